@@ -1,0 +1,1 @@
+"""Benchmarks quoted in the README: ``make bench`` runs ``python -m benchmarks``; never part of the tests."""

@@ -1,0 +1,100 @@
+"""The ``flexdigit`` command: one sub-command per domain, every one with ``--json``.
+
+Each domain registers its own sub-commands from ``flexdigit/<domain>/commands.py`` through a function
+``register(subparsers)``; this module only lists those modules, runs the chosen command and prints its
+:class:`CommandResult`. Bad input never ends in a traceback: flexdigit's errors (and ``ValueError``/``OSError``)
+become one line on stderr naming the culprit, with exit code 2 (``--debug`` shows the traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from flexdigit import __version__
+from flexdigit._json import to_jsonable
+
+#: Modules that add sub-commands, in the order of the architecture (params -> ... -> report).
+COMMAND_MODULES: tuple[str, ...] = (
+    "flexdigit.params_commands",
+    "flexdigit.report.commands",
+)
+
+
+@dataclass
+class CommandResult:
+    """What a sub-command returns: JSON-able ``data`` for ``--json`` and ``text`` for people."""
+
+    data: object
+    text: str = ""
+    exit_code: int = 0
+    extra: dict = field(default_factory=dict)
+
+
+def add_command(
+    subparsers: argparse._SubParsersAction,
+    name: str,
+    func: Callable[[argparse.Namespace], CommandResult],
+    help: str,
+    description: str | None = None,
+) -> argparse.ArgumentParser:
+    """Add a sub-command with the common ``--json`` flag; ``func(args)`` returns a :class:`CommandResult`."""
+    parser = subparsers.add_parser(name, help=help, description=description or help)
+    parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    parser.set_defaults(func=func, command_name=name)
+    return parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="flexdigit",
+        description="The cable-actuated flexible digit (Ward 2004 MPhil thesis), on its digital twin or a real rig.",
+    )
+    parser.add_argument("--version", action="version", version=f"flexdigit {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks instead of one-line errors")
+    subparsers = parser.add_subparsers(title="commands", metavar="COMMAND")
+    for module_name in COMMAND_MODULES:
+        importlib.import_module(module_name).register(subparsers)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run ``flexdigit`` with ``argv`` (default ``sys.argv[1:]``) and return the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not hasattr(args, "func"):
+        parser.print_help()
+        return 2
+    try:
+        result = args.func(args)
+    except KeyboardInterrupt:
+        print(f"flexdigit {args.command_name}: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, OSError, ArithmeticError, KeyError) as exc:
+        if args.debug:
+            raise
+        print(f"flexdigit {args.command_name}: error: {_message(exc)}", file=sys.stderr)
+        return 2
+    if getattr(args, "json", False):
+        json.dump(to_jsonable(result.data), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    elif result.text:
+        print(result.text)
+    return result.exit_code
+
+
+def _message(exc: BaseException) -> str:
+    if isinstance(exc, FileNotFoundError) and exc.filename:
+        return f"no such file: {Path(exc.filename)}"
+    if isinstance(exc, KeyError) and exc.args:
+        return str(exc.args[0])
+    return str(exc) or type(exc).__name__
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

@@ -1,0 +1,32 @@
+"""Exceptions raised by flexdigit.
+
+Every exception subclasses a built-in so that callers can catch ``ValueError`` or ``OSError`` without
+knowing flexdigit (the python-control ``ControlDimension(ValueError)`` and pyserial
+``SerialException(IOError)`` habit). The CLI turns any of them into a one-line message and exit code 2.
+"""
+
+from __future__ import annotations
+
+
+class FlexdigitError(Exception):
+    """Base of every flexdigit-specific error."""
+
+
+class ParameterError(FlexdigitError, ValueError):
+    """A parameter (rig, model, design or experiment) has a bad value; the message names it."""
+
+
+class DataFileError(FlexdigitError, ValueError):
+    """A data file (time series, dataset, parameter TOML, saved model) cannot be used as it is."""
+
+
+class DesignError(FlexdigitError, ValueError):
+    """A control design problem is ill-posed or infeasible (bad weights, infeasible gamma)."""
+
+
+class UnstableError(FlexdigitError, ArithmeticError):
+    """A closed loop or a model that must be stable is not; norms of it are meaningless."""
+
+
+class RigError(FlexdigitError, OSError):
+    """The rig (hardware or twin backend) failed: port vanished, board silent, sensor fault."""

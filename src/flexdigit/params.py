@@ -1,0 +1,432 @@
+"""Rig parameters: one source of truth, frozen dataclasses in SI units, the thesis rig as the default.
+
+Sections 2.2-2.5 and 3.1-3.4 of the thesis (tables 3.5, 3.7), transcribed in ``reference/thesis.toml``. Every
+field carries its unit in its name; the serial position "command" (0..254) counts as a unit. A few values the
+thesis does not give (strip density, bridge excitation, low-pass order) are marked as assumptions in their
+docstring; the twin's calibration absorbs them.
+
+Load and save as TOML with :func:`load_params` and :func:`save_params` (``flexdigit params --write rig.toml``
+dumps the defaults); every bad value raises :class:`~flexdigit.errors.ParameterError` naming the file, the key,
+the value and what was expected.
+
+Examples
+--------
+>>> p = RigParams()
+>>> round(p.geometry.second_moment_m4 * 1e14, 3)   # table 3.7: 5.8532e-14 m^4
+5.853
+>>> round(p.actuator.rad_per_command, 6)           # E 3.15: 0.8622 deg per command
+0.015048
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from flexdigit._validation import check_array, check_choice, check_int, check_positive, check_real
+from flexdigit.errors import ParameterError
+
+BRIDGE_TYPES = ("quarter", "half", "full")
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The digit's geometry (2.2, table 3.5, table 3.7).
+
+    Attributes
+    ----------
+    section_count : int
+        Number of sections (2.2): 3.
+    section_length_m : float
+        Spring-steel strip length per section (2.2.2): 80 mm.
+    strip_thickness_m, strip_width_m : float
+        Strip cross-section, 0.015 in x 0.5 in (2.2.2).
+    digit_length_m : float
+        ``l`` of table 3.7, clamp to tip: 270 mm. Supports sit every ``digit_length_m / section_count``.
+    strip_length_m : float
+        Free strip length, 3 x 80 mm = 240 mm; table 3.4's ``y_max`` column fits x ~ 0.241 m, i.e. this.
+    cable_eccentricity_m : float
+        ``e`` of table 3.7, cable to neutral axis: 5.715 mm.
+    gauge_positions_m : tuple of float
+        Strain-gauge pairs from the base (table 3.5): 45, 135, 225 mm, midway between supports (2.3.2).
+    max_rotation_per_section_deg : float
+        30 degrees per section, to keep the spring steel elastic (2.2).
+    guide_hole_diameter_m : float
+        Cable guide holes, 0.042 in (2.2.1).
+    """
+
+    section_count: int = 3
+    section_length_m: float = 0.080
+    strip_thickness_m: float = 0.381e-3
+    strip_width_m: float = 12.7e-3
+    digit_length_m: float = 0.270
+    strip_length_m: float = 0.240
+    cable_eccentricity_m: float = 5.715e-3
+    gauge_positions_m: tuple[float, ...] = (0.045, 0.135, 0.225)
+    max_rotation_per_section_deg: float = 30.0
+    guide_hole_diameter_m: float = 1.067e-3
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        check_int(self.section_count, "section_count", owner, low=1, high=50)
+        for name in (
+            "section_length_m",
+            "strip_thickness_m",
+            "strip_width_m",
+            "digit_length_m",
+            "strip_length_m",
+            "cable_eccentricity_m",
+            "guide_hole_diameter_m",
+        ):
+            check_positive(getattr(self, name), name, owner)
+        check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
+        check_real(
+            self.max_rotation_per_section_deg, "max_rotation_per_section_deg", owner, low=0, high=180, low_open=True
+        )
+        positions = check_array(
+            self.gauge_positions_m,
+            "gauge_positions_m",
+            owner,
+            ndim=1,
+            min_length=1,
+            increasing=True,
+            low=0,
+            high=self.digit_length_m,
+            low_open=True,
+        )
+        object.__setattr__(self, "gauge_positions_m", tuple(float(x) for x in positions))
+
+    @property
+    def second_moment_m4(self) -> float:
+        """Second moment of area of the strip, ``w t^3 / 12`` (table 3.7: 5.8532e-14 m^4)."""
+        return self.strip_width_m * self.strip_thickness_m**3 / 12.0
+
+    @property
+    def section_pitch_m(self) -> float:
+        """Distance between sectional supports along the digit, ``digit_length_m / section_count``."""
+        return self.digit_length_m / self.section_count
+
+    @property
+    def cross_section_m2(self) -> float:
+        """Strip cross-section area, ``w t``."""
+        return self.strip_width_m * self.strip_thickness_m
+
+
+@dataclass(frozen=True)
+class Material:
+    """Spring-steel strip material (table 3.7).
+
+    Attributes
+    ----------
+    youngs_modulus_pa : float
+        E = 205 GPa (table 3.7).
+    strip_density_kg_m3 : float
+        7850 kg/m^3: an assumption (carbon spring steel); the thesis does not give it.
+    """
+
+    youngs_modulus_pa: float = 205e9
+    strip_density_kg_m3: float = 7850.0
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        check_positive(self.youngs_modulus_pa, "youngs_modulus_pa", owner)
+        check_positive(self.strip_density_kg_m3, "strip_density_kg_m3", owner)
+
+
+@dataclass(frozen=True)
+class Sensors:
+    """Strain gauges, bridge, amplifier and DAQ card (2.3, 2.5.1, 2.5.2, 6.4).
+
+    Attributes
+    ----------
+    gauge_resistance_ohm : float
+        120 ohm gauges (2.3.2).
+    gauge_factor : float
+        GF ~ 0.8 (6.4).
+    bridge : {"quarter", "half", "full"}
+        Half bridge on the rig (E 2.4).
+    excitation_v : float
+        Bridge supply voltage Vs. An assumption (1 V): the thesis does not give it; the twin's per-channel
+        gains are calibrated against E 3.20-3.22 instead.
+    amplifier_gain_v_per_v : float
+        Fylde FE-366-TA gain, 10,000 (2.5.1).
+    amplifier_lowpass_hz : float
+        Amplifier low-pass cut-off, 470 Hz (2.5.1).
+    amplifier_lowpass_order : int
+        Order of that low-pass (Butterworth). An assumption (2); the thesis gives only the cut-off.
+    adc_bits : int
+        PCI-DAS1602/16: 16 bits (2.5.2).
+    adc_range_v : tuple of float
+        Input range, +-5 V (2.5.2).
+    adc_channels : tuple of int
+        Gauge pairs 1..3 on analog inputs 0..2 (table 2.2).
+    """
+
+    gauge_resistance_ohm: float = 120.0
+    gauge_factor: float = 0.8
+    bridge: str = "half"
+    excitation_v: float = 1.0
+    amplifier_gain_v_per_v: float = 10_000.0
+    amplifier_lowpass_hz: float = 470.0
+    amplifier_lowpass_order: int = 2
+    adc_bits: int = 16
+    adc_range_v: tuple[float, float] = (-5.0, 5.0)
+    adc_channels: tuple[int, ...] = (0, 1, 2)
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        for name in (
+            "gauge_resistance_ohm",
+            "gauge_factor",
+            "excitation_v",
+            "amplifier_gain_v_per_v",
+            "amplifier_lowpass_hz",
+        ):
+            check_positive(getattr(self, name), name, owner)
+        check_choice(self.bridge, "bridge", BRIDGE_TYPES, owner)
+        check_int(self.amplifier_lowpass_order, "amplifier_lowpass_order", owner, low=1, high=8)
+        check_int(self.adc_bits, "adc_bits", owner, low=1, high=32)
+        rng = check_array(self.adc_range_v, "adc_range_v", owner, shape=(2,), increasing=True)
+        object.__setattr__(self, "adc_range_v", (float(rng[0]), float(rng[1])))
+        channels = tuple(check_int(c, "adc_channels", owner, low=0, high=63) for c in self.adc_channels)
+        if len(channels) == 0 or len(set(channels)) != len(channels):
+            raise ParameterError(
+                f"The 'adc_channels' parameter of {owner} must be distinct channel numbers. "
+                f"Got {list(self.adc_channels)!r} instead."
+            )
+        object.__setattr__(self, "adc_channels", channels)
+
+    @property
+    def adc_lsb_v(self) -> float:
+        """One ADC count in volts: range / 2**bits."""
+        return (self.adc_range_v[1] - self.adc_range_v[0]) / 2**self.adc_bits
+
+
+@dataclass(frozen=True)
+class Actuator:
+    """The servo, its driver board, pulley and potentiometer (2.4, 2.5.3, 3.2.4, 3.4.1).
+
+    Attributes
+    ----------
+    command_min, command_max : int
+        Serial position command range, 0..254 (3.4.1); 255 is the board's sync byte and never a position.
+    angle_min_deg, angle_max_deg : float
+        Servo angle at command_min and command_max: 0 and 219 degrees (3.2.4).
+    pulley_radius_m : float
+        ``r_M``, the pulley ("inertial disc") radius, 11.5 mm (table 3.7).
+    pwm_frequency_hz : float
+        Servo pulse frequency, 52 Hz (3.2).
+    pulse_width_min_s, pulse_width_max_s : float
+        Pulse width at command_min and command_max, 1 and 2 ms (3.4.1).
+    serial_period_s : float
+        Commands reach the board every 20 ms (5.2): the loop cannot run faster.
+    equilibrium_command : int
+        The command at which the digit is straight: 8 (table 3.4 note).
+    operating_commands : tuple of int
+        8..43: 0 to 30 degrees of beam rotation (3.4.1).
+    servo_wn_rad_s, servo_zeta : float
+        The servo's identified second-order model, 20.53 rad/s and 0.5629 (3.2.4).
+    pot_v_at_min_angle_v, pot_v_at_max_angle_v : float
+        Potentiometer voltage at 0 and 219 degrees: 0.46688 and 2.4755 V (3.2.4).
+    stall_torque_nm : float
+        Futaba S-148: 42 oz in = 0.297 N m (2.4).
+    """
+
+    command_min: int = 0
+    command_max: int = 254
+    angle_min_deg: float = 0.0
+    angle_max_deg: float = 219.0
+    pulley_radius_m: float = 11.5e-3
+    pwm_frequency_hz: float = 52.0
+    pulse_width_min_s: float = 1.0e-3
+    pulse_width_max_s: float = 2.0e-3
+    serial_period_s: float = 0.020
+    equilibrium_command: int = 8
+    operating_commands: tuple[int, int] = (8, 43)
+    servo_wn_rad_s: float = 20.53
+    servo_zeta: float = 0.5629
+    pot_v_at_min_angle_v: float = 0.46688
+    pot_v_at_max_angle_v: float = 2.4755
+    stall_torque_nm: float = 0.297
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        lo = check_int(self.command_min, "command_min", owner, low=0, high=254)
+        hi = check_int(self.command_max, "command_max", owner, low=lo + 1, high=254)
+        check_real(self.angle_min_deg, "angle_min_deg", owner, low=-360, high=360)
+        check_real(self.angle_max_deg, "angle_max_deg", owner, low=self.angle_min_deg, high=360, low_open=True)
+        for name in (
+            "pulley_radius_m",
+            "pwm_frequency_hz",
+            "pulse_width_min_s",
+            "serial_period_s",
+            "servo_wn_rad_s",
+            "stall_torque_nm",
+        ):
+            check_positive(getattr(self, name), name, owner)
+        check_real(self.pulse_width_max_s, "pulse_width_max_s", owner, low=self.pulse_width_min_s, low_open=True)
+        check_real(self.servo_zeta, "servo_zeta", owner, low=0, high=10, low_open=True)
+        check_int(self.equilibrium_command, "equilibrium_command", owner, low=lo, high=hi)
+        ops = tuple(check_int(c, "operating_commands", owner, low=lo, high=hi) for c in self.operating_commands)
+        if len(ops) != 2 or ops[0] >= ops[1]:
+            raise ParameterError(
+                f"The 'operating_commands' parameter of {owner} must be two increasing commands "
+                f"inside [{lo}, {hi}]. Got {list(self.operating_commands)!r} instead."
+            )
+        object.__setattr__(self, "operating_commands", ops)
+        check_real(self.pot_v_at_min_angle_v, "pot_v_at_min_angle_v", owner)
+        check_real(
+            self.pot_v_at_max_angle_v, "pot_v_at_max_angle_v", owner, low=self.pot_v_at_min_angle_v, low_open=True
+        )
+
+    @property
+    def deg_per_command(self) -> float:
+        """Servo degrees per command: 219/254 = 0.8622 (E 3.15)."""
+        return (self.angle_max_deg - self.angle_min_deg) / (self.command_max - self.command_min)
+
+    @property
+    def rad_per_command(self) -> float:
+        """Servo radians per command: 0.8622 pi/180 = 0.015048 (E 3.15; printed rounded as 0.0150)."""
+        return math.radians(self.deg_per_command)
+
+    @property
+    def pot_v_per_command(self) -> float:
+        """Potentiometer volts per command: (2.4755 - 0.46688)/254 = 0.0079 V (3.2.4)."""
+        return (self.pot_v_at_max_angle_v - self.pot_v_at_min_angle_v) / (self.command_max - self.command_min)
+
+
+@dataclass(frozen=True)
+class DigitDynamics:
+    """The digit's identified second-order dynamics (3.1.2, tables 3.1 and 3.2).
+
+    Attributes
+    ----------
+    wn_housing_rad_s, zeta_housing : float
+        With the elastomer housing (table 3.2 averages): 13.0995 rad/s, 0.06791.
+    wn_bare_rad_s, zeta_bare : float
+        Strip and supports alone (table 3.1 averages): 10.16271 rad/s, 0.0025.
+    """
+
+    wn_housing_rad_s: float = 13.0995
+    zeta_housing: float = 0.06791
+    wn_bare_rad_s: float = 10.16271
+    zeta_bare: float = 0.0025
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        for name in ("wn_housing_rad_s", "wn_bare_rad_s"):
+            check_positive(getattr(self, name), name, owner)
+        for name in ("zeta_housing", "zeta_bare"):
+            check_real(getattr(self, name), name, owner, low=0, high=10)
+
+
+@dataclass(frozen=True)
+class RigParams:
+    """The whole rig: geometry, material, sensors, actuator and identified digit dynamics."""
+
+    geometry: Geometry = field(default_factory=Geometry)
+    material: Material = field(default_factory=Material)
+    sensors: Sensors = field(default_factory=Sensors)
+    actuator: Actuator = field(default_factory=Actuator)
+    dynamics: DigitDynamics = field(default_factory=DigitDynamics)
+
+    def __post_init__(self) -> None:
+        g = self.geometry
+        if max(g.gauge_positions_m) > g.digit_length_m:
+            raise ParameterError(
+                f"The 'gauge_positions_m' parameter of Geometry must lie inside (0, {g.digit_length_m:g}]. "
+                f"Got {list(g.gauge_positions_m)!r} instead."
+            )
+
+    @property
+    def bending_stiffness_n_m2(self) -> float:
+        """EI of the strip alone (N m^2)."""
+        return self.material.youngs_modulus_pa * self.geometry.second_moment_m4
+
+    def replace(self, **sections: Any) -> RigParams:
+        """Return a copy with whole sections replaced, e.g. ``p.replace(sensors=Sensors(bridge="full"))``."""
+        return dataclasses.replace(self, **sections)
+
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """Plain nested dict (lists for tuples), as written to TOML."""
+        return {
+            f.name: {
+                k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(getattr(self, f.name)).items()
+            }
+            for f in dataclasses.fields(self)
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], source: str = "parameters") -> RigParams:
+        """Build from a nested dict (as read from TOML); unknown or mistyped keys raise naming ``source``."""
+        if not isinstance(data, dict):
+            raise ParameterError(f"{source}: expected a table of sections, got {type(data).__name__}")
+        section_types = {f.name: f.default_factory for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - set(section_types))
+        if unknown:
+            raise ParameterError(
+                f"{source}: unknown section [{unknown[0]}]; expected one of "
+                + ", ".join(f"[{s}]" for s in section_types)
+            )
+        sections = {}
+        for name, factory in section_types.items():
+            values = data.get(name, {})
+            if not isinstance(values, dict):
+                raise ParameterError(f"{source}: [{name}] must be a table of keys. Got {values!r} instead.")
+            allowed = {f.name: f for f in dataclasses.fields(factory)}
+            bad = sorted(set(values) - set(allowed))
+            if bad:
+                raise ParameterError(
+                    f"{source}: unknown key '{bad[0]}' in [{name}]; expected one of " + ", ".join(allowed)
+                )
+            converted = {}
+            for key, value in values.items():
+                default = getattr(factory(), key)
+                if isinstance(default, tuple):
+                    if not isinstance(value, list):
+                        raise ParameterError(
+                            f"{source}: [{name}] {key} must be a list like {list(default)!r}. Got {value!r} instead."
+                        )
+                    value = tuple(value)
+                converted[key] = value
+            try:
+                sections[name] = factory(**converted)
+            except (ParameterError, TypeError, ValueError) as exc:
+                raise ParameterError(f"{source}: [{name}] {exc}") from None
+        try:
+            return cls(**sections)
+        except ParameterError as exc:
+            raise ParameterError(f"{source}: {exc}") from None
+
+
+def load_params(path: str | Path) -> RigParams:
+    """Read rig parameters from a TOML file; missing keys keep the thesis defaults.
+
+    Raises
+    ------
+    ParameterError
+        Naming the file, the section and key, the bad value and what was expected.
+    FileNotFoundError
+        If the file does not exist.
+    """
+    path = Path(path)
+    text = path.read_text()
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{path}: not valid TOML ({exc})") from None
+    return RigParams.from_dict(data, source=str(path))
+
+
+def save_params(params: RigParams, path: str | Path) -> Path:
+    """Write ``params`` as TOML (every key, so the file documents the rig); returns the path."""
+    import tomli_w
+
+    path = Path(path)
+    header = "# flexdigit rig parameters (SI units; 'command' is the servo board's 0..254 position).\n"
+    path.write_text(header + tomli_w.dumps(params.to_dict()))
+    return path

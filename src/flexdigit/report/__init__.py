@@ -1,0 +1,10 @@
+"""The reproduce-the-thesis report: every chapter's figures beside the thesis's, as HTML and ``results.json``.
+
+:data:`CHAPTERS` lists the chapter modules in reading order; each exposes ``build(ctx) -> Chapter``.
+The report only reads the rest of the package; nothing imports it.
+"""
+
+from __future__ import annotations
+
+#: Chapter modules in the order they appear in the report.
+CHAPTERS: tuple[str, ...] = ()

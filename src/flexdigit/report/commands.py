@@ -1,0 +1,40 @@
+"""``flexdigit reproduce``: the main job, the whole thesis on the twin, as a report."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from flexdigit.cli import CommandResult, add_command
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = add_command(
+        subparsers,
+        "reproduce",
+        _reproduce,
+        help="reproduce the thesis end to end on the twin and write a report",
+    )
+    parser.add_argument("--out", default="report", help="output folder (default: report/)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of every random stream (default 0)")
+    parser.add_argument("--params", help="rig parameter TOML (default: the thesis rig)")
+    parser.add_argument("--fast", action="store_true", help="smaller sweeps, for a quick look")
+
+
+def _reproduce(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.report.build import reproduce
+
+    params = load_params(args.params) if args.params else RigParams()
+
+    def progress(name: str) -> None:
+        if not args.json:
+            print(f"  {name} ...", file=sys.stderr, flush=True)
+
+    summary = reproduce(args.out, params=params, seed=args.seed, fast=args.fast, progress=progress)
+    lines = [
+        f"report written to {summary.out_dir / 'index.html'} and {summary.out_dir / 'results.json'}",
+        f"{summary.entries} entries: " + ", ".join(f"{n} {s}" for s, n in summary.counts.items()),
+    ]
+    lines += [f"chapter {name} FAILED:\n{error}" for name, error in summary.failed.items()]
+    return CommandResult(data=summary, text="\n".join(lines), exit_code=1 if summary.failed else 0)

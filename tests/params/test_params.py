@@ -1,0 +1,74 @@
+"""Rig parameters: thesis defaults, derived figures, TOML round trip, and the messages of bad files."""
+
+import math
+
+import pytest
+
+from flexdigit.errors import ParameterError
+from flexdigit.params import Actuator, Geometry, RigParams, Sensors, load_params, save_params
+from flexdigit.reference import thesis_value
+
+
+def test_defaults_match_the_thesis_tables():
+    p = RigParams()
+    # table 3.7: I = 5.8532e-14 m^4 from w t^3 / 12
+    assert p.geometry.second_moment_m4 == pytest.approx(thesis_value("geometry.second_moment_m4"), rel=1e-4)
+    assert list(p.geometry.gauge_positions_m) == thesis_value("geometry.strain_gauge_positions_from_base_m")
+    # E 3.15: 219/254 = 0.8622 degrees per command
+    assert p.actuator.deg_per_command == pytest.approx(thesis_value("actuator.deg_per_command"), abs=5e-5)
+    assert p.actuator.rad_per_command == pytest.approx(0.8622 * math.pi / 180, rel=1e-4)
+    # 3.2.4 / [plant].note: the potentiometer moves 0.0079 V per command
+    assert p.actuator.pot_v_per_command == pytest.approx(0.0079, abs=5e-5)
+    # 16 bits over 10 V
+    assert p.sensors.adc_lsb_v == pytest.approx(10 / 65536)
+
+
+def test_toml_round_trip(tmp_path):
+    p = RigParams().replace(sensors=Sensors(bridge="full", excitation_v=2.5))
+    path = save_params(p, tmp_path / "rig.toml")
+    assert load_params(path) == p
+
+
+def test_partial_file_keeps_defaults(tmp_path):
+    path = tmp_path / "rig.toml"
+    path.write_text("[actuator]\nequilibrium_command = 10\n")
+    p = load_params(path)
+    assert p.actuator.equilibrium_command == 10
+    assert p.geometry == Geometry()
+
+
+@pytest.mark.parametrize(
+    ("text", "fragments"),
+    [
+        (
+            "[geometry]\ngauge_positions_m = [0.045, 0.3]\n",
+            ["rig.toml", "gauge_positions_m", "0.3", "inside (0, 0.27]"],
+        ),
+        (
+            "[actuator]\nequilibrium_command = 300\n",
+            ["rig.toml", "equilibrium_command", "300", "integer inside [0, 254]"],
+        ),
+        ("[sensors]\nbridge = 'third'\n", ["bridge", "'third'", "'quarter', 'half', 'full'"]),
+        ("[sensors]\ngauge_factor = -1.0\n", ["gauge_factor", "-1.0", "inside (0, inf)"]),
+        ("[sensors]\ngauge_factor = nan\n", ["gauge_factor", "finite"]),
+        ("[geometry]\nlength = 1\n", ["unknown key 'length'", "[geometry]", "digit_length_m"]),
+        ("[gemoetry]\n", ["unknown section [gemoetry]"]),
+        ("[actuator]\noperating_commands = 8\n", ["operating_commands", "must be a list"]),
+        ("[actuator]\noperating_commands = [43, 8]\n", ["operating_commands", "two increasing"]),
+        ("[actuator\n", ["not valid TOML"]),
+    ],
+)
+def test_bad_files_name_the_key_value_and_expectation(tmp_path, text, fragments):
+    path = tmp_path / "rig.toml"
+    path.write_text(text)
+    with pytest.raises(ParameterError) as info:
+        load_params(path)
+    for fragment in fragments:
+        assert fragment in str(info.value)
+
+
+def test_bad_values_in_code_name_the_owner():
+    with pytest.raises(ParameterError, match="The 'command_max' parameter of Actuator"):
+        Actuator(command_max=255)  # 255 is the board's sync byte, never a position
+    with pytest.raises(ValueError, match="strain_gauge|gauge_positions_m"):
+        Geometry(gauge_positions_m=(0.1, 0.05))
