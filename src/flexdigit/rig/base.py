@@ -1,0 +1,322 @@
+"""The Rig interface: read the gauges (and potentiometer), write a servo command, hang a load (thesis 2.5, 5.2).
+
+Every backend (the twin, the serial servo board, the DAQ card, a recorded run) implements :class:`Rig`, so the
+real-time loop (:mod:`flexdigit.rig.loop`) and the tactile experiments drive the twin and the hardware with the same
+code. Backends are chosen by name or URL through :func:`open_rig`, the way pyserial's ``serial_for_url`` chooses a
+protocol handler::
+
+    sim                                     the twin, virtual time (as fast as it computes)
+    sim+paced                               the twin, paced to the wall clock
+    serial:///dev/ttyUSB0?baud=9600&channel=0[&daq=0]   the MILINST servo board (Mini SSC frames), gauges from daq
+    daq://0                                 a Measurement Computing card through uldaq (gauges only)
+    replay://run.jsonl                      a recorded run played back
+
+The servo command (0..254, integer) is a unit of its own: :func:`clamp_command` is the one place it is rounded
+and clamped, and 255 (the Mini SSC sync byte) can never come out of it.
+"""
+
+from __future__ import annotations
+
+import abc
+import math
+import time
+import urllib.parse
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from importlib import import_module
+from numbers import Real
+from typing import Any
+
+import numpy as np
+
+from flexdigit.errors import ParameterError, RigError
+from flexdigit.params import RigParams
+
+__all__ = [
+    "Reading",
+    "Rig",
+    "clamp_command",
+    "open_rig",
+    "parse_rig_url",
+    "console_operator",
+    "BACKENDS",
+]
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One sample of the rig.
+
+    Parameters
+    ----------
+    time_s : float
+        Rig time of the sample, s (virtual time on the twin, monotonic time since opening on hardware).
+    gauges_v : ndarray, shape (3,)
+        Amplified half-bridge voltages of gauges 1..3 (base to tip), V, as the ADC sees them (table 2.2).
+    pot_v : float
+        Servo potentiometer voltage, V; NaN when the backend has no potentiometer channel.
+    command : int
+        The servo command in force when the sample was taken (0..254).
+    """
+
+    time_s: float
+    gauges_v: np.ndarray
+    pot_v: float = math.nan
+    command: int = 8
+
+    def __post_init__(self) -> None:
+        gauges = np.array(self.gauges_v, dtype=float).reshape(-1)
+        gauges.setflags(write=False)
+        object.__setattr__(self, "gauges_v", gauges)
+
+    @property
+    def finite(self) -> bool:
+        """True when every gauge voltage is a finite number."""
+        return bool(np.all(np.isfinite(self.gauges_v)))
+
+
+def clamp_command(command: object, params: RigParams | None = None) -> int:
+    """Round a command to the nearest integer and clamp it to the actuator range (0..254 on the thesis rig).
+
+    Parameters
+    ----------
+    command : real
+        Requested servo command (any real number; NaN is refused).
+    params : RigParams, optional
+        Gives ``actuator.command_min``/``command_max``; the thesis rig by default.
+
+    Returns
+    -------
+    int
+        The command actually sendable; never 255 (the Mini SSC sync byte).
+
+    Examples
+    --------
+    >>> clamp_command(300.7), clamp_command(-3), clamp_command(42.5), clamp_command(43.5)
+    (254, 0, 42, 44)
+    """
+    if isinstance(command, bool) or not isinstance(command, Real | np.integer | np.floating):
+        raise ParameterError(f"The 'command' parameter must be a real number. Got {command!r} instead.")
+    value = float(command)
+    if math.isnan(value):
+        raise ParameterError("The 'command' parameter must be a real number, not NaN. Got nan instead.")
+    actuator = (params or RigParams()).actuator
+    low, high = int(actuator.command_min), min(int(actuator.command_max), 254)
+    if value >= high:
+        return high
+    if value <= low:
+        return low
+    return int(round(value))  # banker's rounding is fine: a half-quantum tie either way
+
+
+def console_operator(message: str) -> None:
+    """Ask the person at the rig to do something (hang a weight) and wait for Enter."""
+    input(f"{message} Press Enter when done. ")
+
+
+class Rig(abc.ABC):
+    """A flexible digit you can read and command: the twin or the hardware.
+
+    Subclasses implement :meth:`_read`, :meth:`_send` and, where it exists, :meth:`_apply_load`; this base class
+    owns clamping, the command in force, the clock, the safe state and closing.
+
+    Parameters
+    ----------
+    params : RigParams, optional
+        The rig parameters (thesis rig by default).
+    clock : callable, optional
+        Monotonic clock in seconds (``time.monotonic`` on hardware; the twin passes its virtual clock). Tests
+        inject a fake one.
+    sleep : callable, optional
+        ``sleep(seconds)`` used by :meth:`wait` on hardware backends (``time.sleep`` by default).
+    operator : callable, optional
+        ``operator(message)`` asked to hang or remove weights on hardware backends (:func:`console_operator`).
+    """
+
+    #: Name used in reprs and messages.
+    name = "rig"
+
+    def __init__(
+        self,
+        params: RigParams | None = None,
+        *,
+        clock: Callable[[], float] | None = None,
+        sleep: Callable[[float], None] | None = None,
+        operator: Callable[[str], None] | None = None,
+    ) -> None:
+        self.params = params if params is not None else RigParams()
+        if not isinstance(self.params, RigParams):
+            raise ParameterError(f"The 'params' parameter of {type(self).__name__} must be a RigParams. Got {params!r}")
+        self._clock = clock or time.monotonic
+        self._sleep = sleep or time.sleep
+        self.operator = operator or console_operator
+        self._t0 = self._clock()
+        self._command = int(self.params.actuator.equilibrium_command)
+        self._closed = False
+        self.loads: list[tuple[float, float]] = []
+
+    # -- what backends implement -------------------------------------------------------------------------------
+    @abc.abstractmethod
+    def _read(self) -> tuple[np.ndarray, float]:
+        """Return ``(gauges_v (3,), pot_v)`` now."""
+
+    @abc.abstractmethod
+    def _send(self, command: int) -> None:
+        """Send an already clamped integer command to the actuator."""
+
+    def _apply_load(self, mass_kg: float, position_from_base_m: float) -> None:
+        self.operator(f"Hang {mass_kg * 1000:.0f} g at {position_from_base_m * 1000:.0f} mm from the base.")
+
+    def _remove_loads(self) -> None:
+        self.operator("Remove every weight from the digit.")
+
+    def _close(self) -> None:
+        """Release the port/device (after the safe command has been sent); nothing to release by default."""
+        return None
+
+    # -- the interface -----------------------------------------------------------------------------------------
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    @property
+    def command(self) -> int:
+        """The last command sent (the equilibrium command before any)."""
+        return self._command
+
+    def clock(self) -> float:
+        """Rig time in seconds since opening: virtual on the twin, monotonic on hardware."""
+        return self._clock() - self._t0
+
+    def read(self) -> Reading:
+        """Read the three gauges and the potentiometer now."""
+        self._check_open()
+        gauges, pot = self._read()
+        return Reading(self.clock(), gauges, float(pot), self._command)
+
+    def write_command(self, command: object) -> int:
+        """Send a servo command, rounded and clamped to the actuator range; return what was sent."""
+        self._check_open()
+        sent = clamp_command(command, self.params)
+        self._send(sent)
+        self._command = sent
+        return sent
+
+    def wait(self, seconds: float) -> None:
+        """Let ``seconds`` pass (advances virtual time on the twin; sleeps on hardware)."""
+        self._check_open()
+        if seconds > 0:
+            self._sleep(seconds)
+
+    def place_load(self, mass_kg: float, position_from_base_m: float) -> None:
+        """Hang a point mass at a distance from the base (the twin applies it; on hardware the operator does)."""
+        from flexdigit._validation import check_real
+
+        mass = check_real(mass_kg, "mass_kg", type(self).__name__, low=0.0)
+        length = self.params.geometry.digit_length_m
+        pos = check_real(position_from_base_m, "position_from_base_m", type(self).__name__, low=0.0, high=length)
+        self._check_open()
+        self._apply_load(mass, pos)
+        self.loads.append((mass, pos))
+
+    def clear_loads(self) -> None:
+        """Remove every load."""
+        self._check_open()
+        self._remove_loads()
+        self.loads.clear()
+
+    def relax(self) -> int:
+        """Send the equilibrium command (8 on the thesis rig: no deflection)."""
+        return self.write_command(self.params.actuator.equilibrium_command)
+
+    def close(self) -> None:
+        """Relax the digit (best effort) and release the port. Safe to call twice."""
+        if self._closed:
+            return
+        try:
+            self.relax()
+        except OSError:
+            pass  # the port may be the thing that failed; closing must still release it
+        finally:
+            self._closed = True
+            self._close()
+
+    def __enter__(self) -> Rig:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else "open"
+        return f"{type(self).__name__}<{self.name}>(command={self._command}, loads={self.loads}, {state})"
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise RigError(f"{self.name}: the rig is closed")
+
+
+# -- choosing a backend ----------------------------------------------------------------------------------------
+
+#: scheme -> "module:factory"; each factory takes ``(location, params, options)`` and returns a :class:`Rig`.
+BACKENDS: dict[str, str] = {
+    "sim": "flexdigit.rig.sim_backend:from_url",
+    "sim+paced": "flexdigit.rig.sim_backend:from_url_paced",
+    "serial": "flexdigit.rig.serial_backend:from_url",
+    "daq": "flexdigit.rig.daq_backend:from_url",
+    "replay": "flexdigit.rig.replay_backend:from_url",
+}
+
+
+@dataclass(frozen=True)
+class RigURL:
+    """A parsed rig URL: ``scheme``, ``location`` (port, board number or path) and query ``options``."""
+
+    scheme: str
+    location: str = ""
+    options: dict[str, str] = field(default_factory=dict)
+
+
+def parse_rig_url(url: str) -> RigURL:
+    """Split ``serial:///dev/ttyUSB0?baud=9600`` into scheme, location and options.
+
+    Examples
+    --------
+    >>> parse_rig_url("serial:///dev/ttyUSB0?baud=9600&channel=1")
+    RigURL(scheme='serial', location='/dev/ttyUSB0', options={'baud': '9600', 'channel': '1'})
+    >>> parse_rig_url("sim").scheme
+    'sim'
+    """
+    if not isinstance(url, str) or not url.strip():
+        raise ParameterError(f"The 'url' parameter of open_rig must be a rig name or URL. Got {url!r} instead.")
+    text = url.strip()
+    if "://" not in text:
+        scheme, _, query = text.partition("?")
+        rest = ""
+    else:
+        scheme, _, rest = text.partition("://")
+        rest, _, query = rest.partition("?")
+    scheme = scheme.lower()
+    if scheme not in BACKENDS:
+        raise ParameterError(
+            f"The 'url' parameter of open_rig must start with one of {sorted(BACKENDS)}. Got {url!r} instead."
+        )
+    options = dict(urllib.parse.parse_qsl(query, keep_blank_values=True))
+    return RigURL(scheme, urllib.parse.unquote(rest), options)
+
+
+def open_rig(url: str = "sim", params: RigParams | None = None, **options: Any) -> Rig:
+    """Open a rig backend by name or URL (see the module docstring).
+
+    Keyword ``options`` are passed to the backend and override URL query options (``clock``, ``sleep``,
+    ``operator``, ``seed``, ``serial`` ...).
+
+    Examples
+    --------
+    >>> with open_rig("sim", seed=0) as rig:  # doctest: +SKIP
+    ...     rig.write_command(20); rig.wait(0.5); reading = rig.read()
+    """
+    parsed = parse_rig_url(url)
+    module_name, _, factory = BACKENDS[parsed.scheme].partition(":")
+    merged: dict[str, Any] = {**parsed.options, **options}
+    return getattr(import_module(module_name), factory)(parsed.location, params, merged)
