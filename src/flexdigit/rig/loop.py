@@ -1,0 +1,378 @@
+"""The real-time loop: read, compute, command, log, on absolute deadlines (thesis 5.2, figure 5.1).
+
+One sample is ``read -> controller -> write_command -> log``. Sample ``k`` is due at ``t0 + k T`` on the rig's
+monotonic clock (virtual time on the twin), never at "last sample + T", so scheduling errors do not accumulate.
+A sample that starts more than one period late is an *overrun*: it is counted and the missed deadlines are skipped
+(the loop never bursts to catch up, which would hammer the servo board).
+
+Every sample is appended to a JSON-lines log and flushed to the OS at once, so a crash or Ctrl-C loses nothing
+already written; ``fsync`` policy: the file is fsync'ed every ``fsync_every`` lines (default 50, i.e. one second at
+20 ms) and at close, so a power cut loses at most that many lines. The first line is a header with the period,
+backend and controller; the last line (when the loop ends normally or by a fault) is a footer with the stop reason.
+
+On any fault (port lost, sensor NaN or clipped at the ADC rail, Ctrl-C, an exception in the controller) the digit
+is sent to the equilibrium command and the port is closed before the loop returns or re-raises.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from flexdigit._validation import check_int, check_positive
+from flexdigit.errors import ParameterError, RigError
+from flexdigit.rig.base import Reading, Rig
+
+__all__ = ["LoopController", "SampleLog", "TimingStats", "LoopResult", "run_loop", "check_reading", "read_log"]
+
+LOG_FORMAT = "flexdigit-loop-log/1"
+
+
+class LoopController(Protocol):
+    """What the loop drives: ``reset(command)`` once, then ``step(setpoint, reading) -> command`` every sample."""
+
+    def reset(self, command: int) -> None: ...
+
+    def step(self, setpoint: float, reading: Reading) -> float: ...
+
+
+class SampleLog:
+    """Append-only JSON-lines log of a run, flushed every line (survives a crash or Ctrl-C).
+
+    Parameters
+    ----------
+    path : path-like
+        The log file (created or appended to).
+    header : dict
+        Written as the first line, with ``format``.
+    fsync_every : int
+        fsync after this many lines (and at close); 0 never fsyncs (the OS still gets every line at once).
+    """
+
+    def __init__(self, path: str | os.PathLike, header: dict[str, Any], fsync_every: int = 50) -> None:
+        self.path = Path(path)
+        self.fsync_every = check_int(fsync_every, "fsync_every", "SampleLog", low=0)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 - closed in close()
+        except OSError as exc:
+            raise RigError(f"cannot open the loop log {self.path}: {exc.strerror or exc}") from exc
+        self._since_sync = 0
+        self.lines = 0
+        self.write({"format": LOG_FORMAT, **header})
+
+    def write(self, record: dict[str, Any]) -> None:
+        self._file.write(json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n")
+        self._file.flush()
+        self.lines += 1
+        self._since_sync += 1
+        if self.fsync_every and self._since_sync >= self.fsync_every:
+            os.fsync(self._file.fileno())
+            self._since_sync = 0
+
+    def close(self) -> None:
+        if self._file.closed:
+            return
+        self._file.flush()
+        os.fsync(self._file.fileno())
+        self._file.close()
+
+
+def read_log(path: str | os.PathLike) -> tuple[dict[str, Any], list[dict[str, Any]], dict[str, Any] | None]:
+    """Read a loop log: ``(header, samples, footer or None)``; a torn last line (power cut) is ignored.
+
+    Raises :class:`~flexdigit.errors.DataFileError` naming the file and line when it is not a loop log.
+    """
+    from flexdigit.errors import DataFileError
+
+    path = Path(path)
+    header: dict[str, Any] | None = None
+    samples: list[dict[str, Any]] = []
+    footer = None
+    lines = path.read_text(encoding="utf-8").splitlines()
+    for number, line in enumerate(lines, 1):
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            if number == len(lines):
+                break  # a line cut by a crash mid-write
+            raise DataFileError(f"{path}: line {number} is not JSON") from None
+        if number == 1:
+            if not isinstance(record, dict) or record.get("format") != LOG_FORMAT:
+                raise DataFileError(f"{path}: line 1 is not a flexdigit loop log header (format {LOG_FORMAT})")
+            header = record
+        elif "stop" in record:
+            footer = record
+        else:
+            samples.append(record)
+    if header is None:
+        raise DataFileError(f"{path}: empty file, expected a flexdigit loop log")
+    return header, samples, footer
+
+
+def _finite_or_none(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+@dataclass
+class TimingStats:
+    """Timing of a run, s. ``lateness`` = sample start minus its deadline; ``compute`` = read..log wall time."""
+
+    period_s: float
+    samples: int
+    overruns: int
+    mean_period_s: float
+    jitter_p50_s: float
+    jitter_p99_s: float
+    jitter_max_s: float
+    compute_mean_s: float
+    compute_p99_s: float
+    compute_max_s: float
+
+    @classmethod
+    def from_arrays(cls, period_s: float, starts: np.ndarray, lateness: np.ndarray, compute: np.ndarray, overruns: int):
+        n = len(starts)
+        mean_period = float(np.mean(np.diff(starts))) if n > 1 else math.nan
+        late = np.abs(lateness) if n else np.zeros(1)
+        comp = compute if n else np.zeros(1)
+        return cls(
+            period_s,
+            n,
+            overruns,
+            mean_period,
+            float(np.percentile(late, 50)),
+            float(np.percentile(late, 99)),
+            float(np.max(late)),
+            float(np.mean(comp)),
+            float(np.percentile(comp, 99)),
+            float(np.max(comp)),
+        )
+
+
+@dataclass
+class LoopResult:
+    """What a run did: the samples, the timing, and why it stopped.
+
+    ``status`` is ``"completed"``, ``"fault"`` (rig or sensor fault; ``message`` says which) or ``"interrupted"``.
+    """
+
+    status: str
+    message: str
+    timing: TimingStats
+    time_s: np.ndarray
+    setpoint: np.ndarray
+    gauges_v: np.ndarray
+    measurement: np.ndarray
+    command: np.ndarray
+    safe_command_sent: bool
+    log_path: Path | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "completed"
+
+
+def check_reading(reading: Reading, adc_range_v: tuple[float, float], margin_v: float = 1e-3) -> None:
+    """Raise :class:`RigError` when a gauge reads NaN/inf or sits on an ADC rail (clipped), naming the gauge."""
+    low, high = adc_range_v
+    for i, v in enumerate(reading.gauges_v):
+        if not math.isfinite(v):
+            raise RigError(f"sensor fault: gauge {i + 1} read {v} at t = {reading.time_s:.3f} s")
+        if v >= high - margin_v or v <= low + margin_v:
+            raise RigError(
+                f"sensor fault: gauge {i + 1} clipped at {v:+.3f} V (ADC range {low:+g}..{high:+g} V) "
+                f"at t = {reading.time_s:.3f} s"
+            )
+
+
+def run_loop(
+    rig: Rig,
+    controller: LoopController,
+    setpoint: float | Callable[[float], float],
+    duration_s: float,
+    period_s: float = 0.020,
+    *,
+    log_path: str | os.PathLike | None = None,
+    clock: Callable[[], float] | None = None,
+    timer: Callable[[], float] | None = None,
+    measure: Callable[[Reading], float] | None = None,
+    on_sample: Callable[[int, float, float, int], None] | None = None,
+    check_sensors: bool = True,
+    close_rig: bool = True,
+    fsync_every: int = 50,
+    header: dict[str, Any] | None = None,
+) -> LoopResult:
+    """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
+
+    Parameters
+    ----------
+    rig : Rig
+        Any backend; its :meth:`~Rig.wait` lets time pass (virtual on the twin).
+    controller : LoopController
+        ``reset(command)`` then ``step(setpoint, reading) -> command`` each sample.
+    setpoint : float or callable
+        Setpoint (in the controller's unit, e.g. beam rotation deg), or a function of loop time (s).
+    duration_s, period_s : float
+        Run length and sample period, s (0.020 s: the servo board's rate, 5.2).
+    log_path : path-like, optional
+        JSON-lines sample log (see the module docstring).
+    clock : callable, optional
+        Monotonic clock the deadlines are kept on; the rig's clock by default (tests inject a fake).
+    timer : callable, optional
+        Wall-clock timer for compute time (``time.perf_counter``).
+    measure : callable, optional
+        ``measure(reading) -> float`` logged as ``y`` (e.g. beam rotation, deg); the controller's
+        ``measure`` attribute if it has one.
+    on_sample : callable, optional
+        ``on_sample(k, t, y, command)`` after each sample (progress display).
+    check_sensors : bool
+        Stop with a fault when a gauge is NaN or clipped (:func:`check_reading`).
+    close_rig : bool
+        Close the rig (port) when the loop ends, whatever the reason.
+
+    Returns
+    -------
+    LoopResult
+        ``status`` is ``"completed"``, ``"fault"`` or ``"interrupted"``; faults of the rig or the sensors are
+        reported there (not raised). Exceptions raised by the controller are re-raised after the safe state.
+    """
+    period = check_positive(period_s, "period_s", "run_loop")
+    duration = check_positive(duration_s, "duration_s", "run_loop")
+    clock = clock or rig.clock
+    timer = timer or time.perf_counter
+    measure = measure or getattr(controller, "measure", None) or (lambda r: math.nan)
+    target = setpoint if callable(setpoint) else (lambda t, _s=float(setpoint): _s)
+    n_samples = int(math.floor(duration / period + 1e-9))
+    if n_samples < 1:
+        raise ParameterError(f"The 'duration_s' parameter of run_loop must cover at least one period. Got {duration_s}")
+    adc_range = tuple(rig.params.sensors.adc_range_v)
+    equilibrium = int(rig.params.actuator.equilibrium_command)
+
+    log = None
+    if log_path is not None:
+        meta = {
+            "rig": repr(rig),
+            "controller": type(controller).__name__,
+            "period_s": period,
+            "duration_s": duration,
+            "started_unix_s": time.time(),
+            **(header or {}),
+        }
+        log = SampleLog(log_path, meta, fsync_every)
+
+    starts, lateness, compute = [], [], []
+    ts, sps, gauges, ys, cmds = [], [], [], [], []
+    overruns = 0
+    status, message = "completed", f"ran {n_samples} samples of {period * 1000:g} ms"
+    pending_error: BaseException | None = None
+    try:
+        controller.reset(rig.command)
+        t0 = clock()
+        k = 0
+        while k < n_samples:
+            deadline = t0 + k * period
+            now = clock()
+            if now < deadline:
+                rig.wait(deadline - now)
+                now = clock()
+            late = now - deadline
+            if late > period:  # missed at least one whole deadline: count it and resynchronise, never burst
+                overruns += 1
+                skipped = int(late // period)
+                k += skipped
+                if k >= n_samples:
+                    break
+                deadline = t0 + k * period
+                late = now - deadline
+            w0 = timer()
+            reading = rig.read()
+            t = now - t0
+            r = float(target(t))
+            if check_sensors:
+                check_reading(reading, adc_range)
+            u = controller.step(r, reading)
+            sent = rig.write_command(u)
+            y = float(measure(reading))
+            if log is not None:
+                log.write(
+                    {
+                        "k": k,
+                        "t": round(t, 9),
+                        "setpoint": r,
+                        "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
+                        "pot_v": _finite_or_none(reading.pot_v),
+                        "y": _finite_or_none(y),
+                        "command": sent,
+                    }
+                )
+            compute.append(timer() - w0)
+            starts.append(now)
+            lateness.append(late)
+            ts.append(t)
+            sps.append(r)
+            gauges.append(reading.gauges_v)
+            ys.append(y)
+            cmds.append(sent)
+            if on_sample is not None:
+                on_sample(k, t, y, sent)
+            k += 1
+    except KeyboardInterrupt:
+        status, message = "interrupted", "interrupted by Ctrl-C"
+    except (RigError, OSError) as exc:
+        status, message = "fault", str(exc)
+    except BaseException as exc:  # a controller bug: safe state first, then let it propagate
+        status, message = "fault", f"{type(exc).__name__}: {exc}"
+        pending_error = exc
+
+    safe = _safe_state(rig, equilibrium, close_rig)
+    if status != "completed":
+        when = f" at t = {ts[-1]:.3f} s" if ts else " before the first sample"
+        relaxed = f"digit relaxed to command {equilibrium}" if safe else "could NOT send the safe command (port lost)"
+        message = f"{message}{when}; {relaxed}"
+    if log is not None:
+        try:
+            log.write({"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns})
+        finally:
+            log.close()
+        message = f"{message}; log: {log.path}"
+    timing = TimingStats.from_arrays(period, np.array(starts), np.array(lateness), np.array(compute), overruns)
+    result = LoopResult(
+        status,
+        message,
+        timing,
+        np.array(ts),
+        np.array(sps),
+        np.array(gauges).reshape(-1, 3) if gauges else np.zeros((0, 3)),
+        np.array(ys),
+        np.array(cmds, dtype=int),
+        safe,
+        log.path if log is not None else None,
+    )
+    if pending_error is not None:
+        raise pending_error
+    return result
+
+
+def _safe_state(rig: Rig, equilibrium: int, close_rig: bool) -> bool:
+    """Send the equilibrium command and (optionally) close; True when the safe command went out."""
+    sent = False
+    try:
+        if not rig.closed:
+            sent = rig.write_command(equilibrium) == equilibrium
+    except (OSError, ValueError):
+        sent = False
+    if close_rig:
+        try:
+            rig.close()
+        except OSError:
+            pass
+    return sent

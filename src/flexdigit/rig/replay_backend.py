@@ -1,0 +1,70 @@
+"""The replay backend: a recorded loop log (:mod:`flexdigit.rig.loop`) played back as a rig.
+
+:meth:`read` returns the recorded sample in force at the current replay time (sample and hold), time advances only
+through :meth:`wait` (virtual), and the commands written are kept in :attr:`commands_sent` beside the recorded
+ones, so a new controller can be run open-loop on a recorded run and its commands compared with the original's.
+Reading past the end of the recording raises :class:`~flexdigit.errors.RigError`.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from typing import Any
+
+import numpy as np
+
+from flexdigit.errors import DataFileError, RigError
+from flexdigit.params import RigParams
+from flexdigit.rig.base import Rig
+from flexdigit.rig.loop import read_log
+
+__all__ = ["ReplayRig", "from_url"]
+
+
+class ReplayRig(Rig):
+    """Play back ``path`` (a loop log written by :func:`~flexdigit.rig.loop.run_loop`)."""
+
+    name = "replay"
+
+    def __init__(self, path: str, params: RigParams | None = None, **kwargs: Any) -> None:
+        self.path = str(path)
+        self.header, samples, self.footer = read_log(path)
+        if not samples:
+            raise DataFileError(f"{path}: the log has no samples to replay")
+        self._times = [float(s["t"]) for s in samples]
+        if any(b < a for a, b in zip(self._times, self._times[1:], strict=False)):
+            raise DataFileError(f"{path}: sample times are not increasing")
+        self._gauges = np.array(
+            [[math.nan if g is None else float(g) for g in s["gauges_v"]] for s in samples], dtype=float
+        )
+        self._pot = np.array([math.nan if s.get("pot_v") is None else float(s["pot_v"]) for s in samples])
+        self.recorded_commands = np.array([int(s["command"]) for s in samples])
+        self.commands_sent: list[tuple[float, int]] = []
+        self._now = 0.0
+        kwargs.setdefault("clock", lambda: self._now)
+        kwargs.setdefault("sleep", self._advance)
+        super().__init__(params, **kwargs)
+        self.name = f"replay {self.path}"
+
+    def _advance(self, seconds: float) -> None:
+        self._now += seconds
+
+    @property
+    def end_time_s(self) -> float:
+        return self._times[-1]
+
+    def _read(self) -> tuple[np.ndarray, float]:
+        t = self.clock() + self._times[0]
+        if t > self._times[-1] + 1e-9:
+            raise RigError(f"{self.name}: the recording ends at t = {self._times[-1]:.3f} s")
+        i = max(bisect.bisect_right(self._times, t + 1e-9) - 1, 0)
+        return self._gauges[i].copy(), float(self._pot[i])
+
+    def _send(self, command: int) -> None:
+        self.commands_sent.append((self.clock(), command))
+
+
+def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> ReplayRig:
+    """``replay://path/to/run.jsonl``."""
+    return ReplayRig(location, params, **options)

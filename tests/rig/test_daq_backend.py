@@ -1,0 +1,106 @@
+"""The DAQ backend with a fake uldaq module: channel/range mapping (table 2.2) and the missing-package message."""
+
+from __future__ import annotations
+
+import builtins
+import enum
+import types
+
+import numpy as np
+import pytest
+
+from flexdigit.errors import ParameterError, RigError
+from flexdigit.params import RigParams, Sensors
+from flexdigit.rig.base import open_rig
+from flexdigit.rig.daq_backend import MISSING_ULDAQ, DaqRig, uldaq_range
+
+
+def fake_uldaq(voltages):
+    """Enough of uldaq's API (names checked against uldaq 1.2.3) to record what the backend asks for."""
+    calls = []
+
+    class Range(enum.IntEnum):
+        BIP10VOLTS = 1
+        BIP5VOLTS = 6
+        BIP2VOLTS = 9
+
+    class AiInputMode(enum.IntEnum):
+        DIFFERENTIAL = 1
+        SINGLE_ENDED = 2
+
+    class Ai:
+        def a_in(self, channel, mode, rng, flags):
+            calls.append((channel, mode, rng, flags))
+            return voltages[channel]
+
+    class Device:
+        def __init__(self, descriptor):
+            self.descriptor = descriptor
+            self.state = "new"
+
+        def connect(self):
+            self.state = "connected"
+
+        def get_ai_device(self):
+            return Ai()
+
+        def disconnect(self):
+            self.state = "disconnected"
+
+        def release(self):
+            self.state = "released"
+
+    mod = types.SimpleNamespace(
+        Range=Range,
+        AiInputMode=AiInputMode,
+        AInFlag=types.SimpleNamespace(DEFAULT=0),
+        InterfaceType=types.SimpleNamespace(ANY=7),
+        get_daq_device_inventory=lambda interface: ["PCI-DAS1602/16"],
+        DaqDevice=Device,
+        calls=calls,
+    )
+    return mod
+
+
+def test_reads_gauge_channels_0_1_2_at_plus_minus_5v():
+    ul = fake_uldaq({0: 0.1, 1: -0.2, 2: 0.3, 3: 9.9})
+    rig = DaqRig(0, uldaq=ul)
+    reading = rig.read()
+    np.testing.assert_allclose(reading.gauges_v, [0.1, -0.2, 0.3])
+    assert [c[0] for c in ul.calls] == [0, 1, 2]  # table 2.2: Ch 0, 1, 2 high
+    assert {c[2] for c in ul.calls} == {ul.Range.BIP5VOLTS}  # 2.5.1: +-5 V
+    assert {c[1] for c in ul.calls} == {ul.AiInputMode.SINGLE_ENDED}
+    assert np.isnan(reading.pot_v)
+    with pytest.raises(RigError, match="cannot move the servo"):
+        rig.write_command(20)
+    rig.close()
+    assert rig._device.state == "released"
+
+
+def test_channels_and_range_come_from_params():
+    ul = fake_uldaq({4: 1.0, 5: 2.0, 6: 3.0})
+    params = RigParams().replace(sensors=Sensors(adc_channels=(4, 5, 6), adc_range_v=(-10.0, 10.0)))
+    rig = DaqRig(0, params, uldaq=ul, input_mode="differential")
+    np.testing.assert_allclose(rig.read().gauges_v, [1.0, 2.0, 3.0])
+    assert {c[2] for c in ul.calls} == {ul.Range.BIP10VOLTS}
+    with pytest.raises(ParameterError, match="adc_range_v"):
+        uldaq_range((0.0, 5.0), ul)
+
+
+def test_missing_board_is_a_rig_error():
+    with pytest.raises(RigError, match="no such MCC device; found 1"):
+        DaqRig(3, uldaq=fake_uldaq({}))
+
+
+def test_missing_uldaq_gives_an_install_hint(monkeypatch):
+    real_import = builtins.__import__
+
+    def no_uldaq(name, *args, **kwargs):
+        if name == "uldaq":
+            raise ImportError("No module named 'uldaq'")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_uldaq)
+    with pytest.raises(RigError, match="optional 'uldaq' package") as info:
+        open_rig("daq://0")
+    assert str(info.value) == MISSING_ULDAQ

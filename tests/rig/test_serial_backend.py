@@ -1,0 +1,114 @@
+"""The serial backend through a real pseudo-terminal pair, with a fake MILINST board decoding frames on the far end."""
+
+from __future__ import annotations
+
+import math
+import os
+import select
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+from flexdigit.errors import ParameterError, RigError
+from flexdigit.rig.base import open_rig
+from flexdigit.rig.loop import read_log, run_loop
+from flexdigit.rig.serial_backend import SerialRig
+from flexdigit.rig.servo_board import FrameDecoder
+
+from .conftest import PI, FakeClock
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="needs os.openpty")
+
+
+class FakeBoard(threading.Thread):
+    """Reads the master side of a pty and decodes Mini SSC frames, as the MILINST board would."""
+
+    def __init__(self):
+        super().__init__(daemon=True)
+        self.master, self.slave = os.openpty()
+        self.port = os.ttyname(self.slave)
+        self.decoder = FrameDecoder()
+        self.frames: list[tuple[int, int]] = []
+        self.got = threading.Condition()
+        self._halt = threading.Event()
+        self.start()
+
+    def run(self):
+        while not self._halt.is_set():
+            try:
+                ready, _, _ = select.select([self.master], [], [], 0.01)
+                if ready:
+                    data = os.read(self.master, 64)
+                    with self.got:
+                        self.frames += self.decoder.feed(data)
+                        self.got.notify_all()
+            except OSError:
+                return
+
+    def wait_frames(self, n, timeout=5.0):
+        with self.got:
+            self.got.wait_for(lambda: len(self.frames) >= n, timeout)
+        return list(self.frames)
+
+    def vanish(self):
+        """Unplug: the far end closes, the next write fails with EIO."""
+        self._halt.set()
+        self.join(1.0)
+        os.close(self.master)
+
+    def close(self):
+        if not self._halt.is_set():
+            self.vanish()
+        os.close(self.slave)
+
+
+@pytest.fixture
+def board():
+    b = FakeBoard()
+    yield b
+    b.close()
+
+
+def test_commands_reach_the_board_as_frames(board):
+    rig = open_rig(f"serial://{board.port}?baud=9600&channel=2", sensor=lambda: (np.zeros(3), math.nan))
+    assert isinstance(rig, SerialRig) and rig.channel == 2 and rig.baud == 9600
+    assert rig.write_command(43) == 43
+    assert rig.write_command(300) == 254  # clamped; 255 is never sent
+    assert rig.write_command(-7.2) == 0
+    rig.close()  # relaxes: equilibrium command 8
+    # first frame: the explicit equilibrium sent at open (bumpless start), last: the relax on close
+    assert board.wait_frames(5) == [(2, 8), (2, 43), (2, 254), (2, 0), (2, 8)]
+    assert "baud=9600" in repr(rig) and "closed" in repr(rig)
+
+
+def test_bad_url_options_name_the_culprit(board):
+    with pytest.raises(ParameterError, match="baud"):
+        open_rig(f"serial://{board.port}?baud=fast")
+    with pytest.raises(ParameterError, match="channel"):
+        open_rig(f"serial://{board.port}?channel=9")
+    with pytest.raises(RigError, match="cannot open"):
+        open_rig("serial:///dev/no-such-servo-board")
+
+
+def test_board_vanishing_mid_run_stops_the_loop_safely(tmp_path, board):
+    clock = FakeClock()
+    rig = SerialRig(board.port, sensor=lambda: (np.array([0.01, 0.0, 0.0]), math.nan), clock=clock, sleep=clock.sleep)
+    board.wait_frames(1)
+    n_before = 10
+
+    def unplug(k, t, y, command):
+        if k == n_before - 1:
+            board.vanish()
+
+    log = tmp_path / "run.jsonl"
+    result = run_loop(rig, PI(), setpoint=0.02, duration_s=1.0, period_s=0.02, log_path=log, on_sample=unplug)
+    assert result.status == "fault"
+    assert "port lost" in result.message and board.port in result.message
+    assert "could NOT send the safe command" in result.message  # the board is gone: we say so, we do not pretend
+    assert not result.safe_command_sent
+    assert rig.closed
+    header, samples, footer = read_log(log)
+    assert len(samples) == n_before and [s["k"] for s in samples] == list(range(n_before))
+    assert footer["stop"] == "fault"
