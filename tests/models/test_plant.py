@@ -1,0 +1,133 @@
+"""The plant G(s) of 3.5, built from components, against the printed figures (reference/thesis.toml) and
+closed forms of the cable model."""
+
+import math
+
+import numpy as np
+import pytest
+
+from flexdigit.errors import ParameterError
+from flexdigit.models.plant import (
+    build_plant,
+    closed_loop_printed_k1,
+    commands_for_tip_rotation,
+    explain_discrepancies,
+    output_choices,
+)
+from flexdigit.params import Geometry, RigParams
+from flexdigit.reference import thesis_complex, thesis_value
+
+
+def _rel(a, b):
+    return np.abs(np.asarray(a) - np.asarray(b)) / np.abs(np.asarray(b))
+
+
+def _match_poles(ours, printed):
+    """Relative distance of each printed pole to the nearest of ours."""
+    return np.array([np.min(np.abs(np.asarray(ours) - p)) / abs(p) for p in printed])
+
+
+def test_printed_plant_coefficients_within_0p1_percent_of_section_3_5():
+    g = build_plant("printed")
+    num = g.tf.num[0][0] / g.tf.den[0][0][0]
+    den = g.tf.den[0][0] / g.tf.den[0][0][0]
+    assert _rel(num, thesis_value("plant.g_num")).max() < 1e-3  # 48.7
+    assert _rel(den, thesis_value("plant.g_den")).max() < 1e-3  # 1, 23.65, 537.3, 2616, 4.354e4
+
+
+def test_printed_plant_poles_within_0p1_percent_of_section_3_5():
+    g = build_plant("printed")
+    assert _match_poles(g.poles, thesis_complex("plant.poles")).max() < 1e-3
+
+
+def test_closed_loop_with_printed_k1_matches_table_4_1():
+    g = build_plant("printed")
+    k1 = closed_loop_printed_k1()
+    assert k1 == pytest.approx(1.7699, abs=1e-4)  # table 4.1 numerator 86.2 / 48.7
+    cl = g.closed_loop(k1)
+    num = cl.num[0][0] / cl.den[0][0][0]
+    den = cl.den[0][0] / cl.den[0][0][0]
+    assert _rel(num[-1:], thesis_value("plant.closed_loop_num")).max() < 1e-3
+    assert _rel(den, thesis_value("plant.closed_loop_den")).max() < 1e-3
+    assert _match_poles(cl.poles(), thesis_complex("plant.closed_loop_poles")).max() < 1e-3
+
+
+def test_printed_plant_structure_as_stated_in_3_5():
+    g = build_plant("printed")
+    assert g.zeros.size == 0
+    assert g.controllability_rank == 4 and g.observability_rank == 4
+    assert g.is_minimum_phase
+    # companion form as printed: A first row = -den, C only in the last column
+    assert g.ss.A[0, 3] == pytest.approx(-43535, rel=1e-3)
+    assert g.ss.C[0, :3].tolist() == [0.0, 0.0, 0.0]
+
+
+def test_consistent_tip_rotation_gain_is_cable_closed_form():
+    p = RigParams()
+    g = build_plant("consistent", p, output="tip_rotation_rad")
+    # closed form: tip rotation = r_M theta / e, theta = 219/254 deg per command
+    expected = p.actuator.pulley_radius_m * math.radians(219 / 254) / p.geometry.cable_eccentricity_m
+    assert g.dc_gain == pytest.approx(expected, rel=1e-12)
+    assert g.output_unit == "rad"
+    assert commands_for_tip_rotation(30.0) == pytest.approx(math.radians(30) / expected, rel=1e-12)
+    assert 0 < commands_for_tip_rotation(30.0) + p.actuator.equilibrium_command < 254
+
+
+def test_consistent_gauge1_deflection_is_table_3_4_per_command():
+    g = build_plant("consistent", output="deflection_sg1_m")
+    # table 3.4: 1.82 mm at 16 commands from equilibrium
+    assert g.per_command(16) * 1e3 == pytest.approx(1.82, abs=0.005)
+    assert g.output_unit == "m"
+
+
+def test_consistent_measured_gains_equal_printed_fits():
+    dv = build_plant("consistent", output="gauge_v_sg1", gains="measured")
+    assert dv.dc_gain == pytest.approx(0.0086, rel=1e-12)  # E 3.20 slope
+    dy = build_plant("consistent", output="deflection_sg3_m", gains="measured")
+    assert dy.dc_gain == pytest.approx(2.7705e-3, rel=1e-12)  # 3.4.1 fit, gauge 3
+
+
+def test_consistent_plant_realisation_agrees_with_its_tf():
+    g = build_plant("consistent", output="gauge_v")
+    w = np.array([0.5, 5.0, 50.0])
+    ss_resp = np.array([complex(g.ss(1j * x)) for x in w])
+    tf_resp = np.array([complex(g.tf(1j * x)) for x in w])
+    assert _rel(ss_resp, tf_resp).max() < 1e-9
+    assert g.controllability_rank == 4 and g.observability_rank == 4
+
+
+def test_consistent_poles_are_servo_and_housed_digit():
+    p = RigParams()
+    g = build_plant("consistent", p)
+    wn = sorted(np.abs(g.poles))
+    assert wn[0] == pytest.approx(p.dynamics.wn_housing_rad_s, rel=1e-9)
+    assert wn[-1] == pytest.approx(p.actuator.servo_wn_rad_s, rel=1e-9)
+
+
+def test_explanations_are_numbered_and_cover_each_discrepancy():
+    items = explain_discrepancies()
+    assert [int(s.split(".")[0]) for s in items] == list(range(1, len(items) + 1))
+    text = " ".join(items)
+    for word in ("Digit factor", "Servo units", "K2", "K1", "DC gain", "Beam rotation"):
+        assert word in text
+
+
+def test_output_choices_follow_gauge_count():
+    p = RigParams(geometry=Geometry(gauge_positions_m=(0.1, 0.2)))
+    assert "deflection_sg2_m" in output_choices(p) and "deflection_sg3_m" not in output_choices(p)
+
+
+@pytest.mark.parametrize(
+    ("variant", "output", "gains"),
+    [
+        ("bogus", "deflection_sg1_m", "cable"),
+        ("printed", "tip_rotation_rad", "cable"),
+        ("printed", "deflection_sg1_m", "measured"),
+        ("consistent", "deflection_sg9_m", "cable"),
+        ("consistent", "tip_rotation_rad", "measured"),
+        ("consistent", "deflection_sg1_m", "guess"),
+    ],
+)
+def test_bad_choices_raise_parameter_error(variant, output, gains):
+    with pytest.raises(ParameterError):
+        build_plant(variant, output=output, gains=gains)
