@@ -1,0 +1,375 @@
+"""Tactile datasets: a tidy table of readings, a crash-safe journal, Parquet and CSV files.
+
+One row per reading: the three gauge voltages, the potentiometer voltage, the load (kg), where it hung (from the
+tip and from the base, m), the servo command (:data:`~flexdigit.tactile.protocols.RELAXED` when actuation is
+disabled), the test and repetition, and the time. The protocol and the rig that produced it travel with it as
+metadata, so a dataset cannot silently be mixed up with another experiment.
+
+While collecting, each reading is appended to a JSON-lines *journal* and flushed at once: Ctrl-C or a crash loses
+nothing already read, and a partial last line (a crash mid-write) is dropped on resume. When the protocol
+completes the journal is compacted to Parquet (pyarrow) and removed.
+
+Examples
+--------
+>>> import numpy as np
+>>> ds = Dataset({c: np.zeros(2, dtype=d) for c, d in COLUMNS.items()}, {"protocol": {"name": "x"}})
+>>> len(ds), ds.gauges_v.shape
+(2, (2, 3))
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from flexdigit import __version__
+from flexdigit.errors import DataFileError
+from flexdigit.tactile.protocols import Protocol
+
+#: Every column of a dataset and its numpy dtype.
+COLUMNS: dict[str, type] = {
+    "sample": np.int64,
+    "test": np.int64,
+    "gauge1_v": np.float64,
+    "gauge2_v": np.float64,
+    "gauge3_v": np.float64,
+    "pot_v": np.float64,
+    "load_kg": np.float64,
+    "position_index": np.int64,
+    "position_from_tip_m": np.float64,
+    "position_from_base_m": np.float64,
+    "command": np.int64,
+    "repetition": np.int64,
+    "time_s": np.float64,
+}
+GAUGE_COLUMNS = ("gauge1_v", "gauge2_v", "gauge3_v")
+JOURNAL_FORMAT = "flexdigit-tactile-journal/1"
+DATASET_FORMAT = "flexdigit-tactile-dataset/1"
+
+
+@dataclass
+class Dataset:
+    """Readings of one protocol: ``columns`` (name -> 1-D array, see :data:`COLUMNS`) and ``meta``.
+
+    ``meta`` holds ``protocol`` (the protocol as a dict), ``protocol_fingerprint``, ``rig`` (a description of
+    the backend), ``digit_length_m`` and ``flexdigit_version``.
+    """
+
+    columns: dict[str, np.ndarray]
+    meta: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return int(self.columns["sample"].shape[0])
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    @property
+    def gauges_v(self) -> np.ndarray:
+        """The three gauge voltages as an ``(n, 3)`` array (V)."""
+        return np.column_stack([self.columns[c] for c in GAUGE_COLUMNS])
+
+    @property
+    def contact(self) -> np.ndarray:
+        """1 where a load hangs on the digit, 0 for the no-load readings."""
+        return (self.columns["load_kg"] > 0).astype(np.int64)
+
+    @property
+    def protocol(self) -> Protocol:
+        return Protocol.from_dict(self.meta["protocol"])
+
+    def subset(self, mask: np.ndarray) -> Dataset:
+        """A new dataset with the rows where ``mask`` is true."""
+        return Dataset({k: v[mask] for k, v in self.columns.items()}, dict(self.meta))
+
+    def __repr__(self) -> str:
+        name = self.meta.get("protocol", {}).get("name", "?")
+        return f"Dataset(protocol={name!r}, samples={len(self)}, rig={self.meta.get('rig', {}).get('url', '?')!r})"
+
+
+def make_meta(protocol: Protocol, rig: dict, digit_length_m: float) -> dict:
+    """The metadata stored with a dataset (and in its journal's header)."""
+    return {
+        "format": DATASET_FORMAT,
+        "protocol": protocol.to_dict(),
+        "protocol_fingerprint": protocol.fingerprint,
+        "rig": rig,
+        "digit_length_m": float(digit_length_m),
+        "flexdigit_version": __version__,
+    }
+
+
+# --------------------------------------------------------------------------------------------------- journal
+class Journal:
+    """Append-only JSON-lines file: a header line, then one line per reading, flushed as written.
+
+    Use :meth:`open` to start or resume; it returns the journal and the readings already in it.
+    ``fsync=True`` also forces each line to disk (survives power loss, costs ~ms a reading).
+    """
+
+    def __init__(self, path: Path, handle, fsync: bool = False) -> None:
+        self.path = path
+        self._fh = handle
+        self._fsync = fsync
+
+    @classmethod
+    def open(cls, path: str | Path, meta: dict, *, fsync: bool = False) -> tuple[Journal, list[dict]]:
+        """Open ``path`` for appending; create it with ``meta`` as header, or check the header and resume.
+
+        Returns
+        -------
+        (Journal, list of dict)
+            The journal and the readings already recorded, in order (``sample`` 0, 1, ...).
+
+        Raises
+        ------
+        DataFileError
+            If the journal belongs to another protocol, or its lines are not consecutive readings.
+        """
+        path = Path(path)
+        rows: list[dict] = []
+        if path.exists() and path.stat().st_size > 0:
+            header, rows, good_bytes = _read_journal(path)
+            if header.get("protocol_fingerprint") != meta["protocol_fingerprint"]:
+                raise DataFileError(
+                    f"{path}: this journal was written by protocol {header.get('protocol', {}).get('name')!r} "
+                    f"(fingerprint {header.get('protocol_fingerprint')}), not {meta['protocol']['name']!r} "
+                    f"(fingerprint {meta['protocol_fingerprint']}); remove it or use --out with another file"
+                )
+            if good_bytes < path.stat().st_size:  # a crash mid-write left a partial line: drop it
+                with path.open("r+b") as fh:
+                    fh.truncate(good_bytes)
+            handle = path.open("a", encoding="utf-8")
+        else:
+            handle = path.open("w", encoding="utf-8")
+            handle.write(json.dumps({"journal": JOURNAL_FORMAT, **meta}) + "\n")
+            handle.flush()
+        return cls(path, handle, fsync), rows
+
+    def append(self, row: dict) -> None:
+        """Write one reading and flush it (and fsync it if asked)."""
+        self._fh.write(json.dumps(row) + "\n")
+        self._fh.flush()
+        if self._fsync:
+            os.fsync(self._fh.fileno())
+
+    def close(self) -> None:
+        self._fh.close()
+
+    def __enter__(self) -> Journal:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
+    """Header, complete readings, and the byte length of the complete part of a journal."""
+    data = path.read_bytes()
+    lines = data.split(b"\n")
+    # Everything after the last newline is a partial line (or empty): it is not counted.
+    complete, good_bytes = lines[:-1], data.rfind(b"\n") + 1
+    if not complete:
+        raise DataFileError(f"{path}: journal has no complete header line")
+    try:
+        header = json.loads(complete[0])
+    except json.JSONDecodeError:
+        raise DataFileError(f"{path}: line 1 is not a journal header (not JSON)") from None
+    if not isinstance(header, dict) or header.get("journal") != JOURNAL_FORMAT:
+        raise DataFileError(f"{path}: line 1 is not a {JOURNAL_FORMAT} header")
+    rows = []
+    for number, line in enumerate(complete[1:], start=2):
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:
+            raise DataFileError(f"{path}: line {number} is not valid JSON") from None
+        missing = [c for c in COLUMNS if c not in row]
+        if missing:
+            raise DataFileError(f"{path}: line {number} lacks column '{missing[0]}'")
+        if row["sample"] != len(rows):
+            raise DataFileError(
+                f"{path}: line {number} holds sample {row['sample']}, expected {len(rows)} "
+                "(readings must be consecutive; the journal was edited or mixed with another)"
+            )
+        rows.append(row)
+    return header, rows, good_bytes
+
+
+def read_journal(path: str | Path) -> Dataset:
+    """The readings of a journal so far, as a :class:`Dataset` (an interrupted run can still be analysed)."""
+    header, rows, _ = _read_journal(Path(path))
+    meta = {k: v for k, v in header.items() if k != "journal"}
+    return Dataset(_rows_to_columns(rows), meta)
+
+
+def _rows_to_columns(rows: list[dict]) -> dict[str, np.ndarray]:
+    out = {}
+    for name, dtype in COLUMNS.items():
+        values = [np.nan if r[name] is None else r[name] for r in rows]
+        out[name] = np.array(values, dtype=dtype) if values else np.zeros(0, dtype=dtype)
+    return out
+
+
+# ------------------------------------------------------------------------------------------- parquet and csv
+def save_dataset(dataset: Dataset, path: str | Path) -> Path:
+    """Write ``dataset`` as Parquet (metadata in the schema) or, for a ``.csv`` path, as CSV with a JSON header."""
+    path = Path(path)
+    if path.suffix.lower() == ".csv":
+        return export_csv(dataset, path)
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.table({name: dataset.columns[name] for name in COLUMNS})
+    table = table.replace_schema_metadata({"flexdigit": json.dumps(dataset.meta)})
+    tmp = path.with_name(path.name + ".tmp")
+    pq.write_table(table, tmp)
+    os.replace(tmp, path)  # atomic: a crash never leaves half a Parquet file under the real name
+    return path
+
+
+def export_csv(dataset: Dataset, path: str | Path) -> Path:
+    """Write ``dataset`` as CSV: a ``# {json metadata}`` first line, a header, one row per reading."""
+    path = Path(path)
+    names = list(COLUMNS)
+    with path.open("w", encoding="utf-8") as fh:
+        fh.write("# " + json.dumps(dataset.meta) + "\n")
+        fh.write(",".join(names) + "\n")
+        cols = [dataset.columns[n] for n in names]
+        for i in range(len(dataset)):
+            fh.write(",".join(repr(float(c[i])) if c.dtype.kind == "f" else str(int(c[i])) for c in cols) + "\n")
+    return path
+
+
+def load_dataset(path: str | Path, protocol: Protocol | None = None) -> Dataset:
+    """Read and validate a dataset (Parquet, CSV export, or an unfinished ``.jsonl`` journal).
+
+    Parameters
+    ----------
+    path : path
+        The file.
+    protocol : Protocol, optional
+        If given, the dataset must have been collected with it (same fingerprint).
+
+    Raises
+    ------
+    DataFileError
+        Naming the file and what is wrong: unreadable, a missing column, a wrong dtype, NaN gauge readings,
+        missing metadata, or another protocol.
+    FileNotFoundError
+        If the file does not exist.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(2, "No such file", str(path))
+    suffix = path.suffix.lower()
+    if suffix == ".jsonl":
+        dataset = read_journal(path)
+    elif suffix == ".csv":
+        dataset = _load_csv(path)
+    else:
+        dataset = _load_parquet(path)
+    _validate(dataset, path, protocol)
+    return dataset
+
+
+def _load_parquet(path: Path) -> Dataset:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    try:
+        table = pq.read_table(path)
+    except (pa.ArrowException, OSError) as exc:
+        raise DataFileError(f"{path}: not a readable Parquet file ({exc})") from None
+    meta_raw = (table.schema.metadata or {}).get(b"flexdigit")
+    if meta_raw is None:
+        raise DataFileError(f"{path}: no flexdigit metadata (protocol and rig); not a flexdigit tactile dataset")
+    try:
+        meta = json.loads(meta_raw)
+    except json.JSONDecodeError:
+        raise DataFileError(f"{path}: flexdigit metadata is not valid JSON") from None
+    columns = {}
+    for name, dtype in COLUMNS.items():
+        if name not in table.column_names:
+            raise DataFileError(f"{path}: missing column '{name}' (expected columns: {', '.join(COLUMNS)})")
+        arrow_type = table.schema.field(name).type
+        want_float = np.dtype(dtype).kind == "f"
+        ok = pa.types.is_floating(arrow_type) if want_float else pa.types.is_integer(arrow_type)
+        if not ok:
+            raise DataFileError(
+                f"{path}: column '{name}' has type {arrow_type}, expected {'float' if want_float else 'integer'}"
+            )
+        column = table.column(name)
+        if column.null_count and not want_float:
+            raise DataFileError(f"{path}: column '{name}' has {column.null_count} missing values")
+        columns[name] = column.to_numpy(zero_copy_only=False).astype(dtype)
+    return Dataset(columns, meta)
+
+
+def _load_csv(path: Path) -> Dataset:
+    with path.open(encoding="utf-8") as fh:
+        first = fh.readline()
+        if not first.startswith("# "):
+            raise DataFileError(f"{path}: line 1 must be '# {{json metadata}}' as written by flexdigit")
+        try:
+            meta = json.loads(first[2:])
+        except json.JSONDecodeError:
+            raise DataFileError(f"{path}: line 1 metadata is not valid JSON") from None
+        header = fh.readline().strip().split(",")
+        missing = [c for c in COLUMNS if c not in header]
+        if missing:
+            raise DataFileError(f"{path}: missing column '{missing[0]}' (expected columns: {', '.join(COLUMNS)})")
+        values: dict[str, list] = {c: [] for c in header}
+        for number, line in enumerate(fh, start=3):
+            cells = line.rstrip("\n").split(",")
+            if len(cells) != len(header):
+                raise DataFileError(f"{path}: line {number} has {len(cells)} cells, expected {len(header)}")
+            for c, v in zip(header, cells, strict=True):
+                values[c].append(v)
+    columns = {}
+    for name, dtype in COLUMNS.items():
+        try:
+            columns[name] = np.array(values[name], dtype=float)
+        except ValueError:
+            raise DataFileError(f"{path}: column '{name}' has a value that is not a number") from None
+        if np.dtype(dtype).kind == "i":
+            col = columns[name]
+            if not np.all(np.isfinite(col)) or not np.all(col == np.round(col)):
+                raise DataFileError(f"{path}: column '{name}' must hold integers")
+        columns[name] = columns[name].astype(dtype)
+    return Dataset(columns, meta)
+
+
+def _validate(dataset: Dataset, path: Path, protocol: Protocol | None) -> None:
+    meta = dataset.meta
+    for key in ("protocol", "protocol_fingerprint", "rig"):
+        if key not in meta:
+            raise DataFileError(f"{path}: metadata lacks '{key}'")
+    try:
+        stored = Protocol.from_dict(meta["protocol"])
+    except (TypeError, ValueError) as exc:
+        raise DataFileError(f"{path}: the stored protocol is invalid ({exc})") from None
+    if stored.fingerprint != meta["protocol_fingerprint"]:
+        raise DataFileError(f"{path}: the stored protocol does not match its fingerprint (edited metadata?)")
+    if protocol is not None and protocol.fingerprint != stored.fingerprint:
+        raise DataFileError(
+            f"{path}: collected with protocol {stored.name!r} (fingerprint {stored.fingerprint}), "
+            f"not {protocol.name!r} (fingerprint {protocol.fingerprint})"
+        )
+    gauges = dataset.gauges_v
+    if gauges.size and not np.all(np.isfinite(gauges)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(gauges), axis=1))[0])
+        raise DataFileError(f"{path}: gauge voltage of sample {int(dataset['sample'][bad])} is not finite")
+    loaded = dataset["load_kg"] > 0
+    if np.any(dataset["load_kg"] < 0) or np.any(~np.isfinite(dataset["load_kg"])):
+        raise DataFileError(f"{path}: column 'load_kg' must be finite and >= 0")
+    if np.any(~np.isfinite(dataset["position_from_tip_m"][loaded])):
+        raise DataFileError(f"{path}: a loaded sample has no position ('position_from_tip_m' is NaN)")
+    samples = dataset["sample"]
+    if np.unique(samples).size != samples.size:
+        raise DataFileError(f"{path}: column 'sample' repeats a sample number (duplicated readings)")
+    if samples.size and (samples.min() < 0 or samples.max() >= stored.sample_count):
+        raise DataFileError(f"{path}: column 'sample' is outside 0..{stored.sample_count - 1} for {stored.name!r}")

@@ -1,0 +1,339 @@
+"""The thesis's neural-network pipeline (6.6-6.9, 7.3-7.5), and the three network strategies of 6.2.1.
+
+Steps, as in the thesis: shuffle with a seed; split 1/2 training, 1/3 validation, 1/6 test (6.6); normalise every
+set with the training mean and standard deviation (E 6.1); train NETLAB MLPs (tanh hidden layer, linear output,
+squared error, SCG, :mod:`flexdigit.tactile.netlab`) with early stopping on the validation set (6.7-6.8); sweep the
+hidden nodes coarsely (5-60 step 5), then finely around the best (+-5 step 1: the thesis's 10-20 and 15-25); sweep
+the "learning gradient" (SCG tolerance) 1e-1..1e-9 at the chosen size; score the test set by MATLAB's ``corr2``
+and per-sample percentage error (6.9).
+
+Targets. The thesis's position target is the position *number* of tables 6.1/7.1 (1 = tip), with the no-load
+readings as position 0 (the table's first row), over every sample of the protocol (1275 or 1500): :func:`targets`
+``"position"``. ``"position_m"`` is the distance from the tip in metres over the loaded samples only (where a
+position exists); ``"magnitude"`` the load in kg (0 for no load); ``"contact"`` 1 for a load, 0 for none.
+
+Examples
+--------
+>>> import numpy as np
+>>> s = thesis_split(12, seed=0)
+>>> [len(s.train), len(s.val), len(s.test)]
+[6, 4, 2]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexdigit._validation import check_array, check_choice, check_int
+from flexdigit.errors import ParameterError
+from flexdigit.tactile.dataset import Dataset
+from flexdigit.tactile.metrics import accuracy, corr2, percentage_error, relative_rmse, rmse
+from flexdigit.tactile.netlab import MLP
+
+TARGETS = ("position", "position_m", "magnitude", "contact")
+LEARNING_GRADIENTS = tuple(10.0**-k for k in range(1, 10))
+COARSE_HIDDEN = tuple(range(5, 61, 5))
+
+
+@dataclass(frozen=True)
+class Split:
+    """Row indices of the training, validation and test sets."""
+
+    train: np.ndarray
+    val: np.ndarray
+    test: np.ndarray
+
+
+def thesis_split(n: int, seed: int) -> Split:
+    """Shuffle ``n`` rows with ``seed`` and cut them 1/2, 1/3, 1/6 (6.6)."""
+    n = check_int(n, "n", "thesis_split", low=3)
+    perm = np.random.default_rng(seed).permutation(n)
+    n_train, n_val = int(round(n / 2)), int(round(n / 3))
+    return Split(perm[:n_train], perm[n_train : n_train + n_val], perm[n_train + n_val :])
+
+
+class Normaliser:
+    """E 6.1: ``x~ = (x - mean) / sigma`` with the training set's mean and standard deviation (MATLAB ``std``).
+
+    Columns with zero spread are left unscaled (sigma = 1) rather than divided by zero.
+    """
+
+    def fit(self, X) -> Normaliser:
+        x = check_array(X, "X", "Normaliser.fit", ndim=2, min_length=2)
+        self.mean_ = x.mean(axis=0)
+        std = x.std(axis=0, ddof=1)
+        self.std_ = np.where(std > 0, std, 1.0)
+        return self
+
+    def transform(self, X) -> np.ndarray:
+        return (np.asarray(X, dtype=float) - self.mean_) / self.std_
+
+    def inverse_transform(self, Z) -> np.ndarray:
+        return np.asarray(Z, dtype=float) * self.std_ + self.mean_
+
+
+def features(dataset: Dataset, with_command: bool = False) -> np.ndarray:
+    """Network inputs: the three gauge voltages (V), and the servo command if asked (chapter 7 extension)."""
+    x = dataset.gauges_v
+    if with_command:
+        x = np.column_stack([x, dataset["command"].astype(float)])
+    return x
+
+
+def targets(dataset: Dataset, target: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(rows, y)``: which rows have the target, and its values (see the module docstring)."""
+    check_choice(target, "target", TARGETS, "targets")
+    n = len(dataset)
+    if target == "position":
+        return np.arange(n), dataset["position_index"].astype(float)
+    if target == "position_m":
+        rows = np.flatnonzero(dataset["load_kg"] > 0)
+        return rows, dataset["position_from_tip_m"][rows]
+    if target == "magnitude":
+        return np.arange(n), dataset["load_kg"].astype(float)
+    return np.arange(n), dataset.contact.astype(float)
+
+
+class ThesisNetwork:
+    """A normalised NETLAB MLP: normalise inputs and targets (E 6.1), train with early stopping, predict.
+
+    Parameters are those of :class:`~flexdigit.tactile.netlab.MLP`. ``fit(X, y, X_val, y_val)``.
+    """
+
+    def __init__(self, hidden=18, tol=1e-7, epochs=50, iterations_per_epoch=50, random_state=0) -> None:
+        self.hidden = hidden
+        self.tol = tol
+        self.epochs = epochs
+        self.iterations_per_epoch = iterations_per_epoch
+        self.random_state = random_state
+
+    def __repr__(self) -> str:
+        return f"ThesisNetwork(hidden={self.hidden}, tol={self.tol:g}, epochs={self.epochs})"
+
+    def fit(self, X, y, X_val=None, y_val=None) -> ThesisNetwork:
+        x = check_array(X, "X", "ThesisNetwork.fit", ndim=2, min_length=2)
+        t = check_array(y, "y", "ThesisNetwork.fit")
+        self.y_ndim_ = t.ndim
+        t2 = t.reshape(-1, 1) if t.ndim == 1 else t
+        self.x_norm_ = Normaliser().fit(x)
+        self.y_norm_ = Normaliser().fit(t2)
+        net = MLP(self.hidden, self.tol, self.epochs, self.iterations_per_epoch, self.random_state)
+        if X_val is None:
+            net.fit(self.x_norm_.transform(x), self.y_norm_.transform(t2))
+        else:
+            tv = np.asarray(y_val, dtype=float)
+            tv = tv.reshape(-1, 1) if tv.ndim == 1 else tv
+            net.fit(
+                self.x_norm_.transform(x),
+                self.y_norm_.transform(t2),
+                self.x_norm_.transform(X_val),
+                self.y_norm_.transform(tv),
+            )
+        self.net_ = net
+        # error curves in target units^2 (the normalised MSE times the target variance)
+        scale = float(np.mean(self.y_norm_.std_**2))
+        self.train_error_ = net.train_error_ * scale
+        self.val_error_ = net.val_error_ * scale
+        return self
+
+    def predict(self, X) -> np.ndarray:
+        if not hasattr(self, "net_"):
+            raise ParameterError("This ThesisNetwork is not fitted yet; call fit first.")
+        x = check_array(X, "X", "ThesisNetwork.predict", ndim=2)
+        y = self.y_norm_.inverse_transform(self.net_.predict(self.x_norm_.transform(x)).reshape(x.shape[0], -1))
+        return y[:, 0] if self.y_ndim_ == 1 else y
+
+
+@dataclass
+class SweepPoint:
+    """One trained configuration: its size, tolerance, best validation and training MSE, and the epoch kept."""
+
+    hidden: int
+    tol: float
+    val_mse: float
+    train_mse: float
+    best_epoch: int
+
+
+@dataclass
+class PipelineResult:
+    """Everything the thesis pipeline produced for one dataset and target."""
+
+    target: str
+    split: Split
+    coarse: list[SweepPoint]
+    fine: list[SweepPoint]
+    gradient: list[SweepPoint]
+    best_hidden: int
+    best_tol: float
+    curve_hidden: int
+    curve_train: np.ndarray
+    curve_val: np.ndarray
+    y_test: np.ndarray
+    y_pred: np.ndarray
+    corr2: float
+    percent_error: np.ndarray
+    model: ThesisNetwork
+    extra: dict = field(default_factory=dict)
+
+
+def _train(x, y, split, hidden, tol, seed, epochs) -> tuple[ThesisNetwork, SweepPoint]:
+    model = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=seed)
+    model.fit(x[split.train], y[split.train], x[split.val], y[split.val])
+    k = model.net_.best_epoch_
+    return model, SweepPoint(hidden, tol, float(model.val_error_[k]), float(model.train_error_[k]), k)
+
+
+def run_pipeline(
+    x,
+    y,
+    *,
+    seed: int = 0,
+    coarse=COARSE_HIDDEN,
+    fine_halfwidth: int = 5,
+    gradients=LEARNING_GRADIENTS,
+    default_tol: float = 1e-7,
+    curve_hidden: int = 15,
+    epochs: int = 50,
+    fixed_hidden: int | None = None,
+    fixed_tol: float | None = None,
+    target: str = "position",
+) -> PipelineResult:
+    """The thesis's optimisation and test (6.6-6.9) on inputs ``x`` (n, k) and targets ``y`` (n,).
+
+    Parameters
+    ----------
+    seed : int
+        Seeds the shuffle and every network's initial weights: same seed, same numbers.
+    coarse : sequence of int
+        Hidden sizes of the coarse sweep (5..60 step 5).
+    fine_halfwidth : int
+        The fine sweep covers the best coarse size +-this, step 1 (thesis: 10-20, 15-25).
+    gradients : sequence of float
+        "Learning gradients" (SCG tolerances) swept at the chosen size (1e-1..1e-9).
+    default_tol : float
+        Tolerance during the hidden-node sweeps (the thesis's default 1e-7).
+    curve_hidden : int
+        Size whose error-vs-iteration curves are kept (figure 6.13: 15; figure 7.4: 20).
+    epochs : int
+        Epochs of 50 SCG iterations per training (50).
+    fixed_hidden, fixed_tol : optional
+        Skip the sweeps and use these (the thesis's printed optimum, for a like-for-like test).
+    """
+    x = check_array(x, "x", "run_pipeline", ndim=2, min_length=6)
+    y = check_array(y, "y", "run_pipeline", ndim=1)
+    if y.shape[0] != x.shape[0]:
+        raise ParameterError(f"run_pipeline needs one target per row. Got {y.shape[0]} and {x.shape[0]}.")
+    split = thesis_split(x.shape[0], seed)
+    seeds = iter(np.random.default_rng([seed, 1]).integers(0, 2**31, size=1000))
+    coarse_pts = [] if fixed_hidden else [_train(x, y, split, h, default_tol, next(seeds), epochs)[1] for h in coarse]
+    fine_pts: list[SweepPoint] = []
+    if fixed_hidden:
+        best_hidden = int(fixed_hidden)
+    else:
+        c = min(coarse_pts, key=lambda p: p.val_mse).hidden
+        fine = range(max(1, c - fine_halfwidth), c + fine_halfwidth + 1)
+        fine_pts = [_train(x, y, split, h, default_tol, next(seeds), epochs)[1] for h in fine]
+        best_hidden = min(fine_pts + coarse_pts, key=lambda p: p.val_mse).hidden
+    grad_pts: list[SweepPoint] = []
+    if fixed_tol:
+        best_tol = float(fixed_tol)
+    else:
+        grad_pts = [_train(x, y, split, best_hidden, g, next(seeds), epochs)[1] for g in gradients]
+        best_tol = min(grad_pts, key=lambda p: p.val_mse).tol
+    curve_model, _ = _train(x, y, split, curve_hidden, default_tol, next(seeds), epochs)
+    model, _ = _train(x, y, split, best_hidden, best_tol, next(seeds), epochs)
+    y_test = y[split.test]
+    y_pred = model.predict(x[split.test])
+    return PipelineResult(
+        target=target,
+        split=split,
+        coarse=coarse_pts,
+        fine=fine_pts,
+        gradient=grad_pts,
+        best_hidden=best_hidden,
+        best_tol=best_tol,
+        curve_hidden=curve_hidden,
+        curve_train=curve_model.train_error_,
+        curve_val=curve_model.val_error_,
+        y_test=y_test,
+        y_pred=y_pred,
+        corr2=corr2(y_pred, y_test),
+        percent_error=percentage_error(y_pred, y_test),
+        model=model,
+    )
+
+
+# ------------------------------------------------------------------------------------ strategies of 6.2.1
+@dataclass
+class StrategyScore:
+    """Test-set scores of one strategy: position (corr2 and RMSE in m, loaded samples), contact, magnitude."""
+
+    strategy: str
+    position_corr2: float
+    position_rmse_m: float
+    contact_accuracy: float
+    magnitude_rel_rmse: float
+    magnitude_rmse_kg: float
+
+
+def compare_strategies(dataset: Dataset, *, hidden: int = 18, tol: float = 1e-7, seed: int = 0, epochs: int = 50):
+    """Combined, parallel and cascaded networks (figures 6.2-6.4) on the same split of ``dataset``.
+
+    * parallel: three separate networks on the gauges: contact (all rows, 0/1, threshold 0.5), magnitude (all
+      rows, kg) and position (loaded rows only, m from the tip); position is reported only where contact is
+      predicted.
+    * combined: one network with three outputs (contact, magnitude, position; position 0 for no load).
+    * cascaded: contact first; magnitude from gauges + predicted contact; position from gauges + predicted contact
+      + predicted magnitude (trained on the upstream networks' own predictions, as it would run).
+
+    Returns a list of :class:`StrategyScore` (scores on the test rows; position over loaded test rows).
+    """
+    x = features(dataset, with_command=dataset.protocol.actuated)
+    n = len(dataset)
+    split = thesis_split(n, seed)
+    contact = dataset.contact.astype(float)
+    mass = dataset["load_kg"].astype(float)
+    pos = np.nan_to_num(dataset["position_from_tip_m"], nan=0.0)
+    loaded = contact > 0
+    tr, va, te = split.train, split.val, split.test
+    tr_l, va_l = tr[loaded[tr]], va[loaded[va]]
+    te_l = te[loaded[te]]
+
+    def net(h=hidden, s=seed):
+        return ThesisNetwork(hidden=h, tol=tol, epochs=epochs, random_state=s)
+
+    def score(name, c_pred, m_pred, p_pred) -> StrategyScore:
+        c_hat = (c_pred >= 0.5).astype(float)
+        pl = p_pred[loaded[te]]
+        return StrategyScore(
+            name,
+            corr2(pl, pos[te_l]),
+            rmse(pl, pos[te_l]),
+            accuracy(c_hat, contact[te]),
+            relative_rmse(m_pred[loaded[te]], mass[te_l]),
+            rmse(m_pred, mass[te]),
+        )
+
+    scores = []
+    # parallel
+    c_net = net().fit(x[tr], contact[tr], x[va], contact[va])
+    m_net = net().fit(x[tr], mass[tr], x[va], mass[va])
+    p_net = net().fit(x[tr_l], pos[tr_l], x[va_l], pos[va_l])
+    scores.append(score("parallel", c_net.predict(x[te]), m_net.predict(x[te]), p_net.predict(x[te])))
+    # combined
+    y3 = np.column_stack([contact, mass, pos])
+    comb = net(h=hidden).fit(x[tr], y3[tr], x[va], y3[va])
+    y_hat = comb.predict(x[te])
+    scores.append(score("combined", y_hat[:, 0], y_hat[:, 1], y_hat[:, 2]))
+    # cascaded: each stage sees the previous stages' predictions
+    c_all = c_net.predict(x)
+    x2 = np.column_stack([x, c_all])
+    m2 = net().fit(x2[tr], mass[tr], x2[va], mass[va])
+    m_all = m2.predict(x2)
+    x3 = np.column_stack([x2, m_all])
+    p3 = net().fit(x3[tr_l], pos[tr_l], x3[va_l], pos[va_l])
+    scores.append(score("cascaded", c_all[te], m_all[te], p3.predict(x3[te])))
+    return scores

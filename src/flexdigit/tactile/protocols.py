@@ -1,0 +1,265 @@
+"""Load experiments as data: the thesis's tables 6.1 and 7.1 and user-defined protocols in TOML.
+
+A protocol says which loads are hung where on the digit, at which actuation commands, how many times each is
+read and how long to let the digit settle. :meth:`Protocol.plan` turns it into the ordered list of samples the
+runner takes: for every test (one load, or one (load, command) pair when actuated) the no-load readings first
+("a no load condition was measured at the start of every test", 6.5, 7.2), then each position from the tip,
+read ``repetitions`` times.
+
+Built-in protocols live in ``tactile/protocols/*.toml``: ``thesis-6.1`` (1275 samples), ``thesis-7.1``
+(1500 samples, as printed) and ``thesis-7.1-no-load`` (1650: the no-load readings the text mentions but the
+printed count leaves out).
+
+Examples
+--------
+>>> p = load_protocol("thesis-6.1")
+>>> p.sample_count, len(p.positions_from_tip_m), p.loads_kg
+(1275, 16, (0.0125, 0.025, 0.0075))
+>>> load_protocol("thesis-7.1").sample_count
+1500
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import tomllib
+from dataclasses import asdict, dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from flexdigit._validation import check_array, check_choice, check_int, check_real
+from flexdigit.errors import ParameterError
+
+#: The ``command`` recorded when actuation is disabled (the servo relaxed, chapter 6).
+RELAXED = -1
+
+#: Names of the protocols packaged in ``tactile/protocols``.
+BUILTIN = ("thesis-6.1", "thesis-7.1", "thesis-7.1-no-load")
+
+_KEYS = {
+    "name",
+    "description",
+    "thesis_ref",
+    "orientation",
+    "loads_g",
+    "positions_from_tip_cm",
+    "actuation_commands",
+    "repetitions",
+    "no_load_repetitions",
+    "settle_s",
+    "expected_samples",
+}
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """One load experiment.
+
+    Parameters
+    ----------
+    name : str
+        Short identifier, recorded in every dataset.
+    loads_kg : tuple of float
+        Point loads hung on the digit, one test each, in order (kg).
+    positions_from_tip_m : tuple of float
+        Load positions measured from the tip, in order (m); position index 1 is the first (table 6.1).
+    actuation_commands : tuple of int
+        Servo commands (0..254) held during the readings; empty means actuation disabled (servo relaxed).
+    repetitions : int
+        Readings per (load, position, command).
+    no_load_repetitions : int
+        No-load readings at the start of every test.
+    settle_s : float
+        Time allowed after every change of load, position or command before reading (s).
+    orientation : {"horizontal", "vertical"}
+        How the digit lies; the thesis's tactile experiments are horizontal (7, intro).
+    description, thesis_ref : str
+        Free text.
+    """
+
+    name: str
+    loads_kg: tuple[float, ...]
+    positions_from_tip_m: tuple[float, ...]
+    actuation_commands: tuple[int, ...] = ()
+    repetitions: int = 25
+    no_load_repetitions: int = 25
+    settle_s: float = 1.0
+    orientation: str = "horizontal"
+    description: str = ""
+    thesis_ref: str = ""
+
+    def __post_init__(self) -> None:
+        owner = f"Protocol {self.name!r}"
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise ParameterError(f"The 'name' parameter of Protocol must be a non-empty string. Got {self.name!r}.")
+        loads = check_array(self.loads_kg, "loads_kg", owner, ndim=1, min_length=1, low=0, low_open=True, high=10)
+        positions = check_array(
+            self.positions_from_tip_m, "positions_from_tip_m", owner, ndim=1, min_length=1, low=0, high=10
+        )
+        if len(set(positions.tolist())) != positions.size:
+            raise ParameterError(
+                f"The 'positions_from_tip_m' parameter of {owner} must not repeat a position. "
+                f"Got {positions.tolist()!r} instead."
+            )
+        commands = tuple(check_int(c, "actuation_commands", owner, low=0, high=254) for c in self.actuation_commands)
+        object.__setattr__(self, "loads_kg", tuple(float(v) for v in loads))
+        object.__setattr__(self, "positions_from_tip_m", tuple(float(v) for v in positions))
+        object.__setattr__(self, "actuation_commands", commands)
+        object.__setattr__(self, "repetitions", check_int(self.repetitions, "repetitions", owner, low=1, high=100_000))
+        object.__setattr__(
+            self,
+            "no_load_repetitions",
+            check_int(self.no_load_repetitions, "no_load_repetitions", owner, low=0, high=100_000),
+        )
+        object.__setattr__(self, "settle_s", check_real(self.settle_s, "settle_s", owner, low=0, high=3600))
+        check_choice(self.orientation, "orientation", ("horizontal", "vertical"), owner)
+
+    @property
+    def actuated(self) -> bool:
+        """Whether the servo holds a command during the readings (chapter 7) or is relaxed (chapter 6)."""
+        return bool(self.actuation_commands)
+
+    @property
+    def tests(self) -> list[tuple[float, int]]:
+        """The tests in order: ``(load_kg, command)``, command :data:`RELAXED` when not actuated."""
+        commands = self.actuation_commands or (RELAXED,)
+        return [(load, command) for load in self.loads_kg for command in commands]
+
+    @property
+    def sample_count(self) -> int:
+        """Number of samples the protocol takes (1275 for table 6.1, 1500 for table 7.1)."""
+        per_test = self.no_load_repetitions + len(self.positions_from_tip_m) * self.repetitions
+        return len(self.tests) * per_test
+
+    def plan(self, digit_length_m: float) -> dict[str, np.ndarray]:
+        """The ordered samples: one array per column, ``sample_count`` long.
+
+        Parameters
+        ----------
+        digit_length_m : float
+            Clamp to tip (m), to turn positions from the tip into positions from the base.
+
+        Returns
+        -------
+        dict of ndarray
+            ``sample``, ``test``, ``load_kg``, ``position_index`` (0 for no load, 1.. as table 6.1),
+            ``position_from_tip_m`` and ``position_from_base_m`` (NaN for no load), ``command``
+            (:data:`RELAXED` when not actuated) and ``repetition``.
+        """
+        length = check_real(digit_length_m, "digit_length_m", "Protocol.plan", low=0, low_open=True)
+        too_far = [p for p in self.positions_from_tip_m if p > length]
+        if too_far:
+            raise ParameterError(
+                f"The 'positions_from_tip_m' parameter of Protocol {self.name!r} must lie on the digit "
+                f"(0 to {length:g} m from the tip). Got {too_far!r} instead."
+            )
+        rows: list[tuple] = []
+        for test, (load, command) in enumerate(self.tests):
+            for rep in range(self.no_load_repetitions):
+                rows.append((test, 0.0, 0, np.nan, command, rep))
+            for index, pos in enumerate(self.positions_from_tip_m, start=1):
+                for rep in range(self.repetitions):
+                    rows.append((test, load, index, pos, command, rep))
+        cols = list(zip(*rows, strict=True))
+        tip = np.array(cols[3], dtype=float)
+        return {
+            "sample": np.arange(len(rows), dtype=np.int64),
+            "test": np.array(cols[0], dtype=np.int64),
+            "load_kg": np.array(cols[1], dtype=float),
+            "position_index": np.array(cols[2], dtype=np.int64),
+            "position_from_tip_m": tip,
+            "position_from_base_m": length - tip,
+            "command": np.array(cols[4], dtype=np.int64),
+            "repetition": np.array(cols[5], dtype=np.int64),
+        }
+
+    def to_dict(self) -> dict:
+        """Plain dict (lists for tuples), as stored in datasets and journals."""
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+
+    @property
+    def fingerprint(self) -> str:
+        """A short hash of everything that decides which samples are taken (not the free text)."""
+        d = self.to_dict()
+        key = {k: d[k] for k in ("loads_kg", "positions_from_tip_m", "actuation_commands", "repetitions")}
+        key["no_load_repetitions"] = d["no_load_repetitions"]
+        return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]
+
+    @classmethod
+    def from_dict(cls, data: dict) -> Protocol:
+        """Inverse of :meth:`to_dict`."""
+        fields = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
+        return cls(**fields)
+
+
+def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
+    """Build a protocol from TOML text (units as in the thesis tables: grams and centimetres).
+
+    Keys: ``name``, ``loads_g``, ``positions_from_tip_cm`` (required); ``actuation_commands`` (default ``[]``,
+    actuation disabled), ``repetitions`` (25), ``no_load_repetitions`` (25), ``settle_s`` (1.0),
+    ``orientation`` ("horizontal"), ``description``, ``thesis_ref``, ``expected_samples`` (checked if given).
+
+    Raises
+    ------
+    ParameterError
+        Naming ``source``, the key and what was expected.
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{source}: not valid TOML ({exc})") from None
+    unknown = sorted(set(data) - _KEYS)
+    if unknown:
+        raise ParameterError(f"{source}: unknown key '{unknown[0]}'; expected some of " + ", ".join(sorted(_KEYS)))
+    for key in ("name", "loads_g", "positions_from_tip_cm"):
+        if key not in data:
+            raise ParameterError(f"{source}: missing key '{key}'")
+    for key in ("loads_g", "positions_from_tip_cm", "actuation_commands"):
+        if key in data and not isinstance(data[key], list):
+            raise ParameterError(f"{source}: '{key}' must be a list. Got {data[key]!r} instead.")
+    try:
+        loads = check_array(data["loads_g"], "loads_g", source, ndim=1, min_length=1, low=0, low_open=True)
+        tips = check_array(data["positions_from_tip_cm"], "positions_from_tip_cm", source, ndim=1, min_length=1, low=0)
+        protocol = Protocol(
+            name=data["name"],
+            loads_kg=tuple(float(v) / 1000.0 for v in loads),
+            positions_from_tip_m=tuple(float(v) / 100.0 for v in tips),
+            actuation_commands=tuple(data.get("actuation_commands", ())),
+            repetitions=data.get("repetitions", 25),
+            no_load_repetitions=data.get("no_load_repetitions", 25),
+            settle_s=data.get("settle_s", 1.0),
+            orientation=data.get("orientation", "horizontal"),
+            description=str(data.get("description", "")),
+            thesis_ref=str(data.get("thesis_ref", "")),
+        )
+    except ParameterError as exc:
+        raise ParameterError(f"{source}: {exc}") from None
+    expected = data.get("expected_samples")
+    if expected is not None and expected != protocol.sample_count:
+        raise ParameterError(
+            f"{source}: 'expected_samples' is {expected!r} but the protocol takes {protocol.sample_count} samples"
+        )
+    return protocol
+
+
+def load_protocol(name_or_path: str | Path) -> Protocol:
+    """A built-in protocol by name (see :data:`BUILTIN`) or a user protocol from a TOML file.
+
+    Raises
+    ------
+    ParameterError
+        If the name is unknown and no such file exists, or the file is invalid.
+    """
+    text_name = str(name_or_path)
+    if text_name in BUILTIN:
+        resource = resources.files(__package__).joinpath("protocols", f"{text_name}.toml")
+        return protocol_from_toml(resource.read_text(), source=f"protocol {text_name}")
+    path = Path(name_or_path)
+    if not path.is_file():
+        raise ParameterError(
+            f"no protocol {text_name!r}: expected one of {', '.join(BUILTIN)} or a TOML file that exists"
+        )
+    return protocol_from_toml(path.read_text(), source=str(path))

@@ -1,0 +1,52 @@
+import numpy as np
+import pytest
+
+from flexdigit.errors import ParameterError
+from flexdigit.reference import thesis_value
+from flexdigit.tactile.protocols import RELAXED, load_protocol, protocol_from_toml
+
+
+def test_table_6_1_counts_match_thesis():
+    # table 6.1 / thesis-values [tactile.non_actuated]: 3 loads x 16 positions x 25 + 75 no-load = 1275
+    p = load_protocol("thesis-6.1")
+    assert p.sample_count == thesis_value("tactile.non_actuated.samples") == 1275
+    assert [round(m * 1000, 3) for m in p.loads_kg] == thesis_value("tactile.non_actuated.loads_g")
+    assert [round(x * 100, 6) for x in p.positions_from_tip_m] == thesis_value(
+        "tactile.non_actuated.positions_from_tip_cm"
+    )
+    assert not p.actuated
+    plan = p.plan(0.270)
+    assert np.sum(plan["load_kg"] == 0) == 75  # a no-load reading set at the start of every test
+    assert np.all(plan["command"] == RELAXED)
+    # first test starts with its no-load readings, then position 1 (the tip, 270 mm from the base)
+    assert plan["load_kg"][0] == 0 and plan["position_index"][25] == 1
+    assert plan["position_from_base_m"][25] == pytest.approx(0.270)
+
+
+def test_table_7_1_counts_match_thesis():
+    # table 7.1: 2 x 10 x 3 x 25 = 1500 (as printed; no-load readings are not in that count)
+    p = load_protocol("thesis-7.1")
+    assert p.sample_count == thesis_value("tactile.actuated.samples") == 1500
+    assert list(p.actuation_commands) == thesis_value("tactile.actuated.actuation_commands")
+    assert load_protocol("thesis-7.1-no-load").sample_count == 1500 + 2 * 3 * 25
+    plan = p.plan(0.270)
+    assert sorted(set(plan["command"].tolist())) == [0, 20, 40]
+
+
+def test_user_protocol_and_clear_errors(tmp_path):
+    p = protocol_from_toml('name = "mine"\nloads_g = [10]\npositions_from_tip_cm = [0, 5]\nrepetitions = 2\n')
+    assert p.sample_count == 2 * 2 + 25
+    with pytest.raises(ParameterError, match="missing key 'loads_g'"):
+        protocol_from_toml('name = "x"\npositions_from_tip_cm = [1]\n')
+    with pytest.raises(ParameterError, match="unknown key 'load_g'"):
+        protocol_from_toml('name = "x"\nload_g = [1]\npositions_from_tip_cm = [1]\n')
+    with pytest.raises(ParameterError, match="repetitions"):
+        protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [1]\nrepetitions = 0\n')
+    with pytest.raises(ParameterError, match="expected_samples"):
+        protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [1]\nexpected_samples = 3\n')
+    with pytest.raises(ParameterError, match="actuation_commands"):
+        protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [1]\nactuation_commands = [300]\n')
+    with pytest.raises(ParameterError, match="no protocol"):
+        load_protocol(tmp_path / "absent.toml")
+    with pytest.raises(ParameterError, match="must lie on the digit"):
+        protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [30]\n').plan(0.27)
