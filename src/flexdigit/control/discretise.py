@@ -1,0 +1,256 @@
+"""Discretisation of a continuous controller, and where each method puts its poles and zeros (thesis 5.1).
+
+Four methods, each a map from the s-plane to the z-plane::
+
+    tustin (trapezoidal, E 5.1)   s = (2/T)(z - 1)/(z + 1)     z = (1 + sT/2)/(1 - sT/2)
+    forward Euler (5.1.2)         s = (z - 1)/T                z = 1 + sT
+    backward Euler                s = (z - 1)/(T z)            z = 1/(1 - sT)
+    zero-order hold               exact for a held input       poles z = exp(sT)
+
+Tustin and backward Euler map the whole left half plane inside the unit circle, so a stable controller stays
+stable at any period. Forward Euler maps it onto the half plane Re z < 1: a pole ``-sigma +- j omega`` lands inside
+the unit circle only while ``T < 2 sigma / (sigma^2 + omega^2) = 2 zeta / wn`` (``2/a`` for a real pole ``-a``;
+:func:`forward_euler_stability_limit_s`). For the thesis's 39 Hz controller that is 2/245 = 8.2 ms for its fast
+pole, and its zeros, placed on the lightly damped beam mode (zeta 0.027, wn 10.16 rad/s), leave the circle above
+2 zeta/wn = 5.3 ms; this is the explanation of figures 5.5-5.7.
+
+Tustin, ZOH and backward Euler come from python-control's ``sample_system`` (SciPy ``cont2discrete``); forward
+Euler is one line by hand, ``x+ = (I + TA) x + TB u`` (E 5.2-5.3 of the thesis), because SciPy's ``"euler"`` is the
+same map but python-control refuses to prewarp or name it, and the thesis states it in exactly this form.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import control as ct
+from flexdigit._validation import check_choice, check_int, check_positive, check_real
+from flexdigit.errors import DesignError
+
+__all__ = [
+    "METHODS",
+    "discretise",
+    "map_s_to_z",
+    "forward_euler_stability_limit_s",
+    "FirstOrderTustin",
+    "StepHalving",
+    "halve_step",
+]
+
+METHODS = ("tustin", "zoh", "forward_euler", "backward_euler")
+
+
+def discretise(sys, period_s: float, method: str = "tustin", *, prewarp_rad_s: float | None = None):
+    """Discretise a continuous LTI system at sample period ``period_s``.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction or control.StateSpace
+        Continuous-time system (the controller, or the plant for ``"zoh"``).
+    period_s : float
+        Sample period T, s.
+    method : {"tustin", "zoh", "forward_euler", "backward_euler"}
+    prewarp_rad_s : float, optional
+        Tustin only: frequency (rad/s) at which the discrete frequency response matches the continuous one.
+
+    Returns
+    -------
+    control.TransferFunction or control.StateSpace
+        A new discrete system with ``dt = period_s``, of the same type as ``sys``.
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> d = discretise(ct.tf([1], [1, 1]), 0.1, "forward_euler")
+    >>> [round(float(p.real), 6) for p in d.poles()]     # z = 1 + sT = 1 - 0.1
+    [0.9]
+    """
+    T = check_positive(period_s, "period_s", "discretise")
+    method = check_choice(method, "method", METHODS, "discretise")
+    if not ct.isctime(sys, strict=True):
+        raise DesignError(f"The 'sys' parameter of discretise must be a continuous-time system. Got dt={sys.dt}.")
+    if prewarp_rad_s is not None:
+        if method != "tustin":
+            raise DesignError(f"prewarp_rad_s applies to the 'tustin' method only, not {method!r}")
+        w = check_positive(prewarp_rad_s, "prewarp_rad_s", "discretise")
+        if w * T >= np.pi:
+            raise DesignError(f"prewarp_rad_s = {w} rad/s is above the Nyquist frequency pi/T = {np.pi / T:.4g} rad/s")
+    if method == "forward_euler":
+        ss = ct.ss(sys)
+        n = ss.nstates
+        out = ct.ss(np.eye(n) + T * ss.A, T * ss.B, ss.C, ss.D, T)  # x+ = (I + TA) x + TB u   (5.1.2)
+        return ct.tf(out) if isinstance(sys, ct.TransferFunction) else out
+    if method == "backward_euler":
+        return ct.sample_system(sys, T, method="backward_diff")
+    if method == "tustin":
+        return ct.sample_system(sys, T, method="tustin", prewarp_frequency=prewarp_rad_s)
+    return ct.sample_system(sys, T, method="zoh")
+
+
+def map_s_to_z(s, period_s: float, method: str) -> np.ndarray:
+    """Where a method sends points of the s-plane (poles; also zeros for every method but ``"zoh"``).
+
+    ZOH maps poles by ``exp(sT)``; its zeros have no closed form, so map only poles with ``"zoh"``.
+
+    Examples
+    --------
+    >>> round(float(map_s_to_z(-245.04, 0.010, "forward_euler").real), 4)   # the 39 Hz design's fast pole, 10 ms
+    -1.4504
+    """
+    T = check_positive(period_s, "period_s", "map_s_to_z")
+    method = check_choice(method, "method", METHODS, "map_s_to_z")
+    s = np.asarray(s, dtype=complex)
+    if method == "forward_euler":
+        return 1 + s * T
+    if method == "backward_euler":
+        return 1 / (1 - s * T)
+    if method == "tustin":
+        return (1 + s * T / 2) / (1 - s * T / 2)
+    return np.exp(s * T)
+
+
+def forward_euler_stability_limit_s(points) -> float:
+    """Largest period for which forward Euler keeps every left-half-plane point inside the unit circle.
+
+    ``|1 + sT| < 1`` for ``s = -sigma + j omega`` iff ``T < 2 sigma / |s|^2`` (``= 2 zeta / wn``; ``2/a`` for a real
+    point ``-a``). Points on or right of the imaginary axis are never inside, and give 0.
+
+    Examples
+    --------
+    >>> round(forward_euler_stability_limit_s([-245.04]) * 1000, 2)          # ms: 2/245
+    8.16
+    >>> round(forward_euler_stability_limit_s([-0.2715 + 10.1594j]) * 1000, 2)  # ms: 2 zeta/wn of the beam mode
+    5.26
+    """
+    s = np.atleast_1d(np.asarray(points, dtype=complex))
+    if s.size == 0:
+        raise DesignError("forward_euler_stability_limit_s needs at least one point")
+    sigma = -s.real
+    if np.any(sigma <= 0):
+        return 0.0
+    return float(np.min(2 * sigma / np.abs(s) ** 2))
+
+
+@dataclass(frozen=True)
+class FirstOrderTustin:
+    """The first-order lead/lag ``C(s) = (1 + A s)/(1 + B s)`` as the difference equation of appendix E.
+
+    ``u(k) = [-(T - 2B) u(k-1) + (2A + T) e(k) + (T - 2A) e(k-1)] / (2B + T)``
+
+    (appendix E prints a stray factor ``z`` on the ``u(k-1)`` and ``e(k-1)`` terms of its last two lines; dividing by
+    ``z`` had already turned them into delays, so the factor is a typesetting slip and is dropped here.)
+
+    Parameters
+    ----------
+    lead_s : float
+        A, s.
+    lag_s : float
+        B, s (> 0).
+    period_s : float
+        T, s.
+
+    Examples
+    --------
+    >>> f = FirstOrderTustin(0.5, 0.1, 0.01)
+    >>> [round(c, 6) for c in (f.b0, f.b1, f.a1)]
+    [4.809524, -4.714286, -0.904762]
+    """
+
+    lead_s: float
+    lag_s: float
+    period_s: float
+    _state: list = field(default_factory=lambda: [0.0, 0.0], repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        check_real(self.lead_s, "lead_s", "FirstOrderTustin")
+        check_positive(self.lag_s, "lag_s", "FirstOrderTustin")
+        check_positive(self.period_s, "period_s", "FirstOrderTustin")
+
+    @property
+    def b0(self) -> float:
+        return (2 * self.lead_s + self.period_s) / (2 * self.lag_s + self.period_s)
+
+    @property
+    def b1(self) -> float:
+        return (self.period_s - 2 * self.lead_s) / (2 * self.lag_s + self.period_s)
+
+    @property
+    def a1(self) -> float:
+        """Coefficient of ``u(k-1)`` on the left: ``u(k) = -a1 u(k-1) + b0 e(k) + b1 e(k-1)``."""
+        return (self.period_s - 2 * self.lag_s) / (2 * self.lag_s + self.period_s)
+
+    def transfer_function(self) -> ct.TransferFunction:
+        """``C(z) = (b0 z + b1)/(z + a1)`` with ``dt = T``."""
+        return ct.tf([self.b0, self.b1], [1.0, self.a1], self.period_s)
+
+    def reset(self) -> None:
+        self._state[:] = [0.0, 0.0]
+
+    def step(self, e: float) -> float:
+        """One sample: ``u(k)`` from ``e(k)``, remembering ``u(k-1)`` and ``e(k-1)`` (appendix E)."""
+        u_prev, e_prev = self._state
+        u = -self.a1 * u_prev + self.b0 * e + self.b1 * e_prev
+        self._state[:] = [u, e]
+        return u
+
+    def simulate(self, e: Sequence[float]) -> np.ndarray:
+        """Run the difference equation over a sequence from rest."""
+        self.reset()
+        return np.array([self.step(float(v)) for v in e])
+
+
+@dataclass(frozen=True)
+class StepHalving:
+    """Result of the step-halving procedure of 5.1.2: the chosen period and the error at each halving."""
+
+    period_s: float
+    history: tuple[tuple[float, float], ...]  # (alpha, relative difference between alpha and alpha/2)
+    converged: bool
+
+
+def halve_step(
+    response: Callable[[float], tuple[np.ndarray, np.ndarray]],
+    initial_period_s: float,
+    tolerance: float = 0.02,
+    max_halvings: int = 8,
+) -> StepHalving:
+    """Choose a step size the way 5.1.2 does: compare the step response at ``alpha`` and ``alpha/2``, halve until
+    they agree within ``tolerance`` (relative to the peak of the finer response), and keep that ``alpha``.
+
+    Parameters
+    ----------
+    response : callable
+        ``response(alpha) -> (t, y)``: the step response computed with step/sample period ``alpha``.
+    initial_period_s : float
+        First ``alpha``, s.
+    tolerance : float
+        Largest acceptable ``max|y_alpha - y_alpha/2| / max|y_alpha/2|``, compared on the ``alpha`` grid.
+    max_halvings : int
+
+    Returns
+    -------
+    StepHalving
+        ``period_s`` is the first ``alpha`` that agrees with ``alpha/2`` (the last one tried if none does,
+        with ``converged=False``). A response that is not finite (an unstable discretisation) never agrees.
+    """
+    alpha = check_positive(initial_period_s, "initial_period_s", "halve_step")
+    tol = check_positive(tolerance, "tolerance", "halve_step")
+    n = check_int(max_halvings, "max_halvings", "halve_step", low=1)
+    history = []
+    t_a, y_a = response(alpha)
+    for _ in range(n):
+        t_h, y_h = response(alpha / 2)
+        y_h_on_a = np.interp(t_a, t_h, y_h)
+        scale = np.max(np.abs(y_h)) if np.all(np.isfinite(y_h)) else np.inf
+        if np.all(np.isfinite(y_a)) and np.isfinite(scale) and scale > 0:
+            err = float(np.max(np.abs(y_a - y_h_on_a)) / scale)
+        else:
+            err = float("inf")
+        history.append((alpha, err))
+        if err <= tol:
+            return StepHalving(alpha, tuple(history), True)
+        alpha, t_a, y_a = alpha / 2, t_h, y_h
+    return StepHalving(alpha, tuple(history), False)
