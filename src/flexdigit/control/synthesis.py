@@ -1,0 +1,411 @@
+"""H-infinity synthesis by two independent routes (thesis 4.4).
+
+* :func:`hinf_riccati`: the Glover-Doyle Riccati solution (SLICOT ``SB10AD`` through slycot): bisection for the
+  optimal ``gamma`` from a known feasible upper bound, then the central controller at
+  ``gamma = (1 + margin) gamma_opt``. It needs a regular problem (``D12`` full column rank, ``D21`` full row rank):
+  regularise the thesis's singular problem first (:func:`flexdigit.control.generalized.regularise`).
+* :func:`hinf_lmi`: the Gahinet-Apkarian bounded-real-lemma LMIs (cvxpy), which need no rank conditions and
+  give the optimal ``gamma`` of the same (or the singular) problem.
+
+Both routes scale the problem first (state balancing, and the control and measurement channels normalised)
+because the thesis plant gives ~1e-3 m per command and its controllers ~1e5 commands per m.
+
+Convention: python-control/SLICOT ``u = K y`` on the generalized plant (for the thesis ``P``, ``y = w - G u``
+so ``K`` sits in an ordinary negative-feedback loop).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+import control as ct
+from flexdigit._validation import check_real
+from flexdigit.control.generalized import as_statespace, regularise
+from flexdigit.errors import DesignError
+
+__all__ = [
+    "HinfDesign",
+    "LmiResult",
+    "hinf_riccati",
+    "hinf_lmi",
+    "regularisation_path",
+    "reduce_controller",
+    "hinfsyn_plain",
+]
+
+
+@dataclass(frozen=True)
+class HinfDesign:
+    """The result of an H-infinity synthesis.
+
+    Attributes
+    ----------
+    controller : StateSpace
+        ``K(s)`` from the measurement ``y`` to the control ``u`` (commands per output unit), ``u = K y``.
+    gamma : float
+        The level the central controller was built for, ``(1 + margin) * gamma_opt``.
+    gamma_opt : float
+        The optimal (infimal) ``gamma`` found by bisection, to ``gtol``.
+    margin : float
+        Relative sub-optimality of ``gamma``.
+    achieved : float
+        ``||T_zw||_inf`` of the closed loop with ``controller`` (<= ``gamma``).
+    closed_loop : StateSpace
+        ``T_zw`` (all performance outputs from all exogenous inputs).
+    method : str
+        ``"riccati"``.
+    """
+
+    controller: ct.StateSpace
+    gamma: float
+    gamma_opt: float
+    margin: float
+    achieved: float
+    closed_loop: ct.StateSpace
+    method: str = "riccati"
+
+
+@dataclass(frozen=True)
+class LmiResult:
+    """Optimal ``gamma`` from the Gahinet-Apkarian LMIs, with the solver's matrices (scaled coordinates)."""
+
+    gamma: float
+    R: np.ndarray
+    S: np.ndarray
+    status: str
+    solver: str
+
+
+@dataclass(frozen=True)
+class _Scaling:
+    """Similarity ``x = T x_s`` and channel scalings ``u = su u_s``, ``y_s = sy y``."""
+
+    T: np.ndarray
+    su: np.ndarray
+    sy: np.ndarray
+
+
+def _partition(P, nmeas, ncon):
+    nw, nz = P.ninputs - ncon, P.noutputs - nmeas
+    if nw < 1 or nz < 1 or nmeas < 1 or ncon < 1:
+        raise DesignError(
+            f"The generalized plant has {P.ninputs} inputs and {P.noutputs} outputs: too few for "
+            f"ncon={ncon} and nmeas={nmeas} plus at least one exogenous input and one performance output."
+        )
+    return nw, nz
+
+
+def _scale(P, nmeas: int, ncon: int):
+    """Balance the states and normalise the u and y channels; ``gamma`` is unchanged (w and z untouched)."""
+    nw, nz = _partition(P, nmeas, ncon)
+    A, B, C, D = (np.asarray(M, float) for M in (P.A, P.B, P.C, P.D))
+    n = A.shape[0]
+    # scipy's balancing (LAPACK gebal) on the whole system matrix equalises row and column norms; keep its
+    # state part only, a similarity that leaves every transfer function as it was.
+    M = np.block([[A, B], [C, D]]) if B.shape[1] == C.shape[0] else None
+    if M is not None:
+        _, (d, _) = scipy.linalg.matrix_balance(M, permute=False, separate=True)
+        t = d[:n]
+    else:
+        _, (t, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
+    T = np.diag(t)
+    Ti = np.diag(1 / t)
+    A, B, C = Ti @ A @ T, Ti @ B, C @ T
+    B2 = np.vstack([B[:, nw:], D[:nz, nw:]])
+    C2 = np.hstack([C[nz:], D[nz:, :nw]])
+    su = 1 / np.maximum(np.linalg.norm(B2, axis=0), 1e-300)
+    sy = 1 / np.maximum(np.linalg.norm(C2, axis=1), 1e-300)
+    B = B.copy()
+    C = C.copy()
+    D = D.copy()
+    B[:, nw:] *= su
+    D[:, nw:] *= su
+    C[nz:] *= sy[:, None]
+    D[nz:] *= sy[:, None]
+    return ct.ss(A, B, C, D), _Scaling(T, su, sy)
+
+
+def _unscale_controller(Ks: ct.StateSpace, sc: _Scaling) -> ct.StateSpace:
+    # u = su u_s, y_s = sy y:  K = diag(su) K_s diag(sy)
+    return ct.ss(Ks.A, Ks.B * sc.sy[None, :], sc.su[:, None] * Ks.C, sc.su[:, None] * Ks.D * sc.sy[None, :])
+
+
+def _sb10ad(P, nmeas, ncon, gamma, job, gtol=0.0):
+    from slycot import sb10ad
+
+    n, m, p = P.nstates, P.ninputs, P.noutputs
+    try:
+        return sb10ad(n, m, p, ncon, nmeas, gamma, P.A, P.B, P.C, P.D, job=job, gtol=gtol)
+    except Exception as exc:  # slycot raises SlycotArithmeticError/ValueError with SLICOT's info code
+        text = str(exc).strip().splitlines()
+        raise DesignError(
+            f"H-infinity Riccati synthesis failed at gamma={gamma:.6g}: {text[-1] if text else exc!r}. "
+            "Is the problem regular (D12 full column rank, D21 full row rank; see regularise()) and gamma feasible?"
+        ) from exc
+
+
+def _check_regular(P, nmeas, ncon):
+    nw, nz = _partition(P, nmeas, ncon)
+    D12 = np.asarray(P.D)[:nz, nw:]
+    D21 = np.asarray(P.D)[nz:, :nw]
+    if np.linalg.matrix_rank(D12) < ncon:
+        raise DesignError(
+            "The Riccati route needs D12 of full column rank; got D12 = "
+            f"{np.round(D12, 12).tolist()} (nothing weights the control signal: the singular problem of thesis "
+            "4.4). Regularise it with regularise(P, eps_u) or use hinf_lmi()."
+        )
+    if np.linalg.matrix_rank(D21) < nmeas:
+        raise DesignError(
+            f"The Riccati route needs D21 of full row rank; got D21 = {np.round(D21, 12).tolist()}. "
+            "Regularise it with regularise(P, eps_u, eps_noise) or use hinf_lmi()."
+        )
+
+
+def _upper_gamma(Ps, nmeas, ncon):
+    """A feasible starting level: ||P11|| (K = 0 achieves it) when P is stable, else a large number."""
+    nw, nz = _partition(Ps, nmeas, ncon)
+    if Ps.nstates and np.max(np.linalg.eigvals(Ps.A).real) < 0:
+        P11 = ct.ss(Ps.A, Ps.B[:, :nw], Ps.C[:nz], Ps.D[:nz, :nw])
+        return 1.05 * float(ct.linfnorm(P11)[0]) + 1e-12
+    return 1e12
+
+
+def hinf_riccati(
+    P,
+    nmeas: int = 1,
+    ncon: int = 1,
+    *,
+    gamma: float | None = None,
+    margin: float = 0.0,
+    gtol: float = 1e-4,
+) -> HinfDesign:
+    """Riccati-based H-infinity synthesis with ``gamma`` iteration (thesis 4.4; MATLAB ``hinfric``).
+
+    Parameters
+    ----------
+    P : StateSpace
+        Regular generalized plant, inputs ``[w; u]``, outputs ``[z; y]`` (last ``ncon`` / ``nmeas``).
+    nmeas, ncon : int
+        Number of measurements and control inputs.
+    gamma : float, optional
+        Build the central controller at this level instead of ``(1 + margin) gamma_opt``; raises
+        :class:`DesignError` if it is below the optimum (infeasible).
+    margin : float
+        Relative sub-optimality of the central controller, ``>= 0``. At ``margin = 0`` the controller is the
+        one of the last feasible bisection step, typically with one very fast pole (the optimum is singular).
+    gtol : float
+        Relative accuracy of the ``gamma`` bisection.
+
+    Returns
+    -------
+    HinfDesign
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
+    >>> P = regularise(thesis_generalized_plant(ct.tf([1.0], [1.0, 1.0]), filter_weight(1.0)), 0.1)
+    >>> d = hinf_riccati(P, margin=0.05)
+    >>> d.achieved <= d.gamma
+    True
+    """
+    P = as_statespace(P, "P", siso=False)
+    margin = check_real(margin, "margin", "hinf_riccati", low=0.0, error=DesignError)
+    gtol = check_real(gtol, "gtol", "hinf_riccati", low=0.0, low_open=True, high=0.5, error=DesignError)
+    _check_regular(P, nmeas, ncon)
+    Ps, sc = _scale(P, nmeas, ncon)
+    g_up = _upper_gamma(Ps, nmeas, ncon)
+    out = _sb10ad(Ps, nmeas, ncon, g_up, job=1, gtol=gtol)
+    gamma_opt = float(out[0])
+    if gamma is not None:
+        level = check_real(gamma, "gamma", "hinf_riccati", low=0.0, low_open=True, error=DesignError)
+        if level < gamma_opt * (1 - 2 * gtol):
+            raise DesignError(
+                f"The 'gamma' parameter of hinf_riccati must be feasible: >= the optimum {gamma_opt:.6g} "
+                f"(to {gtol:g}). Got {level!r} instead."
+            )
+        level = max(level, gamma_opt)
+    else:
+        level = gamma_opt * (1 + margin)
+    if level != gamma_opt:
+        out = _sb10ad(Ps, nmeas, ncon, level, job=4)
+    Ks = ct.ss(out[1], out[2], out[3], out[4])
+    K = _unscale_controller(Ks, sc)
+    nw, nz = _partition(P, nmeas, ncon)
+    CL = ct.ss(out[5], out[6], out[7], out[8])
+    if CL.nstates and np.max(np.linalg.eigvals(CL.A).real) >= 0:
+        raise DesignError(f"The central controller at gamma={level:.6g} does not stabilise the plant.")
+    achieved = float(ct.linfnorm(CL)[0])
+    return HinfDesign(K, float(level), gamma_opt, float(level / gamma_opt - 1), achieved, CL)
+
+
+def hinfsyn_plain(P, nmeas: int = 1, ncon: int = 1):
+    """``control.hinfsyn`` as it is (no scaling, SLICOT's own gamma search from 1e100): the benchmark's peer."""
+    return ct.hinfsyn(P, nmeas, ncon)
+
+
+def hinf_lmi(
+    P, nmeas: int = 1, ncon: int = 1, *, solver: str = "CLARABEL", strict: float = 1e-9, rescale_iterations: int = 3
+) -> LmiResult:
+    """Optimal ``gamma`` from the H-infinity synthesis LMIs of Gahinet & Apkarian (1994), no rank conditions.
+
+    Minimise ``gamma`` over symmetric ``R, S`` such that (``N_R``, ``N_S`` bases of the null spaces of
+    ``[B2' D12']`` and ``[C2 D21]``)::
+
+        [N_R 0; 0 I]' [[A R + R A', R C1', B1], [C1 R, -g I, D11], [B1', D11', -g I]] [N_R 0; 0 I] < 0
+        [N_S 0; 0 I]' [[A' S + S A, S B1, C1'], [B1' S, -g I, D11'], [C1, D11, -g I]] [N_S 0; 0 I] < 0
+        [[R, I], [I, S]] >= 0
+
+    Parameters
+    ----------
+    P : StateSpace
+        Generalized plant (singular or not).
+    solver : str
+        A cvxpy conic solver ("CLARABEL" or "SCS").
+    strict : float
+        Margin used for the strict inequalities, relative to the scaled problem.
+    rescale_iterations : int
+        Re-solves after a uniform state rescaling that equalises the sizes of ``R`` and ``S``; the smallest
+        ``gamma`` is kept (each solve is a valid certificate of its own ``gamma``).
+
+    Returns
+    -------
+    LmiResult
+    """
+    P = as_statespace(P, "P", siso=False)
+    nw, nz = _partition(P, nmeas, ncon)
+    Ps, _ = _scale(P, nmeas, ncon)
+    # gamma scale: normalise z so that the optimum is O(1) (the thesis problem has gamma ~ 0.02)
+    zscale = _upper_gamma(Ps, nmeas, ncon) / 1.05 if Ps.nstates else 1.0
+    if not (math.isfinite(zscale) and 0 < zscale < 1e11):
+        zscale = 1.0
+    C, D = np.array(Ps.C), np.array(Ps.D)
+    C[:nz] /= zscale
+    D[:nz] /= zscale
+    Ps = ct.ss(Ps.A, Ps.B, C, D)
+    if Ps.nstates and np.max(np.linalg.eigvals(Ps.A).real) < 0:
+        Ps = _balanced(Ps)
+    best = None
+    for _ in range(max(1, rescale_iterations + 1)):
+        try:
+            res, viol = _lmi_once(Ps, nw, nz, solver, strict)
+        except DesignError:
+            if best is None:
+                raise
+            break
+        if best is None or (viol < 1e-7 and res.gamma < best.gamma):
+            best = res
+        # uniform state rescaling (a similarity: gamma is unchanged) that brings R and S to the same size;
+        # the near-singular thesis problem needs it for the solver to reach the optimum
+        gr = np.exp(np.mean(np.log(np.abs(np.linalg.eigvalsh(res.R)) + 1e-300)))
+        gs = np.exp(np.mean(np.log(np.abs(np.linalg.eigvalsh(res.S)) + 1e-300)))
+        k = (gs / gr) ** 0.25
+        Ps = ct.ss(Ps.A, Ps.B / k, Ps.C * k, Ps.D)
+    return LmiResult(best.gamma * zscale, best.R, best.S, best.status, solver)
+
+
+def _balanced(P):
+    """Balanced realization of a stable system from its Gramians (better conditioned LMIs)."""
+    Wc = ct.gram(P, "c")
+    Wo = ct.gram(P, "o")
+    try:
+        Lc = scipy.linalg.cholesky((Wc + Wc.T) / 2, lower=True)
+    except np.linalg.LinAlgError:
+        return P
+    U, s, _ = np.linalg.svd(Lc.T @ Wo @ Lc)
+    T = Lc @ U @ np.diag(s**-0.25)
+    Ti = np.linalg.inv(T)
+    return ct.ss(Ti @ P.A @ T, Ti @ P.B, P.C @ T, P.D)
+
+
+def _lmi_once(Ps, nw, nz, solver, strict) -> tuple[LmiResult, float]:
+    import cvxpy as cp
+
+    A, B, C, D = (np.asarray(M, float) for M in (Ps.A, Ps.B, Ps.C, Ps.D))
+    n = A.shape[0]
+    B1, B2, C1, C2 = B[:, :nw], B[:, nw:], C[:nz], C[nz:]
+    D11, D12, D21 = D[:nz, :nw], D[:nz, nw:], D[nz:, :nw]
+    NR = scipy.linalg.null_space(np.hstack([B2.T, D12.T]))
+    NS = scipy.linalg.null_space(np.hstack([C2, D21]))
+    R = cp.Variable((n, n), symmetric=True)
+    S = cp.Variable((n, n), symmetric=True)
+    g = cp.Variable()
+    cons = [cp.bmat([[R, np.eye(n)], [np.eye(n), S]]) >> 0]
+    if NR.size:
+        WR = scipy.linalg.block_diag(NR, np.eye(nw))
+        MR = cp.bmat(
+            [
+                [A @ R + R @ A.T, R @ C1.T, B1],
+                [C1 @ R, -g * np.eye(nz), D11],
+                [B1.T, D11.T, -g * np.eye(nw)],
+            ]
+        )
+        LR = WR.T @ MR @ WR
+        cons.append((LR + LR.T) / 2 << -strict * np.eye(WR.shape[1]))
+    if NS.size:
+        WS = scipy.linalg.block_diag(NS, np.eye(nz))
+        MS = cp.bmat(
+            [
+                [A.T @ S + S @ A, S @ B1, C1.T],
+                [B1.T @ S, -g * np.eye(nw), D11.T],
+                [C1, D11, -g * np.eye(nz)],
+            ]
+        )
+        LS = WS.T @ MS @ WS
+        cons.append((LS + LS.T) / 2 << -strict * np.eye(WS.shape[1]))
+    prob = cp.Problem(cp.Minimize(g), cons)
+    try:
+        prob.solve(solver=solver)
+    except cp.error.SolverError as exc:
+        raise DesignError(f"The LMI solver {solver} failed: {exc}") from exc
+    if prob.status not in ("optimal", "optimal_inaccurate") or g.value is None:
+        raise DesignError(f"The H-infinity LMIs are infeasible or the solver failed (status {prob.status!r}).")
+    res = LmiResult(float(g.value), np.asarray(R.value), np.asarray(S.value), prob.status, solver)
+    # relative violation of the LMIs at the returned point (the solver's own tolerances are absolute)
+    viol = 0.0
+    for con in cons:
+        expr = np.asarray(con.expr.value)  # cvxpy keeps every LMI as "expr is PSD"
+        lam = np.linalg.eigvalsh((expr + expr.T) / 2)
+        viol = max(viol, float(-lam.min() / max(np.abs(lam).max(), 1e-300)))
+    return res, viol
+
+
+def regularisation_path(P_singular, eps_values, *, margin: float = 0.0, nmeas: int = 1, ncon: int = 1):
+    """Design for a decreasing sequence of ``eps_u`` and return one row per level.
+
+    Returns
+    -------
+    list of dict
+        ``eps``, ``gamma_opt``, ``design`` (:class:`HinfDesign`), ``dc_gain`` (controller, commands per unit) and
+        ``fastest_pole`` (rad/s, the magnitude of the fastest controller pole).
+    """
+    rows = []
+    for eps in eps_values:
+        d = hinf_riccati(regularise(P_singular, eps, nmeas=nmeas, ncon=ncon), nmeas, ncon, margin=margin)
+        poles = np.linalg.eigvals(d.controller.A)
+        rows.append(
+            {
+                "eps": float(eps),
+                "gamma_opt": d.gamma_opt,
+                "design": d,
+                "dc_gain": float(np.real(ct.dcgain(d.controller))),
+                "fastest_pole": float(np.max(np.abs(poles))) if poles.size else math.nan,
+            }
+        )
+    return rows
+
+
+def reduce_controller(K, order: int) -> ct.StateSpace:
+    """Balanced truncation of a stable controller to ``order`` states (``control.balred``)."""
+    K = as_statespace(K, "K", siso=False)
+    if not isinstance(order, int) or not 0 < order <= K.nstates:
+        raise DesignError(f"The 'order' parameter must be an integer in [1, {K.nstates}]. Got {order!r} instead.")
+    if K.nstates and np.max(np.linalg.eigvals(K.A).real) >= 0:
+        raise DesignError("Balanced truncation needs a stable controller; this one has unstable poles.")
+    if order == K.nstates:
+        return K
+    return ct.balred(K, order, method="truncate")
