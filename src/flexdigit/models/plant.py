@@ -55,9 +55,9 @@ import math
 import re
 from dataclasses import dataclass, field
 
-import control
 import numpy as np
 
+import control
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.models import bridge, cable, conversion, digit, servo
@@ -428,15 +428,17 @@ def explain_discrepancies(params: RigParams | None = None) -> list[str]:
     zeta_p = printed_digit_zeta(p)
     k1 = conversion.k1_printed_command_per_mm()[0]
     rot = cable.tip_rotation_per_command_deg(p)
+    e_den = printed.components["E_digit_printed"].den[0][0]
     items = [
         "Digit factor. 3.5 says G = K1 K2 K3 MT(s) E(s) with E(s) = 171.61/(s^2 + 1.782 s + 171.61) (housing, "
-        "table 3.2), but the printed G contains 103.3/(s^2 + 0.543 s + 103.3): wn = "
+        f"table 3.2), but the printed G contains {e_den[2]:.4g}/(s^2 + {e_den[1]:.3g} s + {e_den[2]:.4g}): wn = "
         f"{p.dynamics.wn_bare_rad_s:.5g} rad/s of table 3.1 (bare strip) with zeta = {zeta_p:.4f}, a damping "
         "found in no table (it is -Re of the printed poles over wn). The consistent plant uses E(s) with housing.",
         "Servo units. MT(s) = 421.5/(s^2 + 23.11 s + 421.5) has unit DC gain, yet 3.2.4 multiplies it by "
         "109.1344 deg/V x pi/180 = 1.905 rad/V and calls 802.854/(...) 'rad per serial command'. The potentiometer "
         f"moves {pot_v_per_cmd:.5f} V per command, so the servo turns {a.rad_per_command:.6f} rad per command "
-        f"(E 3.15), {1.9048 / a.rad_per_command:.1f} times less than the printed factor. The consistent plant "
+        f"(E 3.15), {math.radians(pot_printed.slope_deg_per_v) / a.rad_per_command:.1f} times less than the printed "
+        "factor. The consistent plant "
         "uses MT(s) x rad_per_command.",
         f"K2. E I r_M/(l e) from table 3.7 is {k2:.6f} N m/rad; the printed 0.089377 is reproduced "
         f"({k2_printed_i:.6f}) with I rounded to 5.85e-14 m^4 before multiplying. Difference "
