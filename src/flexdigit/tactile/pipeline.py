@@ -9,7 +9,7 @@ and per-sample percentage error (6.9).
 
 Targets. The thesis's position target is the position *number* of tables 6.1/7.1 (1 = tip), with the no-load
 readings as position 0 (the table's first row), over every sample of the protocol (1275 or 1500): :func:`targets`
-``"position"``. ``"position_m"`` is the distance from the tip in metres over the loaded samples only (where a
+``"position_index"``. ``"position"`` is the distance from the tip in metres over the loaded samples only (where a
 position exists); ``"magnitude"`` the load in kg (0 for no load); ``"contact"`` 1 for a load, 0 for none.
 
 Examples
@@ -32,7 +32,7 @@ from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.metrics import accuracy, corr2, percentage_error, relative_rmse, rmse
 from flexdigit.tactile.netlab import MLP
 
-TARGETS = ("position", "position_m", "magnitude", "contact")
+TARGETS = ("position", "position_index", "magnitude", "contact")
 LEARNING_GRADIENTS = tuple(10.0**-k for k in range(1, 10))
 COARSE_HIDDEN = tuple(range(5, 61, 5))
 
@@ -86,9 +86,9 @@ def targets(dataset: Dataset, target: str) -> tuple[np.ndarray, np.ndarray]:
     """``(rows, y)``: which rows have the target, and its values (see the module docstring)."""
     check_choice(target, "target", TARGETS, "targets")
     n = len(dataset)
-    if target == "position":
+    if target == "position_index":
         return np.arange(n), dataset["position_index"].astype(float)
-    if target == "position_m":
+    if target == "position":
         rows = np.flatnonzero(dataset["load_kg"] > 0)
         return rows, dataset["position_from_tip_m"][rows]
     if target == "magnitude":
@@ -199,7 +199,7 @@ def run_pipeline(
     epochs: int = 50,
     fixed_hidden: int | None = None,
     fixed_tol: float | None = None,
-    target: str = "position",
+    target: str = "position_index",
 ) -> PipelineResult:
     """The thesis's optimisation and test (6.6-6.9) on inputs ``x`` (n, k) and targets ``y`` (n,).
 

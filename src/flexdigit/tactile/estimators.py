@@ -1,0 +1,230 @@
+"""Load estimators beyond the thesis's MLP, on the same inputs: a beam-model inversion and a Gaussian process.
+
+Both follow scikit-learn's contract. Inputs ``X`` are the gauge voltages (n, 3), optionally with the servo
+command as a 4th column (actuated experiments); targets ``Y`` are ``(position_from_tip_m, load_kg)`` (n, 2) of
+loaded readings.
+
+* :class:`BeamInversion`: least squares on a static gauge model (the twin's, :mod:`flexdigit.tactile.physics`):
+  ``(a, m) = argmin sum_i ((v_i - g_i(a, m, c)) / sigma_i)^2`` on a dense (position, mass) grid with
+  parabolic refinement; ``fit`` only calibrates a per-gauge gain and offset of the model on the training
+  readings (6 numbers; a real rig's gains differ from the model's). This is the maximum-likelihood estimate
+  under the model's Gaussian noise, the estimator the Cramer-Rao bound is about.
+* :class:`GPLocaliser`: scikit-learn ``GaussianProcessRegressor`` (anisotropic RBF + white noise) on the
+  normalised inputs, one per target, with a predictive standard deviation for every estimate.
+
+Examples
+--------
+>>> import numpy as np
+>>> class Line:
+...     noise_v = np.array([0.002, 0.002, 0.002])
+...     def gauges_v(self, a, m, command):
+...         a, m = np.broadcast_arrays(np.atleast_1d(a), np.atleast_1d(m))
+...         return 40.0 * (m * 9.81)[:, None] * np.clip(a[:, None] - [0.045, 0.135, 0.225], 0, None)
+>>> inv = BeamInversion(Line(), digit_length_m=0.27, max_mass_kg=0.05)
+>>> v = Line().gauges_v(0.27 - 0.05, 0.02, -1)
+>>> np.round(inv.fit(v, [[0.05, 0.02]]).predict(v), 4).tolist()
+[[0.05, 0.02]]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexdigit._validation import check_array, check_int, check_positive
+from flexdigit.errors import ParameterError
+from flexdigit.tactile.pipeline import Normaliser
+from flexdigit.tactile.protocols import RELAXED
+
+
+def _split_x(X) -> tuple[np.ndarray, np.ndarray]:
+    x = check_array(X, "X", "estimator", ndim=2)
+    if x.shape[1] not in (3, 4):
+        raise ParameterError(f"X must have 3 gauge columns (and optionally the command). Got {x.shape[1]} columns.")
+    command = x[:, 3].astype(int) if x.shape[1] == 4 else np.full(x.shape[0], RELAXED)
+    return x[:, :3], command
+
+
+class BeamInversion:
+    """Maximum-likelihood load position and mass from a static gauge model (see the module docstring).
+
+    Parameters
+    ----------
+    model : gauge model
+        ``gauges_v(position_from_base_m, mass_kg, command)`` and ``noise_v``.
+    digit_length_m : float
+        Clamp to tip (m): positions from the tip are ``digit_length_m - a``.
+    max_mass_kg : float
+        Upper end of the mass grid (kg).
+    position_step_m : float
+        Grid step along the digit (m), refined by a parabola through the three best points.
+    mass_steps : int
+        Mass grid points.
+    calibrate : bool
+        Fit a per-gauge gain and offset of the model to the training readings.
+    """
+
+    def __init__(
+        self,
+        model,
+        digit_length_m: float = 0.270,
+        max_mass_kg: float = 0.08,
+        position_step_m: float = 1e-3,
+        mass_steps: int = 161,
+        calibrate: bool = True,
+    ) -> None:
+        self.model = model
+        self.digit_length_m = digit_length_m
+        self.max_mass_kg = max_mass_kg
+        self.position_step_m = position_step_m
+        self.mass_steps = mass_steps
+        self.calibrate = calibrate
+
+    def __repr__(self) -> str:
+        return (
+            f"BeamInversion(model={type(self.model).__name__}, digit_length_m={self.digit_length_m}, "
+            f"max_mass_kg={self.max_mass_kg}, position_step_m={self.position_step_m}, calibrate={self.calibrate})"
+        )
+
+    def _grid(self, command: int) -> np.ndarray:
+        if command not in self.grids_:
+            a, m = self.a_grid_, self.m_grid_
+            aa, mm = np.meshgrid(a, m, indexing="ij")
+            g = self.model.gauges_v(aa.ravel(), mm.ravel(), np.full(aa.size, command))
+            self.grids_[command] = g.reshape(a.size, m.size, 3)
+        return self.grids_[command]
+
+    def fit(self, X, Y=None) -> BeamInversion:
+        length = check_positive(self.digit_length_m, "digit_length_m", "BeamInversion")
+        step = check_positive(self.position_step_m, "position_step_m", "BeamInversion")
+        self.a_grid_ = np.arange(0.0, length + step / 2, step)
+        max_mass = check_positive(self.max_mass_kg, "max_mass_kg", "BeamInversion")
+        self.m_grid_ = np.linspace(0.0, max_mass, check_int(self.mass_steps, "mass_steps", "BeamInversion", low=3))
+        self.grids_: dict[int, np.ndarray] = {}
+        self.noise_v_ = np.asarray(self.model.noise_v, dtype=float)
+        self.gain_ = np.ones(3)
+        self.offset_ = np.zeros(3)
+        v, command = _split_x(X)
+        if self.calibrate and Y is not None:
+            y = check_array(Y, "Y", "BeamInversion.fit", ndim=2, shape=(v.shape[0], 2))
+            g = self.model.gauges_v(length - y[:, 0], y[:, 1], command)
+            for i in range(3):  # v_i ~ gain_i g_i + offset_i, least squares (6 numbers)
+                design = np.column_stack([g[:, i], np.ones(len(g))])
+                if np.ptp(g[:, i]) > 0:
+                    (self.gain_[i], self.offset_[i]), *_ = np.linalg.lstsq(design, v[:, i], rcond=None)
+                else:
+                    self.offset_[i] = float(np.mean(v[:, i] - g[:, i]))
+        return self
+
+    def predict(self, X, return_cost: bool = False):
+        """``(n, 2)``: position from the tip (m) and mass (kg) of each reading (and the residual cost if asked)."""
+        if not hasattr(self, "grids_"):
+            raise ParameterError("This BeamInversion is not fitted yet; call fit first.")
+        v, command = _split_x(X)
+        out = np.empty((v.shape[0], 2))
+        cost = np.empty(v.shape[0])
+        for value in np.unique(command):
+            rows = np.flatnonzero(command == value)
+            grid = self._grid(int(value)) * self.gain_ + self.offset_
+            for start in range(0, rows.size, 32):  # batches bound the (batch, na, nm) temporaries
+                r = rows[start : start + 32]
+                d = np.zeros((r.size,) + grid.shape[:2])
+                for i in range(3):
+                    d += ((v[r, i, None, None] - grid[None, :, :, i]) / self.noise_v_[i]) ** 2
+                flat = d.reshape(r.size, -1).argmin(axis=1)
+                ia, im = np.unravel_index(flat, d.shape[1:])
+                a, m, c = self._gauss_newton(v[r], self.a_grid_[ia], self.m_grid_[im], int(value))
+                out[r, 0] = self.digit_length_m - a
+                out[r, 1] = m
+                cost[r] = c
+        return (out, cost) if return_cost else out
+
+    def _cost(self, v, a, m, command):
+        g = self.model.gauges_v(a, m, np.full(a.size, command)) * self.gain_ + self.offset_
+        return np.sum(((v - g) / self.noise_v_) ** 2, axis=1), g
+
+    def _gauss_newton(self, v, a, m, command, iterations: int = 4):
+        """Refine grid estimates by damped Gauss-Newton on the model itself (joint in position and mass)."""
+        step_a, step_m = 1e-4, 1e-5
+        cost, g = self._cost(v, a, m, command)
+        for _ in range(iterations):
+            ga = (self._cost(v, a + step_a, m, command)[1] - self._cost(v, a - step_a, m, command)[1]) / (2 * step_a)
+            gm = (self._cost(v, a, m + step_m, command)[1] - self._cost(v, a, m - step_m, command)[1]) / (2 * step_m)
+            r = (v - g) / self.noise_v_
+            ja, jm = ga / self.noise_v_, gm / self.noise_v_
+            h11, h22, h12 = np.sum(ja * ja, 1), np.sum(jm * jm, 1), np.sum(ja * jm, 1)
+            b1, b2 = np.sum(ja * r, 1), np.sum(jm * r, 1)
+            det = h11 * h22 - h12**2
+            ok = det > 1e-9 * np.maximum(h11 * h22, 1e-300)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                da = np.where(ok, (h22 * b1 - h12 * b2) / det, 0.0)
+                dm = np.where(ok, (h11 * b2 - h12 * b1) / det, 0.0)
+            # never leave the digit or go below zero mass; keep a step only if it lowers the cost
+            a_new = np.clip(a + np.clip(da, -0.01, 0.01), 0.0, self.digit_length_m)
+            m_new = np.clip(m + np.clip(dm, -0.01, 0.01), 0.0, None)
+            new_cost, new_g = self._cost(v, a_new, m_new, command)
+            better = new_cost < cost
+            a, m = np.where(better, a_new, a), np.where(better, m_new, m)
+            cost, g = np.where(better, new_cost, cost), np.where(better[:, None], new_g, g)
+        return a, m, cost
+
+
+class GPLocaliser:
+    """Gaussian-process regression of position and mass from the gauges, with uncertainty.
+
+    One ``GaussianProcessRegressor`` per target column, kernel ``C * RBF(anisotropic) + White``, inputs and
+    targets normalised (E 6.1 style). ``predict(X, return_std=True)`` also gives the predictive standard
+    deviation of each estimate (same units as the target).
+
+    Parameters
+    ----------
+    n_restarts : int
+        Optimiser restarts of the kernel hyper-parameters.
+    max_train : int
+        Training readings used at most (a seeded subsample beyond it: the GP is O(n^3)).
+    random_state : int
+        Seed of the optimiser restarts and the subsample.
+    """
+
+    def __init__(self, n_restarts: int = 0, max_train: int = 600, random_state: int = 0) -> None:
+        self.n_restarts = n_restarts
+        self.max_train = max_train
+        self.random_state = random_state
+
+    def __repr__(self) -> str:
+        return (
+            f"GPLocaliser(n_restarts={self.n_restarts}, max_train={self.max_train}, random_state={self.random_state})"
+        )
+
+    def fit(self, X, Y) -> GPLocaliser:
+        from sklearn.gaussian_process import GaussianProcessRegressor
+        from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+        x = check_array(X, "X", "GPLocaliser.fit", ndim=2, min_length=2)
+        y = check_array(Y, "Y", "GPLocaliser.fit")
+        y = y.reshape(-1, 1) if y.ndim == 1 else y
+        rng = np.random.default_rng(self.random_state)
+        if x.shape[0] > self.max_train:
+            keep = np.sort(rng.choice(x.shape[0], self.max_train, replace=False))
+            x, y = x[keep], y[keep]
+        self.x_norm_ = Normaliser().fit(x)
+        xn = self.x_norm_.transform(x)
+        self.models_ = []
+        for j in range(y.shape[1]):
+            kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.ones(x.shape[1]), (1e-2, 1e3)) + WhiteKernel(
+                1e-3, (1e-8, 1.0)
+            )
+            gp = GaussianProcessRegressor(
+                kernel, normalize_y=True, n_restarts_optimizer=self.n_restarts, random_state=self.random_state
+            )
+            self.models_.append(gp.fit(xn, y[:, j]))
+        self.n_outputs_ = y.shape[1]
+        return self
+
+    def predict(self, X, return_std: bool = False):
+        if not hasattr(self, "models_"):
+            raise ParameterError("This GPLocaliser is not fitted yet; call fit first.")
+        xn = self.x_norm_.transform(check_array(X, "X", "GPLocaliser.predict", ndim=2))
+        outs = [gp.predict(xn, return_std=True) for gp in self.models_]
+        mean = np.column_stack([o[0] for o in outs])
+        std = np.column_stack([o[1] for o in outs])
+        return (mean, std) if return_std else mean

@@ -1,0 +1,127 @@
+"""What the gauges can tell, physically: the Cramer-Rao bound of the load position and an identifiability map.
+
+A *gauge model* is anything with ``gauges_v(position_from_base_m, mass_kg, command) -> (n, 3)`` (the static,
+noise-free gauge voltages with one point load; ``command`` :data:`~flexdigit.tactile.protocols.RELAXED` for
+actuation disabled; ``mass_kg`` 0 means no load) and ``noise_v`` (3,), the standard deviation of one reading per
+gauge (V). :class:`TwinGaugeModel` wraps the digital twin; tests use a closed-form cantilever.
+
+For independent Gaussian noise, the Fisher information of ``theta = (a, m)`` (position, mass) in one reading is
+``F = J^T diag(1/sigma^2) J`` with ``J = dg/dtheta`` (finite differences of the model). The position's Cramer-Rao
+bound is ``sqrt([F^-1]_aa)`` when the mass is unknown, and ``sigma_a = 1/sqrt(F_aa)`` when it is known. A load
+between the clamp and gauge 1 bends no gauge (no moment reaches a gauge beyond the load on a cantilever): its
+Fisher information is zero and nothing can locate it; between gauges 1 and 2 only gauge 1 bends, so ``F`` has
+rank 1 and position and mass are confounded (only the moment ``m g (a - x_1)`` is seen).
+
+Examples
+--------
+>>> import numpy as np
+>>> class Line:
+...     noise_v = np.array([0.01, 0.01, 0.01])
+...     def gauges_v(self, a, m, command):
+...         a, m = np.broadcast_arrays(np.atleast_1d(a), np.atleast_1d(m))
+...         return 40.0 * (m * 9.81)[:, None] * np.clip(a[:, None] - [0.045, 0.135, 0.225], 0, None)
+>>> zone_of(Line(), 0.03, 0.025, -1)
+'no gauge bends'
+>>> zone_of(Line(), 0.10, 0.025, -1)
+'position and mass confounded'
+>>> zone_of(Line(), 0.25, 0.025, -1)
+'identifiable'
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexdigit.tactile.protocols import RELAXED
+
+ZONES = ("no gauge bends", "position and mass confounded", "identifiable")
+
+
+def jacobian(model, position_from_base_m, mass_kg, command, step_m: float = 2e-4, rel_step_mass: float = 0.02):
+    """``dg/da`` (V/m) and ``dg/dm`` (V/kg) by central differences, each of shape (n, 3)."""
+    a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
+    m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
+    c = np.broadcast_to(np.asarray(command), a.shape)
+    dm = rel_step_mass * np.maximum(m, 1e-4)
+    ga = (model.gauges_v(a + step_m, m, c) - model.gauges_v(a - step_m, m, c)) / (2 * step_m)
+    gm = (model.gauges_v(a, m + dm, c) - model.gauges_v(a, m - dm, c)) / (2 * dm)[:, None]
+    return ga, gm
+
+
+@dataclass
+class Bound:
+    """Cramer-Rao bounds of one reading, per point (m): mass unknown and mass known; the zone of each point."""
+
+    position_from_base_m: np.ndarray
+    crlb_m: np.ndarray
+    crlb_known_mass_m: np.ndarray
+    zone: np.ndarray
+
+
+def cramer_rao(model, position_from_base_m, mass_kg, command=RELAXED, *, step_m: float = 2e-4) -> Bound:
+    """Cramer-Rao lower bounds of the position (m, one reading) at each ``(position, mass, command)``.
+
+    Infinite where the position cannot be estimated at all (no gauge bends) or, for ``crlb_m``, where position
+    and mass are confounded (a rank-1 Fisher information).
+    """
+    a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
+    m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
+    ga, gm = jacobian(model, a, m, command, step_m=step_m)
+    w = 1.0 / np.asarray(model.noise_v, dtype=float) ** 2
+    faa = np.sum(w * ga * ga, axis=1)
+    fmm = np.sum(w * gm * gm, axis=1)
+    fam = np.sum(w * ga * gm, axis=1)
+    det = faa * fmm - fam**2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        known = np.where(faa > 0, 1.0 / np.sqrt(faa), np.inf)
+        # relative conditioning: det / (faa fmm) = 1 - cos^2 of the angle between the two sensitivity directions
+        cos2 = np.where(faa * fmm > 0, fam**2 / (faa * fmm), 1.0)
+        unknown = np.where((faa > 0) & (1.0 - cos2 > 1e-6), np.sqrt(fmm / det), np.inf)
+    zone = np.array([_zone(k, u) for k, u in zip(known, unknown, strict=True)], dtype=object)
+    # a load that moves no gauge by even a tenth of its noise counts as invisible
+    dg = np.abs(model.gauges_v(a, m, np.broadcast_to(command, a.shape)) - model.gauges_v(a, 0.0 * m, command))
+    invisible = np.all(dg < 0.1 * np.asarray(model.noise_v), axis=1)
+    zone[invisible] = ZONES[0]
+    known = np.where(invisible, np.inf, known)
+    unknown = np.where(zone == ZONES[2], unknown, np.inf)
+    return Bound(a, unknown, known, zone)
+
+
+def _zone(known: float, unknown: float) -> str:
+    if not np.isfinite(known):
+        return ZONES[0]
+    if not np.isfinite(unknown):
+        return ZONES[1]
+    return ZONES[2]
+
+
+def zone_of(model, position_from_base_m: float, mass_kg: float, command=RELAXED) -> str:
+    """The identifiability zone of one load (see :data:`ZONES`)."""
+    return str(cramer_rao(model, [position_from_base_m], mass_kg, command).zone[0])
+
+
+class TwinGaugeModel:
+    """The digital twin's static gauge model and noise, as a gauge model for the bounds and the beam inversion.
+
+    Parameters
+    ----------
+    twin : flexdigit.twin.Twin
+        A twin; its batched ``static_gauges_v`` and its noise level are used.
+    """
+
+    def __init__(self, twin) -> None:
+        self.twin = twin
+        self.noise_v = np.asarray(twin.gauge_noise_v(), dtype=float)
+
+    def gauges_v(self, position_from_base_m, mass_kg, command) -> np.ndarray:
+        a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
+        m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
+        c = np.broadcast_to(np.asarray(command), a.shape)
+        out = np.empty((a.size, 3))
+        for value in np.unique(c):
+            rows = c == value
+            cmd = None if value == RELAXED else int(value)
+            out[rows] = self.twin.static_gauges_v(a[rows], m[rows], command=cmd)
+        return out

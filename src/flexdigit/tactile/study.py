@@ -1,0 +1,193 @@
+"""Beyond the thesis's corr2: localisation in millimetres against the Cramer-Rao bound, contact and magnitude.
+
+:func:`localisation_study` puts three estimators side by side on identical data (the thesis's split of one
+dataset): the thesis's MLP (trained on the position in metres), the beam-model inversion and the Gaussian
+process (:mod:`flexdigit.tactile.estimators`). Each test reading also gets the Cramer-Rao bound of its position
+and its identifiability zone (:mod:`flexdigit.tactile.physics`), so the errors are compared with what the gauges
+physically allow, only where the load can be located at all.
+
+Note on the bound: it is the floor for an *unbiased* estimate of a continuous position and mass from one reading.
+Estimators trained on a protocol learn that masses (and positions) come from a short list and can beat it on
+that protocol's data; the beam inversion assumes nothing of the sort and cannot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexdigit.tactile.dataset import Dataset
+from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
+from flexdigit.tactile.metrics import accuracy, rmse
+from flexdigit.tactile.physics import ZONES, cramer_rao
+from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
+
+ESTIMATORS = ("thesis MLP", "beam inversion", "Gaussian process")
+#: chi-square(2 dof) 99.9 % quantile: a load is declared when it explains the reading this much better than none
+CONTACT_CHI2 = 13.8155
+
+
+def reading_zones(model, dataset: Dataset) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Zone, position CRLB (mass unknown) and CRLB (mass known) of every reading (no-load rows: zone ``""``)."""
+    n = len(dataset)
+    zone = np.full(n, "", dtype=object)
+    crlb = np.full(n, np.nan)
+    crlb_known = np.full(n, np.nan)
+    loaded = np.flatnonzero(dataset["load_kg"] > 0)
+    keys = np.column_stack([dataset["position_from_base_m"], dataset["load_kg"], dataset["command"]])[loaded]
+    settings, inverse = np.unique(keys, axis=0, return_inverse=True)
+    for k, (a, m, c) in enumerate(settings):
+        b = cramer_rao(model, [a], m, int(c))
+        rows = loaded[inverse.ravel() == k]
+        zone[rows], crlb[rows], crlb_known[rows] = b.zone[0], b.crlb_m[0], b.crlb_known_mass_m[0]
+    return zone, crlb, crlb_known
+
+
+@dataclass
+class LocalisationResult:
+    """Scores of every estimator on the same test readings (see :func:`localisation_study`)."""
+
+    test_rows: np.ndarray
+    zone: np.ndarray
+    crlb_m: np.ndarray
+    crlb_known_mass_m: np.ndarray
+    position_pred_m: dict[str, np.ndarray]
+    position_true_m: np.ndarray
+    mass_pred_kg: dict[str, np.ndarray]
+    mass_true_kg: np.ndarray
+    position_rmse_m: dict[str, float]
+    position_rmse_identifiable_m: dict[str, float]
+    crlb_rms_identifiable_m: float
+    crlb_known_rms_identifiable_m: float
+    magnitude_rel_rmse: dict[str, float]
+    magnitude_rel_rmse_identifiable: dict[str, float]
+    contact_accuracy: dict[str, float]
+    contact_accuracy_visible: dict[str, float]
+    gp_std_m: np.ndarray
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def best(self) -> str:
+        """The estimator with the lowest position RMSE over identifiable readings."""
+        return min(self.position_rmse_identifiable_m, key=self.position_rmse_identifiable_m.get)
+
+
+def localisation_study(
+    dataset: Dataset,
+    model,
+    *,
+    seed: int = 0,
+    hidden: int = 18,
+    tol: float = 1e-7,
+    epochs: int = 50,
+    digit_length_m: float | None = None,
+) -> LocalisationResult:
+    """Position, magnitude and contact by the three estimators on the thesis split of ``dataset``.
+
+    Parameters
+    ----------
+    dataset : Dataset
+        Readings of one protocol (with no-load readings for the contact scores).
+    model : gauge model
+        The static gauge model and noise (the twin's, :class:`~flexdigit.tactile.physics.TwinGaugeModel`).
+    seed : int
+        Seeds the split (same as the thesis pipeline's for the same seed) and every estimator.
+    hidden, tol, epochs : thesis MLP settings.
+    digit_length_m : float, optional
+        Clamp to tip (default: from the dataset's metadata).
+    """
+    length = float(digit_length_m or dataset.meta.get("digit_length_m", 0.270))
+    actuated = dataset.protocol.actuated
+    x = features(dataset, with_command=actuated)
+    n = len(dataset)
+    split = thesis_split(n, seed)
+    mass = dataset["load_kg"]
+    loaded = mass > 0
+    pos = np.nan_to_num(dataset["position_from_tip_m"], nan=0.0)
+    y = np.column_stack([pos, mass])
+    tr = split.train[loaded[split.train]]
+    va = split.val[loaded[split.val]]
+    trva = np.concatenate([tr, va])
+    te = split.test[loaded[split.test]]
+    zone, crlb, crlb_known = reading_zones(model, dataset)
+
+    rng = np.random.default_rng([seed, 7])
+    mlp_pos = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
+    mlp_pos.fit(x[tr], pos[tr], x[va], pos[va])
+    mlp_mass = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
+    mlp_mass.fit(x[split.train], mass[split.train], x[split.val], mass[split.val])
+    mlp_contact = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
+    contact = loaded.astype(float)
+    mlp_contact.fit(x[split.train], contact[split.train], x[split.val], contact[split.val])
+
+    inversion = BeamInversion(model, digit_length_m=length, max_mass_kg=2.0 * float(mass.max())).fit(x[trva], y[trva])
+    gp = GPLocaliser(random_state=seed).fit(x[trva], y[trva])
+
+    inv_all, inv_cost = inversion.predict(x[split.test], return_cost=True)
+    gp_all, gp_std = gp.predict(x[te], return_std=True)
+    pos_pred = {
+        "thesis MLP": mlp_pos.predict(x[te]),
+        "beam inversion": inv_all[loaded[split.test], 0],
+        "Gaussian process": gp_all[:, 0],
+    }
+    mass_pred = {
+        "thesis MLP": mlp_mass.predict(x[te]),
+        "beam inversion": inv_all[loaded[split.test], 1],
+        "Gaussian process": gp_all[:, 1],
+    }
+    ident = zone[te] == ZONES[2]
+    pos_true, mass_true = pos[te], mass[te]
+    # contact: the thesis-style network thresholded at 0.5; the inversion's likelihood-ratio test against no load
+    no_load_cost = np.sum(
+        ((x[split.test, :3] - _no_load_gauges(inversion, x[split.test])) / inversion.noise_v_) ** 2, axis=1
+    )
+    contact_pred = {
+        "thesis MLP": (mlp_contact.predict(x[split.test]) >= 0.5).astype(float),
+        "beam inversion": (no_load_cost - inv_cost > CONTACT_CHI2).astype(float),
+    }
+    visible = zone[split.test] != ZONES[0]
+    contact_true = contact[split.test]
+
+    def rel(p, t):
+        return float(np.sqrt(np.mean(((p - t) / t) ** 2))) if t.size else float("nan")
+
+    return LocalisationResult(
+        test_rows=te,
+        zone=zone[te],
+        crlb_m=crlb[te],
+        crlb_known_mass_m=crlb_known[te],
+        position_pred_m=pos_pred,
+        position_true_m=pos_true,
+        mass_pred_kg=mass_pred,
+        mass_true_kg=mass_true,
+        position_rmse_m={k: rmse(v, pos_true) for k, v in pos_pred.items()},
+        position_rmse_identifiable_m={k: rmse(v[ident], pos_true[ident]) for k, v in pos_pred.items()},
+        crlb_rms_identifiable_m=float(np.sqrt(np.mean(crlb[te][ident] ** 2))),
+        crlb_known_rms_identifiable_m=float(np.sqrt(np.mean(crlb_known[te][ident] ** 2))),
+        magnitude_rel_rmse={k: rel(v, mass_true) for k, v in mass_pred.items()},
+        magnitude_rel_rmse_identifiable={k: rel(v[ident], mass_true[ident]) for k, v in mass_pred.items()},
+        contact_accuracy={k: accuracy(v, contact_true) for k, v in contact_pred.items()},
+        contact_accuracy_visible={k: accuracy(v[visible], contact_true[visible]) for k, v in contact_pred.items()},
+        gp_std_m=gp_std[:, 0],
+        extra={"split": split, "identifiable_fraction": float(np.mean(ident))},
+    )
+
+
+def _no_load_gauges(inversion: BeamInversion, x: np.ndarray) -> np.ndarray:
+    command = x[:, 3].astype(int) if x.shape[1] == 4 else np.full(x.shape[0], -1)
+    g = inversion.model.gauges_v(np.zeros(x.shape[0]), np.zeros(x.shape[0]), command)
+    return g * inversion.gain_ + inversion.offset_
+
+
+def identifiability_map(model, masses_kg, commands, digit_length_m: float, points: int = 271) -> dict:
+    """CRLB (mass unknown and known) and zone along the digit for each (mass, command): arrays of ``points``."""
+    a = np.linspace(0.0, digit_length_m, points)
+    out = {"position_from_base_m": a, "cases": []}
+    for c in commands:
+        for m in masses_kg:
+            b = cramer_rao(model, a, m, c)
+            out["cases"].append(
+                {"mass_kg": m, "command": c, "crlb_m": b.crlb_m, "crlb_known_m": b.crlb_known_mass_m, "zone": b.zone}
+            )
+    return out
