@@ -1,0 +1,206 @@
+"""Beyond the thesis: a mixed-sensitivity controller the servo can follow (consistent plant, beam rotation).
+
+The thesis's controllers ask for 2e5 commands from a 0..254 servo (5 Hz) or do almost nothing (39 Hz, loop gain
+3e-4 at DC). This design, on ``build_plant("consistent", output="tip_rotation_rad")``, weights
+
+* ``W1 = (s/M + wb)/(s + wb A)`` on the tracking error (near-integral action, bandwidth ``wb``),
+* a constant ``W2`` on the command (keeps a 30 deg step inside 0..254),
+* a constant ``Wd`` on an input disturbance (``G S`` in the cost: the H-infinity optimum would otherwise cancel
+  the lightly damped beam mode with controller zeros and leave it ringing at zeta = 0.07),
+
+solves it by :func:`flexdigit.control.synthesis.hinf_riccati`, then moves the controller's slow pole
+(``~ -wb A``) to the origin for exact integral action. Requirements (i)-(iv) of issue 5 are checked by
+:func:`check_requirements` on the linear plant.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+import control as ct
+from flexdigit._validation import check_positive, check_real
+from flexdigit.control.analysis import hinf_norm, loop_maps, monte_carlo_stability
+from flexdigit.control.generalized import as_statespace
+from flexdigit.control.synthesis import HinfDesign, hinf_riccati
+from flexdigit.errors import DesignError
+
+__all__ = ["MixsynSpec", "MixsynDesign", "disturbance_plant", "design_mixsyn", "plant_family", "check_requirements"]
+
+#: Equilibrium servo command of the rig (thesis 3.4.1: the digit is straight at command 8) and the command range.
+EQUILIBRIUM_COMMAND = 8.0
+COMMAND_RANGE = (0.0, 254.0)
+
+
+@dataclass(frozen=True)
+class MixsynSpec:
+    """Weights of the mixed-sensitivity design (units: rad of beam rotation, commands, rad/s).
+
+    Attributes
+    ----------
+    bandwidth_rad_s : float
+        ``wb`` of ``W1``.
+    s_peak : float
+        ``M``, the allowed sensitivity peak (high-frequency gain of ``1/W1``).
+    integral_eps : float
+        ``A``: ``W1`` has its pole at ``-wb A`` (moved to 0 afterwards).
+    w_command : float
+        ``W2``, per command.
+    w_disturbance : float
+        ``Wd``, commands of input disturbance per unit of ``d``.
+    margin : float
+        Relative gamma margin of the central controller.
+    """
+
+    bandwidth_rad_s: float = 1.0
+    s_peak: float = 1.5
+    integral_eps: float = 1e-4
+    w_command: float = 0.04
+    w_disturbance: float = 40.0
+    margin: float = 0.05
+
+    def __post_init__(self):
+        owner = type(self).__name__
+        check_positive(self.bandwidth_rad_s, "bandwidth_rad_s", owner, error=DesignError)
+        check_real(self.s_peak, "s_peak", owner, low=1.0, error=DesignError)
+        check_real(self.integral_eps, "integral_eps", owner, low=0.0, high=0.1, low_open=True, error=DesignError)
+        check_positive(self.w_command, "w_command", owner, error=DesignError)
+        check_real(self.w_disturbance, "w_disturbance", owner, low=0.0, error=DesignError)
+        check_real(self.margin, "margin", owner, low=0.0, error=DesignError)
+
+
+@dataclass(frozen=True)
+class MixsynDesign:
+    """A mixed-sensitivity design: the integral controller, the raw H-infinity result and the spec."""
+
+    controller: ct.TransferFunction
+    hinf: HinfDesign
+    spec: MixsynSpec
+
+    @property
+    def order(self) -> int:
+        return len(np.trim_zeros(self.controller.den[0][0], "f")) - 1
+
+
+def disturbance_plant(plant, w1, w2, wd) -> ct.StateSpace:
+    """Generalized plant with reference ``r`` and input disturbance ``d``: ``[W1 e; W2 u; e]`` from ``[r; d; u]``.
+
+    ``e = r - G (u + Wd d)``; ``u = K e``.
+    """
+    G = as_statespace(plant, "plant")
+    W1 = as_statespace(w1, "w1", weight=True)
+    W2 = as_statespace(w2, "w2", weight=True)
+    Wd = as_statespace(wd, "wd", weight=True)
+    blocks = [
+        ct.ss(G, inputs="ut", outputs="yp", name="G"),
+        ct.ss(W1, inputs="e", outputs="z1", name="W1"),
+        ct.ss(W2, inputs="u", outputs="z2", name="W2"),
+        ct.ss(Wd, inputs="d", outputs="dd", name="Wd"),
+        ct.summing_junction(["u", "dd"], "ut", name="sum_u"),
+        ct.summing_junction(["r", "-yp"], "e", name="sum_e"),
+    ]
+    return ct.interconnect(blocks, inplist=["r", "d", "u"], outlist=["z1", "z2", "e"])
+
+
+def design_mixsyn(plant, spec: MixsynSpec | None = None) -> MixsynDesign:
+    """Design the integral mixed-sensitivity controller (see the module docstring).
+
+    Examples
+    --------
+    >>> from flexdigit.models.plant import build_plant
+    >>> d = design_mixsyn(build_plant("consistent", output="tip_rotation_rad").tf)
+    >>> float(d.controller.den[0][0][-1])        # a pole at s = 0: integral action
+    0.0
+    """
+    spec = MixsynSpec() if spec is None else spec
+    wb, A = spec.bandwidth_rad_s, spec.integral_eps
+    W1 = ct.tf([1 / spec.s_peak, wb], [1.0, wb * A])
+    P = disturbance_plant(plant, W1, spec.w_command, spec.w_disturbance)
+    hd = hinf_riccati(P, nmeas=1, ncon=1, margin=spec.margin)
+    K = ct.tf(ct.minreal(hd.controller, verbose=False))
+    num, den = np.asarray(K.num[0][0], float), np.asarray(K.den[0][0], float)
+    roots = np.roots(den)
+    i = int(np.argmin(np.abs(roots)))
+    if not abs(roots[i]) < 10 * wb * A + 1e-9:
+        raise DesignError(f"The design has no slow pole near -{wb * A:g} rad/s to turn into an integrator.")
+    rest = np.real(np.poly(np.delete(roots, i)))
+    # keep the gain at frequencies >> |slow|: K_int = num / (s * rest), den = (s - slow) * rest
+    Kint = ct.tf(num / den[0], np.polymul([1.0, 0.0], rest))
+    return MixsynDesign(Kint, hd, spec)
+
+
+def plant_family(plant_info):
+    """``factory(gain=1, wn=1) -> G``: the consistent plant with its DC gain and beam frequency scaled.
+
+    Uses the components of :class:`flexdigit.models.plant.Plant`: ``dc_gain x MT_unit(s) x E(s)``, with the beam
+    factor ``E(s) = wn^2/(s^2 + 2 zeta wn s + wn^2)`` re-built at ``wn x factor`` (same zeta).
+    """
+    mt = plant_info.components["MT_unit"]
+    E = plant_info.components["E_digit_housing"]
+    e_den = np.asarray(E.den[0][0], float)
+    wn0 = math.sqrt(e_den[2] / e_den[0])
+    zeta = e_den[1] / e_den[0] / (2 * wn0)
+    dc = float(plant_info.dc_gain)
+
+    def factory(gain: float = 1.0, wn: float = 1.0):
+        w = wn0 * wn
+        return gain * dc * mt * ct.tf([w * w], [1.0, 2 * zeta * w, w * w])
+
+    return factory
+
+
+def check_requirements(
+    plant_info, controller, *, step_rad: float = math.radians(30.0), n_monte_carlo: int = 300, seed: int = 0
+) -> dict:
+    """Issue 5's requirements on the linear plant.
+
+    (i) the command for a 0..``step_rad`` step stays in ``[0 - 8, 254 - 8]`` about the equilibrium command;
+    (ii) zero steady-state error (``|S(0)|``); (iii) every closed-loop pole has damping >= 0.3;
+    (iv) stable for gain x [0.7, 1.3] and beam frequency x [0.8, 1.2]: a grid of the corners and edges, Monte
+    Carlo (seeded) and the small-gain test ``|T(jw)| l(w) < 1`` with ``l(w) = max |G_p/G - 1|`` over the grid.
+    """
+    G = plant_info.tf
+    maps = loop_maps(G, controller)
+    if not maps.stable:
+        return {"stable": False}
+    t = np.linspace(0.0, 10.0, 5001)
+    u = np.squeeze(ct.step_response(maps.T_uw, T=t).outputs) * step_rad
+    y = np.squeeze(ct.step_response(maps.T_yw, T=t).outputs) * step_rad
+    lo, hi = COMMAND_RANGE[0] - EQUILIBRIUM_COMMAND, COMMAND_RANGE[1] - EQUILIBRIUM_COMMAND
+    poles = maps.poles
+    zeta = -poles.real / np.abs(poles)
+    s0 = abs(complex(ct.evalfr(maps.T_zw, 1e-9)))
+    factory = plant_family(plant_info)
+    grid = [(g, w) for g in np.linspace(0.7, 1.3, 7) for w in np.linspace(0.8, 1.2, 9)]
+    grid_stable = all(loop_maps(factory(g, w), controller).stable for g, w in grid)
+    mc = monte_carlo_stability(factory, controller, {"gain": 0.3, "wn": 0.2}, n=n_monte_carlo, seed=seed)
+    omega = np.logspace(-2, 3, 3000)
+    Gn = G(1j * omega)
+    ell = np.max([np.abs(factory(g, w)(1j * omega) / Gn - 1) for g, w in grid], axis=0)
+    T = np.abs(maps.T_yw(1j * omega))
+    small_gain = float(np.max(T * ell))
+    info = ct.step_info(maps.T_yw, T=t)
+    return {
+        "stable": True,
+        "command_min": float(u.min()),
+        "command_max": float(u.max()),
+        "command_final": float(u[-1]),
+        "command_window": (lo, hi),
+        "req_i_command_ok": bool(u.min() >= lo and u.max() <= hi),
+        "sensitivity_dc": s0,
+        "output_final_rad": float(y[-1]),
+        "req_ii_integral": bool(s0 < 1e-6),
+        "min_damping": float(zeta.min()),
+        "req_iii_damping": bool(zeta.min() >= 0.3),
+        "grid_stable": grid_stable,
+        "monte_carlo": mc,
+        "small_gain_peak": small_gain,
+        "req_iv_robust": bool(grid_stable and mc["stable_fraction"] == 1.0),
+        "req_iv_small_gain": bool(small_gain < 1.0),
+        "settling_time_s": float(info["SettlingTime"]),
+        "overshoot_percent": float(info["Overshoot"]),
+        "ks_norm": hinf_norm(maps.T_uw, "T_uw")[0],
+        "closed_loop_poles": poles,
+    }
