@@ -28,6 +28,8 @@ Examples
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from flexdigit._validation import check_array, check_int, check_positive
@@ -196,6 +198,7 @@ class GPLocaliser:
         )
 
     def fit(self, X, Y) -> GPLocaliser:
+        from sklearn.exceptions import ConvergenceWarning
         from sklearn.gaussian_process import GaussianProcessRegressor
         from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 
@@ -216,7 +219,9 @@ class GPLocaliser:
             gp = GaussianProcessRegressor(
                 kernel, normalize_y=True, n_restarts_optimizer=self.n_restarts, random_state=self.random_state
             )
-            self.models_.append(gp.fit(xn, y[:, j]))
+            with warnings.catch_warnings():  # hyper-parameters at a bound (e.g. no noise floor) are fine here
+                warnings.simplefilter("ignore", ConvergenceWarning)
+                self.models_.append(gp.fit(xn, y[:, j]))
         self.n_outputs_ = y.shape[1]
         return self
 

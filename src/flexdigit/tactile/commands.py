@@ -1,0 +1,136 @@
+"""``flexdigit collect``, ``flexdigit train`` and ``flexdigit predict``: tactile experiments from the shell."""
+
+from __future__ import annotations
+
+import argparse
+
+from flexdigit.cli import CommandResult, add_command
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = add_command(
+        subparsers,
+        "collect",
+        _collect,
+        help="run a load protocol (thesis-6.1, thesis-7.1, thesis-7.1-no-load or a TOML file) and save the dataset",
+    )
+    p.add_argument("protocol", help="a built-in protocol name or a protocol TOML file")
+    p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
+    p.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv); resumes its journal")
+    p.add_argument("--seed", type=int, default=0, help="seed of the twin's noise (sim backends)")
+    p.add_argument("--settle", type=float, default=None, help="settle time per setting, s (default: protocol's)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+    p = add_command(subparsers, "train", _train, help="train the thesis's network on a dataset and save it as JSON")
+    p.add_argument("file", help="a dataset written by 'flexdigit collect'")
+    p.add_argument(
+        "--target",
+        default="position",
+        choices=("position", "position-index", "magnitude", "contact"),
+        help="position: m from the tip (loaded readings); position-index: the thesis's position number; "
+        "magnitude: kg; contact: load / no load",
+    )
+    p.add_argument("--hidden", type=int, default=None, help="hidden nodes (default: sweep as the thesis)")
+    p.add_argument("--tol", type=float, default=None, help="'learning gradient' (SCG tolerance; default: sweep)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--model", default=None, help="model file to write (default: FILE stem + .<target>.model.json)")
+
+    p = add_command(subparsers, "predict", _predict, help="predict with a saved model on a dataset")
+    p.add_argument("model", help="a model file written by 'flexdigit train'")
+    p.add_argument("file", help="a dataset")
+    p.add_argument("--limit", type=int, default=10, help="readings to list in the text output")
+
+
+def _collect(args: argparse.Namespace) -> CommandResult:
+    from pathlib import Path
+
+    from flexdigit.rig.base import open_rig
+    from flexdigit.tactile.protocols import load_protocol
+    from flexdigit.tactile.runner import collect, journal_path
+
+    protocol = load_protocol(args.protocol)
+    out = Path(args.out)
+    resumed = journal_path(out).exists()
+    options = {"seed": args.seed} if args.backend.split(":")[0].startswith("sim") else {}
+    rig = open_rig(args.backend, **options)
+    try:
+        dataset = collect(protocol, rig, out, rig_url=args.backend, settle_s=args.settle, progress=not args.no_progress)
+    finally:
+        rig.close()
+    data = {"protocol": protocol.name, "samples": len(dataset), "out": str(out), "resumed": resumed}
+    text = f"{protocol.name}: {len(dataset)} readings written to {out}" + (" (resumed)" if resumed else "")
+    return CommandResult(data=data, text=text)
+
+
+def _train(args: argparse.Namespace) -> CommandResult:
+    from pathlib import Path
+
+    from flexdigit.tactile.dataset import load_dataset
+    from flexdigit.tactile.metrics import accuracy, rmse
+    from flexdigit.tactile.model_io import save_model
+    from flexdigit.tactile.pipeline import features, run_pipeline, targets
+
+    dataset = load_dataset(args.file)
+    target = args.target.replace("-", "_")
+    rows, y = targets(dataset, target)
+    actuated = dataset.protocol.actuated
+    x = features(dataset, with_command=actuated)[rows]
+    inputs = ["gauge1_v", "gauge2_v", "gauge3_v"] + (["command"] if actuated else [])
+    sweep = args.hidden is None or args.tol is None
+    result = run_pipeline(
+        x,
+        y,
+        seed=args.seed,
+        fixed_hidden=args.hidden,
+        fixed_tol=args.tol,
+        target=target,
+        curve_hidden=args.hidden or 15,
+    )
+    scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
+    if target == "position":
+        scores["rmse_mm"] = 1000 * rmse(result.y_pred, result.y_test)
+    elif target == "magnitude":
+        scores["rmse_g"] = 1000 * rmse(result.y_pred, result.y_test)
+    elif target == "contact":
+        scores["accuracy"] = accuracy((result.y_pred >= 0.5).astype(float), result.y_test)
+    else:
+        scores["rmse_positions"] = rmse(result.y_pred, result.y_test)
+    model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
+    save_model(
+        model_path,
+        result.model,
+        target=target,
+        inputs=inputs,
+        meta={"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores},
+    )
+    data = {"target": target, "model": str(model_path), "swept": sweep, **scores}
+    lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]
+    lines += [f"  {k} = {v:.6g}" if isinstance(v, float) else f"  {k} = {v}" for k, v in scores.items()]
+    return CommandResult(data=data, text="\n".join(lines))
+
+
+def _predict(args: argparse.Namespace) -> CommandResult:
+    import numpy as np
+
+    from flexdigit.errors import DataFileError
+    from flexdigit.tactile.dataset import load_dataset
+    from flexdigit.tactile.metrics import corr2, rmse
+    from flexdigit.tactile.model_io import load_model
+    from flexdigit.tactile.pipeline import targets
+
+    saved = load_model(args.model)
+    dataset = load_dataset(args.file)
+    missing = [c for c in saved.inputs if c not in dataset.columns]
+    if missing:
+        raise DataFileError(f"{args.file}: the model needs column '{missing[0]}'")
+    rows, y = targets(dataset, saved.target)
+    x = np.column_stack([dataset[c].astype(float) for c in saved.inputs])[rows]
+    pred = saved.network.predict(x)
+    scores = {"corr2": corr2(pred, y), "rmse": rmse(pred, y)}
+    data = {"target": saved.target, "samples": rows.tolist(), "predicted": pred, "actual": y, "scores": scores}
+    lines = [f"{saved.target}: {len(rows)} readings, corr2 {scores['corr2']:.4f}, RMSE {scores['rmse']:.4g}"]
+    lines += [
+        f"  sample {int(dataset['sample'][r])}: predicted {p:.5g}, actual {t:.5g}"
+        for r, p, t in zip(rows[: args.limit], pred[: args.limit], y[: args.limit], strict=True)
+    ]
+    return CommandResult(data=data, text="\n".join(lines))

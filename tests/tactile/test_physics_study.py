@@ -1,0 +1,67 @@
+import numpy as np
+import pytest
+
+from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
+from flexdigit.tactile.physics import ZONES, cramer_rao
+from flexdigit.tactile.protocols import load_protocol
+from flexdigit.tactile.runner import collect
+from flexdigit.tactile.study import localisation_study
+
+NOISE = 0.002
+
+
+class Cantilever:
+    noise_v = np.full(3, NOISE)
+
+    def __init__(self, model):
+        self.model = model
+
+    def gauges_v(self, a, m, command):
+        return self.model(a, m)
+
+
+def test_zones_follow_the_cantilever(cantilever_model):
+    # no moment reaches a gauge beyond the load: clamp..gauge 1 invisible, gauge 1..2 one equation (confounded)
+    b = cramer_rao(Cantilever(cantilever_model), [0.03, 0.10, 0.18, 0.26], 0.0125)
+    assert b.zone.tolist() == [ZONES[0], ZONES[1], ZONES[2], ZONES[2]]
+    assert np.isinf(b.crlb_m[:2]).all() and np.isfinite(b.crlb_known_mass_m[1])
+
+
+def test_crlb_matches_closed_form(cantilever_model):
+    # beyond gauge 3, v_i = k_i m g (a - x_i): the 2x2 Fisher information has a closed form
+    a, m = 0.25, 0.0125
+    k = np.array([40.0, 45.0, 50.0]) * 9.81
+    x = np.array([0.045, 0.135, 0.225])
+    ja, jm = k * m, k * (a - x)
+    f = np.array([[ja @ ja, ja @ jm], [ja @ jm, jm @ jm]]) / NOISE**2
+    b = cramer_rao(Cantilever(cantilever_model), [a], m)
+    assert b.crlb_m[0] == pytest.approx(np.sqrt(np.linalg.inv(f)[0, 0]), rel=1e-3)
+    assert b.crlb_known_mass_m[0] == pytest.approx(1 / np.sqrt(f[0, 0]), rel=1e-3)
+
+
+def test_beam_inversion_is_efficient_on_its_own_model(cantilever_model):
+    # the maximum-likelihood inversion on the true model reaches the Cramer-Rao bound (within 15 %, 400 draws)
+    model = Cantilever(cantilever_model)
+    rng = np.random.default_rng(2)
+    a = rng.uniform(0.235, 0.27, 400)
+    m = rng.uniform(0.01, 0.03, 400)
+    v = cantilever_model(a, m) + NOISE * rng.standard_normal((400, 3))
+    est = BeamInversion(model, calibrate=False).fit(v[:1])
+    err = est.predict(v)[:, 0] - (0.27 - a)
+    bound = np.sqrt(np.mean(cramer_rao(model, a, m).crlb_m ** 2))
+    assert np.sqrt(np.mean(err**2)) == pytest.approx(bound, rel=0.15)
+
+
+@pytest.mark.slow
+def test_localisation_study_on_table_6_1(tmp_path, make_rig, cantilever_model):
+    ds = collect(load_protocol("thesis-6.1"), make_rig(seed=0), tmp_path / "d.parquet")
+    r = localisation_study(ds, Cantilever(cantilever_model), seed=0, epochs=10)
+    # a load 24 cm from the tip (3 cm from the clamp) bends no gauge of a cantilever: every such reading is invisible
+    far = ds["position_index"][r.test_rows] == 16
+    assert set(r.zone[far]) == {ZONES[0]}
+    inv = r.position_rmse_identifiable_m["beam inversion"]
+    assert inv <= 1.25 * r.crlb_rms_identifiable_m
+    assert r.contact_accuracy_visible["beam inversion"] >= 0.99
+    assert r.magnitude_rel_rmse_identifiable["beam inversion"] < 0.10
+    gp_mean, gp_std = GPLocaliser().fit(ds.gauges_v[:50], ds["load_kg"][:50]).predict(ds.gauges_v[:5], True)
+    assert gp_std.shape == gp_mean.shape == (5, 1)
