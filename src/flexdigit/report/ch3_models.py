@@ -40,6 +40,12 @@ def build(ctx: ReportContext) -> Chapter:
     )
     e = chapter.entries
     _digit(ctx, chapter, e)
+    zeta_ok = sum(x.status == "match" for x in e if x.key.startswith("table_3_") and ".zeta[" in x.key)
+    chapter.paragraphs.append(
+        f"Tables 3.1 and 3.2: all {zeta_ok} zetas whose %OS is readable follow from it to the printed 4 decimals; "
+        "table 3.2 row 2's %OS is garbled in print and its zeta implies 80.5973 %. Table 3.1's wn column, "
+        "unlike table 3.2's, does not follow from its wd column."
+    )
     _servo(ctx, chapter, e)
     _cable(ctx, chapter, e)
     _conversion(chapter, e)
