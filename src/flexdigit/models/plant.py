@@ -32,7 +32,7 @@ Two variants, both built from components (nothing about G is typed in):
     command at gauges 1-3.
 
 What "30 degrees of beam rotation" means in commands: by the cable model the tip turns
-``r_M x 0.015048 / e = 0.0303 rad = 1.735 deg`` per command, so 30 deg is 17.3 commands (commands 8..25).
+``r_M x 0.015048 / e = 0.0303 rad = 1.735 deg`` per command, so 30 deg is 17.3 commands (from command 8 to 25.3).
 The thesis says 8..43 in 3.4.1 (that is 30 deg of *servo* rotation) and "approximately fifteen steps" in 3.6.
 With ``output="tip_rotation_rad"`` a 30 deg (0.5236 rad) reference needs 17.3 commands at DC, well inside
 0..254. See :func:`explain_discrepancies` for every printed-vs-consistent difference.
