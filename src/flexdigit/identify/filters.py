@@ -63,9 +63,12 @@ def svd_filter(y, rank: int = 2, window: int | None = None) -> np.ndarray:
     n = x.size
     L = min(n // 2, 256) if window is None else check_int(window, "window", "svd_filter", low=2, high=n - 1)
     r = check_int(rank, "rank", "svd_filter", low=1, high=min(L, n - L + 1))
-    trajectory = np.lib.stride_tricks.sliding_window_view(x, n - L + 1)  # L x K Hankel matrix, a view
-    u, s, vt = np.linalg.svd(trajectory, full_matrices=False)
-    low_rank = (u[:, :r] * s[:r]) @ vt[:r]
+    trajectory = np.ascontiguousarray(np.lib.stride_tricks.sliding_window_view(x, n - L + 1))  # L x K Hankel
+    # the r leading left singular vectors are the leading eigenvectors of the L x L lag covariance X X^T (basic
+    # SSA): far cheaper than a full SVD of X, and only those r are needed
+    _, vectors = np.linalg.eigh(trajectory @ trajectory.T)  # ascending eigenvalues
+    u = vectors[:, L - r :]
+    low_rank = u @ (u.T @ trajectory)  # projection onto the leading r-dimensional subspace
     return _diagonal_average(low_rank)
 
 

@@ -1,0 +1,241 @@
+"""From a release or step record to a validated second-order model (thesis 3.1.2, 3.2.4), two ways.
+
+``method="thesis"`` does what the thesis did: filter the record, read the percent overshoot and the 2 % settling
+time, ``zeta`` from %OS and ``wn = 4 / (zeta Ts)`` (the text of 3.1.2; table 3.2 actually used
+``wn = wd / sqrt(1 - zeta^2)``, reported as ``wn_damped_rad_s``). ``method="lsq"`` fits the whole raw record by
+least squares (:class:`~flexdigit.identify.fit.SecondOrderFit`) and gives confidence intervals. Both are
+validated against the raw record with MATLAB's ``corr2`` (the thesis's figure) and the NRMSE fit.
+
+Examples
+--------
+>>> from flexdigit.identify.fit import second_order_response
+>>> t = np.arange(0, 8, 0.002)
+>>> y = second_order_response(t, "release", 13.1, 0.068, 0.0, 1.0, 0.5)
+>>> y = y + np.random.default_rng(0).normal(0, 0.02, t.size)
+>>> r = identify(TimeSeries.from_arrays(t, y), "release", method="lsq")
+>>> round(r.wn_rad_s, 1), round(r.zeta, 2)      # digit of 3.1.2: 13.1 rad/s, 0.068
+(13.1, 0.07)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+import control
+from flexdigit._validation import check_choice
+from flexdigit.errors import DataFileError
+from flexdigit.identify.filters import FILTERS, apply_filter
+from flexdigit.identify.fit import Estimate, SecondOrderFit, second_order_response
+from flexdigit.identify.response import ResponseFeatures, analyze_response
+from flexdigit.identify.timeseries import TimeSeries
+from flexdigit.identify.validation import corr2, nrmse_fit
+
+METHODS = ("thesis", "lsq")
+KINDS = ("release", "step")
+
+
+@dataclass(frozen=True)
+class Identification:
+    """A second-order model identified from one record, and how well it reproduces it.
+
+    Attributes
+    ----------
+    kind, method, filter : str
+        Experiment (``release``/``step``), method (``thesis``/``lsq``) and the filter used for the features.
+    source, channel, unit : str
+        Where the record came from.
+    wn_rad_s, zeta : float
+        The identified model ``wn^2 / (s^2 + 2 zeta wn s + wn^2)``.
+    gain : float
+        Step: output change per input change (signal unit per input unit) when the input step is known, else the
+        output change. Release: the initial deflection (signal unit).
+    offset, amplitude, t0_s : float
+        As in :func:`~flexdigit.identify.fit.second_order_response`.
+    estimates : dict of str to Estimate, or None
+        ``lsq`` only: every fitted parameter with its confidence interval.
+    features : ResponseFeatures or None
+        The thesis-style features of the filtered record (None if it has no overshoot, with ``lsq``).
+    corr2, fit_percent : float
+        MATLAB ``corr2`` and NRMSE fit (%) of the model response against the raw record.
+    """
+
+    kind: str
+    method: str
+    filter: str
+    source: str
+    channel: str
+    unit: str
+    wn_rad_s: float
+    zeta: float
+    gain: float
+    offset: float
+    amplitude: float
+    t0_s: float
+    estimates: dict[str, Estimate] | None
+    features: ResponseFeatures | None
+    corr2: float
+    fit_percent: float
+
+    def predict(self, t_s) -> np.ndarray:
+        """The model's release or step response at ``t_s`` (s), in the record's unit."""
+        return second_order_response(t_s, self.kind, self.wn_rad_s, self.zeta, self.offset, self.amplitude, self.t0_s)
+
+    def transfer_function(self) -> control.TransferFunction:
+        """``gain wn^2 / (s^2 + 2 zeta wn s + wn^2)`` for a step (unit DC gain for a release, as E(s) is printed)."""
+        k = self.gain if self.kind == "step" else 1.0
+        return control.tf([k * self.wn_rad_s**2], [1.0, 2 * self.zeta * self.wn_rad_s, self.wn_rad_s**2])
+
+    def summary(self) -> dict:
+        """Plain figures for ``--json`` and reports."""
+        out = {
+            "kind": self.kind,
+            "method": self.method,
+            "filter": self.filter,
+            "source": self.source,
+            "channel": self.channel,
+            "unit": self.unit,
+            "wn_rad_s": self.wn_rad_s,
+            "zeta": self.zeta,
+            "gain": self.gain,
+            "t0_s": self.t0_s,
+            "corr2": self.corr2,
+            "fit_percent": self.fit_percent,
+            "tf_num": [float(c) for c in self.transfer_function().num[0][0]],
+            "tf_den": [float(c) for c in self.transfer_function().den[0][0]],
+        }
+        if self.estimates:
+            out["confidence_intervals"] = {k: [e.ci_low, e.ci_high] for k, e in self.estimates.items()}
+        if self.features is not None:
+            f = self.features
+            out["features"] = {
+                "percent_overshoot": f.percent_overshoot,
+                "peak_time_s": f.peak_time_s,
+                "rise_time_s": f.rise_time_s,
+                "settling_time_s": f.settling_time_s,
+                "wd_rad_s": f.wd_rad_s,
+                "log_decrement": f.log_decrement,
+                "zeta_from_overshoot": f.zeta_os,
+                "zeta_from_log_decrement": f.zeta_log_decrement,
+                "wn_from_settling_rad_s": f.wn_settling_rad_s,
+                "wn_from_damped_rad_s": f.wn_damped_rad_s,
+            }
+        return out
+
+
+def identify(
+    series: TimeSeries,
+    kind: str,
+    *,
+    method: str = "lsq",
+    filter: str = "butter",
+    t0_s: float | None = None,
+    input_step: float | None = None,
+    wn_from: str = "settling",
+    **filter_options,
+) -> Identification:
+    """Identify a second-order model from a release or step record.
+
+    Parameters
+    ----------
+    series : TimeSeries
+        The record (:func:`~flexdigit.identify.timeseries.read_timeseries`, the twin, or arrays).
+    kind : {"release", "step"}
+        Free decay from an initial deflection (the digit, 3.1.2) or a step response (the servo, 3.2.4).
+    method : {"lsq", "thesis"}
+        Least-squares fit of the raw record, or the thesis's %OS and settling-time formulas on the filtered one.
+    filter : {"butter", "svd", "fft", "none"}
+        Filter used to read the features (thesis method, and the start values of ``lsq``).
+    t0_s : float, optional
+        Step/release instant (s). Default: where the recorded input changes, else the first sample (step); found
+        from the response (release).
+    input_step : float, optional
+        Size of the input step (e.g. 51 commands, 3.2.4) when the record has no input column; gives ``gain``.
+    wn_from : {"settling", "damped"}
+        Thesis method: ``wn = 4 / (zeta Ts)`` as the text says, or ``wd / sqrt(1 - zeta^2)`` as table 3.2 did.
+    **filter_options
+        Passed to :func:`~flexdigit.identify.filters.apply_filter` (``cutoff_hz``, ``rank``, ``harmonics``...).
+
+    Raises
+    ------
+    DataFileError
+        If the record cannot give a model (thesis method: no overshoot/undershoot; settling not reached).
+    """
+    check_choice(kind, "kind", KINDS, "identify")
+    check_choice(method, "method", METHODS, "identify")
+    check_choice(filter, "filter", FILTERS, "identify")
+    check_choice(wn_from, "wn_from", ("settling", "damped"), "identify")
+    t, y = series.t_s, series.y
+    du = None
+    if kind == "step" and series.u is not None:
+        moved = np.nonzero(np.abs(series.u - series.u[0]) > 1e-12 * max(1.0, abs(series.u[0])))[0]
+        if moved.size:
+            if t0_s is None:
+                t0_s = float(t[moved[0]])
+            du = float(np.mean(series.u[moved[0] :]) - series.u[0])
+    if du is None and input_step is not None:
+        du = float(input_step)
+    if kind == "step" and t0_s is None:
+        t0_s = float(t[0])
+    smooth = apply_filter(t, y, filter, **filter_options)
+    if method == "thesis":
+        f = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name)
+        wn = f.wn_settling_rad_s if wn_from == "settling" else f.wn_damped_rad_s
+        if not math.isfinite(wn):
+            raise DataFileError(
+                f"{series.name}: the {kind} response does not settle inside the 2 % band before the record ends, "
+                "so the thesis's wn = 4/(zeta Ts) is undefined; record longer, filter harder, or use the lsq method"
+            )
+        zeta = f.zeta_os
+        if kind == "step":
+            offset, amplitude = f.initial_value, f.final_value - f.initial_value
+        else:
+            offset, amplitude = f.final_value, f.initial_value - f.final_value
+        t0, estimates, features = f.t0_s, None, f
+    else:
+        try:
+            features = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name)
+        except DataFileError:
+            features = None  # an overdamped record: the fit still works
+        fit_t0 = kind == "release" and t0_s is None
+        model = SecondOrderFit(kind=kind, fit_t0=fit_t0, t0_s=t0_s).fit(t, y, source=series.name)
+        wn, zeta = model.wn_, model.zeta_
+        offset, amplitude, t0 = model.offset_, model.amplitude_, model.t0_
+        estimates = model.estimates_
+    prediction = second_order_response(t, kind, wn, zeta, offset, amplitude, t0)
+    gain = amplitude / du if (kind == "step" and du) else amplitude
+    return Identification(
+        kind=kind,
+        method=method,
+        filter=filter,
+        source=series.source,
+        channel=series.channel,
+        unit=series.unit,
+        wn_rad_s=float(wn),
+        zeta=float(zeta),
+        gain=float(gain),
+        offset=float(offset),
+        amplitude=float(amplitude),
+        t0_s=float(t0),
+        estimates=estimates,
+        features=features,
+        corr2=corr2(y, prediction),
+        fit_percent=nrmse_fit(y, prediction),
+    )
+
+
+def average_runs(runs: list[TimeSeries]) -> TimeSeries:
+    """The sample-by-sample mean of repeated runs on the same time grid (figure 3.11's "average" curve)."""
+    if not runs:
+        raise DataFileError("average_runs needs at least one run")
+    n = min(r.n_samples for r in runs)
+    t = runs[0].t_s[:n]
+    for r in runs[1:]:
+        if not np.allclose(r.t_s[:n], t, rtol=0, atol=1e-9 + 1e-6 * runs[0].dt_s):
+            raise DataFileError(f"{r.name}: runs to average must share their sample times")
+    y = np.mean([r.y[:n] for r in runs], axis=0)
+    u = runs[0].u[:n] if runs[0].u is not None else None
+    first = runs[0]
+    return TimeSeries(t, y, first.channel, first.unit, f"mean of {len(runs)} runs", u, first.input_name)

@@ -1,0 +1,326 @@
+"""Time series for identification: from a DAQ recording (CSV or Parquet), from the twin, or from arrays.
+
+A recording is a table with a time column and one or more channels, one row per sample. Units are in the
+column names, ``<name>_<unit>``: ``time_s`` (or ``time_ms``, ``t_us``) and ``sg1_v``, ``pot_v``, ``command``.
+A time column with no unit (``time``, ``t``) needs ``time_unit=`` (``--time-unit`` on the command line). A
+channel is picked by its full column name or its name without the unit (``sg1`` for ``sg1_v``); without one, the
+first channel that is not an input (``command``, ``u``) is used. An input column, when present, is kept with the
+series (the servo command of a step test).
+
+Every problem with a file raises :class:`~flexdigit.errors.DataFileError` naming the file, the column and the
+line (CSV, counting the header as line 1) or row (Parquet) and what was expected: a missing column, a cell that
+is not a number, time that does not increase, a run of missing values, irregular sampling, too few samples.
+
+Examples
+--------
+>>> ts = TimeSeries.from_arrays(np.arange(0, 1, 0.01), np.zeros(100), channel="sg1", unit="V")
+>>> ts.n_samples, round(ts.sample_rate_hz, 6)
+(100, 100.0)
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from flexdigit._validation import check_array
+from flexdigit.errors import DataFileError
+
+#: Fewest samples an identification record may have.
+MIN_SAMPLES = 20
+#: Time units accepted in a column name suffix or ``time_unit``, in seconds.
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
+#: Unit suffixes recognised in channel names (anything else is kept as part of the name).
+CHANNEL_UNITS = {"v": "V", "mv": "mV", "m": "m", "mm": "mm", "rad": "rad", "deg": "deg", "n": "N", "nm": "N m"}
+#: Column names (without unit) treated as the experiment's input rather than a measured channel.
+INPUT_NAMES = ("command", "cmd", "u", "input")
+#: Largest allowed deviation of one sampling interval from the median interval (fraction of it).
+SAMPLING_TOLERANCE = 0.25
+
+
+@dataclass(frozen=True)
+class TimeSeries:
+    """One measured channel of an experiment, uniformly sampled.
+
+    Attributes
+    ----------
+    t_s : ndarray
+        Sample times (s), strictly increasing.
+    y : ndarray
+        The channel (``unit``).
+    channel, unit : str
+        Channel name and unit (``""`` when unknown).
+    source : str
+        Where it came from (a file name, ``"twin"``, ``"array"``); used in messages.
+    u : ndarray or None
+        The input (e.g. servo command) at the same times, when recorded.
+    input_name : str
+        Name of the input column.
+    """
+
+    t_s: np.ndarray
+    y: np.ndarray
+    channel: str = "y"
+    unit: str = ""
+    source: str = "array"
+    u: np.ndarray | None = None
+    input_name: str = ""
+    meta: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_arrays(cls, t_s, y, *, channel: str = "y", unit: str = "", u=None, source: str = "array"):
+        """Validate arrays into a series (same checks as a file: increasing time, no NaN, enough samples)."""
+        t = check_array(t_s, "t_s", "TimeSeries", ndim=1, finite=False, error=DataFileError)
+        yv = check_array(y, "y", "TimeSeries", ndim=1, finite=False, error=DataFileError)
+        if yv.shape != t.shape:
+            raise DataFileError(f"{source}: time has {t.size} samples but '{channel}' has {yv.size}")
+        uv = None
+        if u is not None:
+            uv = check_array(u, "u", "TimeSeries", ndim=1, shape=(t.size,), error=DataFileError)
+        _check_series(t, yv, source, "time", channel, lambda i: f"sample {i}")
+        return cls(t, yv, channel, unit, source, uv, "u" if uv is not None else "")
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.t_s.size)
+
+    @property
+    def dt_s(self) -> float:
+        """Median sampling interval (s)."""
+        return float(np.median(np.diff(self.t_s)))
+
+    @property
+    def sample_rate_hz(self) -> float:
+        return 1.0 / self.dt_s
+
+    @property
+    def name(self) -> str:
+        """``source:channel``, for messages and reports."""
+        return f"{self.source}:{self.channel}"
+
+    def with_y(self, y) -> TimeSeries:
+        """A new series with the same times and a new signal (e.g. filtered)."""
+        return TimeSeries(
+            self.t_s, np.asarray(y, dtype=float), self.channel, self.unit, self.source, self.u, self.input_name
+        )
+
+
+def split_unit(column: str) -> tuple[str, str]:
+    """``"sg1_v" -> ("sg1", "V")``; a name without a known unit suffix keeps unit ``""``.
+
+    Examples
+    --------
+    >>> split_unit("pot_v"), split_unit("time_ms"), split_unit("command")
+    (('pot', 'V'), ('time', 'ms'), ('command', ''))
+    """
+    stem, sep, suffix = column.strip().rpartition("_")
+    if sep and stem:
+        low = suffix.lower()
+        if low in TIME_UNITS:
+            return stem, low
+        if low in CHANNEL_UNITS:
+            return stem, CHANNEL_UNITS[low]
+    return column.strip(), ""
+
+
+def read_timeseries(
+    path: str | Path,
+    channel: str | None = None,
+    *,
+    time_unit: str | None = None,
+    time_column: str | None = None,
+) -> TimeSeries:
+    """Read one channel of a DAQ recording (``.csv`` or ``.parquet``) as a :class:`TimeSeries`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The recording: a header row then one row per sample (CSV; ``#`` lines are comments), or a Parquet table.
+    channel : str, optional
+        Column to read, by full name (``sg1_v``) or without its unit (``sg1``). Default: the first channel
+        that is not the time or an input column.
+    time_unit : {"s", "ms", "us"}, optional
+        Unit of a time column whose name carries none (``time``); overrides the name's suffix.
+    time_column : str, optional
+        Name of the time column (default: the first column named ``time``/``t``, with or without a unit).
+
+    Returns
+    -------
+    TimeSeries
+        Times in seconds; the input column (``command``...) as ``u`` when present.
+
+    Raises
+    ------
+    DataFileError
+        Naming the file, column and line/row: no such file, no header, missing time or channel column, a cell
+        that is not a number, time not strictly increasing, NaN runs, irregular sampling, fewer than
+        :data:`MIN_SAMPLES` samples.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise DataFileError(f"{p}: no such file")
+    suffix = p.suffix.lower()
+    if suffix == ".parquet":
+        columns, data = _read_parquet(p)
+        where = lambda i: f"row {i + 1}"  # noqa: E731
+    elif suffix in (".csv", ".txt", ".tsv"):
+        columns, data, lines = _read_csv(p)
+        where = lambda i: f"line {lines[i]}" if i < len(lines) else f"line {i + 2}"  # noqa: E731
+    else:
+        raise DataFileError(f"{p}: unknown file type {p.suffix!r}: expected a .csv or .parquet recording")
+    tcol = _find_time_column(p, columns, time_column)
+    stem, unit_in_name = split_unit(tcol)
+    unit = time_unit or unit_in_name
+    if unit not in TIME_UNITS:
+        got = f"--time-unit {time_unit!r}" if time_unit else f"column {tcol!r} has no unit"
+        raise DataFileError(
+            f"{p}: time unit unknown ({got}): name the column time_s, time_ms or time_us, or pass time_unit "
+            "(--time-unit) s, ms or us"
+        )
+    inputs = [c for c in columns if c != tcol and split_unit(c)[0].lower() in INPUT_NAMES]
+    channels = [c for c in columns if c != tcol and c not in inputs]
+    if channel is None:
+        if not channels:
+            raise DataFileError(f"{p}: no channel column besides {tcol!r} (columns: {', '.join(columns)})")
+        ycol = channels[0]
+    else:
+        matches = [c for c in columns if c == channel] or [c for c in columns if split_unit(c)[0] == channel]
+        if not matches:
+            raise DataFileError(f"{p}: no column {channel!r} (columns: {', '.join(columns)})")
+        ycol = matches[0]
+    t = data[tcol] * TIME_UNITS[unit]
+    y = data[ycol]
+    u = data[inputs[0]] if inputs and inputs[0] != ycol else None
+    _check_series(t, y, str(p), tcol, ycol, where)
+    if u is not None:
+        _check_nan_runs(u, str(p), inputs[0], where)
+    ystem, yunit = split_unit(ycol)
+    return TimeSeries(t, y, ystem, yunit, str(p), u, inputs[0] if u is not None else "")
+
+
+def _find_time_column(p: Path, columns: list[str], time_column: str | None) -> str:
+    if time_column is not None:
+        if time_column not in columns:
+            raise DataFileError(f"{p}: no time column {time_column!r} (columns: {', '.join(columns)})")
+        return time_column
+    for c in columns:
+        if split_unit(c)[0].lower() in ("time", "t"):
+            return c
+    raise DataFileError(
+        f"{p}: no time column: expected one named time_s (or time_ms, time, t) among: {', '.join(columns)}"
+    )
+
+
+def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
+    """Columns, float data and the file line of each data row; names the line and column of a bad cell."""
+    with p.open(newline="", encoding="utf-8-sig") as fh:
+        text = fh.read()
+    header = None
+    rows: list[list[str]] = []
+    lines: list[int] = []
+    dialect = "excel-tab" if p.suffix.lower() == ".tsv" else "excel"
+    for lineno, row in enumerate(csv.reader(text.splitlines(), dialect=dialect), start=1):
+        if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
+            continue
+        if header is None:
+            header = [c.strip() for c in row]
+            header_line = lineno
+            continue
+        if len(row) != len(header):
+            raise DataFileError(
+                f"{p}: line {lineno} has {len(row)} fields, the header (line {header_line}) has {len(header)}"
+            )
+        rows.append(row)
+        lines.append(lineno)
+    if header is None:
+        raise DataFileError(f"{p}: empty file: expected a header row such as time_s,sg1_v")
+    if len(set(header)) != len(header):
+        raise DataFileError(f"{p}: duplicate column names in the header: {', '.join(header)}")
+    data = {c: np.empty(len(rows)) for c in header}
+    for i, row in enumerate(rows):
+        for c, cell in zip(header, row, strict=True):
+            cell = cell.strip()
+            if cell == "" or cell.lower() in ("nan", "na", "null"):
+                data[c][i] = math.nan
+                continue
+            try:
+                data[c][i] = float(cell)
+            except ValueError:
+                raise DataFileError(f"{p}: line {lines[i]}, column {c!r}: {cell!r} is not a number") from None
+    return header, data, lines
+
+
+def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
+    import pyarrow.parquet as pq
+
+    try:
+        table = pq.read_table(p)
+    except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
+        raise DataFileError(f"{p}: not a readable Parquet file ({exc})") from None
+    data = {}
+    for name in table.column_names:
+        col = table.column(name)
+        try:
+            data[name] = np.asarray(col.to_numpy(zero_copy_only=False), dtype=float)
+        except (TypeError, ValueError):
+            raise DataFileError(f"{p}: column {name!r} is not numeric (type {col.type})") from None
+    return list(table.column_names), data
+
+
+def _check_series(t: np.ndarray, y: np.ndarray, source: str, tcol: str, ycol: str, where) -> None:
+    """Enough samples, finite strictly increasing roughly uniform time, no NaN in the channel."""
+    if t.size < MIN_SAMPLES:
+        raise DataFileError(
+            f"{source}: too few samples: {t.size}, an identification record needs at least {MIN_SAMPLES}"
+        )
+    bad = np.nonzero(~np.isfinite(t))[0]
+    if bad.size:
+        raise DataFileError(f"{source}: column {tcol!r}, {where(int(bad[0]))}: time is missing or not finite")
+    dt = np.diff(t)
+    back = np.nonzero(dt <= 0)[0]
+    if back.size:
+        i = int(back[0]) + 1
+        raise DataFileError(
+            f"{source}: column {tcol!r}, {where(i)}: time must increase strictly, got {t[i]:g} after {t[i - 1]:g}"
+        )
+    _check_nan_runs(y, source, ycol, where)
+    med = float(np.median(dt))
+    off = np.nonzero(np.abs(dt - med) > SAMPLING_TOLERANCE * med)[0]
+    if off.size:
+        i = int(off[0]) + 1
+        raise DataFileError(
+            f"{source}: column {tcol!r}, {where(i)}: irregular sampling, a step of {dt[i - 1]:g} where the median "
+            f"is {med:g} (dropped samples?); the filters need uniform sampling"
+        )
+
+
+def _check_nan_runs(y: np.ndarray, source: str, col: str, where) -> None:
+    nan = ~np.isfinite(y)
+    if not nan.any():
+        return
+    first = int(np.argmax(nan))
+    end = first
+    while end + 1 < y.size and nan[end + 1]:
+        end += 1
+    runs = int(np.sum(np.diff(np.concatenate([[0], nan.astype(int)])) == 1))
+    more = f" ({runs} runs, {int(nan.sum())} values in all)" if runs > 1 else ""
+    span = where(first) if end == first else f"{where(first)} to {where(end)}"
+    raise DataFileError(
+        f"{source}: column {col!r}, {span}: missing values (NaN run of {end - first + 1}){more}; "
+        "cut the record or fill the gap before identifying"
+    )
+
+
+def write_csv(path: str | Path, ts: TimeSeries) -> Path:
+    """Write a series as a recording ``time_s,<channel>_<unit>[,command]`` that :func:`read_timeseries` reads."""
+    p = Path(path)
+    unit = {v: k for k, v in CHANNEL_UNITS.items()}.get(ts.unit, "")
+    ycol = f"{ts.channel}_{unit}" if unit else ts.channel
+    cols = [ts.t_s, ts.y] + ([ts.u] if ts.u is not None else [])
+    header = ["time_s", ycol] + ([ts.input_name or "command"] if ts.u is not None else [])
+    np.savetxt(p, np.column_stack(cols), delimiter=",", header=",".join(header), comments="", fmt="%.9g")
+    return p
