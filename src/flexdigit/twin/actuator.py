@@ -1,0 +1,100 @@
+"""The servo as identified (3.2.4): second order, zeta 0.5629, wn 20.53 rad/s, driven by latched integer commands.
+
+The MILINST board receives a command (0..254) in a serial frame every ``serial_period_s`` (20 ms, 5.2) and turns it
+into a pulse width; the servo reads the pulse on its next PWM pulse (52 Hz). So a command issued at time ``t``
+takes effect at the first PWM pulse at or after the first serial frame boundary at or after ``t`` (then rounded up
+to the integration grid). The servo's shaft angle follows ``theta'' = wn^2 (theta_cmd - theta) - 2 zeta wn
+theta'`` exactly between grid points (matrix exponential), with ``theta_cmd`` from E 3.15 (0.8622 deg per command,
+0 deg at command 0) and the mechanical range 0..219 deg enforced as a hard stop. The potentiometer maps the angle to
+volts with the line through params' end points (:class:`flexdigit.models.servo.PotentiometerMap`).
+
+The servo's identified model already includes whatever load it carried when identified; the cable tension is not
+fed back to it (the S-148 is position-controlled and its 0.297 N m stall torque is ~3x the ~0.1 N m the digit
+needs at command 43).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache, lru_cache
+
+import numpy as np
+import scipy.linalg
+
+from flexdigit._validation import check_int
+from flexdigit.models.servo import PotentiometerMap, command_to_angle_rad
+
+
+@lru_cache(maxsize=32)
+def _servo_transition(wn: float, zeta: float, h: float) -> np.ndarray:
+    a = np.array([[0.0, 1.0, 0.0], [-(wn**2), -2.0 * zeta * wn, wn**2], [0.0, 0.0, 0.0]])
+    return scipy.linalg.expm(a * h)
+
+
+class Servo:
+    """Servo state (angle from the servo's 0 deg, rad; rate, rad/s) and its command schedule.
+
+    Parameters
+    ----------
+    params : RigParams
+    command : int
+        Initial command, at rest there.
+    """
+
+    def __init__(self, params, command: int):
+        a = params.actuator
+        self.params = params
+        self.wn = a.servo_wn_rad_s
+        self.zeta = a.servo_zeta
+        self.angle_min = math.radians(a.angle_min_deg)
+        self.angle_max = math.radians(a.angle_max_deg)
+        self.pot = PotentiometerMap.from_params(params)
+        self.command = self.check_command(command)
+        self.angle = float(command_to_angle_rad(self.command, params))
+        self.rate = 0.0
+        self.pending: list[tuple[float, int]] = []
+
+    def check_command(self, value) -> int:
+        """Validate a serial position command (integer in ``command_min..command_max``)."""
+        a = self.params.actuator
+        return check_int(value, "command", "Twin", low=a.command_min, high=a.command_max)
+
+    def schedule(self, value, issued_s: float, grid_s: float) -> float:
+        """Latch ``value`` at the next serial frame and PWM pulse; returns the grid time it takes effect (s)."""
+        value = self.check_command(value)
+        a = self.params.actuator
+        frame = math.ceil(issued_s / a.serial_period_s - 1e-9) * a.serial_period_s
+        pwm = 1.0 / a.pwm_frequency_hz
+        pulse = math.ceil(frame / pwm - 1e-9) * pwm
+        apply = math.ceil(pulse / grid_s - 1e-9) * grid_s
+        self.pending.append((apply, value))
+        self.pending.sort(key=lambda item: item[0])
+        return apply
+
+    def update_command(self, time_s: float) -> None:
+        """Apply every scheduled command whose time has come (the last one wins)."""
+        while self.pending and self.pending[0][0] <= time_s + 1e-12:
+            self.command = self.pending.pop(0)[1]
+
+    def step(self, h: float) -> None:
+        """Advance the servo ``h`` seconds towards the current command's angle (exact for the linear model)."""
+        phi = _servo_transition(self.wn, self.zeta, h)
+        target = self._target(self.command)
+        angle = phi[0, 0] * self.angle + phi[0, 1] * self.rate + phi[0, 2] * target
+        rate = phi[1, 0] * self.angle + phi[1, 1] * self.rate + phi[1, 2] * target
+        if angle > self.angle_max or angle < self.angle_min:  # mechanical stop
+            angle = min(max(angle, self.angle_min), self.angle_max)
+            rate = 0.0
+        self.angle, self.rate = angle, rate
+
+    @staticmethod
+    @cache
+    def _target_angle(params, command: int) -> float:
+        return float(command_to_angle_rad(command, params))
+
+    def _target(self, command: int) -> float:
+        return self._target_angle(self.params, command)
+
+    def pot_v(self, angle_rad: float) -> float:
+        """Potentiometer voltage (V) at a shaft angle (rad)."""
+        return float(self.pot.voltage_v(math.degrees(angle_rad)))

@@ -1,0 +1,584 @@
+"""The digit as a planar large-deflection chain: rigid links joined by rotational springs (a discrete elastica).
+
+Why this model
+--------------
+The digit is an inextensible spring-steel strip (axial stiffness ~10^6 N against loads < 1 N) carrying rigid nylon
+supports, bent by a cable and by hanging weights, up to ~60 degrees at the tip. An inextensible planar elastica is
+the right continuum, and its standard discretisation is the Hencky chain: the strip is cut into cells, each
+cell's bending is lumped into a rotational spring ``k = EI / h`` at the cell's mid-point (the mid-point rule for
+``theta' = M / EI``, second order in ``h``), and the links between springs are rigid. This choice, rather than a
+Cosserat rod (PyElastica) or beam finite elements, gives:
+
+- exact large rotations with one coordinate per cell (absolute link angles ``psi``), no shear or axial stiffness
+  to resolve, so the dynamics is not stiff in the axial direction and a 5 ms step is stable;
+- rigid supports for free: a support is simply a stretch of link with no spring in it;
+- a spring moment equal to the bending moment at the joint in equilibrium, so gauge strains are exact on the
+  discrete configuration;
+- a closed-form mass matrix ``M_jk = A_jk cos(psi_j - psi_k)`` with a constant ``A`` (the N-link pendulum), and
+  generalised forces of world-fixed loads that are ``-sin(psi) G_a + cos(psi) G_b`` with constant ``G``. Statics
+  vectorise over thousands of load cases (one batched Newton solve); dynamics are a few small dense products per
+  step.
+
+The cable (3.3) runs at constant eccentricity ``e`` (the thesis's assumption): its path is ``e * psi_tip`` shorter
+than the strip, so its only generalised force is the moment ``T e`` on the tip angle. The compression ``T`` it puts
+on the strip is self-equilibrated (a tendon in a duct does not buckle its duct) and appears only as axial strain
+at the gauges, which the half bridge cancels and a quarter bridge sees. The cable is a stiff, tension-only spring
+(``T = k_c max(0, r_M dtheta_M - e psi_tip)``, E 3.11), so a slack cable and a taut one are both handled.
+
+Axes: ``a`` along the undeformed digit (base to tip), ``b`` towards the cable side (positive bending). Angles in
+rad, lengths in m, forces in N, moments in N m.
+
+Examples
+--------
+>>> chain = Chain.uniform(length_m=0.2, ei_n_m2=0.01, n_cells=40)
+>>> sol = chain.solve_static(tip_force_n=[[0.0, 1e-4]])
+>>> round(float(sol.tip_m[0, 1] / (1e-4 * 0.2**3 / (3 * 0.01))), 3)     # P L^3 / 3 EI
+1.0
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg.lapack import dgesv as _gesv
+
+from flexdigit._validation import check_array, check_int, check_positive, check_real
+from flexdigit.errors import ParameterError
+
+G_STANDARD_M_S2 = 9.80665
+
+
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x = b`` through LAPACK gesv directly: ``np.linalg.solve`` costs ~20 us of Python overhead per call,
+    more than the 9 x 9 solve itself, and the dynamics call it twice per step."""
+    _, _, x, info = _gesv(a, b)
+    if info != 0:
+        raise ArithmeticError("singular mass or iteration matrix in the digit dynamics")
+    return x
+
+
+#: Gravity direction in the digit's (a, b) axes for each mounting: "vertical" tip up (the designed mounting, 2.2.4),
+#: "hanging" tip down, "horizontal" with the cable side up (chapters 6-7: weights hang off the digit).
+ORIENTATIONS = {"vertical": (-1.0, 0.0), "hanging": (1.0, 0.0), "horizontal": (0.0, -1.0)}
+
+
+@dataclass(frozen=True)
+class StaticSolution:
+    """Equilibria of a batch of load cases.
+
+    Attributes
+    ----------
+    psi_rad : ndarray, shape (B, n)
+        Absolute link angles.
+    curvature_1_m : ndarray, shape (B, n_gauges)
+        Strip curvature at the gauge positions (1/m, positive towards the cable side).
+    axial_force_n : ndarray, shape (B, n_gauges)
+        Axial force in the strip at the gauges (N, tension positive).
+    tension_n : ndarray, shape (B,)
+        Cable tension (N).
+    tip_m : ndarray, shape (B, 2)
+        Tip position in the (a, b) axes (m).
+    iterations : int
+        Newton iterations used.
+    """
+
+    psi_rad: np.ndarray
+    curvature_1_m: np.ndarray
+    axial_force_n: np.ndarray
+    tension_n: np.ndarray
+    tip_m: np.ndarray
+    iterations: int
+
+
+class Chain:
+    """A clamped planar chain of rigid links and rotational springs (see the module docstring).
+
+    Parameters
+    ----------
+    length_m : float
+        Clamp-to-tip length.
+    joint_s_m : array_like, shape (n,)
+        Arc positions of the springs, increasing, inside (0, length_m).
+    joint_stiffness_nm_rad : array_like, shape (n,)
+        Spring stiffness ``EI / h`` of each cell (N m / rad).
+    joint_damping_nms_rad : array_like, shape (n,)
+        Viscous damping of each spring (N m s / rad): structural damping, stiffness-proportional by default.
+    cell_length_m : array_like, shape (n,)
+        Length ``h`` of the cell each spring lumps (curvature = joint angle / h).
+    mass_s_m, mass_kg, mass_inertia_kg_m2 : array_like, shape (P,)
+        Point masses on the chain: arc position, mass, rotary inertia about their own centre.
+    gauge_s_m : array_like, shape (G,)
+        Arc positions where curvature and axial force are reported (the strain gauges).
+    gravity_ab_m_s2 : (float, float)
+        Gravity in the (a, b) axes (m/s^2).
+    cable_eccentricity_m, cable_stiffness_n_m : float
+        Cable offset ``e`` from the neutral axis, and its tension-only stiffness (N/m).
+    """
+
+    def __init__(
+        self,
+        length_m,
+        joint_s_m,
+        joint_stiffness_nm_rad,
+        joint_damping_nms_rad,
+        cell_length_m,
+        mass_s_m,
+        mass_kg,
+        mass_inertia_kg_m2,
+        gauge_s_m=(),
+        gravity_ab_m_s2=(0.0, 0.0),
+        cable_eccentricity_m=0.0,
+        cable_stiffness_n_m=0.0,
+        strip_axial_stiffness_n=np.inf,
+    ):
+        owner = "Chain"
+        self.length_m = check_positive(length_m, "length_m", owner)
+        s = check_array(joint_s_m, "joint_s_m", owner, ndim=1, min_length=1, increasing=True, low=0, high=length_m)
+        n = s.size
+        self.joint_s_m = s
+        self.stiffness = check_array(joint_stiffness_nm_rad, "joint_stiffness_nm_rad", owner, shape=(n,), low=0)
+        self.damping = check_array(joint_damping_nms_rad, "joint_damping_nms_rad", owner, shape=(n,), low=0)
+        self.cell_length_m = check_array(cell_length_m, "cell_length_m", owner, shape=(n,), low=0, low_open=True)
+        self.link_length_m = np.diff(np.append(s, self.length_m))
+        ms = check_array(mass_s_m, "mass_s_m", owner, ndim=1, low=0, high=length_m)
+        self.mass_s_m = ms
+        self.mass_kg = check_array(mass_kg, "mass_kg", owner, shape=(ms.size,), low=0)
+        self.mass_inertia = check_array(mass_inertia_kg_m2, "mass_inertia_kg_m2", owner, shape=(ms.size,), low=0)
+        self.gauge_s_m = check_array(gauge_s_m, "gauge_s_m", owner, ndim=1, low=0, high=length_m)
+        self.gravity = check_array(gravity_ab_m_s2, "gravity_ab_m_s2", owner, shape=(2,))
+        self.eccentricity = check_real(cable_eccentricity_m, "cable_eccentricity_m", owner, low=0)
+        self.cable_stiffness = check_real(cable_stiffness_n_m, "cable_stiffness_n_m", owner, low=0)
+        self.strip_axial_stiffness = float(strip_axial_stiffness_n)
+        # phi = D psi: relative joint angles from absolute link angles (the clamp link has angle 0)
+        d = np.eye(n) - np.eye(n, k=-1)
+        self._d = d
+        self.k_psi = d.T @ (self.stiffness[:, None] * d)
+        self.c_psi = d.T @ (self.damping[:, None] * d)
+        lever = self.levers(ms)  # (P, n)
+        link_of_mass = np.clip(np.searchsorted(s, ms, side="right") - 1, -1, n - 1)
+        j_diag = np.zeros(n)
+        np.add.at(j_diag, link_of_mass[link_of_mass >= 0], self.mass_inertia[link_of_mass >= 0])
+        self.a_mass = lever.T @ (self.mass_kg[:, None] * lever) + np.diag(j_diag)
+        self.g_gravity = lever.T @ (self.mass_kg[:, None] * self.gravity[None, :])  # (n, 2)
+        # weight beyond each gauge (for the axial force)
+        self._mass_beyond_gauge = (ms[None, :] > self.gauge_s_m[:, None]) @ self.mass_kg
+        self._gauge_interp = self._interpolation(self.gauge_s_m)
+        self._gauge_link = np.clip(np.searchsorted(s, self.gauge_s_m, side="right") - 1, -1, n - 1)
+
+    # ----------------------------------------------------------------------------------------------- geometry
+    @property
+    def n(self) -> int:
+        """Number of springs (= degrees of freedom)."""
+        return self.joint_s_m.size
+
+    def levers(self, s_m) -> np.ndarray:
+        """Lever of each link for points at arc positions ``s_m``: ``clip(s - s_j, 0, l_j)``, shape (P, n).
+
+        A point's position is ``s_0 a + sum_j lever_j u(psi_j)`` (or ``s a`` on the clamped first stretch).
+        """
+        s_m = np.asarray(s_m, dtype=float)
+        return np.clip(s_m[..., None] - self.joint_s_m, 0.0, self.link_length_m)
+
+    def _interpolation(self, s_query: np.ndarray) -> np.ndarray:
+        """Matrix W (Q, n): curvature at ``s_query`` = W @ (phi / h), linear between springs of the same span."""
+        s = self.joint_s_m
+        w = np.zeros((s_query.size, self.n))
+        # a "span" is a run of springs whose cells touch (no rigid stretch between them)
+        gaps = s[1:] - s[:-1] > 0.5 * (self.cell_length_m[1:] + self.cell_length_m[:-1]) + 1e-12
+        span = np.concatenate([[0], np.cumsum(gaps)])
+        for q, sq in enumerate(s_query):
+            j = int(np.argmin(np.abs(s - sq)))
+            idx = np.flatnonzero(span == span[j])
+            eye = np.eye(idx.size)
+            for c in range(idx.size):
+                w[q, idx[c]] = np.interp(sq, s[idx], eye[c])
+        return w
+
+    def positions(self, psi: np.ndarray, s_m) -> np.ndarray:
+        """Positions (.., P, 2) in the (a, b) axes of points at arc positions ``s_m`` for angles ``psi`` (.., n)."""
+        psi = np.asarray(psi, dtype=float)
+        s_m = np.asarray(s_m, dtype=float)
+        lever = self.levers(s_m)  # (P, n)
+        u = np.stack([np.cos(psi), np.sin(psi)], axis=-1)  # (.., n, 2)
+        pos = np.einsum("pn,...nk->...pk", lever, u)
+        base = np.minimum(s_m, self.joint_s_m[0])
+        pos[..., 0] += base
+        return pos
+
+    def tip(self, psi: np.ndarray) -> np.ndarray:
+        """Tip position (.., 2)."""
+        return self.positions(psi, [self.length_m])[..., 0, :]
+
+    def curvature_at_gauges(self, psi: np.ndarray) -> np.ndarray:
+        """Strip curvature (1/m) at the gauges for angles ``psi`` (.., n)."""
+        phi = np.diff(np.asarray(psi, dtype=float), prepend=0.0, axis=-1)
+        return (phi / self.cell_length_m) @ self._gauge_interp.T
+
+    # ------------------------------------------------------------------------------------------------ loads
+    def load_forces(self, s_m, force_ab_n) -> np.ndarray:
+        """Constant force vector ``G`` (.., n, 2) of world-fixed point forces: Q_j = -sin psi_j G_a + cos psi_j G_b.
+
+        ``s_m`` (.., K) arc positions and ``force_ab_n`` (.., K, 2) forces in the (a, b) axes.
+        """
+        lever = self.levers(s_m)  # (.., K, n)
+        return np.einsum("...kn,...kc->...nc", lever, np.asarray(force_ab_n, dtype=float))
+
+    def cable_tension(self, psi_tip, cable_shortening_m):
+        """Tension (N) of the tension-only cable: ``k_c max(0, r_M dtheta_M - e psi_tip)`` (E 3.11)."""
+        stretch = np.asarray(cable_shortening_m) - self.eccentricity * np.asarray(psi_tip)
+        return self.cable_stiffness * np.maximum(stretch, 0.0), stretch > 0
+
+    def axial_force(self, psi, g_forces_beyond_ab, tension):
+        """Axial force (N, tension +) in the strip at the gauges: ``F_beyond . u - T`` (quasi-static)."""
+        psi_g = np.take(np.concatenate([np.zeros(psi.shape[:-1] + (1,)), psi], axis=-1), self._gauge_link + 1, axis=-1)
+        fa, fb = g_forces_beyond_ab[..., 0], g_forces_beyond_ab[..., 1]
+        return fa * np.cos(psi_g) + fb * np.sin(psi_g) - np.asarray(tension)[..., None]
+
+    # ------------------------------------------------------------------------------------------------ statics
+    def solve_static(
+        self,
+        load_s_m=None,
+        load_force_ab_n=None,
+        *,
+        tip_force_n=None,
+        tip_moment_nm=0.0,
+        cable_shortening_m=None,
+        psi0=None,
+        tol=1e-11,
+        max_iter=80,
+        max_step_rad=0.35,
+    ) -> StaticSolution:
+        """Equilibria of a batch of load cases (batched Newton on the total potential energy's gradient).
+
+        Parameters
+        ----------
+        load_s_m : array_like, shape (B, K), optional
+            Arc positions of world-fixed point forces (hanging weights).
+        load_force_ab_n : array_like, shape (B, K, 2), optional
+            Those forces in the (a, b) axes (N). Self-weight is always included.
+        tip_force_n : array_like, shape (B, 2), optional
+            An extra world-fixed force at the tip (N).
+        tip_moment_nm : float or array_like, shape (B,)
+            A pure moment at the tip (N m), positive towards ``b``.
+        cable_shortening_m : array_like, shape (B,), optional
+            Motor-side cable shortening ``r_M (theta_M - theta_M0)`` (E 3.11); None: no cable.
+        psi0 : array_like, shape (B, n), optional
+            Starting angles.
+
+        Returns
+        -------
+        StaticSolution
+        """
+        sizes = [1]
+        for arr in (load_s_m, tip_force_n, cable_shortening_m):
+            if arr is not None:
+                sizes.append(np.shape(arr)[0])
+        sizes.append(np.size(tip_moment_nm))
+        b = max(sizes)
+        g = np.broadcast_to(self.g_gravity, (b, self.n, 2)).copy()
+        beyond = np.broadcast_to(self._mass_beyond_gauge[:, None] * self.gravity, (b, self.gauge_s_m.size, 2)).copy()
+        if load_s_m is not None:
+            ls = np.asarray(load_s_m, dtype=float).reshape(b, -1)
+            lf = np.asarray(load_force_ab_n, dtype=float).reshape(b, -1, 2)
+            g += self.load_forces(ls, lf)
+            beyond += np.einsum("bgk,bkc->bgc", (ls[:, None, :] > self.gauge_s_m[None, :, None]).astype(float), lf)
+        if tip_force_n is not None:
+            tf = np.asarray(tip_force_n, dtype=float).reshape(b, 2)
+            g += self.link_length_m[None, :, None] * tf[:, None, :]
+            beyond += tf[:, None, :]
+        moment = np.broadcast_to(np.asarray(tip_moment_nm, dtype=float), (b,))
+        has_cable = cable_shortening_m is not None and self.cable_stiffness > 0
+        short = np.broadcast_to(np.asarray(cable_shortening_m if has_cable else 0.0, dtype=float), (b,))
+        psi = np.zeros((b, self.n)) if psi0 is None else np.array(psi0, dtype=float).reshape(b, self.n)
+        ga, gb = g[..., 0], g[..., 1]
+        e = self.eccentricity
+        kc = self.cable_stiffness
+        scale = max(float(np.max(self.stiffness)), 1e-300)
+        iterations = 0
+        for iterations in range(1, max_iter + 1):  # noqa: B007 (reported below)
+            s, c = np.sin(psi), np.cos(psi)
+            res = psi @ self.k_psi + s * ga - c * gb
+            res[:, -1] -= moment
+            jac = np.broadcast_to(self.k_psi, (b, self.n, self.n)).copy()
+            idx = np.arange(self.n)
+            jac[:, idx, idx] += c * ga + s * gb
+            if has_cable:
+                tension, taut = self.cable_tension(psi[:, -1], short)
+                res[:, -1] -= e * tension
+                jac[:, -1, -1] += kc * e * e * taut
+            step = np.linalg.solve(jac, res[..., None])[..., 0]
+            biggest = np.max(np.abs(step), axis=1, keepdims=True)
+            step *= np.minimum(1.0, max_step_rad / np.maximum(biggest, 1e-300))
+            psi -= step
+            if np.max(np.abs(res)) < tol * scale and np.max(biggest) < 1e-9:
+                break
+        tension = self.cable_tension(psi[:, -1], short)[0] if has_cable else np.zeros(b)
+        if not np.all(np.isfinite(psi)):
+            raise ArithmeticError("static solve diverged (non-finite angles)")
+        return StaticSolution(
+            psi_rad=psi,
+            curvature_1_m=self.curvature_at_gauges(psi),
+            axial_force_n=self.axial_force(psi, beyond, tension),
+            tension_n=tension,
+            tip_m=self.tip(psi),
+            iterations=iterations,
+        )
+
+    # ----------------------------------------------------------------------------------------------- dynamics
+    def linear_modes(self, psi_eq=None, g_extra=None, cable_taut=False):
+        """Natural frequencies (rad/s) and damping ratios of the chain linearised about ``psi_eq`` (sorted).
+
+        Uses the tangent stiffness (springs, gravity, taut cable) and the spring dampers.
+        """
+        import scipy.linalg
+
+        psi = np.zeros(self.n) if psi_eq is None else np.asarray(psi_eq, dtype=float)
+        g = self.g_gravity + (0 if g_extra is None else g_extra)
+        m = self.a_mass * np.cos(psi[:, None] - psi[None, :])
+        k = self.tangent_stiffness(psi, g, cable_taut)
+        n = self.n
+        a = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(m, k), -np.linalg.solve(m, self.c_psi)]])
+        lam = scipy.linalg.eigvals(a)
+        lam = lam[lam.imag > 0] if np.any(lam.imag > 0) else lam
+        wn = np.abs(lam)
+        zeta = -lam.real / wn
+        order = np.argsort(wn)
+        return wn[order], zeta[order]
+
+    def tangent_stiffness(self, psi, g, cable_taut):
+        """``K_psi + diag(cos psi G_a + sin psi G_b) + k_c e^2 [taut]`` (n, n)."""
+        k = self.k_psi + np.diag(np.cos(psi) * g[:, 0] + np.sin(psi) * g[:, 1])
+        if cable_taut:
+            k[-1, -1] += self.cable_stiffness * self.eccentricity**2
+        return k
+
+
+class DynamicState:
+    """Integrates the chain's equations of motion with the linearly implicit trapezoidal rule.
+
+    ``sum_k A_jk [cos(psi_j - psi_k) psi''_k + sin(psi_j - psi_k) psi'_k^2] = Q_j`` (springs, stiffness-
+    proportional dampers, world-fixed loads, self-weight, cable). Each step is one Rosenbrock stage with
+    ``gamma = 1/2`` and the exact Jacobian (mass-matrix and Coriolis derivatives included), which makes it
+    second order, A-stable and free of numerical damping on linear problems (the thesis's bare digit has
+    zeta = 0.0025, which an L-stable method at this step would visibly add to), at the cost of one small
+    ``n x n`` solve for the acceleration and one for the step. The fast cell modes are damped by the physical
+    stiffness-proportional damping, not by the integrator.
+
+    Parameters
+    ----------
+    chain : Chain
+    psi, omega : array_like, shape (n,)
+        Initial angles (rad) and angular rates (rad/s).
+    """
+
+    def __init__(self, chain: Chain, psi=None, omega=None):
+        self.chain = chain
+        n = chain.n
+        self.psi = np.zeros(n) if psi is None else np.array(psi, dtype=float)
+        self.omega = np.zeros(n) if omega is None else np.array(omega, dtype=float)
+        self._idx = np.arange(n)
+        self.set_loads(None, None)
+
+    def set_loads(self, load_s_m, load_mass_kg):
+        """Hang weights (kg) at arc positions (m): they add mass and weight; None clears them."""
+        ch = self.chain
+        a = ch.a_mass.copy()
+        g = ch.g_gravity.copy()
+        beyond = ch._mass_beyond_gauge[:, None] * ch.gravity
+        if load_s_m is not None and np.size(load_s_m):
+            s = np.asarray(load_s_m, dtype=float).reshape(-1)
+            m = np.asarray(load_mass_kg, dtype=float).reshape(-1)
+            lever = ch.levers(s)
+            a += lever.T @ (m[:, None] * lever)
+            g += lever.T @ (m[:, None] * ch.gravity[None, :])
+            beyond = beyond + ((s[None, :] > ch.gauge_s_m[:, None]) @ m)[:, None] * ch.gravity
+        self._a = a
+        self._g = g
+        self._beyond = beyond
+
+    def step(self, h: float, shortening0: float, shortening1: float) -> None:
+        """Advance by ``h`` seconds; the cable shortening goes linearly from ``shortening0`` to ``shortening1`` (m)."""
+        ch = self.chain
+        psi, omega = self.psi, self.omega
+        idx = self._idx
+        s, c = np.sin(psi), np.cos(psi)
+        ga, gb = self._g[:, 0], self._g[:, 1]
+        delta = psi[:, None] - psi[None, :]
+        m = self._a * np.cos(delta)
+        sm = self._a * np.sin(delta)
+        w2 = omega * omega
+        q_static = -(ch.k_psi @ psi) - s * ga + c * gb
+        q_damp = ch.c_psi @ omega
+        coriolis = sm @ w2
+        # exact dQ/dt of the cable enters a one-stage Rosenbrock step as Q at the mid-step shortening
+        stretch = 0.5 * (shortening0 + shortening1) - ch.eccentricity * psi[-1]
+        taut = stretch > 0
+        if taut:
+            q_static[-1] += ch.eccentricity * ch.cable_stiffness * stretch
+        rhs = q_static - q_damp - coriolis  # = M alpha
+        alpha = _solve(m, rhs)
+        # Jacobians of F = M alpha + N(psi, omega) - Q(psi, omega)
+        f_psi = sm * alpha - m * w2 + ch.k_psi
+        f_psi[idx, idx] += -(sm @ alpha) + (m @ w2) + c * ga + s * gb
+        if taut:
+            f_psi[-1, -1] += ch.cable_stiffness * ch.eccentricity**2
+        f_omega = (2.0 * sm) * omega + ch.c_psi
+        hh = 0.5 * h
+        b = _solve(m + hh * f_omega + (hh * hh) * f_psi, rhs - hh * (f_psi @ omega))
+        a = omega + hh * b
+        self.psi = psi + h * a
+        self.omega = omega + h * b
+        self.alpha = alpha
+
+    def tension(self, shortening: float) -> float:
+        """Cable tension (N) at the current angles."""
+        return float(self.chain.cable_tension(self.psi[-1], shortening)[0])
+
+    def axial_force(self, shortening: float) -> np.ndarray:
+        """Quasi-static axial force at the gauges (N, tension +)."""
+        return self.chain.axial_force(self.psi, self._beyond, self.tension(shortening))
+
+
+def uniform_cells(start_m: float, end_m: float, n_cells: int):
+    """Mid-points and length of ``n_cells`` equal cells on [start, end]."""
+    n_cells = check_int(n_cells, "n_cells", "uniform_cells", low=1, high=10_000)
+    h = (end_m - start_m) / n_cells
+    return start_m + h * (np.arange(n_cells) + 0.5), np.full(n_cells, h)
+
+
+def _uniform(length_m, ei_n_m2, n_cells, mass_per_length_kg_m=0.0, damping_ratio_beta_s=0.0, gravity=(0.0, 0.0)):
+    s, h = uniform_cells(0.0, length_m, n_cells)
+    k = ei_n_m2 / h
+    link_edges = np.append(s, length_m)
+    link_len = np.diff(link_edges)
+    centres = s + 0.5 * link_len
+    mass = mass_per_length_kg_m * link_len
+    inertia = mass * link_len**2 / 12.0
+    # the first half cell is clamped: its mass never moves
+    return Chain(
+        length_m,
+        s,
+        k,
+        damping_ratio_beta_s * k,
+        h,
+        centres,
+        mass,
+        inertia,
+        gauge_s_m=(),
+        gravity_ab_m_s2=gravity,
+    )
+
+
+def _chain_uniform(
+    length_m: float,
+    ei_n_m2: float,
+    n_cells: int,
+    mass_per_length_kg_m: float = 0.0,
+    beta_s: float = 0.0,
+    gravity_ab_m_s2=(0.0, 0.0),
+) -> Chain:
+    """A uniform clamped strip: ``n_cells`` cells, distributed mass as rigid-bar links (for validation)."""
+    check_positive(length_m, "length_m", "Chain.uniform")
+    check_positive(ei_n_m2, "ei_n_m2", "Chain.uniform")
+    check_real(mass_per_length_kg_m, "mass_per_length_kg_m", "Chain.uniform", low=0)
+    if not np.isfinite(beta_s) or beta_s < 0:
+        raise ParameterError(f"The 'beta_s' parameter of Chain.uniform must be >= 0. Got {beta_s!r} instead.")
+    return _uniform(length_m, ei_n_m2, n_cells, mass_per_length_kg_m, beta_s, gravity_ab_m_s2)
+
+
+Chain.uniform = staticmethod(_chain_uniform)
+
+
+def build_digit(
+    params,
+    calibration,
+    *,
+    housing: bool = True,
+    orientation: str = "vertical",
+    cells_per_section: int = 3,
+) -> Chain:
+    """The thesis digit as a :class:`Chain` (2.2, table 3.5, table 3.7).
+
+    Each of the ``section_count`` sections is ``section_pitch_m`` long (90 mm): a flexible strip of
+    ``strip_length_m / section_count`` (80 mm) between rigid nylon supports, half a support (5 mm) at each end, so
+    the supports sit at 0, 90, 180, 270 mm and the gauges (45, 135, 225 mm) midway on the strip. The flexible part
+    of section ``k`` has ``EI = E I_strip + housing_ei_n_m2[k]`` (with ``housing``), cut into ``cells_per_section``
+    cells (odd, so the gauges fall on a spring). Masses: the strip (rigid-bar links, density from params), the
+    support masses at 90, 180, 270 mm and the housing mass spread on the sections. Damping is stiffness-
+    proportional: ``c = beta_strip k_strip + beta_housing k_housing``.
+
+    Parameters
+    ----------
+    params : RigParams
+    calibration : Calibration
+        Support masses, housing stiffness/mass, damping, cable stiffness (see :mod:`flexdigit.twin.calibration`).
+    housing : bool
+        With the elastomer housing (table 3.2) or the bare strip (table 3.1).
+    orientation : {"vertical", "hanging", "horizontal"}
+    cells_per_section : int
+        Springs per section.
+    """
+    from flexdigit._validation import check_choice
+
+    check_choice(orientation, "orientation", tuple(ORIENTATIONS), "build_digit")
+    cells_per_section = check_int(cells_per_section, "cells_per_section", "build_digit", low=1, high=1000)
+    geo, mat = params.geometry, params.material
+    nsec = geo.section_count
+    pitch = geo.section_pitch_m
+    flex = geo.strip_length_m / nsec
+    half_support = 0.5 * (pitch - flex)
+    ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4
+    housing_ei = np.asarray(calibration.housing_ei_n_m2, dtype=float)
+    if housing_ei.size != nsec:
+        raise ParameterError(
+            f"The 'housing_ei_n_m2' parameter of Calibration must have {nsec} values (one per section). "
+            f"Got {housing_ei.tolist()!r} instead."
+        )
+    s_list, h_list, k_strip, k_house = [], [], [], []
+    for k in range(nsec):
+        s, h = uniform_cells(k * pitch + half_support, (k + 1) * pitch - half_support, cells_per_section)
+        s_list.append(s)
+        h_list.append(h)
+        k_strip.append(ei_strip / h)
+        k_house.append((housing_ei[k] if housing else 0.0) / h)
+    s = np.concatenate(s_list)
+    h = np.concatenate(h_list)
+    ks, kh = np.concatenate(k_strip), np.concatenate(k_house)
+    stiffness = ks + kh
+    damping = calibration.strip_beta_s * ks + (calibration.housing_beta_s * kh if housing else 0.0)
+    length = geo.digit_length_m
+    link_len = np.diff(np.append(s, length))
+    mu = mat.strip_density_kg_m3 * geo.cross_section_m2
+    mass_s = [s + 0.5 * link_len]
+    mass_kg = [mu * link_len]
+    inertia = [mu * link_len**3 / 12.0]
+    supports = np.asarray(calibration.support_mass_kg, dtype=float)
+    if supports.size != nsec:
+        raise ParameterError(
+            f"The 'support_mass_kg' parameter of Calibration must have {nsec} values (supports at "
+            f"{[round((k + 1) * pitch, 4) for k in range(nsec)]} m). Got {supports.tolist()!r} instead."
+        )
+    mass_s.append(pitch * (np.arange(nsec) + 1.0))
+    mass_kg.append(supports)
+    inertia.append(np.zeros(nsec))
+    if housing and calibration.housing_mass_kg > 0:
+        mass_s.append(s)
+        mass_kg.append(np.full(s.size, calibration.housing_mass_kg / s.size))
+        inertia.append(np.zeros(s.size))
+    g = np.asarray(ORIENTATIONS[orientation]) * G_STANDARD_M_S2
+    return Chain(
+        length,
+        s,
+        stiffness,
+        damping,
+        h,
+        np.concatenate(mass_s),
+        np.concatenate(mass_kg),
+        np.concatenate(inertia),
+        gauge_s_m=geo.gauge_positions_m,
+        gravity_ab_m_s2=g,
+        cable_eccentricity_m=geo.cable_eccentricity_m,
+        cable_stiffness_n_m=calibration.cable_stiffness_n_m,
+        strip_axial_stiffness_n=mat.youngs_modulus_pa * geo.cross_section_m2,
+    )

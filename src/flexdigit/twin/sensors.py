@@ -1,0 +1,138 @@
+"""The sensor chain: gauge strain -> Wheatstone bridge -> amplifier and low-pass -> 16-bit ADC, with noise (2.3, 2.5).
+
+Each gauge pair sits on the two faces of the strip, ``t/2`` from the neutral axis: the face away from the cable
+stretches by ``+kappa t/2 + eps_axial`` and the cable-side face by ``-kappa t/2 + eps_axial`` (``eps_axial`` is
+the axial force over ``E A``: the cable's compression and the hanging weights' pull). The bridge ratio is E 2.2
+evaluated with the actual resistances (``R (1 + GF eps)``), not its small-strain forms, so the quarter bridge sees
+the axial strain and the half bridge (E 2.4) cancels it:
+
+- quarter: R1 = tension-face gauge, R2 = R3 = R4 = R;
+- half (the rig): R1 = tension face, R2 = compression face, R3 = R4 = R (completion resistors in the amplifier);
+- full: R1 = R3 = tension faces, R2 = R4 = compression faces (E 2.3).
+
+The amplifier multiplies by ``amplifier_gain_v_per_v`` (10,000) times a per-channel calibration factor (E 3.20-3.22
+differ by channel: gauge placement, bonding and the unknown excitation ``excitation_v``, an assumption) and adds a
+per-channel offset (bridge imbalance). Its Butterworth low-pass (470 Hz) is applied as its group delay
+``tau = a1/a0`` of the filter's denominator: the digit's signals are below 20 Hz, where the filter's gain differs
+from 1 by less than 1e-4 and its phase is ``-omega tau`` to the same order (checked against ``scipy.signal.lsim`` in
+the tests). Noise is added at the ADC input: white (per sample) plus a slow random-walk drift per channel, from a
+seeded generator. The ADC clips to its range and rounds to its 16-bit step.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from flexdigit._validation import check_choice
+from flexdigit.params import BRIDGE_TYPES
+
+
+def bridge_ratio(eps_tension_face, eps_compression_face, gauge_factor: float, bridge: str = "half"):
+    """Bridge output over excitation, ``Vm/Vs`` (E 2.2), for the face strains of a gauge pair.
+
+    Parameters
+    ----------
+    eps_tension_face, eps_compression_face : array_like
+        Strain (dimensionless) of the gauge on the face away from the cable and on the cable side.
+    gauge_factor : float
+        GF (E 2.1), ~0.8 on the rig.
+    bridge : {"quarter", "half", "full"}
+
+    Returns
+    -------
+    ndarray
+        ``(R1 R3 - R2 R4) / ((R1 + R2)(R3 + R4))``.
+
+    Examples
+    --------
+    >>> round(float(bridge_ratio(1e-4, -1e-4, 0.8, "half")) / (0.8 / 4 * 2e-4), 6)   # E 2.4
+    1.0
+    >>> round(float(bridge_ratio(1e-4, -1e-4, 0.8, "full")) / (0.8 * 1e-4), 6)        # E 2.3
+    1.0
+    """
+    check_choice(bridge, "bridge", BRIDGE_TYPES, "bridge_ratio")
+    r1 = 1.0 + gauge_factor * np.asarray(eps_tension_face, dtype=float)
+    r2 = 1.0 + gauge_factor * np.asarray(eps_compression_face, dtype=float)
+    if bridge == "quarter":
+        return (r1 - 1.0) / ((r1 + 1.0) * 2.0)
+    if bridge == "half":
+        return (r1 - r2) / ((r1 + r2) * 2.0)
+    return (r1 * r1 - r2 * r2) / ((r1 + r2) ** 2)
+
+
+@lru_cache(maxsize=16)
+def lowpass_group_delay_s(cutoff_hz: float, order: int) -> float:
+    """DC group delay of an analog Butterworth low-pass, ``a1 / a0`` of its denominator (s)."""
+    from scipy.signal import butter
+
+    _, den = butter(order, 2.0 * np.pi * cutoff_hz, btype="low", analog=True)
+    return float(den[-2] / den[-1])
+
+
+def adc(voltage_v, range_v: tuple[float, float], bits: int) -> np.ndarray:
+    """Clip to the input range and round to the ADC step (2.5.2: 16 bits over +-5 V).
+
+    Examples
+    --------
+    >>> adc([7.0, -9.0, 0.00004], (-5.0, 5.0), 16).tolist()
+    [4.999847412109375, -5.0, 0.0]
+    """
+    lo, hi = range_v
+    lsb = (hi - lo) / 2**bits
+    code = np.clip(np.round((np.asarray(voltage_v, dtype=float) - lo) / lsb), 0, 2**bits - 1)
+    return lo + code * lsb
+
+
+class SensorChain:
+    """Strain at the gauges to ADC volts, with per-channel gain/offset and seeded noise (module docstring).
+
+    Parameters
+    ----------
+    params : RigParams
+    calibration : Calibration
+        ``channel_gain``, ``channel_offset_v``, ``noise_white_v``, ``noise_drift_v_per_sqrt_s``, ``pot_noise_v``.
+    rng : numpy.random.Generator
+    """
+
+    def __init__(self, params, calibration, rng: np.random.Generator):
+        s = params.sensors
+        self.params = params
+        self.gain = s.amplifier_gain_v_per_v * s.excitation_v * np.asarray(calibration.channel_gain, dtype=float)
+        self.offset = np.asarray(calibration.channel_offset_v, dtype=float)
+        self.white = np.asarray(calibration.noise_white_v, dtype=float)
+        self.drift_rate = np.asarray(calibration.noise_drift_v_per_sqrt_s, dtype=float)
+        self.pot_noise = float(calibration.pot_noise_v)
+        self.delay_s = lowpass_group_delay_s(s.amplifier_lowpass_hz, s.amplifier_lowpass_order)
+        self.rng = rng
+        self.drift = np.zeros(self.gain.size)
+        self._last_t = None
+        half_t = 0.5 * params.geometry.strip_thickness_m
+        self._half_t = half_t
+        self._ea = params.material.youngs_modulus_pa * params.geometry.cross_section_m2
+
+    def clean_v(self, curvature_1_m, axial_force_n) -> np.ndarray:
+        """Noise-free amplifier output (V) for curvature (1/m) and axial force (N) at the gauges; vectorised."""
+        s = self.params.sensors
+        kappa = np.asarray(curvature_1_m, dtype=float)
+        eps_axial = np.asarray(axial_force_n, dtype=float) / self._ea
+        ratio = bridge_ratio(
+            kappa * self._half_t + eps_axial, -kappa * self._half_t + eps_axial, s.gauge_factor, s.bridge
+        )
+        return self.gain * ratio + self.offset
+
+    def sample(self, clean_v: np.ndarray, time_s: float) -> np.ndarray:
+        """One ADC sample of the gauge channels at ``time_s``: drift advanced since the last sample, white noise."""
+        if self._last_t is not None and time_s > self._last_t:
+            self.drift += self.drift_rate * np.sqrt(time_s - self._last_t) * self.rng.standard_normal(self.drift.size)
+        self._last_t = time_s
+        noisy = clean_v + self.drift + self.white * self.rng.standard_normal(self.drift.size)
+        s = self.params.sensors
+        return adc(noisy, s.adc_range_v, s.adc_bits)
+
+    def sample_pot(self, pot_v: float) -> float:
+        """One ADC sample of the potentiometer channel (V)."""
+        s = self.params.sensors
+        noisy = pot_v + self.pot_noise * self.rng.standard_normal()
+        return float(adc(noisy, s.adc_range_v, s.adc_bits))

@@ -1,0 +1,342 @@
+"""The twin's stepping API (what the ``sim`` rig backend drives) and a batched static solver for load studies.
+
+:class:`Twin` holds the digit (:mod:`flexdigit.twin.digit`), the servo (:mod:`flexdigit.twin.actuator`) and the
+sensor chain (:mod:`flexdigit.twin.sensors`) on one clock. It integrates on a fixed grid (``dt_s``, a divisor of the
+20 ms serial period) and answers :meth:`Twin.read` at any time in between by cubic Hermite interpolation of the
+grid states, so a caller sampling at 1 kHz costs no more than one at 50 Hz.
+
+The cable is just taut with the digit straight at the equilibrium command (8, table 3.4 note): the cable
+shortening is ``r_M (theta_M - theta_M(8))`` (E 3.11); below command 8 it is slack.
+
+Examples
+--------
+>>> twin = Twin(seed=1)
+>>> twin.command(20)
+>>> twin.advance(1.0)
+>>> gauges_v, pot_v = twin.read()
+>>> gauges_v.shape, round(twin.time_s, 3)
+((3,), 1.0)
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+
+from flexdigit._validation import check_array, check_choice, check_int, check_real
+from flexdigit.errors import ParameterError
+from flexdigit.models.servo import command_to_angle_rad
+from flexdigit.params import RigParams
+from flexdigit.twin.actuator import Servo
+from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
+from flexdigit.twin.sensors import SensorChain
+
+DEFAULT_DT_S = 0.010
+DEFAULT_CELLS_PER_SECTION = 3
+
+
+@lru_cache(maxsize=32)
+def cached_digit(params: RigParams, calibration: Calibration, housing: bool, orientation: str, cells: int) -> Chain:
+    """:func:`build_digit`, cached (parameters are frozen and hashable)."""
+    return build_digit(params, calibration, housing=housing, orientation=orientation, cells_per_section=cells)
+
+
+def cable_shortening_m(command_or_angle, params: RigParams, *, is_angle: bool = False):
+    """Cable shortening (m) for a command (or a servo angle, rad): ``r_M (theta_M - theta_M(8))`` (E 3.11)."""
+    a = params.actuator
+    angle = np.asarray(command_or_angle, dtype=float)
+    if not is_angle:
+        angle = command_to_angle_rad(angle, params)
+    return a.pulley_radius_m * (angle - command_to_angle_rad(a.equilibrium_command, params))
+
+
+class Twin:
+    """The simulated rig: integer commands in, three gauge voltages and a potentiometer voltage out.
+
+    Parameters
+    ----------
+    params : RigParams, optional
+        The rig; the thesis rig by default.
+    calibration : Calibration, optional
+        Fitted parameters; :func:`~flexdigit.twin.calibration.default_calibration` by default.
+    seed : int
+        Seed of the noise generator: same seed and same calls, same numbers.
+    orientation : {"vertical", "hanging", "horizontal"}
+        "vertical": tip up (the designed mounting, 2.2.4); "horizontal": cable side up (chapters 6-7).
+    housing : bool
+        With the elastomer housing (the operating rig) or the bare strip.
+    cable : bool
+        Cable attached (False: the release-test set-up of 3.1.2, cable removed).
+    dt_s : float
+        Integration step (s), rounded to a divisor of the serial period.
+    cells_per_section : int
+        Springs per section of the digit model.
+    command : int, optional
+        Initial command (default the equilibrium command, 8); the twin starts at rest in equilibrium there.
+    """
+
+    def __init__(
+        self,
+        params: RigParams | None = None,
+        calibration: Calibration | None = None,
+        *,
+        seed: int = 0,
+        orientation: str = "vertical",
+        housing: bool = True,
+        cable: bool = True,
+        dt_s: float = DEFAULT_DT_S,
+        cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
+        command: int | None = None,
+    ):
+        self.params = params or RigParams()
+        self.calibration = calibration or default_calibration()
+        self.seed = check_int(seed, "seed", "Twin", low=0)
+        self.orientation = check_choice(orientation, "orientation", tuple(ORIENTATIONS), "Twin")
+        self.housing = bool(housing)
+        self.cable = bool(cable)
+        period = self.params.actuator.serial_period_s
+        dt = check_real(dt_s, "dt_s", "Twin", low=1e-5, high=period)
+        self.dt_s = period / max(1, round(period / dt))
+        self.chain = cached_digit(self.params, self.calibration, self.housing, self.orientation, cells_per_section)
+        self.rng = np.random.default_rng(self.seed)
+        self.sensors = SensorChain(self.params, self.calibration, self.rng)
+        start = self.params.actuator.equilibrium_command if command is None else command
+        self.servo = Servo(self.params, start)
+        self._pulley_m = self.params.actuator.pulley_radius_m
+        self._angle_taut = float(command_to_angle_rad(self.params.actuator.equilibrium_command, self.params))
+        self._loads: list[tuple[float, float]] = []
+        self.dynamics = DynamicState(self.chain)
+        self._settle()
+        self.time_s = 0.0
+        self._t_grid = 0.0
+        self._prev = self._snapshot()
+
+    # ------------------------------------------------------------------------------------------------ state
+    def _shortening(self, servo_angle: float) -> float:
+        if not self.cable:
+            return -math.inf
+        return self._pulley_m * (servo_angle - self._angle_taut)
+
+    def _settle(self) -> None:
+        """Put the digit at rest in static equilibrium under the current loads and servo angle."""
+        loads = self._load_arrays()
+        shortening = self._shortening(self.servo.angle) if self.cable else None
+        sol = self.chain.solve_static(
+            loads[0][None, :] if loads[0].size else None,
+            (loads[1][:, None] * self.chain.gravity[None, :])[None] if loads[0].size else None,
+            cable_shortening_m=None if shortening is None else [shortening],
+        )
+        self.dynamics.psi = sol.psi_rad[0].copy()
+        self.dynamics.omega = np.zeros(self.chain.n)
+
+    def _load_arrays(self):
+        if not self._loads:
+            return np.zeros(0), np.zeros(0)
+        s, m = zip(*self._loads, strict=True)
+        return np.array(s), np.array(m)
+
+    def _snapshot(self):
+        return (
+            self._t_grid,
+            self.dynamics.psi.copy(),
+            self.dynamics.omega.copy(),
+            self.servo.angle,
+            self.servo.rate,
+        )
+
+    # -------------------------------------------------------------------------------------------------- API
+    def command(self, value: int) -> None:
+        """Send a servo command (integer ``command_min..command_max``); it takes effect on the next serial frame.
+
+        Raises
+        ------
+        ParameterError
+            If ``value`` is not an integer in range (255, the board's sync byte, is never a position).
+        """
+        self.servo.schedule(value, self.time_s, self.dt_s)
+
+    def advance(self, duration_s: float) -> None:
+        """Let ``duration_s`` seconds of rig time pass (integrates the digit and the servo)."""
+        duration = check_real(duration_s, "duration_s", "Twin.advance", low=0)
+        target = self.time_s + duration
+        h = self.dt_s
+        while self._t_grid < target - 1e-12:
+            self._prev = self._snapshot()
+            self.servo.update_command(self._t_grid)
+            a0 = self.servo.angle
+            self.servo.step(h)
+            self.dynamics.step(h, self._shortening(a0), self._shortening(self.servo.angle))
+            self._t_grid = round((self._t_grid + h) / h) * h
+        self.time_s = target
+
+    def state(self, time_s: float | None = None):
+        """Interpolated ``(psi, servo_angle)`` at ``time_s`` (default now), between the last two grid points."""
+        t = self.time_s if time_s is None else time_s
+        t0, psi0, om0, th0, w0 = self._prev
+        t1 = self._t_grid
+        psi1, om1, th1, w1 = self.dynamics.psi, self.dynamics.omega, self.servo.angle, self.servo.rate
+        h = t1 - t0
+        if h <= 0:
+            return psi1.copy(), th1
+        x = min(max((t - t0) / h, 0.0), 1.0)
+        h00, h10, h01, h11 = 2 * x**3 - 3 * x**2 + 1, x**3 - 2 * x**2 + x, -2 * x**3 + 3 * x**2, x**3 - x**2
+        psi = h00 * psi0 + h10 * h * om0 + h01 * psi1 + h11 * h * om1
+        theta = h00 * th0 + h10 * h * w0 + h01 * th1 + h11 * h * w1
+        return psi, theta
+
+    def clean_read(self, time_s: float | None = None):
+        """Noise-free ``(gauges_v, pot_v)`` at ``time_s`` (default now), before the ADC."""
+        t = self.time_s if time_s is None else time_s
+        psi, theta = self.state(t - self.sensors.delay_s)
+        kappa = self.chain.curvature_at_gauges(psi)
+        shortening = self._shortening(theta)
+        tension = self.chain.cable_tension(psi[-1], shortening)[0] if self.cable else 0.0
+        axial = self.chain.axial_force(psi, self.dynamics._beyond, tension)
+        _, theta_now = self.state(t)
+        return self.sensors.clean_v(kappa, axial), self.servo.pot_v(theta_now)
+
+    def read(self) -> tuple[np.ndarray, float]:
+        """Sample the three gauge channels and the potentiometer through the sensor chain (with noise).
+
+        Returns
+        -------
+        gauges_v : ndarray, shape (3,)
+            Gauge voltages (V), gauges 1..3 from the base.
+        pot_v : float
+            Potentiometer voltage (V).
+        """
+        clean, pot = self.clean_read()
+        return self.sensors.sample(clean, self.time_s), self.sensors.sample_pot(pot)
+
+    def tip_position_m(self) -> np.ndarray:
+        """Tip position now in the (along-digit, towards-cable) axes (m)."""
+        return self.chain.tip(self.state()[0])
+
+    def deflection_m(self, s_m) -> np.ndarray:
+        """Sideways deflection (towards the cable, m) now at arc positions ``s_m`` from the base."""
+        return self.chain.positions(self.state()[0], np.atleast_1d(np.asarray(s_m, dtype=float)))[:, 1]
+
+    def place_load(self, mass_kg: float, position_from_base_m: float) -> None:
+        """Hang a weight (kg) at a position along the digit (m from the base); it stays until :meth:`clear_loads`."""
+        m, s = check_load(mass_kg, position_from_base_m, self.params)
+        self._loads.append((float(s), float(m)))
+        s_arr, m_arr = self._load_arrays()
+        self.dynamics.set_loads(s_arr, m_arr)
+
+    def clear_loads(self) -> None:
+        """Remove every hung weight."""
+        self._loads.clear()
+        self.dynamics.set_loads(None, None)
+
+    @property
+    def loads(self) -> list[tuple[float, float]]:
+        """Hung weights as ``(mass_kg, position_from_base_m)``."""
+        return [(m, s) for s, m in self._loads]
+
+    def __repr__(self) -> str:
+        return (
+            f"Twin(seed={self.seed}, orientation={self.orientation!r}, housing={self.housing}, cable={self.cable}, "
+            f"dt_s={self.dt_s:g}, time_s={self.time_s:g}, command={self.servo.command}, loads={self.loads})"
+        )
+
+
+def check_load(mass_kg, position_from_base_m, params: RigParams):
+    """Validate one hung weight: mass > 0 (kg), position in (0, digit_length] (m)."""
+    m = check_real(mass_kg, "mass_kg", "load", low=0, low_open=True)
+    length = params.geometry.digit_length_m
+    s = check_real(position_from_base_m, "position_from_base_m", "load", low=0, high=length)
+    return m, s
+
+
+def static_gauges_v(
+    loads_mass_kg,
+    positions_from_base_m,
+    commands=None,
+    *,
+    params: RigParams | None = None,
+    calibration: Calibration | None = None,
+    orientation: str = "horizontal",
+    housing: bool = True,
+    cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
+    seed: int | None = None,
+    adc: bool = True,
+    return_solution: bool = False,
+):
+    """Steady gauge voltages for many static load cases at once (one batched Newton solve).
+
+    Parameters
+    ----------
+    loads_mass_kg : array_like, shape (B,) or (B, K)
+        Hung weights (kg, >= 0; 0 means no weight). ``K`` weights per case when 2-D.
+    positions_from_base_m : array_like, same shape
+        Their positions along the digit from the base (m), in [0, digit_length].
+    commands : int or array_like of int, shape (B,), optional
+        Servo command per case (0..254); None: cable detached (the non-actuated digit of chapter 6).
+    params, calibration : optional
+        Rig and calibration (thesis defaults).
+    orientation : {"horizontal", "vertical", "hanging"}
+        Horizontal by default: the weights hang off a horizontal digit, cable side up (chapters 6-7).
+    housing : bool
+    cells_per_section : int
+    seed : int, optional
+        With a seed, add the calibration's white noise (drift is a slow process, not per case).
+    adc : bool
+        Clip and quantise like the 16-bit card.
+    return_solution : bool
+        Also return the :class:`~flexdigit.twin.digit.StaticSolution`.
+
+    Returns
+    -------
+    ndarray, shape (B, 3)
+        Gauge voltages (V), gauges 1..3.
+
+    Examples
+    --------
+    >>> v = static_gauges_v([0.0, 0.025], [0.27, 0.27], [8, 8])
+    >>> v.shape, bool(abs(v[1, 0] - v[0, 0]) > 0.01)
+    ((2, 3), True)
+    """
+    params = params or RigParams()
+    calibration = calibration or default_calibration()
+    masses = check_array(loads_mass_kg, "loads_mass_kg", "static_gauges_v", low=0)
+    if masses.ndim == 1:
+        masses = masses[:, None]
+    if masses.ndim != 2:
+        raise ParameterError(
+            f"The 'loads_mass_kg' parameter of static_gauges_v must be 1-D or 2-D. Got shape {masses.shape}."
+        )
+    length = params.geometry.digit_length_m
+    pos = check_array(positions_from_base_m, "positions_from_base_m", "static_gauges_v", low=0, high=length)
+    pos = pos.reshape(masses.shape) if pos.size == masses.size else None
+    if pos is None:
+        raise ParameterError(
+            "The 'positions_from_base_m' parameter of static_gauges_v must have the shape of 'loads_mass_kg' "
+            f"{masses.shape}. Got {np.shape(positions_from_base_m)} instead."
+        )
+    b = masses.shape[0]
+    chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
+    shortening = None
+    if commands is not None:
+        a = params.actuator
+        cmd = check_array(commands, "commands", "static_gauges_v", low=a.command_min, high=a.command_max)
+        if np.any(cmd != np.round(cmd)):
+            raise ParameterError(
+                f"The 'commands' parameter of static_gauges_v must be integers. Got {cmd.ravel().tolist()!r}."
+            )
+        cmd = np.broadcast_to(cmd.reshape(-1) if cmd.ndim else cmd, (b,))
+        shortening = cable_shortening_m(cmd, params)
+    forces = masses[..., None] * chain.gravity
+    sol = chain.solve_static(pos, forces, cable_shortening_m=shortening)
+    rng = np.random.default_rng(seed) if seed is not None else None
+    sensors = SensorChain(params, calibration, rng if rng is not None else np.random.default_rng(0))
+    volts = sensors.clean_v(sol.curvature_1_m, sol.axial_force_n)
+    if rng is not None:
+        volts = volts + np.asarray(calibration.noise_white_v) * rng.standard_normal(volts.shape)
+    if adc:
+        from flexdigit.twin.sensors import adc as quantise
+
+        volts = quantise(volts, params.sensors.adc_range_v, params.sensors.adc_bits)
+    return (volts, sol) if return_solution else volts
