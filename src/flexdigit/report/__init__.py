@@ -7,4 +7,4 @@ The report only reads the rest of the package; nothing imports it.
 from __future__ import annotations
 
 #: Chapter modules in the order they appear in the report.
-CHAPTERS: tuple[str, ...] = ()
+CHAPTERS: tuple[str, ...] = ("flexdigit.report.ch3_models",)
