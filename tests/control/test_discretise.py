@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
+import control as ct
 import numpy as np
 import pytest
 from scipy import signal
 
-import control as ct
 from flexdigit.control.discretise import (
     FirstOrderTustin,
     discretise,

@@ -3,10 +3,10 @@ bumpless start."""
 
 from __future__ import annotations
 
+import control as ct
 import numpy as np
 import pytest
 
-import control as ct
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.errors import DesignError, ParameterError
 from flexdigit.reference import thesis_value

@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import control as ct
 import numpy as np
 
-import control as ct
 from flexdigit.control.generalized import as_statespace
 from flexdigit.errors import UnstableError
 

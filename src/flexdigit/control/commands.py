@@ -42,9 +42,9 @@ def _parse_filters(text: str) -> list[float]:
 
 
 def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, margin=None) -> dict:
+    import control as ct
     import numpy as np
 
-    import control as ct
     from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps, step_metrics
     from flexdigit.control.reproduce import sorted_poles, thesis_design
     from flexdigit.models.plant import build_plant

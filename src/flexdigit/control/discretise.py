@@ -24,9 +24,9 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+import control as ct
 import numpy as np
 
-import control as ct
 from flexdigit._validation import check_choice, check_int, check_positive, check_real
 from flexdigit.errors import DesignError
 
@@ -38,6 +38,9 @@ __all__ = [
     "FirstOrderTustin",
     "StepHalving",
     "halve_step",
+    "SampledLoop",
+    "sampled_loop",
+    "sample_period_study",
 ]
 
 METHODS = ("tustin", "zoh", "forward_euler", "backward_euler")
@@ -254,3 +257,102 @@ def halve_step(
             return StepHalving(alpha, tuple(history), True)
         alpha, t_a, y_a = alpha / 2, t_h, y_h
     return StepHalving(alpha, tuple(history), False)
+
+
+# -- the sample-period study of figures 5.3-5.7 ------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class SampledLoop:
+    """A plant held by a zero-order hold, in a loop with a digitised controller, ``u = K (w - y)`` (figure 5.1).
+
+    Attributes
+    ----------
+    method : str
+        How the controller was digitised.
+    period_s : float
+    delay_samples : int
+        Extra whole samples of transport delay between the controller and the hold.
+    spectral_radius : float
+        Largest closed-loop pole magnitude (stable iff < 1).
+    t_s, y : ndarray
+        Step response at the sample instants (output unit per unit step of ``w``).
+    y_continuous : ndarray
+        The continuous loop's step response at the same instants.
+    error : float
+        ``max |y - y_continuous| / max |y_continuous|`` (inf when unstable).
+    controller_poles_z, controller_zeros_z, plant_poles_z : ndarray
+        Where the digitised controller's poles and zeros and the held plant's poles lie (z-plane).
+    """
+
+    method: str
+    period_s: float
+    delay_samples: int
+    spectral_radius: float
+    t_s: np.ndarray
+    y: np.ndarray
+    y_continuous: np.ndarray
+    error: float
+    controller_poles_z: np.ndarray
+    controller_zeros_z: np.ndarray
+    plant_poles_z: np.ndarray
+
+    @property
+    def stable(self) -> bool:
+        return self.spectral_radius < 1.0
+
+    @property
+    def cancellation_error(self) -> float:
+        """Distance from each held-plant pole to the nearest controller zero, worst case (z-plane units).
+
+        The 39 Hz design cancels the plant's poles with its zeros; this is how far the digitised zeros miss.
+        """
+        if self.controller_zeros_z.size == 0 or self.plant_poles_z.size == 0:
+            return float("inf")
+        d = np.abs(self.plant_poles_z[:, None] - self.controller_zeros_z[None, :])
+        return float(np.max(np.min(d, axis=1)))
+
+
+def sampled_loop(
+    plant,
+    controller,
+    period_s: float,
+    method: str = "tustin",
+    *,
+    delay_samples: int = 0,
+    t_final_s: float = 3.0,
+) -> SampledLoop:
+    """Digitise ``controller`` with ``method``, hold ``plant`` (ZOH) and close the loop at ``period_s`` (5.1).
+
+    The loop is built in state space (high-order transfer-function products lose the poles near z = 1 at
+    sub-millisecond periods). ``delay_samples`` adds ``z^-d`` between controller and hold (the servo board's
+    transport delay, 5.2).
+    """
+    T = check_positive(period_s, "period_s", "sampled_loop")
+    d = check_int(delay_samples, "delay_samples", "sampled_loop", low=0)
+    G, K = ct.ss(plant), ct.ss(controller)
+    Gd = ct.sample_system(G, T, method="zoh")
+    Kd = discretise(K, T, method)
+    path = Kd if d == 0 else ct.series(Kd, ct.ss(ct.tf([1.0], [1.0] + [0.0] * d, T)))
+    closed = ct.feedback(ct.series(path, Gd), 1)
+    poles = closed.poles()
+    radius = float(np.max(np.abs(poles))) if poles.size else 0.0
+    t = np.arange(0.0, t_final_s + T / 2, T)
+    with np.errstate(over="ignore", invalid="ignore"):
+        y = np.squeeze(ct.step_response(closed, t).outputs)
+    continuous = ct.feedback(ct.series(K, G), 1)
+    t_fine = np.arange(0.0, t_final_s + 1e-4, 1e-4)
+    yc_fine = np.squeeze(ct.step_response(continuous, t_fine).outputs)
+    yc = np.interp(t, t_fine, yc_fine)
+    if radius < 1 and np.all(np.isfinite(y)):
+        error = float(np.max(np.abs(y - yc)) / np.max(np.abs(yc)))
+    else:
+        error = float("inf")
+    return SampledLoop(
+        method, T, d, radius, t, y, yc, error, Kd.poles(), Kd.zeros() if K.nstates else np.array([]), Gd.poles()
+    )
+
+
+def sample_period_study(plant, controller, periods_s, methods=("tustin", "forward_euler"), **kwargs):
+    """:func:`sampled_loop` for every method and period (figures 5.3-5.7): ``{method: [SampledLoop, ...]}``."""
+    return {m: [sampled_loop(plant, controller, T, m, **kwargs) for T in periods_s] for m in methods}

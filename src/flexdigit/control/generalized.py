@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import math
 
+import control as ct
 import numpy as np
 
-import control as ct
 from flexdigit._validation import check_positive, check_real
 from flexdigit.errors import DesignError
 

@@ -18,9 +18,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import control as ct
 import numpy as np
 
-import control as ct
 from flexdigit._validation import check_positive, check_real
 from flexdigit.control.analysis import hinf_norm, loop_maps, monte_carlo_stability
 from flexdigit.control.generalized import as_statespace

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import math
 
+import control as ct
 import numpy as np
 from scipy.optimize import minimize
 
-import control as ct
 from flexdigit._validation import check_positive
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
 from flexdigit.control.synthesis import HinfDesign, hinf_riccati
@@ -92,7 +92,7 @@ def thesis_design(
 def sorted_poles(values) -> np.ndarray:
     """Poles sorted by real part, then imaginary part (for comparing lists)."""
     v = np.asarray(values, dtype=complex)
-    return v[np.lexsort((v.imag, v.real))]
+    return v[np.lexsort((v.imag, np.round(v.real, 6)))]
 
 
 def fit_thesis_regularisation(filter_hz: float, target_poles=None, plant=None) -> dict:

@@ -5,7 +5,7 @@ Every sample::
     v       = C x + D w                       w = e (error input) or [r, y] (two-degree-of-freedom)
     u_raw   = u_eq + v                        u_eq = equilibrium command (8: no deflection)
     u       = round(clip(u_raw, 0, 254))      the integer the servo board accepts
-    x+      = A x + B w + L (clip(u_raw) - u_raw)   L: anti-windup (back-calculation) gain
+    x+      = A x + B w + L (clip(u_raw) - u_raw) + Lq (u - clip(u_raw))   anti-windup (back-calculation)
 
 ``L (clip(u_raw) - u_raw)`` feeds the difference between what was applied and what was asked back into the state. For an
 observer-based controller with ``L`` = the observer's input matrix, the observer sees exactly the command the
@@ -24,9 +24,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+import control as ct
 import numpy as np
 
-import control as ct
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import DesignError, ParameterError
 from flexdigit.params import RigParams
@@ -49,10 +49,15 @@ class RuntimeController:
         ``L`` for ``"back_calculation"``.
     quantise : bool
         Round the command to an integer (True on any real board).
-    aw_quantisation : bool
-        Feed the rounding error back too (``u`` applied rather than ``clip(u_raw)``). Right for an observer whose
-        model must see the exact command; wrong for a PI, whose integrator would then track the rounded command and
-        stall within half a quantum of the setpoint (a dead zone), so False by default.
+    aw_quantisation : bool or array_like, shape (n,)
+        Gain on the rounding error ``u - clip(u_raw)`` (True: the same as ``aw_gain``). Right for an observer whose
+        model must see the exact integer command; wrong for a PI, whose integrator would then track the rounded
+        command and stall within half a quantum of the setpoint (a dead zone), so False by default.
+    deadband : (int, float), optional
+        ``(state index, width)``: that state (an integrator of ``r - y``) is not updated while ``|r - y| <= width``.
+        With an integer command the output can only take values a quantum apart; an integrator asked for the
+        value in between limit-cycles between the two neighbours. A deadband of half a quantum (in output units)
+        stops it, at the cost of a steady-state error of at most half a quantum.
     measure : callable, optional
         ``measure(reading) -> y`` used by :meth:`step` (the loop protocol) to turn a rig reading into the
         controlled variable.
@@ -74,7 +79,8 @@ class RuntimeController:
         antiwindup: str = "none",
         aw_gain=None,
         quantise: bool = True,
-        aw_quantisation: bool = False,
+        aw_quantisation=False,
+        deadband: tuple[int, float] | None = None,
         measure: Callable | None = None,
         name: str = "",
     ) -> None:
@@ -109,7 +115,29 @@ class RuntimeController:
             L = np.zeros(n)
         self.aw_gain = L
         self.quantise = bool(quantise)
-        self.aw_quantisation = bool(aw_quantisation)
+        if isinstance(aw_quantisation, bool | np.bool_):
+            self._q_gain = L.copy() if aw_quantisation else np.zeros(n)
+        else:
+            self._q_gain = np.asarray(aw_quantisation, dtype=float).reshape(-1)
+            if self._q_gain.shape != (n,):
+                raise ParameterError(
+                    f"The 'aw_quantisation' parameter of RuntimeController must be a bool or {n} gains."
+                )
+        self.aw_quantisation = aw_quantisation
+        self._db_index = None
+        if deadband is not None:
+            index, width = deadband
+            index = int(index)
+            if not 0 <= index < n:
+                raise ParameterError(
+                    f"The 'deadband' state index of RuntimeController must be in 0..{n - 1}. Got {index}."
+                )
+            self._db_index, self._db_width = index, check_real(width, "deadband width", "RuntimeController", low=0.0)
+            b = ss.B[index]
+            if ss.ninputs == 1:
+                self._db_b_dot = lambda r, y, b0=float(b[0]): b0 * (r - y)
+            else:
+                self._db_b_dot = lambda r, y, b0=float(b[0]), b1=float(b[1]): b0 * r + b1 * y
         self.measure = measure
         self.name = name or "controller"
         self._M = np.ascontiguousarray(np.block([[ss.A, ss.B], [ss.C, ss.D]]), dtype=float)
@@ -158,8 +186,8 @@ class RuntimeController:
             u = float(round(u))
         self.saturated = u_raw > self.u_max or u_raw < self.u_min
         if self.antiwindup == "back_calculation":
-            u_fed = u if self.aw_quantisation else (self.u_max if u_raw > self.u_max else max(u_raw, self.u_min))
-            v[:n] = z[:n] + self.aw_gain * (u_fed - u_raw)
+            u_clip = self.u_max if u_raw > self.u_max else (self.u_min if u_raw < self.u_min else u_raw)
+            v[:n] = z[:n] + self.aw_gain * (u_clip - u_raw) + self._q_gain * (u - u_clip)
         elif self.antiwindup == "clamp" and self.saturated:
             # freeze the state unless the update moves the output back towards the range
             x_new = z[:n]
@@ -168,6 +196,11 @@ class RuntimeController:
                 v[:n] = x_new
         else:
             v[:n] = z[:n]
+        if self._db_index is not None:
+            e = r - y
+            if -self._db_width <= e <= self._db_width:
+                # inside the deadband: undo this sample's integration (no limit cycle chasing the quantum)
+                v[self._db_index] -= self._db_b_dot(r, y)
         out = int(u) if self.quantise else u
         self.last_command = out
         return out

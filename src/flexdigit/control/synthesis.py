@@ -19,10 +19,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import control as ct
 import numpy as np
 import scipy.linalg
 
-import control as ct
 from flexdigit._validation import check_real
 from flexdigit.control.generalized import as_statespace, regularise
 from flexdigit.errors import DesignError
@@ -249,7 +249,7 @@ def hinfsyn_plain(P, nmeas: int = 1, ncon: int = 1):
 
 
 def hinf_lmi(
-    P, nmeas: int = 1, ncon: int = 1, *, solver: str = "CLARABEL", strict: float = 1e-9, rescale_iterations: int = 3
+    P, nmeas: int = 1, ncon: int = 1, *, solver: str = "CLARABEL", strict: float = 1e-9, rescale_iterations: int = 4
 ) -> LmiResult:
     """Optimal ``gamma`` from the H-infinity synthesis LMIs of Gahinet & Apkarian (1994), no rank conditions.
 
@@ -297,7 +297,7 @@ def hinf_lmi(
             if best is None:
                 raise
             break
-        if best is None or (viol < 1e-7 and res.gamma < best.gamma):
+        if best is None or (viol < 1e-5 and res.gamma < best.gamma):
             best = res
         # uniform state rescaling (a similarity: gamma is unchanged) that brings R and S to the same size;
         # the near-singular thesis problem needs it for the solver to reach the optimum

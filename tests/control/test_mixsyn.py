@@ -1,0 +1,57 @@
+"""Issue 5's new design on the consistent plant: requirements (i)-(iv) on the linear plant."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixsyn
+from flexdigit.errors import DesignError
+from flexdigit.models.plant import build_plant
+
+warnings.filterwarnings("ignore", category=UserWarning)
+
+
+@pytest.fixture(scope="module")
+def result():
+    plant = build_plant("consistent", output="tip_rotation_rad")
+    d = design_mixsyn(plant.tf)
+    return plant, d, check_requirements(plant, d.controller, n_monte_carlo=200, seed=1)
+
+
+def test_requirement_i_command_in_servo_range(result):
+    _, _, r = result
+    assert r["command_min"] >= -8.0 and r["command_max"] <= 246.0
+    # at DC the command is 30 deg / |G(0)| (closed form from the plant's DC gain)
+    plant = result[0]
+    assert r["command_final"] == pytest.approx(math.radians(30) / plant.dc_gain, rel=1e-3)
+
+
+def test_requirement_ii_integral_action(result):
+    _, d, r = result
+    assert d.controller.den[0][0][-1] == 0.0
+    assert r["output_final_rad"] == pytest.approx(math.radians(30), rel=1e-6)
+
+
+def test_requirement_iii_damping(result):
+    assert result[2]["min_damping"] >= 0.3
+
+
+def test_requirement_iv_robust_stability(result):
+    r = result[2]
+    assert r["grid_stable"]
+    assert r["monte_carlo"]["stable_fraction"] == 1.0
+    assert r["monte_carlo"]["worst_pole_real"] < 0
+
+
+def test_low_order_for_the_20ms_loop(result):
+    d = result[1]
+    assert d.order <= 5
+    # slowest to fastest controller pole below the 20 ms Nyquist frequency (157 rad/s)
+    assert np.max(np.abs(np.roots(d.controller.den[0][0]))) < np.pi / 0.02
+
+
+def test_bad_spec():
+    with pytest.raises(DesignError, match="s_peak"):
+        MixsynSpec(s_peak=0.5)
