@@ -37,6 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _model(args: argparse.Namespace) -> CommandResult:
     import control
+
     from flexdigit.models.plant import build_plant, closed_loop_printed_k1, explain_discrepancies
     from flexdigit.params import RigParams, load_params
 

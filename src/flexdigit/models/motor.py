@@ -32,6 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import control
+
 from flexdigit._validation import check_choice, check_positive, check_real
 
 

@@ -55,9 +55,9 @@ import math
 import re
 from dataclasses import dataclass, field
 
+import control
 import numpy as np
 
-import control
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.models import bridge, cable, conversion, digit, servo

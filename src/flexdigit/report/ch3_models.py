@@ -6,9 +6,9 @@ Every figure here is computed from :mod:`flexdigit.models` and compared with the
 
 from __future__ import annotations
 
+import control
 import numpy as np
 
-import control
 from flexdigit.models import cable, conversion, digit, servo
 from flexdigit.models.plant import (
     build_plant,
