@@ -2,10 +2,10 @@
 
 import math
 
+import control
 import numpy as np
 import pytest
 
-import control
 from flexdigit.identify.experiment import identify
 from flexdigit.identify.fit import SecondOrderFit, fit_arx, fit_linear
 from flexdigit.identify.timeseries import TimeSeries

@@ -2,11 +2,11 @@
 
 import math
 
+import control
 import numpy as np
 import pytest
 from scipy import optimize
 
-import control
 from flexdigit.errors import DataFileError
 from flexdigit.identify.fit import second_order_response
 from flexdigit.identify.response import (

@@ -22,9 +22,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import control
 import numpy as np
 
-import control
 from flexdigit._validation import check_choice
 from flexdigit.errors import DataFileError
 from flexdigit.identify.filters import FILTERS, apply_filter

@@ -28,10 +28,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import control
 import numpy as np
 from scipy import optimize, stats
 
-import control
 from flexdigit._validation import check_array, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.identify.response import analyze_response, final_value_estimate, free_response
