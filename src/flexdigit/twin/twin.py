@@ -166,10 +166,12 @@ class Twin:
         while self._t_grid < target - 1e-12:
             self._prev = self._snapshot()
             self.servo.update_command(self._t_grid)
+            t_next = (math.floor(self._t_grid / h + 1e-9) + 1) * h  # back on the grid after deflect()
+            step = t_next - self._t_grid
             a0 = self.servo.angle
-            self.servo.step(h)
-            self.dynamics.step(h, self._shortening(a0), self._shortening(self.servo.angle))
-            self._t_grid = round((self._t_grid + h) / h) * h
+            self.servo.step(step)
+            self.dynamics.step(step, self._shortening(a0), self._shortening(self.servo.angle))
+            self._t_grid = t_next
         self.time_s = target
 
     def state(self, time_s: float | None = None):
@@ -210,6 +212,23 @@ class Twin:
         """
         clean, pot = self.clean_read()
         return self.sensors.sample(clean, self.time_s), self.sensors.sample_pot(pot)
+
+    def deflect(self, tip_force_n: float) -> None:
+        """Hold the digit at rest under an extra sideways tip force (N, towards the cable side), as a hand does
+        before a release test (3.1.2); the next :meth:`advance` releases it."""
+        force = check_real(tip_force_n, "tip_force_n", "Twin.deflect")
+        s_arr, m_arr = self._load_arrays()
+        sol = self.chain.solve_static(
+            s_arr[None, :] if s_arr.size else None,
+            (m_arr[:, None] * self.chain.gravity[None, :])[None] if s_arr.size else None,
+            tip_force_n=[[0.0, force]],
+            cable_shortening_m=[self._shortening(self.servo.angle)] if self.cable else None,
+        )
+        self.dynamics.psi = sol.psi_rad[0].copy()
+        self.dynamics.omega = np.zeros(self.chain.n)
+        self.servo.rate = 0.0
+        self._t_grid = self.time_s
+        self._prev = self._snapshot()
 
     def tip_position_m(self) -> np.ndarray:
         """Tip position now in the (along-digit, towards-cable) axes (m)."""

@@ -1,0 +1,395 @@
+"""Simulated experiments on the twin, as the thesis ran them on the rig, each returning a tidy table.
+
+- :func:`release_test`: the digit (cable removed) deflected and released, gauges sampled (3.1.2, figure 3.6);
+- :func:`servo_step_test`: a command step, potentiometer and gauges sampled (3.2.4, figure 3.11);
+- :func:`actuation_sweep`: commands 8..43, each settled then sampled (3.4.3, figure 3.17, E 3.20-3.22);
+- :func:`static_load_test`: weights hung at positions, at actuation commands, repeated (6.4-6.5, 7.1-7.2).
+
+Every result is an :class:`ExperimentResult`: a ``pyarrow.Table`` whose column names carry their unit
+(``time_s``, ``gauge1_v``) plus metadata (experiment, its arguments, the rig parameters, the calibration, the seed,
+the flexdigit version), saved as Parquet with the metadata in the schema, or exported as CSV with the metadata as
+``#`` comment lines.
+
+Examples
+--------
+>>> res = static_load_test([0.025], [0.27], commands=[8], repetitions=2, seed=3)
+>>> res.table.num_rows, res.table.column_names[:4]
+(4, ['mass_kg', 'position_from_base_m', 'position_from_tip_m', 'command'])
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+
+from flexdigit import __version__
+from flexdigit._json import to_jsonable
+from flexdigit._validation import check_array, check_int, check_positive, check_real
+from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.params import RigParams
+from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.twin import Twin, check_load, static_gauges_v
+
+METADATA_KEY = b"flexdigit"
+
+
+@dataclass
+class ExperimentResult:
+    """A simulated experiment: a tidy table (units in the column names) and what made it.
+
+    Attributes
+    ----------
+    table : pyarrow.Table
+    metadata : dict
+        ``experiment``, ``arguments``, ``seed``, ``params``, ``calibration``, ``flexdigit_version``, ``units``.
+    """
+
+    table: pa.Table
+    metadata: dict[str, Any]
+
+    def column(self, name: str) -> np.ndarray:
+        """One column as a numpy array."""
+        if name not in self.table.column_names:
+            raise KeyError(f"no column {name!r}; columns are {self.table.column_names}")
+        return self.table.column(name).to_numpy()
+
+    def save(self, path: str | Path) -> Path:
+        """Write Parquet (``.parquet``) or CSV (``.csv``), choosing by suffix; returns the path."""
+        path = Path(path)
+        if path.suffix.lower() == ".csv":
+            return self.to_csv(path)
+        import pyarrow.parquet as pq
+
+        meta = dict(self.table.schema.metadata or {})
+        meta[METADATA_KEY] = json.dumps(to_jsonable(self.metadata)).encode()
+        pq.write_table(self.table.replace_schema_metadata(meta), path)
+        return path
+
+    def to_csv(self, path: str | Path) -> Path:
+        """CSV with the metadata as leading ``# key: json`` lines."""
+        import pyarrow.csv as pcsv
+
+        path = Path(path)
+        sink = pa.BufferOutputStream()
+        pcsv.write_csv(self.table, sink)
+        lines = [f"# {k}: {json.dumps(to_jsonable(v))}" for k, v in self.metadata.items()]
+        path.write_text("\n".join(lines) + "\n" + sink.getvalue().to_pybytes().decode())
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> ExperimentResult:
+        """Read a result saved by :meth:`save` (Parquet or CSV)."""
+        path = Path(path)
+        if not path.exists():
+            raise FileNotFoundError(2, "No such file", str(path))
+        if path.suffix.lower() == ".csv":
+            import io
+
+            import pyarrow.csv as pcsv
+
+            text = path.read_text()
+            meta, body = {}, []
+            for line in text.splitlines(keepends=True):
+                if line.startswith("# ") and not body:
+                    key, _, value = line[2:].partition(": ")
+                    try:
+                        meta[key] = json.loads(value)
+                    except json.JSONDecodeError:
+                        raise DataFileError(f"{path}: metadata line for {key!r} is not JSON") from None
+                else:
+                    body.append(line)
+            try:
+                table = pcsv.read_csv(io.BytesIO("".join(body).encode()))
+            except pa.ArrowInvalid as exc:
+                raise DataFileError(f"{path}: not a CSV table ({exc})") from None
+            return cls(table, meta)
+        import pyarrow.parquet as pq
+
+        try:
+            table = pq.read_table(path)
+        except (pa.ArrowInvalid, OSError) as exc:
+            raise DataFileError(f"{path}: not a Parquet file ({exc})") from None
+        raw = (table.schema.metadata or {}).get(METADATA_KEY)
+        if raw is None:
+            raise DataFileError(f"{path}: no flexdigit metadata (not written by ExperimentResult.save)")
+        return cls(table.replace_schema_metadata(None), json.loads(raw))
+
+    def summary(self) -> str:
+        """One line per column: name, min, max."""
+        lines = [
+            f"{self.metadata.get('experiment', '?')}: {self.table.num_rows} rows, seed {self.metadata.get('seed')}"
+        ]
+        for name in self.table.column_names:
+            col = self.column(name).astype(float)
+            lines.append(f"  {name:<24} {np.nanmin(col):>12.6g} .. {np.nanmax(col):<12.6g}")
+        return "\n".join(lines)
+
+
+def _units(columns) -> dict[str, str]:
+    out = {}
+    for c in columns:
+        suffix = c.rsplit("_", 1)[-1] if "_" in c else ""
+        out[c] = {"s": "s", "v": "V", "m": "m", "kg": "kg", "rad": "rad", "mm": "mm"}.get(suffix, "1")
+    out.update({k: "command (0..254)" for k in columns if k == "command"})
+    return out
+
+
+def _result(name: str, columns: dict[str, np.ndarray], arguments: dict, seed, params, calibration) -> ExperimentResult:
+    table = pa.table({k: pa.array(np.asarray(v)) for k, v in columns.items()})
+    meta = {
+        "experiment": name,
+        "arguments": arguments,
+        "seed": seed,
+        "units": _units(columns),
+        "params": params.to_dict(),
+        "calibration": calibration.to_dict(),
+        "flexdigit_version": __version__,
+    }
+    return ExperimentResult(table, meta)
+
+
+def _sample(twin: Twin, times: np.ndarray, extra=None):
+    gauges = np.empty((times.size, 3))
+    pot = np.empty(times.size)
+    cmd = np.empty(times.size, dtype=np.int64)
+    tip = np.empty(times.size)
+    for k, t in enumerate(times):
+        if extra is not None:
+            extra(twin, t)
+        twin.advance(max(t - twin.time_s, 0.0))
+        gauges[k], pot[k] = twin.read()
+        cmd[k] = twin.servo.command
+        tip[k] = twin.tip_position_m()[1]
+    return gauges, pot, cmd, tip
+
+
+def _check_rate(duration_s, sample_rate_hz, owner):
+    duration = check_real(duration_s, "duration_s", owner, low=0, low_open=True, high=3600)
+    rate = check_real(sample_rate_hz, "sample_rate_hz", owner, low=1, high=100_000)
+    return duration, rate, np.arange(int(math.floor(duration * rate)) + 1) / rate
+
+
+def release_test(
+    *,
+    housing: bool = True,
+    tip_deflection_m: float = 0.02,
+    duration_s: float = 8.0,
+    sample_rate_hz: float = 1000.0,
+    seed: int = 0,
+    params: RigParams | None = None,
+    calibration: Calibration | None = None,
+    orientation: str = "vertical",
+) -> ExperimentResult:
+    """Deflect the digit (cable removed) by ``tip_deflection_m`` at the tip, release it, sample the gauges (3.1.2).
+
+    Returns
+    -------
+    ExperimentResult
+        Columns ``time_s, gauge1_v, gauge2_v, gauge3_v, tip_deflection_m``.
+    """
+    params = params or RigParams()
+    calibration = calibration or default_calibration()
+    deflection = check_real(tip_deflection_m, "tip_deflection_m", "release_test", low=-0.1, high=0.1)
+    _, _, times = _check_rate(duration_s, sample_rate_hz, "release_test")
+    twin = Twin(params, calibration, seed=seed, orientation=orientation, housing=housing, cable=False)
+    unit = twin.chain.solve_static(tip_force_n=[[0.0, 1e-3]]).tip_m[0, 1] - twin.chain.solve_static().tip_m[0, 1]
+    force = 1e-3 * deflection / unit
+    for _ in range(3):  # the tip load-deflection curve bends a little: a few secant corrections
+        got = twin.chain.solve_static(tip_force_n=[[0.0, force]]).tip_m[0, 1]
+        force *= deflection / got if got != 0 else 1.0
+    twin.deflect(force)
+    gauges, _, _, tip = _sample(twin, times)
+    cols = {"time_s": times, "gauge1_v": gauges[:, 0], "gauge2_v": gauges[:, 1], "gauge3_v": gauges[:, 2]}
+    cols["tip_deflection_m"] = tip
+    args = dict(housing=housing, tip_deflection_m=deflection, duration_s=duration_s, sample_rate_hz=sample_rate_hz)
+    args["orientation"] = orientation
+    return _result("release_test", cols, args, seed, params, calibration)
+
+
+def servo_step_test(
+    *,
+    command_from: int = 0,
+    command_to: int = 51,
+    step_at_s: float = 0.1,
+    duration_s: float = 1.5,
+    sample_rate_hz: float = 1000.0,
+    cable: bool = False,
+    seed: int = 0,
+    params: RigParams | None = None,
+    calibration: Calibration | None = None,
+) -> ExperimentResult:
+    """A servo command step (3.2.4: to 51), potentiometer and gauges sampled; cable detached by default.
+
+    Returns
+    -------
+    ExperimentResult
+        Columns ``time_s, command, pot_v, servo_angle_rad, gauge1_v, gauge2_v, gauge3_v``.
+    """
+    params = params or RigParams()
+    calibration = calibration or default_calibration()
+    a = params.actuator
+    c0 = check_int(command_from, "command_from", "servo_step_test", low=a.command_min, high=a.command_max)
+    c1 = check_int(command_to, "command_to", "servo_step_test", low=a.command_min, high=a.command_max)
+    step_at = check_real(step_at_s, "step_at_s", "servo_step_test", low=0)
+    _, _, times = _check_rate(duration_s, sample_rate_hz, "servo_step_test")
+    twin = Twin(params, calibration, seed=seed, cable=cable, command=c0)
+    sent = {"done": False}
+    angles = []
+
+    def stepper(tw, t):
+        if not sent["done"] and t >= step_at:
+            tw.advance(max(step_at - tw.time_s, 0.0))
+            tw.command(c1)
+            sent["done"] = True
+
+    gauges = np.empty((times.size, 3))
+    pot = np.empty(times.size)
+    cmd = np.empty(times.size, dtype=np.int64)
+    for k, t in enumerate(times):
+        stepper(twin, t)
+        twin.advance(max(t - twin.time_s, 0.0))
+        gauges[k], pot[k] = twin.read()
+        cmd[k] = twin.servo.command
+        angles.append(twin.state()[1])
+    cols = {"time_s": times, "command": cmd, "pot_v": pot, "servo_angle_rad": np.array(angles)}
+    cols.update({f"gauge{i + 1}_v": gauges[:, i] for i in range(3)})
+    args = dict(command_from=c0, command_to=c1, step_at_s=step_at, duration_s=duration_s, cable=cable)
+    args["sample_rate_hz"] = sample_rate_hz
+    return _result("servo_step_test", cols, args, seed, params, calibration)
+
+
+def actuation_sweep(
+    commands=None,
+    *,
+    settle_s: float = 3.0,
+    samples: int = 20,
+    sample_rate_hz: float = 100.0,
+    seed: int = 0,
+    params: RigParams | None = None,
+    calibration: Calibration | None = None,
+    orientation: str = "vertical",
+) -> ExperimentResult:
+    """Step through ``commands`` (default 8..43), let each settle, then sample the gauges (3.4.3, E 3.20-3.22).
+
+    Returns
+    -------
+    ExperimentResult
+        Columns ``command, sample, time_s, gauge1_v, gauge2_v, gauge3_v, pot_v``.
+    """
+    params = params or RigParams()
+    calibration = calibration or default_calibration()
+    a = params.actuator
+    if commands is None:
+        commands = range(a.operating_commands[0], a.operating_commands[1] + 1)
+    cmds = [check_int(c, "commands", "actuation_sweep", low=a.command_min, high=a.command_max) for c in commands]
+    if not cmds:
+        raise ParameterError("The 'commands' parameter of actuation_sweep must not be empty.")
+    settle = check_real(settle_s, "settle_s", "actuation_sweep", low=0)
+    n = check_int(samples, "samples", "actuation_sweep", low=1, high=100_000)
+    rate = check_positive(sample_rate_hz, "sample_rate_hz", "actuation_sweep")
+    twin = Twin(params, calibration, seed=seed, orientation=orientation, command=cmds[0])
+    rows: dict[str, list] = {
+        k: [] for k in ("command", "sample", "time_s", "gauge1_v", "gauge2_v", "gauge3_v", "pot_v")
+    }
+    for c in cmds:
+        twin.command(c)
+        twin.advance(settle)
+        for k in range(n):
+            if k:
+                twin.advance(1.0 / rate)
+            g, p = twin.read()
+            for key, val in zip(("command", "sample", "time_s", "pot_v"), (c, k, twin.time_s, p), strict=True):
+                rows[key].append(val)
+            for i in range(3):
+                rows[f"gauge{i + 1}_v"].append(g[i])
+    cols = {k: np.asarray(v) for k, v in rows.items()}
+    args = dict(commands=cmds, settle_s=settle, samples=n, sample_rate_hz=rate, orientation=orientation)
+    return _result("actuation_sweep", cols, args, seed, params, calibration)
+
+
+def static_load_test(
+    loads_kg,
+    positions_from_tip_m,
+    *,
+    commands=None,
+    repetitions: int = 25,
+    include_no_load: bool = True,
+    seed: int = 0,
+    params: RigParams | None = None,
+    calibration: Calibration | None = None,
+    orientation: str = "horizontal",
+) -> ExperimentResult:
+    """Hang each weight at each position (measured from the tip, as the thesis does) at each command, repeated.
+
+    Mirrors 6.4-6.5 (loads 12.5, 25, 7.5 g; 16 positions; 25 repetitions; cable detached: ``commands=None``)
+    and 7.1-7.2 (25, 37.5 g; 10 positions; commands 0, 20, 40). Each repetition is a fresh sample of the
+    steady gauges with the calibration's white noise. A no-load case per command is added first when
+    ``include_no_load``.
+
+    Returns
+    -------
+    ExperimentResult
+        Columns ``mass_kg, position_from_base_m, position_from_tip_m, command, repetition, gauge1_v, gauge2_v,
+        gauge3_v`` (``command`` is -1 when the cable is detached).
+    """
+    params = params or RigParams()
+    calibration = calibration or default_calibration()
+    length = params.geometry.digit_length_m
+    masses = check_array(loads_kg, "loads_kg", "static_load_test", ndim=1, min_length=1, low=0, low_open=True)
+    from_tip = check_array(positions_from_tip_m, "positions_from_tip_m", "static_load_test", ndim=1, min_length=1)
+    for m in masses:
+        for p in from_tip:
+            if not 0 <= p < length:
+                raise ParameterError(
+                    f"The 'positions_from_tip_m' parameter of static_load_test must be inside [0, {length:g}) "
+                    f"(a load beyond the tip or at the clamp). Got {p!r} instead."
+                )
+            check_load(m, length - p, params)
+    reps = check_int(repetitions, "repetitions", "static_load_test", low=1, high=100_000)
+    cmd_list = [None] if commands is None else list(commands)
+    rows_m, rows_p, rows_c = [], [], []
+    for c in cmd_list:
+        if include_no_load:
+            rows_m.append(0.0)
+            rows_p.append(length)
+            rows_c.append(c)
+        for m in masses:
+            for p in from_tip:
+                rows_m.append(float(m))
+                rows_p.append(length - float(p))
+                rows_c.append(c)
+    m_arr = np.repeat(np.array(rows_m), reps)
+    p_arr = np.repeat(np.array(rows_p), reps)
+    rep = np.tile(np.arange(reps), len(rows_m))
+    if commands is None:
+        cmd_arr = None
+        cmd_col = np.full(m_arr.size, -1, dtype=np.int64)
+    else:
+        cmd_arr = np.repeat(np.array(rows_c, dtype=float), reps)
+        cmd_col = cmd_arr.astype(np.int64)
+    volts = static_gauges_v(
+        m_arr, p_arr, cmd_arr, params=params, calibration=calibration, orientation=orientation, seed=seed
+    )
+    cols = {
+        "mass_kg": m_arr,
+        "position_from_base_m": p_arr,
+        "position_from_tip_m": length - p_arr,
+        "command": cmd_col,
+        "repetition": rep,
+    }
+    cols.update({f"gauge{i + 1}_v": volts[:, i] for i in range(3)})
+    args = dict(
+        loads_kg=masses.tolist(),
+        positions_from_tip_m=from_tip.tolist(),
+        commands=None if commands is None else [int(c) for c in cmd_list],
+        repetitions=reps,
+        include_no_load=include_no_load,
+        orientation=orientation,
+    )
+    return _result("static_load_test", cols, args, seed, params, calibration)
