@@ -12,7 +12,7 @@ the flexdigit version), saved as Parquet with the metadata in the schema, or exp
 
 Examples
 --------
->>> res = static_load_test([0.025], [0.27], commands=[8], repetitions=2, seed=3)
+>>> res = static_load_test([0.025], [0.0], commands=[8], repetitions=2, seed=3)
 >>> res.table.num_rows, res.table.column_names[:4]
 (4, ['mass_kg', 'position_from_base_m', 'position_from_tip_m', 'command'])
 """

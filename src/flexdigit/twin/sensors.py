@@ -25,41 +25,42 @@ from functools import lru_cache
 
 import numpy as np
 
-from flexdigit._validation import check_choice
-from flexdigit.params import BRIDGE_TYPES
+from flexdigit.models.bridge import adc_quantise, gauge_resistance_ohm, wheatstone_ratio
+from flexdigit.params import Sensors
 
 
-def bridge_ratio(eps_tension_face, eps_compression_face, gauge_factor: float, bridge: str = "half"):
-    """Bridge output over excitation, ``Vm/Vs`` (E 2.2), for the face strains of a gauge pair.
+def bridge_ratio(eps_tension_face, eps_compression_face, sensors: Sensors):
+    """Bridge output over excitation, ``Vm/Vs`` (E 2.2), for the two face strains of a gauge pair.
+
+    :func:`flexdigit.models.bridge.bridge_ratio` assumes the opposite gauge sees exactly ``-strain``; on the digit
+    the faces also share an axial strain (cable compression, hanging weights), which only the quarter bridge sees,
+    so the resistances are built here and E 2.2 is :func:`flexdigit.models.bridge.wheatstone_ratio`.
 
     Parameters
     ----------
     eps_tension_face, eps_compression_face : array_like
         Strain (dimensionless) of the gauge on the face away from the cable and on the cable side.
-    gauge_factor : float
-        GF (E 2.1), ~0.8 on the rig.
-    bridge : {"quarter", "half", "full"}
-
-    Returns
-    -------
-    ndarray
-        ``(R1 R3 - R2 R4) / ((R1 + R2)(R3 + R4))``.
+    sensors : Sensors
+        Gauge factor, resistance and bridge type.
 
     Examples
     --------
-    >>> round(float(bridge_ratio(1e-4, -1e-4, 0.8, "half")) / (0.8 / 4 * 2e-4), 6)   # E 2.4
+    >>> from flexdigit.params import Sensors
+    >>> round(float(bridge_ratio(1e-4, -1e-4, Sensors(bridge="half"))) / (0.8 / 4 * 2e-4), 6)   # E 2.4
     1.0
-    >>> round(float(bridge_ratio(1e-4, -1e-4, 0.8, "full")) / (0.8 * 1e-4), 6)        # E 2.3
+    >>> round(float(bridge_ratio(1e-4, -1e-4, Sensors(bridge="full"))) / (0.8 * 1e-4), 6)        # E 2.3
     1.0
+    >>> float(bridge_ratio(5e-5, 5e-5, Sensors(bridge="half")))     # pure axial strain cancels
+    0.0
     """
-    check_choice(bridge, "bridge", BRIDGE_TYPES, "bridge_ratio")
-    r1 = 1.0 + gauge_factor * np.asarray(eps_tension_face, dtype=float)
-    r2 = 1.0 + gauge_factor * np.asarray(eps_compression_face, dtype=float)
-    if bridge == "quarter":
-        return (r1 - 1.0) / ((r1 + 1.0) * 2.0)
-    if bridge == "half":
-        return (r1 - r2) / ((r1 + r2) * 2.0)
-    return (r1 * r1 - r2 * r2) / ((r1 + r2) ** 2)
+    r1 = gauge_resistance_ohm(eps_tension_face, sensors)
+    r2 = gauge_resistance_ohm(eps_compression_face, sensors)
+    r = np.full_like(np.asarray(r1, dtype=float), sensors.gauge_resistance_ohm)
+    if sensors.bridge == "quarter":
+        return np.asarray(wheatstone_ratio(r1, r, r, r))
+    if sensors.bridge == "half":  # R3 = R4 inside the amplifier (E 2.4)
+        return np.asarray(wheatstone_ratio(r1, r2, r, r))
+    return np.asarray(wheatstone_ratio(r1, r2, r1, r2))  # E 2.3
 
 
 @lru_cache(maxsize=16)
@@ -71,18 +72,10 @@ def lowpass_group_delay_s(cutoff_hz: float, order: int) -> float:
     return float(den[-2] / den[-1])
 
 
-def adc(voltage_v, range_v: tuple[float, float], bits: int) -> np.ndarray:
-    """Clip to the input range and round to the ADC step (2.5.2: 16 bits over +-5 V).
-
-    Examples
-    --------
-    >>> adc([7.0, -9.0, 0.00004], (-5.0, 5.0), 16).tolist()
-    [4.999847412109375, -5.0, 0.0]
-    """
-    lo, hi = range_v
-    lsb = (hi - lo) / 2**bits
-    code = np.clip(np.round((np.asarray(voltage_v, dtype=float) - lo) / lsb), 0, 2**bits - 1)
-    return lo + code * lsb
+def adc(voltage_v, sensors: Sensors) -> np.ndarray:
+    """What the card reads: clipped to its range and rounded to its 16-bit step (2.5.2); see
+    :func:`flexdigit.models.bridge.adc_quantise`."""
+    return np.asarray(adc_quantise(voltage_v, sensors), dtype=float)
 
 
 class SensorChain:
@@ -114,12 +107,10 @@ class SensorChain:
 
     def clean_v(self, curvature_1_m, axial_force_n) -> np.ndarray:
         """Noise-free amplifier output (V) for curvature (1/m) and axial force (N) at the gauges; vectorised."""
-        s = self.params.sensors
         kappa = np.asarray(curvature_1_m, dtype=float)
         eps_axial = np.asarray(axial_force_n, dtype=float) / self._ea
-        ratio = bridge_ratio(
-            kappa * self._half_t + eps_axial, -kappa * self._half_t + eps_axial, s.gauge_factor, s.bridge
-        )
+        bend = kappa * self._half_t
+        ratio = bridge_ratio(bend + eps_axial, -bend + eps_axial, self.params.sensors)
         return self.gain * ratio + self.offset
 
     def sample(self, clean_v: np.ndarray, time_s: float) -> np.ndarray:
@@ -128,11 +119,9 @@ class SensorChain:
             self.drift += self.drift_rate * np.sqrt(time_s - self._last_t) * self.rng.standard_normal(self.drift.size)
         self._last_t = time_s
         noisy = clean_v + self.drift + self.white * self.rng.standard_normal(self.drift.size)
-        s = self.params.sensors
-        return adc(noisy, s.adc_range_v, s.adc_bits)
+        return adc(noisy, self.params.sensors)
 
     def sample_pot(self, pot_v: float) -> float:
         """One ADC sample of the potentiometer channel (V)."""
-        s = self.params.sensors
         noisy = pot_v + self.pot_noise * self.rng.standard_normal()
-        return float(adc(noisy, s.adc_range_v, s.adc_bits))
+        return float(adc(noisy, self.params.sensors))

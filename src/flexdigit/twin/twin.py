@@ -357,5 +357,5 @@ def static_gauges_v(
     if adc:
         from flexdigit.twin.sensors import adc as quantise
 
-        volts = quantise(volts, params.sensors.adc_range_v, params.sensors.adc_bits)
+        volts = quantise(volts, params.sensors)
     return (volts, sol) if return_solution else volts
