@@ -130,9 +130,20 @@ class ResponseFeatures:
 
 
 def final_value_estimate(y: np.ndarray, tail_fraction: float = 0.1) -> float:
-    """Mean of the last ``tail_fraction`` of the record: the value the response settles to."""
+    """The value the response settles to: the mean of the last ``tail_fraction`` of the record, over whole cycles.
+
+    A record still oscillating at its end (a lightly damped digit) would bias a plain mean by up to the oscillation
+    amplitude; averaging between the first and last upward crossings of the tail removes the partial cycle.
+    """
     n = max(3, int(round(len(y) * tail_fraction)))
-    return float(np.mean(y[-n:]))
+    tail = np.asarray(y[-n:], dtype=float)
+    m = float(np.mean(tail))
+    for _ in range(2):
+        up = np.nonzero((tail[:-1] < m) & (tail[1:] >= m))[0]
+        if up.size < 2:
+            break
+        m = float(np.mean(tail[up[0] + 1 : up[-1] + 1]))
+    return m
 
 
 def analyze_response(
@@ -169,10 +180,11 @@ def analyze_response(
 
     Notes
     -----
-    Extrema and crossings count only while the response stands out of the noise, taken as the standard deviation
-    of the last 10 % of the record (three of them). The 2 % settling time is the instant the response enters the
-    band after its last extremum outside it; when the noise is larger than the band it is the last extremum that
-    stands out of the noise, so the thesis method's ``Ts`` (and its ``wn``) degrade with the noise, as they did.
+    Extrema and crossings count only while the response stands out of the noise (three standard deviations of
+    the record's last 10 %, or of its second differences for a record that has not come to rest). The 2 %
+    settling time is the instant the response enters the band after its last extremum outside it; when the noise
+    is larger than the band it is the last extremum that stands out of the noise, so the thesis method's ``Ts``
+    (and its ``wn``) degrade with the noise, as they did.
 
     Raises
     ------
@@ -194,7 +206,7 @@ def analyze_response(
     t = check_array(t_s, "t_s", ndim=1, min_length=8, increasing=True, error=DataFileError)
     y = check_array(y, "y", ndim=1, shape=(len(t),), error=DataFileError)
     yf = final_value_estimate(y) if final_value is None else float(final_value)
-    noise = float(np.std(y[-max(3, y.size // 10) :]))
+    noise = _noise_level(y)
     if t0_s is not None:
         t0 = float(t0_s)
     elif kind == "step":
@@ -244,7 +256,8 @@ def analyze_response(
     rise = _crossing_time(tt, s, 0.9) - _crossing_time(tt, s, 0.1)
     settling = _settling_time(tt, x, ext_t, ext_v)
     logdec = _log_decrement(ext_v)
-    zeta_os = float(zeta_from_overshoot(percent_os)) if percent_os < 100 else math.nan
+    # an undershoot as large as the release (noise on a nearly undamped digit): damping below the resolution
+    zeta_os = float(zeta_from_overshoot(percent_os)) if percent_os < 100 else 0.0
     zeta_ld = zeta_from_log_decrement(logdec) if math.isfinite(logdec) and logdec > 0 else math.nan
     ok_ts = math.isfinite(settling) and settling > 0 and zeta_os > 0
     wn_ts = float(wn_from_settling_time(settling, zeta_os)) if ok_ts else math.nan  # 3.1.2
@@ -340,6 +353,19 @@ def free_response(t_s, wn_rad_s: float, zeta: float) -> np.ndarray:
 # --- helpers -----------------------------------------------------------------------------------------------------
 
 
+def _noise_level(y: np.ndarray) -> float:
+    """Noise standard deviation: that of the record's last 10 %, or of its second differences if smaller.
+
+    A record that has come to rest shows its noise in its tail; one that has not (a lightly damped digit) still
+    oscillates there, and white noise of deviation s gives second differences of deviation s sqrt(6) (robust
+    estimate from the median absolute value) while a smooth signal gives almost none.
+    """
+    tail = float(np.std(y[-max(3, y.size // 10) :]))
+    d2 = np.diff(y, 2)
+    robust = float(np.median(np.abs(d2 - np.median(d2)))) / 0.6745 / math.sqrt(6.0) if d2.size else tail
+    return min(tail, robust)
+
+
 def _release_time(t: np.ndarray, x: np.ndarray, noise: float) -> float | None:
     """Release instant from the first two final-value crossings after the largest deviation.
 
@@ -347,9 +373,15 @@ def _release_time(t: np.ndarray, x: np.ndarray, noise: float) -> float | None:
     give ``wd`` and the ratio of the first two extrema ``zeta``, so the instant is found without relying on the
     (noisy, possibly held) samples before it. Returns None when the record has fewer than two crossings.
     """
-    peak = int(np.argmax(np.abs(x)))
-    sign = 1.0 if x[peak] > 0 else -1.0
-    hyst = max(3.0 * noise, 0.01 * abs(x[peak]))
+    dev = np.abs(x)
+    # the first near-largest deviation (a lightly damped record swings almost as far later on), then the largest
+    # one of its lobe
+    start = int(np.argmax(dev >= 0.9 * dev.max()))
+    sign = 1.0 if x[start] > 0 else -1.0
+    hyst = max(3.0 * noise, 0.01 * dev.max())
+    other_side = np.nonzero(sign * x[start:] < -hyst)[0]
+    end = start + int(other_side[0]) if other_side.size else x.size
+    peak = start + int(np.argmax(sign * x[start:end]))
     xn = -sign * x[peak:] / abs(x[peak])
     ext_t, ext_v, crossings = _extrema(t[peak:], xn, hyst / abs(x[peak]), from_start=False)
     if len(crossings) < 2:
@@ -429,8 +461,8 @@ def _extrema(
         k = a + int(np.argmax(np.abs(x[a:b])))
         if b == len(x) and k >= len(x) - 2:
             break  # the record ends inside this lobe: no extremum yet
-        if values and abs(x[k]) > values[-1]:
-            break  # a second-order response decays: a larger extremum is noise
+        if values and abs(x[k]) > values[-1] + 2 * hysteresis:
+            break  # a second-order response decays: a clearly larger extremum is noise
         if from_start and times and abs((t[k] - times[-1]) - (times[0] - t[0])) > 0.5 * (times[0] - t[0]):
             break  # extrema come every half period (the first one comes half a period after t0): noise
         j = a  # the zero crossing is the last sign change before the lobe passes its hysteresis
