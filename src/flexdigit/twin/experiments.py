@@ -348,7 +348,7 @@ def static_load_test(
             if not 0 <= p < length:
                 raise ParameterError(
                     f"The 'positions_from_tip_m' parameter of static_load_test must be inside [0, {length:g}) "
-                    f"(a load beyond the tip or at the clamp). Got {p!r} instead."
+                    f"(a load beyond the tip or at the clamp). Got {float(p)!r} instead."
                 )
             check_load(m, length - p, params)
     reps = check_int(repetitions, "repetitions", "static_load_test", low=1, high=100_000)

@@ -1,0 +1,151 @@
+"""``flexdigit simulate release|step|sweep|load ... --out FILE [--json]``: the thesis's experiments on the twin.
+
+Each writes its tidy table (Parquet, or CSV when FILE ends in .csv) with the parameters, calibration and seed in
+its metadata, and prints what the thesis took from that experiment (release: wn and zeta per gauge; step: the
+potentiometer's rise; sweep: the E 3.20-3.22 lines; load: rows and mean voltages).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from flexdigit.cli import CommandResult, add_command
+from flexdigit.errors import ParameterError
+
+
+def _floats(text: str, name: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ParameterError(f"--{name} must be comma-separated numbers. Got {text!r} instead.") from None
+
+
+def _commands(text: str) -> list[int]:
+    """``"8..43"`` or ``"0,20,40"``."""
+    try:
+        if ".." in text:
+            lo, hi = text.split("..")
+            return list(range(int(lo), int(hi) + 1))
+        return [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ParameterError(f"--commands must be like '8..43' or '0,20,40'. Got {text!r} instead.") from None
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = add_command(
+        subparsers,
+        "simulate",
+        _run,
+        help="run a thesis experiment on the digital twin and save its table",
+        description=__doc__.splitlines()[0],
+    )
+    sub = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
+
+    def common(p: argparse.ArgumentParser) -> None:
+        p.add_argument("--out", required=True, help="output file (.parquet, or .csv)")
+        p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+        p.add_argument("--params", help="rig parameters TOML (default: the thesis rig)")
+        p.add_argument("--calibration", help="twin calibration TOML (default: fitted to the thesis)")
+        p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+
+    p = sub.add_parser("release", help="release test, cable removed (3.1.2, figure 3.6)")
+    common(p)
+    p.add_argument("--no-housing", action="store_true", help="bare strip (table 3.1)")
+    p.add_argument("--deflection-mm", type=float, default=20.0, help="initial tip deflection (mm)")
+    p.add_argument("--duration", type=float, default=8.0, help="seconds")
+    p.add_argument("--rate", type=float, default=1000.0, help="sample rate (Hz)")
+    p = sub.add_parser("step", help="servo command step (3.2.4, figure 3.11)")
+    common(p)
+    p.add_argument("--from", dest="command_from", type=int, default=0)
+    p.add_argument("--to", dest="command_to", type=int, default=51)
+    p.add_argument("--duration", type=float, default=1.5)
+    p.add_argument("--rate", type=float, default=1000.0)
+    p.add_argument("--cable", action="store_true", help="keep the cable attached")
+    p = sub.add_parser("sweep", help="actuation sweep, commands 8..43 (3.4.3, E 3.20-3.22)")
+    common(p)
+    p.add_argument("--commands", default="8..43", help="'8..43' or '8,20,43'")
+    p.add_argument("--settle", type=float, default=3.0, help="settling time per command (s)")
+    p.add_argument("--samples", type=int, default=20, help="samples per command")
+    p = sub.add_parser("load", help="static load test (6.4-6.5, 7.1-7.2)")
+    common(p)
+    p.add_argument("--loads-g", default="12.5,25,7.5", help="weights in grams (default: chapter 6)")
+    p.add_argument(
+        "--positions-cm",
+        default="0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,24",
+        help="positions from the tip in cm (default: chapter 6)",
+    )
+    p.add_argument("--commands", default=None, help="actuation commands, e.g. '0,20,40' (default: cable detached)")
+    p.add_argument("--repetitions", type=int, default=25)
+    p.add_argument("--orientation", default="horizontal", choices=("horizontal", "vertical", "hanging"))
+
+
+def _run(args: argparse.Namespace) -> CommandResult:
+    import numpy as np
+
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.twin import experiments as ex
+    from flexdigit.twin.calibration import default_calibration, fit_damped_sine, load_calibration
+
+    params = load_params(args.params) if args.params else RigParams()
+    cal = load_calibration(args.calibration) if args.calibration else default_calibration()
+    common = dict(seed=args.seed, params=params, calibration=cal)
+    findings: dict = {}
+    if args.experiment == "release":
+        res = ex.release_test(
+            housing=not args.no_housing,
+            tip_deflection_m=args.deflection_mm * 1e-3,
+            duration_s=args.duration,
+            sample_rate_hz=args.rate,
+            **common,
+        )
+        t = res.column("time_s")
+        for g in (1, 2, 3):
+            fit = fit_damped_sine(t, res.column(f"gauge{g}_v"))
+            findings[f"gauge{g}"] = {"wn_rad_s": fit["wn_rad_s"], "zeta": fit["zeta"]}
+        text = "\n".join(
+            f"gauge {g}: wn {findings[f'gauge{g}']['wn_rad_s']:.3f} rad/s, zeta {findings[f'gauge{g}']['zeta']:.4f}"
+            for g in (1, 2, 3)
+        )
+    elif args.experiment == "step":
+        res = ex.servo_step_test(
+            command_from=args.command_from,
+            command_to=args.command_to,
+            duration_s=args.duration,
+            sample_rate_hz=args.rate,
+            cable=args.cable,
+            **common,
+        )
+        pot = res.column("pot_v")
+        findings = {"pot_start_v": float(pot[0]), "pot_peak_v": float(pot.max()), "pot_end_v": float(pot[-1])}
+        text = "pot: {pot_start_v:.4f} V -> peak {pot_peak_v:.4f} V -> {pot_end_v:.4f} V".format(**findings)
+    elif args.experiment == "sweep":
+        res = ex.actuation_sweep(_commands(args.commands), settle_s=args.settle, samples=args.samples, **common)
+        cmd = res.column("command")
+        lines = []
+        for g in (1, 2, 3):
+            slope, offset = np.polyfit(cmd, res.column(f"gauge{g}_v"), 1)
+            findings[f"gauge{g}"] = {"slope_v_per_command": float(slope), "offset_v": float(offset)}
+            lines.append(f"gauge {g}: V = {slope:.5f} command {offset:+.4f}   (E 3.2{g - 1})")
+        text = "\n".join(lines)
+    else:
+        commands = None if args.commands is None else _commands(args.commands)
+        res = ex.static_load_test(
+            [g * 1e-3 for g in _floats(args.loads_g, "loads-g")],
+            [c * 1e-2 for c in _floats(args.positions_cm, "positions-cm")],
+            commands=commands,
+            repetitions=args.repetitions,
+            orientation=args.orientation,
+            **common,
+        )
+        findings = {f"gauge{g}_mean_v": float(np.mean(res.column(f"gauge{g}_v"))) for g in (1, 2, 3)}
+        text = f"{res.table.num_rows} samples"
+    path = res.save(args.out)
+    data = {
+        "experiment": res.metadata["experiment"],
+        "out": str(path),
+        "rows": res.table.num_rows,
+        "columns": res.table.column_names,
+        "seed": args.seed,
+        "findings": findings,
+    }
+    return CommandResult(data=data, text=f"{res.metadata['experiment']}: {res.table.num_rows} rows -> {path}\n{text}")

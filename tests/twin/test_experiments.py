@@ -1,0 +1,88 @@
+"""Simulated experiments: tables, metadata, files, determinism, bad input; and the CLI."""
+
+import json
+
+import numpy as np
+import pytest
+
+from flexdigit.cli import main
+from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.twin import experiments as ex
+
+
+def test_static_load_test_follows_the_thesis_protocol():
+    # 6.4-6.5: 3 weights x 16 positions x 25 repetitions, plus the no-load case
+    t = ex.static_load_test(
+        [0.0125, 0.025, 0.0075], [c / 100 for c in (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 24)], seed=0
+    )
+    assert t.table.num_rows == 3 * 16 * 25 + 25
+    assert set(np.unique(t.column("command"))) == {-1}
+    np.testing.assert_allclose(t.column("position_from_base_m") + t.column("position_from_tip_m"), 0.27)
+    assert t.metadata["units"]["gauge1_v"] == "V" and t.metadata["seed"] == 0
+
+
+def test_experiments_are_deterministic_per_seed():
+    a = ex.servo_step_test(duration_s=0.3, seed=7)
+    b = ex.servo_step_test(duration_s=0.3, seed=7)
+    c = ex.servo_step_test(duration_s=0.3, seed=8)
+    assert a.table.equals(b.table)
+    assert not a.table.equals(c.table)
+
+
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+def test_save_and_load_keep_table_and_metadata(tmp_path, suffix):
+    res = ex.static_load_test([0.025], [0.0, 0.1], commands=[0, 20], repetitions=3, seed=2)
+    path = res.save(tmp_path / f"run{suffix}")
+    back = ex.ExperimentResult.load(path)
+    assert back.metadata["experiment"] == "static_load_test"
+    assert back.metadata["arguments"]["commands"] == [0, 20]
+    assert back.metadata["params"]["geometry"]["digit_length_m"] == 0.27
+    for name in res.table.column_names:
+        np.testing.assert_allclose(back.column(name), res.column(name))
+
+
+def test_loading_a_foreign_file_says_what_is_wrong(tmp_path):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    pq.write_table(pa.table({"x": [1, 2]}), tmp_path / "other.parquet")
+    with pytest.raises(DataFileError, match="other.parquet.*metadata"):
+        ex.ExperimentResult.load(tmp_path / "other.parquet")
+    (tmp_path / "junk.parquet").write_text("not parquet")
+    with pytest.raises(DataFileError, match="junk.parquet"):
+        ex.ExperimentResult.load(tmp_path / "junk.parquet")
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: ex.static_load_test([0.01], [0.30]), "beyond the tip"),
+        (lambda: ex.static_load_test([-0.01], [0.1]), "loads_kg"),
+        (lambda: ex.static_load_test([0.01], [0.1], commands=[255]), "commands"),
+        (lambda: ex.servo_step_test(command_to=300), "command_to"),
+        (lambda: ex.release_test(tip_deflection_m=float("nan")), "tip_deflection_m"),
+        (lambda: ex.actuation_sweep([8, 9.5]), "commands"),
+        (lambda: ex.release_test(duration_s=-1), "duration_s"),
+    ],
+)
+def test_bad_experiment_inputs_raise_clear_errors(call, match):
+    with pytest.raises(ParameterError, match=match):
+        call()
+
+
+def test_cli_simulate_writes_a_file_and_reports_json(tmp_path, capsys):
+    out = tmp_path / "step.parquet"
+    assert main(["simulate", "step", "--out", str(out), "--duration", "0.5", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["experiment"] == "servo_step_test" and data["rows"] == 501
+    assert ex.ExperimentResult.load(out).table.num_rows == 501
+    # the potentiometer settles on the params line for command 51 (3.2.4)
+    assert data["findings"]["pot_end_v"] == pytest.approx(0.46688 + 51 * (2.4755 - 0.46688) / 254, abs=0.02)
+
+
+def test_cli_bad_input_is_one_line_exit_2(tmp_path, capsys):
+    assert main(["simulate", "load", "--out", str(tmp_path / "x.parquet"), "--positions-cm", "30"]) == 2
+    err = capsys.readouterr().err
+    assert "beyond the tip" in err and "Traceback" not in err
+    assert main(["simulate", "sweep", "--out", str(tmp_path / "x.csv"), "--commands", "8..x"]) == 2
+    assert "--commands" in capsys.readouterr().err

@@ -1,0 +1,70 @@
+"""The sensor chain against E 2.2-2.4, scipy's Butterworth and the ADC's arithmetic."""
+
+import numpy as np
+import pytest
+import scipy.signal
+
+from flexdigit.params import RigParams, Sensors
+from flexdigit.twin.calibration import Calibration
+from flexdigit.twin.sensors import SensorChain, adc, bridge_ratio, lowpass_group_delay_s
+
+
+@pytest.mark.parametrize(("bridge", "per_strain"), [("quarter", 0.8 / 4), ("half", 0.8 / 2), ("full", 0.8)])
+def test_bridge_small_strain_forms(bridge, per_strain):
+    # E 2.3 (full: GF eps), E 2.4 (half: GF/4 * 2 eps), quarter GF eps / 4, to first order in eps
+    eps = 1e-6
+    assert float(bridge_ratio(eps, -eps, Sensors(bridge=bridge))) == pytest.approx(per_strain * eps, rel=1e-5)
+
+
+def test_axial_strain_cancels_in_half_and_full_bridges_only():
+    axial = 2e-5
+    assert float(bridge_ratio(axial, axial, Sensors(bridge="half"))) == 0.0
+    assert float(bridge_ratio(axial, axial, Sensors(bridge="full"))) == 0.0
+    # quarter bridge: (R1 - R)/(2(R1 + R)) with R1 = R (1 + GF eps) (E 2.2)
+    gf = 0.8
+    assert float(bridge_ratio(axial, axial, Sensors(bridge="quarter"))) == pytest.approx(
+        gf * axial / (2 * (2 + gf * axial)), rel=1e-12
+    )
+
+
+def test_lowpass_as_delay_matches_scipy_lsim_on_digit_frequencies():
+    # the twin applies the 470 Hz Butterworth as its DC group delay; check against the full filter at 2 Hz
+    s = Sensors()
+    b, a = scipy.signal.butter(s.amplifier_lowpass_order, 2 * np.pi * s.amplifier_lowpass_hz, analog=True)
+    t = np.linspace(0, 1.0, 200_001)
+    w = 2 * np.pi * 2.0
+    _, y, _ = scipy.signal.lsim((b, a), np.sin(w * t), t)
+    tau = lowpass_group_delay_s(s.amplifier_lowpass_hz, s.amplifier_lowpass_order)
+    assert tau == pytest.approx(np.sqrt(2) / (2 * np.pi * 470.0), rel=1e-9)  # 2nd-order Butterworth: sqrt(2)/wc
+    settled = t > 0.2
+    assert np.max(np.abs(y[settled] - np.sin(w * (t[settled] - tau)))) < 1e-4
+
+
+def test_adc_clips_and_quantises_to_16_bits():
+    s = Sensors()
+    lsb = 10.0 / 2**16
+    out = adc([7.0, -9.0, 0.3 * lsb, 0.7 * lsb], s)
+    np.testing.assert_allclose(out, [5.0 - lsb, -5.0, 0.0, lsb])
+
+
+def test_noise_is_seeded_and_has_the_calibrated_level():
+    p = RigParams()
+    cal = Calibration(noise_white_v=(0.01, 0.02, 0.0), noise_drift_v_per_sqrt_s=(0.0, 0.0, 0.0))
+    chains = [SensorChain(p, cal, np.random.default_rng(seed)) for seed in (5, 5, 6)]
+    samples = [np.array([c.sample(np.zeros(3), 0.001 * k) for k in range(4000)]) for c in chains]
+    np.testing.assert_array_equal(samples[0], samples[1])
+    assert not np.array_equal(samples[0], samples[2])
+    np.testing.assert_allclose(samples[0].std(axis=0), [0.01, 0.02, 0.0], atol=1e-3)
+
+
+def test_drift_is_a_random_walk_with_the_calibrated_rate():
+    p = RigParams()
+    cal = Calibration(noise_white_v=(0.0,) * 3, noise_drift_v_per_sqrt_s=(0.01,) * 3)
+    ends = []
+    for seed in range(300):
+        chain = SensorChain(p, cal, np.random.default_rng(seed))
+        for k in range(11):
+            v = chain.sample(np.zeros(3), 0.4 * k)
+        ends.append(v)
+    # after 4 s the spread is 0.01 * sqrt(4) = 0.02 V
+    assert np.std(np.array(ends)) == pytest.approx(0.02, rel=0.1)
