@@ -58,6 +58,10 @@ class RuntimeController:
         With an integer command the output can only take values a quantum apart; an integrator asked for the
         value in between limit-cycles between the two neighbours. A deadband of half a quantum (in output units)
         stops it, at the cost of a steady-state error of at most half a quantum.
+    hysteresis : float
+        Quantiser hysteresis, commands (0..0.5): the command in force is kept until the unrounded command is more
+        than ``0.5 + hysteresis`` away from it. Stops measurement noise toggling the command between two
+        neighbours at rest (each toggle moves the beam a whole quantum, 1.7 deg).
     measure : callable, optional
         ``measure(reading) -> y`` used by :meth:`step` (the loop protocol) to turn a rig reading into the
         controlled variable.
@@ -81,6 +85,7 @@ class RuntimeController:
         quantise: bool = True,
         aw_quantisation=False,
         deadband: tuple[int, float] | None = None,
+        hysteresis: float = 0.0,
         measure: Callable | None = None,
         name: str = "",
     ) -> None:
@@ -115,6 +120,7 @@ class RuntimeController:
             L = np.zeros(n)
         self.aw_gain = L
         self.quantise = bool(quantise)
+        self.hysteresis = check_real(hysteresis, "hysteresis", "RuntimeController", low=0.0, high=0.5)
         if isinstance(aw_quantisation, bool | np.bool_):
             self._q_gain = L.copy() if aw_quantisation else np.zeros(n)
         else:
@@ -183,7 +189,12 @@ class RuntimeController:
             raise DesignError(f"{self.name}: the controller output is not finite ({u_raw}); its state has diverged")
         u = self.u_max if u_raw > self.u_max else (self.u_min if u_raw < self.u_min else u_raw)
         if self.quantise:
-            u = float(round(u))
+            last = self.last_command
+            # hysteresis: keep the command in force unless u moved past the half-quantum boundary by h
+            if self.hysteresis and abs(u - last) < 0.5 + self.hysteresis and self.u_min <= last <= self.u_max:
+                u = float(last)
+            else:
+                u = float(round(u))
         self.saturated = u_raw > self.u_max or u_raw < self.u_min
         if self.antiwindup == "back_calculation":
             u_clip = self.u_max if u_raw > self.u_max else (self.u_min if u_raw < self.u_min else u_raw)

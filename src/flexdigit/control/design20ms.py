@@ -1,0 +1,271 @@
+"""Control that works at the servo board's 20 ms: a direct discrete design (thesis 5.2, and what 5.3 asked for).
+
+Chapter 5 designed in continuous time and digitised; at the 20 ms the serial link imposes, the forward-Euler
+(state-space) digitisation of the 39 Hz design is unstable (its -245 rad/s pole maps to 1 - 245 x 0.02 = -3.9) and
+the loop also has a transport delay and an integer command. Here the design is done *in* discrete time, on the
+model the computer actually sees:
+
+1. **Plant as sampled**: the servo (3.2.4: ``wn^2/(s^2 + 2 zeta wn s + wn^2)``, wn 20.53 rad/s, zeta 0.5629) times
+   the static beam rotation per command (the cable model's 1.735 deg, :mod:`flexdigit.models.plant`), held by a
+   zero-order hold at T (exact, ``sample_system(..., "zoh")``), plus **one sample of transport delay** (a state
+   ``u_prev``: the command computed at sample k reaches the servo by sample k+1; the board latches frames every
+   20 ms and the servo reads the pulse on its next 52 Hz PWM period, 0..19 ms). The digit's own mode is not in the
+   design model: with the cable taut it is far better damped than the release-test mode (see the twin's step), and
+   the loop is tested against it on the nonlinear twin rather than trusted to a model of it.
+2. **State feedback** by discrete LQR on ``[x_servo, u_prev]`` with cost ``y^2 + q_rate (dy)^2 + r_u u^2`` (the
+   rate term damps the response without slowing its rise).
+3. **Integral action without an integrator**: a Kalman predictor on ``[x_servo, u_prev, d]`` with a constant
+   input disturbance ``d`` (offset-free control). The command is ``u = -K (x^ - x_ss r) + u_ss r - d^``. A step of
+   the setpoint does not charge ``d^`` (the model predicts the response), so there is no integrator overshoot;
+   a gain error or a load is absorbed by ``d^`` at the observer's speed.
+4. **The integer command**: the observer is fed the command actually applied (saturated and rounded, through the
+   runtime's back-calculation gain ``L = B_observer``), so it never chases the quantum: no limit cycle, and the
+   steady-state error stays within half a quantum (0.87 deg of rotation). Saturation cannot wind anything up
+   (there is no integrator state to wind).
+
+Units: the controller takes the setpoint and the measured beam rotation in degrees and returns the command
+deviation from the equilibrium command 8 (:class:`~flexdigit.control.runtime.RuntimeController` adds 8, clips to
+0..254 and rounds).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+
+from flexdigit._validation import check_int, check_positive
+from flexdigit.control.discretise import METHODS, discretise
+from flexdigit.control.runtime import RuntimeController
+from flexdigit.errors import DesignError
+from flexdigit.params import RigParams
+
+__all__ = [
+    "Weights",
+    "Digital20msDesign",
+    "design_plant",
+    "design_20ms",
+    "thesis_controller",
+    "closed_loop",
+]
+
+
+@dataclass(frozen=True)
+class Weights:
+    """LQR and Kalman weights of :func:`design_20ms` (rotation in deg, command in commands).
+
+    q_rate : weight on the change of rotation per sample, (deg)^-2
+    r_u : weight on the command deviation, (command)^-2 (the rotation error has weight 1)
+    q_disturbance : variance of the input-disturbance random walk per sample, command^2
+    q_input : variance of the process noise at the servo input, command^2
+    r_measurement : variance of the rotation measurement, deg^2. The gauges' 2 mV noise alone is ~0.2 deg rms
+        through the gauge-to-rotation map, but the map is static: while the digit vibrates the gauges also see
+        dynamic bending, and the estimate leaves the true rotation by up to +-3 deg (seen on the twin). 10 deg^2
+        makes the observer trust the model through that, so the integer command does not chase the vibration.
+    """
+
+    q_rate: float = 100.0
+    r_u: float = 30.0
+    q_disturbance: float = 0.1
+    q_input: float = 1.0
+    r_measurement: float = 10.0
+
+    def __post_init__(self) -> None:
+        for name in ("q_rate", "r_u", "q_disturbance", "q_input", "r_measurement"):
+            check_positive(getattr(self, name), name, "Weights", error=DesignError)
+
+
+def design_plant(params: RigParams | None = None, deg_per_command: float | None = None) -> ct.StateSpace:
+    """Continuous design model: servo (3.2.4) x beam rotation per command, command -> deg.
+
+    ``deg_per_command`` defaults to the cable model's tip rotation per command (1.735 deg,
+    :func:`flexdigit.models.plant.build_plant` ``"consistent"``, ``output="tip_rotation_rad"``).
+    """
+    from flexdigit.models.plant import build_plant
+    from flexdigit.models.servo import servo_unit_tf
+
+    params = params or RigParams()
+    if deg_per_command is None:
+        deg_per_command = float(np.rad2deg(build_plant("consistent", params, output="tip_rotation_rad").dc_gain))
+    k = check_positive(deg_per_command, "deg_per_command", "design_plant", error=DesignError)
+    return ct.ss(servo_unit_tf(params) * k)
+
+
+@dataclass(frozen=True)
+class Digital20msDesign:
+    """A discrete design for one sample period (see the module docstring).
+
+    Attributes
+    ----------
+    controller : control.StateSpace
+        Discrete, inputs ``[r_deg, y_deg]``, output the command deviation; states ``[x_servo^, u_prev^, d^]``.
+    aw_gain : ndarray
+        Back-calculation gain: the observer's input matrix (the observer sees the applied command).
+    plant_d : control.StateSpace
+        The held plant with the delay state (command -> deg), what the design assumed.
+    lqr_gain, observer_gain : ndarray
+    closed_loop_poles : ndarray
+        Poles of the nominal linear loop (z-plane).
+    period_s : float
+    delay_samples : int
+    deg_per_command : float
+    weights : Weights
+    """
+
+    controller: ct.StateSpace
+    aw_gain: np.ndarray
+    plant_d: ct.StateSpace
+    lqr_gain: np.ndarray
+    observer_gain: np.ndarray
+    closed_loop_poles: np.ndarray
+    period_s: float
+    delay_samples: int
+    deg_per_command: float
+    weights: Weights
+
+    def runtime(
+        self, params: RigParams | None = None, measure=None, name: str = "digital20", hysteresis: float = 0.3
+    ) -> RuntimeController:
+        """The controller ready for the loop: saturation, integer command with hysteresis, observer-fed anti-windup.
+
+        The hysteresis (0.3 command) keeps the servo still at rest: the observer knows the command applied, so
+        holding it is not a disturbance to the estimate, only a bounded (< 0.8 quantum) steady-state error.
+        """
+        return RuntimeController(
+            self.controller,
+            params,
+            antiwindup="back_calculation",
+            aw_gain=self.aw_gain,
+            aw_quantisation=True,
+            hysteresis=hysteresis,
+            measure=measure,
+            name=name,
+        )
+
+
+def design_20ms(
+    params: RigParams | None = None,
+    *,
+    period_s: float | None = None,
+    delay_samples: int = 1,
+    deg_per_command: float | None = None,
+    weights: Weights | None = None,
+) -> Digital20msDesign:
+    """Design the discrete controller for the serial period (20 ms) with hold, delay and integer command.
+
+    Parameters
+    ----------
+    params : RigParams, optional
+    period_s : float, optional
+        Sample period; ``params.actuator.serial_period_s`` (0.020 s, 5.2) by default.
+    delay_samples : int
+        Whole samples of transport delay in the model (1: the serial frame + PWM latch).
+    deg_per_command : float, optional
+        Beam rotation per command (see :func:`design_plant`).
+    weights : Weights, optional
+
+    Returns
+    -------
+    Digital20msDesign
+
+    Examples
+    --------
+    >>> d = design_20ms()
+    >>> d.controller.ninputs, d.controller.nstates, d.period_s
+    (2, 4, 0.02)
+    >>> bool(max(abs(d.closed_loop_poles)) < 1)
+    True
+    """
+    params = params or RigParams()
+    T = check_positive(
+        params.actuator.serial_period_s if period_s is None else period_s, "period_s", "design_20ms", error=DesignError
+    )
+    nd = check_int(delay_samples, "delay_samples", "design_20ms", low=0, high=5, error=DesignError)
+    w = weights or Weights()
+    G = design_plant(params, deg_per_command)
+    dc = float(np.real(ct.dcgain(G)))
+    Gd = ct.sample_system(G, T, method="zoh")
+    A, B, C = np.asarray(Gd.A), np.asarray(Gd.B), np.asarray(Gd.C)
+    n = A.shape[0]
+    # delay chain: x_servo+ = A x + B u_prev_nd ; u_prev_1+ = u ; u_prev_i+ = u_prev_{i-1}
+    na = n + nd
+    Aa = np.zeros((na, na))
+    Aa[:n, :n] = A
+    Ba = np.zeros((na, 1))
+    if nd:
+        Aa[:n, na - 1 : na] = B
+        Ba[n, 0] = 1.0
+        for i in range(1, nd):
+            Aa[n + i, n + i - 1] = 1.0
+    else:
+        Ba[:n] = B
+    Ca = np.hstack([C, np.zeros((1, nd))])
+    # LQR on the delayed plant: rotation, its change per sample, and the command
+    Cd = Ca @ (Aa - np.eye(na))
+    Q = Ca.T @ Ca + w.q_rate * (Cd.T @ Cd)
+    K, _, _ = ct.dlqr(Aa, Ba, (Q + Q.T) / 2, w.r_u)
+    # Kalman predictor on [x, delay, d]: d enters where the command reaches the servo
+    no = na + 1
+    Ao = np.zeros((no, no))
+    Ao[:na, :na] = Aa
+    Ao[:n, na : na + 1] = B
+    Ao[na, na] = 1.0
+    Bo = np.vstack([Ba, [[0.0]]])
+    Co = np.hstack([Ca, [[0.0]]])
+    Gn = np.zeros((no, 2))
+    Gn[:n, 0:1] = B
+    Gn[na, 1] = 1.0
+    L, _, _ = ct.dlqe(Ao, Gn, Co, np.diag([w.q_input, w.q_disturbance]), [[w.r_measurement]])
+    L = np.asarray(L).reshape(no, 1)
+    # steady state per degree of setpoint: u_ss = 1/dc - d, x_servo_ss = (I - A)^-1 B / dc, delays = u_ss
+    u_ss = 1.0 / dc
+    x_ss = np.linalg.solve(np.eye(n) - A, B * u_ss)
+    Kx, Kdel = K[:, :n], K[:, n:]
+    # u = -Kx x^ - Kdel (del^ - (u_ss r - d^) 1) + u_ss r - d^
+    Fx = np.hstack([-Kx, -Kdel, -(Kdel.sum(axis=1, keepdims=True)) - 1.0])
+    Fr = float((Kx @ x_ss).item()) + float(Kdel.sum()) * u_ss + u_ss
+    Ac = Ao - L @ Co + Bo @ Fx
+    Bc = np.hstack([Bo * Fr, L])
+    Dc = np.array([[Fr, 0.0]])
+    controller = ct.ss(Ac, Bc, Fx, Dc, T)
+    plant_d = ct.ss(Aa, Ba, Ca, np.zeros((1, 1)), T)
+    loop = closed_loop(plant_d, controller)
+    poles = loop.poles()
+    if np.max(np.abs(poles)) >= 1:
+        raise DesignError("design_20ms: the nominal loop is unstable; check the weights")
+    return Digital20msDesign(controller, Bo.ravel(), plant_d, K, L, poles, T, nd, dc, w)
+
+
+def closed_loop(plant_d, controller, gain: float = 1.0) -> ct.StateSpace:
+    """Linear loop ``r -> y`` of a discrete plant (command -> y) and a two-input controller ``u = K [r; y]``.
+
+    ``gain`` multiplies the plant (the +-30 % robustness check).
+    """
+    P, Kc = ct.ss(plant_d), ct.ss(controller)
+    if P.dt != Kc.dt:
+        raise DesignError(f"closed_loop: plant dt {P.dt} differs from controller dt {Kc.dt}")
+    A, B, C = P.A, P.B * gain, P.C
+    Ak, Bk, Ck, Dk = Kc.A, Kc.B, Kc.C, Kc.D
+    if np.any(P.D):
+        raise DesignError("closed_loop: the plant must be strictly proper (it has a hold and a delay)")
+    Acl = np.block([[A + B @ Dk[:, 1:2] @ C, B @ Ck], [Bk[:, 1:2] @ C, Ak]])
+    Bcl = np.vstack([B @ Dk[:, 0:1], Bk[:, 0:1]])
+    Ccl = np.hstack([C, np.zeros((1, Ak.shape[0]))])
+    return ct.ss(Acl, Bcl, Ccl, np.zeros((1, 1)), P.dt)
+
+
+def thesis_controller(
+    method: str = "forward_euler", period_s: float = 0.020, params: RigParams | None = None, measure=None
+) -> RuntimeController:
+    """The printed 39 Hz H-infinity controller (4.7, commands per metre of gauge-1 deflection) digitised the
+    thesis's way: ``"forward_euler"`` is the state-space method 5.2 implemented; ``"tustin"`` is 5.1.1.
+
+    The runtime runs it on the error ``r - y`` in metres; no anti-windup (the thesis had none).
+    """
+    from flexdigit.control.reproduce import printed_controller
+
+    if method not in METHODS:
+        raise DesignError(f"The 'method' parameter of thesis_controller must be one of {METHODS}. Got {method!r}.")
+    Kd = discretise(ct.ss(printed_controller("39hz")), period_s, method)
+    return RuntimeController(Kd, params, measure=measure, name=f"thesis39-{method}")
