@@ -43,8 +43,8 @@ class RotationEstimator:
 
     Examples
     --------
-    >>> est = RotationEstimator().fit([[0, 0, 0], [1, 2, 1], [2, 4, 2.5]], [0, 10, 21])
-    >>> round(est.predict_one(np.array([1, 2, 1])), 6)
+    >>> est = RotationEstimator().fit([[0, 0, 0], [1, 2, 1], [2, 4, 2.5], [3, 5, 3]], [0, 10, 21, 28])
+    >>> round(est.predict_one(np.array([1, 2, 1])), 3)
     10.0
     """
 

@@ -64,11 +64,10 @@ def encode_frame(channel: int, position: int, framing: Framing = MINI_SSC) -> by
     --------
     >>> encode_frame(0, 8).hex()
     'ff0008'
-    >>> encode_frame(0, 255)
+    >>> encode_frame(0, 255)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    flexdigit.errors.ParameterError: The 'position' parameter of encode_frame must be an integer in [0, 254]. \
-Got 255 instead.
+    flexdigit.errors.ParameterError: The 'position' parameter of encode_frame must be ...Got 255 instead.
     """
     ch = check_int(channel, "channel", "encode_frame", low=0, high=framing.max_channel)
     pos = check_int(position, "position", "encode_frame", low=0, high=framing.max_position)
