@@ -63,6 +63,12 @@ class BeamInversion:
         Mass grid points.
     calibrate : bool
         Fit a per-gauge gain and offset of the model to the training readings.
+    tared : bool
+        The readings have had their no-load level subtracted (:func:`flexdigit.tactile.study.tare`): model
+        ``g(a, m, c) - g(., 0, c)`` instead of ``g(a, m, c)``.
+    load_set : bool
+        Restrict the mass to the loads seen in training (a protocol hangs a few known weights: the same prior
+        the learned estimators pick up); the position is then a 1-D least-squares fit per candidate load.
     """
 
     def __init__(
@@ -73,6 +79,8 @@ class BeamInversion:
         position_step_m: float = 1e-3,
         mass_steps: int = 161,
         calibrate: bool = True,
+        load_set: bool = False,
+        tared: bool = False,
     ) -> None:
         self.model = model
         self.digit_length_m = digit_length_m
@@ -80,18 +88,21 @@ class BeamInversion:
         self.position_step_m = position_step_m
         self.mass_steps = mass_steps
         self.calibrate = calibrate
+        self.load_set = load_set
+        self.tared = tared
 
     def __repr__(self) -> str:
         return (
             f"BeamInversion(model={type(self.model).__name__}, digit_length_m={self.digit_length_m}, "
-            f"max_mass_kg={self.max_mass_kg}, position_step_m={self.position_step_m}, calibrate={self.calibrate})"
+            f"max_mass_kg={self.max_mass_kg}, position_step_m={self.position_step_m}, calibrate={self.calibrate}, "
+            f"load_set={self.load_set}, tared={self.tared})"
         )
 
     def _grid(self, command: int) -> np.ndarray:
         if command not in self.grids_:
             a, m = self.a_grid_, self.m_grid_
             aa, mm = np.meshgrid(a, m, indexing="ij")
-            g = self.model.gauges_v(aa.ravel(), mm.ravel(), np.full(aa.size, command))
+            g = self._model(aa.ravel(), mm.ravel(), np.full(aa.size, command))
             self.grids_[command] = g.reshape(a.size, m.size, 3)
         return self.grids_[command]
 
@@ -106,9 +117,14 @@ class BeamInversion:
         self.gain_ = np.ones(3)
         self.offset_ = np.zeros(3)
         v, command = _split_x(X)
+        if self.load_set:
+            if Y is None:
+                raise ParameterError("BeamInversion(load_set=True).fit needs Y (position, mass) to learn the loads.")
+            masses = np.unique(np.asarray(Y, dtype=float)[:, 1])
+            self.m_grid_ = masses[masses > 0]
         if self.calibrate and Y is not None:
             y = check_array(Y, "Y", "BeamInversion.fit", ndim=2, shape=(v.shape[0], 2))
-            g = self.model.gauges_v(length - y[:, 0], y[:, 1], command)
+            g = self._model(length - y[:, 0], y[:, 1], command)
             for i in range(3):  # v_i ~ gain_i g_i + offset_i, least squares (6 numbers)
                 design = np.column_stack([g[:, i], np.ones(len(g))])
                 if np.ptp(g[:, i]) > 0:
@@ -140,8 +156,19 @@ class BeamInversion:
                 cost[r] = c
         return (out, cost) if return_cost else out
 
+    def _model(self, a, m, command) -> np.ndarray:
+        g = self.model.gauges_v(a, m, command)
+        if self.tared:
+            g = g - self.model.gauges_v(np.zeros(np.size(a)), np.zeros(np.size(a)), command)
+        return g
+
+    def no_load_v(self, command) -> np.ndarray:
+        """The calibrated model's reading with nothing hung, for each command (n, 3)."""
+        command = np.atleast_1d(command)
+        return self._model(np.zeros(command.size), np.zeros(command.size), command) * self.gain_ + self.offset_
+
     def _cost(self, v, a, m, command):
-        g = self.model.gauges_v(a, m, np.full(a.size, command)) * self.gain_ + self.offset_
+        g = self._model(a, m, np.full(a.size, command)) * self.gain_ + self.offset_
         return np.sum(((v - g) / self.noise_v_) ** 2, axis=1), g
 
     def _gauss_newton(self, v, a, m, command, iterations: int = 4):
@@ -161,6 +188,8 @@ class BeamInversion:
                 da = np.where(ok, (h22 * b1 - h12 * b2) / det, 0.0)
                 dm = np.where(ok, (h11 * b2 - h12 * b1) / det, 0.0)
             # never leave the digit or go below zero mass; keep a step only if it lowers the cost
+            if self.load_set:  # the mass stays the candidate load: a 1-D Gauss-Newton step in position
+                da, dm = np.where(h11 > 0, b1 / np.where(h11 > 0, h11, 1.0), 0.0), 0.0 * dm
             a_new = np.clip(a + np.clip(da, -0.01, 0.01), 0.0, self.digit_length_m)
             m_new = np.clip(m + np.clip(dm, -0.01, 0.01), 0.0, None)
             new_cost, new_g = self._cost(v, a_new, m_new, command)

@@ -60,16 +60,20 @@ class Bound:
     zone: np.ndarray
 
 
-def cramer_rao(model, position_from_base_m, mass_kg, command=RELAXED, *, step_m: float = 2e-4) -> Bound:
+def cramer_rao(
+    model, position_from_base_m, mass_kg, command=RELAXED, *, step_m: float = 2e-4, noise_v=None
+) -> Bound:
     """Cramer-Rao lower bounds of the position (m, one reading) at each ``(position, mass, command)``.
 
     Infinite where the position cannot be estimated at all (no gauge bends) or, for ``crlb_m``, where position
-    and mass are confounded (a rank-1 Fisher information).
+    and mass are confounded (a rank-1 Fisher information). ``noise_v`` (3,) or (n, 3) overrides the model's
+    noise (e.g. white noise plus the drift accumulated since the last tare).
     """
     a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
     m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
     ga, gm = jacobian(model, a, m, command, step_m=step_m)
-    w = 1.0 / np.asarray(model.noise_v, dtype=float) ** 2
+    sigma = np.asarray(model.noise_v if noise_v is None else noise_v, dtype=float)
+    w = 1.0 / sigma**2
     faa = np.sum(w * ga * ga, axis=1)
     fmm = np.sum(w * gm * gm, axis=1)
     fam = np.sum(w * ga * gm, axis=1)
@@ -82,7 +86,7 @@ def cramer_rao(model, position_from_base_m, mass_kg, command=RELAXED, *, step_m:
     zone = np.array([_zone(k, u) for k, u in zip(known, unknown, strict=True)], dtype=object)
     # a load that moves no gauge by even a tenth of its noise counts as invisible
     dg = np.abs(model.gauges_v(a, m, np.broadcast_to(command, a.shape)) - model.gauges_v(a, 0.0 * m, command))
-    invisible = np.all(dg < 0.1 * np.asarray(model.noise_v), axis=1)
+    invisible = np.all(dg < 0.1 * sigma, axis=1)
     zone[invisible] = ZONES[0]
     known = np.where(invisible, np.inf, known)
     unknown = np.where(zone == ZONES[2], unknown, np.inf)
@@ -103,25 +107,59 @@ def zone_of(model, position_from_base_m: float, mass_kg: float, command=RELAXED)
 
 
 class TwinGaugeModel:
-    """The digital twin's static gauge model and noise, as a gauge model for the bounds and the beam inversion.
+    """The digital twin's static gauge model and white noise, as a gauge model for the bounds and the inversion.
+
+    Uses the twin's batched static solver (:func:`flexdigit.twin.twin.static_gauges_v`), horizontal digit, no ADC
+    quantisation. A reading with command :data:`~flexdigit.tactile.protocols.RELAXED` (actuation disabled,
+    chapter 6) is modelled with the cable detached, as the twin models the non-actuated digit.
 
     Parameters
     ----------
-    twin : flexdigit.twin.Twin
-        A twin; its batched ``static_gauges_v`` and its noise level are used.
+    params : RigParams, optional
+    calibration : Calibration, optional
+        The twin's calibration (default: the twin's default calibration).
+    orientation : str
+        How the digit lies (the protocols' "horizontal").
+
+    Attributes
+    ----------
+    noise_v : ndarray, shape (3,)
+        White noise per reading (V): the calibration's ``noise_white_v``.
+    drift_v_per_sqrt_s : ndarray, shape (3,)
+        The twin's random-walk drift rate: ``t`` seconds after a tare it adds variance ``rate^2 t``.
     """
 
-    def __init__(self, twin) -> None:
-        self.twin = twin
-        self.noise_v = np.asarray(twin.gauge_noise_v(), dtype=float)
+    def __init__(self, params=None, calibration=None, orientation: str = "horizontal") -> None:
+        from flexdigit.params import RigParams
+        from flexdigit.twin.calibration import default_calibration
+
+        self.params = params or RigParams()
+        self.calibration = calibration or default_calibration()
+        self.orientation = orientation
+        self.noise_v = np.asarray(self.calibration.noise_white_v, dtype=float)
+        self.drift_v_per_sqrt_s = np.asarray(self.calibration.noise_drift_v_per_sqrt_s, dtype=float)
+
+    def __repr__(self) -> str:
+        return f"TwinGaugeModel(orientation={self.orientation!r}, noise_v={self.noise_v.tolist()})"
 
     def gauges_v(self, position_from_base_m, mass_kg, command) -> np.ndarray:
+        from flexdigit.twin.twin import static_gauges_v
+
         a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
         m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
         c = np.broadcast_to(np.asarray(command), a.shape)
+        a = np.clip(a, 0.0, self.params.geometry.digit_length_m)  # finite differences may step past the tip
+        m = np.maximum(m, 0.0)
         out = np.empty((a.size, 3))
         for value in np.unique(c):
             rows = c == value
-            cmd = None if value == RELAXED else int(value)
-            out[rows] = self.twin.static_gauges_v(a[rows], m[rows], command=cmd)
+            out[rows] = static_gauges_v(
+                m[rows],
+                a[rows],
+                None if value == RELAXED else np.full(int(rows.sum()), int(value)),
+                params=self.params,
+                calibration=self.calibration,
+                orientation=self.orientation,
+                adc=False,
+            )
         return out

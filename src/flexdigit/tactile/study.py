@@ -22,24 +22,52 @@ from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.metrics import accuracy, rmse
 from flexdigit.tactile.physics import ZONES, cramer_rao
 from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
+from flexdigit.tactile.protocols import RELAXED
 
-ESTIMATORS = ("thesis MLP", "beam inversion", "Gaussian process")
+ESTIMATORS = ("thesis MLP", "beam inversion", "beam inversion, known load set", "Gaussian process")
 #: chi-square(2 dof) 99.9 % quantile: a load is declared when it explains the reading this much better than none
 CONTACT_CHI2 = 13.8155
 
 
-def reading_zones(model, dataset: Dataset) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Zone, position CRLB (mass unknown) and CRLB (mass known) of every reading (no-load rows: zone ``""``)."""
+def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
+    """Subtract from every test's readings the mean of its no-load readings (taken at its start, 6.5, 7.2).
+
+    Returns the tared dataset and, per reading, the seconds since its tare (since the first reading for tests
+    without no-load readings, which are left as they are).
+    """
+    gauges = dataset.gauges_v.copy()
+    since = dataset["time_s"] - dataset["time_s"].min()
+    for test in np.unique(dataset["test"]):
+        rows = dataset["test"] == test
+        zero = rows & (dataset["load_kg"] == 0)
+        if zero.any():
+            gauges[rows] -= gauges[zero].mean(axis=0)
+            since[rows] = np.abs(dataset["time_s"][rows] - dataset["time_s"][zero].mean())
+    columns = dict(dataset.columns)
+    for i, name in enumerate(("gauge1_v", "gauge2_v", "gauge3_v")):
+        columns[name] = gauges[:, i]
+    return Dataset(columns, dict(dataset.meta)), since
+
+
+def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Zone, position CRLB (mass unknown) and CRLB (mass known) of every reading (no-load rows: zone ``""``).
+
+    With ``since_tare_s`` and a model with ``drift_v_per_sqrt_s``, each reading's noise is the white noise plus
+    the random-walk drift accumulated since its tare: ``sigma^2 = sigma_w^2 + rate^2 t``.
+    """
     n = len(dataset)
     zone = np.full(n, "", dtype=object)
     crlb = np.full(n, np.nan)
     crlb_known = np.full(n, np.nan)
     loaded = np.flatnonzero(dataset["load_kg"] > 0)
-    keys = np.column_stack([dataset["position_from_base_m"], dataset["load_kg"], dataset["command"]])[loaded]
-    settings, inverse = np.unique(keys, axis=0, return_inverse=True)
-    for k, (a, m, c) in enumerate(settings):
-        b = cramer_rao(model, [a], m, int(c))
+    rate = np.asarray(getattr(model, "drift_v_per_sqrt_s", np.zeros(3)), dtype=float)
+    since = np.zeros(n) if since_tare_s is None else np.asarray(since_tare_s, dtype=float)
+    keys = np.column_stack([dataset["position_from_base_m"], dataset["load_kg"], dataset["command"], dataset["test"]])
+    settings, inverse = np.unique(keys[loaded], axis=0, return_inverse=True)
+    for k, (a, m, c, _) in enumerate(settings):
         rows = loaded[inverse.ravel() == k]
+        sigma = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + rate**2 * float(np.mean(since[rows])))
+        b = cramer_rao(model, [a], m, int(c), noise_v=sigma)
         zone[rows], crlb[rows], crlb_known[rows] = b.zone[0], b.crlb_m[0], b.crlb_known_mass_m[0]
     return zone, crlb, crlb_known
 
@@ -99,6 +127,8 @@ def localisation_study(
     """
     length = float(digit_length_m or dataset.meta.get("digit_length_m", 0.270))
     actuated = dataset.protocol.actuated
+    raw = dataset
+    dataset, since = tare(dataset)
     x = features(dataset, with_command=actuated)
     n = len(dataset)
     split = thesis_split(n, seed)
@@ -110,7 +140,7 @@ def localisation_study(
     va = split.val[loaded[split.val]]
     trva = np.concatenate([tr, va])
     te = split.test[loaded[split.test]]
-    zone, crlb, crlb_known = reading_zones(model, dataset)
+    zone, crlb, crlb_known = reading_zones(model, raw, since)
 
     rng = np.random.default_rng([seed, 7])
     mlp_pos = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
@@ -121,7 +151,10 @@ def localisation_study(
     contact = loaded.astype(float)
     mlp_contact.fit(x[split.train], contact[split.train], x[split.val], contact[split.val])
 
-    inversion = BeamInversion(model, digit_length_m=length, max_mass_kg=2.0 * float(mass.max())).fit(x[trva], y[trva])
+    inversion = BeamInversion(model, digit_length_m=length, max_mass_kg=2.0 * float(mass.max()), tared=True)
+    inversion.fit(x[trva], y[trva])
+    known_set = BeamInversion(model, digit_length_m=length, load_set=True, tared=True).fit(x[trva], y[trva])
+    set_pred = known_set.predict(x[te])
     gp = GPLocaliser(random_state=seed).fit(x[trva], y[trva])
 
     inv_all, inv_cost = inversion.predict(x[split.test], return_cost=True)
@@ -129,19 +162,20 @@ def localisation_study(
     pos_pred = {
         "thesis MLP": mlp_pos.predict(x[te]),
         "beam inversion": inv_all[loaded[split.test], 0],
+        "beam inversion, known load set": set_pred[:, 0],
         "Gaussian process": gp_all[:, 0],
     }
     mass_pred = {
         "thesis MLP": mlp_mass.predict(x[te]),
         "beam inversion": inv_all[loaded[split.test], 1],
+        "beam inversion, known load set": set_pred[:, 1],
         "Gaussian process": gp_all[:, 1],
     }
     ident = zone[te] == ZONES[2]
     pos_true, mass_true = pos[te], mass[te]
     # contact: the thesis-style network thresholded at 0.5; the inversion's likelihood-ratio test against no load
-    no_load_cost = np.sum(
-        ((x[split.test, :3] - _no_load_gauges(inversion, x[split.test])) / inversion.noise_v_) ** 2, axis=1
-    )
+    test_commands = x[split.test, 3].astype(int) if actuated else np.full(split.test.size, RELAXED)
+    no_load_cost = np.sum(((x[split.test, :3] - inversion.no_load_v(test_commands)) / inversion.noise_v_) ** 2, axis=1)
     contact_pred = {
         "thesis MLP": (mlp_contact.predict(x[split.test]) >= 0.5).astype(float),
         "beam inversion": (no_load_cost - inv_cost > CONTACT_CHI2).astype(float),
@@ -170,14 +204,8 @@ def localisation_study(
         contact_accuracy={k: accuracy(v, contact_true) for k, v in contact_pred.items()},
         contact_accuracy_visible={k: accuracy(v[visible], contact_true[visible]) for k, v in contact_pred.items()},
         gp_std_m=gp_std[:, 0],
-        extra={"split": split, "identifiable_fraction": float(np.mean(ident))},
+        extra={"split": split, "identifiable_fraction": float(np.mean(ident)), "zone_all": zone},
     )
-
-
-def _no_load_gauges(inversion: BeamInversion, x: np.ndarray) -> np.ndarray:
-    command = x[:, 3].astype(int) if x.shape[1] == 4 else np.full(x.shape[0], -1)
-    g = inversion.model.gauges_v(np.zeros(x.shape[0]), np.zeros(x.shape[0]), command)
-    return g * inversion.gain_ + inversion.offset_
 
 
 def identifiability_map(model, masses_kg, commands, digit_length_m: float, points: int = 271) -> dict:

@@ -1,0 +1,167 @@
+"""The thesis's tactile experiments end to end on the twin: collect, run the pipeline, compare estimators.
+
+:func:`twin_rig` opens the ``sim`` backend set up as the protocol says (digit horizontal; cable detached when the
+protocol has no actuation, as the twin models the non-actuated digit of chapter 6). :func:`run_experiment` is
+what report chapters 6 and 7 and the benchmark call.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from flexdigit.params import RigParams
+from flexdigit.reference import thesis_value
+from flexdigit.tactile.dataset import Dataset
+from flexdigit.tactile.metrics import rmse
+from flexdigit.tactile.physics import TwinGaugeModel
+from flexdigit.tactile.pipeline import (
+    COARSE_HIDDEN,
+    LEARNING_GRADIENTS,
+    PipelineResult,
+    compare_strategies,
+    features,
+    run_pipeline,
+    targets,
+)
+from flexdigit.tactile.protocols import Protocol, load_protocol
+from flexdigit.tactile.runner import collect
+from flexdigit.tactile.study import LocalisationResult, identifiability_map, localisation_study
+
+
+def sim_options(protocol: Protocol, url: str = "sim") -> dict:
+    """Twin options a protocol implies (orientation; cable only when actuated), unless the URL sets them."""
+    from flexdigit.rig.base import parse_rig_url
+
+    given = parse_rig_url(url).options
+    out = {}
+    if "orientation" not in given:
+        out["orientation"] = protocol.orientation
+    if "cable" not in given:
+        out["cable"] = protocol.actuated
+    return out
+
+
+def twin_rig(protocol: Protocol, *, seed: int = 0, params: RigParams | None = None, calibration=None):
+    """A ``sim`` rig (virtual time) set up for ``protocol``."""
+    from flexdigit.rig.base import open_rig
+
+    options = sim_options(protocol)
+    if calibration is not None:
+        options["calibration"] = calibration
+    return open_rig("sim", params, seed=seed, **options)
+
+
+def collect_on_twin(
+    protocol: Protocol, out: str | Path, *, seed: int = 0, params: RigParams | None = None, calibration=None
+) -> Dataset:
+    """Collect ``protocol`` on a fresh twin into ``out`` (replacing an older file)."""
+    out = Path(out)
+    out.unlink(missing_ok=True)
+    rig = twin_rig(protocol, seed=seed, params=params, calibration=calibration)
+    try:
+        return collect(protocol, rig, out, params=params, rig_url="sim")
+    finally:
+        rig.close()
+
+
+#: Per experiment: (protocol collected, size whose error curves figure 6.13 / 7.4 show)
+EXPERIMENTS = {
+    "non_actuated": ("thesis-6.1", 15),
+    "actuated": ("thesis-7.1-no-load", 20),
+}
+
+
+@dataclass
+class ExperimentResult:
+    """Everything chapters 6 and 7 show for one experiment."""
+
+    key: str
+    dataset: Dataset
+    pipeline_rows: np.ndarray
+    sweep: PipelineResult
+    at_thesis_optimum: PipelineResult
+    strategies: list
+    localisation: LocalisationResult
+    thesis_mlp_position_m: dict
+    identifiability: dict
+    extra: dict = field(default_factory=dict)
+
+
+def run_experiment(
+    key: str,
+    data_dir: str | Path,
+    *,
+    seed: int = 0,
+    fast: bool = False,
+    params: RigParams | None = None,
+    calibration=None,
+) -> ExperimentResult:
+    """Collect the experiment on the twin and run everything chapters 6 (``non_actuated``) or 7 (``actuated``) show.
+
+    ``fast`` shrinks the sweeps (3 coarse sizes, +-1 fine, 3 gradients, 10 epochs) for tests; the report's
+    full run uses the thesis's sweeps (5-60 step 5, +-5 step 1, 1e-1..1e-9, 50 epochs of 50 iterations).
+    """
+    params = params or RigParams()
+    name, curve_hidden = EXPERIMENTS[key]
+    protocol = load_protocol(name)
+    data_dir = Path(data_dir)
+    data_dir.mkdir(parents=True, exist_ok=True)
+    dataset = collect_on_twin(protocol, data_dir / f"{name}.parquet", seed=seed, params=params, calibration=calibration)
+    # The position network sees the loaded readings: the no-load readings "assist in the determination of the
+    # load/no load and load magnitude prediction networks" (6.5), and table 7.1's 1500 has none. The variant with
+    # the no-load readings as position 0 (table 6.1's first row) is run too, at the thesis's optimum.
+    rows = np.flatnonzero(dataset["load_kg"] > 0)
+    sub = dataset.subset(rows)
+    _, y = targets(sub, "position_index")
+    x = features(sub)  # the thesis's networks have 3 inputs: the gauge voltages
+    epochs = 10 if fast else int(thesis_value("tactile.non_actuated.epoch_iterations"))
+    sweep_kw = {
+        "coarse": (5, 20, 40) if fast else COARSE_HIDDEN,
+        "fine_halfwidth": 1 if fast else 5,
+        "gradients": (1e-1, 1e-4, 1e-7) if fast else LEARNING_GRADIENTS,
+        "epochs": epochs,
+        "curve_hidden": curve_hidden,
+    }
+    sweep = run_pipeline(x, y, seed=seed, **sweep_kw)
+    best_hidden = int(thesis_value(f"tactile.{key}.best_hidden"))
+    best_tol = float(thesis_value(f"tactile.{key}.best_learning_gradient"))
+    at_optimum = run_pipeline(
+        x, y, seed=seed, fixed_hidden=best_hidden, fixed_tol=best_tol, epochs=epochs, curve_hidden=curve_hidden
+    )
+    _, y_all = targets(dataset, "position_index")
+    with_no_load = run_pipeline(
+        features(dataset), y_all, seed=seed, fixed_hidden=best_hidden, fixed_tol=best_tol, epochs=epochs,
+        curve_hidden=curve_hidden,
+    )
+    strategies = compare_strategies(dataset, hidden=best_hidden, tol=best_tol, seed=seed, epochs=epochs)
+    model = TwinGaugeModel(params, calibration)
+    loc = localisation_study(dataset, model, seed=seed, hidden=best_hidden, tol=best_tol, epochs=epochs)
+    thesis_mlp = _thesis_mlp_in_metres(dataset, rows, at_optimum, protocol, loc)
+    commands = list(protocol.actuation_commands) or [-1]
+    ident = identifiability_map(model, list(protocol.loads_kg), commands, params.geometry.digit_length_m, 136)
+    return ExperimentResult(
+        key, dataset, rows, sweep, at_optimum, strategies, loc, thesis_mlp, ident, {"with_no_load": with_no_load}
+    )
+
+
+def _thesis_mlp_in_metres(dataset, rows, result: PipelineResult, protocol: Protocol, loc: LocalisationResult) -> dict:
+    """The thesis network (position-number target) on its test rows, mapped to metres from the tip.
+
+    A predicted position number is turned into a distance by interpolating the protocol's table (number k is the
+    k-th position from the tip; beyond the last, the last). Scored on loaded, identifiable test readings.
+    """
+    test_rows = rows[result.split.test]
+    table = np.asarray(protocol.positions_from_tip_m)
+    pred_m = np.interp(result.y_pred, np.arange(1, table.size + 1), table)
+    loaded = dataset["load_kg"][test_rows] > 0
+    true_m = dataset["position_from_tip_m"][test_rows]
+    ident = loaded & (loc.extra["zone_all"][test_rows] == "identifiable")
+    return {
+        "rmse_m": rmse(pred_m[loaded], true_m[loaded]),
+        "rmse_identifiable_m": rmse(pred_m[ident], true_m[ident]) if ident.any() else float("nan"),
+        "test_rows": test_rows[loaded],
+        "pred_m": pred_m[loaded],
+    }
