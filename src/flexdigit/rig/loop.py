@@ -336,6 +336,8 @@ def run_loop(
     safe = _safe_state(rig, equilibrium, close_rig)
     if status != "completed":
         when = f" at t = {ts[-1]:.3f} s" if ts else " before the first sample"
+        if "at t =" in message:
+            when = ""
         relaxed = f"digit relaxed to command {equilibrium}" if safe else "could NOT send the safe command (port lost)"
         message = f"{message}{when}; {relaxed}"
     if log is not None:
