@@ -69,7 +69,6 @@ def test_deflections_match_table_3_6_where_the_thesis_model_agrees():
                 assert y_mm[g] == pytest.approx(measured[g, c], abs=DEFLECTION_ABS_MM), (g + 1, command)
 
 
-@pytest.mark.slow
 def test_recalibrating_reproduces_the_packaged_default():
     result = calibrate(CalibrationTargets.from_thesis())
     default = default_calibration()

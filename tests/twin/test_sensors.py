@@ -68,3 +68,11 @@ def test_drift_is_a_random_walk_with_the_calibrated_rate():
         ends.append(v)
     # after 4 s the spread is 0.01 * sqrt(4) = 0.02 V
     assert np.std(np.array(ends)) == pytest.approx(0.02, rel=0.1)
+
+
+def test_inlined_quantiser_agrees_with_models_bridge():
+    from flexdigit.models.bridge import adc_quantise
+
+    chain = SensorChain(RigParams(), Calibration(), np.random.default_rng(0))
+    v = np.random.default_rng(1).uniform(-6, 6, 10_000)
+    np.testing.assert_array_equal(chain._quantise(v), adc_quantise(v, RigParams().sensors))

@@ -165,6 +165,8 @@ class Chain:
         self._mass_beyond_gauge = (ms[None, :] > self.gauge_s_m[:, None]) @ self.mass_kg
         self._gauge_interp = self._interpolation(self.gauge_s_m)
         self._gauge_link = np.clip(np.searchsorted(s, self.gauge_s_m, side="right") - 1, -1, n - 1)
+        # curvature at the gauges = W (phi / h) = W diag(1/h) D psi: one product per read
+        self._psi_to_gauge_curvature = self._gauge_interp @ (d / self.cell_length_m[:, None])
 
     # ----------------------------------------------------------------------------------------------- geometry
     @property
@@ -212,8 +214,7 @@ class Chain:
 
     def curvature_at_gauges(self, psi: np.ndarray) -> np.ndarray:
         """Strip curvature (1/m) at the gauges for angles ``psi`` (.., n)."""
-        phi = np.diff(np.asarray(psi, dtype=float), prepend=0.0, axis=-1)
-        return (phi / self.cell_length_m) @ self._gauge_interp.T
+        return np.asarray(psi, dtype=float) @ self._psi_to_gauge_curvature.T
 
     # ------------------------------------------------------------------------------------------------ loads
     def load_forces(self, s_m, force_ab_n) -> np.ndarray:
@@ -231,7 +232,8 @@ class Chain:
 
     def axial_force(self, psi, g_forces_beyond_ab, tension):
         """Axial force (N, tension +) in the strip at the gauges: ``F_beyond . u - T`` (quasi-static)."""
-        psi_g = np.take(np.concatenate([np.zeros(psi.shape[:-1] + (1,)), psi], axis=-1), self._gauge_link + 1, axis=-1)
+        link = self._gauge_link
+        psi_g = np.where(link >= 0, np.take(psi, np.maximum(link, 0), axis=-1), 0.0)
         fa, fb = g_forces_beyond_ab[..., 0], g_forces_beyond_ab[..., 1]
         return fa * np.cos(psi_g) + fb * np.sin(psi_g) - np.asarray(tension)[..., None]
 

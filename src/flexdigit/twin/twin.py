@@ -168,6 +168,8 @@ class Twin:
             self.servo.update_command(self._t_grid)
             t_next = (math.floor(self._t_grid / h + 1e-9) + 1) * h  # back on the grid after deflect()
             step = t_next - self._t_grid
+            if abs(step - h) < 1e-9:  # keep the step bit-identical so the servo's transition matrix stays cached
+                step = h
             a0 = self.servo.angle
             self.servo.step(step)
             self.dynamics.step(step, self._shortening(a0), self._shortening(self.servo.angle))
@@ -176,28 +178,39 @@ class Twin:
 
     def state(self, time_s: float | None = None):
         """Interpolated ``(psi, servo_angle)`` at ``time_s`` (default now), between the last two grid points."""
-        t = self.time_s if time_s is None else time_s
+        return self._interpolate(self.time_s if time_s is None else time_s, True)
+
+    def _interpolate(self, t: float, want_psi: bool):
         t0, psi0, om0, th0, w0 = self._prev
         t1 = self._t_grid
         psi1, om1, th1, w1 = self.dynamics.psi, self.dynamics.omega, self.servo.angle, self.servo.rate
         h = t1 - t0
         if h <= 0:
-            return psi1.copy(), th1
+            return (psi1.copy() if want_psi else None), th1
         x = min(max((t - t0) / h, 0.0), 1.0)
-        h00, h10, h01, h11 = 2 * x**3 - 3 * x**2 + 1, x**3 - 2 * x**2 + x, -2 * x**3 + 3 * x**2, x**3 - x**2
-        psi = h00 * psi0 + h10 * h * om0 + h01 * psi1 + h11 * h * om1
+        x2, x3 = x * x, x * x * x
+        h00, h10, h01, h11 = 2 * x3 - 3 * x2 + 1, x3 - 2 * x2 + x, -2 * x3 + 3 * x2, x3 - x2
         theta = h00 * th0 + h10 * h * w0 + h01 * th1 + h11 * h * w1
+        if not want_psi:
+            return None, theta
+        psi = h00 * psi0 + (h10 * h) * om0 + h01 * psi1 + (h11 * h) * om1
         return psi, theta
 
     def clean_read(self, time_s: float | None = None):
-        """Noise-free ``(gauges_v, pot_v)`` at ``time_s`` (default now), before the ADC."""
+        """Noise-free ``(gauges_v, pot_v)`` at ``time_s`` (default now), before the ADC.
+
+        The gauges see the state a low-pass group delay ago (:mod:`flexdigit.twin.sensors`); the pot is read now.
+        """
         t = self.time_s if time_s is None else time_s
-        psi, theta = self.state(t - self.sensors.delay_s)
+        psi, theta = self._interpolate(t - self.sensors.delay_s, True)
         kappa = self.chain.curvature_at_gauges(psi)
-        shortening = self._shortening(theta)
-        tension = self.chain.cable_tension(psi[-1], shortening)[0] if self.cable else 0.0
+        if self.cable:
+            stretch = self._shortening(theta) - self.chain.eccentricity * psi[-1]
+            tension = self.chain.cable_stiffness * stretch if stretch > 0 else 0.0
+        else:
+            tension = 0.0
         axial = self.chain.axial_force(psi, self.dynamics._beyond, tension)
-        _, theta_now = self.state(t)
+        _, theta_now = self._interpolate(t, False)
         return self.sensors.clean_v(kappa, axial), self.servo.pot_v(theta_now)
 
     def read(self) -> tuple[np.ndarray, float]:

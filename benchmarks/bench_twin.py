@@ -1,0 +1,213 @@
+"""Twin benchmarks: dynamic real-time factor, batched static throughput, and the same cantilever in PyElastica.
+
+- Real-time factor: the default twin (3 cells per section, 10 ms step) driven like the rig loop: a command and a
+  read every 20 ms serial frame (the loop's period, 5.2), a 1 Hz square wave between commands 8 and 43. Goal >= 100.
+  Also with reads at 1 kHz (a DAQ-rate recording), for information.
+- Static throughput: 10,000 random load cases (chapter 6/7 weights, positions, commands 0/20/40), one batched
+  call of ``static_gauges_v``. Goal >= 10,000 cases/s; also the 1275-sample chapter 6 protocol.
+- PyElastica: a clamped strip with the digit's EI and mass per length (240 mm) under a dead tip load with
+  P L^2 / EI = 2, against the elastica closed form (elliptic integrals). PyElastica (a Cosserat rod, explicit
+  Position Verlet, statics by damped dynamic relaxation) at 80 elements; the twin's chain at the coarsest
+  resolution whose tip-deflection error is no larger than PyElastica's. Both timed in this run (PyElastica's
+  numba compile excluded by a warm-up run).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+EI = 205e9 * 12.7e-3 * 0.381e-3**3 / 12  # N m^2, table 3.7
+MU = 7850.0 * 12.7e-3 * 0.381e-3  # kg/m
+LENGTH = 0.24  # m, the strip
+ALPHA2 = 2.0  # P L^2 / EI
+
+
+def elastica_tip_deflection(alpha2: float) -> float:
+    """Tip deflection / L of a cantilever under a dead tip load (Bisshopp & Drucker 1945)."""
+    from scipy.optimize import brentq
+    from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
+
+    a = math.sqrt(alpha2)
+    k = brentq(
+        lambda k: ellipk(k * k) - ellipkinc(math.asin(1 / (math.sqrt(2) * k)), k * k) - a,
+        1 / math.sqrt(2) + 1e-12,
+        1 - 1e-12,
+        xtol=1e-15,
+    )
+    phi1 = math.asin(1 / (math.sqrt(2) * k))
+    return 1 - 2 / a * (ellipe(k * k) - ellipeinc(phi1, k * k))
+
+
+def bench_realtime(sim_seconds: float = 20.0, read_hz: float = 50.0) -> dict:
+    """Twin driven like the rig loop: a read every ``1/read_hz`` s, a command every 20 ms serial frame."""
+    from flexdigit.twin import Twin
+
+    twin = Twin(seed=0)
+    twin.advance(0.02)  # warm caches
+    frame = twin.params.actuator.serial_period_s
+    per_frame = max(1, round(frame * read_hz))
+    dt = frame / per_frame
+    frames = int(round(sim_seconds / frame))
+    start = time.perf_counter()
+    for k in range(frames):
+        twin.command(43 if (k // 25) % 2 else 8)  # a 1 Hz square wave between 8 and 43
+        for _ in range(per_frame):
+            twin.advance(dt)
+            twin.read()
+    elapsed = time.perf_counter() - start
+    return {
+        "name": f"twin dynamic real-time factor, read at {read_hz:g} Hz",
+        "value": sim_seconds / elapsed,
+        "unit": "x",
+        "goal": ">= 100" if read_hz <= 50 else "",
+        "note": f"{sim_seconds:g} s simulated in {elapsed:.3f} s; dt {twin.dt_s * 1e3:g} ms, {twin.chain.n} springs, "
+        "a command every 20 ms frame",
+    }
+
+
+def bench_static(cases: int = 10_000) -> list[dict]:
+    from flexdigit.twin import static_gauges_v
+
+    rng = np.random.default_rng(0)
+    masses = rng.choice([0.0075, 0.0125, 0.025, 0.0375], cases)
+    positions = rng.uniform(0.03, 0.27, cases)
+    commands = rng.choice([0, 20, 40], cases)
+    static_gauges_v(masses[:10], positions[:10], commands[:10])  # warm caches
+    start = time.perf_counter()
+    static_gauges_v(masses, positions, commands, seed=0)
+    elapsed = time.perf_counter() - start
+    tips = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 24]) / 100
+    m6 = np.concatenate([np.zeros(75), np.repeat([0.0125, 0.025, 0.0075], 16 * 25)])
+    p6 = np.concatenate([np.full(75, 0.27), np.tile(np.repeat(0.27 - tips, 25), 3)])
+    start6 = time.perf_counter()
+    static_gauges_v(m6, p6, None, seed=0)
+    elapsed6 = time.perf_counter() - start6
+    return [
+        {
+            "name": "twin static load cases per second (batched, with cable)",
+            "value": cases / elapsed,
+            "unit": "cases/s",
+            "goal": ">= 10000",
+            "note": f"{cases} cases in {elapsed:.3f} s",
+        },
+        {
+            "name": "twin chapter-6 data set (1275 samples)",
+            "value": elapsed6,
+            "unit": "s",
+            "goal": "<= 10",
+            "note": "3 weights x 16 positions x 25 repetitions + 75 no-load, cable detached",
+        },
+    ]
+
+
+def _pyelastica_tip(n_elements: int, final_time: float, dt: float, radius: float = 4e-3) -> float:
+    import elastica as ea
+
+    class Beam(ea.BaseSystemCollection, ea.Constraints, ea.Forcing, ea.Damping):
+        pass
+
+    sim = Beam()
+    inertia = math.pi * radius**4 / 4
+    area = math.pi * radius**2
+    rod = ea.CosseratRod.straight_rod(
+        n_elements,
+        np.zeros(3),
+        np.array([1.0, 0.0, 0.0]),
+        np.array([0.0, 1.0, 0.0]),
+        LENGTH,
+        radius,
+        MU / area,
+        youngs_modulus=EI / inertia,
+    )
+    sim.append(rod)
+    sim.constrain(rod).using(ea.OneEndFixedBC, constrained_position_idx=(0,), constrained_director_idx=(0,))
+    force = ALPHA2 * EI / LENGTH**2
+    sim.add_forcing_to(rod).using(
+        ea.EndpointForces, np.zeros(3), np.array([0.0, -force, 0.0]), ramp_up_time=final_time / 4
+    )
+    sim.dampen(rod).using(ea.AnalyticalLinearDamper, uniform_damping_constant=50.0, time_step=dt)
+    sim.finalize()
+    ea.integrate(ea.PositionVerlet(), sim, final_time, int(round(final_time / dt)), progress_bar=False)
+    return -float(rod.position_collection[1, -1])
+
+
+def bench_pyelastica(n_elements: int = 80) -> list[dict]:
+    import contextlib
+    import io
+
+    from flexdigit.twin.digit import Chain
+
+    exact = elastica_tip_deflection(ALPHA2) * LENGTH
+    try:
+        import elastica  # noqa: F401
+    except ImportError:
+        return [
+            {"name": "PyElastica comparison", "value": float("nan"), "unit": "", "goal": "", "note": "not installed"}
+        ]
+    with contextlib.redirect_stdout(io.StringIO()):
+        _pyelastica_tip(10, 0.01, 1e-5)  # numba compile
+        start = time.perf_counter()
+        tip = _pyelastica_tip(n_elements, 0.4, 0.4 / 80_000 * 80 / n_elements)
+        pe_time = time.perf_counter() - start
+    pe_err = abs(tip / exact - 1)
+    force = ALPHA2 * EI / LENGTH**2
+    n = 2
+    while True:
+        chain = Chain.uniform(LENGTH, EI, n, mass_per_length_kg_m=MU)
+        start = time.perf_counter()
+        repeats = 20
+        for _ in range(repeats):
+            sol = chain.solve_static(tip_force_n=[[0.0, -force]])
+        tw_time = (time.perf_counter() - start) / repeats
+        tw_err = abs(-sol.tip_m[0, 1] / exact - 1)
+        if tw_err <= pe_err or n > 400:
+            break
+        n += 1
+    return [
+        {
+            "name": f"PyElastica cantilever, {n_elements} elements, tip-deflection error",
+            "value": pe_err * 100,
+            "unit": "%",
+            "goal": "",
+            "note": f"P L^2/EI = {ALPHA2:g}, Cosserat rod, Position Verlet, damped relaxation 0.4 s",
+        },
+        {
+            "name": f"PyElastica cantilever, {n_elements} elements, time",
+            "value": pe_time,
+            "unit": "s",
+            "goal": "",
+            "note": "numba compile excluded",
+        },
+        {
+            "name": f"twin chain, {n} cells (coarsest at <= that error), error",
+            "value": tw_err * 100,
+            "unit": "%",
+            "goal": "",
+            "note": "rigid links + rotational springs, Newton on the equilibrium",
+        },
+        {
+            "name": f"twin chain, {n} cells, time",
+            "value": tw_time,
+            "unit": "s",
+            "goal": "",
+            "note": f"speed-up x{pe_time / tw_time:.0f} over PyElastica at equal tip-deflection accuracy",
+        },
+    ]
+
+
+def run() -> list[dict]:
+    """All twin benchmarks (``python -m benchmarks bench_twin``)."""
+    return [
+        bench_realtime(read_hz=50.0),
+        bench_realtime(read_hz=1000.0, sim_seconds=5.0),
+        *bench_static(),
+        *bench_pyelastica(),
+    ]
+
+
+if __name__ == "__main__":
+    for row in run():
+        print(row)
