@@ -33,6 +33,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
     parser.add_argument("--t0", type=float, help="step/release instant in s (default: found from the data)")
+    parser.add_argument(
+        "--delay",
+        choices=("auto", "yes", "no"),
+        default="auto",
+        help="lsq: fit the step instant too (a dead time); auto: when the record has samples before the step",
+    )
     parser.add_argument("--input-step", type=float, help="size of the input step (e.g. 51 commands) for the gain")
 
 
@@ -43,7 +49,13 @@ def _identify(args: argparse.Namespace):
 
     series = read_timeseries(args.file, args.channel, time_unit=args.time_unit)
     result = identify(
-        series, args.kind, method=args.method, filter=args.filter, t0_s=args.t0, input_step=args.input_step
+        series,
+        args.kind,
+        method=args.method,
+        filter=args.filter,
+        t0_s=args.t0,
+        input_step=args.input_step,
+        fit_delay={"auto": None, "yes": True, "no": False}[args.delay],
     )
     data = result.summary()
     unit = f" {series.unit}" if series.unit else ""

@@ -134,6 +134,7 @@ def identify(
     t0_s: float | None = None,
     input_step: float | None = None,
     wn_from: str = "settling",
+    fit_delay: bool | None = None,
     **filter_options,
 ) -> Identification:
     """Identify a second-order model from a release or step record.
@@ -155,6 +156,10 @@ def identify(
         Size of the input step (e.g. 51 commands, 3.2.4) when the record has no input column; gives ``gain``.
     wn_from : {"settling", "damped"}
         Thesis method: ``wn = 4 / (zeta Ts)`` as the text says, or ``wd / sqrt(1 - zeta^2)`` as table 3.2 did.
+    fit_delay : bool, optional
+        ``lsq``: also fit the step instant, i.e. a dead time after ``t0_s`` (the servo board latches a command at
+        its next 20 ms serial frame, 5.2). Default: for a step, when the record has samples before ``t0_s``; a
+        release instant is always fitted unless ``t0_s`` is given.
     **filter_options
         Passed to :func:`~flexdigit.identify.filters.apply_filter` (``cutoff_hz``, ``rank``, ``harmonics``...).
 
@@ -172,8 +177,9 @@ def identify(
     if kind == "step" and series.u is not None:
         moved = np.nonzero(np.abs(series.u - series.u[0]) > 1e-12 * max(1.0, abs(series.u[0])))[0]
         if moved.size:
-            if t0_s is None:
-                t0_s = float(t[moved[0]])
+            if t0_s is None:  # the input changed somewhere after the previous sample: take the midpoint
+                k = int(moved[0])
+                t0_s = float(t[k]) if k == 0 else 0.5 * float(t[k - 1] + t[k])
             du = float(np.mean(series.u[moved[0] :]) - series.u[0])
     if du is None and input_step is not None:
         du = float(input_step)
@@ -199,7 +205,10 @@ def identify(
             features = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name)
         except DataFileError:
             features = None  # an overdamped record: the fit still works
-        fit_t0 = kind == "release" and t0_s is None
+        if fit_delay is None:
+            fit_t0 = t0_s is None if kind == "release" else bool(t0_s > t[0] + 2 * series.dt_s)
+        else:
+            fit_t0 = bool(fit_delay)
         model = SecondOrderFit(kind=kind, fit_t0=fit_t0, t0_s=t0_s).fit(t, y, source=series.name)
         wn, zeta = model.wn_, model.zeta_
         offset, amplitude, t0 = model.offset_, model.amplitude_, model.t0_

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import signal
+from threadpoolctl import threadpool_limits
 
 from flexdigit._validation import check_array, check_int, check_positive
 from flexdigit.errors import DataFileError
@@ -66,7 +67,8 @@ def svd_filter(y, rank: int = 2, window: int | None = None) -> np.ndarray:
     trajectory = np.ascontiguousarray(np.lib.stride_tricks.sliding_window_view(x, n - L + 1))  # L x K Hankel
     # the r leading left singular vectors are the leading eigenvectors of the L x L lag covariance X X^T (basic
     # SSA): far cheaper than a full SVD of X, and only those r are needed
-    _, vectors = np.linalg.eigh(trajectory @ trajectory.T)  # ascending eigenvalues
+    with threadpool_limits(1):  # a few-hundred-square problem: threads only add contention on a busy machine
+        _, vectors = np.linalg.eigh(trajectory @ trajectory.T)  # ascending eigenvalues
     u = vectors[:, L - r :]
     low_rank = u @ (u.T @ trajectory)  # projection onto the leading r-dimensional subspace
     return _diagonal_average(low_rank)

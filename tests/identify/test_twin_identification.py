@@ -1,0 +1,55 @@
+"""Identification of the twin's simulated experiments recovers the thesis's E(s) and MT(s) (issue 4: within 3 %)."""
+
+import pytest
+
+from flexdigit.identify.experiment import identify
+from flexdigit.identify.timeseries import TimeSeries, read_timeseries
+from flexdigit.reference import thesis_value
+from flexdigit.twin.experiments import release_test, servo_step_test
+
+# the thesis's models: E(s) of 3.1.2 (table 3.2 averages) and MT(s) of 3.2.4
+DIGIT_WN, DIGIT_ZETA = (
+    thesis_value("digit.release_tests_with_housing.wn_avg_rad_s"),
+    thesis_value("digit.release_tests_with_housing.zeta_avg"),
+)
+SERVO_WN, SERVO_ZETA = thesis_value("actuator.model.wn_rad_s"), thesis_value("actuator.model.zeta")
+
+
+@pytest.fixture(scope="module")
+def release_file(tmp_path_factory):
+    res = release_test(duration_s=5.0, sample_rate_hz=500.0, seed=0)
+    return res.save(tmp_path_factory.mktemp("twin") / "release.csv")  # as a user would: through a file
+
+
+def test_digit_from_twin_release_test_gauge1(release_file):
+    r = identify(read_timeseries(release_file, "gauge1"), "release", method="lsq")
+    assert r.wn_rad_s == pytest.approx(DIGIT_WN, rel=0.03)
+    assert r.zeta == pytest.approx(DIGIT_ZETA, rel=0.03)
+
+
+def test_digit_from_twin_release_test_tip(release_file):
+    r = identify(read_timeseries(release_file, "tip_deflection"), "release", method="lsq")
+    assert r.wn_rad_s == pytest.approx(DIGIT_WN, rel=0.03)
+    assert r.zeta == pytest.approx(DIGIT_ZETA, rel=0.03)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_servo_from_twin_step_test(seed, tmp_path):
+    res = servo_step_test(command_to=51, sample_rate_hz=500.0, seed=seed)
+    series = read_timeseries(res.save(tmp_path / "step.parquet"), "pot")
+    assert series.u is not None  # the command column gives the step instant and size
+    r = identify(series, "step", method="lsq")
+    assert r.wn_rad_s == pytest.approx(SERVO_WN, rel=0.03)
+    assert r.zeta == pytest.approx(SERVO_ZETA, rel=0.03)
+    # gain: pot volts per command, (2.4755 - 0.46688) V over 254 commands (3.2.4)
+    assert r.gain == pytest.approx((2.4755 - 0.46688) / 254, rel=0.03)
+    # the servo board latches the command at its next 20 ms frame (5.2): the fitted instant is after the request
+    assert 0.1 <= r.t0_s <= 0.1 + 0.021
+
+
+def test_thesis_method_on_twin_step_overestimates_wn():
+    res = servo_step_test(command_to=51, sample_rate_hz=500.0, seed=0)
+    series = TimeSeries.from_arrays(res.column("time_s"), res.column("pot_v"), u=res.column("command"))
+    r = identify(series, "step", method="thesis")
+    assert r.zeta == pytest.approx(SERVO_ZETA, rel=0.05)
+    assert r.wn_rad_s > 1.1 * SERVO_WN  # the +21 % bias of 4/(zeta Ts) at this damping (test_response)
