@@ -108,3 +108,14 @@ def test_linear_fit_of_table_3_6_against_numpy_polyfit():
     # the thesis's printed a = 0.9047 mm per command (E 3.17) is not this least-squares slope (0.871), see models
     assert r.slope.value == pytest.approx(0.8713, abs=1e-3)
     assert r.as_model().slope == r.slope.value
+
+
+@pytest.mark.parametrize("kind", ["release", "step"])
+def test_arx_method_on_records_with_half_percent_noise_within_2_percent(kind):
+    # the ARX route pre-filters input and output alike; equation-error least squares is still biased by noise
+    # (up to ~5 % on steps at 2 % noise, see the report's table), so it is held to 2 % at 0.5 % noise
+    gen, truth = (release_record, DIGIT) if kind == "release" else (step_record, SERVO)
+    t, y = gen(3, noise=0.005)
+    r = identify(TimeSeries.from_arrays(t, y), kind, method="arx", t0_s=None if kind == "release" else 0.2)
+    assert r.wn_rad_s == pytest.approx(truth["wn_rad_s"], rel=0.02)
+    assert r.zeta == pytest.approx(truth["zeta"], rel=0.02)

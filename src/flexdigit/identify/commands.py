@@ -24,9 +24,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--channel", help="column to analyse, with or without its unit (default: the first)")
     parser.add_argument(
         "--method",
-        choices=("thesis", "lsq"),
+        choices=("thesis", "lsq", "arx"),
         default="lsq",
-        help="lsq: least-squares fit with confidence intervals (default); thesis: %%OS and wn = 4/(zeta Ts)",
+        help="lsq: least-squares fit with confidence intervals (default); thesis: %%OS and wn = 4/(zeta Ts); "
+        "arx: dominant poles of a discrete ARX model of the filtered record",
     )
     parser.add_argument(
         "--filter", choices=("butter", "svd", "fft", "none"), default="butter", help="filter for the features"

@@ -33,7 +33,7 @@ from flexdigit.identify.response import ResponseFeatures, analyze_response
 from flexdigit.identify.timeseries import TimeSeries
 from flexdigit.identify.validation import corr2, nrmse_fit
 
-METHODS = ("thesis", "lsq")
+METHODS = ("thesis", "lsq", "arx")
 KINDS = ("release", "step")
 
 
@@ -145,8 +145,10 @@ def identify(
         The record (:func:`~flexdigit.identify.timeseries.read_timeseries`, the twin, or arrays).
     kind : {"release", "step"}
         Free decay from an initial deflection (the digit, 3.1.2) or a step response (the servo, 3.2.4).
-    method : {"lsq", "thesis"}
-        Least-squares fit of the raw record, or the thesis's %OS and settling-time formulas on the filtered one.
+    method : {"lsq", "thesis", "arx"}
+        Least-squares fit of the raw record; the thesis's %OS and settling-time formulas on the filtered one; or the
+        dominant poles of a discrete ARX(2, 2) (AR(2) for a release) fitted to the record and its input, both
+        through the same Butterworth pre-filter (``cutoff_hz``) and decimated.
     filter : {"butter", "svd", "fft", "none"}
         Filter used to read the features (thesis method, and the start values of ``lsq``).
     t0_s : float, optional
@@ -200,6 +202,15 @@ def identify(
         else:
             offset, amplitude = f.final_value, f.initial_value - f.final_value
         t0, estimates, features = f.t0_s, None, f
+    elif method == "arx":
+        try:
+            features = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name)
+        except DataFileError:
+            features = None
+        t0 = t0_s if t0_s is not None else (features.t0_s if features is not None else float(t[0]))
+        wn, zeta = _arx_mode(t, y, kind, t0, filter_options.get("cutoff_hz"))
+        offset, amplitude = _offset_amplitude(t, y, kind, wn, zeta, t0)
+        estimates = None
     else:
         try:
             features = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name)
@@ -233,6 +244,37 @@ def identify(
         corr2=corr2(y, prediction),
         fit_percent=nrmse_fit(y, prediction),
     )
+
+
+def _arx_mode(t, y, kind: str, t0: float, cutoff_hz: float | None) -> tuple[float, float]:
+    """``(wn, zeta)`` of the dominant pole pair of an ARX(2, 2) (step) or AR(2) (release) model.
+
+    Equation-error least squares is biased by noise, so input and output both go through the same zero-phase
+    Butterworth pre-filter (which leaves the input-output relation unchanged) and are decimated to about 10
+    samples per cut-off period (50 per period of the dominant oscillation by default). A release record is used
+    from two cut-off periods after the release, where the filter no longer mixes in the hold before it.
+    """
+    from flexdigit.identify.filters import butter_filter, default_cutoff_hz
+    from flexdigit.identify.fit import fit_arx
+
+    fs = (t.size - 1) / (t[-1] - t[0])
+    cutoff = cutoff_hz or default_cutoff_hz(t, y)
+    yf = butter_filter(y, fs, cutoff)
+    step = max(1, int(fs / (10 * cutoff)))
+    if kind == "release":
+        keep = t >= t0 + 2.0 / cutoff
+        model = fit_arx(yf[keep][::step], dt_s=step / fs, na=2)
+    else:
+        u = butter_filter((t >= t0).astype(float), fs, cutoff)
+        model = fit_arx(yf[::step], u[::step], dt_s=step / fs, na=2, nb=2, nk=1)
+    return model.dominant_mode()
+
+
+def _offset_amplitude(t, y, kind: str, wn: float, zeta: float, t0: float) -> tuple[float, float]:
+    """Offset and amplitude of the model response that best fit the record (linear least squares)."""
+    shape = second_order_response(t, kind, wn, zeta, 0.0, 1.0, t0)
+    (offset, amplitude), *_ = np.linalg.lstsq(np.column_stack([np.ones_like(t), shape]), y, rcond=None)
+    return float(offset), float(amplitude)
 
 
 def average_runs(runs: list[TimeSeries]) -> TimeSeries:

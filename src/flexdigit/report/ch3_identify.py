@@ -214,7 +214,7 @@ def _noise_study(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
     rows = []
     for kind, (wn, zeta) in truth.items():
         rng = ctx.rng(40 if kind == "release" else 41)
-        err = {m: [] for m in ("lsq", "thesis")}
+        err = {m: [] for m in ("lsq", "arx", "thesis")}
         for _ in range(seeds):
             if kind == "release":
                 rec = _release_record(wn, zeta, 8.0, rng)
@@ -256,7 +256,7 @@ def _noise_study(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
                 )
     chapter.tables.append(
         Table(
-            f"Errors over {seeds} noisy synthetic records ({100 * NOISE:g} % white noise): thesis method vs lsq",
+            f"Errors over {seeds} noisy synthetic records ({100 * NOISE:g} % white noise): thesis method, lsq, ARX",
             [
                 "test",
                 "method",
