@@ -130,6 +130,7 @@ class RuntimeController:
                     f"The 'aw_quantisation' parameter of RuntimeController must be a bool or {n} gains."
                 )
         self.aw_quantisation = aw_quantisation
+        self._same_gains = bool(np.array_equal(self._q_gain, L))
         self._db_index = None
         if deadband is not None:
             index, width = deadband
@@ -149,6 +150,9 @@ class RuntimeController:
         self._M = np.ascontiguousarray(np.block([[ss.A, ss.B], [ss.C, ss.D]]), dtype=float)
         self._v = np.zeros(n + ss.ninputs)  # [x; w]
         self._z = np.zeros(n + 1)  # [x+; v]
+        self._vx, self._zx = self._v[:n], self._z[:n]  # views made once: the update writes through them
+        self._tmp = np.zeros(n)
+        self._c_row = np.asarray(ss.C, dtype=float).reshape(-1)
         self.saturated = False
         self.reset()
 
@@ -184,29 +188,38 @@ class RuntimeController:
             v[n] = r
             v[n + 1] = y
         np.dot(self._M, v, out=z)
-        u_raw = self.u_eq + z[n]
+        u_raw = self.u_eq + z.item(n)  # .item: a Python float, cheaper to compare than a numpy scalar
         if not math.isfinite(u_raw):
             raise DesignError(f"{self.name}: the controller output is not finite ({u_raw}); its state has diverged")
-        u = self.u_max if u_raw > self.u_max else (self.u_min if u_raw < self.u_min else u_raw)
+        hi, lo = self.u_max, self.u_min
+        u_clip = hi if u_raw > hi else (lo if u_raw < lo else u_raw)
+        u = u_clip
         if self.quantise:
             last = self.last_command
             # hysteresis: keep the command in force unless u moved past the half-quantum boundary by h
-            if self.hysteresis and abs(u - last) < 0.5 + self.hysteresis and self.u_min <= last <= self.u_max:
+            if self.hysteresis and abs(u - last) < 0.5 + self.hysteresis and lo <= last <= hi:
                 u = float(last)
             else:
                 u = float(round(u))
-        self.saturated = u_raw > self.u_max or u_raw < self.u_min
+        self.saturated = u_clip != u_raw
+        xv, xz, tmp = self._vx, self._zx, self._tmp
         if self.antiwindup == "back_calculation":
-            u_clip = self.u_max if u_raw > self.u_max else (self.u_min if u_raw < self.u_min else u_raw)
-            v[:n] = z[:n] + self.aw_gain * (u_clip - u_raw) + self._q_gain * (u - u_clip)
+            c_sat, c_q = u_clip - u_raw, u - u_clip
+            if self._same_gains:
+                np.multiply(self.aw_gain, c_sat + c_q, out=tmp)
+                np.add(xz, tmp, out=xv)
+            else:
+                np.multiply(self.aw_gain, c_sat, out=tmp)
+                np.add(xz, tmp, out=xv)
+                np.multiply(self._q_gain, c_q, out=tmp)
+                np.add(xv, tmp, out=xv)
         elif self.antiwindup == "clamp" and self.saturated:
             # freeze the state unless the update moves the output back towards the range
-            x_new = z[:n]
-            drift = float(self.sys.C.reshape(-1) @ (x_new - v[:n]))
-            if (u_raw > self.u_max and drift < 0) or (u_raw < self.u_min and drift > 0):
-                v[:n] = x_new
+            drift = float(self._c_row @ (xz - xv))
+            if (u_raw > hi and drift < 0) or (u_raw < lo and drift > 0):
+                np.copyto(xv, xz)
         else:
-            v[:n] = z[:n]
+            np.copyto(xv, xz)
         if self._db_index is not None:
             e = r - y
             if -self._db_width <= e <= self._db_width:
