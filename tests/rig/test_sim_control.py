@@ -89,3 +89,18 @@ def test_sim_backend_virtual_time_is_deterministic_and_applies_loads():
     unloaded = rig.read().gauges_v
     assert not np.allclose(unloaded, a.gauges_v, atol=0.01)  # the 50 g load bends the digit
     assert rig.twin.loads == [] and rig.loads == []
+
+
+def test_paced_mode_follows_the_injected_clock():
+    from .conftest import FakeClock
+
+    clock = FakeClock()
+    rig = SimRig(paced=True, seed=0, clock=clock, sleep=clock.sleep)
+    rig.write_command(20)
+    clock.sleep(0.35)  # wall time passes with nobody asking: the twin catches up at the next read
+    reading = rig.read()
+    assert reading.time_s == pytest.approx(0.35) and rig.twin.time_s == pytest.approx(0.35)
+    rig.wait(0.15)
+    assert rig.read().time_s == pytest.approx(0.5) and rig.twin.time_s == pytest.approx(0.5)
+    rig.close()
+    assert rig.twin.servo.pending[-1][1] == 8 or rig.twin.servo.command == 8  # relaxed on close
