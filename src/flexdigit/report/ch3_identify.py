@@ -51,6 +51,7 @@ def build(ctx: ReportContext) -> Chapter:
     _models_from_experiments(ctx, chapter, e)
     _filters(ctx, chapter, e)
     _linear_fits(chapter, e)
+    _voltage_fits(ctx, chapter, e)
     return chapter
 
 
@@ -598,6 +599,50 @@ def _linear_fits(chapter: Chapter, e: list[Entry]) -> None:
         Table(
             "3.4.1: deflection vs command fits of table 3.6 with 95 % confidence intervals",
             ["gauge", "slope lsq (mm/cmd)", "95 % CI", "printed a", "printed inside CI", "residual RMS (mm)", "R^2"],
+            rows,
+        )
+    )
+
+
+def _voltage_fits(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
+    """E 3.20-3.22 from the twin's actuation sweep (commands 8..43, each settled): gauge volts vs command."""
+    from flexdigit.twin.experiments import actuation_sweep
+
+    sweep = actuation_sweep(samples=5 if ctx.fast else 20, seed=ctx.seed, params=ctx.params)
+    commands = sweep.column("command").astype(float)
+    printed = thesis_value("conversion.v_sg_fit")
+    rows = []
+    for k in range(3):
+        r = fit_linear(commands, sweep.column(f"gauge{k + 1}_v"))
+        slope_p, offset_p = float(printed[k]["slope"]), float(printed[k]["offset"])
+        rows.append(
+            [
+                k + 1,
+                slope_p,
+                f"{r.slope.value:.5f} ({r.slope.ci_low:.5f}..{r.slope.ci_high:.5f})",
+                offset_p,
+                f"{r.intercept.value:.4f} ({r.intercept.ci_low:.4f}..{r.intercept.ci_high:.4f})",
+                f"{1e3 * r.rms:.2f}",
+                f"{r.r_squared:.4f}",
+            ]
+        )
+        e.append(
+            compare(
+                f"identify.v_sg_fit.sg{k + 1}.slope_v_per_command",
+                "3.4.3",
+                slope_p,
+                r.slope.value,
+                "V/command",
+                rtol=0.03,
+                note=f"Least-squares line through the twin's actuation sweep (E 3.2{k}); 95 % CI "
+                f"{r.slope.ci_low:.5f}..{r.slope.ci_high:.5f}, residual RMS {1e3 * r.rms:.2f} mV.",
+                discrepancy_note="The twin's calibration does not reproduce this fit of figure 3.17.",
+            )
+        )
+    chapter.tables.append(
+        Table(
+            "3.4.3: gauge voltage vs command (E 3.20-3.22) fitted to the twin's actuation sweep, 95 % intervals",
+            ["gauge", "slope printed", "slope ours (CI)", "offset printed", "offset ours (CI)", "RMS (mV)", "R^2"],
             rows,
         )
     )
