@@ -6,7 +6,14 @@ import pyarrow.parquet as pq
 import pytest
 
 from flexdigit.errors import DataFileError
-from flexdigit.identify.timeseries import MIN_SAMPLES, TimeSeries, read_timeseries, split_unit, write_csv
+from flexdigit.identify.timeseries import (
+    MIN_SAMPLES,
+    TimeSeries,
+    read_timeseries,
+    series_from_table,
+    split_unit,
+    write_csv,
+)
 
 
 def _write(path, header, rows):
@@ -150,3 +157,25 @@ def test_split_unit():
     assert split_unit("time_us") == ("time", "us")
     assert split_unit("sg_1_mv") == ("sg_1", "mV")
     assert split_unit("velocity_knots") == ("velocity_knots", "")
+
+
+def test_binary_file_is_not_a_csv(tmp_path):
+    (tmp_path / "rec.csv").write_bytes(b"time_s,sg1_v\n\xff\xfe\x00garbage")
+    with pytest.raises(DataFileError, match=r"rec.csv: not a text CSV file"):
+        read_timeseries(tmp_path / "rec.csv")
+
+
+def test_unknown_suffix(tmp_path):
+    (tmp_path / "rec.xlsx").write_text("x")
+    with pytest.raises(DataFileError, match=r"rec.xlsx: unknown file type '.xlsx'"):
+        read_timeseries(tmp_path / "rec.xlsx")
+
+
+def test_series_from_in_memory_table_gets_the_same_checks():
+    t = np.arange(40) * 0.01
+    ts = series_from_table({"time_s": t, "pot_v": np.ones(40), "command": np.full(40, 51.0)}, "pot")
+    assert ts.unit == "V" and ts.u is not None and ts.input_name == "command"
+    y = np.ones(40)
+    y[10:12] = np.nan
+    with pytest.raises(DataFileError, match=r"table: column 'pot_v', row 11 to row 12: missing values"):
+        series_from_table({"time_s": t, "pot_v": y}, "pot")

@@ -3,7 +3,7 @@
 import pytest
 
 from flexdigit.identify.experiment import identify
-from flexdigit.identify.timeseries import TimeSeries, read_timeseries
+from flexdigit.identify.timeseries import read_timeseries, series_from_table
 from flexdigit.reference import thesis_value
 from flexdigit.twin.experiments import release_test, servo_step_test
 
@@ -49,7 +49,7 @@ def test_servo_from_twin_step_test(seed, tmp_path):
 
 def test_thesis_method_on_twin_step_overestimates_wn():
     res = servo_step_test(command_to=51, sample_rate_hz=500.0, seed=0)
-    series = TimeSeries.from_arrays(res.column("time_s"), res.column("pot_v"), u=res.column("command"))
+    series = series_from_table(res, "pot")  # in memory this time
     r = identify(series, "step", method="thesis")
     assert r.zeta == pytest.approx(SERVO_ZETA, rel=0.05)
     assert r.wn_rad_s > 1.1 * SERVO_WN  # the +21 % bias of 4/(zeta Ts) at this damping (test_response)

@@ -5,7 +5,8 @@ column names, ``<name>_<unit>``: ``time_s`` (or ``time_ms``, ``t_us``) and ``sg1
 A time column with no unit (``time``, ``t``) needs ``time_unit=`` (``--time-unit`` on the command line). A
 channel is picked by its full column name or its name without the unit (``sg1`` for ``sg1_v``); without one, the
 first channel that is not an input (``command``, ``u``) is used. An input column, when present, is kept with the
-series (the servo command of a step test).
+series (the servo command of a step test). :func:`series_from_table` does the same for a table in memory, such as
+the twin's experiments (:mod:`flexdigit.twin.experiments`).
 
 Every problem with a file raises :class:`~flexdigit.errors.DataFileError` naming the file, the column and the
 line (CSV, counting the header as line 1) or row (Parquet) and what was expected: a missing column, a cell that
@@ -22,7 +23,7 @@ from __future__ import annotations
 
 import csv
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -69,7 +70,6 @@ class TimeSeries:
     source: str = "array"
     u: np.ndarray | None = None
     input_name: str = ""
-    meta: dict = field(default_factory=dict)
 
     @classmethod
     def from_arrays(cls, t_s, y, *, channel: str = "y", unit: str = "", u=None, source: str = "array"):
@@ -172,6 +172,44 @@ def read_timeseries(
         where = lambda i: f"line {lines[i]}" if i < len(lines) else f"line {i + 2}"  # noqa: E731
     else:
         raise DataFileError(f"{p}: unknown file type {p.suffix!r}: expected a .csv or .parquet recording")
+    return _series_from_columns(columns, data, str(p), where, channel, time_unit, time_column)
+
+
+def series_from_table(table, channel: str | None = None, *, source: str = "table", time_unit: str | None = None):
+    """One channel of an in-memory table as a :class:`TimeSeries`, with the checks of :func:`read_timeseries`.
+
+    Parameters
+    ----------
+    table : pyarrow.Table, mapping of column name to array, or an object with a ``table`` attribute
+        E.g. the :class:`~flexdigit.twin.experiments.ExperimentResult` of ``release_test`` or ``servo_step_test``
+        (its metadata, when present, names the experiment in messages).
+    channel, time_unit
+        As for :func:`read_timeseries`.
+    source : str
+        Name used in messages.
+
+    Examples
+    --------
+    >>> ts = series_from_table({"time_s": np.arange(30) * 0.01, "pot_v": np.ones(30)}, "pot")
+    >>> ts.channel, ts.unit, ts.n_samples
+    ('pot', 'V', 30)
+    """
+    meta = getattr(table, "metadata", None)
+    if isinstance(meta, dict) and meta.get("experiment"):
+        source = f"twin {meta['experiment']}"
+    inner = getattr(table, "table", table)
+    if hasattr(inner, "column_names"):
+        columns = list(inner.column_names)
+        data = {c: np.asarray(inner.column(c).to_numpy(zero_copy_only=False), dtype=float) for c in columns}
+    else:
+        columns = list(inner)
+        data = {c: np.asarray(inner[c], dtype=float) for c in columns}
+    return _series_from_columns(columns, data, source, lambda i: f"row {i + 1}", channel, time_unit, None)
+
+
+def _series_from_columns(columns, data, source: str, where, channel, time_unit, time_column) -> TimeSeries:
+    """Pick the time, channel and input columns, convert time to seconds and check them."""
+    p = source
     tcol = _find_time_column(p, columns, time_column)
     stem, unit_in_name = split_unit(tcol)
     unit = time_unit or unit_in_name
@@ -195,14 +233,14 @@ def read_timeseries(
     t = data[tcol] * TIME_UNITS[unit]
     y = data[ycol]
     u = data[inputs[0]] if inputs and inputs[0] != ycol else None
-    _check_series(t, y, str(p), tcol, ycol, where)
+    _check_series(t, y, p, tcol, ycol, where)
     if u is not None:
-        _check_nan_runs(u, str(p), inputs[0], where)
+        _check_nan_runs(u, p, inputs[0], where)
     ystem, yunit = split_unit(ycol)
-    return TimeSeries(t, y, ystem, yunit, str(p), u, inputs[0] if u is not None else "")
+    return TimeSeries(t, y, ystem, yunit, p, u, inputs[0] if u is not None else "")
 
 
-def _find_time_column(p: Path, columns: list[str], time_column: str | None) -> str:
+def _find_time_column(p: str, columns: list[str], time_column: str | None) -> str:
     if time_column is not None:
         if time_column not in columns:
             raise DataFileError(f"{p}: no time column {time_column!r} (columns: {', '.join(columns)})")
@@ -217,8 +255,10 @@ def _find_time_column(p: Path, columns: list[str], time_column: str | None) -> s
 
 def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
     """Columns, float data and the file line of each data row; names the line and column of a bad cell."""
-    with p.open(newline="", encoding="utf-8-sig") as fh:
-        text = fh.read()
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataFileError(f"{p}: not a text CSV file (byte {exc.start} is not UTF-8)") from None
     header = None
     rows: list[list[str]] = []
     lines: list[int] = []

@@ -18,7 +18,7 @@ from flexdigit.identify.experiment import average_runs, identify
 from flexdigit.identify.filters import fft_filter, noise_reduction, svd_filter
 from flexdigit.identify.fit import fit_linear, second_order_response
 from flexdigit.identify.response import settling_formula_bias
-from flexdigit.identify.timeseries import TimeSeries
+from flexdigit.identify.timeseries import TimeSeries, series_from_table
 from flexdigit.reference import thesis_value
 from flexdigit.report.chapter import Chapter, ReportContext, Table
 from flexdigit.report.results import Entry, compare, new
@@ -290,25 +290,13 @@ def _experiments(ctx: ReportContext):
 
     duration, rate = (5.0, 500.0) if ctx.fast else (8.0, 1000.0)
     rel = release_test(duration_s=duration, sample_rate_hz=rate, seed=ctx.seed, params=ctx.params)
-    release = TimeSeries.from_arrays(
-        rel.column("time_s"), rel.column("gauge1_v"), channel="gauge1", unit="V", source="twin release_test"
-    )
-    tip = TimeSeries.from_arrays(
-        rel.column("time_s"), rel.column("tip_deflection_m"), channel="tip", unit="m", source="twin release_test"
-    )
-    steps = []
-    for k in range(3 if ctx.fast else 5):
-        res = servo_step_test(command_to=STEP_COMMANDS, sample_rate_hz=rate, seed=ctx.seed + k, params=ctx.params)
-        steps.append(
-            TimeSeries.from_arrays(
-                res.column("time_s"),
-                res.column("pot_v"),
-                channel="pot",
-                unit="V",
-                u=res.column("command").astype(float),
-                source="twin servo_step_test",
-            )
+    release, tip = series_from_table(rel, "gauge1"), series_from_table(rel, "tip_deflection")
+    steps = [
+        series_from_table(
+            servo_step_test(command_to=STEP_COMMANDS, sample_rate_hz=rate, seed=ctx.seed + k, params=ctx.params), "pot"
         )
+        for k in range(3 if ctx.fast else 5)
+    ]
     return release, tip, steps, "the twin's default calibration"
 
 
