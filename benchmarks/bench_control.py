@@ -17,6 +17,7 @@ def _best_ms(fn, repeat: int = 20) -> float:
 
 def run() -> list[dict]:
     warnings.simplefilter("ignore")
+    from flexdigit.control._threads import single_blas_thread
     from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
     from flexdigit.control.reproduce import THESIS_REGULARISATION, thesis_plant
     from flexdigit.control.synthesis import hinf_riccati, hinfsyn_plain
@@ -25,6 +26,12 @@ def run() -> list[dict]:
     P = regularise(thesis_generalized_plant(thesis_plant(), filter_weight(5.0)), eps)
     ours = _best_ms(lambda: hinf_riccati(P, margin=margin))
     plain = _best_ms(lambda: hinfsyn_plain(P))
+
+    def plain_single():
+        with single_blas_thread():
+            hinfsyn_plain(P)
+
+    plain_1 = _best_ms(plain_single)
     return [
         {
             "name": "H-inf design, thesis 5 Hz problem (Riccati route, scaled, margin)",
@@ -38,6 +45,13 @@ def run() -> list[dict]:
             "value": plain,
             "unit": "ms",
             "goal": "peer",
-            "note": "SLICOT SB10AD gamma search from 1e100, best of 20",
+            "note": "SLICOT SB10AD gamma search from 1e100, best of 20, default OpenBLAS threads",
+        },
+        {
+            "name": "plain control.hinfsyn, BLAS pinned to one thread",
+            "value": plain_1,
+            "unit": "ms",
+            "goal": "peer",
+            "note": "same call inside threadpoolctl's limit(1), as flexdigit runs SLICOT",
         },
     ]

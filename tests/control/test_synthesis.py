@@ -6,6 +6,7 @@ import control as ct
 import numpy as np
 import pytest
 
+from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
 from flexdigit.control.reproduce import (
@@ -37,7 +38,8 @@ def test_riccati_matches_plain_hinfsyn(P5):
     # independent oracle: python-control's hinfsyn (SLICOT's own gamma search) on the same regularised plant
     P = regularise(P5, 1e-6)
     ours = hinf_riccati(P, gtol=1e-5)
-    _, _, gam, _ = ct.hinfsyn(P, 1, 1)
+    with single_blas_thread():  # the plain call crawls with OpenBLAS threads on a busy machine
+        _, _, gam, _ = ct.hinfsyn(P, 1, 1)
     assert ours.gamma_opt == pytest.approx(gam, rel=2e-3)
     assert ours.achieved <= ours.gamma * (1 + 1e-6)
 
@@ -53,10 +55,11 @@ def test_infeasible_gamma_raises(P5):
         hinf_riccati(P, gamma=0.01)  # optimum is 0.0249 (test_riccati_matches_plain_hinfsyn)
 
 
-@pytest.mark.parametrize("eps, rel", [(1e-5, 0.01), (1e-6, 0.01), (1.0538e-7, 0.02)])
+@pytest.mark.slow
+@pytest.mark.parametrize("eps, rel", [(1e-5, 0.002), (1e-6, 0.003), (1.0538e-7, 0.015)])
 def test_lmi_and_riccati_agree(P5, eps, rel):
     # issue 5: the two routes agree on gamma within 1 % on the regularised thesis problem; at the fitted level
-    # eps = 1.05e-7 the LMI is conditioning-limited (R, S spread over 1e-5..1e6) and stops 1.0-1.3 % high
+    # eps = 1.05e-7 the LMI is conditioning-limited (R, S spread over ten decades) and stops 0.7-1.1 % high
     P = regularise(P5, eps)
     ric = hinf_riccati(P, gtol=1e-5)
     lmi = hinf_lmi(P)

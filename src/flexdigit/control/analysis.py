@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.generalized import as_statespace
 from flexdigit.errors import UnstableError
 
@@ -115,7 +116,8 @@ def hinf_norm(sys, name: str = "system") -> tuple[float, float]:
         )
     if sys.nstates == 0:
         return float(np.linalg.norm(sys.D, 2)), 0.0
-    gpeak, fpeak = ct.linfnorm(sys)
+    with single_blas_thread():
+        gpeak, fpeak = ct.linfnorm(sys)
     return float(gpeak), float(fpeak)
 
 

@@ -133,7 +133,7 @@ def fit_thesis_regularisation(filter_hz: float, target_poles=None, plant=None) -
 
     grid = [(cost([le, m]), le, m) for le in np.arange(-9.0, -2.9, 0.5) for m in (0.01, 0.05, 0.2, 0.8, 3.0)]
     _, le, m = min(grid)
-    res = minimize(cost, [le, m], method="Nelder-Mead", options={"xatol": 1e-5, "fatol": 1e-12, "maxiter": 400})
+    res = minimize(cost, [le, m], method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-10, "maxiter": 200})
     design, poles = poles_for(res.x)
     err = float(np.max(np.abs(poles - target) / np.abs(target)))
     return {"eps_u": float(10 ** res.x[0]), "margin": float(res.x[1]), "pole_error": err, "design": design}
