@@ -25,7 +25,7 @@ def _update_cost_us(controller, number: int = 200_000) -> float:
 def run() -> list[dict]:
     from flexdigit.control.design20ms import design_20ms, thesis_controller
     from flexdigit.rig.base import open_rig
-    from flexdigit.rig.loop import run_loop
+    from flexdigit.rig.loop import realtime_priority, run_loop
 
     rows = []
     d20 = design_20ms().runtime()
@@ -63,7 +63,8 @@ def run() -> list[dict]:
         def step(self, setpoint, reading):
             return fast.update(setpoint, fast.measure(reading))
 
-    result = run_loop(rig, Wrapped(), 10.0, duration, period, check_sensors=False)
+    with realtime_priority() as rt:
+        result = run_loop(rig, Wrapped(), 10.0, duration, period, check_sensors=False)
     t = result.timing
     rows += [
         {
@@ -72,7 +73,8 @@ def run() -> list[dict]:
             "unit": "ms",
             "goal": "<= 0.2",
             "note": f"p50 {t.jitter_p50_s * 1e3:.3f} ms, max {t.jitter_max_s * 1e3:.3f} ms, {t.samples} samples, "
-            f"status {result.status}; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores",
+            f"status {result.status}; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; "
+            f"SCHED_FIFO {'on' if rt.active else 'not permitted'}",
         },
         {
             "name": "loop 1 kHz on sim+paced, 10 s: overruns",

@@ -124,3 +124,17 @@ def test_a_log_that_is_not_a_log_is_refused(tmp_path):
     torn.write_text(torn.read_text() + '{"k": 99, "t"')  # a power cut mid-line
     header, samples, footer = read_log(torn)
     assert len(samples) == 5
+
+
+def test_realtime_priority_is_restored_or_untouched():
+    import os
+
+    from flexdigit.rig.loop import realtime_priority
+
+    if not hasattr(os, "sched_getscheduler"):
+        pytest.skip("no POSIX scheduling on this platform")
+    before = os.sched_getscheduler(0)
+    with realtime_priority() as rt:
+        inside = os.sched_getscheduler(0)
+        assert inside == (os.SCHED_FIFO if rt.active else before)
+    assert os.sched_getscheduler(0) == before

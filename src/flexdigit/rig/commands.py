@@ -37,13 +37,16 @@ def register(subparsers) -> None:
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
     parser.add_argument("--calibration", type=Path, default=None, help="saved rotation map (JSON); made if missing")
     parser.add_argument("--no-progress", action="store_true", help="no live progress line")
+    parser.add_argument(
+        "--realtime", action="store_true", help="run the loop under SCHED_FIFO when permitted (hardware, sim+paced)"
+    )
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit._validation import check_positive, check_real
     from flexdigit.rig.base import open_rig
     from flexdigit.rig.experiments import CONTROLLERS, RotationEstimator, calibrate_rotation, make_controller
-    from flexdigit.rig.loop import run_loop
+    from flexdigit.rig.loop import realtime_priority, run_loop
 
     if args.controller not in CONTROLLERS:
         from flexdigit.errors import ParameterError
@@ -62,6 +65,9 @@ def _run(args: argparse.Namespace) -> CommandResult:
         rig.close()
         raise
     progress = None if (args.no_progress or args.json or not sys.stderr.isatty()) else _Progress(duration)
+    priority = realtime_priority() if args.realtime else None
+    if priority is not None:
+        priority.__enter__()
     try:
         result = run_loop(
             rig,
@@ -75,6 +81,8 @@ def _run(args: argparse.Namespace) -> CommandResult:
             header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend},
         )
     finally:
+        if priority is not None:
+            priority.__exit__(None, None, None)
         if progress:
             progress.stop()
     t = result.timing

@@ -31,7 +31,16 @@ from flexdigit._validation import check_int, check_positive
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.rig.base import Reading, Rig
 
-__all__ = ["LoopController", "SampleLog", "TimingStats", "LoopResult", "run_loop", "check_reading", "read_log"]
+__all__ = [
+    "LoopController",
+    "SampleLog",
+    "TimingStats",
+    "LoopResult",
+    "run_loop",
+    "check_reading",
+    "read_log",
+    "realtime_priority",
+]
 
 LOG_FORMAT = "flexdigit-loop-log/1"
 
@@ -362,6 +371,36 @@ def run_loop(
     if pending_error is not None:
         raise pending_error
     return result
+
+
+class realtime_priority:
+    """Context manager: run the calling process under ``SCHED_FIFO`` (Linux) if allowed, restore it after.
+
+    A real-time loop on a shared machine is preempted by whatever else runs; FIFO priority keeps the scheduler
+    from doing that (the loop sleeps most of each period, so it does not starve the machine). Without the
+    permission (non-root, no CAP_SYS_NICE, not Linux) it does nothing; :attr:`active` says which.
+    """
+
+    def __init__(self, priority: int = 10) -> None:
+        self.priority = priority
+        self.active = False
+        self._previous = None
+
+    def __enter__(self) -> realtime_priority:
+        try:
+            self._previous = (os.sched_getscheduler(0), os.sched_getparam(0))
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(self.priority))
+            self.active = True
+        except (AttributeError, OSError):
+            self.active = False
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.active and self._previous is not None:
+            try:
+                os.sched_setscheduler(0, self._previous[0], self._previous[1])
+            except OSError:
+                pass
 
 
 def _safe_state(rig: Rig, equilibrium: int, close_rig: bool) -> bool:
