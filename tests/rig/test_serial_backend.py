@@ -112,3 +112,16 @@ def test_board_vanishing_mid_run_stops_the_loop_safely(tmp_path, board):
     header, samples, footer = read_log(log)
     assert len(samples) == n_before and [s["k"] for s in samples] == list(range(n_before))
     assert footer["stop"] == "fault"
+
+
+def test_serial_with_daq_reads_the_card_and_releases_it(board):
+    from .test_daq_backend import fake_uldaq
+
+    ul = fake_uldaq({0: 0.25, 1: 0.5, 2: 0.75})
+    rig = open_rig(f"serial://{board.port}?channel=0&daq=0", uldaq=ul)
+    np.testing.assert_allclose(rig.read().gauges_v, [0.25, 0.5, 0.75])
+    assert rig.write_command(30) == 30
+    card = rig.companions[0]
+    rig.close()
+    assert card.closed and card._device.state == "released"
+    assert board.wait_frames(3)[-2:] == [(0, 30), (0, 8)]

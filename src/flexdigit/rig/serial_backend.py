@@ -75,6 +75,7 @@ class SerialRig(Rig):
         if serial is None:
             serial = _open_port(self.port, self.baud, self.write_timeout_s)
         self._port = serial
+        self.companions: list = []
         super().__init__(params, **kwargs)
         # Bumpless start: the board holds its last position, so we start by sending equilibrium explicitly.
         self.write_command(self.params.actuator.equilibrium_command)
@@ -100,6 +101,8 @@ class SerialRig(Rig):
             self._port.close()
         except Exception:  # noqa: BLE001 - closing a port that already vanished must not raise
             pass
+        for companion in self.companions:  # the gauge card opened with it (serial://...?daq=0)
+            companion.close()
 
     def __repr__(self) -> str:
         state = "closed" if self.closed else "open"
@@ -130,8 +133,23 @@ def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -
             except ValueError:
                 raise ParameterError(f"serial://{location}: option {key}={options[key]!r} must be an integer") from None
     daq = options.pop("daq", None)
+    uldaq = options.pop("uldaq", None)
+    card = None
     if daq is not None and "sensor" not in options:
         from flexdigit.rig.daq_backend import DaqRig
 
-        options["sensor"] = DaqRig(int(daq), params).read_gauges
-    return SerialRig(location, params, **options)
+        try:
+            board = int(daq)
+        except ValueError:
+            raise ParameterError(f"serial://{location}: option daq={daq!r} must be a board number") from None
+        card = DaqRig(board, params, uldaq=uldaq)
+        options["sensor"] = card.read_gauges
+    try:
+        rig = SerialRig(location, params, **options)
+    except BaseException:
+        if card is not None:
+            card.close()
+        raise
+    if card is not None:
+        rig.companions.append(card)
+    return rig
