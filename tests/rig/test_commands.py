@@ -33,3 +33,10 @@ def test_run_errors_are_one_line(capsys, tmp_path):
     bad.write_text("{}")
     assert main(["run", "--calibration", str(bad)]) == 2
     assert "not a rotation calibration" in capsys.readouterr().err
+
+
+def test_replay_needs_a_saved_calibration(tmp_path, capsys):
+    log = tmp_path / "rec.jsonl"
+    log.write_text('{"format": "flexdigit-loop-log/1"}\n{"k": 0, "t": 0.0, "gauges_v": [0, 0, 0], "command": 8}\n')
+    assert main(["run", "--backend", f"replay://{log}"]) == 2
+    assert "--calibration" in capsys.readouterr().err

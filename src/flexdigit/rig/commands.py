@@ -124,6 +124,10 @@ def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
         return _load_estimator(path, RotationEstimator)
     if sim:
         est = calibrate_rotation(open_rig(args.backend.split("?")[0], seed=args.seed + 1))
+    elif args.backend.startswith("replay"):
+        from flexdigit.errors import ParameterError
+
+        raise ParameterError("a replay cannot be calibrated (it ignores commands); pass --calibration FILE")
     else:
 
         def ask(command: int) -> float:
