@@ -164,3 +164,27 @@ def test_cable_is_slack_below_the_equilibrium_command():
     # below command 8 the cable is slack, so a vertical digit stays straight: same reading at 0 and 8
     v = static_gauges_v([0.0, 0.0], [0.27, 0.27], [0, 8], orientation="vertical", adc=False)
     np.testing.assert_allclose(v[0], v[1], atol=1e-9)
+
+
+def test_a_full_range_command_step_settles_on_the_static_equilibrium():
+    # the most violent input the rig can get (8 -> 43 in one frame): the adaptive step keeps the dynamics finite
+    # and the digit comes to rest where the static solver puts it
+    twin = Twin(seed=0, command=8)
+    twin.command(43)
+    twin.advance(6.0)
+    static = static_gauges_v([0.0], [0.27], [43], orientation="vertical", adc=False)[0]
+    np.testing.assert_allclose(twin.clean_read()[0], static, atol=5e-4)
+    assert np.max(np.abs(twin.dynamics.omega)) < 0.05
+
+
+def test_no_step_to_step_ringing_after_a_cable_pull():
+    # an A-stable but not L-stable method would leave the fast cell modes alternating sign every step
+    twin = Twin(seed=0, command=8)
+    twin.command(30)
+    twin.advance(1.0)
+    readings = []
+    for _ in range(20):
+        twin.advance(twin.dt_s)
+        readings.append(twin.clean_read()[0])
+    second_difference = np.diff(np.array(readings), n=2, axis=0)
+    assert np.max(np.abs(second_difference)) < 2e-3  # V: smooth at the 10 ms grid

@@ -16,7 +16,7 @@ needs at command 43).
 from __future__ import annotations
 
 import math
-from functools import cache, lru_cache
+from functools import lru_cache
 
 import numpy as np
 import scipy.linalg
@@ -53,6 +53,8 @@ class Servo:
         self.angle = float(command_to_angle_rad(self.command, params))
         self.rate = 0.0
         self.pending: list[tuple[float, int]] = []
+        self._targets: dict[int, float] = {}
+        self._transitions: dict[float, np.ndarray] = {}
 
     def check_command(self, value) -> int:
         """Validate a serial position command (integer in ``command_min..command_max``)."""
@@ -78,7 +80,9 @@ class Servo:
 
     def step(self, h: float) -> None:
         """Advance the servo ``h`` seconds towards the current command's angle (exact for the linear model)."""
-        phi = _servo_transition(self.wn, self.zeta, h)
+        phi = self._transitions.get(h)
+        if phi is None:
+            phi = self._transitions[h] = _servo_transition(self.wn, self.zeta, h)
         target = self._target(self.command)
         angle = phi[0, 0] * self.angle + phi[0, 1] * self.rate + phi[0, 2] * target
         rate = phi[1, 0] * self.angle + phi[1, 1] * self.rate + phi[1, 2] * target
@@ -87,13 +91,12 @@ class Servo:
             rate = 0.0
         self.angle, self.rate = angle, rate
 
-    @staticmethod
-    @cache
-    def _target_angle(params, command: int) -> float:
-        return float(command_to_angle_rad(command, params))
-
     def _target(self, command: int) -> float:
-        return self._target_angle(self.params, command)
+        # a dict per servo: hashing the frozen RigParams for an lru_cache key costs ~20 us a step
+        angle = self._targets.get(command)
+        if angle is None:
+            angle = self._targets[command] = float(command_to_angle_rad(command, self.params))
+        return angle
 
     def pot_v(self, angle_rad: float) -> float:
         """Potentiometer voltage (V) at a shaft angle (rad)."""
