@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from flexdigit.identify.experiment import identify
-from flexdigit.identify.fit import SecondOrderFit, fit_arx, fit_linear
+from flexdigit.identify.fit import SecondOrderFit, fit_arx, fit_linear, second_order_response
 from flexdigit.identify.timeseries import TimeSeries
 from flexdigit.reference import thesis_value
 
@@ -119,3 +119,12 @@ def test_arx_method_on_records_with_half_percent_noise_within_2_percent(kind):
     r = identify(TimeSeries.from_arrays(t, y), kind, method="arx", t0_s=None if kind == "release" else 0.2)
     assert r.wn_rad_s == pytest.approx(truth["wn_rad_s"], rel=0.02)
     assert r.zeta == pytest.approx(truth["zeta"], rel=0.02)
+
+
+def test_lsq_fits_an_overdamped_step_the_thesis_method_cannot():
+    # zeta 1.5: no overshoot, so no %OS; the fit starts from the rise time and still finds the parameters
+    t = np.arange(0, 3, 0.002)
+    y = second_order_response(t, "step", 10.0, 1.5, 0.0, 1.0, 0.1) + np.random.default_rng(0).normal(0, 0.005, t.size)
+    r = identify(TimeSeries.from_arrays(t, y), "step", method="lsq", t0_s=0.1)
+    assert r.features is None
+    assert r.wn_rad_s == pytest.approx(10.0, rel=0.05) and r.zeta == pytest.approx(1.5, rel=0.05)

@@ -139,7 +139,8 @@ class SecondOrderFit:
 
     def fit(self, t_s, y, *, initial: dict | None = None, source: str = "response") -> SecondOrderFit:
         """Fit the model to ``y(t_s)``; ``initial`` may give start values ``wn_rad_s, zeta, offset, amplitude,
-        t0_s`` (default: from the thesis-style features of a smoothed copy, or the dominant ARX poles)."""
+        t0_s`` (default: from the features of a smoothed copy, or, for a response that does not overshoot, from
+        its rise time at critical damping)."""
         owner = type(self).__name__
         if self.kind not in ("step", "release"):
             raise ParameterError(
@@ -201,7 +202,7 @@ class SecondOrderFit:
 
 
 def _initial_guess(t: np.ndarray, y: np.ndarray, kind: str, t0_s: float | None, source: str) -> dict:
-    """Start values: features of a smoothed copy when it over/undershoots, else the ARX(2) poles, else a guess."""
+    """Start values: features of a smoothed copy when it over/undershoots, else critical damping and the rise time."""
     from flexdigit.identify.filters import apply_filter
 
     smooth = apply_filter(t, y, "butter")

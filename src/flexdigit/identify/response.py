@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_positive
+from flexdigit._validation import check_array, check_choice, check_positive
 from flexdigit.errors import DataFileError
 from flexdigit.models.digit import (
     natural_frequency_from_damped,
@@ -85,7 +85,8 @@ class ResponseFeatures:
         Signal before the step / at release, and at rest (signal units).
     percent_overshoot : float
         Step: overshoot past the final value relative to the step size. Release: first undershoot past the final
-        value relative to the initial deflection (percent). NaN when the response does not cross its final value.
+        value relative to the initial deflection (percent). A response that does not cross its final value raises
+        instead (:func:`analyze_response`).
     peak_time_s : float
         Time of that first overshoot (undershoot) after ``t0_s`` (s).
     rise_time_s : float
@@ -201,8 +202,7 @@ def analyze_response(
     >>> round(f.zeta_os, 4), round(f.wn_damped_rad_s, 2), round(f.settling_time_s, 4)  # MT(s) of 3.2.4
     (0.5628, 20.53, 0.2855)
     """
-    if kind not in ("step", "release"):
-        raise ValueError(f"The 'kind' parameter must be one of 'step', 'release'. Got {kind!r} instead.")
+    check_choice(kind, "kind", ("step", "release"), "analyze_response")
     t = check_array(t_s, "t_s", ndim=1, min_length=8, increasing=True, error=DataFileError)
     y = check_array(y, "y", ndim=1, shape=(len(t),), error=DataFileError)
     yf = final_value_estimate(y) if final_value is None else float(final_value)
