@@ -124,5 +124,10 @@ def test_reduce_controller_keeps_low_frequency(G):
     K = thesis_design(5.0, G).controller
     Kr = reduce_controller(K, 3)
     assert Kr.nstates == 3
+    # balanced truncation error bound: |K - Kr| <= 2 x (sum of the dropped Hankel singular values), all w
+    hsv = np.sort(ct.hankel_singular_values(K))[::-1]
+    w = np.logspace(-1, 4, 400)
+    err = np.max(np.abs(K(1j * w) - Kr(1j * w)))
+    assert err <= 2 * hsv[3:].sum() * (1 + 1e-6)
     with pytest.raises(DesignError, match="order"):
         reduce_controller(K, 9)

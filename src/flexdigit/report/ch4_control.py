@@ -52,6 +52,37 @@ def build(ctx: ReportContext) -> Chapter:
         )
     )
 
+    # ---- 4.2 / table 4.1: the K1 closed loop without a controller
+    k1 = 86.2 / 48.7  # the printed closed-loop numerator over the plant's: 1.7699 (a tenth of E 3.16's 17.6991)
+    cl_poles = sorted_poles(ct.poles(build_plant("printed").closed_loop(k1)))
+    for i, (p_t, p_o) in enumerate(zip(sorted_poles(thesis_complex("plant.closed_loop_poles")), cl_poles, strict=True)):
+        E(
+            results.compare(
+                f"plant.closed_loop_pole_{i}_abs",
+                "4.2, table 4.1",
+                abs(p_t),
+                abs(p_o),
+                "rad/s",
+                rtol=2e-3,
+                note=f"K1 = {k1:.4f} closed loop: printed {p_t:.4f}, ours {p_o:.4f}.",
+            )
+        )
+
+    # ---- the printed 5 Hz controller on the printed plant
+    m5p = loop_maps(G, printed_controller("5hz"))
+    worst = m5p.poles[np.argmax(m5p.poles.real)]
+    E(
+        results.new(
+            "hinf.k_5hz_printed_closed_loop",
+            "4.4",
+            "unstable",
+            "",
+            f"The 5 Hz controller as printed, on the printed plant, gives closed-loop poles up to "
+            f"{worst.real:+.2f} {abs(worst.imag):+.2f}j rad/s: no norm of it is meaningful. With the plant gain "
+            "divided by 10 (or K by 10) it is stable and gives the printed ||T_zw||.",
+        )
+    )
+
     # ---- fitted regularisation reproduces tables 4.2 / 4.3
     fits = {hz: fit_thesis_regularisation(hz) for hz in (5.0, 39.0)}
     for hz, key in ((5.0, "5hz"), (39.0, "39hz")):
