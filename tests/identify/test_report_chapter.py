@@ -11,6 +11,7 @@ def chapter(tmp_path_factory):
     return build(ReportContext(out_dir=tmp_path_factory.mktemp("report"), fast=True))
 
 
+@pytest.mark.slow  # ~3-5 s: the chapter runs the twin's release, step and sweep experiments
 def test_chapter_entries_and_figures(chapter):
     entries = {e.key: e for e in chapter.entries}
     # lsq recovers the thesis's digit and servo models within 3 % (issue 4) from the chapter's experiments
@@ -23,3 +24,6 @@ def test_chapter_entries_and_figures(chapter):
     refs = {f.thesis_ref for f in chapter.figures}
     assert {"figure 3.6", "figure 3.11", "figure 3.12"} <= refs
     assert all(e.status != "discrepancy" or e.note for e in chapter.entries)
+    # E 3.20-3.22 refitted to the twin's actuation sweep (the twin is calibrated to them)
+    for k in (1, 2, 3):
+        assert entries[f"identify.v_sg_fit.sg{k}.slope_v_per_command"].status == "match"
