@@ -77,7 +77,7 @@ class BeamInversion:
         digit_length_m: float = 0.270,
         max_mass_kg: float = 0.08,
         position_step_m: float = 1e-3,
-        mass_steps: int = 161,
+        mass_steps: int = 81,
         calibrate: bool = True,
         load_set: bool = False,
         tared: bool = False,
@@ -143,17 +143,19 @@ class BeamInversion:
         for value in np.unique(command):
             rows = np.flatnonzero(command == value)
             grid = self._grid(int(value)) * self.gain_ + self.offset_
+            a0 = np.empty(rows.size)
+            m0 = np.empty(rows.size)
             for start in range(0, rows.size, 32):  # batches bound the (batch, na, nm) temporaries
                 r = rows[start : start + 32]
                 d = np.zeros((r.size,) + grid.shape[:2])
                 for i in range(3):
                     d += ((v[r, i, None, None] - grid[None, :, :, i]) / self.noise_v_[i]) ** 2
-                flat = d.reshape(r.size, -1).argmin(axis=1)
-                ia, im = np.unravel_index(flat, d.shape[1:])
-                a, m, c = self._gauss_newton(v[r], self.a_grid_[ia], self.m_grid_[im], int(value))
-                out[r, 0] = self.digit_length_m - a
-                out[r, 1] = m
-                cost[r] = c
+                ia, im = np.unravel_index(d.reshape(r.size, -1).argmin(axis=1), d.shape[1:])
+                a0[start : start + 32], m0[start : start + 32] = self.a_grid_[ia], self.m_grid_[im]
+            a, m, c = self._gauss_newton(v[rows], a0, m0, int(value))
+            out[rows, 0] = self.digit_length_m - a
+            out[rows, 1] = m
+            cost[rows] = c
         return (out, cost) if return_cost else out
 
     def _model(self, a, m, command) -> np.ndarray:
@@ -202,8 +204,8 @@ class BeamInversion:
 class GPLocaliser:
     """Gaussian-process regression of position and mass from the gauges, with uncertainty.
 
-    One ``GaussianProcessRegressor`` per target column, kernel ``C * RBF(anisotropic) + White``, inputs and
-    targets normalised (E 6.1 style). ``predict(X, return_std=True)`` also gives the predictive standard
+    One ``GaussianProcessRegressor`` for all target columns (shared kernel ``C * RBF(anisotropic) + White``),
+    inputs and targets normalised (E 6.1 style). ``predict(X, return_std=True)`` also gives the predictive standard
     deviation of each estimate (same units as the target).
 
     Parameters
@@ -216,7 +218,7 @@ class GPLocaliser:
         Seed of the optimiser restarts and the subsample.
     """
 
-    def __init__(self, n_restarts: int = 0, max_train: int = 600, random_state: int = 0) -> None:
+    def __init__(self, n_restarts: int = 0, max_train: int = 500, random_state: int = 0) -> None:
         self.n_restarts = n_restarts
         self.max_train = max_train
         self.random_state = random_state
@@ -240,17 +242,17 @@ class GPLocaliser:
             x, y = x[keep], y[keep]
         self.x_norm_ = Normaliser().fit(x)
         xn = self.x_norm_.transform(x)
-        self.models_ = []
-        for j in range(y.shape[1]):
-            kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.ones(x.shape[1]), (1e-2, 1e3)) + WhiteKernel(
-                1e-3, (1e-8, 1.0)
-            )
-            gp = GaussianProcessRegressor(
-                kernel, normalize_y=True, n_restarts_optimizer=self.n_restarts, random_state=self.random_state
-            )
-            with warnings.catch_warnings():  # hyper-parameters at a bound (e.g. no noise floor) are fine here
-                warnings.simplefilter("ignore", ConvergenceWarning)
-                self.models_.append(gp.fit(xn, y[:, j]))
+        # one GP for every target column: shared kernel hyper-parameters, each column normalised (normalize_y)
+        kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.ones(x.shape[1]), (1e-2, 1e3)) + WhiteKernel(
+            1e-3, (1e-8, 1.0)
+        )
+        gp = GaussianProcessRegressor(
+            kernel, normalize_y=True, n_restarts_optimizer=self.n_restarts, random_state=self.random_state
+        )
+        with warnings.catch_warnings():  # hyper-parameters at a bound (e.g. no noise floor) are fine here
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            gp.fit(xn, y)
+        self.models_ = [gp]
         self.n_outputs_ = y.shape[1]
         return self
 
@@ -258,7 +260,6 @@ class GPLocaliser:
         if not hasattr(self, "models_"):
             raise ParameterError("This GPLocaliser is not fitted yet; call fit first.")
         xn = self.x_norm_.transform(check_array(X, "X", "GPLocaliser.predict", ndim=2))
-        outs = [gp.predict(xn, return_std=True) for gp in self.models_]
-        mean = np.column_stack([o[0] for o in outs])
-        std = np.column_stack([o[1] for o in outs])
+        mean, std = self.models_[0].predict(xn, return_std=True)
+        mean, std = mean.reshape(xn.shape[0], -1), std.reshape(xn.shape[0], -1)
         return (mean, std) if return_std else mean

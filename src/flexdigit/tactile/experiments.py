@@ -55,16 +55,62 @@ def twin_rig(protocol: Protocol, *, seed: int = 0, params: RigParams | None = No
 
 
 def collect_on_twin(
-    protocol: Protocol, out: str | Path, *, seed: int = 0, params: RigParams | None = None, calibration=None
+    protocol: Protocol,
+    out: str | Path,
+    *,
+    seed: int = 0,
+    params: RigParams | None = None,
+    calibration=None,
+    settle_s: float | None = None,
 ) -> Dataset:
-    """Collect ``protocol`` on a fresh twin into ``out`` (replacing an older file)."""
+    """Collect ``protocol`` on a fresh twin into ``out`` (replacing an older file and journal)."""
+    from flexdigit.tactile.runner import journal_path
+
     out = Path(out)
     out.unlink(missing_ok=True)
+    journal_path(out).unlink(missing_ok=True)
     rig = twin_rig(protocol, seed=seed, params=params, calibration=calibration)
     try:
-        return collect(protocol, rig, out, params=params, rig_url="sim")
+        return collect(protocol, rig, out, params=params, rig_url="sim", settle_s=settle_s)
     finally:
         rig.close()
+
+
+def static_dataset(protocol: Protocol, *, seed: int = 0, params: RigParams | None = None, calibration=None) -> Dataset:
+    """The protocol's readings from the twin's batched static solver plus its white noise (no dynamics, no drift).
+
+    Every setting at rest, every reading independent: the ideal experiment, in milliseconds (used to scan the
+    noise level). ``time_s`` counts the readings.
+    """
+    from flexdigit.tactile.dataset import COLUMNS, make_meta
+    from flexdigit.tactile.protocols import RELAXED
+    from flexdigit.twin.calibration import default_calibration
+    from flexdigit.twin.twin import static_gauges_v
+
+    params = params or RigParams()
+    calibration = calibration or default_calibration()
+    plan = protocol.plan(params.geometry.digit_length_m)
+    n = protocol.sample_count
+    pos = np.nan_to_num(plan["position_from_base_m"], nan=0.0)
+    gauges = np.empty((n, 3))
+    rng_seed = np.random.default_rng(seed).integers(2**31, size=len(set(plan["command"].tolist())))
+    for k, c in enumerate(sorted(set(plan["command"].tolist()))):
+        rows = plan["command"] == c
+        gauges[rows] = static_gauges_v(
+            plan["load_kg"][rows],
+            pos[rows],
+            None if c == RELAXED else plan["command"][rows],
+            params=params,
+            calibration=calibration,
+            orientation=protocol.orientation,
+            seed=int(rng_seed[k]),
+        )
+    columns = {k: np.asarray(v) for k, v in plan.items()}
+    columns.update(gauge1_v=gauges[:, 0], gauge2_v=gauges[:, 1], gauge3_v=gauges[:, 2])
+    columns["pot_v"] = np.full(n, np.nan)
+    columns["time_s"] = np.arange(n, dtype=float)
+    meta = make_meta(protocol, {"url": "static-twin", "repr": "static_gauges_v"}, params.geometry.digit_length_m)
+    return Dataset({k: columns[k].astype(d) for k, d in COLUMNS.items()}, meta)
 
 
 #: Per experiment: (protocol collected, size whose error curves figure 6.13 / 7.4 show)
@@ -109,7 +155,15 @@ def run_experiment(
     protocol = load_protocol(name)
     data_dir = Path(data_dir)
     data_dir.mkdir(parents=True, exist_ok=True)
-    dataset = collect_on_twin(protocol, data_dir / f"{name}.parquet", seed=seed, params=params, calibration=calibration)
+    # fast mode (tests) settles 2 s instead of the protocol's 10-15 s: quicker, but the digit still swings a little
+    dataset = collect_on_twin(
+        protocol,
+        data_dir / f"{name}.parquet",
+        seed=seed,
+        params=params,
+        calibration=calibration,
+        settle_s=2.0 if fast else None,
+    )
     # The position network sees the loaded readings: the no-load readings "assist in the determination of the
     # load/no load and load magnitude prediction networks" (6.5), and table 7.1's 1500 has none. The variant with
     # the no-load readings as position 0 (table 6.1's first row) is run too, at the thesis's optimum.
@@ -133,7 +187,12 @@ def run_experiment(
     )
     _, y_all = targets(dataset, "position_index")
     with_no_load = run_pipeline(
-        features(dataset), y_all, seed=seed, fixed_hidden=best_hidden, fixed_tol=best_tol, epochs=epochs,
+        features(dataset),
+        y_all,
+        seed=seed,
+        fixed_hidden=best_hidden,
+        fixed_tol=best_tol,
+        epochs=epochs,
         curve_hidden=curve_hidden,
     )
     strategies = compare_strategies(dataset, hidden=best_hidden, tol=best_tol, seed=seed, epochs=epochs)

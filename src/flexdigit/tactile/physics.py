@@ -60,9 +60,7 @@ class Bound:
     zone: np.ndarray
 
 
-def cramer_rao(
-    model, position_from_base_m, mass_kg, command=RELAXED, *, step_m: float = 2e-4, noise_v=None
-) -> Bound:
+def cramer_rao(model, position_from_base_m, mass_kg, command=RELAXED, *, step_m: float = 2e-4, noise_v=None) -> Bound:
     """Cramer-Rao lower bounds of the position (m, one reading) at each ``(position, mass, command)``.
 
     Infinite where the position cannot be estimated at all (no gauge bends) or, for ``crlb_m``, where position
