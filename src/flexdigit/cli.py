@@ -22,6 +22,12 @@ from flexdigit._json import to_jsonable
 #: Modules that add sub-commands, in the order of the architecture (params -> ... -> report).
 COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.params_commands",
+    "flexdigit.models.commands",
+    "flexdigit.twin.commands",
+    "flexdigit.identify.commands",
+    "flexdigit.control.commands",
+    "flexdigit.rig.commands",
+    "flexdigit.tactile.commands",
     "flexdigit.report.commands",
 )
 

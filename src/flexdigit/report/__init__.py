@@ -7,4 +7,12 @@ The report only reads the rest of the package; nothing imports it.
 from __future__ import annotations
 
 #: Chapter modules in the order they appear in the report.
-CHAPTERS: tuple[str, ...] = ("flexdigit.report.ch3_models",)
+CHAPTERS: tuple[str, ...] = (
+    "flexdigit.report.ch3_models",
+    "flexdigit.report.ch3_twin",
+    "flexdigit.report.ch3_identify",
+    "flexdigit.report.ch4_control",
+    "flexdigit.report.ch5_digital",
+    "flexdigit.report.ch6_tactile",
+    "flexdigit.report.ch7_tactile",
+)
