@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -86,11 +87,15 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"flexdigit {args.command_name}: error: {_message(exc)}", file=sys.stderr)
         return 2
-    if getattr(args, "json", False):
-        json.dump(to_jsonable(result.data), sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    elif result.text:
-        print(result.text)
+    try:
+        if getattr(args, "json", False):
+            json.dump(to_jsonable(result.data), sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        elif result.text:
+            print(result.text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # `flexdigit ... | head`: the reader left; say nothing more
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - keeps Python's exit-time flush quiet
     return result.exit_code
 
 
