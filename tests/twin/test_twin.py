@@ -177,14 +177,17 @@ def test_a_full_range_command_step_settles_on_the_static_equilibrium():
     assert np.max(np.abs(twin.dynamics.omega)) < 0.05
 
 
-def test_no_step_to_step_ringing_after_a_cable_pull():
-    # an A-stable but not L-stable method would leave the fast cell modes alternating sign every step
-    twin = Twin(seed=0, command=8)
-    twin.command(30)
-    twin.advance(1.0)
-    readings = []
-    for _ in range(20):
-        twin.advance(twin.dt_s)
-        readings.append(twin.clean_read()[0])
-    second_difference = np.diff(np.array(readings), n=2, axis=0)
-    assert np.max(np.abs(second_difference)) < 2e-3  # V: smooth at the 10 ms grid
+def test_default_step_tracks_a_fine_step_after_a_cable_pull():
+    # an A-stable but not L-stable method leaves the fast cell modes ringing at the grid rate; the default 20 ms
+    # step must follow a 1 ms reference through the transient of a cable pull, gauge by gauge
+    coarse, fine = Twin(seed=0, command=8), Twin(seed=0, command=8, dt_s=0.001)
+    for twin in (coarse, fine):
+        twin.command(30)
+    worst = 0.0
+    for _ in range(100):
+        coarse.advance(0.02)
+        fine.advance(0.02)
+        worst = max(worst, float(np.max(np.abs(coarse.clean_read()[0] - fine.clean_read()[0]))))
+    span = abs(static_gauges_v([0.0], [0.27], [30], orientation="vertical", adc=False)[0, 1] - fine.clean_read()[0][1])
+    assert worst < 0.01  # V, against a swing of ~0.2 V on gauge 2
+    assert span < 0.01  # and both have settled near the static value

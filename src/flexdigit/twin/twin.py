@@ -34,7 +34,7 @@ from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
 from flexdigit.twin.sensors import SensorChain
 
-DEFAULT_DT_S = 0.010
+DEFAULT_DT_S = 0.020
 DEFAULT_CELLS_PER_SECTION = 3
 
 
