@@ -100,4 +100,4 @@ class Servo:
 
     def pot_v(self, angle_rad: float) -> float:
         """Potentiometer voltage (V) at a shaft angle (rad)."""
-        return float(self.pot.voltage_v(math.degrees(angle_rad)))
+        return (math.degrees(angle_rad) - self.pot.offset_deg) / self.pot.slope_deg_per_v  # PotentiometerMap.voltage_v

@@ -166,6 +166,8 @@ class Chain:
         self._mass_beyond_gauge = (ms[None, :] > self.gauge_s_m[:, None]) @ self.mass_kg
         self._gauge_interp = self._interpolation(self.gauge_s_m)
         self._gauge_link = np.clip(np.searchsorted(s, self.gauge_s_m, side="right") - 1, -1, n - 1)
+        self._gauge_take = np.maximum(self._gauge_link, 0)
+        self._gauge_on_chain = (self._gauge_link >= 0).astype(float)
         # curvature at the gauges = W (phi / h) = W diag(1/h) D psi: one product per read
         self._psi_to_gauge_curvature = self._gauge_interp @ (d / self.cell_length_m[:, None])
 
@@ -233,8 +235,7 @@ class Chain:
 
     def axial_force(self, psi, g_forces_beyond_ab, tension):
         """Axial force (N, tension +) in the strip at the gauges: ``F_beyond . u - T`` (quasi-static)."""
-        link = self._gauge_link
-        psi_g = np.where(link >= 0, np.take(psi, np.maximum(link, 0), axis=-1), 0.0)
+        psi_g = np.take(psi, self._gauge_take, axis=-1) * self._gauge_on_chain  # 0 on the clamped stretch
         fa, fb = g_forces_beyond_ab[..., 0], g_forces_beyond_ab[..., 1]
         return fa * np.cos(psi_g) + fb * np.sin(psi_g) - np.asarray(tension)[..., None]
 

@@ -21,6 +21,7 @@ seeded generator. The ADC clips to its range and rounds to its 16-bit step.
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -119,7 +120,8 @@ class SensorChain:
     def sample(self, clean_v: np.ndarray, time_s: float) -> np.ndarray:
         """One ADC sample of the gauge channels at ``time_s``: drift advanced since the last sample, white noise."""
         if self._last_t is not None and time_s > self._last_t:
-            self.drift += self.drift_rate * np.sqrt(time_s - self._last_t) * self.rng.standard_normal(self.drift.size)
+            step = math.sqrt(time_s - self._last_t)
+            self.drift += (self.drift_rate * step) * self.rng.standard_normal(self.drift.size)
         self._last_t = time_s
         noisy = clean_v + self.drift + self.white * self.rng.standard_normal(self.drift.size)
         return self._quantise(noisy)
