@@ -14,4 +14,4 @@ def test_chapter_builds_with_explained_entries(tmp_path):
     assert by_key["hinf.tzw_peak_db"].status == "match"
     assert by_key["hinf.k_5hz_num_lead"].status == "discrepancy" and "10x" in by_key["hinf.k_5hz_num_lead"].note
     assert all(e.note for e in ch.entries if e.status == "discrepancy")
-    assert len(ch.figures) == 6 and all((tmp_path / "figures" / f"{f.name}.png").exists() for f in ch.figures)
+    assert len(ch.figures) == 8 and all((tmp_path / "figures" / f"{f.name}.png").exists() for f in ch.figures)

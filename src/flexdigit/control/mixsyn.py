@@ -63,7 +63,7 @@ class MixsynSpec:
     """
 
     bandwidth_rad_s: float = 1.0
-    s_peak: float = 1.5
+    s_peak: float = 2.0
     integral_eps: float = 1e-4
     w_command: float = 0.04
     w_disturbance: float = 40.0
