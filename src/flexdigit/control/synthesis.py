@@ -17,6 +17,7 @@ so ``K`` sits in an ordinary negative-feedback loop).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import control as ct
@@ -392,7 +393,10 @@ def _lmi_once(Ps, nw, nz, solver, strict) -> tuple[LmiResult, float]:
     # over ten decades near the optimum, and the defaults stop 1 % high
     options = _CLARABEL_OPTIONS if solver.upper() == "CLARABEL" else {}
     try:
-        prob.solve(solver=solver, **options)
+        with warnings.catch_warnings():
+            # "may be inaccurate": the status says so, and the LMIs are re-checked below
+            warnings.simplefilter("ignore", UserWarning)
+            prob.solve(solver=solver, **options)
     except cp.error.SolverError as exc:
         raise DesignError(f"The LMI solver {solver} failed: {exc}") from exc
     if prob.status not in ("optimal", "optimal_inaccurate") or g.value is None:
