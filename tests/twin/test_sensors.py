@@ -76,3 +76,17 @@ def test_inlined_quantiser_agrees_with_models_bridge():
     chain = SensorChain(RigParams(), Calibration(), np.random.default_rng(0))
     v = np.random.default_rng(1).uniform(-6, 6, 10_000)
     np.testing.assert_array_equal(chain._quantise(v), adc_quantise(v, RigParams().sensors))
+
+
+@pytest.mark.parametrize("bridge", ["quarter", "half", "full"])
+def test_chain_output_is_gain_times_bridge_ratio_plus_offset(bridge):
+    p = RigParams().replace(sensors=Sensors(bridge=bridge))
+    cal = Calibration(channel_gain=(0.1, 0.2, 0.3), channel_offset_v=(0.01, -0.02, 0.0))
+    chain = SensorChain(p, cal, np.random.default_rng(0))
+    kappa = np.array([[0.5, -2.0, 3.0], [0.0, 1.0, -1.0]])  # 1/m
+    axial = np.array([[-8.0, 0.0, 2.0], [5.0, -5.0, 0.0]])  # N
+    half_t = p.geometry.strip_thickness_m / 2
+    eps_ax = axial / (p.material.youngs_modulus_pa * p.geometry.cross_section_m2)
+    ratio = bridge_ratio(kappa * half_t + eps_ax, -kappa * half_t + eps_ax, p.sensors)
+    expected = 1e4 * 1.0 * np.array([0.1, 0.2, 0.3]) * ratio + np.array([0.01, -0.02, 0.0])
+    np.testing.assert_allclose(chain.clean_v(kappa, axial), expected, rtol=1e-12, atol=1e-15)
