@@ -49,6 +49,11 @@ def test_singular_problem_rejected_by_riccati(P5):
         hinf_riccati(P5)
 
 
+def test_wrong_partition_raises(P5):
+    with pytest.raises(DesignError, match="too few"):
+        hinf_riccati(regularise(P5, 1e-6), nmeas=3, ncon=1)
+
+
 def test_infeasible_gamma_raises(P5):
     P = regularise(P5, 1e-6)
     with pytest.raises(DesignError, match="feasible"):

@@ -38,6 +38,22 @@ def build(ctx: ReportContext) -> Chapter:
     w = np.logspace(-1, 4, 2000)
     E = ch.entries.append
 
+    ch.paragraphs.append(
+        "Figures of chapter 4 and where they are here: 4.1-4.2 (Bode of the K1 loop and the plant) -> "
+        "ch4_plant_bode; 4.3-4.4 (root loci) -> ch4_root_locus and the table 4.1 entries; 4.5 (|F|) -> the "
+        "filter_peak entry; 4.6-4.8 and 4.17 are block diagrams (the LFTs are implemented in generalized.py and "
+        "analysis.loop_maps); 4.9-4.11 (controller root locus, singular values, exploded pole-zero plot) -> "
+        "ch4_controllers, ch4_pole_zero and the table 4.2 entries; 4.12-4.14 (T_zw, T_yw, T_uw) -> ch4_loop_maps "
+        "and the T_zw entries; 4.15-4.16 and 4.19-4.22 (step responses) -> ch4_steps and the T_uw/settling "
+        "entries; 4.18 (T_pq) -> ch4_tpq and the additive-tolerance entries; 4.23-4.24 (39 Hz controller) -> "
+        "ch4_controllers, ch4_tpq and the table 4.3 entries."
+    )
+    ch.paragraphs.append(
+        "Table 4.2 heads its columns 'x 10^4' and table 4.3 'x 10^2' (poles) and 'x 10^4' (zeros). The values in "
+        "4.2 are already rad/s (our fitted controller has exactly them), the 4.3 poles are rad/s / 100 "
+        "(-2.4504 x 100 = -245.04 = the 39 Hz filter pole), and the 4.3 zeros are rad/s (the plant poles)."
+    )
+
     # ---- 4.3 filter
     F = filter_weight(5.0)
     E(
