@@ -206,9 +206,57 @@ def build(ctx: ReportContext) -> Chapter:
             [[k, v] for k, v in cal.to_dict().items()],
         )
     )
+    gains = np.asarray(cal.channel_gain)
+    ch.paragraphs.append(
+        "Channel gains: with the nominal chain (Vs = 1 V, an assumption, times the amplifier's 10,000 and the half "
+        "bridge's GF/2) the twin's sweep would rise by "
+        + ", ".join(f"{fit['slope'] / g:.3f}" for fit, g in zip(fits, gains, strict=True))
+        + " V per command at gauges 1-3; E 3.20-3.22 measure "
+        + ", ".join(f"{fit['slope']:g}" for fit in fits)
+        + f", so the fitted per-channel factors are {', '.join(f'{g:.3f}' for g in gains)}: an effective "
+        f"excitation x gain of {1e4 * gains.min():.0f}-{1e4 * gains.max():.0f} V/V instead of 10,000 (a bridge "
+        "supply nearer 0.1 V, or a lower gauge factor or gain). The spread between channels (gauge 2 is "
+        f"{gains[1] / gains[0]:.2f} x gauge 1) is the per-channel difference the thesis's lines show."
+    )
     for entry in _physics_checks():
         e.append(entry)
+    ch.tables.append(_convergence_table())
     return ch
+
+
+def _convergence_table() -> Table:
+    """Relative errors against the closed forms as the cells are refined: second order (x 1/4 per halving)."""
+    from flexdigit.twin.digit import Chain
+
+    ei, length, mu = 0.012, 0.24, 0.038
+    exact_f = 1.8751040687**2 * math.sqrt(ei / (mu * length**4))
+    rows = []
+    for n in (3, 6, 12, 24, 48):
+        chain = Chain.uniform(length, ei, n, mass_per_length_kg_m=mu)
+        tip = chain.solve_static(tip_force_n=[[0, 1e-6]]).tip_m[0, 1] / (1e-6 * length**3 / (3 * ei)) - 1
+        y = -Chain.uniform(1.0, 1.0, n).solve_static(tip_force_n=[[0, -10.0]]).tip_m[0, 1] / _elastica_y(10.0) - 1
+        wn = chain.linear_modes()[0][0] / exact_f - 1
+        rows.append([n, f"{tip:.2e}", f"{y:.2e}", f"{wn:.2e}"])
+    return Table(
+        "Convergence with discretisation (relative errors; the twin's default is 12 cells over the strip)",
+        ["cells", "tip load vs PL^3/3EI", "elastica PL^2/EI = 10", "1st frequency vs Euler-Bernoulli"],
+        rows,
+    )
+
+
+def _elastica_y(alpha2: float) -> float:
+    """Tip deflection / L under a dead tip load, Bisshopp & Drucker's elliptic-integral solution."""
+    from scipy.optimize import brentq
+    from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
+
+    a = math.sqrt(alpha2)
+    k = brentq(
+        lambda k: ellipk(k * k) - ellipkinc(math.asin(1 / (math.sqrt(2) * k)), k * k) - a,
+        1 / math.sqrt(2) + 1e-12,
+        1 - 1e-12,
+    )
+    phi1 = math.asin(1 / (math.sqrt(2) * k))
+    return 1 - 2 / a * (ellipe(k * k) - ellipeinc(phi1, k * k))
 
 
 def _tip_angle(params, cal, command: int) -> float:
@@ -219,9 +267,6 @@ def _tip_angle(params, cal, command: int) -> float:
 
 def _physics_checks():
     """Closed-form checks at the twin's default cell size (12 cells over the strip)."""
-    from scipy.optimize import brentq
-    from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
-
     from flexdigit.twin.digit import Chain
 
     out = []
@@ -250,14 +295,7 @@ def _physics_checks():
             "Pure tip moment bending the strip 90 deg against the exact circular arc, 12 cells (goal 0.5 %).",
         )
     )
-    a = math.sqrt(10.0)
-    k = brentq(
-        lambda k: ellipk(k * k) - ellipkinc(math.asin(1 / (math.sqrt(2) * k)), k * k) - a,
-        1 / math.sqrt(2) + 1e-12,
-        1 - 1e-12,
-    )
-    phi1 = math.asin(1 / (math.sqrt(2) * k))
-    y_exact = 1 - 2 / a * (ellipe(k * k) - ellipeinc(phi1, k * k))
+    y_exact = _elastica_y(10.0)
     y = -Chain.uniform(1.0, 1.0, 12).solve_static(tip_force_n=[[0, -10.0]]).tip_m[0, 1]
     out.append(
         new(
