@@ -16,6 +16,9 @@ from flexdigit.errors import DesignError
 def register(subparsers) -> None:
     parser = subparsers.add_parser("design", help="H-infinity and mixed-sensitivity controller design (ch. 4)")
     sub = parser.add_subparsers(title="design commands", metavar="KIND")
+    parser.set_defaults(
+        func=lambda args: CommandResult(data=None, text=parser.format_help(), exit_code=2), command_name="design"
+    )
     p = add_command(sub, "hinf", _hinf, help="the thesis's H-infinity design (4.4) for one error-filter cut-off")
     p.add_argument("--filter-hz", type=float, required=True, help="cut-off of F(s) = 1/(s + 2 pi f), Hz")
     p.add_argument("--plant", choices=("printed", "consistent"), default="printed")
