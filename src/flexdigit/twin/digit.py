@@ -11,7 +11,7 @@ Cosserat rod (PyElastica) or beam finite elements, gives:
 
 - exact large rotations with one coordinate per cell (absolute link angles ``psi``), no shear or axial stiffness
   to resolve (a Cosserat rod's axial and shear waves force microsecond explicit steps), so an L-stable implicit
-  step of 10 ms follows the digit's 10-25 rad/s modes and quenches the fast cell modes (:class:`DynamicState`);
+  step of 20 ms follows the digit's 10-25 rad/s modes and quenches the fast cell modes (:class:`DynamicState`);
 - rigid supports for free: a support is simply a stretch of link with no spring in it;
 - a spring moment equal to the bending moment at the joint in equilibrium, so gauge strains are exact on the
   discrete configuration;
@@ -367,8 +367,9 @@ class DynamicState:
     the exact Jacobian (mass-matrix and Coriolis derivatives included) and ``gamma = 1 - 1/sqrt(2)``: second order
     and L-stable, so the chain's fast cell modes and the stiff cable are quenched rather than left ringing, while
     the slow modes keep their damping: its numerical damping ratio grows like (w h)^3 with a small constant,
-    4.5e-6 for an 11 rad/s mode at the default 10 ms step (0.2 % of the bare digit's 0.0025), where the usual
-    ``gamma = 1 + 1/sqrt(2)`` adds ~4 (w h)^3 = 5e-3, twice the bare digit's own damping. A step costs two
+    4e-5 for an 11 rad/s mode at the twin's default 20 ms step (1.5 % of the bare digit's 0.0025, 0.06 % of the
+    housed 0.068), where the usual ``gamma = 1 + 1/sqrt(2)`` adds ~4 (w h)^3 = 4e-2, far more than the digit's
+    own damping (both measured in the tests' set-up). A step costs two
     force evaluations and three small solves.
 
     Parameters
