@@ -44,14 +44,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _collect(args: argparse.Namespace) -> CommandResult:
     from pathlib import Path
 
-    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.base import open_rig, parse_rig_url
+    from flexdigit.tactile.experiments import sim_options
     from flexdigit.tactile.protocols import load_protocol
     from flexdigit.tactile.runner import collect, journal_path
 
     protocol = load_protocol(args.protocol)
     out = Path(args.out)
     resumed = journal_path(out).exists()
-    options = {"seed": args.seed} if args.backend.split(":")[0].startswith("sim") else {}
+    # on the twin, lie the digit as the protocol says and attach the cable only when it actuates
+    options = (
+        {"seed": args.seed, **sim_options(protocol, args.backend)}
+        if parse_rig_url(args.backend).scheme.startswith("sim")
+        else {}
+    )
     rig = open_rig(args.backend, **options)
     try:
         dataset = collect(protocol, rig, out, rig_url=args.backend, settle_s=args.settle, progress=not args.no_progress)
