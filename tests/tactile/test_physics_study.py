@@ -65,3 +65,30 @@ def test_localisation_study_on_table_6_1(tmp_path, make_rig, cantilever_model):
     assert r.magnitude_rel_rmse_identifiable["beam inversion"] < 0.10
     gp_mean, gp_std = GPLocaliser().fit(ds.gauges_v[:50], ds["load_kg"][:50]).predict(ds.gauges_v[:5], True)
     assert gp_std.shape == gp_mean.shape == (5, 1)
+
+
+def test_tare_zeroes_each_test_on_its_no_load_readings(tmp_path, make_rig):
+    from flexdigit.tactile.protocols import Protocol
+    from flexdigit.tactile.study import tare
+
+    p = Protocol("t", loads_kg=(0.01, 0.02), positions_from_tip_m=(0.0,), repetitions=3, no_load_repetitions=4)
+    ds = collect(p, make_rig(seed=1), tmp_path / "t.parquet")
+    ds.columns["gauge1_v"] = ds["gauge1_v"] + 0.5 * ds["test"]  # a different offset per test
+    tared, since = tare(ds)
+    for test in (0, 1):
+        zero = (ds["test"] == test) & (ds["load_kg"] == 0)
+        np.testing.assert_allclose(tared.gauges_v[zero].mean(axis=0), 0.0, atol=1e-12)
+    assert np.all(since >= 0) and since[ds["load_kg"] > 0].min() > 0
+
+
+def test_known_load_set_inversion_recovers_the_load(cantilever_model):
+    # noise-free readings of loads from a set of three: the set-restricted inversion returns the exact load
+    model = Cantilever(cantilever_model)
+    a = np.array([0.25, 0.20, 0.265, 0.15])
+    m = np.array([0.0075, 0.025, 0.0125, 0.025])
+    v = cantilever_model(a, m)
+    y = np.column_stack([0.27 - a, m])
+    est = BeamInversion(model, load_set=True, calibrate=False).fit(v, y)
+    pred = est.predict(v)
+    np.testing.assert_allclose(pred[:, 1], m)
+    np.testing.assert_allclose(pred[:, 0], 0.27 - a, atol=2e-4)

@@ -197,7 +197,7 @@ def run_experiment(
     )
     strategies = compare_strategies(dataset, hidden=best_hidden, tol=best_tol, seed=seed, epochs=epochs)
     model = TwinGaugeModel(params, calibration)
-    loc = localisation_study(dataset, model, seed=seed, hidden=best_hidden, tol=best_tol, epochs=epochs)
+    loc = localisation_study(dataset, model, seed=seed, hidden=best_hidden, tol=best_tol, epochs=epochs, fast=fast)
     thesis_mlp = _thesis_mlp_in_metres(dataset, rows, at_optimum, protocol, loc)
     commands = list(protocol.actuation_commands) or [-1]
     ident = identifiability_map(model, list(protocol.loads_kg), commands, params.geometry.digit_length_m, 136)

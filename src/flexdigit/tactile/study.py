@@ -110,6 +110,7 @@ def localisation_study(
     tol: float = 1e-7,
     epochs: int = 50,
     digit_length_m: float | None = None,
+    fast: bool = False,
 ) -> LocalisationResult:
     """Position, magnitude and contact by the three estimators on the thesis split of ``dataset``.
 
@@ -124,6 +125,8 @@ def localisation_study(
     hidden, tol, epochs : thesis MLP settings.
     digit_length_m : float, optional
         Clamp to tip (default: from the dataset's metadata).
+    fast : bool
+        Coarser inversion grid (2 mm, 41 masses) and a 200-reading GP: for tests.
     """
     length = float(digit_length_m or dataset.meta.get("digit_length_m", 0.270))
     actuated = dataset.protocol.actuated
@@ -151,11 +154,12 @@ def localisation_study(
     contact = loaded.astype(float)
     mlp_contact.fit(x[split.train], contact[split.train], x[split.val], contact[split.val])
 
-    inversion = BeamInversion(model, digit_length_m=length, max_mass_kg=2.0 * float(mass.max()), tared=True)
+    grid = {"position_step_m": 2e-3, "mass_steps": 41} if fast else {}
+    inversion = BeamInversion(model, digit_length_m=length, max_mass_kg=2.0 * float(mass.max()), tared=True, **grid)
     inversion.fit(x[trva], y[trva])
-    known_set = BeamInversion(model, digit_length_m=length, load_set=True, tared=True).fit(x[trva], y[trva])
+    known_set = BeamInversion(model, digit_length_m=length, load_set=True, tared=True, **grid).fit(x[trva], y[trva])
     set_pred = known_set.predict(x[te])
-    gp = GPLocaliser(random_state=seed).fit(x[trva], y[trva])
+    gp = GPLocaliser(random_state=seed, max_train=200 if fast else 500).fit(x[trva], y[trva])
 
     inv_all, inv_cost = inversion.predict(x[split.test], return_cost=True)
     gp_all, gp_std = gp.predict(x[te], return_std=True)
