@@ -122,6 +122,8 @@ def build(ctx: ReportContext) -> Chapter:
         )
     ch.figures.append(_sweep_figure(ctx, sweep, fits))
 
+    ch.figures.append(_shapes_and_step_figure(ctx, p, cal, rng_seed))
+
     targets = CalibrationTargets.from_thesis()
     rows = []
     commands = targets.deflection_commands
@@ -366,4 +368,48 @@ def _sweep_figure(ctx: ReportContext, sweep, fits):
     fig.tight_layout()
     return ctx.save_figure(
         fig, "twin_actuation_sweep", "Simulated actuation sweep beside E 3.20-3.22.", thesis_ref="figure 3.17"
+    )
+
+
+def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int):
+    """Left: the digit's shape at commands 8..43 (large deflection). Right: a servo step against MT(s)."""
+    import matplotlib.pyplot as plt
+    import scipy.signal
+
+    from flexdigit.twin import experiments as ex
+    from flexdigit.twin.twin import Twin
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
+    s = np.linspace(0.0, params.geometry.digit_length_m, 60)
+    for command in (8, 15, 22, 29, 36, 43):
+        twin = Twin(params, cal, command=command)
+        xy = twin.chain.positions(twin.state()[0], s) * 1e3
+        left.plot(xy[:, 1], xy[:, 0], label=f"command {command}")
+        g = twin.chain.positions(twin.state()[0], params.geometry.gauge_positions_m) * 1e3
+        left.plot(g[:, 1], g[:, 0], "k.", ms=4)
+    left.set_xlabel("sideways, towards the cable (mm)")
+    left.set_ylabel("along the undeformed digit (mm)")
+    left.set_aspect("equal")
+    left.legend(fontsize=7)
+    left.set_title("twin: digit shape (dots: gauges)")
+    res = ex.servo_step_test(command_from=0, command_to=51, duration_s=1.0, seed=seed, params=params, calibration=cal)
+    t = res.column("time_s")
+    pot = res.column("pot_v")
+    step_at = float(t[np.argmax(res.column("command") == 51)])
+    num, den = thesis_value("actuator.model.mt_num"), thesis_value("actuator.model.mt_den")
+    tt = np.linspace(0, t[-1] - step_at, 400)
+    _, y = scipy.signal.step((num, den), T=tt)
+    p0, p1 = pot[: max(1, int(np.argmax(t >= step_at)))].mean(), pot[-50:].mean()
+    right.plot(t, pot, lw=0.6, label="twin potentiometer (with noise)")
+    right.plot(tt + step_at, p0 + (p1 - p0) * y, "--", label="MT(s) of 3.2.4 from the command's arrival")
+    right.set_xlabel("time (s)")
+    right.set_ylabel("potentiometer (V)")
+    right.set_title("servo step 0 -> 51")
+    right.legend(fontsize=7)
+    fig.tight_layout()
+    return ctx.save_figure(
+        fig,
+        "twin_shapes_and_servo_step",
+        "Digit shapes over the operating commands; a servo step beside MT(s).",
+        thesis_ref="figure 3.12",
     )
