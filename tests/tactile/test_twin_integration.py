@@ -41,3 +41,20 @@ def test_thesis_corr2_on_the_static_twin_is_near_the_printed_figure():
     _, y = targets(ds, "position_index")
     r = run_pipeline(features(ds), y, seed=0, fixed_hidden=18, fixed_tol=1e-8, epochs=20)
     assert abs(r.corr2 - 0.9823) <= 0.03
+
+
+def test_twin_step_does_not_change_settled_readings(tmp_path):
+    # tactile runs use the twin's 20 ms step (experiments.TACTILE_TWIN_DT_S) instead of the sim backend's 2 ms:
+    # after settling, the readings of every setting agree to well under the 2 mV gauge noise
+    from flexdigit.rig.base import open_rig
+    from flexdigit.tactile.runner import collect
+
+    p = Protocol(
+        "dt", loads_kg=(0.025,), positions_from_tip_m=(0.0, 0.08), repetitions=2, no_load_repetitions=1, settle_s=15.0
+    )
+    means = []
+    for dt in (0.002, 0.02):
+        rig = open_rig("sim", seed=0, orientation="horizontal", cable=False, dt_s=dt)
+        ds = collect(p, rig, tmp_path / f"{dt}.parquet")
+        means.append([ds.gauges_v[ds["position_index"] == k].mean(axis=0) for k in (0, 1, 2)])
+    assert np.max(np.abs(np.array(means[0]) - np.array(means[1]))) < 5e-4

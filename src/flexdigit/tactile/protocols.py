@@ -133,9 +133,8 @@ class Protocol:
     def tests(self) -> list[tuple[float, int]]:
         """The tests in order: ``(load_kg, command)``, command :data:`RELAXED` when not actuated.
 
-        Commands outer, loads inner, so the servo command only steps in the order given (table 7.1: up, 0, 20,
-        40). Dropping the command at once releases a bent digit; on the twin that currently makes the
-        dynamics diverge, and on the rig it whips the digit.
+        Commands outer, loads inner: each command is set once and held while the weights change (three servo
+        moves for table 7.1 instead of six, always upwards). The thesis does not give the order.
         """
         commands = self.actuation_commands or (RELAXED,)
         return [(load, command) for command in commands for load in self.loads_kg]
