@@ -52,7 +52,6 @@ def test_beam_inversion_is_efficient_on_its_own_model(cantilever_model):
     assert np.sqrt(np.mean(err**2)) == pytest.approx(bound, rel=0.15)
 
 
-@pytest.mark.slow
 def test_localisation_study_on_table_6_1(tmp_path, make_rig, cantilever_model):
     ds = collect(load_protocol("thesis-6.1"), make_rig(seed=0), tmp_path / "d.parquet")
     r = localisation_study(ds, Cantilever(cantilever_model), seed=0, epochs=10)

@@ -1,14 +1,15 @@
 """Beyond the thesis's corr2: localisation in millimetres against the Cramer-Rao bound, contact and magnitude.
 
-:func:`localisation_study` puts three estimators side by side on identical data (the thesis's split of one
-dataset): the thesis's MLP (trained on the position in metres), the beam-model inversion and the Gaussian
+:func:`localisation_study` puts four estimators side by side on identical data (the thesis's split of one
+dataset, readings tared on each test's no-load readings): an MLP of the thesis's architecture trained on the
+position in metres, the beam-model inversion (mass free, or from the protocol's load set) and the Gaussian
 process (:mod:`flexdigit.tactile.estimators`). Each test reading also gets the Cramer-Rao bound of its position
 and its identifiability zone (:mod:`flexdigit.tactile.physics`), so the errors are compared with what the gauges
 physically allow, only where the load can be located at all.
 
 Note on the bound: it is the floor for an *unbiased* estimate of a continuous position and mass from one reading.
 Estimators trained on a protocol learn that masses (and positions) come from a short list and can beat it on
-that protocol's data; the beam inversion assumes nothing of the sort and cannot.
+that protocol's data; the free-mass beam inversion assumes nothing of the sort and cannot.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from flexdigit.tactile.physics import ZONES, cramer_rao
 from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
 from flexdigit.tactile.protocols import RELAXED
 
-ESTIMATORS = ("thesis MLP", "beam inversion", "beam inversion, known load set", "Gaussian process")
+ESTIMATORS = ("MLP (thesis architecture)", "beam inversion", "beam inversion, known load set", "Gaussian process")
 #: chi-square(2 dof) 99.9 % quantile: a load is declared when it explains the reading this much better than none
 CONTACT_CHI2 = 13.8155
 
@@ -164,13 +165,13 @@ def localisation_study(
     inv_all, inv_cost = inversion.predict(x[split.test], return_cost=True)
     gp_all, gp_std = gp.predict(x[te], return_std=True)
     pos_pred = {
-        "thesis MLP": mlp_pos.predict(x[te]),
+        "MLP (thesis architecture)": mlp_pos.predict(x[te]),
         "beam inversion": inv_all[loaded[split.test], 0],
         "beam inversion, known load set": set_pred[:, 0],
         "Gaussian process": gp_all[:, 0],
     }
     mass_pred = {
-        "thesis MLP": mlp_mass.predict(x[te]),
+        "MLP (thesis architecture)": mlp_mass.predict(x[te]),
         "beam inversion": inv_all[loaded[split.test], 1],
         "beam inversion, known load set": set_pred[:, 1],
         "Gaussian process": gp_all[:, 1],
@@ -181,7 +182,7 @@ def localisation_study(
     test_commands = x[split.test, 3].astype(int) if actuated else np.full(split.test.size, RELAXED)
     no_load_cost = np.sum(((x[split.test, :3] - inversion.no_load_v(test_commands)) / inversion.noise_v_) ** 2, axis=1)
     contact_pred = {
-        "thesis MLP": (mlp_contact.predict(x[split.test]) >= 0.5).astype(float),
+        "MLP (thesis architecture)": (mlp_contact.predict(x[split.test]) >= 0.5).astype(float),
         "beam inversion": (no_load_cost - inv_cost > CONTACT_CHI2).astype(float),
     }
     visible = zone[split.test] != ZONES[0]
