@@ -12,7 +12,12 @@ import json
 import sys
 import time
 
-MODULES: tuple[str, ...] = ("benchmarks.bench_control", "benchmarks.bench_twin", "benchmarks.bench_rig", "benchmarks.bench_tactile")
+MODULES: tuple[str, ...] = (
+    "benchmarks.bench_control",
+    "benchmarks.bench_twin",
+    "benchmarks.bench_rig",
+    "benchmarks.bench_tactile",
+)
 
 
 def main(argv: list[str] | None = None) -> int:
