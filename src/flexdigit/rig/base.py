@@ -313,8 +313,12 @@ def open_rig(url: str = "sim", params: RigParams | None = None, **options: Any) 
 
     Examples
     --------
-    >>> with open_rig("sim", seed=0) as rig:  # doctest: +SKIP
-    ...     rig.write_command(20); rig.wait(0.5); reading = rig.read()
+    >>> with open_rig("sim", seed=0) as rig:  # the twin, in virtual time
+    ...     sent = rig.write_command(300)  # clamped to the board's range
+    ...     rig.wait(0.5)
+    ...     reading = rig.read()
+    >>> sent, reading.time_s, reading.command, reading.gauges_v.shape
+    (254, 0.5, 254, (3,))
     """
     parsed = parse_rig_url(url)
     module_name, _, factory = BACKENDS[parsed.scheme].partition(":")
