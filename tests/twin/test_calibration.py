@@ -69,8 +69,12 @@ def test_deflections_match_table_3_6_where_the_thesis_model_agrees():
                 assert y_mm[g] == pytest.approx(measured[g, c], abs=DEFLECTION_ABS_MM), (g + 1, command)
 
 
+@pytest.mark.slow
 def test_recalibrating_reproduces_the_packaged_default():
-    result = calibrate(CalibrationTargets.from_thesis())
+    # the friction level's only evidence is the thesis's actuated corr2, scored by the tactile pipeline (~15 s)
+    from flexdigit.tactile.experiments import actuated_corr2_score
+
+    result = calibrate(CalibrationTargets.from_thesis(), friction_score=actuated_corr2_score)
     default = default_calibration()
     for name, value in default.to_dict().items():
         np.testing.assert_allclose(getattr(result.calibration, name), value, rtol=1e-5, atol=1e-12, err_msg=name)
@@ -84,7 +88,8 @@ def test_calibrate_recovers_known_parameters_from_synthetic_records():
     truth = default_calibration().replace(support_mass_kg=(0.012,) * 3, housing_beta_s=0.03)
     bare = ex.release_test(housing=False, duration_s=10.0, sample_rate_hz=250, calibration=truth, seed=4)
     housed = ex.release_test(housing=True, duration_s=5.0, sample_rate_hz=250, calibration=truth, seed=5)
-    sweep = ex.actuation_sweep(range(8, 44, 5), settle_s=2.5, samples=3, calibration=truth, seed=6)
+    # 12 readings a command: the cable-guide friction (taut cable) scatters single readings by ~10-40 mV
+    sweep = ex.actuation_sweep(range(8, 44, 5), settle_s=2.5, samples=12, calibration=truth, seed=6)
     volts = np.column_stack([sweep.column(f"gauge{g}_v") for g in (1, 2, 3)])
     targets = CalibrationTargets.from_records(
         release_bare=(bare.column("time_s"), bare.column("gauge2_v")),

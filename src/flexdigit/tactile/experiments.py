@@ -82,12 +82,33 @@ def collect_on_twin(
         rig.close()
 
 
-def static_dataset(protocol: Protocol, *, seed: int = 0, params: RigParams | None = None, calibration=None) -> Dataset:
-    """The protocol's readings from the twin's batched static solver plus its white noise (no dynamics, no drift).
+#: How often a random disturbance is drawn in :func:`static_dataset`: every reading, or once per hang (setting)
+DRAWS = ("reading", "hang")
 
-    Every setting at rest, every reading independent: the ideal experiment, in milliseconds (used to scan the
-    noise level). ``time_s`` counts the readings.
+
+def static_dataset(
+    protocol: Protocol,
+    *,
+    seed: int = 0,
+    params: RigParams | None = None,
+    calibration=None,
+    friction_per: str = "reading",
+    servo_jitter_rad: float = 0.0,
+    servo_jitter_per: str = "reading",
+) -> Dataset:
+    """The protocol's readings from the twin's batched static solver plus its noise (no dynamics, no drift).
+
+    Every setting at rest: the ideal experiment, in milliseconds (used to scan and calibrate the noise level).
+    White noise is drawn per reading; the cable-guide friction per reading (the twin's model) or, with
+    ``friction_per="hang"``, once per setting and shared by its repetitions. ``servo_jitter_rad`` adds a Gaussian
+    servo shaft offset (standard deviation, rad) per reading or per hang: the deadband hypothesis the report
+    tests. ``time_s`` counts the readings.
     """
+    from flexdigit._validation import check_choice, check_real
+
+    check_choice(friction_per, "friction_per", DRAWS, "static_dataset")
+    check_choice(servo_jitter_per, "servo_jitter_per", DRAWS, "static_dataset")
+    jitter = check_real(servo_jitter_rad, "servo_jitter_rad", "static_dataset", low=0)
     from flexdigit.tactile.dataset import COLUMNS, make_meta
     from flexdigit.tactile.protocols import RELAXED
     from flexdigit.twin.calibration import default_calibration
@@ -100,6 +121,16 @@ def static_dataset(protocol: Protocol, *, seed: int = 0, params: RigParams | Non
     pos = np.nan_to_num(plan["position_from_base_m"], nan=0.0)
     gauges = np.empty((n, 3))
     rng_seed = np.random.default_rng(seed).integers(2**31, size=len(set(plan["command"].tolist())))
+    # one hang = one (test, position) of the plan; draws for the "hang" options from their own streams
+    _, hang = np.unique(np.column_stack([plan["test"], plan["position_index"]]), axis=0, return_inverse=True)
+    hang = hang.ravel()
+    xi = np.random.default_rng([seed, 2]).standard_normal((hang.max() + 1, 3))[hang]
+    jitter_rng = np.random.default_rng([seed, 3])
+    offsets = jitter * (
+        jitter_rng.standard_normal(n)
+        if servo_jitter_per == "reading"
+        else jitter_rng.standard_normal(hang.max() + 1)[hang]
+    )
     for k, c in enumerate(sorted(set(plan["command"].tolist()))):
         rows = plan["command"] == c
         gauges[rows] = static_gauges_v(
@@ -110,6 +141,8 @@ def static_dataset(protocol: Protocol, *, seed: int = 0, params: RigParams | Non
             calibration=calibration,
             orientation=protocol.orientation,
             seed=int(rng_seed[k]),
+            friction_draws=xi[rows] if friction_per == "hang" else None,
+            servo_offset_rad=None if c == RELAXED or jitter == 0 else offsets[rows],
         )
     columns = {k: np.asarray(v) for k, v in plan.items()}
     columns.update(gauge1_v=gauges[:, 0], gauge2_v=gauges[:, 1], gauge3_v=gauges[:, 2])
@@ -117,6 +150,38 @@ def static_dataset(protocol: Protocol, *, seed: int = 0, params: RigParams | Non
     columns["time_s"] = np.arange(n, dtype=float)
     meta = make_meta(protocol, {"url": "static-twin", "repr": "static_gauges_v"}, params.geometry.digit_length_m)
     return Dataset({k: columns[k].astype(d) for k, d in COLUMNS.items()}, meta)
+
+
+def pipeline_corr2_static(
+    key: str, calibration, *, seed: int = 0, params: RigParams | None = None, epochs: int = 50, **static_kw
+) -> float:
+    """Test corr2 of the thesis pipeline at the thesis's optimum (18 / 24 nodes) on the twin's static readings.
+
+    The experiment's protocol read from the batched static solver with ``calibration``'s noise
+    (:func:`static_dataset`, which ``static_kw`` goes to), loaded readings only, as :func:`run_experiment` feeds
+    the position network.
+    """
+    protocol = load_protocol(EXPERIMENTS[key][0])
+    ds = static_dataset(protocol, seed=seed, params=params, calibration=calibration, **static_kw)
+    ds = ds.subset(np.flatnonzero(ds["load_kg"] > 0))
+    _, y = targets(ds, "position_index")
+    hidden = int(thesis_value(f"tactile.{key}.best_hidden"))
+    tol = float(thesis_value(f"tactile.{key}.best_learning_gradient"))
+    return run_pipeline(features(ds), y, seed=seed, fixed_hidden=hidden, fixed_tol=tol, epochs=epochs).corr2
+
+
+def actuated_corr2_score(calibration, *, seed: int = 0, params: RigParams | None = None) -> float:
+    """The score :func:`flexdigit.twin.calibration.calibrate` fits ``cable_friction_ratio`` with: the thesis
+    pipeline's actuated test corr2 (24 nodes, 1e-7, 50 epochs; :func:`pipeline_corr2_static`), seeded.
+
+    Examples
+    --------
+    >>> from flexdigit.twin.calibration import default_calibration
+    >>> cal = default_calibration().replace(cable_friction_ratio=0.0)
+    >>> actuated_corr2_score(cal) > 0.95        # white noise alone: far above the thesis's 0.8998
+    True
+    """
+    return pipeline_corr2_static("actuated", calibration, seed=seed, params=params)
 
 
 #: Per experiment: (protocol collected, size whose error curves figure 6.13 / 7.4 show)

@@ -215,6 +215,17 @@ class Chain:
         """Tip position (.., 2)."""
         return self.positions(psi, [self.length_m])[..., 0, :]
 
+    @property
+    def gauge_curvature_per_moment(self) -> np.ndarray:
+        """Curvature (1/m) at each gauge per N m of extra bending moment carried by its section, ``W (1 / (k h))``.
+
+        The local compliance: what a moment confined to the gauge's section (e.g. a cable-guide friction moment,
+        :mod:`flexdigit.twin.sensors`) does to the gauge's curvature, the rest of the chain held.
+        """
+        with np.errstate(divide="ignore"):
+            flex = np.where(self.stiffness > 0, 1.0 / (self.stiffness * self.cell_length_m), 0.0)
+        return self._gauge_interp @ flex
+
     def curvature_at_gauges(self, psi: np.ndarray) -> np.ndarray:
         """Strip curvature (1/m) at the gauges for angles ``psi`` (.., n)."""
         return np.asarray(psi, dtype=float) @ self._psi_to_gauge_curvature.T

@@ -17,6 +17,22 @@ per-channel offset (bridge imbalance). Its Butterworth low-pass (470 Hz) is appl
 from 1 by less than 1e-4 and its phase is ``-omega tau`` to the same order (checked against ``scipy.signal.lsim`` in
 the tests). Noise is added at the ADC input: white (per sample) plus a slow random-walk drift per channel, from a
 seeded generator. The ADC clips to its range and rounds to its 16-bit step.
+
+Cable-guide friction (taut cable only)
+--------------------------------------
+The cable slides through the nylon guides whenever its tension changes (a weight hung, the servo hunting within
+its deadband); static friction at each guide then holds a tension difference of up to ``mu phi T`` (capstan,
+``phi`` the cable's wrap at the guide), whose sign and size depend on how the cable last slid. So each gauge's
+section carries, besides ``e T`` from the cable's anchor at the tip, an extra moment ``e dT_k`` with
+``dT_k = ratio * T * xi_k``, ``xi_k`` standard normal, independent per gauge and per reading
+(``Calibration.cable_friction_ratio``). It enters as curvature through the section's local compliance
+(:attr:`flexdigit.twin.digit.Chain.gauge_curvature_per_moment`), not through the chain's equilibrium: a
+first-order model of a redistribution that the stiff cable (which pins the tip angle) keeps local. It is zero with
+a slack or detached cable (the non-actuated digit of chapter 6) and grows with the tension. Its draws come from a
+generator of their own (seeded from the twin's seed), so the white noise and drift are the same numbers with or
+without it. Per reading rather than per hang: the thesis repeats "the procedure" 25 times at each setting (6.4,
+7.1), each a fresh slide of the cable, and a per-hang offset shared by readings split at random between training
+and test leaves corr2 untouched (the report shows both).
 """
 
 from __future__ import annotations
@@ -98,6 +114,8 @@ class SensorChain:
         self.white = np.asarray(calibration.noise_white_v, dtype=float)
         self.drift_rate = np.asarray(calibration.noise_drift_v_per_sqrt_s, dtype=float)
         self.pot_noise = float(calibration.pot_noise_v)
+        self.friction_ratio = float(calibration.cable_friction_ratio)
+        self._eccentricity = float(params.geometry.cable_eccentricity_m)
         self.delay_s = lowpass_group_delay_s(s.amplifier_lowpass_hz, s.amplifier_lowpass_order)
         self.rng = rng
         self.drift = np.zeros(self.gain.size)
@@ -124,6 +142,37 @@ class SensorChain:
         else:
             ratio = bridge_ratio(bend + eps_axial, -bend + eps_axial, self.params.sensors)
         return self.gain * ratio + self.offset
+
+    def friction_curvature_sd_1_m(self, tension_n, curvature_per_moment) -> np.ndarray:
+        """Standard deviation (1/m) of the cable-guide friction's curvature at each gauge (module docstring).
+
+        ``tension_n`` (...) the cable tension (N; 0 or less: slack, no friction); ``curvature_per_moment`` (3,)
+        the sections' local compliance (1/(N m^2)). Returns (..., 3).
+        """
+        tension = np.maximum(np.asarray(tension_n, dtype=float), 0.0)
+        c = np.asarray(curvature_per_moment, dtype=float)
+        return (self.friction_ratio * self._eccentricity) * tension[..., None] * c
+
+    def volts_per_curvature(self, curvature_1_m, axial_force_n, step_1_m: float = 1e-4) -> np.ndarray:
+        """``dV/dkappa`` (V m) of each channel at a state (central difference of :meth:`clean_v`)."""
+        kappa = np.asarray(curvature_1_m, dtype=float)
+        return (self.clean_v(kappa + step_1_m, axial_force_n) - self.clean_v(kappa - step_1_m, axial_force_n)) / (
+            2.0 * step_1_m
+        )
+
+    def friction_sd_v(self, curvature_1_m, axial_force_n, tension_n, curvature_per_moment) -> np.ndarray:
+        """Standard deviation (V) of the friction's share of a reading, per gauge (linearised; exact for the
+        half bridge to a part in 1e4)."""
+        sd = self.friction_curvature_sd_1_m(tension_n, curvature_per_moment)
+        return np.abs(self.volts_per_curvature(curvature_1_m, axial_force_n)) * sd
+
+    def friction_draw(self, curvature_1_m, tension_n, curvature_per_moment, rng: np.random.Generator):
+        """Curvature with one draw of the friction added; draws nothing (same stream) when it is zero."""
+        kappa = np.asarray(curvature_1_m, dtype=float)
+        sd = self.friction_curvature_sd_1_m(tension_n, curvature_per_moment)
+        if not np.any(sd > 0):
+            return kappa
+        return kappa + sd * rng.standard_normal(sd.shape)
 
     def sample(self, clean_v: np.ndarray, time_s: float) -> np.ndarray:
         """One ADC sample of the gauge channels at ``time_s``: drift advanced since the last sample, white noise."""

@@ -36,6 +36,8 @@ from flexdigit.twin.sensors import SensorChain
 
 DEFAULT_DT_S = 0.020
 DEFAULT_CELLS_PER_SECTION = 3
+#: Second word of the seed of the cable-guide friction's generator, ``default_rng([seed, FRICTION_STREAM])``.
+FRICTION_STREAM = 1
 
 
 @lru_cache(maxsize=32)
@@ -103,6 +105,9 @@ class Twin:
         self.chain = cached_digit(self.params, self.calibration, self.housing, self.orientation, cells_per_section)
         self.rng = np.random.default_rng(self.seed)
         self.sensors = SensorChain(self.params, self.calibration, self.rng)
+        # cable-guide friction draws from its own stream: the white noise and drift stay the same numbers
+        self.friction_rng = np.random.default_rng([self.seed, FRICTION_STREAM])
+        self._curvature_per_moment = self.chain.gauge_curvature_per_moment
         start = self.params.actuator.equilibrium_command if command is None else command
         self.servo = Servo(self.params, start)
         self._pulley_m = self.params.actuator.pulley_radius_m
@@ -196,12 +201,8 @@ class Twin:
         psi = h00 * psi0 + (h10 * h) * om0 + h01 * psi1 + (h11 * h) * om1
         return psi, theta
 
-    def clean_read(self, time_s: float | None = None):
-        """Noise-free ``(gauges_v, pot_v)`` at ``time_s`` (default now), before the ADC.
-
-        The gauges see the state a low-pass group delay ago (:mod:`flexdigit.twin.sensors`); the pot is read now.
-        """
-        t = self.time_s if time_s is None else time_s
+    def _gauge_state(self, t: float):
+        """Curvature and axial force at the gauges, cable tension (a group delay ago) and the servo angle now."""
         psi, theta = self._interpolate(t - self.sensors.delay_s, True)
         kappa = self.chain.curvature_at_gauges(psi)
         if self.cable:
@@ -211,10 +212,25 @@ class Twin:
             tension = 0.0
         axial = self.chain.axial_force(psi, self.dynamics._beyond, tension)
         _, theta_now = self._interpolate(t, False)
+        return kappa, axial, tension, theta_now
+
+    def clean_read(self, time_s: float | None = None):
+        """Noise-free ``(gauges_v, pot_v)`` at ``time_s`` (default now), before the ADC.
+
+        The gauges see the state a low-pass group delay ago (:mod:`flexdigit.twin.sensors`); the pot is read now.
+        """
+        kappa, axial, _, theta_now = self._gauge_state(self.time_s if time_s is None else time_s)
         return self.sensors.clean_v(kappa, axial), self.servo.pot_v(theta_now)
+
+    def cable_tension_n(self) -> float:
+        """Cable tension now (N; 0 when slack or detached), as the gauges see it (a group delay ago)."""
+        return float(self._gauge_state(self.time_s)[2])
 
     def read(self) -> tuple[np.ndarray, float]:
         """Sample the three gauge channels and the potentiometer through the sensor chain (with noise).
+
+        With a taut cable each reading also carries a fresh draw of the cable-guide friction
+        (``Calibration.cable_friction_ratio``, :mod:`flexdigit.twin.sensors`).
 
         Returns
         -------
@@ -223,8 +239,11 @@ class Twin:
         pot_v : float
             Potentiometer voltage (V).
         """
-        clean, pot = self.clean_read()
-        return self.sensors.sample(clean, self.time_s), self.sensors.sample_pot(pot)
+        kappa, axial, tension, theta_now = self._gauge_state(self.time_s)
+        if tension > 0 and self.sensors.friction_ratio > 0:
+            kappa = self.sensors.friction_draw(kappa, tension, self._curvature_per_moment, self.friction_rng)
+        clean = self.sensors.clean_v(kappa, axial)
+        return self.sensors.sample(clean, self.time_s), self.sensors.sample_pot(self.servo.pot_v(theta_now))
 
     def deflect(self, tip_force_n: float) -> None:
         """Hold the digit at rest under an extra sideways tip force (N, towards the cable side), as a hand does
@@ -296,6 +315,8 @@ def static_gauges_v(
     seed: int | None = None,
     adc: bool = True,
     return_solution: bool = False,
+    friction_draws=None,
+    servo_offset_rad=None,
 ):
     """Steady gauge voltages for many static load cases at once (one batched Newton solve).
 
@@ -314,11 +335,19 @@ def static_gauges_v(
     housing : bool
     cells_per_section : int
     seed : int, optional
-        With a seed, add the calibration's white noise (drift is a slow process, not per case).
+        With a seed, add the calibration's white noise and, where the cable is taut, one draw of the cable-guide
+        friction per case (drift is a slow process, not per case). The same seed gives the same white noise as
+        without friction (the friction has its own stream, ``default_rng([seed, FRICTION_STREAM])``).
     adc : bool
         Clip and quantise like the 16-bit card.
     return_solution : bool
         Also return the :class:`~flexdigit.twin.digit.StaticSolution`.
+    friction_draws : array_like, shape (B, 3), optional
+        Standard-normal draws of the cable-guide friction to use instead of fresh ones (with ``seed``): lets a
+        caller share one draw between readings of the same hang.
+    servo_offset_rad : array_like, shape (B,), optional
+        Servo shaft angle away from the command's (rad), e.g. where a servo stopped inside its deadband; used by
+        the report to show that such a disturbance alone is not what costs the actuated experiment its corr2.
 
     Returns
     -------
@@ -360,11 +389,23 @@ def static_gauges_v(
             )
         cmd = np.broadcast_to(cmd.reshape(-1) if cmd.ndim else cmd, (b,))
         shortening = cable_shortening_m(cmd, params)
+        if servo_offset_rad is not None:
+            offset = check_array(servo_offset_rad, "servo_offset_rad", "static_gauges_v")
+            shortening = shortening + params.actuator.pulley_radius_m * np.broadcast_to(offset.reshape(-1), (b,))
     forces = masses[..., None] * chain.gravity
     sol = chain.solve_static(pos, forces, cable_shortening_m=shortening)
     rng = np.random.default_rng(seed) if seed is not None else None
     sensors = SensorChain(params, calibration, rng if rng is not None else np.random.default_rng(0))
-    volts = sensors.clean_v(sol.curvature_1_m, sol.axial_force_n)
+    kappa = sol.curvature_1_m
+    if rng is not None and shortening is not None and sensors.friction_ratio > 0:
+        c_moment = chain.gauge_curvature_per_moment
+        if friction_draws is None:
+            friction_rng = np.random.default_rng([seed, FRICTION_STREAM])
+            kappa = sensors.friction_draw(kappa, sol.tension_n, c_moment, friction_rng)
+        else:
+            xi = check_array(friction_draws, "friction_draws", "static_gauges_v", shape=(b, kappa.shape[1]))
+            kappa = kappa + sensors.friction_curvature_sd_1_m(sol.tension_n, c_moment) * xi
+    volts = sensors.clean_v(kappa, sol.axial_force_n)
     if rng is not None:
         volts = volts + np.asarray(calibration.noise_white_v) * rng.standard_normal(volts.shape)
     if adc:
@@ -372,3 +413,35 @@ def static_gauges_v(
 
         volts = quantise(volts, params.sensors)
     return (volts, sol) if return_solution else volts
+
+
+def friction_sd_v(
+    solution,
+    params: RigParams | None = None,
+    calibration: Calibration | None = None,
+    *,
+    orientation: str = "horizontal",
+    housing: bool = True,
+    cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
+) -> np.ndarray:
+    """Standard deviation (V) of the cable-guide friction in one reading, per case and gauge, shape (B, 3).
+
+    ``solution`` a :class:`~flexdigit.twin.digit.StaticSolution` (e.g. from :func:`static_gauges_v` with
+    ``return_solution=True``); zero where the cable is slack. The same model the twin draws from
+    (:mod:`flexdigit.twin.sensors`), for the Cramer-Rao bound and the calibration.
+
+    Examples
+    --------
+    >>> cal = default_calibration().replace(cable_friction_ratio=0.1)
+    >>> _, sol = static_gauges_v([0.0, 0.0], [0.0, 0.0], [0, 40], calibration=cal, adc=False, return_solution=True)
+    >>> sd = friction_sd_v(sol, calibration=cal)
+    >>> sd.shape, bool(np.all(sd[1] > sd[0]))      # more tension at command 40, more friction
+    ((2, 3), True)
+    """
+    params = params or RigParams()
+    calibration = calibration or default_calibration()
+    chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
+    sensors = SensorChain(params, calibration, np.random.default_rng(0))
+    return sensors.friction_sd_v(
+        solution.curvature_1_m, solution.axial_force_n, solution.tension_n, chain.gauge_curvature_per_moment
+    )

@@ -1,0 +1,151 @@
+"""The cable-guide friction noise (taut cable only): zero when slack, proportional to the tension, seeded, and its
+calibration from a measured repeatability or a score.
+
+Reference values: the model of :mod:`flexdigit.twin.sensors` (sd of the friction moment at a gauge's section =
+ratio x e x T, e the cable eccentricity of RigParams); statistical tolerances are set from the standard error of
+a standard deviation estimated from N readings, 1/sqrt(2 N), with a margin of 4-5 of those.
+"""
+
+import numpy as np
+import pytest
+
+from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.params import RigParams
+from flexdigit.twin.calibration import (
+    Calibration,
+    CalibrationTargets,
+    default_calibration,
+    fit_level,
+    friction_ratio_from_repeatability,
+    load_calibration,
+    save_calibration,
+)
+from flexdigit.twin.twin import Twin, cached_digit, friction_sd_v, static_gauges_v
+
+RATIO = 0.1
+
+
+def _cal(ratio=RATIO):
+    return default_calibration().replace(cable_friction_ratio=ratio)
+
+
+def test_no_friction_without_a_taut_cable():
+    # chapter 6: cable detached; and a vertical digit below the equilibrium command, where the cable is slack
+    for kwargs in ({"cable": False, "orientation": "horizontal"}, {"orientation": "vertical", "command": 0}):
+        a, b = Twin(seed=3, calibration=_cal(), **kwargs), Twin(seed=3, calibration=_cal(0.0), **kwargs)
+        assert a.cable_tension_n() == 0.0
+        for _ in range(5):
+            a.advance(0.02)
+            b.advance(0.02)
+            np.testing.assert_array_equal(a.read()[0], b.read()[0])
+    detached = static_gauges_v([0.025] * 4, [0.2] * 4, None, calibration=_cal(), seed=5)
+    np.testing.assert_array_equal(detached, static_gauges_v([0.025] * 4, [0.2] * 4, None, calibration=_cal(0), seed=5))
+    _, sol = static_gauges_v(
+        [0.0], [0.0], [0], orientation="vertical", calibration=_cal(), adc=False, return_solution=True
+    )
+    assert sol.tension_n[0] == 0.0
+    assert np.all(friction_sd_v(sol, calibration=_cal(), orientation="vertical") == 0.0)
+
+
+def test_friction_sd_is_ratio_times_eccentricity_times_tension_through_the_local_compliance():
+    params = RigParams()
+    _, sol = static_gauges_v(
+        [0.0, 0.025, 0.0375], [0.0, 0.2, 0.1], [0, 20, 40], calibration=_cal(), adc=False, return_solution=True
+    )
+    assert np.all(np.diff(sol.tension_n) > 0)  # more command, more tension
+    chain = cached_digit(params, _cal(), True, "horizontal", 3)
+    # the half bridge's volts per curvature: gain x excitation x channel gain x GF t / 4 (E 2.4, axial strain ~ 0)
+    s = params.sensors
+    v_per_kappa = (
+        s.amplifier_gain_v_per_v
+        * s.excitation_v
+        * np.array(_cal().channel_gain)
+        * s.gauge_factor
+        * params.geometry.strip_thickness_m
+        / 4
+    )
+    expected = (
+        RATIO * params.geometry.cable_eccentricity_m * sol.tension_n[:, None] * chain.gauge_curvature_per_moment
+    ) * v_per_kappa
+    np.testing.assert_allclose(friction_sd_v(sol, calibration=_cal()), expected, rtol=1e-3)
+    np.testing.assert_allclose(friction_sd_v(sol, calibration=_cal(2 * RATIO)), 2 * expected, rtol=1e-3)
+
+
+def test_static_friction_draws_are_seeded_and_leave_the_white_noise_alone():
+    args = ([0.025] * 3, [0.2] * 3, [0, 20, 40])
+    one = static_gauges_v(*args, calibration=_cal(), seed=7, adc=False)
+    np.testing.assert_array_equal(one, static_gauges_v(*args, calibration=_cal(), seed=7, adc=False))
+    assert not np.array_equal(one, static_gauges_v(*args, calibration=_cal(), seed=8, adc=False))
+    # the difference from the friction-free readings is the friction alone: sd x its own stream's draws
+    without = static_gauges_v(*args, calibration=_cal(0.0), seed=7, adc=False)
+    _, sol = static_gauges_v(*args, calibration=_cal(), adc=False, return_solution=True)
+    xi = np.random.default_rng([7, 1]).standard_normal((3, 3))
+    np.testing.assert_allclose(one - without, friction_sd_v(sol, calibration=_cal()) * xi, rtol=1e-3, atol=1e-7)
+
+
+def test_static_spread_matches_white_plus_friction():
+    n = 4000
+    volts, sol = static_gauges_v([0.025] * n, [0.2] * n, [40] * n, calibration=_cal(), seed=1, return_solution=True)
+    expected = np.sqrt(np.array(_cal().noise_white_v) ** 2 + friction_sd_v(sol, calibration=_cal())[0] ** 2)
+    np.testing.assert_allclose(np.std(volts, axis=0), expected, rtol=4 / np.sqrt(2 * n) + 0.01)
+
+
+def test_dynamic_twin_reading_spread_matches_the_static_model():
+    # settled at command 40, horizontal: the readings scatter as white noise plus friction at the static tension
+    cal = _cal()
+    twin = Twin(seed=2, calibration=cal, orientation="horizontal", command=40)
+    n = 400
+    reads = []
+    for _ in range(n):
+        twin.advance(0.02)
+        reads.append(twin.read()[0])
+    _, sol = static_gauges_v([0.0], [0.0], [40], calibration=cal, adc=False, return_solution=True)
+    assert twin.cable_tension_n() == pytest.approx(sol.tension_n[0], rel=1e-3)
+    expected = np.sqrt(np.array(cal.noise_white_v) ** 2 + friction_sd_v(sol, calibration=cal)[0] ** 2)
+    np.testing.assert_allclose(np.std(reads, axis=0), expected, rtol=5 / np.sqrt(2 * n))
+    again = Twin(seed=2, calibration=cal, orientation="horizontal", command=40)
+    again.advance(0.02)
+    np.testing.assert_array_equal(again.read()[0], reads[0])
+
+
+def test_friction_ratio_recovered_from_a_synthetic_repeatability_record():
+    # a user with a rig: 1000 readings of the unloaded digit held at command 30, from a twin with a known ratio
+    truth = 0.05
+    n = 1000
+    twin = Twin(seed=11, calibration=_cal(truth), orientation="horizontal", command=30)
+    volts = []
+    for _ in range(n):
+        twin.advance(0.02)
+        volts.append(twin.read()[0])
+    targets = CalibrationTargets.from_records(actuated_rest=(30, np.array(volts)))
+    assert targets.actuated_repeatability_command == 30
+    got = friction_ratio_from_repeatability(
+        RigParams(), _cal(0.0), targets.actuated_repeatability_command, targets.actuated_repeatability_v
+    )
+    assert got == pytest.approx(truth, rel=0.07)  # ~5 standard errors of a 1000-reading spread
+
+
+def test_fit_level_recovers_a_noise_level_from_corr2():
+    # closed form: corr2(y, y + s n) = 1 / sqrt(1 + s^2 var(n) / var(y)) for independent y and n
+    rng = np.random.default_rng(0)
+    y, noise = rng.uniform(1, 10, 20000), rng.standard_normal(20000)
+
+    def corr2(s):
+        return float(np.corrcoef(y, y + s * noise)[0, 1])
+
+    s_true = np.std(y) * np.sqrt(1 / 0.9**2 - 1)  # level that gives corr2 0.9 in the limit
+    assert fit_level(corr2, 0.9, bracket=(0.0, 10.0)) == pytest.approx(s_true, rel=0.02)
+    with pytest.raises(ParameterError, match="'target' parameter of fit_level"):
+        fit_level(corr2, 0.5, bracket=(0.0, 1.0))
+
+
+def test_friction_ratio_is_validated_and_round_trips(tmp_path):
+    with pytest.raises(ParameterError, match="cable_friction_ratio"):
+        Calibration(cable_friction_ratio=-0.1)
+    with pytest.raises(ParameterError, match="cable_friction_ratio"):
+        Calibration(cable_friction_ratio=1.5)
+    path = save_calibration(_cal(0.03), tmp_path / "cal.toml")
+    assert load_calibration(path).cable_friction_ratio == 0.03
+    (tmp_path / "bad.toml").write_text('[calibration]\ncable_friction_ratio = "a lot"\n')
+    with pytest.raises(DataFileError, match="bad.toml.*cable_friction_ratio"):
+        load_calibration(tmp_path / "bad.toml")
