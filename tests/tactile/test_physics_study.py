@@ -91,3 +91,57 @@ def test_known_load_set_inversion_recovers_the_load(cantilever_model):
     pred = est.predict(v)
     np.testing.assert_allclose(pred[:, 1], m)
     np.testing.assert_allclose(pred[:, 0], 0.27 - a, atol=2e-4)
+
+
+class LoadDependentNoise:
+    """One gauge reading ``k a m`` (two more that read nothing), with noise ``s0 + c a`` on the first gauge."""
+
+    k, s0, c = 40.0, 0.002, 0.05
+
+    def gauges_v(self, a, m, command):
+        a, m = np.broadcast_arrays(np.atleast_1d(a), np.atleast_1d(m))
+        out = np.zeros((a.size, 3))
+        out[:, 0] = self.k * a * m
+        out[:, 1:] = (a * m)[:, None] * [1e-3, 2e-3]  # tiny, so the zone is not "no gauge bends"
+        return out
+
+    noise_v = np.array([0.002, 1.0, 1.0])
+
+    def noise_at(self, a, m, command):
+        a = np.atleast_1d(a)
+        return np.column_stack([self.s0 + self.c * a, np.ones(a.size), np.ones(a.size)])
+
+
+def test_crlb_includes_load_dependent_noise_in_closed_form():
+    # mass known, one parameter a: F = (dg/da)^2 / sigma^2 + 2 (dsigma/da)^2 / sigma^2 (Gaussian with a-dependent
+    # variance), summed over gauges; gauges 2-3 add (1e-3 m)^2 + (2e-3 m)^2 with sigma 1
+    model, a, m = LoadDependentNoise(), 0.2, 0.025
+    sigma = model.s0 + model.c * a
+    fisher = ((model.k * m) ** 2 + 2 * model.c**2) / sigma**2 + (1e-3 * m) ** 2 + (2e-3 * m) ** 2
+    b = cramer_rao(model, [a], m, 20)
+    assert b.crlb_known_mass_m[0] == pytest.approx(1 / np.sqrt(fisher), rel=1e-6)
+    # a fixed noise override drops the spread's information: (dg/da)^2 / sigma^2 only
+    fixed = cramer_rao(model, [a], m, 20, noise_v=[sigma, 1.0, 1.0])
+    assert fixed.crlb_known_mass_m[0] == pytest.approx(
+        1 / np.sqrt((model.k * m / sigma) ** 2 + (1e-3 * m) ** 2 + (2e-3 * m) ** 2), rel=1e-6
+    )
+
+
+def test_twin_gauge_model_noise_is_white_when_relaxed_and_adds_friction_when_taut():
+    from flexdigit.tactile.physics import TwinGaugeModel
+    from flexdigit.twin.calibration import default_calibration
+    from flexdigit.twin.twin import friction_sd_v, static_gauges_v
+
+    cal = default_calibration()
+    assert cal.cable_friction_ratio > 0
+    model = TwinGaugeModel(calibration=cal)
+    np.testing.assert_array_equal(model.noise_at([0.2], [0.025], [-1])[0], cal.noise_white_v)
+    _, sol = static_gauges_v([0.025], [0.2], [40], calibration=cal, adc=False, return_solution=True)
+    expected = np.sqrt(np.array(cal.noise_white_v) ** 2 + friction_sd_v(sol, calibration=cal)[0] ** 2)
+    np.testing.assert_allclose(model.noise_at([0.2], [0.025], [40])[0], expected, rtol=1e-12)
+    # the bound grows with the friction: twice the ratio, a looser bound at command 40
+    looser = TwinGaugeModel(calibration=cal.replace(cable_friction_ratio=2 * cal.cable_friction_ratio))
+    assert (
+        cramer_rao(looser, [0.2], 0.025, 40).crlb_known_mass_m[0]
+        > cramer_rao(model, [0.2], 0.025, 40).crlb_known_mass_m[0]
+    )

@@ -8,7 +8,10 @@ loaded readings.
   ``(a, m) = argmin sum_i ((v_i - g_i(a, m, c)) / sigma_i)^2`` on a dense (position, mass) grid with
   parabolic refinement; ``fit`` only calibrates a per-gauge gain and offset of the model on the training
   readings (6 numbers; a real rig's gains differ from the model's). This is the maximum-likelihood estimate
-  under the model's Gaussian noise, the estimator the Cramer-Rao bound is about.
+  under the model's Gaussian noise, the estimator the Cramer-Rao bound is about. A model whose noise depends on
+  the load (``noise_at``: the twin's cable-guide friction, which grows with the cable tension) is weighted by it:
+  the grid cost is then the full negative log-likelihood, ``sum_i ((v_i - g_i) / sigma_i)^2 + 2 log sigma_i``,
+  and the refinement keeps the weights of the best grid point.
 * :class:`GPLocaliser`: scikit-learn ``GaussianProcessRegressor`` (anisotropic RBF + white noise) on the
   normalised inputs, one per target, with a predictive standard deviation for every estimate.
 
@@ -104,7 +107,29 @@ class BeamInversion:
             aa, mm = np.meshgrid(a, m, indexing="ij")
             g = self._model(aa.ravel(), mm.ravel(), np.full(aa.size, command))
             self.grids_[command] = g.reshape(a.size, m.size, 3)
+            self.noise_grids_[command] = self._noise(aa.ravel(), mm.ravel(), command).reshape(a.size, m.size, 3)
         return self.grids_[command]
+
+    def _noise(self, a, m, command: int) -> np.ndarray:
+        """Standard deviation (V) of a reading at ``(a, m)`` (n, 3), in the calibrated model's units."""
+        a = np.atleast_1d(a)
+        if hasattr(self.model, "noise_at"):
+            sigma = np.asarray(self.model.noise_at(a, np.broadcast_to(m, a.shape), np.full(a.size, command)))
+        else:
+            sigma = np.broadcast_to(self.noise_v_, (a.size, 3))
+        return sigma * np.abs(self.gain_)
+
+    def no_load_cost(self, X) -> np.ndarray:
+        """Negative log-likelihood (as the fit's cost) of each reading under "nothing hung"."""
+        v, command = _split_x(X)
+        cost = np.empty(v.shape[0])
+        for value in np.unique(command):
+            rows = command == value
+            zero = np.zeros(int(rows.sum()))
+            sigma = self._noise(zero, zero, int(value))
+            g = self.no_load_v(np.full(int(rows.sum()), value))
+            cost[rows] = np.sum(((v[rows] - g) / sigma) ** 2 + 2 * np.log(sigma), axis=1)
+        return cost
 
     def fit(self, X, Y=None) -> BeamInversion:
         length = check_positive(self.digit_length_m, "digit_length_m", "BeamInversion")
@@ -113,6 +138,7 @@ class BeamInversion:
         max_mass = check_positive(self.max_mass_kg, "max_mass_kg", "BeamInversion")
         self.m_grid_ = np.linspace(0.0, max_mass, check_int(self.mass_steps, "mass_steps", "BeamInversion", low=3))
         self.grids_: dict[int, np.ndarray] = {}
+        self.noise_grids_: dict[int, np.ndarray] = {}
         self.noise_v_ = np.asarray(self.model.noise_v, dtype=float)
         self.gain_ = np.ones(3)
         self.offset_ = np.zeros(3)
@@ -143,16 +169,20 @@ class BeamInversion:
         for value in np.unique(command):
             rows = np.flatnonzero(command == value)
             grid = self._grid(int(value)) * self.gain_ + self.offset_
+            sigma = self.noise_grids_[int(value)]
+            log_term = 2 * np.sum(np.log(sigma), axis=2)
             a0 = np.empty(rows.size)
             m0 = np.empty(rows.size)
+            s0 = np.empty((rows.size, 3))
             for start in range(0, rows.size, 32):  # batches bound the (batch, na, nm) temporaries
                 r = rows[start : start + 32]
-                d = np.zeros((r.size,) + grid.shape[:2])
+                d = np.broadcast_to(log_term, (r.size,) + grid.shape[:2]).copy()
                 for i in range(3):
-                    d += ((v[r, i, None, None] - grid[None, :, :, i]) / self.noise_v_[i]) ** 2
+                    d += ((v[r, i, None, None] - grid[None, :, :, i]) / sigma[None, :, :, i]) ** 2
                 ia, im = np.unravel_index(d.reshape(r.size, -1).argmin(axis=1), d.shape[1:])
                 a0[start : start + 32], m0[start : start + 32] = self.a_grid_[ia], self.m_grid_[im]
-            a, m, c = self._gauss_newton(v[rows], a0, m0, int(value))
+                s0[start : start + 32] = sigma[ia, im]
+            a, m, c = self._gauss_newton(v[rows], a0, m0, int(value), s0)
             out[rows, 0] = self.digit_length_m - a
             out[rows, 1] = m
             cost[rows] = c
@@ -169,19 +199,24 @@ class BeamInversion:
         command = np.atleast_1d(command)
         return self._model(np.zeros(command.size), np.zeros(command.size), command) * self.gain_ + self.offset_
 
-    def _cost(self, v, a, m, command):
+    def _cost(self, v, a, m, command, sigma):
         g = self._model(a, m, np.full(a.size, command)) * self.gain_ + self.offset_
-        return np.sum(((v - g) / self.noise_v_) ** 2, axis=1), g
+        return np.sum(((v - g) / sigma) ** 2 + 2 * np.log(sigma), axis=1), g
 
-    def _gauss_newton(self, v, a, m, command, iterations: int = 4):
-        """Refine grid estimates by damped Gauss-Newton on the model itself (joint in position and mass)."""
+    def _gauss_newton(self, v, a, m, command, sigma, iterations: int = 4):
+        """Refine grid estimates by damped Gauss-Newton on the model itself (joint in position and mass), with
+        the noise ``sigma`` (n, 3) of each reading's best grid point held."""
         step_a, step_m = 1e-4, 1e-5
-        cost, g = self._cost(v, a, m, command)
+        cost, g = self._cost(v, a, m, command, sigma)
         for _ in range(iterations):
-            ga = (self._cost(v, a + step_a, m, command)[1] - self._cost(v, a - step_a, m, command)[1]) / (2 * step_a)
-            gm = (self._cost(v, a, m + step_m, command)[1] - self._cost(v, a, m - step_m, command)[1]) / (2 * step_m)
-            r = (v - g) / self.noise_v_
-            ja, jm = ga / self.noise_v_, gm / self.noise_v_
+            ga = (self._cost(v, a + step_a, m, command, sigma)[1] - self._cost(v, a - step_a, m, command, sigma)[1]) / (
+                2 * step_a
+            )
+            gm = (self._cost(v, a, m + step_m, command, sigma)[1] - self._cost(v, a, m - step_m, command, sigma)[1]) / (
+                2 * step_m
+            )
+            r = (v - g) / sigma
+            ja, jm = ga / sigma, gm / sigma
             h11, h22, h12 = np.sum(ja * ja, 1), np.sum(jm * jm, 1), np.sum(ja * jm, 1)
             b1, b2 = np.sum(ja * r, 1), np.sum(jm * r, 1)
             det = h11 * h22 - h12**2
@@ -194,7 +229,7 @@ class BeamInversion:
                 da, dm = np.where(h11 > 0, b1 / np.where(h11 > 0, h11, 1.0), 0.0), 0.0 * dm
             a_new = np.clip(a + np.clip(da, -0.01, 0.01), 0.0, self.digit_length_m)
             m_new = np.clip(m + np.clip(dm, -0.01, 0.01), 0.0, None)
-            new_cost, new_g = self._cost(v, a_new, m_new, command)
+            new_cost, new_g = self._cost(v, a_new, m_new, command, sigma)
             better = new_cost < cost
             a, m = np.where(better, a_new, a), np.where(better, m_new, m)
             cost, g = np.where(better, new_cost, cost), np.where(better[:, None], new_g, g)

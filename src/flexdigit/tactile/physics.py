@@ -6,7 +6,10 @@ actuation disabled; ``mass_kg`` 0 means no load) and ``noise_v`` (3,), the stand
 gauge (V). :class:`TwinGaugeModel` wraps the digital twin; tests use a closed-form cantilever.
 
 For independent Gaussian noise, the Fisher information of ``theta = (a, m)`` (position, mass) in one reading is
-``F = J^T diag(1/sigma^2) J`` with ``J = dg/dtheta`` (finite differences of the model). The position's Cramer-Rao
+``F = J^T diag(1/sigma^2) J`` with ``J = dg/dtheta`` (finite differences of the model). A model whose noise
+depends on the load (``noise_at``: the twin's cable-guide friction grows with the cable tension, which the load
+changes) adds the information the spread itself carries, ``2 sum_k (dsigma_k/dtheta_i)(dsigma_k/dtheta_j) /
+sigma_k^2`` (the Gaussian Fisher information's covariance term for a diagonal covariance). The position's Cramer-Rao
 bound is ``sqrt([F^-1]_aa)`` when the mass is unknown, and ``sigma_a = 1/sqrt(F_aa)`` when it is known. A load
 between the clamp and gauge 1 bends no gauge (no moment reaches a gauge beyond the load on a cantilever): its
 Fisher information is zero and nothing can locate it; between gauges 1 and 2 only gauge 1 bends, so ``F`` has
@@ -60,21 +63,57 @@ class Bound:
     zone: np.ndarray
 
 
-def cramer_rao(model, position_from_base_m, mass_kg, command=RELAXED, *, step_m: float = 2e-4, noise_v=None) -> Bound:
+def noise_of(model, position_from_base_m, mass_kg, command) -> np.ndarray:
+    """Standard deviation (V) of one reading per point and gauge, (n, 3): the model's ``noise_at`` if it has one
+    (load-dependent noise), else its constant ``noise_v``."""
+    a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
+    if hasattr(model, "noise_at"):
+        m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
+        return np.asarray(model.noise_at(a, m, np.broadcast_to(np.asarray(command), a.shape)), dtype=float)
+    return np.broadcast_to(np.asarray(model.noise_v, dtype=float), (a.size, 3))
+
+
+def cramer_rao(
+    model,
+    position_from_base_m,
+    mass_kg,
+    command=RELAXED,
+    *,
+    step_m: float = 2e-4,
+    noise_v=None,
+    extra_variance_v2=None,
+) -> Bound:
     """Cramer-Rao lower bounds of the position (m, one reading) at each ``(position, mass, command)``.
 
     Infinite where the position cannot be estimated at all (no gauge bends) or, for ``crlb_m``, where position
-    and mass are confounded (a rank-1 Fisher information). ``noise_v`` (3,) or (n, 3) overrides the model's
-    noise (e.g. white noise plus the drift accumulated since the last tare).
+    and mass are confounded (a rank-1 Fisher information). The noise is the model's (:func:`noise_of`, with the
+    information in a load-dependent spread, module docstring); ``noise_v`` (3,) or (n, 3) overrides it with a
+    fixed one; ``extra_variance_v2`` (3,) or (n, 3) adds a load-independent variance (e.g. the drift accumulated
+    since the last tare).
     """
     a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
     m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
     ga, gm = jacobian(model, a, m, command, step_m=step_m)
-    sigma = np.asarray(model.noise_v if noise_v is None else noise_v, dtype=float)
+    extra = 0.0 if extra_variance_v2 is None else np.asarray(extra_variance_v2, dtype=float)
+    if noise_v is not None:
+        sigma = np.sqrt(np.asarray(noise_v, dtype=float) ** 2 + extra)
+        sa = sm = np.zeros((a.size, 3))
+    else:
+
+        def total(aa, mm):
+            return np.sqrt(noise_of(model, aa, mm, command) ** 2 + extra)
+
+        sigma = total(a, m)
+        if hasattr(model, "noise_at"):  # d sigma / d theta, the same differences as the jacobian
+            dm = 0.02 * np.maximum(m, 1e-4)
+            sa = (total(a + step_m, m) - total(a - step_m, m)) / (2 * step_m)
+            sm = (total(a, m + dm) - total(a, m - dm)) / (2 * dm)[:, None]
+        else:
+            sa = sm = np.zeros((a.size, 3))
     w = 1.0 / sigma**2
-    faa = np.sum(w * ga * ga, axis=1)
-    fmm = np.sum(w * gm * gm, axis=1)
-    fam = np.sum(w * ga * gm, axis=1)
+    faa = np.sum(w * (ga * ga + 2 * sa * sa), axis=1)
+    fmm = np.sum(w * (gm * gm + 2 * sm * sm), axis=1)
+    fam = np.sum(w * (ga * gm + 2 * sa * sm), axis=1)
     det = faa * fmm - fam**2
     with np.errstate(divide="ignore", invalid="ignore"):
         known = np.where(faa > 0, 1.0 / np.sqrt(faa), np.inf)
@@ -122,7 +161,8 @@ class TwinGaugeModel:
     Attributes
     ----------
     noise_v : ndarray, shape (3,)
-        White noise per reading (V): the calibration's ``noise_white_v``.
+        White noise per reading (V): the calibration's ``noise_white_v``. With a taut cable the twin adds the
+        cable-guide friction, whose spread depends on the load: :meth:`noise_at`.
     drift_v_per_sqrt_s : ndarray, shape (3,)
         The twin's random-walk drift rate: ``t`` seconds after a tare it adds variance ``rate^2 t``.
     """
@@ -141,7 +181,17 @@ class TwinGaugeModel:
         return f"TwinGaugeModel(orientation={self.orientation!r}, noise_v={self.noise_v.tolist()})"
 
     def gauges_v(self, position_from_base_m, mass_kg, command) -> np.ndarray:
-        from flexdigit.twin.twin import static_gauges_v
+        return self._solve(position_from_base_m, mass_kg, command, False)
+
+    def noise_at(self, position_from_base_m, mass_kg, command) -> np.ndarray:
+        """Standard deviation (V) of one reading, (n, 3): white noise and, with a taut cable, the cable-guide
+        friction at that load's tension (:func:`flexdigit.twin.twin.friction_sd_v`, the model the twin draws from).
+        """
+        friction = self._solve(position_from_base_m, mass_kg, command, True)
+        return np.sqrt(self.noise_v**2 + friction**2)
+
+    def _solve(self, position_from_base_m, mass_kg, command, friction: bool) -> np.ndarray:
+        from flexdigit.twin.twin import friction_sd_v, static_gauges_v
 
         a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
         m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
@@ -151,7 +201,10 @@ class TwinGaugeModel:
         out = np.empty((a.size, 3))
         for value in np.unique(c):
             rows = c == value
-            out[rows] = static_gauges_v(
+            if friction and (value == RELAXED or self.calibration.cable_friction_ratio == 0):
+                out[rows] = 0.0  # no cable, or no friction: skip the solve
+                continue
+            volts, sol = static_gauges_v(
                 m[rows],
                 a[rows],
                 None if value == RELAXED else np.full(int(rows.sum()), int(value)),
@@ -159,5 +212,9 @@ class TwinGaugeModel:
                 calibration=self.calibration,
                 orientation=self.orientation,
                 adc=False,
+                return_solution=True,
+            )
+            out[rows] = (
+                friction_sd_v(sol, self.params, self.calibration, orientation=self.orientation) if friction else volts
             )
         return out

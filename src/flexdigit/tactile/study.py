@@ -23,7 +23,6 @@ from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.metrics import accuracy, rmse
 from flexdigit.tactile.physics import ZONES, cramer_rao
 from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
-from flexdigit.tactile.protocols import RELAXED
 
 ESTIMATORS = ("MLP (thesis architecture)", "beam inversion", "beam inversion, known load set", "Gaussian process")
 #: chi-square(2 dof) 99.9 % quantile: a load is declared when it explains the reading this much better than none
@@ -53,8 +52,9 @@ def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
 def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Zone, position CRLB (mass unknown) and CRLB (mass known) of every reading (no-load rows: zone ``""``).
 
-    With ``since_tare_s`` and a model with ``drift_v_per_sqrt_s``, each reading's noise is the white noise plus
-    the random-walk drift accumulated since its tare: ``sigma^2 = sigma_w^2 + rate^2 t``.
+    With ``since_tare_s`` and a model with ``drift_v_per_sqrt_s``, each reading's noise is the model's (white,
+    and the cable-guide friction when the cable is taut) plus the random-walk drift accumulated since its tare:
+    ``sigma^2 = sigma_model^2 + rate^2 t``.
     """
     n = len(dataset)
     zone = np.full(n, "", dtype=object)
@@ -67,8 +67,7 @@ def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarra
     settings, inverse = np.unique(keys[loaded], axis=0, return_inverse=True)
     for k, (a, m, c, _) in enumerate(settings):
         rows = loaded[inverse.ravel() == k]
-        sigma = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + rate**2 * float(np.mean(since[rows])))
-        b = cramer_rao(model, [a], m, int(c), noise_v=sigma)
+        b = cramer_rao(model, [a], m, int(c), extra_variance_v2=rate**2 * float(np.mean(since[rows])))
         zone[rows], crlb[rows], crlb_known[rows] = b.zone[0], b.crlb_m[0], b.crlb_known_mass_m[0]
     return zone, crlb, crlb_known
 
@@ -179,8 +178,7 @@ def localisation_study(
     ident = zone[te] == ZONES[2]
     pos_true, mass_true = pos[te], mass[te]
     # contact: the thesis-style network thresholded at 0.5; the inversion's likelihood-ratio test against no load
-    test_commands = x[split.test, 3].astype(int) if actuated else np.full(split.test.size, RELAXED)
-    no_load_cost = np.sum(((x[split.test, :3] - inversion.no_load_v(test_commands)) / inversion.noise_v_) ** 2, axis=1)
+    no_load_cost = inversion.no_load_cost(x[split.test])
     contact_pred = {
         "MLP (thesis architecture)": (mlp_contact.predict(x[split.test]) >= 0.5).astype(float),
         "beam inversion": (no_load_cost - inv_cost > CONTACT_CHI2).astype(float),
