@@ -17,3 +17,9 @@ def test_tactile_chapters_build_in_fast_mode(tmp_path):
     assert all(e["note"] for e in entries.values() if e["status"] == "discrepancy")
     for name in ("ch6-tactile-raw", "ch6-tactile-predicted-actual", "ch7-tactile-bound", "ch7-tactile-percent-error"):
         assert (tmp_path / "figures" / f"{name}.png").stat().st_size > 1000
+    # the actuated noise revisited: the calibrated friction and its servo-angle reading are reported
+    assert entries["actuated.cable_friction_ratio"]["ours"] > 0
+    assert entries["actuated.cable_friction_equivalent_servo_deg"]["unit"] == "deg"
+    assert "cable-guide friction" in entries["actuated.test_corr2_at_thesis_optimum"]["note"] or (
+        entries["actuated.test_corr2_at_thesis_optimum"]["status"] == "match"
+    )

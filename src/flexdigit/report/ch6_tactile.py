@@ -59,6 +59,16 @@ def build_tactile(ctx: ReportContext, key: str) -> Chapter:
         "output, NETLAB SCG, epochs of 50 iterations with early stopping on the validation third; the 'learning "
         "gradient' is SCG's termination tolerance (NETLAB options(2) and options(3)).",
     ]
+    if key == "actuated":
+        chapter.paragraphs.append(
+            "The twin's noise was revisited for this chapter (issue 7), not the pipeline: a taut cable now brings "
+            "cable-guide friction, a random share of the tension gained or lost across the guides before each "
+            "gauge's section, drawn every reading and zero when the cable is slack (so chapter 6 is unchanged); "
+            "its level is calibrated to this chapter's corr2 (tables and entries below). Before, with no such "
+            "noise (default calibration up to commit 3491245), this chapter gave corr2 0.990 against 0.8998, the "
+            "best estimator 6.6 mm = 0.80 x the thesis network, a worst error / bound of 2.39, contact and "
+            "magnitude met."
+        )
     if ctx.fast:
         chapter.paragraphs.append("Fast mode: reduced sweeps (3 coarse sizes, +-1 fine, 3 gradients, 10 epochs).")
 
@@ -80,7 +90,10 @@ def build_tactile(ctx: ReportContext, key: str) -> Chapter:
             note=f"protocol {'thesis-6.1' if chap == '6' else 'thesis-7.1'} as printed",
         )
     )
-    noise_note = _noise_study(ctx, key, best_h, best_g, chapter)
+    if key == "actuated":
+        noise_note = _friction_study(ctx, best_h, best_g, chapter)
+    else:
+        noise_note = _noise_study(ctx, key, best_h, best_g, chapter)
     e.append(
         results.compare(
             f"{key}.test_corr2_at_thesis_optimum",
@@ -226,6 +239,8 @@ def build_tactile(ctx: ReportContext, key: str) -> Chapter:
             + ").",
         ),
     ]
+
+    chapter.paragraphs.append(_criteria_paragraph(exp, opt.corr2, thesis_corr2, thesis_mlp))
 
     # ------------------------------------------------------------------------------- tables
     chapter.tables.append(
@@ -378,11 +393,201 @@ def _noise_study(ctx: ReportContext, key: str, hidden: int, tol: float, chapter:
         matching = f"{target} lies outside the scanned range, so no white-noise level alone reproduces it"
     return (
         f"Revisiting the twin's noise calibration rather than the pipeline: corr2 against the white gauge noise "
-        f"({', '.join(f'x{r[0]:g}: {r[2]:.4f}' for r in rows)}); {matching}. The default noise (fitted to "
-        "chapter 3's data) is kept: one noise level cannot match both chapters, and the thesis attributes the "
-        "actuated loss to what the twin leaves out (cable friction and stiffness variation, deflections past the "
-        "30 degree small-angle range, 7 intro)."
+        f"({', '.join(f'x{r[0]:g}: {r[2]:.4f}' for r in rows)}); {matching}. The default white noise is kept: "
+        "one white level cannot match both chapters. The actuated loss is the cable-guide friction, which needs a "
+        "taut cable and so is absent here (cable detached; chapter 7)."
     )
+
+
+def _friction_study(ctx: ReportContext, hidden: int, tol: float, chapter: Chapter) -> str:
+    """Chapter 7's noise revisited: corr2 against the cable-guide friction (per reading, per hang) and against
+    servo deadband jitter alone; the calibrated level and its physical meaning. Returns the explanation."""
+    from flexdigit.tactile.experiments import pipeline_corr2_static
+    from flexdigit.twin.calibration import default_calibration
+
+    cal = default_calibration()
+    ratio = cal.cable_friction_ratio
+    epochs = 10 if ctx.fast else 50
+    kw = {"seed": ctx.seed, "params": ctx.params, "epochs": epochs}
+    none = cal.replace(cable_friction_ratio=0.0)
+    cases = [("none (previous default)", none, {}), ("cable-guide friction, per reading (the twin)", cal, {})]
+    cases.append(("cable-guide friction, one draw per hang", cal, {"friction_per": "hang"}))
+    if not ctx.fast:
+        cases.insert(
+            1, (f"friction x0.5 ({ratio / 2:.4f}), per reading", cal.replace(cable_friction_ratio=ratio / 2), {})
+        )
+        cases.insert(
+            3, (f"friction x1.5 ({1.5 * ratio:.4f}), per reading", cal.replace(cable_friction_ratio=1.5 * ratio), {})
+        )
+    for deg in (1.0,) if ctx.fast else (1.0, 4.0):
+        for per in ("reading", "hang"):
+            cases.append(
+                (
+                    f"servo deadband jitter alone, {deg:g} deg per {per}",
+                    none,
+                    {"servo_jitter_rad": np.radians(deg), "servo_jitter_per": per},
+                )
+            )
+    rows = [[name, pipeline_corr2_static("actuated", c, **kw, **extra)] for name, c, extra in cases]
+    chapter.tables.append(
+        Table(
+            f"Actuated test corr2 at the thesis's optimum ({hidden} nodes, gradient {tol:g}) against the twin's "
+            "actuated noise (batched static solver: at rest, no drift; thesis 0.8998)",
+            ["noise in the actuated readings", "test corr2"],
+            rows,
+        )
+    )
+    per_hang = next(r[1] for r in rows if r[0].endswith("per hang") and r[0].startswith("cable"))
+    eq = _equivalent_servo_angle(ctx, cal)
+    e = chapter.entries
+    e.append(
+        results.new(
+            "actuated.cable_friction_ratio",
+            "7 (twin calibration)",
+            ratio,
+            "",
+            "Calibrated cable-guide friction (twin default_calibration.toml): standard deviation of the share of the "
+            "cable tension gained or lost across the guides before each gauge's section, redrawn every reading; fitted "
+            "by a 1-D root find so the thesis pipeline's actuated test corr2 is 0.8998 (static twin, seed 0), the "
+            "only evidence the thesis gives. As friction, mu x wrap angle >= this: e.g. mu 0.2-0.3 (steel on "
+            f"nylon) over {ratio / 0.3:.2f}-{ratio / 0.2:.2f} rad of wrap per guide, the order of the sections' "
+            "relative rotation at commands 20-40: plausible.",
+        )
+    )
+    e.append(
+        results.new(
+            "actuated.cable_friction_equivalent_servo_deg",
+            "7 (twin calibration)",
+            eq["median_deg"],
+            "deg",
+            "The same tension scatter expressed as a servo shaft angle (ratio x T / (dT/dtheta), over the protocol's "
+            f"settings): median {eq['median_deg']:.2f} deg = {eq['median_us']:.1f} us of PWM pulse "
+            f"({eq['min_deg']:.2f}-{eq['max_deg']:.2f} deg, {eq['min_us']:.1f}-{eq['max_us']:.1f} us; "
+            f"{ctx.params.actuator.deg_per_command:.4f} deg = one command = {eq['us_per_command']:.3f} us). A hobby "
+            "servo's deadband is a few us (a fraction of a degree to ~1 deg), so the servo alone could not scatter "
+            "the tension this much, and the table shows it could not cost corr2 anyway: its jitter moves the gauges "
+            "along the one actuation direction, which the network separates from the load.",
+        )
+    )
+    return (
+        "Revisited the twin's noise calibration, not the pipeline (issue 7): the previous default had no noise "
+        "specific to the taut cable, and white gauge noise high enough for 0.8998 (x9.4) wrecks chapter 6. "
+        "Servo deadband jitter alone leaves corr2 at "
+        + ", ".join(f"{r[1]:.3f}" for r in rows if r[0].startswith("servo"))
+        + " (table); cable-guide friction drawn per reading reproduces it at ratio "
+        f"{ratio:.4f}, drawn once per hang it does not ({per_hang:.3f}): "
+        "the readings of one hang are split at random between training and test and share its offset. The thesis "
+        "repeated 'the procedure' 25 times per setting (6.4, 7.1), which makes every repetition a fresh slide of "
+        "the cable; the twin's protocol reads 25 times 20 ms apart after one hang, and its per-reading draw stands "
+        "in for that."
+    )
+
+
+def _equivalent_servo_angle(ctx: ReportContext, cal) -> dict:
+    """The friction's tension scatter over the protocol's settings as a servo shaft angle (deg) and pulse (us)."""
+    from flexdigit.tactile.protocols import load_protocol
+    from flexdigit.twin.twin import static_gauges_v
+
+    a = ctx.params.actuator
+    plan = load_protocol("thesis-7.1-no-load").plan(ctx.params.geometry.digit_length_m)
+    keys = np.unique(
+        np.column_stack([plan["load_kg"], np.nan_to_num(plan["position_from_base_m"]), plan["command"]]), axis=0
+    )
+    d = 0.01 * a.rad_per_command
+    tension = []
+    for off in (-d, 0.0, d):
+        _, sol = static_gauges_v(
+            keys[:, 0],
+            keys[:, 1],
+            keys[:, 2].astype(int),
+            params=ctx.params,
+            calibration=cal,
+            adc=False,
+            return_solution=True,
+            servo_offset_rad=np.full(len(keys), off),
+        )
+        tension.append(sol.tension_n)
+    slope = (tension[2] - tension[0]) / (2 * d)  # N per rad of servo shaft
+    deg = np.degrees(cal.cable_friction_ratio * tension[1] / slope)
+    us_per_deg = 1e6 * (a.pulse_width_max_s - a.pulse_width_min_s) / (a.angle_max_deg - a.angle_min_deg)
+    return {
+        "median_deg": float(np.median(deg)),
+        "min_deg": float(deg.min()),
+        "max_deg": float(deg.max()),
+        "median_us": float(np.median(deg) * us_per_deg),
+        "min_us": float(deg.min() * us_per_deg),
+        "max_us": float(deg.max() * us_per_deg),
+        "us_per_command": float(a.deg_per_command * us_per_deg),
+    }
+
+
+def _criteria_paragraph(exp, corr2_ours: float, corr2_thesis: float, thesis_mlp_m: float) -> str:
+    """Issue 7's "done when" criteria on this experiment, each with its figure, and why a failing one fails."""
+    loc = exp.localisation
+    best = loc.best
+    rm = loc.position_rmse_identifiable_m
+    worst = _worst_ratio(loc, best)
+    contact = max(loc.contact_accuracy_visible.values())
+    magnitude = min(loc.magnitude_rel_rmse_identifiable.values())
+    checks = [
+        (f"corr2 {corr2_ours:.4f} within +-0.03 of {corr2_thesis}", abs(corr2_ours - corr2_thesis) <= 0.03),
+        (
+            f"best estimator ({best}) {1000 * rm[best]:.1f} mm = {rm[best] / thesis_mlp_m:.2f} x the thesis network's "
+            f"{1000 * thesis_mlp_m:.1f} mm (<= 0.5)",
+            rm[best] <= 0.5 * thesis_mlp_m,
+        ),
+        (f"its worst per-position error / Cramer-Rao bound {worst:.2f} (<= 1.25)", worst <= 1.25),
+        (f"contact {100 * contact:.1f} % (>= 99 %)", contact >= 0.99),
+        (f"magnitude {100 * magnitude:.1f} % RMS (<= 10 %)", magnitude <= 0.10),
+    ]
+    text = (
+        "Issue 7's criteria on this experiment: "
+        + "; ".join(f"{label}: {'met' if ok else 'NOT met'}" for label, ok in checks)
+        + "."
+    )
+    if checks[1][1] and checks[2][1]:
+        return text
+    # why: how close the thesis network already is to the bound, position by position
+    rows = exp.thesis_mlp_position_m["test_rows"]
+    pred = exp.thesis_mlp_position_m["pred_m"]
+    true = exp.dataset["position_from_tip_m"][rows]
+    zone = loc.extra["zone_all"][rows]
+    bound = loc.extra["crlb_all_m"][rows]
+    ratios = []
+    for p in np.unique(true):
+        sel = (true == p) & (zone == "identifiable")
+        if sel.any():
+            err = np.sqrt(np.mean((pred[sel] - p) ** 2))
+            ratios.append(err / np.sqrt(np.mean(bound[sel] ** 2)))
+    ratios = np.array(ratios)
+    spread = float(np.std(np.unique(exp.dataset["position_from_tip_m"][exp.dataset["load_kg"] > 0])))
+    ident = loc.zone == "identifiable"
+    over = float(np.mean(loc.crlb_m[ident] > spread)) if ident.any() else float("nan")
+    text += (
+        f" Why: position by position the thesis network is already at {np.min(ratios):.2f}-{np.max(ratios):.2f} x "
+        f"the one-reading bound (median {np.median(ratios):.2f}), i.e. mostly below it: the bound exceeds the spread "
+        f"of the protocol's positions ({1000 * spread:.0f} mm standard deviation) on {over:.0%} of the identifiable "
+        "test readings, and a network that has learnt the protocol's short list of positions and loads beats it by "
+        "shrinking towards them. An estimator at half its error would sit at half those ratios, further below a "
+        "bound no unbiased estimator can cross, so with the noise that reproduces the thesis's corr2 the 0.5 x "
+        "criterion asks for more than one reading holds, and the ratio-to-bound metric is ill-posed (estimators "
+        "beat it by using the protocol, not the gauges)."
+    )
+    if not checks[3][1]:
+        name = max(loc.contact_accuracy_visible, key=loc.contact_accuracy_visible.get)
+        crow = loc.extra["contact_rows"]
+        wrong = loc.extra["contact_pred"][name] != (exp.dataset["load_kg"][crow] > 0)
+        where = exp.dataset["position_from_tip_m"][crow][wrong]
+        cmds = exp.dataset["command"][crow][wrong]
+        labels = [f"load {100 * w:g} cm from the tip" if np.isfinite(w) else "no load" for w in where]
+        counts = {k: labels.count(k) for k in sorted(set(labels))}
+        text += (
+            f" Contact ({name}) errs on {int(wrong.sum())} of {crow.size} test readings ("
+            + ", ".join(f"{k}: {v}" for k, v in counts.items())
+            + f"; commands {sorted(set(cmds.tolist()))}): a load near the clamp bends gauge 1 by only a few standard "
+            "deviations of the friction at those tensions, and the friction scatters the no-load readings alike."
+        )
+    return text
 
 
 def _worst_ratio(loc, name: str) -> float:

@@ -207,7 +207,14 @@ def localisation_study(
         contact_accuracy={k: accuracy(v, contact_true) for k, v in contact_pred.items()},
         contact_accuracy_visible={k: accuracy(v[visible], contact_true[visible]) for k, v in contact_pred.items()},
         gp_std_m=gp_std[:, 0],
-        extra={"split": split, "identifiable_fraction": float(np.mean(ident)), "zone_all": zone},
+        extra={
+            "split": split,
+            "identifiable_fraction": float(np.mean(ident)),
+            "zone_all": zone,
+            "crlb_all_m": crlb,
+            "contact_pred": contact_pred,
+            "contact_rows": split.test,
+        },
     )
 
 
