@@ -199,7 +199,8 @@ def build_tactile(ctx: ReportContext, key: str) -> Chapter:
             1000 * loc.crlb_rms_identifiable_m,
             "mm",
             "Cramer-Rao bound of one reading (twin sensitivity by finite differences of its static model; white "
-            "noise plus the drift accumulated since the test's tare), RMS over the identifiable test readings, "
+            "noise, the cable-guide friction at the load's tension when the cable is taut, and the drift "
+            "accumulated since the test's tare), RMS over the identifiable test readings, "
             f"position and mass both unknown. Best estimator / bound = {rm[best] / loc.crlb_rms_identifiable_m:.3f}.",
         ),
         results.new(
