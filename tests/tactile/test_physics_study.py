@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
-from flexdigit.tactile.physics import ZONES, cramer_rao
+from flexdigit.tactile.physics import ZONES, cramer_rao, protocol_limits
 from flexdigit.tactile.protocols import load_protocol
 from flexdigit.tactile.runner import collect
 from flexdigit.tactile.study import localisation_study
@@ -62,6 +62,10 @@ def test_localisation_study_on_table_6_1(tmp_path, make_rig, cantilever_model):
     assert inv <= 1.25 * r.crlb_rms_identifiable_m
     assert r.contact_accuracy_visible["beam inversion"] >= 0.99
     assert r.magnitude_rel_rmse_identifiable["beam inversion"] < 0.10
+    # the Bayes limit knows the protocol: no estimator beats it by more than the test set's sampling error
+    best = min(r.position_rmse_identifiable_m.values())
+    assert r.bayes["position_rmse_identifiable_m"] <= 1.1 * best  # 0 here: 2 mV noise separates every position
+    assert r.bayes["contact_accuracy_visible"] >= max(r.contact_accuracy_visible.values()) - 0.01
     gp_mean, gp_std = GPLocaliser().fit(ds.gauges_v[:50], ds["load_kg"][:50]).predict(ds.gauges_v[:5], True)
     assert gp_std.shape == gp_mean.shape == (5, 1)
 
@@ -145,3 +149,51 @@ def test_twin_gauge_model_noise_is_white_when_relaxed_and_adds_friction_when_tau
         cramer_rao(looser, [0.2], 0.025, 40).crlb_known_mass_m[0]
         > cramer_rao(model, [0.2], 0.025, 40).crlb_known_mass_m[0]
     )
+
+
+class OneGauge:
+    """Gauge 1 reads ``slope * m * a`` (V), the others nothing; constant noise ``sigma``."""
+
+    def __init__(self, slope=1.0, sigma=0.01):
+        self.slope, self.noise_v = slope, np.array([sigma, sigma, sigma])
+
+    def gauges_v(self, a, m, command):
+        a, m = np.broadcast_arrays(np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(m, float)))
+        return np.column_stack([self.slope * m * a, 0 * a, 0 * a])
+
+
+def test_bayes_contact_error_is_the_gaussian_tail():
+    # load vs no load, equal priors, one gauge separated by d = 2 sigma: Bayes error Phi(-d / 2 sigma) = Phi(-1)
+    from scipy.stats import norm
+
+    model = OneGauge(slope=1.0, sigma=0.01)
+    lim = protocol_limits(model, [0.0, 0.2], [0.0, 0.1], [-1, -1], samples=40000, seed=1)
+    assert lim.contact_error == pytest.approx([norm.cdf(-1.0)] * 2, abs=0.006)
+    assert np.isnan(lim.position_mse_m2[0]) and lim.position_mse_m2[1] == 0.0  # one loaded setting: no doubt
+
+
+def test_bayes_position_error_matches_numerical_integration():
+    # two equally likely positions a1, a2, same mass: the posterior mean errs by (a2 - a1) p_wrong, with
+    # p_wrong = 1 / (1 + exp(D x)) for the reading x sigma from its own mean, D = (v2 - v1) / sigma
+    from scipy.integrate import quad
+    from scipy.stats import norm
+
+    model, a1, a2, m = OneGauge(slope=1.0, sigma=0.01), 0.20, 0.22, 1.0
+    d = (a2 - a1) * m / 0.01
+
+    def p_wrong_sq(x):
+        return norm.pdf(x) / (1 + np.exp(d * x + d * d / 2)) ** 2
+
+    expected = (a2 - a1) ** 2 * quad(p_wrong_sq, -12, 12)[0]
+    lim = protocol_limits(model, [a1, a2], [m, m], [-1, -1], samples=40000, seed=2)
+    assert lim.position_mse_m2 == pytest.approx([expected, expected], rel=0.05)
+    assert lim.contact_error.tolist() == [0.0, 0.0]  # no no-load setting: always a load
+
+
+def test_bayes_limits_are_seeded_and_refuse_repeated_settings():
+    model = OneGauge()
+    one = protocol_limits(model, [0.1, 0.2], [0.02, 0.02], [-1, -1], samples=500, seed=3)
+    two = protocol_limits(model, [0.1, 0.2], [0.02, 0.02], [-1, -1], samples=500, seed=3)
+    np.testing.assert_array_equal(one.position_mse_m2, two.position_mse_m2)
+    with pytest.raises(ValueError, match="distinct settings"):
+        protocol_limits(model, [0.1, 0.1], [0.02, 0.02], [-1, -1])

@@ -241,6 +241,37 @@ def build_tactile(ctx: ReportContext, key: str) -> Chapter:
         ),
     ]
 
+    bayes = loc.bayes
+    floor_pos = bayes["position_rmse_identifiable_m"]
+    e += [
+        results.new(
+            f"{key}.bayes_position_rmse_identifiable_mm",
+            f"{chap} (new)",
+            1000 * floor_pos,
+            "mm",
+            "Bayes limit: the RMS position error of the best possible estimator that knows the protocol's settings "
+            "(positions, loads, commands, their frequencies) and the twin's noise, on the identifiable test "
+            "readings (Monte Carlo, tactile.physics.protocol_limits). Unlike the Cramer-Rao bound, learned "
+            f"estimators cannot beat it. Best estimator / limit = {rm[best] / floor_pos:.2f}; the thesis network / "
+            f"limit = {thesis_mlp / floor_pos:.2f}.",
+        ),
+        results.new(
+            f"{key}.bayes_magnitude_rel_rmse_identifiable",
+            f"{chap} (new)",
+            bayes["magnitude_rel_rmse_identifiable"],
+            "",
+            "Bayes limit of the load's RMS relative error on the identifiable test readings (same model).",
+        ),
+        results.new(
+            f"{key}.bayes_contact_accuracy_visible",
+            f"{chap} (new)",
+            bayes["contact_accuracy_visible"],
+            "",
+            "Bayes limit of load / no-load accuracy on the test readings a load can be seen on (same model; "
+            f"expected errors on these {int(np.sum(loc.extra['contact_visible']))} readings: "
+            f"{np.sum(loc.extra['contact_visible']) * (1 - bayes['contact_accuracy_visible']):.1f}).",
+        ),
+    ]
     chapter.paragraphs.append(_criteria_paragraph(exp, opt.corr2, thesis_corr2, thesis_mlp))
 
     # ------------------------------------------------------------------------------- tables
@@ -546,6 +577,31 @@ def _criteria_paragraph(exp, corr2_ours: float, corr2_thesis: float, thesis_mlp_
         + "; ".join(f"{label}: {'met' if ok else 'NOT met'}" for label, ok in checks)
         + "."
     )
+    bayes = loc.bayes
+    floor_pos = bayes["position_rmse_identifiable_m"]
+    floor_mag = bayes["magnitude_rel_rmse_identifiable"]
+    floor_contact = bayes["contact_accuracy_visible"]
+    text += (
+        " The Bayes limits (the best any estimator that knows the protocol can do on these readings, twin noise "
+        f"model): position {1000 * floor_pos:.1f} mm (best estimator at {rm[best] / floor_pos:.2f} x, thesis "
+        f"network at {thesis_mlp_m / floor_pos:.2f} x), magnitude {100 * floor_mag:.1f} %, contact "
+        f"{100 * floor_contact:.2f} %."
+    )
+    unreachable = []
+    if 0.5 * thesis_mlp_m < floor_pos:
+        unreachable.append(
+            f"half the thesis network's error ({1000 * 0.5 * thesis_mlp_m:.1f} mm) is below the position limit"
+        )
+    if floor_contact < 0.99:
+        unreachable.append(f"99 % contact is above the contact limit ({100 * floor_contact:.2f} %)")
+    if floor_mag > 0.10:
+        unreachable.append(f"10 % magnitude is below the magnitude limit ({100 * floor_mag:.1f} %)")
+    if unreachable:
+        text += (
+            " So with this noise no estimator can meet every criterion: "
+            + "; ".join(unreachable)
+            + ". The noise that reproduces the thesis's corr2 leaves too little in one reading."
+        )
     if checks[1][1] and checks[2][1]:
         return text
     # why: how close the thesis network already is to the bound, position by position

@@ -218,3 +218,101 @@ class TwinGaugeModel:
                 friction_sd_v(sol, self.params, self.calibration, orientation=self.orientation) if friction else volts
             )
         return out
+
+
+@dataclass
+class ProtocolLimits:
+    """What the best possible estimator achieves on a protocol's settings (:func:`protocol_limits`), per setting.
+
+    Attributes
+    ----------
+    position_from_base_m, mass_kg, command : ndarray, shape (k,)
+        The settings (``mass_kg`` 0: no load).
+    contact_error : ndarray
+        Probability that the Bayes load / no-load decision is wrong on a reading of this setting.
+    position_mse_m2 : ndarray
+        Mean squared error (m^2) of the Bayes (posterior-mean) position of a loaded reading; NaN for no load.
+    magnitude_rel_mse : ndarray
+        Mean squared relative error of the Bayes mass estimate for the relative-error loss; NaN for no load.
+    """
+
+    position_from_base_m: np.ndarray
+    mass_kg: np.ndarray
+    command: np.ndarray
+    contact_error: np.ndarray
+    position_mse_m2: np.ndarray
+    magnitude_rel_mse: np.ndarray
+
+    def index(self, position_from_base_m, mass_kg, command) -> np.ndarray:
+        """The setting of each reading (``position_from_base_m`` is ignored where ``mass_kg`` is 0)."""
+        keys = {k: i for i, k in enumerate(_setting_keys(self.position_from_base_m, self.mass_kg, self.command))}
+        try:
+            return np.array([keys[k] for k in _setting_keys(position_from_base_m, mass_kg, command)], dtype=int)
+        except KeyError as err:
+            raise ValueError(f"reading at setting {err.args[0]} is not one of the protocol's settings") from None
+
+
+def _setting_keys(a, m, c) -> list[tuple]:
+    a, m, c = (np.atleast_1d(np.asarray(v, dtype=float)) for v in (a, m, c))
+    a = np.where(m > 0, np.nan_to_num(a, nan=0.0), 0.0)
+    return [(round(x, 6), round(y, 9), int(z)) for x, y, z in zip(a, m, c, strict=True)]
+
+
+def protocol_limits(model, position_from_base_m, mass_kg, command, weights=None, *, samples: int = 4000, seed=0):
+    """Bayes limits of contact, position and magnitude on a protocol's discrete settings (Monte Carlo).
+
+    The Cramer-Rao bound is for an unbiased estimate of a continuous position; an estimator trained on a protocol
+    also knows that loads hang at a short list of positions and masses, and can beat it. This is the limit for
+    such estimators: readings of every setting are drawn from the model's Gaussian noise (``noise_of``), and
+    each is given the Bayes-optimal answer knowing the settings, their frequencies (``weights``) and the servo
+    command: load / no load by the larger posterior, the position by the posterior mean over loaded settings
+    (the minimiser of the squared error), the mass by ``sum p_k / m_k / sum p_k / m_k^2`` (the minimiser of the
+    squared *relative* error). No estimator does better on average on readings drawn this way; the model omits
+    drift, tare and ADC quantisation, so the limits are, if anything, optimistic.
+
+    Parameters
+    ----------
+    model : gauge model
+    position_from_base_m, mass_kg, command : array_like, shape (k,)
+        The protocol's distinct settings; ``mass_kg`` 0 is a no-load reading (its position is ignored).
+    weights : array_like, shape (k,), optional
+        How often each setting occurs (default: equally often).
+    samples : int
+        Monte Carlo readings per setting.
+    seed : int or sequence of int
+        Seeds the draws: same seed, same limits.
+    """
+    keys = _setting_keys(position_from_base_m, mass_kg, command)
+    if len(set(keys)) != len(keys):
+        raise ValueError("protocol_limits needs distinct settings; got repeated (position, mass, command) rows")
+    a = np.array([k[0] for k in keys])
+    m = np.array([k[1] for k in keys])
+    c = np.array([k[2] for k in keys])
+    w = np.ones(a.size) if weights is None else np.asarray(weights, dtype=float)
+    mean = model.gauges_v(a, m, c)
+    sigma = noise_of(model, a, m, c)
+    rng = np.random.default_rng(seed)
+    contact_error = np.zeros(a.size)
+    pos_mse = np.full(a.size, np.nan)
+    mag_mse = np.full(a.size, np.nan)
+    for value in np.unique(c):
+        group = np.flatnonzero(c == value)
+        loaded = m[group] > 0
+        log_prior = np.log(w[group] / w[group].sum())
+        for j in group:
+            v = mean[j] + sigma[j] * rng.standard_normal((samples, 3))
+            # log posterior over the group's settings (up to a constant), (samples, len(group))
+            z = (v[:, None, :] - mean[group][None]) / sigma[group][None]
+            log_post = log_prior - 0.5 * np.sum(z**2, axis=2) - np.sum(np.log(sigma[group]), axis=1)
+            post = np.exp(log_post - log_post.max(axis=1, keepdims=True))
+            post /= post.sum(axis=1, keepdims=True)
+            p_load = post[:, loaded].sum(axis=1)
+            contact_error[j] = np.mean((p_load > 0.5) != (m[j] > 0))
+            if m[j] > 0:
+                pl = post[:, loaded]
+                pl = pl / np.maximum(pl.sum(axis=1, keepdims=True), 1e-300)
+                pos_mse[j] = np.mean((pl @ a[group][loaded] - a[j]) ** 2)
+                mg = m[group][loaded]
+                m_hat = (pl @ (1.0 / mg)) / (pl @ (1.0 / mg**2))
+                mag_mse[j] = np.mean(((m_hat - m[j]) / m[j]) ** 2)
+    return ProtocolLimits(a, m, c, contact_error, pos_mse, mag_mse)

@@ -21,7 +21,7 @@ import numpy as np
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.metrics import accuracy, rmse
-from flexdigit.tactile.physics import ZONES, cramer_rao
+from flexdigit.tactile.physics import ZONES, cramer_rao, protocol_limits
 from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
 
 ESTIMATORS = ("MLP (thesis architecture)", "beam inversion", "beam inversion, known load set", "Gaussian process")
@@ -93,6 +93,7 @@ class LocalisationResult:
     contact_accuracy: dict[str, float]
     contact_accuracy_visible: dict[str, float]
     gp_std_m: np.ndarray
+    bayes: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
 
     @property
@@ -189,6 +190,25 @@ def localisation_study(
     def rel(p, t):
         return float(np.sqrt(np.mean(((p - t) / t) ** 2))) if t.size else float("nan")
 
+    # Bayes limits, each with the prior of the readings it is scored on (more knowledge than any estimator has, so
+    # a floor for every estimator scored on those readings): identifiable loads; visible readings; all readings
+    ident_rows, visible_rows = te[ident], split.test[visible]
+
+    def limit(rows):
+        lim = bayes_limits(model, raw, rows, seed=seed)
+        return lim, lim.index(raw["position_from_base_m"][rows], raw["load_kg"][rows], raw["command"][rows])
+
+    lim_id, k_id = limit(ident_rows)
+    lim_vis, k_vis = limit(visible_rows)
+    lim_all, k_all = limit(split.test)
+    bayes = {
+        "position_rmse_identifiable_m": float(np.sqrt(np.mean(lim_id.position_mse_m2[k_id]))),
+        "magnitude_rel_rmse_identifiable": float(np.sqrt(np.mean(lim_id.magnitude_rel_mse[k_id]))),
+        "contact_accuracy_visible": float(1.0 - np.mean(lim_vis.contact_error[k_vis])),
+        "contact_accuracy": float(1.0 - np.mean(lim_all.contact_error[k_all])),
+        "limits_identifiable": lim_id,
+    }
+
     return LocalisationResult(
         test_rows=te,
         zone=zone[te],
@@ -207,6 +227,7 @@ def localisation_study(
         contact_accuracy={k: accuracy(v, contact_true) for k, v in contact_pred.items()},
         contact_accuracy_visible={k: accuracy(v[visible], contact_true[visible]) for k, v in contact_pred.items()},
         gp_std_m=gp_std[:, 0],
+        bayes=bayes,
         extra={
             "split": split,
             "identifiable_fraction": float(np.mean(ident)),
@@ -214,8 +235,22 @@ def localisation_study(
             "crlb_all_m": crlb,
             "contact_pred": contact_pred,
             "contact_rows": split.test,
+            "contact_visible": visible,
         },
     )
+
+
+def bayes_limits(model, dataset: Dataset, rows=None, *, samples: int = 4000, seed: int = 0):
+    """:func:`~flexdigit.tactile.physics.protocol_limits` on the distinct settings of ``dataset`` (or of its
+    ``rows``), weighted by how often each occurs in the whole dataset: what the best estimator that knows the
+    protocol, and that the reading is one of those settings, could score on them."""
+    mass = dataset["load_kg"]
+    a = np.where(mass > 0, np.nan_to_num(dataset["position_from_base_m"], nan=0.0), 0.0)
+    all_keys = np.column_stack([np.round(a, 6), mass, dataset["command"]])
+    keys, inverse, counts = np.unique(all_keys, axis=0, return_inverse=True, return_counts=True)
+    keep = np.unique(inverse.ravel()[np.arange(len(dataset)) if rows is None else np.asarray(rows)])
+    k = keys[keep]
+    return protocol_limits(model, k[:, 0], k[:, 1], k[:, 2], counts[keep], samples=samples, seed=[seed, 11])
 
 
 def identifiability_map(model, masses_kg, commands, digit_length_m: float, points: int = 271) -> dict:
