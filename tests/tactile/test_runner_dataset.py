@@ -128,3 +128,15 @@ def test_corrupt_and_mismatched_datasets_give_clear_errors(saved, tmp_path, make
     with pytest.raises(DataFileError, match="missing column"):
         load_dataset(bad)
     assert set(COLUMNS) <= set(table.column_names)
+
+
+def test_rehang_on_hardware_asks_the_operator_and_waits_the_settle_time(make_rig):
+    rig = make_rig()
+    said = []
+    rig.operator = said.append
+    t0 = rig.clock()
+    rig.rehang(2.5)
+    assert said == ["Lift every weight and hang it again at the same place."]
+    assert rig.clock() - t0 == pytest.approx(2.5)
+    with pytest.raises(ParameterError, match="settle_s"):
+        rig.rehang(-1.0)

@@ -91,13 +91,15 @@ def test_static_spread_matches_white_plus_friction():
 
 
 def test_dynamic_twin_reading_spread_matches_the_static_model():
-    # settled at command 40, horizontal: the readings scatter as white noise plus friction at the static tension
+    # settled at command 40, horizontal, jolted before every reading (a weight re-hung): the readings scatter as
+    # white noise plus friction at the static tension
     cal = _cal()
     twin = Twin(seed=2, calibration=cal, orientation="horizontal", command=40)
     n = 400
     reads = []
     for _ in range(n):
         twin.advance(0.02)
+        twin.disturb()
         reads.append(twin.read()[0])
     _, sol = static_gauges_v([0.0], [0.0], [40], calibration=cal, adc=False, return_solution=True)
     assert twin.cable_tension_n() == pytest.approx(sol.tension_n[0], rel=1e-3)
@@ -105,17 +107,47 @@ def test_dynamic_twin_reading_spread_matches_the_static_model():
     np.testing.assert_allclose(np.std(reads, axis=0), expected, rtol=5 / np.sqrt(2 * n))
     again = Twin(seed=2, calibration=cal, orientation="horizontal", command=40)
     again.advance(0.02)
+    again.disturb()
     np.testing.assert_array_equal(again.read()[0], reads[0])
 
 
+def test_friction_state_is_held_until_the_cable_is_jolted():
+    # no jolt yet (the servo only pulled the cable): readings scatter as the white noise alone
+    cal = _cal()
+    twin = Twin(seed=4, calibration=cal, orientation="horizontal", command=40)
+    twin.advance(0.02)
+    quiet = []
+    for _ in range(300):
+        twin.advance(0.02)
+        quiet.append(twin.read()[0])
+    np.testing.assert_allclose(np.std(quiet, axis=0), cal.noise_white_v, rtol=5 / np.sqrt(600))
+    # one jolt: every later reading carries the same offset, the white noise still the only scatter
+    twin.disturb()
+    held = []
+    for _ in range(300):
+        twin.advance(0.02)
+        held.append(twin.read()[0])
+    np.testing.assert_allclose(np.std(held, axis=0), cal.noise_white_v, rtol=5 / np.sqrt(600))
+    _, sol = static_gauges_v([0.0], [0.0], [40], calibration=cal, adc=False, return_solution=True)
+    shift = np.abs(np.mean(held, axis=0) - np.mean(quiet, axis=0))
+    assert np.all(shift < 4 * friction_sd_v(sol, calibration=cal)[0])  # one draw of the friction, not more
+    assert np.any(shift > 10 * np.array(cal.noise_white_v) / np.sqrt(300))  # and visibly there
+    # hanging a weight is a jolt too
+    before = twin._friction_xi.copy()
+    twin.place_load(0.025, 0.2)
+    assert not np.array_equal(before, twin._friction_xi)
+
+
 def test_friction_ratio_recovered_from_a_synthetic_repeatability_record():
-    # a user with a rig: 1000 readings of the unloaded digit held at command 30, from a twin with a known ratio
+    # a user with a rig: 1000 readings of the unloaded digit held at command 30, tapped between readings, from a
+    # twin with a known ratio
     truth = 0.05
     n = 1000
     twin = Twin(seed=11, calibration=_cal(truth), orientation="horizontal", command=30)
     volts = []
     for _ in range(n):
         twin.advance(0.02)
+        twin.disturb()  # tap the digit between readings: each sees the cable settle afresh in its guides
         volts.append(twin.read()[0])
     targets = CalibrationTargets.from_records(actuated_rest=(30, np.array(volts)))
     assert targets.actuated_repeatability_command == 30

@@ -170,6 +170,10 @@ class Rig(abc.ABC):
     def _remove_loads(self) -> None:
         self.operator("Remove every weight from the digit.")
 
+    def _rehang(self, settle_s: float) -> None:
+        self.operator("Lift every weight and hang it again at the same place.")
+        self.wait(settle_s)
+
     def _close(self) -> None:
         """Release the port/device (after the safe command has been sent); nothing to release by default."""
         return None
@@ -218,6 +222,18 @@ class Rig(abc.ABC):
         self._check_open()
         self._apply_load(mass, pos)
         self.loads.append((mass, pos))
+
+    def rehang(self, settle_s: float) -> None:
+        """Lift the hung weights and hang them again at the same places, then let the digit settle ``settle_s``.
+
+        The thesis repeats "the procedure" for every reading (6.4, 7.1); on hardware the operator does it. The twin
+        re-hangs exactly, without a swing, so it only lets the cable settle afresh in its guides and does not wait.
+        """
+        from flexdigit._validation import check_real
+
+        settle = check_real(settle_s, "settle_s", type(self).__name__, low=0.0)
+        self._check_open()
+        self._rehang(settle)
 
     def clear_loads(self) -> None:
         """Remove every load."""

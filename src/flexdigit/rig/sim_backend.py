@@ -112,6 +112,10 @@ class SimRig(Rig):
     def _remove_loads(self) -> None:
         self.twin.clear_loads()
 
+    def _rehang(self, settle_s: float) -> None:
+        self._catch_up()
+        self.twin.disturb()  # same weights, same places: only the cable-guide friction settles afresh
+
     def tip_rotation_deg(self) -> float:
         """The twin's true tip (beam) rotation now, deg: the last link's absolute angle (not measurable on hardware)."""
         psi, _ = self.twin.state()

@@ -51,6 +51,7 @@ _KEYS = {
     "no_load_repetitions",
     "settle_s",
     "sample_interval_s",
+    "rehang",
     "expected_samples",
 }
 
@@ -77,6 +78,10 @@ class Protocol:
         Time allowed after every change of load, position or command before reading (s).
     sample_interval_s : float
         Time between the repeated readings of one setting (s).
+    rehang : bool
+        Lift and re-hang the weight before every repetition of a loaded setting, as the thesis repeats "the
+        procedure" 25 times at each position and weight (6.4, 7.1); each reading then sees the cable settle in
+        its guides afresh (:meth:`flexdigit.rig.base.Rig.rehang`). False: read repeatedly after one hang.
     orientation : {"horizontal", "vertical"}
         How the digit lies; the thesis's tactile experiments are horizontal (7, intro).
     description, thesis_ref : str
@@ -91,6 +96,7 @@ class Protocol:
     no_load_repetitions: int = 25
     settle_s: float = 1.0
     sample_interval_s: float = 0.02
+    rehang: bool = False
     orientation: str = "horizontal"
     description: str = ""
     thesis_ref: str = ""
@@ -123,6 +129,8 @@ class Protocol:
             self, "sample_interval_s", check_real(self.sample_interval_s, "sample_interval_s", owner, low=0, high=3600)
         )
         check_choice(self.orientation, "orientation", ("horizontal", "vertical"), owner)
+        if not isinstance(self.rehang, bool):
+            raise ParameterError(f"The 'rehang' parameter of {owner} must be true or false. Got {self.rehang!r}.")
 
     @property
     def actuated(self) -> bool:
@@ -211,7 +219,7 @@ def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
 
     Keys: ``name``, ``loads_g``, ``positions_from_tip_cm`` (required); ``actuation_commands`` (default ``[]``,
     actuation disabled), ``repetitions`` (25), ``no_load_repetitions`` (25), ``settle_s`` (1.0),
-    ``sample_interval_s`` (0.02), ``orientation`` ("horizontal"), ``description``, ``thesis_ref``,
+    ``sample_interval_s`` (0.02), ``rehang`` (false), ``orientation`` ("horizontal"), ``description``, ``thesis_ref``,
     ``expected_samples`` (checked if given).
 
     Raises
@@ -244,6 +252,7 @@ def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
             no_load_repetitions=data.get("no_load_repetitions", 25),
             settle_s=data.get("settle_s", 1.0),
             sample_interval_s=data.get("sample_interval_s", 0.02),
+            rehang=data.get("rehang", False),
             orientation=data.get("orientation", "horizontal"),
             description=str(data.get("description", "")),
             thesis_ref=str(data.get("thesis_ref", "")),

@@ -106,8 +106,11 @@ def collect(
                     _apply_setting(rig, command, float(plan["load_kg"][i]), float(plan["position_from_base_m"][i]))
                     rig.wait(settle)
                     setting = wanted
-                elif protocol.sample_interval_s > 0:
-                    rig.wait(protocol.sample_interval_s)
+                else:
+                    if protocol.rehang and plan["load_kg"][i] > 0:
+                        rig.rehang(settle)
+                    if protocol.sample_interval_s > 0:
+                        rig.wait(protocol.sample_interval_s)
                 reading = rig.read()
                 gauges = np.asarray(reading.gauges_v, dtype=float)
                 if gauges.shape != (3,) or not np.all(np.isfinite(gauges)):

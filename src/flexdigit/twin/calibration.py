@@ -208,8 +208,10 @@ class CalibrationTargets:
         Measured noise levels, if any.
     actuated_repeatability_v : tuple of float, optional
         Measured standard deviation (V, per gauge) of repeated readings of the unloaded digit lying horizontal
-        (cable side up) and held at ``actuated_repeatability_command``: fixes ``cable_friction_ratio`` in closed
-        form (:func:`friction_ratio_from_repeatability`). Preferred over ``actuated_test_corr2`` when given.
+        (cable side up) and held at ``actuated_repeatability_command``, the digit tapped before each reading so
+        the cable settles afresh in its guides (readings after one tap share one friction state): fixes
+        ``cable_friction_ratio`` in closed form (:func:`friction_ratio_from_repeatability`). Preferred over
+        ``actuated_test_corr2`` when given.
     actuated_repeatability_command : int, optional
         The command of that record.
     actuated_test_corr2 : float, optional
@@ -295,8 +297,8 @@ class CalibrationTargets:
         rest : (time_s, volts (N, 3)), optional
             The resting rig: white noise and drift per channel (:func:`noise_from_record`).
         actuated_rest : (command, volts (N, 3)), optional
-            Repeated readings of the unloaded digit lying horizontal, held at one command: their standard
-            deviation per channel is the actuated repeatability (``cable_friction_ratio``).
+            Repeated readings of the unloaded digit lying horizontal, held at one command and tapped before each
+            reading: their standard deviation per channel is the actuated repeatability (``cable_friction_ratio``).
         """
         kw: dict[str, Any] = {"deflection_resolution_mm": deflection_resolution_mm}
         for name, rec in (("bare", release_bare), ("housing", release_housing)):

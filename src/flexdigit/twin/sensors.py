@@ -24,15 +24,19 @@ The cable slides through the nylon guides whenever its tension changes (a weight
 its deadband); static friction at each guide then holds a tension difference of up to ``mu phi T`` (capstan,
 ``phi`` the cable's wrap at the guide), whose sign and size depend on how the cable last slid. So each gauge's
 section carries, besides ``e T`` from the cable's anchor at the tip, an extra moment ``e dT_k`` with
-``dT_k = ratio * T * xi_k``, ``xi_k`` standard normal, independent per gauge and per reading
-(``Calibration.cable_friction_ratio``). It enters as curvature through the section's local compliance
+``dT_k = ratio * T * xi_k``, ``xi_k`` standard normal, independent per gauge section
+(``Calibration.cable_friction_ratio``). The state ``xi`` is held until something jolts the cable in its guides:
+hanging, lifting or re-hanging a weight by hand draws it afresh (:meth:`flexdigit.twin.Twin.disturb`); the servo
+pulling the cable slides it one way only, a repeatable state that the calibration absorbs, so a loop with no
+weights hung (chapter 5) sees none of it. It enters as curvature through the section's local compliance
 (:attr:`flexdigit.twin.digit.Chain.gauge_curvature_per_moment`), not through the chain's equilibrium: a
 first-order model of a redistribution that the stiff cable (which pins the tip angle) keeps local. It is zero with
 a slack or detached cable (the non-actuated digit of chapter 6) and grows with the tension. Its draws come from a
 generator of their own (seeded from the twin's seed), so the white noise and drift are the same numbers with or
-without it. Per reading rather than per hang: the thesis repeats "the procedure" 25 times at each setting (6.4,
-7.1), each a fresh slide of the cable, and a per-hang offset shared by readings split at random between training
-and test leaves corr2 untouched (the report shows both).
+without it. The thesis repeats "the procedure" 25 times at each setting (6.4, 7.1): every reading follows its own
+hang, so its own friction state (the tactile protocols re-hang before every repetition, ``rehang``); readings
+taken one after another after a single hang would share one state, which, split at random between training and
+test, leaves corr2 untouched (the report shows both).
 """
 
 from __future__ import annotations

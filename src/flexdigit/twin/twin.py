@@ -108,6 +108,9 @@ class Twin:
         # cable-guide friction draws from its own stream: the white noise and drift stay the same numbers
         self.friction_rng = np.random.default_rng([self.seed, FRICTION_STREAM])
         self._curvature_per_moment = self.chain.gauge_curvature_per_moment
+        # the cable-guide friction's state (standard-normal, per gauge section): zero until something jolts the
+        # cable (a servo pulling it slides it one way, a repeatable state the calibration absorbs)
+        self._friction_xi = np.zeros(3)
         start = self.params.actuator.equilibrium_command if command is None else command
         self.servo = Servo(self.params, start)
         self._pulley_m = self.params.actuator.pulley_radius_m
@@ -229,8 +232,8 @@ class Twin:
     def read(self) -> tuple[np.ndarray, float]:
         """Sample the three gauge channels and the potentiometer through the sensor chain (with noise).
 
-        With a taut cable each reading also carries a fresh draw of the cable-guide friction
-        (``Calibration.cable_friction_ratio``, :mod:`flexdigit.twin.sensors`).
+        With a taut cable each reading also carries the cable-guide friction's current state
+        (``Calibration.cable_friction_ratio``, :mod:`flexdigit.twin.sensors`), drawn afresh by :meth:`disturb`.
 
         Returns
         -------
@@ -241,7 +244,8 @@ class Twin:
         """
         kappa, axial, tension, theta_now = self._gauge_state(self.time_s)
         if tension > 0 and self.sensors.friction_ratio > 0:
-            kappa = self.sensors.friction_draw(kappa, tension, self._curvature_per_moment, self.friction_rng)
+            sd = self.sensors.friction_curvature_sd_1_m(tension, self._curvature_per_moment)
+            kappa = kappa + sd * self._friction_xi
         clean = self.sensors.clean_v(kappa, axial)
         return self.sensors.sample(clean, self.time_s), self.sensors.sample_pot(self.servo.pot_v(theta_now))
 
@@ -271,16 +275,30 @@ class Twin:
         return self.chain.positions(self.state()[0], np.atleast_1d(np.asarray(s_m, dtype=float)))[:, 1]
 
     def place_load(self, mass_kg: float, position_from_base_m: float) -> None:
-        """Hang a weight (kg) at a position along the digit (m from the base); it stays until :meth:`clear_loads`."""
+        """Hang a weight (kg) at a position along the digit (m from the base); it stays until :meth:`clear_loads`.
+
+        Hanging it jolts the cable in its guides: the friction is drawn afresh (:meth:`disturb`).
+        """
         m, s = check_load(mass_kg, position_from_base_m, self.params)
         self._loads.append((float(s), float(m)))
         s_arr, m_arr = self._load_arrays()
         self.dynamics.set_loads(s_arr, m_arr)
+        self.disturb()
 
     def clear_loads(self) -> None:
-        """Remove every hung weight."""
+        """Remove every hung weight (a jolt, like hanging one: :meth:`disturb`)."""
         self._loads.clear()
         self.dynamics.set_loads(None, None)
+        self.disturb()
+
+    def disturb(self) -> None:
+        """Jolt the cable in its guides (a weight hung, lifted or re-hung by hand): the cable-guide friction
+        settles in a new random state, held until the next jolt (:mod:`flexdigit.twin.sensors`).
+
+        The mechanics are untouched: re-hanging a weight at the same place leaves the settled shape as it was.
+        Draws from the friction's own stream, so the white noise and drift are the same numbers.
+        """
+        self._friction_xi = self.friction_rng.standard_normal(3)
 
     @property
     def loads(self) -> list[tuple[float, float]]:
