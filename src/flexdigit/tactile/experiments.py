@@ -99,8 +99,9 @@ def static_dataset(
     """The protocol's readings from the twin's batched static solver plus its noise (no dynamics, no drift).
 
     Every setting at rest: the ideal experiment, in milliseconds (used to scan and calibrate the noise level).
-    White noise is drawn per reading; the cable-guide friction per reading (the twin's model) or, with
-    ``friction_per="hang"``, once per setting and shared by its repetitions. ``servo_jitter_rad`` adds a Gaussian
+    White noise is drawn per reading; the cable-guide friction per reading (a hang per reading, as the thesis
+    protocols re-hang before every repetition) or, with ``friction_per="hang"``, once per setting and shared by
+    its repetitions (25 readings after one hang). ``servo_jitter_rad`` adds a Gaussian
     servo shaft offset (standard deviation, rad) per reading or per hang: the deadband hypothesis the report
     tests. ``time_s`` counts the readings.
     """

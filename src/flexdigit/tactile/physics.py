@@ -258,7 +258,9 @@ def _setting_keys(a, m, c) -> list[tuple]:
     return [(round(x, 6), round(y, 9), int(z)) for x, y, z in zip(a, m, c, strict=True)]
 
 
-def protocol_limits(model, position_from_base_m, mass_kg, command, weights=None, *, samples: int = 4000, seed=0):
+def protocol_limits(
+    model, position_from_base_m, mass_kg, command, weights=None, *, samples: int = 4000, seed=0, no_load_noise_v=None
+):
     """Bayes limits of contact, position and magnitude on a protocol's discrete settings (Monte Carlo).
 
     The Cramer-Rao bound is for an unbiased estimate of a continuous position; an estimator trained on a protocol
@@ -281,6 +283,9 @@ def protocol_limits(model, position_from_base_m, mass_kg, command, weights=None,
         Monte Carlo readings per setting.
     seed : int or sequence of int
         Seeds the draws: same seed, same limits.
+    no_load_noise_v : array_like, shape (3,), optional
+        Noise of the no-load readings instead of the model's (e.g. the white noise alone for readings tared on
+        their own test's no-load readings, which share one cable-guide friction state).
     """
     keys = _setting_keys(position_from_base_m, mass_kg, command)
     if len(set(keys)) != len(keys):
@@ -291,6 +296,8 @@ def protocol_limits(model, position_from_base_m, mass_kg, command, weights=None,
     w = np.ones(a.size) if weights is None else np.asarray(weights, dtype=float)
     mean = model.gauges_v(a, m, c)
     sigma = noise_of(model, a, m, c)
+    if no_load_noise_v is not None:
+        sigma = np.where((m > 0)[:, None], sigma, np.asarray(no_load_noise_v, dtype=float))
     rng = np.random.default_rng(seed)
     contact_error = np.zeros(a.size)
     pos_mse = np.full(a.size, np.nan)

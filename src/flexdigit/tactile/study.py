@@ -243,14 +243,22 @@ def localisation_study(
 def bayes_limits(model, dataset: Dataset, rows=None, *, samples: int = 4000, seed: int = 0):
     """:func:`~flexdigit.tactile.physics.protocol_limits` on the distinct settings of ``dataset`` (or of its
     ``rows``), weighted by how often each occurs in the whole dataset: what the best estimator that knows the
-    protocol, and that the reading is one of those settings, could score on them."""
+    protocol, and that the reading is one of those settings, could score on them.
+
+    The no-load readings carry the model's white noise only: they are read one after another after the weights
+    are lifted (the protocols re-hang only loaded readings), so they share one cable-guide friction state, which
+    the tare on their mean removes.
+    """
     mass = dataset["load_kg"]
     a = np.where(mass > 0, np.nan_to_num(dataset["position_from_base_m"], nan=0.0), 0.0)
     all_keys = np.column_stack([np.round(a, 6), mass, dataset["command"]])
     keys, inverse, counts = np.unique(all_keys, axis=0, return_inverse=True, return_counts=True)
     keep = np.unique(inverse.ravel()[np.arange(len(dataset)) if rows is None else np.asarray(rows)])
     k = keys[keep]
-    return protocol_limits(model, k[:, 0], k[:, 1], k[:, 2], counts[keep], samples=samples, seed=[seed, 11])
+    white = getattr(model, "noise_v", None)
+    return protocol_limits(
+        model, k[:, 0], k[:, 1], k[:, 2], counts[keep], samples=samples, seed=[seed, 11], no_load_noise_v=white
+    )
 
 
 def identifiability_map(model, masses_kg, commands, digit_length_m: float, points: int = 271) -> dict:
