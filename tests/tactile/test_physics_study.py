@@ -197,3 +197,15 @@ def test_bayes_limits_are_seeded_and_refuse_repeated_settings():
     np.testing.assert_array_equal(one.position_mse_m2, two.position_mse_m2)
     with pytest.raises(ValueError, match="distinct settings"):
         protocol_limits(model, [0.1, 0.1], [0.02, 0.02], [-1, -1])
+
+
+def test_bayes_contact_uses_the_no_load_noise_when_given():
+    # no-load readings 10x quieter than loaded ones: a no-load reading is almost never mistaken for a load (it would
+    # have to stray 1 sigma_loaded = 10 of its own sigmas), and a loaded one only when all three gauges land in the
+    # no-load's narrow band: both errors fall far below the equal-noise Phi(-1) = 0.159
+    from scipy.stats import norm
+
+    model = OneGauge(slope=1.0, sigma=0.01)
+    lim = protocol_limits(model, [0.0, 0.2], [0.0, 0.1], [-1, -1], samples=40000, seed=4, no_load_noise_v=[1e-3] * 3)
+    assert lim.contact_error[0] < 1e-3
+    assert lim.contact_error[1] < 0.1 * norm.cdf(-1.0)
