@@ -662,12 +662,8 @@ def fit_level(score, target: float, bracket: tuple[float, float] = (0.0, 0.3), x
     return float(brentq(lambda x: score(x) - target, lo, hi, xtol=xtol))
 
 
-def actuated_rest_sd_v(params, calibration: Calibration, command: int, cells_per_section: int = 3) -> np.ndarray:
-    """Standard deviation (V, per gauge) of one reading of the unloaded digit, horizontal, held at ``command``.
-
-    White noise and cable-guide friction, independent (:mod:`flexdigit.twin.sensors`); drift left out (a
-    repeatability record spans seconds).
-    """
+def _rest_friction_sd_v(params, calibration: Calibration, command: int, cells_per_section: int) -> np.ndarray:
+    """Cable-guide friction's standard deviation (V, per gauge) of the unloaded horizontal digit at ``command``."""
     from flexdigit.twin.twin import friction_sd_v, static_gauges_v
 
     _, sol = static_gauges_v(
@@ -680,7 +676,16 @@ def actuated_rest_sd_v(params, calibration: Calibration, command: int, cells_per
         adc=False,
         return_solution=True,
     )
-    friction = friction_sd_v(sol, params, calibration, cells_per_section=cells_per_section)[0]
+    return friction_sd_v(sol, params, calibration, cells_per_section=cells_per_section)[0]
+
+
+def actuated_rest_sd_v(params, calibration: Calibration, command: int, cells_per_section: int = 3) -> np.ndarray:
+    """Standard deviation (V, per gauge) of one reading of the unloaded digit, horizontal, held at ``command``.
+
+    White noise and cable-guide friction, independent (:mod:`flexdigit.twin.sensors`); drift left out (a
+    repeatability record spans seconds).
+    """
+    friction = _rest_friction_sd_v(params, calibration, command, cells_per_section)
     return np.sqrt(np.asarray(calibration.noise_white_v) ** 2 + friction**2)
 
 
@@ -694,20 +699,7 @@ def friction_ratio_from_repeatability(
     ``sqrt(sum u_k^2 (sd_k^2 - w_k^2) / sum u_k^4)`` (0 if the spread is no more than the white noise).
     """
     sd = check_array(sd_v, "actuated_repeatability_v", "CalibrationTargets", ndim=1, low=0)
-    unit = calibration.replace(cable_friction_ratio=1.0)
-    from flexdigit.twin.twin import friction_sd_v, static_gauges_v
-
-    _, sol = static_gauges_v(
-        [0.0],
-        [0.0],
-        [command],
-        params=params,
-        calibration=unit,
-        cells_per_section=cells_per_section,
-        adc=False,
-        return_solution=True,
-    )
-    u = friction_sd_v(sol, params, unit, cells_per_section=cells_per_section)[0]
+    u = _rest_friction_sd_v(params, calibration.replace(cable_friction_ratio=1.0), command, cells_per_section)
     if sd.size != u.size:
         raise ParameterError(
             f"The 'actuated_repeatability_v' parameter of CalibrationTargets must have {u.size} values (one per "
