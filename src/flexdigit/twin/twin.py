@@ -243,7 +243,7 @@ class Twin:
             Potentiometer voltage (V).
         """
         kappa, axial, tension, theta_now = self._gauge_state(self.time_s)
-        if tension > 0 and self.sensors.friction_ratio > 0:
+        if tension > 0 and self.sensors.friction_ratio > 0 and self._friction_xi.any():  # none until a jolt
             sd = self.sensors.friction_curvature_sd_1_m(tension, self._curvature_per_moment)
             kappa = kappa + sd * self._friction_xi
         clean = self.sensors.clean_v(kappa, axial)
