@@ -50,3 +50,7 @@ def test_user_protocol_and_clear_errors(tmp_path):
         load_protocol(tmp_path / "absent.toml")
     with pytest.raises(ParameterError, match="must lie on the digit"):
         protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [30]\n').plan(0.27)
+    # re-hanging before every repetition: the thesis protocols do (7.1), user protocols choose, with a bool
+    assert load_protocol("thesis-7.1").rehang and not p.rehang
+    with pytest.raises(ParameterError, match="'rehang' parameter .* true or false. Got 'yes'"):
+        protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [1]\nrehang = "yes"\n')
