@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from flexdigit._validation import check_array, check_choice, check_int, check_positive, check_real
-from flexdigit.errors import ParameterError
+from flexdigit.errors import DataFileError, ParameterError
 
 BRIDGE_TYPES = ("quarter", "half", "full")
 
@@ -423,10 +423,28 @@ def load_params(path: str | Path) -> RigParams:
 
 
 def save_params(params: RigParams, path: str | Path) -> Path:
-    """Write ``params`` as TOML (every key, so the file documents the rig); returns the path."""
+    """Write ``params`` as TOML (every key, so the file documents the rig); returns the path.
+
+    Raises
+    ------
+    DataFileError
+        If the file cannot be written: its directory does not exist or is not a directory, or the system
+        refuses (permissions, a directory in the way); the message names the path and the reason.
+    """
     import tomli_w
 
     path = Path(path)
+    parent = path.parent
+    what = f"cannot write the rig parameters to {path}"
+    if not parent.exists():
+        raise DataFileError(f"{what}: the directory {parent} does not exist (create it first)")
+    if not parent.is_dir():
+        raise DataFileError(f"{what}: {parent} is not a directory")
+    if path.is_dir():
+        raise DataFileError(f"{what}: it is a directory; give a file name such as {path / 'rig.toml'}")
     header = "# flexdigit rig parameters (SI units; 'command' is the servo board's 0..254 position).\n"
-    path.write_text(header + tomli_w.dumps(params.to_dict()))
+    try:
+        path.write_text(header + tomli_w.dumps(params.to_dict()))
+    except OSError as exc:
+        raise DataFileError(f"{what}: {exc.strerror or exc}") from None
     return path

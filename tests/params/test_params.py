@@ -72,3 +72,28 @@ def test_bad_values_in_code_name_the_owner():
         Actuator(command_max=255)  # 255 is the board's sync byte, never a position
     with pytest.raises(ValueError, match="strain_gauge|gauge_positions_m"):
         Geometry(gauge_positions_m=(0.1, 0.05))
+
+
+def test_write_to_a_missing_directory_says_so(tmp_path, capsys):
+    # a write error is about the directory, not "no such file" (the file is what is being created)
+    from flexdigit.cli import main
+    from flexdigit.errors import DataFileError
+
+    target = tmp_path / "nonexistent" / "rig.toml"
+    with pytest.raises(DataFileError, match="the directory .*nonexistent does not exist"):
+        save_params(RigParams(), target)
+    assert main(["params", "--write", str(target)]) == 2
+    err = capsys.readouterr().err
+    assert f"cannot write the rig parameters to {target}: the directory {target.parent} does not exist" in err
+    assert "no such file" not in err and "Traceback" not in err
+    assert not target.parent.exists()
+
+
+def test_write_onto_a_directory_or_under_a_file_is_refused(tmp_path):
+    from flexdigit.errors import DataFileError
+
+    with pytest.raises(DataFileError, match="it is a directory; give a file name"):
+        save_params(RigParams(), tmp_path)
+    (tmp_path / "plain").write_text("x")
+    with pytest.raises(DataFileError, match="plain is not a directory"):
+        save_params(RigParams(), tmp_path / "plain" / "rig.toml")
