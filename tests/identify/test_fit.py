@@ -6,6 +6,7 @@ import control
 import numpy as np
 import pytest
 
+from flexdigit.errors import DataFileError
 from flexdigit.identify.experiment import identify
 from flexdigit.identify.fit import SecondOrderFit, fit_arx, fit_linear, second_order_response
 from flexdigit.identify.timeseries import TimeSeries
@@ -34,6 +35,39 @@ def test_lsq_recovers_servo_from_noisy_step_within_2_percent(seed):
     r = identify(TimeSeries.from_arrays(t, y), "step", method="lsq", t0_s=0.2)
     assert r.wn_rad_s == pytest.approx(SERVO["wn_rad_s"], rel=0.02)
     assert r.zeta == pytest.approx(SERVO["zeta"], rel=0.02)
+
+
+def test_thesis_method_on_the_same_noisy_releases_misses_by_more_than_2_percent():
+    # issue 4: "report the thesis method's error on the same data next to it". Same 5 records as the lsq test
+    # above (2 % white noise, the digit of 3.1.2). Measured: thesis wn -1.0, +1.6, +7.2, -1.7, +3.9 %; zeta -1.1,
+    # +1.3, -3.6, +5.7, -1.1 %; lsq on the same records at most 0.03 % in wn and 0.8 % in zeta. The thesis's
+    # errors are one undershoot and one settling instant read through the noise, plus the +3 % bias of 4/(zeta Ts).
+    thesis_err, lsq_err = [], []
+    for seed in SEEDS:
+        series = TimeSeries.from_arrays(*release_record(seed, noise=0.02))
+        for method, out in (("thesis", thesis_err), ("lsq", lsq_err)):
+            r = identify(series, "release", method=method)
+            out.append((r.wn_rad_s / DIGIT["wn_rad_s"] - 1, r.zeta / DIGIT["zeta"] - 1))
+    thesis_err, lsq_err = np.abs(thesis_err), np.abs(lsq_err)
+    assert thesis_err[:, 0].max() == pytest.approx(0.072, abs=0.002)  # worst wn: +7.2 % (seed 2)
+    assert thesis_err[:, 1].max() == pytest.approx(0.057, abs=0.002)  # worst zeta: +5.7 % (seed 3)
+    assert np.mean(thesis_err[:, 0]) > 0.02  # mean |error| 3.1 % in wn: outside issue 4's 2 %
+    assert lsq_err.max() < 0.01
+    assert np.all(lsq_err < thesis_err)  # on every record, both parameters
+
+
+def test_release_that_does_not_oscillate_needs_allow_overdamped():
+    # issue 4's bad-file case "no overshoot in a release test", for the API: every method refuses by default
+    t = np.arange(0, 3, 0.002)
+    y = second_order_response(t, "release", 10.0, 1.5, 0.0, 1.0, 0.2)
+    y = y + np.random.default_rng(0).normal(0, 0.005, t.size)
+    series = TimeSeries.from_arrays(t, y, channel="sg1", source="rec.csv")
+    for method in ("lsq", "arx", "thesis"):
+        with pytest.raises(DataFileError, match="rec.csv:sg1: no undershoot .* expected an oscillating decay"):
+            identify(series, "release", method=method)
+    r = identify(series, "release", method="lsq", allow_overdamped=True)
+    assert r.features is None
+    assert r.wn_rad_s == pytest.approx(10.0, rel=0.05) and r.zeta == pytest.approx(1.5, rel=0.05)
 
 
 def test_thesis_method_on_the_same_records_is_biased_high_in_wn():

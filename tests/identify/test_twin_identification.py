@@ -1,7 +1,10 @@
 """Identification of the twin's simulated experiments recovers the thesis's E(s) and MT(s) (issue 4: within 3 %)."""
 
+import json
+
 import pytest
 
+from flexdigit.cli import main
 from flexdigit.identify.experiment import identify
 from flexdigit.identify.timeseries import read_timeseries, series_from_table
 from flexdigit.reference import thesis_value
@@ -53,3 +56,11 @@ def test_thesis_method_on_twin_step_overestimates_wn():
     r = identify(series, "step", method="thesis")
     assert r.zeta == pytest.approx(SERVO_ZETA, rel=0.05)
     assert r.wn_rad_s > 1.1 * SERVO_WN  # the +21 % bias of 4/(zeta Ts) at this damping (test_response)
+
+
+def test_cli_reads_the_twin_file_with_the_readme_channel_name(release_file, capsys):
+    # the README says --channel sg1; the twin's files name the column gauge1_v: sgN and gaugeN are one gauge
+    assert main(["identify", "release", str(release_file), "--channel", "sg1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["channel"] == "gauge1" and out["unit"] == "V"
+    assert out["wn_rad_s"] == pytest.approx(DIGIT_WN, rel=0.03)

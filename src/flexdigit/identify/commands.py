@@ -16,12 +16,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description=(
             "Identify wn and zeta from a recorded release test (free decay of the digit, thesis 3.1.2) or step "
             "test (the servo, 3.2.4). The recording has a time column (time_s, or time with --time-unit) and "
-            "channels named with their unit (sg1_v, pot_v); an optional command column gives the input step."
+            "channels named with their unit (sg1_v, pot_v; the twin's files say gauge1_v); an optional command "
+            "column gives the input step."
         ),
     )
     parser.add_argument("kind", choices=("release", "step"), help="the experiment")
     parser.add_argument("file", help="the recording (.csv or .parquet)")
-    parser.add_argument("--channel", help="column to analyse, with or without its unit (default: the first)")
+    parser.add_argument(
+        "--channel",
+        help="column to analyse, with or without its unit; sg1 and gauge1 name the same strain gauge "
+        "(default: the first channel)",
+    )
     parser.add_argument(
         "--method",
         choices=("thesis", "lsq", "arx"),
@@ -41,6 +46,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="lsq: fit the step instant too (a dead time); auto: when the record has samples before the step",
     )
     parser.add_argument("--input-step", type=float, help="size of the input step (e.g. 51 commands) for the gain")
+    parser.add_argument(
+        "--allow-overdamped",
+        action="store_true",
+        help="release: fit a decay that never undershoots its final value (lsq/arx); by default such a record is "
+        "refused, since the digit's release test is an oscillating decay",
+    )
 
 
 def _identify(args: argparse.Namespace):
@@ -57,6 +68,7 @@ def _identify(args: argparse.Namespace):
         t0_s=args.t0,
         input_step=args.input_step,
         fit_delay={"auto": None, "yes": True, "no": False}[args.delay],
+        allow_overdamped=args.allow_overdamped,
     )
     data = result.summary()
     unit = f" {series.unit}" if series.unit else ""

@@ -29,7 +29,7 @@ from flexdigit._validation import check_choice
 from flexdigit.errors import DataFileError
 from flexdigit.identify.filters import FILTERS, apply_filter
 from flexdigit.identify.fit import Estimate, SecondOrderFit, second_order_response
-from flexdigit.identify.response import ResponseFeatures, analyze_response
+from flexdigit.identify.response import NoOscillationError, ResponseFeatures, analyze_response
 from flexdigit.identify.timeseries import TimeSeries
 from flexdigit.identify.validation import corr2, nrmse_fit
 
@@ -57,7 +57,8 @@ class Identification:
     estimates : dict of str to Estimate, or None
         ``lsq`` only: every fitted parameter with its confidence interval.
     features : ResponseFeatures or None
-        The thesis-style features of the filtered record (None if it has no overshoot, with ``lsq``).
+        The thesis-style features of the filtered record (None for an ``lsq``/``arx`` fit of a record without
+        overshoot: an overdamped step, or a release with ``allow_overdamped=True``).
     corr2, fit_percent : float
         MATLAB ``corr2`` and NRMSE fit (%) of the model response against the raw record.
     """
@@ -135,6 +136,7 @@ def identify(
     input_step: float | None = None,
     wn_from: str = "settling",
     fit_delay: bool | None = None,
+    allow_overdamped: bool = False,
     **filter_options,
 ) -> Identification:
     """Identify a second-order model from a release or step record.
@@ -162,13 +164,19 @@ def identify(
         ``lsq``: also fit the step instant, i.e. a dead time after ``t0_s`` (the servo board latches a command at
         its next 20 ms serial frame, 5.2). Default: for a step, when the record has samples before ``t0_s``; a
         release instant is always fitted unless ``t0_s`` is given.
+    allow_overdamped : bool
+        Release tests only. The digit released from a deflection swings through its rest position (3.1.2), and
+        that oscillation is what identifies it; a release record that never undershoots its final value (or that
+        the fit finds overdamped, ``zeta >= 1``) is refused unless this is True, for ``lsq`` and ``arx`` (the
+        thesis method can never use one). Step records may be overdamped either way.
     **filter_options
         Passed to :func:`~flexdigit.identify.filters.apply_filter` (``cutoff_hz``, ``rank``, ``harmonics``...).
 
     Raises
     ------
     DataFileError
-        If the record cannot give a model (thesis method: no overshoot/undershoot; settling not reached).
+        If the record cannot give a model: a release test without undershoot or with an overdamped fit (unless
+        ``allow_overdamped``); thesis method: no overshoot, settling not reached.
     """
     check_choice(kind, "kind", KINDS, "identify")
     check_choice(method, "method", METHODS, "identify")
@@ -188,8 +196,16 @@ def identify(
     if kind == "step" and t0_s is None:
         t0_s = float(t[0])
     smooth = apply_filter(t, y, filter, **filter_options)
+    try:
+        features, problem = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name), None
+    except DataFileError as exc:  # lsq and arx fit an overdamped step; the thesis method needs features
+        features, problem = None, exc
+    if kind == "release" and isinstance(problem, NoOscillationError) and not allow_overdamped:
+        raise DataFileError(_not_oscillating(problem.finding)) from None
     if method == "thesis":
-        f = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name)
+        if problem is not None:
+            raise problem
+        f = features
         wn = f.wn_settling_rad_s if wn_from == "settling" else f.wn_damped_rad_s
         if not math.isfinite(wn):
             raise DataFileError(
@@ -201,21 +217,13 @@ def identify(
             offset, amplitude = f.initial_value, f.final_value - f.initial_value
         else:
             offset, amplitude = f.final_value, f.initial_value - f.final_value
-        t0, estimates, features = f.t0_s, None, f
+        t0, estimates = f.t0_s, None
     elif method == "arx":
-        try:
-            features = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name)
-        except DataFileError:
-            features = None
         t0 = t0_s if t0_s is not None else (features.t0_s if features is not None else float(t[0]))
         wn, zeta = _arx_mode(t, y, kind, t0, filter_options.get("cutoff_hz"))
         offset, amplitude = _offset_amplitude(t, y, kind, wn, zeta, t0)
         estimates = None
     else:
-        try:
-            features = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name)
-        except DataFileError:
-            features = None  # an overdamped record: the fit still works
         if fit_delay is None:
             fit_t0 = t0_s is None if kind == "release" else bool(t0_s > t[0] + 2 * series.dt_s)
         else:
@@ -224,6 +232,12 @@ def identify(
         wn, zeta = model.wn_, model.zeta_
         offset, amplitude, t0 = model.offset_, model.amplitude_, model.t0_
         estimates = model.estimates_
+    if kind == "release" and zeta >= 1.0 and not allow_overdamped:
+        raise DataFileError(
+            _not_oscillating(
+                f"{series.name}: the {method} fit of this release test is overdamped (zeta = {float(zeta):.4g} >= 1)"
+            )
+        )
     prediction = second_order_response(t, kind, wn, zeta, offset, amplitude, t0)
     gain = amplitude / du if (kind == "step" and du) else amplitude
     return Identification(
@@ -243,6 +257,15 @@ def identify(
         features=features,
         corr2=corr2(y, prediction),
         fit_percent=nrmse_fit(y, prediction),
+    )
+
+
+def _not_oscillating(finding: str) -> str:
+    """The one-line refusal of a release record that does not oscillate: what was found, expected, and the way out."""
+    return (
+        f"{finding}: expected an oscillating decay (the digit released from a deflection swings through its rest "
+        "position, 3.1.2), from which zeta and wn are identified; to fit an overdamped decay anyway, pass "
+        "--allow-overdamped (allow_overdamped=True) with the lsq or arx method"
     )
 
 

@@ -45,6 +45,7 @@ from flexdigit.models.digit import (
 )
 
 __all__ = [
+    "NoOscillationError",
     "ResponseFeatures",
     "analyze_response",
     "free_response",
@@ -70,6 +71,40 @@ def zeta_from_log_decrement(delta: float) -> float:
 
 
 # --- features of a recorded response ------------------------------------------------------------------------------
+
+
+class NoOscillationError(DataFileError):
+    """The response never overshoots (a release: never undershoots) its final value by more than the noise.
+
+    The thesis method cannot read a damping ratio from such a record, and a release test of the digit should be an
+    oscillating decay. A subclass of :class:`~flexdigit.errors.DataFileError` (so ``except DataFileError`` still
+    catches it) that keeps what was found, so :func:`flexdigit.identify.experiment.identify` can say what to do.
+
+    Attributes
+    ----------
+    source, kind : str
+        The record (file and channel) and the experiment (``"release"`` or ``"step"``).
+    final_value : float
+        The final value the response never crossed (signal unit).
+    finding : str
+        The message without the advice.
+    """
+
+    def __init__(self, source: str, kind: str, final_value: float):
+        self.source, self.kind, self.final_value = source, kind, float(final_value)
+        what = "undershoot" if kind == "release" else "overshoot"
+        self.finding = (
+            f"{source}: no {what} in this {kind} test: the response never crosses its final value "
+            f"{final_value:g} by more than the noise (overdamped or too noisy)"
+        )
+        if kind == "release":
+            advice = (
+                "a release test of the digit is expected to be an oscillating decay and the thesis method needs one "
+                "(lsq and arx fit an overdamped decay with --allow-overdamped, allow_overdamped=True)"
+            )
+        else:
+            advice = "the thesis method needs an underdamped response, use the lsq method"
+        super().__init__(f"{self.finding}; {advice}")
 
 
 @dataclass(frozen=True)
@@ -189,9 +224,12 @@ def analyze_response(
 
     Raises
     ------
+    NoOscillationError
+        A :class:`~flexdigit.errors.DataFileError`: the response does not overshoot (undershoot, for a release)
+        its final value, so the thesis method cannot give a damping ratio; the message says so and names
+        ``source``.
     DataFileError
-        If the response does not overshoot (undershoot, for a release) its final value, so the thesis method
-        cannot give a damping ratio; the message says so and names ``source``.
+        If the response does not move at all.
 
     Examples
     --------
@@ -214,10 +252,7 @@ def analyze_response(
     else:
         t0 = _release_time(t, y - yf, noise)
         if t0 is None:
-            raise DataFileError(
-                f"{source}: no undershoot in this release test: the response never crosses its final value "
-                f"{yf:g} by more than the noise (overdamped or too noisy); use the lsq method"
-            )
+            raise NoOscillationError(source, kind, yf)
     i0 = min(int(np.searchsorted(t, t0)), len(t) - 1)
     if initial_value is not None:
         y0 = float(initial_value)
@@ -239,12 +274,7 @@ def analyze_response(
         first_bad = int(np.argmin(keep))
         ext_t, ext_v, crossings = ext_t[:first_bad], ext_v[:first_bad], crossings[: first_bad + 1]
     if ext_t.size == 0:
-        what = "undershoot" if kind == "release" else "overshoot"
-        raise DataFileError(
-            f"{source}: no {what} in this {kind} test: the response never crosses its final value {yf:g} "
-            f"by more than the noise (overdamped or too noisy); the thesis method needs an underdamped response, "
-            f"use the lsq method"
-        )
+        raise NoOscillationError(source, kind, yf)
     percent_os = 100.0 * float(ext_v[0])
     peak_time = float(ext_t[0])
     if len(crossings) >= 3:

@@ -4,9 +4,11 @@ A recording is a table with a time column and one or more channels, one row per 
 column names, ``<name>_<unit>``: ``time_s`` (or ``time_ms``, ``t_us``) and ``sg1_v``, ``pot_v``, ``command``.
 A time column with no unit (``time``, ``t``) needs ``time_unit=`` (``--time-unit`` on the command line). A
 channel is picked by its full column name or its name without the unit (``sg1`` for ``sg1_v``); without one, the
-first channel that is not an input (``command``, ``u``) is used. An input column, when present, is kept with the
-series (the servo command of a step test). :func:`series_from_table` does the same for a table in memory, such as
-the twin's experiments (:mod:`flexdigit.twin.experiments`).
+first channel that is not an input (``command``, ``u``) is used. Strain-gauge channels answer to either
+name, ``sgN`` (a DAQ recording, the thesis) or ``gaugeN`` (the twin's files), when the file has only one of
+them. An input column, when present, is kept with the series (the servo command of a step test).
+:func:`series_from_table` does the same for a table in memory, such as the twin's experiments
+(:mod:`flexdigit.twin.experiments`).
 
 Every problem with a file raises :class:`~flexdigit.errors.DataFileError` naming the file, the column and the
 line (CSV, counting the header as line 1) or row (Parquet) and what was expected: a missing column, a cell that
@@ -23,6 +25,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,6 +42,8 @@ TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 CHANNEL_UNITS = {"v": "V", "mv": "mV", "m": "m", "mm": "mm", "rad": "rad", "deg": "deg", "n": "N", "nm": "N m"}
 #: Column names (without unit) treated as the experiment's input rather than a measured channel.
 INPUT_NAMES = ("command", "cmd", "u", "input")
+#: A strain-gauge channel named either way: ``sg1`` (DAQ recordings, the thesis) or ``gauge1`` (the twin's files).
+_GAUGE_ALIAS = re.compile(r"^(sg|gauge)(\d+)$", re.IGNORECASE)
 #: Largest allowed deviation of one sampling interval from the median interval (fraction of it).
 SAMPLING_TOLERANCE = 0.25
 
@@ -141,8 +146,9 @@ def read_timeseries(
     path : str or Path
         The recording: a header row then one row per sample (CSV; ``#`` lines are comments), or a Parquet table.
     channel : str, optional
-        Column to read, by full name (``sg1_v``) or without its unit (``sg1``). Default: the first channel
-        that is not the time or an input column.
+        Column to read, by full name (``sg1_v``) or without its unit (``sg1``); ``sgN`` and ``gaugeN`` name
+        the same gauge when only one of them is in the file (the twin writes ``gauge1_v``). Default: the first
+        channel that is not the time or an input column.
     time_unit : {"s", "ms", "us"}, optional
         Unit of a time column whose name carries none (``time``); overrides the name's suffix.
     time_column : str, optional
@@ -226,10 +232,7 @@ def _series_from_columns(columns, data, source: str, where, channel, time_unit, 
             raise DataFileError(f"{p}: no channel column besides {tcol!r} (columns: {', '.join(columns)})")
         ycol = channels[0]
     else:
-        matches = [c for c in columns if c == channel] or [c for c in columns if split_unit(c)[0] == channel]
-        if not matches:
-            raise DataFileError(f"{p}: no column {channel!r} (columns: {', '.join(columns)})")
-        ycol = matches[0]
+        ycol = _match_channel(p, columns, channel)
     t = data[tcol] * TIME_UNITS[unit]
     y = data[ycol]
     u = data[inputs[0]] if inputs and inputs[0] != ycol else None
@@ -238,6 +241,25 @@ def _series_from_columns(columns, data, source: str, where, channel, time_unit, 
         _check_nan_runs(u, p, inputs[0], where)
     ystem, yunit = split_unit(ycol)
     return TimeSeries(t, y, ystem, yunit, p, u, inputs[0] if u is not None else "")
+
+
+def _match_channel(p: str, columns: list[str], channel: str) -> str:
+    """The column ``channel`` names: exactly, without its unit, or through the gauge alias ``sgN`` <-> ``gaugeN``."""
+    matches = [c for c in columns if c == channel] or [c for c in columns if split_unit(c)[0] == channel]
+    if matches:
+        return matches[0]
+    stem, unit = split_unit(channel)
+    m = _GAUGE_ALIAS.match(stem)
+    if m is not None:
+        other = ("gauge" if m.group(1).lower() == "sg" else "sg") + m.group(2)
+        matches = [c for c in columns if split_unit(c)[0].lower() == other and (not unit or split_unit(c)[1] == unit)]
+        if len(matches) == 1:
+            return matches[0]
+        if len(matches) > 1:
+            raise DataFileError(
+                f"{p}: channel {channel!r} is ambiguous: it could be any of {', '.join(matches)}; name the column"
+            )
+    raise DataFileError(f"{p}: no column {channel!r} (columns: {', '.join(columns)})")
 
 
 def _find_time_column(p: str, columns: list[str], time_column: str | None) -> str:
