@@ -18,12 +18,23 @@ def test_run_digital20_json_with_log_and_saved_calibration(tmp_path, capsys):
     assert main(argv) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["status"] == "completed" and data["samples"] == 100 and data["overruns"] == 0
-    assert abs(data["final_rotation_deg"] - 20) < 1.0  # measured rotation within about half a quantum
+    assert abs(data["estimated_final_rotation_deg"] - 20) < 1.0  # measured rotation within about half a quantum
+    # the sim backend also reports the twin's own rotation: within one quantum (1.7 deg) of the estimate at the end
+    # and at the peak (the ill-posed least-squares map once read 41.5 deg at a true 31 deg)
+    assert abs(data["true_final_rotation_deg"] - 20) < 1.0
+    assert abs(data["true_peak_rotation_deg"] - data["estimated_peak_rotation_deg"]) < 1.7
     assert cal.exists() and read_log(log)[2]["stop"] == "completed"
     # second run reuses the saved map (no calibration sweep) and gives the same numbers: deterministic
+    argv[-1] = str(tmp_path / "again.jsonl")
     assert main(argv) == 0
     again = json.loads(capsys.readouterr().out)
-    assert again["final_rotation_deg"] == data["final_rotation_deg"]
+    assert again["estimated_final_rotation_deg"] == data["estimated_final_rotation_deg"]
+    assert again["true_peak_rotation_deg"] == data["true_peak_rotation_deg"]
+    # a backend without a twin has only the estimate: the true rotation is null, not a copy of the estimate
+    assert main(["run", "--json", "--backend", f"replay://{log}", "--calibration", str(cal), "--duration", "1"]) == 0
+    replayed = json.loads(capsys.readouterr().out)
+    assert replayed["true_peak_rotation_deg"] is None and replayed["true_final_rotation_deg"] is None
+    assert replayed["estimated_peak_rotation_deg"] > 15  # the recorded gauges did move
 
 
 def test_run_errors_are_one_line(capsys, tmp_path):

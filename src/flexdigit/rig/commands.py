@@ -6,7 +6,8 @@
 
 The setpoint is a beam-rotation step from rest at t = 0. On the twin the rotation map is calibrated on a separate
 twin first; on hardware the operator is asked for the angle at each calibration command (a protractor), or a
-saved map is loaded with ``--calibration``.
+saved map is loaded with ``--calibration``. The rotation the loop controls is the gauges' estimate; on the sim
+backends the report also gives the twin's true tip rotation (``true_*`` beside ``estimated_*``).
 """
 
 from __future__ import annotations
@@ -65,6 +66,16 @@ def _run(args: argparse.Namespace) -> CommandResult:
         rig.close()
         raise
     progress = None if (args.no_progress or args.json or not sys.stderr.isatty()) else _Progress(duration)
+    # the twin knows the true beam rotation; the loop (and hardware) only has the gauges' estimate of it
+    truth = getattr(rig, "tip_rotation_deg", None)
+    true_rotation: list[float] = []
+
+    def on_sample(k: int, t: float, y: float, command: int) -> None:
+        if truth is not None:
+            true_rotation.append(truth())
+        if progress:
+            progress.update(k, t, y, command)
+
     priority = realtime_priority() if args.realtime else None
     if priority is not None:
         priority.__enter__()
@@ -76,7 +87,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
             duration,
             period,
             log_path=args.log,
-            on_sample=progress.update if progress else None,
+            on_sample=on_sample,
             measure=estimator,
             header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend},
         )
@@ -86,9 +97,9 @@ def _run(args: argparse.Namespace) -> CommandResult:
         if progress:
             progress.stop()
     t = result.timing
-    y = result.measurement
-    tail = y[result.time_s >= result.time_s[-1] - 0.5] if y.size else y
-    final = float(tail.mean()) if tail.size else math.nan
+    final, peak = _final_and_peak(result.time_s, result.measurement)
+    true_final, true_peak = _final_and_peak(result.time_s[: len(true_rotation)], true_rotation)
+    has_truth = truth is not None
     data = {
         "status": result.status,
         "message": result.message,
@@ -102,20 +113,36 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "jitter_p99_s": t.jitter_p99_s,
         "jitter_max_s": t.jitter_max_s,
         "compute_mean_s": t.compute_mean_s,
-        "final_rotation_deg": final,
-        "peak_rotation_deg": float(y.max()) if y.size else math.nan,
+        # what the loop measured (the gauges through the rotation map), on every backend
+        "estimated_final_rotation_deg": final,
+        "estimated_peak_rotation_deg": peak,
+        # the twin's own tip rotation (sim backends only; null on hardware and replays)
+        "true_final_rotation_deg": true_final if has_truth else None,
+        "true_peak_rotation_deg": true_peak if has_truth else None,
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
     }
+    truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if has_truth else ""
     text = (
         f"{args.controller} on {args.backend}: {result.status} ({result.message})\n"
-        f"  rotation: final {final:.2f} deg (setpoint {setpoint:g}), peak {data['peak_rotation_deg']:.2f} deg; "
-        f"last command {data['final_command']}\n"
+        f"  rotation estimated from the gauges: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg"
+        f"{truth_text}; last command {data['final_command']}\n"
         f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
         f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
     )
     exit_code = {"completed": 0, "fault": 1, "interrupted": 130}[result.status]
     return CommandResult(data=data, text=text, exit_code=exit_code)
+
+
+def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
+    """Mean of the last 0.5 s and maximum of a rotation record (deg); NaN for an empty one."""
+    import numpy as np
+
+    t = np.asarray(time_s, dtype=float)
+    y = np.asarray(rotation_deg, dtype=float)
+    if not y.size:
+        return math.nan, math.nan
+    return float(y[t >= t[-1] - 0.5].mean()), float(y.max())
 
 
 def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
@@ -138,6 +165,7 @@ def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
         path.write_text(
             json.dumps(
                 {
+                    "method": est.method,
                     "coef": est.coef_.tolist(),
                     "intercept": est.intercept_,
                     "gauge_v_per_deg": est.gauge_v_per_deg_.tolist(),
