@@ -118,6 +118,12 @@ def read_log(path: str | os.PathLike) -> tuple[dict[str, Any], list[dict[str, An
             if not isinstance(record, dict) or record.get("format") != LOG_FORMAT:
                 raise DataFileError(f"{path}: line 1 is not a flexdigit loop log header (format {LOG_FORMAT})")
             header = record
+        elif isinstance(record, dict) and "format" in record:
+            # SampleLog appends: a second run logged to the same path starts here
+            raise DataFileError(
+                f"{path}: line {number} starts a second run (two runs were logged to the same file); "
+                "split the file at that line or log each run to its own file"
+            )
         elif "stop" in record:
             footer = record
         else:
