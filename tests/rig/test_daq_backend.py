@@ -104,3 +104,34 @@ def test_missing_uldaq_gives_an_install_hint(monkeypatch):
     with pytest.raises(RigError, match="optional 'uldaq' package") as info:
         open_rig("daq://0")
     assert str(info.value) == MISSING_ULDAQ
+
+
+def test_pot_channel_from_the_url_is_read_after_the_gauges():
+    # 3.2.4 wires the pot to "one of the channels" of the card; the value is whatever that channel reads
+    ul = fake_uldaq({0: 0.1, 1: -0.2, 2: 0.3, 3: 1.47})
+    rig = open_rig("daq://0?pot=3", uldaq=ul)
+    reading = rig.read()
+    np.testing.assert_allclose(reading.gauges_v, [0.1, -0.2, 0.3])
+    assert reading.pot_v == 1.47
+    assert [c[0] for c in ul.calls] == [0, 1, 2, 3]
+    assert {c[2] for c in ul.calls} == {ul.Range.BIP5VOLTS}  # same +-5 V range (the pot spans 0.47..2.48 V)
+    rig.close()
+    # no pot option, or pot=none: NaN as before, and channel 3 is never read
+    for url in ("daq://0", "daq://0?pot=none"):
+        ul = fake_uldaq({0: 0.1, 1: -0.2, 2: 0.3, 3: 1.47})
+        assert np.isnan(open_rig(url, uldaq=ul).read().pot_v)
+        assert [c[0] for c in ul.calls] == [0, 1, 2]
+
+
+@pytest.mark.parametrize(
+    ("url", "match"),
+    [
+        ("daq://0?pot=x", "option pot='x' must be an analog input number"),
+        ("daq://0?pot=-1", "option pot='-1' must be an analog input number"),
+        ("daq://0?pot=1", r"'pot_channel' parameter of DaqRig must differ from the gauge channels \(0, 1, 2\)\. Got 1"),
+        ("daq://0?pots=3", "unknown option 'pots'; a daq URL takes pot, input_mode"),
+    ],
+)
+def test_bad_pot_option_names_the_option_and_value(url, match):
+    with pytest.raises(ParameterError, match=match):
+        open_rig(url, uldaq=fake_uldaq({}))

@@ -2,9 +2,12 @@
 
 The thesis reads the amplified half-bridges on analog inputs 0, 1, 2 (pins 2, 4, 6, "Ch n high") of a
 PCI-DAS1602/16 set to +-5 V. The channels and range come from ``params.sensors`` (``adc_channels``,
-``adc_range_v``). ``uldaq`` is an optional extra (``pip install flexdigit[daq]``, plus MCC's ``libuldaq``) and is
-imported only when a DAQ rig is opened. Note: libuldaq drives MCC's USB and Ethernet devices; a PCI card needs
-MCC's PCI driver (or an equivalent USB card such as a USB-1608).
+``adc_range_v``). The servo's potentiometer (0.47..2.48 V over 0..219 deg, 3.2.4) was wired to "one of the
+channels of the data acquisition card" (3.2.4, number not given): name it with ``pot_channel`` (URL
+``daq://0?pot=3``, or ``serial://PORT?daq=0&pot=3``); without it the pot reads NaN. ``uldaq`` is an optional
+extra (``pip install flexdigit[daq]``, plus MCC's ``libuldaq``) and is imported only when a DAQ rig is opened.
+Note: libuldaq drives MCC's USB and Ethernet devices; a PCI card needs MCC's PCI driver (or an equivalent USB card
+such as a USB-1608).
 
 A DAQ card alone cannot move the servo: use ``serial://PORT?daq=0`` for the full rig. :class:`DaqRig` on its
 own is a sensor (``write_command`` raises :class:`~flexdigit.errors.RigError` unless given an ``actuator``).
@@ -18,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._validation import check_int
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig
@@ -62,6 +66,9 @@ class DaqRig(Rig):
         Index into ``uldaq.get_daq_device_inventory(InterfaceType.ANY)``.
     input_mode : {"single_ended", "differential"}
         The thesis wires each gauge to "Ch n high" with a common analog ground: single-ended.
+    pot_channel : int, optional
+        Analog input the servo potentiometer is wired to (3.2.4; read in the same range as the gauges). None (the
+        default): no pot channel, ``pot_v`` is NaN.
     actuator : callable, optional
         ``actuator(command)`` to send servo commands (e.g. a :class:`~flexdigit.rig.serial_backend.SerialRig`'s
         ``write_command``); without it this rig is read-only.
@@ -77,6 +84,7 @@ class DaqRig(Rig):
         params: RigParams | None = None,
         *,
         input_mode: str = "single_ended",
+        pot_channel: int | None = None,
         actuator: Callable[[int], object] | None = None,
         uldaq: Any = None,
         **kwargs: Any,
@@ -88,6 +96,14 @@ class DaqRig(Rig):
         sensors = self.params.sensors
         self.channels = tuple(int(c) for c in sensors.adc_channels)
         self.range = uldaq_range(sensors.adc_range_v, self._ul)
+        if pot_channel is not None:
+            pot_channel = check_int(pot_channel, "pot_channel", "DaqRig", low=0)
+            if pot_channel in self.channels:
+                raise ParameterError(
+                    f"The 'pot_channel' parameter of DaqRig must differ from the gauge channels {self.channels}. "
+                    f"Got {pot_channel} instead."
+                )
+        self.pot_channel = pot_channel
         modes = {"single_ended": "SINGLE_ENDED", "differential": "DIFFERENTIAL"}
         if input_mode not in modes:
             raise ParameterError(
@@ -111,12 +127,14 @@ class DaqRig(Rig):
             raise RigError(f"{self.name}: cannot connect ({exc})") from exc
 
     def read_gauges(self) -> tuple[np.ndarray, float]:
-        """``(gauges_v, nan)``: one ``a_in`` per gauge channel, volts (the card has no potentiometer channel)."""
+        """``(gauges_v, pot_v)``: one ``a_in`` per gauge channel, then the pot channel (NaN without one), volts."""
+        channels = self.channels if self.pot_channel is None else (*self.channels, self.pot_channel)
         try:
-            values = [self._ai.a_in(ch, self.input_mode, self.range, self._ul.AInFlag.DEFAULT) for ch in self.channels]
+            values = [self._ai.a_in(ch, self.input_mode, self.range, self._ul.AInFlag.DEFAULT) for ch in channels]
         except Exception as exc:  # noqa: BLE001
             raise RigError(f"{self.name}: analog read failed ({exc})") from exc
-        return np.asarray(values, dtype=float), math.nan
+        pot = float(values[3]) if self.pot_channel is not None else math.nan
+        return np.asarray(values[:3], dtype=float), pot
 
     def _read(self) -> tuple[np.ndarray, float]:
         return self.read_gauges()
@@ -145,10 +163,41 @@ class DaqRig(Rig):
                 pass
 
 
+#: Options a ``daq://`` URL may carry (the other keyword arguments of :class:`DaqRig` are Python-only).
+URL_OPTIONS = ("pot", "input_mode")
+
+
+def pot_option(value: Any, where: str) -> int | None:
+    """The ``pot`` URL option: a channel number, or ``none``/empty for no pot channel."""
+    if value is None or isinstance(value, int):
+        return value
+    text = str(value).strip().lower()
+    if text in ("", "none"):
+        return None
+    try:
+        channel = int(text)
+    except ValueError:
+        channel = -1
+    if channel < 0:
+        raise ParameterError(
+            f"{where}: option pot={value!r} must be an analog input number (an integer >= 0, e.g. pot=3) or 'none'"
+        )
+    return channel
+
+
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> DaqRig:
-    """``daq://0`` (board number, default 0)."""
+    """``daq://0`` (board number, default 0), ``daq://0?pot=3`` (pot on channel 3), ``&input_mode=differential``."""
     try:
         board = int(location or 0)
     except ValueError:
         raise ParameterError(f"daq://{location}: the board must be a number, e.g. daq://0") from None
+    options = dict(options)
+    known = (*URL_OPTIONS, "actuator", "uldaq", "clock", "sleep", "operator")
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        raise ParameterError(
+            f"daq://{location}: unknown option {unknown[0]!r}; a daq URL takes {', '.join(URL_OPTIONS)}"
+        )
+    if "pot" in options:
+        options["pot_channel"] = pot_option(options.pop("pot"), f"daq://{location}")
     return DaqRig(board, params, **options)
