@@ -15,7 +15,7 @@ from flexdigit.errors import ParameterError, RigError
 from flexdigit.rig.base import open_rig
 from flexdigit.rig.loop import read_log, run_loop
 from flexdigit.rig.serial_backend import SerialRig
-from flexdigit.rig.servo_board import FrameDecoder
+from flexdigit.rig.servo_board import FrameDecoder, Framing
 
 from .conftest import PI, FakeClock
 
@@ -92,6 +92,44 @@ def test_bad_url_options_name_the_culprit(board):
         open_rig("serial:///dev/no-such-servo-board")
 
 
+def test_framing_from_the_url_reaches_the_board(board):
+    # a board with a 0xFE sync byte and positions up to 200: frames are (0xFE, channel, position)
+    rig = open_rig(f"serial://{board.port}?sync=0xFE&max_position=200&max_channel=3&channel=3")
+    assert rig.framing == Framing(sync=0xFE, max_channel=3, max_position=200)
+    board.decoder = FrameDecoder(rig.framing)
+    rig.write_command(150)
+    assert rig.write_command(230) == 200  # clamped to the framing's highest position, never refused mid-run
+    rig.close()
+    assert board.wait_frames(3)[-3:] == [(3, 150), (3, 200), (3, 8)]
+    # options left out keep their Mini SSC values; decimal works as well as hexadecimal
+    rig = open_rig(f"serial://{board.port}?sync=254&max_position=253")
+    assert rig.framing == Framing(sync=254, max_channel=7, max_position=253)
+    rig.close()
+
+
+@pytest.mark.parametrize(
+    ("query", "match"),
+    [
+        ("sync=start", "option sync='start' must be an integer"),
+        ("max_position=2.5", "option max_position='2.5' must be an integer"),
+        ("sync=300", r"'sync' parameter of Framing must be an integer inside \[0, 255\]. Got 300"),
+        ("sync=0x10", "'sync' parameter of Framing must be above every channel and position byte"),
+        ("max_position=255", r"'max_position' parameter of Framing must be an integer inside \[1, 254\]. Got 255"),
+        ("max_channel=2&channel=3", r"'channel' parameter of SerialRig must be an integer inside \[0, 2\]. Got 3"),
+        ("pot=3", "option pot='3' needs the gauge card too"),
+        ("speed=9600", "unknown option 'speed'; a serial URL takes baud, channel, sync"),
+    ],
+)
+def test_bad_framing_options_name_the_option_and_value(board, query, match):
+    with pytest.raises(ParameterError, match=match):
+        open_rig(f"serial://{board.port}?{query}")
+
+
+def test_framing_given_twice_is_refused(board):
+    with pytest.raises(ParameterError, match="not both"):
+        open_rig(f"serial://{board.port}?sync=0xFE", framing=Framing())
+
+
 def test_board_vanishing_mid_run_stops_the_loop_safely(tmp_path, board):
     clock = FakeClock()
     rig = SerialRig(board.port, sensor=lambda: (np.array([0.01, 0.0, 0.0]), math.nan), clock=clock, sleep=clock.sleep)
@@ -117,9 +155,10 @@ def test_board_vanishing_mid_run_stops_the_loop_safely(tmp_path, board):
 def test_serial_with_daq_reads_the_card_and_releases_it(board):
     from .test_daq_backend import fake_uldaq
 
-    ul = fake_uldaq({0: 0.25, 1: 0.5, 2: 0.75})
-    rig = open_rig(f"serial://{board.port}?channel=0&daq=0", uldaq=ul)
+    ul = fake_uldaq({0: 0.25, 1: 0.5, 2: 0.75, 3: 1.5})
+    rig = open_rig(f"serial://{board.port}?channel=0&daq=0&pot=3", uldaq=ul)
     np.testing.assert_allclose(rig.read().gauges_v, [0.25, 0.5, 0.75])
+    assert rig.read().pot_v == 1.5  # the pot channel passed through to the card
     assert rig.write_command(30) == 30
     card = rig.companions[0]
     rig.close()

@@ -7,12 +7,14 @@ protocol handler::
 
     sim                                     the twin, virtual time (as fast as it computes)
     sim+paced                               the twin, paced to the wall clock
-    serial:///dev/ttyUSB0?baud=9600&channel=0[&daq=0]   the MILINST servo board (Mini SSC frames), gauges from daq
-    daq://0                                 a Measurement Computing card through uldaq (gauges only)
+    serial:///dev/ttyUSB0?baud=9600&channel=0[&daq=0[&pot=3]]   the MILINST servo board, gauges (and pot) from daq
+        framing: &sync=0xFF&max_channel=7&max_position=254 (Mini SSC, the defaults)
+    daq://0[?pot=3]                         a Measurement Computing card through uldaq (gauges, pot if wired)
     replay://run.jsonl                      a recorded run played back
 
 The servo command (0..254, integer) is a unit of its own: :func:`clamp_command` is the one place it is rounded
-and clamped, and 255 (the Mini SSC sync byte) can never come out of it.
+and clamped, and 255 (the Mini SSC sync byte) can never come out of it (a board whose framing allows fewer
+positions clamps further, :class:`~flexdigit.rig.serial_backend.SerialRig`).
 """
 
 from __future__ import annotations

@@ -1,8 +1,10 @@
 """The serial backend: the MILINST servo board over pyserial (thesis 2.5.3, 5.2).
 
 The board only drives the servo; it has no inputs. Gauges come from a separate source (the DAQ card in the thesis):
-pass ``sensor=`` (a callable returning ``(gauges_v, pot_v)``) or ``daq=<board number>`` in the URL. Without one,
-:meth:`read` returns NaN gauges and the loop stops with a sensor fault rather than control blind.
+pass ``sensor=`` (a callable returning ``(gauges_v, pot_v)``) or ``daq=<board number>`` (and ``pot=<channel>``) in
+the URL. Without one, :meth:`read` returns NaN gauges and the loop stops with a sensor fault rather than control
+blind. The frame layout (sync byte, highest channel and position) is set by URL options or a
+:class:`~flexdigit.rig.servo_board.Framing`; see :func:`from_url`.
 
 The port is opened with pyserial's ``serial_for_url``, so ``loop://`` and ``socket://`` work too. A port that
 vanishes mid-run (USB unplugged, board powered off) raises :class:`~flexdigit.errors.RigError` naming the port;
@@ -13,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -20,7 +23,7 @@ import numpy as np
 from flexdigit._validation import check_int, check_positive
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.base import Rig
+from flexdigit.rig.base import Rig, clamp_command
 from flexdigit.rig.servo_board import MINI_SSC, Framing, encode_frame
 
 __all__ = ["SerialRig", "from_url"]
@@ -80,6 +83,10 @@ class SerialRig(Rig):
         # Bumpless start: the board holds its last position, so we start by sending equilibrium explicitly.
         self.write_command(self.params.actuator.equilibrium_command)
 
+    def write_command(self, command: object) -> int:
+        """Send a servo command clamped to the actuator range and to the framing's highest position."""
+        return super().write_command(min(clamp_command(command, self.params), self.framing.max_position))
+
     def _read(self) -> tuple[np.ndarray, float]:
         if self.sensor is None:
             return np.full(3, math.nan), math.nan
@@ -121,28 +128,75 @@ def _open_port(port: str, baud: int, write_timeout_s: float) -> Any:
         raise RigError(f"serial {port}: cannot open the servo board port ({exc})") from exc
 
 
+#: Options a ``serial://`` URL may carry; ``sync``, ``max_channel`` and ``max_position`` build the :class:`Framing`.
+URL_OPTIONS = ("baud", "channel", "sync", "max_channel", "max_position", "daq", "pot")
+_FRAMING_OPTIONS = ("sync", "max_channel", "max_position")
+#: Keyword arguments open_rig may pass from Python (not from the URL text).
+_PYTHON_OPTIONS = ("framing", "sensor", "write_timeout_s", "serial", "uldaq", "clock", "sleep", "operator")
+
+
+def _int_option(location: str, key: str, value: Any) -> Any:
+    """A URL option as an integer (decimal, or 0x.. hexadecimal for bytes such as the sync byte)."""
+    if not isinstance(value, str):
+        return value
+    try:
+        return int(value.strip(), 0)
+    except ValueError:
+        raise ParameterError(
+            f"serial://{location}: option {key}={value!r} must be an integer (decimal, or hexadecimal as 0xFF)"
+        ) from None
+
+
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> SerialRig:
-    """``serial://PORT?baud=9600&channel=0&daq=0`` (``daq`` adds the gauge card as the sensor)."""
+    """``serial://PORT?baud=9600&channel=0&daq=0&pot=3&sync=0xFF&max_channel=7&max_position=254``.
+
+    ``daq`` adds the gauge card (board number) as the sensor, ``pot`` its potentiometer channel
+    (:mod:`flexdigit.rig.daq_backend`); ``sync``, ``max_channel`` and ``max_position`` describe the board's frame
+    (:class:`~flexdigit.rig.servo_board.Framing`, Mini SSC by default: any left out keeps its Mini SSC value).
+
+    Examples
+    --------
+    >>> rig = from_url("loop://", None, {"sync": "0xFE", "max_position": "200", "channel": "2"})
+    >>> rig.framing, rig.channel
+    (Framing(sync=254, max_channel=7, max_position=200), 2)
+    >>> rig.close()
+    """
     if not location:
         raise ParameterError("serial:// needs a port, e.g. serial:///dev/ttyUSB0 or serial://COM3")
     options = dict(options)
-    for key in ("baud", "channel"):
-        if key in options and isinstance(options[key], str):
-            try:
-                options[key] = int(options[key])
-            except ValueError:
-                raise ParameterError(f"serial://{location}: option {key}={options[key]!r} must be an integer") from None
+    unknown = sorted(set(options) - set(URL_OPTIONS) - set(_PYTHON_OPTIONS))
+    if unknown:
+        raise ParameterError(
+            f"serial://{location}: unknown option {unknown[0]!r}; a serial URL takes {', '.join(URL_OPTIONS)}"
+        )
+    for key in ("baud", "channel", *_FRAMING_OPTIONS):
+        if key in options:
+            options[key] = _int_option(location, key, options[key])
+    framing_keys = {key: options.pop(key) for key in _FRAMING_OPTIONS if key in options}
+    if framing_keys:
+        if "framing" in options:
+            raise ParameterError(
+                f"serial://{location}: give the framing either as URL options ({', '.join(framing_keys)}) or as "
+                "framing=Framing(...), not both"
+            )
+        try:
+            options["framing"] = replace(MINI_SSC, **framing_keys)
+        except ParameterError as exc:
+            raise ParameterError(f"serial://{location}: {exc}") from None
     daq = options.pop("daq", None)
+    pot = options.pop("pot", None)
     uldaq = options.pop("uldaq", None)
+    if pot is not None and daq is None:
+        raise ParameterError(f"serial://{location}: option pot={pot!r} needs the gauge card too (daq=BOARD)")
     card = None
     if daq is not None and "sensor" not in options:
-        from flexdigit.rig.daq_backend import DaqRig
+        from flexdigit.rig.daq_backend import DaqRig, pot_option
 
         try:
             board = int(daq)
         except ValueError:
             raise ParameterError(f"serial://{location}: option daq={daq!r} must be a board number") from None
-        card = DaqRig(board, params, uldaq=uldaq)
+        card = DaqRig(board, params, uldaq=uldaq, pot_channel=pot_option(pot, f"serial://{location}"))
         options["sensor"] = card.read_gauges
     try:
         rig = SerialRig(location, params, **options)
