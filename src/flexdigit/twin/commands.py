@@ -11,24 +11,35 @@ import argparse
 
 from flexdigit.cli import CommandResult, add_command
 from flexdigit.errors import ParameterError
+from flexdigit.twin._checks import check_values
 
 
 def _floats(text: str, name: str) -> list[float]:
     try:
-        return [float(v) for v in text.split(",") if v.strip()]
+        values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise ParameterError(f"--{name} must be comma-separated numbers. Got {text!r} instead.") from None
+    if not values:
+        raise ParameterError(f"--{name} must name at least one value. Got {text!r} instead.")
+    return values
 
 
-def _commands(text: str) -> list[int]:
-    """``"8..43"`` or ``"0,20,40"``."""
+def _commands(text: str, params, experiment: str) -> list[int]:
+    """``"8..43"`` or ``"0,20,40"``, each inside the servo's command range (checked here, in the user's terms)."""
     try:
         if ".." in text:
             lo, hi = text.split("..")
-            return list(range(int(lo), int(hi) + 1))
-        return [int(v) for v in text.split(",") if v.strip()]
+            values = list(range(int(lo), int(hi) + 1))
+        else:
+            values = [int(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise ParameterError(f"--commands must be like '8..43' or '0,20,40'. Got {text!r} instead.") from None
+    if not values:
+        raise ParameterError(f"--commands must name at least one command (e.g. '8..43'). Got {text!r} instead.")
+    a = params.actuator
+    owner = f"flexdigit simulate {experiment}"
+    check_values(values, "--commands", owner, low=a.command_min, high=a.command_max, integer=True)
+    return values
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -119,7 +130,9 @@ def _run(args: argparse.Namespace) -> CommandResult:
         findings = {"pot_start_v": float(pot[0]), "pot_peak_v": float(pot.max()), "pot_end_v": float(pot[-1])}
         text = "pot: {pot_start_v:.4f} V -> peak {pot_peak_v:.4f} V -> {pot_end_v:.4f} V".format(**findings)
     elif args.experiment == "sweep":
-        res = ex.actuation_sweep(_commands(args.commands), settle_s=args.settle, samples=args.samples, **common)
+        res = ex.actuation_sweep(
+            _commands(args.commands, params, "sweep"), settle_s=args.settle, samples=args.samples, **common
+        )
         cmd = res.column("command")
         lines = []
         for g in (1, 2, 3):
@@ -128,10 +141,23 @@ def _run(args: argparse.Namespace) -> CommandResult:
             lines.append(f"gauge {g}: V = {slope:.5f} command {offset:+.4f}   (E 3.2{g - 1})")
         text = "\n".join(lines)
     else:
-        commands = None if args.commands is None else _commands(args.commands)
+        commands = None if args.commands is None else _commands(args.commands, params, "load")
+        owner = "flexdigit simulate load"
+        loads_g = check_values(_floats(args.loads_g, "loads-g"), "--loads-g", owner, low=0, low_open=True, unit="g")
+        length_cm = params.geometry.digit_length_m * 1e2
+        positions_cm = check_values(
+            _floats(args.positions_cm, "positions-cm"),
+            "--positions-cm",
+            owner,
+            low=0,
+            high=length_cm,
+            high_open=True,
+            unit="cm from the tip",
+            note=f"0 is the tip, {length_cm:g} the clamp: nothing hangs beyond the tip, or at or behind the clamp",
+        )
         res = ex.static_load_test(
-            [g * 1e-3 for g in _floats(args.loads_g, "loads-g")],
-            [c * 1e-2 for c in _floats(args.positions_cm, "positions-cm")],
+            [g * 1e-3 for g in loads_g],
+            [c * 1e-2 for c in positions_cm],
             commands=commands,
             repetitions=args.repetitions,
             orientation=args.orientation,

@@ -46,6 +46,7 @@ from scipy.linalg.lapack import dgesv as _gesv
 
 from flexdigit._validation import check_array, check_int, check_positive, check_real
 from flexdigit.errors import ParameterError
+from flexdigit.twin._checks import check_values
 
 G_STANDARD_M_S2 = 9.80665
 
@@ -268,10 +269,11 @@ class Chain:
 
         Parameters
         ----------
-        load_s_m : array_like, shape (B, K), optional
-            Arc positions of world-fixed point forces (hanging weights).
+        load_s_m : array_like, shape (B, K) or (B,), optional
+            Arc positions (m from the clamp, in ``[0, length_m]``) of world-fixed point forces (hanging weights),
+            ``K`` per case (one when 1-D).
         load_force_ab_n : array_like, shape (B, K, 2), optional
-            Those forces in the (a, b) axes (N). Self-weight is always included.
+            Those forces in the (a, b) axes (N), finite. Self-weight is always included.
         tip_force_n : array_like, shape (B, 2), optional
             An extra world-fixed force at the tip (N).
         tip_moment_nm : float or array_like, shape (B,)
@@ -284,28 +286,91 @@ class Chain:
         Returns
         -------
         StaticSolution
+
+        Raises
+        ------
+        ParameterError
+            A load position outside ``[0, length_m]`` (beyond the tip), a load position without its force (or the
+            other way round), a non-finite force, moment, cable shortening or starting angle, or batch sizes that
+            disagree.
+        ArithmeticError
+            If the Newton iteration diverges on valid inputs.
         """
-        sizes = [1]
-        for arr in (load_s_m, tip_force_n, cable_shortening_m):
-            if arr is not None:
-                sizes.append(np.shape(arr)[0])
-        sizes.append(np.size(tip_moment_nm))
-        b = max(sizes)
+        owner = "Chain.solve_static"
+        if (load_s_m is None) != (load_force_ab_n is None):
+            given = "load_s_m" if load_force_ab_n is None else "load_force_ab_n"
+            raise ParameterError(
+                f"The 'load_s_m' and 'load_force_ab_n' parameters of {owner} go together (a position and a force "
+                f"per load). Got only '{given}'."
+            )
+        if load_s_m is not None:
+            load_s_m = check_values(
+                load_s_m,
+                "load_s_m",
+                owner,
+                low=0,
+                high=self.length_m,
+                unit="m",
+                note=f"{self.length_m:g} is the tip: a load beyond the tip is off the chain",
+            )
+            load_force_ab_n = check_values(load_force_ab_n, "load_force_ab_n", owner, unit="N")
+            # (B,) is one load per case, (B, K) K loads per case
+            load_s_m = load_s_m.reshape(load_s_m.shape[0], -1) if load_s_m.ndim else load_s_m.reshape(1, 1)
+            if load_force_ab_n.size != 2 * load_s_m.size or load_force_ab_n.shape[-1:] != (2,):
+                raise ParameterError(
+                    f"The 'load_force_ab_n' parameter of {owner} must hold an (a, b) force per entry of 'load_s_m' "
+                    f"(shape {(*load_s_m.shape, 2)}). Got shape {load_force_ab_n.shape} instead."
+                )
+            load_force_ab_n = load_force_ab_n.reshape(*load_s_m.shape, 2)
+        if tip_force_n is not None:
+            tip_force_n = check_values(tip_force_n, "tip_force_n", owner, unit="N")
+            if tip_force_n.shape[-1:] != (2,) or tip_force_n.ndim > 2:
+                raise ParameterError(
+                    f"The 'tip_force_n' parameter of {owner} must have shape (B, 2) (an (a, b) force per load case). "
+                    f"Got shape {tip_force_n.shape} instead."
+                )
+            tip_force_n = tip_force_n.reshape(-1, 2)
+        tip_moment_nm = check_values(tip_moment_nm, "tip_moment_nm", owner, unit="N m").reshape(-1)
+        if cable_shortening_m is not None:
+            cable_shortening_m = check_values(cable_shortening_m, "cable_shortening_m", owner, unit="m").reshape(-1)
+        sizes = {}
+        for name, arr in (
+            ("load_s_m", load_s_m),
+            ("tip_force_n", tip_force_n),
+            ("cable_shortening_m", cable_shortening_m),
+            ("tip_moment_nm", tip_moment_nm),
+        ):
+            if arr is not None and arr.shape[0] != 1:
+                sizes[name] = arr.shape[0]
+        b = max(sizes.values(), default=1)
+        if any(size != b for size in sizes.values()):
+            raise ParameterError(
+                f"The load cases given to {owner} must agree in number (or be one). Got "
+                + ", ".join(f"{size} in '{name}'" for name, size in sizes.items())
+                + " instead."
+            )
+        if psi0 is not None:
+            psi0 = check_values(psi0, "psi0", owner, unit="rad")
+            if psi0.size not in (self.n, b * self.n):
+                raise ParameterError(
+                    f"The 'psi0' parameter of {owner} must have shape ({b}, {self.n}) (or ({self.n},) for all "
+                    f"cases). Got shape {psi0.shape} instead."
+                )
         g = np.broadcast_to(self.g_gravity, (b, self.n, 2)).copy()
         beyond = np.broadcast_to(self._mass_beyond_gauge[:, None] * self.gravity, (b, self.gauge_s_m.size, 2)).copy()
         if load_s_m is not None:
-            ls = np.asarray(load_s_m, dtype=float).reshape(b, -1)
-            lf = np.asarray(load_force_ab_n, dtype=float).reshape(b, -1, 2)
+            ls = np.broadcast_to(load_s_m, (b, load_s_m.shape[1]))
+            lf = np.broadcast_to(load_force_ab_n, (b, load_s_m.shape[1], 2))
             g += self.load_forces(ls, lf)
             beyond += np.einsum("bgk,bkc->bgc", (ls[:, None, :] > self.gauge_s_m[None, :, None]).astype(float), lf)
         if tip_force_n is not None:
-            tf = np.asarray(tip_force_n, dtype=float).reshape(b, 2)
+            tf = np.broadcast_to(tip_force_n, (b, 2))
             g += self.link_length_m[None, :, None] * tf[:, None, :]
             beyond += tf[:, None, :]
-        moment = np.broadcast_to(np.asarray(tip_moment_nm, dtype=float), (b,))
+        moment = np.broadcast_to(tip_moment_nm, (b,))
         has_cable = cable_shortening_m is not None and self.cable_stiffness > 0
-        short = np.broadcast_to(np.asarray(cable_shortening_m if has_cable else 0.0, dtype=float), (b,))
-        psi = np.zeros((b, self.n)) if psi0 is None else np.array(psi0, dtype=float).reshape(b, self.n)
+        short = np.broadcast_to(cable_shortening_m if has_cable else np.zeros(1), (b,))
+        psi = np.zeros((b, self.n)) if psi0 is None else np.broadcast_to(psi0.reshape(-1, self.n), (b, self.n)).copy()
         ga, gb = g[..., 0], g[..., 1]
         e = self.eccentricity
         kc = self.cable_stiffness
@@ -330,7 +395,8 @@ class Chain:
                 break
         tension = self.cable_tension(psi[:, -1], short)[0] if has_cable else np.zeros(b)
         if not np.all(np.isfinite(psi)):
-            raise ArithmeticError("static solve diverged (non-finite angles)")
+            bad = int(np.sum(~np.all(np.isfinite(psi), axis=1)))
+            raise ArithmeticError(f"static solve diverged (non-finite angles) in {bad} of {b} load cases")
         return StaticSolution(
             psi_rad=psi,
             curvature_1_m=self.curvature_at_gauges(psi),

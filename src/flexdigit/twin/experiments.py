@@ -30,11 +30,12 @@ import pyarrow as pa
 
 from flexdigit import __version__
 from flexdigit._json import to_jsonable
-from flexdigit._validation import check_array, check_int, check_positive, check_real
+from flexdigit._validation import check_int, check_positive, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
+from flexdigit.twin._checks import check_values
 from flexdigit.twin.calibration import Calibration, default_calibration
-from flexdigit.twin.twin import Twin, check_load, static_gauges_v
+from flexdigit.twin.twin import Twin, static_gauges_v
 
 METADATA_KEY = b"flexdigit"
 
@@ -313,6 +314,16 @@ def actuation_sweep(
     return _result("actuation_sweep", cols, args, seed, params, calibration)
 
 
+def _list(value, name: str, owner: str) -> list:
+    """A non-empty 1-D sequence of the caller's values (a scalar is one value)."""
+    arr = np.atleast_1d(np.asarray(value, dtype=object))
+    if arr.ndim != 1 or arr.size == 0:
+        raise ParameterError(
+            f"The '{name}' parameter of {owner} must be a non-empty list of numbers. Got shape {arr.shape} instead."
+        )
+    return arr.tolist()
+
+
 def static_load_test(
     loads_kg,
     positions_from_tip_m,
@@ -341,17 +352,33 @@ def static_load_test(
     params = params or RigParams()
     calibration = calibration or default_calibration()
     length = params.geometry.digit_length_m
-    masses = check_array(loads_kg, "loads_kg", "static_load_test", ndim=1, min_length=1, low=0, low_open=True)
-    from_tip = check_array(positions_from_tip_m, "positions_from_tip_m", "static_load_test", ndim=1, min_length=1)
-    for m in masses:
-        for p in from_tip:
-            if not 0 <= p < length:
-                raise ParameterError(
-                    f"The 'positions_from_tip_m' parameter of static_load_test must be inside [0, {length:g}) "
-                    f"(a load beyond the tip or at the clamp). Got {float(p)!r} instead."
-                )
-            check_load(m, length - p, params)
-    reps = check_int(repetitions, "repetitions", "static_load_test", low=1, high=100_000)
+    owner = "static_load_test"
+    # checked here, before the cases are repeated over positions, commands and repetitions, so a message
+    # quotes what the caller passed (once), not the broadcast batch
+    masses = check_values(_list(loads_kg, "loads_kg", owner), "loads_kg", owner, low=0, low_open=True, unit="kg")
+    from_tip = check_values(
+        _list(positions_from_tip_m, "positions_from_tip_m", owner),
+        "positions_from_tip_m",
+        owner,
+        low=0,
+        high=length,
+        high_open=True,
+        unit="m from the tip",
+        note=f"0 is the tip, {length:g} the clamp: nothing hangs beyond the tip, or at or behind the clamp",
+    )
+    reps = check_int(repetitions, "repetitions", owner, low=1, high=100_000)
+    if commands is not None:
+        a = params.actuator
+        cmds = check_values(
+            _list(commands, "commands", owner),
+            "commands",
+            owner,
+            low=a.command_min,
+            high=a.command_max,
+            integer=True,
+            note="servo commands; None detaches the cable",
+        )
+        commands = [int(c) for c in cmds]
     cmd_list = [None] if commands is None else list(commands)
     rows_m, rows_p, rows_c = [], [], []
     for c in cmd_list:

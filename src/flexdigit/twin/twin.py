@@ -25,10 +25,11 @@ from functools import lru_cache
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_choice, check_int, check_real
+from flexdigit._validation import check_choice, check_int, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
+from flexdigit.twin._checks import check_values
 from flexdigit.twin.actuator import Servo
 from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
@@ -380,7 +381,8 @@ def static_gauges_v(
     """
     params = params or RigParams()
     calibration = calibration or default_calibration()
-    masses = check_array(loads_mass_kg, "loads_mass_kg", "static_gauges_v", low=0)
+    owner = "static_gauges_v"
+    masses = check_values(loads_mass_kg, "loads_mass_kg", owner, low=0, unit="kg")
     if masses.ndim == 1:
         masses = masses[:, None]
     if masses.ndim != 2:
@@ -388,7 +390,9 @@ def static_gauges_v(
             f"The 'loads_mass_kg' parameter of static_gauges_v must be 1-D or 2-D. Got shape {masses.shape}."
         )
     length = params.geometry.digit_length_m
-    pos = check_array(positions_from_base_m, "positions_from_base_m", "static_gauges_v", low=0, high=length)
+    pos = check_values(
+        positions_from_base_m, "positions_from_base_m", owner, low=0, high=length, unit="m from the base"
+    )
     pos = pos.reshape(masses.shape) if pos.size == masses.size else None
     if pos is None:
         raise ParameterError(
@@ -400,15 +404,16 @@ def static_gauges_v(
     shortening = None
     if commands is not None:
         a = params.actuator
-        cmd = check_array(commands, "commands", "static_gauges_v", low=a.command_min, high=a.command_max)
-        if np.any(cmd != np.round(cmd)):
+        cmd = check_values(commands, "commands", owner, low=a.command_min, high=a.command_max, integer=True)
+        if cmd.ndim and cmd.size not in (1, b):
             raise ParameterError(
-                f"The 'commands' parameter of static_gauges_v must be integers. Got {cmd.ravel().tolist()!r}."
+                f"The 'commands' parameter of {owner} must be one command or one per load case ({b}). "
+                f"Got {cmd.size} commands instead."
             )
         cmd = np.broadcast_to(cmd.reshape(-1) if cmd.ndim else cmd, (b,))
         shortening = cable_shortening_m(cmd, params)
         if servo_offset_rad is not None:
-            offset = check_array(servo_offset_rad, "servo_offset_rad", "static_gauges_v")
+            offset = check_values(servo_offset_rad, "servo_offset_rad", owner, unit="rad")
             shortening = shortening + params.actuator.pulley_radius_m * np.broadcast_to(offset.reshape(-1), (b,))
     forces = masses[..., None] * chain.gravity
     sol = chain.solve_static(pos, forces, cable_shortening_m=shortening)
@@ -421,7 +426,12 @@ def static_gauges_v(
             friction_rng = np.random.default_rng([seed, FRICTION_STREAM])
             kappa = sensors.friction_draw(kappa, sol.tension_n, c_moment, friction_rng)
         else:
-            xi = check_array(friction_draws, "friction_draws", "static_gauges_v", shape=(b, kappa.shape[1]))
+            xi = check_values(friction_draws, "friction_draws", owner)
+            if xi.shape != kappa.shape:
+                raise ParameterError(
+                    f"The 'friction_draws' parameter of {owner} must have shape {kappa.shape} (load cases, gauges). "
+                    f"Got shape {xi.shape} instead."
+                )
             kappa = kappa + sensors.friction_curvature_sd_1_m(sol.tension_n, c_moment) * xi
     volts = sensors.clean_v(kappa, sol.axial_force_n)
     if rng is not None:
