@@ -29,16 +29,32 @@ SLOPE_RTOL = 0.05
 DEFLECTION_ABS_MM = 0.5
 
 
-@pytest.mark.parametrize(("housing", "table"), [(False, "without_housing"), (True, "with_housing")])
-def test_release_tests_reproduce_tables_3_1_and_3_2(housing, table):
-    res = ex.release_test(housing=housing, duration_s=12.0 if not housing else 6.0, sample_rate_hz=500, seed=1)
+#: Record lengths of the simulated release tests (s), as the report uses them: the bare digit's amplitude decays
+#: with a time constant 1/(zeta wn) = 39 s, so a 12 s record holds too little decay for a zeta to survive the
+#: noise (median over the gauges off by up to 3.1 % over 20 seeds at 12 s, 0.6-1.6 % at 30 s); the housed one's
+#: is 1.1 s, and 8 s holds all of it.
+RELEASE_DURATION_S = {False: 30.0, True: 8.0}
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize(
+    ("housing", "table"),
+    [pytest.param(False, "without_housing", marks=pytest.mark.slow), (True, "with_housing")],
+)
+def test_release_tests_reproduce_tables_3_1_and_3_2(housing, table, seed):
+    # Analysed like the thesis's measurements: a damped-sine fit per gauge. wn is checked on every gauge (it is
+    # set by the mechanics, and every gauge sees it to ~0.5 %); zeta on the median over the three gauges, as the
+    # report does, because gauge 3 (nearest the tip, the smallest strain: ~14 mV of swing over 2 mV of white
+    # noise and drift) alone scatters by +-5 % even on 30 s records. Several seeds, so a pass is not seed luck.
+    res = ex.release_test(housing=housing, duration_s=RELEASE_DURATION_S[housing], sample_rate_hz=500, seed=seed)
     t = res.column("time_s")
-    for gauge in (1, 2, 3):
-        fit = fit_damped_sine(t, res.column(f"gauge{gauge}_v"))
-        assert fit["wn_rad_s"] == pytest.approx(
-            thesis_value(f"digit.release_tests_{table}.wn_avg_rad_s"), rel=RELEASE_RTOL
-        )
-        assert fit["zeta"] == pytest.approx(thesis_value(f"digit.release_tests_{table}.zeta_avg"), rel=RELEASE_RTOL)
+    fits = [fit_damped_sine(t, res.column(f"gauge{gauge}_v")) for gauge in (1, 2, 3)]
+    wn_thesis = thesis_value(f"digit.release_tests_{table}.wn_avg_rad_s")
+    zeta_thesis = thesis_value(f"digit.release_tests_{table}.zeta_avg")
+    for gauge, fit in enumerate(fits, start=1):
+        assert fit["wn_rad_s"] == pytest.approx(wn_thesis, rel=RELEASE_RTOL), gauge
+    zeta = float(np.median([fit["zeta"] for fit in fits]))
+    assert zeta == pytest.approx(zeta_thesis, rel=RELEASE_RTOL)
 
 
 def test_actuation_sweep_reproduces_e_3_20_to_3_22():
