@@ -8,11 +8,13 @@ import pytest
 
 from flexdigit.errors import ParameterError
 from flexdigit.models.plant import (
+    PRINTED_DIGIT_DAMPING_1_PER_S,
     build_plant,
     closed_loop_printed_k1,
     commands_for_tip_rotation,
     explain_discrepancies,
     output_choices,
+    printed_digit_zeta,
 )
 from flexdigit.params import Geometry, RigParams
 from flexdigit.reference import thesis_complex, thesis_value
@@ -38,6 +40,41 @@ def test_printed_plant_coefficients_within_0p1_percent_of_section_3_5():
 def test_printed_plant_poles_within_0p1_percent_of_section_3_5():
     g = build_plant("printed")
     assert _match_poles(g.poles, thesis_complex("plant.poles")).max() < 1e-3
+
+
+def test_printed_digit_damping_comes_from_the_identified_factor_not_the_poles():
+    # [plant].note of reference/thesis.toml: the digit factor is 103.3/(s^2 + 0.543 s + 103.3), wn of table 3.1
+    assert PRINTED_DIGIT_DAMPING_1_PER_S == 0.543
+    wn = thesis_value("digit.release_tests_without_housing.wn_avg_rad_s")
+    assert printed_digit_zeta() == pytest.approx(0.543 / (2 * wn), rel=1e-12)  # 0.02672, "zeta ~ 0.027"
+    e = build_plant("printed").components["E_digit_printed"]
+    assert e.den[0][0][1] == pytest.approx(0.543, rel=1e-12)
+
+
+@pytest.mark.parametrize("damping", [0.0543, 0.3, 1.0, 2.0])
+def test_printed_numerator_s0_and_pole_frequencies_do_not_depend_on_the_digit_damping(damping):
+    # the damping is the one input the printed poles' real part reflects; the numerator 48.7, the s^0 coefficient
+    # 4.354e4 and the poles' imaginary parts 16.97 and 10.1594 follow from the other components whatever it is
+    ref = build_plant("printed")
+    g = build_plant("printed", printed_digit_damping_1_per_s=damping)
+    num = g.tf.num[0][0][-1] / g.tf.den[0][0][0]
+    s0 = g.tf.den[0][0][-1] / g.tf.den[0][0][0]
+    assert num == pytest.approx(ref.tf.num[0][0][-1] / ref.tf.den[0][0][0], rel=1e-12)
+    assert s0 == pytest.approx(ref.tf.den[0][0][-1] / ref.tf.den[0][0][0], rel=1e-12)
+    assert _rel(num, thesis_value("plant.g_num")[0]) < 1e-3 and _rel(s0, thesis_value("plant.g_den")[-1]) < 1e-3
+    upper = g.poles[g.poles.imag > 0]
+    fast, slow = sorted(upper, key=lambda z: -abs(z))
+    printed_fast, printed_slow = sorted((z for z in thesis_complex("plant.poles") if z.imag > 0), key=lambda z: -abs(z))
+    # the servo pair (16.97j) is untouched; the digit pair's wd = sqrt(wn^2 - (c/2)^2) moves by about
+    # c^2/(8 wn^2): 3.6e-4 at c = 0.543, 0.48 % at c = 2, always below wn = 10.16271 of table 3.1
+    ref_fast = max(ref.poles, key=abs)
+    assert fast == pytest.approx(complex(ref_fast.real, abs(ref_fast.imag)), rel=1e-9)
+    assert _rel(fast.imag, printed_fast.imag) < 1e-3
+    wn = thesis_value("digit.release_tests_without_housing.wn_avg_rad_s")
+    assert slow.imag == pytest.approx(math.sqrt(wn**2 - damping**2 / 4), rel=1e-9)
+    assert _rel(slow.imag, printed_slow.imag) < 5e-3
+    assert slow.real == pytest.approx(-damping / 2, rel=1e-9)  # only the real part follows the damping
+    assert abs(slow.real - (-0.2715)) > 0.01  # none of these gives the printed -0.2715: it checks the 0.543
 
 
 def test_closed_loop_with_printed_k1_matches_table_4_1():

@@ -8,8 +8,12 @@ Two variants, both built from components (nothing about G is typed in):
     K2 = E I r_M/(l e) (:mod:`.cable`), K3 = a/s from the printed fits (:mod:`.conversion`, in m/V),
     ``MT_rad(s) = MT(s) x 109.1344 pi/180`` (:mod:`.servo`) and a digit factor
     ``E'(s) = wn^2/(s^2 + 2 zeta wn s + wn^2)`` with wn = 10.16 rad/s of table 3.1 (the bare strip) and the
-    damping the printed poles imply (Re = -0.2715, zeta = 0.0267). The text says E(s) of 3.1.2 (with housing,
-    171.61/(s^2 + 1.782 s + 171.61)) is used; it is not what the printed G contains.
+    damping coefficient ``2 zeta wn = 0.543`` 1/s (zeta = 0.0267) of the digit factor
+    ``103.3/(s^2 + 0.543 s + 103.3)`` that the ``[plant]`` note of ``reference/thesis.toml`` identifies
+    (:data:`PRINTED_DIGIT_DAMPING_1_PER_S`). The text says E(s) of 3.1.2 (with housing,
+    171.61/(s^2 + 1.782 s + 171.61)) is used; it is not what the printed G contains. The damping only sets the
+    real part of the slow poles (and the s^3..s^1 coefficients): the numerator 48.7, the s^0 coefficient and the
+    poles' imaginary parts follow from the other components whatever it is.
 
 ``"consistent"``
     The same chain with units that hold: command -> servo angle (``MT(s)`` with unit DC gain x 0.015048 rad per
@@ -62,9 +66,12 @@ from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.models import bridge, cable, conversion, digit, servo
 from flexdigit.params import RigParams
-from flexdigit.reference import thesis_complex
 
 VARIANTS = ("printed", "consistent")
+#: ``2 zeta wn`` (1/s) of the digit factor inside the printed G(s), ``103.3/(s^2 + 0.543 s + 103.3)``, as identified
+#: in the ``[plant]`` note of ``reference/thesis.toml`` (from the shared reference): the thesis prints neither it nor
+#: its zeta ~ 0.027, which is in no table (tables 3.1/3.2 give 0.0025 and 0.068).
+PRINTED_DIGIT_DAMPING_1_PER_S = 0.543
 GAIN_SOURCES = ("cable", "measured")
 _GAUGE_OUTPUT = re.compile(r"^(deflection_sg|strain_sg|gauge_v_sg)(\d+)(_m)?$")
 
@@ -212,15 +219,24 @@ def companion_ss(tf: control.TransferFunction) -> control.StateSpace:
     return control.ss(a, b, c, np.zeros((1, 1)))
 
 
-def printed_digit_zeta(params: RigParams | None = None) -> float:
-    """The digit damping hidden in the printed G(s): ``-Re(p) / wn`` of its slow poles (3.5), about 0.0267.
+def printed_digit_zeta(
+    params: RigParams | None = None, damping_1_per_s: float = PRINTED_DIGIT_DAMPING_1_PER_S
+) -> float:
+    """The digit damping ratio inside the printed G(s): ``zeta = (2 zeta wn) / (2 wn)``, about 0.0267.
 
-    The thesis does not state it: it is recovered from the printed poles -0.2715 +- 10.1594j and table 3.1's
-    wn = 10.16271 rad/s. (The identification formula ``2 zeta wn = 8 / Ts`` would put Ts at 14.7 s.)
+    ``damping_1_per_s`` is the ``0.543`` 1/s of the identified digit factor ``103.3/(s^2 + 0.543 s + 103.3)``
+    (:data:`PRINTED_DIGIT_DAMPING_1_PER_S`), ``wn`` table 3.1's 10.16271 rad/s (``params.dynamics.wn_bare_rad_s``).
+    It is not read from the printed poles, so that their real part -0.2715 is a check, not an input. (The
+    identification formula ``2 zeta wn = 8 / Ts`` would put Ts at 14.7 s.)
+
+    Examples
+    --------
+    >>> round(printed_digit_zeta(), 5)
+    0.02672
     """
     wn = (params or RigParams()).dynamics.wn_bare_rad_s
-    slow = [p for p in thesis_complex("plant.poles") if abs(p.imag) < 12.0]
-    return -float(np.mean([p.real for p in slow])) / wn
+    damping = check_real(damping_1_per_s, "damping_1_per_s", "printed_digit_zeta", low=0)
+    return damping / (2.0 * wn)
 
 
 def _gauge_index(output: str, params: RigParams) -> tuple[str, int] | None:
@@ -239,6 +255,7 @@ def build_plant(
     *,
     output: str = "deflection_sg1_m",
     gains: str = "cable",
+    printed_digit_damping_1_per_s: float = PRINTED_DIGIT_DAMPING_1_PER_S,
 ) -> Plant:
     """Assemble the plant G(s) of 3.5 from the component models.
 
@@ -256,6 +273,9 @@ def build_plant(
     gains : {"cable", "measured"}
         Consistent variant only: DC gains from the cable model (default) or scaled to the measured per-command
         figures (printed fits of table 3.6, E 3.20-3.22; deflection and gauge-voltage outputs only).
+    printed_digit_damping_1_per_s : float
+        Printed variant only: ``2 zeta wn`` (1/s) of its digit factor (default 0.543, see
+        :data:`PRINTED_DIGIT_DAMPING_1_PER_S`).
 
     Returns
     -------
@@ -272,11 +292,11 @@ def build_plant(
     if output == "gauge_v":
         output = "gauge_v_sg1"
     if variant == "printed":
-        return _printed(params, output, gains)
+        return _printed(params, output, gains, printed_digit_damping_1_per_s)
     return _consistent(params, output, gains)
 
 
-def _printed(params: RigParams, output: str, gains: str) -> Plant:
+def _printed(params: RigParams, output: str, gains: str, damping_1_per_s: float) -> Plant:
     gauge = _gauge_index(output, params)
     if gauge is None or gauge[0] != "deflection_sg" or not output.endswith("_m"):
         raise ParameterError(
@@ -294,7 +314,7 @@ def _printed(params: RigParams, output: str, gains: str) -> Plant:
     k2 = cable.k2_nm_per_rad(params)
     k3_m_per_v = k3[k] * 1e-3  # mm -> m, as 3.5 does
     mt_rad = servo.servo_tf(params, form="printed")
-    e_printed = digit.digit_tf(params.dynamics.wn_bare_rad_s, printed_digit_zeta(params))
+    e_printed = digit.digit_tf(params.dynamics.wn_bare_rad_s, printed_digit_zeta(params, damping_1_per_s))
     tf = k2 * k3_m_per_v * mt_rad * e_printed
     tf = control.tf(*_normalised(tf))
     components = {
@@ -304,7 +324,8 @@ def _printed(params: RigParams, output: str, gains: str) -> Plant:
         "E_digit_printed": e_printed,
     }
     notes = (
-        "G = K2 K3 MT(s) x 109.1344 pi/180 x E'(s), E' from table 3.1's wn with the damping of the printed poles.",
+        f"G = K2 K3 MT(s) x 109.1344 pi/180 x E'(s), E' from table 3.1's wn with 2 zeta wn = {damping_1_per_s:g} 1/s "
+        "(the digit factor the [plant] note of reference/thesis.toml identifies).",
         "Units as printed: MT has unit DC gain, so 'rad per command' is 126.6x too large; E' is 1 V per N m.",
     )
     return Plant("printed", output, tf, companion_ss(tf), "command", "m", components, notes)
@@ -433,7 +454,8 @@ def explain_discrepancies(params: RigParams | None = None) -> list[str]:
         "Digit factor. 3.5 says G = K1 K2 K3 MT(s) E(s) with E(s) = 171.61/(s^2 + 1.782 s + 171.61) (housing, "
         f"table 3.2), but the printed G contains {e_den[2]:.4g}/(s^2 + {e_den[1]:.3g} s + {e_den[2]:.4g}): wn = "
         f"{p.dynamics.wn_bare_rad_s:.5g} rad/s of table 3.1 (bare strip) with zeta = {zeta_p:.4f}, a damping "
-        "found in no table (it is -Re of the printed poles over wn). The consistent plant uses E(s) with housing.",
+        f"found in no table (2 zeta wn = {e_den[1]:.3g} 1/s, slow poles' real part {-e_den[1] / 2:.4f} as printed). "
+        "The consistent plant uses E(s) with housing.",
         "Servo units. MT(s) = 421.5/(s^2 + 23.11 s + 421.5) has unit DC gain, yet 3.2.4 multiplies it by "
         "109.1344 deg/V x pi/180 = 1.905 rad/V and calls 802.854/(...) 'rad per serial command'. The potentiometer "
         f"moves {pot_v_per_cmd:.5f} V per command, so the servo turns {a.rad_per_command:.6f} rad per command "
