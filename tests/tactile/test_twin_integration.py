@@ -1,6 +1,7 @@
 """The tactile pieces on the real twin (sim rig backend and static model)."""
 
 import numpy as np
+import pytest
 
 from flexdigit.tactile.experiments import collect_on_twin, static_dataset
 from flexdigit.tactile.physics import ZONES, TwinGaugeModel, cramer_rao
@@ -41,6 +42,21 @@ def test_thesis_corr2_on_the_static_twin_is_near_the_printed_figure():
     _, y = targets(ds, "position_index")
     r = run_pipeline(features(ds), y, seed=0, fixed_hidden=18, fixed_tol=1e-8, epochs=20)
     assert abs(r.corr2 - 0.9823) <= 0.03
+
+
+@pytest.mark.slow
+def test_actuated_corr2_on_held_out_seeds_is_near_the_printed_figure():
+    # chapter 7's figure: corr2 0.8998 at 24 nodes, gradient 1e-7 (7.5); the issue's tolerance is +-0.03. The
+    # cable-guide friction was fitted on seeds 0-7 (experiments.FRICTION_FIT_SEEDS); seeds 8-15 are new draws of
+    # the whole experiment (readings, split, initial weights), so this checks the fit, not one lucky seed.
+    from flexdigit.tactile.experiments import FRICTION_FIT_SEEDS, actuated_corr2_score
+    from flexdigit.twin.calibration import default_calibration
+
+    held_out = range(8, 16)
+    assert not set(held_out) & set(FRICTION_FIT_SEEDS)
+    mean, sd = actuated_corr2_score(default_calibration(), seeds=held_out, spread=True)
+    assert abs(mean - 0.8998) <= 0.03
+    assert 0.005 < sd < 0.04  # one experiment's scatter: why the calibration averages 8 of them
 
 
 def test_twin_step_does_not_change_settled_readings(tmp_path):

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
 from flexdigit.tactile.dataset import Dataset
@@ -171,18 +172,33 @@ def pipeline_corr2_static(
     return run_pipeline(features(ds), y, seed=seed, fixed_hidden=hidden, fixed_tol=tol, epochs=epochs).corr2
 
 
-def actuated_corr2_score(calibration, *, seed: int = 0, params: RigParams | None = None) -> float:
+#: Seeds the friction is fitted over: the actuated corr2 of one seeded experiment scatters by about 0.02 from seed to
+#: seed (a 1500-reading data set, 250 test readings), so the calibration matches the thesis's 0.8998 on average.
+FRICTION_FIT_SEEDS = tuple(range(8))
+
+
+def actuated_corr2_score(
+    calibration, *, seeds=FRICTION_FIT_SEEDS, params: RigParams | None = None, spread: bool = False
+):
     """The score :func:`flexdigit.twin.calibration.calibrate` fits ``cable_friction_ratio`` with: the thesis
-    pipeline's actuated test corr2 (24 nodes, 1e-7, 50 epochs; :func:`pipeline_corr2_static`), seeded.
+    pipeline's actuated test corr2 (24 nodes, 1e-7, 50 epochs; :func:`pipeline_corr2_static`), averaged over the
+    experiment repeated with each of ``seeds`` (data set, split and initial weights).
+
+    With ``spread=True`` returns ``(mean, standard deviation)`` over the seeds instead of the mean.
 
     Examples
     --------
     >>> from flexdigit.twin.calibration import default_calibration
     >>> cal = default_calibration().replace(cable_friction_ratio=0.0)
-    >>> actuated_corr2_score(cal) > 0.95        # white noise alone: far above the thesis's 0.8998
+    >>> actuated_corr2_score(cal, seeds=(0,)) > 0.95        # white noise alone: far above the thesis's 0.8998
     True
     """
-    return pipeline_corr2_static("actuated", calibration, seed=seed, params=params)
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ParameterError("actuated_corr2_score needs at least one seed in 'seeds'.")
+    scores = np.array([pipeline_corr2_static("actuated", calibration, seed=s, params=params) for s in seeds])
+    mean = float(scores.mean())
+    return (mean, float(scores.std(ddof=1)) if len(scores) > 1 else 0.0) if spread else mean
 
 
 #: Per experiment: (protocol collected, size whose error curves figure 6.13 / 7.4 show)

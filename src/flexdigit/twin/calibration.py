@@ -479,7 +479,8 @@ def calibrate(
         Print the residual table.
     friction_score : callable, optional
         ``friction_score(calibration) -> corr2``: the thesis pipeline's actuated test corr2 on a twin with that
-        calibration (e.g. :func:`flexdigit.tactile.experiments.actuated_corr2_score`); needed only for
+        calibration (e.g. :func:`flexdigit.tactile.experiments.actuated_corr2_score`, its mean over 8 seeded
+        repetitions of the experiment: one repetition scatters by about 0.02); needed only for
         ``targets.actuated_test_corr2``.
 
     Returns
