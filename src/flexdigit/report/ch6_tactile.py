@@ -569,7 +569,9 @@ def _criteria_paragraph(exp, corr2_ours: float, corr2_thesis: float, thesis_mlp_
     best = loc.best
     rm = loc.position_rmse_identifiable_m
     worst = _worst_ratio(loc, best)
-    contact = max(loc.contact_accuracy_visible.values())
+    contact_name = max(loc.contact_accuracy_visible, key=loc.contact_accuracy_visible.get)
+    contact = loc.contact_accuracy_visible[contact_name]
+    contact_all = loc.contact_accuracy[contact_name]
     magnitude = min(loc.magnitude_rel_rmse_identifiable.values())
     checks = [
         (f"corr2 {corr2_ours:.4f} within +-0.03 of {corr2_thesis}", abs(corr2_ours - corr2_thesis) <= 0.03),
@@ -579,7 +581,11 @@ def _criteria_paragraph(exp, corr2_ours: float, corr2_thesis: float, thesis_mlp_
             rm[best] <= 0.5 * thesis_mlp_m,
         ),
         (f"its worst per-position error / Cramer-Rao bound {worst:.2f} (<= 1.25)", worst <= 1.25),
-        (f"contact {100 * contact:.1f} % (>= 99 %)", contact >= 0.99),
+        (
+            f"contact {100 * contact:.1f} % on the readings where some gauge bends (>= 99 %; {100 * contact_all:.1f} "
+            "% on all test readings: a load no gauge sees reads as no load)",
+            contact >= 0.99,
+        ),
         (f"magnitude {100 * magnitude:.1f} % RMS (<= 10 %)", magnitude <= 0.10),
     ]
     text = (
