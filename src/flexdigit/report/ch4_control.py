@@ -11,6 +11,57 @@ import numpy as np
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext, Table
 
+_BLOCK_P = (
+    "a block diagram, no data: the interconnection is generalized.thesis_generalized_plant, P of 4.4 built from "
+    "its state-space formula and checked against F S in tests/control/test_generalized.py"
+)
+_BLOCK_PC = (
+    "a block diagram, no data: the LFTs T_zw, T_yw, T_uw, T_pq of 4.4-4.6 are analysis.loop_maps, checked "
+    "against the feedback formulas in tests/control/test_analysis.py"
+)
+
+#: Every figure of thesis chapter 4: its caption, and the figure of ours that stands beside it (a name starting
+#: ``ch4_``) or why there is none. The chapter's figures take their thesis references from here.
+THESIS_FIGURES: dict[str, tuple[str, str]] = {
+    "4.1": ("Bode magnitude of the closed loop without controller (K1)", "ch4_plant_bode"),
+    "4.2": ("Bode magnitude of the plant", "ch4_plant_bode"),
+    "4.3": ("Root locus of the closed loop without controller", "ch4_root_locus"),
+    "4.4": ("Root locus of the plant", "ch4_root_locus"),
+    "4.5": ("Singular values of F(s)", "ch4_filter_sv"),
+    "4.6": ("Block diagram of the system including F(s)", _BLOCK_P),
+    "4.7": ("Nominal system P, including F(s)", _BLOCK_P),
+    "4.8": ("Block diagram of the nominal system P", _BLOCK_P),
+    "4.9": ("Root locus of the (5 Hz) controller", "ch4_root_locus_k5"),
+    "4.10": ("Singular values of the (5 Hz) controller", "ch4_controllers"),
+    "4.11": ("Exploded pole-zero plots of the plant and controller", "ch4_pole_zero"),
+    "4.12": ("Singular values of T_zw", "ch4_loop_maps"),
+    "4.13": ("Singular values of T_yw", "ch4_loop_maps"),
+    "4.14": ("Singular values of T_uw", "ch4_loop_maps"),
+    "4.15": ("Step response of T_yw", "ch4_steps"),
+    "4.16": ("Step response of T_uw", "ch4_steps"),
+    "4.17": ("Block diagram of the nominal system (P, C)", _BLOCK_PC),
+    "4.18": ("Singular values of T_pq", "ch4_tpq"),
+    "4.19": ("T_uw step, 5 Hz filter (0.85 % error tolerance)", "ch4_steps"),
+    "4.20": ("T_uw step, 0.5 Hz filter (0.78 %)", "ch4_steps"),
+    "4.21": ("T_uw step, 39 Hz filter (22.48 %)", "ch4_steps"),
+    "4.22": ("T_uw step, 50 Hz filter (2.6 %)", "ch4_steps"),
+    "4.23": ("Root locus of the (39 Hz) controller", "ch4_root_locus_k39"),
+    "4.24": ("Singular values of the (39 Hz) controller", "ch4_controllers"),
+}
+
+
+def _refs(name: str) -> str:
+    """``"figures 4.1, 4.2"``: the thesis figures :data:`THESIS_FIGURES` puts beside our figure ``name``."""
+    keys = [k for k, (_, ours) in THESIS_FIGURES.items() if ours == name]
+    return ("figure " if len(keys) == 1 else "figures ") + ", ".join(keys) if keys else ""
+
+
+def _half_last_digit(printed: float) -> float:
+    """Half a unit in the last decimal of a figure printed with decimals (0.78 -> 0.005, 2.6 -> 0.05)."""
+    text = repr(float(printed))
+    decimals = len(text.split(".")[1]) if "." in text and "e" not in text else 0
+    return 0.5 * 10.0**-decimals
+
 
 def build(ctx: ReportContext) -> Chapter:
     import matplotlib
@@ -39,14 +90,9 @@ def build(ctx: ReportContext) -> Chapter:
     E = ch.entries.append
 
     ch.paragraphs.append(
-        "Figures of chapter 4 and where they are here: 4.1-4.2 (Bode of the K1 loop and the plant) -> "
-        "ch4_plant_bode; 4.3-4.4 (root loci) -> ch4_root_locus and the table 4.1 entries; 4.5 (|F|) -> the "
-        "filter_peak entry; 4.6-4.8 and 4.17 are block diagrams (the LFTs are implemented in generalized.py and "
-        "analysis.loop_maps); 4.9-4.11 (controller root locus, singular values, exploded pole-zero plot) -> "
-        "ch4_controllers, ch4_pole_zero and the table 4.2 entries; 4.12-4.14 (T_zw, T_yw, T_uw) -> ch4_loop_maps "
-        "and the T_zw entries; 4.15-4.16 and 4.19-4.22 (step responses) -> ch4_steps and the T_uw/settling "
-        "entries; 4.18 (T_pq) -> ch4_tpq and the additive-tolerance entries; 4.23-4.24 (39 Hz controller) -> "
-        "ch4_controllers, ch4_tpq and the table 4.3 entries."
+        "Figures of chapter 4 and where they are here: "
+        + "; ".join(f"{k} ({cap}) -> {ours}" for k, (cap, ours) in THESIS_FIGURES.items())
+        + "."
     )
     ch.paragraphs.append(
         "Table 4.2 heads its columns 'x 10^4' and table 4.3 'x 10^2' (poles) and 'x 10^4' (zeros). The values in "
@@ -56,21 +102,39 @@ def build(ctx: ReportContext) -> Chapter:
 
     # ---- 4.3 filter
     F = filter_weight(5.0)
+    wc = 2 * math.pi * 5.0
+    peak_printed = thesis_value("hinf.filter_peak_db")
+    # the frequency at which |F(j w)| is the printed figure: |F| = 1/sqrt(w^2 + wc^2)
+    w_read = math.sqrt(max(10 ** (-peak_printed / 10) - wc**2, 0.0))
     E(
         results.compare(
             "hinf.filter_peak_db",
             "4.3",
-            thesis_value("hinf.filter_peak_db"),
+            peak_printed,
             20 * math.log10(abs(F(0))),
             "dB",
-            rtol=5e-4,
-            note="|F(0)| of 1/(s + 31.4159); the thesis read a grid point 0.004 dB lower.",
+            rtol=_half_last_digit(peak_printed) / abs(peak_printed),
+            note="The peak of 1/(s + 31.4159) is its DC gain 1/31.4159 = -29.9430 dB.",
+            discrepancy_note=f"The printed -29.9474 dB is |F(j w)| at w = {w_read:.2f} rad/s, not at DC: a point of "
+            "the plot's frequency grid read as the peak (0.0044 dB low).",
         )
     )
 
     # ---- 4.2 / table 4.1: the K1 closed loop without a controller
     k1 = 86.2 / 48.7  # the printed closed-loop numerator over the plant's: 1.7699 (a tenth of E 3.16's 17.6991)
     cl_poles = sorted_poles(ct.poles(build_plant("printed").closed_loop(k1)))
+    cl_printed_tf = sorted_poles(
+        ct.poles(ct.tf(thesis_value("plant.closed_loop_num"), thesis_value("plant.closed_loop_den")))
+    )
+    cl_table = sorted_poles(thesis_complex("plant.closed_loop_poles"))
+    # the K1 whose closed loop has table 4.1's slow pair (the one off by more than the printed digits):
+    # closed-loop poles are the roots of den + K1 num
+    g_num, g_den = np.asarray(G.num[0][0], float), np.asarray(G.den[0][0], float)
+    slow_t = cl_table[np.argmin(np.abs(cl_table))]
+    k1_grid = np.linspace(0.5, 2.0, 1501)
+    slow_err = [np.min(np.abs(np.roots(np.polyadd(g_den, k * g_num)) - slow_t)) for k in k1_grid]
+    k1_table = float(k1_grid[int(np.argmin(slow_err))])
+    cl_fit = sorted_poles(np.roots(np.polyadd(g_den, k1_table * g_num)))
     for i, (p_t, p_o) in enumerate(zip(sorted_poles(thesis_complex("plant.closed_loop_poles")), cl_poles, strict=True)):
         E(
             results.compare(
@@ -79,8 +143,12 @@ def build(ctx: ReportContext) -> Chapter:
                 abs(p_t),
                 abs(p_o),
                 "rad/s",
-                rtol=2e-3,
+                # printed to 4 decimals; our plant's open-loop poles are within 3e-5 of the printed ones
+                rtol=1e-4,
                 note=f"K1 = {k1:.4f} closed loop: printed {p_t:.4f}, ours {p_o:.4f}.",
+                discrepancy_note=f"This pole of table 4.1 is not a root of the printed G_cl (86.2/(... + 4.362e4)), "
+                f"which has {cl_printed_tf[i]:.4f}, next to ours; on our plant it needs K1 = {k1_table:.2f} "
+                f"({cl_fit[i]:.4f}), not {k1:.4f}.",
             )
         )
 
@@ -114,8 +182,10 @@ def build(ctx: ReportContext) -> Chapter:
                     abs(p_t),
                     abs(p_o),
                     "rad/s",
-                    rtol=2e-3,
+                    # printed to 6 significant digits (table 4.2) and to 4 (table 4.3)
+                    rtol=1e-4 if hz == 5 else 5e-4,
                     note=f"pole {p_t:.4f}; ours {p_o:.4f}.",
+                    discrepancy_note="The fit of (eps_u, margin) to the printed poles left this residual.",
                 )
             )
         zeros = sorted_poles(ct.zeros(K))
@@ -151,13 +221,27 @@ def build(ctx: ReportContext) -> Chapter:
     # ---- gamma by two routes and the regularisation path
     P5 = thesis_generalized_plant(G, filter_weight(5.0))
     eps5 = fits[5.0]["eps_u"]
-    ric = hinf_riccati(regularise(P5, eps5), gtol=1e-5)
-    lmi = hinf_lmi(regularise(P5, eps5))
+    routes = {}  # (filter Hz, eps_u) -> (Riccati gamma_opt, LMI gamma)
+    for hz, eps in ((5.0, 1e-5), (5.0, 1e-6), (5.0, eps5), (39.0, fits[39.0]["eps_u"])):
+        Pr = regularise(thesis_generalized_plant(G, filter_weight(hz)), eps)
+        routes[hz, eps] = (hinf_riccati(Pr, gtol=1e-6).gamma_opt, hinf_lmi(Pr).gamma)
+    ch.tables.append(
+        Table(
+            "gamma_opt by the two synthesis routes (issue: agree within 1 %); the last two rows are the levels "
+            "fitted to the printed controllers",
+            ["filter Hz", "eps_u", "Riccati (SLICOT)", "LMI (Clarabel)", "LMI - Riccati %"],
+            [
+                [f"{hz:g}", f"{eps:.4g}", f"{gr:.6g}", f"{gl:.6g}", f"{100 * (gl / gr - 1):+.3f}"]
+                for (hz, eps), (gr, gl) in routes.items()
+            ],
+        )
+    )
+    g_ric, g_lmi = routes[5.0, eps5]
     E(
         results.new(
             "hinf.gamma_opt_riccati",
             "4.4",
-            ric.gamma_opt,
+            g_ric,
             "m/m",
             f"Optimal gamma of the 5 Hz problem regularised at eps_u = {eps5:.3g} (not printed in the thesis).",
         )
@@ -166,11 +250,12 @@ def build(ctx: ReportContext) -> Chapter:
         results.new(
             "hinf.gamma_opt_lmi",
             "4.4",
-            lmi.gamma,
+            g_lmi,
             "m/m",
-            f"Same problem by the Gahinet-Apkarian LMIs (Clarabel): {100 * (lmi.gamma / ric.gamma_opt - 1):+.2f} %"
-            " from the Riccati route (R and S spread over ten decades at this eps; at 1e-5 and 1e-6 the two routes"
-            " agree to 0.01-0.1 %).",
+            f"Same problem by the Gahinet-Apkarian LMIs (Clarabel): {100 * (g_lmi / g_ric - 1):+.3f} % from the "
+            "Riccati route. In the plant's balanced coordinates the LMI optimum stops 10 % high (R needs "
+            "eigenvalues over ten decades); re-solving in the coordinates that make the route's own centred R and S "
+            "equal and diagonal closes the gap.",
         )
     )
     E(
@@ -209,7 +294,18 @@ def build(ctx: ReportContext) -> Chapter:
     d5 = thesis_design(5.0, G)
     maps5 = loop_maps(G, d5.controller)
     g, wpk = hinf_norm(maps5.T_zw, "T_zw")
-    E(results.compare("hinf.tzw_peak_db", "4.4", thesis_value("hinf.tzw_peak_db"), 20 * math.log10(g), "dB", rtol=1e-3))
+    E(
+        results.compare(
+            "hinf.tzw_peak_db",
+            "4.4",
+            thesis_value("hinf.tzw_peak_db"),
+            20 * math.log10(g),
+            "dB",
+            rtol=1e-4,  # printed to 0.0001 dB
+            note="The fitted 5 Hz design (its poles were fitted, not this norm).",
+            discrepancy_note="The fitted design misses the printed norm by more than its printed digits.",
+        )
+    )
     E(
         results.compare(
             "hinf.tzw_peak_rad_s",
@@ -243,7 +339,7 @@ def build(ctx: ReportContext) -> Chapter:
             10 * su["peak"],
             "command/m",
             rtol=0.2,
-            note="Ours x 10 (the printed gain).",
+            note="Ours x 10 (the printed gain); the thesis gives one digit, '2 x 10^5'.",
         )
     )
     m05 = loop_maps(G, thesis_design(0.5, G).controller)
@@ -254,35 +350,64 @@ def build(ctx: ReportContext) -> Chapter:
             thesis_value("hinf.tuw_step_peak_0p5hz"),
             10 * step_metrics(m05.T_uw, t_final=3.0)["peak"],
             "command/m",
-            rtol=0.1,
+            rtol=0.02,
             note="0.5 Hz design at the 5 Hz regularisation level, x 10 (the printed gain); thesis: 'in excess of "
             "0.9e6'.",
+            discrepancy_note="Ours is below the printed lower bound: the thesis prints no 0.5 Hz controller, so its "
+            "regularisation level (which sets the gain) is unknown; a smaller eps_u gives a larger peak.",
         )
     )
     printed_pct = thesis_value("hinf.additive_tolerance_percent")
+    ch.paragraphs.append(
+        "Additive-uncertainty tolerances of 4.6-4.7: the thesis's percentages are 100/(||T_pq|| in dB) of "
+        "controllers with 10x our numerator, e.g. 100/117.83 = 0.85 %. By the small-gain theorem the loop "
+        "tolerates any stable additive Delta with ||Delta|| < 1/||T_pq||; as a fraction of |G(0)| = 1.12e-3 m per "
+        "command that is the same whether the thesis's plant was 10x smaller than printed (its loop is then ours) "
+        "or its controllers were printed 10x (the printed 0.5 and 5 Hz gains destabilise the printed plant, so "
+        "the printed pair cannot be the analysed loop). Ours are compared with the printed figures to the printed "
+        "digits (half a unit in the last decimal)."
+    )
     rows = []
     for hz, key in ((0.5, "0.5Hz"), (5.0, "5Hz"), (39.0, "39Hz"), (50.0, "50Hz")):
         d = thesis_design(hz, G)
         tol = additive_tolerance(G, d.controller)
+        # the printed gain is 10x ours: ||T_pq|| x 10 (+20 dB) while the loop gain is small (S ~ 1 where |KS| peaks)
         shifted = tol["tpq_db"] + 20
+        ours_pct = 100 / shifted if shifted > 0 else math.nan
+        corrected = (
+            f"Corrected (small gain): 1/||T_pq|| = {tol['tolerance_relative_percent']:.3g} % of |G(0)| "
+            f"({tol['tolerance']:.3g} m/command for our K on the printed plant)."
+        )
+        lead = float(ct.tf(d.controller).num[0][0][0])
+        printed_db = 100 / printed_pct[key]  # the ||T_pq|| (dB) the printed percentage stands for
+        why = {
+            "39Hz": "Our fitted 39 Hz controller has the printed poles, but its numerator is "
+            f"{100 * abs(1 - 10 * lead / thesis_value('hinf.k_39hz_num')[0]):.1f} % off the printed 416.5/10, so "
+            f"||T_pq|| x 10 is {shifted:.3f} dB, not 100/22.48 = {printed_db:.3f} dB: "
+            f"{100 * abs(10 ** ((shifted - printed_db) / 20) - 1):.1f} % in the norm, which the 100/dB arithmetic "
+            f"of a {printed_db:.1f} dB norm turns into {100 * abs(ours_pct / printed_pct[key] - 1):.1f} %. The "
+            "printed controller itself gives 22.51 % (hinf.additive_tolerance_39Hz_printed_K).",
+            "50Hz": "The thesis prints no 50 Hz controller; ours uses the 5 Hz regularisation level (eps_u, gamma "
+            f"margin), so its gain differs: the printed 2.6 % needs ||T_pq|| = {printed_db:.1f} dB, "
+            f"ours x 10 is {shifted:.1f} dB.",
+        }.get(key, "The thesis prints no controller for this filter; ours uses the 5 Hz regularisation level.")
         E(
             results.compare(
                 f"hinf.additive_tolerance_{key}",
                 "4.7",
                 printed_pct[key],
-                100 / shifted if shifted > 0 else math.nan,
+                ours_pct,
                 "%",
-                rtol=0.25,
-                note="Thesis arithmetic 100/(||T_pq|| in dB) applied to our design with the printed 10x gain.",
-                discrepancy_note="For 0.5 and 50 Hz the thesis prints no controller; we use the 5 Hz regularisation "
-                "level, so the gain differs. The correct small-gain tolerance is 1/||T_pq|| = "
-                f"{tol['tolerance']:.3g} m/command ({tol['tolerance_relative_percent']:.3g} % of |G(0)|, our gain).",
+                rtol=_half_last_digit(printed_pct[key]) / printed_pct[key],
+                note=f"Thesis arithmetic 100/(||T_pq|| in dB) on our design with the printed 10x gain. {corrected}",
+                discrepancy_note=why,
             )
         )
         rows.append(
             [
                 key,
                 f"{printed_pct[key]}",
+                f"{ours_pct:.4g}",
                 f"{tol['tpq_db']:.2f}",
                 f"{tol['tolerance']:.3g}",
                 f"{tol['tolerance_relative_percent']:.3g}",
@@ -290,8 +415,15 @@ def build(ctx: ReportContext) -> Chapter:
         )
     ch.tables.append(
         Table(
-            "Filter sweep of 4.7",
-            ["filter", "thesis %", "||T_pq|| dB (ours)", "1/||T_pq|| m/command", "% of |G(0)|"],
+            "Filter sweep of 4.7 (small-gain tolerance in the last two columns)",
+            [
+                "filter",
+                "thesis %",
+                "ours, thesis arithmetic %",
+                "||T_pq|| dB (ours)",
+                "1/||T_pq|| m/command",
+                "% of |G(0)|",
+            ],
             rows,
         )
     )
@@ -303,7 +435,8 @@ def build(ctx: ReportContext) -> Chapter:
             22.48,
             tol39["thesis_arithmetic_percent"],
             "%",
-            rtol=0.005,
+            # rounding the printed K to its 4 digits moves this by +-0.12 % (200 draws): 22.479-22.532
+            rtol=0.0025,
             note=f"The printed 39 Hz controller: ||T_pq|| = {tol39['tpq_db']:.3f} dB; "
             f"100/{tol39['tpq_db']:.3f} = 22.5 % is the thesis's number, but 1/||T_pq|| = "
             f"{tol39['tolerance']:.3f} m/command. 117.83 dB gives 1.28e-6, not 0.85 %.",
@@ -392,7 +525,7 @@ def build(ctx: ReportContext) -> Chapter:
         ax.semilogx(w, 20 * np.log10(np.abs(sys(1j * w))), label=name)
     ax.set(xlabel="rad/s", ylabel="dB")
     ax.legend()
-    ch.figures.append(ctx.save_figure(fig, "ch4_plant_bode", "Plant and K1 closed loop", "figures 4.1-4.2"))
+    ch.figures.append(ctx.save_figure(fig, "ch4_plant_bode", "Plant and K1 closed loop", _refs("ch4_plant_bode")))
 
     fig, ax = plt.subplots()
     for hz in (5.0, 39.0):
@@ -402,7 +535,7 @@ def build(ctx: ReportContext) -> Chapter:
     ax.set(xlabel="rad/s", ylabel="|K| dB")
     ax.legend()
     ch.figures.append(
-        ctx.save_figure(fig, "ch4_controllers", "Controllers: ours vs printed (10x)", "figures 4.10, 4.24")
+        ctx.save_figure(fig, "ch4_controllers", "Controllers: ours vs printed (10x)", _refs("ch4_controllers"))
     )
 
     fig, ax = plt.subplots()
@@ -413,7 +546,7 @@ def build(ctx: ReportContext) -> Chapter:
     ax.set(xlabel="Re", ylabel="Im")
     ax.legend()
     ch.figures.append(
-        ctx.save_figure(fig, "ch4_pole_zero", "5 Hz controller zeros on the plant poles", "figures 4.9, 4.11")
+        ctx.save_figure(fig, "ch4_pole_zero", "5 Hz controller zeros on the plant poles", _refs("ch4_pole_zero"))
     )
 
     fig, ax = plt.subplots()
@@ -421,7 +554,7 @@ def build(ctx: ReportContext) -> Chapter:
         ax.semilogx(w, 20 * np.log10(np.abs(sys(1j * w))), label=name)
     ax.set(xlabel="rad/s", ylabel="dB")
     ax.legend()
-    ch.figures.append(ctx.save_figure(fig, "ch4_loop_maps", "Closed-loop maps, 5 Hz design", "figures 4.12-4.14, 4.18"))
+    ch.figures.append(ctx.save_figure(fig, "ch4_loop_maps", "Closed-loop maps, 5 Hz design", _refs("ch4_loop_maps")))
 
     fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
     t = np.linspace(0, 1.0, 1000)
@@ -432,9 +565,7 @@ def build(ctx: ReportContext) -> Chapter:
     axs[0].set(title="T_yw step", xlabel="s")
     axs[1].set(title="T_uw step (x10, printed gain)", xlabel="s", yscale="symlog")
     axs[0].legend()
-    ch.figures.append(
-        ctx.save_figure(fig, "ch4_steps", "Step responses of the filter sweep", "figures 4.15-4.16, 4.19-4.22")
-    )
+    ch.figures.append(ctx.save_figure(fig, "ch4_steps", "Step responses of the filter sweep", _refs("ch4_steps")))
 
     fig, ax = plt.subplots()
     gains = np.concatenate([[0.0], np.logspace(-1, 5, 400)])
@@ -449,7 +580,7 @@ def build(ctx: ReportContext) -> Chapter:
     ax.set(xlabel="Re (rad/s)", ylabel="Im (rad/s)", xlim=(-40, 15), ylim=(-60, 60))
     ax.legend()
     ch.figures.append(
-        ctx.save_figure(fig, "ch4_root_locus", "Root loci of k G and k G_cl, k from 0 to 1e5", "figures 4.3-4.4")
+        ctx.save_figure(fig, "ch4_root_locus", "Root loci of k G and k G_cl, k from 0 to 1e5", _refs("ch4_root_locus"))
     )
 
     fig, ax = plt.subplots()
@@ -461,7 +592,7 @@ def build(ctx: ReportContext) -> Chapter:
     ax.legend()
     ch.figures.append(
         ctx.save_figure(
-            fig, "ch4_tpq", "T_pq (= -K S) of the filter sweep, with the printed 10x gain", "figures 4.18, 4.24"
+            fig, "ch4_tpq", "T_pq (= -K S) of the filter sweep, with the printed 10x gain", _refs("ch4_tpq")
         )
     )
 
@@ -473,4 +604,72 @@ def build(ctx: ReportContext) -> Chapter:
     axs[0].set(title="beam rotation, deg", xlabel="s")
     axs[1].set(title="servo command", xlabel="s")
     ch.figures.append(ctx.save_figure(fig, "ch4_mixsyn_step", "Mixed-sensitivity design: 0-30 deg step", ""))
+
+    # ---- 4.5: singular values of the error weight
+    fig, ax = plt.subplots()
+    for hz in (0.5, 5.0, 39.0, 50.0):
+        Fh = filter_weight(hz)
+        ax.semilogx(w, 20 * np.log10(np.abs(Fh(1j * w))), "-" if hz == 5.0 else ":", label=f"F, {hz:g} Hz")
+    ax.axhline(peak_printed, color="k", lw=0.8, ls="--", label=f"printed peak {peak_printed} dB")
+    ax.plot([w_read], [peak_printed], "ko", mfc="none", label=f"|F(j {w_read:.2f})| = printed peak")
+    ax.set(xlabel="rad/s", ylabel="|F| dB", ylim=(-90, 10))
+    ax.legend(fontsize=8)
+    ch.figures.append(
+        ctx.save_figure(fig, "ch4_filter_sv", "Error weights F(s) = 1/(s + 2 pi f_c)", _refs("ch4_filter_sv"))
+    )
+
+    # ---- 4.9 and 4.23: root loci of the controllers
+    for hz, key in ((5.0, "5hz"), (39.0, "39hz")):
+        K = fits[hz]["design"].controller
+        fig = _controller_root_locus(plt, G, K, printed_controller(key), hz)
+        name = f"ch4_root_locus_k{hz:g}"
+        ch.figures.append(
+            ctx.save_figure(
+                fig,
+                name,
+                f"Root loci of the {hz:g} Hz controller alone (1 + k K, the thesis's plot) and of the loop "
+                "1 + k G K, with the closed-loop poles at our gain (k = 1) and the printed one (10x)",
+                _refs(name),
+            )
+        )
     return ch
+
+
+def _controller_root_locus(plt, G, K, K_printed, hz: float):
+    """Two root loci (python-control's ``root_locus_map``): ``1 + k K`` and ``1 + k G K``; closed-loop poles marked."""
+    from flexdigit.control.analysis import loop_maps
+
+    Kt = ct.tf(K)
+    fig, axs = plt.subplots(1, 2, figsize=(10, 4.2))
+    pk = np.linalg.eigvals(K.A)
+    # frame the controller's own poles; a filter pole far beyond them (245 rad/s at 39 Hz) is left off the frame
+    near = np.abs(pk)[np.abs(pk) <= 5 * np.median(np.abs(pk))]
+    span = 1.6 * float(np.max(near))
+    for ax, sys, title in (
+        (axs[0], Kt, f"1 + k K, {hz:g} Hz controller"),
+        (axs[1], ct.tf(G) * Kt, f"1 + k G K, {hz:g} Hz loop"),
+    ):
+        # k over eight decades either side of the gain at which |k sys| = 1 at the fastest controller pole,
+        # densely enough that the loci are continuous, and through k = 1 and 10 (ours and the printed gain)
+        k0 = 1.0 / abs(complex(sys(1j * span)))
+        gains = np.union1d(np.concatenate([[0.0], k0 * np.logspace(-8, 8, 4000)]), [1.0, 10.0])
+        rl = ct.root_locus_map(sys, gains=gains)
+        ax.plot(rl.loci.real, rl.loci.imag, "-", lw=0.9, color="tab:blue")
+        ax.plot(rl.poles.real, rl.poles.imag, "x", color="k", ms=7)
+        ax.plot(rl.zeros.real, rl.zeros.imag, "o", mfc="none", color="k", ms=7)
+        ax.axvline(0.0, color="0.6", lw=0.6)
+        ax.set(title=title, xlabel="Re (rad/s)", ylabel="Im (rad/s)", xlim=(-span, 0.3 * span), ylim=(-span, span))
+    if near.size < pk.size:
+        far = pk[np.abs(pk) > 5 * np.median(np.abs(pk))]
+        axs[0].annotate(
+            "also a pole at " + ", ".join(f"{p.real:.0f}" for p in far) + " rad/s (off the frame)",
+            (0.02, 0.02),
+            xycoords="axes fraction",
+            fontsize=8,
+        )
+    ours = loop_maps(G, K).poles
+    printed = loop_maps(G, K_printed).poles
+    axs[1].plot(ours.real, ours.imag, "s", mfc="none", color="tab:green", label="closed loop, k = 1 (ours)")
+    axs[1].plot(printed.real, printed.imag, "^", color="tab:red", label="closed loop, printed K (10x)")
+    axs[1].legend(fontsize=8, loc="lower left")
+    return fig
