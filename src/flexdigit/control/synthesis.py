@@ -24,7 +24,7 @@ import control as ct
 import numpy as np
 import scipy.linalg
 
-from flexdigit._validation import check_real
+from flexdigit._validation import check_int, check_real
 from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.generalized import as_statespace, regularise
 from flexdigit.errors import DesignError
@@ -325,8 +325,7 @@ def hinf_lmi(
     """
     P = as_statespace(P, "P", siso=False)
     nw, nz = _partition(P, nmeas, ncon)
-    if not isinstance(iterations, int) or iterations < 1:
-        raise DesignError(f"The 'iterations' parameter of hinf_lmi must be a positive integer. Got {iterations!r}.")
+    iterations = check_int(iterations, "iterations", "hinf_lmi", low=1, error=DesignError)
     centre_margin = check_real(
         centre_margin, "centre_margin", "hinf_lmi", low=0.0, low_open=True, high=0.5, error=DesignError
     )
