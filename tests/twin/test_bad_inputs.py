@@ -11,10 +11,10 @@ import re
 import numpy as np
 import pytest
 
+from flexdigit._validation import describe_values
 from flexdigit.cli import main
 from flexdigit.errors import ParameterError
 from flexdigit.twin import experiments as ex
-from flexdigit.twin._checks import describe_values
 from flexdigit.twin.digit import Chain
 from flexdigit.twin.twin import static_gauges_v
 

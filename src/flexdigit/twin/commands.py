@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import argparse
 
+from flexdigit._validation import check_values
 from flexdigit.cli import CommandResult, add_command
 from flexdigit.errors import ParameterError
-from flexdigit.twin._checks import check_values
 
 
 def _floats(text: str, name: str) -> list[float]:

@@ -44,9 +44,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg.lapack import dgesv as _gesv
 
-from flexdigit._validation import check_array, check_int, check_positive, check_real
+from flexdigit._validation import check_array, check_int, check_positive, check_real, check_values
 from flexdigit.errors import ParameterError
-from flexdigit.twin._checks import check_values
 
 G_STANDARD_M_S2 = 9.80665
 

@@ -30,10 +30,9 @@ import pyarrow as pa
 
 from flexdigit import __version__
 from flexdigit._json import to_jsonable
-from flexdigit._validation import check_int, check_positive, check_real
+from flexdigit._validation import check_int, check_positive, check_real, check_values
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
-from flexdigit.twin._checks import check_values
 from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.twin import Twin, static_gauges_v
 

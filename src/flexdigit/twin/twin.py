@@ -25,11 +25,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from flexdigit._validation import check_choice, check_int, check_real
+from flexdigit._validation import check_choice, check_int, check_real, check_values
 from flexdigit.errors import ParameterError
 from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
-from flexdigit.twin._checks import check_values
 from flexdigit.twin.actuator import Servo
 from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
