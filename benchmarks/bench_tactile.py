@@ -20,9 +20,9 @@ import numpy as np
 
 
 def run() -> list[dict]:
-    from flexdigit.tactile.experiments import collect_on_twin
     from flexdigit.tactile.pipeline import ThesisNetwork, features, run_pipeline, targets
     from flexdigit.tactile.protocols import load_protocol
+    from flexdigit.tactile.thesis_experiments import collect_on_twin
 
     rows = []
     tmp = Path(tempfile.mkdtemp())

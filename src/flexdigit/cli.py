@@ -2,8 +2,9 @@
 
 Each domain registers its own sub-commands from ``flexdigit/<domain>/commands.py`` through a function
 ``register(subparsers)``; this module only lists those modules, runs the chosen command and prints its
-:class:`CommandResult`. Bad input never ends in a traceback: flexdigit's errors (and ``ValueError``/``OSError``)
-become one line on stderr naming the culprit, with exit code 2 (``--debug`` shows the traceback).
+:class:`~flexdigit._command.CommandResult`. Bad input never ends in a traceback: flexdigit's errors (and
+``ValueError``/``OSError``) become one line on stderr naming the culprit, with exit code 2 (``--debug`` shows the
+traceback).
 """
 
 from __future__ import annotations
@@ -13,8 +14,6 @@ import importlib
 import json
 import os
 import sys
-from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from flexdigit import __version__
@@ -31,30 +30,6 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.tactile.commands",
     "flexdigit.report.commands",
 )
-
-
-@dataclass
-class CommandResult:
-    """What a sub-command returns: JSON-able ``data`` for ``--json`` and ``text`` for people."""
-
-    data: object
-    text: str = ""
-    exit_code: int = 0
-    extra: dict = field(default_factory=dict)
-
-
-def add_command(
-    subparsers: argparse._SubParsersAction,
-    name: str,
-    func: Callable[[argparse.Namespace], CommandResult],
-    help: str,
-    description: str | None = None,
-) -> argparse.ArgumentParser:
-    """Add a sub-command with the common ``--json`` flag; ``func(args)`` returns a :class:`CommandResult`."""
-    parser = subparsers.add_parser(name, help=help, description=description or help)
-    parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
-    parser.set_defaults(func=func, command_name=name)
-    return parser
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -30,3 +30,7 @@ class UnstableError(FlexdigitError, ArithmeticError):
 
 class RigError(FlexdigitError, OSError):
     """The rig (hardware or twin backend) failed: port vanished, board silent, sensor fault."""
+
+
+class OutputExistsError(FlexdigitError, FileExistsError):
+    """An output file exists and would be overwritten; the message names it and says ``--force``."""

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from flexdigit.errors import DataFileError
-from flexdigit.identify.experiment import identify
 from flexdigit.identify.fit import SecondOrderFit, fit_arx, fit_linear, second_order_response
+from flexdigit.identify.identification import identify
 from flexdigit.identify.timeseries import TimeSeries
 from flexdigit.reference import thesis_value
 

@@ -5,10 +5,10 @@ import json
 import pytest
 
 from flexdigit.cli import main
-from flexdigit.identify.experiment import identify
+from flexdigit.identify.identification import identify
 from flexdigit.identify.timeseries import read_timeseries, series_from_table
 from flexdigit.reference import thesis_value
-from flexdigit.twin.experiments import release_test, servo_step_test
+from flexdigit.twin.records import release_test, servo_step_test
 
 # the thesis's models: E(s) of 3.1.2 (table 3.2 averages) and MT(s) of 3.2.4
 DIGIT_WN, DIGIT_ZETA = (

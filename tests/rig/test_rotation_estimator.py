@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.rig.experiments import RotationEstimator
+from flexdigit.rig.rotation import RotationEstimator
 
 SENS_V_PER_DEG = np.array([5.1e-3, 7.1e-3, 5.2e-3])
 OFFSET_V = np.array([-0.12, 0.60, 0.035])

@@ -16,9 +16,10 @@ import pytest
 
 from flexdigit.control.design20ms import design_20ms
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.experiments import calibrate_rotation, step_test
 from flexdigit.rig.loop import read_log
+from flexdigit.rig.rotation import calibrate_rotation
 from flexdigit.rig.sim_backend import SimRig
+from flexdigit.rig.step_test import step_test
 
 pytestmark = pytest.mark.slow
 

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from flexdigit.tactile.experiments import collect_on_twin, static_dataset
-from flexdigit.tactile.physics import ZONES, TwinGaugeModel, cramer_rao
+from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao
 from flexdigit.tactile.pipeline import features, run_pipeline, targets
 from flexdigit.tactile.protocols import Protocol, load_protocol
+from flexdigit.tactile.thesis_experiments import collect_on_twin, static_dataset
 
 TINY = Protocol(
     "tiny", loads_kg=(0.025,), positions_from_tip_m=(0.0, 0.10), repetitions=3, no_load_repetitions=2, settle_s=0.5
@@ -49,7 +49,7 @@ def test_actuated_corr2_on_held_out_seeds_is_near_the_printed_figure():
     # chapter 7's figure: corr2 0.8998 at 24 nodes, gradient 1e-7 (7.5); the issue's tolerance is +-0.03. The
     # cable-guide friction was fitted on seeds 0-7 (experiments.FRICTION_FIT_SEEDS); seeds 8-15 are new draws of
     # the whole experiment (readings, split, initial weights), so this checks the fit, not one lucky seed.
-    from flexdigit.tactile.experiments import FRICTION_FIT_SEEDS, actuated_corr2_score
+    from flexdigit.tactile.thesis_experiments import FRICTION_FIT_SEEDS, actuated_corr2_score
     from flexdigit.twin.calibration import default_calibration
 
     held_out = range(8, 16)

@@ -14,7 +14,7 @@ import pytest
 from flexdigit._validation import describe_values
 from flexdigit.cli import main
 from flexdigit.errors import ParameterError
-from flexdigit.twin import experiments as ex
+from flexdigit.twin import records as ex
 from flexdigit.twin.digit import Chain
 from flexdigit.twin.twin import static_gauges_v
 

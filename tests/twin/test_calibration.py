@@ -11,7 +11,7 @@ import pytest
 
 from flexdigit.errors import DataFileError
 from flexdigit.reference import thesis_value
-from flexdigit.twin import experiments as ex
+from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import (
     Calibration,
     CalibrationTargets,
@@ -88,7 +88,7 @@ def test_deflections_match_table_3_6_where_the_thesis_model_agrees():
 @pytest.mark.slow
 def test_recalibrating_reproduces_the_packaged_default():
     # the friction level's only evidence is the thesis's actuated corr2, scored by the tactile pipeline (~15 s)
-    from flexdigit.tactile.experiments import actuated_corr2_score
+    from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 
     result = calibrate(CalibrationTargets.from_thesis(), friction_score=actuated_corr2_score)
     default = default_calibration()

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit.cli import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command
 from flexdigit.errors import DesignError
 
 

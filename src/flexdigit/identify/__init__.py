@@ -7,8 +7,8 @@
 - :mod:`~flexdigit.identify.fit`: least-squares second-order fit with confidence intervals (``SecondOrderFit``),
   ARX (``fit_arx``), straight lines of 3.4 (``fit_linear``);
 - :mod:`~flexdigit.identify.filters`: the SVD and FFT filters of 3.2.4 and zero-phase Butterworth;
-- :mod:`~flexdigit.identify.validation`: MATLAB's ``corr2`` and the NRMSE fit;
-- :mod:`~flexdigit.identify.experiment`: ``identify(series, "release" | "step", method="thesis" | "lsq" | "arx")``.
+- :mod:`~flexdigit.identify.scores`: MATLAB's ``corr2`` and the NRMSE fit;
+- :mod:`~flexdigit.identify.identification`: ``identify(series, "release" | "step", method="thesis" | "lsq" | "arx")``.
 
 The submodules are imported on demand (``flexdigit --help`` stays fast).
 """

@@ -6,7 +6,7 @@ import argparse
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from flexdigit.cli import add_command
+    from flexdigit._command import add_command
 
     parser = add_command(
         subparsers,
@@ -55,8 +55,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _identify(args: argparse.Namespace):
-    from flexdigit.cli import CommandResult
-    from flexdigit.identify.experiment import identify
+    from flexdigit._command import CommandResult
+    from flexdigit.identify.identification import identify
     from flexdigit.identify.timeseries import read_timeseries
 
     series = read_timeseries(args.file, args.channel, time_unit=args.time_unit)

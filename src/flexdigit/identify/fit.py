@@ -35,7 +35,7 @@ from scipy import optimize, stats
 from flexdigit._validation import check_array, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.identify.response import analyze_response, final_value_estimate, free_response
-from flexdigit.identify.validation import corr2, nrmse_fit
+from flexdigit.identify.scores import corr2, nrmse_fit
 
 
 @dataclass(frozen=True)

@@ -78,7 +78,7 @@ class NoOscillationError(DataFileError):
 
     The thesis method cannot read a damping ratio from such a record, and a release test of the digit should be an
     oscillating decay. A subclass of :class:`~flexdigit.errors.DataFileError` (so ``except DataFileError`` still
-    catches it) that keeps what was found, so :func:`flexdigit.identify.experiment.identify` can say what to do.
+    catches it) that keeps what was found, so :func:`flexdigit.identify.identification.identify` can say what to do.
 
     Attributes
     ----------

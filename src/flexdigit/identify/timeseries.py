@@ -8,7 +8,7 @@ first channel that is not an input (``command``, ``u``) is used. Strain-gauge ch
 name, ``sgN`` (a DAQ recording, the thesis) or ``gaugeN`` (the twin's files), when the file has only one of
 them. An input column, when present, is kept with the series (the servo command of a step test).
 :func:`series_from_table` does the same for a table in memory, such as the twin's experiments
-(:mod:`flexdigit.twin.experiments`).
+(:mod:`flexdigit.twin.records`).
 
 Every problem with a file raises :class:`~flexdigit.errors.DataFileError` naming the file, the column and the
 line (CSV, counting the header as line 1) or row (Parquet) and what was expected: a missing column, a cell that
@@ -187,7 +187,7 @@ def series_from_table(table, channel: str | None = None, *, source: str = "table
     Parameters
     ----------
     table : pyarrow.Table, mapping of column name to array, or an object with a ``table`` attribute
-        E.g. the :class:`~flexdigit.twin.experiments.ExperimentResult` of ``release_test`` or ``servo_step_test``
+        E.g. the :class:`~flexdigit.twin.records.TwinRecord` of ``release_test`` or ``servo_step_test``
         (its metadata, when present, names the experiment in messages).
     channel, time_unit
         As for :func:`read_timeseries`.

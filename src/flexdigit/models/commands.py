@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit.cli import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

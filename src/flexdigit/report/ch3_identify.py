@@ -4,7 +4,7 @@ Beside 3.1.2 (release tests, tables 3.1 and 3.2, E(s), figure 3.6), 3.2.4 (servo
 filters, MT(s), figures 3.11 and 3.12) and 3.4 (the linear fits behind K1 and K3). The closed-form checks of
 the printed tables are in the models chapter; this one runs the identification on records: synthetic second-order
 ones with known parameters (to measure each method's error) and the twin's simulated release and step tests
-(:mod:`flexdigit.twin.experiments`, default calibration), from which E(s) and MT(s) are identified as the thesis
+(:mod:`flexdigit.twin.records`, default calibration), from which E(s) and MT(s) are identified as the thesis
 identified them from the rig.
 """
 
@@ -14,9 +14,9 @@ import math
 
 import numpy as np
 
-from flexdigit.identify.experiment import average_runs, identify
 from flexdigit.identify.filters import fft_filter, noise_reduction, svd_filter
 from flexdigit.identify.fit import fit_linear, second_order_response
+from flexdigit.identify.identification import average_runs, identify
 from flexdigit.identify.response import settling_formula_bias
 from flexdigit.identify.timeseries import TimeSeries, series_from_table
 from flexdigit.reference import thesis_value
@@ -313,7 +313,7 @@ def _experiments(ctx: ReportContext):
 
     Returns the release record (gauge 1 and tip deflection), the step records and a phrase naming their origin.
     """
-    from flexdigit.twin.experiments import release_test, servo_step_test
+    from flexdigit.twin.records import release_test, servo_step_test
 
     duration, rate = (5.0, 500.0) if ctx.fast else (8.0, 1000.0)
     rel = release_test(duration_s=duration, sample_rate_hz=rate, seed=ctx.seed, params=ctx.params)
@@ -631,7 +631,7 @@ def _linear_fits(chapter: Chapter, e: list[Entry]) -> None:
 
 def _voltage_fits(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
     """E 3.20-3.22 from the twin's actuation sweep (commands 8..43, each settled): gauge volts vs command."""
-    from flexdigit.twin.experiments import actuation_sweep
+    from flexdigit.twin.records import actuation_sweep
 
     sweep = actuation_sweep(samples=5 if ctx.fast else 20, seed=ctx.seed, params=ctx.params)
     commands = sweep.column("command").astype(float)

@@ -19,7 +19,7 @@ from flexdigit.report.results import compare, new
 
 def build(ctx: ReportContext) -> Chapter:
     """Build the twin chapter."""
-    from flexdigit.twin import experiments as ex
+    from flexdigit.twin import records as ex
     from flexdigit.twin.calibration import CalibrationTargets, default_calibration, default_fit_record, fit_damped_sine
     from flexdigit.twin.twin import Twin
 
@@ -376,7 +376,7 @@ def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int):
     import matplotlib.pyplot as plt
     import scipy.signal
 
-    from flexdigit.twin import experiments as ex
+    from flexdigit.twin import records as ex
     from flexdigit.twin.twin import Twin
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))

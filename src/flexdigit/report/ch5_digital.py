@@ -240,7 +240,8 @@ def _fig_zplane(ctx, plt, K):
 
 def _twenty_ms(ctx: ReportContext, chapter: Chapter, plt) -> None:
     from flexdigit.rig.base import open_rig
-    from flexdigit.rig.experiments import calibrate_rotation, step_test
+    from flexdigit.rig.rotation import calibrate_rotation
+    from flexdigit.rig.step_test import step_test
 
     d = design_20ms(ctx.params)
     chapter.paragraphs.append(

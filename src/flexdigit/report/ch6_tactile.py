@@ -33,7 +33,7 @@ def build_tactile(ctx: ReportContext, key: str) -> Chapter:
     """Chapter 6 (``non_actuated``) or 7 (``actuated``)."""
     import matplotlib.pyplot as plt
 
-    from flexdigit.tactile.experiments import run_experiment
+    from flexdigit.tactile.thesis_experiments import run_experiment
 
     slug, title, chap = TITLES[key]
     refs = FIGURE_REFS[key]
@@ -251,7 +251,7 @@ def build_tactile(ctx: ReportContext, key: str) -> Chapter:
             "mm",
             "Bayes limit: the RMS position error of the best possible estimator that knows the protocol's settings "
             "(positions, loads, commands, their frequencies) and the twin's noise, on the identifiable test "
-            "readings (Monte Carlo, tactile.physics.protocol_limits). Unlike the Cramer-Rao bound, learned "
+            "readings (Monte Carlo, tactile.bounds.protocol_limits). Unlike the Cramer-Rao bound, learned "
             f"estimators cannot beat it. Best estimator / limit = {rm[best] / floor_pos:.2f}; the thesis network / "
             f"limit = {thesis_mlp / floor_pos:.2f}.",
         ),
@@ -389,9 +389,9 @@ def load_protocolsamples(key: str) -> int:
 
 def _noise_study(ctx: ReportContext, key: str, hidden: int, tol: float, chapter: Chapter) -> str:
     """corr2 at the thesis optimum against the twin's white-noise level; returns the discrepancy explanation."""
-    from flexdigit.tactile.experiments import EXPERIMENTS, static_dataset
     from flexdigit.tactile.pipeline import features, run_pipeline, targets
     from flexdigit.tactile.protocols import load_protocol
+    from flexdigit.tactile.thesis_experiments import EXPERIMENTS, static_dataset
     from flexdigit.twin.calibration import default_calibration
 
     base = default_calibration()
@@ -434,7 +434,7 @@ def _noise_study(ctx: ReportContext, key: str, hidden: int, tol: float, chapter:
 def _friction_study(ctx: ReportContext, hidden: int, tol: float, chapter: Chapter) -> str:
     """Chapter 7's noise revisited: corr2 against the cable-guide friction (per reading, per hang) and against
     servo deadband jitter alone; the calibrated level and its physical meaning. Returns the explanation."""
-    from flexdigit.tactile.experiments import pipeline_corr2_static
+    from flexdigit.tactile.thesis_experiments import pipeline_corr2_static
     from flexdigit.twin.calibration import default_calibration
 
     cal = default_calibration()
@@ -497,7 +497,7 @@ def _friction_study(ctx: ReportContext, hidden: int, tol: float, chapter: Chapte
         )
     )
     if not ctx.fast:
-        from flexdigit.tactile.experiments import FRICTION_FIT_SEEDS, actuated_corr2_score
+        from flexdigit.tactile.thesis_experiments import FRICTION_FIT_SEEDS, actuated_corr2_score
 
         mean, sd = actuated_corr2_score(cal, params=ctx.params, spread=True)
         e.append(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from flexdigit.cli import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -18,7 +18,7 @@ import math
 import sys
 from pathlib import Path
 
-from flexdigit.cli import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command
 
 
 def register(subparsers) -> None:
@@ -46,8 +46,9 @@ def register(subparsers) -> None:
 def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit._validation import check_positive, check_real
     from flexdigit.rig.base import open_rig
-    from flexdigit.rig.experiments import CONTROLLERS, RotationEstimator, calibrate_rotation, make_controller
+    from flexdigit.rig.controllers import CONTROLLERS, make_controller
     from flexdigit.rig.loop import realtime_priority, run_loop
+    from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation
 
     if args.controller not in CONTROLLERS:
         from flexdigit.errors import ParameterError

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit.cli import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -45,9 +45,9 @@ def _collect(args: argparse.Namespace) -> CommandResult:
     from pathlib import Path
 
     from flexdigit.rig.base import open_rig, parse_rig_url
-    from flexdigit.tactile.experiments import sim_options
     from flexdigit.tactile.protocols import load_protocol
     from flexdigit.tactile.runner import collect, journal_path
+    from flexdigit.tactile.thesis_experiments import sim_options
 
     protocol = load_protocol(args.protocol)
     out = Path(args.out)

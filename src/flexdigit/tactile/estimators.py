@@ -4,7 +4,7 @@ Both follow scikit-learn's contract. Inputs ``X`` are the gauge voltages (n, 3),
 command as a 4th column (actuated experiments); targets ``Y`` are ``(position_from_tip_m, load_kg)`` (n, 2) of
 loaded readings.
 
-* :class:`BeamInversion`: least squares on a static gauge model (the twin's, :mod:`flexdigit.tactile.physics`):
+* :class:`BeamInversion`: least squares on a static gauge model (the twin's, :mod:`flexdigit.tactile.bounds`):
   ``(a, m) = argmin sum_i ((v_i - g_i(a, m, c)) / sigma_i)^2`` on a dense (position, mass) grid with
   parabolic refinement; ``fit`` only calibrates a per-gauge gain and offset of the model on the training
   readings (6 numbers; a real rig's gains differ from the model's). This is the maximum-likelihood estimate
@@ -67,7 +67,7 @@ class BeamInversion:
     calibrate : bool
         Fit a per-gauge gain and offset of the model to the training readings.
     tared : bool
-        The readings have had their no-load level subtracted (:func:`flexdigit.tactile.study.tare`): model
+        The readings have had their no-load level subtracted (:func:`flexdigit.tactile.studies.tare`): model
         ``g(a, m, c) - g(., 0, c)`` instead of ``g(a, m, c)``.
     load_set : bool
         Restrict the mass to the loads seen in training (a protocol hangs a few known weights: the same prior

@@ -2,7 +2,7 @@
 
 - :class:`Twin`: the stepping API (command, advance, read, place_load) the ``sim`` rig backend drives;
 - :func:`static_gauges_v`: steady gauge voltages for many load cases at once (tactile studies);
-- :mod:`~flexdigit.twin.experiments`: the thesis's experiments as tidy tables;
+- :mod:`~flexdigit.twin.records`: the thesis's experiments simulated, as tidy tables (``TwinRecord``);
 - :mod:`~flexdigit.twin.calibration`: the fitted parameters and :func:`calibrate`.
 """
 

@@ -479,7 +479,7 @@ def calibrate(
         Print the residual table.
     friction_score : callable, optional
         ``friction_score(calibration) -> corr2``: the thesis pipeline's actuated test corr2 on a twin with that
-        calibration (e.g. :func:`flexdigit.tactile.experiments.actuated_corr2_score`, its mean over 8 seeded
+        calibration (e.g. :func:`flexdigit.tactile.thesis_experiments.actuated_corr2_score`, its mean over 8 seeded
         repetitions of the experiment: one repetition scatters by about 0.02); needed only for
         ``targets.actuated_test_corr2``.
 
@@ -714,7 +714,7 @@ def friction_ratio_from_repeatability(
 def main() -> int:
     """Refit the default calibration to the thesis and write ``default_calibration.toml`` beside this module."""
     # the one upward import, here only: the thesis's sole evidence of the actuated noise is its network's corr2
-    from flexdigit.tactile.experiments import actuated_corr2_score
+    from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 
     result = calibrate(CalibrationTargets.from_thesis(), verbose=True, friction_score=actuated_corr2_score)
     fit = {

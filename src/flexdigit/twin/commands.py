@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import argparse
 
+from flexdigit._command import CommandResult, add_command
 from flexdigit._validation import check_values
-from flexdigit.cli import CommandResult, add_command
 from flexdigit.errors import ParameterError
 
 
@@ -94,7 +94,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
     import numpy as np
 
     from flexdigit.params import RigParams, load_params
-    from flexdigit.twin import experiments as ex
+    from flexdigit.twin import records as ex
     from flexdigit.twin.calibration import default_calibration, fit_damped_sine, load_calibration
 
     params = load_params(args.params) if args.params else RigParams()

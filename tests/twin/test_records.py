@@ -7,7 +7,7 @@ import pytest
 
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.twin import experiments as ex
+from flexdigit.twin import records as ex
 
 
 def test_static_load_test_follows_the_thesis_protocol():
@@ -33,7 +33,7 @@ def test_experiments_are_deterministic_per_seed():
 def test_save_and_load_keep_table_and_metadata(tmp_path, suffix):
     res = ex.static_load_test([0.025], [0.0, 0.1], commands=[0, 20], repetitions=3, seed=2)
     path = res.save(tmp_path / f"run{suffix}")
-    back = ex.ExperimentResult.load(path)
+    back = ex.TwinRecord.load(path)
     assert back.metadata["experiment"] == "static_load_test"
     assert back.metadata["arguments"]["commands"] == [0, 20]
     assert back.metadata["params"]["geometry"]["digit_length_m"] == 0.27
@@ -47,10 +47,10 @@ def test_loading_a_foreign_file_says_what_is_wrong(tmp_path):
 
     pq.write_table(pa.table({"x": [1, 2]}), tmp_path / "other.parquet")
     with pytest.raises(DataFileError, match="other.parquet.*metadata"):
-        ex.ExperimentResult.load(tmp_path / "other.parquet")
+        ex.TwinRecord.load(tmp_path / "other.parquet")
     (tmp_path / "junk.parquet").write_text("not parquet")
     with pytest.raises(DataFileError, match="junk.parquet"):
-        ex.ExperimentResult.load(tmp_path / "junk.parquet")
+        ex.TwinRecord.load(tmp_path / "junk.parquet")
 
 
 @pytest.mark.parametrize(
@@ -75,7 +75,7 @@ def test_cli_simulate_writes_a_file_and_reports_json(tmp_path, capsys):
     assert main(["simulate", "step", "--out", str(out), "--duration", "0.5", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["experiment"] == "servo_step_test" and data["rows"] == 501
-    assert ex.ExperimentResult.load(out).table.num_rows == 501
+    assert ex.TwinRecord.load(out).table.num_rows == 501
     # the potentiometer settles on the params line for command 51 (3.2.4)
     assert data["findings"]["pot_end_v"] == pytest.approx(0.46688 + 51 * (2.4755 - 0.46688) / 254, abs=0.02)
 

@@ -4,7 +4,7 @@
 dataset, readings tared on each test's no-load readings): an MLP of the thesis's architecture trained on the
 position in metres, the beam-model inversion (mass free, or from the protocol's load set) and the Gaussian
 process (:mod:`flexdigit.tactile.estimators`). Each test reading also gets the Cramer-Rao bound of its position
-and its identifiability zone (:mod:`flexdigit.tactile.physics`), so the errors are compared with what the gauges
+and its identifiability zone (:mod:`flexdigit.tactile.bounds`), so the errors are compared with what the gauges
 physically allow, only where the load can be located at all.
 
 Note on the bound: it is the floor for an *unbiased* estimate of a continuous position and mass from one reading.
@@ -18,10 +18,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit.tactile.bounds import ZONES, cramer_rao, protocol_limits
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.metrics import accuracy, rmse
-from flexdigit.tactile.physics import ZONES, cramer_rao, protocol_limits
 from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
 
 ESTIMATORS = ("MLP (thesis architecture)", "beam inversion", "beam inversion, known load set", "Gaussian process")
@@ -120,7 +120,7 @@ def localisation_study(
     dataset : Dataset
         Readings of one protocol (with no-load readings for the contact scores).
     model : gauge model
-        The static gauge model and noise (the twin's, :class:`~flexdigit.tactile.physics.TwinGaugeModel`).
+        The static gauge model and noise (the twin's, :class:`~flexdigit.tactile.bounds.TwinGaugeModel`).
     seed : int
         Seeds the split (same as the thesis pipeline's for the same seed) and every estimator.
     hidden, tol, epochs : thesis MLP settings.
@@ -241,7 +241,7 @@ def localisation_study(
 
 
 def bayes_limits(model, dataset: Dataset, rows=None, *, samples: int = 4000, seed: int = 0):
-    """:func:`~flexdigit.tactile.physics.protocol_limits` on the distinct settings of ``dataset`` (or of its
+    """:func:`~flexdigit.tactile.bounds.protocol_limits` on the distinct settings of ``dataset`` (or of its
     ``rows``), weighted by how often each occurs in the whole dataset: what the best estimator that knows the
     protocol, and that the reading is one of those settings, could score on them.
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from flexdigit.identify.validation import corr2, nrmse_fit
+from flexdigit.identify.scores import corr2, nrmse_fit
 
 
 def test_corr2_matches_matlab_definition_on_hand_computed_2d_example():

@@ -15,9 +15,9 @@ import numpy as np
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
+from flexdigit.tactile.bounds import TwinGaugeModel
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.metrics import rmse
-from flexdigit.tactile.physics import TwinGaugeModel
 from flexdigit.tactile.pipeline import (
     COARSE_HIDDEN,
     LEARNING_GRADIENTS,
@@ -29,7 +29,7 @@ from flexdigit.tactile.pipeline import (
 )
 from flexdigit.tactile.protocols import Protocol, load_protocol
 from flexdigit.tactile.runner import collect
-from flexdigit.tactile.study import LocalisationResult, identifiability_map, localisation_study
+from flexdigit.tactile.studies import LocalisationResult, identifiability_map, localisation_study
 
 #: Twin step for tactile runs (s): the twin's own default. The sim backend defaults to 2 ms for the control
 #: loop's sake; load experiments only need the settled state, which is the same to 0.1 mV (checked in tests).
@@ -209,7 +209,7 @@ EXPERIMENTS = {
 
 
 @dataclass
-class ExperimentResult:
+class TactileExperimentResult:
     """Everything chapters 6 and 7 show for one experiment."""
 
     key: str
@@ -232,7 +232,7 @@ def run_experiment(
     fast: bool = False,
     params: RigParams | None = None,
     calibration=None,
-) -> ExperimentResult:
+) -> TactileExperimentResult:
     """Collect the experiment on the twin and run everything chapters 6 (``non_actuated``) or 7 (``actuated``) show.
 
     ``fast`` shrinks the sweeps (3 coarse sizes, +-1 fine, 3 gradients, 10 epochs) for tests; the report's
@@ -289,7 +289,7 @@ def run_experiment(
     thesis_mlp = _thesis_mlp_in_metres(dataset, rows, at_optimum, protocol, loc)
     commands = list(protocol.actuation_commands) or [-1]
     ident = identifiability_map(model, list(protocol.loads_kg), commands, params.geometry.digit_length_m, 136)
-    return ExperimentResult(
+    return TactileExperimentResult(
         key, dataset, rows, sweep, at_optimum, strategies, loc, thesis_mlp, ident, {"with_no_load": with_no_load}
     )
 

@@ -1,11 +1,11 @@
-"""Simulated experiments on the twin, as the thesis ran them on the rig, each returning a tidy table.
+"""Records of simulated experiments on the twin, as the thesis ran them on the rig, each a tidy table.
 
 - :func:`release_test`: the digit (cable removed) deflected and released, gauges sampled (3.1.2, figure 3.6);
 - :func:`servo_step_test`: a command step, potentiometer and gauges sampled (3.2.4, figure 3.11);
 - :func:`actuation_sweep`: commands 8..43, each settled then sampled (3.4.3, figure 3.17, E 3.20-3.22);
 - :func:`static_load_test`: weights hung at positions, at actuation commands, repeated (6.4-6.5, 7.1-7.2).
 
-Every result is an :class:`ExperimentResult`: a ``pyarrow.Table`` whose column names carry their unit
+Every result is a :class:`TwinRecord`: a ``pyarrow.Table`` whose column names carry their unit
 (``time_s``, ``gauge1_v``) plus metadata (experiment, its arguments, the rig parameters, the calibration, the seed,
 the flexdigit version), saved as Parquet with the metadata in the schema, or exported as CSV with the metadata as
 ``#`` comment lines.
@@ -40,7 +40,7 @@ METADATA_KEY = b"flexdigit"
 
 
 @dataclass
-class ExperimentResult:
+class TwinRecord:
     """A simulated experiment: a tidy table (units in the column names) and what made it.
 
     Attributes
@@ -83,7 +83,7 @@ class ExperimentResult:
         return path
 
     @classmethod
-    def load(cls, path: str | Path) -> ExperimentResult:
+    def load(cls, path: str | Path) -> TwinRecord:
         """Read a result saved by :meth:`save` (Parquet or CSV)."""
         path = Path(path)
         if not path.exists():
@@ -117,7 +117,7 @@ class ExperimentResult:
             raise DataFileError(f"{path}: not a Parquet file ({exc})") from None
         raw = (table.schema.metadata or {}).get(METADATA_KEY)
         if raw is None:
-            raise DataFileError(f"{path}: no flexdigit metadata (not written by ExperimentResult.save)")
+            raise DataFileError(f"{path}: no flexdigit metadata (not written by TwinRecord.save)")
         return cls(table.replace_schema_metadata(None), json.loads(raw))
 
     def summary(self) -> str:
@@ -140,7 +140,7 @@ def _units(columns) -> dict[str, str]:
     return out
 
 
-def _result(name: str, columns: dict[str, np.ndarray], arguments: dict, seed, params, calibration) -> ExperimentResult:
+def _result(name: str, columns: dict[str, np.ndarray], arguments: dict, seed, params, calibration) -> TwinRecord:
     table = pa.table({k: pa.array(np.asarray(v)) for k, v in columns.items()})
     meta = {
         "experiment": name,
@@ -151,7 +151,7 @@ def _result(name: str, columns: dict[str, np.ndarray], arguments: dict, seed, pa
         "calibration": calibration.to_dict(),
         "flexdigit_version": __version__,
     }
-    return ExperimentResult(table, meta)
+    return TwinRecord(table, meta)
 
 
 def _sample(twin: Twin, times: np.ndarray, extra=None):
@@ -185,12 +185,12 @@ def release_test(
     params: RigParams | None = None,
     calibration: Calibration | None = None,
     orientation: str = "vertical",
-) -> ExperimentResult:
+) -> TwinRecord:
     """Deflect the digit (cable removed) by ``tip_deflection_m`` at the tip, release it, sample the gauges (3.1.2).
 
     Returns
     -------
-    ExperimentResult
+    TwinRecord
         Columns ``time_s, gauge1_v, gauge2_v, gauge3_v, tip_deflection_m``.
     """
     params = params or RigParams()
@@ -223,12 +223,12 @@ def servo_step_test(
     seed: int = 0,
     params: RigParams | None = None,
     calibration: Calibration | None = None,
-) -> ExperimentResult:
+) -> TwinRecord:
     """A servo command step (3.2.4: to 51), potentiometer and gauges sampled; cable detached by default.
 
     Returns
     -------
-    ExperimentResult
+    TwinRecord
         Columns ``time_s, command, pot_v, servo_angle_rad, gauge1_v, gauge2_v, gauge3_v``.
     """
     params = params or RigParams()
@@ -274,12 +274,12 @@ def actuation_sweep(
     params: RigParams | None = None,
     calibration: Calibration | None = None,
     orientation: str = "vertical",
-) -> ExperimentResult:
+) -> TwinRecord:
     """Step through ``commands`` (default 8..43), let each settle, then sample the gauges (3.4.3, E 3.20-3.22).
 
     Returns
     -------
-    ExperimentResult
+    TwinRecord
         Columns ``command, sample, time_s, gauge1_v, gauge2_v, gauge3_v, pot_v``.
     """
     params = params or RigParams()
@@ -334,7 +334,7 @@ def static_load_test(
     params: RigParams | None = None,
     calibration: Calibration | None = None,
     orientation: str = "horizontal",
-) -> ExperimentResult:
+) -> TwinRecord:
     """Hang each weight at each position (measured from the tip, as the thesis does) at each command, repeated.
 
     Mirrors 6.4-6.5 (loads 12.5, 25, 7.5 g; 16 positions; 25 repetitions; cable detached: ``commands=None``)
@@ -344,7 +344,7 @@ def static_load_test(
 
     Returns
     -------
-    ExperimentResult
+    TwinRecord
         Columns ``mass_kg, position_from_base_m, position_from_tip_m, command, repetition, gauge1_v, gauge2_v,
         gauge3_v`` (``command`` is -1 when the cable is detached).
     """

@@ -30,8 +30,8 @@ from flexdigit.errors import DataFileError
 from flexdigit.identify.filters import FILTERS, apply_filter
 from flexdigit.identify.fit import Estimate, SecondOrderFit, second_order_response
 from flexdigit.identify.response import NoOscillationError, ResponseFeatures, analyze_response
+from flexdigit.identify.scores import corr2, nrmse_fit
 from flexdigit.identify.timeseries import TimeSeries
-from flexdigit.identify.validation import corr2, nrmse_fit
 
 METHODS = ("thesis", "lsq", "arx")
 KINDS = ("release", "step")

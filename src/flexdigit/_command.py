@@ -1,0 +1,37 @@
+"""The plumbing every sub-command shares: what a command returns and how it is added to the parser.
+
+A leaf module (standard library only), so that a domain's ``commands.py`` never imports the entry point
+(:mod:`flexdigit.cli`), which only assembles the sub-commands.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+__all__ = ["CommandResult", "add_command"]
+
+
+@dataclass
+class CommandResult:
+    """What a sub-command returns: JSON-able ``data`` for ``--json`` and ``text`` for people."""
+
+    data: object
+    text: str = ""
+    exit_code: int = 0
+    extra: dict = field(default_factory=dict)
+
+
+def add_command(
+    subparsers: argparse._SubParsersAction,
+    name: str,
+    func: Callable[[argparse.Namespace], CommandResult],
+    help: str,
+    description: str | None = None,
+) -> argparse.ArgumentParser:
+    """Add a sub-command with the common ``--json`` flag; ``func(args)`` returns a :class:`CommandResult`."""
+    parser = subparsers.add_parser(name, help=help, description=description or help)
+    parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    parser.set_defaults(func=func, command_name=name)
+    return parser

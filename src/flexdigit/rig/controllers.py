@@ -1,0 +1,83 @@
+"""Controllers by name, as ``flexdigit run --controller NAME`` knows them, adapted to the real-time loop.
+
+``digital20`` is the discrete design of :mod:`flexdigit.control.design20ms` on the beam rotation estimated from the
+gauges (:mod:`flexdigit.rig.rotation`); ``thesis39-euler`` and ``thesis39-tustin`` are the printed 39 Hz controller
+digitised as 5.2 and 5.1.1 did, on gauge-1 deflection in metres.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from flexdigit._validation import check_choice, check_positive, check_real
+from flexdigit.params import RigParams
+from flexdigit.rig.base import Reading, Rig
+from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation
+
+__all__ = ["CONTROLLERS", "make_controller"]
+
+
+def _gauge1_deflection_m(params: RigParams, tare_v: float) -> Callable[[Reading], float]:
+    """Gauge-1 deflection (m) from its voltage through the printed K3 (E 3.23, 6.5698 mm/V)."""
+    from flexdigit.models.conversion import k3_printed_mm_per_v
+
+    k3_m_per_v = k3_printed_mm_per_v()[0] / 1000.0
+    return lambda reading: (float(reading.gauges_v[0]) - tare_v) * k3_m_per_v
+
+
+class _Wrapped:
+    """Adapts a :class:`RuntimeController` to the loop: measurement, setpoint units, optional actuator gain error."""
+
+    def __init__(self, runtime, measure, setpoint_scale: float = 1.0, gain: float = 1.0, equilibrium: int = 8):
+        self.runtime, self.measure = runtime, measure
+        self.setpoint_scale, self.gain, self.equilibrium = setpoint_scale, gain, equilibrium
+        self.name = runtime.name
+
+    def reset(self, command: int) -> None:
+        self.runtime.reset(command)
+
+    def step(self, setpoint: float, reading: Reading) -> float:
+        u = self.runtime.update(setpoint * self.setpoint_scale, self.measure(reading))
+        # a plant gain error, emulated at the actuator: the servo gets gain x the asked deviation
+        return self.equilibrium + self.gain * (u - self.equilibrium) if self.gain != 1.0 else u
+
+
+CONTROLLERS = ("digital20", "thesis39-euler", "thesis39-tustin")
+
+
+def make_controller(
+    name: str,
+    rig: Rig,
+    *,
+    period_s: float = 0.020,
+    estimator: RotationEstimator | None = None,
+    gain: float = 1.0,
+) -> _Wrapped:
+    """Build controller ``name`` for ``rig``; its setpoint is beam rotation in degrees for all of them.
+
+    The thesis controllers work on gauge-1 deflection (m): the setpoint in degrees is converted with the sweep's
+    gauge-1 volts per degree times the printed K3 (6.5698 mm/V, E 3.23).
+    """
+    from flexdigit.control.design20ms import design_20ms, thesis_controller
+
+    check_choice(name, "controller", CONTROLLERS, "make_controller")
+    check_positive(period_s, "period_s", "make_controller")
+    check_real(gain, "gain", "make_controller", low=0.0, low_open=True)
+    params = rig.params
+    if estimator is None:
+        estimator = calibrate_rotation(rig)
+    rest = [rig.read().gauges_v for _ in range(5)]
+    estimator.tare(rest)
+    eq = int(params.actuator.equilibrium_command)
+    if name == "digital20":
+        design = design_20ms(params, period_s=period_s)
+        return _Wrapped(design.runtime(params, name=name), estimator, 1.0, gain, eq)
+    method = "forward_euler" if name.endswith("euler") else "tustin"
+    measure = _gauge1_deflection_m(params, float(np.mean([g[0] for g in rest])))
+    from flexdigit.models.conversion import k3_printed_mm_per_v
+
+    # metres of gauge-1 deflection per degree: K3 (m/V) x the sweep's gauge-1 volts per degree
+    scale = k3_printed_mm_per_v()[0] / 1000.0 * float(estimator.gauge_v_per_deg_[0])
+    return _Wrapped(thesis_controller(method, period_s, params), measure, scale, gain, eq)
