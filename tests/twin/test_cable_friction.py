@@ -1,5 +1,5 @@
 """The cable-guide friction noise (taut cable only): zero when slack, proportional to the tension, seeded, and its
-calibration from a measured repeatability or a score.
+file round trip (its calibration from a measured repeatability or a score: tests/calibrate/test_friction.py).
 
 Reference values: the model of :mod:`flexdigit.twin.sensors` (sd of the friction moment at a gauge's section =
 ratio x e x T, e the cable eccentricity of RigParams); statistical tolerances are set from the standard error of
@@ -11,15 +11,7 @@ import pytest
 
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import (
-    Calibration,
-    CalibrationTargets,
-    default_calibration,
-    fit_level,
-    friction_ratio_from_repeatability,
-    load_calibration,
-    save_calibration,
-)
+from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration, save_calibration
 from flexdigit.twin.twin import Twin, cached_digit, friction_sd_v, static_gauges_v
 
 RATIO = 0.1
@@ -138,39 +130,6 @@ def test_friction_state_is_held_until_the_cable_is_jolted():
     assert not np.array_equal(before, twin._friction_xi)
 
 
-def test_friction_ratio_recovered_from_a_synthetic_repeatability_record():
-    # a user with a rig: 1000 readings of the unloaded digit held at command 30, tapped between readings, from a
-    # twin with a known ratio
-    truth = 0.05
-    n = 1000
-    twin = Twin(seed=11, calibration=_cal(truth), orientation="horizontal", command=30)
-    volts = []
-    for _ in range(n):
-        twin.advance(0.02)
-        twin.disturb()  # tap the digit between readings: each sees the cable settle afresh in its guides
-        volts.append(twin.read()[0])
-    targets = CalibrationTargets.from_records(actuated_rest=(30, np.array(volts)))
-    assert targets.actuated_repeatability_command == 30
-    got = friction_ratio_from_repeatability(
-        RigParams(), _cal(0.0), targets.actuated_repeatability_command, targets.actuated_repeatability_v
-    )
-    assert got == pytest.approx(truth, rel=0.07)  # ~5 standard errors of a 1000-reading spread
-
-
-def test_fit_level_recovers_a_noise_level_from_corr2():
-    # closed form: corr2(y, y + s n) = 1 / sqrt(1 + s^2 var(n) / var(y)) for independent y and n
-    rng = np.random.default_rng(0)
-    y, noise = rng.uniform(1, 10, 20000), rng.standard_normal(20000)
-
-    def corr2(s):
-        return float(np.corrcoef(y, y + s * noise)[0, 1])
-
-    s_true = np.std(y) * np.sqrt(1 / 0.9**2 - 1)  # level that gives corr2 0.9 in the limit
-    assert fit_level(corr2, 0.9, bracket=(0.0, 10.0)) == pytest.approx(s_true, rel=0.02)
-    with pytest.raises(ParameterError, match="'target' parameter of fit_level"):
-        fit_level(corr2, 0.5, bracket=(0.0, 1.0))
-
-
 def test_friction_ratio_is_validated_and_round_trips(tmp_path):
     with pytest.raises(ParameterError, match="cable_friction_ratio"):
         Calibration(cable_friction_ratio=-0.1)
@@ -178,6 +137,6 @@ def test_friction_ratio_is_validated_and_round_trips(tmp_path):
         Calibration(cable_friction_ratio=1.5)
     path = save_calibration(_cal(0.03), tmp_path / "cal.toml")
     assert load_calibration(path).cable_friction_ratio == 0.03
-    (tmp_path / "bad.toml").write_text('[calibration]\ncable_friction_ratio = "a lot"\n')
+    (tmp_path / "bad.toml").write_text('based_on = "default"\n[calibration]\ncable_friction_ratio = "a lot"\n')
     with pytest.raises(DataFileError, match="bad.toml.*cable_friction_ratio"):
         load_calibration(tmp_path / "bad.toml")

@@ -1,7 +1,7 @@
 """Report chapter 3 (twin): the calibrated digital twin against tables 3.1, 3.2, 3.6, E 3.20-3.22 and closed forms.
 
 The release tests and the actuation sweep are simulated as experiments (digit, servo, sensor chain with noise) and
-analysed like measurements: a damped-sine fit gives wn and zeta (tables 3.1, 3.2), a straight line per gauge gives
+analysed like measurements: identify's lsq fit gives wn and zeta (tables 3.1, 3.2), a straight line per gauge gives
 the E 3.20-3.22 slopes. The deflections of table 3.6 are read off the twin's static shape. The physics checks
 (closed forms the twin was not written from) are repeated at the twin's default resolution.
 """
@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from flexdigit.identify.fit import second_order_response
 from flexdigit.reference import thesis_value
 from flexdigit.report.chapter import Chapter, ReportContext, Table
 from flexdigit.report.results import compare, new
@@ -19,8 +20,10 @@ from flexdigit.report.results import compare, new
 
 def build(ctx: ReportContext) -> Chapter:
     """Build the twin chapter."""
+    from flexdigit.calibrate.targets import CalibrationTargets, release_figures
+    from flexdigit.identify.timeseries import series_from_table
     from flexdigit.twin import records as ex
-    from flexdigit.twin.calibration import CalibrationTargets, default_calibration, default_fit_record, fit_damped_sine
+    from flexdigit.twin.calibration import default_calibration, default_calibration_source, default_fit_record
     from flexdigit.twin.twin import Twin
 
     p = ctx.params
@@ -33,7 +36,7 @@ def build(ctx: ReportContext) -> Chapter:
         "order model (3.2.4) driven by integer commands latched on 20 ms serial frames; the gauges go through the "
         "half bridge (E 2.2), a per-channel gain and offset, the 470 Hz low-pass and a 16-bit +-5 V ADC, with seeded "
         "white noise and drift. Support masses, housing stiffness (with a stiffer base section), damping, cable "
-        "compliance and channel gains are fitted with scipy.optimize.least_squares (flexdigit.twin.calibration)."
+        "compliance and channel gains are fitted with scipy.optimize.least_squares (flexdigit.calibrate)."
     )
     e = ch.entries
     rng_seed = int(ctx.rng(3).integers(0, 2**31))
@@ -42,16 +45,14 @@ def build(ctx: ReportContext) -> Chapter:
     release = {}
     for housing, table, key in ((False, "3.1", "without_housing"), (True, "3.2", "with_housing")):
         res = ex.release_test(housing=housing, duration_s=dur[housing], sample_rate_hz=500, seed=rng_seed, params=p)
-        release[housing] = res
         t = res.column("time_s")
-        fits = [fit_damped_sine(t, res.column(f"gauge{g}_v")) for g in (1, 2, 3)]
-        fit = {k: float(np.median([f[k] for f in fits])) for k in ("wn_rad_s", "zeta")}
-        fit.update({k: fits[1][k] for k in ("offset", "amplitude")})
+        fit = release_figures([series_from_table(res, f"gauge{g}") for g in (1, 2, 3)])
         wn_t = thesis_value(f"digit.release_tests_{key}.wn_avg_rad_s")
         z_t = thesis_value(f"digit.release_tests_{key}.zeta_avg")
         note = (
-            f"Median over the three gauges of a damped-sine fit to a simulated release test (20 mm tip deflection), "
-            f"table {table} average."
+            f"Median over the gauges of identify's lsq fit (as flexdigit identify release and flexdigit calibrate) "
+            f"to a simulated release test (20 mm tip deflection), table {table} average."
+            + (f" Gauges not identified: {', '.join(s['record'] for s in fit['skipped'])}." if fit["skipped"] else "")
         )
         why = (
             "The twin is calibrated to this figure; a miss means the calibration and the time integration disagree "
@@ -74,7 +75,9 @@ def build(ctx: ReportContext) -> Chapter:
                 f"twin.release_{key}.zeta", "3.1.2", z_t, fit["zeta"], "", rtol=0.03, note=note, discrepancy_note=why
             )
         )
-        model = fit["offset"] + fit["amplitude"] * np.exp(-z_t * wn_t * t) * np.cos(wn_t * math.sqrt(1 - z_t**2) * t)
+        release[housing] = (res, fit)
+        gauge2 = _gauge_fit(fit, "gauge2")
+        model = second_order_response(t, "release", wn_t, z_t, gauge2.offset, gauge2.amplitude, gauge2.t0_s)
         corr = float(np.corrcoef(model, res.column("gauge2_v"))[0, 1])
         e.append(
             new(
@@ -193,7 +196,7 @@ def build(ctx: ReportContext) -> Chapter:
     fit_rec = default_fit_record().get("residuals", [])
     ch.tables.append(
         Table(
-            "Default calibration: fit residuals (python -m flexdigit.twin.calibration)",
+            f"Calibration ({_source_text(default_calibration_source())}): fit residuals (flexdigit calibrate)",
             ["target", "measured", "twin", "residual", "unit"],
             [
                 [r["target"], r["measured"], round(r["twin"], 6), round(r["twin"] - r["measured"], 6), r["unit"]]
@@ -203,7 +206,7 @@ def build(ctx: ReportContext) -> Chapter:
     )
     ch.tables.append(
         Table(
-            "Default calibration: fitted parameters",
+            f"Calibration ({_source_text(default_calibration_source())}): fitted parameters",
             ["parameter", "value"],
             [[k, v] for k, v in cal.to_dict().items()],
         )
@@ -327,17 +330,15 @@ def _release_figure(ctx: ReportContext, release):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from flexdigit.twin.calibration import fit_damped_sine
-
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=False)
     for ax, housing, key in ((axes[0], True, "with_housing"), (axes[1], False, "without_housing")):
-        res = release[housing]
+        res, fit = release[housing]
         t = res.column("time_s")
         y = res.column("gauge2_v")
-        fit = fit_damped_sine(t, y)
+        gauge2 = _gauge_fit(fit, "gauge2")
         wn = thesis_value(f"digit.release_tests_{key}.wn_avg_rad_s")
         z = thesis_value(f"digit.release_tests_{key}.zeta_avg")
-        model = fit["offset"] + fit["amplitude"] * np.exp(-z * wn * t) * np.cos(wn * math.sqrt(1 - z**2) * t)
+        model = second_order_response(t, "release", wn, z, gauge2.offset, gauge2.amplitude, gauge2.t0_s)
         ax.plot(t, y, lw=0.8, label="twin (gauge 2, through the sensor chain)")
         ax.plot(t, model, "--", lw=0.8, label=f"thesis model: wn {wn:.2f} rad/s, zeta {z:.4f}")
         ax.set_title("with housing (table 3.2)" if housing else "without housing (table 3.1)")
@@ -413,3 +414,13 @@ def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int):
         "Digit shapes over the operating commands; a servo step beside MT(s).",
         thesis_ref="figure 3.12",
     )
+
+
+def _gauge_fit(figures: dict, channel: str):
+    """The identification of ``channel`` among a release test's fits, or the first gauge identified (offset and
+    amplitude to draw the thesis's model on that gauge's scale)."""
+    return next((f for f in figures["fits"] if f.channel == channel), figures["fits"][0])
+
+
+def _source_text(source: str) -> str:
+    return "packaged, fitted to the thesis by flexdigit calibrate --thesis" if source == "packaged" else source

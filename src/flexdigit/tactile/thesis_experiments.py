@@ -180,7 +180,7 @@ FRICTION_FIT_SEEDS = tuple(range(8))
 def actuated_corr2_score(
     calibration, *, seeds=FRICTION_FIT_SEEDS, params: RigParams | None = None, spread: bool = False
 ):
-    """The score :func:`flexdigit.twin.calibration.calibrate` fits ``cable_friction_ratio`` with: the thesis
+    """The score :func:`flexdigit.calibrate.fit.calibrate` fits ``cable_friction_ratio`` with: the thesis
     pipeline's actuated test corr2 (24 nodes, 1e-7, 50 epochs; :func:`pipeline_corr2_static`), averaged over the
     experiment repeated with each of ``seeds`` (data set, split and initial weights).
 

@@ -1,0 +1,353 @@
+"""Fit the twin's free parameters to targets (``scipy.optimize.least_squares``): the calibration layer's core.
+
+This layer sits above the twin and the tactile package (params -> models -> twin -> identify -> ... -> tactile ->
+calibrate): it runs the twin's models, reduces records with ``identify``, and, for the thesis's actuated noise,
+scores candidate calibrations through the tactile pipeline. The twin itself keeps only what it needs to run (the
+:class:`~flexdigit.twin.calibration.Calibration`, its file and the packaged default).
+
+What is fitted to what (see :mod:`flexdigit.twin.calibration` for the parameters): the mechanics (support mass,
+housing stiffness and its base factor, strip and housing damping, cable stiffness) against the release tests' wn
+and zeta and the deflections; then each channel's gain and offset against its gauge-volt line; noise levels copied
+from a resting record; the cable-guide friction from the actuated repeatability or a corr2 score.
+
+Examples
+--------
+>>> from flexdigit.calibrate.targets import CalibrationTargets
+>>> result = calibrate(CalibrationTargets(bare_wn_rad_s=10.0, bare_zeta=0.003))
+>>> round(result.calibration.support_mass_kg[0] * 1e3, 2), round(result.residuals[0]["twin"], 6)
+(8.61, 10.0)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from flexdigit.calibrate.friction import actuated_rest_sd_v, fit_level, friction_ratio_from_repeatability
+from flexdigit.calibrate.targets import CalibrationTargets
+from flexdigit.errors import ParameterError
+from flexdigit.twin.calibration import Calibration
+
+#: Parameters the mechanical fit can move, and the targets that identify each: a parameter no given target
+#: identifies is held at its initial value (a least-squares step would move it along a flat valley).
+MECHANICS = {
+    "support_mass_kg": ("bare_wn_rad_s", "housing_wn_rad_s"),
+    "housing_ei_n_m2": ("housing_wn_rad_s", "deflection_mm"),
+    "housing_base_factor": ("deflection_mm",),
+    "strip_beta_s": ("bare_zeta", "housing_zeta"),
+    "housing_beta_s": ("housing_zeta",),
+    "cable_stiffness_n_m": ("deflection_mm",),
+}
+
+
+@dataclass
+class CalibrationResult:
+    """What :func:`calibrate` returns: the calibration, a residual table and the optimiser's report.
+
+    Attributes
+    ----------
+    calibration : Calibration
+    residuals : list of dict
+        One row per target: ``target``, ``measured``, ``twin`` (the calibrated twin's value), ``unit``.
+    cost : float
+        The mechanical fit's final cost (half the sum of squared scaled residuals).
+    success : bool
+        Whether the optimiser converged.
+    message : str
+        The optimiser's report.
+    fitted : list of str
+        The calibration's fields the fit set (the others kept their initial values).
+    targets : CalibrationTargets or None
+        What was fitted.
+    """
+
+    calibration: Calibration
+    residuals: list[dict[str, Any]] = field(default_factory=list)
+    cost: float = 0.0
+    success: bool = True
+    message: str = ""
+    fitted: list[str] = field(default_factory=list)
+    targets: CalibrationTargets | None = None
+
+    def residual_rows(self) -> list[dict[str, Any]]:
+        """The residuals with ``residual`` (twin - measured) and ``relative`` (residual / abs(measured); None at 0)."""
+        rows = []
+        for r in self.residuals:
+            residual = float(r["twin"]) - float(r["measured"])
+            relative = residual / abs(float(r["measured"])) if float(r["measured"]) != 0 else None
+            rows.append({**r, "residual": residual, "relative": relative})
+        return rows
+
+    def table(self) -> str:
+        """The residuals as text, one line per target."""
+        lines = [f"{'target':<44} {'measured':>12} {'twin':>12} {'residual':>12} unit"]
+        for r in self.residual_rows():
+            lines.append(
+                f"{r['target']:<44} {r['measured']:>12.5g} {r['twin']:>12.5g} {r['residual']:>12.4g} {r['unit']}"
+            )
+        return "\n".join(lines)
+
+    def fit_record(self, source: str) -> dict[str, Any]:
+        """The ``[fit]`` table of a calibration file: how it was made, its targets and residuals."""
+        record: dict[str, Any] = {"source": source, "cost": self.cost, "success": self.success}
+        record["fitted"] = list(self.fitted)
+        if self.targets is not None:
+            record["targets"] = self.targets.to_dict()
+        record["residuals"] = [dict(r) for r in self.residuals]
+        return record
+
+
+def model_response(params, calibration: Calibration, targets: CalibrationTargets, *, cells_per_section: int = 3):
+    """Everything the fit compares: modal wn/zeta bare and housed, deflections and bridge ratios on the sweep."""
+    from flexdigit.twin.digit import build_digit
+    from flexdigit.twin.sensors import SensorChain
+    from flexdigit.twin.twin import cable_shortening_m
+
+    out: dict[str, Any] = {}
+    bare = build_digit(params, calibration, housing=False, cells_per_section=cells_per_section)
+    house = build_digit(params, calibration, housing=True, cells_per_section=cells_per_section)
+    out["bare_wn"], out["bare_zeta"] = (float(v[0]) for v in bare.linear_modes())
+    out["housing_wn"], out["housing_zeta"] = (float(v[0]) for v in house.linear_modes())
+    if targets.deflection_commands is not None:
+        cmds = np.asarray(targets.deflection_commands, dtype=float)
+        sol = house.solve_static(cable_shortening_m=cable_shortening_m(cmds, params))
+        out["deflection_mm"] = house.positions(sol.psi_rad, params.geometry.gauge_positions_m)[..., 1].T * 1e3
+    if targets.sweep_commands is not None:
+        cmds = np.asarray(targets.sweep_commands, dtype=float)
+        sol = house.solve_static(cable_shortening_m=cable_shortening_m(cmds, params))
+        unit = calibration.replace(channel_gain=(1.0,) * 3, channel_offset_v=(0.0,) * 3)
+        out["sweep_unit_v"] = SensorChain(params, unit, np.random.default_rng(0)).clean_v(
+            sol.curvature_1_m, sol.axial_force_n
+        )
+    return out
+
+
+def calibrate(
+    targets: CalibrationTargets,
+    params=None,
+    *,
+    initial: Calibration | None = None,
+    cells_per_section: int = 3,
+    verbose: bool = False,
+    friction_score=None,
+) -> CalibrationResult:
+    """Fit the twin's free parameters to measured targets (``scipy.optimize.least_squares``).
+
+    Mechanics first (support mass, housing stiffness and base factor, strip and housing damping, cable stiffness)
+    against the release tests' wn and zeta (relative residuals in units of 1 %) and the deflections (in units of
+    the reading resolution); a parameter no given target identifies keeps its initial value (:data:`MECHANICS`).
+    Then, with the mechanics fixed, each channel's gain and offset by linear least squares against its gauge-volt
+    line over the sweep; noise levels are copied from the targets when given; last the cable-guide friction, from
+    a measured actuated repeatability (closed form) or, failing that, from the actuated test corr2 through
+    ``friction_score`` (a 1-D root find, :func:`~flexdigit.calibrate.friction.fit_level`). With neither,
+    ``initial``'s value is kept.
+
+    Parameters
+    ----------
+    targets : CalibrationTargets
+        E.g. :meth:`CalibrationTargets.from_thesis` or :meth:`CalibrationTargets.from_records`.
+    params : RigParams, optional
+    initial : Calibration, optional
+        Starting point and the values of everything not fitted (default: the nominal :class:`Calibration`).
+    cells_per_section : int
+        Resolution of the digit model the calibration is for.
+    verbose : bool
+        Print the residual table.
+    friction_score : callable, optional
+        ``friction_score(calibration) -> corr2``: the thesis pipeline's actuated test corr2 on a twin with that
+        calibration (e.g. :func:`flexdigit.tactile.thesis_experiments.actuated_corr2_score`, its mean over 8 seeded
+        repetitions of the experiment: one repetition scatters by about 0.02); needed only for
+        ``targets.actuated_test_corr2``.
+
+    Returns
+    -------
+    CalibrationResult
+    """
+    from scipy.optimize import least_squares
+
+    from flexdigit.params import RigParams
+
+    params = params or RigParams()
+    cal0 = initial or Calibration()
+    t = targets
+
+    def unpack(x):
+        m, ei, base, bs, bh, kc = np.exp(x)
+        return cal0.replace(
+            support_mass_kg=(m, m, m),
+            housing_ei_n_m2=(ei * base, ei, ei),
+            strip_beta_s=bs,
+            housing_beta_s=bh,
+            cable_stiffness_n_m=kc,
+        )
+
+    weight = np.asarray(t.deflection_weight, dtype=float) if t.deflection_mm is not None else None
+
+    def resid(x):
+        r = model_response(params, unpack(x), t, cells_per_section=cells_per_section)
+        out = []
+        for key in ("bare_wn", "bare_zeta", "housing_wn", "housing_zeta"):
+            target = getattr(t, key + ("_rad_s" if key.endswith("wn") else ""))
+            if target is not None:
+                out.append((r[key] / target - 1.0) / 0.01)
+        if weight is not None:
+            diff = (r["deflection_mm"] - np.asarray(t.deflection_mm)) / t.deflection_resolution_mm
+            out.extend((diff * weight)[weight > 0].tolist())
+        return np.array(out)
+
+    m0 = cal0.support_mass_kg[0]
+    ei0 = cal0.housing_ei_n_m2[1]
+    base0 = cal0.housing_ei_n_m2[0] / ei0 if ei0 > 0 else 1.0
+    x0 = np.log(
+        [
+            m0,
+            max(ei0, 1e-8),
+            base0,
+            max(cal0.strip_beta_s, 1e-8),
+            max(cal0.housing_beta_s, 1e-8),
+            cal0.cable_stiffness_n_m,
+        ]
+    )
+    lower = np.log([1e-4, 1e-5, 0.2, 1e-7, 1e-6, 2e3])
+    upper = np.log([0.5, 1.0, 200.0, 1.0, 1.0, 2e6])
+    given = {name for name, value in vars(t).items() if value is not None}
+    if weight is None or not np.any(weight > 0):
+        given.discard("deflection_mm")
+    free = [any(target in given for target in MECHANICS[name]) for name in MECHANICS]
+    for k, is_free in enumerate(free):
+        if not is_free:  # not identifiable from the targets given: keep it
+            lower[k], upper[k] = x0[k] - 1e-9, x0[k] + 1e-9
+    fitted = [name for name, is_free in zip(MECHANICS, free, strict=True) if is_free]
+    if any(free):
+        fit = least_squares(
+            resid,
+            np.clip(x0, lower + 1e-9, upper - 1e-9),
+            bounds=(lower, upper),
+            x_scale=1.0,
+            xtol=1e-12,
+            ftol=1e-12,
+            gtol=1e-12,
+            max_nfev=400,
+        )
+        x, cost, success, message = fit.x, float(fit.cost), bool(fit.success), str(fit.message)
+    else:
+        x, cost, success, message = x0, 0.0, True, "no mechanical target: mechanics kept"
+    cal = unpack(x) if any(free) else cal0
+    fitted = [name for name in fitted if name != "housing_base_factor"]
+    r = model_response(params, cal, t, cells_per_section=cells_per_section)
+    gains, offsets = list(cal.channel_gain), list(cal.channel_offset_v)
+    rows: list[dict[str, Any]] = []
+    if t.sweep_commands is not None:
+        cmds = np.asarray(t.sweep_commands, dtype=float)
+        for ch in range(r["sweep_unit_v"].shape[1]):
+            line = t.sweep_slopes_v_per_command[ch] * cmds + t.sweep_offsets_v[ch]
+            design = np.column_stack([r["sweep_unit_v"][:, ch], np.ones_like(cmds)])
+            (g, o), *_ = np.linalg.lstsq(design, line, rcond=None)
+            gains[ch], offsets[ch] = float(g), float(o)
+            model = g * r["sweep_unit_v"][:, ch] + o
+            slope, intercept = np.polyfit(cmds, model, 1)
+            rows.append(
+                dict(
+                    target=f"sweep slope gauge {ch + 1} (as E 3.2{ch})",
+                    measured=t.sweep_slopes_v_per_command[ch],
+                    twin=float(slope),
+                    unit="V/command",
+                )
+            )
+            rows.append(
+                dict(
+                    target=f"sweep offset gauge {ch + 1} (as E 3.2{ch})",
+                    measured=t.sweep_offsets_v[ch],
+                    twin=float(intercept),
+                    unit="V",
+                )
+            )
+    changes: dict[str, Any] = {"channel_gain": tuple(gains), "channel_offset_v": tuple(offsets)}
+    if t.noise_white_v is not None:
+        changes["noise_white_v"] = tuple(float(v) for v in t.noise_white_v)
+    if t.noise_drift_v_per_sqrt_s is not None:
+        changes["noise_drift_v_per_sqrt_s"] = tuple(float(v) for v in t.noise_drift_v_per_sqrt_s)
+    cal = cal.replace(**changes)
+    friction_rows: list[dict[str, Any]] = []
+    if t.actuated_repeatability_v is not None:
+        if t.actuated_repeatability_command is None:
+            raise ParameterError(
+                "The 'actuated_repeatability_command' parameter of CalibrationTargets must be given with "
+                "'actuated_repeatability_v'. Got None."
+            )
+        ratio = friction_ratio_from_repeatability(
+            params, cal, t.actuated_repeatability_command, t.actuated_repeatability_v, cells_per_section
+        )
+        cal = cal.replace(cable_friction_ratio=ratio)
+        model = actuated_rest_sd_v(params, cal, t.actuated_repeatability_command, cells_per_section)
+        for ch, (meas, got) in enumerate(zip(t.actuated_repeatability_v, model, strict=True)):
+            friction_rows.append(
+                dict(
+                    target=f"actuated repeatability gauge {ch + 1} @ {t.actuated_repeatability_command}",
+                    measured=float(meas),
+                    twin=float(got),
+                    unit="V",
+                )
+            )
+    elif t.actuated_test_corr2 is not None and friction_score is not None:
+        base = cal
+        ratio = fit_level(lambda r: friction_score(base.replace(cable_friction_ratio=r)), t.actuated_test_corr2)
+        cal = cal.replace(cable_friction_ratio=ratio)
+        friction_rows.append(
+            dict(target="actuated test corr2 (7.5)", measured=t.actuated_test_corr2, twin=friction_score(cal), unit="")
+        )
+    head = []
+    for key, label, unit in (
+        ("bare_wn", "wn without housing (as table 3.1)", "rad/s"),
+        ("bare_zeta", "zeta without housing (as table 3.1)", ""),
+        ("housing_wn", "wn with housing (as table 3.2)", "rad/s"),
+        ("housing_zeta", "zeta with housing (as table 3.2)", ""),
+    ):
+        target = getattr(t, key + ("_rad_s" if key.endswith("wn") else ""))
+        if target is not None:
+            head.append(dict(target=label, measured=float(target), twin=r[key], unit=unit))
+    if weight is not None:
+        for g in range(weight.shape[0]):
+            for c, cmd in enumerate(t.deflection_commands):
+                if weight[g, c] > 0:
+                    head.append(
+                        dict(
+                            target=f"deflection gauge {g + 1} @ {cmd} (as table 3.6)",
+                            measured=float(t.deflection_mm[g][c]),
+                            twin=float(r["deflection_mm"][g, c]),
+                            unit="mm",
+                        )
+                    )
+    if t.sweep_commands is not None:
+        fitted += ["channel_gain", "channel_offset_v"]
+    fitted += [name for name in ("noise_white_v", "noise_drift_v_per_sqrt_s") if name in changes]
+    if friction_rows:
+        fitted.append("cable_friction_ratio")
+    result = CalibrationResult(cal, head + rows + friction_rows, cost, success, message, fitted, targets)
+    if verbose:
+        print(result.table())
+    return result
+
+
+def calibrate_to_thesis(params=None, *, verbose: bool = False) -> CalibrationResult:
+    """The packaged default: :func:`calibrate` on the thesis's targets, the friction by the actuated corr2.
+
+    The friction's only evidence is the thesis network's actuated test corr2 (7.5), scored through the tactile
+    pipeline averaged over 8 seeded repetitions (:func:`flexdigit.tactile.thesis_experiments.actuated_corr2_score`):
+    minutes of CPU. ``flexdigit calibrate --thesis`` runs it.
+    """
+    from flexdigit.tactile.thesis_experiments import actuated_corr2_score
+
+    def score(calibration: Calibration) -> float:
+        return actuated_corr2_score(calibration, params=params)
+
+    return calibrate(CalibrationTargets.from_thesis(), params, verbose=verbose, friction_score=score)
+
+
+#: ``[fit] source`` of a calibration fitted to the thesis (the packaged default's).
+THESIS_SOURCE = (
+    "calibrate(CalibrationTargets.from_thesis(), friction_score=actuated_corr2_score) with RigParams() "
+    "defaults, cells_per_section=3"
+)

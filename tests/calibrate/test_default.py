@@ -1,0 +1,88 @@
+"""The packaged default calibration against the thesis (tables 3.1, 3.2, 3.6, E 3.20-3.22), and its re-fit.
+
+The release tests and the sweep are run as experiments on the twin (through the sensor chain, with noise) and
+analysed like measurements, with the reduction ``flexdigit calibrate`` applies to a rig's records (identify's lsq
+fit per gauge, the median over the gauges), so the check covers the dynamics, the servo and the sensors, not only
+the fit. Tolerances from issue 3: wn and zeta within 3 %, gauge-volt slopes within 5 %, deflections within the
+0.5 mm reading resolution where the thesis's own model agrees with its measurement.
+"""
+
+import numpy as np
+import pytest
+
+from flexdigit.calibrate.fit import calibrate_to_thesis
+from flexdigit.calibrate.targets import CalibrationTargets, release_figures
+from flexdigit.identify.timeseries import series_from_table
+from flexdigit.reference import thesis_value
+from flexdigit.twin import records as ex
+from flexdigit.twin.calibration import default_fit_record, packaged_calibration
+
+RELEASE_RTOL = 0.03
+SLOPE_RTOL = 0.05
+DEFLECTION_ABS_MM = 0.5
+#: The re-fit must land on the packaged values (the fit is deterministic: seeded scores, fixed tolerances)
+REFIT_RTOL = 1e-5
+
+#: Record lengths of the simulated release tests (s), as the report uses them: the bare digit's amplitude decays
+#: with a time constant 1/(zeta wn) = 39 s, so a 12 s record holds too little decay for a zeta to survive the
+#: noise (median over the gauges off by up to 3.1 % over 20 seeds at 12 s, 0.6-1.6 % at 30 s); the housed one's
+#: is 1.1 s, and 8 s holds all of it.
+RELEASE_DURATION_S = {False: 30.0, True: 8.0}
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize(
+    ("housing", "table"),
+    [pytest.param(False, "without_housing", marks=pytest.mark.slow), (True, "with_housing")],
+)
+def test_release_tests_reproduce_tables_3_1_and_3_2(housing, table, seed):
+    # wn and zeta are the medians over the gauges, as the report and flexdigit calibrate take them: gauge 3
+    # (nearest the tip, the smallest strain: ~14 mV of swing over 2 mV of white noise and drift) alone scatters by
+    # +-5 % even on 30 s records. Several seeds, so a pass is not seed luck.
+    res = ex.release_test(housing=housing, duration_s=RELEASE_DURATION_S[housing], sample_rate_hz=500, seed=seed)
+    figures = release_figures([series_from_table(res, f"gauge{gauge}") for gauge in (1, 2, 3)])
+    assert figures["wn_rad_s"] == pytest.approx(
+        thesis_value(f"digit.release_tests_{table}.wn_avg_rad_s"), rel=RELEASE_RTOL
+    )
+    assert figures["zeta"] == pytest.approx(thesis_value(f"digit.release_tests_{table}.zeta_avg"), rel=RELEASE_RTOL)
+    for fit in figures["fits"]:  # wn is set by the mechanics: every gauge identified sees it
+        assert fit.wn_rad_s == pytest.approx(figures["wn_rad_s"], rel=0.01), fit.channel
+
+
+def test_actuation_sweep_reproduces_e_3_20_to_3_22():
+    res = ex.actuation_sweep(settle_s=2.5, samples=5, seed=2)
+    commands = res.column("command")
+    for gauge, fit in enumerate(thesis_value("conversion.v_sg_fit"), start=1):
+        slope, offset = np.polyfit(commands, res.column(f"gauge{gauge}_v"), 1)
+        assert slope == pytest.approx(fit["slope"], rel=SLOPE_RTOL)
+        assert offset == pytest.approx(fit["offset"], abs=0.02)
+
+
+def test_deflections_match_table_3_6_where_the_thesis_model_agrees():
+    from flexdigit.params import RigParams
+    from flexdigit.twin.twin import Twin
+
+    targets = CalibrationTargets.from_thesis()
+    weight = np.array(targets.deflection_weight)
+    measured = np.array(targets.deflection_mm)
+    assert weight.sum() >= 15  # 19 readings of table 3.6 are within 0.5 mm of table 3.4
+    p = RigParams()
+    for c, command in enumerate(targets.deflection_commands):
+        if not weight[:, c].any():
+            continue
+        twin = Twin(seed=0, command=command)
+        y_mm = twin.deflection_m(p.geometry.gauge_positions_m) * 1e3
+        for g in range(3):
+            if weight[g, c]:
+                assert y_mm[g] == pytest.approx(measured[g, c], abs=DEFLECTION_ABS_MM), (g + 1, command)
+
+
+@pytest.mark.slow
+def test_recalibrating_reproduces_the_packaged_default():
+    # the friction level's only evidence is the thesis's actuated corr2, scored by the tactile pipeline (minutes)
+    result = calibrate_to_thesis()
+    default = packaged_calibration()
+    for name, value in default.to_dict().items():
+        np.testing.assert_allclose(getattr(result.calibration, name), value, rtol=REFIT_RTOL, atol=1e-12, err_msg=name)
+    record = default_fit_record()
+    assert len(record["residuals"]) == len(result.residuals)
