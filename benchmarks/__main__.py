@@ -17,6 +17,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_twin",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
+    "benchmarks.bench_calibrate",
 )
 
 

@@ -28,6 +28,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.control.commands",
     "flexdigit.rig.commands",
     "flexdigit.tactile.commands",
+    "flexdigit.calibrate.commands",
     "flexdigit.report.commands",
 )
 

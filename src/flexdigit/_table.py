@@ -1,0 +1,265 @@
+"""Tables made elsewhere: a CSV-like text file (any common delimiter, detected) or Parquet, read cell by cell.
+
+Files from other rigs and spreadsheets come with a byte-order mark, CRLF line ends, ``;`` or tab delimiters
+(``,`` as the decimal mark), quoted headers with spaces and units, comment lines and extra columns. :func:`read_table`
+reads any of those into a :class:`Table` of raw cells that remembers the file line of every row, so
+:meth:`Table.numbers` can refuse a bad cell naming the file, the line and the column. A leaf module (standard
+library, numpy, and pyarrow for Parquet), shared by every reader of foreign files (tactile datasets, calibration
+records).
+
+The delimiter is detected by parsing the first lines with each candidate (``,`` ``;`` tab ``|``) and keeping the one
+that splits every line into the same number (> 1) of fields, the most fields winning; failing all, runs of
+whitespace. ``csv.Sniffer`` was tried first and dropped: it guesses from character frequencies and picks ``,`` in
+``;``-separated files with decimal commas.
+
+Examples
+--------
+>>> import tempfile, pathlib
+>>> path = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
+>>> _ = path.write_bytes('\\ufeff"SG 1 (mV)";mass [g]\\r\\n12,5;25\\r\\n13,0;0\\r\\n'.encode())
+>>> table = read_table(path, decimal=",")
+>>> table.columns, table.delimiter
+(['SG 1 (mV)', 'mass [g]'], ';')
+>>> table.numbers("SG 1 (mV)").tolist()
+[12.5, 13.0]
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from flexdigit.errors import DataFileError
+
+__all__ = ["Table", "read_table", "DELIMITERS"]
+
+#: Delimiters tried, in order of preference on a tie; "whitespace" is the fallback.
+DELIMITERS = (",", ";", "\t", "|")
+#: A number as a cell may hold it (no NaN, no infinity, no digit separators).
+_NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
+#: Lines used to detect the delimiter.
+_SNIFF_LINES = 50
+
+
+@dataclass
+class Table:
+    """Raw cells of a table and where each row came from.
+
+    Attributes
+    ----------
+    source : str
+        The file, for messages.
+    columns : list of str
+        Header names, stripped of surrounding whitespace.
+    rows : list of list of str
+        Cells as text (Parquet values converted with ``str``; a null is ``""``).
+    lines : list of int
+        File line of each row (CSV, counting from 1) or row number (Parquet, from 1).
+    delimiter : str or None
+        The delimiter found (``"whitespace"`` for runs of blanks; None for Parquet).
+    decimal : str
+        The decimal mark numbers are read with.
+    """
+
+    source: str
+    columns: list[str]
+    rows: list[list[str]]
+    lines: list[int]
+    delimiter: str | None = None
+    decimal: str = "."
+    unit: str = field(default="line")
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def where(self, i: int) -> str:
+        """``"line 12"`` (CSV) or ``"row 12"`` (Parquet) for row ``i``."""
+        return f"{self.unit} {self.lines[i]}"
+
+    def find(self, name: str, role: str = "") -> str:
+        """The column ``name`` names: exactly, else ignoring case, surrounding quotes and runs of blanks.
+
+        Raises
+        ------
+        DataFileError
+            Naming the file, the column (and its ``role``, e.g. "the load column") and the columns there are.
+        """
+        if name in self.columns:
+            return name
+        key = _loose(name)
+        matches = [c for c in self.columns if _loose(c) == key]
+        if len(matches) == 1:
+            return matches[0]
+        what = f" ({role})" if role else ""
+        if len(matches) > 1:
+            raise DataFileError(
+                f"{self.source}: column {name!r}{what} is ambiguous: it could be any of {', '.join(map(repr, matches))}"
+            )
+        raise DataFileError(
+            f"{self.source}: no column {name!r}{what}; the header (line {self._header_line()}) has "
+            + ", ".join(repr(c) for c in self.columns)
+        )
+
+    def _header_line(self) -> int:
+        return self.lines[0] - 1 if self.lines and self.unit == "line" else 1
+
+    def numbers(self, name: str, *, allow_empty: bool = False, role: str = "") -> np.ndarray:
+        """Column ``name`` as floats; an empty cell is NaN when ``allow_empty``.
+
+        Raises
+        ------
+        DataFileError
+            ``FILE: line N, column 'X': 'abc' is not a number`` for the first bad cell: text, NaN or infinity
+            written out, a decimal comma when the decimal mark is ``.`` (the message says so), or an empty cell
+            unless allowed.
+        """
+        column = self.find(name, role)
+        k = self.columns.index(column)
+        out = np.empty(len(self.rows))
+        for i, row in enumerate(self.rows):
+            cell = row[k].strip()
+            if cell == "":
+                if allow_empty:
+                    out[i] = math.nan
+                    continue
+                raise DataFileError(f"{self.source}: {self.where(i)}, column {column!r}: empty cell; expected a number")
+            text = cell.replace(",", ".") if self.decimal == "," else cell
+            if not _NUMBER.match(text):
+                hint = ""
+                if self.decimal == "." and re.match(r"^[+-]?\d+,\d+$", cell):
+                    hint = " (a decimal comma? give the decimal mark ',')"
+                elif cell.lower().lstrip("+-") in ("nan", "na", "n/a", "inf", "infinity", "null", "none"):
+                    hint = " (a missing or infinite value; every mapped cell needs a finite number)"
+                raise DataFileError(
+                    f"{self.source}: {self.where(i)}, column {column!r}: {cell!r} is not a number{hint}"
+                )
+            out[i] = float(text)
+        return out
+
+
+def _loose(name: str) -> str:
+    return " ".join(name.strip().strip("\"'").split()).lower()
+
+
+def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str = ".") -> Table:
+    """Read a CSV-like text file or a ``.parquet`` file into a :class:`Table` (see the module docstring).
+
+    Parameters
+    ----------
+    path : path
+        The file. Text: UTF-8 (a byte-order mark is skipped), or Latin-1 if it is not UTF-8; lines starting with
+        ``#`` and blank lines are skipped; the first other line is the header.
+    delimiter : str, optional
+        ``","``, ``";"``, ``"\\t"`` (or ``"tab"``), ``"|"``, ``"whitespace"``; default: detected.
+    decimal : {".", ","}
+        The decimal mark of the numbers (``,`` only with another delimiter).
+
+    Raises
+    ------
+    DataFileError
+        Naming the file (and line): not found as a file, binary, empty, no delimiter that splits the lines
+        consistently, a row with a different number of fields than the header, duplicate column names.
+    FileNotFoundError
+        If the file does not exist.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(2, "No such file", str(p))
+    if not p.is_file():
+        raise DataFileError(f"{p}: not a file")
+    if decimal not in (".", ","):
+        raise DataFileError(f"{p}: the decimal mark must be '.' or ','. Got {decimal!r} instead.")
+    if delimiter == "tab":
+        delimiter = "\t"
+    if delimiter is not None and delimiter not in (*DELIMITERS, "whitespace"):
+        raise DataFileError(
+            f"{p}: the delimiter must be one of ',', ';', 'tab', '|', 'whitespace'. Got {delimiter!r} instead."
+        )
+    if decimal == "," and delimiter == ",":
+        raise DataFileError(f"{p}: ',' cannot be both the delimiter and the decimal mark")
+    if p.suffix.lower() == ".parquet":
+        return _read_parquet(p, decimal)
+    data = p.read_bytes()
+    if b"\x00" in data[:4096]:
+        raise DataFileError(f"{p}: not a text table (binary content); expected CSV-like text or a .parquet file")
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = data.decode("latin-1")
+    numbered = [
+        (n, line)
+        for n, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not numbered:
+        raise DataFileError(f"{p}: empty file: expected a header line and rows of numbers")
+    if delimiter is None:
+        delimiter = _detect_delimiter(p, [line for _, line in numbered[:_SNIFF_LINES]], decimal)
+    rows = [_split(line, delimiter) for _, line in numbered]
+    header = [c.strip() for c in rows[0]]
+    header_line = numbered[0][0]
+    # a delimiter closing every line (spreadsheet exports) makes an empty last column: drop it
+    if header and header[-1] == "" and all(len(r) == len(header) and r[-1].strip() == "" for r in rows[1:]):
+        header, rows = header[:-1], [r[:-1] for r in rows]
+    if any(c == "" for c in header):
+        raise DataFileError(f"{p}: line {header_line}: the header has an empty column name: {header!r}")
+    seen = set()
+    for c in header:
+        if c in seen:
+            raise DataFileError(f"{p}: line {header_line}: column {c!r} appears twice in the header")
+        seen.add(c)
+    body, lines = [], []
+    for (n, _), row in zip(numbered[1:], rows[1:], strict=True):
+        if len(row) != len(header):
+            raise DataFileError(
+                f"{p}: line {n} has {len(row)} fields, the header (line {header_line}) has {len(header)}"
+            )
+        body.append(row)
+        lines.append(n)
+    return Table(str(p), header, body, lines, delimiter, decimal, "line")
+
+
+def _split(line: str, delimiter: str) -> list[str]:
+    if delimiter == "whitespace":
+        return next(csv.reader([line.strip()], delimiter=" ", skipinitialspace=True))
+    return next(csv.reader([line], delimiter=delimiter))
+
+
+def _detect_delimiter(p: Path, lines: list[str], decimal: str) -> str:
+    best, best_fields = None, 1
+    for d in DELIMITERS:
+        if d == decimal:
+            continue
+        counts = {len(_split(line, d)) for line in lines}
+        if len(counts) == 1 and (n := counts.pop()) > best_fields:
+            best, best_fields = d, n
+    if best is not None:
+        return best
+    counts = {len(_split(line, "whitespace")) for line in lines}
+    if len(counts) == 1 and counts.pop() > 1:
+        return "whitespace"
+    raise DataFileError(
+        f"{p}: no delimiter splits the first {len(lines)} lines into the same number of columns (tried ',', ';', "
+        "tab, '|' and blanks); give the delimiter"
+    )
+
+
+def _read_parquet(p: Path, decimal: str) -> Table:
+    import pyarrow.parquet as pq
+
+    try:
+        table = pq.read_table(p)
+    except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
+        raise DataFileError(f"{p}: not a readable Parquet file ({exc})") from None
+    columns = [str(c) for c in table.column_names]
+    values = [table.column(c).to_pylist() for c in table.column_names]
+    rows = [
+        ["" if v is None else repr(float(v)) if isinstance(v, float) else str(v) for v in row]
+        for row in zip(*values, strict=True)
+    ]
+    return Table(str(p), columns, rows, list(range(1, len(rows) + 1)), None, ".", "row")

@@ -1,0 +1,173 @@
+"""A rig's record files, read for ``flexdigit calibrate`` (CSV-like text or Parquet, one row per sample).
+
+Columns are named as ``flexdigit identify`` reads them, the unit after the last underscore:
+
+- gauges ``gauge1_v`` .. ``gauge3_v`` or ``sg1_v`` .. (``_mv`` for millivolts), as the twin and a DAQ write them;
+- ``command`` (or ``cmd``): the servo command, an integer 0..254;
+- ``time_s`` (or ``time_ms``, or ``time`` with ``time_unit``);
+- numbers with ``.`` as the decimal mark, or ``,`` when told (``--decimal ,``); any common delimiter (detected);
+- deflections ``y1_mm`` .. ``y3_mm`` (or ``sg1_mm``, ``gauge1_mm``, ``y_sg1_mm``; ``_cm``, ``_m``): the
+  deflection at each gauge position, as thesis table 3.6 gives it (an empty cell: not read).
+
+What each record is (thesis sections in brackets):
+
+- **release test** (3.1.2): time and the gauge channels of the digit released from a deflection, cable removed,
+  bare or housed; every gauge channel found is identified (:func:`~flexdigit.calibrate.targets.release_figures`);
+- **actuation sweep** (3.4.3, E 3.20-3.22): ``command`` and the three gauges, settled readings at each command
+  (several a command allowed);
+- **deflection table** (3.4.1, table 3.6): ``command`` and the three deflections;
+- **rest record**: time and the three gauges of the resting rig (white noise and drift);
+- **actuated rest** (repeatability): ``command`` (one value) and the three gauges, repeated readings of the
+  unloaded digit lying horizontal, tapped before each reading.
+
+Every problem names the file, and the line and column where there is one.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from flexdigit._table import Table, read_table
+from flexdigit.errors import DataFileError
+
+#: Gauge-voltage units and their factor to V.
+VOLT_UNITS = {"v": 1.0, "mv": 1e-3}
+#: Deflection units and their factor to mm.
+LENGTH_UNITS = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
+#: Time units and their factor to s.
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
+GAUGES = (1, 2, 3)
+
+_GAUGE_NAME = re.compile(r"^(?:sg|gauge)(\d+)_([a-z]+)$")
+_DEFLECTION_NAME = re.compile(r"^(?:y_?(?:sg|gauge)?|sg|gauge)(\d+)_([a-z]+)$")
+
+
+def _gauge_columns(table: Table, pattern: re.Pattern, units: dict[str, float], what: str) -> dict[int, tuple]:
+    """``{gauge: (column, factor)}`` for the columns ``pattern`` matches with a unit of ``units``."""
+    found: dict[int, list[tuple[str, float]]] = {}
+    for column in table.columns:
+        m = pattern.match(column.strip().lower())
+        if m and m.group(2) in units:
+            found.setdefault(int(m.group(1)), []).append((column, units[m.group(2)]))
+    out = {}
+    for gauge, columns in found.items():
+        if len(columns) > 1:
+            names = ", ".join(repr(c) for c, _ in columns)
+            raise DataFileError(f"{table.source}: gauge {gauge} has several {what} columns ({names}); keep one")
+        out[gauge] = columns[0]
+    return out
+
+
+def _three_gauges(table: Table, pattern: re.Pattern, units: dict[str, float], what: str, example: str):
+    columns = _gauge_columns(table, pattern, units, what)
+    missing = [g for g in GAUGES if g not in columns]
+    if missing:
+        raise DataFileError(
+            f"{table.source}: no {what} column for gauge {missing[0]} (expected e.g. {example.format(g=missing[0])}; "
+            f"columns: {', '.join(table.columns)})"
+        )
+    return [columns[g] for g in GAUGES]
+
+
+def _volts(table: Table, *, allow_empty: bool = False) -> np.ndarray:
+    cols = _three_gauges(table, _GAUGE_NAME, VOLT_UNITS, "gauge-voltage", "gauge{g}_v or sg{g}_mv")
+    return np.column_stack([table.numbers(c, allow_empty=allow_empty) * f for c, f in cols])
+
+
+def _commands(table: Table) -> np.ndarray:
+    name = next((c for c in table.columns if c.strip().lower() in ("command", "cmd")), None)
+    if name is None:
+        raise DataFileError(f"{table.source}: no 'command' column (columns: {', '.join(table.columns)})")
+    values = table.numbers(name)
+    for i, v in enumerate(values):
+        if v != round(v) or not 0 <= v <= 254:
+            raise DataFileError(
+                f"{table.source}: {table.where(i)}, column {name!r}: {v:g} is not a servo command (an integer 0..254)"
+            )
+    return values.astype(int)
+
+
+def _time_s(table: Table, time_unit: str | None) -> np.ndarray:
+    for column in table.columns:
+        stem, _, unit = column.strip().lower().rpartition("_")
+        if (stem or unit) in ("time", "t") and (stem == "" or unit in TIME_UNITS):
+            unit = time_unit or (unit if stem else None)
+            if unit not in TIME_UNITS:
+                raise DataFileError(
+                    f"{table.source}: column {column!r} has no time unit: name it time_s or time_ms, or give the "
+                    "time unit (s, ms, us)"
+                )
+            t = table.numbers(column) * TIME_UNITS[unit]
+            back = np.nonzero(np.diff(t) <= 0)[0]
+            if back.size:
+                i = int(back[0]) + 1
+                raise DataFileError(
+                    f"{table.source}: {table.where(i)}, column {column!r}: time must increase, got {t[i]:g} s after "
+                    f"{t[i - 1]:g} s"
+                )
+            return t
+    raise DataFileError(
+        f"{table.source}: no time column (time_s, time_ms or time); columns: {', '.join(table.columns)}"
+    )
+
+
+def read_release(path: str | Path, *, time_unit: str | None = None, decimal: str = ".") -> list:
+    """Every gauge channel of a release-test file as a :class:`~flexdigit.identify.timeseries.TimeSeries`,
+    read by ``identify``'s own reader (so the file reads as ``flexdigit identify release`` reads it)."""
+    from flexdigit.identify.timeseries import read_timeseries
+
+    table = read_table(path, decimal=decimal)
+    columns = _gauge_columns(table, _GAUGE_NAME, VOLT_UNITS, "gauge-voltage")
+    if not columns:
+        raise DataFileError(
+            f"{path}: no gauge channel (gauge1_v .. gauge3_v, or sg1_v ..; _mv for millivolts); columns: "
+            + ", ".join(table.columns)
+        )
+    return [read_timeseries(path, columns[g][0], time_unit=time_unit) for g in sorted(columns)]
+
+
+def read_sweep(path: str | Path, *, decimal: str = ".") -> tuple[np.ndarray, np.ndarray]:
+    """``(commands, volts (N, 3))`` of an actuation-sweep file."""
+    table = read_table(path, decimal=decimal)
+    _at_least(table, 2, "an actuation sweep")
+    return _commands(table), _volts(table)
+
+
+def read_deflections(path: str | Path, *, decimal: str = ".") -> tuple[np.ndarray, np.ndarray]:
+    """``(commands, mm (3, N))`` of a deflection table; NaN where a cell is empty (not read)."""
+    table = read_table(path, decimal=decimal)
+    _at_least(table, 1, "a deflection table")
+    commands = _commands(table)
+    cols = _three_gauges(table, _DEFLECTION_NAME, LENGTH_UNITS, "deflection", "y{g}_mm")
+    mm = np.vstack([table.numbers(c, allow_empty=True) * f for c, f in cols])
+    repeated = [c for c in set(commands.tolist()) if np.sum(commands == c) > 1]
+    if repeated:
+        raise DataFileError(f"{path}: command {repeated[0]} appears twice in the deflection table; give one row each")
+    return commands, mm
+
+
+def read_rest(path: str | Path, *, time_unit: str | None = None, decimal: str = ".") -> tuple[np.ndarray, np.ndarray]:
+    """``(time_s, volts (N, 3))`` of a record of the resting rig."""
+    table = read_table(path, decimal=decimal)
+    _at_least(table, 16, "a rest record")
+    return _time_s(table, time_unit), _volts(table)
+
+
+def read_actuated_rest(path: str | Path, *, decimal: str = ".") -> tuple[int, np.ndarray]:
+    """``(command, volts (N, 3))`` of repeated readings of the unloaded, actuated digit at one command."""
+    table = read_table(path, decimal=decimal)
+    _at_least(table, 3, "an actuated-rest record")
+    commands = _commands(table)
+    if np.unique(commands).size != 1:
+        raise DataFileError(
+            f"{path}: an actuated-rest record holds one command; this one has {sorted(set(commands.tolist()))}"
+        )
+    return int(commands[0]), _volts(table)
+
+
+def _at_least(table: Table, n: int, what: str) -> None:
+    if len(table) < n:
+        raise DataFileError(f"{table.source}: {what} needs at least {n} rows; this file has {len(table)}")
