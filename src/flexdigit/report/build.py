@@ -91,7 +91,8 @@ def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext)
         "<!doctype html><html><head><meta charset='utf-8'><title>flexdigit: the thesis reproduced</title>",
         f"<style>{_CSS}</style></head><body>",
         "<h1>The cable-actuated flexible digit, reproduced on its digital twin</h1>",
-        f"<p>flexdigit {html.escape(__version__)}, seed {ctx.seed}{', fast mode' if ctx.fast else ''}. "
+        f"<p>flexdigit {html.escape(__version__)}, seed {ctx.seed}{', fast mode' if ctx.fast else ''}, "
+        f"twin calibration: {html.escape(_calibration_source())}. "
         "Each entry puts the figure as printed in the thesis beside ours: <span class='match'>match</span>, "
         "<span class='discrepancy'>discrepancy</span> (the note explains it and gives the corrected figure) or "
         "<span class='new'>new</span> (not in the thesis). The same entries are in <code>results.json</code>.</p>",
@@ -130,3 +131,10 @@ def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext)
         parts.append(f"<h2>{html.escape(module_name)}: failed</h2><div class='failed'>{html.escape(error)}</div>")
     parts.append("</body></html>\n")
     return "\n".join(parts)
+
+
+def _calibration_source() -> str:
+    from flexdigit.twin.calibration import default_calibration_source
+
+    source = default_calibration_source()
+    return "packaged (fitted to the thesis)" if source == "packaged" else source

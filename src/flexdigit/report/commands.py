@@ -18,6 +18,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", default="report", help="output folder (default: report/)")
     parser.add_argument("--seed", type=int, default=0, help="seed of every random stream (default 0)")
     parser.add_argument("--params", help="rig parameter TOML (default: the thesis rig)")
+    parser.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (default: fitted to the thesis)")
     parser.add_argument("--fast", action="store_true", help="smaller sweeps, for a quick look")
 
 
@@ -31,7 +32,14 @@ def _reproduce(args: argparse.Namespace) -> CommandResult:
         if not args.json:
             print(f"  {name} ...", file=sys.stderr, flush=True)
 
-    summary = reproduce(args.out, params=params, seed=args.seed, fast=args.fast, progress=progress)
+    if args.calibration:  # every twin of every chapter on the user's calibration (flexdigit calibrate's file)
+        from flexdigit.twin.calibration import load_calibration_record, use_calibration
+
+        calibration, fit = load_calibration_record(args.calibration)
+        with use_calibration(calibration, source=str(args.calibration), fit=fit):
+            summary = reproduce(args.out, params=params, seed=args.seed, fast=args.fast, progress=progress)
+    else:
+        summary = reproduce(args.out, params=params, seed=args.seed, fast=args.fast, progress=progress)
     lines = [
         f"report written to {summary.out_dir / 'index.html'} and {summary.out_dir / 'results.json'}",
         f"{summary.entries} entries: " + ", ".join(f"{n} {s}" for s, n in summary.counts.items()),

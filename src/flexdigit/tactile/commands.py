@@ -18,6 +18,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
     p.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv); resumes its journal")
     p.add_argument("--seed", type=int, default=0, help="seed of the twin's noise (sim backends)")
+    p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (sim backends; default: the thesis's)")
     p.add_argument("--settle", type=float, default=None, help="settle time per setting, s (default: protocol's)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -44,6 +45,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _collect(args: argparse.Namespace) -> CommandResult:
     from pathlib import Path
 
+    from flexdigit.errors import ParameterError
     from flexdigit.rig.base import open_rig, parse_rig_url
     from flexdigit.tactile.protocols import load_protocol
     from flexdigit.tactile.runner import collect, journal_path
@@ -53,11 +55,16 @@ def _collect(args: argparse.Namespace) -> CommandResult:
     out = Path(args.out)
     resumed = journal_path(out).exists()
     # on the twin, lie the digit as the protocol says and attach the cable only when it actuates
-    options = (
-        {"seed": args.seed, **sim_options(protocol, args.backend)}
-        if parse_rig_url(args.backend).scheme.startswith("sim")
-        else {}
-    )
+    on_twin = parse_rig_url(args.backend).scheme.startswith("sim")
+    if args.calibration and not on_twin:
+        raise ParameterError(
+            f"--calibration calibrates the twin: it needs a sim backend, not {args.backend!r} (a real rig is itself)"
+        )
+    options = {"seed": args.seed, **sim_options(protocol, args.backend)} if on_twin else {}
+    if args.calibration:
+        from flexdigit.twin.calibration import load_calibration
+
+        options["calibration"] = load_calibration(args.calibration)
     rig = open_rig(args.backend, **options)
     try:
         dataset = collect(protocol, rig, out, rig_url=args.backend, settle_s=args.settle, progress=not args.no_progress)
