@@ -1,5 +1,6 @@
 import json
 
+import numpy as np
 import pytest
 
 from flexdigit.cli import main
@@ -62,3 +63,31 @@ def test_contact_target_and_bad_files_give_one_line_errors(dataset_file, tmp_pat
     assert "not a model file" in capsys.readouterr().err
     assert main(["collect", "no-such-protocol", "--out", str(tmp_path / "x.parquet")]) == 2
     assert "no protocol 'no-such-protocol'" in capsys.readouterr().err
+
+
+def test_collect_on_the_twin_uses_the_given_calibration(tmp_path, capsys):
+    # the same protocol and seed on two calibrations: the gauge volts scale with the channel gains
+    from flexdigit.tactile.dataset import load_dataset
+    from flexdigit.twin.calibration import packaged_calibration, save_calibration
+
+    protocol = tmp_path / "tiny.toml"
+    protocol.write_text(
+        'name = "tiny"\nloads_g = [25.0]\npositions_from_tip_cm = [2, 8]\nrepetitions = 2\n'
+        "no_load_repetitions = 2\nsettle_s = 0.5\n"
+    )
+    base = packaged_calibration().replace(noise_white_v=(0.0,) * 3, noise_drift_v_per_sqrt_s=(0.0,) * 3)
+    doubled = base.replace(channel_gain=tuple(2 * g for g in base.channel_gain))
+    runs = {}
+    for name, cal in (("base", base), ("doubled", doubled)):
+        path = save_calibration(cal, tmp_path / f"{name}.toml")
+        out = tmp_path / f"{name}.parquet"
+        assert main(["collect", str(protocol), "--calibration", str(path), "--out", str(out), "--no-progress"]) == 0
+        runs[name] = load_dataset(out)
+    offsets = np.array(base.channel_offset_v)
+    np.testing.assert_allclose(
+        runs["doubled"].gauges_v - offsets, 2 * (runs["base"].gauges_v - offsets), rtol=1e-3, atol=2e-4
+    )  # 16-bit ADC steps of 0.15 mV
+    capsys.readouterr()
+    args = ["collect", str(protocol), "--backend", "replay:///nope.jsonl", "--calibration", str(path)]
+    assert main([*args, "--out", str(tmp_path / "x.parquet")]) == 2
+    assert "--calibration calibrates the twin: it needs a sim backend" in capsys.readouterr().err
