@@ -1,4 +1,4 @@
-"""``flexdigit collect``, ``flexdigit train`` and ``flexdigit predict``: tactile experiments from the shell."""
+"""``flexdigit collect``, ``dataset import``, ``train`` and ``predict``: tactile experiments from the shell."""
 
 from __future__ import annotations
 
@@ -21,6 +21,44 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (sim backends; default: the thesis's)")
     p.add_argument("--settle", type=float, default=None, help="settle time per setting, s (default: protocol's)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+    p = add_command(
+        subparsers,
+        "dataset",
+        _dataset,
+        help="import tactile readings from another rig (its own columns and units) as a dataset",
+    )
+    sub = p.add_subparsers(dest="action", metavar="ACTION", required=True)
+    q = sub.add_parser(
+        "import",
+        help="map a foreign readings file (CSV-like or Parquet) onto a dataset train and predict take",
+        description="Map a foreign tactile readings file onto a flexdigit dataset. The column map comes from --map "
+        "(a TOML with the keys below, without the dashes: gauges, gauge_unit, load, ...) and/or the flags, which win.",
+    )
+    q.add_argument("file", help="the readings: CSV-like text (delimiter detected) or .parquet")
+    q.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv)")
+    q.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    q.add_argument("--map", metavar="TOML", help='column map file (keys as the flags, e.g. gauge_unit = "mV")')
+    q.add_argument("--gauges", metavar="A,B,C", help="the three gauge columns, gauge 1 (nearest the clamp) first")
+    q.add_argument("--gauge-unit", choices=("V", "mV"), help="unit of the gauge (and pot) columns (default V)")
+    q.add_argument("--load", metavar="COLUMN", help="the hung mass (0 = no load)")
+    q.add_argument("--load-unit", choices=("kg", "g"), help="default kg")
+    q.add_argument("--position", metavar="COLUMN", help="where the load hangs (may be empty on no-load rows)")
+    q.add_argument("--position-unit", choices=("m", "cm", "mm"), help="default m")
+    q.add_argument("--position-from", choices=("tip", "clamp"), help="what the position is measured from (default tip)")
+    q.add_argument("--digit-length-m", type=float, help="clamp to tip, m (default: the rig's, 0.27)")
+    q.add_argument("--command", metavar="COLUMN", help="servo command column (default: none, servo relaxed)")
+    q.add_argument("--repetition", metavar="COLUMN", help="repetition column (default: counted)")
+    q.add_argument("--test", metavar="COLUMN", help="test column (default: derived, see the README)")
+    q.add_argument("--time", metavar="COLUMN", help="time column (default: none)")
+    q.add_argument("--time-unit", choices=("s", "ms"), help="default s")
+    q.add_argument("--pot", metavar="COLUMN", help="potentiometer column, in the gauge unit (default: none)")
+    q.add_argument("--delimiter", choices=(",", ";", "tab", "|", "whitespace"), help="default: detected")
+    q.add_argument("--decimal", choices=(".", ","), help="decimal mark (default .)")
+    q.add_argument("--name", help="the dataset's protocol name (default: imported:<file stem>)")
+    q.add_argument("--orientation", choices=("horizontal", "vertical"), help="how the digit lay (default horizontal)")
+    q.add_argument("--params", metavar="FILE", help="rig parameters TOML (for the digit length)")
+    q.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
     p = add_command(subparsers, "train", _train, help="train the thesis's network on a dataset and save it as JSON")
     p.add_argument("file", help="a dataset written by 'flexdigit collect'")
@@ -72,6 +110,60 @@ def _collect(args: argparse.Namespace) -> CommandResult:
         rig.close()
     data = {"protocol": protocol.name, "samples": len(dataset), "out": str(out), "resumed": resumed}
     text = f"{protocol.name}: {len(dataset)} readings written to {out}" + (" (resumed)" if resumed else "")
+    return CommandResult(data=data, text=text)
+
+
+def _dataset(args: argparse.Namespace) -> CommandResult:
+    import numpy as np
+
+    from flexdigit._io import atomic_path, check_output
+    from flexdigit.errors import ParameterError
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.tactile.dataset import export_csv, save_dataset
+    from flexdigit.tactile.importer import ROLES, ColumnMap, import_readings
+
+    out = check_output(args.out, force=args.force)
+    flags = {
+        key: getattr(args, key)
+        for key in (
+            "gauge_unit", "load", "load_unit", "position", "position_unit", "position_from", "digit_length_m",
+            "command", "repetition", "test", "time", "time_unit", "pot", "delimiter", "decimal", "name",
+            "orientation",
+        )
+    }  # fmt: skip
+    if args.gauges is not None:
+        flags["gauges"] = tuple(g.strip() for g in args.gauges.split(","))
+    if args.map:
+        cmap = ColumnMap.from_toml(args.map, **flags)
+    else:
+        missing = [flag for flag, key in (("--gauges", "gauges"), ("--load", "load"), ("--position", "position"))
+                   if flags.get(key) is None]  # fmt: skip
+        if missing:
+            raise ParameterError(
+                f"dataset import needs {missing[0]} (the {ROLES[missing[0][2:]]}): give the flags or a --map TOML"
+            )
+        cmap = ColumnMap.build({}, flags, source="the column flags")
+    params = load_params(args.params) if args.params else RigParams()
+    dataset = import_readings(args.file, cmap, params=params)
+    with atomic_path(out, force=args.force) as tmp:
+        (export_csv if out.suffix.lower() == ".csv" else save_dataset)(dataset, tmp)
+    protocol = dataset.protocol
+    loaded = int(np.sum(dataset["load_kg"] > 0))
+    data = {
+        "out": str(out),
+        "samples": len(dataset),
+        "loaded": loaded,
+        "no_load": len(dataset) - loaded,
+        "protocol": protocol.to_dict(),
+        "tests": int(np.unique(dataset["test"]).size),
+        "derived": dataset.meta["rig"]["derived"],
+        "delimiter": dataset.meta["rig"]["delimiter"],
+    }
+    text = (
+        f"{args.file}: {len(dataset)} readings ({loaded} loaded, {len(dataset) - loaded} no load; "
+        f"{len(protocol.loads_kg)} loads, {len(protocol.positions_from_tip_m)} positions, "
+        f"{len(protocol.actuation_commands) or 'no'} commands, {data['tests']} tests) -> {out}"
+    )
     return CommandResult(data=data, text=text)
 
 

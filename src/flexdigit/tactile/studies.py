@@ -33,16 +33,19 @@ def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
     """Subtract from every test's readings the mean of its no-load readings (taken at its start, 6.5, 7.2).
 
     Returns the tared dataset and, per reading, the seconds since its tare (since the first reading for tests
-    without no-load readings, which are left as they are).
+    without no-load readings, which are left as they are; 0 when the readings have no times, e.g. imported).
     """
     gauges = dataset.gauges_v.copy()
-    since = dataset["time_s"] - dataset["time_s"].min()
+    time = dataset["time_s"]
+    if not np.all(np.isfinite(time)):  # readings imported without times: none accrues drift since its tare
+        time = np.zeros(len(dataset))
+    since = time - time.min()
     for test in np.unique(dataset["test"]):
         rows = dataset["test"] == test
         zero = rows & (dataset["load_kg"] == 0)
         if zero.any():
             gauges[rows] -= gauges[zero].mean(axis=0)
-            since[rows] = np.abs(dataset["time_s"][rows] - dataset["time_s"][zero].mean())
+            since[rows] = np.abs(time[rows] - time[zero].mean())
     columns = dict(dataset.columns)
     for i, name in enumerate(("gauge1_v", "gauge2_v", "gauge3_v")):
         columns[name] = gauges[:, i]
