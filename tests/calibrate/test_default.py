@@ -7,20 +7,24 @@ the fit. Tolerances from issue 3: wn and zeta within 3 %, gauge-volt slopes with
 0.5 mm reading resolution where the thesis's own model agrees with its measurement.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from flexdigit.calibrate.fit import calibrate_to_thesis
+from flexdigit.calibrate.fit import calibrate
+from flexdigit.calibrate.friction import LEVEL_XTOL
 from flexdigit.calibrate.targets import CalibrationTargets, release_figures
 from flexdigit.identify.timeseries import series_from_table
 from flexdigit.reference import thesis_value
+from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import default_fit_record, packaged_calibration
 
 RELEASE_RTOL = 0.03
 SLOPE_RTOL = 0.05
 DEFLECTION_ABS_MM = 0.5
-#: The re-fit must land on the packaged values (the fit is deterministic: seeded scores, fixed tolerances)
+#: The re-fit must land on the packaged values (the fit is deterministic: fixed tolerances, seeded scores)
 REFIT_RTOL = 1e-5
 
 #: Record lengths of the simulated release tests (s), as the report uses them: the bare digit's amplitude decays
@@ -79,10 +83,21 @@ def test_deflections_match_table_3_6_where_the_thesis_model_agrees():
 
 @pytest.mark.slow
 def test_recalibrating_reproduces_the_packaged_default():
-    # the friction level's only evidence is the thesis's actuated corr2, scored by the tactile pipeline (minutes)
-    result = calibrate_to_thesis()
+    # Everything but the friction is fitted before it and does not depend on it: re-fitted exactly (seconds).
+    targets = CalibrationTargets.from_thesis()
+    mechanics = calibrate(dataclasses.replace(targets, actuated_test_corr2=None))
     default = packaged_calibration()
     for name, value in default.to_dict().items():
-        np.testing.assert_allclose(getattr(result.calibration, name), value, rtol=REFIT_RTOL, atol=1e-12, err_msg=name)
-    record = default_fit_record()
-    assert len(record["residuals"]) == len(result.residuals)
+        if name != "cable_friction_ratio":
+            np.testing.assert_allclose(
+                getattr(mechanics.calibration, name), value, rtol=REFIT_RTOL, atol=1e-12, err_msg=name
+            )
+    # The friction's only evidence is the thesis's actuated corr2, scored by the tactile pipeline (8 seeded runs of
+    # the experiment per score). Brent's method returns a ratio within LEVEL_XTOL of a crossing of the target, so
+    # the packaged ratio is the re-fit's answer exactly when the score crosses 0.8998 within 2 LEVEL_XTOL of it:
+    # two scores instead of the ten of a full root find (flexdigit calibrate --thesis runs that).
+    ratio = default.cable_friction_ratio
+    below = actuated_corr2_score(mechanics.calibration.replace(cable_friction_ratio=ratio - 2 * LEVEL_XTOL))
+    above = actuated_corr2_score(mechanics.calibration.replace(cable_friction_ratio=ratio + 2 * LEVEL_XTOL))
+    assert below >= targets.actuated_test_corr2 >= above  # corr2 falls as the friction grows
+    assert len(default_fit_record()["residuals"]) == len(mechanics.residuals) + 1  # + the corr2 row

@@ -15,8 +15,11 @@ from flexdigit._validation import check_array, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.twin.calibration import Calibration
 
+#: The friction fit's tolerance on the ratio (absolute): Brent's method returns a level within it of a crossing.
+LEVEL_XTOL = 1e-4
 
-def fit_level(score, target: float, bracket: tuple[float, float] = (0.0, 0.3), xtol: float = 1e-4) -> float:
+
+def fit_level(score, target: float, bracket: tuple[float, float] = (0.0, 0.3), xtol: float = LEVEL_XTOL) -> float:
     """The level ``x`` in ``bracket`` where ``score(x) = target``: a 1-D root find (Brent's method).
 
     For a noise level against a score that falls as the noise grows (corr2). ``score`` should be deterministic
