@@ -217,3 +217,24 @@ def test_an_existing_output_is_refused_before_any_fit_and_thesis_excludes_record
     assert "--thesis fits the thesis's figures: give it alone" in capsys.readouterr().err
     assert main(["calibrate", "--sweep", str(sweep), "--out", str(out), "--deflection-resolution-mm", "0"]) == 2
     assert "--deflection-resolution-mm must be > 0" in capsys.readouterr().err
+
+
+def test_calibrate_thesis_writes_the_packaged_mechanics_and_fits_the_friction_to_the_score(
+    tmp_path, capsys, monkeypatch
+):
+    # the tactile score replaced by a closed form with a known root (corr2 = 1 - 2 ratio: 0.8998 at 0.0501), so
+    # the command's path is checked in seconds; the real score's root is tests/calibrate/test_default.py's
+    def score(calibration, *, params=None):
+        return 1.0 - 2.0 * calibration.cable_friction_ratio
+
+    monkeypatch.setattr("flexdigit.tactile.thesis_experiments.actuated_corr2_score", score)
+    out = tmp_path / "thesis.toml"
+    assert main(["calibrate", "--thesis", "--out", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    got, fit = load_calibration_record(out)
+    assert got.cable_friction_ratio == pytest.approx((1 - 0.8998) / 2, abs=1e-4)
+    default = packaged_calibration()
+    np.testing.assert_allclose(got.housing_ei_n_m2, default.housing_ei_n_m2, rtol=1e-5)
+    np.testing.assert_allclose(got.channel_gain, default.channel_gain, rtol=1e-5)
+    assert report["residuals"][-1]["target"] == "actuated test corr2 (7.5)"
+    assert fit["source"].startswith("calibrate(CalibrationTargets.from_thesis()")
