@@ -276,3 +276,27 @@ def test_the_importer_refuses_rather_than_guesses_a_delimiter(tmp_path):
     path.write_text("a,b,c,m,x\n1,2,3,25\n1;2;3;25;4\n")
     with pytest.raises(DataFileError, match="no delimiter splits the first 3 lines"):
         import_readings(path, ColumnMap(gauges=("a", "b", "c"), load="m", position="x"))
+
+
+@pytest.mark.slow
+def test_every_estimator_and_study_runs_on_an_imported_dataset(tmp_path):
+    # the estimators of tactile.studies and the 6.2.1 strategies on the closed-form readings imported above:
+    # every score finite, the learned ones locating the load to a few cm on this easy data
+    from flexdigit.tactile.bounds import TwinGaugeModel
+    from flexdigit.tactile.pipeline import compare_strategies
+    from flexdigit.tactile.studies import ESTIMATORS, localisation_study
+
+    rows, _ = cantilever_rows()
+    src = write_foreign(tmp_path / "lab.csv", HEADER, rows)
+    cmap = ColumnMap(
+        gauges=tuple(HEADER[:3]), gauge_unit="mV", load=HEADER[3], load_unit="g", position=HEADER[4],
+        position_unit="mm", position_from="clamp", decimal=",",
+    )  # fmt: skip
+    ds = import_readings(src, cmap)
+    loc = localisation_study(ds, TwinGaugeModel(), fast=True, epochs=5)
+    assert set(loc.position_rmse_m) == set(ESTIMATORS)
+    assert all(np.isfinite(v) for v in loc.position_rmse_m.values())
+    assert np.isfinite(loc.crlb_rms_identifiable_m)  # no time column: no drift, not NaN
+    assert loc.position_rmse_m["Gaussian process"] < 0.02
+    scores = compare_strategies(ds, hidden=6, tol=1e-5, epochs=5)
+    assert len(scores) == 3 and all(np.isfinite(s.position_corr2) for s in scores)
