@@ -238,3 +238,30 @@ def test_calibrate_thesis_writes_the_packaged_mechanics_and_fits_the_friction_to
     np.testing.assert_allclose(got.channel_gain, default.channel_gain, rtol=1e-5)
     assert report["residuals"][-1]["target"] == "actuated test corr2 (7.5)"
     assert fit["source"].startswith("calibrate(CalibrationTargets.from_thesis()")
+
+
+@pytest.mark.slow
+def test_records_the_twin_cannot_reproduce_together_are_refused_unless_allowed(tmp_path, capsys):
+    # a deflection table of the packaged twin at 0.1 mm, then the same with gauge 3 read in the wrong unit (x10,
+    # cm taken for mm): the first calibrates cleanly, the second is refused naming the target it misses most
+    from flexdigit.calibrate.synthetic import write_csv
+    from flexdigit.params import RigParams
+    from flexdigit.twin.twin import Twin
+
+    params = RigParams()
+    rows = []
+    for command in range(8, 44, 5):
+        y = Twin(params, packaged_calibration(), command=command).deflection_m(params.geometry.gauge_positions_m)
+        rows.append([command, *np.round(y * 1e4) / 10])
+    good = write_csv(tmp_path / "good.csv", ["command", "y1_mm", "y2_mm", "y3_mm"], rows)
+    slip = write_csv(tmp_path / "slip.csv", ["command", "y1_mm", "y2_mm", "y3_mm"], [r[:3] + [10 * r[3]] for r in rows])
+    common = ["--deflection-resolution-mm", "0.1", "--json"]
+    assert main(["calibrate", "--deflections", str(good), "--out", str(tmp_path / "good.toml"), *common]) == 0
+    assert json.loads(capsys.readouterr().out)["worst"]["times_scale"] < 1.0
+    out = tmp_path / "slip.toml"
+    assert main(["calibrate", "--deflections", str(slip), "--out", str(out), *common]) == 2
+    err = capsys.readouterr().err
+    assert re.search(r"misses deflection gauge \d @ \d+ \(as table 3\.6\) by .* cannot reproduce these records", err)
+    assert "--allow-poor-fit" in err and not out.exists()
+    assert main(["calibrate", "--deflections", str(slip), "--out", str(out), "--allow-poor-fit", *common]) == 0
+    assert json.loads(capsys.readouterr().out)["worst"]["times_scale"] > 3.0 and out.exists()

@@ -13,6 +13,10 @@ import argparse
 
 from flexdigit._command import CommandResult, add_command
 
+#: A fit that misses a release test's wn or zeta by more than this many percent, or a deflection by more than this
+#: many reading resolutions, is refused (unless --allow-poor-fit): the twin cannot reproduce those records together
+#: (records of different rigs or set-ups mixed, a unit slip, a gauge wired to the wrong channel...).
+POOR_FIT = 3.0
 RECORDS = ("release_bare", "release_housed", "sweep", "deflections", "rest", "actuated_rest")
 
 
@@ -38,6 +42,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
     p.add_argument("--decimal", choices=(".", ","), default=".", help="decimal mark of the tables (default '.')")
     p.add_argument("--thesis", action="store_true", help="fit to the thesis's figures instead (minutes: the friction)")
+    p.add_argument(
+        "--allow-poor-fit",
+        action="store_true",
+        help=f"write the calibration even if the twin misses a target by more than {POOR_FIT:g} of its scale",
+    )
     p.add_argument("--initial", metavar="FILE", help="calibration to start from (default: the packaged one)")
     p.add_argument("--params", metavar="FILE", help="rig parameters TOML (default: the thesis rig)")
 
@@ -97,6 +106,14 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
         result = calibrate(targets, params, initial=initial)
         if not result.success:
             raise DesignError(f"the fit did not converge ({result.message}); no calibration written to {out}")
+        row, miss = result.worst()
+        if miss > POOR_FIT and not args.allow_poor_fit:
+            raise DesignError(
+                f"the calibrated twin misses {row['target']} by {row['twin'] - row['measured']:+.4g} {row['unit']} "
+                f"({miss:.1f} times its scale of {row['scale']:.3g} {row['unit']}): it cannot reproduce these records "
+                f"together (different rigs or set-ups mixed? a unit slip?); no calibration written to {out} (pass "
+                "--allow-poor-fit to write it anyway)"
+            )
         source = "flexdigit calibrate " + " ".join(
             f"--{name.replace('_', '-')} {path}"
             for name, paths in given.items()
@@ -107,9 +124,11 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
         fit["release_tests"] = {key: _release_summary(fig) for key, fig in releases.items()}
     save_calibration(result.calibration, out, fit, force=args.force)
     rows = result.residual_rows()
+    row, miss = result.worst()
     data = {
         "out": str(out),
         "success": result.success,
+        "worst": None if row is None else {"target": row["target"], "times_scale": miss},
         "message": result.message,
         "cost": result.cost,
         "fitted": result.fitted,

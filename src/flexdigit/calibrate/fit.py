@@ -34,7 +34,8 @@ from flexdigit.twin.calibration import Calibration
 #: identifies is held at its initial value (a least-squares step would move it along a flat valley).
 MECHANICS = {
     "support_mass_kg": ("bare_wn_rad_s", "housing_wn_rad_s"),
-    "housing_ei_n_m2": ("housing_wn_rad_s", "deflection_mm"),
+    # deflections alone cannot: with a stiff cable the tip turns as far as the pulley pulls whatever the housing
+    "housing_ei_n_m2": ("housing_wn_rad_s",),
     "housing_base_factor": ("deflection_mm",),
     "strip_beta_s": ("bare_zeta", "housing_zeta"),
     "housing_beta_s": ("housing_zeta",),
@@ -50,7 +51,8 @@ class CalibrationResult:
     ----------
     calibration : Calibration
     residuals : list of dict
-        One row per target: ``target``, ``measured``, ``twin`` (the calibrated twin's value), ``unit``.
+        One row per target: ``target``, ``measured``, ``twin`` (the calibrated twin's value), ``unit``, and for the
+        mechanical targets ``scale``, the miss the fit weighs as one (1 % of wn or zeta, a deflection's resolution).
     cost : float
         The mechanical fit's final cost (half the sum of squared scaled residuals).
     success : bool
@@ -79,6 +81,12 @@ class CalibrationResult:
             relative = residual / abs(float(r["measured"])) if float(r["measured"]) != 0 else None
             rows.append({**r, "residual": residual, "relative": relative})
         return rows
+
+    def worst(self) -> tuple[dict[str, Any] | None, float]:
+        """The target the twin misses most, in units of its scale (1 % of a release test's wn or zeta, the reading
+        resolution of a deflection: what the mechanical fit weighs), and that multiple; ``(None, 0)`` if none."""
+        scaled = [(r, abs(r["twin"] - r["measured"]) / r["scale"]) for r in self.residuals if r.get("scale")]
+        return max(scaled, key=lambda item: item[1], default=(None, 0.0))
 
     def table(self) -> str:
         """The residuals as text, one line per target."""
@@ -307,7 +315,7 @@ def calibrate(
     ):
         target = getattr(t, key + ("_rad_s" if key.endswith("wn") else ""))
         if target is not None:
-            head.append(dict(target=label, measured=float(target), twin=r[key], unit=unit))
+            head.append(dict(target=label, measured=float(target), twin=r[key], unit=unit, scale=0.01 * float(target)))
     if weight is not None:
         for g in range(weight.shape[0]):
             for c, cmd in enumerate(t.deflection_commands):
@@ -318,6 +326,7 @@ def calibrate(
                             measured=float(t.deflection_mm[g][c]),
                             twin=float(r["deflection_mm"][g, c]),
                             unit="mm",
+                            scale=float(t.deflection_resolution_mm),
                         )
                     )
     if t.sweep_commands is not None:
