@@ -6,7 +6,7 @@
 
 The setpoint is a beam-rotation step from rest at t = 0. On the twin the rotation map is calibrated on a separate
 twin first; on hardware the operator is asked for the angle at each calibration command (a protractor), or a
-saved map is loaded with ``--calibration``. The rotation the loop controls is the gauges' estimate; on the sim
+saved map is loaded with ``--rotation-map``. The rotation the loop controls is the gauges' estimate; on the sim
 backends the report also gives the twin's true tip rotation (``true_*`` beside ``estimated_*``).
 """
 
@@ -19,6 +19,11 @@ import sys
 from pathlib import Path
 
 from flexdigit._command import CommandResult, add_command
+
+
+#: The estimated rotation is averaged over a centred 0.1 s window before its step figures are taken: its noise
+#: (~0.2 deg rms on the twin) is half the 2 % band of a 20 deg step (:func:`flexdigit.rig.step_test.step_metrics`).
+ESTIMATE_SMOOTH_S = 0.1
 
 
 def register(subparsers) -> None:
@@ -36,7 +41,15 @@ def register(subparsers) -> None:
     parser.add_argument("--seed", type=int, default=0, help="twin noise seed (sim backends)")
     parser.add_argument("--gain", type=float, default=1.0, help="actuator gain error to emulate (robustness runs)")
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
-    parser.add_argument("--calibration", type=Path, default=None, help="saved rotation map (JSON); made if missing")
+    parser.add_argument(
+        "--rotation-map", type=Path, default=None, help="saved gauge -> rotation map (JSON); made and saved if missing"
+    )
+    parser.add_argument(
+        "--calibration",
+        type=Path,
+        default=None,
+        help="twin calibration TOML for the sim backends (flexdigit calibrate)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no live progress line")
     parser.add_argument(
         "--realtime", action="store_true", help="run the loop under SCHED_FIFO when permitted (hardware, sim+paced)"
@@ -49,6 +62,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
     from flexdigit.rig.loop import realtime_priority, run_loop
     from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation
+    from flexdigit.rig.step_test import step_metrics
 
     if args.controller not in CONTROLLERS:
         from flexdigit.errors import ParameterError
@@ -57,7 +71,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
     duration = check_positive(args.duration, "--duration")
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
     sim = args.backend.split("?")[0].split("://")[0] in ("sim", "sim+paced")
-    options = {"seed": args.seed} if sim else {}
+    options = _twin_options(args, sim)
     rig = open_rig(args.backend, **options)
     try:
         period = check_positive(args.period or rig.params.actuator.serial_period_s, "--period")
@@ -80,6 +94,16 @@ def _run(args: argparse.Namespace) -> CommandResult:
     priority = realtime_priority() if args.realtime else None
     if priority is not None:
         priority.__enter__()
+    deg_per_command = _deg_per_command(rig.params)
+
+    def summary(time_s, estimated_deg) -> dict:
+        figures = {
+            "estimated": step_metrics(time_s, estimated_deg, setpoint, 0.0, deg_per_command, smooth_s=ESTIMATE_SMOOTH_S)
+        }
+        if truth is not None:
+            figures["true"] = step_metrics(time_s[: len(true_rotation)], true_rotation, setpoint, 0.0, deg_per_command)
+        return {name: m.to_dict() for name, m in figures.items()}
+
     try:
         result = run_loop(
             rig,
@@ -91,12 +115,14 @@ def _run(args: argparse.Namespace) -> CommandResult:
             on_sample=on_sample,
             measure=estimator,
             header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend},
+            summary=summary,
         )
     finally:
         if priority is not None:
             priority.__exit__(None, None, None)
-        if progress:
-            progress.stop()
+    figures = summary(result.time_s, result.measurement) if result.time_s.size >= 2 else {}
+    if progress:
+        progress.stop(_figures_line(figures))
     t = result.timing
     final, peak = _final_and_peak(result.time_s, result.measurement)
     true_final, true_peak = _final_and_peak(result.time_s[: len(true_rotation)], true_rotation)
@@ -120,6 +146,15 @@ def _run(args: argparse.Namespace) -> CommandResult:
         # the twin's own tip rotation (sim backends only; null on hardware and replays)
         "true_final_rotation_deg": true_final if has_truth else None,
         "true_peak_rotation_deg": true_peak if has_truth else None,
+        # rise, 2 % settling, overshoot, steady-state error (deg, commands), IAE of the step to the setpoint, from
+        # the estimated rotation and, on the twin, the true one (null where there is none)
+        "step_metrics": {
+            "estimated": figures["estimated"] if figures else None,
+            "true": figures.get("true"),
+            "deg_per_command": deg_per_command,
+            "settling_band": 0.02,
+            "estimate_smoothed_s": ESTIMATE_SMOOTH_S,
+        },
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
     }
@@ -128,11 +163,59 @@ def _run(args: argparse.Namespace) -> CommandResult:
         f"{args.controller} on {args.backend}: {result.status} ({result.message})\n"
         f"  rotation estimated from the gauges: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg"
         f"{truth_text}; last command {data['final_command']}\n"
+        f"  step: {_figures_line(figures)}\n"
         f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
         f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
     )
     exit_code = {"completed": 0, "fault": 1, "interrupted": 130}[result.status]
     return CommandResult(data=data, text=text, exit_code=exit_code)
+
+
+def _deg_per_command(params) -> float:
+    """Beam rotation per servo command of the design model (the cable model's 1.735 deg on the thesis rig)."""
+    import numpy as np
+
+    from flexdigit.control.design20ms import design_plant
+
+    return float(np.real(design_plant(params).dcgain()))
+
+
+def _figures_line(figures: dict) -> str:
+    """The step figures on one line: the estimated rotation's, and the twin's true ones where there are any."""
+    if not figures:
+        return "too few samples for step figures"
+
+    def one(m: dict) -> str:
+        return (
+            f"rise {m['rise_time_s']:.2f} s, settling (2 %) {m['settling_time_s']:.2f} s "
+            f"({m['settling_to_final_s']:.2f} s to its final value), overshoot "
+            f"{m['overshoot_percent']:.1f} %, steady-state error {m['final_error_deg']:+.2f} deg "
+            f"({m['final_error_commands']:+.2f} commands), IAE {m['iae_deg_s']:.2f} deg s"
+        )
+
+    text = f"estimated {one(figures['estimated'])}"
+    if "true" in figures:
+        text += f"; true {one(figures['true'])}"
+    return text
+
+
+def _twin_options(args, sim: bool) -> dict:
+    """Keyword options for a sim backend: the seed and, with ``--calibration``, the twin calibration."""
+    if not sim:
+        if args.calibration is not None:
+            from flexdigit.errors import ParameterError
+
+            raise ParameterError(
+                f"--calibration {args.calibration} is a twin calibration: it applies to the sim backends only "
+                f"(got --backend {args.backend}); a saved rotation map is --rotation-map FILE"
+            )
+        return {}
+    options = {"seed": args.seed}
+    if args.calibration is not None:
+        from flexdigit.twin.calibration import load_calibration
+
+        options["calibration"] = load_calibration(args.calibration)
+    return options
 
 
 def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
@@ -147,15 +230,17 @@ def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
 
 
 def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
-    path = args.calibration
+    path = args.rotation_map
     if path is not None and path.exists():
         return _load_estimator(path, RotationEstimator)
     if sim:
-        est = calibrate_rotation(open_rig(args.backend.split("?")[0], seed=args.seed + 1))
+        est = calibrate_rotation(
+            open_rig(args.backend.split("?")[0], **{**_twin_options(args, sim), "seed": args.seed + 1})
+        )
     elif args.backend.startswith("replay"):
         from flexdigit.errors import ParameterError
 
-        raise ParameterError("a replay cannot be calibrated (it ignores commands); pass --calibration FILE")
+        raise ParameterError("a replay cannot be calibrated (it ignores commands); pass --rotation-map FILE")
     else:
 
         def ask(command: int) -> float:
@@ -200,6 +285,7 @@ class _Progress:
     """A one-line live display (rich): time, rotation, command."""
 
     def __init__(self, duration_s: float) -> None:
+        from rich.console import Console
         from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
         self._p = Progress(
@@ -208,6 +294,7 @@ class _Progress:
             TextColumn("{task.description}"),
             TimeRemainingColumn(),
             transient=True,
+            console=Console(stderr=True),  # stdout carries the result only
         )
         self._task = self._p.add_task("", total=duration_s)
         self._p.start()
@@ -218,5 +305,8 @@ class _Progress:
                 self._task, completed=t, description=f"t {t:6.2f} s  rotation {y:6.2f} deg  command {command:3d}"
             )
 
-    def stop(self) -> None:
+    def stop(self, closing_line: str = "") -> None:
+        """End the live line; leave ``closing_line`` (the step figures) in its place on stderr."""
         self._p.stop()
+        if closing_line:
+            self._p.console.print(f"run: {closing_line}", highlight=False)

@@ -27,6 +27,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.rig.base import Reading, Rig
@@ -225,6 +226,7 @@ def run_loop(
     close_rig: bool = True,
     fsync_every: int = 50,
     header: dict[str, Any] | None = None,
+    summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None,
 ) -> LoopResult:
     """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
 
@@ -253,6 +255,9 @@ def run_loop(
         Stop with a fault when a gauge is NaN or clipped (:func:`check_reading`).
     close_rig : bool
         Close the rig (port) when the loop ends, whatever the reason.
+    summary : callable, optional
+        ``summary(time_s, measurement) -> dict`` of figures (e.g. the step metrics) written into the log's closing
+        record under ``"summary"``, whatever the reason the loop stopped.
 
     Returns
     -------
@@ -356,8 +361,11 @@ def run_loop(
         relaxed = f"digit relaxed to command {equilibrium}" if safe else "could NOT send the safe command (port lost)"
         message = f"{message}{when}; {relaxed}"
     if log is not None:
+        footer: dict[str, Any] = {"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns}
+        if summary is not None and ts:
+            footer["summary"] = to_jsonable(summary(np.array(ts), np.array(ys)))  # NaN/inf -> null
         try:
-            log.write({"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns})
+            log.write(footer)
         finally:
             log.close()
         message = f"{message}; log: {log.path}"
