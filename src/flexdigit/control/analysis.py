@@ -164,7 +164,7 @@ class StepFigures:
 
 
 def _settling_time(t: np.ndarray, error: np.ndarray, band: float) -> float:
-    """Start of the final stretch with ``error <= band`` (interpolated); 0 if always inside, inf if outside at the end."""
+    """Start of the last stretch with ``error <= band`` (interpolated): 0 if never out, inf if out at the end."""
     outside = np.nonzero(error > band)[0]
     if not outside.size:
         return 0.0

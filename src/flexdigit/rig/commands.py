@@ -20,7 +20,6 @@ from pathlib import Path
 
 from flexdigit._command import CommandResult, add_command
 
-
 #: The estimated rotation is averaged over a centred 0.1 s window before its step figures are taken: its noise
 #: (~0.2 deg rms on the twin) is half the 2 % band of a 20 deg step (:func:`flexdigit.rig.step_test.step_metrics`).
 ESTIMATE_SMOOTH_S = 0.1
