@@ -10,6 +10,8 @@ protocol handler::
     serial:///dev/ttyUSB0?baud=9600&channel=0[&daq=0[&pot=3]]   the MILINST servo board, gauges (and pot) from daq
         framing: &sync=0xFF&max_channel=7&max_position=254 (Mini SSC, the defaults)
     daq://0[?pot=3]                         a Measurement Computing card through uldaq (gauges, pot if wired)
+    stream:///dev/ttyACM0?baud=115200       gauges (and pot) from a microcontroller ADC, read-only
+    serial:///dev/ttyUSB0?daq=stream:///dev/ttyACM0&daq.baud=115200   the servo board with the stream's gauges
     replay://run.jsonl                      a recorded run played back
 
 The servo command (0..254, integer) is a unit of its own: :func:`clamp_command` is the one place it is rounded
@@ -283,6 +285,7 @@ BACKENDS: dict[str, str] = {
     "serial": "flexdigit.rig.serial_backend:from_url",
     "daq": "flexdigit.rig.daq_backend:from_url",
     "replay": "flexdigit.rig.replay_backend:from_url",
+    "stream": "flexdigit.rig.stream_backend:from_url",
 }
 
 

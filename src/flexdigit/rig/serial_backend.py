@@ -1,10 +1,12 @@
 """The serial backend: the MILINST servo board over pyserial (thesis 2.5.3, 5.2).
 
 The board only drives the servo; it has no inputs. Gauges come from a separate source (the DAQ card in the thesis):
-pass ``sensor=`` (a callable returning ``(gauges_v, pot_v)``) or ``daq=<board number>`` (and ``pot=<channel>``) in
-the URL. Without one, :meth:`read` returns NaN gauges and the loop stops with a sensor fault rather than control
-blind. The frame layout (sync byte, highest channel and position) is set by URL options or a
-:class:`~flexdigit.rig.servo_board.Framing`; see :func:`from_url`.
+pass ``sensor=`` (a callable returning ``(gauges_v, pot_v)``) or, in the URL, ``daq=<board number>`` (and
+``pot=<channel>``), ``daq=daq://N`` or ``daq=stream://PORT`` (a microcontroller ADC,
+:mod:`flexdigit.rig.stream_backend`); options of the gauge source follow with a ``daq.`` prefix
+(``&daq.baud=115200&daq.scale=0.000125``). Without one, :meth:`read` returns NaN gauges and the loop stops with a
+sensor fault rather than control blind. The frame layout (sync byte, highest channel and position) is set by URL
+options or a :class:`~flexdigit.rig.servo_board.Framing`; see :func:`from_url`.
 
 The port is opened with pyserial's ``serial_for_url``, so ``loop://`` and ``socket://`` work too. A port that
 vanishes mid-run (USB unplugged, board powered off) raises :class:`~flexdigit.errors.RigError` naming the port;
@@ -147,6 +149,44 @@ def _int_option(location: str, key: str, value: Any) -> Any:
         ) from None
 
 
+def _gauge_source(location: str, params, daq: str, pot, source_options: dict, uldaq):
+    """The servo board's gauge source from ``daq=``: an MCC board number, ``daq://N`` or ``stream://PORT``."""
+    from flexdigit.rig.base import parse_rig_url
+    from flexdigit.rig.daq_backend import DaqRig, pot_option
+
+    where = f"serial://{location}"
+    if "://" not in daq:
+        try:
+            board = int(daq)
+        except ValueError:
+            raise ParameterError(
+                f"{where}: option daq={daq!r} must be a board number, daq://BOARD or stream://PORT"
+            ) from None
+        if source_options:
+            raise ParameterError(
+                f"{where}: option daq.{next(iter(source_options))} is for a daq:// or stream:// source"
+            )
+        return DaqRig(board, params, uldaq=uldaq, pot_channel=pot_option(pot, where))
+    try:
+        url = parse_rig_url(daq)
+    except ParameterError:
+        url = None
+    if url is None or url.scheme not in ("daq", "stream"):
+        raise ParameterError(f"{where}: option daq={daq!r} must be a board number, daq://BOARD or stream://PORT")
+    merged = {**url.options, **source_options}
+    if url.scheme == "stream":
+        from flexdigit.rig.stream_backend import source_from_url
+
+        if pot is not None:
+            raise ParameterError(f"{where}: option pot={pot!r} is for a DAQ card; a stream sends the pot in its lines")
+        return source_from_url(url.location, merged)
+    from flexdigit.rig.daq_backend import from_url as daq_from_url
+
+    if pot is not None:
+        merged.setdefault("pot", pot)
+    return daq_from_url(url.location, params, {**merged, **({"uldaq": uldaq} if uldaq is not None else {})})
+
+
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> SerialRig:
     """``serial://PORT?baud=9600&channel=0&daq=0&pot=3&sync=0xFF&max_channel=7&max_position=254``.
 
@@ -164,7 +204,7 @@ def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -
     if not location:
         raise ParameterError("serial:// needs a port, e.g. serial:///dev/ttyUSB0 or serial://COM3")
     options = dict(options)
-    unknown = sorted(set(options) - set(URL_OPTIONS) - set(_PYTHON_OPTIONS))
+    unknown = sorted(k for k in set(options) - set(URL_OPTIONS) - set(_PYTHON_OPTIONS) if not k.startswith("daq."))
     if unknown:
         raise ParameterError(
             f"serial://{location}: unknown option {unknown[0]!r}; a serial URL takes {', '.join(URL_OPTIONS)}"
@@ -186,17 +226,16 @@ def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -
     daq = options.pop("daq", None)
     pot = options.pop("pot", None)
     uldaq = options.pop("uldaq", None)
+    source_options = {key[4:]: options.pop(key) for key in list(options) if key.startswith("daq.")}
     if pot is not None and daq is None:
         raise ParameterError(f"serial://{location}: option pot={pot!r} needs the gauge card too (daq=BOARD)")
+    if source_options and daq is None:
+        raise ParameterError(
+            f"serial://{location}: option daq.{next(iter(source_options))} needs a gauge source (daq=...)"
+        )
     card = None
     if daq is not None and "sensor" not in options:
-        from flexdigit.rig.daq_backend import DaqRig, pot_option
-
-        try:
-            board = int(daq)
-        except ValueError:
-            raise ParameterError(f"serial://{location}: option daq={daq!r} must be a board number") from None
-        card = DaqRig(board, params, uldaq=uldaq, pot_channel=pot_option(pot, f"serial://{location}"))
+        card = _gauge_source(location, params, str(daq), pot, source_options, uldaq)
         options["sensor"] = card.read_gauges
     try:
         rig = SerialRig(location, params, **options)

@@ -1,0 +1,50 @@
+/*
+ * flexdigit-stream protocol, version 1: one checksummed ASCII line per sample (plain C, no Arduino dependency,
+ * so the host test suite compiles it with gcc and decodes its output with flexdigit's own decoder).
+ *
+ *   $<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<CRC>\r\n
+ *
+ *   seq      0..65535, +1 per line, wraps to 0: a gap tells the host a line was lost
+ *   t_us     0..4294967295, micros() when the sample was taken
+ *   g1..g3   gauges 1..3 (base to tip), signed ADC counts
+ *   pot      optional servo potentiometer, signed ADC counts
+ *   CRC      4 hex digits, CRC-16/XMODEM (poly 0x1021, init 0) of the bytes between '$' and '*'
+ *
+ * Lines starting with '#' are information (the banner) and never data.
+ */
+#ifndef FLEXDIGIT_STREAM_H
+#define FLEXDIGIT_STREAM_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#define FLEXDIGIT_STREAM_VERSION 1
+/* the longest line: "$65535,4294967295," + 4 x "-2147483648," + "*FFFF\r\n" + NUL */
+#define FLEXDIGIT_STREAM_LINE_MAX 96
+
+static uint16_t flexdigit_crc16_xmodem(const char *data, int length) {
+  uint16_t crc = 0;
+  for (int i = 0; i < length; i++) {
+    crc ^= (uint16_t)((uint8_t)data[i]) << 8;
+    for (int bit = 0; bit < 8; bit++) {
+      crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x1021) : (uint16_t)(crc << 1);
+    }
+  }
+  return crc;
+}
+
+/* Format one sample into out (at least FLEXDIGIT_STREAM_LINE_MAX bytes); has_pot = 0 leaves the pot out.
+ * Returns the line's length in bytes (without the terminating NUL). */
+static int flexdigit_format_line(char *out, uint16_t seq, uint32_t t_us, int32_t g1, int32_t g2, int32_t g3,
+                                 int has_pot, int32_t pot) {
+  int n = snprintf(out, FLEXDIGIT_STREAM_LINE_MAX, "$%u,%lu,%ld,%ld,%ld", (unsigned)seq, (unsigned long)t_us,
+                   (long)g1, (long)g2, (long)g3);
+  if (has_pot) {
+    n += snprintf(out + n, FLEXDIGIT_STREAM_LINE_MAX - n, ",%ld", (long)pot);
+  }
+  uint16_t crc = flexdigit_crc16_xmodem(out + 1, n - 1); /* the bytes between '$' and '*' */
+  n += snprintf(out + n, FLEXDIGIT_STREAM_LINE_MAX - n, "*%04X\r\n", (unsigned)crc);
+  return n;
+}
+
+#endif

@@ -1,0 +1,70 @@
+/*
+ * flexdigit-stream: the three strain-gauge channels (and the servo pot) of the flexible digit, read by an ADS1115
+ * on an Arduino-class board and sent to flexdigit over USB serial, as `stream://PORT` reads them.
+ *
+ * Wiring (replaces the thesis's PCI-DAS1602/16, table 2.2): the three amplified half-bridge outputs on ADS1115
+ * inputs A0, A1, A2 (gauges 1, 2, 3 from the base), the servo potentiometer wiper on A3 (optional), ADS1115 on I2C
+ * (SDA/SCL), ADDR to GND (0x48). The amplifier outputs must stay within the ADC's range (here +-4.096 V, and never
+ * beyond the ADS1115's supply).
+ *
+ * Library: "Adafruit ADS1X15" (Arduino library manager). Board: any Arduino-class board with I2C and USB serial.
+ *
+ * Host side: flexdigit run --backend "serial:///dev/ttyUSB0?daq=stream:///dev/ttyACM0&daq.scale=0.000125"
+ * (scale = volts per count: 4.096 V / 32768 = 0.000125 at GAIN_ONE). The protocol is in flexdigit_stream.h.
+ *
+ * Rate: single-shot conversions at 860 SPS take ~1.2 ms each, so four channels fit in 5 ms; 100 lines/s leaves
+ * the 20 ms control loop five fresh samples per period. At 115200 baud a line (< 60 bytes) takes ~5 ms.
+ *
+ * HX711 instead (one per gauge, 24-bit, 10 or 80 SPS): read the three chips in read_gauges() below, send
+ * their counts unchanged, and on the host set daq.bits=24, daq.scale to your bridge's volts per count and
+ * daq.timeout above the conversion period (0.3 s at 10 SPS).
+ */
+#include <Adafruit_ADS1X15.h>
+
+#include "flexdigit_stream.h"
+
+static const unsigned long BAUD = 115200;
+static const unsigned long PERIOD_US = 10000;  // 100 lines per second
+static const bool SEND_POT = true;             // false if the pot is not wired (the host reads NaN)
+
+Adafruit_ADS1115 ads;
+static uint16_t seq = 0;
+static unsigned long next_us = 0;
+
+static void read_gauges(int32_t *g, int32_t *pot) {
+  g[0] = ads.readADC_SingleEnded(0);
+  g[1] = ads.readADC_SingleEnded(1);
+  g[2] = ads.readADC_SingleEnded(2);
+  *pot = SEND_POT ? ads.readADC_SingleEnded(3) : 0;
+}
+
+void setup() {
+  Serial.begin(BAUD);
+  while (!Serial) {
+  }  // boards with native USB: wait for the host to open the port
+  if (!ads.begin()) {
+    Serial.println("# flexdigit-stream error: no ADS1115 at 0x48");
+    while (true) {
+    }  // send no data: the host reports a silent stream and stays in its safe state
+  }
+  ads.setGain(GAIN_ONE);                  // +-4.096 V: 0.000125 V per count
+  ads.setDataRate(RATE_ADS1115_860SPS);
+  Serial.print("# flexdigit-stream ");
+  Serial.print(FLEXDIGIT_STREAM_VERSION);
+  Serial.println(" adc=ADS1115 v_per_count=0.000125 rate_hz=100");
+  next_us = micros();
+}
+
+void loop() {
+  if ((long)(micros() - next_us) < 0) {
+    return;
+  }
+  next_us += PERIOD_US;
+  int32_t g[3];
+  int32_t pot;
+  unsigned long t_us = micros();
+  read_gauges(g, &pot);
+  char line[FLEXDIGIT_STREAM_LINE_MAX];
+  int n = flexdigit_format_line(line, seq++, t_us, g[0], g[1], g[2], SEND_POT, pot);
+  Serial.write((const uint8_t *)line, n);
+}
