@@ -67,7 +67,7 @@ def test_run_errors_are_one_line(capsys, tmp_path):
     assert "not a rotation calibration" in capsys.readouterr().err
     # --calibration is the twin's: refused on a backend that is not the twin, naming the flag to use
     assert main(["run", "--backend", "replay://x.jsonl", "--calibration", str(bad)]) == 2
-    assert "applies to the sim backends only" in capsys.readouterr().err
+    assert "it applies to the sim backends" in capsys.readouterr().err
 
 
 def test_replay_needs_a_saved_calibration(tmp_path, capsys):

@@ -13,7 +13,6 @@ backends the report also gives the twin's true tip rotation (``true_*`` beside `
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
@@ -41,8 +40,25 @@ def register(subparsers) -> None:
     parser.add_argument("--gain", type=float, default=1.0, help="actuator gain error to emulate (robustness runs)")
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
     parser.add_argument(
-        "--rotation-map", type=Path, default=None, help="saved gauge -> rotation map (JSON); made and saved if missing"
+        "--rotation-map",
+        type=Path,
+        default=None,
+        help="gauge -> rotation map (JSON): loaded if it exists, else made and saved",
     )
+    parser.add_argument(
+        "--map-from",
+        default=None,
+        metavar="twin|operator|FILE",
+        help="make the rotation map from: the (calibrated) twin's own rotation (default on sim), the operator at each "
+        "command (default on hardware), or a CSV of rotations or deflections measured on the rig",
+    )
+    parser.add_argument(
+        "--resolution-mm", type=float, default=0.5, help="reading resolution of measured deflections, mm (0.5)"
+    )
+    parser.add_argument(
+        "--resolution-deg", type=float, default=1.0, help="reading resolution of measured rotations, deg (1)"
+    )
+    parser.add_argument("--force", action="store_true", help="overwrite an existing --rotation-map when making one")
     parser.add_argument(
         "--calibration",
         type=Path,
@@ -54,13 +70,37 @@ def register(subparsers) -> None:
         "--realtime", action="store_true", help="run the loop under SCHED_FIFO when permitted (hardware, sim+paced)"
     )
 
+    emulator = add_command(
+        subparsers,
+        "stream-emulator",
+        _stream_emulator,
+        help="try stream:// without hardware: the gauge stream's firmware (and a servo board) on pseudo-terminals",
+    )
+    emulator.add_argument("--twin", action="store_true", help="stream a twin's gauges and serve a servo board for it")
+    emulator.add_argument("--rate", type=float, default=100.0, help="lines per second (100, the firmware's)")
+    emulator.add_argument("--seed", type=int, default=0, help="twin and noise seed")
+    emulator.add_argument("--duration", type=float, default=None, help="stop after this many seconds (default Ctrl-C)")
+
+
+def _stream_emulator(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.rig.stream_emulator import run_emulator
+
+    said: list[str] = []
+
+    def say(line: str) -> None:
+        said.append(line)
+        if not args.json:
+            print(line, flush=True)
+
+    run_emulator(args.twin, args.rate, args.seed, args.duration, say)
+    return CommandResult(data={"lines": said}, text="")
+
 
 def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit._validation import check_positive, check_real
     from flexdigit.rig.base import open_rig
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
     from flexdigit.rig.loop import realtime_priority, run_loop
-    from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation
     from flexdigit.rig.step_test import step_metrics
 
     if args.controller not in CONTROLLERS:
@@ -71,10 +111,14 @@ def _run(args: argparse.Namespace) -> CommandResult:
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
     sim = args.backend.split("?")[0].split("://")[0] in ("sim", "sim+paced")
     options = _twin_options(args, sim)
+    if args.rotation_map is not None and (args.map_from is not None or not args.rotation_map.exists()):
+        from flexdigit._io import check_output
+
+        check_output(args.rotation_map, force=args.force)  # before the sweep, not after it
     rig = open_rig(args.backend, **options)
     try:
         period = check_positive(args.period or rig.params.actuator.serial_period_s, "--period")
-        estimator = _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig)
+        estimator = _rotation_map(args, rig, sim)
         controller = make_controller(args.controller, rig, period_s=period, estimator=estimator, gain=args.gain)
     except BaseException:
         rig.close()
@@ -93,7 +137,9 @@ def _run(args: argparse.Namespace) -> CommandResult:
     priority = realtime_priority() if args.realtime else None
     if priority is not None:
         priority.__enter__()
-    deg_per_command = _deg_per_command(rig.params)
+    deg_per_command = getattr(estimator, "deg_per_command_", math.nan)
+    if not (isinstance(deg_per_command, float) and math.isfinite(deg_per_command) and deg_per_command > 0):
+        deg_per_command = _deg_per_command(rig.params)
 
     def summary(time_s, estimated_deg) -> dict:
         figures = {
@@ -154,6 +200,10 @@ def _run(args: argparse.Namespace) -> CommandResult:
             "settling_band": 0.02,
             "estimate_smoothed_s": ESTIMATE_SMOOTH_S,
         },
+        # which map turned the gauges into the rotation the loop held, and how far to trust it
+        "rotation_map": _map_summary(estimator, args.rotation_map, setpoint),
+        # a gauge stream's counts (stream:// on its own or as the servo board's daq=): valid, dropped, garbled
+        "gauge_source": _source_stats(rig),
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
     }
@@ -163,6 +213,8 @@ def _run(args: argparse.Namespace) -> CommandResult:
         f"  rotation estimated from the gauges: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg"
         f"{truth_text}; last command {data['final_command']}\n"
         f"  step: {_figures_line(figures)}\n"
+        f"  rotation map: {data['rotation_map']['source']}; uncertainty {data['rotation_map']['uncertainty_deg']:.2f} "
+        f"deg at {setpoint:g} deg\n"
         f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
         f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
     )
@@ -200,13 +252,13 @@ def _figures_line(figures: dict) -> str:
 
 def _twin_options(args, sim: bool) -> dict:
     """Keyword options for a sim backend: the seed and, with ``--calibration``, the twin calibration."""
-    if not sim:
+    if not sim and args.map_from != "twin":
         if args.calibration is not None:
             from flexdigit.errors import ParameterError
 
             raise ParameterError(
-                f"--calibration {args.calibration} is a twin calibration: it applies to the sim backends only "
-                f"(got --backend {args.backend}); a saved rotation map is --rotation-map FILE"
+                f"--calibration {args.calibration} is a twin calibration: it applies to the sim backends (or to "
+                f"--map-from twin), not --backend {args.backend}; a saved rotation map is --rotation-map FILE"
             )
         return {}
     options = {"seed": args.seed}
@@ -228,56 +280,67 @@ def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
     return float(y[t >= t[-1] - 0.5].mean()), float(y.max())
 
 
-def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
-    path = args.rotation_map
-    if path is not None and path.exists():
-        return _load_estimator(path, RotationEstimator)
-    if sim:
-        est = calibrate_rotation(
-            open_rig(args.backend.split("?")[0], **{**_twin_options(args, sim), "seed": args.seed + 1})
-        )
-    elif args.backend.startswith("replay"):
-        from flexdigit.errors import ParameterError
+def _rotation_map(args, rig, sim: bool):
+    """The gauge -> rotation map: loaded from ``--rotation-map``, or made (``--map-from``) and saved there."""
+    from flexdigit.errors import ParameterError
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map, save_rotation_map
 
-        raise ParameterError("a replay cannot be calibrated (it ignores commands); pass --rotation-map FILE")
-    else:
+    path, source = args.rotation_map, args.map_from
+    if path is not None and path.exists() and source is None:
+        return load_rotation_map(path)
+    replay = args.backend.startswith("replay")
+    source = source or ("twin" if sim else "operator")
+    if source == "twin":
+        # the twin (calibrated to the rig with --calibration): a separate one, read at its own tip rotation
+        twin = open_rig("sim", **{**_twin_options(args, True), "seed": args.seed + 1})
+        est = calibrate_rotation(twin)
+    elif source == "operator":
+        if replay:
+            raise ParameterError("a replay cannot be swept (it ignores commands); pass --rotation-map FILE")
 
         def ask(command: int) -> float:
-            return float(input(f"Command {command}: beam rotation now, deg? "))
+            return float(input(f"Command {command}, digit at rest: tip rotation now, deg? "))
 
-        est = calibrate_rotation(rig, angle_source=ask)
-    if path is not None:
-        path.write_text(
-            json.dumps(
-                {
-                    "method": est.method,
-                    "coef": est.coef_.tolist(),
-                    "intercept": est.intercept_,
-                    "gauge_v_per_deg": est.gauge_v_per_deg_.tolist(),
-                }
-            )
+        est = calibrate_rotation(rig, reference=ask, reference_sd_deg=args.resolution_deg / math.sqrt(12))
+    else:
+        from flexdigit.rig.rotation_reference import read_reference
+
+        reference = read_reference(
+            Path(source), rig.params, resolution_mm=args.resolution_mm, resolution_deg=args.resolution_deg
         )
+        if replay and reference.gauges_v is None:
+            raise ParameterError(
+                f"a replay cannot be swept; {source} needs gauge1_v, gauge2_v, gauge3_v columns to fit the map alone"
+            )
+        est = calibrate_rotation(rig, reference=reference)
+    if path is not None:
+        save_rotation_map(est, path, force=args.force)
     return est
 
 
-def _load_estimator(path: Path, RotationEstimator):
-    import numpy as np
+def _map_summary(estimator, path, setpoint: float) -> dict:
+    """What ``run --json`` says about the map: where it came from and its uncertainty at the setpoint."""
+    has_data = hasattr(estimator, "rotation_deg_")
+    return {
+        "source": getattr(estimator, "source_", "given"),
+        "file": str(path) if path is not None else None,
+        "commands": getattr(estimator, "commands_", None),
+        "settle_time_s": getattr(estimator, "settle_time_s_", None),
+        "residual_deg": getattr(estimator, "residual_deg_", None),
+        "uncertainty_deg": estimator.uncertainty_deg(setpoint) if has_data else math.nan,
+        "deg_per_command": getattr(estimator, "deg_per_command_", None),
+        "coef_deg_per_v": estimator.coef_.tolist(),
+    }
 
-    from flexdigit.errors import DataFileError
 
-    try:
-        data = json.loads(path.read_text())
-        est = RotationEstimator()
-        est.coef_ = np.asarray(data["coef"], dtype=float).reshape(3)
-        est.intercept_ = float(data["intercept"])
-        est.gauge_v_per_deg_ = np.asarray(data["gauge_v_per_deg"], dtype=float).reshape(3)
-        est.tare_deg_ = 0.0
-        est.residual_deg_ = math.nan
-    except (ValueError, KeyError, TypeError) as exc:
-        raise DataFileError(
-            f"{path}: not a rotation calibration (expected coef[3], intercept, gauge_v_per_deg[3]): {exc}"
-        ) from None
-    return est
+def _source_stats(rig) -> dict | None:
+    """Counts of a gauge stream (the rig's own, or its servo board's ``daq=``), if it has one."""
+    for part in (rig, *getattr(rig, "companions", [])):
+        stats = getattr(part, "stats", None)
+        if callable(stats):
+            return stats()
+    return None
 
 
 class _Progress:

@@ -1,25 +1,59 @@
-"""Beam (tip) rotation from the three gauge voltages: the map and the static sweep that calibrates it.
+"""Beam (tip) rotation from the three gauge voltages: the map, the sweep that calibrates it, and how far to trust it.
 
 :class:`RotationEstimator` is an affine map fitted on a static calibration sweep (commands 8..32, the digit at rest
 at each). The sweep moves the digit along one direction only, so the map inverts each gauge's sensitivity to the
-rotation (a well-posed one-parameter fit) rather than regressing the rotation on three nearly collinear gauges. On
-the twin the reference angle is the twin's own tip rotation; on hardware it is what the operator reads off a
-protractor (``angle_source``). The map is tared at the start of every run (the digit at rest at the equilibrium
-command is 0 deg by definition), so gauge offsets and drift between calibration and run do not become a
-steady-state error.
+rotation (a well-posed one-parameter fit) rather than regressing the rotation on three nearly collinear gauges.
+
+What the map is fitted to decides what the loop holds (:func:`calibrate_rotation`'s ``reference``):
+
+- ``"twin"``: the twin's own tip rotation (sim backends; a twin calibrated to the rig stands in for it on
+  hardware, ``flexdigit run --map-from twin``);
+- a :class:`~flexdigit.rig.rotation_reference.MeasuredReference`: tip rotations or deflections at known points
+  measured on the rig (protractor, ruler as in table 3.6, camera), read from a small file;
+- the operator, asked at each command (a protractor).
+
+Each reading of the sweep is taken once the digit has *settled*, detected from the readings themselves
+(:func:`wait_until_settled`: no ringing or drift above the gauges' own noise), not after a fixed time, so a lightly
+damped digit is not read mid-swing. The map carries its uncertainty (:meth:`RotationEstimator.uncertainty_deg`):
+the spread of the rotation it would hold, from the reference's uncertainty and the readings' noise. The map is tared
+at the start of every run (the digit at rest at the equilibrium command is 0 deg by definition), so gauge offsets
+and drift between calibration and run do not become a steady-state error. Maps are saved as versioned JSON
+(:func:`save_rotation_map`, :func:`load_rotation_map`).
 """
 
 from __future__ import annotations
 
+import json
+import math
 from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_choice, check_real
-from flexdigit.errors import DataFileError, ParameterError
+from flexdigit._validation import check_array, check_choice, check_int, check_real
+from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.rig.base import Reading, Rig
 
-__all__ = ["RotationEstimator", "calibrate_rotation"]
+__all__ = [
+    "RotationEstimator",
+    "calibrate_rotation",
+    "wait_until_settled",
+    "Settled",
+    "save_rotation_map",
+    "load_rotation_map",
+    "MAP_FORMAT",
+    "SWEEP_COMMANDS",
+]
+
+MAP_FORMAT = "flexdigit-rotation-map/1"
+#: The default calibration sweep: 0..40 deg of rotation in nine steps.
+SWEEP_COMMANDS = (8, 11, 14, 17, 20, 23, 26, 29, 32)
+#: Draws of the Monte Carlo that propagates the reference's and the readings' uncertainty into the map.
+UNCERTAINTY_DRAWS = 400
+#: Residual variance over the variance the stated uncertainties explain above which they are not believed (the
+#: 95th percentile of chi-square / dof at 7 degrees of freedom, a nine-point sweep, is 2.0).
+BIRGE_LIMIT = 2.0
 
 
 class RotationEstimator:
@@ -64,7 +98,12 @@ class RotationEstimator:
         self.noise_v = noise_v
         self.ridge = ridge
 
-    def fit(self, gauges_v, rotation_deg) -> RotationEstimator:
+    def fit(self, gauges_v, rotation_deg, *, rotation_cov_deg2=None, gauges_sd_v=None) -> RotationEstimator:
+        """Fit the map to gauge readings (n, 3) at reference rotations (n,).
+
+        ``rotation_cov_deg2`` (n, n) is the reference rotations' covariance (deg^2) and ``gauges_sd_v`` (n, 3) the
+        standard uncertainty of each averaged reading; both feed :meth:`uncertainty_deg` (zero if not given).
+        """
         check_choice(self.method, "method", self.METHODS, "RotationEstimator")
         X = np.asarray(gauges_v, dtype=float)
         y = np.asarray(rotation_deg, dtype=float).reshape(-1)
@@ -103,7 +142,59 @@ class RotationEstimator:
             self.intercept_ = float(coef[3])
         self.residual_deg_ = float(np.sqrt(np.mean((X @ self.coef_ + self.intercept_ - y) ** 2)))
         self.tare_deg_ = 0.0
+        n = y.size
+        cov = np.zeros((n, n)) if rotation_cov_deg2 is None else np.asarray(rotation_cov_deg2, dtype=float)
+        sd = np.zeros((n, 3)) if gauges_sd_v is None else np.asarray(gauges_sd_v, dtype=float)
+        if cov.shape != (n, n) or sd.shape != (n, 3) or not (np.all(np.isfinite(cov)) and np.all(np.isfinite(sd))):
+            raise DataFileError(
+                f"RotationEstimator.fit: rotation_cov_deg2 must be ({n}, {n}) and gauges_sd_v ({n}, 3), finite"
+            )
+        self.gauges_v_, self.rotation_deg_ = X, y
+        self.rotation_cov_deg2_, self.gauges_sd_v_ = cov, sd
         return self
+
+    def uncertainty_deg(self, at_deg: float, *, seed: int = 0) -> float:
+        """Standard uncertainty (deg) of the rotation the loop holds when the map reads ``at_deg``.
+
+        A Monte Carlo (seeded, :data:`UNCERTAINTY_DRAWS` draws): the reference rotations are drawn from their
+        covariance and the readings from their noise, the map is refitted, and the rotation at which the refitted
+        map reads ``at_deg`` (on the fitted gauge lines) is recorded; its spread is the answer. Where the fit's
+        residuals are more than :data:`BIRGE_LIMIT` times what the stated uncertainties explain, the spread is
+        scaled up by the root of that ratio (and is never below a regression's prediction error from the
+        residuals), so a reference that claims more than the readings show is not believed.
+        """
+        at = check_real(at_deg, "at_deg", "RotationEstimator.uncertainty_deg")
+        if not hasattr(self, "rotation_deg_"):
+            return math.nan  # a map saved without its sweep (the earlier format): nothing to tell
+        X, y = self.gauges_v_, self.rotation_deg_
+        rng = np.random.default_rng(seed)
+        n = y.size
+        try:
+            chol = np.linalg.cholesky(self.rotation_cov_deg2_ + 1e-18 * np.eye(n))
+        except np.linalg.LinAlgError:
+            chol = np.diag(np.sqrt(np.clip(np.diag(self.rotation_cov_deg2_), 0.0, None)))
+        sens, offset = self.gauge_v_per_deg_, X.mean(axis=0) - self.gauge_v_per_deg_ * y.mean()
+        held = np.empty(UNCERTAINTY_DRAWS)
+        for k in range(UNCERTAINTY_DRAWS):
+            y_k = y + chol @ rng.standard_normal(n)
+            X_k = X + self.gauges_sd_v_ * rng.standard_normal(X.shape)
+            m = RotationEstimator(self.method, self.noise_v, self.ridge).fit(X_k, y_k)
+            # the refitted map reads `at` where w'(a + s theta) + b' = at, on the gauge lines fitted now
+            held[k] = (at - m.intercept_ - m.coef_ @ offset) / (m.coef_ @ sens)
+        spread = float(np.std(held))
+        dof = n - 2
+        if dof > 0:
+            # the residuals' variance against what the stated uncertainties explain (a Birge ratio): a reference
+            # that claims more than the fit shows is not believed, and the spread grows by the ratio's root
+            s_res2 = self.residual_deg_**2 * n / dof
+            explained = float(np.mean(np.diag(self.rotation_cov_deg2_))) + float(
+                np.mean((self.gauges_sd_v_**2) @ (self.coef_**2))
+            )
+            if s_res2 > BIRGE_LIMIT * explained:
+                syy = float(np.sum((y - y.mean()) ** 2))
+                by_residuals = math.sqrt(s_res2 * (1 / n + (at - y.mean()) ** 2 / syy))
+                spread = max(spread * math.sqrt(s_res2 / explained) if explained > 0 else 0.0, by_residuals)
+        return spread
 
     def predict(self, gauges_v) -> np.ndarray:
         return np.asarray(gauges_v, dtype=float) @ self.coef_ + self.intercept_ - self.tare_deg_
@@ -123,40 +214,277 @@ class RotationEstimator:
     def __call__(self, reading: Reading) -> float:
         return self.predict_one(reading.gauges_v)
 
+    def to_dict(self) -> dict:
+        """Everything needed to use the map again and to say where it came from (JSON-able)."""
+        return {
+            "format": MAP_FORMAT,
+            "method": self.method,
+            "coef": self.coef_.tolist(),
+            "intercept": self.intercept_,
+            "gauge_v_per_deg": self.gauge_v_per_deg_.tolist(),
+            "residual_deg": self.residual_deg_,
+            "gauges_v": self.gauges_v_.tolist(),
+            "rotation_deg": self.rotation_deg_.tolist(),
+            "rotation_cov_deg2": self.rotation_cov_deg2_.tolist(),
+            "gauges_sd_v": self.gauges_sd_v_.tolist(),
+            **{key: getattr(self, f"{key}_") for key in _PROVENANCE if hasattr(self, f"{key}_")},
+        }
+
+
+#: Where a map came from, kept with it (set by :func:`calibrate_rotation`): the source, the sweep's commands, the
+#: time each reading waited for the digit to settle, and the rotation per command the sweep measured.
+_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command")
+
+
+@dataclass(frozen=True)
+class Settled:
+    """The digit at rest: the window's mean readings and what it took to get there.
+
+    gauges_v : mean of the window's readings (V); sd_v : its standard uncertainty (V); noise_v : the gauges' noise
+    per reading (V); waited_s : from the call to the end of the window (s); truth_deg : the twin's mean tip
+    rotation over the window (deg; NaN on hardware).
+    """
+
+    gauges_v: np.ndarray
+    sd_v: np.ndarray
+    noise_v: np.ndarray
+    waited_s: float
+    truth_deg: float
+
+
+def wait_until_settled(
+    rig: Rig,
+    *,
+    window_s: float = 1.0,
+    timeout_s: float = 30.0,
+    tolerance: float = 1.4,
+    truth: Callable[[], float] | None = None,
+) -> Settled:
+    """Read the rig every serial period until the digit is at rest, judged from the readings (not a fixed time).
+
+    At rest means, over the last ``window_s`` of readings, for every gauge: a spread no more than ``tolerance``
+    times the gauge's own noise (so no ringing above the noise: an amplitude under ~1.2 noise standard deviations)
+    and a straight-line drift across the window under one noise standard deviation (so no creep). The noise is
+    estimated from the readings' second differences (robust median estimate; a swing of the digit's ~2 Hz mode
+    barely shows in them at 50 Hz), floored at the ADC's quantisation.
+
+    Raises :class:`~flexdigit.errors.RigError` naming the gauge, its spread and drift if the digit has not settled
+    within ``timeout_s``: a reading the map could not stand behind.
+    """
+    owner = "wait_until_settled"
+    window = check_real(window_s, "window_s", owner, low=0.0, low_open=True)
+    timeout = check_real(timeout_s, "timeout_s", owner, low=window)
+    tol = check_real(tolerance, "tolerance", owner, low=1.0)
+    period = rig.params.actuator.serial_period_s
+    n = max(5, int(round(window / period)))
+    sensors = rig.params.sensors
+    lsb = (sensors.adc_range_v[1] - sensors.adc_range_v[0]) / 2**sensors.adc_bits
+    ramp = np.arange(n) - (n - 1) / 2
+    start = rig.clock()
+    rows: list[np.ndarray] = []
+    truths: list[float] = []
+    while True:
+        rig.wait(period)
+        rows.append(rig.read().gauges_v)
+        truths.append(truth() if truth is not None else math.nan)
+        waited = rig.clock() - start
+        if len(rows) < n + 2:
+            continue
+        G = np.asarray(rows)
+        d2 = np.diff(G, 2, axis=0)
+        noise = np.maximum(1.4826 * np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0) / math.sqrt(6), lsb / 2)
+        W = G[-n:]
+        spread = W.std(axis=0, ddof=1)
+        drift = (ramp @ (W - W.mean(axis=0))) / (ramp @ ramp) * (n - 1)
+        if np.all(spread <= tol * noise) and np.all(np.abs(drift) <= noise):
+            return Settled(W.mean(axis=0), spread / math.sqrt(n), noise, waited, float(np.mean(truths[-n:])))
+        if waited >= timeout:
+            worst = int(np.argmax(np.maximum(spread / (tol * noise), np.abs(drift) / noise)))
+            raise RigError(
+                f"{rig.name}: the digit did not settle within {timeout:g} s at command {rig.command} (gauge "
+                f"{worst + 1}: spread {spread[worst] * 1000:.2f} mV and drift {drift[worst] * 1000:+.2f} mV over "
+                f"{window:g} s, against noise {noise[worst] * 1000:.2f} mV)"
+            )
+
 
 def calibrate_rotation(
     rig: Rig,
-    commands=(8, 11, 14, 17, 20, 23, 26, 29, 32),
+    commands=None,
     *,
-    settle_s: float = 2.0,
+    reference="twin",
+    settle_s: float | None = None,
     samples: int = 5,
+    window_s: float = 1.0,
+    timeout_s: float = 30.0,
+    reference_sd_deg: float | None = None,
     angle_source: Callable[[int], float] | None = None,
 ) -> RotationEstimator:
-    """Static calibration sweep: hold each command, average ``samples`` readings, fit gauges -> rotation.
+    """Static calibration sweep: hold each command, wait for the digit to settle, read, fit gauges -> rotation.
 
-    ``angle_source(command)`` gives the reference rotation (deg) at each point; default the twin's own
-    (``rig.tip_rotation_deg``), which hardware backends do not have: pass a function that asks the operator.
+    Parameters
+    ----------
+    rig : Rig
+    commands : sequence of int, optional
+        The sweep (default :data:`SWEEP_COMMANDS`, or the commands of a measured ``reference``).
+    reference : "twin", MeasuredReference or callable
+        Where the reference rotations come from: the twin's own tip rotation (averaged over the same window as the
+        readings), rotations measured on the rig (:mod:`flexdigit.rig.rotation_reference`; if it holds gauge
+        readings, no sweep is run), or ``reference(command) -> deg`` (e.g. the operator with a protractor).
+    settle_s : float, optional
+        None (default): wait until the readings show the digit at rest (:func:`wait_until_settled`). A number: the
+        old fixed wait, then ``samples`` readings 20 ms apart (kept to compare with).
+    window_s, timeout_s : float
+        :func:`wait_until_settled`'s window and time limit.
+    reference_sd_deg : float, optional
+        Standard uncertainty of a callable reference's rotations (deg): a 1 deg protractor's 0.29 by default.
+    angle_source : callable, optional
+        Same as a callable ``reference`` (the earlier name).
+
+    Returns
+    -------
+    RotationEstimator
+        Fitted, with ``source_``, ``commands_``, ``settle_time_s_`` (per reading) and ``deg_per_command_`` (the
+        reference's rotation per command over the sweep) set, and :meth:`~RotationEstimator.uncertainty_deg`.
     """
-    if angle_source is None:
+    from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
+
+    if angle_source is not None:
+        reference = angle_source
+    cov, truth = None, None
+    if isinstance(reference, MeasuredReference):
+        if commands is not None and sorted(int(c) for c in commands) != sorted(reference.commands.tolist()):
+            raise ParameterError(
+                f"calibrate_rotation: the sweep's commands {list(commands)} differ from those measured in "
+                f"{reference.source} {reference.commands.tolist()}"
+            )
+        commands = reference.commands.tolist()
+        cov = reference.rotation_cov_deg2
+        source = f"{reference.kind} measured on the rig ({reference.source})"
+        if reference.gauges_v is not None:  # readings taken with the measurements: no sweep needed
+            est = RotationEstimator().fit(reference.gauges_v, reference.rotation_deg, rotation_cov_deg2=cov)
+            return _provenance(est, source, commands, [math.nan] * len(commands), reference.rotation_deg)
+        angle = reference.angle_source()
+    elif isinstance(reference, str) and reference == "twin":
         truth = getattr(rig, "tip_rotation_deg", None)
         if truth is None:
             raise ParameterError(
-                f"{rig.name}: no way to know the true rotation on this backend; pass angle_source (e.g. a protractor)"
+                f"{rig.name}: no way to know the true rotation on this backend; give a reference (a file of measured "
+                "rotations or deflections, or ask the operator with a protractor)"
             )
-
-        def angle_source(command: int) -> float:
-            return truth()
-
-    X, y = [], []
+        angle = None
+        source = "twin (its own tip rotation)"
+    elif callable(reference):
+        angle = reference
+        sd = ROTATION_RESOLUTION_DEG / math.sqrt(12) if reference_sd_deg is None else reference_sd_deg
+        sd = check_real(sd, "reference_sd_deg", "calibrate_rotation", low=0.0)
+        source = "operator (measured at each command)"
+    else:
+        raise ParameterError(
+            "The 'reference' parameter of calibrate_rotation must be 'twin', a MeasuredReference or a callable. "
+            f"Got {reference!r} instead."
+        )
+    commands = [int(c) for c in (SWEEP_COMMANDS if commands is None else commands)]
+    X, sd_v, y, waited = [], [], [], []
     for command in commands:
-        rig.write_command(int(command))
-        rig.wait(settle_s)
-        rows = []
-        for _ in range(samples):
-            rig.wait(0.02)
-            rows.append(rig.read().gauges_v)
-        X.append(np.mean(rows, axis=0))
-        y.append(float(angle_source(int(command))))
+        rig.write_command(command)
+        if settle_s is None:
+            settled = wait_until_settled(
+                rig, window_s=window_s, timeout_s=timeout_s, truth=truth if angle is None else None
+            )
+            X.append(settled.gauges_v)
+            sd_v.append(settled.sd_v)
+            waited.append(settled.waited_s)
+            y.append(settled.truth_deg if angle is None else float(angle(command)))
+        else:
+            rig.wait(check_real(settle_s, "settle_s", "calibrate_rotation", low=0.0))
+            rows, truths = [], []
+            for _ in range(check_int(samples, "samples", "calibrate_rotation", low=1)):
+                rig.wait(0.02)
+                rows.append(rig.read().gauges_v)
+                truths.append(truth() if angle is None else math.nan)
+            X.append(np.mean(rows, axis=0))
+            sd_v.append(np.zeros(3))
+            waited.append(float(settle_s))
+            y.append(float(np.mean(truths)) if angle is None else float(angle(command)))
     rig.relax()
-    rig.wait(settle_s)
-    return RotationEstimator().fit(X, y)
+    if settle_s is None:
+        wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
+    else:
+        rig.wait(settle_s)
+    if cov is None and callable(reference) and not isinstance(reference, str):
+        cov = np.eye(len(commands)) * sd**2
+    est = RotationEstimator().fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=np.asarray(sd_v))
+    return _provenance(est, source, commands, waited, np.asarray(y))
+
+
+def _provenance(est: RotationEstimator, source: str, commands, waited, rotation_deg) -> RotationEstimator:
+    est.source_ = source
+    est.commands_ = [int(c) for c in commands]
+    est.settle_time_s_ = [float(w) for w in waited]
+    c = np.asarray(est.commands_, dtype=float)
+    est.deg_per_command_ = float(np.polyfit(c, rotation_deg, 1)[0]) if np.ptp(c) > 0 else math.nan
+    return est
+
+
+def save_rotation_map(estimator: RotationEstimator, path, *, force: bool = False) -> Path:
+    """Write a fitted map as JSON (atomically; an existing file only with ``force``)."""
+    from flexdigit._io import atomic_write
+    from flexdigit._json import to_jsonable
+
+    with atomic_write(path, "w", force=force) as fh:
+        json.dump(to_jsonable(estimator.to_dict()), fh, indent=1)
+    return Path(path)
+
+
+def load_rotation_map(path) -> RotationEstimator:
+    """Read a map saved by :func:`save_rotation_map` (or the earlier ``coef/intercept/gauge_v_per_deg`` JSON).
+
+    Raises :class:`~flexdigit.errors.DataFileError` naming the file and the key that is missing or wrong.
+    """
+    path = Path(path)
+    expected = "expected a flexdigit rotation map: coef[3], intercept, gauge_v_per_deg[3]"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DataFileError(f"{path}: not a rotation calibration, not JSON ({exc}); {expected}") from None
+    if not isinstance(data, dict):
+        raise DataFileError(f"{path}: not a rotation calibration; {expected}")
+    if data.get("format", MAP_FORMAT) != MAP_FORMAT:
+        raise DataFileError(f"{path}: format {data.get('format')!r}; this flexdigit reads {MAP_FORMAT!r}")
+    known = {"format", "method", "coef", "intercept", "gauge_v_per_deg", "residual_deg", "gauges_v", "rotation_deg"}
+    known |= {"rotation_cov_deg2", "gauges_sd_v", *_PROVENANCE}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise DataFileError(f"{path}: unknown key {unknown[0]!r}; {expected}")
+    for key in ("coef", "intercept", "gauge_v_per_deg"):
+        if key not in data:
+            raise DataFileError(f"{path}: not a rotation calibration, no {key!r}; {expected}")
+
+    def array(key, shape):
+        try:
+            value = np.asarray(data[key], dtype=float)
+        except (TypeError, ValueError):
+            value = np.array([np.nan])
+        if value.shape != shape or not np.all(np.isfinite(value)):
+            raise DataFileError(f"{path}: {key!r} must be finite numbers of shape {shape}; got {data[key]!r:.80}")
+        return value
+
+    est = RotationEstimator(method=data.get("method", "sensitivity"))
+    est.coef_ = array("coef", (3,))
+    est.intercept_ = float(array("intercept", ()))
+    est.gauge_v_per_deg_ = array("gauge_v_per_deg", (3,))
+    if not np.any(est.coef_ != 0) or not abs(est.coef_ @ est.gauge_v_per_deg_) > 0:
+        raise DataFileError(f"{path}: the map's 'coef' {est.coef_.tolist()} read no rotation from the gauges")
+    est.tare_deg_ = 0.0
+    est.residual_deg_ = float(data.get("residual_deg", math.nan) or math.nan)
+    if "rotation_deg" in data:
+        n = len(data["rotation_deg"]) if isinstance(data["rotation_deg"], list) else -1
+        est.rotation_deg_ = array("rotation_deg", (n,))
+        est.gauges_v_ = array("gauges_v", (n, 3))
+        est.rotation_cov_deg2_ = array("rotation_cov_deg2", (n, n))
+        est.gauges_sd_v_ = array("gauges_sd_v", (n, 3))
+    for key in _PROVENANCE:
+        if key in data:
+            setattr(est, f"{key}_", data[key])
+    est.source_ = f"{getattr(est, 'source_', 'a saved map')}, loaded from {path}"
+    return est
