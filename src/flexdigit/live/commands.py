@@ -1,0 +1,88 @@
+"""``flexdigit shape`` (the centre line from one reading, or the estimator's accuracy on the twin).
+
+flexdigit shape --gauges-v 0.21,0.71,0.30 --command 20 --orientation horizontal [--json]
+flexdigit shape --accuracy [--seed 0] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from flexdigit._command import CommandResult, add_command
+
+
+def register(subparsers) -> None:
+    parser = add_command(
+        subparsers,
+        "shape",
+        _shape,
+        help="the digit's centre line (and a load) from the three gauge voltages, or the estimator's accuracy",
+    )
+    parser.add_argument("--gauges-v", default=None, help="the three gauge voltages, V, comma-separated (base first)")
+    parser.add_argument("--command", type=int, default=None, help="servo command in force (0..254); omit if unknown")
+    parser.add_argument("--orientation", default="vertical", help="vertical (tip up), horizontal (cable up), hanging")
+    parser.add_argument("--no-cable", action="store_true", help="cable detached (the non-actuated digit, ch. 6)")
+    parser.add_argument("--load", default="weight", help="what a load is: weight, press or none")
+    parser.add_argument("--n-average", type=int, default=1, help="readings averaged into the one given")
+    parser.add_argument("--accuracy", action="store_true", help="score the estimator against the twin instead")
+    parser.add_argument("--seed", type=int, default=0, help="noise seed of --accuracy")
+
+
+def _shape(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.errors import ParameterError
+
+    if args.accuracy:
+        return _accuracy(args)
+    if args.gauges_v is None:
+        raise ParameterError("--gauges-v V1,V2,V3 is required (or --accuracy)")
+    try:
+        volts = [float(x) for x in args.gauges_v.split(",")]
+    except ValueError:
+        raise ParameterError(f"--gauges-v must be three numbers separated by commas. Got {args.gauges_v!r}.") from None
+    if len(volts) != 3:
+        raise ParameterError(f"--gauges-v must be three numbers separated by commas. Got {args.gauges_v!r}.")
+    from flexdigit.tactile.shape import ShapeEstimator
+
+    est_settings = ShapeEstimator(
+        orientation=args.orientation, cable=not args.no_cable, load=args.load, n_average=args.n_average
+    )
+    est = est_settings.estimate(volts, command=args.command)
+    row = est.row(0, every=10)
+    tip_mm = [1e3 * x for x in row["tip_m"]]
+    text = (
+        f"tip at {tip_mm[0]:.1f}, {tip_mm[1]:.1f} mm (along, towards the cable), "
+        f"+- {1e3 * max(row['tip_sd_m']):.1f} mm; tip angle {row['tip_angle_deg']:.1f} deg; "
+        f"cable tension {row['tension_n']:.2f} N\n"
+    )
+    if row["contact"]:
+        lo, hi = row["load_position_interval_m"]
+        sd = row["load_position_sd_m"]
+        sd_text = "not locatable" if sd is None else f"+- {1e3 * sd:.1f} mm"
+        text += (
+            f"contact: a {row['load_kind']} at {1e3 * row['load_position_from_base_m']:.0f} mm from the base "
+            f"({sd_text}; consistent {1e3 * lo:.0f}..{1e3 * hi:.0f} mm), force {row['load_force_n']:.3f} N"
+        )
+    else:
+        text += "no contact"
+    if not row["consistent"]:
+        chi2 = float(est.chi2_load[0] if row["contact"] else est.chi2_no_load[0])
+        text = (
+            f"the readings do not fit this rig (chi-square {chi2:.0f}, at most {est_settings.misfit_chi2:g} "
+            "expected): check the calibration, --orientation, --command and --no-cable; no estimate given"
+        )
+        return CommandResult(data=row, text=text, exit_code=1)
+    return CommandResult(data=row, text=text)
+
+
+def _accuracy(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.tactile.shape import shape_accuracy
+
+    acc = shape_accuracy(tuple(range(8, 44, 5)), seed=args.seed)
+    summary = acc.summary()
+    lines = ["case                 cases  tip median  tip p95  tip max  RMS along  tip within 2 sd"]
+    for g in summary:
+        lines.append(
+            f"{g['case']:<20} {g['cases']:>5}  {g['tip_error_median_mm']:7.2f} mm {g['tip_error_p95_mm']:6.2f} mm "
+            f"{g['tip_error_max_mm']:6.2f} mm {g['rms_error_mean_mm']:7.2f} mm  {100 * g['tip_within_2sd']:6.0f} %"
+        )
+    return CommandResult(data={"seed": args.seed, "groups": summary}, text="\n".join(lines))
