@@ -36,6 +36,10 @@ def register(subparsers) -> None:
     parser.add_argument("--seed", type=int, default=0, help="twin noise seed (sim backends)")
     parser.add_argument("--gain", type=float, default=1.0, help="actuator gain error to emulate (robustness runs)")
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
+    parser.add_argument(
+        "--record", type=Path, default=None, help="MCAP recording of every sample (any MCAP tool reads it)"
+    )
+    parser.add_argument("--force", action="store_true", help="replace an existing --record file")
     parser.add_argument("--calibration", type=Path, default=None, help="saved rotation map (JSON); made if missing")
     parser.add_argument("--no-progress", action="store_true", help="no live progress line")
     parser.add_argument(
@@ -77,6 +81,21 @@ def _run(args: argparse.Namespace) -> CommandResult:
         if progress:
             progress.update(k, t, y, command)
 
+    recording = None
+    if args.record is not None:
+        from flexdigit.rig.recording import Recording, rig_metadata
+
+        try:
+            recording = Recording(
+                args.record,
+                header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
+                        "period_s": period, "duration_s": duration, "seed": args.seed if sim else None},
+                metadata={**rig_metadata(rig), "flexdigit.calibration": {"rotation_map": _estimator_dict(estimator)}},
+                force=args.force,
+            )  # fmt: skip
+        except BaseException:
+            rig.close()
+            raise
     priority = realtime_priority() if args.realtime else None
     if priority is not None:
         priority.__enter__()
@@ -91,6 +110,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
             on_sample=on_sample,
             measure=estimator,
             header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend},
+            recording=recording,
         )
     finally:
         if priority is not None:
@@ -122,6 +142,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "true_peak_rotation_deg": true_peak if has_truth else None,
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
+        "record": str(recording.path) if recording is not None else None,
     }
     truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if has_truth else ""
     text = (
@@ -152,6 +173,8 @@ def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
         return _load_estimator(path, RotationEstimator)
     if sim:
         est = calibrate_rotation(open_rig(args.backend.split("?")[0], seed=args.seed + 1))
+    elif args.backend.startswith("replay") and _recorded_map(rig) is not None:
+        est = _estimator_from_dict(_recorded_map(rig), RotationEstimator, rig.path)
     elif args.backend.startswith("replay"):
         from flexdigit.errors import ParameterError
 
@@ -163,26 +186,47 @@ def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
 
         est = calibrate_rotation(rig, angle_source=ask)
     if path is not None:
-        path.write_text(
-            json.dumps(
-                {
-                    "method": est.method,
-                    "coef": est.coef_.tolist(),
-                    "intercept": est.intercept_,
-                    "gauge_v_per_deg": est.gauge_v_per_deg_.tolist(),
-                }
-            )
-        )
+        path.write_text(json.dumps(_estimator_dict(est)))
     return est
 
 
+def _estimator_dict(est) -> dict:
+    """A rotation map as saved with ``--calibration`` (and kept in a recording's metadata)."""
+    return {
+        "method": est.method,
+        "coef": est.coef_.tolist(),
+        "intercept": est.intercept_,
+        "gauge_v_per_deg": est.gauge_v_per_deg_.tolist(),
+    }
+
+
+def _recorded_map(rig) -> dict | None:
+    """The rotation map an MCAP recording keeps in its ``flexdigit.calibration`` metadata, if any."""
+    from flexdigit.rig.recording import is_mcap, read_metadata
+
+    path = getattr(rig, "path", None)
+    if path is None or not is_mcap(path):
+        return None
+    found = read_metadata(path).get("flexdigit.calibration", {}).get("rotation_map")
+    return found if isinstance(found, dict) else None
+
+
 def _load_estimator(path: Path, RotationEstimator):
+    from flexdigit.errors import DataFileError
+
+    try:
+        data = json.loads(path.read_text())
+    except ValueError as exc:
+        raise DataFileError(f"{path}: not a rotation calibration (not JSON: {exc})") from None
+    return _estimator_from_dict(data, RotationEstimator, path)
+
+
+def _estimator_from_dict(data, RotationEstimator, source):
     import numpy as np
 
     from flexdigit.errors import DataFileError
 
     try:
-        data = json.loads(path.read_text())
         est = RotationEstimator()
         est.coef_ = np.asarray(data["coef"], dtype=float).reshape(3)
         est.intercept_ = float(data["intercept"])
@@ -191,7 +235,7 @@ def _load_estimator(path: Path, RotationEstimator):
         est.residual_deg_ = math.nan
     except (ValueError, KeyError, TypeError) as exc:
         raise DataFileError(
-            f"{path}: not a rotation calibration (expected coef[3], intercept, gauge_v_per_deg[3]): {exc}"
+            f"{source}: not a rotation calibration (expected coef[3], intercept, gauge_v_per_deg[3]): {exc}"
         ) from None
     return est
 

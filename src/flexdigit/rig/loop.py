@@ -225,6 +225,7 @@ def run_loop(
     close_rig: bool = True,
     fsync_every: int = 50,
     header: dict[str, Any] | None = None,
+    recording: Any = None,
 ) -> LoopResult:
     """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
 
@@ -253,6 +254,9 @@ def run_loop(
         Stop with a fault when a gauge is NaN or clipped (:func:`check_reading`).
     close_rig : bool
         Close the rig (port) when the loop ends, whatever the reason.
+    recording : flexdigit.rig.recording.Recording, optional
+        An open MCAP recording: every sample goes to it as to the log, and the loop closes it with the stop
+        record (so a fault or Ctrl-C still leaves a complete, readable file).
 
     Returns
     -------
@@ -317,18 +321,20 @@ def run_loop(
             u = controller.step(r, reading)
             sent = rig.write_command(u)
             y = float(measure(reading))
-            if log is not None:
-                log.write(
-                    {
-                        "k": k,
-                        "t": round(t, 9),
-                        "setpoint": r,
-                        "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
-                        "pot_v": _finite_or_none(reading.pot_v),
-                        "y": _finite_or_none(y),
-                        "command": sent,
-                    }
-                )
+            if log is not None or recording is not None:
+                record = {
+                    "k": k,
+                    "t": round(t, 9),
+                    "setpoint": r,
+                    "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
+                    "pot_v": _finite_or_none(reading.pot_v),
+                    "y": _finite_or_none(y),
+                    "command": sent,
+                }
+                if log is not None:
+                    log.write(record)
+                if recording is not None:
+                    recording.write_sample(record)
             compute.append(timer() - w0)
             starts.append(now)
             lateness.append(late)
@@ -355,9 +361,13 @@ def run_loop(
             when = ""
         relaxed = f"digit relaxed to command {equilibrium}" if safe else "could NOT send the safe command (port lost)"
         message = f"{message}{when}; {relaxed}"
+    stop = {"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns}
+    if recording is not None:
+        recording.close(stop)
+        message = f"{message}; recording: {recording.path}"
     if log is not None:
         try:
-            log.write({"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns})
+            log.write(stop)
         finally:
             log.close()
         message = f"{message}; log: {log.path}"
