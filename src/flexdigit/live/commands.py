@@ -12,6 +12,22 @@ from flexdigit._command import CommandResult, add_command
 
 
 def register(subparsers) -> None:
+    live = add_command(
+        subparsers,
+        "live",
+        _live,
+        help="serve the live page: the digit's shape, gauges, contact and controller, in a browser",
+    )
+    live.add_argument("--backend", default="sim", help="sim (the twin, horizontal), serial://..., replay://FILE")
+    live.add_argument("--model", default=None, help="a trained position network (flexdigit train) for the contact")
+    live.add_argument("--host", default="127.0.0.1", help="address to listen on (default this machine only)")
+    live.add_argument("--port", type=int, default=8050, help="port (0: any free one; default 8050)")
+    live.add_argument("--allow-remote", action="store_true", help="allow a --host other machines can reach")
+    live.add_argument("--record", default=None, help="record the session to this MCAP file")
+    live.add_argument("--force", action="store_true", help="replace an existing --record file")
+    live.add_argument("--calibration", default=None, help="rotation map (flexdigit run --calibration) on hardware")
+    live.add_argument("--orientation", default=None, help="mounting on hardware: vertical, horizontal, hanging")
+    live.add_argument("--seed", type=int, default=0, help="twin noise seed")
     parser = add_command(
         subparsers,
         "shape",
@@ -26,6 +42,38 @@ def register(subparsers) -> None:
     parser.add_argument("--n-average", type=int, default=1, help="readings averaged into the one given")
     parser.add_argument("--accuracy", action="store_true", help="score the estimator against the twin instead")
     parser.add_argument("--seed", type=int, default=0, help="noise seed of --accuracy")
+
+
+def _live(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._validation import check_int
+    from flexdigit.live.server import check_host, serve
+    from flexdigit.live.session import LiveSession
+
+    check_host(args.host, args.allow_remote)
+    check_int(args.port, "--port", low=0, high=65535)
+    session = LiveSession(
+        args.backend,
+        model=args.model,
+        record=args.record,
+        force=args.force,
+        calibration=args.calibration,
+        orientation=args.orientation,
+        seed=args.seed,
+    )
+    try:
+        serve(session, args.host, args.port, allow_remote=args.allow_remote)
+    except KeyboardInterrupt:
+        pass  # Ctrl-C is how a live session ends; uvicorn re-raises it once it has shut down
+    finally:
+        session.stop()
+    data = {
+        "status": session.error or "stopped",
+        "backend": args.backend,
+        "record": str(session.recording.path) if session.recording is not None else None,
+        "overruns": session.state.overruns,
+    }
+    text = f"flexdigit live: {data['status']}" + (f"; recording {data['record']}" if data["record"] else "")
+    return CommandResult(data=data, text=text, exit_code=0 if session.error is None else 1)
 
 
 def _shape(args: argparse.Namespace) -> CommandResult:

@@ -36,6 +36,7 @@ from __future__ import annotations
 import json
 import os
 import struct
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -149,6 +150,7 @@ class Recording:
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=CompressionType.NONE)
         self._writer.start(profile="", library=f"flexdigit ({RECORDING_FORMAT})")
         self._channels: dict[str, int] = {}
+        self._lock = threading.Lock()  # a live session writes samples and estimates from two threads
         self._sequence = 0
         self._closed = False
         run = {"format": RECORDING_FORMAT, "started_unix_s": time.time(), **(header or {})}
@@ -171,16 +173,17 @@ class Recording:
 
     def write(self, topic: str, time_s: float, message: dict[str, Any]) -> None:
         """Append one message (a JSON object) on ``topic`` at rig time ``time_s`` (s, >= 0)."""
-        if self._closed:
-            raise ParameterError(f"{self.path}: the recording is closed")
         channel = self._channels.get(topic)
         if channel is None:
             raise ParameterError(f"Recording.write: unknown topic {topic!r}; add it with add_channel first")
         stamp = max(int(round(float(time_s) * 1e9)), 0)
         data = json.dumps(message, allow_nan=False, separators=(",", ":")).encode()
-        self._writer.add_message(channel, log_time=stamp, data=data, publish_time=stamp, sequence=self._sequence)
-        self._sequence += 1
-        self.messages += 1
+        with self._lock:
+            if self._closed:
+                raise ParameterError(f"{self.path}: the recording is closed")
+            self._writer.add_message(channel, log_time=stamp, data=data, publish_time=stamp, sequence=self._sequence)
+            self._sequence += 1
+            self.messages += 1
 
     def write_sample(self, record: dict[str, Any]) -> None:
         """Append a loop sample (:data:`SAMPLE_SCHEMA`) at its time ``record["t"]``."""
@@ -188,14 +191,19 @@ class Recording:
 
     def flush(self) -> None:
         """Close the open chunk and push everything written to the disk (fsync)."""
-        if self._closed:
-            return
-        self._writer.flush()
-        self._file.flush()
-        os.fsync(self._file.fileno())
+        with self._lock:
+            if self._closed:
+                return
+            self._writer.flush()
+            self._file.flush()
+            os.fsync(self._file.fileno())
 
     def close(self, stop: dict[str, Any] | None = None) -> None:
         """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice."""
+        with self._lock:
+            self._close(stop)
+
+    def _close(self, stop: dict[str, Any] | None) -> None:
         if self._closed:
             return
         try:
