@@ -151,3 +151,35 @@ def test_token_bucket_limits_the_rate():
     assert [bucket.take() for _ in range(7)] == [True] * 5 + [False] * 2
     now[0] += 0.35  # 3.5 tokens back
     assert [bucket.take() for _ in range(4)] == [True, True, True, False]
+
+
+@pytest.mark.slow
+def test_a_recording_replays_at_1x_and_10x(tmp_path):
+    from flexdigit.cli import main
+
+    path = tmp_path / "run.mcap"
+    assert main(["run", "--backend", "sim", "--duration", "8", "--record", str(path), "--no-progress"]) == 0
+    srv = LiveServer(tmp_path, "--backend", f"replay://{path}")
+    try:
+        with _ws(srv) as ws:
+            hello = _next(ws, "hello")
+            assert hello["kind"] == "replay" and hello["speeds"] == [1, 10] and not hello["can_command"]
+
+            def rate(seconds):  # recorded seconds played per wall second
+                start, first, frame = time.monotonic(), None, None
+                while time.monotonic() - start < seconds:
+                    frame = _next(ws, "frame")
+                    if frame["samples"]:
+                        first = frame["samples"][0]["t"] if first is None else first
+                        last = frame["samples"][-1]["t"]
+                return (last - first) / seconds, frame
+
+            one, frame = rate(2.0)
+            assert 0.7 < one < 1.4
+            assert frame["samples"][-1]["setpoint"] == 30.0  # the recorded setpoint comes back with the samples
+            ws.send(json.dumps({"type": "speed", "speed": 10}))
+            _next(ws, "ack")
+            ten, _ = rate(0.5)
+            assert 6 < ten < 13
+    finally:
+        srv.stop()

@@ -128,3 +128,27 @@ def test_run_records_and_replays_from_the_command_line(tmp_path, capsys):
     assert replayed["status"] == "completed" and replayed["samples"] == 45
     assert main(["run", "--backend", "sim", "--duration", "1", "--record", str(path)]) == 2
     assert "exists" in capsys.readouterr().err
+
+
+def test_a_recorded_rig_keeps_every_reading_and_load(tmp_path):
+    from flexdigit.rig.recording import EVENT_TOPIC, iter_messages, recording_rig
+
+    path = tmp_path / "collect.mcap"
+    inner = open_rig("sim?orientation=horizontal", seed=2)
+    rig = recording_rig(inner, Recording(path, header={"source": "collect"}))
+    readings = []
+    rig.place_load(0.025, 0.2)
+    rig.wait(0.5)
+    readings.append(rig.read())
+    rig.clear_loads()
+    rig.wait(0.5)
+    readings.append(rig.read())
+    assert rig.twin is inner.twin  # the inner rig's extras stay reachable
+    rig.close()
+    assert inner.closed
+    messages = list(iter_messages(path))
+    events = [m for topic, _, m in messages if topic == EVENT_TOPIC]
+    assert [e["event"] for e in events] == ["load", "clear"] and events[0]["mass_kg"] == 0.025
+    _, samples, footer = read_recording(path)
+    assert [s["gauges_v"] for s in samples] == [list(r.gauges_v) for r in readings]
+    assert footer["stop"] == "closed"

@@ -49,6 +49,7 @@ __all__ = [
     "read_recording",
     "read_metadata",
     "rig_metadata",
+    "recording_rig",
     "iter_messages",
     "is_mcap",
     "SAMPLE_TOPIC",
@@ -309,3 +310,84 @@ def read_recording(path: str | os.PathLike):
     if header is None or header.get("format") != RECORDING_FORMAT:
         raise DataFileError(f"{path}: not a flexdigit recording (no flexdigit.run metadata of {RECORDING_FORMAT})")
     return header, samples, meta.get("flexdigit.stop")
+
+
+#: JSON Schema of what happens to the rig besides its samples (weights hung, lifted, re-hung).
+EVENT_TOPIC = "/flexdigit/event"
+EVENT_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "flexdigit.Event",
+    "description": "A change to the rig that is not a command: a weight hung (kg, m from the base), lifted, re-hung.",
+    "type": "object",
+    "properties": {
+        "t": {"type": "number"},
+        "event": {"enum": ["load", "clear", "rehang"]},
+        "mass_kg": _NULLABLE,
+        "position_from_base_m": _NULLABLE,
+    },
+    "required": ["t", "event"],
+}
+
+
+def recording_rig(rig, recording: Recording):
+    """``rig`` with every reading it returns recorded as a sample, and its loads as events.
+
+    For code that drives a rig without a loop (the tactile protocols' ``collect``): closing the returned rig
+    closes ``rig`` (safe command, port) and then the recording.
+    """
+    from flexdigit.rig.base import Rig
+
+    recording.add_channel(EVENT_TOPIC, EVENT_SCHEMA)
+
+    class RecordingRig(Rig):
+        name = f"{rig.name} (recorded)"
+
+        def __init__(self) -> None:
+            super().__init__(rig.params, clock=rig.clock, sleep=rig.wait, operator=lambda message: None)
+            self.inner, self.recording, self._k = rig, recording, 0
+
+        def read(self):
+            reading = self.inner.read()
+            pot = reading.pot_v if reading.pot_v == reading.pot_v else None  # NaN: no pot channel
+            gauges = [float(g) if g == g else None for g in reading.gauges_v]
+            sample = {"k": self._k, "t": reading.time_s, "gauges_v": gauges, "pot_v": pot, "command": reading.command}
+            self.recording.write_sample(sample)
+            self._k += 1
+            return reading
+
+        def _read(self):  # pragma: no cover - read() is overridden
+            raise NotImplementedError
+
+        def _send(self, command: int) -> None:
+            self.inner.write_command(command)
+
+        def _event(self, event: str, mass=None, position=None) -> None:
+            self.recording.write(
+                EVENT_TOPIC, self.inner.clock(),
+                {"t": self.inner.clock(), "event": event, "mass_kg": mass, "position_from_base_m": position},
+            )  # fmt: skip
+
+        def _apply_load(self, mass_kg: float, position_from_base_m: float) -> None:
+            self.inner.place_load(mass_kg, position_from_base_m)
+            self._event("load", mass_kg, position_from_base_m)
+
+        def _remove_loads(self) -> None:
+            self.inner.clear_loads()
+            self._event("clear")
+
+        def _rehang(self, settle_s: float) -> None:
+            self.inner.rehang(settle_s)
+            self._event("rehang")
+
+        def _close(self) -> None:
+            try:
+                self.inner.close()
+            finally:
+                self.recording.close({"stop": "closed"})
+
+        def __getattr__(self, item):  # the inner rig's extras (the twin, its true rotation)
+            if item == "inner":
+                raise AttributeError(item)
+            return getattr(self.inner, item)
+
+    return RecordingRig()

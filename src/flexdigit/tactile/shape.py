@@ -214,16 +214,12 @@ class DigitBeam:
         """Node values (B, P+1) or (B, P+1, 2) interpolated at arc positions ``x_m``, (Q,) or (B, Q)."""
         vector = nodes.ndim == 3 if vector is None else vector
         i, w = self.locate(x_m)
-        b = nodes.shape[0]
-        if i.ndim == 1:
-            i, w = np.broadcast_to(i, (b, i.size)), np.broadcast_to(w, (b, w.size))
-        if vector:
-            lo = np.take_along_axis(nodes, i[..., None].repeat(2, axis=-1), axis=1)
-            hi = np.take_along_axis(nodes, (i + 1)[..., None].repeat(2, axis=-1), axis=1)
-            return lo + w[..., None] * (hi - lo)
-        lo = np.take_along_axis(nodes, i, axis=1)
-        hi = np.take_along_axis(nodes, i + 1, axis=1)
-        return lo + w * (hi - lo)
+        rows = np.arange(nodes.shape[0])[:, None] if i.ndim == 2 else slice(None)
+        if i.ndim == 2:
+            lo, hi = nodes[rows, i], nodes[rows, i + 1]
+        else:
+            lo, hi = nodes[:, i], nodes[:, i + 1]
+        return lo + (w[..., None] if vector else w) * (hi - lo)
 
     def interpolation(self, x_m) -> np.ndarray:
         """Matrix (Q, P+1) taking node values to their linear interpolation at arc positions ``x_m`` (Q,)."""
@@ -728,18 +724,21 @@ class ShapeEstimator:
         return m * beam.inv_ei
 
     def _load_moment(self, r, psi, s_load) -> np.ndarray:
-        """Moment per unit force (m) on the cells (B, P) of a load at ``s_load`` (B,)."""
+        """Moment per unit force (m) on the cells of a load at ``s_load``: (B,) -> (B, P); (B, C) -> (B, C, P)."""
         beam = self.beam_
-        s_l = np.asarray(s_load, dtype=float)[:, None]
-        r_l = beam.at(r, s_l)[:, 0]  # (B, 2)
+        s_l = np.asarray(s_load, dtype=float)
+        single = s_l.ndim == 1
+        s_l = s_l[:, None] if single else s_l
+        r_l = beam.at(r, s_l)  # (B, C, 2)
         if self.load == "press":
-            angle = beam.at(psi, s_l, vector=False)[:, 0]
+            angle = beam.at(psi, s_l, vector=False)
             d = np.stack([-np.sin(angle), np.cos(angle)], axis=-1)
         else:
             d = np.broadcast_to(beam.gravity / np.linalg.norm(beam.gravity), r_l.shape)
-        r_mid = 0.5 * (r[:, :-1, :] + r[:, 1:, :])
-        lever = _cross(r_l[:, None, :] - r_mid, d[:, None, :])
-        return np.where(beam.s_m[None, :] < s_l, lever, 0.0)
+        r_mid = 0.5 * (r[:, :-1, :] + r[:, 1:, :])  # (B, P, 2)
+        lever = _cross(r_l[:, :, None, :] - r_mid[:, None, :, :], d[:, :, None, :])  # (B, C, P)
+        out = np.where(beam.s_m[None, None, :] < s_l[:, :, None], lever, 0.0)
+        return out[:, 0] if single else out
 
     # ------------------------------------------------------------------------------------------- uncertainty
     def _uncertainty(self, fit, tip_eq, sd_k, r, psi) -> dict:
@@ -773,16 +772,18 @@ class ShapeEstimator:
         # the centre line's sensitivity to each parameter (lever arms held), by differences of the integral
         base = self._curvature_field(fit, r, psi)
         _, r0, _ = beam.integrate(base)
-        unit = [
-            np.broadcast_to(beam.eccentricity_m * beam.inv_ei, base.shape),
-            self._load_moment(r, psi, s_l) * beam.inv_ei,
-            p[:, None]
-            * (self._load_moment(r, psi, s_hi) - self._load_moment(r, psi, s_lo))
-            * beam.inv_ei
-            / d_sl[:, None],
-        ]
-        eps = (1e-3, 1e-3, 1e-4)
-        jac_r = np.stack([(beam.integrate(base + h * u)[1] - r0) / h for h, u in zip(eps, unit, strict=True)], -1)
+        moments = self._load_moment(r, psi, np.stack([s_l, s_lo, s_hi], axis=1)) * beam.inv_ei  # (B, 3, P)
+        unit = np.stack(
+            [
+                np.broadcast_to(beam.eccentricity_m * beam.inv_ei, base.shape),
+                moments[:, 0],
+                p[:, None] * (moments[:, 2] - moments[:, 1]) / d_sl[:, None],
+            ],
+            axis=1,
+        )  # (B, 3, P): curvature per unit T, P and s_L
+        eps = np.array([1e-3, 1e-3, 1e-4])
+        _, r1, _ = beam.integrate(base[:, None, :] + eps[None, :, None] * unit)  # all three at once
+        jac_r = np.moveaxis((r1 - r0[:, None]) / eps[None, :, None, None], 1, -1)  # (B, P+1, 2, 3)
         cov_r = np.einsum("bpci,bij,bpdj->bpcd", jac_r, cov, jac_r)
         normal = np.stack([-np.sin(psi), np.cos(psi)], axis=-1)
         sd_normal = np.sqrt(np.maximum(np.einsum("bpc,bpcd,bpd->bp", normal, cov_r, normal), 0.0))
