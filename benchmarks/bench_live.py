@@ -29,17 +29,6 @@ from pathlib import Path
 
 import numpy as np
 
-CHROMIUM = "/usr/bin/chromium"
-FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 WINDOW_S = 15.0
 
 
@@ -64,11 +53,13 @@ def _start_server(log: Path) -> tuple[subprocess.Popen, str]:
 def measure(screenshot: str | None = None) -> dict:
     from playwright.sync_api import sync_playwright
 
+    from flexdigit.live.browser import launch
+
     with tempfile.TemporaryDirectory() as tmp:
         proc, url = _start_server(Path(tmp) / "live.err")
         try:
             with sync_playwright() as pw:
-                browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=FLAGS)
+                browser = launch(pw)
                 page = browser.new_page(viewport={"width": 1280, "height": 860})
                 page.goto(url)
                 page.wait_for_function("() => flexdigit.last && flexdigit.last.shape", timeout=60_000)
