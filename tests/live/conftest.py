@@ -107,7 +107,7 @@ def stats(page) -> dict:
     return page.evaluate(
         "() => ({frames: flexdigit.frames, draws: flexdigit.draws, samples: flexdigit.samples,"
         " connected: flexdigit.connected, reconnects: flexdigit.reconnects, errors: flexdigit.errors,"
-        " last: flexdigit.last, hello: flexdigit.hello})"
+        " last: flexdigit.last, hello: flexdigit.hello, locMap: flexdigit.locMap || null})"
     )
 
 

@@ -96,8 +96,8 @@ def test_a_click_is_located_within_a_centimetre_where_the_gauges_see_it(live_ser
 def test_the_page_says_where_the_gauges_cannot_see_a_load(live_server, page):
     server = live_server("--backend", "sim?cable=false")
     page.goto(server.url)
-    wait_for(page, lambda s: s["last"]["locatability"] is not None, timeout_s=40, what="the locatability map")
-    loc = stats(page)["last"]["locatability"]
+    wait_for(page, lambda s: s["locMap"] is not None, timeout_s=40, what="the locatability map")
+    loc = stats(page)["locMap"]
     blind = [s for s, sd in zip(loc["s_m"], loc["sd_m"], strict=True) if sd is None or sd > 0.005]
     assert min(blind) < 0.045 and max(blind) >= 0.13  # clamp to gauge 2: no gauge, or gauge 1 alone, bends
     _click(page, 0.03)  # between the clamp and gauge 1

@@ -261,8 +261,12 @@ class LiveSession:
     """
 
     HISTORY_S = 10.0
-    ESTIMATE_EVERY = 2  # frames: the shape at 25 Hz
+    ESTIMATE_EVERY = 2  # frames: the shape at up to 25 Hz
     AVERAGE = 5  # readings averaged into each estimate (0.1 s)
+    #: Re-estimate at least this often even when nothing moved (s).
+    MAX_ESTIMATE_GAP_S = 1.0
+    #: Readings count as moved when their 0.1 s mean changed by more than this many of its own standard deviations.
+    STILL_SIGMAS = 3.0
 
     def __init__(
         self,
@@ -331,6 +335,10 @@ class LiveSession:
         self._loc_cache: dict = {}
         self._loc_pending: set = set()
         self._loc_worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="flexdigit-map")
+        from flexdigit.twin.calibration import default_calibration
+
+        white = float(np.max((getattr(twin, "calibration", None) or default_calibration()).noise_white_v))
+        self._still_v = self.STILL_SIGMAS * white * math.sqrt(2.0 / self.AVERAGE)  # a difference of two means
         self.contacts: list[ContactSource] = [BeamContact()]
         if model is not None:
             self.contacts.insert(0, NetworkContact(model, self.length_m))
@@ -493,6 +501,7 @@ class LiveSession:
         virtual = 0.0  # replay time
         k = 0
         window: collections.deque = collections.deque(maxlen=self.AVERAGE)
+        last_job = None
         try:
             with self._lock:
                 self.state.status = "running"
@@ -538,12 +547,22 @@ class LiveSession:
                 with self._lock:
                     self.state.samples.append(sample)
                 if k % self.ESTIMATE_EVERY == 0 and len(window) == window.maxlen:
-                    # the estimate runs in its own thread: hand it the latest job (a slower estimate skips some)
-                    twin = getattr(rig, "twin", None)
-                    psi = None if twin is None else np.array(twin.state()[0])
-                    with self._job_ready:
-                        self._job = (np.mean(window, axis=0), command, reading.time_s, psi)
-                        self._job_ready.notify()
+                    mean = np.mean(window, axis=0)
+                    # a digit at rest gives the same estimate again: re-estimate when the averaged readings moved
+                    # beyond their noise, the command changed, or a second has passed (the twin's truth moves on)
+                    moved = last_job is None or (
+                        np.max(np.abs(mean - last_job[0])) > self._still_v
+                        or command != last_job[1]
+                        or reading.time_s - last_job[2] >= self.MAX_ESTIMATE_GAP_S
+                    )
+                    if moved:
+                        # the estimate runs in its own thread: hand it the latest job (a slower one skips some)
+                        twin = getattr(rig, "twin", None)
+                        psi = None if twin is None else np.array(twin.state()[0])
+                        last_job = (mean, command, reading.time_s, psi)
+                        with self._job_ready:
+                            self._job = last_job
+                            self._job_ready.notify()
                 k += 1
         except (RigError, OSError) as exc:
             self.error = f"fault: {exc}"
@@ -638,13 +657,17 @@ class LiveSession:
         """Where a 25 g load can be placed to the page's threshold at this command: computed in a worker thread
         (half a second of work must not stall the 20 ms loop), cached per command; None until something new."""
         key = int(command) if self.cable else None
+        now = time.monotonic()
+        if key != getattr(self, "_loc_seen", "unset"):
+            self._loc_seen, self._loc_since = key, now
         if getattr(self, "_loc_sent", "unset") == key:
             return None
         done = self._loc_cache.get(key)
         if done is not None:
             self._loc_sent = key
             return done
-        if key not in self._loc_pending:
+        # computed only for a command held half a second: a digit on its way somewhere needs no map of each stop
+        if key not in self._loc_pending and now - self._loc_since >= 0.5:
             self._loc_pending.add(key)
             self._loc_worker.submit(self._compute_locatability, key)
         return None

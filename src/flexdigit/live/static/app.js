@@ -87,7 +87,7 @@
       while (cut < samples.length && samples[cut].t < tEnd - HISTORY_S) cut++;
       if (cut > 0) samples = samples.slice(cut);
     }
-    if (msg.locatability) locMap = msg.locatability;
+    if (msg.locatability) locMap = stats.locMap = msg.locatability; // sent when it changes (with the command)
     if (msg.samples.length) dirty = true;
   }
 
