@@ -455,6 +455,7 @@ class LiveSession:
                     "speed": self.speed,
                     "loads": [[round(m, 5), round(s, 4)] for m, s in getattr(self.rig, "loads", [])],
                     "overruns": self.state.overruns,
+                    "estimate_error": self.estimate_error,
                     "clients": self.clients,
                     "server_ms": time.time() * 1e3,
                 },
@@ -674,8 +675,12 @@ class LiveSession:
 
     def _compute_locatability(self, key) -> None:
         s = np.round(np.arange(0.005, self.length_m + 1e-9, 0.005), 4)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # a heavily sagging free digit may settle slowly: the map stays useful
-            sd = self._loc_estimator.locatability(s, 0.245, key)
-        self._loc_cache[key] = {"command": key, "s_m": s.tolist(), "sd_m": [_finite(x) for x in sd]}
-        self._loc_pending.discard(key)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # a heavily sagging free digit may settle slowly: the map holds
+                sd = self._loc_estimator.locatability(s, 0.245, key)
+            self._loc_cache[key] = {"command": key, "s_m": s.tolist(), "sd_m": [_finite(x) for x in sd]}
+        except Exception as exc:  # the page goes without the map; it says why
+            self.estimate_error = f"locatability map: {type(exc).__name__}: {exc}"
+        finally:
+            self._loc_pending.discard(key)

@@ -257,7 +257,8 @@
 
   function drawPanels() {
     const st = last.state, sh = last.shape;
-    $("status").textContent = st.status + (st.overruns ? " (" + st.overruns + " overruns)" : "");
+    $("status").textContent = st.status + (st.overruns ? " (" + st.overruns + " overruns)" : "") +
+      (st.estimate_error ? "; estimate failed: " + st.estimate_error : "");
     $("ctrl-state").textContent = (st.controller ? "controller " + st.controller : "open loop") +
       (hello && !hello.can_command ? "; no actuation here" : "") + (st.paused ? "; paused" : "") +
       (hello && hello.kind === "replay" ? "; replay at " + st.speed + "x" : "");
