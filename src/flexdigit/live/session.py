@@ -355,11 +355,10 @@ class LiveSession:
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
         elif self.kind == "rig" and calibration is not None:
-            from flexdigit.rig.commands import _load_estimator
             from flexdigit.rig.controllers import make_controller
-            from flexdigit.rig.rotation import RotationEstimator
+            from flexdigit.rig.rotation import load_rotation_map
 
-            estimator = _load_estimator(calibration, RotationEstimator)
+            estimator = load_rotation_map(calibration)
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
         self.recording = None

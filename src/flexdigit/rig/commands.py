@@ -90,7 +90,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
                 args.record,
                 header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
                         "period_s": period, "duration_s": duration, "seed": args.seed if sim else None},
-                metadata={**rig_metadata(rig), "flexdigit.calibration": {"rotation_map": _estimator_dict(estimator)}},
+                metadata={**rig_metadata(rig), "flexdigit.calibration": {"rotation_map": estimator.to_dict()}},
                 force=args.force,
             )  # fmt: skip
         except BaseException:
@@ -168,13 +168,15 @@ def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
 
 
 def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
+    from flexdigit.rig.rotation import load_rotation_map
+
     path = args.calibration
     if path is not None and path.exists():
-        return _load_estimator(path, RotationEstimator)
+        return load_rotation_map(path)
     if sim:
         est = calibrate_rotation(open_rig(args.backend.split("?")[0], seed=args.seed + 1))
     elif args.backend.startswith("replay") and _recorded_map(rig) is not None:
-        est = _estimator_from_dict(_recorded_map(rig), RotationEstimator, rig.path)
+        est = RotationEstimator.from_dict(_recorded_map(rig), source=rig.path)
     elif args.backend.startswith("replay"):
         from flexdigit.errors import ParameterError
 
@@ -186,18 +188,8 @@ def _estimator(args, rig, sim, RotationEstimator, calibrate_rotation, open_rig):
 
         est = calibrate_rotation(rig, angle_source=ask)
     if path is not None:
-        path.write_text(json.dumps(_estimator_dict(est)))
+        path.write_text(json.dumps(est.to_dict()))
     return est
-
-
-def _estimator_dict(est) -> dict:
-    """A rotation map as saved with ``--calibration`` (and kept in a recording's metadata)."""
-    return {
-        "method": est.method,
-        "coef": est.coef_.tolist(),
-        "intercept": est.intercept_,
-        "gauge_v_per_deg": est.gauge_v_per_deg_.tolist(),
-    }
 
 
 def _recorded_map(rig) -> dict | None:
@@ -209,35 +201,6 @@ def _recorded_map(rig) -> dict | None:
         return None
     found = read_metadata(path).get("flexdigit.calibration", {}).get("rotation_map")
     return found if isinstance(found, dict) else None
-
-
-def _load_estimator(path: Path, RotationEstimator):
-    from flexdigit.errors import DataFileError
-
-    try:
-        data = json.loads(path.read_text())
-    except ValueError as exc:
-        raise DataFileError(f"{path}: not a rotation calibration (not JSON: {exc})") from None
-    return _estimator_from_dict(data, RotationEstimator, path)
-
-
-def _estimator_from_dict(data, RotationEstimator, source):
-    import numpy as np
-
-    from flexdigit.errors import DataFileError
-
-    try:
-        est = RotationEstimator()
-        est.coef_ = np.asarray(data["coef"], dtype=float).reshape(3)
-        est.intercept_ = float(data["intercept"])
-        est.gauge_v_per_deg_ = np.asarray(data["gauge_v_per_deg"], dtype=float).reshape(3)
-        est.tare_deg_ = 0.0
-        est.residual_deg_ = math.nan
-    except (ValueError, KeyError, TypeError) as exc:
-        raise DataFileError(
-            f"{source}: not a rotation calibration (expected coef[3], intercept, gauge_v_per_deg[3]): {exc}"
-        ) from None
-    return est
 
 
 class _Progress:

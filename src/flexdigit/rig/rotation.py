@@ -19,7 +19,7 @@ from flexdigit._validation import check_array, check_choice, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.rig.base import Reading, Rig
 
-__all__ = ["RotationEstimator", "calibrate_rotation"]
+__all__ = ["RotationEstimator", "calibrate_rotation", "load_rotation_map"]
 
 
 class RotationEstimator:
@@ -122,6 +122,45 @@ class RotationEstimator:
 
     def __call__(self, reading: Reading) -> float:
         return self.predict_one(reading.gauges_v)
+
+    def to_dict(self) -> dict:
+        """The fitted map as plain numbers (``flexdigit run --calibration`` saves it; recordings keep it)."""
+        return {
+            "method": self.method,
+            "coef": self.coef_.tolist(),
+            "intercept": self.intercept_,
+            "gauge_v_per_deg": self.gauge_v_per_deg_.tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, data, source="rotation map") -> RotationEstimator:
+        """A fitted map from :meth:`to_dict`'s numbers; :class:`DataFileError` naming ``source`` if they are not."""
+        try:
+            est = cls(method=str(data.get("method", "sensitivity")))
+            est.coef_ = np.asarray(data["coef"], dtype=float).reshape(3)
+            est.intercept_ = float(data["intercept"])
+            est.gauge_v_per_deg_ = np.asarray(data["gauge_v_per_deg"], dtype=float).reshape(3)
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise DataFileError(
+                f"{source}: not a rotation calibration (expected coef[3], intercept, gauge_v_per_deg[3]): {exc}"
+            ) from None
+        if not (np.all(np.isfinite(est.coef_)) and np.isfinite(est.intercept_)):
+            raise DataFileError(f"{source}: the rotation map's numbers must be finite")
+        est.tare_deg_, est.residual_deg_ = 0.0, float("nan")
+        return est
+
+
+def load_rotation_map(path) -> RotationEstimator:
+    """Read a rotation map saved by ``flexdigit run --calibration FILE`` (JSON of :meth:`RotationEstimator.to_dict`)."""
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except ValueError as exc:
+        raise DataFileError(f"{path}: not a rotation calibration (not JSON: {exc})") from None
+    return RotationEstimator.from_dict(data, source=path)
 
 
 def calibrate_rotation(
