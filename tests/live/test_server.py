@@ -130,6 +130,21 @@ def test_a_remote_host_needs_allow_remote():
     assert run.returncode == 2 and "--allow-remote" in run.stderr and "Traceback" not in run.stderr
 
 
+def test_bad_files_are_named_before_anything_is_served(tmp_path):
+    bad = tmp_path / "rig.toml"
+    bad.write_text("[calibration]\nsupport_mass_kg = 'heavy'\n")
+    for args, culprit in (
+        (["--calibration", str(bad)], "rig.toml"),
+        (["--calibration", str(tmp_path / "missing.toml")], "missing.toml"),
+        (["--model", str(bad)], "rig.toml"),
+        (["--backend", f"replay://{tmp_path / 'none.mcap'}"], "none.mcap"),
+    ):
+        run = subprocess.run(
+            [sys.executable, "-m", "flexdigit.cli", "live", *args], capture_output=True, text=True, timeout=120
+        )
+        assert run.returncode == 2 and culprit in run.stderr and "Traceback" not in run.stderr, run.stderr
+
+
 def test_request_validation_names_the_culprit():
     assert validate_request({"type": "setpoint", "value": -50}) == {"type": "setpoint", "value": -10.0}
     assert validate_request({"type": "pause", "paused": True})["paused"] is True

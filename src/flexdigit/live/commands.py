@@ -25,7 +25,8 @@ def register(subparsers) -> None:
     live.add_argument("--allow-remote", action="store_true", help="allow a --host other machines can reach")
     live.add_argument("--record", default=None, help="record the session to this MCAP file")
     live.add_argument("--force", action="store_true", help="replace an existing --record file")
-    live.add_argument("--calibration", default=None, help="rotation map (flexdigit run --calibration) on hardware")
+    live.add_argument("--calibration", default=None, help="calibration TOML: the twin's, and the shape estimate's")
+    live.add_argument("--rotation-map", default=None, help="rotation map (flexdigit run --calibration) on hardware")
     live.add_argument("--orientation", default=None, help="mounting on hardware: vertical, horizontal, hanging")
     live.add_argument("--seed", type=int, default=0, help="twin noise seed")
     parser = add_command(
@@ -57,6 +58,7 @@ def _live(args: argparse.Namespace) -> CommandResult:
         record=args.record,
         force=args.force,
         calibration=args.calibration,
+        rotation_map=args.rotation_map,
         orientation=args.orientation,
         seed=args.seed,
     )

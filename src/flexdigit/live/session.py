@@ -251,6 +251,9 @@ class LiveSession:
     record : path, optional
         An MCAP recording of the session (refused if it exists unless ``force``).
     calibration : path, optional
+        A calibration TOML (``flexdigit calibrate``): the twin's on ``sim``, and on every backend the channel
+        gains, offsets, stiffness and noise the shape estimate uses; the thesis's fit by default.
+    rotation_map : path, optional
         A rotation map (``flexdigit run --calibration``) for the controller on hardware; the twin calibrates its own.
     orientation : str, optional
         How the digit is mounted, for the shape estimate on hardware (the twin knows its own).
@@ -276,12 +279,15 @@ class LiveSession:
         record=None,
         force: bool = False,
         calibration=None,
+        rotation_map=None,
         orientation: str | None = None,
         period_s: float = 0.020,
         seed: int = 0,
     ) -> None:
         from flexdigit.rig.base import open_rig, parse_rig_url
+        from flexdigit.twin.calibration import default_calibration, load_calibration
 
+        self.calibration = default_calibration() if calibration is None else load_calibration(calibration)
         self.period_s = check_real(period_s, "period_s", "LiveSession", low=0.005, high=1.0)
         parsed = parse_rig_url(backend)
         self.kind = {"sim": "twin", "sim+paced": "twin", "replay": "replay"}.get(parsed.scheme, "rig")
@@ -290,12 +296,12 @@ class LiveSession:
             options = {"orientation": "horizontal", **parsed.options}
             query = "&".join(f"{k}={v}" for k, v in options.items())
             self.rig_url = f"sim+paced?{query}"
-            self.rig = open_rig(self.rig_url, seed=seed)
+            self.rig = open_rig(self.rig_url, seed=seed, calibration=self.calibration)
         else:
             self.rig_url = backend
             self.rig = open_rig(backend)
         try:
-            self._setup(model, record, force, calibration, orientation, seed)
+            self._setup(model, record, force, rotation_map, orientation, seed)
         except BaseException:
             self.rig.close()
             raise
@@ -314,7 +320,7 @@ class LiveSession:
         self.engaged = False  # the controller holds the setpoint only while a page asks for it
         self.error: str | None = None
 
-    def _setup(self, model, record, force, calibration, orientation, seed) -> None:
+    def _setup(self, model, record, force, rotation_map, orientation, seed) -> None:
         from flexdigit.tactile.shape import ShapeEstimator
 
         rig = self.rig
@@ -326,18 +332,16 @@ class LiveSession:
         else:
             orientation, cable, housing = orientation or "vertical", True, True
         self.orientation, self.cable = orientation, cable
-        self.estimator = ShapeEstimator(
-            params, orientation=orientation, housing=housing, cable=cable, n_average=self.AVERAGE
-        )
-        self._loc_estimator = ShapeEstimator(
-            params, orientation=orientation, housing=housing, cable=cable, n_average=self.AVERAGE
+        self.estimator, self._loc_estimator = (
+            ShapeEstimator(
+                params, self.calibration, orientation=orientation, housing=housing, cable=cable, n_average=self.AVERAGE
+            )
+            for _ in range(2)
         )
         self._loc_cache: dict = {}
         self._loc_pending: set = set()
         self._loc_worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="flexdigit-map")
-        from flexdigit.twin.calibration import default_calibration
-
-        white = float(np.max((getattr(twin, "calibration", None) or default_calibration()).noise_white_v))
+        white = float(np.max(self.calibration.noise_white_v))
         self._still_v = self.STILL_SIGMAS * white * math.sqrt(2.0 / self.AVERAGE)  # a difference of two means
         self.contacts: list[ContactSource] = [BeamContact()]
         if model is not None:
@@ -351,14 +355,16 @@ class LiveSession:
 
             # a static sweep on a twin of its own (virtual time, the twin's 20 ms step: nothing moves fast)
             query = self.rig_url.partition("?")[2]
-            estimator = calibrate_rotation(open_rig(f"sim?{query}&dt_s=0.02", seed=seed + 1))
+            estimator = calibrate_rotation(
+                open_rig(f"sim?{query}&dt_s=0.02", seed=seed + 1, calibration=self.calibration)
+            )
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
-        elif self.kind == "rig" and calibration is not None:
+        elif self.kind == "rig" and rotation_map is not None:
             from flexdigit.rig.controllers import make_controller
             from flexdigit.rig.rotation import load_rotation_map
 
-            estimator = load_rotation_map(calibration)
+            estimator = load_rotation_map(rotation_map)
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
         self.recording = None
@@ -378,7 +384,10 @@ class LiveSession:
                 record,
                 header={"backend": self.backend, "controller": "digital20" if self.controller else None,
                         "period_s": self.period_s, "source": "flexdigit live", "seed": seed},
-                metadata={**rig_metadata(rig), "flexdigit.calibration": {"estimator": repr(self.estimator)}},
+                metadata={
+                    **rig_metadata(rig),
+                    "flexdigit.calibration": {"estimator": repr(self.estimator), **self.calibration.to_dict()},
+                },
                 force=force,
             )  # fmt: skip
             self.recording.add_channel("/flexdigit/shape", SHAPE_SCHEMA)
