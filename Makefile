@@ -7,7 +7,10 @@ STAMP  := $(VENV)/.installed
 BENCH_STAMP := $(VENV)/.installed-bench
 PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 
-.PHONY: setup run test lint bench clean
+# The live page's tests drive Debian's chromium (no browser download); installed here when missing (CI runs as root).
+CHROMIUM := /usr/bin/chromium
+
+.PHONY: setup run test lint bench clean browser
 
 setup: $(STAMP)
 
@@ -26,14 +29,20 @@ lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/ruff format --check src tests benchmarks
 
-test: lint
+test: lint browser
 	$(BIN)/pytest
+
+browser:
+	@test -x $(CHROMIUM) || { \
+	    echo "the live page's tests need Debian's chromium: installing it (apt-get install chromium)"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; } \
+	    || { echo "could not install chromium: run 'apt-get install chromium' as root"; exit 1; }
 
 $(BENCH_STAMP): $(STAMP)
 	$(PIP) install -c constraints.txt -e '.[dev,bench]'
 	@touch $(BENCH_STAMP)
 
-bench: $(BENCH_STAMP)
+bench: $(BENCH_STAMP) browser
 	$(BIN)/python -m benchmarks
 
 clean:

@@ -18,6 +18,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
     "benchmarks.bench_calibrate",
+    "benchmarks.bench_live",
 )
 
 

@@ -29,6 +29,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.rig.commands",
     "flexdigit.tactile.commands",
     "flexdigit.calibrate.commands",
+    "flexdigit.live.commands",
     "flexdigit.report.commands",
 )
 

@@ -15,4 +15,5 @@ CHAPTERS: tuple[str, ...] = (
     "flexdigit.report.ch5_digital",
     "flexdigit.report.ch6_tactile",
     "flexdigit.report.ch7_tactile",
+    "flexdigit.report.ch8_shape",
 )

@@ -58,12 +58,17 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--resolution-deg", type=float, default=1.0, help="reading resolution of measured rotations, deg (1)"
     )
-    parser.add_argument("--force", action="store_true", help="overwrite an existing --rotation-map when making one")
     parser.add_argument(
         "--calibration",
         type=Path,
         default=None,
         help="twin calibration TOML for the sim backends (flexdigit calibrate)",
+    )
+    parser.add_argument(
+        "--record", type=Path, default=None, help="MCAP recording of every sample (any MCAP tool reads it)"
+    )
+    parser.add_argument(
+        "--force", action="store_true", help="replace an existing --record file, or --rotation-map when making one"
     )
     parser.add_argument("--no-progress", action="store_true", help="no live progress line")
     parser.add_argument(
@@ -134,6 +139,21 @@ def _run(args: argparse.Namespace) -> CommandResult:
         if progress:
             progress.update(k, t, y, command)
 
+    recording = None
+    if args.record is not None:
+        from flexdigit.rig.recording import Recording, rig_metadata
+
+        try:
+            recording = Recording(
+                args.record,
+                header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
+                        "period_s": period, "duration_s": duration, "seed": args.seed if sim else None},
+                metadata={**rig_metadata(rig), "flexdigit.calibration": {"rotation_map": estimator.to_dict()}},
+                force=args.force,
+            )  # fmt: skip
+        except BaseException:
+            rig.close()
+            raise
     priority = realtime_priority() if args.realtime else None
     if priority is not None:
         priority.__enter__()
@@ -161,6 +181,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
             measure=estimator,
             header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend},
             summary=summary,
+            recording=recording,
         )
     finally:
         if priority is not None:
@@ -206,6 +227,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "gauge_source": _source_stats(rig),
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
+        "record": str(recording.path) if recording is not None else None,
     }
     truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if has_truth else ""
     text = (
@@ -290,6 +312,10 @@ def _rotation_map(args, rig, sim: bool):
     if path is not None and path.exists() and source is None:
         return load_rotation_map(path)
     replay = args.backend.startswith("replay")
+    if replay and source is None and _recorded_map(rig) is not None:
+        from flexdigit.rig.rotation import RotationEstimator
+
+        return RotationEstimator.from_dict(_recorded_map(rig), source=rig.path)  # the map the recording was run with
     source = source or ("twin" if sim else "operator")
     if source == "twin":
         # the twin (calibrated to the rig with --calibration): a separate one, read at its own tip rotation
@@ -341,6 +367,17 @@ def _source_stats(rig) -> dict | None:
         if callable(stats):
             return stats()
     return None
+
+
+def _recorded_map(rig) -> dict | None:
+    """The rotation map an MCAP recording keeps in its ``flexdigit.calibration`` metadata, if any."""
+    from flexdigit.rig.recording import is_mcap, read_metadata
+
+    path = getattr(rig, "path", None)
+    if path is None or not is_mcap(path):
+        return None
+    found = read_metadata(path).get("flexdigit.calibration", {}).get("rotation_map")
+    return found if isinstance(found, dict) else None
 
 
 class _Progress:

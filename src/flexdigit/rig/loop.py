@@ -226,6 +226,7 @@ def run_loop(
     close_rig: bool = True,
     fsync_every: int = 50,
     header: dict[str, Any] | None = None,
+    recording: Any = None,
     summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None,
 ) -> LoopResult:
     """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
@@ -255,9 +256,12 @@ def run_loop(
         Stop with a fault when a gauge is NaN or clipped (:func:`check_reading`).
     close_rig : bool
         Close the rig (port) when the loop ends, whatever the reason.
+    recording : flexdigit.rig.recording.Recording, optional
+        An open MCAP recording: every sample goes to it as to the log, and the loop closes it with the stop
+        record (so a fault or Ctrl-C still leaves a complete, readable file).
     summary : callable, optional
-        ``summary(time_s, measurement) -> dict`` of figures (e.g. the step metrics) written into the log's closing
-        record under ``"summary"``, whatever the reason the loop stopped.
+        ``summary(time_s, measurement) -> dict`` of figures (e.g. the step metrics) written into the closing record
+        of the log and the recording under ``"summary"``, whatever the reason the loop stopped.
 
     Returns
     -------
@@ -322,18 +326,20 @@ def run_loop(
             u = controller.step(r, reading)
             sent = rig.write_command(u)
             y = float(measure(reading))
-            if log is not None:
-                log.write(
-                    {
-                        "k": k,
-                        "t": round(t, 9),
-                        "setpoint": r,
-                        "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
-                        "pot_v": _finite_or_none(reading.pot_v),
-                        "y": _finite_or_none(y),
-                        "command": sent,
-                    }
-                )
+            if log is not None or recording is not None:
+                record = {
+                    "k": k,
+                    "t": round(t, 9),
+                    "setpoint": r,
+                    "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
+                    "pot_v": _finite_or_none(reading.pot_v),
+                    "y": _finite_or_none(y),
+                    "command": sent,
+                }
+                if log is not None:
+                    log.write(record)
+                if recording is not None:
+                    recording.write_sample(record)
             compute.append(timer() - w0)
             starts.append(now)
             lateness.append(late)
@@ -360,12 +366,15 @@ def run_loop(
             when = ""
         relaxed = f"digit relaxed to command {equilibrium}" if safe else "could NOT send the safe command (port lost)"
         message = f"{message}{when}; {relaxed}"
+    stop: dict[str, Any] = {"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns}
+    if summary is not None and ts:
+        stop["summary"] = to_jsonable(summary(np.array(ts), np.array(ys)))  # NaN/inf -> null
+    if recording is not None:
+        recording.close(stop)
+        message = f"{message}; recording: {recording.path}"
     if log is not None:
-        footer: dict[str, Any] = {"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns}
-        if summary is not None and ts:
-            footer["summary"] = to_jsonable(summary(np.array(ts), np.array(ys)))  # NaN/inf -> null
         try:
-            log.write(footer)
+            log.write(stop)
         finally:
             log.close()
         message = f"{message}; log: {log.path}"

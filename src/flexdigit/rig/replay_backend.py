@@ -1,4 +1,5 @@
-"""The replay backend: a recorded loop log (:mod:`flexdigit.rig.loop`) played back as a rig.
+"""The replay backend: a recorded run played back as a rig: a JSON-lines loop log (:mod:`flexdigit.rig.loop`) or
+an MCAP recording (:mod:`flexdigit.rig.recording`), told apart by the file's first bytes.
 
 :meth:`read` returns the recorded sample in force at the current replay time (sample and hold), time advances only
 through :meth:`wait` (virtual), and the commands written are kept in :attr:`commands_sent` beside the recorded
@@ -18,18 +19,19 @@ from flexdigit.errors import DataFileError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig
 from flexdigit.rig.loop import read_log
+from flexdigit.rig.recording import is_mcap, read_recording
 
 __all__ = ["ReplayRig", "from_url"]
 
 
 class ReplayRig(Rig):
-    """Play back ``path`` (a loop log written by :func:`~flexdigit.rig.loop.run_loop`)."""
+    """Play back ``path`` (a loop log or an MCAP recording written by :func:`~flexdigit.rig.loop.run_loop`)."""
 
     name = "replay"
 
     def __init__(self, path: str, params: RigParams | None = None, **kwargs: Any) -> None:
         self.path = str(path)
-        self.header, samples, self.footer = read_log(path)
+        self.header, samples, self.footer = read_recording(path) if is_mcap(path) else read_log(path)
         if not samples:
             raise DataFileError(f"{path}: the log has no samples to replay")
         self._times = [float(s["t"]) for s in samples]
@@ -66,5 +68,5 @@ class ReplayRig(Rig):
 
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> ReplayRig:
-    """``replay://path/to/run.jsonl``."""
+    """``replay://path/to/run.jsonl`` or ``replay://path/to/run.mcap``."""
     return ReplayRig(location, params, **options)

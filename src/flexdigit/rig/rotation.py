@@ -215,20 +215,28 @@ class RotationEstimator:
         return self.predict_one(reading.gauges_v)
 
     def to_dict(self) -> dict:
-        """Everything needed to use the map again and to say where it came from (JSON-able)."""
-        return {
+        """Everything needed to use the map again and to say where it came from (JSON-able; :meth:`from_dict`)."""
+        out = {
             "format": MAP_FORMAT,
             "method": self.method,
             "coef": self.coef_.tolist(),
             "intercept": self.intercept_,
             "gauge_v_per_deg": self.gauge_v_per_deg_.tolist(),
-            "residual_deg": self.residual_deg_,
-            "gauges_v": self.gauges_v_.tolist(),
-            "rotation_deg": self.rotation_deg_.tolist(),
-            "rotation_cov_deg2": self.rotation_cov_deg2_.tolist(),
-            "gauges_sd_v": self.gauges_sd_v_.tolist(),
-            **{key: getattr(self, f"{key}_") for key in _PROVENANCE if hasattr(self, f"{key}_")},
+            "residual_deg": self.residual_deg_ if math.isfinite(self.residual_deg_) else None,
         }
+        if hasattr(self, "rotation_deg_"):  # the sweep it was fitted on: its uncertainty can be told again
+            out["gauges_v"] = self.gauges_v_.tolist()
+            out["rotation_deg"] = self.rotation_deg_.tolist()
+            out["rotation_cov_deg2"] = self.rotation_cov_deg2_.tolist()
+            out["gauges_sd_v"] = self.gauges_sd_v_.tolist()
+        out.update({key: getattr(self, f"{key}_") for key in _PROVENANCE if hasattr(self, f"{key}_")})
+        return out
+
+    @classmethod
+    def from_dict(cls, data, source: str = "rotation map") -> RotationEstimator:
+        """A fitted map from :meth:`to_dict`'s numbers (a saved map, a recording's metadata, or the earlier
+        ``coef/intercept/gauge_v_per_deg`` form); :class:`DataFileError` naming ``source`` and the key if not."""
+        return _from_dict(cls, data, source)
 
 
 #: Where a map came from, kept with it (set by :func:`calibrate_rotation`): the source, the sweep's commands, the
@@ -442,23 +450,32 @@ def load_rotation_map(path) -> RotationEstimator:
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the key that is missing or wrong.
     """
     path = Path(path)
-    expected = "expected a flexdigit rotation map: coef[3], intercept, gauge_v_per_deg[3]"
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise DataFileError(f"{path}: not a rotation calibration, not JSON ({exc}); {expected}") from None
+        raise DataFileError(f"{path}: not a rotation calibration, not JSON ({exc}); {_EXPECTED}") from None
+    est = RotationEstimator.from_dict(data, source=str(path))
+    est.source_ = f"{getattr(est, 'source_', 'a saved map')}, loaded from {path}"
+    return est
+
+
+_EXPECTED = "expected a flexdigit rotation map: coef[3], intercept, gauge_v_per_deg[3]"
+
+
+def _from_dict(cls, data, source: str) -> RotationEstimator:
+    """:meth:`RotationEstimator.from_dict`."""
     if not isinstance(data, dict):
-        raise DataFileError(f"{path}: not a rotation calibration; {expected}")
+        raise DataFileError(f"{source}: not a rotation calibration; {_EXPECTED}")
     if data.get("format", MAP_FORMAT) != MAP_FORMAT:
-        raise DataFileError(f"{path}: format {data.get('format')!r}; this flexdigit reads {MAP_FORMAT!r}")
+        raise DataFileError(f"{source}: format {data.get('format')!r}; this flexdigit reads {MAP_FORMAT!r}")
     known = {"format", "method", "coef", "intercept", "gauge_v_per_deg", "residual_deg", "gauges_v", "rotation_deg"}
     known |= {"rotation_cov_deg2", "gauges_sd_v", *_PROVENANCE}
     unknown = sorted(set(data) - known)
     if unknown:
-        raise DataFileError(f"{path}: unknown key {unknown[0]!r}; {expected}")
+        raise DataFileError(f"{source}: unknown key {unknown[0]!r}; {_EXPECTED}")
     for key in ("coef", "intercept", "gauge_v_per_deg"):
         if key not in data:
-            raise DataFileError(f"{path}: not a rotation calibration, no {key!r}; {expected}")
+            raise DataFileError(f"{source}: not a rotation calibration, no {key!r}; {_EXPECTED}")
 
     def array(key, shape):
         try:
@@ -466,25 +483,26 @@ def load_rotation_map(path) -> RotationEstimator:
         except (TypeError, ValueError):
             value = np.array([np.nan])
         if value.shape != shape or not np.all(np.isfinite(value)):
-            raise DataFileError(f"{path}: {key!r} must be finite numbers of shape {shape}; got {data[key]!r:.80}")
+            raise DataFileError(f"{source}: {key!r} must be finite numbers of shape {shape}; got {data[key]!r:.80}")
         return value
 
-    est = RotationEstimator(method=data.get("method", "sensitivity"))
+    est = cls(method=str(data.get("method", "sensitivity")))
     est.coef_ = array("coef", (3,))
     est.intercept_ = float(array("intercept", ()))
     est.gauge_v_per_deg_ = array("gauge_v_per_deg", (3,))
     if not np.any(est.coef_ != 0) or not abs(est.coef_ @ est.gauge_v_per_deg_) > 0:
-        raise DataFileError(f"{path}: the map's 'coef' {est.coef_.tolist()} read no rotation from the gauges")
+        raise DataFileError(f"{source}: the map's 'coef' {est.coef_.tolist()} read no rotation from the gauges")
     est.tare_deg_ = 0.0
-    est.residual_deg_ = float(data.get("residual_deg", math.nan) or math.nan)
+    residual = data.get("residual_deg")
+    est.residual_deg_ = float(residual) if isinstance(residual, int | float) else math.nan
     if "rotation_deg" in data:
         n = len(data["rotation_deg"]) if isinstance(data["rotation_deg"], list) else -1
         est.rotation_deg_ = array("rotation_deg", (n,))
-        est.gauges_v_ = array("gauges_v", (n, 3))
-        est.rotation_cov_deg2_ = array("rotation_cov_deg2", (n, n))
-        est.gauges_sd_v_ = array("gauges_sd_v", (n, 3))
+        for key, shape in (("gauges_v", (n, 3)), ("rotation_cov_deg2", (n, n)), ("gauges_sd_v", (n, 3))):
+            if key not in data:
+                raise DataFileError(f"{source}: 'rotation_deg' without {key!r}; {_EXPECTED}")
+            setattr(est, f"{key}_", array(key, shape))
     for key in _PROVENANCE:
         if key in data:
             setattr(est, f"{key}_", data[key])
-    est.source_ = f"{getattr(est, 'source_', 'a saved map')}, loaded from {path}"
     return est

@@ -21,6 +21,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (sim backends; default: the thesis's)")
     p.add_argument("--settle", type=float, default=None, help="settle time per setting, s (default: protocol's)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
+    p.add_argument("--force", action="store_true", help="replace an existing --record file")
 
     p = add_command(
         subparsers,
@@ -104,6 +106,20 @@ def _collect(args: argparse.Namespace) -> CommandResult:
 
         options["calibration"] = load_calibration(args.calibration)
     rig = open_rig(args.backend, **options)
+    if args.record is not None:
+        from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
+
+        try:
+            recording = Recording(
+                args.record,
+                header={"backend": args.backend, "protocol": protocol.name, "seed": args.seed, "source": "collect"},
+                metadata=rig_metadata(rig),
+                force=args.force,
+            )
+        except BaseException:
+            rig.close()
+            raise
+        rig = recording_rig(rig, recording)
     try:
         dataset = collect(protocol, rig, out, rig_url=args.backend, settle_s=args.settle, progress=not args.no_progress)
     finally:

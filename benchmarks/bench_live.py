@@ -1,0 +1,147 @@
+"""Live page benchmarks, measured in a real browser (Debian's chromium through Playwright) against ``flexdigit live``.
+
+- ``page update rate``: redraws per second of the page (it redraws when new samples arrive), goal >= 20 Hz while
+  the rig runs its 50 Hz frame;
+- ``sample-to-screen latency``: from the server reading a sample (its wall clock, in the sample) to the page having
+  drawn it (the browser's clock; same machine), p50 / p95, goal p95 <= 100 ms;
+- ``server CPU``: the ``flexdigit live`` process's user + system CPU time over the window, % of one core, goal
+  <= 20 % at 50 Hz (the twin integrated on the wall clock, the controller, the shape estimate at 25 Hz, the
+  WebSocket);
+- ``loop rate``: samples per second the page received (50 expected) and the loop's overruns;
+- ``shape estimate``: one warm-started :meth:`ShapeEstimator.estimate` (what the live session runs 25 times a
+  second), ms.
+
+The session is doing real work meanwhile: a 25 g weight hangs on the twin; the controller holds 20 deg for 8 s, then
+steps between 10 and 30 deg every 3 s for 12 s (the shape is re-estimated at 25 Hz while the readings move, once a
+second at rest); CPU is given for both phases.
+``python -m benchmarks.bench_live --screenshot docs/live.png`` also saves the page as the README shows it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REST_S = 8.0  # holding the setpoint
+MOVING_S = 12.0  # then stepping it
+STEP_S = 3.0
+
+
+def _cpu_s(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
+
+
+def _start_server(log: Path) -> tuple[subprocess.Popen, str]:
+    err = open(log, "w")  # noqa: SIM115 - the server's whole life
+    proc = subprocess.Popen([sys.executable, "-m", "flexdigit.cli", "live", "--port", "0"], stderr=err)
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline:
+        match = re.search(r"(http://127\.0\.0\.1:\d+/)", log.read_text())
+        if match:
+            return proc, match.group(1)
+        time.sleep(0.2)
+    proc.kill()
+    raise RuntimeError(f"flexdigit live did not start: {log.read_text()[-1000:]}")
+
+
+def measure(screenshot: str | None = None) -> dict:
+    from playwright.sync_api import sync_playwright
+
+    from flexdigit.live.browser import launch
+
+    with tempfile.TemporaryDirectory() as tmp:
+        proc, url = _start_server(Path(tmp) / "live.err")
+        try:
+            with sync_playwright() as pw:
+                browser = launch(pw)
+                page = browser.new_page(viewport={"width": 1280, "height": 860})
+                page.goto(url)
+                page.wait_for_function("() => flexdigit.last && flexdigit.last.shape", timeout=60_000)
+                page.locator("#setpoint").fill("20")
+                page.wait_for_timeout(2000)
+                point = page.evaluate("() => flexdigit.pointFor(0.2)")
+                page.mouse.click(point["x"], point["y"])
+                page.wait_for_timeout(3000)
+                before = page.evaluate("() => ({d: flexdigit.draws, s: flexdigit.samples})")
+                cpu0, t0 = _cpu_s(proc.pid), time.monotonic()
+                page.wait_for_timeout(REST_S * 1000)  # holding 20 deg, the weight hung
+                cpu_mid, t_mid = _cpu_s(proc.pid), time.monotonic()
+                for step in range(int(MOVING_S / STEP_S)):  # stepping 10 <-> 30 deg
+                    page.locator("#setpoint").fill("30" if step % 2 == 0 else "10")
+                    page.wait_for_timeout(STEP_S * 1000)
+                cpu1, t1 = _cpu_s(proc.pid), time.monotonic()
+                after = page.evaluate(
+                    "() => ({d: flexdigit.draws, s: flexdigit.samples, lat: flexdigit.latenciesMs.slice(),"
+                    " overruns: flexdigit.last.state.overruns})"
+                )
+                if screenshot:
+                    page.screenshot(path=screenshot, full_page=True)
+                browser.close()
+        finally:
+            proc.send_signal(signal.SIGINT)
+            proc.wait(timeout=30)
+    wall = t1 - t0
+    # one latency per draw: the window's draws are the last ones recorded
+    latencies = np.array(after["lat"])[-max(int(after["d"] - before["d"]), 1) :]
+    return {
+        "update_hz": (after["d"] - before["d"]) / wall,
+        "samples_hz": (after["s"] - before["s"]) / wall,
+        "latency_p50_ms": float(np.percentile(latencies, 50)),
+        "latency_p95_ms": float(np.percentile(latencies, 95)),
+        "cpu_percent": 100.0 * (cpu1 - cpu0) / wall,
+        "cpu_rest_percent": 100.0 * (cpu_mid - cpu0) / (t_mid - t0),
+        "cpu_moving_percent": 100.0 * (cpu1 - cpu_mid) / (t1 - t_mid),
+        "overruns": int(after["overruns"]),
+        "window_s": wall,
+    }
+
+
+def _estimate_ms() -> float:
+    from flexdigit.tactile.shape import ShapeEstimator
+    from flexdigit.twin import static_gauges_v
+
+    est = ShapeEstimator(orientation="horizontal", n_average=5)
+    volts = static_gauges_v([0.025], [0.2], [20])
+    previous = est.estimate(volts, command=20)
+    n = 100
+    start = time.perf_counter()
+    for _ in range(n):
+        previous = est.estimate(volts, command=20, start=previous)
+    return (time.perf_counter() - start) / n * 1e3
+
+
+def run(screenshot: str | None = None) -> list[dict]:
+    m = measure(screenshot)
+    note = f"{m['window_s']:.0f} s, 25 g hung, holding then stepping 10 <-> 30 deg; chromium on the same 2 cores"
+    return [
+        {"name": "live page update rate", "value": m["update_hz"], "unit": "Hz", "goal": ">= 20", "note": note},
+        {"name": "live loop samples reaching the page", "value": m["samples_hz"], "unit": "Hz", "goal": "50",
+         "note": f"loop overruns since start: {m['overruns']}"},
+        {"name": "sample-to-screen latency p50", "value": m["latency_p50_ms"], "unit": "ms", "goal": "", "note": ""},
+        {"name": "sample-to-screen latency p95", "value": m["latency_p95_ms"], "unit": "ms", "goal": "<= 100",
+         "note": "server read (its clock) to the page's draw (the browser's clock), same machine"},
+        {"name": "live server CPU at 50 Hz, holding", "value": m["cpu_rest_percent"], "unit": "% core",
+         "goal": "<= 20", "note": "user + system time of the flexdigit live process, the twin's simulation included"},
+        {"name": "live server CPU at 50 Hz, stepping 10 <-> 30 deg", "value": m["cpu_moving_percent"],
+         "unit": "% core", "goal": "<= 20", "note": "the shape re-estimated at 25 Hz while the readings move"},
+        {"name": "shape estimate, warm start (one per 40 ms)", "value": _estimate_ms(), "unit": "ms", "goal": "",
+         "note": "ShapeEstimator.estimate from the last frame's shape"},
+    ]  # fmt: skip
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.bench_live")
+    parser.add_argument("--screenshot", default=None, help="save the page as a PNG")
+    args = parser.parse_args()
+    for row in run(args.screenshot):
+        print(f"{row['name']:<48} {row['value']:10.3g} {row['unit']:<7} {row['goal']}  {row['note']}")

@@ -1,0 +1,226 @@
+"""The live page's server: Starlette (ASGI) on uvicorn, one WebSocket, three packaged files.
+
+Why this stack: a small, well-kept ASGI server with WebSockets streams the 50 Hz loop to a hand-written canvas page
+in a few hundred lines with no build step and nothing fetched from the internet, where Bokeh or Panel would bring
+a large JavaScript runtime and their own server for the same three plots.
+
+Safety (issue 12):
+
+- binds 127.0.0.1 unless told otherwise; another host needs ``allow_remote`` (``--allow-remote``) and a warning is
+  printed;
+- only the packaged assets are served, from a fixed table of three names read once from the package: no part of a
+  request's path reaches the file system;
+- the WebSocket checks its ``Origin`` against the server's own address and refuses anything else (a page on another
+  site cannot drive the rig through the user's browser);
+- every client message is size-limited, rate-limited (a token bucket) and validated and clamped
+  (:func:`flexdigit.live.session.validate_request`); a bad one gets an error message back, never an exception;
+- when the last page disconnects the digit is relaxed, and when the server stops (Ctrl-C, SIGTERM) the session
+  sends the safe command, closes the port and closes the recording (:class:`~flexdigit.live.session.LiveSession`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+import json
+import socket
+import sys
+import time
+from importlib import resources
+from typing import Any
+
+from flexdigit.errors import ParameterError
+
+__all__ = ["make_app", "serve", "bind", "check_host", "ASSETS", "TokenBucket"]
+
+#: URL path -> (packaged file, media type). The only files the server ever sends.
+ASSETS = {
+    "/": ("index.html", "text/html; charset=utf-8"),
+    "/app.js": ("app.js", "text/javascript; charset=utf-8"),
+    "/app.css": ("app.css", "text/css; charset=utf-8"),
+}
+#: Page updates per second pushed to each client (the loop makes 50 samples a second; the shape comes at 25).
+UPDATE_HZ = 30.0
+
+
+def _asset_bytes() -> dict[str, tuple[bytes, str]]:
+    root = resources.files("flexdigit.live").joinpath("static")
+    return {path: (root.joinpath(name).read_bytes(), media) for path, (name, media) in ASSETS.items()}
+
+
+def check_host(host: str, allow_remote: bool = False) -> str:
+    """Return ``host`` if it is a loopback address (or ``localhost``), or any address with ``allow_remote``."""
+    if not isinstance(host, str) or not host:
+        raise ParameterError(f"--host must be an address. Got {host!r}.")
+    loopback = host == "localhost"
+    try:
+        loopback = loopback or ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        if host != "localhost":
+            raise ParameterError(f"--host must be an IP address or localhost. Got {host!r}.") from None
+    if not loopback and not allow_remote:
+        raise ParameterError(
+            f"--host {host} would let other machines drive the rig; pass --allow-remote to mean it "
+            "(the default 127.0.0.1 serves this machine only)"
+        )
+    return host
+
+
+class TokenBucket:
+    """At most ``rate`` messages a second on average, ``burst`` at once (monotonic clock, injectable)."""
+
+    def __init__(self, rate: float = 20.0, burst: float = 40.0, clock=time.monotonic) -> None:
+        self.rate, self.burst, self.clock = rate, burst, clock
+        self.tokens, self.last = burst, clock()
+
+    def take(self) -> bool:
+        now = self.clock()
+        self.tokens = min(self.burst, self.tokens + (now - self.last) * self.rate)
+        self.last = now
+        if self.tokens >= 1.0:
+            self.tokens -= 1.0
+            return True
+        return False
+
+
+def _dumps(obj: Any) -> str:
+    return json.dumps(obj, allow_nan=False, separators=(",", ":"))
+
+
+def make_app(session, allowed_origins: set[str]):
+    """The Starlette app serving ``session`` to pages whose ``Origin`` is in ``allowed_origins``."""
+    from contextlib import asynccontextmanager
+
+    from starlette.applications import Starlette
+    from starlette.responses import Response
+    from starlette.routing import Route, WebSocketRoute
+    from starlette.websockets import WebSocket, WebSocketDisconnect
+
+    from flexdigit.live.session import MAX_REQUEST_BYTES
+
+    assets = _asset_bytes()
+    # 'self' covers the page's own ws:// address (CSP level 3)
+    csp = (
+        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; connect-src 'self'; "
+        "base-uri 'none'; form-action 'none'; frame-ancestors 'none'"
+    )
+
+    async def asset(request):
+        body, media = assets[request.url.path]
+        headers = {"Content-Security-Policy": csp, "X-Content-Type-Options": "nosniff", "Cache-Control": "no-store"}
+        return Response(body, media_type=media, headers=headers)
+
+    async def stream(websocket: WebSocket) -> None:
+        if websocket.headers.get("origin") not in allowed_origins:
+            await websocket.close(code=1008)  # policy violation: another site's page, or no Origin at all
+            return
+        await websocket.accept()
+        session.connected()
+        bucket = TokenBucket()
+
+        async def push() -> None:
+            since = -1
+            period = 1.0 / UPDATE_HZ
+            loop = asyncio.get_running_loop()
+            next_at = loop.time()
+            sent_map = None
+            while True:
+                frame = session.snapshot(since)
+                if frame["samples"]:
+                    since = frame["samples"][-1]["k"]
+                if frame["locatability"] is sent_map:  # the map changes with the command only: send it once
+                    frame["locatability"] = None
+                else:
+                    sent_map = frame["locatability"]
+                await websocket.send_text(_dumps(frame))
+                # absolute deadlines: the time a frame takes to build and send does not slow the rate
+                next_at = max(next_at + period, loop.time())
+                await asyncio.sleep(next_at - loop.time())
+
+        sender = None
+        try:
+            await websocket.send_text(_dumps(session.hello()))
+            sender = asyncio.create_task(push())
+            while True:
+                message = await websocket.receive()
+                if message["type"] == "websocket.disconnect":
+                    break
+                text = message.get("text")
+                if text is None:
+                    await websocket.send_text(_dumps({"type": "error", "message": "send JSON text, not binary"}))
+                    continue
+                if len(text) > MAX_REQUEST_BYTES:
+                    error = f"request too long ({len(text)} bytes, at most {MAX_REQUEST_BYTES})"
+                    await websocket.send_text(_dumps({"type": "error", "message": error}))
+                    continue
+                if not bucket.take():
+                    await websocket.send_text(_dumps({"type": "error", "message": "too many requests; slow down"}))
+                    continue
+                try:
+                    accepted = session.request(json.loads(text))
+                except (ValueError, ParameterError) as exc:
+                    await websocket.send_text(_dumps({"type": "error", "message": str(exc)}))
+                    continue
+                await websocket.send_text(_dumps({"type": "ack", "request": accepted}))
+        except (WebSocketDisconnect, RuntimeError, OSError):
+            pass  # the page went away mid-send
+        finally:
+            if sender is not None:
+                sender.cancel()
+            session.disconnected()
+
+    @asynccontextmanager
+    async def lifespan(app):
+        session.start()
+        try:
+            yield
+        finally:
+            session.stop()
+
+    routes = [Route(path, asset) for path in ASSETS] + [WebSocketRoute("/ws", stream)]
+    return Starlette(routes=routes, lifespan=lifespan)
+
+
+def bind(host: str, port: int) -> socket.socket:
+    """A listening TCP socket on ``host:port`` (port 0: any free one); refuses a port in use by name."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+    except OSError as exc:
+        sock.close()
+        raise OSError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
+    sock.listen(64)
+    sock.setblocking(False)
+    return sock
+
+
+def serve(session, host: str = "127.0.0.1", port: int = 8050, *, allow_remote: bool = False, announce=None) -> None:
+    """Serve ``session`` until Ctrl-C or SIGTERM; the session is started and stopped by the server's lifespan."""
+    import uvicorn
+
+    check_host(host, allow_remote)
+    # the loop, the estimate and the server share the GIL: hand it over every millisecond (the default 5 ms is a
+    # quarter of a frame) so the 20 ms loop keeps its deadlines while a page is being served
+    sys.setswitchinterval(0.001)
+    sock = bind(host, port)
+    port = sock.getsockname()[1]
+    shown = f"[{host}]" if ":" in host else host
+    origins = {f"http://{shown}:{port}"}
+    if host in ("127.0.0.1", "localhost", "::1"):
+        origins |= {f"http://127.0.0.1:{port}", f"http://localhost:{port}", f"http://[::1]:{port}"}
+    app = make_app(session, origins)
+    url = f"http://{shown}:{port}/"
+    if announce is None:
+
+        def announce(text: str) -> None:
+            print(text, file=sys.stderr, flush=True)
+
+    if not ipaddress.ip_address("127.0.0.1" if host == "localhost" else host).is_loopback:
+        announce(f"WARNING: serving the rig to the network on {host}: anyone who can reach {url} can move the digit")
+    announce(f"flexdigit live: {url} (backend {session.backend}); Ctrl-C to stop")
+    config = uvicorn.Config(
+        app, log_level="warning", ws="websockets-sansio", lifespan="on", timeout_graceful_shutdown=2, access_log=False
+    )
+    uvicorn.Server(config).run(sockets=[sock])

@@ -1,0 +1,694 @@
+"""A live session: the rig's 50 Hz loop in a thread of its own, what the page shows, and what the page may ask.
+
+:class:`LiveSession` opens a backend (the twin in real time, the hardware, or a replay played at 1x or 10x), runs
+read -> controller -> command on absolute 20 ms deadlines (the servo board's frame, 5.2), keeps the last
+``history_s`` seconds of samples, estimates the shape and the contact from the latest readings
+(:class:`flexdigit.tactile.shape.ShapeEstimator`, and a trained network when given), records everything to MCAP
+when asked (:mod:`flexdigit.rig.recording`), and takes the page's requests through :meth:`LiveSession.request`,
+which validates and clamps every field (a client message is bad input like a bad file).
+
+Why not :func:`flexdigit.rig.loop.run_loop`: a live loop has no end and takes requests while it runs; ``run_loop``
+is a fixed-length run that keeps every sample in memory. The deadline rule is the same (absolute deadlines, missed
+ones counted and skipped, never burst).
+
+Safety: the loop sends the equilibrium command and closes the port whenever it ends (stop, fault, exception);
+when the last page disconnects the controller lets go and the digit is relaxed (command 8) until a page asks for
+a setpoint again; the recording is closed (summary, footer) by :meth:`LiveSession.stop`, and every second of it
+is on the disk before that (:class:`~flexdigit.rig.recording.Recording` flushes its chunks).
+
+Contact sources are pluggable (:class:`ContactSource`): the beam inversion of the shape estimator always, a
+trained network (``--model``) when given; a palpation estimate adds itself the same way.
+"""
+
+from __future__ import annotations
+
+import collections
+import concurrent.futures
+import math
+import queue
+import threading
+import time
+import warnings
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from flexdigit._validation import check_choice, check_real
+from flexdigit.errors import ParameterError, RigError
+
+__all__ = ["LiveSession", "ContactSource", "BeamContact", "NetworkContact", "validate_request", "REQUESTS"]
+
+#: The page's requests and their fields: ``{type: {field: (kind, low, high)}}``; values are clamped to the range.
+REQUESTS: dict[str, dict[str, tuple]] = {
+    "setpoint": {"value": ("number", -10.0, 60.0)},
+    "load": {"position_m": ("number", 0.0, None), "mass_g": ("number", 1.0, 200.0), "kind": ("choice", "weight")},
+    "clear": {},
+    "pause": {"paused": ("bool",)},
+    "speed": {"speed": ("choice", 1, 10)},
+}
+#: The largest request accepted, bytes.
+MAX_REQUEST_BYTES = 512
+
+
+def validate_request(message: object, digit_length_m: float = 0.27) -> dict[str, Any]:
+    """Check a request from the page and clamp its numbers; raise :class:`ParameterError` naming what is wrong.
+
+    Examples
+    --------
+    >>> validate_request({"type": "setpoint", "value": 99})
+    {'type': 'setpoint', 'value': 60.0}
+    >>> validate_request({"type": "load", "position_m": 0.2, "mass_g": 25, "kind": "weight"})["mass_g"]
+    25.0
+    >>> validate_request({"type": "reboot"})
+    Traceback (most recent call last):
+    ...
+    flexdigit.errors.ParameterError: The 'type' parameter of a request must be one of 'setpoint', 'load', 'clear', \
+'pause', 'speed'. Got 'reboot' instead.
+    """
+    if not isinstance(message, dict):
+        raise ParameterError(f"a request must be a JSON object. Got {type(message).__name__}.")
+    kind = check_choice(message.get("type"), "type", tuple(REQUESTS), "a request")
+    fields = REQUESTS[kind]
+    extra = set(message) - set(fields) - {"type"}
+    if extra:
+        raise ParameterError(f"a {kind!r} request has no field {sorted(extra)[0]!r}; it takes {sorted(fields)}")
+    out: dict[str, Any] = {"type": kind}
+    for name, spec in fields.items():
+        if name not in message:
+            raise ParameterError(f"a {kind!r} request needs the field {name!r}")
+        value = message[name]
+        if spec[0] == "number":
+            x = check_real(value, name, f"a {kind!r} request")
+            high = digit_length_m if spec[2] is None else spec[2]
+            out[name] = float(min(max(x, spec[1]), high))
+        elif spec[0] == "bool":
+            if not isinstance(value, bool):
+                raise ParameterError(
+                    f"The '{name}' parameter of a {kind!r} request must be true or false. Got {value!r}"
+                )
+            out[name] = value
+        else:
+            if value not in spec[1:] or isinstance(value, bool):
+                options = ", ".join(repr(o) for o in spec[1:])
+                raise ParameterError(
+                    f"The '{name}' parameter of a {kind!r} request must be one of {options}. Got {value!r}"
+                )
+            out[name] = value
+    return out
+
+
+# -- contact sources ---------------------------------------------------------------------------------------------
+
+
+class ContactSource:
+    """Something that says where the digit is touched: ``estimate(gauges_v, command, shape) -> dict``.
+
+    The dict has ``source``, ``contact`` (bool), ``position_from_base_m``, ``position_sd_m`` and
+    ``position_interval_m`` (None where unknown), ``force_n``, ``mass_kg``, ``located`` (its standard deviation
+    below the page's threshold) and ``note`` (a sentence for the page).
+    """
+
+    name = "contact"
+
+    def estimate(self, gauges_v: np.ndarray, command: int | None, shape) -> dict[str, Any]:  # pragma: no cover
+        raise NotImplementedError
+
+
+def _finite(x) -> float | None:
+    try:
+        value = float(x)
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) else None
+
+
+@dataclass
+class BeamContact(ContactSource):
+    """The shape estimator's own load (its beam inversion): position with its profile interval, force, contact."""
+
+    located_sd_m: float = 0.005
+    name: str = "beam inversion"
+
+    def estimate(self, gauges_v, command, shape) -> dict[str, Any]:
+        row = shape.row(0, every=1000)
+        sd = row["load_position_sd_m"]
+        contact = bool(row["contact"])
+        located = contact and sd is not None and sd <= self.located_sd_m
+        if not contact:
+            note = "no load found"
+        elif located:
+            note = f"located to +- {1e3 * sd:.1f} mm"
+        elif sd is None:
+            note = (
+                "a load, but the readings cannot place it here (its position trades off with its force or the tension)"
+            )
+        else:
+            note = f"a load, placed only to +- {1e3 * sd:.0f} mm here"
+        return {
+            "source": self.name,
+            "contact": contact,
+            "position_from_base_m": row["load_position_from_base_m"],
+            "position_sd_m": sd,
+            "position_interval_m": row["load_position_interval_m"],
+            "force_n": row["load_force_n"],
+            "mass_kg": row["load_mass_kg"],
+            "located": located,
+            "consistent": row["consistent"],
+            "note": note if row["consistent"] else "the readings do not fit the model (calibration?)",
+        }
+
+
+class NetworkContact(ContactSource):
+    """A trained position network (``flexdigit train --target position``): position from the gauges (and the
+    command if it was trained with it); its band is the test RMSE the model file carries. Contact comes from the
+    beam inversion (a position network has no "no load" answer)."""
+
+    def __init__(self, path, digit_length_m: float) -> None:
+        from flexdigit.tactile.model_io import load_model
+
+        self.model = load_model(path)
+        if self.model.target != "position":
+            raise ParameterError(f"{path}: a {self.model.target!r} model; the live page needs a 'position' model")
+        self.with_command = len(self.model.inputs) == 4
+        self.rmse_m = _finite(self.model.meta.get("scores", {}).get("rmse_mm"))
+        self.rmse_m = None if self.rmse_m is None else self.rmse_m / 1e3
+        self.length = digit_length_m
+        self.name = f"network {path}"
+
+    def estimate(self, gauges_v, command, shape) -> dict[str, Any]:
+        x = list(gauges_v) + ([command if command is not None else 8] if self.with_command else [])
+        from_tip = float(np.ravel(self.model.network.predict(np.array([x], dtype=float)))[0])
+        position = min(max(self.length - from_tip, 0.0), self.length)
+        contact = bool(shape.contact[0])
+        band = None if self.rmse_m is None else [position - self.rmse_m, position + self.rmse_m]
+        return {
+            "source": self.name,
+            "contact": contact,
+            "position_from_base_m": position if contact else None,
+            "position_sd_m": self.rmse_m if contact else None,
+            "position_interval_m": band if contact else None,
+            "force_n": None,
+            "mass_kg": None,
+            "located": contact,
+            "consistent": True,
+            "note": "trained network; band = its test RMSE" if contact else "no load found (beam inversion)",
+        }
+
+
+# -- the session -------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Sample:
+    """One loop sample as the page and the recording see it."""
+
+    k: int
+    t: float
+    wall_ms: float
+    gauges_v: list
+    pot_v: float | None
+    command: int
+    setpoint: float | None
+    y: float | None
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "k": self.k,
+            "t": round(self.t, 4),
+            "wall_ms": round(self.wall_ms, 1),
+            "gauges_v": self.gauges_v,
+            "pot_v": self.pot_v,
+            "command": self.command,
+            "setpoint": self.setpoint,
+            "y": self.y,
+        }
+
+
+@dataclass
+class _State:
+    """What the page shows, guarded by the session's lock."""
+
+    samples: collections.deque = field(default_factory=lambda: collections.deque(maxlen=600))
+    shape: dict | None = None
+    truth: list | None = None
+    contact: list = field(default_factory=list)
+    status: str = "starting"
+    locatability: dict | None = None
+    overruns: int = 0
+
+
+class LiveSession:
+    """The rig loop behind the live page (see the module docstring).
+
+    Parameters
+    ----------
+    backend : str
+        A rig URL (:func:`flexdigit.rig.base.open_rig`); ``sim`` runs the twin on the wall clock (``sim+paced``),
+        horizontal by default (the mounting of chapters 6-7, where a hung weight bends the digit).
+    model : path, optional
+        A trained position network for the contact panel.
+    record : path, optional
+        An MCAP recording of the session (refused if it exists unless ``force``).
+    calibration : path, optional
+        A calibration TOML (``flexdigit calibrate``): the twin's on ``sim``, and on every backend the channel
+        gains, offsets, stiffness and noise the shape estimate uses; the thesis's fit by default.
+    rotation_map : path, optional
+        A rotation map (``flexdigit run --calibration``) for the controller on hardware; the twin calibrates its own.
+    orientation : str, optional
+        How the digit is mounted, for the shape estimate on hardware (the twin knows its own).
+    period_s : float
+        Loop period (the servo board's 20 ms frame).
+    seed : int
+        Twin noise seed.
+    """
+
+    HISTORY_S = 10.0
+    ESTIMATE_EVERY = 2  # frames: the shape at up to 25 Hz
+    AVERAGE = 5  # readings averaged into each estimate (0.1 s)
+    #: Re-estimate at least this often even when nothing moved (s).
+    MAX_ESTIMATE_GAP_S = 1.0
+    #: Readings count as moved when their 0.1 s mean changed by more than this many of its own standard deviations.
+    STILL_SIGMAS = 3.0
+
+    def __init__(
+        self,
+        backend: str = "sim",
+        *,
+        model=None,
+        record=None,
+        force: bool = False,
+        calibration=None,
+        rotation_map=None,
+        orientation: str | None = None,
+        period_s: float = 0.020,
+        seed: int = 0,
+    ) -> None:
+        from flexdigit.rig.base import open_rig, parse_rig_url
+        from flexdigit.twin.calibration import default_calibration, load_calibration
+
+        self.calibration = default_calibration() if calibration is None else load_calibration(calibration)
+        self.period_s = check_real(period_s, "period_s", "LiveSession", low=0.005, high=1.0)
+        parsed = parse_rig_url(backend)
+        self.kind = {"sim": "twin", "sim+paced": "twin", "replay": "replay"}.get(parsed.scheme, "rig")
+        self.backend = backend
+        if self.kind == "twin":
+            options = {"orientation": "horizontal", **parsed.options}
+            query = "&".join(f"{k}={v}" for k, v in options.items())
+            self.rig_url = f"sim+paced?{query}"
+            self.rig = open_rig(self.rig_url, seed=seed, calibration=self.calibration)
+        else:
+            self.rig_url = backend
+            self.rig = open_rig(backend)
+        try:
+            self._setup(model, record, force, rotation_map, orientation, seed)
+        except BaseException:
+            self.rig.close()
+            raise
+        self._lock = threading.Lock()
+        self._requests: queue.SimpleQueue = queue.SimpleQueue()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._estimator_thread: threading.Thread | None = None
+        self._job = None
+        self._job_ready = threading.Condition()
+        self.estimate_error: str | None = None
+        self.state = _State(samples=collections.deque(maxlen=int(self.HISTORY_S / self.period_s)))
+        self.clients = 0
+        self.paused = False
+        self.speed = 1
+        self.engaged = False  # the controller holds the setpoint only while a page asks for it
+        self.error: str | None = None
+
+    def _setup(self, model, record, force, rotation_map, orientation, seed) -> None:
+        from flexdigit.tactile.shape import ShapeEstimator
+
+        rig = self.rig
+        params = rig.params
+        self.length_m = params.geometry.digit_length_m
+        twin = getattr(rig, "twin", None)
+        if twin is not None:
+            orientation, cable, housing = twin.orientation, twin.cable, twin.housing
+        else:
+            orientation, cable, housing = orientation or "vertical", True, True
+        self.orientation, self.cable = orientation, cable
+        self.estimator, self._loc_estimator = (
+            ShapeEstimator(
+                params, self.calibration, orientation=orientation, housing=housing, cable=cable, n_average=self.AVERAGE
+            )
+            for _ in range(2)
+        )
+        self._loc_cache: dict = {}
+        self._loc_pending: set = set()
+        self._loc_worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="flexdigit-map")
+        white = float(np.max(self.calibration.noise_white_v))
+        self._still_v = self.STILL_SIGMAS * white * math.sqrt(2.0 / self.AVERAGE)  # a difference of two means
+        self.contacts: list[ContactSource] = [BeamContact()]
+        if model is not None:
+            self.contacts.insert(0, NetworkContact(model, self.length_m))
+        self.controller, self.unit = None, "command"
+        self.setpoint = float(params.actuator.equilibrium_command)
+        if self.kind == "twin" and cable:
+            from flexdigit.rig.base import open_rig
+            from flexdigit.rig.controllers import make_controller
+            from flexdigit.rig.rotation import calibrate_rotation
+
+            # a static sweep on a twin of its own (virtual time, the twin's 20 ms step: nothing moves fast)
+            query = self.rig_url.partition("?")[2]
+            estimator = calibrate_rotation(
+                open_rig(f"sim?{query}&dt_s=0.02", seed=seed + 1, calibration=self.calibration)
+            )
+            self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
+            self.unit, self.setpoint = "deg", 0.0
+        elif self.kind == "rig" and rotation_map is not None:
+            from flexdigit.rig.controllers import make_controller
+            from flexdigit.rig.rotation import load_rotation_map
+
+            estimator = load_rotation_map(rotation_map)
+            self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
+            self.unit, self.setpoint = "deg", 0.0
+        self.recording = None
+        if self.kind == "replay":
+            from flexdigit.rig.loop import read_log
+            from flexdigit.rig.recording import is_mcap, read_recording
+
+            _, samples, _ = read_recording(rig.path) if is_mcap(rig.path) else read_log(rig.path)
+            self._replayed = samples
+            self._replay_length_s = float(samples[-1]["t"]) - float(samples[0]["t"])
+            self.setpoint = None
+        if record is not None:
+            from flexdigit.live.schemas import CONTACT_SCHEMA, SHAPE_SCHEMA
+            from flexdigit.rig.recording import Recording, rig_metadata
+
+            self.recording = Recording(
+                record,
+                header={"backend": self.backend, "controller": "digital20" if self.controller else None,
+                        "period_s": self.period_s, "source": "flexdigit live", "seed": seed},
+                metadata={
+                    **rig_metadata(rig),
+                    "flexdigit.calibration": {"estimator": repr(self.estimator), **self.calibration.to_dict()},
+                },
+                force=force,
+            )  # fmt: skip
+            self.recording.add_channel("/flexdigit/shape", SHAPE_SCHEMA)
+            self.recording.add_channel("/flexdigit/contact", CONTACT_SCHEMA)
+
+    # -- what the server calls -----------------------------------------------------------------------------------
+    def hello(self) -> dict[str, Any]:
+        """The page's set-up: the digit, what it may ask, units."""
+        g = self.rig.params.geometry
+        return {
+            "type": "hello",
+            "backend": self.backend,
+            "kind": self.kind,
+            "orientation": self.orientation,
+            "cable": self.cable,
+            "digit_length_m": self.length_m,
+            "gauges_m": list(g.gauge_positions_m),
+            "supports_m": [g.section_pitch_m * (k + 1) for k in range(g.section_count)],
+            "setpoint_unit": self.unit,
+            "setpoint_range": [0.0, 45.0] if self.unit == "deg" else [0.0, 60.0],
+            "can_command": self.kind != "replay" and self.cable,
+            "can_load": self.kind == "twin",
+            "loads_g": [12.5, 25.0, 37.5, 50.0],
+            "speeds": [1, 10] if self.kind == "replay" else [1],
+            "period_s": self.period_s,
+            "history_s": self.HISTORY_S,
+            "located_sd_m": BeamContact.located_sd_m,
+            "contact_sources": [c.name for c in self.contacts],
+        }
+
+    def request(self, message: object) -> dict[str, Any]:
+        """Validate a page request and queue it for the loop; returns the clamped request (raises when bad)."""
+        clean = validate_request(message, self.length_m)
+        kind = clean["type"]
+        if kind in ("setpoint",) and not (self.kind != "replay" and self.cable):
+            raise ParameterError("this backend takes no setpoint (a replay, or the cable is detached)")
+        if kind in ("load", "clear") and self.kind != "twin":
+            raise ParameterError("only the twin can be loaded from the page; on a rig the operator hangs weights")
+        if kind == "speed" and self.kind != "replay":
+            raise ParameterError("only a replay has a playback speed")
+        self._requests.put(clean)
+        return clean
+
+    def connected(self) -> None:
+        with self._lock:
+            self.clients += 1
+
+    def disconnected(self) -> None:
+        """A page went away: with none left the controller lets go and the digit is relaxed."""
+        with self._lock:
+            self.clients = max(self.clients - 1, 0)
+            none_left = self.clients == 0
+        if none_left:
+            self._requests.put({"type": "relax"})
+
+    def snapshot(self, since_k: int) -> dict[str, Any]:
+        """Samples after ``since_k`` and the latest estimates, for one page update."""
+        with self._lock:
+            samples = [s.as_dict() for s in self.state.samples if s.k > since_k]
+            return {
+                "type": "frame",
+                "samples": samples,
+                "shape": self.state.shape,
+                "truth": self.state.truth,
+                "contact": self.state.contact,
+                "state": {
+                    "status": self.state.status,
+                    "setpoint": self.setpoint,
+                    "unit": self.unit,
+                    "controller": "digital20" if self.controller else None,
+                    "engaged": self.engaged,
+                    "paused": self.paused,
+                    "speed": self.speed,
+                    "loads": [[round(m, 5), round(s, 4)] for m, s in getattr(self.rig, "loads", [])],
+                    "overruns": self.state.overruns,
+                    "estimate_error": self.estimate_error,
+                    "clients": self.clients,
+                    "server_ms": time.time() * 1e3,
+                },
+                "locatability": self.state.locatability,
+            }
+
+    # -- the loop ------------------------------------------------------------------------------------------------
+    def start(self) -> None:
+        """Start the loop thread and the estimator thread."""
+        self._thread = threading.Thread(target=self._run, name="flexdigit-live-loop", daemon=True)
+        self._estimator_thread = threading.Thread(target=self._estimates, name="flexdigit-live-shape", daemon=True)
+        self._thread.start()
+        self._estimator_thread.start()
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        """Stop the loop: safe command, port closed, recording closed (idempotent)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+        if self._estimator_thread is not None:
+            self._estimator_thread.join(timeout_s)
+        self._shutdown("stopped")
+
+    def _shutdown(self, why: str) -> None:
+        self._loc_worker.shutdown(wait=False, cancel_futures=True)
+        with self._job_ready:
+            self._job_ready.notify_all()
+        try:
+            if not self.rig.closed:
+                self.rig.close()  # sends the equilibrium command, then releases the port
+        finally:
+            if self.recording is not None and not self.recording.closed:
+                self.recording.close({"stop": why, "message": self.error or why})
+
+    def _run(self) -> None:
+        from flexdigit.rig.loop import check_reading
+
+        rig = self.rig
+        adc = tuple(rig.params.sensors.adc_range_v)
+        equilibrium = int(rig.params.actuator.equilibrium_command)
+        if self.controller is not None:
+            self.controller.reset(rig.command)
+        t0 = time.monotonic()
+        virtual = 0.0  # replay time
+        k = 0
+        window: collections.deque = collections.deque(maxlen=self.AVERAGE)
+        last_job = None
+        try:
+            with self._lock:
+                self.state.status = "running"
+            while not self._stop.is_set():
+                deadline = t0 + k * self.period_s / (self.speed if self.kind == "replay" else 1)
+                now = time.monotonic()
+                if now < deadline:
+                    time.sleep(deadline - now)
+                elif now - deadline > self.period_s:
+                    with self._lock:
+                        self.state.overruns += 1
+                    t0 = now - k * self.period_s / (self.speed if self.kind == "replay" else 1)  # resynchronise
+                self._apply_requests()
+                if self.paused and self.kind == "replay":
+                    t0 = time.monotonic() - k * self.period_s / self.speed
+                    time.sleep(self.period_s)
+                    continue
+                if self.kind == "replay":
+                    if virtual + self.period_s > self._replay_length_s:
+                        with self._lock:
+                            self.state.status = "replay finished"
+                        self._stop.wait(0.2)
+                        continue
+                    rig.wait(self.period_s)
+                    virtual += self.period_s
+                reading = rig.read()
+                check_reading(reading, adc)
+                wall_ms = time.time() * 1e3
+                command, setpoint, y = self._act(reading, equilibrium)
+                sample = Sample(
+                    k,
+                    reading.time_s,
+                    wall_ms,
+                    [round(float(g), 6) for g in reading.gauges_v],
+                    _finite(reading.pot_v),
+                    int(command),
+                    setpoint,
+                    y,
+                )
+                if self.recording is not None:
+                    self.recording.write_sample({kk: v for kk, v in sample.as_dict().items() if kk != "wall_ms"})
+                window.append(reading.gauges_v)
+                with self._lock:
+                    self.state.samples.append(sample)
+                if k % self.ESTIMATE_EVERY == 0 and len(window) == window.maxlen:
+                    mean = np.mean(window, axis=0)
+                    # a digit at rest gives the same estimate again: re-estimate when the averaged readings moved
+                    # beyond their noise, the command changed, or a second has passed (the twin's truth moves on)
+                    moved = last_job is None or (
+                        np.max(np.abs(mean - last_job[0])) > self._still_v
+                        or command != last_job[1]
+                        or reading.time_s - last_job[2] >= self.MAX_ESTIMATE_GAP_S
+                    )
+                    if moved:
+                        # the estimate runs in its own thread: hand it the latest job (a slower one skips some)
+                        twin = getattr(rig, "twin", None)
+                        psi = None if twin is None else np.array(twin.state()[0])
+                        last_job = (mean, command, reading.time_s, psi)
+                        with self._job_ready:
+                            self._job = last_job
+                            self._job_ready.notify()
+                k += 1
+        except (RigError, OSError) as exc:
+            self.error = f"fault: {exc}"
+        except Exception as exc:  # a bug must still leave the rig safe; say what it was
+            self.error = f"error: {type(exc).__name__}: {exc}"
+        finally:
+            with self._lock:
+                self.state.status = self.error or "stopped"
+            self._shutdown(self.error or "stopped")
+
+    def _apply_requests(self) -> None:
+        rig = self.rig
+        while True:
+            try:
+                req = self._requests.get_nowait()
+            except queue.Empty:
+                return
+            kind = req["type"]
+            if kind == "setpoint":
+                self.setpoint = req["value"]
+                if self.controller is not None and not self.engaged:
+                    self.controller.reset(rig.command)
+                self.engaged = True
+            elif kind == "relax":
+                self.engaged = False
+                if self.kind != "replay" and not rig.closed:
+                    rig.relax()
+            elif kind == "load":
+                rig.clear_loads()
+                rig.place_load(req["mass_g"] / 1000.0, req["position_m"])
+            elif kind == "clear":
+                rig.clear_loads()
+            elif kind == "pause":
+                self.paused = req["paused"]
+            elif kind == "speed":
+                self.speed = req["speed"]
+
+    def _act(self, reading, equilibrium: int):
+        """The command for this frame: the controller's while engaged, the setpoint itself open loop, else 8."""
+        rig = self.rig
+        if self.kind == "replay":
+            i = min(int(round(reading.time_s / self.period_s)), len(self._replayed) - 1)
+            rec = self._replayed[i]
+            return int(rec.get("command", equilibrium)), _finite(rec.get("setpoint")), _finite(rec.get("y"))
+        y = None
+        if self.controller is not None:
+            y = _finite(self.controller.measure(reading))
+            if self.engaged:
+                return rig.write_command(self.controller.step(self.setpoint, reading)), self.setpoint, y
+            return rig.command, None, y
+        if self.engaged and self.cable:
+            return rig.write_command(self.setpoint), self.setpoint, y
+        return rig.command, None, y
+
+    def _estimates(self) -> None:
+        """The estimator thread: the latest job from the loop, estimated, published, recorded."""
+        previous = None
+        while not self._stop.is_set():
+            with self._job_ready:
+                while self._job is None and not self._stop.is_set():
+                    self._job_ready.wait(0.2)
+                job, self._job = self._job, None
+            if job is None:
+                continue
+            try:
+                previous = self._estimate(*job, previous)
+            except Exception as exc:  # an estimate that fails must not take the loop (and the rig's safety) down
+                self.estimate_error = f"{type(exc).__name__}: {exc}"
+                previous = None
+
+    def _estimate(self, gauges_v, command, t, psi, previous):
+        est = self.estimator.estimate(gauges_v, command=command if self.cable else None, start=previous)
+        row = est.row(0, every=5)
+        shape = {"t": round(t, 4), **row}
+        contacts = [c.estimate(gauges_v, command, est) for c in self.contacts]
+        truth = None
+        twin = getattr(self.rig, "twin", None)
+        if twin is not None and psi is not None:
+            pts = twin.chain.positions(psi, np.asarray(row["s_m"]))
+            truth = np.round(pts, 6).tolist()
+        locatability = self._locatability(command)
+        with self._lock:
+            self.state.shape, self.state.truth, self.state.contact = shape, truth, contacts
+            if locatability is not None:
+                self.state.locatability = locatability
+        if self.recording is not None:
+            self.recording.write("/flexdigit/shape", t, shape)
+            self.recording.write("/flexdigit/contact", t, {"t": round(t, 4), "sources": contacts})
+        return est
+
+    def _locatability(self, command):
+        """Where a 25 g load can be placed to the page's threshold at this command: computed in a worker thread
+        (half a second of work must not stall the 20 ms loop), cached per command; None until something new."""
+        key = int(command) if self.cable else None
+        now = time.monotonic()
+        if key != getattr(self, "_loc_seen", "unset"):
+            self._loc_seen, self._loc_since = key, now
+        if getattr(self, "_loc_sent", "unset") == key:
+            return None
+        done = self._loc_cache.get(key)
+        if done is not None:
+            self._loc_sent = key
+            return done
+        # computed only for a command held half a second: a digit on its way somewhere needs no map of each stop
+        if key not in self._loc_pending and now - self._loc_since >= 0.5:
+            self._loc_pending.add(key)
+            self._loc_worker.submit(self._compute_locatability, key)
+        return None
+
+    def _compute_locatability(self, key) -> None:
+        s = np.round(np.arange(0.005, self.length_m + 1e-9, 0.005), 4)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # a heavily sagging free digit may settle slowly: the map holds
+                sd = self._loc_estimator.locatability(s, 0.245, key)
+            self._loc_cache[key] = {"command": key, "s_m": s.tolist(), "sd_m": [_finite(x) for x in sd]}
+        except Exception as exc:  # the page goes without the map; it says why
+            self.estimate_error = f"locatability map: {type(exc).__name__}: {exc}"
+        finally:
+            self._loc_pending.discard(key)

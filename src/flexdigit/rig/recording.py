@@ -1,0 +1,393 @@
+"""Recordings in MCAP: every sample of a run, with JSON schemas, readable by any MCAP tool (Foxglove, Lichtblick,
+PlotJuggler, Rerun, the ``mcap`` libraries and CLI).
+
+A recording holds one channel per topic, each with a JSON Schema (``jsonschema`` encoding, ``json`` messages) so
+another tool can decode and check it without flexdigit:
+
+- ``/flexdigit/sample``: what the loop logs (:mod:`flexdigit.rig.loop`): time, the three gauge voltages, the pot,
+  the command sent, the setpoint and the measured value;
+- channels a caller adds (:meth:`Recording.add_channel`): the live page adds ``/flexdigit/shape`` and
+  ``/flexdigit/contact``; this module knows nothing of them (rig is below tactile and live in the import chain).
+
+Metadata records: ``flexdigit.run`` (format, backend, controller, period, start time: the header of a JSON-lines
+log), ``flexdigit.rig`` (its repr and parameters), ``flexdigit.calibration`` when a caller gives one, and
+``flexdigit.stop`` (why and how the run ended, written by :meth:`Recording.close`). Nested values are stored as
+JSON text (MCAP metadata is string to string).
+
+Nothing is lost or clobbered: the file is created exclusively (``--force`` replaces it), chunks are small (one
+every ``chunk_size`` bytes, about a second of samples) and flushed and fsync'ed as they close, so a run that is
+killed leaves every closed chunk readable (:func:`read_recording` reads such a file record by record; the summary
+section only makes reading faster). A clean close writes the summary and the footer.
+
+Examples
+--------
+>>> import tempfile, pathlib
+>>> path = pathlib.Path(tempfile.mkdtemp()) / "run.mcap"
+>>> with Recording(path, header={"backend": "sim"}) as rec:
+...     rec.write_sample({"k": 0, "t": 0.0, "setpoint": 30.0, "gauges_v": [0.1, 0.5, 0.0], "pot_v": None,
+...                       "y": 0.0, "command": 8})
+>>> header, samples, footer = read_recording(path)
+>>> header["backend"], samples[0]["gauges_v"], footer["stop"]
+('sim', [0.1, 0.5, 0.0], 'closed')
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import struct
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from flexdigit.errors import DataFileError, ParameterError
+
+__all__ = [
+    "Recording",
+    "read_recording",
+    "read_metadata",
+    "rig_metadata",
+    "recording_rig",
+    "iter_messages",
+    "is_mcap",
+    "SAMPLE_TOPIC",
+    "SAMPLE_SCHEMA",
+    "RECORDING_FORMAT",
+]
+
+RECORDING_FORMAT = "flexdigit-recording/1"
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+SAMPLE_TOPIC = "/flexdigit/sample"
+_NULLABLE = {"type": ["number", "null"]}
+#: JSON Schema of a loop sample (the same fields as a JSON-lines loop log line).
+SAMPLE_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "flexdigit.Sample",
+    "description": "One sample of the rig loop: read, command, log (thesis 5.2). SI units; null where not measured.",
+    "type": "object",
+    "properties": {
+        "k": {"type": "integer", "minimum": 0, "description": "sample index"},
+        "t": {"type": "number", "description": "rig time since the start of the run, s"},
+        "gauges_v": {
+            "type": "array",
+            "items": _NULLABLE,
+            "minItems": 3,
+            "maxItems": 3,
+            "description": "gauge pair voltages 1..3 from the base, V",
+        },
+        "pot_v": {**_NULLABLE, "description": "servo potentiometer, V (null: no pot channel)"},
+        "command": {"type": "integer", "minimum": 0, "maximum": 254, "description": "servo command sent"},
+        "setpoint": {**_NULLABLE, "description": "setpoint, the controller's unit (beam rotation, deg)"},
+        "y": {**_NULLABLE, "description": "what the controller measured, its unit (beam rotation, deg)"},
+    },
+    "required": ["t", "gauges_v", "command"],
+    "additionalProperties": True,
+}
+
+
+def is_mcap(path: str | os.PathLike) -> bool:
+    """True when the file starts with the MCAP magic bytes."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(len(MCAP_MAGIC)) == MCAP_MAGIC
+    except OSError:
+        return False
+
+
+def _metadata_text(values: dict[str, Any]) -> dict[str, str]:
+    """MCAP metadata is string to string: strings kept, everything else as JSON text."""
+    return {str(k): v if isinstance(v, str) else json.dumps(v, allow_nan=False, default=str) for k, v in values.items()}
+
+
+def _metadata_values(values: dict[str, str]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in values.items():
+        try:
+            out[k] = json.loads(v)
+        except (TypeError, ValueError):
+            out[k] = v
+    return out
+
+
+class Recording:
+    """An MCAP recording being written (see the module docstring).
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.mcap`` file; refused if it exists unless ``force``.
+    header : dict, optional
+        The run's settings (backend, controller, period ...), stored as the ``flexdigit.run`` metadata.
+    metadata : dict of dict, optional
+        More metadata records, ``{name: {key: value}}`` (e.g. ``flexdigit.rig``, ``flexdigit.calibration``).
+    force : bool
+        Replace an existing file.
+    chunk_size : int
+        Bytes per chunk: a killed run loses at most the open chunk.
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike,
+        *,
+        header: dict[str, Any] | None = None,
+        metadata: dict[str, dict[str, Any]] | None = None,
+        force: bool = False,
+        chunk_size: int = 16 * 1024,
+    ) -> None:
+        from mcap.writer import CompressionType, Writer
+
+        from flexdigit._io import check_output
+
+        self.path = check_output(path, force=force)
+        try:
+            self._file = open(self.path, "wb" if force else "xb")  # noqa: SIM115 - closed in close()
+        except FileExistsError:
+            from flexdigit.errors import OutputExistsError
+
+            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
+        self._writer = Writer(self._file, chunk_size=chunk_size, compression=CompressionType.NONE)
+        self._writer.start(profile="", library=f"flexdigit ({RECORDING_FORMAT})")
+        self._channels: dict[str, int] = {}
+        self._lock = threading.Lock()  # a live session writes samples and estimates from two threads
+        self._sequence = 0
+        self._closed = False
+        run = {"format": RECORDING_FORMAT, "started_unix_s": time.time(), **(header or {})}
+        self.header = run
+        self._writer.add_metadata("flexdigit.run", _metadata_text(run))
+        for name, values in (metadata or {}).items():
+            self._writer.add_metadata(str(name), _metadata_text(dict(values)))
+        self.add_channel(SAMPLE_TOPIC, SAMPLE_SCHEMA)
+        self.messages = 0
+
+    def add_channel(self, topic: str, schema: dict[str, Any]) -> None:
+        """Add a topic with its JSON Schema (``schema["title"]`` names it); adding it twice is a no-op."""
+        if topic in self._channels:
+            return
+        if not isinstance(topic, str) or not topic.startswith("/"):
+            raise ParameterError(f"The 'topic' parameter of Recording.add_channel must start with '/'. Got {topic!r}")
+        name = str(schema.get("title", topic.strip("/").replace("/", ".")))
+        schema_id = self._writer.register_schema(name, "jsonschema", json.dumps(schema).encode())
+        self._channels[topic] = self._writer.register_channel(topic, "json", schema_id)
+
+    def write(self, topic: str, time_s: float, message: dict[str, Any]) -> None:
+        """Append one message (a JSON object) on ``topic`` at rig time ``time_s`` (s, >= 0)."""
+        channel = self._channels.get(topic)
+        if channel is None:
+            raise ParameterError(f"Recording.write: unknown topic {topic!r}; add it with add_channel first")
+        stamp = max(int(round(float(time_s) * 1e9)), 0)
+        data = json.dumps(message, allow_nan=False, separators=(",", ":")).encode()
+        with self._lock:
+            if self._closed:
+                raise ParameterError(f"{self.path}: the recording is closed")
+            self._writer.add_message(channel, log_time=stamp, data=data, publish_time=stamp, sequence=self._sequence)
+            self._sequence += 1
+            self.messages += 1
+
+    def write_sample(self, record: dict[str, Any]) -> None:
+        """Append a loop sample (:data:`SAMPLE_SCHEMA`) at its time ``record["t"]``."""
+        self.write(SAMPLE_TOPIC, float(record["t"]), record)
+
+    def flush(self) -> None:
+        """Close the open chunk and push everything written to the disk (fsync)."""
+        with self._lock:
+            if self._closed:
+                return
+            self._writer.flush()
+            self._file.flush()
+            os.fsync(self._file.fileno())
+
+    def close(self, stop: dict[str, Any] | None = None) -> None:
+        """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice."""
+        with self._lock:
+            self._close(stop)
+
+    def _close(self, stop: dict[str, Any] | None) -> None:
+        if self._closed:
+            return
+        try:
+            self._writer.add_metadata("flexdigit.stop", _metadata_text({"stop": "closed", **(stop or {})}))
+            self._writer.finish()
+            self._file.flush()
+            os.fsync(self._file.fileno())
+        finally:
+            self._closed = True
+            self._file.close()
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def __enter__(self) -> Recording:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.close({"stop": "error", "message": f"{exc_type.__name__}: {exc}"} if exc_type else None)
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else "open"
+        return f"Recording({str(self.path)!r}, topics={sorted(self._channels)}, messages={self.messages}, {state})"
+
+
+def rig_metadata(rig) -> dict[str, dict[str, Any]]:
+    """``flexdigit.rig`` metadata of an open rig: its repr and parameters (and, on the twin, its calibration)."""
+    import dataclasses
+
+    out: dict[str, dict[str, Any]] = {
+        "flexdigit.rig": {"rig": repr(rig), "name": rig.name, "params": dataclasses.asdict(rig.params)}
+    }
+    twin = getattr(rig, "twin", None)
+    if twin is not None:
+        out["flexdigit.rig"]["twin_calibration"] = twin.calibration.to_dict()
+        out["flexdigit.rig"]["twin_seed"] = twin.seed
+        out["flexdigit.rig"]["orientation"] = twin.orientation
+    return out
+
+
+def _records(path: Path) -> Iterator[Any]:
+    """Every record of an MCAP file in order, tolerating a file cut short by a killed run."""
+    from mcap.exceptions import McapError
+    from mcap.stream_reader import StreamReader
+
+    with open(path, "rb") as fh:
+        reader = StreamReader(fh, skip_magic=False)
+        try:
+            yield from reader.records
+        except (McapError, EOFError, ValueError, struct.error):
+            return  # the open chunk of a run that was killed: everything before it is kept
+
+
+def iter_messages(path: str | os.PathLike, topics=None) -> Iterator[tuple[str, float, dict[str, Any]]]:
+    """``(topic, time_s, message)`` for every message in ``path`` (optionally only ``topics``), in file order."""
+    from mcap.records import Channel, Message
+
+    path = Path(path)
+    if not is_mcap(path):
+        raise DataFileError(f"{path}: not an MCAP file (no MCAP magic at the start)")
+    channels: dict[int, str] = {}
+    wanted = None if topics is None else set(topics)
+    for record in _records(path):
+        if isinstance(record, Channel):
+            channels[record.id] = record.topic
+        elif isinstance(record, Message):
+            topic = channels.get(record.channel_id)
+            if topic is None:
+                raise DataFileError(f"{path}: a message on channel {record.channel_id}, which was never declared")
+            if wanted is not None and topic not in wanted:
+                continue
+            try:
+                message = json.loads(record.data)
+            except ValueError:
+                raise DataFileError(f"{path}: message {record.sequence} on {topic} is not JSON") from None
+            yield topic, record.log_time * 1e-9, message
+
+
+def read_metadata(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
+    """The metadata records of a recording, ``{name: {key: value}}`` (JSON text decoded)."""
+    from mcap.records import Metadata
+
+    return {r.name: _metadata_values(r.metadata) for r in _records(Path(path)) if isinstance(r, Metadata)}
+
+
+def read_recording(path: str | os.PathLike):
+    """Read a recording as :func:`~flexdigit.rig.loop.read_log` reads a log: ``(header, samples, footer or None)``.
+
+    ``header`` is the ``flexdigit.run`` metadata, ``samples`` the ``/flexdigit/sample`` messages (dicts with
+    ``t``, ``gauges_v``, ``pot_v``, ``command`` ...), ``footer`` the ``flexdigit.stop`` metadata (None for a run
+    that was killed before it closed the file). Raises :class:`~flexdigit.errors.DataFileError` naming the file
+    when it is not a flexdigit recording or a sample lacks a field.
+    """
+    path = Path(path)
+    samples = []
+    for _, _, message in iter_messages(path, topics=[SAMPLE_TOPIC]):
+        if not isinstance(message, dict) or not {"t", "gauges_v", "command"} <= set(message):
+            raise DataFileError(f"{path}: a {SAMPLE_TOPIC} message lacks t, gauges_v or command: {message!r:.120}")
+        samples.append(message)
+    meta = read_metadata(path)
+    header = meta.get("flexdigit.run")
+    if header is None or header.get("format") != RECORDING_FORMAT:
+        raise DataFileError(f"{path}: not a flexdigit recording (no flexdigit.run metadata of {RECORDING_FORMAT})")
+    return header, samples, meta.get("flexdigit.stop")
+
+
+#: JSON Schema of what happens to the rig besides its samples (weights hung, lifted, re-hung).
+EVENT_TOPIC = "/flexdigit/event"
+EVENT_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "flexdigit.Event",
+    "description": "A change to the rig that is not a command: a weight hung (kg, m from the base), lifted, re-hung.",
+    "type": "object",
+    "properties": {
+        "t": {"type": "number"},
+        "event": {"enum": ["load", "clear", "rehang"]},
+        "mass_kg": _NULLABLE,
+        "position_from_base_m": _NULLABLE,
+    },
+    "required": ["t", "event"],
+}
+
+
+def recording_rig(rig, recording: Recording):
+    """``rig`` with every reading it returns recorded as a sample, and its loads as events.
+
+    For code that drives a rig without a loop (the tactile protocols' ``collect``): closing the returned rig
+    closes ``rig`` (safe command, port) and then the recording.
+    """
+    from flexdigit.rig.base import Rig
+
+    recording.add_channel(EVENT_TOPIC, EVENT_SCHEMA)
+
+    class RecordingRig(Rig):
+        name = f"{rig.name} (recorded)"
+
+        def __init__(self) -> None:
+            super().__init__(rig.params, clock=rig.clock, sleep=rig.wait, operator=lambda message: None)
+            self.inner, self.recording, self._k = rig, recording, 0
+
+        def read(self):
+            reading = self.inner.read()
+            pot = reading.pot_v if reading.pot_v == reading.pot_v else None  # NaN: no pot channel
+            gauges = [float(g) if g == g else None for g in reading.gauges_v]
+            sample = {"k": self._k, "t": reading.time_s, "gauges_v": gauges, "pot_v": pot, "command": reading.command}
+            self.recording.write_sample(sample)
+            self._k += 1
+            return reading
+
+        def _read(self):  # pragma: no cover - read() is overridden
+            raise NotImplementedError
+
+        def _send(self, command: int) -> None:
+            self.inner.write_command(command)
+
+        def _event(self, event: str, mass=None, position=None) -> None:
+            self.recording.write(
+                EVENT_TOPIC, self.inner.clock(),
+                {"t": self.inner.clock(), "event": event, "mass_kg": mass, "position_from_base_m": position},
+            )  # fmt: skip
+
+        def _apply_load(self, mass_kg: float, position_from_base_m: float) -> None:
+            self.inner.place_load(mass_kg, position_from_base_m)
+            self._event("load", mass_kg, position_from_base_m)
+
+        def _remove_loads(self) -> None:
+            self.inner.clear_loads()
+            self._event("clear")
+
+        def _rehang(self, settle_s: float) -> None:
+            self.inner.rehang(settle_s)
+            self._event("rehang")
+
+        def _close(self) -> None:
+            try:
+                self.inner.close()
+            finally:
+                self.recording.close({"stop": "closed"})
+
+        def __getattr__(self, item):  # the inner rig's extras (the twin, its true rotation)
+            if item == "inner":
+                raise AttributeError(item)
+            return getattr(self.inner, item)
+
+    return RecordingRig()

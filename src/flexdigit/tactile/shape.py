@@ -1,0 +1,1061 @@
+"""The digit's centre line from the three gauges and the servo command, with its uncertainty (thesis 1.1, 3.3-3.4).
+
+The thesis's digit gives "a sense of feeling and shape" (1.1); this module gives the shape. It is a beam inversion
+of its own, written from the thesis's beam relations rather than from the twin's chain solver:
+
+1. **Gauges to curvature.** Each half bridge reads ``V = V0 + S kappa`` (E 2.2-2.4: ``Vm/Vs = GF/4 * 2 eps``,
+   ``eps = kappa t / 2``, times the amplifier gain): ``S`` and ``V0`` per channel from the calibration.
+2. **A moment field with few unknowns.** Along the digit, curvature is ``kappa(s) = M(s) / EI(s)`` (E 3.12) on the
+   three 80 mm strips (strip plus housing stiffness per section) and zero on the rigid nylon supports. The moment
+   is the sum of
+
+   - the cable's, ``T e``, the same all along (3.3: the cable runs at constant eccentricity ``e``),
+   - the digit's own weight and its supports' (known masses, world-fixed gravity of the mounting),
+   - one load: a weight (force ``P`` along gravity, chapters 6-7) or a press normal to the digit (force ``f``)
+     at an unknown arc position ``s_L``: ``M(s) = (r_L - r(s)) x F`` for ``s < s_L``, zero beyond.
+
+   With the cable taut the command fixes the tip angle: the cable is shortened by ``r_M (theta_M - theta_M(8))``
+   (E 3.11) and takes it up as ``e psi_tip + T / k_c`` (E 3.14 with the cable's stretch), one more equation.
+3. **Fit.** For every candidate ``s_L`` (1 mm grid, then a parabola through the best three) the model is linear in
+   ``(T, P)`` given the shape; a weighted least-squares fit with ``T >= 0`` (a cable only pulls) and ``P >= 0``
+   (a weight only hangs) over the three gauges (and the tip-angle equation) picks the best. The no-load model
+   (``T`` alone) is fitted too: contact is declared when the load model lowers chi-square by more than
+   ``contact_chi2`` (a likelihood-ratio test) and the load's moment is above the noise.
+4. **Integrate.** ``psi(s) = int kappa``, ``r(s) = int (cos psi, sin psi)`` on a 1 mm grid (large rotations kept);
+   the lever arms of the world-fixed forces depend on the shape, so steps 2-4 repeat from the straight digit
+   until the shape settles (``tol_rad``).
+5. **Uncertainty.** The noise model is the calibration's: white noise per reading (``/sqrt(n_average)`` when
+   readings are averaged), and, while the cable is taut, the cable-guide friction, a moment ``ratio e T`` per
+   section that averaging does not remove (:mod:`flexdigit.twin.sensors`). The parameters' covariance is the
+   inverse Fisher information ``(J' W J)^-1`` at the estimate; the shape's, ``J_r Cov J_r'``, is reported as a
+   standard deviation normal to the centre line. Where the load's position has no information (a load between
+   the clamp and gauge 1 bends no gauge on a free digit) its standard deviation is infinite and the estimate
+   says the load is not locatable there (:meth:`ShapeEstimator.locatability`).
+
+It is quasi-static (no inertia): a swinging digit is estimated as if it were at rest in its present shape.
+
+Examples
+--------
+>>> from flexdigit.twin import static_gauges_v
+>>> est = ShapeEstimator(orientation="horizontal")
+>>> v = static_gauges_v([0.025], [0.20], [20])          # 25 g at 200 mm on the horizontal digit, command 20
+>>> e = est.estimate(v, command=20)
+>>> bool(e.contact[0]), round(float(e.load_position_from_base_m[0]), 2), round(float(e.load_mass_kg[0]), 3)
+(True, 0.2, 0.025)
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexdigit._validation import check_array, check_choice, check_int, check_real
+from flexdigit.errors import ParameterError
+from flexdigit.params import RigParams
+
+try:  # scikit-learn's warning class, so one filter silences every flexdigit estimator's
+    from sklearn.exceptions import ConvergenceWarning
+except ImportError:  # pragma: no cover - scikit-learn is a dependency
+    ConvergenceWarning = UserWarning
+
+__all__ = [
+    "DigitBeam",
+    "ShapeEstimate",
+    "ShapeEstimator",
+    "ShapeAccuracy",
+    "shape_accuracy",
+    "LOAD_KINDS",
+    "true_centre_line_m",
+]
+
+#: What the load is: a weight (force along gravity), a press normal to the digit, or no load at all.
+LOAD_KINDS = ("weight", "press", "none")
+G_M_S2 = 9.80665
+
+
+def _cross(a, b):
+    """z-component of the 2-D cross product ``a x b`` over the last axis."""
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+@dataclass(frozen=True)
+class DigitBeam:
+    """The static beam the estimator inverts: a 1 mm grid along the digit with its stiffness and masses.
+
+    Attributes
+    ----------
+    s_m : ndarray, shape (P,)
+        Cell mid-points along the digit from the clamp (m).
+    ds_m : float
+        Cell length (m).
+    inv_ei : ndarray, shape (P,)
+        ``1 / EI`` per cell (1/(N m^2)), 0 on the rigid supports and the clamped stretch.
+    gauge_s_m, gauge_inv_ei : ndarray, shape (3,)
+        Gauge positions (m) and ``1 / EI`` there.
+    mass_s_m, mass_kg : ndarray
+        Point masses (strip per cell, supports) along the digit.
+    gravity : ndarray, shape (2,)
+        Gravity in the digit's (along, towards-cable) axes (m/s^2) for the mounting.
+    eccentricity_m, cable_stiffness_n_m, pulley_radius_m, taut_angle_rad : float
+        Cable geometry (table 3.7), its stiffness and the servo angle at which it is just taut (command 8).
+    """
+
+    length_m: float
+    s_m: np.ndarray
+    ds_m: float
+    inv_ei: np.ndarray
+    gauge_s_m: np.ndarray
+    gauge_inv_ei: np.ndarray
+    mass_s_m: np.ndarray
+    mass_kg: np.ndarray
+    gravity: np.ndarray
+    eccentricity_m: float
+    cable_stiffness_n_m: float
+    pulley_radius_m: float
+    taut_angle_rad: float
+    params: RigParams = field(repr=False)
+
+    @classmethod
+    def from_params(
+        cls,
+        params: RigParams | None = None,
+        calibration=None,
+        *,
+        orientation: str = "vertical",
+        housing: bool = True,
+        ds_m: float = 1e-3,
+    ) -> DigitBeam:
+        """The thesis digit (2.2, tables 3.5, 3.7) with the calibration's housing stiffness and support masses."""
+        from flexdigit.models.servo import command_to_angle_rad
+        from flexdigit.twin.calibration import default_calibration
+        from flexdigit.twin.digit import ORIENTATIONS
+
+        params = params or RigParams()
+        calibration = calibration or default_calibration()
+        check_choice(orientation, "orientation", tuple(ORIENTATIONS), "DigitBeam")
+        geo, mat = params.geometry, params.material
+        length = geo.digit_length_m
+        n = max(int(round(length / check_real(ds_m, "ds_m", "DigitBeam", low=1e-5, high=0.01))), 10)
+        ds = length / n
+        s = (np.arange(n) + 0.5) * ds
+        pitch = geo.section_pitch_m
+        flex = geo.strip_length_m / geo.section_count
+        half = 0.5 * (pitch - flex)
+        ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4
+        housing_ei = np.asarray(calibration.housing_ei_n_m2, dtype=float)
+        if housing_ei.size != geo.section_count:
+            raise ParameterError(
+                f"The 'housing_ei_n_m2' parameter of Calibration must have {geo.section_count} values. "
+                f"Got {housing_ei.tolist()!r} instead."
+            )
+
+        def inv_ei_at(x):
+            x = np.asarray(x, dtype=float)
+            k = np.clip(np.floor(x / pitch).astype(int), 0, geo.section_count - 1)
+            local = x - k * pitch
+            flexible = (local > half) & (local < pitch - half)
+            ei = ei_strip + (housing_ei[k] if housing else 0.0)
+            return np.where(flexible, 1.0 / ei, 0.0)
+
+        mu = mat.strip_density_kg_m3 * geo.cross_section_m2
+        supports = np.asarray(calibration.support_mass_kg, dtype=float)
+        support_s = pitch * (np.arange(geo.section_count) + 1.0)
+        housing_mass = calibration.housing_mass_kg if housing else 0.0
+        flexible_cells = inv_ei_at(s) > 0
+        cell_mass = mu * ds + (housing_mass / max(int(flexible_cells.sum()), 1)) * flexible_cells
+        gauges = np.asarray(geo.gauge_positions_m, dtype=float)
+        mass_s = np.concatenate([s, support_s])
+        order = np.argsort(mass_s, kind="stable")
+        a = params.actuator
+        return cls(
+            length_m=length,
+            s_m=s,
+            ds_m=ds,
+            inv_ei=inv_ei_at(s),
+            gauge_s_m=gauges,
+            gauge_inv_ei=inv_ei_at(gauges),
+            mass_s_m=mass_s[order],
+            mass_kg=np.concatenate([cell_mass, supports])[order],
+            gravity=np.asarray(ORIENTATIONS[orientation], dtype=float) * G_M_S2,
+            eccentricity_m=geo.cable_eccentricity_m,
+            cable_stiffness_n_m=calibration.cable_stiffness_n_m,
+            pulley_radius_m=a.pulley_radius_m,
+            taut_angle_rad=float(command_to_angle_rad(a.equilibrium_command, params)),
+            params=params,
+        )
+
+    # --------------------------------------------------------------------------------------------- geometry
+    def integrate(self, curvature_1_m: np.ndarray):
+        """Angles and positions from a curvature field (..., P): ``(psi_nodes, r_nodes, r_mid)``.
+
+        ``psi_nodes`` (..., P+1) at the cell edges (0 at the clamp), ``r_nodes`` (..., P+1, 2) and ``r_mid``
+        (..., P, 2) in the (along, towards-cable) axes; each cell is a circular arc's chord (second order in ds).
+        """
+        k = np.asarray(curvature_1_m, dtype=float)
+        dpsi = k * self.ds_m
+        psi = np.concatenate([np.zeros(k.shape[:-1] + (1,)), np.cumsum(dpsi, axis=-1)], axis=-1)
+        mid_angle = psi[..., :-1] + 0.5 * dpsi
+        step = self.ds_m * np.stack([np.cos(mid_angle), np.sin(mid_angle)], axis=-1)
+        r = np.concatenate([np.zeros(k.shape[:-1] + (1, 2)), np.cumsum(step, axis=-2)], axis=-2)
+        quarter = psi[..., :-1] + 0.25 * dpsi
+        r_mid = r[..., :-1, :] + 0.5 * self.ds_m * np.stack([np.cos(quarter), np.sin(quarter)], axis=-1)
+        return psi, r, r_mid
+
+    def locate(self, x_m):
+        """Cell index and fraction of arc positions ``x_m`` (any shape) for interpolating node values."""
+        x = np.clip(np.asarray(x_m, dtype=float), 0.0, self.length_m)
+        i = np.clip(np.floor(x / self.ds_m).astype(int), 0, self.s_m.size - 1)
+        return i, x / self.ds_m - i
+
+    def at(self, nodes: np.ndarray, x_m, *, vector: bool | None = None) -> np.ndarray:
+        """Node values (B, P+1) or (B, P+1, 2) interpolated at arc positions ``x_m``, (Q,) or (B, Q)."""
+        vector = nodes.ndim == 3 if vector is None else vector
+        i, w = self.locate(x_m)
+        rows = np.arange(nodes.shape[0])[:, None] if i.ndim == 2 else slice(None)
+        if i.ndim == 2:
+            lo, hi = nodes[rows, i], nodes[rows, i + 1]
+        else:
+            lo, hi = nodes[:, i], nodes[:, i + 1]
+        return lo + (w[..., None] if vector else w) * (hi - lo)
+
+    def interpolation(self, x_m) -> np.ndarray:
+        """Matrix (Q, P+1) taking node values to their linear interpolation at arc positions ``x_m`` (Q,)."""
+        i, w = self.locate(np.atleast_1d(x_m))
+        out = np.zeros((i.size, self.s_m.size + 1))
+        rows = np.arange(i.size)
+        out[rows, i] = 1.0 - w
+        out[rows, i + 1] += w
+        return out
+
+    def weight_operator(self, x_m) -> np.ndarray:
+        """Matrix (Q, P+1) ``W`` with ``(W r) x g`` the moment (N m) of the digit's own masses at ``x_m``.
+
+        ``M(x) = sum_{s_k > x} m_k (r_k - r(x)) x g``: linear in the node positions ``r``, so one product per
+        shape (the world-fixed weight's lever arms follow the shape).
+        """
+        x = np.atleast_1d(np.asarray(x_m, dtype=float))
+        moment = self.mass_kg[:, None] * self.interpolation(self.mass_s_m)  # (K, P+1): m_k r_k
+        suffix = np.concatenate([np.cumsum(moment[::-1], axis=0)[::-1], np.zeros((1, moment.shape[1]))])
+        suffix_m = np.r_[np.cumsum(self.mass_kg[::-1])[::-1], 0.0]
+        j = np.searchsorted(self.mass_s_m, x, side="right")  # first mass beyond x
+        return suffix[j] - suffix_m[j][:, None] * self.interpolation(x)
+
+    def weight_moment(self, r_nodes: np.ndarray, operator: np.ndarray) -> np.ndarray:
+        """Moment (B, Q) of the digit's own weight for shapes (B, P+1, 2) through a :meth:`weight_operator`."""
+        return _cross(np.matmul(operator, r_nodes), self.gravity)
+
+
+@dataclass
+class ShapeEstimate:
+    """What :meth:`ShapeEstimator.estimate` returns for B readings (SI units; positions from the clamp).
+
+    Attributes
+    ----------
+    s_m : ndarray, shape (P+1,)
+        Arc positions of the centre-line nodes (m).
+    centre_line_m : ndarray, shape (B, P+1, 2)
+        Node positions in the (along, towards-cable) axes (m).
+    angle_rad : ndarray, shape (B, P+1)
+        Tangent angle of the centre line at the nodes (rad; the tip's is the beam rotation).
+    sd_normal_m : ndarray, shape (B, P+1)
+        Standard deviation of each node normal to the centre line (m).
+    tip_sd_m : ndarray, shape (B, 2)
+        Standard deviation of the tip position along each axis (m).
+    curvature_1_m : ndarray, shape (B, P)
+        The fitted curvature field on the cells (1/m).
+    tension_n : ndarray, shape (B,)
+        Estimated cable tension (N; 0 slack or no cable).
+    contact : ndarray of bool, shape (B,)
+        A load was found (likelihood-ratio test against "no load").
+    load_position_from_base_m, load_position_sd_m : ndarray, shape (B,)
+        Where the load is (NaN without contact) and its standard deviation (inf where it cannot be located): the
+        larger of the local (Fisher) one and half the profile-likelihood interval at one standard deviation.
+    load_position_interval_m : ndarray, shape (B, 2)
+        Every position consistent with the readings at two standard deviations (profile likelihood, chi-square
+        within 4 of the best), from the lowest to the highest: wide where two branches fit (between gauges 1
+        and 2 position and mass trade off).
+    load_force_n, load_force_sd_n : ndarray, shape (B,)
+        The load's force (N; a weight's ``m g``; a press's normal force, positive towards the cable side).
+    chi2_no_load, chi2_load : ndarray, shape (B,)
+        The two fits' chi-square.
+    consistent : ndarray of bool, shape (B,)
+        The chosen fit's chi-square is below ``misfit_chi2``: False means the readings are not what this rig and
+        calibration can produce (wrong calibration, orientation or command, a second load, a fault) and the
+        estimate should not be trusted.
+    load_kind : str
+        "weight", "press" or "none" (:data:`LOAD_KINDS`).
+    """
+
+    s_m: np.ndarray
+    centre_line_m: np.ndarray
+    angle_rad: np.ndarray
+    sd_normal_m: np.ndarray
+    tip_sd_m: np.ndarray
+    curvature_1_m: np.ndarray
+    tension_n: np.ndarray
+    contact: np.ndarray
+    load_position_from_base_m: np.ndarray
+    load_position_sd_m: np.ndarray
+    load_position_interval_m: np.ndarray
+    load_force_n: np.ndarray
+    load_force_sd_n: np.ndarray
+    chi2_no_load: np.ndarray
+    chi2_load: np.ndarray
+    consistent: np.ndarray
+    load_kind: str = "weight"
+
+    @property
+    def tip_m(self) -> np.ndarray:
+        """Tip positions (B, 2), m."""
+        return self.centre_line_m[:, -1, :]
+
+    @property
+    def load_mass_kg(self) -> np.ndarray:
+        """A weight's mass, ``force / g`` (kg; NaN for a press or without contact)."""
+        if self.load_kind != "weight":
+            return np.full(self.contact.shape, np.nan)
+        return self.load_force_n / G_M_S2
+
+    def row(self, i: int = 0, every: int = 1) -> dict:
+        """Reading ``i`` as plain numbers (JSON, the live page), every ``every``-th centre-line node and the tip."""
+        idx = np.unique(np.r_[np.arange(0, self.s_m.size, max(int(every), 1)), self.s_m.size - 1])
+        contact = bool(self.contact[i])
+
+        def num(x):
+            x = float(x)
+            return x if math.isfinite(x) else None
+
+        def load(x):
+            return num(x) if contact else None
+
+        return {
+            "s_m": np.round(self.s_m[idx], 5).tolist(),
+            "centre_line_m": np.round(self.centre_line_m[i, idx], 6).tolist(),
+            "sd_normal_m": [num(x) for x in np.round(self.sd_normal_m[i, idx], 6)],
+            "tip_m": [num(x) for x in self.tip_m[i]],
+            "tip_sd_m": [num(x) for x in self.tip_sd_m[i]],
+            "tip_angle_deg": num(math.degrees(self.angle_rad[i, -1])),
+            "tension_n": num(self.tension_n[i]),
+            "consistent": bool(self.consistent[i]),
+            "contact": contact,
+            "load_kind": self.load_kind,
+            "load_position_from_base_m": load(self.load_position_from_base_m[i]),
+            "load_position_sd_m": load(self.load_position_sd_m[i]),
+            "load_position_interval_m": [load(x) for x in self.load_position_interval_m[i]],
+            "load_force_n": load(self.load_force_n[i]),
+            "load_force_sd_n": load(self.load_force_sd_n[i]),
+            "load_mass_kg": load(self.load_mass_kg[i]),
+        }
+
+
+class ShapeEstimator:
+    """Centre line, cable tension and one load from the three gauge voltages (module docstring).
+
+    Parameters
+    ----------
+    params : RigParams, optional
+        The rig (thesis rig by default).
+    calibration : Calibration, optional
+        Channel gains and offsets, housing stiffness, support masses, cable stiffness and the noise model
+        (the twin's default calibration by default; a real rig's from its calibration).
+    orientation : {"vertical", "hanging", "horizontal"}
+        Mounting: where gravity points (horizontal: cable side up, chapters 6-7).
+    housing : bool
+        With the elastomer housing.
+    cable : bool
+        Cable attached. False: the non-actuated digit of chapter 6 (no tension, no tip-angle equation).
+    load : {"weight", "press", "none"}
+        What a load is: a weight along gravity, a press normal to the digit, or never any load.
+    n_average : int
+        Readings averaged into each one passed (divides the white noise's variance, not the friction's).
+    tip_angle_sd_rad : float
+        Standard deviation of the tip angle the command implies (servo deadband, cable stretch), rad.
+    contact_chi2 : float
+        Chi-square drop that declares contact (likelihood ratio; 2 extra parameters: 13.8 is p = 0.001).
+    max_force_n : float
+        The largest load force considered (N; 5 N is about half a kilogram hung).
+    misfit_chi2 : float
+        Chi-square of the chosen fit above which the readings are declared inconsistent with the model.
+    max_iterations : int
+        Most updates of the world-fixed forces' lever arms from the shape (large rotations); a
+        :class:`~sklearn.exceptions.ConvergenceWarning` says when they had not settled.
+    tol_rad : float
+        The lever arms have settled when no tangent angle moved by more than this in an update (rad).
+    ds_m : float
+        Grid step along the digit (m): the centre line's nodes and the load's candidate positions.
+
+    Examples
+    --------
+    >>> from flexdigit.twin import static_gauges_v
+    >>> v, twin = static_gauges_v([0.0], [0.0], [30], orientation="vertical", return_solution=True)
+    >>> e = ShapeEstimator().estimate(v, command=30)
+    >>> bool(e.contact[0]), round(float(np.degrees(e.angle_rad[0, -1])), 1)   # no load; beam rotation, deg
+    (False, 37.0)
+    >>> round(float(np.degrees(twin.psi_rad[0, -1])), 1)                      # the twin's own
+    37.0
+    """
+
+    def __init__(
+        self,
+        params: RigParams | None = None,
+        calibration=None,
+        *,
+        orientation: str = "vertical",
+        housing: bool = True,
+        cable: bool = True,
+        load: str = "weight",
+        n_average: int = 1,
+        tip_angle_sd_rad: float = 0.01,
+        contact_chi2: float = 25.0,
+        max_force_n: float = 5.0,
+        misfit_chi2: float = 30.0,
+        max_iterations: int = 100,
+        tol_rad: float = 1e-7,
+        ds_m: float = 1e-3,
+    ) -> None:
+        self.params = params
+        self.calibration = calibration
+        self.orientation = orientation
+        self.housing = housing
+        self.cable = cable
+        self.load = load
+        self.n_average = n_average
+        self.tip_angle_sd_rad = tip_angle_sd_rad
+        self.contact_chi2 = contact_chi2
+        self.max_force_n = max_force_n
+        self.misfit_chi2 = misfit_chi2
+        self.max_iterations = max_iterations
+        self.tol_rad = tol_rad
+        self.ds_m = ds_m
+
+    def __repr__(self) -> str:
+        return (
+            f"ShapeEstimator(orientation={self.orientation!r}, housing={self.housing}, cable={self.cable}, "
+            f"load={self.load!r}, n_average={self.n_average}, tip_angle_sd_rad={self.tip_angle_sd_rad}, "
+            f"contact_chi2={self.contact_chi2}, max_force_n={self.max_force_n}, "
+            f"misfit_chi2={self.misfit_chi2}, max_iterations={self.max_iterations}, "
+            f"tol_rad={self.tol_rad}, ds_m={self.ds_m})"
+        )
+
+    # ------------------------------------------------------------------------------------------------ set-up
+    def _key(self) -> tuple:
+        return tuple(
+            id(v) if k in ("params", "calibration") else v for k, v in sorted(vars(self).items()) if not k[-1] == "_"
+        )
+
+    def _setup(self) -> None:
+        """Validate the settings and build the beam (once per settings, as scikit-learn validates in fit)."""
+        if getattr(self, "ready_", None) == self._key():
+            return
+        from flexdigit.twin.calibration import default_calibration
+        from flexdigit.twin.sensors import SensorChain
+
+        owner = "ShapeEstimator"
+        self.params_ = self.params or RigParams()
+        self.calibration_ = self.calibration or default_calibration()
+        check_choice(self.load, "load", LOAD_KINDS, owner)
+        check_int(self.n_average, "n_average", owner, low=1)
+        check_real(self.tip_angle_sd_rad, "tip_angle_sd_rad", owner, low=0, low_open=True)
+        check_real(self.contact_chi2, "contact_chi2", owner, low=0)
+        check_real(self.max_force_n, "max_force_n", owner, low=0, low_open=True)
+        check_real(self.misfit_chi2, "misfit_chi2", owner, low=0, low_open=True)
+        check_int(self.max_iterations, "max_iterations", owner, low=1, high=1000)
+        check_real(self.tol_rad, "tol_rad", owner, low=0, low_open=True)
+        self.beam_ = DigitBeam.from_params(
+            self.params_, self.calibration_, orientation=self.orientation, housing=bool(self.housing), ds_m=self.ds_m
+        )
+        sensors = SensorChain(self.params_, self.calibration_, np.random.default_rng(0))
+        self.volts_per_curvature_ = sensors.volts_per_curvature(np.zeros(3), np.zeros(3))
+        self.offset_v_ = sensors.clean_v(np.zeros(3), np.zeros(3))
+        self.white_v_ = np.asarray(self.calibration_.noise_white_v, dtype=float)
+        self.friction_ratio_ = float(self.calibration_.cable_friction_ratio) if self.cable else 0.0
+        beam = self.beam_
+        self.nodes_m_ = np.arange(beam.s_m.size + 1) * beam.ds_m  # also the load's candidates
+        # linear maps of the node positions, fixed for the beam: the gauges' positions and the own weight's moment
+        # at the gauges, on the cells and integrated along the digit (the tip equation)
+        self.gauge_interp_ = beam.interpolation(beam.gauge_s_m)
+        self.weight_gauges_ = beam.weight_operator(beam.gauge_s_m)
+        self.weight_cells_ = beam.weight_operator(beam.s_m)
+        self.weight_tip_ = (beam.inv_ei * beam.ds_m) @ self.weight_cells_
+        self.ready_ = self._key()
+
+    def curvature_from_volts(self, gauges_v) -> np.ndarray:
+        """Curvature (1/m) at the gauges from their voltages (n, 3), E 2.2-2.4 through the calibration."""
+        self._setup()
+        return (np.asarray(gauges_v, dtype=float) - self.offset_v_) / self.volts_per_curvature_
+
+    def volts_from_curvature(self, curvature_1_m) -> np.ndarray:
+        """The inverse of :meth:`curvature_from_volts`: gauge voltages (n, 3) for curvatures at the gauges."""
+        self._setup()
+        return np.asarray(curvature_1_m, dtype=float) * self.volts_per_curvature_ + self.offset_v_
+
+    def _tip_equation(self, command, b: int) -> np.ndarray:
+        """Per reading, the cable shortening the command asks for over e (rad), or NaN where there is none."""
+        if command is None or not self.cable:
+            return np.full(b, np.nan)
+        from flexdigit.models.servo import command_to_angle_rad
+
+        a = self.params_.actuator
+        c = check_array(command, "command", "ShapeEstimator", low=a.command_min, high=a.command_max)
+        c = np.broadcast_to(c.reshape(-1) if c.ndim else c, (b,))
+        shortening = self.beam_.pulley_radius_m * (command_to_angle_rad(c, self.params_) - self.beam_.taut_angle_rad)
+        return shortening / self.beam_.eccentricity_m
+
+    def _straight(self, b: int):
+        psi = np.zeros((b, self.nodes_m_.size))
+        r = np.zeros((b, self.nodes_m_.size, 2))
+        r[..., 0] = self.nodes_m_
+        return psi, r
+
+    # ------------------------------------------------------------------------------------------------ the fit
+    def estimate(self, gauges_v, command=None, *, start: ShapeEstimate | None = None) -> ShapeEstimate:
+        """Estimate the shape (and the load) for readings ``gauges_v`` (3,) or (B, 3), V.
+
+        Parameters
+        ----------
+        gauges_v : array_like, shape (3,) or (B, 3)
+            Gauge voltages (V), gauges 1..3 from the base; averages of ``n_average`` readings each.
+        command : int or array_like, shape (B,), optional
+            The servo command in force (0..254). None: unknown or actuation disabled (no tip-angle equation).
+        start : ShapeEstimate, optional
+            A previous estimate of the same B readings to take the lever arms from: one fit instead of
+            iterating to convergence (a live stream, where the last frame's shape is close to this one's).
+
+        Returns
+        -------
+        ShapeEstimate
+        """
+        self._setup()
+        owner = "ShapeEstimator.estimate"
+        v = check_array(gauges_v, "gauges_v", owner)
+        v = v.reshape(1, -1) if v.ndim == 1 else v
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise ParameterError(
+                f"The 'gauges_v' parameter of {owner} must have 3 gauge columns. "
+                f"Got shape {np.shape(gauges_v)} instead."
+            )
+        beam = self.beam_
+        b = v.shape[0]
+        kappa_g = self.curvature_from_volts(v)
+        tip_eq = self._tip_equation(command, b)
+        sd_white = (self.white_v_ / math.sqrt(self.n_average)) / np.abs(self.volts_per_curvature_)
+        if start is not None and start.centre_line_m.shape[:2] == (b, self.nodes_m_.size):
+            psi, r, tension, rounds = start.angle_rad, start.centre_line_m, start.tension_n, 0
+        else:
+            (psi, r), tension, rounds = self._straight(b), np.zeros(b), int(self.max_iterations)
+        settle, fit = _Settle(beam, psi, self.tol_rad), None
+        for k in range(rounds):
+            hold = fit if k >= self.HOLD_AFTER else None
+            fit = self._fit(kappa_g, tip_eq, self._sd_curvature(sd_white, tension), r, psi, hold)
+            psi, r = settle.step(self._curvature_field(fit, r, psi))
+            tension = fit["T"]
+            if settle.done:
+                break
+        change = settle.change
+        if rounds and not np.all(change < self.tol_rad):
+            warnings.warn(
+                f"ShapeEstimator: the lever arms had not settled after {rounds} iterations on "
+                f"{int(np.sum(change >= self.tol_rad))} of {b} readings (last change {np.max(change):.2g} rad); "
+                "raise max_iterations",
+                ConvergenceWarning,
+                stacklevel=2,
+            )
+        sd_k = self._sd_curvature(sd_white, tension)
+        fit = self._fit(kappa_g, tip_eq, sd_k, r, psi, fit if rounds > self.HOLD_AFTER else None)
+        curvature = self._curvature_field(fit, r, psi)
+        psi, r, _ = beam.integrate(curvature)
+        unc = self._uncertainty(fit, tip_eq, sd_k, r, psi)
+        contact = fit["contact"]
+        # the position's standard deviation: the local (Fisher) one, or half the one-sigma profile interval when
+        # that is wider (a second branch of solutions, a flat chi-square)
+        half_width = 0.5 * np.diff(fit["interval_1sd"], axis=1)[:, 0]
+        position_sd = np.fmax(unc["position_sd_m"], half_width)
+        return ShapeEstimate(
+            s_m=self.nodes_m_,
+            centre_line_m=r,
+            angle_rad=psi,
+            sd_normal_m=unc["sd_normal_m"],
+            tip_sd_m=unc["tip_sd_m"],
+            curvature_1_m=curvature,
+            tension_n=fit["T"],
+            contact=contact,
+            load_position_from_base_m=np.where(contact, fit["sL"], np.nan),
+            load_position_sd_m=np.where(contact, position_sd, np.nan),
+            load_position_interval_m=np.where(contact[:, None], fit["interval_2sd"], np.nan),
+            load_force_n=np.where(contact, fit["P"], np.nan),
+            load_force_sd_n=np.where(contact, unc["force_sd_n"], np.nan),
+            chi2_no_load=fit["chi2_0"],
+            chi2_load=fit["chi2_1"],
+            consistent=np.where(fit["loaded"], fit["chi2_1"], fit["chi2_0"]) <= self.misfit_chi2,
+            load_kind=self.load,
+        )
+
+    def _sd_curvature(self, sd_white: np.ndarray, tension: np.ndarray) -> np.ndarray:
+        """Per reading and gauge, the curvature noise (1/m): white (averaged) and the cable-guide friction."""
+        friction = self.friction_ratio_ * self.beam_.eccentricity_m * tension[:, None] * self.beam_.gauge_inv_ei
+        return np.sqrt(sd_white[None, :] ** 2 + friction**2)
+
+    def _rows(self, r, psi, s_load=None):
+        """The measurement model: curvature at the three gauges and the tip-angle equation (4 rows).
+
+        Returns ``a_T`` (4,) per unit tension, ``b_w`` (B, 4) from the digit's own weight and, for loads at
+        ``s_load`` (B, C) (``"nodes"``: every node of the grid), ``a_P`` (B, C, 4) per unit load force.
+        """
+        beam = self.beam_
+        e = beam.eccentricity_m
+        inv_g = beam.gauge_inv_ei
+        w_cells = beam.inv_ei * beam.ds_m
+        # cable: T e everywhere; the tip equation is psi_tip + T / (k_c e) (E 3.11 with the cable's stretch)
+        a_t = np.r_[e * inv_g, e * np.sum(w_cells) + 1.0 / (beam.cable_stiffness_n_m * e)]
+        m_g = beam.weight_moment(r, self.weight_gauges_)  # (B, 3)
+        b_w = np.concatenate([m_g * inv_g, beam.weight_moment(r, self.weight_tip_[None, :])], axis=1)
+        if s_load is None:
+            return a_t, b_w, None
+        r_mid = 0.5 * (r[:, :-1, :] + r[:, 1:, :])
+        cum_r = np.concatenate([np.zeros((r.shape[0], 1, 2)), np.cumsum(r_mid * w_cells[None, :, None], axis=1)], 1)
+        cum_w = np.r_[0.0, np.cumsum(w_cells)]
+        if isinstance(s_load, str):  # every node: no interpolation
+            s_load = np.broadcast_to(self.nodes_m_, r.shape[:2])
+            r_l, r_before, w_before = r, cum_r, np.broadcast_to(cum_w, r.shape[:2])
+            angle = psi
+        else:
+            r_l = beam.at(r, s_load)  # (B, C, 2)
+            r_before = beam.at(cum_r, s_load)
+            w_before = beam.at(np.broadcast_to(cum_w, r.shape[:2]), s_load, vector=False)
+            angle = beam.at(psi, s_load, vector=False) if self.load == "press" else None
+        if self.load == "press":
+            d = np.stack([-np.sin(angle), np.cos(angle)], axis=-1)  # normal towards the cable side
+        else:
+            d = np.broadcast_to(beam.gravity / np.linalg.norm(beam.gravity), r_l.shape)
+        # moment per unit force at x < s_L: (r_L - r(x)) x d = r_L x d - r(x) x d
+        rl_x_d = _cross(r_l, d)  # (B, C)
+        r_g = np.matmul(self.gauge_interp_, r)  # (B, 3, 2)
+        rg_x_d = _cross(r_g[:, None, :, :], d[:, :, None, :])  # (B, C, 3)
+        before = beam.gauge_s_m[None, None, :] < s_load[:, :, None]
+        gauge_rows = np.where(before, rl_x_d[:, :, None] - rg_x_d, 0.0) * inv_g
+        # tip row: int_0^{s_L} (r_L x d - r(x) x d) / EI dx, from cumulative sums over the cells
+        tip_row = rl_x_d * w_before - _cross(r_before, d)
+        return a_t, b_w, np.concatenate([gauge_rows, tip_row[..., None]], axis=-1)
+
+    #: After this many updates of the lever arms the model (load or not) and the load's branch are held, and the
+    #: position is sought within :attr:`HOLD_WINDOW_M` of the last one: a discrete choice that flips with the
+    #: shape would otherwise make the fixed point cycle.
+    HOLD_AFTER = 4
+    HOLD_WINDOW_M = 0.005
+    #: Prior standard deviations of the tension (N) and the load's force (N) (the position's is the digit's
+    #: length over sqrt(12), uniform): weak, so they matter only where the readings say nothing.
+    PRIOR_TENSION_N = 50.0
+    PRIOR_FORCE_N = 1.0
+    #: A load counts as located when its position's standard deviation is below this share of the prior's.
+    LOCATED_FRACTION = 0.5
+
+    def _fit(self, kappa_g, tip_eq, sd_k, r, psi, hold: dict | None = None) -> dict:
+        """Weighted least squares for (T, P) at every candidate position; contact by likelihood ratio.
+
+        ``hold``: a previous fit whose model choice is kept and near whose load position the position is sought.
+        """
+        b = kappa_g.shape[0]
+        cable = bool(self.cable)
+        has_tip = np.isfinite(tip_eq)
+        sd = np.concatenate([sd_k, np.full((b, 1), self.tip_angle_sd_rad)], axis=1)
+        y = np.concatenate([kappa_g, np.where(has_tip, tip_eq, 0.0)[:, None]], axis=1)
+        w = 1.0 / sd**2
+        w[:, 3] = np.where(has_tip, w[:, 3], 0.0)
+        a_t, b_w, _ = self._rows(r, psi)
+        res = y - b_w  # what the tension (and the load) must explain
+        t0, chi0 = _fit_tension(res, a_t, w, cable)
+        out = {"T": t0, "P": np.zeros(b), "sL": np.full(b, np.nan), "chi2_0": chi0, "chi2_1": chi0.copy()}
+        out["contact"] = out["loaded"] = np.zeros(b, dtype=bool)
+        out["interval_1sd"] = out["interval_2sd"] = np.full((b, 2), np.nan)
+        if self.load == "none":
+            return out
+        positive = self.load == "weight"
+        cand = np.broadcast_to(self.nodes_m_, (b, self.nodes_m_.size))
+        _, _, a_p = self._rows(r, psi, "nodes")
+        # the force's weak prior as a fifth row (P = 0 +- PRIOR_FORCE_N): a ridge that keeps a huge force just past
+        # a gauge from explaining the friction's scatter better than a modest one where the load really is
+        a_t, res, w = np.r_[a_t, 0.0], np.c_[res, np.zeros(b)], np.c_[w, np.full(b, self.PRIOR_FORCE_N**-2.0)]
+        a_p = np.concatenate([a_p, np.ones(a_p.shape[:2] + (1,))], axis=-1)
+        t1, p1, chi1 = _fit_load(res[:, None, :], a_t, a_p, w[:, None, :], cable, positive, self.max_force_n)
+        rows = np.arange(b)
+        if hold is not None:
+            near = np.abs(self.nodes_m_[None, :] - np.nan_to_num(hold["sL"])[:, None]) <= self.HOLD_WINDOW_M
+            best = np.argmin(np.where(near | ~hold["loaded"][:, None], chi1, np.inf), axis=1)
+        else:
+            best = np.argmin(chi1, axis=1)
+        refined = _parabola(self.nodes_m_, chi1, best)[:, None]
+        _, _, a_ref = self._rows(r, psi, refined)
+        a_ref = np.concatenate([a_ref, np.ones(a_ref.shape[:2] + (1,))], axis=-1)
+        t_r, p_r, chi_r = _fit_load(res[:, None, :], a_t, a_ref, w[:, None, :], cable, positive, self.max_force_n)
+        better = chi_r[:, 0] <= chi1[rows, best]
+        s_hat = np.where(better, refined[:, 0], cand[rows, best])
+        t_hat = np.where(better, t_r[:, 0], t1[rows, best])
+        p_hat = np.where(better, p_r[:, 0], p1[rows, best])
+        chi_hat = np.where(better, chi_r[:, 0], chi1[rows, best])
+        # profile likelihood of the position: every candidate within 1 (4) of the best chi-square is consistent
+        # with the readings at one (two) standard deviations; a disjoint second branch widens the interval
+        out["interval_1sd"] = _span(self.nodes_m_, chi1 <= chi_hat[:, None] + 1.0, s_hat)
+        out["interval_2sd"] = _span(self.nodes_m_, chi1 <= chi_hat[:, None] + 4.0, s_hat)
+        # the shape takes the load model whenever it is the better model (Akaike: two more parameters must lower
+        # chi-square by more than 4); a contact is declared only on the stricter likelihood-ratio test
+        loaded = (chi0 - chi_hat > min(4.0, self.contact_chi2)) & (p_hat != 0)
+        if hold is not None:
+            loaded = hold["loaded"] & (p_hat != 0)
+        out.update(
+            T=np.where(loaded, t_hat, t0),
+            P=np.where(loaded, p_hat, 0.0),
+            sL=np.where(loaded, s_hat, np.nan),
+            chi2_1=chi_hat,
+            loaded=loaded,
+            contact=loaded & (chi0 - chi_hat > self.contact_chi2),
+        )
+        return out
+
+    def _curvature_field(self, fit, r, psi) -> np.ndarray:
+        """kappa(s) on the cells (B, P) for the fitted (T, P, s_L) on the shape ``r``."""
+        beam = self.beam_
+        m = fit["T"][:, None] * beam.eccentricity_m + beam.weight_moment(r, self.weight_cells_)
+        if np.any(fit["loaded"]):
+            s_l = np.where(fit["loaded"], fit["sL"], 0.0)
+            m = m + np.where(fit["loaded"], fit["P"], 0.0)[:, None] * self._load_moment(r, psi, s_l)
+        return m * beam.inv_ei
+
+    def _load_moment(self, r, psi, s_load) -> np.ndarray:
+        """Moment per unit force (m) on the cells of a load at ``s_load``: (B,) -> (B, P); (B, C) -> (B, C, P)."""
+        beam = self.beam_
+        s_l = np.asarray(s_load, dtype=float)
+        single = s_l.ndim == 1
+        s_l = s_l[:, None] if single else s_l
+        r_l = beam.at(r, s_l)  # (B, C, 2)
+        if self.load == "press":
+            angle = beam.at(psi, s_l, vector=False)
+            d = np.stack([-np.sin(angle), np.cos(angle)], axis=-1)
+        else:
+            d = np.broadcast_to(beam.gravity / np.linalg.norm(beam.gravity), r_l.shape)
+        r_mid = 0.5 * (r[:, :-1, :] + r[:, 1:, :])  # (B, P, 2)
+        lever = _cross(r_l[:, :, None, :] - r_mid[:, None, :, :], d[:, :, None, :])  # (B, C, P)
+        out = np.where(beam.s_m[None, None, :] < s_l[:, :, None], lever, 0.0)
+        return out[:, 0] if single else out
+
+    # ------------------------------------------------------------------------------------------- uncertainty
+    def _uncertainty(self, fit, tip_eq, sd_k, r, psi) -> dict:
+        """Parameter covariance (inverse Fisher information) and its image on the centre line."""
+        beam = self.beam_
+        b = sd_k.shape[0]
+        taut = fit["T"] > 0
+        contact = fit["loaded"]
+        w = np.concatenate([1.0 / sd_k**2, np.full((b, 1), self.tip_angle_sd_rad**-2.0)], axis=1)
+        w[:, 3] = np.where(np.isfinite(tip_eq) & taut, w[:, 3], 0.0)
+        step = 1e-3
+        s_l = np.where(contact, fit["sL"], 0.0)
+        s_lo, s_hi = np.clip(s_l - step, 0, beam.length_m), np.clip(s_l + step, 0, beam.length_m)
+        a_t, _, a_p = self._rows(r, psi, np.stack([s_l, s_lo, s_hi], axis=1))
+        d_sl = np.where(s_hi > s_lo, s_hi - s_lo, 1.0)
+        p = np.where(contact, fit["P"], 0.0)
+        a_s = p[:, None] * (a_p[:, 2] - a_p[:, 1]) / d_sl[:, None]
+        # Jacobian columns: T (while the cable is taut), P and s_L (with contact); inactive ones held exactly
+        cols = np.stack([np.broadcast_to(a_t, (b, 4)), a_p[:, 0], a_s], axis=2)  # (B, 4, 3)
+        active = np.stack([taut, contact, contact], axis=1)
+        fisher = np.einsum("bmi,bm,bmj->bij", cols, w, cols)
+        both = active[:, :, None] & active[:, None, :]
+        # a weak prior keeps the inverse finite where the readings leave a direction free (position and mass
+        # trading off between gauges 1 and 2, no gauge bending before gauge 1): the shape's band then stays finite
+        # (that direction barely moves the shape) while the position's standard deviation comes out at the prior's
+        prior_sd = np.array([self.PRIOR_TENSION_N, self.PRIOR_FORCE_N, beam.length_m / math.sqrt(12.0)])
+        fisher = np.where(both, fisher, 0.0) + np.diag(1.0 / prior_sd**2)[None]
+        cov = np.where(both, np.linalg.inv(fisher), 0.0)
+        # located: the readings, not the prior, set the position (its variance well under the prior's)
+        locatable = cov[:, 2, 2] < (self.LOCATED_FRACTION * prior_sd[2]) ** 2
+        # the centre line's sensitivity to each parameter (lever arms held), by differences of the integral
+        base = self._curvature_field(fit, r, psi)
+        _, r0, _ = beam.integrate(base)
+        moments = self._load_moment(r, psi, np.stack([s_l, s_lo, s_hi], axis=1)) * beam.inv_ei  # (B, 3, P)
+        unit = np.stack(
+            [
+                np.broadcast_to(beam.eccentricity_m * beam.inv_ei, base.shape),
+                moments[:, 0],
+                p[:, None] * (moments[:, 2] - moments[:, 1]) / d_sl[:, None],
+            ],
+            axis=1,
+        )  # (B, 3, P): curvature per unit T, P and s_L
+        eps = np.array([1e-3, 1e-3, 1e-4])
+        _, r1, _ = beam.integrate(base[:, None, :] + eps[None, :, None] * unit)  # all three at once
+        jac_r = np.moveaxis((r1 - r0[:, None]) / eps[None, :, None, None], 1, -1)  # (B, P+1, 2, 3)
+        cov_r = np.einsum("bpci,bij,bpdj->bpcd", jac_r, cov, jac_r)
+        normal = np.stack([-np.sin(psi), np.cos(psi)], axis=-1)
+        sd_normal = np.sqrt(np.maximum(np.einsum("bpc,bpcd,bpd->bp", normal, cov_r, normal), 0.0))
+        tip_sd = np.sqrt(np.maximum(np.stack([cov_r[:, -1, 0, 0], cov_r[:, -1, 1, 1]], axis=1), 0.0))
+        bad = contact & ~locatable
+        return {
+            "cov": cov,
+            "sd_normal_m": sd_normal,
+            "tip_sd_m": tip_sd,
+            "position_sd_m": np.where(bad, np.inf, np.sqrt(np.maximum(cov[:, 2, 2], 0.0))),
+            "force_sd_n": np.where(bad, np.inf, np.sqrt(np.maximum(cov[:, 1, 1], 0.0))),
+        }
+
+    # ------------------------------------------------------------------------------------------ forward model
+    def predict(self, positions_from_base_m, force_n, command=None):
+        """The model's own noise-free state for one load per case: ``(curvature at the gauges (B, 3), fit,
+        centre line (B, P+1, 2), angles (B, P+1))``; force 0 means no load.
+
+        The forward problem: tension from the command while the cable is taut (or 0), the shape iterated.
+        """
+        self._setup()
+        beam = self.beam_
+        s_l = np.atleast_1d(check_array(positions_from_base_m, "positions_from_base_m", "ShapeEstimator.predict"))
+        p = np.broadcast_to(check_array(force_n, "force_n", "ShapeEstimator.predict"), s_l.shape).astype(float)
+        b = s_l.size
+        tip_eq = self._tip_equation(command, b)
+        psi, r = self._straight(b)
+        fit = {"T": np.zeros(b), "P": p, "sL": s_l, "contact": p != 0, "loaded": p != 0}
+        settle = _Settle(beam, psi, 1e-3 * self.tol_rad)
+        for _ in range(10 * int(self.max_iterations)):
+            if np.all(np.isfinite(tip_eq)):
+                a_t, b_w, a_p = self._rows(r, psi, s_l[:, None])
+                psi_free = b_w[:, 3] + p * a_p[:, 0, 3]  # tip equation without the cable
+                fit["T"] = np.maximum((tip_eq - psi_free) / a_t[3], 0.0)
+            psi, r = settle.step(self._curvature_field(fit, r, psi))
+            if settle.done:
+                break
+        a_t, b_w, a_p = self._rows(r, psi, s_l[:, None])
+        kappa = fit["T"][:, None] * a_t[:3] + b_w[:, :3] + p[:, None] * a_p[:, 0, :3]
+        return kappa, fit, r, psi
+
+    def locatability(self, positions_from_base_m, force_n: float = 0.25, command=None) -> np.ndarray:
+        """Standard deviation (m) of the estimated position of a load at each position (inf: not found or not
+        locatable), as :meth:`estimate` reports it on the model's own noise-free readings.
+
+        ``force_n`` (N; 0.25 N is about a 25 g weight) on the digit at ``command``, readings averaged
+        ``n_average`` at a time. The live page shades the stretches of the digit where it exceeds a threshold ("the
+        gauges cannot place a load here"): before gauge 1 no gauge bends on a free digit; between gauges 1 and 2
+        position and mass trade off.
+        """
+        self._setup()
+        force = check_real(force_n, "force_n", "ShapeEstimator.locatability", low=0, low_open=True)
+        pos = np.atleast_1d(check_array(positions_from_base_m, "positions_from_base_m", "ShapeEstimator"))
+        kappa, _, _, _ = self.predict(pos, np.full(pos.size, force), command)
+        est = self.estimate(self.volts_from_curvature(kappa), command=command)
+        return np.where(est.contact, est.load_position_sd_m, np.inf)
+
+
+class _Settle:
+    """The fixed point of the lever arms: curvature from the shape, shape from the curvature, repeated.
+
+    A heavily loaded free digit (a large sag) makes the plain iteration overshoot; wherever an update grew, the
+    next ones are under-relaxed (the step halved each time, and let grow again by a quarter while updates shrink).
+    """
+
+    def __init__(self, beam: DigitBeam, psi: np.ndarray, tol_rad: float) -> None:
+        self.beam, self.psi, self.tol_rad = beam, psi, tol_rad
+        self.curvature = None
+        self.relax = np.ones(psi.shape[0])
+        self.change = np.full(psi.shape[0], np.inf)
+
+    def step(self, target: np.ndarray):
+        """Move towards the curvature field ``target`` (B, P); return the new ``(psi, r)``."""
+        if self.curvature is not None:
+            target = self.curvature + self.relax[:, None] * (target - self.curvature)
+        psi, r, _ = self.beam.integrate(target)
+        change = np.max(np.abs(psi - self.psi), axis=1)
+        if self.curvature is not None:
+            self.relax = np.where(change > self.change, 0.5 * self.relax, np.minimum(1.0, 1.25 * self.relax))
+        self.psi, self.curvature, self.change = psi, target, change
+        return psi, r
+
+    @property
+    def done(self) -> bool:
+        return bool(np.all(self.change < self.tol_rad))
+
+
+def _fit_tension(res, a_t, w, cable: bool):
+    """T >= 0 alone: ``(T (B,), chi2 (B,))``. With T = 0 the tip row drops out (a slack cable fixes nothing)."""
+    chi_slack = np.sum(w[:, :3] * res[:, :3] ** 2, axis=1)
+    if not cable:
+        return np.zeros(res.shape[0]), chi_slack
+    t = np.sum(w * a_t * res, axis=1) / np.sum(w * a_t * a_t, axis=1)
+    chi_taut = np.sum(w * (res - t[:, None] * a_t) ** 2, axis=1)
+    taut = (t > 0) & (chi_taut < chi_slack)
+    return np.where(taut, t, 0.0), np.where(taut, chi_taut, chi_slack)
+
+
+def _fit_load(res, a_t, a_p, w, cable: bool, positive: bool, max_force_n: float = np.inf):
+    """(T, P) per candidate with T >= 0 (a cable only pulls), |P| <= ``max_force_n`` and, for weights, P >= 0: the
+    active sets are enumerated (both free; P alone with the cable slack). Shapes (B, C); chi-square is infinite
+    where no feasible load explains the readings."""
+    slack_w = w.copy()
+    slack_w[..., 3] = 0.0
+    sp = np.sum(slack_w * a_p * a_p, axis=-1)
+    p_only = np.sum(slack_w * a_p * res, axis=-1) / np.where(sp > 0, sp, 1.0)
+    p_only = np.maximum(p_only, 0.0) if positive else p_only
+    chi = np.sum(slack_w * (res - p_only[..., None] * a_p) ** 2, axis=-1)
+    chi = np.where(np.abs(p_only) <= max_force_n, chi, np.inf)
+    t_best, p_best = np.zeros(chi.shape), p_only
+    if not cable:
+        return t_best, p_best, chi
+    a_tb = np.broadcast_to(a_t, a_p.shape)
+    h11 = np.sum(w * a_tb * a_tb, axis=-1)
+    h22 = np.sum(w * a_p * a_p, axis=-1)
+    h12 = np.sum(w * a_tb * a_p, axis=-1)
+    g1 = np.sum(w * a_tb * res, axis=-1)
+    g2 = np.sum(w * a_p * res, axis=-1)
+    det = h11 * h22 - h12**2
+    ok = det > 1e-12 * h11 * np.maximum(h22, 1e-300)
+    safe = np.where(ok, det, 1.0)
+    t = np.where(ok, (h22 * g1 - h12 * g2) / safe, 0.0)
+    p = np.where(ok, (h11 * g2 - h12 * g1) / safe, 0.0)
+    chi_tp = np.sum(w * (res - t[..., None] * a_tb - p[..., None] * a_p) ** 2, axis=-1)
+    take = ok & (t > 0) & ((p >= 0) if positive else True) & (np.abs(p) <= max_force_n) & (chi_tp < chi)
+    return np.where(take, t, t_best), np.where(take, p, p_best), np.where(take, chi_tp, chi)
+
+
+def _span(grid: np.ndarray, inside: np.ndarray, best: np.ndarray) -> np.ndarray:
+    """(B, 2): the lowest and highest grid point marked ``inside`` each row, widened to include ``best``."""
+    lo = np.where(inside.any(axis=1), grid[np.argmax(inside, axis=1)], best)
+    hi = np.where(inside.any(axis=1), grid[grid.size - 1 - np.argmax(inside[:, ::-1], axis=1)], best)
+    return np.stack([np.minimum(lo, best), np.maximum(hi, best)], axis=1)
+
+
+def _parabola(grid: np.ndarray, chi: np.ndarray, best: np.ndarray) -> np.ndarray:
+    """The minimum of the parabola through the best grid point and its neighbours (m); the point itself at an end."""
+    i = np.clip(best, 1, grid.size - 2)
+    rows = np.arange(chi.shape[0])
+    y0, y1, y2 = chi[rows, i - 1], chi[rows, i], chi[rows, i + 1]
+    with np.errstate(invalid="ignore"):  # an infeasible neighbour (infinite chi-square): no refinement
+        denom = y0 - 2 * y1 + y2
+        usable = np.isfinite(denom) & (denom > 0)
+        shift = np.clip(np.where(usable, 0.5 * (y0 - y2) / np.where(usable, denom, 1.0), 0.0), -1.0, 1.0)
+    at_end = (best == 0) | (best == grid.size - 1)
+    return np.where(at_end, grid[best], grid[i] + shift * (grid[1] - grid[0]))
+
+
+def true_centre_line_m(psi_rad, chain, s_m) -> np.ndarray:
+    """The twin's centre line (B, Q, 2) at arc positions ``s_m`` from its link angles (B, n): the reference the
+    estimator is scored against (:meth:`flexdigit.twin.digit.Chain.positions`)."""
+    return chain.positions(np.atleast_2d(psi_rad), np.asarray(s_m, dtype=float))
+
+
+@dataclass
+class ShapeAccuracy:
+    """The estimator against the twin's true centre line over a set of static cases (:func:`shape_accuracy`).
+
+    Attributes
+    ----------
+    case : ndarray of str, shape (B,)
+        The case group of each row ("bare, upright", "bare, horizontal", "weight, horizontal").
+    command, mass_kg, position_from_base_m : ndarray, shape (B,)
+        The case: servo command, hung weight (0: none) and where (m from the clamp).
+    tip_error_m, rms_error_m : ndarray, shape (B,)
+        Distance between estimated and true tip (m), RMS distance along the digit (m).
+    tip_sd_m : ndarray, shape (B,)
+        The estimate's own standard deviation of the tip position (m, both axes combined).
+    contact : ndarray of bool, shape (B,)
+        Whether the estimator declared a load.
+    load_position_error_m, load_position_sd_m : ndarray, shape (B,)
+        Its load position's error and standard deviation (m; NaN without contact).
+    """
+
+    case: np.ndarray
+    command: np.ndarray
+    mass_kg: np.ndarray
+    position_from_base_m: np.ndarray
+    tip_error_m: np.ndarray
+    rms_error_m: np.ndarray
+    tip_sd_m: np.ndarray
+    contact: np.ndarray
+    load_position_error_m: np.ndarray
+    load_position_sd_m: np.ndarray
+    seed: int = 0
+
+    def summary(self) -> list[dict]:
+        """Per case group: cases, tip error median / 95th percentile / max (mm), mean RMS along the digit (mm),
+        share of tips within two of their standard deviations, contact rate."""
+        out = []
+        for group in dict.fromkeys(self.case.tolist()):
+            rows = self.case == group
+            tip = self.tip_error_m[rows] * 1e3
+            out.append(
+                {
+                    "case": group,
+                    "cases": int(rows.sum()),
+                    "tip_error_median_mm": float(np.median(tip)),
+                    "tip_error_p95_mm": float(np.percentile(tip, 95)),
+                    "tip_error_max_mm": float(np.max(tip)),
+                    "rms_error_mean_mm": float(np.mean(self.rms_error_m[rows]) * 1e3),
+                    "tip_within_2sd": float(np.mean(self.tip_error_m[rows] <= 2 * self.tip_sd_m[rows])),
+                    "contact_rate": float(np.mean(self.contact[rows])),
+                }
+            )
+        return out
+
+
+#: Where :func:`shape_accuracy` hangs its weight by default: every centimetre from the clamp to the tip (m).
+ACCURACY_POSITIONS_M = tuple(round(0.01 * k, 2) for k in range(1, 28))
+
+
+def shape_accuracy(
+    commands=tuple(range(8, 44)),
+    positions_from_base_m=ACCURACY_POSITIONS_M,
+    mass_kg: float = 0.025,
+    *,
+    seed: int = 0,
+    params: RigParams | None = None,
+    calibration=None,
+) -> ShapeAccuracy:
+    """Score :class:`ShapeEstimator` against the twin's true centre line over the actuation range.
+
+    Three groups of static cases, one noisy reading each (the twin's white noise and, with the cable taut, one
+    draw of its cable-guide friction per case, seeded): the bare digit upright (the designed mounting) and
+    horizontal at every command of ``commands``, and the horizontal digit with ``mass_kg`` hung at every position
+    of ``positions_from_base_m`` at every command. The twin (:func:`flexdigit.twin.static_gauges_v`, a
+    discrete elastica solved by Newton) gives the readings and the true shape; the estimator sees only the
+    readings and the command.
+
+    Examples
+    --------
+    >>> acc = shape_accuracy(commands=(8, 30), positions_from_base_m=(0.2,), seed=1)
+    >>> [(g["case"], g["cases"]) for g in acc.summary()]
+    [('bare, upright', 2), ('bare, horizontal', 2), ('weight, horizontal', 2)]
+    >>> bool(np.all(acc.tip_error_m < 0.01))
+    True
+    """
+    from flexdigit.twin.calibration import default_calibration
+    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
+
+    params = params or RigParams()
+    calibration = calibration or default_calibration()
+    a = params.actuator
+    cmds = check_array(commands, "commands", "shape_accuracy", ndim=1, min_length=1, low=a.command_min)
+    cmds = cmds.astype(int)
+    pos = check_array(positions_from_base_m, "positions_from_base_m", "shape_accuracy", ndim=1, low=0)
+    mass = check_real(mass_kg, "mass_kg", "shape_accuracy", low=0, low_open=True)
+    groups = [
+        ("bare, upright", "vertical", cmds, np.zeros(cmds.size), np.zeros(cmds.size)),
+        ("bare, horizontal", "horizontal", cmds, np.zeros(cmds.size), np.zeros(cmds.size)),
+    ]
+    cc, pp = np.meshgrid(cmds, pos, indexing="ij")
+    groups.append(("weight, horizontal", "horizontal", cc.ravel(), np.full(cc.size, mass), pp.ravel()))
+    columns: dict[str, list] = {k: [] for k in ShapeAccuracy.__dataclass_fields__ if k != "seed"}
+    for k, (name, orientation, c, m, s) in enumerate(groups):
+        volts, sol = static_gauges_v(
+            m, s, c, params=params, calibration=calibration, orientation=orientation, seed=seed + k,
+            return_solution=True,
+        )  # fmt: skip
+        est = ShapeEstimator(params, calibration, orientation=orientation).estimate(volts, command=c)
+        chain = cached_digit(params, calibration, True, orientation, DEFAULT_CELLS_PER_SECTION)
+        truth = true_centre_line_m(sol.psi_rad, chain, est.s_m)
+        dist = np.linalg.norm(est.centre_line_m - truth, axis=-1)
+        columns["case"].append(np.full(c.size, name))
+        columns["command"].append(c)
+        columns["mass_kg"].append(m)
+        columns["position_from_base_m"].append(s)
+        columns["tip_error_m"].append(dist[:, -1])
+        columns["rms_error_m"].append(np.sqrt(np.mean(dist**2, axis=1)))
+        columns["tip_sd_m"].append(np.hypot(est.tip_sd_m[:, 0], est.tip_sd_m[:, 1]))
+        columns["contact"].append(est.contact)
+        columns["load_position_error_m"].append(np.where(m > 0, est.load_position_from_base_m - s, np.nan))
+        columns["load_position_sd_m"].append(est.load_position_sd_m)
+    return ShapeAccuracy(**{k: np.concatenate(v) for k, v in columns.items()}, seed=seed)

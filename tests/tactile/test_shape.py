@@ -1,0 +1,151 @@
+"""The shape estimator (tactile.shape) against closed forms and against the twin, a solver it does not share.
+
+References: the circular arc of a constant curvature (exact); a press on a straight, weightless cantilever,
+curvature f (s_L - x) / EI at each gauge (Euler-Bernoulli, E 3.12); the twin's static solution (a discrete elastica
+solved by Newton, tests/twin/test_physics.py validates it against the elastica) for the shape, the tension and
+the gauges; seeded noise from the twin's own noise model for the uncertainty's calibration.
+
+Tolerances (named): integration of a constant curvature 1e-6 relative (1 mm cells, second order); forward model
+against the twin's gauge curvature 1 % (the twin's 3 springs per section against a 1 mm grid); noise-free tip
+within 0.5 mm of the twin's; the load found within 2 mm where the gauges can see it; at least 85 % of noisy tips
+and load positions within two of their own standard deviations (95 % for a calibrated Gaussian; the shortfall is
+the model choice, load or not, which the standard deviation does not carry).
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from flexdigit.errors import ParameterError
+from flexdigit.params import RigParams
+from flexdigit.tactile.shape import DigitBeam, ShapeEstimator, shape_accuracy, true_centre_line_m
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
+
+ARC_RTOL = 1e-6
+FORWARD_RTOL = 0.01
+NOISE_FREE_TIP_M = 0.5e-3
+LOCATE_M = 2e-3
+COVERAGE_2SD = 0.85
+
+
+def test_integrating_a_constant_curvature_gives_the_circular_arc():
+    beam = DigitBeam.from_params()
+    kappa = 4.0  # 1/m: the tip turns 62 deg over 270 mm
+    psi, r, _ = beam.integrate(np.full((1, beam.s_m.size), kappa))
+    length = beam.length_m
+    expected = np.array([math.sin(kappa * length), 1 - math.cos(kappa * length)]) / kappa
+    assert psi[0, -1] == pytest.approx(kappa * length, rel=ARC_RTOL)
+    assert r[0, -1] == pytest.approx(expected, rel=1e-5)  # chords of 1 mm: (kappa ds)^2 / 24 = 7e-7
+
+
+@pytest.mark.parametrize("s_load", [0.10, 0.20, 0.27])
+def test_press_on_a_straight_weightless_digit_matches_euler_bernoulli(s_load):
+    # weightless strip and supports (upright, the weight of the real ones would amplify the bending like a
+    # column's); a small press towards the cable side at command 8 slackens the cable
+    params = RigParams().replace(material=RigParams().material.__class__(strip_density_kg_m3=1e-9))
+    calibration = default_calibration().replace(support_mass_kg=(0.0, 0.0, 0.0))
+    est = ShapeEstimator(params, calibration, orientation="vertical", load="press")
+    force = 1e-3  # N: small deflection
+    kappa, fit, _, _ = est.predict([s_load], [force], command=8)
+    beam = est.beam_
+    expected = force * np.clip(s_load - beam.gauge_s_m, 0, None) * beam.gauge_inv_ei  # M = f (s_L - x), E 3.12
+    assert fit["T"][0] == 0.0
+    assert kappa[0] == pytest.approx(expected, rel=1e-3, abs=1e-9)
+
+
+@pytest.mark.parametrize("orientation", ["vertical", "horizontal"])
+def test_forward_model_agrees_with_the_twin(orientation):
+    commands = np.array([8, 20, 30, 40])
+    masses = np.array([0.0, 0.025, 0.0375, 0.025]) if orientation == "horizontal" else np.zeros(4)
+    positions = np.array([0.0, 0.20, 0.25, 0.15])
+    _, sol = static_gauges_v(masses, positions, commands, orientation=orientation, adc=False, return_solution=True)
+    est = ShapeEstimator(orientation=orientation)
+    kappa, fit, r, _ = est.predict(positions, masses * 9.80665, commands)
+    assert kappa == pytest.approx(sol.curvature_1_m, rel=FORWARD_RTOL, abs=0.01)
+    assert fit["T"] == pytest.approx(sol.tension_n, rel=FORWARD_RTOL)
+    chain = cached_digit(RigParams(), default_calibration(), True, orientation, DEFAULT_CELLS_PER_SECTION)
+    truth = true_centre_line_m(sol.psi_rad, chain, est.nodes_m_)
+    assert np.max(np.linalg.norm(r - truth, axis=-1)) < 1e-3
+
+
+def test_noise_free_twin_readings_give_its_shape_and_load():
+    commands = np.array([8, 8, 20, 20, 8])
+    positions = np.array([0.27, 0.20, 0.18, 0.15, 0.16])
+    masses = np.full(5, 0.025)
+    volts, sol = static_gauges_v(masses, positions, commands, orientation="horizontal", return_solution=True)
+    est = ShapeEstimator(orientation="horizontal").estimate(volts, command=commands)
+    chain = cached_digit(RigParams(), default_calibration(), True, "horizontal", DEFAULT_CELLS_PER_SECTION)
+    truth = true_centre_line_m(sol.psi_rad, chain, est.s_m)
+    assert np.all(np.linalg.norm(est.tip_m - truth[:, -1], axis=-1) < NOISE_FREE_TIP_M)
+    assert np.all(est.contact)
+    assert est.load_position_from_base_m == pytest.approx(positions, abs=LOCATE_M)
+    assert est.load_mass_kg == pytest.approx(masses, rel=0.05)
+    assert est.tension_n == pytest.approx(sol.tension_n, rel=0.02)
+
+
+def test_bare_digit_has_no_contact_and_its_tension_follows_the_command():
+    commands = np.arange(8, 44, 5)
+    volts, sol = static_gauges_v(np.zeros(commands.size), np.zeros(commands.size), commands, orientation="vertical",
+                                 seed=3, return_solution=True)  # fmt: skip
+    est = ShapeEstimator().estimate(volts, command=commands)
+    assert not np.any(est.contact)
+    assert est.tension_n == pytest.approx(sol.tension_n, abs=0.1)  # N; 10 N at command 43
+
+
+def test_locatability_zones_follow_the_gauges():
+    # chapter 6: the cable detached, a free digit; the thesis's gauges at 45, 135, 225 mm
+    est = ShapeEstimator(orientation="horizontal", cable=False, n_average=10)
+    sd = est.locatability([0.03, 0.10, 0.18, 0.26], force_n=0.245)
+    assert np.isinf(sd[0])  # before gauge 1 no gauge bends
+    assert sd[1] > 0.02  # between gauges 1 and 2 only gauge 1 bends: position and mass trade off
+    assert np.all(sd[2:] < 2e-3)  # two or three gauges bend: located to a millimetre or two
+
+
+def test_uncertainty_is_calibrated_on_seeded_noise():
+    acc = shape_accuracy(commands=tuple(range(8, 44, 7)), seed=11)
+    bare = np.char.startswith(acc.case.astype(str), "bare")
+    assert np.mean(acc.tip_error_m[bare] <= 2 * acc.tip_sd_m[bare]) >= COVERAGE_2SD
+    weight = ~bare
+    assert np.mean(acc.tip_error_m[weight] <= 2 * acc.tip_sd_m[weight] + 1e-3) >= COVERAGE_2SD
+    located = weight & acc.contact
+    err = np.abs(acc.load_position_error_m[located])
+    assert np.mean(err <= 2 * acc.load_position_sd_m[located]) >= COVERAGE_2SD
+    # the bare digit's shape from one noisy reading: within 2 mm at the tip
+    assert np.max(acc.tip_error_m[bare]) < 2e-3
+
+
+def test_live_warm_start_matches_a_cold_estimate():
+    volts = static_gauges_v([0.025], [0.22], [15], orientation="horizontal")
+    est = ShapeEstimator(orientation="horizontal")
+    cold = est.estimate(volts, command=15)
+    warm = est.estimate(volts, command=15, start=cold)
+    assert warm.centre_line_m == pytest.approx(cold.centre_line_m, abs=1e-6)
+    assert warm.load_position_from_base_m == pytest.approx(cold.load_position_from_base_m, abs=1e-4)
+
+
+def test_row_is_json_ready():
+    import json
+
+    volts = static_gauges_v([0.025], [0.22], [15], orientation="horizontal")
+    row = ShapeEstimator(orientation="horizontal").estimate(volts, command=15).row(0, every=10)
+    text = json.dumps(row, allow_nan=False)
+    assert row["contact"] is True and len(row["s_m"]) == 28  # every 10 mm and the tip
+    assert abs(row["load_position_from_base_m"] - 0.22) < LOCATE_M and "NaN" not in text
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda e: e.estimate([[0.1, 0.2]]), "3 gauge columns"),
+        (lambda e: e.estimate([0.1, np.nan, 0.2]), "gauges_v"),
+        (lambda e: e.estimate([0.1, 0.2, 0.3], command=300), "command"),
+        (lambda e: ShapeEstimator(load="poke").estimate([0.1, 0.2, 0.3]), "load"),
+        (lambda e: ShapeEstimator(n_average=0).estimate([0.1, 0.2, 0.3]), "n_average"),
+        (lambda e: ShapeEstimator(orientation="sideways").estimate([0.1, 0.2, 0.3]), "orientation"),
+    ],
+)
+def test_bad_input_is_named(call, match):
+    with pytest.raises(ParameterError, match=match):
+        call(ShapeEstimator())
