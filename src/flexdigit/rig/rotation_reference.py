@@ -167,15 +167,16 @@ def rotations_from_deflections(
 
     Examples
     --------
-    A digit whose sections carry 25, 35 and 40 % of the rotation, read to 0.5 mm at the gauges over a sweep:
+    A digit whose sections carry 25, 35 and 40 % of the rotation, read to 0.5 mm at the gauges and the tip:
 
     >>> shape = DigitShape.from_params()
     >>> true = np.radians([5.0, 10, 20, 30, 40])
     >>> curv = np.outer(true, np.array([0.25, 0.35, 0.40]) / shape.flex_length_m)
-    >>> y = np.array([shape.deflection_m(k, [0.045, 0.135, 0.225]) for k in curv])
-    >>> rot, cov, rms, shares = rotations_from_deflections([0.045, 0.135, 0.225], np.round(y * 2000) / 2000)
-    >>> np.round(rot, 1).tolist(), bool(np.sqrt(cov[-1, -1]) < 0.3)
-    ([5.0, 10.0, 20.0, 30.0, 40.0], True)
+    >>> points = [0.045, 0.135, 0.225, 0.27]
+    >>> y = np.array([shape.deflection_m(k, points) for k in curv])
+    >>> rot, cov, rms, shares = rotations_from_deflections(points, np.round(y * 2000) / 2000)
+    >>> bool(np.all(np.abs(rot - np.degrees(true)) < 3 * np.sqrt(np.diag(cov)))), bool(np.sqrt(cov[-1, -1]) < 0.5)
+    (True, True)
     """
     from scipy.optimize import least_squares
 
