@@ -95,3 +95,24 @@ def test_hinf_gamma_is_the_thesis_design():
 
     assert METRICS["hinf_gamma"](ParameterSet()) == pytest.approx(thesis_design(5.0).gamma, rel=1e-9)
     assert math.isfinite(METRICS["hinf_gamma"](ParameterSet()))
+
+
+def test_batched_metrics_equal_the_scalar_twin():
+    # the metrics run on the batched twin; the scalar twin's chain (Chain.linear_modes, Chain.solve_static) is
+    # the reference it vectorises
+    from flexdigit.studies.metrics import _chain, evaluate_many
+    from flexdigit.studies.spec import load_spec
+    from flexdigit.twin.twin import cable_shortening_m
+
+    spec = load_spec("thesis-tolerances")
+    rng = np.random.default_rng(1)
+    sets = [spec.parameter_set(row) for row in spec.values_from_unit(rng.random((6, len(spec.parameters))))]
+    names = ["release_wn_rad_s", "release_zeta", "rotation_gain_deg_per_command"]
+    together = evaluate_many(sets, names)
+    for ps, values in zip(sets, together, strict=True):
+        chain = _chain(ps)
+        wn, zeta = chain.linear_modes()
+        tips = chain.solve_static(cable_shortening_m=cable_shortening_m(np.array([8, 43]), ps.params)).psi_rad[:, -1]
+        assert values["release_wn_rad_s"] == pytest.approx(wn[0], rel=1e-9)
+        assert values["release_zeta"] == pytest.approx(zeta[0], rel=1e-7)
+        assert values["rotation_gain_deg_per_command"] == pytest.approx(np.degrees(tips[1] - tips[0]) / 35, rel=1e-9)

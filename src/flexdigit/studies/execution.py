@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.studies.metrics import MetricContext, evaluate
+from flexdigit.studies.metrics import MetricContext
 
 __all__ = ["Journal", "RowRecord", "evaluate_rows", "run_rows", "parse_scheduler", "JOURNAL_NAME"]
 
@@ -82,18 +82,30 @@ def evaluate_rows(build, rows, values, metrics, context: MetricContext, task_key
     """
     from threadpoolctl import threadpool_limits
 
-    out = []
+    from flexdigit.studies.metrics import evaluate_many
+
+    out: list[RowRecord] = []
     with threadpool_limits(1):  # one core per worker: BLAS threads would fight the other workers
+        start = time.perf_counter()
+        built, sets = [], []
         for i, row in enumerate(rows):
-            start = time.perf_counter()
-            label = f"row {int(row)}"
             try:
-                ps = build(values[i], label)
-                out.append(RowRecord(int(row), evaluate(ps, metrics, context), None, time.perf_counter() - start))
-            except Exception as exc:  # noqa: BLE001 - any failure of one evaluation is that row's result
-                message = f"{type(exc).__name__}: {exc}".splitlines()[0]
-                out.append(RowRecord(int(row), {}, message, time.perf_counter() - start))
-    return out
+                sets.append(build(values[i], f"row {int(row)}"))
+                built.append(int(row))
+            except Exception as exc:  # noqa: BLE001 - a row the rig refuses is that row's result
+                out.append(RowRecord(int(row), {}, _message(exc)))
+        results = evaluate_many(sets, metrics, context)
+        each = (time.perf_counter() - start) / max(1, len(rows))
+        for row, res in zip(built, results, strict=True):
+            if isinstance(res, Exception):
+                out.append(RowRecord(row, {}, _message(res), each))
+            else:
+                out.append(RowRecord(row, res, None, each))
+    return sorted(out, key=lambda r: r.row)
+
+
+def _message(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}".splitlines()[0]
 
 
 class Journal:

@@ -98,6 +98,7 @@ class Metric:
     description: str
     func: Callable[[ParameterSet, MetricContext], float]
     thesis_ref: str = ""
+    batched: Callable[[list, MetricContext], np.ndarray] | None = None
 
     def __call__(self, parameter_set: ParameterSet, context: MetricContext | None = None) -> float:
         return float(self.func(parameter_set, context or MetricContext()))
@@ -107,11 +108,15 @@ class Metric:
 METRICS: dict[str, Metric] = {}
 
 
-def register_metric(name: str, unit: str, description: str, thesis_ref: str = ""):
-    """Decorator adding a plain function ``f(parameter_set, context) -> float`` to :data:`METRICS`."""
+def register_metric(name: str, unit: str, description: str, thesis_ref: str = "", batched=None):
+    """Decorator adding a plain function ``f(parameter_set, context) -> float`` to :data:`METRICS`.
+
+    ``batched(parameter_sets, context) -> ndarray`` optionally computes the same numbers for many parameter sets
+    at once (on the batched twin); a test holds the two to each other.
+    """
 
     def wrap(func):
-        METRICS[name] = Metric(name, unit, description, func, thesis_ref)
+        METRICS[name] = Metric(name, unit, description, func, thesis_ref, batched)
         return func
 
     return wrap
@@ -123,11 +128,51 @@ def evaluate(parameter_set: ParameterSet, names, context: MetricContext | None =
     return {name: METRICS[name](parameter_set, context) for name in names}
 
 
+def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -> list[dict | Exception]:
+    """Every named metric of many parameter sets: the metrics with a batched form run once over all of them.
+
+    Returns, per parameter set, its metric values or the exception that stopped it (a batched metric that fails
+    is retried one set at a time, so one bad set does not take the others down).
+    """
+    context = context or MetricContext()
+    out: list[dict | Exception] = [{} for _ in parameter_sets]
+    names = list(names)
+    batched = [n for n in names if METRICS[n].batched is not None]
+    if batched and len(parameter_sets) > 1:
+        try:
+            columns = {n: np.asarray(METRICS[n].batched(parameter_sets, context), dtype=float) for n in batched}
+            for i, values in enumerate(out):
+                values.update({n: float(columns[n][i]) for n in batched})
+        except Exception:  # noqa: BLE001 - find the culprit one set at a time below
+            pass
+    for i, ps in enumerate(parameter_sets):
+        try:
+            for n in names:
+                if n not in out[i]:
+                    out[i][n] = METRICS[n](ps, context)
+        except Exception as exc:  # noqa: BLE001 - any failure of one evaluation is that set's result
+            out[i] = exc
+    return out
+
+
 # ------------------------------------------------------------------------------------------------ the digit
 def _chain(ps: ParameterSet, cells: int | None = None):
     from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit
 
     return cached_digit(ps.params, ps.calibration, True, "vertical", cells or DEFAULT_CELLS_PER_SECTION)
+
+
+def _chains(parameter_sets):
+    """The parameter sets' digits (housed, tip up as designed, 2.2.4) on the batched twin, with their cables."""
+    from flexdigit.twin.batched import BatchedChains
+
+    pre = [ps.antagonist_pretension_n for ps in parameter_sets]
+    if all(p is None for p in pre):
+        return BatchedChains([_chain(ps) for ps in parameter_sets])
+    # a batch mixing one and two cables: a single cable is the pair with the second one never taut
+    return BatchedChains(
+        [_chain(ps) for ps in parameter_sets], [0.0 if p is None else p for p in pre], [p is not None for p in pre]
+    )
 
 
 def _mid_shortening_m(ps: ParameterSet) -> float:
@@ -137,61 +182,102 @@ def _mid_shortening_m(ps: ParameterSet) -> float:
     return float(cable_shortening_m(0.5 * sum(ps.params.actuator.operating_commands), ps.params))
 
 
+_BATCH_CACHE: list = [None, None]  # (the list of parameter sets, its results): the metrics share one pass
+
+
+def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
+    """The twin metrics of many parameter sets at once (:class:`flexdigit.twin.batched.BatchedChains`).
+
+    Release mode (cable removed), the actuated mode and the tip's rotational stiffness linearised mid-range, the
+    rotation per command over the operating commands, and the linearised actuated digit's matrices (for
+    :func:`actuated_model`).
+    """
+    from flexdigit.twin.twin import cable_shortening_m
+
+    if _BATCH_CACHE[0] is parameter_sets:
+        return _BATCH_CACHE[1]
+    chains = _chains(parameter_sets)
+    wn, zeta = chains.linear_modes()
+    commands = np.array([ps.params.actuator.operating_commands for ps in parameter_sets], dtype=float)
+    ends = np.array(
+        [cable_shortening_m(np.array(ps.params.actuator.operating_commands), ps.params) for ps in parameter_sets]
+    )
+    mid = np.array([_mid_shortening_m(ps) for ps in parameter_sets])
+    tip_lo = chains.solve_static(ends[:, 0])[:, -1]
+    tip_hi = chains.solve_static(ends[:, 1])[:, -1]
+    psi_mid = chains.solve_static(mid)
+    act_wn, _ = chains.linear_modes(psi_mid, mid)
+    moment = 1e-4  # N m: small, the linear stiffness about the mid-range shape
+    turned = chains.solve_static(mid, tip_moment_nm=np.full(len(parameter_sets), moment), psi0=psi_mid)[:, -1]
+    out = {
+        "release_wn_rad_s": wn,
+        "release_zeta": zeta,
+        "actuated_wn_rad_s": act_wn,
+        "rotation_gain_deg_per_command": np.degrees(tip_hi - tip_lo) / (commands[:, 1] - commands[:, 0]),
+        "tip_stiffness_nm_per_rad": moment / (turned - psi_mid[:, -1]),
+        "_linear": chains.linearised(psi_mid, mid),
+    }
+    _BATCH_CACHE[:] = [parameter_sets, out]
+    return out
+
+
+def _batched(name):
+    return lambda parameter_sets, ctx: twin_figures(parameter_sets)[name]
+
+
+def _one(name):
+    return lambda ps, ctx: float(twin_figures([ps])[name][0])
+
+
 @lru_cache(maxsize=4096)
 def actuated_model(ps: ParameterSet):
-    """The twin's digit linearised with the cable taut, mid-range: cable shortening (m) -> tip rotation (rad).
+    """The twin's digit linearised with the cable(s) taut, mid-range: cable shortening (m) -> tip rotation (rad).
 
     ``M psi'' + C psi' + K psi = b u`` about the static shape, ``M = A cos(psi_j - psi_k)``, ``K`` the tangent
-    stiffness (springs, gravity, cable ``k_c e^2``), ``b = k_c e`` on the tip link (:mod:`flexdigit.twin.digit`).
+    stiffness (springs, gravity, ``k_c e^2`` per taut cable), ``b = k_c e`` per taut cable on the tip link
+    (:mod:`flexdigit.twin.digit`, :meth:`flexdigit.twin.batched.BatchedChains.linearised`).
     """
     import control as ct
 
-    chain = _chain(ps)
-    sol = chain.solve_static(cable_shortening_m=[_mid_shortening_m(ps)])
-    psi = sol.psi_rad[0]
-    n = chain.n
-    m = chain.a_mass * np.cos(psi[:, None] - psi[None, :])
-    k = chain.tangent_stiffness(psi, chain.g_gravity, cable_taut=True)
-    b = np.zeros((n, 1))
-    b[-1, 0] = chain.eccentricity * chain.cable_stiffness
-    a = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(m, k), -np.linalg.solve(m, chain.c_psi)]])
-    c = np.zeros((1, 2 * n))
-    c[0, n - 1] = 1.0
-    return ct.ss(a, np.vstack([np.zeros((n, 1)), np.linalg.solve(m, b)]), c, np.zeros((1, 1)))
+    m, c, k, b = (x[0] for x in twin_figures([ps])["_linear"])
+    n = m.shape[0]
+    a = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(m, k), -np.linalg.solve(m, c)]])
+    out = np.zeros((1, 2 * n))
+    out[0, n - 1] = 1.0
+    return ct.ss(a, np.vstack([np.zeros((n, 1)), np.linalg.solve(m, b[:, None])]), out, np.zeros((1, 1)))
 
 
-def _modes(ps: ParameterSet, cable_taut: bool) -> tuple[float, float]:
-    chain = _chain(ps)
-    psi = None
-    if cable_taut:
-        psi = chain.solve_static(cable_shortening_m=[_mid_shortening_m(ps)]).psi_rad[0]
-    wn, zeta = chain.linear_modes(psi, cable_taut=cable_taut)
-    return float(wn[0]), float(zeta[0])
-
-
-@register_metric("release_wn_rad_s", "rad/s", "first mode of the housed digit, cable removed", "table 3.2")
-def release_wn_rad_s(ps: ParameterSet, ctx: MetricContext) -> float:
-    return _modes(ps, False)[0]
-
-
-@register_metric("release_zeta", "", "damping ratio of that mode", "table 3.2")
-def release_zeta(ps: ParameterSet, ctx: MetricContext) -> float:
-    return _modes(ps, False)[1]
-
-
-@register_metric("actuated_wn_rad_s", "rad/s", "first mode with the cable taut, mid operating range", "3.3")
-def actuated_wn_rad_s(ps: ParameterSet, ctx: MetricContext) -> float:
-    return _modes(ps, True)[0]
-
-
-@register_metric("rotation_gain_deg_per_command", "deg/command", "tip rotation per command over 8..43", "E 3.15")
-def rotation_gain_deg_per_command(ps: ParameterSet, ctx: MetricContext) -> float:
-    from flexdigit.twin.twin import cable_shortening_m
-
-    lo, hi = ps.params.actuator.operating_commands
-    sol = _chain(ps).solve_static(cable_shortening_m=cable_shortening_m(np.array([lo, hi]), ps.params))
-    tip = np.degrees(sol.psi_rad[:, -1])
-    return float((tip[1] - tip[0]) / (hi - lo))
+release_wn_rad_s = register_metric(
+    "release_wn_rad_s",
+    "rad/s",
+    "first mode of the housed digit, cable removed",
+    "table 3.2",
+    batched=_batched("release_wn_rad_s"),
+)(_one("release_wn_rad_s"))
+release_zeta = register_metric(
+    "release_zeta", "", "damping ratio of that mode", "table 3.2", batched=_batched("release_zeta")
+)(_one("release_zeta"))
+actuated_wn_rad_s = register_metric(
+    "actuated_wn_rad_s",
+    "rad/s",
+    "first mode with the cable(s) taut, mid operating range",
+    "3.3",
+    batched=_batched("actuated_wn_rad_s"),
+)(_one("actuated_wn_rad_s"))
+rotation_gain_deg_per_command = register_metric(
+    "rotation_gain_deg_per_command",
+    "deg/command",
+    "tip rotation per command over the operating commands",
+    "E 3.15",
+    batched=_batched("rotation_gain_deg_per_command"),
+)(_one("rotation_gain_deg_per_command"))
+tip_stiffness_nm_per_rad = register_metric(
+    "tip_stiffness_nm_per_rad",
+    "N m/rad",
+    "tip moment per tip rotation, cable(s) taut mid-range (rigidity, 2.1)",
+    "2.1",
+    batched=_batched("tip_stiffness_nm_per_rad"),
+)(_one("tip_stiffness_nm_per_rad"))
 
 
 # -------------------------------------------------------------------------------------------------- control

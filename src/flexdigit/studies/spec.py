@@ -96,10 +96,12 @@ SHIPPED_SPECS = ("thesis-tolerances",)
 
 @dataclass(frozen=True)
 class ParameterSet:
-    """One rig to evaluate: its parameters and its twin calibration."""
+    """One rig to evaluate: its parameters, its twin calibration and, for designs beyond the thesis, a second
+    antagonistic cable (its pretension in N, both cables; None: the thesis's single cable, 2.1)."""
 
     params: RigParams = field(default_factory=RigParams)
     calibration: Calibration = field(default_factory=default_calibration)
+    antagonist_pretension_n: float | None = None
 
 
 @dataclass(frozen=True)
@@ -280,7 +282,7 @@ def apply_values(baseline: ParameterSet, parameters, values: dict, label: str) -
         params = dataclasses.replace(baseline.params, **sections) if sections else baseline.params
     except (ParameterError, DataFileError, TypeError) as exc:
         raise ParameterError(f"{label}: [{where}] {exc}") from None
-    return ParameterSet(params, calibration)
+    return ParameterSet(params, calibration, baseline.antagonist_pretension_n)
 
 
 # --------------------------------------------------------------------------------------------------- reading
