@@ -12,17 +12,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         subparsers,
         "study",
         _study,
-        help="sensitivity study (Morris, Sobol) over a spec of uncertain parameters, on Dask",
-        description="Run a study spec (a TOML file, or a shipped one: thesis-tolerances) on a local "
+        help="sensitivity (Morris, Sobol) or design study (Pareto front) over a spec, on Dask",
+        description="Run a study spec (a TOML file, or a shipped one: thesis-tolerances, thesis-design) on a local "
         "Dask cluster (one worker per core) or an existing one; rerunning with the same --out resumes it.",
     )
-    p.add_argument("kind", choices=("sensitivity",), help="which study")
-    p.add_argument("spec", help="study spec TOML, or a shipped name (thesis-tolerances)")
+    p.add_argument("kind", choices=("sensitivity", "design"), help="which study")
+    p.add_argument("spec", help="study spec TOML, or a shipped name (thesis-tolerances, thesis-design)")
     p.add_argument("--out", required=True, help="directory for the journal, tables and figures (created)")
     p.add_argument("--scheduler", default=None, help="an existing Dask scheduler, tcp://HOST:PORT")
     p.add_argument("--workers", type=int, default=None, help="local Dask workers (default: one per core; 0: no Dask)")
     p.add_argument("--n", type=int, default=None, help="sensitivity: Sobol base samples N (a power of 2)")
     p.add_argument("--second-order", action="store_true", help="sensitivity: also second-order indices S2")
+    p.add_argument("--samples", type=int, default=None, help="design: candidate designs to evaluate (0: all)")
     p.add_argument("--force", action="store_true", help="start over: replace the journal and outputs in --out")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 
@@ -44,7 +45,9 @@ def _study(args: argparse.Namespace) -> CommandResult:
     if not out.parent.is_dir():
         raise FileNotFoundError(f"{out}: the directory {out.parent} does not exist")
     spec = load_spec(args.spec)
-    return _sensitivity(args, spec, out)
+    if args.kind == "sensitivity":
+        return _sensitivity(args, spec, out)
+    return _design(args, spec, out)
 
 
 def _sensitivity(args, spec, out) -> CommandResult:
@@ -79,3 +82,23 @@ def _sensitivity(args, spec, out) -> CommandResult:
     if result.failed_rows:
         lines.append(f"  {len(result.failed_rows)} rows failed (listed in summary.json)")
     return CommandResult(data=summary, text="\n".join(lines))
+
+
+def _design(args, spec, out) -> CommandResult:
+    from flexdigit.studies.design import DesignSettings, run_design, write_design_outputs
+
+    settings = DesignSettings.from_spec(spec, samples=args.samples)
+    out.mkdir(exist_ok=True)
+    result = run_design(
+        spec,
+        out,
+        settings=settings,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        force=args.force,
+        progress=not args.no_progress,
+    )
+    paths = write_design_outputs(result, out, force=args.force)
+    summary = result.summary()
+    summary["files"] = {k: str(v) for k, v in paths.items()}
+    return CommandResult(data=summary, text=result.text())

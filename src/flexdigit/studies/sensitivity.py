@@ -425,3 +425,32 @@ def write_outputs(result: SensitivityResult, out_dir: str | Path, *, force: bool
     with atomic_write(paths["summary"], "w", force=force) as fh:
         json.dump(to_jsonable(summary), fh, indent=2)
     return paths
+
+
+#: The metrics the batched twin computes for a whole task at once: the report's study runs on these.
+TWIN_METRICS = (
+    "release_wn_rad_s",
+    "release_zeta",
+    "actuated_wn_rad_s",
+    "rotation_gain_deg_per_command",
+    "tip_stiffness_nm_per_rad",
+)
+
+
+def twin_sensitivity(sobol_n: int = 64, *, seed: int = 0, spec: StudySpec | None = None) -> SensitivityResult:
+    """The shipped tolerances' Sobol indices for the twin's metrics (:data:`TWIN_METRICS`), in this process.
+
+    What ``flexdigit reproduce`` shows (no Dask cluster start-up inside the report): every evaluation is one pass
+    of the batched twin, so 2N (d + 2) rows cost a few seconds. The control and tactile metrics need a controller
+    design or a Monte Carlo per row: ``flexdigit study sensitivity thesis-tolerances`` computes them on Dask.
+    """
+    import dataclasses
+    import tempfile
+
+    from flexdigit.studies.spec import load_spec
+
+    spec = spec or load_spec("thesis-tolerances")
+    spec = dataclasses.replace(spec, metrics=TWIN_METRICS, seed=seed)
+    settings = SensitivitySettings(morris_trajectories=4, sobol_n=sobol_n, chunk_size=10**6, bootstrap=200)
+    with tempfile.TemporaryDirectory() as tmp:
+        return run_sensitivity(spec, tmp, settings=settings, workers=0, progress=False)

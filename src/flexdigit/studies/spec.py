@@ -91,7 +91,7 @@ DISTRIBUTIONS: dict[str, tuple[str, ...]] = {
 CHECK_SIGMAS = 6.0
 SECTIONS = ("geometry", "material", "sensors", "actuator", "dynamics", "calibration")
 #: Specs shipped with flexdigit (``flexdigit study sensitivity thesis-tolerances``).
-SHIPPED_SPECS = ("thesis-tolerances",)
+SHIPPED_SPECS = ("thesis-tolerances", "thesis-design")
 
 
 @dataclass(frozen=True)
@@ -348,6 +348,8 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
             raise ParameterError(f"{source}: [study] metrics lists a metric twice: {metrics!r}")
     baseline = _baseline(study, source, base_dir)
     parameters = _parameters(doc.get("parameters", {}), baseline, source)
+    if not parameters and "design" not in doc:
+        raise ParameterError(f"{source}: no [parameters.SECTION.FIELD] tables: nothing is uncertain")
     names = [p.name for p in parameters]
     for p in parameters:
         if p.is_factor and any(q.startswith(f"{p.section}.{p.field}[") and q != p.name for q in names):
@@ -436,8 +438,6 @@ def _parameters(table, baseline: ParameterSet, source: str) -> list[UncertainPar
                     )
                 continue
             out.append(_parameter(section, name, None, float(nominal), entry, where, source))
-    if not out:
-        raise ParameterError(f"{source}: no [parameters.SECTION.FIELD] tables: nothing is uncertain")
     for p in out:
         for end in p.check_range():
             try:
