@@ -98,6 +98,18 @@ def test_candidates_sample_keeps_the_thesis_design():
     settings = DesignSettings(samples=25)
     got = candidates(settings, seed=3)
     assert len(got) == 25 and any(c.is_thesis for c in got)
+    # and the thesis design's equal-spacing twins, the designs the front is read against
+    assert {
+        c.gauge_count
+        for c in got
+        if c.layout == "equal"
+        and c.bridge == "half"
+        and c.size == 1.0
+        and c.adc_bits == 16
+        and c.pretension_n == 0
+        and c.eccentricity_m == 5.715e-3
+        and abs(c.servo_deg_per_command - 219 / 254) < 1e-9
+    } == {3, 4, 5, 6}
     assert got == candidates(settings, seed=3) != candidates(settings, seed=4)
     assert all(c.gauge_count == 3 for c in candidates(DesignSettings(), 0) if c.layout == "thesis")
 

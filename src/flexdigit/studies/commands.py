@@ -50,14 +50,11 @@ def _study(args: argparse.Namespace) -> CommandResult:
     return _design(args, spec, out)
 
 
-def _sensitivity(args, spec, out) -> CommandResult:
-    from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity, write_outputs
-
-    overrides = {"sobol_n": args.n, "second_order": True if args.second_order else None}
-    settings = SensitivitySettings.from_spec(spec, **overrides)
+def _run(args, out, run, settings, write):
+    """Run a study in ``out`` (created), write its files, return ``(result, summary)``."""
     out.mkdir(exist_ok=True)
-    result = run_sensitivity(
-        spec,
+    result = run(
+        args.spec_obj,
         out,
         settings=settings,
         workers=args.workers,
@@ -65,9 +62,18 @@ def _sensitivity(args, spec, out) -> CommandResult:
         force=args.force,
         progress=not args.no_progress,
     )
-    paths = write_outputs(result, out, force=args.force)
+    paths = write(result, out, force=args.force)
     summary = result.summary()
     summary["files"] = {k: str(v) for k, v in paths.items()}
+    return result, summary
+
+
+def _sensitivity(args, spec, out) -> CommandResult:
+    from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity, write_outputs
+
+    overrides = {"sobol_n": args.n, "second_order": True if args.second_order else None}
+    args.spec_obj = spec
+    result, summary = _run(args, out, run_sensitivity, SensitivitySettings.from_spec(spec, **overrides), write_outputs)
     lines = [f"{spec.name}: {summary['evaluations']} evaluations of {len(spec.parameters)} parameters -> {out}"]
     for metric, entry in summary["metrics"].items():
         if metric in result.refused:
@@ -87,18 +93,7 @@ def _sensitivity(args, spec, out) -> CommandResult:
 def _design(args, spec, out) -> CommandResult:
     from flexdigit.studies.design import DesignSettings, run_design, write_design_outputs
 
+    args.spec_obj = spec
     settings = DesignSettings.from_spec(spec, samples=args.samples)
-    out.mkdir(exist_ok=True)
-    result = run_design(
-        spec,
-        out,
-        settings=settings,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        force=args.force,
-        progress=not args.no_progress,
-    )
-    paths = write_design_outputs(result, out, force=args.force)
-    summary = result.summary()
-    summary["files"] = {k: str(v) for k, v in paths.items()}
+    result, summary = _run(args, out, run_design, settings, write_design_outputs)
     return CommandResult(data=summary, text=result.text())

@@ -19,7 +19,8 @@ size has on ... stiffness and stability"; 2.3.1 names the quarter, half and full
 - ``size`` [0.75, 1.0, 1.25]: every length along the digit scaled (sections, supports, gauges), the strip's
   cross-section and the cable's eccentricity kept;
 - ``samples`` [0]: 0 evaluates every combination; a positive number evaluates that many, drawn without
-  replacement with the study's seed, always including the thesis design.
+  replacement with the study's seed, always including the thesis design and its equal-spacing twins (the thesis
+  design with 4, 5, 6 equally spaced gauges), the designs the front is read against.
 
 Every candidate is evaluated with the 20 ms controller designed for it (:class:`MetricContext` ``redesign``):
 chapter 6's localisation Bayes limit and blind zone against the closed loop's settling time, overshoot and gain
@@ -41,7 +42,7 @@ import numpy as np
 
 from flexdigit.errors import ParameterError
 from flexdigit.params import BRIDGE_TYPES, RigParams
-from flexdigit.studies.execution import JOURNAL_NAME, Journal, run_rows
+from flexdigit.studies.execution import run_study
 from flexdigit.studies.metrics import METRICS, MetricContext
 from flexdigit.studies.spec import ParameterSet, StudySpec
 
@@ -216,13 +217,18 @@ def candidates(settings: DesignSettings, seed: int) -> list[Candidate]:
         raise ParameterError("[design]: no candidate (the 'thesis' layout has 3 gauges: add 3 to gauge_counts)")
     if settings.samples and settings.samples < len(combos):
         rng = np.random.default_rng([seed, 17])
-        pick = set(rng.choice(len(combos), settings.samples, replace=False).tolist())
-        thesis = [i for i, c in enumerate(combos) if c.is_thesis]
-        if thesis and thesis[0] not in pick:
-            pick.discard(max(pick))
-            pick.add(thesis[0])
+        # the designs the front is read against always go in: the thesis design and its equal-spacing twins
+        marked = [i for i, c in enumerate(combos) if c.is_thesis or _is_equal_twin(c)]
+        rest = [i for i in range(len(combos)) if i not in set(marked)]
+        extra = max(0, settings.samples - len(marked))
+        pick = set(marked[: settings.samples]) | set(rng.choice(rest, min(extra, len(rest)), replace=False).tolist())
         combos = [combos[i] for i in sorted(pick)]
     return combos
+
+
+def _is_equal_twin(c: Candidate) -> bool:
+    """An equal-spacing design that is the thesis design in every other option."""
+    return c.layout == "equal" and dataclasses.replace(c, layout="thesis", gauge_count=3).is_thesis
 
 
 # ----------------------------------------------------------------------------------------------------- layouts
@@ -428,11 +434,9 @@ class DesignResult:
         for i, c in enumerate(self.candidates):
             if c.is_thesis:
                 marks["thesis layout"] = i
-        thesis = next((c for c in self.candidates if c.is_thesis), None)
-        if thesis is not None:
-            for i, c in enumerate(self.candidates):
-                if c.layout == "equal" and dataclasses.replace(c, layout="thesis", gauge_count=3) == thesis:
-                    marks[f"equal spacing, {c.gauge_count} gauges"] = i
+        for i, c in enumerate(self.candidates):
+            if _is_equal_twin(c):
+                marks[f"equal spacing, {c.gauge_count} gauges"] = i
         return marks
 
     def summary(self) -> dict:
@@ -522,28 +526,24 @@ def run_design(
     fingerprint = hashlib.sha256(
         json.dumps([spec.fingerprint(), dataclasses.asdict(settings)], sort_keys=True, default=repr).encode()
     ).hexdigest()[:16]
-    journal = Journal(
-        Path(out_dir) / JOURNAL_NAME,
-        {"kind": "design", "study": spec.name, "fingerprint": fingerprint, "rows": len(cands)},
-        force=force,
-    )
+    header = {"kind": "design", "study": spec.name, "fingerprint": fingerprint, "rows": len(cands)}
     build = _Builder(spec.baseline, cands, settings.grid_step_m, spec.seed)
     values = np.arange(len(cands), dtype=float)[:, None]
-    records = run_rows(
+    outputs, errors = run_study(
         build,
         values,
         metrics,
         context,
-        journal,
+        out_dir,
+        header,
         seed=spec.seed,
         chunk_size=settings.chunk_size,
         workers=workers,
         scheduler=scheduler,
+        force=force,
         progress=progress,
         label=f"design {spec.name}",
     )
-    outputs = {m: np.array([records[i].values.get(m, math.nan) for i in range(len(cands))]) for m in metrics}
-    errors = [records[i].error for i in range(len(cands))]
     result = DesignResult(spec, settings, cands, outputs, errors, np.array([], dtype=int))
     result.front = pareto_front(result.objective_matrix())
     if "d-optimal" in settings.layouts:

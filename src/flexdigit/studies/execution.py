@@ -39,7 +39,7 @@ import numpy as np
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.studies.metrics import MetricContext
 
-__all__ = ["Journal", "RowRecord", "evaluate_rows", "run_rows", "parse_scheduler", "JOURNAL_NAME"]
+__all__ = ["Journal", "RowRecord", "evaluate_rows", "run_rows", "run_study", "parse_scheduler", "JOURNAL_NAME"]
 
 JOURNAL_NAME = "journal.jsonl"
 JOURNAL_FORMAT = 1
@@ -318,6 +318,43 @@ def run_rows(
                 journal.append(records)
                 bar.update(task, advance=len(rows))
     return dict(journal.records)
+
+
+def run_study(
+    build,
+    values,
+    metrics,
+    context,
+    out_dir,
+    header: dict,
+    *,
+    seed: int,
+    chunk_size: int,
+    workers=None,
+    scheduler=None,
+    force: bool = False,
+    progress: bool = True,
+    label: str = "study",
+):
+    """:func:`run_rows` with the study's journal in ``out_dir``; returns ``(outputs, errors)``: per metric an array
+    over the rows (NaN where a row failed) and per row its error or None."""
+    journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
+    records = run_rows(
+        build,
+        values,
+        metrics,
+        context,
+        journal,
+        seed=seed,
+        chunk_size=chunk_size,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        label=label,
+    )
+    n = len(values)
+    outputs = {m: np.array([records[i].values.get(m, math.nan) for i in range(n)]) for m in metrics}
+    return outputs, [records[i].error for i in range(n)]
 
 
 def warn(message: str) -> None:

@@ -247,37 +247,20 @@ def actuated_model(ps: ParameterSet):
     return ct.ss(a, np.vstack([np.zeros((n, 1)), np.linalg.solve(m, b[:, None])]), out, np.zeros((1, 1)))
 
 
-release_wn_rad_s = register_metric(
-    "release_wn_rad_s",
-    "rad/s",
-    "first mode of the housed digit, cable removed",
-    "table 3.2",
-    batched=_batched("release_wn_rad_s"),
-)(_one("release_wn_rad_s"))
-release_zeta = register_metric(
-    "release_zeta", "", "damping ratio of that mode", "table 3.2", batched=_batched("release_zeta")
-)(_one("release_zeta"))
-actuated_wn_rad_s = register_metric(
-    "actuated_wn_rad_s",
-    "rad/s",
-    "first mode with the cable(s) taut, mid operating range",
-    "3.3",
-    batched=_batched("actuated_wn_rad_s"),
-)(_one("actuated_wn_rad_s"))
-rotation_gain_deg_per_command = register_metric(
-    "rotation_gain_deg_per_command",
-    "deg/command",
-    "tip rotation per command over the operating commands",
-    "E 3.15",
-    batched=_batched("rotation_gain_deg_per_command"),
-)(_one("rotation_gain_deg_per_command"))
-tip_stiffness_nm_per_rad = register_metric(
-    "tip_stiffness_nm_per_rad",
-    "N m/rad",
-    "tip moment per tip rotation, cable(s) taut mid-range (rigidity, 2.1)",
-    "2.1",
-    batched=_batched("tip_stiffness_nm_per_rad"),
-)(_one("tip_stiffness_nm_per_rad"))
+_TWIN_METRICS = (
+    ("release_wn_rad_s", "rad/s", "first mode of the housed digit, cable removed", "table 3.2"),
+    ("release_zeta", "", "damping ratio of that mode", "table 3.2"),
+    ("actuated_wn_rad_s", "rad/s", "first mode with the cable(s) taut, mid operating range", "3.3"),
+    ("rotation_gain_deg_per_command", "deg/command", "tip rotation per command over the operating commands", "E 3.15"),
+    ("tip_stiffness_nm_per_rad", "N m/rad", "tip moment per tip rotation, cable(s) taut mid-range (rigidity)", "2.1"),
+)
+for _name, _unit, _text, _ref in _TWIN_METRICS:
+    register_metric(_name, _unit, _text, _ref, batched=_batched(_name))(_one(_name))
+
+
+def rotation_gain_deg_per_command(ps: ParameterSet, ctx: MetricContext | None = None) -> float:
+    """Tip rotation per servo command (deg) over the operating commands (E 3.15), from the twin's statics."""
+    return METRICS["rotation_gain_deg_per_command"](ps, ctx)
 
 
 # -------------------------------------------------------------------------------------------------- control

@@ -34,7 +34,7 @@ import numpy as np
 
 from flexdigit._validation import check_int, check_real
 from flexdigit.errors import ParameterError
-from flexdigit.studies.execution import JOURNAL_NAME, Journal, run_rows, warn
+from flexdigit.studies.execution import run_study, warn
 from flexdigit.studies.metrics import METRICS, SENSITIVITY_METRICS, MetricContext
 from flexdigit.studies.spec import StudySpec
 
@@ -293,22 +293,21 @@ def run_sensitivity(
         "fingerprint": _fingerprint(spec, settings, metrics),
         "rows": int(values.shape[0]),
     }
-    journal = Journal(out_dir / JOURNAL_NAME, header, force=force)
-    records = run_rows(
+    outputs, errors = run_study(
         spec.parameter_set,
         values,
         metrics,
         context,
-        journal,
+        out_dir,
+        header,
         seed=spec.seed,
         chunk_size=settings.chunk_size,
         workers=workers,
         scheduler=scheduler,
+        force=force,
         progress=progress,
         label=f"sensitivity {spec.name}",
     )
-    outputs = {m: np.array([records[i].values.get(m, math.nan) for i in range(len(values))]) for m in metrics}
-    errors = [records[i].error for i in range(len(values))]
     result = SensitivityResult(spec, settings, tuple(metrics), values, design, outputs, errors)
     _analyse(result, u)
     return result
