@@ -138,7 +138,7 @@ def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -
     out: list[dict | Exception] = [{} for _ in parameter_sets]
     names = list(names)
     batched = [n for n in names if METRICS[n].batched is not None]
-    if batched and len(parameter_sets) > 1:
+    if batched and parameter_sets:
         try:
             columns = {n: np.asarray(METRICS[n].batched(parameter_sets, context), dtype=float) for n in batched}
             for i, values in enumerate(out):
@@ -225,8 +225,13 @@ def _batched(name):
     return lambda parameter_sets, ctx: twin_figures(parameter_sets)[name]
 
 
+@lru_cache(maxsize=4096)
+def _single(ps: ParameterSet) -> dict[str, np.ndarray]:
+    return twin_figures([ps])
+
+
 def _one(name):
-    return lambda ps, ctx: float(twin_figures([ps])[name][0])
+    return lambda ps, ctx: float(_single(ps)[name][0])
 
 
 @lru_cache(maxsize=4096)
@@ -239,7 +244,7 @@ def actuated_model(ps: ParameterSet):
     """
     import control as ct
 
-    m, c, k, b = (x[0] for x in twin_figures([ps])["_linear"])
+    m, c, k, b = (x[0] for x in _single(ps)["_linear"])
     n = m.shape[0]
     a = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(m, k), -np.linalg.solve(m, c)]])
     out = np.zeros((1, 2 * n))
