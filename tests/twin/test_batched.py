@@ -99,3 +99,16 @@ def test_bad_inputs_are_named():
         from flexdigit.params import Actuator
 
         BatchedTwin([RigParams(), RigParams(actuator=Actuator(serial_period_s=0.01))])
+
+
+def test_threads_do_not_change_a_number():
+    # the batch-last arithmetic is elementwise over rigs: blocks on two threads give the one-thread numbers
+    rigs = [RigParams(material=Material(youngs_modulus_pa=e)) for e in np.linspace(195e9, 215e9, 512)]
+    runs = []
+    for threads in (1, 2):
+        twins = BatchedTwin(rigs)
+        twins.threads = threads
+        twins.command([30] * len(rigs))
+        twins.advance(0.4)
+        runs.append(twins.psi.copy())
+    assert np.array_equal(runs[0], runs[1])

@@ -381,6 +381,7 @@ class BatchedTwin:
         self._omega = np.zeros_like(self._psi)
         self.time_s = 0.0
         self.substeps = 0
+        self.threads = None  # None: one per core (up to 8) for batches of 256 rigs or more; 1: no threads
 
     # ---------------------------------------------------------------------------------------------- servo
     def _check_commands(self, values) -> np.ndarray:
@@ -433,14 +434,43 @@ class BatchedTwin:
         duration = check_real(duration_s, "duration_s", "BatchedTwin.advance", low=0)
         target = self.time_s + duration
         h = self.dt_s
-        every = np.arange(self.size)
-        while self.time_s < target - 1e-12:
-            while self._pending and self._pending[0][0] <= self.time_s + 1e-12:
-                self.commands = self._pending.pop(0)[1]
-            a0 = self.angle
-            self._servo_step(h)
-            self._step(every, h, self._shortening(a0), self._shortening(self.angle), 0)
-            self.time_s = (round(self.time_s / h) + 1) * h
+        blocks = self._blocks()
+        pool = None
+        if len(blocks) > 1:
+            from concurrent.futures import ThreadPoolExecutor
+
+            pool = ThreadPoolExecutor(len(blocks))
+        try:
+            while self.time_s < target - 1e-12:
+                while self._pending and self._pending[0][0] <= self.time_s + 1e-12:
+                    self.commands = self._pending.pop(0)[1]
+                a0 = self.angle
+                self._servo_step(h)
+                s0, s1 = self._shortening(a0), self._shortening(self.angle)
+                if pool is None:
+                    self._step(blocks[0], h, s0, s1, 0)
+                else:  # numpy releases the GIL in its loops: the blocks step on separate cores
+                    jobs = [pool.submit(self._step, b, h, s0[b], s1[b], 0) for b in blocks]
+                    for job in jobs:
+                        job.result()
+                self.time_s = (round(self.time_s / h) + 1) * h
+        finally:
+            if pool is not None:
+                pool.shutdown()
+
+    #: Below this many rigs a batch steps in one thread (the threads' overhead outweighs a second core).
+    THREAD_MIN_RIGS = 256
+
+    def _blocks(self) -> list[np.ndarray]:
+        """Contiguous blocks of rigs, one per core when the batch is large enough; every rig's arithmetic is the
+        same whichever block it is in (the batch-last operations are elementwise over rigs)."""
+        import os
+
+        cores = min(os.cpu_count() or 1, 8)
+        if self.threads is not None:
+            cores = self.threads
+        count = max(1, min(cores, self.size // self.THREAD_MIN_RIGS))
+        return [b for b in np.array_split(np.arange(self.size), count) if b.size]
 
     def _servo_step(self, h: float) -> None:
         phi = self._transition(h)
@@ -452,7 +482,8 @@ class BatchedTwin:
         self.rate = np.where(stop, 0.0, rate)
 
     def _step(self, idx, h, short0, short1, depth) -> None:
-        sel = slice(None) if idx.size == self.size else idx  # all members: views, no copies
+        contiguous = idx.size and idx[-1] - idx[0] + 1 == idx.size
+        sel = slice(int(idx[0]), int(idx[-1]) + 1) if contiguous else idx  # a block of rigs: views, no copies
         psi0, omega0 = self._psi[:, sel], self._omega[:, sel]
         psi1, omega1 = self.chains.ros2(sel, psi0, omega0, h, short0, short1)
         self.substeps += 1
