@@ -160,3 +160,16 @@ def test_unreachable_scheduler_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and "Traceback" not in "\n".join(err)
     assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err[-1]
+
+
+def test_a_finished_study_is_not_overwritten(tmp_path, capsys):
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC.replace('"bayes_position_limit_mm"', '"release_zeta"'))
+    args = ["study", "sensitivity", str(spec), "--out", str(tmp_path / "o"), "--workers", "0", "--no-progress"]
+    assert main(args) == 0
+    before = (tmp_path / "o" / "summary.json").read_text()
+    capsys.readouterr()
+    assert main(args) == 2
+    assert "--force" in capsys.readouterr().err
+    assert (tmp_path / "o" / "summary.json").read_text() == before
+    assert main([*args, "--force"]) == 0

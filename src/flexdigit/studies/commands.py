@@ -52,6 +52,11 @@ def _study(args: argparse.Namespace) -> CommandResult:
 
 def _run(args, out, run, settings, write):
     """Run a study in ``out`` (created), write its files, return ``(result, summary)``."""
+    from flexdigit.errors import OutputExistsError
+
+    done = out / "summary.json"
+    if done.exists() and not args.force:  # refuse before any work, not after it
+        raise OutputExistsError(f"{done}: this study has finished in {out}; pass --force to run it again")
     out.mkdir(exist_ok=True)
     result = run(
         args.spec_obj,
