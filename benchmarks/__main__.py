@@ -19,6 +19,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_tactile",
     "benchmarks.bench_calibrate",
     "benchmarks.bench_live",
+    "benchmarks.bench_studies",
 )
 
 

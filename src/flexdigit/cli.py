@@ -30,6 +30,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.tactile.commands",
     "flexdigit.calibrate.commands",
     "flexdigit.live.commands",
+    "flexdigit.studies.commands",
     "flexdigit.report.commands",
 )
 

@@ -16,4 +16,5 @@ CHAPTERS: tuple[str, ...] = (
     "flexdigit.report.ch6_tactile",
     "flexdigit.report.ch7_tactile",
     "flexdigit.report.ch8_shape",
+    "flexdigit.report.ch8_studies",
 )

@@ -70,7 +70,8 @@ def noise_of(model, position_from_base_m, mass_kg, command) -> np.ndarray:
     if hasattr(model, "noise_at"):
         m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
         return np.asarray(model.noise_at(a, m, np.broadcast_to(np.asarray(command), a.shape)), dtype=float)
-    return np.broadcast_to(np.asarray(model.noise_v, dtype=float), (a.size, 3))
+    noise = np.asarray(model.noise_v, dtype=float)
+    return np.broadcast_to(noise, (a.size, noise.size))
 
 
 def cramer_rao(
@@ -97,7 +98,7 @@ def cramer_rao(
     extra = 0.0 if extra_variance_v2 is None else np.asarray(extra_variance_v2, dtype=float)
     if noise_v is not None:
         sigma = np.sqrt(np.asarray(noise_v, dtype=float) ** 2 + extra)
-        sa = sm = np.zeros((a.size, 3))
+        sa = sm = np.zeros_like(ga)
     else:
 
         def total(aa, mm):
@@ -109,7 +110,7 @@ def cramer_rao(
             sa = (total(a + step_m, m) - total(a - step_m, m)) / (2 * step_m)
             sm = (total(a, m + dm) - total(a, m - dm)) / (2 * dm)[:, None]
         else:
-            sa = sm = np.zeros((a.size, 3))
+            sa = sm = np.zeros_like(ga)
     w = 1.0 / sigma**2
     faa = np.sum(w * (ga * ga + 2 * sa * sa), axis=1)
     fmm = np.sum(w * (gm * gm + 2 * sm * sm), axis=1)
@@ -157,6 +158,9 @@ class TwinGaugeModel:
         The twin's calibration (default: the twin's default calibration).
     orientation : str
         How the digit lies (the protocols' "horizontal").
+    cells_per_section : int
+        Springs per section of the twin's chain (its default, 3, unless a study needs finer: a load's effect on a
+        gauge is resolved to one cell).
 
     Attributes
     ----------
@@ -167,13 +171,15 @@ class TwinGaugeModel:
         The twin's random-walk drift rate: ``t`` seconds after a tare it adds variance ``rate^2 t``.
     """
 
-    def __init__(self, params=None, calibration=None, orientation: str = "horizontal") -> None:
+    def __init__(self, params=None, calibration=None, orientation: str = "horizontal", cells_per_section=None) -> None:
         from flexdigit.params import RigParams
         from flexdigit.twin.calibration import default_calibration
+        from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION
 
         self.params = params or RigParams()
         self.calibration = calibration or default_calibration()
         self.orientation = orientation
+        self.cells_per_section = DEFAULT_CELLS_PER_SECTION if cells_per_section is None else cells_per_section
         self.noise_v = np.asarray(self.calibration.noise_white_v, dtype=float)
         self.drift_v_per_sqrt_s = np.asarray(self.calibration.noise_drift_v_per_sqrt_s, dtype=float)
 
@@ -198,7 +204,7 @@ class TwinGaugeModel:
         c = np.broadcast_to(np.asarray(command), a.shape)
         a = np.clip(a, 0.0, self.params.geometry.digit_length_m)  # finite differences may step past the tip
         m = np.maximum(m, 0.0)
-        out = np.empty((a.size, 3))
+        out = np.empty((a.size, len(self.params.geometry.gauge_positions_m)))  # any number of gauges (studies)
         for value in np.unique(c):
             rows = c == value
             if friction and (value == RELAXED or self.calibration.cable_friction_ratio == 0):
@@ -211,11 +217,20 @@ class TwinGaugeModel:
                 params=self.params,
                 calibration=self.calibration,
                 orientation=self.orientation,
+                cells_per_section=self.cells_per_section,
                 adc=False,
                 return_solution=True,
             )
             out[rows] = (
-                friction_sd_v(sol, self.params, self.calibration, orientation=self.orientation) if friction else volts
+                friction_sd_v(
+                    sol,
+                    self.params,
+                    self.calibration,
+                    orientation=self.orientation,
+                    cells_per_section=self.cells_per_section,
+                )
+                if friction
+                else volts
             )
         return out
 
@@ -307,7 +322,7 @@ def protocol_limits(
         loaded = m[group] > 0
         log_prior = np.log(w[group] / w[group].sum())
         for j in group:
-            v = mean[j] + sigma[j] * rng.standard_normal((samples, 3))
+            v = mean[j] + sigma[j] * rng.standard_normal((samples, mean.shape[1]))
             # log posterior over the group's settings (up to a constant), (samples, len(group))
             z = (v[:, None, :] - mean[group][None]) / sigma[group][None]
             log_post = log_prior - 0.5 * np.sum(z**2, axis=2) - np.sum(np.log(sigma[group]), axis=1)

@@ -1,0 +1,200 @@
+"""Studies benchmarks: Dask speed-up (2 workers against 1), the per-task overhead, the batched twin's real-time
+factor, and what one evaluation of each metric costs.
+
+- Dask: the thesis-tolerances spec's twin metrics on a Saltelli design of 2 x 64 x (18 + 2) = 2560 evaluations, in
+  tasks of 64 rows, on a warm ``LocalCluster`` of 1 and then 2 single-threaded worker processes (cluster start-up
+  timed apart). The study's journal is written as in a real run. On a 2-core machine that other jobs load, the
+  speed-up reads low: the lead reruns ``make bench`` on a quiet machine.
+- Per-task overhead: 200 one-row tasks on one worker against the same rows in process, per task.
+- Batched twin: N = 1000 parameter sets (E and the housing stiffness drawn, seeded), a 0 -> 30 deg command step
+  (the first 2 s include the halved steps of the transient) and 2 s of quiet following; aggregate real-time
+  factor = N x simulated time / wall time. The scalar twin's real-time factor in the same run, for comparison.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+
+def _study_rows(n_base: int):
+    import dataclasses
+
+    from flexdigit.studies.metrics import MetricContext
+    from flexdigit.studies.sensitivity import TWIN_METRICS, SensitivitySettings, sensitivity_design
+    from flexdigit.studies.spec import load_spec
+
+    spec = dataclasses.replace(load_spec("thesis-tolerances"), metrics=TWIN_METRICS)
+    u, _ = sensitivity_design(spec, SensitivitySettings(morris_trajectories=0, sobol_n=n_base))
+    return spec, spec.values_from_unit(u), MetricContext(baseline=spec.baseline)
+
+
+def _run(spec, values, ctx, *, workers, scheduler, chunk):
+    from flexdigit.studies.execution import Journal, run_rows
+
+    with tempfile.TemporaryDirectory() as tmp:
+        journal = Journal(Path(tmp) / "journal.jsonl", {"fingerprint": "bench"})
+        start = time.perf_counter()
+        run_rows(
+            spec.parameter_set,
+            values,
+            spec.metrics,
+            ctx,
+            journal,
+            seed=0,
+            chunk_size=chunk,
+            workers=workers,
+            scheduler=scheduler,
+            progress=False,
+            label="bench",
+        )
+        return time.perf_counter() - start
+
+
+def _dask_rows() -> list[dict]:
+    from distributed import LocalCluster
+
+    spec, values, ctx = _study_rows(64)
+    rows = []
+    _run(spec, values[:64], ctx, workers=0, scheduler=None, chunk=64)  # imports and caches, not timed
+    serial = _run(spec, values, ctx, workers=0, scheduler=None, chunk=64)
+    wall = {}
+    for n in (1, 2):
+        start = time.perf_counter()
+        with LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None, silence_logs=40
+        ) as cluster:
+            startup = time.perf_counter() - start
+            _run(spec, values[: 64 * n], ctx, workers=n, scheduler=cluster.scheduler_address, chunk=64)  # warm
+            wall[n] = _run(spec, values, ctx, workers=n, scheduler=cluster.scheduler_address, chunk=64)
+            if n == 1:
+                one = values[:200]
+                serial_one = _run(spec, one, ctx, workers=0, scheduler=None, chunk=1)
+                per_task = (
+                    _run(spec, one, ctx, workers=1, scheduler=cluster.scheduler_address, chunk=1) - serial_one
+                ) / len(one)
+        rows.append(
+            {"name": f"LocalCluster start-up, {n} worker(s)", "value": startup, "unit": "s", "goal": "", "note": ""}
+        )
+    rows += [
+        {
+            "name": f"study of {len(values)} evaluations, in process (no Dask)",
+            "value": serial,
+            "unit": "s",
+            "goal": "",
+            "note": f"{1e3 * serial / len(values):.2f} ms per evaluation (5 twin metrics, batched per task)",
+        },
+        {
+            "name": f"study of {len(values)} evaluations, 1 Dask worker",
+            "value": wall[1],
+            "unit": "s",
+            "goal": "",
+            "note": "",
+        },
+        {
+            "name": f"study of {len(values)} evaluations, 2 Dask workers",
+            "value": wall[2],
+            "unit": "s",
+            "goal": "",
+            "note": "",
+        },
+        {
+            "name": "Dask speed-up, 2 workers over 1",
+            "value": wall[1] / wall[2],
+            "unit": "x",
+            "goal": ">= 1.7",
+            "note": "on 2 cores; other jobs on the machine lower it",
+        },
+        {
+            "name": "per-task overhead (Dask + journal), one-row tasks",
+            "value": 1e3 * per_task,
+            "unit": "ms",
+            "goal": "",
+            "note": "worker minus in-process time per task, 200 tasks on one worker",
+        },
+    ]
+    return rows
+
+
+def _batched_rows() -> list[dict]:
+    from flexdigit.params import Material, RigParams
+    from flexdigit.twin import Twin
+    from flexdigit.twin.batched import BatchedTwin
+    from flexdigit.twin.calibration import default_calibration
+
+    cal = default_calibration()
+    rng = np.random.default_rng(0)
+    n = 1000
+    params = [RigParams(material=Material(youngs_modulus_pa=float(e))) for e in rng.uniform(195e9, 215e9, n)]
+    cals = [cal.replace(housing_ei_n_m2=tuple(np.array(cal.housing_ei_n_m2) * f)) for f in rng.uniform(0.8, 1.2, n)]
+    start = time.perf_counter()
+    twins = BatchedTwin(params, cals)
+    build = time.perf_counter() - start
+    twins.command(np.full(n, 30))
+    start = time.perf_counter()
+    twins.advance(2.0)
+    step = time.perf_counter() - start
+    start = time.perf_counter()
+    twins.advance(2.0)
+    quiet = time.perf_counter() - start
+    single = Twin(params[0], cals[0])
+    single.command(30)
+    start = time.perf_counter()
+    single.advance(4.0)
+    scalar = time.perf_counter() - start
+    return [
+        {
+            "name": "batched twin, N = 1000: aggregate real-time factor, 4 s (step + quiet)",
+            "value": n * 4.0 / (step + quiet),
+            "unit": "x",
+            "goal": ">= 10,000",
+            "note": f"step 2 s: {n * 2.0 / step:.0f} x, quiet 2 s: {n * 2.0 / quiet:.0f} x",
+        },
+        {"name": "batched twin, N = 1000: build (1000 chains)", "value": build, "unit": "s", "goal": "", "note": ""},
+        {
+            "name": "scalar twin, same 4 s, one rig",
+            "value": 4.0 / scalar,
+            "unit": "x",
+            "goal": "",
+            "note": "real-time factor of one Twin in the same run",
+        },
+    ]
+
+
+def _metric_rows() -> list[dict]:
+    from flexdigit.studies.metrics import METRICS, SENSITIVITY_METRICS, MetricContext
+    from flexdigit.studies.spec import ParameterSet
+
+    ctx = MetricContext()
+    ps = ParameterSet()
+    for name in SENSITIVITY_METRICS:  # warm: the baseline controller, protocol tables
+        METRICS[name](ps, ctx)
+    rows = []
+    rng = np.random.default_rng(1)
+    from flexdigit.studies.spec import load_spec
+
+    spec = load_spec("thesis-tolerances")
+    sets = [spec.parameter_set(v) for v in spec.values_from_unit(rng.random((5, len(spec.parameters))))]
+    for name in SENSITIVITY_METRICS:
+        start = time.perf_counter()
+        for p in sets:
+            METRICS[name](p, ctx)
+        rows.append(
+            {
+                "name": f"metric {name}, one evaluation",
+                "value": 1e3 * (time.perf_counter() - start) / len(sets),
+                "unit": "ms",
+                "goal": "",
+                "note": "",
+            }
+        )
+    return rows
+
+
+def run() -> list[dict]:
+    warnings.simplefilter("ignore")
+    return _batched_rows() + _dask_rows() + _metric_rows()

@@ -1,0 +1,165 @@
+"""Report chapter 8 (beyond the thesis): sensitivity to the rig's tolerances and the design of the next digit.
+
+The thesis's conclusion asks for "a sensitivity and stability analysis ... into the effects of all system
+parameters", feedback from more gauges and a finer motor step; 2.1 for a second cable and a study of size. This
+chapter shows two library results (:mod:`flexdigit.studies`): the Sobol indices of the twin's metrics over the
+shipped tolerances (:func:`flexdigit.studies.sensitivity.twin_sensitivity`) and a small design study with its
+Pareto front (:func:`flexdigit.studies.design.showcase_design`). Both run in process at a small size; the
+``flexdigit study`` command runs the full studies on Dask.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.results import new
+
+#: Parameters of thesis-tolerances the report's study keeps: the 11 that move the twin's mechanics, and the
+#: servo's wn, which must come out with no effect (a check of the method).
+REPORT_PARAMETERS = (
+    "material.youngs_modulus_pa",
+    "material.strip_density_kg_m3",
+    "geometry.strip_thickness_m",
+    "geometry.strip_width_m",
+    "geometry.cable_eccentricity_m",
+    "actuator.pulley_radius_m",
+    "actuator.servo_wn_rad_s",
+    "calibration.cable_stiffness_n_m",
+    "calibration.support_mass_kg[*]",
+    "calibration.housing_ei_n_m2[*]",
+    "calibration.housing_beta_s",
+    "calibration.strip_beta_s",
+)
+
+
+def build(ctx: ReportContext) -> Chapter:
+    """Build the chapter."""
+    chapter = Chapter(slug="ch8-studies", title="Beyond the thesis: sensitivity and design")
+    _sensitivity(ctx, chapter)
+    _design(ctx, chapter)
+    return chapter
+
+
+def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
+    from flexdigit.studies import figures
+    from flexdigit.studies.sensitivity import twin_sensitivity
+    from flexdigit.studies.spec import load_spec
+
+    spec = load_spec("thesis-tolerances")
+    spec = dataclasses.replace(spec, parameters=tuple(p for p in spec.parameters if p.name in REPORT_PARAMETERS))
+    n = 16 if ctx.fast else 128
+    result = twin_sensitivity(n, seed=ctx.seed, spec=spec)
+    names = spec.names
+    big = 2 * n
+    chapter.paragraphs.append(
+        f"Sobol indices of the twin's metrics over {len(names)} of the shipped tolerances (thesis-tolerances: each "
+        "tolerance's source is in the spec), Saltelli's design with N = "
+        f"{big} ({result.values.shape[0]} evaluations on the batched twin, Morris screening first), 95 % bootstrap "
+        f"intervals. Converged means no S1 or ST moved by more than {result.settings.convergence_tol} between "
+        f"N = {n} and {big}. The controller, H-infinity and tactile metrics need a design or a Monte Carlo per "
+        "rig: `flexdigit study sensitivity thesis-tolerances` computes them on Dask."
+    )
+    rows = []
+    for metric in result.metrics:
+        if metric in result.refused:
+            chapter.entries.append(new(f"studies.sobol.{metric}", "8", result.refused[metric], "", "no indices"))
+            continue
+        res = result.sobol[metric][big]
+        conv = result.convergence[metric]
+        order = np.argsort(-res["ST"])
+        top = names[order[0]]
+        chapter.entries.append(
+            new(
+                f"studies.sobol.{metric}.max_change",
+                "8",
+                conv["max_change"],
+                "",
+                f"largest change of S1/ST between N = {n} and {big}: "
+                + ("converged" if conv["converged"] else "NOT converged")
+                + f" (tolerance {conv['tolerance']}); most influential: {top}, ST {res['ST'][order[0]]:.3f}",
+            )
+        )
+        for j, name in enumerate(names):
+            for index in ("S1", "ST"):
+                chapter.entries.append(
+                    new(
+                        f"studies.sobol.{metric}.{name}.{index}",
+                        "8",
+                        res[index][j],
+                        "",
+                        f"+- {res[f'{index}_conf'][j]:.3f} (95 % bootstrap), N = {big}",
+                    )
+                )
+        rows.append([metric, *(f"{res['ST'][j]:.2f} ± {res['ST_conf'][j]:.2f}" for j in range(len(names)))])
+    chapter.tables.append(Table("Total Sobol indices ST (95 % interval)", ["metric", *names], rows))
+    st = np.array([result.sobol[m][big]["ST"] for m in result.sobol])
+    fig = figures.total_index_map_figure(names, list(result.sobol), st, f"Total Sobol indices, N = {big}")
+    chapter.figures.append(ctx.save_figure(fig, "studies_sobol_total", "Total Sobol indices of the twin's metrics."))
+    metric = "release_wn_rad_s"
+    if metric in result.sobol:
+        fig = figures.sobol_bars_figure(names, result.sobol[metric][big], f"{metric}: S1 and ST, 95 % intervals")
+        chapter.figures.append(
+            ctx.save_figure(
+                fig,
+                "studies_sobol_release_wn",
+                "Sobol indices of the housed release frequency.",
+                thesis_ref="table 3.2",
+            )
+        )
+
+
+def _design(ctx: ReportContext, chapter: Chapter) -> None:
+    from flexdigit.studies.design import design_pareto_figure, showcase_design
+
+    result = showcase_design(8 if ctx.fast else 24, seed=ctx.seed, bayes_samples=50 if ctx.fast else 100)
+    o = result.settings.objectives
+    chapter.paragraphs.append(
+        f"A design study of {len(result.candidates)} designs (3, 4 or 6 gauges, thesis or equal spacing, half or full "
+        "bridge, the servo's step or a 4:1 finer one, one cable or the antagonistic pair of 2.1, size x0.75-1.25), "
+        f"each with its own 20 ms controller: {o[0]} (chapter 6's Bayes limit) against {o[1]} (linearised twin). "
+        "`flexdigit study design thesis-design` runs the full space (2916 designs) on Dask."
+    )
+    rows = []
+    front = set(result.front.tolist())
+    for i in sorted(front, key=lambda i: result.outputs[o[0]][i]):
+        rows.append([result.candidates[i].label(), *(f"{result.outputs[m][i]:.3g}" for m in o)])
+    for name, i in result.marked().items():
+        rows.append([f"[{name}] {result.candidates[i].label()}", *(f"{result.outputs[m][i]:.3g}" for m in o)])
+        for m in o:
+            chapter.entries.append(
+                new(
+                    f"studies.design.{name.replace(' ', '_').replace(',', '')}.{m}",
+                    "8",
+                    result.outputs[m][i],
+                    "",
+                    f"{result.candidates[i].label()}; on the Pareto front: {i in front}",
+                )
+            )
+    for k, i in enumerate(sorted(front, key=lambda i: result.outputs[o[0]][i])):
+        for m in o:
+            chapter.entries.append(
+                new(f"studies.design.front_{k}.{m}", "8", result.outputs[m][i], "", result.candidates[i].label())
+            )
+    chapter.tables.append(Table("Pareto front and marked designs", ["design", *o], rows))
+    for p in result.placement:
+        chapter.entries.append(
+            new(
+                f"studies.design.d_optimal_{p['gauges']}_gauges.d_efficiency_of_equal_spacing",
+                "8",
+                p["d_efficiency_equal"],
+                "",
+                f"D-optimal positions {p['positions_mm']} mm against equal spacing {p['equal_mm']} mm (largest shift "
+                f"{p['max_shift_mm']:.0f} mm): a load's moment passes every gauge between it and the clamp, so the "
+                "information concentrates near the clamp; equal spacing is not D-optimal on this strip",
+            )
+        )
+    chapter.figures.append(
+        ctx.save_figure(
+            design_pareto_figure(result),
+            "studies_pareto",
+            "Design candidates, their Pareto front, the thesis layout and equal spacing marked.",
+        )
+    )

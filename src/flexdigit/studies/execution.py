@@ -1,0 +1,362 @@
+"""Running a study's evaluations: serially or on Dask distributed, seeded, resumable, failures kept apart.
+
+A study is a table of rows (parameter values) and a list of metrics. Rows are cut into tasks of ``chunk_size``
+rows (a fixed number from the spec, never from the worker count, so the same tasks run whatever the cluster);
+each task evaluates its rows in a fresh process-local context and returns one record per row. Randomness inside a
+task comes only from generators seeded by the study's seed and the task's key (or the study's seed alone, for the
+common random numbers of :mod:`flexdigit.studies.metrics`), so a serial run, a run on 2 workers and a run on 20
+give the same numbers, record for record.
+
+Execution (:func:`run_rows`):
+
+- ``workers=0``: in this process, no Dask (the reference);
+- otherwise on Dask distributed: a ``LocalCluster`` on 127.0.0.1 with ``workers`` single-threaded worker
+  processes (one per core by default), or an existing cluster's scheduler (``scheduler="tcp://HOST:PORT"``).
+  flexdigit runs no process pool of its own.
+
+Every finished task's records are appended to a journal (``journal.jsonl`` in the study's directory: a header line
+with the study's fingerprint, then one line per row, flushed and fsynced), so a study killed at any point resumes
+where it stopped when rerun with the same spec and directory; a journal written by a study with other settings
+is refused, never mixed (``--force`` starts over). A row whose evaluation raises is recorded with its error and
+its parameters and the study goes on; a task whose worker dies is recorded the same way for each of its rows.
+A progress bar goes to stderr.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import re
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.studies.metrics import MetricContext
+
+__all__ = ["Journal", "RowRecord", "evaluate_rows", "run_rows", "run_study", "parse_scheduler", "JOURNAL_NAME"]
+
+JOURNAL_NAME = "journal.jsonl"
+JOURNAL_FORMAT = 1
+
+
+@dataclass(frozen=True)
+class RowRecord:
+    """One evaluated row: metric values, or the error that stopped it (``values`` then empty)."""
+
+    row: int
+    values: dict
+    error: str | None = None
+    seconds: float = 0.0
+
+    def to_json(self) -> dict:
+        values = {k: (v if math.isfinite(v) else repr(v)) for k, v in self.values.items()}
+        return {"row": self.row, "values": values, "error": self.error, "seconds": round(self.seconds, 6)}
+
+    @classmethod
+    def from_json(cls, data: dict) -> RowRecord:
+        values = {k: float(v) for k, v in data["values"].items()}  # 'inf' / 'nan' round-trip through float()
+        return cls(int(data["row"]), values, data.get("error"), float(data.get("seconds", 0.0)))
+
+
+def evaluate_rows(build, rows, values, metrics, context: MetricContext, task_key: int, seed: int) -> list[RowRecord]:
+    """Evaluate rows of a study (the task every worker runs).
+
+    Parameters
+    ----------
+    build : callable
+        ``build(values_row, label) -> ParameterSet`` (e.g. :meth:`StudySpec.parameter_set`).
+    rows : sequence of int
+        The rows' indices in the study's table.
+    values : array_like, shape (len(rows), d)
+    metrics : sequence of str
+    context : MetricContext
+    task_key, seed : int
+        The task's key and the study's seed; the only generator a task may use is
+        ``numpy.random.default_rng([seed, task_key])`` (handed to ``build`` as ``rng`` when it takes one).
+    """
+    from threadpoolctl import threadpool_limits
+
+    from flexdigit.studies.metrics import evaluate_many
+
+    out: list[RowRecord] = []
+    with threadpool_limits(1):  # one core per worker: BLAS threads would fight the other workers
+        start = time.perf_counter()
+        built, sets = [], []
+        for i, row in enumerate(rows):
+            try:
+                sets.append(build(values[i], f"row {int(row)}"))
+                built.append(int(row))
+            except Exception as exc:  # noqa: BLE001 - a row the rig refuses is that row's result
+                out.append(RowRecord(int(row), {}, _message(exc)))
+        results = evaluate_many(sets, metrics, context)
+        each = (time.perf_counter() - start) / max(1, len(rows))
+        for row, res in zip(built, results, strict=True):
+            if isinstance(res, Exception):
+                out.append(RowRecord(row, {}, _message(res), each))
+            else:
+                out.append(RowRecord(row, res, None, each))
+    return sorted(out, key=lambda r: r.row)
+
+
+def _message(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}".splitlines()[0]
+
+
+class Journal:
+    """The append-only record of a study's finished rows (see the module docstring).
+
+    Parameters
+    ----------
+    path : Path
+    header : dict
+        The study's identity (its ``fingerprint`` decides whether an existing journal may be extended).
+    force : bool
+        Start over: an existing journal is replaced.
+    """
+
+    def __init__(self, path: Path, header: dict, *, force: bool = False) -> None:
+        self.path = Path(path)
+        self.header = {"flexdigit_study_journal": JOURNAL_FORMAT, **header}
+        self.records: dict[int, RowRecord] = {}
+        if self.path.exists() and not force:
+            self._read()
+        else:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = self.path.with_name(f".{self.path.name}.tmp")
+            with tmp.open("w", encoding="utf-8") as fh:
+                fh.write(json.dumps(self.header, sort_keys=True) + "\n")
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(tmp, self.path)
+
+    def _read(self) -> None:
+        text = self.path.read_bytes()
+        lines = text.split(b"\n")
+        complete, tail = lines[:-1], lines[-1]
+        if not complete:
+            raise DataFileError(f"{self.path}: not a study journal (no header line)")
+        try:
+            header = json.loads(complete[0])
+        except json.JSONDecodeError:
+            raise DataFileError(f"{self.path}: line 1 is not a study journal header") from None
+        if not isinstance(header, dict) or header.get("flexdigit_study_journal") != JOURNAL_FORMAT:
+            raise DataFileError(f"{self.path}: line 1 is not a flexdigit study journal header")
+        if header.get("fingerprint") != self.header.get("fingerprint"):
+            raise DataFileError(
+                f"{self.path}: written by a study with other settings (fingerprint {header.get('fingerprint')}, "
+                f"this study {self.header.get('fingerprint')}); use another --out directory, or --force to start over"
+            )
+        for number, line in enumerate(complete[1:], start=2):
+            if not line.strip():
+                continue
+            try:
+                record = RowRecord.from_json(json.loads(line))
+            except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+                raise DataFileError(f"{self.path}: line {number} is not a row record") from None
+            self.records[record.row] = record
+        if tail:  # a line cut short by a kill: drop it, the row is computed again
+            with self.path.open("r+b") as fh:
+                fh.truncate(len(text) - len(tail))
+
+    def append(self, records) -> None:
+        """Add finished rows, flushed and fsynced before returning."""
+        lines = "".join(json.dumps(r.to_json(), sort_keys=True) + "\n" for r in records)
+        with self.path.open("a", encoding="utf-8") as fh:
+            fh.write(lines)
+            fh.flush()
+            os.fsync(fh.fileno())
+        for r in records:
+            self.records[r.row] = r
+
+
+_SCHEDULER = re.compile(r"^(tcp|tls|inproc|ucx)://[^\s/:]+(:\d{1,5})?$")
+
+
+def parse_scheduler(url: str) -> str:
+    """Check a Dask scheduler address such as ``tcp://127.0.0.1:8786`` and return it."""
+    if not isinstance(url, str) or not _SCHEDULER.match(url):
+        raise ParameterError(
+            f"The 'scheduler' parameter must be a Dask scheduler address such as tcp://127.0.0.1:8786. Got {url!r} "
+            "instead."
+        )
+    return url
+
+
+@contextlib.contextmanager
+def dask_client(scheduler: str | None, workers: int):
+    """A Dask ``Client``: on an existing scheduler, or on a local cluster of ``workers`` processes (127.0.0.1)."""
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            client = Client(parse_scheduler(scheduler), timeout="5s")
+        except OSError as exc:
+            raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address=None,
+        silence_logs=40,
+    )
+    client = Client(cluster)
+    try:
+        yield client
+    finally:
+        client.close()
+        cluster.close()
+
+
+def _progress(total: int, done: int, enabled: bool, label: str):
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    progress = Progress(
+        TextColumn(f"[bold]{label}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+        disable=not enabled,
+        transient=False,
+    )
+    task = progress.add_task(label, total=total, completed=done)
+    return progress, task
+
+
+def run_rows(
+    build,
+    values,
+    metrics,
+    context: MetricContext,
+    journal: Journal,
+    *,
+    seed: int,
+    chunk_size: int = 8,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    label: str = "study",
+) -> dict[int, RowRecord]:
+    """Evaluate every row of ``values`` not yet in ``journal``; return all records by row.
+
+    Parameters
+    ----------
+    build : callable
+        ``build(values_row, label) -> ParameterSet``; must pickle (a bound method of a :class:`StudySpec` does).
+    values : ndarray, shape (n, d)
+    metrics : sequence of str
+    context : MetricContext
+    journal : Journal
+    seed : int
+        The study's seed (with each task's key, the seed of the task's generator).
+    chunk_size : int
+        Rows per task.
+    workers : int, optional
+        0: in this process; N: a local Dask cluster of N worker processes (default: one per core).
+    scheduler : str, optional
+        An existing Dask scheduler's address (``tcp://HOST:PORT``); ``workers`` is then ignored.
+    progress : bool
+        Show a progress bar on stderr.
+    """
+    values = np.asarray(values, dtype=float)
+    n = values.shape[0]
+    chunks = [np.arange(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
+    todo = [(key, rows) for key, rows in enumerate(chunks) if any(int(r) not in journal.records for r in rows)]
+    if workers is None:
+        workers = os.cpu_count() or 1
+    bar, task = _progress(n, n - sum(len(r) for _, r in todo), progress and bool(todo), label)
+    metrics = list(metrics)
+    with bar:
+        if not todo:
+            return dict(journal.records)
+        if workers == 0 and not scheduler:
+            for key, rows in todo:
+                records = evaluate_rows(build, rows, values[rows], metrics, context, key, seed)
+                journal.append(records)
+                bar.update(task, advance=len(rows))
+            return dict(journal.records)
+        from distributed import as_completed
+
+        with dask_client(scheduler, workers) as client:
+            [build_remote] = client.scatter([build], broadcast=True)
+            futures = {}
+            for key, rows in todo:
+                fut = client.submit(
+                    evaluate_rows,
+                    build_remote,
+                    rows,
+                    values[rows],
+                    metrics,
+                    context,
+                    key,
+                    seed,
+                    key=f"{label}-{journal.header.get('fingerprint', '')}-{key}",
+                    pure=False,
+                    retries=0,
+                )
+                futures[fut] = rows
+            for fut in as_completed(list(futures)):
+                rows = futures[fut]
+                try:
+                    records = fut.result()
+                except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
+                    message = f"task failed: {type(exc).__name__}: {exc}".splitlines()[0]
+                    records = [RowRecord(int(r), {}, message) for r in rows]
+                journal.append(records)
+                bar.update(task, advance=len(rows))
+    return dict(journal.records)
+
+
+def run_study(
+    build,
+    values,
+    metrics,
+    context,
+    out_dir,
+    header: dict,
+    *,
+    seed: int,
+    chunk_size: int,
+    workers=None,
+    scheduler=None,
+    force: bool = False,
+    progress: bool = True,
+    label: str = "study",
+):
+    """:func:`run_rows` with the study's journal in ``out_dir``; returns ``(outputs, errors)``: per metric an array
+    over the rows (NaN where a row failed) and per row its error or None."""
+    journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
+    records = run_rows(
+        build,
+        values,
+        metrics,
+        context,
+        journal,
+        seed=seed,
+        chunk_size=chunk_size,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        label=label,
+    )
+    n = len(values)
+    outputs = {m: np.array([records[i].values.get(m, math.nan) for i in range(n)]) for m in metrics}
+    return outputs, [records[i].error for i in range(n)]
+
+
+def warn(message: str) -> None:
+    """One line on stderr (failed rows, unconverged indices): the result is kept, the user is told."""
+    print(f"flexdigit study: {message}", file=sys.stderr)

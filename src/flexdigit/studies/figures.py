@@ -1,0 +1,126 @@
+"""Figures of the studies: Sobol indices with their intervals, the total-index map, S2 heat maps, Pareto fronts.
+
+Each function draws from a result object and saves through :mod:`flexdigit._io` (atomic, no clobber without
+``force``); the report calls the ``*_figure`` builders and saves them itself.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["sobol_bars_figure", "total_index_map_figure", "s2_figure", "pareto_figure", "sensitivity_figures"]
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path, force: bool) -> Path:
+    from flexdigit._io import atomic_path
+
+    plt = _plt()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path, force=force) as tmp:
+        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    plt.close(fig)
+    return path
+
+
+def sobol_bars_figure(names, res: dict, title: str):
+    """S1 and ST per parameter as bars with their bootstrap confidence intervals."""
+    plt = _plt()
+    d = len(names)
+    x = np.arange(d)
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.45 * d + 2), 3.6))
+    ax.bar(x - 0.2, res["S1"], 0.4, yerr=res["S1_conf"], capsize=2, label="S1 (first order)")
+    ax.bar(x + 0.2, res["ST"], 0.4, yerr=res["ST_conf"], capsize=2, label="ST (total)")
+    ax.set_xticks(x, [n.replace("calibration.", "cal.") for n in names], rotation=60, ha="right", fontsize=7)
+    ax.set_ylabel("Sobol index")
+    ax.set_title(title, fontsize=9)
+    ax.axhline(0, color="k", lw=0.5)
+    ax.legend(fontsize=7)
+    return fig
+
+
+def total_index_map_figure(names, metrics, st: np.ndarray, title: str):
+    """Total indices, metrics (rows) x parameters (columns)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.45 * len(names) + 3), 0.45 * len(metrics) + 2))
+    im = ax.imshow(np.clip(st, 0, 1), vmin=0, vmax=1, cmap="viridis", aspect="auto")
+    ax.set_xticks(
+        range(len(names)), [n.replace("calibration.", "cal.") for n in names], rotation=60, ha="right", fontsize=7
+    )
+    ax.set_yticks(range(len(metrics)), metrics, fontsize=7)
+    for i in range(st.shape[0]):
+        for j in range(st.shape[1]):
+            if np.isfinite(st[i, j]) and st[i, j] >= 0.05:
+                ax.text(
+                    j, i, f"{st[i, j]:.2f}", ha="center", va="center", fontsize=6, color="w" if st[i, j] < 0.6 else "k"
+                )
+    fig.colorbar(im, ax=ax, label="total Sobol index ST")
+    ax.set_title(title, fontsize=9)
+    return fig
+
+
+def s2_figure(names, s2: np.ndarray, title: str):
+    """Second-order indices as a heat map (upper triangle)."""
+    plt = _plt()
+    d = len(names)
+    grid = np.full((d, d), np.nan)
+    iu = np.triu_indices(d, 1)
+    grid[iu] = s2[iu]
+    fig, ax = plt.subplots(figsize=(0.4 * d + 3, 0.4 * d + 2.5))
+    im = ax.imshow(grid, cmap="magma", aspect="equal")
+    labels = [n.replace("calibration.", "cal.") for n in names]
+    ax.set_xticks(range(d), labels, rotation=60, ha="right", fontsize=6)
+    ax.set_yticks(range(d), labels, fontsize=6)
+    fig.colorbar(im, ax=ax, label="S2")
+    ax.set_title(title, fontsize=9)
+    return fig
+
+
+def pareto_figure(x, y, front, marks: dict, xlabel: str, ylabel: str, title: str):
+    """Candidates (grey), their Pareto front (line) and marked designs (``marks``: label -> (x, y))."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.2, 4.2))
+    ax.scatter(x, y, s=8, c="0.75", label="candidates")
+    order = np.argsort(x[front])
+    ax.plot(x[front][order], y[front][order], "-o", ms=4, color="C0", label="Pareto front")
+    for k, (label, (mx, my)) in enumerate(marks.items()):
+        ax.scatter([mx], [my], s=70, marker="*^sDv"[k % 5], color=f"C{k + 1}", zorder=5, label=label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def sensitivity_figures(result, fig_dir: Path, *, force: bool = False) -> list[Path]:
+    """Every figure of a sensitivity result, saved under ``fig_dir``."""
+    names = result.spec.names
+    big = 2 * result.settings.sobol_n
+    paths = []
+    for metric, by_n in result.sobol.items():
+        res = by_n[big]
+        fig = sobol_bars_figure(names, res, f"{metric}: Sobol indices, N = {big}, {result.settings.confidence:.0%} CI")
+        paths.append(_save(fig, fig_dir / f"sobol_{metric}.png", force))
+        if "S2" in res:
+            paths.append(
+                _save(
+                    s2_figure(names, res["S2"], f"{metric}: second-order indices"), fig_dir / f"s2_{metric}.png", force
+                )
+            )
+    if result.sobol:
+        metrics = list(result.sobol)
+        st = np.array([result.sobol[m][big]["ST"] for m in metrics])
+        fig = total_index_map_figure(names, metrics, st, f"{result.spec.name}: total Sobol indices (N = {big})")
+        paths.append(_save(fig, fig_dir / "sobol_total_map.png", force))
+    return paths

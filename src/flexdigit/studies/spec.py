@@ -1,0 +1,543 @@
+"""Uncertain parameters: a TOML that gives a distribution or a range to any field of the rig and the calibration.
+
+The thesis's first item of future work (chapter 8) is "a sensitivity and stability analysis ... into the effects of
+all system parameters"; 2.1 asks what the digit's size does to its stiffness and stability. A study spec says
+which fields of :class:`~flexdigit.params.RigParams` and :class:`~flexdigit.twin.calibration.Calibration` are
+uncertain and how, one table per field::
+
+    [study]
+    name = "thesis-tolerances"
+    seed = 0
+    metrics = ["release_wn_rad_s", "rotation_gain_deg_per_command"]
+
+    [parameters.geometry.strip_thickness_m]     # 0.015 in feeler stock
+    distribution = "uniform"
+    delta = 0.0127e-3                           # nominal +- 0.0127 mm
+    source = "shim-stock thickness tolerance, +-0.0005 in (datasheet class)"
+
+    [parameters.calibration.housing_ei_n_m2]    # a tuple field: one factor moves every element
+    distribution = "normal"
+    relative_sd = 0.08
+
+    [parameters.geometry.gauge_positions_m.0]   # one element of a tuple field
+    distribution = "uniform"
+    delta = 1e-3
+
+Distributions (the nominal value is the baseline rig's, :attr:`UncertainParameter.nominal`):
+
+- ``uniform``: ``low`` and ``high``, or ``relative`` (nominal x (1 +- r)), or ``delta`` (nominal +- d);
+- ``triangular``: the same bounds, peak at ``mode`` (default the nominal value);
+- ``normal``: ``sd`` or ``relative_sd``, mean ``mean`` (default nominal), optionally truncated to ``low``/``high``;
+- ``lognormal``: ``sigma_log`` (standard deviation of the log), median ``median`` (default nominal).
+
+A tuple field without an element index is moved as a whole by one factor (nominal 1), so only the relative forms
+apply to it. Everything is checked when the spec is read, like a parameter file: an unknown section, field or key,
+an empty range, a distribution whose range reaches values the field refuses (a negative stiffness, a thickness of
+0), each a one-line :class:`~flexdigit.errors.ParameterError` naming the file and the key. The declared constraints
+live in the dataclasses themselves: a range is checked by building the rig at its two ends (six standard
+deviations out for an unbounded normal), so the spec never restates them.
+
+Examples
+--------
+>>> spec = spec_from_toml('''
+... [parameters.material.youngs_modulus_pa]
+... distribution = "uniform"
+... low = 195e9
+... high = 215e9
+... ''')
+>>> p = spec.parameters[0]
+>>> p.name, float(p.ppf(0.5))
+('material.youngs_modulus_pa', 205000000000.0)
+>>> spec.parameter_set({"material.youngs_modulus_pa": 2.0e11}).params.material.youngs_modulus_pa
+200000000000.0
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.params import RigParams, load_params
+from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration
+
+__all__ = [
+    "DISTRIBUTIONS",
+    "ParameterSet",
+    "UncertainParameter",
+    "StudySpec",
+    "load_spec",
+    "spec_from_toml",
+    "SHIPPED_SPECS",
+]
+
+#: Keys each distribution takes (besides ``distribution`` and ``source``); alternatives are listed in order.
+DISTRIBUTIONS: dict[str, tuple[str, ...]] = {
+    "uniform": ("low", "high", "relative", "delta"),
+    "triangular": ("low", "high", "relative", "delta", "mode"),
+    "normal": ("mean", "sd", "relative_sd", "low", "high"),
+    "lognormal": ("median", "sigma_log"),
+}
+#: How far an unbounded distribution's range is checked against the field's constraints (standard deviations).
+CHECK_SIGMAS = 6.0
+SECTIONS = ("geometry", "material", "sensors", "actuator", "dynamics", "calibration")
+#: Specs shipped with flexdigit (``flexdigit study sensitivity thesis-tolerances``).
+SHIPPED_SPECS = ("thesis-tolerances", "thesis-design")
+
+
+@dataclass(frozen=True)
+class ParameterSet:
+    """One rig to evaluate: its parameters, its twin calibration and, for designs beyond the thesis, a second
+    antagonistic cable (its pretension in N, both cables; None: the thesis's single cable, 2.1)."""
+
+    params: RigParams = field(default_factory=RigParams)
+    calibration: Calibration = field(default_factory=default_calibration)
+    antagonist_pretension_n: float | None = None
+
+
+@dataclass(frozen=True)
+class UncertainParameter:
+    """One uncertain field (or element of a tuple field, or a factor on a whole tuple field).
+
+    Attributes
+    ----------
+    name : str
+        ``section.field``, ``section.field[k]`` (element ``k``) or ``section.field[*]`` (a factor on every element).
+    section, field : str
+    element : int or None
+        The tuple element (0-based); None for a scalar field or a whole-tuple factor.
+    distribution : str
+        One of :data:`DISTRIBUTIONS`.
+    nominal : float
+        The baseline's value (1 for a whole-tuple factor).
+    low, high : float
+        The support (may be infinite for ``normal`` and ``lognormal``).
+    shape : dict
+        The distribution's other numbers (``mean``, ``sd``, ``mode``, ``median``, ``sigma_log``).
+    source : str
+        Where the tolerance comes from (datasheet class, thesis text, engineering judgement).
+    """
+
+    name: str
+    section: str
+    field: str
+    element: int | None
+    distribution: str
+    nominal: float
+    low: float
+    high: float
+    shape: dict = field(default_factory=dict)
+    source: str = ""
+
+    @property
+    def is_factor(self) -> bool:
+        """True for a factor on a whole tuple field."""
+        return self.name.endswith("[*]")
+
+    def ppf(self, u) -> np.ndarray:
+        """Values at probabilities ``u`` in (0, 1) (the inverse CDF): how unit-cube samples become values."""
+        u = np.asarray(u, dtype=float)
+        lo, hi = self.low, self.high
+        if self.distribution == "uniform":
+            return lo + u * (hi - lo)
+        if self.distribution == "triangular":
+            c = (self.shape["mode"] - lo) / (hi - lo)
+            return stats.triang.ppf(u, c, loc=lo, scale=hi - lo)
+        if self.distribution == "normal":
+            mean, sd = self.shape["mean"], self.shape["sd"]
+            if math.isinf(lo) and math.isinf(hi):
+                return stats.norm.ppf(u, loc=mean, scale=sd)
+            return stats.truncnorm.ppf(u, (lo - mean) / sd, (hi - mean) / sd, loc=mean, scale=sd)
+        return self.shape["median"] * np.exp(self.shape["sigma_log"] * stats.norm.ppf(u))  # lognormal
+
+    def check_range(self) -> tuple[float, float]:
+        """The two values checked against the field's constraints: the support's ends, or six sigmas out."""
+        lo, hi = self.low, self.high
+        if self.distribution == "normal":
+            mean, sd = self.shape["mean"], self.shape["sd"]
+            lo = max(lo, mean - CHECK_SIGMAS * sd)
+            hi = min(hi, mean + CHECK_SIGMAS * sd)
+        elif self.distribution == "lognormal":
+            lo = self.shape["median"] * math.exp(-CHECK_SIGMAS * self.shape["sigma_log"])
+            hi = self.shape["median"] * math.exp(CHECK_SIGMAS * self.shape["sigma_log"])
+        return lo, hi
+
+    def describe(self) -> str:
+        """A short description such as ``uniform [0.368, 0.394] mm``-like text (SI units)."""
+        if self.distribution in ("uniform", "triangular"):
+            return f"{self.distribution} [{self.low:.6g}, {self.high:.6g}]"
+        if self.distribution == "normal":
+            text = f"normal mean {self.shape['mean']:.6g} sd {self.shape['sd']:.6g}"
+            if math.isfinite(self.low) or math.isfinite(self.high):
+                text += f" truncated to [{self.low:.6g}, {self.high:.6g}]"
+            return text
+        return f"lognormal median {self.shape['median']:.6g} sigma_log {self.shape['sigma_log']:.6g}"
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """A parsed study spec: uncertain parameters, the study's settings and the baseline rig.
+
+    Attributes
+    ----------
+    name : str
+    seed : int
+    parameters : tuple of UncertainParameter
+    metrics : tuple of str
+        Metric names (:data:`flexdigit.studies.metrics.METRICS`); empty means the study's default set.
+    settings : dict
+        The other tables (``[sensitivity]``, ``[design]``), as read; each study validates its own.
+    baseline : ParameterSet
+    source : str
+        The file (or ``"spec"``) named in error messages.
+    """
+
+    name: str
+    seed: int
+    parameters: tuple[UncertainParameter, ...]
+    metrics: tuple[str, ...]
+    settings: dict
+    baseline: ParameterSet
+    source: str = "spec"
+
+    @property
+    def names(self) -> list[str]:
+        return [p.name for p in self.parameters]
+
+    def fingerprint(self) -> str:
+        """A hash of everything that decides the study's numbers (not the file's comments or layout)."""
+        doc = {
+            "name": self.name,
+            "seed": self.seed,
+            "metrics": list(self.metrics),
+            "settings": self.settings,
+            "parameters": [dataclasses.asdict(p) for p in self.parameters],
+            "baseline": {"params": self.baseline.params.to_dict(), "calibration": self.baseline.calibration.to_dict()},
+        }
+        text = json.dumps(doc, sort_keys=True, default=repr)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def values_from_unit(self, u) -> np.ndarray:
+        """Map unit-cube samples (n, d) to parameter values (n, d) column by column."""
+        u = np.atleast_2d(np.asarray(u, dtype=float))
+        if u.shape[1] != len(self.parameters):
+            raise ParameterError(
+                f"{self.source}: samples have {u.shape[1]} columns for {len(self.parameters)} parameters"
+            )
+        return np.column_stack([p.ppf(u[:, j]) for j, p in enumerate(self.parameters)])
+
+    def parameter_set(self, values, label: str = "sample") -> ParameterSet:
+        """The baseline rig with the uncertain fields set to ``values`` (a mapping name -> value, or a row).
+
+        Raises
+        ------
+        ParameterError
+            Naming ``label`` and the field, if the rig refuses a value (e.g. a gauge beyond the tip).
+        """
+        if not isinstance(values, dict):
+            row = np.asarray(values, dtype=float).reshape(-1)
+            values = dict(zip(self.names, row, strict=True))
+        return apply_values(self.baseline, self.parameters, values, label)
+
+
+# --------------------------------------------------------------------------------------------------- applying
+def apply_values(baseline: ParameterSet, parameters, values: dict, label: str) -> ParameterSet:
+    """``baseline`` with each parameter's value set (see :meth:`StudySpec.parameter_set`).
+
+    Only the sections a parameter touches are rebuilt (``dataclasses.replace``), so their own validation runs and
+    the rest is reused: a few hundred microseconds a row, not the milliseconds of a round trip through a dict.
+    """
+    changes: dict[str, dict] = {}
+    for p in parameters:
+        value = float(values[p.name])
+        section = baseline.calibration if p.section == "calibration" else getattr(baseline.params, p.section)
+        fields = changes.setdefault(p.section, {})
+        current = fields.get(p.field, getattr(section, p.field))
+        if p.is_factor:
+            fields[p.field] = tuple(float(v) * value for v in current)
+        elif p.element is not None:
+            current = list(current)
+            current[p.element] = value
+            fields[p.field] = tuple(current)
+        else:
+            fields[p.field] = value
+    where = "calibration"
+    try:
+        calibration = baseline.calibration
+        if "calibration" in changes:
+            calibration = dataclasses.replace(calibration, **changes.pop("calibration"))
+        sections = {}
+        for where, kw in changes.items():
+            sections[where] = dataclasses.replace(getattr(baseline.params, where), **kw)
+        where = "rig"
+        params = dataclasses.replace(baseline.params, **sections) if sections else baseline.params
+    except (ParameterError, DataFileError, TypeError) as exc:
+        raise ParameterError(f"{label}: [{where}] {exc}") from None
+    return ParameterSet(params, calibration, baseline.antagonist_pretension_n)
+
+
+# --------------------------------------------------------------------------------------------------- reading
+def load_spec(name_or_path: str | Path) -> StudySpec:
+    """Read a study spec: a file, or the name of a shipped one (:data:`SHIPPED_SPECS`).
+
+    Raises
+    ------
+    ParameterError
+        Naming the file and the key, for anything the spec gets wrong.
+    FileNotFoundError
+        If there is no such file and no shipped spec of that name.
+    """
+    text_name = str(name_or_path)
+    path = Path(name_or_path)
+    if not path.exists() and text_name in SHIPPED_SPECS:
+        from importlib import resources
+
+        ref = resources.files("flexdigit.studies").joinpath("specs").joinpath(f"{text_name}.toml")
+        return spec_from_toml(ref.read_text(), source=f"{text_name}.toml")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory, not a study spec")
+    return spec_from_toml(path.read_text(), source=str(path), base_dir=path.parent)
+
+
+def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None) -> StudySpec:
+    """Parse a study spec from TOML text (see the module docstring); errors name ``source`` and the key."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{source}: not valid TOML ({exc})") from None
+    known = {"study", "parameters", "sensitivity", "design"}
+    unknown = sorted(set(doc) - known)
+    if unknown:
+        raise ParameterError(
+            f"{source}: unknown table [{unknown[0]}]; expected " + ", ".join(f"[{k}]" for k in sorted(known))
+        )
+    study = _table(doc.get("study", {}), "[study]", source)
+    bad = sorted(set(study) - {"name", "seed", "metrics", "params", "calibration", "description"})
+    if bad:
+        raise ParameterError(
+            f"{source}: unknown key '{bad[0]}' in [study]; expected name, seed, metrics, params, calibration, "
+            "description"
+        )
+    name = study.get("name", Path(source).stem)
+    if not isinstance(name, str) or not name:
+        raise ParameterError(f"{source}: [study] name must be a non-empty string. Got {name!r} instead.")
+    seed = study.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ParameterError(f"{source}: [study] seed must be an integer >= 0. Got {seed!r} instead.")
+    metrics = study.get("metrics", [])
+    if not isinstance(metrics, list) or not all(isinstance(m, str) for m in metrics):
+        raise ParameterError(f"{source}: [study] metrics must be a list of metric names. Got {metrics!r} instead.")
+    if metrics:
+        from flexdigit.studies.metrics import METRICS
+
+        for m in metrics:
+            if m not in METRICS:
+                raise ParameterError(
+                    f"{source}: [study] metrics: unknown metric {m!r}; expected one of " + ", ".join(METRICS)
+                )
+        if len(set(metrics)) != len(metrics):
+            raise ParameterError(f"{source}: [study] metrics lists a metric twice: {metrics!r}")
+    baseline = _baseline(study, source, base_dir)
+    parameters = _parameters(doc.get("parameters", {}), baseline, source)
+    if not parameters and "design" not in doc:
+        raise ParameterError(f"{source}: no [parameters.SECTION.FIELD] tables: nothing is uncertain")
+    names = [p.name for p in parameters]
+    for p in parameters:
+        if p.is_factor and any(q.startswith(f"{p.section}.{p.field}[") and q != p.name for q in names):
+            raise ParameterError(
+                f"{source}: [parameters.{p.section}.{p.field}] gives the whole field a factor and also one of its "
+                "elements a distribution; give either the factor or the elements"
+            )
+    settings = {k: _table(doc[k], f"[{k}]", source) for k in ("sensitivity", "design") if k in doc}
+    return StudySpec(name, seed, tuple(parameters), tuple(metrics), settings, baseline, source)
+
+
+def _table(value, where: str, source: str) -> dict:
+    if not isinstance(value, dict):
+        raise ParameterError(f"{source}: {where} must be a table of keys. Got {value!r} instead.")
+    return value
+
+
+def _baseline(study: dict, source: str, base_dir: Path | None) -> ParameterSet:
+    params, calibration = RigParams(), default_calibration()
+    for key, loader in (("params", load_params), ("calibration", load_calibration)):
+        if key not in study:
+            continue
+        value = study[key]
+        if not isinstance(value, str):
+            raise ParameterError(f"{source}: [study] {key} must be a file name. Got {value!r} instead.")
+        path = Path(value) if base_dir is None or Path(value).is_absolute() else base_dir / value
+        if not path.is_file():
+            raise ParameterError(f"{source}: [study] {key}: no such file {path}")
+        try:
+            loaded = loader(path)
+        except (ParameterError, DataFileError) as exc:
+            raise ParameterError(f"{source}: [study] {key}: {exc}") from None
+        if key == "params":
+            params = loaded
+        else:
+            calibration = loaded
+    return ParameterSet(params, calibration)
+
+
+def _fields(section: str, baseline: ParameterSet) -> dict[str, Any]:
+    if section == "calibration":
+        return baseline.calibration.to_dict()
+    return baseline.params.to_dict()[section]
+
+
+def _parameters(table, baseline: ParameterSet, source: str) -> list[UncertainParameter]:
+    table = _table(table, "[parameters]", source)
+    out: list[UncertainParameter] = []
+    for section, fields in table.items():
+        if section not in SECTIONS:
+            raise ParameterError(
+                f"{source}: unknown section [parameters.{section}]; expected one of "
+                + ", ".join(f"[parameters.{s}]" for s in SECTIONS)
+            )
+        fields = _table(fields, f"[parameters.{section}]", source)
+        allowed = _fields(section, baseline)
+        for name, entry in fields.items():
+            where = f"[parameters.{section}.{name}]"
+            if name not in allowed:
+                raise ParameterError(
+                    f"{source}: unknown field '{name}' in [parameters.{section}]; expected one of " + ", ".join(allowed)
+                )
+            entry = _table(entry, where, source)
+            nominal = allowed[name]
+            if isinstance(nominal, bool) or isinstance(nominal, (str, int)):
+                raise ParameterError(
+                    f"{source}: {where}: the field is {type(nominal).__name__}-valued ({nominal!r}); only real-valued "
+                    "fields can be uncertain (a design study varies the others)"
+                )
+            if isinstance(nominal, list):
+                if not all(isinstance(v, float) for v in nominal):
+                    raise ParameterError(f"{source}: {where}: only real-valued fields can be uncertain")
+                if "distribution" in entry:  # a factor on the whole tuple
+                    out.append(_parameter(section, name, None, 1.0, entry, where, source, factor=True))
+                    continue
+                for key, sub in entry.items():
+                    if not (key.isdigit() and int(key) < len(nominal)):
+                        raise ParameterError(
+                            f"{source}: {where}: expected 'distribution' (one factor on every element) or element "
+                            f"tables 0..{len(nominal) - 1}. Got key {key!r} instead."
+                        )
+                    k = int(key)
+                    sub = _table(sub, f"[parameters.{section}.{name}.{k}]", source)
+                    out.append(
+                        _parameter(section, name, k, nominal[k], sub, f"[parameters.{section}.{name}.{k}]", source)
+                    )
+                continue
+            out.append(_parameter(section, name, None, float(nominal), entry, where, source))
+    for p in out:
+        for end in p.check_range():
+            try:
+                apply_values(baseline, [p], {p.name: end}, f"{source}: {_where(p)}")
+            except ParameterError as exc:
+                raise ParameterError(
+                    f"{exc} (the {p.distribution} range of {_where(p)} reaches {end:.6g}, which the field refuses)"
+                ) from None
+    return out
+
+
+def _where(p: UncertainParameter) -> str:
+    tail = f".{p.element}" if p.element is not None else ""
+    return f"[parameters.{p.section}.{p.field}{tail}]"
+
+
+def _number(entry: dict, key: str, where: str, source: str, positive: bool = False) -> float:
+    value = entry[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ParameterError(f"{source}: {where} {key} must be a finite number. Got {value!r} instead.")
+    if positive and value <= 0:
+        raise ParameterError(f"{source}: {where} {key} must be > 0. Got {value!r} instead.")
+    return float(value)
+
+
+def _parameter(section, name, element, nominal, entry, where, source, factor=False) -> UncertainParameter:
+    dist = entry.get("distribution")
+    if dist not in DISTRIBUTIONS:
+        raise ParameterError(
+            f"{source}: {where} distribution must be one of "
+            + ", ".join(repr(d) for d in DISTRIBUTIONS)
+            + f". Got {dist!r} instead."
+        )
+    keys = set(entry) - {"distribution", "source"}
+    bad = sorted(keys - set(DISTRIBUTIONS[dist]))
+    if bad:
+        raise ParameterError(
+            f"{source}: {where}: unknown key '{bad[0]}' for a {dist} distribution; expected "
+            + ", ".join(DISTRIBUTIONS[dist])
+        )
+    text = entry.get("source", "")
+    if not isinstance(text, str):
+        raise ParameterError(f"{source}: {where} source must be a string. Got {text!r} instead.")
+    if factor:
+        absolute = sorted(keys & {"low", "high", "mean", "sd", "median", "delta", "mode"})
+        if absolute:
+            raise ParameterError(
+                f"{source}: {where}: a whole tuple field is moved by one factor (nominal 1): give 'relative' or "
+                f"'relative_sd' (or 'sigma_log'), or one table per element. Got '{absolute[0]}' instead."
+            )
+    num = {k: _number(entry, k, where, source) for k in keys}
+    shape: dict[str, float] = {}
+    lo, hi = -math.inf, math.inf
+    if dist in ("uniform", "triangular"):
+        forms = [f for f in (("low", "high"), ("relative",), ("delta",)) if any(k in num for k in f)]
+        if len(forms) != 1 or (forms[0] == ("low", "high") and not {"low", "high"} <= set(num)):
+            raise ParameterError(
+                f"{source}: {where}: a {dist} distribution needs 'low' and 'high', or 'relative', or 'delta' "
+                f"(exactly one form). Got {sorted(keys - {'mode'})} instead."
+            )
+        if "relative" in num:
+            r = _number(entry, "relative", where, source, positive=True)
+            lo, hi = sorted((nominal * (1 - r), nominal * (1 + r)))
+        elif "delta" in num:
+            d = _number(entry, "delta", where, source, positive=True)
+            lo, hi = nominal - d, nominal + d
+        else:
+            lo, hi = num["low"], num["high"]
+        if not lo < hi:
+            raise ParameterError(f"{source}: {where}: empty range: low {lo:.6g} must be below high {hi:.6g}")
+        if dist == "triangular":
+            mode = num.get("mode", nominal)
+            if not lo <= mode <= hi:
+                raise ParameterError(f"{source}: {where}: mode {mode:.6g} must lie in [{lo:.6g}, {hi:.6g}]")
+            shape["mode"] = mode
+    elif dist == "normal":
+        if ("sd" in num) == ("relative_sd" in num):
+            raise ParameterError(f"{source}: {where}: a normal distribution needs 'sd' or 'relative_sd' (one of them)")
+        mean = num.get("mean", nominal)
+        sd = (
+            _number(entry, "sd", where, source, positive=True)
+            if "sd" in num
+            else _number(entry, "relative_sd", where, source, positive=True) * abs(mean)
+        )
+        if sd <= 0:
+            raise ParameterError(f"{source}: {where}: relative_sd of a zero mean gives no spread; give 'sd'")
+        lo, hi = num.get("low", -math.inf), num.get("high", math.inf)
+        if not lo < hi:
+            raise ParameterError(f"{source}: {where}: empty range: low {lo:.6g} must be below high {hi:.6g}")
+        if not lo <= mean <= hi:
+            raise ParameterError(f"{source}: {where}: mean {mean:.6g} must lie in the truncation [{lo:.6g}, {hi:.6g}]")
+        shape.update(mean=mean, sd=sd)
+    else:  # lognormal
+        if "sigma_log" not in num:
+            raise ParameterError(f"{source}: {where}: a lognormal distribution needs 'sigma_log'")
+        sigma = _number(entry, "sigma_log", where, source, positive=True)
+        median = num.get("median", nominal)
+        if median <= 0:
+            raise ParameterError(f"{source}: {where}: a lognormal median must be > 0. Got {median!r} instead.")
+        shape.update(median=median, sigma_log=sigma)
+        lo, hi = 0.0, math.inf
+    label = f"{section}.{name}" + ("[*]" if factor else f"[{element}]" if element is not None else "")
+    return UncertainParameter(label, section, name, element, dist, float(nominal), lo, hi, shape, text)

@@ -1,0 +1,537 @@
+"""N parameter sets of the twin stepped together: one vectorised state for the statics and the dynamics.
+
+Studies (:mod:`flexdigit.studies`) evaluate thousands of rigs; stepping them one :class:`~flexdigit.twin.Twin` at a
+time costs Python overhead per rig and per step. :class:`BatchedTwin` stacks the rigs' chains (same number of
+springs; every other number may differ: stiffness, damping, masses, lengths, gauges, cable, servo) and advances
+them with the scalar twin's integrator (:class:`~flexdigit.twin.digit.DynamicState`: two-stage L-stable Rosenbrock,
+exact Jacobian, the step halved while a link would turn more than 0.1 rad) written over a leading batch axis; a
+member that needs a halved step gets it alone (masked recursion), the others keep the full step. The servo is the
+scalar twin's (:mod:`flexdigit.twin.actuator`: second order, exact transition, commands latched on the 20 ms serial
+frame and the 52 Hz PWM pulse, hard stops). Same inputs, same numbers as N scalar twins (tested to 1e-9 rad).
+
+The batched twin also gains the thesis's **second, antagonistic cable** (2.1: "future designs should incorporate
+two cable system to ensure rigidity of the member and ultimately its stability"; 2.5 mentions one fitted for
+stiffness): a cable on the far side (eccentricity ``-e``), wound on the same pulley the other way, both cables
+pretensioned by ``pretension_n``. The tip link then carries ``e (T1 - T2)`` with ``T1 = k_c max(0, p + s - e psi)``
+and ``T2 = k_c max(0, p - s + e psi)`` (``s`` the shortening of the main cable, E 3.11, ``p = pretension / k_c``):
+near the equilibrium both are taut and the tip gains ``2 k_c e^2`` of stiffness instead of ``k_c e^2``, and
+commands below the equilibrium bend the digit the other way instead of slackening the cable.
+
+Reads are at the integration grid's points (the scalar twin interpolates between them) and noise-free: studies
+want the mechanics; the sensor chain's noise models are in :mod:`flexdigit.twin.sensors` and the tactile bounds.
+
+Examples
+--------
+>>> from flexdigit.params import RigParams
+>>> from flexdigit.twin.calibration import default_calibration
+>>> cal = default_calibration()
+>>> twins = BatchedTwin([RigParams()] * 2, [cal, cal.replace(cable_stiffness_n_m=2e4)])
+>>> twins.command([30, 30]); twins.advance(2.0)
+>>> bool(twins.tip_rotation_deg()[0] > twins.tip_rotation_deg()[1] > 30)    # the stiffer cable turns it further
+True
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import scipy.linalg
+
+from flexdigit._validation import check_array, check_choice, check_int, check_real
+from flexdigit.errors import ParameterError
+from flexdigit.models.servo import command_to_angle_rad
+from flexdigit.params import RigParams
+from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, DEFAULT_DT_S, cached_digit
+
+__all__ = ["BatchedChains", "BatchedTwin"]
+
+
+class BatchedChains:
+    """The matrices of N chains with the same number of springs, stacked on a leading axis.
+
+    Parameters
+    ----------
+    chains : sequence of Chain
+    pretension_n : array_like, shape (N,), optional
+        With a second, antagonistic cable: both cables' pretension (N); None: the thesis's single cable.
+    antagonist : array_like of bool, shape (N,), optional
+        Which chains have the second cable (default: all of them when ``pretension_n`` is given).
+    """
+
+    def __init__(self, chains: Sequence[Chain], pretension_n=None, antagonist=None) -> None:
+        if not chains:
+            raise ParameterError("BatchedChains needs at least one chain")
+        n, g = chains[0].n, chains[0].gauge_s_m.size
+        for i, ch in enumerate(chains):
+            if ch.n != n or ch.gauge_s_m.size != g:
+                raise ParameterError(
+                    f"BatchedChains: chain {i} has {ch.n} springs and {ch.gauge_s_m.size} gauges; chain 0 has {n} "
+                    f"and {g} (same section count, cells per section and gauge count across the batch)"
+                )
+        self.chains = list(chains)
+        self.size = len(chains)
+        self.n = n
+        self.k = np.stack([ch.k_psi for ch in chains])
+        self.c = np.stack([ch.c_psi for ch in chains])
+        self.a = np.stack([ch.a_mass for ch in chains])
+        g_grav = np.stack([ch.g_gravity for ch in chains])
+        self.ga, self.gb = g_grav[..., 0].copy(), g_grav[..., 1].copy()
+        self.e = np.array([ch.eccentricity for ch in chains])
+        self.kc = np.array([ch.cable_stiffness for ch in chains])
+        self.to_curvature = np.stack([ch._psi_to_gauge_curvature for ch in chains])
+        self.link = np.stack([ch.link_length_m for ch in chains])
+        self.s0 = np.array([ch.joint_s_m[0] for ch in chains])
+        self.stiffness = np.stack([ch.stiffness for ch in chains])
+        # batch-last copies for the dynamics: every elementwise operation runs along contiguous memory, and the
+        # small solves are an unpivoted LU written over the batch axis (_lu_factor), 3-4x faster than LAPACK's
+        # per-matrix gesv for 1000 9 x 9 systems
+        self._k_t = np.ascontiguousarray(self.k.transpose(1, 2, 0))
+        self._c_t = np.ascontiguousarray(self.c.transpose(1, 2, 0))
+        self._a_t = np.ascontiguousarray(self.a.transpose(1, 2, 0))
+        self._ga_t = np.ascontiguousarray(self.ga.T)
+        self._gb_t = np.ascontiguousarray(self.gb.T)
+        if pretension_n is None:
+            self.antagonist = np.zeros(self.size, dtype=bool)
+            self.pre = np.zeros(self.size)
+        else:
+            pre = check_array(pretension_n, "pretension_n", "BatchedChains", shape=(self.size,), low=0)
+            self.antagonist = np.ones(self.size, dtype=bool) if antagonist is None else np.asarray(antagonist, bool)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                self.pre = np.where(self.antagonist & (self.kc > 0), pre / np.where(self.kc > 0, self.kc, 1.0), 0.0)
+
+    # ---------------------------------------------------------------------------------------------- cable
+    def tensions(self, psi_tip, shortening):
+        """``(T1, T2, taut1, taut2)``: main and antagonistic cable tension (N) and whether each is taut."""
+        s1 = shortening + self.pre - self.e * psi_tip
+        t1 = self.kc * np.maximum(s1, 0.0)
+        s2 = np.where(self.antagonist, self.pre - shortening + self.e * psi_tip, -np.inf)
+        t2 = self.kc * np.maximum(s2, 0.0)
+        return t1, t2, s1 > 0, s2 > 0
+
+    def tip_rad(self, psi) -> np.ndarray:
+        """Absolute tip-link angle (rad)."""
+        return psi[:, -1]
+
+    def tip_m(self, psi) -> np.ndarray:
+        """Tip positions (N, 2) in the (a, b) axes."""
+        a = self.s0 + np.sum(self.link * np.cos(psi), axis=1)
+        b = np.sum(self.link * np.sin(psi), axis=1)
+        return np.column_stack([a, b])
+
+    def curvature(self, psi) -> np.ndarray:
+        """Strip curvature at the gauges (N, G), 1/m."""
+        return np.einsum("bgn,bn->bg", self.to_curvature, psi)
+
+    # ---------------------------------------------------------------------------------------------- statics
+    def solve_static(self, shortening_m, *, tip_moment_nm=None, psi0=None, tol=1e-11, max_iter=80, max_step_rad=0.35):
+        """Equilibrium of every chain under self-weight, the cable(s) and an optional tip moment; (N, n) angles.
+
+        ``shortening_m`` (N,): the main cable's shortening, ``-inf`` for a detached cable (the antagonist then
+        carries nothing either). The scalar :meth:`Chain.solve_static`'s damped Newton, batched over chains.
+        """
+        short = np.broadcast_to(np.asarray(shortening_m, dtype=float), (self.size,))
+        moment = np.zeros(self.size) if tip_moment_nm is None else np.broadcast_to(tip_moment_nm, (self.size,))
+        attached = np.isfinite(short)
+        sh = np.where(attached, short, 0.0)
+        psi = np.zeros((self.size, self.n)) if psi0 is None else np.array(psi0, dtype=float)
+        idx = np.arange(self.n)
+        scale = float(np.max(self.stiffness))
+        for _ in range(max_iter):
+            s, c = np.sin(psi), np.cos(psi)
+            res = np.einsum("bij,bj->bi", self.k, psi) + s * self.ga - c * self.gb
+            res[:, -1] -= moment
+            jac = self.k.copy()
+            jac[:, idx, idx] += c * self.ga + s * self.gb
+            t1, t2, taut1, taut2 = self.tensions(psi[:, -1], sh)
+            res[:, -1] -= np.where(attached, self.e * (t1 - t2), 0.0)
+            jac[:, -1, -1] += np.where(attached, self.kc * self.e**2 * (taut1.astype(float) + taut2), 0.0)
+            step = np.linalg.solve(jac, res[..., None])[..., 0]
+            biggest = np.max(np.abs(step), axis=1, keepdims=True)
+            step *= np.minimum(1.0, max_step_rad / np.maximum(biggest, 1e-300))
+            psi -= step
+            if np.max(np.abs(res)) < tol * scale and np.max(biggest) < 1e-9:
+                break
+        if not np.all(np.isfinite(psi)):
+            raise ArithmeticError("batched static solve diverged (non-finite angles)")
+        return psi
+
+    def linear_modes(self, psi_eq=None, shortening_m=None):
+        """First-mode natural frequency (rad/s) and damping ratio of every chain, linearised about ``psi_eq``.
+
+        The cables count as taut where their stretch at ``psi_eq`` and ``shortening_m`` is positive (None: cable
+        removed, the release test of 3.1.2).
+        """
+        psi = np.zeros((self.size, self.n)) if psi_eq is None else np.asarray(psi_eq, dtype=float)
+        n = self.n
+        idx = np.arange(n)
+        m = self.a * np.cos(psi[:, :, None] - psi[:, None, :])
+        k = self.k.copy()
+        k[:, idx, idx] += np.cos(psi) * self.ga + np.sin(psi) * self.gb
+        if shortening_m is not None:
+            _, _, taut1, taut2 = self.tensions(psi[:, -1], np.asarray(shortening_m, dtype=float))
+            k[:, -1, -1] += self.kc * self.e**2 * (taut1.astype(float) + taut2)
+        minv_k = np.linalg.solve(m, k)
+        minv_c = np.linalg.solve(m, self.c)
+        top = np.concatenate([np.zeros_like(m), np.broadcast_to(np.eye(n), m.shape)], axis=2)
+        bottom = np.concatenate([-minv_k, -minv_c], axis=2)
+        lam = np.linalg.eigvals(np.concatenate([top, bottom], axis=1))
+        lam = np.where(lam.imag > 0, lam, np.nan)  # one of each conjugate pair (the digit's modes are underdamped)
+        wn = np.abs(lam)
+        first = np.nanargmin(wn, axis=1)
+        rows = np.arange(self.size)
+        return wn[rows, first], -lam.real[rows, first] / wn[rows, first]
+
+    def linearised(self, psi_eq, shortening_m):
+        """``(M, C, K, b)`` of every chain about ``psi_eq`` (N, n): mass, damping and tangent stiffness matrices
+        (N, n, n) and the generalised force per metre of cable shortening (N, n), ``k_c e`` on the tip link per
+        taut cable (E 3.11)."""
+        psi = np.asarray(psi_eq, dtype=float)
+        idx = np.arange(self.n)
+        m = self.a * np.cos(psi[:, :, None] - psi[:, None, :])
+        k = self.k.copy()
+        k[:, idx, idx] += np.cos(psi) * self.ga + np.sin(psi) * self.gb
+        _, _, taut1, taut2 = self.tensions(psi[:, -1], np.asarray(shortening_m, dtype=float))
+        taut = taut1.astype(float) + taut2
+        k[:, -1, -1] += self.kc * self.e**2 * taut
+        b = np.zeros_like(psi)
+        b[:, -1] = self.kc * self.e * taut
+        return m, self.c.copy(), k, b
+
+    # ---------------------------------------------------------------------------------------------- dynamics
+    # Batch-last layout: angles (n, B), matrices (n, n, B); ``sel`` picks members (a slice for all of them, so
+    # nothing is copied on the common path).
+    def _rhs(self, sel, psi, omega, short):
+        a = self._a_t[:, :, sel]
+        s, c = np.sin(psi), np.cos(psi)
+        # cos(psi_j - psi_k) and sin(psi_j - psi_k) from outer products: no trigonometry on n^2 B numbers
+        cos_d = c[:, None, :] * c[None, :, :] + s[:, None, :] * s[None, :, :]
+        sin_d = s[:, None, :] * c[None, :, :] - c[:, None, :] * s[None, :, :]
+        m = a * cos_d
+        sm = a * sin_d
+        rhs = (
+            c * self._gb_t[:, sel]
+            - s * self._ga_t[:, sel]
+            - _matvec(self._k_t[:, :, sel], psi)
+            - _matvec(self._c_t[:, :, sel], omega)
+            - _matvec(sm, omega * omega)
+        )
+        attached = np.isfinite(short)
+        sh = np.where(attached, short, 0.0)
+        pre, e, kc, anta = self.pre[sel], self.e[sel], self.kc[sel], self.antagonist[sel]
+        s1 = sh + pre - e * psi[-1]
+        s2 = np.where(anta, pre - sh + e * psi[-1], -np.inf)
+        taut = np.where(attached, (s1 > 0).astype(float) + (s2 > 0), 0.0)
+        rhs[-1] += np.where(attached, e * kc * (np.maximum(s1, 0.0) - np.maximum(s2, 0.0)), 0.0)
+        return m, sm, rhs, s, c, taut
+
+    def ros2(self, sel, psi, omega, h, short0, short1):
+        """One ROS2 step of the members ``sel`` (see :meth:`DynamicState._ros2`), batch-last ``(n, B)`` angles and
+        rates; returns the new ``(psi, omega)``."""
+        n = self.n
+        d = np.arange(n)
+        gam = DynamicState.GAMMA
+        gh = gam * h
+        m, sm, rhs, s, c, taut = self._rhs(sel, psi, omega, short0)
+        alpha = _solve(m, rhs)
+        w2 = omega * omega
+        f_psi = sm * alpha[None, :, :] - m * w2[None, :, :] + self._k_t[:, :, sel]
+        f_psi[d, d] += -_matvec(sm, alpha) + _matvec(m, w2) + c * self._ga_t[:, sel] + s * self._gb_t[:, sel]
+        e, kc = self.e[sel], self.kc[sel]
+        f_psi[-1, -1] += kc * e * e * taut
+        q_t = np.zeros_like(psi)
+        rate = np.where(np.isfinite(short0) & np.isfinite(short1), (short1 - short0) / h, 0.0)
+        q_t[-1] = e * kc * taut * rate
+        f_omega = 2.0 * sm * omega[None, :, :] + self._c_t[:, :, sel]
+        lu = _lu_factor(m + gh * f_omega + (gh * gh) * f_psi)
+        b1 = _lu_solve(lu, rhs + gh * q_t - gh * _matvec(f_psi, omega))
+        a1 = omega + gh * b1
+        psi2, omega2 = psi + h * a1, omega + h * b1
+        m2, _, rhs2, _, _, _ = self._rhs(sel, psi2, omega2, short1)
+        alpha2 = _solve(m2, rhs2)
+        r1 = omega2 - 2.0 * a1
+        b2 = _lu_solve(lu, _matvec(m, alpha2 - 2.0 * b1) - gh * q_t - gh * _matvec(f_psi, r1))
+        a2 = r1 + gh * b2
+        return psi + h * (1.5 * a1 + 0.5 * a2), omega + h * (1.5 * b1 + 0.5 * b2)
+
+
+def _matvec(a, x):
+    """``a @ x`` per member, batch-last: (n, n, B) x (n, B) -> (n, B)."""
+    return np.einsum("ijb,jb->ib", a, x)
+
+
+def _lu_factor(a):
+    """Unpivoted LU of every member, batch-last (n, n, B); packed factors. The matrices here (mass matrices and
+    ``M + gamma h F_omega + (gamma h)^2 F_psi``) are dominated by the positive definite mass matrix, where
+    Gaussian elimination without pivoting is stable; a vanishing pivot raises rather than returning garbage."""
+    lu = a.copy()
+    n = lu.shape[0]
+    for k in range(n - 1):
+        lu[k + 1 :, k] /= lu[k, k]
+        lu[k + 1 :, k + 1 :] -= lu[k + 1 :, k, None] * lu[k, None, k + 1 :]
+    diag = np.abs(lu[np.arange(n), np.arange(n)])
+    if not np.all(diag > 1e-14 * np.max(np.abs(a), axis=(0, 1))):
+        raise ArithmeticError("singular mass or iteration matrix in the batched digit dynamics")
+    return lu
+
+
+def _lu_solve(lu, b):
+    """Solve with :func:`_lu_factor`'s factors, batch-last: ``b`` (n, B)."""
+    x = b.copy()
+    n = lu.shape[0]
+    for k in range(1, n):
+        x[k] -= np.sum(lu[k, :k] * x[:k], axis=0)
+    for k in range(n - 1, -1, -1):
+        x[k] = (x[k] - np.sum(lu[k, k + 1 :] * x[k + 1 :], axis=0)) / lu[k, k]
+    return x
+
+
+def _solve(a, b):
+    return _lu_solve(_lu_factor(a), b)
+
+
+class BatchedTwin:
+    """N rigs on one clock: integer commands in (one per rig), tip rotations and gauge curvatures out.
+
+    Parameters
+    ----------
+    params : RigParams or sequence of RigParams
+        One per rig (or one for all); the serial period and PWM frequency must agree (one clock).
+    calibrations : Calibration or sequence of Calibration, optional
+    orientation : {"vertical", "hanging", "horizontal"}
+    housing, cable : bool
+    dt_s : float
+        Integration step (s), rounded to a divisor of the serial period.
+    cells_per_section : int
+    pretension_n : array_like, shape (N,), optional
+        A second, antagonistic cable with this pretension on both cables (N); None: the thesis's single cable.
+    command : int or array_like, optional
+        Initial commands (default the equilibrium command); every rig starts at rest in equilibrium there.
+    """
+
+    MAX_ROTATION_PER_STEP_RAD = DynamicState.MAX_ROTATION_PER_STEP_RAD
+
+    def __init__(
+        self,
+        params,
+        calibrations=None,
+        *,
+        orientation: str = "vertical",
+        housing: bool = True,
+        cable: bool = True,
+        dt_s: float = DEFAULT_DT_S,
+        cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
+        pretension_n=None,
+        command=None,
+    ) -> None:
+        params_list = [params] if isinstance(params, RigParams) else list(params)
+        if calibrations is None or isinstance(calibrations, Calibration):
+            cal_list = [calibrations or default_calibration()] * len(params_list)
+        else:
+            cal_list = list(calibrations)
+        if len(params_list) == 1 and len(cal_list) > 1:
+            params_list = params_list * len(cal_list)
+        if len(params_list) != len(cal_list) or not params_list:
+            raise ParameterError(
+                f"BatchedTwin: {len(params_list)} parameter sets and {len(cal_list)} calibrations; give one of each "
+                "per rig (or one for all)"
+            )
+        check_choice(orientation, "orientation", tuple(ORIENTATIONS), "BatchedTwin")
+        cells = check_int(cells_per_section, "cells_per_section", "BatchedTwin", low=1, high=1000)
+        self.params, self.calibrations = params_list, cal_list
+        self.size = len(params_list)
+        self.cable = bool(cable)
+        clocks = {(p.actuator.serial_period_s, p.actuator.pwm_frequency_hz) for p in params_list}
+        if len(clocks) != 1:
+            raise ParameterError(
+                "BatchedTwin: the rigs must share one serial period and PWM frequency (one clock). "
+                f"Got {sorted(clocks)}."
+            )
+        (period, self._pwm_hz) = clocks.pop()
+        self._period = period
+        dt = check_real(dt_s, "dt_s", "BatchedTwin", low=1e-5, high=period)
+        self.dt_s = period / max(1, round(period / dt))
+        chains = [
+            cached_digit(p, c, bool(housing), orientation, cells) for p, c in zip(params_list, cal_list, strict=True)
+        ]
+        self.chains = BatchedChains(chains, pretension_n if self.cable else None)
+        act = [p.actuator for p in params_list]
+        self._cmd_lo = np.array([a.command_min for a in act])
+        self._cmd_hi = np.array([a.command_max for a in act])
+        self._rad_per_command = np.array([a.rad_per_command for a in act])
+        self._angle0 = np.array([math.radians(a.angle_min_deg) for a in act])
+        self._angle_min = self._angle0.copy()
+        self._angle_max = np.array([math.radians(a.angle_max_deg) for a in act])
+        self._wn = np.array([a.servo_wn_rad_s for a in act])
+        self._zeta = np.array([a.servo_zeta for a in act])
+        self._pulley = np.array([a.pulley_radius_m for a in act])
+        self._angle_taut = np.array(
+            [float(command_to_angle_rad(a.equilibrium_command, p)) for a, p in zip(act, params_list, strict=True)]
+        )
+        start = np.array([a.equilibrium_command for a in act]) if command is None else command
+        self.commands = self._check_commands(start)
+        self.angle = self._target(self.commands)
+        self.rate = np.zeros(self.size)
+        self._pending: list[tuple[float, np.ndarray]] = []
+        self._transitions: dict[float, np.ndarray] = {}
+        self._psi = np.ascontiguousarray(self.chains.solve_static(self._shortening(self.angle)).T)
+        self._omega = np.zeros_like(self._psi)
+        self.time_s = 0.0
+        self.substeps = 0
+        self.threads = None  # None: one per core (up to 8) for batches of 256 rigs or more; 1: no threads
+
+    # ---------------------------------------------------------------------------------------------- servo
+    def _check_commands(self, values) -> np.ndarray:
+        v = np.broadcast_to(np.asarray(values), (self.size,))
+        if not np.all(np.isfinite(v.astype(float))) or np.any(v != np.round(v)):
+            raise ParameterError(f"The 'command' parameter of BatchedTwin must be integers. Got {v!r} instead.")
+        v = v.astype(int)
+        bad = np.flatnonzero((v < self._cmd_lo) | (v > self._cmd_hi))
+        if bad.size:
+            i = int(bad[0])
+            raise ParameterError(
+                f"The 'command' parameter of BatchedTwin must be an integer in [{self._cmd_lo[i]}, {self._cmd_hi[i]}]. "
+                f"Got {int(v[i])} for rig {i} instead."
+            )
+        return v.copy()
+
+    def _target(self, commands) -> np.ndarray:
+        return self._angle0 + (commands - self._cmd_lo) * self._rad_per_command
+
+    def _shortening(self, angle) -> np.ndarray:
+        if not self.cable:
+            return np.full(self.size, -np.inf)
+        return self._pulley * (angle - self._angle_taut)
+
+    def _transition(self, h: float) -> np.ndarray:
+        phi = self._transitions.get(h)
+        if phi is None:
+            a = np.zeros((self.size, 3, 3))
+            a[:, 0, 1] = 1.0
+            a[:, 1, 0] = -(self._wn**2)
+            a[:, 1, 1] = -2.0 * self._zeta * self._wn
+            a[:, 1, 2] = self._wn**2
+            phi = self._transitions[h] = scipy.linalg.expm(a * h)
+        return phi
+
+    def command(self, values) -> None:
+        """Send one command per rig (integers); they take effect on the next serial frame and PWM pulse, as on the
+        scalar twin (:meth:`flexdigit.twin.actuator.Servo.schedule`)."""
+        v = self._check_commands(values)
+        frame = math.ceil(self.time_s / self._period - 1e-9) * self._period
+        pwm = 1.0 / self._pwm_hz
+        pulse = math.ceil(frame / pwm - 1e-9) * pwm
+        apply = math.ceil(pulse / self.dt_s - 1e-9) * self.dt_s
+        self._pending.append((apply, v))
+        self._pending.sort(key=lambda item: item[0])
+
+    # ---------------------------------------------------------------------------------------------- stepping
+    def advance(self, duration_s: float) -> None:
+        """Let ``duration_s`` of rig time pass (a whole number of integration steps, rounded up)."""
+        duration = check_real(duration_s, "duration_s", "BatchedTwin.advance", low=0)
+        target = self.time_s + duration
+        h = self.dt_s
+        blocks = self._blocks()
+        pool = None
+        if len(blocks) > 1:
+            from concurrent.futures import ThreadPoolExecutor
+
+            pool = ThreadPoolExecutor(len(blocks))
+        try:
+            while self.time_s < target - 1e-12:
+                while self._pending and self._pending[0][0] <= self.time_s + 1e-12:
+                    self.commands = self._pending.pop(0)[1]
+                a0 = self.angle
+                self._servo_step(h)
+                s0, s1 = self._shortening(a0), self._shortening(self.angle)
+                if pool is None:
+                    self._step(blocks[0], h, s0, s1, 0)
+                else:  # numpy releases the GIL in its loops: the blocks step on separate cores
+                    jobs = [pool.submit(self._step, b, h, s0[b], s1[b], 0) for b in blocks]
+                    for job in jobs:
+                        job.result()
+                self.time_s = (round(self.time_s / h) + 1) * h
+        finally:
+            if pool is not None:
+                pool.shutdown()
+
+    #: Below this many rigs a batch steps in one thread (the threads' overhead outweighs a second core).
+    THREAD_MIN_RIGS = 256
+
+    def _blocks(self) -> list[np.ndarray]:
+        """Contiguous blocks of rigs, one per core when the batch is large enough. Every rig's arithmetic is the
+        same whichever block it is in (the batch-last operations are elementwise over rigs) up to rounding: numpy's
+        inner loops differ between a contiguous batch and a strided block (1e-14 rad after a 0.4 s step; tested).
+        Set :attr:`threads` to 1 for bit-for-bit repeatability across batch sizes."""
+        import os
+
+        cores = min(os.cpu_count() or 1, 8)
+        if self.threads is not None:
+            cores = self.threads
+        count = max(1, min(cores, self.size // self.THREAD_MIN_RIGS))
+        return [b for b in np.array_split(np.arange(self.size), count) if b.size]
+
+    def _servo_step(self, h: float) -> None:
+        phi = self._transition(h)
+        target = self._target(self.commands)
+        angle = phi[:, 0, 0] * self.angle + phi[:, 0, 1] * self.rate + phi[:, 0, 2] * target
+        rate = phi[:, 1, 0] * self.angle + phi[:, 1, 1] * self.rate + phi[:, 1, 2] * target
+        stop = (angle > self._angle_max) | (angle < self._angle_min)
+        self.angle = np.clip(angle, self._angle_min, self._angle_max)
+        self.rate = np.where(stop, 0.0, rate)
+
+    def _step(self, idx, h, short0, short1, depth) -> None:
+        contiguous = idx.size and idx[-1] - idx[0] + 1 == idx.size
+        sel = slice(int(idx[0]), int(idx[-1]) + 1) if contiguous else idx  # a block of rigs: views, no copies
+        psi0, omega0 = self._psi[:, sel], self._omega[:, sel]
+        psi1, omega1 = self.chains.ros2(sel, psi0, omega0, h, short0, short1)
+        self.substeps += 1
+        spin = h * np.maximum(np.max(np.abs(omega0), axis=0), np.max(np.abs(omega1), axis=0))
+        fast = (spin > self.MAX_ROTATION_PER_STEP_RAD) | ~np.all(np.isfinite(omega1), axis=0)
+        if depth >= 12 or not fast.any():
+            self._psi[:, sel], self._omega[:, sel] = psi1, omega1
+            if not np.all(np.isfinite(psi1)):
+                raise ArithmeticError("the batched digit dynamics diverged (non-finite angles)")
+            return
+        keep = ~fast
+        self._psi[:, idx[keep]], self._omega[:, idx[keep]] = psi1[:, keep], omega1[:, keep]
+        sub = idx[fast]
+        mid = 0.5 * (short0[fast] + short1[fast])
+        self._step(sub, 0.5 * h, short0[fast], mid, depth + 1)
+        self._step(sub, 0.5 * h, mid, short1[fast], depth + 1)
+
+    @property
+    def psi(self) -> np.ndarray:
+        """Link angles of every rig (N, n), rad."""
+        return self._psi.T
+
+    @property
+    def omega(self) -> np.ndarray:
+        """Link rates of every rig (N, n), rad/s."""
+        return self._omega.T
+
+    # ---------------------------------------------------------------------------------------------- reading
+    def tip_rotation_deg(self) -> np.ndarray:
+        """Tip rotation of every rig (deg, towards the cable side)."""
+        return np.degrees(self.psi[:, -1])
+
+    def gauge_curvature_1_m(self) -> np.ndarray:
+        """Strip curvature at every rig's gauges (N, G), 1/m."""
+        return self.chains.curvature(self.psi)
+
+    def tensions_n(self) -> tuple[np.ndarray, np.ndarray]:
+        """Main and antagonistic cable tensions now (N each; 0 when slack, absent or detached)."""
+        short = self._shortening(self.angle)
+        if not self.cable:
+            return np.zeros(self.size), np.zeros(self.size)
+        t1, t2, _, _ = self.chains.tensions(self.psi[:, -1], short)
+        return t1, t2
+
+    def __repr__(self) -> str:
+        return (
+            f"BatchedTwin(size={self.size}, dt_s={self.dt_s:g}, time_s={self.time_s:g}, cable={self.cable}, "
+            f"antagonist={bool(self.chains.antagonist.any())})"
+        )

@@ -1,0 +1,164 @@
+"""The design study: layouts, candidates, the D-criterion and the Pareto front against independent checks."""
+
+import itertools
+
+import numpy as np
+import pytest
+
+from flexdigit.errors import ParameterError
+from flexdigit.params import RigParams
+from flexdigit.studies.design import (
+    Candidate,
+    DesignSettings,
+    _information,
+    candidates,
+    d_criterion,
+    d_optimal_positions,
+    design_parameter_set,
+    equal_positions,
+    pareto_front,
+    run_design,
+)
+from flexdigit.studies.metrics import METRICS, MetricContext
+from flexdigit.studies.spec import ParameterSet, load_spec, spec_from_toml
+
+THESIS = Candidate(3, "thesis", "half", 16, 219 / 254, 5.715e-3, 0.0, 1.0)
+
+
+def test_pareto_front_against_brute_force():
+    rng = np.random.default_rng(0)
+    y = rng.random((60, 3))
+    y[7] = np.nan  # a failed design is never on the front
+    front = set(pareto_front(y).tolist())
+    for i in range(60):
+        dominated = any(
+            np.all(y[j] <= y[i]) and np.any(y[j] < y[i]) for j in range(60) if j != i and np.all(np.isfinite(y[j]))
+        )
+        assert (i in front) == (np.all(np.isfinite(y[i])) and not dominated)
+
+
+def test_equal_spacing_of_three_is_the_thesis_layout_and_stays_on_the_strip():
+    p = RigParams()
+    assert equal_positions(3, p) == pytest.approx(p.geometry.gauge_positions_m)  # table 3.5: midway (2.3.2)
+    for n in range(3, 7):
+        for x in equal_positions(n, p):  # never on a nylon support (90, 180 mm +- 5 mm)
+            assert all(abs(x - s) > 0.005 for s in (0.09, 0.18))
+
+
+def test_thesis_candidate_rebuilds_the_thesis_rig():
+    ps = design_parameter_set(ParameterSet(), THESIS)
+    base = RigParams()
+    assert ps.params.geometry == base.geometry and ps.params.sensors == base.sensors
+    assert ps.params.actuator.deg_per_command == pytest.approx(base.actuator.deg_per_command)
+    assert ps.antagonist_pretension_n is None
+
+
+def test_finer_servo_second_cable_and_size_change_the_rig_as_asked():
+    c = Candidate(6, "equal", "full", 12, 219 / 1016, 8e-3, 5.0, 1.25)
+    ps = design_parameter_set(ParameterSet(), c)
+    assert ps.params.geometry.digit_length_m == pytest.approx(1.25 * 0.27)
+    assert len(ps.params.geometry.gauge_positions_m) == 6 == len(ps.calibration.channel_gain)
+    assert ps.params.actuator.deg_per_command == pytest.approx(219 / 1016)
+    # the operating range still reaches 30 deg of tip rotation (3.4.1) with the finer step
+    gain = METRICS["rotation_gain_deg_per_command"](ps)
+    lo, hi = ps.params.actuator.operating_commands
+    assert (hi - lo) * gain >= 29.0
+    # the pair of cables stiffens the tip (2.1: 'rigidity of the member')
+    single = design_parameter_set(ParameterSet(), Candidate(6, "equal", "full", 12, 219 / 1016, 8e-3, 0.0, 1.25))
+    assert METRICS["tip_stiffness_nm_per_rad"](ps) > 1.5 * METRICS["tip_stiffness_nm_per_rad"](single)
+
+
+def test_full_bridge_and_more_bits_localise_better():
+    ctx = MetricContext(redesign=True, bayes_samples=100)
+    limit = {
+        (b, bits): METRICS["bayes_position_limit_mm"](
+            design_parameter_set(ParameterSet(), Candidate(3, "equal", b, bits, 219 / 254, 5.715e-3, 0.0, 1.0)), ctx
+        )
+        for b, bits in itertools.product(("half", "full"), (8, 16))
+    }
+    # E 2.3 vs E 2.4: the full bridge doubles the signal over the same amplifier noise
+    assert limit["full", 16] < limit["half", 16]
+    # an 8-bit card's 39 mV step adds 11 mV rms of quantisation noise to the 2 mV white noise
+    assert limit["half", 8] > 2 * limit["half", 16]
+
+
+def test_d_optimal_beats_every_pair_on_a_coarse_grid():
+    # exchange search against exhaustive search for 2 gauges on a 10 mm grid
+    ps = ParameterSet()
+    from flexdigit.tactile.protocols import load_protocol
+
+    jac, grid = _information(ps.params, ps.calibration, 0.01, tuple(load_protocol("thesis-6.1").loads_kg))
+    best = max(d_criterion(jac, pair) for pair in itertools.combinations(range(grid.size), 2))
+    positions, value, equal_value = d_optimal_positions(2, ps, step_m=0.01, seed=0)
+    assert value == pytest.approx(best, abs=1e-9)
+    assert value >= equal_value
+
+
+def test_candidates_sample_keeps_the_thesis_design():
+    settings = DesignSettings(samples=25)
+    got = candidates(settings, seed=3)
+    assert len(got) == 25 and any(c.is_thesis for c in got)
+    # and the thesis design's equal-spacing twins, the designs the front is read against
+    assert {
+        c.gauge_count
+        for c in got
+        if c.layout == "equal"
+        and c.bridge == "half"
+        and c.size == 1.0
+        and c.adc_bits == 16
+        and c.pretension_n == 0
+        and c.eccentricity_m == 5.715e-3
+        and abs(c.servo_deg_per_command - 219 / 254) < 1e-9
+    } == {3, 4, 5, 6}
+    assert got == candidates(settings, seed=3) != candidates(settings, seed=4)
+    assert all(c.gauge_count == 3 for c in candidates(DesignSettings(), 0) if c.layout == "thesis")
+
+
+@pytest.mark.parametrize(
+    "table, expected",
+    [
+        ("bridges = ['half', 'triple']", "bridges"),
+        ("gauge_counts = [0, 3]", "gauge_counts"),
+        ("size = []", "size"),
+        ("pretension_n = [-1.0]", "pretension_n"),
+        ("objectives = ['bayes_position_limit_mm']", "objectives"),
+        ("gauges = [3]", "unknown key 'gauges'"),
+    ],
+)
+def test_bad_design_tables_are_named(table, expected):
+    spec = spec_from_toml(f"[design]\n{table}\n", source="d.toml")
+    with pytest.raises(ParameterError) as err:
+        DesignSettings.from_spec(spec)
+    assert expected in str(err.value) and "d.toml" in str(err.value)
+
+
+def test_small_design_study_marks_the_thesis_on_its_front(tmp_path):
+    spec = spec_from_toml(
+        """
+[study]
+seed = 2
+[design]
+gauge_counts = [3]
+layouts = ["thesis", "equal"]
+bridges = ["half", "full"]
+adc_bits = [16]
+servo_deg_per_command = [0.8622]
+eccentricity_m = [0.005715]
+pretension_n = [0.0]
+size = [1.0, 1.25]
+bayes_samples = 50
+"""
+    )
+    result = run_design(spec, tmp_path, workers=0, progress=False)
+    marks = result.marked()
+    assert "thesis layout" in marks and "equal spacing, 3 gauges" in marks
+    obj = result.objective_matrix()
+    # the front is exactly the non-dominated designs, and the full bridge dominates the thesis's half bridge
+    assert set(result.front.tolist()) == set(pareto_front(obj).tolist())
+    assert marks["thesis layout"] not in set(result.front.tolist())
+    assert np.all(np.isfinite(obj[marks["thesis layout"]]))
+
+
+def test_shipped_design_spec_reads():
+    settings = DesignSettings.from_spec(load_spec("thesis-design"))
+    assert settings.samples > 0 and 3 in settings.gauge_counts and "full" in settings.bridges

@@ -1,0 +1,118 @@
+"""Metrics against closed forms and independent checks (tolerances named here)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from flexdigit.control.design20ms import closed_loop, design_20ms
+from flexdigit.params import Geometry, RigParams
+from flexdigit.reference import thesis_value
+from flexdigit.studies.metrics import (
+    METRICS,
+    MetricContext,
+    actuated_model,
+    evaluate,
+    loop_plant,
+    rotation_gain_deg_per_command,
+)
+from flexdigit.studies.spec import ParameterSet
+from flexdigit.twin.calibration import default_calibration
+
+WN_RTOL = 1e-3  # the default calibration's fit residual on table 3.2 is < 1e-5
+KINEMATIC_RTOL = 2e-3  # a 1e9 N/m cable pins the tip to r_M theta / e
+BAYES_RTOL = 0.1  # report chapter 6: Bayes position limit 2.6 mm (3 cells per section; the metric uses 9)
+
+
+def test_release_mode_is_table_3_2():
+    ps = ParameterSet()
+    assert METRICS["release_wn_rad_s"](ps) == pytest.approx(
+        thesis_value("digit.release_tests_with_housing.wn_avg_rad_s"), rel=WN_RTOL
+    )
+    assert METRICS["release_zeta"](ps) == pytest.approx(
+        thesis_value("digit.release_tests_with_housing.zeta_avg"), rel=WN_RTOL
+    )
+
+
+def test_rotation_gain_with_a_rigid_cable_is_the_kinematic_closed_form():
+    # E 3.11 with an inextensible cable: e psi_tip = r_M theta_M, so deg per command = 0.8622 r_M / e
+    p = RigParams()
+    stiff = ParameterSet(p, default_calibration().replace(cable_stiffness_n_m=1e9))
+    closed = p.actuator.deg_per_command * p.actuator.pulley_radius_m / p.geometry.cable_eccentricity_m
+    assert rotation_gain_deg_per_command(stiff, MetricContext()) == pytest.approx(closed, rel=KINEMATIC_RTOL)
+    # the fitted cable stretches: less rotation than the kinematic figure, as table 3.6 measured
+    assert METRICS["rotation_gain_deg_per_command"](ParameterSet()) < 0.99 * closed
+
+
+def test_actuated_model_dc_gain_matches_the_static_slope():
+    # the linearised model's DC gain (rad per m of shortening) against a central difference of the statics
+    ps = ParameterSet()
+    from flexdigit.studies.metrics import _chain, _mid_shortening_m
+
+    s0, ds = _mid_shortening_m(ps), 1e-6
+    sol = _chain(ps).solve_static(cable_shortening_m=[s0 - ds, s0 + ds])
+    slope = (sol.psi_rad[1, -1] - sol.psi_rad[0, -1]) / (2 * ds)
+    import control as ct
+
+    assert float(ct.dcgain(actuated_model(ps))) == pytest.approx(slope, rel=1e-4)
+
+
+def test_gain_margin_is_where_the_loop_goes_unstable():
+    # independent of stability_margins: scale the plant by the reported margin and look at the loop's poles
+    ps = ParameterSet()
+    gm = METRICS["gain_margin"](ps)
+    assert 1.5 < gm < 20
+    design = design_20ms(RigParams(), deg_per_command=rotation_gain_deg_per_command(ps, MetricContext()))
+    plant = loop_plant(ps, design.period_s, design.delay_samples)
+    radius = [np.max(np.abs(closed_loop(plant, design.controller, gain=g).poles())) for g in (0.98 * gm, 1.02 * gm)]
+    assert radius[0] < 1 < radius[1]
+
+
+def test_loop_settles_and_degrades_with_a_slower_servo():
+    base = evaluate(ParameterSet(), ["settling_time_s", "overshoot_percent"])
+    assert 0.1 < base["settling_time_s"] < 1.0 and 0 <= base["overshoot_percent"] < 10
+    a = RigParams().actuator
+    slow = ParameterSet(RigParams(actuator=type(a)(servo_wn_rad_s=0.5 * a.servo_wn_rad_s)))
+    assert METRICS["settling_time_s"](slow) > base["settling_time_s"]
+
+
+def test_bayes_limit_and_blind_zone_follow_the_gauges_and_the_noise():
+    base = ParameterSet()
+    assert METRICS["bayes_position_limit_mm"](base) == pytest.approx(2.6, rel=BAYES_RTOL)
+    blind = METRICS["blind_zone_mm"](base)
+    # a load past gauge 1 bends it (table 3.5: 45 mm); the sagging horizontal digit also shows a load a little
+    # short of it to gauges 2 and 3 (its weight turns the whole outer digit), so the zone ends before 45 mm
+    assert 25.0 < blind < 45.0
+    inward = ParameterSet(RigParams(geometry=Geometry(gauge_positions_m=(0.020, 0.135, 0.225))))
+    assert METRICS["blind_zone_mm"](inward) == pytest.approx(20.0, abs=3.0)  # ends at gauge 1, within a cell
+    cal = default_calibration()
+    noisy = ParameterSet(calibration=cal.replace(noise_white_v=tuple(4 * v for v in cal.noise_white_v)))
+    assert METRICS["blind_zone_mm"](noisy) > blind + 5  # what bends a gauge by a tenth of the noise moves out
+
+
+def test_hinf_gamma_is_the_thesis_design():
+    from flexdigit.control.reproduce import thesis_design
+
+    assert METRICS["hinf_gamma"](ParameterSet()) == pytest.approx(thesis_design(5.0).gamma, rel=1e-9)
+    assert math.isfinite(METRICS["hinf_gamma"](ParameterSet()))
+
+
+def test_batched_metrics_equal_the_scalar_twin():
+    # the metrics run on the batched twin; the scalar twin's chain (Chain.linear_modes, Chain.solve_static) is
+    # the reference it vectorises
+    from flexdigit.studies.metrics import _chain, evaluate_many
+    from flexdigit.studies.spec import load_spec
+    from flexdigit.twin.twin import cable_shortening_m
+
+    spec = load_spec("thesis-tolerances")
+    rng = np.random.default_rng(1)
+    sets = [spec.parameter_set(row) for row in spec.values_from_unit(rng.random((6, len(spec.parameters))))]
+    names = ["release_wn_rad_s", "release_zeta", "rotation_gain_deg_per_command"]
+    together = evaluate_many(sets, names)
+    for ps, values in zip(sets, together, strict=True):
+        chain = _chain(ps)
+        wn, zeta = chain.linear_modes()
+        tips = chain.solve_static(cable_shortening_m=cable_shortening_m(np.array([8, 43]), ps.params)).psi_rad[:, -1]
+        assert values["release_wn_rad_s"] == pytest.approx(wn[0], rel=1e-9)
+        assert values["release_zeta"] == pytest.approx(zeta[0], rel=1e-7)
+        assert values["rotation_gain_deg_per_command"] == pytest.approx(np.degrees(tips[1] - tips[0]) / 35, rel=1e-9)

@@ -1,0 +1,115 @@
+"""The batched twin against the scalar twin it vectorises, and its antagonistic cable against closed forms."""
+
+import numpy as np
+import pytest
+
+from flexdigit.params import Geometry, Material, RigParams
+from flexdigit.twin import Twin
+from flexdigit.twin.batched import BatchedChains, BatchedTwin
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.twin import cable_shortening_m, cached_digit
+
+PSI_ATOL = 1e-9  # rad: the same arithmetic in another order
+STATIC_ATOL = 1e-10
+
+CAL = default_calibration()
+RIGS = [
+    (RigParams(), CAL),
+    (RigParams(material=Material(youngs_modulus_pa=190e9)), CAL.replace(housing_ei_n_m2=(0.007, 0.003, 0.004))),
+    (RigParams(geometry=Geometry(cable_eccentricity_m=5.0e-3)), CAL.replace(cable_stiffness_n_m=2.0e4)),
+    (RigParams(), CAL.replace(support_mass_kg=(0.012, 0.006, 0.01), strip_beta_s=1e-3)),
+]
+
+
+def _scalar_run(params, cal, commands, steps, **kw):
+    twin = Twin(params, cal, **kw)
+    out = []
+    for k in range(steps):
+        if k in commands:
+            twin.command(commands[k])
+        twin.advance(twin.dt_s)
+        out.append(twin.dynamics.psi.copy())
+    return np.array(out)
+
+
+@pytest.mark.parametrize("orientation", ["vertical", "horizontal"])
+def test_steps_like_n_scalar_twins(orientation):
+    # a full-range step and back: the servo, the latch, the slack/taut cable and the halved steps all engage
+    commands = {0: 43, 40: 8, 55: 30}
+    steps = 90
+    batch = BatchedTwin([p for p, _ in RIGS], [c for _, c in RIGS], orientation=orientation)
+    got = []
+    for k in range(steps):
+        if k in commands:
+            batch.command([commands[k]] * len(RIGS))
+        batch.advance(batch.dt_s)
+        got.append(batch.psi.copy())
+    got = np.array(got)
+    for i, (p, c) in enumerate(RIGS):
+        ref = _scalar_run(p, c, commands, steps, orientation=orientation)
+        np.testing.assert_allclose(got[:, i], ref, atol=PSI_ATOL, rtol=0)
+    assert batch.substeps > steps  # some members needed halved steps, alone
+
+
+def test_statics_and_modes_match_each_chain():
+    chains = [cached_digit(p, c, True, "vertical", 3) for p, c in RIGS]
+    batch = BatchedChains(chains)
+    short = cable_shortening_m(np.array([8, 20, 30, 43]), RigParams())
+    psi = batch.solve_static(short)
+    for i, ch in enumerate(chains):
+        ref = ch.solve_static(cable_shortening_m=[short[i]]).psi_rad[0]
+        np.testing.assert_allclose(psi[i], ref, atol=STATIC_ATOL)
+    wn, zeta = batch.linear_modes()
+    for i, ch in enumerate(chains):
+        w, z = ch.linear_modes()
+        assert wn[i] == pytest.approx(w[0], rel=1e-10) and zeta[i] == pytest.approx(z[0], rel=1e-8)
+
+
+def test_antagonist_adds_k_e2_at_the_tip_and_bends_both_ways():
+    ch = cached_digit(RigParams(), CAL, True, "vertical", 3)
+    single, double = BatchedChains([ch], pretension_n=None), BatchedChains([ch], pretension_n=[5.0])
+    moment = 1e-4  # N m, small: the linear stiffness
+
+    def compliance(chains, pre_short):
+        psi0 = chains.solve_static([pre_short])[0, -1]
+        psi1 = chains.solve_static([pre_short], tip_moment_nm=[moment])[0, -1]
+        return (psi1 - psi0) / moment
+
+    # the single cable pretensioned by shortening it 5 N worth: taut, like the antagonistic pair at rest
+    c1 = compliance(single, 5.0 / ch.cable_stiffness)
+    c2 = compliance(double, 0.0)
+    # each taut cable adds k_c e^2 to the tip's rotational stiffness (3.3: moment T e, T = k_c (s - e psi))
+    assert 1 / c2 - 1 / c1 == pytest.approx(ch.cable_stiffness * ch.eccentricity**2, rel=2e-3)
+    # below the equilibrium command the single cable goes slack; the pair bends the digit the other way
+    twins = BatchedTwin([RigParams()] * 2, [CAL] * 2, pretension_n=[0.0, 5.0])
+    one = BatchedTwin(RigParams(), CAL)
+    for t in (one, twins):
+        t.command([0] * t.size)
+        t.advance(2.0)
+    assert abs(one.tip_rotation_deg()[0]) < 0.5
+    assert np.all(twins.tip_rotation_deg() < -5.0)
+
+
+def test_bad_inputs_are_named():
+    with pytest.raises(ValueError, match="command"):
+        BatchedTwin(RigParams()).command([255])
+    with pytest.raises(ValueError, match="pretension_n"):
+        BatchedTwin([RigParams()] * 2, pretension_n=[1.0, -1.0])
+    with pytest.raises(ValueError, match="one clock"):
+        from flexdigit.params import Actuator
+
+        BatchedTwin([RigParams(), RigParams(actuator=Actuator(serial_period_s=0.01))])
+
+
+def test_threads_do_not_change_a_number():
+    # the batch-last arithmetic is elementwise over rigs: blocks on two threads give the one-thread numbers, to
+    # rounding (numpy's inner loops differ between a contiguous batch and a strided block of it)
+    rigs = [RigParams(material=Material(youngs_modulus_pa=e)) for e in np.linspace(195e9, 215e9, 512)]
+    runs = []
+    for threads in (1, 2):
+        twins = BatchedTwin(rigs)
+        twins.threads = threads
+        twins.command([30] * len(rigs))
+        twins.advance(0.4)
+        runs.append(twins.psi.copy())
+    np.testing.assert_allclose(runs[1], runs[0], rtol=0, atol=1e-12)
