@@ -1,17 +1,46 @@
-"""One validator per kind of quantity: each copies, checks and names the culprit.
+"""Parameter validation: constraints declared once, checked by one helper, named in one message format.
 
 Messages follow scikit-learn's ``_param_validation`` format::
 
     The 'gauge_positions_m' parameter of DigitGeometry must be increasing and inside (0, 0.27].
     Got [0.3] instead.
 
-Validators raise :class:`flexdigit.errors.ParameterError` (a ``ValueError``) unless told otherwise, and never
-use ``assert`` (it vanishes under ``python -O``).
+Two layers, one format:
+
+- **Declared constraints** (scikit-learn's ``_parameter_constraints`` and ``validate_params``): a function's or a
+  class's parameters are declared once as a dict ``{"name": [constraint, ...]}`` of :class:`Interval`,
+  :class:`Options`, :class:`Array`, :class:`Bool`, :class:`InstanceOf`, :class:`HasMethods`, :class:`Callable` or
+  ``None`` (the value
+  ``None`` allowed: "not given"; 0 is a value). :func:`validate_params` decorates a function; a frozen dataclass
+  or an estimator calls :func:`check_params` on its own ``_parameter_constraints``. Every declaration is kept in
+  :data:`DECLARED`, and ``tests/test_validation.py`` generates the invalid values of every one of them
+  (:meth:`Constraint.invalid_values`) and checks that each is refused with this message, naming the parameter.
+- **Validators** (``check_real``, ``check_int``, ``check_choice``, ``check_array``, ``check_values``): the checks
+  the constraints run, also for what a declaration cannot say (one field bounded by another, a file's column).
+
+Everything raises :class:`flexdigit.errors.ParameterError` (a ``ValueError``) unless told otherwise, and never
+uses ``assert`` (it vanishes under ``python -O``).
+
+Examples
+--------
+>>> from numbers import Integral, Real
+>>> @validate_params({"hidden": [Interval(Integral, 1, None)], "tol": [Interval(Real, 0, None, closed="neither")]})
+... def train(hidden, tol=1e-7):
+...     return hidden, tol
+>>> train(18.0)
+(18, 1e-07)
+>>> train(True)
+Traceback (most recent call last):
+...
+flexdigit.errors.ParameterError: The 'hidden' parameter of train must be an integer inside [1, inf). Got True instead.
 """
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Iterable, Sequence
 from numbers import Integral, Real
 
@@ -252,3 +281,402 @@ def _interval_text(low, high, low_open, high_open) -> str:
     lo = "-inf" if low is None else f"{low:g}"
     hi = "inf" if high is None else f"{high:g}"
     return f" inside {left}{lo}, {hi}{right}"
+
+
+# ------------------------------------------------------------------------------------------ declared constraints
+class _Unsatisfied(Exception):
+    """A value does not meet one constraint (internal: the caller tries the next one or names them all)."""
+
+
+class Constraint(ABC):
+    """One declared constraint on a parameter: how to convert a value that meets it, how to say what it wants,
+    and (for the tests) values that do not meet it."""
+
+    @abstractmethod
+    def convert(self, value: object) -> object:
+        """Return ``value`` (a copy, or converted: ``8.0`` -> ``8`` for an integer) or raise ``_Unsatisfied``."""
+
+    @abstractmethod
+    def describe(self) -> str:
+        """What the constraint wants, as the message says it: ``"a real number inside (0, inf)"``."""
+
+    def invalid_values(self) -> list:
+        """Values that break this constraint (the declared-validation test feeds each of them)."""
+        return []
+
+    def valid_value(self) -> object:
+        """One value that meets this constraint (the test's stand-in for required parameters)."""
+        raise NotImplementedError(f"no valid value generated for {self!r}")
+
+    def check(self, value: object, name: str, owner: str | None, error: type[Exception]) -> object:
+        """:meth:`convert`, raising the one-line message naming the parameter (used when it is the only choice)."""
+        try:
+            return self.convert(value)
+        except _Unsatisfied:
+            _fail(name, owner, self.describe(), value, error)
+
+    def satisfied_by(self, value: object) -> bool:
+        try:
+            self.convert(value)
+        except _Unsatisfied:
+            return False
+        return True
+
+
+_CLOSED = ("both", "left", "right", "neither")
+
+
+class Interval(Constraint):
+    """A real number or an integer in an interval (scikit-learn's ``Interval``).
+
+    Parameters
+    ----------
+    type : numbers.Real or numbers.Integral
+        ``Integral`` accepts whole floats (``8.0`` -> ``8``) but not ``True``; ``Real`` accepts finite numbers only.
+    low, high : float or None
+        Bounds; ``None`` is unbounded.
+    closed : {"both", "left", "right", "neither"}
+        Which bounds belong to the interval (default ``"both"``; an integer interval is always closed).
+    """
+
+    def __init__(self, type, low=None, high=None, *, closed: str = "both") -> None:
+        if type not in (Real, Integral):
+            raise TypeError(f"Interval type must be numbers.Real or numbers.Integral, not {type!r}")
+        if closed not in _CLOSED:
+            raise ValueError(f"Interval closed must be one of {_CLOSED}, not {closed!r}")
+        if low is not None and high is not None and high < low:
+            raise ValueError(f"Interval high {high} is below low {low}")
+        self.type, self.low, self.high, self.closed = type, low, high, closed
+
+    @property
+    def low_open(self) -> bool:
+        return self.type is Real and self.closed in ("right", "neither")
+
+    @property
+    def high_open(self) -> bool:
+        return self.type is Real and self.closed in ("left", "neither")
+
+    def __repr__(self) -> str:
+        kind = "Real" if self.type is Real else "Integral"
+        return f"Interval({kind}, {self.low}, {self.high}, closed={self.closed!r})"
+
+    def describe(self) -> str:
+        kind = "an integer" if self.type is Integral else "a real number"
+        return kind + _interval_text(self.low, self.high, self.low_open, self.high_open)
+
+    def convert(self, value):
+        try:
+            if self.type is Integral:
+                return check_int(value, "x", low=self.low, high=self.high, error=_Unsatisfied)
+            return check_real(
+                value, "x", low=self.low, high=self.high, low_open=self.low_open, high_open=self.high_open,
+                error=_Unsatisfied,
+            )  # fmt: skip
+        except TypeError:  # comparing an exotic Real with the bounds
+            raise _Unsatisfied from None
+
+    def check(self, value, name, owner, error):
+        """:func:`check_int` or :func:`check_real`, with their messages (e.g. "a finite real number" for NaN)."""
+        if self.type is Integral:
+            return check_int(value, name, owner, low=self.low, high=self.high, error=error)
+        return check_real(
+            value, name, owner, low=self.low, high=self.high, low_open=self.low_open, high_open=self.high_open,
+            error=error,
+        )  # fmt: skip
+
+    def invalid_values(self) -> list:
+        out: list = ["1", True]
+        if self.type is Integral:
+            out.append(1.5)
+            out += [v for v in (self.low - 1 if self.low is not None else None,) if v is not None]
+            out += [v for v in (self.high + 1 if self.high is not None else None,) if v is not None]
+            return out
+        out.append(math.nan)
+        for bound, is_open, step in ((self.low, self.low_open, -1), (self.high, self.high_open, 1)):
+            if bound is not None:
+                out.append(bound if is_open else bound + step * max(1e-6, 1e-6 * abs(bound)))
+        return out
+
+    def valid_value(self):
+        lo = self.low if self.low is not None else (self.high - 1 if self.high is not None else 0)
+        hi = self.high if self.high is not None else lo + 2
+        mid = (lo + hi) / 2
+        return int(math.ceil(mid)) if self.type is Integral else float(mid)
+
+
+class Options(Constraint):
+    """One of a set of values (scikit-learn's ``Options``/``StrOptions``): ``Options({"thesis", "lsq"})``."""
+
+    def __init__(self, options: Iterable) -> None:
+        self.options = tuple(options)
+        if not self.options:
+            raise ValueError("Options needs at least one option")
+
+    def __repr__(self) -> str:
+        return f"Options({self.options!r})"
+
+    def describe(self) -> str:
+        return "one of " + ", ".join(repr(o) for o in self.options)
+
+    def convert(self, value):
+        # bool is an int: True must not pass for an option 1
+        if any(value is o or (type(value) is type(o) and value == o) for o in self.options):
+            return value
+        raise _Unsatisfied
+
+    def invalid_values(self) -> list:
+        probe = "not " + " or ".join(str(o) for o in self.options)
+        return [probe] + ([True] if all(isinstance(o, str) for o in self.options) else [])
+
+    def valid_value(self):
+        return self.options[0]
+
+
+def StrOptions(options: Iterable[str]) -> Options:  # noqa: N802 - scikit-learn's name for the same thing
+    """:class:`Options` of strings (scikit-learn's spelling)."""
+    return Options(sorted(options) if isinstance(options, set | frozenset) else options)
+
+
+class Bool(Constraint):
+    """``True`` or ``False`` (numpy's booleans too; not 0 or 1, which are numbers)."""
+
+    def __repr__(self) -> str:
+        return "Bool()"
+
+    def describe(self) -> str:
+        return "a boolean (True or False)"
+
+    def convert(self, value):
+        if isinstance(value, bool | np.bool_):
+            return bool(value)
+        raise _Unsatisfied
+
+    def invalid_values(self) -> list:
+        return [1, "yes"]
+
+    def valid_value(self):
+        return False
+
+
+class InstanceOf(Constraint):
+    """An instance of ``cls`` (a class or a tuple of classes)."""
+
+    def __init__(self, cls, description: str | None = None) -> None:
+        self.cls = cls
+        names = cls if isinstance(cls, tuple) else (cls,)
+        self.text = description or "an instance of " + " or ".join(c.__name__ for c in names)
+
+    def __repr__(self) -> str:
+        return f"InstanceOf({self.cls!r})"
+
+    def describe(self) -> str:
+        return self.text
+
+    def convert(self, value):
+        if isinstance(value, self.cls):
+            return value
+        raise _Unsatisfied
+
+    def invalid_values(self) -> list:
+        return [object()]
+
+
+class Callable(Constraint):
+    """A callable (a function or an object with ``__call__``)."""
+
+    def __repr__(self) -> str:
+        return "Callable()"
+
+    def describe(self) -> str:
+        return "a callable"
+
+    def convert(self, value):
+        if callable(value):
+            return value
+        raise _Unsatisfied
+
+    def invalid_values(self) -> list:
+        return [1.0]
+
+    def valid_value(self):
+        return len
+
+
+class HasMethods(Constraint):
+    """An object with these methods (a gauge model, a rig): duck typing, declared."""
+
+    def __init__(self, methods) -> None:
+        self.methods = (methods,) if isinstance(methods, str) else tuple(methods)
+
+    def __repr__(self) -> str:
+        return f"HasMethods({self.methods!r})"
+
+    def describe(self) -> str:
+        return "an object with method(s) " + ", ".join(self.methods)
+
+    def convert(self, value):
+        if all(callable(getattr(value, m, None)) for m in self.methods):
+            return value
+        raise _Unsatisfied
+
+    def invalid_values(self) -> list:
+        return [object()]
+
+    def valid_value(self):
+        return type("Stub", (), {m: lambda self, *a, **k: None for m in self.methods})()
+
+
+class Array(Constraint):
+    """An array of real numbers, checked and copied by :func:`check_array` (same keywords)."""
+
+    def __init__(self, **check_array_kwargs) -> None:
+        bad = set(check_array_kwargs) - {
+            "ndim", "shape", "min_length", "finite", "increasing", "low", "high", "low_open", "high_open",
+        }  # fmt: skip
+        if bad:
+            raise TypeError(f"Array got unexpected keywords {sorted(bad)}")
+        self.kwargs = check_array_kwargs
+
+    def __repr__(self) -> str:
+        return "Array(" + ", ".join(f"{k}={v!r}" for k, v in self.kwargs.items()) + ")"
+
+    def describe(self) -> str:
+        return "an array of real numbers"
+
+    def convert(self, value):
+        if isinstance(value, str | bytes):
+            raise _Unsatisfied
+        return check_array(value, "x", error=_Unsatisfied, **self.kwargs)
+
+    def check(self, value, name, owner, error):
+        """Like :meth:`convert`, but with :func:`check_array`'s own, more precise message."""
+        if isinstance(value, str | bytes):
+            _fail(name, owner, "an array of real numbers", value, error)
+        return check_array(value, name, owner, error=error, **self.kwargs)
+
+    def invalid_values(self) -> list:
+        out: list = ["abc"]
+        if self.kwargs.get("finite", True):
+            out.append([math.nan] * max(1, self.kwargs.get("min_length") or 1))
+        return out
+
+    def valid_value(self):
+        k = self.kwargs
+        shape = k.get("shape")
+        n = max(2, k.get("min_length") or 0)
+        if shape is not None:
+            dims = tuple(n if s is None else s for s in shape)
+        else:
+            dims = (n,) * (k.get("ndim") or 1)
+        lo = k.get("low")
+        lo = 0.0 if lo is None else float(lo)
+        hi = k.get("high")
+        hi = lo + 1.0 if hi is None else float(hi)
+        size = int(np.prod(dims))
+        return np.linspace(lo + (hi - lo) / 4, hi - (hi - lo) / 4, size).reshape(dims)
+
+
+def _constraints(declared) -> list:
+    """A parameter's declaration as a list of :class:`Constraint` (``None`` allowed if listed)."""
+    items = declared if isinstance(declared, list | tuple) else [declared]
+    for c in items:
+        if c is not None and not isinstance(c, Constraint):
+            raise TypeError(f"a declared constraint must be a Constraint or None, not {c!r}")
+    return list(items)
+
+
+def check_param(value, declared, name: str, owner: str | None = None, *, error: type[Exception] = ParameterError):
+    """Return ``value`` converted by the first constraint of ``declared`` it meets, or raise naming it.
+
+    ``declared`` is a :class:`Constraint`, ``None``, or a list of them ("any of"). The message lists what each
+    would accept: ``The 'seed' parameter of run must be an integer inside [0, inf) or None. Got -1 instead.``
+
+    Examples
+    --------
+    >>> check_param(None, [Interval(Integral, 0, None), None], "seed", "run") is None
+    True
+    """
+    items = _constraints(declared)
+    if value is None and None in items:
+        return None
+    real = [c for c in items if c is not None]
+    if len(real) == 1 and None not in items:
+        return real[0].check(value, name, owner, error)
+    for c in real:
+        try:
+            return c.convert(value)
+        except _Unsatisfied:
+            continue
+    texts = [c.describe() for c in real] + (["None"] if None in items else [])
+    _fail(name, owner, " or ".join(texts), value, error)
+
+
+def check_params(
+    values: dict, constraints: dict, owner: str, *, error: type[Exception] = ParameterError
+) -> dict[str, object]:
+    """Check every declared parameter of ``values`` (a dict) against ``constraints``; return them converted.
+
+    Parameters not in ``values`` are skipped (their defaults were declared valid); a name in ``values`` that
+    ``constraints`` does not declare is not checked.
+    """
+    return {
+        name: check_param(values[name], declared, name, owner, error=error)
+        for name, declared in constraints.items()
+        if name in values
+    }
+
+
+#: Every declaration made by :func:`validate_params` or :func:`declare`: ``(callable, constraints)``. The
+#: declared-validation test walks it (after importing every flexdigit module) and feeds each invalid value.
+DECLARED: list[tuple[object, dict]] = []
+
+
+def validate_params(constraints: dict, *, owner: str | None = None, error: type[Exception] = ParameterError):
+    """Decorate a function so its declared parameters are checked (and converted) before it runs.
+
+    Parameters
+    ----------
+    constraints : dict
+        ``{"name": constraint or [constraints]}``; the names must be parameters of the function.
+    owner : str, optional
+        The name in messages (default: the function's qualified name).
+    error : type
+        The exception raised (default :class:`~flexdigit.errors.ParameterError`).
+    """
+
+    def decorate(func):
+        sig = inspect.signature(func)
+        unknown = set(constraints) - set(sig.parameters)
+        if unknown:
+            raise TypeError(f"validate_params on {func.__qualname__}: no parameter(s) {sorted(unknown)}")
+        name = owner or func.__qualname__
+        declared = {k: _constraints(v) for k, v in constraints.items()}
+
+        @functools.wraps(func)
+        def wrapper(*args, **kwargs):
+            bound = sig.bind(*args, **kwargs)
+            for key, value in check_params(bound.arguments, declared, name, error=error).items():
+                bound.arguments[key] = value
+            return func(*bound.args, **bound.kwargs)
+
+        wrapper.parameter_constraints = declared
+        DECLARED.append((wrapper, declared))
+        return wrapper
+
+    return decorate
+
+
+def declare(cls):
+    """Class decorator: register a class whose ``__init__`` (or ``__post_init__``) checks its
+    ``_parameter_constraints`` with :func:`check_params`, so the declared-validation test covers it."""
+    declared = {k: _constraints(v) for k, v in cls._parameter_constraints.items()}
+    cls._parameter_constraints = declared
+    DECLARED.append((cls, declared))
+    return cls
+
+
+def validate_fields(obj) -> None:
+    """Check a dataclass instance's fields against its class's ``_parameter_constraints`` (no conversion: a
+    frozen dataclass keeps what it was given). Call it first in ``__post_init__``."""
+    owner = type(obj).__name__
+    check_params({k: getattr(obj, k) for k in obj._parameter_constraints}, obj._parameter_constraints, owner)

@@ -24,15 +24,19 @@ import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass, field
+from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
 
-from flexdigit._validation import check_array, check_choice, check_int, check_positive, check_real
+from flexdigit._validation import Array, Interval, Options, check_array, check_int, check_real, declare, validate_fields
 from flexdigit.errors import DataFileError, ParameterError
 
 BRIDGE_TYPES = ("quarter", "half", "full")
+#: A strictly positive real number (lengths, gains, frequencies).
+_POSITIVE = Interval(Real, 0, None, closed="neither")
 
 
+@declare
 @dataclass(frozen=True)
 class Geometry:
     """The digit's geometry (2.2, table 3.5, table 3.7).
@@ -70,23 +74,23 @@ class Geometry:
     max_rotation_per_section_deg: float = 30.0
     guide_hole_diameter_m: float = 1.067e-3
 
+    _parameter_constraints = {
+        "section_count": [Interval(Integral, 1, 50)],
+        "section_length_m": [_POSITIVE],
+        "strip_thickness_m": [_POSITIVE],
+        "strip_width_m": [_POSITIVE],
+        "digit_length_m": [_POSITIVE],
+        "strip_length_m": [_POSITIVE],
+        "cable_eccentricity_m": [_POSITIVE],
+        "gauge_positions_m": [Array(ndim=1, min_length=1, increasing=True, low=0, low_open=True)],
+        "max_rotation_per_section_deg": [Interval(Real, 0, 180, closed="right")],
+        "guide_hole_diameter_m": [_POSITIVE],
+    }
+
     def __post_init__(self) -> None:
+        validate_fields(self)
         owner = type(self).__name__
-        check_int(self.section_count, "section_count", owner, low=1, high=50)
-        for name in (
-            "section_length_m",
-            "strip_thickness_m",
-            "strip_width_m",
-            "digit_length_m",
-            "strip_length_m",
-            "cable_eccentricity_m",
-            "guide_hole_diameter_m",
-        ):
-            check_positive(getattr(self, name), name, owner)
         check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
-        check_real(
-            self.max_rotation_per_section_deg, "max_rotation_per_section_deg", owner, low=0, high=180, low_open=True
-        )
         positions = check_array(
             self.gauge_positions_m,
             "gauge_positions_m",
@@ -116,6 +120,7 @@ class Geometry:
         return self.strip_width_m * self.strip_thickness_m
 
 
+@declare
 @dataclass(frozen=True)
 class Material:
     """Spring-steel strip material (table 3.7).
@@ -131,12 +136,13 @@ class Material:
     youngs_modulus_pa: float = 205e9
     strip_density_kg_m3: float = 7850.0
 
+    _parameter_constraints = {"youngs_modulus_pa": [_POSITIVE], "strip_density_kg_m3": [_POSITIVE]}
+
     def __post_init__(self) -> None:
-        owner = type(self).__name__
-        check_positive(self.youngs_modulus_pa, "youngs_modulus_pa", owner)
-        check_positive(self.strip_density_kg_m3, "strip_density_kg_m3", owner)
+        validate_fields(self)
 
 
+@declare
 @dataclass(frozen=True)
 class Sensors:
     """Strain gauges, bridge, amplifier and DAQ card (2.3, 2.5.1, 2.5.2, 6.4).
@@ -177,19 +183,22 @@ class Sensors:
     adc_range_v: tuple[float, float] = (-5.0, 5.0)
     adc_channels: tuple[int, ...] = (0, 1, 2)
 
+    _parameter_constraints = {
+        "gauge_resistance_ohm": [_POSITIVE],
+        "gauge_factor": [_POSITIVE],
+        "bridge": [Options(BRIDGE_TYPES)],
+        "excitation_v": [_POSITIVE],
+        "amplifier_gain_v_per_v": [_POSITIVE],
+        "amplifier_lowpass_hz": [_POSITIVE],
+        "amplifier_lowpass_order": [Interval(Integral, 1, 8)],
+        "adc_bits": [Interval(Integral, 1, 32)],
+        "adc_range_v": [Array(shape=(2,), increasing=True)],
+        "adc_channels": [Array(ndim=1, min_length=1, low=0, high=63)],
+    }
+
     def __post_init__(self) -> None:
+        validate_fields(self)
         owner = type(self).__name__
-        for name in (
-            "gauge_resistance_ohm",
-            "gauge_factor",
-            "excitation_v",
-            "amplifier_gain_v_per_v",
-            "amplifier_lowpass_hz",
-        ):
-            check_positive(getattr(self, name), name, owner)
-        check_choice(self.bridge, "bridge", BRIDGE_TYPES, owner)
-        check_int(self.amplifier_lowpass_order, "amplifier_lowpass_order", owner, low=1, high=8)
-        check_int(self.adc_bits, "adc_bits", owner, low=1, high=32)
         rng = check_array(self.adc_range_v, "adc_range_v", owner, shape=(2,), increasing=True)
         object.__setattr__(self, "adc_range_v", (float(rng[0]), float(rng[1])))
         channels = tuple(check_int(c, "adc_channels", owner, low=0, high=63) for c in self.adc_channels)
@@ -206,6 +215,7 @@ class Sensors:
         return (self.adc_range_v[1] - self.adc_range_v[0]) / 2**self.adc_bits
 
 
+@declare
 @dataclass(frozen=True)
 class Actuator:
     """The servo, its driver board, pulley and potentiometer (2.4, 2.5.3, 3.2.4, 3.4.1).
@@ -253,23 +263,33 @@ class Actuator:
     pot_v_at_max_angle_v: float = 2.4755
     stall_torque_nm: float = 0.297
 
+    _parameter_constraints = {
+        "command_min": [Interval(Integral, 0, 254)],
+        "command_max": [Interval(Integral, 0, 254)],
+        "angle_min_deg": [Interval(Real, -360, 360)],
+        "angle_max_deg": [Interval(Real, -360, 360)],
+        "pulley_radius_m": [_POSITIVE],
+        "pwm_frequency_hz": [_POSITIVE],
+        "pulse_width_min_s": [_POSITIVE],
+        "pulse_width_max_s": [_POSITIVE],
+        "serial_period_s": [_POSITIVE],
+        "equilibrium_command": [Interval(Integral, 0, 254)],
+        "operating_commands": [Array(shape=(2,), low=0, high=254)],
+        "servo_wn_rad_s": [_POSITIVE],
+        "servo_zeta": [Interval(Real, 0, 10, closed="right")],
+        "pot_v_at_min_angle_v": [Interval(Real)],
+        "pot_v_at_max_angle_v": [Interval(Real)],
+        "stall_torque_nm": [_POSITIVE],
+    }
+
     def __post_init__(self) -> None:
+        validate_fields(self)
         owner = type(self).__name__
-        lo = check_int(self.command_min, "command_min", owner, low=0, high=254)
+        # what a declaration cannot say: one field bounded by another
+        lo = int(self.command_min)
         hi = check_int(self.command_max, "command_max", owner, low=lo + 1, high=254)
-        check_real(self.angle_min_deg, "angle_min_deg", owner, low=-360, high=360)
         check_real(self.angle_max_deg, "angle_max_deg", owner, low=self.angle_min_deg, high=360, low_open=True)
-        for name in (
-            "pulley_radius_m",
-            "pwm_frequency_hz",
-            "pulse_width_min_s",
-            "serial_period_s",
-            "servo_wn_rad_s",
-            "stall_torque_nm",
-        ):
-            check_positive(getattr(self, name), name, owner)
         check_real(self.pulse_width_max_s, "pulse_width_max_s", owner, low=self.pulse_width_min_s, low_open=True)
-        check_real(self.servo_zeta, "servo_zeta", owner, low=0, high=10, low_open=True)
         check_int(self.equilibrium_command, "equilibrium_command", owner, low=lo, high=hi)
         ops = tuple(check_int(c, "operating_commands", owner, low=lo, high=hi) for c in self.operating_commands)
         if len(ops) != 2 or ops[0] >= ops[1]:
@@ -278,7 +298,6 @@ class Actuator:
                 f"inside [{lo}, {hi}]. Got {list(self.operating_commands)!r} instead."
             )
         object.__setattr__(self, "operating_commands", ops)
-        check_real(self.pot_v_at_min_angle_v, "pot_v_at_min_angle_v", owner)
         check_real(
             self.pot_v_at_max_angle_v, "pot_v_at_max_angle_v", owner, low=self.pot_v_at_min_angle_v, low_open=True
         )
@@ -299,6 +318,7 @@ class Actuator:
         return (self.pot_v_at_max_angle_v - self.pot_v_at_min_angle_v) / (self.command_max - self.command_min)
 
 
+@declare
 @dataclass(frozen=True)
 class DigitDynamics:
     """The digit's identified second-order dynamics (3.1.2, tables 3.1 and 3.2).
@@ -316,12 +336,15 @@ class DigitDynamics:
     wn_bare_rad_s: float = 10.16271
     zeta_bare: float = 0.0025
 
+    _parameter_constraints = {
+        "wn_housing_rad_s": [_POSITIVE],
+        "zeta_housing": [Interval(Real, 0, 10)],
+        "wn_bare_rad_s": [_POSITIVE],
+        "zeta_bare": [Interval(Real, 0, 10)],
+    }
+
     def __post_init__(self) -> None:
-        owner = type(self).__name__
-        for name in ("wn_housing_rad_s", "wn_bare_rad_s"):
-            check_positive(getattr(self, name), name, owner)
-        for name in ("zeta_housing", "zeta_bare"):
-            check_real(getattr(self, name), name, owner, low=0, high=10)
+        validate_fields(self)
 
 
 @dataclass(frozen=True)

@@ -32,10 +32,12 @@ Examples
 from __future__ import annotations
 
 import warnings
+from numbers import Integral, Real
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_int, check_positive
+from flexdigit._estimator import Estimator, check_is_fitted
+from flexdigit._validation import Bool, HasMethods, Interval, check_array
 from flexdigit.errors import ParameterError
 from flexdigit.tactile.pipeline import Normaliser
 from flexdigit.tactile.protocols import RELAXED
@@ -49,7 +51,7 @@ def _split_x(X) -> tuple[np.ndarray, np.ndarray]:
     return x[:, :3], command
 
 
-class BeamInversion:
+class BeamInversion(Estimator):
     """Maximum-likelihood load position and mass from a static gauge model (see the module docstring).
 
     Parameters
@@ -73,6 +75,17 @@ class BeamInversion:
         Restrict the mass to the loads seen in training (a protocol hangs a few known weights: the same prior
         the learned estimators pick up); the position is then a 1-D least-squares fit per candidate load.
     """
+
+    _parameter_constraints = {
+        "model": [HasMethods("gauges_v")],
+        "digit_length_m": [Interval(Real, 0, None, closed="neither")],
+        "max_mass_kg": [Interval(Real, 0, None, closed="neither")],
+        "position_step_m": [Interval(Real, 0, None, closed="neither")],
+        "mass_steps": [Interval(Integral, 3, None)],
+        "calibrate": [Bool()],
+        "load_set": [Bool()],
+        "tared": [Bool()],
+    }
 
     def __init__(
         self,
@@ -132,11 +145,10 @@ class BeamInversion:
         return cost
 
     def fit(self, X, Y=None) -> BeamInversion:
-        length = check_positive(self.digit_length_m, "digit_length_m", "BeamInversion")
-        step = check_positive(self.position_step_m, "position_step_m", "BeamInversion")
+        self._validate_params()
+        length, step = float(self.digit_length_m), float(self.position_step_m)
         self.a_grid_ = np.arange(0.0, length + step / 2, step)
-        max_mass = check_positive(self.max_mass_kg, "max_mass_kg", "BeamInversion")
-        self.m_grid_ = np.linspace(0.0, max_mass, check_int(self.mass_steps, "mass_steps", "BeamInversion", low=3))
+        self.m_grid_ = np.linspace(0.0, float(self.max_mass_kg), int(self.mass_steps))
         self.grids_: dict[int, np.ndarray] = {}
         self.noise_grids_: dict[int, np.ndarray] = {}
         self.noise_v_ = np.asarray(self.model.noise_v, dtype=float)
@@ -161,8 +173,7 @@ class BeamInversion:
 
     def predict(self, X, return_cost: bool = False):
         """``(n, 2)``: position from the tip (m) and mass (kg) of each reading (and the residual cost if asked)."""
-        if not hasattr(self, "grids_"):
-            raise ParameterError("This BeamInversion is not fitted yet; call fit first.")
+        check_is_fitted(self, "grids_")
         v, command = _split_x(X)
         out = np.empty((v.shape[0], 2))
         cost = np.empty(v.shape[0])
@@ -236,7 +247,7 @@ class BeamInversion:
         return a, m, cost
 
 
-class GPLocaliser:
+class GPLocaliser(Estimator):
     """Gaussian-process regression of position and mass from the gauges, with uncertainty.
 
     One ``GaussianProcessRegressor`` for all target columns (shared kernel ``C * RBF(anisotropic) + White``),
@@ -253,6 +264,12 @@ class GPLocaliser:
         Seed of the optimiser restarts and the subsample.
     """
 
+    _parameter_constraints = {
+        "n_restarts": [Interval(Integral, 0, None)],
+        "max_train": [Interval(Integral, 2, None)],
+        "random_state": [Interval(Integral, 0, None), None],
+    }
+
     def __init__(self, n_restarts: int = 0, max_train: int = 500, random_state: int = 0) -> None:
         self.n_restarts = n_restarts
         self.max_train = max_train
@@ -268,6 +285,7 @@ class GPLocaliser:
         from sklearn.gaussian_process import GaussianProcessRegressor
         from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 
+        self._validate_params()
         x = check_array(X, "X", "GPLocaliser.fit", ndim=2, min_length=2)
         y = check_array(Y, "Y", "GPLocaliser.fit")
         y = y.reshape(-1, 1) if y.ndim == 1 else y
@@ -292,8 +310,7 @@ class GPLocaliser:
         return self
 
     def predict(self, X, return_std: bool = False):
-        if not hasattr(self, "models_"):
-            raise ParameterError("This GPLocaliser is not fitted yet; call fit first.")
+        check_is_fitted(self, "models_")
         xn = self.x_norm_.transform(check_array(X, "X", "GPLocaliser.predict", ndim=2))
         mean, std = self.models_[0].predict(xn, return_std=True)
         mean, std = mean.reshape(xn.shape[0], -1), std.reshape(xn.shape[0], -1)

@@ -1,0 +1,167 @@
+"""Declared parameter validation (flexdigit._validation): every declaration is refused its invalid values.
+
+As scikit-learn's ``test_common.py::test_check_param_validation`` does, the invalid values are generated from the
+declarations themselves (:meth:`Constraint.invalid_values`), for every function and class of the package that
+declares its parameters, so a new declaration is covered the day it is written.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import math
+import pkgutil
+import re
+from numbers import Integral, Real
+
+import numpy as np
+import pytest
+
+import flexdigit
+from flexdigit._estimator import Estimator
+from flexdigit._validation import (
+    DECLARED,
+    Array,
+    Bool,
+    Callable,
+    InstanceOf,
+    Interval,
+    Options,
+    StrOptions,
+    check_param,
+    validate_params,
+)
+from flexdigit.errors import ParameterError
+
+#: Modules whose import needs an optional extra that may be absent (the DAQ driver).
+OPTIONAL = ("flexdigit.rig.daq_backend",)
+
+
+def _import_all() -> None:
+    for info in pkgutil.walk_packages(flexdigit.__path__, "flexdigit."):
+        if info.name.endswith("__main__"):
+            continue
+        try:
+            importlib.import_module(info.name)
+        except ImportError:
+            if info.name not in OPTIONAL:
+                raise
+
+
+_import_all()
+
+
+def _owner(target) -> str:
+    return target.__name__ if inspect.isclass(target) else getattr(target, "__qualname__", str(target))
+
+
+def _cases():
+    """(target, parameter, invalid value) for every declaration and every invalid value no alternative accepts."""
+    out = []
+    for target, declared in DECLARED:
+        for name, constraints in declared.items():
+            real = [c for c in constraints if c is not None]
+            for c in real:
+                for bad in c.invalid_values():
+                    if bad is None and None in constraints:
+                        continue
+                    if any(o.satisfied_by(bad) for o in real if o is not c):
+                        continue
+                    out.append(pytest.param(target, name, bad, id=f"{_owner(target)}-{name}-{bad!r}"[:90]))
+    return out
+
+
+def _valid_arguments(target, declared) -> dict:
+    """Valid values for the required parameters (declared ones from their constraints); defaults for the rest."""
+    sig = inspect.signature(target)
+    kwargs = {}
+    for name, p in sig.parameters.items():
+        if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD) or p.default is not p.empty:
+            continue
+        if name not in declared:
+            raise AssertionError(f"{_owner(target)}: required parameter {name!r} is not declared")
+        first = next(c for c in declared[name] if c is not None)
+        kwargs[name] = first.valid_value()
+    return kwargs
+
+
+def test_the_package_declares_parameters():
+    # the declarations this test covers: the first users are the rig parameters and the estimators
+    owners = {_owner(t) for t, _ in DECLARED}
+    assert {"Geometry", "Material", "Sensors", "Actuator", "DigitDynamics"} <= owners
+    assert sum(len(d) for _, d in DECLARED) >= 40
+
+
+@pytest.mark.parametrize(("target", "name", "bad"), _cases())
+def test_declared_parameter_refuses_invalid_value(target, name, bad):
+    declared = dict(DECLARED)[target]
+    kwargs = _valid_arguments(target, declared)
+    kwargs[name] = bad
+    expected = rf"^The '{re.escape(name)}' parameter of {re.escape(_owner(target))} must be "
+    with pytest.raises(ParameterError, match=expected):
+        if inspect.isclass(target) and issubclass(target, Estimator):
+            # scikit-learn's contract: __init__ only stores; fit validates first, before it looks at the data
+            fit = list(inspect.signature(target.fit).parameters.values())[1:]
+            target(**kwargs).fit(*[None for p in fit if p.default is p.empty])
+        else:
+            target(**kwargs)
+
+
+@pytest.mark.parametrize(("target", "declared"), DECLARED, ids=[_owner(t) for t, _ in DECLARED])
+def test_declared_valid_values_pass(target, declared):
+    # every constraint's generated valid value passes its own check (so the test above fails on the bad one only)
+    for name, constraints in declared.items():
+        for c in constraints:
+            if c is not None:
+                assert c.satisfied_by(c.valid_value()), (name, c)
+
+
+# ----------------------------------------------------------------------------- the constraints themselves
+@pytest.mark.parametrize(
+    ("constraint", "good", "bad"),
+    [
+        (Interval(Real, 0, None, closed="neither"), [1e-9, 5, 2.5], [0, -1, math.inf, math.nan, True, "1"]),
+        (Interval(Real, 0, 1), [0, 1, 0.5], [-1e-9, 1 + 1e-9]),
+        (Interval(Real, 0, 1, closed="left"), [0, 0.999], [1]),
+        (Interval(Integral, 1, 50), [1, 50, 8.0, np.int64(3)], [0, 51, 1.5, True, np.nan]),
+        (Options(("thesis", "lsq")), ["thesis", "lsq"], ["arx", True, None]),
+        (Options((4, 5)), [4, 5], [True, 4.5, "4"]),
+        (Bool(), [True, False, np.bool_(True)], [0, 1, "yes"]),
+        (Array(ndim=1, increasing=True), [[0, 1, 2]], [[2, 1], "abc", [[1]], [np.nan]]),
+        (Callable(), [len], [1.0]),
+        (InstanceOf(str), ["x"], [1]),
+    ],
+)
+def test_constraint_accepts_and_refuses(constraint, good, bad):
+    for v in good:
+        assert constraint.satisfied_by(v), v
+    for v in bad:
+        assert not constraint.satisfied_by(v), v
+
+
+def test_message_lists_every_alternative_and_none():
+    with pytest.raises(ParameterError) as err:
+        check_param(-1, [Interval(Integral, 0, None), StrOptions({"auto"}), None], "seed", "run")
+    assert str(err.value) == (
+        "The 'seed' parameter of run must be an integer inside [0, inf) or one of 'auto' or None. Got -1 instead."
+    )
+
+
+def test_decorator_converts_and_keeps_zero_as_a_value():
+    @validate_params({"n": [Interval(Integral, 0, None)], "x": [Interval(Real, None, None), None]})
+    def f(n, x=None):
+        return n, x
+
+    assert f(0) == (0, None)  # 0 is a value, None is "not given"
+    assert f(8.0, x=0) == (8, 0.0)
+    assert type(f(8.0)[0]) is int
+    with pytest.raises(ParameterError, match="'n' parameter of .*f must be an integer inside"):
+        f(True)
+
+
+def test_decorator_refuses_an_undeclared_name():
+    with pytest.raises(TypeError, match="no parameter"):
+
+        @validate_params({"m": [Interval(Real)]})
+        def g(n):
+            return n
