@@ -13,6 +13,7 @@ import sys
 import time
 
 MODULES: tuple[str, ...] = (
+    "benchmarks.bench_cli",
     "benchmarks.bench_control",
     "benchmarks.bench_twin",
     "benchmarks.bench_rig",

@@ -28,3 +28,24 @@ def pytest_approx(x):
     import pytest
 
     return pytest.approx(x, rel=1e-4)
+
+
+#: Libraries a sub-command may import when it runs, never to build the parser (``flexdigit --help``).
+HEAVY = ("scipy", "control", "sklearn", "cvxpy", "matplotlib", "pyarrow", "slycot")
+
+
+def _imported_after(code: str) -> set[str]:
+    import subprocess
+    import sys
+
+    probe = code + "\nimport sys; print(' '.join(sorted({m.split('.')[0] for m in sys.modules})))"
+    out = subprocess.run([sys.executable, "-c", probe], check=True, capture_output=True, text=True).stdout
+    return set(out.split())
+
+
+def test_parser_and_light_commands_import_no_heavy_library():
+    # start-up (issue 15): the parser loads every sub-command's options and nothing they compute with, so
+    # `flexdigit --help` does not pay for python-control, scipy, cvxpy...; `params` needs numpy only
+    assert not _imported_after("from flexdigit.cli import build_parser; build_parser()") & set(HEAVY)
+    loaded = _imported_after("from flexdigit.cli import main; main(['params', '--json'])")
+    assert not loaded & set(HEAVY), loaded & set(HEAVY)

@@ -7,7 +7,23 @@
   Fitting them to a rig is :mod:`flexdigit.calibrate`'s job, a layer above.
 """
 
-from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration, use_calibration
-from flexdigit.twin.twin import Twin, static_gauges_v
+import importlib
 
-__all__ = ["Twin", "static_gauges_v", "Calibration", "default_calibration", "load_calibration", "use_calibration"]
+#: Public names and the submodule each lives in: imported on first use (PEP 562), so that importing a submodule
+#: (``flexdigit.twin.commands`` for ``flexdigit --help``) does not load python-control and scipy.
+_LAZY = {
+    "Twin": "flexdigit.twin.twin",
+    "static_gauges_v": "flexdigit.twin.twin",
+    "Calibration": "flexdigit.twin.calibration",
+    "default_calibration": "flexdigit.twin.calibration",
+    "load_calibration": "flexdigit.twin.calibration",
+    "use_calibration": "flexdigit.twin.calibration",
+}
+__all__ = list(_LAZY)
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'flexdigit.twin' has no attribute {name!r}")
+
