@@ -205,7 +205,7 @@ def _train(args: argparse.Namespace) -> CommandResult:
         fixed_hidden=args.hidden,
         fixed_tol=args.tol,
         target=target,
-        curve_hidden=args.hidden or 15,
+        curve_hidden=None,  # the error curves are not shown: no network for them
     )
     scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
     if target == "position":

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._estimator import Estimator, check_is_fitted
 from flexdigit._validation import check_array, check_choice, check_int
 from flexdigit.errors import ParameterError
 from flexdigit.tactile.dataset import Dataset
@@ -96,11 +97,13 @@ def targets(dataset: Dataset, target: str) -> tuple[np.ndarray, np.ndarray]:
     return np.arange(n), dataset.contact.astype(float)
 
 
-class ThesisNetwork:
+class ThesisNetwork(Estimator):
     """A normalised NETLAB MLP: normalise inputs and targets (E 6.1), train with early stopping, predict.
 
     Parameters are those of :class:`~flexdigit.tactile.netlab.MLP`. ``fit(X, y, X_val, y_val)``.
     """
+
+    _parameter_constraints = MLP._parameter_constraints
 
     def __init__(self, hidden=18, tol=1e-7, epochs=50, iterations_per_epoch=50, random_state=0) -> None:
         self.hidden = hidden
@@ -110,9 +113,13 @@ class ThesisNetwork:
         self.random_state = random_state
 
     def __repr__(self) -> str:
-        return f"ThesisNetwork(hidden={self.hidden}, tol={self.tol:g}, epochs={self.epochs})"
+        return (
+            f"ThesisNetwork(hidden={self.hidden}, tol={self.tol:g}, epochs={self.epochs}, "
+            f"iterations_per_epoch={self.iterations_per_epoch}, random_state={self.random_state})"
+        )
 
     def fit(self, X, y, X_val=None, y_val=None) -> ThesisNetwork:
+        self._validate_params()
         x = check_array(X, "X", "ThesisNetwork.fit", ndim=2, min_length=2)
         t = check_array(y, "y", "ThesisNetwork.fit")
         self.y_ndim_ = t.ndim
@@ -139,8 +146,7 @@ class ThesisNetwork:
         return self
 
     def predict(self, X) -> np.ndarray:
-        if not hasattr(self, "net_"):
-            raise ParameterError("This ThesisNetwork is not fitted yet; call fit first.")
+        check_is_fitted(self, "net_")
         x = check_array(X, "X", "ThesisNetwork.predict", ndim=2)
         y = self.y_norm_.inverse_transform(self.net_.predict(self.x_norm_.transform(x)).reshape(x.shape[0], -1))
         return y[:, 0] if self.y_ndim_ == 1 else y
@@ -168,7 +174,7 @@ class PipelineResult:
     gradient: list[SweepPoint]
     best_hidden: int
     best_tol: float
-    curve_hidden: int
+    curve_hidden: int | None
     curve_train: np.ndarray
     curve_val: np.ndarray
     y_test: np.ndarray
@@ -195,7 +201,7 @@ def run_pipeline(
     fine_halfwidth: int = 5,
     gradients=LEARNING_GRADIENTS,
     default_tol: float = 1e-7,
-    curve_hidden: int = 15,
+    curve_hidden: int | None = 15,
     epochs: int = 50,
     fixed_hidden: int | None = None,
     fixed_tol: float | None = None,
@@ -215,8 +221,9 @@ def run_pipeline(
         "Learning gradients" (SCG tolerances) swept at the chosen size (1e-1..1e-9).
     default_tol : float
         Tolerance during the hidden-node sweeps (the thesis's default 1e-7).
-    curve_hidden : int
-        Size whose error-vs-iteration curves are kept (figure 6.13: 15; figure 7.4: 20).
+    curve_hidden : int or None
+        Size whose error-vs-iteration curves are kept (figure 6.13: 15; figure 7.4: 20); None trains no network
+        for the curves (they are then empty), e.g. when only the test score is wanted.
     epochs : int
         Epochs of 50 SCG iterations per training (50).
     fixed_hidden, fixed_tol : optional
@@ -243,7 +250,12 @@ def run_pipeline(
     else:
         grad_pts = [_train(x, y, split, best_hidden, g, next(seeds), epochs)[1] for g in gradients]
         best_tol = min(grad_pts, key=lambda p: p.val_mse).tol
-    curve_model, _ = _train(x, y, split, curve_hidden, default_tol, next(seeds), epochs)
+    curve_seed = next(seeds)  # drawn either way, so the final network's seed does not depend on curve_hidden
+    if curve_hidden is None:
+        curve_train = curve_val = np.empty(0)
+    else:
+        curve_model, _ = _train(x, y, split, curve_hidden, default_tol, curve_seed, epochs)
+        curve_train, curve_val = curve_model.train_error_, curve_model.val_error_
     model, _ = _train(x, y, split, best_hidden, best_tol, next(seeds), epochs)
     y_test = y[split.test]
     y_pred = model.predict(x[split.test])
@@ -256,8 +268,8 @@ def run_pipeline(
         best_hidden=best_hidden,
         best_tol=best_tol,
         curve_hidden=curve_hidden,
-        curve_train=curve_model.train_error_,
-        curve_val=curve_model.val_error_,
+        curve_train=curve_train,
+        curve_val=curve_val,
         y_test=y_test,
         y_pred=y_pred,
         corr2=corr2(y_pred, y_test),

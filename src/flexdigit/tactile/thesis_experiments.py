@@ -169,7 +169,8 @@ def pipeline_corr2_static(
     _, y = targets(ds, "position_index")
     hidden = int(thesis_value(f"tactile.{key}.best_hidden"))
     tol = float(thesis_value(f"tactile.{key}.best_learning_gradient"))
-    return run_pipeline(features(ds), y, seed=seed, fixed_hidden=hidden, fixed_tol=tol, epochs=epochs).corr2
+    fixed = {"fixed_hidden": hidden, "fixed_tol": tol, "curve_hidden": None}
+    return run_pipeline(features(ds), y, seed=seed, epochs=epochs, **fixed).corr2
 
 
 #: Seeds the friction is fitted over: the actuated corr2 of one seeded experiment scatters by about 0.02 from seed to
@@ -270,8 +271,9 @@ def run_experiment(
     sweep = run_pipeline(x, y, seed=seed, **sweep_kw)
     best_hidden = int(thesis_value(f"tactile.{key}.best_hidden"))
     best_tol = float(thesis_value(f"tactile.{key}.best_learning_gradient"))
+    # at a fixed optimum only the test score is shown: no network for the error curves (the sweep's are shown)
     at_optimum = run_pipeline(
-        x, y, seed=seed, fixed_hidden=best_hidden, fixed_tol=best_tol, epochs=epochs, curve_hidden=curve_hidden
+        x, y, seed=seed, fixed_hidden=best_hidden, fixed_tol=best_tol, epochs=epochs, curve_hidden=None
     )
     _, y_all = targets(dataset, "position_index")
     with_no_load = run_pipeline(
@@ -281,7 +283,7 @@ def run_experiment(
         fixed_hidden=best_hidden,
         fixed_tol=best_tol,
         epochs=epochs,
-        curve_hidden=curve_hidden,
+        curve_hidden=None,
     )
     strategies = compare_strategies(dataset, hidden=best_hidden, tol=best_tol, seed=seed, epochs=epochs)
     model = TwinGaugeModel(params, calibration)
