@@ -46,7 +46,7 @@ def chapters():
 
 
 def test_report_writes_entries_html_and_figures(tmp_path, chapters):
-    summary = reproduce(tmp_path, chapters=chapters)
+    summary = reproduce(tmp_path, chapters=chapters, workers=1)  # the test chapters live in this process only
     entries = json.loads((tmp_path / "results.json").read_text())
     assert [e["status"] for e in entries] == ["match", "discrepancy", "new"]
     assert set(entries[0]) == {"key", "section", "thesis", "ours", "unit", "rel_error", "status", "note"}

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import html
 import importlib
 import json
+import multiprocessing
+import os
 import time
 import traceback
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -41,32 +45,116 @@ def reproduce(
     fast: bool = False,
     chapters: tuple[str, ...] | None = None,
     progress=None,
+    workers: int | None = None,
 ) -> ReportSummary:
     """Run the report's chapters on the twin and write ``out_dir/index.html`` and ``out_dir/results.json``.
 
     A chapter that fails is shown in the report with its error (and listed in ``failed``) instead of
     hiding the chapters that worked.
+
+    Parameters
+    ----------
+    progress : callable, optional
+        Called with each chapter's module name as it starts (one worker) or finishes (several).
+    workers : int, optional
+        Chapters built at once, each in its own process (default: one per available core). Chapters are
+        independent and seeded by ``seed`` and their own streams, so the numbers do not depend on it; ``1``
+        builds them one after another in this process.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     ctx = ReportContext(out_dir=out, params=params or RigParams(), seed=seed, fast=fast)
-    built: list[Chapter] = []
-    failed: dict[str, str] = {}
-    seconds: dict[str, float] = {}
-    for module_name in chapters or CHAPTERS:
-        start = time.perf_counter()
-        if progress is not None:
-            progress(module_name)
-        try:
-            built.append(importlib.import_module(module_name).build(ctx))
-        except Exception:  # a broken chapter must not hide the others; its traceback goes in the report
-            failed[module_name] = traceback.format_exc()
-        seconds[module_name] = time.perf_counter() - start
+    names = tuple(chapters or CHAPTERS)
+    n_workers = _available_cores() if workers is None else int(workers)
+    n_workers = max(1, min(n_workers, len(names)))
+    if n_workers == 1:
+        done = {}
+        for name in names:
+            if progress is not None:
+                progress(name)
+            done[name] = _build_chapter(name, ctx)
+    else:
+        done = _build_in_processes(names, ctx, n_workers, progress)
+    built = [done[n][0] for n in names if done[n][0] is not None]
+    failed = {n: done[n][1] for n in names if done[n][1] is not None}
+    seconds = {n: done[n][2] for n in names}
     entries = [asdict(e) for chapter in built for e in chapter.entries]
     (out / "results.json").write_text(json.dumps(to_jsonable(entries), indent=2) + "\n")
     (out / "index.html").write_text(_render(built, failed, ctx))
     counts = {s: sum(e["status"] == s for e in entries) for s in ("match", "discrepancy", "new")}
     return ReportSummary(out, len(entries), counts, [c.title for c in built], failed, seconds)
+
+
+#: Rough seconds each chapter takes (full report, 2-core machine): only the order in which chapters are handed to
+#: the worker processes (longest first, so that no long chapter starts last), never their numbers.
+EXPECTED_SECONDS = {
+    "flexdigit.report.ch7_tactile": 45.0,
+    "flexdigit.report.ch6_tactile": 35.0,
+    "flexdigit.report.ch4_control": 12.0,
+    "flexdigit.report.ch3_twin": 9.0,
+    "flexdigit.report.ch5_digital": 7.0,
+    "flexdigit.report.ch3_identify": 5.0,
+}
+
+
+def _available_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _build_chapter(module_name: str, ctx: ReportContext) -> tuple[Chapter | None, str | None, float]:
+    """``(chapter, None, seconds)``, or ``(None, traceback, seconds)`` if it failed."""
+    start = time.perf_counter()
+    try:
+        chapter = importlib.import_module(module_name).build(ctx)
+        return chapter, None, time.perf_counter() - start
+    except Exception:  # a broken chapter must not hide the others; its traceback goes in the report
+        return None, traceback.format_exc(), time.perf_counter() - start
+
+
+#: What a worker process keeps entered for its lifetime (the calibration the report runs on).
+_WORKER_CONTEXT = contextlib.ExitStack()
+
+
+def _calibration_state():
+    """The twin calibration a ``use_calibration`` block made the default here, to hand to the workers (a spawned
+    process starts on the packaged one); None when it is the packaged one."""
+    from flexdigit.twin.calibration import default_calibration, default_calibration_source, default_fit_record
+
+    source = default_calibration_source()
+    return None if source == "packaged" else (default_calibration(), source, default_fit_record())
+
+
+def _worker_init(calibration_state) -> None:
+    # one BLAS thread per worker: the workers already use every core, and OpenBLAS threads fighting over them make
+    # small factorisations (SLICOT's) tens of times slower
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)
+    if calibration_state is not None:  # the parent's use_calibration block, for every chapter of this worker
+        from flexdigit.twin.calibration import use_calibration
+
+        _WORKER_CONTEXT.enter_context(use_calibration(*calibration_state))
+
+
+def _build_in_processes(names, ctx: ReportContext, workers: int, progress) -> dict:
+    order = sorted(names, key=lambda n: -EXPECTED_SECONDS.get(n, 5.0))
+    done = {}
+    context = multiprocessing.get_context("spawn")  # a fresh interpreter: no state inherited from this one
+    init = {"initializer": _worker_init, "initargs": (_calibration_state(),)}
+    with ProcessPoolExecutor(workers, mp_context=context, **init) as pool:
+        futures = {pool.submit(_build_chapter, name, ctx): name for name in order}
+        for future in as_completed(futures):
+            name = futures[future]
+            try:
+                done[name] = future.result()
+            except Exception:  # the worker died (out of memory, killed): say so in the report
+                done[name] = (None, traceback.format_exc(), float("nan"))
+            if progress is not None:
+                progress(name)
+    return done
 
 
 _CSS = """

@@ -404,7 +404,13 @@ def _noise_study(ctx: ReportContext, key: str, hidden: int, tol: float, chapter:
         ds = ds.subset(ds["load_kg"] > 0)
         _, y = targets(ds, "position_index")
         r = run_pipeline(
-            features(ds), y, seed=ctx.seed, fixed_hidden=hidden, fixed_tol=tol, epochs=10 if ctx.fast else 50
+            features(ds),
+            y,
+            seed=ctx.seed,
+            fixed_hidden=hidden,
+            fixed_tol=tol,
+            epochs=10 if ctx.fast else 50,
+            curve_hidden=None,
         )
         rows.append([scale, 1000 * base.noise_white_v[0] * scale, r.corr2])
     chapter.tables.append(

@@ -20,9 +20,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--params", help="rig parameter TOML (default: the thesis rig)")
     parser.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (default: fitted to the thesis)")
     parser.add_argument("--fast", action="store_true", help="smaller sweeps, for a quick look")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        help="chapters built at once, one process each (default: one per core; 1: in this process, one by one)",
+    )
 
 
 def _reproduce(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.errors import ParameterError
     from flexdigit.params import RigParams, load_params
     from flexdigit.report.build import reproduce
 
@@ -32,14 +38,17 @@ def _reproduce(args: argparse.Namespace) -> CommandResult:
         if not args.json:
             print(f"  {name} ...", file=sys.stderr, flush=True)
 
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers must be a positive integer. Got {args.workers} instead.")
+    run = {"params": params, "seed": args.seed, "fast": args.fast, "progress": progress, "workers": args.workers}
     if args.calibration:  # every twin of every chapter on the user's calibration (flexdigit calibrate's file)
         from flexdigit.twin.calibration import load_calibration_record, use_calibration
 
         calibration, fit = load_calibration_record(args.calibration)
         with use_calibration(calibration, source=str(args.calibration), fit=fit):
-            summary = reproduce(args.out, params=params, seed=args.seed, fast=args.fast, progress=progress)
+            summary = reproduce(args.out, **run)  # the workers get the calibration from reproduce
     else:
-        summary = reproduce(args.out, params=params, seed=args.seed, fast=args.fast, progress=progress)
+        summary = reproduce(args.out, **run)
     lines = [
         f"report written to {summary.out_dir / 'index.html'} and {summary.out_dir / 'results.json'}",
         f"{summary.entries} entries: " + ", ".join(f"{n} {s}" for s, n in summary.counts.items()),
