@@ -8,8 +8,13 @@ import matplotlib.pyplot as plt
 import pytest
 
 from flexdigit.report.build import reproduce
-from flexdigit.report.chapter import Chapter
+from flexdigit.report.chapter import Chapter, ResultTable
 from flexdigit.report.results import compare, new
+
+#: 14 rows: more than build.COLLAPSE_ROWS, so the table is collapsed in the HTML
+rows = tuple((0.5 * k, 0.0182 + k * 1e-4, "riccati" if k % 2 else "lmi") for k in range(14)) + (
+    (50.0, float("nan"), "x"),
+)
 
 
 def _install(name, build):
@@ -33,6 +38,7 @@ def chapters():
                 compare("demo.db", "4.6", 0.85, 1.28e-4, "%", rtol=0.01, discrepancy_note="117.83 dB is 1.28e-6."),
                 new("demo.new", "7", 1.5, "mm", "RMSE"),
             ],
+            tables=[ResultTable("demo.gamma", "gamma by two routes", ("filter_hz", "gamma", "route"), rows)],
             figures=[ctx.save_figure(fig, "demo_line", "a line", thesis_ref="figure 3.5")],
         )
 
@@ -47,9 +53,16 @@ def chapters():
 
 def test_report_writes_entries_html_and_figures(tmp_path, chapters):
     summary = reproduce(tmp_path, chapters=chapters, workers=1)  # the test chapters live in this process only
-    entries = json.loads((tmp_path / "results.json").read_text())
+    document = json.loads((tmp_path / "results.json").read_text())
+    entries = document["entries"]
     assert [e["status"] for e in entries] == ["match", "discrepancy", "new"]
-    assert set(entries[0]) == {"key", "section", "thesis", "ours", "unit", "rel_error", "status", "note"}
+    assert set(entries[0]) == {"key", "section", "thesis", "ours", "unit", "rel_error", "status", "note", "chapter"}
+    # every table as numbers (issue 15): cells keep their type, NaN becomes null
+    (table,) = document["tables"]
+    assert table["key"] == "demo.gamma" and table["chapter"] == "demo"
+    assert table["rows"][3] == [1.5, pytest.approx(0.0185), "riccati"] and table["rows"][-1][1] is None
+    assert document["counts"] == {"match": 1, "discrepancy": 1, "new": 1}
+    assert document["chapters"][0]["counts"] == {"match": 1, "discrepancy": 1, "new": 1}
     assert entries[0]["rel_error"] == pytest.approx(abs(0.0894 - 0.089377) / 0.089377)
     assert summary.counts == {"match": 1, "discrepancy": 1, "new": 1}
     html = (tmp_path / "index.html").read_text()
@@ -57,6 +70,9 @@ def test_report_writes_entries_html_and_figures(tmp_path, chapters):
     assert "figures/demo_line.png" in html and (tmp_path / "figures" / "demo_line.png").stat().st_size > 1000
     # the failing chapter is shown with its error, the good one is kept
     assert "fd_test_bad_chapter" in summary.failed and "chapter exploded" in html
+    # the first screen: counts per chapter, then the chapters; the 15-row table collapsed under its title
+    assert html.index("Chapters</h2>") < html.index("id='demo'")
+    assert "<details><summary>gamma by two routes <code>demo.gamma</code> (15 rows)</summary>" in html
 
 
 def test_unexplained_discrepancy_is_refused():

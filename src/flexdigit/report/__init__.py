@@ -17,4 +17,5 @@ CHAPTERS: tuple[str, ...] = (
     "flexdigit.report.ch7_tactile",
     "flexdigit.report.ch8_shape",
     "flexdigit.report.ch8_studies",
+    "flexdigit.report.ch6_7_noise",
 )

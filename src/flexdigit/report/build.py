@@ -78,18 +78,84 @@ def reproduce(
     built = [done[n][0] for n in names if done[n][0] is not None]
     failed = {n: done[n][1] for n in names if done[n][1] is not None}
     seconds = {n: done[n][2] for n in names}
-    entries = [asdict(e) for chapter in built for e in chapter.entries]
-    (out / "results.json").write_text(json.dumps(to_jsonable(entries), indent=2) + "\n")
-    (out / "index.html").write_text(_render(built, failed, ctx))
-    counts = {s: sum(e["status"] == s for e in entries) for s in ("match", "discrepancy", "new")}
-    return ReportSummary(out, len(entries), counts, [c.title for c in built], failed, seconds)
+    document = results_document(built, ctx, seconds={c.slug: done[n][2] for n, c in _pairs(names, done)})
+    (out / "results.json").write_text(json.dumps(to_jsonable(document), indent=2) + "\n")
+    (out / "index.html").write_text(_render(built, failed, ctx, document))
+    return ReportSummary(out, len(document["entries"]), document["counts"], [c.title for c in built], failed, seconds)
+
+
+def _pairs(names, done):
+    return [(n, done[n][0]) for n in names if done[n][0] is not None]
+
+
+#: The report's first screen: the figures a reader wants first, each the thesis's beside ours (entry keys; a key
+#: whose chapter failed or was not built is left out).
+HEADLINE = (
+    "plant.G.num",
+    "plant.G.den[s^0]",
+    "cable.commands_for_30deg_tip_rotation",
+    "conversion.K1_sg1",
+    "twin.release_with_housing.wn_rad_s",
+    "twin.release_with_housing.zeta",
+    "identify.servo.lsq.wn_rad_s",
+    "identify.digit.thesis.wn_rad_s",
+    "hinf.tzw_peak_db",
+    "hinf.k_39hz_num_lead",
+    "hinf.additive_tolerance_5Hz",
+    "digital.euler_unstable_above_s",
+    "digital20.settling_time_s",
+    "non_actuated.test_corr2_at_thesis_optimum",
+    "actuated.test_corr2_at_thesis_optimum",
+    "actuated.best_estimator_position_rmse_mm",
+    "actuated.bayes_position_rmse_identifiable_mm",
+)
+STATUSES = ("match", "discrepancy", "new")
+
+
+def results_document(chapters: list[Chapter], ctx: ReportContext, seconds: dict[str, float] | None = None) -> dict:
+    """What ``results.json`` holds: every entry, every table as numbers, the headline and per-chapter counts.
+
+    ``{"flexdigit", "seed", "fast", "calibration", "counts", "headline", "chapters", "entries", "tables"}``: ``entries`` is the
+    list of ``{key, section, thesis, ours, unit, rel_error, status, note}``; ``tables`` the list of
+    ``{key, chapter, title, columns, rows}`` (cells are numbers, or strings for labels; NaN is null);
+    ``headline`` the keys of :data:`HEADLINE` present; ``chapters`` each chapter's slug, title, counts and seconds.
+    """
+    entries = [dict(asdict(e), chapter=c.slug) for c in chapters for e in c.entries]
+    present = {e["key"] for e in entries}
+    seconds = seconds or {}
+    return {
+        "flexdigit": __version__,
+        "seed": ctx.seed,
+        "fast": ctx.fast,
+        "calibration": _calibration_source(),
+        "counts": _counts(entries),
+        "headline": [k for k in HEADLINE if k in present],
+        "chapters": [
+            {
+                "slug": c.slug,
+                "title": c.title,
+                "counts": _counts([asdict(e) for e in c.entries]),
+                "tables": len(c.tables),
+                "figures": len(c.figures),
+                "seconds": seconds.get(c.slug),
+            }
+            for c in chapters
+        ],
+        "entries": entries,
+        "tables": [dict(t.as_dict(), chapter=c.slug) for c in chapters for t in c.tables],
+    }
+
+
+def _counts(entries) -> dict[str, int]:
+    return {s: sum(e["status"] == s for e in entries) for s in STATUSES}
 
 
 #: Rough seconds each chapter takes (full report, 2-core machine): only the order in which chapters are handed to
 #: the worker processes (longest first, so that no long chapter starts last), never their numbers.
 EXPECTED_SECONDS = {
-    "flexdigit.report.ch7_tactile": 45.0,
-    "flexdigit.report.ch6_tactile": 35.0,
+    "flexdigit.report.ch7_tactile": 35.0,
+    "flexdigit.report.ch6_tactile": 30.0,
+    "flexdigit.report.ch6_7_noise": 15.0,
     "flexdigit.report.ch4_control": 12.0,
     "flexdigit.report.ch3_twin": 9.0,
     "flexdigit.report.ch5_digital": 7.0,
@@ -165,50 +231,121 @@ th{background:#f3f3f3}.match{background:#e8f6e8}.discrepancy{background:#fff2d9}
 .failed{background:#fde4e4;padding:0.5em;white-space:pre-wrap;font-family:monospace;font-size:0.8em}
 figure{display:inline-block;margin:0.5em;max-width:520px;vertical-align:top}figure img{max-width:100%}
 figcaption{font-size:0.85em;color:#444}code{background:#f5f5f5}
+details{margin:1em 0}summary{cursor:pointer;font-weight:600}
 """
 
 
+@dataclass(frozen=True)
+class _Link:
+    """A table cell linking to a chapter."""
+
+    slug: str
+    text: str
+
+
 def _cell(value: object) -> str:
+    if isinstance(value, _Link):
+        return f"<a href='#{html.escape(value.slug)}'>{html.escape(value.text)}</a>"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
     if isinstance(value, float):
         return f"{value:.6g}"
     return html.escape("" if value is None else str(value))
 
 
-def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext) -> str:
+#: Tables longer than this are collapsed under their title (click to open).
+COLLAPSE_ROWS = 12
+
+
+def _table_html(columns, rows, row_class=None) -> str:
+    head = "<table><tr>" + "".join(f"<th>{html.escape(c)}</th>" for c in columns) + "</tr>"
+    body = []
+    for row in rows:
+        cls = f" class='{row_class(row)}'" if row_class else ""
+        body.append(f"<tr{cls}>" + "".join(f"<td>{_cell(v)}</td>" for v in row) + "</tr>")
+    return head + "".join(body) + "</table>"
+
+
+def _collapsible(summary: str, inner: str, n_rows: int) -> str:
+    if n_rows <= COLLAPSE_ROWS:
+        return f"<h3>{summary}</h3>{inner}"
+    return f"<details><summary>{summary} ({n_rows} rows)</summary>{inner}</details>"
+
+
+def _entry_row(e) -> list:
+    rel = None if e.rel_error is None else f"{100 * e.rel_error:.3g} %"
+    return [e.key, e.section, e.thesis, e.ours, e.unit, rel, e.status, e.note]
+
+
+def _front_page(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext, document: dict) -> list[str]:
+    by_key = {e.key: e for c in chapters for e in c.entries}
+    counts = document["counts"]
+    parts = [
+        "<h1>The cable-actuated flexible digit, reproduced on its digital twin</h1>",
+        f"<p>flexdigit {html.escape(__version__)}, seed {ctx.seed}{', fast mode' if ctx.fast else ''}, "
+        f"twin calibration: {html.escape(_calibration_source())}: "
+        f"{sum(counts.values())} entries, "
+        + ", ".join(f"<span class='{s}'>{counts[s]} {s}</span>" for s in STATUSES)
+        + ". Each entry puts the figure as printed in the thesis beside ours: <span class='match'>match</span>, "
+        "<span class='discrepancy'>discrepancy</span> (the note explains it and gives the corrected figure) or "
+        "<span class='new'>new</span> (not in the thesis). The same entries, and every table as numbers, are in "
+        "<code>results.json</code>.</p>",
+        "<h2 id='headline'>Headline figures</h2>",
+        _table_html(
+            ["figure", "section", "thesis", "ours", "unit", "status", "note"],
+            [
+                [
+                    k,
+                    by_key[k].section,
+                    by_key[k].thesis,
+                    by_key[k].ours,
+                    by_key[k].unit,
+                    by_key[k].status,
+                    _first_sentence(by_key[k].note),
+                ]
+                for k in document["headline"]
+            ],
+            row_class=lambda row: row[5],
+        ),  # fmt: skip
+        "<h2 id='chapters'>Chapters</h2>",
+        _table_html(
+            ["chapter", *STATUSES, "tables", "figures", "seconds"],
+            [
+                [_Link(c["slug"], c["title"]), *(c["counts"][s] for s in STATUSES)]
+                + [c["tables"], c["figures"], c["seconds"]]
+                for c in document["chapters"]
+            ],
+        ),
+    ]
+    if failed:
+        parts.append("<p class='failed'>Failed: " + ", ".join(html.escape(n) for n in failed) + " (below).</p>")
+    return parts
+
+
+def _first_sentence(note: str) -> str:
+    head, _, _ = note.partition(". ")
+    return head + ("." if head and not head.endswith(".") else "")
+
+
+def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext, document: dict) -> str:
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'><title>flexdigit: the thesis reproduced</title>",
         f"<style>{_CSS}</style></head><body>",
-        "<h1>The cable-actuated flexible digit, reproduced on its digital twin</h1>",
-        f"<p>flexdigit {html.escape(__version__)}, seed {ctx.seed}{', fast mode' if ctx.fast else ''}, "
-        f"twin calibration: {html.escape(_calibration_source())}. "
-        "Each entry puts the figure as printed in the thesis beside ours: <span class='match'>match</span>, "
-        "<span class='discrepancy'>discrepancy</span> (the note explains it and gives the corrected figure) or "
-        "<span class='new'>new</span> (not in the thesis). The same entries are in <code>results.json</code>.</p>",
-        "<ul>" + "".join(f"<li><a href='#{c.slug}'>{html.escape(c.title)}</a></li>" for c in chapters) + "</ul>",
+        *_front_page(chapters, failed, ctx, document),
     ]
     for chapter in chapters:
         parts.append(f"<h2 id='{chapter.slug}'>{html.escape(chapter.title)}</h2>")
         parts.extend(f"<p>{html.escape(p)}</p>" for p in chapter.paragraphs)
         if chapter.entries:
-            parts.append(
-                "<table><tr><th>key</th><th>section</th><th>thesis</th><th>ours</th><th>unit</th>"
-                "<th>rel. error</th><th>status</th><th>note</th></tr>"
+            inner = _table_html(
+                ["key", "section", "thesis", "ours", "unit", "rel. error", "status", "note"],
+                [_entry_row(e) for e in chapter.entries],
+                row_class=lambda row: row[6],
             )
-            for e in chapter.entries:
-                rel = "" if e.rel_error is None else f"{100 * e.rel_error:.3g} %"
-                parts.append(
-                    f"<tr class='{e.status}'><td>{_cell(e.key)}</td><td>{_cell(e.section)}</td>"
-                    f"<td>{_cell(e.thesis)}</td><td>{_cell(e.ours)}</td><td>{_cell(e.unit)}</td><td>{rel}</td>"
-                    f"<td>{e.status}</td><td>{_cell(e.note)}</td></tr>"
-                )
-            parts.append("</table>")
+            parts.append(_collapsible("Entries: the thesis beside ours", inner, len(chapter.entries)))
         for table in chapter.tables:
-            parts.append(f"<h3>{html.escape(table.title)}</h3><table><tr>")
-            parts.extend(f"<th>{html.escape(c)}</th>" for c in table.columns)
-            parts.append("</tr>")
-            for row in table.rows:
-                parts.append("<tr>" + "".join(f"<td>{_cell(v)}</td>" for v in row) + "</tr>")
-            parts.append("</table>")
+            title = f"{html.escape(table.title)} <code>{html.escape(table.key)}</code>"
+            parts.append(_collapsible(title, _table_html(table.columns, table.rows), len(table.rows)))
         for fig in chapter.figures:
             ref = f" (beside thesis {html.escape(fig.thesis_ref)})" if fig.thesis_ref else ""
             parts.append(

@@ -20,7 +20,7 @@ from flexdigit.identify.identification import average_runs, identify
 from flexdigit.identify.response import settling_formula_bias
 from flexdigit.identify.timeseries import TimeSeries, series_from_table
 from flexdigit.reference import thesis_value
-from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
 from flexdigit.report.results import Entry, compare, new
 
 SECTION_DIGIT = "3.1.2"
@@ -167,35 +167,36 @@ def _tables_from_records(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -
             got["thesis_wn"].append(th.wn_rad_s)
             got["lsq_zeta"].append(ls.zeta)
             got["lsq_wn"].append(ls.wn_rad_s)
-            ts = th.features.settling_time_s
             rows.append(
-                [
+                (
                     i + 1,
-                    f"{zetas[i]:.4f}",
-                    f"{th.features.percent_overshoot:.4f}",
-                    f"{th.zeta:.4f}",
-                    f"{ls.zeta:.4f}",
-                    f"{wns[i]:.4f}",
-                    f"{th.wn_rad_s:.4f}",
-                    f"{ls.wn_rad_s:.4f}",
-                    "not reached" if not math.isfinite(ts) else f"{ts:.2f}",
-                ]
+                    zetas[i],
+                    th.features.percent_overshoot,
+                    th.zeta,
+                    ls.zeta,
+                    wns[i],
+                    th.wn_rad_s,
+                    ls.wn_rad_s,
+                    th.features.settling_time_s,  # inf: the record ends before it settles
+                )
             )
         chapter.tables.append(
-            Table(
-                f"Table {table} from synthetic release records ({t_end:g} s, 0.2 % noise) with the printed zeta and wn",
-                [
+            ResultTable(
+                f"identify.table_{table.replace('.', '_')}_from_records",
+                f"Table {table} from synthetic release records ({t_end:g} s, 0.2 % noise) with the printed zeta and "
+                "wn (thesis method: wn from the damped frequency; settling time inf: not reached in the record)",
+                (
                     "test",
-                    "zeta printed",
-                    "%OS measured",
-                    "zeta thesis method",
-                    "zeta lsq",
-                    "wn printed",
-                    "wn thesis method (wd)",
-                    "wn lsq",
-                    "2 % Ts (s)",
-                ],
-                rows,
+                    "zeta_printed",
+                    "percent_overshoot_measured",
+                    "zeta_thesis_method",
+                    "zeta_lsq",
+                    "wn_printed_rad_s",
+                    "wn_thesis_method_rad_s",
+                    "wn_lsq_rad_s",
+                    "settling_2_percent_s",
+                ),
+                tuple(rows),
             )
         )
         key = f"identify.table_{table.replace('.', '_')}"
@@ -256,14 +257,14 @@ def _noise_study(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
         for method, values in err.items():
             a = np.asarray(values)
             rows.append(
-                [
+                (
                     kind,
                     method,
-                    f"{100 * a[:, 0].mean():+.2f}",
-                    f"{100 * np.abs(a[:, 0]).max():.2f}",
-                    f"{100 * a[:, 1].mean():+.2f}",
-                    f"{100 * np.abs(a[:, 1]).max():.2f}",
-                ]
+                    100 * a[:, 0].mean(),
+                    100 * np.abs(a[:, 0]).max(),
+                    100 * a[:, 1].mean(),
+                    100 * np.abs(a[:, 1]).max(),
+                )
             )
             for j, par in enumerate(("wn", "zeta")):
                 e.append(
@@ -283,17 +284,18 @@ def _noise_study(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
                     )
                 )
     chapter.tables.append(
-        Table(
+        ResultTable(
+            "identify.noisy_records",
             f"Errors over {seeds} noisy synthetic records ({100 * NOISE:g} % white noise): thesis method, lsq, ARX",
-            [
+            (
                 "test",
                 "method",
-                "wn mean error (%)",
-                "wn max |error| (%)",
-                "zeta mean error (%)",
-                "zeta max |error| (%)",
-            ],
-            rows,
+                "wn_mean_error_percent",
+                "wn_max_abs_error_percent",
+                "zeta_mean_error_percent",
+                "zeta_max_abs_error_percent",
+            ),
+            tuple(rows),
         )
     )
 
@@ -353,23 +355,7 @@ def _models_from_experiments(ctx: ReportContext, chapter: Chapter, e: list[Entry
     for (model, method), r in fits.items():
         wn_p, zeta_p, corr_p = printed[model]
         section = SECTION_DIGIT if model == "digit" else SECTION_SERVO
-        ci = ""
-        if r.estimates:
-            w, z = r.estimates["wn_rad_s"], r.estimates["zeta"]
-            ci = f"wn {w.ci_low:.3f}..{w.ci_high:.3f}, zeta {z.ci_low:.4f}..{z.ci_high:.4f}"
-        rows.append(
-            [
-                model,
-                method,
-                wn_p,
-                f"{r.wn_rad_s:.3f}",
-                zeta_p,
-                f"{r.zeta:.4f}",
-                ci,
-                f"{r.corr2:.4f}",
-                f"{r.fit_percent:.1f}",
-            ]
-        )
+        rows.append((model, method, wn_p, r.wn_rad_s, zeta_p, r.zeta, *_intervals(r), r.corr2, r.fit_percent))
         why = (
             "The thesis method's wn = 4/(zeta Ts) carries the bias of identify.wn_settling_formula.* plus the noise "
             "in the settling time read off a filtered record."
@@ -440,17 +426,17 @@ def _models_from_experiments(ctx: ReportContext, chapter: Chapter, e: list[Entry
     for method, r in tip_fits.items():
         wn_p, zeta_p, _ = printed["digit"]
         rows.append(
-            [
+            (
                 f"digit (tip, {tip.unit})",
                 method,
                 wn_p,
-                f"{r.wn_rad_s:.3f}",
+                r.wn_rad_s,
                 zeta_p,
-                f"{r.zeta:.4f}",
-                "",
-                f"{r.corr2:.4f}",
-                f"{r.fit_percent:.1f}",
-            ]
+                r.zeta,
+                *_intervals(r),
+                r.corr2,
+                r.fit_percent,
+            )
         )
         for par, value in (("wn_rad_s", r.wn_rad_s), ("zeta", r.zeta)):
             e.append(
@@ -464,20 +450,25 @@ def _models_from_experiments(ctx: ReportContext, chapter: Chapter, e: list[Entry
                 )
             )
     chapter.tables.append(
-        Table(
-            f"Digit E(s) and servo MT(s) identified from {origin}, beside the thesis's",
-            [
+        ResultTable(
+            "identify.models_from_twin",
+            f"Digit E(s) and servo MT(s) identified from {origin}, beside the thesis's (95 % confidence intervals of "
+            "the lsq fits; NaN for the thesis method, which gives none)",
+            (
                 "model",
                 "method",
-                "wn thesis",
-                "wn ours",
-                "zeta thesis",
-                "zeta ours",
-                "95 % CI (lsq)",
+                "wn_thesis_rad_s",
+                "wn_ours_rad_s",
+                "zeta_thesis",
+                "zeta_ours",
+                "wn_ci_low_rad_s",
+                "wn_ci_high_rad_s",
+                "zeta_ci_low",
+                "zeta_ci_high",
                 "corr2",
-                "NRMSE fit %",
-            ],
-            rows,
+                "nrmse_fit_percent",
+            ),
+            tuple(rows),
         )
     )
     # figures 3.6 and 3.12: measured versus modelled
@@ -597,17 +588,7 @@ def _linear_fits(chapter: Chapter, e: list[Entry]) -> None:
         r = fit_linear(commands, y)
         a = float(printed[k]["a"])
         inside = r.slope.ci_low <= a <= r.slope.ci_high
-        rows.append(
-            [
-                k + 1,
-                f"{r.slope.value:.4f}",
-                f"{r.slope.ci_low:.4f}..{r.slope.ci_high:.4f}",
-                a,
-                "yes" if inside else "no",
-                f"{r.rms:.3f}",
-                f"{r.r_squared:.4f}",
-            ]
-        )
+        rows.append((k + 1, r.slope.value, r.slope.ci_low, r.slope.ci_high, a, bool(inside), r.rms, r.r_squared))
         e.append(
             new(
                 f"identify.k1_fit.sg{k + 1}.slope_mm_per_command",
@@ -621,10 +602,20 @@ def _linear_fits(chapter: Chapter, e: list[Entry]) -> None:
             )
         )
     chapter.tables.append(
-        Table(
+        ResultTable(
+            "identify.deflection_fits",
             "3.4.1: deflection vs command fits of table 3.6 with 95 % confidence intervals",
-            ["gauge", "slope lsq (mm/cmd)", "95 % CI", "printed a", "printed inside CI", "residual RMS (mm)", "R^2"],
-            rows,
+            (
+                "gauge",
+                "slope_lsq_mm_per_command",
+                "slope_ci_low",
+                "slope_ci_high",
+                "a_printed_mm_per_command",
+                "printed_inside_ci",
+                "residual_rms_mm",
+                "r_squared",
+            ),
+            tuple(rows),
         )
     )
 
@@ -641,15 +632,8 @@ def _voltage_fits(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
         r = fit_linear(commands, sweep.column(f"gauge{k + 1}_v"))
         slope_p, offset_p = float(printed[k]["slope"]), float(printed[k]["offset"])
         rows.append(
-            [
-                k + 1,
-                slope_p,
-                f"{r.slope.value:.5f} ({r.slope.ci_low:.5f}..{r.slope.ci_high:.5f})",
-                offset_p,
-                f"{r.intercept.value:.4f} ({r.intercept.ci_low:.4f}..{r.intercept.ci_high:.4f})",
-                f"{1e3 * r.rms:.2f}",
-                f"{r.r_squared:.4f}",
-            ]
+            (k + 1, slope_p, r.slope.value, r.slope.ci_low, r.slope.ci_high, offset_p, r.intercept.value)
+            + (r.intercept.ci_low, r.intercept.ci_high, 1e3 * r.rms, r.r_squared)
         )
         e.append(
             compare(
@@ -665,9 +649,30 @@ def _voltage_fits(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
             )
         )
     chapter.tables.append(
-        Table(
+        ResultTable(
+            "identify.voltage_fits",
             "3.4.3: gauge voltage vs command (E 3.20-3.22) fitted to the twin's actuation sweep, 95 % intervals",
-            ["gauge", "slope printed", "slope ours (CI)", "offset printed", "offset ours (CI)", "RMS (mV)", "R^2"],
-            rows,
+            (
+                "gauge",
+                "slope_printed_v_per_command",
+                "slope_ours_v_per_command",
+                "slope_ci_low",
+                "slope_ci_high",
+                "offset_printed_v",
+                "offset_ours_v",
+                "offset_ci_low",
+                "offset_ci_high",
+                "residual_rms_mv",
+                "r_squared",
+            ),
+            tuple(rows),
         )
     )
+
+
+def _intervals(r) -> tuple[float, float, float, float]:
+    """The 95 % intervals of wn and zeta of an lsq identification (NaN where the method gives none)."""
+    if not r.estimates:
+        return (math.nan,) * 4
+    w, z = r.estimates["wn_rad_s"], r.estimates["zeta"]
+    return w.ci_low, w.ci_high, z.ci_low, z.ci_high

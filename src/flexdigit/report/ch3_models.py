@@ -14,14 +14,13 @@ import numpy as np
 from flexdigit.models import cable, conversion, digit, servo
 from flexdigit.models.plant import (
     PRINTED_DIGIT_DAMPING_1_PER_S,
-    build_plant,
     closed_loop_printed_k1,
     commands_for_tip_rotation,
     explain_discrepancies,
     printed_digit_zeta,
 )
 from flexdigit.reference import thesis_complex, thesis_value
-from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import Entry, compare, new
 
 
@@ -31,8 +30,11 @@ def _printed_rtol(printed: float, decimals: int) -> float:
 
 
 def build(ctx: ReportContext) -> Chapter:
-    """Build chapter 3 of the report."""
+    """Chapter 3 from :func:`flexdigit.models.studies.chapter3_study`: entries, tables and figures."""
+    from flexdigit.models.studies import chapter3_study
+
     p = ctx.params
+    study = chapter3_study(p)
     chapter = Chapter(slug="ch3-models", title="Chapter 3: component models and the plant G(s)")
     chapter.paragraphs.append(
         "Each component of chapter 3 is rebuilt from the rig parameters (flexdigit.models) and the plant G(s) of "
@@ -42,15 +44,17 @@ def build(ctx: ReportContext) -> Chapter:
         "discrepancies as below."
     )
     e = chapter.entries
-    _digit(ctx, chapter, e)
+    for release in study.releases.values():
+        _release_entries(release, e)
+    _digit_model(ctx, study, chapter)
     zeta_ok = sum(x.status == "match" for x in e if x.key.startswith("table_3_") and ".zeta[" in x.key)
     chapter.paragraphs.append(
         f"Tables 3.1 and 3.2: all {zeta_ok} zetas whose %OS is readable follow from it to the printed 4 decimals; "
         "table 3.2 row 2's %OS is garbled in print and its zeta implies 80.5973 %. Table 3.1's wn column, "
         "unlike table 3.2's, does not follow from its wd column."
     )
-    _servo(ctx, chapter, e)
-    _cable(ctx, chapter, e)
+    _servo(ctx, study, chapter)
+    _cable(p, study, e)
     cells = [x for x in e if x.key.startswith("table_3_4.")]
     gauge_cells = [x for x in cells if not x.key.startswith("table_3_4.y_max_mm")]
     chapter.paragraphs.append(
@@ -59,108 +63,103 @@ def build(ctx: ReportContext) -> Chapter:
         f"({sum(x.status == 'match' for x in cells) - sum(x.status == 'match' for x in gauge_cells)} of its "
         f"{len(cells) - len(gauge_cells)} cells match at x = l, the zero row)."
     )
-    _conversion(chapter, e)
-    _plant(ctx, chapter, e)
+    _conversion(study.conversion, e)
+    _plant_printed(p, study.plant.printed, e)
+    _closed_loop(study.plant.printed, e)
+    _plant_variants(ctx, study, e, chapter)
+    chapter.tables.extend(study.tables)
     chapter.paragraphs.append("Printed versus consistent plant, numbered:")
     chapter.paragraphs.extend(explain_discrepancies(p))
     return chapter
 
 
 # --- 3.1.2: release tests and E(s) ------------------------------------------------------------------------
-def _digit(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
-    for table, name in (("3.1", "without_housing"), ("3.2", "with_housing")):
-        t = thesis_value(f"digit.release_tests_{name}")
-        os_ = np.asarray(t["percent_overshoot"], dtype=float)
-        zeta = np.atleast_1d(digit.zeta_from_overshoot(os_))
-        wn_from_wd = np.atleast_1d(digit.natural_frequency_from_damped(t["wd_rad_s"], t["zeta"]))
-        rows = []
-        for i, (z_ours, z_print) in enumerate(zip(zeta, t["zeta"], strict=True), start=1):
-            key = f"table_{table.replace('.', '_')}.zeta[{i}]"
-            if not np.isfinite(z_ours):
-                os_implied = digit.overshoot_from_zeta(z_print)
-                e.append(
-                    compare(
-                        key,
-                        "3.1.2",
-                        z_print,
-                        z_ours,
-                        "",
-                        rtol=0.0,
-                        discrepancy_note=f"The %OS of this row is printed garbled ('80.59.5973'), read as NaN. The "
-                        f"printed zeta {z_print} implies %OS = {os_implied:.4f}, so the value was most likely "
-                        "80.5973 with a stray '59.'.",
-                    )
-                )
-            else:
-                e.append(
-                    compare(
-                        key,
-                        "3.1.2",
-                        z_print,
-                        z_ours,
-                        "",
-                        rtol=_printed_rtol(z_print, 4),
-                        note=f"zeta = -ln(OS/100)/sqrt(pi^2 + ln^2(OS/100)) from %OS = {os_[i - 1]}; "
-                        "printed to 4 decimals.",
-                        discrepancy_note="The printed zeta does not follow from its printed %OS.",
-                    )
-                )
-            rows.append([i, os_[i - 1], t["zeta"][i - 1], z_ours, t["wn_rad_s"][i - 1], wn_from_wd[i - 1]])
-        chapter.tables.append(
-            Table(
-                f"Table {table} recomputed (release tests {name.replace('_', ' ')})",
-                ["test", "%OS", "zeta printed", "zeta ours", "wn printed (rad/s)", "wd/sqrt(1-zeta^2) (rad/s)"],
-                rows,
-            )
-        )
-        # averages: a NaN row (garbled %OS) falls back on its printed zeta
-        z_for_avg = np.where(np.isfinite(zeta), zeta, t["zeta"])
-        e.append(
-            compare(
-                f"table_{table.replace('.', '_')}.zeta_avg",
-                "3.1.2",
-                t["zeta_avg"],
-                float(np.mean(z_for_avg)),
-                "",
-                rtol=_printed_rtol(t["zeta_avg"], 4),
-                note="Mean of the recomputed zetas (the printed zeta where %OS is unreadable); the rows are "
-                "known to 4 decimals, so is their mean.",
-                discrepancy_note="The printed average is not the mean of the rows.",
-            )
-        )
-        e.append(
-            compare(
-                f"table_{table.replace('.', '_')}.wn_avg_rad_s",
-                "3.1.2",
-                t["wn_avg_rad_s"],
-                float(np.mean(t["wn_rad_s"])),
-                "rad/s",
-                rtol=1e-4,
-                note="Mean of the printed wn column.",
-                discrepancy_note="The printed average is not the mean of the rows.",
-            )
-        )
-        wn_printed, wd_printed = np.asarray(t["wn_rad_s"]), np.asarray(t["wd_rad_s"])
-        for i, (wn_p, wn_o) in enumerate(zip(wn_printed, wn_from_wd, strict=True), start=1):
-            implied_zeta = math.sqrt(1 - (wd_printed[i - 1] / wn_p) ** 2)
+def _release_entries(release, e: list[Entry]) -> None:
+    """Table 3.1 or 3.2: each zeta from its %OS, the averages, each wn from its wd."""
+    table = release.table.key.removeprefix("models.table_").replace("_", ".")
+    t = thesis_value(f"digit.release_tests_{release.name}")
+    os_, zeta, wn_from_wd = release.percent_overshoot, release.zeta, release.wn_from_wd_rad_s
+    for i, (z_ours, z_print) in enumerate(zip(zeta, t["zeta"], strict=True), start=1):
+        key = f"table_{table.replace('.', '_')}.zeta[{i}]"
+        if not np.isfinite(z_ours):
             e.append(
                 compare(
-                    f"table_{table.replace('.', '_')}.wn_rad_s[{i}]",
+                    key,
                     "3.1.2",
-                    float(wn_p),
-                    float(wn_o),
-                    "rad/s",
-                    rtol=_printed_rtol(float(wn_p), 4),
-                    note=f"wd/sqrt(1 - zeta^2) from the printed wd = {wd_printed[i - 1]} rad/s and zeta = "
-                    f"{t['zeta'][i - 1]} of the same row; the printed wn has 4 decimals.",
-                    discrepancy_note=f"In table {table} the printed wn is not wd/sqrt(1 - zeta^2): wd/wn of this row "
-                    f"needs zeta = {implied_zeta:.4f}, not the tabulated {t['zeta'][i - 1]}. The wn column must come "
-                    "from wn = 4/(zeta Ts) with settling times that are not printed; the wd column is the one "
-                    f"consistent with zeta, and gives wn = {wn_o:.4f} rad/s.",
+                    z_print,
+                    z_ours,
+                    "",
+                    rtol=0.0,
+                    discrepancy_note=f"The %OS of this row is printed garbled ('80.59.5973'), read as NaN. The "
+                    f"printed zeta {z_print} implies %OS = {digit.overshoot_from_zeta(z_print):.4f}, so the value "
+                    "was most likely 80.5973 with a stray '59.'.",
                 )
             )
-    # E(s) of 3.1.2
-    e_tf = digit.digit_tf_from_params(ctx.params, housing=True)
+            continue
+        e.append(
+            compare(
+                key,
+                "3.1.2",
+                z_print,
+                z_ours,
+                "",
+                rtol=_printed_rtol(z_print, 4),
+                note=f"zeta = -ln(OS/100)/sqrt(pi^2 + ln^2(OS/100)) from %OS = {os_[i - 1]}; printed to 4 decimals.",
+                discrepancy_note="The printed zeta does not follow from its printed %OS.",
+            )
+        )
+    # averages: a NaN row (garbled %OS) falls back on its printed zeta
+    z_for_avg = np.where(np.isfinite(zeta), zeta, t["zeta"])
+    e.append(
+        compare(
+            f"table_{table.replace('.', '_')}.zeta_avg",
+            "3.1.2",
+            t["zeta_avg"],
+            float(np.mean(z_for_avg)),
+            "",
+            rtol=_printed_rtol(t["zeta_avg"], 4),
+            note="Mean of the recomputed zetas (the printed zeta where %OS is unreadable); the rows are "
+            "known to 4 decimals, so is their mean.",
+            discrepancy_note="The printed average is not the mean of the rows.",
+        )
+    )
+    e.append(
+        compare(
+            f"table_{table.replace('.', '_')}.wn_avg_rad_s",
+            "3.1.2",
+            t["wn_avg_rad_s"],
+            float(np.mean(t["wn_rad_s"])),
+            "rad/s",
+            rtol=1e-4,
+            note="Mean of the printed wn column.",
+            discrepancy_note="The printed average is not the mean of the rows.",
+        )
+    )
+    wn_printed, wd_printed = np.asarray(t["wn_rad_s"]), np.asarray(t["wd_rad_s"])
+    for i, (wn_p, wn_o) in enumerate(zip(wn_printed, wn_from_wd, strict=True), start=1):
+        implied_zeta = math.sqrt(1 - (wd_printed[i - 1] / wn_p) ** 2)
+        e.append(
+            compare(
+                f"table_{table.replace('.', '_')}.wn_rad_s[{i}]",
+                "3.1.2",
+                float(wn_p),
+                float(wn_o),
+                "rad/s",
+                rtol=_printed_rtol(float(wn_p), 4),
+                note=f"wd/sqrt(1 - zeta^2) from the printed wd = {wd_printed[i - 1]} rad/s and zeta = "
+                f"{t['zeta'][i - 1]} of the same row; the printed wn has 4 decimals.",
+                discrepancy_note=f"In table {table} the printed wn is not wd/sqrt(1 - zeta^2): wd/wn of this row "
+                f"needs zeta = {implied_zeta:.4f}, not the tabulated {t['zeta'][i - 1]}. The wn column must come "
+                "from wn = 4/(zeta Ts) with settling times that are not printed; the wd column is the one "
+                f"consistent with zeta, and gives wn = {wn_o:.4f} rad/s.",
+            )
+        )
+
+
+def _digit_model(ctx: ReportContext, study, chapter: Chapter) -> None:
+    """E(s) of 3.1.2 beside its printed coefficients and bandwidth (figure 3.5)."""
+    e = chapter.entries
+    e_tf = study.digit_tf
     den_e = thesis_value("digit.model.e_den")
     den = e_tf.den[0][0]
     e.append(
@@ -186,38 +185,35 @@ def _digit(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
             "zeta and wn rounded before multiplying (0.16 %).",
         )
     )
-    bw = float(control.bandwidth(e_tf))
     e.append(
         compare(
             "digit.E.bandwidth_rad_s",
             "3.1.2",
             20.3,
-            bw,
+            float(control.bandwidth(e_tf)),
             "rad/s",
             rtol=5e-3,
             note="The 'attenuation around 20.3 rad/s' of figure 3.5 is E(s)'s -3 dB bandwidth (3.23 Hz).",
         )
     )
-    fig = _bode_pz(
-        [("E(s), with housing (3.1.2)", e_tf), ("bare strip (table 3.1)", digit.digit_tf_from_params(housing=False))],
-        "Digit",
-    )
+    fig = _bode_pz([("E(s), with housing (3.1.2)", e_tf), ("bare strip (table 3.1)", study.bare_digit_tf)], "Digit")
     chapter.figures.append(
         ctx.save_figure(fig, "ch3_digit_bode_pz", "Digit E(s): pole-zero and Bode plots", thesis_ref="figure 3.5")
     )
 
 
 # --- 3.2.4: servo ---------------------------------------------------------------------------------------
-def _servo(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
+def _servo(ctx: ReportContext, study, chapter: Chapter) -> None:
     p = ctx.params
-    mt = servo.servo_tf(p, form="unit")
+    e = chapter.entries
+    mt = study.servo_tf["unit"]
     den = mt.den[0][0]
     mt_den = thesis_value("actuator.model.mt_den")
     e.append(compare("servo.MT.wn2", "3.2.4", mt_den[2], den[2], "rad^2/s^2", rtol=1e-3, note="wn = 20.53 rad/s."))
     e.append(
         compare("servo.MT.2_zeta_wn", "3.2.4", mt_den[1], den[1], "rad/s", rtol=1e-3, note="zeta = 0.5629 (3.2.4).")
     )
-    mt_rad = servo.servo_tf(p, form="printed")
+    mt_rad = study.servo_tf["printed"]
     e.append(
         compare(
             "servo.MT_rad.num",
@@ -233,7 +229,7 @@ def _servo(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
         new(
             "servo.MT_consistent.dc_gain",
             "3.2.4",
-            float(servo.servo_tf(p, form="consistent").dcgain()),
+            float(study.servo_tf["consistent"].dcgain()),
             "rad/command",
             "MT(s) has unit DC gain; times 219/254 deg per command: the servo's real rad per command.",
         )
@@ -280,7 +276,10 @@ def _servo(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
         )
     )
     fig = _bode_pz(
-        [("MT(s) x 109.1344 pi/180 (printed)", mt_rad), ("MT(s) x rad/command (consistent)", servo.servo_tf(p))],
+        [
+            ("MT(s) x 109.1344 pi/180 (printed)", mt_rad),
+            ("MT(s) x rad/command (consistent)", study.servo_tf["consistent"]),
+        ],
         "Servo",
     )
     chapter.figures.append(
@@ -289,9 +288,9 @@ def _servo(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
 
 
 # --- 3.3-3.4.2: cable, K2, table 3.4 ---------------------------------------------------------------------
-def _cable(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
-    p = ctx.params
-    k2 = cable.k2_nm_per_rad(p)
+def _cable(p, study, e: list[Entry]) -> None:
+    """K2 (E 3.19) and every cell of table 3.4 (E 3.15)."""
+    k2 = study.k2
     e.append(
         compare(
             "cable.K2",
@@ -301,30 +300,13 @@ def _cable(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
             "N m/rad",
             rtol=1e-3,
             note=f"E I r_M/(l e) with table 3.7 (E 3.19) is {k2:.6f}, 0.056 % above the printed 0.089377, which "
-            f"is reproduced ({cable.k2_nm_per_rad(p, second_moment_m4=5.85e-14):.6f}) with I rounded to "
-            "5.85e-14 m^4 before multiplying.",
+            f"is reproduced ({study.k2_rounded_i:.6f}) with I rounded to 5.85e-14 m^4 before multiplying.",
             discrepancy_note="More than 0.1 % from the printed K2: the parameters differ from table 3.7.",
         )
     )
-    ours = cable.table_3_4(params=p)
-    x_fit = cable.fit_tip_x_m(thesis_value("conversion.table_3_4_y_max_mm"), params=p)
-    ours_fit = cable.table_3_4(params=p, tip_x_m=round(x_fit, 3))
+    t34 = study.table_3_4
+    ours, ours_fit, x_fit = t34.ours, t34.ours_at_fit, t34.tip_x_fit_m
     cmds = ours["commands"]
-    rows = []
-    for j, c in enumerate(cmds):
-        row = [int(c)]
-        for col in ("y_sg1_mm", "y_sg2_mm", "y_sg3_mm", "y_max_mm"):
-            row += [thesis_value(f"conversion.table_3_4_{col}")[j], round(float(ours[col][j]), 2)]
-        row.append(round(float(ours_fit["y_max_mm"][j]), 2))
-        rows.append(row)
-    chapter.tables.append(
-        Table(
-            "Table 3.4 reproduced (mm; E 3.15 with 0.8622 deg per command)",
-            ["command", "SG1 printed", "SG1 ours", "SG2 printed", "SG2 ours", "SG3 printed", "SG3 ours"]
-            + ["y_max printed", "y_max ours (x = l)", f"y_max ours (x = {round(x_fit, 3)} m)"],
-            rows,
-        )
-    )
     n_fit_equal = int(
         np.sum(np.round(ours_fit["y_max_mm"], 2) == np.asarray(thesis_value("conversion.table_3_4_y_max_mm")))
     )
@@ -372,18 +354,14 @@ def _cable(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
 
 
 # --- 3.4.1, 3.4.3: K1 and K3 ------------------------------------------------------------------------------
-def _conversion(chapter: Chapter, e: list[Entry]) -> None:
-    k1 = conversion.k1_printed_command_per_mm()
-    k3 = conversion.k3_printed_mm_per_v()
+def _conversion(study, e: list[Entry]) -> None:
+    """K1 and K3 beside E 3.16-3.18 and E 3.23-3.25, the fits' slopes and the K3 offsets."""
+    k1, k3 = study.k1, study.k3
     k1_print = thesis_value("conversion.k1_command_per_mm")
     k3_print = thesis_value("conversion.k3_mm_per_v")
-    ours_fits = conversion.fit_deflection(through_equilibrium=True)
-    ols_fits = conversion.fit_deflection()
-    printed_fits = conversion.printed_deflection_fits()
-    voltage_fits = conversion.printed_voltage_fits()
-    offsets = conversion.k3_offsets_mm(printed_fits, voltage_fits)
+    ours_fits, ols_fits, printed_fits = study.through_equilibrium, study.ols, study.printed_fits
+    offsets = study.offsets_mm
     offsets_print = thesis_value("conversion.k3_offset_mm")
-    rows = []
     for g in range(3):
         n = g + 1
         e.append(
@@ -435,15 +413,6 @@ def _conversion(chapter: Chapter, e: list[Entry]) -> None:
                 + (" and gauge 1's is a tenth of it (0.1246 for 1.2456)." if g == 0 else "."),
             )
         )
-        rows.append([n, printed_fits[g].slope, -printed_fits[g].intercept, ours_fits[g].slope, ols_fits[g].slope,
-                     k1[g], k3[g]])  # fmt: skip
-    chapter.tables.append(
-        Table(
-            "K1 and K3 (3.4.1, 3.4.3)",
-            ["gauge", "a printed", "b printed", "a ours (through 8)", "a ours (OLS)", "K1 = 1/a", "K3 = a/s"],
-            rows,
-        )
-    )
 
 
 # --- 3.5 and table 4.1: the plant --------------------------------------------------------------------------
@@ -470,9 +439,8 @@ def _pole_entries(e: list[Entry], key: str, section: str, printed: list[complex]
             )
 
 
-def _plant(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
-    p = ctx.params
-    g = build_plant("printed", p)
+def _plant_printed(p, g, e: list[Entry]) -> None:
+    """The printed G(s) of 3.5 from the component models: coefficients, poles, state space, ranks."""
     num = g.tf.num[0][0] / g.tf.den[0][0][0]
     den = g.tf.den[0][0] / g.tf.den[0][0][0]
     e.append(
@@ -524,7 +492,10 @@ def _plant(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
             note=f"{g.zeros.size} finite zeros, all poles stable.",
         )
     )
-    # table 4.1: closed loop with K1
+
+
+def _closed_loop(g, e: list[Entry]) -> None:
+    """Table 4.1: the printed plant closed with K1, beside the printed numerator, denominator and poles."""
     k1 = closed_loop_printed_k1()
     cl = g.closed_loop(k1)
     cl_den = cl.den[0][0] / cl.den[0][0][0]
@@ -574,11 +545,13 @@ def _plant(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
         "Closed loop K1 G/(1 + K1 G) with K1 = 1.7699.",
         closed_loop_miss,
     )
-    # the consistent plant
-    outputs = ("deflection_sg1_m", "tip_rotation_rad", "gauge_v_sg1", "curvature_1_per_m")
-    rows = []
-    for out in outputs:
-        c = build_plant("consistent", p, output=out)
+
+
+def _plant_variants(ctx: ReportContext, study, e: list[Entry], chapter: Chapter) -> None:
+    """The unit-consistent plant's DC gains, and the printed and consistent plants' Bode and pole-zero plots."""
+    p = ctx.params
+    g = study.plant.printed
+    for out, c in study.plant.consistent.items():
         e.append(
             new(
                 f"plant.consistent.{out}.dc_gain",
@@ -588,16 +561,12 @@ def _plant(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
                 "Unit-correct chain, cable-model gains.",
             )
         )
-        rows.append([out, c.output_unit, c.dc_gain, ", ".join(f"{z:.4g}" for z in c.poles if z.imag >= 0)])
-    for out in ("deflection_sg1_m", "gauge_v_sg1"):
-        c = build_plant("consistent", p, output=out, gains="measured")
-        rows.append([out + " (measured gains)", c.output_unit, c.dc_gain, ""])
-    rows.append(["printed G (deflection_sg1_m)", "m", g.dc_gain, ", ".join(f"{z:.4g}" for z in g.poles if z.imag >= 0)])
+    cons = study.plant.consistent["deflection_sg1_m"]
     e.append(
         new(
             "plant.printed_over_cable_dc_gain",
             "3.5",
-            g.dc_gain / build_plant("consistent", p).dc_gain,
+            g.dc_gain / cons.dc_gain,
             "",
             "Printed G(0) over the cable model's deflection per command at gauge 1 (discrepancy 6 below).",
         )
@@ -611,12 +580,6 @@ def _plant(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
             "r_M x rad_per_command / e: what one command does to the tip.",
         )
     )
-    chapter.tables.append(
-        Table(
-            "Plant variants (DC gain per command; upper-half-plane poles)", ["output", "unit", "DC gain", "poles"], rows
-        )  # fmt: skip
-    )
-    cons = build_plant("consistent", p)
     fig = _bode_pz(
         [("printed G(s) (3.5)", g), ("consistent, gauge-1 deflection", cons.tf)],
         "Plant",

@@ -14,7 +14,7 @@ import numpy as np
 
 from flexdigit.identify.fit import second_order_response
 from flexdigit.reference import thesis_value
-from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
 from flexdigit.report.results import compare, new
 
 
@@ -138,7 +138,7 @@ def build(ctx: ReportContext) -> Chapter:
         y = Twin(p, cal, command=command).deflection_m(p.geometry.gauge_positions_m) * 1e3
         row: list[object] = [command]
         for g in range(3):
-            row += [measured[g, c], theory[g, c], round(float(y[g]), 2)]
+            row += [measured[g, c], theory[g, c], float(y[g])]
             worst_all = max(worst_all, abs(y[g] - measured[g, c]))
             if weight[g, c]:
                 worst_trusted = max(worst_trusted, abs(y[g] - measured[g, c]))
@@ -155,12 +155,13 @@ def build(ctx: ReportContext) -> Chapter:
                         discrepancy_note="Outside the 0.5 mm resolution where the thesis model agrees.",
                     )
                 )
-        rows.append(row)
+        rows.append(tuple(row))
     ch.tables.append(
-        Table(
+        ResultTable(
+            "twin.table_3_6",
             "Table 3.6 beside table 3.4 (thesis model, E 3.15) and the twin: deflection at the gauges (mm)",
-            ["command"] + [f"{k} SG{g}" for g in (1, 2, 3) for k in ("measured", "thesis model", "twin")],
-            rows,
+            ("command",) + tuple(f"sg{g}_{k}_mm" for g in (1, 2, 3) for k in ("measured", "thesis_model", "twin")),
+            tuple(rows),
         )
     )
     e.append(
@@ -195,20 +196,20 @@ def build(ctx: ReportContext) -> Chapter:
 
     fit_rec = default_fit_record().get("residuals", [])
     ch.tables.append(
-        Table(
+        ResultTable(
+            "twin.calibration_residuals",
             f"Calibration ({_source_text(default_calibration_source())}): fit residuals (flexdigit calibrate)",
-            ["target", "measured", "twin", "residual", "unit"],
-            [
-                [r["target"], r["measured"], round(r["twin"], 6), round(r["twin"] - r["measured"], 6), r["unit"]]
-                for r in fit_rec
-            ],
+            ("target", "measured", "twin", "residual", "unit"),
+            tuple((r["target"], r["measured"], r["twin"], r["twin"] - r["measured"], r["unit"]) for r in fit_rec),
         )
     )
     ch.tables.append(
-        Table(
-            f"Calibration ({_source_text(default_calibration_source())}): fitted parameters",
-            ["parameter", "value"],
-            [[k, v] for k, v in cal.to_dict().items()],
+        ResultTable(
+            "twin.calibration_parameters",
+            f"Calibration ({_source_text(default_calibration_source())}): fitted parameters (one row per element of a "
+            "per-section or per-gauge parameter)",
+            ("parameter", "value"),
+            tuple(_flat_parameters(cal.to_dict())),
         )
     )
     gains = np.asarray(cal.channel_gain)
@@ -229,7 +230,7 @@ def build(ctx: ReportContext) -> Chapter:
     return ch
 
 
-def _convergence_table() -> Table:
+def _convergence_table() -> ResultTable:
     """Relative errors against the closed forms as the cells are refined: second order (x 1/4 per halving)."""
     from flexdigit.twin.digit import Chain
 
@@ -241,12 +242,24 @@ def _convergence_table() -> Table:
         tip = chain.solve_static(tip_force_n=[[0, 1e-6]]).tip_m[0, 1] / (1e-6 * length**3 / (3 * ei)) - 1
         y = -Chain.uniform(1.0, 1.0, n).solve_static(tip_force_n=[[0, -10.0]]).tip_m[0, 1] / _elastica_y(10.0) - 1
         wn = chain.linear_modes()[0][0] / exact_f - 1
-        rows.append([n, f"{tip:.2e}", f"{y:.2e}", f"{wn:.2e}"])
-    return Table(
-        "Convergence with discretisation (relative errors; the twin's default is 12 cells over the strip)",
-        ["cells", "tip load vs PL^3/3EI", "elastica PL^2/EI = 10", "1st frequency vs Euler-Bernoulli"],
-        rows,
+        rows.append((n, tip, y, wn))
+    return ResultTable(
+        "twin.convergence",
+        "Convergence with discretisation (relative errors against closed forms: tip load vs P L^3/3EI, the "
+        "elastica at P L^2/EI = 10, the first frequency vs Euler-Bernoulli; the twin's default is 12 cells over "
+        "the strip)",
+        ("cells", "tip_load_rel_error", "elastica_rel_error", "first_frequency_rel_error"),
+        tuple(rows),
     )
+
+
+def _flat_parameters(values: dict):
+    """``(name, number)`` rows: a list-valued parameter gives one row per element, ``name[i]``."""
+    for k, v in values.items():
+        if isinstance(v, list | tuple):
+            yield from ((f"{k}[{i}]", x) for i, x in enumerate(v))
+        else:
+            yield (k, v)
 
 
 def _elastica_y(alpha2: float) -> float:

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
-import warnings
 
 import control as ct
 import numpy as np
 
+from flexdigit.control.reproduce import printed_controller
+from flexdigit.reference import thesis_value
 from flexdigit.report import results
-from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.chapter import Chapter, ReportContext
 
 _BLOCK_P = (
     "a block diagram, no data: the interconnection is generalized.thesis_generalized_plant, P of 4.4 built from "
@@ -64,31 +65,11 @@ def _half_last_digit(printed: float) -> float:
 
 
 def build(ctx: ReportContext) -> Chapter:
-    import matplotlib
+    """Chapter 4 from :func:`flexdigit.control.studies.chapter4_study`: entries, tables and figures."""
+    from flexdigit.control.studies import chapter4_study
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps, margins, step_metrics
-    from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
-    from flexdigit.control.mixsyn import check_requirements, design_mixsyn
-    from flexdigit.control.reproduce import (
-        fit_thesis_regularisation,
-        printed_controller,
-        sorted_poles,
-        thesis_design,
-        thesis_plant,
-    )
-    from flexdigit.control.synthesis import hinf_lmi, hinf_riccati, regularisation_path
-    from flexdigit.models.plant import build_plant
-    from flexdigit.reference import thesis_complex, thesis_value
-
-    warnings.simplefilter("ignore")
+    study = chapter4_study(fast=ctx.fast, seed=ctx.seed)
     ch = Chapter("ch4", "Controller design (H-infinity, thesis chapter 4)")
-    G = thesis_plant()
-    w = np.logspace(-1, 4, 2000)
-    E = ch.entries.append
-
     ch.paragraphs.append(
         "Figures of chapter 4 and where they are here: "
         + "; ".join(f"{k} ({cap}) -> {ours}" for k, (cap, ours) in THESIS_FIGURES.items())
@@ -99,44 +80,36 @@ def build(ctx: ReportContext) -> Chapter:
         "4.2 are already rad/s (our fitted controller has exactly them), the 4.3 poles are rad/s / 100 "
         "(-2.4504 x 100 = -245.04 = the 39 Hz filter pole), and the 4.3 zeros are rad/s (the plant poles)."
     )
+    _filter_and_k1(study, ch.entries)
+    _controllers(study, ch.entries)
+    _gamma(study, ch)
+    _loop_5hz(study, ch.entries)
+    _filter_sweep(study, ch)
+    _mixsyn(study, ch, ctx.seed)
+    ch.tables.extend(study.tables)
+    _figures(ctx, study, ch)
+    return ch
 
-    # ---- 4.3 filter
-    F = filter_weight(5.0)
-    wc = 2 * math.pi * 5.0
+
+def _filter_and_k1(study, E: list) -> None:
+    """4.3's filter peak and 4.2 / table 4.1's K1 closed loop."""
     peak_printed = thesis_value("hinf.filter_peak_db")
-    # the frequency at which |F(j w)| is the printed figure: |F| = 1/sqrt(w^2 + wc^2)
-    w_read = math.sqrt(max(10 ** (-peak_printed / 10) - wc**2, 0.0))
-    E(
+    E.append(
         results.compare(
             "hinf.filter_peak_db",
             "4.3",
             peak_printed,
-            20 * math.log10(abs(F(0))),
+            study.filter_peak_db,
             "dB",
             rtol=_half_last_digit(peak_printed) / abs(peak_printed),
             note="The peak of 1/(s + 31.4159) is its DC gain 1/31.4159 = -29.9430 dB.",
-            discrepancy_note=f"The printed -29.9474 dB is |F(j w)| at w = {w_read:.2f} rad/s, not at DC: a point of "
-            "the plot's frequency grid read as the peak (0.0044 dB low).",
+            discrepancy_note=f"The printed -29.9474 dB is |F(j w)| at w = {study.filter_peak_read_at_rad_s:.2f} "
+            "rad/s, not at DC: a point of the plot's frequency grid read as the peak (0.0044 dB low).",
         )
     )
-
-    # ---- 4.2 / table 4.1: the K1 closed loop without a controller
-    k1 = 86.2 / 48.7  # the printed closed-loop numerator over the plant's: 1.7699 (a tenth of E 3.16's 17.6991)
-    cl_poles = sorted_poles(ct.poles(build_plant("printed").closed_loop(k1)))
-    cl_printed_tf = sorted_poles(
-        ct.poles(ct.tf(thesis_value("plant.closed_loop_num"), thesis_value("plant.closed_loop_den")))
-    )
-    cl_table = sorted_poles(thesis_complex("plant.closed_loop_poles"))
-    # the K1 whose closed loop has table 4.1's slow pair (the one off by more than the printed digits):
-    # closed-loop poles are the roots of den + K1 num
-    g_num, g_den = np.asarray(G.num[0][0], float), np.asarray(G.den[0][0], float)
-    slow_t = cl_table[np.argmin(np.abs(cl_table))]
-    k1_grid = np.linspace(0.5, 2.0, 1501)
-    slow_err = [np.min(np.abs(np.roots(np.polyadd(g_den, k * g_num)) - slow_t)) for k in k1_grid]
-    k1_table = float(k1_grid[int(np.argmin(slow_err))])
-    cl_fit = sorted_poles(np.roots(np.polyadd(g_den, k1_table * g_num)))
-    for i, (p_t, p_o) in enumerate(zip(sorted_poles(thesis_complex("plant.closed_loop_poles")), cl_poles, strict=True)):
-        E(
+    k = study.k1
+    for i, (p_t, p_o) in enumerate(zip(k.poles_table, k.poles, strict=True)):
+        E.append(
             results.compare(
                 f"plant.closed_loop_pole_{i}_abs",
                 "4.2, table 4.1",
@@ -145,17 +118,18 @@ def build(ctx: ReportContext) -> Chapter:
                 "rad/s",
                 # printed to 4 decimals; our plant's open-loop poles are within 3e-5 of the printed ones
                 rtol=1e-4,
-                note=f"K1 = {k1:.4f} closed loop: printed {p_t:.4f}, ours {p_o:.4f}.",
+                note=f"K1 = {k.k1:.4f} closed loop: printed {p_t:.4f}, ours {p_o:.4f}.",
                 discrepancy_note=f"This pole of table 4.1 is not a root of the printed G_cl (86.2/(... + 4.362e4)), "
-                f"which has {cl_printed_tf[i]:.4f}, next to ours; on our plant it needs K1 = {k1_table:.2f} "
-                f"({cl_fit[i]:.4f}), not {k1:.4f}.",
+                f"which has {k.poles_printed_tf[i]:.4f}, next to ours; on our plant it needs K1 = "
+                f"{k.k1_for_table_slow_pair:.2f} ({k.poles_at_that_k1[i]:.4f}), not {k.k1:.4f}.",
             )
         )
 
-    # ---- the printed 5 Hz controller on the printed plant
-    m5p = loop_maps(G, printed_controller("5hz"))
-    worst = m5p.poles[np.argmax(m5p.poles.real)]
-    E(
+
+def _controllers(study, E: list) -> None:
+    """The printed 5 Hz controller's loop, and the fitted controllers beside tables 4.2 and 4.3."""
+    worst = study.printed_5hz_worst_pole
+    E.append(
         results.new(
             "hinf.k_5hz_printed_closed_loop",
             "4.4",
@@ -166,16 +140,10 @@ def build(ctx: ReportContext) -> Chapter:
             "divided by 10 (or K by 10) it is stable and gives the printed ||T_zw||.",
         )
     )
-
-    # ---- fitted regularisation reproduces tables 4.2 / 4.3
-    fits = {hz: fit_thesis_regularisation(hz) for hz in (5.0, 39.0)}
-    for hz, key in ((5.0, "5hz"), (39.0, "39hz")):
-        f = fits[hz]
-        K = f["design"].controller
-        ours = sorted_poles(np.linalg.eigvals(K.A))
-        printed = sorted_poles(thesis_complex(f"hinf.k_{key}_poles"))
-        for i, (p_t, p_o) in enumerate(zip(printed, ours, strict=True)):
-            E(
+    for hz, fit in study.gamma.fits.items():
+        key = f"{hz:g}hz"
+        for i, (p_t, p_o) in enumerate(zip(fit.poles_printed, fit.poles, strict=True)):
+            E.append(
                 results.compare(
                     f"hinf.k_{key}_pole_{i}_abs",
                     "4.4" if hz == 5 else "4.7",
@@ -188,27 +156,24 @@ def build(ctx: ReportContext) -> Chapter:
                     discrepancy_note="The fit of (eps_u, margin) to the printed poles left this residual.",
                 )
             )
-        zeros = sorted_poles(ct.zeros(K))
-        zerr = float(np.max(np.abs(zeros - sorted_poles(ct.poles(G))) / np.abs(zeros)))
-        E(
+        E.append(
             results.new(
                 f"hinf.k_{key}_zeros_vs_plant_poles",
                 "4.4",
-                zerr,
+                fit.zeros_vs_plant_poles,
                 "relative",
                 "Largest relative distance of the controller zeros from the plant poles (thesis: equal).",
             )
         )
-        lead = float(ct.tf(K).num[0][0][0])
-        E(
+        E.append(
             results.compare(
                 f"hinf.k_{key}_num_lead",
                 "4.4" if hz == 5 else "4.7",
                 thesis_value(f"hinf.k_{key}_num")[0],
-                lead,
+                fit.numerator_lead,
                 "command/m / s",
                 rtol=0.01,
-                note=f"Fitted regularisation eps_u = {f['eps_u']:.4g}, gamma margin {f['margin']:.3f} reproduce the "
+                note=f"Fitted regularisation eps_u = {fit.eps_u:.4g}, gamma margin {fit.margin:.3f} reproduce the "
                 "printed poles to 4-5 digits.",
                 discrepancy_note="The printed numerator is 10x ours with identical poles: every printed figure that "
                 "depends on the controller gain (T_pq 117.83 dB, T_uw 2e5) is 20 dB / 10x ours, and the printed 5 Hz "
@@ -218,68 +183,39 @@ def build(ctx: ReportContext) -> Chapter:
             )
         )
 
-    # ---- gamma by two routes and the regularisation path
-    P5 = thesis_generalized_plant(G, filter_weight(5.0))
-    eps5 = fits[5.0]["eps_u"]
-    routes = {}  # (filter Hz, eps_u) -> (Riccati gamma_opt, LMI gamma)
-    for hz, eps in ((5.0, 1e-5), (5.0, 1e-6), (5.0, eps5), (39.0, fits[39.0]["eps_u"])):
-        Pr = regularise(thesis_generalized_plant(G, filter_weight(hz)), eps)
-        routes[hz, eps] = (hinf_riccati(Pr, gtol=1e-6).gamma_opt, hinf_lmi(Pr).gamma)
-    ch.tables.append(
-        Table(
-            "gamma_opt by the two synthesis routes (issue: agree within 1 %); the last two rows are the levels "
-            "fitted to the printed controllers",
-            ["filter Hz", "eps_u", "Riccati (SLICOT)", "LMI (Clarabel)", "LMI - Riccati %"],
-            [
-                [f"{hz:g}", f"{eps:.4g}", f"{gr:.6g}", f"{gl:.6g}", f"{100 * (gl / gr - 1):+.3f}"]
-                for (hz, eps), (gr, gl) in routes.items()
-            ],
-        )
-    )
-    g_ric, g_lmi = routes[5.0, eps5]
-    E(
+
+def _gamma(study, ch: Chapter) -> None:
+    """gamma by two routes, the singular problem and the regularisation path (4.4)."""
+    g = study.gamma
+    eps5 = g.fits[5.0].eps_u
+    ch.entries += [
         results.new(
             "hinf.gamma_opt_riccati",
             "4.4",
-            g_ric,
+            g.gamma_riccati,
             "m/m",
             f"Optimal gamma of the 5 Hz problem regularised at eps_u = {eps5:.3g} (not printed in the thesis).",
-        )
-    )
-    E(
+        ),
         results.new(
             "hinf.gamma_opt_lmi",
             "4.4",
-            g_lmi,
+            g.gamma_lmi,
             "m/m",
-            f"Same problem by the Gahinet-Apkarian LMIs (Clarabel): {100 * (g_lmi / g_ric - 1):+.3f} % from the "
-            "Riccati route. In the plant's balanced coordinates the LMI optimum stops 10 % high (R needs "
+            f"Same problem by the Gahinet-Apkarian LMIs (Clarabel): {100 * (g.gamma_lmi / g.gamma_riccati - 1):+.3f} "
+            "% from the Riccati route. In the plant's balanced coordinates the LMI optimum stops 10 % high (R needs "
             "eigenvalues over ten decades); re-solving in the coordinates that make the route's own centred R and S "
             "equal and diagonal closes the gap.",
-        )
-    )
-    E(
+        ),
         results.new(
             "hinf.gamma_lmi_singular",
             "4.4",
-            hinf_lmi(P5).gamma,
+            g.gamma_lmi_singular,
             "m/m",
             "The LMIs applied to the singular problem itself (D12 = 0, no regularisation): below every regularised "
             "optimum down to eps_u = 1e-8 (0.0160). The true infimum is 0; the solver stops where R and S run out "
             "of conditioning.",
-        )
-    )
-    path = regularisation_path(P5, [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8])
-    ch.tables.append(
-        Table(
-            "Regularisation path of the 5 Hz problem (D12 = 0 replaced by eps_u): gamma falls, gain rises",
-            ["eps_u", "gamma_opt", "K(0) command/m", "fastest controller pole rad/s"],
-            [
-                [f"{r['eps']:.0e}", f"{r['gamma_opt']:.5f}", f"{r['dc_gain']:.4g}", f"{r['fastest_pole']:.4g}"]
-                for r in path
-            ],
-        )
-    )
+        ),
+    ]
     ch.paragraphs.append(
         "The problem of 4.4 weights only the tracking error (D12 = 0). Its infimum is 0 and is not attained "
         "(the plant is stable and minimum phase: Q = G^-1/(tau s + 1)^4 drives ||F S|| to 0), so gamma does not "
@@ -290,11 +226,11 @@ def build(ctx: ReportContext) -> Chapter:
         "gamma_opt jumps back to 0.0257)."
     )
 
-    # ---- T_zw, T_pq, sweep
-    d5 = thesis_design(5.0, G)
-    maps5 = loop_maps(G, d5.controller)
-    g, wpk = hinf_norm(maps5.T_zw, "T_zw")
-    E(
+
+def _loop_5hz(study, E: list) -> None:
+    """The fitted 5 Hz design's T_zw norm, settling and T_uw peaks (4.4-4.5, 4.7)."""
+    g, wpk = study.tzw_peak
+    E += [
         results.compare(
             "hinf.tzw_peak_db",
             "4.4",
@@ -304,9 +240,7 @@ def build(ctx: ReportContext) -> Chapter:
             rtol=1e-4,  # printed to 0.0001 dB
             note="The fitted 5 Hz design (its poles were fitted, not this norm).",
             discrepancy_note="The fitted design misses the printed norm by more than its printed digits.",
-        )
-    )
-    E(
+        ),
         results.compare(
             "hinf.tzw_peak_rad_s",
             "4.4",
@@ -315,49 +249,43 @@ def build(ctx: ReportContext) -> Chapter:
             "rad/s",
             rtol=0.005,
             discrepancy_note="Our exact peak is at 53.26 rad/s; the thesis's figure reads a coarse grid.",
-        )
-    )
-    st = step_metrics(maps5.T_yw, t_final=3.0)
-    E(
+        ),
         results.compare(
             "hinf.settling_s_max",
             "4.5",
             thesis_value("hinf.settling_s_max"),
-            st["settling_time_s"],
+            study.settling_s,
             "s",
             rtol=0.05,
             discrepancy_note="The slowest closed-loop pole is at -17.2 rad/s, so the 2 % settling "
             "time is ~0.22 s, not < 30 ms (the plant poles the controller cancels stay in the loop, too).",
-        )
-    )
-    su = step_metrics(maps5.T_uw, t_final=3.0)
-    E(
+        ),
         results.compare(
             "hinf.tuw_step_peak",
             "4.5",
             thesis_value("hinf.tuw_step_peak"),
-            10 * su["peak"],
+            study.tuw_step_peak,
             "command/m",
             rtol=0.2,
             note="Ours x 10 (the printed gain); the thesis gives one digit, '2 x 10^5'.",
-        )
-    )
-    m05 = loop_maps(G, thesis_design(0.5, G).controller)
-    E(
+        ),
         results.compare(
             "hinf.tuw_step_peak_0p5hz",
             "4.7",
             thesis_value("hinf.tuw_step_peak_0p5hz"),
-            10 * step_metrics(m05.T_uw, t_final=3.0)["peak"],
+            study.tuw_step_peak_0p5hz,
             "command/m",
             rtol=0.02,
             note="0.5 Hz design at the 5 Hz regularisation level, x 10 (the printed gain); thesis: 'in excess of "
             "0.9e6'.",
             discrepancy_note="Ours is below the printed lower bound: the thesis prints no 0.5 Hz controller, so its "
             "regularisation level (which sets the gain) is unknown; a smaller eps_u gives a larger peak.",
-        )
-    )
-    printed_pct = thesis_value("hinf.additive_tolerance_percent")
+        ),
+    ]
+
+
+def _filter_sweep(study, ch: Chapter) -> None:
+    """The additive-uncertainty tolerances of 4.6-4.7, each beside its printed figure."""
     ch.paragraphs.append(
         "Additive-uncertainty tolerances of 4.6-4.7: the thesis's percentages are 100/(||T_pq|| in dB) of "
         "controllers with 10x our numerator, e.g. 100/117.83 = 0.85 %. By the small-gain theorem the loop "
@@ -367,68 +295,38 @@ def build(ctx: ReportContext) -> Chapter:
         "the printed pair cannot be the analysed loop). Ours are compared with the printed figures to the printed "
         "digits (half a unit in the last decimal)."
     )
-    rows = []
-    for hz, key in ((0.5, "0.5Hz"), (5.0, "5Hz"), (39.0, "39Hz"), (50.0, "50Hz")):
-        d = thesis_design(hz, G)
-        tol = additive_tolerance(G, d.controller)
-        # the printed gain is 10x ours: ||T_pq|| x 10 (+20 dB) while the loop gain is small (S ~ 1 where |KS| peaks)
-        shifted = tol["tpq_db"] + 20
-        ours_pct = 100 / shifted if shifted > 0 else math.nan
-        corrected = (
-            f"Corrected (small gain): 1/||T_pq|| = {tol['tolerance_relative_percent']:.3g} % of |G(0)| "
-            f"({tol['tolerance']:.3g} m/command for our K on the printed plant)."
-        )
-        lead = float(ct.tf(d.controller).num[0][0][0])
-        printed_db = 100 / printed_pct[key]  # the ||T_pq|| (dB) the printed percentage stands for
+    t = study.sweep.table
+    for hz, printed, ours, tpq_db, tolerance, relative, lead in t.rows:
+        key = f"{hz:g}Hz"
+        shifted = tpq_db + 20
+        printed_db = 100 / printed  # the ||T_pq|| (dB) the printed percentage stands for
         why = {
             "39Hz": "Our fitted 39 Hz controller has the printed poles, but its numerator is "
             f"{100 * abs(1 - 10 * lead / thesis_value('hinf.k_39hz_num')[0]):.1f} % off the printed 416.5/10, so "
             f"||T_pq|| x 10 is {shifted:.3f} dB, not 100/22.48 = {printed_db:.3f} dB: "
             f"{100 * abs(10 ** ((shifted - printed_db) / 20) - 1):.1f} % in the norm, which the 100/dB arithmetic "
-            f"of a {printed_db:.1f} dB norm turns into {100 * abs(ours_pct / printed_pct[key] - 1):.1f} %. The "
+            f"of a {printed_db:.1f} dB norm turns into {100 * abs(ours / printed - 1):.1f} %. The "
             "printed controller itself gives 22.51 % (hinf.additive_tolerance_39Hz_printed_K).",
             "50Hz": "The thesis prints no 50 Hz controller; ours uses the 5 Hz regularisation level (eps_u, gamma "
             f"margin), so its gain differs: the printed 2.6 % needs ||T_pq|| = {printed_db:.1f} dB, "
             f"ours x 10 is {shifted:.1f} dB.",
         }.get(key, "The thesis prints no controller for this filter; ours uses the 5 Hz regularisation level.")
-        E(
+        ch.entries.append(
             results.compare(
                 f"hinf.additive_tolerance_{key}",
                 "4.7",
-                printed_pct[key],
-                ours_pct,
+                printed,
+                ours,
                 "%",
-                rtol=_half_last_digit(printed_pct[key]) / printed_pct[key],
-                note=f"Thesis arithmetic 100/(||T_pq|| in dB) on our design with the printed 10x gain. {corrected}",
+                rtol=_half_last_digit(printed) / printed,
+                note=f"Thesis arithmetic 100/(||T_pq|| in dB) on our design with the printed 10x gain. Corrected "
+                f"(small gain): 1/||T_pq|| = {relative:.3g} % of |G(0)| ({tolerance:.3g} m/command for our K on the "
+                "printed plant).",
                 discrepancy_note=why,
             )
         )
-        rows.append(
-            [
-                key,
-                f"{printed_pct[key]}",
-                f"{ours_pct:.4g}",
-                f"{tol['tpq_db']:.2f}",
-                f"{tol['tolerance']:.3g}",
-                f"{tol['tolerance_relative_percent']:.3g}",
-            ]
-        )
-    ch.tables.append(
-        Table(
-            "Filter sweep of 4.7 (small-gain tolerance in the last two columns)",
-            [
-                "filter",
-                "thesis %",
-                "ours, thesis arithmetic %",
-                "||T_pq|| dB (ours)",
-                "1/||T_pq|| m/command",
-                "% of |G(0)|",
-            ],
-            rows,
-        )
-    )
-    tol39 = additive_tolerance(G, printed_controller("39hz"))
-    E(
+    tol39 = study.sweep.printed_39hz
+    ch.entries.append(
         results.compare(
             "hinf.additive_tolerance_39Hz_printed_K",
             "4.7",
@@ -443,66 +341,39 @@ def build(ctx: ReportContext) -> Chapter:
         )
     )
 
-    # ---- beyond: mixsyn
-    info = build_plant("consistent", output="tip_rotation_rad")
-    md = design_mixsyn(info.tf)
-    req = check_requirements(info, md.controller, n_monte_carlo=100 if ctx.fast else 1000, seed=ctx.seed)
-    for k, unit, note in (
-        ("command_min", "command", "(i) lowest command about 8 for a 30 deg step (>= -8)."),
-        ("command_max", "command", "(i) highest command about 8 (<= 246)."),
-        ("min_damping", "", "(iii) smallest closed-loop damping (>= 0.3)."),
-        (
-            "small_gain_partition_peak",
-            "",
-            "(iv) small-gain certificate: largest |(p - p_c)/p_c| over 8 sub-boxes of the parameter box (< 1: the "
-            "whole box is stable, by the small-gain theorem on each sub-box).",
-        ),
-        (
-            "small_gain_peak",
-            "",
-            "(iv) unstructured small-gain |T| l: > 1, conservative for a +-20 % shift of a "
-            "zeta = 0.07 resonance; the grid and Monte Carlo show the parameter box is stable.",
-        ),
-    ):
-        E(results.new(f"mixsyn.{k}", "new", req[k], unit, note))
-    E(
+
+#: The mixsyn requirements reported: (key of check_requirements, unit, note).
+_REQUIREMENTS = (
+    ("command_min", "command", "(i) lowest command about 8 for a 30 deg step (>= -8)."),
+    ("command_max", "command", "(i) highest command about 8 (<= 246)."),
+    ("min_damping", "", "(iii) smallest closed-loop damping (>= 0.3)."),
+    (
+        "small_gain_partition_peak",
+        "",
+        "(iv) small-gain certificate: largest |(p - p_c)/p_c| over 8 sub-boxes of the parameter box (< 1: the "
+        "whole box is stable, by the small-gain theorem on each sub-box).",
+    ),
+    (
+        "small_gain_peak",
+        "",
+        "(iv) unstructured small-gain |T| l: > 1, conservative for a +-20 % shift of a "
+        "zeta = 0.07 resonance; the grid and Monte Carlo show the parameter box is stable.",
+    ),
+)
+
+
+def _mixsyn(study, ch: Chapter, seed: int) -> None:
+    """The servo-ready mixed-sensitivity design: requirements, and beside the printed 39 Hz controller."""
+    req = study.requirements
+    for k, unit, note in _REQUIREMENTS:
+        ch.entries.append(results.new(f"mixsyn.{k}", "new", req[k], unit, note))
+    ch.entries.append(
         results.new(
             "mixsyn.monte_carlo_stable_fraction",
             "new",
             req["monte_carlo"]["stable_fraction"],
             "",
-            f"(iv) gain x0.7..1.3, beam wn x0.8..1.2, {req['monte_carlo']['n']} samples, seed {ctx.seed}.",
-        )
-    )
-
-    # side by side with the thesis's 39 Hz controller (printed, on the printed plant)
-    K39 = printed_controller("39hz")
-    m39 = loop_maps(G, K39)
-    mm = loop_maps(info.tf, md.controller)
-
-    def _row(maps, plant, K):
-        zeta = -maps.poles.real / np.abs(maps.poles)
-        gm = margins(plant, K)
-        return [
-            f"{abs(complex(ct.evalfr(maps.T_zw, 1e-9))):.4g}",
-            f"{zeta.min():.3f}",
-            f"{gm['disk_gain_margin']:.3g}",
-            f"{step_metrics(maps.T_yw, t_final=10.0)['settling_time_s']:.3g}",
-            f"{len(np.trim_zeros(ct.tf(K).den[0][0], 'f')) - 1}",
-        ]
-
-    ch.tables.append(
-        Table(
-            "Thesis 39 Hz controller (as printed, printed plant) beside the mixsyn design (consistent plant)",
-            [
-                "controller",
-                "|S(0)| (steady-state error)",
-                "min closed-loop damping",
-                "disk gain margin",
-                "2 % settling s",
-                "order",
-            ],
-            [["thesis 39 Hz"] + _row(m39, G, K39), ["mixsyn (ours)"] + _row(mm, info.tf, md.controller)],
+            f"(iv) gain x0.7..1.3, beam wn x0.8..1.2, {req['monte_carlo']['n']} samples, seed {seed}.",
         )
     )
     ch.paragraphs.append(
@@ -513,115 +384,31 @@ def build(ctx: ReportContext) -> Chapter:
         "right-half-plane zeros (about 5 +- 7j rad/s) give a 1.2 deg dip in the first 0.4 s of the step."
     )
 
-    # ---- figures
-    fig, ax = plt.subplots()
-    for name, sys in (
-        ("G (printed)", G),
-        (
-            "closed loop with K1 (4.1)",
-            ct.tf(thesis_value("plant.closed_loop_num"), thesis_value("plant.closed_loop_den")),
-        ),
+
+def _figures(ctx: ReportContext, study, ch: Chapter) -> None:
+    """Every figure of the chapter, each beside the thesis figures :data:`THESIS_FIGURES` maps to it."""
+    import matplotlib.pyplot as plt
+
+    G = study.plant
+    w = np.logspace(-1, 4, 2000)
+    designs = study.sweep.designs
+    fits = study.gamma.fits
+    for name, caption, draw in (
+        ("ch4_plant_bode", "Plant and K1 closed loop", _fig_plant_bode),
+        ("ch4_controllers", "Controllers: ours vs printed (10x)", _fig_controllers),
+        ("ch4_pole_zero", "5 Hz controller zeros on the plant poles", _fig_pole_zero),
+        ("ch4_loop_maps", "Closed-loop maps, 5 Hz design", _fig_loop_maps),
+        ("ch4_steps", "Step responses of the filter sweep", _fig_steps),
+        ("ch4_root_locus", "Root loci of k G and k G_cl, k from 0 to 1e5", _fig_root_locus),
+        ("ch4_tpq", "T_pq (= -K S) of the filter sweep, with the printed 10x gain", _fig_tpq),
+        ("ch4_mixsyn_step", "Mixed-sensitivity design: 0-30 deg step", _fig_mixsyn_step),
+        ("ch4_filter_sv", "Error weights F(s) = 1/(s + 2 pi f_c)", _fig_filter),
     ):
-        ax.semilogx(w, 20 * np.log10(np.abs(sys(1j * w))), label=name)
-    ax.set(xlabel="rad/s", ylabel="dB")
-    ax.legend()
-    ch.figures.append(ctx.save_figure(fig, "ch4_plant_bode", "Plant and K1 closed loop", _refs("ch4_plant_bode")))
-
-    fig, ax = plt.subplots()
-    for hz in (5.0, 39.0):
-        K = fits[hz]["design"].controller
-        ax.semilogx(w, 20 * np.log10(np.abs(K(1j * w))), label=f"ours {hz:g} Hz")
-        ax.semilogx(w, 20 * np.log10(np.abs(printed_controller(f"{hz:g}hz")(1j * w))), "--", label=f"printed {hz:g} Hz")
-    ax.set(xlabel="rad/s", ylabel="|K| dB")
-    ax.legend()
-    ch.figures.append(
-        ctx.save_figure(fig, "ch4_controllers", "Controllers: ours vs printed (10x)", _refs("ch4_controllers"))
-    )
-
-    fig, ax = plt.subplots()
-    pk = np.concatenate([np.linalg.eigvals(fits[5.0]["design"].controller.A), ct.poles(G)])
-    zk = ct.zeros(fits[5.0]["design"].controller)
-    ax.plot(pk.real, pk.imag, "x", label="controller and plant poles")
-    ax.plot(zk.real, zk.imag, "o", mfc="none", label="controller zeros")
-    ax.set(xlabel="Re", ylabel="Im")
-    ax.legend()
-    ch.figures.append(
-        ctx.save_figure(fig, "ch4_pole_zero", "5 Hz controller zeros on the plant poles", _refs("ch4_pole_zero"))
-    )
-
-    fig, ax = plt.subplots()
-    for name, sys in (("T_zw", maps5.T_zw), ("T_yw", maps5.T_yw), ("T_uw / 1e4", maps5.T_uw * 1e-4)):
-        ax.semilogx(w, 20 * np.log10(np.abs(sys(1j * w))), label=name)
-    ax.set(xlabel="rad/s", ylabel="dB")
-    ax.legend()
-    ch.figures.append(ctx.save_figure(fig, "ch4_loop_maps", "Closed-loop maps, 5 Hz design", _refs("ch4_loop_maps")))
-
-    fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
-    t = np.linspace(0, 1.0, 1000)
-    for hz in (0.5, 5.0, 39.0, 50.0):
-        m = loop_maps(G, thesis_design(hz, G).controller)
-        axs[0].plot(t, np.squeeze(ct.step_response(m.T_yw, T=t).outputs), label=f"{hz:g} Hz")
-        axs[1].plot(t, 10 * np.squeeze(ct.step_response(m.T_uw, T=t).outputs), label=f"{hz:g} Hz")
-    axs[0].set(title="T_yw step", xlabel="s")
-    axs[1].set(title="T_uw step (x10, printed gain)", xlabel="s", yscale="symlog")
-    axs[0].legend()
-    ch.figures.append(ctx.save_figure(fig, "ch4_steps", "Step responses of the filter sweep", _refs("ch4_steps")))
-
-    fig, ax = plt.subplots()
-    gains = np.concatenate([[0.0], np.logspace(-1, 5, 400)])
-    for name, plant, marker in (
-        ("plant (4.4)", G, "."),
-        ("K1 closed loop (4.3)", build_plant("printed").closed_loop(k1), "."),
-    ):
-        num, den = np.asarray(plant.num[0][0], float), np.asarray(plant.den[0][0], float)
-        locus = np.array([np.roots(np.polyadd(den, k * num)) for k in gains])
-        ax.plot(locus.real.ravel(), locus.imag.ravel(), marker, ms=2, label=name)
-    ax.plot(ct.poles(G).real, ct.poles(G).imag, "kx")
-    ax.set(xlabel="Re (rad/s)", ylabel="Im (rad/s)", xlim=(-40, 15), ylim=(-60, 60))
-    ax.legend()
-    ch.figures.append(
-        ctx.save_figure(fig, "ch4_root_locus", "Root loci of k G and k G_cl, k from 0 to 1e5", _refs("ch4_root_locus"))
-    )
-
-    fig, ax = plt.subplots()
-    for hz in (0.5, 5.0, 39.0, 50.0):
-        m = loop_maps(G, thesis_design(hz, G).controller)
-        ax.semilogx(w, 20 + 20 * np.log10(np.abs(m.T_pq(1j * w))), label=f"ours x10, {hz:g} Hz")
-    ax.semilogx(w, 20 * np.log10(np.abs(loop_maps(G, K39).T_pq(1j * w))), "k--", label="printed 39 Hz K")
-    ax.set(xlabel="rad/s", ylabel="|T_pq| dB")
-    ax.legend()
-    ch.figures.append(
-        ctx.save_figure(
-            fig, "ch4_tpq", "T_pq (= -K S) of the filter sweep, with the printed 10x gain", _refs("ch4_tpq")
-        )
-    )
-
-    fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
-    t = np.linspace(0, 5, 2000)
-    step = math.radians(30)
-    axs[0].plot(t, np.degrees(step * np.squeeze(ct.step_response(mm.T_yw, T=t).outputs)))
-    axs[1].plot(t, 8 + step * np.squeeze(ct.step_response(mm.T_uw, T=t).outputs))
-    axs[0].set(title="beam rotation, deg", xlabel="s")
-    axs[1].set(title="servo command", xlabel="s")
-    ch.figures.append(ctx.save_figure(fig, "ch4_mixsyn_step", "Mixed-sensitivity design: 0-30 deg step", ""))
-
-    # ---- 4.5: singular values of the error weight
-    fig, ax = plt.subplots()
-    for hz in (0.5, 5.0, 39.0, 50.0):
-        Fh = filter_weight(hz)
-        ax.semilogx(w, 20 * np.log10(np.abs(Fh(1j * w))), "-" if hz == 5.0 else ":", label=f"F, {hz:g} Hz")
-    ax.axhline(peak_printed, color="k", lw=0.8, ls="--", label=f"printed peak {peak_printed} dB")
-    ax.plot([w_read], [peak_printed], "ko", mfc="none", label=f"|F(j {w_read:.2f})| = printed peak")
-    ax.set(xlabel="rad/s", ylabel="|F| dB", ylim=(-90, 10))
-    ax.legend(fontsize=8)
-    ch.figures.append(
-        ctx.save_figure(fig, "ch4_filter_sv", "Error weights F(s) = 1/(s + 2 pi f_c)", _refs("ch4_filter_sv"))
-    )
-
-    # ---- 4.9 and 4.23: root loci of the controllers
-    for hz, key in ((5.0, "5hz"), (39.0, "39hz")):
-        K = fits[hz]["design"].controller
-        fig = _controller_root_locus(plt, G, K, printed_controller(key), hz)
+        fig = draw(plt, study, G, w, designs, fits)
+        ch.figures.append(ctx.save_figure(fig, name, caption, _refs(name) if name != "ch4_mixsyn_step" else ""))
+    # 4.9 and 4.23: root loci of the controllers
+    for hz, fit in fits.items():
+        fig = _controller_root_locus(plt, G, fit.controller, printed_controller(f"{hz:g}hz"), hz)
         name = f"ch4_root_locus_k{hz:g}"
         ch.figures.append(
             ctx.save_figure(
@@ -632,7 +419,123 @@ def build(ctx: ReportContext) -> Chapter:
                 _refs(name),
             )
         )
-    return ch
+
+
+def _fig_plant_bode(plt, study, G, w, designs, fits):
+    fig, ax = plt.subplots()
+    cl = ct.tf(thesis_value("plant.closed_loop_num"), thesis_value("plant.closed_loop_den"))
+    for name, sys in (("G (printed)", G), ("closed loop with K1 (4.1)", cl)):
+        ax.semilogx(w, 20 * np.log10(np.abs(sys(1j * w))), label=name)
+    ax.set(xlabel="rad/s", ylabel="dB")
+    ax.legend()
+    return fig
+
+
+def _fig_controllers(plt, study, G, w, designs, fits):
+    fig, ax = plt.subplots()
+    for hz, fit in fits.items():
+        ax.semilogx(w, 20 * np.log10(np.abs(fit.controller(1j * w))), label=f"ours {hz:g} Hz")
+        ax.semilogx(w, 20 * np.log10(np.abs(printed_controller(f"{hz:g}hz")(1j * w))), "--", label=f"printed {hz:g} Hz")
+    ax.set(xlabel="rad/s", ylabel="|K| dB")
+    ax.legend()
+    return fig
+
+
+def _fig_pole_zero(plt, study, G, w, designs, fits):
+    fig, ax = plt.subplots()
+    K = fits[5.0].controller
+    pk = np.concatenate([np.linalg.eigvals(K.A), ct.poles(G)])
+    zk = ct.zeros(K)
+    ax.plot(pk.real, pk.imag, "x", label="controller and plant poles")
+    ax.plot(zk.real, zk.imag, "o", mfc="none", label="controller zeros")
+    ax.set(xlabel="Re", ylabel="Im")
+    ax.legend()
+    return fig
+
+
+def _fig_loop_maps(plt, study, G, w, designs, fits):
+    fig, ax = plt.subplots()
+    m = study.loop_5hz
+    for name, sys in (("T_zw", m.T_zw), ("T_yw", m.T_yw), ("T_uw / 1e4", m.T_uw * 1e-4)):
+        ax.semilogx(w, 20 * np.log10(np.abs(sys(1j * w))), label=name)
+    ax.set(xlabel="rad/s", ylabel="dB")
+    ax.legend()
+    return fig
+
+
+def _fig_steps(plt, study, G, w, designs, fits):
+    from flexdigit.control.analysis import loop_maps
+
+    fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
+    t = np.linspace(0, 1.0, 1000)
+    for hz, d in designs.items():
+        m = loop_maps(G, d.controller)
+        axs[0].plot(t, np.squeeze(ct.step_response(m.T_yw, T=t).outputs), label=f"{hz:g} Hz")
+        axs[1].plot(t, 10 * np.squeeze(ct.step_response(m.T_uw, T=t).outputs), label=f"{hz:g} Hz")
+    axs[0].set(title="T_yw step", xlabel="s")
+    axs[1].set(title="T_uw step (x10, printed gain)", xlabel="s", yscale="symlog")
+    axs[0].legend()
+    return fig
+
+
+def _fig_root_locus(plt, study, G, w, designs, fits):
+    from flexdigit.models.plant import build_plant
+
+    fig, ax = plt.subplots()
+    gains = np.concatenate([[0.0], np.logspace(-1, 5, 400)])
+    for name, plant in (("plant (4.4)", G), ("K1 closed loop (4.3)", build_plant("printed").closed_loop(study.k1.k1))):
+        num, den = np.asarray(plant.num[0][0], float), np.asarray(plant.den[0][0], float)
+        locus = np.array([np.roots(np.polyadd(den, k * num)) for k in gains])
+        ax.plot(locus.real.ravel(), locus.imag.ravel(), ".", ms=2, label=name)
+    ax.plot(ct.poles(G).real, ct.poles(G).imag, "kx")
+    ax.set(xlabel="Re (rad/s)", ylabel="Im (rad/s)", xlim=(-40, 15), ylim=(-60, 60))
+    ax.legend()
+    return fig
+
+
+def _fig_tpq(plt, study, G, w, designs, fits):
+    from flexdigit.control.analysis import loop_maps
+
+    fig, ax = plt.subplots()
+    for hz, d in designs.items():
+        ax.semilogx(
+            w, 20 + 20 * np.log10(np.abs(loop_maps(G, d.controller).T_pq(1j * w))), label=f"ours x10, {hz:g} Hz"
+        )
+    K39 = printed_controller("39hz")
+    ax.semilogx(w, 20 * np.log10(np.abs(loop_maps(G, K39).T_pq(1j * w))), "k--", label="printed 39 Hz K")
+    ax.set(xlabel="rad/s", ylabel="|T_pq| dB")
+    ax.legend()
+    return fig
+
+
+def _fig_mixsyn_step(plt, study, G, w, designs, fits):
+    from flexdigit.control.analysis import loop_maps
+
+    mm = loop_maps(study.mixsyn_plant.tf, study.mixsyn.controller)
+    fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
+    t = np.linspace(0, 5, 2000)
+    step = math.radians(30)
+    axs[0].plot(t, np.degrees(step * np.squeeze(ct.step_response(mm.T_yw, T=t).outputs)))
+    axs[1].plot(t, 8 + step * np.squeeze(ct.step_response(mm.T_uw, T=t).outputs))
+    axs[0].set(title="beam rotation, deg", xlabel="s")
+    axs[1].set(title="servo command", xlabel="s")
+    return fig
+
+
+def _fig_filter(plt, study, G, w, designs, fits):
+    from flexdigit.control.generalized import filter_weight
+
+    peak_printed = thesis_value("hinf.filter_peak_db")
+    w_read = study.filter_peak_read_at_rad_s
+    fig, ax = plt.subplots()
+    for hz in designs:
+        Fh = filter_weight(hz)
+        ax.semilogx(w, 20 * np.log10(np.abs(Fh(1j * w))), "-" if hz == 5.0 else ":", label=f"F, {hz:g} Hz")
+    ax.axhline(peak_printed, color="k", lw=0.8, ls="--", label=f"printed peak {peak_printed} dB")
+    ax.plot([w_read], [peak_printed], "ko", mfc="none", label=f"|F(j {w_read:.2f})| = printed peak")
+    ax.set(xlabel="rad/s", ylabel="|F| dB", ylim=(-90, 10))
+    ax.legend(fontsize=8)
+    return fig
 
 
 def _controller_root_locus(plt, G, K, K_printed, hz: float):

@@ -10,32 +10,21 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexdigit.control.design20ms import design_20ms
-from flexdigit.control.discretise import (
-    forward_euler_stability_limit_s,
-    halve_step,
-    map_s_to_z,
-    sample_period_study,
-    sampled_loop,
-)
-from flexdigit.control.reproduce import printed_controller, thesis_plant
+from flexdigit.control.discretise import map_s_to_z
+from flexdigit.control.reproduce import printed_controller
 from flexdigit.reference import thesis_value
-from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import compare, new
 
 
 def build(ctx: ReportContext) -> Chapter:
-    """Build chapter 5 of the report."""
-    import control as ct
-    import matplotlib
-
-    matplotlib.use("Agg")
+    """Chapter 5 from :func:`flexdigit.rig.studies.chapter5_study`: entries, tables and figures."""
     import matplotlib.pyplot as plt
 
+    from flexdigit.rig.studies import chapter5_study
+
+    study = chapter5_study(ctx.params, seed=int(ctx.rng(5).integers(1, 1000)), fast=ctx.fast)
     chapter = Chapter(slug="ch5-digital", title="Chapter 5: the digital controller and control at 20 ms")
-    e = chapter.entries
-    G = thesis_plant("printed")
-    K = printed_controller("39hz")
     chapter.paragraphs.append(
         "The printed 39 Hz H-infinity controller K(s) (4.7) is digitised by Tustin (5.1.1, E 5.1) and by forward "
         "Euler (5.1.2, the state-space method 5.2 implemented) and closed around the printed plant G(s) held by a "
@@ -43,73 +32,64 @@ def build(ctx: ReportContext) -> Chapter:
         "state space: as high-order transfer-function products, the poles near z = 1 at 0.6 ms come out outside "
         "the unit circle from rounding alone."
     )
+    _sampling(study, chapter.entries)
+    _twenty_ms(study, chapter)
+    chapter.tables.extend(study.tables)
+    K = printed_controller("39hz")
+    chapter.figures.append(_fig_tustin(ctx, plt, study.loops, study.periods_s))
+    chapter.figures.append(_fig_euler(ctx, plt, study.loops, study.periods_s))
+    chapter.figures.append(_fig_zplane(ctx, plt, K))
+    chapter.figures.append(_fig_twenty_ms(ctx, plt, study.twenty_ms))
+    return chapter
 
-    # -- bandwidth and the sampling rule (5.1.1) -------------------------------------------------------------
-    Tc = ct.feedback(ct.series(K, G), 1)
-    bw = float(ct.bandwidth(Tc))
+
+def _sampling(study, e: list) -> None:
+    """The sampling rule of 5.1.1, Tustin and forward Euler against the period, and the step halving of 5.1.2."""
     e.append(
         compare(
             "digital.closed_loop_bandwidth_rad_s",
             "5.1.1",
             thesis_value("digital.closed_loop_bandwidth_rad_s"),
-            bw,
+            study.bandwidth_rad_s,
             "rad/s",
             rtol=0.05,
             note="-3 dB bandwidth of K G/(1 + K G) from the printed 4-figure coefficients.",
         )
     )
-    rule = 2 * np.pi / (10 * thesis_value("digital.closed_loop_bandwidth_rad_s"))
     e.append(
         compare(
             "digital.sample_period_rule_s",
             "5.1.1",
             thesis_value("digital.sample_period_rule_s"),
-            rule,
+            2 * np.pi / (10 * thesis_value("digital.closed_loop_bandwidth_rad_s")),
             "s",
             rtol=0.01,
             note="T = 1/(10 f_bw) with f_bw = 24.3 rad/s = 3.867 Hz; the thesis writes the bandwidth as "
             "'38.67 Hz', which is the sampling frequency, not the bandwidth. The loop's DC gain is "
-            f"{float(np.real(ct.dcgain(Tc))):.2e}: the printed design barely moves the output (ch. 4 note).",
+            f"{study.dc_gain:.2e}: the printed design barely moves the output (ch. 4 note).",
         )
     )
-
-    # -- the study -------------------------------------------------------------------------------------------
-    periods = [0.0006, 0.001, 0.002, 0.005, 0.010, 0.020] if not ctx.fast else [0.001, 0.005, 0.010, 0.020]
-    study = sample_period_study(G, K, periods, methods=("tustin", "forward_euler"), t_final_s=2.0)
-    rows = []
-    for i, T in enumerate(periods):
-        tu, fe = study["tustin"][i], study["forward_euler"][i]
-        rows.append(
-            [
-                f"{T * 1000:g}",
-                f"{tu.spectral_radius:.4f}",
-                f"{tu.error:.2e}",
-                f"{fe.spectral_radius:.4f}",
-                "unstable" if not fe.stable else f"{fe.error:.2e}",
-                f"{fe.cancellation_error:.2e}",
-            ]
-        )
-    chapter.tables.append(
-        Table(
-            "Sample-period study on the printed plant (error: max |y - y_continuous| / max |y_continuous|)",
-            ["T (ms)", "Tustin max|pole|", "Tustin error", "Euler max|pole|", "Euler error", "Euler zero miss"],
-            rows,
+    by_t = {round(T, 4): i for i, T in enumerate(study.periods_s)}
+    e.append(
+        new(
+            "digital.tustin_error_1ms",
+            "5.1.1",
+            study.loops["tustin"][by_t[0.001]].error,
+            "",
+            "Figure 5.4: 'almost identical'.",
         )
     )
-    by_t = {round(T, 4): i for i, T in enumerate(periods)}
-    tu1 = study["tustin"][by_t[0.001]]
-    e.append(new("digital.tustin_error_1ms", "5.1.1", tu1.error, "", "Figure 5.4: 'almost identical'."))
     e.append(
         new(
             "digital.tustin_error_20ms",
             "5.1.1",
-            study["tustin"][by_t[0.02]].error,
+            study.loops["tustin"][by_t[0.02]].error,
             "",
             "Tustin degrades as T^2 (0.07 % at 5 ms, ~1 % at 20 ms) but stays stable at every period: on the printed "
             "plant the thesis's 'above 5 ms do not characterize the system' is a matter of accuracy, not stability.",
         )
     )
-    limit = forward_euler_stability_limit_s(K.poles())
+    limit = study.euler_limit_s
     e.append(
         compare(
             "digital.euler_unstable_above_s",
@@ -122,27 +102,21 @@ def build(ctx: ReportContext) -> Chapter:
             discrepancy_note=f"The thesis tried 5 and 10 ms and saw 10 ms unstable; the exact limit is "
             f"{limit * 1000:.2f} ms, between the two, so the two figures agree. K's zeros on the beam mode "
             f"(zeta 0.027, wn 10.16 rad/s) leave the circle above 2 zeta/wn = "
-            f"{forward_euler_stability_limit_s(K.zeros()) * 1000:.2f} ms, after which the cancellation the "
+            f"{study.euler_zero_limit_s * 1000:.2f} ms, after which the cancellation the "
             "design relies on is lost. At 20 ms the pole (39 Hz) is also above the 25 Hz Nyquist frequency.",
         )
     )
-    fe20 = sampled_loop(G, K, 0.020, "forward_euler", t_final_s=1.0)
     e.append(
         new(
             "digital.euler_20ms_spectral_radius",
             "5.2",
-            fe20.spectral_radius,
+            study.euler_20ms_spectral_radius,
             "",
             "Figure 5.7's 20 ms loop with the state-space (forward Euler) controller: the pole at 1 - 245 x 0.02 = "
             "-3.9 makes it diverge by a factor 3.9 per sample.",
         )
     )
-
-    def fe_response(alpha):
-        loop = sampled_loop(G, K, alpha, "forward_euler", t_final_s=2.0)
-        return loop.t_s, loop.y
-
-    halving = halve_step(fe_response, 0.020, tolerance=0.05)
+    halving = study.halving
     e.append(
         compare(
             "digital.step_halving_period_s",
@@ -157,13 +131,6 @@ def build(ctx: ReportContext) -> Chapter:
             discrepancy_note="The halving stops at a different period with this tolerance.",
         )
     )
-    chapter.figures.append(_fig_tustin(ctx, plt, study, periods))
-    chapter.figures.append(_fig_euler(ctx, plt, study, periods))
-    chapter.figures.append(_fig_zplane(ctx, plt, K))
-
-    # -- 20 ms on the twin -----------------------------------------------------------------------------------
-    _twenty_ms(ctx, chapter, plt)
-    return chapter
 
 
 def _fig_tustin(ctx, plt, study, periods):
@@ -238,12 +205,8 @@ def _fig_zplane(ctx, plt, K):
     )
 
 
-def _twenty_ms(ctx: ReportContext, chapter: Chapter, plt) -> None:
-    from flexdigit.rig.base import open_rig
-    from flexdigit.rig.rotation import calibrate_rotation
-    from flexdigit.rig.step_test import step_test
-
-    d = design_20ms(ctx.params)
+def _twenty_ms(study, chapter: Chapter) -> None:
+    """Control at 20 ms on the twin: the direct design and its plant-gain cases, the thesis's controller."""
     chapter.paragraphs.append(
         "Why a 2 % band is hard here: one command turns the beam by about 1.7 deg, so 30 deg sits between two "
         "reachable rotations and a 2 % band (0.6 deg) is narrower than half a quantum (0.87 deg). Whether the "
@@ -259,48 +222,7 @@ def _twenty_ms(ctx: ReportContext, chapter: Chapter, plt) -> None:
         "nonlinear twin (2 ms integration) through the same loop and sim backend a rig run uses; the beam "
         "rotation is estimated from the three gauges by a map calibrated on a static sweep and tared at rest."
     )
-    seed = int(ctx.rng(5).integers(1, 1000))
-    commands = (8, 14, 20, 26, 32) if ctx.fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
-    est = calibrate_rotation(open_rig("sim", ctx.params, seed=seed), commands, settle_s=1.5 if ctx.fast else 2.0)
-    runs = {}
-    cases = [
-        ("digital20", 1.0),
-        ("digital20", 0.7),
-        ("digital20", 1.3),
-        ("thesis39-euler", 1.0),
-        ("thesis39-tustin", 1.0),
-    ]
-    for name, gain in cases:
-        runs[(name, gain)] = step_test(open_rig("sim", ctx.params, seed=seed + 1), name, estimator=est, gain=gain)
-    rows = []
-    for (name, gain), st in runs.items():
-        m = st.metrics
-        rows.append(
-            [
-                name,
-                f"{gain:g}",
-                f"{m.settling_time_s:.2f}",
-                f"{m.overshoot_percent:.1f}",
-                f"{m.final_error_deg:+.2f}",
-                f"{m.final_error_quanta:.2f}",
-                f"{m.peak_deg:.1f}",
-            ]
-        )
-    chapter.tables.append(
-        Table(
-            "0 -> 30 deg beam-rotation step at 20 ms on the twin (true tip rotation)",
-            [
-                "controller",
-                "plant gain",
-                "2 % settling (s)",
-                "overshoot (%)",
-                "final error (deg)",
-                "final error (quanta)",
-                "peak (deg)",
-            ],
-            rows,
-        )
-    )
+    runs = study.twenty_ms.runs
     nominal = runs[("digital20", 1.0)].metrics
     e = chapter.entries
     e.append(new("digital20.settling_time_s", "5.2", nominal.settling_time_s, "s", "Goal < 1.0 s (issue 6), 2 % band."))
@@ -311,7 +233,7 @@ def _twenty_ms(ctx: ReportContext, chapter: Chapter, plt) -> None:
             "5.2",
             nominal.final_error_quanta,
             "command",
-            f"Goal < 1 quantum ({d.deg_per_command:.3f} deg of rotation per command).",
+            f"Goal < 1 quantum ({study.twenty_ms.deg_per_command:.3f} deg of rotation per command).",
         )
     )
     for gain in (0.7, 1.3):
@@ -326,12 +248,11 @@ def _twenty_ms(ctx: ReportContext, chapter: Chapter, plt) -> None:
                 "Plant gain x0.7 / x1.3 emulated at the actuator (the controller is not told).",
             )
         )
-    fe = runs[("thesis39-euler", 1.0)]
     e.append(
         new(
             "thesis39_euler_20ms.peak_deg",
             "5.2",
-            fe.metrics.peak_deg,
+            runs[("thesis39-euler", 1.0)].metrics.peak_deg,
             "deg",
             "The thesis's state-space (forward Euler) controller at 20 ms on the twin: the command bangs between "
             "0 and 254 - the instability figure 5.7 shows.",
@@ -348,8 +269,10 @@ def _twenty_ms(ctx: ReportContext, chapter: Chapter, plt) -> None:
         )
     )
 
+
+def _fig_twenty_ms(ctx, plt, twenty_ms):
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for (name, gain), st in runs.items():
+    for (name, gain), st in twenty_ms.runs.items():
         if name == "thesis39-tustin":
             continue
         t = st.result.time_s
@@ -363,11 +286,9 @@ def _twenty_ms(ctx: ReportContext, chapter: Chapter, plt) -> None:
     )
     axes[0].legend(fontsize=7)
     axes[1].set(xlabel="t (s)", ylabel="command")
-    chapter.figures.append(
-        ctx.save_figure(
-            fig,
-            "ch5_20ms_twin",
-            "A 30 deg beam-rotation step at 20 ms on the nonlinear twin (clipped to -20..80 deg).",
-            thesis_ref="figure 5.7",
-        )
+    return ctx.save_figure(
+        fig,
+        "ch5_20ms_twin",
+        "A 30 deg beam-rotation step at 20 ms on the nonlinear twin (clipped to -20..80 deg).",
+        thesis_ref="figure 5.7",
     )

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.report import results
-from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
 
 SECTION = "8 (beyond)"
 
@@ -46,15 +46,15 @@ def build(ctx: ReportContext) -> Chapter:
     for group in summary:
         slug = group["case"].replace(", ", "_").replace(" ", "_")
         rows.append(
-            [
+            (
                 group["case"],
                 group["cases"],
-                round(group["tip_error_median_mm"], 2),
-                round(group["tip_error_p95_mm"], 2),
-                round(group["tip_error_max_mm"], 2),
-                round(group["rms_error_mean_mm"], 2),
-                f"{100 * group['tip_within_2sd']:.0f} %",
-            ]
+                group["tip_error_median_mm"],
+                group["tip_error_p95_mm"],
+                group["tip_error_max_mm"],
+                group["rms_error_mean_mm"],
+                group["tip_within_2sd"],
+            )
         )
         for key, unit, what in (
             ("tip_error_median_mm", "mm", "median tip position error"),
@@ -82,10 +82,12 @@ def build(ctx: ReportContext) -> Chapter:
             )
         )
     chapter.tables.append(
-        Table(
+        ResultTable(
+            "shape.accuracy",
             "Shape from the gauges against the twin (one reading per case)",
-            ["case", "cases", "tip median (mm)", "tip p95 (mm)", "tip max (mm)", "RMS along (mm)", "tip within 2 sd"],
-            rows,
+            ("case", "cases", "tip_error_median_mm", "tip_error_p95_mm", "tip_error_max_mm", "rms_error_mean_mm")
+            + ("tip_within_2sd_fraction",),
+            tuple(rows),
         )
     )
     located = acc.contact & (acc.mass_kg > 0)

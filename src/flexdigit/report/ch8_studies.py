@@ -14,7 +14,7 @@ import dataclasses
 
 import numpy as np
 
-from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
 from flexdigit.report.results import new
 
 #: Parameters of thesis-tolerances the report's study keeps: the 11 that move the twin's mechanics, and the
@@ -93,8 +93,15 @@ def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
                         f"+- {res[f'{index}_conf'][j]:.3f} (95 % bootstrap), N = {big}",
                     )
                 )
-        rows.append([metric, *(f"{res['ST'][j]:.2f} ± {res['ST_conf'][j]:.2f}" for j in range(len(names)))])
-    chapter.tables.append(Table("Total Sobol indices ST (95 % interval)", ["metric", *names], rows))
+        rows.append((metric, *(v for j in range(len(names)) for v in (res["ST"][j], res["ST_conf"][j]))))
+    chapter.tables.append(
+        ResultTable(
+            "studies.sobol_total",
+            f"Total Sobol indices ST and their 95 % half-intervals, N = {big}",
+            ("metric", *(c for name in names for c in (f"{name}.ST", f"{name}.ST_conf"))),
+            tuple(rows),
+        )
+    )
     st = np.array([result.sobol[m][big]["ST"] for m in result.sobol])
     fig = figures.total_index_map_figure(names, list(result.sobol), st, f"Total Sobol indices, N = {big}")
     chapter.figures.append(ctx.save_figure(fig, "studies_sobol_total", "Total Sobol indices of the twin's metrics."))
@@ -125,9 +132,9 @@ def _design(ctx: ReportContext, chapter: Chapter) -> None:
     rows = []
     front = set(result.front.tolist())
     for i in sorted(front, key=lambda i: result.outputs[o[0]][i]):
-        rows.append([result.candidates[i].label(), *(f"{result.outputs[m][i]:.3g}" for m in o)])
+        rows.append((result.candidates[i].label(), *(result.outputs[m][i] for m in o)))
     for name, i in result.marked().items():
-        rows.append([f"[{name}] {result.candidates[i].label()}", *(f"{result.outputs[m][i]:.3g}" for m in o)])
+        rows.append((f"[{name}] {result.candidates[i].label()}", *(result.outputs[m][i] for m in o)))
         for m in o:
             chapter.entries.append(
                 new(
@@ -143,7 +150,9 @@ def _design(ctx: ReportContext, chapter: Chapter) -> None:
             chapter.entries.append(
                 new(f"studies.design.front_{k}.{m}", "8", result.outputs[m][i], "", result.candidates[i].label())
             )
-    chapter.tables.append(Table("Pareto front and marked designs", ["design", *o], rows))
+    chapter.tables.append(
+        ResultTable("studies.design_front", "Pareto front and marked designs", ("design", *o), tuple(rows))
+    )
     for p in result.placement:
         chapter.entries.append(
             new(

@@ -11,8 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 from flexdigit.report.results import Entry
+
+__all__ = ["Chapter", "Figure", "ReportContext", "ResultTable"]
 
 
 @dataclass
@@ -25,23 +28,15 @@ class Figure:
 
 
 @dataclass
-class Table:
-    """A small table shown in the chapter (thesis columns beside ours)."""
-
-    title: str
-    columns: list[str]
-    rows: list[list[object]]
-
-
-@dataclass
 class Chapter:
-    """One chapter of the reproduce report."""
+    """One chapter of the reproduce report: its tables are :class:`~flexdigit._result_table.ResultTable` of numbers (the
+    library studies' own), shown formatted in ``index.html`` and as numbers in ``results.json``."""
 
     slug: str
     title: str
     paragraphs: list[str] = field(default_factory=list)
     entries: list[Entry] = field(default_factory=list)
-    tables: list[Table] = field(default_factory=list)
+    tables: list[ResultTable] = field(default_factory=list)
     figures: list[Figure] = field(default_factory=list)
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._result_table import ResultTable
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
@@ -314,3 +315,279 @@ def _thesis_mlp_in_metres(dataset, rows, result: PipelineResult, protocol: Proto
         "test_rows": test_rows[loaded],
         "pred_m": pred_m[loaded],
     }
+
+
+# ------------------------------------------------------------------------- the twin's noise, revisited (6.9, 7.5)
+#: White-noise scales scanned for chapter 6 (x the default calibration's white gauge noise).
+NOISE_SCALES = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
+
+
+@dataclass(frozen=True)
+class NoiseScan:
+    """Test corr2 of the thesis pipeline at the printed optimum against the twin's white gauge noise.
+
+    Attributes
+    ----------
+    key : str
+        The experiment (``"non_actuated"``).
+    table : ResultTable
+        ``tactile.noise_scan``: scale, gauge 1's white noise (mV), test corr2.
+    target : float
+        The thesis's corr2; ``scale_match`` the scale that reproduces it (interpolated), None outside the scan.
+    """
+
+    key: str
+    table: ResultTable
+    target: float
+    scale_match: float | None
+
+
+def white_noise_scan(
+    key: str = "non_actuated",
+    *,
+    scales=NOISE_SCALES,
+    seed: int = 0,
+    params: RigParams | None = None,
+    epochs: int = 50,
+) -> NoiseScan:
+    """corr2 at the printed optimum with the default white gauge noise scaled by each of ``scales``.
+
+    Readings from the twin's batched static solver (:func:`static_dataset`: at rest, white noise only, loaded
+    readings), pipeline as :func:`pipeline_corr2_static`. Chapter 6 (cable detached) is the one this scans: the
+    actuated loss is the cable-guide friction (:func:`friction_study`).
+    """
+    from flexdigit.twin.calibration import default_calibration
+
+    base = default_calibration()
+    rows = []
+    for scale in scales:
+        cal = base.replace(noise_white_v=tuple(scale * v for v in base.noise_white_v))
+        corr2 = pipeline_corr2_static(key, cal, seed=seed, params=params, epochs=epochs)
+        rows.append((float(scale), 1000 * base.noise_white_v[0] * scale, corr2))
+    target = float(thesis_value(f"tactile.{key}.test_corr2"))
+    c2 = np.array([r[2] for r in rows])
+    match = None
+    if c2.min() <= target <= c2.max():
+        order = np.argsort(c2)
+        match = float(np.interp(target, c2[order], np.array([r[0] for r in rows])[order]))
+    table = ResultTable(
+        "tactile.noise_scan",
+        "corr2 at the thesis's optimum against the twin's white gauge noise (readings from the twin's batched "
+        "static solver: at rest, white noise only)",
+        ("noise_scale", "white_noise_gauge1_mv", "test_corr2"),
+        tuple(rows),
+    )
+    return NoiseScan(key, table, target, match)
+
+
+def equivalent_servo_angle(params: RigParams | None = None, calibration=None) -> dict:
+    """The cable-guide friction's tension scatter over ``thesis-7.1-no-load``'s settings as a servo shaft angle.
+
+    ``ratio x T / (dT/dtheta)`` at every (load, position, command) of the protocol, the slope by central
+    differences of the static twin (0.01 command). Returns the median, minimum and maximum in degrees and in
+    microseconds of PWM pulse, and microseconds per command.
+    """
+    from flexdigit.twin.calibration import default_calibration
+    from flexdigit.twin.twin import static_gauges_v
+
+    params = params or RigParams()
+    cal = calibration or default_calibration()
+    a = params.actuator
+    plan = load_protocol("thesis-7.1-no-load").plan(params.geometry.digit_length_m)
+    keys = np.unique(
+        np.column_stack([plan["load_kg"], np.nan_to_num(plan["position_from_base_m"]), plan["command"]]), axis=0
+    )
+    d = 0.01 * a.rad_per_command
+    tension = []
+    for off in (-d, 0.0, d):
+        _, sol = static_gauges_v(
+            keys[:, 0],
+            keys[:, 1],
+            keys[:, 2].astype(int),
+            params=params,
+            calibration=cal,
+            adc=False,
+            return_solution=True,
+            servo_offset_rad=np.full(len(keys), off),
+        )
+        tension.append(sol.tension_n)
+    slope = (tension[2] - tension[0]) / (2 * d)  # N per rad of servo shaft
+    deg = np.degrees(cal.cable_friction_ratio * tension[1] / slope)
+    us_per_deg = 1e6 * (a.pulse_width_max_s - a.pulse_width_min_s) / (a.angle_max_deg - a.angle_min_deg)
+    return {
+        "median_deg": float(np.median(deg)),
+        "min_deg": float(deg.min()),
+        "max_deg": float(deg.max()),
+        "median_us": float(np.median(deg) * us_per_deg),
+        "min_us": float(deg.min() * us_per_deg),
+        "max_us": float(deg.max() * us_per_deg),
+        "us_per_command": float(a.deg_per_command * us_per_deg),
+    }
+
+
+@dataclass(frozen=True)
+class FrictionStudy:
+    """Chapter 7's noise revisited: actuated corr2 against the cable-guide friction and servo jitter.
+
+    Attributes
+    ----------
+    table : ResultTable
+        ``tactile.friction_study``: each noise case and the test corr2 at the printed optimum (24 nodes, 1e-7).
+    ratio : float
+        The default calibration's ``cable_friction_ratio``.
+    per_hang_corr2 : float
+        corr2 with 25 readings after one hang (one friction state per setting).
+    servo_equivalent : dict
+        :func:`equivalent_servo_angle`.
+    corr2_mean, corr2_sd : float or None
+        corr2 averaged over :data:`FRICTION_FIT_SEEDS` and its spread from seed to seed (None in fast mode).
+    """
+
+    table: ResultTable
+    ratio: float
+    per_hang_corr2: float
+    servo_equivalent: dict
+    corr2_mean: float | None
+    corr2_sd: float | None
+
+
+def friction_study(*, seed: int = 0, params: RigParams | None = None, fast: bool = False) -> FrictionStudy:
+    """corr2 of the actuated experiment against the twin's actuated noise: none, the calibrated friction per
+    reading (x0.5, x1, x1.5), per hang, and servo deadband jitter alone (1 and 4 deg, per reading or per hang).
+
+    ``fast`` (tests): 10 epochs, fewer cases, no mean over the fit seeds.
+    """
+    from flexdigit.twin.calibration import default_calibration
+
+    cal = default_calibration()
+    ratio = cal.cable_friction_ratio
+    kw = {"seed": seed, "params": params, "epochs": 10 if fast else 50}
+    none = cal.replace(cable_friction_ratio=0.0)
+    cases = [("none (previous default)", none, {})]
+    if not fast:
+        cases.append(
+            (f"friction x0.5 ({ratio / 2:.4f}), a hang per reading", cal.replace(cable_friction_ratio=ratio / 2), {})
+        )
+    cases.append(("cable-guide friction, a hang per reading (the thesis, the twin)", cal, {}))
+    if not fast:
+        cases.append(
+            (
+                f"friction x1.5 ({1.5 * ratio:.4f}), a hang per reading",
+                cal.replace(cable_friction_ratio=1.5 * ratio),
+                {},
+            )
+        )
+    cases.append(("cable-guide friction, 25 readings after one hang", cal, {"friction_per": "hang"}))
+    for deg in (1.0,) if fast else (1.0, 4.0):
+        for per in ("reading", "hang"):
+            jitter = {"servo_jitter_rad": np.radians(deg), "servo_jitter_per": per}
+            cases.append((f"servo deadband jitter alone, {deg:g} deg per {per}", none, jitter))
+    rows = tuple((name, pipeline_corr2_static("actuated", c, **kw, **extra)) for name, c, extra in cases)
+    mean = sd = None
+    if not fast:
+        mean, sd = actuated_corr2_score(cal, params=params, spread=True)
+    hidden = int(thesis_value("tactile.actuated.best_hidden"))
+    tol = float(thesis_value("tactile.actuated.best_learning_gradient"))
+    table = ResultTable(
+        "tactile.friction_study",
+        f"Actuated test corr2 at the thesis's optimum ({hidden} nodes, gradient {tol:g}) against the twin's "
+        "actuated noise (batched static solver: at rest, no drift; thesis 0.8998)",
+        ("noise_in_the_actuated_readings", "test_corr2"),
+        rows,
+    )
+    per_hang = next(r[1] for r in rows if r[0].endswith("after one hang"))
+    return FrictionStudy(table, ratio, per_hang, equivalent_servo_angle(params, cal), mean, sd)
+
+
+# ----------------------------------------------------------------------------------- scores of one experiment
+def position_ratios(exp: TactileExperimentResult, name: str | None = None) -> dict[float, float]:
+    """Per identifiable test position (m from the tip): RMSE / Cramer-Rao bound (mass unknown) of estimator
+    ``name`` (default: the best), or of the thesis network when ``name == "thesis network"``."""
+    loc = exp.localisation
+    if name == "thesis network":
+        rows = exp.thesis_mlp_position_m["test_rows"]
+        pred, true = exp.thesis_mlp_position_m["pred_m"], exp.dataset["position_from_tip_m"][rows]
+        zone, bound = loc.extra["zone_all"][rows], loc.extra["crlb_all_m"][rows]
+    else:
+        pred, true = loc.position_pred_m[name or loc.best], loc.position_true_m
+        zone, bound = loc.zone, loc.crlb_m
+    out = {}
+    for p in np.unique(true):
+        sel = (true == p) & (zone == "identifiable")
+        if sel.any():
+            out[float(p)] = float(np.sqrt(np.mean((pred[sel] - p) ** 2)) / np.sqrt(np.mean(bound[sel] ** 2)))
+    return out
+
+
+def criteria(exp: TactileExperimentResult, corr2_ours: float) -> list[tuple[str, float, float, bool]]:
+    """Issue 7's criteria on one experiment: ``(name, value, goal, met)`` for corr2 (within 0.03 of the thesis),
+    the best estimator over the thesis network (<= 0.5), its worst per-position RMSE / bound (<= 1.25), contact
+    where a gauge bends (>= 0.99) and the load magnitude's RMS relative error (<= 0.10)."""
+    loc = exp.localisation
+    best = loc.best
+    thesis_corr2 = float(thesis_value(f"tactile.{exp.key}.test_corr2"))
+    ratios = position_ratios(exp)
+    worst = max(ratios.values()) if ratios else float("nan")
+    contact = max(loc.contact_accuracy_visible.values())
+    magnitude = min(loc.magnitude_rel_rmse_identifiable.values())
+    over = loc.position_rmse_identifiable_m[best] / exp.thesis_mlp_position_m["rmse_identifiable_m"]
+    return [
+        ("corr2_distance_from_thesis", abs(corr2_ours - thesis_corr2), 0.03, abs(corr2_ours - thesis_corr2) <= 0.03),
+        ("best_over_thesis_network", over, 0.5, over <= 0.5),
+        ("worst_position_rmse_over_crlb", worst, 1.25, worst <= 1.25),
+        ("contact_accuracy_visible", contact, 0.99, contact >= 0.99),
+        ("magnitude_rel_rmse", magnitude, 0.10, magnitude <= 0.10),
+    ]
+
+
+def experiment_tables(exp: TactileExperimentResult) -> tuple[ResultTable, ...]:
+    """The experiment's tables (numbers): the 6.2.1 strategies, the estimators, and per position."""
+    loc = exp.localisation
+    length_mm = 1000 * float(exp.dataset.meta.get("digit_length_m", 0.270))
+    thesis = exp.thesis_mlp_position_m
+    rm = loc.position_rmse_identifiable_m
+    key = exp.key
+    strategies = ResultTable(
+        f"tactile.{key}.strategies",
+        "Network strategies of 6.2.1 (test readings; position over loaded readings, m from the tip)",
+        ("strategy", "position_corr2", "position_rmse_mm", "contact_accuracy", "magnitude_rel_rmse"),
+        tuple(
+            (s.strategy, s.position_corr2, 1000 * s.position_rmse_m, s.contact_accuracy, s.magnitude_rel_rmse)
+            for s in exp.strategies
+        ),
+    )
+    estimators = ResultTable(
+        f"tactile.{key}.estimators",
+        "Estimators on identical data (loaded test readings; identifiable = the Fisher information has rank 2)",
+        ("estimator", "rmse_all_mm", "rmse_identifiable_mm", "percent_of_digit", "magnitude_rel_rmse"),
+        (
+            (
+                "thesis network (position numbers)",
+                1000 * thesis["rmse_m"],
+                1000 * thesis["rmse_identifiable_m"],
+                100 * thesis["rmse_identifiable_m"] * 1000 / length_mm,
+                None,
+            ),
+        )
+        + tuple(
+            (k, 1000 * loc.position_rmse_m[k], 1000 * rm[k], 100 * rm[k] * 1000 / length_mm)
+            + (loc.magnitude_rel_rmse_identifiable[k],)
+            for k in rm
+        ),
+    )
+    rows = []
+    for p in np.unique(loc.position_true_m):
+        sel = loc.position_true_m == p
+        row = (100 * p, "/".join(sorted(set(loc.zone[sel]))))
+        row += (1000 * float(np.sqrt(np.mean(loc.crlb_m[sel] ** 2))),)
+        row += (1000 * float(np.sqrt(np.mean(loc.crlb_known_mass_m[sel] ** 2))),)
+        row += tuple(1000 * float(np.sqrt(np.mean((v[sel] - p) ** 2))) for v in loc.position_pred_m.values())
+        rows.append(row)
+    per_position = ResultTable(
+        f"tactile.{key}.per_position",
+        "Per position (test readings): identifiability zone, Cramer-Rao bounds and RMSE of each estimator (mm)",
+        ("from_tip_cm", "zone", "crlb_mass_unknown_mm", "crlb_mass_known_mm")
+        + tuple(f"rmse_mm {k}" for k in loc.position_pred_m),
+        tuple(rows),
+    )
+    return strategies, estimators, per_position
