@@ -9,7 +9,8 @@
 - :func:`chapter4_study`: all of them, the 5 Hz loop's norms and steps (4.4-4.5), and the servo-ready
   mixed-sensitivity design beside the printed 39 Hz controller.
 
-Every table is a :class:`~flexdigit._result_table.ResultTable` of numbers; controllers and loops are python-control objects.
+Every table is a :class:`~flexdigit._result_table.ResultTable` of numbers; controllers and loops are
+python-control objects.
 
 Examples
 --------

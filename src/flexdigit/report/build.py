@@ -115,8 +115,8 @@ STATUSES = ("match", "discrepancy", "new")
 def results_document(chapters: list[Chapter], ctx: ReportContext, seconds: dict[str, float] | None = None) -> dict:
     """What ``results.json`` holds: every entry, every table as numbers, the headline and per-chapter counts.
 
-    ``{"flexdigit", "seed", "fast", "calibration", "counts", "headline", "chapters", "entries", "tables"}``: ``entries`` is the
-    list of ``{key, section, thesis, ours, unit, rel_error, status, note}``; ``tables`` the list of
+    ``{"flexdigit", "seed", "fast", "calibration", "counts", "headline", "chapters", "entries", "tables"}``:
+    ``entries`` is the list of ``{key, section, thesis, ours, unit, rel_error, status, note}``; ``tables`` the list of
     ``{key, chapter, title, columns, rows}`` (cells are numbers, or strings for labels; NaN is null);
     ``headline`` the keys of :data:`HEADLINE` present; ``chapters`` each chapter's slug, title, counts and seconds.
     """

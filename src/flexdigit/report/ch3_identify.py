@@ -2,10 +2,10 @@
 
 Beside 3.1.2 (release tests, tables 3.1 and 3.2, E(s), figure 3.6), 3.2.4 (servo step tests, FFT and SVD
 filters, MT(s), figures 3.11 and 3.12) and 3.4 (the linear fits behind K1 and K3). The closed-form checks of
-the printed tables are in the models chapter; this one runs the identification on records: synthetic second-order
-ones with known parameters (to measure each method's error) and the twin's simulated release and step tests
-(:mod:`flexdigit.twin.records`, default calibration), from which E(s) and MT(s) are identified as the thesis
-identified them from the rig.
+the printed tables are in the models chapter; this one shows :func:`flexdigit.identify.studies.chapter3_identify_study`:
+the identification run on synthetic second-order records with known parameters (to measure each method's error)
+and on the twin's simulated release and step tests (:mod:`flexdigit.twin.records`, default calibration), from
+which E(s) and MT(s) are identified as the thesis identified them from the rig.
 """
 
 from __future__ import annotations
@@ -14,26 +14,20 @@ import math
 
 import numpy as np
 
-from flexdigit.identify.filters import fft_filter, noise_reduction, svd_filter
-from flexdigit.identify.fit import fit_linear, second_order_response
-from flexdigit.identify.identification import average_runs, identify
-from flexdigit.identify.response import settling_formula_bias
-from flexdigit.identify.timeseries import TimeSeries, series_from_table
+from flexdigit.identify.filters import fft_filter, svd_filter
+from flexdigit.identify.studies import STEP_COMMANDS, chapter3_identify_study
 from flexdigit.reference import thesis_value
-from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
+from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import Entry, compare, new
 
 SECTION_DIGIT = "3.1.2"
 SECTION_SERVO = "3.2.4"
-#: Synthetic records: sampling period (s) and white noise (fraction of the response amplitude).
-DT_S = 0.002
-NOISE = 0.02
-#: Input step of the thesis's servo tests (3.2.4: "an input serial command of 51").
-STEP_COMMANDS = 51
+#: The report's random stream of this chapter's twin experiments is the report seed itself (ctx.seed).
 
 
 def build(ctx: ReportContext) -> Chapter:
-    """Build the identification chapter."""
+    """The identification chapter from :func:`~flexdigit.identify.studies.chapter3_identify_study`."""
+    study = chapter3_identify_study(ctx.params, seed=ctx.seed, fast=ctx.fast)
     chapter = Chapter(slug="ch3-identify", title="Chapter 3: system identification (release and step tests)")
     chapter.paragraphs.append(
         "The thesis identified each component from one experiment: release tests of the digit (zeta from the "
@@ -45,13 +39,14 @@ def build(ctx: ReportContext) -> Chapter:
         "as in table 3.1."
     )
     e = chapter.entries
-    _wn_formula_bias(ctx, chapter, e)
-    _tables_from_records(ctx, chapter, e)
-    _noise_study(ctx, chapter, e)
-    _models_from_experiments(ctx, chapter, e)
-    _filters(ctx, chapter, e)
-    _linear_fits(chapter, e)
-    _voltage_fits(ctx, chapter, e)
+    _wn_formula_bias(ctx, study, chapter, e)
+    _records_tables(study, chapter, e)
+    _noisy_records(study, e)
+    _models_from_experiments(ctx, study.twin, chapter, e)
+    _filters(ctx, study.filters, chapter, e)
+    _linear_fits(study.deflection[0], e)
+    _voltage_fits(study.voltage[0], e)
+    chapter.tables.extend(study.tables)
     chapter.paragraphs.append(_summary(e))
     return chapter
 
@@ -83,10 +78,10 @@ def _summary(entries: list[Entry]) -> str:
 
 
 # --- the thesis's wn = 4 / (zeta Ts) --------------------------------------------------------------------------
-def _wn_formula_bias(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
+def _wn_formula_bias(ctx: ReportContext, study, chapter: Chapter, e: list[Entry]) -> None:
     p = ctx.params
     zd, zs = p.dynamics.zeta_housing, p.actuator.servo_zeta
-    bias_digit, bias_servo = (float(b) for b in settling_formula_bias([zd, zs]))
+    bias_digit, bias_servo = study.settling_bias
     e.append(
         new(
             "identify.wn_settling_formula.bias_digit",
@@ -119,8 +114,7 @@ def _wn_formula_bias(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> No
             "settling time'). Table 3.2's wn column, by contrast, is wd/sqrt(1 - zeta^2) to 5e-6 rad/s.",
         )
     )
-    zetas = np.linspace(0.005, 0.95, 60 if ctx.fast else 190)
-    bias = settling_formula_bias(zetas, points_per_period=200 if ctx.fast else 400)
+    zetas, bias = study.bias_curve
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 3.4))
@@ -143,82 +137,27 @@ def _wn_formula_bias(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> No
     )
 
 
-# --- tables 3.1 and 3.2 from release records ------------------------------------------------------------------
-def _release_record(wn: float, zeta: float, t_end: float, rng: np.random.Generator, noise: float = NOISE):
-    """A synthetic release test: 1 V deflection held 0.3 s, released, plus white noise (fraction of it)."""
-    t = np.arange(0.0, t_end, DT_S)
-    y = second_order_response(t, "release", wn, zeta, 0.0, 1.0, 0.3) + rng.normal(0, noise, t.size)
-    return TimeSeries.from_arrays(t, y, channel="sg1", unit="V", source="synthetic release")
-
-
-def _tables_from_records(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
-    rng = ctx.rng(31)
-    for table, name, t_end in (("3.1", "without_housing", 20.0), ("3.2", "with_housing", 8.0)):
-        t = thesis_value(f"digit.release_tests_{name}")
-        zetas, wns = np.asarray(t["zeta"]), np.asarray(t["wn_rad_s"])
-        rows = []
-        got = {"thesis_zeta": [], "thesis_wn": [], "lsq_zeta": [], "lsq_wn": []}
-        n_rows = 3 if ctx.fast else len(zetas)
-        for i in range(n_rows):
-            rec = _release_record(wns[i], zetas[i], t_end, rng, noise=0.002)
-            th = identify(rec, "release", method="thesis", wn_from="damped")
-            ls = identify(rec, "release", method="lsq")
-            got["thesis_zeta"].append(th.zeta)
-            got["thesis_wn"].append(th.wn_rad_s)
-            got["lsq_zeta"].append(ls.zeta)
-            got["lsq_wn"].append(ls.wn_rad_s)
-            rows.append(
-                (
-                    i + 1,
-                    zetas[i],
-                    th.features.percent_overshoot,
-                    th.zeta,
-                    ls.zeta,
-                    wns[i],
-                    th.wn_rad_s,
-                    ls.wn_rad_s,
-                    th.features.settling_time_s,  # inf: the record ends before it settles
-                )
-            )
-        chapter.tables.append(
-            ResultTable(
-                f"identify.table_{table.replace('.', '_')}_from_records",
-                f"Table {table} from synthetic release records ({t_end:g} s, 0.2 % noise) with the printed zeta and "
-                "wn (thesis method: wn from the damped frequency; settling time inf: not reached in the record)",
-                (
-                    "test",
-                    "zeta_printed",
-                    "percent_overshoot_measured",
-                    "zeta_thesis_method",
-                    "zeta_lsq",
-                    "wn_printed_rad_s",
-                    "wn_thesis_method_rad_s",
-                    "wn_lsq_rad_s",
-                    "settling_2_percent_s",
-                ),
-                tuple(rows),
-            )
-        )
-        key = f"identify.table_{table.replace('.', '_')}"
-        truth_zeta, truth_wn = float(np.mean(zetas[:n_rows])), float(np.mean(wns[:n_rows]))
+def _records_tables(study, chapter: Chapter, e: list[Entry]) -> None:
+    """Tables 3.1 and 3.2 identified back from synthetic records: each method's mean error."""
+    for rec in study.records.values():
+        key = f"identify.table_{rec.number.replace('.', '_')}"
         for method in ("thesis", "lsq"):
-            z_avg = float(np.mean(got[f"{method}_zeta"]))
-            wn_avg = float(np.mean(got[f"{method}_wn"]))
+            zeta_err, wn_err = rec.mean_rel_error[method]
             e.append(
                 new(
                     f"{key}.{method}_zeta_avg_rel_error",
                     SECTION_DIGIT,
-                    z_avg / truth_zeta - 1,
+                    zeta_err,
                     "",
-                    f"Mean zeta identified by the {method} method from {n_rows} synthetic release records built "
-                    f"with table {table}'s printed zeta and wn (0.2 % noise), relative to the mean printed zeta.",
+                    f"Mean zeta identified by the {method} method from {rec.rows} synthetic release records built "
+                    f"with table {rec.number}'s printed zeta and wn (0.2 % noise), relative to the mean printed zeta.",
                 )
             )
             e.append(
                 new(
                     f"{key}.{method}_wn_avg_rel_error",
                     SECTION_DIGIT,
-                    wn_avg / truth_wn - 1,
+                    wn_err,
                     "",
                     f"The same for wn ({'wd/sqrt(1-zeta^2), as the table did' if method == 'thesis' else 'fitted'}).",
                 )
@@ -232,113 +171,35 @@ def _tables_from_records(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -
     )
 
 
-# --- the same noisy records, both methods -----------------------------------------------------------------------
-def _noise_study(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
-    p = ctx.params
-    seeds = 4 if ctx.fast else 20
-    truth = {
-        "release": (p.dynamics.wn_housing_rad_s, p.dynamics.zeta_housing),
-        "step": (p.actuator.servo_wn_rad_s, p.actuator.servo_zeta),
-    }
-    rows = []
-    for kind, (wn, zeta) in truth.items():
-        rng = ctx.rng(40 if kind == "release" else 41)
-        err = {m: [] for m in ("lsq", "arx", "thesis")}
-        for _ in range(seeds):
-            if kind == "release":
-                rec = _release_record(wn, zeta, 8.0, rng)
-                t0 = None
-            else:
-                rec = _step_record(wn, zeta, rng)
-                t0 = None
-            for method in err:
-                r = identify(rec, kind, method=method, t0_s=t0)
-                err[method].append((r.wn_rad_s / wn - 1, r.zeta / zeta - 1))
-        for method, values in err.items():
-            a = np.asarray(values)
-            rows.append(
-                (
-                    kind,
-                    method,
-                    100 * a[:, 0].mean(),
-                    100 * np.abs(a[:, 0]).max(),
-                    100 * a[:, 1].mean(),
-                    100 * np.abs(a[:, 1]).max(),
+def _noisy_records(study, e: list[Entry]) -> None:
+    """Each method's largest error over the noisy synthetic records."""
+    n = study.noisy.records
+    for (kind, method), a in study.noisy.errors.items():
+        for j, par in enumerate(("wn", "zeta")):
+            e.append(
+                new(
+                    f"identify.noisy_{kind}.{method}.{par}_max_abs_rel_error",
+                    SECTION_DIGIT if kind == "release" else SECTION_SERVO,
+                    float(np.abs(a[:, j]).max()),
+                    "",
+                    f"Largest |relative error| of {par} over {n} synthetic {kind} records with known "
+                    f"parameters (the thesis's {'digit' if kind == 'release' else 'servo'}) and white noise of "
+                    "2 % of the response; issue 4 asks lsq for < 2 %."
+                    + (" The thesis method's error is mostly the bias of 4/(zeta Ts)." if method == "thesis" else ""),
                 )
             )
-            for j, par in enumerate(("wn", "zeta")):
-                e.append(
-                    new(
-                        f"identify.noisy_{kind}.{method}.{par}_max_abs_rel_error",
-                        SECTION_DIGIT if kind == "release" else SECTION_SERVO,
-                        float(np.abs(a[:, j]).max()),
-                        "",
-                        f"Largest |relative error| of {par} over {seeds} synthetic {kind} records with known "
-                        f"parameters (the thesis's {'digit' if kind == 'release' else 'servo'}) and white noise of "
-                        f"{100 * NOISE:g} % of the response; issue 4 asks lsq for < 2 %."
-                        + (
-                            " The thesis method's error is mostly the bias of 4/(zeta Ts)."
-                            if method == "thesis"
-                            else ""
-                        ),
-                    )
-                )
-    chapter.tables.append(
-        ResultTable(
-            "identify.noisy_records",
-            f"Errors over {seeds} noisy synthetic records ({100 * NOISE:g} % white noise): thesis method, lsq, ARX",
-            (
-                "test",
-                "method",
-                "wn_mean_error_percent",
-                "wn_max_abs_error_percent",
-                "zeta_mean_error_percent",
-                "zeta_max_abs_error_percent",
-            ),
-            tuple(rows),
-        )
-    )
 
 
-def _step_record(wn: float, zeta: float, rng: np.random.Generator, noise: float = NOISE, gain: float = 0.0079):
-    """A synthetic servo step test: command 8 -> 8 + 51 at 0.2 s, pot volts with white noise."""
-    t = np.arange(0.0, 2.0, DT_S)
-    amp = gain * STEP_COMMANDS
-    y = second_order_response(t, "step", wn, zeta, 0.4669, amp, 0.2) + rng.normal(0, noise * amp, t.size)
-    u = np.where(t >= 0.2, 8.0 + STEP_COMMANDS, 8.0)
-    return TimeSeries.from_arrays(t, y, channel="pot", unit="V", u=u, source="synthetic step")
+# --- E(s) and MT(s) from the twin's experiments -------------------------------------------------------------
+def _models_from_experiments(ctx: ReportContext, twin, chapter: Chapter, e: list[Entry]) -> None:
+    """E(s) and MT(s) identified from the twin's experiments, beside the thesis's (figures 3.6, 3.11, 3.12)."""
+    _model_entries(twin, e)
+    _tip_entries(twin, e)
+    _model_figures(ctx, twin, chapter)
 
 
-# --- E(s) and MT(s) from experiments ----------------------------------------------------------------------------
-def _experiments(ctx: ReportContext):
-    """The twin's release test of the digit (gauge 1, as 3.5 uses) and its servo step tests (51 commands).
-
-    Returns the release record (gauge 1 and tip deflection), the step records and a phrase naming their origin.
-    """
-    from flexdigit.twin.records import release_test, servo_step_test
-
-    duration, rate = (5.0, 500.0) if ctx.fast else (8.0, 1000.0)
-    rel = release_test(duration_s=duration, sample_rate_hz=rate, seed=ctx.seed, params=ctx.params)
-    release, tip = series_from_table(rel, "gauge1"), series_from_table(rel, "tip_deflection")
-    steps = [
-        series_from_table(
-            servo_step_test(command_to=STEP_COMMANDS, sample_rate_hz=rate, seed=ctx.seed + k, params=ctx.params), "pot"
-        )
-        for k in range(3 if ctx.fast else 5)
-    ]
-    return release, tip, steps, "the twin's default calibration"
-
-
-def _models_from_experiments(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
-    import matplotlib.pyplot as plt
-
-    release, tip, steps, origin = _experiments(ctx)
-    step = average_runs(steps)
-    # the thesis filtered the servo records with its SVD filter (3.2.4); rank 3 holds a step on an offset
-    fits = {("digit", m): identify(release, "release", method=m) for m in ("thesis", "lsq")} | {
-        ("servo", m): identify(step, "step", method=m, filter="svd") for m in ("thesis", "lsq")
-    }
-    tip_fits = {m: identify(tip, "release", method=m) for m in ("thesis", "lsq")}
+def _model_entries(twin, e: list[Entry]) -> None:
+    fits, tip_fits, origin = twin.fits, twin.tip_fits, twin.origin
     printed = {
         "digit": (
             thesis_value("digit.release_tests_with_housing.wn_avg_rad_s"),
@@ -351,11 +212,9 @@ def _models_from_experiments(ctx: ReportContext, chapter: Chapter, e: list[Entry
             thesis_value("actuator.model.validation_corr2"),
         ),
     }
-    rows = []
     for (model, method), r in fits.items():
         wn_p, zeta_p, corr_p = printed[model]
         section = SECTION_DIGIT if model == "digit" else SECTION_SERVO
-        rows.append((model, method, wn_p, r.wn_rad_s, zeta_p, r.zeta, *_intervals(r), r.corr2, r.fit_percent))
         why = (
             "The thesis method's wn = 4/(zeta Ts) carries the bias of identify.wn_settling_formula.* plus the noise "
             "in the settling time read off a filtered record."
@@ -423,21 +282,13 @@ def _models_from_experiments(ctx: ReportContext, chapter: Chapter, e: list[Entry
                     "noise, not the rig's. The NRMSE fit (identify CLI, table) is the better figure.",
                 )
             )
-    for method, r in tip_fits.items():
-        wn_p, zeta_p, _ = printed["digit"]
-        rows.append(
-            (
-                f"digit (tip, {tip.unit})",
-                method,
-                wn_p,
-                r.wn_rad_s,
-                zeta_p,
-                r.zeta,
-                *_intervals(r),
-                r.corr2,
-                r.fit_percent,
-            )
-        )
+
+
+def _tip_entries(twin, e: list[Entry]) -> None:
+    """The same release read at the tip, a measurement the rig did not have."""
+    wn_p = thesis_value("digit.release_tests_with_housing.wn_avg_rad_s")
+    zeta_p = thesis_value("digit.release_tests_with_housing.zeta_avg")
+    for method, r in twin.tip_fits.items():
         for par, value in (("wn_rad_s", r.wn_rad_s), ("zeta", r.zeta)):
             e.append(
                 new(
@@ -449,28 +300,12 @@ def _models_from_experiments(ctx: ReportContext, chapter: Chapter, e: list[Entry
                     f"method; thesis: {wn_p if par == 'wn_rad_s' else zeta_p}.",
                 )
             )
-    chapter.tables.append(
-        ResultTable(
-            "identify.models_from_twin",
-            f"Digit E(s) and servo MT(s) identified from {origin}, beside the thesis's (95 % confidence intervals of "
-            "the lsq fits; NaN for the thesis method, which gives none)",
-            (
-                "model",
-                "method",
-                "wn_thesis_rad_s",
-                "wn_ours_rad_s",
-                "zeta_thesis",
-                "zeta_ours",
-                "wn_ci_low_rad_s",
-                "wn_ci_high_rad_s",
-                "zeta_ci_low",
-                "zeta_ci_high",
-                "corr2",
-                "nrmse_fit_percent",
-            ),
-            tuple(rows),
-        )
-    )
+
+
+def _model_figures(ctx: ReportContext, twin, chapter: Chapter) -> None:
+    import matplotlib.pyplot as plt
+
+    release, steps, step, fits, origin = twin.release, twin.steps, twin.step, twin.fits, twin.origin
     # figures 3.6 and 3.12: measured versus modelled
     for model, rec, kind, fig_name, ref in (
         ("digit", release, "release", "ch3_identify_release_validation", "figure 3.6"),
@@ -516,19 +351,12 @@ def _models_from_experiments(ctx: ReportContext, chapter: Chapter, e: list[Entry
 
 
 # --- filters of 3.2.4 -------------------------------------------------------------------------------------------
-def _filters(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
+def _filters(ctx: ReportContext, f, chapter: Chapter, e: list[Entry]) -> None:
+    """The FFT and SVD filters of 3.2.4 against their parameter."""
     import matplotlib.pyplot as plt
 
-    p = ctx.params
-    rng = ctx.rng(60)
-    t = np.arange(0.0, 2.0, DT_S)
-    clean = second_order_response(t, "step", p.actuator.servo_wn_rad_s, p.actuator.servo_zeta, 0.0, 1.0, 0.2)
-    noisy = clean + rng.normal(0, 0.05, t.size)
-    harmonics = np.unique(np.geomspace(1, 500, 12 if ctx.fast else 30).astype(int))
-    fft_red = [noise_reduction(clean, noisy, fft_filter(noisy, int(n))) for n in harmonics]
-    ranks = np.arange(1, 9)
-    svd_red = [noise_reduction(clean, noisy, svd_filter(noisy, rank=int(r))) for r in ranks]
-    best_n = int(harmonics[int(np.argmax(fft_red))])
+    harmonics, fft_red, ranks, svd_red = f.harmonics, f.fft_reduction, f.ranks, f.svd_reduction
+    best_n = f.best_harmonics
     e.append(
         new(
             "identify.filters.fft_best_harmonics",
@@ -579,16 +407,12 @@ def _filters(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
 
 
 # --- 3.4: linear fits with their uncertainty ---------------------------------------------------------------------
-def _linear_fits(chapter: Chapter, e: list[Entry]) -> None:
-    commands = np.asarray(thesis_value("conversion.table_3_4_commands"), dtype=float)
+def _linear_fits(fits: list, e: list[Entry]) -> None:
+    """3.4.1: the slopes of table 3.6 with their intervals, beside the printed ones."""
     printed = thesis_value("conversion.k1_fit")
-    rows = []
-    for k in range(3):
-        y = np.asarray(thesis_value(f"conversion.table_3_6_y_sg{k + 1}_mm"), dtype=float)
-        r = fit_linear(commands, y)
+    for k, r in enumerate(fits):
         a = float(printed[k]["a"])
         inside = r.slope.ci_low <= a <= r.slope.ci_high
-        rows.append((k + 1, r.slope.value, r.slope.ci_low, r.slope.ci_high, a, bool(inside), r.rms, r.r_squared))
         e.append(
             new(
                 f"identify.k1_fit.sg{k + 1}.slope_mm_per_command",
@@ -601,45 +425,17 @@ def _linear_fits(chapter: Chapter, e: list[Entry]) -> None:
                 "command 8, see the models chapter).",
             )
         )
-    chapter.tables.append(
-        ResultTable(
-            "identify.deflection_fits",
-            "3.4.1: deflection vs command fits of table 3.6 with 95 % confidence intervals",
-            (
-                "gauge",
-                "slope_lsq_mm_per_command",
-                "slope_ci_low",
-                "slope_ci_high",
-                "a_printed_mm_per_command",
-                "printed_inside_ci",
-                "residual_rms_mm",
-                "r_squared",
-            ),
-            tuple(rows),
-        )
-    )
 
 
-def _voltage_fits(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
-    """E 3.20-3.22 from the twin's actuation sweep (commands 8..43, each settled): gauge volts vs command."""
-    from flexdigit.twin.records import actuation_sweep
-
-    sweep = actuation_sweep(samples=5 if ctx.fast else 20, seed=ctx.seed, params=ctx.params)
-    commands = sweep.column("command").astype(float)
+def _voltage_fits(fits: list, e: list[Entry]) -> None:
+    """E 3.20-3.22 from the twin's actuation sweep, beside the printed lines."""
     printed = thesis_value("conversion.v_sg_fit")
-    rows = []
-    for k in range(3):
-        r = fit_linear(commands, sweep.column(f"gauge{k + 1}_v"))
-        slope_p, offset_p = float(printed[k]["slope"]), float(printed[k]["offset"])
-        rows.append(
-            (k + 1, slope_p, r.slope.value, r.slope.ci_low, r.slope.ci_high, offset_p, r.intercept.value)
-            + (r.intercept.ci_low, r.intercept.ci_high, 1e3 * r.rms, r.r_squared)
-        )
+    for k, r in enumerate(fits):
         e.append(
             compare(
                 f"identify.v_sg_fit.sg{k + 1}.slope_v_per_command",
                 "3.4.3",
-                slope_p,
+                float(printed[k]["slope"]),
                 r.slope.value,
                 "V/command",
                 rtol=0.03,
@@ -648,31 +444,3 @@ def _voltage_fits(ctx: ReportContext, chapter: Chapter, e: list[Entry]) -> None:
                 discrepancy_note="The twin's calibration does not reproduce this fit of figure 3.17.",
             )
         )
-    chapter.tables.append(
-        ResultTable(
-            "identify.voltage_fits",
-            "3.4.3: gauge voltage vs command (E 3.20-3.22) fitted to the twin's actuation sweep, 95 % intervals",
-            (
-                "gauge",
-                "slope_printed_v_per_command",
-                "slope_ours_v_per_command",
-                "slope_ci_low",
-                "slope_ci_high",
-                "offset_printed_v",
-                "offset_ours_v",
-                "offset_ci_low",
-                "offset_ci_high",
-                "residual_rms_mv",
-                "r_squared",
-            ),
-            tuple(rows),
-        )
-    )
-
-
-def _intervals(r) -> tuple[float, float, float, float]:
-    """The 95 % intervals of wn and zeta of an lsq identification (NaN where the method gives none)."""
-    if not r.estimates:
-        return (math.nan,) * 4
-    w, z = r.estimates["wn_rad_s"], r.estimates["zeta"]
-    return w.ci_low, w.ci_high, z.ci_low, z.ci_high

@@ -26,4 +26,3 @@ def __getattr__(name: str):
     if name in _LAZY:
         return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'flexdigit.twin' has no attribute {name!r}")
-
