@@ -89,6 +89,11 @@ def _sampling(study, e: list) -> None:
             "plant the thesis's 'above 5 ms do not characterize the system' is a matter of accuracy, not stability.",
         )
     )
+    _euler_entries(study, e)
+
+
+def _euler_entries(study, e: list) -> None:
+    """Forward Euler's stability limit, its 20 ms loop and the step halving of 5.1.2."""
     limit = study.euler_limit_s
     e.append(
         compare(

@@ -159,6 +159,16 @@ def _pipeline_entries(exp, e: list) -> None:
             "among equals; only 1e-1..1e-3 stop training early and cost accuracy.",
         ),
     ]
+    _variant_entries(exp, e)
+
+
+def _variant_entries(exp, e: list) -> None:
+    """The no-load variant (chapter 6) and the share of small percentage errors the thesis describes."""
+    key = exp.key
+    chap = TITLES[key][2]
+    sec = f"tactile.{key}"
+    table_section = f"{chap}.{'9' if chap == '6' else '5'}"
+    opt = exp.at_thesis_optimum
     if chap == "6":
         e.append(
             results.new(
