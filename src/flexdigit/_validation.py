@@ -576,6 +576,23 @@ class Array(Constraint):
         return np.linspace(lo + (hi - lo) / 4, hi - (hi - lo) / 4, size).reshape(dims)
 
 
+class NoValidation(Constraint):
+    """Any value: the function checks this parameter itself (a system converted by ``as_statespace``, a dataset
+    read from its file). Declared so that every parameter of a decorated function is declared."""
+
+    def __repr__(self) -> str:
+        return "NoValidation()"
+
+    def describe(self) -> str:
+        return "anything"
+
+    def convert(self, value):
+        return value
+
+    def valid_value(self):
+        return None
+
+
 def _constraints(declared) -> list:
     """A parameter's declaration as a list of :class:`Constraint` (``None`` allowed if listed)."""
     items = declared if isinstance(declared, list | tuple) else [declared]

@@ -34,3 +34,11 @@ class RigError(FlexdigitError, OSError):
 
 class OutputExistsError(FlexdigitError, FileExistsError):
     """An output file exists and would be overwritten; the message names it and says ``--force``."""
+
+
+class ConvergenceWarning(UserWarning):
+    """An iterative solver stopped before meeting its tolerance; the result carries ``converged=False``.
+
+    The same role as scikit-learn's ``ConvergenceWarning`` (flexdigit's own, so the twin does not import
+    scikit-learn): the answer is returned with its flag, never silently as if it had converged.
+    """

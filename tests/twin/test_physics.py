@@ -195,3 +195,18 @@ def test_time_integration_is_second_order_in_the_step():
     ref = tip_at(0.0001)
     e1, e2 = (np.linalg.norm(tip_at(h) - ref) for h in (0.004, 0.002))
     assert 3.0 < e1 / e2 < 5.0
+
+
+def test_unconverged_static_solve_says_so():
+    # issue 15: an iterative solver that stops unconverged says so (flag and warning), never a silent answer;
+    # 2 Newton steps cannot bend a strip 90 degrees (a large-deflection problem), 80 do
+    from flexdigit.errors import ConvergenceWarning
+    from flexdigit.twin.digit import Chain
+
+    chain = Chain.uniform(0.24, 0.012, 12)
+    with pytest.warns(ConvergenceWarning, match="did not meet its tolerance in 2 iterations"):
+        short = chain.solve_static(tip_moment_nm=1.5708 * 0.012 / 0.24, max_iter=2)
+    assert not short.converged
+    full = chain.solve_static(tip_moment_nm=1.5708 * 0.012 / 0.24)
+    assert full.converged and full.iterations < 80
+    assert abs(full.tip_m[0, 0] - short.tip_m[0, 0]) > 1e-4  # the unconverged answer really is off

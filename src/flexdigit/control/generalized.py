@@ -18,11 +18,12 @@ Units: ``u`` is the servo command (0..254, about the equilibrium), ``w``, ``y`` 
 from __future__ import annotations
 
 import math
+from numbers import Integral, Real
 
 import control as ct
 import numpy as np
 
-from flexdigit._validation import check_positive, check_real
+from flexdigit._validation import Interval, NoValidation, check_positive, check_real, validate_params
 from flexdigit.errors import DesignError
 
 __all__ = [
@@ -136,6 +137,16 @@ def thesis_generalized_plant(plant, weight) -> ct.StateSpace:
     return ct.ss(AP, BP, CP, DP, inputs=["w", "u"], outputs=["z", "y"], name="P")
 
 
+@validate_params(
+    {
+        "P": [NoValidation()],
+        "eps_u": [Interval(Real, 0, None)],
+        "eps_noise": [Interval(Real, 0, None)],
+        "nmeas": [Interval(Integral, 1, None)],
+        "ncon": [Interval(Integral, 1, None)],
+    },
+    error=DesignError,
+)
 def regularise(P, eps_u: float, eps_noise: float = 0.0, *, nmeas: int = 1, ncon: int = 1) -> ct.StateSpace:
     """Make a singular generalized plant regular: append ``eps_u * u`` to ``z`` and ``eps_noise * v`` to ``y``.
 
@@ -155,8 +166,6 @@ def regularise(P, eps_u: float, eps_noise: float = 0.0, *, nmeas: int = 1, ncon:
         Inputs ``[w; v; u]`` (``v`` only if ``eps_noise > 0``), outputs ``[z; z_u; y]`` (``z_u`` only if
         ``eps_u > 0``).
     """
-    eps_u = check_real(eps_u, "eps_u", "regularise", low=0.0, error=DesignError)
-    eps_noise = check_real(eps_noise, "eps_noise", "regularise", low=0.0, error=DesignError)
     P = as_statespace(P, "P", siso=False)
     _check_partition(P, nmeas, ncon)
     nw, nz = P.ninputs - ncon, P.noutputs - nmeas
@@ -205,8 +214,7 @@ def mixed_sensitivity_plant(plant, w1=None, w2=None, w3=None) -> ct.StateSpace:
 
 
 def _check_partition(P, nmeas: int, ncon: int) -> None:
-    if not (isinstance(nmeas, int) and isinstance(ncon, int)) or nmeas < 1 or ncon < 1:
-        raise DesignError(f"nmeas and ncon must be positive integers. Got nmeas={nmeas!r}, ncon={ncon!r} instead.")
+    """``nmeas`` and ``ncon`` (declared positive integers) leave at least one w and one z."""
     if P.ninputs <= ncon or P.noutputs <= nmeas:
         raise DesignError(
             f"The generalized plant has {P.ninputs} inputs and {P.noutputs} outputs, too few for "

@@ -19,12 +19,13 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
+from numbers import Integral, Real
 
 import control as ct
 import numpy as np
 import scipy.linalg
 
-from flexdigit._validation import check_int, check_real
+from flexdigit._validation import Array, Interval, NoValidation, Options, validate_params
 from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.generalized import as_statespace, regularise
 from flexdigit.errors import DesignError
@@ -176,6 +177,21 @@ def _upper_gamma(Ps, nmeas, ncon):
     return 1e12
 
 
+#: The partition of a generalized plant: measurements and control inputs (declared once, for every route).
+_PARTITION = {"P": [NoValidation()], "nmeas": [Interval(Integral, 1, None)], "ncon": [Interval(Integral, 1, None)]}
+_POSITIVE = Interval(Real, 0, None, closed="neither")
+
+
+@validate_params(
+    _PARTITION
+    | {
+        "gamma": [_POSITIVE, None],
+        "margin": [Interval(Real, 0, None)],
+        "gtol": [Interval(Real, 0, 0.5, closed="right")],
+        "gamma_opt": [_POSITIVE, None],
+    },
+    error=DesignError,
+)
 def hinf_riccati(
     P,
     nmeas: int = 1,
@@ -225,8 +241,6 @@ def hinf_riccati(
 
 def _riccati_design(P, nmeas, ncon, gamma, margin, gtol, gamma_opt) -> HinfDesign:
     P = as_statespace(P, "P", siso=False)
-    margin = check_real(margin, "margin", "hinf_riccati", low=0.0, error=DesignError)
-    gtol = check_real(gtol, "gtol", "hinf_riccati", low=0.0, low_open=True, high=0.5, error=DesignError)
     _check_regular(P, nmeas, ncon)
     Ps, sc = _scale(P, nmeas, ncon)
     if gamma_opt is None:
@@ -234,10 +248,9 @@ def _riccati_design(P, nmeas, ncon, gamma, margin, gtol, gamma_opt) -> HinfDesig
         out = _sb10ad(Ps, nmeas, ncon, g_up, job=1, gtol=gtol)
         gamma_opt = float(out[0])
     else:
-        gamma_opt = check_real(gamma_opt, "gamma_opt", "hinf_riccati", low=0.0, low_open=True, error=DesignError)
         out = None
     if gamma is not None:
-        level = check_real(gamma, "gamma", "hinf_riccati", low=0.0, low_open=True, error=DesignError)
+        level = gamma
         if level < gamma_opt * (1 - 2 * gtol):
             raise DesignError(
                 f"The 'gamma' parameter of hinf_riccati must be feasible: >= the optimum {gamma_opt:.6g} "
@@ -263,6 +276,16 @@ def hinfsyn_plain(P, nmeas: int = 1, ncon: int = 1):
     return ct.hinfsyn(P, nmeas, ncon)
 
 
+@validate_params(
+    _PARTITION
+    | {
+        "solver": [Options(("CLARABEL", "SCS"))],
+        "strict": [_POSITIVE],
+        "iterations": [Interval(Integral, 1, None)],
+        "centre_margin": [Interval(Real, 0, 0.5, closed="right")],
+    },
+    error=DesignError,
+)
 def hinf_lmi(
     P,
     nmeas: int = 1,
@@ -325,10 +348,6 @@ def hinf_lmi(
     """
     P = as_statespace(P, "P", siso=False)
     nw, nz = _partition(P, nmeas, ncon)
-    iterations = check_int(iterations, "iterations", "hinf_lmi", low=1, error=DesignError)
-    centre_margin = check_real(
-        centre_margin, "centre_margin", "hinf_lmi", low=0.0, low_open=True, high=0.5, error=DesignError
-    )
     Ps, _ = _scale(P, nmeas, ncon)
     # gamma scale: normalise z so that the optimum is O(1) (the thesis problem has gamma ~ 0.02)
     zscale = _upper_gamma(Ps, nmeas, ncon) / 1.05 if Ps.nstates else 1.0
@@ -481,6 +500,16 @@ def _lmi_centre(Ps, nw, nz, solver, strict, gamma) -> tuple[np.ndarray, np.ndarr
     return np.asarray(R.value), np.asarray(S.value)
 
 
+@validate_params(
+    {
+        "P_singular": [NoValidation()],
+        "eps_values": [Array(ndim=1, min_length=1, low=0, low_open=True)],
+        "margin": [Interval(Real, 0, None)],
+        "nmeas": [Interval(Integral, 1, None)],
+        "ncon": [Interval(Integral, 1, None)],
+    },
+    error=DesignError,
+)
 def regularisation_path(P_singular, eps_values, *, margin: float = 0.0, nmeas: int = 1, ncon: int = 1):
     """Design for a decreasing sequence of ``eps_u`` and return one row per level.
 
@@ -506,10 +535,11 @@ def regularisation_path(P_singular, eps_values, *, margin: float = 0.0, nmeas: i
     return rows
 
 
+@validate_params({"K": [NoValidation()], "order": [Interval(Integral, 1, None)]}, error=DesignError)
 def reduce_controller(K, order: int) -> ct.StateSpace:
     """Balanced truncation of a stable controller to ``order`` states (``control.balred``)."""
     K = as_statespace(K, "K", siso=False)
-    if not isinstance(order, int) or not 0 < order <= K.nstates:
+    if order > K.nstates:
         raise DesignError(f"The 'order' parameter must be an integer in [1, {K.nstates}]. Got {order!r} instead.")
     if K.nstates and np.max(np.linalg.eigvals(K.A).real) >= 0:
         raise DesignError("Balanced truncation needs a stable controller; this one has unstable poles.")

@@ -39,13 +39,14 @@ Examples
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg.lapack import dgesv as _gesv
 
 from flexdigit._validation import check_array, check_int, check_positive, check_real, check_values
-from flexdigit.errors import ParameterError
+from flexdigit.errors import ConvergenceWarning, ParameterError
 
 G_STANDARD_M_S2 = 9.80665
 
@@ -82,6 +83,9 @@ class StaticSolution:
         Tip position in the (a, b) axes (m).
     iterations : int
         Newton iterations used.
+    converged : bool
+        Whether the Newton iteration met its tolerance within ``max_iter`` (else a
+        :class:`~flexdigit.errors.ConvergenceWarning` was issued).
     """
 
     psi_rad: np.ndarray
@@ -90,6 +94,7 @@ class StaticSolution:
     tension_n: np.ndarray
     tip_m: np.ndarray
     iterations: int
+    converged: bool = True
 
 
 class Chain:
@@ -294,6 +299,11 @@ class Chain:
             disagree.
         ArithmeticError
             If the Newton iteration diverges on valid inputs.
+
+        Warns
+        -----
+        ConvergenceWarning
+            If it has not met ``tol`` after ``max_iter`` iterations: the result says so (``converged=False``).
         """
         owner = "Chain.solve_static"
         if (load_s_m is None) != (load_force_ab_n is None):
@@ -374,7 +384,7 @@ class Chain:
         e = self.eccentricity
         kc = self.cable_stiffness
         scale = max(float(np.max(self.stiffness)), 1e-300)
-        iterations = 0
+        iterations, converged = 0, False
         for iterations in range(1, max_iter + 1):  # noqa: B007 (reported below)
             s, c = np.sin(psi), np.cos(psi)
             res = psi @ self.k_psi + s * ga - c * gb
@@ -391,11 +401,20 @@ class Chain:
             step *= np.minimum(1.0, max_step_rad / np.maximum(biggest, 1e-300))
             psi -= step
             if np.max(np.abs(res)) < tol * scale and np.max(biggest) < 1e-9:
+                converged = True
                 break
         tension = self.cable_tension(psi[:, -1], short)[0] if has_cable else np.zeros(b)
         if not np.all(np.isfinite(psi)):
             bad = int(np.sum(~np.all(np.isfinite(psi), axis=1)))
             raise ArithmeticError(f"static solve diverged (non-finite angles) in {bad} of {b} load cases")
+        if not converged:
+            warnings.warn(
+                f"{owner}: the Newton iteration did not meet its tolerance in {max_iter} iterations (largest "
+                f"residual {np.max(np.abs(res)) / scale:.3g} of the stiffness, last step {np.max(biggest):.3g} rad); "
+                "the solution has converged=False",
+                ConvergenceWarning,
+                stacklevel=2,
+            )
         return StaticSolution(
             psi_rad=psi,
             curvature_1_m=self.curvature_at_gauges(psi),
@@ -403,6 +422,7 @@ class Chain:
             tension_n=tension,
             tip_m=self.tip(psi),
             iterations=iterations,
+            converged=converged,
         )
 
     # ----------------------------------------------------------------------------------------------- dynamics
