@@ -21,6 +21,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_calibrate",
     "benchmarks.bench_live",
     "benchmarks.bench_studies",
+    "benchmarks.bench_report",
 )
 
 

@@ -14,8 +14,7 @@ from flexdigit.identify.filters import (
     svd_filter,
 )
 from flexdigit.identify.fit import SecondOrderFit, second_order_response
-
-from .conftest import DIGIT
+from oracles import DIGIT
 
 
 def _damped_sinusoid(seed, noise=0.05):

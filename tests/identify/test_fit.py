@@ -11,8 +11,7 @@ from flexdigit.identify.fit import SecondOrderFit, fit_arx, fit_linear, second_o
 from flexdigit.identify.identification import identify
 from flexdigit.identify.timeseries import TimeSeries
 from flexdigit.reference import thesis_value
-
-from .conftest import DIGIT, SERVO, release_record, step_record
+from oracles import DIGIT, SERVO, release_record, step_record
 
 SEEDS = range(5)
 

@@ -10,17 +10,9 @@ import numpy as np
 import pytest
 
 from flexdigit.rig.base import Rig
+from oracles import GAIN_V_PER_NM, GAUGES_M, cantilever_gauges_v  # noqa: F401 (used by test modules)
 
-GAUGES_M = np.array([0.045, 0.135, 0.225])  # table 3.5
-GAIN_V_PER_NM = np.array([40.0, 45.0, 50.0])  # arbitrary, distinct per channel
 NOISE_V = 0.002
-
-
-def cantilever_gauges_v(position_from_base_m, mass_kg) -> np.ndarray:
-    """Closed-form gauge volts, shape (n, 3): gain * m g * max(a - x_i, 0)."""
-    a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))[:, None]
-    m = np.atleast_1d(np.asarray(mass_kg, dtype=float))[:, None]
-    return GAIN_V_PER_NM * m * 9.81 * np.clip(a - GAUGES_M, 0.0, None)
 
 
 class CantileverRig(Rig):

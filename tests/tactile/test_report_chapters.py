@@ -15,8 +15,6 @@ def test_tactile_chapters_build_in_fast_mode(tmp_path):
     # table 6.1 and 7.1 sample counts as printed (1275, 1500)
     assert entries["non_actuated.samples"]["status"] == "match"
     assert entries["actuated.samples"]["status"] == "match"
-    # every discrepancy carries its explanation (results.compare refuses one without)
-    assert all(e["note"] for e in entries.values() if e["status"] == "discrepancy")
     for name in ("ch6-tactile-raw", "ch6-tactile-predicted-actual", "ch7-tactile-bound", "ch7-tactile-percent-error"):
         assert (tmp_path / "figures" / f"{name}.png").stat().st_size > 1000
     # the actuated noise revisited: the calibrated friction and its servo-angle reading are reported

@@ -9,12 +9,12 @@ import math
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
-from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
 
+import oracles
 from flexdigit.models.beam import Cantilever
 from flexdigit.params import RigParams
 from flexdigit.twin.digit import Chain, DynamicState
+from oracles import elastica_tip_load
 
 SMALL_DEFLECTION_RTOL = 0.005
 ARC_RTOL = 0.005
@@ -24,25 +24,6 @@ N_CELLS = 12  # the resolution these tolerances are checked at
 
 L, EI = 0.24, 205e9 * 12.7e-3 * 0.381e-3**3 / 12  # the digit's strip (table 3.7)
 MU = 7850.0 * 12.7e-3 * 0.381e-3  # kg/m
-
-
-def elastica_tip_load(alpha2: float) -> tuple[float, float, float]:
-    """Cantilever (L = EI = 1) under a dead tip load P perpendicular to its axis, PL^2/EI = alpha2.
-
-    Bisshopp & Drucker (1945): with k^2 = (1 + sin theta0)/2 and sin phi1 = 1/(sqrt(2) k),
-    sqrt(alpha2) = K(k) - F(phi1, k); tip deflection 1 - (2/alpha)(E(k) - E(phi1, k)); horizontal tip
-    position sqrt(2 sin theta0)/alpha. Returns (x_tip, y_tip, theta0).
-    """
-    a = math.sqrt(alpha2)
-
-    def f(k):
-        return ellipk(k * k) - ellipkinc(math.asin(1 / (math.sqrt(2) * k)), k * k) - a
-
-    k = brentq(f, 1 / math.sqrt(2) + 1e-12, 1 - 1e-12, xtol=1e-15)
-    phi1 = math.asin(1 / (math.sqrt(2) * k))
-    theta0 = math.asin(2 * k * k - 1)
-    y = 1 - 2 / a * (ellipe(k * k) - ellipeinc(phi1, k * k))
-    return math.sqrt(2 * math.sin(theta0)) / a, y, theta0
 
 
 def tip_load_error(n: int) -> float:
@@ -105,7 +86,7 @@ def test_elastica_formula_against_quadrature():
 
 
 def euler_bernoulli_first_frequency() -> float:
-    return 1.8751040687**2 * math.sqrt(EI / (MU * L**4))  # clamped-free, first root of cos cosh = -1
+    return oracles.euler_bernoulli_first_frequency(EI, MU, L)  # clamped-free, first root of cos cosh = -1
 
 
 def test_first_bending_frequency_matches_euler_bernoulli():
