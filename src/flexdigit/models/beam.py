@@ -30,10 +30,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_choice, check_positive, check_real
+from flexdigit._validation import Interval, Options, check_array, check_param, check_real, declare, validate_fields
 from flexdigit.params import RigParams
 
 #: First root of ``1 + cos(b) cosh(b) = 0``, the clamped-free beam's first mode.
@@ -48,6 +49,7 @@ def _out(a: np.ndarray):
     return a if a.ndim else float(a)
 
 
+@declare
 @dataclass(frozen=True)
 class Cantilever:
     """A uniform cantilever, clamped at x = 0.
@@ -69,11 +71,15 @@ class Cantilever:
     thickness_m: float
     mass_per_length_kg_m: float = 0.0
 
+    _parameter_constraints = {
+        "length_m": [Interval(Real, 0, None, closed="neither")],
+        "ei_n_m2": [Interval(Real, 0, None, closed="neither")],
+        "thickness_m": [Interval(Real, 0, None, closed="neither")],
+        "mass_per_length_kg_m": [Interval(Real, 0, None)],
+    }
+
     def __post_init__(self) -> None:
-        owner = type(self).__name__
-        for name in ("length_m", "ei_n_m2", "thickness_m"):
-            check_positive(getattr(self, name), name, owner)
-        check_real(self.mass_per_length_kg_m, "mass_per_length_kg_m", owner, low=0.0)
+        validate_fields(self)
 
     @classmethod
     def from_params(cls, params: RigParams | None = None, *, length: str = "strip") -> Cantilever:
@@ -85,7 +91,7 @@ class Cantilever:
             ``"strip"``: the 3 x 80 mm = 240 mm of steel; ``"digit"``: ``l`` = 270 mm of table 3.7 (E 3.14).
         """
         p = params or RigParams()
-        check_choice(length, "length", ("strip", "digit"), "Cantilever.from_params")
+        check_param(length, Options(("strip", "digit")), "length", "Cantilever.from_params")
         g = p.geometry
         return cls(
             length_m=g.strip_length_m if length == "strip" else g.digit_length_m,

@@ -20,13 +20,16 @@ Examples
 from __future__ import annotations
 
 import math
+from numbers import Real
 
 import control
 import numpy as np
 
-from flexdigit._validation import check_positive, check_real
+from flexdigit._validation import Interval, validate_params
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
+
+_POSITIVE = Interval(Real, 0, None, closed="neither")
 
 
 def zeta_from_overshoot(percent_overshoot):
@@ -114,11 +117,12 @@ def wn_from_settling_time(settling_time_s, zeta):
     return out if out.ndim else float(out)
 
 
+@validate_params(
+    {"wn_rad_s": [Interval(Real, 0, None, closed="neither")], "zeta": [Interval(Real, 0, None, closed="neither")]}
+)
 def settling_time_from_wn(wn_rad_s, zeta):
     """The 2 % settling time the thesis's formula implies, ``Ts = 4 / (zeta wn)`` (s)."""
-    wn = check_positive(wn_rad_s, "wn_rad_s", "settling_time_from_wn")
-    z = check_positive(zeta, "zeta", "settling_time_from_wn")
-    return 4.0 / (z * wn)
+    return 4.0 / (zeta * wn_rad_s)
 
 
 def damped_frequency(wn_rad_s, zeta):
@@ -137,6 +141,13 @@ def natural_frequency_from_damped(wd_rad_s, zeta):
     return out if out.ndim else float(out)
 
 
+@validate_params(
+    {
+        "wn_rad_s": [Interval(Real, 0, None, closed="neither")],
+        "zeta": [Interval(Real, 0, None)],
+        "gain": [Interval(Real)],
+    }
+)
 def digit_tf(wn_rad_s: float, zeta: float, gain: float = 1.0) -> control.TransferFunction:
     """``E(s) = gain wn^2 / (s^2 + 2 zeta wn s + wn^2)`` (3.1.2).
 
@@ -158,10 +169,7 @@ def digit_tf(wn_rad_s: float, zeta: float, gain: float = 1.0) -> control.Transfe
     >>> float(digit_tf(10.0, 0.1).dcgain())
     1.0
     """
-    wn = check_positive(wn_rad_s, "wn_rad_s", "digit_tf")
-    z = check_real(zeta, "zeta", "digit_tf", low=0.0)
-    k = check_real(gain, "gain", "digit_tf")
-    return control.tf([k * wn**2], [1.0, 2.0 * z * wn, wn**2])
+    return control.tf([gain * wn_rad_s**2], [1.0, 2.0 * zeta * wn_rad_s, wn_rad_s**2])
 
 
 def digit_tf_from_params(params: RigParams | None = None, *, housing: bool = True) -> control.TransferFunction:

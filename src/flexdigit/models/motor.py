@@ -30,12 +30,14 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
+from numbers import Real
 
 import control
 
-from flexdigit._validation import check_choice, check_positive, check_real
+from flexdigit._validation import Interval, check_choice, declare, validate_fields
 
 
+@declare
 @dataclass(frozen=True)
 class DCMotor:
     """Parameters of table 3.3, in SI, with example values (the thesis gives none).
@@ -72,19 +74,20 @@ class DCMotor:
     efficiency: float = 0.6
     load_inertia_kg_m2: float = 2.0e-6
 
+    _parameter_constraints = {
+        "torque_constant_nm_per_a": [Interval(Real, 0, None, closed="neither")],
+        "back_emf_v_s_per_rad": [Interval(Real, 0, None, closed="neither")],
+        "rotor_inertia_kg_m2": [Interval(Real, 0, None, closed="neither")],
+        "resistance_ohm": [Interval(Real, 0, None, closed="neither")],
+        "inductance_h": [Interval(Real, 0, None)],
+        "viscous_damping_nm_s_per_rad": [Interval(Real, 0, None)],
+        "gear_ratio": [Interval(Real, 0, None, closed="neither")],
+        "efficiency": [Interval(Real, 0, 1, closed="right")],
+        "load_inertia_kg_m2": [Interval(Real, 0, None)],
+    }
+
     def __post_init__(self) -> None:
-        owner = type(self).__name__
-        for name in (
-            "torque_constant_nm_per_a",
-            "back_emf_v_s_per_rad",
-            "rotor_inertia_kg_m2",
-            "resistance_ohm",
-            "gear_ratio",
-        ):
-            check_positive(getattr(self, name), name, owner)
-        for name in ("inductance_h", "viscous_damping_nm_s_per_rad", "load_inertia_kg_m2"):
-            check_real(getattr(self, name), name, owner, low=0.0)
-        check_real(self.efficiency, "efficiency", owner, low=0.0, high=1.0, low_open=True)
+        validate_fields(self)
 
     @property
     def reflected_inertia_kg_m2(self) -> float:

@@ -26,11 +26,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Real
 
 import control
 import numpy as np
 
-from flexdigit._validation import check_choice, check_real
+from flexdigit._validation import Interval, check_choice, declare, validate_fields
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
 
@@ -75,6 +76,7 @@ def servo_tf(params: RigParams | None = None, *, form: str = "consistent") -> co
     return unit * params.actuator.rad_per_command
 
 
+@declare
 @dataclass(frozen=True)
 class PotentiometerMap:
     """The servo potentiometer's line, ``theta_M [deg] = slope_deg_per_v * V + offset_deg`` (3.2.4).
@@ -98,9 +100,10 @@ class PotentiometerMap:
     slope_deg_per_v: float
     offset_deg: float
 
+    _parameter_constraints = {"slope_deg_per_v": [Interval(Real)], "offset_deg": [Interval(Real)]}
+
     def __post_init__(self) -> None:
-        check_real(self.slope_deg_per_v, "slope_deg_per_v", type(self).__name__)
-        check_real(self.offset_deg, "offset_deg", type(self).__name__)
+        validate_fields(self)
         if self.slope_deg_per_v == 0:
             from flexdigit.errors import ParameterError
 
