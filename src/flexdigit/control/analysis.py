@@ -69,6 +69,18 @@ def loop_maps(plant, controller) -> LoopMaps:
     >>> round(float(ct.dcgain(maps.T_zw)), 6)    # S(0) = 1/(1 + 1)
     0.5
     """
+    Acl, Bw, Cy, Dy, Ux, Uxk, Uw = _closed_loop(plant, controller)
+    T_yw = ct.ss(Acl, Bw, Cy, Dy)
+    T_zw = ct.ss(Acl, Bw, -Cy, np.eye(1) - Dy)  # 4.4: z = w - y
+    T_uw = ct.ss(Acl, Bw, np.hstack([Ux, Uxk]), Uw)  # 4.5: u
+    # 4.6: p enters the controller input with a minus sign (additive Delta between u and y), q = u
+    Bp = -Bw
+    T_pq = ct.ss(Acl, Bp, np.hstack([Ux, Uxk]), -Uw)
+    return LoopMaps(T_zw, T_yw, T_uw, T_pq, np.linalg.eigvals(Acl) if Acl.size else np.array([]))
+
+
+def _closed_loop(plant, controller):
+    """The closed loop ``u = K (w - y)`` in state space: ``Acl, Bw, Cy, Dy`` (w to y) and the rows giving u."""
     G = as_statespace(plant, "plant")
     K = as_statespace(controller, "controller")
     A, B, C, D = G.A, G.B, G.C, G.D
@@ -83,13 +95,20 @@ def loop_maps(plant, controller) -> LoopMaps:
     Bw = np.vstack([B @ Uw, Bk @ Ew])
     Cy = np.hstack([C + D @ Ux, D @ Uxk])
     Dy = D @ Uw
-    T_yw = ct.ss(Acl, Bw, Cy, Dy)
-    T_zw = ct.ss(Acl, Bw, -Cy, np.eye(1) - Dy)  # 4.4: z = w - y
-    T_uw = ct.ss(Acl, Bw, np.hstack([Ux, Uxk]), Uw)  # 4.5: u
-    # 4.6: p enters the controller input with a minus sign (additive Delta between u and y), q = u
-    Bp = -Bw
-    T_pq = ct.ss(Acl, Bp, np.hstack([Ux, Uxk]), -Uw)
-    return LoopMaps(T_zw, T_yw, T_uw, T_pq, np.linalg.eigvals(Acl) if Acl.size else np.array([]))
+    return Acl, Bw, Cy, Dy, Ux, Uxk, Uw
+
+
+def closed_loop_poles(plant, controller) -> np.ndarray:
+    """The poles of the loop ``u = K (w - y)`` (those of :func:`loop_maps`, without building its four systems).
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> closed_loop_poles(ct.tf([1.0], [1.0, 1.0]), ct.tf([1.0], [1.0])).tolist()     # 1/(s + 1) with K = 1
+    [-2.0]
+    """
+    Acl = _closed_loop(plant, controller)[0]
+    return np.linalg.eigvals(Acl) if Acl.size else np.array([])
 
 
 def is_stable(sys) -> bool:
@@ -378,8 +397,7 @@ def monte_carlo_stability(plant_factory, controller, spreads: dict, n: int = 500
     worst, worst_factors = -math.inf, None
     for _ in range(n):
         factors = {k: 1.0 + spreads[k] * rng.uniform(-1.0, 1.0) for k in names}
-        maps = loop_maps(plant_factory(**factors), K)
-        r = float(np.max(maps.poles.real))
+        r = float(np.max(closed_loop_poles(plant_factory(**factors), K).real))
         stable += r < 0
         if r > worst:
             worst, worst_factors = r, factors
