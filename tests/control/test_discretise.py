@@ -20,6 +20,14 @@ from flexdigit.reference import thesis_value
 K39 = ct.tf(thesis_value("hinf.k_39hz_num"), thesis_value("hinf.k_39hz_den"))  # E 4.x, 4.7 as printed
 BEAM = ct.tf([103.3], [1, 0.543, 103.3])  # the lightly damped digit factor of the printed plant (reference note)
 
+# Tolerances, each with the reason for its size
+EXACT_RTOL = 1e-12  # the same map computed two ways (ours and SciPy's or python-control's): rounding only
+EXACT_ATOL = 1e-12  # ... for entries that are zero
+SIMULATION_RTOL = 1e-10  # a recursion run over 50 samples against python-control's forced_response
+POLE_MAP_RTOL = 1e-6  # poles of the discretised system against the closed-form s -> z map of the continuous ones
+PRINTED_POLE_RTOL = 1e-3  # 245.04, the printed pole, to its 4 digits
+ZERO_LIMIT_RTOL = 1e-2  # 2 zeta/wn from the printed plant's rounded beam factor
+
 
 @pytest.mark.parametrize("T", [0.001, 0.005, 0.02])
 def test_forward_euler_equals_scipy_euler(T):
@@ -27,8 +35,8 @@ def test_forward_euler_equals_scipy_euler(T):
     ss = ct.ss(K39)
     Ad, Bd, Cd, Dd, _ = signal.cont2discrete((ss.A, ss.B, ss.C, ss.D), T, method="euler")
     ours = discretise(ss, T, "forward_euler")
-    np.testing.assert_allclose(ours.A, Ad, rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(ours.B, Bd, rtol=1e-12)
+    np.testing.assert_allclose(ours.A, Ad, rtol=EXACT_RTOL, atol=EXACT_ATOL)
+    np.testing.assert_allclose(ours.B, Bd, rtol=EXACT_RTOL)
     assert ours.dt == T and isinstance(discretise(K39, T, "forward_euler"), ct.TransferFunction)
 
 
@@ -37,7 +45,7 @@ def test_poles_land_where_the_closed_form_map_says(method):
     T = 0.005
     poles_d = np.sort_complex(discretise(K39, T, method).poles())
     expected = np.sort_complex(map_s_to_z(K39.poles(), T, method))
-    np.testing.assert_allclose(poles_d, expected, rtol=1e-6)
+    np.testing.assert_allclose(poles_d, expected, rtol=POLE_MAP_RTOL)
 
 
 @pytest.mark.parametrize("method", ["tustin", "forward_euler", "backward_euler"])
@@ -73,9 +81,9 @@ def test_forward_euler_limits_of_the_39hz_design():
     # issue 6 / 5.1.2: the fast pole leaves the unit circle above 2/245 s, the beam-mode zeros above 2 zeta/wn
     fast = forward_euler_stability_limit_s(K39.poles())
     zeros = forward_euler_stability_limit_s(K39.zeros())
-    assert fast == pytest.approx(2 / 245.04, rel=1e-3)  # 8.16 ms
+    assert fast == pytest.approx(2 / 245.04, rel=PRINTED_POLE_RTOL)  # 8.16 ms
     # 5.26 ms from table 4.3's zeros; the 4-figure printed coefficients put the zero at -0.2731, hence 1 %
-    assert zeros == pytest.approx(2 * 0.2715 / (0.2715**2 + 10.1594**2), rel=1e-2)
+    assert zeros == pytest.approx(2 * 0.2715 / (0.2715**2 + 10.1594**2), rel=ZERO_LIMIT_RTOL)
     # and the numerical discretisation agrees on either side of the limit
     assert np.max(np.abs(discretise(K39, 0.98 * fast, "forward_euler").poles())) < 1
     assert np.max(np.abs(discretise(K39, 1.02 * fast, "forward_euler").poles())) > 1
@@ -87,11 +95,11 @@ def test_appendix_e_difference_equation_is_tustin(A, B, T):
     f = FirstOrderTustin(A, B, T)
     oracle = ct.sample_system(ct.tf([A, 1.0], [B, 1.0]), T, method="tustin")  # python-control's bilinear
     num, den = oracle.num[0][0], oracle.den[0][0]
-    np.testing.assert_allclose([f.b0, f.b1], num / den[0], rtol=1e-12)
-    np.testing.assert_allclose(f.a1, den[1] / den[0], rtol=1e-12)
+    np.testing.assert_allclose([f.b0, f.b1], num / den[0], rtol=EXACT_RTOL)
+    np.testing.assert_allclose(f.a1, den[1] / den[0], rtol=EXACT_RTOL)
     e = np.sin(np.arange(50) * 0.3) + 1.0
     _, u = ct.forced_response(oracle, np.arange(50) * T, e)
-    np.testing.assert_allclose(f.simulate(e), u, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(f.simulate(e), u, rtol=SIMULATION_RTOL, atol=EXACT_ATOL)
 
 
 def test_step_halving_on_forward_euler_of_a_first_order_lag():

@@ -23,6 +23,16 @@ from flexdigit.reference import thesis_complex, thesis_value
 
 warnings.filterwarnings("ignore", category=UserWarning)
 
+# Tolerances, each with the reason for its size
+GAMMA_ROUTE_RTOL = 0.01  # issue 5: the Riccati and LMI routes agree within 1 %
+SLICOT_GAMMA_RTOL = 2e-3  # the bisection's gtol (1e-3) twice over
+PRINTED_4_DIGITS_RTOL = 1e-3  # a figure printed to 4 significant digits
+PRINTED_10X_RTOL = 0.01  # the printed numerator's 10x, to its printed digits
+TZW_PEAK_DB_ATOL = 2e-3  # ||T_zw|| printed to 0.0001 dB; the fitted design is within 0.002 dB
+TZW_PEAK_W_RTOL = 0.04  # the printed peak frequency reads a coarse grid (51.8 against our exact 53.3 rad/s)
+TPQ_DB_ATOL = 0.05  # ||T_pq|| printed to 0.01 dB, the 39 Hz numerator 0.6 % off (see the report)
+PRINTED_TOLERANCE_RTOL = 3e-3  # 22.48 % from the printed K, whose 4 digits move it by +-0.12 %
+
 
 @pytest.fixture(scope="module")
 def G():
@@ -40,7 +50,7 @@ def test_riccati_matches_plain_hinfsyn(P5):
     ours = hinf_riccati(P, gtol=1e-5)
     with single_blas_thread():  # the plain call crawls with OpenBLAS threads on a busy machine
         _, _, gam, _ = ct.hinfsyn(P, 1, 1)
-    assert ours.gamma_opt == pytest.approx(gam, rel=2e-3)
+    assert ours.gamma_opt == pytest.approx(gam, rel=SLICOT_GAMMA_RTOL)
     assert ours.achieved <= ours.gamma * (1 + 1e-6)
 
 
@@ -74,7 +84,7 @@ def test_lmi_and_riccati_agree(G, hz, eps):
     P = regularise(thesis_generalized_plant(G, filter_weight(hz)), eps)
     ric = hinf_riccati(P, gtol=1e-6)
     lmi = hinf_lmi(P)
-    assert lmi.gamma == pytest.approx(ric.gamma_opt, rel=0.01)
+    assert lmi.gamma == pytest.approx(ric.gamma_opt, rel=GAMMA_ROUTE_RTOL)
 
 
 def test_lmi_rejects_bad_iterations(P5):
@@ -107,22 +117,22 @@ def test_fitted_design_reproduces_printed_poles_and_structure(G, which, hz):
     # controller zeros = plant poles (thesis 4.4) within 0.1 %; filter pole present
     zeros = sorted_poles(ct.zeros(K))
     plant_poles = sorted_poles(ct.poles(G))
-    np.testing.assert_allclose(zeros, plant_poles, rtol=1e-3)
+    np.testing.assert_allclose(zeros, plant_poles, rtol=PRINTED_4_DIGITS_RTOL)
     assert np.min(np.abs(np.linalg.eigvals(K.A) + 2 * np.pi * hz)) < 1e-3 * 2 * np.pi * hz
     # the printed numerator is 10x ours (same poles): thesis k_*_num[0] vs our leading coefficient
     lead = float(ct.tf(K).num[0][0][0])
-    assert thesis_value(f"hinf.k_{which}_num")[0] / lead == pytest.approx(10.0, rel=0.01)
+    assert thesis_value(f"hinf.k_{which}_num")[0] / lead == pytest.approx(10.0, rel=PRINTED_10X_RTOL)
 
 
 def test_5hz_tzw_peak_matches_thesis(G):
     # 4.4: ||T_zw|| = 2.2645 dB (the thesis's 51.769 rad/s is 2.8 % below our 53.26, a coarse grid)
     d = thesis_design(5.0, G)
     gpk, w = hinf_norm(loop_maps(G, d.controller).T_zw)
-    assert 20 * np.log10(gpk) == pytest.approx(thesis_value("hinf.tzw_peak_db"), abs=2e-3)
-    assert w == pytest.approx(thesis_value("hinf.tzw_peak_rad_s"), rel=0.04)
+    assert 20 * np.log10(gpk) == pytest.approx(thesis_value("hinf.tzw_peak_db"), abs=TZW_PEAK_DB_ATOL)
+    assert w == pytest.approx(thesis_value("hinf.tzw_peak_rad_s"), rel=TZW_PEAK_W_RTOL)
     # T_pq: 117.83 dB printed = ours + 20 dB (the printed controller is 10x ours)
     tol = additive_tolerance(G, d.controller)
-    assert tol["tpq_db"] + 20 == pytest.approx(thesis_value("hinf.tpq_peak_db"), abs=0.05)
+    assert tol["tpq_db"] + 20 == pytest.approx(thesis_value("hinf.tpq_peak_db"), abs=TPQ_DB_ATOL)
 
 
 def test_printed_5hz_controller_destabilises_printed_plant(G):
@@ -135,8 +145,8 @@ def test_printed_5hz_controller_destabilises_printed_plant(G):
 def test_printed_39hz_tolerance_is_thesis_arithmetic(G):
     # 4.7: 22.48 % is 100 / (||T_pq|| in dB) of the printed controller, not 1/||T_pq||
     tol = additive_tolerance(G, printed_controller("39hz"))
-    assert tol["thesis_arithmetic_percent"] == pytest.approx(22.48, rel=3e-3)
-    assert 100 * tol["tolerance"] == pytest.approx(59.96, rel=1e-3)
+    assert tol["thesis_arithmetic_percent"] == pytest.approx(22.48, rel=PRINTED_TOLERANCE_RTOL)
+    assert 100 * tol["tolerance"] == pytest.approx(59.96, rel=PRINTED_4_DIGITS_RTOL)
 
 
 def test_thesis_poles_reference_loaded():
