@@ -8,17 +8,25 @@ from flexdigit.errors import ParameterError
 from flexdigit.params import Actuator, Geometry, RigParams, Sensors, load_params, save_params
 from flexdigit.reference import thesis_value
 
+# Tolerances, each with the reason for its size
+PRINTED_5_DIGITS_RTOL = 1e-4  # a figure printed to 5 significant digits (table 3.7's I, E 3.15's 0.8622)
+PRINTED_4_DECIMALS_ATOL = 5e-5  # a figure printed to 4 decimals (0.8622 deg, 0.0079 V per command)
+
 
 def test_defaults_match_the_thesis_tables():
     p = RigParams()
     # table 3.7: I = 5.8532e-14 m^4 from w t^3 / 12
-    assert p.geometry.second_moment_m4 == pytest.approx(thesis_value("geometry.second_moment_m4"), rel=1e-4)
+    assert p.geometry.second_moment_m4 == pytest.approx(
+        thesis_value("geometry.second_moment_m4"), rel=PRINTED_5_DIGITS_RTOL
+    )
     assert list(p.geometry.gauge_positions_m) == thesis_value("geometry.strain_gauge_positions_from_base_m")
     # E 3.15: 219/254 = 0.8622 degrees per command
-    assert p.actuator.deg_per_command == pytest.approx(thesis_value("actuator.deg_per_command"), abs=5e-5)
-    assert p.actuator.rad_per_command == pytest.approx(0.8622 * math.pi / 180, rel=1e-4)
+    assert p.actuator.deg_per_command == pytest.approx(
+        thesis_value("actuator.deg_per_command"), abs=PRINTED_4_DECIMALS_ATOL
+    )
+    assert p.actuator.rad_per_command == pytest.approx(0.8622 * math.pi / 180, rel=PRINTED_5_DIGITS_RTOL)
     # 3.2.4 / [plant].note: the potentiometer moves 0.0079 V per command
-    assert p.actuator.pot_v_per_command == pytest.approx(0.0079, abs=5e-5)
+    assert p.actuator.pot_v_per_command == pytest.approx(0.0079, abs=PRINTED_4_DECIMALS_ATOL)
     # 16 bits over 10 V
     assert p.sensors.adc_lsb_v == pytest.approx(10 / 65536)
 

@@ -13,6 +13,14 @@ from flexdigit.report.chapter import ReportContext
 
 COMMANDS = thesis_value("conversion.table_3_4_commands")
 
+# Tolerances, each with the reason for its size
+PRINTED_4_DIGITS_RTOL = 1e-3  # 48.7, printed to 3-4 significant digits
+EXACT_RTOL = 1e-12  # wd/sqrt(1 - zeta^2) written out against the chapter's: rounding only
+EXACT_ATOL = 1e-9  # the printed digit factor's slow pole, built from the printed 0.543 1/s
+TABLE_4_1_REL_ERROR_ATOL = 5e-4  # the slow closed-loop pole's 1.04 % miss, to 0.05 %
+PRINTED_2_DECIMALS_ATOL = 0.01  # a table 3.4 figure, printed to 2 decimals
+K1_PRINTED_ATOL = 1e-4  # 86.2 / 48.7 = 1.7699, to 4 decimals
+
 
 @pytest.fixture(scope="module")
 def chapter(tmp_path_factory):
@@ -32,7 +40,7 @@ def test_plant_and_k2_entries_match_within_0p1_percent(chapter):
         assert e.status == "match", key
         assert e.rel_error < 1e-3
     assert _entry(ch, "plant.G.num").thesis == thesis_value("plant.g_num")[0]  # 48.7 as printed
-    assert _entry(ch, "plant.G.num").ours == pytest.approx(48.7, rel=1e-3)  # 3.5
+    assert _entry(ch, "plant.G.num").ours == pytest.approx(48.7, rel=PRINTED_4_DIGITS_RTOL)  # 3.5
 
 
 @pytest.mark.parametrize(("key", "printed_key"), [("plant.G.poles", "plant.poles"),
@@ -56,13 +64,13 @@ def test_pole_statuses(chapter):
     for k in (1, 2):
         for part in ("real", "imag"):
             assert _entry(ch, f"plant.G.poles[{k}].{part}").status == "match"
-    assert _entry(ch, "plant.G.poles[2].real").ours == pytest.approx(-0.2715, abs=1e-9)
+    assert _entry(ch, "plant.G.poles[2].real").ours == pytest.approx(-0.2715, abs=EXACT_ATOL)
     # closed loop (table 4.1): within 0.1 % except the slow real part, which is 1.0 % off, as printed it is not a
     # root of table 4.1's own denominator (-0.2654)
     for key in ("[1].real", "[1].imag", "[2].imag"):
         assert _entry(ch, f"plant.closed_loop.poles{key}").status == "match", key
     slow = _entry(ch, "plant.closed_loop.poles[2].real")
-    assert slow.status == "discrepancy" and slow.rel_error == pytest.approx(0.0104, abs=5e-4)
+    assert slow.status == "discrepancy" and slow.rel_error == pytest.approx(0.0104, abs=TABLE_4_1_REL_ERROR_ATOL)
     assert "-0.2654" in slow.note
 
 
@@ -82,7 +90,7 @@ def test_release_table_wn_rows_are_printed_wn_beside_wd_over_sqrt(chapter, table
     for i, (wn, wd, z) in enumerate(zip(t["wn_rad_s"], t["wd_rad_s"], t["zeta"], strict=True), start=1):
         e = _entry(ch, f"table_{table}.wn_rad_s[{i}]")
         assert e.thesis == wn and e.unit == "rad/s"
-        assert e.ours == pytest.approx(wd / math.sqrt(1 - z * z), rel=1e-12)
+        assert e.ours == pytest.approx(wd / math.sqrt(1 - z * z), rel=EXACT_RTOL)
         assert e.status == status
     assert not [e for e in ch.entries if "worst_rel" in e.key]
 
@@ -104,7 +112,7 @@ def test_table_3_4_every_cell_is_the_printed_value_beside_ours(chapter, col):
 def test_table_3_4_y_max_note_gives_the_corrected_figure(chapter):
     ch, _ = chapter
     y_max = _entry(ch, "table_3_4.y_max_mm[24]")
-    assert y_max.thesis == 52.11 and y_max.ours == pytest.approx(65.41, abs=0.01)  # x = l = 0.270 m
+    assert y_max.thesis == 52.11 and y_max.ours == pytest.approx(65.41, abs=PRINTED_2_DECIMALS_ATOL)  # x = l = 0.270 m
     assert "gives 52.11 mm here" in y_max.note  # at the fitted x = 0.241 m
 
 
@@ -115,7 +123,7 @@ def test_thesis_fields_are_printed_numbers_not_zero_placeholders(chapter):
     assert zeros == [f"table_3_4.{c}[8]" for c in ("y_sg1_mm", "y_sg2_mm", "y_sg3_mm", "y_max_mm")]
     # 1.7699 is implied by table 4.1, not printed: a new figure
     k1 = _entry(ch, "plant.closed_loop.K1")
-    assert k1.status == "new" and k1.thesis is None and k1.ours == pytest.approx(1.7699, abs=1e-4)
+    assert k1.status == "new" and k1.thesis is None and k1.ours == pytest.approx(1.7699, abs=K1_PRINTED_ATOL)
 
 
 def test_explained_discrepancies(chapter):
