@@ -14,6 +14,7 @@ where its values come from; PyElastica keeps its analytical solutions in ``syste
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import brentq
@@ -99,3 +100,38 @@ def cantilever_gauges_v(position_from_base_m, mass_kg) -> np.ndarray:
     a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))[:, None]
     m = np.atleast_1d(np.asarray(mass_kg, dtype=float))[:, None]
     return GAIN_V_PER_NM * m * 9.81 * np.clip(a - GAUGES_M, 0.0, None)
+
+
+# ------------------------------------------------------------------------------ the report before issue 15
+#: results.json entries of ``flexdigit reproduce --fast`` (seed 0) at commit c11dacc, before the report's science
+#: moved into the library (issue 15): ``{key: [status, ours, chapter]}`` (the chapter the entry is in now). The
+#: refactor must leave every entry as it was.
+FAST_BASELINE_FILE = Path(__file__).with_name("data") / "report_fast_c11dacc.json"
+#: How far an entry may move: the network trainings are the same to the bit and every stream keeps its seed, so
+#: only rounding differences remain (BLAS run on one thread per chapter worker, where it ran on two before).
+BASELINE_RTOL = 1e-6
+BASELINE_ATOL = 1e-12
+
+
+def assert_entries_unchanged(entries, chapter: str) -> None:
+    """Every baseline entry of ``chapter`` (its slug) is in ``entries`` with the same status and the same figure
+    (within :data:`BASELINE_RTOL`); ``entries`` are :class:`~flexdigit.report.results.Entry` or dicts."""
+    import json
+
+    baseline = json.loads(FAST_BASELINE_FILE.read_text())
+    got = {(e["key"] if isinstance(e, dict) else e.key): e for e in entries}
+    wanted = {k: v[:2] for k, v in baseline.items() if v[2] == chapter}
+    assert wanted, f"no baseline entries of chapter {chapter!r}"
+    missing = sorted(set(wanted) - set(got))
+    assert not missing, f"entries gone since c11dacc: {missing}"
+    moved = []
+    for key, (status, ours) in wanted.items():
+        e = got[key]
+        e_status, e_ours = (e["status"], e["ours"]) if isinstance(e, dict) else (e.status, e.ours)
+        if isinstance(ours, str) or ours is None:
+            same = e_ours == ours
+        else:
+            same = e_ours is not None and bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
+        if not same or e_status != status:
+            moved.append(f"{key}: {status} {ours!r} -> {e_status} {e_ours!r}")
+    assert not moved, "entries changed since c11dacc:\n" + "\n".join(moved)

@@ -1,4 +1,8 @@
-"""Build the report: run every chapter, write ``index.html``, ``results.json`` and ``figures/``."""
+"""Build the report: run every chapter (in parallel processes), write ``index.html``, ``results.json``, ``figures/``.
+
+``results.json`` holds every entry and every table as numbers (:func:`results_document`); ``index.html`` opens on
+the headline figures and the per-chapter counts, then the chapters, long tables collapsed.
+"""
 
 from __future__ import annotations
 
