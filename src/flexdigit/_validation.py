@@ -480,6 +480,14 @@ class InstanceOf(Constraint):
     def invalid_values(self) -> list:
         return [object()]
 
+    def valid_value(self):
+        """An instance built with the class's defaults (parameter sets such as ``RigParams``)."""
+        cls = self.cls[0] if isinstance(self.cls, tuple) else self.cls
+        try:
+            return cls()
+        except TypeError:
+            raise NotImplementedError(f"{cls.__name__} has no default instance") from None
+
 
 class Callable(Constraint):
     """A callable (a function or an object with ``__call__``)."""
@@ -692,8 +700,9 @@ def declare(cls):
     return cls
 
 
-def validate_fields(obj) -> None:
+def validate_fields(obj, *, error: type[Exception] = ParameterError) -> None:
     """Check a dataclass instance's fields against its class's ``_parameter_constraints`` (no conversion: a
     frozen dataclass keeps what it was given). Call it first in ``__post_init__``."""
     owner = type(obj).__name__
-    check_params({k: getattr(obj, k) for k in obj._parameter_constraints}, obj._parameter_constraints, owner)
+    values = {k: getattr(obj, k) for k in obj._parameter_constraints}
+    check_params(values, obj._parameter_constraints, owner, error=error)

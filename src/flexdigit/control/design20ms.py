@@ -31,11 +31,19 @@ deviation from the equilibrium command 8 (:class:`~flexdigit.control.runtime.Run
 from __future__ import annotations
 
 from dataclasses import dataclass
+from numbers import Integral, Real
 
 import control as ct
 import numpy as np
 
-from flexdigit._validation import check_int, check_positive
+from flexdigit._validation import (
+    InstanceOf,
+    Interval,
+    check_positive,
+    declare,
+    validate_fields,
+    validate_params,
+)
 from flexdigit.control.discretise import METHODS, discretise
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.errors import DesignError
@@ -51,6 +59,7 @@ __all__ = [
 ]
 
 
+@declare
 @dataclass(frozen=True)
 class Weights:
     """LQR and Kalman weights of :func:`design_20ms` (rotation in deg, command in commands).
@@ -71,9 +80,13 @@ class Weights:
     q_input: float = 1.0
     r_measurement: float = 10.0
 
+    _parameter_constraints = {
+        name: [Interval(Real, 0, None, closed="neither")]
+        for name in ("q_rate", "r_u", "q_disturbance", "q_input", "r_measurement")
+    }
+
     def __post_init__(self) -> None:
-        for name in ("q_rate", "r_u", "q_disturbance", "q_input", "r_measurement"):
-            check_positive(getattr(self, name), name, "Weights", error=DesignError)
+        validate_fields(self, error=DesignError)
 
 
 def design_plant(params: RigParams | None = None, deg_per_command: float | None = None) -> ct.StateSpace:
@@ -146,6 +159,16 @@ class Digital20msDesign:
         )
 
 
+@validate_params(
+    {
+        "params": [InstanceOf(RigParams), None],
+        "period_s": [Interval(Real, 0, None, closed="neither"), None],
+        "delay_samples": [Interval(Integral, 0, 5)],
+        "deg_per_command": [Interval(Real, 0, None, closed="neither"), None],
+        "weights": [InstanceOf(Weights), None],
+    },
+    error=DesignError,
+)
 def design_20ms(
     params: RigParams | None = None,
     *,
@@ -180,10 +203,8 @@ def design_20ms(
     True
     """
     params = params or RigParams()
-    T = check_positive(
-        params.actuator.serial_period_s if period_s is None else period_s, "period_s", "design_20ms", error=DesignError
-    )
-    nd = check_int(delay_samples, "delay_samples", "design_20ms", low=0, high=5, error=DesignError)
+    T = params.actuator.serial_period_s if period_s is None else period_s
+    nd = delay_samples
     w = weights or Weights()
     G = design_plant(params, deg_per_command)
     dc = float(np.real(ct.dcgain(G)))

@@ -23,11 +23,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from numbers import Integral, Real
 
 import control as ct
 import numpy as np
 
-from flexdigit._validation import check_choice, check_int, check_positive, check_real
+from flexdigit._validation import Callable as Callable_
+from flexdigit._validation import Interval, NoValidation, Options, declare, validate_fields, validate_params
 from flexdigit.errors import DesignError
 
 __all__ = [
@@ -44,8 +46,12 @@ __all__ = [
 ]
 
 METHODS = ("tustin", "zoh", "forward_euler", "backward_euler")
+_POSITIVE = Interval(Real, 0, None, closed="neither")
 
 
+@validate_params(
+    {"sys": [NoValidation()], "period_s": [_POSITIVE], "method": [Options(METHODS)], "prewarp_rad_s": [_POSITIVE, None]}
+)
 def discretise(sys, period_s: float, method: str = "tustin", *, prewarp_rad_s: float | None = None):
     """Discretise a continuous LTI system at sample period ``period_s``.
 
@@ -71,14 +77,13 @@ def discretise(sys, period_s: float, method: str = "tustin", *, prewarp_rad_s: f
     >>> [round(float(p.real), 6) for p in d.poles()]     # z = 1 + sT = 1 - 0.1
     [0.9]
     """
-    T = check_positive(period_s, "period_s", "discretise")
-    method = check_choice(method, "method", METHODS, "discretise")
+    T = period_s
     if not ct.isctime(sys, strict=True):
         raise DesignError(f"The 'sys' parameter of discretise must be a continuous-time system. Got dt={sys.dt}.")
     if prewarp_rad_s is not None:
         if method != "tustin":
             raise DesignError(f"prewarp_rad_s applies to the 'tustin' method only, not {method!r}")
-        w = check_positive(prewarp_rad_s, "prewarp_rad_s", "discretise")
+        w = prewarp_rad_s
         if w * T >= np.pi:
             raise DesignError(f"prewarp_rad_s = {w} rad/s is above the Nyquist frequency pi/T = {np.pi / T:.4g} rad/s")
     if method == "forward_euler":
@@ -93,6 +98,7 @@ def discretise(sys, period_s: float, method: str = "tustin", *, prewarp_rad_s: f
     return ct.sample_system(sys, T, method="zoh")
 
 
+@validate_params({"s": [NoValidation()], "period_s": [_POSITIVE], "method": [Options(METHODS)]})
 def map_s_to_z(s, period_s: float, method: str) -> np.ndarray:
     """Where a method sends points of the s-plane (poles; also zeros for every method but ``"zoh"``).
 
@@ -103,8 +109,7 @@ def map_s_to_z(s, period_s: float, method: str) -> np.ndarray:
     >>> round(float(map_s_to_z(-245.04, 0.010, "forward_euler").real), 4)   # the 39 Hz design's fast pole, 10 ms
     -1.4504
     """
-    T = check_positive(period_s, "period_s", "map_s_to_z")
-    method = check_choice(method, "method", METHODS, "map_s_to_z")
+    T = period_s
     s = np.asarray(s, dtype=complex)
     if method == "forward_euler":
         return 1 + s * T
@@ -137,6 +142,7 @@ def forward_euler_stability_limit_s(points) -> float:
     return float(np.min(2 * sigma / np.abs(s) ** 2))
 
 
+@declare
 @dataclass(frozen=True)
 class FirstOrderTustin:
     """The first-order lead/lag ``C(s) = (1 + A s)/(1 + B s)`` as the difference equation of appendix E.
@@ -167,10 +173,10 @@ class FirstOrderTustin:
     period_s: float
     _state: list = field(default_factory=lambda: [0.0, 0.0], repr=False, compare=False)
 
+    _parameter_constraints = {"lead_s": [Interval(Real)], "lag_s": [_POSITIVE], "period_s": [_POSITIVE]}
+
     def __post_init__(self) -> None:
-        check_real(self.lead_s, "lead_s", "FirstOrderTustin")
-        check_positive(self.lag_s, "lag_s", "FirstOrderTustin")
-        check_positive(self.period_s, "period_s", "FirstOrderTustin")
+        validate_fields(self)
 
     @property
     def b0(self) -> float:
@@ -214,6 +220,14 @@ class StepHalving:
     converged: bool
 
 
+@validate_params(
+    {
+        "response": [Callable_()],
+        "initial_period_s": [_POSITIVE],
+        "tolerance": [_POSITIVE],
+        "max_halvings": [Interval(Integral, 1, None)],
+    }
+)
 def halve_step(
     response: Callable[[float], tuple[np.ndarray, np.ndarray]],
     initial_period_s: float,
@@ -239,9 +253,7 @@ def halve_step(
         ``period_s`` is the first ``alpha`` that agrees with ``alpha/2`` (the last one tried if none does,
         with ``converged=False``). A response that is not finite (an unstable discretisation) never agrees.
     """
-    alpha = check_positive(initial_period_s, "initial_period_s", "halve_step")
-    tol = check_positive(tolerance, "tolerance", "halve_step")
-    n = check_int(max_halvings, "max_halvings", "halve_step", low=1)
+    alpha, tol, n = initial_period_s, tolerance, max_halvings
     history = []
     t_a, y_a = response(alpha)
     for _ in range(n):
@@ -313,6 +325,16 @@ class SampledLoop:
         return float(np.max(np.min(d, axis=1)))
 
 
+@validate_params(
+    {
+        "plant": [NoValidation()],
+        "controller": [NoValidation()],
+        "period_s": [_POSITIVE],
+        "method": [Options(METHODS)],
+        "delay_samples": [Interval(Integral, 0, None)],
+        "t_final_s": [_POSITIVE],
+    }
+)
 def sampled_loop(
     plant,
     controller,
@@ -328,8 +350,7 @@ def sampled_loop(
     sub-millisecond periods). ``delay_samples`` adds ``z^-d`` between controller and hold (the servo board's
     transport delay, 5.2).
     """
-    T = check_positive(period_s, "period_s", "sampled_loop")
-    d = check_int(delay_samples, "delay_samples", "sampled_loop", low=0)
+    T, d = period_s, delay_samples
     G, K = ct.ss(plant), ct.ss(controller)
     Gd = ct.sample_system(G, T, method="zoh")
     Kd = discretise(K, T, method)

@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Real
 
 import control as ct
 import numpy as np
 
-from flexdigit._validation import check_positive, check_real
+from flexdigit._validation import Interval, declare, validate_fields
 from flexdigit.control.analysis import closed_loop_poles, hinf_norm, loop_maps, monte_carlo_stability
 from flexdigit.control.generalized import as_statespace
 from flexdigit.control.synthesis import HinfDesign, hinf_riccati
@@ -42,6 +43,7 @@ EQUILIBRIUM_COMMAND = 8.0
 COMMAND_RANGE = (0.0, 254.0)
 
 
+@declare
 @dataclass(frozen=True)
 class MixsynSpec:
     """Weights of the mixed-sensitivity design (units: rad of beam rotation, commands, rad/s).
@@ -69,14 +71,17 @@ class MixsynSpec:
     w_disturbance: float = 40.0
     margin: float = 0.05
 
+    _parameter_constraints = {
+        "bandwidth_rad_s": [Interval(Real, 0, None, closed="neither")],
+        "s_peak": [Interval(Real, 1, None)],
+        "integral_eps": [Interval(Real, 0, 0.1, closed="right")],
+        "w_command": [Interval(Real, 0, None, closed="neither")],
+        "w_disturbance": [Interval(Real, 0, None)],
+        "margin": [Interval(Real, 0, None)],
+    }
+
     def __post_init__(self):
-        owner = type(self).__name__
-        check_positive(self.bandwidth_rad_s, "bandwidth_rad_s", owner, error=DesignError)
-        check_real(self.s_peak, "s_peak", owner, low=1.0, error=DesignError)
-        check_real(self.integral_eps, "integral_eps", owner, low=0.0, high=0.1, low_open=True, error=DesignError)
-        check_positive(self.w_command, "w_command", owner, error=DesignError)
-        check_real(self.w_disturbance, "w_disturbance", owner, low=0.0, error=DesignError)
-        check_real(self.margin, "margin", owner, low=0.0, error=DesignError)
+        validate_fields(self, error=DesignError)
 
 
 @dataclass(frozen=True)
