@@ -19,26 +19,12 @@ import time
 
 import numpy as np
 
+from flexdigit.models.beam import elastica_tip_deflection
+
 EI = 205e9 * 12.7e-3 * 0.381e-3**3 / 12  # N m^2, table 3.7
 MU = 7850.0 * 12.7e-3 * 0.381e-3  # kg/m
 LENGTH = 0.24  # m, the strip
 ALPHA2 = 2.0  # P L^2 / EI
-
-
-def elastica_tip_deflection(alpha2: float) -> float:
-    """Tip deflection / L of a cantilever under a dead tip load (Bisshopp & Drucker 1945)."""
-    from scipy.optimize import brentq
-    from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
-
-    a = math.sqrt(alpha2)
-    k = brentq(
-        lambda k: ellipk(k * k) - ellipkinc(math.asin(1 / (math.sqrt(2) * k)), k * k) - a,
-        1 / math.sqrt(2) + 1e-12,
-        1 - 1e-12,
-        xtol=1e-15,
-    )
-    phi1 = math.asin(1 / (math.sqrt(2) * k))
-    return 1 - 2 / a * (ellipe(k * k) - ellipeinc(phi1, k * k))
 
 
 SCENARIOS = {

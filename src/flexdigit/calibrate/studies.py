@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexdigit._result_table import ResultTable
+from flexdigit.models.beam import elastica_tip_deflection
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
 
@@ -118,21 +119,6 @@ def table_3_6(params: RigParams | None = None, calibration=None) -> Table36:
     return Table36(commands, measured, theory, twin, trusted, worst_trusted, float(err.max()), table)
 
 
-def _elastica_y(alpha2: float) -> float:
-    """Tip deflection / L under a dead tip load, Bisshopp & Drucker's elliptic-integral solution."""
-    from scipy.optimize import brentq
-    from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
-
-    a = math.sqrt(alpha2)
-    k = brentq(
-        lambda k: ellipk(k * k) - ellipkinc(math.asin(1 / (math.sqrt(2) * k)), k * k) - a,
-        1 / math.sqrt(2) + 1e-12,
-        1 - 1e-12,
-    )
-    phi1 = math.asin(1 / (math.sqrt(2) * k))
-    return 1 - 2 / a * (ellipe(k * k) - ellipeinc(phi1, k * k))
-
-
 def physics_checks(cells: int = 12) -> dict[str, float]:
     """Relative errors of the twin's chain against closed forms it was not written from, at ``cells`` cells.
 
@@ -154,7 +140,7 @@ def physics_checks(cells: int = 12) -> dict[str, float]:
     return {
         "tip_load": tip / (1e-6 * length**3 / (3 * ei)) - 1,
         "arc_90deg": float(np.linalg.norm(sol.tip_m[0] - exact) / r),
-        "elastica_pl2_ei_10": y / _elastica_y(10.0) - 1,
+        "elastica_pl2_ei_10": y / elastica_tip_deflection(10.0) - 1,
         "first_frequency": wn / (1.8751040687**2 * math.sqrt(ei / (0.038 * length**4))) - 1,
     }
 
@@ -169,7 +155,11 @@ def convergence_table(cells=CONVERGENCE_CELLS) -> ResultTable:
     for n in cells:
         chain = Chain.uniform(length, ei, n, mass_per_length_kg_m=mu)
         tip = chain.solve_static(tip_force_n=[[0, 1e-6]]).tip_m[0, 1] / (1e-6 * length**3 / (3 * ei)) - 1
-        y = -Chain.uniform(1.0, 1.0, n).solve_static(tip_force_n=[[0, -10.0]]).tip_m[0, 1] / _elastica_y(10.0) - 1
+        y = (
+            -Chain.uniform(1.0, 1.0, n).solve_static(tip_force_n=[[0, -10.0]]).tip_m[0, 1]
+            / elastica_tip_deflection(10.0)
+            - 1
+        )
         wn = chain.linear_modes()[0][0] / exact_f - 1
         rows.append((n, tip, y, wn))
     return ResultTable(

@@ -34,7 +34,16 @@ from numbers import Real
 
 import numpy as np
 
-from flexdigit._validation import Interval, Options, check_array, check_param, check_real, declare, validate_fields
+from flexdigit._validation import (
+    Interval,
+    Options,
+    check_array,
+    check_param,
+    check_real,
+    declare,
+    validate_fields,
+    validate_params,
+)
 from flexdigit.params import RigParams
 
 #: First root of ``1 + cos(b) cosh(b) = 0``, the clamped-free beam's first mode.
@@ -199,3 +208,30 @@ class Cantilever:
     def tip_moment_for_deflection_nm(self, tip_deflection_m: float) -> float:
         """``M = 2 EI y_max / L^2`` (E 3.13 inverted, as in 3.4.1), N m."""
         return 2.0 * self.ei_n_m2 * check_real(tip_deflection_m, "tip_deflection_m", "Cantilever") / self.length_m**2
+
+
+@validate_params({"alpha2": [Interval(Real, 0, None, closed="neither")]})
+def elastica_tip_deflection(alpha2: float) -> float:
+    """Tip deflection / L of a cantilever under a dead tip load perpendicular to it, ``P L^2 / EI = alpha2``: the
+    large-deflection elastica (Bisshopp & Drucker 1945, elliptic integrals), the closed form the twin's chain and
+    PyElastica are checked against.
+
+    Examples
+    --------
+    >>> round(float(elastica_tip_deflection(0.01) / (0.01 / 3)), 3)    # small loads: P L^3 / 3EI
+    1.0
+    >>> round(float(elastica_tip_deflection(10.0)), 4)
+    0.8106
+    """
+    from scipy.optimize import brentq
+    from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
+
+    a = math.sqrt(alpha2)
+    k = brentq(
+        lambda k: ellipk(k * k) - ellipkinc(math.asin(1 / (math.sqrt(2) * k)), k * k) - a,
+        1 / math.sqrt(2) + 1e-12,
+        1 - 1e-12,
+        xtol=1e-15,
+    )
+    phi1 = math.asin(1 / (math.sqrt(2) * k))
+    return 1 - 2 / a * (ellipe(k * k) - ellipeinc(phi1, k * k))
