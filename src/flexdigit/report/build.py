@@ -92,27 +92,27 @@ def _pairs(names, done):
     return [(n, done[n][0]) for n in names if done[n][0] is not None]
 
 
-#: The report's first screen: the figures a reader wants first, each the thesis's beside ours (entry keys; a key
-#: whose chapter failed or was not built is left out).
-HEADLINE = (
-    "plant.G.num",
-    "plant.G.den[s^0]",
-    "cable.commands_for_30deg_tip_rotation",
-    "conversion.K1_sg1",
-    "twin.release_with_housing.wn_rad_s",
-    "twin.release_with_housing.zeta",
-    "identify.servo.lsq.wn_rad_s",
-    "identify.digit.thesis.wn_rad_s",
-    "hinf.tzw_peak_db",
-    "hinf.k_39hz_num_lead",
-    "hinf.additive_tolerance_5Hz",
-    "digital.euler_unstable_above_s",
-    "digital20.settling_time_s",
-    "non_actuated.test_corr2_at_thesis_optimum",
-    "actuated.test_corr2_at_thesis_optimum",
-    "actuated.best_estimator_position_rmse_mm",
-    "actuated.bayes_position_rmse_identifiable_mm",
-)
+#: The report's first screen: the figures a reader wants first, each the thesis's beside ours (entry key -> what it
+#: is; a key whose chapter failed or was not built is left out).
+HEADLINE = {
+    "plant.G.num": "plant G(s) of 3.5 rebuilt from its components: numerator",
+    "plant.G.den[s^0]": "plant G(s): constant of the denominator",
+    "cable.commands_for_30deg_tip_rotation": "commands for 30 deg of tip rotation",
+    "conversion.K1_sg1": "K1, gauge 1 (E 3.16)",
+    "twin.release_with_housing.wn_rad_s": "twin release test: wn (table 3.2)",
+    "twin.release_with_housing.zeta": "twin release test: zeta (table 3.2)",
+    "identify.servo.lsq.wn_rad_s": "servo wn identified by least squares (3.2.4)",
+    "identify.digit.thesis.wn_rad_s": "digit wn by the thesis's wn = 4/(zeta Ts)",
+    "hinf.tzw_peak_db": "||T_zw|| of the 5 Hz design (4.4)",
+    "hinf.k_39hz_num_lead": "39 Hz controller gain (table 4.3)",
+    "hinf.additive_tolerance_5Hz": "additive tolerance, 5 Hz filter (4.7)",
+    "digital.euler_unstable_above_s": "forward Euler unstable above (5.1.2)",
+    "digital20.settling_time_s": "30 deg step at 20 ms on the twin: 2 % settling",
+    "non_actuated.test_corr2_at_thesis_optimum": "tactile corr2, non-actuated (6.9)",
+    "actuated.test_corr2_at_thesis_optimum": "tactile corr2, actuated (7.5)",
+    "actuated.best_estimator_position_rmse_mm": "actuated: best estimator's position error",
+    "actuated.bayes_position_rmse_identifiable_mm": "actuated: the Bayes limit of that error",
+}
 STATUSES = ("match", "discrepancy", "new")
 
 
@@ -122,7 +122,8 @@ def results_document(chapters: list[Chapter], ctx: ReportContext, seconds: dict[
     ``{"flexdigit", "seed", "fast", "calibration", "counts", "headline", "chapters", "entries", "tables"}``:
     ``entries`` is the list of ``{key, section, thesis, ours, unit, rel_error, status, note}``; ``tables`` the list of
     ``{key, chapter, title, columns, rows}`` (cells are numbers, or strings for labels; NaN is null);
-    ``headline`` the keys of :data:`HEADLINE` present; ``chapters`` each chapter's slug, title, counts and seconds.
+    ``headline`` the ``{key, figure}`` of :data:`HEADLINE` present; ``chapters`` each chapter's slug, title,
+    counts, numbers of tables and figures, and build seconds.
     """
     entries = [dict(asdict(e), chapter=c.slug) for c in chapters for e in c.entries]
     present = {e["key"] for e in entries}
@@ -133,7 +134,7 @@ def results_document(chapters: list[Chapter], ctx: ReportContext, seconds: dict[
         "fast": ctx.fast,
         "calibration": _calibration_source(),
         "counts": _counts(entries),
-        "headline": [k for k in HEADLINE if k in present],
+        "headline": [{"key": k, "figure": label} for k, label in HEADLINE.items() if k in present],
         "chapters": [
             {
                 "slug": c.slug,
@@ -296,20 +297,13 @@ def _front_page(chapters: list[Chapter], failed: dict[str, str], ctx: ReportCont
         "<code>results.json</code>.</p>",
         "<h2 id='headline'>Headline figures</h2>",
         _table_html(
-            ["figure", "section", "thesis", "ours", "unit", "status", "note"],
+            ["figure", "key", "section", "thesis", "ours", "unit", "status", "note"],
             [
-                [
-                    k,
-                    by_key[k].section,
-                    by_key[k].thesis,
-                    by_key[k].ours,
-                    by_key[k].unit,
-                    by_key[k].status,
-                    _first_sentence(by_key[k].note),
-                ]
-                for k in document["headline"]
+                [h["figure"], h["key"], by_key[h["key"]].section, by_key[h["key"]].thesis, by_key[h["key"]].ours]
+                + [by_key[h["key"]].unit, by_key[h["key"]].status, _first_sentence(by_key[h["key"]].note)]
+                for h in document["headline"]
             ],
-            row_class=lambda row: row[5],
+            row_class=lambda row: row[6],
         ),  # fmt: skip
         "<h2 id='chapters'>Chapters</h2>",
         _table_html(
