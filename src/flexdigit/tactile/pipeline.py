@@ -55,13 +55,14 @@ def thesis_split(n: int, seed: int) -> Split:
     return Split(perm[:n_train], perm[n_train : n_train + n_val], perm[n_train + n_val :])
 
 
-class Normaliser:
+class Normaliser(Estimator):
     """E 6.1: ``x~ = (x - mean) / sigma`` with the training set's mean and standard deviation (MATLAB ``std``).
 
-    Columns with zero spread are left unscaled (sigma = 1) rather than divided by zero.
+    Columns with zero spread are left unscaled (sigma = 1) rather than divided by zero. (scikit-learn's
+    ``StandardScaler`` divides by the population deviation, ``ddof=0``; the thesis used MATLAB's ``std``.)
     """
 
-    def fit(self, X) -> Normaliser:
+    def fit(self, X, y=None) -> Normaliser:
         x = check_array(X, "X", "Normaliser.fit", ndim=2, min_length=2)
         self.mean_ = x.mean(axis=0)
         std = x.std(axis=0, ddof=1)
@@ -69,9 +70,11 @@ class Normaliser:
         return self
 
     def transform(self, X) -> np.ndarray:
+        check_is_fitted(self, "mean_")
         return (np.asarray(X, dtype=float) - self.mean_) / self.std_
 
     def inverse_transform(self, Z) -> np.ndarray:
+        check_is_fitted(self, "mean_")
         return np.asarray(Z, dtype=float) * self.std_ + self.mean_
 
 
