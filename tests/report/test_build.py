@@ -5,6 +5,7 @@ import sys
 import types
 
 import matplotlib.pyplot as plt
+import numpy as np
 import pytest
 
 from flexdigit.report.build import reproduce
@@ -78,3 +79,45 @@ def test_report_writes_entries_html_and_figures(tmp_path, chapters):
 def test_unexplained_discrepancy_is_refused():
     with pytest.raises(ValueError, match="no explanation"):
         compare("x", "3.1", 1.0, 2.0, "", rtol=0.01)
+
+
+CHAPTER_SOURCE = """
+import numpy as np
+from flexdigit.report.chapter import Chapter
+from flexdigit.report.results import new
+from flexdigit._table import Table
+
+
+def build(ctx):
+    x = ctx.rng({stream}).normal(size=3)  # seeded by the report seed and the chapter's own stream
+    if {fail}:
+        raise RuntimeError("chapter {name} exploded")
+    rows = tuple((float(v),) for v in x)
+    return Chapter("{name}", "Chapter {name}", entries=[new("{name}.x0", "1", float(x[0]), "", "")],
+                   tables=[Table("{name}.x", "draws", ("x",), rows)])
+"""
+
+
+@pytest.fixture
+def chapter_files(tmp_path, monkeypatch):
+    # real modules on sys.path: worker processes (spawned) import the chapters by name as the report does
+    src = tmp_path / "chapters"
+    src.mkdir()
+    for name, stream, fail in (("fdpa", 1, False), ("fdpb", 2, False), ("fdpc", 3, True)):
+        (src / f"{name}.py").write_text(CHAPTER_SOURCE.format(name=name, stream=stream, fail=fail))
+    monkeypatch.syspath_prepend(str(src))
+    return ("fdpa", "fdpb", "fdpc")
+
+
+def test_parallel_chapters_give_the_same_numbers_in_reading_order(tmp_path, chapter_files):
+    # issue 15: chapters run in worker processes; the numbers and their order do not depend on the workers
+    one = reproduce(tmp_path / "one", chapters=chapter_files, workers=1, seed=7)
+    two = reproduce(tmp_path / "two", chapters=chapter_files, workers=2, seed=7)
+    a = json.loads((tmp_path / "one" / "results.json").read_text())
+    b = json.loads((tmp_path / "two" / "results.json").read_text())
+    assert a["entries"] == b["entries"] and a["tables"] == b["tables"]
+    assert [e["key"] for e in b["entries"]] == ["fdpa.x0", "fdpb.x0"]  # reading order, the failed one left out
+    # the same draws as numpy's generator seeded [seed, stream]: the chapter's own stream, in whichever process
+    assert b["tables"][1]["rows"][2][0] == np.random.default_rng([7, 2]).normal(size=3)[2]
+    assert set(one.failed) == set(two.failed) == {"fdpc"} and "fdpc exploded" in two.failed["fdpc"]
+    assert set(two.seconds) == set(chapter_files)
