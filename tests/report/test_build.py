@@ -85,7 +85,7 @@ CHAPTER_SOURCE = """
 import numpy as np
 from flexdigit.report.chapter import Chapter
 from flexdigit.report.results import new
-from flexdigit._table import Table
+from flexdigit._result_table import ResultTable
 
 
 def build(ctx):
@@ -94,7 +94,7 @@ def build(ctx):
         raise RuntimeError("chapter {name} exploded")
     rows = tuple((float(v),) for v in x)
     return Chapter("{name}", "Chapter {name}", entries=[new("{name}.x0", "1", float(x[0]), "", "")],
-                   tables=[Table("{name}.x", "draws", ("x",), rows)])
+                   tables=[ResultTable("{name}.x", "draws", ("x",), rows)])
 """
 
 

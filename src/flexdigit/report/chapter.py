@@ -29,8 +29,8 @@ class Figure:
 
 @dataclass
 class Chapter:
-    """One chapter of the reproduce report: its tables are :class:`~flexdigit._result_table.ResultTable` of numbers (the
-    library studies' own), shown formatted in ``index.html`` and as numbers in ``results.json``."""
+    """One chapter of the reproduce report: its tables are :class:`~flexdigit._result_table.ResultTable` of
+    numbers (the library studies' own), shown formatted in ``index.html`` and as numbers in ``results.json``."""
 
     slug: str
     title: str
