@@ -102,13 +102,14 @@ def cantilever_gauges_v(position_from_base_m, mass_kg) -> np.ndarray:
     return GAIN_V_PER_NM * m * 9.81 * np.clip(a - GAUGES_M, 0.0, None)
 
 
-# ------------------------------------------------------------------------------ the report before issue 15
-#: results.json entries of ``flexdigit reproduce --fast`` (seed 0) at commit c11dacc, before the report's science
-#: moved into the library (issue 15): ``{key: [status, ours, chapter]}`` (the chapter the entry is in now). The
-#: refactor must leave every entry as it was.
-FAST_BASELINE_FILE = Path(__file__).with_name("data") / "report_fast_c11dacc.json"
-#: How far an entry may move: the network trainings are the same to the bit and every stream keeps its seed, so
-#: only rounding differences remain (BLAS run on one thread per chapter worker, where it ran on two before).
+# ------------------------------------------------------------------------------------ the report's entries
+#: results.json entries of ``flexdigit reproduce --fast`` (seed 0) as they should be: ``{key: [status, ours,
+#: chapter]}``. First written at commit c11dacc, before issue 15 moved the report's science into the library: the
+#: refactor had to leave every entry as it was. A change meant to move them rewrites it with
+#: ``tests/data/update_report_baseline.py`` and commits the diff with its reason.
+FAST_BASELINE_FILE = Path(__file__).with_name("data") / "report_fast_baseline.json"
+#: How far an entry may move: network training and every random stream are the same to the bit, so only rounding
+#: differences remain (BLAS on one thread per chapter worker, or on two in-process).
 BASELINE_RTOL = 1e-6
 BASELINE_ATOL = 1e-12
 
@@ -123,7 +124,7 @@ def assert_entries_unchanged(entries, chapter: str) -> None:
     wanted = {k: v[:2] for k, v in baseline.items() if v[2] == chapter}
     assert wanted, f"no baseline entries of chapter {chapter!r}"
     missing = sorted(set(wanted) - set(got))
-    assert not missing, f"entries gone since c11dacc: {missing}"
+    assert not missing, f"entries gone from the baseline ({FAST_BASELINE_FILE.name}): {missing}"
     moved = []
     for key, (status, ours) in wanted.items():
         e = got[key]
@@ -134,4 +135,7 @@ def assert_entries_unchanged(entries, chapter: str) -> None:
             same = e_ours is not None and bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
         if not same or e_status != status:
             moved.append(f"{key}: {status} {ours!r} -> {e_status} {e_ours!r}")
-    assert not moved, "entries changed since c11dacc:\n" + "\n".join(moved)
+    assert not moved, (
+        f"entries changed from {FAST_BASELINE_FILE.name} (if meant, rewrite it with "
+        "tests/data/update_report_baseline.py and commit the diff with its reason):\n" + "\n".join(moved)
+    )

@@ -32,7 +32,18 @@ RANK = {
     "cli": 11,
 }
 #: Shared leaf modules every domain may use (they import no domain).
-SHARED = {"_validation", "_io", "_json", "_command", "_table", "_result_table", "_estimator", "errors", "reference", "__init__"}
+SHARED = {
+    "_validation",
+    "_io",
+    "_json",
+    "_command",
+    "_table",
+    "_result_table",
+    "_estimator",
+    "errors",
+    "reference",
+    "__init__",
+}
 #: Imports that run up the chain today, each with the reason and who removes it (empty when none is known).
 KNOWN: dict[tuple[str, str], str] = {
     ("twin", "tactile"): "twin/calibration.py fits the cable friction with tactile's actuated corr2 score; h11-calib "
