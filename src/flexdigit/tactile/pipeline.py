@@ -23,11 +23,21 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from numbers import Integral, Real
 
 import numpy as np
 
 from flexdigit._estimator import Estimator, check_is_fitted
-from flexdigit._validation import check_array, check_choice, check_int
+from flexdigit._validation import (
+    Array,
+    Interval,
+    NoValidation,
+    Options,
+    check_array,
+    check_choice,
+    check_int,
+    validate_params,
+)
 from flexdigit.errors import ParameterError
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.metrics import accuracy, corr2, percentage_error, relative_rmse, rmse
@@ -195,6 +205,22 @@ def _train(x, y, split, hidden, tol, seed, epochs) -> tuple[ThesisNetwork, Sweep
     return model, SweepPoint(hidden, tol, float(model.val_error_[k]), float(model.train_error_[k]), k)
 
 
+@validate_params(
+    {
+        "x": [NoValidation()],
+        "y": [NoValidation()],
+        "seed": [Interval(Integral, 0, None)],
+        "coarse": [Array(ndim=1, min_length=1, low=1)],
+        "fine_halfwidth": [Interval(Integral, 0, None)],
+        "gradients": [Array(ndim=1, min_length=1, low=0, low_open=True)],
+        "default_tol": [Interval(Real, 0, None, closed="neither")],
+        "curve_hidden": [Interval(Integral, 1, None), None],
+        "epochs": [Interval(Integral, 1, None)],
+        "fixed_hidden": [Interval(Integral, 1, None), None],
+        "fixed_tol": [Interval(Real, 0, None, closed="neither"), None],
+        "target": [Options(TARGETS)],
+    }
+)
 def run_pipeline(
     x,
     y,
@@ -238,9 +264,12 @@ def run_pipeline(
         raise ParameterError(f"run_pipeline needs one target per row. Got {y.shape[0]} and {x.shape[0]}.")
     split = thesis_split(x.shape[0], seed)
     seeds = iter(np.random.default_rng([seed, 1]).integers(0, 2**31, size=1000))
-    coarse_pts = [] if fixed_hidden else [_train(x, y, split, h, default_tol, next(seeds), epochs)[1] for h in coarse]
+    coarse, gradients = [int(h) for h in coarse], [float(g) for g in gradients]  # declared arrays arrive as floats
+    coarse_pts = []
+    if fixed_hidden is None:
+        coarse_pts = [_train(x, y, split, h, default_tol, next(seeds), epochs)[1] for h in coarse]
     fine_pts: list[SweepPoint] = []
-    if fixed_hidden:
+    if fixed_hidden is not None:
         best_hidden = int(fixed_hidden)
     else:
         c = min(coarse_pts, key=lambda p: p.val_mse).hidden
@@ -248,7 +277,7 @@ def run_pipeline(
         fine_pts = [_train(x, y, split, h, default_tol, next(seeds), epochs)[1] for h in fine]
         best_hidden = min(fine_pts + coarse_pts, key=lambda p: p.val_mse).hidden
     grad_pts: list[SweepPoint] = []
-    if fixed_tol:
+    if fixed_tol is not None:
         best_tol = float(fixed_tol)
     else:
         grad_pts = [_train(x, y, split, best_hidden, g, next(seeds), epochs)[1] for g in gradients]
