@@ -121,3 +121,25 @@ def test_parallel_chapters_give_the_same_numbers_in_reading_order(tmp_path, chap
     assert b["tables"][1]["rows"][2][0] == np.random.default_rng([7, 2]).normal(size=3)[2]
     assert set(one.failed) == set(two.failed) == {"fdpc"} and "fdpc exploded" in two.failed["fdpc"]
     assert set(two.seconds) == set(chapter_files)
+
+
+def test_worker_processes_run_on_the_calibration_of_the_caller(tmp_path, monkeypatch):
+    # a use_calibration block (flexdigit reproduce --calibration) reaches every chapter, also in worker processes
+    from flexdigit.twin.calibration import packaged_calibration, use_calibration
+
+    src = tmp_path / "chapters"
+    src.mkdir()
+    for name in ("fdcala", "fdcalb"):
+        (src / f"{name}.py").write_text(
+            "from flexdigit.report.chapter import Chapter\nfrom flexdigit.report.results import new\n\n\n"
+            "def build(ctx):\n    from flexdigit.twin.calibration import default_calibration\n\n"
+            f"    gain = default_calibration().channel_gain[0]\n"
+            f"    return Chapter('{name}', '{name}', entries=[new('{name}.gain', '3.4', gain, '', '')])\n"
+        )
+    monkeypatch.syspath_prepend(str(src))
+    mine = packaged_calibration().replace(channel_gain=(0.2, 0.25, 0.3))
+    with use_calibration(mine, source="a test"):
+        reproduce(tmp_path / "report", chapters=("fdcala", "fdcalb"), workers=2)
+    document = json.loads((tmp_path / "report" / "results.json").read_text())
+    assert [e["ours"] for e in document["entries"]] == [0.2, 0.2]
+    assert document["calibration"] == "a test"

@@ -37,7 +37,7 @@ def test_reproduce_runs_every_chapter_on_the_given_calibration(tmp_path, probe_c
     path = save_calibration(mine, tmp_path / "mine.toml", {"source": "a test"})
     assert main(["reproduce", "--calibration", str(path), "--out", str(tmp_path / "report"), "--json"]) == 0
     assert probe_chapter["calibration"] == mine
-    entries = json.loads((tmp_path / "report" / "results.json").read_text())
+    entries = json.loads((tmp_path / "report" / "results.json").read_text())["entries"]
     assert entries[0]["ours"] == 0.2
     assert f"twin calibration: {path}" in (tmp_path / "report" / "index.html").read_text()
     # and without the option, the packaged one
