@@ -104,9 +104,10 @@ def cantilever_gauges_v(position_from_base_m, mass_kg) -> np.ndarray:
 
 # ------------------------------------------------------------------------------------ the report's entries
 #: results.json entries of ``flexdigit reproduce --fast`` (seed 0) as they should be: ``{key: [status, ours,
-#: chapter]}``. First written at commit c11dacc, before issue 15 moved the report's science into the library: the
-#: refactor had to leave every entry as it was. A change meant to move them rewrites it with
-#: ``tests/data/update_report_baseline.py`` and commits the diff with its reason.
+#: chapter]}``. First written from main before issue 15's refactor landed (the report's science moved into the
+#: library, tables as numbers, chapters in parallel processes): the refactor had to leave every entry as it was. A
+#: change meant to move them rewrites it with ``tests/data/update_report_baseline.py`` and commits the diff with its
+#: reason.
 FAST_BASELINE_FILE = Path(__file__).with_name("data") / "report_fast_baseline.json"
 #: How far an entry may move: network training and every random stream are the same to the bit, so only rounding
 #: differences remain (BLAS on one thread per chapter worker, or on two in-process).

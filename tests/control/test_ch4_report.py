@@ -9,6 +9,7 @@ import pytest
 
 from flexdigit.report import ch4_control
 from flexdigit.report.chapter import ReportContext
+from oracles import assert_entries_unchanged
 
 # thesis chapter 4 has figures 4.1-4.24; 4.6-4.8 and 4.17 are block diagrams (no data to reproduce)
 THESIS_FIGURE_KEYS = {f"4.{i}" for i in range(1, 25)}
@@ -64,3 +65,9 @@ def test_chapter_entries_are_explained(chapter):
     # the two synthesis routes within 1 % on the fitted level (issue 5)
     ric, lmi = by_key["hinf.gamma_opt_riccati"].ours, by_key["hinf.gamma_opt_lmi"].ours
     assert lmi == pytest.approx(ric, rel=0.01)
+
+
+@pytest.mark.slow
+def test_entries_unchanged_since_the_library_refactor(chapter):
+    # issue 15 moved the chapter's computations into control.studies: every entry as the baseline has it
+    assert_entries_unchanged(chapter[0].entries, "ch4")

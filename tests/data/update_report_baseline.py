@@ -28,7 +28,8 @@ def main() -> int:
         return 1
     document = json.loads((out / "results.json").read_text())
     baseline = {e["key"]: [e["status"], e["ours"], e["chapter"]] for e in document["entries"]}
-    BASELINE.write_text(json.dumps(baseline, indent=0, sort_keys=True) + "\n")
+    lines = [f"{json.dumps(k)}: {json.dumps(v)}" for k, v in sorted(baseline.items())]  # one entry a line: diffable
+    BASELINE.write_text("{\n" + ",\n".join(lines) + "\n}\n")
     print(f"wrote {BASELINE}: {len(baseline)} entries")
     return 0
 

@@ -4,6 +4,7 @@ import pytest
 
 from flexdigit.report.ch3_identify import build
 from flexdigit.report.chapter import ReportContext
+from oracles import assert_entries_unchanged
 
 
 @pytest.fixture(scope="module")
@@ -26,3 +27,8 @@ def test_chapter_entries_and_figures(chapter):
     # E 3.20-3.22 refitted to the twin's actuation sweep (the twin is calibrated to them)
     for k in (1, 2, 3):
         assert entries[f"identify.v_sg_fit.sg{k}.slope_v_per_command"].status == "match"
+
+
+def test_entries_unchanged_since_the_library_refactor(chapter):
+    # issue 15 moved the chapter's computations into identify.studies: every entry as the baseline has it
+    assert_entries_unchanged(chapter.entries, "ch3-identify")

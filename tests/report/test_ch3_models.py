@@ -10,6 +10,7 @@ import pytest
 from flexdigit.reference import thesis_complex, thesis_value
 from flexdigit.report import ch3_models
 from flexdigit.report.chapter import ReportContext
+from oracles import assert_entries_unchanged
 
 COMMANDS = thesis_value("conversion.table_3_4_commands")
 
@@ -140,3 +141,8 @@ def test_figures_saved(chapter):
     assert refs == {"figure 3.5", "figure 3.14", "figure 3.18"}
     for f in ch.figures:
         assert (out / "figures" / f"{f.name}.png").stat().st_size > 5000
+
+
+def test_entries_unchanged_since_the_library_refactor(chapter):
+    # issue 15 moved the chapter's computations into models.studies: every entry as the baseline has it
+    assert_entries_unchanged(chapter[0].entries, "ch3-models")

@@ -6,6 +6,7 @@ import pytest
 
 from flexdigit.report import ch5_digital
 from flexdigit.report.chapter import ReportContext
+from oracles import assert_entries_unchanged
 
 pytestmark = pytest.mark.slow
 
@@ -25,3 +26,5 @@ def test_chapter_5_entries_and_figures(tmp_path):
     assert entries["digital20.overshoot_percent"].ours < 10.0
     assert {f.name for f in ch.figures} == {"ch5_tustin_periods", "ch5_euler_periods", "ch5_zplane", "ch5_20ms_twin"}
     assert all((tmp_path / "figures" / f"{f.name}.png").exists() for f in ch.figures)
+    # issue 15 moved the chapter's computations into rig.studies: every entry as the baseline has it
+    assert_entries_unchanged(ch.entries, "ch5-digital")

@@ -2,6 +2,7 @@
 
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import ReportContext
+from oracles import assert_entries_unchanged
 
 
 def test_twin_chapter_matches_the_thesis_figures(tmp_path):
@@ -15,3 +16,5 @@ def test_twin_chapter_matches_the_thesis_figures(tmp_path):
     assert all(s in ("match", "new") for s in statuses.values()), statuses
     assert {f.thesis_ref for f in chapter.figures} == {"figure 3.6", "figure 3.12", "figure 3.17"}
     assert (tmp_path / "figures" / "twin_release_tests.png").stat().st_size > 10_000
+    # issue 15 moved the chapter's computations into calibrate.studies: every entry as the baseline has it
+    assert_entries_unchanged(chapter.entries, "ch3-twin")
