@@ -8,12 +8,18 @@ from flexdigit.tactile.model_io import load_model, save_model
 from flexdigit.tactile.netlab import MLP, mlp_error, mlp_grad, mlp_init, scg
 from flexdigit.tactile.pipeline import Normaliser, ThesisNetwork, run_pipeline, thesis_split
 
+# Tolerances, each with the reason for its size
+EXACT_RTOL = 1e-12  # the same quantity computed two ways (numpy's corrcoef, E 6.1 written out, a saved model)
+EXACT_ATOL = 1e-12  # ... where it is zero
+SCG_QUADRATIC_RTOL = 1e-6  # SCG run to its 1e-10 step tolerance on a well-conditioned 6-D quadratic
+LEARNABLE_CORR2 = 0.99  # the cantilever's position follows from two gauges in closed form: a near-perfect fit
+
 
 def test_corr2_is_pearson_over_all_elements():
     # MATLAB corr2 (thesis 6.9, ref [27]) equals Pearson's r of the flattened arrays (numpy.corrcoef)
     rng = np.random.default_rng(3)
     a, b = rng.normal(size=(5, 4)), rng.normal(size=(5, 4))
-    assert corr2(a, b) == pytest.approx(np.corrcoef(a.ravel(), b.ravel())[0, 1], rel=1e-12)
+    assert corr2(a, b) == pytest.approx(np.corrcoef(a.ravel(), b.ravel())[0, 1], rel=EXACT_RTOL)
     assert np.isnan(percentage_error([1.0], [0.0])[0])
     assert percentage_error([11.0], [10.0])[0] == pytest.approx(10.0)
 
@@ -26,7 +32,7 @@ def test_scg_solves_a_quadratic_to_its_closed_form():
     b = rng.normal(size=6)
     x, converged = scg(lambda x: 0.5 * x @ a @ x - b @ x, lambda x: a @ x - b, np.zeros(6), 200, 1e-10, 1e-14)
     assert converged
-    np.testing.assert_allclose(x, np.linalg.solve(a, b), rtol=1e-6)
+    np.testing.assert_allclose(x, np.linalg.solve(a, b), rtol=SCG_QUADRATIC_RTOL)
 
 
 def test_mlp_training_is_the_plain_netlab_loop_to_the_bit():
@@ -59,8 +65,8 @@ def test_split_and_normaliser_follow_e_6_1():
     assert len(set(np.concatenate([s.train, s.val, s.test]).tolist())) == 1275
     x = np.random.default_rng(1).normal(3.0, 2.0, size=(100, 3))
     z = Normaliser().fit(x).transform(x)
-    np.testing.assert_allclose(z.mean(axis=0), 0, atol=1e-12)
-    np.testing.assert_allclose(z.std(axis=0, ddof=1), 1, rtol=1e-12)
+    np.testing.assert_allclose(z.mean(axis=0), 0, atol=EXACT_ATOL)
+    np.testing.assert_allclose(z.std(axis=0, ddof=1), 1, rtol=EXACT_RTOL)
 
 
 def _cantilever_xy(model, n=300, seed=0):
@@ -91,7 +97,7 @@ def test_network_learns_cantilever_position(cantilever_model):
     # the position of a load beyond gauge 2 follows from two gauge readings in closed form: a good fit is possible
     x, y = _cantilever_xy(cantilever_model, n=400)
     r = run_pipeline(x, y, seed=0, fixed_hidden=10, fixed_tol=1e-7, epochs=10)
-    assert r.corr2 > 0.99
+    assert r.corr2 > LEARNABLE_CORR2
     assert r.model.val_error_[r.model.net_.best_epoch_] < r.model.val_error_[0]
 
 
@@ -99,7 +105,7 @@ def test_model_file_round_trip_and_errors(tmp_path, cantilever_model):
     x, y = _cantilever_xy(cantilever_model, n=100)
     net = ThesisNetwork(hidden=4, epochs=2).fit(x, y)
     path = save_model(tmp_path / "m.json", net, target="position", inputs=["gauge1_v", "gauge2_v", "gauge3_v"])
-    np.testing.assert_allclose(load_model(path).network.predict(x), net.predict(x), rtol=1e-12)
+    np.testing.assert_allclose(load_model(path).network.predict(x), net.predict(x), rtol=EXACT_RTOL)
     text = path.read_text()
     (tmp_path / "v.json").write_text(text.replace('"version": 1', '"version": 99'))
     with pytest.raises(DataFileError, match="version 99"):
