@@ -17,7 +17,6 @@ import sys
 from pathlib import Path
 
 from flexdigit import __version__
-from flexdigit._json import to_jsonable
 
 #: Modules that add sub-commands, in the order of the architecture (params -> ... -> report).
 COMMAND_MODULES: tuple[str, ...] = (
@@ -67,6 +66,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         if getattr(args, "json", False):
+            from flexdigit._json import to_jsonable  # numpy: not for --help or --version
+
             json.dump(to_jsonable(result.data), sys.stdout, indent=2)
             sys.stdout.write("\n")
         elif result.text:
