@@ -9,14 +9,18 @@ where its values come from; PyElastica keeps its analytical solutions in ``syste
   (Euler-Bernoulli).
 - Second-order responses with known wn and zeta, with seeded white noise (identification).
 - A closed-form cantilever gauge model, independent of the twin (tactile).
+- The digit's elastica with contact (a unilateral Winkler / Hunt-Crossley foundation, point forces), solved
+  as a boundary-value problem with ``scipy.integrate.solve_bvp`` without the twin's solvers (palpation).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
 
@@ -142,3 +146,363 @@ def assert_entries_unchanged(entries, chapter: str) -> None:
         f"entries changed from {FAST_BASELINE_FILE.name} (if meant, rewrite it with "
         "tests/data/update_report_baseline.py and commit the diff with its reason):\n" + "\n".join(moved)
     )
+
+
+# ------------------------------------------------------------------------- the digit's elastica with contact
+#
+# Nothing here imports the twin's solvers: an oracle is written from the physics, so that agreeing with it means
+# something.
+#
+# :func:`digit_contact_bvp` is the planar elastica of the digit (inextensible strip, rigid supports, point masses,
+# the cable's end moment, a unilateral Winkler / Hunt-Crossley foundation fixed in the world, point forces), solved
+# as a multi-segment boundary-value problem with ``scipy.integrate.solve_bvp``. Per unit arc length ``s``::
+#
+#     x' = cos(theta)   y' = sin(theta)   theta' = M / EI(s)          (0 on a rigid support)
+#     N' = -f(s)        M' = -(cos(theta) N_y - sin(theta) N_x)
+#
+# with ``N`` the resultant of every external force beyond ``s``, ``M`` the bending moment, and ``f`` the distributed
+# load: the strip's weight and the foundation ``(0, -side k(x) max(0, side y - gap)^n)`` where ``x`` lies inside the
+# body. Boundary conditions: clamped at ``s = 0``; at the tip ``N = 0`` and ``M = T e`` (the cable anchored at the
+# tip at eccentricity ``e``, thesis 3.3); ``T = k_c max(0, dL - e theta(L))`` (E 3.11, a tension-only cable of
+# stiffness ``k_c``) with ``T`` an unknown parameter. Point loads (the supports' weights, point forces) are jumps of
+# ``N`` between segments.
+
+
+@dataclass
+class Segment:
+    """One stretch of the digit: ``[s0, s1]`` (m), bending stiffness (N m^2; inf for rigid)."""
+
+    s0: float
+    s1: float
+    ei: float
+    load_b_n_m: float = 0.0  # a world-fixed line load towards +b on this stretch (N/m)
+
+
+@dataclass
+class BVPSolution:
+    s: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    theta: np.ndarray
+    tension_n: float
+    tip: np.ndarray
+    contact_force_n: float
+    contact_centroid_m: float
+    converged: bool
+    message: str
+
+
+def thesis_digit_segments(params, calibration, *, housing: bool = True) -> tuple[list[Segment], list[float]]:
+    """The digit as 2.2 describes it: three 80 mm strips between 10 mm rigid supports (half supports at the clamp
+    and the tip); returns the segments and the support positions (m), where the supports' masses sit."""
+    geo, mat = params.geometry, params.material
+    n = geo.section_count
+    pitch = geo.section_pitch_m
+    half = 0.5 * (pitch - geo.strip_length_m / n)
+    ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4
+    segments = []
+    supports = [pitch * (k + 1) for k in range(n)]
+    edge = 0.0
+    for k in range(n):
+        lo, hi = k * pitch + half, (k + 1) * pitch - half
+        segments.append(Segment(edge, lo, np.inf))
+        segments.append(Segment(lo, hi, ei_strip + (calibration.housing_ei_n_m2[k] if housing else 0.0)))
+        edge = hi
+    segments.append(Segment(edge, geo.digit_length_m, np.inf))
+    # cut rigid stretches at the supports' centres (point masses there)
+    out = []
+    for seg in segments:
+        cut = [p for p in supports if seg.s0 < p < seg.s1]
+        bounds = [seg.s0, *cut, seg.s1]
+        out += [Segment(a, b, seg.ei) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+    return out, supports
+
+
+def digit_contact_bvp(
+    segments: list[Segment],
+    *,
+    strip_mass_per_m: float = 0.0,
+    point_masses: dict[float, float] | None = None,
+    gravity_ab: tuple[float, float] = (0.0, 0.0),
+    eccentricity_m: float = 0.0,
+    cable_stiffness_n_m: float = 0.0,
+    cable_shortening_m: float | None = None,
+    tissue: dict | None = None,
+    point_forces_b: dict[float, float] | None = None,
+    pressures_b: list[tuple[float, float, float]] = (),
+    nodes_per_segment: int = 30,
+    tol: float = 1e-5,
+    max_nodes: int = 5000,
+    continuation: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0),
+) -> BVPSolution:
+    """Solve the digit's elastica with contact (module docstring).
+
+    ``tissue``: ``{"start", "end", "gap", "modulus", "exponent", "side", "inclusions": [(centre, width, ratio)]}``
+    (m, N/m^2; ``side`` +1 on the cable side). ``point_masses`` and ``point_forces_b``: ``{s: kg}`` and
+    ``{s: N towards +b}`` at arc positions that are segment ends. ``pressures_b``: ``(start, end, total N)`` line
+    loads spread evenly over arc stretches.
+
+    The body's ends and its inclusions' edges are where the foundation's modulus jumps; collocation cannot
+    converge across a jump, so each is a free boundary: the arc position where the digit crosses it is an unknown
+    parameter with the condition ``x(s_cut) = cut``, and on every resulting piece the modulus is constant.
+    """
+    point_masses = point_masses or {}
+    point_forces_b = point_forces_b or {}
+    for at in sorted(set(point_forces_b) | set(point_masses)):  # point loads act between two stretches
+        segments = [
+            piece
+            for seg in segments
+            for piece in (
+                [Segment(seg.s0, at, seg.ei, seg.load_b_n_m), Segment(at, seg.s1, seg.ei, seg.load_b_n_m)]
+                if seg.s0 < at < seg.s1
+                else [seg]
+            )
+        ]
+    for start, end, total in pressures_b:  # split the stretches at the line loads' ends, load the ones inside
+        split = []
+        for seg in segments:
+            bounds = [seg.s0, *[c for c in (start, end) if seg.s0 < c < seg.s1], seg.s1]
+            for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+                inside = start <= 0.5 * (a + b) <= end
+                split.append(Segment(a, b, seg.ei, seg.load_b_n_m + (total / (end - start) if inside else 0.0)))
+        segments = split
+    g = np.asarray(gravity_ab, dtype=float)
+    has_cable = cable_shortening_m is not None and cable_stiffness_n_m > 0
+    side = float(tissue.get("side", 1.0)) if tissue else 1.0
+    length = segments[-1].s1
+
+    def modulus_of(x):
+        k = np.where((x > tissue["start"]) & (x < tissue["end"]), tissue["modulus"], 0.0)
+        for centre, width, ratio in tissue.get("inclusions", ()):
+            k = np.where(np.abs(x - centre) < width / 2, k * ratio, k)
+        return k
+
+    cuts = []
+    if tissue is not None:
+        cuts = [tissue["start"], tissue["end"]]
+        for centre, width, _ in tissue.get("inclusions", ()):
+            cuts += [centre - width / 2, centre + width / 2]
+        cuts = sorted(set(cuts))
+
+    # first guess of the shape: the arc the cable alone would bend if the compliance were uniform (E 3.11); then
+    # each solve's shape places the cuts (and the modulus of every piece) for the next, until nothing moves
+    flex = np.array([1.0 / seg.ei if np.isfinite(seg.ei) else 0.0 for seg in segments])
+    lengths = np.array([seg.s1 - seg.s0 for seg in segments])
+    theta_tip = (cable_shortening_m / eccentricity_m) if has_cable else 0.0
+    compliance = np.concatenate([[0.0], np.cumsum(lengths * flex)])
+    total = compliance[-1] if compliance[-1] > 0 else 1.0
+    s_fine = np.linspace(0.0, length, 5001)
+    th_fine = theta_tip * np.interp(s_fine, [seg.s0 for seg in segments] + [length], compliance) / total
+    mid = 0.5 * (th_fine[1:] + th_fine[:-1])
+    shape = (
+        s_fine,
+        np.concatenate([[0.0], np.cumsum(np.cos(mid) * np.diff(s_fine))]),
+        np.concatenate([[0.0], np.cumsum(np.sin(mid) * np.diff(s_fine))]),
+        th_fine,
+    )
+    curvature = theta_tip / total
+    layout = None
+    result = None
+    for _attempt in range(8):
+        arcs = {c: float(np.interp(c, shape[1], shape[0])) for c in cuts if shape[1][0] < c < shape[1][-1]}
+        k_of = (lambda x: modulus_of(x)) if tissue is not None else (lambda x: np.zeros_like(x))
+        result, shape, new_layout = _solve_pieces(
+            segments,
+            arcs,
+            shape,
+            k_of,
+            curvature,
+            has_cable,
+            eccentricity_m,
+            cable_stiffness_n_m,
+            cable_shortening_m,
+            strip_mass_per_m,
+            point_masses,
+            point_forces_b,
+            g,
+            tissue,
+            side,
+            nodes_per_segment,
+            tol,
+            max_nodes,
+            continuation,
+        )
+        if not result.converged or new_layout == layout:
+            break
+        layout = new_layout
+        continuation = (1.0,)  # later solves start from a shape near the answer
+    return result
+
+
+def _solve_pieces(
+    segments,
+    cut_arcs,
+    shape,
+    k_of,
+    curvature_guess,
+    has_cable,
+    e,
+    kc,
+    dl,
+    mu,
+    point_masses,
+    point_forces_b,
+    g,
+    tissue,
+    side,
+    nodes,
+    tol,
+    max_nodes,
+    continuation,
+):
+    """One multi-segment solve with the cuts where ``shape`` puts them (their arcs free) and each piece's modulus
+    from ``shape``; returns the solution, its shape and the layout (which cut in which segment, each modulus)."""
+    s_fine, x_fine, y_fine, th_fine = shape
+    length = segments[-1].s1
+    # pieces: (lo, hi, ei) where lo/hi are a float or ("p", index into the free arcs)
+    pieces = []
+    free = []  # (cut x, arc guess)
+    line_load = []
+    for seg in segments:
+        inside = sorted((a, c) for c, a in cut_arcs.items() if seg.s0 < a < seg.s1)
+        lo = seg.s0
+        for a, c in inside:
+            free.append((c, a))
+            ref = ("p", len(free))
+            pieces.append([lo, ref, seg.ei])
+            line_load.append(seg.load_b_n_m)
+            lo = ref
+        pieces.append([lo, seg.s1, seg.ei])
+        line_load.append(seg.load_b_n_m)
+    npiece = len(pieces)
+    flex = np.array([1.0 / pc[2] if np.isfinite(pc[2]) else 0.0 for pc in pieces])
+
+    def value(end, p):
+        return p[end[1]] if isinstance(end, tuple) else end
+
+    def guess_value(end):
+        return free[end[1] - 1][1] if isinstance(end, tuple) else end
+
+    mids = np.array([0.5 * (guess_value(pc[0]) + guess_value(pc[1])) for pc in pieces])
+    k_piece = k_of(np.interp(mids, s_fine, x_fine))
+    exponent = float(tissue.get("exponent", 1.0)) if tissue else 1.0
+    gap = float(tissue["gap"]) if tissue else 0.0
+    scale = [1.0]
+
+    def point_load(s):
+        f = point_masses.get(s, 0.0) * g
+        return f + np.array([0.0, point_forces_b.get(s, 0.0)])
+
+    def rhs(tau, z, p):
+        out = np.empty_like(z)
+        for i, (lo, hi, _) in enumerate(pieces):
+            x, y, th, nx, ny, m = z[6 * i : 6 * i + 6]
+            h = value(hi, p) - value(lo, p)
+            q = scale[0] * k_piece[i] * np.maximum(side * y - gap, 0.0) ** exponent
+            out[6 * i + 0] = h * np.cos(th)
+            out[6 * i + 1] = h * np.sin(th)
+            out[6 * i + 2] = h * m * flex[i]
+            out[6 * i + 3] = -h * mu * g[0]
+            out[6 * i + 4] = -h * (mu * g[1] + line_load[i] - side * q)
+            out[6 * i + 5] = -h * (np.cos(th) * ny - np.sin(th) * nx)
+        return out
+
+    def jac(tau, z, p):  # analytic: solve_bvp's finite differences over 60+ states dominate its cost
+        n, m = z.shape
+        dz = np.zeros((n, n, m))
+        dp = np.zeros((n, p.size, m))
+        f = rhs(tau, z, p)
+        for i, (lo, hi, _) in enumerate(pieces):
+            r = 6 * i
+            x, y, th, nx, ny, mm = z[r : r + 6]
+            h = value(hi, p) - value(lo, p)
+            depth = side * y - gap
+            dq = scale[0] * k_piece[i] * exponent * np.where(depth > 0, np.abs(depth) ** (exponent - 1), 0.0) * side
+            dz[r + 0, r + 2] = -h * np.sin(th)
+            dz[r + 1, r + 2] = h * np.cos(th)
+            dz[r + 2, r + 5] = h * flex[i]
+            dz[r + 4, r + 1] = h * side * dq
+            dz[r + 5, r + 2] = h * (np.sin(th) * ny + np.cos(th) * nx)
+            dz[r + 5, r + 3] = h * np.sin(th)
+            dz[r + 5, r + 4] = -h * np.cos(th)
+            for end, sign in ((hi, 1.0), (lo, -1.0)):
+                if isinstance(end, tuple):
+                    dp[r : r + 6, end[1]] += sign * f[r : r + 6] / h
+        return dz, dp
+
+    def bc(za, zb, p):
+        tension = p[0]
+        res = [za[0], za[1], za[2]]
+        for i in range(npiece - 1):
+            end, start = zb[6 * i : 6 * i + 6], za[6 * (i + 1) : 6 * (i + 1) + 6]
+            hi = pieces[i][1]
+            jump = np.zeros(2) if isinstance(hi, tuple) else point_load(hi)
+            res += [end[0] - start[0], end[1] - start[1], end[2] - start[2], end[5] - start[5]]
+            res += [end[3] - start[3] - jump[0], end[4] - start[4] - jump[1]]
+            if isinstance(hi, tuple):
+                res.append(end[0] - free[hi[1] - 1][0])  # the digit crosses the cut here
+        tip = zb[6 * (npiece - 1) : 6 * npiece]
+        jump = point_load(length)
+        res += [tip[3] - jump[0], tip[4] - jump[1], tip[5] - tension * e]
+        res.append(tension - kc * max(0.0, dl - e * tip[2]) if has_cable else tension)
+        return np.array(res)
+
+    tau = np.linspace(0.0, 1.0, nodes)
+    z0 = np.zeros((6 * npiece, tau.size))
+    for i, (lo, hi, _) in enumerate(pieces):
+        s = guess_value(lo) + tau * (guess_value(hi) - guess_value(lo))
+        z0[6 * i + 2] = np.interp(s, s_fine, th_fine)
+        z0[6 * i + 0] = np.interp(s, s_fine, x_fine)
+        z0[6 * i + 1] = np.interp(s, s_fine, y_fine)
+        z0[6 * i + 5] = curvature_guess
+    p0 = np.array([curvature_guess / e if has_cable else 0.0] + [a for _, a in free])
+    mesh, guess, p_guess = tau, z0, p0
+    sol = None
+    for factor in continuation if tissue is not None else (1.0,):
+        scale[0] = factor
+        sol = solve_bvp(rhs, bc, mesh, guess, p=p_guess, tol=tol, max_nodes=max_nodes, fun_jac=jac)
+        if not sol.success:
+            break
+        mesh, guess, p_guess = sol.x, sol.y, sol.p
+    fine = np.linspace(0.0, 1.0, 401)
+    z = sol.sol(fine)
+    p = sol.p
+    s_all, x_all, y_all, th_all = [], [], [], []
+    force, moment = 0.0, 0.0
+    for i, (lo, hi, _) in enumerate(pieces):
+        si = value(lo, p) + fine * (value(hi, p) - value(lo, p))
+        q = k_piece[i] * np.maximum(side * z[6 * i + 1] - gap, 0.0) ** exponent
+        force += np.trapezoid(q, si)
+        moment += np.trapezoid(q * si, si)
+        s_all.append(si)
+        x_all.append(z[6 * i])
+        y_all.append(z[6 * i + 1])
+        th_all.append(z[6 * i + 2])
+    # the contact force exactly, from the ODE's own balance: N(0) is every external force on the digit
+    known = mu * length * g[1] + sum(m * g[1] for m in point_masses.values()) + sum(point_forces_b.values())
+    known += sum(
+        load * (seg.s1 - seg.s0) for seg, load in zip(segments, [sg.load_b_n_m for sg in segments], strict=True)
+    )
+    contact_b = float(z[4, 0]) - known
+    tip = np.array([z[6 * (npiece - 1), -1], z[6 * (npiece - 1) + 1, -1]])
+    centroid = moment / force if force > 0 else float("nan")
+    s_new, x_new = np.concatenate(s_all), np.concatenate(x_all)
+    order = np.argsort(s_new, kind="stable")
+    new_shape = (s_new[order], x_new[order], np.concatenate(y_all)[order], np.concatenate(th_all)[order])
+    result = BVPSolution(
+        new_shape[0],
+        new_shape[1],
+        new_shape[2],
+        new_shape[3],
+        float(p[0]),
+        tip,
+        contact_b,
+        centroid,
+        bool(sol.success),
+        sol.message,
+    )
+    # the layout this solve assumed; the next one (from the new shape) must find the same for the answer to stand
+    where = tuple(
+        sorted((c, next(i for i, sg in enumerate(segments) if sg.s0 < a < sg.s1)) for c, a in cut_arcs.items())
+    )
+    return result, new_shape, (where, tuple(np.round(k_piece, 9)))

@@ -268,6 +268,7 @@ class Chain:
         tol=1e-11,
         max_iter=80,
         max_step_rad=0.35,
+        contact=None,
     ) -> StaticSolution:
         """Equilibria of a batch of load cases (batched Newton on the total potential energy's gradient).
 
@@ -286,6 +287,9 @@ class Chain:
             Motor-side cable shortening ``r_M (theta_M - theta_M0)`` (E 3.11); None: no cable.
         psi0 : array_like, shape (B, n), optional
             Starting angles.
+        contact : optional
+            A shape-dependent load (:class:`flexdigit.twin.contact.TissueContact`): ``generalized(psi)`` gives its
+            generalised forces and their derivatives, ``resultant(psi)`` the force it carries past the gauges.
 
         Returns
         -------
@@ -396,6 +400,10 @@ class Chain:
                 tension, taut = self.cable_tension(psi[:, -1], short)
                 res[:, -1] -= e * tension
                 jac[:, -1, -1] += kc * e * e * taut
+            if contact is not None:
+                q_contact, dq_contact, _ = contact.generalized(psi)
+                res -= q_contact
+                jac -= dq_contact
             step = np.linalg.solve(jac, res[..., None])[..., 0]
             biggest = np.max(np.abs(step), axis=1, keepdims=True)
             step *= np.minimum(1.0, max_step_rad / np.maximum(biggest, 1e-300))
@@ -404,6 +412,8 @@ class Chain:
                 converged = True
                 break
         tension = self.cable_tension(psi[:, -1], short)[0] if has_cable else np.zeros(b)
+        if contact is not None and np.all(np.isfinite(psi)):
+            beyond = beyond + contact.resultant(psi)[3]
         if not np.all(np.isfinite(psi)):
             bad = int(np.sum(~np.all(np.isfinite(psi), axis=1)))
             raise ArithmeticError(f"static solve diverged (non-finite angles) in {bad} of {b} load cases")
@@ -483,10 +493,14 @@ class DynamicState:
         self.psi = np.zeros(n) if psi is None else np.array(psi, dtype=float)
         self.omega = np.zeros(n) if omega is None else np.array(omega, dtype=float)
         self._idx = np.arange(n)
+        #: A shape-dependent load (:class:`flexdigit.twin.contact.TissueContact`) or None.
+        self.contact = None
         self.set_loads(None, None)
 
-    def set_loads(self, load_s_m, load_mass_kg):
-        """Hang weights (kg) at arc positions (m): they add mass and weight; None clears them."""
+    def set_loads(self, load_s_m, load_mass_kg, force_s_m=None, force_ab_n=None):
+        """Hang weights (kg) at arc positions (m): they add mass and weight; None clears them. World-fixed forces
+        ``force_ab_n`` (K, 2) at arc positions ``force_s_m`` (K,) (presses, :mod:`flexdigit.twin.contact`) add
+        their load only."""
         ch = self.chain
         a = ch.a_mass.copy()
         g = ch.g_gravity.copy()
@@ -498,6 +512,11 @@ class DynamicState:
             a += lever.T @ (m[:, None] * lever)
             g += lever.T @ (m[:, None] * ch.gravity[None, :])
             beyond = beyond + ((s[None, :] > ch.gauge_s_m[:, None]) @ m)[:, None] * ch.gravity
+        if force_s_m is not None and np.size(force_s_m):
+            fs = np.asarray(force_s_m, dtype=float).reshape(-1)
+            fab = np.asarray(force_ab_n, dtype=float).reshape(-1, 2)
+            g = g + ch.load_forces(fs, fab)
+            beyond = beyond + (fs[None, :] > ch.gauge_s_m[:, None]).astype(float) @ fab
         self._a = a
         self._g = g
         self._ga, self._gb = g[:, 0].copy(), g[:, 1].copy()
@@ -515,6 +534,9 @@ class DynamicState:
         taut = stretch > 0
         if taut:
             rhs[-1] += ch.eccentricity * ch.cable_stiffness * stretch
+        if self.contact is not None:
+            q_contact, self._dq_psi, self._dq_omega = self.contact.generalized(psi[None], omega[None])
+            rhs = rhs + q_contact[0]
         return m, sm, rhs, s, c, taut
 
     #: A step is halved (recursively) when it would turn any link faster than this many radians per step: the
@@ -556,6 +578,10 @@ class DynamicState:
             f_psi[-1, -1] += ch.cable_stiffness * ch.eccentricity**2
             q_t[-1] = ch.eccentricity * ch.cable_stiffness * (shortening1 - shortening0) / h
         f_omega = (2.0 * sm) * omega + ch.c_psi
+        if self.contact is not None:  # F = M alpha + N - Q: the contact's Q enters with a minus
+            f_psi = f_psi - self._dq_psi[0]
+            if self._dq_omega is not None:
+                f_omega = f_omega - self._dq_omega[0]
         iteration = m + gh * f_omega + (gh * gh) * f_psi
         # stage 1: W k1 = f(y) + gamma h f_t, in the M-scaled block form (see the module docstring)
         b1 = _solve(iteration, rhs + gh * q_t - gh * (f_psi @ omega))
@@ -577,7 +603,13 @@ class DynamicState:
 
     def axial_force(self, shortening: float) -> np.ndarray:
         """Quasi-static axial force at the gauges (N, tension +)."""
-        return self.chain.axial_force(self.psi, self._beyond, self.tension(shortening))
+        return self.chain.axial_force(self.psi, self.beyond(), self.tension(shortening))
+
+    def beyond(self, psi=None) -> np.ndarray:
+        """Force carried past each gauge (G, 2): weights, presses and, at angles ``psi`` (default now), contact."""
+        if self.contact is None:
+            return self._beyond
+        return self._beyond + self.contact.resultant((self.psi if psi is None else psi)[None])[3][0]
 
 
 def uniform_cells(start_m: float, end_m: float, n_cells: int):

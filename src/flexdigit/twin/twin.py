@@ -116,6 +116,8 @@ class Twin:
         self._pulley_m = self.params.actuator.pulley_radius_m
         self._angle_taut = float(command_to_angle_rad(self.params.actuator.equilibrium_command, self.params))
         self._loads: list[tuple[float, float]] = []
+        self._presses: list = []  # PointForce / Pressure (flexdigit.twin.contact)
+        self.tissue = None
         self.dynamics = DynamicState(self.chain)
         self._settle()
         self.time_s = 0.0
@@ -130,15 +132,29 @@ class Twin:
 
     def _settle(self) -> None:
         """Put the digit at rest in static equilibrium under the current loads and servo angle."""
-        loads = self._load_arrays()
-        shortening = self._shortening(self.servo.angle) if self.cable else None
-        sol = self.chain.solve_static(
-            loads[0][None, :] if loads[0].size else None,
-            (loads[1][:, None] * self.chain.gravity[None, :])[None] if loads[0].size else None,
-            cable_shortening_m=None if shortening is None else [shortening],
-        )
-        self.dynamics.psi = sol.psi_rad[0].copy()
+        self.dynamics.psi = self._static().psi_rad[0].copy()
         self.dynamics.omega = np.zeros(self.chain.n)
+
+    def _static(self, tip_force_n=None):
+        """The static equilibrium under the hung weights, presses, the body beside it and the servo angle now."""
+        s_arr, m_arr = self._load_arrays()
+        forces_s, forces_ab = self._press_arrays()
+        weights_ab = m_arr[:, None] * self.chain.gravity[None, :]
+        load_s = np.concatenate([s_arr, forces_s])
+        load_f = np.concatenate([weights_ab, forces_ab])
+        return self.chain.solve_static(
+            load_s[None, :] if load_s.size else None,
+            load_f[None] if load_s.size else None,
+            tip_force_n=None if tip_force_n is None else [[0.0, tip_force_n]],
+            cable_shortening_m=[self._shortening(self.servo.angle)] if self.cable else None,
+            contact=self.dynamics.contact,
+            max_iter=200 if self.dynamics.contact is not None else 80,
+        )
+
+    def _press_arrays(self):
+        from flexdigit.twin.contact import quadrature
+
+        return quadrature(self.chain, self._presses)
 
     def _load_arrays(self):
         if not self._loads:
@@ -213,7 +229,7 @@ class Twin:
             tension = self.chain.cable_stiffness * stretch if stretch > 0 else 0.0
         else:
             tension = 0.0
-        axial = self.chain.axial_force(psi, self.dynamics._beyond, tension)
+        axial = self.chain.axial_force(psi, self.dynamics.beyond(psi), tension)
         _, theta_now = self._interpolate(t, False)
         return kappa, axial, tension, theta_now
 
@@ -253,13 +269,7 @@ class Twin:
         """Hold the digit at rest under an extra sideways tip force (N, towards the cable side), as a hand does
         before a release test (3.1.2); the next :meth:`advance` releases it."""
         force = check_real(tip_force_n, "tip_force_n", "Twin.deflect")
-        s_arr, m_arr = self._load_arrays()
-        sol = self.chain.solve_static(
-            s_arr[None, :] if s_arr.size else None,
-            (m_arr[:, None] * self.chain.gravity[None, :])[None] if s_arr.size else None,
-            tip_force_n=[[0.0, force]],
-            cable_shortening_m=[self._shortening(self.servo.angle)] if self.cable else None,
-        )
+        sol = self._static(tip_force_n=force)
         self.dynamics.psi = sol.psi_rad[0].copy()
         self.dynamics.omega = np.zeros(self.chain.n)
         self.servo.rate = 0.0
@@ -281,15 +291,71 @@ class Twin:
         """
         m, s = check_load(mass_kg, position_from_base_m, self.params)
         self._loads.append((float(s), float(m)))
-        s_arr, m_arr = self._load_arrays()
-        self.dynamics.set_loads(s_arr, m_arr)
+        self._apply_loads()
         self.disturb()
+
+    def _apply_loads(self) -> None:
+        s_arr, m_arr = self._load_arrays()
+        self.dynamics.set_loads(s_arr, m_arr, *self._press_arrays())
 
     def clear_loads(self) -> None:
         """Remove every hung weight (a jolt, like hanging one: :meth:`disturb`)."""
         self._loads.clear()
-        self.dynamics.set_loads(None, None)
+        self._apply_loads()
         self.disturb()
+
+    # ------------------------------------------------------------------------------------------------ contact
+    def press(self, force_n: float, position_from_base_m: float) -> None:
+        """Add a world-fixed sideways point force (N, + towards the cable side) at a position along the digit (m
+        from the base); it stays (with any others) until :meth:`clear_presses`. The digit is not jolted: it moves
+        from where it is (the next :meth:`advance` integrates the motion)."""
+        from flexdigit.twin.contact import check_point_force
+
+        self._presses.append(check_point_force(position_from_base_m, force_n, self.chain.length_m, "Twin.press"))
+        self._apply_loads()
+
+    def apply_pressure(self, total_n: float, start_m: float, end_m: float) -> None:
+        """Add a world-fixed sideways line load: ``total_n`` (N, + towards the cable side) spread evenly over the
+        stretch ``start_m..end_m`` (m from the base). Stays until :meth:`clear_presses`."""
+        from flexdigit.twin.contact import check_pressure
+
+        self._presses.append(check_pressure(start_m, end_m, total_n, self.chain.length_m, "Twin.apply_pressure"))
+        self._apply_loads()
+
+    def clear_presses(self) -> None:
+        """Remove every point force and line load added by :meth:`press` and :meth:`apply_pressure`."""
+        self._presses.clear()
+        self._apply_loads()
+
+    @property
+    def presses(self) -> list:
+        """The point forces and line loads acting now (:mod:`flexdigit.twin.contact`)."""
+        return list(self._presses)
+
+    def set_tissue(self, tissue=None, *, settle: bool = False) -> None:
+        """Put a compliant body beside the digit (:class:`flexdigit.twin.contact.Tissue`), or take it away (None).
+
+        The digit meets it where it is: with ``settle`` it is put at rest in the new static equilibrium instead
+        (a body placed before the run, the digit already pressing on it).
+        """
+        from flexdigit.twin.contact import Tissue, TissueContact
+
+        if tissue is not None and not isinstance(tissue, Tissue):
+            raise ParameterError(f"The 'tissue' parameter of Twin.set_tissue must be a Tissue or None. Got {tissue!r}.")
+        self.tissue = tissue
+        self.dynamics.contact = TissueContact(self.chain, tissue) if tissue is not None else None
+        if settle:
+            self._settle()
+            self._prev = self._snapshot()
+
+    def contact_state(self):
+        """The body's force on the digit now (N, + towards the cable side), its centroid (m of arc from the base)
+        and the stretch in contact ``(first, last)`` (m; NaN without contact): the truth the gauges are read for."""
+        if self.dynamics.contact is None:
+            return 0.0, math.nan, (math.nan, math.nan)
+        psi, _ = self.state()
+        force, centroid, (first, last), _ = self.dynamics.contact.resultant(psi[None], self.dynamics.omega[None])
+        return float(force[0]), float(centroid[0]), (float(first[0]), float(last[0]))
 
     def disturb(self) -> None:
         """Jolt the cable in its guides (a weight hung, lifted or re-hung by hand): the cable-guide friction

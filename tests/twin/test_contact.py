@@ -1,0 +1,267 @@
+"""Contact in the twin against solutions it was not written from.
+
+- The elastica boundary-value problem of the whole digit (rigid supports, support masses, the cable, the body's
+  foundation with its edges and inclusions as free boundaries), solved by ``scipy.integrate.solve_bvp`` in
+  ``tests/oracles.py``: tip position and contact force within :data:`BVP_RTOL` (1 %, issue 13) at the twin's
+  default resolution (3 cells per section).
+- A beam on an elastic foundation (Hetenyi 1946): the small-deflection tip load of a uniform cantilever resting on
+  a Winkler foundation, from the general solution of ``EI y'''' + k y = 0`` (a 4 x 4 linear solve for its
+  constants): :data:`FOUNDATION_RTOL`.
+- Point forces and a line load in small deflection: the bending moment at every spring is the statics of a
+  cantilever, ``sum P (a - x) + q (end - x)^2 / 2`` (exact for the chain at its springs): :data:`MOMENT_RTOL`.
+- Dynamics: a uniform strip oscillating in its first mode against a body that touches it along its whole length
+  (gap 0) is a bilinear oscillator; the foundation adds ``k / mu`` to the mode's ``w^2`` without changing its shape,
+  so the period is ``pi / w1 + pi / sqrt(w1^2 + k / mu)`` with ``w1`` Euler-Bernoulli's: :data:`PERIOD_RTOL`.
+"""
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexdigit.errors import ParameterError
+from flexdigit.params import RigParams
+from flexdigit.twin import Twin
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.contact import Inclusion, PointForce, Pressure, Tissue, solve_contact
+from flexdigit.twin.digit import Chain, DynamicState
+from flexdigit.twin.twin import cable_shortening_m, cached_digit
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from oracles import digit_contact_bvp, thesis_digit_segments  # noqa: E402
+
+BVP_RTOL = 0.01
+FOUNDATION_RTOL = 0.01
+MOMENT_RTOL = 1e-6
+PERIOD_RTOL = 0.01
+
+PARAMS = RigParams()
+CAL = default_calibration()
+L_STRIP, EI_STRIP = 0.24, 205e9 * 12.7e-3 * 0.381e-3**3 / 12
+MU = 7850.0 * 12.7e-3 * 0.381e-3
+
+
+def _oracle(tissue: Tissue, command: int, **extra):
+    segments, supports = thesis_digit_segments(PARAMS, CAL)
+    body = {
+        "start": tissue.start_m,
+        "end": tissue.end_m,
+        "gap": tissue.gap_m,
+        "modulus": tissue.modulus_n_m2,
+        "exponent": tissue.exponent,
+        "side": tissue.sign,
+        "inclusions": [(i.centre_m, i.width_m, i.ratio) for i in tissue.inclusions],
+    }
+    return digit_contact_bvp(
+        segments,
+        strip_mass_per_m=PARAMS.material.strip_density_kg_m3 * PARAMS.geometry.cross_section_m2,
+        point_masses=dict(zip(supports, CAL.support_mass_kg, strict=True)),
+        gravity_ab=(-9.80665, 0.0),  # the twin's default mounting: vertical, tip up
+        eccentricity_m=PARAMS.geometry.cable_eccentricity_m,
+        cable_stiffness_n_m=CAL.cable_stiffness_n_m,
+        cable_shortening_m=float(cable_shortening_m(command, PARAMS)),
+        tissue=body,
+        **extra,
+    )
+
+
+CASES = {
+    # a stiff body beside the tip, the cable pressing the digit into it (the palpation set-up)
+    "tip, linear": (Tissue(0.24, 0.30, 0.02, 5000.0), 20, {}),
+    # Hertzian exponent, contact over the middle section, past a rigid support
+    "middle, Hunt-Crossley n = 1.5": (Tissue(0.10, 0.20, 0.01, 20000.0, exponent=1.5), 25, {}),
+    # a 3x inclusion inside the contact: its edges are free boundaries of the BVP
+    "inclusion in the contact": (Tissue(0.15, 0.30, 0.04, 2000.0, inclusions=(Inclusion(0.255, 0.01, 3.0),)), 30, {}),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(CASES))
+def test_contact_statics_match_the_elastica_bvp(name):
+    tissue, command, _ = CASES[name]
+    ref = _oracle(tissue, command)
+    assert ref.converged, ref.message
+    chain = cached_digit(PARAMS, CAL, True, "vertical", 3)
+    sol = solve_contact(chain, tissue=tissue, cable_shortening_m=[float(cable_shortening_m(command, PARAMS))])
+    assert sol.converged
+    assert ref.contact_force_n < -0.05  # a real contact, pushing the digit back (N)
+    assert np.linalg.norm(sol.tip_m[0] - ref.tip) / np.linalg.norm(ref.tip) < BVP_RTOL
+    assert sol.contact_force_n[0] == pytest.approx(ref.contact_force_n, rel=BVP_RTOL)
+    assert sol.static.tension_n[0] == pytest.approx(ref.tension_n, rel=BVP_RTOL)
+    assert sol.contact_centroid_m[0] == pytest.approx(ref.contact_centroid_m, abs=1e-3)
+
+
+@pytest.mark.slow
+def test_point_forces_and_a_line_load_match_the_bvp():
+    loads = [PointForce(0.12, -0.05), PointForce(0.26, -0.08), Pressure(0.19, 0.25, 0.06)]
+    tissue = Tissue(0.24, 0.30, 0.03, 5000.0)
+    ref = _oracle(tissue, 22, point_forces_b={0.12: -0.05, 0.26: -0.08}, pressures_b=[(0.19, 0.25, 0.06)])
+    assert ref.converged, ref.message
+    chain = cached_digit(PARAMS, CAL, True, "vertical", 3)
+    sol = solve_contact(chain, tissue=tissue, loads=loads, cable_shortening_m=[float(cable_shortening_m(22, PARAMS))])
+    assert np.linalg.norm(sol.tip_m[0] - ref.tip) / np.linalg.norm(ref.tip) < BVP_RTOL
+    assert sol.contact_force_n[0] == pytest.approx(ref.contact_force_n, rel=BVP_RTOL)
+
+
+def test_contact_converges_with_resolution():
+    tissue, command, _ = CASES["tip, linear"]
+    short = [float(cable_shortening_m(command, PARAMS))]
+    forces = [
+        solve_contact(
+            cached_digit(PARAMS, CAL, True, "vertical", c), tissue=tissue, cable_shortening_m=short
+        ).contact_force_n[0]
+        for c in (3, 9, 27)
+    ]
+    # the 27-cell chain stands in for the limit: the error falls roughly as h^2 (3x finer: ~9x smaller)
+    assert abs(forces[0] - forces[2]) > 4 * abs(forces[1] - forces[2])
+
+
+def hetenyi_tip_deflection(p_n, length, ei, k):
+    """Small-deflection tip deflection of a cantilever resting on a Winkler foundation ``k`` (N/m^2) under a tip
+    load ``p_n``: ``y = e^{bx}(A cos bx + B sin bx) + e^{-bx}(C cos bx + D sin bx)``, ``b = (k / 4 EI)^(1/4)``;
+    clamped at 0 (y = y' = 0), free at L (EI y'' = 0, EI y''' = -P)."""
+    b = (k / (4 * ei)) ** 0.25
+
+    def basis(x):  # y, y', y'', y''' of the four solutions at x
+        rows = []
+        for sgn, trig in ((1, 0), (1, 1), (-1, 0), (-1, 1)):
+            z = complex(sgn * b, b)  # e^{(sgn b + i b) x}: real part cos, imaginary part sin
+            rows.append([(z**d * np.exp(z * x)).imag if trig else (z**d * np.exp(z * x)).real for d in range(4)])
+        return np.array(rows).T
+
+    m0, ml = basis(0.0), basis(length)
+    system = np.array([m0[0], m0[1], ml[2], ml[3]])
+    coef = np.linalg.solve(system, [0.0, 0.0, 0.0, -p_n / ei])
+    return float(ml[0] @ coef)
+
+
+def test_beam_on_elastic_foundation_matches_hetenyi():
+    k = 2000.0  # N/m^2: beta L = 1.6, the deflection stays on one side (the unilateral body never lets go)
+    chain = Chain.uniform(L_STRIP, EI_STRIP, 48)
+    p = 1e-4
+    sol = solve_contact(
+        chain, tissue=Tissue(-0.01, 0.3, 0.0, k, side="opposite"), load_s_m=[[L_STRIP]], load_force_ab_n=[[[0, -p]]]
+    )
+    exact = hetenyi_tip_deflection(p, L_STRIP, EI_STRIP, k)
+    assert exact > 0 and -sol.tip_m[0, 1] == pytest.approx(exact, rel=FOUNDATION_RTOL)
+    bare = p * L_STRIP**3 / (3 * EI_STRIP)
+    assert exact < 0.8 * bare  # the foundation carries a real share of the load
+
+
+def line_load_moment(x, lo, hi, total):
+    """Moment at ``x`` of ``total`` N spread evenly on ``[lo, hi]``: ``q/2 ((hi - x)^2 - (max(x, lo) - x)^2)``."""
+    q = total / (hi - lo)
+    inside = np.clip(x, lo, hi)
+    return np.where(x < hi, 0.5 * q * ((hi - x) ** 2 - (inside - x) ** 2), 0.0)
+
+
+def test_point_forces_and_a_line_load_give_the_cantilever_moments():
+    chain = Chain.uniform(L_STRIP, EI_STRIP, 24)
+    loads = [PointForce(0.08, 2e-6), PointForce(0.2, -1e-6), Pressure(0.1, 0.22, 3e-6)]
+    sol = solve_contact(chain, loads=loads)
+    x = chain.joint_s_m
+    curvature = np.diff(sol.static.psi_rad[0], prepend=0.0) / chain.cell_length_m
+    moment = 2e-6 * np.clip(0.08 - x, 0, None) - 1e-6 * np.clip(0.2 - x, 0, None)
+    moment += line_load_moment(x, 0.1, 0.22, 3e-6)
+    np.testing.assert_allclose(curvature * EI_STRIP, moment, rtol=MOMENT_RTOL, atol=1e-12)
+
+
+def test_pressure_quadrature_is_exact_for_the_moment_past_a_spring():
+    # a line load ending between two springs: the 2-point rule per piece still gives the exact statics
+    chain = Chain.uniform(L_STRIP, EI_STRIP, 6)
+    total = 1e-6
+    sol = solve_contact(chain, loads=[Pressure(0.05, 0.17, total)])
+    moment = line_load_moment(chain.joint_s_m, 0.05, 0.17, total)
+    np.testing.assert_allclose(np.diff(sol.static.psi_rad[0], prepend=0) / chain.cell_length_m * EI_STRIP, moment)
+
+
+def test_unilateral_contact_oscillates_as_a_bilinear_oscillator():
+    n = 16
+    chain = Chain.uniform(L_STRIP, EI_STRIP, n, mass_per_length_kg_m=MU)
+    w1 = 1.8751040687**2 * math.sqrt(EI_STRIP / (MU * L_STRIP**4))  # Euler-Bernoulli, clamped-free
+    k = 3.0 * MU * w1**2  # in contact the mode runs at 2 w1: the period is 3/4 of the free one
+    w_chain = chain.linear_modes()[0][0]
+    assert w_chain == pytest.approx(w1, rel=0.01)
+    # start in the chain's own first mode, moving into the body (its surface at the straight strip: gap 0)
+    import scipy.linalg
+
+    m = chain.a_mass
+    vals, vecs = scipy.linalg.eigh(chain.k_psi, m)
+    mode = vecs[:, 0] / np.max(np.abs(vecs[:, 0])) * 1e-3
+    state = DynamicState(chain, psi=np.zeros(n), omega=mode * w_chain)
+    from flexdigit.twin.contact import TissueContact
+
+    state.contact = TissueContact(chain, Tissue(-0.01, 0.3, 0.0, k))
+    h, t, tip, times = 5e-4, 0.0, [], []
+    for _ in range(int(1.2 / h)):
+        state.step(h, -np.inf, -np.inf)
+        t += h
+        tip.append(chain.tip(state.psi)[1])
+        times.append(t)
+    tip, times = np.array(tip), np.array(times)
+    # upward zero crossings of the tip (leaving the body into free flight) are one period apart
+    up = np.flatnonzero((tip[:-1] < 0) & (tip[1:] >= 0))
+    crossings = times[up] - tip[up] * h / (tip[up + 1] - tip[up])
+    period = float(np.mean(np.diff(crossings)))
+    exact = math.pi / w_chain + math.pi / math.sqrt(w_chain**2 + k / MU)
+    assert period == pytest.approx(exact, rel=PERIOD_RTOL)
+    assert period < 0.8 * 2 * math.pi / w_chain  # the body shortens the period
+
+
+def test_the_twin_settles_on_the_static_contact():
+    tissue = Tissue(0.24, 0.30, 0.02, 5000.0, damping_s_m=0.5)
+    twin = Twin(seed=0)
+    twin.set_tissue(tissue)
+    twin.command(20)
+    twin.advance(8.0)
+    force, centroid, _ = twin.contact_state()
+    static = solve_contact(twin.chain, tissue=tissue, cable_shortening_m=[float(cable_shortening_m(20, PARAMS))])
+    assert force == pytest.approx(static.contact_force_n[0], rel=0.01)
+    assert centroid == pytest.approx(static.contact_centroid_m[0], abs=5e-4)
+    np.testing.assert_allclose(twin.tip_position_m(), static.tip_m[0], atol=2e-4)
+
+
+def test_press_and_pressure_on_the_twin_move_the_gauges_as_the_statics_say():
+    twin = Twin(seed=0, command=20)
+    twin.press(-0.05, 0.25)
+    twin.apply_pressure(-0.04, 0.15, 0.2)
+    twin.advance(10.0)
+    static = solve_contact(
+        twin.chain,
+        loads=[PointForce(0.25, -0.05), Pressure(0.15, 0.2, -0.04)],
+        cable_shortening_m=[float(cable_shortening_m(20, PARAMS))],
+    )
+    np.testing.assert_allclose(twin.tip_position_m(), static.tip_m[0], atol=1e-4)
+    twin.clear_presses()
+    assert twin.presses == []
+
+
+def test_set_tissue_settle_starts_at_rest_in_contact():
+    twin = Twin(seed=0, command=25)
+    twin.set_tissue(Tissue(0.24, 0.30, 0.02, 5000.0), settle=True)
+    force0, _, _ = twin.contact_state()
+    twin.advance(1.0)
+    assert force0 < -0.1 and twin.contact_state()[0] == pytest.approx(force0, rel=1e-3)
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: Tissue(0.2, 0.1, 0.0, 1.0), "'end_m' parameter of Tissue"),
+        (lambda: Tissue(0.1, 0.2, 0.0, -5.0), "'modulus_n_m2'"),
+        (lambda: Tissue(0.1, 0.2, float("nan"), 5.0), "'gap_m'"),
+        (lambda: Tissue(0.1, 0.2, 0.0, 5.0, exponent=0.5), "'exponent'"),
+        (lambda: Tissue(0.1, 0.2, 0.0, 5.0, side="left"), "'side'"),
+        (lambda: Tissue(0.1, 0.3, 0, 5, inclusions=(Inclusion(0.2, 0.04, 3), Inclusion(0.21, 0.02, 2))), "overlap"),
+        (lambda: Inclusion(0.2, 0.0, 3.0), "'width_m'"),
+        (lambda: Twin().press(0.1, 0.3), "'position_m' parameter of Twin.press"),
+        (lambda: Twin().press(float("inf"), 0.2), "'force_n' parameter of Twin.press"),
+        (lambda: Twin().apply_pressure(0.1, 0.2, 0.1), "'end_m' parameter of Twin.apply_pressure"),
+        (lambda: Twin().set_tissue("soft"), "'tissue' parameter of Twin.set_tissue"),
+    ],
+)
+def test_bad_contact_inputs_are_named(make, message):
+    with pytest.raises(ParameterError, match=message):
+        make()
