@@ -178,6 +178,15 @@ class Rig(abc.ABC):
         self.operator("Lift every weight and hang it again at the same place.")
         self.wait(settle_s)
 
+    def _apply_tissue(self, tissue) -> None:
+        if tissue is None:
+            self.operator("Take the tissue away from the digit.")
+        else:
+            self.operator(
+                f"Place the tissue beside the digit from {tissue.start_m * 1000:.0f} to {tissue.end_m * 1000:.0f} mm "
+                f"from the base, {tissue.gap_m * 1000:.1f} mm from its axis on the {tissue.side} side."
+            )
+
     def _close(self) -> None:
         """Release the port/device (after the safe command has been sent); nothing to release by default."""
         return None
@@ -238,6 +247,12 @@ class Rig(abc.ABC):
         settle = check_real(settle_s, "settle_s", type(self).__name__, low=0.0)
         self._check_open()
         self._rehang(settle)
+
+    def place_tissue(self, tissue) -> None:
+        """Put a compliant body beside the digit (:class:`flexdigit.twin.contact.Tissue`) or take it away (None):
+        the twin places it, on hardware the operator does (palpation, :mod:`flexdigit.tactile.palpation`)."""
+        self._check_open()
+        self._apply_tissue(tissue)
 
     def clear_loads(self) -> None:
         """Remove every load."""

@@ -112,6 +112,10 @@ class SimRig(Rig):
     def _remove_loads(self) -> None:
         self.twin.clear_loads()
 
+    def _apply_tissue(self, tissue) -> None:
+        self._catch_up()
+        self.twin.set_tissue(tissue)
+
     def _rehang(self, settle_s: float) -> None:
         self._catch_up()
         self.twin.disturb()  # same weights, same places: only the cable-guide friction settles afresh

@@ -338,3 +338,250 @@ def protocol_limits(
                 m_hat = (pl @ (1.0 / mg)) / (pl @ (1.0 / mg**2))
                 mag_mse[j] = np.mean(((m_hat - m[j]) / m[j]) ** 2)
     return ProtocolLimits(a, m, c, contact_error, pos_mse, mag_mse)
+
+
+# ---------------------------------------------------------------------------------------------------- contact
+#: Identifiability of a contact (issue 13): nothing seen; only a product of force and position seen; the force
+#: seen but not where it acts (the position's bound beyond :data:`FORCE_ONLY_FRACTION` of the digit); both.
+CONTACT_ZONES = ("no gauge bends", "position and force confounded", "force only", "identifiable")
+#: A position bound beyond this fraction of the digit's length counts as "force only".
+FORCE_ONLY_FRACTION = 0.1
+
+
+def point_jacobian(model, position_m, force_n, command, step_m: float = 2e-4, rel_step_force: float = 0.01):
+    """``d gauges / d (position, force)`` of a point contact (V/m, V/N), shape (n, 3, 2), by central differences
+    of ``model.point_v`` (:class:`flexdigit.tactile.contact.ContactGaugeModel`), one-sided at the digit's ends."""
+    s = np.atleast_1d(np.asarray(position_m, dtype=float))
+    f = np.broadcast_to(np.asarray(force_n, dtype=float), s.shape)
+    length = model.length_m
+    lo, hi = np.maximum(s - step_m, 0.0), np.minimum(s + step_m, length)
+    df = rel_step_force * np.maximum(np.abs(f), 1e-3)
+    batch_s = np.concatenate([hi, lo, s, s])
+    batch_f = np.concatenate([f, f, f + df, f - df])
+    cmd = np.broadcast_to(np.asarray(command), s.shape)
+    v = model.point_v(batch_s, batch_f, np.tile(cmd, 4)).reshape(4, s.size, 3)
+    d_pos = (v[0] - v[1]) / (hi - lo)[:, None]
+    d_force = (v[2] - v[3]) / (2 * df)[:, None]
+    return np.stack([d_pos, d_force], axis=2)
+
+
+def line_jacobian(model, centre_m, extent_m, total_n, command, step_m: float = 5e-4, rel_step_force: float = 0.01):
+    """``d gauges / d (centre, extent, total)`` of an even line load, shape (n, 3, 3), by central differences
+    of ``model.line_v`` (steps shrunk to stay on the digit)."""
+    c = np.atleast_1d(np.asarray(centre_m, dtype=float))
+    w = np.broadcast_to(np.asarray(extent_m, dtype=float), c.shape)
+    t = np.broadcast_to(np.asarray(total_n, dtype=float), c.shape)
+    length = model.length_m
+    room = np.minimum(c - w / 2, length - c - w / 2)
+    hc = np.clip(room, 1e-6, step_m)  # centre steps that keep the load on the digit
+    hw = np.clip(np.minimum(room * 2, w / 2), 1e-6, step_m)
+    dt = rel_step_force * np.maximum(np.abs(t), 1e-3)
+    cc = np.concatenate([c + hc, c - hc, c, c, c, c])
+    ww = np.concatenate([w, w, w + hw, w - hw, w, w])
+    tt = np.concatenate([t, t, t, t, t + dt, t - dt])
+    cmd = np.broadcast_to(np.asarray(command), c.shape)
+    v = model.line_v(cc, ww, tt, np.tile(cmd, 6)).reshape(6, c.size, 3)
+    return np.stack(
+        [(v[0] - v[1]) / (2 * hc)[:, None], (v[2] - v[3]) / (2 * hw)[:, None], (v[4] - v[5]) / (2 * dt)[:, None]], 2
+    )
+
+
+def fisher_sd(jac, sigma_v) -> np.ndarray:
+    """Cramer-Rao standard deviations ``sqrt(diag(F^-1))``, ``F = J' diag(1/sigma^2) J``, for Jacobians (n, 3, d)
+    and noise (3,) or (n, 3); inf for parameters the information does not reach (singular or conditioning worse
+    than 1e8 after scaling)."""
+    jac = np.asarray(jac, dtype=float)
+    w = 1.0 / np.broadcast_to(np.asarray(sigma_v, dtype=float), jac.shape[:2]) ** 2
+    info = np.einsum("nki,nk,nkj->nij", jac, w, jac)
+    out = np.full((jac.shape[0], jac.shape[2]), np.inf)
+    for i, f in enumerate(info):
+        diag = np.diag(f)
+        if not np.all(diag > 0):
+            continue
+        scale = np.sqrt(diag)
+        corr = f / np.outer(scale, scale)
+        if np.linalg.cond(corr) < 1e8:
+            out[i] = np.sqrt(np.diag(np.linalg.inv(corr))) / scale
+    return out
+
+
+@dataclass
+class ContactBound:
+    """Cramer-Rao bounds of a contact from ``n_readings`` averaged readings, per case.
+
+    ``position_m`` / ``force_n`` the cases; ``position_crlb_m``, ``force_crlb_n`` (inf where not identifiable);
+    ``zone`` one of :data:`CONTACT_ZONES`.
+    """
+
+    position_m: np.ndarray
+    force_n: np.ndarray
+    position_crlb_m: np.ndarray
+    force_crlb_n: np.ndarray
+    zone: np.ndarray
+
+
+def contact_bounds(model, position_m, force_n, command, *, n_readings: int = 1) -> ContactBound:
+    """Cramer-Rao bounds of a point contact's position and force (see :mod:`flexdigit.tactile.contact` for why
+    some contacts cannot be located), with the model's white noise over ``n_readings`` averaged readings."""
+    s = np.atleast_1d(np.asarray(position_m, dtype=float))
+    f = np.broadcast_to(np.asarray(force_n, dtype=float), s.shape)
+    sigma = np.asarray(model.noise_v, dtype=float) / np.sqrt(n_readings)
+    jac = point_jacobian(model, s, f, command)
+    sd = fisher_sd(jac, sigma)
+    cmd = np.broadcast_to(np.asarray(command), s.shape)
+    change = np.abs(model.point_v(s, f, cmd) - model.free_v(cmd))
+    invisible = np.all(change < 0.1 * sigma, axis=1)
+    # confounded: the two sensitivity directions (weighted) nearly parallel, as cramer_rao judges mass and position
+    info = np.einsum("nki,k,nkj->nij", jac, 1.0 / sigma**2, jac)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cos2 = np.where(info[:, 0, 0] * info[:, 1, 1] > 0, info[:, 0, 1] ** 2 / (info[:, 0, 0] * info[:, 1, 1]), 1.0)
+    confounded = (1.0 - cos2 <= 1e-6) | ~np.isfinite(sd[:, 1])
+    sd[confounded] = np.inf
+    zone = np.where(
+        invisible,
+        CONTACT_ZONES[0],
+        np.where(
+            confounded,
+            CONTACT_ZONES[1],
+            np.where(sd[:, 0] > FORCE_ONLY_FRACTION * model.length_m, CONTACT_ZONES[2], CONTACT_ZONES[3]),
+        ),
+    ).astype(object)
+    sd[invisible] = np.inf
+    return ContactBound(s, f, sd[:, 0], sd[:, 1], zone)
+
+
+def gaussian_bayes_limits(
+    means, noise, weights=None, *, labels=None, values=None, relative_values=None, samples: int = 1000, seed=0
+) -> dict:
+    """Bayes limits on discrete settings with Gaussian readings (Monte Carlo), for any reading vector.
+
+    The generalisation of :func:`protocol_limits` to stacked readings with correlated noise (e.g. several readings
+    under one hang sharing one cable-guide friction state) and to any labels and values. Readings of every setting
+    are drawn from ``N(means_j, noise_j)``; each gets the Bayes answer knowing the settings and their frequencies:
+    the most probable label, the posterior mean of ``values`` (squared-error optimum) and, for
+    ``relative_values``, ``sum p / y / sum p / y^2`` (the relative-error optimum).
+
+    Parameters
+    ----------
+    means : array_like, shape (k, D)
+        Noise-free reading vector of each setting.
+    noise : array_like, shape (k, D) or (k, D, D)
+        Standard deviations (independent noise) or lower Cholesky factors of the covariance of each setting.
+    weights : array_like, shape (k,), optional
+        Prior frequencies (default equal).
+    labels : array_like, shape (k,), optional
+        A class per setting: the limit is the error rate of the maximum-posterior class.
+    values, relative_values : array_like, shape (k,) or (k, d), optional
+        Quantities to estimate (absolute or relative squared error).
+    samples : int
+        Monte Carlo readings per setting.
+    seed : int or sequence of int
+
+    Returns
+    -------
+    dict
+        ``label_error`` (k,), ``value_mse`` (k, d), ``relative_mse`` (k, d): per setting, NaN where not asked.
+    """
+    mu = np.asarray(means, dtype=float)
+    k, dim = mu.shape
+    noise = np.asarray(noise, dtype=float)
+    chol = noise if noise.ndim == 3 else np.einsum("kd,de->kde", noise, np.eye(dim))
+    inv = np.linalg.inv(chol)  # (k, D, D)
+    log_det = np.sum(np.log(np.abs(np.einsum("kdd->kd", chol))), axis=1)
+    w = np.ones(k) if weights is None else np.asarray(weights, dtype=float)
+    log_prior = np.log(w / w.sum())
+    rng = np.random.default_rng(seed)
+    vals = None if values is None else np.asarray(values, dtype=float).reshape(k, -1)
+    rel = None if relative_values is None else np.asarray(relative_values, dtype=float).reshape(k, -1)
+    lab = None if labels is None else np.asarray(labels)
+    out = {
+        "label_error": np.full(k, np.nan),
+        "value_mse": np.full((k, 1 if vals is None else vals.shape[1]), np.nan),
+        "relative_mse": np.full((k, 1 if rel is None else rel.shape[1]), np.nan),
+    }
+    for j in range(k):
+        v = mu[j] + rng.standard_normal((samples, dim)) @ chol[j].T
+        z = np.einsum("kde,ske->skd", inv, v[:, None, :] - mu[None])  # whitened residual under every setting
+        log_post = log_prior - 0.5 * np.sum(z * z, axis=2) - log_det
+        post = np.exp(log_post - log_post.max(axis=1, keepdims=True))
+        post /= post.sum(axis=1, keepdims=True)
+        if lab is not None:
+            classes = np.unique(lab)
+            p_class = np.stack([post[:, lab == c].sum(axis=1) for c in classes], axis=1)
+            out["label_error"][j] = np.mean(classes[np.argmax(p_class, axis=1)] != lab[j])
+        if vals is not None:
+            out["value_mse"][j] = np.mean((post @ vals - vals[j]) ** 2, axis=0)
+        if rel is not None:
+            est = (post @ (1.0 / rel)) / (post @ (1.0 / rel**2))
+            out["relative_mse"][j] = np.mean(((est - rel[j]) / rel[j]) ** 2, axis=0)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------- active sensing
+def hang_readings_model(model, position_from_base_m, mass_kg, commands):
+    """Mean and noise of the gauges read at each of ``commands`` under one hang, stacked: ``(means (k, 3K),
+    chol (k, 3K, 3K))``, for a gauge model with ``noise_at`` (:class:`TwinGaugeModel`).
+
+    The white noise is independent per reading; the cable-guide friction is not: it is drawn when the weight is
+    hung and held while the servo moves (:mod:`flexdigit.twin.sensors`), so the same standard-normal state ``xi_g``
+    scales with each command's tension, ``sd_{c,g} xi_g``: the covariance of gauge ``g`` across commands is
+    ``outer(sd_g, sd_g)`` plus the white noise on the diagonal.
+    """
+    a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
+    m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
+    cmds = list(commands)
+    white = np.asarray(model.noise_v, dtype=float)
+    means, friction = [], []
+    for c in cmds:
+        cc = np.full(a.size, c)
+        means.append(model.gauges_v(a, m, cc))
+        total = noise_of(model, a, m, cc)
+        friction.append(np.sqrt(np.maximum(total**2 - white**2, 0.0)))
+    k, dim = a.size, 3 * len(cmds)
+    mean = np.concatenate(means, axis=1)
+    fric = np.stack(friction, axis=1)  # (k, K, 3)
+    cov = np.zeros((k, dim, dim))
+    idx = np.arange(dim)
+    cov[:, idx, idx] = np.tile(white**2, len(cmds))
+    for g in range(3):
+        rows = np.arange(len(cmds)) * 3 + g
+        cov[:, rows[:, None], rows[None, :]] += fric[:, :, g, None] * fric[:, None, :, g]
+    return mean, np.linalg.cholesky(cov)
+
+
+def active_limits(model, position_from_base_m, mass_kg, commands, weights=None, *, samples=4000, seed=0) -> dict:
+    """Bayes limits of position and mass from readings at every one of ``commands`` under one hang, beside the
+    single-reading limits of the same settings read at each command alone (chapter 7's protocol, 7.1).
+
+    Returns RMS figures over the settings (weighted): ``position_rmse_m`` and ``magnitude_rel_rmse`` of the hang
+    read at all commands, ``single_position_rmse_m`` and ``single_magnitude_rel_rmse`` of one reading at one of
+    them (averaged over the commands), and the per-setting arrays.
+    """
+    a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
+    m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
+    w = np.ones(a.size) if weights is None else np.asarray(weights, dtype=float)
+    mean, chol = hang_readings_model(model, a, m, commands)
+    hang = gaussian_bayes_limits(mean, chol, w, values=a, relative_values=m, samples=samples, seed=seed)
+    single_pos, single_mag = [], []
+    for j, c in enumerate(commands):
+        cc = np.full(a.size, c)
+        one = gaussian_bayes_limits(
+            model.gauges_v(a, m, cc),
+            noise_of(model, a, m, cc),
+            w,
+            values=a,
+            relative_values=m,
+            samples=samples,
+            seed=[*np.atleast_1d(seed).tolist(), j + 1],
+        )
+        single_pos.append(one["value_mse"][:, 0])
+        single_mag.append(one["relative_mse"][:, 0])
+    wn = w / w.sum()
+    return {
+        "position_rmse_m": float(np.sqrt(wn @ hang["value_mse"][:, 0])),
+        "magnitude_rel_rmse": float(np.sqrt(wn @ hang["relative_mse"][:, 0])),
+        "single_position_rmse_m": float(np.sqrt(wn @ np.mean(single_pos, axis=0))),
+        "single_magnitude_rel_rmse": float(np.sqrt(wn @ np.mean(single_mag, axis=0))),
+        "position_mse_m2": hang["value_mse"][:, 0],
+        "single_position_mse_m2": np.array(single_pos),
+    }

@@ -59,6 +59,8 @@ _GAUSS_T = 0.5 * (_GAUSS_T + 1.0)  # on [0, 1]
 _GAUSS_W = 0.5 * _GAUSS_W
 
 SIDES = {"cable": 1.0, "opposite": -1.0}
+#: Stiffening stages of :func:`solve_contact` when Newton does not converge at once (factors on the modulus).
+CONTINUATION = (1e-3, 1e-2, 0.1, 0.3, 1.0)
 
 
 @dataclass(frozen=True)
@@ -475,15 +477,27 @@ def solve_contact(
             axis=1,
         )
     contact = TissueContact(chain, tissue) if tissue is not None and tissue.modulus_n_m2 > 0 else None
-    sol = chain.solve_static(
-        load_s_m,
-        load_force_ab_n,
-        tip_moment_nm=tip_moment_nm,
-        cable_shortening_m=cable_shortening_m,
-        psi0=psi0,
-        contact=contact,
-        max_iter=max_iter,
-    )
+
+    def solve(body, start):
+        return chain.solve_static(
+            load_s_m,
+            load_force_ab_n,
+            tip_moment_nm=tip_moment_nm,
+            cable_shortening_m=cable_shortening_m,
+            psi0=start,
+            contact=body,
+            max_iter=max_iter,
+        )
+
+    sol = solve(contact, psi0)
+    if sol.iterations >= max_iter and contact is not None:
+        # a very stiff body makes semi-smooth Newton chatter between contact sets: stiffen it gradually instead,
+        # each stage starting from the last stage's shape
+        start = psi0
+        for factor in CONTINUATION:
+            stage = TissueContact(chain, tissue.replace(modulus_n_m2=factor * tissue.modulus_n_m2))
+            sol = solve(stage, start)
+            start = sol.psi_rad
     b = sol.psi_rad.shape[0]
     converged = sol.iterations < max_iter
     if not converged:
