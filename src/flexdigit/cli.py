@@ -27,6 +27,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.control.commands",
     "flexdigit.rig.commands",
     "flexdigit.tactile.commands",
+    "flexdigit.tactile.palpation_commands",
     "flexdigit.calibrate.commands",
     "flexdigit.live.commands",
     "flexdigit.studies.commands",

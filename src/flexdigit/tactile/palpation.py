@@ -778,6 +778,7 @@ def hold_force(
     window_s: float = 3.0,
     side: str = "cable",
     region_m=None,
+    approach_rate: float = 4.0,
     log_path=None,
 ) -> ForceHold:
     """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
@@ -803,7 +804,7 @@ def hold_force(
     rest = np.array([rig.read().gauges_v for _ in range(10)])
     offset = rest.mean(axis=0) - model.free_v([eq])[0]
     sign = -1.0 if side == "cable" else 1.0
-    controller = ForceController(estimator, offset, gain=gain, low=eq, sign=sign)
+    controller = ForceController(estimator, offset, gain=gain, low=eq, sign=sign, approach_rate=approach_rate)
     truth = _truth_of(rig)
     true_force = []
     result = run_loop(
