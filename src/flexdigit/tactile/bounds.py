@@ -451,7 +451,16 @@ def contact_bounds(model, position_m, force_n, command, *, n_readings: int = 1) 
 
 
 def gaussian_bayes_limits(
-    means, noise, weights=None, *, labels=None, values=None, relative_values=None, samples: int = 1000, seed=0
+    means,
+    noise,
+    weights=None,
+    *,
+    labels=None,
+    values=None,
+    relative_values=None,
+    samples: int = 1000,
+    seed=0,
+    evaluate=None,
 ) -> dict:
     """Bayes limits on discrete settings with Gaussian readings (Monte Carlo), for any reading vector.
 
@@ -476,11 +485,15 @@ def gaussian_bayes_limits(
     samples : int
         Monte Carlo readings per setting.
     seed : int or sequence of int
+    evaluate : array_like of int, optional
+        Draw readings only from these settings (the posterior still runs over all of them): a fine grid of
+        settings stands for a continuous prior, and the limit is wanted at a few of them.
 
     Returns
     -------
     dict
-        ``label_error`` (k,), ``value_mse`` (k, d), ``relative_mse`` (k, d): per setting, NaN where not asked.
+        ``label_error`` (k,), ``value_mse`` (k, d), ``relative_mse`` (k, d): per setting, NaN where not asked or
+        not evaluated.
     """
     mu = np.asarray(means, dtype=float)
     k, dim = mu.shape
@@ -499,7 +512,7 @@ def gaussian_bayes_limits(
         "value_mse": np.full((k, 1 if vals is None else vals.shape[1]), np.nan),
         "relative_mse": np.full((k, 1 if rel is None else rel.shape[1]), np.nan),
     }
-    for j in range(k):
+    for j in range(k) if evaluate is None else np.asarray(evaluate, dtype=int):
         v = mu[j] + rng.standard_normal((samples, dim)) @ chol[j].T
         z = np.einsum("kde,ske->skd", inv, v[:, None, :] - mu[None])  # whitened residual under every setting
         log_post = log_prior - 0.5 * np.sum(z * z, axis=2) - log_det

@@ -46,10 +46,10 @@ from flexdigit._validation import check_array, check_choice, check_int, check_po
 from flexdigit.errors import ParameterError
 from flexdigit.tactile.bounds import fisher_sd, line_jacobian
 
-#: chi-square quantiles: 2 degrees of freedom at 99.9 % (a contact is declared when it explains the reading this
-#: much better than none) and 1 degree of freedom at 99 % (a line load must beat a point force by this much).
+#: chi-square(2 dof) 99.9 % quantile: a contact is declared when it explains the reading this much better than none.
 DETECT_CHI2 = 13.8155
-CLASSIFY_CHI2 = 6.6349
+#: A line load is declared when the gauges make it more probable than a point (equal priors: the Bayes decision).
+DISTRIBUTED_LOG_ODDS = 0.0
 POLY_DEGREE = 5
 #: Forces each table is fitted on (a degree-5 polynomial on 9 forces matches the twin within 6 uV up to 1 N).
 FORCE_POINTS = 9
@@ -141,7 +141,7 @@ class ContactGaugeModel:
         c = np.atleast_1d(np.asarray(centre_m, dtype=float))
         w = np.broadcast_to(np.asarray(extent_m, dtype=float), c.shape)
         lo, hi = c - w / 2, c + w / 2
-        bad = (lo < -1e-12) | (hi > self.length_m + 1e-12) | ~(w > 0) | ~np.isfinite(c)
+        bad = (lo < -1e-5) | (hi > self.length_m + 1e-5) | ~(w > 0) | ~np.isfinite(c)  # (steps of the bounds)
         if np.any(bad):
             raise ParameterError(
                 "The line loads of ContactGaugeModel must lie on the digit (0 <= centre - extent/2, centre + "
@@ -188,8 +188,12 @@ class ContactEstimate:
         The point-force estimate whatever the decision (what a caller that knows it is a point uses).
     line_centre_m, line_extent_m, line_total_n : ndarray
         The line-load estimate whatever the decision.
-    chi2_contact, chi2_distributed : ndarray
-        ``cost(none) - cost(best)`` and ``cost(point) - cost(line)``: the statistics behind the decisions.
+    chi2_contact : ndarray
+        ``cost(none) - cost(best)``: the likelihood-ratio statistic of the contact decision.
+    log_odds_distributed : ndarray
+        ``log p(reading | line load) - log p(reading | point force)``, each marginalised over its grid (uniform
+        priors over positions, or centres and extents, and forces): the Bayes factor behind the point / distributed
+        decision.
     """
 
     contact: np.ndarray
@@ -206,7 +210,7 @@ class ContactEstimate:
     line_extent_m: np.ndarray
     line_total_n: np.ndarray
     chi2_contact: np.ndarray
-    chi2_distributed: np.ndarray
+    log_odds_distributed: np.ndarray
 
     def as_dict(self) -> dict:
         return {k: v.tolist() for k, v in self.__dict__.items()}
@@ -238,8 +242,13 @@ class ContactEstimator:
         Readings averaged into each input row (the noise of a row is ``noise_v / sqrt(n_readings)``).
     offset_v : array_like, shape (3,), optional
         Subtracted from every reading: the rig's gauge offsets against the model (see :meth:`fit`).
-    detect_chi2, classify_chi2 : float
-        Thresholds of the two likelihood-ratio tests (:data:`DETECT_CHI2`, :data:`CLASSIFY_CHI2`).
+    detect_chi2 : float
+        Threshold of the contact's likelihood-ratio test (:data:`DETECT_CHI2`).
+    classify_log_odds : float
+        A line load is declared when its log Bayes factor over a point force exceeds this (:data:`DISTRIBUTED_LOG_ODDS`,
+        the Bayes decision for equal priors). A short line load away from the gauges reads exactly as a point does,
+        and the line hypothesis has more ways (centre, extent, force) to explain such a reading, so where the gauges
+        cannot tell the two the decision is a coin the priors toss: ``point_*`` and ``line_*`` hold both estimates.
     classify : bool
         Also weigh the line-load hypothesis (point versus distributed); False keeps to point forces (faster to
         tabulate: what force control and palpation need).
@@ -260,7 +269,7 @@ class ContactEstimator:
         n_readings: int = 1,
         offset_v=None,
         detect_chi2: float = DETECT_CHI2,
-        classify_chi2: float = CLASSIFY_CHI2,
+        classify_log_odds: float = DISTRIBUTED_LOG_ODDS,
         classify: bool = True,
         region_m=None,
     ) -> None:
@@ -273,7 +282,7 @@ class ContactEstimator:
         self.n_readings = n_readings
         self.offset_v = offset_v
         self.detect_chi2 = detect_chi2
-        self.classify_chi2 = classify_chi2
+        self.classify_log_odds = classify_log_odds
         self.classify = classify
         self.region_m = region_m
 
@@ -342,8 +351,9 @@ class ContactEstimator:
         # line loads: centres on a grid, each extent that fits on the digit
         rows = []
         step = max(LINE_CENTRE_STEP_M, self.position_step_m)
+        lo, hi = self.s_grid_[0], self.s_grid_[-1]
         for w in self.extents_:
-            centres = np.arange(w / 2, m.length_m - w / 2 + 1e-12, step)
+            centres = np.arange(max(w / 2, lo), min(m.length_m - w / 2, hi) + 1e-12, step)
             rows += [(c, w) for c in centres]
         cw = np.array(rows)
         ls, lu = m.line_points(cw[:, 0], cw[:, 1])
@@ -359,7 +369,8 @@ class ContactEstimator:
     def _profile(self, r, coef):
         """Best force and cost for every grid entry: ``r`` (B, 3) residual readings, ``coef`` (K, G, 3).
 
-        Returns force (B, G) and cost (B, G) (the weighted squared residual)."""
+        Returns force (B, G), cost (B, G) (the weighted squared residual) and the cost's half curvature in the force
+        (B, G), for the evidence's Laplace approximation."""
         w = self.weight_
         a1 = coef[0]  # (G, 3)
         f = ((r * w) @ a1.T) / np.maximum(np.sum(a1 * w * a1, axis=1), 1e-300)  # the linear model's force
@@ -372,9 +383,9 @@ class ContactEstimator:
             hess = np.sum(w * dpred * dpred, axis=2)
             f = f - grad / np.maximum(hess, 1e-300)
         f = np.minimum(np.maximum(f * self.sign_, 0.0), lim) * self.sign_
-        pred, _ = _horner(coef, f)
+        pred, dpred = _horner(coef, f)
         res = r[:, None, :] - pred
-        return f, np.sum(w * res * res, axis=2)
+        return f, np.sum(w * res * res, axis=2), np.sum(w * dpred * dpred, axis=2)
 
     def predict(self, X, command=None) -> ContactEstimate:
         """Estimate contact from readings: ``X`` (n, 4) gauges and command, or (n, 3) gauges with ``command``."""
@@ -401,29 +412,29 @@ class ContactEstimator:
         none_cost = np.sum(self.weight_ * r * r, axis=1)
         n = r.shape[0]
         ps, pforce, pcost = np.empty(n), np.empty(n), np.empty(n)
-        lcentre, lextent, ltotal, lcost = (np.full(n, np.nan) for _ in range(4))
+        lcentre, lextent, ltotal, lcost, log_odds = (np.full(n, np.nan) for _ in range(5))
         for start in range(0, n, 16):  # chunks bound the (chunk, grid, 3) temporaries
             part = slice(start, start + 16)
-            pf, pc = self._profile(r[part], t["point"])
+            pf, pc, ph = self._profile(r[part], t["point"])
             ps[part], pforce[part], pcost[part] = self._refine(pf, pc, self.s_grid_)
             if self.classify:
                 cw = t["line_cw"]
-                lf, lc = self._profile(r[part], t["line"])
+                lf, lc, lh = self._profile(r[part], t["line"])
                 li = np.argmin(lc, axis=1)
                 b = np.arange(li.size)
                 lcost[part], lcentre[part], lextent[part], ltotal[part] = lc[b, li], cw[li, 0], cw[li, 1], lf[b, li]
+                log_odds[part] = _log_evidence(lc, lh) - _log_evidence(pc, ph)
         best = np.fmin(pcost, lcost)
         chi_contact = none_cost - best
-        chi_line = pcost - lcost
         is_contact = chi_contact > self.detect_chi2
-        is_line = is_contact & (chi_line > self.classify_chi2)  # False where not classified (NaN)
+        is_line = is_contact & (log_odds > self.classify_log_odds)  # False where not classified (NaN)
         point_sd = self._point_sd(ps, pforce, t)
         line_sd = np.full((n, 3), np.nan)
         if np.any(is_line):
             line_sd[is_line] = self._line_sd(lcentre[is_line], lextent[is_line], ltotal[is_line], command)
         out["point_position_m"][rows], out["point_force_n"][rows] = ps, pforce
         out["line_centre_m"][rows], out["line_extent_m"][rows], out["line_total_n"][rows] = lcentre, lextent, ltotal
-        out["chi2_contact"][rows], out["chi2_distributed"][rows] = chi_contact, chi_line
+        out["chi2_contact"][rows], out["log_odds_distributed"][rows] = chi_contact, log_odds
         contact[rows] = is_contact
         kind[rows] = np.where(is_line, "distributed", np.where(is_contact, "point", "none"))
         out["position_m"][rows] = np.where(is_line, lcentre, np.where(is_contact, ps, np.nan))
@@ -432,6 +443,26 @@ class ContactEstimator:
         out["position_sd_m"][rows] = np.where(is_line, line_sd[:, 0], np.where(is_contact, point_sd[:, 0], np.nan))
         out["force_sd_n"][rows] = np.where(is_line, line_sd[:, 2], point_sd[:, 1])
         out["extent_sd_m"][rows] = np.where(is_line, line_sd[:, 1], np.nan)
+
+    def rival_chi2(self, gauges_v, command: int) -> np.ndarray:
+        """How much worse the best *other* local minimum of the point-contact cost explains each reading (chi^2, n),
+        inf when the cost along the digit has one minimum. For noise-free readings: a small value means a distant
+        contact is almost as likely, so the contact is locally locatable (a finite Cramer-Rao bound) but globally
+        ambiguous (noise now and then makes the estimate jump to the rival)."""
+        t = self._table(int(command))
+        r = np.atleast_2d(gauges_v) - self.offset_ - t["g0"]
+        _, cost, _ = self._profile(r, t["point"])
+        padded = np.pad(cost, ((0, 0), (1, 1)), constant_values=np.inf)
+        minimum = (cost <= padded[:, :-2]) & (cost <= padded[:, 2:])
+        best = np.argmin(cost, axis=1)
+        out = np.full(cost.shape[0], np.inf)
+        for i in range(cost.shape[0]):
+            # the global minimum's own basin ends where the cost stops falling towards it
+            others = np.flatnonzero(minimum[i])
+            others = others[np.abs(others - best[i]) > 1]
+            if others.size:
+                out[i] = float(np.min(cost[i, others]) - cost[i, best[i]])
+        return out
 
     def _refine(self, force, cost, grid):
         """Best grid point, refined by a parabola through it and its neighbours (position and force)."""
@@ -482,8 +513,17 @@ _FIELDS = (
     "line_extent_m",
     "line_total_n",
     "chi2_contact",
-    "chi2_distributed",
+    "log_odds_distributed",
 )
+
+
+def _log_evidence(cost, curvature) -> np.ndarray:
+    """``log sum_g exp(-cost_g / 2) sqrt(2 pi / curvature_g)`` over a grid (B, G), less ``log G``: the marginal
+    likelihood under a uniform prior over the grid's entries, the force integrated out by Laplace's approximation
+    about its best value (the common force prior's width cancels between hypotheses)."""
+    terms = -0.5 * cost + 0.5 * np.log(2 * np.pi / np.maximum(curvature, 1e-300))
+    top = terms.max(axis=1, keepdims=True)
+    return top[:, 0] + np.log(np.mean(np.exp(terms - top), axis=1))
 
 
 def _horner(coef, f):
