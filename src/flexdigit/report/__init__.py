@@ -20,4 +20,5 @@ CHAPTERS: tuple[str, ...] = (
     "flexdigit.report.ch8_shape",
     "flexdigit.report.ch8_studies",
     "flexdigit.report.ch6_7_noise",
+    "flexdigit.report.ch8_palpation",
 )

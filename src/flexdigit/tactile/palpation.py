@@ -276,6 +276,7 @@ def fit_tissue(
     *,
     fit_exponent: bool = False,
     sigma_v=None,
+    start=None,
 ) -> TissueFit:
     """Fit a tissue's gap and modulus (and Hunt-Crossley exponent) to a sweep's plateaus (module docstring).
 
@@ -294,6 +295,8 @@ def fit_tissue(
         Fit Hunt-Crossley's ``n`` too (the "hunt-crossley" model).
     sigma_v : array_like, optional
         Noise of one plateau mean per gauge (V); default the model's white noise over ``record.readings``.
+    start : TissueFit, optional
+        Start from this fit's gap and modulus (a neighbouring sweep's) instead of a coarse grid search.
     """
     sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(record.readings) if sigma_v is None else sigma_v
     like = _TissueLikelihood(
@@ -304,7 +307,10 @@ def fit_tissue(
         sigma,
         lambda th: placed.replace(gap_m=th[0], modulus_n_m2=math.exp(th[1]), exponent=th[2] if fit_exponent else 1.0),
     )
-    x0 = _start(like, model, placed, record.command, fit_exponent)
+    if start is None:
+        x0 = _start(like, model, placed, record.command, fit_exponent)
+    else:
+        x0 = np.array([start.gap_m, math.log(start.modulus_n_m2)] + ([start.exponent] if fit_exponent else []))
     lower = [-0.05, math.log(1.0)] + ([1.0] if fit_exponent else [])
     upper = [0.3, math.log(1e7)] + ([3.0] if fit_exponent else [])
     sol, sd = _least_squares(like, x0, lower, upper, [1e-3, 0.1] + ([0.1] if fit_exponent else []))
@@ -582,7 +588,7 @@ def scan(
     uniform = placed.replace(inclusions=())
     local, where = [], []
     for d, rec in zip(offsets, records, strict=True):
-        fit = fit_tissue(rec, model, uniform.moved(float(d)))
+        fit = fit_tissue(rec, model, uniform.moved(float(d)), start=local[-1] if local else None)
         local.append(fit)
         sol, _ = model.tissue_solution(fit.tissue, rec.command[~rec.tare][-1:])
         where.append(float(sol.static.tip_m[0, 0] if np.isnan(sol.contact_centroid_m[0]) else _centroid_a(model, sol)))

@@ -1,0 +1,396 @@
+"""Report chapter "beyond the thesis: palpation" (issue 13): contact, stiffness, an inclusion, force, active sensing.
+
+Chapter 8 of the thesis says what its sensing is for: "to detect low frequency palpations, to identify variability
+in tissue stiffness, and to discriminate against distributed loads". This chapter shows the library's answers
+(:mod:`flexdigit.tactile.palpation_studies`) on the twin at the thesis's non-actuated noise level; it computes
+nothing itself. It runs small but honest settings (the README quotes the full studies and the command that
+measures each); every table is also in results.json.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexdigit.report.chapter import Chapter, ReportContext, Table
+from flexdigit.report.results import new
+from flexdigit.tactile import palpation_studies as studies
+
+SECTION = "beyond: palpation"
+
+
+def build(ctx: ReportContext) -> Chapter:
+    """Build the palpation chapter."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ch = Chapter(slug="ch8-palpation", title="Beyond the thesis: palpation")
+    ch.paragraphs.append(
+        "The digit presses into a compliant body beside it, the cable pulling it in: a unilateral Winkler (or "
+        "Hunt-Crossley) foundation in the twin (flexdigit.twin.contact), validated against an independent elastica "
+        "boundary-value problem within 0.07 % on the tip and 0.44 % on the contact force. Noise: 2 mV white per "
+        "reading and the twin's drift, the thesis's non-actuated level (no weight is hung, so no cable-guide "
+        "friction), except for active sensing, which works at chapter 7's actuated level."
+    )
+    _contact(ctx, ch, plt)
+    _classification(ctx, ch)
+    _stiffness(ctx, ch, plt)
+    _scan(ctx, ch, plt)
+    _force(ctx, ch, plt)
+    _active(ctx, ch)
+    return ch
+
+
+def _contact(ctx, ch, plt) -> None:
+    step = 0.02 if ctx.fast else 0.01
+    c = studies.contact_study(
+        positions_m=np.arange(0.0, 0.2701, step), forces_n=(0.1, 0.2), n_readings=25, repetitions=20, seed=ctx.seed
+    )
+    e = ch.entries
+    pub = studies.PUBLISHED
+    e.append(
+        new(
+            "palpation.contact.position_rmse_mm",
+            SECTION,
+            1000 * c["seen_rms_position_m"],
+            "mm",
+            f"point contacts of 0.1 and 0.2 N the gauges can see ({c['zone_counts']['identifiable']} of "
+            f"{len(c['zone'])}: {1000 * c['seen_span_m'][0]:.0f}-{1000 * c['seen_span_m'][1]:.0f} mm), 25 "
+            "readings per estimate",
+        )
+    )
+    e.append(
+        new(
+            "palpation.contact.position_ratio_to_crlb",
+            SECTION,
+            c["position_ratio"],
+            "",
+            "RMS position error over the Cramer-Rao bound's RMS on the same contacts (issue: <= 1.2)",
+        )
+    )
+    e.append(
+        new(
+            "palpation.contact.force_rel_rmse",
+            SECTION,
+            c["seen_rms_force_rel"],
+            "",
+            f"relative force RMS; best published {pub['force_rel']:.0%}",
+        )
+    )
+    e.append(new("palpation.contact.force_ratio_to_crlb", SECTION, c["force_ratio"], "", "issue: <= 1.2"))
+    if "band_rms_position_m" in c:
+        e.append(
+            new(
+                "palpation.contact.band_position_rmse_mm",
+                SECTION,
+                1000 * c["band_rms_position_m"],
+                "mm",
+                f"between gauge 2 and the tip support ({1000 * c['band_m'][0]:.0f}-{1000 * c['band_m'][1]:.0f} "
+                f"mm); best published {1000 * pub['location_m']:.1f} mm (1 % of the length)",
+            )
+        )
+    for zone, count in c["zone_counts"].items():
+        e.append(
+            new(
+                f"palpation.contact.zone.{zone.replace(' ', '_')}",
+                SECTION,
+                count,
+                "contacts",
+                "cases per identifiability zone (0.1 and 0.2 N, every position)",
+            )
+        )
+    ch.paragraphs.append(
+        "Which contacts the gauges cannot see (flexdigit.tactile.bounds.contact_bounds): before gauge 1 (45 mm) "
+        "nothing bends; between gauges 1 and 2 only the product F (s - 45 mm) is seen (the taut cable's answer is "
+        "proportional to it too), so force and position are confounded; on the rigid tip support (265-270 mm) the "
+        "stiff cable pins the tip angle and absorbs the load's moment, so only the force is seen; just past gauge 2 "
+        "and in the last section a distant rival explains the reading nearly as well (ambiguous). Where the gauges "
+        "see the contact the estimate is at its Cramer-Rao bound."
+    )
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    for f, marker in ((-0.1, "o"), (-0.2, "s")):
+        rows = c["force_n"] == f
+        ax.semilogy(
+            1000 * c["position_m"][rows], 1000 * c["rms_position_m"][rows], marker, label=f"RMS error, {-f:g} N"
+        )
+        ax.semilogy(1000 * c["position_m"][rows], 1000 * c["crlb_position_m"][rows], "-", label=f"Cramer-Rao, {-f:g} N")
+    for x in ctx.params.geometry.gauge_positions_m:
+        ax.axvline(1000 * x, color="0.7", lw=0.8)
+    ax.axhline(1000 * studies.PUBLISHED["location_m"], color="k", ls=":", label="best published (1 % of length)")
+    ax.set(xlabel="contact position from the base (mm)", ylabel="position error (mm)", ylim=(0.1, 300))
+    ax.legend(fontsize=7, ncol=2)
+    ch.figures.append(
+        ctx.save_figure(
+            fig,
+            "palpation_contact_map",
+            "Contact position: error and bound along the digit (25 readings, command 20; gauges grey)",
+        )
+    )
+
+
+def _classification(ctx, ch) -> None:
+    small = {
+        "region_m": (0.12, 0.24),
+        "extents_m": (0.04, 0.08, 0.12),
+        "totals_n": (0.2, 0.4),
+        "prior_total_step_n": 0.04,
+    }
+    cl = studies.classification_study(**small, truth_step_m=0.04, repetitions=10, samples=100, seed=ctx.seed)
+    e = ch.entries
+    e.append(
+        new(
+            "palpation.classify.bayes_allows_fraction",
+            SECTION,
+            cl["allowed_fraction"],
+            "",
+            "share of the point and line-load settings where the Bayes limit tells them apart >= 95 % (25 readings)",
+        )
+    )
+    e.append(
+        new(
+            "palpation.classify.accuracy_where_allowed",
+            SECTION,
+            cl["allowed_accuracy"],
+            "",
+            f"the estimator's Bayes-factor decision there (limit {cl['allowed_bayes']:.3f}); issue: >= 0.95",
+        )
+    )
+    e.append(
+        new(
+            "palpation.classify.accuracy_overall",
+            SECTION,
+            cl["overall"],
+            "",
+            f"all settings (Bayes limit {cl['overall_bayes']:.3f}): a line load whose stretch covers no gauge "
+            "reads exactly as a point at its centroid",
+        )
+    )
+    ch.tables.append(
+        Table(
+            "Point versus distributed (25 readings, command 20)",
+            ["", "Bayes limit", "estimator"],
+            [
+                ["all settings", round(cl["overall_bayes"], 3), round(cl["overall"], 3)],
+                [
+                    f"where the limit allows 95 % ({cl['allowed_fraction']:.0%} of them)",
+                    round(cl["allowed_bayes"], 3),
+                    round(cl["allowed_accuracy"], 3),
+                ],
+            ],
+        )
+    )
+
+
+def _stiffness(ctx, ch, plt) -> None:
+    from flexdigit.tactile.contact import ContactGaugeModel
+    from flexdigit.tactile.palpation import PalpationProtocol, analyse, simulate_sweep
+    from flexdigit.twin.contact import Tissue
+
+    protocol = PalpationProtocol(commands=tuple(range(8, 31, 2)))
+    s = studies.stiffness_study((300.0, 750.0, 1500.0), seeds=(ctx.seed,), protocol=protocol)
+    e = ch.entries
+    e.append(
+        new(
+            "palpation.stiffness.max_rel_error",
+            SECTION,
+            s["max_abs_rel_error"],
+            "",
+            f"modulus fitted on one sweep each at 3, 7.5 and 15 N/m per cm ({s['range']:.0f}x); issue <= 0.10, "
+            "best published 0.10-0.16",
+        )
+    )
+    e.append(
+        new(
+            "palpation.stiffness.rel_bound",
+            SECTION,
+            float(np.max(s["rel_bound"])),
+            "",
+            "largest Cramer-Rao bound of the relative modulus on those sweeps",
+        )
+    )
+    ch.tables.append(
+        Table(
+            "Tissue stiffness from one sweep (12 plateaus, 20 readings each)",
+            ["modulus (N/m per cm)", "error", "fit sd", "Cramer-Rao"],
+            [
+                [float(k) / 100, f"{r:+.1%}", f"{sd:.1%}", f"{b:.1%}"]
+                for k, r, sd, b in zip(s["moduli_n_m2"], s["rel_error"], s["rel_sd"], s["rel_bound"], strict=True)
+            ],
+        )
+    )
+    for k, r in zip(s["moduli_n_m2"], s["rel_error"], strict=True):
+        e.append(new(f"palpation.stiffness.rel_error_at_{k / 100:g}_n_m_per_cm", SECTION, r, "", "table row"))
+    model = ContactGaugeModel()
+    placed = Tissue(0.15, 0.35, 0.03, 1000.0)
+    record = simulate_sweep(model, placed, protocol, seed=ctx.seed)
+    result = analyse(record, placed.replace(modulus_n_m2=1.0, gap_m=0.0), protocol, model)
+    cv = result.curve
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    ax.errorbar(
+        1000 * cv["indentation_m"], cv["force_n"], yerr=cv["force_sd_n"], fmt="o", ms=3, label="from the gauges"
+    )
+    ax.plot(1000 * cv["indentation_m"], cv["model_force_n"], "-", label="fitted tissue")
+    ax.plot(1000 * cv["indentation_m"], cv["true_force_n"], "x", label="twin (truth)")
+    ax.set(xlabel="indentation (mm)", ylabel="contact force (N)")
+    ax.legend(fontsize=8)
+    ch.figures.append(
+        ctx.save_figure(
+            fig,
+            "palpation_force_indentation",
+            f"Force against indentation, soft block (10 N/m per cm): fitted {result.fit.modulus_n_m2 / 100:.2f} +- "
+            f"{result.fit.modulus_sd_n_m2 / 100:.2f} N/m per cm; lumped slope {result.lumped_stiffness_n_m:.1f} N/m",
+        )
+    )
+    e.append(
+        new(
+            "palpation.stiffness.lumped_n_m",
+            SECTION,
+            result.lumped_stiffness_n_m,
+            "N/m",
+            "slope of force against deepest indentation, soft block (10 N/m per cm)",
+        )
+    )
+
+
+def _scan(ctx, ch, plt) -> None:
+    from flexdigit.tactile.palpation import PalpationProtocol
+
+    offsets = np.arange(-0.02, 0.0201, 0.01)
+    sc = studies.scan_study(
+        offsets_m=offsets, protocol=PalpationProtocol(commands=tuple(range(8, 31, 3))), seed=ctx.seed
+    )
+    e = ch.entries
+    e.append(
+        new(
+            "palpation.scan.inclusion_error_mm",
+            SECTION,
+            1000 * sc["centre_error_m"],
+            "mm",
+            f"a 10 mm nodule 3x stiffer, {1000 * sc['true_centre_m']:.0f} mm into the phantom, {len(offsets)} "
+            "offsets 10 mm apart; issue: within 10 mm",
+        )
+    )
+    e.append(
+        new(
+            "palpation.scan.ratio",
+            SECTION,
+            sc["ratio"],
+            "",
+            f"fitted stiffness ratio (+- {sc['ratio_sd']:.2f}); truth 3",
+        )
+    )
+    fig, ax = plt.subplots(figsize=(5.5, 3.4))
+    ax.errorbar(
+        1000 * sc["map_position_m"],
+        sc["map_modulus_n_m2"] / 100,
+        yerr=sc["map_modulus_sd_n_m2"] / 100,
+        fmt="o-",
+        label="local fit",
+    )
+    ax.axvline(1000 * sc["centre_m"], color="r", label="inclusion found")
+    ax.axvspan(1000 * sc["true_centre_m"] - 5, 1000 * sc["true_centre_m"] + 5, color="0.85", label="true nodule")
+    ax.set(xlabel="position in the phantom (mm)", ylabel="stiffness (N/m per cm)")
+    ax.legend(fontsize=8)
+    ch.figures.append(ctx.save_figure(fig, "palpation_scan", "Stiffness map of a scan and the inclusion fitted to it"))
+
+
+def _force(ctx, ch, plt) -> None:
+    f = studies.force_study((1000.0,), duration_s=8.0, seed=ctx.seed + 2)
+    run = f["runs"][0]
+    e = ch.entries
+    e.append(
+        new(
+            "palpation.force.steady_error",
+            SECTION,
+            float(f["steady_error"][0]),
+            "",
+            "0.1 N held on the 20 ms loop from the gauges' force estimate, true force over the last 3 s; issue: "
+            "within 10 %",
+        )
+    )
+    e.append(
+        new(
+            "palpation.force.overshoot",
+            SECTION,
+            float(f["overshoot"][0]),
+            "",
+            "largest true force over 0.1 N; issue: < 20 %",
+        )
+    )
+    e.append(
+        new("palpation.force.settling_s", SECTION, float(f["settling_s"][0]), "s", "last time outside 10 % of 0.1 N")
+    )
+    fig, ax = plt.subplots(figsize=(5.5, 3.2))
+    ax.plot(run.time_s, run.true_force_n, label="true contact force")
+    ax.plot(run.time_s, run.force_n, lw=0.6, alpha=0.7, label="estimate (one reading)")
+    ax.axhspan(0.09, 0.11, color="0.9", label="0.1 N +- 10 %")
+    ax.set(xlabel="time (s)", ylabel="force (N)")
+    ax.legend(fontsize=8)
+    ch.figures.append(
+        ctx.save_figure(fig, "palpation_force_control", "Holding 0.1 N against the soft block (twin, 20 ms loop)")
+    )
+
+
+def _active(ctx, ch) -> None:
+    a = studies.active_study(samples=500 if ctx.fast else 1000, repetitions=10, seed=ctx.seed)
+    e = ch.entries
+    e.append(
+        new(
+            "palpation.active.bayes_position_mm",
+            SECTION,
+            1000 * a["position_rmse_m"],
+            "mm",
+            "table 7.1's settings read at commands 0, 20 and 40 under one hang (chapter 7's actuated noise)",
+        )
+    )
+    e.append(
+        new(
+            "palpation.active.single_bayes_position_mm",
+            SECTION,
+            1000 * a["single_position_rmse_m"],
+            "mm",
+            "the same settings, one reading at one command (the README's 22.5 mm is this over chapter 7's test split)",
+        )
+    )
+    e.append(
+        new(
+            "palpation.active.bayes_magnitude",
+            SECTION,
+            a["magnitude_rel_rmse"],
+            "",
+            f"single reading: {a['single_magnitude_rel_rmse']:.3f}",
+        )
+    )
+    e.append(
+        new(
+            "palpation.active.posterior_position_mm",
+            SECTION,
+            1000 * a["posterior_position_rmse_m"],
+            "mm",
+            "the Bayes estimator on readings the twin draws",
+        )
+    )
+    e.append(
+        new(
+            "palpation.active.inversion_position_mm",
+            SECTION,
+            1000 * a["inversion_position_rmse_m"],
+            "mm",
+            "maximum likelihood without the protocol's prior",
+        )
+    )
+    ch.tables.append(
+        Table(
+            "Hanging loads: one reading against one hang read at three commands (Bayes limits)",
+            ["", "position RMS (mm)", "magnitude RMS"],
+            [
+                [
+                    "one reading at one command",
+                    round(1000 * a["single_position_rmse_m"], 1),
+                    round(a["single_magnitude_rel_rmse"], 3),
+                ],
+                ["one hang at 0, 20, 40", round(1000 * a["position_rmse_m"], 1), round(a["magnitude_rel_rmse"], 3)],
+            ],
+        )
+    )
