@@ -22,6 +22,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_live",
     "benchmarks.bench_studies",
     "benchmarks.bench_report",
+    "benchmarks.bench_palpation",
 )
 
 

@@ -1,0 +1,140 @@
+"""Palpation benchmarks (issue 13): an estimate's latency and a full scan's time on the twin.
+
+- Latency of one contact estimate from one reading (three gauges and the command): position, force and their
+  standard deviations (point hypothesis, what force control runs every 20 ms frame), and with the point /
+  distributed decision; best of 5 runs of 200 calls, tables built beforehand (not timed; their build is its own row).
+- A full scan on the twin through the 20 ms loop: the nodule phantom at 9 offsets 10 mm apart, each a sweep of 12
+  plateaus (2.5 s settle, 20 readings), the twin integrating at 10 ms; then the local fits and the inclusion fit.
+  Also the same scan's analysis on the twin's statics (:func:`flexdigit.tactile.palpation.simulate_sweep`), which
+  is what the report runs.
+- One palpation sweep (23 plateaus) through the loop and its fit; 10 s of force control at the twin's 5 ms step.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+
+def _best(fn, number: int = 200, repeat: int = 5) -> float:
+    best = np.inf
+    for _ in range(repeat):
+        start = time.perf_counter()
+        for _ in range(number):
+            fn()
+        best = min(best, (time.perf_counter() - start) / number)
+    return best
+
+
+def run() -> list[dict]:
+    from flexdigit.rig.base import open_rig
+    from flexdigit.tactile.contact import ContactEstimator, ContactGaugeModel
+    from flexdigit.tactile.palpation import PalpationProtocol, hold_force, palpate, run_sweep, scan, simulate_sweep
+    from flexdigit.tactile.palpation_files import load_palpation_protocol, load_tissue
+
+    rows = []
+    model = ContactGaugeModel()
+    start = time.perf_counter()
+    point = ContactEstimator(model, commands=[20], classify=False).fit()
+    table_s = time.perf_counter() - start
+    start = time.perf_counter()
+    both = ContactEstimator(model, commands=[20]).fit()
+    line_s = time.perf_counter() - start
+    reading = model.point_v([0.2], [-0.1], 20) + model.noise_v * np.random.default_rng(0).standard_normal((1, 3))
+    rows.append(
+        {
+            "name": "contact estimate, one reading (position, force, sds)",
+            "value": 1e3 * _best(lambda: point.predict(reading, 20)),
+            "unit": "ms",
+            "goal": "<= 1 ms",
+            "note": "ContactEstimator(classify=False).predict: 271-point profile, refinement, Fisher sds",
+        }
+    )
+    rows.append(
+        {
+            "name": "contact estimate with point vs distributed, one reading",
+            "value": 1e3 * _best(lambda: both.predict(reading, 20)),
+            "unit": "ms",
+            "goal": "<= 1 ms",
+            "note": "adds the line-load profile (~800 centres x extents) and the Bayes factor",
+        }
+    )
+    rows.append(
+        {
+            "name": "estimator tables for one command, point / point and line",
+            "value": table_s,
+            "unit": "s",
+            "goal": "",
+            "note": f"point and line loads: {line_s:.2f} s",
+        }
+    )
+
+    tissue, _ = load_tissue("nodule-phantom")
+    plan = load_palpation_protocol("scan")
+    placed = tissue.replace(inclusions=())
+    rig = open_rig("sim", seed=0, dt_s=0.01)
+    start = time.perf_counter()
+    records = []
+    for d in plan.scan["offsets_m"]:
+        rig.place_tissue(tissue.moved(d))
+        records.append(run_sweep(rig, plan.sweep))
+    loop_s = time.perf_counter() - start
+    start = time.perf_counter()
+    result = scan(records, placed, plan.scan["offsets_m"], plan.sweep, model=model)
+    fit_s = time.perf_counter() - start
+    rig.close()
+    sim_s = len(plan.scan["offsets_m"]) * plan.sweep.duration_s
+    rows.append(
+        {
+            "name": f"full scan on the twin, 9 offsets x {len(plan.sweep.commands)} plateaus, through the loop",
+            "value": loop_s + fit_s,
+            "unit": "s",
+            "goal": "",
+            "note": f"{sim_s:.0f} s of rig time: loop {loop_s:.1f} s, fits {fit_s:.1f} s; inclusion "
+            f"{1000 * (result.inclusion['centre_m'] - 0.1):+.1f} mm off, ratio {result.inclusion['ratio']:.2f} (3)",
+        }
+    )
+    start = time.perf_counter()
+    statics = [simulate_sweep(model, tissue.moved(d), plan.sweep, seed=j) for j, d in enumerate(plan.scan["offsets_m"])]
+    scan(statics, placed, plan.scan["offsets_m"], plan.sweep, model=model)
+    rows.append(
+        {
+            "name": "the same scan on the twin's statics (what the report runs)",
+            "value": time.perf_counter() - start,
+            "unit": "s",
+            "goal": "",
+            "note": "simulate_sweep + scan",
+        }
+    )
+
+    soft, _ = load_tissue("soft-block")
+    rig = open_rig("sim", seed=0, dt_s=0.01)
+    start = time.perf_counter()
+    res = palpate(rig, soft, PalpationProtocol(), model=model)
+    rows.append(
+        {
+            "name": "one palpation sweep (23 plateaus) through the loop and its fit",
+            "value": time.perf_counter() - start,
+            "unit": "s",
+            "goal": "",
+            "note": f"{PalpationProtocol().duration_s:.0f} s of rig time; modulus "
+            f"{res.fit.modulus_n_m2:.0f} N/m^2 (1000)",
+        }
+    )
+    rig.close()
+    rig = open_rig("sim", seed=0, dt_s=0.005)
+    rig.place_tissue(soft)
+    start = time.perf_counter()
+    held = hold_force(rig, 0.1, duration_s=10.0, region_m=(0.15, 0.27), model=model)
+    rows.append(
+        {
+            "name": "10 s of force control (0.1 N) on the twin",
+            "value": time.perf_counter() - start,
+            "unit": "s",
+            "goal": "",
+            "note": f"steady {held.steady_error:+.1%}, overshoot {held.overshoot:.1%}",
+        }
+    )
+    rig.close()
+    return rows
