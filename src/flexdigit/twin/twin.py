@@ -374,7 +374,10 @@ class Twin:
     def __repr__(self) -> str:
         return (
             f"Twin(seed={self.seed}, orientation={self.orientation!r}, housing={self.housing}, cable={self.cable}, "
-            f"dt_s={self.dt_s:g}, time_s={self.time_s:g}, command={self.servo.command}, loads={self.loads})"
+            f"dt_s={self.dt_s:g}, time_s={self.time_s:g}, command={self.servo.command}, loads={self.loads}"
+            + (f", presses={self.presses}" if self._presses else "")
+            + (f", tissue={self.tissue!r}" if self.tissue is not None else "")
+            + ")"
         )
 
 
