@@ -11,7 +11,7 @@ import pytest
 from scipy.stats import norm
 
 from flexdigit.errors import ParameterError
-from flexdigit.tactile.bounds import CONTACT_ZONES, contact_bounds, fisher_sd, gaussian_bayes_limits
+from flexdigit.tactile.bounds import CONTACT_ZONES, contact_bounds, fisher_sd, gaussian_bayes_limits, line_bounds
 from flexdigit.tactile.contact import ContactEstimator, ContactGaugeModel
 
 NOISE_FREE_POSITION_M = 1.5e-3  # a 3-cell model reading 9-cell statics (model error ~0.4 %, tests/twin)
@@ -80,6 +80,17 @@ def test_averaging_readings_shrinks_the_bound_as_one_over_sqrt_n():
     one = contact_bounds(MODEL, [0.2], -0.1, 20)
     many = contact_bounds(MODEL, [0.2], -0.1, 20, n_readings=25)
     assert many.position_crlb_m[0] == pytest.approx(one.position_crlb_m[0] / 5, rel=1e-6)
+
+
+def test_line_load_bounds_shrink_as_one_over_sqrt_n():
+    one = line_bounds(MODEL, [0.17], [0.04], [-0.5], 20)
+    many = line_bounds(MODEL, [0.17], [0.04], [-0.5], 20, n_readings=25)
+    for key in ("centre_m", "extent_m", "total_n"):
+        assert np.isfinite(one[key][0]) and many[key][0] == pytest.approx(one[key][0] / 5, rel=1e-6)
+    # 150..190 mm covers no gauge: the moments at the gauges are a point's at 170 mm, and only the taut cable's
+    # tension (the pinned tip angle integrates the moment over the strip: a difference of F w^2 / 24) sees the
+    # extent, far less sharply than the total
+    assert many["extent_m"][0] / 0.04 > 10 * many["total_n"][0] / 0.5
 
 
 def test_fisher_sd_against_the_closed_form():

@@ -450,6 +450,15 @@ def contact_bounds(model, position_m, force_n, command, *, n_readings: int = 1) 
     return ContactBound(s, f, sd[:, 0], sd[:, 1], zone)
 
 
+def line_bounds(model, centre_m, extent_m, total_n, command, *, n_readings: int = 1) -> dict:
+    """Cramer-Rao standard deviations of an even line load's centre (m), extent (m) and total (N) from
+    ``n_readings`` averaged readings (inf where the gauges do not reach the parameter: a stretch that covers no
+    gauge reads as a point at its centroid, so its extent is not seen)."""
+    sigma = np.asarray(model.noise_v, dtype=float) / np.sqrt(n_readings)
+    sd = fisher_sd(line_jacobian(model, centre_m, extent_m, total_n, command), sigma)
+    return {"centre_m": sd[:, 0], "extent_m": sd[:, 1], "total_n": sd[:, 2]}
+
+
 def gaussian_bayes_limits(
     means,
     noise,

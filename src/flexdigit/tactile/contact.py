@@ -13,8 +13,9 @@ angle, so the tension adjusts to keep ``integral kappa ds`` fixed. Hence
 - on the rigid tip support (past 265 mm) the position drops out: a load there is a force plus a moment at the
   section's start, and the pinned tip angle absorbs the moment. Only the force is seen;
 - a line load and a point force with the same total and centroid give the same moment at every section outside the
-  loaded stretch; they differ (by up to ``F w / 8`` at its centre) only at a gauge inside it. Point versus
-  distributed can be told only when a gauge lies inside the stretch.
+  loaded stretch; they differ (by up to ``F w / 8`` at its centre) at a gauge inside it, and, faintly, through the
+  taut cable's tension (the pinned tip angle integrates the moment along the strip: ``F w^2 / 24`` apart). Point
+  versus distributed is told mostly where a gauge lies inside the stretch.
 
 :class:`ContactGaugeModel` is the twin's static model of the gauges under a point force, a line load or a body
 (:mod:`flexdigit.twin.contact`); :class:`ContactEstimator` is the maximum-likelihood estimate under three
