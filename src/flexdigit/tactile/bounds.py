@@ -389,19 +389,27 @@ def line_jacobian(model, centre_m, extent_m, total_n, command, step_m: float = 5
 def fisher_sd(jac, sigma_v) -> np.ndarray:
     """Cramer-Rao standard deviations ``sqrt(diag(F^-1))``, ``F = J' diag(1/sigma^2) J``, for Jacobians (n, 3, d)
     and noise (3,) or (n, 3); inf for parameters the information does not reach (singular or conditioning worse
-    than 1e8 after scaling)."""
+    than 1e8 after scaling). Vectorised over the batch (an estimate's latency counts it)."""
     jac = np.asarray(jac, dtype=float)
     w = 1.0 / np.broadcast_to(np.asarray(sigma_v, dtype=float), jac.shape[:2]) ** 2
-    info = np.einsum("nki,nk,nkj->nij", jac, w, jac)
-    out = np.full((jac.shape[0], jac.shape[2]), np.inf)
-    for i, f in enumerate(info):
-        diag = np.diag(f)
-        if not np.all(diag > 0):
-            continue
-        scale = np.sqrt(diag)
-        corr = f / np.outer(scale, scale)
-        if np.linalg.cond(corr) < 1e8:
-            out[i] = np.sqrt(np.diag(np.linalg.inv(corr))) / scale
+    info = np.matmul((jac * w[..., None]).transpose(0, 2, 1), jac)
+    n, d = info.shape[0], info.shape[1]
+    diag = np.einsum("nii->ni", info)
+    positive = np.all(diag > 0, axis=1)
+    scale = np.sqrt(np.where(positive[:, None], diag, 1.0))
+    corr = info / (scale[:, :, None] * scale[:, None, :])
+    out = np.full((n, d), np.inf)
+    if d == 2:  # closed form: corr = [[1, r], [r, 1]], inverse diagonal 1 / (1 - r^2)
+        r2 = corr[:, 0, 1] ** 2
+        ok = positive & (1.0 - r2 > 1e-8)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out[ok] = np.sqrt(1.0 / (1.0 - r2[ok]))[:, None] / scale[ok]
+        return out
+    ok = positive.copy()
+    ok[ok] = np.linalg.cond(corr[ok]) < 1e8
+    if np.any(ok):
+        inv = np.linalg.inv(corr[ok])
+        out[ok] = np.sqrt(np.einsum("nii->ni", inv)) / scale[ok]
     return out
 
 
