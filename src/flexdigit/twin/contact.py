@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexdigit._validation import check_real
-from flexdigit.errors import ParameterError
+from flexdigit.errors import ConvergenceWarning, ParameterError
 
 #: Gauss-Legendre points per clipped interval of a link.
 GAUSS_POINTS = 4
@@ -459,7 +459,7 @@ def solve_contact(
 
     Warns
     -----
-    RuntimeWarning
+    ConvergenceWarning
         If Newton stops before its tolerance (``converged`` is False); never silently.
     """
     s_fixed, f_fixed = quadrature(chain, loads)
@@ -479,18 +479,20 @@ def solve_contact(
     contact = TissueContact(chain, tissue) if tissue is not None and tissue.modulus_n_m2 > 0 else None
 
     def solve(body, start):
-        return chain.solve_static(
-            load_s_m,
-            load_force_ab_n,
-            tip_moment_nm=tip_moment_nm,
-            cable_shortening_m=cable_shortening_m,
-            psi0=start,
-            contact=body,
-            max_iter=max_iter,
-        )
+        with warnings.catch_warnings():  # this function says itself when the last attempt did not converge
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            return chain.solve_static(
+                load_s_m,
+                load_force_ab_n,
+                tip_moment_nm=tip_moment_nm,
+                cable_shortening_m=cable_shortening_m,
+                psi0=start,
+                contact=body,
+                max_iter=max_iter,
+            )
 
     sol = solve(contact, psi0)
-    if sol.iterations >= max_iter and contact is not None:
+    if not sol.converged and contact is not None:
         # a very stiff body makes semi-smooth Newton chatter between contact sets: stiffen it gradually instead,
         # each stage starting from the last stage's shape
         start = psi0
@@ -499,11 +501,11 @@ def solve_contact(
             sol = solve(stage, start)
             start = sol.psi_rad
     b = sol.psi_rad.shape[0]
-    converged = sol.iterations < max_iter
+    converged = bool(sol.converged)
     if not converged:
         warnings.warn(
             f"contact statics did not converge in {max_iter} Newton iterations; the solution may be wrong",
-            RuntimeWarning,
+            ConvergenceWarning,
             stacklevel=2,
         )
     if contact is None:
