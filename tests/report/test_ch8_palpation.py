@@ -11,7 +11,16 @@ from flexdigit.report.build import reproduce
 def test_palpation_chapter_builds_with_the_issue_figures(tmp_path):
     summary = reproduce(tmp_path, fast=True, chapters=("flexdigit.report.ch8_palpation",))
     assert summary.failed == {}
-    entries = {e["key"]: e for e in json.loads((tmp_path / "results.json").read_text())}
+    document = json.loads((tmp_path / "results.json").read_text())
+    entries = {e["key"]: e for e in document["entries"]}
+    tables = {t["key"]: t for t in document["tables"] if t["chapter"] == "ch8-palpation"}
+    assert set(tables) == {"palpation.classify", "palpation.stiffness", "palpation.active"}
+    # tables hold numbers, and agree with the entries they sit beside
+    stiffness = tables["palpation.stiffness"]
+    errors = [row[stiffness["columns"].index("rel_error")] for row in stiffness["rows"]]
+    assert max(abs(r) for r in errors) == pytest.approx(entries["palpation.stiffness.max_rel_error"]["ours"])
+    active = tables["palpation.active"]["rows"]
+    assert active[0][1] == pytest.approx(entries["palpation.active.single_bayes_position_mm"]["ours"])
     assert all(e["status"] == "new" for e in entries.values())
     # issue 13's "Done when", each a figure that could be wrong
     assert entries["palpation.contact.position_ratio_to_crlb"]["ours"] <= 1.2

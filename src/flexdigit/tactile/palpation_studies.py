@@ -1,9 +1,10 @@
 """The studies behind issue 13's figures: contact estimation against its bounds, point versus distributed against
 the Bayes limit, stiffness over a 5x range, a scan for an inclusion, force control, and active sensing.
 
-Each returns plain numbers (dicts of floats and arrays) that the report chapter turns into entries and figures
-and the README quotes; every one takes a seed and size settings (the report runs them small, ``make bench`` and the
-README full). Readings come from the twin's statics at a finer resolution (9 cells per section) than the
+Each returns plain numbers (dicts of floats and arrays, its table as a
+:class:`~flexdigit._result_table.ResultTable` under ``"table"``) that the report chapter turns into entries and
+figures and the README quotes; every one takes a seed and size settings (the report runs them small, the README
+full). Readings come from the twin's statics at a finer resolution (9 cells per section) than the
 estimators' model (3), with the twin's white noise and ADC, so no estimator inverts its own forward model.
 """
 
@@ -13,6 +14,7 @@ import math
 
 import numpy as np
 
+from flexdigit._result_table import ResultTable
 from flexdigit.tactile.bounds import CONTACT_ZONES, contact_bounds, gaussian_bayes_limits
 
 #: The best published figures the issue names: contact location within 1 % of the length (Xiao & Chen 2021: 1.0-2.2
@@ -186,6 +188,21 @@ def classification_study(
         "allowed_fraction": float(np.mean(allowed)),
         "allowed_accuracy": float(np.mean(ours[allowed])) if np.any(allowed) else math.nan,
         "allowed_bayes": float(np.mean(bayes[allowed])) if np.any(allowed) else math.nan,
+        "table": ResultTable(
+            "palpation.classify",
+            f"Point versus distributed ({n_readings} readings, command {command}): share of settings told apart "
+            "correctly, Bayes limit and estimator",
+            ("settings", "share_of_settings", "bayes_accuracy", "estimator_accuracy"),
+            (
+                ("all", 1.0, float(np.mean(bayes)), float(np.mean(ours))),
+                (
+                    "where the limit allows 95 %",
+                    float(np.mean(allowed)),
+                    float(np.mean(bayes[allowed])) if np.any(allowed) else None,
+                    float(np.mean(ours[allowed])) if np.any(allowed) else None,
+                ),
+            ),
+        ),
     }
 
 
@@ -212,11 +229,21 @@ def stiffness_study(
             bound.append(b / k)
             gap.append(fit.gap_m - tissue.gap_m)
     rel = np.array(rel)
+    moduli = np.repeat(np.asarray(moduli_n_m2, dtype=float), len(seeds))
+    seed_col = np.tile(np.asarray(seeds, dtype=int), len(moduli_n_m2))
+    rows = zip(moduli / 100, seed_col, rel, sd, bound, 1000 * np.array(gap), strict=True)
     return {
-        "moduli_n_m2": np.repeat(np.asarray(moduli_n_m2, dtype=float), len(seeds)),
+        "moduli_n_m2": moduli,
         "rel_error": rel,
         "rel_sd": np.array(sd),
         "rel_bound": np.array(bound),
+        "table": ResultTable(
+            "palpation.stiffness",
+            f"Tissue stiffness from one sweep ({len(protocol.commands)} plateaus, {protocol.readings} readings each): "
+            "relative error of the fitted modulus, the fit's sd and the Cramer-Rao bound",
+            ("modulus_n_m_per_cm", "seed", "rel_error", "rel_sd", "rel_crlb", "gap_error_mm"),
+            tuple(rows),
+        ),
         "gap_error_m": np.array(gap),
         "max_abs_rel_error": float(np.max(np.abs(rel))),
         "rms_rel_error": float(np.sqrt(np.mean(rel**2))),
@@ -308,4 +335,42 @@ def active_study(*, commands=(0, 20, 40), samples=2000, repetitions=20, seed=0, 
             p = est.predict(v)
             out[f"{name}_position_rmse_m"] = float(np.sqrt(np.mean((p[:, 0] - true_tip) ** 2)))
             out[f"{name}_magnitude_rel_rmse"] = float(np.sqrt(np.mean(((p[:, 1] - true_m) / true_m) ** 2)))
+    rows = [
+        (
+            "Bayes limit, one reading at one command",
+            1000 * out["single_position_rmse_m"],
+            out["single_magnitude_rel_rmse"],
+        ),
+        (
+            f"Bayes limit, one hang at {', '.join(str(c) for c in commands)}",
+            1000 * out["position_rmse_m"],
+            out["magnitude_rel_rmse"],
+        ),
+    ]
+    rows += [
+        (f"{label} on the twin's readings", 1000 * out[f"{name}_position_rmse_m"], out[f"{name}_magnitude_rel_rmse"])
+        for name, label in (("posterior", "Bayes estimator"), ("inversion", "maximum likelihood"))
+        if f"{name}_position_rmse_m" in out
+    ]
+    out["table"] = ResultTable(
+        "palpation.active",
+        "Hanging loads (table 7.1's settings, chapter 7's actuated noise): one reading against one hang read at "
+        "several commands",
+        ("protocol", "position_rmse_mm", "magnitude_rel_rmse"),
+        tuple(rows),
+    )
     return out
+
+
+def sweep_example(modulus_n_m2: float = 1000.0, *, protocol=None, seed=0):
+    """One palpation sweep of the soft block (the twin's statics and noise) analysed as ``flexdigit palpate``
+    does: its :class:`~flexdigit.tactile.palpation.PalpationResult` (fit, force-indentation curve, lumped slope)."""
+    from flexdigit.tactile.contact import ContactGaugeModel
+    from flexdigit.tactile.palpation import PalpationProtocol, analyse, simulate_sweep
+    from flexdigit.twin.contact import Tissue
+
+    model = ContactGaugeModel()
+    protocol = protocol or PalpationProtocol(commands=tuple(range(8, 31, 2)))
+    placed = Tissue(0.15, 0.35, 0.03, float(modulus_n_m2))
+    record = simulate_sweep(model, placed, protocol, seed=seed)
+    return analyse(record, placed.replace(modulus_n_m2=1.0, gap_m=0.0), protocol, model)
