@@ -4,10 +4,12 @@ Studies (:mod:`flexdigit.studies`) evaluate thousands of rigs; stepping them one
 time costs Python overhead per rig and per step. :class:`BatchedTwin` stacks the rigs' chains (same number of
 springs; every other number may differ: stiffness, damping, masses, lengths, gauges, cable, servo) and advances
 them with the scalar twin's integrator (:class:`~flexdigit.twin.digit.DynamicState`: two-stage L-stable Rosenbrock,
-exact Jacobian, the step halved while a link would turn more than 0.1 rad) written over a leading batch axis; a
-member that needs a halved step gets it alone (masked recursion), the others keep the full step. The servo is the
-scalar twin's (:mod:`flexdigit.twin.actuator`: second order, exact transition, commands latched on the 20 ms serial
-frame and the 52 Hz PWM pulse, hard stops). Same inputs, same numbers as N scalar twins (tested to 1e-9 rad).
+exact Jacobian, the step halved while a link would turn more than 0.1 rad), compiled
+(:mod:`flexdigit.twin._batched_kernel`: eight rigs abreast, blocks of rigs on separate cores); a rig that needs a
+halved step gets it alone, the others keep the full step. The servo is the scalar twin's
+(:mod:`flexdigit.twin.actuator`: second order, exact transition, commands latched on the 20 ms serial frame and the
+52 Hz PWM pulse, hard stops). Same inputs, same numbers as N scalar twins (tested to 1e-9 rad), and the same bits
+for a rig whatever its batch or the number of threads.
 
 The batched twin also gains the thesis's **second, antagonistic cable** (2.1: "future designs should incorporate
 two cable system to ensure rigidity of the member and ultimately its stability"; 2.5 mentions one fitted for
@@ -86,14 +88,9 @@ class BatchedChains:
         self.link = np.stack([ch.link_length_m for ch in chains])
         self.s0 = np.array([ch.joint_s_m[0] for ch in chains])
         self.stiffness = np.stack([ch.stiffness for ch in chains])
-        # batch-last copies for the dynamics: every elementwise operation runs along contiguous memory, and the
-        # small solves are an unpivoted LU written over the batch axis (_lu_factor), 3-4x faster than LAPACK's
-        # per-matrix gesv for 1000 9 x 9 systems
-        self._k_t = np.ascontiguousarray(self.k.transpose(1, 2, 0))
-        self._c_t = np.ascontiguousarray(self.c.transpose(1, 2, 0))
-        self._a_t = np.ascontiguousarray(self.a.transpose(1, 2, 0))
-        self._ga_t = np.ascontiguousarray(self.ga.T)
-        self._gb_t = np.ascontiguousarray(self.gb.T)
+        # springs and dampers join neighbouring links: K and C are banded (the dynamics kernel skips the zeros)
+        rows, cols = np.nonzero(np.any(self.k != 0, axis=0) | np.any(self.c != 0, axis=0))
+        self.bandwidth = int(np.max(np.abs(rows - cols))) if rows.size else 0
         if pretension_n is None:
             self.antagonist = np.zeros(self.size, dtype=bool)
             self.pre = np.zeros(self.size)
@@ -201,97 +198,6 @@ class BatchedChains:
         b[:, -1] = self.kc * self.e * taut
         return m, self.c.copy(), k, b
 
-    # ---------------------------------------------------------------------------------------------- dynamics
-    # Batch-last layout: angles (n, B), matrices (n, n, B); ``sel`` picks members (a slice for all of them, so
-    # nothing is copied on the common path).
-    def _rhs(self, sel, psi, omega, short):
-        a = self._a_t[:, :, sel]
-        s, c = np.sin(psi), np.cos(psi)
-        # cos(psi_j - psi_k) and sin(psi_j - psi_k) from outer products: no trigonometry on n^2 B numbers
-        cos_d = c[:, None, :] * c[None, :, :] + s[:, None, :] * s[None, :, :]
-        sin_d = s[:, None, :] * c[None, :, :] - c[:, None, :] * s[None, :, :]
-        m = a * cos_d
-        sm = a * sin_d
-        rhs = (
-            c * self._gb_t[:, sel]
-            - s * self._ga_t[:, sel]
-            - _matvec(self._k_t[:, :, sel], psi)
-            - _matvec(self._c_t[:, :, sel], omega)
-            - _matvec(sm, omega * omega)
-        )
-        attached = np.isfinite(short)
-        sh = np.where(attached, short, 0.0)
-        pre, e, kc, anta = self.pre[sel], self.e[sel], self.kc[sel], self.antagonist[sel]
-        s1 = sh + pre - e * psi[-1]
-        s2 = np.where(anta, pre - sh + e * psi[-1], -np.inf)
-        taut = np.where(attached, (s1 > 0).astype(float) + (s2 > 0), 0.0)
-        rhs[-1] += np.where(attached, e * kc * (np.maximum(s1, 0.0) - np.maximum(s2, 0.0)), 0.0)
-        return m, sm, rhs, s, c, taut
-
-    def ros2(self, sel, psi, omega, h, short0, short1):
-        """One ROS2 step of the members ``sel`` (see :meth:`DynamicState._ros2`), batch-last ``(n, B)`` angles and
-        rates; returns the new ``(psi, omega)``."""
-        n = self.n
-        d = np.arange(n)
-        gam = DynamicState.GAMMA
-        gh = gam * h
-        m, sm, rhs, s, c, taut = self._rhs(sel, psi, omega, short0)
-        alpha = _solve(m, rhs)
-        w2 = omega * omega
-        f_psi = sm * alpha[None, :, :] - m * w2[None, :, :] + self._k_t[:, :, sel]
-        f_psi[d, d] += -_matvec(sm, alpha) + _matvec(m, w2) + c * self._ga_t[:, sel] + s * self._gb_t[:, sel]
-        e, kc = self.e[sel], self.kc[sel]
-        f_psi[-1, -1] += kc * e * e * taut
-        q_t = np.zeros_like(psi)
-        rate = np.where(np.isfinite(short0) & np.isfinite(short1), (short1 - short0) / h, 0.0)
-        q_t[-1] = e * kc * taut * rate
-        f_omega = 2.0 * sm * omega[None, :, :] + self._c_t[:, :, sel]
-        lu = _lu_factor(m + gh * f_omega + (gh * gh) * f_psi)
-        b1 = _lu_solve(lu, rhs + gh * q_t - gh * _matvec(f_psi, omega))
-        a1 = omega + gh * b1
-        psi2, omega2 = psi + h * a1, omega + h * b1
-        m2, _, rhs2, _, _, _ = self._rhs(sel, psi2, omega2, short1)
-        alpha2 = _solve(m2, rhs2)
-        r1 = omega2 - 2.0 * a1
-        b2 = _lu_solve(lu, _matvec(m, alpha2 - 2.0 * b1) - gh * q_t - gh * _matvec(f_psi, r1))
-        a2 = r1 + gh * b2
-        return psi + h * (1.5 * a1 + 0.5 * a2), omega + h * (1.5 * b1 + 0.5 * b2)
-
-
-def _matvec(a, x):
-    """``a @ x`` per member, batch-last: (n, n, B) x (n, B) -> (n, B)."""
-    return np.einsum("ijb,jb->ib", a, x)
-
-
-def _lu_factor(a):
-    """Unpivoted LU of every member, batch-last (n, n, B); packed factors. The matrices here (mass matrices and
-    ``M + gamma h F_omega + (gamma h)^2 F_psi``) are dominated by the positive definite mass matrix, where
-    Gaussian elimination without pivoting is stable; a vanishing pivot raises rather than returning garbage."""
-    lu = a.copy()
-    n = lu.shape[0]
-    for k in range(n - 1):
-        lu[k + 1 :, k] /= lu[k, k]
-        lu[k + 1 :, k + 1 :] -= lu[k + 1 :, k, None] * lu[k, None, k + 1 :]
-    diag = np.abs(lu[np.arange(n), np.arange(n)])
-    if not np.all(diag > 1e-14 * np.max(np.abs(a), axis=(0, 1))):
-        raise ArithmeticError("singular mass or iteration matrix in the batched digit dynamics")
-    return lu
-
-
-def _lu_solve(lu, b):
-    """Solve with :func:`_lu_factor`'s factors, batch-last: ``b`` (n, B)."""
-    x = b.copy()
-    n = lu.shape[0]
-    for k in range(1, n):
-        x[k] -= np.sum(lu[k, :k] * x[:k], axis=0)
-    for k in range(n - 1, -1, -1):
-        x[k] = (x[k] - np.sum(lu[k, k + 1 :] * x[k + 1 :], axis=0)) / lu[k, k]
-    return x
-
-
-def _solve(a, b):
-    return _lu_solve(_lu_factor(a), b)
-
 
 class BatchedTwin:
     """N rigs on one clock: integer commands in (one per rig), tip rotations and gauge curvatures out.
@@ -377,11 +283,13 @@ class BatchedTwin:
         self.rate = np.zeros(self.size)
         self._pending: list[tuple[float, np.ndarray]] = []
         self._transitions: dict[float, np.ndarray] = {}
-        self._psi = np.ascontiguousarray(self.chains.solve_static(self._shortening(self.angle)).T)
+        self._psi = np.ascontiguousarray(self.chains.solve_static(self._shortening(self.angle)))
         self._omega = np.zeros_like(self._psi)
         self.time_s = 0.0
-        self.substeps = 0
-        self.threads = None  # None: one per core (up to 8) for batches of 256 rigs or more; 1: no threads
+        #: ROS2 steps each rig has taken (halved steps included): a rig in a violent transient takes more
+        self.substeps = np.zeros(self.size, dtype=np.int64)
+        #: None: one thread per core (up to 8) for batches of 2 x THREAD_MIN_RIGS rigs or more; 1: no threads
+        self.threads = None
 
     # ---------------------------------------------------------------------------------------------- servo
     def _check_commands(self, values) -> np.ndarray:
@@ -407,14 +315,18 @@ class BatchedTwin:
         return self._pulley * (angle - self._angle_taut)
 
     def _transition(self, h: float) -> np.ndarray:
+        """The servo's exact transition over ``h`` for every rig (N, 3, 3), one matrix exponential per distinct
+        servo (studies mostly vary other things)."""
         phi = self._transitions.get(h)
         if phi is None:
-            a = np.zeros((self.size, 3, 3))
+            servos, which = np.unique(np.column_stack([self._wn, self._zeta]), axis=0, return_inverse=True)
+            wn, zeta = servos[:, 0], servos[:, 1]
+            a = np.zeros((len(servos), 3, 3))
             a[:, 0, 1] = 1.0
-            a[:, 1, 0] = -(self._wn**2)
-            a[:, 1, 1] = -2.0 * self._zeta * self._wn
-            a[:, 1, 2] = self._wn**2
-            phi = self._transitions[h] = scipy.linalg.expm(a * h)
+            a[:, 1, 0] = -(wn**2)
+            a[:, 1, 1] = -2.0 * zeta * wn
+            a[:, 1, 2] = wn**2
+            phi = self._transitions[h] = scipy.linalg.expm(a * h)[which.reshape(-1)]
         return phi
 
     def command(self, values) -> None:
@@ -430,49 +342,68 @@ class BatchedTwin:
 
     # ---------------------------------------------------------------------------------------------- stepping
     def advance(self, duration_s: float) -> None:
-        """Let ``duration_s`` of rig time pass (a whole number of integration steps, rounded up)."""
+        """Let ``duration_s`` of rig time pass (a whole number of integration steps, rounded up).
+
+        The servo (independent of the digit) runs first over the whole interval, in numpy; then every rig's digit
+        follows its cable through the compiled kernel (:mod:`flexdigit.twin._batched_kernel`), blocks of rigs on
+        separate cores.
+        """
         duration = check_real(duration_s, "duration_s", "BatchedTwin.advance", low=0)
         target = self.time_s + duration
         h = self.dt_s
-        blocks = self._blocks()
-        pool = None
-        if len(blocks) > 1:
-            from concurrent.futures import ThreadPoolExecutor
-
-            pool = ThreadPoolExecutor(len(blocks))
-        try:
-            while self.time_s < target - 1e-12:
-                while self._pending and self._pending[0][0] <= self.time_s + 1e-12:
-                    self.commands = self._pending.pop(0)[1]
-                a0 = self.angle
-                self._servo_step(h)
-                s0, s1 = self._shortening(a0), self._shortening(self.angle)
-                if pool is None:
-                    self._step(blocks[0], h, s0, s1, 0)
-                else:  # numpy releases the GIL in its loops: the blocks step on separate cores
-                    jobs = [pool.submit(self._step, b, h, s0[b], s1[b], 0) for b in blocks]
-                    for job in jobs:
-                        job.result()
-                self.time_s = (round(self.time_s / h) + 1) * h
-        finally:
-            if pool is not None:
-                pool.shutdown()
+        shortening = [self._shortening(self.angle)]
+        times = []
+        while (times[-1] if times else self.time_s) < target - 1e-12:
+            now = times[-1] if times else self.time_s
+            while self._pending and self._pending[0][0] <= now + 1e-12:
+                self.commands = self._pending.pop(0)[1]
+            self._servo_step(h)
+            shortening.append(self._shortening(self.angle))
+            times.append((round(now / h) + 1) * h)
+        if not times:
+            return
+        self._step_digits(np.array(shortening), h)
+        self.time_s = times[-1]
 
     #: Below this many rigs a batch steps in one thread (the threads' overhead outweighs a second core).
-    THREAD_MIN_RIGS = 256
+    THREAD_MIN_RIGS = 64
 
-    def _blocks(self) -> list[np.ndarray]:
-        """Contiguous blocks of rigs, one per core when the batch is large enough. Every rig's arithmetic is the
-        same whichever block it is in (the batch-last operations are elementwise over rigs) up to rounding: numpy's
-        inner loops differ between a contiguous batch and a strided block (1e-14 rad after a 0.4 s step; tested).
-        Set :attr:`threads` to 1 for bit-for-bit repeatability across batch sizes."""
+    def _blocks(self) -> list[tuple[int, int]]:
+        """Contiguous blocks of rigs ``(lo, hi)``, one per core when the batch is large enough. A rig's arithmetic
+        is its own (the kernel steps one rig at a time): any blocks, any threads, the same bits."""
         import os
 
         cores = min(os.cpu_count() or 1, 8)
         if self.threads is not None:
             cores = self.threads
+        from flexdigit.twin._batched_kernel import LANES
+
         count = max(1, min(cores, self.size // self.THREAD_MIN_RIGS))
-        return [b for b in np.array_split(np.arange(self.size), count) if b.size]
+        groups = -(-self.size // LANES)  # blocks of whole groups of LANES rigs
+        edges = np.minimum(LANES * np.linspace(0, groups, count + 1).round().astype(int), self.size)
+        return [(int(lo), int(hi)) for lo, hi in zip(edges[:-1], edges[1:], strict=True) if hi > lo]
+
+    def _step_digits(self, shortening: np.ndarray, h: float) -> None:
+        from flexdigit.twin._batched_kernel import advance_rigs
+
+        ch = self.chains
+        args = (self._psi, self._omega, np.ascontiguousarray(shortening), h, ch.a, ch.k, ch.c, ch.bandwidth)
+        args += (ch.ga, ch.gb, ch.e)
+        args += (ch.kc, ch.pre, ch.antagonist, self.MAX_ROTATION_PER_STEP_RAD)
+        blocks = self._blocks()
+        if len(blocks) == 1:
+            failed = [advance_rigs(*args, 0, self.size, self.substeps)]
+        else:  # the kernel releases the GIL: the blocks step on separate cores
+            from concurrent.futures import ThreadPoolExecutor
+
+            with ThreadPoolExecutor(len(blocks)) as pool:
+                failed = list(pool.map(lambda b: advance_rigs(*args, b[0], b[1], self.substeps), blocks))
+        bad = [f for f in failed if f >= 0]
+        if bad:
+            raise ArithmeticError(
+                f"the batched digit dynamics diverged for rig {bad[0]} (a singular mass or iteration matrix, or "
+                "non-finite angles): its parameters are not a physical digit"
+            )
 
     def _servo_step(self, h: float) -> None:
         phi = self._transition(h)
@@ -483,35 +414,15 @@ class BatchedTwin:
         self.angle = np.clip(angle, self._angle_min, self._angle_max)
         self.rate = np.where(stop, 0.0, rate)
 
-    def _step(self, idx, h, short0, short1, depth) -> None:
-        contiguous = idx.size and idx[-1] - idx[0] + 1 == idx.size
-        sel = slice(int(idx[0]), int(idx[-1]) + 1) if contiguous else idx  # a block of rigs: views, no copies
-        psi0, omega0 = self._psi[:, sel], self._omega[:, sel]
-        psi1, omega1 = self.chains.ros2(sel, psi0, omega0, h, short0, short1)
-        self.substeps += 1
-        spin = h * np.maximum(np.max(np.abs(omega0), axis=0), np.max(np.abs(omega1), axis=0))
-        fast = (spin > self.MAX_ROTATION_PER_STEP_RAD) | ~np.all(np.isfinite(omega1), axis=0)
-        if depth >= 12 or not fast.any():
-            self._psi[:, sel], self._omega[:, sel] = psi1, omega1
-            if not np.all(np.isfinite(psi1)):
-                raise ArithmeticError("the batched digit dynamics diverged (non-finite angles)")
-            return
-        keep = ~fast
-        self._psi[:, idx[keep]], self._omega[:, idx[keep]] = psi1[:, keep], omega1[:, keep]
-        sub = idx[fast]
-        mid = 0.5 * (short0[fast] + short1[fast])
-        self._step(sub, 0.5 * h, short0[fast], mid, depth + 1)
-        self._step(sub, 0.5 * h, mid, short1[fast], depth + 1)
-
     @property
     def psi(self) -> np.ndarray:
         """Link angles of every rig (N, n), rad."""
-        return self._psi.T
+        return self._psi
 
     @property
     def omega(self) -> np.ndarray:
         """Link rates of every rig (N, n), rad/s."""
-        return self._omega.T
+        return self._omega
 
     # ---------------------------------------------------------------------------------------------- reading
     def tip_rotation_deg(self) -> np.ndarray:
