@@ -22,6 +22,10 @@ What each one means (thesis section in brackets):
   designed for the baseline rig (a rig built to these tolerances runs the thesis rig's controller), unless the
   context says ``redesign`` (the design study designs one per candidate). ``gain_margin`` is the loop's gain
   margin broken at the plant input (a factor; the stability margin);
+- ``twin_settling_time_s``, ``twin_overshoot_percent``, ``twin_steady_state_error_deg``: the same loop *run* on
+  the batched twin (:mod:`flexdigit.studies.loop`): integer commands latched on the serial frame and the PWM pulse,
+  the large-deflection digit, a setpoint step of ``context.loop`` (20 deg centred on the mid-range rotation);
+  the steady-state error is what the integer command leaves (the design holds it within half a quantum);
 - ``hinf_gamma``: gamma of the thesis's H-infinity design (4.4, 5 Hz error weight, the thesis's regularisation)
   on this rig's plant as the thesis assembled it (3.5, :func:`flexdigit.models.plant.build_plant` "printed");
 - ``bayes_position_limit_mm``: chapter 6's localisation Bayes limit (:func:`flexdigit.tactile.bounds.protocol_limits`)
@@ -45,6 +49,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from flexdigit.studies.loop import LoopProtocol
 from flexdigit.studies.spec import ParameterSet
 
 __all__ = ["Metric", "MetricContext", "METRICS", "evaluate", "register_metric", "SENSITIVITY_METRICS"]
@@ -76,6 +81,8 @@ class MetricContext:
         Cut-off of the H-infinity error weight (4.4: 5 Hz).
     protocol : str
         The tactile protocol whose settings the Bayes limit uses (table 6.1).
+    loop : LoopProtocol
+        The setpoint step the twin-run loop metrics score (:mod:`flexdigit.studies.loop`).
     """
 
     baseline: ParameterSet = field(default_factory=ParameterSet)
@@ -87,6 +94,7 @@ class MetricContext:
     tactile_cells: int = 9
     hinf_filter_hz: float = 5.0
     protocol: str = "thesis-6.1"
+    loop: LoopProtocol = field(default_factory=LoopProtocol)
 
 
 @dataclass(frozen=True)
@@ -216,6 +224,7 @@ def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
         "rotation_gain_deg_per_command": np.degrees(tip_hi - tip_lo) / (commands[:, 1] - commands[:, 0]),
         "tip_stiffness_nm_per_rad": moment / (turned - psi_mid[:, -1]),
         "_linear": chains.linearised(psi_mid, mid),
+        "_mid_rotation_deg": np.degrees(psi_mid[:, -1] - tip_lo),
     }
     _BATCH_CACHE[:] = [parameter_sets, out]
     return out
@@ -335,15 +344,22 @@ def step_figures(t, y, band: float = 0.02) -> tuple[float, float]:
 
 
 @lru_cache(maxsize=4096)
+def loop_design(ps: ParameterSet, ctx: MetricContext):
+    """The 20 ms design the loop metrics run on ``ps``: the baseline rig's, or its own with ``ctx.redesign``."""
+    if not ctx.redesign:
+        return _baseline_design(ctx.baseline)
+    from flexdigit.control.design20ms import design_20ms
+
+    return design_20ms(ps.params, deg_per_command=rotation_gain_deg_per_command(ps, ctx))
+
+
+@lru_cache(maxsize=4096)
 def _loop(ps: ParameterSet, ctx: MetricContext) -> dict:
     import control as ct
 
-    from flexdigit.control.design20ms import closed_loop, design_20ms
+    from flexdigit.control.design20ms import closed_loop
 
-    if ctx.redesign:
-        design = design_20ms(ps.params, deg_per_command=rotation_gain_deg_per_command(ps, ctx))
-    else:
-        design = _baseline_design(ctx.baseline)
+    design = loop_design(ps, ctx)
     plant_d = loop_plant(ps, design.period_s, design.delay_samples)
     loop = closed_loop(plant_d, design.controller)
     if np.max(np.abs(loop.poles())) >= 1.0:
@@ -375,6 +391,51 @@ def overshoot_percent(ps: ParameterSet, ctx: MetricContext) -> float:
 @register_metric("gain_margin", "factor", "gain margin of the 20 ms loop at the plant input", "5.2")
 def gain_margin(ps: ParameterSet, ctx: MetricContext) -> float:
     return _loop(ps, ctx)["gain_margin"]
+
+
+_LOOP_CACHE: list = [None, None, None]  # (parameter sets, context, figures): the three metrics share one run
+
+
+def twin_loop_figures(parameter_sets, ctx: MetricContext) -> dict[str, np.ndarray]:
+    """The 20 ms loop run on the batched twin for many parameter sets at once (:mod:`flexdigit.studies.loop`):
+    settling time, overshoot and steady-state error of the context's setpoint step, centred on each rig's
+    mid-range rotation (where the linear metrics linearise)."""
+    from flexdigit.studies.loop import step_figures_batch, step_responses
+
+    if _LOOP_CACHE[0] is parameter_sets and _LOOP_CACHE[1] == ctx:
+        return _LOOP_CACHE[2]
+    designs = [loop_design(ps, ctx) for ps in parameter_sets]
+    run = step_responses(
+        [ps.params for ps in parameter_sets],
+        [ps.calibration for ps in parameter_sets],
+        [d.runtime(ps.params) for d, ps in zip(designs, parameter_sets, strict=True)],
+        twin_figures(parameter_sets)["_mid_rotation_deg"],
+        ctx.loop,
+        pretension_n=[ps.antagonist_pretension_n for ps in parameter_sets],
+    )
+    out = step_figures_batch(run)
+    _LOOP_CACHE[:] = [parameter_sets, ctx, out]
+    return out
+
+
+@lru_cache(maxsize=4096)
+def _single_loop(ps: ParameterSet, ctx: MetricContext) -> dict[str, np.ndarray]:
+    return twin_loop_figures([ps], ctx)
+
+
+def _loop_metric(name, unit, text):
+    register_metric(
+        f"twin_{name}",
+        unit,
+        text,
+        "5.2",
+        batched=lambda parameter_sets, ctx: twin_loop_figures(parameter_sets, ctx)[name],
+    )(lambda ps, ctx: float(_single_loop(ps, ctx)[name][0]))
+
+
+_loop_metric("settling_time_s", "s", "2 % settling of the 20 ms loop's step, run on the twin (integer command)")
+_loop_metric("overshoot_percent", "%", "overshoot of the 20 ms loop's step, run on the twin")
+_loop_metric("steady_state_error_deg", "deg", "the 20 ms loop's final error after its step, run on the twin")
 
 
 @register_metric("hinf_gamma", "", "gamma of the thesis's H-infinity design on this rig's printed plant", "4.4")

@@ -97,6 +97,11 @@ class BatchedChains:
         else:
             pre = check_array(pretension_n, "pretension_n", "BatchedChains", shape=(self.size,), low=0)
             self.antagonist = np.ones(self.size, dtype=bool) if antagonist is None else np.asarray(antagonist, bool)
+            if self.antagonist.shape != (self.size,):
+                raise ParameterError(
+                    f"The 'antagonist' parameter of BatchedChains must be {self.size} booleans, one per chain. "
+                    f"Got shape {self.antagonist.shape} instead."
+                )
             with np.errstate(divide="ignore", invalid="ignore"):
                 self.pre = np.where(self.antagonist & (self.kc > 0), pre / np.where(self.kc > 0, self.kc, 1.0), 0.0)
 
@@ -214,6 +219,8 @@ class BatchedTwin:
     cells_per_section : int
     pretension_n : array_like, shape (N,), optional
         A second, antagonistic cable with this pretension on both cables (N); None: the thesis's single cable.
+    antagonist : array_like of bool, shape (N,), optional
+        Which rigs have the second cable when ``pretension_n`` is given (default: all of them).
     command : int or array_like, optional
         Initial commands (default the equilibrium command); every rig starts at rest in equilibrium there.
     """
@@ -231,6 +238,7 @@ class BatchedTwin:
         dt_s: float = DEFAULT_DT_S,
         cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
         pretension_n=None,
+        antagonist=None,
         command=None,
     ) -> None:
         params_list = [params] if isinstance(params, RigParams) else list(params)
@@ -263,7 +271,7 @@ class BatchedTwin:
         chains = [
             cached_digit(p, c, bool(housing), orientation, cells) for p, c in zip(params_list, cal_list, strict=True)
         ]
-        self.chains = BatchedChains(chains, pretension_n if self.cable else None)
+        self.chains = BatchedChains(chains, pretension_n if self.cable else None, antagonist)
         act = [p.actuator for p in params_list]
         self._cmd_lo = np.array([a.command_min for a in act])
         self._cmd_hi = np.array([a.command_max for a in act])
