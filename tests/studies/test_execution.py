@@ -1,5 +1,7 @@
-"""Execution: Dask gives the serial run's numbers, a killed study resumes, journals are never mixed."""
+"""Execution: Dask gives the serial run's numbers, a killed study resumes, a dead worker fails only its task,
+journals are never mixed."""
 
+import dataclasses
 import json
 import os
 import signal
@@ -13,7 +15,9 @@ import pytest
 
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.studies.execution import JOURNAL_NAME, Journal, RowRecord, parse_scheduler
+from flexdigit.studies.execution import JOURNAL_NAME, TASK_FAILED, Journal, RowRecord, parse_scheduler, retry_rows
+from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity, write_outputs
+from flexdigit.studies.spec import StudySpec, spec_from_toml
 
 SPEC = """
 [study]
@@ -110,6 +114,98 @@ def test_a_killed_study_resumes_without_recomputing(tmp_path):
     rows = [json.loads(line)["row"] for line in after[1:]]
     assert sorted(rows) == list(range(rows_total))
     assert _evaluations(out).equals(_evaluations(ref))
+
+
+_DYING = """
+import dataclasses
+import os
+
+from flexdigit.studies.spec import StudySpec
+
+
+@dataclasses.dataclass(frozen=True)
+class DyingSpec(StudySpec):
+    die_on: str = ""
+    sentinel: str = ""
+
+    def parameter_set(self, values, label="sample"):
+        if label == self.die_on and os.path.exists(self.sentinel):
+            os._exit(3)  # no exception, no cleanup: as an out-of-memory kill or a segfault
+        return super().parameter_set(values, label)
+"""
+
+
+@pytest.mark.slow
+def test_a_worker_dying_mid_task_fails_that_task_only_and_a_rerun_computes_it(tmp_path, monkeypatch):
+    import importlib
+
+    import dask
+
+    # a spec whose row 7 kills the worker process evaluating it while the file `die` exists, in a module the
+    # workers (fresh processes) import
+    (tmp_path / "dying_spec.py").write_text(_DYING)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
+    dying_spec = importlib.import_module("dying_spec")
+    spec = spec_from_toml(SPEC.replace(', "bayes_position_limit_mm"', ""))
+    settings = SensitivitySettings.from_spec(spec)
+    sentinel = tmp_path / "die"
+    sentinel.touch()
+    fields = {f.name: getattr(spec, f.name) for f in dataclasses.fields(StudySpec)}
+    dying = dying_spec.DyingSpec(**fields, die_on="row 7", sentinel=str(sentinel))
+    assert dying.fingerprint() == spec.fingerprint()
+    ref = run_sensitivity(spec, tmp_path / "ref", settings=settings, workers=0, progress=False)
+    assert not ref.failed_rows
+    out = tmp_path / "out"
+    # one task in flight per worker (a dying worker takes only its running task with it); Dask gives a task up
+    # once 2 workers died running it (allowed-failures 1: the default 3 only costs more worker restarts)
+    config = {"distributed.scheduler.allowed-failures": 1, "distributed.scheduler.worker-saturation": 1.0}
+    with dask.config.set(config):
+        first = run_sensitivity(dying, out, settings=settings, workers=2, progress=False)
+    # chunk_size 3: row 7's task holds rows 6-8; it is reported, the other 55 rows are the serial run's numbers
+    assert first.failed_rows == [6, 7, 8]
+    assert all(first.errors[i].startswith(f"{TASK_FAILED}KilledWorker") for i in (6, 7, 8))
+    for metric in spec.metrics:
+        keep = np.setdiff1d(np.arange(len(first.values)), [6, 7, 8])
+        np.testing.assert_array_equal(first.outputs[metric][keep], ref.outputs[metric][keep])
+        assert np.all(np.isnan(first.outputs[metric][[6, 7, 8]]))
+    write_outputs(first, out)
+    summary = json.loads((out / "summary.json").read_text())
+    reported = {r["row"]: r for r in summary["failed_rows"]}
+    assert sorted(reported) == [6, 7, 8]
+    assert reported[7]["parameters"] == pytest.approx(dict(zip(spec.names, ref.values[7], strict=True)), rel=1e-15)
+    # the metrics see NaN on 3 rows: no indices from a subset of the design, the row and its parameters named
+    assert all("row 6" in first.refused[m] and spec.names[0] in first.refused[m] for m in spec.metrics)
+    # a rerun (the cause gone) computes those 3 rows only and gives the serial study
+    assert retry_rows(out) == 3
+    lines = len((out / JOURNAL_NAME).read_text().splitlines())
+    sentinel.unlink()
+    again = run_sensitivity(dying, out, settings=settings, workers=0, progress=False)
+    assert len((out / JOURNAL_NAME).read_text().splitlines()) == lines + 3 and retry_rows(out) == 0
+    assert not again.failed_rows and not again.refused
+    for metric in spec.metrics:
+        np.testing.assert_array_equal(again.outputs[metric], ref.outputs[metric])
+
+
+@pytest.mark.slow
+def test_a_finished_study_with_failed_tasks_is_rerun_not_refused(tmp_path, capsys):
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC.replace(', "bayes_position_limit_mm"', ""))
+    out = tmp_path / "o"
+    args = ["study", "sensitivity", str(spec), "--out", str(out), "--workers", "0", "--no-progress"]
+    assert main(args) == 0
+    journal = Journal(
+        out / JOURNAL_NAME, {"fingerprint": json.loads((out / JOURNAL_NAME).open().readline())["fingerprint"]}
+    )
+    good = journal.records[4]
+    journal.append([RowRecord(4, {}, f"{TASK_FAILED}KilledWorker: all workers died")])  # as a dead worker leaves it
+    assert retry_rows(out) == 1
+    capsys.readouterr()
+    assert main([*args, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["failed_rows"] == []
+    assert Journal(out / JOURNAL_NAME, journal.header).records[4].values == good.values
+    assert retry_rows(out) == 0
+    assert main(args) == 2  # finished, nothing to retry: refused as before
 
 
 def test_journal_refuses_other_settings_and_drops_a_cut_line(tmp_path):

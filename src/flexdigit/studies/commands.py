@@ -51,11 +51,16 @@ def _study(args: argparse.Namespace) -> CommandResult:
 
 
 def _run(args, out, run, settings, write):
-    """Run a study in ``out`` (created), write its files, return ``(result, summary)``."""
+    """Run a study in ``out`` (created), write its files, return ``(result, summary)``.
+
+    A finished study is refused (before any work) unless some of its tasks failed (a worker died): a rerun then
+    computes those rows again and rewrites the outputs."""
     from flexdigit.errors import OutputExistsError
+    from flexdigit.studies.execution import retry_rows
 
     done = out / "summary.json"
-    if done.exists() and not args.force:  # refuse before any work, not after it
+    retry = done.exists() and not args.force and retry_rows(out) > 0
+    if done.exists() and not args.force and not retry:
         raise OutputExistsError(f"{done}: this study has finished in {out}; pass --force to run it again")
     out.mkdir(exist_ok=True)
     result = run(
@@ -67,7 +72,7 @@ def _run(args, out, run, settings, write):
         force=args.force,
         progress=not args.no_progress,
     )
-    paths = write(result, out, force=args.force)
+    paths = write(result, out, force=args.force or retry)
     summary = result.summary()
     summary["files"] = {k: str(v) for k, v in paths.items()}
     return result, summary

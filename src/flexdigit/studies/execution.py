@@ -18,8 +18,10 @@ Every finished task's records are appended to a journal (``journal.jsonl`` in th
 with the study's fingerprint, then one line per row, flushed and fsynced), so a study killed at any point resumes
 where it stopped when rerun with the same spec and directory; a journal written by a study with other settings
 is refused, never mixed (``--force`` starts over). A row whose evaluation raises is recorded with its error and
-its parameters and the study goes on; a task whose worker dies is recorded the same way for each of its rows.
-A progress bar goes to stderr.
+its parameters and the study goes on; a task whose worker dies (Dask gives up on it once the workers it ran on
+died, ``KilledWorker``) or that could not run is recorded the same way for each of its rows, its error starting
+with :data:`TASK_FAILED`: such rows are not results (the rig did not refuse them), so a rerun computes them again,
+keeping every other row. A progress bar goes to stderr.
 """
 
 from __future__ import annotations
@@ -39,10 +41,22 @@ import numpy as np
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.studies.metrics import MetricContext
 
-__all__ = ["Journal", "RowRecord", "evaluate_rows", "run_rows", "run_study", "parse_scheduler", "JOURNAL_NAME"]
+__all__ = [
+    "Journal",
+    "RowRecord",
+    "evaluate_rows",
+    "run_rows",
+    "run_study",
+    "parse_scheduler",
+    "retry_rows",
+    "JOURNAL_NAME",
+    "TASK_FAILED",
+]
 
 JOURNAL_NAME = "journal.jsonl"
 JOURNAL_FORMAT = 1
+#: How the error of a row whose task failed (not the row itself: a worker died, the task could not run) begins
+TASK_FAILED = "task failed: "
 
 
 @dataclass(frozen=True)
@@ -53,6 +67,11 @@ class RowRecord:
     values: dict
     error: str | None = None
     seconds: float = 0.0
+
+    @property
+    def done(self) -> bool:
+        """A result (values or the row's own error), not a failed task's placeholder to compute again."""
+        return not (self.error or "").startswith(TASK_FAILED)
 
     def to_json(self) -> dict:
         values = {k: (v if math.isfinite(v) else repr(v)) for k, v in self.values.items()}
@@ -274,7 +293,7 @@ def run_rows(
     values = np.asarray(values, dtype=float)
     n = values.shape[0]
     chunks = [np.arange(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
-    todo = [(key, rows) for key, rows in enumerate(chunks) if any(int(r) not in journal.records for r in rows)]
+    todo = [(key, rows) for key, rows in enumerate(chunks) if any(not _done(journal, r) for r in rows)]
     if workers is None:
         workers = os.cpu_count() or 1
     bar, task = _progress(n, n - sum(len(r) for _, r in todo), progress and bool(todo), label)
@@ -291,7 +310,9 @@ def run_rows(
         from distributed import as_completed
 
         with dask_client(scheduler, workers) as client:
-            [build_remote] = client.scatter([build], broadcast=True)
+            # the builder as a task of its own, not scattered data: a scattered object dies with the workers that
+            # hold it (all tasks after a worker death would fail); a task's result is computed again where needed
+            build_remote = client.submit(_identity, build, key=f"{label}-build-{journal.header.get('fingerprint', '')}")
             futures = {}
             for key, rows in todo:
                 fut = client.submit(
@@ -313,11 +334,34 @@ def run_rows(
                 try:
                     records = fut.result()
                 except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
-                    message = f"task failed: {type(exc).__name__}: {exc}".splitlines()[0]
+                    message = f"{TASK_FAILED}{type(exc).__name__}: {exc}".splitlines()[0]
                     records = [RowRecord(int(r), {}, message) for r in rows]
                 journal.append(records)
                 bar.update(task, advance=len(rows))
     return dict(journal.records)
+
+
+def _identity(x):
+    return x
+
+
+def _done(journal: Journal, row) -> bool:
+    record = journal.records.get(int(row))
+    return record is not None and record.done
+
+
+def retry_rows(out_dir) -> int:
+    """How many rows of the study journaled in ``out_dir`` a rerun would compute again (their task failed); 0 when
+    there is no journal."""
+    path = Path(out_dir) / JOURNAL_NAME
+    if not path.is_file():
+        return 0
+    failed = set()
+    for line in path.read_bytes().split(b"\n")[1:]:
+        with contextlib.suppress(json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
+            record = RowRecord.from_json(json.loads(line))
+            (failed.discard if record.done else failed.add)(record.row)
+    return len(failed)
 
 
 def run_study(
