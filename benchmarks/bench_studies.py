@@ -8,7 +8,8 @@ factor, and what one evaluation of each metric costs.
 - Per-task overhead: 200 one-row tasks on one worker against the same rows in process, per task.
 - Batched twin: N = 1000 parameter sets (E and the housing stiffness drawn, seeded), a 0 -> 30 deg command step
   (the first 2 s include the halved steps of the transient) and 2 s of quiet following; aggregate real-time
-  factor = N x simulated time / wall time, and per CPU second of all threads (less sensitive to other jobs). The
+  factor = N x simulated time / wall time, and per CPU second of all threads (less sensitive to other jobs), and
+  per CPU second in one thread (what one core does; two quiet cores give about twice it). The
   kernel's compile time (once per machine: numba caches it) is measured apart in a fresh process with an empty
   cache. The scalar twin's real-time factor in the same run, for comparison.
 """
@@ -176,6 +177,12 @@ def _batched_rows() -> list[dict]:
     twins.advance(2.0)
     quiet = time.perf_counter() - start
     cpu = time.process_time() - cpu
+    one = BatchedTwin(params, cals)  # the same in one thread: CPU time per rig and ROS2 step, less load-sensitive
+    one.threads = 1
+    one.command(np.full(n, 30))
+    cpu_one = time.process_time()
+    one.advance(4.0)
+    cpu_one = time.process_time() - cpu_one
     single = Twin(params[0], cals[0])
     single.command(30)
     start = time.perf_counter()
@@ -190,6 +197,14 @@ def _batched_rows() -> list[dict]:
             "goal": ">= 10,000",
             "note": f"step 2 s: {n * 2.0 / step:.0f} x, quiet 2 s: {n * 2.0 / quiet:.0f} x; {threads} threads; "
             f"per CPU second (all threads): {n * 4.0 / cpu:.0f} x",
+        },
+        {
+            "name": "batched twin, N = 1000, one thread: real-time factor per CPU second",
+            "value": n * 4.0 / cpu_one,
+            "unit": "x",
+            "goal": "",
+            "note": f"{1e6 * cpu_one / one.substeps.sum():.2f} us CPU per rig and ROS2 step "
+            f"({one.substeps.sum()} steps, halved ones included)",
         },
         {"name": "batched twin, N = 1000: build (1000 chains)", "value": build, "unit": "s", "goal": "", "note": ""},
         {

@@ -1,8 +1,9 @@
 """The batched twin's dynamics, compiled: the scalar twin's ROS2 step, eight rigs abreast in machine code.
 
 numba, because a step is dozens of 9 x 9 products and solves per rig: over a whole batch axis numpy spends ~10 us
-per rig and step in memory traffic and dispatch; compiled, eight rigs step together in vector registers
-(every loop below runs innermost over :data:`LANES` rigs, which the compiler turns into SIMD) at ~1 us a rig.
+per rig and step in memory traffic and dispatch; compiled, ~2 us (CPU, one thread, 9 links). Every loop below runs
+innermost over :data:`LANES` rigs so that the compiler could step eight rigs in vector registers; numba 0.68's
+LLVM vectorises little of it (the machine code is mostly scalar): the next factor, if one is needed.
 
 :func:`advance_rigs` advances rigs ``lo..hi`` of a batch over ``K`` steps of ``h`` seconds: the step of
 :meth:`flexdigit.twin.digit.DynamicState._ros2` (Verwer et al.'s ROS2, exact Jacobian, non-autonomous cable term)
