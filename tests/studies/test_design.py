@@ -16,6 +16,7 @@ from flexdigit.studies.design import (
     d_optimal_positions,
     design_parameter_set,
     equal_positions,
+    exchange_search,
     pareto_front,
     run_design,
 )
@@ -92,6 +93,37 @@ def test_d_optimal_beats_every_pair_on_a_coarse_grid():
     positions, value, equal_value = d_optimal_positions(2, ps, step_m=0.01, seed=0)
     assert value == pytest.approx(best, abs=1e-9)
     assert value >= equal_value
+
+
+def test_d_optimal_crowding_at_the_clamp_is_the_cantilevers_not_the_twins():
+    # Closed form (Euler-Bernoulli cantilever, no cells): a load m at a bends a gauge at x < a by m g (a - x) / EI
+    # and leaves one beyond it straight, so d/d(a/L) = m g L and d/d(m / 25 g) = 0.025 g (a - x) behind the load,
+    # 0 ahead of it. Scaled onto the twin's gradients (one factor: volts per moment over the noise, which the
+    # criterion's ridge makes matter), the same exchange search from the same starts puts 3 gauges where the
+    # twin's information does, the first at the grid's edge by the clamp: the crowding is the physics of the
+    # criterion (a mass is read best where its moment arm is longest; a load behind every gauge is not seen),
+    # not the twin's 3 cells per section (the information uses 9).
+    from flexdigit.tactile.protocols import load_protocol
+
+    ps = ParameterSet()
+    masses = tuple(load_protocol("thesis-6.1").loads_kg)
+    jac, grid = _information(ps.params, ps.calibration, 0.0025, masses)
+    length = ps.params.geometry.digit_length_m
+    a, m = (x.ravel() for x in np.meshgrid(np.linspace(0.05 * length, length, 24), masses))
+    behind = grid[None, :] < a[:, None]
+    closed = np.stack(
+        [np.where(behind, m[:, None] * 9.81 * length, 0.0), np.where(behind, 0.025 * 9.81 * (a[:, None] - grid), 0.0)],
+        axis=-1,
+    )
+    closed *= np.sum(jac * closed) / np.sum(closed**2)
+    assert np.linalg.norm(jac - closed) / np.linalg.norm(jac) < 0.25  # the twin is a cantilever, nearly
+    positions, _, _ = d_optimal_positions(3, ps, step_m=0.0025, seed=0)
+    rng = np.random.default_rng([0, 3, 23])  # d_optimal_positions' starts
+    equal = [int(np.argmin(np.abs(grid - x))) for x in equal_positions(3, ps.params)]
+    starts = [equal] + [sorted(rng.choice(grid.size, 3, replace=False).tolist()) for _ in range(3)]
+    chosen, _ = exchange_search(closed, starts)
+    np.testing.assert_allclose(grid[chosen], positions, atol=0.0025 + 1e-12)  # within one grid step
+    assert positions[0] == pytest.approx(grid[0]) and positions[2] < 0.5 * length
 
 
 def test_candidates_sample_keeps_the_thesis_design():

@@ -320,22 +320,30 @@ def d_optimal_positions(count: int, ps: ParameterSet, *, step_m: float = 0.0025,
     equal = [int(np.argmin(np.abs(grid - x))) for x in equal_positions(count, ps.params)]
     rng = np.random.default_rng([seed, count, 23])
     starts_list = [equal] + [sorted(rng.choice(grid.size, count, replace=False).tolist()) for _ in range(starts - 1)]
+    best, best_value = exchange_search(jac, starts_list)
+    return tuple(float(grid[g]) for g in best), best_value, d_criterion(jac, equal)
+
+
+def exchange_search(jac: np.ndarray, starts) -> tuple[list[int], float]:
+    """The coordinate exchange of :func:`d_optimal_positions` on any gradients ``jac`` (cases, grid, 2) from the
+    layouts ``starts`` (grid indices); returns the best layout found (sorted indices) and its criterion."""
     best, best_value = None, -math.inf
-    for start in starts_list:
+    size = jac.shape[1]
+    for start in starts:
         chosen = list(start)
         value = d_criterion(jac, chosen)
         improved = True
         while improved:
             improved = False
-            for i in range(count):
+            for i in range(len(chosen)):
                 others = chosen[:i] + chosen[i + 1 :]
-                trial = [d_criterion(jac, others + [g]) if g not in others else -math.inf for g in range(grid.size)]
+                trial = [d_criterion(jac, others + [g]) if g not in others else -math.inf for g in range(size)]
                 g = int(np.argmax(trial))
                 if trial[g] > value + 1e-9:
                     chosen[i], value, improved = g, trial[g], True
         if value > best_value:
             best, best_value = sorted(chosen), value
-    return tuple(float(grid[g]) for g in best), best_value, d_criterion(jac, equal)
+    return best, best_value
 
 
 # ----------------------------------------------------------------------------------------------------- candidates
