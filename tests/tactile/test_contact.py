@@ -121,7 +121,6 @@ def test_bayes_limit_of_two_gaussian_settings_is_the_closed_form():
         (lambda: ContactEstimator(MODEL, region_m=(0.2, 0.2005)).fit(), "'region_m'"),
         (lambda: ContactEstimator(MODEL, n_readings=0).fit(), "'n_readings'"),
         (lambda: ContactEstimator(MODEL).fit().predict(np.zeros((2, 5))), "3 gauge columns"),
-        (lambda: ContactEstimator(MODEL).predict(np.zeros((1, 4))), "not fitted"),
         (lambda: MODEL.point_v([0.3], [-0.1], 20), "'position_m'"),
         (lambda: MODEL.point_v([0.2], [-0.1], 300), "'command'"),
         (lambda: MODEL.line_v([0.26], [0.04], [-0.1], 20), "must lie on the digit"),
@@ -130,3 +129,19 @@ def test_bayes_limit_of_two_gaussian_settings_is_the_closed_form():
 def test_bad_inputs_are_named(make, message):
     with pytest.raises(ParameterError, match=message):
         make()
+
+
+def test_the_estimators_keep_scikit_learns_contract():
+    # issue 15's Estimator: __init__ stores, fit validates, predict before fit is NotFittedError, clone works
+    from sklearn.base import clone
+
+    from flexdigit._estimator import NotFittedError
+    from flexdigit.tactile.active import HangInversion, HangPosterior
+
+    est = ContactEstimator(MODEL, n_readings=4, classify=False)
+    assert clone(est).get_params()["n_readings"] == 4
+    for unfitted in (est, HangInversion(object(), [0]), HangPosterior(object(), [0], [0.1], [0.02])):
+        with pytest.raises(NotFittedError, match="not fitted"):
+            unfitted.predict(np.zeros((1, 4)))
+    with pytest.raises(ParameterError, match="^The 'model' parameter of HangInversion must be an object with"):
+        HangInversion(object(), [20]).fit()

@@ -13,9 +13,12 @@ estimate of position and mass from all the readings of a hang (the full covarian
 
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 
-from flexdigit._validation import check_array, check_int, check_positive
+from flexdigit._estimator import Estimator, check_is_fitted
+from flexdigit._validation import Array, HasMethods, Interval, check_array, check_int, check_positive
 from flexdigit.errors import ParameterError
 
 
@@ -48,7 +51,7 @@ def simulate_hangs(model, position_from_base_m, mass_kg, commands, *, repetition
     return np.concatenate(out, axis=1)
 
 
-class HangInversion:
+class HangInversion(Estimator):
     """Maximum-likelihood load position and mass from the readings of one hang at several commands.
 
     ``(a, m) = argmin (v - g(a, m))' C(a, m)^-1 (v - g(a, m)) + log det C(a, m)`` over a grid (positions along the
@@ -64,6 +67,15 @@ class HangInversion:
     digit_length_m, max_mass_kg, position_step_m, mass_steps
         The grid.
     """
+
+    _parameter_constraints = {
+        "model": [HasMethods("gauges_v")],
+        "commands": [Array(ndim=1, min_length=1, low=0, high=254)],
+        "digit_length_m": [Interval(Real, 0, None, closed="neither")],
+        "max_mass_kg": [Interval(Real, 0, None, closed="neither")],
+        "position_step_m": [Interval(Real, 0, None, closed="neither")],
+        "mass_steps": [Interval(Integral, 3, None)],
+    }
 
     def __init__(self, model, commands, *, digit_length_m=0.270, max_mass_kg=0.06, position_step_m=1e-3, mass_steps=61):
         self.model = model
@@ -82,6 +94,7 @@ class HangInversion:
     def fit(self, X=None, y=None) -> HangInversion:
         from flexdigit.tactile.bounds import hang_readings_model
 
+        self._validate_params()
         owner = "HangInversion"
         self.commands_ = [check_int(c, "commands", owner, low=0, high=254) for c in self.commands]
         if not self.commands_:
@@ -118,8 +131,7 @@ class HangInversion:
         return out.reshape(v.shape[0], *self.shape_)
 
     def predict(self, V) -> np.ndarray:
-        if not hasattr(self, "mean_"):
-            raise ParameterError("This HangInversion is not fitted yet; call fit first.")
+        check_is_fitted(self, "mean_")
         cost = self.cost(V)
         n = cost.shape[0]
         flat = cost.reshape(n, -1).argmin(axis=1)
@@ -135,7 +147,7 @@ class HangInversion:
         return np.column_stack([self.digit_length_m - a, self.m_grid_[im]])
 
 
-class HangPosterior:
+class HangPosterior(Estimator):
     """The Bayes estimate of position and mass of a hang read at several commands, knowing the protocol's settings
     (the estimator :func:`flexdigit.tactile.bounds.active_limits` scores): the posterior mean of the position and
     the relative-error optimum of the mass over ``settings``, with the full covariance of the shared friction.
@@ -150,6 +162,15 @@ class HangPosterior:
         How often each occurs.
     """
 
+    _parameter_constraints = {
+        "model": [HasMethods("gauges_v")],
+        "commands": [Array(ndim=1, min_length=1, low=0, high=254)],
+        "position_from_base_m": [Array(ndim=1, min_length=1, low=0)],
+        "mass_kg": [Array(low=0, low_open=True)],
+        "weights": [Array(ndim=1, low=0), None],
+        "digit_length_m": [Interval(Real, 0, None, closed="neither")],
+    }
+
     def __init__(self, model, commands, position_from_base_m, mass_kg, weights=None, digit_length_m=0.270) -> None:
         self.model = model
         self.commands = commands
@@ -161,6 +182,7 @@ class HangPosterior:
     def fit(self, X=None, y=None) -> HangPosterior:
         from flexdigit.tactile.bounds import hang_readings_model
 
+        self._validate_params()
         self.a_ = np.atleast_1d(np.asarray(self.position_from_base_m, dtype=float))
         self.m_ = np.broadcast_to(np.asarray(self.mass_kg, dtype=float), self.a_.shape)
         w = np.ones(self.a_.size) if self.weights is None else np.asarray(self.weights, dtype=float)
@@ -171,8 +193,7 @@ class HangPosterior:
         return self
 
     def predict(self, V) -> np.ndarray:
-        if not hasattr(self, "mean_"):
-            raise ParameterError("This HangPosterior is not fitted yet; call fit first.")
+        check_is_fitted(self, "mean_")
         v = check_array(V, "V", "HangPosterior", ndim=2, shape=(None, self.mean_.shape[1]))
         z = np.einsum("kde,nke->nkd", self.inv_chol_, v[:, None, :] - self.mean_[None])
         log_post = self.log_prior_ - 0.5 * np.sum(z * z, axis=2) - self.log_det_

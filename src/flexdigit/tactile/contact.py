@@ -40,10 +40,24 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
+from numbers import Integral, Real
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_choice, check_int, check_positive, check_real, check_values
+from flexdigit._estimator import Estimator, check_is_fitted
+from flexdigit._validation import (
+    Array,
+    Bool,
+    HasMethods,
+    Interval,
+    Options,
+    check_array,
+    check_choice,
+    check_int,
+    check_positive,
+    check_real,
+    check_values,
+)
 from flexdigit.errors import ParameterError
 from flexdigit.tactile.bounds import fisher_sd, line_jacobian
 
@@ -217,7 +231,7 @@ class ContactEstimate:
         return {k: v.tolist() for k, v in self.__dict__.items()}
 
 
-class ContactEstimator:
+class ContactEstimator(Estimator):
     """Maximum-likelihood contact from the three gauges and the command (see the module docstring).
 
     The point-force hypothesis is tabulated per command on a grid of positions (``position_step_m``), each gauge a
@@ -258,6 +272,21 @@ class ContactEstimator:
         lie: a reading of nothing then gives a force near 0 instead of a large force where the gauges are blind.
     """
 
+    _parameter_constraints = {
+        "model": [HasMethods(("point_v", "line_v", "free_v"))],
+        "commands": [Array(ndim=1, low=0, high=254)],
+        "side": [Options(("cable", "opposite"))],
+        "max_force_n": [Interval(Real, 0, None, closed="neither")],
+        "position_step_m": [Interval(Real, 1e-4, 0.05)],
+        "extents_m": [Array(ndim=1, min_length=1, low=0, low_open=True)],
+        "n_readings": [Interval(Integral, 1, None)],
+        "offset_v": [Array(shape=(3,)), None],
+        "detect_chi2": [Interval(Real, 0, None)],
+        "classify_log_odds": [Interval(Real, None, None)],
+        "classify": [Bool()],
+        "region_m": [Array(shape=(2,), increasing=True), None],
+    }
+
     def __init__(
         self,
         model,
@@ -297,6 +326,7 @@ class ContactEstimator:
     def fit(self, X=None, y=None) -> ContactEstimator:
         """Validate the settings and tabulate ``commands``. With ``X`` (n, 4: gauges and command) of readings with
         nothing touching, also learn the gauges' offsets against the model (a tare), unless ``offset_v`` is given."""
+        self._validate_params()
         owner = "ContactEstimator"
         check_choice(self.side, "side", ("cable", "opposite"), owner)
         self.sign_ = -1.0 if self.side == "cable" else 1.0
@@ -419,8 +449,7 @@ class ContactEstimator:
             cmd = np.broadcast_to(np.asarray(command), (v.shape[0],)).astype(int)
         else:
             v, cmd = _split(X)
-        if not hasattr(self, "tables_"):
-            raise ParameterError("This ContactEstimator is not fitted yet; call fit first.")
+        check_is_fitted(self, "tables_")
         n = v.shape[0]
         out = {name: np.full(n, np.nan) for name in _FIELDS}
         kind = np.full(n, "none", dtype=object)
