@@ -62,6 +62,11 @@ BAD_TISSUES = [
     (TISSUE.replace('side = "cable"', 'side = "left"'), "key 'tissue.side' must be one of 'cable', 'opposite'"),
     (TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 250\nwidth_mm = 0\nratio = 3\n", "'tissue.inclusions[0].width_mm'"),
     (TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 250\nratio = 3\n", "'tissue.inclusions[0].width_mm' is missing"),
+    # an inclusion outside the body would change nothing: refused, not ignored
+    (
+        TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 400\nwidth_mm = 8\nratio = 3\n",
+        "centre_mm' must lie in the tissue",
+    ),
     (TISSUE + "\n[extra]\nx = 1\n", "unknown table 'extra'"),
     ("[tissue\nstart_mm = 1", "not valid TOML"),
 ]

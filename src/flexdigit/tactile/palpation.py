@@ -71,7 +71,7 @@ class PalpationProtocol:
         cmds = check_values(self.commands, "commands", owner, low=0, high=254, integer=True)
         if cmds.ndim != 1 or cmds.size < 3:
             raise ParameterError(
-                f"The 'commands' parameter of {owner} must list at least 3 commands. Got {list(np.ravel(cmds))!r}."
+                f"The 'commands' parameter of {owner} must list at least 3 commands. Got {np.ravel(cmds).tolist()!r}."
             )
         object.__setattr__(self, "commands", tuple(int(c) for c in cmds))
         object.__setattr__(self, "period_s", check_real(self.period_s, "period_s", owner, low=1e-3, high=1.0))

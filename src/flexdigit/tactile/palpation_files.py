@@ -193,9 +193,15 @@ def load_tissue(name_or_path):
         raise DataFileError(f"{t.where('inclusions')} must be an array of tables [[tissue.inclusions]]; got {raw!r}")
     for i, item in enumerate(raw):
         inc = _Table(item, source, f"tissue.inclusions[{i}]", _INCLUSION_KEYS)
+        centre = inc.real("centre_mm", unit="mm") / 1000
+        if not start <= centre <= end:  # outside the body it would change nothing: a plausible wrong answer
+            raise DataFileError(
+                f"{inc.where('centre_mm')} must lie in the tissue ({start * 1000:g}..{end * 1000:g} mm); "
+                f"got {centre * 1000:g}"
+            )
         inclusions.append(
             Inclusion(
-                inc.real("centre_mm", unit="mm") / 1000,
+                centre,
                 inc.real("width_mm", low=0, low_open=True, unit="mm") / 1000,
                 inc.real("ratio", low=0, low_open=True),
             )
