@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 from flexdigit.cli import main
 
 
@@ -25,8 +27,6 @@ def test_bad_file_gives_one_line_error(tmp_path, capsys):
 
 
 def pytest_approx(x):
-    import pytest
-
     return pytest.approx(x, rel=1e-4)
 
 
@@ -49,3 +49,57 @@ def test_parser_and_light_commands_import_no_heavy_library():
     assert not _imported_after("from flexdigit.cli import build_parser; build_parser()") & set(HEAVY)
     loaded = _imported_after("from flexdigit.cli import main; main(['params', '--json'])")
     assert not loaded & set(HEAVY), loaded & set(HEAVY)
+
+
+# -- errors as JSON under --json (issue 16): a client always gets one JSON object on stdout, exit 2 ---------------
+@pytest.mark.parametrize(
+    "argv, error_type, needle",
+    [
+        (["params", "--seed", "1", "--json"], "UsageError", "unrecognized arguments: --seed"),
+        (["collect", "thesis-6.1", "--out", "x.parquet", "--seed", "abc", "--json"], "UsageError", "invalid int"),
+        (["simulate", "release", "--json"], "UsageError", "required: --out"),
+        (["params", "missing.toml", "--json"], "FileNotFoundError", "no such file: missing.toml"),
+        (["run", "--backend", "nosuch://x", "--json"], "ParameterError", "nosuch://x"),
+    ],
+)
+def test_errors_are_json_on_stdout_under_json(argv, error_type, needle, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)  # stdout holds exactly one JSON object
+    assert doc["exit_code"] == 2 and doc["error_type"] == error_type and needle in doc["error"]
+    assert doc["command"] == argv[0] or (argv[0] == "simulate" and doc["command"] == "simulate release")
+    assert "Traceback" not in captured.err and len(captured.err.strip().splitlines()) == 1
+
+
+def test_errors_without_json_stay_one_line_on_stderr(capsys):
+    assert main(["params", "--seed", "1"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.startswith("flexdigit params: error: unrecognized arguments")
+
+
+def test_an_internal_error_is_one_line_not_a_traceback(monkeypatch, capsys):
+    import flexdigit.params_commands as pc
+
+    def broken(args):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(pc, "_params", broken)
+    assert main(["params", "--json"]) == 2
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["error_type"] == "RuntimeError" and "internal error" in doc["error"] and "boom" in doc["error"]
+
+
+def test_collect_json_keeps_progress_off_stdout(tmp_path, capsys):
+    """The progress bar goes to stderr; before issue 16 it went into stdout and broke the JSON."""
+    protocol = tmp_path / "p.toml"
+    protocol.write_text(
+        'name = "tiny"\nloads_g = [25.0]\npositions_from_tip_cm = [0, 5]\nrepetitions = 2\n'
+        "no_load_repetitions = 1\nsettle_s = 0.5\n"
+    )
+    out = tmp_path / "d.parquet"
+    assert main(["collect", str(protocol), "--out", str(out), "--json"]) == 0
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    assert doc["samples"] == 1 + 2 * 2 and doc["protocol"] == "tiny"
+    assert "tiny" in captured.err  # the bar was drawn, on stderr

@@ -166,10 +166,16 @@ def _none_if_nan(value: float) -> float | None:
 def _progress_bar(enabled: bool):
     if not enabled:
         return None
+    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    return Progress(
-        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(), transient=False
+    return Progress(  # on stderr: stdout carries the command's result (its --json) and nothing else
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeRemainingColumn(),
+        transient=False,
+        console=Console(stderr=True),
     )
 
 
