@@ -49,3 +49,19 @@ def to_jsonable(obj: object) -> object:
     if hasattr(obj, "to_dict"):
         return to_jsonable(obj.to_dict())
     raise TypeError(f"cannot convert {type(obj).__name__} to JSON")
+
+
+def fingerprint(obj: object) -> str:
+    """A short, stable hash (16 hex digits of SHA-256) of ``obj``'s JSON form, keys sorted: two settings with the
+    same fingerprint are the same settings.
+
+    Examples
+    --------
+    >>> fingerprint({"b": 1, "a": [1.0, 2.0]}) == fingerprint({"a": np.array([1.0, 2.0]), "b": 1})
+    True
+    """
+    import hashlib
+    import json
+
+    text = json.dumps(to_jsonable(obj), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]

@@ -126,8 +126,8 @@ def test_pot_channel_from_the_url_is_read_after_the_gauges():
 @pytest.mark.parametrize(
     ("url", "match"),
     [
-        ("daq://0?pot=x", "option pot='x' must be an analog input number"),
-        ("daq://0?pot=-1", "option pot='-1' must be an analog input number"),
+        ("daq://0?pot=x", r"option pot='x' must be an integer inside \[0, inf\) or 'none' \(the analog input"),
+        ("daq://0?pot=-1", r"option pot='-1' must be an integer inside \[0, inf\) or 'none'"),
         ("daq://0?pot=1", r"'pot_channel' parameter of DaqRig must differ from the gauge channels \(0, 1, 2\)\. Got 1"),
         ("daq://0?pots=3", "unknown option 'pots'; a daq URL takes pot, input_mode"),
     ],

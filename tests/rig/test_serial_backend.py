@@ -112,11 +112,11 @@ def test_framing_from_the_url_reaches_the_board(board):
     [
         ("sync=start", "option sync='start' must be an integer"),
         ("max_position=2.5", "option max_position='2.5' must be an integer"),
-        ("sync=300", r"'sync' parameter of Framing must be an integer inside \[0, 255\]. Got 300"),
+        ("sync=300", r"option sync='300' must be an integer inside \[0, 255\] \(the frame's sync byte"),
         ("sync=0x10", "'sync' parameter of Framing must be above every channel and position byte"),
-        ("max_position=255", r"'max_position' parameter of Framing must be an integer inside \[1, 254\]. Got 255"),
+        ("max_position=255", r"option max_position='255' must be an integer inside \[1, 254\]"),
         ("max_channel=2&channel=3", r"'channel' parameter of SerialRig must be an integer inside \[0, 2\]. Got 3"),
-        ("pot=3", "option pot='3' needs the gauge card too"),
+        ("pot=3", "option pot=3 needs the gauge card too"),
         ("speed=9600", "unknown option 'speed'; a serial URL takes baud, channel, sync"),
     ],
 )

@@ -28,7 +28,7 @@ def register(subparsers) -> None:
     live.add_argument("--calibration", default=None, help="calibration TOML: the twin's, and the shape estimate's")
     live.add_argument("--rotation-map", default=None, help="rotation map (flexdigit run --calibration) on hardware")
     live.add_argument("--orientation", default=None, help="mounting on hardware: vertical, horizontal, hanging")
-    live.add_argument("--seed", type=int, default=0, help="twin noise seed")
+    live.add_argument("--seed", type=int, default=None, help="twin noise seed (default: the URL's seed=, else 0)")
     parser = add_command(
         subparsers,
         "shape",

@@ -259,8 +259,8 @@ class LiveSession:
         How the digit is mounted, for the shape estimate on hardware (the twin knows its own).
     period_s : float
         Loop period (the servo board's 20 ms frame).
-    seed : int
-        Twin noise seed.
+    seed : int, optional
+        Twin noise seed (default: the URL's ``seed=``, else 0).
     """
 
     HISTORY_S = 10.0
@@ -282,7 +282,7 @@ class LiveSession:
         rotation_map=None,
         orientation: str | None = None,
         period_s: float = 0.020,
-        seed: int = 0,
+        seed: int | None = None,
     ) -> None:
         from flexdigit.rig.base import open_rig, parse_rig_url
         from flexdigit.twin.calibration import default_calibration, load_calibration
@@ -296,7 +296,9 @@ class LiveSession:
             options = {"orientation": "horizontal", **parsed.options}
             query = "&".join(f"{k}={v}" for k, v in options.items())
             self.rig_url = f"sim+paced?{query}"
-            self.rig = open_rig(self.rig_url, seed=seed, calibration=self.calibration)
+            # the URL's seed= or the seed given, never one silently over the other (issue 16)
+            given = {} if seed is None else {"seed": seed}
+            self.rig = open_rig(self.rig_url, calibration=self.calibration, **given)
         else:
             self.rig_url = backend
             self.rig = open_rig(backend)
@@ -354,10 +356,12 @@ class LiveSession:
             from flexdigit.rig.rotation import calibrate_rotation
 
             # a static sweep on a twin of its own (virtual time, the twin's 20 ms step: nothing moves fast)
-            query = self.rig_url.partition("?")[2]
-            estimator = calibrate_rotation(
-                open_rig(f"sim?{query}&dt_s=0.02", seed=seed + 1, calibration=self.calibration)
-            )
+            from flexdigit.rig.base import rig_url_options
+
+            _, options = rig_url_options(self.rig_url)
+            options = {k: v for k, v in options.items() if k != "spin_s"}
+            options.update(dt_s=0.02, seed=rig.settings()["seed"] + 1)
+            estimator = calibrate_rotation(open_rig("sim", calibration=self.calibration, **options))
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
         elif self.kind == "rig" and rotation_map is not None:
@@ -383,7 +387,8 @@ class LiveSession:
             self.recording = Recording(
                 record,
                 header={"backend": self.backend, "controller": "digital20" if self.controller else None,
-                        "period_s": self.period_s, "source": "flexdigit live", "seed": seed},
+                        "period_s": self.period_s, "source": "flexdigit live",
+                        "seed": self.rig.settings().get("seed")},
                 metadata={
                     **rig_metadata(rig),
                     "flexdigit.calibration": {"estimator": repr(self.estimator), **self.calibration.to_dict()},

@@ -42,6 +42,9 @@ __all__ = [
     "clamp_command",
     "open_rig",
     "parse_rig_url",
+    "rig_url_options",
+    "seed_option",
+    "UrlOption",
     "console_operator",
     "BACKENDS",
 ]
@@ -114,8 +117,15 @@ def clamp_command(command: object, params: RigParams | None = None) -> int:
 
 
 def console_operator(message: str) -> None:
-    """Ask the person at the rig to do something (hang a weight) and wait for Enter."""
-    input(f"{message} Press Enter when done. ")
+    """Ask the person at the rig to do something (hang a weight) and wait for Enter.
+
+    With no one to ask (stdin closed or not a terminal at its end) it raises :class:`RigError` naming the step,
+    rather than dying in an ``EOFError``: whoever called it then leaves the rig in its safe state.
+    """
+    try:
+        input(f"{message} Press Enter when done. ")
+    except EOFError:
+        raise RigError(f"no operator to ask ({message}): stdin is closed; run it from a terminal") from None
 
 
 class Rig(abc.ABC):
@@ -139,6 +149,11 @@ class Rig(abc.ABC):
 
     #: Name used in reprs and messages.
     name = "rig"
+    #: False for a backend that cannot hang weights (a replay): tactile collection refuses it up front.
+    accepts_loads = True
+    #: True when the same actions give the same readings (the twin in virtual time): a resumed collection can
+    #: then replay the readings already journalled to bring the rig to the state it was in, and check them.
+    deterministic = False
 
     def __init__(
         self,
@@ -192,6 +207,13 @@ class Rig(abc.ABC):
         return None
 
     # -- the interface -----------------------------------------------------------------------------------------
+    def settings(self) -> dict[str, Any]:
+        """The effective settings of this rig (JSON-able): recorded with every dataset and log, compared on resume.
+
+        Backends add what decides their readings (the twin's seed and calibration, the port and framing).
+        """
+        return {"backend": type(self).name}
+
     @property
     def closed(self) -> bool:
         return self._closed
@@ -293,7 +315,10 @@ class Rig(abc.ABC):
 
 # -- choosing a backend ----------------------------------------------------------------------------------------
 
-#: scheme -> "module:factory"; each factory takes ``(location, params, options)`` and returns a :class:`Rig`.
+#: scheme -> "module:factory"; each factory takes ``(location, params, options)`` and returns a :class:`Rig`. The
+#: module declares what its URL may carry: ``URL_OPTIONS`` (a tuple of :class:`UrlOption`), ``PYTHON_OPTIONS``
+#: (keyword arguments only Python passes: callables, open ports, fakes) and ``URL_PREFIXES`` (option prefixes
+#: passed on, as text, to a nested source that checks them: ``daq.`` on serial).
 BACKENDS: dict[str, str] = {
     "sim": "flexdigit.rig.sim_backend:from_url",
     "sim+paced": "flexdigit.rig.sim_backend:from_url_paced",
@@ -303,18 +328,128 @@ BACKENDS: dict[str, str] = {
     "stream": "flexdigit.rig.stream_backend:from_url",
 }
 
+_TRUE = ("1", "true", "yes", "on")
+_FALSE = ("0", "false", "no", "off")
+
+
+@dataclass(frozen=True)
+class UrlOption:
+    """One option a backend's URL may carry, declared once: name, kind and allowed values.
+
+    The one parser (:func:`rig_url_options`) refuses options a backend does not declare, converts the text of
+    those it does and checks their range; 0 is a value like any other (``seed=0``, ``pot=0``). Python callers
+    passing the same option as a keyword to :func:`open_rig` are checked by the same declaration.
+
+    Parameters
+    ----------
+    name : str
+        The query key (``seed`` in ``sim?seed=3``).
+    kind : {"int", "float", "bool", "choice", "str"}
+        ``int`` accepts decimal and ``0x``-prefixed hexadecimal (a sync byte); ``bool`` accepts
+        1/0, true/false, yes/no, on/off.
+    low, high : float, optional
+        Closed interval for ``int``/``float`` (``low_open``/``high_open`` make an end open).
+    choices : tuple of str
+        The allowed values of a ``choice``.
+    none : bool
+        The value may be ``none`` (or empty), meaning "not wired" (``pot=none``): converted to None.
+    help : str
+        What it means (in messages and docs).
+    """
+
+    name: str
+    kind: str
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+    choices: tuple[str, ...] = ()
+    none: bool = False
+    help: str = ""
+
+    def expected(self) -> str:
+        """What a valid value looks like, for messages."""
+        from flexdigit._validation import _interval_text
+
+        if self.kind == "choice":
+            text = "one of " + ", ".join(self.choices)
+        elif self.kind == "bool":
+            text = "a boolean (1/0, true/false, yes/no, on/off)"
+        elif self.kind == "int":
+            text = "an integer" + _interval_text(self.low, self.high, False, False)
+        elif self.kind == "float":
+            text = "a finite number" + _interval_text(self.low, self.high, self.low_open, self.high_open)
+        else:
+            text = "non-empty text"
+        return text + (" or 'none'" if self.none else "")
+
+    def convert(self, value: object, where: str) -> Any:
+        """``value`` (URL text, or a Python value) as this option's type, or a :class:`ParameterError` naming
+        ``where``, the option and what was expected."""
+        about = f" ({self.help})" if self.help else ""
+        bad = ParameterError(f"{where}: option {self.name}={value!r} must be {self.expected()}{about}")
+        text = value.strip() if isinstance(value, str) else None
+        if self.none and (value is None or (text is not None and text.lower() in ("", "none"))):
+            return None
+        if self.kind == "str":
+            if not text:  # not text, or empty: an empty value is not "not given"
+                raise bad
+            return text
+        if self.kind == "choice":
+            if text not in self.choices:
+                raise bad
+            return text
+        if self.kind == "bool":
+            if isinstance(value, bool | np.bool_):
+                return bool(value)
+            if text is not None and text.lower() in _TRUE + _FALSE:
+                return text.lower() in _TRUE
+            raise bad
+        if isinstance(value, bool | np.bool_):
+            raise bad
+        if text is not None:
+            try:
+                number: float = int(text, 0) if self.kind == "int" else float(text)
+            except ValueError:
+                raise bad from None
+        elif isinstance(value, Real | np.integer | np.floating):
+            number = value
+        else:
+            raise bad
+        if self.kind == "int":
+            if not float(number).is_integer():
+                raise bad
+            number = int(number)
+        else:
+            number = float(number)
+        if not math.isfinite(number):
+            raise bad
+        low_bad = self.low is not None and (number < self.low or (self.low_open and number == self.low))
+        high_bad = self.high is not None and (number > self.high or (self.high_open and number == self.high))
+        if low_bad or high_bad:
+            raise bad
+        return number
+
 
 @dataclass(frozen=True)
 class RigURL:
-    """A parsed rig URL: ``scheme``, ``location`` (port, board number or path) and query ``options``."""
+    """A parsed rig URL: ``scheme``, ``location`` (port, board number or path) and query ``options`` (text)."""
 
     scheme: str
     location: str = ""
     options: dict[str, str] = field(default_factory=dict)
 
+    @property
+    def where(self) -> str:
+        """The URL as messages name it (``serial:///dev/ttyUSB0``, ``sim``)."""
+        return f"{self.scheme}://{self.location}" if self.location else self.scheme
+
 
 def parse_rig_url(url: str) -> RigURL:
-    """Split ``serial:///dev/ttyUSB0?baud=9600`` into scheme, location and options.
+    """Split ``serial:///dev/ttyUSB0?baud=9600`` into scheme, location and options (text, not yet checked).
+
+    A scheme flexdigit does not know and an option given twice are refused here; :func:`rig_url_options`
+    checks the options against the backend's declarations.
 
     Examples
     --------
@@ -337,15 +472,86 @@ def parse_rig_url(url: str) -> RigURL:
         raise ParameterError(
             f"The 'url' parameter of open_rig must start with one of {sorted(BACKENDS)}. Got {url!r} instead."
         )
-    options = dict(urllib.parse.parse_qsl(query, keep_blank_values=True))
+    options: dict[str, str] = {}
+    for key, value in urllib.parse.parse_qsl(query, keep_blank_values=True):
+        if key in options:
+            raise ParameterError(f"{url}: option {key!r} is given twice ({options[key]!r} and {value!r})")
+        options[key] = value
     return RigURL(scheme, urllib.parse.unquote(rest), options)
+
+
+def _backend_module(scheme: str):
+    module_name, _, factory = BACKENDS[scheme].partition(":")
+    module = import_module(module_name)
+    return module, getattr(module, factory)
+
+
+def rig_url_options(url: str | RigURL, **given: Any) -> tuple[RigURL, dict[str, Any]]:
+    """Check a rig URL's options (and keyword ``given`` by Python) against its backend's declarations.
+
+    Returns the parsed URL and the options as typed values: the URL's, merged with ``given``. An option the
+    backend does not declare is refused by name (listing those it takes), a value of the wrong type or out of
+    range is refused naming the option and what was expected, and an option given both in the URL and as a
+    keyword with different values is refused (neither silently wins). Nothing is opened.
+
+    Examples
+    --------
+    >>> rig_url_options("sim?seed=0&orientation=horizontal")[1]
+    {'seed': 0, 'orientation': 'horizontal'}
+    >>> rig_url_options("sim?bogus=1")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    flexdigit.errors.ParameterError: sim: unknown option 'bogus'; a sim URL takes seed, ...
+    """
+    parsed = url if isinstance(url, RigURL) else parse_rig_url(url)
+    module, _ = _backend_module(parsed.scheme)
+    declared = {opt.name: opt for opt in getattr(module, "URL_OPTIONS", ())}
+    python_only = set(getattr(module, "PYTHON_OPTIONS", ()))
+    prefixes = tuple(getattr(module, "URL_PREFIXES", ()))
+    where = parsed.where
+    takes = ", ".join(declared) if declared else "no options"
+    out: dict[str, Any] = {}
+    for key, text in parsed.options.items():
+        if prefixes and key.startswith(prefixes):
+            out[key] = text  # a nested source's option, checked by its own backend
+            continue
+        if key not in declared:
+            raise ParameterError(f"{where}: unknown option {key!r}; a {parsed.scheme} URL takes {takes}")
+        out[key] = declared[key].convert(text, where)
+    for key, value in given.items():
+        if key in declared:
+            value = declared[key].convert(value, where)
+            if key in out and out[key] != value:
+                raise ParameterError(
+                    f"{where}: option {key} is {out[key]!r} in the URL but {value!r} was also asked for; give it once"
+                )
+        elif key not in python_only:
+            raise ParameterError(f"{where}: unknown option {key!r}; a {parsed.scheme} URL takes {takes}")
+        out[key] = value
+    return parsed, out
+
+
+def seed_option(url: str, seed: int | None) -> dict[str, int]:
+    """The options that pass a command line's ``--seed`` to a rig: ``{}`` when it was not given (None).
+
+    The seed drives the twin's noise; a hardware backend has none, so ``--seed`` with one is refused rather than
+    ignored. A seed also in the URL must agree (:func:`rig_url_options` refuses ``sim?seed=5 --seed 0``).
+    """
+    if seed is None:
+        return {}
+    parsed = parse_rig_url(url)
+    module, _ = _backend_module(parsed.scheme)
+    if "seed" not in {opt.name for opt in getattr(module, "URL_OPTIONS", ())}:
+        raise ParameterError(f"--seed {seed}: the {parsed.scheme} backend has no random noise to seed (the twin does)")
+    return {"seed": seed}
 
 
 def open_rig(url: str = "sim", params: RigParams | None = None, **options: Any) -> Rig:
     """Open a rig backend by name or URL (see the module docstring).
 
-    Keyword ``options`` are passed to the backend and override URL query options (``clock``, ``sleep``,
-    ``operator``, ``seed``, ``serial`` ...).
+    Keyword ``options`` are the URL's options given from Python (``seed=3``) or Python-only ones (``clock``,
+    ``sleep``, ``operator``, ``serial`` ...); every one is checked by :func:`rig_url_options`, and one given both
+    ways must agree.
 
     Examples
     --------
@@ -356,7 +562,6 @@ def open_rig(url: str = "sim", params: RigParams | None = None, **options: Any) 
     >>> sent, reading.time_s, reading.command, reading.gauges_v.shape
     (254, 0.5, 254, (3,))
     """
-    parsed = parse_rig_url(url)
-    module_name, _, factory = BACKENDS[parsed.scheme].partition(":")
-    merged: dict[str, Any] = {**parsed.options, **options}
-    return getattr(import_module(module_name), factory)(parsed.location, params, merged)
+    parsed, merged = rig_url_options(url, **options)
+    _, factory = _backend_module(parsed.scheme)
+    return factory(parsed.location, params, merged)

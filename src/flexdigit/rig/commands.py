@@ -36,7 +36,9 @@ def register(subparsers) -> None:
     parser.add_argument("--setpoint-deg", type=float, default=30.0, help="beam rotation to hold, deg (default 30)")
     parser.add_argument("--duration", type=float, default=3.0, help="run length, s (default 3)")
     parser.add_argument("--period", type=float, default=None, help="sample period, s (default the 20 ms serial period)")
-    parser.add_argument("--seed", type=int, default=0, help="twin noise seed (sim backends)")
+    parser.add_argument(
+        "--seed", type=int, default=None, help="twin noise seed (sim backends; default 0, or the URL's seed=)"
+    )
     parser.add_argument("--gain", type=float, default=1.0, help="actuator gain error to emulate (robustness runs)")
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
     parser.add_argument(
@@ -103,7 +105,7 @@ def _stream_emulator(args: argparse.Namespace) -> CommandResult:
 
 def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit._validation import check_positive, check_real
-    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
     from flexdigit.rig.loop import realtime_priority, run_loop
     from flexdigit.rig.step_test import step_metrics
@@ -114,13 +116,16 @@ def _run(args: argparse.Namespace) -> CommandResult:
         raise ParameterError(f"--controller must be one of {', '.join(CONTROLLERS)}. Got {args.controller!r} instead.")
     duration = check_positive(args.duration, "--duration")
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
-    sim = args.backend.split("?")[0].split("://")[0] in ("sim", "sim+paced")
-    options = _twin_options(args, sim)
+    sim = parse_rig_url(args.backend).scheme in ("sim", "sim+paced")
+    twin_options = _twin_options(args, sim)
     if args.rotation_map is not None and (args.map_from is not None or not args.rotation_map.exists()):
         from flexdigit._io import check_output
 
         check_output(args.rotation_map, force=args.force)  # before the sweep, not after it
-    rig = open_rig(args.backend, **options)
+    # --seed reaches a hardware rig only to be refused (it has no noise); with --map-from twin it seeds the map's twin
+    rig_options = twin_options if sim else ({} if args.map_from == "twin" else seed_option(args.backend, args.seed))
+    rig = open_rig(args.backend, **rig_options)
+    settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): logged and reported
     try:
         period = check_positive(args.period or rig.params.actuator.serial_period_s, "--period")
         estimator = _rotation_map(args, rig, sim)
@@ -147,7 +152,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
             recording = Recording(
                 args.record,
                 header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
-                        "period_s": period, "duration_s": duration, "seed": args.seed if sim else None},
+                        "period_s": period, "duration_s": duration, "seed": settings.get("seed")},
                 metadata={**rig_metadata(rig), "flexdigit.calibration": {"rotation_map": estimator.to_dict()}},
                 force=args.force,
             )  # fmt: skip
@@ -179,7 +184,12 @@ def _run(args: argparse.Namespace) -> CommandResult:
             log_path=args.log,
             on_sample=on_sample,
             measure=estimator,
-            header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend},
+            header={
+                "controller": args.controller,
+                "setpoint_deg": setpoint,
+                "backend": args.backend,
+                "rig_settings": settings,
+            },
             summary=summary,
             recording=recording,
         )
@@ -197,6 +207,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "status": result.status,
         "message": result.message,
         "backend": args.backend,
+        "rig": settings,
         "controller": args.controller,
         "setpoint_deg": setpoint,
         "period_s": period,
@@ -273,7 +284,7 @@ def _figures_line(figures: dict) -> str:
 
 
 def _twin_options(args, sim: bool) -> dict:
-    """Keyword options for a sim backend: the seed and, with ``--calibration``, the twin calibration."""
+    """Keyword options for a twin: ``--seed`` (when given) and, with ``--calibration``, the twin calibration."""
     if not sim and args.map_from != "twin":
         if args.calibration is not None:
             from flexdigit.errors import ParameterError
@@ -283,7 +294,7 @@ def _twin_options(args, sim: bool) -> dict:
                 f"--map-from twin), not --backend {args.backend}; a saved rotation map is --rotation-map FILE"
             )
         return {}
-    options = {"seed": args.seed}
+    options = {} if args.seed is None else {"seed": args.seed}
     if args.calibration is not None:
         from flexdigit.twin.calibration import load_calibration
 
@@ -305,22 +316,28 @@ def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
 def _rotation_map(args, rig, sim: bool):
     """The gauge -> rotation map: loaded from ``--rotation-map``, or made (``--map-from``) and saved there."""
     from flexdigit.errors import ParameterError
-    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
     from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map, save_rotation_map
 
     path, source = args.rotation_map, args.map_from
     if path is not None and path.exists() and source is None:
         return load_rotation_map(path)
-    replay = args.backend.startswith("replay")
+    replay = parse_rig_url(args.backend).scheme == "replay"
     if replay and source is None and _recorded_map(rig) is not None:
         from flexdigit.rig.rotation import RotationEstimator
 
         return RotationEstimator.from_dict(_recorded_map(rig), source=rig.path)  # the map the recording was run with
     source = source or ("twin" if sim else "operator")
     if source == "twin":
-        # the twin (calibrated to the rig with --calibration): a separate one, read at its own tip rotation
-        twin = open_rig("sim", **{**_twin_options(args, True), "seed": args.seed + 1})
-        est = calibrate_rotation(twin)
+        # the twin (calibrated to the rig with --calibration): a separate one, read at its own tip rotation, set up
+        # as the URL says when the rig is the twin, with the next seed
+        options = _twin_options(args, True)
+        if sim:
+            url_options = {k: v for k, v in rig_url_options(args.backend)[1].items() if k != "spin_s"}
+            options = {**url_options, **options, "seed": rig.settings()["seed"] + 1}
+        else:
+            options["seed"] = options.get("seed", 0) + 1
+        est = calibrate_rotation(open_rig("sim", **options))
     elif source == "operator":
         if replay:
             raise ParameterError("a replay cannot be swept (it ignores commands); pass --rotation-map FILE")

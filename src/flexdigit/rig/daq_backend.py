@@ -24,7 +24,7 @@ import numpy as np
 from flexdigit._validation import check_int
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.base import Rig
+from flexdigit.rig.base import Rig, UrlOption
 
 __all__ = ["DaqRig", "uldaq_range", "from_url", "MISSING_ULDAQ"]
 
@@ -139,6 +139,15 @@ class DaqRig(Rig):
     def _read(self) -> tuple[np.ndarray, float]:
         return self.read_gauges()
 
+    def settings(self) -> dict[str, Any]:
+        return {
+            "backend": "daq",
+            "board": self.board,
+            "channels": list(self.channels),
+            "pot_channel": self.pot_channel,
+            "input_mode": str(getattr(self.input_mode, "name", self.input_mode)),
+        }
+
     def _send(self, command: int) -> None:
         if self.actuator is None:
             raise RigError(f"{self.name}: a DAQ card alone cannot move the servo; open 'serial://PORT?daq=0' instead")
@@ -164,25 +173,12 @@ class DaqRig(Rig):
 
 
 #: Options a ``daq://`` URL may carry (the other keyword arguments of :class:`DaqRig` are Python-only).
-URL_OPTIONS = ("pot", "input_mode")
-
-
-def pot_option(value: Any, where: str) -> int | None:
-    """The ``pot`` URL option: a channel number, or ``none``/empty for no pot channel."""
-    if value is None or isinstance(value, int):
-        return value
-    text = str(value).strip().lower()
-    if text in ("", "none"):
-        return None
-    try:
-        channel = int(text)
-    except ValueError:
-        channel = -1
-    if channel < 0:
-        raise ParameterError(
-            f"{where}: option pot={value!r} must be an analog input number (an integer >= 0, e.g. pot=3) or 'none'"
-        )
-    return channel
+URL_OPTIONS = (
+    UrlOption("pot", "int", low=0, none=True, help="the analog input the servo potentiometer is wired to"),
+    UrlOption("input_mode", "choice", choices=("single_ended", "differential"), help="how the gauges are wired"),
+)
+#: Keyword arguments only Python passes.
+PYTHON_OPTIONS = ("actuator", "uldaq", "clock", "sleep", "operator")
 
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> DaqRig:
@@ -190,14 +186,10 @@ def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -
     try:
         board = int(location or 0)
     except ValueError:
-        raise ParameterError(f"daq://{location}: the board must be a number, e.g. daq://0") from None
+        board = -1
+    if board < 0:
+        raise ParameterError(f"daq://{location}: the board must be a number >= 0, e.g. daq://0")
     options = dict(options)
-    known = (*URL_OPTIONS, "actuator", "uldaq", "clock", "sleep", "operator")
-    unknown = sorted(set(options) - set(known))
-    if unknown:
-        raise ParameterError(
-            f"daq://{location}: unknown option {unknown[0]!r}; a daq URL takes {', '.join(URL_OPTIONS)}"
-        )
     if "pot" in options:
-        options["pot_channel"] = pot_option(options.pop("pot"), f"daq://{location}")
+        options["pot_channel"] = options.pop("pot")
     return DaqRig(board, params, **options)

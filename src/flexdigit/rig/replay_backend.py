@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from flexdigit.errors import DataFileError, RigError
+from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig
 from flexdigit.rig.loop import read_log
@@ -28,6 +28,7 @@ class ReplayRig(Rig):
     """Play back ``path`` (a loop log or an MCAP recording written by :func:`~flexdigit.rig.loop.run_loop`)."""
 
     name = "replay"
+    accepts_loads = False  # a recording cannot hang weights: collecting on it would only wait for an operator
 
     def __init__(self, path: str, params: RigParams | None = None, **kwargs: Any) -> None:
         self.path = str(path)
@@ -66,7 +67,27 @@ class ReplayRig(Rig):
     def _send(self, command: int) -> None:
         self.commands_sent.append((self.clock(), command))
 
+    def _apply_load(self, mass_kg: float, position_from_base_m: float) -> None:
+        raise RigError(f"{self.name}: a recording cannot hang weights; use the twin (sim) or a rig")
+
+    def _remove_loads(self) -> None:
+        return None  # nothing hangs on a recording
+
+    def _rehang(self, settle_s: float) -> None:
+        raise RigError(f"{self.name}: a recording cannot re-hang weights; use the twin (sim) or a rig")
+
+    def settings(self) -> dict[str, Any]:
+        return {"backend": "replay", "path": self.path, "samples": len(self._times)}
+
+
+#: A ``replay://`` URL takes no options (a recording plays at the loop's own pace, in virtual time).
+URL_OPTIONS: tuple = ()
+#: Keyword arguments only Python passes.
+PYTHON_OPTIONS = ("clock", "sleep", "operator")
+
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> ReplayRig:
     """``replay://path/to/run.jsonl`` or ``replay://path/to/run.mcap``."""
+    if not location:
+        raise ParameterError("replay:// needs the recorded log, e.g. replay://run.jsonl or replay://run.mcap")
     return ReplayRig(location, params, **options)

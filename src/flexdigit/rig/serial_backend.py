@@ -4,8 +4,9 @@ The board only drives the servo; it has no inputs. Gauges come from a separate s
 pass ``sensor=`` (a callable returning ``(gauges_v, pot_v)``) or, in the URL, ``daq=<board number>`` (and
 ``pot=<channel>``), ``daq=daq://N`` or ``daq=stream://PORT`` (a microcontroller ADC,
 :mod:`flexdigit.rig.stream_backend`); options of the gauge source follow with a ``daq.`` prefix
-(``&daq.baud=115200&daq.scale=0.000125``). Without one, :meth:`read` returns NaN gauges and the loop stops with a
-sensor fault rather than control blind. The frame layout (sync byte, highest channel and position) is set by URL
+(``&daq.baud=115200&daq.scale=0.000125``) and are checked by that source's own declarations. Without one,
+:meth:`read` raises :class:`~flexdigit.errors.RigError` ("no gauge source configured") rather than let anything
+control blind. The frame layout (sync byte, highest channel and position) is set by URL
 options or a :class:`~flexdigit.rig.servo_board.Framing`; see :func:`from_url`.
 
 The port is opened with pyserial's ``serial_for_url``, so ``loop://`` and ``socket://`` work too. A port that
@@ -15,7 +16,6 @@ vanishes mid-run (USB unplugged, board powered off) raises :class:`~flexdigit.er
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
@@ -25,7 +25,7 @@ import numpy as np
 from flexdigit._validation import check_int, check_positive
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.base import Rig, clamp_command
+from flexdigit.rig.base import Rig, UrlOption, clamp_command
 from flexdigit.rig.servo_board import MINI_SSC, Framing, encode_frame
 
 __all__ = ["SerialRig", "from_url"]
@@ -90,8 +90,11 @@ class SerialRig(Rig):
         return super().write_command(min(clamp_command(command, self.params), self.framing.max_position))
 
     def _read(self) -> tuple[np.ndarray, float]:
-        if self.sensor is None:
-            return np.full(3, math.nan), math.nan
+        if self.sensor is None:  # the board has no inputs: reading it would only give NaN to control blind on
+            raise RigError(
+                f"{self.name}: no gauge source configured; the servo board has no inputs: add the gauge card "
+                "to the URL (serial://PORT?daq=0) or pass sensor="
+            )
         gauges, pot = self.sensor()
         return np.asarray(gauges, dtype=float), float(pot)
 
@@ -104,6 +107,21 @@ class SerialRig(Rig):
             raise RigError(f"{self.name}: the servo board stopped answering ({exc}); port lost") from exc
         if written is not None and written != len(frame):
             raise RigError(f"{self.name}: only {written} of {len(frame)} bytes written; board not accepting data")
+
+    def settings(self) -> dict[str, Any]:
+        sensor = [c.settings() for c in self.companions] or (["python callable"] if self.sensor else [])
+        return {
+            "backend": "serial",
+            "port": self.port,
+            "baud": self.baud,
+            "channel": self.channel,
+            "framing": {
+                "sync": self.framing.sync,
+                "max_channel": self.framing.max_channel,
+                "max_position": self.framing.max_position,
+            },
+            "gauge_source": sensor[0] if sensor else None,
+        }
 
     def _close(self) -> None:
         try:
@@ -131,60 +149,61 @@ def _open_port(port: str, baud: int, write_timeout_s: float) -> Any:
 
 
 #: Options a ``serial://`` URL may carry; ``sync``, ``max_channel`` and ``max_position`` build the :class:`Framing`.
-URL_OPTIONS = ("baud", "channel", "sync", "max_channel", "max_position", "daq", "pot")
+URL_OPTIONS = (
+    UrlOption("baud", "int", low=50, high=4_000_000, help="the baud rate: 2400 or 9600 on the 1-904 board"),
+    UrlOption("channel", "int", low=0, high=254, help="the servo number on the board"),
+    UrlOption("sync", "int", low=0, high=255, help="the frame's sync byte, 0xFF on a Mini SSC"),
+    UrlOption("max_channel", "int", low=0, high=254, help="the highest servo number, 7 on a Mini SSC"),
+    UrlOption("max_position", "int", low=1, high=254, help="the highest position byte, 254 on a Mini SSC"),
+    UrlOption("daq", "str", help="the gauge source: an MCC board number, daq://BOARD or stream://PORT"),
+    UrlOption("pot", "int", low=0, none=True, help="the analog input the servo potentiometer is wired to"),
+)
 _FRAMING_OPTIONS = ("sync", "max_channel", "max_position")
 #: Keyword arguments open_rig may pass from Python (not from the URL text).
-_PYTHON_OPTIONS = ("framing", "sensor", "write_timeout_s", "serial", "uldaq", "clock", "sleep", "operator")
+PYTHON_OPTIONS = ("framing", "sensor", "write_timeout_s", "serial", "uldaq", "clock", "sleep", "operator")
+#: Options with this prefix belong to the gauge source (``daq.baud=115200``): checked by its backend.
+URL_PREFIXES = ("daq.",)
 
 
-def _int_option(location: str, key: str, value: Any) -> Any:
-    """A URL option as an integer (decimal, or 0x.. hexadecimal for bytes such as the sync byte)."""
-    if not isinstance(value, str):
-        return value
-    try:
-        return int(value.strip(), 0)
-    except ValueError:
-        raise ParameterError(
-            f"serial://{location}: option {key}={value!r} must be an integer (decimal, or hexadecimal as 0xFF)"
-        ) from None
+def _gauge_source(where: str, params, daq: str, pot: int | None, source_options: dict[str, str], uldaq):
+    """The servo board's gauge source from ``daq=``: an MCC board number, ``daq://N`` or ``stream://PORT``.
 
+    The source's own options (``daq.NAME=`` in the serial URL, or in the nested URL) are checked by that backend's
+    declarations through the one parser, so an unknown one is refused by name as anywhere else.
+    """
+    from flexdigit.rig.base import RigURL, parse_rig_url, rig_url_options
 
-def _gauge_source(location: str, params, daq: str, pot, source_options: dict, uldaq):
-    """The servo board's gauge source from ``daq=``: an MCC board number, ``daq://N`` or ``stream://PORT``."""
-    from flexdigit.rig.base import parse_rig_url
-    from flexdigit.rig.daq_backend import DaqRig, pot_option
-
-    where = f"serial://{location}"
-    if "://" not in daq:
+    bad = ParameterError(f"{where}: option daq={daq!r} must be a board number, daq://BOARD or stream://PORT")
+    text = daq.strip()
+    if "://" not in text:
+        if not text.isdigit():
+            raise bad
+        url = RigURL("daq", str(int(text)))
+    else:
         try:
-            board = int(daq)
-        except ValueError:
-            raise ParameterError(
-                f"{where}: option daq={daq!r} must be a board number, daq://BOARD or stream://PORT"
-            ) from None
-        if source_options:
-            raise ParameterError(
-                f"{where}: option daq.{next(iter(source_options))} is for a daq:// or stream:// source"
-            )
-        return DaqRig(board, params, uldaq=uldaq, pot_channel=pot_option(pot, where))
-    try:
-        url = parse_rig_url(daq)
-    except ParameterError:
-        url = None
-    if url is None or url.scheme not in ("daq", "stream"):
-        raise ParameterError(f"{where}: option daq={daq!r} must be a board number, daq://BOARD or stream://PORT")
-    merged = {**url.options, **source_options}
+            url = parse_rig_url(text)
+        except ParameterError:
+            raise bad from None
+        if url.scheme not in ("daq", "stream"):
+            raise bad
+    twice = sorted(set(url.options) & set(source_options))
+    if twice:
+        raise ParameterError(f"{where}: option {twice[0]} of the gauge source is given twice (in daq= and as daq.)")
+    python: dict[str, Any] = {}
+    if url.scheme == "stream" and pot is not None:
+        raise ParameterError(f"{where}: option pot={pot!r} is for a DAQ card; a stream sends the pot in its lines")
+    if url.scheme == "daq":
+        python = {"pot": pot} if pot is not None else {}
+        if uldaq is not None:
+            python["uldaq"] = uldaq
+    nested, checked = rig_url_options(RigURL(url.scheme, url.location, {**url.options, **source_options}), **python)
     if url.scheme == "stream":
         from flexdigit.rig.stream_backend import source_from_url
 
-        if pot is not None:
-            raise ParameterError(f"{where}: option pot={pot!r} is for a DAQ card; a stream sends the pot in its lines")
-        return source_from_url(url.location, merged)
+        return source_from_url(nested.location, checked)
     from flexdigit.rig.daq_backend import from_url as daq_from_url
 
-    if pot is not None:
-        merged.setdefault("pot", pot)
-    return daq_from_url(url.location, params, {**merged, **({"uldaq": uldaq} if uldaq is not None else {})})
+    return daq_from_url(nested.location, params, checked)
 
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> SerialRig:
@@ -193,10 +212,12 @@ def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -
     ``daq`` adds the gauge card (board number) as the sensor, ``pot`` its potentiometer channel
     (:mod:`flexdigit.rig.daq_backend`); ``sync``, ``max_channel`` and ``max_position`` describe the board's frame
     (:class:`~flexdigit.rig.servo_board.Framing`, Mini SSC by default: any left out keeps its Mini SSC value).
+    ``options`` arrive checked and typed (:func:`~flexdigit.rig.base.rig_url_options`).
 
     Examples
     --------
-    >>> rig = from_url("loop://", None, {"sync": "0xFE", "max_position": "200", "channel": "2"})
+    >>> from flexdigit.rig.base import open_rig
+    >>> rig = open_rig("serial://loop://?sync=0xFE&max_position=200&channel=2")
     >>> rig.framing, rig.channel
     (Framing(sync=254, max_channel=7, max_position=200), 2)
     >>> rig.close()
@@ -204,14 +225,6 @@ def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -
     if not location:
         raise ParameterError("serial:// needs a port, e.g. serial:///dev/ttyUSB0 or serial://COM3")
     options = dict(options)
-    unknown = sorted(k for k in set(options) - set(URL_OPTIONS) - set(_PYTHON_OPTIONS) if not k.startswith("daq."))
-    if unknown:
-        raise ParameterError(
-            f"serial://{location}: unknown option {unknown[0]!r}; a serial URL takes {', '.join(URL_OPTIONS)}"
-        )
-    for key in ("baud", "channel", *_FRAMING_OPTIONS):
-        if key in options:
-            options[key] = _int_option(location, key, options[key])
     framing_keys = {key: options.pop(key) for key in _FRAMING_OPTIONS if key in options}
     if framing_keys:
         if "framing" in options:
@@ -228,14 +241,16 @@ def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -
     uldaq = options.pop("uldaq", None)
     source_options = {key[4:]: options.pop(key) for key in list(options) if key.startswith("daq.")}
     if pot is not None and daq is None:
-        raise ParameterError(f"serial://{location}: option pot={pot!r} needs the gauge card too (daq=BOARD)")
+        raise ParameterError(f"serial://{location}: option pot={pot} needs the gauge card too (daq=BOARD)")
     if source_options and daq is None:
         raise ParameterError(
             f"serial://{location}: option daq.{next(iter(source_options))} needs a gauge source (daq=...)"
         )
+    if daq is not None and "sensor" in options:
+        raise ParameterError(f"serial://{location}: give the gauges either as daq={daq} or as sensor=..., not both")
     card = None
-    if daq is not None and "sensor" not in options:
-        card = _gauge_source(location, params, str(daq), pot, source_options, uldaq)
+    if daq is not None:
+        card = _gauge_source(f"serial://{location}", params, daq, pot, source_options, uldaq)
         options["sensor"] = card.read_gauges
     try:
         rig = SerialRig(location, params, **options)

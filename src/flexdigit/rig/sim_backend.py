@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 
 from flexdigit._validation import check_real
+from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
-from flexdigit.rig.base import Rig
+from flexdigit.rig.base import Rig, UrlOption
 
 __all__ = ["SimRig", "from_url", "from_url_paced", "DEFAULT_TWIN_DT_S"]
 
@@ -120,6 +121,26 @@ class SimRig(Rig):
         self._catch_up()
         self.twin.disturb()  # same weights, same places: only the cable-guide friction settles afresh
 
+    @property
+    def deterministic(self) -> bool:  # virtual time: the same actions, the same readings
+        return not self.paced
+
+    def settings(self) -> dict[str, Any]:
+        """Backend, seed, how the twin is set up, and fingerprints of its calibration and rig parameters."""
+        from flexdigit._json import fingerprint
+
+        twin = self.twin
+        return {
+            "backend": self.name,
+            "seed": int(twin.seed),
+            "orientation": twin.orientation,
+            "housing": bool(twin.housing),
+            "cable": bool(twin.cable),
+            "dt_s": float(twin.dt_s),
+            "calibration_fingerprint": fingerprint(twin.calibration.to_dict()),
+            "params_fingerprint": fingerprint(twin.params.to_dict()),
+        }
+
     def tip_rotation_deg(self) -> float:
         """The twin's true tip (beam) rotation now, deg: the last link's absolute angle (not measurable on hardware)."""
         psi, _ = self.twin.state()
@@ -130,25 +151,33 @@ class SimRig(Rig):
         return f"SimRig(paced={self.paced}, twin={self.twin!r}, {state})"
 
 
-def _options(options: dict[str, Any]) -> dict[str, Any]:
-    out = dict(options)
-    for key in ("seed",):
-        if isinstance(out.get(key), str):
-            out[key] = int(out[key])
-    for key in ("dt_s", "spin_s"):
-        if isinstance(out.get(key), str):
-            out[key] = float(out[key])
-    for key in ("housing", "cable"):
-        if isinstance(out.get(key), str):
-            out[key] = out[key].lower() in ("1", "true", "yes")
-    return out
+#: What a ``sim`` / ``sim+paced`` URL may carry (:class:`~flexdigit.rig.base.UrlOption`).
+URL_OPTIONS = (
+    UrlOption("seed", "int", low=0, help="the seed of the twin's noise"),
+    UrlOption("orientation", "choice", choices=("vertical", "horizontal", "hanging"), help="how the digit lies"),
+    UrlOption("housing", "bool", help="the elastomer housing on, or the bare strip"),
+    UrlOption("cable", "bool", help="the cable attached, or removed"),
+    UrlOption("dt_s", "float", low=1e-5, high=0.02, help="the twin's integration step, s"),
+    UrlOption("spin_s", "float", low=0.0, high=0.1, help="sim+paced: busy-wait the last spin_s of every wait, s"),
+)
+#: Keyword arguments only Python passes to :class:`SimRig` (objects, not text).
+PYTHON_OPTIONS = ("twin", "calibration", "cells_per_section", "command", "clock", "sleep", "operator")
+
+
+def _no_location(location: str, scheme: str) -> None:
+    if location:
+        raise ParameterError(
+            f"{scheme}://{location}: the twin takes no location; write '{scheme}' or '{scheme}?seed=3'"
+        )
 
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> SimRig:
-    """``sim`` or ``sim?seed=3&orientation=horizontal`` (virtual time)."""
-    return SimRig(params, paced=False, **_options(options))
+    """``sim`` or ``sim?seed=3&orientation=horizontal`` (virtual time); options as :data:`URL_OPTIONS`."""
+    _no_location(location, "sim")
+    return SimRig(params, paced=False, **options)
 
 
 def from_url_paced(location: str, params: RigParams | None, options: dict[str, Any]) -> SimRig:
     """``sim+paced`` (wall clock)."""
-    return SimRig(params, paced=True, **_options(options))
+    _no_location(location, "sim+paced")
+    return SimRig(params, paced=True, **options)

@@ -39,24 +39,24 @@ import numpy as np
 
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.base import Rig
+from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 from flexdigit.rig.stream_protocol import PROTOCOL_VERSION, SEQ_MODULUS, LineDecoder, Sample
 
 __all__ = ["StreamSource", "StreamRig", "from_url", "source_from_url", "URL_OPTIONS"]
 
-#: name -> (kind, low, high, default): what a ``stream://`` URL may carry, each range-checked.
-URL_OPTIONS: dict[str, tuple[str, float, float, Any]] = {
-    "baud": ("int", 50, 4_000_000, 115200),
-    "scale": ("real", 0.0, math.inf, 0.000125),
-    "pot_scale": ("real", 0.0, math.inf, None),
-    "bits": ("int", 2, 32, 16),
-    "timeout": ("real", 0.0, 60.0, 0.25),
-    "startup": ("real", 0.0, 60.0, 3.0),
-    "window": ("int", 5, 100_000, 50),
-    "max_bad": ("real", 0.0, 1.0, 0.2),
-}
+#: What a ``stream://`` URL may carry, each checked by the one parser (:func:`~flexdigit.rig.base.rig_url_options`).
+URL_OPTIONS = (
+    UrlOption("baud", "int", low=50, high=4_000_000, help="the baud rate, 115200 in the reference firmware"),
+    UrlOption("scale", "float", low=0.0, low_open=True, help="volts per ADC count of the gauges"),
+    UrlOption("pot_scale", "float", low=0.0, low_open=True, none=True, help="volts per count of the pot"),
+    UrlOption("bits", "int", low=2, high=32, help="the ADC resolution"),
+    UrlOption("timeout", "float", low=0.0, high=60.0, low_open=True, help="seconds without a line: silent"),
+    UrlOption("startup", "float", low=0.0, high=60.0, help="seconds to wait for the first line"),
+    UrlOption("window", "int", low=5, high=100_000, help="lines over which garbling is judged"),
+    UrlOption("max_bad", "float", low=0.0, high=1.0, help="the share of bad lines that is garbled"),
+)
 #: Keyword arguments that only Python callers pass (not URL text).
-_PYTHON_OPTIONS = ("serial", "clock", "sleep", "operator")
+PYTHON_OPTIONS = ("serial", "clock", "sleep", "operator")
 
 
 class StreamSource:
@@ -315,40 +315,16 @@ def _open_port(port: str, baud: int) -> Any:
 
 def _check_options(location: str, options: dict[str, Any]) -> dict[str, Any]:
     """URL (or keyword) options converted and range-checked; unknown ones refused by name."""
-    out: dict[str, Any] = {}
-    for key, value in options.items():
-        if key not in URL_OPTIONS:
-            raise ParameterError(
-                f"stream://{location}: unknown option {key!r}; a stream URL takes {', '.join(URL_OPTIONS)}"
-            )
-        kind, low, high, _ = URL_OPTIONS[key]
-        try:
-            if isinstance(value, str):
-                number = int(value.strip(), 0) if kind == "int" else float(value)
-            else:
-                number = value
-            if isinstance(number, bool) or (kind == "int" and int(number) != number):
-                raise ValueError
-            number = int(number) if kind == "int" else float(number)
-        except (TypeError, ValueError):
-            raise ParameterError(
-                f"stream://{location}: option {key}={value!r} must be {'an integer' if kind == 'int' else 'a number'}"
-            ) from None
-        open_low = kind == "real" and key in ("scale", "pot_scale", "timeout")
-        if not (math.isfinite(number) and (number > low if open_low else number >= low) and number <= high):
-            interval = f"{'(' if open_low else '['}{low:g}, {high:g}]"
-            raise ParameterError(f"stream://{location}: option {key}={value!r} must be inside {interval}")
-        out[key] = number
-    return out
+    return rig_url_options(RigURL("stream", location), **options)[1]
 
 
 def source_from_url(location: str, options: dict[str, Any]) -> StreamSource:
     """A :class:`StreamSource` from a URL's location and options (``stream:///dev/ttyACM0?baud=115200``)."""
     if not location:
         raise ParameterError("stream:// needs a port, e.g. stream:///dev/ttyACM0 or stream://COM4")
-    python = {k: options[k] for k in _PYTHON_OPTIONS if k in options and k != "operator"}
-    checked = _check_options(location, {k: v for k, v in options.items() if k not in _PYTHON_OPTIONS})
-    return StreamSource(location, **checked, **python)
+    checked = _check_options(location, options)
+    checked.pop("operator", None)
+    return StreamSource(location, **checked)
 
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> StreamRig:

@@ -17,7 +17,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("protocol", help="a built-in protocol name or a protocol TOML file")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
     p.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv); resumes its journal")
-    p.add_argument("--seed", type=int, default=0, help="seed of the twin's noise (sim backends)")
+    p.add_argument(
+        "--seed", type=int, default=None, help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)"
+    )
     p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (sim backends; default: the thesis's)")
     p.add_argument("--settle", type=float, default=None, help="settle time per setting, s (default: protocol's)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -86,7 +88,7 @@ def _collect(args: argparse.Namespace) -> CommandResult:
     from pathlib import Path
 
     from flexdigit.errors import ParameterError
-    from flexdigit.rig.base import open_rig, parse_rig_url
+    from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.tactile.protocols import load_protocol
     from flexdigit.tactile.runner import collect, journal_path
     from flexdigit.tactile.thesis_experiments import sim_options
@@ -100,19 +102,24 @@ def _collect(args: argparse.Namespace) -> CommandResult:
         raise ParameterError(
             f"--calibration calibrates the twin: it needs a sim backend, not {args.backend!r} (a real rig is itself)"
         )
-    options = {"seed": args.seed, **sim_options(protocol, args.backend)} if on_twin else {}
+    options = sim_options(protocol, args.backend) if on_twin else {}
     if args.calibration:
         from flexdigit.twin.calibration import load_calibration
 
         options["calibration"] = load_calibration(args.calibration)
-    rig = open_rig(args.backend, **options)
+    rig = open_rig(args.backend, **options, **seed_option(args.backend, args.seed))
     if args.record is not None:
         from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
 
         try:
             recording = Recording(
                 args.record,
-                header={"backend": args.backend, "protocol": protocol.name, "seed": args.seed, "source": "collect"},
+                header={
+                    "backend": args.backend,
+                    "protocol": protocol.name,
+                    "seed": rig.settings().get("seed"),
+                    "source": "collect",
+                },
                 metadata=rig_metadata(rig),
                 force=args.force,
             )

@@ -28,8 +28,10 @@ def journal_path(out: str | Path) -> Path:
 
 
 def describe_rig(rig, url: str | None = None) -> dict:
-    """The rig metadata stored with a dataset: its URL (backend) and ``repr``."""
-    return {"url": url or getattr(rig, "url", type(rig).__name__), "repr": repr(rig)}
+    """The rig metadata stored with a dataset: its URL (backend), ``repr`` and effective settings (the seed the
+    twin actually used, whichever way it was given)."""
+    settings = rig.settings() if hasattr(rig, "settings") else {}
+    return {"url": url or getattr(rig, "url", type(rig).__name__), "repr": repr(rig), "settings": settings}
 
 
 def collect(
@@ -83,6 +85,11 @@ def collect(
     """
     params = params or RigParams()
     out = Path(out)
+    if not getattr(rig, "accepts_loads", True):
+        raise ParameterError(
+            f"{getattr(rig, 'name', rig)}: cannot collect a load protocol on it (it cannot hang weights); "
+            "collect on the twin (--backend sim) or a rig"
+        )
     if out.exists():
         raise ParameterError(f"{out} already exists; remove it or choose another output file")
     settle = protocol.settle_s if settle_s is None else float(settle_s)
