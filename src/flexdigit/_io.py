@@ -30,16 +30,17 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-from flexdigit.errors import OutputExistsError
+from flexdigit.errors import DataFileError, OutputExistsError
 
-__all__ = ["check_output", "atomic_path", "atomic_write"]
+__all__ = ["check_output", "atomic_path", "atomic_write", "read_text"]
 
 
-def check_output(path: str | os.PathLike, *, force: bool = False) -> Path:
+def check_output(path: str | os.PathLike, *, force: bool = False, hint: str = "") -> Path:
     """Check that ``path`` can be written before the work that produces it starts; return it as a :class:`Path`.
 
     Refuses, naming the path: a parent directory that does not exist or is not writable, a directory at the path,
-    and an existing file unless ``force``.
+    and an existing file unless ``force`` (``hint`` adds another way out to that message, e.g. ``"or --append
+    ..."``).
     """
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
@@ -48,7 +49,7 @@ def check_output(path: str | os.PathLike, *, force: bool = False) -> Path:
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory, not a file")
     if path.exists() and not force:
-        raise OutputExistsError(f"{path}: the file exists; pass --force to overwrite it")
+        raise OutputExistsError(f"{path}: the file exists; pass --force to overwrite it" + (f" {hint}" if hint else ""))
     if not os.access(parent, os.W_OK):
         raise PermissionError(f"{path}: the directory {parent} is not writable")
     return path
@@ -110,3 +111,35 @@ def _publish_no_clobber(tmp: Path, path: Path) -> None:
         if path.exists():
             raise OutputExistsError(f"{path}: the file exists; pass --force to overwrite it") from None
         os.replace(tmp, path)
+
+
+def read_text(path: str | os.PathLike, what: str = "a text file") -> str:
+    """The text of ``path`` (UTF-8), or a :class:`~flexdigit.errors.DataFileError` naming the file when it is
+    binary or not UTF-8 (Python's own message names neither the file nor what was expected).
+
+    ``what`` says what the file should be (``"a rig parameter TOML"``). A missing file raises
+    :class:`FileNotFoundError` (the CLI says "no such file: ...").
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "rig.toml"
+    >>> _ = p.write_bytes(b"\\x89PNG\\r\\n")
+    >>> read_text(p, "a rig parameter TOML")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    flexdigit.errors.DataFileError: .../rig.toml: not a rig parameter TOML: binary or not UTF-8 (byte 0x89 at offset 0)
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise DataFileError(f"{path}: is a directory, not {what}")
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DataFileError(
+            f"{path}: not {what}: binary or not UTF-8 (byte 0x{data[exc.start]:02x} at offset {exc.start})"
+        ) from None
+    if "\x00" in text:
+        raise DataFileError(f"{path}: not {what}: binary (a NUL byte at offset {text.index(chr(0))})")
+    return text

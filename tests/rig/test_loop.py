@@ -124,12 +124,14 @@ def test_a_log_that_is_not_a_log_is_refused(tmp_path):
     torn.write_text(torn.read_text() + '{"k": 99, "t"')  # a power cut mid-line
     header, samples, footer = read_log(torn)
     assert len(samples) == 5
-    # the log appends: a second run to the same file is refused with the line it starts on (header + 5 + footer)
+    # a log a second run was appended to: read_log names the line it starts on (header + 5 + footer) unless asked
+    # for one run
     twice = tmp_path / "twice.jsonl"
-    for _ in range(2):
-        run_loop(FirstOrderRig(), PI(), setpoint=1.0, duration_s=0.1, log_path=twice)
+    for mode in ("new", "append"):
+        run_loop(FirstOrderRig(), PI(), setpoint=1.0, duration_s=0.1, log_path=twice, log_mode=mode)
     with pytest.raises(DataFileError, match="line 8 starts a second run"):
         read_log(twice)
+    assert len(read_log(twice, run=2)[1]) == 5
 
 
 def test_realtime_priority_is_restored_or_untouched():

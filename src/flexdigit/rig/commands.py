@@ -22,6 +22,8 @@ from flexdigit._command import CommandResult, add_command
 #: The estimated rotation is averaged over a centred 0.1 s window before its step figures are taken: its noise
 #: (~0.2 deg rms on the twin) is half the 2 % band of a 20 deg step (:func:`flexdigit.rig.step_test.step_metrics`).
 ESTIMATE_SMOOTH_S = 0.1
+#: Longest run ``flexdigit run`` takes, s (a day; a longer one is a typo, and would not end on the twin).
+MAX_DURATION_S = 86_400.0
 
 
 def register(subparsers) -> None:
@@ -69,8 +71,14 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--record", type=Path, default=None, help="MCAP recording of every sample (any MCAP tool reads it)"
     )
-    parser.add_argument(
-        "--force", action="store_true", help="replace an existing --record file, or --rotation-map when making one"
+    writes = parser.add_mutually_exclusive_group()
+    writes.add_argument(
+        "--append", action="store_true", help="add this run to an existing --log (same controller, period and rig)"
+    )
+    writes.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing --log or --record file, or --rotation-map when making one",
     )
     parser.add_argument("--no-progress", action="store_true", help="no live progress line")
     parser.add_argument(
@@ -104,30 +112,37 @@ def _stream_emulator(args: argparse.Namespace) -> CommandResult:
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
-    from flexdigit._validation import check_positive, check_real
+    from flexdigit._validation import check_real
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
-    from flexdigit.rig.loop import realtime_priority, run_loop
+    from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
     from flexdigit.rig.step_test import step_metrics
 
     if args.controller not in CONTROLLERS:
         from flexdigit.errors import ParameterError
 
         raise ParameterError(f"--controller must be one of {', '.join(CONTROLLERS)}. Got {args.controller!r} instead.")
-    duration = check_positive(args.duration, "--duration")
+    from flexdigit._io import check_output
+    from flexdigit.rig.loop import check_appendable
+
+    duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
+    if args.log is not None and not (args.append and args.log.exists()):  # before the rig moves, not after
+        check_output(args.log, force=args.force, hint="or --append to add this run to it")
     sim = parse_rig_url(args.backend).scheme in ("sim", "sim+paced")
     twin_options = _twin_options(args, sim)
     if args.rotation_map is not None and (args.map_from is not None or not args.rotation_map.exists()):
-        from flexdigit._io import check_output
-
         check_output(args.rotation_map, force=args.force)  # before the sweep, not after it
     # --seed reaches a hardware rig only to be refused (it has no noise); with --map-from twin it seeds the map's twin
     rig_options = twin_options if sim else ({} if args.map_from == "twin" else seed_option(args.backend, args.seed))
     rig = open_rig(args.backend, **rig_options)
     settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): logged and reported
     try:
-        period = check_positive(args.period or rig.params.actuator.serial_period_s, "--period")
+        # 0 is a value (refused), not "not given"; below 0.1 ms the loop would only spin (--period 1e-7 hung)
+        period = rig.params.actuator.serial_period_s if args.period is None else args.period
+        period = check_real(period, "--period", low=MIN_PERIOD_S, high=MAX_PERIOD_S)
+        if args.log is not None and args.append and args.log.exists():
+            check_appendable(args.log, {"controller": args.controller, "period_s": period, "rig_settings": settings})
         estimator = _rotation_map(args, rig, sim)
         controller = make_controller(args.controller, rig, period_s=period, estimator=estimator, gain=args.gain)
     except BaseException:
@@ -182,6 +197,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
             duration,
             period,
             log_path=args.log,
+            log_mode="append" if args.append else "replace" if args.force else "new",
             on_sample=on_sample,
             measure=estimator,
             header={

@@ -27,9 +27,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from flexdigit._io import check_output
 from flexdigit._json import to_jsonable
-from flexdigit._validation import check_int, check_positive
-from flexdigit.errors import ParameterError, RigError
+from flexdigit._validation import check_int, check_positive, check_real
+from flexdigit.errors import DataFileError, OutputExistsError, ParameterError, RigError
 from flexdigit.rig.base import Reading, Rig
 
 __all__ = [
@@ -40,10 +41,16 @@ __all__ = [
     "run_loop",
     "check_reading",
     "read_log",
+    "read_log_runs",
+    "check_appendable",
     "realtime_priority",
 ]
 
 LOG_FORMAT = "flexdigit-loop-log/1"
+#: Shortest and longest sample period the loop takes, s: 0.1 ms is beyond any backend here (the servo board
+#: takes a frame every 20 ms, the 1 kHz benchmark is the fastest use), and a shorter one only spins (a loop of
+#: 1e-7 s hung); 1 s is the slowest that still controls a digit whose first mode is 1.6 Hz.
+MIN_PERIOD_S, MAX_PERIOD_S = 1e-4, 1.0
 
 
 class LoopController(Protocol):
@@ -54,30 +61,54 @@ class LoopController(Protocol):
     def step(self, setpoint: float, reading: Reading) -> float: ...
 
 
+#: Header keys that must agree for a run to be appended to an existing log (``--append``).
+APPEND_KEYS = ("controller", "period_s", "rig_settings")
+#: How :class:`SampleLog` treats an existing file: refuse it, add a run to it, or replace it (``--force``).
+LOG_MODES = ("new", "append", "replace")
+
+
 class SampleLog:
     """Append-only JSON-lines log of a run, flushed every line (survives a crash or Ctrl-C).
 
     Parameters
     ----------
     path : path-like
-        The log file (created or appended to).
+        The log file.
     header : dict
-        Written as the first line, with ``format``.
+        Written as the run's first line, with ``format``.
     fsync_every : int
         fsync after this many lines (and at close); 0 never fsyncs (the OS still gets every line at once).
+    mode : {"new", "append", "replace"}
+        What to do with an existing file: ``"new"`` refuses it (:class:`~flexdigit.errors.OutputExistsError`);
+        ``"append"`` adds this run after the runs already in it, once it has checked the file is a loop log whose
+        first run has the same :data:`APPEND_KEYS` (a torn last line, a crash mid-write, is dropped first);
+        ``"replace"`` starts the file afresh (``--force``).
     """
 
-    def __init__(self, path: str | os.PathLike, header: dict[str, Any], fsync_every: int = 50) -> None:
+    def __init__(
+        self, path: str | os.PathLike, header: dict[str, Any], fsync_every: int = 50, *, mode: str = "new"
+    ) -> None:
+        from flexdigit._validation import check_choice
+
         self.path = Path(path)
         self.fsync_every = check_int(fsync_every, "fsync_every", "SampleLog", low=0)
+        mode = check_choice(mode, "mode", LOG_MODES, "SampleLog")
+        record = {"format": LOG_FORMAT, **header}
+        if mode == "append" and self.path.exists():
+            check_appendable(self.path, record)
+        else:
+            check_output(self.path, force=mode == "replace", hint="or --append to add this run to it")
         try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 - closed in close()
+            if mode == "replace":
+                self.path.unlink(missing_ok=True)
+            self._file = open(self.path, "a" if mode == "append" else "x", encoding="utf-8")  # noqa: SIM115
+        except FileExistsError:  # appeared since the check
+            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
         except OSError as exc:
             raise RigError(f"cannot open the loop log {self.path}: {exc.strerror or exc}") from exc
         self._since_sync = 0
         self.lines = 0
-        self.write({"format": LOG_FORMAT, **header})
+        self.write(record)
 
     def write(self, record: dict[str, Any]) -> None:
         self._file.write(json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n")
@@ -96,18 +127,71 @@ class SampleLog:
         self._file.close()
 
 
-def read_log(path: str | os.PathLike) -> tuple[dict[str, Any], list[dict[str, Any]], dict[str, Any] | None]:
-    """Read a loop log: ``(header, samples, footer or None)``; a torn last line (power cut) is ignored.
+def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
+    """Refuse to append a run with ``header`` to ``path`` unless it is a loop log whose first run agrees on
+    :data:`APPEND_KEYS`; drop a torn last line (a crash mid-write) so the new run starts on a line of its own.
+
+    Raises :class:`~flexdigit.errors.DataFileError` naming the file and the first setting that differs.
+    """
+    path = Path(path)
+    with path.open("rb") as fh:
+        first = fh.readline()
+    try:
+        old = json.loads(first.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        old = None
+    if not isinstance(old, dict) or old.get("format") != LOG_FORMAT:
+        raise DataFileError(
+            f"{path}: not a flexdigit loop log ({LOG_FORMAT}); --append only adds a run to a log of the same "
+            "format: choose another --log file"
+        )
+    new = json.loads(json.dumps(header, allow_nan=False))  # compare as they would read back
+    for key in APPEND_KEYS:
+        if old.get(key) != new.get(key):
+            raise DataFileError(
+                f"{path}: --append: the log's runs have {key}={old.get(key)!r}, this run {key}={new.get(key)!r}; "
+                "log this run to another file"
+            )
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        with path.open("r+b") as fh:
+            fh.truncate(data.rfind(b"\n") + 1)
+
+
+def read_log(
+    path: str | os.PathLike, run: int | None = None
+) -> tuple[dict[str, Any], list[dict[str, Any]], dict[str, Any] | None]:
+    """Read one run of a loop log: ``(header, samples, footer or None)``; a torn last line (power cut) is ignored.
+
+    A log holds one run, or several added with ``--append`` (each starts with its own header line): ``run``
+    (1-based) chooses one; without it a log of several runs is refused naming the lines they start on.
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and line when it is not a loop log.
     """
-    from flexdigit.errors import DataFileError
+    path = Path(path)
+    runs = read_log_runs(path)
+    if run is None:
+        if len(runs) > 1:
+            starts = ", ".join(str(start) for start, *_ in runs)
+            raise DataFileError(
+                f"{path}: holds {len(runs)} runs (appended; starting on lines {starts}); line {runs[1][0]} starts a "
+                "second run: choose one with read_log(path, run=N) or replay://FILE?run=N"
+            )
+        run = 1
+    from flexdigit._validation import check_int
+
+    index = check_int(run, "run", "read_log", low=1, high=len(runs), error=DataFileError)
+    _, header, samples, footer = runs[index - 1]
+    return header, samples, footer
+
+
+def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]]:
+    """Every run of a loop log as ``(first line number, header, samples, footer or None)``."""
+    from flexdigit._io import read_text
 
     path = Path(path)
-    header: dict[str, Any] | None = None
-    samples: list[dict[str, Any]] = []
-    footer = None
-    lines = path.read_text(encoding="utf-8").splitlines()
+    runs: list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]] = []
+    lines = read_text(path, "a flexdigit loop log").splitlines()
     for number, line in enumerate(lines, 1):
         try:
             record = json.loads(line)
@@ -115,23 +199,45 @@ def read_log(path: str | os.PathLike) -> tuple[dict[str, Any], list[dict[str, An
             if number == len(lines):
                 break  # a line cut by a crash mid-write
             raise DataFileError(f"{path}: line {number} is not JSON") from None
-        if number == 1:
-            if not isinstance(record, dict) or record.get("format") != LOG_FORMAT:
-                raise DataFileError(f"{path}: line 1 is not a flexdigit loop log header (format {LOG_FORMAT})")
-            header = record
-        elif isinstance(record, dict) and "format" in record:
-            # SampleLog appends: a second run logged to the same path starts here
-            raise DataFileError(
-                f"{path}: line {number} starts a second run (two runs were logged to the same file); "
-                "split the file at that line or log each run to its own file"
-            )
+        if not isinstance(record, dict):
+            raise DataFileError(f"{path}: line {number} is not a JSON object")
+        if number == 1 or "format" in record:
+            if record.get("format") != LOG_FORMAT:
+                raise DataFileError(f"{path}: line {number} is not a flexdigit loop log header (format {LOG_FORMAT})")
+            runs.append((number, record, [], None))
+        elif runs[-1][3] is not None:
+            raise DataFileError(f"{path}: line {number} follows the run's last line (its footer)")
         elif "stop" in record:
-            footer = record
+            start, header, samples, _ = runs[-1]
+            runs[-1] = (start, header, samples, record)
         else:
-            samples.append(record)
-    if header is None:
+            runs[-1][2].append(_check_sample(record, path, number))
+    if not runs:
         raise DataFileError(f"{path}: empty file, expected a flexdigit loop log")
-    return header, samples, footer
+    return runs
+
+
+def _check_sample(record: dict[str, Any], path: Path, number: int) -> dict[str, Any]:
+    """A sample line as the loop writes it, or a DataFileError naming the line and field."""
+
+    def bad(field: str, expected: str) -> DataFileError:
+        return DataFileError(f"{path}: line {number}: field '{field}' must be {expected}. Got {record.get(field)!r}")
+
+    for key in ("t", "setpoint", "y", "pot_v"):
+        value = record.get(key)
+        if key == "t" and value is None:
+            raise bad(key, "a number (the sample's time, s)")
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)):
+            raise bad(key, "a number or null")
+    gauges = record.get("gauges_v")
+    if not isinstance(gauges, list) or len(gauges) != 3:
+        raise bad("gauges_v", "a list of 3 voltages")
+    if any(g is not None and (isinstance(g, bool) or not isinstance(g, int | float)) for g in gauges):
+        raise bad("gauges_v", "a list of 3 numbers (null for a non-finite reading)")
+    command = record.get("command")
+    if isinstance(command, bool) or not isinstance(command, int) or not 0 <= command <= 254:
+        raise bad("command", "an integer 0..254")
+    return record
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -228,6 +334,7 @@ def run_loop(
     header: dict[str, Any] | None = None,
     recording: Any = None,
     summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None,
+    log_mode: str = "new",
 ) -> LoopResult:
     """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
 
@@ -262,6 +369,9 @@ def run_loop(
     summary : callable, optional
         ``summary(time_s, measurement) -> dict`` of figures (e.g. the step metrics) written into the closing record
         of the log and the recording under ``"summary"``, whatever the reason the loop stopped.
+    log_mode : {"new", "append", "replace"}
+        An existing ``log_path`` is refused (``"new"``), added to (``"append"``: a log of the same controller,
+        period and rig settings) or replaced (``"replace"``, ``--force``); see :class:`SampleLog`.
 
     Returns
     -------
@@ -269,7 +379,7 @@ def run_loop(
         ``status`` is ``"completed"``, ``"fault"`` or ``"interrupted"``; faults of the rig or the sensors are
         reported there (not raised). Exceptions raised by the controller are re-raised after the safe state.
     """
-    period = check_positive(period_s, "period_s", "run_loop")
+    period = check_real(period_s, "period_s", "run_loop", low=MIN_PERIOD_S, high=MAX_PERIOD_S)
     duration = check_positive(duration_s, "duration_s", "run_loop")
     clock = clock or rig.clock
     timer = timer or time.perf_counter
@@ -291,7 +401,11 @@ def run_loop(
             "started_unix_s": time.time(),
             **(header or {}),
         }
-        log = SampleLog(log_path, meta, fsync_every)
+        try:
+            log = SampleLog(log_path, meta, fsync_every, mode=log_mode)
+        except BaseException:
+            _safe_state(rig, equilibrium, close_rig)  # nothing ran, but the caller gave us the rig to leave safe
+            raise
 
     starts, lateness, compute = [], [], []
     ts, sps, gauges, ys, cmds = [], [], [], [], []

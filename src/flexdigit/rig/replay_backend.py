@@ -17,7 +17,7 @@ import numpy as np
 
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.base import Rig
+from flexdigit.rig.base import Rig, UrlOption
 from flexdigit.rig.loop import read_log
 from flexdigit.rig.recording import is_mcap, read_recording
 
@@ -30,9 +30,12 @@ class ReplayRig(Rig):
     name = "replay"
     accepts_loads = False  # a recording cannot hang weights: collecting on it would only wait for an operator
 
-    def __init__(self, path: str, params: RigParams | None = None, **kwargs: Any) -> None:
+    def __init__(self, path: str, params: RigParams | None = None, *, run: int | None = None, **kwargs: Any) -> None:
         self.path = str(path)
-        self.header, samples, self.footer = read_recording(path) if is_mcap(path) else read_log(path)
+        self.run = run
+        if is_mcap(path) and run not in (None, 1):
+            raise ParameterError(f"replay://{path}?run={run}: an MCAP recording holds one run")
+        self.header, samples, self.footer = read_recording(path) if is_mcap(path) else read_log(path, run)
         if not samples:
             raise DataFileError(f"{path}: the log has no samples to replay")
         self._times = [float(s["t"]) for s in samples]
@@ -77,11 +80,12 @@ class ReplayRig(Rig):
         raise RigError(f"{self.name}: a recording cannot re-hang weights; use the twin (sim) or a rig")
 
     def settings(self) -> dict[str, Any]:
-        return {"backend": "replay", "path": self.path, "samples": len(self._times)}
+        return {"backend": "replay", "path": self.path, "run": self.run, "samples": len(self._times)}
 
 
-#: A ``replay://`` URL takes no options (a recording plays at the loop's own pace, in virtual time).
-URL_OPTIONS: tuple = ()
+#: What a ``replay://`` URL may carry: which run of a log holding several (``--append``); a recording plays at the
+#: loop's own pace, in virtual time.
+URL_OPTIONS = (UrlOption("run", "int", low=1, help="which run of a log that holds several, 1 the first"),)
 #: Keyword arguments only Python passes.
 PYTHON_OPTIONS = ("clock", "sleep", "operator")
 
