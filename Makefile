@@ -23,7 +23,7 @@ $(STAMP): pyproject.toml constraints.txt
 	@touch $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/flexdigit reproduce --out report/
+	$(BIN)/flexdigit reproduce --out report/ --force
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks

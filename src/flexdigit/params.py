@@ -445,16 +445,22 @@ def load_params(path: str | Path) -> RigParams:
     return RigParams.from_dict(data, source=str(path))
 
 
-def save_params(params: RigParams, path: str | Path) -> Path:
+def save_params(params: RigParams, path: str | Path, *, force: bool = False) -> Path:
     """Write ``params`` as TOML (every key, so the file documents the rig); returns the path.
+
+    Written atomically (:mod:`flexdigit._io`); an existing file is kept unless ``force``.
 
     Raises
     ------
     DataFileError
         If the file cannot be written: its directory does not exist or is not a directory, or the system
         refuses (permissions, a directory in the way); the message names the path and the reason.
+    OutputExistsError
+        If the file exists and ``force`` is false.
     """
     import tomli_w
+
+    from flexdigit._io import atomic_write
 
     path = Path(path)
     parent = path.parent
@@ -467,7 +473,10 @@ def save_params(params: RigParams, path: str | Path) -> Path:
         raise DataFileError(f"{what}: it is a directory; give a file name such as {path / 'rig.toml'}")
     header = "# flexdigit rig parameters (SI units; 'command' is the servo board's 0..254 position).\n"
     try:
-        path.write_text(header + tomli_w.dumps(params.to_dict()))
+        with atomic_write(path, "w", force=force) as fh:
+            fh.write(header + tomli_w.dumps(params.to_dict()))
+    except FileExistsError:
+        raise
     except OSError as exc:
         raise DataFileError(f"{what}: {exc.strerror or exc}") from None
     return path

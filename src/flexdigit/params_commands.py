@@ -11,11 +11,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = add_command(subparsers, "params", _params, help="show, check or write the rig parameters (TOML)")
     parser.add_argument("file", nargs="?", help="a rig TOML to load and check (default: the thesis rig)")
     parser.add_argument("--write", metavar="FILE", help="write the parameters (defaults, or FILE's) as TOML")
+    parser.add_argument("--force", action="store_true", help="overwrite the --write file if it exists")
 
 
 def _params(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._io import check_output
     from flexdigit.params import RigParams, load_params, save_params
 
+    if args.write:
+        check_output(args.write, force=args.force)
     params = load_params(args.file) if args.file else RigParams()
     data = params.to_dict()
     derived = {
@@ -33,6 +37,6 @@ def _params(args: argparse.Namespace) -> CommandResult:
     lines.append("derived:")
     lines.extend(f"  {k} = {v:.6g}" for k, v in derived.items())
     if args.write:
-        path = save_params(params, args.write)
+        path = save_params(params, args.write, force=args.force)
         lines.append(f"written to {path}")
     return CommandResult(data={"params": data, "derived": derived, "written": args.write}, text="\n".join(lines))

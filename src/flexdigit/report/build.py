@@ -21,7 +21,9 @@ from pathlib import Path
 import matplotlib
 
 from flexdigit import __version__
+from flexdigit._io import atomic_write, check_output
 from flexdigit._json import to_jsonable
+from flexdigit.errors import OutputExistsError
 from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import Chapter, ReportContext
@@ -50,11 +52,13 @@ def reproduce(
     chapters: tuple[str, ...] | None = None,
     progress=None,
     workers: int | None = None,
+    force: bool = False,
 ) -> ReportSummary:
     """Run the report's chapters on the twin and write ``out_dir/index.html`` and ``out_dir/results.json``.
 
     A chapter that fails is shown in the report with its error (and listed in ``failed``) instead of
-    hiding the chapters that worked.
+    hiding the chapters that worked. A folder that already holds a report is refused before any chapter runs,
+    unless ``force``; every file is written atomically (:mod:`flexdigit._io`).
 
     Parameters
     ----------
@@ -65,12 +69,11 @@ def reproduce(
         independent and seeded by ``seed`` and their own streams, so the numbers do not depend on it; ``1``
         builds them one after another in this process.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = check_report_dir(out_dir, force=force)
     ctx = ReportContext(out_dir=out, params=params or RigParams(), seed=seed, fast=fast)
-    names = tuple(chapters or CHAPTERS)
+    names = CHAPTERS if chapters is None else tuple(chapters)  # () is a value: no chapter
     n_workers = _available_cores() if workers is None else int(workers)
-    n_workers = max(1, min(n_workers, len(names)))
+    n_workers = max(1, min(n_workers, len(names) or 1))
     if n_workers == 1:
         done = {}
         for name in names:
@@ -83,8 +86,10 @@ def reproduce(
     failed = {n: done[n][1] for n in names if done[n][1] is not None}
     seconds = {n: done[n][2] for n in names}
     document = results_document(built, ctx, seconds={c.slug: done[n][2] for n, c in _pairs(names, done)})
-    (out / "results.json").write_text(json.dumps(to_jsonable(document), indent=2) + "\n")
-    (out / "index.html").write_text(_render(built, failed, ctx, document))
+    with atomic_write(out / "results.json", "w", force=True) as fh:  # checked above: ours to replace
+        fh.write(json.dumps(to_jsonable(document), indent=2) + "\n")
+    with atomic_write(out / "index.html", "w", force=True) as fh:
+        fh.write(_render(built, failed, ctx, document))
     return ReportSummary(out, len(document["entries"]), document["counts"], [c.title for c in built], failed, seconds)
 
 
@@ -228,6 +233,22 @@ def _build_in_processes(names, ctx: ReportContext, workers: int, progress) -> di
             if progress is not None:
                 progress(name)
     return done
+
+
+def check_report_dir(out_dir: str | Path, *, force: bool = False) -> Path:
+    """The report folder, created if needed (its parent must exist); one that holds a report is refused unless
+    ``force``, before any chapter runs."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"{out}: is a file, not a report folder")
+    if not out.exists():
+        check_output(out)  # names a missing parent directory
+        out.mkdir()
+    existing = [p for p in (out / "results.json", out / "index.html") if p.exists()]
+    existing += sorted((out / "figures").glob("*.png"))[:1]
+    if existing and not force:
+        raise OutputExistsError(f"{out}: already holds a report ({existing[0].name}); pass --force to overwrite it")
+    return out
 
 
 _CSS = """

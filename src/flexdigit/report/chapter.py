@@ -63,6 +63,10 @@ class ReportContext:
         """Save a matplotlib figure as ``figures/<name>.png``, close it, and return its :class:`Figure`."""
         import matplotlib.pyplot as plt
 
-        fig.savefig(self.figure_dir / f"{name}.png", dpi=110, bbox_inches="tight")
+        from flexdigit._io import atomic_path
+
+        # the report folder was checked before any chapter ran (report.build.check_report_dir): ours to replace
+        with atomic_path(self.figure_dir / f"{name}.png", force=True) as tmp:
+            fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
         plt.close(fig)
         return Figure(name, caption, thesis_ref)

@@ -25,22 +25,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         type=int,
         help="chapters built at once, one process each (default: one per core; 1: in this process, one by one)",
     )
+    parser.add_argument("--force", action="store_true", help="overwrite a report already in --out")
 
 
 def _reproduce(args: argparse.Namespace) -> CommandResult:
     from flexdigit.errors import ParameterError
     from flexdigit.params import RigParams, load_params
-    from flexdigit.report.build import reproduce
+    from flexdigit.report.build import check_report_dir, reproduce
 
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers must be a positive integer. Got {args.workers} instead.")
+    check_report_dir(args.out, force=args.force)  # before the chapters run (minutes), not after
     params = load_params(args.params) if args.params else RigParams()
 
     def progress(name: str) -> None:
         if not args.json:
             print(f"  {name} ...", file=sys.stderr, flush=True)
 
-    if args.workers is not None and args.workers < 1:
-        raise ParameterError(f"--workers must be a positive integer. Got {args.workers} instead.")
     run = {"params": params, "seed": args.seed, "fast": args.fast, "progress": progress, "workers": args.workers}
+    run["force"] = args.force  # checked above; the chapters' own files are then ours to replace
     if args.calibration:  # every twin of every chapter on the user's calibration (flexdigit calibrate's file)
         from flexdigit.twin.calibration import load_calibration_record, use_calibration
 

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import __version__
+from flexdigit._io import atomic_write
 from flexdigit.errors import DataFileError
 from flexdigit.tactile.netlab import MLP
 from flexdigit.tactile.pipeline import TARGETS, Normaliser, ThesisNetwork
@@ -43,8 +44,11 @@ class SavedModel:
     meta: dict = field(default_factory=dict)
 
 
-def save_model(path: str | Path, network: ThesisNetwork, *, target: str, inputs: list[str], meta=None) -> Path:
-    """Write a fitted :class:`ThesisNetwork` as JSON; returns the path."""
+def save_model(
+    path: str | Path, network: ThesisNetwork, *, target: str, inputs: list[str], meta=None, force: bool = False
+) -> Path:
+    """Write a fitted :class:`ThesisNetwork` as JSON; returns the path (atomic; an existing file is refused
+    unless ``force``)."""
     net = network.net_
     doc = {
         "format": MODEL_FORMAT,
@@ -63,7 +67,8 @@ def save_model(path: str | Path, network: ThesisNetwork, *, target: str, inputs:
         "meta": meta or {},
     }
     path = Path(path)
-    path.write_text(json.dumps(doc, indent=1) + "\n")
+    with atomic_write(path, "w", force=force) as fh:
+        fh.write(json.dumps(doc, indent=1) + "\n")
     return path
 
 

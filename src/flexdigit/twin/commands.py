@@ -54,6 +54,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     def common(p: argparse.ArgumentParser) -> None:
         p.add_argument("--out", required=True, help="output file (.parquet, or .csv)")
+        p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
         p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
         p.add_argument("--params", help="rig parameters TOML (default: the thesis rig)")
         p.add_argument("--calibration", help="twin calibration TOML (default: fitted to the thesis)")
@@ -93,10 +94,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> CommandResult:
     import numpy as np
 
+    from flexdigit._io import check_output
     from flexdigit.params import RigParams, load_params
     from flexdigit.twin import records as ex
     from flexdigit.twin.calibration import default_calibration, load_calibration
 
+    check_output(args.out, force=args.force)  # before the simulation, not after it
     params = load_params(args.params) if args.params else RigParams()
     cal = load_calibration(args.calibration) if args.calibration else default_calibration()
     common = dict(seed=args.seed, params=params, calibration=cal)
@@ -169,7 +172,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         )
         findings = {f"gauge{g}_mean_v": float(np.mean(res.column(f"gauge{g}_v"))) for g in (1, 2, 3)}
         text = f"{res.table.num_rows} samples"
-    path = res.save(args.out)
+    path = res.save(args.out, force=args.force)
     data = {
         "experiment": res.metadata["experiment"],
         "out": str(path),

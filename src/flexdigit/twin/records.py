@@ -29,6 +29,7 @@ import numpy as np
 import pyarrow as pa
 
 from flexdigit import __version__
+from flexdigit._io import atomic_path, atomic_write
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive, check_real, check_values
 from flexdigit.errors import DataFileError, ParameterError
@@ -59,27 +60,33 @@ class TwinRecord:
             raise KeyError(f"no column {name!r}; columns are {self.table.column_names}")
         return self.table.column(name).to_numpy()
 
-    def save(self, path: str | Path) -> Path:
-        """Write Parquet (``.parquet``) or CSV (``.csv``), choosing by suffix; returns the path."""
+    def save(self, path: str | Path, *, force: bool = False) -> Path:
+        """Write Parquet (``.parquet``) or CSV (``.csv``), choosing by suffix; returns the path.
+
+        Atomic (:mod:`flexdigit._io`): a failed write leaves whatever was at ``path``; an existing file is
+        refused unless ``force``.
+        """
         path = Path(path)
         if path.suffix.lower() == ".csv":
-            return self.to_csv(path)
+            return self.to_csv(path, force=force)
         import pyarrow.parquet as pq
 
         meta = dict(self.table.schema.metadata or {})
         meta[METADATA_KEY] = json.dumps(to_jsonable(self.metadata)).encode()
-        pq.write_table(self.table.replace_schema_metadata(meta), path)
+        with atomic_path(path, force=force) as tmp:
+            pq.write_table(self.table.replace_schema_metadata(meta), tmp)
         return path
 
-    def to_csv(self, path: str | Path) -> Path:
-        """CSV with the metadata as leading ``# key: json`` lines."""
+    def to_csv(self, path: str | Path, *, force: bool = False) -> Path:
+        """CSV with the metadata as leading ``# key: json`` lines (atomic, no clobber unless ``force``)."""
         import pyarrow.csv as pcsv
 
         path = Path(path)
         sink = pa.BufferOutputStream()
         pcsv.write_csv(self.table, sink)
         lines = [f"# {k}: {json.dumps(to_jsonable(v))}" for k, v in self.metadata.items()]
-        path.write_text("\n".join(lines) + "\n" + sink.getvalue().to_pybytes().decode())
+        with atomic_write(path, "w", force=force) as fh:
+            fh.write("\n".join(lines) + "\n" + sink.getvalue().to_pybytes().decode())
         return path
 
     @classmethod
