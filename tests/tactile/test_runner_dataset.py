@@ -5,7 +5,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from flexdigit.errors import DataFileError, ParameterError, RigError
+from flexdigit.errors import DataFileError, OutputExistsError, ParameterError, RigError
 from flexdigit.tactile.dataset import COLUMNS, export_csv, load_dataset
 from flexdigit.tactile.protocols import Protocol, load_protocol
 from flexdigit.tactile.runner import collect, journal_path
@@ -69,7 +69,7 @@ def test_resume_refuses_another_protocol_and_existing_output(tmp_path, make_rig)
     with pytest.raises(DataFileError, match="written by protocol 'small'"):
         collect(other, make_rig(), out)
     collect(SMALL, make_rig(), out)
-    with pytest.raises(ParameterError, match="already exists"):
+    with pytest.raises(OutputExistsError, match="the file exists; pass --force"):
         collect(SMALL, make_rig(), out)
 
 

@@ -21,7 +21,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--seed", type=int, default=None, help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)"
     )
     p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (sim backends; default: the thesis's)")
-    p.add_argument("--settle", type=float, default=None, help="settle time per setting, s (default: protocol's)")
+    p.add_argument(
+        "--settle", type=float, default=None, help="settle time per setting, s, 0..3600 (default: protocol's)"
+    )
+    p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
     p.add_argument("--force", action="store_true", help="replace an existing --record file")
@@ -77,6 +80,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--tol", type=float, default=None, help="'learning gradient' (SCG tolerance; default: sweep)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--model", default=None, help="model file to write (default: FILE stem + .<target>.model.json)")
+    p.add_argument("--force", action="store_true", help="overwrite the model file if it exists")
 
     p = add_command(subparsers, "predict", _predict, help="predict with a saved model on a dataset")
     p.add_argument("model", help="a model file written by 'flexdigit train'")
@@ -87,15 +91,23 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _collect(args: argparse.Namespace) -> CommandResult:
     from pathlib import Path
 
+    from flexdigit._io import check_output
+    from flexdigit._validation import check_real
     from flexdigit.errors import ParameterError
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
-    from flexdigit.tactile.protocols import load_protocol
+    from flexdigit.tactile.protocols import MAX_SETTLE_S, load_protocol
     from flexdigit.tactile.runner import collect, journal_path
     from flexdigit.tactile.thesis_experiments import sim_options
 
     protocol = load_protocol(args.protocol)
     out = Path(args.out)
-    resumed = journal_path(out).exists()
+    # every option checked before the rig is opened (the runner checks them again before the first reading)
+    if args.settle is not None:
+        check_real(args.settle, "--settle", "flexdigit collect", low=0, high=MAX_SETTLE_S)
+    journal = journal_path(out)
+    if not (out.exists() and journal.exists()):  # both: a run stopped while tidying up, the runner finishes it
+        check_output(out, force=args.force)
+    resumed = journal.exists()
     # on the twin, lie the digit as the protocol says and attach the cable only when it actuates
     on_twin = parse_rig_url(args.backend).scheme.startswith("sim")
     if args.calibration and not on_twin:
@@ -128,10 +140,24 @@ def _collect(args: argparse.Namespace) -> CommandResult:
             raise
         rig = recording_rig(rig, recording)
     try:
-        dataset = collect(protocol, rig, out, rig_url=args.backend, settle_s=args.settle, progress=not args.no_progress)
+        dataset = collect(
+            protocol,
+            rig,
+            out,
+            rig_url=args.backend,
+            settle_s=args.settle,
+            progress=not args.no_progress,
+            force=args.force,
+        )
     finally:
         rig.close()
-    data = {"protocol": protocol.name, "samples": len(dataset), "out": str(out), "resumed": resumed}
+    data = {
+        "protocol": protocol.name,
+        "samples": len(dataset),
+        "out": str(out),
+        "resumed": resumed,
+        "settings": dataset.meta.get("settings"),
+    }
     text = f"{protocol.name}: {len(dataset)} readings written to {out}" + (" (resumed)" if resumed else "")
     return CommandResult(data=data, text=text)
 
@@ -193,11 +219,14 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
 def _train(args: argparse.Namespace) -> CommandResult:
     from pathlib import Path
 
+    from flexdigit._io import check_output
     from flexdigit.tactile.dataset import load_dataset
     from flexdigit.tactile.metrics import accuracy, rmse
     from flexdigit.tactile.model_io import save_model
     from flexdigit.tactile.pipeline import features, run_pipeline, targets
 
+    model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
+    check_output(model_path, force=args.force)  # before training (minutes), not after it
     dataset = load_dataset(args.file)
     target = args.target.replace("-", "_")
     rows, y = targets(dataset, target)
@@ -223,13 +252,13 @@ def _train(args: argparse.Namespace) -> CommandResult:
         scores["accuracy"] = accuracy((result.y_pred >= 0.5).astype(float), result.y_test)
     else:
         scores["rmse_positions"] = rmse(result.y_pred, result.y_test)
-    model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
     save_model(
         model_path,
         result.model,
         target=target,
         inputs=inputs,
         meta={"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores},
+        force=args.force,
     )
     data = {"target": target, "model": str(model_path), "swept": sweep, **scores}
     lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]

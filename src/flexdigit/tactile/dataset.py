@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import __version__
+from flexdigit._io import atomic_path, atomic_write
 from flexdigit.errors import DataFileError
 from flexdigit.tactile.protocols import Protocol
 
@@ -120,6 +121,10 @@ class Journal:
     def open(cls, path: str | Path, meta: dict, *, fsync: bool = False) -> tuple[Journal, list[dict]]:
         """Open ``path`` for appending; create it with ``meta`` as header, or check the header and resume.
 
+        A new journal's header is written atomically (a crash leaves no journal or a whole header). On resume the
+        header's protocol and ``settings`` (the effective settings of the run that started it) must equal
+        ``meta``'s; the first difference is named.
+
         Returns
         -------
         (Journal, list of dict)
@@ -128,11 +133,12 @@ class Journal:
         Raises
         ------
         DataFileError
-            If the journal belongs to another protocol, or its lines are not consecutive readings.
+            If the journal belongs to another protocol or other settings, or its lines are not consecutive
+            readings.
         """
         path = Path(path)
         rows: list[dict] = []
-        if path.exists() and path.stat().st_size > 0:
+        if path.exists():
             header, rows, good_bytes = _read_journal(path)
             if header.get("protocol_fingerprint") != meta["protocol_fingerprint"]:
                 raise DataFileError(
@@ -140,14 +146,20 @@ class Journal:
                     f"(fingerprint {header.get('protocol_fingerprint')}), not {meta['protocol']['name']!r} "
                     f"(fingerprint {meta['protocol_fingerprint']}); remove it or use --out with another file"
                 )
+            difference = first_difference(header.get("settings"), meta.get("settings"))
+            if difference is not None:
+                key, was, now = difference
+                raise DataFileError(
+                    f"{path}: this journal was started with {key}={was!r}; this run has {key}={now!r}. Resume with "
+                    "the same settings, or collect into another --out"
+                )
             if good_bytes < path.stat().st_size:  # a crash mid-write left a partial line: drop it
                 with path.open("r+b") as fh:
                     fh.truncate(good_bytes)
-            handle = path.open("a", encoding="utf-8")
         else:
-            handle = path.open("w", encoding="utf-8")
-            handle.write(json.dumps({"journal": JOURNAL_FORMAT, **meta}) + "\n")
-            handle.flush()
+            with atomic_write(path, "w") as fh:
+                fh.write(json.dumps({"journal": JOURNAL_FORMAT, **meta}) + "\n")
+        handle = path.open("a", encoding="utf-8")
         return cls(path, handle, fsync), rows
 
     def append(self, row: dict) -> None:
@@ -167,6 +179,25 @@ class Journal:
         self.close()
 
 
+def first_difference(was: object, now: object, prefix: str = "") -> tuple[str, object, object] | None:
+    """The first (dotted key, old value, new value) where two settings differ, or None when they agree.
+
+    Examples
+    --------
+    >>> first_difference({"rig": {"seed": 3}, "settle_s": 15.0}, {"rig": {"seed": 4}, "settle_s": 15.0})
+    ('rig.seed', 3, 4)
+    """
+    if isinstance(was, dict) and isinstance(now, dict):
+        for key in list(was) + [k for k in now if k not in was]:
+            found = first_difference(was.get(key), now.get(key), f"{prefix}{key}.")
+            if found is not None:
+                return found
+        return None
+    if was != now:
+        return prefix.rstrip(".") or "settings", was, now
+    return None
+
+
 def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     """Header, complete readings, and the byte length of the complete part of a journal."""
     data = path.read_bytes()
@@ -177,7 +208,7 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
         raise DataFileError(f"{path}: journal has no complete header line")
     try:
         header = json.loads(complete[0])
-    except json.JSONDecodeError:
+    except ValueError:  # not JSON, or not UTF-8
         raise DataFileError(f"{path}: line 1 is not a journal header (not JSON)") from None
     if not isinstance(header, dict) or header.get("journal") != JOURNAL_FORMAT:
         raise DataFileError(f"{path}: line 1 is not a {JOURNAL_FORMAT} header")
@@ -185,11 +216,22 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     for number, line in enumerate(complete[1:], start=2):
         try:
             row = json.loads(line)
-        except json.JSONDecodeError:
+        except ValueError:
             raise DataFileError(f"{path}: line {number} is not valid JSON") from None
+        if not isinstance(row, dict):
+            raise DataFileError(f"{path}: line {number} is not a reading (a JSON object)")
         missing = [c for c in COLUMNS if c not in row]
         if missing:
             raise DataFileError(f"{path}: line {number} lacks column '{missing[0]}'")
+        for name, dtype in COLUMNS.items():
+            value = row[name]
+            if np.dtype(dtype).kind == "i":
+                ok = isinstance(value, int) and not isinstance(value, bool) and abs(value) < 2**63
+            else:
+                ok = value is None or (isinstance(value, int | float) and not isinstance(value, bool))
+            if not ok:
+                kind = "an integer" if np.dtype(dtype).kind == "i" else "a number or null"
+                raise DataFileError(f"{path}: line {number}: column '{name}' must be {kind}. Got {value!r}")
         if row["sample"] != len(rows):
             raise DataFileError(
                 f"{path}: line {number} holds sample {row['sample']}, expected {len(rows)} "
@@ -215,27 +257,30 @@ def _rows_to_columns(rows: list[dict]) -> dict[str, np.ndarray]:
 
 
 # ------------------------------------------------------------------------------------------- parquet and csv
-def save_dataset(dataset: Dataset, path: str | Path) -> Path:
-    """Write ``dataset`` as Parquet (metadata in the schema) or, for a ``.csv`` path, as CSV with a JSON header."""
+def save_dataset(dataset: Dataset, path: str | Path, *, force: bool = False) -> Path:
+    """Write ``dataset`` as Parquet (metadata in the schema) or, for a ``.csv`` path, as CSV with a JSON header.
+
+    Atomic (:mod:`flexdigit._io`): a crash never leaves half a file under the real name, a failed write leaves
+    the old one; an existing file is refused unless ``force``.
+    """
     path = Path(path)
     if path.suffix.lower() == ".csv":
-        return export_csv(dataset, path)
+        return export_csv(dataset, path, force=force)
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     table = pa.table({name: dataset.columns[name] for name in COLUMNS})
     table = table.replace_schema_metadata({"flexdigit": json.dumps(dataset.meta)})
-    tmp = path.with_name(path.name + ".tmp")
-    pq.write_table(table, tmp)
-    os.replace(tmp, path)  # atomic: a crash never leaves half a Parquet file under the real name
+    with atomic_path(path, force=force) as tmp:
+        pq.write_table(table, tmp)
     return path
 
 
-def export_csv(dataset: Dataset, path: str | Path) -> Path:
-    """Write ``dataset`` as CSV: a ``# {json metadata}`` first line, a header, one row per reading."""
+def export_csv(dataset: Dataset, path: str | Path, *, force: bool = False) -> Path:
+    """Write ``dataset`` as CSV: a ``# {json metadata}`` first line, a header, one row per reading (atomic)."""
     path = Path(path)
     names = list(COLUMNS)
-    with path.open("w", encoding="utf-8") as fh:
+    with atomic_write(path, "w", force=force) as fh:
         fh.write("# " + json.dumps(dataset.meta) + "\n")
         fh.write(",".join(names) + "\n")
         cols = [dataset.columns[n] for n in names]

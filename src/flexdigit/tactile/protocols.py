@@ -36,6 +36,9 @@ from flexdigit.errors import ParameterError
 #: The ``command`` recorded when actuation is disabled (the servo relaxed, chapter 6).
 RELAXED = -1
 
+#: Longest settle time (and reading interval) a protocol or ``collect --settle`` takes, s: an hour.
+MAX_SETTLE_S = 3600.0
+
 #: Names of the protocols packaged in ``tactile/protocols``.
 BUILTIN = ("thesis-6.1", "thesis-7.1", "thesis-7.1-no-load")
 
@@ -124,9 +127,11 @@ class Protocol:
             "no_load_repetitions",
             check_int(self.no_load_repetitions, "no_load_repetitions", owner, low=0, high=100_000),
         )
-        object.__setattr__(self, "settle_s", check_real(self.settle_s, "settle_s", owner, low=0, high=3600))
+        object.__setattr__(self, "settle_s", check_real(self.settle_s, "settle_s", owner, low=0, high=MAX_SETTLE_S))
         object.__setattr__(
-            self, "sample_interval_s", check_real(self.sample_interval_s, "sample_interval_s", owner, low=0, high=3600)
+            self,
+            "sample_interval_s",
+            check_real(self.sample_interval_s, "sample_interval_s", owner, low=0, high=MAX_SETTLE_S),
         )
         check_choice(self.orientation, "orientation", ("horizontal", "vertical"), owner)
         if not isinstance(self.rehang, bool):

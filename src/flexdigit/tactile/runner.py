@@ -3,9 +3,17 @@
 The runner only uses the :class:`flexdigit.rig.base.Rig` interface (``read``, ``write_command``, ``wait``,
 ``place_load``, ``clear_loads``, ``relax``), so the same protocol runs on the twin and on hardware, where
 ``place_load`` asks the operator to hang the weight. Every reading is appended to ``<out>.journal.jsonl`` and
-flushed before the next one is taken; running the same command again after Ctrl-C or a crash resumes at the
-first missing sample, so no reading is lost or taken twice. At the end the journal is compacted to ``out``
-(Parquet) and removed.
+flushed before the next one is taken; running the same command again after Ctrl-C, a crash or ``kill -9`` resumes
+at the first missing sample, so no reading is lost or taken twice. At the end the journal is compacted to ``out``
+(Parquet, atomically) and removed.
+
+Nothing mixes: every option is checked before the first reading; the journal's header holds the effective
+settings (:func:`effective_settings`: the protocol, the settle time, the rig's own settings such as the twin's seed
+and calibration, and whatever the caller adds) and a resume with different ones is refused naming the first
+difference. On a deterministic rig (the twin in virtual time) a resume first replays the readings already
+journalled, checking each against the journal, so the rig is in the state an uninterrupted run would have left it
+in: the resumed dataset equals the uninterrupted one, reading for reading. (Keying the twin's random streams by
+reading would not be enough: the digit's swing and the sensor drift carry the history of every earlier setting.)
 """
 
 from __future__ import annotations
@@ -15,10 +23,24 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit.errors import ParameterError, RigError
+from flexdigit._io import check_output
+from flexdigit._validation import check_real
+from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
-from flexdigit.tactile.protocols import RELAXED, Protocol
+from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
+
+#: The protocol fields that decide the readings (the free text and the name do not).
+PROTOCOL_SETTINGS = (
+    "loads_kg",
+    "positions_from_tip_m",
+    "actuation_commands",
+    "repetitions",
+    "no_load_repetitions",
+    "sample_interval_s",
+    "rehang",
+    "orientation",
+)
 
 
 def journal_path(out: str | Path) -> Path:
@@ -34,6 +56,22 @@ def describe_rig(rig, url: str | None = None) -> dict:
     return {"url": url or getattr(rig, "url", type(rig).__name__), "repr": repr(rig), "settings": settings}
 
 
+def effective_settings(protocol: Protocol, rig, settle_s: float, extra: dict | None = None) -> dict:
+    """Everything that decides the readings of a collection, as recorded in its journal and dataset.
+
+    ``protocol`` (:data:`PROTOCOL_SETTINGS`), ``settle_s`` (the one used: the protocol's or the override, 0
+    included), ``rig`` (:meth:`~flexdigit.rig.base.Rig.settings`: backend, the twin's seed, calibration and
+    parameter fingerprints ...) and ``extra`` (anything else the caller applies, e.g. a calibration file).
+    """
+    proto = protocol.to_dict()
+    return {
+        "protocol": {key: proto[key] for key in PROTOCOL_SETTINGS},
+        "settle_s": float(settle_s),
+        "rig": rig.settings() if hasattr(rig, "settings") else {"backend": type(rig).__name__},
+        **(extra or {}),
+    }
+
+
 def collect(
     protocol: Protocol,
     rig,
@@ -45,6 +83,8 @@ def collect(
     progress: bool = False,
     fsync: bool = False,
     stop_after: int | None = None,
+    force: bool = False,
+    settings: dict | None = None,
 ) -> Dataset:
     """Take every sample of ``protocol`` on ``rig`` and write the dataset to ``out`` (Parquet).
 
@@ -53,7 +93,7 @@ def collect(
     protocol : Protocol
         What to do.
     rig : Rig
-        Any backend of :mod:`flexdigit.rig` (the twin, a serial board, a replay).
+        Any backend of :mod:`flexdigit.rig` that can hang weights (the twin, a serial board; not a replay).
     out : path
         The dataset to write. Its journal ``<out>.journal.jsonl`` is resumed if present.
     params : RigParams, optional
@@ -61,13 +101,18 @@ def collect(
     rig_url : str, optional
         How the rig was opened, recorded in the metadata.
     settle_s : float, optional
-        Override the protocol's settle time (s) after every change of load, position or command.
+        Override the protocol's settle time (s, 0..3600; 0 is a value) after every change of load, position or
+        command. None: the protocol's.
     progress : bool
-        Show a rich progress bar.
+        Show a rich progress bar (on stderr).
     fsync : bool
         Force every reading to disk (power-loss safe; slower).
     stop_after : int, optional
         Stop (as if interrupted) after taking this many new readings; for tests and partial runs.
+    force : bool
+        Overwrite an existing dataset at ``out`` (a journal is still resumed only with the same settings).
+    settings : dict, optional
+        Further effective settings to record and check on resume (e.g. ``{"calibration": fingerprint}``).
 
     Returns
     -------
@@ -76,69 +121,58 @@ def collect(
 
     Raises
     ------
-    ParameterError
-        If ``out`` already holds a dataset.
+    OutputExistsError
+        If ``out`` already holds a dataset (unless ``force``).
     DataFileError
-        If the journal belongs to another protocol or is corrupt.
+        If the journal was written with other settings (named), is corrupt, or (on a deterministic rig) its
+        readings are not what these settings give.
+    ParameterError
+        If an option is invalid; raised before anything is read or written.
     RigError
         If the rig fails; the journal keeps every reading taken before.
     """
+    # -- every check before the first reading ------------------------------------------------------------------
     params = params or RigParams()
     out = Path(out)
+    journal_file = journal_path(out)
+    settle = (
+        protocol.settle_s if settle_s is None else check_real(settle_s, "settle_s", "collect", low=0, high=MAX_SETTLE_S)
+    )
+    if stop_after is not None and (isinstance(stop_after, bool) or not isinstance(stop_after, int) or stop_after < 0):
+        raise ParameterError(f"The 'stop_after' parameter of collect must be an integer >= 0. Got {stop_after!r}.")
     if not getattr(rig, "accepts_loads", True):
         raise ParameterError(
             f"{getattr(rig, 'name', rig)}: cannot collect a load protocol on it (it cannot hang weights); "
             "collect on the twin (--backend sim) or a rig"
         )
-    if out.exists():
-        raise ParameterError(f"{out} already exists; remove it or choose another output file")
-    settle = protocol.settle_s if settle_s is None else float(settle_s)
     plan = protocol.plan(params.geometry.digit_length_m)
     meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m)
-    journal, done = Journal.open(journal_path(out), meta, fsync=fsync)
+    meta["settings"] = effective_settings(protocol, rig, settle, settings)
+    if out.exists() and journal_file.exists() and not force:
+        return _finish_compaction(out, journal_file, meta, protocol)
+    check_output(out, force=force)
+    check_output(journal_file, force=True)  # its directory is out's; an existing journal is resumed
+
+    # -- collect -------------------------------------------------------------------------------------------------
+    journal, done = Journal.open(journal_file, meta, fsync=fsync)
     start = len(done)
     total = protocol.sample_count
+    replay = start > 0 and bool(getattr(rig, "deterministic", False))
     taken = 0
     setting = None
     bar = _progress_bar(progress)
     try:
         with bar if bar is not None else nullcontext():
             task = bar.add_task(protocol.name, total=total, completed=start) if bar is not None else None
-            for i in range(start, total):
-                if stop_after is not None and taken >= stop_after:
+            for i in range(0 if replay else start, total):
+                if i >= start and stop_after is not None and taken >= stop_after:
                     break
-                wanted = (int(plan["test"][i]), float(plan["load_kg"][i]), int(plan["position_index"][i]))
-                command = int(plan["command"][i])
-                if wanted != setting:
-                    _apply_setting(rig, command, float(plan["load_kg"][i]), float(plan["position_from_base_m"][i]))
-                    rig.wait(settle)
-                    setting = wanted
-                else:
-                    if protocol.rehang and plan["load_kg"][i] > 0:
-                        rig.rehang(settle)
-                    if protocol.sample_interval_s > 0:
-                        rig.wait(protocol.sample_interval_s)
-                reading = rig.read()
-                gauges = np.asarray(reading.gauges_v, dtype=float)
-                if gauges.shape != (3,) or not np.all(np.isfinite(gauges)):
-                    raise RigError(f"rig returned gauge voltages {gauges.tolist()!r} at sample {i}; expected 3 finite")
-                journal.append(
-                    {
-                        "sample": i,
-                        "test": int(plan["test"][i]),
-                        "gauge1_v": float(gauges[0]),
-                        "gauge2_v": float(gauges[1]),
-                        "gauge3_v": float(gauges[2]),
-                        "pot_v": float(reading.pot_v),
-                        "load_kg": float(plan["load_kg"][i]),
-                        "position_index": int(plan["position_index"][i]),
-                        "position_from_tip_m": _none_if_nan(plan["position_from_tip_m"][i]),
-                        "position_from_base_m": _none_if_nan(plan["position_from_base_m"][i]),
-                        "command": command,
-                        "repetition": int(plan["repetition"][i]),
-                        "time_s": float(reading.time_s),
-                    }
-                )
+                setting, reading = _take(rig, protocol, plan, i, setting, settle)
+                row = _row(plan, i, reading)
+                if i < start:  # replaying what the journal holds: the twin must give it again, bit for bit
+                    _check_replayed(journal_file, done[i], row)
+                    continue
+                journal.append(row)
                 taken += 1
                 if task is not None:
                     bar.advance(task)
@@ -149,10 +183,75 @@ def collect(
             rig.relax()
         except Exception:  # noqa: BLE001 - the original error (if any) matters more than a failed tidy-up
             pass
-    dataset = load_dataset(journal_path(out), protocol)
+    dataset = load_dataset(journal_file, protocol)
     if len(dataset) == total:
-        save_dataset(dataset, out)
-        journal_path(out).unlink()
+        save_dataset(dataset, out, force=force)
+        journal_file.unlink()
+    return dataset
+
+
+def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float):
+    """Bring the rig to sample ``i``'s setting (or re-hang and wait between repetitions) and read it."""
+    wanted = (int(plan["test"][i]), float(plan["load_kg"][i]), int(plan["position_index"][i]))
+    command = int(plan["command"][i])
+    if wanted != setting:
+        _apply_setting(rig, command, float(plan["load_kg"][i]), float(plan["position_from_base_m"][i]))
+        rig.wait(settle)
+        setting = wanted
+    else:
+        if protocol.rehang and plan["load_kg"][i] > 0:
+            rig.rehang(settle)
+        if protocol.sample_interval_s > 0:
+            rig.wait(protocol.sample_interval_s)
+    reading = rig.read()
+    gauges = np.asarray(reading.gauges_v, dtype=float)
+    if gauges.shape != (3,) or not np.all(np.isfinite(gauges)):
+        raise RigError(f"rig returned gauge voltages {gauges.tolist()!r} at sample {i}; expected 3 finite")
+    return setting, reading
+
+
+def _row(plan: dict, i: int, reading) -> dict:
+    gauges = np.asarray(reading.gauges_v, dtype=float)
+    return {
+        "sample": i,
+        "test": int(plan["test"][i]),
+        "gauge1_v": float(gauges[0]),
+        "gauge2_v": float(gauges[1]),
+        "gauge3_v": float(gauges[2]),
+        "pot_v": _none_if_nan(reading.pot_v),
+        "load_kg": float(plan["load_kg"][i]),
+        "position_index": int(plan["position_index"][i]),
+        "position_from_tip_m": _none_if_nan(plan["position_from_tip_m"][i]),
+        "position_from_base_m": _none_if_nan(plan["position_from_base_m"][i]),
+        "command": int(plan["command"][i]),
+        "repetition": int(plan["repetition"][i]),
+        "time_s": float(reading.time_s),
+    }
+
+
+def _check_replayed(path: Path, journalled: dict, replayed: dict) -> None:
+    for key, value in replayed.items():
+        if journalled.get(key) != value:
+            raise DataFileError(
+                f"{path}: sample {replayed['sample']}'s {key} is {journalled.get(key)!r} in the journal but the rig "
+                f"gives {value!r} with these settings (the journal was edited, or written by another version of "
+                "the twin); remove it or use another --out"
+            )
+
+
+def _finish_compaction(out: Path, journal_file: Path, meta: dict, protocol: Protocol) -> Dataset:
+    """``out`` and its journal both exist: a run was stopped between writing the dataset and removing the
+    journal. Finish it if ``out`` is that journal's complete dataset (same settings); refuse otherwise."""
+    dataset = load_dataset(out, protocol)
+    journal = load_dataset(journal_file, protocol)
+    complete = len(dataset) == protocol.sample_count == len(journal)
+    same = dataset.meta.get("settings") == meta["settings"] == journal.meta.get("settings")
+    if not (complete and same and np.array_equal(dataset.gauges_v, journal.gauges_v)):
+        raise DataFileError(
+            f"{out}: the file exists beside a journal ({journal_file.name}) of another or unfinished run; pass "
+            "--force to collect again into it, or use another --out"
+        )
+    journal_file.unlink()
     return dataset
 
 
