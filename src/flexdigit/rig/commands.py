@@ -116,6 +116,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
     from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
+    from flexdigit.rig.safety import RunawayGuard
     from flexdigit.rig.step_test import step_metrics
 
     if args.controller not in CONTROLLERS:
@@ -198,6 +199,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
             period,
             log_path=args.log,
             log_mode="append" if args.append else "replace" if args.force else "new",
+            guard=RunawayGuard(truth=truth),
             on_sample=on_sample,
             measure=estimator,
             header={

@@ -335,6 +335,7 @@ def run_loop(
     recording: Any = None,
     summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None,
     log_mode: str = "new",
+    guard=None,
 ) -> LoopResult:
     """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
 
@@ -369,6 +370,9 @@ def run_loop(
     summary : callable, optional
         ``summary(time_s, measurement) -> dict`` of figures (e.g. the step metrics) written into the closing record
         of the log and the recording under ``"summary"``, whatever the reason the loop stopped.
+    guard : RunawayGuard, optional
+        Runaway and plausibility checks on every sample (:mod:`flexdigit.rig.safety`); a fault it raises ends
+        the run in the safe state like any rig fault. ``flexdigit run`` always passes one.
     log_mode : {"new", "append", "replace"}
         An existing ``log_path`` is refused (``"new"``), added to (``"append"``: a log of the same controller,
         period and rig settings) or replaced (``"replace"``, ``--force``); see :class:`SampleLog`.
@@ -412,8 +416,15 @@ def run_loop(
     overruns = 0
     status, message = "completed", f"ran {n_samples} samples of {period * 1000:g} ms"
     pending_error: BaseException | None = None
+    framing = getattr(rig, "framing", None)  # a servo board whose frame allows fewer positions clamps lower
+    command_limits = (
+        float(rig.params.actuator.command_min),
+        float(min(rig.params.actuator.command_max, 254, getattr(framing, "max_position", 254))),
+    )
     try:
         controller.reset(rig.command)
+        if guard is not None:
+            guard.reset(rig.command)
         t0 = clock()
         k = 0
         while k < n_samples:
@@ -437,9 +448,11 @@ def run_loop(
             r = float(target(t))
             if check_sensors:
                 check_reading(reading, adc_range)
+            y = float(measure(reading))
+            if guard is not None:
+                guard.check_rotation(t, y)
             u = controller.step(r, reading)
             sent = rig.write_command(u)
-            y = float(measure(reading))
             if log is not None or recording is not None:
                 record = {
                     "k": k,
@@ -464,6 +477,8 @@ def run_loop(
             cmds.append(sent)
             if on_sample is not None:
                 on_sample(k, t, y, sent)
+            if guard is not None:
+                guard.check_command(t, r, y, float(u), sent, command_limits)
             k += 1
     except KeyboardInterrupt:
         status, message = "interrupted", "interrupted by Ctrl-C"
