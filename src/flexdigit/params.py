@@ -436,8 +436,10 @@ def load_params(path: str | Path) -> RigParams:
     FileNotFoundError
         If the file does not exist.
     """
+    from flexdigit._io import read_text
+
     path = Path(path)
-    text = path.read_text()
+    text = read_text(path, "a rig parameter TOML")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -92,7 +92,7 @@ class Dataset:
         return f"Dataset(protocol={name!r}, samples={len(self)}, rig={self.meta.get('rig', {}).get('url', '?')!r})"
 
 
-def make_meta(protocol: Protocol, rig: dict, digit_length_m: float) -> dict:
+def make_meta(protocol: Protocol, rig: dict, digit_length_m: float, adc_range_v=(-5.0, 5.0)) -> dict:
     """The metadata stored with a dataset (and in its journal's header)."""
     return {
         "format": DATASET_FORMAT,
@@ -100,6 +100,7 @@ def make_meta(protocol: Protocol, rig: dict, digit_length_m: float) -> dict:
         "protocol_fingerprint": protocol.fingerprint,
         "rig": rig,
         "digit_length_m": float(digit_length_m),
+        "adc_range_v": [float(v) for v in adc_range_v],
         "flexdigit_version": __version__,
     }
 
@@ -289,8 +290,13 @@ def export_csv(dataset: Dataset, path: str | Path, *, force: bool = False) -> Pa
     return path
 
 
-def load_dataset(path: str | Path, protocol: Protocol | None = None) -> Dataset:
+def load_dataset(path: str | Path, protocol: Protocol | None = None, *, partial: bool | None = None) -> Dataset:
     """Read and validate a dataset (Parquet, CSV export, or an unfinished ``.jsonl`` journal).
+
+    Every reading is checked against the protocol stored with it: its sample number, test, load, position,
+    command and repetition must be the protocol's for that sample (an edited load or position is refused), its
+    gauge and potentiometer voltages must lie in the ADC range it was read with, and a dataset must hold every
+    sample of its protocol (a truncated file is refused) unless ``partial``.
 
     Parameters
     ----------
@@ -298,12 +304,14 @@ def load_dataset(path: str | Path, protocol: Protocol | None = None) -> Dataset:
         The file.
     protocol : Protocol, optional
         If given, the dataset must have been collected with it (same fingerprint).
+    partial : bool, optional
+        Accept a dataset that holds only the first samples of its protocol. Default: only for a journal.
 
     Raises
     ------
     DataFileError
-        Naming the file and what is wrong: unreadable, a missing column, a wrong dtype, NaN gauge readings,
-        missing metadata, or another protocol.
+        Naming the file and what is wrong: unreadable, a missing column, a wrong dtype, a reading that is not the
+        protocol's or out of the ADC range, missing readings, missing metadata, or another protocol.
     FileNotFoundError
         If the file does not exist.
     """
@@ -317,7 +325,7 @@ def load_dataset(path: str | Path, protocol: Protocol | None = None) -> Dataset:
         dataset = _load_csv(path)
     else:
         dataset = _load_parquet(path)
-    _validate(dataset, path, protocol)
+    _validate(dataset, path, protocol, partial=suffix == ".jsonl" if partial is None else partial)
     return dataset
 
 
@@ -388,14 +396,16 @@ def _load_csv(path: Path) -> Dataset:
     return Dataset(columns, meta)
 
 
-def _validate(dataset: Dataset, path: Path, protocol: Protocol | None) -> None:
+def _validate(dataset: Dataset, path: Path, protocol: Protocol | None, *, partial: bool = False) -> None:
     meta = dataset.meta
+    if not isinstance(meta, dict):
+        raise DataFileError(f"{path}: the metadata is not a JSON object")
     for key in ("protocol", "protocol_fingerprint", "rig"):
         if key not in meta:
             raise DataFileError(f"{path}: metadata lacks '{key}'")
     try:
         stored = Protocol.from_dict(meta["protocol"])
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, AttributeError) as exc:
         raise DataFileError(f"{path}: the stored protocol is invalid ({exc})") from None
     if stored.fingerprint != meta["protocol_fingerprint"]:
         raise DataFileError(f"{path}: the stored protocol does not match its fingerprint (edited metadata?)")
@@ -404,17 +414,64 @@ def _validate(dataset: Dataset, path: Path, protocol: Protocol | None) -> None:
             f"{path}: collected with protocol {stored.name!r} (fingerprint {stored.fingerprint}), "
             f"not {protocol.name!r} (fingerprint {protocol.fingerprint})"
         )
+    samples = dataset["sample"]
+    if np.unique(samples).size != samples.size:
+        raise DataFileError(f"{path}: column 'sample' repeats a sample number (duplicated readings)")
+    total = stored.sample_count
+    if samples.size and (samples.min() < 0 or samples.max() >= total):
+        raise DataFileError(f"{path}: column 'sample' is outside 0..{total - 1} for {stored.name!r}")
+    if not partial and samples.size != total:
+        missing = sorted(set(range(total)) - set(samples.tolist()))
+        raise DataFileError(
+            f"{path}: holds {samples.size} of the {total} readings of {stored.name!r} (sample {missing[0]} is "
+            "missing): a truncated or cut file; an unfinished collection resumes from its journal"
+        )
+    _check_against_plan(dataset, path, stored, meta)
     gauges = dataset.gauges_v
     if gauges.size and not np.all(np.isfinite(gauges)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(gauges), axis=1))[0])
         raise DataFileError(f"{path}: gauge voltage of sample {int(dataset['sample'][bad])} is not finite")
-    loaded = dataset["load_kg"] > 0
-    if np.any(dataset["load_kg"] < 0) or np.any(~np.isfinite(dataset["load_kg"])):
-        raise DataFileError(f"{path}: column 'load_kg' must be finite and >= 0")
-    if np.any(~np.isfinite(dataset["position_from_tip_m"][loaded])):
-        raise DataFileError(f"{path}: a loaded sample has no position ('position_from_tip_m' is NaN)")
-    samples = dataset["sample"]
-    if np.unique(samples).size != samples.size:
-        raise DataFileError(f"{path}: column 'sample' repeats a sample number (duplicated readings)")
-    if samples.size and (samples.min() < 0 or samples.max() >= stored.sample_count):
-        raise DataFileError(f"{path}: column 'sample' is outside 0..{stored.sample_count - 1} for {stored.name!r}")
+    low, high = _adc_range(meta, path)
+    for name in (*GAUGE_COLUMNS, "pot_v"):
+        values = dataset[name]
+        with np.errstate(invalid="ignore"):
+            outside = np.flatnonzero((values < low) | (values > high))
+        if outside.size:
+            i = int(outside[0])
+            raise DataFileError(
+                f"{path}: column '{name}' of sample {int(samples[i])} is {values[i]:g} V, outside the ADC range "
+                f"{low:g}..{high:g} V it was read with"
+            )
+    if not np.all(np.isfinite(dataset["time_s"])):
+        raise DataFileError(f"{path}: column 'time_s' must be finite")
+
+
+def _adc_range(meta: dict, path: Path) -> tuple[float, float]:
+    """The ADC range the readings were taken with (metadata; the thesis card's +-5 V for older files)."""
+    value = meta.get("adc_range_v", [-5.0, 5.0])
+    try:
+        low, high = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise DataFileError(f"{path}: metadata 'adc_range_v' must be [low, high] in volts. Got {value!r}") from None
+    if not (np.isfinite(low) and np.isfinite(high) and low < high):
+        raise DataFileError(f"{path}: metadata 'adc_range_v' must be an increasing pair of volts. Got {value!r}")
+    return low, high
+
+
+def _check_against_plan(dataset: Dataset, path: Path, protocol: Protocol, meta: dict) -> None:
+    """Each reading's setting columns must be what the protocol prescribes for its sample number."""
+    try:
+        length = float(meta.get("digit_length_m", 0.270))
+        plan = protocol.plan(length)
+    except (TypeError, ValueError) as exc:
+        raise DataFileError(f"{path}: metadata 'digit_length_m' does not fit the protocol ({exc})") from None
+    index = dataset["sample"]
+    for name in ("test", "load_kg", "position_index", "command", "repetition", "position_from_tip_m"):
+        want, got = plan[name][index], dataset[name]
+        same = np.isclose(got, want, rtol=1e-12, atol=1e-12, equal_nan=True) if got.dtype.kind == "f" else got == want
+        if not np.all(same):
+            i = int(np.flatnonzero(~same)[0])
+            raise DataFileError(
+                f"{path}: sample {int(index[i])} has {name} = {got[i].item()!r}, but protocol {protocol.name!r} takes "
+                f"{want[i].item()!r} there (an edited or mixed-up file)"
+            )

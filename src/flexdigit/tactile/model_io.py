@@ -80,13 +80,16 @@ def load_model(path: str | Path) -> SavedModel:
     DataFileError
         If the file is not JSON, not a flexdigit model, of a newer version, or a field is missing or inconsistent.
     """
+    from flexdigit._io import read_text
+    from flexdigit._validation import check_int, check_real
+
     path = Path(path)
     try:
-        doc = json.loads(path.read_text())
+        doc = json.loads(read_text(path, "a model file"))
     except json.JSONDecodeError as exc:
         raise DataFileError(f"{path}: not a model file (invalid JSON: {exc})") from None
-    except UnicodeDecodeError:
-        raise DataFileError(f"{path}: not a model file (binary)") from None
+    except RecursionError:
+        raise DataFileError(f"{path}: not a model file (JSON nested too deep)") from None
     if not isinstance(doc, dict) or doc.get("format") != MODEL_FORMAT:
         raise DataFileError(f"{path}: not a {MODEL_FORMAT} file")
     if doc.get("version") != MODEL_VERSION:
@@ -96,15 +99,31 @@ def load_model(path: str | Path) -> SavedModel:
     for key in ("target", "inputs", "hidden", "n_outputs", "weights", "x_mean", "x_std", "y_mean", "y_std"):
         if key not in doc:
             raise DataFileError(f"{path}: missing field '{key}'")
-    if doc["target"] not in TARGETS:
+    if not isinstance(doc["target"], str) or doc["target"] not in TARGETS:
         raise DataFileError(f"{path}: field 'target' is {doc['target']!r}, expected one of {', '.join(TARGETS)}")
-    nin, hidden, nout = len(doc["inputs"]), doc["hidden"], doc["n_outputs"]
+    inputs = doc["inputs"]
+    if not isinstance(inputs, list) or not inputs or not all(isinstance(c, str) for c in inputs):
+        raise DataFileError(f"{path}: field 'inputs' must be a list of column names. Got {inputs!r}")
+    nin = len(inputs)
+    # an int, not "five" (that reached numpy as a TypeError) nor True; the field names itself in the message
     try:
-        weights = np.array(doc["weights"], dtype=float)
-        x_mean, x_std = np.array(doc["x_mean"], dtype=float), np.array(doc["x_std"], dtype=float)
-        y_mean, y_std = np.array(doc["y_mean"], dtype=float), np.array(doc["y_std"], dtype=float)
-    except (TypeError, ValueError):
-        raise DataFileError(f"{path}: weights and normalisers must be lists of numbers") from None
+        hidden = check_int(doc["hidden"], "hidden", "a model file", low=1, high=10_000, error=DataFileError)
+        nout = check_int(doc["n_outputs"], "n_outputs", "a model file", low=1, high=1_000, error=DataFileError)
+        tol = check_real(doc.get("tol", 1e-7), "tol", "a model file", low=0, low_open=True, error=DataFileError)
+    except DataFileError as exc:
+        raise DataFileError(f"{path}: {exc}") from None
+    if not isinstance(doc.get("meta", {}), dict):
+        raise DataFileError(f"{path}: field 'meta' must be an object. Got {doc['meta']!r}")
+    arrays = {}
+    for key in ("weights", "x_mean", "x_std", "y_mean", "y_std"):
+        value = doc[key]
+        if not isinstance(value, list) or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in value
+        ):
+            raise DataFileError(f"{path}: field '{key}' must be a list of numbers")
+        arrays[key] = np.array(value, dtype=float)
+    weights, x_mean, x_std = arrays["weights"], arrays["x_mean"], arrays["x_std"]
+    y_mean, y_std = arrays["y_mean"], arrays["y_std"]
     expected = nin * hidden + hidden + hidden * nout + nout
     if weights.shape != (expected,):
         raise DataFileError(
@@ -113,14 +132,15 @@ def load_model(path: str | Path) -> SavedModel:
         )
     if x_mean.shape != (nin,) or x_std.shape != (nin,) or y_mean.shape != (nout,) or y_std.shape != (nout,):
         raise DataFileError(f"{path}: normaliser sizes do not match {nin} inputs and {nout} outputs")
-    if not (np.all(np.isfinite(weights)) and np.all(x_std > 0) and np.all(y_std > 0)):
+    finite = all(np.all(np.isfinite(a)) for a in arrays.values())
+    if not (finite and np.all(x_std > 0) and np.all(y_std > 0)):
         raise DataFileError(f"{path}: weights must be finite and normaliser spreads positive")
-    mlp = MLP(hidden=hidden, tol=doc.get("tol", 1e-7))
+    mlp = MLP(hidden=hidden, tol=tol)
     mlp.weights_, mlp.n_inputs_, mlp.n_outputs_, mlp.y_ndim_ = weights, nin, nout, 2
-    network = ThesisNetwork(hidden=hidden, tol=doc.get("tol", 1e-7))
+    network = ThesisNetwork(hidden=hidden, tol=tol)
     network.net_ = mlp
     network.x_norm_, network.y_norm_ = Normaliser(), Normaliser()
     network.x_norm_.mean_, network.x_norm_.std_ = x_mean, x_std
     network.y_norm_.mean_, network.y_norm_.std_ = y_mean, y_std
     network.y_ndim_ = 1 if nout == 1 else 2
-    return SavedModel(network, doc["target"], list(doc["inputs"]), doc.get("meta", {}))
+    return SavedModel(network, doc["target"], list(inputs), doc.get("meta", {}))

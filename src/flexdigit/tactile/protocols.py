@@ -289,4 +289,6 @@ def load_protocol(name_or_path: str | Path) -> Protocol:
         raise ParameterError(
             f"no protocol {text_name!r}: expected one of {', '.join(BUILTIN)} or a TOML file that exists"
         )
-    return protocol_from_toml(path.read_text(), source=str(path))
+    from flexdigit._io import read_text
+
+    return protocol_from_toml(read_text(path, "a protocol TOML"), source=str(path))

@@ -146,7 +146,7 @@ def collect(
             "collect on the twin (--backend sim) or a rig"
         )
     plan = protocol.plan(params.geometry.digit_length_m)
-    meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m)
+    meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v)
     meta["settings"] = effective_settings(protocol, rig, settle, settings)
     if out.exists() and journal_file.exists() and not force:
         return _finish_compaction(out, journal_file, meta, protocol)
