@@ -1,5 +1,6 @@
 # flexdigit: `make run` reproduces the thesis on the twin; `make test` runs lint and the test suite;
-# `make bench` runs the benchmarks quoted in the README. Each sets up .venv first when needed.
+# `make bench` runs the benchmarks quoted in the README; `make fuzz` runs the loader fuzz tests at 10,000 examples
+# each (FUZZ_SEED=N for another seed). Each sets up .venv first when needed.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -10,7 +11,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 # The live page's tests drive Debian's chromium (no browser download); installed here when missing (CI runs as root).
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: setup run test lint bench clean browser
+.PHONY: setup run test lint bench fuzz clean browser
 
 setup: $(STAMP)
 
@@ -44,6 +45,10 @@ $(BENCH_STAMP): $(STAMP)
 
 bench: $(BENCH_STAMP) browser
 	$(BIN)/python -m benchmarks
+
+FUZZ_SEED ?= 0
+fuzz: $(STAMP)
+	HYPOTHESIS_PROFILE=fuzz $(BIN)/pytest tests/fuzz -q -p no:cacheprovider --hypothesis-seed=$(FUZZ_SEED)
 
 clean:
 	rm -rf $(VENV) report .pytest_cache .ruff_cache

@@ -1,5 +1,24 @@
-"""Shared test set-up: a non-interactive matplotlib backend for every test."""
+"""Shared test set-up: a non-interactive matplotlib backend, and the hypothesis profiles.
+
+Hypothesis profiles (issue 16): ``flexdigit`` (the default, ``make test``) runs 200 examples per property,
+derandomized (the same examples every run: a seeded test suite); ``fuzz`` (``make fuzz``, or
+``HYPOTHESIS_PROFILE=fuzz``) runs 10,000, from the seed ``make fuzz`` passes (``FUZZ_SEED``, default 0).
+"""
+
+import os
 
 import matplotlib
+from hypothesis import HealthCheck, settings
 
 matplotlib.use("Agg")
+
+#: Examples per property in ``make test`` and in ``make fuzz`` (quoted in the README).
+EXAMPLES = {"flexdigit": 200, "fuzz": 10_000}
+_COMMON = dict(
+    deadline=None,  # a shared 2-core machine: timing is not a property
+    database=None,  # nothing written beside the tests; failures print their example
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much],
+)
+settings.register_profile("flexdigit", max_examples=EXAMPLES["flexdigit"], derandomize=True, **_COMMON)
+settings.register_profile("fuzz", max_examples=EXAMPLES["fuzz"], **_COMMON)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "flexdigit"))

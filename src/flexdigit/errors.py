@@ -42,3 +42,16 @@ class ConvergenceWarning(UserWarning):
     The same role as scikit-learn's ``ConvergenceWarning`` (flexdigit's own, so the twin does not import
     scikit-learn): the answer is returned with its flag, never silently as if it had converged.
     """
+
+
+def one_line(message: object) -> str:
+    """``message`` (an exception from a library, say) on one line: its whitespace runs collapsed to one space.
+
+    pyarrow and others put newlines in their messages; flexdigit's errors are one line.
+
+    Examples
+    --------
+    >>> one_line("Couldn't deserialize thrift\nDeserializing page header failed.\n")
+    "Couldn't deserialize thrift Deserializing page header failed."
+    """
+    return " ".join(str(message).split())

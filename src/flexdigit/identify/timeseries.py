@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit._validation import check_array
-from flexdigit.errors import DataFileError
+from flexdigit.errors import DataFileError, one_line
 
 #: Fewest samples an identification record may have.
 MIN_SAMPLES = 20
@@ -322,7 +322,7 @@ def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
     try:
         table = pq.read_table(p)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
-        raise DataFileError(f"{p}: not a readable Parquet file ({exc})") from None
+        raise DataFileError(f"{p}: not a readable Parquet file ({one_line(exc)})") from None
     data = {}
     for name in table.column_names:
         col = table.column(name)
@@ -377,12 +377,16 @@ def _check_nan_runs(y: np.ndarray, source: str, col: str, where) -> None:
     )
 
 
-def write_csv(path: str | Path, ts: TimeSeries) -> Path:
-    """Write a series as a recording ``time_s,<channel>_<unit>[,command]`` that :func:`read_timeseries` reads."""
+def write_csv(path: str | Path, ts: TimeSeries, *, force: bool = False) -> Path:
+    """Write a series as a recording ``time_s,<channel>_<unit>[,command]`` that :func:`read_timeseries` reads
+    (atomically; an existing file is refused unless ``force``)."""
+    from flexdigit._io import atomic_write
+
     p = Path(path)
     unit = {v: k for k, v in CHANNEL_UNITS.items()}.get(ts.unit, "")
     ycol = f"{ts.channel}_{unit}" if unit else ts.channel
     cols = [ts.t_s, ts.y] + ([ts.u] if ts.u is not None else [])
     header = ["time_s", ycol] + ([ts.input_name or "command"] if ts.u is not None else [])
-    np.savetxt(p, np.column_stack(cols), delimiter=",", header=",".join(header), comments="", fmt="%.9g")
+    with atomic_write(p, "w", force=force) as fh:
+        np.savetxt(fh, np.column_stack(cols), delimiter=",", header=",".join(header), comments="", fmt="%.9g")
     return p

@@ -28,7 +28,7 @@ import numpy as np
 
 from flexdigit import __version__
 from flexdigit._io import atomic_path, atomic_write
-from flexdigit.errors import DataFileError
+from flexdigit.errors import DataFileError, one_line
 from flexdigit.tactile.protocols import Protocol
 
 #: Every column of a dataset and its numpy dtype.
@@ -336,7 +336,7 @@ def _load_parquet(path: Path) -> Dataset:
     try:
         table = pq.read_table(path)
     except (pa.ArrowException, OSError) as exc:
-        raise DataFileError(f"{path}: not a readable Parquet file ({exc})") from None
+        raise DataFileError(f"{path}: not a readable Parquet file ({one_line(exc)})") from None
     meta_raw = (table.schema.metadata or {}).get(b"flexdigit")
     if meta_raw is None:
         raise DataFileError(f"{path}: no flexdigit metadata (protocol and rig); not a flexdigit tactile dataset")
@@ -363,7 +363,11 @@ def _load_parquet(path: Path) -> Dataset:
 
 
 def _load_csv(path: Path) -> Dataset:
-    with path.open(encoding="utf-8") as fh:
+    from io import StringIO
+
+    from flexdigit._io import read_text
+
+    with StringIO(read_text(path, "a flexdigit dataset CSV")) as fh:
         first = fh.readline()
         if not first.startswith("# "):
             raise DataFileError(f"{path}: line 1 must be '# {{json metadata}}' as written by flexdigit")

@@ -1,0 +1,80 @@
+"""Fuzz the TOML loaders (rig parameters, protocols, twin calibration): every generated file loads or gives the
+project's one-line error naming the file (issue 16). Valid seeds: the thesis defaults written by tomli_w, the
+packaged thesis-6.1 protocol and twin calibration."""
+
+from __future__ import annotations
+
+import tomllib
+from importlib import resources
+
+import pytest
+import tomli_w
+from hypothesis import given
+
+from flexdigit.params import RigParams, load_params
+from flexdigit.tactile.protocols import load_protocol
+from flexdigit.twin.calibration import load_calibration
+
+from .strategies import assert_loader_contract, edited_document, mutated_bytes, toml_values
+
+PARAMS = tomli_w.dumps(RigParams().to_dict()).encode()
+PROTOCOL = resources.files("flexdigit.tactile").joinpath("protocols", "thesis-6.1.toml").read_bytes()
+CALIBRATION = resources.files("flexdigit.twin").joinpath("default_calibration.toml").read_bytes()
+
+LOADERS = {
+    "params": (load_params, PARAMS),
+    "protocol": (load_protocol, PROTOCOL),
+    "calibration": (load_calibration, CALIBRATION),
+}
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    return tmp_path_factory.mktemp("toml")
+
+
+def _dumps(doc) -> bytes:
+    try:
+        return tomli_w.dumps(doc).encode()
+    except (TypeError, ValueError):  # not representable in TOML (a NaN key...): write its repr instead
+        return repr(doc).encode("utf-8", "surrogatepass")
+
+
+@pytest.mark.parametrize("name", LOADERS)
+def test_the_seeds_load(name, folder):
+    load, valid = LOADERS[name]
+    path = folder / f"{name}.toml"
+    path.write_bytes(valid)
+    assert not isinstance(assert_loader_contract(load, path), Exception)
+
+
+def _fuzz_bytes(name):
+    load, valid = LOADERS[name]
+
+    @given(data=mutated_bytes(valid))
+    def test(folder, data):
+        path = folder / f"{name}-bytes.toml"
+        path.write_bytes(data)
+        assert_loader_contract(load, path)
+
+    return test
+
+
+def _fuzz_values(name):
+    load, valid = LOADERS[name]
+
+    @given(doc=edited_document(tomllib.loads(valid.decode()), toml_values))
+    def test(folder, doc):
+        path = folder / f"{name}-values.toml"
+        path.write_bytes(_dumps(doc))
+        assert_loader_contract(load, path)
+
+    return test
+
+
+test_params_bytes = _fuzz_bytes("params")
+test_params_values = _fuzz_values("params")
+test_protocol_bytes = _fuzz_bytes("protocol")
+test_protocol_values = _fuzz_values("protocol")
+test_calibration_bytes = _fuzz_bytes("calibration")
+test_calibration_values = _fuzz_values("calibration")

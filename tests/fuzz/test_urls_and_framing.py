@@ -1,0 +1,134 @@
+"""Fuzz the rig URL parser and the servo-board framing (issue 16).
+
+URLs: any generated URL (known and unknown schemes, declared and unknown options, values of every shape) is
+parsed into options that satisfy their backend's declarations, or refused with a one-line ParameterError; never
+another exception. Framing: whatever commands a controller asks for (any real, huge, negative), on any valid
+framing, the bytes sent to the board decode into frames whose position is never 255 (nor the sync byte) and
+never beyond the framing's highest position.
+"""
+
+from __future__ import annotations
+
+import math
+import urllib.parse
+
+from hypothesis import assume, given
+from hypothesis import strategies as st
+
+from flexdigit.errors import ParameterError
+from flexdigit.rig import daq_backend, replay_backend, serial_backend, sim_backend
+from flexdigit.rig.base import BACKENDS, clamp_command, rig_url_options
+from flexdigit.rig.serial_backend import SerialRig
+from flexdigit.rig.servo_board import FrameDecoder, Framing, encode_frame
+
+from .strategies import numbers
+
+MODULES = {"sim": sim_backend, "sim+paced": sim_backend, "serial": serial_backend, "daq": daq_backend}
+MODULES["replay"] = replay_backend
+DECLARED = sorted({opt.name for m in MODULES.values() for opt in m.URL_OPTIONS})
+
+values = st.one_of(
+    numbers.map(str),
+    st.sampled_from(["", "none", "0x10", "0xFF", "1e3", "-0", "yes", "off", "horizontal", "single_ended", " 3 "]),
+    st.text(max_size=8),
+)
+
+
+@st.composite
+def urls(draw) -> str:
+    scheme = draw(st.one_of(st.sampled_from(sorted(BACKENDS)), st.text(max_size=6)))
+    location = draw(st.one_of(st.just(""), st.sampled_from(["loop://", "/dev/ttyUSB0", "0", "run.jsonl"]), st.text()))
+    keys = draw(st.lists(st.one_of(st.sampled_from(DECLARED), st.text(max_size=6)), max_size=4))
+    query = "&".join(f"{urllib.parse.quote(k)}={urllib.parse.quote(draw(values))}" for k in keys)
+    sep = "://" if location or draw(st.booleans()) else ""
+    return f"{scheme}{sep}{location}" + (f"?{query}" if query else "")
+
+
+@given(url=urls())
+def test_url_parser(url):
+    try:
+        parsed, options = rig_url_options(url)
+    except ParameterError as exc:
+        assert str(exc) and "\n" not in str(exc)
+        return
+    declared = {opt.name: opt for opt in MODULES[parsed.scheme].URL_OPTIONS}
+    for key, value in options.items():
+        opt = declared[key]  # nothing undeclared gets through
+        if value is None:
+            assert opt.none
+        elif opt.kind in ("int", "float"):
+            assert isinstance(value, int if opt.kind == "int" else float) and math.isfinite(value)
+            assert opt.low is None or value >= opt.low
+            assert opt.high is None or value <= opt.high
+        elif opt.kind == "bool":
+            assert isinstance(value, bool)
+        elif opt.kind == "choice":
+            assert value in opt.choices
+
+
+@st.composite
+def framings(draw) -> Framing:
+    max_channel = draw(st.integers(0, 253))
+    max_position = draw(st.integers(1, 254))
+    sync = draw(st.integers(max(max_channel, max_position) + 1, 255))
+    return Framing(sync=sync, max_channel=max_channel, max_position=max_position)
+
+
+class _Port:
+    """A pyserial-like port that keeps what was written."""
+
+    def __init__(self) -> None:
+        self.sent = bytearray()
+
+    def write(self, data: bytes) -> int:
+        self.sent += data
+        return len(data)
+
+    def flush(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+@given(framing=framings(), data=st.data(), commands=st.lists(numbers, max_size=20))
+def test_frames_never_carry_255_or_a_position_beyond_the_framing(framing, data, commands):
+    channel = data.draw(st.integers(0, framing.max_channel))
+    port = _Port()
+    rig = SerialRig("fuzz", framing=framing, channel=channel, serial=port, sensor=lambda: ([0.0, 0.0, 0.0], 1.0))
+    for command in commands:
+        try:
+            sent = rig.write_command(command)
+        except ParameterError:  # NaN: refused, nothing sent
+            assert isinstance(command, float) and math.isnan(command)
+            continue
+        assert 0 <= sent <= framing.max_position
+    rig.close()  # relaxes: one more frame
+    decoder = FrameDecoder(framing)
+    frames = decoder.feed(bytes(port.sent))
+    assert decoder.dropped_bytes == 0 and len(port.sent) == 3 * len(frames)
+    assert all(
+        ch == channel and 0 <= pos <= framing.max_position and pos not in (255, framing.sync) for ch, pos in frames
+    )
+
+
+@given(channel=st.integers(-5, 300), position=st.one_of(st.integers(-5, 300), numbers))
+def test_encode_frame_refuses_what_it_cannot_send(channel, position):
+    try:
+        frame = encode_frame(channel, position)
+    except ParameterError as exc:
+        assert "\n" not in str(exc)
+        return
+    assert frame[0] == 0xFF and 0xFF not in frame[1:] and frame[2] <= 254
+
+
+@given(command=numbers)
+def test_clamp_command_never_gives_255(command):
+    assume(not (isinstance(command, float) and math.isnan(command)))
+    assert 0 <= clamp_command(command) <= 254
+
+
+@given(stream=st.binary(max_size=300), framing=framings())
+def test_the_decoder_never_yields_the_sync_byte_as_a_position(stream, framing):
+    for ch, pos in FrameDecoder(framing).feed(stream):
+        assert ch <= framing.max_channel and pos != framing.sync
