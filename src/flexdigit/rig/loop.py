@@ -126,6 +126,13 @@ class SampleLog:
         os.fsync(self._file.fileno())
         self._file.close()
 
+    def abandon(self) -> None:
+        """Close without flushing what the OS refused (a full disk): the file keeps the lines already written."""
+        try:
+            self._file.close()
+        except OSError:
+            pass
+
 
 def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
     """Refuse to append a run with ``header`` to ``path`` unless it is a loop log whose first run agrees on
@@ -336,6 +343,7 @@ def run_loop(
     summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None,
     log_mode: str = "new",
     guard=None,
+    stall_s: float = 0.5,
 ) -> LoopResult:
     """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
 
@@ -370,6 +378,9 @@ def run_loop(
     summary : callable, optional
         ``summary(time_s, measurement) -> dict`` of figures (e.g. the step metrics) written into the closing record
         of the log and the recording under ``"summary"``, whatever the reason the loop stopped.
+    stall_s : float
+        A sample that starts more than this late (s) is a fault, not an overrun: the rig (a DAQ or stream gone
+        silent, a read that blocked) or the computer stopped answering, and the loop has been blind that long.
     guard : RunawayGuard, optional
         Runaway and plausibility checks on every sample (:mod:`flexdigit.rig.safety`); a fault it raises ends
         the run in the safe state like any rig fault. ``flexdigit run`` always passes one.
@@ -384,6 +395,7 @@ def run_loop(
         reported there (not raised). Exceptions raised by the controller are re-raised after the safe state.
     """
     period = check_real(period_s, "period_s", "run_loop", low=MIN_PERIOD_S, high=MAX_PERIOD_S)
+    stall = check_real(stall_s, "stall_s", "run_loop", low=period, low_open=True)
     duration = check_positive(duration_s, "duration_s", "run_loop")
     clock = clock or rig.clock
     timer = timer or time.perf_counter
@@ -434,6 +446,11 @@ def run_loop(
                 rig.wait(deadline - now)
                 now = clock()
             late = now - deadline
+            if late > stall:
+                raise RigError(
+                    f"the loop stalled: sample {k} started {late:.3f} s late (more than {stall:g} s); the rig (a DAQ "
+                    "or stream gone silent, a read that blocked) or the computer stopped answering"
+                )
             if late > period:  # missed at least one whole deadline: count it and resynchronise, never burst
                 overruns += 1
                 skipped = int(late // period)
@@ -499,14 +516,19 @@ def run_loop(
     if summary is not None and ts:
         stop["summary"] = to_jsonable(summary(np.array(ts), np.array(ys)))  # NaN/inf -> null
     if recording is not None:
-        recording.close(stop)
-        message = f"{message}; recording: {recording.path}"
+        try:  # a full disk (or a vanished drive) must not hide the result
+            recording.close(stop)
+            message = f"{message}; recording: {recording.path}"
+        except OSError as exc:
+            message = f"{message}; recording: {recording.path} (not closed: {exc.strerror or exc})"
     if log is not None:
-        try:
+        try:  # a full disk (or a vanished drive) must not hide the result: the log keeps what it had
             log.write(stop)
-        finally:
             log.close()
-        message = f"{message}; log: {log.path}"
+            message = f"{message}; log: {log.path}"
+        except OSError as exc:
+            log.abandon()
+            message = f"{message}; log: {log.path} (its last lines are lost: {exc.strerror or exc})"
     timing = TimingStats.from_arrays(period, np.array(starts), np.array(lateness), np.array(compute), overruns)
     result = LoopResult(
         status,
