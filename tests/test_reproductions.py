@@ -1,0 +1,72 @@
+"""Issue 16's reproductions not covered beside their domain's other tests: each gives a one-line error now.
+
+(The others: tests/rig/test_urls.py, test_logs.py, test_safety.py, test_fault_matrix.py; tests/tactile/
+test_resume.py, test_dataset_checks.py, test_train_outputs.py; tests/test_outputs.py, test_cli.py.)
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+
+from flexdigit.cli import main
+
+BINARY = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\xff\xfe"
+
+
+def _error(capsys) -> dict:
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.err and captured.err.count("\n") == 1
+    return json.loads(captured.out)
+
+
+@pytest.mark.parametrize(
+    "argv, culprit",
+    [
+        (["collect", "thesis-6.1", "--out", "{tmp}/d.parquet", "--settle", "1e9"], "'--settle' parameter"),
+        (["run", "--period", "1e-7"], "'--period' parameter must be a real number inside [0.0001, 1]"),
+        (["run", "--period", "0"], "Got 0.0 instead"),  # 0 is a value (refused), not "not given"
+        (["run", "--duration", "1e9"], "'--duration' parameter"),
+    ],
+)
+def test_hangs_are_bounded(argv, culprit, tmp_path, capsys):
+    """`collect --settle 1e9` and `run --period 1e-7` hung; both are refused before anything runs."""
+    start = time.process_time()
+    assert main([a.replace("{tmp}", str(tmp_path)) for a in argv] + ["--json"]) == 2
+    assert culprit in _error(capsys)["error"]
+    assert time.process_time() - start < 2.0
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_two_gauge_positions_are_refused_by_params(tmp_path, capsys):
+    """They passed `params` and failed later with a numpy broadcast message."""
+    rig = tmp_path / "rig.toml"
+    rig.write_text("[geometry]\ngauge_positions_m = [0.045, 0.135]\n")
+    assert main(["params", str(rig), "--json"]) == 2
+    error = _error(capsys)["error"]
+    assert "gauge_positions_m" in error and "shape (3)" in error and "[0.045, 0.135]" in error
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["params", "{bad}"],
+        ["collect", "{bad}", "--out", "{tmp}/d.parquet"],
+        ["simulate", "release", "--calibration", "{bad}", "--out", "{tmp}/r.parquet"],
+        ["simulate", "release", "--params", "{bad}", "--out", "{tmp}/r.parquet"],
+        ["run", "--backend", "replay://{bad}"],
+        ["train", "{bad}"],
+        ["predict", "{bad}", "{bad}"],
+    ],
+    ids=["params", "protocol", "calibration", "params-of-simulate", "replay-log", "dataset", "model"],
+)
+def test_binary_garbage_names_the_file(argv, tmp_path, capsys):
+    """Binary garbage said "'utf-8' codec can't decode ..." with no file name."""
+    bad = tmp_path / "garbage.toml"
+    bad.write_bytes(BINARY)
+    assert main([a.replace("{bad}", str(bad)).replace("{tmp}", str(tmp_path)) for a in argv] + ["--json"]) == 2
+    doc = _error(capsys)
+    assert str(bad) in doc["error"] and doc["error_type"] == "DataFileError", doc
+    assert "codec" not in doc["error"]
