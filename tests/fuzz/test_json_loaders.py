@@ -133,15 +133,6 @@ def test_journal_bytes(folder, data):
     assert_loader_contract(_open_journal, path)  # the resume path reads it the same way
 
 
-@given(line=st.integers(0, len(JOURNAL) - 1), data=st.data())
-def test_journal_values(folder, line, data):
-    lines = list(JOURNAL)
-    lines[line] = data.draw(edited_document(JOURNAL[line], json_values))
-    path = folder / "journal-values.jsonl"
-    path.write_bytes(_jsonl(lines))
-    assert_loader_contract(load_dataset, path)
-
-
 @given(data=mutated_bytes(_jsonl(LOG)))
 def test_log_bytes(folder, data):
     path = folder / "log-bytes.jsonl"
@@ -149,10 +140,19 @@ def test_log_bytes(folder, data):
     assert_loader_contract(read_log_runs, path)
 
 
-@given(line=st.integers(0, len(LOG) - 1), data=st.data())
-def test_log_values(folder, line, data):
-    lines = list(LOG)
-    lines[line] = data.draw(edited_document(LOG[line], json_values))
-    path = folder / "log-values.jsonl"
-    path.write_bytes(_jsonl(lines))
-    assert_loader_contract(read_log_runs, path)
+def _line_values(seed_lines: list[dict], name: str, load):
+    """A property: one line of a JSON-lines file has one value edited (``edited_document``)."""
+
+    @given(line=st.integers(0, len(seed_lines) - 1), data=st.data())
+    def test(folder, line, data):
+        lines = list(seed_lines)
+        lines[line] = data.draw(edited_document(seed_lines[line], json_values))
+        path = folder / f"{name}-values.jsonl"
+        path.write_bytes(_jsonl(lines))
+        assert_loader_contract(load, path)
+
+    return test
+
+
+test_journal_values = _line_values(JOURNAL, "journal", load_dataset)
+test_log_values = _line_values(LOG, "log", read_log_runs)

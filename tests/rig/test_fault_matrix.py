@@ -30,7 +30,7 @@ import pytest
 from flexdigit.rig.base import open_rig
 from flexdigit.rig.loop import read_log_runs, run_loop
 
-from .conftest import PI
+from .conftest import PI, FakeClock
 
 FAULT_AT = 6  # the 6th read
 RAIL_V = 5.0
@@ -146,17 +146,6 @@ def fake_uldaq(source: Source):
     )
 
 
-class Clock:
-    def __init__(self) -> None:
-        self.now = 0.0
-
-    def __call__(self) -> float:
-        return self.now
-
-    def sleep(self, seconds: float) -> None:
-        self.now += max(seconds, 0.0)
-
-
 def _recording(path, fault):
     """A loop log to replay: 40 samples, the fault baked in from the 6th (a null gauge is a NaN reading)."""
     lines = [{"format": "flexdigit-loop-log/1", "controller": "recorded", "period_s": 0.02}]
@@ -174,7 +163,7 @@ def _recording(path, fault):
 def _open(backend, fault, tmp_path):
     """(rig, port or None, how to read its last command)."""
     port = FakePort() if backend.startswith("serial") else None
-    clock = Clock()
+    clock = FakeClock()
     if backend in ("sim", "sim+paced"):
         rig = open_rig(backend, seed=0)
         source = Source(lambda: rig.command, fault, rig.twin.advance if backend == "sim" else None)
