@@ -112,10 +112,11 @@ def _stream_emulator(args: argparse.Namespace) -> CommandResult:
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._io import check_output
     from flexdigit._validation import check_real
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
-    from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
+    from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, check_appendable, realtime_priority, run_loop
     from flexdigit.rig.safety import RunawayGuard
     from flexdigit.rig.step_test import step_metrics
 
@@ -123,9 +124,6 @@ def _run(args: argparse.Namespace) -> CommandResult:
         from flexdigit.errors import ParameterError
 
         raise ParameterError(f"--controller must be one of {', '.join(CONTROLLERS)}. Got {args.controller!r} instead.")
-    from flexdigit._io import check_output
-    from flexdigit.rig.loop import check_appendable
-
     duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
     if args.log is not None and not (args.append and args.log.exists()):  # before the rig moves, not after
