@@ -25,9 +25,9 @@ def _error(capsys) -> dict:
     [
         ["params", "--write", "{out}"],
         ["simulate", "sweep", "--commands", "8,9", "--settle", "0.1", "--samples", "1", "--out", "{out}"],
-        ["simulate", "release", "--duration", "0.2", "--out", "{out}"],
+        ["simulate", "step", "--duration", "0.2", "--rate", "100", "--out", "{out}"],
     ],
-    ids=["params", "simulate-parquet", "simulate-release"],
+    ids=["params", "simulate-sweep", "simulate-step"],
 )
 def test_existing_outputs_are_refused_without_force(argv, tmp_path, capsys):
     out = tmp_path / ("rig.toml" if argv[0] == "params" else "x.parquet")

@@ -22,6 +22,7 @@ import sys
 from pathlib import Path
 
 from flexdigit import __version__
+from flexdigit.errors import one_line
 
 #: Modules that add sub-commands, in the order of the architecture (params -> ... -> report).
 COMMAND_MODULES: tuple[str, ...] = (
@@ -117,6 +118,7 @@ def _command_names(parser: argparse.ArgumentParser) -> set[str]:
 
 def _fail(message: str, error_type: str, command: str, wants_json: bool, code: int) -> int:
     """Report an error: one line on stderr and, under ``--json``, an ``{"error": ...}`` object on stdout."""
+    message = one_line(message)  # a library's message may carry newlines; ours are one line
     prefix = f"flexdigit {command}" if command else "flexdigit"
     print(f"{prefix}: {'interrupted' if code == 130 else 'error: ' + message}", file=sys.stderr)
     if wants_json:

@@ -392,7 +392,7 @@ class RigParams:
         unknown = sorted(set(data) - set(section_types))
         if unknown:
             raise ParameterError(
-                f"{source}: unknown section [{unknown[0]}]; expected one of "
+                f"{source}: unknown section {unknown[0]!r}; expected one of "
                 + ", ".join(f"[{s}]" for s in section_types)
             )
         sections = {}
@@ -404,7 +404,7 @@ class RigParams:
             bad = sorted(set(values) - set(allowed))
             if bad:
                 raise ParameterError(
-                    f"{source}: unknown key '{bad[0]}' in [{name}]; expected one of " + ", ".join(allowed)
+                    f"{source}: unknown key {bad[0]!r} in [{name}]; expected one of " + ", ".join(allowed)
                 )
             converted = {}
             for key, value in values.items():

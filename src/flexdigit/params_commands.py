@@ -15,11 +15,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _params(args: argparse.Namespace) -> CommandResult:
-    from flexdigit._io import check_output
     from flexdigit.params import RigParams, load_params, save_params
 
-    if args.write:
-        check_output(args.write, force=args.force)
     params = load_params(args.file) if args.file else RigParams()
     data = params.to_dict()
     derived = {

@@ -49,7 +49,7 @@ def test_partial_file_keeps_defaults(tmp_path):
     ("text", "fragments"),
     [
         (
-            "[geometry]\ngauge_positions_m = [0.045, 0.3]\n",
+            "[geometry]\ngauge_positions_m = [0.045, 0.135, 0.3]\n",
             ["rig.toml", "gauge_positions_m", "0.3", "inside (0, 0.27]"],
         ),
         (
@@ -60,7 +60,7 @@ def test_partial_file_keeps_defaults(tmp_path):
         ("[sensors]\ngauge_factor = -1.0\n", ["gauge_factor", "-1.0", "inside (0, inf)"]),
         ("[sensors]\ngauge_factor = nan\n", ["gauge_factor", "finite"]),
         ("[geometry]\nlength = 1\n", ["unknown key 'length'", "[geometry]", "digit_length_m"]),
-        ("[gemoetry]\n", ["unknown section [gemoetry]"]),
+        ("[gemoetry]\n", ["unknown section 'gemoetry'"]),
         ("[actuator]\noperating_commands = 8\n", ["operating_commands", "must be a list"]),
         ("[actuator]\noperating_commands = [43, 8]\n", ["operating_commands", "two increasing"]),
         ("[actuator\n", ["not valid TOML"]),

@@ -165,10 +165,10 @@ def _collect(args: argparse.Namespace) -> CommandResult:
 def _dataset(args: argparse.Namespace) -> CommandResult:
     import numpy as np
 
-    from flexdigit._io import atomic_path, check_output
+    from flexdigit._io import check_output
     from flexdigit.errors import ParameterError
     from flexdigit.params import RigParams, load_params
-    from flexdigit.tactile.dataset import export_csv, save_dataset
+    from flexdigit.tactile.dataset import save_dataset
     from flexdigit.tactile.importer import ROLES, ColumnMap, import_readings
 
     out = check_output(args.out, force=args.force)
@@ -194,8 +194,7 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
         cmap = ColumnMap.build({}, flags, source="the column flags")
     params = load_params(args.params) if args.params else RigParams()
     dataset = import_readings(args.file, cmap, params=params)
-    with atomic_path(out, force=args.force) as tmp:
-        (export_csv if out.suffix.lower() == ".csv" else save_dataset)(dataset, tmp)
+    save_dataset(dataset, out, force=args.force)  # atomic, Parquet or (by the suffix) CSV
     protocol = dataset.protocol
     loaded = int(np.sum(dataset["load_kg"] > 0))
     data = {

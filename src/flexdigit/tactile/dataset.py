@@ -92,15 +92,16 @@ class Dataset:
         return f"Dataset(protocol={name!r}, samples={len(self)}, rig={self.meta.get('rig', {}).get('url', '?')!r})"
 
 
-def make_meta(protocol: Protocol, rig: dict, digit_length_m: float, adc_range_v=(-5.0, 5.0)) -> dict:
-    """The metadata stored with a dataset (and in its journal's header)."""
+def make_meta(protocol: Protocol, rig: dict, digit_length_m: float, adc_range_v=None) -> dict:
+    """The metadata stored with a dataset (and in its journal's header); ``adc_range_v`` (V) where it is known
+    (the card the readings were taken with; None for imported readings)."""
     return {
         "format": DATASET_FORMAT,
         "protocol": protocol.to_dict(),
         "protocol_fingerprint": protocol.fingerprint,
         "rig": rig,
         "digit_length_m": float(digit_length_m),
-        "adc_range_v": [float(v) for v in adc_range_v],
+        "adc_range_v": None if adc_range_v is None else [float(v) for v in adc_range_v],
         "flexdigit_version": __version__,
     }
 
@@ -424,35 +425,42 @@ def _validate(dataset: Dataset, path: Path, protocol: Protocol | None, *, partia
     total = stored.sample_count
     if samples.size and (samples.min() < 0 or samples.max() >= total):
         raise DataFileError(f"{path}: column 'sample' is outside 0..{total - 1} for {stored.name!r}")
-    if not partial and samples.size != total:
-        missing = sorted(set(range(total)) - set(samples.tolist()))
-        raise DataFileError(
-            f"{path}: holds {samples.size} of the {total} readings of {stored.name!r} (sample {missing[0]} is "
-            "missing): a truncated or cut file; an unfinished collection resumes from its journal"
-        )
-    _check_against_plan(dataset, path, stored, meta)
+    collected = not (isinstance(meta["rig"], dict) and meta["rig"].get("url") == "import")
+    if collected:  # taken by the runner in the protocol's order: complete, and each reading where the plan says
+        if not partial and samples.size != total:
+            missing = sorted(set(range(total)) - set(samples.tolist()))
+            raise DataFileError(
+                f"{path}: holds {samples.size} of the {total} readings of {stored.name!r} (sample {missing[0]} is "
+                "missing): a truncated or cut file; an unfinished collection resumes from its journal"
+            )
+        _check_against_plan(dataset, path, stored, meta)
+    else:  # imported (flexdigit dataset import): its protocol is the set of its settings, in the file's order
+        _check_against_settings(dataset, path, stored)
     gauges = dataset.gauges_v
     if gauges.size and not np.all(np.isfinite(gauges)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(gauges), axis=1))[0])
         raise DataFileError(f"{path}: gauge voltage of sample {int(dataset['sample'][bad])} is not finite")
-    low, high = _adc_range(meta, path)
-    for name in (*GAUGE_COLUMNS, "pot_v"):
+    adc = _adc_range(meta, path)
+    for name in (*GAUGE_COLUMNS, "pot_v") if adc is not None else ():
         values = dataset[name]
         with np.errstate(invalid="ignore"):
-            outside = np.flatnonzero((values < low) | (values > high))
+            outside = np.flatnonzero((values < adc[0]) | (values > adc[1]))
         if outside.size:
             i = int(outside[0])
             raise DataFileError(
                 f"{path}: column '{name}' of sample {int(samples[i])} is {values[i]:g} V, outside the ADC range "
-                f"{low:g}..{high:g} V it was read with"
+                f"{adc[0]:g}..{adc[1]:g} V it was read with"
             )
-    if not np.all(np.isfinite(dataset["time_s"])):
-        raise DataFileError(f"{path}: column 'time_s' must be finite")
+    if np.any(np.isinf(dataset["time_s"])):
+        raise DataFileError(f"{path}: column 'time_s' must be finite (or NaN where the time is unknown)")
 
 
-def _adc_range(meta: dict, path: Path) -> tuple[float, float]:
-    """The ADC range the readings were taken with (metadata; the thesis card's +-5 V for older files)."""
+def _adc_range(meta: dict, path: Path) -> tuple[float, float] | None:
+    """The ADC range the readings were taken with (metadata; the thesis card's +-5 V for files collected before it
+    was recorded; None where it is unknown: imported readings)."""
     value = meta.get("adc_range_v", [-5.0, 5.0])
+    if value is None:
+        return None
     try:
         low, high = (float(v) for v in value)
     except (TypeError, ValueError):
@@ -460,6 +468,27 @@ def _adc_range(meta: dict, path: Path) -> tuple[float, float]:
     if not (np.isfinite(low) and np.isfinite(high) and low < high):
         raise DataFileError(f"{path}: metadata 'adc_range_v' must be an increasing pair of volts. Got {value!r}")
     return low, high
+
+
+def _check_against_settings(dataset: Dataset, path: Path, protocol: Protocol) -> None:
+    """Each imported reading's load, position and command must be one of its protocol's."""
+    from flexdigit.tactile.protocols import RELAXED
+
+    allowed = {
+        "load_kg": {0.0, *protocol.loads_kg},
+        "position_from_tip_m": set(protocol.positions_from_tip_m),
+        "command": set(protocol.actuation_commands) or {RELAXED},
+    }
+    loaded = dataset["load_kg"] > 0
+    for name, values in allowed.items():
+        column = dataset[name][loaded] if name == "position_from_tip_m" else dataset[name]
+        bad = ~np.isin(column, sorted(values))
+        if np.any(bad):
+            i = int(np.flatnonzero(bad)[0])
+            raise DataFileError(
+                f"{path}: a reading has {name} = {column[i].item()!r}, not one of protocol {protocol.name!r}'s "
+                f"{sorted(values)!r} (an edited or mixed-up file)"
+            )
 
 
 def _check_against_plan(dataset: Dataset, path: Path, protocol: Protocol, meta: dict) -> None:
