@@ -32,7 +32,7 @@ LOCATION = {
 @pytest.mark.parametrize(
     "url, culprit",
     [
-        ("replay://run.jsonl?speed=2", "unknown option 'speed'; a replay URL takes no options"),
+        ("replay://run.jsonl?speed=2", "unknown option 'speed'; a replay URL takes run"),
         ("replay://run.jsonl?clock=2", "unknown option 'clock'"),  # a Python-only keyword is not URL text
         ("serial://loop://?sensor=1", "unknown option 'sensor'; a serial URL takes baud, channel"),
         ("sim?bogus=1", "sim: unknown option 'bogus'; a sim URL takes seed, orientation"),

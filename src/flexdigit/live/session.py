@@ -351,12 +351,10 @@ class LiveSession:
         self.controller, self.unit = None, "command"
         self.setpoint = float(params.actuator.equilibrium_command)
         if self.kind == "twin" and cable:
-            from flexdigit.rig.base import open_rig
+            # a static sweep on a twin of its own (virtual time, the twin's 20 ms step: nothing moves fast)
+            from flexdigit.rig.base import open_rig, rig_url_options
             from flexdigit.rig.controllers import make_controller
             from flexdigit.rig.rotation import calibrate_rotation
-
-            # a static sweep on a twin of its own (virtual time, the twin's 20 ms step: nothing moves fast)
-            from flexdigit.rig.base import rig_url_options
 
             _, options = rig_url_options(self.rig_url)
             options = {k: v for k, v in options.items() if k != "spin_s"}

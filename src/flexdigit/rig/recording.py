@@ -361,6 +361,14 @@ def recording_rig(rig, recording: Recording):
         def _send(self, command: int) -> None:
             self.inner.write_command(command)
 
+        # the wrapped rig's nature and settings are this one's: a collection journals them and compares them on
+        # resume, and replays a deterministic rig (tactile.runner)
+        accepts_loads = property(lambda self: self.inner.accepts_loads)
+        deterministic = property(lambda self: self.inner.deterministic)
+
+        def settings(self):
+            return self.inner.settings()
+
         def _event(self, event: str, mass=None, position=None) -> None:
             self.recording.write(
                 EVENT_TOPIC, self.inner.clock(),

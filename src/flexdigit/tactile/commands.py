@@ -24,10 +24,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--settle", type=float, default=None, help="settle time per setting, s, 0..3600 (default: protocol's)"
     )
-    p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
-    p.add_argument("--force", action="store_true", help="replace an existing --record file")
+    p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset, and --record")
 
     p = add_command(
         subparsers,
