@@ -43,6 +43,7 @@ __all__ = [
     "read_log",
     "read_log_runs",
     "check_appendable",
+    "check_sample",
     "realtime_priority",
 ]
 
@@ -218,17 +219,20 @@ def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], li
             start, header, samples, _ = runs[-1]
             runs[-1] = (start, header, samples, record)
         else:
-            runs[-1][2].append(_check_sample(record, path, number))
+            runs[-1][2].append(check_sample(record, path, f"line {number}"))
     if not runs:
         raise DataFileError(f"{path}: empty file, expected a flexdigit loop log")
     return runs
 
 
-def _check_sample(record: dict[str, Any], path: Path, number: int) -> dict[str, Any]:
-    """A sample line as the loop writes it, or a DataFileError naming the line and field."""
+def check_sample(record: dict[str, Any], path: Path, where: str) -> dict[str, Any]:
+    """A sample as the loop writes it (a log line, a recording's message), or a DataFileError naming the file,
+    ``where`` in it (``"line 7"``) and the field."""
 
     def bad(field: str, expected: str) -> DataFileError:
-        return DataFileError(f"{path}: line {number}: field '{field}' must be {expected}. Got {record.get(field)!r}")
+        got = repr(record.get(field))
+        got = got if len(got) <= 60 else got[:57] + "..."
+        return DataFileError(f"{path}: {where}: field '{field}' must be {expected}. Got {got}")
 
     for key in ("t", "setpoint", "y", "pot_v"):
         value = record.get(key)

@@ -252,11 +252,27 @@ def _records(path: Path) -> Iterator[Any]:
     from mcap.stream_reader import StreamReader
 
     with open(path, "rb") as fh:
-        reader = StreamReader(fh, skip_magic=False)
+        reader = StreamReader(_Bounded(fh, path.stat().st_size), skip_magic=False)
         try:
             yield from reader.records
         except (McapError, EOFError, ValueError, struct.error):
             return  # the open chunk of a run that was killed: everything before it is kept
+
+
+class _Bounded:
+    """A binary file whose reads may not ask for more than it holds: a record length damaged into 2**60 would have
+    the MCAP reader allocate that much (a MemoryError, found by tests/fuzz); it ends the records as a cut file."""
+
+    def __init__(self, fh, size: int) -> None:
+        self._fh, self._size = fh, size
+
+    def read(self, n: int = -1) -> bytes:
+        if n is not None and n > self._size - self._fh.tell():
+            raise EOFError("a record runs past the end of the file")
+        return self._fh.read(n)
+
+    def __getattr__(self, item):
+        return getattr(self._fh, item)
 
 
 def iter_messages(path: str | os.PathLike, topics=None) -> Iterator[tuple[str, float, dict[str, Any]]]:
@@ -299,12 +315,14 @@ def read_recording(path: str | os.PathLike):
     that was killed before it closed the file). Raises :class:`~flexdigit.errors.DataFileError` naming the file
     when it is not a flexdigit recording or a sample lacks a field.
     """
+    from flexdigit.rig.loop import check_sample
+
     path = Path(path)
     samples = []
     for _, _, message in iter_messages(path, topics=[SAMPLE_TOPIC]):
         if not isinstance(message, dict) or not {"t", "gauges_v", "command"} <= set(message):
             raise DataFileError(f"{path}: a {SAMPLE_TOPIC} message lacks t, gauges_v or command: {message!r:.120}")
-        samples.append(message)
+        samples.append(check_sample(message, path, f"{SAMPLE_TOPIC} message {len(samples) + 1}"))
     meta = read_metadata(path)
     header = meta.get("flexdigit.run")
     if header is None or header.get("format") != RECORDING_FORMAT:
