@@ -49,7 +49,7 @@ def test_partial_file_keeps_defaults(tmp_path):
     ("text", "fragments"),
     [
         (
-            "[geometry]\ngauge_positions_m = [0.045, 0.135, 0.3]\n",
+            "[geometry]\ngauge_positions_m = [0.045, 0.3]\n",
             ["rig.toml", "gauge_positions_m", "0.3", "inside (0, 0.27]"],
         ),
         (

@@ -99,6 +99,29 @@ def adc(voltage_v, sensors: Sensors) -> np.ndarray:
     return np.asarray(adc_quantise(voltage_v, sensors), dtype=float)
 
 
+#: The calibration's fields that hold one value per gauge channel.
+CHANNEL_FIELDS = ("channel_gain", "channel_offset_v", "noise_white_v", "noise_drift_v_per_sqrt_s")
+
+
+def check_channels(params, calibration) -> None:
+    """Refuse rig parameters and a calibration that disagree on the number of gauges, naming both.
+
+    A rig TOML with two gauge positions met the packaged three-channel calibration in a numpy broadcast (issue 16);
+    studies of other gauge counts give a calibration with one value per gauge (:mod:`flexdigit.studies.design`).
+    """
+    from flexdigit.errors import ParameterError
+
+    gauges = len(params.geometry.gauge_positions_m)
+    for name in CHANNEL_FIELDS:
+        channels = len(getattr(calibration, name))
+        if channels != gauges:
+            raise ParameterError(
+                f"The rig parameters place {gauges} gauge(s) (geometry.gauge_positions_m) but the twin's calibration "
+                f"has {channels} value(s) of '{name}': give one calibration value per gauge (the thesis rig and its "
+                "packaged calibration have 3)"
+            )
+
+
 class SensorChain:
     """Strain at the gauges to ADC volts, with per-channel gain/offset and seeded noise (module docstring).
 
@@ -111,6 +134,7 @@ class SensorChain:
     """
 
     def __init__(self, params, calibration, rng: np.random.Generator):
+        check_channels(params, calibration)
         s = params.sensors
         self.params = params
         self.gain = s.amplifier_gain_v_per_v * s.excitation_v * np.asarray(calibration.channel_gain, dtype=float)
