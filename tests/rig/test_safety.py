@@ -75,8 +75,10 @@ def rotation_maps(tmp_path_factory):
     doc = json.loads(good.read_text())
     flipped = dict(doc, coef=[-c for c in doc["coef"]], intercept=-doc["intercept"])
     zero = dict(doc, coef=[0.0, 0.0, 0.0], intercept=0.0)
+    # all but dead: 1e-4 of the good map's gain, so the estimate hardly moves (a zero map is refused on load)
+    dead = dict(doc, coef=[1e-4 * c for c in doc["coef"]], intercept=0.0)
     maps = {"good": good}
-    for name, content in (("flipped", flipped), ("zero", zero)):
+    for name, content in (("flipped", flipped), ("zero", zero), ("dead", dead)):
         maps[name] = folder / f"{name}.json"
         maps[name].write_text(json.dumps(content))
     return maps
@@ -91,7 +93,7 @@ def _run(capsys, *argv):
     "which, extra, culprit",
     [
         ("flipped", [], "left the physical range"),
-        ("zero", [], "does not follow the command"),
+        ("dead", [], "does not follow the command"),
         ("good", ["--gain", "1e9"], "saturated at 254"),
     ],
 )
@@ -101,6 +103,12 @@ def test_runaways_fault_to_the_safe_state(rotation_maps, capsys, which, extra, c
     assert "digit relaxed to command 8" in data["message"]
     # it stopped before the twin's true rotation left the physical range (it reached 342-412 deg unguarded)
     assert data["true_peak_rotation_deg"] < ROTATION_RANGE_DEG[1]
+
+
+def test_a_zero_map_is_refused_before_the_rig_moves(rotation_maps, capsys):
+    """Issue 16's zero map: refused on load (by the map's own check) instead of run to a runaway."""
+    code, data = _run(capsys, "--rotation-map", str(rotation_maps["zero"]))
+    assert code == 2 and "read no rotation from the gauges" in data["error"]
 
 
 @pytest.mark.parametrize("gain, setpoint", [(0.7, 30), (1.0, 30), (1.3, 30), (1.0, 120), (1.0, 0)])
