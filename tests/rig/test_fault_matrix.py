@@ -2,12 +2,17 @@
 
 Backends: the twin in virtual time (``sim``) and paced to the wall clock (``sim+paced``); the servo board on a
 serial port with its gauges from a Python source (``serial``) or from the DAQ card the URL names
-(``serial+daq``: ``serial://PORT?daq=0``, the thesis rig, with a fake port and a fake uldaq); and a recorded run
-played back (``replay``). Faults are injected at the 6th sample of a 20 ms loop:
+(``serial+daq``: ``serial://PORT?daq=0``, the thesis rig, with a fake port and a fake uldaq) or from a
+microcontroller's gauge stream (``serial+stream``: ``serial://PORT?daq=stream://PTY``, the stream emulator on a
+pseudo-terminal, on the wall clock); and a recorded run played back (``replay``). A bare ``stream://`` rig reads
+only: it refuses the loop's first command (tests/rig/test_stream_backend.py). Faults are injected at the 6th sample
+of a 20 ms loop:
 
 - port lost: the serial port's writes fail (USB unplugged); the safe command cannot go out, the port is closed;
-- DAQ silent: the gauge source raises (a dead card) or blocks for a second (a stall); a recording that ends;
-- NaN gauge, clipped ADC (a gauge on the +5 V rail);
+- DAQ silent: the gauge source raises (a dead card) or blocks for a second (a stall); a recording that ends; a
+  stream that stops sending;
+- NaN gauge, clipped ADC (a gauge on the +5 V rail); on a stream, whose values are integer counts, the unreadable
+  value is a garbled line (the stream turns to garbage) and the clipped one a count at the ADC's rail;
 - Ctrl-C during the run;
 - disk full: the log's writes fail with ENOSPC.
 
@@ -35,7 +40,7 @@ from .conftest import PI, FakeClock
 FAULT_AT = 6  # the 6th read
 RAIL_V = 5.0
 
-BACKENDS = ("sim", "sim+paced", "serial", "serial+daq", "replay")
+BACKENDS = ("sim", "sim+paced", "serial", "serial+daq", "serial+stream", "replay")
 FAULTS = ("port lost", "DAQ silent", "DAQ stall", "NaN gauge", "clipped ADC", "Ctrl-C", "disk full")
 #: What each cell must report (a fragment of the message), or None where the fault has no meaning there.
 MESSAGES = {
@@ -52,7 +57,10 @@ NOT_APPLICABLE = {
     ("sim+paced", "port lost"): "the twin has no port",
     ("replay", "port lost"): "a replay sends its commands nowhere",
     ("replay", "DAQ stall"): "a replay's clock moves only when the loop waits",
+    ("serial+stream", "DAQ stall"): "a stream's reads never block (its thread keeps the newest line): see silent",
 }
+#: The stream's own words for the faults whose message differs there.
+STREAM_MESSAGES = {"DAQ silent": "stream silent", "NaN gauge": "stream garbled", "clipped ADC": "stream ADC's rail"}
 
 
 class FakePort:
@@ -160,8 +168,42 @@ def _recording(path, fault):
     path.write_text("\n".join(json.dumps(line) for line in lines) + "\n")
 
 
-def _open(backend, fault, tmp_path):
-    """(rig, port or None, how to read its last command)."""
+def _stream(fault, port, request):
+    """``serial://fake?daq=stream://PTY``: the emulator streams volts that follow the servo's last command; at the
+    6th read of the loop the fault is switched on in the emulator (it then stops, garbles or sends the rail)."""
+    from flexdigit.rig.stream_emulator import Faults, StreamEmulator
+
+    state = {"rail": False}
+
+    def source(t_s):
+        command = port.last_command if port.frames else 8
+        gauges = np.full(3, 0.01 * (command - 8))
+        if state["rail"]:
+            gauges[0] = RAIL_V  # beyond the ADS1115's +4.096 V: the count is clipped at the rail
+        return gauges, None
+
+    emulator = StreamEmulator(source)
+    request.addfinalizer(emulator.close)
+    rig = open_rig(f"serial://fake?daq=stream://{emulator.port}", serial=port)
+    read, reads = rig.sensor, [0]
+
+    def sensor():
+        reads[0] += 1
+        if reads[0] == FAULT_AT:
+            if fault == "DAQ silent":
+                emulator.faults = Faults(stop_after=0)
+            elif fault == "NaN gauge":
+                emulator.faults = Faults(garble_after=0)
+            elif fault == "clipped ADC":
+                state["rail"] = True
+        return read()
+
+    rig.sensor = sensor
+    return rig
+
+
+def _open(backend, fault, tmp_path, request=None):
+    """(rig, port or None)."""
     port = FakePort() if backend.startswith("serial") else None
     clock = FakeClock()
     if backend in ("sim", "sim+paced"):
@@ -184,6 +226,8 @@ def _open(backend, fault, tmp_path):
         rig = open_rig("serial://fake", serial=port, clock=clock, sleep=clock.sleep)
         rig.sensor = Source(lambda: rig.command, fault, clock.sleep)
         return rig, port
+    if backend == "serial+stream":
+        return _stream(fault, port, request), port
     if backend == "serial+daq":
         holder = {}
         source = Source(lambda: holder["rig"].command, fault, clock.sleep)
@@ -213,10 +257,12 @@ CELLS = [(b, f) for f in FAULTS for b in BACKENDS]
 
 
 @pytest.mark.parametrize("backend, fault", CELLS, ids=[f"{b}-{f}" for b, f in CELLS])
-def test_fault_ends_safe_with_the_log_readable(backend, fault, tmp_path, monkeypatch):
+def test_fault_ends_safe_with_the_log_readable(backend, fault, tmp_path, monkeypatch, request):
     if (backend, fault) in NOT_APPLICABLE:
         pytest.skip("not applicable: " + NOT_APPLICABLE[backend, fault])
-    rig, port = _open(backend, fault, tmp_path)
+    rig, port = _open(backend, fault, tmp_path, request)
+    # the stream's faults show a few of its lines after they start (0.25 s silent, 20 % of 50 lines garbled)
+    duration, samples_max = (1.0, 50) if backend == "serial+stream" else (0.4, 20)
     log = tmp_path / "run.jsonl"
     on_sample = None
     if fault == "Ctrl-C":
@@ -233,15 +279,17 @@ def test_fault_ends_safe_with_the_log_readable(backend, fault, tmp_path, monkeyp
 
     if fault == "disk full":
         _full_disk(monkeypatch)
-    result = run_loop(rig, PI(), 0.3, 0.4, 0.02, log_path=log, on_sample=on_sample, check_sensors=True)
+    result = run_loop(rig, PI(), 0.3, duration, 0.02, log_path=log, on_sample=on_sample, check_sensors=True)
 
     # -- the run stopped, saying why ------------------------------------------------------------------------------
     assert result.status == ("interrupted" if fault == "Ctrl-C" else "fault"), result.message
     expected = MESSAGES[fault] or {"replay": "recording ends", "serial+daq": "analog read failed"}.get(
         backend, "did not answer"
     )
+    if backend == "serial+stream":
+        expected = STREAM_MESSAGES.get(fault, expected)
     assert expected in result.message, result.message
-    assert result.timing.samples < 20  # it did not run on to the end
+    assert result.timing.samples < samples_max  # it did not run on to the end
     # -- the safe state: relaxed where a port can take it, the port closed either way ------------------------------
     assert rig.closed
     if fault == "port lost":
