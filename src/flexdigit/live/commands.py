@@ -26,7 +26,7 @@ def register(subparsers) -> None:
     live.add_argument("--record", default=None, help="record the session to this MCAP file")
     live.add_argument("--force", action="store_true", help="replace an existing --record file")
     live.add_argument("--calibration", default=None, help="calibration TOML: the twin's, and the shape estimate's")
-    live.add_argument("--rotation-map", default=None, help="rotation map (flexdigit run --calibration) on hardware")
+    live.add_argument("--rotation-map", default=None, help="rotation map (flexdigit run --rotation-map) on hardware")
     live.add_argument("--orientation", default=None, help="mounting on hardware: vertical, horizontal, hanging")
     live.add_argument("--seed", type=int, default=None, help="twin noise seed (default: the URL's seed=, else 0)")
     parser = add_command(
