@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 from hypothesis import strategies as st
 
 from flexdigit.errors import FlexdigitError
@@ -32,6 +33,7 @@ __all__ = [
     "mutated_bytes",
     "edited_document",
     "assert_loader_contract",
+    "loop_samples",
 ]
 
 #: Numbers a file may hold that loaders must cope with: huge, tiny, negative zero, NaN, infinities, big integers.
@@ -59,6 +61,23 @@ toml_values = st.recursive(
     lambda children: st.lists(children, max_size=4) | st.dictionaries(text, children, max_size=3),
     max_leaves=6,
 )
+
+
+def loop_samples(seed: int, n: int = 8) -> list[dict]:
+    """``n`` samples of a 20 ms loop as its log and recordings hold them (seeded numbers: a valid seed file)."""
+    rng = np.random.default_rng(seed)
+    return [
+        {
+            "k": k,
+            "t": 0.02 * k,
+            "setpoint": 30.0,
+            "gauges_v": [float(v) for v in rng.normal(0, 0.2, 3)],
+            "pot_v": None,
+            "y": float(rng.normal(30, 1)),
+            "command": int(rng.integers(0, 255)),
+        }
+        for k in range(n)
+    ]
 
 
 @st.composite

@@ -17,7 +17,7 @@ from flexdigit.tactile.model_io import load_model, save_model
 from flexdigit.tactile.pipeline import ThesisNetwork
 from flexdigit.tactile.protocols import Protocol
 
-from .strategies import assert_loader_contract, edited_document, json_values, mutated_bytes
+from .strategies import assert_loader_contract, edited_document, json_values, loop_samples, mutated_bytes
 
 PROTOCOL = Protocol("fuzz", (0.0125, 0.025), (0.0, 0.05), repetitions=2, no_load_repetitions=1)
 
@@ -63,19 +63,7 @@ def _journal_lines() -> list[dict]:
 
 
 def _log_lines() -> list[dict]:
-    rng = np.random.default_rng(2)
-    samples = [
-        {
-            "k": k,
-            "t": 0.02 * k,
-            "setpoint": 30.0,
-            "gauges_v": [float(v) for v in rng.normal(0, 0.2, 3)],
-            "pot_v": None,
-            "y": float(rng.normal(30, 1)),
-            "command": int(rng.integers(0, 255)),
-        }
-        for k in range(8)
-    ]
+    samples = loop_samples(seed=2)
     header = {"format": LOG_FORMAT, "controller": "digital20", "period_s": 0.02}
     return [header, *samples, {"stop": "completed", "message": "ran 8 samples", "safe_command_sent": True}]
 

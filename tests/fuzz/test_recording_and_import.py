@@ -13,26 +13,9 @@ from flexdigit.rig.recording import Recording
 from flexdigit.rig.replay_backend import ReplayRig
 from flexdigit.tactile.importer import ColumnMap, import_readings
 
-from .strategies import assert_loader_contract, edited_document, json_values, mutated_bytes
+from .strategies import assert_loader_contract, edited_document, json_values, loop_samples, mutated_bytes
 
-
-def _samples() -> list[dict]:
-    rng = np.random.default_rng(4)
-    return [
-        {
-            "k": k,
-            "t": 0.02 * k,
-            "setpoint": 30.0,
-            "gauges_v": [float(v) for v in rng.normal(0, 0.2, 3)],
-            "pot_v": None,
-            "y": float(rng.normal(30, 1)),
-            "command": int(rng.integers(0, 255)),
-        }
-        for k in range(8)
-    ]
-
-
-SAMPLES = _samples()
+SAMPLES = loop_samples(seed=4)
 CMAP = ColumnMap(
     gauges=("sg_a", "sg_b", "sg_c"),
     gauge_unit="mV",
