@@ -51,7 +51,7 @@ def one_line(message: object) -> str:
 
     Examples
     --------
-    >>> one_line("Couldn't deserialize thrift\nDeserializing page header failed.\n")
+    >>> one_line("Couldn't deserialize thrift\\nDeserializing page header failed.\\n")
     "Couldn't deserialize thrift Deserializing page header failed."
     """
     return " ".join(str(message).split())
