@@ -586,9 +586,13 @@ def _horner(coef, f):
     """``sum_k coef_k f^k`` (k = 1..K) and its derivative in ``f``, for coefficients (K, G, 3) and forces (B, G):
     (B, G, 3) each."""
     x = f[..., None]
-    value = np.broadcast_to(coef[-1], f.shape + (3,))
-    slope = np.zeros(f.shape + (3,))
-    for k in range(coef.shape[0] - 2, -1, -1):  # value = (...((c_K f + c_K-1) f + ...) + c_1) f
+    if coef.shape[0] == 1:
+        return coef[0] * x, coef[0] + 0.0 * x
+    # value = (...((c_K f + c_K-1) f + ...) + c_1) f, its first step unrolled: broadcasting the (B, G, 3) start
+    # explicitly cost more than the arithmetic on a few entries (an estimate's latency)
+    value = coef[-1] * x + coef[-2]
+    slope = coef[-1]
+    for k in range(coef.shape[0] - 3, -1, -1):
         slope = slope * x + value
         value = value * x + coef[k]
     return value * x, slope * x + value
