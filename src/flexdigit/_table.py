@@ -42,6 +42,17 @@ __all__ = ["Table", "read_table", "DELIMITERS"]
 DELIMITERS = (",", ";", "\t", "|")
 #: A number as a cell may hold it (no NaN, no infinity, no digit separators).
 _NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
+#: What a cell may hold for "no value" where a value may be missing (as pandas, MATLAB or R write it).
+_MISSING = ("nan", "na", "n/a", "null", "none")
+#: A character no plain number holds (``float`` would also take ``nan``, ``inf``, ``1_000``, other scripts' digits).
+_NOT_NUMERIC = re.compile(r"[^0-9+\-.eE\n]")
+#: A number with a decimal comma / a decimal point (for detecting the decimal mark).
+_COMMA_NUMBER = re.compile(r"^[+-]?\d*,\d+([eE][+-]?\d+)?$")
+_POINT_NUMBER = re.compile(r"^[+-]?\d*\.\d+([eE][+-]?\d+)?$")
+#: A spreadsheet's first line naming the delimiter (``sep=;``).
+_SEP_LINE = re.compile(r"^sep=[,;|\t]$")
+#: What starts a comment line (``#``; ``%`` as MATLAB writes them).
+_COMMENT = ("#", "%")
 #: Lines used to detect the delimiter.
 _SNIFF_LINES = 50
 
@@ -109,7 +120,8 @@ class Table:
         return self.lines[0] - 1 if self.lines and self.unit == "line" else 1
 
     def numbers(self, name: str, *, allow_empty: bool = False, role: str = "") -> np.ndarray:
-        """Column ``name`` as floats; an empty cell is NaN when ``allow_empty``.
+        """Column ``name`` as floats; an empty cell (or ``NaN``, ``NA``, ``null``: "no value") is NaN when
+        ``allow_empty``.
 
         Raises
         ------
@@ -120,15 +132,27 @@ class Table:
         """
         column = self.find(name, role)
         k = self.columns.index(column)
-        out = np.empty(len(self.rows))
-        for i, row in enumerate(self.rows):
-            cell = row[k].strip()
-            if cell == "":
+        cells = [row[k].strip() for row in self.rows]
+        if self.decimal == ",":
+            cells = [c.replace(",", ".") for c in cells]
+        if allow_empty:
+            cells = ["" if c.lower() in _MISSING else c for c in cells]
+        # the whole column at once when it holds only plain numbers (a 1e5-row file in well under a second); any
+        # other cell: cell by cell, for the message naming it
+        given = [c for c in cells if c] if allow_empty else cells
+        if given and not _NOT_NUMERIC.search("\n".join(given)):
+            try:
+                return np.array([c or "nan" for c in cells] if allow_empty else cells, dtype=float)
+            except ValueError:
+                pass
+        out = np.empty(len(cells))
+        for i, text in enumerate(cells):
+            cell = self.rows[i][k].strip()
+            if text == "":
                 if allow_empty:
                     out[i] = math.nan
                     continue
                 raise DataFileError(f"{self.source}: {self.where(i)}, column {column!r}: empty cell; expected a number")
-            text = cell.replace(",", ".") if self.decimal == "," else cell
             if not _NUMBER.match(text):
                 hint = ""
                 if self.decimal == "." and re.match(r"^[+-]?\d+,\d+$", cell):
@@ -146,24 +170,28 @@ def _loose(name: str) -> str:
     return " ".join(name.strip().strip("\"'").split()).lower()
 
 
-def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str = ".") -> Table:
+def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str | None = None) -> Table:
     """Read a CSV-like text file or a ``.parquet`` file into a :class:`Table` (see the module docstring).
 
     Parameters
     ----------
     path : path
-        The file. Text: UTF-8 (a byte-order mark is skipped), or Latin-1 if it is not UTF-8; lines starting with
-        ``#`` and blank lines are skipped; the first other line is the header.
+        The file. Text: UTF-8 (a byte-order mark is skipped), UTF-16 with its byte-order mark (a spreadsheet's
+        "Unicode text"), or Latin-1 if it is not UTF-8; lines starting with ``#`` or ``%`` and blank lines are
+        skipped; a first line ``sep=;`` (a spreadsheet's export) names the delimiter; the first other line is the
+        header.
     delimiter : str, optional
-        ``","``, ``";"``, ``"\\t"`` (or ``"tab"``), ``"|"``, ``"whitespace"``; default: detected.
-    decimal : {".", ","}
-        The decimal mark of the numbers (``,`` only with another delimiter).
+        ``","``, ``";"``, ``"\\t"`` (or ``"tab"``), ``"|"``, ``"whitespace"``; default: ``sep=`` or detected.
+    decimal : {".", ","}, optional
+        The decimal mark of the numbers. Default: detected, ``,`` only where the delimiter is not ``,`` and the
+        first rows hold numbers with a decimal comma and none with a decimal point; with the ``,`` delimiter a
+        decimal comma needs quoted cells and ``decimal=","``.
 
     Raises
     ------
     DataFileError
-        Naming the file (and line): not found as a file, binary, empty, no delimiter that splits the lines
-        consistently, a row with a different number of fields than the header, duplicate column names.
+        Naming the file (and line): not found as a file, binary, empty, no delimiter that splits the header into
+        columns, a row with a different number of fields than the header, duplicate column names.
     FileNotFoundError
         If the file does not exist.
     """
@@ -171,8 +199,8 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str =
     if not p.exists():
         raise FileNotFoundError(2, "No such file", str(p))
     if not p.is_file():
-        raise DataFileError(f"{p}: not a file")
-    if decimal not in (".", ","):
+        raise DataFileError(f"{p}: not a file (a directory?); expected a CSV-like text or .parquet file")
+    if decimal not in (None, ".", ","):
         raise DataFileError(f"{p}: the decimal mark must be '.' or ','. Got {decimal!r} instead.")
     if delimiter == "tab":
         delimiter = "\t"
@@ -180,27 +208,21 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str =
         raise DataFileError(
             f"{p}: the delimiter must be one of ',', ';', 'tab', '|', 'whitespace'. Got {delimiter!r} instead."
         )
-    if decimal == "," and delimiter == ",":
-        raise DataFileError(f"{p}: ',' cannot be both the delimiter and the decimal mark")
     if p.suffix.lower() == ".parquet":
-        return _read_parquet(p, decimal)
-    data = p.read_bytes()
-    if b"\x00" in data[:4096]:
-        raise DataFileError(f"{p}: not a text table (binary content); expected CSV-like text or a .parquet file")
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        text = data.decode("latin-1")
-    numbered = [
-        (n, line)
-        for n, line in enumerate(text.splitlines(), start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
-    if not numbered:
-        raise DataFileError(f"{p}: empty file: expected a header line and rows of numbers")
+        return _read_parquet(p, decimal or ".")
+    numbered = _text_lines(p)
+    first = numbered[0][1].strip(" \"'")
+    if _SEP_LINE.match(first):  # "sep=;": a spreadsheet's export names its delimiter on the first line
+        numbered = numbered[1:]
+        named = "\t" if first[4:] == "\t" else first[4:]
+        delimiter = delimiter or named
+        if not numbered:
+            raise DataFileError(f"{p}: empty file: expected a header line and rows of numbers")
     if delimiter is None:
         delimiter = _detect_delimiter(p, [line for _, line in numbered[:_SNIFF_LINES]], decimal)
-    rows = [_split(line, delimiter) for _, line in numbered]
+    rows = _split_all([line for _, line in numbered], delimiter)
+    if decimal is None:
+        decimal = _detect_decimal(rows[1 : 1 + _SNIFF_LINES * 4], delimiter)
     header = [c.strip() for c in rows[0]]
     header_line = numbered[0][0]
     # a delimiter closing every line (spreadsheet exports) makes an empty last column: drop it
@@ -213,15 +235,39 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str =
         if c in seen:
             raise DataFileError(f"{p}: line {header_line}: column {c!r} appears twice in the header")
         seen.add(c)
-    body, lines = [], []
-    for (n, _), row in zip(numbered[1:], rows[1:], strict=True):
+    lines = [n for n, _ in numbered[1:]]
+    body = rows[1:]
+    for n, row in zip(lines, body, strict=True):
         if len(row) != len(header):
             raise DataFileError(
                 f"{p}: line {n} has {len(row)} fields, the header (line {header_line}) has {len(header)}"
             )
-        body.append(row)
-        lines.append(n)
     return Table(str(p), header, body, lines, delimiter, decimal, "line")
+
+
+def _text_lines(p: Path) -> list[tuple[int, str]]:
+    """``(line number, line)`` of the lines that are neither blank nor comments; refuses binary and empty files."""
+    data = p.read_bytes()
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # UTF-16 with its byte-order mark
+        try:
+            text = data.decode("utf-16")
+        except UnicodeDecodeError:
+            raise DataFileError(f"{p}: not a text table (a broken UTF-16 file)") from None
+    elif b"\x00" in data[:4096]:
+        raise DataFileError(f"{p}: not a text table (binary content); expected CSV-like text or a .parquet file")
+    else:
+        try:
+            text = data.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            text = data.decode("latin-1")
+    numbered = [
+        (n, line)
+        for n, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith(_COMMENT)
+    ]
+    if not numbered:
+        raise DataFileError(f"{p}: empty file: expected a header line and rows of numbers")
+    return numbered
 
 
 def _split(line: str, delimiter: str) -> list[str]:
@@ -230,23 +276,52 @@ def _split(line: str, delimiter: str) -> list[str]:
     return next(csv.reader([line], delimiter=delimiter))
 
 
-def _detect_delimiter(p: Path, lines: list[str], decimal: str) -> str:
-    best, best_fields = None, 1
-    for d in DELIMITERS:
-        if d == decimal:
+def _split_all(lines: list[str], delimiter: str) -> list[list[str]]:
+    """Every line split on ``delimiter``: one :mod:`csv` reader for all (fast), line by line where a quote left
+    open would let the reader run on into the next line."""
+    if delimiter == "whitespace":
+        rows = list(csv.reader([line.strip() for line in lines], delimiter=" ", skipinitialspace=True))
+    else:
+        rows = list(csv.reader(lines, delimiter=delimiter))
+    if len(rows) != len(lines):
+        rows = [_split(line, delimiter) for line in lines]
+    return rows
+
+
+def _detect_delimiter(p: Path, lines: list[str], decimal: str | None) -> str:
+    """The delimiter that splits the header into the most columns (> 1) and every other line into as many; else
+    runs of blanks doing so; else the delimiter most lines agree with (the ragged line is then named)."""
+    candidates = [d for d in DELIMITERS if d != decimal] + ([","] if decimal == "," else [])
+    consistent, partial = [], []
+    for d in candidates:
+        fields = [len(_split(line, d)) for line in lines]
+        if fields[0] < 2:
             continue
-        counts = {len(_split(line, d)) for line in lines}
-        if len(counts) == 1 and (n := counts.pop()) > best_fields:
-            best, best_fields = d, n
-    if best is not None:
-        return best
+        agree = sum(n == fields[0] for n in fields) / len(fields)
+        (consistent if agree == 1.0 else partial).append((-fields[0], -agree, d))
+    if consistent:
+        return min(consistent, key=lambda k: k[:1])[2]  # most columns; on a tie, the first delimiter tried
     counts = {len(_split(line, "whitespace")) for line in lines}
     if len(counts) == 1 and counts.pop() > 1:
         return "whitespace"
+    if partial:
+        agree, _, d = max((-a, -n, d) for n, a, d in partial)  # most lines agreeing, then most columns
+        if agree >= 0.5:
+            return d
     raise DataFileError(
-        f"{p}: no delimiter splits the first {len(lines)} lines into the same number of columns (tried ',', ';', "
-        "tab, '|' and blanks); give the delimiter"
+        f"{p}: no delimiter splits the header (the first line that is not a comment) into columns and most of the "
+        f"{len(lines) - 1} lines after it into as many (tried ',', ';', tab, '|' and blanks); give the delimiter"
     )
+
+
+def _detect_decimal(rows: list[list[str]], delimiter: str) -> str:
+    """``,`` when the delimiter is not ``,`` and the cells hold decimal commas (``12,5``) and no decimal points."""
+    if delimiter == ",":
+        return "."
+    cells = [c.strip() for row in rows for c in row]
+    comma = any(_COMMA_NUMBER.match(c) for c in cells)
+    point = any(_POINT_NUMBER.match(c) for c in cells)
+    return "," if comma and not point else "."
 
 
 def _read_parquet(p: Path, decimal: str) -> Table:

@@ -197,8 +197,9 @@ def test_map_and_flag_mistakes_are_named(tmp_path, capsys):
     bad_map.write_text('gauges = ["a", "b", "c"]\nload = "m"\nposition = "x"\ngauge_unit = "uV"\n')
     assert main(["dataset", "import", str(src), *out, "--map", str(bad_map)]) == 2
     assert "m.toml: The 'gauge_unit' parameter of ColumnMap must be one of 'V', 'mV'" in capsys.readouterr().err
-    # a decimal comma read with '.' is named as such
-    comma = write_foreign(tmp_path / "c.csv", ["a", "b", "c", "m", "x"], [GOOD], delimiter=";", decimal=",")
+    # a decimal comma in a ','-separated file (quoted cells) read with '.' is named as such
+    comma = tmp_path / "c.csv"
+    comma.write_text('a,b,c,m,x\n"1,0","2,0","3,0",25,100\n')
     assert main(["dataset", "import", str(comma), *out, "--gauges", "a,b,c", "--load", "m", "--position", "x"]) == 2
     assert "'1,0' is not a number (a decimal comma? give the decimal mark ',')" in capsys.readouterr().err
     # an existing dataset is kept unless --force
@@ -274,7 +275,7 @@ def test_any_layout_imports_to_the_same_si_readings(tmp_path, case):
 def test_the_importer_refuses_rather_than_guesses_a_delimiter(tmp_path):
     path = tmp_path / "ragged.csv"
     path.write_text("a,b,c,m,x\n1,2,3,25\n1;2;3;25;4\n")
-    with pytest.raises(DataFileError, match="no delimiter splits the first 3 lines"):
+    with pytest.raises(DataFileError, match="no delimiter splits the header"):
         import_readings(path, ColumnMap(gauges=("a", "b", "c"), load="m", position="x"))
 
 

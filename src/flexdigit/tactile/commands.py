@@ -60,7 +60,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     q.add_argument("--time-unit", choices=("s", "ms"), help="default s")
     q.add_argument("--pot", metavar="COLUMN", help="potentiometer column, in the gauge unit (default: none)")
     q.add_argument("--delimiter", choices=(",", ";", "tab", "|", "whitespace"), help="default: detected")
-    q.add_argument("--decimal", choices=(".", ","), help="decimal mark (default .)")
+    q.add_argument("--decimal", choices=(".", ","), help="decimal mark (default: detected)")
     q.add_argument("--name", help="the dataset's protocol name (default: imported:<file stem>)")
     q.add_argument("--orientation", choices=("horizontal", "vertical"), help="how the digit lay (default horizontal)")
     q.add_argument("--params", metavar="FILE", help="rig parameters TOML (for the digit length)")
@@ -205,6 +205,7 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
         "tests": int(np.unique(dataset["test"]).size),
         "derived": dataset.meta["rig"]["derived"],
         "delimiter": dataset.meta["rig"]["delimiter"],
+        "decimal": dataset.meta["rig"]["decimal"],
     }
     text = (
         f"{args.file}: {len(dataset)} readings ({loaded} loaded, {len(dataset) - loaded} no load; "

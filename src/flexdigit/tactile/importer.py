@@ -86,8 +86,10 @@ class ColumnMap:
         the time (``time_unit``), the potentiometer (``gauge_unit``).
     time_unit : {"s", "ms"}
     delimiter : str, optional
-        Default: detected. ``","``, ``";"``, ``"tab"``, ``"|"``, ``"whitespace"``.
-    decimal : {".", ","}
+        Default: detected (or named by a spreadsheet's ``sep=`` first line). ``","``, ``";"``, ``"tab"``, ``"|"``,
+        ``"whitespace"``.
+    decimal : {".", ","}, optional
+        Default: detected (``,`` where the delimiter is not ``,`` and the numbers have decimal commas).
     name : str, optional
         The dataset's protocol name (default: ``imported:<file stem>``).
     orientation : {"horizontal", "vertical"}
@@ -109,7 +111,7 @@ class ColumnMap:
     time_unit: str = "s"
     pot: str | None = None
     delimiter: str | None = None
-    decimal: str = "."
+    decimal: str | None = None
     name: str | None = None
     orientation: str = "horizontal"
 
@@ -132,13 +134,15 @@ class ColumnMap:
         for key in ("command", "repetition", "test", "time", "pot", "name"):
             value = getattr(self, key)
             if value is not None and (not isinstance(value, str) or not value.strip()):
-                raise ParameterError(f"The '{key}' parameter of {owner} must be a column name. Got {value!r}.")
+                what = "a name" if key == "name" else "a column name"
+                raise ParameterError(f"The '{key}' parameter of {owner} must be {what}. Got {value!r}.")
         check_choice(self.gauge_unit, "gauge_unit", tuple(GAUGE_UNITS), owner)
         check_choice(self.load_unit, "load_unit", tuple(LOAD_UNITS), owner)
         check_choice(self.position_unit, "position_unit", tuple(POSITION_UNITS), owner)
         check_choice(self.position_from, "position_from", POSITION_FROM, owner)
         check_choice(self.time_unit, "time_unit", tuple(TIME_UNITS), owner)
-        check_choice(self.decimal, "decimal", (".", ","), owner)
+        if self.decimal is not None:
+            check_choice(self.decimal, "decimal", (".", ","), owner)
         check_choice(self.orientation, "orientation", ("horizontal", "vertical"), owner)
         if self.delimiter is not None:
             check_choice(self.delimiter, "delimiter", (",", ";", "tab", "\t", "|", "whitespace"), owner)
@@ -163,12 +167,16 @@ class ColumnMap:
             Naming the file and the key: not TOML, an unknown key, a missing key, a bad value.
         """
         path = Path(path)
-        if not path.is_file():
+        if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
+        if not path.is_file():
+            raise DataFileError(f"{path}: not a file (a directory?); expected a column map TOML")
         try:
             data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
         except tomllib.TOMLDecodeError as exc:
             raise DataFileError(f"{path}: not valid TOML ({exc})") from None
+        except UnicodeDecodeError as exc:
+            raise DataFileError(f"{path}: not a text TOML file (byte {exc.start} is not UTF-8)") from None
         return cls.build(data, overrides, source=str(path))
 
     @classmethod
@@ -234,6 +242,7 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
         if role != "gauges" and getattr(cmap, role) is not None
     }
     gauge_columns = [table.find(g, f"gauge {k}") for k, g in enumerate(cmap.gauges, start=1)]
+    _check_distinct(table, {**{f"gauge {k}": c for k, c in enumerate(gauge_columns, start=1)}, **columns})
     gauges = np.column_stack([table.numbers(c) for c in gauge_columns]) * GAUGE_UNITS[cmap.gauge_unit]
     load = table.numbers(columns["load"]) * LOAD_UNITS[cmap.load_unit]
     _check_rows(table, columns["load"], load, (load < 0), "a negative mass; expected 0 (no load) or more")
@@ -311,6 +320,7 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
         "source": str(path),
         "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
         "delimiter": table.delimiter,
+        "decimal": table.decimal,
         "column_map": cmap.to_dict(),
         "derived": [
             name
@@ -319,6 +329,21 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
         ],
     }
     return Dataset(data, make_meta(protocol, rig, length_m))
+
+
+def _check_distinct(table: Table, columns: dict[str, str]) -> None:
+    """One column, one role: a column mapped twice (gauge 1 and gauge 2, a gauge and the position) is a slip in the
+    map that would give a plausible, wrong dataset."""
+    seen: dict[str, str] = {}
+    for role, column in columns.items():
+        if column in seen:
+            first = seen[column] if seen[column].startswith("gauge") else f"the {ROLES[seen[column]]}"
+            this = role if role.startswith("gauge") else f"the {ROLES[role]}"
+            raise DataFileError(
+                f"{table.source}: column {column!r} is mapped twice, as {first} and as {this}; each role needs its "
+                "own column"
+            )
+        seen[column] = role
 
 
 def _check_rows(table: Table, column: str, values: np.ndarray, bad: np.ndarray, problem: str) -> None:
