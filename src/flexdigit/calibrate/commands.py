@@ -40,7 +40,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--actuated-rest", metavar="FILE", help="repeated readings of the unloaded actuated digit (friction level)"
     )
     p.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
-    p.add_argument("--decimal", choices=(".", ","), default=".", help="decimal mark of the tables (default '.')")
+    p.add_argument(
+        "--decimal", choices=(".", ","), default=None, help="decimal mark of the tables (default: detected per file)"
+    )
     p.add_argument("--thesis", action="store_true", help="fit to the thesis's figures instead (minutes: the friction)")
     p.add_argument(
         "--allow-poor-fit",

@@ -3,11 +3,14 @@
 Columns are named as ``flexdigit identify`` reads them, the unit after the last underscore:
 
 - gauges ``gauge1_v`` .. ``gauge3_v`` or ``sg1_v`` .. (``_mv`` for millivolts), as the twin and a DAQ write them;
+  the unit may also stand in parentheses or brackets, and case, blanks and ``_`` in the name do not matter
+  (``SG 1 (mV)``, ``Gauge_2 [V]``);
 - ``command`` (or ``cmd``): the servo command, an integer 0..254;
-- ``time_s`` (or ``time_ms``, or ``time`` with ``time_unit``);
-- numbers with ``.`` as the decimal mark, or ``,`` when told (``--decimal ,``); any common delimiter (detected);
+- ``time_s`` (or ``time_ms``, ``t_us``, ``Time (ms)``, or ``time`` with ``time_unit``);
+- any common delimiter and decimal mark (detected, :func:`flexdigit._table.read_table`; ``decimal`` for a file
+  whose decimal commas the detection cannot see, such as a ``,``-separated file with quoted cells);
 - deflections ``y1_mm`` .. ``y3_mm`` (or ``sg1_mm``, ``gauge1_mm``, ``y_sg1_mm``; ``_cm``, ``_m``): the
-  deflection at each gauge position, as thesis table 3.6 gives it (an empty cell: not read).
+  deflection at each gauge position, as thesis table 3.6 gives it (an empty cell, or NaN: not read).
 
 What each record is (thesis sections in brackets):
 
@@ -41,17 +44,29 @@ LENGTH_UNITS = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 GAUGES = (1, 2, 3)
 
-_GAUGE_NAME = re.compile(r"^(?:sg|gauge)(\d+)_([a-z]+)$")
-_DEFLECTION_NAME = re.compile(r"^(?:y_?(?:sg|gauge)?|sg|gauge)(\d+)_([a-z]+)$")
+#: A column name's unit: after the last ``_`` (``sg1_mv``), or in parentheses or brackets (``SG 1 (mV)``,
+#: ``time [ms]``); the name before it is compared without case, blanks or ``_`` (``Gauge_1``, ``sg 1``).
+_NAME_UNIT = re.compile(r"^(?P<stem>.+?)(?:_(?P<suffix>[a-z]+)|\s*[\(\[]\s*(?P<bracket>[a-z]+)\s*[\)\]])$")
+_GAUGE_STEM = re.compile(r"^(?:sg|gauge)(\d+)$")
+_DEFLECTION_STEM = re.compile(r"^(?:y(?:sg|gauge)?|sg|gauge)(\d+)$")
+
+
+def _stem_unit(column: str) -> tuple[str, str | None]:
+    """``"SG 1 (mV)" -> ("sg1", "mv")``, ``"time_ms" -> ("time", "ms")``, ``"time" -> ("time", None)``."""
+    name = column.strip().lower()
+    m = _NAME_UNIT.match(name)
+    stem, unit = (m.group("stem"), m.group("suffix") or m.group("bracket")) if m else (name, None)
+    return re.sub(r"[\s_]+", "", stem), unit
 
 
 def _gauge_columns(table: Table, pattern: re.Pattern, units: dict[str, float], what: str) -> dict[int, tuple]:
-    """``{gauge: (column, factor)}`` for the columns ``pattern`` matches with a unit of ``units``."""
+    """``{gauge: (column, factor)}`` for the columns whose name ``pattern`` matches, with a unit of ``units``."""
     found: dict[int, list[tuple[str, float]]] = {}
     for column in table.columns:
-        m = pattern.match(column.strip().lower())
-        if m and m.group(2) in units:
-            found.setdefault(int(m.group(1)), []).append((column, units[m.group(2)]))
+        stem, unit = _stem_unit(column)
+        m = pattern.match(stem)
+        if m and unit in units:
+            found.setdefault(int(m.group(1)), []).append((column, units[unit]))
     out = {}
     for gauge, columns in found.items():
         if len(columns) > 1:
@@ -73,7 +88,7 @@ def _three_gauges(table: Table, pattern: re.Pattern, units: dict[str, float], wh
 
 
 def _volts(table: Table, *, allow_empty: bool = False) -> np.ndarray:
-    cols = _three_gauges(table, _GAUGE_NAME, VOLT_UNITS, "gauge-voltage", "gauge{g}_v or sg{g}_mv")
+    cols = _three_gauges(table, _GAUGE_STEM, VOLT_UNITS, "gauge-voltage", "gauge{g}_v or sg{g}_mv")
     return np.column_stack([table.numbers(c, allow_empty=allow_empty) * f for c, f in cols])
 
 
@@ -92,9 +107,14 @@ def _commands(table: Table) -> np.ndarray:
 
 def _time_s(table: Table, time_unit: str | None) -> np.ndarray:
     for column in table.columns:
-        stem, _, unit = column.strip().lower().rpartition("_")
-        if (stem or unit) in ("time", "t") and (stem == "" or unit in TIME_UNITS):
-            unit = time_unit or (unit if stem else None)
+        stem, unit = _stem_unit(column)
+        if stem in ("time", "t") and (unit is None or unit in TIME_UNITS):
+            if time_unit is not None and unit is not None and unit != time_unit:
+                raise DataFileError(
+                    f"{table.source}: column {column!r} says its time is in {unit} but the time unit {time_unit} was "
+                    "given: drop --time-unit, or rename the column"
+                )
+            unit = unit or time_unit
             if unit not in TIME_UNITS:
                 raise DataFileError(
                     f"{table.source}: column {column!r} has no time unit: name it time_s or time_ms, or give the "
@@ -110,38 +130,43 @@ def _time_s(table: Table, time_unit: str | None) -> np.ndarray:
                 )
             return t
     raise DataFileError(
-        f"{table.source}: no time column (time_s, time_ms or time); columns: {', '.join(table.columns)}"
+        f"{table.source}: no time column (time_s, time_ms, time (ms), or time with the time unit given); columns: "
+        f"{', '.join(table.columns)}"
     )
 
 
-def read_release(path: str | Path, *, time_unit: str | None = None, decimal: str = ".") -> list:
-    """Every gauge channel of a release-test file as a :class:`~flexdigit.identify.timeseries.TimeSeries`,
-    read by ``identify``'s own reader (so the file reads as ``flexdigit identify release`` reads it)."""
-    from flexdigit.identify.timeseries import read_timeseries
+def read_release(path: str | Path, *, time_unit: str | None = None, decimal: str | None = None) -> list:
+    """Every gauge channel of a release-test file as a :class:`~flexdigit.identify.timeseries.TimeSeries` (volts),
+    checked as ``identify`` checks a recording (increasing, uniform time; enough samples)."""
+    from flexdigit.identify.timeseries import TimeSeries
 
     table = read_table(path, decimal=decimal)
-    columns = _gauge_columns(table, _GAUGE_NAME, VOLT_UNITS, "gauge-voltage")
+    columns = _gauge_columns(table, _GAUGE_STEM, VOLT_UNITS, "gauge-voltage")
     if not columns:
         raise DataFileError(
-            f"{path}: no gauge channel (gauge1_v .. gauge3_v, or sg1_v ..; _mv for millivolts); columns: "
+            f"{path}: no gauge channel (gauge1_v .. gauge3_v, or sg1_v ..; _mv or (mV) for millivolts); columns: "
             + ", ".join(table.columns)
         )
-    return [read_timeseries(path, columns[g][0], time_unit=time_unit) for g in sorted(columns)]
+    t = _time_s(table, time_unit)
+    return [
+        TimeSeries.from_arrays(t, table.numbers(column) * factor, channel=column, unit="V", source=str(path))
+        for column, factor in (columns[g] for g in sorted(columns))
+    ]
 
 
-def read_sweep(path: str | Path, *, decimal: str = ".") -> tuple[np.ndarray, np.ndarray]:
+def read_sweep(path: str | Path, *, decimal: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(commands, volts (N, 3))`` of an actuation-sweep file."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 2, "an actuation sweep")
     return _commands(table), _volts(table)
 
 
-def read_deflections(path: str | Path, *, decimal: str = ".") -> tuple[np.ndarray, np.ndarray]:
+def read_deflections(path: str | Path, *, decimal: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(commands, mm (3, N))`` of a deflection table; NaN where a cell is empty (not read)."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 1, "a deflection table")
     commands = _commands(table)
-    cols = _three_gauges(table, _DEFLECTION_NAME, LENGTH_UNITS, "deflection", "y{g}_mm")
+    cols = _three_gauges(table, _DEFLECTION_STEM, LENGTH_UNITS, "deflection", "y{g}_mm")
     mm = np.vstack([table.numbers(c, allow_empty=True) * f for c, f in cols])
     repeated = [c for c in set(commands.tolist()) if np.sum(commands == c) > 1]
     if repeated:
@@ -149,14 +174,16 @@ def read_deflections(path: str | Path, *, decimal: str = ".") -> tuple[np.ndarra
     return commands, mm
 
 
-def read_rest(path: str | Path, *, time_unit: str | None = None, decimal: str = ".") -> tuple[np.ndarray, np.ndarray]:
+def read_rest(
+    path: str | Path, *, time_unit: str | None = None, decimal: str | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """``(time_s, volts (N, 3))`` of a record of the resting rig."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 16, "a rest record")
     return _time_s(table, time_unit), _volts(table)
 
 
-def read_actuated_rest(path: str | Path, *, decimal: str = ".") -> tuple[int, np.ndarray]:
+def read_actuated_rest(path: str | Path, *, decimal: str | None = None) -> tuple[int, np.ndarray]:
     """``(command, volts (N, 3))`` of repeated readings of the unloaded, actuated digit at one command."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 3, "an actuated-rest record")
