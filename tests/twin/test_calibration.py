@@ -155,3 +155,9 @@ def test_use_calibration_sets_the_default_for_a_block_and_restores_it():
         raise RuntimeError("inside")
     assert default_calibration() is packaged_calibration()
     np.testing.assert_array_equal(default_calibration().housing_ei_n_m2, packaged_calibration().housing_ei_n_m2)
+
+
+def test_a_directory_given_as_the_calibration_file_is_named(tmp_path):
+    (tmp_path / "cal.toml").mkdir()
+    with pytest.raises(DataFileError, match=r"cal\.toml: not a file \(a directory\?\); expected a calibration TOML"):
+        load_calibration(tmp_path / "cal.toml")

@@ -241,8 +241,10 @@ def load_calibration_record(path: str | Path) -> tuple[Calibration, dict[str, An
 
 
 def _read_toml(path: Path) -> dict:
-    if not path.is_file():
+    if not path.exists():
         raise FileNotFoundError(2, "No such file", str(path))
+    if not path.is_file():
+        raise DataFileError(f"{path}: not a file (a directory?); expected a calibration TOML")
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
