@@ -17,8 +17,8 @@ from flexdigit.twin.calibration import load_calibration, load_calibration_record
 STIFFNESS_RTOL = 0.03  # issue 11: housing stiffness, channel gains
 DAMPING_RTOL = 0.05  # issue 11: strip damping
 #: the calibrated twin, running the same experiments again (other seeds), reproduces the records' figures:
-#: wn to its noise (~0.1 %) plus the 20 ms integration's period error (-0.15..-0.3 %), zeta within the scatter of
-#: a median over three gauges, the sweep lines within their readings' spread
+#: wn to its noise (~0.1 %; the release tests integrate at 10 ms, within 0.03 % of the linear modes), zeta within
+#: the scatter of a median over three gauges, the sweep lines within their readings' spread
 REPRODUCE_WN_RTOL = 0.005
 REPRODUCE_ZETA_RTOL = 0.05
 REPRODUCE_SLOPE_RTOL = 0.02
