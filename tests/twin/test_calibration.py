@@ -107,6 +107,8 @@ def test_an_explicitly_partial_file_takes_the_rest_from_the_packaged_default(tmp
         ("channel_gain", "[0.1, 0.0, 0.1]", r"'channel_gain'"),  # a dead channel
         ("noise_white_v", "[0.002, 0.002]", r"'noise_white_v' .*3 values, one per gauge"),
         ("housing_ei_n_m2", "[0.005, 0.004]", r"'housing_ei_n_m2' .*3 values, one per section"),
+        # the short key read first: both keys named, the values as plain numbers
+        ("channel_gain", "[0.1, 0.1]", r"'channel_offset_v' .* has 3 values but 'channel_gain' has 2 .* Got \[-0\.1"),
     ],
 )
 def test_bad_values_are_one_line_naming_file_and_key(tmp_path, key, value, message):

@@ -137,7 +137,7 @@ class Calibration:
 
     def __post_init__(self) -> None:
         owner = type(self).__name__
-        lengths: dict[str, int] = {}
+        lengths: dict[str, tuple[str, int]] = {}
         for name, (kind, low, high, low_open, _) in FIELDS.items():
             value = getattr(self, name)
             if kind == "scalar":
@@ -146,10 +146,11 @@ class Calibration:
             arr = check_array(value, name, owner, ndim=1, min_length=1, low=low, high=high, low_open=low_open)
             object.__setattr__(self, name, tuple(float(v) for v in arr))
             group = "gauge" if kind == "gauge" else "support"  # a support ends each section: as many of both
-            if lengths.setdefault(group, arr.size) != arr.size:
+            first, size = lengths.setdefault(group, (name, arr.size))
+            if size != arr.size:
                 raise ParameterError(
-                    f"The '{name}' parameter of {owner} must have {lengths[group]} values, one per {kind}, as the "
-                    f"other per-{kind} keys have. Got {list(arr)!r} instead."
+                    f"The '{name}' parameter of {owner} has {arr.size} values but '{first}' has {size} values, one "
+                    f"per {kind}: every per-{kind} key needs as many. Got {arr.tolist()!r}."
                 )
 
     def replace(self, **changes: Any) -> Calibration:
