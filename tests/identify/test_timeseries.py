@@ -179,3 +179,42 @@ def test_series_from_in_memory_table_gets_the_same_checks():
     y[10:12] = np.nan
     with pytest.raises(DataFileError, match=r"table: column 'pot_v', row 11 to row 12: missing values"):
         series_from_table({"time_s": t, "pot_v": y}, "pot")
+
+
+# --- layouts of recordings made elsewhere (issue 11) ------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("header", "sep", "decimal", "comments", "index", "time_unit"),
+    [
+        ("time_ms;sg1_mv", ";", ",", 0, False, None),  # semicolons and a decimal comma
+        ("Time (ms)\tPot (mV)", "\t", ".", 0, False, None),  # tabs, units in parentheses
+        ("t[ms]  sg2[mV]", "  ", ".", 2, False, None),  # comment lines, runs of spaces, units in brackets
+        (",time_ms,pot_mv", ",", ".", 0, True, None),  # pandas' to_csv index column
+        ("time|y_mv", "|", ".", 0, False, "ms"),  # a bare time column and --time-unit
+    ],
+)
+def test_layouts_of_other_rigs(tmp_path, header, sep, decimal, comments, index, time_unit):
+    lines = [f"# rig B, note {k}" for k in range(comments)] + [header]
+    for k in range(30):
+        cells = [f"{10 * k}", f"{1.5 + k}".replace(".", decimal)]
+        lines.append(sep.join(([str(k)] if index else []) + cells))
+    p = tmp_path / "rec.csv"
+    p.write_text("\n".join(lines) + "\n")
+    ts = read_timeseries(p, time_unit=time_unit)
+    assert ts.unit == "mV" and ts.time_unit == "ms"
+    assert ts.t_s[:2] == pytest.approx([0.0, 0.01])
+    assert ts.y[:2] == pytest.approx([1.5, 2.5])  # not the index column
+
+
+def test_time_unit_contradicting_a_column_unit_is_refused(tmp_path):
+    p = _write(tmp_path / "rec.csv", "time_s,sg1_v", [(0.01 * k, 0.5) for k in range(30)])
+    with pytest.raises(DataFileError, match=r"column 'time_s' says its time is in s but --time-unit ms was given"):
+        read_timeseries(p, time_unit="ms")
+    assert read_timeseries(p, time_unit="s").t_s[1] == pytest.approx(0.01)
+
+
+def test_split_unit_in_brackets():
+    assert split_unit("Time (ms)") == ("Time", "ms")
+    assert split_unit("t [us]") == ("t", "us")
+    assert split_unit("pot (V)") == ("pot", "V")
+    assert split_unit("force [N]") == ("force", "N")
+    assert split_unit("load (g)") == ("load", "g")  # kept as written

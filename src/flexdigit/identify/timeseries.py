@@ -1,10 +1,14 @@
 """Time series for identification: from a DAQ recording (CSV or Parquet), from the twin, or from arrays.
 
 A recording is a table with a time column and one or more channels, one row per sample. Units are in the
-column names, ``<name>_<unit>``: ``time_s`` (or ``time_ms``, ``t_us``) and ``sg1_v``, ``pot_v``, ``command``.
-A time column with no unit (``time``, ``t``) needs ``time_unit=`` (``--time-unit`` on the command line). A
-channel is picked by its full column name or its name without the unit (``sg1`` for ``sg1_v``); without one, the
-first channel that is not an input (``command``, ``u``) is used. Strain-gauge channels answer to either
+column names, ``<name>_<unit>`` (``time_s``, ``time_ms``, ``t_us``, ``sg1_v``, ``pot_mv``, ``command``) or
+``<name> (<unit>)`` / ``<name>[<unit>]`` (``Time (ms)``, ``Pot (V)``, ``t[s]``). A time column with no unit
+(``time``, ``t``) needs ``time_unit=`` (``--time-unit`` on the command line); a time unit given for a column that
+names another one is refused. A channel is picked by its full column name or its name without the unit (``sg1``
+for ``sg1_v``); without one, the first channel that is not an input (``command``, ``u``) or an unnamed index
+column (pandas' ``to_csv``) is used. CSV files may be separated by ``,`` ``;`` tabs or spaces (found from the
+header and the first rows), with ``#`` comment lines; with a separator other than ``,`` a decimal comma
+(``0,25``) is read as a decimal point. Strain-gauge channels answer to either
 name, ``sgN`` (a DAQ recording, the thesis) or ``gaugeN`` (the twin's files), when the file has only one of
 them. An input column, when present, is kept with the series (the servo command of a step test).
 :func:`series_from_table` does the same for a table in memory, such as the twin's experiments
@@ -38,6 +42,16 @@ from flexdigit.errors import DataFileError, one_line
 MIN_SAMPLES = 20
 #: Time units accepted in a column name suffix or ``time_unit``, in seconds.
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
+#: Other spellings of the time units in a column name (``Time (sec)``, ``t [µs]``).
+_TIME_ALIASES = {"sec": "s", "msec": "ms", "µs": "us", "μs": "us", "usec": "us"}
+#: Names of a time column (without its unit), case-insensitive.
+TIME_NAMES = ("time", "t", "timestamp")
+#: Column names of a row index rather than a measurement (pandas ``to_csv`` writes an unnamed one).
+_INDEX_NAMES = ("", "index", "unnamed: 0", "sample", "row")
+#: Separators tried on a CSV header and its first rows, in this order; then runs of spaces.
+_DELIMITERS = ("\t", ";", ",", "|")
+#: ``<name> (<unit>)`` or ``<name>[<unit>]``.
+_BRACKET_UNIT = re.compile(r"^(?P<stem>.*?)\s*[\(\[]\s*(?P<unit>[^\)\]]*?)\s*[\)\]]$")
 #: Unit suffixes recognised in channel names (anything else is kept as part of the name).
 CHANNEL_UNITS = {"v": "V", "mv": "mV", "m": "m", "mm": "mm", "rad": "rad", "deg": "deg", "n": "N", "nm": "N m"}
 #: Column names (without unit) treated as the experiment's input rather than a measured channel.
@@ -66,6 +80,8 @@ class TimeSeries:
         The input (e.g. servo command) at the same times, when recorded.
     input_name : str
         Name of the input column.
+    time_unit : str
+        Unit of the time column in the file (``t_s`` is always in seconds); for messages.
     """
 
     t_s: np.ndarray
@@ -75,6 +91,7 @@ class TimeSeries:
     source: str = "array"
     u: np.ndarray | None = None
     input_name: str = ""
+    time_unit: str = "s"
 
     @classmethod
     def from_arrays(cls, t_s, y, *, channel: str = "y", unit: str = "", u=None, source: str = "array"):
@@ -110,26 +127,50 @@ class TimeSeries:
     def with_y(self, y) -> TimeSeries:
         """A new series with the same times and a new signal (e.g. filtered)."""
         return TimeSeries(
-            self.t_s, np.asarray(y, dtype=float), self.channel, self.unit, self.source, self.u, self.input_name
+            self.t_s,
+            np.asarray(y, dtype=float),
+            self.channel,
+            self.unit,
+            self.source,
+            self.u,
+            self.input_name,
+            self.time_unit,
         )
 
 
 def split_unit(column: str) -> tuple[str, str]:
-    """``"sg1_v" -> ("sg1", "V")``; a name without a known unit suffix keeps unit ``""``.
+    """``"sg1_v" -> ("sg1", "V")``, ``"Time (ms)" -> ("Time", "ms")``; a name without a known unit keeps ``""``.
+
+    A unit in brackets or parentheses is always a unit (kept as written unless it is a known one); a suffix after
+    the last ``_`` only when it is a known unit (``sg_1_mv`` is ``sg_1`` in mV, ``velocity_knots`` has no unit).
 
     Examples
     --------
     >>> split_unit("pot_v"), split_unit("time_ms"), split_unit("command")
     (('pot', 'V'), ('time', 'ms'), ('command', ''))
+    >>> split_unit("Time (s)"), split_unit("sg2[mV]"), split_unit("force (N)")
+    (('Time', 's'), ('sg2', 'mV'), ('force', 'N'))
     """
-    stem, sep, suffix = column.strip().rpartition("_")
+    name = column.strip()
+    m = _BRACKET_UNIT.match(name)
+    if m and m.group("stem"):
+        unit = m.group("unit")
+        return m.group("stem"), _known_unit(unit) or unit
+    stem, sep, suffix = name.rpartition("_")
     if sep and stem:
-        low = suffix.lower()
-        if low in TIME_UNITS:
-            return stem, low
-        if low in CHANNEL_UNITS:
-            return stem, CHANNEL_UNITS[low]
-    return column.strip(), ""
+        unit = _known_unit(suffix)
+        if unit:
+            return stem, unit
+    return name, ""
+
+
+def _known_unit(text: str) -> str:
+    """The canonical spelling of a known time or channel unit (``"MS"`` -> ``"ms"``, ``"mv"`` -> ``"mV"``) or ``""``."""
+    low = text.strip().lower()
+    low = _TIME_ALIASES.get(low, low)
+    if low in TIME_UNITS:
+        return low
+    return CHANNEL_UNITS.get(low, "")
 
 
 def read_timeseries(
@@ -218,15 +259,22 @@ def _series_from_columns(columns, data, source: str, where, channel, time_unit, 
     p = source
     tcol = _find_time_column(p, columns, time_column)
     stem, unit_in_name = split_unit(tcol)
+    if time_unit is not None and time_unit not in TIME_UNITS:
+        raise DataFileError(f"{p}: time unit unknown (--time-unit {time_unit!r}): expected s, ms or us")
+    if time_unit is not None and unit_in_name and unit_in_name != time_unit:
+        raise DataFileError(
+            f"{p}: column {tcol!r} says its time is in {unit_in_name} but --time-unit {time_unit} was given: "
+            "drop --time-unit, or rename the column"
+        )
     unit = time_unit or unit_in_name
     if unit not in TIME_UNITS:
-        got = f"--time-unit {time_unit!r}" if time_unit else f"column {tcol!r} has no unit"
+        got = f"column {tcol!r} has no unit" if not unit_in_name else f"column {tcol!r} is in {unit_in_name!r}"
         raise DataFileError(
             f"{p}: time unit unknown ({got}): name the column time_s, time_ms or time_us, or pass time_unit "
             "(--time-unit) s, ms or us"
         )
     inputs = [c for c in columns if c != tcol and split_unit(c)[0].lower() in INPUT_NAMES]
-    channels = [c for c in columns if c != tcol and c not in inputs]
+    channels = [c for c in columns if c != tcol and c not in inputs and c.strip().lower() not in _INDEX_NAMES]
     if channel is None:
         if not channels:
             raise DataFileError(f"{p}: no channel column besides {tcol!r} (columns: {', '.join(columns)})")
@@ -240,7 +288,7 @@ def _series_from_columns(columns, data, source: str, where, channel, time_unit, 
     if u is not None:
         _check_nan_runs(u, p, inputs[0], where)
     ystem, yunit = split_unit(ycol)
-    return TimeSeries(t, y, ystem, yunit, p, u, inputs[0] if u is not None else "")
+    return TimeSeries(t, y, ystem, yunit, p, u, inputs[0] if u is not None else "", unit)
 
 
 def _match_channel(p: str, columns: list[str], channel: str) -> str:
@@ -268,7 +316,7 @@ def _find_time_column(p: str, columns: list[str], time_column: str | None) -> st
             raise DataFileError(f"{p}: no time column {time_column!r} (columns: {', '.join(columns)})")
         return time_column
     for c in columns:
-        if split_unit(c)[0].lower() in ("time", "t"):
+        if split_unit(c)[0].lower() in TIME_NAMES:
             return c
     raise DataFileError(
         f"{p}: no time column: expected one named time_s (or time_ms, time, t) among: {', '.join(columns)}"
@@ -281,16 +329,20 @@ def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
         text = p.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataFileError(f"{p}: not a text CSV file (byte {exc.start} is not UTF-8)") from None
-    header = None
+    numbered = [
+        (lineno, line)
+        for lineno, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not numbered:
+        raise DataFileError(f"{p}: empty file: expected a header row such as time_s,sg1_v")
+    split = _splitter(p, [line for _, line in numbered[:21]])
+    header_line, header = numbered[0][0], [c.strip().strip('"') for c in split(numbered[0][1])]
     rows: list[list[str]] = []
     lines: list[int] = []
-    dialect = "excel-tab" if p.suffix.lower() == ".tsv" else "excel"
-    for lineno, row in enumerate(csv.reader(text.splitlines(), dialect=dialect), start=1):
-        if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
-            continue
-        if header is None:
-            header = [c.strip() for c in row]
-            header_line = lineno
+    for lineno, line in numbered[1:]:
+        row = split(line)
+        if not "".join(row).strip():
             continue
         if len(row) != len(header):
             raise DataFileError(
@@ -298,22 +350,65 @@ def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
             )
         rows.append(row)
         lines.append(lineno)
-    if header is None:
-        raise DataFileError(f"{p}: empty file: expected a header row such as time_s,sg1_v")
     if len(set(header)) != len(header):
         raise DataFileError(f"{p}: duplicate column names in the header: {', '.join(header)}")
-    data = {c: np.empty(len(rows)) for c in header}
-    for i, row in enumerate(rows):
-        for c, cell in zip(header, row, strict=True):
-            cell = cell.strip()
-            if cell == "" or cell.lower() in ("nan", "na", "null"):
-                data[c][i] = math.nan
-                continue
-            try:
-                data[c][i] = float(cell)
-            except ValueError:
-                raise DataFileError(f"{p}: line {lines[i]}, column {c!r}: {cell!r} is not a number") from None
+    decimal_comma = split.delimiter != ","
+    data = {}
+    for j, c in enumerate(header):
+        cells = [row[j] for row in rows]
+        data[c] = _parse_column(p, c, cells, lines, decimal_comma)
     return header, data, lines
+
+
+class _Splitter:
+    """Split a CSV line on one delimiter (quotes as in :mod:`csv`), or on runs of spaces (``delimiter=" "``)."""
+
+    def __init__(self, delimiter: str):
+        self.delimiter = delimiter
+
+    def __call__(self, line: str) -> list[str]:
+        if self.delimiter == " ":
+            return [c.strip('"') for c in line.split()]
+        return next(csv.reader([line], delimiter=self.delimiter))
+
+
+def _splitter(p: Path, lines: list[str]) -> _Splitter:
+    """The delimiter that splits the header and the first rows into the same number (>= 2) of fields.
+
+    Tried in the order tab, ``;``, ``,``, ``|``, then runs of spaces, so ``0,5;1,2`` (a decimal comma) splits on
+    ``;``. Without a consistent one, ``,``: the reader then names the first line whose fields do not match.
+    """
+    for delimiter in (*_DELIMITERS, " "):
+        split = _Splitter(delimiter)
+        counts = {len(split(line)) for line in lines}
+        if len(counts) == 1 and counts.pop() >= 2:
+            return split
+    return _Splitter(",")
+
+
+#: Cells read as a missing value (NaN).
+_MISSING = ("", "nan", "na", "null", "none")
+
+
+def _parse_column(p: Path, name: str, cells: list[str], lines: list[int], decimal_comma: bool) -> np.ndarray:
+    """One column's cells as floats (vectorised; cell by cell only to name a bad one)."""
+    if decimal_comma:
+        cells = [c.replace(",", ".") if "," in c and "." not in c else c for c in cells]
+    try:
+        return np.array(cells, dtype=float)
+    except ValueError:
+        pass
+    out = np.empty(len(cells))
+    for i, cell in enumerate(cells):
+        cell = cell.strip()
+        if cell.lower() in _MISSING:
+            out[i] = math.nan
+            continue
+        try:
+            out[i] = float(cell)
+        except ValueError:
+            raise DataFileError(f"{p}: line {lines[i]}, column {name!r}: {cell!r} is not a number") from None
+    return out
 
 
 def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
