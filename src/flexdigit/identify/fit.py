@@ -31,10 +31,11 @@ from dataclasses import dataclass
 import control
 import numpy as np
 from scipy import optimize, stats
+from threadpoolctl import threadpool_limits
 
-from flexdigit._validation import check_array, check_int, check_real
+from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.identify.response import analyze_response, final_value_estimate, free_response
+from flexdigit.identify.response import analyze_response, final_value_estimate, free_response, noise_std
 from flexdigit.identify.scores import corr2, nrmse_fit
 
 
@@ -82,6 +83,10 @@ def second_order_response(t_s, kind: str, wn_rad_s: float, zeta: float, offset: 
     return offset + amplitude * x
 
 
+#: Losses of the second-order fit (``scipy.optimize.least_squares``): plain least squares, or robust to outliers.
+LOSSES = ("linear", "soft_l1", "huber")
+
+
 class SecondOrderFit:
     """Least-squares second-order model of a release or step test (3.1.2, 3.2.4), scikit-learn style.
 
@@ -98,19 +103,33 @@ class SecondOrderFit:
         Level of the confidence intervals, in (0, 1).
     max_zeta : float
         Upper bound on the damping ratio (the model continues smoothly into overdamping).
+    loss : {"linear", "soft_l1", "huber"}
+        ``linear`` is least squares; ``soft_l1`` and ``huber`` (``scipy.optimize.least_squares``) count a residual
+        beyond ``f_scale`` linearly instead of quadratically, so isolated spikes do not bias the fit.
+    f_scale : float, optional
+        Residual size (signal units) where a robust loss turns linear. Default: twice the noise standard deviation
+        estimated from the record's second differences (:func:`~flexdigit.identify.response.noise_std`).
+    drift : bool
+        Also fit a linear drift of the baseline, ``drift_per_s`` (signal units per second).
 
     Attributes
     ----------
     wn_, zeta_ : float
         Natural frequency (rad/s) and damping ratio.
     offset_, amplitude_, t0_ : float
-        See :func:`second_order_response`.
+        See :func:`second_order_response`; with a drift, ``offset_`` is the level at the start value of ``t0``.
+    drift_per_s_ : float
+        Baseline drift (signal units per second; 0 unless ``drift``).
     estimates_ : dict of str to Estimate
-        ``wn_rad_s``, ``zeta``, ``offset``, ``amplitude`` (and ``t0_s``) with standard errors and intervals.
+        ``wn_rad_s``, ``zeta``, ``offset``, ``amplitude`` (and ``t0_s``, ``drift_per_s``) with standard errors and
+        intervals.
     covariance_ : ndarray
-        Parameter covariance ``s^2 (J^T J)^-1``.
+        Parameter covariance: ``s^2 (J^T J)^-1`` for least squares; for a robust loss the sandwich
+        ``A^-1 B A^-1 n / (n - k)`` with ``A = sum psi'(r_i) J_i J_i^T`` and ``B = sum psi(r_i)^2 J_i J_i^T``,
+        ``psi`` the derivative of the loss in the residual (the M-estimator covariance, Huber 1981, 7.6).
     residual_std_ : float
-        Standard deviation of the residuals (signal units).
+        Standard deviation of the residuals (signal units; robust, from their median absolute deviation, for a
+        robust loss).
     fit_percent_, corr2_ : float
         NRMSE fit (%) and MATLAB ``corr2`` of the fitted response against the data.
     result_ : scipy.optimize.OptimizeResult
@@ -124,54 +143,92 @@ class SecondOrderFit:
         t0_s: float | None = None,
         confidence: float = 0.95,
         max_zeta: float = 5.0,
+        loss: str = "linear",
+        f_scale: float | None = None,
+        drift: bool = False,
     ):
         self.kind = kind
         self.fit_t0 = fit_t0
         self.t0_s = t0_s
         self.confidence = confidence
         self.max_zeta = max_zeta
+        self.loss = loss
+        self.f_scale = f_scale
+        self.drift = drift
 
     def __repr__(self) -> str:
         return (
             f"SecondOrderFit(kind={self.kind!r}, fit_t0={self.fit_t0!r}, t0_s={self.t0_s!r}, "
-            f"confidence={self.confidence!r}, max_zeta={self.max_zeta!r})"
+            f"confidence={self.confidence!r}, max_zeta={self.max_zeta!r}, loss={self.loss!r}, "
+            f"f_scale={self.f_scale!r}, drift={self.drift!r})"
         )
 
-    def fit(self, t_s, y, *, initial: dict | None = None, source: str = "response") -> SecondOrderFit:
+    def fit(self, t_s, y, *, initial: dict | None = None, source: str = "response", smoothed=None) -> SecondOrderFit:
         """Fit the model to ``y(t_s)``; ``initial`` may give start values ``wn_rad_s, zeta, offset, amplitude,
-        t0_s`` (default: from the features of a smoothed copy, or, for a response that does not overshoot, from
-        its rise time at critical damping)."""
+        t0_s`` (default: from the features of a smoothed copy, ``smoothed`` or ``y`` through the default
+        Butterworth filter, or, for a response that does not overshoot, from its rise time at critical damping)."""
         owner = type(self).__name__
-        if self.kind not in ("step", "release"):
-            raise ParameterError(
-                f"The 'kind' parameter of {owner} must be one of 'step', 'release'. Got {self.kind!r}."
-            )
+        check_choice(self.kind, "kind", ("step", "release"), owner)
+        check_choice(self.loss, "loss", LOSSES, owner)
         level = check_real(self.confidence, "confidence", owner, low=0, high=1, low_open=True, high_open=True)
         t = check_array(t_s, "t_s", owner, ndim=1, min_length=8, increasing=True, error=DataFileError)
         yv = check_array(y, "y", owner, ndim=1, shape=(t.size,), error=DataFileError)
         fit_t0 = (self.kind == "release") if self.fit_t0 is None else bool(self.fit_t0)
-        start = _initial_guess(t, yv, self.kind, self.t0_s, source)
+        start = _initial_guess(t, yv, self.kind, self.t0_s, source, smoothed)
         start.update(initial or {})
         names = ["wn_rad_s", "zeta", "offset", "amplitude"] + (["t0_s"] if fit_t0 else [])
+        names += ["drift_per_s"] if self.drift else []
         t0_fixed = float(start["t0_s"])
+        start.setdefault("drift_per_s", 0.0)
         p0 = np.array([float(start[k]) for k in names])
         duration = t[-1] - t[0]
         span = float(np.ptp(yv)) or 1.0
         lower = [1e-6, 1e-6, -np.inf, -np.inf] + ([t[0] - 0.25 * duration] if fit_t0 else [])
         upper = [np.inf, self.max_zeta, np.inf, np.inf] + ([t[-1]] if fit_t0 else [])
+        lower += [-np.inf] if self.drift else []
+        upper += [np.inf] if self.drift else []
         p0 = np.clip(p0, np.array(lower) + 1e-9, np.array(upper) - 1e-9)
-        kind = self.kind
+        model = _Model(t, self.kind, t0_fixed, fit_t0, self.drift)
 
         def residuals(p):
-            t0 = p[4] if fit_t0 else t0_fixed
-            return second_order_response(t, kind, p[0], p[1], p[2], p[3], t0) - yv
+            return model(p) - yv
 
+        if self.f_scale is None:
+            f_scale = 2.0 * max(noise_std(yv), 1e-12 * span)
+        else:
+            f_scale = check_real(self.f_scale, "f_scale", owner, low=0, low_open=True)
         scale = np.array([p0[0], 0.1, span, span] + ([duration / 100] if fit_t0 else []))
-        result = optimize.least_squares(residuals, p0, bounds=(lower, upper), x_scale=scale, method="trf")
-        n, k = t.size, p0.size
-        dof = max(n - k, 1)
-        s2 = float(np.sum(result.fun**2) / dof)
-        cov = np.linalg.pinv(result.jac.T @ result.jac) * s2
+        if self.drift:
+            scale = np.append(scale, span / duration)
+        solve = dict(bounds=(lower, upper), x_scale=scale, method="trf", loss=self.loss)
+        # a tall, thin problem (thousands of samples, <= 7 parameters): BLAS threads only contend on a busy machine
+        # (the SVD of each step took 70 ms instead of 5 on 2 shared cores)
+        with threadpool_limits(1):
+            block = _block_size(t, p0[0])
+            if block > 1:  # converge on block medians first, then finish on every sample (a few steps)
+                m = t.size // block
+                tb = t[: m * block].reshape(m, block).mean(axis=1)
+                yb = np.median(yv[: m * block].reshape(m, block), axis=1)
+                coarse = _Model(tb, self.kind, t0_fixed, fit_t0, self.drift)
+                first = optimize.least_squares(
+                    lambda p: coarse(p) - yb, p0, jac=coarse.jacobian, f_scale=f_scale, **solve
+                )
+                p0 = np.clip(first.x, np.array(lower) + 1e-12, np.array(upper) - 1e-12)
+            result = optimize.least_squares(residuals, p0, jac=model.jacobian, f_scale=f_scale, **solve)
+            n, k = t.size, p0.size
+            dof = max(n - k, 1)
+            r = result.fun
+            jac = model.jacobian(result.x)
+            if self.loss == "linear":
+                s2 = float(np.sum(r**2) / dof)
+                cov = np.linalg.pinv(jac.T @ jac) * s2
+                self.residual_std_ = math.sqrt(s2)
+            else:
+                w, curvature = _loss_derivatives(self.loss, (r / f_scale) ** 2)
+                a_inv = np.linalg.pinv(jac.T @ (jac * curvature[:, None]))
+                b = (jac * (w * r)[:, None]).T @ (jac * (w * r)[:, None])
+                cov = a_inv @ b @ a_inv * (n / dof)
+                self.residual_std_ = 1.4826 * float(np.median(np.abs(r - np.median(r))))
         q = stats.t.ppf(0.5 + level / 2, dof)
         se = np.sqrt(np.clip(np.diag(cov), 0, None))
         self.estimates_ = {
@@ -180,19 +237,23 @@ class SecondOrderFit:
         }
         self.wn_, self.zeta_, self.offset_, self.amplitude_ = (float(v) for v in result.x[:4])
         self.t0_ = float(result.x[4]) if fit_t0 else t0_fixed
+        self.drift_per_s_ = float(result.x[-1]) if self.drift else 0.0
+        self.drift_reference_s_ = t0_fixed
+        self.f_scale_ = f_scale
         self.covariance_ = cov
-        self.residual_std_ = math.sqrt(s2)
         self.result_ = result
-        model = self.predict(t)
-        self.fit_percent_ = nrmse_fit(yv, model)
-        self.corr2_ = corr2(yv, model)
+        fitted = self.predict(t)
+        self.fit_percent_ = nrmse_fit(yv, fitted)
+        self.corr2_ = corr2(yv, fitted)
         return self
 
     def predict(self, t_s) -> np.ndarray:
-        """The fitted response at ``t_s`` (s)."""
+        """The fitted response (with its drift) at ``t_s`` (s)."""
         if not hasattr(self, "wn_"):
             raise ParameterError("This SecondOrderFit is not fitted yet: call fit(t_s, y) first.")
-        return second_order_response(t_s, self.kind, self.wn_, self.zeta_, self.offset_, self.amplitude_, self.t0_)
+        t = np.asarray(t_s, dtype=float)
+        y = second_order_response(t, self.kind, self.wn_, self.zeta_, self.offset_, self.amplitude_, self.t0_)
+        return y + self.drift_per_s_ * (t - self.drift_reference_s_)
 
     def transfer_function(self, gain: float = 1.0) -> control.TransferFunction:
         """``gain wn^2 / (s^2 + 2 zeta wn s + wn^2)`` with the fitted ``wn`` and ``zeta``."""
@@ -201,11 +262,101 @@ class SecondOrderFit:
         return control.tf([gain * self.wn_**2], [1.0, 2 * self.zeta_ * self.wn_, self.wn_**2])
 
 
-def _initial_guess(t: np.ndarray, y: np.ndarray, kind: str, t0_s: float | None, source: str) -> dict:
+#: Records longer than this are first fitted on block medians (see :func:`_block_size`).
+_MAX_DIRECT_SAMPLES = 4000
+
+
+def _block_size(t: np.ndarray, wn_rad_s: float) -> int:
+    """Samples per block for the coarse first fit of a long record: at most 1/60 of a natural period each."""
+    if t.size <= _MAX_DIRECT_SAMPLES or not wn_rad_s > 0:
+        return 1
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    limit = int(2 * math.pi / wn_rad_s / 60 / dt)
+    return max(1, min(math.ceil(t.size / _MAX_DIRECT_SAMPLES), limit))
+
+
+def _loss_derivatives(loss: str, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``psi(r) / r = rho'(z)`` and ``psi'(r) = rho'(z) + 2 z rho''(z)`` of scipy's robust losses, ``z = (r/f)^2``.
+
+    The first weighs each residual in the score, the second in the curvature of the cost (as scipy scales its
+    Jacobian for a robust loss); both enter the sandwich covariance.
+    """
+    if loss == "soft_l1":
+        w = 1.0 / np.sqrt(1.0 + z)
+        return w, w**3
+    if loss == "huber":
+        inside = z <= 1.0
+        return np.where(inside, 1.0, 1.0 / np.sqrt(np.maximum(z, 1.0))), inside.astype(float)
+    return np.ones_like(z), np.ones_like(z)
+
+
+class _Model:
+    """The fitted response ``offset + drift (t - t_ref) + amplitude g(t - t0)`` and its Jacobian.
+
+    ``g`` is ``1 - x`` (step) or ``x`` (release), ``x`` the free response
+    ``exp(-a tau) (cos(w tau) + a sin(w tau) / w)``, ``a = zeta wn``, ``w = wn sqrt(1 - zeta^2)``. The Jacobian is
+    analytic for an underdamped model (one pass of exp/sin/cos instead of one per parameter, which keeps a 30 s
+    record at 2 kHz well under a second) and by forward differences near and beyond critical damping.
+    """
+
+    def __init__(self, t: np.ndarray, kind: str, t0_fixed: float, fit_t0: bool, drift: bool):
+        self.t, self.kind, self.t0_fixed, self.fit_t0, self.drift = t, kind, t0_fixed, fit_t0, drift
+        self.sign = -1.0 if kind == "step" else 1.0
+
+    def _t0(self, p) -> float:
+        return float(p[4]) if self.fit_t0 else self.t0_fixed
+
+    def __call__(self, p) -> np.ndarray:
+        y = second_order_response(self.t, self.kind, p[0], p[1], p[2], p[3], self._t0(p))
+        if self.drift:
+            y = y + p[-1] * (self.t - self.t0_fixed)
+        return y
+
+    def jacobian(self, p) -> np.ndarray:
+        wn, zeta, amplitude = float(p[0]), float(p[1]), float(p[3])
+        if zeta >= 0.95:
+            return self._numeric_jacobian(p)
+        t0 = self._t0(p)
+        after = self.t > t0
+        tau = self.t[after] - t0
+        a, root = zeta * wn, math.sqrt(1.0 - zeta * zeta)
+        w = wn * root
+        e = np.exp(-a * tau)
+        sn, cs = np.sin(w * tau), np.cos(w * tau)
+        x = e * (cs + (a / w) * sn)
+        dx_da = -tau * x + e * sn / w
+        dx_dw = e * (-tau * sn + (a / w) * tau * cs - (a / w**2) * sn)
+        jac = np.zeros((self.t.size, len(p)))
+        k = self.sign * amplitude
+        jac[after, 0] = k * (dx_da * zeta + dx_dw * root)
+        jac[after, 1] = k * (dx_da * wn - dx_dw * wn * zeta / root)
+        jac[:, 2] = 1.0
+        g = np.full(self.t.size, 0.0 if self.kind == "step" else 1.0)
+        g[after] = 1.0 - x if self.kind == "step" else x
+        jac[:, 3] = g
+        if self.fit_t0:
+            jac[after, 4] = k * (wn * wn / w) * e * sn  # d/dt0 of x(t - t0) = +wn^2/w e^(-a tau) sin(w tau)
+        if self.drift:
+            jac[:, -1] = self.t - self.t0_fixed
+        return jac
+
+    def _numeric_jacobian(self, p) -> np.ndarray:
+        p = np.asarray(p, dtype=float)
+        base = self(p)
+        jac = np.empty((self.t.size, p.size))
+        for j in range(p.size):
+            h = 1e-7 * max(abs(p[j]), 1e-3)
+            q = p.copy()
+            q[j] += h
+            jac[:, j] = (self(q) - base) / h
+        return jac
+
+
+def _initial_guess(t: np.ndarray, y: np.ndarray, kind: str, t0_s: float | None, source: str, smooth=None) -> dict:
     """Start values: features of a smoothed copy when it over/undershoots, else critical damping and the rise time."""
     from flexdigit.identify.filters import apply_filter
 
-    smooth = apply_filter(t, y, "butter")
+    smooth = apply_filter(t, y, "butter") if smooth is None else np.asarray(smooth, dtype=float)
     guess = {}
     try:
         f = analyze_response(t, smooth, kind, t0_s=t0_s, source=source)
