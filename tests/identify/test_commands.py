@@ -101,9 +101,10 @@ def test_oscillating_release_with_the_default_method(tmp_path, capsys):
 
 @pytest.mark.parametrize(("column", "asked"), [("gauge1_v", "sg1"), ("gauge1_v", "sg1_v"), ("sg1_v", "gauge1")])
 def test_gauge_channels_answer_to_sg_and_gauge(tmp_path, capsys, column, asked):
-    # the README's --channel sg1 on a twin-style file (gauge1_v), and the other way round
+    # the README's --channel sg1 on a twin-style file (gauge1_v), and the other way round (--force: a first-order
+    # decay gives no second-order wn and zeta to stand behind, and this test is about the channel)
     p = _exponential_decay(tmp_path / "decay.csv", channel=column)
-    assert main(["identify", "release", str(p), "--channel", asked, "--allow-overdamped", "--json"]) == 0
+    assert main(["identify", "release", str(p), "--channel", asked, "--allow-overdamped", "--force", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["channel"] == column[:-2]
 
 
@@ -113,3 +114,71 @@ def test_gauge_alias_that_is_ambiguous_names_the_columns(tmp_path, capsys):
     np.savetxt(p, np.column_stack([t, t, t]), delimiter=",", header="time_s,gauge1_v,gauge1_mm", comments="")
     assert main(["identify", "release", str(p), "--channel", "sg1"]) == 2
     assert "channel 'sg1' is ambiguous: it could be any of gauge1_v, gauge1_mm" in capsys.readouterr().err
+
+
+# --- issue 16: every option is checked, 0 is a value, contradictions are refused --------------------------------
+@pytest.mark.parametrize(
+    ("extra", "expected"),
+    [
+        (["--input-step", "inf"], "The 'input_step' parameter of identify must be a finite real number. Got inf"),
+        (["--input-step", "nan"], "The 'input_step' parameter of identify must be a finite real number. Got nan"),
+        (["--input-step", "0"], "The 'input_step' parameter of identify must not be 0"),
+        (["--t0", "-5"], "The 't0_s' parameter of identify (--t0) must be inside the record, 0 .. 1.998 s. Got -5"),
+        (["--t0", "2.5"], "must be inside the record, 0 .. 1.998 s. Got 2.5 instead."),
+        (["--t0", "nan"], "The 't0_s' parameter of identify must be a finite real number. Got nan"),
+    ],
+)
+def test_bad_options_are_one_line_errors(tmp_path, capsys, extra, expected):
+    # identify step f.csv --input-step inf was an IndexError; --t0 -5 was accepted
+    p = _record(tmp_path / "step.csv", "step", zeta=0.5629, wn=20.53, noise=0.004)
+    p.write_text("\n".join(line.rsplit(",", 1)[0] for line in p.read_text().splitlines()) + "\n")  # no command
+    assert main(["identify", "step", str(p), *extra]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_input_step_contradicting_the_command_column_is_refused(tmp_path, capsys):
+    p = _record(tmp_path / "step.csv", "step", zeta=0.5629, wn=20.53, noise=0.004)  # command 8 -> 59
+    assert main(["identify", "step", str(p), "--input-step", "40"]) == 2
+    assert "(40) contradicts the 'command' column" in capsys.readouterr().err
+    assert main(["identify", "step", str(p), "--input-step", "51", "--json"]) == 0  # agreeing is fine
+    assert json.loads(capsys.readouterr().out)["gain"] == pytest.approx(0.0079, rel=0.02)
+
+
+def test_time_unit_contradicting_the_column_name_is_refused(tmp_path, capsys):
+    # --time-unit ms silently overrode a column named time_s (every time 1000 x too short)
+    p = _record(tmp_path / "step.csv", "step", zeta=0.5629, wn=20.53, noise=0.004)
+    assert main(["identify", "step", str(p), "--time-unit", "ms"]) == 2
+    err = capsys.readouterr().err
+    assert "column 'time_s' says its time is in s but --time-unit ms was given" in err
+    assert main(["identify", "step", str(p), "--time-unit", "s"]) == 0  # the same unit is no contradiction
+
+
+def test_t0_zero_is_a_value_not_absent(tmp_path, capsys):
+    # a step at the very first sample: --t0 0 is taken as given (0 is a value), not as "find it"
+    t = np.arange(0, 2, 0.002)
+    y = second_order_response(t, "step", 20.53, 0.5629, 0.4669, 0.4, 0.0)
+    y = y + np.random.default_rng(2).normal(0, 0.004, t.size)
+    p = tmp_path / "s.csv"
+    np.savetxt(p, np.column_stack([t, y]), delimiter=",", header="time_s,pot_v", comments="", fmt="%.9g")
+    assert main(["identify", "step", str(p), "--t0", "0", "--delay", "no", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["instant"]["found_from"] == "given" and out["t0_s"] == 0.0
+    assert out["wn_rad_s"] == pytest.approx(20.53, rel=0.01) and out["zeta"] == pytest.approx(0.5629, rel=0.02)
+
+
+def test_text_output_reports_the_instant_and_the_quality(tmp_path, capsys):
+    p = _record(tmp_path / "step.csv", "step", zeta=0.5629, wn=20.53, noise=0.004)
+    assert main(["identify", "step", str(p)]) == 0
+    out = capsys.readouterr().out
+    assert "step at t = 0.2" in out and "from the 'command' column" in out and "step up" in out
+    assert "quality:" in out and "Ljung-Box" in out and "record: noise" in out
+
+
+def test_simulate_release_from_no_deflection_is_refused(tmp_path, capsys):
+    # issue 16: simulate release --deflection-mm 0 printed a wn fitted to noise
+    code = main(["simulate", "release", "--deflection-mm", "0", "--out", str(tmp_path / "r.parquet")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "'--deflection-mm' parameter of flexdigit simulate release must not be 0" in err
+    assert not (tmp_path / "r.parquet").exists()

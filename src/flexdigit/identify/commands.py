@@ -15,9 +15,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="identify a second-order model from a release or step test recording (CSV/Parquet)",
         description=(
             "Identify wn and zeta from a recorded release test (free decay of the digit, thesis 3.1.2) or step "
-            "test (the servo, 3.2.4). The recording has a time column (time_s, or time with --time-unit) and "
-            "channels named with their unit (sg1_v, pot_v; the twin's files say gauge1_v); an optional command "
-            "column gives the input step."
+            "test (the servo, 3.2.4). The recording has a time column (time_s, time_ms, 'Time (ms)', or time with "
+            "--time-unit) and channels named with their unit (sg1_v, pot_v; the twin's files say gauge1_v), "
+            "separated by commas, semicolons, tabs or spaces; an optional command column gives the input step. "
+            "The step or release instant is found from the record (either direction, with or without a baseline "
+            "before it; mains hum removed, spikes and drift allowed for) and reported with the fit's quality. A "
+            "record that cannot be identified with confidence exits with status 2 and says why, unless --force."
         ),
     )
     parser.add_argument("kind", choices=("release", "step"), help="the experiment")
@@ -38,7 +41,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--filter", choices=("butter", "svd", "fft", "none"), default="butter", help="filter for the features"
     )
     parser.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
-    parser.add_argument("--t0", type=float, help="step/release instant in s (default: found from the data)")
+    parser.add_argument(
+        "--t0", type=float, help="step/release instant in s on the record's clock (default: found from the record)"
+    )
     parser.add_argument(
         "--delay",
         choices=("auto", "yes", "no"),
@@ -46,6 +51,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="lsq: fit the step instant too (a dead time); auto: when the record has samples before the step",
     )
     parser.add_argument("--input-step", type=float, help="size of the input step (e.g. 51 commands) for the gain")
+    parser.add_argument(
+        "--loss",
+        choices=("soft_l1", "huber", "linear"),
+        default="soft_l1",
+        help="lsq: loss of the fit; soft_l1 (default) and huber keep isolated spikes from biasing it, linear is "
+        "plain least squares",
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="print the fit even when the record cannot be identified with confidence (the reasons are printed "
+        "as warnings, exit status 0)",
+    )
     parser.add_argument(
         "--allow-overdamped",
         action="store_true",
@@ -69,12 +87,16 @@ def _identify(args: argparse.Namespace):
         input_step=args.input_step,
         fit_delay={"auto": None, "yes": True, "no": False}[args.delay],
         allow_overdamped=args.allow_overdamped,
+        loss=args.loss,
+        force=args.force,
     )
     data = result.summary()
     unit = f" {series.unit}" if series.unit else ""
+    how = f", {args.loss} loss" if args.method == "lsq" else ""
     lines = [
         f"{args.kind} test {series.source} (channel {series.channel}{unit}, {series.n_samples} samples "
-        f"at {series.sample_rate_hz:.6g} Hz), method {args.method}:",
+        f"at {series.sample_rate_hz:.6g} Hz), method {args.method}{how}:",
+        _instant_line(result, series),
         f"  wn   = {result.wn_rad_s:.6g} rad/s" + _ci(result, "wn_rad_s"),
         f"  zeta = {result.zeta:.6g}" + _ci(result, "zeta"),
     ]
@@ -91,7 +113,48 @@ def _identify(args: argparse.Namespace):
         f"  model: {num[0]:.6g} / (s^2 + {den[1]:.6g} s + {den[2]:.6g})",
         f"  validation: corr2 = {result.corr2:.4f}, NRMSE fit = {result.fit_percent:.2f} %",
     ]
+    lines += _quality_lines(result, unit)
+    lines += [f"  warning: {w}" for w in result.warnings]
     return CommandResult(data=data, text="\n".join(lines))
+
+
+def _instant_line(result, series) -> str:
+    """Where the step or release is, and how it was found."""
+    sv = result.survey
+    what = "step" if result.kind == "step" else "release"
+    where = f"  {what} at t = {result.t0_s:.6g} s"
+    if series.time_unit != "s":
+        scale = {"ms": 1e3, "us": 1e6}[series.time_unit]
+        where += f" ({result.t0_s * scale:.6g} {series.time_unit} on the file's clock)"
+    origin = {
+        "signal": "found from the signal",
+        "command": f"from the {series.input_name!r} column",
+        "given": "as given (--t0)",
+    }[sv.found_from]
+    extra = []
+    if sv.found_from != "given" and result.method == "lsq":
+        extra.append("fitted")
+    extra.append(f"{sv.baseline_s:.3g} s of baseline before it" if sv.baseline_s > 0 else "no baseline before it")
+    if result.kind == "step" and sv.direction:
+        extra.append("step " + ("up" if sv.direction > 0 else "down"))
+    return f"{where}, {origin} ({', '.join(extra)})"
+
+
+def _quality_lines(result, unit: str) -> list[str]:
+    q, sv = result.quality, result.survey
+    lb = q.whiteness
+    white = "white" if q.summary()["whiteness"]["white"] else "NOT white"
+    lines = [
+        f"  quality: misfit {q.misfit_percent:.2g} % of the response, residuals {white} (Ljung-Box p = "
+        f"{lb.p_value:.2g}, {lb.lags} lags of {q.block_s * 1e3:.3g} ms blocks)"
+    ]
+    record = [f"noise {sv.noise_std:.3g}{unit}", f"{sv.spikes.size} spike{'s' if sv.spikes.size != 1 else ''}"]
+    if sv.hum is not None:
+        record.append(f"{sv.hum.frequency_hz:.4g} Hz hum of {sv.hum.amplitude:.3g}{unit} removed")
+    if result.drift_per_s:
+        record.append(f"drift {result.drift_per_s:.3g}{unit}/s")
+    lines.append("  record: " + ", ".join(record))
+    return lines
 
 
 def _ci(result, name: str) -> str:

@@ -3,8 +3,12 @@
 ``method="thesis"`` does what the thesis did: filter the record, read the percent overshoot and the 2 % settling
 time, ``zeta`` from %OS and ``wn = 4 / (zeta Ts)`` (the text of 3.1.2; table 3.2 actually used
 ``wn = wd / sqrt(1 - zeta^2)``, reported as ``wn_damped_rad_s``). ``method="lsq"`` fits the whole raw record by
-least squares (:class:`~flexdigit.identify.fit.SecondOrderFit`) and gives confidence intervals. Both are
-validated against the raw record with MATLAB's ``corr2`` (the thesis's figure) and the NRMSE fit.
+least squares (:class:`~flexdigit.identify.fit.SecondOrderFit`, robust ``soft_l1`` loss, with a baseline drift)
+and gives confidence intervals. Neither needs to be told where the step or release is: :func:`survey
+<flexdigit.identify.events.survey>` finds it (and removes mains hum); every fit is judged
+(:mod:`flexdigit.identify.quality`: NRMSE fit, MATLAB's ``corr2``, the misfit (largest systematic deviation),
+Ljung-Box whiteness of the residuals), and a record that cannot be identified with confidence (no step, two
+steps, too short, clipped, growing, a poor or uncertain fit) is refused with the reason unless ``force=True``.
 
 Examples
 --------
@@ -20,17 +24,18 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import control
 import numpy as np
 
-from flexdigit._validation import check_choice
-from flexdigit.errors import DataFileError
-from flexdigit.identify.filters import FILTERS, apply_filter
-from flexdigit.identify.fit import Estimate, SecondOrderFit, second_order_response
+from flexdigit._validation import check_choice, check_real
+from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.identify.events import Problem, Survey, survey
+from flexdigit.identify.filters import FILTERS, apply_filter, default_cutoff_hz
+from flexdigit.identify.fit import LOSSES, Estimate, SecondOrderFit, second_order_response
+from flexdigit.identify.quality import FitQuality, assess
 from flexdigit.identify.response import NoOscillationError, ResponseFeatures, analyze_response
-from flexdigit.identify.scores import corr2, nrmse_fit
 from flexdigit.identify.timeseries import TimeSeries
 
 METHODS = ("thesis", "lsq", "arx")
@@ -60,7 +65,15 @@ class Identification:
         The thesis-style features of the filtered record (None for an ``lsq``/``arx`` fit of a record without
         overshoot: an overdamped step, or a release with ``allow_overdamped=True``).
     corr2, fit_percent : float
-        MATLAB ``corr2`` and NRMSE fit (%) of the model response against the raw record.
+        MATLAB ``corr2`` and NRMSE fit (%) of the model response against the record (its mains hum removed).
+    drift_per_s : float
+        Baseline drift fitted with the model (signal unit per second; 0 for the thesis and ARX methods).
+    survey : Survey or None
+        What was found in the record before the fit: the instant and where it came from, spikes, hum, noise.
+    quality : FitQuality or None
+        Unexplained part, residual whiteness and the problems found after the fit.
+    warnings : tuple of str
+        Problems overridden with ``force=True`` and other findings the user should read.
     """
 
     kind: str
@@ -79,10 +92,17 @@ class Identification:
     features: ResponseFeatures | None
     corr2: float
     fit_percent: float
+    drift_per_s: float = 0.0
+    drift_reference_s: float = 0.0
+    survey: Survey | None = field(default=None, repr=False, compare=False)
+    quality: FitQuality | None = None
+    warnings: tuple[str, ...] = ()
 
     def predict(self, t_s) -> np.ndarray:
-        """The model's release or step response at ``t_s`` (s), in the record's unit."""
-        return second_order_response(t_s, self.kind, self.wn_rad_s, self.zeta, self.offset, self.amplitude, self.t0_s)
+        """The model's release or step response (with its drift) at ``t_s`` (s), in the record's unit."""
+        t = np.asarray(t_s, dtype=float)
+        y = second_order_response(t, self.kind, self.wn_rad_s, self.zeta, self.offset, self.amplitude, self.t0_s)
+        return y + self.drift_per_s * (t - self.drift_reference_s)
 
     def transfer_function(self) -> control.TransferFunction:
         """``gain wn^2 / (s^2 + 2 zeta wn s + wn^2)`` for a step (unit DC gain for a release, as E(s) is printed)."""
@@ -107,6 +127,25 @@ class Identification:
             "tf_num": [float(c) for c in self.transfer_function().num[0][0]],
             "tf_den": [float(c) for c in self.transfer_function().den[0][0]],
         }
+        if self.survey is not None:
+            sv = self.survey
+            out["instant"] = {
+                "t0_s": self.t0_s,
+                "found_from": sv.found_from,
+                "start_estimate_s": sv.t0_s,
+                "baseline_s": sv.baseline_s,
+                "direction": {1: "up", -1: "down"}.get(sv.direction, "none"),
+            }
+            out["record"] = {
+                "noise_std": sv.noise_std,
+                "spikes": int(sv.spikes.size),
+                "hum_hz": sv.hum.frequency_hz if sv.hum else None,
+                "hum_amplitude": sv.hum.amplitude if sv.hum else None,
+                "drift_per_s": self.drift_per_s,
+            }
+        if self.quality is not None:
+            out["quality"] = self.quality.summary()
+        out["warnings"] = list(self.warnings)
         if self.estimates:
             out["confidence_intervals"] = {k: [e.ci_low, e.ci_high] for k, e in self.estimates.items()}
         if self.features is not None:
@@ -137,6 +176,9 @@ def identify(
     wn_from: str = "settling",
     fit_delay: bool | None = None,
     allow_overdamped: bool = False,
+    loss: str = "soft_l1",
+    drift: bool = True,
+    force: bool = False,
     **filter_options,
 ) -> Identification:
     """Identify a second-order model from a release or step record.
@@ -154,54 +196,78 @@ def identify(
     filter : {"butter", "svd", "fft", "none"}
         Filter used to read the features (thesis method, and the start values of ``lsq``).
     t0_s : float, optional
-        Step/release instant (s). Default: where the recorded input changes, else the first sample (step); found
-        from the response (release).
+        Step/release instant (s, on the record's clock, inside it). Default: found (:func:`~flexdigit.identify.
+        events.survey`): where the ``command`` column changes, else from the signal.
     input_step : float, optional
         Size of the input step (e.g. 51 commands, 3.2.4) when the record has no input column; gives ``gain``.
+        Non-zero; when the record has a command column it must agree with it.
     wn_from : {"settling", "damped"}
         Thesis method: ``wn = 4 / (zeta Ts)`` as the text says, or ``wd / sqrt(1 - zeta^2)`` as table 3.2 did.
     fit_delay : bool, optional
-        ``lsq``: also fit the step instant, i.e. a dead time after ``t0_s`` (the servo board latches a command at
-        its next 20 ms serial frame, 5.2). Default: for a step, when the record has samples before ``t0_s``; a
-        release instant is always fitted unless ``t0_s`` is given.
+        ``lsq``: also fit the instant, i.e. a dead time after ``t0_s`` (the servo board latches a command at its
+        next 20 ms serial frame, 5.2). Default: always when the instant was found from the signal; from a command
+        column or a given ``t0_s``, for a step when the record has samples before it, for a release when it was
+        not given.
     allow_overdamped : bool
         Release tests only. The digit released from a deflection swings through its rest position (3.1.2), and
         that oscillation is what identifies it; a release record that never undershoots its final value (or that
         the fit finds overdamped, ``zeta >= 1``) is refused unless this is True, for ``lsq`` and ``arx`` (the
         thesis method can never use one). Step records may be overdamped either way.
+    loss : {"soft_l1", "huber", "linear"}
+        ``lsq``: loss of the fit; the robust ones keep isolated spikes from biasing it.
+    drift : bool
+        ``lsq``: fit a linear baseline drift with the model.
+    force : bool
+        Give the answer even when the record cannot be identified with confidence; the problems are then in
+        ``warnings`` instead of raised.
     **filter_options
         Passed to :func:`~flexdigit.identify.filters.apply_filter` (``cutoff_hz``, ``rank``, ``harmonics``...).
 
     Raises
     ------
     DataFileError
-        If the record cannot give a model: a release test without undershoot or with an overdamped fit (unless
-        ``allow_overdamped``); thesis method: no overshoot, settling not reached.
+        If the record cannot give a model it can stand behind, naming what looks wrong (unless ``force``): no step
+        or release found, two steps, a command that never changes, too short, saturated, growing, a poor or
+        uncertain fit; a release test without undershoot or with an overdamped fit (unless ``allow_overdamped``);
+        thesis method: no overshoot, settling not reached. A constant record is refused even with ``force``.
+    ParameterError
+        If ``t0_s`` is outside the record or ``input_step`` is zero, not finite, or contradicts the command column.
     """
     check_choice(kind, "kind", KINDS, "identify")
     check_choice(method, "method", METHODS, "identify")
     check_choice(filter, "filter", FILTERS, "identify")
     check_choice(wn_from, "wn_from", ("settling", "damped"), "identify")
-    t, y = series.t_s, series.y
-    du = None
-    if kind == "step" and series.u is not None:
-        moved = np.nonzero(np.abs(series.u - series.u[0]) > 1e-12 * max(1.0, abs(series.u[0])))[0]
-        if moved.size:
-            if t0_s is None:  # the input changed somewhere after the previous sample: take the midpoint
-                k = int(moved[0])
-                t0_s = float(t[k]) if k == 0 else 0.5 * float(t[k - 1] + t[k])
-            du = float(np.mean(series.u[moved[0] :]) - series.u[0])
+    check_choice(loss, "loss", LOSSES, "identify")
+    t = series.t_s
+    if t0_s is not None:
+        t0_s = _check_instant(t0_s, t)
+    if input_step is not None:
+        input_step = check_real(input_step, "input_step", "identify")
+        if input_step == 0:
+            raise ParameterError("The 'input_step' parameter of identify must not be 0 (the gain is output / input).")
+    found = survey(series, kind, t0_s=t0_s)
+    du = found.input_step
+    if du is not None and input_step is not None and not math.isclose(du, input_step, rel_tol=1e-9):
+        raise ParameterError(
+            f"The 'input_step' parameter of identify ({input_step:g}) contradicts the {series.input_name!r} column "
+            f"of {series.source}, which steps by {du:g}; drop one of them."
+        )
     if du is None and input_step is not None:
-        du = float(input_step)
-    if kind == "step" and t0_s is None:
-        t0_s = float(t[0])
-    smooth = apply_filter(t, y, filter, **filter_options)
+        du = input_step
+    warnings = _check_problems(series, kind, found.problems, force)
+    y = found.cleaned
+    t0_start = found.t0_s if found.t0_s is not None else float(t[0])
+    t0_features = t0_start if (kind == "step" or t0_s is not None) else None
+    smooth = apply_filter(t, y, filter, **_feature_filter_options(filter, filter_options, found, t))
     try:
-        features, problem = analyze_response(t, smooth, kind, t0_s=t0_s, source=series.name), None
+        features, problem = analyze_response(t, smooth, kind, t0_s=t0_features, source=series.name), None
     except DataFileError as exc:  # lsq and arx fit an overdamped step; the thesis method needs features
         features, problem = None, exc
     if kind == "release" and isinstance(problem, NoOscillationError) and not allow_overdamped:
-        raise DataFileError(_not_oscillating(problem.finding)) from None
+        if not force or method == "thesis":
+            raise DataFileError(_not_oscillating(problem.finding)) from None
+        warnings.append(_not_oscillating(problem.finding))
+    drift_per_s, drift_ref = 0.0, t0_start
     if method == "thesis":
         if problem is not None:
             raise problem
@@ -219,26 +285,51 @@ def identify(
             offset, amplitude = f.final_value, f.initial_value - f.final_value
         t0, estimates = f.t0_s, None
     elif method == "arx":
-        t0 = t0_s if t0_s is not None else (features.t0_s if features is not None else float(t[0]))
+        t0 = t0_start if kind == "step" or t0_s is not None else (features.t0_s if features else t0_start)
         wn, zeta = _arx_mode(t, y, kind, t0, filter_options.get("cutoff_hz"))
         offset, amplitude = _offset_amplitude(t, y, kind, wn, zeta, t0)
         estimates = None
     else:
-        if fit_delay is None:
-            fit_t0 = t0_s is None if kind == "release" else bool(t0_s > t[0] + 2 * series.dt_s)
+        if found.found_from == "signal":
+            fit_t0 = True
+        elif fit_delay is None:
+            fit_t0 = t0_s is None if kind == "release" else bool(t0_start > t[0] + 2 * series.dt_s)
         else:
             fit_t0 = bool(fit_delay)
-        model = SecondOrderFit(kind=kind, fit_t0=fit_t0, t0_s=t0_s).fit(t, y, source=series.name)
+        model = SecondOrderFit(
+            kind=kind,
+            fit_t0=fit_t0,
+            t0_s=t0_start,
+            loss=loss,
+            f_scale=2.0 * found.noise_std if found.noise_std > 0 else None,
+            drift=drift,
+        ).fit(t, y, source=series.name, smoothed=smooth)
         wn, zeta = model.wn_, model.zeta_
         offset, amplitude, t0 = model.offset_, model.amplitude_, model.t0_
+        drift_per_s, drift_ref = model.drift_per_s_, model.drift_reference_s_
         estimates = model.estimates_
     if kind == "release" and zeta >= 1.0 and not allow_overdamped:
-        raise DataFileError(
-            _not_oscillating(
-                f"{series.name}: the {method} fit of this release test is overdamped (zeta = {float(zeta):.4g} >= 1)"
-            )
-        )
-    prediction = second_order_response(t, kind, wn, zeta, offset, amplitude, t0)
+        finding = f"{series.name}: the {method} fit of this release test is overdamped (zeta = {float(zeta):.4g} >= 1)"
+        if not force:
+            raise DataFileError(_not_oscillating(finding))
+        warnings.append(_not_oscillating(finding))
+    prediction = second_order_response(t, kind, wn, zeta, offset, amplitude, t0) + drift_per_s * (t - drift_ref)
+    quality = assess(
+        t,
+        y,
+        prediction,
+        kind=kind,
+        wn_rad_s=float(wn),
+        zeta=float(zeta),
+        amplitude=float(amplitude),
+        t0_s=float(t0),
+        estimates=estimates,
+        raw=series.y,
+        noise_std=found.noise_std,
+        unit=series.unit,
+        method=method,
+    )
+    warnings += _check_problems(series, kind, quality.problems, force)
     gain = amplitude / du if (kind == "step" and du) else amplitude
     return Identification(
         kind=kind,
@@ -255,8 +346,55 @@ def identify(
         t0_s=float(t0),
         estimates=estimates,
         features=features,
-        corr2=corr2(y, prediction),
-        fit_percent=nrmse_fit(y, prediction),
+        corr2=quality.corr2,
+        fit_percent=quality.fit_percent,
+        drift_per_s=float(drift_per_s),
+        drift_reference_s=float(drift_ref),
+        survey=found,
+        quality=quality,
+        warnings=tuple(warnings) + quality.warnings,
+    )
+
+
+def _feature_filter_options(filter: str, options: dict, found: Survey, t: np.ndarray) -> dict:
+    """The filter options for reading features: a Butterworth cut-off from the response found, unless given.
+
+    :func:`~flexdigit.identify.filters.default_cutoff_hz` (5 x the spectral peak, at least 20/duration) unless the
+    peak is pulled far below the response, to the record's lowest bins, by a drifting baseline or a long step
+    record (0.7 Hz for 30 s: the response itself filtered away); then 5 x the dominant frequency estimated from
+    the delay time found (instant to half-way): a quarter period for a release (5/(4 delay)), about 1.1/wn for a
+    step (5 wn/2pi = 0.875/delay).
+    """
+    if filter != "butter" or options.get("cutoff_hz") or not (found.delay_s > 0):
+        return options
+    fs = (t.size - 1) / (t[-1] - t[0])
+    per_delay = 1.25 if found.kind == "release" else 0.875
+    from_delay = min(0.4 * fs, max(per_delay / found.delay_s, 20.0 / (t[-1] - t[0])))
+    from_spectrum = default_cutoff_hz(t, found.cleaned)
+    return {**options, "cutoff_hz": from_spectrum if from_spectrum >= 0.5 * from_delay else from_delay}
+
+
+def _check_instant(t0_s, t: np.ndarray) -> float:
+    """``t0_s`` as a float inside the record's time span, or a one-line error naming both."""
+    value = check_real(t0_s, "t0_s", "identify")
+    if not (t[0] <= value < t[-1]):
+        raise ParameterError(
+            f"The 't0_s' parameter of identify (--t0) must be inside the record, {float(t[0]):g} .. "
+            f"{float(t[-1]):g} s. Got {value:g} instead."
+        )
+    return value
+
+
+def _check_problems(series: TimeSeries, kind: str, problems: tuple[Problem, ...], force: bool) -> list[str]:
+    """Refuse a record with problems, naming them all in one line; with ``force`` return them as warnings."""
+    if not problems:
+        return []
+    if force:
+        return [p.message for p in problems]
+    what = "; ".join(p.message for p in problems)
+    raise DataFileError(
+        f"{series.name}: cannot identify this {kind} test with confidence: {what}; pass --force (force=True) to "
+        "get the fit anyway"
     )
 
 
@@ -312,4 +450,5 @@ def average_runs(runs: list[TimeSeries]) -> TimeSeries:
     y = np.mean([r.y[:n] for r in runs], axis=0)
     u = runs[0].u[:n] if runs[0].u is not None else None
     first = runs[0]
-    return TimeSeries(t, y, first.channel, first.unit, f"mean of {len(runs)} runs", u, first.input_name)
+    source = f"mean of {len(runs)} runs"
+    return TimeSeries(t, y, first.channel, first.unit, source, u, first.input_name, first.time_unit)

@@ -1,0 +1,243 @@
+"""How far a fitted second-order model can be trusted: the quality every identification reports.
+
+Three figures, from the residuals of the model against the record (its hum removed):
+
+- the **NRMSE fit** (%) and MATLAB's ``corr2`` (:mod:`flexdigit.identify.scores`), as the thesis reported;
+- the **misfit**: the largest deviation of the residuals low-passed at three times the model's natural frequency
+  (the structure the model misses, at the time scale of the response, white noise mostly filtered out), in % of
+  the response's amplitude (the step, or the released deflection);
+- **residual whiteness**: the Ljung-Box test (:func:`~flexdigit.identify.scores.ljung_box`) on the residuals
+  averaged over blocks of a tenth of the natural period, spikes taken out first. Averaging makes noise that a DAQ's
+  anti-alias filter coloured look white again, while a model error, which is slow, stays correlated.
+
+From them and the confidence intervals come the problems that make a fit untrustworthy
+(:class:`~flexdigit.identify.events.Problem`): a second step after the first has settled (or a change before
+it), samples stuck at the record's extreme where the model goes on (clipping), a poor fit (a misfit over
+:data:`MAX_MISFIT_PERCENT`), and confidence intervals wider than :data:`MAX_CI_HALFWIDTH`. A
+non-white residual alone is a warning: the model holds but misses some structure (higher modes, 3.1.2), and its
+confidence intervals are optimistic.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexdigit.identify.events import Problem, find_spikes
+from flexdigit.identify.filters import butter_filter
+from flexdigit.identify.scores import LjungBox, corr2, ljung_box, nrmse_fit
+
+#: A fit whose record deviates from it by more than this (% of the response's amplitude) is poor.
+MAX_MISFIT_PERCENT = 10.0
+#: Widest acceptable 95 % confidence half-width, relative to the value, of each identified parameter.
+MAX_CI_HALFWIDTH = {"wn_rad_s": 0.10, "zeta": 0.25}
+#: Below this Ljung-Box p-value the residuals are reported as not white.
+WHITENESS_P = 0.001
+#: A low-passed residual beyond this fraction of the response's amplitude, after it settled, is a second step.
+SECOND_STEP_FRACTION = 0.15
+
+
+@dataclass(frozen=True)
+class FitQuality:
+    """The quality of one fit (see the module docstring).
+
+    Attributes
+    ----------
+    fit_percent, corr2 : float
+        NRMSE fit (%) and ``corr2`` of the model against the record (hum removed).
+    residual_std : float
+        Robust standard deviation of the residuals (signal unit).
+    misfit_percent : float
+        Largest deviation of the low-passed residual, in % of the response's amplitude.
+    whiteness : LjungBox
+        Ljung-Box test of the block-averaged residuals.
+    block_s : float
+        Block length of the whiteness test (s).
+    problems : tuple of Problem
+        What makes the fit untrustworthy (refused unless forced).
+    warnings : tuple of str
+        What the user should know, the fit standing.
+    """
+
+    fit_percent: float
+    corr2: float
+    residual_std: float
+    misfit_percent: float
+    whiteness: LjungBox
+    block_s: float
+    problems: tuple[Problem, ...]
+    warnings: tuple[str, ...]
+
+    def summary(self) -> dict:
+        return {
+            "fit_percent": self.fit_percent,
+            "corr2": self.corr2,
+            "residual_std": self.residual_std,
+            "misfit_percent": self.misfit_percent,
+            "whiteness": {
+                "test": "Ljung-Box",
+                "lags": self.whiteness.lags,
+                "block_s": self.block_s,
+                "q": self.whiteness.q,
+                "p_value": self.whiteness.p_value,
+                "white": self.whiteness.p_value >= WHITENESS_P,
+            },
+        }
+
+
+def assess(
+    t_s,
+    y,
+    model,
+    *,
+    kind: str,
+    wn_rad_s: float,
+    zeta: float,
+    amplitude: float,
+    t0_s: float,
+    estimates: dict | None = None,
+    raw=None,
+    noise_std: float = 0.0,
+    unit: str = "",
+    method: str = "lsq",
+) -> FitQuality:
+    """Judge a fitted model ``model`` (its response at ``t_s``) against the record ``y`` (hum removed).
+
+    Parameters
+    ----------
+    t_s, y, model : array_like
+        Times (s), the record and the model's response there.
+    kind : {"step", "release"}
+    wn_rad_s, zeta, amplitude, t0_s : float
+        The fitted model (``amplitude``: step size or released deflection, signal unit).
+    estimates : dict of str to Estimate, optional
+        Confidence intervals to check (``lsq``).
+    raw : array_like, optional
+        The record as read (with its hum), where clipped samples are looked for; default ``y``.
+    noise_std : float
+        White-noise deviation of the record (signal unit), the margin of the clipping test.
+    unit : str
+        Signal unit, for messages.
+    method : str
+        The method that gave the model. Only the fit of the whole record (``lsq``) can tell a bad record by a
+        poor fit; the thesis's formulas and ARX miss good records by their own errors, so for them a poor fit is a
+        warning about the method, not a refusal of the record.
+
+    Returns
+    -------
+    FitQuality
+
+    Examples
+    --------
+    >>> t = np.arange(0, 2, 0.002)
+    >>> clean = 1 - np.exp(-11.6 * t) * (np.cos(17 * t) + 11.6 / 17 * np.sin(17 * t))
+    >>> y = clean + np.random.default_rng(1).normal(0, 0.01, t.size)
+    >>> q = assess(t, y, clean, kind="step", wn_rad_s=20.58, zeta=0.5636, amplitude=1.0, t0_s=0.0)
+    >>> q.problems, q.misfit_percent < 2, q.whiteness.p_value > 0.01
+    ((), True, True)
+    """
+    t = np.asarray(t_s, dtype=float)
+    yv = np.asarray(y, dtype=float)
+    m = np.asarray(model, dtype=float)
+    fs = (t.size - 1) / (t[-1] - t[0])
+    r = yv - m
+    scale = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+    clipped = r.copy()  # spikes out (a systematic deviation is a run of samples, never a spike)
+    spikes = find_spikes(r, scale)
+    clipped[spikes] = np.median(r)
+    fn = wn_rad_s / (2 * math.pi)
+    cutoff = min(max(3.0 * fn, 1.0), 0.4 * fs)
+    slow = butter_filter(clipped, fs, cutoff) if t.size > 30 else clipped
+    misfit = 100.0 * float(np.max(np.abs(slow))) / abs(amplitude) if amplitude else math.inf
+    block = max(1, int(fs / (10.0 * fn))) if fn > 0 else 1
+    nb = clipped.size // block
+    means = clipped[: nb * block].reshape(nb, block).mean(axis=1) if nb >= 8 else clipped
+    lags = int(min(20, max(1, means.size // 5)))
+    lb = ljung_box(means, lags)
+    problems: list[Problem] = []
+    warnings: list[str] = []
+    margin = 2.0 * noise_std + 0.005 * abs(amplitude)
+    sat = _saturation(t, np.asarray(raw if raw is not None else yv, dtype=float), m, margin, unit)
+    if sat:
+        problems.append(sat)
+    if misfit > MAX_MISFIT_PERCENT and method == "lsq":
+        problems.append(_misfit(t, slow, kind, wn_rad_s, zeta, amplitude, t0_s, misfit, unit))
+    elif misfit > MAX_MISFIT_PERCENT:
+        warnings.append(
+            f"the record deviates from the {method} method's model by up to {misfit:.2g} % of the response "
+            f"(more than {MAX_MISFIT_PERCENT:g} %): its wn or zeta is off; the lsq method fits the whole record"
+        )
+    for name, limit in MAX_CI_HALFWIDTH.items():
+        e = (estimates or {}).get(name)
+        if e is not None and not (e.relative_halfwidth <= limit):
+            label = "wn" if name == "wn_rad_s" else "zeta"
+            problems.append(
+                Problem(
+                    "uncertain",
+                    f"not identified with confidence: the 95 % interval of {label} is +-"
+                    f"{100 * e.relative_halfwidth:.3g} % of its value {e.value:.4g} (at most +-{100 * limit:g} %): "
+                    "the record is too short or too noisy for this response",
+                )
+            )
+    if lb.p_value < WHITENESS_P:
+        warnings.append(
+            f"residuals not white (Ljung-Box p = {lb.p_value:.2g} over {lb.lags} lags of {block / fs * 1e3:.3g} ms "
+            f"blocks; misfit {misfit:.2g} % of the response): the model misses some structure, so its "
+            "confidence intervals are optimistic"
+        )
+    return FitQuality(
+        fit_percent=nrmse_fit(yv, m),
+        corr2=corr2(yv, m),
+        residual_std=scale,
+        misfit_percent=misfit,
+        whiteness=lb,
+        block_s=block / fs,
+        problems=tuple(problems),
+        warnings=tuple(warnings),
+    )
+
+
+def _saturation(t, raw, model, margin, unit) -> Problem | None:
+    """Samples stuck at the record's maximum (or minimum) where the model goes on beyond it by more than ``margin``
+    (twice the noise and 0.5 % of the response): a clipped record."""
+    for extreme, sign, word in ((raw.max(), 1.0, "maximum"), (raw.min(), -1.0, "minimum")):
+        at = np.nonzero(raw == extreme)[0]
+        if at.size < 3:
+            continue
+        beyond = sign * (model[at] - extreme) > margin
+        if int(beyond.sum()) >= 3:
+            top = float(np.max(sign * (model[at] - extreme)))
+            return Problem(
+                "saturated",
+                f"saturated: {at.size} samples stuck at {extreme:.6g} {unit}".rstrip()
+                + f", the record's {word} (first at {float(t[at[0]]):.4g} s), where the model goes "
+                f"{top:.3g} {unit} beyond it: the amplifier or the ADC clipped (lower the gain or the step)",
+            )
+    return None
+
+
+def _misfit(t, slow, kind, wn, zeta, amplitude, t0, misfit, unit) -> Problem:
+    """A second step, a change before the instant, or plainly a poor fit, from where the residual is large."""
+    big = np.nonzero(np.abs(slow) > SECOND_STEP_FRACTION * abs(amplitude))[0]
+    settled = t0 + (4.0 / (zeta * wn) if zeta * wn > 0 else math.inf)
+    if kind == "step" and big.size:
+        tx = float(t[big[0]])
+        if tx > settled:
+            return Problem(
+                "two-steps",
+                f"two steps: after the step at {t0:.4g} s has settled, the signal moves again from about "
+                f"{tx:.4g} s (one step misses it by {misfit:.2g} % of the response); cut the record to one step",
+            )
+        if tx < t0:
+            return Problem(
+                "two-steps",
+                f"two steps: the signal already changes at about {tx:.4g} s, before the step at {t0:.4g} s "
+                f"(one step misses it by {misfit:.2g} % of the response); cut the record to one step",
+            )
+    return Problem(
+        "poor-fit",
+        f"poor fit: the record deviates from the best second-order {kind} response by up to {misfit:.2g} % of "
+        f"the response (at most {MAX_MISFIT_PERCENT:g} %): it does not look like one {kind} response",
+    )
