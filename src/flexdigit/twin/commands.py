@@ -104,6 +104,12 @@ def _run(args: argparse.Namespace) -> CommandResult:
     cal = load_calibration(args.calibration) if args.calibration else default_calibration()
     common = dict(seed=args.seed, params=params, calibration=cal)
     findings: dict = {}
+    if args.experiment == "release" and args.deflection_mm == 0:
+        # a release from no deflection is noise, and the fit below would report a wn and zeta fitted to it
+        raise ParameterError(
+            "The '--deflection-mm' parameter of flexdigit simulate release must not be 0: a release test releases "
+            "the digit from a deflection (e.g. 20 mm, either sign). Got 0.0 instead."
+        )
     if args.experiment == "release":
         res = ex.release_test(
             housing=not args.no_housing,
