@@ -189,6 +189,10 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
     if growing:
         problems.append(Problem("growing", f"growing: {growing}; expected a response that settles (a stable system)"))
     first = _first_swing(t, smooth, noise_smooth, t0_s)
+    shared = dict(
+        kind=kind, found_from=found_from, noise_std=noise, spikes=spikes, hum=hum, cleaned=cleaned, smooth=smooth,
+        input_step=input_step,
+    )  # fmt: skip
     if first is None:
         spread = float(np.ptp(smooth))
         problems.append(
@@ -201,22 +205,9 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
         )
         level = float(np.median(smooth))
         return Survey(
-            kind=kind,
-            t0_s=t0_s,
-            found_from=found_from,
-            baseline_s=0.0,
-            direction=0,
-            start_level=level,
-            end_level=level,
-            delay_s=math.nan,
-            noise_std=noise,
-            spikes=spikes,
-            hum=hum,
-            cleaned=cleaned,
-            smooth=smooth,
-            input_step=input_step,
-            problems=tuple(problems),
-        )
+            t0_s=t0_s, baseline_s=0.0, direction=0, start_level=level, end_level=level, delay_s=math.nan,
+            problems=tuple(problems), **shared,
+        )  # fmt: skip
     k_on, k_half, start, end, direction = first
     t_on = float(t[k_on])
     if t0_s is None:
@@ -227,21 +218,14 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
     if not growing:  # a growing record has no settled levels or delay time to judge it by
         problems += _shape_problems(series, kind, t, smooth, noise_smooth, float(t0_s), k_on, start, end, delay)
     return Survey(
-        kind=kind,
         t0_s=float(t0_s),
-        found_from=found_from,
         baseline_s=baseline,
         direction=direction,
         start_level=start,
         end_level=end,
         delay_s=delay,
-        noise_std=noise,
-        spikes=spikes,
-        hum=hum,
-        cleaned=cleaned,
-        smooth=smooth,
-        input_step=input_step,
         problems=tuple(problems),
+        **shared,
     )
 
 
