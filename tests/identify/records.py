@@ -269,6 +269,31 @@ def motivating_records(directory: Path, seed: int = 16) -> list[Record]:
     return out
 
 
+def pushed_release_records(directory: Path, seed: int = 31) -> list[Record]:
+    """Release tests recorded from rest: the digit at rest 0.2-0.4 s, pushed over by hand in 0.2-0.3 s (a raised
+    cosine), held 0.1-0.3 s, released; up and down, 500 Hz and 1 kHz, with spikes and 50 Hz hum."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i, (direction, rate) in enumerate(((1, 500.0), (-1, 1000.0))):
+        wn, zeta = float(rng.uniform(10, 16)), float(rng.uniform(0.04, 0.1))
+        rest, push, hold = float(rng.uniform(0.2, 0.4)), float(rng.uniform(0.2, 0.3)), float(rng.uniform(0.1, 0.3))
+        baseline = rest + push + hold
+        deflection = direction * 0.8
+        t, y, t0 = make_signal(
+            rng, "release", wn=wn, zeta=zeta, rate_hz=rate, duration_s=baseline + 6.0, baseline_s=baseline,
+            amplitude=deflection, offset=0.1, noise=0.01, spikes=3, hum_hz=50.0, hum=0.03,
+        )  # fmt: skip
+        ramp = np.clip((t - rest) / push, 0.0, 1.0)
+        y = np.where(t < rest + push, y - deflection * (1.0 - 0.5 * (1.0 - np.cos(np.pi * ramp))), y)
+        rec = Record(f"pushed-{i}", "release", wn, zeta, t0, "ok", "comma", rate, "s", hold, direction)
+        rec.spikes, rec.hum_hz, rec.noise = 3, 50.0, 0.01
+        path = directory / f"{rec.name}.csv"
+        rec.args = write_record(path, t, y, layout="comma", time_unit="s", unit="v")
+        rec.path = str(path)
+        out.append(rec)
+    return out
+
+
 def bad_records(directory: Path, seed: int = 23) -> list[Record]:
     """Records no identification can stand behind, each with the problem its refusal must name."""
     rng = np.random.default_rng(seed)
@@ -326,7 +351,8 @@ def bad_records(directory: Path, seed: int = 23) -> list[Record]:
 
 def all_records(directory: Path) -> list[Record]:
     directory.mkdir(parents=True, exist_ok=True)
-    return good_records(directory) + motivating_records(directory) + bad_records(directory)
+    good = good_records(directory) + motivating_records(directory) + pushed_release_records(directory)
+    return good + bad_records(directory)
 
 
 if __name__ == "__main__":  # pragma: no cover - a tool for looking at the records by hand

@@ -28,7 +28,7 @@ def test_ljung_box_matches_statsmodels():
 
 
 def test_ljung_box_p_values_are_uniform_on_white_noise():
-    # a test at level 0.05 rejects about 5 % of white series: 200 seeded series, binomial 99 % band 4-17
+    # a test at level 0.05 rejects about 5 % of white series: 200 seeded series, binomial 98 % band 4-17
     p = np.array([ljung_box(np.random.default_rng(s).normal(size=400), 10).p_value for s in range(200)])
     assert 4 <= np.sum(p < 0.05) <= 17
 

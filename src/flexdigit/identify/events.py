@@ -98,6 +98,9 @@ class Survey:
         ``"signal"``, ``"command"`` or ``"given"``.
     baseline_s : float
         How long the record holds its start level before the instant (0: it starts at the instant).
+    first_sample : int
+        First sample of the part of the record a second-order model describes: 0, unless a release record starts
+        before the digit was deflected (then the hold's first sample).
     direction : int
         +1 if the signal moves up from its start level (a step up, a release from below), -1 if down.
     start_level, end_level : float
@@ -125,6 +128,7 @@ class Survey:
     t0_s: float | None
     found_from: str
     baseline_s: float
+    first_sample: int
     direction: int
     start_level: float
     end_level: float
@@ -188,7 +192,7 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
     growing = _growth(t, smooth, noise_smooth)
     if growing:
         problems.append(Problem("growing", f"growing: {growing}; expected a response that settles (a stable system)"))
-    first = _first_swing(t, smooth, noise_smooth, t0_s)
+    first = _first_swing(t, smooth, noise_smooth, t0_s, kind)
     shared = dict(
         kind=kind, found_from=found_from, noise_std=noise, spikes=spikes, hum=hum, cleaned=cleaned, smooth=smooth,
         input_step=input_step,
@@ -206,15 +210,15 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
         level = float(np.median(smooth))
         return Survey(
             t0_s=t0_s, baseline_s=0.0, direction=0, start_level=level, end_level=level, delay_s=math.nan,
-            problems=tuple(problems), **shared,
+            first_sample=0, problems=tuple(problems), **shared,
         )  # fmt: skip
-    k_on, k_half, start, end, direction = first
+    k_on, k_half, k_first, start, end, direction = first
     t_on = float(t[k_on])
     if t0_s is None:
         # the response leaves its start level with zero slope: walk back about a fifth of the time to half-way
-        t0_s = max(float(t[0]), t_on - 0.2 * float(t[k_half] - t_on)) if k_on > 0 else float(t[0])
+        t0_s = max(float(t[k_first]), t_on - 0.2 * float(t[k_half] - t_on)) if k_on > k_first else float(t[k_first])
     delay = float(t[k_half] - t0_s)
-    baseline = max(0.0, float(t0_s - t[0]))
+    baseline = max(0.0, float(t0_s - t[k_first]))
     if not growing:  # a growing record has no settled levels or delay time to judge it by
         problems += _shape_problems(series, kind, t, smooth, noise_smooth, float(t0_s), k_on, start, end, delay)
     return Survey(
@@ -224,20 +228,25 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
         start_level=start,
         end_level=end,
         delay_s=delay,
+        first_sample=k_first,
         problems=tuple(problems),
         **shared,
     )
 
 
-def _first_swing(t, smooth, noise, t0_s):
-    """``(onset index, half-way index, start level, end level, direction)`` of the first swing, or None.
+def _first_swing(t, smooth, noise, t0_s, kind):
+    """``(onset, half-way, first sample, start level, end level, direction)`` of the first swing, or None.
 
-    The start level is the median of the first 20 ms (at least 3 samples), refined to the median of everything
-    before the onset; the half-way index is the first sample at half the largest deviation from it.
+    Step: the start level is the median of the first 20 ms (at least 3 samples), refined to the median of
+    everything before the onset; the half-way index is the first sample at half the largest deviation from it.
+    Release: see :func:`_release_swing`. Indices are samples of ``smooth``; the first sample is where the part of
+    the record a second-order model describes begins (0 unless a release record starts before the deflection).
     """
     n = smooth.size
     fs = (n - 1) / (t[-1] - t[0])
     end = float(np.median(smooth[-max(3, n // 10) :]))
+    if kind == "release" and t0_s is None:
+        return _release_swing(smooth, noise, end)
     if t0_s is not None:
         k0 = int(np.clip(np.searchsorted(t, t0_s), 0, n - 1))
         head = smooth[: k0 + 1] if k0 >= 2 else smooth[: max(3, int(0.02 * fs))]
@@ -260,7 +269,38 @@ def _first_swing(t, smooth, noise, t0_s):
         if k_on >= 3:
             start = float(np.median(smooth[: k_on + 1]))
     direction = 1 if smooth[k_half] > start else -1
-    return k_on, k_half, start, end, direction
+    return k_on, k_half, 0, start, end, direction
+
+
+def _release_swing(smooth, noise, end):
+    """The first swing of a release: from the held deflection (the first extreme) through the rest level.
+
+    The deflection is the first stretch at 90 % of the largest deviation from the final level; the release is the
+    last sample still within the noise band of its extreme before the signal first crosses the final level, and the
+    hold is the stretch before it within that band. A record that starts before the deflection (the digit at
+    rest, then pushed over by hand) thus starts its model at the hold, not at the push.
+    """
+    dev = np.abs(smooth - end)
+    peak = float(dev.max())
+    if peak < 8.0 * noise:
+        return None
+    band = max(4.0 * noise, 0.03 * peak)
+    k90 = int(np.argmax(dev >= 0.9 * peak))
+    side = np.sign(smooth[k90] - end)
+    crossed = np.nonzero(side * (smooth[k90:] - end) < 0)[0]
+    k_cross = k90 + int(crossed[0]) if crossed.size else smooth.size - 1
+    k_top = k90 + int(np.argmax(dev[k90 : k_cross + 1]))
+    level = float(smooth[k_top])
+    near = np.abs(smooth - level) <= band
+    leave = np.nonzero(~near[k_top : k_cross + 1])[0]  # near[k_top] holds, so leave[0] >= 1
+    k_on = k_top + (int(leave[0]) - 1 if leave.size else k_cross - k_top)
+    away = np.nonzero(~near[: k_on + 1])[0]
+    k_first = int(away[-1]) + 1 if away.size else 0
+    start = float(np.median(smooth[k_first : k_on + 1]))
+    half = np.nonzero(np.abs(smooth[k_on:] - end) <= 0.5 * abs(start - end))[0]
+    k_half = k_on + int(half[0]) if half.size else smooth.size - 1
+    direction = 1 if smooth[k_half] > start else -1
+    return k_on, k_half, k_first, start, end, direction
 
 
 def _shape_problems(series, kind, t, smooth, noise, t0, k_on, start, end, delay) -> list[Problem]:

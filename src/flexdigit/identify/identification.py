@@ -23,6 +23,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -255,6 +256,21 @@ def identify(
     if du is None and input_step is not None:
         du = input_step
     warnings = _check_problems(series, kind, found.problems, force)
+    if found.first_sample > 0:  # a release recorded from rest: the model describes the record from the hold on
+        i0 = found.first_sample
+        warnings.append(
+            f"the record before {float(t[i0]):.4g} s, where the digit is not yet held deflected, is left out of the fit"
+        )
+        series = TimeSeries(t[i0:], series.y[i0:], series.channel, series.unit, series.source, None, "",
+                            series.time_unit)  # fmt: skip
+        found = dataclasses.replace(
+            found,
+            cleaned=found.cleaned[i0:],
+            smooth=found.smooth[i0:],
+            spikes=found.spikes[found.spikes >= i0] - i0,
+            first_sample=0,
+        )
+        t = series.t_s
     y = found.cleaned
     t0_start = found.t0_s if found.t0_s is not None else float(t[0])
     t0_features = t0_start if (kind == "step" or t0_s is not None) else None
