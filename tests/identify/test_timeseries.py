@@ -46,6 +46,11 @@ def test_csv_roundtrip_and_parquet_read(tmp_path):
     ts = TimeSeries.from_arrays(t, np.cos(t), channel="sg2", unit="V", u=np.full(t.size, 8.0))
     back = read_timeseries(write_csv(tmp_path / "a.csv", ts))
     np.testing.assert_allclose(back.y, ts.y, rtol=1e-8)
+    with pytest.raises(FileExistsError, match=r"a.csv: the file exists; pass --force to overwrite it"):
+        write_csv(tmp_path / "a.csv", ts.with_y(np.zeros(t.size)))
+    assert read_timeseries(tmp_path / "a.csv").y[0] == pytest.approx(np.cos(0.0))  # untouched
+    write_csv(tmp_path / "a.csv", ts.with_y(np.zeros(t.size)), force=True)
+    assert read_timeseries(tmp_path / "a.csv").y[0] == 0.0
     pq.write_table(pa.table({"time_s": t, "sg2_v": np.cos(t)}), tmp_path / "a.parquet")
     np.testing.assert_allclose(read_timeseries(tmp_path / "a.parquet", "sg2").y, np.cos(t))
 
