@@ -337,6 +337,8 @@ def bad_records(directory: Path, seed: int = 23) -> list[Record]:
     # an overdamped release (zeta 1.5) without --allow-overdamped
     t, y, _ = make_signal(rng, "release", duration_s=4.0, baseline_s=0.3, **{**digit, "zeta": 1.5})
     add("overdamped-release", "release", t, y, "no undershoot")
+    t, y, _ = make_signal(rng, "step", duration_s=3.0, baseline_s=0.3, **{**servo, "zeta": 1.6, "noise": 0.005})
+    add("overdamped-step", "step", t, y, "overdamped")
     # growing: negative damping, and an exponential run-away (with and without --allow-overdamped)
     t, y, _ = make_signal(rng, "release", duration_s=5.0, baseline_s=0.3, **{**digit, "zeta": -0.03})
     add("growing-release", "release", t, y, "growing")

@@ -155,10 +155,14 @@ def test_arx_method_on_records_with_half_percent_noise_within_2_percent(kind):
 
 
 def test_lsq_fits_an_overdamped_step_the_thesis_method_cannot():
-    # zeta 1.5: no overshoot, so no %OS; the fit starts from the rise time and still finds the parameters
+    # zeta 1.5: no overshoot, so no %OS; the fit starts from the rise time and still finds the parameters, once
+    # allowed (issue 11: an overdamped record is refused without --allow-overdamped)
     t = np.arange(0, 3, 0.002)
     y = second_order_response(t, "step", 10.0, 1.5, 0.0, 1.0, 0.1) + np.random.default_rng(0).normal(0, 0.005, t.size)
-    r = identify(TimeSeries.from_arrays(t, y), "step", method="lsq", t0_s=0.1)
+    series = TimeSeries.from_arrays(t, y)
+    with pytest.raises(DataFileError, match=r"step test is overdamped \(zeta = 1.49.* pass --allow-overdamped"):
+        identify(series, "step", method="lsq", t0_s=0.1)
+    r = identify(series, "step", method="lsq", t0_s=0.1, allow_overdamped=True)
     assert r.features is None
     assert r.wn_rad_s == pytest.approx(10.0, rel=0.05) and r.zeta == pytest.approx(1.5, rel=0.05)
 

@@ -71,3 +71,27 @@ def test_clipping_is_saturation():
     q = assess(t, np.minimum(y, rail), model, kind="step", wn_rad_s=20.53, zeta=0.5629, amplitude=0.4, t0_s=0.2,
                noise_std=0.002)  # fmt: skip
     assert q.problems[0].code == "saturated" and f"stuck at {rail:.6g}" in q.problems[0].message
+
+
+def test_a_clipped_final_level_is_saturation_even_where_the_model_follows_it():
+    # an overdamped step into the rail: the model can settle on the rail too, but no noisy record holds one value
+    t = np.arange(0, 2, 0.002)
+    model = 1.0 + 0.4 * step_shape(t - 0.2, 20.0, 1.2)
+    y = np.minimum(model + np.random.default_rng(4).normal(0, 0.004, t.size), 1.35)
+    fitted = np.minimum(model, 1.35)
+    q = assess(t, y, fitted, kind="step", wn_rad_s=20.0, zeta=1.2, amplitude=0.35, t0_s=0.2, noise_std=0.004)
+    assert q.problems[0].code == "saturated" and "times as many as any other value" in q.problems[0].message
+
+
+def test_a_quantised_plateau_is_not_saturation():
+    # a 12-bit ADC with noise below one step: the plateau shares its samples with the neighbouring levels
+    t = np.arange(0, 2, 0.002)
+    model = 1.0 + 0.4 * step_shape(t - 0.2, 20.0, 1.2)
+    lsb = 10.0 / 4096
+    y = np.round((model + np.random.default_rng(5).normal(0, 0.8 * lsb, t.size)) / lsb) * lsb
+    q = assess(t, y, model, kind="step", wn_rad_s=20.0, zeta=1.2, amplitude=0.4, t0_s=0.2, noise_std=0.8 * lsb)
+    assert [p.code for p in q.problems] == []
+    # and quantised coarser than its noise (0.2 LSB): the plateau is one value, but no noise is seen either
+    y = np.round((model + np.random.default_rng(6).normal(0, 0.2 * lsb, t.size)) / lsb) * lsb
+    q = assess(t, y, model, kind="step", wn_rad_s=20.0, zeta=1.2, amplitude=0.4, t0_s=0.2, noise_std=0.0)
+    assert [p.code for p in q.problems] == []

@@ -80,5 +80,14 @@ def test_the_generated_set_covers_every_case_of_issue_11(tmp_path):
     assert {r.command for r in good if r.kind == "step"} == {True, False}
     assert {r.layout for r in good} == set(LAYOUTS)
     problems = {r.expect for r in bad_records(tmp_path)}
-    assert problems >= {"no step", "two steps", "constant", "too short", "saturated", "no undershoot", "growing"}
+    assert problems >= {
+        "no step",
+        "two steps",
+        "constant",
+        "too short",
+        "saturated",
+        "no undershoot",
+        "overdamped",
+        "growing",
+    }
     assert all(math.isfinite(r.wn_rad_s) and r.wn_rad_s > 0 for r in good)

@@ -97,7 +97,8 @@ def test_issue_11_reproduction_step_down_in_ms_without_command(records_dir, caps
 #: Every record of records.bad_records (the test below checks the list is complete).
 BAD = [
     "no-step", "no-release", "two-steps", "pulse", "two-steps-command", "constant-command", "constant",
-    "constant-release", "too-short", "saturated", "saturated-release", "overdamped-release", "growing-release",
+    "constant-release", "too-short", "saturated", "saturated-release", "overdamped-release", "overdamped-step",
+    "growing-release",
     "growing-step", "exponential", "exponential-release",
 ]  # fmt: skip
 

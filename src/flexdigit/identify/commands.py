@@ -67,8 +67,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--allow-overdamped",
         action="store_true",
-        help="release: fit a decay that never undershoots its final value (lsq/arx); by default such a record is "
-        "refused, since the digit's release test is an oscillating decay",
+        help="fit a release that never undershoots its final value, or a step or release whose fit is overdamped "
+        "(zeta >= 1; lsq/arx); by default such a record is refused: the digit's release test is an oscillating "
+        "decay, and without an overshoot wn and zeta are poorly told apart",
     )
 
 

@@ -210,10 +210,11 @@ def identify(
         column or a given ``t0_s``, for a step when the record has samples before it, for a release when it was
         not given.
     allow_overdamped : bool
-        Release tests only. The digit released from a deflection swings through its rest position (3.1.2), and
-        that oscillation is what identifies it; a release record that never undershoots its final value (or that
-        the fit finds overdamped, ``zeta >= 1``) is refused unless this is True, for ``lsq`` and ``arx`` (the
-        thesis method can never use one). Step records may be overdamped either way.
+        The digit released from a deflection swings through its rest position (3.1.2), and that oscillation is what
+        identifies it; a release record that never undershoots its final value (or that the fit finds overdamped,
+        ``zeta >= 1``) is refused unless this is True, for ``lsq`` and ``arx`` (the thesis method can never use
+        one). A step whose fit is overdamped is refused likewise: without an overshoot its wn and zeta are poorly
+        told apart.
     loss : {"soft_l1", "huber", "linear"}
         ``lsq``: loss of the fit; the robust ones keep isolated spikes from biasing it.
     drift : bool
@@ -229,7 +230,7 @@ def identify(
     DataFileError
         If the record cannot give a model it can stand behind, naming what looks wrong (unless ``force``): no step
         or release found, two steps, a command that never changes, too short, saturated, growing, a poor or
-        uncertain fit; a release test without undershoot or with an overdamped fit (unless ``allow_overdamped``);
+        uncertain fit; a release test without undershoot, or an overdamped fit (unless ``allow_overdamped``);
         thesis method: no overshoot, settling not reached. A constant record is refused even with ``force``.
     ParameterError
         If ``t0_s`` is outside the record or ``input_step`` is zero, not finite, or contradicts the command column.
@@ -324,11 +325,12 @@ def identify(
         offset, amplitude, t0 = model.offset_, model.amplitude_, model.t0_
         drift_per_s, drift_ref = model.drift_per_s_, model.drift_reference_s_
         estimates = model.estimates_
-    if kind == "release" and zeta >= 1.0 and not allow_overdamped:
-        finding = f"{series.name}: the {method} fit of this release test is overdamped (zeta = {float(zeta):.4g} >= 1)"
+    if zeta >= 1.0 and not allow_overdamped:
+        finding = f"{series.name}: the {method} fit of this {kind} test is overdamped (zeta = {float(zeta):.4g} >= 1)"
+        message = _not_oscillating(finding) if kind == "release" else _overdamped_step(finding)
         if not force:
-            raise DataFileError(_not_oscillating(finding))
-        warnings.append(_not_oscillating(finding))
+            raise DataFileError(message)
+        warnings.append(message)
     prediction = second_order_response(t, kind, wn, zeta, offset, amplitude, t0) + drift_per_s * (t - drift_ref)
     quality = assess(
         t,
@@ -420,6 +422,15 @@ def _not_oscillating(finding: str) -> str:
         f"{finding}: expected an oscillating decay (the digit released from a deflection swings through its rest "
         "position, 3.1.2), from which zeta and wn are identified; to fit an overdamped decay anyway, pass "
         "--allow-overdamped (allow_overdamped=True) with the lsq or arx method"
+    )
+
+
+def _overdamped_step(finding: str) -> str:
+    """The one-line refusal of an overdamped step: what was found, why it is not trusted, and the way out."""
+    return (
+        f"{finding}: without an overshoot the record shows mainly the slower of two real poles, so wn and zeta are "
+        "poorly told apart (the servo of 3.2.4 overshoots, zeta 0.56); to fit it anyway, pass --allow-overdamped "
+        "(allow_overdamped=True)"
     )
 
 

@@ -158,8 +158,7 @@ def assess(
     lb = ljung_box(means, lags)
     problems: list[Problem] = []
     warnings: list[str] = []
-    margin = 2.0 * noise_std + 0.005 * abs(amplitude)
-    sat = _saturation(t, np.asarray(raw if raw is not None else yv, dtype=float), m, margin, unit)
+    sat = _saturation(t, np.asarray(raw if raw is not None else yv, dtype=float), m, noise_std, abs(amplitude), unit)
     if sat:
         problems.append(sat)
     if misfit > MAX_MISFIT_PERCENT and method == "lsq":
@@ -199,22 +198,35 @@ def assess(
     )
 
 
-def _saturation(t, raw, model, margin, unit) -> Problem | None:
-    """Samples stuck at the record's maximum (or minimum) where the model goes on beyond it by more than ``margin``
-    (twice the noise and 0.5 % of the response): a clipped record."""
-    for extreme, sign, word in ((raw.max(), 1.0, "maximum"), (raw.min(), -1.0, "minimum")):
-        at = np.nonzero(raw == extreme)[0]
-        if at.size < 3:
+def _saturation(t, raw, model, noise, amplitude, unit) -> Problem | None:
+    """Samples stuck at the record's maximum (or minimum): a clipped record.
+
+    Either the model goes on beyond that value by more than twice the noise and 0.5 % of the response at three of
+    them or more, or, in a noisy record, the value holds at least 10 samples, three times as many as any other
+    value (a rail; a plateau quantised finer than its noise shares its samples with the levels next to it, and a
+    record quantised coarser than its noise shows no noise at all).
+    """
+    margin = 2.0 * noise + 0.005 * amplitude
+    values, counts = np.unique(raw, return_counts=True)
+    for k, sign, word in ((values.size - 1, 1.0, "maximum"), (0, -1.0, "minimum")):
+        extreme, n_at = float(values[k]), int(counts[k])
+        if n_at < 3:
             continue
-        beyond = sign * (model[at] - extreme) > margin
-        if int(beyond.sum()) >= 3:
-            top = float(np.max(sign * (model[at] - extreme)))
-            return Problem(
-                "saturated",
-                f"saturated: {at.size} samples stuck at {extreme:.6g} {unit}".rstrip()
-                + f", the record's {word} (first at {float(t[at[0]]):.4g} s), where the model goes "
-                f"{top:.3g} {unit} beyond it: the amplifier or the ADC clipped (lower the gain or the step)",
-            )
+        at = np.nonzero(raw == extreme)[0]
+        beyond = sign * (model[at] - extreme)
+        others = int(np.max(np.delete(counts, k))) if counts.size > 1 else 0
+        if int(np.sum(beyond > margin)) >= 3:
+            why = f"where the model goes {float(beyond.max()):.3g} {unit} beyond it"
+        elif noise > 0 and n_at >= 10 and n_at > 3 * others:
+            why = f"{n_at / max(others, 1):.3g} times as many as any other value"
+        else:
+            continue
+        return Problem(
+            "saturated",
+            f"saturated: {n_at} samples stuck at {extreme:.6g} {unit}".rstrip()
+            + f", the record's {word} (first at {float(t[at[0]]):.4g} s), {why}: the amplifier or the ADC "
+            "clipped (lower the gain or the step)",
+        )
     return None
 
 
