@@ -174,3 +174,25 @@ def test_a_long_record_at_2_khz_is_identified(tmp_path, capsys):
     res = json.loads(out)
     assert res["wn_rad_s"] == pytest.approx(20.53, rel=0.01) and res["zeta"] == pytest.approx(0.5629, rel=0.02)
     assert res["t0_s"] == pytest.approx(0.3, abs=1e-3) and res["record"]["spikes"] == 20
+
+
+@pytest.mark.parametrize("late_s", [0.06, 0.2, 0.45])
+def test_a_release_record_that_starts_in_mid_swing(tmp_path, capsys, late_s):
+    # the recording started after the release (a gauge near the clamp also reads this way, its higher modes
+    # moving it away from rest first): the instant lies before the record, and the fit finds it there
+    t, y, t0 = make_signal(
+        np.random.default_rng(9), "release", wn=13.1, zeta=0.068, rate_hz=500.0, duration_s=5.0,
+        baseline_s=-late_s, amplitude=0.8, offset=0.1, noise=0.01,
+    )  # fmt: skip
+    p = tmp_path / "late.csv"
+    write_record(p, t, y, layout="comma", time_unit="s", unit="v")
+    code, out, err = _run(capsys, ["identify", "release", str(p), "--json"])
+    assert code == 0, err
+    res = json.loads(out)
+    assert res["wn_rad_s"] == pytest.approx(13.1, rel=0.01) and res["zeta"] == pytest.approx(0.068, rel=0.03)
+    assert res["instant"]["baseline_s"] < 0.05  # no hold: at most the approach to the record's first extreme
+    # the fitted instant, modulo half a period (only the phase is seen, and a release from the next extreme is the
+    # same curve with the deflection's sign flipped): within 5 ms of the true one
+    half = np.pi / (13.1 * np.sqrt(1 - 0.068**2))
+    offset = (res["t0_s"] - t0 + half / 2) % half - half / 2
+    assert abs(offset) < 0.005

@@ -212,13 +212,18 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
             t0_s=t0_s, baseline_s=0.0, direction=0, start_level=level, end_level=level, delay_s=math.nan,
             first_sample=0, problems=tuple(problems), **shared,
         )  # fmt: skip
-    k_on, k_half, k_first, start, end, direction = first
+    k_on, k_half, k_first, held, start, end, direction = first
     t_on = float(t[k_on])
-    if t0_s is None:
+    if t0_s is None and not held:
+        # in mid-swing the instant may lie before the record: the extreme a quarter period before the first crossing
+        # of the rest level (the model's phase; the fit moves it on, past the record's start if need be)
+        cross = _crossings(t, smooth - end, max(4.0 * noise_smooth, 0.03 * float(np.max(np.abs(smooth - end)))))
+        t0_s = cross[0] - 0.5 * (cross[1] - cross[0]) if len(cross) >= 2 else float(t[0])
+    elif t0_s is None:
         # the response leaves its start level with zero slope: walk back about a fifth of the time to half-way
         t0_s = max(float(t[k_first]), t_on - 0.2 * float(t[k_half] - t_on)) if k_on > k_first else float(t[k_first])
     delay = float(t[k_half] - t0_s)
-    baseline = max(0.0, float(t0_s - t[k_first]))
+    baseline = max(0.0, float(t0_s - t[k_first])) if held else 0.0
     if not growing:  # a growing record has no settled levels or delay time to judge it by
         problems += _shape_problems(series, kind, t, smooth, noise_smooth, float(t0_s), k_on, start, end, delay)
     return Survey(
@@ -235,12 +240,13 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
 
 
 def _first_swing(t, smooth, noise, t0_s, kind):
-    """``(onset, half-way, first sample, start level, end level, direction)`` of the first swing, or None.
+    """``(onset, half-way, first sample, held, start level, end level, direction)`` of the first swing, or None.
 
     Step: the start level is the median of the first 20 ms (at least 3 samples), refined to the median of
     everything before the onset; the half-way index is the first sample at half the largest deviation from it.
     Release: see :func:`_release_swing`. Indices are samples of ``smooth``; the first sample is where the part of
-    the record a second-order model describes begins (0 unless a release record starts before the deflection).
+    the record a second-order model describes begins (0 unless a release record starts before the deflection);
+    ``held`` is False for a release record that starts in mid-swing (no baseline before its instant).
     """
     n = smooth.size
     fs = (n - 1) / (t[-1] - t[0])
@@ -269,7 +275,20 @@ def _first_swing(t, smooth, noise, t0_s, kind):
         if k_on >= 3:
             start = float(np.median(smooth[: k_on + 1]))
     direction = 1 if smooth[k_half] > start else -1
-    return k_on, k_half, 0, start, end, direction
+    return k_on, k_half, 0, True, start, end, direction
+
+
+def _crossings(t, x, hysteresis: float) -> list[float]:
+    """Times (interpolated) where ``x`` changes sign, counting a change only once ``|x|`` passes ``hysteresis``."""
+    side = np.where(x > hysteresis, 1, np.where(x < -hysteresis, -1, 0))
+    known = np.nonzero(side)[0]
+    out = []
+    for a, b in zip(known[:-1], known[1:], strict=True):
+        if side[a] != side[b]:
+            k = a + int(np.argmax(np.sign(x[a : b + 1]) != side[a]))  # first sample past zero
+            x0, x1 = x[k - 1], x[k]
+            out.append(float(t[k - 1] + (t[k] - t[k - 1]) * x0 / (x0 - x1)) if x1 != x0 else float(t[k]))
+    return out
 
 
 def _release_swing(smooth, noise, end):
@@ -278,7 +297,8 @@ def _release_swing(smooth, noise, end):
     The deflection is the first stretch at 90 % of the largest deviation from the final level; the release is the
     last sample still within the noise band of its extreme before the signal first crosses the final level, and the
     hold is the stretch before it within that band. A record that starts before the deflection (the digit at
-    rest, then pushed over by hand) thus starts its model at the hold, not at the push.
+    rest, then pushed over by hand) thus starts its model at the hold, not at the push; one that swings through the
+    rest level before its first extreme starts in mid-swing and is kept whole.
     """
     dev = np.abs(smooth - end)
     peak = float(dev.max())
@@ -296,11 +316,16 @@ def _release_swing(smooth, noise, end):
     k_on = k_top + (int(leave[0]) - 1 if leave.size else k_cross - k_top)
     away = np.nonzero(~near[: k_on + 1])[0]
     k_first = int(away[-1]) + 1 if away.size else 0
+    held = True
+    if np.any(side * (smooth[:k_first] - end) < -band):
+        # the signal swung through its rest level before this extreme: the record starts in mid-swing (a gauge near
+        # the clamp released from a tip force carries higher modes, 3.1.2), not before a hold; keep all of it
+        k_first, held = 0, False
     start = float(np.median(smooth[k_first : k_on + 1]))
     half = np.nonzero(np.abs(smooth[k_on:] - end) <= 0.5 * abs(start - end))[0]
     k_half = k_on + int(half[0]) if half.size else smooth.size - 1
     direction = 1 if smooth[k_half] > start else -1
-    return k_on, k_half, k_first, start, end, direction
+    return k_on, k_half, k_first, held, start, end, direction
 
 
 def _shape_problems(series, kind, t, smooth, noise, t0, k_on, start, end, delay) -> list[Problem]:
@@ -345,7 +370,9 @@ def _shape_problems(series, kind, t, smooth, noise, t0, k_on, start, end, delay)
             )
         )
         return problems
-    levels = _plateaus(t, smooth, noise, peak, 2.0 * delay)
+    # a release's free swing can linger (higher modes on a gauge near the clamp): a second release is left to the
+    # fit's misfit; a step's levels are flat once it has settled
+    levels = _plateaus(t, smooth, noise, peak, 2.0 * delay) if kind == "step" else []
     later = [lv for lv in levels if lv[0] > k_on]
     if len(later) >= 2:
         (a0, a1, level_a), (b0, _, level_b) = later[0], later[1]

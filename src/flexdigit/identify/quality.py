@@ -3,9 +3,9 @@
 Three figures, from the residuals of the model against the record (its hum removed):
 
 - the **NRMSE fit** (%) and MATLAB's ``corr2`` (:mod:`flexdigit.identify.scores`), as the thesis reported;
-- the **misfit**: the largest deviation of the residuals low-passed at three times the model's natural frequency
-  (the structure the model misses, at the time scale of the response, white noise mostly filtered out), in % of
-  the response's amplitude (the step, or the released deflection);
+- the **misfit**: the deviation of the residuals low-passed at three times the model's natural frequency (the
+  structure the model misses, at the time scale of the response, white noise mostly filtered out) that only 1 % of
+  the record exceeds, in % of the response's amplitude (the step, or the released deflection);
 - **residual whiteness**: the Ljung-Box test (:func:`~flexdigit.identify.scores.ljung_box`) on the residuals
   averaged over blocks of a tenth of the natural period, spikes taken out first. Averaging makes noise that a DAQ's
   anti-alias filter coloured look white again, while a model error, which is slow, stays correlated.
@@ -13,7 +13,9 @@ Three figures, from the residuals of the model against the record (its hum remov
 From them and the confidence intervals come the problems that make a fit untrustworthy
 (:class:`~flexdigit.identify.events.Problem`): a second step after the first has settled (or a change before
 it), samples stuck at the record's extreme where the model goes on (clipping), a poor fit (a misfit over
-:data:`MAX_MISFIT_PERCENT`), and confidence intervals wider than :data:`MAX_CI_HALFWIDTH`. A
+:data:`MAX_MISFIT_PERCENT`, and over twice what the record's white noise alone leaves through the same filter, so
+a weak channel's noise is not taken for a model error), and confidence intervals wider than
+:data:`MAX_CI_HALFWIDTH`. A
 non-white residual alone is a warning: the model holds but misses some structure (higher modes, 3.1.2), and its
 confidence intervals are optimistic.
 """
@@ -50,7 +52,9 @@ class FitQuality:
     residual_std : float
         Robust standard deviation of the residuals (signal unit).
     misfit_percent : float
-        Largest deviation of the low-passed residual, in % of the response's amplitude.
+        Deviation of the low-passed residual exceeded by 1 % of the record, in % of the response's amplitude.
+    noise_misfit_percent : float
+        The same for the record's white noise alone (what a perfect model would show).
     whiteness : LjungBox
         Ljung-Box test of the block-averaged residuals.
     block_s : float
@@ -65,6 +69,7 @@ class FitQuality:
     corr2: float
     residual_std: float
     misfit_percent: float
+    noise_misfit_percent: float
     whiteness: LjungBox
     block_s: float
     problems: tuple[Problem, ...]
@@ -76,6 +81,7 @@ class FitQuality:
             "corr2": self.corr2,
             "residual_std": self.residual_std,
             "misfit_percent": self.misfit_percent,
+            "noise_misfit_percent": self.noise_misfit_percent,
             "whiteness": {
                 "test": "Ljung-Box",
                 "lags": self.whiteness.lags,
@@ -150,7 +156,12 @@ def assess(
     fn = wn_rad_s / (2 * math.pi)
     cutoff = min(max(3.0 * fn, 1.0), 0.4 * fs)
     slow = butter_filter(clipped, fs, cutoff) if t.size > 30 else clipped
-    misfit = 100.0 * float(np.max(np.abs(slow))) / abs(amplitude) if amplitude else math.inf
+    # the 99th percentile, not the maximum: a brief fast transient (higher modes excited at the release, 3.1.2)
+    # is not a misfit of the dominant mode, while a model error or a second step lasts
+    misfit = 100.0 * float(np.percentile(np.abs(slow), 99)) / abs(amplitude) if amplitude else math.inf
+    # what white noise alone leaves there: its 99th percentile through the same filter (Gaussian, 2.576 sigma)
+    noise_misfit = 100.0 * 2.576 * noise_std * _noise_gain(fs, cutoff) / abs(amplitude) if amplitude else 0.0
+    limit = max(MAX_MISFIT_PERCENT, 2.0 * noise_misfit)
     block = max(1, int(fs / (10.0 * fn))) if fn > 0 else 1
     nb = clipped.size // block
     means = clipped[: nb * block].reshape(nb, block).mean(axis=1) if nb >= 8 else clipped
@@ -161,12 +172,12 @@ def assess(
     sat = _saturation(t, np.asarray(raw if raw is not None else yv, dtype=float), m, noise_std, abs(amplitude), unit)
     if sat:
         problems.append(sat)
-    if misfit > MAX_MISFIT_PERCENT and method == "lsq":
-        problems.append(_misfit(t, slow, kind, wn_rad_s, zeta, amplitude, t0_s, misfit, unit))
-    elif misfit > MAX_MISFIT_PERCENT:
+    if misfit > limit and method == "lsq":
+        problems.append(_misfit(t, slow, kind, wn_rad_s, zeta, amplitude, t0_s, misfit, limit))
+    elif misfit > limit:
         warnings.append(
             f"the record deviates from the {method} method's model by up to {misfit:.2g} % of the response "
-            f"(more than {MAX_MISFIT_PERCENT:g} %): its wn or zeta is off; the lsq method fits the whole record"
+            f"(more than {limit:.2g} %): its wn or zeta is off; the lsq method fits the whole record"
         )
     for name, limit in MAX_CI_HALFWIDTH.items():
         e = (estimates or {}).get(name)
@@ -191,6 +202,7 @@ def assess(
         corr2=corr2(yv, m),
         residual_std=scale,
         misfit_percent=misfit,
+        noise_misfit_percent=noise_misfit,
         whiteness=lb,
         block_s=block / fs,
         problems=tuple(problems),
@@ -230,7 +242,15 @@ def _saturation(t, raw, model, noise, amplitude, unit) -> Problem | None:
     return None
 
 
-def _misfit(t, slow, kind, wn, zeta, amplitude, t0, misfit, unit) -> Problem:
+def _noise_gain(fs: float, cutoff: float) -> float:
+    """Standard deviation of unit white noise after :func:`~flexdigit.identify.filters.butter_filter` at ``cutoff``."""
+    n = int(min(200_000, max(64, 40 * fs / cutoff)))
+    impulse = np.zeros(n)
+    impulse[n // 2] = 1.0
+    return float(np.sqrt(np.sum(butter_filter(impulse, fs, cutoff) ** 2)))
+
+
+def _misfit(t, slow, kind, wn, zeta, amplitude, t0, misfit, limit) -> Problem:
     """A second step, a change before the instant, or plainly a poor fit, from where the residual is large."""
     big = np.nonzero(np.abs(slow) > SECOND_STEP_FRACTION * abs(amplitude))[0]
     settled = t0 + (4.0 / (zeta * wn) if zeta * wn > 0 else math.inf)
@@ -251,5 +271,5 @@ def _misfit(t, slow, kind, wn, zeta, amplitude, t0, misfit, unit) -> Problem:
     return Problem(
         "poor-fit",
         f"poor fit: the record deviates from the best second-order {kind} response by up to {misfit:.2g} % of "
-        f"the response (at most {MAX_MISFIT_PERCENT:g} %): it does not look like one {kind} response",
+        f"the response (at most {limit:.2g} %): it does not look like one {kind} response",
     )
