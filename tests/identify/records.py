@@ -294,6 +294,31 @@ def pushed_release_records(directory: Path, seed: int = 31) -> list[Record]:
     return out
 
 
+def light_release_records(directory: Path, seed: int = 41) -> list[Record]:
+    """Release tests of the bare, lightly damped digit (zeta 0.002-0.005 at about 10 rad/s, as the twin's bare strip:
+    30 s at 1 kHz still swinging at half its deflection at the end) as a gauge near the tip reads them: a decaying
+    higher mode (150 rad/s, zeta 0.3) adds to the deflection at the release, and the gauge's quadratic
+    nonlinearity lifts every swing to one side, so the first undershoot is smaller than the swing after it. The
+    known answer is the dominant mode's. Noise-free, and with 1.2 % noise; up and down.
+    """
+    rng = np.random.default_rng(seed)
+    out = []
+    for i, (noise, direction) in enumerate(((0.0, 1), (0.012, -1), (0.012, 1))):
+        wn, zeta = float(rng.uniform(9.5, 11.0)), float(rng.uniform(0.002, 0.005))
+        rate = 1000.0
+        t = np.arange(int(30.0 * rate)) / rate
+        x = free_response(t, wn, zeta)
+        shape = x + 0.12 * x * x + 0.5 * free_response(t, 150.0, 0.3)
+        a = 0.0084
+        y = 0.034 + direction * a * shape + rng.normal(0.0, noise * a, t.size)
+        rec = Record(f"light-{i}", "release", wn, zeta, 0.0, "ok", "comma", rate, "s", 0.0, direction, noise=noise)
+        path = directory / f"{rec.name}.csv"
+        rec.args = write_record(path, t, y, layout="comma", time_unit="s", unit="v")
+        rec.path = str(path)
+        out.append(rec)
+    return out
+
+
 def bad_records(directory: Path, seed: int = 23) -> list[Record]:
     """Records no identification can stand behind, each with the problem its refusal must name."""
     rng = np.random.default_rng(seed)
@@ -354,6 +379,7 @@ def bad_records(directory: Path, seed: int = 23) -> list[Record]:
 def all_records(directory: Path) -> list[Record]:
     directory.mkdir(parents=True, exist_ok=True)
     good = good_records(directory) + motivating_records(directory) + pushed_release_records(directory)
+    good += light_release_records(directory)
     return good + bad_records(directory)
 
 

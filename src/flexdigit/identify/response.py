@@ -419,7 +419,11 @@ def _release_time(t: np.ndarray, x: np.ndarray, noise: float) -> float | None:
 
     The free response from rest crosses zero first at ``(pi/2 + asin zeta) / wd`` after the release; the crossings
     give ``wd`` and the ratio of the first two extrema ``zeta``, so the instant is found without relying on the
-    (noisy, possibly held) samples before it. Returns None when the record has fewer than two crossings.
+    (noisy, possibly held) samples before it. The crossings are taken from the lobes themselves, not from the
+    extrema :func:`_extrema` keeps: on a lightly damped digit a decaying higher mode or a gauge's nonlinearity can
+    make the first undershoot smaller than the swing after it, which :func:`_extrema` rejects as noise (then zeta
+    is taken as 0: below the resolution of two extrema anyway). Returns None when the record has fewer than two
+    crossings.
     """
     dev = np.abs(x)
     # the first near-largest deviation (a lightly damped record swings almost as far later on), then the largest
@@ -431,9 +435,12 @@ def _release_time(t: np.ndarray, x: np.ndarray, noise: float) -> float | None:
     end = start + int(other_side[0]) if other_side.size else x.size
     peak = start + int(np.argmax(sign * x[start:end]))
     xn = -sign * x[peak:] / abs(x[peak])
-    ext_t, ext_v, crossings = _extrema(t[peak:], xn, hyst / abs(x[peak]), from_start=False)
-    if len(crossings) < 2:
+    tp, h = t[peak:], hyst / abs(x[peak])
+    lobes = _lobes(xn, h)
+    if len(lobes) < 3 or xn[lobes[0][0]] > 0:
         return None
+    crossings = [_zero_before(tp, xn, a) for a, _ in lobes[1:3]]
+    ext_t, ext_v, _ = _extrema(tp, xn, h, from_start=False)
     wd = math.pi / (crossings[1] - crossings[0])
     zeta = 0.0
     if ext_v.size >= 2 and ext_v[1] > 0 and ext_v[0] > ext_v[1]:
@@ -513,15 +520,21 @@ def _extrema(
             break  # a second-order response decays: a clearly larger extremum is noise
         if from_start and times and abs((t[k] - times[-1]) - (times[0] - t[0])) > 0.5 * (times[0] - t[0]):
             break  # extrema come every half period (the first one comes half a period after t0): noise
-        j = a  # the zero crossing is the last sign change before the lobe passes its hysteresis
-        while j > 0 and np.sign(x[j - 1]) == np.sign(x[a]):
-            j -= 1
-        if j > 0:
-            crossings.append(_interp_level(t[j - 1], t[j], x[j - 1], x[j], 0.0))
+        crossing = _zero_before(t, x, a)
+        if crossing is not None:
+            crossings.append(crossing)
         tk, vk = _parabolic_peak(t, np.abs(x), k)
         times.append(tk)
         values.append(vk)
     return np.asarray(times), np.asarray(values), crossings
+
+
+def _zero_before(t: np.ndarray, x: np.ndarray, a: int) -> float | None:
+    """The zero crossing that starts the lobe at ``a``: the last sign change before ``x[a]`` (interpolated)."""
+    j = a
+    while j > 0 and np.sign(x[j - 1]) == np.sign(x[a]):
+        j -= 1
+    return _interp_level(t[j - 1], t[j], x[j - 1], x[j], 0.0) if j > 0 else None
 
 
 def _parabolic_peak(t: np.ndarray, v: np.ndarray, k: int) -> tuple[float, float]:
