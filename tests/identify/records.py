@@ -156,6 +156,13 @@ def write_record(path: Path, t_s, y_v, *, layout: str, time_unit: str, unit: str
     return ["--time-unit", time_unit] if spec.get("bare_time") else []
 
 
+def save(rec: Record, path: Path, t_s, y_v, *, unit: str = "v", command=None) -> Record:
+    """Write ``rec``'s record to ``path`` in its layout and time unit; set its path and command-line arguments."""
+    rec.args = write_record(path, t_s, y_v, layout=rec.layout, time_unit=rec.time_unit, unit=unit, command=command)
+    rec.path = str(path)
+    return rec
+
+
 def good_records(directory: Path, n: int = 24, seed: int = 11) -> list[Record]:
     """``n`` identifiable records covering every case of issue 11 (cycled, so each one appears several times).
 
@@ -232,10 +239,7 @@ def good_records(directory: Path, n: int = 24, seed: int = 11) -> list[Record]:
             drift=drift,
             noise=noise,
         )
-        path = directory / f"{rec.name}.csv"
-        rec.args = write_record(path, t, y, layout=layout, time_unit=time_unit, unit=unit, command=cmd)
-        rec.path = str(path)
-        out.append(rec)
+        out.append(save(rec, directory / f"{rec.name}.csv", t, y, unit=unit, command=cmd))
     return out
 
 
@@ -262,10 +266,7 @@ def motivating_records(directory: Path, seed: int = 16) -> list[Record]:
         )
         rec = Record(f"issue11-{i}", "step", wn, zeta, t0, "ok", "comma", 500.0, time_unit, baseline, direction)
         rec.spikes, rec.noise = 4, 0.02
-        path = directory / f"{rec.name}.csv"
-        rec.args = write_record(path, t, y, layout="comma", time_unit=time_unit, unit="v")
-        rec.path = str(path)
-        out.append(rec)
+        out.append(save(rec, directory / f"{rec.name}.csv", t, y))
     return out
 
 
@@ -287,10 +288,7 @@ def pushed_release_records(directory: Path, seed: int = 31) -> list[Record]:
         y = np.where(t < rest + push, y - deflection * (1.0 - 0.5 * (1.0 - np.cos(np.pi * ramp))), y)
         rec = Record(f"pushed-{i}", "release", wn, zeta, t0, "ok", "comma", rate, "s", hold, direction)
         rec.spikes, rec.hum_hz, rec.noise = 3, 50.0, 0.01
-        path = directory / f"{rec.name}.csv"
-        rec.args = write_record(path, t, y, layout="comma", time_unit="s", unit="v")
-        rec.path = str(path)
-        out.append(rec)
+        out.append(save(rec, directory / f"{rec.name}.csv", t, y))
     return out
 
 
@@ -312,10 +310,7 @@ def light_release_records(directory: Path, seed: int = 41) -> list[Record]:
         a = 0.0084
         y = 0.034 + direction * a * shape + rng.normal(0.0, noise * a, t.size)
         rec = Record(f"light-{i}", "release", wn, zeta, 0.0, "ok", "comma", rate, "s", 0.0, direction, noise=noise)
-        path = directory / f"{rec.name}.csv"
-        rec.args = write_record(path, t, y, layout="comma", time_unit="s", unit="v")
-        rec.path = str(path)
-        out.append(rec)
+        out.append(save(rec, directory / f"{rec.name}.csv", t, y))
     return out
 
 
@@ -326,10 +321,7 @@ def bad_records(directory: Path, seed: int = 23) -> list[Record]:
 
     def add(name, kind, t, y, expect, *, wn=math.nan, zeta=math.nan, t0=math.nan, cmd=None, layout="comma"):
         rec = Record(name, kind, wn, zeta, t0, expect, layout, float(1 / (t[1] - t[0])), "s", 0.0, 1, cmd is not None)
-        path = directory / f"bad-{name}.csv"
-        rec.args = write_record(path, t, y, layout=layout, time_unit="s", unit="v", command=cmd)
-        rec.path = str(path)
-        out.append(rec)
+        out.append(save(rec, directory / f"bad-{name}.csv", t, y, command=cmd))
 
     servo = dict(wn=20.53, zeta=0.5629, rate_hz=500.0, amplitude=0.4, offset=0.9, noise=0.02)
     digit = dict(wn=13.1, zeta=0.068, rate_hz=500.0, amplitude=0.8, offset=0.1, noise=0.02)
