@@ -51,7 +51,10 @@ from flexdigit.errors import ParameterError
 
 def _fail(name: str, owner: str | None, expected: str, got: object, error: type[Exception]) -> None:
     where = f"The '{name}' parameter of {owner}" if owner else f"The '{name}' parameter"
-    raise error(f"{where} must be {expected}. Got {got!r} instead.")
+    shown = repr(got)
+    if len(shown) > 80:  # a 400-digit integer from a client: name it, do not echo it
+        shown = f"{shown[:60]}... ({len(shown)} characters)"
+    raise error(f"{where} must be {expected}. Got {shown} instead.")
 
 
 def check_real(
@@ -74,7 +77,10 @@ def check_real(
     """
     if isinstance(value, bool) or not isinstance(value, Real):
         _fail(name, owner, "a real number", value, error)
-    out = float(value)
+    try:
+        out = float(value)
+    except OverflowError:  # an integer beyond a float's range (JSON allows any number of digits)
+        out = math.inf if value > 0 else -math.inf
     interval = _interval_text(low, high, low_open, high_open)
     if not math.isfinite(out):
         _fail(name, owner, f"a finite real number{interval}", value, error)
