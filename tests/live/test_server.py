@@ -84,7 +84,7 @@ def test_every_message_is_validated_clamped_and_rate_limited(server):
             ws.send(text)
             assert _next(ws, "error")["message"]
         ws.send(json.dumps({"type": "setpoint", "value": 999}))
-        assert _next(ws, "ack")["request"]["value"] == 60.0  # clamped to the slider's range
+        assert _next(ws, "ack")["request"]["value"] == 45.0  # clamped to the slider's range (hello's, deg)
         ws.send(json.dumps({"type": "load", "position_m": 5.0, "mass_g": 1e6, "kind": "weight"}))
         ack = _next(ws, "ack")["request"]
         assert ack["position_m"] == 0.27 and ack["mass_g"] == 200.0  # onto the digit, at most 200 g
@@ -146,13 +146,15 @@ def test_bad_files_are_named_before_anything_is_served(tmp_path):
 
 
 def test_request_validation_names_the_culprit():
-    assert validate_request({"type": "setpoint", "value": -50}) == {"type": "setpoint", "value": -10.0}
+    assert validate_request({"type": "setpoint", "value": -50}) == {"type": "setpoint", "value": 0.0}
+    assert validate_request({"type": "setpoint", "value": 99}, setpoint_range=(0.0, 60.0))["value"] == 60.0
     assert validate_request({"type": "pause", "paused": True})["paused"] is True
     assert validate_request({"type": "speed", "speed": 10})["speed"] == 10
     for bad, match in [
         ({"type": "speed", "speed": 3}, "speed"),
         ({"type": "speed", "speed": True}, "speed"),
         ({"type": "setpoint", "value": float("nan")}, "value"),
+        ({"type": "setpoint", "value": 10**400}, "finite"),  # JSON allows any digits; beyond a float's range
         ({"type": "load", "position_m": 0.1, "mass_g": 25}, "kind"),
         ({"value": 3}, "type"),
     ]:

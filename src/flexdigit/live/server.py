@@ -31,7 +31,7 @@ from typing import Any
 
 from flexdigit.errors import ParameterError
 
-__all__ = ["make_app", "serve", "bind", "check_host", "ASSETS", "TokenBucket"]
+__all__ = ["make_app", "serve", "bind", "check_host", "origin_allowed", "ASSETS", "TokenBucket"]
 
 #: URL path -> (packaged file, media type). The only files the server ever sends.
 ASSETS = {
@@ -41,6 +41,13 @@ ASSETS = {
 }
 #: Page updates per second pushed to each client (the loop makes 50 samples a second; the shape comes at 25).
 UPDATE_HZ = 30.0
+#: Requests a second from one page (``burst`` at once), and from all pages together.
+RATE_PER_PAGE, BURST_PER_PAGE = 20.0, 40.0
+RATE_ALL, BURST_ALL = 40.0, 80.0
+#: Pages served at once; one more is refused (WebSocket close 1013, "try again later").
+MAX_PAGES = 8
+#: The largest WebSocket frame read at all (bytes): a bigger one closes the connection (1009) before it is buffered.
+MAX_FRAME_BYTES = 4096
 
 
 def _asset_bytes() -> dict[str, tuple[bytes, str]]:
@@ -87,8 +94,36 @@ def _dumps(obj: Any) -> str:
     return json.dumps(obj, allow_nan=False, separators=(",", ":"))
 
 
-def make_app(session, allowed_origins: set[str]):
-    """The Starlette app serving ``session`` to pages whose ``Origin`` is in ``allowed_origins``."""
+def origin_allowed(origin: str | None, host_header: str | None, allowed_origins: set[str], any_address: bool) -> bool:
+    """Whether a WebSocket from a page at ``origin`` may drive the rig.
+
+    ``origin`` must be one of ``allowed_origins`` (the server's own addresses). A server bound to every address
+    (``--host 0.0.0.0 --allow-remote``) cannot know the address a remote browser used, so there the page's own
+    origin must be the address the request was sent to (``Host``), and that an IP address or this machine's
+    name: a name that resolves here only by another site's doing (DNS rebinding) is refused.
+    """
+    if not origin:
+        return False
+    if origin in allowed_origins:
+        return True
+    if not any_address or not host_header or origin != f"http://{host_header}":
+        return False
+    from urllib.parse import urlsplit
+
+    try:
+        name = urlsplit(f"//{host_header}").hostname or ""
+    except ValueError:
+        return False
+    try:
+        ipaddress.ip_address(name)
+        return True
+    except ValueError:
+        return name.lower() in {socket.gethostname().lower(), socket.getfqdn().lower()}
+
+
+def make_app(session, allowed_origins: set[str], *, any_address: bool = False):
+    """The Starlette app serving ``session`` to pages whose ``Origin`` is in ``allowed_origins`` (see
+    :func:`origin_allowed` for a server bound to every address)."""
     from contextlib import asynccontextmanager
 
     from starlette.applications import Starlette
@@ -110,13 +145,27 @@ def make_app(session, allowed_origins: set[str]):
         headers = {"Content-Security-Policy": csp, "X-Content-Type-Options": "nosniff", "Cache-Control": "no-store"}
         return Response(body, media_type=media, headers=headers)
 
+    everyone = TokenBucket(RATE_ALL, BURST_ALL)
+    pages = [0]
+
     async def stream(websocket: WebSocket) -> None:
-        if websocket.headers.get("origin") not in allowed_origins:
+        headers = websocket.headers
+        if not origin_allowed(headers.get("origin"), headers.get("host"), allowed_origins, any_address):
             await websocket.close(code=1008)  # policy violation: another site's page, or no Origin at all
             return
-        await websocket.accept()
+        if pages[0] >= MAX_PAGES:
+            await websocket.accept()
+            await websocket.close(code=1013, reason=f"at most {MAX_PAGES} pages at once")  # try again later
+            return
+        pages[0] += 1
+        try:
+            await websocket.accept()
+        except BaseException:
+            pages[0] -= 1
+            raise
         session.connected()
-        bucket = TokenBucket()
+        bucket = TokenBucket(RATE_PER_PAGE, BURST_PER_PAGE)
+        told_at = -1.0  # when this page was last told to slow down (once a second at most)
 
         async def push() -> None:
             since = -1
@@ -153,18 +202,27 @@ def make_app(session, allowed_origins: set[str]):
                     error = f"request too long ({len(text)} bytes, at most {MAX_REQUEST_BYTES})"
                     await websocket.send_text(_dumps({"type": "error", "message": error}))
                     continue
-                if not bucket.take():
-                    await websocket.send_text(_dumps({"type": "error", "message": "too many requests; slow down"}))
+                if not (bucket.take() and everyone.take()):
+                    now = time.monotonic()
+                    if now - told_at >= 1.0:  # dropped; said once a second, not once per message
+                        told_at = now
+                        error = f"too many requests (at most {RATE_PER_PAGE:g} a second); dropped until you slow down"
+                        await websocket.send_text(_dumps({"type": "error", "message": error}))
                     continue
                 try:
                     accepted = session.request(json.loads(text))
                 except (ValueError, ParameterError) as exc:
                     await websocket.send_text(_dumps({"type": "error", "message": str(exc)}))
                     continue
+                except Exception as exc:  # a request must never take the page's connection (or the server) down
+                    error = f"request refused ({type(exc).__name__}: {exc})"
+                    await websocket.send_text(_dumps({"type": "error", "message": error[:300]}))
+                    continue
                 await websocket.send_text(_dumps({"type": "ack", "request": accepted}))
         except (WebSocketDisconnect, RuntimeError, OSError):
             pass  # the page went away mid-send
         finally:
+            pages[0] -= 1
             if sender is not None:
                 sender.cancel()
             session.disconnected()
@@ -210,7 +268,8 @@ def serve(session, host: str = "127.0.0.1", port: int = 8050, *, allow_remote: b
     origins = {f"http://{shown}:{port}"}
     if host in ("127.0.0.1", "localhost", "::1"):
         origins |= {f"http://127.0.0.1:{port}", f"http://localhost:{port}", f"http://[::1]:{port}"}
-    app = make_app(session, origins)
+    any_address = host in ("0.0.0.0", "::")
+    app = make_app(session, origins, any_address=any_address)
     url = f"http://{shown}:{port}/"
     if announce is None:
 
@@ -221,6 +280,12 @@ def serve(session, host: str = "127.0.0.1", port: int = 8050, *, allow_remote: b
         announce(f"WARNING: serving the rig to the network on {host}: anyone who can reach {url} can move the digit")
     announce(f"flexdigit live: {url} (backend {session.backend}); Ctrl-C to stop")
     config = uvicorn.Config(
-        app, log_level="warning", ws="websockets-sansio", lifespan="on", timeout_graceful_shutdown=2, access_log=False
+        app,
+        log_level="warning",
+        ws="websockets-sansio",
+        ws_max_size=MAX_FRAME_BYTES,
+        lifespan="on",
+        timeout_graceful_shutdown=2,
+        access_log=False,
     )
     uvicorn.Server(config).run(sockets=[sock])

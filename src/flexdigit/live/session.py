@@ -22,6 +22,7 @@ trained network (``--model``) when given; a palpation estimate adds itself the s
 
 from __future__ import annotations
 
+import bisect
 import collections
 import concurrent.futures
 import math
@@ -37,11 +38,20 @@ import numpy as np
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError, RigError
 
-__all__ = ["LiveSession", "ContactSource", "BeamContact", "NetworkContact", "validate_request", "REQUESTS"]
+__all__ = [
+    "LiveSession",
+    "ContactSource",
+    "BeamContact",
+    "NetworkContact",
+    "validate_request",
+    "REQUESTS",
+    "SETPOINT_RANGES",
+]
 
-#: The page's requests and their fields: ``{type: {field: (kind, low, high)}}``; values are clamped to the range.
+#: The page's requests and their fields: ``{type: {field: (kind, low, high)}}``; numbers are clamped to the range
+#: (None: the session's own, :data:`SETPOINT_RANGES` for a setpoint, the digit's length for a position).
 REQUESTS: dict[str, dict[str, tuple]] = {
-    "setpoint": {"value": ("number", -10.0, 60.0)},
+    "setpoint": {"value": ("number", None, None)},
     "load": {"position_m": ("number", 0.0, None), "mass_g": ("number", 1.0, 200.0), "kind": ("choice", "weight")},
     "clear": {},
     "pause": {"paused": ("bool",)},
@@ -49,15 +59,22 @@ REQUESTS: dict[str, dict[str, tuple]] = {
 }
 #: The largest request accepted, bytes.
 MAX_REQUEST_BYTES = 512
+#: The setpoint slider's range per unit: beam rotation (the controller's, deg) or the servo command itself (open loop).
+SETPOINT_RANGES = {"deg": (0.0, 45.0), "command": (0.0, 60.0)}
 
 
-def validate_request(message: object, digit_length_m: float = 0.27) -> dict[str, Any]:
+def validate_request(
+    message: object, digit_length_m: float = 0.27, setpoint_range: tuple[float, float] = SETPOINT_RANGES["deg"]
+) -> dict[str, Any]:
     """Check a request from the page and clamp its numbers; raise :class:`ParameterError` naming what is wrong.
+
+    A setpoint is clamped to ``setpoint_range`` (the slider's, in the session's unit), a load's position to the
+    digit (0..``digit_length_m``, m) and its mass to 1..200 g.
 
     Examples
     --------
     >>> validate_request({"type": "setpoint", "value": 99})
-    {'type': 'setpoint', 'value': 60.0}
+    {'type': 'setpoint', 'value': 45.0}
     >>> validate_request({"type": "load", "position_m": 0.2, "mass_g": 25, "kind": "weight"})["mass_g"]
     25.0
     >>> validate_request({"type": "reboot"})
@@ -80,8 +97,11 @@ def validate_request(message: object, digit_length_m: float = 0.27) -> dict[str,
         value = message[name]
         if spec[0] == "number":
             x = check_real(value, name, f"a {kind!r} request")
-            high = digit_length_m if spec[2] is None else spec[2]
-            out[name] = float(min(max(x, spec[1]), high))
+            if kind == "setpoint":
+                low, high = setpoint_range
+            else:
+                low, high = spec[1], digit_length_m if spec[2] is None else spec[2]
+            out[name] = float(min(max(x, low), high))
         elif spec[0] == "bool":
             if not isinstance(value, bool):
                 raise ParameterError(
@@ -371,11 +391,9 @@ class LiveSession:
             self.unit, self.setpoint = "deg", 0.0
         self.recording = None
         if self.kind == "replay":
-            from flexdigit.rig.loop import read_log
-            from flexdigit.rig.recording import is_mcap, read_recording
-
-            _, samples, _ = read_recording(rig.path) if is_mcap(rig.path) else read_log(rig.path)
+            samples = rig.samples
             self._replayed = samples
+            self._replayed_t = [float(x["t"]) - float(samples[0]["t"]) for x in samples]
             self._replay_length_s = float(samples[-1]["t"]) - float(samples[0]["t"])
             self.setpoint = None
         if record is not None:
@@ -410,7 +428,7 @@ class LiveSession:
             "gauges_m": list(g.gauge_positions_m),
             "supports_m": [g.section_pitch_m * (k + 1) for k in range(g.section_count)],
             "setpoint_unit": self.unit,
-            "setpoint_range": [0.0, 45.0] if self.unit == "deg" else [0.0, 60.0],
+            "setpoint_range": list(SETPOINT_RANGES[self.unit]),
             "can_command": self.kind != "replay" and self.cable,
             "can_load": self.kind == "twin",
             "loads_g": [12.5, 25.0, 37.5, 50.0],
@@ -423,7 +441,7 @@ class LiveSession:
 
     def request(self, message: object) -> dict[str, Any]:
         """Validate a page request and queue it for the loop; returns the clamped request (raises when bad)."""
-        clean = validate_request(message, self.length_m)
+        clean = validate_request(message, self.length_m, SETPOINT_RANGES[self.unit])
         kind = clean["type"]
         if kind in ("setpoint",) and not (self.kind != "replay" and self.cable):
             raise ParameterError("this backend takes no setpoint (a replay, or the cable is detached)")
@@ -526,7 +544,10 @@ class LiveSession:
                     with self._lock:
                         self.state.overruns += 1
                     t0 = now - k * self.period_s / (self.speed if self.kind == "replay" else 1)  # resynchronise
+                speed = self.speed
                 self._apply_requests()
+                if self.speed != speed:  # a new replay speed: new deadlines from here, not a missed one
+                    t0 = time.monotonic() - k * self.period_s / self.speed
                 if self.paused and self.kind == "replay":
                     t0 = time.monotonic() - k * self.period_s / self.speed
                     time.sleep(self.period_s)
@@ -536,6 +557,7 @@ class LiveSession:
                         with self._lock:
                             self.state.status = "replay finished"
                         self._stop.wait(0.2)
+                        t0 = time.monotonic() - k * self.period_s / self.speed  # waiting is not a missed deadline
                         continue
                     rig.wait(self.period_s)
                     virtual += self.period_s
@@ -616,7 +638,8 @@ class LiveSession:
         """The command for this frame: the controller's while engaged, the setpoint itself open loop, else 8."""
         rig = self.rig
         if self.kind == "replay":
-            i = min(int(round(reading.time_s / self.period_s)), len(self._replayed) - 1)
+            # the recorded sample in force (a recording of any rate, starting at any time)
+            i = max(bisect.bisect_right(self._replayed_t, reading.time_s + 1e-9) - 1, 0)
             rec = self._replayed[i]
             return int(rec.get("command", equilibrium)), _finite(rec.get("setpoint")), _finite(rec.get("y"))
         y = None
