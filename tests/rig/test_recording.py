@@ -152,3 +152,133 @@ def test_a_recorded_rig_keeps_every_reading_and_load(tmp_path):
     _, samples, footer = read_recording(path)
     assert [s["gauges_v"] for s in samples] == [list(r.gauges_v) for r in readings]
     assert footer["stop"] == "closed"
+
+
+_WRITER = """
+import sys, time
+from flexdigit.rig.recording import Recording
+rec = Recording(sys.argv[1], header={"backend": "test writer"})
+start = time.monotonic()
+print("started", flush=True)
+k = 0
+while True:  # a 50 Hz run until killed
+    t = time.monotonic() - start
+    rec.write_sample({"k": k, "t": t, "gauges_v": [0.1, 0.2, 0.3], "pot_v": None, "command": 8 + k % 40})
+    k += 1
+    time.sleep(max(0.0, 0.02 * k - (time.monotonic() - start)))
+"""
+
+
+@pytest.mark.slow
+def test_a_run_killed_with_sigkill_keeps_all_but_its_last_second(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from mcap.records import Message
+    from mcap.stream_reader import StreamReader
+
+    path = tmp_path / "killed.mcap"
+    child = subprocess.Popen([sys.executable, "-c", _WRITER, str(path)], stdout=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "started"
+    started = time.monotonic()
+    time.sleep(2.0)  # 100 samples, 11 kB: less than one chunk's 16 kB, so only the time-based close saves them
+    child.send_signal(signal.SIGKILL)
+    killed_after = time.monotonic() - started
+    child.wait(timeout=10)
+    # the mcap library's own streaming reader (not flexdigit's code) reads every closed chunk, then meets the cut
+    times = []
+    with open(path, "rb") as fh:
+        try:
+            for record in StreamReader(fh).records:
+                if isinstance(record, Message):
+                    times.append(json.loads(record.data)["t"])
+        except Exception:  # noqa: BLE001 - the torn end of a killed file: what came before it is the point
+            pass
+    _, samples, footer = read_recording(path)
+    assert footer is None  # never closed
+    assert [s["k"] for s in samples] == list(range(len(samples)))  # nothing missing or mixed
+    assert [s["t"] for s in samples] == times
+    # the chunk is closed at least once a second: all but the last second (and the scheduler's slack) survive
+    assert times[-1] >= killed_after - 1.0 - 0.5, (times[-1], killed_after)
+
+
+def _foreign(path, samples, *, topic=SAMPLE_TOPIC, encoding="json", raw=None):
+    """An MCAP written by the mcap library directly, as another program would from the README: the documented
+    topic and fields, no flexdigit metadata."""
+    from mcap.writer import Writer
+
+    schema = {"type": "object", "required": ["t", "gauges_v", "command"]}
+    with open(path, "wb") as fh:
+        writer = Writer(fh)
+        writer.start(profile="", library="another writer")
+        schema_id = writer.register_schema("Sample", "jsonschema", json.dumps(schema).encode())
+        channel = writer.register_channel(topic, encoding, schema_id)
+        for i, sample in enumerate(samples):
+            data = raw if raw is not None else json.dumps(sample).encode()
+            writer.add_message(channel, log_time=10**9 * 100 + i, publish_time=0, data=data, sequence=i)
+        writer.finish()
+    return path
+
+
+def _gauges(t):  # known readings: a function of the recorded time
+    return [0.01 * t, -0.02 * t, 0.5]
+
+
+def test_a_recording_by_another_writer_replays(tmp_path):
+    # 100 Hz, starting at t = 100 s of the other program's clock, no pot channel, no flexdigit metadata
+    samples = [{"t": 100 + 0.01 * k, "gauges_v": _gauges(100 + 0.01 * k), "command": 8 + k % 30} for k in range(300)]
+    path = _foreign(tmp_path / "other.mcap", samples)
+    header, read, footer = read_recording(path)
+    assert header == {"format": None} and footer is None and read == samples
+    with open_rig(f"replay://{path}") as rig:
+        for tau in (0.0, 0.505, 1.234, 2.99):
+            rig.wait(tau - rig.clock())
+            reading = rig.read()
+            held = 100 + 0.01 * int(tau / 0.01 + 1e-6)  # sample and hold: the last sample at or before tau
+            assert reading.gauges_v == pytest.approx(_gauges(held), abs=1e-12)
+            assert np.isnan(reading.pot_v)
+
+
+@pytest.mark.parametrize(
+    ("samples", "options", "says"),
+    [
+        ([{"t": 0.0, "gauges_v": [0.1, 0.2], "command": 8}], {}, "'gauges_v' must be a list of 3 voltages"),
+        ([{"t": 0.0, "gauges_v": ["a", 0.2, 0.3], "command": 8}], {}, "'gauges_v' must be a list of 3 numbers"),
+        ([{"t": 0.0, "gauges_v": [0.1, 0.2, 0.3], "command": 8.5}], {}, "'command' must be an integer 0..254"),
+        ([{"t": 0.0, "gauges_v": [0.1, 0.2, 0.3], "command": 999}], {}, "'command' must be an integer 0..254"),
+        ([{"t": None, "gauges_v": [0.1, 0.2, 0.3], "command": 8}], {}, "'t' must be a number"),
+        ([{"t": 0.0, "gauges_v": [0.1, 0.2, 0.3], "command": 8, "pot_v": "x"}], {}, "'pot_v' must be a number or null"),
+        # another writer's JSON may carry NaN / Infinity (flexdigit writes null for them)
+        ([{"t": float("nan"), "gauges_v": [0.1, 0.2, 0.3], "command": 8}], {}, "'t' must be a finite number"),
+        ([{"t": 0.0, "gauges_v": [0.1, float("inf"), 0.3], "command": 8}], {}, "'gauges_v' must be a list of 3 finite"),
+        ([{"t": 0.0, "gauges_v": [0.1, 0.2, 0.3], "command": 8, "pot_v": 10**400}], {}, "'pot_v' must be a finite"),
+        ([[1, 2, 3]], {}, "lacks t, gauges_v or command"),
+        ([{"t": 0.0}] * 3, {"raw": b"\x00\x01"}, "not JSON"),
+        ([{"t": 0.0}], {"encoding": "cdr"}, "encoded as 'cdr'"),
+        ([{"t": 0.0, "gauges_v": [0.1, 0.2, 0.3], "command": 8}], {"topic": "/imu"}, "no /flexdigit/sample"),
+    ],
+)
+def test_a_malformed_foreign_recording_is_named_in_one_line(tmp_path, samples, options, says, capsys):
+    from flexdigit.cli import main
+
+    path = _foreign(tmp_path / "foreign.mcap", samples, **options)
+    with pytest.raises(DataFileError, match=says) as err:
+        open_rig(f"replay://{path}")
+    assert str(path) in str(err.value) and "\n" not in str(err.value)
+    assert main(["live", "--backend", f"replay://{path}"]) == 2
+    message = capsys.readouterr().err
+    assert says in message and str(path) in message and message.count("\n") == 1
+
+
+def test_a_damaged_recording_says_so(tmp_path):
+    whole = _foreign(tmp_path / "whole.mcap", [{"t": 0.01 * k, "gauges_v": [0, 0, 0], "command": 8} for k in range(9)])
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(whole.read_bytes()[:60])  # cut inside its first records
+    with pytest.raises(DataFileError, match="damaged or cut short"):
+        read_recording(cut)
+    empty = tmp_path / "empty.mcap"
+    empty.write_bytes(b"")
+    with pytest.raises(DataFileError, match="not an MCAP file"):
+        open_rig(f"replay://{empty}")

@@ -225,6 +225,13 @@ def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], li
     return runs
 
 
+def _is_finite(x: int | float) -> bool:
+    try:
+        return math.isfinite(x)
+    except OverflowError:  # an integer of 400 digits: JSON allows it, a float cannot hold it
+        return False
+
+
 def check_sample(record: dict[str, Any], path: Path, where: str) -> dict[str, Any]:
     """A sample as the loop writes it (a log line, a recording's message), or a DataFileError naming the file,
     ``where`` in it (``"line 7"``) and the field."""
@@ -240,11 +247,15 @@ def check_sample(record: dict[str, Any], path: Path, where: str) -> dict[str, An
             raise bad(key, "a number (the sample's time, s)")
         if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)):
             raise bad(key, "a number or null")
+        if value is not None and not _is_finite(value):  # JSON reads NaN, Infinity and 1e999; the loop writes null
+            raise bad(key, "a finite number")
     gauges = record.get("gauges_v")
     if not isinstance(gauges, list) or len(gauges) != 3:
         raise bad("gauges_v", "a list of 3 voltages")
     if any(g is not None and (isinstance(g, bool) or not isinstance(g, int | float)) for g in gauges):
         raise bad("gauges_v", "a list of 3 numbers (null for a non-finite reading)")
+    if any(g is not None and not _is_finite(g) for g in gauges):
+        raise bad("gauges_v", "a list of 3 finite numbers (null for a non-finite reading)")
     command = record.get("command")
     if isinstance(command, bool) or not isinstance(command, int) or not 0 <= command <= 254:
         raise bad("command", "an integer 0..254")

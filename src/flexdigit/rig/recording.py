@@ -14,9 +14,9 @@ log), ``flexdigit.rig`` (its repr and parameters), ``flexdigit.calibration`` whe
 ``flexdigit.stop`` (why and how the run ended, written by :meth:`Recording.close`). Nested values are stored as
 JSON text (MCAP metadata is string to string).
 
-Nothing is lost or clobbered: the file is created exclusively (``--force`` replaces it), chunks are small (one
-every ``chunk_size`` bytes, about a second of samples) and flushed and fsync'ed as they close, so a run that is
-killed leaves every closed chunk readable (:func:`read_recording` reads such a file record by record; the summary
+Nothing is lost or clobbered: the file is created exclusively (``--force`` replaces it), and the open chunk is
+closed and handed to the operating system at least once a second (``flush_every_s``), so a run that is killed
+leaves everything but its last second readable (:func:`read_recording` reads such a file record by record; the summary
 section only makes reading faster). A clean close writes the summary and the footer.
 
 Examples
@@ -125,7 +125,11 @@ class Recording:
     force : bool
         Replace an existing file.
     chunk_size : int
-        Bytes per chunk: a killed run loses at most the open chunk.
+        Bytes per chunk at most.
+    flush_every_s : float
+        The open chunk is closed and handed to the operating system at least this often (s, wall clock): a run
+        killed with ``kill -9`` loses at most that much (:meth:`flush` and :meth:`close` also fsync, for a power
+        cut).
     """
 
     def __init__(
@@ -136,6 +140,7 @@ class Recording:
         metadata: dict[str, dict[str, Any]] | None = None,
         force: bool = False,
         chunk_size: int = 16 * 1024,
+        flush_every_s: float = 1.0,
     ) -> None:
         from mcap.writer import CompressionType, Writer
 
@@ -154,6 +159,8 @@ class Recording:
         self._lock = threading.Lock()  # a live session writes samples and estimates from two threads
         self._sequence = 0
         self._closed = False
+        self._flush_every_s = float(flush_every_s)
+        self._flushed_at = time.monotonic()
         run = {"format": RECORDING_FORMAT, "started_unix_s": time.time(), **(header or {})}
         self.header = run
         self._writer.add_metadata("flexdigit.run", _metadata_text(run))
@@ -185,6 +192,10 @@ class Recording:
             self._writer.add_message(channel, log_time=stamp, data=data, publish_time=stamp, sequence=self._sequence)
             self._sequence += 1
             self.messages += 1
+            now = time.monotonic()
+            if now - self._flushed_at >= self._flush_every_s:  # close the chunk: a killed run keeps it
+                self._flushed_at = now
+                self._writer.flush()
 
     def write_sample(self, record: dict[str, Any]) -> None:
         """Append a loop sample (:data:`SAMPLE_SCHEMA`) at its time ``record["t"]``."""
@@ -246,17 +257,28 @@ def rig_metadata(rig) -> dict[str, dict[str, Any]]:
     return out
 
 
-def _records(path: Path) -> Iterator[Any]:
-    """Every record of an MCAP file in order, tolerating a file cut short by a killed run."""
-    from mcap.exceptions import McapError
-    from mcap.stream_reader import StreamReader
+class _Records:
+    """Every record of an MCAP file in order, tolerating a file cut short by a killed run: iterating stops at the
+    first record that cannot be read, and :attr:`stopped` then says why (None when the file was read to its end)."""
 
-    with open(path, "rb") as fh:
-        reader = StreamReader(_Bounded(fh, path.stat().st_size), skip_magic=False)
-        try:
-            yield from reader.records
-        except (McapError, EOFError, ValueError, struct.error):
-            return  # the open chunk of a run that was killed: everything before it is kept
+    def __init__(self, path: Path) -> None:
+        self.path, self.stopped = path, None
+
+    def __iter__(self) -> Iterator[Any]:
+        from mcap.exceptions import McapError
+        from mcap.stream_reader import StreamReader
+
+        with open(self.path, "rb") as fh:
+            reader = StreamReader(_Bounded(fh, self.path.stat().st_size), skip_magic=False)
+            try:
+                yield from reader.records
+            except (McapError, EOFError, ValueError, struct.error) as exc:
+                # the open chunk of a run that was killed: everything before it is kept
+                self.stopped = f"{type(exc).__name__}: {exc}"[:200]
+
+
+def _records(path: Path) -> Iterator[Any]:
+    return iter(_Records(path))
 
 
 class _Bounded:
@@ -275,8 +297,12 @@ class _Bounded:
         return getattr(self._fh, item)
 
 
-def iter_messages(path: str | os.PathLike, topics=None) -> Iterator[tuple[str, float, dict[str, Any]]]:
-    """``(topic, time_s, message)`` for every message in ``path`` (optionally only ``topics``), in file order."""
+def iter_messages(path: str | os.PathLike, topics=None, *, records=None) -> Iterator[tuple[str, float, dict[str, Any]]]:
+    """``(topic, time_s, message)`` for every message in ``path`` (optionally only ``topics``), in file order.
+
+    Messages must be JSON (the channel's ``message_encoding`` "json"); another encoding on a wanted topic is refused
+    naming the file and the topic.
+    """
     from mcap.records import Channel, Message
 
     path = Path(path)
@@ -284,9 +310,14 @@ def iter_messages(path: str | os.PathLike, topics=None) -> Iterator[tuple[str, f
         raise DataFileError(f"{path}: not an MCAP file (no MCAP magic at the start)")
     channels: dict[int, str] = {}
     wanted = None if topics is None else set(topics)
-    for record in _records(path):
+    for record in records if records is not None else _records(path):
         if isinstance(record, Channel):
             channels[record.id] = record.topic
+            if (wanted is None or record.topic in wanted) and record.message_encoding != "json":
+                raise DataFileError(
+                    f"{path}: channel {record.topic} is encoded as {record.message_encoding!r}; "
+                    "flexdigit reads JSON messages (message_encoding 'json')"
+                )
         elif isinstance(record, Message):
             topic = channels.get(record.channel_id)
             if topic is None:
@@ -307,27 +338,50 @@ def read_metadata(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
     return {r.name: _metadata_values(r.metadata) for r in _records(Path(path)) if isinstance(r, Metadata)}
 
 
+def _check_sample(path: Path, i: int, message: Any, check_sample) -> dict[str, Any]:
+    """One ``/flexdigit/sample`` message checked as the loop's logs are (:func:`flexdigit.rig.loop.check_sample`)."""
+    if not isinstance(message, dict) or not {"t", "gauges_v", "command"} <= set(message):
+        raise DataFileError(f"{path}: {SAMPLE_TOPIC} message {i} lacks t, gauges_v or command: {message!r:.120}")
+    return check_sample(message, path, f"{SAMPLE_TOPIC} message {i}")
+
+
 def read_recording(path: str | os.PathLike):
     """Read a recording as :func:`~flexdigit.rig.loop.read_log` reads a log: ``(header, samples, footer or None)``.
 
     ``header`` is the ``flexdigit.run`` metadata, ``samples`` the ``/flexdigit/sample`` messages (dicts with
     ``t``, ``gauges_v``, ``pot_v``, ``command`` ...), ``footer`` the ``flexdigit.stop`` metadata (None for a run
-    that was killed before it closed the file). Raises :class:`~flexdigit.errors.DataFileError` naming the file
-    when it is not a flexdigit recording or a sample lacks a field.
+    that was killed before it closed the file). A recording another program wrote on the documented topic and
+    schema (:data:`SAMPLE_SCHEMA`) needs no flexdigit metadata: its header is then ``{"format": None}``. Raises
+    :class:`~flexdigit.errors.DataFileError` naming the file when it holds no samples, a sample breaks the schema,
+    or its ``flexdigit.run`` metadata is of another format.
     """
+    from mcap.records import Metadata
+
     from flexdigit.rig.loop import check_sample
 
     path = Path(path)
-    samples = []
-    for _, _, message in iter_messages(path, topics=[SAMPLE_TOPIC]):
-        if not isinstance(message, dict) or not {"t", "gauges_v", "command"} <= set(message):
-            raise DataFileError(f"{path}: a {SAMPLE_TOPIC} message lacks t, gauges_v or command: {message!r:.120}")
-        samples.append(check_sample(message, path, f"{SAMPLE_TOPIC} message {len(samples) + 1}"))
-    meta = read_metadata(path)
+    records = _Records(path)
+    meta: dict[str, dict[str, Any]] = {}
+
+    def collecting():
+        for record in records:
+            if isinstance(record, Metadata):
+                meta[record.name] = _metadata_values(record.metadata)
+            yield record
+
+    samples = [
+        _check_sample(path, i + 1, message, check_sample)
+        for i, (_, _, message) in enumerate(iter_messages(path, topics=[SAMPLE_TOPIC], records=collecting()))
+    ]
     header = meta.get("flexdigit.run")
-    if header is None or header.get("format") != RECORDING_FORMAT:
-        raise DataFileError(f"{path}: not a flexdigit recording (no flexdigit.run metadata of {RECORDING_FORMAT})")
-    return header, samples, meta.get("flexdigit.stop")
+    if header is not None and header.get("format") != RECORDING_FORMAT:
+        raise DataFileError(
+            f"{path}: a recording of format {header.get('format')!r}; this flexdigit reads {RECORDING_FORMAT}"
+        )
+    if not samples:
+        why = f" (the file is damaged or cut short: {records.stopped})" if records.stopped else ""
+        raise DataFileError(f"{path}: no {SAMPLE_TOPIC} messages: not a flexdigit recording{why}")
+    return header if header is not None else {"format": None}, samples, meta.get("flexdigit.stop")
 
 
 #: JSON Schema of what happens to the rig besides its samples (weights hung, lifted, re-hung).

@@ -33,11 +33,13 @@ class ReplayRig(Rig):
     def __init__(self, path: str, params: RigParams | None = None, *, run: int | None = None, **kwargs: Any) -> None:
         self.path = str(path)
         self.run = run
-        if is_mcap(path) and run not in (None, 1):
+        mcap = is_mcap(path) or str(path).lower().endswith(".mcap")  # an .mcap that is not one is named as such
+        if mcap and run not in (None, 1):
             raise ParameterError(f"replay://{path}?run={run}: an MCAP recording holds one run")
-        self.header, samples, self.footer = read_recording(path) if is_mcap(path) else read_log(path, run)
+        self.header, samples, self.footer = read_recording(path) if mcap else read_log(path, run)
         if not samples:
             raise DataFileError(f"{path}: the log has no samples to replay")
+        self.samples = samples  # the recorded samples as read (dicts: t, gauges_v, pot_v, command, setpoint ...)
         self._times = [float(s["t"]) for s in samples]
         if any(b < a for a, b in zip(self._times, self._times[1:], strict=False)):
             raise DataFileError(f"{path}: sample times are not increasing")
