@@ -29,7 +29,6 @@ import math
 import queue
 import threading
 import time
-import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -710,9 +709,7 @@ class LiveSession:
     def _compute_locatability(self, key) -> None:
         s = np.round(np.arange(0.005, self.length_m + 1e-9, 0.005), 4)
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # a heavily sagging free digit may settle slowly: the map holds
-                sd = self._loc_estimator.locatability(s, 0.245, key)
+            sd = self._loc_estimator.locatability(s, 0.245, key)  # warns of nothing: no catch_warnings in a thread
             self._loc_cache[key] = {"command": key, "s_m": s.tolist(), "sd_m": [_finite(x) for x in sd]}
         except Exception as exc:  # the page goes without the map; it says why
             self.estimate_error = f"locatability map: {type(exc).__name__}: {exc}"

@@ -528,6 +528,22 @@ class ShapeEstimator:
         -------
         ShapeEstimate
         """
+        estimate, unsettled, change, rounds = self._estimate(gauges_v, command, start)
+        if unsettled:
+            warnings.warn(
+                f"ShapeEstimator: the lever arms had not settled after {rounds} iterations on "
+                f"{unsettled} of {change.size} readings (last change {np.max(change):.2g} rad); raise max_iterations",
+                ConvergenceWarning,
+                stacklevel=2,
+            )
+        return estimate
+
+    def _estimate(self, gauges_v, command, start):
+        """:meth:`estimate` without its warning: ``(estimate, readings unsettled, last change (B,), rounds)``.
+
+        For callers in threads of their own (the live page's locatability map), where ``warnings.catch_warnings``
+        would change the warning filters of every thread while it ran.
+        """
         self._setup()
         owner = "ShapeEstimator.estimate"
         v = check_array(gauges_v, "gauges_v", owner)
@@ -555,14 +571,7 @@ class ShapeEstimator:
             if settle.done:
                 break
         change = settle.change
-        if rounds and not np.all(change < self.tol_rad):
-            warnings.warn(
-                f"ShapeEstimator: the lever arms had not settled after {rounds} iterations on "
-                f"{int(np.sum(change >= self.tol_rad))} of {b} readings (last change {np.max(change):.2g} rad); "
-                "raise max_iterations",
-                ConvergenceWarning,
-                stacklevel=2,
-            )
+        unsettled = int(np.sum(change >= self.tol_rad)) if rounds else 0
         sd_k = self._sd_curvature(sd_white, tension)
         fit = self._fit(kappa_g, tip_eq, sd_k, r, psi, fit if rounds > self.HOLD_AFTER else None)
         curvature = self._curvature_field(fit, r, psi)
@@ -573,7 +582,7 @@ class ShapeEstimator:
         # that is wider (a second branch of solutions, a flat chi-square)
         half_width = 0.5 * np.diff(fit["interval_1sd"], axis=1)[:, 0]
         position_sd = np.fmax(unc["position_sd_m"], half_width)
-        return ShapeEstimate(
+        estimate = ShapeEstimate(
             s_m=self.nodes_m_,
             centre_line_m=r,
             angle_rad=psi,
@@ -592,6 +601,7 @@ class ShapeEstimator:
             consistent=np.where(fit["loaded"], fit["chi2_1"], fit["chi2_0"]) <= self.misfit_chi2,
             load_kind=self.load,
         )
+        return estimate, unsettled, change, rounds
 
     def _sd_curvature(self, sd_white: np.ndarray, tension: np.ndarray) -> np.ndarray:
         """Per reading and gauge, the curvature noise (1/m): white (averaged) and the cable-guide friction."""
@@ -832,13 +842,14 @@ class ShapeEstimator:
         ``force_n`` (N; 0.25 N is about a 25 g weight) on the digit at ``command``, readings averaged
         ``n_average`` at a time. The live page shades the stretches of the digit where it exceeds a threshold ("the
         gauges cannot place a load here"): before gauge 1 no gauge bends on a free digit; between gauges 1 and 2
-        position and mass trade off.
+        position and mass trade off. It does not warn when a heavily sagging digit's lever arms settle slowly (the
+        standard deviations hold): it runs in a thread of its own on the live page.
         """
         self._setup()
         force = check_real(force_n, "force_n", "ShapeEstimator.locatability", low=0, low_open=True)
         pos = np.atleast_1d(check_array(positions_from_base_m, "positions_from_base_m", "ShapeEstimator"))
         kappa, _, _, _ = self.predict(pos, np.full(pos.size, force), command)
-        est = self.estimate(self.volts_from_curvature(kappa), command=command)
+        est = self._estimate(self.volts_from_curvature(kappa), command, None)[0]
         return np.where(est.contact, est.load_position_sd_m, np.inf)
 
 
