@@ -166,3 +166,40 @@ def test_unsettled_lever_arms_warn_in_estimate_but_not_in_the_map():
         warnings.simplefilter("error")
         sd = est.locatability([0.05, 0.25], force_n=0.245)
     assert np.isinf(sd[0]) or sd[0] > 0.01  # before gauge 1: not locatable
+
+
+@pytest.mark.parametrize(("s_load", "cable"), [(0.15, True), (0.20, True), (0.26, False)])
+def test_shape_from_euler_bernoulli_gauges_is_the_closed_form_deflection(s_load, cable):
+    # the inverse problem against a closed form it does not share: a weightless digit pressed with f at s_L;
+    # the gauges read kappa = f (s_L - x) / EI(x) (E 3.12), the estimator sees only those voltages, and its tip
+    # must be the small-deflection cantilever's: y(L) = int_0^L kappa(x) (L - x) dx, theta(L) = int_0^L kappa dx,
+    # with EI(x) the strip plus the section's housing on the 80 mm flexible stretches and rigid 10 mm supports
+    # (2.2, tables 3.5, 3.7), integrated here by scipy's quad, not by the estimator's 1 mm grid. Beyond gauge 3 with
+    # the cable attached and the command unknown the three gauges cannot tell a press there from a tension and a
+    # press at gauge 3 (both moments are linear in x over the gauges): that case is the cable-less digit's
+    from scipy.integrate import quad
+
+    params = RigParams().replace(material=RigParams().material.__class__(strip_density_kg_m3=1e-9))
+    calibration = default_calibration().replace(support_mass_kg=(0.0, 0.0, 0.0))
+    geo, length, force = params.geometry, params.geometry.digit_length_m, 2e-3  # N: small deflection
+    flexible = geo.strip_length_m / geo.section_count
+    rigid_half = 0.5 * (geo.section_pitch_m - flexible)
+    ei_strip = params.material.youngs_modulus_pa * geo.second_moment_m4
+
+    def kappa(x):
+        k = min(int(x // geo.section_pitch_m), geo.section_count - 1)
+        local = x - k * geo.section_pitch_m
+        if not rigid_half < local < geo.section_pitch_m - rigid_half or x >= s_load:
+            return 0.0
+        return force * (s_load - x) / (ei_strip + calibration.housing_ei_n_m2[k])
+
+    breaks = sorted({*np.arange(0.0, length, geo.section_pitch_m) + rigid_half, s_load})
+    deflection = quad(lambda x: kappa(x) * (length - x), 0, length, points=breaks, limit=200)[0]
+    rotation = quad(kappa, 0, length, points=breaks, limit=200)[0]
+    gauges = np.array([kappa(x) for x in geo.gauge_positions_m])
+    est = ShapeEstimator(params, calibration, orientation="vertical", load="press", cable=cable, contact_chi2=0.0)
+    e = est.estimate(est.volts_from_curvature(gauges[None]), command=None)
+    assert e.tip_m[0, 1] == pytest.approx(deflection, rel=0.01)  # a 1 mm grid and large rotations: 1 %
+    assert e.angle_rad[0, -1] == pytest.approx(rotation, rel=0.01)
+    assert e.tip_m[0, 0] == pytest.approx(length, abs=1e-5)  # small deflection: the tip hardly comes back
+    assert e.load_position_from_base_m[0] == pytest.approx(s_load, abs=LOCATE_M)
