@@ -289,6 +289,8 @@ class LiveSession:
     MAX_ESTIMATE_GAP_S = 1.0
     #: Readings count as moved when their 0.1 s mean changed by more than this many of its own standard deviations.
     STILL_SIGMAS = 3.0
+    #: The locatability map is computed for commands rounded to this step (and cached).
+    MAP_COMMAND_STEP = 4
 
     def __init__(
         self,
@@ -339,6 +341,8 @@ class LiveSession:
         self.paused = False
         self.speed = 1
         self.engaged = False  # the controller holds the setpoint only while a page asks for it
+        #: CPU time (s) the loop spent inside the rig's read and write: on the twin, its simulation of the digit
+        self.rig_cpu_s = 0.0
         self.error: str | None = None
 
     def _setup(self, model, record, force, rotation_map, orientation, seed) -> None:
@@ -485,6 +489,7 @@ class LiveSession:
                     "overruns": self.state.overruns,
                     "estimate_error": self.estimate_error,
                     "clients": self.clients,
+                    "rig_cpu_s": round(self.rig_cpu_s, 4),
                     "server_ms": time.time() * 1e3,
                 },
                 "locatability": self.state.locatability,
@@ -560,7 +565,9 @@ class LiveSession:
                         continue
                     rig.wait(self.period_s)
                     virtual += self.period_s
+                start = time.thread_time()
                 reading = rig.read()
+                self.rig_cpu_s += time.thread_time() - start
                 check_reading(reading, adc)
                 wall_ms = time.time() * 1e3
                 command, setpoint, y = self._act(reading, equilibrium)
@@ -645,11 +652,18 @@ class LiveSession:
         if self.controller is not None:
             y = _finite(self.controller.measure(reading))
             if self.engaged:
-                return rig.write_command(self.controller.step(self.setpoint, reading)), self.setpoint, y
+                return self._write(self.controller.step(self.setpoint, reading)), self.setpoint, y
             return rig.command, None, y
         if self.engaged and self.cable:
-            return rig.write_command(self.setpoint), self.setpoint, y
+            return self._write(self.setpoint), self.setpoint, y
         return rig.command, None, y
+
+    def _write(self, command) -> int:
+        start = time.thread_time()
+        try:
+            return self.rig.write_command(command)
+        finally:
+            self.rig_cpu_s += time.thread_time() - start
 
     def _estimates(self) -> None:
         """The estimator thread: the latest job from the loop, estimated, published, recorded."""
@@ -690,7 +704,10 @@ class LiveSession:
     def _locatability(self, command):
         """Where a 25 g load can be placed to the page's threshold at this command: computed in a worker thread
         (half a second of work must not stall the 20 ms loop), cached per command; None until something new."""
-        key = int(command) if self.cable else None
+        # one map per band of MAP_COMMAND_STEP commands: a controller holding a setpoint dithers by a command or
+        # two, and the map moves slowly with the command (the taut cable's friction grows with its tension: a
+        # 25 g load's median sd is 22 mm at command 15, 43 mm at 25), while each map costs half a second of CPU
+        key = int(self.MAP_COMMAND_STEP * round(int(command) / self.MAP_COMMAND_STEP)) if self.cable else None
         now = time.monotonic()
         if key != getattr(self, "_loc_seen", "unset"):
             self._loc_seen, self._loc_since = key, now
