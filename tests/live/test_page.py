@@ -117,9 +117,34 @@ def test_the_page_reconnects_after_a_server_restart(live_server, page):
     server.stop()
     wait_for(page, lambda s: not s["connected"], what="the page to notice the server left")
     assert page.inner_text("#conn") == "reconnecting"
+    # what is still drawn is no longer the digit: the page says so and greys it out
+    assert "unreachable" in page.inner_text("#status") and page.evaluate("document.body.classList.contains('stale')")
     again = live_server("--backend", "sim?cable=false", port=port)
     before = stats(page)["samples"]
     wait_for(page, lambda s: s["connected"] and s["samples"] > before + 20, timeout_s=60, what="the reconnection")
     assert stats(page)["reconnects"] >= 1 and page.inner_text("#conn") == "live"
+    assert not page.evaluate("document.body.classList.contains('stale')")
     assert page.console_errors == [] or all("WebSocket" in e for e in page.console_errors)
     again.stop()
+
+
+def test_a_second_page_shows_the_servers_setpoint_and_pause(live_server, browser, page):
+    # the controls show the server's state, not the page's own last gesture (a reconnection, another page)
+    server = live_server()
+    page.goto(server.url)
+    wait_for(page, lambda s: s["last"]["shape"] is not None, what="the shape")
+    page.locator("#setpoint").fill("30")
+    wait_for(page, lambda s: s["last"]["state"]["setpoint"] == 30, what="the setpoint applied")
+    page.click("#pause")
+    wait_for(page, lambda s: s["last"]["state"]["paused"], what="the pause applied")
+    other = browser.new_context(viewport={"width": 700, "height": 900}).new_page()
+    other.goto(server.url)
+    wait_for(other, lambda s: s["last"]["state"]["setpoint"] == 30, what="the second page's first frame")
+    other.wait_for_timeout(300)
+    assert float(other.input_value("#setpoint")) == 30.0 and other.inner_text("#sp-value") == "30.0"
+    assert other.inner_text("#pause") == "resume"
+    # a narrow window stacks the panels under the digit rather than squeezing the digit beside them
+    shape, contact = other.locator("#shape").bounding_box(), other.locator("#contact").bounding_box()
+    assert shape["width"] > 600 and contact["y"] > shape["y"] + shape["height"]
+    other.context.close()
+    server.stop()

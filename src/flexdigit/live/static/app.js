@@ -13,13 +13,19 @@
     last: null, connected: false, reconnects: 0,
   });
   let ws = null, hello = null, last = null, samples = [], dirty = false, paused = false, lastSend = 0;
-  let pendingSetpoint = null, locMap = null;
+  let pendingSetpoint = null, locMap = null, synced = false, pauseSent = 0;
 
   // ---------------------------------------------------------------------------------------------- connection
   function connect() {
     ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws");
     ws.onopen = () => { stats.connected = true; setConn(true); };
     ws.onclose = () => {
+      if (stats.connected || !document.body.classList.contains("stale")) {
+        // what is on the screen is no longer the digit: say so, and grey it out until the server is back
+        $("status").textContent = "server unreachable: the view is frozen at its last update";
+        $("rate").textContent = "";
+        document.body.classList.add("stale");
+      }
       stats.connected = false;
       setConn(false);
       setTimeout(() => { stats.reconnects += 1; connect(); }, 500);
@@ -45,6 +51,8 @@
     hello = stats.hello = msg;
     samples = [];
     locMap = null;
+    synced = false; // the controls take the server's state from its first frame
+    document.body.classList.remove("stale");
     $("backend").textContent = msg.backend + " (" + msg.kind + ", " + msg.orientation +
       (msg.cable ? "" : ", cable detached") + ")";
     const slider = $("setpoint");
@@ -89,6 +97,26 @@
     }
     if (msg.locatability) locMap = stats.locMap = msg.locatability; // sent when it changes (with the command)
     if (msg.samples.length) dirty = true;
+    syncControls(msg.state);
+  }
+
+  // the controls show the server's state, not this page's last gesture: after a reconnection, a server restart,
+  // or another page's request (the slider only while it is not being moved, the pause button always)
+  function syncControls(st) {
+    const slider = $("setpoint");
+    const idle = pendingSetpoint === null && document.activeElement !== slider &&
+      performance.now() - lastSend > 1000;
+    if ((!synced || idle) && st.setpoint !== null && st.setpoint !== undefined) {
+      slider.value = st.setpoint;
+      $("sp-value").textContent = Number(st.setpoint).toFixed(1);
+    }
+    if (!synced || (st.paused !== paused && performance.now() - pauseSent > 1000)) setPaused(st.paused);
+    synced = true;
+  }
+  function setPaused(on) {
+    paused = on;
+    $("pause").textContent = paused ? "resume" : "pause";
+    $("pause").classList.toggle("active", paused);
   }
 
   // ---------------------------------------------------------------------------------------------- controls
@@ -106,9 +134,8 @@
   }, 50);
   $("clear").onclick = () => send({ type: "clear" });
   $("pause").onclick = () => {
-    paused = !paused;
-    $("pause").textContent = paused ? "resume" : "pause";
-    $("pause").classList.toggle("active", paused);
+    setPaused(!paused);
+    pauseSent = performance.now();
     send({ type: "pause", paused: paused });
   };
   $("shape").addEventListener("click", (e) => {
@@ -263,9 +290,6 @@
       (hello && !hello.can_command ? "; no actuation here" : "") + (st.paused ? "; paused" : "") +
       (hello && hello.kind === "replay" ? "; replay at " + st.speed + "x" : "");
     $("engaged").textContent = st.engaged ? "(holding)" : "(relaxed: command 8)";
-    if (pendingSetpoint === null && st.setpoint !== null && document.activeElement !== $("setpoint")) {
-      $("sp-value").textContent = Number(st.setpoint).toFixed(1);
-    }
     const lastSample = samples[samples.length - 1];
     if (lastSample) {
       $("cmd-value").textContent = lastSample.command;
