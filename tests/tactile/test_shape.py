@@ -125,6 +125,18 @@ def test_live_warm_start_matches_a_cold_estimate():
     assert warm.load_position_from_base_m == pytest.approx(cold.load_position_from_base_m, abs=1e-4)
 
 
+@pytest.mark.parametrize("command", [12, 30])
+def test_locatability_map_is_the_cold_estimates_own(command):
+    # the map starts its estimates from the model's own shape (one fit, the live page computes it per command
+    # band): it must say what estimate() says from the straight digit on the same noise-free readings
+    est = ShapeEstimator(orientation="horizontal", n_average=5)
+    s = np.array([0.03, 0.12, 0.15, 0.19, 0.23, 0.26])
+    kappa, _, _, _ = est.predict(s, np.full(s.size, 0.245), command)
+    cold = est.estimate(est.volts_from_curvature(kappa), command=command)
+    expected = np.where(cold.contact, cold.load_position_sd_m, np.inf)
+    assert est.locatability(s, 0.245, command) == pytest.approx(expected, rel=1e-3)
+
+
 def test_row_is_json_ready():
     import json
 
