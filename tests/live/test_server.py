@@ -181,6 +181,7 @@ def test_a_recording_replays_at_1x_and_10x(tmp_path):
         with _ws(srv) as ws:
             hello = _next(ws, "hello")
             assert hello["kind"] == "replay" and hello["speeds"] == [1, 10] and not hello["can_command"]
+            assert hello["setpoint_unit"] == "deg"  # run's controller holds a beam rotation: its recorded unit
 
             def rate(seconds):  # recorded seconds played per wall second
                 start, first, frame = time.monotonic(), None, None

@@ -372,6 +372,7 @@ class LiveSession:
         if model is not None:
             self.contacts.insert(0, NetworkContact(model, self.length_m))
         self.controller, self.unit = None, "command"
+        self.recorded_controller = None  # a replay's: the controller its recording was made under
         self.setpoint = float(params.actuator.equilibrium_command)
         if self.kind == "twin" and cable:
             # a static sweep on a twin of its own (virtual time, the twin's 20 ms step: nothing moves fast)
@@ -399,6 +400,10 @@ class LiveSession:
             self._replayed_t = [float(x["t"]) - float(samples[0]["t"]) for x in samples]
             self._replay_length_s = float(samples[-1]["t"]) - float(samples[0]["t"])
             self.setpoint = None
+            # a recording made under a controller (run, live's closed loop) has its setpoint and measured value in
+            # the controller's unit, the beam rotation; one without (collect, open loop, another writer's) commands
+            self.recorded_controller = (getattr(rig, "header", None) or {}).get("controller")
+            self.unit = "deg" if self.recorded_controller else "command"
         if record is not None:
             from flexdigit.live.schemas import CONTACT_SCHEMA, SHAPE_SCHEMA
             from flexdigit.rig.recording import Recording, rig_metadata
@@ -481,7 +486,7 @@ class LiveSession:
                     "status": self.state.status,
                     "setpoint": self.setpoint,
                     "unit": self.unit,
-                    "controller": "digital20" if self.controller else None,
+                    "controller": "digital20" if self.controller else self.recorded_controller,
                     "engaged": self.engaged,
                     "paused": self.paused,
                     "speed": self.speed,

@@ -286,11 +286,18 @@
     const st = last.state, sh = last.shape;
     $("status").textContent = st.status + (st.overruns ? " (" + st.overruns + " overruns)" : "") +
       (st.estimate_error ? "; estimate failed: " + st.estimate_error : "");
-    $("ctrl-state").textContent = (st.controller ? "controller " + st.controller : "open loop") +
+    const how = st.controller ? "controller " + st.controller : "open loop";
+    $("ctrl-state").textContent = (hello && hello.kind === "replay" ? "recorded " + (st.controller ? "under " : "") + how : how) +
       (hello && !hello.can_command ? "; no actuation here" : "") + (st.paused ? "; paused" : "") +
       (hello && hello.kind === "replay" ? "; replay at " + st.speed + "x" : "");
-    $("engaged").textContent = st.engaged ? "(holding)" : "(relaxed: command 8)";
+    const replay = hello && hello.kind === "replay";
+    $("engaged").textContent = replay ? "(as recorded)" : st.engaged ? "(holding)" : "(relaxed: command 8)";
     const lastSample = samples[samples.length - 1];
+    if (replay && lastSample) { // a replay's setpoint is the recording's, sample by sample
+      const sp = lastSample.setpoint;
+      $("sp-value").textContent = sp === null || sp === undefined ? "–" : Number(sp).toFixed(1);
+      if (sp !== null && sp !== undefined) $("setpoint").value = sp;
+    }
     if (lastSample) {
       $("cmd-value").textContent = lastSample.command;
       $("y-value").textContent = lastSample.y === null ? "–" : lastSample.y.toFixed(1) + (st.unit === "deg" ? " deg" : "");
