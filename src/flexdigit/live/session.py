@@ -273,7 +273,7 @@ class LiveSession:
         A calibration TOML (``flexdigit calibrate``): the twin's on ``sim``, and on every backend the channel
         gains, offsets, stiffness and noise the shape estimate uses; the thesis's fit by default.
     rotation_map : path, optional
-        A rotation map (``flexdigit run --calibration``) for the controller on hardware; the twin calibrates its own.
+        A rotation map (``flexdigit run --rotation-map``) for the controller on hardware; the twin calibrates its own.
     orientation : str, optional
         How the digit is mounted, for the shape estimate on hardware (the twin knows its own).
     period_s : float
