@@ -2,7 +2,8 @@
 
 - Latency of one contact estimate from one reading (three gauges and the command): position, force and their
   standard deviations (point hypothesis, what force control runs every 20 ms frame), and with the point /
-  distributed decision; best of 5 runs of 200 calls, tables built beforehand (not timed; their build is its own row).
+  distributed decision (the slower of a point reading and a line load's, whose standard deviations it adds); best
+  of 5 runs of 200 calls, wall and CPU, tables built beforehand (not timed; their build is its own row).
 - A full scan on the twin through the 20 ms loop: the nodule phantom at 9 offsets 10 mm apart, each a sweep of 12
   plateaus (2.5 s settle, 20 readings), the twin integrating at 10 ms; then the local fits and the inclusion fit.
   Also the same scan's analysis on the twin's statics (:func:`flexdigit.tactile.palpation.simulate_sweep`), which
@@ -17,14 +18,16 @@ import time
 import numpy as np
 
 
-def _best(fn, number: int = 200, repeat: int = 5) -> float:
-    best = np.inf
+def _best(fn, number: int = 200, repeat: int = 5) -> tuple[float, float]:
+    """Best wall and best CPU time per call (s) over ``repeat`` runs of ``number`` calls."""
+    best, best_cpu = np.inf, np.inf
     for _ in range(repeat):
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         for _ in range(number):
             fn()
         best = min(best, (time.perf_counter() - start) / number)
-    return best
+        best_cpu = min(best_cpu, (time.process_time() - cpu) / number)
+    return best, best_cpu
 
 
 def run() -> list[dict]:
@@ -41,23 +44,48 @@ def run() -> list[dict]:
     start = time.perf_counter()
     both = ContactEstimator(model, commands=[20]).fit()
     line_s = time.perf_counter() - start
-    reading = model.point_v([0.2], [-0.1], 20) + model.noise_v * np.random.default_rng(0).standard_normal((1, 3))
+    noise = model.noise_v * np.random.default_rng(0).standard_normal((1, 3))
+    reading = model.point_v([0.2], [-0.1], 20) + noise
+    line = model.line_v([0.2], [0.08], [-0.3], 20) + noise
+    start = time.perf_counter()
+    assert both.predict(line, 20).kind[0] == "distributed"  # builds the line derivative table (not timed below)
+    derivative_s = time.perf_counter() - start
+    wall, cpu = _best(lambda: point.predict(reading, 20))
     rows.append(
         {
             "name": "contact estimate, one reading (position, force, sds)",
-            "value": 1e3 * _best(lambda: point.predict(reading, 20)),
+            "value": 1e3 * wall,
             "unit": "ms",
             "goal": "<= 1 ms",
-            "note": "ContactEstimator(classify=False).predict: 271-point profile, refinement, Fisher sds",
+            "note": f"ContactEstimator(classify=False).predict: 271-point profile, refinement, Fisher sds; "
+            f"CPU {1e3 * cpu:.2f} ms",
         }
     )
+    wall, cpu = _best(lambda: both.predict(reading, 20))
+    wall_line, cpu_line = _best(lambda: both.predict(line, 20))
     rows.append(
         {
             "name": "contact estimate with point vs distributed, one reading",
-            "value": 1e3 * _best(lambda: both.predict(reading, 20)),
+            "value": 1e3 * max(wall, wall_line),
             "unit": "ms",
             "goal": "<= 1 ms",
-            "note": "adds the line-load profile (~800 centres x extents) and the Bayes factor",
+            "note": f"adds the line-load profile (~800 centres x extents) and the Bayes factor: a point reading "
+            f"{1e3 * wall:.2f} ms (CPU {1e3 * cpu:.2f}), a line load's with its sds {1e3 * wall_line:.2f} ms "
+            f"(CPU {1e3 * cpu_line:.2f})",
+        }
+    )
+    rng = np.random.default_rng(1)
+    batch = model.point_v(rng.uniform(0.15, 0.26, 1000), -rng.uniform(0.05, 0.5, 1000), 20)
+    batch = batch + model.noise_v * rng.standard_normal(batch.shape)
+    wall, cpu = _best(lambda: point.predict(batch, 20), number=1, repeat=3)
+    wall_both, cpu_both = _best(lambda: both.predict(batch, 20), number=1, repeat=3)
+    rows.append(
+        {
+            "name": "contact estimate per reading in a batch of 1000 (point contacts), point / with the decision",
+            "value": wall,
+            "unit": "ms",
+            "goal": "",
+            "note": f"with point vs distributed {wall_both:.2f} ms; CPU {cpu:.2f} / {cpu_both:.2f} ms",
         }
     )
     rows.append(
@@ -66,7 +94,8 @@ def run() -> list[dict]:
             "value": table_s,
             "unit": "s",
             "goal": "",
-            "note": f"point and line loads: {line_s:.2f} s",
+            "note": f"point and line loads: {line_s:.2f} s; the line loads' derivative tables (built when a "
+            f"command first declares one): {derivative_s:.2f} s",
         }
     )
 

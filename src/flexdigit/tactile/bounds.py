@@ -371,10 +371,7 @@ def line_jacobian(model, centre_m, extent_m, total_n, command, step_m: float = 5
     c = np.atleast_1d(np.asarray(centre_m, dtype=float))
     w = np.broadcast_to(np.asarray(extent_m, dtype=float), c.shape)
     t = np.broadcast_to(np.asarray(total_n, dtype=float), c.shape)
-    length = model.length_m
-    room = np.minimum(c - w / 2, length - c - w / 2)
-    hc = np.clip(room, 1e-6, step_m)  # centre steps that keep the load on the digit
-    hw = np.clip(np.minimum(room * 2, w / 2), 1e-6, step_m)
+    hc, hw = line_steps(model.length_m, c, w, step_m)
     dt = rel_step_force * np.maximum(np.abs(t), 1e-3)
     cc = np.concatenate([c + hc, c - hc, c, c, c, c])
     ww = np.concatenate([w, w, w + hw, w - hw, w, w])
@@ -384,6 +381,15 @@ def line_jacobian(model, centre_m, extent_m, total_n, command, step_m: float = 5
     return np.stack(
         [(v[0] - v[1]) / (2 * hc)[:, None], (v[2] - v[3]) / (2 * hw)[:, None], (v[4] - v[5]) / (2 * dt)[:, None]], 2
     )
+
+
+def line_steps(length_m, centre_m, extent_m, step_m: float = 5e-4) -> tuple[np.ndarray, np.ndarray]:
+    """Central-difference steps of a line load's centre and extent (m) that keep it on the digit (:func:`line_jacobian`
+    and the estimator's derivative tables use the same)."""
+    c = np.asarray(centre_m, dtype=float)
+    w = np.asarray(extent_m, dtype=float)
+    room = np.minimum(c - w / 2, length_m - c - w / 2)
+    return np.clip(room, 1e-6, step_m), np.clip(np.minimum(room * 2, w / 2), 1e-6, step_m)
 
 
 def fisher_sd(jac, sigma_v) -> np.ndarray:

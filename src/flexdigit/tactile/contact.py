@@ -59,7 +59,7 @@ from flexdigit._validation import (
     check_values,
 )
 from flexdigit.errors import ParameterError
-from flexdigit.tactile.bounds import fisher_sd, line_jacobian
+from flexdigit.tactile.bounds import line_steps
 
 #: chi-square(2 dof) 99.9 % quantile: a contact is declared when it explains the reading this much better than none.
 DETECT_CHI2 = 13.8155
@@ -377,69 +377,60 @@ class ContactEstimator(Estimator):
         table = self._table(command)
         if "line" in table:
             return table
-        m, f, g0 = self.model, self.f_grid_, table["g0"]
-        design = np.stack([f[1:] ** k for k in range(1, POLY_DEGREE + 1)], axis=1)
         # line loads: centres on a grid, each extent that fits on the digit
         rows = []
         step = max(LINE_CENTRE_STEP_M, self.position_step_m)
         lo, hi = self.s_grid_[0], self.s_grid_[-1]
         for w in self.extents_:
-            centres = np.arange(max(w / 2, lo), min(m.length_m - w / 2, hi) + 1e-12, step)
+            centres = np.arange(max(w / 2, lo), min(self.model.length_m - w / 2, hi) + 1e-12, step)
             rows += [(c, w) for c in centres]
         cw = np.array(rows)
-        ls, lu = m.line_points(cw[:, 0], cw[:, 1])
+        table.update(line=self._line_coefficients(cw[:, 0], cw[:, 1], command, table["g0"]), line_cw=cw)
+        return table
+
+    def _line_coefficients(self, centre, extent, command: int, g0) -> np.ndarray:
+        """Each gauge's polynomial in the total force (K, n, 3) of even line loads, fitted on the force grid."""
+        m, f = self.model, self.f_grid_
+        ls, lu = m.line_points(centre, extent)
         nf = f.size - 1
-        lv = m._volts(np.tile(ls, (nf, 1)), np.repeat(f[1:], cw.shape[0])[:, None] * np.tile(lu, (nf, 1)), command)
-        lv = lv.reshape(nf, cw.shape[0], 3)
-        lcoef = np.linalg.lstsq(design, (lv - g0).reshape(f.size - 1, -1), rcond=None)[0]
-        line = np.ascontiguousarray(lcoef.reshape(POLY_DEGREE, cw.shape[0], 3))
-        table.update(line=line, line_cw=cw)
+        lv = m._volts(np.tile(ls, (nf, 1)), np.repeat(f[1:], centre.size)[:, None] * np.tile(lu, (nf, 1)), command)
+        design = np.stack([f[1:] ** k for k in range(1, POLY_DEGREE + 1)], axis=1)
+        coef = np.linalg.lstsq(design, (lv.reshape(nf, centre.size, 3) - g0).reshape(nf, -1), rcond=None)[0]
+        return np.ascontiguousarray(coef.reshape(POLY_DEGREE, centre.size, 3))
+
+    def _line_derivative_table(self, command: int) -> dict:
+        """The line table's derivatives in centre and extent (K, G, 3 each: polynomials in the total), by the central
+        differences of :func:`flexdigit.tactile.bounds.line_jacobian` (same steps) on every grid entry. Built when a
+        command first declares a line load (4 times the line table's statics, ~1 s): then a line load's Fisher
+        standard deviations are a table look-up instead of six static solves per reading."""
+        table = self._line_table(command)
+        if "line_dc" in table:
+            return table
+        cw, g0 = table["line_cw"], table["g0"]
+        c, w = cw[:, 0], cw[:, 1]
+        hc, hw = line_steps(self.model.length_m, c, w)
+        up = self._line_coefficients(np.concatenate([c + hc, c]), np.concatenate([w, w + hw]), command, g0)
+        down = self._line_coefficients(np.concatenate([c - hc, c]), np.concatenate([w, w - hw]), command, g0)
+        step = np.concatenate([2 * hc, 2 * hw])[None, :, None]
+        slope = (up - down) / step
+        table.update(line_dc=np.ascontiguousarray(slope[:, : c.size]), line_dw=np.ascontiguousarray(slope[:, c.size :]))
         return table
 
     # ----------------------------------------------------------------------------------------- estimating
-    def _profile(self, r, coef, batched: bool = False, start=None):
-        """Best force and cost for every grid entry: ``r`` (B, 3) residual readings, ``coef`` (K, G, 3) (or
-        (K, B, G, 3) per reading when ``batched``).
+    def _profile(self, r, coef, half: int = -1):
+        """Best force and cost for every grid entry: ``r`` (B, 3) residual readings, ``coef`` (K, G, 3).
 
         Returns force (B, G), cost (B, G) (the weighted squared residual) and the cost's half curvature in the force
-        (B, G), for the evidence's Laplace approximation."""
-        w = self.weight_
-        if start is not None:
-            f = start
-        else:
-            a1 = coef[0]  # (G, 3)
-            f = ((r * w) @ a1.T) / np.maximum(np.sum(a1 * w * a1, axis=1), 1e-300)  # the linear model's force
-        lim = self.max_force_n
-        for _ in range(2):  # Newton on the polynomial model, force clipped to the side's range
-            f = np.minimum(np.maximum(f * self.sign_, 0.0), lim) * self.sign_
-            pred, dpred = _horner(coef, f)
-            res = r[:, None, :] - pred
-            grad = -np.sum(w * res * dpred, axis=2)
-            hess = np.sum(w * dpred * dpred, axis=2)
-            f = f - grad / np.maximum(hess, 1e-300)
-        f = np.minimum(np.maximum(f * self.sign_, 0.0), lim) * self.sign_
-        pred, dpred = _horner(coef, f)
-        res = r[:, None, :] - pred
-        return f, np.sum(w * res * res, axis=2), np.sum(w * dpred * dpred, axis=2)
+        (B, G), for the evidence's Laplace approximation: two Newton steps on the polynomial model from the linear
+        model's force, the force clipped to the side's range (compiled: :mod:`flexdigit.tactile._contact_kernel`).
+        With ``half >= 0`` only the ``2 half + 1`` entries around the best at the linear model's force get the
+        Newton steps (all a point estimate needs; the others keep the linear model's force and cost)."""
+        from flexdigit.tactile import _contact_kernel as kernel
 
-    def _profile_near_best(self, r, coef, half: int = 3):
-        """:meth:`_profile` where it matters: every entry at the linear model's force, then Newton on the
-        ``2 half + 1`` entries around the best (all a point estimate needs; a third of the cost)."""
-        w = self.weight_
-        a1 = coef[0]
-        f = ((r * w) @ a1.T) / np.maximum(np.sum(a1 * w * a1, axis=1), 1e-300)
-        f = np.minimum(np.maximum(f * self.sign_, 0.0), self.max_force_n) * self.sign_
-        pred, _ = _horner(coef, f)
-        res = r[:, None, :] - pred
-        cost = np.sum(w * res * res, axis=2)
-        grid = cost.shape[1]
-        centre = np.clip(np.argmin(cost, axis=1), half, grid - 1 - half)
-        idx = centre[:, None] + np.arange(-half, half + 1)  # (B, W)
-        sub = coef[:, idx, :]  # (K, B, W, 3)
-        rows = np.arange(r.shape[0])[:, None]
-        fw, cw, _ = self._profile(r, sub, batched=True, start=f[rows, idx])
-        f[rows, idx], cost[rows, idx] = fw, cw
-        return f, cost
+        out = kernel.empty_profile(r.shape[0], coef.shape[1])
+        r = np.ascontiguousarray(r, dtype=float)
+        kernel.profile(r, coef, self.weight_, self.sign_, float(self.max_force_n), int(half), *out)
+        return out
 
     def predict(self, X, command=None) -> ContactEstimate:
         """Estimate contact from readings: ``X`` (n, 4) gauges and command, or (n, 3) gauges with ``command``."""
@@ -449,7 +440,8 @@ class ContactEstimator(Estimator):
             cmd = np.broadcast_to(np.asarray(command), (v.shape[0],)).astype(int)
         else:
             v, cmd = _split(X)
-        check_is_fitted(self, "tables_")
+        if not hasattr(self, "tables_"):
+            check_is_fitted(self, "tables_")
         n = v.shape[0]
         out = {name: np.full(n, np.nan) for name in _FIELDS}
         kind = np.full(n, "none", dtype=object)
@@ -466,17 +458,15 @@ class ContactEstimator(Estimator):
         n = r.shape[0]
         ps, pforce, pcost = np.empty(n), np.empty(n), np.empty(n)
         lcentre, lextent, ltotal, lcost, log_odds = (np.full(n, np.nan) for _ in range(5))
-        for start in range(0, n, 16):  # chunks bound the (chunk, grid, 3) temporaries
-            part = slice(start, start + 16)
-            if self.classify:
-                pf, pc, ph = self._profile(r[part], t["point"])
-            else:
-                pf, pc = self._profile_near_best(r[part], t["point"])
+        lindex = np.zeros(n, dtype=int)
+        for start in range(0, n, 256):  # chunks bound the (chunk, grid) temporaries
+            part = slice(start, start + 256)
+            pf, pc, ph = self._profile(r[part], t["point"], half=-1 if self.classify else 3)
             ps[part], pforce[part], pcost[part] = self._refine(pf, pc, self.s_grid_)
             if self.classify:
                 cw = t["line_cw"]
                 lf, lc, lh = self._profile(r[part], t["line"])
-                li = np.argmin(lc, axis=1)
+                li = lindex[part] = np.argmin(lc, axis=1)
                 b = np.arange(li.size)
                 lcost[part], lcentre[part], lextent[part], ltotal[part] = lc[b, li], cw[li, 0], cw[li, 1], lf[b, li]
                 log_odds[part] = _log_evidence(lc, lh) - _log_evidence(pc, ph)
@@ -487,7 +477,7 @@ class ContactEstimator(Estimator):
         point_sd = self._point_sd(ps, pforce, t)
         line_sd = np.full((n, 3), np.nan)
         if np.any(is_line):
-            line_sd[is_line] = self._line_sd(lcentre[is_line], lextent[is_line], ltotal[is_line], command)
+            line_sd[is_line] = self._line_sd(lindex[is_line], ltotal[is_line], command)
         out["point_position_m"][rows], out["point_force_n"][rows] = ps, pforce
         out["line_centre_m"][rows], out["line_extent_m"][rows], out["line_total_n"][rows] = lcentre, lextent, ltotal
         out["chi2_contact"][rows], out["log_odds_distributed"][rows] = chi_contact, log_odds
@@ -521,39 +511,33 @@ class ContactEstimator(Estimator):
         return out
 
     def _refine(self, force, cost, grid):
-        """Best grid point, refined by a parabola through it and its neighbours (position and force)."""
-        i = np.argmin(cost, axis=1)
-        b = np.arange(len(i))
-        j = np.clip(i, 1, grid.size - 2)
-        c0, c1, c2 = cost[b, j - 1], cost[b, j], cost[b, j + 1]
-        denom = c0 - 2 * c1 + c2
-        with np.errstate(divide="ignore", invalid="ignore"):
-            shift = np.where((denom > 0) & (i == j), 0.5 * (c0 - c2) / denom, 0.0)
-        shift = np.clip(shift, -1.0, 1.0)
-        step = grid[1] - grid[0]
-        pos = grid[i] + shift * step
-        # force by the same parabola's weights (linear interpolation between the neighbours)
-        f_side = np.where(shift >= 0, force[b, np.minimum(j + 1, grid.size - 1)], force[b, j - 1])
-        f = force[b, i] + np.abs(shift) * (f_side - force[b, i]) * (i == j)
-        return pos, f, cost[b, i] - 0.25 * (c0 - c2) * shift * (i == j)
+        """Best grid point, refined by a parabola through it and its neighbours (position and force; the force by the
+        same parabola's weights, linear interpolation between the neighbours) and the cost there."""
+        from flexdigit.tactile import _contact_kernel as kernel
+
+        out = np.empty((3, cost.shape[0]))
+        kernel.refine(force, cost, grid, *out)
+        return out[0], out[1], out[2]
 
     def _point_sd(self, position, force, table):
         """(n, 2) standard deviations of position and force, from the table's own derivatives."""
-        coef = table["point"].transpose(1, 0, 2)  # (ns, K, 3)
-        grid = self.s_grid_
-        x = np.clip((position - grid[0]) / (grid[1] - grid[0]), 0, grid.size - 1 - 1e-9)
-        i = np.minimum(x.astype(int), grid.size - 2)
-        frac = (x - i)[:, None, None]
-        c = coef[i] * (1 - frac) + coef[i + 1] * frac  # (n, K, 3)
-        dc_ds = (coef[i + 1] - coef[i]) / (grid[1] - grid[0])
-        powers = np.arange(1, POLY_DEGREE + 1)
-        fp = force[:, None] ** powers
-        d_force = np.einsum("nk,nkc->nc", powers * force[:, None] ** (powers - 1), c)
-        d_pos = np.einsum("nk,nkc->nc", fp, dc_ds)
-        return fisher_sd(np.stack([d_pos, d_force], axis=2), self.sigma_)
+        from flexdigit.tactile import _contact_kernel as kernel
 
-    def _line_sd(self, centre, extent, total, command):
-        return fisher_sd(line_jacobian(self.model, centre, extent, total, command), self.sigma_)
+        out = np.empty((position.size, 2))
+        kernel.point_sd(position, force, self.s_grid_, table["point"], self.weight_, out)
+        return out
+
+    def _line_sd(self, index, total, command):
+        """(n, 3) standard deviations of centre, extent and total of the line table's entries ``index`` at forces
+        ``total``, from the derivative tables (within 1 % of :func:`flexdigit.tactile.bounds.line_bounds`)."""
+        from flexdigit.tactile import _contact_kernel as kernel
+
+        t = self._line_derivative_table(command)
+        jac = np.empty((index.size, 3, 3))
+        kernel.line_jacobian(index, np.asarray(total, dtype=float), t["line"], t["line_dc"], t["line_dw"], jac)
+        out = np.empty((index.size, 3))
+        kernel.fisher_sd(jac, self.weight_, out)
+        return out
 
 
 _FIELDS = (
@@ -577,25 +561,11 @@ def _log_evidence(cost, curvature) -> np.ndarray:
     """``log sum_g exp(-cost_g / 2) sqrt(2 pi / curvature_g)`` over a grid (B, G), less ``log G``: the marginal
     likelihood under a uniform prior over the grid's entries, the force integrated out by Laplace's approximation
     about its best value (the common force prior's width cancels between hypotheses)."""
-    terms = -0.5 * cost + 0.5 * np.log(2 * np.pi / np.maximum(curvature, 1e-300))
-    top = terms.max(axis=1, keepdims=True)
-    return top[:, 0] + np.log(np.mean(np.exp(terms - top), axis=1))
+    from flexdigit.tactile import _contact_kernel as kernel
 
-
-def _horner(coef, f):
-    """``sum_k coef_k f^k`` (k = 1..K) and its derivative in ``f``, for coefficients (K, G, 3) and forces (B, G):
-    (B, G, 3) each."""
-    x = f[..., None]
-    if coef.shape[0] == 1:
-        return coef[0] * x, coef[0] + 0.0 * x
-    # value = (...((c_K f + c_K-1) f + ...) + c_1) f, its first step unrolled: broadcasting the (B, G, 3) start
-    # explicitly cost more than the arithmetic on a few entries (an estimate's latency)
-    value = coef[-1] * x + coef[-2]
-    slope = coef[-1]
-    for k in range(coef.shape[0] - 3, -1, -1):
-        slope = slope * x + value
-        value = value * x + coef[k]
-    return value * x, slope * x + value
+    out = np.empty(cost.shape[0])
+    kernel.log_evidence(cost, curvature, out)
+    return out
 
 
 def _split(X) -> tuple[np.ndarray, np.ndarray]:
