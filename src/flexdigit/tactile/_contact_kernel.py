@@ -205,8 +205,8 @@ def line_jacobian(index, total, line, d_centre, d_extent, out):
 @_jit
 def fisher_sd(jac, w, out):
     """:func:`flexdigit.tactile.bounds.fisher_sd`'s general branch (d >= 3) for Jacobians (n, 3, d) and weights
-    ``1 / sigma^2`` (3,), in place (n, d): ``sqrt(diag(F^-1))``, inf for every parameter where the scaled information is singular or worse
-    conditioned than 1e8."""
+    ``1 / sigma^2`` (3,), in place (n, d): ``sqrt(diag(F^-1))``, inf for every parameter where the scaled
+    information is singular or worse conditioned than 1e8."""
     n, n_gauges, d = jac.shape
     info = np.empty((d, d))
     corr = np.empty((d, d))
