@@ -145,3 +145,16 @@ def test_the_estimators_keep_scikit_learns_contract():
             unfitted.predict(np.zeros((1, 4)))
     with pytest.raises(ParameterError, match="^The 'model' parameter of HangInversion must be an object with"):
         HangInversion(object(), [20]).fit()
+
+
+def test_contact_studys_interval_has_the_gaussian_width():
+    # errors of 25-reading estimates are near Gaussian: the pooled RMS's relative standard error is 1 / sqrt(2 n)
+    # over n estimates, so the 95 % interval spans 2 x 1.96 / sqrt(2 n) of the ratio (seeded bootstrap: +-25 %)
+    from flexdigit.tactile.palpation_studies import contact_study
+
+    c = contact_study(positions_m=[0.16, 0.17, 0.18, 0.19], forces_n=(0.2,), n_readings=25, repetitions=100, seed=1)
+    lo, hi = c["position_ratio_ci95"]
+    n = c["zone_counts"]["identifiable"] * 100
+    assert n == 400
+    assert lo < c["position_ratio"] < hi
+    assert (hi - lo) / c["position_ratio"] == pytest.approx(2 * 1.96 / math.sqrt(2 * n), rel=0.25)
