@@ -171,14 +171,16 @@ class ContactGaugeModel:
             s[i, : ps.size], f[i, : ps.size] = ps, pf[:, 1]
         return s, f
 
-    def tissue_solution(self, tissue, command):
+    def tissue_solution(self, tissue, command, psi0=None):
         """The body's static contact at each command: :class:`flexdigit.twin.contact.ContactSolution` and the
-        gauges (n, 3)."""
+        gauges (n, 3). ``psi0`` (n, links): a starting shape (a neighbouring tissue's solution)."""
         from flexdigit.twin.contact import solve_contact
         from flexdigit.twin.twin import cable_shortening_m
 
         cmd = np.atleast_1d(np.asarray(command)).astype(int)
-        sol = solve_contact(self.chain, tissue=tissue, cable_shortening_m=cable_shortening_m(cmd, self.params))
+        sol = solve_contact(
+            self.chain, tissue=tissue, cable_shortening_m=cable_shortening_m(cmd, self.params), psi0=psi0
+        )
         return sol, self.sensors.clean_v(sol.static.curvature_1_m, sol.static.axial_force_n)
 
 

@@ -227,15 +227,18 @@ class _TissueLikelihood:
         self._span, self._t0 = span, float(t.mean())
         self.tissue_of = tissue_of
         self.evaluations = 0
+        self._shapes: dict[int, np.ndarray] = {}
 
     def predict(self, theta):
         self.evaluations += 1
         tissues = self.tissue_of(theta)
-        if not isinstance(tissues, list):
-            return self.model.tissue_solution(tissues, self.commands)[1]
+        blocks = [(slice(None), tissues)] if not isinstance(tissues, list) else tissues  # a scan: one per offset
         out = np.empty_like(self.gauges)
-        for rows, tissue in tissues:  # a scan: one tissue position per block of plateaus
-            out[rows] = self.model.tissue_solution(tissue, self.commands[rows])[1]
+        for i, (rows, tissue) in enumerate(blocks):
+            # each evaluation starts from the last one's shapes: the fit's steps and differences move them little
+            sol, out[rows] = self.model.tissue_solution(tissue, self.commands[rows], psi0=self._shapes.get(i))
+            if sol.static.converged:
+                self._shapes[i] = sol.static.psi_rad
         return out
 
     def residuals(self, theta):
