@@ -400,22 +400,29 @@ class ContactEstimator(Estimator):
         coef = np.linalg.lstsq(design, (lv.reshape(nf, centre.size, 3) - g0).reshape(nf, -1), rcond=None)[0]
         return np.ascontiguousarray(coef.reshape(POLY_DEGREE, centre.size, 3))
 
-    def _line_derivative_table(self, command: int) -> dict:
-        """The line table's derivatives in centre and extent (K, G, 3 each: polynomials in the total), by the central
-        differences of :func:`flexdigit.tactile.bounds.line_jacobian` (same steps) on every grid entry. Built when a
-        command first declares a line load (4 times the line table's statics, ~1 s): then a line load's Fisher
-        standard deviations are a table look-up instead of six static solves per reading."""
+    def _line_derivatives(self, command: int, index) -> dict:
+        """The line table with its derivatives in centre and extent (``line_dc``, ``line_dw``: K, G, 3, polynomials
+        in the total) filled in at entries ``index``: the central differences of
+        :func:`flexdigit.tactile.bounds.line_jacobian` (same steps), fitted as the table is. Each entry's are
+        computed the first time a reading is declared a line load there (32 static solves, a few ms) and kept:
+        a line load's Fisher standard deviations are then a look-up instead of six static solves per reading."""
         table = self._line_table(command)
-        if "line_dc" in table:
-            return table
         cw, g0 = table["line_cw"], table["g0"]
-        c, w = cw[:, 0], cw[:, 1]
-        hc, hw = line_steps(self.model.length_m, c, w)
-        up = self._line_coefficients(np.concatenate([c + hc, c]), np.concatenate([w, w + hw]), command, g0)
-        down = self._line_coefficients(np.concatenate([c - hc, c]), np.concatenate([w, w - hw]), command, g0)
-        step = np.concatenate([2 * hc, 2 * hw])[None, :, None]
-        slope = (up - down) / step
-        table.update(line_dc=np.ascontiguousarray(slope[:, : c.size]), line_dw=np.ascontiguousarray(slope[:, c.size :]))
+        if "line_dc" not in table:
+            table.update(
+                line_dc=np.zeros((POLY_DEGREE, len(cw), 3)),
+                line_dw=np.zeros((POLY_DEGREE, len(cw), 3)),
+                line_derived=np.zeros(len(cw), dtype=bool),
+            )
+        need = np.unique(index[~table["line_derived"][index]])
+        if need.size:
+            c, w = cw[need, 0], cw[need, 1]
+            hc, hw = line_steps(self.model.length_m, c, w)
+            up = self._line_coefficients(np.concatenate([c + hc, c]), np.concatenate([w, w + hw]), command, g0)
+            down = self._line_coefficients(np.concatenate([c - hc, c]), np.concatenate([w, w - hw]), command, g0)
+            slope = (up - down) / np.concatenate([2 * hc, 2 * hw])[None, :, None]
+            table["line_dc"][:, need], table["line_dw"][:, need] = slope[:, : need.size], slope[:, need.size :]
+            table["line_derived"][need] = True
         return table
 
     # ----------------------------------------------------------------------------------------- estimating
@@ -534,7 +541,7 @@ class ContactEstimator(Estimator):
         ``total``, from the derivative tables (within 1 % of :func:`flexdigit.tactile.bounds.line_bounds`)."""
         from flexdigit.tactile import _contact_kernel as kernel
 
-        t = self._line_derivative_table(command)
+        t = self._line_derivatives(command, index)
         jac = np.empty((index.size, 3, 3))
         kernel.line_jacobian(index, np.asarray(total, dtype=float), t["line"], t["line_dc"], t["line_dw"], jac)
         out = np.empty((index.size, 3))
