@@ -38,27 +38,30 @@ def _clip(f, sign, lim):
 
 
 @_jit
+def _sums(r, b, coef, g, w, f):
+    """At force ``f``: ``sum_c w res slope``, ``sum_c w slope^2`` and the cost ``sum_c w res^2`` over the gauges."""
+    cross = 0.0
+    curv = 0.0
+    cost = 0.0
+    for c in range(3):
+        value, slope = _horner(coef, g, c, f)
+        res = r[b, c] - value
+        cross += w[c] * res * slope
+        curv += w[c] * slope * slope
+        cost += w[c] * res * res
+    return cross, curv, cost
+
+
+@_jit
 def _newton(r, b, coef, g, w, sign, lim, f, steps):
     """``steps`` Newton steps on entry ``g``'s cost from force ``f`` (clipped before each), then the cost and the
     half curvature at the clipped result."""
     for _ in range(steps):
         f = _clip(f, sign, lim)
-        grad = 0.0
-        hess = 0.0
-        for c in range(3):
-            value, slope = _horner(coef, g, c, f)
-            res = r[b, c] - value
-            grad -= w[c] * res * slope
-            hess += w[c] * slope * slope
-        f = f - grad / max(hess, 1e-300)
+        cross, curv, _ = _sums(r, b, coef, g, w, f)
+        f = f + cross / max(curv, 1e-300)  # the gradient is -cross
     f = _clip(f, sign, lim)
-    cost = 0.0
-    curv = 0.0
-    for c in range(3):
-        value, slope = _horner(coef, g, c, f)
-        res = r[b, c] - value
-        cost += w[c] * res * res
-        curv += w[c] * slope * slope
+    _, curv, cost = _sums(r, b, coef, g, w, f)
     return f, cost, curv
 
 
