@@ -22,7 +22,7 @@
 /* the longest line: "$65535,4294967295," + 4 x "-2147483648," + "*FFFF\r\n" + NUL */
 #define FLEXDIGIT_STREAM_LINE_MAX 96
 
-static uint16_t flexdigit_crc16_xmodem(const char *data, int length) {
+static inline uint16_t flexdigit_crc16_xmodem(const char *data, int length) {
   uint16_t crc = 0;
   for (int i = 0; i < length; i++) {
     crc ^= (uint16_t)((uint8_t)data[i]) << 8;
@@ -35,8 +35,8 @@ static uint16_t flexdigit_crc16_xmodem(const char *data, int length) {
 
 /* Format one sample into out (at least FLEXDIGIT_STREAM_LINE_MAX bytes); has_pot = 0 leaves the pot out.
  * Returns the line's length in bytes (without the terminating NUL). */
-static int flexdigit_format_line(char *out, uint16_t seq, uint32_t t_us, int32_t g1, int32_t g2, int32_t g3,
-                                 int has_pot, int32_t pot) {
+static inline int flexdigit_format_line(char *out, uint16_t seq, uint32_t t_us, int32_t g1, int32_t g2, int32_t g3,
+                                        int has_pot, int32_t pot) {
   int n = snprintf(out, FLEXDIGIT_STREAM_LINE_MAX, "$%u,%lu,%ld,%ld,%ld", (unsigned)seq, (unsigned long)t_us,
                    (long)g1, (long)g2, (long)g3);
   if (has_pot) {

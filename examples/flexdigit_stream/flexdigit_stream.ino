@@ -29,7 +29,7 @@ static const bool SEND_POT = true;             // false if the pot is not wired 
 
 Adafruit_ADS1115 ads;
 static uint16_t seq = 0;
-static unsigned long next_us = 0;
+static uint32_t next_us = 0;  // uint32_t, not unsigned long: wraps with micros() where long has 64 bits
 
 static void read_gauges(int32_t *g, int32_t *pot) {
   g[0] = ads.readADC_SingleEnded(0);
@@ -52,17 +52,17 @@ void setup() {
   Serial.print("# flexdigit-stream ");
   Serial.print(FLEXDIGIT_STREAM_VERSION);
   Serial.println(" adc=ADS1115 v_per_count=0.000125 rate_hz=100");
-  next_us = micros();
+  next_us = (uint32_t)micros();
 }
 
 void loop() {
-  if ((long)(micros() - next_us) < 0) {
+  if ((int32_t)((uint32_t)micros() - next_us) < 0) {  // wrap-safe: micros() wraps every 71.6 min
     return;
   }
   next_us += PERIOD_US;
   int32_t g[3];
   int32_t pot;
-  unsigned long t_us = micros();
+  uint32_t t_us = (uint32_t)micros();
   read_gauges(g, &pot);
   char line[FLEXDIGIT_STREAM_LINE_MAX];
   int n = flexdigit_format_line(line, seq++, t_us, g[0], g[1], g[2], SEND_POT, pot);
