@@ -88,7 +88,7 @@ def test_garbled_lines_say_why(line, reason):
 
 def test_a_runaway_line_is_dropped_not_buffered():
     decoder = LineDecoder()
-    assert [e.reason for e in decoder.feed(b"x" * 500)] == ["no newline in 200 bytes"]
+    assert [e.reason for e in decoder.feed(b"x" * 500)] == ["no line end in 200 bytes"]
     assert decoder.feed(hand_line(1, 2, 3, 4, 5))[0].sample.gauges == (3, 4, 5)
 
 

@@ -11,13 +11,16 @@ that stream:
 
 A background thread reads the port (pyserial ``serial_for_url``, so ``loop://`` and ``socket://`` work too) and
 keeps the newest valid sample; :meth:`StreamSource.read_gauges` returns it in volts (counts x ``scale``). Dropped
-lines (gaps in the sequence number), garbled lines (bad checksum or fields) and information lines are counted
-(:meth:`StreamSource.stats`). It raises :class:`~flexdigit.errors.RigError`, which the real-time loop turns into
-its safe state (digit relaxed, ports closed, log closed with the reason), when
+lines (gaps in the sequence number), garbled lines (bad checksum or fields), duplicated and out-of-order lines,
+board restarts and information lines are counted (:meth:`StreamSource.stats`). It raises
+:class:`~flexdigit.errors.RigError`, which the real-time loop turns into its safe state (digit relaxed, ports
+closed, log closed with the reason), when
 
-- no valid line came for ``timeout`` seconds (a silent board, a pulled cable);
-- more than ``max_bad`` of the last ``window`` expected lines were dropped or garbled (wrong baud rate, noise);
-- a gauge sits on the ADC's rail (``bits``-bit signed counts);
+- no valid line came for ``timeout`` seconds (a silent board, a pulled cable, a board repeating an old line);
+- more than ``max_bad`` of the last ``window`` expected lines were dropped, garbled, duplicated or out of order
+  (wrong baud rate, noise); what comes before the first valid line (a partial line, a bootloader's bytes while
+  the board resets on opening) is counted but not held against the stream;
+- a gauge sits on the ADC's rail or beyond it (``bits``-bit signed counts);
 - the port itself fails (USB unplugged).
 
 URL options (all optional): ``baud`` (115200), ``scale`` (volts per count, 0.000125: an ADS1115 at +-4.096 V),
@@ -121,7 +124,8 @@ class StreamSource:
         self._latest_at = -math.inf
         self._last_seq: int | None = None
         self._recent: collections.deque[bool] = collections.deque(maxlen=self.window)  # True: dropped or garbled
-        self._counts = {"samples": 0, "garbled": 0, "dropped": 0, "info": 0, "restarts": 0}
+        self._counts = dict.fromkeys(("samples", "garbled", "dropped", "duplicated", "out_of_order", "info"), 0)
+        self._counts["restarts"] = 0
         self._reasons: collections.Counter[str] = collections.Counter()
         self.info_lines: list[str] = []
         self._error: BaseException | None = None
@@ -154,6 +158,9 @@ class StreamSource:
                         self._take(event, now)
 
     def _take(self, event, now: float) -> None:
+        # Until the first valid line (and again after a restart) the board may still be booting: a partial first
+        # line, a bootloader's bytes. Those are counted, but only lines after it count towards "garbled".
+        synced = self._last_seq is not None
         if event.kind == "info":
             self._counts["info"] += 1
             self.info_lines = [*self.info_lines[-19:], event.text]
@@ -167,13 +174,21 @@ class StreamSource:
         if event.kind == "garbled":
             self._counts["garbled"] += 1
             self._reasons[event.reason] += 1
-            self._recent.append(True)
+            if synced:
+                self._recent.append(True)
             return
         sample = event.sample
-        if self._last_seq is not None:
+        if synced:
             gap = (sample.seq - self._last_seq - 1) % SEQ_MODULUS
-            if gap >= SEQ_MODULUS // 2:  # went backwards: the board restarted (reset, re-plugged)
-                self._counts["restarts"] += 1
+            behind = (self._last_seq - sample.seq) % SEQ_MODULUS  # 0: the same line again
+            if sample.seq == 0 and gap:  # the board's first line after power-up or reset
+                self._restart()
+            elif behind <= self.window:  # the same line again, or one from just before: older than what we have
+                self._counts["duplicated" if behind == 0 else "out_of_order"] += 1
+                self._recent.append(True)
+                return
+            elif gap >= SEQ_MODULUS // 2:  # further back than the window: the board restarted (its counter too)
+                self._restart()
             elif gap:
                 self._counts["dropped"] += gap
                 self._recent.extend([True] * min(gap, self.window))
@@ -181,6 +196,10 @@ class StreamSource:
         self._counts["samples"] += 1
         self._recent.append(False)
         self._latest, self._latest_at = sample, now
+
+    def _restart(self) -> None:
+        self._counts["restarts"] += 1
+        self._recent.clear()
 
     def _wait_for_first_line(self) -> None:
         deadline = self._opened_at + self.startup
@@ -220,7 +239,12 @@ class StreamSource:
                 f"(limit {self.max_bad:g}; {self._summary()})"
             )
         for i, count in enumerate(sample.gauges):
-            if count <= self._rail[0] or count >= self._rail[1]:
+            if count < self._rail[0] or count > self._rail[1]:
+                raise RigError(
+                    f"sensor fault: gauge {i + 1} read {count} counts, beyond a {self.bits}-bit ADC's "
+                    f"{self._rail[0]}..{self._rail[1]} on {self.name}: is bits= right (24 for an HX711)?"
+                )
+            if count in self._rail:
                 raise RigError(
                     f"sensor fault: gauge {i + 1} at the stream ADC's rail ({count} counts, {self.bits}-bit) "
                     f"on {self.name}"
@@ -230,15 +254,20 @@ class StreamSource:
         return gauges, pot
 
     def stats(self) -> dict[str, Any]:
-        """Counts so far: ``samples``, ``garbled`` (with ``reasons``), ``dropped``, ``info``, ``restarts``."""
+        """Counts so far: valid ``samples``; ``garbled`` (with their ``reasons``), ``dropped`` (gaps in the sequence),
+        ``duplicated`` and ``out_of_order`` lines (never used); ``info`` lines (the last ones in ``info_lines``);
+        board ``restarts``."""
         with self._lock:
             return {**self._counts, "reasons": dict(self._reasons), "info_lines": list(self.info_lines)}
 
     def _summary(self) -> str:
         c = self._counts
         reasons = ", ".join(f"{k}: {v}" for k, v in self._reasons.most_common(2))
-        return f"{c['samples']} valid lines, {c['dropped']} dropped, {c['garbled']} garbled" + (
-            f" ({reasons})" if reasons else ""
+        stale = ", ".join(f"{c[k]} {k.replace('_', ' ')}" for k in ("duplicated", "out_of_order") if c[k])
+        return (
+            f"{c['samples']} valid lines, {c['dropped']} dropped, {c['garbled']} garbled"
+            + (f" ({reasons})" if reasons else "")
+            + (f", {stale}" if stale else "")
         )
 
     @property

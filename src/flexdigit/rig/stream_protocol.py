@@ -6,21 +6,33 @@ readings over USB serial. This module is the protocol, encoding and decoding byt
 ``threaded.Packetizer`` habit: framing apart from transport, unit-tested on bytes); :mod:`flexdigit.rig.stream_backend`
 is the transport and ``examples/flexdigit_stream/flexdigit_stream.ino`` the reference firmware.
 
-One line per sample, ASCII, ended by ``\\n`` (a ``\\r`` before it is allowed)::
+One line per sample, ASCII, sent ended by ``\\r\\n``; the host ends a line at ``\\n`` or ``\\r``, whichever
+comes, and skips empty lines, so ``\\r\\n``, ``\\n``, ``\\r`` and ``\\n\\r`` all read::
 
     $<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<crc>
 
-- ``seq``: decimal 0..65535, one more than the previous line's, 0 after 65535: a gap is a dropped line;
-- ``t_us``: decimal 0..4294967295, the board's microsecond clock when the sample was taken (Arduino ``micros()``,
-  wraps after 71.6 minutes);
-- ``g1, g2, g3``: the gauges, base to tip, as signed decimal ADC counts;
-- ``pot``: optional, the servo potentiometer in signed decimal ADC counts;
-- ``crc``: four hexadecimal digits, CRC-16/XMODEM (polynomial 0x1021, initial value 0, no reflection: Python's
-  ``binascii.crc_hqx(payload, 0)``, avr-libc's ``_crc_xmodem_update``) of the bytes between ``$`` and ``*``.
+- every field is a decimal integer, an optional ``-`` then digits (no ``+``, no blanks, no decimal point, no
+  exponent): ADC counts, not volts (the host multiplies by its ``scale``, volts per count);
+- ``seq``: 0..65535, 0 on the board's first line after power-up or reset, one more on each line, 0 after 65535.
+  A jump forward is that many dropped lines; the same number again is a *duplicated* line and a number up to
+  ``window`` lines behind an *out-of-order* one (both counted, neither used: the newest sample stays); a 0 that
+  is not the next number, or a jump back further than ``window``, is a *restart* of the board (counted; reading
+  goes on from it);
+- ``t_us``: 0..4294967295, the board's microsecond clock when the sample was taken (Arduino ``micros()``, which
+  wraps after 71.6 minutes; ``millis()`` x 1000 will do). Kept with each sample, never used for timing: the host
+  keeps its own clock, so a wrap or a jump is harmless;
+- ``g1, g2, g3``: the gauges, base to tip, as signed ADC counts;
+- ``pot``: optional (a line may have it or not), the servo potentiometer in signed ADC counts;
+- ``crc``: four hexadecimal digits (the firmware sends upper case; either case reads), CRC-16/XMODEM (polynomial
+  0x1021, initial value 0, no reflection, no final XOR: Python's ``binascii.crc_hqx(payload, 0)``, avr-libc's
+  ``_crc_xmodem_update``; check value 0x31C3 for ``123456789``) of the bytes strictly between ``$`` and ``*``.
 
-Lines starting with ``#`` are information from the firmware (its banner: ``# flexdigit-stream 1 adc=ADS1115
-v_per_count=0.000125 rate_hz=100``); they are counted and kept, never taken for data. Any other line, a line whose
-checksum does not match, or one whose fields are not what is written above is *garbled*, and counted as such.
+A line is at most :data:`MAX_LINE_BYTES` bytes; a longer run without a line end is garbage. Lines starting with
+``#`` are information from the firmware (its banner: ``# flexdigit-stream 1 adc=ADS1115 v_per_count=0.000125
+rate_hz=100``; a banner naming another protocol version is refused); they are counted and kept, never taken for
+data. Any other line, a line whose checksum does not match, or one whose fields are not what is written above is
+*garbled*, and counted as such (with the reason). Bytes are 8N1 at the baud rate both ends agree on (115200 in
+the reference firmware); the rate of lines is free (the host reads the newest).
 
 Examples
 --------
@@ -37,6 +49,7 @@ b'$7,1000000,120,-45,3000,812*4297\\r\\n'
 from __future__ import annotations
 
 import binascii
+import re
 from dataclasses import dataclass
 
 __all__ = ["PROTOCOL_VERSION", "Sample", "Event", "LineDecoder", "encode_line", "crc16_xmodem"]
@@ -49,6 +62,8 @@ SEQ_MODULUS = 65536
 TIME_MODULUS_US = 2**32
 #: A line longer than this without a newline is garbage (a real line is < 70 bytes).
 MAX_LINE_BYTES = 200
+_LINE_END = re.compile(rb"[\r\n]")
+_HEX4 = re.compile(rb"^[0-9A-Fa-f]{4}$")
 
 
 def crc16_xmodem(payload: bytes) -> int:
@@ -98,10 +113,13 @@ def _integer(text: bytes) -> int:
     return int(text)
 
 
+def _too_long() -> Event:
+    return Event("garbled", reason=f"line longer than {MAX_LINE_BYTES} bytes")
+
+
 def decode_line(line: bytes) -> Event:
-    """Decode one line without its newline (a trailing ``\\r`` is stripped)."""
-    if line.endswith(b"\r"):
-        line = line[:-1]
+    """Decode one line without its line end (``\\r`` and ``\\n`` at either end are stripped)."""
+    line = line.strip(b"\r\n")
     if line.startswith(b"#"):
         return Event("info", text=line[1:].decode("ascii", "replace").strip())
     if not line.startswith(b"$"):
@@ -109,10 +127,9 @@ def decode_line(line: bytes) -> Event:
     payload, star, crc = line[1:].rpartition(b"*")
     if not star or len(crc) != 4:
         return Event("garbled", reason="no '*' and 4-digit checksum at the end")
-    try:
-        expected = int(crc, 16)
-    except ValueError:
+    if not _HEX4.match(crc):
         return Event("garbled", reason="checksum is not hexadecimal")
+    expected = int(crc, 16)
     if crc16_xmodem(payload) != expected:
         return Event("garbled", reason="checksum mismatch")
     parts = payload.split(b",")
@@ -132,8 +149,8 @@ def decode_line(line: bytes) -> Event:
 class LineDecoder:
     """Split a byte stream into lines and decode them; keeps a partial line between calls.
 
-    A line longer than :data:`MAX_LINE_BYTES` without a newline (noise, the wrong baud rate) is dropped as one
-    garbled event, so the buffer never grows without bound.
+    A line ends at ``\\n`` or ``\\r``. A run of more than :data:`MAX_LINE_BYTES` bytes without a line end (noise,
+    the wrong baud rate) is dropped as one garbled event, so the buffer never grows without bound.
     """
 
     def __init__(self) -> None:
@@ -143,14 +160,18 @@ class LineDecoder:
         """Decode every complete line in ``data`` (plus what was left over from the last call)."""
         self._buffer += data
         events = []
+        start = 0
+        buffer = self._buffer
         while True:
-            end = self._buffer.find(b"\n")
-            if end < 0:
-                if len(self._buffer) > MAX_LINE_BYTES:
-                    self._buffer.clear()
-                    events.append(Event("garbled", reason=f"no newline in {MAX_LINE_BYTES} bytes"))
+            found = _LINE_END.search(buffer, start)
+            if found is None:
+                del buffer[:start]
+                if len(buffer) > MAX_LINE_BYTES:
+                    buffer.clear()
+                    events.append(Event("garbled", reason=f"no line end in {MAX_LINE_BYTES} bytes"))
                 return events
-            line = bytes(self._buffer[:end])
-            del self._buffer[: end + 1]
+            end = found.start()
+            line = bytes(buffer[start:end])
+            start = end + 1
             if line.strip():
-                events.append(decode_line(line))
+                events.append(decode_line(line) if len(line) <= MAX_LINE_BYTES else _too_long())
