@@ -163,7 +163,7 @@ class StepFigures:
     final : float
         Mean over the record's last ``tail_s`` (the steady-state value as measured).
     steady_state_error : float
-        ``final - target`` (signed).
+        ``final - target`` (signed); NaN where the record shows no steady state (see ``confirm_s``).
     iae : float
         Integral of ``|target - y|`` from the step to the end of the record (unit x s).
     bounded : bool
@@ -216,6 +216,7 @@ def step_figures(
     band: float = 0.02,
     rise_limits: tuple[float, float] = (0.1, 0.9),
     tail_s: float = 0.5,
+    confirm_s: float = 0.0,
 ) -> StepFigures:
     """Rise time, settling time, overshoot, steady-state error and IAE of a sampled step response.
 
@@ -239,6 +240,14 @@ def step_figures(
         Fractions of the step between which the rise time is measured (10 % to 90 %).
     tail_s : float
         The last ``tail_s`` of the record give the final value.
+    confirm_s : float
+        How long the record must go on inside a band after entering it for the response to count as settled
+        (0: the last sample is enough, as for an exact simulated response). A measured record needs more: a run
+        that stops just after the response enters the band, or that ends while it still moves, does not show
+        that it settled. With ``confirm_s`` > 0, a settling time is ``inf`` unless the response stayed in the
+        band for the last ``confirm_s`` of the record, and the final value is only a steady state (else
+        ``settling_to_final_s`` is ``inf`` and ``steady_state_error`` NaN) when the response stayed within ``band``
+        of it over the whole final ``tail_s`` window (and at least the last ``confirm_s``).
 
     Examples
     --------
@@ -259,23 +268,31 @@ def step_figures(
     t, y = t[after] - step_time_s, y[after]
     if t.size < 2:
         raise ValueError("step_figures: fewer than two samples after the step")
-    tail = y[t >= t[-1] - check_real(tail_s, "tail_s", "step_figures", low=0.0)]
+    tail_length = check_real(tail_s, "tail_s", "step_figures", low=0.0)
+    confirm = check_real(confirm_s, "confirm_s", "step_figures", low=0.0)
+    tail = y[t >= t[-1] - tail_length]
     final = float(np.mean(tail))
     goal = final if target is None else check_real(target, "target", "step_figures")
     step = goal - float(initial)
     finite = bool(np.all(np.isfinite(y)))
+    iae = float(np.trapezoid(np.abs(goal - y), t)) if finite else math.nan
     if step == 0 or not finite:
         nan = math.nan
-        return StepFigures(nan, nan, nan, nan, nan, nan, final, final - goal, nan, finite and step == 0)
+        return StepFigures(nan, nan, nan, nan, nan, nan, final, final - goal, iae, finite and step == 0)
     z = (y - float(initial)) / step  # 0 -> 1 whichever the step's direction
     bounded = bool(np.max(np.abs(z - 1.0)) < 10.0)
     rise = _first_crossing(t, z, rise_limits[1]) - _first_crossing(t, z, rise_limits[0])
     settling = _settling_time(t, np.abs(z - 1.0), band)
     settled = _settling_time(t, np.abs(y - final) / abs(step), band)
+    error = final - goal
+    if confirm > 0:
+        if settling > t[-1] - confirm:
+            settling = math.inf  # in the band only at the very end, if at all: not shown to have settled
+        if settled > t[-1] - max(tail_length, confirm):
+            settled, error = math.inf, math.nan  # still moving over the final window: no steady state to give
     k = int(np.argmax(z))
     overshoot = max(0.0, float(z[k] - 1.0) * 100.0)
-    iae = float(np.trapezoid(np.abs(goal - y), t))
-    return StepFigures(rise, settling, settled, overshoot, float(y[k]), float(t[k]), final, final - goal, iae, bounded)
+    return StepFigures(rise, settling, settled, overshoot, float(y[k]), float(t[k]), final, error, iae, bounded)
 
 
 def step_metrics(sys, *, t_final: float | None = None, settling: float = 0.02) -> dict:

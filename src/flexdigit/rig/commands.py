@@ -285,12 +285,20 @@ def _figures_line(figures: dict) -> str:
     if not figures:
         return "too few samples for step figures"
 
+    def seconds(value: float, none: str) -> str:
+        return f"{value:.2f} s" if math.isfinite(value) else none
+
     def one(m: dict) -> str:
+        error = m["final_error_deg"]
+        steady = (
+            f"steady-state error {error:+.2f} deg ({m['final_error_commands']:+.2f} commands)"
+            if math.isfinite(error)
+            else "no steady state in the record"
+        )
         return (
-            f"rise {m['rise_time_s']:.2f} s, settling (2 %) {m['settling_time_s']:.2f} s "
-            f"({m['settling_to_final_s']:.2f} s to its final value), overshoot "
-            f"{m['overshoot_percent']:.1f} %, steady-state error {m['final_error_deg']:+.2f} deg "
-            f"({m['final_error_commands']:+.2f} commands), IAE {m['iae_deg_s']:.2f} deg s"
+            f"rise {seconds(m['rise_time_s'], 'not reached')}, settling (2 %) "
+            f"{seconds(m['settling_time_s'], 'not settled')} ({seconds(m['settling_to_final_s'], 'still moving')} "
+            f"to its final value), overshoot {m['overshoot_percent']:.1f} %, {steady}, IAE {m['iae_deg_s']:.2f} deg s"
         )
 
     text = f"estimated {one(figures['estimated'])}"

@@ -19,7 +19,14 @@ from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import LoopResult, run_loop
 from flexdigit.rig.rotation import RotationEstimator
 
-__all__ = ["StepMetrics", "step_metrics", "StepTest", "step_test"]
+__all__ = ["StepMetrics", "step_metrics", "StepTest", "step_test", "FINAL_WINDOW_S"]
+
+#: The steady state is the mean of the record's last 0.5 s, and a settling time needs the rotation to stay in the
+#: band that long at the end of the record: a record that ends (or faults) sooner after entering the band, or
+#: still moving over its last 0.5 s, shows no settling and no steady state (inf and NaN, null in JSON), rather
+#: than a plausible number. 0.5 s is a period of the housed digit's ~2 Hz mode: a ring that would carry the
+#: rotation out of the band again shows within it.
+FINAL_WINDOW_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -31,20 +38,23 @@ class StepMetrics:
     rise_time_s : float
         10 % -> 90 % of the step (inf if 90 % is never reached).
     settling_time_s : float
-        Time after the step from which the rotation stays within 2 % of the step of the setpoint (inf if never:
-        with an integer command the loop may end up to half a quantum, 0.87 deg, from the setpoint).
+        Time after the step from which the rotation stays within 2 % of the step of the setpoint to the end of
+        the record, at least the last :data:`FINAL_WINDOW_S` (inf if not: with an integer command the loop may
+        end up to half a quantum, 0.87 deg, from the setpoint; or the run ended or faulted too soon).
     settling_to_final_s : float
-        The same about the final rotation instead of the setpoint: when the digit stopped moving.
+        The same about the final rotation instead of the setpoint: when the digit stopped moving (inf if it
+        was still moving over the last :data:`FINAL_WINDOW_S`).
     overshoot_percent : float
-        Peak beyond the setpoint, in percent of the step.
+        Peak beyond the setpoint, in percent of the step (0 if it never got beyond).
     final_error_deg : float
-        Steady-state error: mean of the last 0.5 s minus the setpoint (signed, deg).
+        Steady-state error: mean of the last :data:`FINAL_WINDOW_S` minus the setpoint (signed, deg); NaN when the
+        rotation was still moving then (no steady state in the record).
     final_error_commands : float
         The same in servo commands (signed): deg over the rig's rotation per command.
     final_error_quanta : float
         ``|final_error_commands|``: how many command quanta the loop ends away from the setpoint.
     iae_deg_s : float
-        Integral of the absolute error from the step to the end of the run (deg s).
+        Integral of the absolute error from the step to the end of the run (deg s); also for a zero step.
     peak_deg, peak_time_s : float
         The largest rotation and when it came (s after the step).
     bounded : bool
@@ -82,7 +92,10 @@ def step_metrics(
 
     The figures are :func:`flexdigit.control.analysis.step_figures` (the same code scores a linear model's
     step), against the setpoint: settling means within ``band`` x the step *of the setpoint*, and the
-    steady-state error (mean of the last 0.5 s) is given in degrees and in commands.
+    steady-state error (mean of the last 0.5 s) is given in degrees and in commands. Where the record cannot
+    tell (a run shorter than the settling, a fault, a loop that never settles, a zero step's rise and
+    overshoot, fewer than two samples after the step) the figure is inf or NaN, never a number the record does
+    not support (see :data:`FINAL_WINDOW_S`).
 
     ``smooth_s`` > 0 first averages the record over a centred window of that length (odd number of samples):
     for a measured rotation, whose noise (about 0.2 deg rms from the gauges' 2 mV on the twin) is half the 2 %
@@ -104,14 +117,20 @@ def step_metrics(
     per_command = check_real(deg_per_command, "deg_per_command", "step_metrics", low=0.0, low_open=True)
     y = np.asarray(y_deg, dtype=float).reshape(-1)
     t = np.asarray(t_s, dtype=float).reshape(-1)
+    if np.count_nonzero(t >= step_time_s - 1e-9) < 2:  # a run that ended (or faulted) at the step: nothing to score
+        nan = math.nan
+        return StepMetrics(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, bool(np.all(np.isfinite(y))))
     options = {"target": float(step_deg), "initial": float(initial_deg), "step_time_s": float(step_time_s)}
+    options |= {"tail_s": FINAL_WINDOW_S, "confirm_s": FINAL_WINDOW_S}
     f = step_figures(t, y, band=band, **options)
-    error = f.steady_state_error  # always from the record itself: averaging over the tail needs no smoothing
+    error = f.final - float(step_deg)  # always from the record itself: averaging over the tail needs no smoothing
     if check_real(smooth_s, "smooth_s", "step_metrics", low=0.0) > 0 and t.size > 2:
         from scipy.ndimage import uniform_filter1d
 
         width = 2 * int(round(smooth_s / float(np.median(np.diff(t))) / 2)) + 1
         f = step_figures(t, uniform_filter1d(y, width, mode="nearest"), band=band, **options)
+    if not math.isfinite(f.steady_state_error):  # still moving over the final window (judged as scored)
+        error = math.nan
     commands = error / per_command
     return StepMetrics(
         f.rise_time_s,
