@@ -198,6 +198,18 @@ def test_bad_reference_files_name_file_line_and_column(tmp_path, text, match):
     assert str(path) in str(info.value)
 
 
+def test_a_spreadsheet_export_with_a_byte_order_mark_reads_and_a_directory_is_named(tmp_path):
+    # Excel's "CSV UTF-8": a byte-order mark, CRLF, ';' (a protractor read every 4 commands, 1 deg resolution)
+    path = tmp_path / "protractor.csv"
+    path.write_bytes(b"\xef\xbb\xbfcommand;rotation_deg\r\n8;0\r\n12;7\r\n16;14\r\n20;21\r\n")
+    ref = read_reference(path)
+    np.testing.assert_array_equal(ref.commands, [8, 12, 16, 20])
+    np.testing.assert_allclose(ref.rotation_deg, [0, 7, 14, 21])
+    (tmp_path / "dir.csv").mkdir()
+    with pytest.raises(DataFileError, match=r"dir\.csv: a directory, not a file"):
+        read_reference(tmp_path / "dir.csv")
+
+
 def test_measured_gauges_in_the_file_fit_the_map_without_a_sweep(tmp_path):
     angles = np.array([0.0, 10, 20, 30, 40])
     X = OFFSET + np.outer(angles, SENS)

@@ -284,8 +284,10 @@ def read_reference(
     path = Path(path)
     res_mm = check_real(resolution_mm, "resolution_mm", "read_reference", low=0.0, low_open=True)
     res_deg = check_real(resolution_deg, "resolution_deg", "read_reference", low=0.0, low_open=True)
+    if path.is_dir():
+        raise DataFileError(f"{path}: a directory, not a file (expected a CSV of measured rotations or deflections)")
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is no part of the header
     except UnicodeDecodeError:
         raise DataFileError(f"{path}: not a text file (expected a CSV of measured rotations or deflections)") from None
     rows = [
