@@ -71,6 +71,14 @@ def parse_board_output(data: bytes) -> tuple[list[str], list[tuple[int, ...]]]:
     return info, samples
 
 
+def close_pty(*fds: int) -> None:
+    for fd in fds:
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+
+
 class ThirdPartyBoard:
     """A board on a pseudo-terminal: :attr:`port` is what the host opens; :meth:`play` writes on a schedule."""
 
@@ -104,11 +112,7 @@ class ThirdPartyBoard:
         self._halt.set()
         for thread in self._threads:
             thread.join(2.0)
-        for fd in (self.master, self._slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
+        close_pty(self.master, self._slave)
 
 
 @pytest.fixture
@@ -408,11 +412,7 @@ class ServoBoard:
     def close(self) -> None:
         self._halt.set()
         self._thread.join(2.0)
-        for fd in (self.master, self._slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
+        close_pty(self.master, self._slave)
 
 
 @pytest.fixture
