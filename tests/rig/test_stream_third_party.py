@@ -434,12 +434,17 @@ def test_run_on_a_third_party_board_ends_in_the_safe_state_when_the_stream_fails
     from flexdigit.rig.loop import read_log
 
     servo = ServoBoard()
-    healthy_frames = 30  # the stream fails once the loop has sent 30 frames (0.6 s), however long start-up took
+    # the board's gauges follow the servo (1.7 deg a command through the hand-made map: 10 deg/V on each of three
+    # gauges, 453 counts of 125 uV each), so the loop controls something and its runaway check stays quiet; the
+    # stream fails once the loop has sent 40 frames of its own (0.8 s; the frames before are opening's command 8)
+    healthy_frames = 40
 
     def stream():
         for i in range(3000):  # at most 30 s
-            line = board_line(i % 65536, 10_000 * i, gauges_of(i), 512)
-            if len(servo.positions) >= healthy_frames:
+            command = servo.positions[-1] if servo.positions else 8
+            counts = round((command - 8) * 1.7 / (10.0 * 3 * SCALE)) + i % 3
+            line = board_line(i % 65536, 10_000 * i, (counts, counts, counts), 512)
+            if sum(p != 8 for p in servo.positions) >= healthy_frames:
                 if damage == "stall":
                     return  # nothing more (the port stays open)
                 line = line.replace(b"*", b"*0")  # checksums broken from here on
@@ -455,19 +460,23 @@ def test_run_on_a_third_party_board_ends_in_the_safe_state_when_the_stream_fails
         assert wait_for(lambda: servo.positions and servo.positions[-1] == 8)  # the safe command reached the board
     finally:
         servo.close()
-    assert code == 1 and out["status"] == "fault" and match in out["message"]
+    assert code == 1 and out["status"] == "fault" and match in out["message"], out
     assert "relaxed to command 8" in out["message"]
     counts = out["gauge_source"]
     assert counts["samples"] >= healthy_frames and (counts["garbled"] > 0) == (damage == "garble")
     _, samples, footer = read_log(log)
     assert footer["stop"] == "fault" and match in footer["message"]
-    assert 0.5 < samples[-1]["t"] < 2.5  # it ran on the stream, then stopped at the fault
-    # the step figures say what the record shows: this board's gauges do not follow the servo, so the rotation
-    # never rose (no rise, no settling: null) and sat still, 20 deg short, over the last 0.5 s before the fault
+    assert healthy_frames * 0.02 <= samples[-1]["t"] < 2.5  # it ran on the stream, then stopped at the fault
+    # the step figures of a run cut short claim only what its record shows (the README's rules): a settling time
+    # needs the last 0.5 s inside the band, a steady-state error the last 0.5 s steady, about its own mean
     figures = out["step_metrics"]["estimated"]
-    assert figures["rise_time_s"] is None and figures["settling_time_s"] is None
     t, y = np.array([s["t"] for s in samples]), np.array([s["y"] for s in samples])
-    assert figures["final_error_deg"] == pytest.approx(np.mean(y[t >= t[-1] - 0.5]) - 20.0, abs=1e-3)
+    tail = t >= t[-1] - 0.5
+    if figures["settling_time_s"] is not None:
+        assert figures["settling_time_s"] <= t[-1] - 0.5 and np.all(np.abs(y[tail] - 20.0) <= 0.02 * 20.0)
+    if figures["final_error_deg"] is not None:
+        assert np.all(np.abs(y[tail] - y[tail].mean()) <= 0.02 * 20.0)
+        assert figures["final_error_deg"] == pytest.approx(y[tail].mean() - 20.0, abs=1e-3)
 
 
 # -- the reference firmware, compiled and run on a fake clock ---------------------------------------------------

@@ -292,6 +292,21 @@ class StreamSource:
         except Exception:  # noqa: BLE001 - closing a port that already vanished must not raise
             pass
 
+    def settings(self) -> dict[str, Any]:
+        """What decides the readings (JSON-able; logged and recorded with the servo board's settings)."""
+        return {
+            "backend": "stream",
+            "port": self.port,
+            "baud": self.baud,
+            "scale": self.scale,
+            "pot_scale": self.pot_scale,
+            "bits": self.bits,
+            "timeout": self.timeout,
+            "startup": self.startup,
+            "window": self.window,
+            "max_bad": self.max_bad,
+        }
+
     def __repr__(self) -> str:
         state = "closed" if self.closed else "open"
         return (
@@ -322,6 +337,9 @@ class StreamRig(Rig):
 
     def stats(self) -> dict[str, Any]:
         return self.source.stats()
+
+    def settings(self) -> dict[str, Any]:
+        return self.source.settings()
 
     def close(self) -> None:  # read-only: nothing to relax
         if self._closed:
