@@ -423,6 +423,7 @@ def hand_made_map(tmp_path):
     return path
 
 
+@pytest.mark.slow  # two ptys in real time: on a loaded machine the servo pty's reader can starve (a write timeout)
 @pytest.mark.parametrize(
     ("damage", "match"),
     [("stall", "stream silent"), ("garble", "stream garbled")],
