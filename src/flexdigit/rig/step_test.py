@@ -127,7 +127,8 @@ def step_metrics(
     if check_real(smooth_s, "smooth_s", "step_metrics", low=0.0) > 0 and t.size > 2:
         from scipy.ndimage import uniform_filter1d
 
-        width = 2 * int(round(smooth_s / float(np.median(np.diff(t))) / 2)) + 1
+        samples = max(1, int(round(smooth_s / float(np.median(np.diff(t))))))  # 0.1 s at 20 ms: 5, not 4.9999
+        width = samples if samples % 2 else samples + 1
         f = step_figures(t, uniform_filter1d(y, width, mode="nearest"), band=band, **options)
     if not math.isfinite(f.steady_state_error):  # still moving over the final window (judged as scored)
         error = math.nan
