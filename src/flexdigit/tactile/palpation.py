@@ -140,11 +140,13 @@ class _Staircase:
         return self.commands[index]
 
 
-def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None) -> SweepRecord:
+def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, log_mode: str = "new") -> SweepRecord:
     """Drive ``rig`` through the protocol's staircase on the real-time loop and average each plateau.
 
     ``truth`` (the twin): a callable returning the true contact force (N) now, logged beside every sample so a
     study can score the estimate. The rig is left open (at the equilibrium command) for the next sweep.
+    ``log_mode``: what to do with an existing ``log_path`` (:func:`~flexdigit.rig.loop.run_loop`: refuse it,
+    ``"replace"`` it, ``"append"`` to it).
     """
     from flexdigit.rig.loop import run_loop
 
@@ -159,6 +161,7 @@ def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None) ->
         duration_s=protocol.duration_s,
         period_s=protocol.period_s,
         log_path=log_path,
+        log_mode=log_mode,
         on_sample=on_sample,
         close_rig=False,
         header={"palpation": {"commands": list(protocol.commands), "plateau_s": protocol.plateau_s}},
@@ -489,7 +492,9 @@ def _plateau_truth(record: SweepRecord, protocol: PalpationProtocol) -> np.ndarr
     )
 
 
-def palpate(rig, placed, protocol: PalpationProtocol | None = None, *, model=None, log_path=None) -> PalpationResult:
+def palpate(
+    rig, placed, protocol: PalpationProtocol | None = None, *, model=None, log_path=None, log_mode: str = "new"
+) -> PalpationResult:
     """Run a palpation on ``rig`` with the tissue ``placed`` beside the digit (:func:`run_sweep`, :func:`analyse`).
 
     On the twin the tissue is put there (``rig.place_tissue``) and the true contact force is logged beside each
@@ -501,7 +506,7 @@ def palpate(rig, placed, protocol: PalpationProtocol | None = None, *, model=Non
     model = model or ContactGaugeModel(rig.params)
     rig.place_tissue(placed)
     truth = _truth_of(rig)
-    record = run_sweep(rig, protocol, log_path=log_path, truth=truth)
+    record = run_sweep(rig, protocol, log_path=log_path, truth=truth, log_mode=log_mode)
     return analyse(record, placed, protocol, model)
 
 
@@ -789,6 +794,7 @@ def hold_force(
     region_m=None,
     approach_rate: float = 4.0,
     log_path=None,
+    log_mode: str = "new",
 ) -> ForceHold:
     """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
 
@@ -822,6 +828,7 @@ def hold_force(
         setpoint,
         duration_s,
         log_path=log_path,
+        log_mode=log_mode,
         on_sample=(lambda k, t, y, c: true_force.append(truth())) if truth else None,
         close_rig=False,
     )

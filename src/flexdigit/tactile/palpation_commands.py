@@ -20,19 +20,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--tissue", required=True, help="a tissue TOML file or a built-in (soft-block, nodule-phantom, ...)")
     p.add_argument("--protocol", default=None, help="a protocol TOML file or a built-in: sweep (default), scan, hold")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the twin's noise (sim backends)")
+    p.add_argument(
+        "--seed", type=int, default=None, help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)"
+    )
     p.add_argument("--log", default=None, help="JSON-lines log of every loop sample (scan: one file per offset)")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--force", action="store_true", help="overwrite --out / --log if they exist")
 
 
-def _sim_options(backend: str, kind: str, seed: int) -> dict:
-    from flexdigit.rig.base import parse_rig_url
+def _sim_options(backend: str, kind: str, seed: int | None) -> dict:
+    from flexdigit.rig.base import parse_rig_url, seed_option
 
     url = parse_rig_url(backend)
+    options = seed_option(backend, seed)  # --seed only when given: the URL's seed= is not overridden by a default
     if not url.scheme.startswith("sim"):
-        return {}
-    options = {"seed": seed}
+        return options
     if "dt_s" not in url.options:
         # a quasi-static sweep needs no finer step than 10 ms (the fit's chi^2 is the same at 2 ms); force control
         # acts between frames, 5 ms
@@ -59,16 +61,18 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             "tissue there; palpation then estimates them)"
         )
     rig = open_rig(args.backend, **_sim_options(args.backend, kind, args.seed))
+    settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
+    log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
         if kind == "force":
-            data, text = _force(rig, tissue, plan, logs[0])
+            data, text = _force(rig, tissue, plan, logs[0], log_mode)
         elif kind == "scan":
-            data, text = _scan(rig, tissue, plan, logs)
+            data, text = _scan(rig, tissue, plan, logs, log_mode)
         else:
-            data, text = _sweep(rig, tissue, plan, logs[0])
+            data, text = _sweep(rig, tissue, plan, logs[0], log_mode)
     finally:
         rig.close()
-    data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, **data}
+    data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, "rig": settings, **data}
     if sim:
         data["truth"] = {
             "gap_mm": 1000 * tissue.gap_m,
@@ -125,7 +129,7 @@ def _refuse_poor_fit(fit, what: str) -> None:
         )
 
 
-def _sweep(rig, tissue, plan, log):
+def _sweep(rig, tissue, plan, log, log_mode):
     import numpy as np
 
     from flexdigit.errors import DataFileError
@@ -133,7 +137,7 @@ def _sweep(rig, tissue, plan, log):
     from flexdigit.tactile.palpation import palpate, stiffness_bound
 
     model = ContactGaugeModel(rig.params)
-    result = palpate(rig, tissue, plan.sweep, model=model, log_path=log)
+    result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode)
     _refuse_poor_fit(result.fit, "palpation")
     touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
     if touching < 3:
@@ -182,7 +186,7 @@ def _sweep(rig, tissue, plan, log):
     return data, "\n".join(lines)
 
 
-def _scan(rig, tissue, plan, logs):
+def _scan(rig, tissue, plan, logs, log_mode):
     from flexdigit.tactile.contact import ContactGaugeModel
     from flexdigit.tactile.palpation import _truth_of, run_sweep, scan
 
@@ -190,7 +194,7 @@ def _scan(rig, tissue, plan, logs):
     records = []
     for d, log in zip(plan.scan["offsets_m"], logs, strict=True):
         rig.place_tissue(tissue.moved(d))
-        records.append(run_sweep(rig, plan.sweep, log_path=log, truth=_truth_of(rig)))
+        records.append(run_sweep(rig, plan.sweep, log_path=log, truth=_truth_of(rig), log_mode=log_mode))
     result = scan(
         records,
         tissue,
@@ -231,7 +235,7 @@ def _scan(rig, tissue, plan, logs):
     return data, text
 
 
-def _force(rig, tissue, plan, log):
+def _force(rig, tissue, plan, log, log_mode):
     from flexdigit.tactile.palpation import hold_force
 
     f = plan.force
@@ -246,6 +250,7 @@ def _force(rig, tissue, plan, log):
         side=tissue.side,
         region_m=(max(tissue.start_m, 0.0), end),
         log_path=log,
+        log_mode=log_mode,
     )
     data = {
         "setpoint_n": held.setpoint_n,
