@@ -1,6 +1,8 @@
-"""Fuzz the TOML loaders (rig parameters, protocols, twin calibration): every generated file loads or gives the
-project's one-line error naming the file (issue 16). Valid seeds: the thesis defaults written by tomli_w, the
-packaged thesis-6.1 protocol and twin calibration."""
+"""Fuzz the TOML loaders (rig parameters, protocols, twin calibration, tissue and palpation protocol files, study
+specs): every generated file loads or gives the project's one-line error naming the file (issue 16). Valid seeds:
+the thesis defaults written by tomli_w, the packaged thesis-6.1 protocol and twin calibration, the shipped
+nodule phantom, the shipped sweep, scan and hold palpation protocols in one file, and the shipped
+thesis-tolerances study."""
 
 from __future__ import annotations
 
@@ -12,6 +14,8 @@ import tomli_w
 from hypothesis import given
 
 from flexdigit.params import RigParams, load_params
+from flexdigit.studies.spec import load_spec
+from flexdigit.tactile.palpation_files import load_palpation_protocol, load_tissue
 from flexdigit.tactile.protocols import load_protocol
 from flexdigit.twin.calibration import load_calibration
 
@@ -20,11 +24,18 @@ from .strategies import assert_loader_contract, edited_document, mutated_bytes, 
 PARAMS = tomli_w.dumps(RigParams().to_dict()).encode()
 PROTOCOL = resources.files("flexdigit.tactile").joinpath("protocols", "thesis-6.1.toml").read_bytes()
 CALIBRATION = resources.files("flexdigit.twin").joinpath("default_calibration.toml").read_bytes()
+_PALPATION = resources.files("flexdigit.tactile").joinpath("palpation_data")
+TISSUE = _PALPATION.joinpath("nodule-phantom.toml").read_bytes()
+PALPATION = _PALPATION.joinpath("scan.toml").read_bytes() + b"\n" + _PALPATION.joinpath("hold.toml").read_bytes()
+SPEC = resources.files("flexdigit.studies").joinpath("specs", "thesis-tolerances.toml").read_bytes()
 
 LOADERS = {
     "params": (load_params, PARAMS),
     "protocol": (load_protocol, PROTOCOL),
     "calibration": (load_calibration, CALIBRATION),
+    "tissue": (load_tissue, TISSUE),
+    "palpation": (load_palpation_protocol, PALPATION),
+    "spec": (load_spec, SPEC),
 }
 
 
@@ -78,3 +89,9 @@ test_protocol_bytes = _fuzz_bytes("protocol")
 test_protocol_values = _fuzz_values("protocol")
 test_calibration_bytes = _fuzz_bytes("calibration")
 test_calibration_values = _fuzz_values("calibration")
+test_tissue_bytes = _fuzz_bytes("tissue")
+test_tissue_values = _fuzz_values("tissue")
+test_palpation_bytes = _fuzz_bytes("palpation")
+test_palpation_values = _fuzz_values("palpation")
+test_spec_bytes = _fuzz_bytes("spec")
+test_spec_values = _fuzz_values("spec")

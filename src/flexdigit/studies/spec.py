@@ -305,7 +305,10 @@ def load_spec(name_or_path: str | Path) -> StudySpec:
         return spec_from_toml(ref.read_text(), source=f"{text_name}.toml")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory, not a study spec")
-    return spec_from_toml(path.read_text(), source=str(path), base_dir=path.parent)
+    from flexdigit._io import read_text
+
+    text = read_text(path, "a study spec TOML")  # binary garbage: named, not a codec error
+    return spec_from_toml(text, source=str(path), base_dir=path.parent)
 
 
 def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None) -> StudySpec:
@@ -465,7 +468,7 @@ def _number(entry: dict, key: str, where: str, source: str, positive: bool = Fal
 
 def _parameter(section, name, element, nominal, entry, where, source, factor=False) -> UncertainParameter:
     dist = entry.get("distribution")
-    if dist not in DISTRIBUTIONS:
+    if not isinstance(dist, str) or dist not in DISTRIBUTIONS:
         raise ParameterError(
             f"{source}: {where} distribution must be one of "
             + ", ".join(repr(d) for d in DISTRIBUTIONS)
@@ -475,7 +478,7 @@ def _parameter(section, name, element, nominal, entry, where, source, factor=Fal
     bad = sorted(keys - set(DISTRIBUTIONS[dist]))
     if bad:
         raise ParameterError(
-            f"{source}: {where}: unknown key '{bad[0]}' for a {dist} distribution; expected "
+            f"{source}: {where}: unknown key {bad[0]!r} for a {dist} distribution; expected "
             + ", ".join(DISTRIBUTIONS[dist])
         )
     text = entry.get("source", "")

@@ -62,7 +62,7 @@ class _Table:
         unknown = sorted(set(data) - set(allowed))
         if unknown:
             raise DataFileError(
-                f"{source}: unknown key '{prefix}.{unknown[0]}'; expected some of {', '.join(sorted(allowed))}"
+                f"{source}: unknown key {f'{prefix}.{unknown[0]}'!r}; expected some of {', '.join(sorted(allowed))}"
             )
         self.data, self.source, self.prefix = data, source, prefix
 
@@ -148,7 +148,9 @@ def _read(name_or_path, builtin, kind: str) -> tuple[dict, str]:
             raise DataFileError(
                 f"no {kind} {text_name!r}: expected one of {', '.join(builtin)} or a TOML file that exists"
             )
-        text, source = path.read_text(encoding="utf-8"), str(path)
+        from flexdigit._io import read_text
+
+        text, source = read_text(path, f"a {kind} TOML"), str(path)  # binary garbage: named, not a codec error
     try:
         return tomllib.loads(text), source
     except tomllib.TOMLDecodeError as exc:
@@ -178,7 +180,7 @@ def load_tissue(name_or_path):
     if set(data) != {"tissue"}:
         extra = sorted(set(data) - {"tissue"})
         raise DataFileError(
-            f"{source}: expected one [tissue] table" + (f"; unknown table '{extra[0]}'" if extra else "")
+            f"{source}: expected one [tissue] table" + (f"; unknown table {extra[0]!r}" if extra else "")
         )
     t = _Table(data["tissue"], source, "tissue", _TISSUE_KEYS)
     start = t.real("start_mm", unit="mm") / 1000
@@ -244,7 +246,7 @@ def load_palpation_protocol(name_or_path=None) -> PalpationFile:
     data, source = _read(name_or_path, PROTOCOLS, "palpation protocol")
     unknown = sorted(set(data) - set(_SECTIONS))
     if unknown:
-        raise DataFileError(f"{source}: unknown table '{unknown[0]}'; expected some of {', '.join(sorted(_SECTIONS))}")
+        raise DataFileError(f"{source}: unknown table {unknown[0]!r}; expected some of {', '.join(sorted(_SECTIONS))}")
     if not data:
         raise DataFileError(f"{source}: empty; expected a [sweep], [scan] or [force] table")
     s = _Table(data.get("sweep", {}), source, "sweep", _SECTIONS["sweep"])
