@@ -8,6 +8,7 @@ derandomized (the same examples every run: a seeded test suite); ``fuzz`` (``mak
 import os
 
 import matplotlib
+import pytest
 from hypothesis import HealthCheck, settings
 
 matplotlib.use("Agg")
@@ -22,3 +23,19 @@ _COMMON = dict(
 settings.register_profile("flexdigit", max_examples=EXAMPLES["flexdigit"], derandomize=True, **_COMMON)
 settings.register_profile("fuzz", max_examples=EXAMPLES["fuzz"], **_COMMON)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "flexdigit"))
+
+
+def _work_started(*args, **kwargs):
+    raise RuntimeError("the work started")
+
+
+@pytest.fixture
+def work_must_not_start(monkeypatch):
+    """``work_must_not_start(obj, "name", ...)``: those attributes raise "the work started" when called, so a test
+    can check that a refusal came before the work (the twin stepping, a chapter building), not after it."""
+
+    def patch(*targets):
+        for obj, name in zip(targets[::2], targets[1::2], strict=True):
+            monkeypatch.setattr(obj, name, _work_started)
+
+    return patch
