@@ -6,8 +6,12 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from flexdigit.cli import main
+from flexdigit.errors import DataFileError
 from flexdigit.rig.loop import read_log_runs
+from flexdigit.tactile.palpation_files import MAX_SERIES, load_palpation_protocol
 
 #: The shortest palpation there is: a 0.1 s force hold (after the 1 s tare) on the twin.
 HOLD = "[force]\nsetpoint_n = 0.2\nduration_s = 0.1\n"
@@ -33,3 +37,14 @@ def test_palpate_log_is_refused_then_replaced_with_force_and_the_urls_seed_is_us
     assert json.loads(capsys.readouterr().out)["rig"]["seed"] == 5
     ((_, _, samples, footer),) = read_log_runs(log)  # one run: replaced, not appended
     assert footer["stop"] == "completed" and len(samples) == 5  # 0.1 s of 20 ms frames
+
+
+def test_a_series_that_would_fill_the_memory_is_refused(tmp_path):
+    """Found by the TOML fuzz suite: a {from, to, step} with a tiny step built a list until the machine ran out of
+    memory (the test run was OOM-killed at 24 GB)."""
+    path = tmp_path / "huge.toml"
+    path.write_text("[sweep]\ncommands = { from = 8, to = 30, step = 1e-300 }\n")
+    with pytest.raises(DataFileError, match=rf"huge.toml: key 'sweep.commands' .* more than {MAX_SERIES} values"):
+        load_palpation_protocol(path)
+    path.write_text("[sweep]\ncommands = { from = 8, to = 30, step = 2 }\n")  # the same form, sized: loads
+    assert load_palpation_protocol(path).sweep.commands == tuple(range(8, 31, 2))

@@ -46,6 +46,8 @@ _TISSUE_KEYS = {
     "inclusions",
 }
 _INCLUSION_KEYS = {"centre_mm", "width_mm", "ratio"}
+#: Most values a ``{from, to, step}`` series may expand to (a staircase has at most 255 commands).
+MAX_SERIES = 10_000
 _SECTIONS = {
     "sweep": {"commands", "settle_s", "readings", "tare_command", "period_s", "model"},
     "scan": {"offsets_mm", "inclusion_width_mm"},
@@ -121,7 +123,13 @@ class _Table:
             inner = _Table(value, self.source, f"{self.prefix}.{key}", {"from", "to", "step"})
             start, stop = inner.real("from"), inner.real("to")
             step = inner.real("step", low=0, low_open=True)
-            count = int(math.floor((stop - start) / step + 1e-9)) + 1
+            span = (stop - start) / step
+            if not span < MAX_SERIES:  # a tiny step (or a huge span) would build a list the size of the memory
+                raise DataFileError(
+                    f"{self.where(key)} runs from {start:g} to {stop:g} in steps of {step:g}: more than {MAX_SERIES} "
+                    "values"
+                )
+            count = int(math.floor(span + 1e-9)) + 1
             if count < 1:
                 raise DataFileError(f"{self.where(key)} runs from {start:g} to {stop:g}: 'to' must not be below 'from'")
             value = [start + i * step for i in range(count)]
