@@ -26,6 +26,7 @@
         $("rate").textContent = "";
         document.body.classList.add("stale");
       }
+      dirty = false; // a frame that came just before the close must not redraw over the notice
       stats.connected = false;
       setConn(false);
       setTimeout(() => { stats.reconnects += 1; connect(); }, 500);
@@ -323,7 +324,7 @@
 
   let rateWindow = [];
   function frame() {
-    if (dirty && !paused && last) {
+    if (dirty && !paused && last && stats.connected) {
       const t0 = performance.now();
       drawShape();
       drawTraces("gauges", [0, 1, 2].map((i) => ({ name: "gauge " + (i + 1), color: COLORS[i], get: (s) => s.gauges_v[i] })), "V");
