@@ -185,6 +185,8 @@ class Recording:
         if channel is None:
             raise ParameterError(f"Recording.write: unknown topic {topic!r}; add it with add_channel first")
         stamp = max(int(round(float(time_s) * 1e9)), 0)
+        if stamp >= 2**64:  # MCAP's times are unsigned 64-bit nanoseconds: 584 years
+            raise ParameterError(f"Recording.write: time {time_s!r} s is beyond MCAP's 2**64 ns (584 years)")
         data = json.dumps(message, allow_nan=False, separators=(",", ":")).encode()
         with self._lock:
             if self._closed:
@@ -272,8 +274,9 @@ class _Records:
             reader = StreamReader(_Bounded(fh, self.path.stat().st_size), skip_magic=False)
             try:
                 yield from reader.records
-            except (McapError, EOFError, ValueError, struct.error) as exc:
-                # the open chunk of a run that was killed: everything before it is kept
+            except (McapError, EOFError, ValueError, OverflowError, struct.error) as exc:
+                # the open chunk of a run that was killed: everything before it is kept (OverflowError: a length
+                # inside a chunk damaged past 2**63, which the reader's in-memory stream cannot even ask for)
                 self.stopped = f"{type(exc).__name__}: {exc}"[:200]
 
 
