@@ -8,6 +8,9 @@ Two clocks:
   twin is advanced to the wall-clock time, and :meth:`wait` sleeps (coarse ``time.sleep`` then a short spin for the
   last ``spin_s``, so deadlines are met to tens of microseconds rather than the scheduler's ~1 ms). This is what
   the 1 kHz jitter benchmark runs, and how a controller is rehearsed in real time before meeting the hardware.
+  Its twin steps with the compiled kernel (``compiled``, loaded in the background at opening: numpy steps until
+  it is ready): a wall-clock run does not repeat bit for bit anyway, and the live page's twin then costs ~3 %
+  of a core instead of ~15 % (``benchmarks/bench_live.py``).
 """
 
 from __future__ import annotations
@@ -43,6 +46,10 @@ class SimRig(Rig):
         A ready twin (tests and studies that perturb it); built from ``params`` and ``twin_options`` otherwise.
     spin_s : float
         Paced mode: busy-wait the last ``spin_s`` of every wait.
+    compiled : bool, optional
+        Step the twin's digit with the compiled kernel (:meth:`flexdigit.twin.digit.DynamicState.use_compiled`).
+        Default: in paced mode, loaded in the background (the twin steps in numpy until it is ready); in virtual
+        time, not (its numbers then repeat bit for bit and match the report's). Ignored with a ready ``twin``.
     **twin_options
         Passed to :class:`flexdigit.twin.Twin` (``calibration``, ``orientation``, ``housing``, ``dt_s`` ...).
     """
@@ -60,8 +67,10 @@ class SimRig(Rig):
         clock=None,
         sleep=None,
         operator=None,
+        compiled: bool | None = None,
         **twin_options: Any,
     ) -> None:
+        ready = twin is not None
         if twin is None:
             from flexdigit.twin.twin import Twin
 
@@ -69,7 +78,11 @@ class SimRig(Rig):
             # frames. The 30 deg step of the 20 ms design (seed 0) overshoots 2.69 % at 1 ms, 2.68 % at 2 ms,
             # 6.3 % at 5 ms and 5.5 % at 20 ms; 2 ms is the coarsest step that matches the 1 ms reference.
             twin_options.setdefault("dt_s", DEFAULT_TWIN_DT_S)
-            twin = Twin(params, seed=int(seed), **twin_options)
+            twin = Twin(params, seed=int(seed), compiled=bool(compiled), **twin_options)
+            if compiled is None and paced:
+                twin.dynamics.use_compiled(background=True)
+        #: Whether the twin's digit steps compiled (or will, once the kernel has loaded in the background)
+        self.compiled = twin.dynamics.compiled if ready else bool(compiled or (compiled is None and paced))
         self.twin = twin
         self.paced = bool(paced)
         self.spin_s = check_real(spin_s, "spin_s", "SimRig", low=0.0)
@@ -139,7 +152,7 @@ class SimRig(Rig):
             "dt_s": float(twin.dt_s),
             "calibration_fingerprint": fingerprint(twin.calibration.to_dict()),
             "params_fingerprint": fingerprint(twin.params.to_dict()),
-        }
+        } | ({"compiled": True} if self.compiled else {})  # only when on: older journals stay comparable
 
     def tip_rotation_deg(self) -> float:
         """The twin's true tip (beam) rotation now, deg: the last link's absolute angle (not measurable on hardware)."""
@@ -159,6 +172,7 @@ URL_OPTIONS = (
     UrlOption("cable", "bool", help="the cable attached, or removed"),
     UrlOption("dt_s", "float", low=1e-5, high=0.02, help="the twin's integration step, s"),
     UrlOption("spin_s", "float", low=0.0, high=0.1, help="sim+paced: busy-wait the last spin_s of every wait, s"),
+    UrlOption("compiled", "bool", help="step the digit compiled (default: sim+paced yes, sim no)"),
 )
 #: Keyword arguments only Python passes to :class:`SimRig` (objects, not text).
 PYTHON_OPTIONS = ("twin", "calibration", "cells_per_section", "command", "clock", "sleep", "operator")
