@@ -206,8 +206,10 @@ class DigitBeam:
 
     def locate(self, x_m):
         """Cell index and fraction of arc positions ``x_m`` (any shape) for interpolating node values."""
-        x = np.clip(np.asarray(x_m, dtype=float), 0.0, self.length_m)
-        i = np.clip(np.floor(x / self.ds_m).astype(int), 0, self.s_m.size - 1)
+        # np.minimum(np.maximum()) rather than np.clip: the same numbers at a fifth of the cost on small arrays
+        # (np.clip's dispatch is ~25 us; the live page's estimate locates nine times a frame)
+        x = np.minimum(np.maximum(np.asarray(x_m, dtype=float), 0.0), self.length_m)
+        i = np.minimum(np.maximum(np.floor(x / self.ds_m).astype(int), 0), self.s_m.size - 1)
         return i, x / self.ds_m - i
 
     def at(self, nodes: np.ndarray, x_m, *, vector: bool | None = None) -> np.ndarray:
@@ -480,6 +482,12 @@ class ShapeEstimator:
         self.weight_gauges_ = beam.weight_operator(beam.gauge_s_m)
         self.weight_cells_ = beam.weight_operator(beam.s_m)
         self.weight_tip_ = (beam.inv_ei * beam.ds_m) @ self.weight_cells_
+        # the measurement model's constant parts (:meth:`_rows`), once rather than per row set: the cable's row
+        # per unit tension, the cumulative compliance along the cells and a weight's direction
+        e, w_cells = beam.eccentricity_m, beam.inv_ei * beam.ds_m
+        self.cable_row_ = np.r_[e * beam.gauge_inv_ei, e * np.sum(w_cells) + 1.0 / (beam.cable_stiffness_n_m * e)]
+        self.cum_compliance_ = np.r_[0.0, np.cumsum(w_cells)]
+        self.down_ = beam.gravity / np.linalg.norm(beam.gravity)
         self.ready_ = self._key()
 
     def curvature_from_volts(self, gauges_v) -> np.ndarray:
@@ -615,18 +623,17 @@ class ShapeEstimator:
         ``s_load`` (B, C) (``"nodes"``: every node of the grid), ``a_P`` (B, C, 4) per unit load force.
         """
         beam = self.beam_
-        e = beam.eccentricity_m
         inv_g = beam.gauge_inv_ei
         w_cells = beam.inv_ei * beam.ds_m
         # cable: T e everywhere; the tip equation is psi_tip + T / (k_c e) (E 3.11 with the cable's stretch)
-        a_t = np.r_[e * inv_g, e * np.sum(w_cells) + 1.0 / (beam.cable_stiffness_n_m * e)]
+        a_t = self.cable_row_
         m_g = beam.weight_moment(r, self.weight_gauges_)  # (B, 3)
         b_w = np.concatenate([m_g * inv_g, beam.weight_moment(r, self.weight_tip_[None, :])], axis=1)
         if s_load is None:
             return a_t, b_w, None
         r_mid = 0.5 * (r[:, :-1, :] + r[:, 1:, :])
         cum_r = np.concatenate([np.zeros((r.shape[0], 1, 2)), np.cumsum(r_mid * w_cells[None, :, None], axis=1)], 1)
-        cum_w = np.r_[0.0, np.cumsum(w_cells)]
+        cum_w = self.cum_compliance_
         if isinstance(s_load, str):  # every node: no interpolation
             s_load = np.broadcast_to(self.nodes_m_, r.shape[:2])
             r_l, r_before, w_before = r, cum_r, np.broadcast_to(cum_w, r.shape[:2])
@@ -639,7 +646,7 @@ class ShapeEstimator:
         if self.load == "press":
             d = np.stack([-np.sin(angle), np.cos(angle)], axis=-1)  # normal towards the cable side
         else:
-            d = np.broadcast_to(beam.gravity / np.linalg.norm(beam.gravity), r_l.shape)
+            d = np.broadcast_to(self.down_, r_l.shape)
         # moment per unit force at x < s_L: (r_L - r(x)) x d = r_L x d - r(x) x d
         rl_x_d = _cross(r_l, d)  # (B, C)
         r_g = np.matmul(self.gauge_interp_, r)  # (B, 3, 2)
@@ -687,7 +694,9 @@ class ShapeEstimator:
         _, _, a_p = self._rows(r, psi, "nodes")
         # the force's weak prior as a fifth row (P = 0 +- PRIOR_FORCE_N): a ridge that keeps a huge force just past
         # a gauge from explaining the friction's scatter better than a modest one where the load really is
-        a_t, res, w = np.r_[a_t, 0.0], np.c_[res, np.zeros(b)], np.c_[w, np.full(b, self.PRIOR_FORCE_N**-2.0)]
+        a_t = np.append(a_t, 0.0)
+        res = np.concatenate([res, np.zeros((b, 1))], axis=1)
+        w = np.concatenate([w, np.full((b, 1), self.PRIOR_FORCE_N**-2.0)], axis=1)
         a_p = np.concatenate([a_p, np.ones(a_p.shape[:2] + (1,))], axis=-1)
         t1, p1, chi1 = _fit_load(res[:, None, :], a_t, a_p, w[:, None, :], cable, positive, self.max_force_n)
         rows = np.arange(b)
@@ -744,7 +753,7 @@ class ShapeEstimator:
             angle = beam.at(psi, s_l, vector=False)
             d = np.stack([-np.sin(angle), np.cos(angle)], axis=-1)
         else:
-            d = np.broadcast_to(beam.gravity / np.linalg.norm(beam.gravity), r_l.shape)
+            d = np.broadcast_to(self.down_, r_l.shape)
         r_mid = 0.5 * (r[:, :-1, :] + r[:, 1:, :])  # (B, P, 2)
         lever = _cross(r_l[:, :, None, :] - r_mid[:, None, :, :], d[:, :, None, :])  # (B, C, P)
         out = np.where(beam.s_m[None, None, :] < s_l[:, :, None], lever, 0.0)
