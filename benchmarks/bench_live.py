@@ -6,9 +6,12 @@
   drawn it (the browser's clock; same machine), p50 / p95, goal p95 <= 100 ms;
 - ``server CPU``: the ``flexdigit live`` process's user + system CPU time over the window, % of one core, goal
   <= 20 % at 50 Hz (the twin integrated on the wall clock, the controller, the shape estimate at 25 Hz, the
-  WebSocket), and the part of it the twin's simulation of the digit took (the server's ``rig_cpu_s``: CPU time of
-  the loop thread inside the rig's read and write), which on hardware is the serial and DAQ drivers' far smaller
-  share;
+  WebSocket), with and without the part the twin's simulation of the digit took (the server's ``rig_cpu_s``: CPU
+  time of the loop thread inside the rig's read and write; the twin steps with the compiled kernel,
+  ``sim+paced``'s default), which on hardware is the serial and DAQ drivers' far smaller share;
+- ``start``: from starting ``flexdigit live`` to its URL printed (the twin's kernel loads in the background
+  meanwhile), and what loading that kernel costs on its own: the first time on a machine (numba compiles it,
+  ``NUMBA_CACHE_DIR`` pointed at an empty directory) and from numba's cache after that;
 - ``loop rate``: samples per second the page received (50 expected) and the loop's overruns;
 - ``shape estimate``: one warm-started :meth:`ShapeEstimator.estimate` (what the live session runs 25 times a
   second), ms.
@@ -43,15 +46,16 @@ def _cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
 
 
-def _start_server(log: Path) -> tuple[subprocess.Popen, str]:
+def _start_server(log: Path) -> tuple[subprocess.Popen, str, float]:
     err = open(log, "w")  # noqa: SIM115 - the server's whole life
+    start = time.monotonic()
     proc = subprocess.Popen([sys.executable, "-m", "flexdigit.cli", "live", "--port", "0"], stderr=err)
-    deadline = time.monotonic() + 180
+    deadline = start + 180
     while time.monotonic() < deadline:
         match = re.search(r"(http://127\.0\.0\.1:\d+/)", log.read_text())
         if match:
-            return proc, match.group(1)
-        time.sleep(0.2)
+            return proc, match.group(1), time.monotonic() - start
+        time.sleep(0.05)
     proc.kill()
     raise RuntimeError(f"flexdigit live did not start: {log.read_text()[-1000:]}")
 
@@ -62,7 +66,7 @@ def measure(screenshot: str | None = None) -> dict:
     from flexdigit.live.browser import launch
 
     with tempfile.TemporaryDirectory() as tmp:
-        proc, url = _start_server(Path(tmp) / "live.err")
+        proc, url, start_s = _start_server(Path(tmp) / "live.err")
         try:
             with sync_playwright() as pw:
                 browser = launch(pw)
@@ -106,6 +110,7 @@ def measure(screenshot: str | None = None) -> dict:
         "cpu_moving_percent": 100.0 * (cpu1 - cpu_mid) / (t1 - t_mid),
         "twin_rest_percent": 100.0 * (rig_mid - rig0) / (t_mid - t0),
         "twin_moving_percent": 100.0 * (rig1 - rig_mid) / (t1 - t_mid),
+        "start_s": start_s,
         "load": os.getloadavg()[0],
         "overruns": int(after["overruns"]),
         "window_s": wall,
@@ -126,8 +131,21 @@ def _estimate_ms() -> float:
     return (time.perf_counter() - start) / n * 1e3
 
 
+def _kernel_load_s(cache_dir: str) -> float:
+    """Seconds to load the twin's compiled kernel in a fresh process, numba's cache in ``cache_dir``."""
+    code = (
+        "import time; from flexdigit.twin import Twin; twin = Twin(dt_s=0.002); t = time.perf_counter(); "
+        "twin.dynamics.use_compiled(); print(time.perf_counter() - t)"
+    )
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache_dir}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    return float(out.stdout.split()[-1])
+
+
 def run(screenshot: str | None = None) -> list[dict]:
     m = measure(screenshot)
+    with tempfile.TemporaryDirectory() as cache:
+        first_s, cached_s = _kernel_load_s(cache), _kernel_load_s(cache)
     note = f"{m['window_s']:.0f} s, 25 g hung, holding then stepping 10 <-> 30 deg; chromium on the same 2 cores"
     return [
         {"name": "live page update rate", "value": m["update_hz"], "unit": "Hz", "goal": ">= 20", "note": note},
@@ -143,7 +161,16 @@ def run(screenshot: str | None = None) -> list[dict]:
         {"name": "... of which the twin's simulation, holding / stepping",
          "value": m["twin_rest_percent"], "unit": "% core", "goal": "",
          "note": f"stepping {m['twin_moving_percent']:.1f} %; the digit a rig would be (its thread CPU time in "
-         f"read and write); load average {m['load']:.1f} at the end"},
+         f"read and write, compiled kernel); load average {m['load']:.1f} at the end"},
+        {"name": "live server CPU without the twin, holding", "value": m["cpu_rest_percent"] - m["twin_rest_percent"],
+         "unit": "% core", "goal": "<= 20", "note": "the server's own work: loop, controller, shape, contact, page"},
+        {"name": "live server CPU without the twin, stepping",
+         "value": m["cpu_moving_percent"] - m["twin_moving_percent"], "unit": "% core", "goal": "<= 20",
+         "note": "the shape re-estimated at 25 Hz while the readings move"},
+        {"name": "flexdigit live start, to its URL", "value": m["start_s"], "unit": "s", "goal": "",
+         "note": "the twin's kernel loads in the background meanwhile (numpy steps until it is ready)"},
+        {"name": "twin kernel load, first on a machine / cached", "value": first_s, "unit": "s", "goal": "",
+         "note": f"cached {cached_s:.2f} s (numba's import included); in a thread of its own, off the start"},
         {"name": "shape estimate, warm start (one per 40 ms)", "value": _estimate_ms(), "unit": "ms", "goal": "",
          "note": "ShapeEstimator.estimate from the last frame's shape"},
     ]  # fmt: skip
