@@ -51,6 +51,23 @@ def test_parser_and_light_commands_import_no_heavy_library():
     assert not loaded & set(HEAVY), loaded & set(HEAVY)
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["model"],
+        ["model", "--json"],
+        ["model", "--variant", "consistent", "--output", "tip_rotation_rad", "--json"],
+        ["model", "--explain"],
+        ["model", "--variant", "consistent", "--output", "gauge_v_sg2", "--gains", "measured", "--explain"],
+    ],
+)
+def test_model_command_imports_no_heavy_library(argv):
+    # start-up (issue 15 item 6): the plant is numpy polynomials (flexdigit.models.polytf), so `flexdigit model`
+    # runs without python-control (2 s of imports: scipy.signal, scipy.stats, matplotlib.pyplot)
+    loaded = _imported_after(f"from flexdigit.cli import main; assert main({argv!r}) == 0")
+    assert not loaded & set(HEAVY), loaded & set(HEAVY)
+
+
 # -- errors as JSON under --json (issue 16): a client always gets one JSON object on stdout, exit 2 ---------------
 @pytest.mark.parametrize(
     "argv, error_type, needle",

@@ -24,13 +24,15 @@ Examples
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
-import scipy.signal
 
 from flexdigit._validation import check_choice
 from flexdigit.params import BRIDGE_TYPES, Sensors
+
+if TYPE_CHECKING:
+    import control
 
 
 def wheatstone_ratio(r1, r2, r3, r4):
@@ -119,6 +121,10 @@ def lowpass_tf(sensors: Sensors | None = None) -> control.TransferFunction:
     >>> round(float(abs(lp(2j * math.pi * 470.0))), 4)        # -3 dB at the cut-off
     0.7071
     """
+    # imported here: python-control and scipy.signal cost 2 s of start-up to every user of the bridge (the twin)
+    import control
+    import scipy.signal
+
     s = sensors or Sensors()
     b, a = scipy.signal.butter(s.amplifier_lowpass_order, 2.0 * math.pi * s.amplifier_lowpass_hz, analog=True)
     return control.tf(b / a[0], a / a[0])

@@ -36,30 +36,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _model(args: argparse.Namespace) -> CommandResult:
-    import control
-
     from flexdigit.models.plant import build_plant, closed_loop_printed_k1, explain_discrepancies
+    from flexdigit.models.polytf import PolyTF
     from flexdigit.params import RigParams, load_params
 
+    # python-control is never imported here: it costs 2 s of start-up (see flexdigit.models.polytf)
     params = load_params(args.params) if args.params else RigParams()
     plant = build_plant(args.variant, params, output=args.output, gains=args.gains)
     summary = plant.summary()
     components = {}
-    for name, value in plant.components.items():
-        if isinstance(value, control.TransferFunction):
-            components[name] = {"num": value.num[0][0].tolist(), "den": value.den[0][0].tolist()}
+    for name, value in plant.factors.items():
+        if isinstance(value, PolyTF):
+            components[name] = {"num": value.num.tolist(), "den": value.den.tolist()}
         else:
             components[name] = float(value)
     data = {"plant": summary, "components": components, "notes": list(plant.notes)}
     if plant.variant == "printed":
         k1 = closed_loop_printed_k1()
-        cl = plant.closed_loop(k1)
-        data["closed_loop"] = {
-            "k1": k1,
-            "num": (cl.num[0][0] / cl.den[0][0][0]).tolist(),
-            "den": (cl.den[0][0] / cl.den[0][0][0]).tolist(),
-            "poles": _sorted_poles(cl),
-        }
+        cl = plant.closed_loop_poly(k1).normalised()
+        data["closed_loop"] = {"k1": k1, "num": cl.num.tolist(), "den": cl.den.tolist(), "poles": _sorted_poles(cl)}
     if args.explain:
         data["discrepancies"] = explain_discrepancies(params)
     return CommandResult(data=data, text=_text(data))

@@ -21,13 +21,17 @@ from __future__ import annotations
 
 import math
 from numbers import Real
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 
 from flexdigit._validation import Interval, validate_params
 from flexdigit.errors import ParameterError
+from flexdigit.models.polytf import PolyTF
 from flexdigit.params import RigParams
+
+if TYPE_CHECKING:
+    import control
 
 _POSITIVE = Interval(Real, 0, None, closed="neither")
 
@@ -141,13 +145,28 @@ def natural_frequency_from_damped(wd_rad_s, zeta):
     return out if out.ndim else float(out)
 
 
-@validate_params(
-    {
-        "wn_rad_s": [Interval(Real, 0, None, closed="neither")],
-        "zeta": [Interval(Real, 0, None)],
-        "gain": [Interval(Real)],
-    }
-)
+_DIGIT_TF_CONSTRAINTS = {
+    "wn_rad_s": [Interval(Real, 0, None, closed="neither")],
+    "zeta": [Interval(Real, 0, None)],
+    "gain": [Interval(Real)],
+}
+
+
+@validate_params(_DIGIT_TF_CONSTRAINTS)
+def digit_poly(wn_rad_s: float, zeta: float, gain: float = 1.0) -> PolyTF:
+    """``E(s) = gain wn^2 / (s^2 + 2 zeta wn s + wn^2)`` (3.1.2) as a :class:`~flexdigit.models.polytf.PolyTF`.
+
+    What :func:`digit_tf` returns, without importing python-control (the plant and the twin use this one).
+
+    Examples
+    --------
+    >>> digit_poly(10.0, 0.1).den.tolist()
+    [1.0, 2.0, 100.0]
+    """
+    return PolyTF([gain * wn_rad_s**2], [1.0, 2.0 * zeta * wn_rad_s, wn_rad_s**2])
+
+
+@validate_params(_DIGIT_TF_CONSTRAINTS)
 def digit_tf(wn_rad_s: float, zeta: float, gain: float = 1.0) -> control.TransferFunction:
     """``E(s) = gain wn^2 / (s^2 + 2 zeta wn s + wn^2)`` (3.1.2).
 
@@ -169,19 +188,24 @@ def digit_tf(wn_rad_s: float, zeta: float, gain: float = 1.0) -> control.Transfe
     >>> float(digit_tf(10.0, 0.1).dcgain())
     1.0
     """
-    return control.tf([gain * wn_rad_s**2], [1.0, 2.0 * zeta * wn_rad_s, wn_rad_s**2])
+    return digit_poly(wn_rad_s, zeta, gain).to_control()
 
 
-def digit_tf_from_params(params: RigParams | None = None, *, housing: bool = True) -> control.TransferFunction:
-    """The digit's unit-DC-gain second-order model from ``params.dynamics``.
+def digit_poly_from_params(params: RigParams | None = None, *, housing: bool = True) -> PolyTF:
+    """The digit's unit-DC-gain second-order model from ``params.dynamics``, as a ``PolyTF``.
 
     ``housing=True`` gives E(s) of 3.1.2 (table 3.2 averages, the rig as it runs); ``housing=False`` the bare
     strip of table 3.1.
     """
     d = (params or RigParams()).dynamics
     if housing:
-        return digit_tf(d.wn_housing_rad_s, d.zeta_housing)
-    return digit_tf(d.wn_bare_rad_s, d.zeta_bare)
+        return digit_poly(d.wn_housing_rad_s, d.zeta_housing)
+    return digit_poly(d.wn_bare_rad_s, d.zeta_bare)
+
+
+def digit_tf_from_params(params: RigParams | None = None, *, housing: bool = True) -> control.TransferFunction:
+    """:func:`digit_poly_from_params` as a ``control.TransferFunction`` (``housing``: with housing or bare)."""
+    return digit_poly_from_params(params, housing=housing).to_control()
 
 
 def release_table(percent_overshoot, wd_rad_s) -> dict[str, np.ndarray]:

@@ -31,10 +31,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from numbers import Real
-
-import control
+from typing import TYPE_CHECKING
 
 from flexdigit._validation import Interval, check_choice, declare, validate_fields
+
+if TYPE_CHECKING:
+    import control
 
 
 @declare
@@ -97,6 +99,8 @@ class DCMotor:
 
 def motor_speed_tf(motor: DCMotor | None = None, *, geared: bool = True) -> control.TransferFunction:
     """Motor-shaft speed per armature volt, ``w_m/V_a`` (rad/s per V): E 3.8 if ``geared`` else E 3.6."""
+    import control  # here, not at the top: it costs 2 s of start-up (see flexdigit.models.polytf)
+
     m = motor or DCMotor()
     kt, ke, r, ind, kd = (
         m.torque_constant_nm_per_a,
@@ -127,6 +131,8 @@ def motor_angle_tf(
     shaft : {"motor", "output"}
         ``"motor"``: theta_m as in the thesis; ``"output"``: theta_2 = theta_m / N, the pulley's angle.
     """
+    import control
+
     m = motor or DCMotor()
     check_choice(shaft, "shaft", ("motor", "output"), "motor_angle_tf")
     tf = motor_speed_tf(m, geared=geared) * control.tf([1.0], [1.0, 0.0])

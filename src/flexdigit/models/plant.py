@@ -58,14 +58,19 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.models import bridge, cable, conversion, digit, servo
+from flexdigit.models.polytf import PolyTF, ctrb, obsv
 from flexdigit.params import RigParams
+
+if TYPE_CHECKING:
+    import control
 
 VARIANTS = ("printed", "consistent")
 #: ``2 zeta wn`` (1/s) of the digit factor inside the printed G(s), ``103.3/(s^2 + 0.543 s + 103.3)``, as identified
@@ -88,57 +93,86 @@ def output_choices(params: RigParams | None = None) -> tuple[str, ...]:
 class Plant:
     """A plant model: its transfer function and state space, what goes in and out, and the factors it is made of.
 
+    The plant is held as numpy polynomials and matrices; :attr:`tf`, :attr:`ss` and :attr:`components` convert
+    them to python-control objects on first use (``import control`` costs 2 s, which ``flexdigit model`` does not
+    need to pay for its poles, ranks and DC gain).
+
     Attributes
     ----------
     variant : {"printed", "consistent"}
     output : str
         What the output is (``"deflection_sg1_m"``, ``"tip_rotation_rad"``, ...).
-    tf : control.TransferFunction
-        Command -> output.
-    ss : control.StateSpace
-        A realisation of ``tf``: the companion form of 3.5 for ``printed``, the series connection of the servo and
-        digit (states: servo angle and rate, moment and its rate, scaled) for ``consistent``.
+    poly : PolyTF
+        Command -> output, monic denominator.
+    abcd : tuple of ndarray
+        ``(A, B, C, D)``, a realisation of ``poly``: the companion form of 3.5 for ``printed``; for
+        ``consistent`` the servo and the digit in series, states the servo's output (commands' worth) and its rate,
+        the tip moment (N m) and its rate.
     input_unit, output_unit : str
         ``"command"`` and e.g. ``"m"``.
-    components : dict
-        The factors, name -> float gain or TransferFunction, in the order they are multiplied.
+    factors : dict
+        The factors, name -> float gain or :class:`PolyTF`, in the order they are multiplied.
     notes : tuple of str
         How this variant was put together.
     """
 
     variant: str
     output: str
-    tf: control.TransferFunction
-    ss: control.StateSpace
+    poly: PolyTF
+    abcd: tuple
     input_unit: str
     output_unit: str
-    components: dict = field(default_factory=dict)
+    factors: dict = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+
+    @cached_property
+    def tf(self) -> control.TransferFunction:
+        """Command -> output as a ``control.TransferFunction``."""
+        return self.poly.to_control()
+
+    @cached_property
+    def ss(self) -> control.StateSpace:
+        """:attr:`abcd` as a ``control.StateSpace``."""
+        import control
+
+        return control.ss(*self.abcd)
+
+    @cached_property
+    def components(self) -> dict:
+        """:attr:`factors` with each :class:`PolyTF` as a ``control.TransferFunction`` (floats as they are)."""
+        return {k: v.to_control() if isinstance(v, PolyTF) else v for k, v in self.factors.items()}
+
+    @property
+    def order(self) -> int:
+        """Number of states of :attr:`abcd` (4 in the thesis)."""
+        return int(np.shape(self.abcd[0])[0])
 
     @property
     def poles(self) -> np.ndarray:
         """Poles (rad/s), sorted by real part then imaginary part."""
-        return _sorted(self.tf.poles())
+        return _sorted(self.poly.poles())
 
     @property
     def zeros(self) -> np.ndarray:
         """Finite transmission zeros (rad/s); empty for this plant."""
-        return _sorted(self.tf.zeros())
+        return _sorted(self.poly.zeros())
 
     @property
     def dc_gain(self) -> float:
         """G(0), output unit per command."""
-        return float(np.real(self.tf.dcgain()))
+        return self.poly.dcgain()
 
     @property
     def controllability_rank(self) -> int:
-        """Rank of the controllability matrix of :attr:`ss` (4 in the thesis)."""
-        return int(np.linalg.matrix_rank(_scaled(control.ctrb(self.ss.A, self.ss.B))))
+        """Rank of the controllability matrix of :attr:`abcd` (4 in the thesis)."""
+        a, b = self.abcd[0], self.abcd[1]
+        return int(np.linalg.matrix_rank(_scaled(ctrb(a, b))))
 
     @property
     def observability_rank(self) -> int:
-        """Rank of the observability matrix of :attr:`ss` (4 in the thesis)."""
-        return int(np.linalg.matrix_rank(_scaled(control.obsv(self.ss.A, self.ss.C).T)))
+        """Rank of the observability matrix of :attr:`abcd` (4 in the thesis)."""
+        a, c = self.abcd[0], self.abcd[2]
+        return int(np.linalg.matrix_rank(_scaled(obsv(a, c).T)))
 
     @property
     def is_stable(self) -> bool:
@@ -155,32 +189,35 @@ class Plant:
         out = self.dc_gain * np.asarray(command_steps, dtype=float)
         return out if out.ndim else float(out)
 
+    def closed_loop_poly(self, k1: float) -> PolyTF:
+        """Unity-feedback closed loop with gain ``k1`` in the forward path, ``k1 G / (1 + k1 G)``, as a PolyTF."""
+        k = check_real(k1, "k1", "Plant.closed_loop")
+        return (k * self.poly).feedback()
+
     def closed_loop(self, k1: float) -> control.TransferFunction:
         """Unity-feedback closed loop with gain ``k1`` in the forward path: ``k1 G / (1 + k1 G)`` (table 4.1).
 
         The printed closed loop (86.2 / (... + 4.362e4)) needs ``k1 = 1.7699`` command per output unit, a tenth
         of E 3.16's 17.6991 command per mm (and 17,699 command per m would be the unit-correct figure).
         """
-        k = check_real(k1, "k1", "Plant.closed_loop")
-        return control.feedback(k * self.tf, 1)
+        return self.closed_loop_poly(k1).to_control()
 
     def summary(self) -> dict:
         """Poles, zeros, DC gain, ranks and phase, as plain values (for ``--json`` and the report)."""
-        num = self.tf.num[0][0]
-        den = self.tf.den[0][0]
+        g = self.poly.normalised()
         return {
             "variant": self.variant,
             "output": self.output,
             "input_unit": self.input_unit,
             "output_unit": self.output_unit,
-            "num": (num / den[0]).tolist(),
-            "den": (den / den[0]).tolist(),
+            "num": g.num.tolist(),
+            "den": g.den.tolist(),
             "poles": self.poles,
             "zeros": self.zeros,
             "dc_gain": self.dc_gain,
             "controllability_rank": self.controllability_rank,
             "observability_rank": self.observability_rank,
-            "order": int(self.ss.nstates),
+            "order": self.order,
             "stable": self.is_stable,
             "minimum_phase": self.is_minimum_phase,
         }
@@ -203,9 +240,15 @@ def companion_ss(tf: control.TransferFunction) -> control.StateSpace:
 
     ``A = [[-a1, -a2, ..., -an], [1, 0, ...], ...]``, ``B = e1``, ``C = [0 ... 0 b0]``.
     """
-    num = np.atleast_1d(np.trim_zeros(np.asarray(tf.num[0][0], dtype=float), "f"))
-    den = np.asarray(tf.den[0][0], dtype=float)
-    num, den = num / den[0], den / den[0]
+    import control
+
+    return control.ss(*_companion(PolyTF.from_control(tf)))
+
+
+def _companion(g: PolyTF) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The matrices of :func:`companion_ss` for a PolyTF."""
+    g = g.normalised()
+    num, den = g.num, g.den
     n = den.size - 1
     if n < 1 or num.size > n:
         raise ParameterError(f"companion_ss needs a strictly proper transfer function. Got order {n}.")
@@ -216,7 +259,23 @@ def companion_ss(tf: control.TransferFunction) -> control.StateSpace:
     b[0, 0] = 1.0
     c = np.zeros((1, n))
     c[0, n - num.size :] = num
-    return control.ss(a, b, c, np.zeros((1, 1)))
+    return a, b, c, np.zeros((1, 1))
+
+
+def _second_order_series(first: PolyTF, first_gain: float, second: PolyTF, second_gain: float) -> tuple:
+    """``second_gain second(s) x first_gain first(s)`` for two ``b0/(s^2 + a1 s + a0)`` factors, states
+    ``[y1, y1', y2, y2']`` (each factor's output before its gain, and its rate)."""
+    blocks = []
+    for g in (first.normalised(), second.normalised()):
+        if g.den.size != 3 or g.num.size != 1:
+            raise ParameterError(f"_second_order_series needs b0/(s^2 + a1 s + a0) factors. Got {g!r}.")
+        blocks.append((np.array([[0.0, 1.0], [-g.den[2], -g.den[1]]]), np.array([[0.0], [g.num[0]]])))
+    (a1, b1), (a2, b2) = blocks
+    c1 = np.array([[first_gain, 0.0]])
+    a = np.block([[a1, np.zeros((2, 2))], [b2 @ c1, a2]])
+    b = np.vstack([b1, np.zeros((2, 1))])
+    c = np.array([[0.0, 0.0, second_gain, 0.0]])
+    return a, b, c, np.zeros((1, 1))
 
 
 def printed_digit_zeta(
@@ -313,10 +372,9 @@ def _printed(params: RigParams, output: str, gains: str, damping_1_per_s: float)
         raise ParameterError(f"The printed K3 exists for gauges 1..{len(k3)} only. Got {output!r} instead.")
     k2 = cable.k2_nm_per_rad(params)
     k3_m_per_v = k3[k] * 1e-3  # mm -> m, as 3.5 does
-    mt_rad = servo.servo_tf(params, form="printed")
-    e_printed = digit.digit_tf(params.dynamics.wn_bare_rad_s, printed_digit_zeta(params, damping_1_per_s))
-    tf = k2 * k3_m_per_v * mt_rad * e_printed
-    tf = control.tf(*_normalised(tf))
+    mt_rad = servo.servo_poly(params, form="printed")
+    e_printed = digit.digit_poly(params.dynamics.wn_bare_rad_s, printed_digit_zeta(params, damping_1_per_s))
+    tf = (k2 * k3_m_per_v * mt_rad * e_printed).normalised()
     components = {
         "K2_nm_per_rad": k2,
         "K3_m_per_v": k3_m_per_v,
@@ -328,7 +386,7 @@ def _printed(params: RigParams, output: str, gains: str, damping_1_per_s: float)
         "(the digit factor the [plant] note of reference/thesis.toml identifies).",
         "Units as printed: MT has unit DC gain, so 'rad per command' is 126.6x too large; E' is 1 V per N m.",
     )
-    return Plant("printed", output, tf, companion_ss(tf), "command", "m", components, notes)
+    return Plant("printed", output, tf, _companion(tf), "command", "m", components, notes)
 
 
 def _consistent(params: RigParams, output: str, gains: str) -> Plant:
@@ -341,8 +399,8 @@ def _consistent(params: RigParams, output: str, gains: str) -> Plant:
         )
     g, a, s = params.geometry, params.actuator, params.sensors
     ei = params.bending_stiffness_n_m2
-    mt = servo.servo_unit_tf(params)
-    e_digit = digit.digit_tf_from_params(params, housing=True)
+    mt = servo.servo_unit_poly(params)
+    e_digit = digit.digit_poly_from_params(params, housing=True)
     rad_per_command = a.rad_per_command
     moment_per_shortening = ei / (g.digit_length_m * g.cable_eccentricity_m)  # E 3.12 with 1/rho = dl/(l e)
     gauge = _gauge_index(output, params)
@@ -385,12 +443,10 @@ def _consistent(params: RigParams, output: str, gains: str) -> Plant:
         components["measured_over_cable"] = measured / static
         notes.append(f"DC gain scaled to the measured {measured:.6g} {unit} per command (table 3.6, E 3.20-3.22).")
         static = measured
-    tf = control.tf(*_normalised(static * mt * e_digit))
-    ss_ = control.series(
-        control.tf2ss(mt) * (rad_per_command * a.pulley_radius_m * moment_per_shortening),
-        control.tf2ss(e_digit) * (static / (rad_per_command * a.pulley_radius_m * moment_per_shortening)),
-    )
-    return Plant("consistent", output, tf, ss_, "command", unit, components, tuple(notes))
+    tf = (static * mt * e_digit).normalised()
+    k2 = rad_per_command * a.pulley_radius_m * moment_per_shortening  # N m of tip moment per command
+    abcd = _second_order_series(mt, k2, e_digit, static / k2)
+    return Plant("consistent", output, tf, abcd, "command", unit, components, tuple(notes))
 
 
 def _measured_per_command(output: str, params: RigParams) -> float | None:
@@ -403,12 +459,6 @@ def _measured_per_command(output: str, params: RigParams) -> float | None:
         return fits[k].slope * 1e-3 if k < len(fits) else None
     fits = conversion.printed_voltage_fits()
     return fits[k].slope if k < len(fits) else None
-
-
-def _normalised(tf: control.TransferFunction) -> tuple[np.ndarray, np.ndarray]:
-    num = np.trim_zeros(np.asarray(tf.num[0][0], dtype=float), "f")
-    den = np.asarray(tf.den[0][0], dtype=float)
-    return num / den[0], den / den[0]
 
 
 def closed_loop_printed_k1() -> float:
@@ -449,7 +499,7 @@ def explain_discrepancies(params: RigParams | None = None) -> list[str]:
     zeta_p = printed_digit_zeta(p)
     k1 = conversion.k1_printed_command_per_mm()[0]
     rot = cable.tip_rotation_per_command_deg(p)
-    e_den = printed.components["E_digit_printed"].den[0][0]
+    e_den = printed.factors["E_digit_printed"].den
     items = [
         "Digit factor. 3.5 says G = K1 K2 K3 MT(s) E(s) with E(s) = 171.61/(s^2 + 1.782 s + 171.61) (housing, "
         f"table 3.2), but the printed G contains {e_den[2]:.4g}/(s^2 + {e_den[1]:.3g} s + {e_den[2]:.4g}): wn = "

@@ -27,25 +27,47 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from numbers import Real
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 
 from flexdigit._validation import Interval, check_choice, declare, validate_fields
+from flexdigit.models.polytf import PolyTF
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
+
+if TYPE_CHECKING:
+    import control
 
 SERVO_FORMS = ("unit", "printed", "consistent")
 
 
-def servo_unit_tf(params: RigParams | None = None) -> control.TransferFunction:
+def servo_unit_poly(params: RigParams | None = None) -> PolyTF:
     """``MT(s) = wn^2/(s^2 + 2 zeta wn s + wn^2)`` with unit DC gain (3.2.4): 421.5/(s^2 + 23.11 s + 421.5).
 
-    Built from ``params.actuator.servo_wn_rad_s`` (20.53 rad/s) and ``servo_zeta`` (0.5629).
+    Built from ``params.actuator.servo_wn_rad_s`` (20.53 rad/s) and ``servo_zeta`` (0.5629), as a ``PolyTF``
+    (no python-control import; :func:`servo_unit_tf` gives the ``control.TransferFunction``).
     """
     a = (params or RigParams()).actuator
     wn, z = a.servo_wn_rad_s, a.servo_zeta
-    return control.tf([wn**2], [1.0, 2.0 * z * wn, wn**2])
+    return PolyTF([wn**2], [1.0, 2.0 * z * wn, wn**2])
+
+
+def servo_unit_tf(params: RigParams | None = None) -> control.TransferFunction:
+    """:func:`servo_unit_poly` as a ``control.TransferFunction``: 421.5/(s^2 + 23.11 s + 421.5)."""
+    return servo_unit_poly(params).to_control()
+
+
+def servo_poly(params: RigParams | None = None, *, form: str = "consistent") -> PolyTF:
+    """The servo from serial command to shaft angle, as a ``PolyTF`` (see :func:`servo_tf` for ``form``)."""
+    params = params or RigParams()
+    check_choice(form, "form", SERVO_FORMS, "servo_tf")
+    unit = servo_unit_poly(params)
+    if form == "unit":
+        return unit
+    if form == "printed":
+        return unit * math.radians(PotentiometerMap.printed().slope_deg_per_v)  # E 3.10 x pi/180
+    return unit * params.actuator.rad_per_command
 
 
 def servo_tf(params: RigParams | None = None, *, form: str = "consistent") -> control.TransferFunction:
@@ -66,14 +88,7 @@ def servo_tf(params: RigParams | None = None, *, form: str = "consistent") -> co
     control.TransferFunction
         rad per command for ``printed`` and ``consistent``.
     """
-    params = params or RigParams()
-    check_choice(form, "form", SERVO_FORMS, "servo_tf")
-    unit = servo_unit_tf(params)
-    if form == "unit":
-        return unit
-    if form == "printed":
-        return unit * math.radians(PotentiometerMap.printed().slope_deg_per_v)  # E 3.10 x pi/180
-    return unit * params.actuator.rad_per_command
+    return servo_poly(params, form=form).to_control()
 
 
 @declare
