@@ -5,7 +5,7 @@ from sklearn.exceptions import NotFittedError
 from flexdigit.errors import DataFileError
 from flexdigit.tactile.metrics import corr2, percentage_error
 from flexdigit.tactile.model_io import load_model, save_model
-from flexdigit.tactile.netlab import MLP, mlp_error, mlp_grad, mlp_init, scg
+from flexdigit.tactile.netlab import MLP, scg
 from flexdigit.tactile.pipeline import Normaliser, ThesisNetwork, run_pipeline, thesis_split
 
 # Tolerances, each with the reason for its size
@@ -33,30 +33,6 @@ def test_scg_solves_a_quadratic_to_its_closed_form():
     x, converged = scg(lambda x: 0.5 * x @ a @ x - b @ x, lambda x: a @ x - b, np.zeros(6), 200, 1e-10, 1e-14)
     assert converged
     np.testing.assert_allclose(x, np.linalg.solve(a, b), rtol=SCG_QUADRATIC_RTOL)
-
-
-def test_mlp_training_is_the_plain_netlab_loop_to_the_bit():
-    # MLP.fit shares the error's forward pass with the gradient at the same point (issue 15: a third fewer tanh);
-    # the plain NETLAB loop, scg on mlp_error and mlp_grad recomputing everything, must give the same numbers
-    rng = np.random.default_rng(2)
-    x = rng.normal(size=(120, 3))
-    t = np.tanh(x @ [1.0, -2.0, 0.5])[:, None] + 0.05 * rng.normal(size=(120, 1))
-    for hidden, tol in ((4, 1e-7), (9, 1e-3)):
-        net = MLP(hidden=hidden, tol=tol, epochs=3, iterations_per_epoch=40, random_state=hidden).fit(x, t)
-        w = mlp_init(3, hidden, 1, np.random.default_rng(hidden))
-        errors = [np.mean((net._forward_only(w, x) - t) ** 2)]
-        best, best_err = w, errors[0]
-        for _ in range(3):
-            w, converged = scg(
-                lambda v, h=hidden: mlp_error(v, x, t, h), lambda v, h=hidden: mlp_grad(v, x, t, h), w, 40, tol, tol
-            )
-            errors.append(np.mean((net._forward_only(w, x) - t) ** 2))
-            if errors[-1] < best_err:
-                best, best_err = w, errors[-1]
-            if converged:
-                break
-        assert np.array_equal(net.weights_, best)
-        assert np.array_equal(net.train_error_, np.array(errors))
 
 
 def test_split_and_normaliser_follow_e_6_1():
