@@ -11,7 +11,6 @@ import html
 import importlib
 import json
 import multiprocessing
-import os
 import time
 import traceback
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -23,6 +22,7 @@ import matplotlib
 from flexdigit import __version__
 from flexdigit._io import atomic_write, check_output
 from flexdigit._json import to_jsonable
+from flexdigit._system import available_cores
 from flexdigit.errors import OutputExistsError
 from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
@@ -72,7 +72,7 @@ def reproduce(
     out = check_report_dir(out_dir, force=force)
     ctx = ReportContext(out_dir=out, params=params or RigParams(), seed=seed, fast=fast)
     names = CHAPTERS if chapters is None else tuple(chapters)  # () is a value: no chapter
-    n_workers = _available_cores() if workers is None else int(workers)
+    n_workers = available_cores() if workers is None else int(workers)
     n_workers = max(1, min(n_workers, len(names) or 1))
     if n_workers == 1:
         done = {}
@@ -173,13 +173,6 @@ EXPECTED_SECONDS = {
     "flexdigit.report.ch3_twin": 7.3,
     "flexdigit.report.ch3_models": 3.5,
 }
-
-
-def _available_cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
 
 
 def _build_chapter(module_name: str, ctx: ReportContext) -> tuple[Chapter | None, str | None, float]:

@@ -22,12 +22,14 @@ Examples
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from numbers import Integral, Real
 
 import numpy as np
 
 from flexdigit._estimator import Estimator, check_is_fitted
+from flexdigit._system import available_cores
 from flexdigit._validation import (
     Array,
     Interval,
@@ -205,6 +207,17 @@ def _train(x, y, split, hidden, tol, seed, epochs) -> tuple[ThesisNetwork, Sweep
     return model, SweepPoint(hidden, tol, float(model.val_error_[k]), float(model.train_error_[k]), k)
 
 
+def _sweep(x, y, split, configs, epochs) -> list[SweepPoint]:
+    """:func:`_train` for each ``(hidden, tol, seed)`` of a sweep, the networks trained together on every core.
+
+    The compiled training releases the GIL, so threads train networks side by side; each network depends only on
+    its own configuration and seed, so the points are those of training them one after another, in order.
+    """
+    configs = list(configs)
+    with ThreadPoolExecutor(max_workers=min(len(configs), available_cores()) or 1) as pool:
+        return list(pool.map(lambda c: _train(x, y, split, c[0], c[1], c[2], epochs)[1], configs))
+
+
 @validate_params(
     {
         "x": [NoValidation()],
@@ -267,20 +280,20 @@ def run_pipeline(
     coarse, gradients = [int(h) for h in coarse], [float(g) for g in gradients]  # declared arrays arrive as floats
     coarse_pts = []
     if fixed_hidden is None:
-        coarse_pts = [_train(x, y, split, h, default_tol, next(seeds), epochs)[1] for h in coarse]
+        coarse_pts = _sweep(x, y, split, [(h, default_tol, next(seeds)) for h in coarse], epochs)
     fine_pts: list[SweepPoint] = []
     if fixed_hidden is not None:
         best_hidden = int(fixed_hidden)
     else:
         c = min(coarse_pts, key=lambda p: p.val_mse).hidden
         fine = range(max(1, c - fine_halfwidth), c + fine_halfwidth + 1)
-        fine_pts = [_train(x, y, split, h, default_tol, next(seeds), epochs)[1] for h in fine]
+        fine_pts = _sweep(x, y, split, [(h, default_tol, next(seeds)) for h in fine], epochs)
         best_hidden = min(fine_pts + coarse_pts, key=lambda p: p.val_mse).hidden
     grad_pts: list[SweepPoint] = []
     if fixed_tol is not None:
         best_tol = float(fixed_tol)
     else:
-        grad_pts = [_train(x, y, split, best_hidden, g, next(seeds), epochs)[1] for g in gradients]
+        grad_pts = _sweep(x, y, split, [(best_hidden, g, next(seeds)) for g in gradients], epochs)
         best_tol = min(grad_pts, key=lambda p: p.val_mse).tol
     curve_seed = next(seeds)  # drawn either way, so the final network's seed does not depend on curve_hidden
     if curve_hidden is None:
