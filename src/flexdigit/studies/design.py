@@ -111,7 +111,7 @@ class DesignSettings:
         allowed = {f.name: f for f in dataclasses.fields(cls)}
         bad = sorted(set(table) - set(allowed))
         if bad:
-            raise ParameterError(f"{where}: unknown key '{bad[0]}'; expected one of " + ", ".join(allowed))
+            raise ParameterError(f"{where}: unknown key {bad[0]!r}; expected one of " + ", ".join(allowed))
         values = {}
         for name, value in table.items():
             default = allowed[name].default

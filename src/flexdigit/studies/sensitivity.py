@@ -71,7 +71,7 @@ class SensitivitySettings:
         bad = sorted(set(table) - set(allowed))
         if bad:
             raise ParameterError(
-                f"{spec.source}: unknown key '{bad[0]}' in [sensitivity]; expected one of " + ", ".join(allowed)
+                f"{spec.source}: unknown key {bad[0]!r} in [sensitivity]; expected one of " + ", ".join(allowed)
             )
         where = f"{spec.source}: [sensitivity]"
         try:

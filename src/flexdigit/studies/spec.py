@@ -321,13 +321,13 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
     unknown = sorted(set(doc) - known)
     if unknown:
         raise ParameterError(
-            f"{source}: unknown table [{unknown[0]}]; expected " + ", ".join(f"[{k}]" for k in sorted(known))
+            f"{source}: unknown table {unknown[0]!r}; expected " + ", ".join(f"[{k}]" for k in sorted(known))
         )
     study = _table(doc.get("study", {}), "[study]", source)
     bad = sorted(set(study) - {"name", "seed", "metrics", "params", "calibration", "description"})
     if bad:
         raise ParameterError(
-            f"{source}: unknown key '{bad[0]}' in [study]; expected name, seed, metrics, params, calibration, "
+            f"{source}: unknown key {bad[0]!r} in [study]; expected name, seed, metrics, params, calibration, "
             "description"
         )
     name = study.get("name", Path(source).stem)
@@ -413,7 +413,7 @@ def _parameters(table, baseline: ParameterSet, source: str) -> list[UncertainPar
             where = f"[parameters.{section}.{name}]"
             if name not in allowed:
                 raise ParameterError(
-                    f"{source}: unknown field '{name}' in [parameters.{section}]; expected one of " + ", ".join(allowed)
+                    f"{source}: unknown field {name!r} in [parameters.{section}]; expected one of " + ", ".join(allowed)
                 )
             entry = _table(entry, where, source)
             nominal = allowed[name]

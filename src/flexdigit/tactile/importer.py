@@ -185,7 +185,7 @@ class ColumnMap:
         allowed = [f.name for f in dataclasses.fields(cls)]
         unknown = [k for k in data if k not in allowed]
         if unknown:
-            raise DataFileError(f"{source}: unknown key '{unknown[0]}'; expected some of " + ", ".join(allowed))
+            raise DataFileError(f"{source}: unknown key {unknown[0]!r}; expected some of " + ", ".join(allowed))
         merged = {**data, **{k: v for k, v in (overrides or {}).items() if v is not None}}
         for key in ("gauges", "load", "position"):
             if key not in merged:

@@ -238,7 +238,7 @@ def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
         raise ParameterError(f"{source}: not valid TOML ({exc})") from None
     unknown = sorted(set(data) - _KEYS)
     if unknown:
-        raise ParameterError(f"{source}: unknown key '{unknown[0]}'; expected some of " + ", ".join(sorted(_KEYS)))
+        raise ParameterError(f"{source}: unknown key {unknown[0]!r}; expected some of " + ", ".join(sorted(_KEYS)))
     for key in ("name", "loads_g", "positions_from_tip_cm"):
         if key not in data:
             raise ParameterError(f"{source}: missing key '{key}'")

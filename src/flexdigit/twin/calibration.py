@@ -173,7 +173,7 @@ class Calibration:
             raise DataFileError(f"{source}: [calibration] must be a table of keys. Got {data!r} instead.")
         bad = [k for k in data if k not in FIELDS]
         if bad:
-            raise DataFileError(f"{source}: unknown key '{bad[0]}' in [calibration]; expected " + ", ".join(allowed))
+            raise DataFileError(f"{source}: unknown key {bad[0]!r} in [calibration]; expected " + ", ".join(allowed))
         missing = [k for k in allowed if k not in data]
         if missing and base is None:
             raise DataFileError(
@@ -257,7 +257,7 @@ def _read_toml(path: Path) -> dict:
 def _from_document(data: dict, source: str) -> Calibration:
     bad = [k for k in data if k not in ("based_on", "calibration", "fit")]
     if bad:
-        raise DataFileError(f"{source}: unknown key '{bad[0]}'; expected based_on, [calibration] and [fit]")
+        raise DataFileError(f"{source}: unknown key {bad[0]!r}; expected based_on, [calibration] and [fit]")
     if "calibration" not in data:
         raise DataFileError(f"{source}: no [calibration] table")
     based_on = data.get("based_on")
