@@ -137,3 +137,47 @@ def test_timeseries_parquet_values(folder, data):
     pq.write_table(table, sink)
     path.write_bytes(sink.getvalue())
     assert_loader_contract(lambda p: read_timeseries(p, "sg1"), path)
+
+
+# Regressions that ``make fuzz`` (seed 0) found at 10,000 examples, pinned as plain tests.
+
+
+def _flip_first_byte_of_name(valid: bytes, name: bytes) -> bytes:
+    """``valid`` (a Parquet file) with the first byte of ``name`` in its footer schema turned into 0x80, which is
+    not UTF-8: the one-byte flip the fuzzer found (a thrift string is its length byte, then its bytes)."""
+    i = valid.index(bytes([0x18, len(name)]) + name) + 2
+    return valid[:i] + b"\x80" + valid[i + 1 :]
+
+
+@pytest.mark.parametrize(
+    "seed_name, column, load",
+    [
+        ("valid.parquet", b"repetition", load_dataset),
+        ("rec.parquet", b"sg1_v", lambda p: read_timeseries(p, "sg1")),
+    ],
+)
+def test_a_column_name_that_is_not_utf8_is_refused_naming_the_file(folder, seed_name, column, load):
+    path = folder / f"not-utf8-{seed_name}"
+    path.write_bytes(_flip_first_byte_of_name((folder / seed_name).read_bytes(), column))
+    error = assert_loader_contract(load, path)
+    assert "not UTF-8" in str(error)
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv"])
+def test_a_stored_protocol_with_an_unknown_key_is_named_on_one_line(folder, fmt):
+    dataset = _dataset()
+    dataset.meta["protocol"]["\n"] = False  # the key the fuzzer found: a newline
+    path = folder / f"newline-key.{fmt}"
+    (save_dataset if fmt == "parquet" else export_csv)(dataset, path)
+    error = assert_loader_contract(load_dataset, path)
+    assert "unknown protocol key '\\n'" in str(error)
+
+
+@pytest.mark.parametrize("renamed, expected", [("time_s", "no time column"), ("sg1_v", "no column 'sg1'")])
+def test_a_column_named_with_a_newline_is_listed_on_one_line(folder, renamed, expected):
+    table = pq.read_table(folder / "rec.parquet")
+    table = table.rename_columns(["\n" if c == renamed else c for c in table.column_names])
+    path = folder / "newline-column.parquet"
+    pq.write_table(table, path)
+    error = assert_loader_contract(lambda p: read_timeseries(p, "sg1"), path)
+    assert expected in str(error) and "'\\n'" in str(error)

@@ -277,7 +277,7 @@ def _series_from_columns(columns, data, source: str, where, channel, time_unit, 
     channels = [c for c in columns if c != tcol and c not in inputs and c.strip().lower() not in _INDEX_NAMES]
     if channel is None:
         if not channels:
-            raise DataFileError(f"{p}: no channel column besides {tcol!r} (columns: {', '.join(columns)})")
+            raise DataFileError(f"{p}: no channel column besides {tcol!r} (columns: {_names(columns)})")
         ycol = channels[0]
     else:
         ycol = _match_channel(p, columns, channel)
@@ -289,6 +289,12 @@ def _series_from_columns(columns, data, source: str, where, channel, time_unit, 
         _check_nan_runs(u, p, inputs[0], where)
     ystem, yunit = split_unit(ycol)
     return TimeSeries(t, y, ystem, yunit, p, u, inputs[0] if u is not None else "", unit)
+
+
+def _names(columns: list[str]) -> str:
+    """Column names for a message, as written; one with a newline or another control character as its repr, so
+    the message stays one line."""
+    return ", ".join(c if c.isprintable() else repr(c) for c in columns)
 
 
 def _match_channel(p: str, columns: list[str], channel: str) -> str:
@@ -305,21 +311,21 @@ def _match_channel(p: str, columns: list[str], channel: str) -> str:
             return matches[0]
         if len(matches) > 1:
             raise DataFileError(
-                f"{p}: channel {channel!r} is ambiguous: it could be any of {', '.join(matches)}; name the column"
+                f"{p}: channel {channel!r} is ambiguous: it could be any of {_names(matches)}; name the column"
             )
-    raise DataFileError(f"{p}: no column {channel!r} (columns: {', '.join(columns)})")
+    raise DataFileError(f"{p}: no column {channel!r} (columns: {_names(columns)})")
 
 
 def _find_time_column(p: str, columns: list[str], time_column: str | None) -> str:
     if time_column is not None:
         if time_column not in columns:
-            raise DataFileError(f"{p}: no time column {time_column!r} (columns: {', '.join(columns)})")
+            raise DataFileError(f"{p}: no time column {time_column!r} (columns: {_names(columns)})")
         return time_column
     for c in columns:
         if split_unit(c)[0].lower() in TIME_NAMES:
             return c
     raise DataFileError(
-        f"{p}: no time column: expected one named time_s (or time_ms, time, t) among: {', '.join(columns)}"
+        f"{p}: no time column: expected one named time_s (or time_ms, time, t) among: {_names(columns)}"
     )
 
 
@@ -418,14 +424,18 @@ def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
         table = pq.read_table(p)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
         raise DataFileError(f"{p}: not a readable Parquet file ({one_line(exc)})") from None
+    try:  # pyarrow decodes the names only when asked: a damaged file's may not be UTF-8
+        names = list(table.column_names)
+    except UnicodeDecodeError as exc:
+        raise DataFileError(f"{p}: a column name is not UTF-8 text ({one_line(exc)})") from None
     data = {}
-    for name in table.column_names:
-        col = table.column(name)
+    for k, name in enumerate(names):
+        col = table.column(k)
         try:
             data[name] = np.asarray(col.to_numpy(zero_copy_only=False), dtype=float)
         except (TypeError, ValueError):
             raise DataFileError(f"{p}: column {name!r} is not numeric (type {col.type})") from None
-    return list(table.column_names), data
+    return names, data
 
 
 def _check_series(t: np.ndarray, y: np.ndarray, source: str, tcol: str, ycol: str, where) -> None:

@@ -338,16 +338,20 @@ def _load_parquet(path: Path) -> Dataset:
         table = pq.read_table(path)
     except (pa.ArrowException, OSError) as exc:
         raise DataFileError(f"{path}: not a readable Parquet file ({one_line(exc)})") from None
+    try:  # pyarrow decodes the names only when asked: a damaged file's may not be UTF-8
+        column_names = table.column_names
+    except UnicodeDecodeError as exc:
+        raise DataFileError(f"{path}: a column name is not UTF-8 text ({one_line(exc)})") from None
     meta_raw = (table.schema.metadata or {}).get(b"flexdigit")
     if meta_raw is None:
         raise DataFileError(f"{path}: no flexdigit metadata (protocol and rig); not a flexdigit tactile dataset")
     try:
         meta = json.loads(meta_raw)
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, UnicodeDecodeError):
         raise DataFileError(f"{path}: flexdigit metadata is not valid JSON") from None
     columns = {}
     for name, dtype in COLUMNS.items():
-        if name not in table.column_names:
+        if name not in column_names:
             raise DataFileError(f"{path}: missing column '{name}' (expected columns: {', '.join(COLUMNS)})")
         arrow_type = table.schema.field(name).type
         want_float = np.dtype(dtype).kind == "f"

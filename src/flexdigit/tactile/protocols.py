@@ -214,7 +214,10 @@ class Protocol:
 
     @classmethod
     def from_dict(cls, data: dict) -> Protocol:
-        """Inverse of :meth:`to_dict`."""
+        """Inverse of :meth:`to_dict`; an unknown key is named (as its repr: a stored key may hold a newline)."""
+        unknown = sorted(set(data) - set(cls.__dataclass_fields__))
+        if unknown:
+            raise ParameterError(f"unknown protocol key {unknown[0]!r}")
         fields = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
         return cls(**fields)
 
