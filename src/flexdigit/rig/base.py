@@ -467,6 +467,11 @@ def parse_rig_url(url: str) -> RigURL:
     else:
         scheme, _, rest = text.partition("://")
         rest, _, query = rest.partition("?")
+    if not (text.isprintable() and urllib.parse.unquote(rest).isprintable()):  # messages quote the URL as given
+        raise ParameterError(
+            f"The 'url' parameter of open_rig must be printable text (no newline or control character, also not "
+            f"%-encoded). Got {url!r} instead."
+        )
     scheme = scheme.lower()
     if scheme not in BACKENDS:
         raise ParameterError(
