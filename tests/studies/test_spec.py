@@ -92,6 +92,11 @@ BAD = {
         "[parameters.material.youngs_modulus_pa]\ndistribution = 'normal'\nsd = 1e11\n",
         "youngs_modulus_pa",
     ),
+    # make fuzz (seed 0): sigma_log 119 overflowed math.exp (OverflowError) checking the 6-sigma range
+    "lognormal spread beyond floats": (
+        "[parameters.calibration.strip_beta_s]\ndistribution = 'lognormal'\nsigma_log = 119\n",
+        "[parameters.calibration.strip_beta_s]: the lognormal range reaches inf",
+    ),
     "unknown key": (
         "[parameters.material.youngs_modulus_pa]\ndistribution = 'uniform'\nrelative = 0.1\nspread = 2\n",
         "unknown key 'spread'",

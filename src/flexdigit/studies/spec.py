@@ -89,6 +89,7 @@ DISTRIBUTIONS: dict[str, tuple[str, ...]] = {
 }
 #: How far an unbounded distribution's range is checked against the field's constraints (standard deviations).
 CHECK_SIGMAS = 6.0
+_LOG_MAX_FLOAT = math.log(np.finfo(float).max)  # math.exp beyond it raises OverflowError
 SECTIONS = ("geometry", "material", "sensors", "actuator", "dynamics", "calibration")
 #: Specs shipped with flexdigit (``flexdigit study sensitivity thesis-tolerances``).
 SHIPPED_SPECS = ("thesis-tolerances", "thesis-design")
@@ -167,8 +168,9 @@ class UncertainParameter:
             lo = max(lo, mean - CHECK_SIGMAS * sd)
             hi = min(hi, mean + CHECK_SIGMAS * sd)
         elif self.distribution == "lognormal":
-            lo = self.shape["median"] * math.exp(-CHECK_SIGMAS * self.shape["sigma_log"])
-            hi = self.shape["median"] * math.exp(CHECK_SIGMAS * self.shape["sigma_log"])
+            spread = CHECK_SIGMAS * self.shape["sigma_log"]
+            lo = self.shape["median"] * math.exp(-spread)
+            hi = self.shape["median"] * (math.exp(spread) if spread < _LOG_MAX_FLOAT else math.inf)
         return lo, hi
 
     def describe(self) -> str:
@@ -443,6 +445,11 @@ def _parameters(table, baseline: ParameterSet, source: str) -> list[UncertainPar
             out.append(_parameter(section, name, None, float(nominal), entry, where, source))
     for p in out:
         for end in p.check_range():
+            if not math.isfinite(end):  # a spread too wide for floats: every sample would be 0 or inf
+                raise ParameterError(
+                    f"{source}: {_where(p)}: the {p.distribution} range reaches {end:g} at {CHECK_SIGMAS:g} sigmas; "
+                    "give a spread whose range is finite"
+                )
             try:
                 apply_values(baseline, [p], {p.name: end}, f"{source}: {_where(p)}")
             except ParameterError as exc:
