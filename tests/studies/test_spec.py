@@ -97,6 +97,20 @@ BAD = {
         "[parameters.calibration.strip_beta_s]\ndistribution = 'lognormal'\nsigma_log = 119\n",
         "[parameters.calibration.strip_beta_s]: the lognormal range reaches inf",
     ),
+    # make fuzz (seed 0) again: a newline as a section name broke the message in two; found beside it, a
+    # superscript digit as an element (isdigit, but int() refuses it) and a file name with a newline
+    "section named with a newline": (
+        "[parameters.\"\\n\".x]\ndistribution = 'uniform'\nrelative = 0.1\n",
+        "unknown section '\\n' in [parameters]",
+    ),
+    "element named with a superscript digit": (
+        "[parameters.geometry.gauge_positions_m.\"\u00b2\"]\ndistribution = 'uniform'\ndelta = 1e-3\n",
+        "Got key '\u00b2' instead",
+    ),
+    "params file named with a newline": (
+        '[study]\nparams = "rig\\n.toml"\n' + GOOD.split("[study]")[1].split("\n", 3)[3],
+        "no such file",
+    ),
     "unknown key": (
         "[parameters.material.youngs_modulus_pa]\ndistribution = 'uniform'\nrelative = 0.1\nspread = 2\n",
         "unknown key 'spread'",

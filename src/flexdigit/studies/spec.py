@@ -382,7 +382,7 @@ def _baseline(study: dict, source: str, base_dir: Path | None) -> ParameterSet:
             raise ParameterError(f"{source}: [study] {key} must be a file name. Got {value!r} instead.")
         path = Path(value) if base_dir is None or Path(value).is_absolute() else base_dir / value
         if not path.is_file():
-            raise ParameterError(f"{source}: [study] {key}: no such file {path}")
+            raise ParameterError(f"{source}: [study] {key}: no such file {str(path)!r}")
         try:
             loaded = loader(path)
         except (ParameterError, DataFileError) as exc:
@@ -406,7 +406,7 @@ def _parameters(table, baseline: ParameterSet, source: str) -> list[UncertainPar
     for section, fields in table.items():
         if section not in SECTIONS:
             raise ParameterError(
-                f"{source}: unknown section [parameters.{section}]; expected one of "
+                f"{source}: unknown section {section!r} in [parameters]; expected one of "
                 + ", ".join(f"[parameters.{s}]" for s in SECTIONS)
             )
         fields = _table(fields, f"[parameters.{section}]", source)
@@ -431,7 +431,7 @@ def _parameters(table, baseline: ParameterSet, source: str) -> list[UncertainPar
                     out.append(_parameter(section, name, None, 1.0, entry, where, source, factor=True))
                     continue
                 for key, sub in entry.items():
-                    if not (key.isdigit() and int(key) < len(nominal)):
+                    if not (key.isascii() and key.isdigit() and int(key) < len(nominal)):  # int("²") fails
                         raise ParameterError(
                             f"{source}: {where}: expected 'distribution' (one factor on every element) or element "
                             f"tables 0..{len(nominal) - 1}. Got key {key!r} instead."
