@@ -259,6 +259,7 @@ def test_a_vanishing_stream_port_is_a_rig_error():
         ("serial://loop://?daq=stream:///dev/null&pot=3", "a stream sends the pot in its lines"),
         ("serial://loop://?daq=stream:///dev/null&daq.rate=5", "unknown option 'rate'; a stream URL takes"),
         ("serial://loop://?daq=ftp://x", "daq=.* must be a board number, daq://BOARD or stream://PORT"),
+        ("serial://loop://?daq=%C2%B2", "daq=.* must be a board number"),  # '²': int() raised ValueError
         ("serial://loop://?daq.baud=5", "daq.baud needs a gauge source"),
     ],
 )

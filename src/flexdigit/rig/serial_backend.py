@@ -176,7 +176,7 @@ def _gauge_source(where: str, params, daq: str, pot: int | None, source_options:
     bad = ParameterError(f"{where}: option daq={daq!r} must be a board number, daq://BOARD or stream://PORT")
     text = daq.strip()
     if "://" not in text:
-        if not text.isdigit():
+        if not (text.isascii() and text.isdigit()):  # '²' is a digit to isdigit(), not to int()
             raise bad
         url = RigURL("daq", str(int(text)))
     else:
