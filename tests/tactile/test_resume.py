@@ -158,10 +158,13 @@ def test_cli_resume_with_other_settings_is_refused_and_settle_0_is_recorded(tmp_
     base = ["collect", str(protocol), "--out", str(out), "--no-progress"]
     assert main([*base, "--settle", "-1"]) == 2
     assert not journal_path(out).exists() and not out.exists()  # refused before the first reading
+    from flexdigit.rig.base import open_rig
     from flexdigit.tactile.runner import collect as collect_
+    from flexdigit.tactile.thesis_experiments import sim_options
 
-    rig = twin_rig(Protocol("t", (0.0125,), (0.0, 0.05), repetitions=2), seed=3)
-    collect_(Protocol("t", (0.0125,), (0.0, 0.05), repetitions=2), rig, out, settle_s=0, stop_after=3)
+    started = Protocol("t", (0.0125,), (0.0, 0.05), repetitions=2)
+    rig = open_rig("sim", seed=3, **sim_options(started))  # the rig `flexdigit collect` opens (numpy stepping)
+    collect_(started, rig, out, settle_s=0, stop_after=3)
     assert main([*base, "--seed", "4", "--settle", "0", "--json"]) == 2
     err = json.loads(capsys.readouterr().out)["error"]
     assert "rig.seed=3; this run has rig.seed=4" in err

@@ -53,10 +53,15 @@ def sim_options(protocol: Protocol, url: str = "sim") -> dict:
 
 
 def twin_rig(protocol: Protocol, *, seed: int = 0, params: RigParams | None = None, calibration=None):
-    """A ``sim`` rig (virtual time) set up for ``protocol``."""
+    """A ``sim`` rig (virtual time) set up for ``protocol``, its digit stepped by the compiled kernel.
+
+    The kernel follows the numpy twin to ~1e-15 rad (``tests/twin/test_compiled_dynamics.py``), far inside the
+    ADC's 16-bit quantum, so the readings are the numpy twin's (tests/tactile/test_thesis_experiments.py) for a
+    fifth of the time (issue 15: reproduce in 60 s).
+    """
     from flexdigit.rig.base import open_rig
 
-    options = sim_options(protocol)
+    options = sim_options(protocol) | {"compiled": True}
     if calibration is not None:
         options["calibration"] = calibration
     return open_rig("sim", params, seed=seed, **options)
