@@ -10,6 +10,7 @@ from flexdigit.control.analysis import (
     loop_maps,
     margins,
     monte_carlo_stability,
+    root_locus,
     step_metrics,
 )
 from flexdigit.errors import UnstableError
@@ -22,6 +23,7 @@ CLOSED_FORM_RTOL = 1e-6  # a closed form against a frequency-grid peak refined b
 PEAK_W_RTOL = 1e-4  # the resonant frequency, where the peak is flat (second order in the error)
 SETTLING_RTOL = 0.01  # a settling time read on a 1000-point time grid
 MONTE_CARLO_ATOL = 0.06  # 200 samples of a 1/6 probability: 2.5 standard deviations (0.026)
+ROOTS_ATOL = 1e-6  # two root finders on one polynomial: a double root at a breakaway gain splits as sqrt(eps)
 
 
 def test_maps_equal_feedback_formulas():
@@ -72,3 +74,32 @@ def test_monte_carlo_is_seeded_and_finds_instability():
     assert a == b
     # gain > 2 is unstable: P(1 + 1.5 U > 2) = P(U > 2/3) = 1/6 for U uniform in [-1, 1]
     assert 1 - a["stable_fraction"] == pytest.approx(1 / 6, abs=MONTE_CARLO_ATOL)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_root_locus_is_python_controls_roots_gain_by_gain(seed):
+    # the batched companion eigenvalues against python-control's root_locus_map (np.roots per gain) on random
+    # strictly proper and biproper loops; each row's poles compared as sets (LAPACK orders them its own way)
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 7))
+    m = int(rng.integers(0, n + 1))
+    sys = ct.tf(rng.normal(size=m + 1), np.concatenate([[1.0], rng.normal(size=n)]))
+    gains = np.concatenate([[0.0], np.logspace(-3, 3, 50)])
+    ours = root_locus(sys, gains)
+    theirs = ct.root_locus_map(sys, gains=gains).loci
+    assert ours.shape == theirs.shape == (gains.size, n)
+    for a, b in zip(ours, theirs, strict=True):
+        scale = max(1.0, np.abs(b).max())
+        # match each of ours to the nearest of theirs: within root-finding precision of a well-separated root
+        assert np.abs(a[:, None] - b[None, :]).min(axis=1).max() <= ROOTS_ATOL * scale
+        assert np.abs(b[:, None] - a[None, :]).min(axis=1).max() <= ROOTS_ATOL * scale
+
+
+def test_root_locus_of_a_double_integrator_is_the_closed_form():
+    # 1 + k / s^2: poles at +-j sqrt(k)
+    gains = np.array([0.0, 1.0, 4.0, 9.0])
+    loci = root_locus(ct.tf([1.0], [1.0, 0.0, 0.0]), gains)
+    np.testing.assert_allclose(
+        np.sort(loci.imag, axis=1), np.column_stack([-np.sqrt(gains), np.sqrt(gains)]), atol=1e-7
+    )
+    np.testing.assert_allclose(loci.real, 0.0, atol=1e-7)

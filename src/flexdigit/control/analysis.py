@@ -34,6 +34,7 @@ __all__ = [
     "additive_tolerance",
     "margins",
     "monte_carlo_stability",
+    "root_locus",
 ]
 
 
@@ -96,6 +97,33 @@ def _closed_loop(plant, controller):
     Cy = np.hstack([C + D @ Ux, D @ Uxk])
     Dy = D @ Uw
     return Acl, Bw, Cy, Dy, Ux, Uxk, Uw
+
+
+def root_locus(sys, gains) -> np.ndarray:
+    """Closed-loop poles of ``1 + k sys`` for every ``k`` of ``gains``: shape (len(gains), order), unsorted.
+
+    The roots of ``den + k num`` for all gains at once, as the eigenvalues of a stack of companion matrices (one
+    LAPACK call): python-control's ``root_locus_map`` takes ``np.roots`` gain by gain and sorts the branches,
+    ~10x the time for the 4,000 gains of the report's loci (issue 15). Each row's order is LAPACK's.
+    """
+    tf = ct.tf(sys)
+    num = np.atleast_1d(np.asarray(tf.num[0][0], dtype=float))
+    den = np.atleast_1d(np.asarray(tf.den[0][0], dtype=float))
+    k = np.asarray(gains, dtype=float).ravel()
+    num = np.concatenate([np.zeros(max(den.size - num.size, 0)), num])
+    poly = den[None, :] + k[:, None] * num[None, :]
+    lead = poly[:, 0]
+    if np.any(np.abs(lead) <= 1e-12 * np.abs(poly).max(axis=1)):  # a gain where the order drops: gain by gain
+        rows = [np.roots(np.trim_zeros(p, "f")) for p in poly]
+        width = max(r.size for r in rows)
+        return np.array([np.pad(r.astype(complex), (0, width - r.size), constant_values=np.nan) for r in rows])
+    n = den.size - 1
+    if n == 0:
+        return np.empty((k.size, 0), dtype=complex)
+    companion = np.zeros((k.size, n, n))
+    companion[:, 0, :] = -poly[:, 1:] / lead[:, None]
+    companion[:, np.arange(1, n), np.arange(n - 1)] = 1.0
+    return np.linalg.eigvals(companion)
 
 
 def closed_loop_poles(plant, controller) -> np.ndarray:

@@ -539,8 +539,9 @@ def _fig_filter(plt, study, G, w, designs, fits):
 
 
 def _controller_root_locus(plt, G, K, K_printed, hz: float):
-    """Two root loci (python-control's ``root_locus_map``): ``1 + k K`` and ``1 + k G K``; closed-loop poles marked."""
-    from flexdigit.control.analysis import loop_maps
+    """Two root loci (:func:`~flexdigit.control.analysis.root_locus`): ``1 + k K`` and ``1 + k G K``; closed-loop
+    poles marked."""
+    from flexdigit.control.analysis import loop_maps, root_locus
 
     Kt = ct.tf(K)
     fig, axs = plt.subplots(1, 2, figsize=(10, 4.2))
@@ -556,10 +557,11 @@ def _controller_root_locus(plt, G, K, K_printed, hz: float):
         # densely enough that the loci are continuous, and through k = 1 and 10 (ours and the printed gain)
         k0 = 1.0 / abs(complex(sys(1j * span)))
         gains = np.union1d(np.concatenate([[0.0], k0 * np.logspace(-8, 8, 4000)]), [1.0, 10.0])
-        rl = ct.root_locus_map(sys, gains=gains)
-        ax.plot(rl.loci.real, rl.loci.imag, "-", lw=0.9, color="tab:blue")
-        ax.plot(rl.poles.real, rl.poles.imag, "x", color="k", ms=7)
-        ax.plot(rl.zeros.real, rl.zeros.imag, "o", mfc="none", color="k", ms=7)
+        loci = root_locus(sys, gains)
+        ax.plot(loci.real.ravel(), loci.imag.ravel(), ".", ms=1.2, color="tab:blue")
+        poles, zeros = ct.poles(sys), ct.zeros(sys)
+        ax.plot(poles.real, poles.imag, "x", color="k", ms=7)
+        ax.plot(zeros.real, zeros.imag, "o", mfc="none", color="k", ms=7)
         ax.axvline(0.0, color="0.6", lw=0.6)
         ax.set(title=title, xlabel="Re (rad/s)", ylabel="Im (rad/s)", xlim=(-span, 0.3 * span), ylim=(-span, span))
     if near.size < pk.size:
