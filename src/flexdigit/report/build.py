@@ -164,14 +164,16 @@ def _counts(entries) -> dict[str, int]:
 #: in which chapters are handed to the worker processes (longest first, so that no long chapter starts last), never
 #: their numbers. A chapter not listed counts as a short one.
 EXPECTED_SECONDS = {
-    "flexdigit.report.ch6_tactile": 237.0,
-    "flexdigit.report.ch7_tactile": 213.0,
-    "flexdigit.report.ch6_7_noise": 68.0,
-    "flexdigit.report.ch4_control": 23.0,
-    "flexdigit.report.ch5_digital": 12.0,
-    "flexdigit.report.ch3_identify": 7.4,
-    "flexdigit.report.ch3_twin": 7.3,
-    "flexdigit.report.ch3_models": 3.5,
+    "flexdigit.report.ch7_tactile": 81.0,
+    "flexdigit.report.ch6_tactile": 76.0,
+    "flexdigit.report.ch8_studies": 28.0,
+    "flexdigit.report.ch4_control": 20.0,
+    "flexdigit.report.ch8_palpation": 20.0,
+    "flexdigit.report.ch3_identify": 19.0,
+    "flexdigit.report.ch6_7_noise": 14.0,
+    "flexdigit.report.ch3_twin": 13.0,
+    "flexdigit.report.ch5_digital": 12.5,
+    "flexdigit.report.ch3_models": 4.2,
 }
 
 
