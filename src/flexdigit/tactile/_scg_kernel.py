@@ -122,26 +122,31 @@ def _forward(w, x, t, nin, nh, nout, z, d):
     ob2 = ow2 + nh * nout
     a = np.empty(n)
     d[:, :] = 0.0
-    for j in range(nh):
+    for j in range(nh):  # rows as 1-D views: every inner loop a plain contiguous one, which LLVM vectorises
         bj = w[ob1 + j]
         for i in range(n):
             a[i] = bj
         for k in range(nin):
             c = w[k * nh + j]
+            xk = x[k]
             for i in range(n):
-                a[i] += x[k, i] * c
+                a[i] += xk[i] * c
+        zj = z[j]
         for i in range(n):
-            z[j, i] = _tanh(a[i])
+            zj[i] = _tanh(a[i])
         for o in range(nout):
             c = w[ow2 + j * nout + o]
+            do = d[o]
             for i in range(n):
-                d[o, i] += z[j, i] * c
+                do[i] += zj[i] * c
     err = 0.0
     for o in range(nout):
         b = w[ob2 + o]
+        do = d[o]
+        to = t[o]
         for i in range(n):
-            d[o, i] = (d[o, i] + b) - t[o, i]
-            err += d[o, i] * d[o, i]
+            do[i] = (do[i] + b) - to[i]
+            err += do[i] * do[i]
     return 0.5 * err
 
 
