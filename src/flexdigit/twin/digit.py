@@ -509,9 +509,10 @@ class DynamicState:
         dispatch (what the live page's twin spends its time on).
 
         It rounds differently (unpivoted LU, ``cos(psi_j - psi_k)`` from products): within 1e-9 rad of the numpy
-        path (``tests/twin/test_compiled_dynamics.py``), so it is opt-in, for runs whose numbers feed nothing
-        that must repeat bit for bit (the wall-clock ``sim+paced`` backend); a body beside the digit
-        (:attr:`contact`) is stepped in numpy. The kernel is compiled on its first use on a machine (~10 s),
+        path (``tests/twin/test_compiled_dynamics.py``), so it is opt-in: the wall-clock ``sim+paced`` backend,
+        and the report's tactile collections (``tactile.thesis_experiments.twin_rig``), whose readings the ADC's
+        quantum leaves bit for bit the numpy twin's (``tests/tactile/test_thesis_experiments.py``). A body beside
+        the digit (:attr:`contact`) is stepped in numpy. The kernel is compiled on its first use on a machine (~10 s),
         loaded from numba's cache after that (~1 s, numba's import included).
 
         Parameters
