@@ -9,18 +9,15 @@ The result is a :class:`flexdigit.twin.calibration.Calibration`, written as TOML
 takes ``--calibration FILE``.
 """
 
-__all__ = ["CalibrationTargets", "CalibrationResult", "calibrate"]
+from flexdigit._lazy import lazy_exports
 
-
-def __getattr__(name: str):
-    # loaded on first use (PEP 562): the command line imports flexdigit.calibrate.commands for every command, and
-    # the fit's modules cost ~0.05 s of start-up that `flexdigit --help` or `model` should not pay
-    if name in ("CalibrationResult", "calibrate"):
-        from flexdigit.calibrate import fit
-
-        return getattr(fit, name)
-    if name == "CalibrationTargets":
-        from flexdigit.calibrate.targets import CalibrationTargets
-
-        return CalibrationTargets
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# loaded on first use: the command line imports flexdigit.calibrate.commands for every command, and the fit's
+# modules cost ~0.05 s of start-up that `flexdigit --help` or `model` should not pay
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "CalibrationTargets": "flexdigit.calibrate.targets",
+        "CalibrationResult": "flexdigit.calibrate.fit",
+        "calibrate": "flexdigit.calibrate.fit",
+    },
+)

@@ -12,21 +12,17 @@ This domain sits above tactile in the import chain: it reads the twin, control a
 imports it.
 """
 
-import importlib
+from flexdigit._lazy import lazy_exports
 
 #: Public names and their submodules, imported on first use (PEP 562): the command line imports
 #: ``flexdigit.studies.commands`` to build its parser, which must not load scipy (issue 15's start-up).
-_LAZY = {
-    "METRICS": "flexdigit.studies.metrics",
-    "MetricContext": "flexdigit.studies.metrics",
-    "ParameterSet": "flexdigit.studies.spec",
-    "StudySpec": "flexdigit.studies.spec",
-    "load_spec": "flexdigit.studies.spec",
-}
-__all__ = list(_LAZY)
-
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'flexdigit.studies' has no attribute {name!r}")
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "METRICS": "flexdigit.studies.metrics",
+        "MetricContext": "flexdigit.studies.metrics",
+        "ParameterSet": "flexdigit.studies.spec",
+        "StudySpec": "flexdigit.studies.spec",
+        "load_spec": "flexdigit.studies.spec",
+    },
+)

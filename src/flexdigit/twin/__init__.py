@@ -7,22 +7,18 @@
   Fitting them to a rig is :mod:`flexdigit.calibrate`'s job, a layer above.
 """
 
-import importlib
+from flexdigit._lazy import lazy_exports
 
 #: Public names and the submodule each lives in: imported on first use (PEP 562), so that importing a submodule
 #: (``flexdigit.twin.commands`` for ``flexdigit --help``) does not load python-control and scipy.
-_LAZY = {
-    "Twin": "flexdigit.twin.twin",
-    "static_gauges_v": "flexdigit.twin.twin",
-    "Calibration": "flexdigit.twin.calibration",
-    "default_calibration": "flexdigit.twin.calibration",
-    "load_calibration": "flexdigit.twin.calibration",
-    "use_calibration": "flexdigit.twin.calibration",
-}
-__all__ = list(_LAZY)
-
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'flexdigit.twin' has no attribute {name!r}")
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "Twin": "flexdigit.twin.twin",
+        "static_gauges_v": "flexdigit.twin.twin",
+        "Calibration": "flexdigit.twin.calibration",
+        "default_calibration": "flexdigit.twin.calibration",
+        "load_calibration": "flexdigit.twin.calibration",
+        "use_calibration": "flexdigit.twin.calibration",
+    },
+)
