@@ -16,6 +16,7 @@ where its values come from; PyElastica keeps its analytical solutions in ``syste
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -104,6 +105,17 @@ def cantilever_gauges_v(position_from_base_m, mass_kg) -> np.ndarray:
     a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))[:, None]
     m = np.atleast_1d(np.asarray(mass_kg, dtype=float))[:, None]
     return GAIN_V_PER_NM * m * 9.81 * np.clip(a - GAUGES_M, 0.0, None)
+
+
+def eventually(condition, timeout_s: float = 2.0) -> bool:
+    """Poll ``condition`` every 10 ms until it holds (True) or ``timeout_s`` passes (False): for a peer that answers
+    in its own time (an emulator serving a pty, a server thread)."""
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
 
 
 # ------------------------------------------------------------------------------------ the report's entries

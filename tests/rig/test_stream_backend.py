@@ -26,6 +26,7 @@ from flexdigit.rig.loop import read_log, run_loop
 from flexdigit.rig.stream_backend import StreamRig, StreamSource
 from flexdigit.rig.stream_emulator import Faults, StreamEmulator
 from flexdigit.rig.stream_protocol import LineDecoder, crc16_xmodem, decode_line, encode_line
+from oracles import eventually
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="needs os.openpty")
 
@@ -179,16 +180,6 @@ def test_stream_rig_reads_the_emulator_and_cannot_move_the_servo():
         assert stats["samples"] >= 10 and stats["garbled"] == 0 and stats["dropped"] == 0
         rig.close()
         emulator.close()
-
-
-def eventually(condition, timeout_s: float = 2.0) -> bool:
-    """Poll ``condition`` (the emulator serves the servo pty once per line, every 10 ms)."""
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.01)
-    return True
 
 
 @pytest.fixture(scope="module")

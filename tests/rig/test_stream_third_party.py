@@ -28,6 +28,7 @@ import pytest
 from flexdigit.errors import RigError
 from flexdigit.rig.stream_backend import StreamSource
 from flexdigit.rig.stream_protocol import LineDecoder
+from oracles import eventually
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="needs os.openpty")
 
@@ -146,15 +147,6 @@ def read_for(source: StreamSource, seconds: float, period_s: float = 0.02):
     return out
 
 
-def wait_for(condition, timeout_s: float = 3.0) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.01)
-    return True
-
-
 # -- the third party's CRC is the catalogue's ---------------------------------------------------------------------
 def test_my_crc_is_the_catalogue_crc16_xmodem():
     assert crc16_xmodem_bitwise(b"123456789") == 0x31C3  # CRC RevEng catalogue, CRC-16/XMODEM check value
@@ -167,7 +159,7 @@ def test_counts_become_volts_whatever_the_line_end(board, end):
     board.play(lines)
     source = StreamSource(board.port, scale=SCALE, pot_scale=0.005, startup=3.0)
     try:
-        assert wait_for(lambda: source.stats()["samples"] == 60)
+        assert eventually(lambda: source.stats()["samples"] == 60, timeout_s=3.0)
         gauges, pot = source.read_gauges()
         # the last line: counts (859, -1659, 2518) x 125 uV; pot 571 x 5 mV
         np.testing.assert_allclose(gauges, np.array(gauges_of(59)) * SCALE)
@@ -185,7 +177,7 @@ def test_sequence_and_micros_wrap_without_a_drop_and_the_pot_may_come_and_go(boa
     board.play(lines, period_s=0.005)
     source = StreamSource(board.port, startup=3.0)
     try:
-        assert wait_for(lambda: source.stats()["samples"] == 80)
+        assert eventually(lambda: source.stats()["samples"] == 80, timeout_s=3.0)
         stats = source.stats()
         assert (stats["dropped"], stats["restarts"], stats["garbled"]) == (0, 0, 0)
         assert source.read_gauges()[1] == pytest.approx(139 * SCALE)  # pot_scale defaults to scale
@@ -223,7 +215,7 @@ def test_duplicated_and_reordered_lines_are_counted_and_never_replace_a_newer_sa
     board.play(stream, period_s=0.005)
     source = StreamSource(board.port, startup=3.0)
     try:
-        assert wait_for(lambda: source.stats()["out_of_order"] >= 5)
+        assert eventually(lambda: source.stats()["out_of_order"] >= 5, timeout_s=3.0)
         stats = source.stats()
         assert stats["duplicated"] == 10 and stats["out_of_order"] == 4 + 1 and stats["restarts"] == 0
         # each swap first looks like a dropped line (k skipped), then k arrives late
@@ -239,7 +231,7 @@ def test_a_board_reset_is_a_restart_and_reading_goes_on(board):
     board.play(before + after)
     source = StreamSource(board.port, startup=3.0)
     try:
-        assert wait_for(lambda: source.stats()["samples"] == 80)
+        assert eventually(lambda: source.stats()["samples"] == 80, timeout_s=3.0)
         stats = source.stats()
         assert stats["restarts"] == 1 and stats["dropped"] == 0 and stats["out_of_order"] == 0
         source.read_gauges()
@@ -256,7 +248,7 @@ def test_noise_long_lines_and_nul_bytes_are_counted_and_the_stream_goes_on(board
     board.play(stream, period_s=0.005)
     source = StreamSource(board.port, startup=3.0)
     try:
-        assert wait_for(lambda: source.stats()["samples"] >= 199)
+        assert eventually(lambda: source.stats()["samples"] >= 199, timeout_s=3.0)
         readings = read_for(source, 0.1)
         np.testing.assert_allclose(readings[-1][0], np.array(gauges_of(199)) * SCALE)
         stats = source.stats()
@@ -270,7 +262,7 @@ def test_a_flood_of_lines_is_read_to_the_last_one(board):
     board.play([b"".join(lines[i : i + 500]) for i in range(0, len(lines), 500)], period_s=0.0)
     source = StreamSource(board.port, startup=3.0)
     try:
-        assert wait_for(lambda: source.stats()["samples"] == 20_000, timeout_s=20.0)
+        assert eventually(lambda: source.stats()["samples"] == 20_000, timeout_s=20.0)
         np.testing.assert_allclose(source.read_gauges()[0], np.array(gauges_of(19_999)) * SCALE)
         assert source.stats()["dropped"] == 0
     finally:
@@ -332,7 +324,7 @@ def test_sparse_drops_are_counted_and_tolerated(board):
     board.play(lines, period_s=0.005)
     source = StreamSource(board.port, startup=3.0)
     try:
-        assert wait_for(lambda: source.stats()["samples"] == 190)
+        assert eventually(lambda: source.stats()["samples"] == 190, timeout_s=3.0)
         assert source.stats()["dropped"] == 10  # 7, 27, ..., 187
         source.read_gauges()
     finally:
@@ -458,7 +450,9 @@ def test_run_on_a_third_party_board_ends_in_the_safe_state_when_the_stream_fails
         code = main(["run", "--json", "--backend", url, "--rotation-map", str(hand_made_map), "--setpoint-deg",
                      "20", "--duration", "4", "--log", str(log)])  # fmt: skip
         out = json.loads(capsys.readouterr().out)
-        assert wait_for(lambda: servo.positions and servo.positions[-1] == 8)  # the safe command reached the board
+        assert eventually(
+            lambda: servo.positions and servo.positions[-1] == 8, timeout_s=3.0
+        )  # the safe command reached the board
     finally:
         servo.close()
     assert code == 1 and out["status"] == "fault" and match in out["message"], out
