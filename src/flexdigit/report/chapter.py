@@ -67,6 +67,40 @@ class ReportContext:
 
         # the report folder was checked before any chapter ran (report.build.check_report_dir): ours to replace
         with atomic_path(self.figure_dir / f"{name}.png", force=True) as tmp:
-            fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
+            save_png_tight(fig, tmp, dpi=FIGURE_DPI)
         plt.close(fig)
         return Figure(name, caption, thesis_ref)
+
+
+FIGURE_DPI = 110
+_PAD_IN = 0.1  # matplotlib's savefig.pad_inches
+
+
+def save_png_tight(fig, path, dpi: float = FIGURE_DPI) -> None:
+    """``fig.savefig(path, format="png", dpi=dpi, bbox_inches="tight")`` in one draw instead of two.
+
+    matplotlib draws a figure once to find its tight bounding box and again to save it: ~55 % of the report's
+    figure time (issue 15). Here the figure is drawn once on an Agg canvas, its tight box read from that draw, and
+    the pixels cropped to it (with savefig's 0.1 in pad, less where the canvas ends). A figure with something
+    drawn beyond its canvas (a legend outside it), which a crop cannot reach, is saved by savefig as before.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    original_dpi, original_canvas = fig.dpi, fig.canvas
+    try:
+        fig.dpi = dpi
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        box = fig.get_tightbbox(canvas.get_renderer())
+        width_in, height_in = fig.get_size_inches()
+        if box.x0 >= 0 and box.y0 >= 0 and box.x1 <= width_in and box.y1 <= height_in:
+            pixels = np.asarray(canvas.buffer_rgba())
+            x0, x1 = max(0, round((box.x0 - _PAD_IN) * dpi)), round((box.x1 + _PAD_IN) * dpi)
+            y0, y1 = max(0, round((height_in - box.y1 - _PAD_IN) * dpi)), round((height_in - box.y0 + _PAD_IN) * dpi)
+            Image.fromarray(pixels[y0:y1, x0:x1]).save(path, format="png")
+            return
+    finally:
+        fig.dpi = original_dpi
+        fig.set_canvas(original_canvas)
+    fig.savefig(path, format="png", dpi=dpi, bbox_inches="tight")
