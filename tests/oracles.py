@@ -131,29 +131,45 @@ BASELINE_RTOL = 1e-6
 BASELINE_ATOL = 1e-12
 
 
+def _chapter_reference(path: Path, chapter: str) -> dict:
+    """``{key: (status, ours)}`` of ``chapter``'s entries in a reference file (``{key: [status, ours, chapter]}``)."""
+    import json
+
+    reference = {k: (v[0], v[1]) for k, v in json.loads(path.read_text()).items() if v[2] == chapter}
+    assert reference, f"no entries of chapter {chapter!r} in {path.name}"
+    return reference
+
+
+def _moved_entries(reference: dict, entries, same, source: str) -> list[str]:
+    """The reference entries missing from ``entries`` (:class:`~flexdigit.report.results.Entry` or dicts), or for
+    which ``same(key, status, ours, new_status, new_ours)`` is false, one line each."""
+    got = {}
+    for e in entries:
+        key, status, ours = (e["key"], e["status"], e["ours"]) if isinstance(e, dict) else (e.key, e.status, e.ours)
+        got[key] = (status, ours)
+    missing = sorted(set(reference) - set(got))
+    assert not missing, f"entries gone from {source}: {missing}"
+    return [
+        f"{key}: {status} {ours!r} -> {got[key][0]} {got[key][1]!r}"
+        for key, (status, ours) in reference.items()
+        if not same(key, status, ours, *got[key])
+    ]
+
+
 def assert_entries_unchanged(entries, chapter: str) -> None:
     """Every baseline entry of ``chapter`` (its slug) is in ``entries`` with the same status and the same figure
     (within :data:`BASELINE_RTOL`); ``entries`` are :class:`~flexdigit.report.results.Entry` or dicts."""
-    import json
 
-    baseline = json.loads(FAST_BASELINE_FILE.read_text())
-    got = {(e["key"] if isinstance(e, dict) else e.key): e for e in entries}
-    wanted = {k: v[:2] for k, v in baseline.items() if v[2] == chapter}
-    assert wanted, f"no baseline entries of chapter {chapter!r}"
-    missing = sorted(set(wanted) - set(got))
-    assert not missing, f"entries gone from the baseline ({FAST_BASELINE_FILE.name}): {missing}"
-    moved = []
-    for key, (status, ours) in wanted.items():
-        e = got[key]
-        e_status, e_ours = (e["status"], e["ours"]) if isinstance(e, dict) else (e.status, e.ours)
+    def same(key, status, ours, e_status, e_ours):
+        if e_status != status:
+            return False
         if ours is None:  # NaN in the report, null in JSON
-            same = e_ours is None or (isinstance(e_ours, float) and math.isnan(e_ours))
-        elif isinstance(ours, str):
-            same = e_ours == ours
-        else:
-            same = e_ours is not None and bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
-        if not same or e_status != status:
-            moved.append(f"{key}: {status} {ours!r} -> {e_status} {e_ours!r}")
+            return e_ours is None or (isinstance(e_ours, float) and math.isnan(e_ours))
+        if isinstance(ours, str):
+            return e_ours == ours
+        return e_ours is not None and bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
+
+    moved = _moved_entries(_chapter_reference(FAST_BASELINE_FILE, chapter), entries, same, FAST_BASELINE_FILE.name)
     assert not moved, (
         f"entries changed from {FAST_BASELINE_FILE.name} (if meant, rewrite it with "
         "tests/data/update_report_baseline.py and commit the diff with its reason):\n" + "\n".join(moved)
@@ -178,26 +194,20 @@ UNTRAINED = ("samples", "crlb_", "bayes_", "contact_accuracy_visible", "cable_fr
 
 def assert_trained_entries_close(entries, chapter: str) -> None:
     """Every entry of ``chapter`` in :data:`NUMPY_SCG_FILE` is in ``entries`` within its training band."""
-    import json
 
-    reference = {k: v for k, v in json.loads(NUMPY_SCG_FILE.read_text()).items() if v[2] == chapter}
-    assert reference, f"no entries of chapter {chapter!r} in {NUMPY_SCG_FILE.name}"
-    got = {(e["key"] if isinstance(e, dict) else e.key): e for e in entries}
-    moved = []
-    for key, (status, ours, _) in reference.items():
-        e = got[key]
-        e_status, e_ours = (e["status"], e["ours"]) if isinstance(e, dict) else (e.status, e.ours)
+    def same(key, status, ours, e_status, e_ours):
         name = key.split(".", 1)[1]
         if name in SWEEP_CHOICES:
-            same = e_ours is not None
-        elif name.startswith(UNTRAINED):
-            same = e_status == status and bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
-        elif "corr2" in name:
-            same = e_status == status and abs(e_ours - ours) <= TRAINED_CORR2_ATOL
-        else:
-            same = e_status == status and abs(e_ours - ours) <= TRAINED_REL * abs(ours)
-        if not same:
-            moved.append(f"{key}: {status} {ours!r} -> {e_status} {e_ours!r}")
+            return e_ours is not None
+        if e_status != status:
+            return False
+        if name.startswith(UNTRAINED):
+            return bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
+        if "corr2" in name:
+            return abs(e_ours - ours) <= TRAINED_CORR2_ATOL
+        return abs(e_ours - ours) <= TRAINED_REL * abs(ours)
+
+    moved = _moved_entries(_chapter_reference(NUMPY_SCG_FILE, chapter), entries, same, NUMPY_SCG_FILE.name)
     assert not moved, f"entries beyond their training band of {NUMPY_SCG_FILE.name}:\n" + "\n".join(moved)
 
 
