@@ -34,7 +34,9 @@ _inline = numba.njit(inline="always", error_model="numpy", fastmath={"contract"}
 # Never the forward pass: reassociation would undo the exact split of ln 2 in _exp_neg.
 _reduce = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc", "contract"})
 
-_SIGMA0 = 1.0e-4  # NETLAB scg.m (netlab.SCG_SIGMA0)
+# netlab.SCG_SIGMA0, _BETA_MIN, _BETA_MAX (NETLAB scg.m), written here rather than imported: numba freezes a global
+# into the compiled code and its cache is keyed on this file, so a value imported from netlab.py could go stale
+_SIGMA0 = 1.0e-4
 _BETA_MIN, _BETA_MAX = 1.0e-15, 1.0e100
 _EPS = np.finfo(float).eps
 

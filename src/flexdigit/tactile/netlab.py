@@ -255,13 +255,6 @@ class MLP(Estimator):
         self.converged_ = bool(converged)
         return self
 
-    def _forward_only(self, w, x) -> np.ndarray:
-        return mlp_forward(w, x, int(self.hidden), self.n_outputs_)[0]
-
-    def _mse(self, w, x, t) -> float:
-        y, _ = mlp_forward(w, x, self.hidden, t.shape[1])
-        return float(np.mean((y - t) ** 2))
-
     def predict(self, X) -> np.ndarray:
         """Network outputs for ``X`` (same shape convention as the ``y`` given to ``fit``)."""
         check_is_fitted(self, "weights_")
