@@ -112,6 +112,7 @@ class Identification:
 
     def summary(self) -> dict:
         """Plain figures for ``--json`` and reports."""
+        tf = self.transfer_function()
         out = {
             "kind": self.kind,
             "method": self.method,
@@ -125,8 +126,8 @@ class Identification:
             "t0_s": self.t0_s,
             "corr2": self.corr2,
             "fit_percent": self.fit_percent,
-            "tf_num": [float(c) for c in self.transfer_function().num[0][0]],
-            "tf_den": [float(c) for c in self.transfer_function().den[0][0]],
+            "tf_num": [float(c) for c in tf.num[0][0]],
+            "tf_den": [float(c) for c in tf.den[0][0]],
         }
         if self.survey is not None:
             sv = self.survey
