@@ -13,7 +13,7 @@ from flexdigit.control.analysis import (
     root_locus,
     step_metrics,
 )
-from flexdigit.errors import UnstableError
+from flexdigit.errors import ParameterError, UnstableError
 
 G = ct.tf([2.0], [1.0, 3.0, 2.0])
 K = ct.tf([1.5, 1.0], [1.0, 0.0])  # PI
@@ -103,3 +103,9 @@ def test_root_locus_of_a_double_integrator_is_the_closed_form():
         np.sort(loci.imag, axis=1), np.column_stack([-np.sqrt(gains), np.sqrt(gains)]), atol=1e-7
     )
     np.testing.assert_allclose(loci.real, 0.0, atol=1e-7)
+
+
+@pytest.mark.parametrize("bad", [[0.0, np.nan], [1.0, np.inf], ["k"]])
+def test_root_locus_refuses_gains_that_are_not_finite_numbers(bad):
+    with pytest.raises(ParameterError, match="'gains' parameter of root_locus"):
+        root_locus(ct.tf([1.0], [1.0, 2.0, 1.0]), bad)

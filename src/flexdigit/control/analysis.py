@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from flexdigit._validation import check_array
 from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.generalized import as_statespace
 from flexdigit.errors import UnstableError
@@ -109,7 +110,7 @@ def root_locus(sys, gains) -> np.ndarray:
     tf = ct.tf(sys)
     num = np.atleast_1d(np.asarray(tf.num[0][0], dtype=float))
     den = np.atleast_1d(np.asarray(tf.den[0][0], dtype=float))
-    k = np.asarray(gains, dtype=float).ravel()
+    k = check_array(gains, "gains", "root_locus").ravel()  # finite: LAPACK refuses NaN and inf with a traceback
     num = np.concatenate([np.zeros(max(den.size - num.size, 0)), num])
     poly = den[None, :] + k[:, None] * num[None, :]
     lead = poly[:, 0]
