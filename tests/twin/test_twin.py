@@ -209,3 +209,65 @@ def test_cable_slackening_and_snapping_taut_stays_close_to_a_fine_reference():
     assert np.all(np.isfinite(coarse))
     assert np.max(np.abs(coarse - fine)) < 0.05  # V, during snaps of ~1 V; settled values agree far closer
     np.testing.assert_allclose(coarse[-1], fine[-1], atol=2e-3)
+
+
+def _read_one_by_one(twin, times):
+    """The loop Twin.read_at replaces: advance to each time, read, note the command, angle and tip."""
+    rows = []
+    for t in times:
+        twin.advance(max(t - twin.time_s, 0.0))
+        gauges, pot = twin.read()
+        psi, theta = twin.state()
+        rows.append((gauges, pot, twin.servo.command, theta, twin.chain.tip(psi)))
+    return [np.array(column) for column in zip(*rows, strict=True)]
+
+
+def _released(twin):
+    twin.deflect(0.05)
+
+
+def _loaded_and_stepped(twin):
+    twin.place_load(0.02, 0.2)  # a jolt: the cable-guide friction is in every taut reading
+    twin.command(35)
+
+
+def _on_tissue(twin):
+    from flexdigit.twin.contact import Tissue
+
+    twin.set_tissue(Tissue(0.15, 0.27, 0.004, 5000.0))
+    twin.command(30)
+
+
+READ_AT_CASES = {  # (Twin keywords, set-up, times): bare release, taut cable with friction, repeated times, ...
+    "release, cable off": (dict(cable=False, dt_s=0.01, seed=3), _released, np.arange(0, 1001) / 500),
+    "taut cable, friction": (
+        dict(seed=5, command=20),
+        _loaded_and_stepped,
+        np.sort(np.random.default_rng(1).uniform(0, 2, 500)),
+    ),
+    "repeated times": (dict(seed=7), lambda tw: tw.command(40), np.repeat(np.arange(0, 60) / 97, 2)),
+    "compiled kernel": (dict(seed=9, compiled=True), lambda tw: tw.command(30), np.arange(0, 401) / 1000),
+    "tissue contact": (dict(seed=2), _on_tissue, np.arange(0, 41) / 100),
+}
+
+
+@pytest.mark.parametrize("case", READ_AT_CASES)
+def test_read_at_gives_the_read_loops_numbers_bit_for_bit(case):
+    # Twin.read_at batches the reads between grid points; the loop of advance() + read() is the reference: the
+    # same random draws in the same order and the same operations, so every column equal, not just close
+    kwargs, set_up, times = READ_AT_CASES[case]
+    loop_twin, batch_twin = Twin(**kwargs), Twin(**kwargs)
+    set_up(loop_twin)
+    set_up(batch_twin)
+    expected = _read_one_by_one(loop_twin, times)
+    got = batch_twin.read_at(times)
+    for name, want, have in zip(got._fields, expected, got, strict=True):
+        np.testing.assert_array_equal(have, want, err_msg=name)
+    # and the twins are left in the same state: the next reads agree too
+    assert batch_twin.time_s == loop_twin.time_s
+    np.testing.assert_array_equal(batch_twin.read()[0], loop_twin.read()[0])
+
+
+def test_read_at_refuses_times_that_go_back():
+    with pytest.raises(ParameterError, match="'times_s' parameter of Twin.read_at must be non-decreasing"):
+        Twin().read_at([0.1, 0.05])

@@ -100,4 +100,6 @@ class Servo:
 
     def pot_v(self, angle_rad: float) -> float:
         """Potentiometer voltage (V) at a shaft angle (rad)."""
-        return (math.degrees(angle_rad) - self.pot.offset_deg) / self.pot.slope_deg_per_v  # PotentiometerMap.voltage_v
+        # PotentiometerMap.voltage_v; np.degrees is math.degrees's x * (180 / pi) for arrays (Twin.read_at)
+        degrees = np.degrees(angle_rad) if isinstance(angle_rad, np.ndarray) else math.degrees(angle_rad)
+        return (degrees - self.pot.offset_deg) / self.pot.slope_deg_per_v

@@ -167,21 +167,6 @@ def _result(name: str, columns: dict[str, np.ndarray], arguments: dict, seed, pa
     return TwinRecord(table, meta)
 
 
-def _sample(twin: Twin, times: np.ndarray, extra=None):
-    gauges = np.empty((times.size, 3))
-    pot = np.empty(times.size)
-    cmd = np.empty(times.size, dtype=np.int64)
-    tip = np.empty(times.size)
-    for k, t in enumerate(times):
-        if extra is not None:
-            extra(twin, t)
-        twin.advance(max(t - twin.time_s, 0.0))
-        gauges[k], pot[k] = twin.read()
-        cmd[k] = twin.servo.command
-        tip[k] = twin.tip_position_m()[1]
-    return gauges, pot, cmd, tip
-
-
 def _check_rate(duration_s, sample_rate_hz, owner):
     duration = check_real(duration_s, "duration_s", owner, low=0, low_open=True, high=3600)
     rate = check_real(sample_rate_hz, "sample_rate_hz", owner, low=1, high=100_000)
@@ -219,9 +204,10 @@ def release_test(
         got = twin.chain.solve_static(tip_force_n=[[0.0, force]]).tip_m[0, 1]
         force *= deflection / got if got != 0 else 1.0
     twin.deflect(force)
-    gauges, _, _, tip = _sample(twin, times)
+    series = twin.read_at(times)
+    gauges = series.gauges_v
     cols = {"time_s": times, "gauge1_v": gauges[:, 0], "gauge2_v": gauges[:, 1], "gauge3_v": gauges[:, 2]}
-    cols["tip_deflection_m"] = tip
+    cols["tip_deflection_m"] = series.tip_m[:, 1]
     args = dict(housing=housing, tip_deflection_m=deflection, duration_s=duration_s, sample_rate_hz=sample_rate_hz)
     args["orientation"] = orientation
     return _result("release_test", cols, args, seed, params, calibration)
@@ -254,25 +240,13 @@ def servo_step_test(
     step_at = check_real(step_at_s, "step_at_s", "servo_step_test", low=0)
     _, _, times = _check_rate(duration_s, sample_rate_hz, "servo_step_test")
     twin = Twin(params, calibration, seed=seed, cable=cable, command=c0)
-    sent = {"done": False}
-    angles = []
-
-    def stepper(tw, t):
-        if not sent["done"] and t >= step_at:
-            tw.advance(max(step_at - tw.time_s, 0.0))
-            tw.command(c1)
-            sent["done"] = True
-
-    gauges = np.empty((times.size, 3))
-    pot = np.empty(times.size)
-    cmd = np.empty(times.size, dtype=np.int64)
-    for k, t in enumerate(times):
-        stepper(twin, t)
-        twin.advance(max(t - twin.time_s, 0.0))
-        gauges[k], pot[k] = twin.read()
-        cmd[k] = twin.servo.command
-        angles.append(twin.state()[1])
-    cols = {"time_s": times, "command": cmd, "pot_v": pot, "servo_angle_rad": np.array(angles)}
+    before = twin.read_at(times[times < step_at])
+    if before.command.size < times.size:  # the step is sent at step_at, before the first read at or after it
+        twin.advance(max(step_at - twin.time_s, 0.0))
+        twin.command(c1)
+    after = twin.read_at(times[times >= step_at])
+    gauges, pot, cmd, angles = (np.concatenate(pair) for pair in zip(before[:4], after[:4], strict=True))
+    cols = {"time_s": times, "command": cmd, "pot_v": pot, "servo_angle_rad": angles}
     cols.update({f"gauge{i + 1}_v": gauges[:, i] for i in range(3)})
     args = dict(command_from=c0, command_to=c1, step_at_s=step_at, duration_s=duration_s, cable=cable)
     args["sample_rate_hz"] = sample_rate_hz

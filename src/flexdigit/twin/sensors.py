@@ -211,6 +211,31 @@ class SensorChain:
         noisy = clean_v + self.drift + self.white * self.rng.standard_normal(self.drift.size)
         return self._quantise(noisy)
 
+    def sample_series(self, clean_v: np.ndarray, times_s: np.ndarray, pot_v: np.ndarray):
+        """:meth:`sample` then :meth:`sample_pot` at each of ``times_s`` (N,), non-decreasing, in one go: the same
+        draws in the same order, the same operations, so the same numbers. ``clean_v`` (N, C), ``pot_v`` (N,).
+
+        Returns the gauge samples (N, C) and the pot samples (N,).
+        """
+        n, c = clean_v.shape
+        prev = np.empty(n)
+        prev[1:] = times_s[:-1]
+        prev[0] = math.inf if self._last_t is None else self._last_t
+        moves = times_s > prev  # the drift advances (and draws) only when time has passed
+        # each read draws c (drift, when it moves), then c (white noise), then 1 (pot): one draw, spread in order
+        taken = np.ones((n, 2 * c + 1), dtype=bool)
+        taken[:, :c] = moves[:, None]
+        z = np.zeros(taken.shape)
+        z[taken] = self.rng.standard_normal(int(taken.sum()))
+        with np.errstate(invalid="ignore"):
+            step = np.sqrt(np.where(moves, times_s - prev, 0.0))
+        steps = (self.drift_rate * step[:, None]) * z[:, :c]
+        drift = np.cumsum(np.concatenate([self.drift[None], steps]), axis=0)[1:]  # sequential, as += per read
+        noisy = clean_v + drift + self.white * z[:, c : 2 * c]
+        self.drift = drift[-1].copy()
+        self._last_t = float(times_s[-1])
+        return self._quantise(noisy), self._quantise(pot_v + self.pot_noise * z[:, 2 * c])
+
     def _quantise(self, volts):
         # models.bridge.adc_quantise, inlined: it costs ~40 us a call in NaN handling and conversions, more than the
         # rest of a read; tests/twin/test_sensors.py checks the two agree.
