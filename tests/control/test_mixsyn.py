@@ -6,7 +6,8 @@ import warnings
 import numpy as np
 import pytest
 
-from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixsyn
+from flexdigit.control.analysis import closed_loop_poles, closed_loop_poles_batch, monte_carlo_stability
+from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixsyn, plant_family
 from flexdigit.errors import DesignError
 from flexdigit.models.plant import build_plant
 
@@ -67,3 +68,43 @@ def test_low_order_for_the_20ms_loop(result):
 def test_bad_spec():
     with pytest.raises(DesignError, match="s_peak"):
         MixsynSpec(s_peak=0.5)
+
+
+# issue 15: the plant family's members built as matrices in numpy, all closed loops in one eigenvalue call
+BATCH_POLE_RTOL = 1e-10  # the same poles from another realisation of the same plant: rounding, relative to |p|max
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_family_state_space_has_the_transfer_functions_poles(result, seed):
+    # reference: python-control's realisation of each member's transfer function, closed one by one
+    plant, d, _ = result
+    family = plant_family(plant)
+    rng = np.random.default_rng(seed)
+    gain, wn = rng.uniform(0.5, 1.5, 6), rng.uniform(0.7, 1.3, 6)
+    batch = closed_loop_poles_batch(family.state_space(gain, wn), d.controller)
+    for i in range(gain.size):
+        ref = np.sort_complex(closed_loop_poles(family(gain[i], wn[i]), d.controller))
+        ours = np.sort_complex(batch[i])
+        np.testing.assert_allclose(ours, ref, rtol=0, atol=BATCH_POLE_RTOL * np.abs(ref).max())
+        # and the open loop: the member's own poles
+        A = family.state_space(gain[i], wn[i])[0][0]
+        np.testing.assert_allclose(
+            np.sort_complex(np.linalg.eigvals(A)), np.sort_complex(family(gain[i], wn[i]).poles()), rtol=1e-9
+        )
+
+
+@pytest.mark.parametrize("scale", [1.0, 2.5])
+def test_monte_carlo_batched_equals_sample_by_sample(result, scale):
+    # the batched path against the generic one (a plain callable, one python-control system per sample); at 2.5x
+    # the controller's gain about half of the box is unstable, so the count is a real check
+    plant, d, _ = result
+    family = plant_family(plant)
+    K = scale * d.controller
+    spreads = {"gain": 0.3, "wn": 0.2}
+    fast = monte_carlo_stability(family, K, spreads, n=150, seed=7)
+    slow = monte_carlo_stability(lambda **f: family(**f), K, spreads, n=150, seed=7)
+    assert fast["stable_fraction"] == slow["stable_fraction"]
+    assert fast["worst_factors"] == slow["worst_factors"]
+    assert fast["worst_pole_real"] == pytest.approx(slow["worst_pole_real"], abs=1e-9)
+    if scale > 1:
+        assert 0 < fast["stable_fraction"] < 1

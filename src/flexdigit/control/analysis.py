@@ -20,6 +20,7 @@ import control as ct
 import numpy as np
 
 from flexdigit._validation import check_array
+from flexdigit.control._lsim import step_output
 from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.generalized import as_statespace
 from flexdigit.errors import UnstableError
@@ -35,6 +36,7 @@ __all__ = [
     "additive_tolerance",
     "margins",
     "monte_carlo_stability",
+    "closed_loop_poles_batch",
     "root_locus",
 ]
 
@@ -85,19 +87,31 @@ def _closed_loop(plant, controller):
     """The closed loop ``u = K (w - y)`` in state space: ``Acl, Bw, Cy, Dy`` (w to y) and the rows giving u."""
     G = as_statespace(plant, "plant")
     K = as_statespace(controller, "controller")
-    A, B, C, D = G.A, G.B, G.C, G.D
+    return _closed_loop_matrices(G.A, G.B, G.C, G.D, K)
+
+
+def _closed_loop_matrices(A, B, C, D, K):
+    """:func:`_closed_loop` from the plant's matrices, each possibly a stack (leading axes: one plant each)."""
     Ak, Bk, Ck, Dk = K.A, K.B, K.C, K.D
     # with u = Ck xk + Dk e, e = w - C x - D u  =>  e = (w - C x - D Ck xk) / (1 + D Dk)
-    r = 1.0 / (1.0 + float(D[0, 0] * Dk[0, 0]))
+    r = 1.0 / (1.0 + D[..., :1, :1] * Dk[0, 0])
     Ex = -r * C  # e in terms of x
     Exk = -r * D @ Ck
-    Ew = np.array([[r]])
+    Ew = r
     Ux, Uxk, Uw = Dk @ Ex, Ck + Dk @ Exk, Dk @ Ew  # u
-    Acl = np.block([[A + B @ Ux, B @ Uxk], [Bk @ Ex, Ak + Bk @ Exk]])  # = [[A, B Ck], [-Bk C, Ak]] when D = Dk = 0
-    Bw = np.vstack([B @ Uw, Bk @ Ew])
-    Cy = np.hstack([C + D @ Ux, D @ Uxk])
+    Acl = _block([[A + B @ Ux, B @ Uxk], [Bk @ Ex, Ak + Bk @ Exk]])  # = [[A, B Ck], [-Bk C, Ak]] when D = Dk = 0
+    Bw = _block([[B @ Uw], [Bk @ Ew]])
+    Cy = _block([[C + D @ Ux, D @ Uxk]])
     Dy = D @ Uw
     return Acl, Bw, Cy, Dy, Ux, Uxk, Uw
+
+
+def _block(rows) -> np.ndarray:
+    """``np.block`` over the last two axes of matrices or stacks of them (broadcast over the leading axes)."""
+    lead = np.broadcast_shapes(*(m.shape[:-2] for row in rows for m in row))
+    return np.concatenate(
+        [np.concatenate([np.broadcast_to(m, lead + m.shape[-2:]) for m in row], axis=-1) for row in rows], axis=-2
+    )
 
 
 def root_locus(sys, gains) -> np.ndarray:
@@ -138,6 +152,19 @@ def closed_loop_poles(plant, controller) -> np.ndarray:
     """
     Acl = _closed_loop(plant, controller)[0]
     return np.linalg.eigvals(Acl) if Acl.size else np.array([])
+
+
+def closed_loop_poles_batch(abcd, controller) -> np.ndarray:
+    """:func:`closed_loop_poles` of many plants at once, from stacks of their state-space matrices.
+
+    ``abcd`` is ``(A, B, C, D)`` of shapes ``(N, n, n)``, ``(N, n, 1)``, ``(N, 1, n)``, ``(N, 1, 1)`` (a plant
+    family's :meth:`~flexdigit.control.mixsyn.PlantFamily.state_space`); returns ``(N, n + n_K)`` poles, one LAPACK
+    call for the whole stack instead of a python-control system per plant (issue 15).
+    """
+    K = as_statespace(controller, "controller")
+    A, B, C, D = (np.asarray(M, dtype=float) for M in abcd)
+    Acl = _closed_loop_matrices(A, B, C, D, K)[0]
+    return np.linalg.eigvals(Acl) if Acl.shape[-1] else np.empty(Acl.shape[:-1], dtype=complex)
 
 
 def is_stable(sys) -> bool:
@@ -327,7 +354,8 @@ def step_figures(
 def step_metrics(sys, *, t_final: float | None = None, settling: float = 0.02) -> dict:
     """Step response figures of a stable SISO system (thesis 4.5: settling time and peak control).
 
-    The response is simulated by python-control and scored by :func:`step_figures` (the same code that scores
+    The response is simulated by python-control's recursion (compiled, :func:`~flexdigit.control._lsim.step_output`)
+    and scored by :func:`step_figures` (the same code that scores
     the rig's measured steps), against the system's DC gain.
 
     Returns
@@ -340,12 +368,12 @@ def step_metrics(sys, *, t_final: float | None = None, settling: float = 0.02) -
     sys = ct.ss(sys)
     if not is_stable(sys):
         raise UnstableError("step_metrics: the system is unstable.")
-    T = None
-    if t_final is not None:
-        T = np.linspace(0, t_final, 4000)
-    resp = ct.step_response(sys, T=T)
-    y = np.squeeze(resp.outputs)
-    t = resp.time
+    if t_final is None:  # python-control's own choice of horizon and points
+        resp = ct.step_response(sys)
+        t, y = resp.time, np.squeeze(resp.outputs)
+    else:
+        t = np.linspace(0, t_final, 4000)
+        y = step_output(sys, t)
     final = float(np.real(ct.dcgain(sys)))
     figures = step_figures(t, y, target=final, band=settling)
     i = int(np.argmax(np.abs(y)))
@@ -439,12 +467,21 @@ def monte_carlo_stability(plant_factory, controller, spreads: dict, n: int = 500
     rng = np.random.default_rng(seed)
     K = as_statespace(controller, "controller")
     names = list(spreads)
-    stable = 0
-    worst, worst_factors = -math.inf, None
-    for _ in range(n):
-        factors = {k: 1.0 + spreads[k] * rng.uniform(-1.0, 1.0) for k in names}
-        r = float(np.max(closed_loop_poles(plant_factory(**factors), K).real))
-        stable += r < 0
-        if r > worst:
-            worst, worst_factors = r, factors
-    return {"n": n, "stable_fraction": stable / n, "worst_pole_real": worst, "worst_factors": worst_factors}
+    # sample by sample, one draw per spread in order (the same numbers as drawing them one at a time)
+    factors = 1.0 + np.array([spreads[k] for k in names]) * rng.uniform(-1.0, 1.0, size=(n, len(names)))
+    batch = getattr(plant_factory, "state_space", None)
+    if batch is not None:  # a family that gives its members' matrices: all the closed loops in one call
+        poles = closed_loop_poles_batch(batch(**dict(zip(names, factors.T, strict=True))), K)
+        rightmost = np.max(poles.real, axis=1) if poles.shape[1] else np.full(n, -math.inf)
+    else:
+        rightmost = np.array(
+            [np.max(closed_loop_poles(plant_factory(**dict(zip(names, f, strict=True))), K).real) for f in factors]
+        )
+    i = int(np.argmax(rightmost))
+    worst_factors = {k: float(factors[i, j]) for j, k in enumerate(names)}
+    return {
+        "n": n,
+        "stable_fraction": int(np.sum(rightmost < 0)) / n,
+        "worst_pole_real": float(rightmost[i]),
+        "worst_factors": worst_factors,
+    }

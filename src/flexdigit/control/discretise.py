@@ -30,6 +30,7 @@ import numpy as np
 
 from flexdigit._validation import Callable as Callable_
 from flexdigit._validation import Interval, NoValidation, Options, declare, validate_fields, validate_params
+from flexdigit.control._lsim import step_output
 from flexdigit.errors import DesignError
 
 __all__ = [
@@ -360,10 +361,10 @@ def sampled_loop(
     radius = float(np.max(np.abs(poles))) if poles.size else 0.0
     t = np.arange(0.0, t_final_s + T / 2, T)
     with np.errstate(over="ignore", invalid="ignore"):
-        y = np.squeeze(ct.step_response(closed, t).outputs)
+        y = step_output(closed, t)
     continuous = ct.feedback(ct.series(K, G), 1)
     t_fine = np.arange(0.0, t_final_s + 1e-4, 1e-4)
-    yc_fine = np.squeeze(ct.step_response(continuous, t_fine).outputs)
+    yc_fine = step_output(continuous, t_fine)
     yc = np.interp(t, t_fine, yc_fine)
     if radius < 1 and np.all(np.isfinite(y)):
         error = float(np.max(np.abs(y - yc)) / np.max(np.abs(yc)))

@@ -23,7 +23,14 @@ import control as ct
 import numpy as np
 
 from flexdigit._validation import Interval, declare, validate_fields
-from flexdigit.control.analysis import closed_loop_poles, hinf_norm, loop_maps, monte_carlo_stability
+from flexdigit.control._lsim import step_output
+from flexdigit.control.analysis import (
+    closed_loop_poles,
+    closed_loop_poles_batch,
+    hinf_norm,
+    loop_maps,
+    monte_carlo_stability,
+)
 from flexdigit.control.generalized import as_statespace
 from flexdigit.control.synthesis import HinfDesign, hinf_riccati
 from flexdigit.errors import DesignError
@@ -34,6 +41,7 @@ __all__ = [
     "disturbance_plant",
     "design_mixsyn",
     "plant_family",
+    "PlantFamily",
     "small_gain_certificate",
     "check_requirements",
 ]
@@ -144,24 +152,62 @@ def design_mixsyn(plant, spec: MixsynSpec | None = None) -> MixsynDesign:
     return MixsynDesign(Kint, hd, spec)
 
 
-def plant_family(plant_info):
-    """``factory(gain=1, wn=1) -> G``: the consistent plant with its DC gain and beam frequency scaled.
+class PlantFamily:
+    """``family(gain=1, wn=1) -> G``: the consistent plant with its DC gain and beam frequency scaled.
 
     Uses the components of :class:`flexdigit.models.plant.Plant`: ``dc_gain x MT_unit(s) x E(s)``, with the beam
-    factor ``E(s) = wn^2/(s^2 + 2 zeta wn s + wn^2)`` re-built at ``wn x factor`` (same zeta).
+    factor ``E(s) = wn^2/(s^2 + 2 zeta wn s + wn^2)`` re-built at ``wn x factor`` (same zeta). Calling it gives
+    one member as a transfer function; :meth:`state_space` gives many members' matrices at once (what the
+    robustness checks need: their closed-loop poles, :func:`~flexdigit.control.analysis.closed_loop_poles_batch`).
     """
-    mt = plant_info.components["MT_unit"]
-    E = plant_info.components["E_digit_housing"]
-    e_den = np.asarray(E.den[0][0], float)
-    wn0 = math.sqrt(e_den[2] / e_den[0])
-    zeta = e_den[1] / e_den[0] / (2 * wn0)
-    dc = float(plant_info.dc_gain)
 
-    def factory(gain: float = 1.0, wn: float = 1.0):
-        w = wn0 * wn
-        return gain * dc * mt * ct.tf([w * w], [1.0, 2 * zeta * w, w * w])
+    def __init__(self, plant_info):
+        self.plant_info = plant_info
+        self._mt = plant_info.components["MT_unit"]
+        E = plant_info.components["E_digit_housing"]
+        e_den = np.asarray(E.den[0][0], float)
+        self._wn0 = math.sqrt(e_den[2] / e_den[0])
+        self._zeta = e_den[1] / e_den[0] / (2 * self._wn0)
+        self._dc = float(plant_info.dc_gain)
+        mt = as_statespace(self._mt, "MT_unit")
+        self._mt_abcd = tuple(np.asarray(M, dtype=float) for M in (mt.A, mt.B, mt.C, mt.D))
 
-    return factory
+    def __repr__(self) -> str:
+        return f"PlantFamily({self.plant_info.variant!r} plant, wn0={self._wn0:.6g} rad/s, zeta={self._zeta:.6g})"
+
+    def __call__(self, gain: float = 1.0, wn: float = 1.0):
+        w = self._wn0 * wn
+        return gain * self._dc * self._mt * ct.tf([w * w], [1.0, 2 * self._zeta * w, w * w])
+
+    def state_space(self, gain=1.0, wn=1.0) -> tuple[np.ndarray, ...]:
+        """``(A, B, C, D)`` of the members at the factors ``gain`` and ``wn`` (arrays, broadcast together): shapes
+        ``(N, n, n)``, ``(N, n, 1)``, ``(N, 1, n)``, ``(N, 1, 1)``.
+
+        ``MT_unit`` (python-control's realisation) in series with ``gain x dc_gain x E`` in companion form: the
+        poles of :meth:`__call__`'s transfer function, from matrices built in numpy for all members at once.
+        """
+        gain, wn = np.broadcast_arrays(np.atleast_1d(np.asarray(gain, float)), np.atleast_1d(np.asarray(wn, float)))
+        Am, Bm, Cm, Dm = self._mt_abcd
+        N, nm = gain.size, Am.shape[0]
+        w = self._wn0 * wn.ravel()
+        k = (gain.ravel() * self._dc)[:, None, None]
+        A = np.zeros((N, nm + 2, nm + 2))
+        A[:, :nm, :nm] = Am
+        A[:, nm, nm + 1] = 1.0
+        A[:, nm + 1, nm] = -w * w
+        A[:, nm + 1, nm + 1] = -2 * self._zeta * w
+        A[:, nm + 1 :, :nm] = k * Cm  # E's input is k times MT's output
+        B = np.zeros((N, nm + 2, 1))
+        B[:, :nm] = Bm
+        B[:, nm + 1 :] = k * Dm
+        C = np.zeros((N, 1, nm + 2))
+        C[:, 0, nm] = w * w
+        return A, B, C, np.zeros((N, 1, 1))
+
+
+def plant_family(plant_info) -> PlantFamily:
+    """The :class:`PlantFamily` of ``plant_info`` (the consistent plant) for the robustness checks."""
+    return PlantFamily(plant_info)
 
 
 def small_gain_certificate(
@@ -239,15 +285,16 @@ def check_requirements(
     if not maps.stable:
         return {"stable": False}
     t = np.linspace(0.0, 10.0, 5001)
-    u = np.squeeze(ct.step_response(maps.T_uw, T=t).outputs) * step_rad
-    y = np.squeeze(ct.step_response(maps.T_yw, T=t).outputs) * step_rad
+    u = step_output(maps.T_uw, t) * step_rad
+    y = step_output(maps.T_yw, t) * step_rad
     lo, hi = COMMAND_RANGE[0] - EQUILIBRIUM_COMMAND, COMMAND_RANGE[1] - EQUILIBRIUM_COMMAND
     poles = maps.poles
     zeta = -poles.real / np.abs(poles)
     s0 = abs(complex(ct.evalfr(maps.T_zw, 1e-9)))
     factory = plant_family(plant_info)
     grid = [(g, w) for g in np.linspace(0.7, 1.3, 7) for w in np.linspace(0.8, 1.2, 9)]
-    grid_stable = all(np.max(closed_loop_poles(factory(g, w), controller).real) < 0 for g, w in grid)
+    poles_grid = closed_loop_poles_batch(factory.state_space(*np.array(grid).T), controller)
+    grid_stable = bool(np.all(np.max(poles_grid.real, axis=1) < 0))
     mc = monte_carlo_stability(factory, controller, {"gain": 0.3, "wn": 0.2}, n=n_monte_carlo, seed=seed)
     omega = np.logspace(-2, 3, 3000)
     Gn = G(1j * omega)
