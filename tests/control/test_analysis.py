@@ -24,6 +24,7 @@ PEAK_W_RTOL = 1e-4  # the resonant frequency, where the peak is flat (second ord
 SETTLING_RTOL = 0.01  # a settling time read on a 1000-point time grid
 MONTE_CARLO_ATOL = 0.06  # 200 samples of a 1/6 probability: 2.5 standard deviations (0.026)
 ROOTS_ATOL = 1e-6  # two root finders on one polynomial: a double root at a breakaway gain splits as sqrt(eps)
+ROOTS_EXACT_RTOL = 1e-12  # the same companion matrix through the same LAPACK routine: rounding at most
 
 
 def test_maps_equal_feedback_formulas():
@@ -109,3 +110,20 @@ def test_root_locus_of_a_double_integrator_is_the_closed_form():
 def test_root_locus_refuses_gains_that_are_not_finite_numbers(bad):
     with pytest.raises(ParameterError, match="'gains' parameter of root_locus"):
         root_locus(ct.tf([1.0], [1.0, 2.0, 1.0]), bad)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_root_locus_rows_are_np_roots_over_sixteen_decades(seed):
+    # the report's controller loci: k over 16 decades, where the leading coefficient of den + k num is ~1e-12 of
+    # the others and one root runs off to infinity; and an integrator, whose k = 0 row has a root at exactly 0.
+    # Reference: np.roots row by row (what the batched companion matrices must equal: the same LAPACK call)
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 7))
+    den = np.concatenate([[1.0], rng.uniform(0.5, 3.0, n - 1), [0.0]])  # an integrator
+    num = rng.normal(size=n)  # one degree below den
+    gains = np.concatenate([[0.0], np.logspace(-8, 8, 400)])
+    ours = root_locus(ct.tf(num, den), gains)
+    assert ours.shape == (gains.size, n)
+    for k, row in zip(gains, ours, strict=True):
+        ref = np.sort_complex(np.roots(np.trim_zeros(np.polyadd(den, k * num), "f")))
+        np.testing.assert_allclose(np.sort_complex(row[~np.isnan(row)]), ref, rtol=ROOTS_EXACT_RTOL)

@@ -119,7 +119,10 @@ def root_locus(sys, gains) -> np.ndarray:
 
     The roots of ``den + k num`` for all gains at once, as the eigenvalues of a stack of companion matrices (one
     LAPACK call): python-control's ``root_locus_map`` takes ``np.roots`` gain by gain and sorts the branches,
-    ~10x the time for the 4,000 gains of the report's loci (issue 15). Each row's order is LAPACK's.
+    ~10x the time for the 4,000 gains of the report's loci (issue 15). ``np.roots`` builds the same companion
+    matrix, so each row is its answer; only a polynomial with an exactly zero leading or trailing coefficient
+    (whose order drops, or with roots at 0, which ``np.roots`` strips) goes through ``np.roots`` itself, padded
+    with NaN to the order of ``den``. Each row's order is LAPACK's.
     """
     tf = ct.tf(sys)
     num = np.atleast_1d(np.asarray(tf.num[0][0], dtype=float))
@@ -127,18 +130,21 @@ def root_locus(sys, gains) -> np.ndarray:
     k = check_array(gains, "gains", "root_locus").ravel()  # finite: LAPACK refuses NaN and inf with a traceback
     num = np.concatenate([np.zeros(max(den.size - num.size, 0)), num])
     poly = den[None, :] + k[:, None] * num[None, :]
-    lead = poly[:, 0]
-    if np.any(np.abs(lead) <= 1e-12 * np.abs(poly).max(axis=1)):  # a gain where the order drops: gain by gain
-        rows = [np.roots(np.trim_zeros(p, "f")) for p in poly]
-        width = max(r.size for r in rows)
-        return np.array([np.pad(r.astype(complex), (0, width - r.size), constant_values=np.nan) for r in rows])
-    n = den.size - 1
+    n = poly.shape[1] - 1
+    loci = np.full((k.size, n), np.nan, dtype=complex)
     if n == 0:
-        return np.empty((k.size, 0), dtype=complex)
-    companion = np.zeros((k.size, n, n))
-    companion[:, 0, :] = -poly[:, 1:] / lead[:, None]
-    companion[:, np.arange(1, n), np.arange(n - 1)] = 1.0
-    return np.linalg.eigvals(companion)
+        return loci
+    lead = poly[:, 0]
+    whole = (lead != 0) & (poly[:, -1] != 0)  # np.roots trims nothing: its companion matrix is this one
+    if np.any(whole):
+        companion = np.zeros((int(np.sum(whole)), n, n))
+        companion[:, 0, :] = -poly[whole, 1:] / lead[whole, None]
+        companion[:, np.arange(1, n), np.arange(n - 1)] = 1.0
+        loci[whole] = np.linalg.eigvals(companion)
+    for i in np.flatnonzero(~whole):
+        r = np.roots(np.trim_zeros(poly[i], "f"))
+        loci[i, : r.size] = r
+    return loci
 
 
 def closed_loop_poles(plant, controller) -> np.ndarray:
