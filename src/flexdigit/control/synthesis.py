@@ -17,6 +17,7 @@ so ``K`` sits in an ordinary negative-feedback loop).
 from __future__ import annotations
 
 import math
+import threading
 import warnings
 from dataclasses import dataclass
 from numbers import Integral, Real
@@ -411,6 +412,8 @@ def _balanced(P):
 
 
 def _lmi_constraints(Ps, nw, nz, R, S, g, strict):
+    """The LMIs of :func:`hinf_lmi` written out as cvxpy expressions: the reference :func:`_lmi_maps` is tested
+    against (the route itself solves the compiled problems of :func:`_lmi_problem`)."""
     A, B, C, D = (np.asarray(M, float) for M in (Ps.A, Ps.B, Ps.C, Ps.D))
     import cvxpy as cp
 
@@ -445,6 +448,93 @@ def _lmi_constraints(Ps, nw, nz, R, S, g, strict):
     return cons
 
 
+def _lmi_maps(Ps, nw, nz):
+    """Each LMI of :func:`_lmi_constraints` as the affine map ``L(X, g) = Q X P' + P X Q' + g G + C0`` of its
+    variable ``X`` (``R``, then ``S``) and ``g``: ``(P, Q, G, C0)``, or None where the null space is empty.
+
+    With ``W = blockdiag(N, I)`` and its rows split like the middle matrix (``P`` the state rows, ``F_m``, ``F_l``
+    the other two blocks): ``Q = P A + F_m C1``, ``G = -(F_m F_m' + F_l F_l')``, ``C0 = H + H'`` with
+    ``H = (P B1 + F_m D11) F_l'`` for the ``R`` LMI; the ``S`` LMI is the same with ``A', C1', B1', D11'``.
+    """
+    A, B, C, D = (np.asarray(M, float) for M in (Ps.A, Ps.B, Ps.C, Ps.D))
+    n = A.shape[0]
+    B1, B2, C1, C2 = B[:, :nw], B[:, nw:], C[:nz], C[nz:]
+    D11, D12, D21 = D[:nz, :nw], D[:nz, nw:], D[nz:, :nw]
+    NR = scipy.linalg.null_space(np.hstack([B2.T, D12.T]))
+    NS = scipy.linalg.null_space(np.hstack([C2, D21]))
+    maps = []
+    for N, a, c1, b1, d11, m_mid, m_last in ((NR, A, C1, B1, D11, nz, nw), (NS, A.T, B1.T, C1.T, D11.T, nw, nz)):
+        if not N.size:
+            maps.append(None)
+            continue
+        W = scipy.linalg.block_diag(N, np.eye(m_last))
+        P, Fm, Fl = W[:n].T, W[n : n + m_mid].T, W[n + m_mid :].T
+        H = (P @ b1 + Fm @ d11) @ Fl.T
+        maps.append((P, P @ a + Fm @ c1, -(Fm @ Fm.T + Fl @ Fl.T), H + H.T))
+    return maps
+
+
+#: The LMI problems compiled so far, by (kind, states, LMI sizes, strict): cvxpy compiles a problem once (DPP) and
+#: re-solves it for new data by matrix products; compiling was ~75 % of the route's time (issue 15).
+_LMI_PROBLEMS: dict = {}
+_LMI_LOCK = threading.Lock()
+
+
+def _lmi_problem(kind: str, n: int, sizes: tuple[int, int], strict: float):
+    """The cvxpy problem ``"gamma"`` (minimise ``g``) or ``"centre"`` (least ``trace R + trace S`` at a level in
+    the data) for ``n`` states, with its LMIs as parameters: ``vec(L) = M vec(X) + vec(C0) (+ g vec(G))``, ``M =
+    P (x) Q + Q (x) P`` (Kronecker products, column-major vec), which cvxpy compiles once (DPP)."""
+    import cvxpy as cp
+
+    key = (kind, n, sizes, strict)
+    if key not in _LMI_PROBLEMS:
+        R = cp.Variable((n, n), symmetric=True)
+        S = cp.Variable((n, n), symmetric=True)
+        g = cp.Variable() if kind == "gamma" else None
+        cons, params = [cp.bmat([[R, np.eye(n)], [np.eye(n), S]]) >> 0], []
+        for X, k in zip((R, S), sizes, strict=True):
+            if not k:
+                params.append(None)
+                continue
+            M, C0 = cp.Parameter((k * k, n * n)), cp.Parameter((k, k))
+            L = cp.reshape(M @ cp.vec(X, order="F"), (k, k), order="F") + C0
+            G = cp.Parameter((k, k)) if g is not None else None
+            if G is not None:
+                L = L + g * G
+            cons.append((L + L.T) / 2 << -strict * np.eye(k))
+            params.append((M, C0, G))
+        objective = cp.Minimize(g) if g is not None else cp.Minimize(cp.trace(R) + cp.trace(S))
+        problem = cp.Problem(objective, cons)
+        _LMI_PROBLEMS[key] = (problem, R, S, g, cons, params)
+    return _LMI_PROBLEMS[key]
+
+
+def _solve_lmis(Ps, nw, nz, solver, strict, gamma=None):
+    """Solve :func:`_lmi_problem` for ``Ps``: minimise ``g`` (``gamma`` None) or centre at ``gamma``."""
+    maps = _lmi_maps(Ps, nw, nz)
+    sizes = tuple(0 if m is None else m[0].shape[0] for m in maps)
+    with _LMI_LOCK:
+        problem, R, S, g, cons, params = _lmi_problem("gamma" if gamma is None else "centre", Ps.nstates, sizes, strict)
+        for m, p in zip(maps, params, strict=True):
+            if m is None:
+                continue
+            P, Q, G, C0 = m
+            p[0].value = np.kron(P, Q) + np.kron(Q, P)
+            p[1].value = C0 if gamma is None else C0 + gamma * G
+            if p[2] is not None:
+                p[2].value = G
+        _solve(problem, solver)
+        values = (None if g is None else g.value, R.value, S.value)
+        viol = 0.0
+        if gamma is None and g.value is not None:
+            # relative violation of the LMIs at the returned point (the solver's own tolerances are absolute)
+            for con in cons:
+                expr = np.asarray(con.expr.value)  # cvxpy keeps every LMI as "expr is PSD"
+                lam = np.linalg.eigvalsh((expr + expr.T) / 2)
+                viol = max(viol, float(-lam.min() / max(np.abs(lam).max(), 1e-300)))
+        return values, problem.status, viol
+
+
 def _solve(prob, solver):
     import cvxpy as cp
 
@@ -461,25 +551,10 @@ def _solve(prob, solver):
 
 def _lmi_once(Ps, nw, nz, solver, strict) -> tuple[LmiResult, float]:
     """Minimise ``gamma``; return the result and the LMIs' relative violation at the returned point."""
-    import cvxpy as cp
-
-    n = Ps.nstates
-    R = cp.Variable((n, n), symmetric=True)
-    S = cp.Variable((n, n), symmetric=True)
-    g = cp.Variable()
-    cons = _lmi_constraints(Ps, nw, nz, R, S, g, strict)
-    prob = cp.Problem(cp.Minimize(g), cons)
-    _solve(prob, solver)
-    if g.value is None:
-        raise DesignError(f"The H-infinity LMIs are infeasible or the solver failed (status {prob.status!r}).")
-    res = LmiResult(float(g.value), np.asarray(R.value), np.asarray(S.value), prob.status, solver)
-    # relative violation of the LMIs at the returned point (the solver's own tolerances are absolute)
-    viol = 0.0
-    for con in cons:
-        expr = np.asarray(con.expr.value)  # cvxpy keeps every LMI as "expr is PSD"
-        lam = np.linalg.eigvalsh((expr + expr.T) / 2)
-        viol = max(viol, float(-lam.min() / max(np.abs(lam).max(), 1e-300)))
-    return res, viol
+    (g, R, S), status, viol = _solve_lmis(Ps, nw, nz, solver, strict)
+    if g is None:
+        raise DesignError(f"The H-infinity LMIs are infeasible or the solver failed (status {status!r}).")
+    return LmiResult(float(g), np.asarray(R), np.asarray(S), status, solver), viol
 
 
 def _lmi_centre(Ps, nw, nz, solver, strict, gamma) -> tuple[np.ndarray, np.ndarray]:
@@ -488,16 +563,10 @@ def _lmi_centre(Ps, nw, nz, solver, strict, gamma) -> tuple[np.ndarray, np.ndarr
     Minimising ``gamma`` alone leaves ``R`` and ``S`` as large as the solver likes where their LMIs are slack
     (``R S`` up to 1e11 on the thesis problem), which says nothing about the coordinates the optimum needs.
     """
-    import cvxpy as cp
-
-    n = Ps.nstates
-    R = cp.Variable((n, n), symmetric=True)
-    S = cp.Variable((n, n), symmetric=True)
-    prob = cp.Problem(cp.Minimize(cp.trace(R) + cp.trace(S)), _lmi_constraints(Ps, nw, nz, R, S, gamma, strict))
-    _solve(prob, solver)
-    if R.value is None or S.value is None:
-        raise DesignError(f"The H-infinity LMIs at gamma={gamma:.6g} returned no point (status {prob.status!r}).")
-    return np.asarray(R.value), np.asarray(S.value)
+    (_, R, S), status, _ = _solve_lmis(Ps, nw, nz, solver, strict, gamma)
+    if R is None or S is None:
+        raise DesignError(f"The H-infinity LMIs at gamma={gamma:.6g} returned no point (status {status!r}).")
+    return np.asarray(R), np.asarray(S)
 
 
 @validate_params(
