@@ -235,3 +235,23 @@ def test_compiled_lmis_solve_as_the_written_out_ones(seed):
     R, S, g = cp.Variable((n, n), symmetric=True), cp.Variable((n, n), symmetric=True), cp.Variable()
     cp.Problem(cp.Minimize(g), _lmi_constraints(Ps, nw, nz, R, S, g, 1e-9)).solve(solver="CLARABEL")
     assert ours.gamma == pytest.approx(float(g.value), rel=LMI_SOLVE_RTOL)
+
+
+@pytest.mark.parametrize("hz", [5.0, 39.0])
+def test_central_controller_poles_are_the_designs(P5, G, hz):
+    # issue 15: the regularisation fit's lean path against the full design it stands for, on the fit's own grid
+    # of (eps_u, margin): the same SLICOT calls on the same matrices, so the same numbers bit for bit
+    from flexdigit.control.synthesis import central_controller_poles
+
+    P0 = thesis_generalized_plant(G, filter_weight(hz))
+    for le in np.arange(-9.0, -2.9, 1.5):
+        for margin in (0.01, 0.2, 3.0):
+            full = np.linalg.eigvals(hinf_riccati(regularise(P0, 10**le), margin=margin).controller.A)
+            np.testing.assert_array_equal(central_controller_poles(P0, 10**le, margin), full)
+
+
+def test_central_controller_poles_refuses_what_the_design_refuses(P5):
+    from flexdigit.control.synthesis import central_controller_poles
+
+    with pytest.raises(DesignError, match="D12"):
+        central_controller_poles(P5, 0.0, 0.1)  # no regularisation: the singular problem

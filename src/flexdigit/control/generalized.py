@@ -31,6 +31,7 @@ __all__ = [
     "filter_weight",
     "thesis_generalized_plant",
     "regularise",
+    "regularise_matrices",
     "mixed_sensitivity_plant",
 ]
 
@@ -169,7 +170,13 @@ def regularise(P, eps_u: float, eps_noise: float = 0.0, *, nmeas: int = 1, ncon:
     P = as_statespace(P, "P", siso=False)
     _check_partition(P, nmeas, ncon)
     nw, nz = P.ninputs - ncon, P.noutputs - nmeas
-    A, B, C, D = P.A, P.B, P.C, P.D
+    return ct.ss(*regularise_matrices(P.A, P.B, P.C, P.D, nw, nz, eps_u, eps_noise))
+
+
+def regularise_matrices(A, B, C, D, nw: int, nz: int, eps_u: float, eps_noise: float = 0.0):
+    """:func:`regularise` on bare matrices (``nw`` exogenous inputs, ``nz`` performance outputs; unchecked):
+    ``(A, B, C, D)`` of the regular plant."""
+    nmeas, ncon = C.shape[0] - nz, B.shape[1] - nw
     B1, B2 = B[:, :nw], B[:, nw:]
     C1, C2 = C[:nz], C[nz:]
     D11, D12, D21, D22 = D[:nz, :nw], D[:nz, nw:], D[nz:, :nw], D[nz:, nw:]
@@ -184,7 +191,7 @@ def regularise(P, eps_u: float, eps_noise: float = 0.0, *, nmeas: int = 1, ncon:
     Bn = np.hstack([B1, B2])
     Cn = np.vstack([C1, C2])
     Dn = np.block([[D11, D12], [D21, D22]])
-    return ct.ss(A, Bn, Cn, Dn)
+    return A, Bn, Cn, Dn
 
 
 def mixed_sensitivity_plant(plant, w1=None, w2=None, w3=None) -> ct.StateSpace:
