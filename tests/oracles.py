@@ -129,6 +129,10 @@ FAST_BASELINE_FILE = Path(__file__).with_name("data") / "report_fast_baseline.js
 #: differences remain (BLAS on one thread per chapter worker, or on two in-process).
 BASELINE_RTOL = 1e-6
 BASELINE_ATOL = 1e-12
+#: Entries that are an interior-point solver's stopping point, not a property of the design: 3x the largest move a
+#: scaling of the plant's A by 1 +- 1e-15 or 1 +- 2e-15 causes (6.7e-5 and 3.5 %,
+#: tests/control/test_synthesis.py::test_lmi_gamma_moves_with_one_ulp_of_the_plant).
+SOLVER_NOISE_RTOL = {"hinf.gamma_opt_lmi": 2e-4, "hinf.gamma_lmi_singular": 0.1}
 
 
 def _chapter_reference(path: Path, chapter: str) -> dict:
@@ -158,7 +162,8 @@ def _moved_entries(reference: dict, entries, same, source: str) -> list[str]:
 
 def assert_entries_unchanged(entries, chapter: str) -> None:
     """Every baseline entry of ``chapter`` (its slug) is in ``entries`` with the same status and the same figure
-    (within :data:`BASELINE_RTOL`); ``entries`` are :class:`~flexdigit.report.results.Entry` or dicts."""
+    (within :data:`BASELINE_RTOL`, or :data:`SOLVER_NOISE_RTOL` for a solver's stopping point); ``entries`` are
+    :class:`~flexdigit.report.results.Entry` or dicts."""
 
     def same(key, status, ours, e_status, e_ours):
         if e_status != status:
@@ -167,7 +172,8 @@ def assert_entries_unchanged(entries, chapter: str) -> None:
             return e_ours is None or (isinstance(e_ours, float) and math.isnan(e_ours))
         if isinstance(ours, str):
             return e_ours == ours
-        return e_ours is not None and bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
+        rtol = SOLVER_NOISE_RTOL.get(key, BASELINE_RTOL)
+        return e_ours is not None and bool(np.isclose(e_ours, ours, rtol=rtol, atol=BASELINE_ATOL))
 
     moved = _moved_entries(_chapter_reference(FAST_BASELINE_FILE, chapter), entries, same, FAST_BASELINE_FILE.name)
     assert not moved, (
