@@ -7,6 +7,7 @@ import math
 import control as ct
 import numpy as np
 
+from flexdigit.control._lsim import step_output
 from flexdigit.control.reproduce import printed_controller
 from flexdigit.reference import thesis_value
 from flexdigit.report import results
@@ -472,8 +473,8 @@ def _fig_steps(plt, study, G, w, designs, fits):
     t = np.linspace(0, 1.0, 1000)
     for hz, d in designs.items():
         m = loop_maps(G, d.controller)
-        axs[0].plot(t, np.squeeze(ct.step_response(m.T_yw, T=t).outputs), label=f"{hz:g} Hz")
-        axs[1].plot(t, 10 * np.squeeze(ct.step_response(m.T_uw, T=t).outputs), label=f"{hz:g} Hz")
+        axs[0].plot(t, step_output(m.T_yw, t), label=f"{hz:g} Hz")
+        axs[1].plot(t, 10 * step_output(m.T_uw, t), label=f"{hz:g} Hz")
     axs[0].set(title="T_yw step", xlabel="s")
     axs[1].set(title="T_uw step (x10, printed gain)", xlabel="s", yscale="symlog")
     axs[0].legend()
@@ -481,13 +482,13 @@ def _fig_steps(plt, study, G, w, designs, fits):
 
 
 def _fig_root_locus(plt, study, G, w, designs, fits):
+    from flexdigit.control.analysis import root_locus
     from flexdigit.models.plant import build_plant
 
     fig, ax = plt.subplots()
     gains = np.concatenate([[0.0], np.logspace(-1, 5, 400)])
     for name, plant in (("plant (4.4)", G), ("K1 closed loop (4.3)", build_plant("printed").closed_loop(study.k1.k1))):
-        num, den = np.asarray(plant.num[0][0], float), np.asarray(plant.den[0][0], float)
-        locus = np.array([np.roots(np.polyadd(den, k * num)) for k in gains])
+        locus = root_locus(plant, gains)
         ax.plot(locus.real.ravel(), locus.imag.ravel(), ".", ms=2, label=name)
     ax.plot(ct.poles(G).real, ct.poles(G).imag, "kx")
     ax.set(xlabel="Re (rad/s)", ylabel="Im (rad/s)", xlim=(-40, 15), ylim=(-60, 60))
@@ -517,8 +518,8 @@ def _fig_mixsyn_step(plt, study, G, w, designs, fits):
     fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
     t = np.linspace(0, 5, 2000)
     step = math.radians(30)
-    axs[0].plot(t, np.degrees(step * np.squeeze(ct.step_response(mm.T_yw, T=t).outputs)))
-    axs[1].plot(t, 8 + step * np.squeeze(ct.step_response(mm.T_uw, T=t).outputs))
+    axs[0].plot(t, np.degrees(step * step_output(mm.T_yw, t)))
+    axs[1].plot(t, 8 + step * step_output(mm.T_uw, t))
     axs[0].set(title="beam rotation, deg", xlabel="s")
     axs[1].set(title="servo command", xlabel="s")
     return fig
