@@ -463,17 +463,23 @@ def _balanced(P):
     return ct.ss(Ti @ P.A @ T, Ti @ P.B, P.C @ T, P.D)
 
 
-def _lmi_constraints(Ps, nw, nz, R, S, g, strict):
-    """The LMIs of :func:`hinf_lmi` written out as cvxpy expressions: the reference :func:`_lmi_maps` is tested
-    against (the route itself solves the compiled problems of :func:`_lmi_problem`)."""
+def _lmi_data(Ps, nw, nz):
+    """``A, B1, C1, D11`` and the null-space bases ``N_R`` of ``[B2' D12']`` and ``N_S`` of ``[C2 D21]``."""
     A, B, C, D = (np.asarray(M, float) for M in (Ps.A, Ps.B, Ps.C, Ps.D))
-    import cvxpy as cp
-
-    n = A.shape[0]
     B1, B2, C1, C2 = B[:, :nw], B[:, nw:], C[:nz], C[nz:]
     D11, D12, D21 = D[:nz, :nw], D[:nz, nw:], D[nz:, :nw]
     NR = scipy.linalg.null_space(np.hstack([B2.T, D12.T]))
     NS = scipy.linalg.null_space(np.hstack([C2, D21]))
+    return A, B1, C1, D11, NR, NS
+
+
+def _lmi_constraints(Ps, nw, nz, R, S, g, strict):
+    """The LMIs of :func:`hinf_lmi` written out as cvxpy expressions: the reference :func:`_lmi_maps` is tested
+    against (the route itself solves the compiled problems of :func:`_lmi_problem`)."""
+    import cvxpy as cp
+
+    A, B1, C1, D11, NR, NS = _lmi_data(Ps, nw, nz)
+    n = A.shape[0]
     cons = [cp.bmat([[R, np.eye(n)], [np.eye(n), S]]) >> 0]
     if NR.size:
         WR = scipy.linalg.block_diag(NR, np.eye(nw))
@@ -508,12 +514,8 @@ def _lmi_maps(Ps, nw, nz):
     the other two blocks): ``Q = P A + F_m C1``, ``G = -(F_m F_m' + F_l F_l')``, ``C0 = H + H'`` with
     ``H = (P B1 + F_m D11) F_l'`` for the ``R`` LMI; the ``S`` LMI is the same with ``A', C1', B1', D11'``.
     """
-    A, B, C, D = (np.asarray(M, float) for M in (Ps.A, Ps.B, Ps.C, Ps.D))
+    A, B1, C1, D11, NR, NS = _lmi_data(Ps, nw, nz)
     n = A.shape[0]
-    B1, B2, C1, C2 = B[:, :nw], B[:, nw:], C[:nz], C[nz:]
-    D11, D12, D21 = D[:nz, :nw], D[:nz, nw:], D[nz:, :nw]
-    NR = scipy.linalg.null_space(np.hstack([B2.T, D12.T]))
-    NS = scipy.linalg.null_space(np.hstack([C2, D21]))
     maps = []
     for N, a, c1, b1, d11, m_mid, m_last in ((NR, A, C1, B1, D11, nz, nw), (NS, A.T, B1.T, C1.T, D11.T, nw, nz)):
         if not N.size:
