@@ -244,10 +244,13 @@ def test_central_controller_poles_are_the_designs(P5, G, hz):
     from flexdigit.control.synthesis import central_controller_poles
 
     P0 = thesis_generalized_plant(G, filter_weight(hz))
+    gamma_opts = {}  # the fit's memo of each eps_u's optimum: the second and third margins skip the bisection
     for le in np.arange(-9.0, -2.9, 1.5):
         for margin in (0.01, 0.2, 3.0):
             full = np.linalg.eigvals(hinf_riccati(regularise(P0, 10**le), margin=margin).controller.A)
             np.testing.assert_array_equal(central_controller_poles(P0, 10**le, margin), full)
+            np.testing.assert_array_equal(central_controller_poles(P0, 10**le, margin, gamma_opts), full)
+    assert len(gamma_opts) == 5  # one optimum per eps_u
 
 
 def test_central_controller_poles_refuses_what_the_design_refuses(P5):

@@ -127,11 +127,13 @@ def fit_thesis_regularisation(filter_hz: float, target_poles=None, plant=None) -
         d = hinf_riccati(regularise(P0, 10 ** x[0]), margin=x[1])
         return d, sorted_poles(np.linalg.eigvals(d.controller.A))
 
+    gamma_opts: dict[float, float] = {}  # eps_u -> its optimum: the grid tries every eps_u at 5 margins
+
     def cost(x):
         if x[1] < 0 or not -12 < x[0] < 0:
             return 1e3
         try:  # the poles of poles_for(x)'s design, without building it (hundreds of evaluations)
-            p = sorted_poles(central_controller_poles(P0, 10 ** x[0], x[1]))
+            p = sorted_poles(central_controller_poles(P0, 10 ** x[0], x[1], gamma_opts))
         except (DesignError, ArithmeticError):
             return 1e3
         if p.size != target.size:

@@ -28,7 +28,15 @@ import control as ct
 import numpy as np
 
 from flexdigit._result_table import ResultTable
-from flexdigit.control.analysis import LoopMaps, additive_tolerance, hinf_norm, loop_maps, margins, step_metrics
+from flexdigit.control.analysis import (
+    LoopMaps,
+    additive_tolerance,
+    hinf_norm,
+    loop_maps,
+    margins,
+    root_locus,
+    step_metrics,
+)
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
 from flexdigit.control.reproduce import fit_thesis_regularisation, printed_controller, sorted_poles, thesis_design
 from flexdigit.control.synthesis import hinf_lmi, hinf_riccati, regularisation_path
@@ -90,7 +98,7 @@ def k1_closed_loop_study() -> K1Study:
     g_num, g_den = np.asarray(G.tf.num[0][0], float), np.asarray(G.tf.den[0][0], float)
     slow = table_poles[np.argmin(np.abs(table_poles))]
     grid = np.linspace(0.5, 2.0, 1501)
-    miss = [np.min(np.abs(np.roots(np.polyadd(g_den, k * g_num)) - slow)) for k in grid]
+    miss = np.nanmin(np.abs(root_locus(G.tf, grid) - slow), axis=1)  # np.roots of each k, in one LAPACK call
     k1_slow = float(grid[int(np.argmin(miss))])
     fitted = sorted_poles(np.roots(np.polyadd(g_den, k1_slow * g_num)))
     rows = tuple(

@@ -285,20 +285,26 @@ def _central_solution(Ps, nmeas, ncon, gamma, margin, gtol, gamma_opt):
     return out, gamma_opt, level
 
 
-def central_controller_poles(P_singular, eps_u: float, margin: float) -> np.ndarray:
+def central_controller_poles(P_singular, eps_u: float, margin: float, gamma_opts: dict | None = None) -> np.ndarray:
     """The poles of ``hinf_riccati(regularise(P_singular, eps_u), margin=margin).controller`` (rad/s), unsorted.
 
     The same SLICOT calls on the same matrices, without the python-control systems, the achieved norm and the
     argument checks around them (a fourth of the time): for searches that try hundreds of ``(eps_u, margin)``
     (:func:`~flexdigit.control.reproduce.fit_thesis_regularisation`). SISO partition; ``margin >= 0``.
+    ``gamma_opts`` (``{eps_u: gamma_opt}``, filled as it goes) skips the bisection for an ``eps_u`` seen before,
+    as ``hinf_riccati(..., gamma_opt=...)`` does.
     """
     P = as_statespace(P_singular, "P_singular", siso=False)
     abcd = regularise_matrices(P.A, P.B, P.C, P.D, P.ninputs - 1, P.noutputs - 1, eps_u)
     Pr = _Matrices(*abcd)
     _check_regular(Pr, 1, 1)
     A, B, C, D, _ = _scale_matrices(*abcd, Pr.ninputs - 1, Pr.noutputs - 1)
+    # at margin 0 the design is the bisection's own last controller, so only a margin > 0 may skip it
+    known = None if gamma_opts is None or margin == 0 else gamma_opts.get(eps_u)
     with single_blas_thread():
-        out, _, _ = _central_solution(_Matrices(A, B, C, D), 1, 1, None, margin, 1e-4, None)
+        out, gamma_opt, _ = _central_solution(_Matrices(A, B, C, D), 1, 1, None, margin, 1e-4, known)
+    if gamma_opts is not None:
+        gamma_opts[eps_u] = gamma_opt
     return np.linalg.eigvals(out[1]) if np.size(out[1]) else np.array([])
 
 
