@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -242,6 +243,7 @@ def _saturation(t, raw, model, noise, amplitude, unit) -> Problem | None:
     return None
 
 
+@lru_cache(maxsize=256)  # a pure function of two floats, asked again for every record at the same rate and cut-off
 def _noise_gain(fs: float, cutoff: float) -> float:
     """Standard deviation of unit white noise after :func:`~flexdigit.identify.filters.butter_filter` at ``cutoff``."""
     n = int(min(200_000, max(64, 40 * fs / cutoff)))
