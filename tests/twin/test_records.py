@@ -109,3 +109,12 @@ def test_cli_bad_input_is_one_line_exit_2(tmp_path, capsys):
     assert "beyond the tip" in err and "Traceback" not in err
     assert main(["simulate", "sweep", "--out", str(tmp_path / "x.csv"), "--commands", "8..x"]) == 2
     assert "--commands" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("seed, orientation", [(0, "vertical"), (3, "horizontal")])
+def test_actuation_sweep_on_the_compiled_kernel_reads_what_the_numpy_twin_reads(seed, orientation):
+    # the sweep steps the digit with the compiled kernel by default; the numpy twin is the reference: its readings
+    # (after the ADC's quantisation) must be the same numbers, not just close, over the operating commands
+    kwargs = dict(commands=range(8, 44, 5), settle_s=0.6, samples=5, seed=seed, orientation=orientation)
+    fast, reference = ex.actuation_sweep(**kwargs), ex.actuation_sweep(**kwargs, compiled=False)
+    assert fast.table.equals(reference.table)

@@ -263,8 +263,13 @@ def actuation_sweep(
     params: RigParams | None = None,
     calibration: Calibration | None = None,
     orientation: str = "vertical",
+    compiled: bool = True,
 ) -> TwinRecord:
     """Step through ``commands`` (default 8..43), let each settle, then sample the gauges (3.4.3, E 3.20-3.22).
+
+    ``compiled`` steps the digit with the compiled kernel (:class:`~flexdigit.twin.twin.Twin`'s ``compiled``):
+    it follows the numpy twin to ~1e-15 rad, far inside the ADC's quantum, so the readings, the only columns the
+    digit's motion reaches, are the numpy twin's (tests/twin/test_records.py) for a fifth of the CPU.
 
     Returns
     -------
@@ -282,7 +287,7 @@ def actuation_sweep(
     settle = check_real(settle_s, "settle_s", "actuation_sweep", low=0)
     n = check_int(samples, "samples", "actuation_sweep", low=1, high=100_000)
     rate = check_positive(sample_rate_hz, "sample_rate_hz", "actuation_sweep")
-    twin = Twin(params, calibration, seed=seed, orientation=orientation, command=cmds[0])
+    twin = Twin(params, calibration, seed=seed, orientation=orientation, command=cmds[0], compiled=bool(compiled))
     rows: dict[str, list] = {
         k: [] for k in ("command", "sample", "time_s", "gauge1_v", "gauge2_v", "gauge3_v", "pot_v")
     }
