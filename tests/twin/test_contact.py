@@ -265,3 +265,33 @@ def test_set_tissue_settle_starts_at_rest_in_contact():
 def test_bad_contact_inputs_are_named(make, message):
     with pytest.raises(ParameterError, match=message):
         make()
+
+
+def test_compiled_contact_quadrature_is_the_numpy_quadrature_bit_for_bit():
+    # TissueContact.points runs a compiled kernel; the numpy quadrature it replaced is the reference: seeded random
+    # bodies (either side, gaps from pressing-in to clear, inclusions), mountings, resolutions and batches of
+    # shapes, rates with damping: every array equal, not just close
+    from flexdigit.twin.contact import TissueContact
+
+    rng = np.random.default_rng(13)
+    for trial in range(120):
+        chain = cached_digit(PARAMS, CAL, True, ("vertical", "horizontal")[trial % 2], (3, 2, 4)[trial % 3])
+        start = float(rng.uniform(0.0, 0.2))
+        end = start + float(rng.uniform(0.01, 0.3))
+        inclusions = (
+            (Inclusion(float(rng.uniform(start, end)), 0.02, float(rng.uniform(0.3, 5.0))),) if trial % 4 else ()
+        )
+        tissue = Tissue(
+            start,
+            end,
+            float(rng.uniform(-0.002, 0.02)),
+            float(rng.uniform(1e3, 1e5)),
+            inclusions=inclusions,
+            damping_s_m=0.5 * (trial % 2),
+            side=("cable", "opposite")[trial % 3 == 0],
+        )
+        contact = TissueContact(chain, tissue)
+        psi = rng.normal(0.0, 0.15, (int(rng.integers(1, 25)), chain.n)) * rng.uniform(0.0, 2.0)
+        omega = rng.normal(0.0, 1.0, psi.shape)
+        for got, want in zip(contact.points(psi, omega), contact._points_numpy(psi, omega), strict=True):
+            np.testing.assert_array_equal(got, want)

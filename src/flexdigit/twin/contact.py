@@ -280,6 +280,10 @@ class TissueContact:
         # links: the clamped stretch [0, s_0] (angle 0, no degree of freedom) then one per spring
         self._link_start = np.concatenate([[0.0], chain.joint_s_m])
         self._link_len = np.concatenate([[chain.joint_s_m[0]], chain.link_length_m])
+        self._chain_link_len = np.ascontiguousarray(chain.link_length_m, dtype=float)
+        from flexdigit.twin._contact_points import contact_points
+
+        self._contact_points = contact_points
 
     def __repr__(self) -> str:
         return f"TissueContact(tissue={self.tissue!r})"
@@ -289,7 +293,32 @@ class TissueContact:
 
         Returns ``(s, w, delta, k, rate)``, each (B, P): arc positions (m), weights (m), penetration (m), modulus,
         penetration rate (m/s; zeros without ``omega``). Points outside the contact have weight 0.
+
+        Compiled (:mod:`flexdigit.twin._contact_points`): the same numbers as :meth:`_points_numpy`, bit for bit,
+        for ~1/20 of the CPU at a Newton solve's batch sizes.
         """
+        psi = np.ascontiguousarray(np.atleast_2d(np.asarray(psi, dtype=float)))
+        s, w, delta, k = self._contact_points(
+            psi,
+            self._link_start,
+            self._link_len,
+            self._chain_link_len,
+            float(self.sign),
+            float(self.tissue.gap_m),
+            self._lo,
+            self._hi,
+            self._k,
+            _GAUSS_T,
+            _GAUSS_W,
+        )
+        rate = np.zeros_like(s)
+        if omega is not None and self.tissue.damping_s_m > 0 and s.shape[1]:
+            c = self._levers(s) * np.cos(psi)[:, None, :]  # (B, P, n): d b_p / d psi
+            rate = self.sign * np.einsum("bpn,bn->bp", c, np.atleast_2d(omega))
+        return s, w, delta, k, rate
+
+    def _points_numpy(self, psi, omega=None):
+        """:meth:`points` in numpy: the reference the compiled quadrature is tested against."""
         ch = self.chain
         psi = np.atleast_2d(np.asarray(psi, dtype=float))
         b = psi.shape[0]
