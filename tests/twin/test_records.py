@@ -118,3 +118,16 @@ def test_actuation_sweep_on_the_compiled_kernel_reads_what_the_numpy_twin_reads(
     kwargs = dict(commands=range(8, 44, 5), settle_s=0.6, samples=5, seed=seed, orientation=orientation)
     fast, reference = ex.actuation_sweep(**kwargs), ex.actuation_sweep(**kwargs, compiled=False)
     assert fast.table.equals(reference.table)
+
+
+@pytest.mark.parametrize("housing, seed", [(False, 4), (True, 0)])
+def test_release_test_on_the_compiled_kernel_reads_what_the_numpy_twin_reads(housing, seed):
+    # the release test steps the digit with the compiled kernel by default; the numpy twin is the reference: the
+    # gauge readings (quantised) the same numbers, the tip deflection (not quantised) within 1e-15 m
+    kwargs = dict(housing=housing, duration_s=3.0, sample_rate_hz=500, seed=seed)
+    fast, reference = ex.release_test(**kwargs), ex.release_test(**kwargs, compiled=False)
+    for gauge in ("gauge1_v", "gauge2_v", "gauge3_v"):
+        np.testing.assert_array_equal(fast.column(gauge), reference.column(gauge))
+    np.testing.assert_allclose(
+        fast.column("tip_deflection_m"), reference.column("tip_deflection_m"), rtol=0, atol=1e-15
+    )

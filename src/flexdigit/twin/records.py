@@ -183,8 +183,13 @@ def release_test(
     params: RigParams | None = None,
     calibration: Calibration | None = None,
     orientation: str = "vertical",
+    compiled: bool = True,
 ) -> TwinRecord:
     """Deflect the digit (cable removed) by ``tip_deflection_m`` at the tip, release it, sample the gauges (3.1.2).
+
+    ``compiled`` steps the digit with the compiled kernel (:class:`~flexdigit.twin.twin.Twin`'s ``compiled``):
+    the gauge readings are the numpy twin's, quantised, and the tip column within 1e-15 m of it
+    (tests/twin/test_records.py), for a third of the CPU.
 
     Returns
     -------
@@ -196,7 +201,14 @@ def release_test(
     deflection = check_real(tip_deflection_m, "tip_deflection_m", "release_test", low=-0.1, high=0.1)
     _, _, times = _check_rate(duration_s, sample_rate_hz, "release_test")
     twin = Twin(
-        params, calibration, seed=seed, orientation=orientation, housing=housing, cable=False, dt_s=RELEASE_DT_S
+        params,
+        calibration,
+        seed=seed,
+        orientation=orientation,
+        housing=housing,
+        cable=False,
+        dt_s=RELEASE_DT_S,
+        compiled=compiled,
     )
     unit = twin.chain.solve_static(tip_force_n=[[0.0, 1e-3]]).tip_m[0, 1] - twin.chain.solve_static().tip_m[0, 1]
     force = 1e-3 * deflection / unit
