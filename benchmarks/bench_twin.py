@@ -207,6 +207,30 @@ def bench_pyelastica(n_elements: int = 80) -> list[dict]:
     ]
 
 
+def bench_read_at(sim_seconds: float = 5.0, read_hz: float = 1000.0, repeats: int = 3) -> dict:
+    """:func:`bench_realtime`'s 1 kHz release test read by ``Twin.read_at`` (the reads between two grid points
+    together; the same numbers as the loop, tests/twin/test_twin.py) instead of ``advance`` + ``read`` each."""
+    from flexdigit.twin import Twin
+
+    times = np.arange(1, int(round(sim_seconds * read_hz)) + 1) / read_hz
+
+    def run() -> float:
+        twin = Twin(seed=0, cable=False)
+        twin.deflect(0.05)
+        start = time.perf_counter()
+        twin.read_at(times)
+        return time.perf_counter() - start
+
+    elapsed = min(run() for _ in range(repeats))
+    return {
+        "name": f"twin real-time factor, release, read at {read_hz:g} Hz by Twin.read_at",
+        "value": sim_seconds / elapsed,
+        "unit": "x",
+        "goal": "",
+        "note": f"{sim_seconds:g} s in {elapsed:.3f} s (best of {repeats}); the same readings as advance + read",
+    }
+
+
 def run() -> list[dict]:
     """All twin benchmarks (``python -m benchmarks bench_twin``)."""
     return [
@@ -215,6 +239,7 @@ def run() -> list[dict]:
         bench_realtime(scenario="release"),
         bench_realtime(scenario="square"),
         bench_realtime(5.0, 1000.0, scenario="release"),
+        bench_read_at(),
         *bench_static(),
         *bench_pyelastica(),
     ]
