@@ -21,6 +21,7 @@ from flexdigit.twin.calibration import default_calibration
 
 WN_RTOL = 1e-3  # the default calibration's fit residual on table 3.2 is < 1e-5
 KINEMATIC_RTOL = 2e-3  # a 1e9 N/m cable pins the tip to r_M theta / e
+GM_RTOL = 1e-12  # gain_margin_frd against python-control's stability_margins: the same arithmetic
 BAYES_RTOL = 0.1  # report chapter 6: Bayes position limit 2.6 mm (3 cells per section; the metric uses 9)
 
 
@@ -66,6 +67,44 @@ def test_gain_margin_is_where_the_loop_goes_unstable():
     plant = loop_plant(ps, design.period_s, design.delay_samples)
     radius = [np.max(np.abs(closed_loop(plant, design.controller, gain=g).poles())) for g in (0.98 * gm, 1.02 * gm)]
     assert radius[0] < 1 < radius[1]
+
+
+def _random_discrete_loops(count, seed):
+    """Seeded discrete SISO loops (3-6 stable poles, 0-3 zeros, a sample or two of delay, gains 0.2-20): the
+    phase crosses -180 degrees once, many times or never, the margin is above or below 1."""
+    import control as ct
+
+    rng = np.random.default_rng(seed)
+    loops = []
+    for _ in range(count):
+        poles = rng.uniform(0.2, 0.97, rng.integers(3, 7)) * np.exp(1j * rng.uniform(0, 1.2, 1))
+        zeros = rng.uniform(-0.9, 0.9, rng.integers(0, 4))
+        den = np.real(np.poly(np.concatenate([poles[:-1], [abs(poles[-1])]])))
+        num = np.real(np.poly(zeros)) * rng.uniform(0.2, 20) * abs(np.polyval(den, 1.0))
+        delay = [1.0] + [0.0] * int(rng.integers(1, 3))
+        loops.append(ct.ss(ct.tf(num, den, 0.02) * ct.tf([1.0], delay, 0.02)))
+    return loops
+
+
+def test_gain_margin_frd_is_python_controls_stability_margins():
+    # the hand-written gain margin against python-control's stability_margins(method="frd") itself (its first
+    # output): the same spline, crossings and choice, so equal to rounding; on the rig's loop and on seeded loops
+    import control as ct
+
+    from flexdigit.studies.metrics import _quiet, gain_margin_frd
+
+    ps = ParameterSet()
+    design = design_20ms(RigParams(), deg_per_command=rotation_gain_deg_per_command(ps, MetricContext()))
+    plant = loop_plant(ps, design.period_s, design.delay_samples)
+    k = design.controller
+    rig_loop = -ct.ss(k.A, k.B[:, 1:2], k.C, k.D[:, 1:2], design.period_s) * plant
+    margins = []
+    for loop in [rig_loop, *_random_discrete_loops(12, seed=3)]:
+        with _quiet():
+            ours, theirs = gain_margin_frd(loop), ct.stability_margins(loop, method="frd")[0]
+        assert ours == pytest.approx(theirs, rel=GM_RTOL, abs=0.0) or ours == theirs == math.inf
+        margins.append(ours)
+    assert any(m < 1 for m in margins) and any(1 < m < math.inf for m in margins)  # both sides of 1 were tested
 
 
 def test_loop_settles_and_degrades_with_a_slower_servo():
