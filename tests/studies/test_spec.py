@@ -74,6 +74,42 @@ delta = 1e-3
     assert ps.params.geometry.gauge_positions_m == (0.0455, 0.135, 0.225)
 
 
+def test_rows_reusing_sections_equal_rows_built_from_scratch():
+    # parameter_set remembers rebuilt sections (a Saltelli row repeats most of another row's): every row of a
+    # seeded design equals the baseline rebuilt field by field with dataclasses.replace, with no memory involved
+    import dataclasses
+
+    spec = load_spec("thesis-tolerances")
+    rng = np.random.default_rng(7)
+    base = rng.uniform(0.05, 0.95, (6, len(spec.parameters)))
+    rows = [base[0], base[1]] + [np.where(np.arange(base.shape[1]) == j, base[1], base[0]) for j in range(6)]
+    rows += rows[:3]  # rows seen before, as Saltelli's A and B recur
+    for row in spec.values_from_unit(np.array(rows)):
+        ps = spec.parameter_set(row)
+        params, cal = spec.baseline.params, spec.baseline.calibration
+        for p, value in zip(spec.parameters, row, strict=True):
+            if p.section == "calibration":
+                current = getattr(cal, p.field)
+                new = tuple(v * value for v in current) if p.is_factor else value
+                cal = dataclasses.replace(cal, **{p.field: new})
+            else:
+                section = getattr(params, p.section)
+                current = getattr(section, p.field)
+                if p.is_factor:
+                    new = tuple(v * value for v in current)
+                elif p.element is not None:
+                    new = tuple(value if k == p.element else v for k, v in enumerate(current))
+                else:
+                    new = value
+                params = dataclasses.replace(params, **{p.section: dataclasses.replace(section, **{p.field: new})})
+        assert ps.params == params and ps.calibration == cal
+    # a refused value is refused every time it comes (an error is never remembered as a section)
+    bad = dict(zip(spec.names, spec.values_from_unit(base[:1])[0], strict=True)) | {"material.youngs_modulus_pa": -1}
+    for _ in range(2):
+        with pytest.raises(ParameterError, match="youngs_modulus_pa"):
+            spec.parameter_set(bad, label="row 9")
+
+
 BAD = {
     "unknown field": (
         "[parameters.geometry.strip_thicknes_m]\ndistribution = 'uniform'\nrelative = 0.1\n",

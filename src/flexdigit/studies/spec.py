@@ -60,6 +60,7 @@ import json
 import math
 import tomllib
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -257,6 +258,8 @@ def apply_values(baseline: ParameterSet, parameters, values: dict, label: str) -
 
     Only the sections a parameter touches are rebuilt (``dataclasses.replace``), so their own validation runs and
     the rest is reused: a few hundred microseconds a row, not the milliseconds of a round trip through a dict.
+    A section rebuilt with the same values as a recent row is that row's (frozen, already validated): in a
+    Saltelli design most rows move one parameter, so most of their sections repeat another row's.
     """
     changes: dict[str, dict] = {}
     for p in parameters:
@@ -276,15 +279,21 @@ def apply_values(baseline: ParameterSet, parameters, values: dict, label: str) -
     try:
         calibration = baseline.calibration
         if "calibration" in changes:
-            calibration = dataclasses.replace(calibration, **changes.pop("calibration"))
+            calibration = _replaced(calibration, tuple(changes.pop("calibration").items()))
         sections = {}
         for where, kw in changes.items():
-            sections[where] = dataclasses.replace(getattr(baseline.params, where), **kw)
+            sections[where] = _replaced(getattr(baseline.params, where), tuple(kw.items()))
         where = "rig"
         params = dataclasses.replace(baseline.params, **sections) if sections else baseline.params
     except (ParameterError, DataFileError, TypeError) as exc:
         raise ParameterError(f"{label}: [{where}] {exc}") from None
     return ParameterSet(params, calibration, baseline.antagonist_pretension_n)
+
+
+@lru_cache(maxsize=4096)
+def _replaced(section, changes: tuple):
+    """``dataclasses.replace(section, **dict(changes))``, remembered (a refused value raises and is not)."""
+    return dataclasses.replace(section, **dict(changes))
 
 
 # --------------------------------------------------------------------------------------------------- reading
