@@ -11,6 +11,7 @@ from flexdigit.twin.twin import cable_shortening_m, cached_digit
 
 PSI_ATOL = 1e-9  # rad: the same arithmetic in another order
 STATIC_ATOL = 1e-10
+ASSEMBLY_RTOL = 1e-14  # BatchedChains.from_rigs against a Chain per rig: the same products, stacked
 
 CAL = default_calibration()
 RIGS = [
@@ -64,6 +65,63 @@ def test_statics_and_modes_match_each_chain():
     for i, ch in enumerate(chains):
         w, z = ch.linear_modes()
         assert wn[i] == pytest.approx(w[0], rel=1e-10) and zeta[i] == pytest.approx(z[0], rel=1e-8)
+
+
+def _seeded_rigs(count, seed):
+    """Rigs drawn around the thesis rig (seeded): modulus, density, thickness, eccentricity, size, gauge places,
+    housing stiffness and mass (none on some), support masses, damping, cable: several layouts in one batch."""
+    rng = np.random.default_rng(seed)
+    rigs = []
+    for _ in range(count):
+        size = rng.choice([0.8, 1.0, 1.0, 1.2])
+        geo = Geometry(
+            section_length_m=0.080 * size,
+            digit_length_m=0.270 * size,
+            strip_length_m=0.240 * size,
+            strip_thickness_m=rng.uniform(0.36e-3, 0.40e-3),
+            cable_eccentricity_m=rng.uniform(5e-3, 6.5e-3),
+            gauge_positions_m=tuple(size * np.array([0.045, 0.135, 0.225]) + rng.choice([0.0, 1e-3])),
+        )
+        mat = Material(youngs_modulus_pa=rng.uniform(190e9, 215e9), strip_density_kg_m3=rng.uniform(7700, 8000))
+        cal = CAL.replace(
+            housing_ei_n_m2=tuple(np.array(CAL.housing_ei_n_m2) * rng.uniform(0.8, 1.2, 3)),
+            housing_mass_kg=rng.choice([0.0, rng.uniform(0.005, 0.02)]),
+            support_mass_kg=tuple(np.array(CAL.support_mass_kg) * rng.uniform(0.9, 1.1, 3)),
+            strip_beta_s=CAL.strip_beta_s * rng.uniform(0.5, 2.0),
+            cable_stiffness_n_m=CAL.cable_stiffness_n_m * rng.uniform(0.5, 2.0),
+        )
+        rigs.append((RigParams(geometry=geo, material=mat), cal))
+    return rigs
+
+
+@pytest.mark.parametrize(
+    ("orientation", "housing", "pretension"), [("vertical", True, None), ("horizontal", False, 5.0)]
+)
+def test_from_rigs_is_the_batch_of_each_rigs_digit(orientation, housing, pretension):
+    # stacked assembly against the batch of build_digit chains it replaces: every matrix, the same numbers
+    from flexdigit.twin.digit import build_digit
+
+    rigs = _seeded_rigs(40, seed=11)
+    kw = {"housing": housing, "orientation": orientation, "cells_per_section": 3}
+    pre = None if pretension is None else np.where(np.arange(len(rigs)) % 3 == 0, 0.0, pretension)
+    anta = None if pre is None else pre > 0
+    ref = BatchedChains([build_digit(p, c, **kw) for p, c in rigs], pre, anta)
+    got = BatchedChains.from_rigs([p for p, _ in rigs], [c for _, c in rigs], **kw, pretension_n=pre, antagonist=anta)
+    for name in ("k", "c", "a", "ga", "gb", "e", "kc", "to_curvature", "link", "s0", "stiffness", "pre", "antagonist"):
+        np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=ASSEMBLY_RTOL, atol=0, err_msg=name)
+    assert got.bandwidth == ref.bandwidth
+    assert len({float(p.geometry.digit_length_m) for p, _ in rigs}) > 1  # several layouts were stacked
+    np.testing.assert_allclose(got.linear_modes()[0], ref.linear_modes()[0], rtol=ASSEMBLY_RTOL)
+
+
+def test_from_rigs_refuses_rigs_it_cannot_stack():
+    with pytest.raises(ValueError, match="one calibration per rig"):
+        BatchedChains.from_rigs([RigParams()] * 2, [CAL])
+    four = RigParams(geometry=Geometry(section_count=4, digit_length_m=0.36, strip_length_m=0.32))
+    with pytest.raises(ValueError, match="rig 1 has 12 springs"):
+        BatchedChains.from_rigs(
+            [RigParams(), four], [CAL, CAL.replace(housing_ei_n_m2=(0.005,) * 4, support_mass_kg=(0.01,) * 4)]
+        )
 
 
 def test_antagonist_adds_k_e2_at_the_tip_and_bends_both_ways():

@@ -173,13 +173,16 @@ def _chain(ps: ParameterSet, cells: int | None = None):
 def _chains(parameter_sets):
     """The parameter sets' digits (housed, tip up as designed, 2.2.4) on the batched twin, with their cables."""
     from flexdigit.twin.batched import BatchedChains
+    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION
 
+    rigs = ([ps.params for ps in parameter_sets], [ps.calibration for ps in parameter_sets])
+    options = {"housing": True, "orientation": "vertical", "cells_per_section": DEFAULT_CELLS_PER_SECTION}
     pre = [ps.antagonist_pretension_n for ps in parameter_sets]
     if all(p is None for p in pre):
-        return BatchedChains([_chain(ps) for ps in parameter_sets])
+        return BatchedChains.from_rigs(*rigs, **options)
     # a batch mixing one and two cables: a single cable is the pair with the second one never taut
-    return BatchedChains(
-        [_chain(ps) for ps in parameter_sets], [0.0 if p is None else p for p in pre], [p is not None for p in pre]
+    return BatchedChains.from_rigs(
+        *rigs, **options, pretension_n=[0.0 if p is None else p for p in pre], antagonist=[p is not None for p in pre]
     )
 
 

@@ -46,7 +46,7 @@ from flexdigit.errors import ParameterError
 from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
 from flexdigit.twin.calibration import Calibration, default_calibration
-from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState
+from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, chain_matrices, digit_arrays
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, DEFAULT_DT_S, cached_digit
 
 __all__ = ["BatchedChains", "BatchedTwin"]
@@ -75,19 +75,116 @@ class BatchedChains:
                     f"and {g} (same section count, cells per section and gauge count across the batch)"
                 )
         self.chains = list(chains)
-        self.size = len(chains)
-        self.n = n
-        self.k = np.stack([ch.k_psi for ch in chains])
-        self.c = np.stack([ch.c_psi for ch in chains])
-        self.a = np.stack([ch.a_mass for ch in chains])
         g_grav = np.stack([ch.g_gravity for ch in chains])
+        self._setup(
+            np.stack([ch.k_psi for ch in chains]),
+            np.stack([ch.c_psi for ch in chains]),
+            np.stack([ch.a_mass for ch in chains]),
+            g_grav,
+            np.array([ch.eccentricity for ch in chains]),
+            np.array([ch.cable_stiffness for ch in chains]),
+            np.stack([ch._psi_to_gauge_curvature for ch in chains]),
+            np.stack([ch.link_length_m for ch in chains]),
+            np.array([ch.joint_s_m[0] for ch in chains]),
+            np.stack([ch.stiffness for ch in chains]),
+            pretension_n,
+            antagonist,
+        )
+
+    @classmethod
+    def from_rigs(
+        cls,
+        params,
+        calibrations,
+        *,
+        housing: bool = True,
+        orientation: str = "vertical",
+        cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
+        pretension_n=None,
+        antagonist=None,
+    ) -> BatchedChains:
+        """``BatchedChains([build_digit(p, c, ...) for p, c in zip(params, calibrations)], ...)`` without a
+        :class:`~flexdigit.twin.digit.Chain` per rig: rigs whose springs, masses and gauges sit at the same places
+        (a study of stiffnesses, masses, damping, cables) share one chain's geometry, and their matrices are
+        assembled stacked (:func:`~flexdigit.twin.digit.chain_matrices`); the same numbers (tested), a tenth of the
+        time for thousands of rigs."""
+        params, calibrations = list(params), list(calibrations)
+        if not params or len(params) != len(calibrations):
+            raise ParameterError(
+                f"BatchedChains.from_rigs needs one calibration per rig (at least one). Got {len(params)} rigs and "
+                f"{len(calibrations)} calibrations instead."
+            )
+        rows = [
+            digit_arrays(p, c, housing=housing, orientation=orientation, cells_per_section=cells_per_section)
+            for p, c in zip(params, calibrations, strict=True)
+        ]
+        layouts: dict[tuple, list[int]] = {}
+        for i, r in enumerate(rows):
+            key = tuple(
+                np.asarray(r[name], dtype=float).tobytes()
+                for name in ("length_m", "joint_s_m", "cell_length_m", "mass_s_m", "gauge_s_m", "gravity_ab_m_s2")
+            )
+            layouts.setdefault(key, []).append(i)
+        first = Chain(**rows[0])
+        size, n = len(rows), first.n
+        k, c, a = (np.empty((size, n, n)) for _ in range(3))
+        g_grav = np.empty((size, n, 2))
+        to_curvature = np.empty((size,) + first._psi_to_gauge_curvature.shape)
+        link, s0 = np.empty((size, n)), np.empty(size)
+        for members in layouts.values():
+            template = first if members[0] == 0 else Chain(**rows[members[0]])
+            if template.n != n or template.gauge_s_m.size != first.gauge_s_m.size:
+                raise ParameterError(
+                    f"BatchedChains: rig {members[0]} has {template.n} springs and {template.gauge_s_m.size} gauges; "
+                    f"rig 0 has {n} and {first.gauge_s_m.size} (same section count, cells per section and gauge "
+                    "count across the batch)"
+                )
+            stack = {
+                name: check_array([rows[i][name] for i in members], name, "Chain", shape=(len(members), size_of), low=0)
+                for name, size_of in (
+                    ("joint_stiffness_nm_rad", n),
+                    ("joint_damping_nms_rad", n),
+                    ("mass_kg", template.mass_s_m.size),
+                    ("mass_inertia_kg_m2", template.mass_s_m.size),
+                )
+            }
+            k[members], c[members], a[members], g_grav[members] = chain_matrices(
+                template._d,
+                template._mass_lever,
+                template._mass_link,
+                stack["joint_stiffness_nm_rad"],
+                stack["joint_damping_nms_rad"],
+                stack["mass_kg"],
+                stack["mass_inertia_kg_m2"],
+                template.gravity,
+            )
+            to_curvature[members] = template._psi_to_gauge_curvature
+            link[members] = template.link_length_m
+            s0[members] = template.joint_s_m[0]
+        out = cls.__new__(cls)
+        out.chains = None
+        out._setup(
+            k,
+            c,
+            a,
+            g_grav,
+            check_array([r["cable_eccentricity_m"] for r in rows], "cable_eccentricity_m", "Chain", low=0),
+            check_array([r["cable_stiffness_n_m"] for r in rows], "cable_stiffness_n_m", "Chain", low=0),
+            to_curvature,
+            link,
+            s0,
+            np.array([r["joint_stiffness_nm_rad"] for r in rows]),
+            pretension_n,
+            antagonist,
+        )
+        return out
+
+    def _setup(self, k, c, a, g_grav, e, kc, to_curvature, link, s0, stiffness, pretension_n, antagonist) -> None:
+        self.size, self.n = k.shape[0], k.shape[1]
+        self.k, self.c, self.a = k, c, a
         self.ga, self.gb = g_grav[..., 0].copy(), g_grav[..., 1].copy()
-        self.e = np.array([ch.eccentricity for ch in chains])
-        self.kc = np.array([ch.cable_stiffness for ch in chains])
-        self.to_curvature = np.stack([ch._psi_to_gauge_curvature for ch in chains])
-        self.link = np.stack([ch.link_length_m for ch in chains])
-        self.s0 = np.array([ch.joint_s_m[0] for ch in chains])
-        self.stiffness = np.stack([ch.stiffness for ch in chains])
+        self.e, self.kc = e, kc
+        self.to_curvature, self.link, self.s0, self.stiffness = to_curvature, link, s0, stiffness
         # springs and dampers join neighbouring links: K and C are banded (the dynamics kernel skips the zeros)
         rows, cols = np.nonzero(np.any(self.k != 0, axis=0) | np.any(self.c != 0, axis=0))
         self.bandwidth = int(np.max(np.abs(rows - cols))) if rows.size else 0

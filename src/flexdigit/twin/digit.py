@@ -97,6 +97,21 @@ class StaticSolution:
     converged: bool = True
 
 
+def chain_matrices(d, mass_lever, mass_link, stiffness, damping, mass_kg, inertia, gravity):
+    """A chain's constant matrices ``(K, C, A, G)``: ``K = D^T diag(k) D``, ``C`` alike, the mass matrix's
+    ``A = L^T diag(m) L + diag(J)`` and the gravity forces ``G = L^T (m g)`` (n, 2), from the point masses' levers
+    ``L`` (P, n) and links. ``stiffness`` ... ``gravity`` may carry a leading axis: chains of one layout stacked
+    (:meth:`flexdigit.twin.batched.BatchedChains.from_rigs`), each the same numbers as its own :class:`Chain`."""
+    k = d.T @ (stiffness[..., :, None] * d)
+    c = d.T @ (damping[..., :, None] * d)
+    on = mass_link >= 0
+    j_diag = np.zeros(stiffness.shape)
+    np.add.at(j_diag.T, mass_link[on], inertia[..., on].T)  # the masses in order, as one chain adds them
+    a = mass_lever.T @ (mass_kg[..., :, None] * mass_lever) + j_diag[..., :, None] * np.eye(d.shape[0])
+    g = mass_lever.T @ (mass_kg[..., :, None] * gravity[..., None, :])
+    return k, c, a, g
+
+
 class Chain:
     """A clamped planar chain of rigid links and rotational springs (see the module docstring).
 
@@ -159,14 +174,18 @@ class Chain:
         # phi = D psi: relative joint angles from absolute link angles (the clamp link has angle 0)
         d = np.eye(n) - np.eye(n, k=-1)
         self._d = d
-        self.k_psi = d.T @ (self.stiffness[:, None] * d)
-        self.c_psi = d.T @ (self.damping[:, None] * d)
-        lever = self.levers(ms)  # (P, n)
-        link_of_mass = np.clip(np.searchsorted(s, ms, side="right") - 1, -1, n - 1)
-        j_diag = np.zeros(n)
-        np.add.at(j_diag, link_of_mass[link_of_mass >= 0], self.mass_inertia[link_of_mass >= 0])
-        self.a_mass = lever.T @ (self.mass_kg[:, None] * lever) + np.diag(j_diag)
-        self.g_gravity = lever.T @ (self.mass_kg[:, None] * self.gravity[None, :])  # (n, 2)
+        self._mass_lever = self.levers(ms)  # (P, n)
+        self._mass_link = np.clip(np.searchsorted(s, ms, side="right") - 1, -1, n - 1)
+        self.k_psi, self.c_psi, self.a_mass, self.g_gravity = chain_matrices(
+            d,
+            self._mass_lever,
+            self._mass_link,
+            self.stiffness,
+            self.damping,
+            self.mass_kg,
+            self.mass_inertia,
+            self.gravity,
+        )
         # weight beyond each gauge (for the axial force)
         self._mass_beyond_gauge = (ms[None, :] > self.gauge_s_m[:, None]) @ self.mass_kg
         self._gauge_interp = self._interpolation(self.gauge_s_m)
@@ -764,6 +783,18 @@ def build_digit(
     cells_per_section : int
         Springs per section.
     """
+    return Chain(
+        **digit_arrays(
+            params, calibration, housing=housing, orientation=orientation, cells_per_section=cells_per_section
+        )
+    )
+
+
+def digit_arrays(
+    params, calibration, *, housing: bool = True, orientation: str = "vertical", cells_per_section: int = 3
+) -> dict:
+    """The keyword arguments of :func:`build_digit`'s :class:`Chain`: springs, cells, masses, gauges, gravity, cable
+    (for chains stacked without building each one, :meth:`flexdigit.twin.batched.BatchedChains.from_rigs`)."""
     from flexdigit._validation import check_choice
 
     check_choice(orientation, "orientation", tuple(ORIENTATIONS), "build_digit")
@@ -812,18 +843,18 @@ def build_digit(
         mass_kg.append(np.full(s.size, calibration.housing_mass_kg / s.size))
         inertia.append(np.zeros(s.size))
     g = np.asarray(ORIENTATIONS[orientation]) * G_STANDARD_M_S2
-    return Chain(
-        length,
-        s,
-        stiffness,
-        damping,
-        h,
-        np.concatenate(mass_s),
-        np.concatenate(mass_kg),
-        np.concatenate(inertia),
-        gauge_s_m=geo.gauge_positions_m,
-        gravity_ab_m_s2=g,
-        cable_eccentricity_m=geo.cable_eccentricity_m,
-        cable_stiffness_n_m=calibration.cable_stiffness_n_m,
-        strip_axial_stiffness_n=mat.youngs_modulus_pa * geo.cross_section_m2,
-    )
+    return {
+        "length_m": length,
+        "joint_s_m": s,
+        "joint_stiffness_nm_rad": stiffness,
+        "joint_damping_nms_rad": damping,
+        "cell_length_m": h,
+        "mass_s_m": np.concatenate(mass_s),
+        "mass_kg": np.concatenate(mass_kg),
+        "mass_inertia_kg_m2": np.concatenate(inertia),
+        "gauge_s_m": geo.gauge_positions_m,
+        "gravity_ab_m_s2": g,
+        "cable_eccentricity_m": geo.cable_eccentricity_m,
+        "cable_stiffness_n_m": calibration.cable_stiffness_n_m,
+        "strip_axial_stiffness_n": mat.youngs_modulus_pa * geo.cross_section_m2,
+    }
