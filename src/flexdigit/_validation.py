@@ -81,13 +81,12 @@ def check_real(
         out = float(value)
     except OverflowError:  # an integer beyond a float's range (JSON allows any number of digits)
         out = math.inf if value > 0 else -math.inf
-    interval = _interval_text(low, high, low_open, high_open)
     if not math.isfinite(out):
-        _fail(name, owner, f"a finite real number{interval}", value, error)
-    if low is not None and (out < low or (low_open and out == low)):
-        _fail(name, owner, f"a real number{interval}", value, error)
-    if high is not None and (out > high or (high_open and out == high)):
-        _fail(name, owner, f"a real number{interval}", value, error)
+        _fail(name, owner, f"a finite real number{_interval_text(low, high, low_open, high_open)}", value, error)
+    if (low is not None and (out < low or (low_open and out == low))) or (
+        high is not None and (out > high or (high_open and out == high))
+    ):
+        _fail(name, owner, f"a real number{_interval_text(low, high, low_open, high_open)}", value, error)
     return out
 
 
@@ -114,17 +113,19 @@ def check_int(
     >>> check_int(43, "command", "ServoBoard", low=0, high=254)
     43
     """
-    interval = _interval_text(low, high, False, False)
-    if isinstance(value, bool):
-        _fail(name, owner, f"an integer{interval}", value, error)
-    if isinstance(value, Integral):
+    if isinstance(value, Integral) and not isinstance(value, bool):
         out = int(value)
-    elif isinstance(value, Real) and math.isfinite(float(value)) and float(value).is_integer():
+    elif (
+        isinstance(value, Real)
+        and not isinstance(value, bool)
+        and math.isfinite(float(value))
+        and float(value).is_integer()
+    ):
         out = int(value)
     else:
-        _fail(name, owner, f"an integer{interval}", value, error)
-    if (low is not None and out < low) or (high is not None and out > high):
-        _fail(name, owner, f"an integer{interval}", value, error)
+        out = None
+    if out is None or (low is not None and out < low) or (high is not None and out > high):
+        _fail(name, owner, f"an integer{_interval_text(low, high, False, False)}", value, error)
     return out
 
 
@@ -170,26 +171,28 @@ def check_array(
         out = np.array(value, dtype=float, copy=True)
     except (TypeError, ValueError):
         _fail(name, owner, "an array of real numbers", value, error)
-    got = out.tolist()
+
+    def fail(expected: str):  # the message (and the array as a list in it) only built for a value that fails
+        _fail(name, owner, expected, out.tolist(), error)
+
     if ndim is not None and out.ndim != ndim:
-        _fail(name, owner, f"a {ndim}-dimensional array", got, error)
+        fail(f"a {ndim}-dimensional array")
     if shape is not None:
         ok = out.ndim == len(shape) and all(s is None or s == n for s, n in zip(shape, out.shape, strict=True))
         if not ok:
-            text = "(" + ", ".join("any" if s is None else str(s) for s in shape) + ")"
-            _fail(name, owner, f"an array of shape {text}", got, error)
+            fail("an array of shape (" + ", ".join("any" if s is None else str(s) for s in shape) + ")")
     if min_length is not None and (out.ndim == 0 or out.shape[0] < min_length):
-        _fail(name, owner, f"an array of at least {min_length} values", got, error)
-    if finite and not np.all(np.isfinite(out)):
-        _fail(name, owner, "finite (no NaN or infinity)", got, error)
-    interval = _interval_text(low, high, low_open, high_open)
-    if increasing and out.size > 1 and not np.all(np.diff(out.ravel()) > 0):
-        _fail(name, owner, "strictly increasing" + (f" and{interval}" if interval else ""), got, error)
+        fail(f"an array of at least {min_length} values")
+    if finite and not np.isfinite(out).all():
+        fail("finite (no NaN or infinity)")
+    if increasing and out.size > 1 and not (np.diff(out.ravel()) > 0).all():
+        interval = _interval_text(low, high, low_open, high_open)
+        fail("strictly increasing" + (f" and{interval}" if interval else ""))
     with np.errstate(invalid="ignore"):
-        if low is not None and np.any((out < low) | ((out == low) if low_open else False)):
-            _fail(name, owner, f"an array with values{interval}", got, error)
-        if high is not None and np.any((out > high) | ((out == high) if high_open else False)):
-            _fail(name, owner, f"an array with values{interval}", got, error)
+        if (low is not None and ((out < low) | ((out == low) if low_open else False)).any()) or (
+            high is not None and ((out > high) | ((out == high) if high_open else False)).any()
+        ):
+            fail(f"an array with values{_interval_text(low, high, low_open, high_open)}")
     return out
 
 
@@ -255,13 +258,12 @@ def check_values(
     [8.0, 20.0]
     """
     kind = "integers" if integer else "finite real numbers"
-    interval = _interval_text(low, high, low_open, high_open)
-    expected = kind + interval + (f" {unit}" if unit and interval else "") + (f" ({note})" if note else "")
     try:
         out = np.array(value, dtype=float, copy=True)
     except (TypeError, ValueError):
         raise ParameterError(
-            f"The '{name}' parameter of {owner} must be {kind}{interval}. Got a value of type "
+            f"The '{name}' parameter of {owner} must be {kind}{_interval_text(low, high, low_open, high_open)}. "
+            f"Got a value of type "
             f"{type(value).__name__} that is not numeric instead."
         ) from None
     bad = ~np.isfinite(out)
@@ -272,7 +274,9 @@ def check_values(
             bad |= (out > high) | ((out == high) if high_open else False)
         if integer:
             bad |= out != np.round(out)
-    if np.any(bad):
+    if bad.any():
+        interval = _interval_text(low, high, low_open, high_open)
+        expected = kind + interval + (f" {unit}" if unit and interval else "") + (f" ({note})" if note else "")
         raise ParameterError(
             f"The '{name}' parameter of {owner} must be {expected}. Got {describe_values(out[bad])} instead."
         )
