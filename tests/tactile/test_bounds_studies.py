@@ -151,6 +151,39 @@ def test_twin_gauge_model_noise_is_white_when_relaxed_and_adds_friction_when_tau
     )
 
 
+def test_twin_gauge_model_solves_a_grid_once_for_its_voltages_and_noise(monkeypatch):
+    # the inversion asks for a grid's voltages, then its noise, and tares on a grid of no-load cases: one solve each,
+    # of the distinct cases only, with the numbers of a solve of every case (rounding: another batch size)
+    import flexdigit.twin.twin as twin
+    from flexdigit.tactile.bounds import TwinGaugeModel
+    from flexdigit.twin.calibration import default_calibration
+
+    cal = default_calibration()
+    rng = np.random.default_rng(3)
+    a, m = rng.uniform(0.0, 0.27, 40), rng.uniform(0.0, 0.05, 40)
+    a[:10], m[:10] = 0.0, 0.0  # ten identical no-load cases
+    c = np.full(40, 40)
+    cases = []
+    solve = twin.static_gauges_v
+    monkeypatch.setattr(
+        twin,
+        "static_gauges_v",
+        lambda mass, pos, *args, **kw: cases.append(np.size(mass)) or solve(mass, pos, *args, **kw),
+    )
+    model = TwinGaugeModel(calibration=cal)
+    volts, noise = model.gauges_v(a, m, c), model.noise_at(a, m, c)
+    assert cases == [31]  # 30 loaded + 1 no-load case, solved once for both
+    _, sol = solve(m, a, c, calibration=cal, adc=False, return_solution=True)
+    np.testing.assert_allclose(volts, solve(m, a, c, calibration=cal, adc=False), rtol=1e-12, atol=1e-15)
+    friction = twin.friction_sd_v(sol, calibration=cal)
+    np.testing.assert_allclose(noise, np.sqrt(np.array(cal.noise_white_v) ** 2 + friction**2), rtol=1e-9)
+    model.gauges_v(a, m, np.full(40, 50))  # another command: a solve of its own
+    assert cases == [31, 31]
+    model.calibration = cal.replace(cable_friction_ratio=2 * cal.cable_friction_ratio)  # other settings: solved anew
+    model.noise_at(a, m, c)
+    assert cases == [31, 31, 31]
+
+
 class OneGauge:
     """Gauge 1 reads ``slope * m * a`` (V), the others nothing; constant noise ``sigma``."""
 
