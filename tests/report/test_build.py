@@ -143,3 +143,21 @@ def test_worker_processes_run_on_the_calibration_of_the_caller(tmp_path, monkeyp
     document = json.loads((tmp_path / "report" / "results.json").read_text())
     assert [e["ours"] for e in document["entries"]] == [0.2, 0.2]
     assert document["calibration"] == "a test"
+
+
+def test_a_worker_runs_every_blas_and_openmp_library_on_one_thread():
+    # numpy, SciPy, slycot and scikit-learn each load their own OpenBLAS / OpenMP: those a chapter loads after the
+    # worker starts must be held to one thread too (two fight over the cores: a Cholesky ten times slower)
+    import ast
+    import subprocess
+
+    code = (
+        "from flexdigit.report.build import _worker_init; _worker_init(None)\n"
+        "import scipy.linalg, sklearn.gaussian_process, slycot\n"
+        "from threadpoolctl import threadpool_info\n"
+        "print(sorted({(i['internal_api'], i['num_threads']) for i in threadpool_info()}))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    pools = ast.literal_eval(out)  # a printed list of (api, threads) tuples
+    assert {api for api, _ in pools} >= {"openblas", "openmp"}  # the libraries are there to be checked
+    assert {threads for _, threads in pools} == {1}

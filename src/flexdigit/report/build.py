@@ -85,7 +85,12 @@ def reproduce(
     built = [done[n][0] for n in names if done[n][0] is not None]
     failed = {n: done[n][1] for n in names if done[n][1] is not None}
     seconds = {n: done[n][2] for n in names}
-    document = results_document(built, ctx, seconds={c.slug: done[n][2] for n, c in _pairs(names, done)})
+    document = results_document(
+        built,
+        ctx,
+        seconds={c.slug: done[n][2] for n, c in _pairs(names, done)},
+        cpu_seconds={c.slug: done[n][3] for n, c in _pairs(names, done)},
+    )
     with atomic_write(out / "results.json", "w", force=True) as fh:  # checked above: ours to replace
         fh.write(json.dumps(to_jsonable(document), indent=2) + "\n")
     with atomic_write(out / "index.html", "w", force=True) as fh:
@@ -121,18 +126,23 @@ HEADLINE = {
 STATUSES = ("match", "discrepancy", "new")
 
 
-def results_document(chapters: list[Chapter], ctx: ReportContext, seconds: dict[str, float] | None = None) -> dict:
+def results_document(
+    chapters: list[Chapter],
+    ctx: ReportContext,
+    seconds: dict[str, float] | None = None,
+    cpu_seconds: dict[str, float] | None = None,
+) -> dict:
     """What ``results.json`` holds: every entry, every table as numbers, the headline and per-chapter counts.
 
     ``{"flexdigit", "seed", "fast", "calibration", "counts", "headline", "chapters", "entries", "tables"}``:
     ``entries`` is the list of ``{key, section, thesis, ours, unit, rel_error, status, note}``; ``tables`` the list of
     ``{key, chapter, title, columns, rows}`` (cells are numbers, or strings for labels; NaN is null);
     ``headline`` the ``{key, figure}`` of :data:`HEADLINE` present; ``chapters`` each chapter's slug, title,
-    counts, numbers of tables and figures, and build seconds.
+    counts, numbers of tables and figures, and build seconds (wall, and CPU of its process: all its threads).
     """
     entries = [dict(asdict(e), chapter=c.slug) for c in chapters for e in c.entries]
     present = {e["key"] for e in entries}
-    seconds = seconds or {}
+    seconds, cpu_seconds = seconds or {}, cpu_seconds or {}
     return {
         "flexdigit": __version__,
         "seed": ctx.seed,
@@ -148,6 +158,7 @@ def results_document(chapters: list[Chapter], ctx: ReportContext, seconds: dict[
                 "tables": len(c.tables),
                 "figures": len(c.figures),
                 "seconds": seconds.get(c.slug),
+                "cpu_seconds": cpu_seconds.get(c.slug),
             }
             for c in chapters
         ],
@@ -177,14 +188,14 @@ EXPECTED_SECONDS = {
 }
 
 
-def _build_chapter(module_name: str, ctx: ReportContext) -> tuple[Chapter | None, str | None, float]:
-    """``(chapter, None, seconds)``, or ``(None, traceback, seconds)`` if it failed."""
-    start = time.perf_counter()
+def _build_chapter(module_name: str, ctx: ReportContext) -> tuple[Chapter | None, str | None, float, float]:
+    """``(chapter, None, seconds, cpu_seconds)``, or ``(None, traceback, seconds, cpu_seconds)`` if it failed."""
+    start, cpu = time.perf_counter(), time.process_time()
     try:
-        chapter = importlib.import_module(module_name).build(ctx)
-        return chapter, None, time.perf_counter() - start
+        chapter, error = importlib.import_module(module_name).build(ctx), None
     except Exception:  # a broken chapter must not hide the others; its traceback goes in the report
-        return None, traceback.format_exc(), time.perf_counter() - start
+        chapter, error = None, traceback.format_exc()
+    return chapter, error, time.perf_counter() - start, time.process_time() - cpu
 
 
 #: What a worker process keeps entered for its lifetime (the calibration the report runs on).
@@ -200,12 +211,20 @@ def _calibration_state():
     return None if source == "packaged" else (default_calibration(), source, default_fit_record())
 
 
+#: One thread for every BLAS and OpenMP runtime a chapter loads (numpy, SciPy, slycot and scikit-learn each bring
+#: their own): read when a library loads, so also for those loaded after :func:`_worker_init`.
+_ONE_THREAD = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
 def _worker_init(calibration_state) -> None:
-    # one BLAS thread per worker: the workers already use every core, and OpenBLAS threads fighting over them make
-    # small factorisations (SLICOT's) tens of times slower
+    # one BLAS thread per worker: the workers already use every core, and BLAS threads fighting over them make
+    # factorisations ten times slower (a 500 x 500 Cholesky: 6 ms on one thread, 70 ms on two here)
+    import os
+
     from threadpoolctl import threadpool_limits
 
-    threadpool_limits(1)
+    os.environ.update(_ONE_THREAD)  # the libraries not loaded yet (SciPy's, slycot's OpenBLAS; scikit-learn's OpenMP)
+    threadpool_limits(1)  # those already loaded (numpy's OpenBLAS)
     if calibration_state is not None:  # the parent's use_calibration block, for every chapter of this worker
         from flexdigit.twin.calibration import use_calibration
 
@@ -224,7 +243,7 @@ def _build_in_processes(names, ctx: ReportContext, workers: int, progress) -> di
             try:
                 done[name] = future.result()
             except Exception:  # the worker died (out of memory, killed): say so in the report
-                done[name] = (None, traceback.format_exc(), float("nan"))
+                done[name] = (None, traceback.format_exc(), float("nan"), float("nan"))
             if progress is not None:
                 progress(name)
     return done
@@ -325,10 +344,10 @@ def _front_page(chapters: list[Chapter], failed: dict[str, str], ctx: ReportCont
         ),  # fmt: skip
         "<h2 id='chapters'>Chapters</h2>",
         _table_html(
-            ["chapter", *STATUSES, "tables", "figures", "seconds"],
+            ["chapter", *STATUSES, "tables", "figures", "seconds", "CPU seconds"],
             [
                 [_Link(c["slug"], c["title"]), *(c["counts"][s] for s in STATUSES)]
-                + [c["tables"], c["figures"], c["seconds"]]
+                + [c["tables"], c["figures"], c["seconds"], c["cpu_seconds"]]
                 for c in document["chapters"]
             ],
         ),
