@@ -171,20 +171,20 @@ def _counts(entries) -> dict[str, int]:
     return {s: sum(e["status"] == s for e in entries) for s in STATUSES}
 
 
-#: Relative cost of each chapter (its seconds in one full run, 2 workers, on a busy 2-core machine): only the order
+#: Relative cost of each chapter (its seconds in one full run, 2 workers, on a quiet 2-core machine): only the order
 #: in which chapters are handed to the worker processes (longest first, so that no long chapter starts last), never
 #: their numbers. A chapter not listed counts as a short one.
 EXPECTED_SECONDS = {
-    "flexdigit.report.ch7_tactile": 81.0,
-    "flexdigit.report.ch6_tactile": 76.0,
-    "flexdigit.report.ch8_studies": 28.0,
-    "flexdigit.report.ch4_control": 20.0,
-    "flexdigit.report.ch8_palpation": 20.0,
-    "flexdigit.report.ch3_identify": 19.0,
-    "flexdigit.report.ch6_7_noise": 14.0,
-    "flexdigit.report.ch3_twin": 13.0,
-    "flexdigit.report.ch5_digital": 12.5,
-    "flexdigit.report.ch3_models": 4.2,
+    "flexdigit.report.ch7_tactile": 27.5,
+    "flexdigit.report.ch6_tactile": 26.0,
+    "flexdigit.report.ch6_7_noise": 10.1,
+    "flexdigit.report.ch4_control": 7.9,
+    "flexdigit.report.ch8_palpation": 6.5,
+    "flexdigit.report.ch5_digital": 5.3,
+    "flexdigit.report.ch8_studies": 5.3,
+    "flexdigit.report.ch3_identify": 4.4,
+    "flexdigit.report.ch3_twin": 2.7,
+    "flexdigit.report.ch3_models": 2.5,
 }
 
 
