@@ -182,6 +182,7 @@ class TwinGaugeModel:
         self.cells_per_section = DEFAULT_CELLS_PER_SECTION if cells_per_section is None else cells_per_section
         self.noise_v = np.asarray(self.calibration.noise_white_v, dtype=float)
         self.drift_v_per_sqrt_s = np.asarray(self.calibration.noise_drift_v_per_sqrt_s, dtype=float)
+        self._kept: dict[tuple, dict] = {}  # the last static solves (_static)
 
     def __repr__(self) -> str:
         return f"TwinGaugeModel(orientation={self.orientation!r}, noise_v={self.noise_v.tolist()})"
@@ -221,7 +222,7 @@ class TwinGaugeModel:
 
         settings = (self.params, self.calibration, self.orientation, self.cells_per_section)
         key = (int(command), a.tobytes(), m.tobytes())
-        kept = self.__dict__.setdefault("_kept", {})
+        kept = self._kept
         hit = kept.get(key)
         if hit is None or any(x is not y for x, y in zip(hit["settings"], settings, strict=True)):
             cases = np.column_stack([a, m])
