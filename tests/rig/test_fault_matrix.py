@@ -5,8 +5,8 @@ serial port with its gauges from a Python source (``serial``) or from the DAQ ca
 (``serial+daq``: ``serial://PORT?daq=0``, the thesis rig, with a fake port and a fake uldaq) or from a
 microcontroller's gauge stream (``serial+stream``: ``serial://PORT?daq=stream://PTY``, the stream emulator on a
 pseudo-terminal, on the wall clock); and a recorded run played back (``replay``). A bare ``stream://`` rig reads
-only: it refuses the loop's first command (tests/rig/test_stream_backend.py). Faults are injected at the 6th sample
-of a 20 ms loop:
+only: it refuses the loop's first command (tests/rig/backends/test_stream_backend.py). Faults are injected at the
+6th sample of a 20 ms loop:
 
 - port lost: the serial port's writes fail (USB unplugged); the safe command cannot go out, the port is closed;
 - DAQ silent: the gauge source raises (a dead card) or blocks for a second (a stall); a recording that ends; a
@@ -171,7 +171,7 @@ def _recording(path, fault):
 def _stream(fault, port, request):
     """``serial://fake?daq=stream://PTY``: the emulator streams volts that follow the servo's last command; at the
     6th read of the loop the fault is switched on in the emulator (it then stops, garbles or sends the rail)."""
-    from flexdigit.rig.stream_emulator import Faults, StreamEmulator
+    from flexdigit.rig.backends.stream_emulator import Faults, StreamEmulator
 
     state = {"rail": False}
 

@@ -1,1 +1,1 @@
-"""The surgeon's view: the live page and its server, and the ``shape`` command (thesis 1.1, 8)."""
+"""The surgeon's view: the live page and its server (thesis 1.1, 8)."""

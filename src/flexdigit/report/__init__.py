@@ -1,7 +1,8 @@
 """The reproduce-the-thesis report: every chapter's figures beside the thesis's, as HTML and ``results.json``.
 
 :data:`CHAPTERS` lists the chapter modules in reading order; each exposes ``build(ctx) -> Chapter`` and only turns
-a library study (each domain's ``studies.py``) into entries, tables and figures. The chapters are independent and
+a library study (each domain's module of chapter studies, e.g. ``control/chapter4_studies.py``) into entries,
+tables and figures. The chapters are independent and
 are built in parallel processes (:func:`flexdigit.report.build.reproduce`). The report only reads the rest of the
 package; nothing imports it.
 """

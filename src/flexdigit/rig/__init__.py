@@ -1,1 +1,1 @@
-"""The Rig interface and its backends (sim, serial, daq, replay) and the real-time loop (thesis chapter 5)."""
+"""The rig (thesis chapter 5): the Rig contract, the real-time loop, its log, safety; the backends in ``backends/``."""

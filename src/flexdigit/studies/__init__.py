@@ -5,7 +5,8 @@
 - :mod:`~flexdigit.studies.metrics`: the registry of scalar outputs of a parameter set;
 - :mod:`~flexdigit.studies.sensitivity`: Morris screening and Sobol indices (SALib) with intervals and a
   convergence check;
-- :mod:`~flexdigit.studies.design`: the design study (gauges, bridge, ADC, servo, cable, size) and its Pareto front;
+- :mod:`~flexdigit.studies.design_study`: the design study (gauges, bridge, ADC, servo, cable, size) and its Pareto
+  front;
 - :mod:`~flexdigit.studies.execution`: evaluation on Dask distributed (or in process), seeded, resumable.
 
 This domain sits above tactile in the import chain: it reads the twin, control and tactile; nothing but the report
@@ -15,7 +16,7 @@ imports it.
 from flexdigit._lazy import lazy_exports
 
 #: Public names and their submodules, imported on first use (PEP 562): the command line imports
-#: ``flexdigit.studies.commands`` to build its parser, which must not load scipy (issue 15's start-up).
+#: ``flexdigit.cli.study`` to build its parser, which must not load scipy (issue 15's start-up).
 __getattr__, __all__ = lazy_exports(
     __name__,
     {

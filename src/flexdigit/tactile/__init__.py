@@ -1,1 +1,1 @@
-"""Tactile sensing (thesis chapters 6-7): protocols, datasets, estimators, metrics and the thesis pipeline."""
+"""Tactile sensing (thesis chapters 6-7): the thesis's load localisation: protocols, datasets, estimators, accuracy."""

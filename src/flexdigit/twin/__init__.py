@@ -10,7 +10,7 @@
 from flexdigit._lazy import lazy_exports
 
 #: Public names and the submodule each lives in: imported on first use (PEP 562), so that importing a submodule
-#: (``flexdigit.twin.commands`` for ``flexdigit --help``) does not load python-control and scipy.
+#: (``flexdigit.cli.simulate`` for ``flexdigit --help``) does not load python-control and scipy.
 __getattr__, __all__ = lazy_exports(
     __name__,
     {
