@@ -7,7 +7,7 @@ import json
 import pytest
 
 from flexdigit.cli import main
-from flexdigit.rig.loop import read_log
+from flexdigit.rig.sample_log import read_log
 
 pytestmark = pytest.mark.slow
 

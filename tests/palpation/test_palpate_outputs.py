@@ -11,7 +11,7 @@ import pytest
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError
 from flexdigit.palpation.palpation_files import MAX_SERIES, load_palpation_protocol
-from flexdigit.rig.loop import read_log_runs
+from flexdigit.rig.sample_log import read_log_runs
 
 #: The shortest palpation there is: a 0.1 s force hold (after the 1 s tare) on the twin.
 HOLD = "[force]\nsetpoint_n = 0.2\nduration_s = 0.1\n"

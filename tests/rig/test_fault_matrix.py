@@ -33,7 +33,8 @@ import numpy as np
 import pytest
 
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.loop import read_log_runs, run_loop
+from flexdigit.rig.loop import run_loop
+from flexdigit.rig.sample_log import read_log_runs
 
 from .conftest import PI, FakeClock
 
@@ -241,16 +242,16 @@ def _open(backend, fault, tmp_path, request=None):
 
 def _full_disk(monkeypatch, after_lines=FAULT_AT + 1):
     """The log's file refuses writes (ENOSPC) after the header and the first samples."""
-    import flexdigit.rig.loop as loop
+    from flexdigit.rig.sample_log import SampleLog
 
-    original = loop.SampleLog.write
+    original = SampleLog.write
 
     def write(self, record):
         if self.lines >= after_lines:
             raise OSError(errno.ENOSPC, "No space left on device")
         original(self, record)
 
-    monkeypatch.setattr(loop.SampleLog, "write", write)
+    monkeypatch.setattr(SampleLog, "write", write)
 
 
 #: the cells that apply (the README's table shows the others as "n/a" with NOT_APPLICABLE's reason)

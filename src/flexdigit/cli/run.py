@@ -116,8 +116,9 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit._validation import check_real
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
-    from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, check_appendable, realtime_priority, run_loop
+    from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
     from flexdigit.rig.safety import RunawayGuard
+    from flexdigit.rig.sample_log import check_appendable
     from flexdigit.rig.step_test import step_metrics
 
     if args.controller not in CONTROLLERS:

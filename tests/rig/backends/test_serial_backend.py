@@ -15,7 +15,8 @@ from flexdigit.errors import ParameterError, RigError
 from flexdigit.rig.backends.serial_backend import SerialRig
 from flexdigit.rig.backends.servo_board import FrameDecoder, Framing
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.loop import read_log, run_loop
+from flexdigit.rig.loop import run_loop
+from flexdigit.rig.sample_log import read_log
 
 from ..conftest import PI, FakeClock
 

@@ -25,7 +25,8 @@ from flexdigit.rig.backends.stream_backend import StreamRig, StreamSource
 from flexdigit.rig.backends.stream_emulator import Faults, StreamEmulator
 from flexdigit.rig.backends.stream_framing import LineDecoder, crc16_xmodem, decode_line, encode_line
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.loop import read_log, run_loop
+from flexdigit.rig.loop import run_loop
+from flexdigit.rig.sample_log import read_log
 from oracles import eventually
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="needs os.openpty")

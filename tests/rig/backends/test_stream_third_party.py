@@ -424,7 +424,7 @@ def test_run_on_a_third_party_board_ends_in_the_safe_state_when_the_stream_fails
     board, hand_made_map, tmp_path, capsys, damage, match
 ):
     from flexdigit.cli import main
-    from flexdigit.rig.loop import read_log
+    from flexdigit.rig.sample_log import read_log
 
     servo = ServoBoard()
     # the board's gauges follow the servo (1.7 deg a command through the hand-made map: 10 deg/V on each of three

@@ -1,4 +1,4 @@
-"""The replay backend: a recorded run played back as a rig: a JSON-lines loop log (:mod:`flexdigit.rig.loop`) or
+"""The replay backend: a recorded run played back as a rig: a JSON-lines loop log (:mod:`flexdigit.rig.sample_log`) or
 an MCAP recording (:mod:`flexdigit.rig.recording`), told apart by the file's first bytes.
 
 :meth:`read` returns the recorded sample in force at the current replay time (sample and hold), time advances only
@@ -18,8 +18,8 @@ import numpy as np
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig, UrlOption
-from flexdigit.rig.loop import read_log
 from flexdigit.rig.recording import is_mcap, read_recording
+from flexdigit.rig.sample_log import read_log
 
 __all__ = ["ReplayRig", "from_url"]
 
