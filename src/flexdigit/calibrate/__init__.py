@@ -11,13 +11,16 @@ takes ``--calibration FILE``.
 
 from flexdigit._lazy import lazy_exports
 
-# loaded on first use: the command line imports flexdigit.cli.calibrate for every command, and the fit's
-# modules cost ~0.05 s of start-up that `flexdigit --help` or `model` should not pay
+#: Public names and the module each lives in, imported on first use (PEP 562): importing the package loads
+#: none of its modules, so `flexdigit --help` stays fast; `dir()` lists them all the same.
 __getattr__, __all__ = lazy_exports(
     __name__,
     {
         "CalibrationTargets": "flexdigit.calibrate.targets",
         "CalibrationResult": "flexdigit.calibrate.twin_fit",
         "calibrate": "flexdigit.calibrate.twin_fit",
+        "calibrate_to_thesis": "flexdigit.calibrate.twin_fit",
+        "Chapter3TwinStudy": "flexdigit.calibrate.chapter3_twin",
+        "chapter3_twin_study": "flexdigit.calibrate.chapter3_twin",
     },
 )

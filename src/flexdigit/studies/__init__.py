@@ -15,15 +15,28 @@ imports it.
 
 from flexdigit._lazy import lazy_exports
 
-#: Public names and their submodules, imported on first use (PEP 562): the command line imports
-#: ``flexdigit.cli.study`` to build its parser, which must not load scipy (issue 15's start-up).
+#: Public names and the module each lives in, imported on first use (PEP 562): importing the package loads
+#: none of its modules, so `flexdigit --help` stays fast; `dir()` lists them all the same.
 __getattr__, __all__ = lazy_exports(
     __name__,
     {
         "METRICS": "flexdigit.studies.metrics",
+        "Metric": "flexdigit.studies.metrics",
         "MetricContext": "flexdigit.studies.metrics",
-        "ParameterSet": "flexdigit.studies.spec",
+        "evaluate": "flexdigit.studies.metrics",
+        "register_metric": "flexdigit.studies.metrics",
+        "ParameterSet": "flexdigit.studies.parameter_set",
         "StudySpec": "flexdigit.studies.spec",
+        "UncertainParameter": "flexdigit.studies.spec",
         "load_spec": "flexdigit.studies.spec",
+        "SensitivitySettings": "flexdigit.studies.sensitivity",
+        "SensitivityResult": "flexdigit.studies.sensitivity",
+        "run_sensitivity": "flexdigit.studies.sensitivity",
+        "DesignSettings": "flexdigit.studies.design_study",
+        "DesignResult": "flexdigit.studies.design_study",
+        "run_design": "flexdigit.studies.design_study",
+        "run_study": "flexdigit.studies.execution",
+        "StepSchedule": "flexdigit.studies.batched_loop",
+        "step_responses": "flexdigit.studies.batched_loop",
     },
 )
