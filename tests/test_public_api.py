@@ -5,6 +5,7 @@ domain loads none of its modules (the command line's start-up)."""
 from __future__ import annotations
 
 import importlib
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -88,3 +89,16 @@ def test_importing_the_packages_loads_none_of_their_modules():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == ""
+
+
+def test_the_docs_examples_import_from_the_domain():
+    # a newcomer copies the README's imports: they show the public door, not a module behind it
+    root = Path(__file__).resolve().parents[1]
+    deep = re.compile(r"^\s*from flexdigit\.\w+\.\w+[\w.]* import ")
+    offenders = [
+        f"{path.name}:{number}: {line.strip()}"
+        for path in [root / "README.md", *sorted((root / "docs").glob("*.md"))]
+        for number, line in enumerate(path.read_text().splitlines(), 1)
+        if deep.match(line)
+    ]
+    assert not offenders, offenders

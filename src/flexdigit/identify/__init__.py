@@ -55,5 +55,7 @@ __getattr__, __all__ = lazy_exports(
         "average_runs": "flexdigit.identify.identification",
         "twin_identification": "flexdigit.identify.chapter3_identification",
         "noisy_records_study": "flexdigit.identify.chapter3_identification",
+        "Chapter3IdentifyStudy": "flexdigit.identify.chapter3_identification",
+        "chapter3_identify_study": "flexdigit.identify.chapter3_identification",
     },
 )

@@ -38,6 +38,7 @@ __getattr__, __all__ = lazy_exports(
         "HangInversion": "flexdigit.palpation.active",
         "HangPosterior": "flexdigit.palpation.active",
         "contact_study": "flexdigit.palpation.palpation_studies",
+        "classification_study": "flexdigit.palpation.palpation_studies",
         "stiffness_study": "flexdigit.palpation.palpation_studies",
         "scan_study": "flexdigit.palpation.palpation_studies",
         "force_study": "flexdigit.palpation.palpation_studies",

@@ -47,5 +47,8 @@ __getattr__, __all__ = lazy_exports(
         "LocalisationResult": "flexdigit.tactile.localisation",
         "localisation_study": "flexdigit.tactile.localisation",
         "run_experiment": "flexdigit.tactile.thesis_experiments",
+        "experiment_tables": "flexdigit.tactile.thesis_experiments",
+        "white_noise_scan": "flexdigit.tactile.thesis_experiments",
+        "friction_study": "flexdigit.tactile.thesis_experiments",
     },
 )
