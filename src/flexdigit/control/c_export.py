@@ -577,6 +577,7 @@ _HEADER_COMMON = """\
 #define {P}_COMMAND_EQ {u_eq_i}
 #define {P}_SETPOINT_SCALE {scale}
 #define {P}_FIXED_POINT {is_fixed}
+#define {P}_HAS_MEASURE {has_measure}
 /* update() return codes */
 #define {P}_OK 0
 #define {P}_FAULT_NONFINITE 1
@@ -631,6 +632,7 @@ def render_c(
         u_eq_i=int(round(spec.u_eq)),
         scale=_f32(spec.setpoint_scale),
         is_fixed=1 if fixed else 0,
+        has_measure=0 if spec.rotation is None else 1,
     )
     nx = max(n, 1)  # a zero-length array is not C99
     if fixed:
