@@ -8,8 +8,8 @@
  *   `flexdigit export controller`) on the gauges' rotation estimate and sets the servo pulse.
  * - Timer1, fast PWM (mode 14), 50 Hz, 0.5 us per tick: the servo pulse on OC1A (PB1, Uno pin 9), 1..2 ms for
  *   commands 0..254 (the serial servo board's range); 2000 ticks over that range.
- * - USART0 at BAUD: samples in flexdigit's stream protocol (`$seq,t_us,g1,g2,g3,command*CRC`, gauges as signed
- *   counts about the 2.5 V midpoint, the sixth field the command applied), information lines `# ...`.
+ * - USART0 at BAUD: samples in flexdigit's stream protocol (`$seq,t_us,g1,g2,g3,command*CRC`: the ADC counts
+ *   the period's update used, signed about the 2.5 V midpoint, and the command it applied), information lines `# ...`.
  *   From the host, one command a line: S<millideg> setpoint, M<0|1|2> mode (0 safe, 1 host commands,
  *   2 loop on the board), C<0..254> command (mode 1), F<0|1> safe action (0 relax, 1 hold), W heartbeat.
  * - Safety (checked every control period): host silent for HOST_TIMEOUT_MS (modes 1, 2), a gauge at an ADC rail
@@ -168,6 +168,8 @@ static uint8_t mode = MODE_SAFE;
 static uint8_t fault = FAULT_NONE;
 static uint8_t safe_hold = 0;
 static float setpoint_deg = 0.0f;
+static uint16_t sample_raw[3] = {MID_COUNT, MID_COUNT, MID_COUNT}; /* the ADC counts the last period used */
+static uint32_t sample_ms;
 static float rest_v[3];
 static uint8_t rest_n = 0;
 static float tare_deg = 0.0f; /* the rotation the map reads at rest, subtracted while the loop runs */
@@ -207,6 +209,8 @@ static void handle_line(const char *line)
             }
             tare_deg = fd_ctrl_measure(rest);
             fd_ctrl_reset(&ctrl, (float)command_now); /* bumpless: from the command in force */
+            snprintf(out, sizeof(out), "# tare %ld\r\n", (long)(tare_deg * 1.0e6f)); /* micro-degrees */
+            send_text(out);
         }
         if (value == MODE_SAFE) {
             enter_safe(FAULT_NONE);
@@ -241,7 +245,11 @@ static void control_period(void)
     for (i = 0; i < 4; i++) {
         raw[i] = adc_last[i];
     }
+    sample_ms = time_ms;
     sei();
+    for (i = 0; i < 3; i++) {
+        sample_raw[i] = raw[i]; /* what this period used: streamed, so the host sees the loop's own inputs */
+    }
     for (i = 0; i < 3; i++) {
         /* + half a count: the ADC truncates, so a count stands for the middle of its 4.9 mV step */
         g[i] = ((float)((int16_t)raw[i] - MID_COUNT) + 0.5f) * VOLTS_PER_COUNT;
@@ -290,18 +298,9 @@ static void control_period(void)
 static void stream_sample(uint16_t seq)
 {
     char line[FLEXDIGIT_STREAM_LINE_MAX];
-    uint16_t raw[3];
-    uint32_t t_ms;
-    uint8_t i;
-    int n;
-    cli();
-    for (i = 0; i < 3; i++) {
-        raw[i] = adc_last[i];
-    }
-    t_ms = time_ms;
-    sei();
-    n = flexdigit_format_line(line, seq, t_ms * 1000UL, (int32_t)raw[0] - MID_COUNT, (int32_t)raw[1] - MID_COUNT,
-                              (int32_t)raw[2] - MID_COUNT, 1, command_now);
+    int n = flexdigit_format_line(line, seq, sample_ms * 1000UL, (int32_t)sample_raw[0] - MID_COUNT,
+                                  (int32_t)sample_raw[1] - MID_COUNT, (int32_t)sample_raw[2] - MID_COUNT, 1,
+                                  command_now);
     send(line, n);
 }
 

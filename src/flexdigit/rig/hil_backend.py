@@ -59,6 +59,8 @@ MID_V = 2.5
 VOLTS_PER_COUNT = 5.0 / 1024.0
 #: The board's fault codes (firmware/flexdigit_board.c).
 FAULTS = {1: "host_timeout", 2: "adc_rail", 3: "rotation_bound", 4: "command_range", 5: "controller"}
+#: Stream samples kept in :attr:`HilRig.samples` (a day at 50 Hz would be 4 million: runs here are seconds).
+MAX_KEPT_SAMPLES = 200_000
 #: The host sends a heartbeat line if it has said nothing for this long (the board's timeout is 0.5 s).
 HEARTBEAT_S = 0.1
 
@@ -151,6 +153,12 @@ class HilRig(Rig):
         self._outbox = bytearray()
         self._last_said_s = 0.0
         self.latest = None  # the newest stream sample
+        #: every stream sample (the ADC counts each board period used, and the command it applied), up to a limit
+        self.samples: list = []
+        #: the rotation the board's map read at rest when its loop started (it subtracts it), deg
+        self.board_tare_deg = float("nan")
+        #: ``(index into samples, mode)`` at each mode change the board announced
+        self.mode_marks: list[tuple[int, int]] = []
         self.board_command = float("nan")
         self.faults: list[tuple[float, int, str]] = []
         self.info_lines: list[str] = []
@@ -223,11 +231,17 @@ class HilRig(Rig):
         for event in self._decoder.feed(uart):
             if event.kind == "sample":
                 self.latest = event.sample
+                if len(self.samples) < MAX_KEPT_SAMPLES:
+                    self.samples.append(event.sample)
             elif event.kind == "info":
                 self.info_lines = [*self.info_lines[-49:], event.text]
                 words = event.text.split()
                 if len(words) >= 3 and words[0] == "fault":
                     self.faults.append((self._time_s, int(words[1]), words[2]))
+                elif len(words) == 2 and words[0] == "mode":
+                    self.mode_marks.append((len(self.samples), int(words[1])))
+                elif len(words) == 2 and words[0] == "tare":
+                    self.board_tare_deg = int(words[1]) / 1e6
 
     def _advance(self, seconds: float) -> None:
         steps = int(round(seconds / self.step_s))
