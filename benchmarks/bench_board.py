@@ -58,8 +58,8 @@ def _update_cycles(elf: Path) -> int:
 
 
 def _step(elf: Path) -> dict:
+    from flexdigit.rig.backends.hil_backend import run_on_board
     from flexdigit.rig.base import open_rig
-    from flexdigit.rig.hil_backend import run_on_board
     from flexdigit.rig.step_test import step_metrics
 
     rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)

@@ -20,8 +20,8 @@ import subprocess
 import pytest
 
 from flexdigit.cli import main
+from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s, run_on_board
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.hil_backend import FAULTS, board_period_s, run_on_board
 
 #: The ATmega328P's flash (less the Uno's 512-byte bootloader) and RAM, bytes.
 FLASH_BYTES, RAM_BYTES = 32_256, 2_048
@@ -165,8 +165,8 @@ def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, fmt)
     computes from the same ADC counts (the board streams the counts its update used) through the same map."""
     from types import SimpleNamespace
 
-    from flexdigit.control.commands import _export_design
-    from flexdigit.rig.hil_backend import VOLTS_PER_COUNT
+    from flexdigit.cli.export import _export_design
+    from flexdigit.rig.backends.hil_backend import VOLTS_PER_COUNT
 
     elf = firmware(0.020, fmt)
     rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)
