@@ -16,7 +16,6 @@ sample, so each sample is compared on its own, from the same state:
 
 from __future__ import annotations
 
-import json
 import shutil
 import subprocess
 
@@ -333,25 +332,3 @@ def test_export_writes_both_files_and_never_overwrites(tmp_path, digital20):
     export_controller(spec, out, force=True)
     assert "float32" in (tmp_path / "ctrl.h").read_text()
     assert res.analysis.format == "fixed"
-
-
-def test_cli_export_controller(tmp_path):
-    from flexdigit.cli import main
-
-    out = tmp_path / "c.c"
-    assert main(["export", "controller", "--out", str(out), "--format", "fixed", "--no-rotation-map"]) == 0
-    assert main(["export", "controller", "--out", str(out), "--no-rotation-map"]) == 2  # exists: refused
-    code = main(
-        ["export", "controller", "--out", str(out), "--force", "--json", "--period-s", "0.005", "--no-rotation-map"]
-    )
-    assert code == 0
-    assert "5000UL" in (tmp_path / "c.h").read_text()
-
-
-def test_cli_export_json(tmp_path, capsys):
-    from flexdigit.cli import main
-
-    out = tmp_path / "c.c"
-    assert main(["export", "controller", "--out", str(out), "--json", "--no-rotation-map"]) == 0
-    doc = json.loads(capsys.readouterr().out)
-    assert doc["analysis"]["closed_loop_stable"] is True and doc["format"] == "float"
