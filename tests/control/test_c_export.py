@@ -212,6 +212,34 @@ def test_fixed_export_is_the_python_model_bit_for_bit(tmp_path, digital20):
         assert [u, model.u_raw_q, *model.x] == [int(v) for v in data[k, 1:]], f"sample {k}"
 
 
+def test_fixed_export_bit_for_bit_error_input_and_hysteresis(tmp_path):
+    """The other branches of the fixed-point code: one (error) input, no anti-windup, quantiser hysteresis, and
+    the input-range fault (|r - y| beyond the analysed range: the C refuses the sample, the model raises)."""
+    import dataclasses
+
+    spec = dataclasses.replace(ControllerSpec.from_runtime(thesis_controller("tustin", 0.005)), hysteresis=0.2)
+    fmt = fixed_format(spec, 0.3)
+    run = _build(tmp_path, spec, fmt)
+    rng = np.random.default_rng(5)
+    w = int(0.3 * 2**fmt.input_bits)
+    small = w // 3000  # 0.1 mm: commands inside 0..254, where the hysteresis decides
+    rq = [int(v) for v in rng.integers(-small, small, 500)] + [int(v) for v in rng.integers(-w // 2, w // 2, 500)]
+    yq = [int(v) for v in rng.integers(-small, small, 500)] + [int(v) for v in rng.integers(-w // 2, w // 2, 500)]
+    rq, yq = rq + [w, -w], yq + [-w, w]
+    data = run(zip(rq, yq, strict=True))
+    model = FixedPointController(spec, fmt)
+    for k, (a, c) in enumerate(zip(rq, yq, strict=True)):
+        if k >= 1000:  # |r - y| = 2 w: out of the analysed range
+            assert int(data[k, 0]) == 2
+            with pytest.raises(OverflowError):
+                model.update(a, c)
+            continue
+        u = model.update(a, c)
+        assert [0, u, model.u_raw_q, *model.x] == [int(v) for v in data[k]], f"sample {k}"
+    inside = data[:500, 1]
+    assert np.mean((inside > 0) & (inside < 254)) > 0.5  # the small inputs did keep the command in range
+
+
 def test_fixed_export_within_the_analysed_bound(tmp_path, digital20):
     d, spec = digital20
     fmt = fixed_format(spec, 180.0)
