@@ -28,6 +28,7 @@ def register(subparsers) -> None:
         _export_controller,
         help="write the discretised controller as one C99 file + header (float32 or fixed point) and analyse it",
     )
+    p.set_defaults(command_name="export controller")
     p.add_argument("--out", type=Path, required=True, help="the C source to write (the header goes beside it, .h)")
     p.add_argument("--design", default="digital20", help=f"one of {', '.join(EXPORT_DESIGNS)} (default digital20)")
     p.add_argument("--period-s", type=float, default=0.020, help="sample period, s (default 0.020)")

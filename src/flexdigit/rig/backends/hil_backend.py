@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -168,11 +169,12 @@ class HilRig(Rig):
         self._fault_seen = 0
         #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
         self.gauge_override: dict[int, float] = {}
+        self._stderr = tempfile.TemporaryFile(mode="w+")  # simavr's own messages: quoted if the harness stops
         self._proc = subprocess.Popen(
             [str(self.harness), str(self.elf)],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
-            stderr=subprocess.DEVNULL,
+            stderr=self._stderr,
             text=True,
             bufsize=1,
         )
@@ -215,7 +217,7 @@ class HilRig(Rig):
             raise RigError(f"hil://{self.elf}: the simavr harness failed ({exc})") from None
         parts = reply.split()
         if len(parts) < 8 or parts[0] != "P":
-            raise RigError(f"hil://{self.elf}: the simavr harness stopped (reply {reply.strip()!r})")
+            raise RigError(f"hil://{self.elf}: the simavr harness stopped ({self._harness_said() or 'no reply'})")
         pulse, self.pulses = int(parts[2]), int(parts[3])
         exec_last, self.exec_max_cycles, execs = int(parts[4]), int(parts[5]), int(parts[6])
         if execs > len(self.exec_cycles):
@@ -242,6 +244,16 @@ class HilRig(Rig):
                     self.mode_marks.append((len(self.samples), int(words[1])))
                 elif len(words) == 2 and words[0] == "tare":
                     self.board_tare_deg = int(words[1]) / 1e6
+
+    def _harness_said(self) -> str:
+        """The harness's last line on stderr (why it stopped), or ''."""
+        try:
+            self._proc.wait(timeout=2)
+            self._stderr.seek(0)
+            lines = [line.strip() for line in self._stderr.read().splitlines() if line.strip()]
+        except (OSError, subprocess.TimeoutExpired):
+            return ""
+        return lines[-1] if lines else ""
 
     def _advance(self, seconds: float) -> None:
         steps = int(round(seconds / self.step_s))
@@ -335,6 +347,7 @@ class HilRig(Rig):
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+        self._stderr.close()
 
     def stats(self) -> dict[str, Any]:
         return {
