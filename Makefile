@@ -54,7 +54,7 @@ $(BENCH_STAMP): $(STAMP)
 	$(PIP) install -c constraints.txt -e '.[dev,bench]'
 	@touch $(BENCH_STAMP)
 
-bench: $(BENCH_STAMP) browser
+bench: $(BENCH_STAMP) browser avr
 	$(BIN)/python -m benchmarks
 
 FUZZ_SEED ?= 0
