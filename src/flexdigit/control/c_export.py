@@ -853,11 +853,10 @@ def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
         "    return (int16_t)fl;",
         "}",
         "",
-        f"static int32_t {prefix}_to_q(float v, int bits)",
+        "/* v x 2^bits (scale is that power of two: the product is exact), rounded half away from zero */",
+        f"static int32_t {prefix}_to_q(float v, float scale)",
         "{",
-        "    float s = v;",
-        "    int b;",
-        "    for (b = 0; b < bits; b++) { s = s * 2.0f; }",
+        "    float s = v * scale;",
         "    return (int32_t)(s < 0.0f ? s - 0.5f : s + 0.5f);",
         "}",
         "",
@@ -868,12 +867,12 @@ def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
     pinv = spec.reset_state(spec.u_eq + 1.0) if n and np.any(spec.C) else np.zeros(n)
     for i in range(max(n, 1)):
         if i < n:
-            out.append(f"    c->x[{i}] = {prefix}_to_q({_f32(pinv[i])} * dev, {fmt.state_bits[i]});")
+            out.append(f"    c->x[{i}] = {prefix}_to_q({_f32(pinv[i])} * dev, {_f32(2.0 ** fmt.state_bits[i])});")
         else:
             out.append(f"    c->x[{i}] = 0;")
     out += [
-        f"    c->u_raw = {prefix}_to_q(command, {f});",
-        f"    c->last = {prefix}_round_q({prefix}_to_q(command, {f}));",
+        f"    c->u_raw = {prefix}_to_q(command, {_f32(2.0**f)});",
+        f"    c->last = {prefix}_round_q({prefix}_to_q(command, {_f32(2.0**f)}));",
         "    c->saturated = 0;",
         "}",
         "",
@@ -948,8 +947,8 @@ def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
         "    if (!(r <= w_max && r >= -w_max && y <= w_max && y >= -w_max)) {   /* also NaN */",
         f"        return {P}_FAULT_INPUT_RANGE;",
         "    }",
-        f"    return {prefix}_update_q(c, {prefix}_to_q(r, {fmt.input_bits}), {prefix}_to_q(y, {fmt.input_bits}), "
-        "command);",
+        f"    return {prefix}_update_q(c, {prefix}_to_q(r, {_f32(2.0**fmt.input_bits)}), "
+        f"{prefix}_to_q(y, {_f32(2.0**fmt.input_bits)}), command);",
         "}",
         "",
     ]
