@@ -159,8 +159,8 @@ COMMAND_MISMATCH_FRACTION = 0.02
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("fmt", ["float", "fixed"])
-def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, fmt):
+@pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.020, "fixed"), (0.005, "float")])
+def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, period_s, fmt):
     """The loop on the board, sample for sample: each period's command is what flexdigit's Python controller (float64)
     computes from the same ADC counts (the board streams the counts its update used) through the same map."""
     from types import SimpleNamespace
@@ -168,7 +168,7 @@ def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, fmt)
     from flexdigit.cli.export import _export_design
     from flexdigit.rig.backends.hil_backend import VOLTS_PER_COUNT
 
-    elf = firmware(0.020, fmt)
+    elf = firmware(period_s, fmt)
     rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)
     try:
         run_on_board(rig, 30.0, 3.0)
@@ -177,9 +177,9 @@ def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, fmt)
         rig.close()
     start = [i for i, mode in marks if mode == 2][0]
     board = samples[start:]
-    assert len(board) >= 140 and tare == tare  # 3 s of 20 ms periods; the board said its tare
-    runtime, _, rotation, _, _ = _export_design("digital20", 0.020, SimpleNamespace(no_rotation_map=False,
-                                                                                   rotation_map=None))  # fmt: skip
+    assert len(board) >= 0.95 * 3.0 / period_s and tare == tare  # every period streamed; the board said its tare
+    options = SimpleNamespace(no_rotation_map=False, rotation_map=None)
+    runtime, _, rotation, _, _ = _export_design("digital20", period_s, options)
     runtime.reset(8)
     mismatches = 0
     for sample in board:
