@@ -37,6 +37,7 @@ RANK = {
 #: Shared leaf modules every domain may use (they import no domain).
 SHARED = {
     "_validation",
+    "_constants",
     "_io",
     "_json",
     "_command",
@@ -223,3 +224,59 @@ def test_the_cycle_finder_itself():
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": set()}
     assert _cycles(graph) == [["a", "b", "c"]]
     assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+#: Names that must be defined once in the package (issue 23: two ConvergenceWarning classes and two step_figures
+#: once scored a step two ways), each with the module that holds the one definition.
+DEFINED_ONCE = {
+    "ConvergenceWarning": "flexdigit.errors",
+    "step_figures": "flexdigit.control.analysis",
+    "G_STANDARD_M_S2": "flexdigit._constants",
+}
+
+
+def _definitions(tree: ast.Module) -> dict[str, int]:
+    """Top-level classes, functions and module-level assigned names of a module -> line."""
+    out = {}
+    for node in tree.body:
+        if isinstance(node, (ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+            out[node.name] = node.lineno
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            out.update({t.id: node.lineno for t in targets if isinstance(t, ast.Name)})
+    return out
+
+
+def _gravity_literals(tree: ast.Module) -> list[int]:
+    """Lines where a number between 9.7 and 9.9 is given a name or made a parameter's default: a gravity of its
+    own (the docstrings' toy examples and tables of hints are neither)."""
+    values = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None:
+            values.append(node.value)
+        elif isinstance(node, ast.arguments):
+            values.extend(d for d in node.defaults + node.kw_defaults if d is not None)
+    return [
+        v.lineno for v in values if isinstance(v, ast.Constant) and isinstance(v.value, float) and 9.7 < v.value < 9.9
+    ]
+
+
+def test_one_definition_of_a_shared_constant_class_or_figure():
+    where: dict[str, list[str]] = {name: [] for name in DEFINED_ONCE}
+    gravities = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        module = _module_name(path)
+        tree = ast.parse(path.read_text(), filename=str(path))
+        for name in set(_definitions(tree)) & set(DEFINED_ONCE):
+            where[name].append(module)
+        if module != DEFINED_ONCE["G_STANDARD_M_S2"]:
+            gravities += [f"{module}:{line}" for line in _gravity_literals(tree)]
+    assert where == {name: [module] for name, module in DEFINED_ONCE.items()}, "import these, do not redefine them"
+    assert not gravities, f"gravity given a value of its own (import flexdigit._constants.G_STANDARD_M_S2): {gravities}"
+
+
+def test_the_definition_finders_themselves():
+    tree = ast.parse("G = 9.81\nclass ConvergenceWarning(UserWarning): pass\ndef f(g_m_s2=9.80665, *, k=1.0): pass")
+    assert _definitions(tree) == {"G": 1, "ConvergenceWarning": 2, "f": 3}
+    assert _gravity_literals(tree) == [1, 3]
+    assert _gravity_literals(ast.parse('HINTS = {"N": ((9.81, "kg"),)}\nx = 9.91')) == []

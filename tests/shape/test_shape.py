@@ -166,7 +166,7 @@ def test_bad_input_is_named(call, match):
 def test_unsettled_lever_arms_warn_in_estimate_but_not_in_the_map():
     import warnings
 
-    from sklearn.exceptions import ConvergenceWarning
+    from flexdigit.errors import ConvergenceWarning
 
     # one update of the lever arms cannot settle a free digit sagging under 25 g: estimate says so; the map,
     # which the live page computes in a thread of its own, must not touch the process's warning filters for it

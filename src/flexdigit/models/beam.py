@@ -34,6 +34,7 @@ from numbers import Real
 
 import numpy as np
 
+from flexdigit._constants import G_STANDARD_M_S2
 from flexdigit._validation import (
     Interval,
     Options,
@@ -134,7 +135,7 @@ class Cantilever:
         L = self.length_m
         return _out(load_n_per_m * x**2 * (x**2 - 4.0 * L * x + 6.0 * L**2) / (24.0 * self.ei_n_m2))
 
-    def self_weight_load_n_per_m(self, gravity_m_s2: float = 9.81) -> float:
+    def self_weight_load_n_per_m(self, gravity_m_s2: float = G_STANDARD_M_S2) -> float:
         """Self-weight per unit length, ``m g`` (N/m): the ``w`` of E 3.12 for a horizontal digit."""
         return self.mass_per_length_kg_m * gravity_m_s2
 

@@ -52,14 +52,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._constants import G_STANDARD_M_S2
 from flexdigit._validation import check_array, check_choice, check_int, check_real
-from flexdigit.errors import ParameterError
+from flexdigit.errors import ConvergenceWarning, ParameterError
 from flexdigit.params import RigParams
-
-try:  # scikit-learn's warning class, so one filter silences every flexdigit estimator's
-    from sklearn.exceptions import ConvergenceWarning
-except ImportError:  # pragma: no cover - scikit-learn is a dependency
-    ConvergenceWarning = UserWarning
 
 __all__ = [
     "DigitBeam",
@@ -73,7 +69,6 @@ __all__ = [
 
 #: What the load is: a weight (force along gravity), a press normal to the digit, or no load at all.
 LOAD_KINDS = ("weight", "press", "none")
-G_M_S2 = 9.80665
 
 
 def _cross(a, b):
@@ -179,7 +174,7 @@ class DigitBeam:
             gauge_inv_ei=inv_ei_at(gauges),
             mass_s_m=mass_s[order],
             mass_kg=np.concatenate([cell_mass, supports])[order],
-            gravity=np.asarray(ORIENTATIONS[orientation], dtype=float) * G_M_S2,
+            gravity=np.asarray(ORIENTATIONS[orientation], dtype=float) * G_STANDARD_M_S2,
             eccentricity_m=geo.cable_eccentricity_m,
             cable_stiffness_n_m=calibration.cable_stiffness_n_m,
             pulley_radius_m=a.pulley_radius_m,
@@ -319,7 +314,7 @@ class ShapeEstimate:
         """A weight's mass, ``force / g`` (kg; NaN for a press or without contact)."""
         if self.load_kind != "weight":
             return np.full(self.contact.shape, np.nan)
-        return self.load_force_n / G_M_S2
+        return self.load_force_n / G_STANDARD_M_S2
 
     def row(self, i: int = 0, every: int = 1) -> dict:
         """Reading ``i`` as plain numbers (JSON, the live page), every ``every``-th centre-line node and the tip."""
@@ -383,7 +378,7 @@ class ShapeEstimator:
         Chi-square of the chosen fit above which the readings are declared inconsistent with the model.
     max_iterations : int
         Most updates of the world-fixed forces' lever arms from the shape (large rotations); a
-        :class:`~sklearn.exceptions.ConvergenceWarning` says when they had not settled.
+        :class:`~flexdigit.errors.ConvergenceWarning` says when they had not settled.
     tol_rad : float
         The lever arms have settled when no tangent angle moved by more than this in an update (rad).
     ds_m : float

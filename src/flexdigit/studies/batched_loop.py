@@ -24,9 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexdigit._validation import check_real
+from flexdigit.control.analysis import step_figures
 from flexdigit.errors import DesignError
 
-__all__ = ["StepSchedule", "BatchedRuntime", "StepResponses", "step_responses", "step_figures", "step_figures_batch"]
+__all__ = ["StepSchedule", "BatchedRuntime", "StepResponses", "step_responses", "step_figures_batch"]
 
 
 @dataclass(frozen=True)
@@ -184,42 +185,12 @@ def step_responses(
     return StepResponses(np.arange(n_samples) * period, rotation, command, low, high, n_hold * period, schedule)
 
 
-def step_figures(t, y, band: float = 0.02) -> tuple[float, float]:
-    """2 % settling time (s) and overshoot (%) of a sampled step response settling to ``y[-1]``.
-
-    The settling time is interpolated between the last sample outside the band and the next, so it moves
-    continuously with the parameters instead of in whole 20 ms samples (``control.step_info`` returns a sample time).
-
-    Examples
-    --------
-    >>> t = np.arange(0, 30, 0.02)
-    >>> s, o = step_figures(t, 1 - np.exp(-t))
-    >>> round(s, 3), o                    # 1 - exp(-t) enters the 2 % band at ln 50 = 3.912 s
-    (3.912, 0.0)
-    """
-    final = float(y[-1])
-    err = np.abs(np.asarray(y, dtype=float) - final)
-    limit = band * abs(final)
-    outside = np.flatnonzero(err > limit)
-    if outside.size == 0:
-        settling = 0.0
-    else:
-        k = int(outside[-1])
-        if k + 1 >= len(t):
-            settling = math.inf
-        else:
-            frac = (err[k] - limit) / (err[k] - err[k + 1])
-            settling = float(t[k] + frac * (t[k + 1] - t[k]))
-    overshoot = max(0.0, 100.0 * (float(np.max(y)) - final) / abs(final)) if final else math.inf
-    return settling, overshoot
-
-
 def step_figures_batch(run: StepResponses, band: float = 0.02) -> dict[str, np.ndarray]:
     """Settling time (s, 2 % of the step as run, interpolated between samples), overshoot (%) and steady-state
     error (deg, mean of the last ``tail_s`` against the setpoint) of every run after its step.
 
-    The settling and overshoot are :func:`step_figures` of the rotation from its value
-    at the step to its final sample, as the linear metrics score the linear loop's step; the integer command's
+    The settling and overshoot are :func:`flexdigit.control.analysis.step_figures` of the rotation from its value
+    at the step, against its final sample, as the linear metrics score the linear loop's step; the integer command's
     offset shows in the steady-state error instead (the design holds it within half a quantum).
     """
 
@@ -235,6 +206,7 @@ def step_figures_batch(run: StepResponses, band: float = 0.02) -> dict[str, np.n
         if abs(moved[-1]) < 0.5 * run.schedule.step_deg:  # it never followed the step: no settling to speak of
             settling[i], overshoot[i] = math.inf, math.inf
         else:
-            settling[i], overshoot[i] = step_figures(t, moved, band)
+            figures = step_figures(t, moved, target=float(moved[-1]), band=band)
+            settling[i], overshoot[i] = figures.settling_time_s, figures.overshoot_percent
         error[i] = abs(float(np.mean(ya[tail])) - run.high_deg[i])
     return {"settling_time_s": settling, "overshoot_percent": overshoot, "steady_state_error_deg": error}

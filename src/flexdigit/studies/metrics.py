@@ -339,7 +339,9 @@ def _loop(ps: ParameterSet, ctx: MetricContext) -> dict:
     if np.max(np.abs(loop.poles())) >= 1.0:
         return {"settling_time_s": math.inf, "overshoot_percent": math.inf, "gain_margin": 0.0}
     t = np.arange(0.0, 10.0, design.period_s)
-    settling, overshoot = step_figures(t, np.squeeze(ct.step_response(loop, T=t).outputs))
+    y = np.squeeze(ct.step_response(loop, T=t).outputs)
+    figures = step_figures(t, y, target=float(y[-1]))  # settling to the last sample, as the batched loop's
+    settling, overshoot = figures.settling_time_s, figures.overshoot_percent
     # the loop broken at the plant input: u = K_y y + ..., so the return ratio is -K_y P
     k = design.controller
     k_y = ct.ss(k.A, k.B[:, 1:2], k.C, k.D[:, 1:2], design.period_s)

@@ -45,6 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg.lapack import dgesv as _gesv
 
+from flexdigit._constants import G_STANDARD_M_S2
 from flexdigit._validation import check_array, check_int, check_positive, check_real, check_values
 from flexdigit.errors import ConvergenceWarning, ParameterError
 
@@ -59,8 +60,6 @@ __all__ = [
     "build_digit",
     "digit_arrays",
 ]
-
-G_STANDARD_M_S2 = 9.80665
 
 
 def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
