@@ -1,7 +1,6 @@
 """Issue 5's new design on the consistent plant: requirements (i)-(iv) on the linear plant."""
 
 import math
-import warnings
 
 import numpy as np
 import pytest
@@ -10,8 +9,6 @@ from flexdigit.control.analysis import closed_loop_poles, closed_loop_poles_batc
 from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixsyn, plant_family
 from flexdigit.errors import DesignError
 from flexdigit.models.plant import build_plant
-
-warnings.filterwarnings("ignore", category=UserWarning)
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,5 @@
 """The two synthesis routes, the regularisation path and the thesis reproduction (chapter 4)."""
 
-import warnings
-
 import control as ct
 import numpy as np
 import pytest
@@ -20,8 +18,6 @@ from flexdigit.control.thesis_designs import (
 )
 from flexdigit.errors import DesignError, UnstableError
 from flexdigit.reference import thesis_complex, thesis_value
-
-warnings.filterwarnings("ignore", category=UserWarning)
 
 # Tolerances, each with the reason for its size
 GAMMA_ROUTE_RTOL = 0.01  # issue 5: the Riccati and LMI routes agree within 1 %

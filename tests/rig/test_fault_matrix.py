@@ -36,7 +36,7 @@ from flexdigit.rig.base import open_rig
 from flexdigit.rig.loop import run_loop
 from flexdigit.rig.sample_log import read_log_runs
 
-from .conftest import PI, FakeClock
+from .helpers import PI, FakeClock
 
 FAULT_AT = 6  # the 6th read
 RAIL_V = 5.0

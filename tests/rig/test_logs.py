@@ -12,7 +12,7 @@ from flexdigit.errors import DataFileError, OutputExistsError
 from flexdigit.rig.loop import run_loop
 from flexdigit.rig.sample_log import read_log, read_log_runs
 
-from .conftest import PI, FirstOrderRig
+from .helpers import PI, FirstOrderRig
 
 
 def _run(path, mode="new", period_s=0.02, rig=None):

@@ -13,7 +13,7 @@ from flexdigit.rig.base import open_rig
 from flexdigit.rig.loop import run_loop
 from flexdigit.rig.sample_log import read_log
 
-from .conftest import PI, FirstOrderRig
+from .helpers import PI, FirstOrderRig
 
 
 def test_completed_run_tracks_and_logs_every_sample(tmp_path):

@@ -27,7 +27,7 @@ from flexdigit.rig.rotation import (
 )
 from flexdigit.rig.rotation_reference import DigitShape, read_reference, rotations_from_deflections
 
-from .conftest import FakeClock
+from .helpers import FakeClock
 
 NOISE_V = 0.002
 

@@ -119,7 +119,7 @@ def test_sim_backend_virtual_time_is_deterministic_and_applies_loads():
 
 
 def test_paced_mode_follows_the_injected_clock():
-    from .conftest import FakeClock
+    from .helpers import FakeClock
 
     clock = FakeClock()
     rig = SimRig(paced=True, seed=0, clock=clock, sleep=clock.sleep)

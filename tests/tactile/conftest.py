@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import pytest
 
-from cantilever import NOISE_V, CantileverRig  # noqa: F401 (NOISE_V: used by test modules)
-from oracles import GAIN_V_PER_NM, GAUGES_M, cantilever_gauges_v  # noqa: F401 (used by test modules)
+from cantilever import CantileverRig
+from oracles import cantilever_gauges_v
 
 
 @pytest.fixture

@@ -16,10 +16,10 @@ import json
 import numpy as np
 import pytest
 
+from cantilever import NOISE_V
 from flexdigit.cli import main
 from flexdigit.tactile.dataset import load_dataset
-
-from .conftest import NOISE_V, cantilever_gauges_v
+from oracles import cantilever_gauges_v
 
 LENGTH_M = 0.27  # the thesis digit, clamp to tip (RigParams default)
 HEADER = ["t (s)", "SG1 (mV)", "SG2 (mV)", "SG3 (mV)", "Masse (g)", "Position ab Spitze (cm)"]

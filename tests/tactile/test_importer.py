@@ -16,13 +16,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from cantilever import NOISE_V
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError
 from flexdigit.tactile.dataset import load_dataset
 from flexdigit.tactile.importer import ColumnMap, import_readings
 from flexdigit.tactile.protocols import RELAXED
-
-from .conftest import NOISE_V, cantilever_gauges_v
+from oracles import cantilever_gauges_v
 
 LENGTH_M = 0.27  # the thesis digit, clamp to tip (RigParams default)
 #: the network on 8-position closed-form data locates the load to a few mm (a learned fit, not exact)

@@ -18,7 +18,7 @@ from flexdigit.rig.base import open_rig
 from flexdigit.rig.loop import run_loop
 from flexdigit.rig.sample_log import read_log
 
-from ..conftest import PI, FakeClock
+from ..helpers import PI, FakeClock
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="needs os.openpty")
 
