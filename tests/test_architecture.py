@@ -280,3 +280,93 @@ def test_the_definition_finders_themselves():
     assert _definitions(tree) == {"G": 1, "ConvergenceWarning": 2, "f": 3}
     assert _gravity_literals(tree) == [1, 3]
     assert _gravity_literals(ast.parse('HINTS = {"N": ((9.81, "kg"),)}\nx = 9.91')) == []
+
+
+#: Most lines a function may span (issue 23, docs/conventions.md), counted from ``def`` to its last line, docstring
+#: and nested functions included: what a reader scrolls through. ruff has no such rule, so this test enforces it.
+MAX_FUNCTION_LINES = 80
+#: Functions allowed to be longer, each with why: "kernel" (numerical code read as one piece) or "to split" (a debt:
+#: remove the entry when the function is split). The compiled ``_*_kernel.py`` modules are kernels as a whole.
+LONG_FUNCTIONS = {
+    "flexdigit.rig.loop:run_loop": "to split",  # 222 lines
+    "flexdigit.identify.identification:identify": "to split",  # 206 lines
+    "flexdigit.calibrate.twin_fit:calibrate": "to split",  # 206 lines
+    "flexdigit.twin.digit:Chain.solve_static": "kernel: the chain's static Newton solve, one loop",  # 178 lines
+    "flexdigit.cli.run:_run": "to split",  # 162 lines
+    "flexdigit.report.ch8_shape:build": "to split",  # 146 lines
+    "flexdigit.tactile.localisation:localisation_study": "to split",  # 136 lines
+    "flexdigit.control.c_export:_render_fixed": "kernel: one C template, in compile order",  # 131 lines
+    "flexdigit.identify.response:analyze_response": "to split",  # 129 lines
+    "flexdigit.twin.twin:static_gauges_v": "to split",  # 120 lines
+    "flexdigit.tactile.importer:import_readings": "to split",  # 118 lines
+    "flexdigit.tactile.runner:collect": "to split",  # 116 lines
+    "flexdigit.live.server:make_app": "to split",  # 116 lines
+    "flexdigit.control.c_export:_render_float": "kernel: one C template, in compile order",  # 116 lines
+    "flexdigit.identify.quality:assess": "to split",  # 115 lines
+    "flexdigit.rig.rotation_reference:read_reference": "to split",  # 111 lines
+    "flexdigit.rig.rotation:calibrate_rotation": "to split",  # 108 lines
+    "flexdigit.rig.rotation_reference:rotations_from_deflections": "to split",  # 106 lines
+    "flexdigit.control.c_export:analyse_export": "to split",  # 101 lines
+    "flexdigit.control.synthesis:hinf_lmi": "kernel: the H-inf LMI (Gahinet-Apkarian) in one piece",  # 99 lines
+    "flexdigit.cli.simulate:_run": "to split",  # 97 lines
+    "flexdigit.twin.records:static_load_test": "to split",  # 96 lines
+    "flexdigit.palpation.palpation_studies:classification_study": "to split",  # 96 lines
+    "flexdigit.cli.calibrate:_calibrate": "to split",  # 96 lines
+    "flexdigit.identify.events:survey": "to split",  # 95 lines
+    "flexdigit.live.session:LiveSession._run": "to split",  # 91 lines
+    "flexdigit.report.ch8_palpation:_contact": "to split",  # 90 lines
+    "flexdigit.control.design20ms:design_20ms": "to split",  # 89 lines
+    "flexdigit.tactile.pipeline:run_pipeline": "to split",  # 87 lines
+    "flexdigit.control.analysis:step_figures": "to split",  # 87 lines
+    "flexdigit.twin.batched:BatchedChains.from_rigs": "to split",  # 86 lines
+    "flexdigit.twin.contact:solve_contact": "kernel: the contact complementarity iteration",  # 84 lines
+    "flexdigit.studies.execution:run_rows": "to split",  # 84 lines
+    "flexdigit.report.ch3_identify:_model_entries": "to split",  # 84 lines
+    "flexdigit.palpation.palpation_studies:contact_study": "to split",  # 84 lines
+    "flexdigit.identify.fit:SecondOrderFit.fit": "to split",  # 83 lines
+    "flexdigit.report.ch3_models:_servo": "to split",  # 82 lines
+    "flexdigit.report.ch3_models:_release_entries": "to split",  # 81 lines
+}
+
+
+def _function_lengths(tree: ast.Module, module: str) -> dict[str, int]:
+    """``module:Class.method`` (or ``module:function``, ``module:outer.inner``) -> lines spanned."""
+    out = {}
+
+    def visit(node, prefix):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                out[f"{module}:{prefix}{child.name}"] = child.end_lineno - child.lineno + 1
+                visit(child, f"{prefix}{child.name}.")
+            elif isinstance(child, ast.ClassDef):
+                visit(child, f"{prefix}{child.name}.")
+            else:
+                visit(child, prefix)
+
+    visit(tree, "")
+    return out
+
+
+def _long_functions() -> dict[str, int]:
+    out = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if path.stem.startswith("_") and path.stem.endswith("_kernel"):
+            continue
+        lengths = _function_lengths(ast.parse(path.read_text(), filename=str(path)), _module_name(path))
+        out.update({name: n for name, n in lengths.items() if n > MAX_FUNCTION_LINES})
+    return out
+
+
+def test_no_function_is_longer_than_80_lines():
+    found = _long_functions()
+    unexpected = {name: n for name, n in found.items() if name not in LONG_FUNCTIONS}
+    assert not unexpected, f"functions over {MAX_FUNCTION_LINES} lines (split them): {unexpected}"
+    stale = set(LONG_FUNCTIONS) - set(found)
+    assert not stale, f"no longer over {MAX_FUNCTION_LINES} lines, remove them from LONG_FUNCTIONS: {stale}"
+    reasons = {reason for reason in LONG_FUNCTIONS.values() if reason != "to split" and not reason.startswith("kernel")}
+    assert not reasons, reasons
+
+
+def test_the_function_length_counter_itself():
+    source = "def f():\n    def g():\n        pass\n    return g\n\n\nclass C:\n    def m(self):\n        return 1\n"
+    assert _function_lengths(ast.parse(source), "m") == {"m:f": 4, "m:f.g": 2, "m:C.m": 2}
