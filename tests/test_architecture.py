@@ -324,8 +324,6 @@ LONG_FUNCTIONS = {
     "flexdigit.report.ch3_identify:_model_entries": "to split",  # 84 lines
     "flexdigit.palpation.palpation_studies:contact_study": "to split",  # 84 lines
     "flexdigit.identify.fit:SecondOrderFit.fit": "to split",  # 83 lines
-    "flexdigit.report.ch3_models:_servo": "to split",  # 82 lines
-    "flexdigit.report.ch3_models:_release_entries": "to split",  # 81 lines
 }
 
 

@@ -136,6 +136,11 @@ def _release_entries(release, e: list[Entry]) -> None:
             discrepancy_note="The printed average is not the mean of the rows.",
         )
     )
+    _release_wn_rows(table, t, wn_from_wd, e)
+
+
+def _release_wn_rows(table: str, t: dict, wn_from_wd, e: list[Entry]) -> None:
+    """Table 3.1 or 3.2's wn column against wd/sqrt(1 - zeta^2) of each printed row."""
     wn_printed, wd_printed = np.asarray(t["wn_rad_s"]), np.asarray(t["wd_rad_s"])
     for i, (wn_p, wn_o) in enumerate(zip(wn_printed, wn_from_wd, strict=True), start=1):
         implied_zeta = math.sqrt(1 - (wd_printed[i - 1] / wn_p) ** 2)
@@ -204,6 +209,37 @@ def _digit_model(ctx: ReportContext, study, chapter: Chapter) -> None:
 
 
 # --- 3.2.4: servo ---------------------------------------------------------------------------------------
+def _servo_scale_entries(p, e: list[Entry]) -> None:
+    """The potentiometer's slope (3.2.4) and the servo's rad per command (3.4.1) beside their printed values."""
+    pot_printed = servo.PotentiometerMap.printed()
+    pot_params = servo.PotentiometerMap.from_params(p)
+    e.append(
+        compare(
+            "servo.pot_slope_deg_per_v",
+            "3.2.4",
+            pot_printed.slope_deg_per_v,
+            pot_params.slope_deg_per_v,
+            "deg/V",
+            rtol=1e-4,
+            note="219 deg over the printed end-point voltages.",
+            discrepancy_note=f"The printed line 109.1344 V - 51.162 gives 0 deg at {pot_printed.voltage_v(0):.4f} V; "
+            f"the printed 0-degree voltage {p.actuator.pot_v_at_min_angle_v} V is a transposition of 0.46880 V. "
+            "The printed plant uses the printed line.",
+        )
+    )
+    e.append(
+        compare(
+            "servo.rad_per_command",
+            "3.4.1",
+            thesis_value("actuator.rad_per_command"),
+            p.actuator.rad_per_command,
+            "rad/command",
+            rtol=_printed_rtol(thesis_value("actuator.rad_per_command"), 4),
+            note="0.8622 pi/180 = 0.015048, printed as 0.0150 (E 3.15); table 3.4 needs the unrounded value.",
+        )
+    )
+
+
 def _servo(ctx: ReportContext, study, chapter: Chapter) -> None:
     p = ctx.params
     e = chapter.entries
@@ -249,33 +285,7 @@ def _servo(ctx: ReportContext, study, chapter: Chapter) -> None:
             f"real part of MT's poles; MT's -3 dB bandwidth is {bw:.2f} rad/s.",
         )
     )
-    pot_printed = servo.PotentiometerMap.printed()
-    pot_params = servo.PotentiometerMap.from_params(p)
-    e.append(
-        compare(
-            "servo.pot_slope_deg_per_v",
-            "3.2.4",
-            pot_printed.slope_deg_per_v,
-            pot_params.slope_deg_per_v,
-            "deg/V",
-            rtol=1e-4,
-            note="219 deg over the printed end-point voltages.",
-            discrepancy_note=f"The printed line 109.1344 V - 51.162 gives 0 deg at {pot_printed.voltage_v(0):.4f} V; "
-            f"the printed 0-degree voltage {p.actuator.pot_v_at_min_angle_v} V is a transposition of 0.46880 V. "
-            "The printed plant uses the printed line.",
-        )
-    )
-    e.append(
-        compare(
-            "servo.rad_per_command",
-            "3.4.1",
-            thesis_value("actuator.rad_per_command"),
-            p.actuator.rad_per_command,
-            "rad/command",
-            rtol=_printed_rtol(thesis_value("actuator.rad_per_command"), 4),
-            note="0.8622 pi/180 = 0.015048, printed as 0.0150 (E 3.15); table 3.4 needs the unrounded value.",
-        )
-    )
+    _servo_scale_entries(p, e)
     fig = _bode_pz(
         [
             ("MT(s) x 109.1344 pi/180 (printed)", mt_rad),
