@@ -258,31 +258,36 @@ def _model_entries(twin, e: list[Entry]) -> None:
                 discrepancy_note=why_zeta,
             )
         )
-        if method == "thesis":
-            e.append(
-                new(
-                    f"identify.{model}.thesis.validation_corr2",
-                    section,
-                    r.corr2,
-                    "",
-                    f"corr2 of the thesis method's model against the same record (NRMSE fit {r.fit_percent:.1f} %).",
-                )
+        _corr2_entry(model, method, section, r, corr_p, e)
+
+
+def _corr2_entry(model: str, method: str, section: str, r, corr_p: float, e: list[Entry]) -> None:
+    """corr2 of the identified model against its record: new for the thesis method, against print for lsq."""
+    if method == "thesis":
+        e.append(
+            new(
+                f"identify.{model}.thesis.validation_corr2",
+                section,
+                r.corr2,
+                "",
+                f"corr2 of the thesis method's model against the same record (NRMSE fit {r.fit_percent:.1f} %).",
             )
-        if method == "lsq":
-            e.append(
-                compare(
-                    f"identify.{model}.validation_corr2",
-                    section,
-                    corr_p,
-                    r.corr2,
-                    "",
-                    rtol=0.01,
-                    note="MATLAB corr2 between the recorded response and the identified model's.",
-                    discrepancy_note="corr2 measures the noise of the record more than the model: it ignores gain and "
-                    "offset errors and falls with the noise level, which for these records is the synthetic/twin "
-                    "noise, not the rig's. The NRMSE fit (identify CLI, table) is the better figure.",
-                )
+        )
+    if method == "lsq":
+        e.append(
+            compare(
+                f"identify.{model}.validation_corr2",
+                section,
+                corr_p,
+                r.corr2,
+                "",
+                rtol=0.01,
+                note="MATLAB corr2 between the recorded response and the identified model's.",
+                discrepancy_note="corr2 measures the noise of the record more than the model: it ignores gain and "
+                "offset errors and falls with the noise level, which for these records is the synthetic/twin "
+                "noise, not the rig's. The NRMSE fit (identify CLI, table) is the better figure.",
             )
+        )
 
 
 def _tip_entries(twin, e: list[Entry]) -> None:
