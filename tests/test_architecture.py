@@ -322,7 +322,6 @@ LONG_FUNCTIONS = {
     "flexdigit.twin.contact:solve_contact": "kernel: the contact complementarity iteration",  # 84 lines
     "flexdigit.studies.execution:run_rows": "to split",  # 84 lines
     "flexdigit.palpation.palpation_studies:contact_study": "to split",  # 84 lines
-    "flexdigit.identify.fit:SecondOrderFit.fit": "to split",  # 83 lines
 }
 
 

@@ -98,6 +98,19 @@ def second_order_response(t_s, kind: str, wn_rad_s: float, zeta: float, offset: 
 LOSSES = ("linear", "soft_l1", "huber")
 
 
+def _covariance(loss: str, r: np.ndarray, jac: np.ndarray, f_scale: float, dof: int) -> tuple[np.ndarray, float]:
+    """The parameters' covariance and the residuals' standard deviation at a least-squares solution: ``s^2 (J'J)^-1``
+    for the linear loss, the sandwich ``A^-1 B A^-1`` of the robust loss (with the residuals' MAD as their spread)."""
+    n = r.size
+    if loss == "linear":
+        s2 = float(np.sum(r**2) / dof)
+        return np.linalg.pinv(jac.T @ jac) * s2, math.sqrt(s2)
+    w, curvature = _loss_derivatives(loss, (r / f_scale) ** 2)
+    a_inv = np.linalg.pinv(jac.T @ (jac * curvature[:, None]))
+    b = (jac * (w * r)[:, None]).T @ (jac * (w * r)[:, None])
+    return a_inv @ b @ a_inv * (n / dof), 1.4826 * float(np.median(np.abs(r - np.median(r))))
+
+
 class SecondOrderFit:
     """Least-squares second-order model of a release or step test (3.1.2, 3.2.4), scikit-learn style.
 
@@ -228,18 +241,7 @@ class SecondOrderFit:
             result = optimize.least_squares(residuals, p0, jac=model.jacobian, f_scale=f_scale, **solve)
             n, k = t.size, p0.size
             dof = max(n - k, 1)
-            r = result.fun
-            jac = model.jacobian(result.x)
-            if self.loss == "linear":
-                s2 = float(np.sum(r**2) / dof)
-                cov = np.linalg.pinv(jac.T @ jac) * s2
-                self.residual_std_ = math.sqrt(s2)
-            else:
-                w, curvature = _loss_derivatives(self.loss, (r / f_scale) ** 2)
-                a_inv = np.linalg.pinv(jac.T @ (jac * curvature[:, None]))
-                b = (jac * (w * r)[:, None]).T @ (jac * (w * r)[:, None])
-                cov = a_inv @ b @ a_inv * (n / dof)
-                self.residual_std_ = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+            cov, self.residual_std_ = _covariance(self.loss, result.fun, model.jacobian(result.x), f_scale, dof)
         q = stats.t.ppf(0.5 + level / 2, dof)
         se = np.sqrt(np.clip(np.diag(cov), 0, None))
         self.estimates_ = {
