@@ -321,7 +321,6 @@ LONG_FUNCTIONS = {
     "flexdigit.twin.batched:BatchedChains.from_rigs": "to split",  # 86 lines
     "flexdigit.twin.contact:solve_contact": "kernel: the contact complementarity iteration",  # 84 lines
     "flexdigit.studies.execution:run_rows": "to split",  # 84 lines
-    "flexdigit.palpation.palpation_studies:contact_study": "to split",  # 84 lines
 }
 
 

@@ -48,6 +48,17 @@ def _noisy(model, clean, n_readings, rng):
     return adc(clean + noise, model.params.sensors) if n_readings == 1 else clean + noise
 
 
+def _pooled_rms_ci95(err: np.ndarray, seed, scale: float) -> tuple[float, float]:
+    """95 % Monte Carlo interval of the pooled RMS of ``err`` (contacts x repetitions) over ``scale``: a bootstrap
+    over each contact's repetitions, seeded from ``seed`` (its stream 2)."""
+    boot = np.random.default_rng([*np.atleast_1d(seed).tolist(), 2])
+    draws = [
+        np.sqrt(np.mean(np.take_along_axis(err, boot.integers(0, err.shape[1], err.shape), axis=1) ** 2))
+        for _ in range(BOOTSTRAP_DRAWS)
+    ]
+    return tuple(float(x) for x in np.percentile(draws, [2.5, 97.5]) / scale)
+
+
 def contact_study(
     *,
     positions_m=None,
@@ -113,16 +124,7 @@ def contact_study(
         )
         out["position_ratio"] = out["seen_rms_position_m"] / out["seen_crlb_position_m"]
         out["force_ratio"] = out["seen_rms_force_rel"] / out["seen_crlb_force_rel"]
-        # Monte Carlo spread of the pooled ratio: bootstrap over each contact's repetitions (95 % interval)
-        err = (pos - ss[:, None])[seen]
-        boot = np.random.default_rng([*np.atleast_1d(seed).tolist(), 2])
-        draws = [
-            np.sqrt(np.mean(np.take_along_axis(err, boot.integers(0, repetitions, err.shape), axis=1) ** 2))
-            for _ in range(BOOTSTRAP_DRAWS)
-        ]
-        out["position_ratio_ci95"] = tuple(
-            float(x) for x in np.percentile(draws, [2.5, 97.5]) / out["seen_crlb_position_m"]
-        )
+        out["position_ratio_ci95"] = _pooled_rms_ci95((pos - ss[:, None])[seen], seed, out["seen_crlb_position_m"])
         # the band between gauge 2 and the rigid tip support, where the published figures are comparable
         geo = model.params.geometry
         tip_support = 0.5 * (geo.section_pitch_m - geo.strip_length_m / geo.section_count)
