@@ -103,3 +103,13 @@ def test_fit_record_holds_targets_residuals_and_what_was_fitted():
     rows = result.residual_rows()
     assert rows[0]["residual"] == pytest.approx(rows[0]["twin"] - 10.0)
     assert rows[0]["relative"] == pytest.approx(rows[0]["residual"] / 10.0)
+
+
+def test_verbose_logs_the_residual_table_and_prints_nothing(caplog, capsys):
+    # issue 23: the library prints nothing; verbose puts result.table() on the module's logger at INFO
+    targets = CalibrationTargets(bare_wn_rad_s=10.0, bare_zeta=0.003)
+    with caplog.at_level("INFO", logger="flexdigit.calibrate.twin_fit"):
+        result = calibrate(targets, initial=packaged_calibration(), verbose=True)
+    assert capsys.readouterr().out == ""
+    assert [r.levelname for r in caplog.records] == ["INFO"]
+    assert result.table() in caplog.records[0].getMessage()

@@ -20,6 +20,7 @@ Examples
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,6 +30,8 @@ from flexdigit.calibrate.friction import actuated_rest_sd_v, fit_level, friction
 from flexdigit.calibrate.targets import CalibrationTargets
 from flexdigit.errors import ParameterError
 from flexdigit.twin.calibration import Calibration
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["MECHANICS", "CalibrationResult", "model_response", "calibrate", "calibrate_to_thesis", "THESIS_SOURCE"]
 
@@ -164,7 +167,8 @@ def calibrate(
     cells_per_section : int
         Resolution of the digit model the calibration is for.
     verbose : bool
-        Print the residual table.
+        Log the residual table at INFO (else at DEBUG) on the ``flexdigit.calibrate.twin_fit`` logger; the library
+        prints nothing (``result.table()`` gives the same table).
     friction_score : callable, optional
         ``friction_score(calibration) -> corr2``: the thesis pipeline's actuated test corr2 on a twin with that
         calibration (e.g. :func:`flexdigit.tactile.thesis_experiments.actuated_corr2_score`, its mean over 8 seeded
@@ -337,8 +341,7 @@ def calibrate(
     if friction_rows:
         fitted.append("cable_friction_ratio")
     result = CalibrationResult(cal, head + rows + friction_rows, cost, success, message, fitted, targets)
-    if verbose:
-        print(result.table())
+    _log.log(logging.INFO if verbose else logging.DEBUG, "calibration residuals:\n%s", result.table())
     return result
 
 
