@@ -83,7 +83,7 @@ def _identify(args: argparse.Namespace):
         series,
         args.kind,
         method=args.method,
-        filter=args.filter,
+        smoothing=args.filter,
         t0_s=args.t0,
         input_step=args.input_step,
         fit_delay={"auto": None, "yes": True, "no": False}[args.delay],

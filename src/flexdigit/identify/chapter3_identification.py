@@ -239,7 +239,7 @@ def twin_identification(params: RigParams | None = None, *, seed: int = 0, fast:
     step = average_runs(steps)
     # the thesis filtered the servo records with its SVD filter (3.2.4); rank 3 holds a step on an offset
     fits = {("digit", m): identify(release, "release", method=m) for m in ("thesis", "lsq")} | {
-        ("servo", m): identify(step, "step", method=m, filter="svd") for m in ("thesis", "lsq")
+        ("servo", m): identify(step, "step", method=m, smoothing="svd") for m in ("thesis", "lsq")
     }
     tip_fits = {m: identify(tip, "release", method=m) for m in ("thesis", "lsq")}
     printed = {

@@ -174,7 +174,7 @@ def identify(
     kind: str,
     *,
     method: str = "lsq",
-    filter: str = "butter",
+    smoothing: str = "butter",
     t0_s: float | None = None,
     input_step: float | None = None,
     wn_from: str = "settling",
@@ -197,7 +197,7 @@ def identify(
         Least-squares fit of the raw record; the thesis's %OS and settling-time formulas on the filtered one; or the
         dominant poles of a discrete ARX(2, 2) (AR(2) for a release) fitted to the record and its input, both
         through the same Butterworth pre-filter (``cutoff_hz``) and decimated.
-    filter : {"butter", "svd", "fft", "none"}
+    smoothing : {"butter", "svd", "fft", "none"}
         Filter used to read the features (thesis method, and the start values of ``lsq``).
     t0_s : float, optional
         Step/release instant (s, on the record's clock, inside it). Default: found (:func:`~flexdigit.identify.
@@ -240,7 +240,7 @@ def identify(
     """
     check_choice(kind, "kind", KINDS, "identify")
     check_choice(method, "method", METHODS, "identify")
-    check_choice(filter, "filter", FILTERS, "identify")
+    check_choice(smoothing, "smoothing", FILTERS, "identify")
     check_choice(wn_from, "wn_from", ("settling", "damped"), "identify")
     check_choice(loss, "loss", LOSSES, "identify")
     t = series.t_s
@@ -278,7 +278,7 @@ def identify(
     y = found.cleaned
     t0_start = found.t0_s if found.t0_s is not None else float(t[0])
     t0_features = t0_start if (kind == "step" or t0_s is not None) else None
-    smooth = apply_filter(t, y, filter, **_feature_filter_options(filter, filter_options, found, t))
+    smooth = apply_filter(t, y, smoothing, **_feature_filter_options(smoothing, filter_options, found, t))
     try:
         features, problem = analyze_response(t, smooth, kind, t0_s=t0_features, source=series.name), None
     except DataFileError as exc:  # lsq and arx fit an overdamped step; the thesis method needs features
@@ -355,7 +355,7 @@ def identify(
     return Identification(
         kind=kind,
         method=method,
-        filter=filter,
+        filter=smoothing,
         source=series.source,
         channel=series.channel,
         unit=series.unit,
