@@ -113,6 +113,11 @@ def _contact(ctx, ch, plt) -> None:
         "and in the last section a distant rival explains the reading nearly as well (ambiguous). Where the gauges "
         "see the contact the estimate is at its Cramer-Rao bound."
     )
+    _contact_figure(ctx, ch, plt, c)
+
+
+def _contact_figure(ctx, ch, plt, c: dict) -> None:
+    """The contact study's position error beside its Cramer-Rao bound along the digit."""
     fig, ax = plt.subplots(figsize=(7, 3.6))
     for f, marker in zip(np.unique(c["force_n"])[::-1], "os", strict=False):
         rows = c["force_n"] == f
