@@ -314,7 +314,6 @@ LONG_FUNCTIONS = {
     "flexdigit.cli.calibrate:_calibrate": "to split",  # 96 lines
     "flexdigit.identify.events:survey": "to split",  # 95 lines
     "flexdigit.live.session:LiveSession._run": "to split",  # 91 lines
-    "flexdigit.control.design20ms:design_20ms": "to split",  # 89 lines
     "flexdigit.tactile.pipeline:run_pipeline": "to split",  # 87 lines
     "flexdigit.control.analysis:step_figures": "to split",  # 87 lines
     "flexdigit.twin.batched:BatchedChains.from_rigs": "to split",  # 86 lines

@@ -159,6 +159,24 @@ class Digital20msDesign:
         )
 
 
+def _with_input_delay(A: np.ndarray, B: np.ndarray, C: np.ndarray, nd: int):
+    """``(A, B, C)`` of a discrete plant whose input arrives ``nd`` samples late: the delay chain
+    x_servo+ = A x + B u_prev_nd ; u_prev_1+ = u ; u_prev_i+ = u_prev_{i-1} appended to the state."""
+    n = A.shape[0]
+    na = n + nd
+    Aa = np.zeros((na, na))
+    Aa[:n, :n] = A
+    Ba = np.zeros((na, 1))
+    if nd:
+        Aa[:n, na - 1 : na] = B
+        Ba[n, 0] = 1.0
+        for i in range(1, nd):
+            Aa[n + i, n + i - 1] = 1.0
+    else:
+        Ba[:n] = B
+    return Aa, Ba, np.hstack([C, np.zeros((1, nd))])
+
+
 @validate_params(
     {
         "params": [InstanceOf(RigParams), None],
@@ -211,19 +229,8 @@ def design_20ms(
     Gd = ct.sample_system(G, T, method="zoh")
     A, B, C = np.asarray(Gd.A), np.asarray(Gd.B), np.asarray(Gd.C)
     n = A.shape[0]
-    # delay chain: x_servo+ = A x + B u_prev_nd ; u_prev_1+ = u ; u_prev_i+ = u_prev_{i-1}
     na = n + nd
-    Aa = np.zeros((na, na))
-    Aa[:n, :n] = A
-    Ba = np.zeros((na, 1))
-    if nd:
-        Aa[:n, na - 1 : na] = B
-        Ba[n, 0] = 1.0
-        for i in range(1, nd):
-            Aa[n + i, n + i - 1] = 1.0
-    else:
-        Ba[:n] = B
-    Ca = np.hstack([C, np.zeros((1, nd))])
+    Aa, Ba, Ca = _with_input_delay(A, B, C, nd)
     # LQR on the delayed plant: rotation, its change per sample, and the command
     Cd = Ca @ (Aa - np.eye(na))
     Q = Ca.T @ Ca + w.q_rate * (Cd.T @ Cd)
