@@ -315,7 +315,6 @@ LONG_FUNCTIONS = {
     "flexdigit.identify.events:survey": "to split",  # 95 lines
     "flexdigit.live.session:LiveSession._run": "to split",  # 91 lines
     "flexdigit.tactile.pipeline:run_pipeline": "to split",  # 87 lines
-    "flexdigit.control.analysis:step_figures": "to split",  # 87 lines
     "flexdigit.twin.batched:BatchedChains.from_rigs": "to split",  # 86 lines
     "flexdigit.twin.contact:solve_contact": "kernel: the contact complementarity iteration",  # 84 lines
     "flexdigit.studies.execution:run_rows": "to split",  # 84 lines

@@ -268,6 +268,33 @@ def _first_crossing(t: np.ndarray, z: np.ndarray, level: float) -> float:
     return float(t[i - 1] + (t[i] - t[i - 1]) * (level - z0) / (z1 - z0))
 
 
+def _after_step(t_s, y, step_time_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """The samples from the step on, times counted from it; at least two."""
+    t = np.asarray(t_s, dtype=float).reshape(-1)
+    y = np.asarray(y, dtype=float).reshape(-1)
+    if t.size != y.size:
+        raise ValueError(f"step_figures: {t.size} times for {y.size} values")
+    after = t >= step_time_s - 1e-9
+    t, y = t[after] - step_time_s, y[after]
+    if t.size < 2:
+        raise ValueError("step_figures: fewer than two samples after the step")
+    return t, y
+
+
+def _settling_times(t, y, z, final, step, band, tail_length, confirm) -> tuple[float, float, bool]:
+    """:func:`step_figures`'s settling time to the target and to the final value, and whether the record shows a
+    steady state (``confirm_s`` > 0 asks the record to go on inside the band; see there)."""
+    settling = _settling_time(t, np.abs(z - 1.0), band)
+    settled = _settling_time(t, np.abs(y - final) / abs(step), band)
+    steady = True
+    if confirm > 0:
+        if settling > t[-1] - confirm:
+            settling = math.inf  # in the band only at the very end, if at all: not shown to have settled
+        if settled > t[-1] - max(tail_length, confirm):
+            settled, steady = math.inf, False  # still moving over the final window: no steady state to give
+    return settling, settled, steady
+
+
 def step_figures(
     t_s,
     y,
@@ -322,14 +349,7 @@ def step_figures(
     """
     from flexdigit._validation import check_real
 
-    t = np.asarray(t_s, dtype=float).reshape(-1)
-    y = np.asarray(y, dtype=float).reshape(-1)
-    if t.size != y.size:
-        raise ValueError(f"step_figures: {t.size} times for {y.size} values")
-    after = t >= step_time_s - 1e-9
-    t, y = t[after] - step_time_s, y[after]
-    if t.size < 2:
-        raise ValueError("step_figures: fewer than two samples after the step")
+    t, y = _after_step(t_s, y, step_time_s)
     tail_length = check_real(tail_s, "tail_s", "step_figures", low=0.0)
     confirm = check_real(confirm_s, "confirm_s", "step_figures", low=0.0)
     tail = y[t >= t[-1] - tail_length]
@@ -344,14 +364,8 @@ def step_figures(
     z = (y - float(initial)) / step  # 0 -> 1 whichever the step's direction
     bounded = bool(np.max(np.abs(z - 1.0)) < 10.0)
     rise = _first_crossing(t, z, rise_limits[1]) - _first_crossing(t, z, rise_limits[0])
-    settling = _settling_time(t, np.abs(z - 1.0), band)
-    settled = _settling_time(t, np.abs(y - final) / abs(step), band)
-    error = final - goal
-    if confirm > 0:
-        if settling > t[-1] - confirm:
-            settling = math.inf  # in the band only at the very end, if at all: not shown to have settled
-        if settled > t[-1] - max(tail_length, confirm):
-            settled, error = math.inf, math.nan  # still moving over the final window: no steady state to give
+    settling, settled, steady = _settling_times(t, y, z, final, step, band, tail_length, confirm)
+    error = final - goal if steady else math.nan
     k = int(np.argmax(z))
     overshoot = max(0.0, float(z[k] - 1.0) * 100.0)
     return StepFigures(rise, settling, settled, overshoot, float(y[k]), float(t[k]), final, error, iae, bounded)
