@@ -310,7 +310,6 @@ LONG_FUNCTIONS = {
     "flexdigit.control.synthesis:hinf_lmi": "kernel: the H-inf LMI (Gahinet-Apkarian) in one piece",  # 99 lines
     "flexdigit.cli.simulate:_run": "to split",  # 97 lines
     "flexdigit.twin.records:static_load_test": "to split",  # 96 lines
-    "flexdigit.palpation.palpation_studies:classification_study": "to split",  # 96 lines
     "flexdigit.cli.calibrate:_calibrate": "to split",  # 96 lines
     "flexdigit.identify.events:survey": "to split",  # 95 lines
     "flexdigit.live.session:LiveSession._run": "to split",  # 91 lines

@@ -136,6 +136,22 @@ def contact_study(
     return out
 
 
+def _prior_rows(region_m, extents_m, totals_n, prior_total_step_n, length_m):
+    """:func:`classification_study`'s prior: every point of ``region_m`` (line centres' grid) and every line load
+    centred there that fits on the digit, at every total of the ``prior_total_step_n`` grid and of ``totals_n``
+    (pressing: negative); ``(kind, centre_m, extent_m, force_n)`` arrays."""
+    from flexdigit.palpation.contact_estimation import LINE_CENTRE_STEP_M
+
+    grid = np.arange(region_m[0], region_m[1] + 1e-9, LINE_CENTRE_STEP_M)
+    totals = np.arange(min(totals_n), max(totals_n) + 1e-9, prior_total_step_n)
+    totals = np.unique(np.round(np.concatenate([totals, totals_n]), 9))
+    rows = [("point", c, 0.0, -f) for f in totals for c in grid]
+    rows += [
+        ("distributed", c, w, -f) for f in totals for w in extents_m for c in grid if w / 2 <= c <= length_m - w / 2
+    ]
+    return tuple(np.array([r[i] for r in rows]) for i in range(4))
+
+
 def classification_study(
     *,
     region_m=(0.10, 0.25),
@@ -162,36 +178,20 @@ def classification_study(
     asked the same on ``repetitions`` noisy readings of each truth. Returns the per-truth accuracies and the
     accuracy over the truths where the limit allows 95 %.
     """
-    from flexdigit.palpation.contact_estimation import LINE_CENTRE_STEP_M, ContactEstimator, ContactGaugeModel
+    from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
 
     # at 25 readings the noise (0.4 mV) is as small as the 3-cell chain's discretisation error (0.4 % of the
     # signal): a 9-cell model reads a 27-cell truth (with 3 against 9 the estimator is 2 points less accurate)
     model = estimator_model or ContactGaugeModel(cells_per_section=9)
     truth = truth_model or ContactGaugeModel(cells_per_section=27)
-    lo, hi = region_m
-    grid = np.arange(lo, hi + 1e-9, LINE_CENTRE_STEP_M)
-    totals = np.arange(min(totals_n), max(totals_n) + 1e-9, prior_total_step_n)
-    totals = np.unique(np.round(np.concatenate([totals, totals_n]), 9))
-    rows = [("point", c, 0.0, -f) for f in totals for c in grid]
-    rows += [
-        ("distributed", c, w, -f)
-        for f in totals
-        for w in extents_m
-        for c in grid
-        if w / 2 <= c <= truth.length_m - w / 2
-    ]
-    kind = np.array([r[0] for r in rows])
-    c = np.array([r[1] for r in rows])
-    w = np.array([r[2] for r in rows])
-    f = np.array([r[3] for r in rows])
+    kind, c, w, f = _prior_rows(region_m, extents_m, totals_n, prior_total_step_n, truth.length_m)
     point = kind == "point"
     weights = np.where(point, 0.5 / point.sum(), 0.5 / (~point).sum())  # the two classes equally likely
-    clean = np.empty((len(rows), 3))
+    clean = np.empty((kind.size, 3))
     clean[point] = truth.point_v(c[point], f[point], command)
     clean[~point] = truth.line_v(c[~point], w[~point], f[~point], command)
-    phase = ((c - lo) / truth_step_m) % 1.0
-    on_step = (np.minimum(phase, 1.0 - phase) < 1e-6) & np.isin(np.round(-f, 9), np.round(totals_n, 9))
-    evaluate = np.flatnonzero(on_step)
+    phase = ((c - region_m[0]) / truth_step_m) % 1.0
+    evaluate = np.flatnonzero((np.minimum(phase, 1.0 - phase) < 1e-6) & np.isin(np.round(-f, 9), np.round(totals_n, 9)))
     sigma = np.broadcast_to(model.noise_v / math.sqrt(n_readings), clean.shape)
     limit = gaussian_bayes_limits(clean, sigma, weights, labels=kind, samples=samples, seed=seed, evaluate=evaluate)
     bayes = 1.0 - limit["label_error"][evaluate]
