@@ -144,15 +144,12 @@ class Recording:
     ) -> None:
         from mcap.writer import CompressionType, Writer
 
-        from flexdigit._io import check_output
+        from flexdigit._io import OutputStream, check_output
 
         self.path = check_output(path, force=force)
-        try:
-            self._file = open(self.path, "wb" if force else "xb")  # noqa: SIM115 - closed in close()
-        except FileExistsError:
-            from flexdigit.errors import OutputExistsError
-
-            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
+        # under the recording's lock; with force, written beside the old file and renamed over it at a complete end
+        self._out = OutputStream(self.path, "replace" if force else "new", binary=True)
+        self._file = self._out.file
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=CompressionType.NONE)
         self._writer.start(profile="", library=f"flexdigit ({RECORDING_FORMAT})")
         self._channels: dict[str, int] = {}
@@ -197,7 +194,10 @@ class Recording:
             now = time.monotonic()
             if now - self._flushed_at >= self._flush_every_s:  # close the chunk: a killed run keeps it
                 self._flushed_at = now
-                self._writer.flush()
+                try:
+                    self._writer.flush()
+                except OSError as exc:  # a full disk: say which file
+                    raise self._out.failed(exc) from exc
 
     def write_sample(self, record: dict[str, Any]) -> None:
         """Append a loop sample (:data:`SAMPLE_SCHEMA`) at its time ``record["t"]``."""
@@ -208,9 +208,12 @@ class Recording:
         with self._lock:
             if self._closed:
                 return
-            self._writer.flush()
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            try:
+                self._writer.flush()
+                self._file.flush()
+                os.fsync(self._file.fileno())
+            except OSError as exc:  # a full disk: say which file
+                raise self._out.failed(exc) from exc
 
     def close(self, stop: dict[str, Any] | None = None) -> None:
         """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice."""
@@ -220,14 +223,18 @@ class Recording:
     def _close(self, stop: dict[str, Any] | None) -> None:
         if self._closed:
             return
+        stop = {"stop": "closed", **(stop or {})}
         try:
-            self._writer.add_metadata("flexdigit.stop", _metadata_text({"stop": "closed", **(stop or {})}))
+            self._writer.add_metadata("flexdigit.stop", _metadata_text(stop))
             self._writer.finish()
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            # a run that stopped before its end leaves an old recording (--force) intact, itself in STEM.partial.mcap
+            self.path = self._out.close(complete=stop["stop"] in ("closed", "completed"))
+        except OSError as exc:
+            self._out.abandon()
+            raise self._out.failed(exc) from exc
         finally:
             self._closed = True
-            self._file.close()
+            self._out.abandon()  # no-op once closed
 
     @property
     def closed(self) -> bool:
