@@ -208,8 +208,12 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
         raise DataFileError(
             f"{p}: the delimiter must be one of ',', ';', 'tab', '|', 'whitespace'. Got {delimiter!r} instead."
         )
+    from flexdigit._io import check_input, count_lines
+
     if p.suffix.lower() == ".parquet":
+        check_input(p, "a Parquet table")
         return _read_parquet(p, decimal or ".")
+    count_lines(p, "a text table")  # a 10-million-row file is refused in a second, not read into gigabytes
     numbered = _text_lines(p)
     first = numbered[0][1].strip(" \"'")
     if _SEP_LINE.match(first):  # "sep=;": a spreadsheet's export names its delimiter on the first line
@@ -247,7 +251,9 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
 
 def _text_lines(p: Path) -> list[tuple[int, str]]:
     """``(line number, line)`` of the lines that are neither blank nor comments; refuses binary and empty files."""
-    data = p.read_bytes()
+    from flexdigit._io import RECORDS_LIMIT, read_bytes
+
+    data = read_bytes(p, "a text table", RECORDS_LIMIT)
     if data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # UTF-16 with its byte-order mark
         try:
             text = data.decode("utf-16")

@@ -331,8 +331,11 @@ def _find_time_column(p: str, columns: list[str], time_column: str | None) -> st
 
 def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
     """Columns, float data and the file line of each data row; names the line and column of a bad cell."""
+    from flexdigit._io import RECORDS_LIMIT, count_lines, read_bytes
+
+    count_lines(p, "a CSV record")  # a 10-million-row file is refused in a second, not read into gigabytes
     try:
-        text = p.read_text(encoding="utf-8-sig")
+        text = read_bytes(p, "a CSV record", RECORDS_LIMIT).decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataFileError(f"{p}: not a text CSV file (byte {exc.start} is not UTF-8)") from None
     numbered = [
@@ -420,6 +423,9 @@ def _parse_column(p: Path, name: str, cells: list[str], lines: list[int], decima
 def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
     import pyarrow.parquet as pq
 
+    from flexdigit._io import check_input
+
+    check_input(p, "a Parquet record")
     try:
         table = pq.read_table(p)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"

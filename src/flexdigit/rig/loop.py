@@ -141,8 +141,10 @@ def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the first setting that differs.
     """
+    from flexdigit._io import LOG_LIMIT, open_input
+
     path = Path(path)
-    with path.open("rb") as fh:
+    with open_input(path, "a flexdigit loop log", LOG_LIMIT) as fh:
         first = fh.readline()
     try:
         old = json.loads(first.decode("utf-8"))
@@ -195,11 +197,11 @@ def read_log(
 
 def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]]:
     """Every run of a loop log as ``(first line number, header, samples, footer or None)``."""
-    from flexdigit._io import read_text
+    from flexdigit._io import LOG_LIMIT, read_text
 
     path = Path(path)
     runs: list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]] = []
-    lines = read_text(path, "a flexdigit loop log").splitlines()
+    lines = read_text(path, "a flexdigit loop log", LOG_LIMIT).splitlines()
     for number, line in enumerate(lines, 1):
         try:
             record = json.loads(line)

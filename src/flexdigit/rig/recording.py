@@ -89,10 +89,12 @@ SAMPLE_SCHEMA: dict[str, Any] = {
 
 def is_mcap(path: str | os.PathLike) -> bool:
     """True when the file starts with the MCAP magic bytes."""
-    try:
-        with open(path, "rb") as fh:
+    from flexdigit._io import RECORDS_LIMIT, open_input
+
+    try:  # a FIFO or a device is not one (and is never opened blocking): its reader refuses it by name
+        with open_input(path, "an MCAP recording", RECORDS_LIMIT) as fh:
             return fh.read(len(MCAP_MAGIC)) == MCAP_MAGIC
-    except OSError:
+    except (OSError, DataFileError):
         return False
 
 
@@ -277,7 +279,9 @@ class _Records:
         from mcap.exceptions import McapError
         from mcap.stream_reader import StreamReader
 
-        with open(self.path, "rb") as fh:
+        from flexdigit._io import RECORDS_LIMIT, open_input
+
+        with open_input(self.path, "an MCAP recording", RECORDS_LIMIT) as fh:
             reader = StreamReader(_Bounded(fh, self.path.stat().st_size), skip_magic=False)
             try:
                 yield from reader.records
@@ -315,7 +319,9 @@ def iter_messages(path: str | os.PathLike, topics=None, *, records=None) -> Iter
     """
     from mcap.records import Channel, Message
 
-    path = Path(path)
+    from flexdigit._io import RECORDS_LIMIT, check_input
+
+    path = check_input(path, "an MCAP recording", RECORDS_LIMIT)  # a FIFO, a device: named, never read
     if not is_mcap(path):
         raise DataFileError(f"{path}: not an MCAP file (no MCAP magic at the start)")
     channels: dict[int, str] = {}

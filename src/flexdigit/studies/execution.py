@@ -146,16 +146,17 @@ class Journal:
         if self.path.exists() and not force:
             self._read()
         else:
+            from flexdigit._io import atomic_write
+
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = self.path.with_name(f".{self.path.name}.tmp")
-            with tmp.open("w", encoding="utf-8") as fh:
+            # an exclusive, unpredictable temporary file: a symlink planted at a fixed name is never followed
+            with atomic_write(self.path, "w", force=True) as fh:
                 fh.write(json.dumps(self.header, sort_keys=True) + "\n")
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, self.path)
 
     def _read(self) -> None:
-        text = self.path.read_bytes()
+        from flexdigit._io import LOG_LIMIT, read_bytes
+
+        text = read_bytes(self.path, "a study journal", LOG_LIMIT)
         lines = text.split(b"\n")
         complete, tail = lines[:-1], lines[-1]
         if not complete:

@@ -172,7 +172,9 @@ class ColumnMap:
         if not path.is_file():
             raise DataFileError(f"{path}: not a file (a directory?); expected a column map TOML")
         try:
-            data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+            from flexdigit._io import read_bytes
+
+            data = tomllib.loads(read_bytes(path, "a column map TOML").decode("utf-8-sig"))
         except tomllib.TOMLDecodeError as exc:
             raise DataFileError(f"{path}: not valid TOML ({exc})") from None
         except UnicodeDecodeError as exc:

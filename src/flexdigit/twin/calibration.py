@@ -247,7 +247,9 @@ def _read_toml(path: Path) -> dict:
     if not path.is_file():
         raise DataFileError(f"{path}: not a file (a directory?); expected a calibration TOML")
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        from flexdigit._io import read_text
+
+        return tomllib.loads(read_text(path, "a calibration TOML"))
     except tomllib.TOMLDecodeError as exc:
         raise DataFileError(f"{path}: not valid TOML ({exc})") from None
     except UnicodeDecodeError as exc:

@@ -101,12 +101,16 @@ class TwinRecord:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
+        from flexdigit._io import RECORDS_LIMIT, check_input, count_lines, read_text
+
+        check_input(path, "a twin record", RECORDS_LIMIT)
         if path.suffix.lower() == ".csv":
             import io
 
             import pyarrow.csv as pcsv
 
-            text = path.read_text()
+            count_lines(path, "a twin record CSV")
+            text = read_text(path, "a twin record CSV", RECORDS_LIMIT)
             meta, body = {}, []
             for line in text.splitlines(keepends=True):
                 if line.startswith("# ") and not body:
