@@ -63,6 +63,7 @@ __all__ = [
     "OutputStream",
     "open_input",
     "check_input",
+    "refuse_special",
     "read_bytes",
     "read_text",
     "count_lines",
@@ -542,6 +543,16 @@ def open_input(path: str | os.PathLike, what: str = "a file", limit: int = SETTI
     except BaseException:
         os.close(fd)
         raise
+
+
+def refuse_special(path: str | os.PathLike, what: str = "a file") -> None:
+    """Refuse ``path`` naming what it is when it exists and is neither a regular file nor a directory (a FIFO, a
+    device, a socket, also through a symlink); for loaders that test ``is_file()`` first, whose "no such file"
+    would otherwise misname it. Never opens it."""
+    path = Path(path)
+    st = _stat(path)
+    if st is not None and not stat.S_ISREG(st.st_mode) and not stat.S_ISDIR(st.st_mode):
+        raise DataFileError(f"{path}: is {_kind(st.st_mode)}{_through(path)}, not a regular file; expected {what}")
 
 
 def check_input(path: str | os.PathLike, what: str = "a file", limit: int = RECORDS_LIMIT) -> Path:

@@ -198,6 +198,9 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(2, "No such file", str(p))
+    from flexdigit._io import refuse_special
+
+    refuse_special(p, "a CSV-like text or .parquet file")
     if not p.is_file():
         raise DataFileError(f"{p}: not a file (a directory?); expected a CSV-like text or .parquet file")
     if decimal not in (None, ".", ","):

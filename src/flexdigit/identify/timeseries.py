@@ -207,7 +207,10 @@ def read_timeseries(
         that is not a number, time not strictly increasing, NaN runs, irregular sampling, fewer than
         :data:`MIN_SAMPLES` samples.
     """
+    from flexdigit._io import refuse_special
+
     p = Path(path)
+    refuse_special(p, "a CSV or Parquet record")
     if not p.is_file():
         raise DataFileError(f"{p}: no such file")
     suffix = p.suffix.lower()

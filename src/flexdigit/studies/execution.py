@@ -383,20 +383,23 @@ def run_study(
 ):
     """:func:`run_rows` with the study's journal in ``out_dir``; returns ``(outputs, errors)``: per metric an array
     over the rows (NaN where a row failed) and per row its error or None."""
-    journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
-    records = run_rows(
-        build,
-        values,
-        metrics,
-        context,
-        journal,
-        seed=seed,
-        chunk_size=chunk_size,
-        workers=workers,
-        scheduler=scheduler,
-        progress=progress,
-        label=label,
-    )
+    from flexdigit._io import output_lock
+
+    with output_lock(Path(out_dir) / JOURNAL_NAME):  # one study writes a journal at a time: never mixed
+        journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
+        records = run_rows(
+            build,
+            values,
+            metrics,
+            context,
+            journal,
+            seed=seed,
+            chunk_size=chunk_size,
+            workers=workers,
+            scheduler=scheduler,
+            progress=progress,
+            label=label,
+        )
     n = len(values)
     outputs = {m: np.array([records[i].values.get(m, math.nan) for i in range(n)]) for m in metrics}
     return outputs, [records[i].error for i in range(n)]

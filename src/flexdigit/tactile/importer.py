@@ -169,6 +169,9 @@ class ColumnMap:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
+        from flexdigit._io import refuse_special
+
+        refuse_special(path, "a column map TOML")
         if not path.is_file():
             raise DataFileError(f"{path}: not a file (a directory?); expected a column map TOML")
         try:

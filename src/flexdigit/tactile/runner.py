@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit._io import check_output
+from flexdigit._io import check_output, output_lock
 from flexdigit._validation import check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.params import RigParams
@@ -148,6 +148,25 @@ def collect(
     plan = protocol.plan(params.geometry.digit_length_m)
     meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v)
     meta["settings"] = effective_settings(protocol, rig, settle, settings)
+    # one collection writes ``out`` and its journal at a time: a second is refused (OutputBusyError), never mixed
+    with output_lock(out):
+        return _collect_locked(protocol, rig, out, journal_file, meta, plan, settle, progress, fsync, stop_after, force)
+
+
+def _collect_locked(
+    protocol: Protocol,
+    rig,
+    out: Path,
+    journal_file: Path,
+    meta: dict,
+    plan: dict,
+    settle: float,
+    progress: bool,
+    fsync: bool,
+    stop_after: int | None,
+    force: bool,
+) -> Dataset:
+    """:func:`collect` once its checks passed, holding ``out``'s lock."""
     if out.exists() and journal_file.exists() and not force:
         return _finish_compaction(out, journal_file, meta, protocol)
     check_output(out, force=force)
