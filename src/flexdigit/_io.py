@@ -415,7 +415,8 @@ class OutputStream:
             try:  # non-blocking: a FIFO with no reader must not hang the open
                 fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_NONBLOCK | os.O_CLOEXEC)
             except OSError as exc:
-                if exc.errno == errno.ENXIO:  # a FIFO without a reader, a socket
+                st = _stat(path)  # a FIFO without a reader, a socket, a directory: named
+                if st is not None and not stat.S_ISREG(st.st_mode):
                     check_output(path, force=True)
                 raise _write_error(path, exc, True) from exc
             st = os.fstat(fd)

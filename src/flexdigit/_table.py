@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit import _io
 from flexdigit.errors import DataFileError
 
 __all__ = ["Table", "read_table", "DELIMITERS"]
@@ -337,7 +338,8 @@ def _read_parquet(p: Path, decimal: str) -> Table:
     import pyarrow.parquet as pq
 
     try:
-        table = pq.read_table(p)
+        with _io.open_input(p, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            table = pq.read_table(fh)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
         raise DataFileError(f"{p}: not a readable Parquet file ({exc})") from None
     columns = [str(c) for c in table.column_names]

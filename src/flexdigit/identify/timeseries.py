@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit import _io
 from flexdigit._validation import check_array
 from flexdigit.errors import DataFileError, one_line
 
@@ -430,7 +431,8 @@ def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
 
     check_input(p, "a Parquet record")
     try:
-        table = pq.read_table(p)
+        with _io.open_input(p, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            table = pq.read_table(fh)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
         raise DataFileError(f"{p}: not a readable Parquet file ({one_line(exc)})") from None
     try:  # pyarrow decodes the names only when asked: a damaged file's may not be UTF-8

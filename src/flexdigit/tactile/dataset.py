@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit import __version__
+from flexdigit import __version__, _io
 from flexdigit._io import atomic_path, atomic_write
 from flexdigit.errors import DataFileError, one_line
 from flexdigit.tactile.protocols import Protocol
@@ -340,7 +340,8 @@ def _load_parquet(path: Path) -> Dataset:
 
     check_input(path, "a flexdigit dataset (Parquet)")
     try:
-        table = pq.read_table(path)
+        with _io.open_input(path, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            table = pq.read_table(fh)
     except (pa.ArrowException, OSError) as exc:
         raise DataFileError(f"{path}: not a readable Parquet file ({one_line(exc)})") from None
     try:  # pyarrow decodes the names only when asked: a damaged file's may not be UTF-8

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from flexdigit import __version__
+from flexdigit import __version__, _io
 from flexdigit._io import atomic_path, atomic_write
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive, check_real, check_values
@@ -129,7 +129,8 @@ class TwinRecord:
         import pyarrow.parquet as pq
 
         try:
-            table = pq.read_table(path)
+            with _io.open_input(path, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+                table = pq.read_table(fh)
         except (pa.ArrowInvalid, OSError) as exc:
             raise DataFileError(f"{path}: not a Parquet file ({exc})") from None
         raw = (table.schema.metadata or {}).get(METADATA_KEY)
