@@ -546,8 +546,10 @@ def run_loop(
             message = f"{message}; log: {log.path}{kept}"
         except OSError as exc:
             log.abandon()
-            lost = "its last lines are lost" if log_mode != "replace" else f"{log_path} is kept as it was"
-            message = f"{message}; log: {log_path} ({lost}: {exc.strerror or exc})"
+            if log_mode == "replace":
+                message = f"{message}; log: {log_path} is kept as it was (this run's log could not be written)"
+            else:
+                message = f"{message}; log: {log_path} (its last lines are lost: {exc.strerror or exc})"
     timing = TimingStats.from_arrays(period, np.array(starts), np.array(lateness), np.array(compute), overruns)
     result = LoopResult(
         status,
