@@ -278,3 +278,30 @@ def test_two_collects_into_one_output_one_completes_one_is_refused(tmp_path):
     assert "d.parquet: another flexdigit process" in line or "d.parquet: the file exists" in line, line
     assert len(load_dataset(out)) == 1275  # thesis-6.1's readings, all of them, once
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.parquet"]
+
+
+@pytest.mark.slow
+def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path):
+    """Two real `run --log --append` at once (the paced twin keeps the first running for seconds)."""
+    import time
+
+    from flexdigit.rig.loop import read_log_runs
+
+    log = tmp_path / "r.jsonl"
+    argv = ["run", "--backend", "sim+paced", "--log", str(log), "--append"]
+    first = subprocess.Popen([*EXE, *argv, "--duration", "8"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        for _ in range(600):  # until the first holds the log's lock (it is released only when the run ends)
+            if (tmp_path / ".r.jsonl.lock").exists() or first.poll() is not None:
+                break
+            time.sleep(0.1)
+        assert first.poll() is None, "the first run ended before the second could start"
+        second = _run([*argv, "--duration", "0.2"], tmp_path)
+        assert first.poll() is None, "the first run ended before the second was refused: the test proves nothing"
+    finally:
+        out, err = first.communicate(timeout=300)
+    assert second.returncode == 2 and "r.jsonl: another flexdigit process" in _one_line(second.stderr)
+    assert first.returncode == 0, err
+    runs = read_log_runs(log)
+    # one run, whole (a loaded machine skips overrun samples, so no exact count), nothing of the second mixed in
+    assert len(runs) == 1 and runs[0][3]["stop"] == "completed" and 0 < len(runs[0][2]) <= 400
