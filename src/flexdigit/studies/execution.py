@@ -385,6 +385,7 @@ def run_study(
     over the rows (NaN where a row failed) and per row its error or None."""
     from flexdigit._io import output_lock
 
+    Path(out_dir).mkdir(parents=True, exist_ok=True)  # the lock file lives beside the journal
     with output_lock(Path(out_dir) / JOURNAL_NAME):  # one study writes a journal at a time: never mixed
         journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
         records = run_rows(
