@@ -336,3 +336,18 @@ def test_the_lock_is_released_when_its_holder_dies(tmp_path):
     with output_lock(out):
         pass
     assert _names(tmp_path) == []
+
+
+def test_a_parquet_table_past_the_row_limit_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from flexdigit import _io
+    from flexdigit._table import read_table
+
+    path = tmp_path / "t.parquet"
+    pq.write_table(pa.table({"a": list(range(300))}), path)
+    assert len(read_table(path).rows) == 300
+    monkeypatch.setattr(_io, "RECORDS_ROW_LIMIT", 299)
+    with pytest.raises(DataFileError, match=r"t.parquet: 300 rows; flexdigit reads a table of at most 299 rows"):
+        read_table(path)

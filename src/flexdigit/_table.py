@@ -339,9 +339,16 @@ def _read_parquet(p: Path, decimal: str) -> Table:
 
     try:
         with _io.open_input(p, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
-            table = pq.read_table(fh)
+            rows = pq.ParquetFile(fh).metadata.num_rows
+            too_many = rows > _io.RECORDS_ROW_LIMIT  # a table's cells become Python strings: bounded first
+            table = None if too_many else pq.read_table(fh)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
         raise DataFileError(f"{p}: not a readable Parquet file ({exc})") from None
+    if table is None:
+        raise DataFileError(
+            f"{p}: {rows:,} rows; flexdigit reads a table of at most {_io.RECORDS_ROW_LIMIT:,} rows (17 minutes at "
+            "1 kHz): cut the part you want into a file of its own"
+        )
     columns = [str(c) for c in table.column_names]
     values = [table.column(c).to_pylist() for c in table.column_names]
     rows = [
