@@ -351,3 +351,16 @@ def test_a_parquet_table_past_the_row_limit_is_refused_before_it_is_read(tmp_pat
     monkeypatch.setattr(_io, "RECORDS_ROW_LIMIT", 299)
     with pytest.raises(DataFileError, match=r"t.parquet: 300 rows; flexdigit reads a table of at most 299 rows"):
         read_table(path)
+
+
+def test_a_large_record_is_announced_on_stderr_before_it_is_read(tmp_path, capsys):
+    from flexdigit._io import LARGE_RECORD_LINES
+
+    path = tmp_path / "big.csv"
+    path.write_bytes(b"t,y\n" + b"0,1\n" * LARGE_RECORD_LINES)
+    count_lines(path, "a CSV record")
+    assert capsys.readouterr().err == f"flexdigit: reading {path}: {LARGE_RECORD_LINES + 1:,} lines\n"
+    count_lines(tmp_path / "big.csv", "a CSV record", most=10**7)
+    path.write_bytes(b"t,y\n0,1\n")
+    count_lines(path, "a CSV record")
+    assert capsys.readouterr().err.count("reading") == 1  # the large one only

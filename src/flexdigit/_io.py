@@ -48,6 +48,7 @@ import hashlib
 import os
 import secrets
 import stat
+import sys
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -87,6 +88,9 @@ RECORDS_LIMIT = 4 * 2**30
 #: release test, a calibration sweep or a tactile dataset holds, and reads in about a second in under 1 GB. A
 #: larger file is refused by name after counting its lines in bounded memory (never hangs, never takes GBs).
 RECORDS_ROW_LIMIT = 1_000_000
+
+#: A record of this many lines or more is announced on stderr before it is read (~0.5 s and more).
+LARGE_RECORD_LINES = 100_000
 
 _KINDS = {
     stat.S_IFIFO: "a FIFO (named pipe)",
@@ -588,6 +592,8 @@ def count_lines(
                     f"{path}: more than {most:,} lines; flexdigit reads {what} of at most {most:,} rows (17 minutes "
                     "at 1 kHz): cut the part you want into a file of its own"
                 )
+    if lines >= LARGE_RECORD_LINES:  # reading it takes seconds: say so, on stderr (stdout may be --json)
+        print(f"flexdigit: reading {path}: {lines:,} lines", file=sys.stderr, flush=True)
     return lines
 
 
