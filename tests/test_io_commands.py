@@ -305,3 +305,21 @@ def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path):
     runs = read_log_runs(log)
     # one run, whole (a loaded machine skips overrun samples, so no exact count), nothing of the second mixed in
     assert len(runs) == 1 and runs[0][3]["stop"] == "completed" and 0 < len(runs[0][2]) <= 400
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(os.geteuid() != 0, reason="mounting a tmpfs needs root; test_io.py injects ENOSPC instead")
+def test_a_collect_on_a_disk_that_fills_names_its_journal_and_a_rerun_resumes(tmp_path):
+    from flexdigit.tactile.dataset import load_dataset
+
+    with _small_tmpfs(tmp_path / "disk") as disk:
+        _fill(disk, 40 * 1024)
+        argv = ["collect", "thesis-6.1", "--no-progress", "--out", "d.parquet"]
+        done = _run(argv, disk, timeout=600)
+        line = _one_line(done.stderr)
+        assert done.returncode == 2 and "cannot write it: No space left on device" in line, line
+        assert "readings before are kept: free some space and rerun to resume" in line
+        (disk / "filler").unlink()
+        assert _run(argv, disk, timeout=600).returncode == 0
+        assert len(load_dataset(disk / "d.parquet")) == 1275
+        assert sorted(p.name for p in disk.iterdir()) == ["d.parquet"]

@@ -187,10 +187,18 @@ class Journal:
     def append(self, records) -> None:
         """Add finished rows, flushed and fsynced before returning."""
         lines = "".join(json.dumps(r.to_json(), sort_keys=True) + "\n" for r in records)
-        with self.path.open("a", encoding="utf-8") as fh:
-            fh.write(lines)
-            fh.flush()
-            os.fsync(fh.fileno())
+        try:
+            with self.path.open("a", encoding="utf-8") as fh:
+                fh.write(lines)
+                fh.flush()
+                os.fsync(fh.fileno())
+        except OSError as exc:  # a full disk: say which file, and that a rerun resumes (a torn line is dropped)
+            from flexdigit.errors import OutputError
+
+            raise OutputError(
+                f"{self.path}: cannot write it: {exc.strerror or exc}; the rows before are kept: free some space "
+                "and rerun to resume"
+            ) from exc
         for r in records:
             self.records[r.row] = r
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from flexdigit._io import check_output, output_lock
 from flexdigit._validation import check_real
-from flexdigit.errors import DataFileError, ParameterError, RigError
+from flexdigit.errors import DataFileError, OutputError, ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
@@ -191,17 +191,32 @@ def _collect_locked(
                 if i < start:  # replaying what the journal holds: the twin must give it again, bit for bit
                     _check_replayed(journal_file, done[i], row)
                     continue
-                journal.append(row)
+                try:
+                    journal.append(row)
+                except OSError as exc:  # a full disk: say which file, and that a rerun resumes
+                    raise OutputError(
+                        f"{journal_file}: cannot write it: {exc.strerror or exc}; the readings before are kept: "
+                        "free some space and rerun to resume"
+                    ) from exc
                 taken += 1
                 if task is not None:
                     bar.advance(task)
     finally:
-        journal.close()
+        unwritten = None
+        try:  # its last buffered line may meet a full disk: the rig is still made safe, the file named
+            journal.close()
+        except OSError as exc:
+            unwritten = OutputError(
+                f"{journal_file}: cannot write it: {exc.strerror or exc}; the readings before are kept: free some "
+                "space and rerun to resume"
+            )
         try:  # leave the rig safe: nothing hanging, servo relaxed
             rig.clear_loads()
             rig.relax()
         except Exception:  # noqa: BLE001 - the original error (if any) matters more than a failed tidy-up
             pass
+        if unwritten is not None:
+            raise unwritten  # noqa: B012 - replaces the unnamed OSError the close raised
     dataset = load_dataset(journal_file, protocol)
     if len(dataset) == total:
         save_dataset(dataset, out, force=force)
