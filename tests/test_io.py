@@ -364,3 +364,23 @@ def test_a_large_record_is_announced_on_stderr_before_it_is_read(tmp_path, capsy
     path.write_bytes(b"t,y\n0,1\n")
     count_lines(path, "a CSV record")
     assert capsys.readouterr().err.count("reading") == 1  # the large one only
+
+
+def test_a_one_shot_write_is_refused_while_another_process_holds_the_lock_and_leaves_no_lock_file(tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "p.toml"
+    code = (
+        "import sys\nfrom flexdigit._io import atomic_write\n"
+        "try:\n    atomic_write(sys.argv[1], 'w', force=True).__enter__()\n"
+        "except OSError as exc:\n    print(type(exc).__name__, exc)\n"
+    )
+    with output_lock(out):
+        with atomic_write(out, "w") as fh:  # this process holds it: allowed (a collection saving its dataset)
+            fh.write("ours")
+        done = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True, text=True, timeout=120)
+    assert done.stdout.startswith("OutputBusyError ") and "p.toml: another flexdigit process" in done.stdout, done
+    with atomic_write(out, "w", force=True) as fh:
+        fh.write("again")
+    assert _names(tmp_path) == ["p.toml"] and out.read_text() == "again"

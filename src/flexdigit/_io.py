@@ -15,8 +15,9 @@ Outputs (the guarantees the README's "Reliability" section states, each tested i
 - **Only regular files are replaced**: a FIFO, device, socket or directory at the destination (also through a
   symlink: ``--out /dev/null``) is refused, even with ``--force``. An existing file is refused unless ``force``.
 - **One writer per output**: an advisory lock (``flock`` on ``.NAME.lock`` beside it, removed when released; the
-  kernel releases it when the process dies) refuses a second writer of the same output
-  (:class:`~flexdigit.errors.OutputBusyError`) instead of mixing the two.
+  kernel releases it when the process dies), held by streams, collections and studies for their whole run,
+  refuses a second writer of the same output (:class:`~flexdigit.errors.OutputBusyError`) instead of mixing the
+  two; a one-shot atomic write is refused while another process holds it.
 - Names that are not UTF-8 work (Python's surrogateescape); temporary names are ASCII.
 
 Inputs: :func:`open_input` (and :func:`read_bytes`, :func:`read_text`, :func:`check_input`) open only regular
@@ -230,25 +231,28 @@ def _publish(tmp: Path, path: Path, force: bool) -> None:
 @contextlib.contextmanager
 def _atomic(path: str | os.PathLike, force: bool) -> Iterator[tuple[int, Path]]:
     path = check_output(path, force=force)
-    with output_lock(path):
-        old = _stat(path)
-        fd, tmp = _new_temp(path, old)
+    # a one-shot write needs no lock of its own (the rename publishes a whole file; without force a file that
+    # appeared meanwhile is kept), so it leaves no lock file behind a kill -9; it is refused while another process
+    # holds the output's lock (a run logging to it, a collection writing it)
+    _refuse_if_busy(path)
+    old = _stat(path)
+    fd, tmp = _new_temp(path, old)
+    try:
         try:
-            try:
-                yield fd, tmp
-                if not _same_file(fd, tmp):
-                    raise OutputError(f"{path}: its temporary file {tmp.name} was replaced while it was written")
-                os.fsync(fd)  # flushes the file, whichever descriptor wrote it
-                _publish(tmp, path, force)
-                _fsync_dir(path.parent if str(path.parent) else Path("."))
-            except FlexdigitError:
-                raise
-            except OSError as exc:
-                raise _write_error(path, exc, old is not None) from exc
-        finally:
-            os.close(fd)
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(tmp)
+            yield fd, tmp
+            if not _same_file(fd, tmp):
+                raise OutputError(f"{path}: its temporary file {tmp.name} was replaced while it was written")
+            os.fsync(fd)  # flushes the file, whichever descriptor wrote it
+            _publish(tmp, path, force)
+            _fsync_dir(path.parent if str(path.parent) else Path("."))
+        except FlexdigitError:
+            raise
+        except OSError as exc:
+            raise _write_error(path, exc, old is not None) from exc
+    finally:
+        os.close(fd)
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
 
 
 @contextlib.contextmanager
@@ -339,6 +343,35 @@ def output_lock(path: str | os.PathLike) -> Iterator[None]:
             os.close(fd)
 
 
+def _busy(path: Path, fd: int, exc: OSError) -> OutputError:
+    holder = ""
+    with contextlib.suppress(OSError, ValueError):
+        holder = f" (pid {int(os.pread(fd, 32, 0).decode().strip())})"
+    if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+        return OutputBusyError(
+            f"{path}: another flexdigit process{holder} is writing it; wait for it to finish or choose another file"
+        )
+    return OutputError(f"{path}: cannot lock it: {exc.strerror or exc}")
+
+
+def _refuse_if_busy(path: Path) -> None:
+    """Raise :class:`OutputBusyError` if another process holds ``path``'s lock; create nothing."""
+    lock = _lock_name(path)
+    with _held_guard:
+        if os.path.abspath(lock) in _held:  # this process holds it (a collection saving its dataset)
+            return
+    try:
+        fd = os.open(lock, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+    except OSError:  # no lock file: nobody holds it
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError as exc:
+        raise _busy(path, fd, exc) from None
+    finally:
+        os.close(fd)
+
+
 def _take_lock(path: Path, lock: Path) -> int:
     while True:
         try:
@@ -348,16 +381,9 @@ def _take_lock(path: Path, lock: Path) -> int:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as exc:
-            holder = ""
-            with contextlib.suppress(OSError, ValueError):
-                holder = f" (pid {int(os.read(fd, 32).decode().strip())})"
+            error = _busy(path, fd, exc)
             os.close(fd)
-            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                raise OutputBusyError(
-                    f"{path}: another flexdigit process{holder} is writing it; wait for it to finish or choose "
-                    "another file"
-                ) from None
-            raise OutputError(f"{path}: cannot lock it: {exc.strerror or exc}") from None
+            raise error from None
         if _same_file(fd, lock):  # not removed by its last holder between our open and our lock
             os.ftruncate(fd, 0)
             os.write(fd, f"{os.getpid()}\n".encode())
