@@ -96,19 +96,20 @@ def test_an_injected_full_disk_keeps_the_old_file_names_it_and_leaves_no_debris(
     assert _names(tmp_path) == ["fit.json"]
 
 
-def test_a_full_disk_at_fsync_is_a_failed_write_too(tmp_path, monkeypatch):
-    """NFS and some disks report ENOSPC or EDQUOT only at fsync: the old file stays."""
+@pytest.mark.parametrize("code", [errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EROFS, errno.EIO])
+def test_a_write_failing_at_fsync_is_a_failed_write_too(tmp_path, monkeypatch, code):
+    """NFS and some disks report a full disk or quota only at fsync: the old file stays, the error names it."""
     out = tmp_path / "a.bin"
     out.write_bytes(b"old")
 
     def fsync(fd):
-        raise OSError(errno.EDQUOT, "Disk quota exceeded")
+        raise OSError(code, os.strerror(code))
 
     monkeypatch.setattr(os, "fsync", fsync)
-    with pytest.raises(OutputError, match="a.bin: cannot write it: Disk quota exceeded") as info:
+    with pytest.raises(OutputError, match=rf"a.bin: cannot write it: {re.escape(os.strerror(code))}") as info:
         with atomic_write(out, force=True) as fh:
             fh.write(b"new")
-    assert info.value.errno == errno.EDQUOT and isinstance(info.value, OSError)
+    assert info.value.errno == code and isinstance(info.value, OSError)
     assert out.read_bytes() == b"old" and _names(tmp_path) == ["a.bin"]
 
 
