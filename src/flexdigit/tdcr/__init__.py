@@ -8,6 +8,7 @@ equilibrium by shooting (:mod:`flexdigit.tdcr.statics`).
 from __future__ import annotations
 
 from flexdigit.tdcr.description import ROBOTS, Backbone, Robot, Segment, Tendon, get_robot, load_robot, robot_from_dict
+from flexdigit.tdcr.statics import StaticSolution, solve_statics
 
 __all__ = [
     "ROBOTS",
@@ -18,4 +19,6 @@ __all__ = [
     "get_robot",
     "load_robot",
     "robot_from_dict",
+    "StaticSolution",
+    "solve_statics",
 ]
