@@ -1,7 +1,9 @@
 """The Cosserat rod with tendons, compiled: the ODE, its fixed-step integration and the shooting Newton.
 
-numba, because a static solve is ~20 integrations of ~300 evaluations of a 6 x 6 linear system each: in numpy
-every evaluation would cost ~50 us of dispatch for ~1 us of arithmetic. Plain loops on small arrays.
+numba, because a static solve is ~10-20 integrations of ~200 evaluations of a 6 x 6 linear system each: in numpy
+every evaluation would cost ~50 us of dispatch for ~0.2 us of arithmetic. Plain loops on small arrays, the
+scratch arrays allocated once an integration (:func:`work`): a small allocation costs about what an evaluation
+does.
 
 The state along the backbone is ``y = (p, R, v, u)`` (18 numbers: position, the rotation row by row, the
 strains; Rucker & Webster 2011, IEEE T-RO 27(6), "Statics and dynamics of continuum robots with general tendon
@@ -58,111 +60,111 @@ def _solve6(m, rhs, out):
 
 
 @_jit
-def _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, a_tot, b_tot):
+def work():
+    """Scratch arrays for the kernels: ``(mat (6, 6), m3 (9, 3), vec (10, 6))``."""
+    return np.empty((6, 6)), np.empty((9, 3)), np.empty((10, 6))
+
+
+@_jit
+def _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, ab, m3):
     """The Jacobian ``mat`` of ``Phi(v, u)``, ``Phi`` itself (the cross-section's body-frame force and moment,
-    backbone + active tendons) and the sums ``a``, ``b`` of Rucker & Webster's eq. (13)."""
+    backbone + active tendons) and the sums ``ab = (a, b)`` of Rucker & Webster's eq. (13); ``m3`` scratch."""
     for i in range(6):
         phi[i] = 0.0
+        ab[i] = 0.0
         for j in range(6):
             mat[i, j] = 0.0
     for i in range(3):
         mat[i, i] = kse[i]
         mat[3 + i, 3 + i] = kbt[i]
-        a_tot[i] = 0.0
-        b_tot[i] = 0.0
     phi[0] = kse[0] * v[0]
     phi[1] = kse[1] * v[1]
     phi[2] = kse[2] * (v[2] - 1.0)
     phi[3] = kbt[0] * u[0]
     phi[4] = kbt[1] * u[1]
     phi[5] = kbt[2] * u[2]
-    pb = np.empty(3)
-    am = np.empty((3, 3))
-    bm = np.empty((3, 3))
-    rh = np.empty((3, 3))
-    ph = np.empty((3, 3))
     for k in range(routing.shape[0]):
         if not active[k] or tau[k] == 0.0:
             continue
         r0, r1, r2 = routing[k, 0], routing[k, 1], routing[k, 2]
         # pb = u x r + v: the tendon's tangent in the body frame
-        pb[0] = u[1] * r2 - u[2] * r1 + v[0]
-        pb[1] = u[2] * r0 - u[0] * r2 + v[1]
-        pb[2] = u[0] * r1 - u[1] * r0 + v[2]
-        nrm = np.sqrt(pb[0] * pb[0] + pb[1] * pb[1] + pb[2] * pb[2])
+        p0 = u[1] * r2 - u[2] * r1 + v[0]
+        p1 = u[2] * r0 - u[0] * r2 + v[1]
+        p2 = u[0] * r1 - u[1] * r0 + v[2]
+        n2 = p0 * p0 + p1 * p1 + p2 * p2
+        nrm = np.sqrt(n2)
         t = tau[k]
         # Phi: + tau pb/|pb| (force), + r x tau pb/|pb| (moment)
-        phi[0] += t * pb[0] / nrm
-        phi[1] += t * pb[1] / nrm
-        phi[2] += t * pb[2] / nrm
-        phi[3] += t * (r1 * pb[2] - r2 * pb[1]) / nrm
-        phi[4] += t * (r2 * pb[0] - r0 * pb[2]) / nrm
-        phi[5] += t * (r0 * pb[1] - r1 * pb[0]) / nrm
-        ph[0, 0], ph[0, 1], ph[0, 2] = 0.0, -pb[2], pb[1]
-        ph[1, 0], ph[1, 1], ph[1, 2] = pb[2], 0.0, -pb[0]
-        ph[2, 0], ph[2, 1], ph[2, 2] = -pb[1], pb[0], 0.0
-        rh[0, 0], rh[0, 1], rh[0, 2] = 0.0, -r2, r1
-        rh[1, 0], rh[1, 1], rh[1, 2] = r2, 0.0, -r0
-        rh[2, 0], rh[2, 1], rh[2, 2] = -r1, r0, 0.0
-        c = -t / (nrm * nrm * nrm)
-        for i in range(3):  # A = -(tau/|pb|^3) pb^ pb^
-            for j in range(3):
-                am[i, j] = c * (ph[i, 0] * ph[0, j] + ph[i, 1] * ph[1, j] + ph[i, 2] * ph[2, j])
+        phi[0] += t * p0 / nrm
+        phi[1] += t * p1 / nrm
+        phi[2] += t * p2 / nrm
+        phi[3] += t * (r1 * p2 - r2 * p1) / nrm
+        phi[4] += t * (r2 * p0 - r0 * p2) / nrm
+        phi[5] += t * (r0 * p1 - r1 * p0) / nrm
+        # A = -(tau/|pb|^3) pb^ pb^ with pb^ pb^ = pb pb^T - |pb|^2 I
+        c = -t / (n2 * nrm)
+        m3[0, 0] = c * (p0 * p0 - n2)
+        m3[0, 1] = c * p0 * p1
+        m3[0, 2] = c * p0 * p2
+        m3[1, 0] = m3[0, 1]
+        m3[1, 1] = c * (p1 * p1 - n2)
+        m3[1, 2] = c * p1 * p2
+        m3[2, 0] = m3[0, 2]
+        m3[2, 1] = m3[1, 2]
+        m3[2, 2] = c * (p2 * p2 - n2)
+        m3[6, 0], m3[6, 1], m3[6, 2] = 0.0, -r2, r1  # r^
+        m3[7, 0], m3[7, 1], m3[7, 2] = r2, 0.0, -r0
+        m3[8, 0], m3[8, 1], m3[8, 2] = -r1, r0, 0.0
         for i in range(3):  # B = r^ A
             for j in range(3):
-                bm[i, j] = rh[i, 0] * am[0, j] + rh[i, 1] * am[1, j] + rh[i, 2] * am[2, j]
+                m3[3 + i, j] = m3[6 + i, 0] * m3[0, j] + m3[6 + i, 1] * m3[1, j] + m3[6 + i, 2] * m3[2, j]
         for i in range(3):
             for j in range(3):
-                mat[i, j] += am[i, j]
-                mat[3 + i, j] += bm[i, j]
+                mat[i, j] += m3[i, j]
+                mat[3 + i, j] += m3[3 + i, j]
                 # G = -A r^, H = -B r^
-                mat[i, 3 + j] -= am[i, 0] * rh[0, j] + am[i, 1] * rh[1, j] + am[i, 2] * rh[2, j]
-                mat[3 + i, 3 + j] -= bm[i, 0] * rh[0, j] + bm[i, 1] * rh[1, j] + bm[i, 2] * rh[2, j]
+                mat[i, 3 + j] -= m3[i, 0] * m3[6, j] + m3[i, 1] * m3[7, j] + m3[i, 2] * m3[8, j]
+                mat[3 + i, 3 + j] -= m3[3 + i, 0] * m3[6, j] + m3[3 + i, 1] * m3[7, j] + m3[3 + i, 2] * m3[8, j]
         # a = A (u x pb), b = r x a
-        w0 = u[1] * pb[2] - u[2] * pb[1]
-        w1 = u[2] * pb[0] - u[0] * pb[2]
-        w2 = u[0] * pb[1] - u[1] * pb[0]
-        a0 = am[0, 0] * w0 + am[0, 1] * w1 + am[0, 2] * w2
-        a1 = am[1, 0] * w0 + am[1, 1] * w1 + am[1, 2] * w2
-        a2 = am[2, 0] * w0 + am[2, 1] * w1 + am[2, 2] * w2
-        a_tot[0] += a0
-        a_tot[1] += a1
-        a_tot[2] += a2
-        b_tot[0] += r1 * a2 - r2 * a1
-        b_tot[1] += r2 * a0 - r0 * a2
-        b_tot[2] += r0 * a1 - r1 * a0
+        w0 = u[1] * p2 - u[2] * p1
+        w1 = u[2] * p0 - u[0] * p2
+        w2 = u[0] * p1 - u[1] * p0
+        a0 = m3[0, 0] * w0 + m3[0, 1] * w1 + m3[0, 2] * w2
+        a1 = m3[1, 0] * w0 + m3[1, 1] * w1 + m3[1, 2] * w2
+        a2 = m3[2, 0] * w0 + m3[2, 1] * w1 + m3[2, 2] * w2
+        ab[0] += a0
+        ab[1] += a1
+        ab[2] += a2
+        ab[3] += r1 * a2 - r2 * a1
+        ab[4] += r2 * a0 - r0 * a2
+        ab[5] += r0 * a1 - r1 * a0
 
 
 @_jit
-def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dy):
+def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dy, mat, m3, vec):
     """``dy/ds`` of the state ``y`` (see the module docstring); ``fdist``, ``ldist`` per length, global frame."""
     v = y[12:15]
     u = y[15:18]
-    mat = np.empty((6, 6))
-    phi = np.empty(6)
-    a = np.empty(3)
-    b = np.empty(3)
-    _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, a, b)
-    # R^T f, R^T l (R row-major in y[3:12])
-    rf = np.empty(3)
-    rl = np.empty(3)
-    for i in range(3):
-        rf[i] = y[3 + i] * fdist[0] + y[6 + i] * fdist[1] + y[9 + i] * fdist[2]
-        rl[i] = y[3 + i] * ldist[0] + y[6 + i] * ldist[1] + y[9 + i] * ldist[2]
+    phi = vec[0]
+    ab = vec[1]
+    rhs = vec[2]
+    _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, ab, m3)
     n0 = kse[0] * v[0]
     n1 = kse[1] * v[1]
     n2 = kse[2] * (v[2] - 1.0)
     m0 = kbt[0] * u[0]
     m1 = kbt[1] * u[1]
     m2 = kbt[2] * u[2]
-    rhs = np.empty(6)
-    # d = -u x n - R^T f - a ; c = -u x m - v x n - R^T l - b
-    rhs[0] = -(u[1] * n2 - u[2] * n1) - rf[0] - a[0]
-    rhs[1] = -(u[2] * n0 - u[0] * n2) - rf[1] - a[1]
-    rhs[2] = -(u[0] * n1 - u[1] * n0) - rf[2] - a[2]
-    rhs[3] = -(u[1] * m2 - u[2] * m1) - (v[1] * n2 - v[2] * n1) - rl[0] - b[0]
-    rhs[4] = -(u[2] * m0 - u[0] * m2) - (v[2] * n0 - v[0] * n2) - rl[1] - b[1]
-    rhs[5] = -(u[0] * m1 - u[1] * m0) - (v[0] * n1 - v[1] * n0) - rl[2] - b[2]
+    # d = -u x n - R^T f - a ; c = -u x m - v x n - R^T l - b   (R row-major in y[3:12])
+    for i in range(3):
+        rhs[i] = -(y[3 + i] * fdist[0] + y[6 + i] * fdist[1] + y[9 + i] * fdist[2]) - ab[i]
+        rhs[3 + i] = -(y[3 + i] * ldist[0] + y[6 + i] * ldist[1] + y[9 + i] * ldist[2]) - ab[3 + i]
+    rhs[0] -= u[1] * n2 - u[2] * n1
+    rhs[1] -= u[2] * n0 - u[0] * n2
+    rhs[2] -= u[0] * n1 - u[1] * n0
+    rhs[3] -= (u[1] * m2 - u[2] * m1) + (v[1] * n2 - v[2] * n1)
+    rhs[4] -= (u[2] * m0 - u[0] * m2) + (v[2] * n0 - v[0] * n2)
+    rhs[5] -= (u[0] * m1 - u[1] * m0) + (v[0] * n1 - v[1] * n0)
     _solve6(mat, rhs, dy[12:18])
     for i in range(3):  # p' = R v
         dy[i] = y[3 + 3 * i] * v[0] + y[4 + 3 * i] * v[1] + y[5 + 3 * i] * v[2]
@@ -174,15 +176,13 @@ def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dy):
 
 
 @_jit
-def _strains_for(y, target, routing, tau, active, kse, kbt):
+def _strains_for(y, target, routing, tau, active, kse, kbt, mat, m3, vec):
     """Set the strains ``y[12:18]`` so that ``Phi(v, u) = target`` by Newton from their present value."""
-    mat = np.empty((6, 6))
-    phi = np.empty(6)
-    a = np.empty(3)
-    b = np.empty(3)
-    step = np.empty(6)
+    phi = vec[3]
+    ab = vec[4]
+    step = vec[5]
     for _ in range(30):
-        _matrix_and_wrench(y[12:15], y[15:18], routing, tau, active, kse, kbt, mat, phi, a, b)
+        _matrix_and_wrench(y[12:15], y[15:18], routing, tau, active, kse, kbt, mat, phi, ab, m3)
         for i in range(6):
             phi[i] = target[i] - phi[i]
         _solve6(mat, phi, step)
@@ -198,29 +198,24 @@ def _strains_for(y, target, routing, tau, active, kse, kbt):
 
 
 @_jit
-def _transition(y, routing, tau, before, after, kse, kbt):
+def _transition(y, routing, tau, before, after, kse, kbt, mat, m3, vec):
     """Strains after tendons terminate: ``Phi_after(v+, u+) = Phi_before(v-, u-)``. True if it converged."""
-    mat = np.empty((6, 6))
-    target = np.empty(6)
-    a = np.empty(3)
-    b = np.empty(3)
-    _matrix_and_wrench(y[12:15], y[15:18], routing, tau, before, kse, kbt, mat, target, a, b)
-    return _strains_for(y, target, routing, tau, after, kse, kbt)
+    target = vec[6]
+    _matrix_and_wrench(y[12:15], y[15:18], routing, tau, before, kse, kbt, mat, target, vec[7], m3)
+    return _strains_for(y, target, routing, tau, after, kse, kbt, mat, m3, vec)
 
 
 @_jit
 def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, out):
     """RK4 from node 0 to the last, ``substeps`` steps a node interval; the state at every node into ``out``
     (after the jumps at tendon ends). Returns False if a transition did not converge or the state went non-finite."""
+    mat, m3, vec = work()
     y = y0.copy()
     n_t = routing.shape[0]
     active = np.empty(n_t, dtype=np.bool_)
     after = np.empty(n_t, dtype=np.bool_)
-    k1 = np.empty(STATE)
-    k2 = np.empty(STATE)
-    k3 = np.empty(STATE)
-    k4 = np.empty(STATE)
-    tmp = np.empty(STATE)
+    ks = np.empty((5, STATE))
+    k1, k2, k3, k4, tmp = ks[0], ks[1], ks[2], ks[3], ks[4]
     out[0, :] = y
     ok = True
     for k in range(1, nodes.shape[0]):
@@ -229,16 +224,16 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
             after[i] = end_node[i] >= k + 1
         h = (nodes[k] - nodes[k - 1]) / substeps
         for _ in range(substeps):
-            _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, k1)
+            _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, k1, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + 0.5 * h * k1[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k2)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k2, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + 0.5 * h * k2[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k3)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k3, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + h * k3[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k4)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k4, mat, m3, vec)
             for i in range(STATE):
                 y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
         if k < nodes.shape[0] - 1:
@@ -246,7 +241,7 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
             for i in range(n_t):
                 if active[i] != after[i] and tau[i] != 0.0:
                     changed = True
-            if changed and not _transition(y, routing, tau, active, after, kse, kbt):
+            if changed and not _transition(y, routing, tau, active, after, kse, kbt, mat, m3, vec):
                 ok = False
         out[k, :] = y
     for i in range(STATE):
@@ -257,16 +252,15 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
 
 @_jit
 def tip_residual(y, routing, tau, end_node, last, kse, kbt, tip_force, tip_moment, scale_f, scale_m, res):
-    """Body-frame wrench balance at the tip: ``Phi(v, u) - R^T (F, L)``, scaled (forces by ``scale_f``...)."""
+    """Body-frame wrench balance at the tip: ``Phi(v, u) - R^T (F, L)``, forces over ``scale_f``, moments over
+    ``scale_m``."""
+    mat, m3, vec = work()
     n_t = routing.shape[0]
     active = np.empty(n_t, dtype=np.bool_)
     for i in range(n_t):
         active[i] = end_node[i] >= last
-    mat = np.empty((6, 6))
-    phi = np.empty(6)
-    a = np.empty(3)
-    b = np.empty(3)
-    _matrix_and_wrench(y[12:15], y[15:18], routing, tau, active, kse, kbt, mat, phi, a, b)
+    phi = vec[0]
+    _matrix_and_wrench(y[12:15], y[15:18], routing, tau, active, kse, kbt, mat, phi, vec[1], m3)
     for i in range(3):
         rf = y[3 + i] * tip_force[0] + y[6 + i] * tip_force[1] + y[9 + i] * tip_force[2]
         rl = y[3 + i] * tip_moment[0] + y[6 + i] * tip_moment[1] + y[9 + i] * tip_moment[2]
@@ -277,6 +271,7 @@ def tip_residual(y, routing, tau, end_node, last, kse, kbt, tip_force, tip_momen
 @_jit
 def _evaluate(x, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, tip_force, tip_moment, buf, res):
     """Integrate from the scaled base wrench ``x``; the scaled tip residual into ``res``. Returns (ok, 2-norm)."""
+    mat, m3, vec = work()
     length = nodes[-1] - nodes[0]
     last = nodes.shape[0] - 1
     scale_m = kbt[0] / length
@@ -286,14 +281,14 @@ def _evaluate(x, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist
     y0[7] = 1.0
     y0[11] = 1.0
     y0[14] = 1.0
-    target = np.empty(6)
+    target = vec[8]
     active = np.empty(routing.shape[0], dtype=np.bool_)
     for i in range(routing.shape[0]):
         active[i] = end_node[i] >= 1
     for i in range(3):
         target[i] = x[i] * scale_f
         target[3 + i] = x[3 + i] * scale_m
-    ok = _strains_for(y0, target, routing, tau, active, kse, kbt)
+    ok = _strains_for(y0, target, routing, tau, active, kse, kbt, mat, m3, vec)
     ok = integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, buf) and ok
     tip_residual(buf[last], routing, tau, end_node, last, kse, kbt, tip_force, tip_moment, scale_f, scale_m, res)
     err = 0.0
@@ -311,40 +306,44 @@ def shoot(
     """Newton on the base wrench ``x = (n(0) L^2/EI, m(0) L/EI)`` (world = body frame at the clamp; backbone and
     tendons together) until the scaled tip residual's 2-norm <= ``tol``.
 
-    The Jacobian by forward differences (6 extra integrations), the step halved while the residual does not drop.
-    Returns ``(x, converged, iterations, residual)``; the backbone of the last iterate is in ``out``.
+    The Jacobian by forward differences (6 extra integrations) at the start, then Broyden's rank-one updates
+    while they keep the residual falling (a fresh difference Jacobian when they do not); the step halved while
+    the residual does not drop. Returns ``(x, converged, iterations, residual)``; the backbone of the last
+    iterate is in ``out``.
     """
     x = x0.copy()
-    res = np.empty(6)
-    res_t = np.empty(6)
+    vecs = np.empty((8, 6))
+    res, res_t, rhs, step, trial, dres = vecs[0], vecs[1], vecs[2], vecs[3], vecs[4], vecs[5]
     jac = np.empty((6, 6))
-    work = np.empty((6, 6))
-    rhs = np.empty(6)
-    step = np.empty(6)
-    trial = np.empty(6)
+    work_m = np.empty((6, 6))
     scratch = np.empty_like(out)
     args = (nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, tip_force, tip_moment)
     ok, err = _evaluate(x, *args, out, res)
     iterations = 0
+    have_jac = False  # jac holds a Jacobian (differences, maybe Broyden-updated since)
+    from_fd = False  # ... taken by differences at the present iterate
     while (err > tol or not ok) and iterations < max_iter:
         iterations += 1
-        for j in range(6):
-            h = 1e-7 * (1.0 + abs(x[j]))
-            for i in range(6):
-                trial[i] = x[i]
-            trial[j] += h
-            _evaluate(trial, *args, scratch, res_t)
-            for i in range(6):
-                jac[i, j] = (res_t[i] - res[i]) / h
+        if not have_jac:
+            for j in range(6):
+                h = 1e-7 * (1.0 + abs(x[j]))
+                for i in range(6):
+                    trial[i] = x[i]
+                trial[j] += h
+                _evaluate(trial, *args, scratch, res_t)
+                for i in range(6):
+                    jac[i, j] = (res_t[i] - res[i]) / h
+            have_jac = True
+            from_fd = True
         for i in range(6):
             rhs[i] = -res[i]
             for j in range(6):
-                work[i, j] = jac[i, j]
-        _solve6(work, rhs, step)
+                work_m[i, j] = jac[i, j]
+        _solve6(work_m, rhs, step)
         lam = 1.0
         accepted = False
         ok_t, err_t = ok, err
-        for _ in range(12):
+        while lam > (1e-3 if from_fd else 0.2):  # a Broyden Jacobian that needs short steps has gone stale
             for i in range(6):
                 trial[i] = x[i] + lam * step[i]
             ok_t, err_t = _evaluate(trial, *args, scratch, res_t)
@@ -353,7 +352,23 @@ def shoot(
                 break
             lam *= 0.5
         if not accepted:
-            break
+            if from_fd:
+                break
+            have_jac = False  # retry from here with a difference Jacobian
+            continue
+        # Broyden's update J += (dres - J dx) dx^T / (dx^T dx), dx = lam step
+        dxx = 0.0
+        for i in range(6):
+            dxx += (lam * step[i]) ** 2
+        for i in range(6):
+            acc = res_t[i] - res[i]
+            for j in range(6):
+                acc -= jac[i, j] * lam * step[j]
+            dres[i] = acc / dxx
+        for i in range(6):
+            for j in range(6):
+                jac[i, j] += dres[i] * lam * step[j]
+        from_fd = False
         for i in range(6):
             x[i] = trial[i]
             res[i] = res_t[i]
