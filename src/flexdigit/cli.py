@@ -29,6 +29,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.params_commands",
     "flexdigit.models.commands",
     "flexdigit.twin.commands",
+    "flexdigit.tdcr.commands",
     "flexdigit.identify.commands",
     "flexdigit.control.commands",
     "flexdigit.rig.commands",

@@ -1,24 +1,26 @@
-"""Tendon-driven continuum robots in three dimensions: description, rod statics, (later) dynamics and sensing.
+"""Tendon-driven continuum robots in three dimensions: description, rod statics (dynamics and sensing to come).
 
 The thesis's digit is the planar case of such a robot; this domain is its generalisation to space (issue 26):
 a Cosserat rod with any number of segments and tendons (:mod:`flexdigit.tdcr.description`) and its static
 equilibrium by shooting (:mod:`flexdigit.tdcr.statics`).
 """
 
-from __future__ import annotations
+from flexdigit._lazy import lazy_exports
 
-from flexdigit.tdcr.description import ROBOTS, Backbone, Robot, Segment, Tendon, get_robot, load_robot, robot_from_dict
-from flexdigit.tdcr.statics import StaticSolution, solve_statics
-
-__all__ = [
-    "ROBOTS",
-    "Backbone",
-    "Robot",
-    "Segment",
-    "Tendon",
-    "get_robot",
-    "load_robot",
-    "robot_from_dict",
-    "StaticSolution",
-    "solve_statics",
-]
+#: Public names and the submodule each lives in: imported on first use (PEP 562), so that ``flexdigit --help``
+#: (which imports ``flexdigit.tdcr.commands``) does not load numba.
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "ROBOTS": "flexdigit.tdcr.description",
+        "Backbone": "flexdigit.tdcr.description",
+        "Robot": "flexdigit.tdcr.description",
+        "Segment": "flexdigit.tdcr.description",
+        "Tendon": "flexdigit.tdcr.description",
+        "get_robot": "flexdigit.tdcr.description",
+        "load_robot": "flexdigit.tdcr.description",
+        "robot_from_dict": "flexdigit.tdcr.description",
+        "StaticSolution": "flexdigit.tdcr.statics",
+        "solve_statics": "flexdigit.tdcr.statics",
+    },
+)
