@@ -61,7 +61,7 @@ def test_toml_file_and_built_in_agree(tmp_path):
     ("text", "names"),
     [
         ("[backbone]\nradius_m = -1\n", ["radius_m", "Backbone"]),
-        ("[backbone]\npoisson_ratio = 0.7\n", ["poisson_ratio"]),
+        ("[backbone]\npoisson_ratio = 0.7\n", ["poisson_ratio", "(-1, 0.5]"]),
         ("[backbone]\nstiffness = 1\n", ["stiffness", "[backbone]"]),
         ("segments = []\n", ["segments"]),
         ("[[segments]]\nlength_m = 0.1\ndisk_count = 0\n", ["disk_count", "[[segments]] 1"]),

@@ -66,7 +66,7 @@ class Backbone:
 
     _parameter_constraints = {
         "youngs_modulus_pa": [_POSITIVE],
-        "poisson_ratio": [Interval(Real, -1, 0.5, closed="neither")],
+        "poisson_ratio": [Interval(Real, -1, 0.5, closed="right")],
         "radius_m": [_POSITIVE],
         "density_kg_m3": [Interval(Real, 0, None, closed="left")],
     }
