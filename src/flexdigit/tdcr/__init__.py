@@ -8,7 +8,7 @@ equilibrium by shooting (:mod:`flexdigit.tdcr.statics`).
 from flexdigit._lazy import lazy_exports
 
 #: Public names and the submodule each lives in: imported on first use (PEP 562), so that ``flexdigit --help``
-#: (which imports ``flexdigit.tdcr.commands``) does not load numba.
+#: (which imports ``flexdigit.cli.tdcr``) does not load numba.
 __getattr__, __all__ = lazy_exports(
     __name__,
     {
