@@ -4,7 +4,8 @@ itself back through others, and no module name is used twice.
 params -> models -> twin -> identify -> control -> rig -> (tactile, shape) -> palpation -> calibrate ->
 (live, studies) -> report -> cli (docs/conventions.md, issues 15 and 23): a module may import its own domain, the
 shared leaf modules and the domains before it, never one after it. Read from the source (every ``import`` and
-``from ... import``, also inside functions), so an import placed in a function to dodge a cycle is caught as well. tdcr (issue 26) sits at the twin's rank.
+``from ... import``, also inside functions), so an import placed in a function to dodge a cycle is caught as well.
+tdcr (tendon robots in 3D, issue 26) sits at the twin's rank.
 """
 
 from __future__ import annotations
