@@ -1,8 +1,9 @@
-"""Tendon-driven continuum robots in three dimensions: description, rod statics (dynamics and sensing to come).
+"""Tendon-driven continuum robots in three dimensions: description, rod statics and dynamics (sensing to come).
 
 The thesis's digit is the planar case of such a robot; this domain is its generalisation to space (issue 26):
-a Cosserat rod with any number of segments and tendons (:mod:`flexdigit.tdcr.description`) and its static
-equilibrium by shooting (:mod:`flexdigit.tdcr.statics`).
+a Cosserat rod with any number of segments and tendons (:mod:`flexdigit.tdcr.description`), its static
+equilibrium by shooting (:mod:`flexdigit.tdcr.statics`) and its motion, implicit in time and shot in space
+(:mod:`flexdigit.tdcr.dynamics`).
 """
 
 from flexdigit._lazy import lazy_exports
@@ -22,5 +23,7 @@ __getattr__, __all__ = lazy_exports(
         "robot_from_dict": "flexdigit.tdcr.description",
         "StaticSolution": "flexdigit.tdcr.statics",
         "solve_statics": "flexdigit.tdcr.statics",
+        "DynamicSolution": "flexdigit.tdcr.dynamics",
+        "simulate": "flexdigit.tdcr.dynamics",
     },
 )

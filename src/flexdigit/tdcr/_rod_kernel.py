@@ -5,9 +5,10 @@ every evaluation would cost ~50 us of dispatch for ~0.2 us of arithmetic. Plain 
 scratch arrays allocated once an integration (:func:`work`): a small allocation costs about what an evaluation
 does.
 
-The state along the backbone is ``y = (p, R, v, u)`` (18 numbers: position, the rotation row by row, the
-strains; Rucker & Webster 2011, IEEE T-RO 27(6), "Statics and dynamics of continuum robots with general tendon
-routing and external loading"): ``p' = R v``, ``R' = R u^``, and ``(v', u')`` solve their eq. (13)
+The state along the backbone is ``y = (p, R, v, u, q, w)`` (24 numbers: position, the rotation row by row, the
+strains, and for dynamics the body-frame linear and angular velocities; Rucker & Webster 2011, IEEE T-RO 27(6),
+"Statics and dynamics of continuum robots with general tendon routing and external loading"): ``p' = R v``,
+``R' = R u^``, and ``(v', u')`` solve their eq. (13)
 
     [Kse + A   G      ] [v']   [d]
     [B         Kbt + H] [u'] = [c]
@@ -15,6 +16,13 @@ routing and external loading"): ``p' = R v``, ``R' = R u^``, and ``(v', u')`` so
 for tendons routed straight (``r_i' = 0``). Where tendons terminate, the backbone's strains jump so that the
 whole cross-section's wrench (backbone + tendons, ``Phi`` below) stays continuous (a disk carries no external
 load); the jump is solved by Newton on ``Phi``, whose Jacobian is the same matrix.
+
+Dynamics (Till, Aloi & Rucker 2019, IJRR 38(6), "Real-time dynamics of soft and continuum robots based on
+Cosserat rod models"): time derivatives by an implicit BDF formula ``x_t = c0 x + x_h`` (``x_h`` from the
+previous steps, per node), which turns each time step into a boundary-value problem in ``s`` of the same form:
+the inertia ``rho A (w x q + q_t)`` and ``w x rho J w + rho J w_t`` enter as distributed loads, and the
+compatibility equations ``q' = v_t - u x q + w x v``, ``w' = u_t - u x w`` carry the velocities. Statics is
+``c0 = 0`` with no history, where ``q = w = 0`` throughout.
 """
 
 from __future__ import annotations
@@ -24,7 +32,11 @@ import numpy as np
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
-STATE = 18
+STATE = 24
+HIST = 12  # v_h, u_h, q_h, w_h
+#: A node's record: the state after any jump there, then (v, u, q, w) before it (what the interval ending there
+#: saw: the BDF history of that interval's end)
+RECORD = STATE + HIST
 
 
 @_jit
@@ -141,30 +153,49 @@ def _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, ab, m3):
 
 
 @_jit
-def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dy, mat, m3, vec):
-    """``dy/ds`` of the state ``y`` (see the module docstring); ``fdist``, ``ldist`` per length, global frame."""
+def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, hist, dy, mat, m3, vec):
+    """``dy/ds`` of the state ``y`` (see the module docstring); ``fdist``, ``ldist`` per length, global frame;
+    ``dyn = (c0, rho A, rho J1, rho J2, rho J3)``, ``hist`` the BDF history ``(v_h, u_h, q_h, w_h)`` at this s."""
     v = y[12:15]
     u = y[15:18]
+    q = y[18:21]
+    w = y[21:24]
     phi = vec[0]
     ab = vec[1]
     rhs = vec[2]
+    tt = vec[9]  # v_t, u_t
     _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, ab, m3)
+    c0 = dyn[0]
+    rho_a = dyn[1]
+    for i in range(3):
+        tt[i] = c0 * v[i] + hist[i]
+        tt[3 + i] = c0 * u[i] + hist[3 + i]
     n0 = kse[0] * v[0]
     n1 = kse[1] * v[1]
     n2 = kse[2] * (v[2] - 1.0)
     m0 = kbt[0] * u[0]
     m1 = kbt[1] * u[1]
     m2 = kbt[2] * u[2]
-    # d = -u x n - R^T f - a ; c = -u x m - v x n - R^T l - b   (R row-major in y[3:12])
+    # body-frame distributed loads: external (R^T f, R^T l; R row-major in y[3:12]) less the inertia
+    jw0 = dyn[2] * w[0]
+    jw1 = dyn[3] * w[1]
+    jw2 = dyn[4] * w[2]
+    fi0 = rho_a * (w[1] * q[2] - w[2] * q[1] + c0 * q[0] + hist[6])
+    fi1 = rho_a * (w[2] * q[0] - w[0] * q[2] + c0 * q[1] + hist[7])
+    fi2 = rho_a * (w[0] * q[1] - w[1] * q[0] + c0 * q[2] + hist[8])
+    li0 = w[1] * jw2 - w[2] * jw1 + dyn[2] * (c0 * w[0] + hist[9])
+    li1 = w[2] * jw0 - w[0] * jw2 + dyn[3] * (c0 * w[1] + hist[10])
+    li2 = w[0] * jw1 - w[1] * jw0 + dyn[4] * (c0 * w[2] + hist[11])
+    # d = -u x n - f_body - a ; c = -u x m - v x n - l_body - b
     for i in range(3):
         rhs[i] = -(y[3 + i] * fdist[0] + y[6 + i] * fdist[1] + y[9 + i] * fdist[2]) - ab[i]
         rhs[3 + i] = -(y[3 + i] * ldist[0] + y[6 + i] * ldist[1] + y[9 + i] * ldist[2]) - ab[3 + i]
-    rhs[0] -= u[1] * n2 - u[2] * n1
-    rhs[1] -= u[2] * n0 - u[0] * n2
-    rhs[2] -= u[0] * n1 - u[1] * n0
-    rhs[3] -= (u[1] * m2 - u[2] * m1) + (v[1] * n2 - v[2] * n1)
-    rhs[4] -= (u[2] * m0 - u[0] * m2) + (v[2] * n0 - v[0] * n2)
-    rhs[5] -= (u[0] * m1 - u[1] * m0) + (v[0] * n1 - v[1] * n0)
+    rhs[0] += fi0 - (u[1] * n2 - u[2] * n1)
+    rhs[1] += fi1 - (u[2] * n0 - u[0] * n2)
+    rhs[2] += fi2 - (u[0] * n1 - u[1] * n0)
+    rhs[3] += li0 - (u[1] * m2 - u[2] * m1) - (v[1] * n2 - v[2] * n1)
+    rhs[4] += li1 - (u[2] * m0 - u[0] * m2) - (v[2] * n0 - v[0] * n2)
+    rhs[5] += li2 - (u[0] * m1 - u[1] * m0) - (v[0] * n1 - v[1] * n0)
     _solve6(mat, rhs, dy[12:18])
     for i in range(3):  # p' = R v
         dy[i] = y[3 + 3 * i] * v[0] + y[4 + 3 * i] * v[1] + y[5 + 3 * i] * v[2]
@@ -173,6 +204,13 @@ def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dy, mat, m3, vec):
         dy[3 + 3 * i] = r1 * u[2] - r2 * u[1]
         dy[4 + 3 * i] = r2 * u[0] - r0 * u[2]
         dy[5 + 3 * i] = r0 * u[1] - r1 * u[0]
+    # q' = v_t - u x q + w x v ; w' = u_t - u x w  (p_st = p_ts, R_st = R_ts)
+    dy[18] = tt[0] - (u[1] * q[2] - u[2] * q[1]) + (w[1] * v[2] - w[2] * v[1])
+    dy[19] = tt[1] - (u[2] * q[0] - u[0] * q[2]) + (w[2] * v[0] - w[0] * v[2])
+    dy[20] = tt[2] - (u[0] * q[1] - u[1] * q[0]) + (w[0] * v[1] - w[1] * v[0])
+    dy[21] = tt[3] - (u[1] * w[2] - u[2] * w[1])
+    dy[22] = tt[4] - (u[2] * w[0] - u[0] * w[2])
+    dy[23] = tt[5] - (u[0] * w[1] - u[1] * w[0])
 
 
 @_jit
@@ -206,9 +244,10 @@ def _transition(y, routing, tau, before, after, kse, kbt, mat, m3, vec):
 
 
 @_jit
-def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, out):
-    """RK4 from node 0 to the last, ``substeps`` steps a node interval; the state at every node into ``out``
-    (after the jumps at tendon ends). Returns False if a transition did not converge or the state went non-finite."""
+def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, dyn, hist, out):
+    """RK4 from node 0 to the last, ``substeps`` steps a node interval; each node's record (:data:`RECORD`) into
+    ``out``. ``hist`` (nodes, 24): the BDF history at the nodes, after (:12) and before (12:) any jump there, linear
+    along each interval. Returns False if a transition did not converge or the state went non-finite."""
     mat, m3, vec = work()
     y = y0.copy()
     n_t = routing.shape[0]
@@ -216,26 +255,37 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
     after = np.empty(n_t, dtype=np.bool_)
     ks = np.empty((5, STATE))
     k1, k2, k3, k4, tmp = ks[0], ks[1], ks[2], ks[3], ks[4]
-    out[0, :] = y
+    hs = np.empty((3, HIST))
+    h0, hm, h1 = hs[0], hs[1], hs[2]
+    out[0, :STATE] = y
+    out[0, STATE:] = y[12:]
     ok = True
     for k in range(1, nodes.shape[0]):
         for i in range(n_t):
             active[i] = end_node[i] >= k
             after[i] = end_node[i] >= k + 1
         h = (nodes[k] - nodes[k - 1]) / substeps
-        for _ in range(substeps):
-            _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, k1, mat, m3, vec)
+        for j in range(substeps):
+            a0 = j / substeps
+            am = (j + 0.5) / substeps
+            a1 = (j + 1.0) / substeps
+            for i in range(HIST):
+                h0[i] = (1.0 - a0) * hist[k - 1, i] + a0 * hist[k, HIST + i]
+                hm[i] = (1.0 - am) * hist[k - 1, i] + am * hist[k, HIST + i]
+                h1[i] = (1.0 - a1) * hist[k - 1, i] + a1 * hist[k, HIST + i]
+            _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, h0, k1, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + 0.5 * h * k1[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k2, mat, m3, vec)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, hm, k2, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + 0.5 * h * k2[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k3, mat, m3, vec)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, hm, k3, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + h * k3[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, k4, mat, m3, vec)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, h1, k4, mat, m3, vec)
             for i in range(STATE):
                 y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        out[k, STATE:] = y[12:]
         if k < nodes.shape[0] - 1:
             changed = False
             for i in range(n_t):
@@ -243,7 +293,7 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
                     changed = True
             if changed and not _transition(y, routing, tau, active, after, kse, kbt, mat, m3, vec):
                 ok = False
-        out[k, :] = y
+        out[k, :STATE] = y
     for i in range(STATE):
         if not np.isfinite(y[i]):
             ok = False
@@ -269,7 +319,9 @@ def tip_residual(y, routing, tau, end_node, last, kse, kbt, tip_force, tip_momen
 
 
 @_jit
-def _evaluate(x, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, tip_force, tip_moment, buf, res):
+def _evaluate(
+    x, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, dyn, hist, tip_force, tip_moment, buf, res
+):
     """Integrate from the scaled base wrench ``x``; the scaled tip residual into ``res``. Returns (ok, 2-norm)."""
     mat, m3, vec = work()
     length = nodes[-1] - nodes[0]
@@ -289,7 +341,7 @@ def _evaluate(x, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist
         target[i] = x[i] * scale_f
         target[3 + i] = x[3 + i] * scale_m
     ok = _strains_for(y0, target, routing, tau, active, kse, kbt, mat, m3, vec)
-    ok = integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, buf) and ok
+    ok = integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, dyn, hist, buf) and ok
     tip_residual(buf[last], routing, tau, end_node, last, kse, kbt, tip_force, tip_moment, scale_f, scale_m, res)
     err = 0.0
     for i in range(6):
@@ -301,7 +353,25 @@ def _evaluate(x, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist
 
 @_jit
 def shoot(
-    x0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, tip_force, tip_moment, tol, max_iter, out
+    x0,
+    nodes,
+    substeps,
+    routing,
+    tau,
+    end_node,
+    kse,
+    kbt,
+    fdist,
+    ldist,
+    dyn,
+    hist,
+    tip_force,
+    tip_moment,
+    tol,
+    max_iter,
+    out,
+    jac,
+    have_jac,
 ):
     """Newton on the base wrench ``x = (n(0) L^2/EI, m(0) L/EI)`` (world = body frame at the clamp; backbone and
     tendons together) until the scaled tip residual's 2-norm <= ``tol``.
@@ -314,13 +384,13 @@ def shoot(
     x = x0.copy()
     vecs = np.empty((8, 6))
     res, res_t, rhs, step, trial, dres = vecs[0], vecs[1], vecs[2], vecs[3], vecs[4], vecs[5]
-    jac = np.empty((6, 6))
     work_m = np.empty((6, 6))
     scratch = np.empty_like(out)
-    args = (nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, tip_force, tip_moment)
+    args = (nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, dyn, hist, tip_force, tip_moment)
     ok, err = _evaluate(x, *args, out, res)
     iterations = 0
-    have_jac = False  # jac holds a Jacobian (differences, maybe Broyden-updated since)
+    # have_jac: jac (in and out) holds a Jacobian (differences, maybe Broyden-updated since): a time step starts
+    # from the last step's
     from_fd = False  # ... taken by differences at the present iterate
     while (err > tol or not ok) and iterations < max_iter:
         iterations += 1
@@ -374,4 +444,87 @@ def shoot(
             res[i] = res_t[i]
         ok, err = ok_t, err_t
         out[:, :] = scratch
-    return x, (err <= tol and ok), iterations, err
+    return x, (err <= tol and ok), iterations, err, have_jac
+
+
+@_jit
+def simulate(
+    x0,
+    y_init,
+    nodes,
+    substeps,
+    routing,
+    tau,
+    end_node,
+    kse,
+    kbt,
+    fdist,
+    ldist,
+    inertia,
+    tip_force,
+    tip_moment,
+    dt,
+    n_steps,
+    tol,
+    max_iter,
+    states,
+    iterations,
+):
+    """March ``n_steps`` implicit steps of ``dt`` from the rod at rest in ``y_init`` (nodes, :data:`RECORD`); BDF1
+    for the first step, BDF2 after. ``inertia = (rho A, rho J1, rho J2, rho J3)``. Every step's records into
+    ``states`` (steps + 1, nodes, RECORD), its Newton iterations into ``iterations``. Returns the number of steps
+    that converged."""
+    n_nodes = nodes.shape[0]
+    prev1 = y_init.copy()
+    prev2 = y_init.copy()
+    hist = np.zeros((n_nodes, 2 * HIST))
+    dyn = np.empty(5)
+    dyn[1:] = inertia
+    jac = np.empty((6, 6))
+    have_jac = False
+    buf = np.empty((n_nodes, RECORD))
+    states[0] = y_init
+    x = x0.copy()
+    x_old = x0.copy()
+    guess = x0.copy()
+    for step in range(n_steps):
+        # x_t = c0 x + x_h: BDF1 first (x_h = -x1/dt), BDF2 after (x_h = (-4 x1 + x2) / (2 dt)); the history of
+        # the velocities and strains after (12:24) and before (24:36) each node's jump
+        dyn[0] = 1.0 / dt if step == 0 else 1.5 / dt
+        for k in range(n_nodes):
+            for i in range(2 * HIST):
+                if step == 0:
+                    hist[k, i] = -prev1[k, 12 + i] / dt
+                else:
+                    hist[k, i] = (-4.0 * prev1[k, 12 + i] + prev2[k, 12 + i]) / (2.0 * dt)
+        for i in range(6):  # a linear extrapolation of the last two steps' clamp wrench
+            guess[i] = 2.0 * x[i] - x_old[i] if step > 1 else x[i]
+            x_old[i] = x[i]
+        x, converged, its, err, have_jac = shoot(
+            guess,
+            nodes,
+            substeps,
+            routing,
+            tau,
+            end_node,
+            kse,
+            kbt,
+            fdist,
+            ldist,
+            dyn,
+            hist,
+            tip_force,
+            tip_moment,
+            tol,
+            max_iter,
+            buf,
+            jac,
+            have_jac,
+        )
+        iterations[step] = its
+        if not converged:
+            return step
+        states[step + 1] = buf
+        prev2[:, :] = prev1
+        prev1[:, :] = buf
+    return n_steps

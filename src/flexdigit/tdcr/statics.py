@@ -57,6 +57,8 @@ class StaticSolution:
         Backbone frames: columns are the cross-section's x, y and z (tangent at rest) axes in the world frame.
     strains : ndarray (n, 6)
         ``(v, u)``: shear/extension and curvature/twist (1/m) in the body frame, after any jump at a node.
+    strains_before_jump : ndarray (n, 6)
+        The same before it (different only where tendons terminate).
     base_wrench : ndarray (6,)
         The shooting unknowns: force (N) and moment (N m) on the clamp's cross-section, backbone and tendons
         together, world frame; a start for a nearby solve.
@@ -72,6 +74,7 @@ class StaticSolution:
     positions_m: np.ndarray
     rotations: np.ndarray
     strains: np.ndarray
+    strains_before_jump: np.ndarray
     base_wrench: np.ndarray
     converged: bool
     iterations: int
@@ -208,7 +211,7 @@ def solve_statics(
         robot.backbone.shear_extension_stiffness,
         robot.backbone.bending_torsion_stiffness,
     )
-    out = np.empty((nodes.size, _rod_kernel.STATE))
+    out = np.empty((nodes.size, _rod_kernel.RECORD))
     loads = (tau, fdist, tip_force, tip_moment)
     x, converged, iterations, residual = _shoot(kernel_args, loads, 1.0, x0, tol, max_iter, out)
     if not converged and initial_base_wrench is None:
@@ -236,6 +239,7 @@ def solve_statics(
         positions_m=out[:, 0:3].copy(),
         rotations=out[:, 3:12].reshape(-1, 3, 3).copy(),
         strains=out[:, 12:18].copy(),
+        strains_before_jump=out[:, 24:30].copy(),
         base_wrench=np.array(x) * scale,
         converged=bool(converged),
         iterations=int(iterations),
@@ -246,7 +250,9 @@ def solve_statics(
 def _shoot(kernel_args, loads, factor, x0, tol, max_iter, out):
     nodes, substeps, routing, end_node, kse, kbt = kernel_args
     tau, fdist, tip_force, tip_moment = (factor * np.asarray(v) for v in loads)
-    x, converged, iterations, residual = _rod_kernel.shoot(
+    statics = np.zeros(5)  # c0 = 0: no time derivatives, no inertia
+    history = np.zeros((nodes.size, 2 * _rod_kernel.HIST))
+    x, converged, iterations, residual, _ = _rod_kernel.shoot(
         x0,
         nodes,
         substeps,
@@ -257,11 +263,15 @@ def _shoot(kernel_args, loads, factor, x0, tol, max_iter, out):
         kbt,
         fdist,
         np.zeros(3),
+        statics,
+        history,
         tip_force,
         tip_moment,
         tol,
         max_iter,
         out,
+        np.empty((6, 6)),
+        False,
     )
     return x, bool(converged), int(iterations), float(residual)
 
