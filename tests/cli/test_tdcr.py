@@ -50,3 +50,23 @@ def test_bad_input_is_one_json_error(argv, needle, capsys):
     error = json.loads(captured.out)
     assert needle in error["error"] and error["exit_code"] == 2
     assert captured.err.count("\n") == 1
+
+
+def test_dynamics_json_gives_the_tip_path(capsys):
+    # rao2021 pulled from straight by tendons 1 and 5 at t = 0: it swings towards (and about) its static shape
+    argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "4,0,0,0,2,0", "--dt-s", "0.005", "--duration-s", "0.5"]
+    assert main([*argv, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["converged"] is True
+    tip = np.array(data["tip_position_m"])
+    assert tip.shape == (101, 3) and len(data["t_s"]) == 101
+    np.testing.assert_allclose(tip[0], [0.0, 0.0, 0.4], atol=1e-9)  # from rest, straight
+    # undamped, it overshoots its static tip: the path reaches past it along the static tip's direction
+    reach = tip @ RAO_TIP_M / np.linalg.norm(RAO_TIP_M)
+    assert reach.max() > np.linalg.norm(RAO_TIP_M) - RAO_ATOL_M
+
+
+def test_dynamics_refuses_a_wrong_initial_tension_count(capsys):
+    argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "0,0,0,0,0,0", "--from-tension-n", "1,0", "--json"]
+    assert main(argv) == 2
+    assert "--from-tension-n must give one tension per tendon" in json.loads(capsys.readouterr().out)["error"]

@@ -1,8 +1,10 @@
-"""``flexdigit tdcr statics ROBOT --tension-n T1,...,Tn [...] [--json]``: a tendon robot's static shape.
+"""``flexdigit tdcr statics|dynamics ROBOT --tension-n T1,...,Tn [...] [--json]``: a tendon robot in 3D.
 
-ROBOT is a built-in name (``rao2021``) or a robot TOML file (:mod:`flexdigit.tdcr.description`). Prints the tip
-position and frame and, under ``--json``, the backbone (every disk) as well. A solve that does not converge is
-reported with ``converged: false`` and exit code 1.
+ROBOT is a built-in name (``rao2021``) or a robot TOML file (:mod:`flexdigit.tdcr.description`). ``statics``
+prints the tip position and frame and, under ``--json``, the backbone (every disk) as well. ``dynamics`` starts
+from the static shape under ``--from-tension-n`` / ``--from-tip-force-n`` (default: straight), applies the given
+loads at t = 0 and prints the tip's path. A solve that does not converge is reported with ``converged: false``
+and exit code 1.
 """
 
 from __future__ import annotations
@@ -41,22 +43,37 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--tip-moment-nm", help="tip moment mx,my,mz in N m " + vector.format("tip-moment-nm"))
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+    p = sub.add_parser("dynamics", help="time response from a static shape to loads applied at t = 0")
+    p.add_argument("robot", metavar="ROBOT", help="a built-in robot (rao2021) or a robot TOML file")
+    p.add_argument("--tension-n", required=True, help="tendon tensions from t = 0, in N, one per tendon")
+    p.add_argument("--tip-force-n", help="tip force from t = 0, fx,fy,fz in N " + vector.format("tip-force-n"))
+    p.add_argument("--tip-moment-nm", help="tip moment from t = 0, in N m " + vector.format("tip-moment-nm"))
+    p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame, before and after t = 0")
+    p.add_argument("--from-tension-n", help="tensions of the initial static shape (default: all zero)")
+    p.add_argument("--from-tip-force-n", help="tip force of the initial static shape (default: none)")
+    p.add_argument("--duration-s", type=float, default=1.0, help="simulated time (default 1 s)")
+    p.add_argument("--dt-s", type=float, default=1e-3, help="implicit time step (default 1 ms)")
+    p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
-    import warnings
+    if args.tdcr_command == "dynamics":
+        return _dynamics(args)
+    return _statics(args)
 
-    from flexdigit.errors import ConvergenceWarning
-    from flexdigit.tdcr import get_robot, solve_statics
 
-    robot = get_robot(args.robot)
-    tensions = _floats(args.tension_n, "tension-n")
+def _tensions(text: str, flag: str, robot) -> list[float]:
+    tensions = _floats(text, flag)
     if len(tensions) != len(robot.tendons):
         raise ParameterError(
-            f"--tension-n must give one tension per tendon of {robot.name!r} ({len(robot.tendons)}, in the order "
-            f"of its description). Got {len(tensions)} in {args.tension_n!r} instead."
+            f"--{flag} must give one tension per tendon of {robot.name!r} ({len(robot.tendons)}, in the order "
+            f"of its description). Got {len(tensions)} in {text!r} instead."
         )
-    loads = {
+    return tensions
+
+
+def _loads(args: argparse.Namespace) -> dict:
+    return {
         key: _floats(text, flag, 3)
         for key, flag, text in (
             ("tip_force_n", "tip-force-n", args.tip_force_n),
@@ -65,6 +82,59 @@ def _run(args: argparse.Namespace) -> CommandResult:
         )
         if text is not None
     }
+
+
+def _dynamics(args: argparse.Namespace) -> CommandResult:
+    import warnings
+
+    from flexdigit.errors import ConvergenceWarning
+    from flexdigit.tdcr import get_robot, simulate, solve_statics
+
+    robot = get_robot(args.robot)
+    tensions = _tensions(args.tension_n, "tension-n", robot)
+    loads = _loads(args)
+    start = {"tensions_n": [0.0] * len(robot.tendons)}
+    if args.from_tension_n is not None:
+        start["tensions_n"] = _tensions(args.from_tension_n, "from-tension-n", robot)
+    if args.from_tip_force_n is not None:
+        start["tip_force_n"] = _floats(args.from_tip_force_n, "from-tip-force-n", 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)  # reported below, in the result and the exit code
+        initial = solve_statics(
+            robot, start["tensions_n"], gravity_m_s2=loads.get("gravity_m_s2"), tip_force_n=start.get("tip_force_n")
+        )
+        motion = simulate(robot, initial, args.duration_s, dt_s=args.dt_s, tensions_n=tensions, **loads)
+    converged = initial.converged and motion.converged
+    data = {
+        "robot": robot.name,
+        "tensions_n": tensions,
+        **loads,
+        "initial": {"converged": initial.converged, "tip_position_m": initial.tip_position_m.tolist(), **start},
+        "converged": converged,
+        "dt_s": args.dt_s,
+        "t_s": motion.t_s.tolist(),
+        "tip_position_m": motion.tip_positions_m.tolist(),
+        "newton_iterations": motion.iterations.tolist(),
+    }
+    tip0, tip1 = initial.tip_position_m * 1e3, motion.tip_positions_m[-1] * 1e3
+    lines = [
+        f"{robot.name}: {motion.t_s[-1]:.4g} s in steps of {args.dt_s:g} s",
+        f"tip from ({tip0[0]:.3f}, {tip0[1]:.3f}, {tip0[2]:.3f}) mm",
+        f"      to ({tip1[0]:.3f}, {tip1[1]:.3f}, {tip1[2]:.3f}) mm",
+        f"converged: {converged}",
+    ]
+    return CommandResult(data=data, text="\n".join(lines), exit_code=0 if converged else 1)
+
+
+def _statics(args: argparse.Namespace) -> CommandResult:
+    import warnings
+
+    from flexdigit.errors import ConvergenceWarning
+    from flexdigit.tdcr import get_robot, solve_statics
+
+    robot = get_robot(args.robot)
+    tensions = _tensions(args.tension_n, "tension-n", robot)
+    loads = _loads(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)  # reported below, in the result and the exit code
         sol = solve_statics(robot, tensions, **loads)

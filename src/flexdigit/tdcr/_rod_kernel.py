@@ -487,6 +487,11 @@ def simulate(
     x = x0.copy()
     x_old = x0.copy()
     guess = x0.copy()
+    mat, m3, vec = work()
+    phi, ab = vec[0], vec[1]
+    active0 = np.empty(routing.shape[0], dtype=np.bool_)
+    for i in range(routing.shape[0]):
+        active0[i] = end_node[i] >= 1
     for step in range(n_steps):
         # x_t = c0 x + x_h: BDF1 first (x_h = -x1/dt), BDF2 after (x_h = (-4 x1 + x2) / (2 dt)); the history of
         # the velocities and strains after (12:24) and before (24:36) each node's jump
@@ -497,8 +502,11 @@ def simulate(
                     hist[k, i] = -prev1[k, 12 + i] / dt
                 else:
                     hist[k, i] = (-4.0 * prev1[k, 12 + i] + prev2[k, 12 + i]) / (2.0 * dt)
-        for i in range(6):  # a linear extrapolation of the last two steps' clamp wrench
-            guess[i] = 2.0 * x[i] - x_old[i] if step > 1 else x[i]
+        for i in range(6):  # after: a linear extrapolation of the last two steps' clamp wrench
+            if step > 1:
+                guess[i] = 2.0 * x[i] - x_old[i]
+            elif step == 1:
+                guess[i] = x[i]
             x_old[i] = x[i]
         x, converged, its, err, have_jac = shoot(
             guess,
@@ -521,6 +529,36 @@ def simulate(
             jac,
             have_jac,
         )
+        if not converged and step == 0:
+            # the loads change at t = 0, the strains cannot: retry from the clamp wrench of the rest state's base
+            # strains under the new tensions (the clamp wrench jumps when tendons are released or pulled)
+            _matrix_and_wrench(y_init[0, 12:15], y_init[0, 15:18], routing, tau, active0, kse, kbt, mat, phi, ab, m3)
+            length = nodes[-1] - nodes[0]
+            for i in range(3):
+                guess[i] = phi[i] / (kbt[0] / (length * length))
+                guess[3 + i] = phi[3 + i] / (kbt[0] / length)
+            x, converged, more, err, have_jac = shoot(
+                guess,
+                nodes,
+                substeps,
+                routing,
+                tau,
+                end_node,
+                kse,
+                kbt,
+                fdist,
+                ldist,
+                dyn,
+                hist,
+                tip_force,
+                tip_moment,
+                tol,
+                max_iter,
+                buf,
+                jac,
+                False,
+            )
+            its += more
         iterations[step] = its
         if not converged:
             return step
