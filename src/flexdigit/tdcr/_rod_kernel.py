@@ -73,28 +73,30 @@ def _solve6(m, rhs, out):
 
 @_jit
 def work():
-    """Scratch arrays for the kernels: ``(mat (6, 6), m3 (9, 3), vec (10, 6))``."""
-    return np.empty((6, 6)), np.empty((9, 3)), np.empty((10, 6))
+    """Scratch arrays for the kernels: ``(mat (6, 6), m3 (10, 7), vec (10, 6))``."""
+    return np.empty((6, 6)), np.empty((10, 7)), np.empty((10, 6))
 
 
 @_jit
-def _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, ab, m3):
+def _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, dmp, mat, phi, ab, m3):
     """The Jacobian ``mat`` of ``Phi(v, u)``, ``Phi`` itself (the cross-section's body-frame force and moment,
-    backbone + active tendons) and the sums ``ab = (a, b)`` of Rucker & Webster's eq. (13); ``m3`` scratch."""
+    backbone + active tendons) and the sums ``ab = (a, b)`` of Rucker & Webster's eq. (13); ``m3`` scratch.
+
+    ``dmp = (g, beta v_h, beta u_h)``: Kelvin-Voigt damping ``beta K (v_t, u_t)`` under BDF, ``g = 1 + beta c0``;
+    the backbone's force is ``Kse (g v - e3 + beta v_h)``, its moment ``Kbt (g u + beta u_h)``. ``(1, 0...)``: none.
+    """
     for i in range(6):
         phi[i] = 0.0
         ab[i] = 0.0
         for j in range(6):
             mat[i, j] = 0.0
+    g = dmp[0]
     for i in range(3):
-        mat[i, i] = kse[i]
-        mat[3 + i, 3 + i] = kbt[i]
-    phi[0] = kse[0] * v[0]
-    phi[1] = kse[1] * v[1]
-    phi[2] = kse[2] * (v[2] - 1.0)
-    phi[3] = kbt[0] * u[0]
-    phi[4] = kbt[1] * u[1]
-    phi[5] = kbt[2] * u[2]
+        mat[i, i] = g * kse[i]
+        mat[3 + i, 3 + i] = g * kbt[i]
+        phi[i] = kse[i] * (g * v[i] + dmp[1 + i])
+        phi[3 + i] = kbt[i] * (g * u[i] + dmp[4 + i])
+    phi[2] -= kse[2]
     for k in range(routing.shape[0]):
         if not active[k] or tau[k] == 0.0:
             continue
@@ -153,9 +155,10 @@ def _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, ab, m3):
 
 
 @_jit
-def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, hist, dy, mat, m3, vec):
+def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, hist, dhist, dy, mat, m3, vec):
     """``dy/ds`` of the state ``y`` (see the module docstring); ``fdist``, ``ldist`` per length, global frame;
-    ``dyn = (c0, rho A, rho J1, rho J2, rho J3)``, ``hist`` the BDF history ``(v_h, u_h, q_h, w_h)`` at this s."""
+    ``dyn = (c0, rho A, rho J1, rho J2, rho J3, beta)``, ``hist`` the BDF history ``(v_h, u_h, q_h, w_h)`` at this
+    s, ``dhist`` the derivative along s of its ``(v_h, u_h)``."""
     v = y[12:15]
     u = y[15:18]
     q = y[18:21]
@@ -164,18 +167,24 @@ def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, hist, dy, mat, m3
     ab = vec[1]
     rhs = vec[2]
     tt = vec[9]  # v_t, u_t
-    _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, mat, phi, ab, m3)
+    dmp = m3[9]
     c0 = dyn[0]
     rho_a = dyn[1]
+    beta = dyn[5]
+    dmp[0] = 1.0 + beta * c0
+    for i in range(6):
+        dmp[1 + i] = beta * hist[i]
+    _matrix_and_wrench(v, u, routing, tau, active, kse, kbt, dmp, mat, phi, ab, m3)
     for i in range(3):
         tt[i] = c0 * v[i] + hist[i]
         tt[3 + i] = c0 * u[i] + hist[3 + i]
-    n0 = kse[0] * v[0]
-    n1 = kse[1] * v[1]
-    n2 = kse[2] * (v[2] - 1.0)
-    m0 = kbt[0] * u[0]
-    m1 = kbt[1] * u[1]
-    m2 = kbt[2] * u[2]
+    # the backbone's (damped) force and moment: Phi less the tendons' share
+    n0 = kse[0] * (dmp[0] * v[0] + dmp[1])
+    n1 = kse[1] * (dmp[0] * v[1] + dmp[2])
+    n2 = kse[2] * (dmp[0] * v[2] + dmp[3] - 1.0)
+    m0 = kbt[0] * (dmp[0] * u[0] + dmp[4])
+    m1 = kbt[1] * (dmp[0] * u[1] + dmp[5])
+    m2 = kbt[2] * (dmp[0] * u[2] + dmp[6])
     # body-frame distributed loads: external (R^T f, R^T l; R row-major in y[3:12]) less the inertia
     jw0 = dyn[2] * w[0]
     jw1 = dyn[3] * w[1]
@@ -187,9 +196,11 @@ def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, hist, dy, mat, m3
     li1 = w[2] * jw0 - w[0] * jw2 + dyn[3] * (c0 * w[1] + hist[10])
     li2 = w[0] * jw1 - w[1] * jw0 + dyn[4] * (c0 * w[2] + hist[11])
     # d = -u x n - f_body - a ; c = -u x m - v x n - l_body - b
-    for i in range(3):
+    for i in range(3):  # (and the damping's beta K (v_h', u_h'))
         rhs[i] = -(y[3 + i] * fdist[0] + y[6 + i] * fdist[1] + y[9 + i] * fdist[2]) - ab[i]
         rhs[3 + i] = -(y[3 + i] * ldist[0] + y[6 + i] * ldist[1] + y[9 + i] * ldist[2]) - ab[3 + i]
+        rhs[i] -= beta * kse[i] * dhist[i]
+        rhs[3 + i] -= beta * kbt[i] * dhist[3 + i]
     rhs[0] += fi0 - (u[1] * n2 - u[2] * n1)
     rhs[1] += fi1 - (u[2] * n0 - u[0] * n2)
     rhs[2] += fi2 - (u[0] * n1 - u[1] * n0)
@@ -214,13 +225,13 @@ def _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, hist, dy, mat, m3
 
 
 @_jit
-def _strains_for(y, target, routing, tau, active, kse, kbt, mat, m3, vec):
+def _strains_for(y, target, routing, tau, active, kse, kbt, dmp, mat, m3, vec):
     """Set the strains ``y[12:18]`` so that ``Phi(v, u) = target`` by Newton from their present value."""
     phi = vec[3]
     ab = vec[4]
     step = vec[5]
     for _ in range(30):
-        _matrix_and_wrench(y[12:15], y[15:18], routing, tau, active, kse, kbt, mat, phi, ab, m3)
+        _matrix_and_wrench(y[12:15], y[15:18], routing, tau, active, kse, kbt, dmp, mat, phi, ab, m3)
         for i in range(6):
             phi[i] = target[i] - phi[i]
         _solve6(mat, phi, step)
@@ -236,18 +247,57 @@ def _strains_for(y, target, routing, tau, active, kse, kbt, mat, m3, vec):
 
 
 @_jit
-def _transition(y, routing, tau, before, after, kse, kbt, mat, m3, vec):
+def _transition(y, routing, tau, before, after, kse, kbt, dmp_before, dmp_after, mat, m3, vec):
     """Strains after tendons terminate: ``Phi_after(v+, u+) = Phi_before(v-, u-)``. True if it converged."""
     target = vec[6]
-    _matrix_and_wrench(y[12:15], y[15:18], routing, tau, before, kse, kbt, mat, target, vec[7], m3)
-    return _strains_for(y, target, routing, tau, after, kse, kbt, mat, m3, vec)
+    _matrix_and_wrench(y[12:15], y[15:18], routing, tau, before, kse, kbt, dmp_before, mat, target, vec[7], m3)
+    return _strains_for(y, target, routing, tau, after, kse, kbt, dmp_after, mat, m3, vec)
+
+
+@_jit
+def _history_at(hist, nodes, k, s, value, slope):
+    """The BDF history and its s-derivative at ``s`` in the interval from node ``k - 1`` to ``k``.
+
+    Cubic through the four nearest nodes where no strain jumps among them (the history is ``c0``-sized, ~1/dt
+    times the state: a linear interpolant's O(h^2) error, multiplied by it, biases the inertia and damping by
+    several per cent), linear (the interval's own ends) where one does."""
+    n = nodes.shape[0]
+    first = min(max(k - 2, 0), n - 4)
+    smooth = n >= 4
+    if smooth:
+        for j in range(first, first + 4):
+            for i in range(HIST):
+                if hist[j, i] != hist[j, HIST + i]:
+                    smooth = False
+    if not smooth:
+        a = (s - nodes[k - 1]) / (nodes[k] - nodes[k - 1])
+        for i in range(HIST):
+            value[i] = (1.0 - a) * hist[k - 1, i] + a * hist[k, HIST + i]
+            slope[i] = (hist[k, HIST + i] - hist[k - 1, i]) / (nodes[k] - nodes[k - 1])
+        return
+    for i in range(HIST):
+        value[i] = 0.0
+        slope[i] = 0.0
+    for j in range(first, first + 4):
+        w = 1.0  # Lagrange basis l_j(s) and its derivative
+        dw = 0.0
+        for m in range(first, first + 4):
+            if m == j:
+                continue
+            f = (s - nodes[m]) / (nodes[j] - nodes[m])
+            dw = dw * f + w / (nodes[j] - nodes[m])
+            w *= f
+        for i in range(HIST):
+            value[i] += w * hist[j, i]
+            slope[i] += dw * hist[j, i]
 
 
 @_jit
 def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, dyn, hist, out):
     """RK4 from node 0 to the last, ``substeps`` steps a node interval; each node's record (:data:`RECORD`) into
-    ``out``. ``hist`` (nodes, 24): the BDF history at the nodes, after (:12) and before (12:) any jump there, linear
-    along each interval. Returns False if a transition did not converge or the state went non-finite."""
+    ``out``. ``hist`` (nodes, 24): the BDF history at the nodes, after (:12) and before (12:) any jump there,
+    interpolated between them by :func:`_history_at`. Returns False if a transition did not converge or the state
+    went non-finite."""
     mat, m3, vec = work()
     y = y0.copy()
     n_t = routing.shape[0]
@@ -255,8 +305,15 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
     after = np.empty(n_t, dtype=np.bool_)
     ks = np.empty((5, STATE))
     k1, k2, k3, k4, tmp = ks[0], ks[1], ks[2], ks[3], ks[4]
-    hs = np.empty((3, HIST))
-    h0, hm, h1 = hs[0], hs[1], hs[2]
+    hs = np.empty((6, HIST))
+    h0, hm, h1, d0, dm, d1 = hs[0], hs[1], hs[2], hs[3], hs[4], hs[5]
+    dmps = np.empty((2, 7))
+    d_before, d_after = dmps[0], dmps[1]
+    beta = dyn[5]
+    dynamic = dyn[0] != 0.0
+    if not dynamic:
+        for i in range(HIST):
+            h0[i] = hm[i] = h1[i] = d0[i] = dm[i] = d1[i] = 0.0
     out[0, :STATE] = y
     out[0, STATE:] = y[12:]
     ok = True
@@ -266,23 +323,21 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
             after[i] = end_node[i] >= k + 1
         h = (nodes[k] - nodes[k - 1]) / substeps
         for j in range(substeps):
-            a0 = j / substeps
-            am = (j + 0.5) / substeps
-            a1 = (j + 1.0) / substeps
-            for i in range(HIST):
-                h0[i] = (1.0 - a0) * hist[k - 1, i] + a0 * hist[k, HIST + i]
-                hm[i] = (1.0 - am) * hist[k - 1, i] + am * hist[k, HIST + i]
-                h1[i] = (1.0 - a1) * hist[k - 1, i] + a1 * hist[k, HIST + i]
-            _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, h0, k1, mat, m3, vec)
+            s0 = nodes[k - 1] + j * h
+            if dynamic:
+                _history_at(hist, nodes, k, s0, h0, d0)
+                _history_at(hist, nodes, k, s0 + 0.5 * h, hm, dm)
+                _history_at(hist, nodes, k, s0 + h, h1, d1)
+            _rhs(y, routing, tau, active, kse, kbt, fdist, ldist, dyn, h0, d0, k1, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + 0.5 * h * k1[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, hm, k2, mat, m3, vec)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, hm, dm, k2, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + 0.5 * h * k2[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, hm, k3, mat, m3, vec)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, hm, dm, k3, mat, m3, vec)
             for i in range(STATE):
                 tmp[i] = y[i] + h * k3[i]
-            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, h1, k4, mat, m3, vec)
+            _rhs(tmp, routing, tau, active, kse, kbt, fdist, ldist, dyn, h1, d1, k4, mat, m3, vec)
             for i in range(STATE):
                 y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
         out[k, STATE:] = y[12:]
@@ -291,7 +346,12 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
             for i in range(n_t):
                 if active[i] != after[i] and tau[i] != 0.0:
                     changed = True
-            if changed and not _transition(y, routing, tau, active, after, kse, kbt, mat, m3, vec):
+            d_before[0] = 1.0 + beta * dyn[0]
+            d_after[0] = d_before[0]
+            for i in range(6):
+                d_before[1 + i] = beta * hist[k, HIST + i]
+                d_after[1 + i] = beta * hist[k, i]
+            if changed and not _transition(y, routing, tau, active, after, kse, kbt, d_before, d_after, mat, m3, vec):
                 ok = False
         out[k, :STATE] = y
     for i in range(STATE):
@@ -301,7 +361,7 @@ def integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldis
 
 
 @_jit
-def tip_residual(y, routing, tau, end_node, last, kse, kbt, tip_force, tip_moment, scale_f, scale_m, res):
+def tip_residual(y, routing, tau, end_node, last, kse, kbt, dmp, tip_force, tip_moment, scale_f, scale_m, res):
     """Body-frame wrench balance at the tip: ``Phi(v, u) - R^T (F, L)``, forces over ``scale_f``, moments over
     ``scale_m``."""
     mat, m3, vec = work()
@@ -310,7 +370,7 @@ def tip_residual(y, routing, tau, end_node, last, kse, kbt, tip_force, tip_momen
     for i in range(n_t):
         active[i] = end_node[i] >= last
     phi = vec[0]
-    _matrix_and_wrench(y[12:15], y[15:18], routing, tau, active, kse, kbt, mat, phi, vec[1], m3)
+    _matrix_and_wrench(y[12:15], y[15:18], routing, tau, active, kse, kbt, dmp, mat, phi, vec[1], m3)
     for i in range(3):
         rf = y[3 + i] * tip_force[0] + y[6 + i] * tip_force[1] + y[9 + i] * tip_force[2]
         rl = y[3 + i] * tip_moment[0] + y[6 + i] * tip_moment[1] + y[9 + i] * tip_moment[2]
@@ -340,9 +400,15 @@ def _evaluate(
     for i in range(3):
         target[i] = x[i] * scale_f
         target[3 + i] = x[3 + i] * scale_m
-    ok = _strains_for(y0, target, routing, tau, active, kse, kbt, mat, m3, vec)
+    dmp = np.empty(7)  # the damping at the clamp, then at the tip
+    dmp[0] = 1.0 + dyn[5] * dyn[0]
+    for i in range(6):
+        dmp[1 + i] = dyn[5] * hist[0, i]
+    ok = _strains_for(y0, target, routing, tau, active, kse, kbt, dmp, mat, m3, vec)
     ok = integrate(y0, nodes, substeps, routing, tau, end_node, kse, kbt, fdist, ldist, dyn, hist, buf) and ok
-    tip_residual(buf[last], routing, tau, end_node, last, kse, kbt, tip_force, tip_moment, scale_f, scale_m, res)
+    for i in range(6):
+        dmp[1 + i] = dyn[5] * hist[last, HIST + i]
+    tip_residual(buf[last], routing, tau, end_node, last, kse, kbt, dmp, tip_force, tip_moment, scale_f, scale_m, res)
     err = 0.0
     for i in range(6):
         if not np.isfinite(res[i]):
@@ -461,6 +527,7 @@ def simulate(
     fdist,
     ldist,
     inertia,
+    beta,
     tip_force,
     tip_moment,
     dt,
@@ -471,15 +538,17 @@ def simulate(
     iterations,
 ):
     """March ``n_steps`` implicit steps of ``dt`` from the rod at rest in ``y_init`` (nodes, :data:`RECORD`); BDF1
-    for the first step, BDF2 after. ``inertia = (rho A, rho J1, rho J2, rho J3)``. Every step's records into
+    for the first step, BDF2 after. ``inertia = (rho A, rho J1, rho J2, rho J3)``; ``beta`` (s) the Kelvin-Voigt
+    damping ``beta K`` (stiffness-proportional). Every step's records into
     ``states`` (steps + 1, nodes, RECORD), its Newton iterations into ``iterations``. Returns the number of steps
     that converged."""
     n_nodes = nodes.shape[0]
     prev1 = y_init.copy()
     prev2 = y_init.copy()
     hist = np.zeros((n_nodes, 2 * HIST))
-    dyn = np.empty(5)
-    dyn[1:] = inertia
+    dyn = np.empty(6)
+    dyn[1:5] = inertia
+    dyn[5] = beta
     jac = np.empty((6, 6))
     have_jac = False
     buf = np.empty((n_nodes, RECORD))
@@ -532,7 +601,11 @@ def simulate(
         if not converged and step == 0:
             # the loads change at t = 0, the strains cannot: retry from the clamp wrench of the rest state's base
             # strains under the new tensions (the clamp wrench jumps when tendons are released or pulled)
-            _matrix_and_wrench(y_init[0, 12:15], y_init[0, 15:18], routing, tau, active0, kse, kbt, mat, phi, ab, m3)
+            no_damping = np.zeros(7)
+            no_damping[0] = 1.0  # at rest: the damping carries nothing
+            _matrix_and_wrench(
+                y_init[0, 12:15], y_init[0, 15:18], routing, tau, active0, kse, kbt, no_damping, mat, phi, ab, m3
+            )
             length = nodes[-1] - nodes[0]
             for i in range(3):
                 guess[i] = phi[i] / (kbt[0] / (length * length))

@@ -250,7 +250,7 @@ def solve_statics(
 def _shoot(kernel_args, loads, factor, x0, tol, max_iter, out):
     nodes, substeps, routing, end_node, kse, kbt = kernel_args
     tau, fdist, tip_force, tip_moment = (factor * np.asarray(v) for v in loads)
-    statics = np.zeros(5)  # c0 = 0: no time derivatives, no inertia
+    statics = np.zeros(6)  # c0 = 0: no time derivatives, no inertia, no damping
     history = np.zeros((nodes.size, 2 * _rod_kernel.HIST))
     x, converged, iterations, residual, _ = _rod_kernel.shoot(
         x0,
