@@ -30,6 +30,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+__all__ = ["HIST", "RECORD", "STATE", "integrate", "shoot", "simulate", "tip_residual", "work"]
+
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
 STATE = 24
