@@ -29,6 +29,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.cli.params_file",
     "flexdigit.cli.model",
     "flexdigit.cli.simulate",
+    "flexdigit.cli.tdcr",
     "flexdigit.cli.identify",
     "flexdigit.cli.design",
     "flexdigit.cli.run",
