@@ -41,6 +41,7 @@ SHARED = {
     "_result_table",
     "_estimator",
     "errors",
+    "interrupts",
     "reference",
     "__init__",
 }
