@@ -31,7 +31,9 @@ from flexdigit._io import check_output
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive, check_real
 from flexdigit.errors import DataFileError, OutputExistsError, ParameterError, RigError
+from flexdigit.interrupts import signals_deferred
 from flexdigit.rig.base import Reading, Rig
+from flexdigit.rig.safety import RunawayGuard, default_guard
 
 __all__ = [
     "LoopController",
@@ -357,7 +359,7 @@ def run_loop(
     recording: Any = None,
     summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None,
     log_mode: str = "new",
-    guard=None,
+    guard: RunawayGuard | bool = True,
     stall_s: float = 0.5,
 ) -> LoopResult:
     """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
@@ -396,9 +398,12 @@ def run_loop(
     stall_s : float
         A sample that starts more than this late (s) is a fault, not an overrun: the rig (a DAQ or stream gone
         silent, a read that blocked) or the computer stopped answering, and the loop has been blind that long.
-    guard : RunawayGuard, optional
+    guard : RunawayGuard or bool
         Runaway and plausibility checks on every sample (:mod:`flexdigit.rig.safety`); a fault it raises ends
-        the run in the safe state like any rig fault. ``flexdigit run`` always passes one.
+        the run in the safe state like any rig fault. On by default (``True``:
+        :func:`~flexdigit.rig.safety.default_guard`, which watches the twin's true rotation, and the measurement
+        when it is a rotation estimate); pass a :class:`~flexdigit.rig.safety.RunawayGuard` of your own, or opt
+        out with ``False``.
     log_mode : {"new", "append", "replace"}
         An existing ``log_path`` is refused (``"new"``), added to (``"append"``: a log of the same controller,
         period and rig settings) or replaced (``"replace"``, ``--force``); see :class:`SampleLog`.
@@ -419,6 +424,15 @@ def run_loop(
     n_samples = int(math.floor(duration / period + 1e-9))
     if n_samples < 1:
         raise ParameterError(f"The 'duration_s' parameter of run_loop must cover at least one period. Got {duration_s}")
+    if guard is True:
+        guard = default_guard(rig, measure)
+    elif guard is False:
+        guard = None
+    elif not isinstance(guard, RunawayGuard):
+        raise ParameterError(
+            f"The 'guard' parameter of run_loop must be a RunawayGuard, True (the default guard) or False (none). "
+            f"Got {guard!r} instead."
+        )
     adc_range = tuple(rig.params.sensors.adc_range_v)
     equilibrium = int(rig.params.actuator.equilibrium_command)
 
@@ -443,6 +457,7 @@ def run_loop(
     overruns = 0
     status, message = "completed", f"ran {n_samples} samples of {period * 1000:g} ms"
     pending_error: BaseException | None = None
+    stopped_by: str | None = None  # the signal that stopped the run
     framing = getattr(rig, "framing", None)  # a servo board whose frame allows fewer positions clamps lower
     command_limits = (
         float(rig.params.actuator.command_min),
@@ -495,10 +510,11 @@ def run_loop(
                     "y": _finite_or_none(y),
                     "command": sent,
                 }
-                if log is not None:
-                    log.write(record)
-                if recording is not None:
-                    recording.write_sample(record)
+                with signals_deferred():  # a stop signal waits for the record's end: no torn line or chunk
+                    if log is not None:
+                        log.write(record)
+                    if recording is not None:
+                        recording.write_sample(record)
             compute.append(timer() - w0)
             starts.append(now)
             lateness.append(late)
@@ -512,14 +528,47 @@ def run_loop(
             if guard is not None:
                 guard.check_command(t, r, y, float(u), sent, command_limits)
             k += 1
-    except KeyboardInterrupt:
-        status, message = "interrupted", "interrupted by Ctrl-C"
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP under flexdigit.interrupts.stop_on_signals
+        status, message = "interrupted", _interruption(exc)
+        stopped_by = getattr(exc, "signal_name", "SIGINT")
     except (RigError, OSError) as exc:
         status, message = "fault", str(exc)
     except BaseException as exc:  # a controller bug: safe state first, then let it propagate
         status, message = "fault", f"{type(exc).__name__}: {exc}"
         pending_error = exc
 
+    with signals_deferred():  # the safe command and the closing records go out whole, whatever arrives meanwhile
+        safe, message = _finish(rig, equilibrium, close_rig, status, message, ts, ys, stopped_by, overruns, summary,
+                                recording, log)  # fmt: skip
+    timing = TimingStats.from_arrays(period, np.array(starts), np.array(lateness), np.array(compute), overruns)
+    result = LoopResult(
+        status,
+        message,
+        timing,
+        np.array(ts),
+        np.array(sps),
+        np.array(gauges).reshape(-1, 3) if gauges else np.zeros((0, 3)),
+        np.array(ys),
+        np.array(cmds, dtype=int),
+        safe,
+        log.path if log is not None else None,
+        {"signal": stopped_by} if stopped_by else {},
+    )
+    if pending_error is not None:
+        raise pending_error
+    return result
+
+
+def _interruption(exc: KeyboardInterrupt) -> str:
+    """``"interrupted by SIGTERM"``; a plain KeyboardInterrupt (Python's own Ctrl-C handler) is Ctrl-C."""
+    name = getattr(exc, "signal_name", None)
+    names = {None: "Ctrl-C", "SIGINT": "SIGINT (Ctrl-C)"}
+    return f"interrupted by {names.get(name, name)}"
+
+
+def _finish(rig, equilibrium, close_rig, status, message, ts, ys, stopped_by, overruns, summary, recording, log):
+    """The stop path of :func:`run_loop`: the safe state, then the closing record of the recording and the log
+    (naming the stop, and the signal when one stopped the run); ``(safe command sent, message)``."""
     safe = _safe_state(rig, equilibrium, close_rig)
     if status != "completed":
         when = f" at t = {ts[-1]:.3f} s" if ts else " before the first sample"
@@ -528,6 +577,8 @@ def run_loop(
         relaxed = f"digit relaxed to command {equilibrium}" if safe else "could NOT send the safe command (port lost)"
         message = f"{message}{when}; {relaxed}"
     stop: dict[str, Any] = {"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns}
+    if stopped_by:
+        stop["signal"] = stopped_by
     if summary is not None and ts:
         stop["summary"] = to_jsonable(summary(np.array(ts), np.array(ys)))  # NaN/inf -> null
     if recording is not None:
@@ -544,22 +595,7 @@ def run_loop(
         except OSError as exc:
             log.abandon()
             message = f"{message}; log: {log.path} (its last lines are lost: {exc.strerror or exc})"
-    timing = TimingStats.from_arrays(period, np.array(starts), np.array(lateness), np.array(compute), overruns)
-    result = LoopResult(
-        status,
-        message,
-        timing,
-        np.array(ts),
-        np.array(sps),
-        np.array(gauges).reshape(-1, 3) if gauges else np.zeros((0, 3)),
-        np.array(ys),
-        np.array(cmds, dtype=int),
-        safe,
-        log.path if log is not None else None,
-    )
-    if pending_error is not None:
-        raise pending_error
-    return result
+    return safe, message
 
 
 class realtime_priority:
