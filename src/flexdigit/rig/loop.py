@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -30,7 +31,7 @@ import numpy as np
 from flexdigit._io import check_output
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive, check_real
-from flexdigit.errors import DataFileError, OutputExistsError, ParameterError, RigError
+from flexdigit.errors import DataFileError, Interrupted, OutputExistsError, ParameterError, RigError
 from flexdigit.interrupts import signals_deferred
 from flexdigit.rig.base import Reading, Rig
 from flexdigit.rig.safety import RunawayGuard, default_guard
@@ -325,6 +326,15 @@ class LoopResult:
     @property
     def ok(self) -> bool:
         return self.status == "completed"
+
+    def raise_if_interrupted(self) -> None:
+        """Raise the stop again when the run was interrupted (the rig is already safe and the log closed): for a
+        caller whose work cannot go on without the run (a palpation sweep, the next step of a study).
+
+        Raises :class:`~flexdigit.errors.Interrupted` naming the signal that stopped the run (SIGINT for Ctrl-C).
+        """
+        if self.status == "interrupted":
+            raise Interrupted(getattr(signal, self.extra.get("signal") or "SIGINT"))
 
 
 def check_reading(reading: Reading, adc_range_v: tuple[float, float], margin_v: float = 1e-3) -> None:

@@ -198,6 +198,7 @@ def step_test(
         log_path=log_path,
         header={"experiment": "step", "step_deg": step, "gain": gain},
     )
+    result.raise_if_interrupted()  # the step figures of a run cut short are not a step test's
     deg_per_command = float(np.real(design_plant(rig.params).dcgain()))
     metrics = step_metrics(result.time_s, np.array(rotation), step, step_time_s, deg_per_command)
     return StepTest(controller, gain, result, np.array(rotation), metrics)
