@@ -20,22 +20,31 @@ START_TIMEOUT_S = 180.0
 #: From the signal to the exit: the safe command, the footers, the result, s.
 STOP_TIMEOUT_S = 60.0
 
-_LAUNCH = (
-    "import signal, sys, runpy\n"
+_SIGINT_AS_IN_A_TERMINAL = (
+    "import signal\n"
     "signal.signal(signal.SIGINT, signal.default_int_handler)  # inherited ignored: Ctrl-C as in a terminal\n"
+)
+_CLI = (
+    "import runpy, sys\n"
     "sys.argv = ['flexdigit', *sys.argv[1:]]\n"
-    "runpy.run_module('flexdigit.cli', run_name='__main__', alter_sys=True)\n"
+    "runpy.run_module('flexdigit.cli', run_name='__main__')\n"
 )
 
 
 def start(*argv: str, cwd: str | Path | None = None) -> subprocess.Popen:
     """``flexdigit ARGV`` in a child process, its stdout and stderr piped."""
+    return start_code(_CLI, *argv, cwd=cwd)
+
+
+def start_code(code: str, *argv: str, cwd: str | Path | None = None, env: dict | None = None) -> subprocess.Popen:
+    """``python -c CODE ARGV`` in a child process (SIGINT as in a terminal), its stdout and stderr piped."""
     return subprocess.Popen(
-        [sys.executable, "-c", _LAUNCH, *map(str, argv)],
+        [sys.executable, "-c", _SIGINT_AS_IN_A_TERMINAL + code, *map(str, argv)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         cwd=cwd,
+        env=env,
     )
 
 
