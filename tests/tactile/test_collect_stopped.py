@@ -1,0 +1,58 @@
+"""``flexdigit collect`` stopped by SIGTERM, SIGHUP or SIGINT, then rerun as it was (issue 22): the stop exits 128 +
+the signal naming it, leaves the journal and no dataset or temporary file, and the plain rerun resumes to the very
+dataset an uninterrupted collection gives (the runner replays the journal on the deterministic twin; the same
+machine, so equal bit for bit, as tests/tactile/test_resume.py's kill -9 trials)."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from children import STOPS, lines, start, stop, wait_until
+from flexdigit.tactile.dataset import COLUMNS, load_dataset
+from flexdigit.tactile.runner import journal_path
+
+PROTOCOL = (
+    'name = "stopped"\nloads_g = [12.5, 25.0]\npositions_from_tip_cm = [0, 4, 8, 12]\nactuation_commands = [20]\n'
+    "repetitions = 6\nno_load_repetitions = 3\nsettle_s = 1.5\nrehang = true\n"
+)
+#: Readings journalled before the signal: the collection is under way (the journal's first line is its header).
+READINGS_BEFORE_STOP = 3
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("reference")
+    protocol = folder / "p.toml"
+    protocol.write_text(PROTOCOL)
+    out = folder / "ref.parquet"
+    argv = ["collect", str(protocol), "--seed", "3", "--no-progress", "--out", str(out)]
+    subprocess.run([sys.executable, "-m", "flexdigit.cli", *argv], check=True, capture_output=True)
+    return protocol, load_dataset(out)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum, code", STOPS, ids=[s.name for s, _ in STOPS])
+def test_a_stopped_collection_resumes_to_the_same_dataset(tmp_path, reference, signum, code):
+    protocol, ref = reference
+    out = tmp_path / "d.parquet"
+    argv = ["collect", protocol, "--seed", "3", "--no-progress", "--out", out, "--json"]
+    proc = start(*argv)
+    wait_until(lambda: lines(journal_path(out)) > READINGS_BEFORE_STOP, proc)
+    exit_code, result, err = stop(proc, signum)
+    name = signal.Signals(signum).name
+    assert exit_code == code, err
+    assert result["signal"] == name and result["error"] == f"interrupted by {name}"
+    assert not out.exists() and journal_path(out).exists()  # no dataset yet: the journal, for the rerun
+    assert sorted(p.name for p in tmp_path.iterdir()) == [journal_path(out).name]  # no temporary file
+    done = subprocess.run([sys.executable, "-m", "flexdigit.cli", *map(str, argv)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    resumed = load_dataset(out)
+    for column in COLUMNS:
+        np.testing.assert_array_equal(resumed[column], ref[column], err_msg=column)
+    assert resumed.meta["settings"] == ref.meta["settings"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.parquet"]  # the journal removed once done
