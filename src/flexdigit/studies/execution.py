@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.interrupts import signals_deferred
 from flexdigit.studies.metrics import MetricContext
 
 __all__ = [
@@ -186,7 +187,7 @@ class Journal:
     def append(self, records) -> None:
         """Add finished rows, flushed and fsynced before returning."""
         lines = "".join(json.dumps(r.to_json(), sort_keys=True) + "\n" for r in records)
-        with self.path.open("a", encoding="utf-8") as fh:
+        with signals_deferred(), self.path.open("a", encoding="utf-8") as fh:  # a stop waits for the rows' end
             fh.write(lines)
             fh.flush()
             os.fsync(fh.fileno())
