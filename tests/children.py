@@ -31,21 +31,29 @@ _CLI = (
 )
 
 
-def start(*argv: str, cwd: str | Path | None = None) -> subprocess.Popen:
-    """``flexdigit ARGV`` in a child process, its stdout and stderr piped."""
-    return start_code(_CLI, *argv, cwd=cwd)
+def start(*argv: str, cwd: str | Path | None = None, operator: str | None = None) -> subprocess.Popen:
+    """``flexdigit ARGV`` in a child process, its stdout and stderr piped; ``operator``: what the operator types
+    (on hardware a command asks, e.g. to place the tissue, on stdin)."""
+    return start_code(_CLI, *argv, cwd=cwd, operator=operator)
 
 
-def start_code(code: str, *argv: str, cwd: str | Path | None = None, env: dict | None = None) -> subprocess.Popen:
+def start_code(
+    code: str, *argv: str, cwd: str | Path | None = None, env: dict | None = None, operator: str | None = None
+) -> subprocess.Popen:
     """``python -c CODE ARGV`` in a child process (SIGINT as in a terminal), its stdout and stderr piped."""
-    return subprocess.Popen(
+    proc = subprocess.Popen(
         [sys.executable, "-c", _SIGINT_AS_IN_A_TERMINAL + code, *map(str, argv)],
+        stdin=subprocess.PIPE if operator is not None else subprocess.DEVNULL,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         cwd=cwd,
         env=env,
     )
+    if operator is not None:
+        proc.stdin.write(operator)
+        proc.stdin.flush()
+    return proc
 
 
 def wait_until(condition, proc: subprocess.Popen, timeout_s: float = START_TIMEOUT_S) -> None:

@@ -99,3 +99,25 @@ def test_a_serial_rig_is_left_at_the_safe_command(tmp_path, rotation_map_file, s
     assert result["status"] == "interrupted" and result["signal"] == name
     _, _, footer = read_log(log)
     _check_footer(footer, name)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum, code", STOPS, ids=[s.name for s, _ in STOPS])
+def test_a_palpation_sweep_on_a_serial_rig_stops_at_the_safe_command(tmp_path, signum, code):
+    """The issue's palpation case: stopped mid-sweep, the servo was left pressing into the tissue (command 12)."""
+    from flexdigit.rig.stream_emulator import StreamEmulator
+
+    name = signal.Signals(signum).name
+    log = tmp_path / "sweep.jsonl"
+    with StreamEmulator(twin=True, seed=0) as emulator:
+        url = f"serial://{emulator.servo_port}?daq=stream://{emulator.port}"
+        argv = ["palpate", "--tissue", "soft-block", "--backend", url, "--log", log, "--json"]
+        proc = start(*argv, operator="\n")  # Enter: the tissue is placed
+        # the sweep is pressing: the board's last frame is a step of the staircase, not the resting command 8
+        wait_until(lambda: lines(log) > SAMPLES_BEFORE_STOP and emulator.commands[-1] != 8, proc)
+        exit_code, result, err = stop(proc, signum)
+        assert eventually(lambda: emulator.commands[-1] == 8, timeout_s=5.0), emulator.commands[-5:]
+    assert exit_code == code, err
+    assert result["signal"] == name and result["error"] == f"interrupted by {name}"
+    _, _, footer = read_log(log)
+    _check_footer(footer, name)
