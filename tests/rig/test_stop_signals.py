@@ -121,3 +121,16 @@ def test_a_palpation_sweep_on_a_serial_rig_stops_at_the_safe_command(tmp_path, s
     assert result["signal"] == name and result["error"] == f"interrupted by {name}"
     _, _, footer = read_log(log)
     _check_footer(footer, name)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+def test_the_stream_emulator_stops_as_with_ctrl_c(signum):
+    """``stream-emulator`` runs until stopped: SIGTERM and SIGHUP end it as Ctrl-C does, ptys closed, its count
+    of lines said, exit 0 (stopping is how it ends); before, they killed it mid-line."""
+    proc = start("stream-emulator")
+    assert proc.stdout.readline().startswith("gauge stream on /dev/")  # serving
+    proc.send_signal(signum)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert f"stopped by {signal.Signals(signum).name}" in out and "lines (" in out

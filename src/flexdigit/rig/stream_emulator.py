@@ -272,8 +272,8 @@ def run_emulator(twin: bool, rate_hz: float, seed: int, duration_s: float | None
                     time.sleep(1.0)
             else:
                 time.sleep(duration)
-        except KeyboardInterrupt:
-            pass
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM or SIGHUP (flexdigit.interrupts): how it ends
+            say(f"stopped by {getattr(exc, 'signal_name', 'SIGINT')}")
         say(f"sent {emulator.lines_sent} lines ({emulator.overflows} lost: nobody was reading)")
     return 0
 
