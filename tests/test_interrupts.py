@@ -110,3 +110,71 @@ def test_interrupted_pickles_with_its_signal():
 
     again = pickle.loads(pickle.dumps(Interrupted(signal.SIGHUP)))
     assert again.signum == signal.SIGHUP and again.signal_name == "SIGHUP"
+
+
+def _signal_inside_a_kernel(signum):
+    """What a numba kernel does with a signal that arrives while it runs: the handler runs, its exception is lost,
+    and another comes back ("SystemError: CPUDispatcher(...) returned a result with an exception set")."""
+    import flexdigit.interrupts as interrupts
+
+    interrupts._state.deferred += 1  # the handler's Interrupted held back, then dropped, as the kernel drops it
+    try:
+        os.kill(os.getpid(), signum)
+        _spin()
+    finally:
+        interrupts._state.deferred -= 1
+        interrupts._state.pending = None
+    raise SystemError("CPUDispatcher(<function _train>) returned a result with an exception set")
+
+
+def test_a_stop_that_comes_back_as_another_exception_is_still_a_stop():
+    from flexdigit.interrupts import raise_if_stopping, stop_requested
+
+    with stop_on_signals():
+        assert stop_requested() is None
+        raise_if_stopping()  # nothing asked: nothing raised
+        with pytest.raises(SystemError):
+            _signal_inside_a_kernel(signal.SIGTERM)
+        assert stop_requested().signal_name == "SIGTERM"
+        with pytest.raises(Interrupted, match="SIGTERM") as caught:
+            raise_if_stopping(SystemError("from a kernel"))
+        assert isinstance(caught.value.__cause__, SystemError)
+
+
+def test_the_loop_takes_a_stop_inside_its_rig_for_a_stop_not_a_bug():
+    # the twin's compiled kernels run inside rig.read(): a signal there must stop the run, not fault and re-raise
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.loop import run_loop
+
+    class Kernel:
+        measure = None
+
+        def __init__(self):
+            self.calls = 0
+
+        def reset(self, command):
+            pass
+
+        def step(self, setpoint, reading):
+            self.calls += 1
+            if self.calls == 5:
+                _signal_inside_a_kernel(signal.SIGHUP)
+            return 8.0
+
+    rig = open_rig("sim")
+    with stop_on_signals():
+        result = run_loop(rig, Kernel(), 0.0, 1.0, guard=False)
+    assert result.status == "interrupted" and result.extra["signal"] == "SIGHUP"
+    assert "interrupted by SIGHUP" in result.message and result.safe_command_sent
+
+
+def test_the_command_line_takes_it_for_a_stop_too(monkeypatch, capsys):
+    import json
+
+    import flexdigit.params_commands as params_commands
+    from flexdigit.cli import main
+
+    monkeypatch.setattr(params_commands, "_params", lambda args: _signal_inside_a_kernel(signal.SIGTERM))
+    assert main(["params", "--json"]) == 143
+    out = json.loads(capsys.readouterr().out)
+    assert out["signal"] == "SIGTERM" and out["error"] == "interrupted by SIGTERM"

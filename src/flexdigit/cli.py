@@ -23,7 +23,7 @@ from pathlib import Path
 
 from flexdigit import __version__
 from flexdigit.errors import one_line
-from flexdigit.interrupts import stop_on_signals
+from flexdigit.interrupts import stop_on_signals, stop_requested
 
 #: Modules that add sub-commands, in the order of the architecture (params -> ... -> report).
 COMMAND_MODULES: tuple[str, ...] = (
@@ -121,13 +121,14 @@ def _run_command(argv: list[str]):
         result = args.func(args)
     except KeyboardInterrupt as exc:
         return _interrupted(exc, args.command_name, wants_json)
-    except (ValueError, OSError, ArithmeticError, KeyError) as exc:
+    except Exception as exc:  # noqa: BLE001 - bad input or a bug: one line (and JSON), never a traceback
+        stop = stop_requested()
+        if stop is not None:  # a stop signal that C code (a numba kernel) handed back as another exception
+            return _interrupted(stop, args.command_name, wants_json)
         if args.debug:
             raise
-        return _fail(_message(exc), type(exc).__name__, args.command_name, wants_json, 2)
-    except Exception as exc:  # noqa: BLE001 - a bug, not bad input: still one line (and JSON), never a traceback
-        if args.debug:
-            raise
+        if isinstance(exc, ValueError | OSError | ArithmeticError | KeyError):  # bad input, named
+            return _fail(_message(exc), type(exc).__name__, args.command_name, wants_json, 2)
         text = f"internal error ({type(exc).__name__}: {exc}); please report it, --debug shows the traceback"
         return _fail(text, type(exc).__name__, args.command_name, wants_json, 2)
     return result, wants_json

@@ -43,7 +43,7 @@ from contextlib import contextmanager
 
 from flexdigit.errors import Interrupted
 
-__all__ = ["STOP_SIGNALS", "stop_on_signals", "signals_deferred", "Interrupted"]
+__all__ = ["STOP_SIGNALS", "stop_on_signals", "signals_deferred", "stop_requested", "raise_if_stopping", "Interrupted"]
 
 #: The signals that stop a run: Ctrl-C, ``kill`` (and systemd, batch schedulers), a closed terminal. Those this
 #: platform lacks (SIGHUP on Windows) are left out.
@@ -61,6 +61,7 @@ class _State:
         self.received = 0
         self.deferred = 0
         self.pending: Interrupted | None = None
+        self.first: Interrupted | None = None
 
 
 _state = _State()
@@ -74,7 +75,7 @@ def _handler(signum: int, frame) -> None:
         return
     if _state.received > 1:
         return  # the stop is under way: let it finish (the safe command, the footers)
-    exc = Interrupted(signum)
+    exc = _state.first = Interrupted(signum)
     if _state.deferred:
         _state.pending = exc
         return
@@ -133,3 +134,21 @@ class signals_deferred:  # noqa: N801 - used like a function: ``with signals_def
         if _state.deferred == 0 and _state.pending is not None:
             pending, _state.pending = _state.pending, None
             raise pending  # a signal that came inside; an exception of the section becomes its context
+
+
+def stop_requested() -> Interrupted | None:
+    """The stop a signal asked for in the current :func:`stop_on_signals` block (None when none came).
+
+    A signal that arrives while C code runs (a numba-compiled kernel, a BLAS call) may come back from it as another
+    exception (numba's ``SystemError: ... returned a result with an exception set``): code that classifies
+    exceptions asks this first, so the stop is taken for what it is, not for a bug or a failed row.
+    """
+    return _state.first
+
+
+def raise_if_stopping(cause: BaseException | None = None) -> None:
+    """Raise the requested stop (:func:`stop_requested`), if any, from ``cause``: for a catch-all (``except
+    Exception``) that keeps going after a failure (a chapter, a study row), which must not keep going after a stop."""
+    stop = _state.first
+    if stop is not None:
+        raise Interrupted(stop.signum) from cause

@@ -31,7 +31,7 @@ from flexdigit._io import atomic_write, check_output
 from flexdigit._json import to_jsonable
 from flexdigit._system import available_cores
 from flexdigit.errors import OutputExistsError
-from flexdigit.interrupts import signals_deferred
+from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import Chapter, ReportContext
@@ -279,7 +279,8 @@ def _build_chapter(module_name: str, ctx: ReportContext) -> tuple[Chapter | None
     start, cpu = time.perf_counter(), time.process_time()
     try:
         chapter, error = importlib.import_module(module_name).build(ctx), None
-    except Exception:  # a broken chapter must not hide the others; its traceback goes in the report
+    except Exception as exc:  # a broken chapter must not hide the others; its traceback goes in the report
+        raise_if_stopping(exc)  # a stop signal a compiled kernel handed back as another exception is a stop
         chapter, error = None, traceback.format_exc()
     return chapter, error, time.perf_counter() - start, time.process_time() - cpu
 

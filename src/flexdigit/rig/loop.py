@@ -32,7 +32,7 @@ from flexdigit._io import check_output
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive, check_real
 from flexdigit.errors import DataFileError, Interrupted, OutputExistsError, ParameterError, RigError
-from flexdigit.interrupts import signals_deferred
+from flexdigit.interrupts import signals_deferred, stop_requested
 from flexdigit.rig.base import Reading, Rig
 from flexdigit.rig.safety import RunawayGuard, default_guard
 
@@ -538,14 +538,18 @@ def run_loop(
             if guard is not None:
                 guard.check_command(t, r, y, float(u), sent, command_limits)
             k += 1
-    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP under flexdigit.interrupts.stop_on_signals
-        status, message = "interrupted", _interruption(exc)
-        stopped_by = getattr(exc, "signal_name", "SIGINT")
-    except (RigError, OSError) as exc:
-        status, message = "fault", str(exc)
-    except BaseException as exc:  # a controller bug: safe state first, then let it propagate
-        status, message = "fault", f"{type(exc).__name__}: {exc}"
-        pending_error = exc
+    except BaseException as exc:
+        # Ctrl-C, or SIGTERM/SIGHUP under flexdigit.interrupts.stop_on_signals (which a compiled twin's kernel may
+        # hand back as another exception: asked first)
+        stop = exc if isinstance(exc, KeyboardInterrupt) else stop_requested()
+        if stop is not None:
+            status, message = "interrupted", _interruption(stop)
+            stopped_by = getattr(stop, "signal_name", "SIGINT")
+        elif isinstance(exc, RigError | OSError):
+            status, message = "fault", str(exc)
+        else:  # a controller bug: safe state first, then let it propagate
+            status, message = "fault", f"{type(exc).__name__}: {exc}"
+            pending_error = exc
 
     with signals_deferred():  # the safe command and the closing records go out whole, whatever arrives meanwhile
         safe, message = _finish(rig, equilibrium, close_rig, status, message, ts, ys, stopped_by, overruns, summary,

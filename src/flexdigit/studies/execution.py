@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.interrupts import signals_deferred
+from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.studies.metrics import MetricContext
 
 __all__ = [
@@ -113,6 +113,7 @@ def evaluate_rows(build, rows, values, metrics, context: MetricContext, task_key
                 sets.append(build(values[i], f"row {int(row)}"))
                 built.append(int(row))
             except Exception as exc:  # noqa: BLE001 - a row the rig refuses is that row's result
+                raise_if_stopping(exc)  # (a stop is not)
                 out.append(RowRecord(int(row), {}, _message(exc)))
         results = evaluate_many(sets, metrics, context)
         each = (time.perf_counter() - start) / max(1, len(rows))
