@@ -56,3 +56,20 @@ def test_a_stopped_collection_resumes_to_the_same_dataset(tmp_path, reference, s
         np.testing.assert_array_equal(resumed[column], ref[column], err_msg=column)
     assert resumed.meta["settings"] == ref.meta["settings"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.parquet"]  # the journal removed once done
+
+
+@pytest.mark.slow
+def test_a_stopped_collection_closes_its_recording_naming_the_signal(tmp_path, reference):
+    from mcap.reader import make_reader
+
+    protocol, _ = reference
+    out, record = tmp_path / "d.parquet", tmp_path / "d.mcap"
+    proc = start("collect", protocol, "--seed", "3", "--no-progress", "--out", out, "--record", record, "--json")
+    wait_until(lambda: lines(journal_path(out)) > READINGS_BEFORE_STOP, proc)
+    exit_code, result, err = stop(proc, signal.SIGTERM)
+    assert exit_code == 143, err
+    with open(record, "rb") as fh:  # the mcap library's reader: the summary and footer of a clean close
+        reader = make_reader(fh)
+        (stopped,) = [m.metadata for m in reader.iter_metadata() if m.name == "flexdigit.stop"]
+        assert reader.get_summary().statistics.message_count > READINGS_BEFORE_STOP
+    assert stopped["stop"] == "interrupted" and stopped["signal"] == "SIGTERM"

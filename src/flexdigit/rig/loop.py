@@ -115,7 +115,12 @@ class SampleLog:
         self.write(record)
 
     def write(self, record: dict[str, Any]) -> None:
-        self._file.write(json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n")
+        line = json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n"
+        with signals_deferred():  # a stop signal waits for the line's end: never a torn line
+            self._write(line)
+
+    def _write(self, line: str) -> None:
+        self._file.write(line)
         self._file.flush()
         self.lines += 1
         self._since_sync += 1
