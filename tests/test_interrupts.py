@@ -171,7 +171,7 @@ def test_the_loop_takes_a_stop_inside_its_rig_for_a_stop_not_a_bug():
 def test_the_command_line_takes_it_for_a_stop_too(monkeypatch, capsys):
     import json
 
-    import flexdigit.params_commands as params_commands
+    import flexdigit.cli.params_file as params_commands
     from flexdigit.cli import main
 
     monkeypatch.setattr(params_commands, "_params", lambda args: _signal_inside_a_kernel(signal.SIGTERM))
