@@ -127,7 +127,8 @@ def _new_report(out: Path) -> Iterator[Path]:
     The swap is one step where the system allows it (Linux's ``renameat2(RENAME_EXCHANGE)``), else two renames
     that a signal cannot split; files of the user's in ``out`` (not in :data:`REPORT_ENTRIES`) stay in it.
     """
-    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.resolve().parent))
+    out = out.resolve()  # a symlinked report folder: the folder it points at is swapped, the link kept
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
     try:
         os.chmod(work, stat.S_IMODE(out.stat().st_mode) if out.is_dir() else 0o777 & ~_umask())
         yield work
