@@ -102,3 +102,19 @@ def test_a_stopped_reproduce_leaves_the_old_report_whole(tmp_path, chapters, sig
     ]
     assert [e["key"] for e in json.loads((out / "results.json").read_text())["entries"]] == ["fdstopa.x", "fdstopb.x"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chapters", "report"]
+
+
+def test_the_new_report_is_swapped_in_whole_keeping_the_users_files_and_a_link(tmp_path):
+    from flexdigit.report.build import reproduce
+
+    real = tmp_path / "real"
+    for name, text in OLD.items():
+        (real / name).parent.mkdir(parents=True, exist_ok=True)
+        (real / name).write_text(text)
+    (real / "notes.txt").write_text("the user's")
+    (tmp_path / "report").symlink_to(real)
+    reproduce(tmp_path / "report", chapters=(), force=True)  # no chapter: an empty report over the old one
+    assert (tmp_path / "report").is_symlink()  # the link kept, the folder it points at swapped
+    assert sorted(_tree(real)) == ["index.html", "notes.txt", "results.json"]  # the old figures gone with it
+    assert json.loads((real / "results.json").read_text())["entries"] == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["real", "report"]  # no temporary folder left
