@@ -16,6 +16,7 @@ __all__ = [
     "RigError",
     "OutputExistsError",
     "ConvergenceWarning",
+    "Interrupted",
     "one_line",
 ]
 

@@ -43,7 +43,14 @@ from contextlib import contextmanager
 
 from flexdigit.errors import Interrupted
 
-__all__ = ["STOP_SIGNALS", "stop_on_signals", "signals_deferred", "stop_requested", "raise_if_stopping", "Interrupted"]
+__all__ = [
+    "STOP_SIGNALS",
+    "stop_on_signals",
+    "signals_deferred",
+    "stop_requested",
+    "raise_if_stopping",
+    "Interrupted",
+]
 
 #: The signals that stop a run: Ctrl-C, ``kill`` (and systemd, batch schedulers), a closed terminal. Those this
 #: platform lacks (SIGHUP on Windows) are left out.

@@ -31,7 +31,11 @@ from flexdigit._validation import check_real
 from flexdigit.errors import RigError
 from flexdigit.rig.rotation import RotationEstimator
 
-__all__ = ["ROTATION_RANGE_DEG", "RunawayGuard", "default_guard"]
+__all__ = [
+    "ROTATION_RANGE_DEG",
+    "RunawayGuard",
+    "default_guard",
+]
 
 #: Beam (tip) rotations the digit can take without harm, deg: the setpoints ``flexdigit run`` accepts (-60..120)
 #: with 30 deg of margin. The cable only pulls one way; the twin can be driven far beyond (its elastica wraps).
