@@ -9,6 +9,7 @@ bounded and polls; none is an assertion of timing.
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -80,6 +81,14 @@ def stop(proc: subprocess.Popen, signum: int) -> tuple[int, dict | None, str]:
         name = signal.Signals(signum).name
         raise AssertionError(f"still running {STOP_TIMEOUT_S} s after {name}: {err[-2000:]}") from None
     return proc.returncode, (json.loads(out) if out.strip() else None), err
+
+
+def cpu_s(pid: int) -> float:
+    """User + system CPU time of process ``pid`` so far, s (Linux /proc): how far a child that writes nothing as it
+    goes (a fit, an import) has got."""
+    with open(f"/proc/{pid}/stat") as fh:
+        fields = fh.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def lines(path: Path) -> int:

@@ -5,22 +5,15 @@ exception set"): that was reported as an internal error (exit 2)."""
 
 from __future__ import annotations
 
-import os
 import signal
 import sys
 
 import pytest
 
-from children import STOPS, start, stop, wait_until
+from children import STOPS, cpu_s, start, stop, wait_until
 
 #: CPU time the child has spent before the signal, s: past its imports (~2 s), inside the fit (~15 s in all).
 CPU_BEFORE_STOP_S = 5.0
-
-
-def _cpu_s(pid: int) -> float:
-    """User + system CPU time of process ``pid`` so far, s (Linux /proc)."""
-    fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 @pytest.mark.slow
@@ -30,7 +23,7 @@ def test_a_stopped_calibration_leaves_the_old_file(tmp_path, signum, code):
     out = tmp_path / "cal.toml"
     out.write_text("# the calibration of last week\n")
     proc = start("calibrate", "--thesis", "--out", out, "--force", "--json")
-    wait_until(lambda: _cpu_s(proc.pid) > CPU_BEFORE_STOP_S, proc)
+    wait_until(lambda: cpu_s(proc.pid) > CPU_BEFORE_STOP_S, proc)
     exit_code, result, err = stop(proc, signum)
     name = signal.Signals(signum).name
     assert exit_code == code, err

@@ -73,3 +73,32 @@ def test_a_stopped_collection_closes_its_recording_naming_the_signal(tmp_path, r
         (stopped,) = [m.metadata for m in reader.iter_metadata() if m.name == "flexdigit.stop"]
         assert reader.get_summary().statistics.message_count > READINGS_BEFORE_STOP
     assert stopped["stop"] == "interrupted" and stopped["signal"] == "SIGTERM"
+
+
+#: Rows of the foreign file: enough for the import to run some seconds (2e6 rows took 5 s on the shared machine).
+IMPORT_ROWS = 3_000_000
+#: CPU time of the child before the signal, s: past its imports (~1 s), reading the rows.
+IMPORT_CPU_BEFORE_STOP_S = 2.5
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the child's CPU time from /proc")
+def test_a_stopped_import_leaves_the_old_dataset(tmp_path):
+    from children import cpu_s
+
+    readings = tmp_path / "readings.csv"
+    readings.write_text("g1,g2,g3,m,x\n" + "0.11,0.52,0.03,25,40\n0.10,0.50,0.02,0,0\n" * (IMPORT_ROWS // 2))
+    columns = tmp_path / "columns.toml"
+    columns.write_text(
+        'gauges = ["g1", "g2", "g3"]\ngauge_unit = "V"\nload = "m"\nload_unit = "g"\nposition = "x"\n'
+        'position_unit = "mm"\nposition_from = "tip"\n'
+    )
+    out = tmp_path / "lab.parquet"
+    out.write_bytes(b"the dataset of last week")
+    proc = start("dataset", "import", readings, "--map", columns, "--out", out, "--force", "--json")
+    wait_until(lambda: cpu_s(proc.pid) > IMPORT_CPU_BEFORE_STOP_S, proc)
+    exit_code, result, err = stop(proc, signal.SIGTERM)
+    assert exit_code == 143, err
+    assert result["signal"] == "SIGTERM"
+    assert out.read_bytes() == b"the dataset of last week"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["columns.toml", "lab.parquet", "readings.csv"]
