@@ -33,6 +33,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.cli.identify",
     "flexdigit.cli.design",
     "flexdigit.cli.run",
+    "flexdigit.cli.export",
     "flexdigit.cli.collect",
     "flexdigit.cli.palpate",
     "flexdigit.cli.calibrate",
