@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.interrupts import signals_deferred, stop_requested
 
 __all__ = [
     "Recording",
@@ -187,7 +188,7 @@ class Recording:
         if stamp >= 2**64:  # MCAP's times are unsigned 64-bit nanoseconds: 584 years
             raise ParameterError(f"Recording.write: time {time_s!r} s is beyond MCAP's 2**64 ns (584 years)")
         data = json.dumps(message, allow_nan=False, separators=(",", ":")).encode()
-        with self._lock:
+        with signals_deferred(), self._lock:  # a stop signal waits for the record's end: never a torn record
             if self._closed:
                 raise ParameterError(f"{self.path}: the recording is closed")
             self._writer.add_message(channel, log_time=stamp, data=data, publish_time=stamp, sequence=self._sequence)
@@ -218,8 +219,15 @@ class Recording:
                 raise self._out.failed(exc) from exc
 
     def close(self, stop: dict[str, Any] | None = None) -> None:
-        """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice."""
-        with self._lock:
+        """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice.
+
+        Closed plainly (no ``stop`` of the caller's) while a stop signal is being taken (:mod:`flexdigit.interrupts`),
+        the stop record says it was interrupted and names the signal."""
+        stop = dict(stop or {})
+        requested = stop_requested()
+        if requested is not None and stop.get("stop", "closed") == "closed":
+            stop = {**stop, "stop": "interrupted", "signal": requested.signal_name}
+        with signals_deferred(), self._lock:
             self._close(stop)
 
     def _close(self, stop: dict[str, Any] | None) -> None:

@@ -21,6 +21,7 @@ from typing import Any
 from flexdigit._io import OutputStream, check_output
 from flexdigit._validation import check_int
 from flexdigit.errors import DataFileError
+from flexdigit.interrupts import signals_deferred
 
 __all__ = [
     "LOG_FORMAT",
@@ -64,8 +65,11 @@ class SampleLog:
         from flexdigit._validation import check_choice
 
         self.path = Path(path)
+        #: The log asked for (``path`` becomes ``STEM.partial.jsonl`` when a ``--force`` run stops early) and the mode.
+        self.target = self.path
         self.fsync_every = check_int(fsync_every, "fsync_every", "SampleLog", low=0)
         mode = check_choice(mode, "mode", LOG_MODES, "SampleLog")
+        self.mode = mode
         record = {"format": LOG_FORMAT, **header}
         if mode != "append" or not self.path.exists():
             check_output(self.path, force=mode == "replace", hint="or --append to add this run to it")
@@ -84,16 +88,21 @@ class SampleLog:
         self.write(record)
 
     def write(self, record: dict[str, Any]) -> None:
-        try:
-            self._file.write(json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n")
-            self._file.flush()
-            self.lines += 1
-            self._since_sync += 1
-            if self.fsync_every and self._since_sync >= self.fsync_every:
-                os.fsync(self._file.fileno())
-                self._since_sync = 0
-        except OSError as exc:  # a full disk: say which file
-            raise self._out.failed(exc) from exc
+        line = json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n"
+        with signals_deferred():  # a stop signal waits for the line's end: never a torn line
+            try:
+                self._write(line)
+            except OSError as exc:  # a full disk: say which file
+                raise self._out.failed(exc) from exc
+
+    def _write(self, line: str) -> None:
+        self._file.write(line)
+        self._file.flush()
+        self.lines += 1
+        self._since_sync += 1
+        if self.fsync_every and self._since_sync >= self.fsync_every:
+            os.fsync(self._file.fileno())
+            self._since_sync = 0
 
     def close(self, complete: bool = True) -> Path:
         """Flush, fsync and close; return where the log is: its path, or (a ``--force`` run that stopped before

@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.studies.metrics import MetricContext
 
 __all__ = [
@@ -112,6 +113,7 @@ def evaluate_rows(build, rows, values, metrics, context: MetricContext, task_key
                 sets.append(build(values[i], f"row {int(row)}"))
                 built.append(int(row))
             except Exception as exc:  # noqa: BLE001 - a row the rig refuses is that row's result
+                raise_if_stopping(exc)  # (a stop is not)
                 out.append(RowRecord(int(row), {}, _message(exc)))
         results = evaluate_many(sets, metrics, context)
         each = (time.perf_counter() - start) / max(1, len(rows))
@@ -188,7 +190,7 @@ class Journal:
         """Add finished rows, flushed and fsynced before returning."""
         lines = "".join(json.dumps(r.to_json(), sort_keys=True) + "\n" for r in records)
         try:
-            with self.path.open("a", encoding="utf-8") as fh:
+            with signals_deferred(), self.path.open("a", encoding="utf-8") as fh:  # a stop waits for the rows' end
                 fh.write(lines)
                 fh.flush()
                 os.fsync(fh.fileno())

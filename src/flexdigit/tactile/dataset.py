@@ -29,6 +29,7 @@ import numpy as np
 from flexdigit import __version__, _io
 from flexdigit._io import atomic_path, atomic_write
 from flexdigit.errors import DataFileError, one_line
+from flexdigit.interrupts import signals_deferred
 from flexdigit.tactile.protocols import Protocol
 
 __all__ = [
@@ -180,11 +181,13 @@ class Journal:
         return cls(path, handle, fsync), rows
 
     def append(self, row: dict) -> None:
-        """Write one reading and flush it (and fsync it if asked)."""
-        self._fh.write(json.dumps(row) + "\n")
-        self._fh.flush()
-        if self._fsync:
-            os.fsync(self._fh.fileno())
+        """Write one reading and flush it (and fsync it if asked); a stop signal waits for the line's end."""
+        line = json.dumps(row) + "\n"
+        with signals_deferred():
+            self._fh.write(line)
+            self._fh.flush()
+            if self._fsync:
+                os.fsync(self._fh.fileno())
 
     def close(self) -> None:
         self._fh.close()
