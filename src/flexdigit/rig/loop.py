@@ -312,29 +312,30 @@ def run_loop(
                 guard.check_rotation(t, y)
             u = controller.step(r, reading)
             sent = rig.write_command(u)
-            if log is not None or recording is not None:
-                record = {
-                    "k": k,
-                    "t": round(t, 9),
-                    "setpoint": r,
-                    "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
-                    "pot_v": _finite_or_none(reading.pot_v),
-                    "y": _finite_or_none(y),
-                    "command": sent,
-                }
-                with signals_deferred():  # a stop signal waits for the record's end: no torn line or chunk
+            # a stop signal waits for the sample's end: the log, the recording and the result keep the same samples
+            with signals_deferred():
+                if log is not None or recording is not None:
+                    record = {
+                        "k": k,
+                        "t": round(t, 9),
+                        "setpoint": r,
+                        "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
+                        "pot_v": _finite_or_none(reading.pot_v),
+                        "y": _finite_or_none(y),
+                        "command": sent,
+                    }
                     if log is not None:
                         log.write(record)
                     if recording is not None:
                         recording.write_sample(record)
-            compute.append(timer() - w0)
-            starts.append(now)
-            lateness.append(late)
-            ts.append(t)
-            sps.append(r)
-            gauges.append(reading.gauges_v)
-            ys.append(y)
-            cmds.append(sent)
+                compute.append(timer() - w0)
+                starts.append(now)
+                lateness.append(late)
+                ts.append(t)
+                sps.append(r)
+                gauges.append(reading.gauges_v)
+                ys.append(y)
+                cmds.append(sent)
             if on_sample is not None:
                 on_sample(k, t, y, sent)
             if guard is not None:
