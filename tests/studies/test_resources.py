@@ -118,3 +118,15 @@ def test_workers_beyond_the_machine_are_refused_saying_the_limit(tmp_path, capsy
     assert error.startswith("--workers 1000 is more than this machine can run at once")
     assert f"at most {limit} ({why})" in error and "refused" in error
     assert not (tmp_path / "out").exists()  # refused before anything started
+
+
+def test_a_journal_line_nested_too_deep_is_named(tmp_path):
+    from flexdigit.errors import DataFileError
+    from flexdigit.studies.execution import JOURNAL_NAME, Journal
+
+    path = tmp_path / JOURNAL_NAME
+    Journal(path, {"fingerprint": "f"})  # a header
+    with path.open("a") as fh:
+        fh.write("[" * 100_000 + "]" * 100_000 + "\n")
+    with pytest.raises(DataFileError, match=rf"{JOURNAL_NAME}: line 2 is not a row record"):
+        Journal(path, {"fingerprint": "f"})

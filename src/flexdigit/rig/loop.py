@@ -64,6 +64,10 @@ class LoopController(Protocol):
 
 #: Header keys that must agree for a run to be appended to an existing log (``--append``).
 APPEND_KEYS = ("controller", "period_s", "rig_settings")
+#: The longest line of a loop log read, bytes: a sample is under 300, a header with the rig's settings a few kB.
+#: Logs are read a line at a time (never whole), so a longer line, a file with a hole of NUL bytes or no line
+#: breaks at all, is refused naming it after reading at most this much.
+MAX_LOG_LINE_BYTES = 1 << 20
 #: How :class:`SampleLog` treats an existing file: refuse it, add a run to it, or replace it (``--force``).
 LOG_MODES = ("new", "append", "replace")
 
@@ -146,7 +150,7 @@ def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
         first = fh.readline()
     try:
         old = json.loads(first.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
         old = None
     if not isinstance(old, dict) or old.get("format") != LOG_FORMAT:
         raise DataFileError(
@@ -194,35 +198,72 @@ def read_log(
 
 
 def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]]:
-    """Every run of a loop log as ``(first line number, header, samples, footer or None)``."""
-    from flexdigit._io import read_text
+    """Every run of a loop log as ``(first line number, header, samples, footer or None)``.
 
+    Streamed: read a line at a time (at most :data:`MAX_LOG_LINE_BYTES` each), never the whole file."""
     path = Path(path)
+    if path.is_dir():
+        raise DataFileError(f"{path}: is a directory, not a flexdigit loop log")
     runs: list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]] = []
-    lines = read_text(path, "a flexdigit loop log").splitlines()
-    for number, line in enumerate(lines, 1):
-        try:
-            record = json.loads(line)
-        except json.JSONDecodeError:
-            if number == len(lines):
+    with path.open("rb") as fh:
+        for number, raw, last in _log_lines(path, fh):
+            record = _log_record(path, number, raw, last)
+            if record is None:
                 break  # a line cut by a crash mid-write
-            raise DataFileError(f"{path}: line {number} is not JSON") from None
-        if not isinstance(record, dict):
-            raise DataFileError(f"{path}: line {number} is not a JSON object")
-        if number == 1 or "format" in record:
-            if record.get("format") != LOG_FORMAT:
-                raise DataFileError(f"{path}: line {number} is not a flexdigit loop log header (format {LOG_FORMAT})")
-            runs.append((number, record, [], None))
-        elif runs[-1][3] is not None:
-            raise DataFileError(f"{path}: line {number} follows the run's last line (its footer)")
-        elif "stop" in record:
-            start, header, samples, _ = runs[-1]
-            runs[-1] = (start, header, samples, record)
-        else:
-            runs[-1][2].append(check_sample(record, path, f"line {number}"))
+            if number == 1 or "format" in record:
+                if record.get("format") != LOG_FORMAT:
+                    raise DataFileError(
+                        f"{path}: line {number} is not a flexdigit loop log header (format {LOG_FORMAT})"
+                    )
+                runs.append((number, record, [], None))
+            elif runs[-1][3] is not None:
+                raise DataFileError(f"{path}: line {number} follows the run's last line (its footer)")
+            elif "stop" in record:
+                start, header, samples, _ = runs[-1]
+                runs[-1] = (start, header, samples, record)
+            else:
+                runs[-1][2].append(check_sample(record, path, f"line {number}"))
     if not runs:
         raise DataFileError(f"{path}: empty file, expected a flexdigit loop log")
     return runs
+
+
+def _log_lines(path: Path, fh):
+    """``(line number, bytes, is the last line)`` for each line of ``fh``, one line read ahead."""
+    number, line = 0, fh.readline(MAX_LOG_LINE_BYTES + 1)
+    while line:
+        number += 1
+        if len(line) > MAX_LOG_LINE_BYTES:
+            raise DataFileError(
+                f"{path}: line {number} is longer than {MAX_LOG_LINE_BYTES:,} bytes; a loop log's lines are samples "
+                "of a few hundred (is it a loop log? a file with a hole of NUL bytes?)"
+            )
+        following = fh.readline(MAX_LOG_LINE_BYTES + 1)
+        yield number, line, not following
+        line = following
+
+
+def _log_record(path: Path, number: int, raw: bytes, last: bool) -> dict[str, Any] | None:
+    """One log line as a JSON object; None for a torn last line; a DataFileError naming the line otherwise."""
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DataFileError(
+            f"{path}: not a flexdigit loop log: binary or not UTF-8 (byte 0x{raw[exc.start]:02x} on line {number})"
+        ) from None
+    if "\x00" in text:
+        raise DataFileError(f"{path}: not a flexdigit loop log: binary (a NUL byte on line {number})")
+    try:
+        record = json.loads(text)
+    except json.JSONDecodeError:
+        if last:
+            return None
+        raise DataFileError(f"{path}: line {number} is not JSON") from None
+    except RecursionError:  # brackets nested past the parser's depth: no loop log line is
+        raise DataFileError(f"{path}: line {number} is not a loop log line (JSON nested too deep)") from None
+    if not isinstance(record, dict):
+        raise DataFileError(f"{path}: line {number} is not a JSON object")
+    return record
 
 
 def _is_finite(x: int | float) -> bool:

@@ -166,7 +166,7 @@ class Journal:
             raise DataFileError(f"{self.path}: not a study journal (no header line)")
         try:
             header = json.loads(complete[0])
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):  # RecursionError: brackets nested past the parser's depth
             raise DataFileError(f"{self.path}: line 1 is not a study journal header") from None
         if not isinstance(header, dict) or header.get("flexdigit_study_journal") != JOURNAL_FORMAT:
             raise DataFileError(f"{self.path}: line 1 is not a flexdigit study journal header")
@@ -180,7 +180,7 @@ class Journal:
                 continue
             try:
                 record = RowRecord.from_json(json.loads(line))
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+            except (json.JSONDecodeError, KeyError, TypeError, ValueError, RecursionError):
                 raise DataFileError(f"{self.path}: line {number} is not a row record") from None
             self.records[record.row] = record
         if tail:  # a line cut short by a kill: drop it, the row is computed again
@@ -440,7 +440,7 @@ def retry_rows(out_dir) -> int:
         return 0
     failed = set()
     for line in path.read_bytes().split(b"\n")[1:]:
-        with contextlib.suppress(json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
+        with contextlib.suppress(json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError, RecursionError):
             record = RowRecord.from_json(json.loads(line))
             (failed.discard if record.done else failed.add)(record.row)
     return len(failed)
