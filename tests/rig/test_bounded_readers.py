@@ -14,8 +14,8 @@ import pytest
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError
 from flexdigit.rig import recording
-from flexdigit.rig.loop import LOG_FORMAT, MAX_LOG_LINE_BYTES, read_log
 from flexdigit.rig.recording import SAMPLE_TOPIC, read_recording
+from flexdigit.rig.sample_log import LOG_FORMAT, MAX_LOG_LINE_BYTES, read_log
 
 NESTED = "[" * 100_000 + "]" * 100_000
 #: A hole in a sparse log (a copy cut short, a disk image): reads back as NUL bytes, takes no disk.
