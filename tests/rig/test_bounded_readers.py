@@ -150,3 +150,31 @@ def test_an_mcap_message_nested_too_deep_is_named(tmp_path):
         writer.finish()
     with pytest.raises(DataFileError, match=rf"run\.mcap: message 7 on {SAMPLE_TOPIC}: JSON nested too deep"):
         read_recording(path)
+
+
+#: What a replay may hold per recorded sample while reading and after, bytes: its columns take 64 (t, 3 gauges,
+#: pot, setpoint, y as float64, the command as int16); a list of sample dicts took 790 and 910 at its peak, more
+#: than the log's own 120 bytes a line.
+REPLAY_BYTES_PER_SAMPLE = 200
+
+
+@pytest.mark.parametrize("kind", ["jsonl", "mcap"])
+def test_a_replay_holds_its_samples_in_columns_not_dicts(tmp_path, kind):
+    from flexdigit.rig.backends.replay_backend import ReplayRig
+
+    n = 50_000
+    if kind == "jsonl":
+        path = _log(tmp_path / "run.jsonl", [json.dumps(_sample(k)).encode() for k in range(n)])
+    else:
+        path = _mcap(tmp_path / "run.mcap", n=n)
+    tracemalloc.start()
+    try:
+        rig = ReplayRig(str(path))
+        held, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < REPLAY_BYTES_PER_SAMPLE * n, peak / n
+    assert held < REPLAY_BYTES_PER_SAMPLE * n, held / n
+    last = rig.samples[-1]  # read back as the log has it
+    assert len(rig.samples) == n and last["t"] == _sample(n - 1)["t"] and last["gauges_v"] == [1.0, 1.1, 1.2]
+    assert last["pot_v"] is None and last["command"] == 8

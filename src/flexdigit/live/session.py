@@ -22,7 +22,6 @@ trained network (``--model``) when given; a palpation estimate adds itself the s
 
 from __future__ import annotations
 
-import bisect
 import collections
 import concurrent.futures
 import math
@@ -435,7 +434,7 @@ class LiveSession:
         if self.kind == "replay":
             samples = rig.samples
             self._replayed = samples
-            self._replayed_t = [float(x["t"]) - float(samples[0]["t"]) for x in samples]
+            self._replayed_t = rig.times_s - rig.times_s[0]  # an array: no float object per sample
             self._replay_length_s = float(samples[-1]["t"]) - float(samples[0]["t"])
             self.setpoint = None
             # a recording made under a controller (run, live's closed loop) has its setpoint and measured value in
@@ -697,7 +696,7 @@ class LiveSession:
         rig = self.rig
         if self.kind == "replay":
             # the recorded sample in force (a recording of any rate, starting at any time)
-            i = max(bisect.bisect_right(self._replayed_t, reading.time_s + 1e-9) - 1, 0)
+            i = max(int(np.searchsorted(self._replayed_t, reading.time_s + 1e-9, side="right")) - 1, 0)
             rec = self._replayed[i]
             return int(rec.get("command", equilibrium)), _finite(rec.get("setpoint")), _finite(rec.get("y"))
         y = None

@@ -47,6 +47,7 @@ from flexdigit.errors import DataFileError, ParameterError
 __all__ = [
     "Recording",
     "read_recording",
+    "read_recording_columns",
     "read_metadata",
     "rig_metadata",
     "recording_rig",
@@ -431,11 +432,27 @@ def read_recording(path: str | os.PathLike):
     :class:`~flexdigit.errors.DataFileError` naming the file when it holds no samples, a sample breaks the schema,
     or its ``flexdigit.run`` metadata is of another format.
     """
+    samples: list[dict[str, Any]] = []
+    header, footer = _read_samples(Path(path), samples.append)
+    return header, samples, footer
+
+
+def read_recording_columns(path: str | os.PathLike):
+    """:func:`read_recording` into columns (:class:`~flexdigit.rig.sample_log.SampleColumns`, 64 bytes a sample):
+    ``(header, columns, footer or None)``, streamed a chunk at a time."""
+    from flexdigit.rig.sample_log import SampleColumns
+
+    columns = SampleColumns()
+    header, footer = _read_samples(Path(path), columns.append)
+    return header, columns.arrays(), footer
+
+
+def _read_samples(path: Path, keep):
+    """Stream the recording's samples, checked, to ``keep``; its header and footer (see :func:`read_recording`)."""
     from mcap.records import Metadata
 
     from flexdigit.rig.sample_log import check_sample
 
-    path = Path(path)
     records = _Records(path)
     meta: dict[str, dict[str, Any]] = {}
 
@@ -445,19 +462,19 @@ def read_recording(path: str | os.PathLike):
                 meta[record.name] = _metadata_values(record.metadata)
             yield record
 
-    samples = [
-        _check_sample(path, i + 1, message, check_sample)
-        for i, (_, _, message) in enumerate(iter_messages(path, topics=[SAMPLE_TOPIC], records=collecting()))
-    ]
+    count = 0
+    for _, _, message in iter_messages(path, topics=[SAMPLE_TOPIC], records=collecting()):
+        count += 1
+        keep(_check_sample(path, count, message, check_sample))
     header = meta.get("flexdigit.run")
     if header is not None and header.get("format") != RECORDING_FORMAT:
         raise DataFileError(
             f"{path}: a recording of format {header.get('format')!r}; this flexdigit reads {RECORDING_FORMAT}"
         )
-    if not samples:
+    if not count:
         why = f" (the file is damaged or cut short: {records.stopped})" if records.stopped else ""
         raise DataFileError(f"{path}: no {SAMPLE_TOPIC} messages: not a flexdigit recording{why}")
-    return header if header is not None else {"format": None}, samples, meta.get("flexdigit.stop")
+    return header if header is not None else {"format": None}, meta.get("flexdigit.stop")
 
 
 #: JSON Schema of what happens to the rig besides its samples (weights hung, lifted, re-hung).

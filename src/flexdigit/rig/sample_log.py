@@ -18,6 +18,8 @@ import os
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from flexdigit._io import check_output
 from flexdigit._validation import check_int
 from flexdigit.errors import DataFileError, OutputExistsError, RigError
@@ -30,6 +32,8 @@ __all__ = [
     "check_appendable",
     "read_log",
     "read_log_runs",
+    "read_log_columns",
+    "SampleColumns",
     "check_sample",
 ]
 
@@ -152,31 +156,55 @@ def read_log(
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and line when it is not a loop log.
     """
-    path = Path(path)
-    runs = read_log_runs(path)
-    if run is None:
-        if len(runs) > 1:
-            starts = ", ".join(str(start) for start, *_ in runs)
-            raise DataFileError(
-                f"{path}: holds {len(runs)} runs (appended; starting on lines {starts}); line {runs[1][0]} starts a "
-                "second run: choose one with read_log(path, run=N) or replay://FILE?run=N"
-            )
-        run = 1
+    kept: list[dict[str, Any]] = []
+    header, footer = _read_one_run(Path(path), run, kept.append)
+    return header, kept, footer
+
+
+def read_log_columns(
+    path: str | os.PathLike, run: int | None = None
+) -> tuple[dict[str, Any], dict[str, np.ndarray], dict[str, Any] | None]:
+    """:func:`read_log` into columns (:class:`SampleColumns`): ``(header, columns, footer or None)``.
+
+    Streamed: a line at a time into arrays of 64 bytes a sample, where a list of sample dicts takes ten times
+    that; what a replay of a long log holds (:class:`~flexdigit.rig.backends.replay_backend.ReplayRig`)."""
+    columns = SampleColumns()
+    header, footer = _read_one_run(Path(path), run, columns.append)
+    return header, columns.arrays(), footer
+
+
+def _read_one_run(path: Path, run: int | None, keep) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """Scan the log once, handing run ``run``'s samples (checked) to ``keep``; its header and footer."""
     from flexdigit._validation import check_int
 
-    index = check_int(run, "run", "read_log", low=1, high=len(runs), error=DataFileError)
-    _, header, samples, footer = runs[index - 1]
-    return header, samples, footer
+    want = 1 if run is None else run
+    runs = _scan_log(path, lambda index, sample: keep(sample) if index == want else None)
+    if run is None and len(runs) > 1:
+        starts = ", ".join(str(start) for start, *_ in runs)
+        raise DataFileError(
+            f"{path}: holds {len(runs)} runs (appended; starting on lines {starts}); line {runs[1][0]} starts a "
+            "second run: choose one with read_log(path, run=N) or replay://FILE?run=N"
+        )
+    index = check_int(want, "run", "read_log", low=1, high=len(runs), error=DataFileError)
+    _, header, footer = runs[index - 1]
+    return header, footer
 
 
 def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]]:
     """Every run of a loop log as ``(first line number, header, samples, footer or None)``.
 
     Streamed: read a line at a time (at most :data:`MAX_LOG_LINE_BYTES` each), never the whole file."""
-    path = Path(path)
+    samples: dict[int, list[dict[str, Any]]] = {}
+    runs = _scan_log(Path(path), lambda index, sample: samples.setdefault(index, []).append(sample))
+    return [(start, header, samples.get(i, []), footer) for i, (start, header, footer) in enumerate(runs, 1)]
+
+
+def _scan_log(path: Path, on_sample) -> list[tuple[int, dict[str, Any], dict[str, Any] | None]]:
+    """Read a loop log a line at a time: ``(first line, header, footer or None)`` for each run; every sample,
+    checked, goes to ``on_sample(run index from 1, sample)`` as it is read (the caller keeps what it needs)."""
     if path.is_dir():
         raise DataFileError(f"{path}: is a directory, not a flexdigit loop log")
-    runs: list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]] = []
+    runs: list[list] = []
     with path.open("rb") as fh:
         for number, raw, last in _log_lines(path, fh):
             record = _log_record(path, number, raw, last)
@@ -187,17 +215,87 @@ def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], li
                     raise DataFileError(
                         f"{path}: line {number} is not a flexdigit loop log header (format {LOG_FORMAT})"
                     )
-                runs.append((number, record, [], None))
-            elif runs[-1][3] is not None:
+                runs.append([number, record, None])
+            elif runs[-1][2] is not None:
                 raise DataFileError(f"{path}: line {number} follows the run's last line (its footer)")
             elif "stop" in record:
-                start, header, samples, _ = runs[-1]
-                runs[-1] = (start, header, samples, record)
+                runs[-1][2] = record
             else:
-                runs[-1][2].append(check_sample(record, path, f"line {number}"))
+                on_sample(len(runs), check_sample(record, path, f"line {number}"))
     if not runs:
         raise DataFileError(f"{path}: empty file, expected a flexdigit loop log")
-    return runs
+    return [tuple(r) for r in runs]
+
+
+class SampleColumns:
+    """Checked samples (:func:`check_sample`) kept as typed arrays, 64 bytes a sample, not as dicts (about 600).
+
+    :meth:`append` takes a sample dict; :meth:`arrays` gives ``t``, ``gauges_v`` (n x 3), ``pot_v``,
+    ``setpoint``, ``y`` (float, NaN for null) and ``command`` (int); :class:`SampleView` reads them back as
+    dicts, one at a time."""
+
+    _FLOATS = ("t", "g1", "g2", "g3", "pot_v", "setpoint", "y")
+
+    def __init__(self) -> None:
+        from array import array
+
+        self._floats = {name: array("d") for name in self._FLOATS}
+        self._command = array("h")
+
+    def append(self, sample: dict[str, Any]) -> None:
+        f = self._floats
+        f["t"].append(float(sample["t"]))
+        for name, g in zip(("g1", "g2", "g3"), sample["gauges_v"], strict=True):
+            f[name].append(math.nan if g is None else float(g))
+        for name in ("pot_v", "setpoint", "y"):
+            value = sample.get(name)
+            f[name].append(math.nan if value is None else float(value))
+        self._command.append(int(sample["command"]))
+
+    def __len__(self) -> int:
+        return len(self._command)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        f = {name: np.frombuffer(a, dtype=float) if len(a) else np.zeros(0) for name, a in self._floats.items()}
+        return {
+            "t": f["t"],
+            "gauges_v": np.column_stack([f["g1"], f["g2"], f["g3"]]) if len(self) else np.zeros((0, 3)),
+            "pot_v": f["pot_v"],
+            "setpoint": f["setpoint"],
+            "y": f["y"],
+            "command": np.frombuffer(self._command, dtype=np.int16).astype(int) if len(self) else np.zeros(0, int),
+        }
+
+
+class SampleView:
+    """Columns (:meth:`SampleColumns.arrays`) read as a sequence of sample dicts, each made when asked for (null
+    for NaN, as the log has it)."""
+
+    def __init__(self, columns: dict[str, np.ndarray]) -> None:
+        self._c = columns
+
+    def __len__(self) -> int:
+        return len(self._c["t"])
+
+    def __getitem__(self, i: int) -> dict[str, Any]:
+        if not -len(self) <= i < len(self):
+            raise IndexError(i)
+        c = self._c
+
+        def value(x: float) -> float | None:
+            return None if math.isnan(x) else float(x)
+
+        return {
+            "t": float(c["t"][i]),
+            "gauges_v": [value(g) for g in c["gauges_v"][i]],
+            "pot_v": value(c["pot_v"][i]),
+            "command": int(c["command"][i]),
+            "setpoint": value(c["setpoint"][i]),
+            "y": value(c["y"][i]),
+        }
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
 
 
 def _log_lines(path: Path, fh):
