@@ -37,9 +37,11 @@ or lock out another:
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import ipaddress
 import json
 import socket
+import struct
 import sys
 import time
 from importlib import resources
@@ -196,6 +198,10 @@ def make_app(session, allowed_origins: set[str], *, any_address: bool = False):
             """Disconnect this page at once: its buffer is not flushed first (a page that does not read never
             takes it), so its place and memory are free now; the receive loop then sees the disconnect."""
             if transport is not None:
+                sock = transport.get_extra_info("socket")
+                if sock is not None:  # reset, not closed: the kernel drops the unsent frames now too
+                    with contextlib.suppress(OSError):
+                        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
                 transport.abort()
             else:  # pragma: no cover - another ASGI server: close as politely as it allows
                 asyncio.ensure_future(websocket.close(code=1008, reason=why))
