@@ -296,7 +296,8 @@ def dask_client(scheduler: str | None, workers: int):
         try:
             client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S:g}s")
         except OSError as exc:
-            raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+            why = str(exc) or f"{type(exc).__name__}: no answer within {SCHEDULER_TIMEOUT_S:g} s"
+            raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {why}") from None
         try:
             yield client
         finally:
