@@ -24,6 +24,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_studies",
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
+    "benchmarks.bench_resources",
 )
 
 
