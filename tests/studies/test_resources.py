@@ -140,3 +140,11 @@ def test_a_journal_line_nested_too_deep_is_named(tmp_path):
         fh.write("[" * 100_000 + "]" * 100_000 + "\n")
     with pytest.raises(DataFileError, match=rf"{JOURNAL_NAME}: line 2 is not a row record"):
         Journal(path, {"fingerprint": "f"})
+
+
+def test_a_design_spec_given_to_a_sensitivity_study_is_named(tmp_path, capsys):
+    # no uncertain parameters: SALib failed on the empty problem with an IndexError, reported as an internal error
+    out = tmp_path / "out"
+    assert main(["study", "sensitivity", "thesis-design", "--out", str(out), "--workers", "0", "--json"]) == 2
+    error = json.loads(capsys.readouterr().out)["error"]
+    assert error.startswith("study 'thesis-design' declares no uncertain parameters"), error
