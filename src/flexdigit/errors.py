@@ -7,6 +7,18 @@ knowing flexdigit (the python-control ``ControlDimension(ValueError)`` and pyser
 
 from __future__ import annotations
 
+__all__ = [
+    "FlexdigitError",
+    "ParameterError",
+    "DataFileError",
+    "DesignError",
+    "UnstableError",
+    "RigError",
+    "OutputExistsError",
+    "ConvergenceWarning",
+    "one_line",
+]
+
 
 class FlexdigitError(Exception):
     """Base of every flexdigit-specific error."""

@@ -29,6 +29,19 @@ from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.twin import Twin
 
+__all__ = [
+    "GAIN_FACTORS",
+    "RELEASE",
+    "DEFLECTION_RESOLUTION_MM",
+    "DEFLECTION_COMMANDS",
+    "ACTUATED_COMMAND",
+    "ACTUATED_READINGS",
+    "perturbed",
+    "write_csv",
+    "RigRecords",
+    "make_records",
+]
+
 GAIN_FACTORS = (1.10, 0.90, 1.10)
 #: Release tests as the report runs them: 30 s bare (time constant 1/(zeta wn) = 20 s at the doubled damping),
 #: 8 s housed, at 500 Hz

@@ -38,6 +38,20 @@ import numpy as np
 from flexdigit._validation import check_array
 from flexdigit.errors import DataFileError, one_line
 
+__all__ = [
+    "MIN_SAMPLES",
+    "TIME_UNITS",
+    "TIME_NAMES",
+    "CHANNEL_UNITS",
+    "INPUT_NAMES",
+    "SAMPLING_TOLERANCE",
+    "TimeSeries",
+    "split_unit",
+    "read_timeseries",
+    "series_from_table",
+    "write_csv",
+]
+
 #: Fewest samples an identification record may have.
 MIN_SAMPLES = 20
 #: Time units accepted in a column name suffix or ``time_unit``, in seconds.

@@ -36,6 +36,25 @@ import numpy as np
 from flexdigit._validation import check_choice, check_int, check_real, check_values
 from flexdigit.errors import ParameterError
 
+__all__ = [
+    "MODELS",
+    "PalpationProtocol",
+    "SweepRecord",
+    "run_sweep",
+    "TissueFit",
+    "fit_tissue",
+    "stiffness_bound",
+    "PalpationResult",
+    "analyse",
+    "palpate",
+    "simulate_sweep",
+    "ScanResult",
+    "scan",
+    "ForceController",
+    "ForceHold",
+    "hold_force",
+]
+
 MODELS = ("linear", "hunt-crossley")
 
 

@@ -30,6 +30,16 @@ from pathlib import Path
 
 from flexdigit.errors import DataFileError, ParameterError
 
+__all__ = [
+    "TISSUES",
+    "PROTOCOLS",
+    "MAX_SERIES",
+    "TissueFile",
+    "load_tissue",
+    "PalpationFile",
+    "load_palpation_protocol",
+]
+
 TISSUES = ("soft-block", "nodule-phantom", "hertzian-block")
 PROTOCOLS = ("sweep", "scan", "hold")
 

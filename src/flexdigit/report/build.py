@@ -28,6 +28,17 @@ from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import Chapter, ReportContext
 
+__all__ = [
+    "ReportSummary",
+    "reproduce",
+    "HEADLINE",
+    "STATUSES",
+    "results_document",
+    "EXPECTED_SECONDS",
+    "check_report_dir",
+    "COLLAPSE_ROWS",
+]
+
 matplotlib.use("Agg")
 
 

@@ -24,6 +24,16 @@ import numpy as np
 from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 
+__all__ = [
+    "PERIODS_S",
+    "TWENTY_MS_CASES",
+    "sample_period_table",
+    "TwentyMsStudy",
+    "twenty_ms_study",
+    "Chapter5Study",
+    "chapter5_study",
+]
+
 #: Sample periods of the study of 5.1 (s); the fast report uses fewer.
 PERIODS_S = (0.0006, 0.001, 0.002, 0.005, 0.010, 0.020)
 #: The 20 ms step tests: (controller, plant gain). Gains x0.7 and x1.3 are the robustness cases.

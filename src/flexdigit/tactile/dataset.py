@@ -31,6 +31,21 @@ from flexdigit._io import atomic_path, atomic_write
 from flexdigit.errors import DataFileError, one_line
 from flexdigit.tactile.protocols import Protocol
 
+__all__ = [
+    "COLUMNS",
+    "GAUGE_COLUMNS",
+    "JOURNAL_FORMAT",
+    "DATASET_FORMAT",
+    "Dataset",
+    "make_meta",
+    "Journal",
+    "first_difference",
+    "read_journal",
+    "save_dataset",
+    "export_csv",
+    "load_dataset",
+]
+
 #: Every column of a dataset and its numpy dtype.
 COLUMNS: dict[str, type] = {
     "sample": np.int64,

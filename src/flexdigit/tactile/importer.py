@@ -54,6 +54,18 @@ from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.tactile.dataset import COLUMNS, Dataset, make_meta
 from flexdigit.tactile.protocols import RELAXED, Protocol
 
+__all__ = [
+    "GAUGE_UNITS",
+    "LOAD_UNITS",
+    "POSITION_UNITS",
+    "TIME_UNITS",
+    "POSITION_FROM",
+    "MAX_LOAD_KG",
+    "ColumnMap",
+    "ROLES",
+    "import_readings",
+]
+
 #: Units each quantity may be given in, and their factor to SI.
 GAUGE_UNITS = {"V": 1.0, "mV": 1e-3}
 LOAD_UNITS = {"kg": 1.0, "g": 1e-3}

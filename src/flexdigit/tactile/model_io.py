@@ -30,6 +30,8 @@ from flexdigit.errors import DataFileError
 from flexdigit.tactile.netlab import MLP
 from flexdigit.tactile.pipeline import TARGETS, Normaliser, ThesisNetwork
 
+__all__ = ["MODEL_FORMAT", "MODEL_VERSION", "SavedModel", "save_model", "load_model"]
+
 MODEL_FORMAT = "flexdigit-tactile-model"
 MODEL_VERSION = 1
 

@@ -33,6 +33,8 @@ import numpy as np
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import ParameterError
 
+__all__ = ["RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
+
 #: The ``command`` recorded when actuation is disabled (the servo relaxed, chapter 6).
 RELAXED = -1
 

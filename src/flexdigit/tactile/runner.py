@@ -30,6 +30,8 @@ from flexdigit.params import RigParams
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
 
+__all__ = ["PROTOCOL_SETTINGS", "journal_path", "describe_rig", "effective_settings", "collect", "load_or_collect"]
+
 #: The protocol fields that decide the readings (the free text and the name do not).
 PROTOCOL_SETTINGS = (
     "loads_kg",

@@ -64,6 +64,21 @@ from typing import Any
 from flexdigit._validation import check_array, check_real
 from flexdigit.errors import DataFileError, ParameterError
 
+__all__ = [
+    "DEFAULT_FILE",
+    "BASED_ON",
+    "FIELDS",
+    "Calibration",
+    "load_calibration",
+    "load_calibration_record",
+    "save_calibration",
+    "packaged_calibration",
+    "default_calibration",
+    "default_calibration_source",
+    "default_fit_record",
+    "use_calibration",
+]
+
 DEFAULT_FILE = "default_calibration.toml"
 #: The value of ``based_on`` that makes a file partial (its missing keys from the packaged default).
 BASED_ON = ("default",)

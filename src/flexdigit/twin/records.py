@@ -37,6 +37,16 @@ from flexdigit.params import RigParams
 from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.twin import Twin, static_gauges_v
 
+__all__ = [
+    "METADATA_KEY",
+    "RELEASE_DT_S",
+    "TwinRecord",
+    "release_test",
+    "servo_step_test",
+    "actuation_sweep",
+    "static_load_test",
+]
+
 METADATA_KEY = b"flexdigit"
 #: Integration step of a release test (s). A free decay (1.6-2.1 Hz, lightly damped) is a record whose wn and zeta
 #: are identified to ~0.1 %: at the twin's 20 ms serial-frame step the L-stable Rosenbrock step shortens the period,
