@@ -54,6 +54,7 @@ __all__ = [
     "iter_messages",
     "is_mcap",
     "SAMPLE_TOPIC",
+    "MAX_RECORD_BYTES",
     "SAMPLE_SCHEMA",
     "RECORDING_FORMAT",
 ]

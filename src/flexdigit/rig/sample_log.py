@@ -34,7 +34,9 @@ __all__ = [
     "read_log_runs",
     "read_log_columns",
     "SampleColumns",
+    "SampleView",
     "check_sample",
+    "MAX_LOG_LINE_BYTES",
 ]
 
 LOG_FORMAT = "flexdigit-loop-log/1"

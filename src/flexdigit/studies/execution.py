@@ -49,6 +49,7 @@ __all__ = [
     "run_rows",
     "run_study",
     "parse_scheduler",
+    "check_scheduler_greets",
     "retry_rows",
     "JOURNAL_NAME",
     "TASK_FAILED",
