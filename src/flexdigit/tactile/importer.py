@@ -185,7 +185,7 @@ class ColumnMap:
             raise DataFileError(f"{path}: not a file (a directory?); expected a column map TOML")
         try:
             data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-        except tomllib.TOMLDecodeError as exc:
+        except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
             raise DataFileError(f"{path}: not valid TOML ({exc})") from None
         except UnicodeDecodeError as exc:
             raise DataFileError(f"{path}: not a text TOML file (byte {exc.start} is not UTF-8)") from None

@@ -263,7 +263,7 @@ def _read_toml(path: Path) -> dict:
         raise DataFileError(f"{path}: not a file (a directory?); expected a calibration TOML")
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise DataFileError(f"{path}: not valid TOML ({exc})") from None
     except UnicodeDecodeError as exc:
         raise DataFileError(f"{path}: not a text TOML file (byte {exc.start} is not UTF-8)") from None
