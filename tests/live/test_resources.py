@@ -207,3 +207,29 @@ def test_flooding_pages_are_dropped_and_do_not_starve_the_others(server):
         r.get("message") for r in replies if "message" in r
     ]
     assert ended == ["closed 1008"] * 2
+
+
+def test_the_sessions_request_queue_is_bounded_and_the_relax_never_lost(tmp_path):
+    # a loop that is stuck (not started here) takes no requests: pages within their budgets cannot pile them up
+    from flexdigit.errors import ParameterError
+    from flexdigit.live.session import LiveSession
+    from flexdigit.rig.sample_log import LOG_FORMAT
+
+    log = tmp_path / "run.jsonl"
+    lines = [{"format": LOG_FORMAT, "controller": None, "period_s": 0.02}]
+    lines += [{"k": k, "t": 0.02 * k, "gauges_v": [1.0, 1.1, 1.2], "pot_v": None, "command": 8} for k in range(20)]
+    log.write_text("".join(json.dumps(x) + "\n" for x in lines))
+    session = LiveSession(f"replay://{log}")
+    try:
+        session.connected()
+        for _ in range(session.MAX_PENDING_REQUESTS):
+            session.request({"type": "pause", "paused": True})
+        with pytest.raises(ParameterError, match="the rig loop is behind"):
+            session.request({"type": "pause", "paused": False})
+        session.disconnected()  # the last page leaves with the queue full
+        session.engaged = True
+        session._apply_requests()
+        assert session.paused and not session.engaged  # every queued request applied, then the relax
+        assert session._requests.empty()
+    finally:
+        session.stop()

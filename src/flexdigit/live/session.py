@@ -316,6 +316,9 @@ class LiveSession:
     """
 
     HISTORY_S = 10.0
+    #: Requests waiting for the loop at most: more than every page's burst at once (the server's 8 pages x 40; the
+    #: loop applies them every 20 ms), so only a loop that is stuck refuses them, telling the page it is behind.
+    MAX_PENDING_REQUESTS = 512
     ESTIMATE_EVERY = 2  # frames: the shape at up to 25 Hz
     AVERAGE = 5  # readings averaged into each estimate (0.1 s)
     #: Re-estimate at least this often even when nothing moved (s).
@@ -365,7 +368,10 @@ class LiveSession:
             self.rig.close()
             raise
         self._lock = threading.Lock()
-        self._requests: queue.SimpleQueue = queue.SimpleQueue()
+        # bounded: pages within their budgets cannot pile requests up behind a loop that is stuck (a rig's read
+        # blocking); the relax on the last page leaving never waits for room (a flag when the queue is full)
+        self._requests: queue.Queue = queue.Queue(maxsize=self.MAX_PENDING_REQUESTS)
+        self._relax_due = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._estimator_thread: threading.Thread | None = None
@@ -494,7 +500,12 @@ class LiveSession:
             raise ParameterError("only the twin can be loaded from the page; on a rig the operator hangs weights")
         if kind == "speed" and self.kind != "replay":
             raise ParameterError("only a replay has a playback speed")
-        self._requests.put(clean)
+        try:
+            self._requests.put_nowait(clean)
+        except queue.Full:
+            raise ParameterError(
+                f"the rig loop is behind ({self.MAX_PENDING_REQUESTS} requests waiting); request dropped, try again"
+            ) from None
         return clean
 
     def connected(self) -> None:
@@ -507,7 +518,10 @@ class LiveSession:
             self.clients = max(self.clients - 1, 0)
             none_left = self.clients == 0
         if none_left:
-            self._requests.put({"type": "relax"})
+            try:
+                self._requests.put_nowait({"type": "relax"})
+            except queue.Full:  # never lost: the loop relaxes once it has emptied the queue
+                self._relax_due.set()
 
     def snapshot(self, since_k: int) -> dict[str, Any]:
         """Samples after ``since_k`` and the latest estimates, for one page update."""
@@ -670,7 +684,10 @@ class LiveSession:
             try:
                 req = self._requests.get_nowait()
             except queue.Empty:
-                return
+                if not self._relax_due.is_set():
+                    return
+                self._relax_due.clear()  # the last page left while the queue was full: after what it held
+                req = {"type": "relax"}
             kind = req["type"]
             if kind == "setpoint":
                 self.setpoint = req["value"]
