@@ -48,6 +48,15 @@ class OutputExistsError(FlexdigitError, FileExistsError):
     """An output file exists and would be overwritten; the message names it and says ``--force``."""
 
 
+class OutputError(FlexdigitError, OSError):
+    """An output cannot be written (full disk, quota, permission) or must not be (a FIFO, a device, a directory at
+    its path); the message names the file and says the previous file, if any, is kept."""
+
+
+class OutputBusyError(OutputError, BlockingIOError):
+    """Another process is writing the same output (its advisory lock is held); refused, never mixed."""
+
+
 class ConvergenceWarning(UserWarning):
     """An iterative solver stopped before meeting its tolerance; the result carries ``converged=False``.
 

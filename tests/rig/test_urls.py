@@ -9,7 +9,7 @@ import pytest
 
 from flexdigit.cli import main
 from flexdigit.errors import ParameterError, RigError
-from flexdigit.rig.backends import daq_backend, replay_backend, serial_backend, sim_backend, stream_backend
+from flexdigit.rig.backends import daq_backend, hil_backend, replay_backend, serial_backend, sim_backend, stream_backend
 from flexdigit.rig.base import BACKENDS, UrlOption, console_operator, open_rig, parse_rig_url, rig_url_options
 
 MODULES = {
@@ -18,6 +18,7 @@ MODULES = {
     "daq": daq_backend,
     "replay": replay_backend,
     "stream": stream_backend,
+    "hil": hil_backend,
 }
 LOCATION = {
     "sim": "sim",
@@ -25,6 +26,7 @@ LOCATION = {
     "daq": "daq://0",
     "replay": "replay://run.jsonl",
     "stream": "stream:///dev/null",
+    "hil": "hil://image.elf",
 }
 
 

@@ -13,6 +13,7 @@ protocol handler::
     stream:///dev/ttyACM0?baud=115200       gauges (and pot) from a microcontroller ADC, read-only
     serial:///dev/ttyUSB0?daq=stream:///dev/ttyACM0&daq.baud=115200   the servo board with the stream's gauges
     replay://run.jsonl                      a recorded run played back
+    hil://firmware/build/flexdigit_board.elf?mode=host   the reference firmware on simavr, joined to the twin
 
 The servo command (0..254, integer) is a unit of its own: :func:`clamp_command` is the one place it is rounded
 and clamped, and 255 (the Mini SSC sync byte) can never come out of it (a board whose framing allows fewer
@@ -326,6 +327,7 @@ BACKENDS: dict[str, str] = {
     "daq": "flexdigit.rig.backends.daq_backend:from_url",
     "replay": "flexdigit.rig.backends.replay_backend:from_url",
     "stream": "flexdigit.rig.backends.stream_backend:from_url",
+    "hil": "flexdigit.rig.backends.hil_backend:from_url",
 }
 
 _TRUE = ("1", "true", "yes", "on")

@@ -341,11 +341,15 @@ def run_loop(
     if log is not None:
         try:  # a full disk (or a vanished drive) must not hide the result: the log keeps what it had
             log.write(stop)
-            log.close()
-            message = f"{message}; log: {log.path}"
+            log.close(complete=status == "completed")
+            kept = "" if log.path == Path(log_path) else f" (stopped: {log_path} is kept as it was)"
+            message = f"{message}; log: {log.path}{kept}"
         except OSError as exc:
             log.abandon()
-            message = f"{message}; log: {log.path} (its last lines are lost: {exc.strerror or exc})"
+            if log_mode == "replace":
+                message = f"{message}; log: {log_path} is kept as it was (this run's log could not be written)"
+            else:
+                message = f"{message}; log: {log_path} (its last lines are lost: {exc.strerror or exc})"
     timing = TimingStats.from_arrays(period, np.array(starts), np.array(lateness), np.array(compute), overruns)
     result = LoopResult(
         status,

@@ -96,10 +96,12 @@ SAMPLE_SCHEMA: dict[str, Any] = {
 
 def is_mcap(path: str | os.PathLike) -> bool:
     """True when the file starts with the MCAP magic bytes."""
-    try:
-        with open(path, "rb") as fh:
+    from flexdigit._io import RECORDS_LIMIT, open_input
+
+    try:  # a FIFO or a device is not one (and is never opened blocking): its reader refuses it by name
+        with open_input(path, "an MCAP recording", RECORDS_LIMIT) as fh:
             return fh.read(len(MCAP_MAGIC)) == MCAP_MAGIC
-    except OSError:
+    except (OSError, DataFileError):
         return False
 
 
@@ -151,15 +153,12 @@ class Recording:
     ) -> None:
         from mcap.writer import CompressionType, Writer
 
-        from flexdigit._io import check_output
+        from flexdigit._io import OutputStream, check_output
 
         self.path = check_output(path, force=force)
-        try:
-            self._file = open(self.path, "wb" if force else "xb")  # noqa: SIM115 - closed in close()
-        except FileExistsError:
-            from flexdigit.errors import OutputExistsError
-
-            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
+        # under the recording's lock; with force, written beside the old file and renamed over it at a complete end
+        self._out = OutputStream(self.path, "replace" if force else "new", binary=True)
+        self._file = self._out.file
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=CompressionType.NONE)
         self._writer.start(profile="", library=f"flexdigit ({RECORDING_FORMAT})")
         self._channels: dict[str, int] = {}
@@ -204,7 +203,10 @@ class Recording:
             now = time.monotonic()
             if now - self._flushed_at >= self._flush_every_s:  # close the chunk: a killed run keeps it
                 self._flushed_at = now
-                self._writer.flush()
+                try:
+                    self._writer.flush()
+                except OSError as exc:  # a full disk: say which file
+                    raise self._out.failed(exc) from exc
 
     def write_sample(self, record: dict[str, Any]) -> None:
         """Append a loop sample (:data:`SAMPLE_SCHEMA`) at its time ``record["t"]``."""
@@ -215,9 +217,12 @@ class Recording:
         with self._lock:
             if self._closed:
                 return
-            self._writer.flush()
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            try:
+                self._writer.flush()
+                self._file.flush()
+                os.fsync(self._file.fileno())
+            except OSError as exc:  # a full disk: say which file
+                raise self._out.failed(exc) from exc
 
     def close(self, stop: dict[str, Any] | None = None) -> None:
         """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice."""
@@ -227,14 +232,18 @@ class Recording:
     def _close(self, stop: dict[str, Any] | None) -> None:
         if self._closed:
             return
+        stop = {"stop": "closed", **(stop or {})}
         try:
-            self._writer.add_metadata("flexdigit.stop", _metadata_text({"stop": "closed", **(stop or {})}))
+            self._writer.add_metadata("flexdigit.stop", _metadata_text(stop))
             self._writer.finish()
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            # a run that stopped before its end leaves an old recording (--force) intact, itself in STEM.partial.mcap
+            self.path = self._out.close(complete=stop["stop"] in ("closed", "completed"))
+        except OSError as exc:
+            self._out.abandon()
+            raise self._out.failed(exc) from exc
         finally:
             self._closed = True
-            self._file.close()
+            self._out.abandon()  # no-op once closed
 
     @property
     def closed(self) -> bool:
@@ -281,8 +290,10 @@ class _Records:
         from mcap.records import Chunk
         from mcap.stream_reader import StreamReader, breakup_chunk
 
+        from flexdigit._io import RECORDS_LIMIT, open_input
+
         size = self.path.stat().st_size
-        with open(self.path, "rb") as fh:
+        with open_input(self.path, "an MCAP recording", RECORDS_LIMIT) as fh:
             reader = StreamReader(_Bounded(fh, size, self.path), skip_magic=False, emit_chunks=True)
             try:
                 for record in reader.records:
@@ -379,7 +390,9 @@ def iter_messages(path: str | os.PathLike, topics=None, *, records=None) -> Iter
     """
     from mcap.records import Channel, Message
 
-    path = Path(path)
+    from flexdigit._io import RECORDS_LIMIT, check_input
+
+    path = check_input(path, "an MCAP recording", RECORDS_LIMIT)  # a FIFO, a device: named, never read
     if not is_mcap(path):
         raise DataFileError(f"{path}: not an MCAP file (no MCAP magic at the start)")
     channels: dict[int, str] = {}

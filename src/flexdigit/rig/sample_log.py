@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from flexdigit._io import check_output
+from flexdigit._io import OutputStream, check_output
 from flexdigit._validation import check_int
-from flexdigit.errors import DataFileError, OutputExistsError, RigError
+from flexdigit.errors import DataFileError
 
 __all__ = [
     "LOG_FORMAT",
@@ -77,44 +77,44 @@ class SampleLog:
         self.fsync_every = check_int(fsync_every, "fsync_every", "SampleLog", low=0)
         mode = check_choice(mode, "mode", LOG_MODES, "SampleLog")
         record = {"format": LOG_FORMAT, **header}
-        if mode == "append" and self.path.exists():
-            check_appendable(self.path, record)
-        else:
+        if mode != "append" or not self.path.exists():
             check_output(self.path, force=mode == "replace", hint="or --append to add this run to it")
+        # under the log's lock (a second run writing it is refused, never mixed); "replace" writes beside the old
+        # log, which close(complete=True) replaces (flexdigit._io.OutputStream)
+        self._out = OutputStream(self.path, mode, hint="or --append to add this run to it")
         try:
-            if mode == "replace":
-                self.path.unlink(missing_ok=True)
-            self._file = open(self.path, "a" if mode == "append" else "x", encoding="utf-8")  # noqa: SIM115
-        except FileExistsError:  # appeared since the check
-            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
-        except OSError as exc:
-            raise RigError(f"cannot open the loop log {self.path}: {exc.strerror or exc}") from exc
+            if mode == "append" and self.path.stat().st_size:
+                check_appendable(self.path, record)
+        except BaseException:
+            self._out.abandon()
+            raise
+        self._file = self._out.file
         self._since_sync = 0
         self.lines = 0
         self.write(record)
 
     def write(self, record: dict[str, Any]) -> None:
-        self._file.write(json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n")
-        self._file.flush()
-        self.lines += 1
-        self._since_sync += 1
-        if self.fsync_every and self._since_sync >= self.fsync_every:
-            os.fsync(self._file.fileno())
-            self._since_sync = 0
+        try:
+            self._file.write(json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n")
+            self._file.flush()
+            self.lines += 1
+            self._since_sync += 1
+            if self.fsync_every and self._since_sync >= self.fsync_every:
+                os.fsync(self._file.fileno())
+                self._since_sync = 0
+        except OSError as exc:  # a full disk: say which file
+            raise self._out.failed(exc) from exc
 
-    def close(self) -> None:
-        if self._file.closed:
-            return
-        self._file.flush()
-        os.fsync(self._file.fileno())
-        self._file.close()
+    def close(self, complete: bool = True) -> Path:
+        """Flush, fsync and close; return where the log is: its path, or (a ``--force`` run that stopped before
+        its end, ``complete=False``) ``STEM.partial.jsonl`` beside the old log, which is kept intact."""
+        self.path = self._out.close(complete)
+        return self.path
 
     def abandon(self) -> None:
-        """Close without flushing what the OS refused (a full disk): the file keeps the lines already written."""
-        try:
-            self._file.close()
-        except OSError:
-            pass
+        """Close after a failed write (a full disk): a new or appended log keeps the lines already written; a
+        ``--force`` log's new file is removed and the old one kept."""
+        self._out.abandon()
 
 
 def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
@@ -123,8 +123,10 @@ def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the first setting that differs.
     """
+    from flexdigit._io import LOG_LIMIT, open_input
+
     path = Path(path)
-    with path.open("rb") as fh:
+    with open_input(path, "a flexdigit loop log", LOG_LIMIT) as fh:
         first = fh.readline()
     try:
         old = json.loads(first.decode("utf-8"))
@@ -204,10 +206,10 @@ def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], li
 def _scan_log(path: Path, on_sample) -> list[tuple[int, dict[str, Any], dict[str, Any] | None]]:
     """Read a loop log a line at a time: ``(first line, header, footer or None)`` for each run; every sample,
     checked, goes to ``on_sample(run index from 1, sample)`` as it is read (the caller keeps what it needs)."""
-    if path.is_dir():
-        raise DataFileError(f"{path}: is a directory, not a flexdigit loop log")
+    from flexdigit._io import LOG_LIMIT, open_input
+
     runs: list[list] = []
-    with path.open("rb") as fh:
+    with open_input(path, "a flexdigit loop log", LOG_LIMIT) as fh:  # a regular file (a FIFO would hang)
         for number, raw, last in _log_lines(path, fh):
             record = _log_record(path, number, raw, last)
             if record is None:

@@ -181,10 +181,15 @@ class ColumnMap:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
+        from flexdigit._io import refuse_special
+
+        refuse_special(path, "a column map TOML")
         if not path.is_file():
             raise DataFileError(f"{path}: not a file (a directory?); expected a column map TOML")
         try:
-            data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+            from flexdigit._io import read_bytes
+
+            data = tomllib.loads(read_bytes(path, "a column map TOML").decode("utf-8-sig"))
         except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
             raise DataFileError(f"{path}: not valid TOML ({exc})") from None
         except UnicodeDecodeError as exc:

@@ -289,7 +289,10 @@ def load_protocol(name_or_path: str | Path) -> Protocol:
     if text_name in BUILTIN:
         resource = resources.files(__package__).joinpath("protocols", f"{text_name}.toml")
         return protocol_from_toml(resource.read_text(), source=f"protocol {text_name}")
+    from flexdigit._io import refuse_special
+
     path = Path(name_or_path)
+    refuse_special(path, "a protocol TOML")
     if not path.is_file():
         raise ParameterError(
             f"no protocol {text_name!r}: expected one of {', '.join(BUILTIN)} or a TOML file that exists"
