@@ -29,7 +29,7 @@ import matplotlib
 from flexdigit import __version__
 from flexdigit._io import atomic_write, check_output
 from flexdigit._json import to_jsonable
-from flexdigit._system import available_cores
+from flexdigit._system import available_cores, check_workers
 from flexdigit.errors import OutputExistsError
 from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.params import RigParams
@@ -98,7 +98,7 @@ def _build(work: Path, params, seed, fast, chapters, progress, workers) -> Repor
     """The report, built in the folder ``work``."""
     ctx = ReportContext(out_dir=work, params=params or RigParams(), seed=seed, fast=fast)
     names = CHAPTERS if chapters is None else tuple(chapters)  # () is a value: no chapter
-    n_workers = available_cores() if workers is None else int(workers)
+    n_workers = available_cores() if workers is None else check_workers(int(workers), "workers", CHAPTER_BYTES)
     n_workers = max(1, min(n_workers, len(names) or 1))
     if n_workers == 1:
         done = {}
@@ -269,6 +269,9 @@ def _counts(entries) -> dict[str, int]:
     return {s: sum(e["status"] == s for e in entries) for s in STATUSES}
 
 
+#: Memory one chapter's worker process may hold, bytes, for the cap on ``workers``
+#: (:func:`flexdigit._system.check_workers`): a chapter's sweeps and figures take a few hundred MB.
+CHAPTER_BYTES = 2**30
 #: Relative cost of each chapter (its seconds in one full run, 2 workers, on a quiet 2-core machine): only the order
 #: in which chapters are handed to the worker processes (longest first, so that no long chapter starts last), never
 #: their numbers. A chapter not listed counts as a short one.

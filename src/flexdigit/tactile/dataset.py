@@ -371,7 +371,7 @@ def _load_parquet(path: Path) -> Dataset:
         raise DataFileError(f"{path}: no flexdigit metadata (protocol and rig); not a flexdigit tactile dataset")
     try:
         meta = json.loads(meta_raw)
-    except (json.JSONDecodeError, UnicodeDecodeError):
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
         raise DataFileError(f"{path}: flexdigit metadata is not valid JSON") from None
     columns = {}
     for name, dtype in COLUMNS.items():
@@ -403,7 +403,7 @@ def _load_csv(path: Path) -> Dataset:
             raise DataFileError(f"{path}: line 1 must be '# {{json metadata}}' as written by flexdigit")
         try:
             meta = json.loads(first[2:])
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):
             raise DataFileError(f"{path}: line 1 metadata is not valid JSON") from None
         header = fh.readline().strip().split(",")
         missing = [c for c in COLUMNS if c not in header]
