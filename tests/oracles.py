@@ -125,8 +125,9 @@ def eventually(condition, timeout_s: float = 2.0) -> bool:
 #: change meant to move them rewrites it with ``tests/data/update_report_baseline.py`` and commits the diff with its
 #: reason.
 FAST_BASELINE_FILE = Path(__file__).with_name("data") / "report_fast_baseline.json"
-#: How far an entry may move: network training and every random stream are the same to the bit, so only rounding
-#: differences remain (BLAS on one thread per chapter worker, or on two in-process).
+#: How far an entry may move: every random stream is the same to the bit, so only rounding differences remain (BLAS
+#: on one thread per chapter worker, or on two in-process; another BLAS kernel or CPU). Not for a trained network's
+#: entries (:data:`TRAINED_CHAPTERS`): see :func:`_within_training_band`.
 BASELINE_RTOL = 1e-6
 BASELINE_ATOL = 1e-12
 #: Entries that are an interior-point solver's stopping point, not a property of the design: 3x the largest move a
@@ -172,6 +173,8 @@ def assert_entries_unchanged(entries, chapter: str) -> None:
             return e_ours is None or (isinstance(e_ours, float) and math.isnan(e_ours))
         if isinstance(ours, str):
             return e_ours == ours
+        if chapter in TRAINED_CHAPTERS:
+            return _within_training_band(key, status, ours, e_status, e_ours)
         rtol = SOLVER_NOISE_RTOL.get(key, BASELINE_RTOL)
         return e_ours is not None and bool(np.isclose(e_ours, ours, rtol=rtol, atol=BASELINE_ATOL))
 
@@ -198,20 +201,32 @@ SWEEP_CHOICES = ("best_hidden", "best_learning_gradient")
 UNTRAINED = ("samples", "crlb_", "bayes_", "contact_accuracy_visible", "cable_friction_ratio", "equivalent_servo")
 
 
+#: The chapters whose entries come from trained networks. Their baseline entries are held within the training band,
+#: not to BASELINE_RTOL: the networks part with any change of rounding upstream of the training (another CPU's
+#: vector width in the compiled trainer's sums, a BLAS kernel, a compiled solver for the data set's contact
+#: points), as they do from another seed. At main 0d8edf7 the non-actuated entries had moved so on every BLAS
+#: kernel of an AVX-512 machine (best hidden size 20 -> 40, the thesis network's error 6.61 -> 5.29 mm, corr2 by
+#: 1.3e-3), every one inside its band.
+TRAINED_CHAPTERS = ("ch6-tactile", "ch7-tactile", "ch6-7-noise")
+
+
+def _within_training_band(key, status, ours, e_status, e_ours) -> bool:
+    """Whether a tactile entry ``e_ours`` is ``ours`` within the band a change of rounding may move it by."""
+    name = key.split(".", 1)[1]
+    if name in SWEEP_CHOICES:
+        return e_ours is not None
+    if e_status != status:
+        return False
+    if name.startswith(UNTRAINED):
+        return bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
+    if "corr2" in name:
+        return abs(e_ours - ours) <= TRAINED_CORR2_ATOL
+    return abs(e_ours - ours) <= TRAINED_REL * abs(ours)
+
+
 def assert_trained_entries_close(entries, chapter: str) -> None:
     """Every entry of ``chapter`` in :data:`NUMPY_SCG_FILE` is in ``entries`` within its training band."""
-
-    def same(key, status, ours, e_status, e_ours):
-        name = key.split(".", 1)[1]
-        if name in SWEEP_CHOICES:
-            return e_ours is not None
-        if e_status != status:
-            return False
-        if name.startswith(UNTRAINED):
-            return bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
-        if "corr2" in name:
-            return abs(e_ours - ours) <= TRAINED_CORR2_ATOL
-        return abs(e_ours - ours) <= TRAINED_REL * abs(ours)
+    same = _within_training_band
 
     moved = _moved_entries(_chapter_reference(NUMPY_SCG_FILE, chapter), entries, same, NUMPY_SCG_FILE.name)
     assert not moved, f"entries beyond their training band of {NUMPY_SCG_FILE.name}:\n" + "\n".join(moved)
