@@ -41,6 +41,11 @@ PERIOD_RTOL = 0.01
 #: Nehalem and Prescott kernels; a rule that put the load of the cell the load ends in at the cell's middle would
 #: be off by 1.4e-2 of it.
 QUADRATURE_TOL = 1e-12
+#: The compiled contact quadrature against the numpy one, on each array's scale: the same operations in the same
+#: order, equal to the bit on this machine under all four BLAS kernels; but numba compiles for the CPU it runs on
+#: and numpy's sin/cos and sums have SIMD paths of their own, so another CPU may differ by an ulp per operation,
+#: carried through at most 24 links' sums: 64 eps.
+CONTACT_KERNEL_TOL = 64 * np.finfo(float).eps
 
 PARAMS = RigParams()
 CAL = default_calibration()
@@ -276,10 +281,10 @@ def test_bad_contact_inputs_are_named(make, message):
         make()
 
 
-def test_compiled_contact_quadrature_is_the_numpy_quadrature_bit_for_bit():
+def test_compiled_contact_quadrature_is_the_numpy_quadrature_to_rounding():
     # TissueContact.points runs a compiled kernel; the numpy quadrature it replaced is the reference: seeded random
     # bodies (either side, gaps from pressing-in to clear, inclusions), mountings, resolutions and batches of
-    # shapes, rates with damping: every array equal, not just close
+    # shapes, rates with damping: every array within CONTACT_KERNEL_TOL of its scale (equal to the bit here)
     from flexdigit.twin.contact import TissueContact
 
     rng = np.random.default_rng(13)
@@ -303,4 +308,5 @@ def test_compiled_contact_quadrature_is_the_numpy_quadrature_bit_for_bit():
         psi = rng.normal(0.0, 0.15, (int(rng.integers(1, 25)), chain.n)) * rng.uniform(0.0, 2.0)
         omega = rng.normal(0.0, 1.0, psi.shape)
         for got, want in zip(contact.points(psi, omega), contact._points_numpy(psi, omega), strict=True):
-            np.testing.assert_array_equal(got, want)
+            scale = np.abs(want).max(initial=0.0)
+            np.testing.assert_allclose(got, want, rtol=CONTACT_KERNEL_TOL, atol=CONTACT_KERNEL_TOL * scale)
