@@ -126,14 +126,15 @@ def eventually(condition, timeout_s: float = 2.0) -> bool:
 #: reason.
 FAST_BASELINE_FILE = Path(__file__).with_name("data") / "report_fast_baseline.json"
 #: How far an entry may move: every random stream is the same to the bit, so only rounding differences remain (BLAS
-#: on one thread per chapter worker, or on two in-process; another BLAS kernel or CPU). Not for a trained network's
-#: entries (:data:`TRAINED_CHAPTERS`): see :func:`_within_training_band`.
+#: on one thread per chapter worker, or on two in-process; another BLAS kernel or CPU). Not a trained network's
+#: entries, which rounding moves as a change of seed does (``trained_networks`` below).
 BASELINE_RTOL = 1e-6
 BASELINE_ATOL = 1e-12
-#: Entries that are an interior-point solver's stopping point, not a property of the design: 3x the largest move a
-#: scaling of the plant's A by 1 +- 1e-15 or 1 +- 2e-15 causes (6.7e-5 and 3.5 %,
+#: Entries that are an interior-point solver's stopping point, not a property of the design: about 3x the largest
+#: move a scaling of the plant's A by 1 +- 1e-15 or 1 +- 2e-15 causes (6.7e-5 and 3.5 % on an AVX2 machine; the
+#: singular problem's 5.4 % on an AVX-512 one: its stopping point moves with the CPU's rounding too;
 #: tests/control/test_synthesis.py::test_lmi_gamma_moves_with_one_ulp_of_the_plant).
-SOLVER_NOISE_RTOL = {"hinf.gamma_opt_lmi": 2e-4, "hinf.gamma_lmi_singular": 0.1}
+SOLVER_NOISE_RTOL = {"hinf.gamma_opt_lmi": 2e-4, "hinf.gamma_lmi_singular": 0.2}
 
 
 def _chapter_reference(path: Path, chapter: str) -> dict:
@@ -161,20 +162,26 @@ def _moved_entries(reference: dict, entries, same, source: str) -> list[str]:
     ]
 
 
-def assert_entries_unchanged(entries, chapter: str) -> None:
+def assert_entries_unchanged(entries, chapter: str, *, trained_networks: bool = False) -> None:
     """Every baseline entry of ``chapter`` (its slug) is in ``entries`` with the same status and the same figure
     (within :data:`BASELINE_RTOL`, or :data:`SOLVER_NOISE_RTOL` for a solver's stopping point); ``entries`` are
-    :class:`~flexdigit.report.results.Entry` or dicts."""
+    :class:`~flexdigit.report.results.Entry` or dicts.
+
+    ``trained_networks``: the chapter trains networks with the compiled SCG kernel, which numba compiles for the
+    host's instruction set (AVX2 on one machine, AVX-512 on another): its rounding, and after 2,500 iterations the
+    trained networks, differ by CPU, so their entries are held to the training bands of
+    :func:`assert_trained_entries_close` (the untrained ones still to :data:`BASELINE_RTOL`). To the bit they agree
+    only on one machine."""
 
     def same(key, status, ours, e_status, e_ours):
+        if trained_networks and not key.split(".", 1)[1].startswith(UNTRAINED):
+            return _within_training_band(key, status, ours, e_status, e_ours)
         if e_status != status:
             return False
         if ours is None:  # NaN in the report, null in JSON
             return e_ours is None or (isinstance(e_ours, float) and math.isnan(e_ours))
         if isinstance(ours, str):
             return e_ours == ours
-        if chapter in TRAINED_CHAPTERS:
-            return _within_training_band(key, status, ours, e_status, e_ours)
         rtol = SOLVER_NOISE_RTOL.get(key, BASELINE_RTOL)
         return e_ours is not None and bool(np.isclose(e_ours, ours, rtol=rtol, atol=BASELINE_ATOL))
 
@@ -192,31 +199,28 @@ NUMPY_SCG_FILE = Path(__file__).with_name("data") / "report_fast_numpy_scg.json"
 #: branches part, so the networks differ as networks trained from other initial weights do. A change of rounding
 #: must move an entry less than a change of seed does: over seeds 0-4 of the fast report (which also redraw the
 #: data) corr2 has an SD of up to 0.006, the millimetre and ratio entries a relative SD of 3-44 %, the magnitude
-#: errors 14-28 %. The compiled trainer moved them by at most 0.0054 (corr2) and 7.6 % (README, tactile section).
+#: errors 14-28 %. The compiled trainer moved them by at most 0.0054 (corr2) and 7.6 % (README, tactile section); a
+#: change of CPU (numba compiles the kernel for the host: AVX2 or AVX-512) by up to 0.0013 (corr2) and 19.9 %
+#: (non_actuated.thesis_mlp_position_rmse_mm, 6.61 -> 5.29 mm). 35 % stays inside a change of seed's spread.
 TRAINED_CORR2_ATOL = 0.01
-TRAINED_REL = 0.2
+TRAINED_REL = 0.35
 #: Entries that are a sweep's choice (the argmin of a flat validation curve): any value the sweep tried.
 SWEEP_CHOICES = ("best_hidden", "best_learning_gradient")
 #: Entries made without a network (sample counts, Cramer-Rao and Bayes limits, the friction fit's ratio): unmoved.
 UNTRAINED = ("samples", "crlb_", "bayes_", "contact_accuracy_visible", "cable_friction_ratio", "equivalent_servo")
 
 
-#: The chapters whose entries come from trained networks. Their baseline entries are held within the training band,
-#: not to BASELINE_RTOL: the networks part with any change of rounding upstream of the training (another CPU's
-#: vector width in the compiled trainer's sums, a BLAS kernel, a compiled solver for the data set's contact
-#: points), as they do from another seed. At main 0d8edf7 the non-actuated entries had moved so on every BLAS
-#: kernel of an AVX-512 machine (best hidden size 20 -> 40, the thesis network's error 6.61 -> 5.29 mm, corr2 by
-#: 1.3e-3), every one inside its band.
-TRAINED_CHAPTERS = ("ch6-tactile", "ch7-tactile", "ch6-7-noise")
-
-
 def _within_training_band(key, status, ours, e_status, e_ours) -> bool:
-    """Whether a tactile entry ``e_ours`` is ``ours`` within the band a change of rounding may move it by."""
+    """Whether a tactile entry moved less than a change of rounding may move a trained network's figure."""
     name = key.split(".", 1)[1]
     if name in SWEEP_CHOICES:
         return e_ours is not None
     if e_status != status:
         return False
+    if ours is None:  # NaN in the report, null in JSON
+        return e_ours is None or (isinstance(e_ours, float) and math.isnan(e_ours))
+    if isinstance(ours, str):
+        return e_ours == ours
     if name.startswith(UNTRAINED):
         return bool(np.isclose(e_ours, ours, rtol=BASELINE_RTOL, atol=BASELINE_ATOL))
     if "corr2" in name:
@@ -226,9 +230,10 @@ def _within_training_band(key, status, ours, e_status, e_ours) -> bool:
 
 def assert_trained_entries_close(entries, chapter: str) -> None:
     """Every entry of ``chapter`` in :data:`NUMPY_SCG_FILE` is in ``entries`` within its training band."""
-    same = _within_training_band
 
-    moved = _moved_entries(_chapter_reference(NUMPY_SCG_FILE, chapter), entries, same, NUMPY_SCG_FILE.name)
+    moved = _moved_entries(
+        _chapter_reference(NUMPY_SCG_FILE, chapter), entries, _within_training_band, NUMPY_SCG_FILE.name
+    )
     assert not moved, f"entries beyond their training band of {NUMPY_SCG_FILE.name}:\n" + "\n".join(moved)
 
 

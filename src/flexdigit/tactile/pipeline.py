@@ -41,8 +41,8 @@ from flexdigit._validation import (
     validate_params,
 )
 from flexdigit.errors import ParameterError
+from flexdigit.tactile.accuracy import accuracy, corr2, percentage_error, relative_rmse, rmse
 from flexdigit.tactile.dataset import Dataset
-from flexdigit.tactile.metrics import accuracy, corr2, percentage_error, relative_rmse, rmse
 from flexdigit.tactile.netlab import MLP
 
 TARGETS = ("position", "position_index", "magnitude", "contact")
