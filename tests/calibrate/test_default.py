@@ -21,6 +21,8 @@ from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import default_fit_record, packaged_calibration
 
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+
 RELEASE_RTOL = 0.03
 SLOPE_RTOL = 0.05
 DEFLECTION_ABS_MM = 0.5
