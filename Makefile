@@ -11,7 +11,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 # The live page's tests drive Debian's chromium (no browser download); installed here when missing (CI runs as root).
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: setup run test lint bench fuzz clean browser
+.PHONY: setup run test lint bench fuzz clean browser avr firmware
 
 setup: $(STAMP)
 
@@ -35,12 +35,23 @@ lint: $(STAMP)
 # runs; unless the suite just ran there). About 40 s each; pytest's header names the kernel in use.
 BLAS_RUN := $(BIN)/pytest tests -m blas -p no:cacheprovider
 
-test: lint browser
+test: lint browser avr
 	$(BIN)/pytest
 	@if [ -n "$$OPENBLAS_CORETYPE" ]; then echo "blas tests, OpenBLAS's own kernel (OPENBLAS_CORETYPE unset)"; \
 	    env -u OPENBLAS_CORETYPE $(BLAS_RUN); fi
 	@if [ "$$OPENBLAS_CORETYPE" != Nehalem ]; then echo "blas tests, OPENBLAS_CORETYPE=Nehalem"; \
 	    OPENBLAS_CORETYPE=Nehalem $(BLAS_RUN); fi
+
+# The reference firmware (issue 25): Debian's AVR toolchain and simavr, installed here when missing.
+AVR_PACKAGES := gcc-avr avr-libc binutils-avr simavr libsimavr-dev
+avr:
+	@{ command -v avr-gcc >/dev/null && test -f /usr/lib/avr/include/avr/io.h && test -f /usr/include/simavr/sim_avr.h; } || { \
+	    echo "the firmware and its HIL tests need Debian's $(AVR_PACKAGES): installing them"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(AVR_PACKAGES) >/dev/null; } \
+	    || { echo "could not install them: run 'apt-get install $(AVR_PACKAGES)' as root"; exit 1; }
+
+firmware: $(STAMP) avr
+	$(MAKE) -C firmware FLEXDIGIT=$(abspath $(BIN))/flexdigit
 
 browser:
 	@test -x $(CHROMIUM) || { \
@@ -52,7 +63,7 @@ $(BENCH_STAMP): $(STAMP)
 	$(PIP) install -c constraints.txt -e '.[dev,bench]'
 	@touch $(BENCH_STAMP)
 
-bench: $(BENCH_STAMP) browser
+bench: $(BENCH_STAMP) browser avr
 	$(BIN)/python -m benchmarks
 
 FUZZ_SEED ?= 0

@@ -16,6 +16,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_cli",
     "benchmarks.bench_control",
     "benchmarks.bench_twin",
+    "benchmarks.bench_tdcr",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
@@ -24,6 +25,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_studies",
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
+    "benchmarks.bench_board",
 )
 
 

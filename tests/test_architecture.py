@@ -5,6 +5,7 @@ params -> models -> twin -> identify -> control -> rig -> (tactile, shape) -> pa
 (live, studies) -> report -> cli (docs/conventions.md, issues 15 and 23): a module may import its own domain, the
 shared leaf modules and the domains before it, never one after it. Read from the source (every ``import`` and
 ``from ... import``, also inside functions), so an import placed in a function to dodge a cycle is caught as well.
+tdcr (tendon robots in 3D, issue 26) sits at the twin's rank.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ RANK = {
     "params": 1,
     "models": 2,
     "twin": 3,
+    "tdcr": 3,  # the twin's rank: tendon robots in 3D may use params and models, and only the CLI/report use them
     "identify": 4,
     "control": 5,
     "rig": 6,
@@ -46,6 +48,7 @@ SHARED = {
     "_result_table",
     "_estimator",
     "errors",
+    "interrupts",
     "reference",
     "__init__",
 }

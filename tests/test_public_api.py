@@ -102,3 +102,18 @@ def test_the_docs_examples_import_from_the_domain():
         if deep.match(line)
     ]
     assert not offenders, offenders
+
+
+MODULES = sorted(
+    ".".join(("flexdigit", *p.relative_to(PACKAGE).with_suffix("").parts))
+    for p in PACKAGE.rglob("*.py")
+    if p.name not in ("__init__.py", "__main__.py") and "cli" not in p.relative_to(PACKAGE).parts
+)
+
+
+@pytest.mark.parametrize("module_name", MODULES)
+def test_every_name_a_module_declares_public_exists(module_name):
+    # a module's __all__ is its public part: a stale entry would break `from module import *` and the docs
+    module = importlib.import_module(module_name)
+    missing = [name for name in getattr(module, "__all__", ()) if not hasattr(module, name)]
+    assert not missing, missing

@@ -40,10 +40,10 @@ static inline int flexdigit_format_line(char *out, uint16_t seq, uint32_t t_us, 
   int n = snprintf(out, FLEXDIGIT_STREAM_LINE_MAX, "$%u,%lu,%ld,%ld,%ld", (unsigned)seq, (unsigned long)t_us,
                    (long)g1, (long)g2, (long)g3);
   if (has_pot) {
-    n += snprintf(out + n, FLEXDIGIT_STREAM_LINE_MAX - n, ",%ld", (long)pot);
+    n += snprintf(out + n, (size_t)(FLEXDIGIT_STREAM_LINE_MAX - n), ",%ld", (long)pot);
   }
   uint16_t crc = flexdigit_crc16_xmodem(out + 1, n - 1); /* the bytes between '$' and '*' */
-  n += snprintf(out + n, FLEXDIGIT_STREAM_LINE_MAX - n, "*%04X\r\n", (unsigned)crc);
+  n += snprintf(out + n, (size_t)(FLEXDIGIT_STREAM_LINE_MAX - n), "*%04X\r\n", (unsigned)crc);
   return n;
 }
 

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit import _io
 from flexdigit.errors import DataFileError
 
 __all__ = ["Table", "read_table", "DELIMITERS"]
@@ -198,6 +199,9 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(2, "No such file", str(p))
+    from flexdigit._io import refuse_special
+
+    refuse_special(p, "a CSV-like text or .parquet file")
     if not p.is_file():
         raise DataFileError(f"{p}: not a file (a directory?); expected a CSV-like text or .parquet file")
     if decimal not in (None, ".", ","):
@@ -208,8 +212,12 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
         raise DataFileError(
             f"{p}: the delimiter must be one of ',', ';', 'tab', '|', 'whitespace'. Got {delimiter!r} instead."
         )
+    from flexdigit._io import check_input, count_lines
+
     if p.suffix.lower() == ".parquet":
+        check_input(p, "a Parquet table")
         return _read_parquet(p, decimal or ".")
+    count_lines(p, "a text table")  # a 10-million-row file is refused in a second, not read into gigabytes
     numbered = _text_lines(p)
     first = numbered[0][1].strip(" \"'")
     if _SEP_LINE.match(first):  # "sep=;": a spreadsheet's export names its delimiter on the first line
@@ -247,7 +255,9 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
 
 def _text_lines(p: Path) -> list[tuple[int, str]]:
     """``(line number, line)`` of the lines that are neither blank nor comments; refuses binary and empty files."""
-    data = p.read_bytes()
+    from flexdigit._io import RECORDS_LIMIT, read_bytes
+
+    data = read_bytes(p, "a text table", RECORDS_LIMIT)
     if data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # UTF-16 with its byte-order mark
         try:
             text = data.decode("utf-16")
@@ -328,9 +338,17 @@ def _read_parquet(p: Path, decimal: str) -> Table:
     import pyarrow.parquet as pq
 
     try:
-        table = pq.read_table(p)
+        with _io.open_input(p, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            rows = pq.ParquetFile(fh).metadata.num_rows
+            too_many = rows > _io.RECORDS_ROW_LIMIT  # a table's cells become Python strings: bounded first
+            table = None if too_many else pq.read_table(fh)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
         raise DataFileError(f"{p}: not a readable Parquet file ({exc})") from None
+    if table is None:
+        raise DataFileError(
+            f"{p}: {rows:,} rows; flexdigit reads a table of at most {_io.RECORDS_ROW_LIMIT:,} rows (17 minutes at "
+            "1 kHz): cut the part you want into a file of its own"
+        )
     columns = [str(c) for c in table.column_names]
     values = [table.column(c).to_pylist() for c in table.column_names]
     rows = [

@@ -31,6 +31,18 @@ from typing import Any
 from flexdigit._validation import Array, Interval, Options, check_array, check_int, check_real, declare, validate_fields
 from flexdigit.errors import DataFileError, ParameterError
 
+__all__ = [
+    "BRIDGE_TYPES",
+    "Geometry",
+    "Material",
+    "Sensors",
+    "Actuator",
+    "DigitDynamics",
+    "RigParams",
+    "load_params",
+    "save_params",
+]
+
 BRIDGE_TYPES = ("quarter", "half", "full")
 #: A strictly positive real number (lengths, gains, frequencies).
 _POSITIVE = Interval(Real, 0, None, closed="neither")

@@ -2,7 +2,7 @@
 specs): every generated file loads or gives the project's one-line error naming the file (issue 16). Valid seeds:
 the thesis defaults written by tomli_w, the packaged thesis-6.1 protocol and twin calibration, the shipped
 nodule phantom, the shipped sweep, scan and hold palpation protocols in one file, and the shipped
-thesis-tolerances study."""
+thesis-tolerances study, the rao2021 tendon robot written by tomli_w."""
 
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ from flexdigit.studies.sensitivity import SensitivitySettings
 from flexdigit.studies.spec import load_spec
 from flexdigit.tactile.importer import ColumnMap
 from flexdigit.tactile.protocols import load_protocol
+from flexdigit.tdcr.description import ROBOTS, load_robot
 from flexdigit.twin.calibration import load_calibration
 
 from .strategies import assert_loader_contract, edited_document, mutated_bytes, toml_values
@@ -33,6 +34,7 @@ TISSUE = _PALPATION.joinpath("nodule-phantom.toml").read_bytes()
 PALPATION = _PALPATION.joinpath("scan.toml").read_bytes() + b"\n" + _PALPATION.joinpath("hold.toml").read_bytes()
 SPEC = resources.files("flexdigit.studies").joinpath("specs", "thesis-tolerances.toml").read_bytes()
 DESIGN = resources.files("flexdigit.studies").joinpath("specs", "thesis-design.toml").read_bytes()
+ROBOT = tomli_w.dumps(ROBOTS["rao2021"].to_dict()).encode()
 COLUMN_MAP = b'gauges = ["sg_a", "sg_b", "sg_c"]\ngauge_unit = "mV"\nload = "mass_g"\nposition = "x_mm"\n'
 
 LOADERS = {
@@ -42,6 +44,7 @@ LOADERS = {
     "tissue": (load_tissue, TISSUE),
     "palpation": (load_palpation_protocol, PALPATION),
     "spec": (load_spec, SPEC),
+    "robot": (load_robot, ROBOT),
 }
 
 
@@ -101,6 +104,8 @@ test_palpation_bytes = _fuzz_bytes("palpation")
 test_palpation_values = _fuzz_values("palpation")
 test_spec_bytes = _fuzz_bytes("spec")
 test_spec_values = _fuzz_values("spec")
+test_robot_bytes = _fuzz_bytes("robot")
+test_robot_values = _fuzz_values("robot")
 
 
 #: A key with a newline in it, as ``make fuzz`` (seed 0) generated it for the protocol, calibration and spec files:
@@ -125,6 +130,8 @@ _NEWLINE_CASES = {  # where the key goes: the top level, or a table
     "spec [sensitivity]": (_spec_settings, SPEC, ("sensitivity",)),
     "spec [design]": (_spec_settings, DESIGN, ("design",)),
     "column map": (ColumnMap.from_toml, COLUMN_MAP, ()),
+    "robot": (load_robot, ROBOT, ()),
+    "robot [backbone]": (load_robot, ROBOT, ("backbone",)),
 }
 
 

@@ -26,6 +26,19 @@ from flexdigit.models.beam import elastica_tip_deflection
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
 
+__all__ = [
+    "CONVERGENCE_CELLS",
+    "ReleaseFit",
+    "release_fit",
+    "Table36",
+    "table_3_6",
+    "physics_checks",
+    "convergence_table",
+    "calibration_tables",
+    "Chapter3TwinStudy",
+    "chapter3_twin_study",
+]
+
 #: Cells of the convergence study (the twin's default is 12 over the strip).
 CONVERGENCE_CELLS = (3, 6, 12, 24, 48)
 

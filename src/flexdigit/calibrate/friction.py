@@ -15,6 +15,8 @@ from flexdigit._validation import check_array, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.twin.calibration import Calibration
 
+__all__ = ["LEVEL_XTOL", "fit_level", "actuated_rest_sd_v", "friction_ratio_from_repeatability"]
+
 #: The friction fit's tolerance on the ratio (absolute): Brent's method returns a level within it of a crossing.
 LEVEL_XTOL = 1e-4
 

@@ -36,6 +36,18 @@ import numpy as np
 from flexdigit._table import Table, read_table
 from flexdigit.errors import DataFileError
 
+__all__ = [
+    "VOLT_UNITS",
+    "LENGTH_UNITS",
+    "TIME_UNITS",
+    "GAUGES",
+    "read_release",
+    "read_sweep",
+    "read_deflections",
+    "read_rest",
+    "read_actuated_rest",
+]
+
 #: Gauge-voltage units and their factor to V.
 VOLT_UNITS = {"v": 1.0, "mv": 1e-3}
 #: Deflection units and their factor to mm.

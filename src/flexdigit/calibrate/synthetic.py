@@ -29,6 +29,19 @@ from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.twin import Twin
 
+__all__ = [
+    "GAIN_FACTORS",
+    "RELEASE",
+    "DEFLECTION_RESOLUTION_MM",
+    "DEFLECTION_COMMANDS",
+    "ACTUATED_COMMAND",
+    "ACTUATED_READINGS",
+    "perturbed",
+    "write_csv",
+    "RigRecords",
+    "make_records",
+]
+
 GAIN_FACTORS = (1.10, 0.90, 1.10)
 #: Release tests as the report runs them: 30 s bare (time constant 1/(zeta wn) = 20 s at the doubled damping),
 #: 8 s housed, at 500 Hz
@@ -59,7 +72,9 @@ def write_csv(path: Path, header, rows, delimiter=",", decimal=".") -> Path:
             return text.replace(".", decimal) if decimal != "." else text
         return str(v)
 
-    with path.open("w", newline="", encoding="utf-8") as fh:
+    from flexdigit._io import atomic_write
+
+    with atomic_write(path, "w", force=True, newline="") as fh:  # synthetic records are made again at will
         writer = csv.writer(fh, delimiter=delimiter, lineterminator="\r\n")
         writer.writerow(header)
         writer.writerows([[cell(v) for v in row] for row in rows])

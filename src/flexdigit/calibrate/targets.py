@@ -24,6 +24,8 @@ import numpy as np
 from flexdigit._validation import check_array, check_int
 from flexdigit.errors import DataFileError
 
+__all__ = ["CalibrationTargets", "release_figures", "sweep_lines", "noise_from_record"]
+
 
 @dataclass(frozen=True)
 class CalibrationTargets:

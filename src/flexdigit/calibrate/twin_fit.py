@@ -30,6 +30,8 @@ from flexdigit.calibrate.targets import CalibrationTargets
 from flexdigit.errors import ParameterError
 from flexdigit.twin.calibration import Calibration
 
+__all__ = ["MECHANICS", "CalibrationResult", "model_response", "calibrate", "calibrate_to_thesis", "THESIS_SOURCE"]
+
 #: Parameters the mechanical fit can move, and the targets that identify each: a parameter no given target
 #: identifies is held at its initial value (a least-squares step would move it along a flat valley).
 MECHANICS = {

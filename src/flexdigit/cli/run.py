@@ -84,6 +84,11 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--realtime", action="store_true", help="run the loop under SCHED_FIFO when permitted (hardware, sim+paced)"
     )
+    parser.add_argument(
+        "--on-board",
+        action="store_true",
+        help="close the loop on the board (hil://IMAGE.elf): the host sends the setpoint and watches",
+    )
 
     emulator = add_command(
         subparsers,
@@ -117,10 +122,11 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
     from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
-    from flexdigit.rig.safety import RunawayGuard
     from flexdigit.rig.sample_log import check_appendable
     from flexdigit.rig.step_test import step_metrics
 
+    if args.on_board:
+        return _run_on_board(args)
     if args.controller not in CONTROLLERS:
         from flexdigit.errors import ParameterError
 
@@ -198,7 +204,6 @@ def _run(args: argparse.Namespace) -> CommandResult:
             period,
             log_path=args.log,
             log_mode="append" if args.append else "replace" if args.force else "new",
-            guard=RunawayGuard(truth=truth),
             on_sample=on_sample,
             measure=estimator,
             header={
@@ -223,6 +228,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
     data = {
         "status": result.status,
         "message": result.message,
+        "loop": "host",  # where the loop closed: here (the board closes it with --on-board)
         "backend": args.backend,
         "rig": settings,
         "controller": args.controller,
@@ -256,6 +262,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
         "record": str(recording.path) if recording is not None else None,
+        "signal": result.extra.get("signal"),  # the signal that stopped the run (SIGTERM, SIGHUP, SIGINT), or null
     }
     truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if has_truth else ""
     text = (
@@ -268,8 +275,70 @@ def _run(args: argparse.Namespace) -> CommandResult:
         f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
         f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
     )
-    exit_code = {"completed": 0, "fault": 1, "interrupted": 130}[result.status]
+    # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
+    exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[result.status]
     return CommandResult(data=data, text=text, exit_code=exit_code)
+
+
+def _signal_exit_code(name: str | None) -> int:
+    import signal
+
+    return 128 + int(getattr(signal, name or "SIGINT"))
+
+
+def _run_on_board(args: argparse.Namespace) -> CommandResult:
+    """``flexdigit run --on-board``: the loop closes on the board (the exported controller in its image)."""
+    from flexdigit._validation import check_real
+    from flexdigit.errors import ParameterError
+    from flexdigit.rig.backends.hil_backend import run_on_board
+    from flexdigit.rig.base import open_rig, parse_rig_url
+    from flexdigit.rig.step_test import step_metrics
+
+    if parse_rig_url(args.backend).scheme != "hil":
+        raise ParameterError(
+            f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {args.backend!r}."
+        )
+    for name in ("log", "record", "rotation_map", "calibration"):
+        if getattr(args, name) is not None:
+            raise ParameterError(
+                f"--{name.replace('_', '-')} is not supported with --on-board (the board holds its map)"
+            )
+    duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
+    setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
+    options = {"mode": "board", "setpoint_deg": setpoint} | ({} if args.seed is None else {"seed": args.seed})
+    rig = open_rig(args.backend, **options)
+    try:
+        settings = rig.settings()
+        run = run_on_board(rig, setpoint, duration)
+        stats = rig.stats()
+    finally:
+        rig.close()
+    dpc = _deg_per_command(rig.params)
+    metrics = step_metrics(run.time_s, run.true_rotation_deg, setpoint, 0.0, dpc) if run.time_s.size >= 2 else None
+    final, peak = _final_and_peak(run.time_s, run.true_rotation_deg)
+    data = {
+        "status": run.status,
+        "message": run.message,
+        "loop": "board",
+        "backend": args.backend,
+        "rig": settings,
+        "setpoint_deg": setpoint,
+        "period_s": run.period_s,
+        "samples": int(run.time_s.size),
+        "true_final_rotation_deg": final,
+        "true_peak_rotation_deg": peak,
+        "step_metrics": {"true": metrics.to_dict() if metrics else None, "deg_per_command": dpc},
+        "final_command": float(run.command[-1]) if run.command.size else None,
+        "board": stats,
+    }
+    text = (
+        f"loop on the board ({args.backend}): {run.status} ({run.message})\n"
+        f"  true (twin) rotation: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg\n"
+        f"  step: {_figures_line({'true': metrics.to_dict()}) if metrics else 'too few samples'}\n"
+        f"  board: {run.time_s.size} periods of {run.period_s * 1000:g} ms, update <= {stats['exec_max_cycles']} "
+        f"cycles ({stats['exec_max_cycles'] / 16:.0f} us at 16 MHz), faults {stats['faults'] or 'none'}"
+    )
+    return CommandResult(data=data, text=text, exit_code={"completed": 0, "fault": 1}[run.status])
 
 
 def _deg_per_command(params) -> float:
@@ -302,10 +371,8 @@ def _figures_line(figures: dict) -> str:
             f"to its final value), overshoot {m['overshoot_percent']:.1f} %, {steady}, IAE {m['iae_deg_s']:.2f} deg s"
         )
 
-    text = f"estimated {one(figures['estimated'])}"
-    if "true" in figures:
-        text += f"; true {one(figures['true'])}"
-    return text
+    parts = [f"{name} {one(figures[name])}" for name in ("estimated", "true") if name in figures]
+    return "; ".join(parts)
 
 
 def _twin_options(args, sim: bool) -> dict:

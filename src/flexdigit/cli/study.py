@@ -62,17 +62,21 @@ def _run(args, out, run, settings, write):
     retry = done.exists() and not args.force and retry_rows(out) > 0
     if done.exists() and not args.force and not retry:
         raise OutputExistsError(f"{done}: this study has finished in {out}; pass --force to run it again")
+    from flexdigit._io import output_lock
+    from flexdigit.studies.execution import JOURNAL_NAME
+
     out.mkdir(exist_ok=True)
-    result = run(
-        args.spec_obj,
-        out,
-        settings=settings,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        force=args.force,
-        progress=not args.no_progress,
-    )
-    paths = write(result, out, force=args.force or retry)
+    with output_lock(out / JOURNAL_NAME):  # a second study into this --out is refused, never mixed with this one
+        result = run(
+            args.spec_obj,
+            out,
+            settings=settings,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            force=args.force,
+            progress=not args.no_progress,
+        )
+        paths = write(result, out, force=args.force or retry)
     summary = result.summary()
     summary["files"] = {k: str(v) for k, v in paths.items()}
     return result, summary

@@ -8,6 +8,8 @@
 - :mod:`~flexdigit.control.discretise`: s -> z (Tustin, forward Euler) and the sampled loop;
 - :mod:`~flexdigit.control.design20ms`: the 20 ms digital design (``design_20ms``);
 - :mod:`~flexdigit.control.runtime`: the controller the loop runs (``RuntimeController``);
+- :mod:`~flexdigit.control.c_export`: that controller as C99 for a microcontroller, float32 or fixed point, and
+  the analysis of its quantisation (``export_controller``, ``analyse_export``);
 - :mod:`~flexdigit.control.thesis_designs`: the thesis's printed designs rebuilt;
 - :mod:`~flexdigit.control.chapter4_studies`: what report chapter 4 shows (``chapter4_study``).
 
@@ -25,6 +27,12 @@ __getattr__, __all__ = lazy_exports(
     __name__,
     {
         "thesis_generalized_plant": "flexdigit.control.generalized",
+        "ControllerSpec": "flexdigit.control.c_export",
+        "RotationMap": "flexdigit.control.c_export",
+        "fixed_format": "flexdigit.control.c_export",
+        "render_c": "flexdigit.control.c_export",
+        "analyse_export": "flexdigit.control.c_export",
+        "export_controller": "flexdigit.control.c_export",
         "filter_weight": "flexdigit.control.generalized",
         "regularise": "flexdigit.control.generalized",
         "mixed_sensitivity_plant": "flexdigit.control.generalized",

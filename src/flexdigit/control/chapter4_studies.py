@@ -42,6 +42,23 @@ from flexdigit.control.synthesis import hinf_lmi, hinf_riccati, regularisation_p
 from flexdigit.control.thesis_designs import fit_thesis_regularisation, printed_controller, sorted_poles, thesis_design
 from flexdigit.reference import thesis_complex, thesis_value
 
+__all__ = [
+    "SWEEP_FILTERS_HZ",
+    "PRINTED_FILTERS_HZ",
+    "PATH_EPS_U",
+    "PRINTED_GAIN_FACTOR",
+    "K1Study",
+    "k1_closed_loop_study",
+    "RegularisationFit",
+    "GammaStudy",
+    "fit_printed_controller",
+    "gamma_study",
+    "FilterSweepStudy",
+    "filter_sweep_study",
+    "Chapter4Study",
+    "chapter4_study",
+]
+
 #: Cut-offs of the thesis's filter sweep (4.7), Hz.
 SWEEP_FILTERS_HZ = (0.5, 5.0, 39.0, 50.0)
 #: Cut-offs whose controllers the thesis prints (tables 4.2, 4.3), Hz.

@@ -33,6 +33,27 @@ from flexdigit.identify.timeseries import TimeSeries, series_from_table
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
 
+__all__ = [
+    "DT_S",
+    "NOISE",
+    "STEP_COMMANDS",
+    "STREAMS",
+    "synthetic_release",
+    "synthetic_step",
+    "RecordsTable",
+    "records_table",
+    "NoisyRecordsStudy",
+    "noisy_records_study",
+    "TwinIdentification",
+    "twin_identification",
+    "FilterTradeoff",
+    "filter_tradeoff",
+    "deflection_fits",
+    "voltage_fits",
+    "Chapter3IdentifyStudy",
+    "chapter3_identify_study",
+]
+
 #: Synthetic records: sampling period (s) and white noise (fraction of the response amplitude).
 DT_S = 0.002
 NOISE = 0.02

@@ -47,6 +47,21 @@ from flexdigit.identify.filters import butter_filter
 from flexdigit.identify.response import noise_std
 from flexdigit.identify.timeseries import TimeSeries
 
+__all__ = [
+    "MAINS_HZ",
+    "HUM_PROMINENCE",
+    "FIND_CUTOFF_HZ",
+    "SPIKE_SIGMAS",
+    "MIN_SAMPLES_AFTER",
+    "MIN_DURATION_DELAYS",
+    "Problem",
+    "Hum",
+    "Survey",
+    "survey",
+    "find_spikes",
+    "remove_hum",
+]
+
 #: Mains frequencies whose hum is looked for (Hz).
 MAINS_HZ = (50.0, 60.0)
 #: A hum peak must stand this many times above the median spectrum around it.

@@ -35,6 +35,17 @@ from threadpoolctl import threadpool_limits
 from flexdigit._validation import check_array, check_int, check_positive
 from flexdigit.errors import DataFileError
 
+__all__ = [
+    "FILTERS",
+    "svd_filter",
+    "singular_spectrum",
+    "fft_filter",
+    "butter_filter",
+    "default_cutoff_hz",
+    "apply_filter",
+    "noise_reduction",
+]
+
 #: The filters by name, as the CLI and :func:`apply_filter` know them.
 FILTERS = ("butter", "svd", "fft", "none")
 

@@ -38,6 +38,17 @@ from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.identify.response import analyze_response, final_value_estimate, free_response, noise_std
 from flexdigit.identify.scores import corr2, nrmse_fit
 
+__all__ = [
+    "Estimate",
+    "second_order_response",
+    "LOSSES",
+    "SecondOrderFit",
+    "ARXModel",
+    "fit_arx",
+    "LinearRelation",
+    "fit_linear",
+]
+
 
 @dataclass(frozen=True)
 class Estimate:

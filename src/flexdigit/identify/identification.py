@@ -39,6 +39,8 @@ from flexdigit.identify.quality import FitQuality, assess
 from flexdigit.identify.response import NoOscillationError, ResponseFeatures, analyze_response
 from flexdigit.identify.timeseries import TimeSeries
 
+__all__ = ["METHODS", "KINDS", "Identification", "identify", "average_runs"]
+
 METHODS = ("thesis", "lsq", "arx")
 KINDS = ("release", "step")
 

@@ -23,6 +23,8 @@ from scipy import stats
 
 from flexdigit._validation import check_array, check_int
 
+__all__ = ["corr2", "nrmse_fit", "LjungBox", "ljung_box"]
+
 
 def corr2(a, b) -> float:
     """2-D correlation coefficient, exactly as MATLAB's ``corr2`` defines it.

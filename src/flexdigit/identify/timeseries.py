@@ -35,8 +35,23 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit import _io
 from flexdigit._validation import check_array
 from flexdigit.errors import DataFileError, one_line
+
+__all__ = [
+    "MIN_SAMPLES",
+    "TIME_UNITS",
+    "TIME_NAMES",
+    "CHANNEL_UNITS",
+    "INPUT_NAMES",
+    "SAMPLING_TOLERANCE",
+    "TimeSeries",
+    "split_unit",
+    "read_timeseries",
+    "series_from_table",
+    "write_csv",
+]
 
 #: Fewest samples an identification record may have.
 MIN_SAMPLES = 20
@@ -207,7 +222,10 @@ def read_timeseries(
         that is not a number, time not strictly increasing, NaN runs, irregular sampling, fewer than
         :data:`MIN_SAMPLES` samples.
     """
+    from flexdigit._io import refuse_special
+
     p = Path(path)
+    refuse_special(p, "a CSV or Parquet record")
     if not p.is_file():
         raise DataFileError(f"{p}: no such file")
     suffix = p.suffix.lower()
@@ -331,8 +349,11 @@ def _find_time_column(p: str, columns: list[str], time_column: str | None) -> st
 
 def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
     """Columns, float data and the file line of each data row; names the line and column of a bad cell."""
+    from flexdigit._io import RECORDS_LIMIT, count_lines, read_bytes
+
+    count_lines(p, "a CSV record")  # a 10-million-row file is refused in a second, not read into gigabytes
     try:
-        text = p.read_text(encoding="utf-8-sig")
+        text = read_bytes(p, "a CSV record", RECORDS_LIMIT).decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataFileError(f"{p}: not a text CSV file (byte {exc.start} is not UTF-8)") from None
     numbered = [
@@ -420,8 +441,12 @@ def _parse_column(p: Path, name: str, cells: list[str], lines: list[int], decima
 def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
     import pyarrow.parquet as pq
 
+    from flexdigit._io import check_input
+
+    check_input(p, "a Parquet record")
     try:
-        table = pq.read_table(p)
+        with _io.open_input(p, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            table = pq.read_table(fh)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
         raise DataFileError(f"{p}: not a readable Parquet file ({one_line(exc)})") from None
     try:  # pyarrow decodes the names only when asked: a damaged file's may not be UTF-8

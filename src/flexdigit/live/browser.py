@@ -6,6 +6,8 @@ CI), no GPU, and none of chromium's background traffic (which this machine refus
 
 from __future__ import annotations
 
+__all__ = ["CHROMIUM", "CHROMIUM_FLAGS", "launch"]
+
 #: Debian's chromium (``apt-get install chromium``; ``make test`` installs it when missing).
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_FLAGS = (

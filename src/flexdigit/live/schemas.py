@@ -6,6 +6,8 @@ so any MCAP tool can decode and check them. Units are SI; null where a value is 
 
 from __future__ import annotations
 
+__all__ = ["SHAPE_SCHEMA", "CONTACT_SCHEMA"]
+
 _NUMBER = {"type": "number"}
 _NULLABLE = {"type": ["number", "null"]}
 _POINT = {"type": "array", "items": _NUMBER, "minItems": 2, "maxItems": 2}

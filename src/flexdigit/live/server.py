@@ -21,10 +21,13 @@ Safety (issue 12):
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import ipaddress
 import json
+import signal
 import socket
 import sys
+import threading
 import time
 from importlib import resources
 from typing import Any
@@ -291,4 +294,40 @@ def serve(session, host: str = "127.0.0.1", port: int = 8050, *, allow_remote: b
         timeout_graceful_shutdown=2,
         access_log=False,
     )
-    uvicorn.Server(config).run(sockets=[sock])
+    _server_class()(config, session).run(sockets=[sock])
+
+
+def _server_class():
+    """The server class, made on first use: uvicorn is imported only to serve."""
+    import uvicorn
+
+    class Server(uvicorn.Server):
+        """uvicorn's server, shut down gracefully by SIGHUP too (a closed terminal, as SIGINT and SIGTERM), telling
+        the session which signal stopped it (its recording's stop record names it). uvicorn raises the signal again
+        once it has shut down: :func:`flexdigit.interrupts.stop_on_signals` makes it an ``Interrupted``."""
+
+        def __init__(self, config, session) -> None:
+            super().__init__(config)
+            self.session = session
+
+        def handle_exit(self, sig: int, frame) -> None:
+            if self.session.stopped_by is None:
+                self.session.stopped_by = signal.Signals(sig).name
+            super().handle_exit(sig, frame)
+
+        @contextlib.contextmanager
+        def capture_signals(self):
+            with super().capture_signals():  # SIGINT, SIGTERM; raised again after, in reverse order
+                hup = getattr(signal, "SIGHUP", None)
+                if hup is None or threading.current_thread() is not threading.main_thread():
+                    yield
+                    return
+                previous = signal.getsignal(hup)
+                if previous != signal.SIG_IGN:  # nohup: stays ignored
+                    signal.signal(hup, self.handle_exit)
+                try:
+                    yield
+                finally:
+                    signal.signal(hup, previous)  # before uvicorn raises the captured signals again
+
+    return Server

@@ -381,6 +381,8 @@ class LiveSession:
         #: CPU time (s) the loop spent inside the rig's read and write: on the twin, its simulation of the digit
         self.rig_cpu_s = 0.0
         self.error: str | None = None
+        #: The signal that stopped the server (SIGINT, SIGTERM, SIGHUP), named in the recording's stop record.
+        self.stopped_by: str | None = None
 
     def _setup(self, model, record, force, rotation_map, orientation, seed) -> None:
         from flexdigit.shape.shape import ShapeEstimator
@@ -571,7 +573,10 @@ class LiveSession:
                 self.rig.close()  # sends the equilibrium command, then releases the port
         finally:
             if self.recording is not None and not self.recording.closed:
-                self.recording.close({"stop": why, "message": self.error or why})
+                stop = {"stop": why, "message": self.error or why}
+                if self.stopped_by:
+                    stop["signal"] = self.stopped_by
+                self.recording.close(stop)
 
     def _run(self) -> None:
         from flexdigit.rig.loop import check_reading

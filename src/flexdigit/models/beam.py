@@ -46,6 +46,8 @@ from flexdigit._validation import (
 )
 from flexdigit.params import RigParams
 
+__all__ = ["BETA1_L", "Cantilever", "elastica_tip_deflection"]
+
 #: First root of ``1 + cos(b) cosh(b) = 0``, the clamped-free beam's first mode.
 BETA1_L = 1.8751040687119611
 

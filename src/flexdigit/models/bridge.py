@@ -31,6 +31,22 @@ import numpy as np
 from flexdigit._validation import check_choice
 from flexdigit.params import BRIDGE_TYPES, Sensors
 
+__all__ = [
+    "wheatstone_ratio",
+    "gauge_resistance_ohm",
+    "bridge_ratio",
+    "bridge_gain_v_per_strain",
+    "lowpass_tf",
+    "amplifier_tf",
+    "strain_to_volts_tf",
+    "adc_counts",
+    "counts_to_volts",
+    "adc_quantise",
+    "adc_clipped",
+    "gauge_voltage_v",
+    "strain_from_voltage",
+]
+
 if TYPE_CHECKING:
     import control
 

@@ -29,6 +29,20 @@ import numpy as np
 from flexdigit._validation import check_array, check_positive
 from flexdigit.params import RigParams
 
+__all__ = [
+    "cable_shortening_m",
+    "curvature_per_m",
+    "k2_nm_per_rad",
+    "moment_nm",
+    "deflection_m",
+    "tip_deflection_m",
+    "tip_rotation_rad",
+    "tip_rotation_per_command_deg",
+    "commands_for_tip_rotation",
+    "table_3_4",
+    "fit_tip_x_m",
+]
+
 
 def cable_shortening_m(theta_m_rad, params: RigParams | None = None):
     """``dl_M = theta_M r_M`` (E 3.11): cable shortening (m) for a servo rotation (rad); vectorised."""

@@ -26,6 +26,20 @@ from flexdigit.models.plant import Plant, build_plant
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
 
+__all__ = [
+    "CONSISTENT_OUTPUTS",
+    "ReleaseTable",
+    "release_table",
+    "Table34",
+    "table_3_4",
+    "ConversionStudy",
+    "conversion_study",
+    "PlantStudy",
+    "plant_study",
+    "Chapter3Study",
+    "chapter3_study",
+]
+
 #: Outputs of the consistent plant tabulated (3.5).
 CONSISTENT_OUTPUTS = ("deflection_sg1_m", "tip_rotation_rad", "gauge_v_sg1", "curvature_1_per_m")
 

@@ -34,6 +34,23 @@ from flexdigit._validation import check_array
 from flexdigit.errors import ParameterError
 from flexdigit.reference import thesis_value
 
+__all__ = [
+    "LinearFit",
+    "linear_fit",
+    "printed_deflection_fits",
+    "printed_voltage_fits",
+    "k1_command_per_mm",
+    "k1_printed_command_per_mm",
+    "k3_mm_per_v",
+    "k3_printed_mm_per_v",
+    "k3_offsets_mm",
+    "k3_offsets_as_printed_mm",
+    "table_3_6_commands",
+    "table_3_6_deflections_mm",
+    "fit_deflection",
+    "percent_error",
+]
+
 
 @dataclass(frozen=True)
 class LinearFit:

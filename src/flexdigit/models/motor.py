@@ -35,6 +35,8 @@ from typing import TYPE_CHECKING
 
 from flexdigit._validation import Interval, check_choice, declare, validate_fields
 
+__all__ = ["DCMotor", "motor_speed_tf", "motor_angle_tf", "mechanical_time_constant_s"]
+
 if TYPE_CHECKING:
     import control
 

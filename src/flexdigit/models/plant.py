@@ -69,6 +69,21 @@ from flexdigit.models import bridge, cable, conversion, second_order, servo
 from flexdigit.models.polytf import PolyTF, ctrb, obsv
 from flexdigit.params import RigParams
 
+__all__ = [
+    "VARIANTS",
+    "PRINTED_DIGIT_DAMPING_1_PER_S",
+    "GAIN_SOURCES",
+    "output_choices",
+    "Plant",
+    "companion_ss",
+    "printed_digit_zeta",
+    "build_plant",
+    "closed_loop_printed_k1",
+    "commands_for_tip_rotation",
+    "explain_discrepancies",
+    "tip_rotation_command_range",
+]
+
 if TYPE_CHECKING:
     import control
 

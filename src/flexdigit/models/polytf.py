@@ -28,6 +28,8 @@ import numpy as np
 
 from flexdigit.errors import ParameterError
 
+__all__ = ["PolyTF", "ctrb", "obsv"]
+
 if TYPE_CHECKING:
     import control
 

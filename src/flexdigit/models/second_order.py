@@ -30,6 +30,20 @@ from flexdigit.errors import ParameterError
 from flexdigit.models.polytf import PolyTF
 from flexdigit.params import RigParams
 
+__all__ = [
+    "zeta_from_overshoot",
+    "overshoot_from_zeta",
+    "wn_from_settling_time",
+    "settling_time_from_wn",
+    "damped_frequency",
+    "natural_frequency_from_damped",
+    "digit_poly",
+    "digit_tf",
+    "digit_poly_from_params",
+    "digit_tf_from_params",
+    "release_table",
+]
+
 if TYPE_CHECKING:
     import control
 

@@ -36,6 +36,17 @@ from flexdigit.models.polytf import PolyTF
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
 
+__all__ = [
+    "SERVO_FORMS",
+    "servo_unit_poly",
+    "servo_unit_tf",
+    "servo_poly",
+    "servo_tf",
+    "PotentiometerMap",
+    "command_to_angle_rad",
+    "angle_to_command",
+]
+
 if TYPE_CHECKING:
     import control
 

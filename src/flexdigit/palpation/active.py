@@ -21,6 +21,8 @@ from flexdigit._estimator import Estimator, check_is_fitted
 from flexdigit._validation import Array, HasMethods, Interval, check_array, check_int, check_positive
 from flexdigit.errors import ParameterError
 
+__all__ = ["simulate_hangs", "HangInversion", "HangPosterior"]
+
 
 def simulate_hangs(model, position_from_base_m, mass_kg, commands, *, repetitions: int = 1, seed=0):
     """Readings (n, 3K) of hangs read at every command: one friction draw per hang, shared by its readings, and

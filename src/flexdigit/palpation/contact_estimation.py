@@ -61,6 +61,18 @@ from flexdigit._validation import (
 from flexdigit.errors import ParameterError
 from flexdigit.tactile.bounds import line_steps
 
+__all__ = [
+    "DETECT_CHI2",
+    "DISTRIBUTED_LOG_ODDS",
+    "POLY_DEGREE",
+    "FORCE_POINTS",
+    "LINE_CENTRE_STEP_M",
+    "KINDS",
+    "ContactGaugeModel",
+    "ContactEstimate",
+    "ContactEstimator",
+]
+
 #: chi-square(2 dof) 99.9 % quantile: a contact is declared when it explains the reading this much better than none.
 DETECT_CHI2 = 13.8155
 #: A line load is declared when the gauges make it more probable than a point (equal priors: the Bayes decision).

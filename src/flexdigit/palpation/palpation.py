@@ -36,6 +36,25 @@ import numpy as np
 from flexdigit._validation import check_choice, check_int, check_real, check_values
 from flexdigit.errors import ParameterError
 
+__all__ = [
+    "MODELS",
+    "PalpationProtocol",
+    "SweepRecord",
+    "run_sweep",
+    "TissueFit",
+    "fit_tissue",
+    "stiffness_bound",
+    "PalpationResult",
+    "analyse",
+    "palpate",
+    "simulate_sweep",
+    "ScanResult",
+    "scan",
+    "ForceController",
+    "ForceHold",
+    "hold_force",
+]
+
 MODELS = ("linear", "hunt-crossley")
 
 
@@ -167,6 +186,7 @@ def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, lo
         close_rig=False,
         header={"palpation": {"commands": list(protocol.commands), "plateau_s": protocol.plateau_s}},
     )
+    result.raise_if_interrupted()  # a stop (Ctrl-C, SIGTERM) ends the sweep and the command, not a rig fault
     if not result.ok:
         raise_from = result.message
         from flexdigit.errors import RigError
@@ -834,6 +854,7 @@ def hold_force(
         on_sample=(lambda k, t, y, c: true_force.append(truth())) if truth else None,
         close_rig=False,
     )
+    result.raise_if_interrupted()
     t = result.time_s
     est = np.array(controller.forces[: t.size])
     scored = np.array(true_force) if truth else est

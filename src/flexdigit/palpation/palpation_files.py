@@ -30,6 +30,16 @@ from pathlib import Path
 
 from flexdigit.errors import DataFileError, ParameterError
 
+__all__ = [
+    "TISSUES",
+    "PROTOCOLS",
+    "MAX_SERIES",
+    "TissueFile",
+    "load_tissue",
+    "PalpationFile",
+    "load_palpation_protocol",
+]
+
 TISSUES = ("soft-block", "nodule-phantom", "hertzian-block")
 PROTOCOLS = ("sweep", "scan", "hold")
 
@@ -151,7 +161,10 @@ def _read(name_or_path, builtin, kind: str) -> tuple[dict, str]:
         resource = resources.files(__package__).joinpath("palpation_data", f"{text_name}.toml")
         text, source = resource.read_text(), f"{kind} {text_name}"
     else:
+        from flexdigit._io import refuse_special
+
         path = Path(name_or_path)
+        refuse_special(path, f"a {kind} TOML")
         if not path.is_file():
             raise DataFileError(
                 f"no {kind} {text_name!r}: expected one of {', '.join(builtin)} or a TOML file that exists"

@@ -17,6 +17,19 @@ import numpy as np
 from flexdigit._result_table import ResultTable
 from flexdigit.tactile.bounds import CONTACT_ZONES, contact_bounds, gaussian_bayes_limits
 
+__all__ = [
+    "PUBLISHED",
+    "RIVAL_CHI2",
+    "BOOTSTRAP_DRAWS",
+    "contact_study",
+    "classification_study",
+    "stiffness_study",
+    "scan_study",
+    "force_study",
+    "active_study",
+    "sweep_example",
+]
+
 #: The best published figures the issue names: contact location within 1 % of the length (Xiao & Chen 2021: 1.0-2.2
 #: %; 2.7 mm on this 270 mm digit) and force within 10 % (5-13 %); tissue stiffness 10-16 % (RA-L 2020).
 PUBLISHED = {"location_m": 0.0027, "force_rel": 0.10, "stiffness_rel": 0.10}

@@ -11,6 +11,8 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+__all__ = ["Entry", "relative_error", "compare", "new"]
+
 Status = Literal["match", "discrepancy", "new"]
 
 

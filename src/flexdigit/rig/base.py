@@ -13,6 +13,7 @@ protocol handler::
     stream:///dev/ttyACM0?baud=115200       gauges (and pot) from a microcontroller ADC, read-only
     serial:///dev/ttyUSB0?daq=stream:///dev/ttyACM0&daq.baud=115200   the servo board with the stream's gauges
     replay://run.jsonl                      a recorded run played back
+    hil://firmware/build/flexdigit_board.elf?mode=host   the reference firmware on simavr, joined to the twin
 
 The servo command (0..254, integer) is a unit of its own: :func:`clamp_command` is the one place it is rounded
 and clamped, and 255 (the Mini SSC sync byte) can never come out of it (a board whose framing allows fewer
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import abc
 import math
+import sys
 import time
 import urllib.parse
 from collections.abc import Callable
@@ -120,12 +122,12 @@ def console_operator(message: str) -> None:
     """Ask the person at the rig to do something (hang a weight) and wait for Enter.
 
     With no one to ask (stdin closed or not a terminal at its end) it raises :class:`RigError` naming the step,
-    rather than dying in an ``EOFError``: whoever called it then leaves the rig in its safe state.
+    rather than dying in an ``EOFError``: whoever called it then leaves the rig in its safe state. The request goes
+    to stderr (``input`` writes it to stdout, which carries a command's result: ``--json`` then did not parse).
     """
-    try:
-        input(f"{message} Press Enter when done. ")
-    except EOFError:
-        raise RigError(f"no operator to ask ({message}): stdin is closed; run it from a terminal") from None
+    print(f"{message} Press Enter when done. ", end="", file=sys.stderr, flush=True)
+    if not sys.stdin or not sys.stdin.readline():
+        raise RigError(f"no operator to ask ({message}): stdin is closed; run it from a terminal")
 
 
 class Rig(abc.ABC):
@@ -326,6 +328,7 @@ BACKENDS: dict[str, str] = {
     "daq": "flexdigit.rig.backends.daq_backend:from_url",
     "replay": "flexdigit.rig.backends.replay_backend:from_url",
     "stream": "flexdigit.rig.backends.stream_backend:from_url",
+    "hil": "flexdigit.rig.backends.hil_backend:from_url",
 }
 
 _TRUE = ("1", "true", "yes", "on")

@@ -24,6 +24,16 @@ import numpy as np
 from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 
+__all__ = [
+    "PERIODS_S",
+    "TWENTY_MS_CASES",
+    "sample_period_table",
+    "TwentyMsStudy",
+    "twenty_ms_study",
+    "Chapter5Study",
+    "chapter5_study",
+]
+
 #: Sample periods of the study of 5.1 (s); the fast report uses fewer.
 PERIODS_S = (0.0006, 0.001, 0.002, 0.005, 0.010, 0.020)
 #: The 20 ms step tests: (controller, plant gain). Gains x0.7 and x1.3 are the robustness cases.
@@ -110,7 +120,8 @@ def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: boo
     commands = (8, 14, 20, 26, 32) if fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
     est = calibrate_rotation(open_rig("sim", params, seed=seed), commands, settle_s=1.5 if fast else 2.0)
     runs = {
-        (name, gain): step_test(open_rig("sim", params, seed=seed + 1), name, estimator=est, gain=gain)
+        # unguarded: the chapter shows the thesis's forward-Euler design failing on the twin (5.1.2), not stopped
+        (name, gain): step_test(open_rig("sim", params, seed=seed + 1), name, estimator=est, gain=gain, guard=False)
         for name, gain in TWENTY_MS_CASES
     }
     rows = []

@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.interrupts import signals_deferred, stop_requested
 
 __all__ = [
     "Recording",
@@ -89,10 +90,12 @@ SAMPLE_SCHEMA: dict[str, Any] = {
 
 def is_mcap(path: str | os.PathLike) -> bool:
     """True when the file starts with the MCAP magic bytes."""
-    try:
-        with open(path, "rb") as fh:
+    from flexdigit._io import RECORDS_LIMIT, open_input
+
+    try:  # a FIFO or a device is not one (and is never opened blocking): its reader refuses it by name
+        with open_input(path, "an MCAP recording", RECORDS_LIMIT) as fh:
             return fh.read(len(MCAP_MAGIC)) == MCAP_MAGIC
-    except OSError:
+    except (OSError, DataFileError):
         return False
 
 
@@ -144,15 +147,12 @@ class Recording:
     ) -> None:
         from mcap.writer import CompressionType, Writer
 
-        from flexdigit._io import check_output
+        from flexdigit._io import OutputStream, check_output
 
         self.path = check_output(path, force=force)
-        try:
-            self._file = open(self.path, "wb" if force else "xb")  # noqa: SIM115 - closed in close()
-        except FileExistsError:
-            from flexdigit.errors import OutputExistsError
-
-            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
+        # under the recording's lock; with force, written beside the old file and renamed over it at a complete end
+        self._out = OutputStream(self.path, "replace" if force else "new", binary=True)
+        self._file = self._out.file
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=CompressionType.NONE)
         self._writer.start(profile="", library=f"flexdigit ({RECORDING_FORMAT})")
         self._channels: dict[str, int] = {}
@@ -188,7 +188,7 @@ class Recording:
         if stamp >= 2**64:  # MCAP's times are unsigned 64-bit nanoseconds: 584 years
             raise ParameterError(f"Recording.write: time {time_s!r} s is beyond MCAP's 2**64 ns (584 years)")
         data = json.dumps(message, allow_nan=False, separators=(",", ":")).encode()
-        with self._lock:
+        with signals_deferred(), self._lock:  # a stop signal waits for the record's end: never a torn record
             if self._closed:
                 raise ParameterError(f"{self.path}: the recording is closed")
             self._writer.add_message(channel, log_time=stamp, data=data, publish_time=stamp, sequence=self._sequence)
@@ -197,7 +197,10 @@ class Recording:
             now = time.monotonic()
             if now - self._flushed_at >= self._flush_every_s:  # close the chunk: a killed run keeps it
                 self._flushed_at = now
-                self._writer.flush()
+                try:
+                    self._writer.flush()
+                except OSError as exc:  # a full disk: say which file
+                    raise self._out.failed(exc) from exc
 
     def write_sample(self, record: dict[str, Any]) -> None:
         """Append a loop sample (:data:`SAMPLE_SCHEMA`) at its time ``record["t"]``."""
@@ -208,26 +211,40 @@ class Recording:
         with self._lock:
             if self._closed:
                 return
-            self._writer.flush()
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            try:
+                self._writer.flush()
+                self._file.flush()
+                os.fsync(self._file.fileno())
+            except OSError as exc:  # a full disk: say which file
+                raise self._out.failed(exc) from exc
 
     def close(self, stop: dict[str, Any] | None = None) -> None:
-        """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice."""
-        with self._lock:
+        """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice.
+
+        Closed plainly (no ``stop`` of the caller's) while a stop signal is being taken (:mod:`flexdigit.interrupts`),
+        the stop record says it was interrupted and names the signal."""
+        stop = dict(stop or {})
+        requested = stop_requested()
+        if requested is not None and stop.get("stop", "closed") == "closed":
+            stop = {**stop, "stop": "interrupted", "signal": requested.signal_name}
+        with signals_deferred(), self._lock:
             self._close(stop)
 
     def _close(self, stop: dict[str, Any] | None) -> None:
         if self._closed:
             return
+        stop = {"stop": "closed", **(stop or {})}
         try:
-            self._writer.add_metadata("flexdigit.stop", _metadata_text({"stop": "closed", **(stop or {})}))
+            self._writer.add_metadata("flexdigit.stop", _metadata_text(stop))
             self._writer.finish()
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            # a run that stopped before its end leaves an old recording (--force) intact, itself in STEM.partial.mcap
+            self.path = self._out.close(complete=stop["stop"] in ("closed", "completed"))
+        except OSError as exc:
+            self._out.abandon()
+            raise self._out.failed(exc) from exc
         finally:
             self._closed = True
-            self._file.close()
+            self._out.abandon()  # no-op once closed
 
     @property
     def closed(self) -> bool:
@@ -270,7 +287,9 @@ class _Records:
         from mcap.exceptions import McapError
         from mcap.stream_reader import StreamReader
 
-        with open(self.path, "rb") as fh:
+        from flexdigit._io import RECORDS_LIMIT, open_input
+
+        with open_input(self.path, "an MCAP recording", RECORDS_LIMIT) as fh:
             reader = StreamReader(_Bounded(fh, self.path.stat().st_size), skip_magic=False)
             try:
                 yield from reader.records
@@ -308,7 +327,9 @@ def iter_messages(path: str | os.PathLike, topics=None, *, records=None) -> Iter
     """
     from mcap.records import Channel, Message
 
-    path = Path(path)
+    from flexdigit._io import RECORDS_LIMIT, check_input
+
+    path = check_input(path, "an MCAP recording", RECORDS_LIMIT)  # a FIFO, a device: named, never read
     if not is_mcap(path):
         raise DataFileError(f"{path}: not an MCAP file (no MCAP magic at the start)")
     channels: dict[int, str] = {}

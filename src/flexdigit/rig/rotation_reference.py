@@ -286,8 +286,12 @@ def read_reference(
     res_deg = check_real(resolution_deg, "resolution_deg", "read_reference", low=0.0, low_open=True)
     if path.is_dir():
         raise DataFileError(f"{path}: a directory, not a file (expected a CSV of measured rotations or deflections)")
+    from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
+
+    count_lines(path, "a CSV of measured rotations or deflections")
     try:
-        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is no part of the header
+        # a spreadsheet's byte-order mark is no part of the header; a FIFO or device is refused, never read
+        text = read_text(path, "a CSV of measured rotations or deflections", RECORDS_LIMIT, encoding="utf-8-sig")
     except UnicodeDecodeError:
         raise DataFileError(f"{path}: not a text file (expected a CSV of measured rotations or deflections)") from None
     rows = [

@@ -18,9 +18,10 @@ import os
 from pathlib import Path
 from typing import Any
 
-from flexdigit._io import check_output
+from flexdigit._io import OutputStream, check_output
 from flexdigit._validation import check_int
-from flexdigit.errors import DataFileError, OutputExistsError, RigError
+from flexdigit.errors import DataFileError
+from flexdigit.interrupts import signals_deferred
 
 __all__ = [
     "LOG_FORMAT",
@@ -64,27 +65,38 @@ class SampleLog:
         from flexdigit._validation import check_choice
 
         self.path = Path(path)
+        #: The log asked for (``path`` becomes ``STEM.partial.jsonl`` when a ``--force`` run stops early) and the mode.
+        self.target = self.path
         self.fsync_every = check_int(fsync_every, "fsync_every", "SampleLog", low=0)
         mode = check_choice(mode, "mode", LOG_MODES, "SampleLog")
+        self.mode = mode
         record = {"format": LOG_FORMAT, **header}
-        if mode == "append" and self.path.exists():
-            check_appendable(self.path, record)
-        else:
+        if mode != "append" or not self.path.exists():
             check_output(self.path, force=mode == "replace", hint="or --append to add this run to it")
+        # under the log's lock (a second run writing it is refused, never mixed); "replace" writes beside the old
+        # log, which close(complete=True) replaces (flexdigit._io.OutputStream)
+        self._out = OutputStream(self.path, mode, hint="or --append to add this run to it")
         try:
-            if mode == "replace":
-                self.path.unlink(missing_ok=True)
-            self._file = open(self.path, "a" if mode == "append" else "x", encoding="utf-8")  # noqa: SIM115
-        except FileExistsError:  # appeared since the check
-            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
-        except OSError as exc:
-            raise RigError(f"cannot open the loop log {self.path}: {exc.strerror or exc}") from exc
+            if mode == "append" and self.path.stat().st_size:
+                check_appendable(self.path, record)
+        except BaseException:
+            self._out.abandon()
+            raise
+        self._file = self._out.file
         self._since_sync = 0
         self.lines = 0
         self.write(record)
 
     def write(self, record: dict[str, Any]) -> None:
-        self._file.write(json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n")
+        line = json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n"
+        with signals_deferred():  # a stop signal waits for the line's end: never a torn line
+            try:
+                self._write(line)
+            except OSError as exc:  # a full disk: say which file
+                raise self._out.failed(exc) from exc
+
+    def _write(self, line: str) -> None:
+        self._file.write(line)
         self._file.flush()
         self.lines += 1
         self._since_sync += 1
@@ -92,19 +104,16 @@ class SampleLog:
             os.fsync(self._file.fileno())
             self._since_sync = 0
 
-    def close(self) -> None:
-        if self._file.closed:
-            return
-        self._file.flush()
-        os.fsync(self._file.fileno())
-        self._file.close()
+    def close(self, complete: bool = True) -> Path:
+        """Flush, fsync and close; return where the log is: its path, or (a ``--force`` run that stopped before
+        its end, ``complete=False``) ``STEM.partial.jsonl`` beside the old log, which is kept intact."""
+        self.path = self._out.close(complete)
+        return self.path
 
     def abandon(self) -> None:
-        """Close without flushing what the OS refused (a full disk): the file keeps the lines already written."""
-        try:
-            self._file.close()
-        except OSError:
-            pass
+        """Close after a failed write (a full disk): a new or appended log keeps the lines already written; a
+        ``--force`` log's new file is removed and the old one kept."""
+        self._out.abandon()
 
 
 def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
@@ -113,8 +122,10 @@ def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the first setting that differs.
     """
+    from flexdigit._io import LOG_LIMIT, open_input
+
     path = Path(path)
-    with path.open("rb") as fh:
+    with open_input(path, "a flexdigit loop log", LOG_LIMIT) as fh:
         first = fh.readline()
     try:
         old = json.loads(first.decode("utf-8"))
@@ -167,11 +178,11 @@ def read_log(
 
 def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]]:
     """Every run of a loop log as ``(first line number, header, samples, footer or None)``."""
-    from flexdigit._io import read_text
+    from flexdigit._io import LOG_LIMIT, read_text
 
     path = Path(path)
     runs: list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]] = []
-    lines = read_text(path, "a flexdigit loop log").splitlines()
+    lines = read_text(path, "a flexdigit loop log", LOG_LIMIT).splitlines()
     for number, line in enumerate(lines, 1):
         try:
             record = json.loads(line)

@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.studies.metrics import MetricContext
 
 __all__ = [
@@ -112,6 +113,7 @@ def evaluate_rows(build, rows, values, metrics, context: MetricContext, task_key
                 sets.append(build(values[i], f"row {int(row)}"))
                 built.append(int(row))
             except Exception as exc:  # noqa: BLE001 - a row the rig refuses is that row's result
+                raise_if_stopping(exc)  # (a stop is not)
                 out.append(RowRecord(int(row), {}, _message(exc)))
         results = evaluate_many(sets, metrics, context)
         each = (time.perf_counter() - start) / max(1, len(rows))
@@ -146,16 +148,17 @@ class Journal:
         if self.path.exists() and not force:
             self._read()
         else:
+            from flexdigit._io import atomic_write
+
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = self.path.with_name(f".{self.path.name}.tmp")
-            with tmp.open("w", encoding="utf-8") as fh:
+            # an exclusive, unpredictable temporary file: a symlink planted at a fixed name is never followed
+            with atomic_write(self.path, "w", force=True) as fh:
                 fh.write(json.dumps(self.header, sort_keys=True) + "\n")
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, self.path)
 
     def _read(self) -> None:
-        text = self.path.read_bytes()
+        from flexdigit._io import LOG_LIMIT, read_bytes
+
+        text = read_bytes(self.path, "a study journal", LOG_LIMIT)
         lines = text.split(b"\n")
         complete, tail = lines[:-1], lines[-1]
         if not complete:
@@ -186,10 +189,18 @@ class Journal:
     def append(self, records) -> None:
         """Add finished rows, flushed and fsynced before returning."""
         lines = "".join(json.dumps(r.to_json(), sort_keys=True) + "\n" for r in records)
-        with self.path.open("a", encoding="utf-8") as fh:
-            fh.write(lines)
-            fh.flush()
-            os.fsync(fh.fileno())
+        try:
+            with signals_deferred(), self.path.open("a", encoding="utf-8") as fh:  # a stop waits for the rows' end
+                fh.write(lines)
+                fh.flush()
+                os.fsync(fh.fileno())
+        except OSError as exc:  # a full disk: say which file, and that a rerun resumes (a torn line is dropped)
+            from flexdigit.errors import OutputError
+
+            raise OutputError(
+                f"{self.path}: cannot write it: {exc.strerror or exc}; the rows before are kept: free some space "
+                "and rerun to resume"
+            ) from exc
         for r in records:
             self.records[r.row] = r
 
@@ -382,20 +393,24 @@ def run_study(
 ):
     """:func:`run_rows` with the study's journal in ``out_dir``; returns ``(outputs, errors)``: per metric an array
     over the rows (NaN where a row failed) and per row its error or None."""
-    journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
-    records = run_rows(
-        build,
-        values,
-        metrics,
-        context,
-        journal,
-        seed=seed,
-        chunk_size=chunk_size,
-        workers=workers,
-        scheduler=scheduler,
-        progress=progress,
-        label=label,
-    )
+    from flexdigit._io import output_lock
+
+    Path(out_dir).mkdir(parents=True, exist_ok=True)  # the lock file lives beside the journal
+    with output_lock(Path(out_dir) / JOURNAL_NAME):  # one study writes a journal at a time: never mixed
+        journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
+        records = run_rows(
+            build,
+            values,
+            metrics,
+            context,
+            journal,
+            seed=seed,
+            chunk_size=chunk_size,
+            workers=workers,
+            scheduler=scheduler,
+            progress=progress,
+            label=label,
+        )
     n = len(values)
     outputs = {m: np.array([records[i].values.get(m, math.nan) for i in range(n)]) for m in metrics}
     return outputs, [records[i].error for i in range(n)]

@@ -15,6 +15,8 @@ import numpy as np
 from flexdigit._validation import check_array
 from flexdigit.errors import ParameterError
 
+__all__ = ["corr2", "percentage_error", "rmse", "accuracy", "relative_rmse"]
+
 
 def _pair(a, b, owner: str) -> tuple[np.ndarray, np.ndarray]:
     x = check_array(a, "a", owner)

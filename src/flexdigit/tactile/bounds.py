@@ -39,6 +39,30 @@ import numpy as np
 
 from flexdigit.tactile.protocols import RELAXED
 
+__all__ = [
+    "ZONES",
+    "jacobian",
+    "Bound",
+    "noise_of",
+    "cramer_rao",
+    "zone_of",
+    "TwinGaugeModel",
+    "ProtocolLimits",
+    "protocol_limits",
+    "CONTACT_ZONES",
+    "FORCE_ONLY_FRACTION",
+    "point_jacobian",
+    "line_jacobian",
+    "line_steps",
+    "fisher_sd",
+    "ContactBound",
+    "contact_bounds",
+    "line_bounds",
+    "gaussian_bayes_limits",
+    "hang_readings_model",
+    "active_limits",
+]
+
 ZONES = ("no gauge bends", "position and mass confounded", "identifiable")
 
 

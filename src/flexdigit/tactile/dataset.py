@@ -26,10 +26,26 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit import __version__
+from flexdigit import __version__, _io
 from flexdigit._io import atomic_path, atomic_write
 from flexdigit.errors import DataFileError, one_line
+from flexdigit.interrupts import signals_deferred
 from flexdigit.tactile.protocols import Protocol
+
+__all__ = [
+    "COLUMNS",
+    "GAUGE_COLUMNS",
+    "JOURNAL_FORMAT",
+    "DATASET_FORMAT",
+    "Dataset",
+    "make_meta",
+    "Journal",
+    "first_difference",
+    "read_journal",
+    "save_dataset",
+    "export_csv",
+    "load_dataset",
+]
 
 #: Every column of a dataset and its numpy dtype.
 COLUMNS: dict[str, type] = {
@@ -165,11 +181,13 @@ class Journal:
         return cls(path, handle, fsync), rows
 
     def append(self, row: dict) -> None:
-        """Write one reading and flush it (and fsync it if asked)."""
-        self._fh.write(json.dumps(row) + "\n")
-        self._fh.flush()
-        if self._fsync:
-            os.fsync(self._fh.fileno())
+        """Write one reading and flush it (and fsync it if asked); a stop signal waits for the line's end."""
+        line = json.dumps(row) + "\n"
+        with signals_deferred():
+            self._fh.write(line)
+            self._fh.flush()
+            if self._fsync:
+                os.fsync(self._fh.fileno())
 
     def close(self) -> None:
         self._fh.close()
@@ -202,7 +220,9 @@ def first_difference(was: object, now: object, prefix: str = "") -> tuple[str, o
 
 def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     """Header, complete readings, and the byte length of the complete part of a journal."""
-    data = path.read_bytes()
+    from flexdigit._io import LOG_LIMIT, read_bytes
+
+    data = read_bytes(path, "a collection journal", LOG_LIMIT)
     lines = data.split(b"\n")
     # Everything after the last newline is a partial line (or empty): it is not counted.
     complete, good_bytes = lines[:-1], data.rfind(b"\n") + 1
@@ -334,8 +354,12 @@ def _load_parquet(path: Path) -> Dataset:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    from flexdigit._io import check_input
+
+    check_input(path, "a flexdigit dataset (Parquet)")
     try:
-        table = pq.read_table(path)
+        with _io.open_input(path, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            table = pq.read_table(fh)
     except (pa.ArrowException, OSError) as exc:
         raise DataFileError(f"{path}: not a readable Parquet file ({one_line(exc)})") from None
     try:  # pyarrow decodes the names only when asked: a damaged file's may not be UTF-8
@@ -370,9 +394,10 @@ def _load_parquet(path: Path) -> Dataset:
 def _load_csv(path: Path) -> Dataset:
     from io import StringIO
 
-    from flexdigit._io import read_text
+    from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
 
-    with StringIO(read_text(path, "a flexdigit dataset CSV")) as fh:
+    count_lines(path, "a flexdigit dataset CSV")
+    with StringIO(read_text(path, "a flexdigit dataset CSV", RECORDS_LIMIT)) as fh:
         first = fh.readline()
         if not first.startswith("# "):
             raise DataFileError(f"{path}: line 1 must be '# {{json metadata}}' as written by flexdigit")

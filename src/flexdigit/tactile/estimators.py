@@ -42,6 +42,8 @@ from flexdigit.errors import ParameterError
 from flexdigit.tactile.pipeline import Normaliser
 from flexdigit.tactile.protocols import RELAXED
 
+__all__ = ["BeamInversion", "GPLocaliser"]
+
 
 def _split_x(X) -> tuple[np.ndarray, np.ndarray]:
     x = check_array(X, "X", "estimator", ndim=2)

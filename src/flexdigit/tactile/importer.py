@@ -54,6 +54,18 @@ from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.tactile.dataset import COLUMNS, Dataset, make_meta
 from flexdigit.tactile.protocols import RELAXED, Protocol
 
+__all__ = [
+    "GAUGE_UNITS",
+    "LOAD_UNITS",
+    "POSITION_UNITS",
+    "TIME_UNITS",
+    "POSITION_FROM",
+    "MAX_LOAD_KG",
+    "ColumnMap",
+    "ROLES",
+    "import_readings",
+]
+
 #: Units each quantity may be given in, and their factor to SI.
 GAUGE_UNITS = {"V": 1.0, "mV": 1e-3}
 LOAD_UNITS = {"kg": 1.0, "g": 1e-3}
@@ -169,10 +181,15 @@ class ColumnMap:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
+        from flexdigit._io import refuse_special
+
+        refuse_special(path, "a column map TOML")
         if not path.is_file():
             raise DataFileError(f"{path}: not a file (a directory?); expected a column map TOML")
         try:
-            data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+            from flexdigit._io import read_bytes
+
+            data = tomllib.loads(read_bytes(path, "a column map TOML").decode("utf-8-sig"))
         except tomllib.TOMLDecodeError as exc:
             raise DataFileError(f"{path}: not valid TOML ({exc})") from None
         except UnicodeDecodeError as exc:

@@ -24,6 +24,17 @@ from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
 
+__all__ = [
+    "ESTIMATORS",
+    "CONTACT_CHI2",
+    "tare",
+    "reading_zones",
+    "LocalisationResult",
+    "localisation_study",
+    "bayes_limits",
+    "identifiability_map",
+]
+
 ESTIMATORS = ("MLP (thesis architecture)", "beam inversion", "beam inversion, known load set", "Gaussian process")
 #: chi-square(2 dof) 99.9 % quantile: a load is declared when it explains the reading this much better than none
 CONTACT_CHI2 = 13.8155

@@ -35,6 +35,8 @@ from flexdigit._estimator import Estimator, check_is_fitted
 from flexdigit._validation import Interval, check_array
 from flexdigit.errors import ParameterError
 
+__all__ = ["SCG_SIGMA0", "mlp_unpack", "mlp_init", "mlp_forward", "mlp_error", "mlp_grad", "scg", "MLP"]
+
 SCG_SIGMA0 = 1.0e-4  # NETLAB scg.m
 _BETA_MIN, _BETA_MAX = 1.0e-15, 1.0e100
 

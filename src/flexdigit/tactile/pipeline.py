@@ -45,6 +45,23 @@ from flexdigit.tactile.accuracy import accuracy, corr2, percentage_error, relati
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.netlab import MLP
 
+__all__ = [
+    "TARGETS",
+    "LEARNING_GRADIENTS",
+    "COARSE_HIDDEN",
+    "Split",
+    "thesis_split",
+    "Normaliser",
+    "features",
+    "targets",
+    "ThesisNetwork",
+    "SweepPoint",
+    "PipelineResult",
+    "run_pipeline",
+    "StrategyScore",
+    "compare_strategies",
+]
+
 TARGETS = ("position", "position_index", "magnitude", "contact")
 LEARNING_GRADIENTS = tuple(10.0**-k for k in range(1, 10))
 COARSE_HIDDEN = tuple(range(5, 61, 5))

@@ -33,6 +33,8 @@ import numpy as np
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import ParameterError
 
+__all__ = ["RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
+
 #: The ``command`` recorded when actuation is disabled (the servo relaxed, chapter 6).
 RELAXED = -1
 
@@ -287,7 +289,10 @@ def load_protocol(name_or_path: str | Path) -> Protocol:
     if text_name in BUILTIN:
         resource = resources.files(__package__).joinpath("protocols", f"{text_name}.toml")
         return protocol_from_toml(resource.read_text(), source=f"protocol {text_name}")
+    from flexdigit._io import refuse_special
+
     path = Path(name_or_path)
+    refuse_special(path, "a protocol TOML")
     if not path.is_file():
         raise ParameterError(
             f"no protocol {text_name!r}: expected one of {', '.join(BUILTIN)} or a TOML file that exists"

@@ -32,6 +32,30 @@ from flexdigit.tactile.pipeline import (
 from flexdigit.tactile.protocols import Protocol, load_protocol
 from flexdigit.tactile.runner import collect
 
+__all__ = [
+    "TACTILE_TWIN_DT_S",
+    "sim_options",
+    "twin_rig",
+    "collect_on_twin",
+    "DRAWS",
+    "static_dataset",
+    "pipeline_corr2_static",
+    "FRICTION_FIT_SEEDS",
+    "actuated_corr2_score",
+    "EXPERIMENTS",
+    "TactileExperimentResult",
+    "run_experiment",
+    "NOISE_SCALES",
+    "NoiseScan",
+    "white_noise_scan",
+    "equivalent_servo_angle",
+    "FrictionStudy",
+    "friction_study",
+    "position_ratios",
+    "criteria",
+    "experiment_tables",
+]
+
 #: Twin step for tactile runs (s): the twin's own default. The sim backend defaults to 2 ms for the control
 #: loop's sake; load experiments only need the settled state, which is the same to 0.1 mV (checked in tests).
 TACTILE_TWIN_DT_S = 0.020

@@ -24,6 +24,8 @@ import scipy.linalg
 from flexdigit._validation import check_int
 from flexdigit.models.servo import PotentiometerMap, command_to_angle_rad
 
+__all__ = ["Servo"]
+
 
 @lru_cache(maxsize=32)
 def _servo_transition(wn: float, zeta: float, h: float) -> np.ndarray:

@@ -64,6 +64,21 @@ from typing import Any
 from flexdigit._validation import check_array, check_real
 from flexdigit.errors import DataFileError, ParameterError
 
+__all__ = [
+    "DEFAULT_FILE",
+    "BASED_ON",
+    "FIELDS",
+    "Calibration",
+    "load_calibration",
+    "load_calibration_record",
+    "save_calibration",
+    "packaged_calibration",
+    "default_calibration",
+    "default_calibration_source",
+    "default_fit_record",
+    "use_calibration",
+]
+
 DEFAULT_FILE = "default_calibration.toml"
 #: The value of ``based_on`` that makes a file partial (its missing keys from the packaged default).
 BASED_ON = ("default",)
@@ -244,10 +259,15 @@ def load_calibration_record(path: str | Path) -> tuple[Calibration, dict[str, An
 def _read_toml(path: Path) -> dict:
     if not path.exists():
         raise FileNotFoundError(2, "No such file", str(path))
+    from flexdigit._io import refuse_special
+
+    refuse_special(path, "a calibration TOML")
     if not path.is_file():
         raise DataFileError(f"{path}: not a file (a directory?); expected a calibration TOML")
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        from flexdigit._io import read_text
+
+        return tomllib.loads(read_text(path, "a calibration TOML"))
     except tomllib.TOMLDecodeError as exc:
         raise DataFileError(f"{path}: not valid TOML ({exc})") from None
     except UnicodeDecodeError as exc:

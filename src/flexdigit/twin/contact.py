@@ -52,6 +52,22 @@ import numpy as np
 from flexdigit._validation import check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
 
+__all__ = [
+    "GAUSS_POINTS",
+    "SIDES",
+    "CONTINUATION",
+    "Inclusion",
+    "Tissue",
+    "PointForce",
+    "Pressure",
+    "check_point_force",
+    "check_pressure",
+    "quadrature",
+    "TissueContact",
+    "ContactSolution",
+    "solve_contact",
+]
+
 #: Gauss-Legendre points per clipped interval of a link.
 GAUSS_POINTS = 4
 _GAUSS_T, _GAUSS_W = np.polynomial.legendre.leggauss(GAUSS_POINTS)

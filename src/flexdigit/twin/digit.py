@@ -48,6 +48,18 @@ from scipy.linalg.lapack import dgesv as _gesv
 from flexdigit._validation import check_array, check_int, check_positive, check_real, check_values
 from flexdigit.errors import ConvergenceWarning, ParameterError
 
+__all__ = [
+    "G_STANDARD_M_S2",
+    "ORIENTATIONS",
+    "StaticSolution",
+    "chain_matrices",
+    "Chain",
+    "DynamicState",
+    "uniform_cells",
+    "build_digit",
+    "digit_arrays",
+]
+
 G_STANDARD_M_S2 = 9.80665
 
 

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from flexdigit import __version__
+from flexdigit import __version__, _io
 from flexdigit._io import atomic_path, atomic_write
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive, check_real, check_values
@@ -36,6 +36,16 @@ from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
 from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.twin import Twin, static_gauges_v
+
+__all__ = [
+    "METADATA_KEY",
+    "RELEASE_DT_S",
+    "TwinRecord",
+    "release_test",
+    "servo_step_test",
+    "actuation_sweep",
+    "static_load_test",
+]
 
 METADATA_KEY = b"flexdigit"
 #: Integration step of a release test (s). A free decay (1.6-2.1 Hz, lightly damped) is a record whose wn and zeta
@@ -101,12 +111,16 @@ class TwinRecord:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
+        from flexdigit._io import RECORDS_LIMIT, check_input, count_lines, read_text
+
+        check_input(path, "a twin record", RECORDS_LIMIT)
         if path.suffix.lower() == ".csv":
             import io
 
             import pyarrow.csv as pcsv
 
-            text = path.read_text()
+            count_lines(path, "a twin record CSV")
+            text = read_text(path, "a twin record CSV", RECORDS_LIMIT)
             meta, body = {}, []
             for line in text.splitlines(keepends=True):
                 if line.startswith("# ") and not body:
@@ -125,7 +139,8 @@ class TwinRecord:
         import pyarrow.parquet as pq
 
         try:
-            table = pq.read_table(path)
+            with _io.open_input(path, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+                table = pq.read_table(fh)
         except (pa.ArrowInvalid, OSError) as exc:
             raise DataFileError(f"{path}: not a Parquet file ({exc})") from None
         raw = (table.schema.metadata or {}).get(METADATA_KEY)

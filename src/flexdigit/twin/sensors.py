@@ -49,6 +49,8 @@ import numpy as np
 from flexdigit.models.bridge import adc_quantise, gauge_resistance_ohm, wheatstone_ratio
 from flexdigit.params import Sensors
 
+__all__ = ["bridge_ratio", "lowpass_group_delay_s", "adc", "CHANNEL_FIELDS", "check_channels", "SensorChain"]
+
 
 def bridge_ratio(eps_tension_face, eps_compression_face, sensors: Sensors):
     """Bridge output over excitation, ``Vm/Vs`` (E 2.2), for the two face strains of a gauge pair.

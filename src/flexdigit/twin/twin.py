@@ -35,6 +35,19 @@ from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
 from flexdigit.twin.sensors import SensorChain
 
+__all__ = [
+    "DEFAULT_DT_S",
+    "DEFAULT_CELLS_PER_SECTION",
+    "FRICTION_STREAM",
+    "cached_digit",
+    "cable_shortening_m",
+    "ReadSeries",
+    "Twin",
+    "check_load",
+    "static_gauges_v",
+    "friction_sd_v",
+]
+
 DEFAULT_DT_S = 0.020
 DEFAULT_CELLS_PER_SECTION = 3
 #: Second word of the seed of the cable-guide friction's generator, ``default_rng([seed, FRICTION_STREAM])``.

@@ -1,0 +1,106 @@
+"""The controller on the board (issue 25): cycles of one control update on the emulated ATmega328P, the shortest
+period that leaves half the CPU idle, the servo pulse's resolution, and the 30 deg step on the board against
+flexdigit's Python loop on the twin.
+
+- ``update cycles``: the largest width of the pulse the firmware raises on PD7 around ``fd_ctrl_update`` (simavr
+  counts cycles exactly), over a run of setpoint steps that also saturates the command both ways (30, 90, -40,
+  10 deg over 4 s at 2 ms: 2000 updates). Observed worst case, not a static bound: avr-gcc's soft float and
+  64-bit multiply take data-dependent time.
+- ``shortest period``: the smallest period that divides the servo's 20 ms frame and leaves >= 50 % of it idle
+  after the update (``2 x cycles <= period``).
+- ``step``: settling (2 %), overshoot and steady-state error of the twin's true rotation, the loop on the board
+  (hil://) against ``flexdigit run --backend sim`` (same design and period).
+
+Needs the AVR toolchain and libsimavr (``make avr``); the images are built as ``make firmware`` builds them.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from contextlib import redirect_stdout
+from pathlib import Path
+
+FIRMWARE = Path(__file__).resolve().parents[1] / "firmware"
+F_CPU_HZ = 16e6
+PERIODS_S = (0.001, 0.002, 0.004, 0.005, 0.010, 0.020)
+
+
+def _build(root: Path, period_s: float, fmt: str) -> Path:
+    import flexdigit
+
+    out = root / f"{fmt}-{int(round(period_s * 1e6))}"
+    src = str(Path(flexdigit.__file__).resolve().parents[1])
+    env = dict(os.environ, PYTHONPATH=src + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    subprocess.run(
+        ["make", "-s", "-C", str(FIRMWARE), f"BUILD={out}", f"PERIOD_S={period_s}", f"FORMAT={fmt}",
+         f"FLEXDIGIT={sys.executable} -m flexdigit.cli"],
+        check=True, env=env, capture_output=True,
+    )  # fmt: skip
+    return out / "flexdigit_board.elf"
+
+
+def _update_cycles(elf: Path) -> int:
+    from flexdigit.rig.base import open_rig
+
+    rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)
+    try:
+        for setpoint in (30.0, 90.0, -40.0, 10.0):
+            rig.set_setpoint(setpoint)
+            rig.wait(1.0)
+        return rig.exec_max_cycles
+    finally:
+        rig.close()
+
+
+def _step(elf: Path) -> dict:
+    from flexdigit.rig.backends.hil_backend import run_on_board
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.step_test import step_metrics
+
+    rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)
+    try:
+        run = run_on_board(rig, 30.0, 3.0)
+    finally:
+        rig.close()
+    return step_metrics(run.time_s, run.true_rotation_deg, 30.0, 0.0, 1.735).to_dict()
+
+
+def _python_step(period_s: float) -> dict:
+    from flexdigit.cli import main
+
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        main(["run", "--backend", "sim", "--setpoint-deg", "30", "--duration", "3", "--period", str(period_s),
+              "--json"])  # fmt: skip
+    return json.loads(buf.getvalue())["step_metrics"]["true"]
+
+
+def run() -> list[dict]:
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        shortest = {}
+        for fmt in ("float", "fixed"):
+            cycles = _update_cycles(_build(root, 0.002, fmt))
+            rows.append({"name": f"board: one control update, {fmt} (20 ms design at 2 ms, 4 states)",
+                         "value": cycles, "unit": "cycles", "goal": "",
+                         "note": f"{cycles / F_CPU_HZ * 1e6:.0f} us at 16 MHz; worst observed over 2000 updates "
+                                 "incl. saturation both ways (simavr)"})  # fmt: skip
+            shortest[fmt] = min(p for p in PERIODS_S if 2 * cycles / F_CPU_HZ <= p)
+            rows.append({"name": f"board: shortest period with >= 50 % idle, {fmt}", "value": shortest[fmt] * 1e3,
+                         "unit": "ms", "goal": "", "note": "periods dividing the servo's 20 ms frame"})  # fmt: skip
+        rows.append({"name": "board: servo command step (Timer1, 0.5 us ticks over 1-2 ms)", "value": 2000 / 254,
+                     "unit": "x finer", "goal": "",
+                     "note": "2000 pulse widths over the range against the serial board's 254 commands"})  # fmt: skip
+        for period_s in (0.020, 0.005, min(shortest.values())):
+            board, python = _step(_build(root, period_s, "float")), _python_step(period_s)
+            for key, unit in (("settling_time_s", "s"), ("overshoot_percent", "%"), ("final_error_deg", "deg")):
+                rows.append({"name": f"board vs python loop, {period_s * 1e3:g} ms: {key}",
+                             "value": board[key], "unit": unit, "goal": "",
+                             "note": f"python loop on the twin: {python[key]:.4g}"})  # fmt: skip
+    return rows

@@ -1,0 +1,188 @@
+/*
+ * flexdigit_hil: the firmware image on simavr's ATmega328P, driven in simulated time by flexdigit's `hil://`
+ * backend over this process's stdin/stdout (issue 25, hardware in the loop).
+ *
+ *   flexdigit_hil FIRMWARE.elf
+ *
+ * One request a line on stdin, one reply a line on stdout:
+ *
+ *   V <mv0> <mv1> <mv2> <mv3>   the voltages on ADC0..ADC3 (millivolts, 0..5000), held until the next V
+ *   U <hex>                     bytes for the firmware's UART receiver (delivered one per BYTE_US of AVR time)
+ *   R <us>                      run the AVR for <us> microseconds of simulated time, then reply
+ *       P <t_us> <pulse_cycles> <pulses> <exec_last> <exec_max> <execs> <pin_cycles> <hex of the UART's output>
+ *         pulse_cycles: width of the servo pulse begun last on PB1 (OC1A), CPU cycles (16 MHz): OCR1A as latched
+ *           at the pulse's start (BOTTOM), which is what the hardware does. simavr 1.6 keeps the pin's waveform
+ *           at the OCR1A it had when the timer was configured, so pin_cycles (the width seen on the pin) is
+ *           reported beside it but not used.
+ *         pulses: pulses begun so far; exec_*: width of the high pulses on PD7 (the control update), cycles
+ *   Q                           quit
+ *
+ * The AVR's clock is its own: nothing here depends on the wall clock, so a run repeats exactly.
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <simavr/avr_adc.h>
+#include <simavr/avr_ioport.h>
+#include <simavr/avr_uart.h>
+#include <simavr/sim_avr.h>
+#include <simavr/sim_elf.h>
+#include <simavr/sim_irq.h>
+
+#define FREQUENCY 16000000UL
+#define BYTE_US 50 /* one received byte each 50 us: below the 40 us of a byte at 250000 baud, and never faster */
+#define OUT_MAX 65536
+#define OCR1AL_ADDR 0x88    /* OCR1A in the ATmega328P's data space */
+#define TIMER1_PRESCALE 8UL /* the firmware's Timer1 clock: 0.5 us a tick */
+
+static avr_t *avr;
+static unsigned char out_buf[OUT_MAX];
+static size_t out_len;
+static unsigned char in_buf[4096];
+static size_t in_head, in_len;
+static avr_cycle_count_t pulse_rise, exec_rise;
+static unsigned long pulse_cycles, pulse_latched, pulses, exec_last, exec_max, execs;
+static FILE *reply;
+
+static void uart_out(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    (void)param;
+    if (out_len < OUT_MAX) {
+        out_buf[out_len++] = (unsigned char)value;
+    }
+}
+
+static void servo_pin(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    (void)param;
+    if (value) {
+        /* the pulse starts at BOTTOM, where the hardware latches the double-buffered OCR1A: the width this period */
+        unsigned ocr = (unsigned)avr->data[OCR1AL_ADDR] | ((unsigned)avr->data[OCR1AL_ADDR + 1] << 8);
+        pulse_latched = (unsigned long)(ocr + 1U) * TIMER1_PRESCALE;
+        pulse_rise = avr->cycle;
+        pulses++;
+    } else if (pulse_rise) {
+        pulse_cycles = (unsigned long)(avr->cycle - pulse_rise);
+    }
+}
+
+static void exec_pin(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    (void)param;
+    if (value) {
+        exec_rise = avr->cycle;
+    } else if (exec_rise) {
+        exec_last = (unsigned long)(avr->cycle - exec_rise);
+        if (exec_last > exec_max) {
+            exec_max = exec_last;
+        }
+        execs++;
+    }
+}
+
+static int hexval(int c)
+{
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+}
+
+static void run_us(unsigned long us)
+{
+    avr_cycle_count_t end = avr->cycle + (avr_cycle_count_t)us * (FREQUENCY / 1000000UL);
+    avr_cycle_count_t next_byte = avr->cycle;
+    avr_irq_t *rx = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+    while (avr->cycle < end) {
+        if (in_len > 0 && avr->cycle >= next_byte) {
+            avr_raise_irq(rx, in_buf[in_head]);
+            in_head++;
+            in_len--;
+            next_byte = avr->cycle + BYTE_US * (FREQUENCY / 1000000UL);
+        }
+        int state = avr_run(avr);
+        if (state == cpu_Done || state == cpu_Crashed) {
+            fprintf(stderr, "flexdigit_hil: the AVR stopped (state %d)\n", state);
+            exit(3);
+        }
+    }
+}
+
+int main(int argc, char **argv)
+{
+    elf_firmware_t firmware;
+    char line[8192];
+    int i;
+    uint32_t flags = 0;
+    if (argc != 2) {
+        fprintf(stderr, "usage: flexdigit_hil FIRMWARE.elf\n");
+        return 2;
+    }
+    /* replies on the original stdout; anything simavr prints goes to stderr */
+    reply = fdopen(dup(1), "w");
+    dup2(2, 1);
+    memset(&firmware, 0, sizeof(firmware));
+    if (elf_read_firmware(argv[1], &firmware) != 0) {
+        fprintf(stderr, "flexdigit_hil: cannot read %s\n", argv[1]);
+        return 2;
+    }
+    avr = avr_make_mcu_by_name("atmega328p");
+    if (!avr) {
+        fprintf(stderr, "flexdigit_hil: simavr has no atmega328p\n");
+        return 2;
+    }
+    avr_init(avr);
+    avr_load_firmware(avr, &firmware);
+    avr->frequency = FREQUENCY;
+    avr->vcc = avr->avcc = avr->aref = 5000;
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), uart_out, NULL);
+    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+    flags &= ~(uint32_t)AVR_UART_FLAG_STDIO;
+    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 1), servo_pin, NULL);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 7), exec_pin, NULL);
+    for (i = 0; i < 4; i++) {
+        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), 2500);
+    }
+    while (fgets(line, sizeof(line), stdin)) {
+        if (line[0] == 'V') {
+            long mv[4] = {2500, 2500, 2500, 2500};
+            sscanf(line + 1, "%ld %ld %ld %ld", &mv[0], &mv[1], &mv[2], &mv[3]);
+            for (i = 0; i < 4; i++) {
+                long v = mv[i] < 0 ? 0 : (mv[i] > 5000 ? 5000 : mv[i]);
+                avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), (uint32_t)v);
+            }
+        } else if (line[0] == 'U') {
+            char *p = line + 1;
+            while (*p == ' ') p++;
+            if (in_len == 0) in_head = 0;
+            while (hexval(p[0]) >= 0 && hexval(p[1]) >= 0 && in_head + in_len < sizeof(in_buf)) {
+                in_buf[in_head + in_len] = (unsigned char)(hexval(p[0]) * 16 + hexval(p[1]));
+                in_len++;
+                p += 2;
+            }
+        } else if (line[0] == 'R') {
+            unsigned long us = strtoul(line + 1, NULL, 10);
+            size_t k;
+            run_us(us);
+            fprintf(reply, "P %llu %lu %lu %lu %lu %lu %lu ",
+                    (unsigned long long)(avr->cycle / (FREQUENCY / 1000000UL)), pulse_latched, pulses, exec_last,
+                    exec_max, execs, pulse_cycles);
+            for (k = 0; k < out_len; k++) {
+                fprintf(reply, "%02x", out_buf[k]);
+            }
+            fprintf(reply, "\n");
+            fflush(reply);
+            out_len = 0;
+        } else if (line[0] == 'Q') {
+            break;
+        }
+    }
+    return 0;
+}

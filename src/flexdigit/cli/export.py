@@ -1,0 +1,124 @@
+"""``flexdigit export controller``: the controller as C99 for a microcontroller, and the analysis of its
+quantisation (issue 25; :mod:`flexdigit.control.c_export`).
+
+* ``flexdigit export controller --out ctrl.c [--design digital20] [--period-s 0.02] [--format float|fixed]``
+  ``[--input-max X] [--prefix P] [--rotation-map FILE | --no-rotation-map] [--force] [--json]``
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from flexdigit._command import CommandResult, add_command
+
+#: Designs ``flexdigit export controller`` knows (those of ``flexdigit run --controller``).
+EXPORT_DESIGNS = ("digital20", "thesis39-euler", "thesis39-tustin")
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("export", help="export a controller as C for a microcontroller (issue 25)")
+    sub = parser.add_subparsers(title="export commands", metavar="WHAT")
+    parser.set_defaults(
+        func=lambda args: CommandResult(data=None, text=parser.format_help(), exit_code=2), command_name="export"
+    )
+    p = add_command(
+        sub,
+        "controller",
+        _export_controller,
+        help="write the discretised controller as one C99 file + header (float32 or fixed point) and analyse it",
+    )
+    p.set_defaults(command_name="export controller")
+    p.add_argument("--out", type=Path, required=True, help="the C source to write (the header goes beside it, .h)")
+    p.add_argument("--design", default="digital20", help=f"one of {', '.join(EXPORT_DESIGNS)} (default digital20)")
+    p.add_argument("--period-s", type=float, default=0.020, help="sample period, s (default 0.020)")
+    p.add_argument("--format", choices=("float", "fixed"), default="float", help="float32 or fixed point")
+    p.add_argument(
+        "--input-max",
+        type=float,
+        default=None,
+        help="largest |controller input| the fixed point must hold (default 180 deg; 0.3 m for thesis39-*)",
+    )
+    p.add_argument("--prefix", default="fd_ctrl", help="C identifier prefix (default fd_ctrl)")
+    maps = p.add_mutually_exclusive_group()
+    maps.add_argument(
+        "--rotation-map", type=Path, default=None, help="gauge -> rotation map JSON (default: calibrated on the twin)"
+    )
+    maps.add_argument("--no-rotation-map", action="store_true", help="export the update on (r, y) only")
+    p.add_argument("--force", action="store_true", help="replace existing output files")
+
+
+def _export_controller(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._io import check_output
+    from flexdigit._validation import check_choice, check_real
+    from flexdigit.control.c_export import ControllerSpec, export_controller
+
+    design = check_choice(args.design, "--design", EXPORT_DESIGNS, "flexdigit export controller")
+    period = check_real(args.period_s, "--period-s", low=1e-4, high=1.0)
+    check_output(args.out, force=args.force)  # before any design work
+    runtime, plant_d, rotation, scale, input_max = _export_design(design, period, args)
+    if args.input_max is not None:
+        input_max = check_real(args.input_max, "--input-max", low=0.0, low_open=True)
+    spec = ControllerSpec.from_runtime(runtime, rotation, setpoint_scale=scale)
+    setpoints = [s * scale for s in (0.0, 10.0, 30.0)]  # the rotations of the loop's tests, deg
+    result = export_controller(
+        spec,
+        args.out,
+        format=args.format,
+        input_max=input_max,
+        plant_d=plant_d,
+        setpoints=setpoints,
+        prefix=args.prefix,
+        force=args.force,
+    )
+    data = {
+        "source": str(result.source_path),
+        "header": str(result.header_path),
+        "format": result.format,
+        "design": design,
+        "period_s": period,
+        "prefix": result.prefix,
+        "rotation_map": None if rotation is None else {"coef": list(rotation.coef), "offset": rotation.offset},
+        "setpoint_scale": scale,
+        "analysis": result.analysis.to_dict(),
+    }
+    a = result.analysis
+    code = 0 if (a.closed_loop_stable is not False) else 1
+    return CommandResult(data=data, text=f"wrote {result.source_path} and {result.header_path}\n{a!r}", exit_code=code)
+
+
+def _export_design(design: str, period: float, args):
+    """The runtime controller, its design plant (discrete), the rotation map, the setpoint scale and input range."""
+    import control as ct
+    import numpy as np
+
+    from flexdigit.control.c_export import RotationMap
+    from flexdigit.control.design20ms import design_20ms, thesis_controller
+    from flexdigit.models.conversion import k3_printed_mm_per_v
+    from flexdigit.models.plant import build_plant
+    from flexdigit.params import RigParams
+
+    params = RigParams()
+    estimator, rest = None, None
+    if not args.no_rotation_map or design != "digital20":
+        from flexdigit.rig.base import open_rig
+        from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
+
+        rig = open_rig("sim")
+        try:
+            estimator = load_rotation_map(args.rotation_map) if args.rotation_map else calibrate_rotation(rig)
+            rest = np.array([rig.read().gauges_v for _ in range(5)])
+        finally:
+            rig.close()
+        estimator.tare(rest)
+    if design == "digital20":
+        d = design_20ms(params, period_s=period)
+        rotation = None if args.no_rotation_map else RotationMap.from_estimator(estimator)
+        return d.runtime(params), d.plant_d, rotation, 1.0, 180.0
+    method = "forward_euler" if design.endswith("euler") else "tustin"
+    k3 = k3_printed_mm_per_v()[0] / 1000.0  # m per V of gauge 1 (E 3.23)
+    tare_v = float(np.mean(rest[:, 0]))
+    rotation = None if args.no_rotation_map else RotationMap((k3, 0.0, 0.0), -tare_v * k3, unit="m")
+    scale = k3 * float(estimator.gauge_v_per_deg_[0])
+    plant_d = ct.sample_system(ct.ss(build_plant("printed", params).tf), period, method="zoh")
+    return thesis_controller(method, period, params), plant_d, rotation, scale, 0.3

@@ -1,0 +1,430 @@
+"""The ``hil://`` backend: the reference firmware on an emulated ATmega328P (simavr), joined to the twin (issue 25).
+
+    hil://firmware/build/flexdigit_board.elf?seed=0&mode=host
+
+The firmware image (``make firmware``) runs unchanged on simavr's ATmega328P in a small harness
+(``firmware/hil/flexdigit_hil.c``, against libsimavr) that this backend drives over a pipe, in *simulated* time:
+every ``step_s`` (1 ms) of AVR time it
+
+1. sets the voltages on the AVR's ADC pins from the twin's gauges (``2.5 V + gauge volts``: the level shift of the
+   board's front end, the AVR's ADC reading 0..5 V) and its pot;
+2. runs the AVR for ``step_s`` and collects what its UART sent (stream-protocol lines) and the servo pulse its
+   Timer1 generates (OCR1A latched at the pulse's start, as the hardware double-buffers it);
+3. turns the pulse width into the servo's command (1..2 ms over 0..254, unrounded: Timer1's 0.5 us resolution is
+   finer than the serial board's command) and advances the twin ``step_s``.
+
+Nothing here reads the wall clock: a run repeats exactly. Two modes (``mode=``):
+
+- ``host``: the board streams the gauges and follows ``C<command>`` lines; flexdigit's loop on the host closes the
+  loop through it (``flexdigit run --backend hil://...``), so the whole host stack meets the real firmware;
+- ``board``: the loop closes on the board (the exported controller in the image); the host sends the setpoint
+  (:meth:`HilRig.set_setpoint`) and watches (``flexdigit run --on-board``).
+
+A fault the board reports (``# fault <code> <name>``: host silent, ADC at a rail, rotation past its bound, command
+out of range, controller fault) raises :class:`~flexdigit.errors.RigError` at the next read: the loop's safe state.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from flexdigit.errors import ParameterError, RigError
+from flexdigit.params import RigParams
+from flexdigit.rig.backends.stream_framing import LineDecoder
+from flexdigit.rig.base import Rig, UrlOption
+
+__all__ = [
+    "HilRig",
+    "from_url",
+    "URL_OPTIONS",
+    "pulse_to_command",
+    "HARNESS_NAME",
+    "FAULTS",
+    "BoardRun",
+    "run_on_board",
+]
+
+#: The harness executable ``make firmware`` builds beside the image.
+HARNESS_NAME = "flexdigit_hil"
+#: The AVR's clock, Hz (an Uno's crystal).
+F_CPU_HZ = 16_000_000
+#: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
+MID_V = 2.5
+VOLTS_PER_COUNT = 5.0 / 1024.0
+#: The board's fault codes (firmware/flexdigit_board.c).
+FAULTS = {1: "host_timeout", 2: "adc_rail", 3: "rotation_bound", 4: "command_range", 5: "controller"}
+#: Stream samples kept in :attr:`HilRig.samples` (a day at 50 Hz would be 4 million: runs here are seconds).
+MAX_KEPT_SAMPLES = 200_000
+#: The host sends a heartbeat line if it has said nothing for this long (the board's timeout is 0.5 s).
+HEARTBEAT_S = 0.1
+
+URL_OPTIONS = (
+    UrlOption("seed", "int", low=0, help="the twin's noise seed"),
+    UrlOption("mode", "choice", choices=("host", "board"), help="who closes the loop: the host or the board"),
+    UrlOption("setpoint_deg", "float", low=-60.0, high=120.0, help="board mode: the setpoint sent at opening"),
+    UrlOption("safe", "choice", choices=("relax", "hold"), help="the board's safe state: relax or hold"),
+    UrlOption("harness", "str", help="the simavr harness (default: flexdigit_hil beside the image)"),
+    UrlOption("step_s", "float", low=1e-4, high=0.01, help="the AVR/twin exchange step, s"),
+)
+PYTHON_OPTIONS = ("twin", "operator", "calibration")
+
+
+def pulse_to_command(pulse_cycles: int, params: RigParams | None = None) -> float:
+    """The servo command a pulse stands for: 1..2 ms over ``command_min..command_max`` (unrounded).
+
+    >>> round(pulse_to_command(16504), 3)          # 1031.5 us: command 8 (1000 + 8 x 1000/254 = 1031.5)
+    8.001
+    """
+    a = (params or RigParams()).actuator
+    pulse_us = pulse_cycles / (F_CPU_HZ / 1e6)
+    span = float(min(a.command_max, 254) - a.command_min)
+    return a.command_min + (pulse_us - 1000.0) / 1000.0 * span
+
+
+class HilRig(Rig):
+    """The firmware on simavr, joined to the twin (see the module docstring).
+
+    Parameters
+    ----------
+    elf : path
+        The firmware image.
+    params : RigParams, optional
+    seed : int
+        The twin's noise seed.
+    mode : {"host", "board"}
+    setpoint_deg : float
+        Board mode: the setpoint sent when the board is put in closed loop.
+    safe : {"relax", "hold"}
+        What the board does on a fault.
+    harness : path, optional
+    step_s : float
+        AVR/twin exchange step (s).
+    twin : flexdigit.twin.Twin, optional
+    """
+
+    name = "hil"
+    accepts_loads = True
+    deterministic = True
+
+    def __init__(
+        self,
+        elf,
+        params: RigParams | None = None,
+        *,
+        seed: int = 0,
+        mode: str = "host",
+        setpoint_deg: float = 0.0,
+        safe: str = "relax",
+        harness=None,
+        step_s: float = 0.001,
+        twin: Any = None,
+        operator=None,
+        calibration=None,
+    ) -> None:
+        self.elf = Path(elf)
+        if not self.elf.is_file():
+            raise ParameterError(f"hil://{elf}: no firmware image there (build it with 'make firmware')")
+        harness = Path(harness) if harness else self.elf.parent / HARNESS_NAME
+        if not harness.is_file():
+            found = shutil.which(HARNESS_NAME)
+            if found is None:
+                raise ParameterError(f"hil://{elf}: no simavr harness at {harness} (build it with 'make firmware')")
+            harness = Path(found)
+        self.harness = harness
+        if twin is None:
+            from flexdigit.twin.twin import Twin
+
+            options = {} if calibration is None else {"calibration": calibration}
+            twin = Twin(params, seed=int(seed), dt_s=0.002, **options)
+        self.twin = twin
+        self.seed, self.mode, self.safe, self.step_s = int(seed), mode, safe, float(step_s)
+        self.setpoint_deg = float(setpoint_deg)
+        self._time_s = 0.0
+        super().__init__(
+            twin.params, clock=lambda: self._time_s, sleep=self._wait_alive, operator=operator or (lambda m: None)
+        )
+        self._decoder = LineDecoder()
+        self._outbox = bytearray()
+        self._last_said_s = 0.0
+        self.latest = None  # the newest stream sample
+        #: every stream sample (the ADC counts each board period used, and the command it applied), up to a limit
+        self.samples: list = []
+        #: the rotation the board's map read at rest when its loop started (it subtracts it), deg
+        self.board_tare_deg = float("nan")
+        #: ``(index into samples, mode)`` at each mode change the board announced
+        self.mode_marks: list[tuple[int, int]] = []
+        self.board_command = float("nan")
+        self.faults: list[tuple[float, int, str]] = []
+        self.info_lines: list[str] = []
+        self.pulses = 0
+        self.exec_max_cycles = 0
+        self.exec_cycles: list[int] = []
+        self._fault_seen = 0
+        #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
+        self.gauge_override: dict[int, float] = {}
+        self._stderr = tempfile.TemporaryFile(mode="w+")  # simavr's own messages: quoted if the harness stops
+        self._proc = subprocess.Popen(
+            [str(self.harness), str(self.elf)],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self._stderr,
+            text=True,
+            bufsize=1,
+        )
+        try:
+            self._advance(0.2)  # the banner, and the rest readings the board tares its map on
+            self._say("F1" if safe == "hold" else "F0")  # once the board listens
+            if self.latest is None:
+                raise RigError(f"hil://{self.elf}: the firmware sent no sample in 0.2 s ({self.info_lines[-3:]})")
+            if mode == "board":
+                self.set_setpoint(self.setpoint_deg)
+                self._say("M2")
+            else:
+                self._say("M1")
+            self._advance(self.step_s)
+        except BaseException:
+            self._stop()
+            raise
+
+    # -- the exchange --------------------------------------------------------------------------------------------
+    def _say(self, line: str) -> None:
+        self._outbox += line.encode("ascii") + b"\n"
+        self._last_said_s = self._time_s
+
+    def _exchange(self) -> None:
+        gauges, pot = self.twin.read()
+        volts = [MID_V + float(g) for g in gauges] + [float(pot)]
+        for channel, v in self.gauge_override.items():  # a wire off, a short: the fault tests
+            volts[channel] = MID_V + v
+        mv = [int(round(v * 1000)) for v in volts]
+        out = f"V {mv[0]} {mv[1]} {mv[2]} {mv[3]}\n"
+        if self._outbox:
+            out += "U " + self._outbox.hex() + "\n"
+            self._outbox.clear()
+        out += f"R {int(round(self.step_s * 1e6))}\n"
+        try:
+            self._proc.stdin.write(out)
+            self._proc.stdin.flush()
+            reply = self._proc.stdout.readline()
+        except (BrokenPipeError, OSError) as exc:
+            raise RigError(f"hil://{self.elf}: the simavr harness failed ({exc})") from None
+        parts = reply.split()
+        if len(parts) < 8 or parts[0] != "P":
+            raise RigError(f"hil://{self.elf}: the simavr harness stopped ({self._harness_said() or 'no reply'})")
+        pulse, self.pulses = int(parts[2]), int(parts[3])
+        exec_last, self.exec_max_cycles, execs = int(parts[4]), int(parts[5]), int(parts[6])
+        if execs > len(self.exec_cycles):
+            self.exec_cycles.append(exec_last)
+        uart = bytes.fromhex(parts[8]) if len(parts) > 8 else b""
+        if pulse:
+            command = pulse_to_command(pulse, self.params)
+            if command != self.board_command:
+                self.board_command = command
+                a = self.params.actuator
+                self.twin.servo.pending.clear()
+                self.twin.servo.command = min(max(command, a.command_min), a.command_max)
+        for event in self._decoder.feed(uart):
+            if event.kind == "sample":
+                self.latest = event.sample
+                if len(self.samples) < MAX_KEPT_SAMPLES:
+                    self.samples.append(event.sample)
+            elif event.kind == "info":
+                self.info_lines = [*self.info_lines[-49:], event.text]
+                words = event.text.split()
+                if len(words) >= 3 and words[0] == "fault":
+                    self.faults.append((self._time_s, int(words[1]), words[2]))
+                elif len(words) == 2 and words[0] == "mode":
+                    self.mode_marks.append((len(self.samples), int(words[1])))
+                elif len(words) == 2 and words[0] == "tare":
+                    self.board_tare_deg = int(words[1]) / 1e6
+
+    def _harness_said(self) -> str:
+        """The harness's last line on stderr (why it stopped), or ''."""
+        try:
+            self._proc.wait(timeout=2)
+            self._stderr.seek(0)
+            lines = [line.strip() for line in self._stderr.read().splitlines() if line.strip()]
+        except (OSError, subprocess.TimeoutExpired):
+            return ""
+        return lines[-1] if lines else ""
+
+    def _advance(self, seconds: float) -> None:
+        steps = int(round(seconds / self.step_s))
+        for _ in range(steps):
+            self._exchange()
+            self.twin.advance(self.step_s)
+            self._time_s += self.step_s
+
+    def _wait_alive(self, seconds: float) -> None:
+        """:meth:`wait`: time passes with the host alive (a heartbeat line every HEARTBEAT_S)."""
+        steps = int(round(seconds / self.step_s))
+        for _ in range(steps):
+            if self._time_s - self._last_said_s >= HEARTBEAT_S:
+                self._say("W")
+            self._advance(self.step_s)
+
+    def advance_silently(self, seconds: float) -> None:
+        """Let time pass without the host saying anything (the host-timeout test)."""
+        self._advance(seconds)
+
+    # -- the Rig contract ------------------------------------------------------------------------------------
+    def _check_faults(self) -> None:
+        if len(self.faults) > self._fault_seen:
+            t, code, name = self.faults[-1]
+            self._fault_seen = len(self.faults)
+            raise RigError(f"hil://{self.elf.name}: the board reported fault {code} ({name}) at t = {t:.3f} s")
+
+    def _read(self) -> tuple[np.ndarray, float]:
+        if self._time_s - self._last_said_s >= HEARTBEAT_S:
+            self._say("W")
+        self._check_faults()
+        sample = self.latest
+        gauges = np.array(sample.gauges, dtype=float) * VOLTS_PER_COUNT
+        return gauges, math.nan
+
+    def _send(self, command: int) -> None:
+        self._check_faults()
+        self._say(f"C{int(command)}")
+
+    def set_setpoint(self, degrees: float) -> None:
+        """Board mode: the beam rotation the board's loop holds (deg)."""
+        self.setpoint_deg = float(degrees)
+        self._say(f"S{int(round(degrees * 1000))}")
+
+    def set_mode(self, mode: str) -> None:
+        """``"safe"``, ``"host"`` or ``"board"`` (clears a latched fault)."""
+        code = {"safe": 0, "host": 1, "board": 2}[mode]
+        self.mode = mode
+        self._say(f"M{code}")
+
+    def send_raw(self, line: str) -> None:
+        """A line to the board as is (tests: an out-of-range command)."""
+        self._say(line)
+
+    def tip_rotation_deg(self) -> float:
+        """The twin's true tip rotation now, deg (not measurable on hardware)."""
+        psi, _ = self.twin.state()
+        return math.degrees(float(psi[-1]))
+
+    def _apply_load(self, mass_kg: float, position_from_base_m: float) -> None:
+        self.twin.place_load(mass_kg, position_from_base_m)
+
+    def _remove_loads(self) -> None:
+        self.twin.clear_loads()
+
+    def _rehang(self, settle_s: float) -> None:
+        self.twin.disturb()
+
+    def relax(self) -> int:
+        """Host mode: the equilibrium command; board mode: the board's safe state."""
+        if self.mode == "board" and not self._closed:
+            self.set_mode("safe")
+            self._advance(self.step_s)
+            self._command = int(self.params.actuator.equilibrium_command)
+            return self._command
+        return super().relax()
+
+    def _close(self) -> None:
+        self._stop()
+
+    def _stop(self) -> None:
+        proc = self._proc
+        try:
+            if proc.poll() is None:
+                proc.stdin.write("Q\n")
+                proc.stdin.flush()
+        except (BrokenPipeError, OSError):
+            pass
+        try:
+            proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+        self._stderr.close()
+
+    def stats(self) -> dict[str, Any]:
+        return {
+            "pulses": self.pulses,
+            "faults": [{"t_s": t, "code": c, "name": n} for t, c, n in self.faults],
+            "exec_max_cycles": self.exec_max_cycles,
+            "info_lines": list(self.info_lines[-10:]),
+        }
+
+    def settings(self) -> dict[str, Any]:
+        return {
+            "backend": "hil",
+            "elf": str(self.elf),
+            "seed": self.seed,
+            "mode": self.mode,
+            "safe": self.safe,
+            "step_s": self.step_s,
+            "harness": str(self.harness),
+        }
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else "open"
+        return f"HilRig(elf={str(self.elf)!r}, mode={self.mode!r}, seed={self.seed}, safe={self.safe!r}, {state})"
+
+
+def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> HilRig:
+    """``hil://PATH.elf?seed=0&mode=host`` (see the module docstring)."""
+    from flexdigit.rig.base import RigURL, rig_url_options
+
+    if not location:
+        raise ParameterError("hil:// needs a firmware image, e.g. hil://firmware/build/flexdigit_board.elf")
+    checked = rig_url_options(RigURL("hil", location), **options)[1]
+    return HilRig(location, params, **checked)
+
+
+class BoardRun:
+    """What :func:`run_on_board` watched: per board period, the time, the twin's true rotation, the command."""
+
+    def __init__(self, time_s, true_rotation_deg, command, status: str, message: str, period_s: float) -> None:
+        self.time_s = np.asarray(time_s, dtype=float)
+        self.true_rotation_deg = np.asarray(true_rotation_deg, dtype=float)
+        self.command = np.asarray(command, dtype=float)
+        self.status, self.message, self.period_s = status, message, period_s
+
+    def __repr__(self) -> str:
+        return (
+            f"BoardRun({self.status!r}, {self.time_s.size} periods of {self.period_s * 1000:g} ms, "
+            f"message={self.message!r})"
+        )
+
+
+def board_period_s(rig: HilRig) -> float:
+    """The control period the image was built with (its banner's ``period_us``)."""
+    for line in rig.info_lines:
+        for word in line.split():
+            if word.startswith("period_us="):
+                return int(word.split("=", 1)[1]) / 1e6
+    raise RigError(f"hil://{rig.elf.name}: the firmware's banner does not give its period")
+
+
+def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float) -> BoardRun:
+    """Close the loop on the board: send the setpoint, then watch (read every board period, which is also the
+    host's heartbeat) for ``duration_s``. A fault the board reports ends the run with status ``"fault"``."""
+    period = board_period_s(rig)
+    rig.set_setpoint(setpoint_deg)
+    if rig.mode != "board":
+        rig.set_mode("board")
+    t, truth, command = [], [], []
+    status, message = "completed", f"{duration_s:g} s on the board"
+    n = int(round(duration_s / period))
+    try:
+        for _ in range(n):
+            rig.wait(period)
+            rig.read()
+            t.append(rig.clock())
+            truth.append(rig.tip_rotation_deg())
+            command.append(rig.board_command)
+    except RigError as exc:
+        status, message = "fault", str(exc)
+    return BoardRun(t, truth, command, status, message, period)

@@ -1,0 +1,58 @@
+"""Build the reference firmware and its simavr harness once per session, as ``make firmware`` does.
+
+Nothing here is skipped: these tests need Debian's gcc-avr, avr-libc, binutils-avr and libsimavr-dev, which
+``make test`` installs when missing (``make avr``); without them the build fails and says which tool is absent.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import flexdigit
+
+FIRMWARE = Path(__file__).resolve().parents[2] / "firmware"
+TOOLS = ("avr-gcc", "avr-objcopy", "avr-size", "gcc", "make")
+
+
+def build(tmp_root: Path, period_s: float, fmt: str) -> Path:
+    """``make -C firmware`` into a fresh directory; returns the image. Fails (never skips) without the tools."""
+    missing = [t for t in TOOLS if shutil.which(t) is None]
+    assert not missing, f"the firmware tests need {missing}: run 'make avr' (apt-get install gcc-avr avr-libc ...)"
+    assert Path("/usr/include/simavr/sim_avr.h").exists(), "the HIL harness needs libsimavr-dev: run 'make avr'"
+    out = tmp_root / f"{fmt}-{int(round(period_s * 1e6))}us"
+    src = str(Path(flexdigit.__file__).resolve().parents[1])
+    env = dict(os.environ, PYTHONPATH=src + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    cmd = [
+        "make",
+        "-s",
+        "-C",
+        str(FIRMWARE),
+        f"BUILD={out}",
+        f"PERIOD_S={period_s}",
+        f"FORMAT={fmt}",
+        f"FLEXDIGIT={sys.executable} -m flexdigit.cli",
+    ]
+    done = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    return out / "flexdigit_board.elf"
+
+
+@pytest.fixture(scope="session")
+def firmware(tmp_path_factory):
+    """``firmware(period_s, fmt)`` -> the built image (cached per session)."""
+    root = tmp_path_factory.mktemp("firmware")
+    cache: dict[tuple[float, str], Path] = {}
+
+    def get(period_s: float = 0.020, fmt: str = "float") -> Path:
+        key = (period_s, fmt)
+        if key not in cache:
+            cache[key] = build(root, period_s, fmt)
+        return cache[key]
+
+    return get
