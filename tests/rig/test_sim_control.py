@@ -118,7 +118,7 @@ def test_sim_backend_virtual_time_is_deterministic_and_applies_loads():
 
     a, b, c = run(4), run(4), run(5)
     assert a.time_s == pytest.approx(1.0)
-    np.testing.assert_array_equal(a.gauges_v, b.gauges_v)  # same seed, same numbers
+    np.testing.assert_array_equal(a.gauges_v, b.gauges_v)  # same seed, same numbers: one path, one machine
     assert not np.array_equal(a.gauges_v, c.gauges_v)
     rig = SimRig(seed=4)
     rig.write_command(20)

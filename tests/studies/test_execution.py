@@ -176,7 +176,8 @@ def test_a_worker_dying_mid_task_fails_that_task_only_and_a_rerun_computes_it(tm
     assert reported[7]["parameters"] == pytest.approx(dict(zip(spec.names, ref.values[7], strict=True)), rel=1e-15)
     # the metrics see NaN on 3 rows: no indices from a subset of the design, the row and its parameters named
     assert all("row 6" in first.refused[m] and spec.names[0] in first.refused[m] for m in spec.metrics)
-    # a rerun (the cause gone) computes those 3 rows only and gives the serial study
+    # a rerun (the cause gone) computes those 3 rows only and gives the serial study, exactly: a row's numbers do
+    # not depend on the worker that ran it (exactness is the property; one machine, no stored number)
     assert retry_rows(out) == 3
     lines = len((out / JOURNAL_NAME).read_text().splitlines())
     sentinel.unlink()
