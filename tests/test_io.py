@@ -385,3 +385,24 @@ def test_a_one_shot_write_is_refused_while_another_process_holds_the_lock_and_le
     with atomic_write(out, "w", force=True) as fh:
         fh.write("again")
     assert _names(tmp_path) == ["p.toml"] and out.read_text() == "again"
+
+
+def test_the_next_locked_writer_removes_a_dead_writers_temporary_file_but_not_a_live_ones(tmp_path):
+    # a writer killed outright (kill -9) leaves its temporary file, unlocked; one being written is flock-held
+    import fcntl
+
+    from flexdigit._io import output_lock
+
+    out = tmp_path / "d.parquet"
+    dead = tmp_path / ".d.parquet.0123456789ab.tmp"
+    live = tmp_path / ".d.parquet.ba9876543210.tmp"
+    other = tmp_path / ".e.parquet.0123456789ab.tmp"  # another output's
+    for p in (dead, live, other):
+        p.write_bytes(b"x")
+    with open(live, "rb") as held:
+        fcntl.flock(held.fileno(), fcntl.LOCK_EX)
+        with output_lock(out):
+            pass
+        assert not dead.exists()
+        assert live.exists()
+    assert other.exists()

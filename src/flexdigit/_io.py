@@ -177,10 +177,44 @@ def _new_temp(path: Path, like: os.stat_result | None, tag: str = "tmp") -> tupl
     for _ in range(100):
         tmp = path.with_name(f".{_safe(path.name)}.{secrets.token_hex(6)}.{tag}")
         try:
-            return _create(tmp, like), tmp
+            fd = _create(tmp, like)
         except FileExistsError:  # a name taken (or planted): draw another
             continue
+        # held while the file is written: a temporary file nobody holds is a dead writer's (kill -9), which the
+        # output's next locked writer removes (_sweep_dead_temps)
+        with contextlib.suppress(OSError):
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return fd, tmp
     raise OutputError(f"{path}: cannot create a temporary file beside it (100 names taken)")
+
+
+def _sweep_dead_temps(path: Path) -> None:
+    """Remove the temporary files of ``path`` that no live writer holds (left by a writer killed outright).
+
+    Called by the holder of ``path``'s lock; each candidate is opened without following a symlink and removed only
+    if its ``flock`` can be taken (its writer is gone) and the name still points at the file locked."""
+    prefix = f".{_safe(path.name)}."
+    try:
+        names = [n for n in os.listdir(path.parent if str(path.parent) else ".") if n.startswith(prefix)]
+    except OSError:
+        return
+    for name in names:
+        if not name.endswith(".tmp") or len(name) != len(prefix) + 12 + len(".tmp"):
+            continue
+        tmp = path.with_name(name)
+        try:
+            fd = os.open(tmp, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+        except OSError:
+            continue
+        try:
+            if stat.S_ISREG(os.fstat(fd).st_mode):
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                if _same_file(fd, tmp):
+                    os.unlink(tmp)
+        except OSError:  # held by a live writer (or gone meanwhile): let it be
+            pass
+        finally:
+            os.close(fd)
 
 
 def _fsync_dir(directory: Path) -> None:
@@ -328,6 +362,7 @@ def output_lock(path: str | os.PathLike) -> Iterator[None]:
     fd = _take_lock(path, lock)
     with _held_guard:
         _held[key] = [fd, 1]
+    _sweep_dead_temps(path)
     try:
         yield
     finally:
