@@ -1,9 +1,9 @@
-"""Tendon-driven continuum robots in three dimensions: description, rod statics and dynamics (sensing to come).
+"""Tendon-driven continuum robots in three dimensions: description, rod statics and dynamics, recordings.
 
 The thesis's digit is the planar case of such a robot; this domain is its generalisation to space (issue 26):
 a Cosserat rod with any number of segments and tendons (:mod:`flexdigit.tdcr.description`), its static
 equilibrium by shooting (:mod:`flexdigit.tdcr.statics`) and its motion, implicit in time and shot in space
-(:mod:`flexdigit.tdcr.dynamics`).
+(:mod:`flexdigit.tdcr.dynamics`), and recordings of either that open in 3D in Foxglove (:mod:`flexdigit.tdcr.scene`).
 """
 
 from flexdigit._lazy import lazy_exports
@@ -25,5 +25,7 @@ __getattr__, __all__ = lazy_exports(
         "solve_statics": "flexdigit.tdcr.statics",
         "DynamicSolution": "flexdigit.tdcr.dynamics",
         "simulate": "flexdigit.tdcr.dynamics",
+        "scene_update": "flexdigit.tdcr.scene",
+        "write_recording": "flexdigit.tdcr.scene",
     },
 )
