@@ -144,3 +144,16 @@ def test_the_validation_can_fail():
     for message in (bad_type, bad_color):
         assert not VALIDATORS[0].is_valid(message)
     assert VALIDATORS[0].is_valid(stray) and not VALIDATORS[1].is_valid(stray)
+
+
+def test_the_dynamics_cli_records_every_step(tmp_path, capsys):
+    out = tmp_path / "d.mcap"
+    held = ["--from-tension-n", "4,0,0,0,2,0", "--tension-n", "4,0,0,0,2,0"]  # at rest: a static shape held
+    args = ["tdcr", "dynamics", "rao2021", *held, "--duration-s", "0.005", "--record", str(out), "--json"]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    _, topics = _read(out)
+    assert len(topics["/tdcr/scene"]) == len(data["t_s"]) == 6
+    _check_scene(topics["/tdcr/scene"])
+    tips = np.array([m[3]["position_m"] for m in topics["/tdcr/tip"]])
+    np.testing.assert_allclose(tips, data["tip_position_m"], atol=GEOMETRY_ATOL)
