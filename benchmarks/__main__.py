@@ -26,6 +26,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
     "benchmarks.bench_board",
+    "benchmarks.bench_resources",
 )
 
 

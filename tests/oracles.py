@@ -125,8 +125,9 @@ def eventually(condition, timeout_s: float = 2.0) -> bool:
 #: change meant to move them rewrites it with ``tests/data/update_report_baseline.py`` and commits the diff with its
 #: reason.
 FAST_BASELINE_FILE = Path(__file__).with_name("data") / "report_fast_baseline.json"
-#: How far an entry may move: network training and every random stream are the same to the bit, so only rounding
-#: differences remain (BLAS on one thread per chapter worker, or on two in-process).
+#: How far an entry may move: every random stream is the same to the bit, so only rounding differences remain (BLAS
+#: on one thread per chapter worker, or on two in-process; another BLAS kernel or CPU). Not a trained network's
+#: entries, which rounding moves as a change of seed does (``trained_networks`` below).
 BASELINE_RTOL = 1e-6
 BASELINE_ATOL = 1e-12
 #: Entries that are an interior-point solver's stopping point, not a property of the design: about 3x the largest

@@ -48,6 +48,7 @@ SHARED = {
     "_result_table",
     "_estimator",
     "errors",
+    "interrupts",
     "reference",
     "__init__",
 }

@@ -228,7 +228,7 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
             raise DataFileError(f"{p}: empty file: expected a header line and rows of numbers")
     if delimiter is None:
         delimiter = _detect_delimiter(p, [line for _, line in numbered[:_SNIFF_LINES]], decimal)
-    rows = _split_all([line for _, line in numbered], delimiter)
+    rows = _split_all(p, numbered, delimiter)
     if decimal is None:
         decimal = _detect_decimal(rows[1 : 1 + _SNIFF_LINES * 4], delimiter)
     header = [c.strip() for c in rows[0]]
@@ -286,16 +286,38 @@ def _split(line: str, delimiter: str) -> list[str]:
     return next(csv.reader([line], delimiter=delimiter))
 
 
-def _split_all(lines: list[str], delimiter: str) -> list[list[str]]:
+def _split_all(p: Path, numbered: list[tuple[int, str]], delimiter: str) -> list[list[str]]:
     """Every line split on ``delimiter``: one :mod:`csv` reader for all (fast), line by line where a quote left
-    open would let the reader run on into the next line."""
-    if delimiter == "whitespace":
-        rows = list(csv.reader([line.strip() for line in lines], delimiter=" ", skipinitialspace=True))
-    else:
-        rows = list(csv.reader(lines, delimiter=delimiter))
-    if len(rows) != len(lines):
-        rows = [_split(line, delimiter) for line in lines]
+    open would let the reader run on into the next line, or to name the line :mod:`csv` cannot split (a field past
+    its limit of 131072 characters: a file with a hole of NUL bytes)."""
+    lines = [line for _, line in numbered]
+    try:
+        if delimiter == "whitespace":
+            rows = list(csv.reader([line.strip() for line in lines], delimiter=" ", skipinitialspace=True))
+        else:
+            rows = list(csv.reader(lines, delimiter=delimiter))
+    except csv.Error:
+        rows = []
+    if len(rows) == len(lines):
+        return rows
+    rows = []
+    for number, line in numbered:
+        try:
+            rows.append(_split(line, delimiter))
+        except csv.Error as exc:
+            raise DataFileError(
+                f"{p}: line {number}: not a row of a table ({exc}; {len(line)} characters on one line): expected "
+                "numbers between delimiters"
+            ) from None
     return rows
+
+
+def _count(line: str, delimiter: str) -> int:
+    """The fields of ``line``; -1 where :mod:`csv` cannot split it (then no delimiter agrees with it)."""
+    try:
+        return len(_split(line, delimiter))
+    except csv.Error:
+        return -1
 
 
 def _detect_delimiter(p: Path, lines: list[str], decimal: str | None) -> str:
@@ -304,14 +326,14 @@ def _detect_delimiter(p: Path, lines: list[str], decimal: str | None) -> str:
     candidates = [d for d in DELIMITERS if d != decimal] + ([","] if decimal == "," else [])
     consistent, partial = [], []
     for d in candidates:
-        fields = [len(_split(line, d)) for line in lines]
+        fields = [_count(line, d) for line in lines]
         if fields[0] < 2:
             continue
         agree = sum(n == fields[0] for n in fields) / len(fields)
         (consistent if agree == 1.0 else partial).append((-fields[0], -agree, d))
     if consistent:
         return min(consistent, key=lambda k: k[:1])[2]  # most columns; on a tie, the first delimiter tried
-    counts = {len(_split(line, "whitespace")) for line in lines}
+    counts = {_count(line, "whitespace") for line in lines}
     if len(counts) == 1 and counts.pop() > 1:
         return "whitespace"
     if partial:

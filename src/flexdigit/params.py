@@ -454,7 +454,7 @@ def load_params(path: str | Path) -> RigParams:
     text = read_text(path, "a rig parameter TOML")
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{path}: not valid TOML ({exc})") from None
     return RigParams.from_dict(data, source=str(path))
 

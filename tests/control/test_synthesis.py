@@ -21,6 +21,8 @@ from flexdigit.control.thesis_designs import (
 from flexdigit.errors import DesignError, UnstableError
 from flexdigit.reference import thesis_complex, thesis_value
 
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+
 warnings.filterwarnings("ignore", category=UserWarning)
 
 # Tolerances, each with the reason for its size

@@ -64,12 +64,13 @@ def _live(args: argparse.Namespace) -> CommandResult:
     )
     try:
         serve(session, args.host, args.port, allow_remote=args.allow_remote)
-    except KeyboardInterrupt:
-        pass  # Ctrl-C is how a live session ends; uvicorn re-raises it once it has shut down
+    except KeyboardInterrupt as exc:  # Ctrl-C (or SIGTERM, SIGHUP) is how a live session ends: exit 0
+        session.stopped_by = session.stopped_by or getattr(exc, "signal_name", "SIGINT")
     finally:
         session.stop()
     data = {
         "status": session.error or "stopped",
+        "signal": session.stopped_by,  # what stopped it: SIGINT (Ctrl-C), SIGTERM, SIGHUP
         "backend": args.backend,
         "record": str(session.recording.path) if session.recording is not None else None,
         "overruns": session.state.overruns,

@@ -35,6 +35,11 @@ def _reproduce(args: argparse.Namespace) -> CommandResult:
 
     if args.workers is not None and args.workers < 1:
         raise ParameterError(f"--workers must be a positive integer. Got {args.workers} instead.")
+    if args.workers is not None:
+        from flexdigit._system import check_workers
+        from flexdigit.report.build import CHAPTER_BYTES
+
+        check_workers(args.workers, "--workers", CHAPTER_BYTES)
     check_report_dir(args.out, force=args.force)  # before the chapters run (minutes), not after
     params = load_params(args.params) if args.params else RigParams()
 

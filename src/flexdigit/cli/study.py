@@ -37,6 +37,11 @@ def _study(args: argparse.Namespace) -> CommandResult:
 
     if args.workers is not None and args.workers < 0:
         raise ParameterError(f"--workers must be >= 0 (0: no Dask). Got {args.workers} instead.")
+    if args.workers is not None and args.scheduler is None:
+        from flexdigit._system import check_workers
+        from flexdigit.studies.execution import WORKER_BYTES
+
+        check_workers(args.workers, "--workers", WORKER_BYTES)
     if args.scheduler is not None:
         parse_scheduler(args.scheduler)
     out = Path(args.out)

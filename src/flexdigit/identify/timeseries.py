@@ -364,11 +364,11 @@ def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
     if not numbered:
         raise DataFileError(f"{p}: empty file: expected a header row such as time_s,sg1_v")
     split = _splitter(p, [line for _, line in numbered[:21]])
-    header_line, header = numbered[0][0], [c.strip().strip('"') for c in split(numbered[0][1])]
+    header_line, header = numbered[0][0], [c.strip().strip('"') for c in split(numbered[0][1], numbered[0][0])]
     rows: list[list[str]] = []
     lines: list[int] = []
     for lineno, line in numbered[1:]:
-        row = split(line)
+        row = split(line, lineno)
         if not "".join(row).strip():
             continue
         if len(row) != len(header):
@@ -388,15 +388,26 @@ def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
 
 
 class _Splitter:
-    """Split a CSV line on one delimiter (quotes as in :mod:`csv`), or on runs of spaces (``delimiter=" "``)."""
+    """Split a CSV line on one delimiter (quotes as in :mod:`csv`), or on runs of spaces (``delimiter=" "``).
 
-    def __init__(self, delimiter: str):
-        self.delimiter = delimiter
+    A line :mod:`csv` cannot split (a field past its limit of 131072 characters: a file with a hole of NUL bytes,
+    a quote never closed) is a :class:`DataFileError` naming the file and the line, not a ``csv.Error``.
+    """
 
-    def __call__(self, line: str) -> list[str]:
+    def __init__(self, delimiter: str, path: Path | None = None):
+        self.delimiter, self.path = delimiter, path
+
+    def __call__(self, line: str, lineno: int | None = None) -> list[str]:
         if self.delimiter == " ":
             return [c.strip('"') for c in line.split()]
-        return next(csv.reader([line], delimiter=self.delimiter))
+        try:
+            return next(csv.reader([line], delimiter=self.delimiter))
+        except csv.Error as exc:
+            where = "" if lineno is None else f" line {lineno}:"
+            raise DataFileError(
+                f"{self.path}:{where} not a CSV row ({exc}; {len(line)} characters on one line): expected numbers "
+                f"separated by {self.delimiter!r}"
+            ) from None
 
 
 def _splitter(p: Path, lines: list[str]) -> _Splitter:
@@ -406,11 +417,14 @@ def _splitter(p: Path, lines: list[str]) -> _Splitter:
     ``;``. Without a consistent one, ``,``: the reader then names the first line whose fields do not match.
     """
     for delimiter in (*_DELIMITERS, " "):
-        split = _Splitter(delimiter)
-        counts = {len(split(line)) for line in lines}
+        split = _Splitter(delimiter, p)
+        try:
+            counts = {len(split(line)) for line in lines}
+        except DataFileError:
+            continue  # not this delimiter; the rows are read (and a bad one named) with the one chosen
         if len(counts) == 1 and counts.pop() >= 2:
             return split
-    return _Splitter(",")
+    return _Splitter(",", p)
 
 
 #: Cells read as a missing value (NaN).

@@ -174,7 +174,7 @@ def _read(name_or_path, builtin, kind: str) -> tuple[dict, str]:
         text, source = read_text(path, f"a {kind} TOML"), str(path)  # binary garbage: named, not a codec error
     try:
         return tomllib.loads(text), source
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise DataFileError(f"{source}: not valid TOML ({exc})") from None
 
 

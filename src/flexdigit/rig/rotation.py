@@ -456,6 +456,8 @@ def load_rotation_map(path) -> RotationEstimator:
         data = json.loads(read_text(path, "a rotation calibration JSON"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise DataFileError(f"{path}: not a rotation calibration, not JSON ({exc}); {_EXPECTED}") from None
+    except RecursionError:  # brackets nested past the parser's depth
+        raise DataFileError(f"{path}: not a rotation calibration (JSON nested too deep); {_EXPECTED}") from None
     est = RotationEstimator.from_dict(data, source=str(path))
     est.source_ = f"{getattr(est, 'source_', 'a saved map')}, loaded from {path}"
     return est

@@ -38,7 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._system import available_cores, check_workers
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.studies.metrics import MetricContext
 
 __all__ = [
@@ -48,6 +50,7 @@ __all__ = [
     "run_rows",
     "run_study",
     "parse_scheduler",
+    "check_scheduler_greets",
     "retry_rows",
     "JOURNAL_NAME",
     "TASK_FAILED",
@@ -55,6 +58,9 @@ __all__ = [
 
 JOURNAL_NAME = "journal.jsonl"
 JOURNAL_FORMAT = 1
+#: Memory one local Dask worker process holds, bytes, for the cap on ``workers`` (:func:`flexdigit._system.
+#: check_workers`): its imports alone take 120 MB (numpy, scipy, distributed, the twin), a task's models more.
+WORKER_BYTES = 512 * 2**20
 #: How the error of a row whose task failed (not the row itself: a worker died, the task could not run) begins
 TASK_FAILED = "task failed: "
 
@@ -112,6 +118,7 @@ def evaluate_rows(build, rows, values, metrics, context: MetricContext, task_key
                 sets.append(build(values[i], f"row {int(row)}"))
                 built.append(int(row))
             except Exception as exc:  # noqa: BLE001 - a row the rig refuses is that row's result
+                raise_if_stopping(exc)  # (a stop is not)
                 out.append(RowRecord(int(row), {}, _message(exc)))
         results = evaluate_many(sets, metrics, context)
         each = (time.perf_counter() - start) / max(1, len(rows))
@@ -163,7 +170,7 @@ class Journal:
             raise DataFileError(f"{self.path}: not a study journal (no header line)")
         try:
             header = json.loads(complete[0])
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):  # RecursionError: brackets nested past the parser's depth
             raise DataFileError(f"{self.path}: line 1 is not a study journal header") from None
         if not isinstance(header, dict) or header.get("flexdigit_study_journal") != JOURNAL_FORMAT:
             raise DataFileError(f"{self.path}: line 1 is not a flexdigit study journal header")
@@ -177,7 +184,7 @@ class Journal:
                 continue
             try:
                 record = RowRecord.from_json(json.loads(line))
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+            except (json.JSONDecodeError, KeyError, TypeError, ValueError, RecursionError):
                 raise DataFileError(f"{self.path}: line {number} is not a row record") from None
             self.records[record.row] = record
         if tail:  # a line cut short by a kill: drop it, the row is computed again
@@ -188,7 +195,7 @@ class Journal:
         """Add finished rows, flushed and fsynced before returning."""
         lines = "".join(json.dumps(r.to_json(), sort_keys=True) + "\n" for r in records)
         try:
-            with self.path.open("a", encoding="utf-8") as fh:
+            with signals_deferred(), self.path.open("a", encoding="utf-8") as fh:  # a stop waits for the rows' end
                 fh.write(lines)
                 fh.flush()
                 os.fsync(fh.fileno())
@@ -216,16 +223,93 @@ def parse_scheduler(url: str) -> str:
     return url
 
 
+#: How long a Dask scheduler has to accept a connection and greet it, s (each; every network wait has one).
+SCHEDULER_TIMEOUT_S = 5.0
+#: The largest greeting a Dask scheduler sends, bytes (its handshake is under 100 bytes): a longer first frame is
+#: not a scheduler's, and distributed itself would allocate whatever length it claims (3 EiB from an HTTP reply).
+MAX_GREETING_BYTES = 64 * 1024
+#: Dask's default scheduler port, for an address without one.
+DASK_PORT = 8786
+
+
+def check_scheduler_greets(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S) -> None:
+    """Raise :class:`OSError` naming ``address`` unless a Dask scheduler answers there within ``timeout_s``.
+
+    distributed's client waits for the scheduler's handshake without a deadline (a server that accepts and stays
+    silent hangs it forever, its ``timeout`` covers the connect only) and reads the handshake's 8-byte length
+    header unchecked (a server answering HTTP or garbage makes it allocate exabytes). So before a ``Client`` is
+    made, this opens a connection of its own, reads the greeting a scheduler sends unasked (distributed's TCP
+    framing: a little-endian uint64 length, then a uint64 frame count and one uint64 length per frame, then the
+    frames) with a timeout and checks that it is framed so, then closes it. Only ``tcp://`` addresses are checked;
+    ``tls://`` and the others are left to distributed.
+    """
+    import socket
+    import struct
+
+    scheme, _, location = address.partition("://")
+    if scheme != "tcp":
+        return
+    host, _, port = location.partition(":")
+    port = int(port) if port else DASK_PORT
+
+    def fail(why: str) -> OSError:
+        return OSError(f"{address}: not a Dask scheduler: {why}; expected a scheduler's address (dask scheduler)")
+
+    deadline = time.monotonic() + timeout_s
+
+    def receive(sock, n: int) -> bytes:
+        data = b""
+        while len(data) < n:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise fail(f"no greeting within {timeout_s:g} s of connecting")
+            sock.settimeout(left)
+            try:
+                chunk = sock.recv(n - len(data))
+            except TimeoutError:
+                raise fail(f"no greeting within {timeout_s:g} s of connecting") from None
+            if not chunk:
+                raise fail(f"the connection was closed after {len(data)} bytes of its greeting")
+            data += chunk
+        return data
+
+    try:
+        sock = socket.create_connection((host, port), timeout=timeout_s)
+    except OSError as exc:
+        raise OSError(f"cannot reach the Dask scheduler at {address}: {exc.strerror or exc}") from None
+    with sock:
+        try:
+            (length,) = struct.unpack("<Q", receive(sock, 8))
+            if not 16 <= length <= MAX_GREETING_BYTES:
+                raise fail(
+                    f"its first message claims {length} bytes (a scheduler's greeting is 16..{MAX_GREETING_BYTES})"
+                )
+            body = receive(sock, length)
+        except OSError as exc:
+            if str(exc).startswith(address):
+                raise
+            raise fail(f"{exc.strerror or exc}") from None
+    (count,) = struct.unpack_from("<Q", body)
+    if (
+        not 1 <= count <= (length - 8) // 8
+        or 8 * (1 + count) + sum(struct.unpack_from(f"<{count}Q", body, 8)) != length
+    ):
+        raise fail("its first message is not framed as distributed frames its messages")
+
+
 @contextlib.contextmanager
 def dask_client(scheduler: str | None, workers: int):
-    """A Dask ``Client``: on an existing scheduler, or on a local cluster of ``workers`` processes (127.0.0.1)."""
+    """A Dask ``Client``: on an existing scheduler (checked first: :func:`check_scheduler_greets`), or on a local
+    cluster of ``workers`` processes (127.0.0.1)."""
     from distributed import Client, LocalCluster
 
     if scheduler:
+        check_scheduler_greets(parse_scheduler(scheduler))
         try:
-            client = Client(parse_scheduler(scheduler), timeout="5s")
+            client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S:g}s")
         except OSError as exc:
-            raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+            why = str(exc) or f"{type(exc).__name__}: no answer within {SCHEDULER_TIMEOUT_S:g} s"
+            raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {why}") from None
         try:
             yield client
         finally:
@@ -304,7 +388,9 @@ def run_rows(
     chunks = [np.arange(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
     todo = [(key, rows) for key, rows in enumerate(chunks) if any(not _done(journal, r) for r in rows)]
     if workers is None:
-        workers = os.cpu_count() or 1
+        workers = available_cores()
+    if not scheduler:
+        check_workers(workers, "workers", WORKER_BYTES)
     bar, task = _progress(n, n - sum(len(r) for _, r in todo), progress and bool(todo), label)
     metrics = list(metrics)
     with bar:
@@ -367,7 +453,7 @@ def retry_rows(out_dir) -> int:
         return 0
     failed = set()
     for line in path.read_bytes().split(b"\n")[1:]:
-        with contextlib.suppress(json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
+        with contextlib.suppress(json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError, RecursionError):
             record = RowRecord.from_json(json.loads(line))
             (failed.discard if record.done else failed.add)(record.row)
     return len(failed)

@@ -317,7 +317,7 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
     """Parse a study spec from TOML text (see the module docstring); errors name ``source`` and the key."""
     try:
         doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{source}: not valid TOML ({exc})") from None
     known = {"study", "parameters", "sensitivity", "design"}
     unknown = sorted(set(doc) - known)

@@ -29,6 +29,7 @@ import numpy as np
 from flexdigit import __version__, _io
 from flexdigit._io import atomic_path, atomic_write
 from flexdigit.errors import DataFileError, one_line
+from flexdigit.interrupts import signals_deferred
 from flexdigit.tactile.protocols import Protocol
 
 __all__ = [
@@ -180,11 +181,13 @@ class Journal:
         return cls(path, handle, fsync), rows
 
     def append(self, row: dict) -> None:
-        """Write one reading and flush it (and fsync it if asked)."""
-        self._fh.write(json.dumps(row) + "\n")
-        self._fh.flush()
-        if self._fsync:
-            os.fsync(self._fh.fileno())
+        """Write one reading and flush it (and fsync it if asked); a stop signal waits for the line's end."""
+        line = json.dumps(row) + "\n"
+        with signals_deferred():
+            self._fh.write(line)
+            self._fh.flush()
+            if self._fsync:
+                os.fsync(self._fh.fileno())
 
     def close(self) -> None:
         self._fh.close()
@@ -368,7 +371,7 @@ def _load_parquet(path: Path) -> Dataset:
         raise DataFileError(f"{path}: no flexdigit metadata (protocol and rig); not a flexdigit tactile dataset")
     try:
         meta = json.loads(meta_raw)
-    except (json.JSONDecodeError, UnicodeDecodeError):
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
         raise DataFileError(f"{path}: flexdigit metadata is not valid JSON") from None
     columns = {}
     for name, dtype in COLUMNS.items():
@@ -400,7 +403,7 @@ def _load_csv(path: Path) -> Dataset:
             raise DataFileError(f"{path}: line 1 must be '# {{json metadata}}' as written by flexdigit")
         try:
             meta = json.loads(first[2:])
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):
             raise DataFileError(f"{path}: line 1 metadata is not valid JSON") from None
         header = fh.readline().strip().split(",")
         missing = [c for c in COLUMNS if c not in header]

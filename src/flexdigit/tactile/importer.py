@@ -190,7 +190,7 @@ class ColumnMap:
             from flexdigit._io import read_bytes
 
             data = tomllib.loads(read_bytes(path, "a column map TOML").decode("utf-8-sig"))
-        except tomllib.TOMLDecodeError as exc:
+        except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
             raise DataFileError(f"{path}: not valid TOML ({exc})") from None
         except UnicodeDecodeError as exc:
             raise DataFileError(f"{path}: not a text TOML file (byte {exc.start} is not UTF-8)") from None

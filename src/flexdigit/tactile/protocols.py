@@ -239,7 +239,7 @@ def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
     """
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{source}: not valid TOML ({exc})") from None
     unknown = sorted(set(data) - _KEYS)
     if unknown:

@@ -268,7 +268,7 @@ def _read_toml(path: Path) -> dict:
         from flexdigit._io import read_text
 
         return tomllib.loads(read_text(path, "a calibration TOML"))
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise DataFileError(f"{path}: not valid TOML ({exc})") from None
     except UnicodeDecodeError as exc:
         raise DataFileError(f"{path}: not a text TOML file (byte {exc.start} is not UTF-8)") from None

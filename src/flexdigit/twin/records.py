@@ -127,7 +127,7 @@ class TwinRecord:
                     key, _, value = line[2:].partition(": ")
                     try:
                         meta[key] = json.loads(value)
-                    except json.JSONDecodeError:
+                    except (json.JSONDecodeError, RecursionError):
                         raise DataFileError(f"{path}: metadata line for {key!r} is not JSON") from None
                 else:
                     body.append(line)

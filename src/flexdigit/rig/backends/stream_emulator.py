@@ -264,18 +264,18 @@ def run_emulator(twin: bool, rate_hz: float, seed: int, duration_s: float | None
     """Run an emulator until ``duration_s`` (or Ctrl-C), telling ``say`` the ports and how to use them."""
     duration = None if duration_s is None else check_real(duration_s, "--duration", low=0.0)
     with StreamEmulator(twin=twin, rate_hz=rate_hz, seed=seed) as emulator:
-        say(f"gauge stream on {emulator.port}: stream://{emulator.port}")
-        if emulator.servo_port:
-            say(f"servo board on {emulator.servo_port}; the whole rig:")
-            say(f"  flexdigit run --backend 'serial://{emulator.servo_port}?daq=stream://{emulator.port}'")
-        try:
+        try:  # serving from the first line said: a stop from then on ends it as its duration would
+            say(f"gauge stream on {emulator.port}: stream://{emulator.port}")
+            if emulator.servo_port:
+                say(f"servo board on {emulator.servo_port}; the whole rig:")
+                say(f"  flexdigit run --backend 'serial://{emulator.servo_port}?daq=stream://{emulator.port}'")
             if duration is None:
                 while True:
                     time.sleep(1.0)
             else:
                 time.sleep(duration)
-        except KeyboardInterrupt:
-            pass
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM or SIGHUP (flexdigit.interrupts): how it ends
+            say(f"stopped by {getattr(exc, 'signal_name', 'SIGINT')}")
         say(f"sent {emulator.lines_sent} lines ({emulator.overflows} lost: nobody was reading)")
     return 0
 
