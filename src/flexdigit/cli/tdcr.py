@@ -4,7 +4,8 @@ ROBOT is a built-in name (``rao2021``) or a robot TOML file (:mod:`flexdigit.tdc
 prints the tip position and frame and, under ``--json``, the backbone (every disk) as well. ``dynamics`` starts
 from the static shape under ``--from-tension-n`` / ``--from-tip-force-n`` (default: straight), applies the given
 loads at t = 0 and prints the tip's path. A solve that does not converge is reported with ``converged: false``
-and exit code 1.
+and exit code 1. ``--record OUT.mcap`` also writes the shape(s) as an MCAP recording with a
+``foxglove.SceneUpdate`` channel (:mod:`flexdigit.tdcr.scene`): it opens in Foxglove's 3D panel.
 """
 
 from __future__ import annotations
@@ -42,6 +43,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--tip-force-n", help="tip force fx,fy,fz in N " + vector.format("tip-force-n"))
     p.add_argument("--tip-moment-nm", help="tip moment mx,my,mz in N m " + vector.format("tip-moment-nm"))
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
+    p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
+    p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
     p = sub.add_parser("dynamics", help="time response from a static shape to loads applied at t = 0")
     p.add_argument("robot", metavar="ROBOT", help="a built-in robot (rao2021) or a robot TOML file")
@@ -53,10 +56,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--from-tip-force-n", help="tip force of the initial static shape (default: none)")
     p.add_argument("--duration-s", type=float, default=1.0, help="simulated time (default 1 s)")
     p.add_argument("--dt-s", type=float, default=1e-3, help="implicit time step (default 1 ms)")
+    p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
+    p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
+    if args.record is not None:  # refused before the solve, not after it
+        from flexdigit._io import check_output
+
+        check_output(args.record, force=args.force)
     if args.tdcr_command == "dynamics":
         return _dynamics(args)
     return _statics(args)
@@ -84,6 +93,18 @@ def _loads(args: argparse.Namespace) -> dict:
     }
 
 
+def _record(args: argparse.Namespace, robot, solution, tensions, loads) -> dict:
+    """Write ``--record`` (a 3D recording, :func:`flexdigit.tdcr.write_recording`); its path for the result."""
+    if args.record is None:
+        return {}
+    from flexdigit.tdcr import write_recording
+
+    path = write_recording(
+        args.record, robot, solution, tensions_n=tensions, tip_force_n=loads.get("tip_force_n"), force=args.force
+    )
+    return {"recording": str(path)}
+
+
 def _dynamics(args: argparse.Namespace) -> CommandResult:
     import warnings
 
@@ -105,6 +126,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
         )
         motion = simulate(robot, initial, args.duration_s, dt_s=args.dt_s, tensions_n=tensions, **loads)
     converged = initial.converged and motion.converged
+    record = _record(args, robot, motion, tensions, loads)
     data = {
         "robot": robot.name,
         "tensions_n": tensions,
@@ -115,6 +137,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
         "t_s": motion.t_s.tolist(),
         "tip_position_m": motion.tip_positions_m.tolist(),
         "newton_iterations": motion.iterations.tolist(),
+        **record,
     }
     tip0, tip1 = initial.tip_position_m * 1e3, motion.tip_positions_m[-1] * 1e3
     lines = [
@@ -122,6 +145,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
         f"tip from ({tip0[0]:.3f}, {tip0[1]:.3f}, {tip0[2]:.3f}) mm",
         f"      to ({tip1[0]:.3f}, {tip1[1]:.3f}, {tip1[2]:.3f}) mm",
         f"converged: {converged}",
+        *([f"recording: {record['recording']}"] if record else []),
     ]
     return CommandResult(data=data, text="\n".join(lines), exit_code=0 if converged else 1)
 
@@ -138,7 +162,8 @@ def _statics(args: argparse.Namespace) -> CommandResult:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)  # reported below, in the result and the exit code
         sol = solve_statics(robot, tensions, **loads)
-    data = {"robot": robot.name, "tensions_n": tensions, **loads, **sol.to_dict()}
+    record = _record(args, robot, sol, tensions, loads)
+    data = {"robot": robot.name, "tensions_n": tensions, **loads, **sol.to_dict(), **record}
     tip = sol.tip_position_m * 1e3
     lines = [
         f"{robot.name}: {len(robot.tendons)} tendons, {len(robot.segments)} segments, {robot.length_m * 1e3:g} mm",
@@ -146,5 +171,6 @@ def _statics(args: argparse.Namespace) -> CommandResult:
         "tip frame (columns: x, y, z axes; last: position in m):",
         *("  " + "  ".join(f"{v:+.6f}" for v in row) for row in sol.tip_frame[:3]),
         f"converged: {sol.converged} ({sol.iterations} Newton iterations, residual {sol.residual:.2g})",
+        *([f"recording: {record['recording']}"] if record else []),
     ]
     return CommandResult(data=data, text="\n".join(lines), exit_code=0 if sol.converged else 1)
