@@ -7,6 +7,7 @@ declares its parameters, so a new declaration is covered the day it is written.
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import inspect
 import math
@@ -24,11 +25,14 @@ from flexdigit._validation import (
     Array,
     Bool,
     Callable,
+    Flag,
     InstanceOf,
     Interval,
     Options,
+    Plausible,
     StrOptions,
     check_param,
+    check_plausible,
     validate_params,
 )
 from flexdigit.errors import DesignError, ParameterError
@@ -166,3 +170,61 @@ def test_decorator_refuses_an_undeclared_name():
         @validate_params({"m": [Interval(Real)]})
         def g(n):
             return n
+
+
+# ----------------------------------------------------------------------------- plausible ranges and unit slips
+@pytest.mark.parametrize(
+    ("constraint", "value", "fragments"),
+    [
+        # the unit slips: mm written as m, GPa as Pa, g as kg, ms as s
+        (Plausible("m", 1e-5, 5e-3, "a strip"), 0.381, ["Got 0.381 m instead: did you mean mm (0.000381 m)?"]),
+        (Plausible("Pa", 1e5, 1.2e12, "E"), 205.0, ["Got 205.0 Pa instead: did you mean GPa (2.05e+11 Pa)?"]),
+        (Plausible("g", 0.1, 5000, "a weight"), 0.025, ["did you mean kg (25 g)?"]),
+        (Plausible("s", 1e-5, 0.1, "a sample interval"), 1.0, ["did you mean ms (0.001 s)?"]),
+        # absurd magnitudes: refused naming the range and its reason, no slip invented
+        (
+            Plausible("N", 0, 500, "a load a digit holds"),
+            1e308,
+            ["inside [0, 500] N (a load a digit holds)", "1e+308 N instead."],
+        ),
+        (Plausible("", 1e-3, 1e3, "a gain"), 5e-324, ["inside [0.001, 1000]", "Got 5e-324 instead."]),
+        (
+            Plausible("", 1, 10**6, "samples", integer=True),
+            10**9,
+            ["an integer inside [1, 1e+06]", "Got 1000000000 instead."],
+        ),
+        (Plausible("m", 0.02, 2, "a digit"), 10**400, ["a finite real number", "characters"]),
+    ],
+)
+def test_plausible_refuses_naming_range_reason_and_slip(constraint, value, fragments):
+    with pytest.raises(ParameterError) as err:
+        check_param(value, constraint, "x", "Owner")
+    message = str(err.value)
+    assert message.startswith("The 'x' parameter of Owner must be ")
+    assert "\n" not in message
+    for fragment in fragments:
+        assert fragment in message, message
+
+
+def test_plausible_refuses_subnormal_magnitudes_even_with_zero_allowed():
+    c = Plausible("s", 0, 3600, "an hour")
+    assert c.satisfied_by(0.0) and c.satisfied_by(1e-300)
+    assert not c.satisfied_by(5e-324) and not c.satisfied_by(-0.0 - 5e-324)
+
+
+def test_check_plausible_names_the_first_bad_cell():
+    c = Plausible("V", -10, 10, "a DAQ input")
+    assert check_plausible([1.0, -2.0], c, "gauge1_v").tolist() == [1.0, -2.0]
+    with pytest.raises(ParameterError, match=r"'gauge1_v' .*finite.* Got inf instead"):
+        check_plausible([1.0, float("inf"), 3.0], c, "gauge1_v")
+    with pytest.raises(ParameterError, match=r"Got 1000.0 V instead: did you mean mV \(1 V\)\?"):
+        check_plausible([1.0, 1000.0], c, "gauge1_v")
+
+
+def test_flag_refuses_before_building_a_range():
+    flag = Flag(Plausible("", 0, 254, "the servo's position byte", integer=True), many=True, ranges=True)
+    assert flag("8..10") == [8, 9, 10]
+    assert flag("0,20,40") == [0, 20, 40]
+    for text in ("8..1000000000", "43..8", "", "8,x", "1e308"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            flag(text)
