@@ -488,6 +488,18 @@ class Plausible(Interval):
     def __repr__(self) -> str:
         return f"Plausible({self.unit!r}, {self.low}, {self.high}, {self.why!r}, closed={self.closed!r})"
 
+    def to(self, unit: str, factor: float) -> Plausible:
+        """The same range in another unit (``LOAD_KG.to("g", 1e3)`` for a flag in grams): declared once.
+
+        Examples
+        --------
+        >>> Plausible("kg", 1e-4, 2.0, "a hung weight").to("g", 1e3).describe()
+        'a real number inside [0.1, 2000] g (a hung weight)'
+        """
+        low = None if self.low is None else self.low * factor
+        high = None if self.high is None else self.high * factor
+        return Plausible(unit, low, high, self.why, closed=self.closed, integer=self.type is Integral)
+
     def describe(self) -> str:
         kind = "an integer" if self.type is Integral else "a real number"
         unit = f" {self.unit}" if self.unit else ""
@@ -935,3 +947,8 @@ def validate_fields(obj, *, error: type[Exception] = ParameterError) -> None:
     owner = type(obj).__name__
     values = {k: getattr(obj, k) for k in obj._parameter_constraints}
     check_params(values, obj._parameter_constraints, owner, error=error)
+
+
+# ------------------------------------------------------------------------------ quantities many commands share
+#: A random seed (numpy's ``default_rng``, Dask): any non-negative integer; every random thing takes one.
+SEED = Interval(Integral, 0, None)

@@ -47,11 +47,18 @@ BRIDGE_TYPES = ("quarter", "half", "full")
 # E = 205 "Pa" for 205 GPa) is refused naming the slip. Lengths share one range so a digit of any sensible size
 # (a 5 cm fingertip to a 2 m arm) passes.
 #: A digit's or a strip's length.
-_DIGIT_LENGTH = Plausible("m", 0.02, 2.0, "a digit 2 cm to 2 m long: a 1 km strip or a 10 m digit is a unit slip")
+DIGIT_LENGTH_M = Plausible("m", 0.02, 2.0, "a digit 2 cm to 2 m long: a 1 km strip or a 10 m digit is a unit slip")
 #: One frequency of a second-order model (the servo's, the digit's).
 _NATURAL_FREQUENCY = Plausible("rad/s", 0.01, 1e4, "a mechanical mode of 0.0016 Hz to 1.6 kHz")
 
 
+#: A serial position command: the servo board's position byte, 0..254 (255 is its sync byte, 3.4.1).
+SERVO_COMMAND = Plausible("", 0, 254, "the servo board's position byte; 255 is its sync byte", integer=True)
+#: A weight hung on the digit (tactile protocols, the twin's load test): the thesis hung 7.5 to 25 g on its
+#: 0.381 mm strip; 2 kg bounds any digit of the sizes Geometry accepts.
+LOAD_KG = Plausible("kg", 1e-4, 2.0, "a hung weight of 0.1 g to 2 kg; the thesis hung 7.5 to 25 g")
+#: Where a load hangs, measured from the tip: on a digit at most 2 m long (a protocol also checks its own digit).
+POSITION_FROM_TIP_M = Plausible("m", 0.0, 2.0, "on a digit at most 2 m long, from its tip")
 #: The least part of the digit's rotation (max_rotation_per_section_deg x section_count) the servo's stall torque
 #: must bend the strip through: below it the servo cannot bend the strip (RigParams checks it).
 STRIP_BEND_FRACTION = 0.1
@@ -100,8 +107,8 @@ class Geometry:
         "section_length_m": [Plausible("m", 1e-3, 2.0, "a section 1 mm to the longest digit, 2 m")],
         "strip_thickness_m": [Plausible("m", 1e-5, 5e-3, "a strip 0.01 to 5 mm thick: foil to a stiff plate")],
         "strip_width_m": [Plausible("m", 1e-4, 0.2, "a strip 0.1 mm to 20 cm wide")],
-        "digit_length_m": [_DIGIT_LENGTH],
-        "strip_length_m": [_DIGIT_LENGTH],
+        "digit_length_m": [DIGIT_LENGTH_M],
+        "strip_length_m": [DIGIT_LENGTH_M],
         "cable_eccentricity_m": [Plausible("m", 1e-4, 0.1, "a cable 0.1 mm to 10 cm off the neutral axis")],
         "gauge_positions_m": [Array(ndim=1, min_length=1, increasing=True, low=0, low_open=True)],
         "max_rotation_per_section_deg": [Interval(Real, 0, 180, closed="right")],
@@ -289,8 +296,8 @@ class Actuator:
     stall_torque_nm: float = 0.297
 
     _parameter_constraints = {
-        "command_min": [Interval(Integral, 0, 254)],
-        "command_max": [Interval(Integral, 0, 254)],
+        "command_min": [SERVO_COMMAND],
+        "command_max": [SERVO_COMMAND],
         "angle_min_deg": [Interval(Real, -360, 360)],
         "angle_max_deg": [Interval(Real, -360, 360)],
         "pulley_radius_m": [Plausible("m", 5e-4, 0.2, "a servo pulley 0.5 mm to 20 cm in radius")],
@@ -298,7 +305,7 @@ class Actuator:
         "pulse_width_min_s": [Plausible("s", 1e-6, 0.1, "a servo pulse of 1 us to 100 ms")],
         "pulse_width_max_s": [Plausible("s", 1e-6, 0.1, "a servo pulse of 1 us to 100 ms")],
         "serial_period_s": [Plausible("s", 1e-4, 10.0, "a command every 0.1 ms to 10 s")],
-        "equilibrium_command": [Interval(Integral, 0, 254)],
+        "equilibrium_command": [SERVO_COMMAND],
         "operating_commands": [Array(shape=(2,), low=0, high=254)],
         "servo_wn_rad_s": [_NATURAL_FREQUENCY],
         "servo_zeta": [Interval(Real, 0, 10, closed="right")],
