@@ -19,8 +19,8 @@ def run() -> list[dict]:
     warnings.simplefilter("ignore")
     from flexdigit.control._threads import single_blas_thread
     from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
-    from flexdigit.control.reproduce import THESIS_REGULARISATION, thesis_plant
     from flexdigit.control.synthesis import hinf_riccati, hinfsyn_plain
+    from flexdigit.control.thesis_designs import THESIS_REGULARISATION, thesis_plant
 
     eps, margin = THESIS_REGULARISATION[5.0]
     P = regularise(thesis_generalized_plant(thesis_plant(), filter_weight(5.0)), eps)

@@ -118,7 +118,7 @@ def measure(screenshot: str | None = None) -> dict:
 
 
 def _estimate_ms() -> float:
-    from flexdigit.tactile.shape import ShapeEstimator
+    from flexdigit.shape.shape import ShapeEstimator
     from flexdigit.twin import static_gauges_v
 
     est = ShapeEstimator(orientation="horizontal", n_average=5)

@@ -6,7 +6,7 @@
   of 5 runs of 200 calls, wall and CPU, tables built beforehand (not timed; their build is its own row).
 - A full scan on the twin through the 20 ms loop: the nodule phantom at 9 offsets 10 mm apart, each a sweep of 12
   plateaus (2.5 s settle, 20 readings), the twin integrating at 10 ms; then the local fits and the inclusion fit.
-  Also the same scan's analysis on the twin's statics (:func:`flexdigit.tactile.palpation.simulate_sweep`), which
+  Also the same scan's analysis on the twin's statics (:func:`flexdigit.palpation.palpation.simulate_sweep`), which
   is what the report runs.
 - One palpation sweep (23 plateaus) through the loop and its fit; 10 s of force control at the twin's 5 ms step.
 """
@@ -31,10 +31,10 @@ def _best(fn, number: int = 200, repeat: int = 5) -> tuple[float, float]:
 
 
 def run() -> list[dict]:
+    from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
+    from flexdigit.palpation.palpation import PalpationProtocol, hold_force, palpate, run_sweep, scan, simulate_sweep
+    from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
     from flexdigit.rig.base import open_rig
-    from flexdigit.tactile.contact import ContactEstimator, ContactGaugeModel
-    from flexdigit.tactile.palpation import PalpationProtocol, hold_force, palpate, run_sweep, scan, simulate_sweep
-    from flexdigit.tactile.palpation_files import load_palpation_protocol, load_tissue
 
     rows = []
     model = ContactGaugeModel()

@@ -1,9 +1,10 @@
-"""The package's layout holds: imports run one way along the chain, and no domain imports the CLI.
+"""The package's layout holds: imports run one way along the chain, no domain imports the CLI, no module imports
+itself back through others, and no module name is used twice.
 
-params -> models -> twin -> identify -> control -> rig -> tactile -> calibrate -> (live, studies) -> report -> cli
-(docs/conventions.md, issue 15): a module may import its own domain, the shared leaf modules and the domains before
-it, never one after it. Read from the source (every ``import`` and ``from ... import``, also inside functions),
-so an import placed in a function to dodge a cycle is caught as well.
+params -> models -> twin -> identify -> control -> rig -> (tactile, shape) -> palpation -> calibrate ->
+(live, studies) -> report -> cli (docs/conventions.md, issues 15 and 23): a module may import its own domain, the
+shared leaf modules and the domains before it, never one after it. Read from the source (every ``import`` and
+``from ... import``, also inside functions), so an import placed in a function to dodge a cycle is caught as well.
 """
 
 from __future__ import annotations
@@ -25,11 +26,13 @@ RANK = {
     "control": 5,
     "rig": 6,
     "tactile": 7,
-    "calibrate": 8,
-    "live": 9,
-    "studies": 9,
-    "report": 10,
-    "cli": 11,
+    "shape": 7,
+    "palpation": 8,
+    "calibrate": 9,
+    "live": 10,
+    "studies": 10,
+    "report": 11,
+    "cli": 12,
 }
 #: Shared leaf modules every domain may use (they import no domain).
 SHARED = {
@@ -37,6 +40,8 @@ SHARED = {
     "_io",
     "_json",
     "_command",
+    "_lazy",
+    "_system",
     "_table",
     "_result_table",
     "_estimator",
@@ -49,17 +54,15 @@ KNOWN: dict[tuple[str, str], str] = {}
 
 
 def _domain(module: str) -> str | None:
-    """``flexdigit.twin.calibration`` -> ``twin``; shared -> None. A domain's ``commands`` module (and
-    ``params_commands``) is the command line's, the top of the chain: it may present any domain's results (``flexdigit
-    simulate release`` prints the identified wn and zeta), and only ``cli`` may import it."""
+    """``flexdigit.twin.calibration`` -> ``twin``; shared -> None. The command line (``flexdigit.cli``) is a domain
+    of its own, the top of the chain: a sub-command may present any domain's results (``flexdigit simulate release``
+    prints the identified wn and zeta), and nothing imports it."""
     parts = module.split(".")
     if parts[0] != "flexdigit" or len(parts) == 1:
         return None
     head = parts[1]
     if head in SHARED:
         return None
-    if head == "params_commands" or (len(parts) > 2 and parts[2] == "commands"):
-        return "cli"
     return head
 
 
@@ -123,7 +126,7 @@ def test_no_import_runs_up_the_chain():
 
 
 def test_no_domain_imports_the_cli():
-    # neither the entry point nor a domain's commands module (the CLI's): python-control's hidden cycle of issue 15
+    # neither the entry point nor a sub-command's module: python-control's hidden cycle of issue 15
     offenders = [m for m, source, _, dest in _edges() if dest == "cli" and source != "cli"]
     assert not offenders, offenders
 
@@ -133,13 +136,90 @@ def test_no_domain_imports_the_cli():
     [
         ("twin", "flexdigit.tactile.pipeline", True),  # the known shape of the old twin -> tactile import
         ("models", "flexdigit.cli", True),
-        ("report", "flexdigit.tactile.studies", False),
+        ("report", "flexdigit.tactile.localisation", False),
         ("live", "flexdigit.studies.sensitivity", True),  # siblings on the chain
         ("rig", "flexdigit._validation", False),
-        ("tactile", "flexdigit.twin.commands", True),  # a domain importing another's command line
+        ("tactile", "flexdigit.cli.simulate", True),  # a domain importing a sub-command
+        ("palpation", "flexdigit.tactile.bounds", False),
+        ("tactile", "flexdigit.palpation.contact_estimation", True),
+        ("shape", "flexdigit.tactile.dataset", True),  # siblings on the chain
     ],
 )
 def test_the_rule_itself(source, target, bad):
     # the checker would catch each kind of edge (a test of the test: it can fail)
     dest = _domain(target)
     assert (dest is not None and dest != source and RANK[dest] >= RANK[source]) is bad
+
+
+def test_no_module_name_is_used_twice():
+    # one name per concept (issue 23): `flexdigit.tactile.contact` beside `flexdigit.twin.contact` made a reader
+    # guess which contact an import meant; packages' __init__ and __main__ are the language's, not concepts
+    seen: dict[str, list[str]] = {}
+    for path in PACKAGE.rglob("*.py"):
+        if path.name not in ("__init__.py", "__main__.py"):
+            seen.setdefault(path.stem, []).append(str(path.relative_to(PACKAGE)))
+    twice = {name: sorted(paths) for name, paths in seen.items() if len(paths) > 1}
+    assert not twice, twice
+
+
+def _module_graph() -> dict[str, set[str]]:
+    """Module -> the flexdigit modules it imports (also inside functions); ``from pkg import name`` counts as an
+    import of ``pkg.name`` when that is a module, else of ``pkg``."""
+    modules = {_module_name(path): path for path in PACKAGE.rglob("*.py")}
+    graph = {}
+    for module, path in modules.items():
+        targets = set()
+        for name in _imports(path):
+            while name not in modules and "." in name:
+                name = name.rsplit(".", 1)[0]
+            if name in modules and name != module:
+                targets.add(name)
+        graph[module] = targets
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    out = []
+
+    def visit(v):  # the graph is a few hundred modules deep at most: recursion is fine
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                out.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_cycle():
+    # also inside one folder (studies/loop -> metrics -> spec -> metrics was one, issue 23): a cycle hidden by an
+    # import inside a function still ties the modules into one, which no reader can take apart
+    assert not _cycles(_module_graph())
+
+
+def test_the_cycle_finder_itself():
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": set()}
+    assert _cycles(graph) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []

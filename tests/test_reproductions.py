@@ -1,7 +1,7 @@
 """Issue 16's reproductions not covered beside their domain's other tests: each gives a one-line error now.
 
 (The others: tests/rig/test_urls.py, test_logs.py, test_safety.py, test_fault_matrix.py; tests/tactile/
-test_resume.py, test_dataset_checks.py, test_train_outputs.py; tests/test_outputs.py, test_cli.py.)
+test_resume.py, test_dataset_checks.py, test_train_outputs.py; tests/test_outputs.py, tests/cli/test_main.py.)
 """
 
 from __future__ import annotations

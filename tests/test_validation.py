@@ -39,7 +39,7 @@ from flexdigit._validation import (
 from flexdigit.errors import DesignError, ParameterError
 
 #: Modules whose import needs an optional extra that may be absent (the DAQ driver).
-OPTIONAL = ("flexdigit.rig.daq_backend",)
+OPTIONAL = ("flexdigit.rig.backends.daq_backend",)
 
 
 def _import_all() -> None:

@@ -1,7 +1,7 @@
 """The plumbing every sub-command shares: what a command returns and how it is added to the parser.
 
-A leaf module (standard library only), so that a domain's ``commands.py`` never imports the entry point
-(:mod:`flexdigit.cli`), which only assembles the sub-commands.
+A leaf module (standard library only), so that a sub-command's module (``flexdigit/cli/<command>.py``) never
+imports the entry point (:mod:`flexdigit.cli`), which only assembles the sub-commands.
 """
 
 from __future__ import annotations

@@ -122,9 +122,9 @@ def test_the_calibrated_twin_reproduces_the_records(perturbed_rig, calibrated, t
 def test_a_sweep_alone_fits_the_gains_and_keeps_the_mechanics(tmp_path, capsys):
     # a sweep the packaged twin's static model makes with known gains and offsets, written in millivolts,
     # ';'-separated with decimal commas: the gains come back exactly, the mechanics are not touched
-    from flexdigit.calibrate.fit import model_response
     from flexdigit.calibrate.synthetic import write_csv
     from flexdigit.calibrate.targets import CalibrationTargets
+    from flexdigit.calibrate.twin_fit import model_response
     from flexdigit.params import RigParams
 
     start = packaged_calibration()

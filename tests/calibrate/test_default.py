@@ -12,9 +12,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from flexdigit.calibrate.fit import calibrate
 from flexdigit.calibrate.friction import LEVEL_XTOL
 from flexdigit.calibrate.targets import CalibrationTargets, release_figures
+from flexdigit.calibrate.twin_fit import calibrate
 from flexdigit.identify.timeseries import series_from_table
 from flexdigit.reference import thesis_value
 from flexdigit.tactile.thesis_experiments import actuated_corr2_score

@@ -9,8 +9,8 @@
 import numpy as np
 import pytest
 
-from flexdigit.calibrate.fit import calibrate, model_response
 from flexdigit.calibrate.targets import CalibrationTargets, noise_from_record, release_figures, sweep_lines
+from flexdigit.calibrate.twin_fit import calibrate, model_response
 from flexdigit.errors import DataFileError
 from flexdigit.identify.timeseries import TimeSeries
 from flexdigit.params import RigParams

@@ -14,7 +14,7 @@ import json
 import numpy as np
 import pytest
 
-from flexdigit.calibrate import records
+from flexdigit.calibrate import record_files as records
 from flexdigit.calibrate.targets import release_figures
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError

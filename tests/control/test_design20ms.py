@@ -8,7 +8,7 @@ import pytest
 
 from flexdigit.control.design20ms import Weights, closed_loop, design_20ms, design_plant, thesis_controller
 from flexdigit.control.discretise import forward_euler_stability_limit_s, sample_period_study, sampled_loop
-from flexdigit.control.reproduce import printed_controller, thesis_plant
+from flexdigit.control.thesis_designs import printed_controller, thesis_plant
 from flexdigit.errors import DesignError
 from flexdigit.reference import thesis_value
 

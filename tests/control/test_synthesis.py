@@ -9,7 +9,8 @@ import pytest
 from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
-from flexdigit.control.reproduce import (
+from flexdigit.control.synthesis import hinf_lmi, hinf_riccati, reduce_controller, regularisation_path
+from flexdigit.control.thesis_designs import (
     fit_thesis_regularisation,
     printed_controller,
     singular_infimum_witness,
@@ -17,7 +18,6 @@ from flexdigit.control.reproduce import (
     thesis_design,
     thesis_plant,
 )
-from flexdigit.control.synthesis import hinf_lmi, hinf_riccati, reduce_controller, regularisation_path
 from flexdigit.errors import DesignError, UnstableError
 from flexdigit.reference import thesis_complex, thesis_value
 

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from flexdigit.rig.loop import LOG_FORMAT, read_log_runs
+from flexdigit.rig.sample_log import LOG_FORMAT, read_log_runs
 from flexdigit.tactile.dataset import JOURNAL_FORMAT, Journal, load_dataset, make_meta, read_journal
 from flexdigit.tactile.model_io import load_model, save_model
 from flexdigit.tactile.pipeline import ThesisNetwork

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from flexdigit.rig.backends.replay_backend import ReplayRig
 from flexdigit.rig.recording import Recording
-from flexdigit.rig.replay_backend import ReplayRig
 from flexdigit.tactile.importer import ColumnMap, import_readings
 
 from .strategies import assert_loader_contract, edited_document, json_values, loop_samples, mutated_bytes

@@ -14,12 +14,12 @@ import tomli_w
 from hypothesis import given
 
 from flexdigit.errors import FlexdigitError
+from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
 from flexdigit.params import RigParams, load_params
-from flexdigit.studies.design import DesignSettings
+from flexdigit.studies.design_study import DesignSettings
 from flexdigit.studies.sensitivity import SensitivitySettings
 from flexdigit.studies.spec import load_spec
 from flexdigit.tactile.importer import ColumnMap
-from flexdigit.tactile.palpation_files import load_palpation_protocol, load_tissue
 from flexdigit.tactile.protocols import load_protocol
 from flexdigit.twin.calibration import load_calibration
 
@@ -28,7 +28,7 @@ from .strategies import assert_loader_contract, edited_document, mutated_bytes, 
 PARAMS = tomli_w.dumps(RigParams().to_dict()).encode()
 PROTOCOL = resources.files("flexdigit.tactile").joinpath("protocols", "thesis-6.1.toml").read_bytes()
 CALIBRATION = resources.files("flexdigit.twin").joinpath("default_calibration.toml").read_bytes()
-_PALPATION = resources.files("flexdigit.tactile").joinpath("palpation_data")
+_PALPATION = resources.files("flexdigit.palpation").joinpath("palpation_data")
 TISSUE = _PALPATION.joinpath("nodule-phantom.toml").read_bytes()
 PALPATION = _PALPATION.joinpath("scan.toml").read_bytes() + b"\n" + _PALPATION.joinpath("hold.toml").read_bytes()
 SPEC = resources.files("flexdigit.studies").joinpath("specs", "thesis-tolerances.toml").read_bytes()

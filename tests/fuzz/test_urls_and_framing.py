@@ -19,11 +19,11 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from flexdigit.errors import ParameterError
-from flexdigit.rig import daq_backend, replay_backend, serial_backend, sim_backend, stream_backend
+from flexdigit.rig.backends import daq_backend, replay_backend, serial_backend, sim_backend, stream_backend
+from flexdigit.rig.backends.serial_backend import SerialRig
+from flexdigit.rig.backends.servo_board import FrameDecoder, Framing, encode_frame
+from flexdigit.rig.backends.stream_framing import SEQ_MODULUS, TIME_MODULUS_US, LineDecoder, encode_line
 from flexdigit.rig.base import BACKENDS, clamp_command, rig_url_options
-from flexdigit.rig.serial_backend import SerialRig
-from flexdigit.rig.servo_board import FrameDecoder, Framing, encode_frame
-from flexdigit.rig.stream_protocol import SEQ_MODULUS, TIME_MODULUS_US, LineDecoder, encode_line
 
 from .strategies import numbers
 

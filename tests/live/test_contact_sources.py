@@ -5,9 +5,9 @@ import pytest
 
 from flexdigit.errors import ParameterError
 from flexdigit.live.session import BeamContact, NetworkContact
+from flexdigit.shape.shape import ShapeEstimator
 from flexdigit.tactile.model_io import save_model
 from flexdigit.tactile.pipeline import ThesisNetwork
-from flexdigit.tactile.shape import ShapeEstimator
 from flexdigit.twin import static_gauges_v
 
 

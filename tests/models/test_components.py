@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flexdigit.errors import ParameterError
-from flexdigit.models import cable, conversion, digit, servo
+from flexdigit.models import cable, conversion, second_order, servo
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
 
@@ -26,7 +26,7 @@ TIP_X_ATOL = 5e-4  # the tip position the printed y_max column fits, to the mm t
 @pytest.mark.parametrize("table", ["without_housing", "with_housing"])
 def test_zeta_from_overshoot_reproduces_tables_3_1_and_3_2_to_4_decimals(table):
     t = thesis_value(f"digit.release_tests_{table}")
-    zeta = digit.zeta_from_overshoot(t["percent_overshoot"])
+    zeta = second_order.zeta_from_overshoot(t["percent_overshoot"])
     printed = np.array(t["zeta"])
     ok = np.isfinite(zeta)
     assert np.array_equal(np.round(zeta[ok], 4), printed[ok])
@@ -34,23 +34,25 @@ def test_zeta_from_overshoot_reproduces_tables_3_1_and_3_2_to_4_decimals(table):
 
 def test_garbled_overshoot_of_table_3_2_row_2_is_nan_and_its_zeta_implies_80_597():
     t = thesis_value("digit.release_tests_with_housing")
-    zeta = digit.zeta_from_overshoot(t["percent_overshoot"])
+    zeta = second_order.zeta_from_overshoot(t["percent_overshoot"])
     assert math.isnan(zeta[1])
-    assert digit.overshoot_from_zeta(t["zeta"][1]) == pytest.approx(80.597, abs=PRINTED_2_DECIMALS_ATOL)
+    assert second_order.overshoot_from_zeta(t["zeta"][1]) == pytest.approx(80.597, abs=PRINTED_2_DECIMALS_ATOL)
 
 
 def test_table_3_2_wn_follows_from_wd_but_table_3_1_does_not():
     with_h = thesis_value("digit.release_tests_with_housing")
-    wn = digit.natural_frequency_from_damped(with_h["wd_rad_s"], with_h["zeta"])
+    wn = second_order.natural_frequency_from_damped(with_h["wd_rad_s"], with_h["zeta"])
     assert np.allclose(wn, with_h["wn_rad_s"], atol=TABLE_3_2_WN_ATOL)
     bare = thesis_value("digit.release_tests_without_housing")
-    wn = digit.natural_frequency_from_damped(bare["wd_rad_s"], bare["zeta"])
+    wn = second_order.natural_frequency_from_damped(bare["wd_rad_s"], bare["zeta"])
     assert np.all(np.array(bare["wn_rad_s"]) - wn > 2e-3)  # printed wn exceeds wd/sqrt(1-zeta^2) by ~0.003
 
 
 def test_settling_time_formula_round_trip_and_e_s_of_3_1_2():
-    assert digit.wn_from_settling_time(digit.settling_time_from_wn(13.0995, 0.06791), 0.06791) == pytest.approx(13.0995)
-    e = digit.digit_tf_from_params(RigParams())
+    assert second_order.wn_from_settling_time(
+        second_order.settling_time_from_wn(13.0995, 0.06791), 0.06791
+    ) == pytest.approx(13.0995)
+    e = second_order.digit_tf_from_params(RigParams())
     den = e.den[0][0]
     assert den[2] == pytest.approx(171.61, rel=PRINTED_4_DIGITS_RTOL)  # 3.1.2: s^2 + 1.782 s + 171.61
     assert den[1] == pytest.approx(1.782, rel=ROUNDED_BEFORE_RTOL)
@@ -58,7 +60,7 @@ def test_settling_time_formula_round_trip_and_e_s_of_3_1_2():
 
 def test_overshoot_out_of_range_raises():
     with pytest.raises(ParameterError, match="percent_overshoot"):
-        digit.zeta_from_overshoot([50.0, 120.0])
+        second_order.zeta_from_overshoot([50.0, 120.0])
 
 
 # --- servo (3.2.4) --------------------------------------------------------------------------------------

@@ -5,8 +5,8 @@ serial port with its gauges from a Python source (``serial``) or from the DAQ ca
 (``serial+daq``: ``serial://PORT?daq=0``, the thesis rig, with a fake port and a fake uldaq) or from a
 microcontroller's gauge stream (``serial+stream``: ``serial://PORT?daq=stream://PTY``, the stream emulator on a
 pseudo-terminal, on the wall clock); and a recorded run played back (``replay``). A bare ``stream://`` rig reads
-only: it refuses the loop's first command (tests/rig/test_stream_backend.py). Faults are injected at the 6th sample
-of a 20 ms loop:
+only: it refuses the loop's first command (tests/rig/backends/test_stream_backend.py). Faults are injected at the
+6th sample of a 20 ms loop:
 
 - port lost: the serial port's writes fail (USB unplugged); the safe command cannot go out, the port is closed;
 - DAQ silent: the gauge source raises (a dead card) or blocks for a second (a stall); a recording that ends; a
@@ -33,7 +33,8 @@ import numpy as np
 import pytest
 
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.loop import read_log_runs, run_loop
+from flexdigit.rig.loop import run_loop
+from flexdigit.rig.sample_log import read_log_runs
 
 from .conftest import PI, FakeClock
 
@@ -171,7 +172,7 @@ def _recording(path, fault):
 def _stream(fault, port, request):
     """``serial://fake?daq=stream://PTY``: the emulator streams volts that follow the servo's last command; at the
     6th read of the loop the fault is switched on in the emulator (it then stops, garbles or sends the rail)."""
-    from flexdigit.rig.stream_emulator import Faults, StreamEmulator
+    from flexdigit.rig.backends.stream_emulator import Faults, StreamEmulator
 
     state = {"rail": False}
 
@@ -241,16 +242,16 @@ def _open(backend, fault, tmp_path, request=None):
 
 def _full_disk(monkeypatch, after_lines=FAULT_AT + 1):
     """The log's file refuses writes (ENOSPC) after the header and the first samples."""
-    import flexdigit.rig.loop as loop
+    from flexdigit.rig.sample_log import SampleLog
 
-    original = loop.SampleLog.write
+    original = SampleLog.write
 
     def write(self, record):
         if self.lines >= after_lines:
             raise OSError(errno.ENOSPC, "No space left on device")
         original(self, record)
 
-    monkeypatch.setattr(loop.SampleLog, "write", write)
+    monkeypatch.setattr(SampleLog, "write", write)
 
 
 #: the cells that apply (the README's table shows the others as "n/a" with NOT_APPLICABLE's reason)

@@ -9,7 +9,8 @@ import pytest
 
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError, OutputExistsError
-from flexdigit.rig.loop import read_log, read_log_runs, run_loop
+from flexdigit.rig.loop import run_loop
+from flexdigit.rig.sample_log import read_log, read_log_runs
 
 from .conftest import PI, FirstOrderRig
 

@@ -10,7 +10,8 @@ import pytest
 
 from flexdigit.errors import DataFileError, RigError
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.loop import read_log, run_loop
+from flexdigit.rig.loop import run_loop
+from flexdigit.rig.sample_log import read_log
 
 from .conftest import PI, FirstOrderRig
 

@@ -12,9 +12,10 @@ from mcap.reader import make_reader
 from flexdigit.errors import DataFileError, OutputExistsError
 from flexdigit.rig.base import open_rig
 from flexdigit.rig.controllers import make_controller
-from flexdigit.rig.loop import read_log, run_loop
+from flexdigit.rig.loop import run_loop
 from flexdigit.rig.recording import SAMPLE_TOPIC, Recording, read_recording, rig_metadata
 from flexdigit.rig.rotation import calibrate_rotation
+from flexdigit.rig.sample_log import read_log
 
 
 def _run(tmp_path, seed=0, duration=1.0):

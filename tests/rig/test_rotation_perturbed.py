@@ -24,9 +24,9 @@ import json
 import numpy as np
 import pytest
 
+from flexdigit.rig.backends.sim_backend import SimRig
 from flexdigit.rig.rotation import calibrate_rotation
 from flexdigit.rig.rotation_reference import read_reference
-from flexdigit.rig.sim_backend import SimRig
 from flexdigit.rig.step_test import step_test
 from flexdigit.twin.calibration import default_calibration, save_calibration
 from flexdigit.twin.twin import Twin

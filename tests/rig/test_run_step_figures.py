@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from flexdigit.cli import main
-from flexdigit.rig.loop import read_log
+from flexdigit.rig.sample_log import read_log
 
 #: the README's settling band and final window
 BAND, WINDOW_S, SMOOTH_SAMPLES = 0.02, 0.5, 5

@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from flexdigit.control.design20ms import design_20ms
+from flexdigit.rig.backends.sim_backend import SimRig
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.loop import read_log
 from flexdigit.rig.rotation import calibrate_rotation
-from flexdigit.rig.sim_backend import SimRig
+from flexdigit.rig.sample_log import read_log
 from flexdigit.rig.step_test import step_test
 
 pytestmark = pytest.mark.slow

@@ -9,7 +9,7 @@ import pytest
 
 from flexdigit.cli import main
 from flexdigit.errors import ParameterError, RigError
-from flexdigit.rig import daq_backend, replay_backend, serial_backend, sim_backend, stream_backend
+from flexdigit.rig.backends import daq_backend, replay_backend, serial_backend, sim_backend, stream_backend
 from flexdigit.rig.base import BACKENDS, UrlOption, console_operator, open_rig, parse_rig_url, rig_url_options
 
 MODULES = {

@@ -7,7 +7,7 @@ import pytest
 
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
-from flexdigit.studies.design import (
+from flexdigit.studies.design_study import (
     Candidate,
     DesignSettings,
     _information,

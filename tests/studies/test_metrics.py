@@ -130,7 +130,7 @@ def test_bayes_limit_and_blind_zone_follow_the_gauges_and_the_noise():
 
 
 def test_hinf_gamma_is_the_thesis_design():
-    from flexdigit.control.reproduce import thesis_design
+    from flexdigit.control.thesis_designs import thesis_design
 
     assert METRICS["hinf_gamma"](ParameterSet()) == pytest.approx(thesis_design(5.0).gamma, rel=1e-9)
     assert math.isfinite(METRICS["hinf_gamma"](ParameterSet()))

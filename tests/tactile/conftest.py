@@ -1,4 +1,4 @@
-"""A closed-form cantilever rig for the tactile tests, independent of the twin.
+"""Fixtures of the tactile tests: the closed-form cantilever rig (tests/cantilever.py), independent of the twin.
 
 Strain at gauge i from a point load m at a (from the base) is proportional to the bending moment there,
 m g (a - x_i) for a > x_i and 0 otherwise (Euler-Bernoulli cantilever); plus seeded white noise.
@@ -6,50 +6,10 @@ m g (a - x_i) for a > x_i and 0 otherwise (Euler-Bernoulli cantilever); plus see
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
-from flexdigit.rig.base import Rig
+from cantilever import NOISE_V, CantileverRig  # noqa: F401 (NOISE_V: used by test modules)
 from oracles import GAIN_V_PER_NM, GAUGES_M, cantilever_gauges_v  # noqa: F401 (used by test modules)
-
-NOISE_V = 0.002
-
-
-class CantileverRig(Rig):
-    """A Rig on the closed-form model, with a virtual clock and an optional failure after N reads."""
-
-    name = "cantilever"
-
-    def __init__(self, seed=0, fail_after=None, error=KeyboardInterrupt):
-        self._t = 0.0
-        super().__init__(clock=lambda: self._t, sleep=self._advance, operator=lambda msg: None)
-        self.rng = np.random.default_rng(seed)
-        self.fail_after = fail_after
-        self.error = error
-        self.reads = 0
-        self.url = "cantilever"
-
-    def _advance(self, s):
-        self._t += s
-
-    def _read(self):
-        if self.fail_after is not None and self.reads >= self.fail_after:
-            raise self.error()
-        self.reads += 1
-        self._t += 0.01
-        v = np.zeros(3)
-        for mass, pos in self.loads:
-            v = v + cantilever_gauges_v(pos, mass)[0]
-        return v + NOISE_V * self.rng.standard_normal(3), 1.0
-
-    def _send(self, command):
-        pass
-
-    def _apply_load(self, mass_kg, position_from_base_m):
-        pass
-
-    def _remove_loads(self):
-        pass
 
 
 @pytest.fixture

@@ -3,9 +3,9 @@ import pytest
 
 from flexdigit.tactile.bounds import ZONES, cramer_rao, protocol_limits
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
+from flexdigit.tactile.localisation import localisation_study
 from flexdigit.tactile.protocols import load_protocol
 from flexdigit.tactile.runner import collect
-from flexdigit.tactile.studies import localisation_study
 
 NOISE = 0.002
 
@@ -71,8 +71,8 @@ def test_localisation_study_on_table_6_1(tmp_path, make_rig, cantilever_model):
 
 
 def test_tare_zeroes_each_test_on_its_no_load_readings(tmp_path, make_rig):
+    from flexdigit.tactile.localisation import tare
     from flexdigit.tactile.protocols import Protocol
-    from flexdigit.tactile.studies import tare
 
     p = Protocol("t", loads_kg=(0.01, 0.02), positions_from_tip_m=(0.0,), repetitions=3, no_load_repetitions=4)
     ds = collect(p, make_rig(seed=1), tmp_path / "t.parquet")
@@ -245,8 +245,8 @@ def test_bayes_contact_uses_the_no_load_noise_when_given():
 
 
 def test_identifiability_map_zones_and_scaling_on_the_cantilever(cantilever_model):
+    from flexdigit.tactile.localisation import identifiability_map
     from flexdigit.tactile.protocols import RELAXED
-    from flexdigit.tactile.studies import identifiability_map
 
     gauges = np.array([0.045, 0.135, 0.225])  # table 3.5, the cantilever's gauges
     out = identifiability_map(Cantilever(cantilever_model), [0.0125, 0.025], [RELAXED], 0.27, points=109)

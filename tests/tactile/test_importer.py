@@ -284,8 +284,8 @@ def test_every_estimator_and_study_runs_on_an_imported_dataset(tmp_path):
     # the estimators of tactile.studies and the 6.2.1 strategies on the closed-form readings imported above:
     # every score finite, the learned ones locating the load to a few cm on this easy data
     from flexdigit.tactile.bounds import TwinGaugeModel
+    from flexdigit.tactile.localisation import ESTIMATORS, localisation_study
     from flexdigit.tactile.pipeline import compare_strategies
-    from flexdigit.tactile.studies import ESTIMATORS, localisation_study
 
     rows, _ = cantilever_rows()
     src = write_foreign(tmp_path / "lab.csv", HEADER, rows)

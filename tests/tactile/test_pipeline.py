@@ -3,7 +3,7 @@ import pytest
 from sklearn.exceptions import NotFittedError
 
 from flexdigit.errors import DataFileError
-from flexdigit.tactile.metrics import corr2, percentage_error
+from flexdigit.tactile.accuracy import corr2, percentage_error
 from flexdigit.tactile.model_io import load_model, save_model
 from flexdigit.tactile.netlab import MLP, scg
 from flexdigit.tactile.pipeline import Normaliser, ThesisNetwork, run_pipeline, thesis_split

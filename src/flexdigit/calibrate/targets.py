@@ -1,6 +1,6 @@
 """What the twin is calibrated to: the thesis's figures, or a user's rig records reduced to the same targets.
 
-:class:`CalibrationTargets` holds the figures :func:`flexdigit.calibrate.fit.calibrate` fits: the release tests'
+:class:`CalibrationTargets` holds the figures :func:`flexdigit.calibrate.twin_fit.calibrate` fits: the release tests'
 wn and zeta bare and housed (tables 3.1, 3.2), the actuation sweep's straight lines (E 3.20-3.22), deflections at
 the gauges (table 3.6), noise levels and the actuated repeatability. :meth:`CalibrationTargets.from_thesis` reads
 them as printed; :meth:`CalibrationTargets.from_records` reduces a rig's records to them, the release tests through
@@ -60,7 +60,8 @@ class CalibrationTargets:
         The command of that record.
     actuated_test_corr2 : float, optional
         Test corr2 of the thesis pipeline on the actuated experiment (0.8998, 7.5: the only evidence the thesis
-        gives of the actuated noise); fitted with a score function passed to :func:`~flexdigit.calibrate.fit.calibrate`.
+        gives of the actuated noise); fitted with a score function passed to
+        :func:`~flexdigit.calibrate.twin_fit.calibrate`.
     """
 
     bare_wn_rad_s: float | None = None

@@ -1,1 +1,60 @@
-"""Control (thesis chapters 4-5): generalized plant, H-infinity synthesis, analysis, discretisation, runtime."""
+"""Control (thesis chapters 4-5): generalized plant, H-infinity synthesis, analysis, discretisation, runtime.
+
+- :mod:`~flexdigit.control.generalized`: the generalized plant of 4.3 (``thesis_generalized_plant``,
+  ``filter_weight``, ``regularise``) and a mixed-sensitivity one;
+- :mod:`~flexdigit.control.synthesis`: ``hinf_riccati`` (the 2-Riccati central controller), ``hinf_lmi``;
+- :mod:`~flexdigit.control.mixsyn`: mixed-sensitivity design against requirements (``design_mixsyn``);
+- :mod:`~flexdigit.control.analysis`: loop maps, stability, margins, ``step_figures``;
+- :mod:`~flexdigit.control.discretise`: s -> z (Tustin, forward Euler) and the sampled loop;
+- :mod:`~flexdigit.control.design20ms`: the 20 ms digital design (``design_20ms``);
+- :mod:`~flexdigit.control.runtime`: the controller the loop runs (``RuntimeController``);
+- :mod:`~flexdigit.control.thesis_designs`: the thesis's printed designs rebuilt;
+- :mod:`~flexdigit.control.chapter4_studies`: what report chapter 4 shows (``chapter4_study``).
+
+The controllers ``flexdigit run`` knows by name (``make_controller``) are the rig's (:mod:`flexdigit.rig`): they
+read the rig's gauges, a layer above.
+
+Every public name below is imported from its module on first use (python-control costs seconds to import).
+"""
+
+from flexdigit._lazy import lazy_exports
+
+#: Public names and the module each lives in, imported on first use (PEP 562): importing the package loads
+#: none of its modules, so `flexdigit --help` stays fast; `dir()` lists them all the same.
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "thesis_generalized_plant": "flexdigit.control.generalized",
+        "filter_weight": "flexdigit.control.generalized",
+        "regularise": "flexdigit.control.generalized",
+        "mixed_sensitivity_plant": "flexdigit.control.generalized",
+        "HinfDesign": "flexdigit.control.synthesis",
+        "hinf_riccati": "flexdigit.control.synthesis",
+        "hinf_lmi": "flexdigit.control.synthesis",
+        "regularisation_path": "flexdigit.control.synthesis",
+        "reduce_controller": "flexdigit.control.synthesis",
+        "MixsynSpec": "flexdigit.control.mixsyn",
+        "MixsynDesign": "flexdigit.control.mixsyn",
+        "design_mixsyn": "flexdigit.control.mixsyn",
+        "loop_maps": "flexdigit.control.analysis",
+        "is_stable": "flexdigit.control.analysis",
+        "hinf_norm": "flexdigit.control.analysis",
+        "StepFigures": "flexdigit.control.analysis",
+        "step_figures": "flexdigit.control.analysis",
+        "margins": "flexdigit.control.analysis",
+        "map_s_to_z": "flexdigit.control.discretise",
+        "sampled_loop": "flexdigit.control.discretise",
+        "SampledLoop": "flexdigit.control.discretise",
+        "Weights": "flexdigit.control.design20ms",
+        "Digital20msDesign": "flexdigit.control.design20ms",
+        "design_20ms": "flexdigit.control.design20ms",
+        "thesis_controller": "flexdigit.control.design20ms",
+        "closed_loop": "flexdigit.control.design20ms",
+        "RuntimeController": "flexdigit.control.runtime",
+        "printed_controller": "flexdigit.control.thesis_designs",
+        "thesis_plant": "flexdigit.control.thesis_designs",
+        "thesis_design": "flexdigit.control.thesis_designs",
+        "Chapter4Study": "flexdigit.control.chapter4_studies",
+        "chapter4_study": "flexdigit.control.chapter4_studies",
+    },
+)

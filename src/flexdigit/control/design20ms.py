@@ -286,7 +286,7 @@ def thesis_controller(
 
     The runtime runs it on the error ``r - y`` in metres; no anti-windup (the thesis had none).
     """
-    from flexdigit.control.reproduce import printed_controller
+    from flexdigit.control.thesis_designs import printed_controller
 
     if method not in METHODS:
         raise DesignError(f"The 'method' parameter of thesis_controller must be one of {METHODS}. Got {method!r}.")

@@ -290,7 +290,7 @@ def central_controller_poles(P_singular, eps_u: float, margin: float, gamma_opts
 
     The same SLICOT calls on the same matrices, without the python-control systems, the achieved norm and the
     argument checks around them (a fourth of the time): for searches that try hundreds of ``(eps_u, margin)``
-    (:func:`~flexdigit.control.reproduce.fit_thesis_regularisation`). SISO partition; ``margin >= 0``.
+    (:func:`~flexdigit.control.thesis_designs.fit_thesis_regularisation`). SISO partition; ``margin >= 0``.
     ``gamma_opts`` (``{eps_u: gamma_opt}``, filled as it goes) skips the bisection for an ``eps_u`` seen before,
     as ``hinf_riccati(..., gamma_opt=...)`` does.
     """

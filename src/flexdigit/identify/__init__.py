@@ -16,3 +16,46 @@
 
 The submodules are imported on demand (``flexdigit --help`` stays fast).
 """
+
+from flexdigit._lazy import lazy_exports
+
+#: Public names and the module each lives in, imported on first use (PEP 562): importing the package loads
+#: none of its modules, so `flexdigit --help` stays fast; `dir()` lists them all the same.
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "TimeSeries": "flexdigit.identify.timeseries",
+        "read_timeseries": "flexdigit.identify.timeseries",
+        "series_from_table": "flexdigit.identify.timeseries",
+        "Survey": "flexdigit.identify.events",
+        "survey": "flexdigit.identify.events",
+        "find_spikes": "flexdigit.identify.events",
+        "remove_hum": "flexdigit.identify.events",
+        "ResponseFeatures": "flexdigit.identify.response",
+        "analyze_response": "flexdigit.identify.response",
+        "zeta_from_overshoot": "flexdigit.identify.response",
+        "wn_from_settling_time": "flexdigit.identify.response",
+        "NoOscillationError": "flexdigit.identify.response",
+        "SecondOrderFit": "flexdigit.identify.fit",
+        "ARXModel": "flexdigit.identify.fit",
+        "fit_arx": "flexdigit.identify.fit",
+        "LinearRelation": "flexdigit.identify.fit",
+        "fit_linear": "flexdigit.identify.fit",
+        "svd_filter": "flexdigit.identify.filters",
+        "fft_filter": "flexdigit.identify.filters",
+        "butter_filter": "flexdigit.identify.filters",
+        "apply_filter": "flexdigit.identify.filters",
+        "corr2": "flexdigit.identify.scores",
+        "nrmse_fit": "flexdigit.identify.scores",
+        "ljung_box": "flexdigit.identify.scores",
+        "FitQuality": "flexdigit.identify.quality",
+        "assess": "flexdigit.identify.quality",
+        "Identification": "flexdigit.identify.identification",
+        "identify": "flexdigit.identify.identification",
+        "average_runs": "flexdigit.identify.identification",
+        "twin_identification": "flexdigit.identify.chapter3_identification",
+        "noisy_records_study": "flexdigit.identify.chapter3_identification",
+        "Chapter3IdentifyStudy": "flexdigit.identify.chapter3_identification",
+        "chapter3_identify_study": "flexdigit.identify.chapter3_identification",
+    },
+)

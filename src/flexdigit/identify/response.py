@@ -2,7 +2,7 @@
 
 The thesis identifies a second-order model from one experiment: the damping ratio from the percent overshoot
 (%OS) and the natural frequency from the 2 % settling time, ``wn = 4 / (zeta Ts)`` (3.1.2, ref. [21]; the closed
-forms live in :mod:`flexdigit.models.digit` and are re-exported here). This module measures those features on a
+forms live in :mod:`flexdigit.models.second_order` and are re-exported here). This module measures those features on a
 recorded response (percent overshoot, peak time, rise time, 2 % settling time, damped frequency, log
 decrement) and turns them into ``zeta`` and ``wn`` both the thesis's way and from the damped frequency,
 ``wn = wd / sqrt(1 - zeta^2)``, which is exact for a second-order system.
@@ -37,7 +37,7 @@ import numpy as np
 
 from flexdigit._validation import check_array, check_choice, check_positive
 from flexdigit.errors import DataFileError
-from flexdigit.models.digit import (
+from flexdigit.models.second_order import (
     natural_frequency_from_damped,
     overshoot_from_zeta,
     wn_from_settling_time,
@@ -62,7 +62,7 @@ __all__ = [
 SETTLING_BAND = 0.02
 
 
-# --- closed forms (3.1.2, ref. [21]); the thesis's own live in flexdigit.models.digit ------------------------------
+# --- closed forms (3.1.2, ref. [21]); the thesis's own live in flexdigit.models.second_order -------------------------
 
 
 def zeta_from_log_decrement(delta: float) -> float:

@@ -1,1 +1,18 @@
-"""The surgeon's view: the live page and its server, and the ``shape`` command (thesis 1.1, 8)."""
+"""The surgeon's view: the live page and its server (thesis 1.1, 8).
+
+:class:`~flexdigit.live.session.LiveSession` runs a rig and estimates as it goes; :func:`~flexdigit.live.server.serve`
+shows it in a browser (``flexdigit live``). Every public name below is imported from its module on first use.
+"""
+
+from flexdigit._lazy import lazy_exports
+
+#: Public names and the module each lives in, imported on first use (PEP 562): importing the package loads
+#: none of its modules, so `flexdigit --help` stays fast; `dir()` lists them all the same.
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "LiveSession": "flexdigit.live.session",
+        "make_app": "flexdigit.live.server",
+        "serve": "flexdigit.live.server",
+    },
+)

@@ -10,11 +10,11 @@ _NUMBER = {"type": "number"}
 _NULLABLE = {"type": ["number", "null"]}
 _POINT = {"type": "array", "items": _NUMBER, "minItems": 2, "maxItems": 2}
 
-#: The shape estimate (:meth:`flexdigit.tactile.shape.ShapeEstimate.row`), every 5 mm along the digit.
+#: The shape estimate (:meth:`flexdigit.shape.shape.ShapeEstimate.row`), every 5 mm along the digit.
 SHAPE_SCHEMA = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "title": "flexdigit.Shape",
-    "description": "The digit's centre line from the three gauges (flexdigit.tactile.shape), m, with its "
+    "description": "The digit's centre line from the three gauges (flexdigit.shape.shape), m, with its "
     "standard deviation normal to the line; the load found, if any.",
     "type": "object",
     "properties": {

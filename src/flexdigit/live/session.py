@@ -3,7 +3,7 @@
 :class:`LiveSession` opens a backend (the twin in real time, the hardware, or a replay played at 1x or 10x), runs
 read -> controller -> command on absolute 20 ms deadlines (the servo board's frame, 5.2), keeps the last
 ``history_s`` seconds of samples, estimates the shape and the contact from the latest readings
-(:class:`flexdigit.tactile.shape.ShapeEstimator`, and a trained network when given), records everything to MCAP
+(:class:`flexdigit.shape.shape.ShapeEstimator`, and a trained network when given), records everything to MCAP
 when asked (:mod:`flexdigit.rig.recording`), and takes the page's requests through :meth:`LiveSession.request`,
 which validates and clamps every field (a client message is bad input like a bad file).
 
@@ -383,7 +383,7 @@ class LiveSession:
         self.error: str | None = None
 
     def _setup(self, model, record, force, rotation_map, orientation, seed) -> None:
-        from flexdigit.tactile.shape import ShapeEstimator
+        from flexdigit.shape.shape import ShapeEstimator
 
         rig = self.rig
         params = rig.params

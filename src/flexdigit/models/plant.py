@@ -65,7 +65,7 @@ import numpy as np
 
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError
-from flexdigit.models import bridge, cable, conversion, digit, servo
+from flexdigit.models import bridge, cable, conversion, second_order, servo
 from flexdigit.models.polytf import PolyTF, ctrb, obsv
 from flexdigit.params import RigParams
 
@@ -373,7 +373,7 @@ def _printed(params: RigParams, output: str, gains: str, damping_1_per_s: float)
     k2 = cable.k2_nm_per_rad(params)
     k3_m_per_v = k3[k] * 1e-3  # mm -> m, as 3.5 does
     mt_rad = servo.servo_poly(params, form="printed")
-    e_printed = digit.digit_poly(params.dynamics.wn_bare_rad_s, printed_digit_zeta(params, damping_1_per_s))
+    e_printed = second_order.digit_poly(params.dynamics.wn_bare_rad_s, printed_digit_zeta(params, damping_1_per_s))
     tf = (k2 * k3_m_per_v * mt_rad * e_printed).normalised()
     components = {
         "K2_nm_per_rad": k2,
@@ -400,7 +400,7 @@ def _consistent(params: RigParams, output: str, gains: str) -> Plant:
     g, a, s = params.geometry, params.actuator, params.sensors
     ei = params.bending_stiffness_n_m2
     mt = servo.servo_unit_poly(params)
-    e_digit = digit.digit_poly_from_params(params, housing=True)
+    e_digit = second_order.digit_poly_from_params(params, housing=True)
     rad_per_command = a.rad_per_command
     moment_per_shortening = ei / (g.digit_length_m * g.cable_eccentricity_m)  # E 3.12 with 1/rho = dl/(l e)
     gauge = _gauge_index(output, params)

@@ -15,6 +15,8 @@ from functools import lru_cache
 from importlib import resources
 from typing import Any
 
+__all__ = ["thesis", "thesis_value", "thesis_complex"]
+
 
 @lru_cache(maxsize=1)
 def thesis() -> dict[str, Any]:

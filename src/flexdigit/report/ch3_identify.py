@@ -2,7 +2,8 @@
 
 Beside 3.1.2 (release tests, tables 3.1 and 3.2, E(s), figure 3.6), 3.2.4 (servo step tests, FFT and SVD
 filters, MT(s), figures 3.11 and 3.12) and 3.4 (the linear fits behind K1 and K3). The closed-form checks of
-the printed tables are in the models chapter; this one shows :func:`flexdigit.identify.studies.chapter3_identify_study`:
+the printed tables are in the models chapter; this one shows
+:func:`flexdigit.identify.chapter3_identification.chapter3_identify_study`:
 the identification run on synthetic second-order records with known parameters (to measure each method's error)
 and on the twin's simulated release and step tests (:mod:`flexdigit.twin.records`, default calibration), from
 which E(s) and MT(s) are identified as the thesis identified them from the rig.
@@ -14,8 +15,8 @@ import math
 
 import numpy as np
 
+from flexdigit.identify.chapter3_identification import STEP_COMMANDS, chapter3_identify_study
 from flexdigit.identify.filters import fft_filter, svd_filter
-from flexdigit.identify.studies import STEP_COMMANDS, chapter3_identify_study
 from flexdigit.reference import thesis_value
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import Entry, compare, new
@@ -26,7 +27,7 @@ SECTION_SERVO = "3.2.4"
 
 
 def build(ctx: ReportContext) -> Chapter:
-    """The identification chapter from :func:`~flexdigit.identify.studies.chapter3_identify_study`."""
+    """The identification chapter from :func:`~flexdigit.identify.chapter3_identification.chapter3_identify_study`."""
     study = chapter3_identify_study(ctx.params, seed=ctx.seed, fast=ctx.fast)
     chapter = Chapter(slug="ch3-identify", title="Chapter 3: system identification (release and step tests)")
     chapter.paragraphs.append(

@@ -11,7 +11,7 @@ import math
 import control
 import numpy as np
 
-from flexdigit.models import cable, conversion, digit, servo
+from flexdigit.models import cable, conversion, second_order, servo
 from flexdigit.models.plant import (
     PRINTED_DIGIT_DAMPING_1_PER_S,
     closed_loop_printed_k1,
@@ -30,8 +30,8 @@ def _printed_rtol(printed: float, decimals: int) -> float:
 
 
 def build(ctx: ReportContext) -> Chapter:
-    """Chapter 3 from :func:`flexdigit.models.studies.chapter3_study`: entries, tables and figures."""
-    from flexdigit.models.studies import chapter3_study
+    """Chapter 3 from :func:`flexdigit.models.chapter3_tables.chapter3_study`: entries, tables and figures."""
+    from flexdigit.models.chapter3_tables import chapter3_study
 
     p = ctx.params
     study = chapter3_study(p)
@@ -91,7 +91,8 @@ def _release_entries(release, e: list[Entry]) -> None:
                     "",
                     rtol=0.0,
                     discrepancy_note=f"The %OS of this row is printed garbled ('80.59.5973'), read as NaN. The "
-                    f"printed zeta {z_print} implies %OS = {digit.overshoot_from_zeta(z_print):.4f}, so the value "
+                    f"printed zeta {z_print} implies %OS = {second_order.overshoot_from_zeta(z_print):.4f}, "
+                    "so the value "
                     "was most likely 80.5973 with a stray '59.'.",
                 )
             )

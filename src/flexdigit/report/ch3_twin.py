@@ -18,8 +18,9 @@ from flexdigit.report.results import compare, new
 
 
 def build(ctx: ReportContext) -> Chapter:
-    """The twin chapter from :func:`flexdigit.calibrate.studies.chapter3_twin_study`: entries, tables and figures."""
-    from flexdigit.calibrate.studies import chapter3_twin_study
+    """The twin chapter from :func:`flexdigit.calibrate.chapter3_twin.chapter3_twin_study`: entries, tables and
+    figures."""
+    from flexdigit.calibrate.chapter3_twin import chapter3_twin_study
 
     p = ctx.params
     seed = int(ctx.rng(3).integers(0, 2**31))

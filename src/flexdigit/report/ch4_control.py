@@ -8,7 +8,7 @@ import control as ct
 import numpy as np
 
 from flexdigit.control._lsim import step_output
-from flexdigit.control.reproduce import printed_controller
+from flexdigit.control.thesis_designs import printed_controller
 from flexdigit.reference import thesis_value
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext
@@ -66,8 +66,8 @@ def _half_last_digit(printed: float) -> float:
 
 
 def build(ctx: ReportContext) -> Chapter:
-    """Chapter 4 from :func:`flexdigit.control.studies.chapter4_study`: entries, tables and figures."""
-    from flexdigit.control.studies import chapter4_study
+    """Chapter 4 from :func:`flexdigit.control.chapter4_studies.chapter4_study`: entries, tables and figures."""
+    from flexdigit.control.chapter4_studies import chapter4_study
 
     study = chapter4_study(fast=ctx.fast, seed=ctx.seed)
     ch = Chapter("ch4", "Controller design (H-infinity, thesis chapter 4)")

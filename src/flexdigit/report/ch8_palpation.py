@@ -2,7 +2,7 @@
 
 Chapter 8 of the thesis says what its sensing is for: "to detect low frequency palpations, to identify variability
 in tissue stiffness, and to discriminate against distributed loads". This chapter shows the library's answers
-(:mod:`flexdigit.tactile.palpation_studies`) on the twin at the thesis's non-actuated noise level; it computes
+(:mod:`flexdigit.palpation.palpation_studies`) on the twin at the thesis's non-actuated noise level; it computes
 nothing itself. It runs small but honest settings (the README quotes the full studies and the command that
 measures each); every table is also in results.json.
 """
@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexdigit.palpation import palpation_studies as studies
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import new
-from flexdigit.tactile import palpation_studies as studies
 
 SECTION = "beyond: palpation"
 
@@ -175,7 +175,7 @@ def _classification(ctx, ch) -> None:
 
 
 def _stiffness(ctx, ch, plt) -> None:
-    from flexdigit.tactile.palpation import PalpationProtocol
+    from flexdigit.palpation.palpation import PalpationProtocol
 
     protocol = PalpationProtocol(commands=tuple(range(8, 31, 2)))
     moduli = (300.0, 1500.0) if ctx.fast else (300.0, 750.0, 1500.0)
@@ -234,7 +234,7 @@ def _stiffness(ctx, ch, plt) -> None:
 
 
 def _scan(ctx, ch, plt) -> None:
-    from flexdigit.tactile.palpation import PalpationProtocol
+    from flexdigit.palpation.palpation import PalpationProtocol
 
     offsets = np.arange(-0.02, 0.0201, 0.01)
     sc = studies.scan_study(

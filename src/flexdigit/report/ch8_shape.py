@@ -1,9 +1,9 @@
 """Report chapter "beyond the thesis": the digit's shape from its three gauges (thesis 1.1, 3.3, 8).
 
 The thesis promises "a sense of feeling and shape" (1.1) and shows neither live. This chapter scores
-:class:`flexdigit.tactile.shape.ShapeEstimator` (curvature field from the gauges and the cable's and the load's
+:class:`flexdigit.shape.shape.ShapeEstimator` (curvature field from the gauges and the cable's and the load's
 moments, integrated to a centre line) against the twin's true centre line over the actuation range, bare and with
-a weight hung anywhere (:func:`flexdigit.tactile.shape.shape_accuracy`); it computes nothing itself.
+a weight hung anywhere (:func:`flexdigit.shape.shape.shape_accuracy`); it computes nothing itself.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ def build(ctx: ReportContext) -> Chapter:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from flexdigit.tactile.shape import ShapeEstimator, shape_accuracy, true_centre_line_m
+    from flexdigit.shape.shape import ShapeEstimator, shape_accuracy, true_centre_line_m
     from flexdigit.twin.calibration import default_calibration
     from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
 
@@ -34,7 +34,7 @@ def build(ctx: ReportContext) -> Chapter:
     summary = acc.summary()
     chapter.paragraphs.append(
         "The centre line is estimated from the three gauge voltages and the servo command alone "
-        "(flexdigit.tactile.shape.ShapeEstimator): each gauge's curvature is M/EI (E 3.12) of a moment made of the "
+        "(flexdigit.shape.shape.ShapeEstimator): each gauge's curvature is M/EI (E 3.12) of a moment made of the "
         "cable's T e (3.3), the digit's own weight and one weight at an unknown place; with the cable taut the "
         "command fixes the tip angle (E 3.11, 3.14). The fit (tension, load and where) is integrated to a shape "
         "with large rotations kept. Each case is one noisy reading of the twin (white noise and, with the cable "

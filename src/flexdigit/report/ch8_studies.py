@@ -4,7 +4,7 @@ The thesis's conclusion asks for "a sensitivity and stability analysis ... into 
 parameters", feedback from more gauges and a finer motor step; 2.1 for a second cable and a study of size. This
 chapter shows two library results (:mod:`flexdigit.studies`): the Sobol indices of the twin's metrics over the
 shipped tolerances (:func:`flexdigit.studies.sensitivity.twin_sensitivity`) and a small design study with its
-Pareto front (:func:`flexdigit.studies.design.showcase_design`). Both run in process at a small size; the
+Pareto front (:func:`flexdigit.studies.design_study.showcase_design`). Both run in process at a small size; the
 ``flexdigit study`` command runs the full studies on Dask.
 """
 
@@ -119,7 +119,7 @@ def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
 
 
 def _design(ctx: ReportContext, chapter: Chapter) -> None:
-    from flexdigit.studies.design import design_pareto_figure, showcase_design
+    from flexdigit.studies.design_study import design_pareto_figure, showcase_design
 
     result = showcase_design(8 if ctx.fast else 24, seed=ctx.seed, bayes_samples=50 if ctx.fast else 100)
     o = result.settings.objectives

@@ -16,7 +16,7 @@ protocol handler::
 
 The servo command (0..254, integer) is a unit of its own: :func:`clamp_command` is the one place it is rounded
 and clamped, and 255 (the Mini SSC sync byte) can never come out of it (a board whose framing allows fewer
-positions clamps further, :class:`~flexdigit.rig.serial_backend.SerialRig`).
+positions clamps further, :class:`~flexdigit.rig.backends.serial_backend.SerialRig`).
 """
 
 from __future__ import annotations
@@ -272,7 +272,7 @@ class Rig(abc.ABC):
 
     def place_tissue(self, tissue) -> None:
         """Put a compliant body beside the digit (:class:`flexdigit.twin.contact.Tissue`) or take it away (None):
-        the twin places it, on hardware the operator does (palpation, :mod:`flexdigit.tactile.palpation`)."""
+        the twin places it, on hardware the operator does (palpation, :mod:`flexdigit.palpation.palpation`)."""
         self._check_open()
         self._apply_tissue(tissue)
 
@@ -320,12 +320,12 @@ class Rig(abc.ABC):
 #: (keyword arguments only Python passes: callables, open ports, fakes) and ``URL_PREFIXES`` (option prefixes
 #: passed on, as text, to a nested source that checks them: ``daq.`` on serial).
 BACKENDS: dict[str, str] = {
-    "sim": "flexdigit.rig.sim_backend:from_url",
-    "sim+paced": "flexdigit.rig.sim_backend:from_url_paced",
-    "serial": "flexdigit.rig.serial_backend:from_url",
-    "daq": "flexdigit.rig.daq_backend:from_url",
-    "replay": "flexdigit.rig.replay_backend:from_url",
-    "stream": "flexdigit.rig.stream_backend:from_url",
+    "sim": "flexdigit.rig.backends.sim_backend:from_url",
+    "sim+paced": "flexdigit.rig.backends.sim_backend:from_url_paced",
+    "serial": "flexdigit.rig.backends.serial_backend:from_url",
+    "daq": "flexdigit.rig.backends.daq_backend:from_url",
+    "replay": "flexdigit.rig.backends.replay_backend:from_url",
+    "stream": "flexdigit.rig.backends.stream_backend:from_url",
 }
 
 _TRUE = ("1", "true", "yes", "on")

@@ -4,7 +4,7 @@ PlotJuggler, Rerun, the ``mcap`` libraries and CLI).
 A recording holds one channel per topic, each with a JSON Schema (``jsonschema`` encoding, ``json`` messages) so
 another tool can decode and check it without flexdigit:
 
-- ``/flexdigit/sample``: what the loop logs (:mod:`flexdigit.rig.loop`): time, the three gauge voltages, the pot,
+- ``/flexdigit/sample``: what the loop logs (:mod:`flexdigit.rig.sample_log`): time, the three gauge voltages, the pot,
   the command sent, the setpoint and the measured value;
 - channels a caller adds (:meth:`Recording.add_channel`): the live page adds ``/flexdigit/shape`` and
   ``/flexdigit/contact``; this module knows nothing of them (rig is below tactile and live in the import chain).
@@ -342,14 +342,16 @@ def read_metadata(path: str | os.PathLike) -> dict[str, dict[str, Any]]:
 
 
 def _check_sample(path: Path, i: int, message: Any, check_sample) -> dict[str, Any]:
-    """One ``/flexdigit/sample`` message checked as the loop's logs are (:func:`flexdigit.rig.loop.check_sample`)."""
+    """One ``/flexdigit/sample`` message checked as the loop's logs are
+    (:func:`flexdigit.rig.sample_log.check_sample`)."""
     if not isinstance(message, dict) or not {"t", "gauges_v", "command"} <= set(message):
         raise DataFileError(f"{path}: {SAMPLE_TOPIC} message {i} lacks t, gauges_v or command: {message!r:.120}")
     return check_sample(message, path, f"{SAMPLE_TOPIC} message {i}")
 
 
 def read_recording(path: str | os.PathLike):
-    """Read a recording as :func:`~flexdigit.rig.loop.read_log` reads a log: ``(header, samples, footer or None)``.
+    """Read a recording as :func:`~flexdigit.rig.sample_log.read_log` reads a log: ``(header, samples, footer or
+    None)``.
 
     ``header`` is the ``flexdigit.run`` metadata, ``samples`` the ``/flexdigit/sample`` messages (dicts with
     ``t``, ``gauges_v``, ``pot_v``, ``command`` ...), ``footer`` the ``flexdigit.stop`` metadata (None for a run
@@ -360,7 +362,7 @@ def read_recording(path: str | os.PathLike):
     """
     from mcap.records import Metadata
 
-    from flexdigit.rig.loop import check_sample
+    from flexdigit.rig.sample_log import check_sample
 
     path = Path(path)
     records = _Records(path)

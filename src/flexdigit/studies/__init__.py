@@ -5,7 +5,8 @@
 - :mod:`~flexdigit.studies.metrics`: the registry of scalar outputs of a parameter set;
 - :mod:`~flexdigit.studies.sensitivity`: Morris screening and Sobol indices (SALib) with intervals and a
   convergence check;
-- :mod:`~flexdigit.studies.design`: the design study (gauges, bridge, ADC, servo, cable, size) and its Pareto front;
+- :mod:`~flexdigit.studies.design_study`: the design study (gauges, bridge, ADC, servo, cable, size) and its Pareto
+  front;
 - :mod:`~flexdigit.studies.execution`: evaluation on Dask distributed (or in process), seeded, resumable.
 
 This domain sits above tactile in the import chain: it reads the twin, control and tactile; nothing but the report
@@ -14,15 +15,28 @@ imports it.
 
 from flexdigit._lazy import lazy_exports
 
-#: Public names and their submodules, imported on first use (PEP 562): the command line imports
-#: ``flexdigit.studies.commands`` to build its parser, which must not load scipy (issue 15's start-up).
+#: Public names and the module each lives in, imported on first use (PEP 562): importing the package loads
+#: none of its modules, so `flexdigit --help` stays fast; `dir()` lists them all the same.
 __getattr__, __all__ = lazy_exports(
     __name__,
     {
         "METRICS": "flexdigit.studies.metrics",
+        "Metric": "flexdigit.studies.metrics",
         "MetricContext": "flexdigit.studies.metrics",
-        "ParameterSet": "flexdigit.studies.spec",
+        "evaluate": "flexdigit.studies.metrics",
+        "register_metric": "flexdigit.studies.metrics",
+        "ParameterSet": "flexdigit.studies.parameter_set",
         "StudySpec": "flexdigit.studies.spec",
+        "UncertainParameter": "flexdigit.studies.spec",
         "load_spec": "flexdigit.studies.spec",
+        "SensitivitySettings": "flexdigit.studies.sensitivity",
+        "SensitivityResult": "flexdigit.studies.sensitivity",
+        "run_sensitivity": "flexdigit.studies.sensitivity",
+        "DesignSettings": "flexdigit.studies.design_study",
+        "DesignResult": "flexdigit.studies.design_study",
+        "run_design": "flexdigit.studies.design_study",
+        "run_study": "flexdigit.studies.execution",
+        "StepSchedule": "flexdigit.studies.batched_loop",
+        "step_responses": "flexdigit.studies.batched_loop",
     },
 )

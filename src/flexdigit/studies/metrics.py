@@ -4,7 +4,7 @@ The registry :data:`METRICS` maps a name (unit in the name) to a :class:`Metric`
 wants. Each metric is one call for a user::
 
     >>> from flexdigit.studies.metrics import METRICS, MetricContext
-    >>> from flexdigit.studies.spec import ParameterSet
+    >>> from flexdigit.studies.parameter_set import ParameterSet
     >>> round(METRICS["release_wn_rad_s"](ParameterSet()), 2)      # table 3.2's 13.0995 rad/s
     13.1
 
@@ -23,7 +23,8 @@ What each one means (thesis section in brackets):
   context says ``redesign`` (the design study designs one per candidate). ``gain_margin`` is the loop's gain
   margin broken at the plant input (a factor; the stability margin);
 - ``twin_settling_time_s``, ``twin_overshoot_percent``, ``twin_steady_state_error_deg``: the same loop *run* on
-  the batched twin (:mod:`flexdigit.studies.loop`): integer commands latched on the serial frame and the PWM pulse,
+  the batched twin (:mod:`flexdigit.studies.batched_loop`): integer commands latched on the serial frame and the PWM
+  pulse,
   the large-deflection digit, a setpoint step of ``context.loop`` (20 deg centred on the mid-range rotation);
   the steady-state error is what the integer command leaves (the design holds it within half a quantum);
 - ``hinf_gamma``: gamma of the thesis's H-infinity design (4.4, 5 Hz error weight, the thesis's regularisation)
@@ -31,7 +32,7 @@ What each one means (thesis section in brackets):
 - ``bayes_position_limit_mm``: chapter 6's localisation Bayes limit (:func:`flexdigit.tactile.bounds.protocol_limits`)
   on table 6.1's settings: the RMS position error no estimator beats on one reading;
 - ``blind_zone_mm``: length from the clamp where a 25 g load bends no gauge by a tenth of its noise
-  (:func:`flexdigit.tactile.studies.identifiability_map`), the zone 6.5's position 16 falls in.
+  (:func:`flexdigit.tactile.localisation.identifiability_map`), the zone 6.5's position 16 falls in.
 
 Randomness: the Bayes limit's Monte Carlo draws come from the context's seed alone, the same draws for every
 parameter set (common random numbers), so differences between parameter sets are the parameters' effect and not
@@ -49,8 +50,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from flexdigit.studies.loop import LoopProtocol
-from flexdigit.studies.spec import ParameterSet
+from flexdigit.studies.batched_loop import StepSchedule, step_figures
+from flexdigit.studies.parameter_set import ParameterSet
 
 __all__ = ["Metric", "MetricContext", "METRICS", "evaluate", "register_metric", "SENSITIVITY_METRICS"]
 
@@ -81,8 +82,8 @@ class MetricContext:
         Cut-off of the H-infinity error weight (4.4: 5 Hz).
     protocol : str
         The tactile protocol whose settings the Bayes limit uses (table 6.1).
-    loop : LoopProtocol
-        The setpoint step the twin-run loop metrics score (:mod:`flexdigit.studies.loop`).
+    loop : StepSchedule
+        The setpoint step the twin-run loop metrics score (:mod:`flexdigit.studies.batched_loop`).
     """
 
     baseline: ParameterSet = field(default_factory=ParameterSet)
@@ -94,7 +95,7 @@ class MetricContext:
     tactile_cells: int = 9
     hinf_filter_hz: float = 5.0
     protocol: str = "thesis-6.1"
-    loop: LoopProtocol = field(default_factory=LoopProtocol)
+    loop: StepSchedule = field(default_factory=StepSchedule)
 
 
 @dataclass(frozen=True)
@@ -316,36 +317,6 @@ def loop_plant(ps: ParameterSet, period_s: float, delay_samples: int = 1):
         return ct.series(delay, held)
 
 
-def step_figures(t, y, band: float = 0.02) -> tuple[float, float]:
-    """2 % settling time (s) and overshoot (%) of a sampled step response settling to ``y[-1]``.
-
-    The settling time is interpolated between the last sample outside the band and the next, so it moves
-    continuously with the parameters instead of in whole 20 ms samples (``control.step_info`` returns a sample time).
-
-    Examples
-    --------
-    >>> t = np.arange(0, 30, 0.02)
-    >>> s, o = step_figures(t, 1 - np.exp(-t))
-    >>> round(s, 3), o                    # 1 - exp(-t) enters the 2 % band at ln 50 = 3.912 s
-    (3.912, 0.0)
-    """
-    final = float(y[-1])
-    err = np.abs(np.asarray(y, dtype=float) - final)
-    limit = band * abs(final)
-    outside = np.flatnonzero(err > limit)
-    if outside.size == 0:
-        settling = 0.0
-    else:
-        k = int(outside[-1])
-        if k + 1 >= len(t):
-            settling = math.inf
-        else:
-            frac = (err[k] - limit) / (err[k] - err[k + 1])
-            settling = float(t[k] + frac * (t[k + 1] - t[k]))
-    overshoot = max(0.0, 100.0 * (float(np.max(y)) - final) / abs(final)) if final else math.inf
-    return settling, overshoot
-
-
 @lru_cache(maxsize=4096)
 def loop_design(ps: ParameterSet, ctx: MetricContext):
     """The 20 ms design the loop metrics run on ``ps``: the baseline rig's, or its own with ``ctx.redesign``."""
@@ -440,10 +411,10 @@ _LOOP_CACHE: list = [None, None, None]  # (parameter sets, context, figures): th
 
 
 def twin_loop_figures(parameter_sets, ctx: MetricContext) -> dict[str, np.ndarray]:
-    """The 20 ms loop run on the batched twin for many parameter sets at once (:mod:`flexdigit.studies.loop`):
+    """The 20 ms loop run on the batched twin for many parameter sets at once (:mod:`flexdigit.studies.batched_loop`):
     settling time, overshoot and steady-state error of the context's setpoint step, centred on each rig's
     mid-range rotation (where the linear metrics linearise)."""
-    from flexdigit.studies.loop import step_figures_batch, step_responses
+    from flexdigit.studies.batched_loop import step_figures_batch, step_responses
 
     if _LOOP_CACHE[0] is parameter_sets and _LOOP_CACHE[1] == ctx:
         return _LOOP_CACHE[2]
@@ -483,7 +454,7 @@ _loop_metric("steady_state_error_deg", "deg", "the 20 ms loop's final error afte
 
 @register_metric("hinf_gamma", "", "gamma of the thesis's H-infinity design on this rig's printed plant", "4.4")
 def hinf_gamma(ps: ParameterSet, ctx: MetricContext) -> float:
-    from flexdigit.control.reproduce import thesis_design
+    from flexdigit.control.thesis_designs import thesis_design
     from flexdigit.models.plant import build_plant
 
     return float(thesis_design(ctx.hinf_filter_hz, plant=build_plant("printed", ps.params).tf).gamma)
@@ -541,8 +512,8 @@ def bayes_position_limit_mm(ps: ParameterSet, ctx: MetricContext) -> float:
 
 @register_metric("blind_zone_mm", "mm", "length from the clamp where a 25 g load bends no gauge", "6.5")
 def blind_zone_mm(ps: ParameterSet, ctx: MetricContext) -> float:
+    from flexdigit.tactile.localisation import identifiability_map
     from flexdigit.tactile.protocols import RELAXED
-    from flexdigit.tactile.studies import identifiability_map
 
     length = ps.params.geometry.digit_length_m
     points = int(round(length / ctx.blind_step_m)) + 1

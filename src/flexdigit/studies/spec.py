@@ -69,7 +69,8 @@ from scipy import stats
 
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams, load_params
-from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration
+from flexdigit.studies.parameter_set import ParameterSet
+from flexdigit.twin.calibration import default_calibration, load_calibration
 
 __all__ = [
     "DISTRIBUTIONS",
@@ -94,16 +95,6 @@ _LOG_MAX_FLOAT = math.log(np.finfo(float).max)  # math.exp beyond it raises Over
 SECTIONS = ("geometry", "material", "sensors", "actuator", "dynamics", "calibration")
 #: Specs shipped with flexdigit (``flexdigit study sensitivity thesis-tolerances``).
 SHIPPED_SPECS = ("thesis-tolerances", "thesis-design")
-
-
-@dataclass(frozen=True)
-class ParameterSet:
-    """One rig to evaluate: its parameters, its twin calibration and, for designs beyond the thesis, a second
-    antagonistic cable (its pretension in N, both cables; None: the thesis's single cable, 2.1)."""
-
-    params: RigParams = field(default_factory=RigParams)
-    calibration: Calibration = field(default_factory=default_calibration)
-    antagonist_pretension_n: float | None = None
 
 
 @dataclass(frozen=True)

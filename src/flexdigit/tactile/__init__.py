@@ -1,11 +1,54 @@
-"""Tactile sensing (thesis chapters 6-7): protocols, datasets, estimators, metrics and the thesis pipeline."""
+"""Tactile sensing, the thesis's load localisation (chapters 6-7): protocols, datasets, the MLP, estimators, bounds.
 
-from flexdigit._validation import Plausible
+- :mod:`~flexdigit.tactile.protocols`: load experiments (``load_protocol("thesis-6.1")``);
+- :mod:`~flexdigit.tactile.runner`: ``collect(protocol, rig, path)``, a dataset from any rig;
+- :mod:`~flexdigit.tactile.dataset`, :mod:`~flexdigit.tactile.importer`: datasets saved, loaded, imported;
+- :mod:`~flexdigit.tactile.pipeline`: the thesis's split and network (``thesis_split``, ``ThesisNetwork``);
+- :mod:`~flexdigit.tactile.netlab`: the MLP as netlab trains it; :mod:`~flexdigit.tactile.estimators`: others;
+- :mod:`~flexdigit.tactile.accuracy`, :mod:`~flexdigit.tactile.bounds`: scores and Cramer-Rao / Bayes bounds;
+- :mod:`~flexdigit.tactile.localisation`, :mod:`~flexdigit.tactile.thesis_experiments`: the studies the report
+  shows.
 
-# The network's plausible sizes, declared here (not in netlab) so that the command line declares its flags with
-# them without importing scikit-learn.
-#: Hidden nodes of the thesis's two-layer network: it swept 1 to 40; 10,000 bounds the memory and the time.
-HIDDEN = Plausible("", 1, 10_000, "hidden nodes: the thesis swept 1 to 40", integer=True)
-#: The SCG stopping tolerance (the thesis's "learning gradient", 1e-7 to 1e-1): below 1e-15 it never stops on
-#: float64 round-off, above 1 it stops at once.
-TOL = Plausible("", 1e-15, 1.0, "the SCG tolerance ('learning gradient'): the thesis swept 1e-7 to 1e-1")
+Shape (:mod:`flexdigit.shape`) and palpation (:mod:`flexdigit.palpation`) are domains of their own.
+
+Every public name below is imported from its module on first use.
+"""
+
+from flexdigit._lazy import lazy_exports
+
+#: Public names and the module each lives in, imported on first use (PEP 562): importing the package loads
+#: none of its modules, so `flexdigit --help` stays fast; `dir()` lists them all the same.
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "Protocol": "flexdigit.tactile.protocols",
+        "load_protocol": "flexdigit.tactile.protocols",
+        "collect": "flexdigit.tactile.runner",
+        "load_or_collect": "flexdigit.tactile.runner",
+        "Dataset": "flexdigit.tactile.dataset",
+        "load_dataset": "flexdigit.tactile.dataset",
+        "save_dataset": "flexdigit.tactile.dataset",
+        "ColumnMap": "flexdigit.tactile.importer",
+        "import_readings": "flexdigit.tactile.importer",
+        "thesis_split": "flexdigit.tactile.pipeline",
+        "ThesisNetwork": "flexdigit.tactile.pipeline",
+        "run_pipeline": "flexdigit.tactile.pipeline",
+        "compare_strategies": "flexdigit.tactile.pipeline",
+        "MLP": "flexdigit.tactile.netlab",
+        "BeamInversion": "flexdigit.tactile.estimators",
+        "GPLocaliser": "flexdigit.tactile.estimators",
+        "save_model": "flexdigit.tactile.model_io",
+        "load_model": "flexdigit.tactile.model_io",
+        "percentage_error": "flexdigit.tactile.accuracy",
+        "rmse": "flexdigit.tactile.accuracy",
+        "TwinGaugeModel": "flexdigit.tactile.bounds",
+        "cramer_rao": "flexdigit.tactile.bounds",
+        "protocol_limits": "flexdigit.tactile.bounds",
+        "LocalisationResult": "flexdigit.tactile.localisation",
+        "localisation_study": "flexdigit.tactile.localisation",
+        "run_experiment": "flexdigit.tactile.thesis_experiments",
+        "experiment_tables": "flexdigit.tactile.thesis_experiments",
+        "white_noise_scan": "flexdigit.tactile.thesis_experiments",
+        "friction_study": "flexdigit.tactile.thesis_experiments",
+    },
+)

@@ -371,7 +371,8 @@ FORCE_ONLY_FRACTION = 0.1
 
 def point_jacobian(model, position_m, force_n, command, step_m: float = 2e-4, rel_step_force: float = 0.01):
     """``d gauges / d (position, force)`` of a point contact (V/m, V/N), shape (n, 3, 2), by central differences
-    of ``model.point_v`` (:class:`flexdigit.tactile.contact.ContactGaugeModel`), one-sided at the digit's ends."""
+    of ``model.point_v`` (:class:`flexdigit.palpation.contact_estimation.ContactGaugeModel`), one-sided at the digit's
+    ends."""
     s = np.atleast_1d(np.asarray(position_m, dtype=float))
     f = np.broadcast_to(np.asarray(force_n, dtype=float), s.shape)
     length = model.length_m
@@ -456,7 +457,8 @@ class ContactBound:
 
 
 def contact_bounds(model, position_m, force_n, command, *, n_readings: int = 1) -> ContactBound:
-    """Cramer-Rao bounds of a point contact's position and force (see :mod:`flexdigit.tactile.contact` for why
+    """Cramer-Rao bounds of a point contact's position and force (see :mod:`flexdigit.palpation.contact_estimation`
+    for why
     some contacts cannot be located), with the model's white noise over ``n_readings`` averaged readings."""
     s = np.atleast_1d(np.asarray(position_m, dtype=float))
     f = np.broadcast_to(np.asarray(force_n, dtype=float), s.shape)

@@ -69,7 +69,7 @@ class BeamInversion(Estimator):
     calibrate : bool
         Fit a per-gauge gain and offset of the model to the training readings.
     tared : bool
-        The readings have had their no-load level subtracted (:func:`flexdigit.tactile.studies.tare`): model
+        The readings have had their no-load level subtracted (:func:`flexdigit.tactile.localisation.tare`): model
         ``g(a, m, c) - g(., 0, c)`` instead of ``g(a, m, c)``.
     load_set : bool
         Restrict the mass to the loads seen in training (a protocol hangs a few known weights: the same prior

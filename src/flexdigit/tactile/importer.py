@@ -12,7 +12,7 @@ What the dataset needs and the file may not have is derived, and the metadata sa
 - the protocol (loads, positions, commands, repetitions) from the distinct values of the readings;
 - ``position_index``: the rank of the reading's position from the tip (1 = nearest the tip, as table 6.1), 0 for no
   load;
-- ``test`` (the readings one tare serves, :func:`flexdigit.tactile.studies.tare`): a mapped column, else a new test
+- ``test`` (the readings one tare serves, :func:`flexdigit.tactile.localisation.tare`): a mapped column, else a new test
   at every change of command and wherever no-load readings follow loaded ones (the thesis measured "a no load
   condition ... at the start of every test", 6.5);
 - ``repetition``: a mapped column, else the count of earlier readings of the same setting in that test;

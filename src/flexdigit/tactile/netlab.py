@@ -34,7 +34,7 @@ import numpy as np
 from flexdigit._estimator import Estimator, check_is_fitted
 from flexdigit._validation import Interval, Plausible, check_array
 from flexdigit.errors import ParameterError
-from flexdigit.tactile import HIDDEN, TOL
+from flexdigit.tactile.network_sizes import HIDDEN, TOL
 
 SCG_SIGMA0 = 1.0e-4  # NETLAB scg.m
 _BETA_MIN, _BETA_MAX = 1.0e-15, 1.0e100

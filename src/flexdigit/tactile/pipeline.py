@@ -41,10 +41,10 @@ from flexdigit._validation import (
     validate_params,
 )
 from flexdigit.errors import ParameterError
-from flexdigit.tactile import HIDDEN, TOL
+from flexdigit.tactile.accuracy import accuracy, corr2, percentage_error, relative_rmse, rmse
 from flexdigit.tactile.dataset import Dataset
-from flexdigit.tactile.metrics import accuracy, corr2, percentage_error, relative_rmse, rmse
 from flexdigit.tactile.netlab import MLP
+from flexdigit.tactile.network_sizes import HIDDEN, TOL
 
 TARGETS = ("position", "position_index", "magnitude", "contact")
 LEARNING_GRADIENTS = tuple(10.0**-k for k in range(1, 10))

@@ -16,9 +16,10 @@ from flexdigit._result_table import ResultTable
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
+from flexdigit.tactile.accuracy import rmse
 from flexdigit.tactile.bounds import TwinGaugeModel
 from flexdigit.tactile.dataset import Dataset
-from flexdigit.tactile.metrics import rmse
+from flexdigit.tactile.localisation import LocalisationResult, identifiability_map, localisation_study
 from flexdigit.tactile.pipeline import (
     COARSE_HIDDEN,
     LEARNING_GRADIENTS,
@@ -30,7 +31,6 @@ from flexdigit.tactile.pipeline import (
 )
 from flexdigit.tactile.protocols import Protocol, load_protocol
 from flexdigit.tactile.runner import collect
-from flexdigit.tactile.studies import LocalisationResult, identifiability_map, localisation_study
 
 #: Twin step for tactile runs (s): the twin's own default. The sim backend defaults to 2 ms for the control
 #: loop's sake; load experiments only need the settled state, which is the same to 0.1 mV (checked in tests).
@@ -187,7 +187,7 @@ FRICTION_FIT_SEEDS = tuple(range(8))
 def actuated_corr2_score(
     calibration, *, seeds=FRICTION_FIT_SEEDS, params: RigParams | None = None, spread: bool = False
 ):
-    """The score :func:`flexdigit.calibrate.fit.calibrate` fits ``cable_friction_ratio`` with: the thesis
+    """The score :func:`flexdigit.calibrate.twin_fit.calibrate` fits ``cable_friction_ratio`` with: the thesis
     pipeline's actuated test corr2 (24 nodes, 1e-7, 50 epochs; :func:`pipeline_corr2_static`), averaged over the
     experiment repeated with each of ``seeds`` (data set, split and initial weights).
 

@@ -9,8 +9,8 @@
 
 from flexdigit._lazy import lazy_exports
 
-#: Public names and the submodule each lives in: imported on first use (PEP 562), so that importing a submodule
-#: (``flexdigit.twin.commands`` for ``flexdigit --help``) does not load python-control and scipy.
+#: Public names and the module each lives in, imported on first use (PEP 562): importing the package loads
+#: none of its modules, so `flexdigit --help` stays fast; `dir()` lists them all the same.
 __getattr__, __all__ = lazy_exports(
     __name__,
     {
@@ -19,6 +19,21 @@ __getattr__, __all__ = lazy_exports(
         "Calibration": "flexdigit.twin.calibration",
         "default_calibration": "flexdigit.twin.calibration",
         "load_calibration": "flexdigit.twin.calibration",
+        "save_calibration": "flexdigit.twin.calibration",
         "use_calibration": "flexdigit.twin.calibration",
+        "TwinRecord": "flexdigit.twin.records",
+        "release_test": "flexdigit.twin.records",
+        "servo_step_test": "flexdigit.twin.records",
+        "actuation_sweep": "flexdigit.twin.records",
+        "static_load_test": "flexdigit.twin.records",
+        "Tissue": "flexdigit.twin.contact",
+        "Inclusion": "flexdigit.twin.contact",
+        "PointForce": "flexdigit.twin.contact",
+        "Pressure": "flexdigit.twin.contact",
+        "solve_contact": "flexdigit.twin.contact",
+        "BatchedTwin": "flexdigit.twin.batched",
+        "SensorChain": "flexdigit.twin.sensors",
+        "Chain": "flexdigit.twin.digit",
+        "build_digit": "flexdigit.twin.digit",
     },
 )

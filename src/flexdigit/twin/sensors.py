@@ -107,7 +107,7 @@ def check_channels(params, calibration) -> None:
     """Refuse rig parameters and a calibration that disagree on the number of gauges, naming both.
 
     A rig TOML with two gauge positions met the packaged three-channel calibration in a numpy broadcast (issue 16);
-    studies of other gauge counts give a calibration with one value per gauge (:mod:`flexdigit.studies.design`).
+    studies of other gauge counts give a calibration with one value per gauge (:mod:`flexdigit.studies.design_study`).
     """
     from flexdigit.errors import ParameterError
 

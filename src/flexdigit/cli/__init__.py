@@ -1,0 +1,145 @@
+"""The ``flexdigit`` command: a module per sub-command, every one with ``--json``; nothing imports this package.
+
+Each sub-command lives in its own module here (``flexdigit/cli/<command>.py``), which adds it to the parser
+through a function ``register(subparsers)``; this module only lists those modules, runs the chosen command and
+prints its :class:`~flexdigit._command.CommandResult`. Bad input never ends in a traceback: flexdigit's errors (and
+``ValueError``/``OSError``) become one line on stderr naming the culprit, with exit code 2 (``--debug`` shows the
+traceback). Under ``--json`` the same error is also an object on stdout, so a client always gets JSON::
+
+    {"error": "...", "error_type": "DataFileError", "command": "train", "exit_code": 2}
+
+Command-line mistakes (an unknown option, ``--seed abc``) are reported the same way. Progress displays write to
+stderr only: stdout carries the result and nothing else.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import os
+import sys
+from pathlib import Path
+
+from flexdigit import __version__
+from flexdigit.errors import one_line
+
+#: Modules that add sub-commands, in the order of the architecture (params -> ... -> report).
+COMMAND_MODULES: tuple[str, ...] = (
+    "flexdigit.cli.params_file",
+    "flexdigit.cli.model",
+    "flexdigit.cli.simulate",
+    "flexdigit.cli.identify",
+    "flexdigit.cli.design",
+    "flexdigit.cli.run",
+    "flexdigit.cli.collect",
+    "flexdigit.cli.palpate",
+    "flexdigit.cli.calibrate",
+    "flexdigit.cli.live",
+    "flexdigit.cli.study",
+    "flexdigit.cli.reproduce",
+)
+
+
+class UsageError(ValueError):
+    """A command-line mistake argparse found (unknown option, a value of the wrong type)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, raising :class:`UsageError` instead of exiting, so that ``--json`` can report it as JSON."""
+
+    def error(self, message: str):  # argparse's hook
+        # a declared flag's refusal (flexdigit._validation.Flag) in the format of every parameter message
+        flag, sep, rest = message.removeprefix("argument ").partition(": must ")
+        if sep and message.startswith("argument "):
+            command = self.prog.removeprefix("flexdigit").strip()
+            message = f"The '{flag.split('/')[-1]}' parameter of flexdigit {command} must {rest}"
+        exc = UsageError(message)
+        exc.prog = self.prog
+        raise exc
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="flexdigit",
+        description="The cable-actuated flexible digit (Ward 2004 MPhil thesis), on its digital twin or a real rig.",
+    )
+    parser.add_argument("--version", action="version", version=f"flexdigit {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks instead of one-line errors")
+    subparsers = parser.add_subparsers(title="commands", metavar="COMMAND")
+    for module_name in COMMAND_MODULES:
+        importlib.import_module(module_name).register(subparsers)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run ``flexdigit`` with ``argv`` (default ``sys.argv[1:]``) and return the exit code."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except UsageError as exc:
+        # argparse has not told us whether --json was asked for: look for it (before any "--" end of options)
+        wants_json = "--json" in (argv[: argv.index("--")] if "--" in argv else argv)
+        command = exc.prog.removeprefix(parser.prog).strip()
+        if not command:  # argparse reports a sub-command's unknown options from the top parser: name the command
+            command = next((a for a in argv if not a.startswith("-")), "")
+            command = command if command in _command_names(parser) else ""
+        return _fail(f"{exc} (see flexdigit {command} --help)".replace("  ", " "), "UsageError", command, wants_json, 2)
+    if not hasattr(args, "func"):
+        parser.print_help()
+        return 2
+    wants_json = bool(getattr(args, "json", False))
+    try:
+        result = args.func(args)
+    except KeyboardInterrupt:
+        return _fail("interrupted", "KeyboardInterrupt", args.command_name, wants_json, 130)
+    except (ValueError, OSError, ArithmeticError, KeyError) as exc:
+        if args.debug:
+            raise
+        return _fail(_message(exc), type(exc).__name__, args.command_name, wants_json, 2)
+    except Exception as exc:  # noqa: BLE001 - a bug, not bad input: still one line (and JSON), never a traceback
+        if args.debug:
+            raise
+        text = f"internal error ({type(exc).__name__}: {exc}); please report it, --debug shows the traceback"
+        return _fail(text, type(exc).__name__, args.command_name, wants_json, 2)
+    try:
+        if wants_json:
+            from flexdigit._json import to_jsonable  # numpy: not for --help or --version
+
+            json.dump(to_jsonable(result.data), sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        elif result.text:
+            print(result.text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # `flexdigit ... | head`: the reader left; say nothing more
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - keeps Python's exit-time flush quiet
+    return result.exit_code
+
+
+def _command_names(parser: argparse.ArgumentParser) -> set[str]:
+    return {name for action in parser._subparsers._group_actions for name in action.choices}
+
+
+def _fail(message: str, error_type: str, command: str, wants_json: bool, code: int) -> int:
+    """Report an error: one line on stderr and, under ``--json``, an ``{"error": ...}`` object on stdout."""
+    message = one_line(message)  # a library's message may carry newlines; ours are one line
+    prefix = f"flexdigit {command}" if command else "flexdigit"
+    print(f"{prefix}: {'interrupted' if code == 130 else 'error: ' + message}", file=sys.stderr)
+    if wants_json:
+        doc = {"error": message, "error_type": error_type, "command": command or None, "exit_code": code}
+        try:
+            json.dump(doc, sys.stdout)
+            sys.stdout.write("\n")
+            sys.stdout.flush()
+        except BrokenPipeError:
+            sys.stdout = open(os.devnull, "w")  # noqa: SIM115
+    return code
+
+
+def _message(exc: BaseException) -> str:
+    if isinstance(exc, FileNotFoundError) and exc.filename:
+        return f"no such file: {Path(exc.filename)}"
+    if isinstance(exc, KeyError) and exc.args:
+        return str(exc.args[0])
+    return str(exc) or type(exc).__name__

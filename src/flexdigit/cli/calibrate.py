@@ -1,0 +1,171 @@
+"""``flexdigit calibrate``: fit the twin to a rig's records (or to the thesis) and write a calibration TOML.
+
+Records (see :mod:`flexdigit.calibrate.record_files` for their columns): release tests bare and housed, an actuation
+sweep, a deflection table, a record of the resting rig and repeated readings of the unloaded actuated digit; any
+subset (what no record identifies keeps the starting calibration's value). Prints the residual of every target
+(``--json`` too) and writes the calibration with its fit record, never over an existing file without ``--force``.
+Every command that runs the twin takes the file with ``--calibration FILE``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import Flag
+
+#: A fit that misses a release test's wn or zeta by more than this many percent, or a deflection by more than this
+#: many reading resolutions, is refused (unless --allow-poor-fit): the twin cannot reproduce those records together
+#: (records of different rigs or set-ups mixed, a unit slip, a gauge wired to the wrong channel...).
+POOR_FIT = 3.0
+RECORDS = ("release_bare", "release_housed", "sweep", "deflections", "rest", "actuated_rest")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = add_command(
+        subparsers,
+        "calibrate",
+        _calibrate,
+        help="fit the twin to a rig's records (or to the thesis) and write a calibration TOML",
+        description=__doc__.splitlines()[0],
+    )
+    p.add_argument("--out", required=True, help="calibration TOML to write")
+    p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    p.add_argument("--release-bare", action="append", metavar="FILE", help="release test without housing (repeatable)")
+    p.add_argument("--release-housed", action="append", metavar="FILE", help="release test with housing (repeatable)")
+    p.add_argument("--sweep", metavar="FILE", help="actuation sweep: command and the three gauges")
+    p.add_argument("--deflections", metavar="FILE", help="deflection table: command and y1..y3 (mm, cm or m)")
+    from flexdigit.rig.rotation_reference import READING_RESOLUTION_MM
+
+    p.add_argument(
+        "--deflection-resolution-mm",
+        type=Flag(READING_RESOLUTION_MM),
+        default=0.5,
+        help="reading resolution (default 0.5)",
+    )
+    p.add_argument("--rest", metavar="FILE", help="the resting rig: time and the three gauges (noise levels)")
+    p.add_argument(
+        "--actuated-rest", metavar="FILE", help="repeated readings of the unloaded actuated digit (friction level)"
+    )
+    p.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
+    p.add_argument(
+        "--decimal", choices=(".", ","), default=None, help="decimal mark of the tables (default: detected per file)"
+    )
+    p.add_argument("--thesis", action="store_true", help="fit to the thesis's figures instead (minutes: the friction)")
+    p.add_argument(
+        "--allow-poor-fit",
+        action="store_true",
+        help=f"write the calibration even if the twin misses a target by more than {POOR_FIT:g} of its scale",
+    )
+    p.add_argument("--initial", metavar="FILE", help="calibration to start from (default: the packaged one)")
+    p.add_argument("--params", metavar="FILE", help="rig parameters TOML (default: the thesis rig)")
+
+
+def _calibrate(args: argparse.Namespace) -> CommandResult:
+    import dataclasses
+
+    from flexdigit._io import check_output
+    from flexdigit.calibrate import record_files as rec
+    from flexdigit.calibrate.targets import CalibrationTargets, release_figures
+    from flexdigit.calibrate.twin_fit import THESIS_SOURCE, calibrate, calibrate_to_thesis
+    from flexdigit.errors import DesignError, ParameterError
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.twin.calibration import load_calibration, packaged_calibration, save_calibration
+
+    given = {name: getattr(args, name) for name in RECORDS if getattr(args, name)}
+    if args.thesis and given:
+        raise ParameterError("--thesis fits the thesis's figures: give it alone, without record files")
+    if not args.thesis and not given:
+        raise ParameterError(
+            "nothing to calibrate: give record files (--release-bare, --release-housed, --sweep, --deflections, "
+            "--rest, --actuated-rest) or --thesis"
+        )
+    if args.deflection_resolution_mm <= 0:
+        raise ParameterError(
+            f"--deflection-resolution-mm must be > 0 (the reading resolution). Got {args.deflection_resolution_mm!r}"
+        )
+    out = check_output(args.out, force=args.force)  # refuse a bad destination before minutes of fitting
+    params = load_params(args.params) if args.params else RigParams()
+    initial = load_calibration(args.initial) if args.initial else packaged_calibration()
+    releases: dict[str, dict] = {}
+    if args.thesis:
+        result = calibrate_to_thesis(params)
+        source = THESIS_SOURCE
+    else:
+        kw: dict = {"deflection_resolution_mm": args.deflection_resolution_mm}
+        release_targets: dict = {}
+        for key, name in (("bare", "release_bare"), ("housing", "release_housed")):
+            if name in given:
+                series = [
+                    s
+                    for path in given[name]
+                    for s in rec.read_release(path, time_unit=args.time_unit, decimal=args.decimal)
+                ]
+                releases[key] = release_figures(series)
+                release_targets[f"{key}_wn_rad_s"] = releases[key]["wn_rad_s"]
+                release_targets[f"{key}_zeta"] = releases[key]["zeta"]
+        if "sweep" in given:
+            kw["sweep"] = rec.read_sweep(given["sweep"], decimal=args.decimal)
+        if "deflections" in given:
+            kw["deflections"] = rec.read_deflections(given["deflections"], decimal=args.decimal)
+        if "rest" in given:
+            kw["rest"] = rec.read_rest(given["rest"], time_unit=args.time_unit, decimal=args.decimal)
+        if "actuated_rest" in given:
+            kw["actuated_rest"] = rec.read_actuated_rest(given["actuated_rest"], decimal=args.decimal)
+        targets = dataclasses.replace(CalibrationTargets.from_records(**kw), **release_targets)
+        result = calibrate(targets, params, initial=initial)
+        if not result.success:
+            raise DesignError(f"the fit did not converge ({result.message}); no calibration written to {out}")
+        row, miss = result.worst()
+        if miss > POOR_FIT and not args.allow_poor_fit:
+            raise DesignError(
+                f"the calibrated twin misses {row['target']} by {row['twin'] - row['measured']:+.4g} {row['unit']} "
+                f"({miss:.1f} times its scale of {row['scale']:.3g} {row['unit']}): it cannot reproduce these records "
+                f"together (different rigs or set-ups mixed? a unit slip?); no calibration written to {out} (pass "
+                "--allow-poor-fit to write it anyway)"
+            )
+        source = "flexdigit calibrate " + " ".join(
+            f"--{name.replace('_', '-')} {path}"
+            for name, paths in given.items()
+            for path in (paths if isinstance(paths, list) else [paths])
+        )
+    fit = result.fit_record(source)
+    if releases:
+        fit["release_tests"] = {key: _release_summary(fig) for key, fig in releases.items()}
+    save_calibration(result.calibration, out, fit, force=args.force)
+    rows = result.residual_rows()
+    row, miss = result.worst()
+    data = {
+        "out": str(out),
+        "success": result.success,
+        "worst": None if row is None else {"target": row["target"], "times_scale": miss},
+        "message": result.message,
+        "cost": result.cost,
+        "fitted": result.fitted,
+        "kept": [name for name in result.calibration.to_dict() if name not in result.fitted],
+        "residuals": rows,
+        "calibration": result.calibration.to_dict(),
+        "release_tests": fit.get("release_tests", {}),
+    }
+    lines = [result.table(), ""]
+    for key, summary in data["release_tests"].items():
+        for r in summary["records"]:
+            lines.append(f"release {key} {r['record']}: wn {r['wn_rad_s']:.4f} rad/s, zeta {r['zeta']:.5f}")
+        for s in summary["skipped"]:
+            lines.append(f"release {key} {s['record']}: not identified ({s['reason']})")
+    lines.append("fitted: " + ", ".join(result.fitted))
+    lines.append("kept from the starting calibration: " + (", ".join(data["kept"]) or "none"))
+    lines.append(f"calibration written to {out}")
+    return CommandResult(data=data, text="\n".join(lines))
+
+
+def _release_summary(figures: dict) -> dict:
+    return {
+        "wn_rad_s": figures["wn_rad_s"],
+        "zeta": figures["zeta"],
+        "records": [
+            {"record": f"{f.source}:{f.channel}", "wn_rad_s": f.wn_rad_s, "zeta": f.zeta, "fit_percent": f.fit_percent}
+            for f in figures["fits"]
+        ],
+        "skipped": figures["skipped"],
+    }

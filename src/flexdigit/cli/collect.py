@@ -1,0 +1,314 @@
+"""``flexdigit collect``, ``dataset import``, ``train`` and ``predict``: tactile experiments from the shell."""
+
+from __future__ import annotations
+
+import argparse
+
+from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag, Plausible
+from flexdigit.params import DIGIT_LENGTH_M
+
+
+def _collect_flags():
+    """The declarations the flags share with the library (imported when the parser is built)."""
+    from flexdigit.tactile.network_sizes import HIDDEN, TOL
+    from flexdigit.tactile.protocols import MAX_SETTLE_S
+
+    settle = Plausible("s", 0.0, MAX_SETTLE_S, "settle time per setting: an hour at most")
+    return HIDDEN, TOL, settle
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    hidden, tol, settle = _collect_flags()
+    p = add_command(
+        subparsers,
+        "collect",
+        _collect,
+        help="run a load protocol (thesis-6.1, thesis-7.1, thesis-7.1-no-load or a TOML file) and save the dataset",
+    )
+    p.add_argument("protocol", help="a built-in protocol name or a protocol TOML file")
+    p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
+    p.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv); resumes its journal")
+    p.add_argument(
+        "--seed",
+        type=Flag(SEED),
+        default=None,
+        help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)",
+    )
+    p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (sim backends; default: the thesis's)")
+    p.add_argument(
+        "--settle", type=Flag(settle), default=None, help="settle time per setting, s, 0..3600 (default: protocol's)"
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
+    p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset, and --record")
+
+    p = add_command(
+        subparsers,
+        "dataset",
+        _dataset,
+        help="import tactile readings from another rig (its own columns and units) as a dataset",
+    )
+    sub = p.add_subparsers(dest="action", metavar="ACTION", required=True)
+    q = sub.add_parser(
+        "import",
+        help="map a foreign readings file (CSV-like or Parquet) onto a dataset train and predict take",
+        description="Map a foreign tactile readings file onto a flexdigit dataset. The column map comes from --map "
+        "(a TOML with the keys below, without the dashes: gauges, gauge_unit, load, ...) and/or the flags, which win.",
+    )
+    q.add_argument("file", help="the readings: CSV-like text (delimiter detected) or .parquet")
+    q.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv)")
+    q.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    q.add_argument("--map", metavar="TOML", help='column map file (keys as the flags, e.g. gauge_unit = "mV")')
+    q.add_argument("--gauges", metavar="A,B,C", help="the three gauge columns, gauge 1 (nearest the clamp) first")
+    q.add_argument("--gauge-unit", choices=("V", "mV"), help="unit of the gauge (and pot) columns (default V)")
+    q.add_argument("--load", metavar="COLUMN", help="the hung mass (0 = no load)")
+    q.add_argument("--load-unit", choices=("kg", "g"), help="default kg")
+    q.add_argument("--position", metavar="COLUMN", help="where the load hangs (may be empty on no-load rows)")
+    q.add_argument("--position-unit", choices=("m", "cm", "mm"), help="default m")
+    q.add_argument("--position-from", choices=("tip", "clamp"), help="what the position is measured from (default tip)")
+    q.add_argument("--digit-length-m", type=Flag(DIGIT_LENGTH_M), help="clamp to tip, m (default: the rig's, 0.27)")
+    q.add_argument("--command", metavar="COLUMN", help="servo command column (default: none, servo relaxed)")
+    q.add_argument("--repetition", metavar="COLUMN", help="repetition column (default: counted)")
+    q.add_argument("--test", metavar="COLUMN", help="test column (default: derived, see the README)")
+    q.add_argument("--time", metavar="COLUMN", help="time column (default: none)")
+    q.add_argument("--time-unit", choices=("s", "ms"), help="default s")
+    q.add_argument("--pot", metavar="COLUMN", help="potentiometer column, in the gauge unit (default: none)")
+    q.add_argument("--delimiter", choices=(",", ";", "tab", "|", "whitespace"), help="default: detected")
+    q.add_argument("--decimal", choices=(".", ","), help="decimal mark (default: detected)")
+    q.add_argument("--name", help="the dataset's protocol name (default: imported:<file stem>)")
+    q.add_argument("--orientation", choices=("horizontal", "vertical"), help="how the digit lay (default horizontal)")
+    q.add_argument("--params", metavar="FILE", help="rig parameters TOML (for the digit length)")
+    q.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+
+    p = add_command(subparsers, "train", _train, help="train the thesis's network on a dataset and save it as JSON")
+    p.add_argument("file", help="a dataset written by 'flexdigit collect'")
+    p.add_argument(
+        "--target",
+        default="position",
+        choices=("position", "position-index", "magnitude", "contact"),
+        help="position: m from the tip (loaded readings); position-index: the thesis's position number; "
+        "magnitude: kg; contact: load / no load",
+    )
+    p.add_argument("--hidden", type=Flag(hidden), default=None, help="hidden nodes (default: sweep as the thesis)")
+    p.add_argument("--tol", type=Flag(tol), default=None, help="'learning gradient' (SCG tolerance; default: sweep)")
+    p.add_argument("--seed", type=Flag(SEED), default=0)
+    p.add_argument("--model", default=None, help="model file to write (default: FILE stem + .<target>.model.json)")
+    p.add_argument("--force", action="store_true", help="overwrite the model file if it exists")
+
+    p = add_command(subparsers, "predict", _predict, help="predict with a saved model on a dataset")
+    p.add_argument("model", help="a model file written by 'flexdigit train'")
+    p.add_argument("file", help="a dataset")
+    p.add_argument(
+        "--limit",
+        type=Flag(
+            Plausible("", 0, 1_000_000, "readings listed in the text output (--json lists them all)", integer=True)
+        ),
+        default=10,
+        help="readings to list in the text output",
+    )
+
+
+def _collect(args: argparse.Namespace) -> CommandResult:
+    from pathlib import Path
+
+    from flexdigit._io import check_output
+    from flexdigit._validation import check_real
+    from flexdigit.errors import ParameterError
+    from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
+    from flexdigit.tactile.protocols import MAX_SETTLE_S, load_protocol
+    from flexdigit.tactile.runner import collect, journal_path
+    from flexdigit.tactile.thesis_experiments import sim_options
+
+    protocol = load_protocol(args.protocol)
+    out = Path(args.out)
+    # every option checked before the rig is opened (the runner checks them again before the first reading)
+    if args.settle is not None:
+        check_real(args.settle, "--settle", "flexdigit collect", low=0, high=MAX_SETTLE_S)
+    journal = journal_path(out)
+    if not (out.exists() and journal.exists()):  # both: a run stopped while tidying up, the runner finishes it
+        check_output(out, force=args.force)
+    resumed = journal.exists()
+    # on the twin, lie the digit as the protocol says and attach the cable only when it actuates
+    on_twin = parse_rig_url(args.backend).scheme.startswith("sim")
+    if args.calibration and not on_twin:
+        raise ParameterError(
+            f"--calibration calibrates the twin: it needs a sim backend, not {args.backend!r} (a real rig is itself)"
+        )
+    options = sim_options(protocol, args.backend) if on_twin else {}
+    if args.calibration:
+        from flexdigit.twin.calibration import load_calibration
+
+        options["calibration"] = load_calibration(args.calibration)
+    rig = open_rig(args.backend, **options, **seed_option(args.backend, args.seed))
+    if args.record is not None:
+        from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
+
+        try:
+            recording = Recording(
+                args.record,
+                header={
+                    "backend": args.backend,
+                    "protocol": protocol.name,
+                    "seed": rig.settings().get("seed"),
+                    "source": "collect",
+                },
+                metadata=rig_metadata(rig),
+                force=args.force,
+            )
+        except BaseException:
+            rig.close()
+            raise
+        rig = recording_rig(rig, recording)
+    try:
+        dataset = collect(
+            protocol,
+            rig,
+            out,
+            rig_url=args.backend,
+            settle_s=args.settle,
+            progress=not args.no_progress,
+            force=args.force,
+        )
+    finally:
+        rig.close()
+    data = {
+        "protocol": protocol.name,
+        "samples": len(dataset),
+        "out": str(out),
+        "resumed": resumed,
+        "settings": dataset.meta.get("settings"),
+    }
+    text = f"{protocol.name}: {len(dataset)} readings written to {out}" + (" (resumed)" if resumed else "")
+    return CommandResult(data=data, text=text)
+
+
+def _dataset(args: argparse.Namespace) -> CommandResult:
+    import numpy as np
+
+    from flexdigit._io import check_output
+    from flexdigit.errors import ParameterError
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.tactile.dataset import save_dataset
+    from flexdigit.tactile.importer import ROLES, ColumnMap, import_readings
+
+    out = check_output(args.out, force=args.force)
+    flags = {
+        key: getattr(args, key)
+        for key in (
+            "gauge_unit", "load", "load_unit", "position", "position_unit", "position_from", "digit_length_m",
+            "command", "repetition", "test", "time", "time_unit", "pot", "delimiter", "decimal", "name",
+            "orientation",
+        )
+    }  # fmt: skip
+    if args.gauges is not None:
+        flags["gauges"] = tuple(g.strip() for g in args.gauges.split(","))
+    if args.map:
+        cmap = ColumnMap.from_toml(args.map, **flags)
+    else:
+        missing = [flag for flag, key in (("--gauges", "gauges"), ("--load", "load"), ("--position", "position"))
+                   if flags.get(key) is None]  # fmt: skip
+        if missing:
+            raise ParameterError(
+                f"dataset import needs {missing[0]} (the {ROLES[missing[0][2:]]}): give the flags or a --map TOML"
+            )
+        cmap = ColumnMap.build({}, flags, source="the column flags")
+    params = load_params(args.params) if args.params else RigParams()
+    dataset = import_readings(args.file, cmap, params=params)
+    save_dataset(dataset, out, force=args.force)  # atomic, Parquet or (by the suffix) CSV
+    protocol = dataset.protocol
+    loaded = int(np.sum(dataset["load_kg"] > 0))
+    data = {
+        "out": str(out),
+        "samples": len(dataset),
+        "loaded": loaded,
+        "no_load": len(dataset) - loaded,
+        "protocol": protocol.to_dict(),
+        "tests": int(np.unique(dataset["test"]).size),
+        "derived": dataset.meta["rig"]["derived"],
+        "delimiter": dataset.meta["rig"]["delimiter"],
+        "decimal": dataset.meta["rig"]["decimal"],
+    }
+    text = (
+        f"{args.file}: {len(dataset)} readings ({loaded} loaded, {len(dataset) - loaded} no load; "
+        f"{len(protocol.loads_kg)} loads, {len(protocol.positions_from_tip_m)} positions, "
+        f"{len(protocol.actuation_commands) or 'no'} commands, {data['tests']} tests) -> {out}"
+    )
+    return CommandResult(data=data, text=text)
+
+
+def _train(args: argparse.Namespace) -> CommandResult:
+    from pathlib import Path
+
+    from flexdigit._io import check_output
+    from flexdigit.tactile.accuracy import accuracy, rmse
+    from flexdigit.tactile.dataset import load_dataset
+    from flexdigit.tactile.model_io import save_model
+    from flexdigit.tactile.pipeline import features, run_pipeline, targets
+
+    model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
+    check_output(model_path, force=args.force)  # before training (minutes), not after it
+    dataset = load_dataset(args.file)
+    target = args.target.replace("-", "_")
+    rows, y = targets(dataset, target)
+    actuated = dataset.protocol.actuated
+    x = features(dataset, with_command=actuated)[rows]
+    inputs = ["gauge1_v", "gauge2_v", "gauge3_v"] + (["command"] if actuated else [])
+    sweep = args.hidden is None or args.tol is None
+    result = run_pipeline(
+        x,
+        y,
+        seed=args.seed,
+        fixed_hidden=args.hidden,
+        fixed_tol=args.tol,
+        target=target,
+        curve_hidden=None,  # the error curves are not shown: no network for them
+    )
+    scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
+    if target == "position":
+        scores["rmse_mm"] = 1000 * rmse(result.y_pred, result.y_test)
+    elif target == "magnitude":
+        scores["rmse_g"] = 1000 * rmse(result.y_pred, result.y_test)
+    elif target == "contact":
+        scores["accuracy"] = accuracy((result.y_pred >= 0.5).astype(float), result.y_test)
+    else:
+        scores["rmse_positions"] = rmse(result.y_pred, result.y_test)
+    save_model(
+        model_path,
+        result.model,
+        target=target,
+        inputs=inputs,
+        meta={"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores},
+        force=args.force,
+    )
+    data = {"target": target, "model": str(model_path), "swept": sweep, **scores}
+    lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]
+    lines += [f"  {k} = {v:.6g}" if isinstance(v, float) else f"  {k} = {v}" for k, v in scores.items()]
+    return CommandResult(data=data, text="\n".join(lines))
+
+
+def _predict(args: argparse.Namespace) -> CommandResult:
+    import numpy as np
+
+    from flexdigit.errors import DataFileError
+    from flexdigit.tactile.accuracy import corr2, rmse
+    from flexdigit.tactile.dataset import load_dataset
+    from flexdigit.tactile.model_io import load_model
+    from flexdigit.tactile.pipeline import targets
+
+    saved = load_model(args.model)
+    dataset = load_dataset(args.file)
+    missing = [c for c in saved.inputs if c not in dataset.columns]
+    if missing:
+        raise DataFileError(f"{args.file}: the model needs column '{missing[0]}'")
+    rows, y = targets(dataset, saved.target)
+    x = np.column_stack([dataset[c].astype(float) for c in saved.inputs])[rows]
+    pred = saved.network.predict(x)
+    scores = {"corr2": corr2(pred, y), "rmse": rmse(pred, y)}
+    data = {"target": saved.target, "samples": rows.tolist(), "predicted": pred, "actual": y, "scores": scores}
+    lines = [f"{saved.target}: {len(rows)} readings, corr2 {scores['corr2']:.4f}, RMSE {scores['rmse']:.4g}"]
+    lines += [
+        f"  sample {int(dataset['sample'][r])}: predicted {p:.5g}, actual {t:.5g}"
+        for r, p, t in zip(rows[: args.limit], pred[: args.limit], y[: args.limit], strict=True)
+    ]
+    return CommandResult(data=data, text="\n".join(lines))

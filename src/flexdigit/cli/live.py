@@ -1,0 +1,152 @@
+"""``flexdigit shape`` (the centre line from one reading, or the estimator's accuracy on the twin).
+
+flexdigit shape --gauges-v 0.21,0.71,0.30 --command 20 --orientation horizontal [--json]
+flexdigit shape --accuracy [--seed 0] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+from numbers import Integral
+
+from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag, Interval, Plausible
+from flexdigit.params import SERVO_COMMAND
+
+
+def register(subparsers) -> None:
+    live = add_command(
+        subparsers,
+        "live",
+        _live,
+        help="serve the live page: the digit's shape, gauges, contact and controller, in a browser",
+    )
+    live.add_argument("--backend", default="sim", help="sim (the twin, horizontal), serial://..., replay://FILE")
+    live.add_argument("--model", default=None, help="a trained position network (flexdigit train) for the contact")
+    live.add_argument("--host", default="127.0.0.1", help="address to listen on (default this machine only)")
+    live.add_argument(  # a TCP port number; 0 asks the system for a free one
+        "--port", type=Flag(Interval(Integral, 0, 65535)), default=8050, help="port (0: any free one; default 8050)"
+    )
+    live.add_argument("--allow-remote", action="store_true", help="allow a --host other machines can reach")
+    live.add_argument("--record", default=None, help="record the session to this MCAP file")
+    live.add_argument("--force", action="store_true", help="replace an existing --record file")
+    live.add_argument("--calibration", default=None, help="calibration TOML: the twin's, and the shape estimate's")
+    live.add_argument("--rotation-map", default=None, help="rotation map (flexdigit run --rotation-map) on hardware")
+    live.add_argument("--orientation", default=None, help="mounting on hardware: vertical, horizontal, hanging")
+    live.add_argument(
+        "--seed", type=Flag(SEED), default=None, help="twin noise seed (default: the URL's seed=, else 0)"
+    )
+    parser = add_command(
+        subparsers,
+        "shape",
+        _shape,
+        help="the digit's centre line (and a load) from the three gauge voltages, or the estimator's accuracy",
+    )
+    parser.add_argument("--gauges-v", default=None, help="the three gauge voltages, V, comma-separated (base first)")
+    parser.add_argument(
+        "--command", type=Flag(SERVO_COMMAND), default=None, help="servo command in force (0..254); omit if unknown"
+    )
+    parser.add_argument("--orientation", default="vertical", help="vertical (tip up), horizontal (cable up), hanging")
+    parser.add_argument("--no-cable", action="store_true", help="cable detached (the non-actuated digit, ch. 6)")
+    parser.add_argument("--load", default="weight", help="what a load is: weight, press or none")
+    parser.add_argument(
+        "--n-average",
+        type=Flag(Plausible("", 1, 1_000_000, "readings averaged into one: the thesis took 25", integer=True)),
+        default=1,
+        help="readings averaged into the one given",
+    )
+    parser.add_argument("--accuracy", action="store_true", help="score the estimator against the twin instead")
+    parser.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed of --accuracy")
+
+
+def _live(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._validation import check_int
+    from flexdigit.live.server import check_host, serve
+    from flexdigit.live.session import LiveSession
+
+    check_host(args.host, args.allow_remote)
+    check_int(args.port, "--port", low=0, high=65535)
+    session = LiveSession(
+        args.backend,
+        model=args.model,
+        record=args.record,
+        force=args.force,
+        calibration=args.calibration,
+        rotation_map=args.rotation_map,
+        orientation=args.orientation,
+        seed=args.seed,
+    )
+    try:
+        serve(session, args.host, args.port, allow_remote=args.allow_remote)
+    except KeyboardInterrupt:
+        pass  # Ctrl-C is how a live session ends; uvicorn re-raises it once it has shut down
+    finally:
+        session.stop()
+    data = {
+        "status": session.error or "stopped",
+        "backend": args.backend,
+        "record": str(session.recording.path) if session.recording is not None else None,
+        "overruns": session.state.overruns,
+    }
+    text = f"flexdigit live: {data['status']}" + (f"; recording {data['record']}" if data["record"] else "")
+    return CommandResult(data=data, text=text, exit_code=0 if session.error is None else 1)
+
+
+def _shape(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.errors import ParameterError
+
+    if args.accuracy:
+        return _accuracy(args)
+    if args.gauges_v is None:
+        raise ParameterError("--gauges-v V1,V2,V3 is required (or --accuracy)")
+    try:
+        volts = [float(x) for x in args.gauges_v.split(",")]
+    except ValueError:
+        raise ParameterError(f"--gauges-v must be three numbers separated by commas. Got {args.gauges_v!r}.") from None
+    if len(volts) != 3:
+        raise ParameterError(f"--gauges-v must be three numbers separated by commas. Got {args.gauges_v!r}.")
+    from flexdigit.shape.shape import ShapeEstimator
+
+    est_settings = ShapeEstimator(
+        orientation=args.orientation, cable=not args.no_cable, load=args.load, n_average=args.n_average
+    )
+    est = est_settings.estimate(volts, command=args.command)
+    row = est.row(0, every=10)
+    tip_mm = [1e3 * x for x in row["tip_m"]]
+    text = (
+        f"tip at {tip_mm[0]:.1f}, {tip_mm[1]:.1f} mm (along, towards the cable), "
+        f"+- {1e3 * max(row['tip_sd_m']):.1f} mm; tip angle {row['tip_angle_deg']:.1f} deg; "
+        f"cable tension {row['tension_n']:.2f} N\n"
+    )
+    if row["contact"]:
+        lo, hi = row["load_position_interval_m"]
+        sd = row["load_position_sd_m"]
+        sd_text = "not locatable" if sd is None else f"+- {1e3 * sd:.1f} mm"
+        text += (
+            f"contact: a {row['load_kind']} at {1e3 * row['load_position_from_base_m']:.0f} mm from the base "
+            f"({sd_text}; consistent {1e3 * lo:.0f}..{1e3 * hi:.0f} mm), force {row['load_force_n']:.3f} N"
+        )
+    else:
+        text += "no contact"
+    if not row["consistent"]:
+        chi2 = float(est.chi2_load[0] if row["contact"] else est.chi2_no_load[0])
+        text = (
+            f"the readings do not fit this rig (chi-square {chi2:.0f}, at most {est_settings.misfit_chi2:g} "
+            "expected): check the calibration, --orientation, --command and --no-cable; no estimate given"
+        )
+        return CommandResult(data=row, text=text, exit_code=1)
+    return CommandResult(data=row, text=text)
+
+
+def _accuracy(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.shape.shape import shape_accuracy
+
+    acc = shape_accuracy(tuple(range(8, 44, 5)), seed=args.seed)
+    summary = acc.summary()
+    lines = ["case                 cases  tip median  tip p95  tip max  RMS along  tip within 2 sd"]
+    for g in summary:
+        lines.append(
+            f"{g['case']:<20} {g['cases']:>5}  {g['tip_error_median_mm']:7.2f} mm {g['tip_error_p95_mm']:6.2f} mm "
+            f"{g['tip_error_max_mm']:6.2f} mm {g['rms_error_mean_mm']:7.2f} mm  {100 * g['tip_within_2sd']:6.0f} %"
+        )
+    return CommandResult(data={"seed": args.seed, "groups": summary}, text="\n".join(lines))

@@ -1,0 +1,278 @@
+"""``flexdigit palpate``: press the digit into tissue and say how stiff it is (issue 13)."""
+
+from __future__ import annotations
+
+import argparse
+
+from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag
+
+#: Largest chi^2 per degree of freedom a palpation fit may leave and still be reported.
+MAX_CHI2_PER_DOF = 25.0
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = add_command(
+        subparsers,
+        "palpate",
+        _palpate,
+        help="palpate tissue beside the digit: stiffness from a command sweep, a scan for an inclusion, force control",
+    )
+    p.add_argument("--tissue", required=True, help="a tissue TOML file or a built-in (soft-block, nodule-phantom, ...)")
+    p.add_argument("--protocol", default=None, help="a protocol TOML file or a built-in: sweep (default), scan, hold")
+    p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
+    p.add_argument(
+        "--seed",
+        type=Flag(SEED),
+        default=None,
+        help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)",
+    )
+    p.add_argument("--log", default=None, help="JSON-lines log of every loop sample (scan: one file per offset)")
+    p.add_argument("--out", default=None, help="write the result as JSON to this file")
+    p.add_argument("--force", action="store_true", help="overwrite --out / --log if they exist")
+
+
+def _sim_options(backend: str, kind: str, seed: int | None) -> dict:
+    from flexdigit.rig.base import parse_rig_url, seed_option
+
+    url = parse_rig_url(backend)
+    options = seed_option(backend, seed)  # --seed only when given: the URL's seed= is not overridden by a default
+    if not url.scheme.startswith("sim"):
+        return options
+    if "dt_s" not in url.options:
+        # a quasi-static sweep needs no finer step than 10 ms (the fit's chi^2 is the same at 2 ms); force control
+        # acts between frames, 5 ms
+        options["dt_s"] = 0.005 if kind == "force" else 0.01
+    return options
+
+
+def _palpate(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._io import atomic_write, check_output
+    from flexdigit._json import to_jsonable
+    from flexdigit.errors import DataFileError
+    from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
+    from flexdigit.rig.base import open_rig
+
+    tissue, info = load_tissue(args.tissue)
+    plan = load_palpation_protocol(args.protocol)
+    kind = "force" if plan.force else ("scan" if plan.scan else "sweep")
+    out = check_output(args.out, force=args.force) if args.out else None
+    logs = _log_paths(args.log, plan, args.force)
+    sim = args.backend.split(":")[0].split("?")[0].startswith("sim")
+    if sim and not info.placed_on_twin:
+        raise DataFileError(
+            f"{info.source}: keys 'tissue.gap_mm' and 'tissue.modulus_n_m2' are needed on the twin (they place the "
+            "tissue there; palpation then estimates them)"
+        )
+    rig = open_rig(args.backend, **_sim_options(args.backend, kind, args.seed))
+    settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
+    log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
+    try:
+        if kind == "force":
+            data, text = _force(rig, tissue, plan, logs[0], log_mode)
+        elif kind == "scan":
+            data, text = _scan(rig, tissue, plan, logs, log_mode)
+        else:
+            data, text = _sweep(rig, tissue, plan, logs[0], log_mode)
+    finally:
+        rig.close()
+    data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, "rig": settings, **data}
+    if sim:
+        data["truth"] = {
+            "gap_mm": 1000 * tissue.gap_m,
+            "modulus_n_m2": tissue.modulus_n_m2,
+            "exponent": tissue.exponent,
+        }
+    if out is not None:
+        import json
+
+        with atomic_write(out, "w", force=args.force) as fh:
+            json.dump(to_jsonable(data), fh, indent=2)
+        text += f"\nwritten to {out}"
+    return CommandResult(data=data, text=text)
+
+
+def _log_paths(log, plan, force):
+    from pathlib import Path
+
+    from flexdigit._io import check_output
+
+    if log is None:
+        return [None] * (len(plan.scan["offsets_m"]) if plan.scan else 1)
+    if not plan.scan:
+        return [check_output(log, force=force)]
+    base = Path(log)
+    return [
+        check_output(base.with_name(f"{base.stem}.offset{1000 * d:+.0f}mm{base.suffix}"), force=force)
+        for d in plan.scan["offsets_m"]
+    ]
+
+
+def _tissue_dict(tissue, info) -> dict:
+    return {
+        "name": info.name,
+        "source": info.source,
+        "side": tissue.side,
+        "start_mm": 1000 * tissue.start_m,
+        "end_mm": 1000 * tissue.end_m,
+        "inclusions": [
+            {"centre_mm": 1000 * i.centre_m, "width_mm": 1000 * i.width_m, "ratio": i.ratio} for i in tissue.inclusions
+        ],
+    }
+
+
+def _refuse_poor_fit(fit, what: str) -> None:
+    from flexdigit.errors import DataFileError
+
+    per_dof = fit.chi2 / max(fit.dof, 1)
+    if not fit.converged or per_dof > MAX_CHI2_PER_DOF:
+        raise DataFileError(
+            f"{what}: the gauges do not fit the tissue model (chi2/dof = {per_dof:.1f}, converged = {fit.converged}): "
+            "check where the tissue lies ('start_mm', 'end_mm', 'side') and let each plateau settle longer "
+            "('settle_s'); no stiffness reported"
+        )
+
+
+def _sweep(rig, tissue, plan, log, log_mode):
+    import numpy as np
+
+    from flexdigit.errors import DataFileError
+    from flexdigit.palpation.contact_estimation import ContactGaugeModel
+    from flexdigit.palpation.palpation import palpate, stiffness_bound
+
+    model = ContactGaugeModel(rig.params)
+    result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode)
+    _refuse_poor_fit(result.fit, "palpation")
+    touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
+    if touching < 3:
+        raise DataFileError(
+            f"palpation: the digit reached the tissue on {touching} of {len(result.curve['command'])} plateaus (3 "
+            "needed for a stiffness): sweep to higher commands ('commands') or place the tissue nearer"
+        )
+    bound = stiffness_bound(model, result.fit.tissue, plan.sweep, fit_exponent=plan.sweep.model == "hunt-crossley")
+    summary = result.summary()
+    data = {
+        "protocol": {
+            "commands": list(plan.sweep.commands),
+            "settle_s": plan.sweep.settle_s,
+            "readings": plan.sweep.readings,
+        },
+        "result": summary,
+        "cramer_rao": {"gap_mm": 1000 * bound["gap_m"], "modulus_n_m2": bound["modulus_n_m2"]},
+        "curve": {
+            "command": result.curve["command"].tolist(),
+            "force_n": result.curve["force_n"].tolist(),
+            "force_sd_n": result.curve["force_sd_n"].tolist(),
+            "indentation_mm": (1000 * result.curve["indentation_m"]).tolist(),
+            "model_force_n": result.curve["model_force_n"].tolist(),
+            **({"true_force_n": result.curve["true_force_n"].tolist()} if "true_force_n" in result.curve else {}),
+        },
+    }
+    if "true_force_n" in result.curve:
+        data["modulus_rel_error"] = summary["modulus_n_m2"] / tissue.modulus_n_m2 - 1
+    f = result.fit
+    lines = [
+        f"palpation of {tissue.side}-side tissue at {1000 * tissue.start_m:g}-{1000 * tissue.end_m:g} mm, "
+        f"{len(plan.sweep.commands)} plateaus ({plan.sweep.model})",
+        f"  modulus   {f.modulus_n_m2:9.1f} +- {f.modulus_sd_n_m2:.1f} "
+        + (
+            f"N/m^2 ({f.stiffness_n_m_per_cm:.2f} N/m per cm; "
+            if plan.sweep.model == "linear"
+            else f"N/m^{1 + f.exponent:.2f} (k of k delta^n; "
+        )
+        + f"Cramer-Rao {bound['modulus_n_m2']:.1f})",
+        f"  gap       {1000 * f.gap_m:9.3f} +- {1000 * f.gap_sd_m:.3f} mm",
+        f"  lumped    {result.lumped_stiffness_n_m:9.2f} N/m (force against deepest indentation)",
+        f"  chi2/dof  {summary['chi2_per_dof']:9.2f}",
+    ]
+    if plan.sweep.model == "hunt-crossley":
+        lines.insert(3, f"  exponent  {f.exponent:9.3f} +- {f.exponent_sd:.3f}")
+    return data, "\n".join(lines)
+
+
+def _scan(rig, tissue, plan, logs, log_mode):
+    from flexdigit.palpation.contact_estimation import ContactGaugeModel
+    from flexdigit.palpation.palpation import _truth_of, run_sweep, scan
+
+    model = ContactGaugeModel(rig.params)
+    records = []
+    for d, log in zip(plan.scan["offsets_m"], logs, strict=True):
+        rig.place_tissue(tissue.moved(d))
+        records.append(run_sweep(rig, plan.sweep, log_path=log, truth=_truth_of(rig), log_mode=log_mode))
+    result = scan(
+        records,
+        tissue,
+        plan.scan["offsets_m"],
+        plan.sweep,
+        model=model,
+        inclusion_width_m=plan.scan["inclusion_width_m"],
+    )
+    for fit in result.local:
+        _refuse_poor_fit(fit, "scan")
+    inc = result.inclusion
+    data = {
+        "offsets_mm": [1000 * d for d in plan.scan["offsets_m"]],
+        "map": {
+            "position_in_tissue_mm": (1000 * result.map_position_m).tolist(),
+            "modulus_n_m2": result.map_modulus_n_m2.tolist(),
+            "modulus_sd_n_m2": result.map_modulus_sd_n_m2.tolist(),
+        },
+        "inclusion": {
+            "centre_in_tissue_mm": 1000 * inc["centre_m"],
+            "centre_sd_mm": 1000 * inc["centre_sd_m"],
+            "ratio": inc["ratio"],
+            "ratio_sd": inc["ratio_sd"],
+            "modulus_n_m2": inc["modulus_n_m2"],
+            "width_mm": 1000 * inc["width_m"],
+            "chi2_per_dof": inc["chi2_per_dof"],
+        },
+    }
+    if tissue.inclusions:
+        true = tissue.inclusions[0]
+        data["inclusion"]["true_centre_in_tissue_mm"] = 1000 * (true.centre_m - tissue.start_m)
+        data["inclusion"]["true_ratio"] = true.ratio
+    text = (
+        f"scan of {len(plan.scan['offsets_m'])} offsets: inclusion {1000 * inc['centre_m']:.1f} +- "
+        f"{1000 * inc['centre_sd_m']:.1f} mm into the tissue, {inc['ratio']:.2f} +- {inc['ratio_sd']:.2f} x stiffer "
+        f"(base {inc['modulus_n_m2']:.0f} N/m^2)"
+    )
+    return data, text
+
+
+def _force(rig, tissue, plan, log, log_mode):
+    from flexdigit.palpation.palpation import hold_force
+
+    f = plan.force
+    rig.place_tissue(tissue)
+    end = min(tissue.end_m, rig.params.geometry.digit_length_m)
+    held = hold_force(
+        rig,
+        f["setpoint_n"],
+        duration_s=f["duration_s"],
+        gain=f["gain"],
+        approach_rate=f["approach_rate"],
+        side=tissue.side,
+        region_m=(max(tissue.start_m, 0.0), end),
+        log_path=log,
+        log_mode=log_mode,
+    )
+    data = {
+        "setpoint_n": held.setpoint_n,
+        "steady_force_n": held.steady_force_n,
+        "steady_error": held.steady_error,
+        "steady_ripple_n": held.steady_ripple_n,
+        "overshoot": held.overshoot,
+        "settling_s": held.settling_s,
+        "status": held.status,
+        "scored_on": "true contact force (twin)" if held.true_force_n is not None else "estimated force",
+        "time_s": held.time_s.tolist(),
+        "command": held.command.tolist(),
+        "force_n": held.force_n.tolist(),
+        **({"true_force_n": held.true_force_n.tolist()} if held.true_force_n is not None else {}),
+    }
+    text = (
+        f"held {held.setpoint_n:g} N: steady {held.steady_force_n:.4f} N ({100 * held.steady_error:+.1f} %), ripple "
+        f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, within 10 % after "
+        f"{held.settling_s:.2f} s ({data['scored_on']})"
+    )
+    return data, text

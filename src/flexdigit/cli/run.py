@@ -1,0 +1,478 @@
+"""``flexdigit run``: a closed-loop run on any backend, with a live progress line (thesis ch. 5).
+
+    flexdigit run --backend sim --controller digital20 --setpoint-deg 30 --duration 3
+    flexdigit run --backend "serial:///dev/ttyUSB0?daq=0" --controller digital20 --setpoint-deg 20 --duration 10 \
+        --log run.jsonl
+
+The setpoint is a beam-rotation step from rest at t = 0. On the twin the rotation map is calibrated on a separate
+twin first; on hardware the operator is asked for the angle at each calibration command (a protractor), or a
+saved map is loaded with ``--rotation-map``. The rotation the loop controls is the gauges' estimate; on the sim
+backends the report also gives the twin's true tip rotation (``true_*`` beside ``estimated_*``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag, Plausible
+
+#: The estimated rotation is averaged over a centred 0.1 s window before its step figures are taken: its noise
+#: (~0.2 deg rms on the twin) is half the 2 % band of a 20 deg step (:func:`flexdigit.rig.step_test.step_metrics`).
+ESTIMATE_SMOOTH_S = 0.1
+#: Longest run ``flexdigit run`` takes, s (a day; a longer one is a typo, and would not end on the twin).
+MAX_DURATION_S = 86_400.0
+#: The run's flags, declared once (flexdigit._validation.Flag: refused by argparse, one line naming the flag).
+DURATION = Plausible("s", 0.0, MAX_DURATION_S, "a run of at most a day", closed="right")
+SETPOINT = Plausible("deg", -60.0, 120.0, "a beam rotation the digit reaches: 30 deg per section, 3 sections")
+
+
+def register(subparsers) -> None:
+    from flexdigit.rig.backends.stream_emulator import DURATION_S, RATE_HZ
+    from flexdigit.rig.controllers import ACTUATOR_GAIN
+    from flexdigit.rig.rotation_reference import READING_RESOLUTION_DEG, READING_RESOLUTION_MM
+
+    parser = add_command(
+        subparsers,
+        "run",
+        _run,
+        help="run a controller in closed loop on the twin or the rig (beam-rotation step)",
+    )
+    parser.add_argument("--backend", default="sim", help="sim, sim+paced, serial://PORT?daq=0, replay://FILE")
+    parser.add_argument("--controller", default="digital20", help="digital20, thesis39-euler, thesis39-tustin")
+    parser.add_argument(
+        "--setpoint-deg", type=Flag(SETPOINT), default=30.0, help="beam rotation to hold, deg (default 30)"
+    )
+    parser.add_argument("--duration", type=Flag(DURATION), default=3.0, help="run length, s (default 3)")
+    parser.add_argument(
+        "--period",
+        type=Flag(Plausible("s", 1e-4, 1.0, "the loop's period: below 0.1 ms it only spins (rig.loop)")),
+        default=None,
+        help="sample period, s (default the 20 ms serial period)",
+    )
+    parser.add_argument(
+        "--seed", type=Flag(SEED), default=None, help="twin noise seed (sim backends; default 0, or the URL's seed=)"
+    )
+    parser.add_argument(
+        "--gain", type=Flag(ACTUATOR_GAIN), default=1.0, help="actuator gain error to emulate (robustness runs)"
+    )
+    parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
+    parser.add_argument(
+        "--rotation-map",
+        type=Path,
+        default=None,
+        help="gauge -> rotation map (JSON): loaded if it exists, else made and saved",
+    )
+    parser.add_argument(
+        "--map-from",
+        default=None,
+        metavar="twin|operator|FILE",
+        help="make the rotation map from: the (calibrated) twin's own rotation (default on sim), the operator at each "
+        "command (default on hardware), or a CSV of rotations or deflections measured on the rig",
+    )
+    parser.add_argument(
+        "--resolution-mm",
+        type=Flag(READING_RESOLUTION_MM),
+        default=0.5,
+        help="reading resolution of measured deflections, mm (0.5)",
+    )
+    parser.add_argument(
+        "--resolution-deg",
+        type=Flag(READING_RESOLUTION_DEG),
+        default=1.0,
+        help="reading resolution of measured rotations, deg (1)",
+    )
+    parser.add_argument(
+        "--calibration",
+        type=Path,
+        default=None,
+        help="twin calibration TOML for the sim backends (flexdigit calibrate)",
+    )
+    parser.add_argument(
+        "--record", type=Path, default=None, help="MCAP recording of every sample (any MCAP tool reads it)"
+    )
+    writes = parser.add_mutually_exclusive_group()
+    writes.add_argument(
+        "--append", action="store_true", help="add this run to an existing --log (same controller, period and rig)"
+    )
+    writes.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing --log or --record file, or --rotation-map when making one",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no live progress line")
+    parser.add_argument(
+        "--realtime", action="store_true", help="run the loop under SCHED_FIFO when permitted (hardware, sim+paced)"
+    )
+
+    emulator = add_command(
+        subparsers,
+        "stream-emulator",
+        _stream_emulator,
+        help="try stream:// without hardware: the gauge stream's firmware (and a servo board) on pseudo-terminals",
+    )
+    emulator.add_argument("--twin", action="store_true", help="stream a twin's gauges and serve a servo board for it")
+    emulator.add_argument("--rate", type=Flag(RATE_HZ), default=100.0, help="lines per second (100, the firmware's)")
+    emulator.add_argument("--seed", type=Flag(SEED), default=0, help="twin and noise seed")
+    emulator.add_argument(
+        "--duration", type=Flag(DURATION_S), default=None, help="stop after this many seconds (default Ctrl-C)"
+    )
+
+
+def _stream_emulator(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.rig.backends.stream_emulator import run_emulator
+
+    said: list[str] = []
+
+    def say(line: str) -> None:
+        said.append(line)
+        if not args.json:
+            print(line, flush=True)
+
+    run_emulator(args.twin, args.rate, args.seed, args.duration, say)
+    return CommandResult(data={"lines": said}, text="")
+
+
+def _run(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._io import check_output
+    from flexdigit._validation import check_real
+    from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
+    from flexdigit.rig.controllers import CONTROLLERS, make_controller
+    from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
+    from flexdigit.rig.safety import RunawayGuard
+    from flexdigit.rig.sample_log import check_appendable
+    from flexdigit.rig.step_test import step_metrics
+
+    if args.controller not in CONTROLLERS:
+        from flexdigit.errors import ParameterError
+
+        raise ParameterError(f"--controller must be one of {', '.join(CONTROLLERS)}. Got {args.controller!r} instead.")
+    duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
+    setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
+    if args.log is not None and not (args.append and args.log.exists()):  # before the rig moves, not after
+        check_output(args.log, force=args.force, hint="or --append to add this run to it")
+    sim = parse_rig_url(args.backend).scheme in ("sim", "sim+paced")
+    twin_options = _twin_options(args, sim)
+    if args.rotation_map is not None and (args.map_from is not None or not args.rotation_map.exists()):
+        check_output(args.rotation_map, force=args.force)  # before the sweep, not after it
+    # --seed reaches a hardware rig only to be refused (it has no noise); with --map-from twin it seeds the map's twin
+    rig_options = twin_options if sim else ({} if args.map_from == "twin" else seed_option(args.backend, args.seed))
+    rig = open_rig(args.backend, **rig_options)
+    settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): logged and reported
+    try:
+        # 0 is a value (refused), not "not given"; below 0.1 ms the loop would only spin (--period 1e-7 hung)
+        period = rig.params.actuator.serial_period_s if args.period is None else args.period
+        period = check_real(period, "--period", low=MIN_PERIOD_S, high=MAX_PERIOD_S)
+        if args.log is not None and args.append and args.log.exists():
+            check_appendable(args.log, {"controller": args.controller, "period_s": period, "rig_settings": settings})
+        estimator = _rotation_map(args, rig, sim)
+        controller = make_controller(args.controller, rig, period_s=period, estimator=estimator, gain=args.gain)
+    except BaseException:
+        rig.close()
+        raise
+    progress = None if (args.no_progress or args.json or not sys.stderr.isatty()) else _Progress(duration)
+    # the twin knows the true beam rotation; the loop (and hardware) only has the gauges' estimate of it
+    truth = getattr(rig, "tip_rotation_deg", None)
+    true_rotation: list[float] = []
+
+    def on_sample(k: int, t: float, y: float, command: int) -> None:
+        if truth is not None:
+            true_rotation.append(truth())
+        if progress:
+            progress.update(k, t, y, command)
+
+    recording = None
+    if args.record is not None:
+        from flexdigit.rig.recording import Recording, rig_metadata
+
+        try:
+            recording = Recording(
+                args.record,
+                header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
+                        "period_s": period, "duration_s": duration, "seed": settings.get("seed")},
+                metadata={**rig_metadata(rig), "flexdigit.calibration": {"rotation_map": estimator.to_dict()}},
+                force=args.force,
+            )  # fmt: skip
+        except BaseException:
+            rig.close()
+            raise
+    priority = realtime_priority() if args.realtime else None
+    if priority is not None:
+        priority.__enter__()
+    deg_per_command = getattr(estimator, "deg_per_command_", math.nan)
+    if not (isinstance(deg_per_command, float) and math.isfinite(deg_per_command) and deg_per_command > 0):
+        deg_per_command = _deg_per_command(rig.params)
+
+    def summary(time_s, estimated_deg) -> dict:
+        figures = {
+            "estimated": step_metrics(time_s, estimated_deg, setpoint, 0.0, deg_per_command, smooth_s=ESTIMATE_SMOOTH_S)
+        }
+        if truth is not None:
+            figures["true"] = step_metrics(time_s[: len(true_rotation)], true_rotation, setpoint, 0.0, deg_per_command)
+        return {name: m.to_dict() for name, m in figures.items()}
+
+    try:
+        result = run_loop(
+            rig,
+            controller,
+            setpoint,
+            duration,
+            period,
+            log_path=args.log,
+            log_mode="append" if args.append else "replace" if args.force else "new",
+            guard=RunawayGuard(truth=truth),
+            on_sample=on_sample,
+            measure=estimator,
+            header={
+                "controller": args.controller,
+                "setpoint_deg": setpoint,
+                "backend": args.backend,
+                "rig_settings": settings,
+            },
+            summary=summary,
+            recording=recording,
+        )
+    finally:
+        if priority is not None:
+            priority.__exit__(None, None, None)
+    figures = summary(result.time_s, result.measurement) if result.time_s.size >= 2 else {}
+    if progress:
+        progress.stop(_figures_line(figures))
+    t = result.timing
+    final, peak = _final_and_peak(result.time_s, result.measurement)
+    true_final, true_peak = _final_and_peak(result.time_s[: len(true_rotation)], true_rotation)
+    has_truth = truth is not None
+    data = {
+        "status": result.status,
+        "message": result.message,
+        "backend": args.backend,
+        "rig": settings,
+        "controller": args.controller,
+        "setpoint_deg": setpoint,
+        "period_s": period,
+        "samples": t.samples,
+        "overruns": t.overruns,
+        "jitter_p50_s": t.jitter_p50_s,
+        "jitter_p99_s": t.jitter_p99_s,
+        "jitter_max_s": t.jitter_max_s,
+        "compute_mean_s": t.compute_mean_s,
+        # what the loop measured (the gauges through the rotation map), on every backend
+        "estimated_final_rotation_deg": final,
+        "estimated_peak_rotation_deg": peak,
+        # the twin's own tip rotation (sim backends only; null on hardware and replays)
+        "true_final_rotation_deg": true_final if has_truth else None,
+        "true_peak_rotation_deg": true_peak if has_truth else None,
+        # rise, 2 % settling, overshoot, steady-state error (deg, commands), IAE of the step to the setpoint, from
+        # the estimated rotation and, on the twin, the true one (null where there is none)
+        "step_metrics": {
+            "estimated": figures["estimated"] if figures else None,
+            "true": figures.get("true"),
+            "deg_per_command": deg_per_command,
+            "settling_band": 0.02,
+            "estimate_smoothed_s": ESTIMATE_SMOOTH_S,
+        },
+        # which map turned the gauges into the rotation the loop held, and how far to trust it
+        "rotation_map": _map_summary(estimator, args.rotation_map, setpoint),
+        # a gauge stream's counts (stream:// on its own or as the servo board's daq=): valid, dropped, garbled
+        "gauge_source": _source_stats(rig),
+        "final_command": int(result.command[-1]) if result.command.size else None,
+        "log": str(result.log_path) if result.log_path else None,
+        "record": str(recording.path) if recording is not None else None,
+    }
+    truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if has_truth else ""
+    text = (
+        f"{args.controller} on {args.backend}: {result.status} ({result.message})\n"
+        f"  rotation estimated from the gauges: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg"
+        f"{truth_text}; last command {data['final_command']}\n"
+        f"  step: {_figures_line(figures)}\n"
+        f"  rotation map: {data['rotation_map']['source']}; uncertainty {data['rotation_map']['uncertainty_deg']:.2f} "
+        f"deg at {setpoint:g} deg\n"
+        f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
+        f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
+    )
+    exit_code = {"completed": 0, "fault": 1, "interrupted": 130}[result.status]
+    return CommandResult(data=data, text=text, exit_code=exit_code)
+
+
+def _deg_per_command(params) -> float:
+    """Beam rotation per servo command of the design model (the cable model's 1.735 deg on the thesis rig)."""
+    import numpy as np
+
+    from flexdigit.control.design20ms import design_plant
+
+    return float(np.real(design_plant(params).dcgain()))
+
+
+def _figures_line(figures: dict) -> str:
+    """The step figures on one line: the estimated rotation's, and the twin's true ones where there are any."""
+    if not figures:
+        return "too few samples for step figures"
+
+    def seconds(value: float, none: str) -> str:
+        return f"{value:.2f} s" if math.isfinite(value) else none
+
+    def one(m: dict) -> str:
+        error = m["final_error_deg"]
+        steady = (
+            f"steady-state error {error:+.2f} deg ({m['final_error_commands']:+.2f} commands)"
+            if math.isfinite(error)
+            else "no steady state in the record"
+        )
+        return (
+            f"rise {seconds(m['rise_time_s'], 'not reached')}, settling (2 %) "
+            f"{seconds(m['settling_time_s'], 'not settled')} ({seconds(m['settling_to_final_s'], 'still moving')} "
+            f"to its final value), overshoot {m['overshoot_percent']:.1f} %, {steady}, IAE {m['iae_deg_s']:.2f} deg s"
+        )
+
+    text = f"estimated {one(figures['estimated'])}"
+    if "true" in figures:
+        text += f"; true {one(figures['true'])}"
+    return text
+
+
+def _twin_options(args, sim: bool) -> dict:
+    """Keyword options for a twin: ``--seed`` (when given) and, with ``--calibration``, the twin calibration."""
+    if not sim and args.map_from != "twin":
+        if args.calibration is not None:
+            from flexdigit.errors import ParameterError
+
+            raise ParameterError(
+                f"--calibration {args.calibration} is a twin calibration: it applies to the sim backends (or to "
+                f"--map-from twin), not --backend {args.backend}; a saved rotation map is --rotation-map FILE"
+            )
+        return {}
+    options = {} if args.seed is None else {"seed": args.seed}
+    if args.calibration is not None:
+        from flexdigit.twin.calibration import load_calibration
+
+        options["calibration"] = load_calibration(args.calibration)
+    return options
+
+
+def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
+    """Mean of the last 0.5 s and maximum of a rotation record (deg); NaN for an empty one."""
+    import numpy as np
+
+    t = np.asarray(time_s, dtype=float)
+    y = np.asarray(rotation_deg, dtype=float)
+    if not y.size:
+        return math.nan, math.nan
+    return float(y[t >= t[-1] - 0.5].mean()), float(y.max())
+
+
+def _rotation_map(args, rig, sim: bool):
+    """The gauge -> rotation map: loaded from ``--rotation-map``, or made (``--map-from``) and saved there."""
+    from flexdigit.errors import ParameterError
+    from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
+    from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map, save_rotation_map
+
+    path, source = args.rotation_map, args.map_from
+    if path is not None and path.exists() and source is None:
+        return load_rotation_map(path)
+    replay = parse_rig_url(args.backend).scheme == "replay"
+    if replay and source is None and _recorded_map(rig) is not None:
+        from flexdigit.rig.rotation import RotationEstimator
+
+        return RotationEstimator.from_dict(_recorded_map(rig), source=rig.path)  # the map the recording was run with
+    source = source or ("twin" if sim else "operator")
+    if source == "twin":
+        # the twin (calibrated to the rig with --calibration): a separate one, read at its own tip rotation, set up
+        # as the URL says when the rig is the twin, with the next seed
+        options = _twin_options(args, True)
+        if sim:
+            url_options = {k: v for k, v in rig_url_options(args.backend)[1].items() if k != "spin_s"}
+            options = {**url_options, **options, "seed": rig.settings()["seed"] + 1}
+        else:
+            options["seed"] = options.get("seed", 0) + 1
+        est = calibrate_rotation(open_rig("sim", **options))
+    elif source == "operator":
+        if replay:
+            raise ParameterError("a replay cannot be swept (it ignores commands); pass --rotation-map FILE")
+
+        def ask(command: int) -> float:
+            return float(input(f"Command {command}, digit at rest: tip rotation now, deg? "))
+
+        est = calibrate_rotation(rig, reference=ask, reference_sd_deg=args.resolution_deg / math.sqrt(12))
+    else:
+        from flexdigit.rig.rotation_reference import read_reference
+
+        reference = read_reference(
+            Path(source), rig.params, resolution_mm=args.resolution_mm, resolution_deg=args.resolution_deg
+        )
+        if replay and reference.gauges_v is None:
+            raise ParameterError(
+                f"a replay cannot be swept; {source} needs gauge1_v, gauge2_v, gauge3_v columns to fit the map alone"
+            )
+        est = calibrate_rotation(rig, reference=reference)
+    if path is not None:
+        save_rotation_map(est, path, force=args.force)
+    return est
+
+
+def _map_summary(estimator, path, setpoint: float) -> dict:
+    """What ``run --json`` says about the map: where it came from and its uncertainty at the setpoint."""
+    has_data = hasattr(estimator, "rotation_deg_")
+    return {
+        "source": getattr(estimator, "source_", "given"),
+        "file": str(path) if path is not None else None,
+        "commands": getattr(estimator, "commands_", None),
+        "settle_time_s": getattr(estimator, "settle_time_s_", None),
+        "residual_deg": getattr(estimator, "residual_deg_", None),
+        "uncertainty_deg": estimator.uncertainty_deg(setpoint) if has_data else math.nan,
+        "deg_per_command": getattr(estimator, "deg_per_command_", None),
+        "coef_deg_per_v": estimator.coef_.tolist(),
+    }
+
+
+def _source_stats(rig) -> dict | None:
+    """Counts of a gauge stream (the rig's own, or its servo board's ``daq=``), if it has one."""
+    for part in (rig, *getattr(rig, "companions", [])):
+        stats = getattr(part, "stats", None)
+        if callable(stats):
+            return stats()
+    return None
+
+
+def _recorded_map(rig) -> dict | None:
+    """The rotation map an MCAP recording keeps in its ``flexdigit.calibration`` metadata, if any."""
+    from flexdigit.rig.recording import is_mcap, read_metadata
+
+    path = getattr(rig, "path", None)
+    if path is None or not is_mcap(path):
+        return None
+    found = read_metadata(path).get("flexdigit.calibration", {}).get("rotation_map")
+    return found if isinstance(found, dict) else None
+
+
+class _Progress:
+    """A one-line live display (rich): time, rotation, command."""
+
+    def __init__(self, duration_s: float) -> None:
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+        self._p = Progress(
+            TextColumn("[bold]run"),
+            BarColumn(),
+            TextColumn("{task.description}"),
+            TimeRemainingColumn(),
+            transient=True,
+            console=Console(stderr=True),  # stdout carries the result only
+        )
+        self._task = self._p.add_task("", total=duration_s)
+        self._p.start()
+
+    def update(self, k: int, t: float, y: float, command: int) -> None:
+        if k % 5 == 0:
+            self._p.update(
+                self._task, completed=t, description=f"t {t:6.2f} s  rotation {y:6.2f} deg  command {command:3d}"
+            )
+
+    def stop(self, closing_line: str = "") -> None:
+        """End the live line; leave ``closing_line`` (the step figures) in its place on stderr."""
+        self._p.stop()
+        if closing_line:
+            self._p.console.print(f"run: {closing_line}", highlight=False)

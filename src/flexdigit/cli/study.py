@@ -1,0 +1,121 @@
+"""``flexdigit study sensitivity|design SPEC.toml --out DIR``: studies at scale from the shell."""
+
+from __future__ import annotations
+
+import argparse
+from numbers import Integral
+
+from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import Flag, Interval, Plausible
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = add_command(
+        subparsers,
+        "study",
+        _study,
+        help="sensitivity (Morris, Sobol) or design study (Pareto front) over a spec, on Dask",
+        description="Run a study spec (a TOML file, or a shipped one: thesis-tolerances, thesis-design) on a local "
+        "Dask cluster (one worker per core) or an existing one; rerunning with the same --out resumes it.",
+    )
+    p.add_argument("kind", choices=("sensitivity", "design"), help="which study")
+    p.add_argument("spec", help="study spec TOML, or a shipped name (thesis-tolerances, thesis-design)")
+    p.add_argument("--out", required=True, help="directory for the journal, tables and figures (created)")
+    p.add_argument("--scheduler", default=None, help="an existing Dask scheduler, tcp://HOST:PORT")
+    p.add_argument("--workers", type=int, default=None, help="local Dask workers (default: one per core; 0: no Dask)")
+    p.add_argument(  # the spec's own bounds (sobol_n 4..2**20, a power of 2) are checked with the spec
+        "--n",
+        type=Flag(Interval(Integral, 1, 2**20)),
+        default=None,
+        help="sensitivity: Sobol base samples N (a power of 2)",
+    )
+    p.add_argument("--second-order", action="store_true", help="sensitivity: also second-order indices S2")
+    p.add_argument(
+        "--samples",
+        type=Flag(Plausible("", 0, 1_000_000, "candidate designs: a million twin evaluations is days", integer=True)),
+        default=None,
+        help="design: candidate designs to evaluate (0: all)",
+    )
+    p.add_argument("--force", action="store_true", help="start over: replace the journal and outputs in --out")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+def _study(args: argparse.Namespace) -> CommandResult:
+    from pathlib import Path
+
+    from flexdigit.errors import ParameterError
+    from flexdigit.studies.execution import parse_scheduler
+    from flexdigit.studies.spec import load_spec
+
+    if args.workers is not None and args.workers < 0:
+        raise ParameterError(f"--workers must be >= 0 (0: no Dask). Got {args.workers} instead.")
+    if args.scheduler is not None:
+        parse_scheduler(args.scheduler)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"{out}: --out must be a directory")
+    if not out.parent.is_dir():
+        raise FileNotFoundError(f"{out}: the directory {out.parent} does not exist")
+    spec = load_spec(args.spec)
+    if args.kind == "sensitivity":
+        return _sensitivity(args, spec, out)
+    return _design(args, spec, out)
+
+
+def _run(args, out, run, settings, write):
+    """Run a study in ``out`` (created), write its files, return ``(result, summary)``.
+
+    A finished study is refused (before any work) unless some of its tasks failed (a worker died): a rerun then
+    computes those rows again and rewrites the outputs."""
+    from flexdigit.errors import OutputExistsError
+    from flexdigit.studies.execution import retry_rows
+
+    done = out / "summary.json"
+    retry = done.exists() and not args.force and retry_rows(out) > 0
+    if done.exists() and not args.force and not retry:
+        raise OutputExistsError(f"{done}: this study has finished in {out}; pass --force to run it again")
+    out.mkdir(exist_ok=True)
+    result = run(
+        args.spec_obj,
+        out,
+        settings=settings,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        force=args.force,
+        progress=not args.no_progress,
+    )
+    paths = write(result, out, force=args.force or retry)
+    summary = result.summary()
+    summary["files"] = {k: str(v) for k, v in paths.items()}
+    return result, summary
+
+
+def _sensitivity(args, spec, out) -> CommandResult:
+    from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity, write_outputs
+
+    overrides = {"sobol_n": args.n, "second_order": True if args.second_order else None}
+    args.spec_obj = spec
+    result, summary = _run(args, out, run_sensitivity, SensitivitySettings.from_spec(spec, **overrides), write_outputs)
+    lines = [f"{spec.name}: {summary['evaluations']} evaluations of {len(spec.parameters)} parameters -> {out}"]
+    for metric, entry in summary["metrics"].items():
+        if metric in result.refused:
+            lines.append(f"  {metric}: no indices: {result.refused[metric]}")
+            continue
+        conv = entry.get("convergence", {})
+        top = entry.get("ranking", [])[:3]
+        sob = entry.get("sobol", {})
+        ranked = ", ".join(f"{n} ST {sob[n]['ST']:.2f}+-{sob[n]['ST_conf']:.2f}" for n in top)
+        flag = "converged" if conv.get("converged") else f"NOT converged (moved {conv.get('max_change', 0):.3f})"
+        lines.append(f"  {metric}: {ranked} [{flag}]")
+    if result.failed_rows:
+        lines.append(f"  {len(result.failed_rows)} rows failed (listed in summary.json)")
+    return CommandResult(data=summary, text="\n".join(lines))
+
+
+def _design(args, spec, out) -> CommandResult:
+    from flexdigit.studies.design_study import DesignSettings, run_design, write_design_outputs
+
+    args.spec_obj = spec
+    settings = DesignSettings.from_spec(spec, samples=args.samples)
+    result, summary = _run(args, out, run_design, settings, write_design_outputs)
+    return CommandResult(data=summary, text=result.text())

@@ -1,0 +1,860 @@
+"""Palpation: press the digit into tissue through a command sweep, read the gauges, say how stiff the tissue is.
+
+Beyond the thesis (chapter 8: "identify variability in tissue stiffness"). The protocol drives the servo through
+a staircase of commands on the real-time loop (:func:`flexdigit.rig.loop.run_loop`, 20 ms frames): a tare
+plateau at the equilibrium command (the digit straight, clear of the tissue), one plateau per command of the sweep,
+and the tare again, holding each ``settle_s`` and averaging its last ``readings`` samples. Every sample is kept
+(:class:`SweepRecord`).
+
+The tissue is the twin's model of it (:class:`flexdigit.twin.contact.Tissue`: a unilateral Winkler foundation,
+or Hunt-Crossley ``q = k delta^n``): where it lies along the digit is what the experimenter knows (it is placed
+there); how far its surface is (``gap_m``) and how stiff it is (``modulus_n_m2``, and ``exponent``) are estimated
+by maximum likelihood on the plateaus' gauges through the digit's static contact model
+(:class:`flexdigit.palpation.contact_estimation.ContactGaugeModel`), with each gauge's offset and linear drift over
+the sweep
+as nuisance parameters profiled out (the two tares pin them). The standard deviations come from the fit's
+Jacobian; the Cramer-Rao bound of the same sweep is :func:`stiffness_bound`.
+
+Beside the fit, the force-indentation curve: at each plateau the contact force from the gauges alone
+(:class:`flexdigit.palpation.contact_estimation.ContactEstimator`, no tissue model) against the indentation (the deepest
+penetration of the fitted model), and its least-squares slope, the lumped contact stiffness (N/m).
+
+:func:`scan` repeats the palpation with the tissue moved along the digit and fits one inclusion (centre, stiffness
+ratio) to the whole scan. :func:`hold_force` closes the 20 ms loop on the contact-force estimate.
+
+Units: m, N, N/m (lumped), N/m^2 (the foundation's modulus: N/m for every m of digit pressed in; ``k / 100`` is
+the N/m of one centimetre).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexdigit._validation import check_choice, check_int, check_real, check_values
+from flexdigit.errors import ParameterError
+
+MODELS = ("linear", "hunt-crossley")
+
+
+@dataclass(frozen=True)
+class PalpationProtocol:
+    """A palpation sweep.
+
+    Attributes
+    ----------
+    commands : tuple of int
+        The staircase, in order (servo commands, 0..254).
+    settle_s : float
+        Time each plateau is held before it is read (s). The housed digit rings for seconds after each command
+        step (zeta 0.068, table 3.2): on the twin 1 s leaves chi^2/dof ~ 10 in the fit, 3 s ~ 0.9.
+    readings : int
+        Samples averaged at the end of each plateau (one per loop period).
+    tare_command : int
+        Command of the tare plateaus before and after the sweep (the digit clear of the tissue).
+    period_s : float
+        Loop period (s): 0.020, the servo board's frame (5.2).
+    model : {"linear", "hunt-crossley"}
+        The tissue model fitted: Winkler (``q = k delta``) or Hunt-Crossley (``q = k delta^n``, ``n`` fitted).
+    """
+
+    commands: tuple[int, ...] = tuple(range(8, 31))
+    settle_s: float = 2.5
+    readings: int = 20
+    tare_command: int = 8
+    period_s: float = 0.020
+    model: str = "linear"
+
+    def __post_init__(self) -> None:
+        owner = "PalpationProtocol"
+        cmds = check_values(self.commands, "commands", owner, low=0, high=254, integer=True)
+        if cmds.ndim != 1 or cmds.size < 3:
+            raise ParameterError(
+                f"The 'commands' parameter of {owner} must list at least 3 commands. Got {np.ravel(cmds).tolist()!r}."
+            )
+        object.__setattr__(self, "commands", tuple(int(c) for c in cmds))
+        object.__setattr__(self, "period_s", check_real(self.period_s, "period_s", owner, low=1e-3, high=1.0))
+        object.__setattr__(self, "settle_s", check_real(self.settle_s, "settle_s", owner, low=0.0, high=600.0))
+        object.__setattr__(self, "readings", check_int(self.readings, "readings", owner, low=1, high=100_000))
+        object.__setattr__(self, "tare_command", check_int(self.tare_command, "tare_command", owner, low=0, high=254))
+        check_choice(self.model, "model", MODELS, owner)
+
+    @property
+    def plateau_s(self) -> float:
+        """Duration of one plateau (s): the settling and the readings."""
+        return self.settle_s + self.readings * self.period_s
+
+    @property
+    def duration_s(self) -> float:
+        """The whole sweep, tares included (s)."""
+        return (len(self.commands) + 2) * self.plateau_s
+
+
+@dataclass
+class SweepRecord:
+    """What a sweep read: every sample, and the plateaus' means.
+
+    Attributes
+    ----------
+    command : ndarray (m,)
+        The command of each plateau (the first and last are the tares).
+    time_s : ndarray (m,)
+        Mid-time of each plateau's readings (s from the start of the sweep).
+    gauges_v : ndarray (m, 3)
+        Mean gauge voltages of each plateau's readings.
+    tare : ndarray of bool (m,)
+        Which plateaus are tares.
+    readings : int
+        Samples averaged per plateau.
+    samples : dict
+        Every loop sample: ``time_s``, ``gauges_v``, ``command`` (and ``true_force_n`` on the twin).
+    status : str
+        The loop's stop status (``completed``, ``fault``, ``interrupted``).
+    """
+
+    command: np.ndarray
+    time_s: np.ndarray
+    gauges_v: np.ndarray
+    tare: np.ndarray
+    readings: int
+    samples: dict = field(default_factory=dict)
+    status: str = "completed"
+    message: str = ""
+
+
+class _Staircase:
+    """A loop controller that sends a scheduled command (it reads nothing): the sweep's open-loop staircase."""
+
+    def __init__(self, commands, plateau_s: float) -> None:
+        self.commands = list(commands)
+        self.plateau_s = plateau_s
+        self._t = 0.0
+        self._k = 0
+
+    def reset(self, command: int) -> None:
+        self._k = 0
+
+    def step(self, setpoint: float, reading) -> float:
+        index = min(int(setpoint // self.plateau_s), len(self.commands) - 1)
+        return self.commands[index]
+
+
+def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, log_mode: str = "new") -> SweepRecord:
+    """Drive ``rig`` through the protocol's staircase on the real-time loop and average each plateau.
+
+    ``truth`` (the twin): a callable returning the true contact force (N) now, logged beside every sample so a
+    study can score the estimate. The rig is left open (at the equilibrium command) for the next sweep.
+    ``log_mode``: what to do with an existing ``log_path`` (:func:`~flexdigit.rig.loop.run_loop`: refuse it,
+    ``"replace"`` it, ``"append"`` to it).
+    """
+    from flexdigit.rig.loop import run_loop
+
+    sequence = [protocol.tare_command, *protocol.commands, protocol.tare_command]
+    stairs = _Staircase(sequence, protocol.plateau_s)
+    true_force = []
+    on_sample = (lambda k, t, y, c: true_force.append(truth())) if truth is not None else None
+    result = run_loop(
+        rig,
+        stairs,
+        setpoint=lambda t: t,  # the staircase reads its schedule from the loop time
+        duration_s=protocol.duration_s,
+        period_s=protocol.period_s,
+        log_path=log_path,
+        log_mode=log_mode,
+        on_sample=on_sample,
+        close_rig=False,
+        header={"palpation": {"commands": list(protocol.commands), "plateau_s": protocol.plateau_s}},
+    )
+    if not result.ok:
+        raise_from = result.message
+        from flexdigit.errors import RigError
+
+        raise RigError(f"palpation sweep stopped: {raise_from}")
+    t = result.time_s
+    plateau = np.minimum((t // protocol.plateau_s).astype(int), len(sequence) - 1)
+    means, times = [], []
+    for j in range(len(sequence)):
+        rows = np.flatnonzero(plateau == j)[-protocol.readings :]
+        means.append(result.gauges_v[rows].mean(axis=0))
+        times.append(float(np.mean(t[rows])))
+    samples = {"time_s": t, "gauges_v": result.gauges_v, "command": result.command}
+    if truth is not None:
+        samples["true_force_n"] = np.array(true_force)
+    tare = np.zeros(len(sequence), dtype=bool)
+    tare[[0, -1]] = True
+    return SweepRecord(np.array(sequence), np.array(times), np.array(means), tare, protocol.readings, samples)
+
+
+# --------------------------------------------------------------------------------------------- the tissue fit
+@dataclass
+class TissueFit:
+    """Maximum-likelihood tissue parameters of one sweep (or scan), with standard deviations (inf: not seen).
+
+    ``offset_v`` / ``drift_v_per_s`` are the nuisance gauge offsets and drifts; ``chi2`` the weighted residual sum
+    of squares over ``dof`` degrees of freedom (about ``dof`` when the model explains the readings to their noise).
+    """
+
+    tissue: object
+    gap_m: float
+    gap_sd_m: float
+    modulus_n_m2: float
+    modulus_sd_n_m2: float
+    exponent: float
+    exponent_sd: float
+    chi2: float
+    dof: int
+    converged: bool
+    offset_v: np.ndarray
+    drift_v_per_s: np.ndarray
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def stiffness_n_m_per_cm(self) -> float:
+        """The modulus as the N/m of one centimetre of digit pressed in."""
+        return 0.01 * self.modulus_n_m2
+
+
+class _TissueLikelihood:
+    """Weighted residuals of the plateaus' gauges under a tissue hypothesis, nuisance offsets and drifts profiled
+    out (variable projection: for a given tissue they are a linear least-squares fit per gauge)."""
+
+    def __init__(self, model, commands, times, gauges, sigma, tissue_of, nuisance: bool = True):
+        self.model = model
+        self.commands = np.asarray(commands, dtype=int)
+        self.gauges = np.asarray(gauges, dtype=float)
+        self.sigma = np.asarray(sigma, dtype=float)
+        t = np.asarray(times, dtype=float)
+        span = max(float(np.ptp(t)), 1e-9)
+        self.design = np.column_stack([np.ones_like(t), (t - t.mean()) / span]) if nuisance else None
+        self._span, self._t0 = span, float(t.mean())
+        self.tissue_of = tissue_of
+        self.evaluations = 0
+        self._shapes: dict[int, np.ndarray] = {}
+
+    def predict(self, theta):
+        self.evaluations += 1
+        tissues = self.tissue_of(theta)
+        blocks = [(slice(None), tissues)] if not isinstance(tissues, list) else tissues  # a scan: one per offset
+        out = np.empty_like(self.gauges)
+        for i, (rows, tissue) in enumerate(blocks):
+            # each evaluation starts from the last one's shapes: the fit's steps and differences move them little
+            sol, out[rows] = self.model.tissue_solution(tissue, self.commands[rows], psi0=self._shapes.get(i))
+            if sol.static.converged:
+                self._shapes[i] = sol.static.psi_rad
+        return out
+
+    def residuals(self, theta):
+        r = self.gauges - self.predict(theta)
+        if self.design is not None:
+            coef, *_ = np.linalg.lstsq(self.design, r, rcond=None)
+            r = r - self.design @ coef
+        return (r / self.sigma).ravel()
+
+    def nuisance(self, theta):
+        r = self.gauges - self.predict(theta)
+        if self.design is None:
+            return np.zeros(3), np.zeros(3)
+        coef, *_ = np.linalg.lstsq(self.design, r, rcond=None)
+        return coef[0] - coef[1] * self._t0 / self._span, coef[1] / self._span
+
+
+def _least_squares(likelihood, x0, lower, upper, scale):
+    from scipy.optimize import least_squares
+
+    sol = least_squares(
+        likelihood.residuals, x0, bounds=(lower, upper), x_scale=scale, diff_step=1e-4, xtol=1e-10, ftol=1e-12
+    )
+    jac = sol.jac
+    with np.errstate(divide="ignore", invalid="ignore"):
+        try:
+            cov = np.linalg.inv(jac.T @ jac)
+            sd = np.sqrt(np.where(np.diag(cov) > 0, np.diag(cov), np.inf))
+        except np.linalg.LinAlgError:
+            sd = np.full(x0.size, np.inf)
+    return sol, sd
+
+
+def fit_tissue(
+    record: SweepRecord,
+    model,
+    placed,
+    *,
+    fit_exponent: bool = False,
+    sigma_v=None,
+    start=None,
+) -> TissueFit:
+    """Fit a tissue's gap and modulus (and Hunt-Crossley exponent) to a sweep's plateaus (module docstring).
+
+    The standard deviations are the fit's (Gauss-Newton) widened by ``sqrt(chi2 / dof)`` when the readings scatter
+    about the model more than their noise says.
+
+    Parameters
+    ----------
+    record : SweepRecord
+    model : ContactGaugeModel
+        The digit's static model (the twin's, or a real rig's calibrated one).
+    placed : Tissue
+        Where the tissue lies (``start_m``, ``end_m``, ``side``, inclusions known as ratios): its ``gap_m`` and
+        ``modulus_n_m2`` are only used to name the answer's type, never as a starting point.
+    fit_exponent : bool
+        Fit Hunt-Crossley's ``n`` too (the "hunt-crossley" model).
+    sigma_v : array_like, optional
+        Noise of one plateau mean per gauge (V); default the model's white noise over ``record.readings``.
+    start : TissueFit, optional
+        Start from this fit's gap and modulus (a neighbouring sweep's) instead of a coarse grid search.
+    """
+    sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(record.readings) if sigma_v is None else sigma_v
+    like = _TissueLikelihood(
+        model,
+        record.command,
+        record.time_s,
+        record.gauges_v,
+        sigma,
+        lambda th: placed.replace(gap_m=th[0], modulus_n_m2=math.exp(th[1]), exponent=th[2] if fit_exponent else 1.0),
+    )
+    if start is None:
+        x0 = _start(like, model, placed, record.command, fit_exponent)
+    else:
+        x0 = np.array([start.gap_m, math.log(start.modulus_n_m2)] + ([start.exponent] if fit_exponent else []))
+    lower = [-0.05, math.log(1.0)] + ([1.0] if fit_exponent else [])
+    upper = [0.3, math.log(1e7)] + ([3.0] if fit_exponent else [])
+    sol, sd = _least_squares(like, x0, lower, upper, [1e-3, 0.1] + ([0.1] if fit_exponent else []))
+    gap, logk = float(sol.x[0]), float(sol.x[1])
+    k = math.exp(logk)
+    n = float(sol.x[2]) if fit_exponent else 1.0
+    offset, drift = like.nuisance(sol.x)
+    dof = like.gauges.size - sol.x.size - (like.design.shape[1] * 3 if like.design is not None else 0)
+    # readings the model explains worse than their noise (ringing, drift, a model error) widen the uncertainty
+    sd = sd * math.sqrt(max(1.0, 2 * sol.cost / max(dof, 1)))
+    return TissueFit(
+        tissue=placed.replace(gap_m=gap, modulus_n_m2=k, exponent=n),
+        gap_m=gap,
+        gap_sd_m=float(sd[0]),
+        modulus_n_m2=k,
+        modulus_sd_n_m2=float(k * sd[1]),
+        exponent=n,
+        exponent_sd=float(sd[2]) if fit_exponent else 0.0,
+        chi2=float(2 * sol.cost),
+        dof=int(dof),
+        converged=bool(sol.success),
+        offset_v=offset,
+        drift_v_per_s=drift,
+        extra={"evaluations": like.evaluations},
+    )
+
+
+def _start(like, model, placed, commands, fit_exponent):
+    """A starting point from a coarse grid: gaps where the free digit's deepest point in the tissue's stretch
+    would meet it at each plateau, moduli log-spaced 30..3e5 N/m^2."""
+    from flexdigit.twin.contact import Tissue
+
+    free = model.tissue_solution(Tissue(placed.start_m, placed.end_m, 1.0, 0.0, side=placed.side), commands)[0]
+    chain = model.chain
+    s = np.linspace(0.0, chain.length_m, 55)
+    pos = chain.positions(free.static.psi_rad, s)  # (m, 55, 2)
+    inside = (pos[..., 0] >= placed.start_m) & (pos[..., 0] <= placed.end_m)
+    reach = np.where(inside, placed.sign * pos[..., 1], -np.inf).max(axis=1)
+    gaps = np.unique(np.round(reach[np.isfinite(reach)], 5))
+    if gaps.size == 0:
+        raise ParameterError(
+            f"The tissue from {placed.start_m:g} to {placed.end_m:g} m is nowhere beside the digit during the sweep: "
+            "check 'start_mm' and 'end_mm'."
+        )
+    gaps = np.quantile(gaps, np.linspace(0.05, 0.95, 7))
+    best, x0 = np.inf, None
+    for g in gaps:
+        for logk in np.log([30.0, 300.0, 3000.0, 3e4, 3e5]):
+            th = np.array([g, logk] + ([1.0] if fit_exponent else []))
+            cost = float(np.sum(like.residuals(th) ** 2))
+            if cost < best:
+                best, x0 = cost, th
+    return x0
+
+
+def stiffness_bound(model, tissue, protocol: PalpationProtocol, *, fit_exponent: bool = False) -> dict:
+    """Cramer-Rao standard deviations of the gap (m), modulus (N/m^2) and exponent from one sweep of
+    ``protocol`` on ``tissue``, with the gauges' white noise over ``readings`` and the nuisance offsets and drifts
+    estimated as the fit does."""
+    commands = [protocol.tare_command, *protocol.commands, protocol.tare_command]
+    times = protocol.plateau_s * (np.arange(len(commands)) + 0.5)
+    sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(protocol.readings)
+    clean = model.tissue_solution(tissue, commands)[1]
+    like = _TissueLikelihood(
+        model,
+        commands,
+        times,
+        clean,
+        sigma,
+        lambda th: tissue.replace(gap_m=th[0], modulus_n_m2=math.exp(th[1]), exponent=th[2] if fit_exponent else 1.0),
+    )
+    theta = np.array([tissue.gap_m, math.log(tissue.modulus_n_m2)] + ([tissue.exponent] if fit_exponent else []))
+    steps = np.array([1e-5, 1e-3] + ([1e-3] if fit_exponent else []))
+    jac = np.stack(
+        [
+            (like.residuals(theta + d) - like.residuals(theta - d)) / (2 * h)
+            for d, h in zip(np.diag(steps), steps, strict=True)
+        ],
+        axis=1,
+    )
+    sd = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)))
+    out = {"gap_m": float(sd[0]), "modulus_n_m2": float(sd[1] * tissue.modulus_n_m2)}
+    if fit_exponent:
+        out["exponent"] = float(sd[2])
+    return out
+
+
+# -------------------------------------------------------------------------------------------------- palpate
+@dataclass
+class PalpationResult:
+    """One palpation: the fit, the force-indentation curve, the lumped stiffness.
+
+    ``curve`` holds per sweep plateau (tares excluded): ``command``, ``force_n`` and ``force_sd_n`` (from the
+    gauges alone, the contact force pressing the digit back, > 0), ``indentation_m`` (deepest penetration of the
+    fitted tissue), ``model_force_n`` (the fitted tissue's force) and, on the twin, ``true_force_n``.
+    """
+
+    protocol: PalpationProtocol
+    placed: object
+    fit: TissueFit
+    curve: dict
+    lumped_stiffness_n_m: float
+    lumped_stiffness_sd_n_m: float
+    record: SweepRecord
+
+    def summary(self) -> dict:
+        f = self.fit
+        return {
+            "model": self.protocol.model,
+            "gap_mm": 1000 * f.gap_m,
+            "gap_sd_mm": 1000 * f.gap_sd_m,
+            "modulus_n_m2": f.modulus_n_m2,
+            "modulus_sd_n_m2": f.modulus_sd_n_m2,
+            "stiffness_n_m_per_cm": f.stiffness_n_m_per_cm,
+            "exponent": f.exponent,
+            "exponent_sd": f.exponent_sd,
+            "lumped_stiffness_n_m": self.lumped_stiffness_n_m,
+            "lumped_stiffness_sd_n_m": self.lumped_stiffness_sd_n_m,
+            "chi2_per_dof": f.chi2 / max(f.dof, 1),
+            "converged": f.converged,
+        }
+
+
+def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, estimator=None) -> PalpationResult:
+    """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope."""
+    from flexdigit.palpation.contact_estimation import ContactEstimator
+
+    fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley")
+    sweep = ~record.tare
+    cmds = record.command[sweep]
+    if estimator is None:
+        estimator = ContactEstimator(model, classify=False, n_readings=record.readings, side=placed.side).fit()
+    # the fit's offsets and drifts at each plateau's time, taken off before the force is estimated
+    nuisance = fit.offset_v + np.outer(record.time_s, fit.drift_v_per_s)
+    est = estimator.predict(record.gauges_v[sweep] - nuisance[sweep], cmds)
+    sol, _ = model.tissue_solution(fit.tissue, cmds)
+    depth = _deepest(model, fit.tissue, sol.static.psi_rad)
+    force = -placed.sign * est.point_force_n  # the tissue pushes back: report it as a positive force
+    curve = {
+        "command": cmds,
+        "force_n": force,
+        "force_sd_n": est.force_sd_n,
+        "indentation_m": depth,
+        "model_force_n": -placed.sign * sol.contact_force_n,
+    }
+    if "true_force_n" in record.samples:
+        curve["true_force_n"] = _plateau_truth(record, protocol)[sweep]
+    touching = depth > 0
+    if np.count_nonzero(touching) >= 2:
+        w = 1.0 / np.maximum(est.force_sd_n[touching], 1e-12) ** 2
+        x, y = depth[touching], force[touching]
+        slope = float(np.sum(w * x * y) / np.sum(w * x * x))
+        slope_sd = float(1.0 / math.sqrt(np.sum(w * x * x)))
+    else:
+        slope, slope_sd = math.nan, math.inf
+    return PalpationResult(protocol, placed, fit, curve, slope, slope_sd, record)
+
+
+def _deepest(model, tissue, psi) -> np.ndarray:
+    """Deepest penetration (m) of the digit into the tissue at each state (0 when clear)."""
+    from flexdigit.twin.contact import TissueContact
+
+    _, _, delta, _, _ = TissueContact(model.chain, tissue).points(psi)
+    return delta.max(axis=1, initial=0.0) if delta.size else np.zeros(psi.shape[0])
+
+
+def _plateau_truth(record: SweepRecord, protocol: PalpationProtocol) -> np.ndarray:
+    t = record.samples["time_s"]
+    plateau = np.minimum((t // protocol.plateau_s).astype(int), len(record.command) - 1)
+    truth = record.samples["true_force_n"]
+    return np.array(
+        [truth[np.flatnonzero(plateau == j)[-record.readings :]].mean() for j in range(len(record.command))]
+    )
+
+
+def palpate(
+    rig, placed, protocol: PalpationProtocol | None = None, *, model=None, log_path=None, log_mode: str = "new"
+) -> PalpationResult:
+    """Run a palpation on ``rig`` with the tissue ``placed`` beside the digit (:func:`run_sweep`, :func:`analyse`).
+
+    On the twin the tissue is put there (``rig.place_tissue``) and the true contact force is logged beside each
+    sample; on hardware the operator is asked to place it.
+    """
+    from flexdigit.palpation.contact_estimation import ContactGaugeModel
+
+    protocol = protocol or PalpationProtocol()
+    model = model or ContactGaugeModel(rig.params)
+    rig.place_tissue(placed)
+    truth = _truth_of(rig)
+    record = run_sweep(rig, protocol, log_path=log_path, truth=truth, log_mode=log_mode)
+    return analyse(record, placed, protocol, model)
+
+
+def _truth_of(rig):
+    twin = getattr(rig, "twin", None)
+    if twin is None or not hasattr(twin, "contact_state"):
+        return None
+    return lambda: -twin.tissue.sign * twin.contact_state()[0] if twin.tissue is not None else 0.0
+
+
+def simulate_sweep(model, tissue, protocol: PalpationProtocol, *, seed=0, drift_v_per_sqrt_s=None) -> SweepRecord:
+    """A sweep's plateaus from the twin's statics and its sensor noise, without the dynamics: each plateau's mean is
+    the static contact's gauges plus white noise over ``readings`` samples and the random-walk drift accumulated
+    since the start (the calibration's rates). For studies: the loop-driven sweep on the dynamic twin
+    (:func:`palpate`) agrees with it once the plateaus settle (tests)."""
+    rng = np.random.default_rng(seed)
+    sequence = np.array([protocol.tare_command, *protocol.commands, protocol.tare_command])
+    times = protocol.plateau_s * (np.arange(sequence.size) + 1.0) - 0.5 * protocol.readings * protocol.period_s
+    sol, clean = model.tissue_solution(tissue, sequence)
+    rate = (
+        np.asarray(model.calibration.noise_drift_v_per_sqrt_s, dtype=float)
+        if drift_v_per_sqrt_s is None
+        else np.asarray(drift_v_per_sqrt_s, dtype=float)
+    )
+    steps = np.sqrt(np.diff(np.concatenate([[0.0], times])))[:, None] * rate * rng.standard_normal((sequence.size, 3))
+    white = model.noise_v / math.sqrt(protocol.readings) * rng.standard_normal((sequence.size, 3))
+    gauges = clean + np.cumsum(steps, axis=0) + white
+    tare = np.zeros(sequence.size, dtype=bool)
+    tare[[0, -1]] = True
+    truth = -tissue.sign * sol.contact_force_n
+    samples = {"time_s": times, "gauges_v": gauges, "command": sequence, "true_force_n": truth, "plateau_means": True}
+    return SweepRecord(sequence, times, gauges, tare, protocol.readings, samples)
+
+
+# ------------------------------------------------------------------------------------------------------ scan
+@dataclass
+class ScanResult:
+    """A scan: the tissue at each offset along the digit, the local stiffness map and the fitted inclusion.
+
+    ``offsets_m`` (j,); ``local`` the per-offset uniform fits (:class:`TissueFit`); ``map_position_m`` where on
+    the tissue each local fit looked (its contact centroid, in the tissue's own coordinate: m from where its start
+    was at offset 0); ``inclusion`` the joint fit of one inclusion to every sweep (dict: ``centre_m`` in the
+    tissue's coordinate at offset 0, ``ratio``, ``modulus_n_m2``, ``gap_m`` and their standard deviations).
+    """
+
+    offsets_m: np.ndarray
+    local: list
+    map_position_m: np.ndarray
+    map_modulus_n_m2: np.ndarray
+    map_modulus_sd_n_m2: np.ndarray
+    inclusion: dict
+    records: list
+
+
+def scan(
+    records_or_rig,
+    placed,
+    offsets_m,
+    protocol: PalpationProtocol | None = None,
+    *,
+    model=None,
+    inclusion_width_m: float = 0.01,
+) -> ScanResult:
+    """Palpate with the tissue moved along the digit by each offset, map the stiffness and find an inclusion.
+
+    ``records_or_rig``: a rig (the tissue is placed at each offset, :meth:`flexdigit.rig.base.Rig.place_tissue`,
+    and swept) or a list of :class:`SweepRecord`, one per offset (e.g. :func:`simulate_sweep`). ``placed`` is the
+    tissue at offset 0 (where it lies; its modulus and gap are not used). ``inclusion_width_m`` is the size of the
+    nodule looked for: its ratio is fitted for that width (a narrower, stiffer one presses back alike).
+    """
+    from flexdigit.palpation.contact_estimation import ContactGaugeModel
+
+    protocol = protocol or PalpationProtocol()
+    offsets = check_values(offsets_m, "offsets_m", "scan", unit="m").reshape(-1)
+    if offsets.size < 3:
+        raise ParameterError(f"The 'offsets_m' parameter of scan needs at least 3 offsets. Got {offsets.tolist()!r}.")
+    if isinstance(records_or_rig, list):
+        records = records_or_rig
+        model = model or ContactGaugeModel()
+    else:
+        rig = records_or_rig
+        model = model or ContactGaugeModel(rig.params)
+        records = []
+        for d in offsets:
+            rig.place_tissue(placed.moved(float(d)))
+            records.append(run_sweep(rig, protocol, truth=_truth_of(rig)))
+    uniform = placed.replace(inclusions=())
+    local, where = [], []
+    for d, rec in zip(offsets, records, strict=True):
+        fit = fit_tissue(rec, model, uniform.moved(float(d)), start=local[-1] if local else None)
+        local.append(fit)
+        sol, _ = model.tissue_solution(fit.tissue, rec.command[~rec.tare][-1:])
+        where.append(float(sol.static.tip_m[0, 0] if np.isnan(sol.contact_centroid_m[0]) else _centroid_a(model, sol)))
+    map_k = np.array([f.modulus_n_m2 for f in local])
+    map_sd = np.array([f.modulus_sd_n_m2 for f in local])
+    position = np.array(where) - offsets - placed.start_m
+    inclusion = _fit_inclusion(records, model, uniform, offsets, local, position, map_k, inclusion_width_m)
+    return ScanResult(offsets, local, position, map_k, map_sd, inclusion, records)
+
+
+def _centroid_a(model, sol) -> float:
+    """Where along the digit's axis (world ``a``, m from the clamp) the contact's centroid is."""
+    return float(model.chain.positions(sol.static.psi_rad, [sol.contact_centroid_m[0]])[0, 0, 0])
+
+
+def _fit_inclusion(records, model, uniform, offsets, local, position, map_k, width):
+    """One inclusion fitted to every sweep of the scan: gap, base modulus, centre and ratio (width given)."""
+    from flexdigit.twin.contact import Inclusion
+
+    gauges = np.concatenate([r.gauges_v for r in records])
+    commands = np.concatenate([r.command for r in records])
+    times = np.concatenate([r.time_s + 1e4 * j for j, r in enumerate(records)])  # (drift fitted per sweep below)
+    sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(records[0].readings)
+    blocks = []
+    start = 0
+    for r in records:
+        blocks.append(slice(start, start + r.command.size))
+        start += r.command.size
+
+    def tissues(th):
+        gap, logk, centre, logratio = th
+        body = uniform.replace(gap_m=gap, modulus_n_m2=math.exp(logk))
+        body = body.replace(inclusions=(Inclusion(uniform.start_m + centre, width, math.exp(logratio)),))
+        return [(rows, body.moved(float(d))) for rows, d in zip(blocks, offsets, strict=True)]
+
+    like = _ScanLikelihood(model, commands, times, gauges, sigma, tissues, blocks)
+    base = float(np.median(map_k))
+    peak = int(np.argmax(map_k))
+    gap0 = float(np.median([f.gap_m for f in local]))
+    x0 = np.array([gap0, math.log(base), position[peak], math.log(max(map_k[peak] / base, 1.05))])
+    span = float(np.ptp(position)) + width
+    lower = [-0.05, math.log(1.0), float(position.min()) - width, math.log(0.05)]
+    upper = [0.3, math.log(1e7), float(position.max()) + width, math.log(50.0)]
+    x0 = np.clip(x0, np.array(lower) + 1e-9, np.array(upper) - 1e-9)
+    sol, sd = _least_squares(like, x0, lower, upper, [1e-3, 0.1, 0.2 * span / max(len(offsets), 1), 0.1])
+    dof = gauges.size - 4 - 6 * len(records)
+    sd = sd * math.sqrt(max(1.0, 2 * sol.cost / max(dof, 1)))
+    ratio = math.exp(sol.x[3])
+    return {
+        "centre_m": float(sol.x[2]),
+        "centre_sd_m": float(sd[2]),
+        "ratio": ratio,
+        "ratio_sd": float(ratio * sd[3]),
+        "modulus_n_m2": math.exp(sol.x[1]),
+        "modulus_sd_n_m2": float(math.exp(sol.x[1]) * sd[1]),
+        "gap_m": float(sol.x[0]),
+        "width_m": width,
+        "chi2_per_dof": float(2 * sol.cost / max(dof, 1)),
+        "converged": bool(sol.success),
+    }
+
+
+class _ScanLikelihood(_TissueLikelihood):
+    """The scan's residuals: offsets and drifts profiled out per sweep (each has its own tares)."""
+
+    def __init__(self, model, commands, times, gauges, sigma, tissue_of, blocks):
+        super().__init__(model, commands, times, gauges, sigma, tissue_of, nuisance=False)
+        self.blocks = blocks
+        self.times = np.asarray(times, dtype=float)
+
+    def residuals(self, theta):
+        r = self.gauges - self.predict(theta)
+        for rows in self.blocks:
+            t = self.times[rows]
+            design = np.column_stack([np.ones_like(t), t - t.mean()])
+            coef, *_ = np.linalg.lstsq(design, r[rows], rcond=None)
+            r[rows] = r[rows] - design @ coef
+        return (r / self.sigma).ravel()
+
+
+# ------------------------------------------------------------------------------------------------ force control
+class ForceController:
+    """Hold a set contact force with the 20 ms loop, from the gauges' force estimate (integral control).
+
+    Each sample the contact force is estimated from the reading
+    (:class:`flexdigit.palpation.contact_estimation.ContactEstimator`,
+    point hypothesis) at the servo's position, which is taken as the controller's own continuous command (the
+    servo low-passes what it is sent): the estimate at the two integer commands around it, interpolated. The
+    command integrates the force error (``gain`` commands per second per N, clamped to ``low..high``: no wind-up),
+    and is rounded with error feedback (a first-order sigma-delta): the integer commands sent average to the
+    continuous one, a resolution the servo (20 rad/s) and the digit (13 rad/s) filter the 25 Hz toggling out of,
+    finer than the ~0.03 N a whole command step presses. Integral action alone has no overshoot while the
+    crossover (``gain`` x ~0.03 N per command) stays well below the digit's lightly damped mode.
+
+    Parameters
+    ----------
+    estimator : ContactEstimator
+        Fitted (point hypothesis; ``classify=False`` is enough).
+    offset_v : array_like (3,)
+        Subtracted from every reading first (the tare: readings at rest minus the model's).
+    gain : float
+        Integral gain (commands / s / N).
+    approach_rate : float
+        Commands per second while nothing touches yet (until the force passes ``contact_fraction`` of the
+        setpoint): the integral would creep up on the body at ``gain x setpoint``, letting the gauges drift since
+        the tare.
+    period_s : float
+    low, high : int
+        Command range the controller may use.
+    sign : float
+        -1 when the body is on the cable side (its force on the digit is negative): the force held is
+        ``sign * estimate``, positive.
+    """
+
+    def __init__(
+        self,
+        estimator,
+        offset_v,
+        *,
+        gain=30.0,
+        period_s=0.020,
+        low=8,
+        high=60,
+        sign=-1.0,
+        approach_rate=4.0,
+        contact_fraction=0.3,
+    ) -> None:
+        self.approach_rate = check_real(approach_rate, "approach_rate", "ForceController", low=0, low_open=True)
+        self.contact_fraction = check_real(contact_fraction, "contact_fraction", "ForceController", low=0, high=1)
+        self.estimator = estimator
+        self.offset_v = np.asarray(offset_v, dtype=float)
+        self.gain = check_real(gain, "gain", "ForceController", low=0, low_open=True)
+        self.period_s = period_s
+        self.low, self.high = int(low), int(high)
+        self.sign = sign
+        self.forces: list[float] = []
+
+    def reset(self, command: int) -> None:
+        self.u = float(command)
+        self.residue = 0.0
+        self.forces = []
+        self.touching = False
+
+    def force(self, gauges_v, position: float) -> float:
+        """Contact force (N, > 0 pressing) from one reading with the servo at the (continuous) ``position``."""
+        lo = int(math.floor(position))
+        frac = position - lo
+        v = np.asarray(gauges_v, dtype=float) - self.offset_v
+        est = self.estimator.predict(np.vstack([v, v]), np.array([lo, lo + 1]))
+        f = self.sign * est.point_force_n
+        return float((1 - frac) * f[0] + frac * f[1])
+
+    def step(self, setpoint: float, reading) -> float:
+        f = self.force(reading.gauges_v, self.u)
+        self.forces.append(f)
+        if not self.touching and f > self.contact_fraction * setpoint:
+            self.touching = True
+        # approach at a steady rate until the contact shows, then integrate the force error
+        rate = self.approach_rate if not self.touching else self.gain * (setpoint - f)
+        self.u = min(max(self.u + self.period_s * rate, self.low), self.high)
+        wanted = self.u + self.residue
+        sent = int(round(wanted))
+        self.residue = wanted - sent
+        return sent
+
+
+@dataclass
+class ForceHold:
+    """A force-control run: per sample ``time_s``, ``command``, ``force_n`` (estimated) and, on the twin,
+    ``true_force_n``; the figures over the last ``window_s``: mean true (or estimated) force and its error,
+    and the overshoot (largest force over the setpoint, relative)."""
+
+    setpoint_n: float
+    time_s: np.ndarray
+    command: np.ndarray
+    force_n: np.ndarray
+    true_force_n: np.ndarray | None
+    steady_force_n: float
+    steady_error: float
+    steady_ripple_n: float
+    overshoot: float
+    settling_s: float
+    status: str
+
+
+def hold_force(
+    rig,
+    setpoint_n: float,
+    *,
+    duration_s: float = 10.0,
+    model=None,
+    estimator=None,
+    gain: float = 30.0,
+    window_s: float = 3.0,
+    side: str = "cable",
+    region_m=None,
+    approach_rate: float = 4.0,
+    log_path=None,
+    log_mode: str = "new",
+) -> ForceHold:
+    """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
+
+    Tares on 10 readings at the equilibrium command first (nothing must touch the digit there), then runs
+    :class:`ForceController`. ``region_m`` (m from the base): where the contact can be (where the tissue lies),
+    which steadies the estimate when nothing touches yet. On the twin the true contact force is logged beside the
+    estimate; the figures
+    (steady force and error over the last ``window_s``, overshoot, 10 % settling time) use it there, and the
+    estimate on hardware.
+    """
+    from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
+    from flexdigit.rig.loop import run_loop
+
+    setpoint = check_real(setpoint_n, "setpoint_n", "hold_force", low=0, low_open=True)
+    model = model or ContactGaugeModel(rig.params)
+    if estimator is None:
+        region = None if region_m is None else region_m
+        estimator = ContactEstimator(model, classify=False, side=side, region_m=region).fit()
+    eq = int(rig.params.actuator.equilibrium_command)
+    rig.write_command(eq)
+    rig.wait(1.0)
+    rest = np.array([rig.read().gauges_v for _ in range(10)])
+    offset = rest.mean(axis=0) - model.free_v([eq])[0]
+    sign = -1.0 if side == "cable" else 1.0
+    controller = ForceController(estimator, offset, gain=gain, low=eq, sign=sign, approach_rate=approach_rate)
+    truth = _truth_of(rig)
+    true_force = []
+    result = run_loop(
+        rig,
+        controller,
+        setpoint,
+        duration_s,
+        log_path=log_path,
+        log_mode=log_mode,
+        on_sample=(lambda k, t, y, c: true_force.append(truth())) if truth else None,
+        close_rig=False,
+    )
+    t = result.time_s
+    est = np.array(controller.forces[: t.size])
+    scored = np.array(true_force) if truth else est
+    last = t >= t[-1] - window_s if t.size else np.zeros(0, dtype=bool)
+    steady = float(np.mean(scored[last])) if np.any(last) else math.nan
+    outside = np.flatnonzero(np.abs(scored - setpoint) > 0.1 * setpoint)
+    settling = (
+        float(t[outside[-1] + 1])
+        if outside.size and outside[-1] + 1 < t.size
+        else (0.0 if not outside.size else math.inf)
+    )
+    return ForceHold(
+        setpoint,
+        t,
+        result.command,
+        est,
+        np.array(true_force) if truth else None,
+        steady,
+        (steady - setpoint) / setpoint,
+        float(np.std(scored[last])) if np.any(last) else math.nan,
+        float(max(0.0, (np.max(scored) - setpoint) / setpoint)) if scored.size else math.nan,
+        settling,
+        result.status,
+    )

@@ -1,0 +1,292 @@
+"""Tissue and palpation-protocol files (TOML): read, validate, name the culprit.
+
+A tissue file has one ``[tissue]`` table (``name``, ``description``, ``side``, ``start_mm``, ``end_mm``, and, to
+place it on the twin, ``gap_mm``, ``modulus_n_m2``, ``exponent``, ``damping_s_m``; ``[[tissue.inclusions]]``
+with ``centre_mm``, ``width_mm``, ``ratio``). A protocol file has any of ``[sweep]`` (``commands`` as a list or
+``{from, to, step}``, ``settle_s``, ``readings``, ``tare_command``, ``period_s``, ``model``), ``[scan]``
+(``offsets_mm``, ``inclusion_width_mm``) and ``[force]`` (``setpoint_n``, ``duration_s``, ``gain``,
+``approach_rate``). Built-in files (``palpation/palpation_data``) are named without ``.toml``: tissues
+``soft-block``, ``nodule-phantom``, ``hertzian-block``; protocols ``sweep``, ``scan``, ``hold``.
+
+Every problem is one :class:`~flexdigit.errors.DataFileError` naming the file, the key and what was expected,
+e.g. ``tissue.toml: key 'tissue.gap_mm' must be a real number (mm); got 'far'``.
+
+Examples
+--------
+>>> tissue, _ = load_tissue("soft-block")
+>>> tissue.modulus_n_m2, round(tissue.gap_m, 3)
+(1000.0, 0.03)
+>>> load_palpation_protocol("scan").scan["offsets_m"][:3]
+(-0.04, -0.03, -0.02)
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+from flexdigit.errors import DataFileError, ParameterError
+
+TISSUES = ("soft-block", "nodule-phantom", "hertzian-block")
+PROTOCOLS = ("sweep", "scan", "hold")
+
+_TISSUE_KEYS = {
+    "name",
+    "description",
+    "side",
+    "start_mm",
+    "end_mm",
+    "gap_mm",
+    "modulus_n_m2",
+    "exponent",
+    "damping_s_m",
+    "inclusions",
+}
+_INCLUSION_KEYS = {"centre_mm", "width_mm", "ratio"}
+#: Most values a ``{from, to, step}`` series may expand to (a staircase has at most 255 commands).
+MAX_SERIES = 10_000
+_SECTIONS = {
+    "sweep": {"commands", "settle_s", "readings", "tare_command", "period_s", "model"},
+    "scan": {"offsets_mm", "inclusion_width_mm"},
+    "force": {"setpoint_n", "duration_s", "gain", "approach_rate"},
+}
+
+
+class _Table:
+    """Typed access to one TOML table that names the file and the dotted key in every error."""
+
+    def __init__(self, data, source: str, prefix: str, allowed) -> None:
+        if not isinstance(data, dict):
+            raise DataFileError(f"{source}: '{prefix}' must be a table. Got {data!r}.")
+        unknown = sorted(set(data) - set(allowed))
+        if unknown:
+            raise DataFileError(
+                f"{source}: unknown key {f'{prefix}.{unknown[0]}'!r}; expected some of {', '.join(sorted(allowed))}"
+            )
+        self.data, self.source, self.prefix = data, source, prefix
+
+    def where(self, key: str) -> str:
+        return f"{self.source}: key '{self.prefix}.{key}'"
+
+    def real(self, key, *, default=None, low=None, high=None, low_open=False, unit=""):
+        if key not in self.data:
+            if default is None:
+                raise DataFileError(f"{self.where(key)} is missing")
+            return default
+        value = self.data[key]
+        text = f" ({unit})" if unit else ""
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+            raise DataFileError(f"{self.where(key)} must be a real number{text}; got {value!r}")
+        if (low is not None and (value < low or (low_open and value == low))) or (high is not None and value > high):
+            left = "(" if low_open or low is None else "["
+            bounds = f"{left}{'-inf' if low is None else low}, {'inf)' if high is None else f'{high}]'}"
+            raise DataFileError(f"{self.where(key)} must be inside {bounds}{text}; got {value!r}")
+        return float(value)
+
+    def optional_real(self, key, **kw):
+        return self.real(key, **kw) if key in self.data else None
+
+    def integer(self, key, *, default=None, low=None, high=None):
+        if key not in self.data:
+            if default is None:
+                raise DataFileError(f"{self.where(key)} is missing")
+            return default
+        value = self.data[key]
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int)
+            or (low is not None and value < low)
+            or (high is not None and value > high)
+        ):
+            raise DataFileError(f"{self.where(key)} must be an integer inside [{low}, {high}]; got {value!r}")
+        return int(value)
+
+    def text(self, key, *, default="", choices=None):
+        value = self.data.get(key, default)
+        if not isinstance(value, str) or (choices is not None and value not in choices):
+            expected = f"one of {', '.join(map(repr, choices))}" if choices else "a string"
+            raise DataFileError(f"{self.where(key)} must be {expected}; got {value!r}")
+        return value
+
+    def series(self, key, *, integer=False, default=None, unit=""):
+        """A list of numbers, or ``{from, to, step}`` (inclusive of ``to``)."""
+        if key not in self.data:
+            if default is None:
+                raise DataFileError(f"{self.where(key)} is missing")
+            return default
+        value = self.data[key]
+        kind = "integers" if integer else "numbers"
+        if isinstance(value, dict):
+            inner = _Table(value, self.source, f"{self.prefix}.{key}", {"from", "to", "step"})
+            start, stop = inner.real("from"), inner.real("to")
+            step = inner.real("step", low=0, low_open=True)
+            span = (stop - start) / step
+            if not span < MAX_SERIES:  # a tiny step (or a huge span) would build a list the size of the memory
+                raise DataFileError(
+                    f"{self.where(key)} runs from {start:g} to {stop:g} in steps of {step:g}: more than {MAX_SERIES} "
+                    "values"
+                )
+            count = int(math.floor(span + 1e-9)) + 1
+            if count < 1:
+                raise DataFileError(f"{self.where(key)} runs from {start:g} to {stop:g}: 'to' must not be below 'from'")
+            value = [start + i * step for i in range(count)]
+        if not isinstance(value, list) or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in value
+        ):
+            raise DataFileError(
+                f"{self.where(key)} must be a list of {kind}{f' ({unit})' if unit else ''} or "
+                f"{{from, to, step}}; got {value!r}"
+            )
+        if integer and not all(float(v).is_integer() for v in value):
+            raise DataFileError(f"{self.where(key)} must be integers; got {value!r}")
+        return [int(v) for v in value] if integer else [float(v) for v in value]
+
+
+def _read(name_or_path, builtin, kind: str) -> tuple[dict, str]:
+    text_name = str(name_or_path)
+    if text_name in builtin:
+        resource = resources.files(__package__).joinpath("palpation_data", f"{text_name}.toml")
+        text, source = resource.read_text(), f"{kind} {text_name}"
+    else:
+        path = Path(name_or_path)
+        if not path.is_file():
+            raise DataFileError(
+                f"no {kind} {text_name!r}: expected one of {', '.join(builtin)} or a TOML file that exists"
+            )
+        from flexdigit._io import read_text
+
+        text, source = read_text(path, f"a {kind} TOML"), str(path)  # binary garbage: named, not a codec error
+    try:
+        return tomllib.loads(text), source
+    except tomllib.TOMLDecodeError as exc:
+        raise DataFileError(f"{source}: not valid TOML ({exc})") from None
+
+
+@dataclass(frozen=True)
+class TissueFile:
+    """What a tissue file says beyond the :class:`~flexdigit.twin.contact.Tissue`: its name, and whether it gave
+    the gap and modulus (needed to place it on the twin)."""
+
+    name: str
+    description: str
+    source: str
+    placed_on_twin: bool
+
+
+def load_tissue(name_or_path):
+    """A tissue from a built-in name (:data:`TISSUES`) or a TOML file: ``(Tissue, TissueFile)``.
+
+    Without ``gap_mm`` and ``modulus_n_m2`` the tissue is only located (``TissueFile.placed_on_twin`` False): enough
+    for hardware, where palpation estimates them; the twin needs them to put the tissue there.
+    """
+    from flexdigit.twin.contact import Inclusion, Tissue
+
+    data, source = _read(name_or_path, TISSUES, "tissue")
+    if set(data) != {"tissue"}:
+        extra = sorted(set(data) - {"tissue"})
+        raise DataFileError(
+            f"{source}: expected one [tissue] table" + (f"; unknown table {extra[0]!r}" if extra else "")
+        )
+    t = _Table(data["tissue"], source, "tissue", _TISSUE_KEYS)
+    start = t.real("start_mm", unit="mm") / 1000
+    end = t.real("end_mm", unit="mm") / 1000
+    if not end > start:
+        raise DataFileError(f"{t.where('end_mm')} must be beyond 'start_mm' ({start * 1000:g}); got {end * 1000:g}")
+    gap = t.optional_real("gap_mm", unit="mm")
+    modulus = t.optional_real("modulus_n_m2", low=0, unit="N/m^2")
+    inclusions = []
+    raw = t.data.get("inclusions", [])
+    if not isinstance(raw, list):
+        raise DataFileError(f"{t.where('inclusions')} must be an array of tables [[tissue.inclusions]]; got {raw!r}")
+    for i, item in enumerate(raw):
+        inc = _Table(item, source, f"tissue.inclusions[{i}]", _INCLUSION_KEYS)
+        centre = inc.real("centre_mm", unit="mm") / 1000
+        if not start <= centre <= end:  # outside the body it would change nothing: a plausible wrong answer
+            raise DataFileError(
+                f"{inc.where('centre_mm')} must lie in the tissue ({start * 1000:g}..{end * 1000:g} mm); "
+                f"got {centre * 1000:g}"
+            )
+        inclusions.append(
+            Inclusion(
+                centre,
+                inc.real("width_mm", low=0, low_open=True, unit="mm") / 1000,
+                inc.real("ratio", low=0, low_open=True),
+            )
+        )
+    try:
+        tissue = Tissue(
+            start,
+            end,
+            0.0 if gap is None else gap / 1000,
+            1.0 if modulus is None else modulus,
+            tuple(inclusions),
+            exponent=t.real("exponent", default=1.0, low=1.0, high=3.0),
+            damping_s_m=t.real("damping_s_m", default=0.0, low=0.0, unit="s/m"),
+            side=t.text("side", default="cable", choices=("cable", "opposite")),
+        )
+    except ParameterError as exc:
+        raise DataFileError(f"{source}: {exc}") from None
+    name = t.text("name", default=Path(str(name_or_path)).stem)
+    info = TissueFile(name, t.text("description"), source, gap is not None and modulus is not None)
+    return tissue, info
+
+
+@dataclass(frozen=True)
+class PalpationFile:
+    """A palpation protocol file: the sweep, and the optional scan and force-control settings (SI units)."""
+
+    sweep: object
+    scan: dict | None = None
+    force: dict | None = None
+    source: str = ""
+    extra: dict = field(default_factory=dict)
+
+
+def load_palpation_protocol(name_or_path=None) -> PalpationFile:
+    """A palpation protocol from a built-in name (:data:`PROTOCOLS`) or a TOML file (the default sweep if None)."""
+    from flexdigit.palpation.palpation import PalpationProtocol
+
+    if name_or_path is None:
+        name_or_path = "sweep"
+    data, source = _read(name_or_path, PROTOCOLS, "palpation protocol")
+    unknown = sorted(set(data) - set(_SECTIONS))
+    if unknown:
+        raise DataFileError(f"{source}: unknown table {unknown[0]!r}; expected some of {', '.join(sorted(_SECTIONS))}")
+    if not data:
+        raise DataFileError(f"{source}: empty; expected a [sweep], [scan] or [force] table")
+    s = _Table(data.get("sweep", {}), source, "sweep", _SECTIONS["sweep"])
+    default = PalpationProtocol()
+    try:
+        sweep = PalpationProtocol(
+            commands=tuple(s.series("commands", integer=True, default=list(default.commands))),
+            settle_s=s.real("settle_s", default=default.settle_s, low=0, unit="s"),
+            readings=s.integer("readings", default=default.readings, low=1, high=100_000),
+            tare_command=s.integer("tare_command", default=default.tare_command, low=0, high=254),
+            period_s=s.real("period_s", default=default.period_s, low=0, low_open=True, unit="s"),
+            model=s.text("model", default=default.model, choices=("linear", "hunt-crossley")),
+        )
+    except ParameterError as exc:
+        raise DataFileError(f"{source}: [sweep] {exc}") from None
+    scan = None
+    if "scan" in data:
+        c = _Table(data["scan"], source, "scan", _SECTIONS["scan"])
+        offsets = c.series("offsets_mm", unit="mm")
+        if len(offsets) < 3:
+            raise DataFileError(f"{c.where('offsets_mm')} must give at least 3 offsets; got {offsets!r}")
+        scan = {
+            "offsets_m": tuple(round(v / 1000, 9) for v in offsets),
+            "inclusion_width_m": c.real("inclusion_width_mm", default=10.0, low=0, low_open=True, unit="mm") / 1000,
+        }
+    force = None
+    if "force" in data:
+        f = _Table(data["force"], source, "force", _SECTIONS["force"])
+        force = {
+            "setpoint_n": f.real("setpoint_n", low=0, low_open=True, high=2.0, unit="N"),
+            "duration_s": f.real("duration_s", default=10.0, low=0, low_open=True, unit="s"),
+            "gain": f.real("gain", default=30.0, low=0, low_open=True, unit="commands / s / N"),
+            "approach_rate": f.real("approach_rate", default=4.0, low=0, low_open=True, unit="commands / s"),
+        }
+    return PalpationFile(sweep, scan, force, source)

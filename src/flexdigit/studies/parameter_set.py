@@ -1,0 +1,24 @@
+"""One rig to evaluate in a study: its parameters, its twin calibration and an optional antagonistic cable.
+
+Its own module, below both :mod:`~flexdigit.studies.spec` (which makes parameter sets from a spec) and
+:mod:`~flexdigit.studies.metrics` (which scores them), so that neither imports the other to get it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from flexdigit.params import RigParams
+from flexdigit.twin.calibration import Calibration, default_calibration
+
+__all__ = ["ParameterSet"]
+
+
+@dataclass(frozen=True)
+class ParameterSet:
+    """One rig to evaluate: its parameters, its twin calibration and, for designs beyond the thesis, a second
+    antagonistic cable (its pretension in N, both cables; None: the thesis's single cable, 2.1)."""
+
+    params: RigParams = field(default_factory=RigParams)
+    calibration: Calibration = field(default_factory=default_calibration)
+    antagonist_pretension_n: float | None = None

@@ -1,0 +1,277 @@
+"""Beyond the thesis's corr2: localisation in millimetres against the Cramer-Rao bound, contact and magnitude.
+
+:func:`localisation_study` puts four estimators side by side on identical data (the thesis's split of one
+dataset, readings tared on each test's no-load readings): an MLP of the thesis's architecture trained on the
+position in metres, the beam-model inversion (mass free, or from the protocol's load set) and the Gaussian
+process (:mod:`flexdigit.tactile.estimators`). Each test reading also gets the Cramer-Rao bound of its position
+and its identifiability zone (:mod:`flexdigit.tactile.bounds`), so the errors are compared with what the gauges
+physically allow, only where the load can be located at all.
+
+Note on the bound: it is the floor for an *unbiased* estimate of a continuous position and mass from one reading.
+Estimators trained on a protocol learn that masses (and positions) come from a short list and can beat it on
+that protocol's data; the free-mass beam inversion assumes nothing of the sort and cannot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexdigit.tactile.accuracy import accuracy, rmse
+from flexdigit.tactile.bounds import ZONES, cramer_rao, protocol_limits
+from flexdigit.tactile.dataset import Dataset
+from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
+from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
+
+ESTIMATORS = ("MLP (thesis architecture)", "beam inversion", "beam inversion, known load set", "Gaussian process")
+#: chi-square(2 dof) 99.9 % quantile: a load is declared when it explains the reading this much better than none
+CONTACT_CHI2 = 13.8155
+
+
+def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
+    """Subtract from every test's readings the mean of its no-load readings (taken at its start, 6.5, 7.2).
+
+    Returns the tared dataset and, per reading, the seconds since its tare (since the first reading for tests
+    without no-load readings, which are left as they are; 0 when the readings have no times, e.g. imported).
+    """
+    gauges = dataset.gauges_v.copy()
+    time = dataset["time_s"]
+    if not np.all(np.isfinite(time)):  # readings imported without times: none accrues drift since its tare
+        time = np.zeros(len(dataset))
+    since = time - time.min()
+    for test in np.unique(dataset["test"]):
+        rows = dataset["test"] == test
+        zero = rows & (dataset["load_kg"] == 0)
+        if zero.any():
+            gauges[rows] -= gauges[zero].mean(axis=0)
+            since[rows] = np.abs(time[rows] - time[zero].mean())
+    columns = dict(dataset.columns)
+    for i, name in enumerate(("gauge1_v", "gauge2_v", "gauge3_v")):
+        columns[name] = gauges[:, i]
+    return Dataset(columns, dict(dataset.meta)), since
+
+
+def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Zone, position CRLB (mass unknown) and CRLB (mass known) of every reading (no-load rows: zone ``""``).
+
+    With ``since_tare_s`` and a model with ``drift_v_per_sqrt_s``, each reading's noise is the model's (white,
+    and the cable-guide friction when the cable is taut) plus the random-walk drift accumulated since its tare:
+    ``sigma^2 = sigma_model^2 + rate^2 t``.
+    """
+    n = len(dataset)
+    zone = np.full(n, "", dtype=object)
+    crlb = np.full(n, np.nan)
+    crlb_known = np.full(n, np.nan)
+    loaded = np.flatnonzero(dataset["load_kg"] > 0)
+    rate = np.asarray(getattr(model, "drift_v_per_sqrt_s", np.zeros(3)), dtype=float)
+    since = np.zeros(n) if since_tare_s is None else np.asarray(since_tare_s, dtype=float)
+    keys = np.column_stack([dataset["position_from_base_m"], dataset["load_kg"], dataset["command"], dataset["test"]])
+    settings, inverse = np.unique(keys[loaded], axis=0, return_inverse=True)
+    for k, (a, m, c, _) in enumerate(settings):
+        rows = loaded[inverse.ravel() == k]
+        b = cramer_rao(model, [a], m, int(c), extra_variance_v2=rate**2 * float(np.mean(since[rows])))
+        zone[rows], crlb[rows], crlb_known[rows] = b.zone[0], b.crlb_m[0], b.crlb_known_mass_m[0]
+    return zone, crlb, crlb_known
+
+
+@dataclass
+class LocalisationResult:
+    """Scores of every estimator on the same test readings (see :func:`localisation_study`)."""
+
+    test_rows: np.ndarray
+    zone: np.ndarray
+    crlb_m: np.ndarray
+    crlb_known_mass_m: np.ndarray
+    position_pred_m: dict[str, np.ndarray]
+    position_true_m: np.ndarray
+    mass_pred_kg: dict[str, np.ndarray]
+    mass_true_kg: np.ndarray
+    position_rmse_m: dict[str, float]
+    position_rmse_identifiable_m: dict[str, float]
+    crlb_rms_identifiable_m: float
+    crlb_known_rms_identifiable_m: float
+    magnitude_rel_rmse: dict[str, float]
+    magnitude_rel_rmse_identifiable: dict[str, float]
+    contact_accuracy: dict[str, float]
+    contact_accuracy_visible: dict[str, float]
+    gp_std_m: np.ndarray
+    bayes: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def best(self) -> str:
+        """The estimator with the lowest position RMSE over identifiable readings."""
+        return min(self.position_rmse_identifiable_m, key=self.position_rmse_identifiable_m.get)
+
+
+def localisation_study(
+    dataset: Dataset,
+    model,
+    *,
+    seed: int = 0,
+    hidden: int = 18,
+    tol: float = 1e-7,
+    epochs: int = 50,
+    digit_length_m: float | None = None,
+    fast: bool = False,
+) -> LocalisationResult:
+    """Position, magnitude and contact by the three estimators on the thesis split of ``dataset``.
+
+    Parameters
+    ----------
+    dataset : Dataset
+        Readings of one protocol (with no-load readings for the contact scores).
+    model : gauge model
+        The static gauge model and noise (the twin's, :class:`~flexdigit.tactile.bounds.TwinGaugeModel`).
+    seed : int
+        Seeds the split (same as the thesis pipeline's for the same seed) and every estimator.
+    hidden, tol, epochs : thesis MLP settings.
+    digit_length_m : float, optional
+        Clamp to tip (default: from the dataset's metadata).
+    fast : bool
+        Coarser inversion grid (2 mm, 41 masses) and a 200-reading GP: for tests.
+    """
+    length = float(digit_length_m or dataset.meta.get("digit_length_m", 0.270))
+    actuated = dataset.protocol.actuated
+    raw = dataset
+    dataset, since = tare(dataset)
+    x = features(dataset, with_command=actuated)
+    n = len(dataset)
+    split = thesis_split(n, seed)
+    mass = dataset["load_kg"]
+    loaded = mass > 0
+    pos = np.nan_to_num(dataset["position_from_tip_m"], nan=0.0)
+    y = np.column_stack([pos, mass])
+    tr = split.train[loaded[split.train]]
+    va = split.val[loaded[split.val]]
+    trva = np.concatenate([tr, va])
+    te = split.test[loaded[split.test]]
+    zone, crlb, crlb_known = reading_zones(model, raw, since)
+
+    rng = np.random.default_rng([seed, 7])
+    mlp_pos = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
+    mlp_pos.fit(x[tr], pos[tr], x[va], pos[va])
+    mlp_mass = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
+    mlp_mass.fit(x[split.train], mass[split.train], x[split.val], mass[split.val])
+    mlp_contact = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
+    contact = loaded.astype(float)
+    mlp_contact.fit(x[split.train], contact[split.train], x[split.val], contact[split.val])
+
+    grid = {"position_step_m": 2e-3, "mass_steps": 41} if fast else {}
+    inversion = BeamInversion(model, digit_length_m=length, max_mass_kg=2.0 * float(mass.max()), tared=True, **grid)
+    inversion.fit(x[trva], y[trva])
+    known_set = BeamInversion(model, digit_length_m=length, load_set=True, tared=True, **grid).fit(x[trva], y[trva])
+    set_pred = known_set.predict(x[te])
+    gp = GPLocaliser(random_state=seed, max_train=200 if fast else 500).fit(x[trva], y[trva])
+
+    inv_all, inv_cost = inversion.predict(x[split.test], return_cost=True)
+    gp_all, gp_std = gp.predict(x[te], return_std=True)
+    pos_pred = {
+        "MLP (thesis architecture)": mlp_pos.predict(x[te]),
+        "beam inversion": inv_all[loaded[split.test], 0],
+        "beam inversion, known load set": set_pred[:, 0],
+        "Gaussian process": gp_all[:, 0],
+    }
+    mass_pred = {
+        "MLP (thesis architecture)": mlp_mass.predict(x[te]),
+        "beam inversion": inv_all[loaded[split.test], 1],
+        "beam inversion, known load set": set_pred[:, 1],
+        "Gaussian process": gp_all[:, 1],
+    }
+    ident = zone[te] == ZONES[2]
+    pos_true, mass_true = pos[te], mass[te]
+    # contact: the thesis-style network thresholded at 0.5; the inversion's likelihood-ratio test against no load
+    no_load_cost = inversion.no_load_cost(x[split.test])
+    contact_pred = {
+        "MLP (thesis architecture)": (mlp_contact.predict(x[split.test]) >= 0.5).astype(float),
+        "beam inversion": (no_load_cost - inv_cost > CONTACT_CHI2).astype(float),
+    }
+    visible = zone[split.test] != ZONES[0]
+    contact_true = contact[split.test]
+
+    def rel(p, t):
+        return float(np.sqrt(np.mean(((p - t) / t) ** 2))) if t.size else float("nan")
+
+    # Bayes limits, each with the prior of the readings it is scored on (more knowledge than any estimator has, so
+    # a floor for every estimator scored on those readings): identifiable loads; visible readings; all readings
+    ident_rows, visible_rows = te[ident], split.test[visible]
+
+    def limit(rows):
+        lim = bayes_limits(model, raw, rows, seed=seed)
+        return lim, lim.index(raw["position_from_base_m"][rows], raw["load_kg"][rows], raw["command"][rows])
+
+    lim_id, k_id = limit(ident_rows)
+    lim_vis, k_vis = limit(visible_rows)
+    lim_all, k_all = limit(split.test)
+    bayes = {
+        "position_rmse_identifiable_m": float(np.sqrt(np.mean(lim_id.position_mse_m2[k_id]))),
+        "magnitude_rel_rmse_identifiable": float(np.sqrt(np.mean(lim_id.magnitude_rel_mse[k_id]))),
+        "contact_accuracy_visible": float(1.0 - np.mean(lim_vis.contact_error[k_vis])),
+        "contact_accuracy": float(1.0 - np.mean(lim_all.contact_error[k_all])),
+        "limits_identifiable": lim_id,
+    }
+
+    return LocalisationResult(
+        test_rows=te,
+        zone=zone[te],
+        crlb_m=crlb[te],
+        crlb_known_mass_m=crlb_known[te],
+        position_pred_m=pos_pred,
+        position_true_m=pos_true,
+        mass_pred_kg=mass_pred,
+        mass_true_kg=mass_true,
+        position_rmse_m={k: rmse(v, pos_true) for k, v in pos_pred.items()},
+        position_rmse_identifiable_m={k: rmse(v[ident], pos_true[ident]) for k, v in pos_pred.items()},
+        crlb_rms_identifiable_m=float(np.sqrt(np.mean(crlb[te][ident] ** 2))),
+        crlb_known_rms_identifiable_m=float(np.sqrt(np.mean(crlb_known[te][ident] ** 2))),
+        magnitude_rel_rmse={k: rel(v, mass_true) for k, v in mass_pred.items()},
+        magnitude_rel_rmse_identifiable={k: rel(v[ident], mass_true[ident]) for k, v in mass_pred.items()},
+        contact_accuracy={k: accuracy(v, contact_true) for k, v in contact_pred.items()},
+        contact_accuracy_visible={k: accuracy(v[visible], contact_true[visible]) for k, v in contact_pred.items()},
+        gp_std_m=gp_std[:, 0],
+        bayes=bayes,
+        extra={
+            "split": split,
+            "identifiable_fraction": float(np.mean(ident)),
+            "zone_all": zone,
+            "crlb_all_m": crlb,
+            "contact_pred": contact_pred,
+            "contact_rows": split.test,
+            "contact_visible": visible,
+        },
+    )
+
+
+def bayes_limits(model, dataset: Dataset, rows=None, *, samples: int = 4000, seed: int = 0):
+    """:func:`~flexdigit.tactile.bounds.protocol_limits` on the distinct settings of ``dataset`` (or of its
+    ``rows``), weighted by how often each occurs in the whole dataset: what the best estimator that knows the
+    protocol, and that the reading is one of those settings, could score on them.
+
+    The no-load readings carry the model's white noise only: they are read one after another after the weights
+    are lifted (the protocols re-hang only loaded readings), so they share one cable-guide friction state, which
+    the tare on their mean removes.
+    """
+    mass = dataset["load_kg"]
+    a = np.where(mass > 0, np.nan_to_num(dataset["position_from_base_m"], nan=0.0), 0.0)
+    all_keys = np.column_stack([np.round(a, 6), mass, dataset["command"]])
+    keys, inverse, counts = np.unique(all_keys, axis=0, return_inverse=True, return_counts=True)
+    keep = np.unique(inverse.ravel()[np.arange(len(dataset)) if rows is None else np.asarray(rows)])
+    k = keys[keep]
+    white = getattr(model, "noise_v", None)
+    return protocol_limits(
+        model, k[:, 0], k[:, 1], k[:, 2], counts[keep], samples=samples, seed=[seed, 11], no_load_noise_v=white
+    )
+
+
+def identifiability_map(model, masses_kg, commands, digit_length_m: float, points: int = 271) -> dict:
+    """CRLB (mass unknown and known) and zone along the digit for each (mass, command): arrays of ``points``."""
+    a = np.linspace(0.0, digit_length_m, points)
+    out = {"position_from_base_m": a, "cases": []}
+    for c in commands:
+        for m in masses_kg:
+            b = cramer_rao(model, a, m, c)
+            out["cases"].append(
+                {"mass_kg": m, "command": c, "crlb_m": b.crlb_m, "crlb_known_m": b.crlb_known_mass_m, "zone": b.zone}
+            )
+    return out

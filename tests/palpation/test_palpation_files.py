@@ -1,0 +1,131 @@
+"""Tissue and protocol files, and ``flexdigit palpate`` (issue 13 item 5): one-line errors naming file and key."""
+
+import json
+import re
+
+import pytest
+
+from flexdigit.cli import main
+from flexdigit.errors import DataFileError
+from flexdigit.palpation.palpation_files import PROTOCOLS, TISSUES, load_palpation_protocol, load_tissue
+
+QUICK_SWEEP = """
+[sweep]
+commands = { from = 8, to = 26, step = 3 }
+settle_s = 2.5
+readings = 10
+"""
+
+TISSUE = """
+[tissue]
+name = "test block"
+side = "cable"
+start_mm = 150
+end_mm = 350
+gap_mm = 30
+modulus_n_m2 = 800
+"""
+
+
+@pytest.mark.parametrize("name", TISSUES)
+def test_builtin_tissues_load(name):
+    tissue, info = load_tissue(name)
+    assert info.placed_on_twin and tissue.start_m < tissue.end_m
+
+
+def test_builtin_protocols_load():
+    plans = {name: load_palpation_protocol(name) for name in PROTOCOLS}
+    assert plans["sweep"].sweep.commands == tuple(range(8, 31))
+    assert plans["scan"].scan["offsets_m"] == (-0.04, -0.03, -0.02, -0.01, 0.0, 0.01, 0.02, 0.03, 0.04)
+    assert plans["hold"].force["setpoint_n"] == 0.1
+
+
+def test_units_are_converted(tmp_path):
+    path = tmp_path / "t.toml"
+    path.write_text(TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 250\nwidth_mm = 8\nratio = 2.5\n")
+    tissue, info = load_tissue(path)
+    assert (tissue.start_m, tissue.end_m, tissue.gap_m, tissue.modulus_n_m2) == (0.15, 0.35, 0.03, 800.0)
+    assert (tissue.inclusions[0].centre_m, tissue.inclusions[0].width_m, tissue.inclusions[0].ratio) == (
+        0.25,
+        0.008,
+        2.5,
+    )
+    assert info.name == "test block"
+
+
+BAD_TISSUES = [
+    ("[tissue]\nstart_mm = 150\n", "key 'tissue.end_mm' is missing"),
+    (TISSUE.replace("gap_mm = 30", 'gap_mm = "far"'), "key 'tissue.gap_mm' must be a real number"),
+    (TISSUE.replace("end_mm = 350", "end_mm = 100"), "key 'tissue.end_mm' must be beyond 'start_mm'"),
+    (TISSUE.replace("modulus_n_m2 = 800", "modulus_n_m2 = -1"), "key 'tissue.modulus_n_m2' must be inside"),
+    (TISSUE + "colour = 'red'\n", "unknown key 'tissue.colour'"),
+    (TISSUE.replace('side = "cable"', 'side = "left"'), "key 'tissue.side' must be one of 'cable', 'opposite'"),
+    (TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 250\nwidth_mm = 0\nratio = 3\n", "'tissue.inclusions[0].width_mm'"),
+    (TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 250\nratio = 3\n", "'tissue.inclusions[0].width_mm' is missing"),
+    # an inclusion outside the body would change nothing: refused, not ignored
+    (
+        TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 400\nwidth_mm = 8\nratio = 3\n",
+        "centre_mm' must lie in the tissue",
+    ),
+    (TISSUE + "\n[extra]\nx = 1\n", "unknown table 'extra'"),
+    ("[tissue\nstart_mm = 1", "not valid TOML"),
+]
+
+
+@pytest.mark.parametrize("text, message", BAD_TISSUES)
+def test_bad_tissue_files_give_one_line_naming_the_key(tmp_path, text, message):
+    path = tmp_path / "tissue.toml"
+    path.write_text(text)
+    with pytest.raises(DataFileError, match=re.escape(message)) as err:
+        load_tissue(path)
+    assert str(path) in str(err.value) and "\n" not in str(err.value)
+
+
+BAD_PROTOCOLS = [
+    ("[sweep]\ncommands = [8, 9]\n", "at least 3 commands"),
+    ("[sweep]\ncommands = [8, 9, 300]\n", "'commands'"),
+    ("[sweep]\ncommands = { from = 20, to = 8, step = 1 }\n", "'to' must not be below 'from'"),
+    ("[sweep]\nreadings = 0\n", "key 'sweep.readings' must be an integer"),
+    ("[sweep]\nmodel = 'spring'\n", "key 'sweep.model' must be one of"),
+    ("[scan]\noffsets_mm = [0, 10]\n", "key 'scan.offsets_mm' must give at least 3 offsets"),
+    ("[force]\nsetpoint_n = -0.1\n", "key 'force.setpoint_n' must be inside"),
+    ("[sweep]\nspeed = 3\n", "unknown key 'sweep.speed'"),
+    ("[palpate]\n", "unknown table 'palpate'"),
+]
+
+
+@pytest.mark.parametrize("text, message", BAD_PROTOCOLS)
+def test_bad_protocol_files_give_one_line_naming_the_key(tmp_path, text, message):
+    path = tmp_path / "protocol.toml"
+    path.write_text(text)
+    with pytest.raises(DataFileError, match=re.escape(message)):
+        load_palpation_protocol(path)
+
+
+def test_cli_refuses_a_bad_tissue_file_in_one_line(tmp_path, capsys):
+    path = tmp_path / "tissue.toml"
+    path.write_text(TISSUE.replace("gap_mm = 30", "gap_mm = nan"))
+    assert main(["palpate", "--tissue", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "tissue.gap_mm" in err and str(path) in err
+
+
+def test_cli_needs_gap_and_modulus_on_the_twin(tmp_path, capsys):
+    path = tmp_path / "tissue.toml"
+    path.write_text(TISSUE.replace("gap_mm = 30\n", ""))
+    assert main(["palpate", "--tissue", str(path)]) == 2
+    assert "'tissue.gap_mm' and 'tissue.modulus_n_m2' are needed on the twin" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_palpates_on_the_twin_and_never_clobbers(tmp_path, capsys):
+    tissue, protocol, out = tmp_path / "t.toml", tmp_path / "p.toml", tmp_path / "r.json"
+    tissue.write_text(TISSUE)
+    protocol.write_text(QUICK_SWEEP)
+    args = ["palpate", "--tissue", str(tissue), "--protocol", str(protocol), "--out", str(out), "--json"]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["result"]["modulus_n_m2"] == pytest.approx(800.0, rel=0.1)
+    assert data["truth"]["modulus_n_m2"] == 800.0 and json.loads(out.read_text())["kind"] == "sweep"
+    assert main(args) == 2  # --out exists: refused before any work
+    assert "pass --force" in capsys.readouterr().err
