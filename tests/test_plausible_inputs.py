@@ -97,3 +97,55 @@ def test_protocol_files_with_absurd_values_or_unit_slips_are_refused(body, fragm
     for fragment in fragments:
         assert fragment in err, err
     assert not (tmp_path / "d.parquet").exists()
+
+
+# ----------------------------------------------------------------------------- records and imported tables
+def _write(path, text):
+    path.write_text(text)
+    return str(path)
+
+
+def test_an_imported_gauge_cell_of_1e999_is_refused_naming_line_and_column(tmp_path, capsys):
+    csv = _write(tmp_path / "r.csv", "g1,g2,g3,load,pos\n0.1,0.2,0.3,0.0125,0.05\n0.1,0.2,1e999,0.0125,0.05\n")
+    argv = ["dataset", "import", csv, "--gauges", "g1,g2,g3", "--load", "load", "--position", "pos"]
+    err = _refused([*argv, "--out", str(tmp_path / "d.parquet")], capsys)
+    assert "r.csv: line 3, column 'g3': '1e999' is beyond a float's range" in err
+    assert not (tmp_path / "d.parquet").exists()
+
+
+def test_imported_gauges_in_mv_mapped_as_volts_are_named(tmp_path, capsys):
+    csv = _write(tmp_path / "r.csv", "g1,g2,g3,load,pos\n150,2,3,0.0125,0.05\n150,2,3.1,0.0125,0.06\n")
+    argv = ["dataset", "import", csv, "--gauges", "g1,g2,g3", "--load", "load", "--position", "pos"]
+    err = _refused([*argv, "--out", str(tmp_path / "d.parquet")], capsys)
+    assert "line 2, column 'g1'" in err and "Got 150.0 V instead: did you mean mV (0.15 V)?" in err
+
+
+def test_a_one_row_deflection_table_is_refused_not_fitted(tmp_path, capsys):
+    table = _write(tmp_path / "d.csv", "command,y1_mm,y2_mm,y3_mm\n20,1.0,2.0,3.0\n")
+    err = _refused(["calibrate", "--deflections", table, "--out", str(tmp_path / "c.toml")], capsys)
+    assert "d.csv: a deflection table needs at least 2 rows; this file has 1" in err
+
+
+def test_a_deflection_in_m_read_as_mm_is_refused(tmp_path, capsys):
+    table = _write(tmp_path / "d.csv", "command,y1_m,y2_m,y3_m\n20,0.001,0.002,0.003\n30,0.002,0.004,2.5\n")
+    err = _refused(["calibrate", "--deflections", table, "--out", str(tmp_path / "c.toml")], capsys)
+    assert "line 3, column 'y3_m'" in err and "Got 2500.0 mm instead" in err
+
+
+def test_a_constant_actuated_rest_record_is_refused_not_fitted(tmp_path, capsys):
+    rows = "".join("20,0.1,0.2,0.3\n" for _ in range(8))
+    record = _write(tmp_path / "a.csv", "command,gauge1_v,gauge2_v,gauge3_v\n" + rows)
+    err = _refused(["calibrate", "--actuated-rest", record, "--out", str(tmp_path / "c.toml")], capsys)
+    assert "a.csv: an actuated-rest record whose gauge 1 holds one value (0.1 V)" in err
+    assert not (tmp_path / "c.toml").exists()
+
+
+def test_a_record_in_ms_read_as_seconds_is_named(tmp_path, capsys):
+    import numpy as np
+
+    t_ms = np.arange(400.0)  # 1 kHz, written in ms, read as s
+    y = np.exp(-0.07 * 13 * t_ms / 1e3) * np.cos(13 * t_ms / 1e3)
+    lines = "".join(f"{t:g},{v:.6f}\n" for t, v in zip(t_ms, y, strict=True))
+    record = _write(tmp_path / "release.csv", "time,sg1_v\n" + lines)
+    err = _refused(["identify", "release", record, "--time-unit", "s"], capsys)
+    assert "column 'time'" in err and "Got 1.0 s instead: did you mean ms (0.001 s)?" in err

@@ -54,6 +54,9 @@ _NATURAL_FREQUENCY = Plausible("rad/s", 0.01, 1e4, "a mechanical mode of 0.0016 
 
 #: A serial position command: the servo board's position byte, 0..254 (255 is its sync byte, 3.4.1).
 SERVO_COMMAND = Plausible("", 0, 254, "the servo board's position byte; 255 is its sync byte", integer=True)
+#: A gauge channel's voltage as a DAQ card reads it: the thesis's card reads +-5 V; no card reads +-100 V. A
+#: channel in mV read as V is 1000 times too large, and named as such.
+GAUGE_V = Plausible("V", -100.0, 100.0, "a gauge channel as a DAQ card reads it (the thesis's: +-5 V)")
 #: A weight hung on the digit (tactile protocols, the twin's load test): the thesis hung 7.5 to 25 g on its
 #: 0.381 mm strip; 2 kg bounds any digit of the sizes Geometry accepts.
 LOAD_KG = Plausible("kg", 1e-4, 2.0, "a hung weight of 0.1 g to 2 kg; the thesis hung 7.5 to 25 g")
