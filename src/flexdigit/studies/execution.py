@@ -206,7 +206,9 @@ class Journal:
                     "or copied from another study); --force starts the study over"
                 )
             earlier = self.records.get(record.row)
-            if earlier is not None and earlier.done:  # a failed task's rows are computed again: those may repeat
+            # a failed task's placeholder may follow any record of its row, and a result may follow a placeholder
+            # (the rerun computes the row again); two results for one row are a duplicated line
+            if earlier is not None and earlier.done and record.done:
                 raise DataFileError(
                     f"{where}: row {record.row} again, already recorded on line {lines[record.row]} (a duplicated "
                     "line); --force starts the study over"
@@ -350,7 +352,7 @@ def run_rows(
         if workers == 0 and not scheduler:
             for key, rows in todo:
                 records = evaluate_rows(build, rows, values[rows], metrics, context, key, seed)
-                journal.append(records)
+                journal.append(_new(journal, records))
                 bar.update(task, advance=len(rows))
             return dict(journal.records)
         from distributed import as_completed
@@ -382,13 +384,19 @@ def run_rows(
                 except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
                     message = f"{TASK_FAILED}{type(exc).__name__}: {exc}".splitlines()[0]
                     records = [RowRecord(int(r), {}, message) for r in rows]
-                journal.append(records)
+                journal.append(_new(journal, records))
                 bar.update(task, advance=len(rows))
     return dict(journal.records)
 
 
 def _identity(x):
     return x
+
+
+def _new(journal: Journal, records) -> list[RowRecord]:
+    """The records of a task whose rows are not yet done: a task retried for one failed row evaluates its whole
+    chunk again (the same numbers, seeded by the task's key), but a row already done is recorded once."""
+    return [r for r in records if not _done(journal, r.row)]
 
 
 def _done(journal: Journal, row) -> bool:
