@@ -30,7 +30,15 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit._validation import Plausible, check_array, check_choice, check_int, check_plausible, check_real
+from flexdigit._validation import (
+    Plausible,
+    check_array,
+    check_choice,
+    check_int,
+    check_param,
+    check_plausible,
+    check_real,
+)
 from flexdigit.errors import ParameterError
 from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M
 
@@ -137,7 +145,7 @@ class Protocol:
         object.__setattr__(
             self,
             "sample_interval_s",
-            float(check_plausible(self.sample_interval_s, SAMPLE_INTERVAL_S, "sample_interval_s", owner)),
+            check_param(self.sample_interval_s, SAMPLE_INTERVAL_S, "sample_interval_s", owner),
         )
         check_choice(self.orientation, "orientation", ("horizontal", "vertical"), owner)
         if not isinstance(self.rehang, bool):
