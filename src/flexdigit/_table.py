@@ -142,9 +142,17 @@ class Table:
         given = [c for c in cells if c] if allow_empty else cells
         if given and not _NOT_NUMERIC.search("\n".join(given)):
             try:
-                return np.array([c or "nan" for c in cells] if allow_empty else cells, dtype=float)
+                out = np.array([c or "nan" for c in cells] if allow_empty else cells, dtype=float)
             except ValueError:
                 pass
+            else:
+                if not np.isinf(out).any():
+                    return out
+                i = int(np.argmax(np.isinf(out)))  # 1e999 parses, as infinity: no measurement is that
+                raise DataFileError(
+                    f"{self.source}: {self.where(i)}, column {column!r}: {self.rows[i][k].strip()!r} is beyond a "
+                    "float's range (|x| > 1.8e308); every mapped cell needs a finite number"
+                )
         out = np.empty(len(cells))
         for i, text in enumerate(cells):
             cell = self.rows[i][k].strip()
@@ -163,6 +171,27 @@ class Table:
                     f"{self.source}: {self.where(i)}, column {column!r}: {cell!r} is not a number{hint}"
                 )
             out[i] = float(text)
+            if math.isinf(out[i]):
+                raise DataFileError(
+                    f"{self.source}: {self.where(i)}, column {column!r}: {cell!r} is beyond a float's range "
+                    "(|x| > 1.8e308); every mapped cell needs a finite number"
+                )
+        return out
+
+    def plausible(self, column: str, values: np.ndarray, declared, name: str | None = None) -> np.ndarray:
+        """``values`` (column ``column``, row for row, in the declaration's unit; NaN: not read) if every one is
+        inside the :class:`~flexdigit._validation.Plausible` range ``declared``; else a :class:`DataFileError`
+        naming the file, the line, the column, the value, the range and its likely unit slip."""
+        from flexdigit._validation import check_plausible
+
+        out = np.asarray(values, dtype=float)
+        read = ~np.isnan(out)
+        try:
+            check_plausible(out[read], declared, name or column, error=DataFileError)  # vectorised: 1e7 rows in ms
+        except DataFileError as exc:
+            rows = np.flatnonzero(read)
+            first = next(int(i) for i in rows if not declared.satisfied_by(float(out[i])))
+            raise DataFileError(f"{self.source}: {self.where(first)}, column {column!r}: {exc}") from None
         return out
 
 

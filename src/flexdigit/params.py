@@ -28,7 +28,17 @@ from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
 
-from flexdigit._validation import Array, Interval, Options, check_array, check_int, check_real, declare, validate_fields
+from flexdigit._validation import (
+    Array,
+    Interval,
+    Options,
+    Plausible,
+    check_array,
+    check_int,
+    check_real,
+    declare,
+    validate_fields,
+)
 from flexdigit.errors import DataFileError, ParameterError
 
 __all__ = [
@@ -44,8 +54,29 @@ __all__ = [
 ]
 
 BRIDGE_TYPES = ("quarter", "half", "full")
-#: A strictly positive real number (lengths, gains, frequencies).
-_POSITIVE = Interval(Real, 0, None, closed="neither")
+# Plausible ranges (flexdigit._validation.Plausible): generous bounds for a user's own digit, not the thesis rig's
+# values; each says why. A value outside its range whose unit slip lands inside it (0.381 "m" for a 0.381 mm strip,
+# E = 205 "Pa" for 205 GPa) is refused naming the slip. Lengths share one range so a digit of any sensible size
+# (a 5 cm fingertip to a 2 m arm) passes.
+#: A digit's or a strip's length.
+DIGIT_LENGTH_M = Plausible("m", 0.02, 2.0, "a digit 2 cm to 2 m long: a 1 km strip or a 10 m digit is a unit slip")
+#: One frequency of a second-order model (the servo's, the digit's).
+_NATURAL_FREQUENCY = Plausible("rad/s", 0.01, 1e4, "a mechanical mode of 0.0016 Hz to 1.6 kHz")
+
+
+#: A serial position command: the servo board's position byte, 0..254 (255 is its sync byte, 3.4.1).
+SERVO_COMMAND = Plausible("", 0, 254, "the servo board's position byte; 255 is its sync byte", integer=True)
+#: A gauge channel's voltage as a DAQ card reads it: the thesis's card reads +-5 V; no card reads +-100 V. A
+#: channel in mV read as V is 1000 times too large, and named as such.
+GAUGE_V = Plausible("V", -100.0, 100.0, "a gauge channel as a DAQ card reads it (the thesis's: +-5 V)")
+#: A weight hung on the digit (tactile protocols, the twin's load test): the thesis hung 7.5 to 25 g on its
+#: 0.381 mm strip; 2 kg bounds any digit of the sizes Geometry accepts.
+LOAD_KG = Plausible("kg", 1e-4, 2.0, "a hung weight of 0.1 g to 2 kg; the thesis hung 7.5 to 25 g")
+#: Where a load hangs, measured from the tip: on a digit at most 2 m long (a protocol also checks its own digit).
+POSITION_FROM_TIP_M = Plausible("m", 0.0, 2.0, "on a digit at most 2 m long, from its tip")
+#: The least part of the digit's rotation (max_rotation_per_section_deg x section_count) the servo's stall torque
+#: must bend the strip through: below it the servo cannot bend the strip (RigParams checks it).
+STRIP_BEND_FRACTION = 0.1
 
 
 @declare
@@ -87,16 +118,16 @@ class Geometry:
     guide_hole_diameter_m: float = 1.067e-3
 
     _parameter_constraints = {
-        "section_count": [Interval(Integral, 1, 50)],
-        "section_length_m": [_POSITIVE],
-        "strip_thickness_m": [_POSITIVE],
-        "strip_width_m": [_POSITIVE],
-        "digit_length_m": [_POSITIVE],
-        "strip_length_m": [_POSITIVE],
-        "cable_eccentricity_m": [_POSITIVE],
+        "section_count": [Plausible("", 1, 50, "1 to 50 sectional supports; more is a continuum", integer=True)],
+        "section_length_m": [Plausible("m", 1e-3, 2.0, "a section 1 mm to the longest digit, 2 m")],
+        "strip_thickness_m": [Plausible("m", 1e-5, 5e-3, "a strip 0.01 to 5 mm thick: foil to a stiff plate")],
+        "strip_width_m": [Plausible("m", 1e-4, 0.2, "a strip 0.1 mm to 20 cm wide")],
+        "digit_length_m": [DIGIT_LENGTH_M],
+        "strip_length_m": [DIGIT_LENGTH_M],
+        "cable_eccentricity_m": [Plausible("m", 1e-4, 0.1, "a cable 0.1 mm to 10 cm off the neutral axis")],
         "gauge_positions_m": [Array(ndim=1, min_length=1, increasing=True, low=0, low_open=True)],
         "max_rotation_per_section_deg": [Interval(Real, 0, 180, closed="right")],
-        "guide_hole_diameter_m": [_POSITIVE],
+        "guide_hole_diameter_m": [Plausible("m", 1e-5, 0.02, "a cable guide hole 0.01 to 20 mm across")],
     }
 
     def __post_init__(self) -> None:
@@ -148,7 +179,10 @@ class Material:
     youngs_modulus_pa: float = 205e9
     strip_density_kg_m3: float = 7850.0
 
-    _parameter_constraints = {"youngs_modulus_pa": [_POSITIVE], "strip_density_kg_m3": [_POSITIVE]}
+    _parameter_constraints = {
+        "youngs_modulus_pa": [Plausible("Pa", 1e5, 1.2e12, "0.1 MPa (a soft elastomer) to 1.2 TPa (diamond)")],
+        "strip_density_kg_m3": [Plausible("kg/m^3", 10.0, 25_000.0, "foam (10 kg/m^3) to osmium (22,600 kg/m^3)")],
+    }
 
     def __post_init__(self) -> None:
         validate_fields(self)
@@ -196,15 +230,16 @@ class Sensors:
     adc_channels: tuple[int, ...] = (0, 1, 2)
 
     _parameter_constraints = {
-        "gauge_resistance_ohm": [_POSITIVE],
-        "gauge_factor": [_POSITIVE],
+        "gauge_resistance_ohm": [Plausible("ohm", 1.0, 1e6, "strain gauges are 120 ohm to 5 kohm; up to 1 Mohm")],
+        "gauge_factor": [Plausible("", 0.1, 500.0, "metal foil gauges ~2, semiconductor gauges up to ~200")],
         "bridge": [Options(BRIDGE_TYPES)],
-        "excitation_v": [_POSITIVE],
-        "amplifier_gain_v_per_v": [_POSITIVE],
-        "amplifier_lowpass_hz": [_POSITIVE],
+        "excitation_v": [Plausible("V", 1e-3, 100.0, "a bridge supply of 1 mV to 100 V")],
+        "amplifier_gain_v_per_v": [Plausible("V/V", 1e-3, 1e7, "an instrumentation amplifier: 1e-3 to 1e7")],
+        "amplifier_lowpass_hz": [Plausible("Hz", 0.01, 1e7, "a low-pass of 0.01 Hz to 10 MHz")],
         "amplifier_lowpass_order": [Interval(Integral, 1, 8)],
         "adc_bits": [Interval(Integral, 1, 32)],
-        "adc_range_v": [Array(shape=(2,), increasing=True)],
+        # a DAQ card's input range: +-1 kV is beyond any card (the thesis's is +-5 V)
+        "adc_range_v": [Array(shape=(2,), increasing=True, low=-1000.0, high=1000.0)],
         "adc_channels": [Array(ndim=1, min_length=1, low=0, high=63)],
     }
 
@@ -276,22 +311,22 @@ class Actuator:
     stall_torque_nm: float = 0.297
 
     _parameter_constraints = {
-        "command_min": [Interval(Integral, 0, 254)],
-        "command_max": [Interval(Integral, 0, 254)],
+        "command_min": [SERVO_COMMAND],
+        "command_max": [SERVO_COMMAND],
         "angle_min_deg": [Interval(Real, -360, 360)],
         "angle_max_deg": [Interval(Real, -360, 360)],
-        "pulley_radius_m": [_POSITIVE],
-        "pwm_frequency_hz": [_POSITIVE],
-        "pulse_width_min_s": [_POSITIVE],
-        "pulse_width_max_s": [_POSITIVE],
-        "serial_period_s": [_POSITIVE],
-        "equilibrium_command": [Interval(Integral, 0, 254)],
+        "pulley_radius_m": [Plausible("m", 5e-4, 0.2, "a servo pulley 0.5 mm to 20 cm in radius")],
+        "pwm_frequency_hz": [Plausible("Hz", 1.0, 1e5, "servo pulses: 50-333 Hz on hobby servos, up to 100 kHz")],
+        "pulse_width_min_s": [Plausible("s", 1e-6, 0.1, "a servo pulse of 1 us to 100 ms")],
+        "pulse_width_max_s": [Plausible("s", 1e-6, 0.1, "a servo pulse of 1 us to 100 ms")],
+        "serial_period_s": [Plausible("s", 1e-4, 10.0, "a command every 0.1 ms to 10 s")],
+        "equilibrium_command": [SERVO_COMMAND],
         "operating_commands": [Array(shape=(2,), low=0, high=254)],
-        "servo_wn_rad_s": [_POSITIVE],
+        "servo_wn_rad_s": [_NATURAL_FREQUENCY],
         "servo_zeta": [Interval(Real, 0, 10, closed="right")],
-        "pot_v_at_min_angle_v": [Interval(Real)],
-        "pot_v_at_max_angle_v": [Interval(Real)],
-        "stall_torque_nm": [_POSITIVE],
+        "pot_v_at_min_angle_v": [Plausible("V", -100.0, 100.0, "a potentiometer read by a DAQ card")],
+        "pot_v_at_max_angle_v": [Plausible("V", -100.0, 100.0, "a potentiometer read by a DAQ card")],
+        "stall_torque_nm": [Plausible("N m", 1e-4, 1e3, "a micro servo (0.01 N m) to an industrial drive")],
     }
 
     def __post_init__(self) -> None:
@@ -349,9 +384,9 @@ class DigitDynamics:
     zeta_bare: float = 0.0025
 
     _parameter_constraints = {
-        "wn_housing_rad_s": [_POSITIVE],
+        "wn_housing_rad_s": [_NATURAL_FREQUENCY],
         "zeta_housing": [Interval(Real, 0, 10)],
-        "wn_bare_rad_s": [_POSITIVE],
+        "wn_bare_rad_s": [_NATURAL_FREQUENCY],
         "zeta_bare": [Interval(Real, 0, 10)],
     }
 
@@ -375,6 +410,28 @@ class RigParams:
             raise ParameterError(
                 f"The 'gauge_positions_m' parameter of Geometry must lie inside (0, {g.digit_length_m:g}]. "
                 f"Got {list(g.gauge_positions_m)!r} instead."
+            )
+        self._check_the_servo_bends_the_strip()
+
+    def _check_the_servo_bends_the_strip(self) -> None:
+        """A derived figure no single field shows: the servo must bend the strip through a useful part of its
+        rotation. Bending the strip's free length through ``theta`` takes a tip moment ``E I theta / l``, i.e. a
+        cable tension ``M / e`` and a servo torque ``M r_M / e`` (E 3.12, E 3.19: ``K2 = E I r_M / (l e)`` is that
+        moment per servo radian). The thesis rig needs 0.16 N m of its 0.297 N m stall torque for the full 90 deg;
+        a rig whose servo stalls before a tenth of its rotation (a 0.381 "m" strip: K2 = 8.9e7 N m/rad) is a slip
+        in the file, not a digit."""
+        g, a = self.geometry, self.actuator
+        rotation_rad = math.radians(g.max_rotation_per_section_deg * g.section_count)
+        moment_nm = self.bending_stiffness_n_m2 * rotation_rad / g.strip_length_m
+        torque_nm = moment_nm * a.pulley_radius_m / g.cable_eccentricity_m
+        if torque_nm * STRIP_BEND_FRACTION > a.stall_torque_nm:
+            k2 = self.bending_stiffness_n_m2 * a.pulley_radius_m / (g.strip_length_m * g.cable_eccentricity_m)
+            raise ParameterError(
+                f"The rig parameters describe a strip its servo cannot bend: K2 = E I r_M / (l e) = {k2:.3g} N m/rad "
+                f"needs {torque_nm * STRIP_BEND_FRACTION:.3g} N m of servo torque for a tenth of the digit's "
+                f"{math.degrees(rotation_rad):g} deg, and the servo stalls at {a.stall_torque_nm:g} N m (check "
+                "strip_thickness_m, strip_width_m, youngs_modulus_pa, pulley_radius_m, cable_eccentricity_m and "
+                "their units)"
             )
 
     @property

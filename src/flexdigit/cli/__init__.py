@@ -49,6 +49,11 @@ class _Parser(argparse.ArgumentParser):
     """argparse, raising :class:`UsageError` instead of exiting, so that ``--json`` can report it as JSON."""
 
     def error(self, message: str):  # argparse's hook
+        # a declared flag's refusal (flexdigit._validation.Flag) in the format of every parameter message
+        flag, sep, rest = message.removeprefix("argument ").partition(": must ")
+        if sep and message.startswith("argument "):
+            command = self.prog.removeprefix("flexdigit").strip()
+            message = f"The '{flag.split('/')[-1]}' parameter of flexdigit {command} must {rest}"
         exc = UsageError(message)
         exc.prog = self.prog
         raise exc

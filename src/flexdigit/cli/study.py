@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from numbers import Integral
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import Flag, Interval, Plausible
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -21,9 +23,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, help="directory for the journal, tables and figures (created)")
     p.add_argument("--scheduler", default=None, help="an existing Dask scheduler, tcp://HOST:PORT")
     p.add_argument("--workers", type=int, default=None, help="local Dask workers (default: one per core; 0: no Dask)")
-    p.add_argument("--n", type=int, default=None, help="sensitivity: Sobol base samples N (a power of 2)")
+    p.add_argument(  # the spec's own bounds (sobol_n 4..2**20, a power of 2) are checked with the spec
+        "--n",
+        type=Flag(Interval(Integral, 1, 2**20)),
+        default=None,
+        help="sensitivity: Sobol base samples N (a power of 2)",
+    )
     p.add_argument("--second-order", action="store_true", help="sensitivity: also second-order indices S2")
-    p.add_argument("--samples", type=int, default=None, help="design: candidate designs to evaluate (0: all)")
+    p.add_argument(
+        "--samples",
+        type=Flag(Plausible("", 0, 1_000_000, "candidate designs: a million twin evaluations is days", integer=True)),
+        default=None,
+        help="design: candidate designs to evaluate (0: all)",
+    )
     p.add_argument("--force", action="store_true", help="start over: replace the journal and outputs in --out")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 

@@ -51,6 +51,7 @@ import numpy as np
 from flexdigit._table import Table, read_table
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.params import GAUGE_V
 from flexdigit.tactile.dataset import COLUMNS, Dataset, make_meta
 from flexdigit.tactile.protocols import RELAXED, Protocol
 
@@ -255,7 +256,8 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
     }
     gauge_columns = [table.find(g, f"gauge {k}") for k, g in enumerate(cmap.gauges, start=1)]
     _check_distinct(table, {**{f"gauge {k}": c for k, c in enumerate(gauge_columns, start=1)}, **columns})
-    gauges = np.column_stack([table.numbers(c) for c in gauge_columns]) * GAUGE_UNITS[cmap.gauge_unit]
+    unit = GAUGE_UNITS[cmap.gauge_unit]  # a gauge in mV mapped as V is 1000 times off: named by the range check
+    gauges = np.column_stack([table.plausible(c, table.numbers(c) * unit, GAUGE_V) for c in gauge_columns])
     load = table.numbers(columns["load"]) * LOAD_UNITS[cmap.load_unit]
     _check_rows(table, columns["load"], load, (load < 0), "a negative mass; expected 0 (no load) or more")
     _check_rows(
