@@ -48,7 +48,13 @@ __all__ = [
     "Sensors",
     "Actuator",
     "DigitDynamics",
+    "Cables",
     "RigParams",
+    "MAX_SECTIONS",
+    "MAX_GAUGES",
+    "digit_inconsistencies",
+    "derived_figures",
+    "params_template",
     "load_params",
     "save_params",
 ]
@@ -131,8 +137,14 @@ class Geometry:
     }
 
     def __post_init__(self) -> None:
-        validate_fields(self)
         owner = type(self).__name__
+        positions = self.gauge_positions_m
+        if isinstance(positions, tuple | list) and len(set(map(repr, positions))) < len(positions):
+            raise ParameterError(
+                f"The 'gauge_positions_m' parameter of {owner} puts two gauges at one place: one gauge per position. "
+                f"Got {list(positions)!r} instead."
+            )
+        validate_fields(self)
         check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
         positions = check_array(
             self.gauge_positions_m,
@@ -291,6 +303,10 @@ class Actuator:
         Potentiometer voltage at 0 and 219 degrees: 0.46688 and 2.4755 V (3.2.4).
     stall_torque_nm : float
         Futaba S-148: 42 oz in = 0.297 N m (2.4).
+    gear_ratio : float
+        Servo turns per pulley turn, 1 on the thesis rig (the pulley sits on the servo shaft). A reduction ``n``
+        divides the command step at the pulley by ``n`` (chapter 8 asks for a finer step): see
+        :attr:`pulley_deg_per_command`. Described and derived; the twin does not use it yet.
     """
 
     command_min: int = 0
@@ -309,8 +325,10 @@ class Actuator:
     pot_v_at_min_angle_v: float = 0.46688
     pot_v_at_max_angle_v: float = 2.4755
     stall_torque_nm: float = 0.297
+    gear_ratio: float = 1.0
 
     _parameter_constraints = {
+        "gear_ratio": [Plausible("", 0.01, 100.0, "a gear train between servo and pulley: 1:100 to 100:1")],
         "command_min": [SERVO_COMMAND],
         "command_max": [SERVO_COMMAND],
         "angle_min_deg": [Interval(Real, -360, 360)],
@@ -360,9 +378,49 @@ class Actuator:
         return math.radians(self.deg_per_command)
 
     @property
+    def pulley_deg_per_command(self) -> float:
+        """The command step at the pulley, ``deg_per_command / gear_ratio`` (0.8622 deg on the thesis rig)."""
+        return self.deg_per_command / self.gear_ratio
+
+    @property
     def pot_v_per_command(self) -> float:
         """Potentiometer volts per command: (2.4755 - 0.46688)/254 = 0.0079 V (3.2.4)."""
         return (self.pot_v_at_max_angle_v - self.pot_v_at_min_angle_v) / (self.command_max - self.command_min)
+
+
+@declare
+@dataclass(frozen=True)
+class Cables:
+    """The tendons that bend the digit (2.1, 2.2.1): the thesis's single cable, or an antagonistic pair.
+
+    The eccentricity is ``Geometry.cable_eccentricity_m`` (table 3.7's ``e``, kept there so older files load).
+
+    Attributes
+    ----------
+    count : int
+        1: the thesis's cable, bending one way; 2: an antagonistic pair bending both ways (2.1 asks for "a two
+        cable system to ensure rigidity"; the design study's ``pretension_n > 0``).
+    pretension_n : float
+        Tension both cables of a pair keep at rest (N); 0 with one cable, positive with a pair (a slack pair
+        cannot hold the digit straight).
+    guide_friction_ratio : float
+        Cable-guide friction, the share of the tension gained or lost across the guides
+        (:attr:`flexdigit.twin.calibration.Calibration.cable_friction_ratio`); 0.0548 fitted to the thesis's
+        actuated corr2 (7.5).
+    """
+
+    count: int = 1
+    pretension_n: float = 0.0
+    guide_friction_ratio: float = 0.05481279307004473
+
+    _parameter_constraints = {
+        "count": [Interval(Integral, 1, 2)],
+        "pretension_n": [Interval(Real, 0, 100, closed="both")],
+        "guide_friction_ratio": [Interval(Real, 0, 1, closed="both")],
+    }
+
+    def __post_init__(self) -> None:
+        validate_fields(self)
 
 
 @declare
@@ -403,6 +461,7 @@ class RigParams:
     sensors: Sensors = field(default_factory=Sensors)
     actuator: Actuator = field(default_factory=Actuator)
     dynamics: DigitDynamics = field(default_factory=DigitDynamics)
+    cables: Cables = field(default_factory=Cables)
 
     def __post_init__(self) -> None:
         g = self.geometry
@@ -495,8 +554,162 @@ class RigParams:
             raise ParameterError(f"{source}: {exc}") from None
 
 
-def load_params(path: str | Path) -> RigParams:
+#: The description's limits (issue 24): a planar digit of 1-8 sections carrying 1-8 gauges. The dataclasses accept
+#: more (the design study probes a grid of gauge positions through one ``Geometry``); a *file* is held to these.
+MAX_SECTIONS = 8
+MAX_GAUGES = 8
+#: How closely lengths must add up (m): a micrometre, far below any workshop tolerance, far above float rounding.
+LENGTH_TOLERANCE_M = 1e-6
+
+
+def digit_inconsistencies(params: RigParams) -> list[str]:
+    """Every way the description contradicts itself, one line each naming the key; empty if it holds together.
+
+    The rules (the twin's layout, :func:`flexdigit.twin.digit.build_digit`): ``section_count`` sections of
+    ``section_length_m`` of free strip make ``strip_length_m``; each section's pitch ``digit_length_m /
+    section_count`` holds its free strip and one support, so the supports are ``(digit_length_m - strip_length_m)
+    / section_count`` long, centred at 0, pitch, 2 pitch, ... (half a support at the clamp and at the tip); a gauge
+    sits on the free strip, never on a support or past the strip; one ADC channel per gauge; a cable pair keeps a
+    pretension, a single cable none.
+
+    Examples
+    --------
+    >>> digit_inconsistencies(RigParams())
+    []
+    >>> four = RigParams(geometry=Geometry(section_count=4))   # 4 x 80 mm with digit_length_m left at 0.27
+    >>> digit_inconsistencies(four)[0].split(":")[0]
+    '[geometry] strip_length_m = 0.24 but section_count x section_length_m = 4 x 0.08 = 0.32 m'
+    """
+    g, s, c = params.geometry, params.sensors, params.cables
+    lines = []
+    n, count = g.section_count, len(g.gauge_positions_m)
+    if n > MAX_SECTIONS:
+        lines.append(f"[geometry] section_count = {n}: a digit has 1 to {MAX_SECTIONS} sections")
+    if count > MAX_GAUGES:
+        lines.append(f"[geometry] gauge_positions_m has {count} gauges: a digit carries 1 to {MAX_GAUGES}")
+    strip = n * g.section_length_m
+    if abs(strip - g.strip_length_m) > LENGTH_TOLERANCE_M:
+        lines.append(
+            f"[geometry] strip_length_m = {g.strip_length_m:g} but section_count x section_length_m = {n} x "
+            f"{g.section_length_m:g} = {strip:g} m: the lengths do not add up"
+        )
+    support = (g.digit_length_m - strip) / n
+    if support < -LENGTH_TOLERANCE_M:
+        lines.append(
+            f"[geometry] digit_length_m = {g.digit_length_m:g} is shorter than its {n} sections of "
+            f"{g.section_length_m:g} m ({strip:g} m): set it to {strip:g} m plus the supports, e.g. "
+            f"{n * (g.section_length_m + 0.01):g} m with 10 mm supports"
+        )
+    else:
+        half, pitch = 0.5 * max(support, 0.0), g.digit_length_m / n
+        for i, x in enumerate(g.gauge_positions_m):
+            k = round(x / pitch)  # the nearest support
+            if x > g.digit_length_m - half - LENGTH_TOLERANCE_M:
+                lines.append(
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is past the strip, which ends at "
+                    f"{g.digit_length_m - half:g} m"
+                )
+            elif abs(x - k * pitch) < half + LENGTH_TOLERANCE_M:
+                lines.append(
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {k * pitch:g} m "
+                    f"({k * pitch - half:g} to {k * pitch + half:g} m): put it on the strip"
+                )
+    if len(s.adc_channels) != count:
+        lines.append(
+            f"[sensors] adc_channels has {len(s.adc_channels)} channels for {count} gauges: one per gauge, e.g. "
+            f"{list(range(count))}"
+        )
+    if c.count == 2 and c.pretension_n <= 0:
+        lines.append("[cables] pretension_n = 0 with count = 2: an antagonistic pair needs a pretension > 0 N")
+    if c.count == 1 and c.pretension_n > 0:
+        lines.append(f"[cables] pretension_n = {c.pretension_n:g} with count = 1: a single cable has no pretension")
+    return lines
+
+
+def derived_figures(params: RigParams) -> dict[str, float]:
+    """What the description implies (SI units), as ``flexdigit params`` prints it.
+
+    Examples
+    --------
+    >>> d = derived_figures(RigParams())
+    >>> round(d["support_length_m"], 4), round(d["tip_deg_per_command"], 3)   # 10 mm supports; E 3.15
+    (0.01, 1.735)
+    """
+    g, a = params.geometry, params.actuator
+    return {
+        "second_moment_m4": g.second_moment_m4,
+        "bending_stiffness_n_m2": params.bending_stiffness_n_m2,
+        "section_pitch_m": g.section_pitch_m,
+        "support_length_m": (g.digit_length_m - g.strip_length_m) / g.section_count,
+        "gauge_count": len(g.gauge_positions_m),
+        "rad_per_command": a.rad_per_command,
+        "deg_per_command": a.deg_per_command,
+        "pulley_deg_per_command": a.pulley_deg_per_command,
+        # E 3.15: tip rotation = pulley arc / eccentricity
+        "tip_deg_per_command": a.pulley_deg_per_command * a.pulley_radius_m / g.cable_eccentricity_m,
+        "pot_v_per_command": a.pot_v_per_command,
+        "adc_lsb_v": params.sensors.adc_lsb_v,
+    }
+
+
+def _attribute_notes(cls: type) -> dict[str, str]:
+    """Each attribute's description from a numpydoc ``Attributes`` section, one line."""
+    notes: dict[str, str] = {}
+    lines = (cls.__doc__ or "").split("\n")
+    names: list[str] = []
+    inside = False
+    for line in lines:
+        text = line.strip()
+        if text == "Attributes":
+            inside = True
+            continue
+        if not inside or not text or set(text) == {"-"}:
+            continue
+        if " : " in text and not line.startswith("        "):
+            names = [n.strip() for n in text.split(" : ")[0].split(",")]
+            continue
+        for name in names:
+            notes[name] = (notes.get(name, "") + " " + text).strip()
+    return notes
+
+
+def params_template(params: RigParams | None = None) -> str:
+    """An annotated parameter file: every key with its value (the thesis rig by default) and what it means.
+
+    Examples
+    --------
+    >>> text = params_template()
+    >>> RigParams.from_dict(tomllib.loads(text)) == RigParams()
+    True
+    """
+    import tomli_w
+
+    params = params or RigParams()
+    out = [
+        "# flexdigit: a planar digit described (SI units; 'command' is the servo board's 0..254 position).",
+        "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE",
+        f"# Rules: 1-{MAX_SECTIONS} sections; strip_length_m = section_count x section_length_m; supports of",
+        "# (digit_length_m - strip_length_m) / section_count centred every digit_length_m / section_count;",
+        f"# 1-{MAX_GAUGES} gauges on the strip, one adc_channels entry each; a cable pair needs a pretension.",
+    ]
+    for f in dataclasses.fields(params):
+        section = getattr(params, f.name)
+        notes = _attribute_notes(type(section))
+        first = (type(section).__doc__ or "").strip().split("\n")[0]
+        out += ["", f"# {first}", f"[{f.name}]"]
+        for key, value in dataclasses.asdict(section).items():
+            value = list(value) if isinstance(value, tuple) else value
+            if key in notes:
+                out.append(f"# {notes[key]}")
+            out.append(tomli_w.dumps({key: value}).strip())
+    return "\n".join(out) + "\n"
+
+
+def load_params(path: str | Path, *, check: bool = True) -> RigParams:
     """Read rig parameters from a TOML file; missing keys keep the thesis defaults.
+
+    With ``check`` (the default) a description that contradicts itself (:func:`digit_inconsistencies`) is refused
+    naming its first inconsistency; ``flexdigit params FILE`` loads without it to list them all.
 
     Raises
     ------
@@ -513,7 +726,12 @@ def load_params(path: str | Path) -> RigParams:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML ({exc})") from None
-    return RigParams.from_dict(data, source=str(path))
+    params = RigParams.from_dict(data, source=str(path))
+    problems = digit_inconsistencies(params) if check else []
+    if problems:
+        more = f" (and {len(problems) - 1} more: flexdigit params {path})" if len(problems) > 1 else ""
+        raise ParameterError(f"{path}: {problems[0]}{more}")
+    return params
 
 
 def save_params(params: RigParams, path: str | Path, *, force: bool = False) -> Path:
