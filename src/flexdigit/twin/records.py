@@ -177,6 +177,11 @@ def _result(name: str, columns: dict[str, np.ndarray], arguments: dict, seed, pa
     return TwinRecord(table, meta)
 
 
+def _gauge_columns(params: RigParams) -> list[str]:
+    """``gauge1_v .. gaugeG_v``: one column per gauge of the digit (the thesis rig's three)."""
+    return [f"gauge{i + 1}_v" for i in range(len(params.geometry.gauge_positions_m))]
+
+
 def _check_rate(duration_s, sample_rate_hz, owner):
     duration = check_real(duration_s, "duration_s", owner, low=0, low_open=True, high=3600)
     rate = check_real(sample_rate_hz, "sample_rate_hz", owner, low=1, high=100_000)
@@ -228,7 +233,7 @@ def release_test(
     twin.deflect(force)
     series = twin.read_at(times)
     gauges = series.gauges_v
-    cols = {"time_s": times, "gauge1_v": gauges[:, 0], "gauge2_v": gauges[:, 1], "gauge3_v": gauges[:, 2]}
+    cols = {"time_s": times, **{f"gauge{i + 1}_v": gauges[:, i] for i in range(gauges.shape[1])}}
     cols["tip_deflection_m"] = series.tip_m[:, 1]
     args = dict(housing=housing, tip_deflection_m=deflection, duration_s=duration_s, sample_rate_hz=sample_rate_hz)
     args["orientation"] = orientation
@@ -269,7 +274,7 @@ def servo_step_test(
     after = twin.read_at(times[times >= step_at])
     gauges, pot, cmd, angles = (np.concatenate(pair) for pair in zip(before[:4], after[:4], strict=True))
     cols = {"time_s": times, "command": cmd, "pot_v": pot, "servo_angle_rad": angles}
-    cols.update({f"gauge{i + 1}_v": gauges[:, i] for i in range(3)})
+    cols.update({f"gauge{i + 1}_v": gauges[:, i] for i in range(gauges.shape[1])})
     args = dict(command_from=c0, command_to=c1, step_at_s=step_at, duration_s=duration_s, cable=cable)
     args["sample_rate_hz"] = sample_rate_hz
     return _result("servo_step_test", cols, args, seed, params, calibration)
@@ -310,9 +315,7 @@ def actuation_sweep(
     n = check_int(samples, "samples", "actuation_sweep", low=1, high=100_000)
     rate = check_positive(sample_rate_hz, "sample_rate_hz", "actuation_sweep")
     twin = Twin(params, calibration, seed=seed, orientation=orientation, command=cmds[0], compiled=bool(compiled))
-    rows: dict[str, list] = {
-        k: [] for k in ("command", "sample", "time_s", "gauge1_v", "gauge2_v", "gauge3_v", "pot_v")
-    }
+    rows: dict[str, list] = {k: [] for k in ("command", "sample", "time_s", *_gauge_columns(params), "pot_v")}
     for c in cmds:
         twin.command(c)
         twin.advance(settle)
@@ -322,8 +325,8 @@ def actuation_sweep(
             g, p = twin.read()
             for key, val in zip(("command", "sample", "time_s", "pot_v"), (c, k, twin.time_s, p), strict=True):
                 rows[key].append(val)
-            for i in range(3):
-                rows[f"gauge{i + 1}_v"].append(g[i])
+            for i, name in enumerate(_gauge_columns(params)):
+                rows[name].append(g[i])
     cols = {k: np.asarray(v) for k, v in rows.items()}
     args = dict(commands=cmds, settle_s=settle, samples=n, sample_rate_hz=rate, orientation=orientation)
     return _result("actuation_sweep", cols, args, seed, params, calibration)
@@ -425,7 +428,7 @@ def static_load_test(
         "command": cmd_col,
         "repetition": rep,
     }
-    cols.update({f"gauge{i + 1}_v": volts[:, i] for i in range(3)})
+    cols.update({f"gauge{i + 1}_v": volts[:, i] for i in range(volts.shape[1])})
     args = dict(
         loads_kg=masses.tolist(),
         positions_from_tip_m=from_tip.tolist(),
