@@ -21,6 +21,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -228,6 +229,12 @@ class Sensors:
         Input range, +-5 V (2.5.2).
     adc_channels : tuple of int
         Gauge pairs 1..3 on analog inputs 0..2 (table 2.2).
+    gauge_bridges : tuple of str, optional
+        One bridge per gauge (a chain per gauge); left out: ``bridge`` for every gauge.
+    gauge_factors : tuple of float, optional
+        One gauge factor per gauge; left out: ``gauge_factor`` for every gauge.
+    amplifier_gains_v_per_v : tuple of float, optional
+        One amplifier gain per gauge; left out: ``amplifier_gain_v_per_v`` for every gauge.
     """
 
     gauge_resistance_ohm: float = 120.0
@@ -240,8 +247,13 @@ class Sensors:
     adc_bits: int = 16
     adc_range_v: tuple[float, float] = (-5.0, 5.0)
     adc_channels: tuple[int, ...] = (0, 1, 2)
+    gauge_bridges: tuple[str, ...] | None = None
+    gauge_factors: tuple[float, ...] | None = None
+    amplifier_gains_v_per_v: tuple[float, ...] | None = None
 
     _parameter_constraints = {
+        "gauge_factors": [None, Array(ndim=1, min_length=1, low=0.1, high=500.0)],
+        "amplifier_gains_v_per_v": [None, Array(ndim=1, min_length=1, low=1e-3, high=1e7)],
         "gauge_resistance_ohm": [Plausible("ohm", 1.0, 1e6, "strain gauges are 120 ohm to 5 kohm; up to 1 Mohm")],
         "gauge_factor": [Plausible("", 0.1, 500.0, "metal foil gauges ~2, semiconductor gauges up to ~200")],
         "bridge": [Options(BRIDGE_TYPES)],
@@ -258,6 +270,18 @@ class Sensors:
     def __post_init__(self) -> None:
         validate_fields(self)
         owner = type(self).__name__
+        for name in ("gauge_factors", "amplifier_gains_v_per_v"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
+        if self.gauge_bridges is not None:
+            bridges = self.gauge_bridges
+            if isinstance(bridges, str) or not bridges or any(b not in BRIDGE_TYPES for b in bridges):
+                raise ParameterError(
+                    f"The 'gauge_bridges' parameter of {owner} must be a list of "
+                    + ", ".join(repr(b) for b in BRIDGE_TYPES)
+                    + f", one per gauge. Got {bridges!r} instead."
+                )
+            object.__setattr__(self, "gauge_bridges", tuple(bridges))
         rng = check_array(self.adc_range_v, "adc_range_v", owner, shape=(2,), increasing=True)
         object.__setattr__(self, "adc_range_v", (float(rng[0]), float(rng[1])))
         channels = tuple(check_int(c, "adc_channels", owner, low=0, high=63) for c in self.adc_channels)
@@ -267,6 +291,29 @@ class Sensors:
                 f"Got {list(self.adc_channels)!r} instead."
             )
         object.__setattr__(self, "adc_channels", channels)
+
+    @property
+    def per_gauge(self) -> bool:
+        """Whether any part of the chain is given gauge by gauge."""
+        return any(v is not None for v in (self.gauge_bridges, self.gauge_factors, self.amplifier_gains_v_per_v))
+
+    def chain(self, count: int) -> tuple[tuple[str, ...], tuple[float, ...], tuple[float, ...]]:
+        """Each of ``count`` gauges' bridge, gauge factor and amplifier gain (the per-gauge lists, or the scalars).
+
+        Examples
+        --------
+        >>> Sensors(gauge_bridges=("full", "quarter", "half")).chain(3)[0]
+        ('full', 'quarter', 'half')
+        >>> Sensors().chain(2)[1]
+        (0.8, 0.8)
+        """
+        return (
+            self.gauge_bridges if self.gauge_bridges is not None else (self.bridge,) * count,
+            self.gauge_factors if self.gauge_factors is not None else (float(self.gauge_factor),) * count,
+            self.amplifier_gains_v_per_v
+            if self.amplifier_gains_v_per_v is not None
+            else (float(self.amplifier_gain_v_per_v),) * count,
+        )
 
     @property
     def adc_lsb_v(self) -> float:
@@ -506,7 +553,9 @@ class RigParams:
         """Plain nested dict (lists for tuples), as written to TOML."""
         return {
             f.name: {
-                k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(getattr(self, f.name)).items()
+                k: list(v) if isinstance(v, tuple) else v
+                for k, v in dataclasses.asdict(getattr(self, f.name)).items()
+                if v is not None  # an optional key left out (TOML has no null)
             }
             for f in dataclasses.fields(self)
         }
@@ -537,11 +586,10 @@ class RigParams:
             converted = {}
             for key, value in values.items():
                 default = getattr(factory(), key)
-                if isinstance(default, tuple):
+                if isinstance(default, tuple) or default is None:  # None: an optional list, one per gauge
                     if not isinstance(value, list):
-                        raise ParameterError(
-                            f"{source}: [{name}] {key} must be a list like {list(default)!r}. Got {value!r} instead."
-                        )
+                        like = f"like {list(default)!r}" if default is not None else "with one value per gauge"
+                        raise ParameterError(f"{source}: [{name}] {key} must be a list {like}. Got {value!r} instead.")
                     value = tuple(value)
                 converted[key] = value
             try:
@@ -619,6 +667,10 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
             f"[sensors] adc_channels has {len(s.adc_channels)} channels for {count} gauges: one per gauge, e.g. "
             f"{list(range(count))}"
         )
+    for key in ("gauge_bridges", "gauge_factors", "amplifier_gains_v_per_v"):
+        values = getattr(s, key)
+        if values is not None and len(values) != count:
+            lines.append(f"[sensors] {key} has {len(values)} values for {count} gauges: one per gauge")
     if c.count == 2 and c.pretension_n <= 0:
         lines.append("[cables] pretension_n = 0 with count = 2: an antagonistic pair needs a pretension > 0 N")
     if c.count == 1 and c.pretension_n > 0:
@@ -701,6 +753,11 @@ def params_template(params: RigParams | None = None) -> str:
             value = list(value) if isinstance(value, tuple) else value
             if key in notes:
                 out.append(f"# {notes[key]}")
+            if value is None:  # optional: shown as an example, commented out
+                keys = ("gauge_bridges", "gauge_factors", "amplifier_gains_v_per_v")
+                example = dict(zip(keys, section.chain(len(params.geometry.gauge_positions_m)), strict=True))
+                out.append(f"# {key} = " + json.dumps(list(example.get(key, ()))))
+                continue
             out.append(tomli_w.dumps({key: value}).strip())
     return "\n".join(out) + "\n"
 

@@ -118,3 +118,12 @@ def test_the_gauge_on_a_support_names_the_support():
     params = RigParams.from_dict({"geometry": {"gauge_positions_m": [0.045, 0.093, 0.225]}})
     (line,) = digit_inconsistencies(params)
     assert "support at 0.09 m" in line and math.isfinite(float(line.split("= ")[1].split(" m")[0]))
+
+
+def test_a_per_gauge_list_of_the_wrong_length_is_named(tmp_path):
+    path = write_digit("two-sections", tmp_path, sensors={"gauge_bridges": ["full", "half", "quarter"]})
+    with pytest.raises(ParameterError, match=r"gauge_bridges has 3 values for 2 gauges"):
+        load_params(path)
+    path = write_digit("two-sections", tmp_path, sensors={"gauge_bridges": ["full", "hexa"]})
+    with pytest.raises(ParameterError, match=r"'gauge_bridges' parameter of Sensors"):
+        load_params(path)

@@ -133,3 +133,24 @@ def test_static_deflection_under_the_cable_matches_the_elastica(name):
     assert abs(deflection[1]) > 0.05 * g.digit_length_m
     assert np.linalg.norm(twin.tip_m[0] - ref.tip) < ELASTICA_RTOL * np.linalg.norm(deflection)
     assert twin.tension_n[0] == pytest.approx(ref.tension_n, rel=ELASTICA_RTOL)
+
+
+def test_a_chain_per_gauge_reads_as_each_gauge_alone():
+    """Gauge 1 on a full bridge with GF 2 and a 5000 amplifier, gauge 2 on a quarter bridge: each reads what a
+    digit with that chain on every gauge reads (same calibration: gains, offsets)."""
+    from flexdigit.twin.sensors import SensorChain
+
+    base = DIGITS["two-sections"]
+    mixed = {**base, "sensors": {**base["sensors"], "gauge_bridges": ["full", "quarter"], "gauge_factors": [2.0, 0.8],
+                                  "amplifier_gains_v_per_v": [5000.0, 10000.0]}}  # fmt: skip
+    params = RigParams.from_dict(mixed)
+    cal = calibration_for(params)
+    assert cal.noise_white_v[0] == pytest.approx(0.5 * cal.noise_white_v[1], rel=1e-12)  # noise by amplifier gain
+    full = RigParams.from_dict({**base, "sensors": {**base["sensors"], "bridge": "full", "gauge_factor": 2.0,
+                                                    "amplifier_gain_v_per_v": 5000.0}})  # fmt: skip
+    quarter = RigParams.from_dict({**base, "sensors": {**base["sensors"], "bridge": "quarter"}})
+    rng = np.random.default_rng(0)
+    kappa, axial = np.array([[1.5, -0.7], [0.2, 0.4]]), np.array([[-3.0, -3.0], [0.5, 0.5]])
+    volts = SensorChain(params, cal, rng).clean_v(kappa, axial)
+    assert volts[:, 0] == pytest.approx(SensorChain(full, cal, rng).clean_v(kappa, axial)[:, 0], rel=1e-12)
+    assert volts[:, 1] == pytest.approx(SensorChain(quarter, cal, rng).clean_v(kappa, axial)[:, 1], rel=1e-12)

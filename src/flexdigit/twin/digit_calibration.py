@@ -25,7 +25,8 @@ become under that digit's description, each by the law below. ``0`` subscripts a
 - ``channel_offset_v``: a bridge's imbalance, not a property of its place: the thesis's offset for a gauge at a
   thesis gauge's relative position, else 0 (a balanced bridge, the unbiased guess).
 - ``noise_white_v``, ``noise_drift_v_per_sqrt_s``: the amplifier's input-referred noise, amplified: scaled by
-  ``amplifier_gain / amplifier_gain0``; ``pot_noise_v`` kept (the same servo potentiometer and card).
+  ``amplifier_gain / amplifier_gain0`` (each gauge's own amplifier); ``pot_noise_v`` kept (the same servo
+  potentiometer and card).
 - ``cable_friction_ratio``: the description's ``[cables] guide_friction_ratio`` (default: the thesis's fit).
 
 On the thesis rig every ratio is 1 and every relative position a thesis gauge's, so the packaged calibration comes
@@ -92,10 +93,10 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
     for x in rel:
         same = np.flatnonzero(np.abs(rel0 - x) < _SAME_PLACE)
         offsets.append(float(ref.channel_offset_v[same[0]]) if same.size else 0.0)
-    amplify = params.sensors.amplifier_gain_v_per_v / thesis.sensors.amplifier_gain_v_per_v
     count = rel.size
-    white = float(np.mean(ref.noise_white_v)) * amplify
-    drift = float(np.mean(ref.noise_drift_v_per_sqrt_s)) * amplify
+    amplify = np.asarray(params.sensors.chain(count)[2]) / thesis.sensors.amplifier_gain_v_per_v  # per gauge
+    white = tuple(float(v) for v in float(np.mean(ref.noise_white_v)) * amplify)
+    drift = tuple(float(v) for v in float(np.mean(ref.noise_drift_v_per_sqrt_s)) * amplify)
     return ref.replace(
         support_mass_kg=(support_mass,) * n,
         housing_ei_n_m2=housing_ei,
@@ -103,7 +104,7 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
         housing_mass_kg=ref.housing_mass_kg * width * ecc * length,
         channel_gain=gain,
         channel_offset_v=tuple(offsets),
-        noise_white_v=(white,) * count,
-        noise_drift_v_per_sqrt_s=(drift,) * count,
+        noise_white_v=white,
+        noise_drift_v_per_sqrt_s=drift,
         cable_friction_ratio=params.cables.guide_friction_ratio,
     )
