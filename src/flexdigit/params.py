@@ -353,7 +353,8 @@ class Actuator:
     gear_ratio : float
         Servo turns per pulley turn, 1 on the thesis rig (the pulley sits on the servo shaft). A reduction ``n``
         divides the command step at the pulley by ``n`` (chapter 8 asks for a finer step): see
-        :attr:`pulley_deg_per_command`. Described and derived; the twin does not use it yet.
+        :attr:`pulley_deg_per_command`; the models and the twin draw :attr:`cable_m_per_servo_rad` of cable per
+        servo radian (the servo, its potentiometer and its torque limit stay on the servo's side).
     """
 
     command_min: int = 0
@@ -423,6 +424,11 @@ class Actuator:
     def rad_per_command(self) -> float:
         """Servo radians per command: 0.8622 pi/180 = 0.015048 (E 3.15; printed rounded as 0.0150)."""
         return math.radians(self.deg_per_command)
+
+    @property
+    def cable_m_per_servo_rad(self) -> float:
+        """Cable drawn in per servo radian, ``r_M / gear_ratio`` (m/rad): E 3.11's ``r_M`` with the gearing."""
+        return self.pulley_radius_m / self.gear_ratio
 
     @property
     def pulley_deg_per_command(self) -> float:
@@ -529,7 +535,7 @@ class RigParams:
         g, a = self.geometry, self.actuator
         rotation_rad = math.radians(g.max_rotation_per_section_deg * g.section_count)
         moment_nm = self.bending_stiffness_n_m2 * rotation_rad / g.strip_length_m
-        torque_nm = moment_nm * a.pulley_radius_m / g.cable_eccentricity_m
+        torque_nm = moment_nm * a.cable_m_per_servo_rad / g.cable_eccentricity_m
         if torque_nm * STRIP_BEND_FRACTION > a.stall_torque_nm:
             k2 = self.bending_stiffness_n_m2 * a.pulley_radius_m / (g.strip_length_m * g.cable_eccentricity_m)
             raise ParameterError(

@@ -154,3 +154,13 @@ def test_a_chain_per_gauge_reads_as_each_gauge_alone():
     volts = SensorChain(params, cal, rng).clean_v(kappa, axial)
     assert volts[:, 0] == pytest.approx(SensorChain(full, cal, rng).clean_v(kappa, axial)[:, 0], rel=1e-12)
     assert volts[:, 1] == pytest.approx(SensorChain(quarter, cal, rng).clean_v(kappa, axial)[:, 1], rel=1e-12)
+
+
+def test_a_geared_servo_draws_less_cable_per_command():
+    """A 4:1 reduction: the same command turns the pulley a quarter as far, so the twin's digit bends as the
+    ungeared digit does under a quarter of the shortening (E 3.11 with the gearing)."""
+    from flexdigit.twin.twin import cable_shortening_m
+
+    geared = RigParams.from_dict(DIGITS["six-gauges-geared"])
+    plain = RigParams.from_dict({k: v for k, v in DIGITS["six-gauges-geared"].items() if k != "actuator"})
+    assert float(cable_shortening_m(40, geared)) == pytest.approx(0.25 * float(cable_shortening_m(40, plain)))
