@@ -15,7 +15,11 @@ Execution (:func:`run_rows`):
   flexdigit runs no process pool of its own.
 
 Every finished task's records are appended to a journal (``journal.jsonl`` in the study's directory: a header line
-with the study's fingerprint, then one line per row, flushed and fsynced), so a study killed at any point resumes
+with the study's fingerprint, then one line per row, flushed and fsynced; each row carries a CRC-32 of its canonical
+JSON and the study's fingerprint, so a row edited, renumbered, copied from another study, duplicated or outside
+the design is refused naming the file and line, and a line cut short by a
+kill is dropped and computed again; a journal of format 1, without checksums, is refused: its rows cannot be
+checked, ``--force`` starts over), so a study killed at any point resumes
 where it stopped when rerun with the same spec and directory; a journal written by a study with other settings
 is refused, never mixed (``--force`` starts over). A row whose evaluation raises is recorded with its error and
 its parameters and the study goes on; a task whose worker dies (Dask gives up on it once the workers it ran on
@@ -33,6 +37,7 @@ import os
 import re
 import sys
 import time
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -54,7 +59,8 @@ __all__ = [
 ]
 
 JOURNAL_NAME = "journal.jsonl"
-JOURNAL_FORMAT = 1
+#: 2: each row carries its checksum (``crc``); 1 (before it) is refused, its rows cannot be checked.
+JOURNAL_FORMAT = 2
 #: How the error of a row whose task failed (not the row itself: a worker died, the task could not run) begins
 TASK_FAILED = "task failed: "
 
@@ -139,10 +145,12 @@ class Journal:
         Start over: an existing journal is replaced.
     """
 
-    def __init__(self, path: Path, header: dict, *, force: bool = False) -> None:
+    def __init__(self, path: Path, header: dict, *, force: bool = False, design=None) -> None:
         self.path = Path(path)
         self.header = {"flexdigit_study_journal": JOURNAL_FORMAT, **header}
         self.records: dict[int, RowRecord] = {}
+        #: The study's rows of parameter values: a journalled row number outside them is refused (None: not checked).
+        self.design = None if design is None else np.asarray(design, dtype=float)
         if self.path.exists() and not force:
             self._read()
         else:
@@ -164,6 +172,11 @@ class Journal:
             header = json.loads(complete[0])
         except json.JSONDecodeError:
             raise DataFileError(f"{self.path}: line 1 is not a study journal header") from None
+        if isinstance(header, dict) and header.get("flexdigit_study_journal") == 1:
+            raise DataFileError(
+                f"{self.path}: a study journal of format 1 (written before rows carried checksums): its rows cannot "
+                "be checked; --force starts the study over"
+            )
         if not isinstance(header, dict) or header.get("flexdigit_study_journal") != JOURNAL_FORMAT:
             raise DataFileError(f"{self.path}: line 1 is not a flexdigit study journal header")
         if header.get("fingerprint") != self.header.get("fingerprint"):
@@ -171,21 +184,54 @@ class Journal:
                 f"{self.path}: written by a study with other settings (fingerprint {header.get('fingerprint')}, "
                 f"this study {self.header.get('fingerprint')}); use another --out directory, or --force to start over"
             )
+        lines: dict[int, int] = {}
         for number, line in enumerate(complete[1:], start=2):
             if not line.strip():
                 continue
             try:
-                record = RowRecord.from_json(json.loads(line))
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError):
-                raise DataFileError(f"{self.path}: line {number} is not a row record") from None
+                data = json.loads(line)
+                record = RowRecord.from_json(data)
+                crc = data["crc"]
+            except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
+                raise DataFileError(f"{self.path}: line {number} is not a row record (with its checksum)") from None
+            where = f"{self.path}: line {number}"
+            if self.design is not None and not 0 <= record.row < len(self.design):
+                raise DataFileError(
+                    f"{where}: row {record.row} is outside the study's design (rows 0..{len(self.design) - 1}); the "
+                    "journal was edited or mixed with another study's"
+                )
+            if crc != self._checksum(data):
+                raise DataFileError(
+                    f"{where}: row {record.row}'s checksum does not match its number and values (edited, renumbered "
+                    "or copied from another study); --force starts the study over"
+                )
+            earlier = self.records.get(record.row)
+            if earlier is not None and earlier.done:  # a failed task's rows are computed again: those may repeat
+                raise DataFileError(
+                    f"{where}: row {record.row} again, already recorded on line {lines[record.row]} (a duplicated "
+                    "line); --force starts the study over"
+                )
             self.records[record.row] = record
+            lines[record.row] = number
         if tail:  # a line cut short by a kill: drop it, the row is computed again
             with self.path.open("r+b") as fh:
                 fh.truncate(len(text) - len(tail))
 
+    def _checksum(self, data: dict) -> str:
+        """CRC-32 (8 hex digits) of a row record's canonical JSON (without its ``crc``: its row number, values,
+        error and time) and the study's fingerprint: a row is valid only as written, in its own study."""
+        body = {k: v for k, v in data.items() if k != "crc"}
+        text = json.dumps(body, sort_keys=True, separators=(",", ":")) + "|" + str(self.header.get("fingerprint"))
+        return f"{zlib.crc32(text.encode()):08x}"
+
     def append(self, records) -> None:
-        """Add finished rows, flushed and fsynced before returning."""
-        lines = "".join(json.dumps(r.to_json(), sort_keys=True) + "\n" for r in records)
+        """Add finished rows (each with its checksum), flushed and fsynced before returning."""
+        lines = ""
+        for r in records:
+            data = r.to_json()
+            if self.design is not None and not 0 <= r.row < len(self.design):
+                raise ParameterError(f"row {r.row} is outside the study's design (rows 0..{len(self.design) - 1})")
+            lines += json.dumps({**data, "crc": self._checksum(data)}, sort_keys=True) + "\n"
         with self.path.open("a", encoding="utf-8") as fh:
             fh.write(lines)
             fh.flush()
@@ -382,7 +428,7 @@ def run_study(
 ):
     """:func:`run_rows` with the study's journal in ``out_dir``; returns ``(outputs, errors)``: per metric an array
     over the rows (NaN where a row failed) and per row its error or None."""
-    journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
+    journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force, design=values)
     records = run_rows(
         build,
         values,

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import os
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -63,7 +64,11 @@ COLUMNS: dict[str, type] = {
     "time_s": np.float64,
 }
 GAUGE_COLUMNS = ("gauge1_v", "gauge2_v", "gauge3_v")
-JOURNAL_FORMAT = "flexdigit-tactile-journal/1"
+#: /2: every reading carries a CRC-32 of its canonical JSON (``crc``). A journal of /1 (before it) is still
+#: resumed, as legacy: its readings are real measurements that cannot be taken again, and are checked as before
+#: (consecutive, inside the protocol's plan) but not against a checksum they never had.
+JOURNAL_FORMAT = "flexdigit-tactile-journal/2"
+LEGACY_JOURNAL_FORMATS = ("flexdigit-tactile-journal/1",)
 DATASET_FORMAT = "flexdigit-tactile-dataset/1"
 
 
@@ -170,6 +175,7 @@ class Journal:
                     f"{path}: this journal was started with {key}={was!r}; this run has {key}={now!r}. Resume with "
                     "the same settings, or collect into another --out"
                 )
+            _check_journal_plan(path, rows, header)
             if good_bytes < path.stat().st_size:  # a crash mid-write left a partial line: drop it
                 with path.open("r+b") as fh:
                     fh.truncate(good_bytes)
@@ -180,8 +186,9 @@ class Journal:
         return cls(path, handle, fsync), rows
 
     def append(self, row: dict) -> None:
-        """Write one reading and flush it (and fsync it if asked)."""
-        self._fh.write(json.dumps(row) + "\n")
+        """Write one reading with its checksum and flush it (and fsync it if asked)."""
+        body = {k: v for k, v in row.items() if k != "crc"}
+        self._fh.write(json.dumps({**body, "crc": row_checksum(body)}) + "\n")
         self._fh.flush()
         if self._fsync:
             os.fsync(self._fh.fileno())
@@ -215,6 +222,46 @@ def first_difference(was: object, now: object, prefix: str = "") -> tuple[str, o
     return None
 
 
+def row_checksum(row: dict) -> str:
+    """CRC-32 (8 hex digits) of a journalled reading's canonical JSON, without its own ``crc``.
+
+    Examples
+    --------
+    >>> row_checksum({"sample": 0, "gauge1_v": 0.5}) == row_checksum({"gauge1_v": 0.5, "sample": 0})
+    True
+    """
+    body = {k: v for k, v in row.items() if k != "crc"}
+    return f"{zlib.crc32(json.dumps(body, sort_keys=True, separators=(',', ':')).encode()):08x}"
+
+
+def _check_journal_plan(path: Path, rows: list[dict], header: dict) -> None:
+    """Every journalled reading must be one the protocol of the journal's header takes, where it takes it: a reading
+    beyond the plan (an out-of-design row) or whose settings differ from its sample's is refused naming its line."""
+    try:
+        protocol = Protocol.from_dict(header["protocol"])
+        plan = protocol.plan(float(header.get("digit_length_m", 0.270)))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DataFileError(f"{path}: line 1: the stored protocol is invalid ({one_line(exc)})") from None
+    total = protocol.sample_count
+    if len(rows) > total:  # first: rows past the plan say more than any one setting that differs
+        raise DataFileError(
+            f"{path}: line {total + 2} holds sample {rows[total]['sample']}, beyond the {total} readings protocol "
+            f"{protocol.name!r} takes (the journal was edited or mixed with another)"
+        )
+    for i, row in enumerate(rows):
+        number = i + 2
+        for name in ("test", "load_kg", "position_index", "command", "repetition", "position_from_tip_m"):
+            want, got = plan[name][row["sample"]].item(), row[name]
+            same = (got is None and want != want) or (
+                got is not None and (got == want or (isinstance(want, float) and abs(got - want) <= 1e-12))
+            )
+            if not same:
+                raise DataFileError(
+                    f"{path}: line {number}: sample {row['sample']} has {name} = {got!r}, but protocol "
+                    f"{protocol.name!r} takes {want!r} there (the journal was edited or mixed with another)"
+                )
+
+
 def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     """Header, complete readings, and the byte length of the complete part of a journal."""
     data = path.read_bytes()
@@ -227,8 +274,9 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
         header = json.loads(complete[0])
     except ValueError:  # not JSON, or not UTF-8
         raise DataFileError(f"{path}: line 1 is not a journal header (not JSON)") from None
-    if not isinstance(header, dict) or header.get("journal") != JOURNAL_FORMAT:
+    if not isinstance(header, dict) or header.get("journal") not in (JOURNAL_FORMAT, *LEGACY_JOURNAL_FORMATS):
         raise DataFileError(f"{path}: line 1 is not a {JOURNAL_FORMAT} header")
+    checked = header["journal"] == JOURNAL_FORMAT
     rows = []
     for number, line in enumerate(complete[1:], start=2):
         try:
@@ -249,6 +297,11 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
             if not ok:
                 kind = "an integer" if np.dtype(dtype).kind == "i" else "a number or null"
                 raise DataFileError(f"{path}: line {number}: column '{name}' must be {kind}. Got {value!r}")
+        if checked and row.get("crc") != row_checksum(row):
+            raise DataFileError(
+                f"{path}: line {number}: the checksum of sample {row['sample']} does not match its values (the journal "
+                "was edited, or a line corrupted); remove this line and the ones after it to take them again"
+            )
         if row["sample"] != len(rows):
             raise DataFileError(
                 f"{path}: line {number} holds sample {row['sample']}, expected {len(rows)} "
