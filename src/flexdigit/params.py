@@ -598,6 +598,8 @@ class RigParams:
                         raise ParameterError(f"{source}: [{name}] {key} must be a list {like}. Got {value!r} instead.")
                     value = tuple(value)
                 converted[key] = value
+            if name == "geometry":
+                converted = _derive_lengths(converted)
             try:
                 sections[name] = factory(**converted)
             except (ParameterError, TypeError, ValueError) as exc:
@@ -766,6 +768,27 @@ def params_template(params: RigParams | None = None) -> str:
                 continue
             out.append(tomli_w.dumps({key: value}).strip())
     return "\n".join(out) + "\n"
+
+
+def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
+    """The lengths a ``[geometry]`` table leaves out, derived from the ones it gives (issue 24): the strip from the
+    sections (``section_count x section_length_m``), the digit from the strip and the thesis's 10 mm supports.
+    A table that gives them all is checked (:func:`digit_inconsistencies`), never changed."""
+    count, section = geometry.get("section_count"), geometry.get("section_length_m")
+    if count is None and section is None:
+        return geometry  # the thesis's sections: its lengths are the defaults
+    if not isinstance(count, int | type(None)) or not isinstance(section, int | float | type(None)):
+        return geometry  # mistyped: the dataclass names the key
+    thesis = Geometry()
+    count = thesis.section_count if count is None else count
+    section = thesis.section_length_m if section is None else section
+    out = dict(geometry)
+    if "strip_length_m" not in out:
+        out["strip_length_m"] = count * section
+    if "digit_length_m" not in out and isinstance(out["strip_length_m"], int | float):
+        support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
+        out["digit_length_m"] = out["strip_length_m"] + count * support
+    return out
 
 
 def load_params(path: str | Path, *, check: bool = True) -> RigParams:

@@ -14,6 +14,7 @@ from flexdigit.params import load_params
 EXPERIMENTS = {
     "release": ["--duration", "3"],
     "sweep": ["--commands", "8,20,30", "--samples", "2", "--settle", "1"],
+    "step": ["--duration", "0.5", "--cable"],
     "load": ["--loads-g", "10", "--positions-cm", "0,5", "--repetitions", "2"],
 }
 

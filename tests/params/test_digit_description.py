@@ -69,8 +69,14 @@ def test_written_files_keep_loading(tmp_path):
 
 BAD = {
     # the 4 x 80 mm digit with digit_length_m left at 0.27
-    "lengths do not add up": ({"geometry": {"section_count": 4}}, "strip_length_m"),
-    "a strip longer than the digit": ({"geometry": {"section_count": 4, "strip_length_m": 0.32}}, "strip_length_m"),
+    "lengths do not add up": (
+        {"geometry": {"section_count": 4, "strip_length_m": 0.24, "digit_length_m": 0.27}},  # as --write wrote them
+        "strip_length_m",
+    ),
+    "a strip longer than the digit": (
+        {"geometry": {"section_count": 4, "strip_length_m": 0.32, "digit_length_m": 0.27}},
+        "strip_length_m",
+    ),
     "a gauge on a support": ({"geometry": {"gauge_positions_m": [0.045, 0.088, 0.225]}}, "gauge_positions_m[1]"),
     "a gauge past the strip": ({"geometry": {"gauge_positions_m": [0.045, 0.135, 0.268]}}, "gauge_positions_m[2]"),
     "two gauges at one place": ({"geometry": {"gauge_positions_m": [0.045, 0.045, 0.225]}}, "one place"),
@@ -127,3 +133,14 @@ def test_a_per_gauge_list_of_the_wrong_length_is_named(tmp_path):
     path = write_digit("two-sections", tmp_path, sensors={"gauge_bridges": ["full", "hexa"]})
     with pytest.raises(ParameterError, match=r"'gauge_bridges' parameter of Sensors"):
         load_params(path)
+
+
+def test_lengths_left_out_are_derived_from_the_sections(tmp_path):
+    path = tmp_path / "four.toml"
+    path.write_text("[geometry]\nsection_count = 4\n")
+    g = load_params(path).geometry
+    assert g.strip_length_m == pytest.approx(0.32, abs=LENGTH_ATOL_M)  # 4 x 80 mm
+    assert g.digit_length_m == pytest.approx(0.36, abs=LENGTH_ATOL_M)  # and four 10 mm supports
+    path.write_text("[geometry]\nsection_count = 2\nsection_length_m = 0.1\ngauge_positions_m = [0.05, 0.15]\n"
+                    "[sensors]\nadc_channels = [0, 1]\n")  # fmt: skip
+    assert load_params(path).geometry.digit_length_m == pytest.approx(0.22, abs=LENGTH_ATOL_M)
