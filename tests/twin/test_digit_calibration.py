@@ -164,3 +164,24 @@ def test_a_geared_servo_draws_less_cable_per_command():
     geared = RigParams.from_dict(DIGITS["six-gauges-geared"])
     plain = RigParams.from_dict({k: v for k, v in DIGITS["six-gauges-geared"].items() if k != "actuator"})
     assert float(cable_shortening_m(40, geared)) == pytest.approx(0.25 * float(cable_shortening_m(40, plain)))
+
+
+# issue 24: the release wn within 1 % of the chain's linear modal analysis (identify's fit of an 8 s record, the
+# base gauge: the first mode dominates it on every test digit; higher modes show at the tip gauges of long digits)
+RELEASE_WN_RTOL = 0.01
+
+
+@pytest.mark.parametrize("name", list(DIGITS))
+def test_a_release_rings_at_the_digits_first_linear_mode(name):
+    from flexdigit.identify.identification import identify
+    from flexdigit.identify.timeseries import TimeSeries
+    from flexdigit.twin import records
+
+    params = RigParams.from_dict(DIGITS[name])
+    cal = calibration_for(params)
+    wn = float(build_digit(params, cal, orientation="hanging").linear_modes()[0][0])
+    rec = records.release_test(
+        duration_s=8.0, sample_rate_hz=500, seed=1, params=params, calibration=cal, orientation="hanging"
+    )
+    fit = identify(TimeSeries.from_arrays(rec.column("time_s"), rec.column("gauge1_v"), channel="g1"), "release")
+    assert fit.wn_rad_s == pytest.approx(wn, rel=RELEASE_WN_RTOL)
