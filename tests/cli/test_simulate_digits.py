@@ -36,3 +36,13 @@ def test_simulate_runs_on_the_digit(name, experiment, tmp_path, capsys):
     assert [c for c in columns if c.startswith("gauge")] == [f"gauge{i + 1}_v" for i in range(gauges)]
     if experiment == "release":  # the digit rings: every identified gauge gives one wn (the median's)
         assert 1.0 < data["findings"]["wn_rad_s"] < 100.0
+
+
+def test_a_digit_that_buckles_tip_up_is_refused_in_one_line(tmp_path, capsys):
+    """0.5 m with five 8 g supports: P_cr = pi^2 EI / 4 L^2 ~ 0.16 N against ~0.4 N of supports (docs/digits.md)."""
+    path = write_digit("five-sections-eight-gauges", tmp_path)
+    argv = ["simulate", "release", "--params", str(path), "--out", str(tmp_path / "r.csv")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "buckles" in err[0] and "hanging" in err[0]
+    assert not (tmp_path / "r.csv").exists()

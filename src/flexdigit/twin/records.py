@@ -182,6 +182,20 @@ def _gauge_columns(params: RigParams) -> list[str]:
     return [f"gauge{i + 1}_v" for i in range(len(params.geometry.gauge_positions_m))]
 
 
+def _check_upright(chain, orientation: str, owner: str) -> None:
+    """Refuse a digit that cannot stand straight in ``orientation``: a long or soft digit mounted tip up buckles
+    under its own weight and its supports' (the straight chain's tangent stiffness, springs plus gravity, has a
+    negative eigenvalue), and a release from there falls over instead of ringing."""
+    stiffness = chain.tangent_stiffness(np.zeros(chain.n), chain.g_gravity, False)
+    lowest = float(np.linalg.eigvalsh(0.5 * (stiffness + stiffness.T))[0])
+    if lowest < 0:
+        raise ParameterError(
+            f"The 'orientation' parameter of {owner} is {orientation!r}, but this digit buckles so under its own "
+            f"weight (straight, its lowest tangent stiffness is {lowest:.3g} N m/rad < 0): mount it 'hanging' (tip "
+            "down) or 'horizontal'."
+        )
+
+
 def _check_rate(duration_s, sample_rate_hz, owner):
     duration = check_real(duration_s, "duration_s", owner, low=0, low_open=True, high=3600)
     rate = check_real(sample_rate_hz, "sample_rate_hz", owner, low=1, high=100_000)
@@ -225,6 +239,7 @@ def release_test(
         dt_s=RELEASE_DT_S,
         compiled=compiled,
     )
+    _check_upright(twin.chain, orientation, "release_test")
     unit = twin.chain.solve_static(tip_force_n=[[0.0, 1e-3]]).tip_m[0, 1] - twin.chain.solve_static().tip_m[0, 1]
     force = 1e-3 * deflection / unit
     for _ in range(3):  # the tip load-deflection curve bends a little: a few secant corrections
