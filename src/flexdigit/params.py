@@ -21,6 +21,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -48,7 +49,13 @@ __all__ = [
     "Sensors",
     "Actuator",
     "DigitDynamics",
+    "Cables",
     "RigParams",
+    "MAX_SECTIONS",
+    "MAX_GAUGES",
+    "digit_inconsistencies",
+    "derived_figures",
+    "params_template",
     "load_params",
     "save_params",
 ]
@@ -131,8 +138,14 @@ class Geometry:
     }
 
     def __post_init__(self) -> None:
-        validate_fields(self)
         owner = type(self).__name__
+        positions = self.gauge_positions_m
+        if isinstance(positions, tuple | list) and len(set(map(repr, positions))) < len(positions):
+            raise ParameterError(
+                f"The 'gauge_positions_m' parameter of {owner} puts two gauges at one place: one gauge per position. "
+                f"Got {list(positions)!r} instead."
+            )
+        validate_fields(self)
         check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
         positions = check_array(
             self.gauge_positions_m,
@@ -217,6 +230,12 @@ class Sensors:
         Input range, +-5 V (2.5.2).
     adc_channels : tuple of int
         Gauge pairs 1..3 on analog inputs 0..2 (table 2.2).
+    gauge_bridges : tuple of str, optional
+        One bridge per gauge (a chain per gauge); left out: ``bridge`` for every gauge.
+    gauge_factors : tuple of float, optional
+        One gauge factor per gauge; left out: ``gauge_factor`` for every gauge.
+    amplifier_gains_v_per_v : tuple of float, optional
+        One amplifier gain per gauge; left out: ``amplifier_gain_v_per_v`` for every gauge.
     """
 
     gauge_resistance_ohm: float = 120.0
@@ -229,8 +248,13 @@ class Sensors:
     adc_bits: int = 16
     adc_range_v: tuple[float, float] = (-5.0, 5.0)
     adc_channels: tuple[int, ...] = (0, 1, 2)
+    gauge_bridges: tuple[str, ...] | None = None
+    gauge_factors: tuple[float, ...] | None = None
+    amplifier_gains_v_per_v: tuple[float, ...] | None = None
 
     _parameter_constraints = {
+        "gauge_factors": [None, Array(ndim=1, min_length=1, low=0.1, high=500.0)],
+        "amplifier_gains_v_per_v": [None, Array(ndim=1, min_length=1, low=1e-3, high=1e7)],
         "gauge_resistance_ohm": [Plausible("ohm", 1.0, 1e6, "strain gauges are 120 ohm to 5 kohm; up to 1 Mohm")],
         "gauge_factor": [Plausible("", 0.1, 500.0, "metal foil gauges ~2, semiconductor gauges up to ~200")],
         "bridge": [Options(BRIDGE_TYPES)],
@@ -247,6 +271,18 @@ class Sensors:
     def __post_init__(self) -> None:
         validate_fields(self)
         owner = type(self).__name__
+        for name in ("gauge_factors", "amplifier_gains_v_per_v"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
+        if self.gauge_bridges is not None:
+            bridges = self.gauge_bridges
+            if isinstance(bridges, str) or not bridges or any(b not in BRIDGE_TYPES for b in bridges):
+                raise ParameterError(
+                    f"The 'gauge_bridges' parameter of {owner} must be a list of "
+                    + ", ".join(repr(b) for b in BRIDGE_TYPES)
+                    + f", one per gauge. Got {bridges!r} instead."
+                )
+            object.__setattr__(self, "gauge_bridges", tuple(bridges))
         rng = check_array(self.adc_range_v, "adc_range_v", owner, shape=(2,), increasing=True)
         object.__setattr__(self, "adc_range_v", (float(rng[0]), float(rng[1])))
         channels = tuple(check_int(c, "adc_channels", owner, low=0, high=63) for c in self.adc_channels)
@@ -256,6 +292,29 @@ class Sensors:
                 f"Got {list(self.adc_channels)!r} instead."
             )
         object.__setattr__(self, "adc_channels", channels)
+
+    @property
+    def per_gauge(self) -> bool:
+        """Whether any part of the chain is given gauge by gauge."""
+        return any(v is not None for v in (self.gauge_bridges, self.gauge_factors, self.amplifier_gains_v_per_v))
+
+    def chain(self, count: int) -> tuple[tuple[str, ...], tuple[float, ...], tuple[float, ...]]:
+        """Each of ``count`` gauges' bridge, gauge factor and amplifier gain (the per-gauge lists, or the scalars).
+
+        Examples
+        --------
+        >>> Sensors(gauge_bridges=("full", "quarter", "half")).chain(3)[0]
+        ('full', 'quarter', 'half')
+        >>> Sensors().chain(2)[1]
+        (0.8, 0.8)
+        """
+        return (
+            self.gauge_bridges if self.gauge_bridges is not None else (self.bridge,) * count,
+            self.gauge_factors if self.gauge_factors is not None else (float(self.gauge_factor),) * count,
+            self.amplifier_gains_v_per_v
+            if self.amplifier_gains_v_per_v is not None
+            else (float(self.amplifier_gain_v_per_v),) * count,
+        )
 
     @property
     def adc_lsb_v(self) -> float:
@@ -292,6 +351,11 @@ class Actuator:
         Potentiometer voltage at 0 and 219 degrees: 0.46688 and 2.4755 V (3.2.4).
     stall_torque_nm : float
         Futaba S-148: 42 oz in = 0.297 N m (2.4).
+    gear_ratio : float
+        Servo turns per pulley turn, 1 on the thesis rig (the pulley sits on the servo shaft). A reduction ``n``
+        divides the command step at the pulley by ``n`` (chapter 8 asks for a finer step): see
+        :attr:`pulley_deg_per_command`; the models and the twin draw :attr:`cable_m_per_servo_rad` of cable per
+        servo radian (the servo, its potentiometer and its torque limit stay on the servo's side).
     """
 
     command_min: int = 0
@@ -310,8 +374,10 @@ class Actuator:
     pot_v_at_min_angle_v: float = 0.46688
     pot_v_at_max_angle_v: float = 2.4755
     stall_torque_nm: float = 0.297
+    gear_ratio: float = 1.0
 
     _parameter_constraints = {
+        "gear_ratio": [Plausible("", 0.01, 100.0, "a gear train between servo and pulley: 1:100 to 100:1")],
         "command_min": [SERVO_COMMAND],
         "command_max": [SERVO_COMMAND],
         "angle_min_deg": [Interval(Real, -360, 360)],
@@ -361,9 +427,54 @@ class Actuator:
         return math.radians(self.deg_per_command)
 
     @property
+    def cable_m_per_servo_rad(self) -> float:
+        """Cable drawn in per servo radian, ``r_M / gear_ratio`` (m/rad): E 3.11's ``r_M`` with the gearing."""
+        return self.pulley_radius_m / self.gear_ratio
+
+    @property
+    def pulley_deg_per_command(self) -> float:
+        """The command step at the pulley, ``deg_per_command / gear_ratio`` (0.8622 deg on the thesis rig)."""
+        return self.deg_per_command / self.gear_ratio
+
+    @property
     def pot_v_per_command(self) -> float:
         """Potentiometer volts per command: (2.4755 - 0.46688)/254 = 0.0079 V (3.2.4)."""
         return (self.pot_v_at_max_angle_v - self.pot_v_at_min_angle_v) / (self.command_max - self.command_min)
+
+
+@declare
+@dataclass(frozen=True)
+class Cables:
+    """The tendons that bend the digit (2.1, 2.2.1): the thesis's single cable, or an antagonistic pair.
+
+    The eccentricity is ``Geometry.cable_eccentricity_m`` (table 3.7's ``e``, kept there so older files load).
+
+    Attributes
+    ----------
+    count : int
+        1: the thesis's cable, bending one way; 2: an antagonistic pair bending both ways (2.1 asks for "a two
+        cable system to ensure rigidity"; the design study's ``pretension_n > 0``).
+    pretension_n : float
+        Tension both cables of a pair keep at rest (N); 0 with one cable, positive with a pair (a slack pair
+        cannot hold the digit straight).
+    guide_friction_ratio : float
+        Cable-guide friction, the share of the tension gained or lost across the guides
+        (:attr:`flexdigit.twin.calibration.Calibration.cable_friction_ratio`); 0.0548 fitted to the thesis's
+        actuated corr2 (7.5).
+    """
+
+    count: int = 1
+    pretension_n: float = 0.0
+    guide_friction_ratio: float = 0.05481279307004473
+
+    _parameter_constraints = {
+        "count": [Interval(Integral, 1, 2)],
+        "pretension_n": [Interval(Real, 0, 100, closed="both")],
+        "guide_friction_ratio": [Interval(Real, 0, 1, closed="both")],
+    }
+
+    def __post_init__(self) -> None:
+        validate_fields(self)
 
 
 @declare
@@ -404,6 +515,7 @@ class RigParams:
     sensors: Sensors = field(default_factory=Sensors)
     actuator: Actuator = field(default_factory=Actuator)
     dynamics: DigitDynamics = field(default_factory=DigitDynamics)
+    cables: Cables = field(default_factory=Cables)
 
     def __post_init__(self) -> None:
         g = self.geometry
@@ -424,7 +536,7 @@ class RigParams:
         g, a = self.geometry, self.actuator
         rotation_rad = math.radians(g.max_rotation_per_section_deg * g.section_count)
         moment_nm = self.bending_stiffness_n_m2 * rotation_rad / g.strip_length_m
-        torque_nm = moment_nm * a.pulley_radius_m / g.cable_eccentricity_m
+        torque_nm = moment_nm * a.cable_m_per_servo_rad / g.cable_eccentricity_m
         if torque_nm * STRIP_BEND_FRACTION > a.stall_torque_nm:
             k2 = self.bending_stiffness_n_m2 * a.pulley_radius_m / (g.strip_length_m * g.cable_eccentricity_m)
             raise ParameterError(
@@ -448,7 +560,9 @@ class RigParams:
         """Plain nested dict (lists for tuples), as written to TOML."""
         return {
             f.name: {
-                k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(getattr(self, f.name)).items()
+                k: list(v) if isinstance(v, tuple) else v
+                for k, v in dataclasses.asdict(getattr(self, f.name)).items()
+                if v is not None  # an optional key left out (TOML has no null)
             }
             for f in dataclasses.fields(self)
         }
@@ -479,13 +593,14 @@ class RigParams:
             converted = {}
             for key, value in values.items():
                 default = getattr(factory(), key)
-                if isinstance(default, tuple):
+                if isinstance(default, tuple) or default is None:  # None: an optional list, one per gauge
                     if not isinstance(value, list):
-                        raise ParameterError(
-                            f"{source}: [{name}] {key} must be a list like {list(default)!r}. Got {value!r} instead."
-                        )
+                        like = f"like {list(default)!r}" if default is not None else "with one value per gauge"
+                        raise ParameterError(f"{source}: [{name}] {key} must be a list {like}. Got {value!r} instead.")
                     value = tuple(value)
                 converted[key] = value
+            if name == "geometry":
+                converted = _derive_lengths(converted)
             try:
                 sections[name] = factory(**converted)
             except (ParameterError, TypeError, ValueError) as exc:
@@ -496,8 +611,192 @@ class RigParams:
             raise ParameterError(f"{source}: {exc}") from None
 
 
-def load_params(path: str | Path) -> RigParams:
+#: The description's limits (issue 24): a planar digit of 1-8 sections carrying 1-8 gauges. The dataclasses accept
+#: more (the design study probes a grid of gauge positions through one ``Geometry``); a *file* is held to these.
+MAX_SECTIONS = 8
+MAX_GAUGES = 8
+#: How closely lengths must add up (m): a micrometre, far below any workshop tolerance, far above float rounding.
+LENGTH_TOLERANCE_M = 1e-6
+
+
+def digit_inconsistencies(params: RigParams) -> list[str]:
+    """Every way the description contradicts itself, one line each naming the key; empty if it holds together.
+
+    The rules (the twin's layout, :func:`flexdigit.twin.digit.build_digit`): ``section_count`` sections of
+    ``section_length_m`` of free strip make ``strip_length_m``; each section's pitch ``digit_length_m /
+    section_count`` holds its free strip and one support, so the supports are ``(digit_length_m - strip_length_m)
+    / section_count`` long, centred at 0, pitch, 2 pitch, ... (half a support at the clamp and at the tip); a gauge
+    sits on the free strip, never on a support or past the strip; one ADC channel per gauge; a cable pair keeps a
+    pretension, a single cable none.
+
+    Examples
+    --------
+    >>> digit_inconsistencies(RigParams())
+    []
+    >>> four = RigParams(geometry=Geometry(section_count=4))   # 4 x 80 mm with digit_length_m left at 0.27
+    >>> digit_inconsistencies(four)[0].split(":")[0]
+    '[geometry] strip_length_m = 0.24 but section_count x section_length_m = 4 x 0.08 = 0.32 m'
+    """
+    g, s, c = params.geometry, params.sensors, params.cables
+    lines = []
+    n, count = g.section_count, len(g.gauge_positions_m)
+    if n > MAX_SECTIONS:
+        lines.append(f"[geometry] section_count = {n}: a digit has 1 to {MAX_SECTIONS} sections")
+    if count > MAX_GAUGES:
+        lines.append(f"[geometry] gauge_positions_m has {count} gauges: a digit carries 1 to {MAX_GAUGES}")
+    strip = n * g.section_length_m
+    if abs(strip - g.strip_length_m) > LENGTH_TOLERANCE_M:
+        lines.append(
+            f"[geometry] strip_length_m = {g.strip_length_m:g} but section_count x section_length_m = {n} x "
+            f"{g.section_length_m:g} = {strip:g} m: the lengths do not add up"
+        )
+    support = (g.digit_length_m - strip) / n
+    if support < -LENGTH_TOLERANCE_M:
+        lines.append(
+            f"[geometry] digit_length_m = {g.digit_length_m:g} is shorter than its {n} sections of "
+            f"{g.section_length_m:g} m ({strip:g} m): set it to {strip:g} m plus the supports, e.g. "
+            f"{n * (g.section_length_m + 0.01):g} m with 10 mm supports"
+        )
+    else:
+        half, pitch = 0.5 * max(support, 0.0), g.digit_length_m / n
+        for i, x in enumerate(g.gauge_positions_m):
+            k = round(x / pitch)  # the nearest support
+            if x > g.digit_length_m - half - LENGTH_TOLERANCE_M:
+                lines.append(
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is past the strip, which ends at "
+                    f"{g.digit_length_m - half:g} m"
+                )
+            elif abs(x - k * pitch) < half + LENGTH_TOLERANCE_M:
+                lines.append(
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {k * pitch:g} m "
+                    f"({k * pitch - half:g} to {k * pitch + half:g} m): put it on the strip"
+                )
+    if len(s.adc_channels) != count:
+        lines.append(
+            f"[sensors] adc_channels has {len(s.adc_channels)} channels for {count} gauges: one per gauge, e.g. "
+            f"{list(range(count))}"
+        )
+    for key in ("gauge_bridges", "gauge_factors", "amplifier_gains_v_per_v"):
+        values = getattr(s, key)
+        if values is not None and len(values) != count:
+            lines.append(f"[sensors] {key} has {len(values)} values for {count} gauges: one per gauge")
+    if c.count == 2 and c.pretension_n <= 0:
+        lines.append("[cables] pretension_n = 0 with count = 2: an antagonistic pair needs a pretension > 0 N")
+    if c.count == 1 and c.pretension_n > 0:
+        lines.append(f"[cables] pretension_n = {c.pretension_n:g} with count = 1: a single cable has no pretension")
+    return lines
+
+
+def derived_figures(params: RigParams) -> dict[str, float]:
+    """What the description implies (SI units), as ``flexdigit params`` prints it.
+
+    Examples
+    --------
+    >>> d = derived_figures(RigParams())
+    >>> round(d["support_length_m"], 4), round(d["tip_deg_per_command"], 3)   # 10 mm supports; E 3.15
+    (0.01, 1.735)
+    """
+    g, a = params.geometry, params.actuator
+    return {
+        "second_moment_m4": g.second_moment_m4,
+        "bending_stiffness_n_m2": params.bending_stiffness_n_m2,
+        "section_pitch_m": g.section_pitch_m,
+        "support_length_m": (g.digit_length_m - g.strip_length_m) / g.section_count,
+        "gauge_count": len(g.gauge_positions_m),
+        "rad_per_command": a.rad_per_command,
+        "deg_per_command": a.deg_per_command,
+        "pulley_deg_per_command": a.pulley_deg_per_command,
+        # E 3.15: tip rotation = pulley arc / eccentricity
+        "tip_deg_per_command": a.pulley_deg_per_command * a.pulley_radius_m / g.cable_eccentricity_m,
+        "pot_v_per_command": a.pot_v_per_command,
+        "adc_lsb_v": params.sensors.adc_lsb_v,
+    }
+
+
+def _attribute_notes(cls: type) -> dict[str, str]:
+    """Each attribute's description from a numpydoc ``Attributes`` section, one line."""
+    notes: dict[str, str] = {}
+    lines = (cls.__doc__ or "").split("\n")
+    names: list[str] = []
+    inside = False
+    for line in lines:
+        text = line.strip()
+        if text == "Attributes":
+            inside = True
+            continue
+        if not inside or not text or set(text) == {"-"}:
+            continue
+        if " : " in text and not line.startswith("        "):
+            names = [n.strip() for n in text.split(" : ")[0].split(",")]
+            continue
+        for name in names:
+            notes[name] = (notes.get(name, "") + " " + text).strip()
+    return notes
+
+
+def params_template(params: RigParams | None = None) -> str:
+    """An annotated parameter file: every key with its value (the thesis rig by default) and what it means.
+
+    Examples
+    --------
+    >>> text = params_template()
+    >>> RigParams.from_dict(tomllib.loads(text)) == RigParams()
+    True
+    """
+    import tomli_w
+
+    params = params or RigParams()
+    out = [
+        "# flexdigit: a planar digit described (SI units; 'command' is the servo board's 0..254 position).",
+        "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE",
+        f"# Rules: 1-{MAX_SECTIONS} sections; strip_length_m = section_count x section_length_m; supports of",
+        "# (digit_length_m - strip_length_m) / section_count centred every digit_length_m / section_count;",
+        f"# 1-{MAX_GAUGES} gauges on the strip, one adc_channels entry each; a cable pair needs a pretension.",
+    ]
+    for f in dataclasses.fields(params):
+        section = getattr(params, f.name)
+        notes = _attribute_notes(type(section))
+        first = (type(section).__doc__ or "").strip().split("\n")[0]
+        out += ["", f"# {first}", f"[{f.name}]"]
+        for key, value in dataclasses.asdict(section).items():
+            value = list(value) if isinstance(value, tuple) else value
+            if key in notes:
+                out.append(f"# {notes[key]}")
+            if value is None:  # optional: shown as an example, commented out
+                keys = ("gauge_bridges", "gauge_factors", "amplifier_gains_v_per_v")
+                example = dict(zip(keys, section.chain(len(params.geometry.gauge_positions_m)), strict=True))
+                out.append(f"# {key} = " + json.dumps(list(example.get(key, ()))))
+                continue
+            out.append(tomli_w.dumps({key: value}).strip())
+    return "\n".join(out) + "\n"
+
+
+def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
+    """The lengths a ``[geometry]`` table leaves out, derived from the ones it gives (issue 24): the strip from the
+    sections (``section_count x section_length_m``), the digit from the strip and the thesis's 10 mm supports.
+    A table that gives them all is checked (:func:`digit_inconsistencies`), never changed."""
+    count, section = geometry.get("section_count"), geometry.get("section_length_m")
+    if count is None and section is None:
+        return geometry  # the thesis's sections: its lengths are the defaults
+    if not isinstance(count, int | type(None)) or not isinstance(section, int | float | type(None)):
+        return geometry  # mistyped: the dataclass names the key
+    thesis = Geometry()
+    count = thesis.section_count if count is None else count
+    section = thesis.section_length_m if section is None else section
+    out = dict(geometry)
+    if "strip_length_m" not in out:
+        out["strip_length_m"] = count * section
+    if "digit_length_m" not in out and isinstance(out["strip_length_m"], int | float):
+        support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
+        out["digit_length_m"] = out["strip_length_m"] + count * support
+    return out
+
+
+def load_params(path: str | Path, *, check: bool = True) -> RigParams:
     """Read rig parameters from a TOML file; missing keys keep the thesis defaults.
+
+    With ``check`` (the default) a description that contradicts itself (:func:`digit_inconsistencies`) is refused
+    naming its first inconsistency; ``flexdigit params FILE`` loads without it to list them all.
 
     Raises
     ------
@@ -514,7 +813,12 @@ def load_params(path: str | Path) -> RigParams:
         data = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{path}: not valid TOML ({exc})") from None
-    return RigParams.from_dict(data, source=str(path))
+    params = RigParams.from_dict(data, source=str(path))
+    problems = digit_inconsistencies(params) if check else []
+    if problems:
+        more = f" (and {len(problems) - 1} more: flexdigit params {path})" if len(problems) > 1 else ""
+        raise ParameterError(f"{path}: {problems[0]}{more}")
+    return params
 
 
 def save_params(params: RigParams, path: str | Path, *, force: bool = False) -> Path:

@@ -13,9 +13,10 @@ import pytest
 import tomli_w
 from hypothesis import given
 
+from digits import DIGITS
 from flexdigit.errors import FlexdigitError
 from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
-from flexdigit.params import RigParams, load_params
+from flexdigit.params import RigParams, load_params, params_template
 from flexdigit.studies.design_study import DesignSettings
 from flexdigit.studies.sensitivity import SensitivitySettings
 from flexdigit.studies.spec import load_spec
@@ -39,6 +40,9 @@ COLUMN_MAP = b'gauges = ["sg_a", "sg_b", "sg_c"]\ngauge_unit = "mV"\nload = "mas
 
 LOADERS = {
     "params": (load_params, PARAMS),
+    # issue 24: the annotated template, and a digit of 5 sections and 8 gauges (tests/digits.py)
+    "params template": (load_params, params_template().encode()),
+    "digit": (load_params, tomli_w.dumps(DIGITS["five-sections-eight-gauges"]).encode()),
     "protocol": (load_protocol, PROTOCOL),
     "calibration": (load_calibration, CALIBRATION),
     "tissue": (load_tissue, TISSUE),
@@ -94,6 +98,9 @@ def _fuzz_values(name):
 
 test_params_bytes = _fuzz_bytes("params")
 test_params_values = _fuzz_values("params")
+test_params_template_bytes = _fuzz_bytes("params template")
+test_digit_bytes = _fuzz_bytes("digit")
+test_digit_values = _fuzz_values("digit")
 test_protocol_bytes = _fuzz_bytes("protocol")
 test_protocol_values = _fuzz_values("protocol")
 test_calibration_bytes = _fuzz_bytes("calibration")

@@ -48,7 +48,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
         p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
         p.add_argument("--params", help="rig parameters TOML (default: the thesis rig)")
-        p.add_argument("--calibration", help="twin calibration TOML (default: fitted to the thesis)")
+        p.add_argument(
+            "--calibration",
+            help="twin calibration TOML (default: fitted to the thesis, scaled to the --params digit)",
+        )
         p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
     p = sub.add_parser("release", help="release test, cable removed (3.1.2, figure 3.6)")
@@ -62,6 +65,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--duration", type=Flag(DURATION), default=8.0, help="seconds")
     p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
+    p.add_argument(
+        "--orientation",
+        default="vertical",
+        choices=("vertical", "hanging", "horizontal"),
+        help="vertical: tip up, as the thesis mounted it (2.2.4); a long digit buckles so, hang it",
+    )
     p = sub.add_parser("step", help="servo command step (3.2.4, figure 3.11)")
     common(p)
     p.add_argument("--from", dest="command_from", type=Flag(SERVO_COMMAND), default=0)
@@ -116,11 +125,18 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.params import RigParams, load_params
     from flexdigit.twin import records as ex
     from flexdigit.twin.calibration import default_calibration, load_calibration
+    from flexdigit.twin.digit_calibration import calibration_for
 
     check_output(args.out, force=args.force)  # before the simulation, not after it
     params = load_params(args.params) if args.params else RigParams()
-    cal = load_calibration(args.calibration) if args.calibration else default_calibration()
+    if args.calibration:
+        cal = load_calibration(args.calibration)
+    elif params == RigParams():
+        cal = default_calibration()
+    else:  # a digit nobody has measured: the thesis's calibration scaled to it by the physics
+        cal = calibration_for(params)
     common = dict(seed=args.seed, params=params, calibration=cal)
+    gauges = range(1, len(params.geometry.gauge_positions_m) + 1)  # the digit's gauges, 1..G
     findings: dict = {}
     if args.experiment == "release" and args.deflection_mm == 0:
         # a release from no deflection is noise, and the fit below would report a wn and zeta fitted to it
@@ -134,11 +150,12 @@ def _run(args: argparse.Namespace) -> CommandResult:
             tip_deflection_m=args.deflection_mm * 1e-3,
             duration_s=args.duration,
             sample_rate_hz=args.rate,
+            orientation=args.orientation,
             **common,
         )
-        findings = _release_findings(res)
+        findings = _release_findings(res, gauges)
         lines = []
-        for g in (1, 2, 3):
+        for g in gauges:
             f = findings[f"gauge{g}"]
             if "error" in f:
                 lines.append(f"gauge {g}: not identified ({f['error']})")
@@ -166,10 +183,11 @@ def _run(args: argparse.Namespace) -> CommandResult:
         )
         cmd = res.column("command")
         lines = []
-        for g in (1, 2, 3):
+        thesis = params == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
+        for g in gauges:
             slope, offset = np.polyfit(cmd, res.column(f"gauge{g}_v"), 1)
             findings[f"gauge{g}"] = {"slope_v_per_command": float(slope), "offset_v": float(offset)}
-            lines.append(f"gauge {g}: V = {slope:.5f} command {offset:+.4f}   (E 3.2{g - 1})")
+            lines.append(f"gauge {g}: V = {slope:.5f} command {offset:+.4f}" + (f"   (E 3.2{g - 1})" if thesis else ""))
         text = "\n".join(lines)
     else:
         commands = None if args.commands is None else _commands(args.commands, params, "load")
@@ -194,7 +212,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
             orientation=args.orientation,
             **common,
         )
-        findings = {f"gauge{g}_mean_v": float(np.mean(res.column(f"gauge{g}_v"))) for g in (1, 2, 3)}
+        findings = {f"gauge{g}_mean_v": float(np.mean(res.column(f"gauge{g}_v"))) for g in gauges}
         text = f"{res.table.num_rows} samples"
     path = res.save(args.out, force=args.force)
     data = {
@@ -208,14 +226,14 @@ def _run(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=data, text=f"{res.metadata['experiment']}: {res.table.num_rows} rows -> {path}\n{text}")
 
 
-def _release_findings(record) -> dict:
+def _release_findings(record, gauges=(1, 2, 3)) -> dict:
     """wn and zeta of each gauge of a simulated release test by ``identify``'s lsq fit, and their medians: the
     reduction ``flexdigit calibrate`` applies to a rig's release tests, so one record gives one answer."""
     # the analysis sits above the twin (identify, calibrate); this command only presents it for the record it made
     from flexdigit.calibrate.targets import release_figures
     from flexdigit.identify.timeseries import series_from_table
 
-    figures = release_figures([series_from_table(record, f"gauge{g}") for g in (1, 2, 3)])
+    figures = release_figures([series_from_table(record, f"gauge{g}") for g in gauges])
     findings: dict = {"wn_rad_s": figures["wn_rad_s"], "zeta": figures["zeta"]}
     for fit in figures["fits"]:
         findings[fit.channel] = {"wn_rad_s": fit.wn_rad_s, "zeta": fit.zeta, "fit_percent": fit.fit_percent}

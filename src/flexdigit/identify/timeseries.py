@@ -40,6 +40,7 @@ from flexdigit._validation import Plausible, check_array
 from flexdigit.errors import DataFileError, one_line
 
 __all__ = [
+    "SAMPLE_INTERVAL_S",
     "MIN_SAMPLES",
     "TIME_UNITS",
     "TIME_NAMES",

@@ -311,7 +311,7 @@ def loop_plant(ps: ParameterSet, period_s: float, delay_samples: int = 1):
     from flexdigit.models.servo import servo_unit_tf
 
     a = ps.params.actuator
-    metres_per_command = a.rad_per_command * a.pulley_radius_m
+    metres_per_command = a.rad_per_command * a.cable_m_per_servo_rad
     with _quiet():
         plant = ct.series(ct.ss(servo_unit_tf(ps.params)), actuated_model(ps)) * (np.degrees(1.0) * metres_per_command)
         held = ct.sample_system(plant, period_s, method="zoh")
