@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import Flag, Plausible
 from flexdigit.errors import ParameterError
 
 
@@ -54,8 +55,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame, before and after t = 0")
     p.add_argument("--from-tension-n", help="tensions of the initial static shape (default: all zero)")
     p.add_argument("--from-tip-force-n", help="tip force of the initial static shape (default: none)")
-    p.add_argument("--duration-s", type=float, default=1.0, help="simulated time (default 1 s)")
-    p.add_argument("--dt-s", type=float, default=1e-3, help="implicit time step (default 1 ms)")
+    p.add_argument(
+        "--duration-s",
+        type=Flag(Plausible("s", 1e-4, 600.0, "a simulated response: up to 10 minutes")),
+        default=1.0,
+        help="simulated time, s, up to 600 (default 1 s)",
+    )
+    p.add_argument(
+        "--dt-s",
+        type=Flag(Plausible("s", 1e-6, 0.1, "an implicit time step: 1 us to 0.1 s")),
+        default=1e-3,
+        help="implicit time step, s, 1e-6..0.1 (default 1 ms)",
+    )
     p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
