@@ -30,8 +30,17 @@ lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/ruff format --check src tests benchmarks
 
+# The numbers must not depend on the BLAS kernel (README, "Portable numbers"): the tests marked `blas` run again under
+# OpenBLAS's own choice for this CPU (when the environment forces one) and under Nehalem (SSE only, what any x86-64
+# runs; unless the suite just ran there). About 40 s each; pytest's header names the kernel in use.
+BLAS_RUN := $(BIN)/pytest tests -m blas -p no:cacheprovider
+
 test: lint browser avr
 	$(BIN)/pytest
+	@if [ -n "$$OPENBLAS_CORETYPE" ]; then echo "blas tests, OpenBLAS's own kernel (OPENBLAS_CORETYPE unset)"; \
+	    env -u OPENBLAS_CORETYPE $(BLAS_RUN); fi
+	@if [ "$$OPENBLAS_CORETYPE" != Nehalem ]; then echo "blas tests, OPENBLAS_CORETYPE=Nehalem"; \
+	    OPENBLAS_CORETYPE=Nehalem $(BLAS_RUN); fi
 
 # The reference firmware (issue 25): Debian's AVR toolchain and simavr, installed here when missing.
 AVR_PACKAGES := gcc-avr avr-libc binutils-avr simavr libsimavr-dev

@@ -16,6 +16,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_cli",
     "benchmarks.bench_control",
     "benchmarks.bench_twin",
+    "benchmarks.bench_tdcr",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
@@ -25,6 +26,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
     "benchmarks.bench_board",
+    "benchmarks.bench_resources",
 )
 
 

@@ -9,7 +9,8 @@ flexdigit's Python loop on the twin.
 - ``shortest period``: the smallest period that divides the servo's 20 ms frame and leaves >= 50 % of it idle
   after the update (``2 x cycles <= period``).
 - ``step``: settling (2 %), overshoot and steady-state error of the twin's true rotation, the loop on the board
-  (hil://) against ``flexdigit run --backend sim`` (same design and period).
+  (hil://) against ``flexdigit run --backend sim`` (same design and period), its twin's servo driven as the
+  board drives it (:func:`flexdigit.rig.backends.hil_backend.board_servo_schedule`): the like-for-like reference.
 
 Needs the AVR toolchain and libsimavr (``make avr``); the images are built as ``make firmware`` builds them.
 """
@@ -71,10 +72,15 @@ def _step(elf: Path) -> dict:
 
 
 def _python_step(period_s: float) -> dict:
+    """The Python loop on the twin, its servo driven as the board drives it (the like-for-like reference)."""
+    from unittest import mock
+
     from flexdigit.cli import main
+    from flexdigit.rig.backends.hil_backend import board_servo_schedule
+    from flexdigit.twin.actuator import Servo
 
     buf = io.StringIO()
-    with redirect_stdout(buf):
+    with redirect_stdout(buf), mock.patch.object(Servo, "schedule", board_servo_schedule):
         main(["run", "--backend", "sim", "--setpoint-deg", "30", "--duration", "3", "--period", str(period_s),
               "--json"])  # fmt: skip
     return json.loads(buf.getvalue())["step_metrics"]["true"]

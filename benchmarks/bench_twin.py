@@ -231,9 +231,77 @@ def bench_read_at(sim_seconds: float = 5.0, read_hz: float = 1000.0, repeats: in
     }
 
 
+#: Issue 24's long digit: 5 sections of 90 mm (0.5 m), 8 full-bridge gauges (tests/digits.py), beside the thesis rig.
+FIVE_BY_EIGHT = {
+    "geometry": {
+        "section_count": 5,
+        "section_length_m": 0.09,
+        "strip_length_m": 0.45,
+        "digit_length_m": 0.50,
+        "gauge_positions_m": [0.03, 0.07, 0.13, 0.17, 0.23, 0.27, 0.33, 0.37],
+    },
+    "sensors": {"bridge": "full", "adc_channels": list(range(8))},
+}
+
+
+def bench_digits(sim_seconds: float = 10.0, cases: int = 5000, repeats: int = 3) -> list[dict]:
+    """Real-time factor (hanging, a command each 100 ms, read every 20 ms frame) and static load cases per second
+    of the thesis rig and of the 5-section, 8-gauge digit, its calibration derived by
+    :func:`flexdigit.twin.digit_calibration.calibration_for` (issue 24)."""
+    from flexdigit.params import RigParams
+    from flexdigit.twin import Twin, static_gauges_v
+    from flexdigit.twin.digit_calibration import calibration_for
+
+    rows = []
+    for label, params in (("thesis rig", RigParams()), ("5 sections, 8 gauges", RigParams.from_dict(FIVE_BY_EIGHT))):
+        cal = calibration_for(params)
+
+        def run(params=params, cal=cal) -> float:
+            twin = Twin(params, cal, seed=0, orientation="hanging")
+            twin.advance(0.0)
+            frame = params.actuator.serial_period_s
+            start = time.perf_counter()
+            for k in range(int(round(sim_seconds / frame))):
+                if k % 5 == 0:
+                    twin.command(8 + (k // 5) % 36)
+                twin.advance(frame)
+                twin.read()
+            return time.perf_counter() - start
+
+        elapsed = min(run() for _ in range(repeats))
+        rng = np.random.default_rng(0)
+        length = params.geometry.digit_length_m
+        masses = rng.choice([0.0075, 0.0125, 0.025], cases)
+        positions = rng.uniform(0.1 * length, length, cases)
+        commands = rng.choice([0, 20, 40], cases)
+        kw = dict(params=params, calibration=cal, seed=0)
+        static_gauges_v(masses[:10], positions[:10], commands[:10], **kw)  # warm caches
+        start = time.perf_counter()
+        static_gauges_v(masses, positions, commands, **kw)
+        static_s = time.perf_counter() - start
+        rows += [
+            {
+                "name": f"twin real-time factor, {label}",
+                "value": sim_seconds / elapsed,
+                "unit": "x",
+                "goal": "",
+                "note": f"{sim_seconds:g} s in {elapsed:.3f} s (best of {repeats}), a command each 100 ms, hanging",
+            },
+            {
+                "name": f"twin static load cases per second, {label}",
+                "value": cases / static_s,
+                "unit": "cases/s",
+                "goal": "",
+                "note": f"{cases} cases in {static_s:.3f} s (batched, with cable)",
+            },
+        ]
+    return rows
+
+
 def run() -> list[dict]:
     """All twin benchmarks (``python -m benchmarks bench_twin``)."""
     return [
+        *bench_digits(),
         bench_realtime(scenario="loop"),
         bench_realtime(scenario="sweep"),
         bench_realtime(scenario="release"),

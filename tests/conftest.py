@@ -25,6 +25,16 @@ settings.register_profile("fuzz", max_examples=EXAMPLES["fuzz"], **_COMMON)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "flexdigit"))
 
 
+def pytest_report_header(config):
+    """The OpenBLAS kernel the numbers are computed with (``make test`` runs the ``blas`` tests under several)."""
+    import numpy  # noqa: F401  (loads numpy's OpenBLAS, which threadpoolctl reports)
+    from threadpoolctl import threadpool_info
+
+    kernels = sorted({str(i.get("architecture")) for i in threadpool_info() if i.get("internal_api") == "openblas"})
+    asked = os.environ.get("OPENBLAS_CORETYPE", "unset")
+    return f"openblas kernel: {', '.join(kernels) or 'none'} (OPENBLAS_CORETYPE={asked})"
+
+
 def _work_started(*args, **kwargs):
     raise RuntimeError("the work started")
 

@@ -26,8 +26,8 @@ def _error(capsys) -> dict:
     "argv, culprit",
     [
         (["collect", "thesis-6.1", "--out", "{tmp}/d.parquet", "--settle", "1e9"], "'--settle' parameter"),
-        (["run", "--period", "1e-7"], "'--period' parameter must be a real number inside [0.0001, 1]"),
-        (["run", "--period", "0"], "Got 0.0 instead"),  # 0 is a value (refused), not "not given"
+        (["run", "--period", "1e-7"], "'--period' parameter of flexdigit run must be a real number inside [0.0001, 1]"),
+        (["run", "--period", "0"], "Got 0.0 s instead"),  # 0 is a value (refused), not "not given"
         (["run", "--duration", "1e9"], "'--duration' parameter"),
     ],
 )

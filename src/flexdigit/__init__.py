@@ -26,6 +26,7 @@ __getattr__, __all__ = lazy_exports(
         "Twin": "flexdigit.twin.twin",
         "open_rig": "flexdigit.rig.base",
         "run_loop": "flexdigit.rig.loop",
+        "stop_on_signals": "flexdigit.interrupts",
         "make_controller": "flexdigit.rig.controllers",
         "load_protocol": "flexdigit.tactile.protocols",
         "collect": "flexdigit.tactile.runner",

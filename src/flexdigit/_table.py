@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit import _io
 from flexdigit.errors import DataFileError
 
 __all__ = ["Table", "read_table", "DELIMITERS"]
@@ -142,9 +143,17 @@ class Table:
         given = [c for c in cells if c] if allow_empty else cells
         if given and not _NOT_NUMERIC.search("\n".join(given)):
             try:
-                return np.array([c or "nan" for c in cells] if allow_empty else cells, dtype=float)
+                out = np.array([c or "nan" for c in cells] if allow_empty else cells, dtype=float)
             except ValueError:
                 pass
+            else:
+                if not np.isinf(out).any():
+                    return out
+                i = int(np.argmax(np.isinf(out)))  # 1e999 parses, as infinity: no measurement is that
+                raise DataFileError(
+                    f"{self.source}: {self.where(i)}, column {column!r}: {self.rows[i][k].strip()!r} is beyond a "
+                    "float's range (|x| > 1.8e308); every mapped cell needs a finite number"
+                )
         out = np.empty(len(cells))
         for i, text in enumerate(cells):
             cell = self.rows[i][k].strip()
@@ -163,6 +172,27 @@ class Table:
                     f"{self.source}: {self.where(i)}, column {column!r}: {cell!r} is not a number{hint}"
                 )
             out[i] = float(text)
+            if math.isinf(out[i]):
+                raise DataFileError(
+                    f"{self.source}: {self.where(i)}, column {column!r}: {cell!r} is beyond a float's range "
+                    "(|x| > 1.8e308); every mapped cell needs a finite number"
+                )
+        return out
+
+    def plausible(self, column: str, values: np.ndarray, declared, name: str | None = None) -> np.ndarray:
+        """``values`` (column ``column``, row for row, in the declaration's unit; NaN: not read) if every one is
+        inside the :class:`~flexdigit._validation.Plausible` range ``declared``; else a :class:`DataFileError`
+        naming the file, the line, the column, the value, the range and its likely unit slip."""
+        from flexdigit._validation import check_plausible
+
+        out = np.asarray(values, dtype=float)
+        read = ~np.isnan(out)
+        try:
+            check_plausible(out[read], declared, name or column, error=DataFileError)  # vectorised: 1e7 rows in ms
+        except DataFileError as exc:
+            rows = np.flatnonzero(read)
+            first = next(int(i) for i in rows if not declared.satisfied_by(float(out[i])))
+            raise DataFileError(f"{self.source}: {self.where(first)}, column {column!r}: {exc}") from None
         return out
 
 
@@ -198,6 +228,9 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(2, "No such file", str(p))
+    from flexdigit._io import refuse_special
+
+    refuse_special(p, "a CSV-like text or .parquet file")
     if not p.is_file():
         raise DataFileError(f"{p}: not a file (a directory?); expected a CSV-like text or .parquet file")
     if decimal not in (None, ".", ","):
@@ -208,8 +241,12 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
         raise DataFileError(
             f"{p}: the delimiter must be one of ',', ';', 'tab', '|', 'whitespace'. Got {delimiter!r} instead."
         )
+    from flexdigit._io import check_input, count_lines
+
     if p.suffix.lower() == ".parquet":
+        check_input(p, "a Parquet table")
         return _read_parquet(p, decimal or ".")
+    count_lines(p, "a text table")  # a 10-million-row file is refused in a second, not read into gigabytes
     numbered = _text_lines(p)
     first = numbered[0][1].strip(" \"'")
     if _SEP_LINE.match(first):  # "sep=;": a spreadsheet's export names its delimiter on the first line
@@ -220,7 +257,7 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
             raise DataFileError(f"{p}: empty file: expected a header line and rows of numbers")
     if delimiter is None:
         delimiter = _detect_delimiter(p, [line for _, line in numbered[:_SNIFF_LINES]], decimal)
-    rows = _split_all([line for _, line in numbered], delimiter)
+    rows = _split_all(p, numbered, delimiter)
     if decimal is None:
         decimal = _detect_decimal(rows[1 : 1 + _SNIFF_LINES * 4], delimiter)
     header = [c.strip() for c in rows[0]]
@@ -247,7 +284,9 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
 
 def _text_lines(p: Path) -> list[tuple[int, str]]:
     """``(line number, line)`` of the lines that are neither blank nor comments; refuses binary and empty files."""
-    data = p.read_bytes()
+    from flexdigit._io import RECORDS_LIMIT, read_bytes
+
+    data = read_bytes(p, "a text table", RECORDS_LIMIT)
     if data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # UTF-16 with its byte-order mark
         try:
             text = data.decode("utf-16")
@@ -276,16 +315,38 @@ def _split(line: str, delimiter: str) -> list[str]:
     return next(csv.reader([line], delimiter=delimiter))
 
 
-def _split_all(lines: list[str], delimiter: str) -> list[list[str]]:
+def _split_all(p: Path, numbered: list[tuple[int, str]], delimiter: str) -> list[list[str]]:
     """Every line split on ``delimiter``: one :mod:`csv` reader for all (fast), line by line where a quote left
-    open would let the reader run on into the next line."""
-    if delimiter == "whitespace":
-        rows = list(csv.reader([line.strip() for line in lines], delimiter=" ", skipinitialspace=True))
-    else:
-        rows = list(csv.reader(lines, delimiter=delimiter))
-    if len(rows) != len(lines):
-        rows = [_split(line, delimiter) for line in lines]
+    open would let the reader run on into the next line, or to name the line :mod:`csv` cannot split (a field past
+    its limit of 131072 characters: a file with a hole of NUL bytes)."""
+    lines = [line for _, line in numbered]
+    try:
+        if delimiter == "whitespace":
+            rows = list(csv.reader([line.strip() for line in lines], delimiter=" ", skipinitialspace=True))
+        else:
+            rows = list(csv.reader(lines, delimiter=delimiter))
+    except csv.Error:
+        rows = []
+    if len(rows) == len(lines):
+        return rows
+    rows = []
+    for number, line in numbered:
+        try:
+            rows.append(_split(line, delimiter))
+        except csv.Error as exc:
+            raise DataFileError(
+                f"{p}: line {number}: not a row of a table ({exc}; {len(line)} characters on one line): expected "
+                "numbers between delimiters"
+            ) from None
     return rows
+
+
+def _count(line: str, delimiter: str) -> int:
+    """The fields of ``line``; -1 where :mod:`csv` cannot split it (then no delimiter agrees with it)."""
+    try:
+        return len(_split(line, delimiter))
+    except csv.Error:
+        return -1
 
 
 def _detect_delimiter(p: Path, lines: list[str], decimal: str | None) -> str:
@@ -294,14 +355,14 @@ def _detect_delimiter(p: Path, lines: list[str], decimal: str | None) -> str:
     candidates = [d for d in DELIMITERS if d != decimal] + ([","] if decimal == "," else [])
     consistent, partial = [], []
     for d in candidates:
-        fields = [len(_split(line, d)) for line in lines]
+        fields = [_count(line, d) for line in lines]
         if fields[0] < 2:
             continue
         agree = sum(n == fields[0] for n in fields) / len(fields)
         (consistent if agree == 1.0 else partial).append((-fields[0], -agree, d))
     if consistent:
         return min(consistent, key=lambda k: k[:1])[2]  # most columns; on a tie, the first delimiter tried
-    counts = {len(_split(line, "whitespace")) for line in lines}
+    counts = {_count(line, "whitespace") for line in lines}
     if len(counts) == 1 and counts.pop() > 1:
         return "whitespace"
     if partial:
@@ -328,9 +389,17 @@ def _read_parquet(p: Path, decimal: str) -> Table:
     import pyarrow.parquet as pq
 
     try:
-        table = pq.read_table(p)
+        with _io.open_input(p, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            rows = pq.ParquetFile(fh).metadata.num_rows
+            too_many = rows > _io.RECORDS_ROW_LIMIT  # a table's cells become Python strings: bounded first
+            table = None if too_many else pq.read_table(fh)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
         raise DataFileError(f"{p}: not a readable Parquet file ({exc})") from None
+    if table is None:
+        raise DataFileError(
+            f"{p}: {rows:,} rows; flexdigit reads a table of at most {_io.RECORDS_ROW_LIMIT:,} rows (17 minutes at "
+            "1 kHz): cut the part you want into a file of its own"
+        )
     columns = [str(c) for c in table.column_names]
     values = [table.column(c).to_pylist() for c in table.column_names]
     rows = [

@@ -40,6 +40,7 @@ from __future__ import annotations
 import functools
 import inspect
 import math
+import sys
 from abc import ABC, abstractmethod
 from collections.abc import Iterable, Sequence
 from numbers import Integral, Real
@@ -414,6 +415,236 @@ class Interval(Constraint):
         return int(math.ceil(mid)) if self.type is Integral else float(mid)
 
 
+#: Unit slips: for a value in a field of unit U, (factor, the unit the user likely wrote it in). ``value * factor``
+#: is what the user meant, in U. A slip is only named when that lands inside the plausible range.
+UNIT_SLIPS: dict[str, tuple[tuple[float, str], ...]] = {
+    "m": ((1e-3, "mm"), (1e-2, "cm"), (1e-6, "um")),  # a thickness of 0.381 "m" meant mm
+    "mm": ((10.0, "cm"), (1e3, "m"), (1e-3, "um")),  # positions in cm read as mm
+    "cm": ((1e-1, "mm"), (1e2, "m")),
+    "Pa": ((1e9, "GPa"), (1e6, "MPa"), (1e3, "kPa")),  # E = 205 "Pa" meant GPa
+    "kg": ((1e-3, "g"),),
+    "kg/m^3": ((1e3, "g/cm^3"),),
+    "g": ((1e3, "kg"),),  # a load of 0.025 "g" meant kg
+    "s": ((1e-3, "ms"), (1e-6, "us"), (1e3, "ks")),  # a record in ms read as s
+    "Hz": ((1e3, "kHz"), (1e-3, "mHz")),
+    "ohm": ((1e3, "kohm"),),
+    "N": ((9.81e-3, "g (a mass, not a force)"), (9.81, "kg (a mass, not a force)")),
+    "deg": ((57.29577951308232, "rad"),),
+    "V": ((1e-3, "mV"),),
+}
+
+
+def unit_slip(value: float, unit: str, low: float | None, high: float | None) -> str:
+    """The likely unit slip of an out-of-range ``value`` (``"mm (0.000381 m)"``), or ``""`` if none fits.
+
+    Examples
+    --------
+    >>> unit_slip(0.381, "m", 1e-5, 0.01)
+    'mm (0.000381 m)'
+    >>> unit_slip(205.0, "Pa", 1e8, 1e12)
+    'GPa (2.05e+11 Pa)'
+    """
+    for factor, name in UNIT_SLIPS.get(unit, ()):
+        meant = value * factor
+        if (low is None or meant >= low) and (high is None or meant <= high):
+            return f"{name} ({meant:.6g} {unit})"
+    return ""
+
+
+class Plausible(Interval):
+    """A physical or practical quantity: a finite real number in a plausible range, with its unit and the reason.
+
+    Where :class:`Interval` says what is *possible* (a thickness > 0), ``Plausible`` says what a user's rig can
+    *be*: generous bounds (a user's own digit is not the thesis rig), each stated with its reason, so that a
+    1e308 N load or a 5e-324 gain is refused, not computed with. A value outside the range whose likely unit slip
+    lands inside it is refused naming the slip (``Got 0.381 m instead: did you mean mm (0.000381 m)?``).
+    Subnormal numbers are never plausible magnitudes (they are the float format's underflow, not a measurement).
+
+    Parameters
+    ----------
+    unit : str
+        The unit of the field (``"m"``, ``"Pa"``, ``""`` for a pure number); :data:`UNIT_SLIPS` keys the slips.
+    low, high : float
+        The plausible range (closed unless ``closed`` says otherwise).
+    why : str
+        Why these bounds, as the message shows it in parentheses.
+    integer : bool
+        Whole numbers only (a count of samples, a servo command); then ``8.0`` is converted to ``8``.
+
+    Examples
+    --------
+    >>> Plausible("m", 1e-5, 0.01, "a strip 0.01 mm to 10 mm thick").check(0.381e-3, "t", "Geometry", ValueError)
+    0.000381
+    """
+
+    def __init__(
+        self, unit: str, low: float, high: float, why: str, *, closed: str = "both", integer: bool = False
+    ) -> None:
+        super().__init__(Integral if integer else Real, low, high, closed=closed)
+        if not why:
+            raise ValueError("Plausible needs the reason for its bounds")
+        self.unit, self.why = unit, why
+
+    def __repr__(self) -> str:
+        return f"Plausible({self.unit!r}, {self.low}, {self.high}, {self.why!r}, closed={self.closed!r})"
+
+    def to(self, unit: str, factor: float) -> Plausible:
+        """The same range in another unit (``LOAD_KG.to("g", 1e3)`` for a flag in grams): declared once.
+
+        Examples
+        --------
+        >>> Plausible("kg", 1e-4, 2.0, "a hung weight").to("g", 1e3).describe()
+        'a real number inside [0.1, 2000] g (a hung weight)'
+        """
+        low = None if self.low is None else self.low * factor
+        high = None if self.high is None else self.high * factor
+        return Plausible(unit, low, high, self.why, closed=self.closed, integer=self.type is Integral)
+
+    def describe(self) -> str:
+        kind = "an integer" if self.type is Integral else "a real number"
+        unit = f" {self.unit}" if self.unit else ""
+        return f"{kind}{_interval_text(self.low, self.high, self.low_open, self.high_open)}{unit} ({self.why})"
+
+    def convert(self, value):
+        out = super().convert(value)
+        if out != 0 and abs(out) < sys.float_info.min:  # subnormal: underflow, never a measured magnitude
+            raise _Unsatisfied
+        return out
+
+    def check(self, value, name, owner, error):
+        """Return the value converted, or raise the one-line message naming the parameter, range and slip."""
+        try:
+            return self.convert(value)
+        except _Unsatisfied:
+            pass
+        where = f"The '{name}' parameter of {owner}" if owner else f"The '{name}' parameter"
+        shown = repr(value)
+        if len(shown) > 80:
+            shown = f"{shown[:60]}... ({len(shown)} characters)"
+        slip, finite = "", False
+        if isinstance(value, Real) and not isinstance(value, bool):
+            try:
+                number = float(value)
+            except OverflowError:  # an integer beyond a float's range
+                number = math.inf
+            finite = math.isfinite(number)
+            if finite:
+                exact = isinstance(value, Integral) or (self.type is Integral and number.is_integer())
+                shown = (str(int(number)) if exact and abs(number) < 1e16 else repr(number)) + (
+                    f" {self.unit}" if self.unit else ""
+                )
+                slip = unit_slip(number, self.unit, self.low, self.high)
+        tail = f": did you mean {slip}?" if slip else "."
+        expected = self.describe()
+        if not finite:
+            expected = expected.replace("a real number", "a finite real number", 1)
+        raise error(f"{where} must be {expected}. Got {shown} instead{tail}")
+
+    def invalid_values(self) -> list:
+        out = super().invalid_values() + [math.inf, -math.inf, 1e308]
+        if self.type is Real:
+            out.append(5e-324 if (self.low is None or self.low > 0 or self.low_open) else -1e308)
+        return out
+
+
+def check_plausible(values, declared: Plausible, name: str, owner: str | None = None, *, error=ParameterError):
+    """Check every value of ``values`` (a number or an array) against a :class:`Plausible` declaration; return a
+    float array (a scalar gives a 0-d array). The first offending value is named, with its likely unit slip."""
+    out = np.asarray(values, dtype=float)
+    flat = out.ravel()
+    inside = np.isfinite(flat)
+    with np.errstate(invalid="ignore"):
+        if declared.low is not None:
+            inside &= (flat > declared.low) if declared.low_open else (flat >= declared.low)
+        if declared.high is not None:
+            inside &= (flat < declared.high) if declared.high_open else (flat <= declared.high)
+        inside &= (flat == 0) | (np.abs(flat) >= sys.float_info.min)
+        if declared.type is Integral:
+            inside &= flat == np.round(flat)
+    if not inside.all():
+        declared.check(float(flat[np.argmin(inside)]), name, owner, error)
+    return out
+
+
+class _FlagValueError(ValueError):
+    """A command-line value a :class:`Flag` refuses (internal: turned into argparse's ArgumentTypeError)."""
+
+
+class Flag:
+    """An argparse ``type=``: the command-line value parsed and checked against its declared constraint.
+
+    Declaring a flag's range where the flag is declared (``parser.add_argument("--settle",
+    type=Flag(Plausible("s", 0, 3600, "an hour per setting")))``) makes argparse refuse a bad value before the
+    command runs, in one line naming the flag: ``argument --settle: must be a real number inside [0, 3600] s (an
+    hour per setting). Got 1e+308 s instead.``; ``tests/test_validation.py`` walks the parser and feeds every
+    declared flag its constraint's invalid values.
+
+    Parameters
+    ----------
+    constraint : Constraint
+        Usually a :class:`Plausible`; an integer one parses integers.
+    many : bool
+        A comma-separated list (``"12.5,25,7.5"``); each value is checked; a list is returned.
+    ranges : bool
+        With ``many``, also ``"8..43"`` (both ends checked before the range is made: ``8..1000000000`` is refused,
+        never built).
+    """
+
+    def __init__(self, constraint: Constraint, *, many: bool = False, ranges: bool = False) -> None:
+        self.constraint, self.many, self.ranges = constraint, many, ranges
+        self.integer = isinstance(constraint, Interval) and constraint.type is Integral
+        # argparse names a type in its own messages ("invalid ... value") by __name__
+        self.__name__ = ("integer" if self.integer else "number") + (" list" if many else "")
+
+    def __repr__(self) -> str:
+        return f"Flag({self.constraint!r}, many={self.many}, ranges={self.ranges})"
+
+    def _one(self, text: str):
+        text = text.strip()
+        try:
+            value = int(text) if self.integer else float(text)
+        except ValueError:
+            kind = "an integer" if self.integer else "a number"
+            raise _FlagValueError(f"must be {kind}. Got {text!r} instead.") from None
+        try:
+            return self.constraint.check(value, "x", None, _FlagValueError)
+        except _FlagValueError as exc:
+            raise _FlagValueError(str(exc).removeprefix("The 'x' parameter ")) from None
+
+    def __call__(self, text: str):
+        import argparse
+
+        try:
+            if not self.many:
+                return self._one(text)
+            if self.ranges and ".." in text:
+                lo, _, hi = text.partition("..")
+                lo, hi = self._one(lo), self._one(hi)
+                if hi < lo:
+                    raise _FlagValueError(f"must be a range 'low..high' with low <= high. Got {text!r} instead.")
+                return list(range(lo, hi + 1))
+            values = [self._one(v) for v in text.split(",") if v.strip()]
+            if not values:
+                raise _FlagValueError(f"must name at least one value (comma-separated). Got {text!r} instead.")
+            return values
+        except _FlagValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    def invalid_texts(self) -> list[str]:
+        """Command-line texts this flag must refuse (generated from its constraint, for the tests)."""
+        out = ["abc"]
+        for bad in self.constraint.invalid_values():
+            if isinstance(bad, bool) or not isinstance(bad, Real):
+                continue
+            if self.integer and isinstance(bad, float) and not (math.isfinite(bad) and bad.is_integer()):
+                out.append(repr(bad))
+                continue
+            out.append(str(int(bad)) if self.integer else repr(float(bad)))
+        if self.many:
+            out.append("")
+        return out
+
+
 class Options(Constraint):
     """One of a set of values (scikit-learn's ``Options``/``StrOptions``): ``Options({"thesis", "lsq"})``."""
 
@@ -716,3 +947,8 @@ def validate_fields(obj, *, error: type[Exception] = ParameterError) -> None:
     owner = type(obj).__name__
     values = {k: getattr(obj, k) for k in obj._parameter_constraints}
     check_params(values, obj._parameter_constraints, owner, error=error)
+
+
+# ------------------------------------------------------------------------------ quantities many commands share
+#: A random seed (numpy's ``default_rng``, Dask): any non-negative integer; every random thing takes one.
+SEED = Interval(Integral, 0, None)

@@ -16,6 +16,7 @@ __all__ = [
     "RigError",
     "OutputExistsError",
     "ConvergenceWarning",
+    "Interrupted",
     "one_line",
 ]
 
@@ -48,6 +49,15 @@ class OutputExistsError(FlexdigitError, FileExistsError):
     """An output file exists and would be overwritten; the message names it and says ``--force``."""
 
 
+class OutputError(FlexdigitError, OSError):
+    """An output cannot be written (full disk, quota, permission) or must not be (a FIFO, a device, a directory at
+    its path); the message names the file and says the previous file, if any, is kept."""
+
+
+class OutputBusyError(OutputError, BlockingIOError):
+    """Another process is writing the same output (its advisory lock is held); refused, never mixed."""
+
+
 class ConvergenceWarning(UserWarning):
     """An iterative solver stopped before meeting its tolerance; the result carries ``converged=False``.
 
@@ -67,3 +77,37 @@ def one_line(message: object) -> str:
     "Couldn't deserialize thrift Deserializing page header failed."
     """
     return " ".join(str(message).split())
+
+
+class Interrupted(KeyboardInterrupt):
+    """The run was stopped by a signal (SIGINT, SIGTERM, SIGHUP): a stop, not a crash.
+
+    A :class:`KeyboardInterrupt`, so every ``finally`` and context manager that handles Ctrl-C (the rig's safe
+    state, a log's footer, a temporary file's removal) handles ``kill``, a batch scheduler and a closed terminal the
+    same way (:func:`flexdigit.interrupts.stop_on_signals` raises it). ``exit_code`` is the shell's convention for a
+    process ended by the signal, 128 + its number (130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP).
+
+    Examples
+    --------
+    >>> import signal
+    >>> exc = Interrupted(signal.SIGTERM)
+    >>> exc.signal_name, exc.exit_code, str(exc)
+    ('SIGTERM', 143, 'interrupted by SIGTERM')
+    """
+
+    def __init__(self, signum: int) -> None:
+        import signal
+
+        self.signum = int(signum)
+        try:
+            self.signal_name = signal.Signals(self.signum).name
+        except ValueError:
+            self.signal_name = f"signal {self.signum}"
+        super().__init__(f"interrupted by {self.signal_name}")
+
+    @property
+    def exit_code(self) -> int:
+        return 128 + self.signum
+
+    def __reduce__(self):  # picklable with its signal (a worker process reports it to its parent)
+        return type(self), (self.signum,)

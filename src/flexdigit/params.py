@@ -21,6 +21,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -28,7 +29,17 @@ from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
 
-from flexdigit._validation import Array, Interval, Options, check_array, check_int, check_real, declare, validate_fields
+from flexdigit._validation import (
+    Array,
+    Interval,
+    Options,
+    Plausible,
+    check_array,
+    check_int,
+    check_real,
+    declare,
+    validate_fields,
+)
 from flexdigit.errors import DataFileError, ParameterError
 
 __all__ = [
@@ -38,14 +49,41 @@ __all__ = [
     "Sensors",
     "Actuator",
     "DigitDynamics",
+    "Cables",
     "RigParams",
+    "MAX_SECTIONS",
+    "MAX_GAUGES",
+    "digit_inconsistencies",
+    "derived_figures",
+    "params_template",
     "load_params",
     "save_params",
 ]
 
 BRIDGE_TYPES = ("quarter", "half", "full")
-#: A strictly positive real number (lengths, gains, frequencies).
-_POSITIVE = Interval(Real, 0, None, closed="neither")
+# Plausible ranges (flexdigit._validation.Plausible): generous bounds for a user's own digit, not the thesis rig's
+# values; each says why. A value outside its range whose unit slip lands inside it (0.381 "m" for a 0.381 mm strip,
+# E = 205 "Pa" for 205 GPa) is refused naming the slip. Lengths share one range so a digit of any sensible size
+# (a 5 cm fingertip to a 2 m arm) passes.
+#: A digit's or a strip's length.
+DIGIT_LENGTH_M = Plausible("m", 0.02, 2.0, "a digit 2 cm to 2 m long: a 1 km strip or a 10 m digit is a unit slip")
+#: One frequency of a second-order model (the servo's, the digit's).
+_NATURAL_FREQUENCY = Plausible("rad/s", 0.01, 1e4, "a mechanical mode of 0.0016 Hz to 1.6 kHz")
+
+
+#: A serial position command: the servo board's position byte, 0..254 (255 is its sync byte, 3.4.1).
+SERVO_COMMAND = Plausible("", 0, 254, "the servo board's position byte; 255 is its sync byte", integer=True)
+#: A gauge channel's voltage as a DAQ card reads it: the thesis's card reads +-5 V; no card reads +-100 V. A
+#: channel in mV read as V is 1000 times too large, and named as such.
+GAUGE_V = Plausible("V", -100.0, 100.0, "a gauge channel as a DAQ card reads it (the thesis's: +-5 V)")
+#: A weight hung on the digit (tactile protocols, the twin's load test): the thesis hung 7.5 to 25 g on its
+#: 0.381 mm strip; 2 kg bounds any digit of the sizes Geometry accepts.
+LOAD_KG = Plausible("kg", 1e-4, 2.0, "a hung weight of 0.1 g to 2 kg; the thesis hung 7.5 to 25 g")
+#: Where a load hangs, measured from the tip: on a digit at most 2 m long (a protocol also checks its own digit).
+POSITION_FROM_TIP_M = Plausible("m", 0.0, 2.0, "on a digit at most 2 m long, from its tip")
+#: The least part of the digit's rotation (max_rotation_per_section_deg x section_count) the servo's stall torque
+#: must bend the strip through: below it the servo cannot bend the strip (RigParams checks it).
+STRIP_BEND_FRACTION = 0.1
 
 
 @declare
@@ -87,21 +125,27 @@ class Geometry:
     guide_hole_diameter_m: float = 1.067e-3
 
     _parameter_constraints = {
-        "section_count": [Interval(Integral, 1, 50)],
-        "section_length_m": [_POSITIVE],
-        "strip_thickness_m": [_POSITIVE],
-        "strip_width_m": [_POSITIVE],
-        "digit_length_m": [_POSITIVE],
-        "strip_length_m": [_POSITIVE],
-        "cable_eccentricity_m": [_POSITIVE],
+        "section_count": [Plausible("", 1, 50, "1 to 50 sectional supports; more is a continuum", integer=True)],
+        "section_length_m": [Plausible("m", 1e-3, 2.0, "a section 1 mm to the longest digit, 2 m")],
+        "strip_thickness_m": [Plausible("m", 1e-5, 5e-3, "a strip 0.01 to 5 mm thick: foil to a stiff plate")],
+        "strip_width_m": [Plausible("m", 1e-4, 0.2, "a strip 0.1 mm to 20 cm wide")],
+        "digit_length_m": [DIGIT_LENGTH_M],
+        "strip_length_m": [DIGIT_LENGTH_M],
+        "cable_eccentricity_m": [Plausible("m", 1e-4, 0.1, "a cable 0.1 mm to 10 cm off the neutral axis")],
         "gauge_positions_m": [Array(ndim=1, min_length=1, increasing=True, low=0, low_open=True)],
         "max_rotation_per_section_deg": [Interval(Real, 0, 180, closed="right")],
-        "guide_hole_diameter_m": [_POSITIVE],
+        "guide_hole_diameter_m": [Plausible("m", 1e-5, 0.02, "a cable guide hole 0.01 to 20 mm across")],
     }
 
     def __post_init__(self) -> None:
-        validate_fields(self)
         owner = type(self).__name__
+        positions = self.gauge_positions_m
+        if isinstance(positions, tuple | list) and len(set(map(repr, positions))) < len(positions):
+            raise ParameterError(
+                f"The 'gauge_positions_m' parameter of {owner} puts two gauges at one place: one gauge per position. "
+                f"Got {list(positions)!r} instead."
+            )
+        validate_fields(self)
         check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
         positions = check_array(
             self.gauge_positions_m,
@@ -148,7 +192,11 @@ class Material:
     youngs_modulus_pa: float = 205e9
     strip_density_kg_m3: float = 7850.0
 
-    _parameter_constraints = {"youngs_modulus_pa": [_POSITIVE], "strip_density_kg_m3": [_POSITIVE]}
+    _parameter_constraints = {
+        "youngs_modulus_pa": [Plausible("Pa", 1e5, 1.2e12, "0.1 MPa (a soft elastomer) to 1.2 TPa (diamond)")],
+        # up to osmium; no lower bound but 0: a weightless strip is the oracle of the beam tests (Euler-Bernoulli)
+        "strip_density_kg_m3": [Plausible("kg/m^3", 0.0, 25_000.0, "at most osmium's 22,600 kg/m^3", closed="right")],
+    }
 
     def __post_init__(self) -> None:
         validate_fields(self)
@@ -182,6 +230,12 @@ class Sensors:
         Input range, +-5 V (2.5.2).
     adc_channels : tuple of int
         Gauge pairs 1..3 on analog inputs 0..2 (table 2.2).
+    gauge_bridges : tuple of str, optional
+        One bridge per gauge (a chain per gauge); left out: ``bridge`` for every gauge.
+    gauge_factors : tuple of float, optional
+        One gauge factor per gauge; left out: ``gauge_factor`` for every gauge.
+    amplifier_gains_v_per_v : tuple of float, optional
+        One amplifier gain per gauge; left out: ``amplifier_gain_v_per_v`` for every gauge.
     """
 
     gauge_resistance_ohm: float = 120.0
@@ -194,23 +248,41 @@ class Sensors:
     adc_bits: int = 16
     adc_range_v: tuple[float, float] = (-5.0, 5.0)
     adc_channels: tuple[int, ...] = (0, 1, 2)
+    gauge_bridges: tuple[str, ...] | None = None
+    gauge_factors: tuple[float, ...] | None = None
+    amplifier_gains_v_per_v: tuple[float, ...] | None = None
 
     _parameter_constraints = {
-        "gauge_resistance_ohm": [_POSITIVE],
-        "gauge_factor": [_POSITIVE],
+        "gauge_factors": [None, Array(ndim=1, min_length=1, low=0.1, high=500.0)],
+        "amplifier_gains_v_per_v": [None, Array(ndim=1, min_length=1, low=1e-3, high=1e7)],
+        "gauge_resistance_ohm": [Plausible("ohm", 1.0, 1e6, "strain gauges are 120 ohm to 5 kohm; up to 1 Mohm")],
+        "gauge_factor": [Plausible("", 0.1, 500.0, "metal foil gauges ~2, semiconductor gauges up to ~200")],
         "bridge": [Options(BRIDGE_TYPES)],
-        "excitation_v": [_POSITIVE],
-        "amplifier_gain_v_per_v": [_POSITIVE],
-        "amplifier_lowpass_hz": [_POSITIVE],
+        "excitation_v": [Plausible("V", 1e-3, 100.0, "a bridge supply of 1 mV to 100 V")],
+        "amplifier_gain_v_per_v": [Plausible("V/V", 1e-3, 1e7, "an instrumentation amplifier: 1e-3 to 1e7")],
+        "amplifier_lowpass_hz": [Plausible("Hz", 0.01, 1e7, "a low-pass of 0.01 Hz to 10 MHz")],
         "amplifier_lowpass_order": [Interval(Integral, 1, 8)],
         "adc_bits": [Interval(Integral, 1, 32)],
-        "adc_range_v": [Array(shape=(2,), increasing=True)],
+        # a DAQ card's input range: +-1 kV is beyond any card (the thesis's is +-5 V)
+        "adc_range_v": [Array(shape=(2,), increasing=True, low=-1000.0, high=1000.0)],
         "adc_channels": [Array(ndim=1, min_length=1, low=0, high=63)],
     }
 
     def __post_init__(self) -> None:
         validate_fields(self)
         owner = type(self).__name__
+        for name in ("gauge_factors", "amplifier_gains_v_per_v"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
+        if self.gauge_bridges is not None:
+            bridges = self.gauge_bridges
+            if isinstance(bridges, str) or not bridges or any(b not in BRIDGE_TYPES for b in bridges):
+                raise ParameterError(
+                    f"The 'gauge_bridges' parameter of {owner} must be a list of "
+                    + ", ".join(repr(b) for b in BRIDGE_TYPES)
+                    + f", one per gauge. Got {bridges!r} instead."
+                )
+            object.__setattr__(self, "gauge_bridges", tuple(bridges))
         rng = check_array(self.adc_range_v, "adc_range_v", owner, shape=(2,), increasing=True)
         object.__setattr__(self, "adc_range_v", (float(rng[0]), float(rng[1])))
         channels = tuple(check_int(c, "adc_channels", owner, low=0, high=63) for c in self.adc_channels)
@@ -220,6 +292,29 @@ class Sensors:
                 f"Got {list(self.adc_channels)!r} instead."
             )
         object.__setattr__(self, "adc_channels", channels)
+
+    @property
+    def per_gauge(self) -> bool:
+        """Whether any part of the chain is given gauge by gauge."""
+        return any(v is not None for v in (self.gauge_bridges, self.gauge_factors, self.amplifier_gains_v_per_v))
+
+    def chain(self, count: int) -> tuple[tuple[str, ...], tuple[float, ...], tuple[float, ...]]:
+        """Each of ``count`` gauges' bridge, gauge factor and amplifier gain (the per-gauge lists, or the scalars).
+
+        Examples
+        --------
+        >>> Sensors(gauge_bridges=("full", "quarter", "half")).chain(3)[0]
+        ('full', 'quarter', 'half')
+        >>> Sensors().chain(2)[1]
+        (0.8, 0.8)
+        """
+        return (
+            self.gauge_bridges if self.gauge_bridges is not None else (self.bridge,) * count,
+            self.gauge_factors if self.gauge_factors is not None else (float(self.gauge_factor),) * count,
+            self.amplifier_gains_v_per_v
+            if self.amplifier_gains_v_per_v is not None
+            else (float(self.amplifier_gain_v_per_v),) * count,
+        )
 
     @property
     def adc_lsb_v(self) -> float:
@@ -256,6 +351,11 @@ class Actuator:
         Potentiometer voltage at 0 and 219 degrees: 0.46688 and 2.4755 V (3.2.4).
     stall_torque_nm : float
         Futaba S-148: 42 oz in = 0.297 N m (2.4).
+    gear_ratio : float
+        Servo turns per pulley turn, 1 on the thesis rig (the pulley sits on the servo shaft). A reduction ``n``
+        divides the command step at the pulley by ``n`` (chapter 8 asks for a finer step): see
+        :attr:`pulley_deg_per_command`; the models and the twin draw :attr:`cable_m_per_servo_rad` of cable per
+        servo radian (the servo, its potentiometer and its torque limit stay on the servo's side).
     """
 
     command_min: int = 0
@@ -274,24 +374,26 @@ class Actuator:
     pot_v_at_min_angle_v: float = 0.46688
     pot_v_at_max_angle_v: float = 2.4755
     stall_torque_nm: float = 0.297
+    gear_ratio: float = 1.0
 
     _parameter_constraints = {
-        "command_min": [Interval(Integral, 0, 254)],
-        "command_max": [Interval(Integral, 0, 254)],
+        "gear_ratio": [Plausible("", 0.01, 100.0, "a gear train between servo and pulley: 1:100 to 100:1")],
+        "command_min": [SERVO_COMMAND],
+        "command_max": [SERVO_COMMAND],
         "angle_min_deg": [Interval(Real, -360, 360)],
         "angle_max_deg": [Interval(Real, -360, 360)],
-        "pulley_radius_m": [_POSITIVE],
-        "pwm_frequency_hz": [_POSITIVE],
-        "pulse_width_min_s": [_POSITIVE],
-        "pulse_width_max_s": [_POSITIVE],
-        "serial_period_s": [_POSITIVE],
-        "equilibrium_command": [Interval(Integral, 0, 254)],
+        "pulley_radius_m": [Plausible("m", 5e-4, 0.2, "a servo pulley 0.5 mm to 20 cm in radius")],
+        "pwm_frequency_hz": [Plausible("Hz", 1.0, 1e5, "servo pulses: 50-333 Hz on hobby servos, up to 100 kHz")],
+        "pulse_width_min_s": [Plausible("s", 1e-6, 0.1, "a servo pulse of 1 us to 100 ms")],
+        "pulse_width_max_s": [Plausible("s", 1e-6, 0.1, "a servo pulse of 1 us to 100 ms")],
+        "serial_period_s": [Plausible("s", 1e-4, 10.0, "a command every 0.1 ms to 10 s")],
+        "equilibrium_command": [SERVO_COMMAND],
         "operating_commands": [Array(shape=(2,), low=0, high=254)],
-        "servo_wn_rad_s": [_POSITIVE],
+        "servo_wn_rad_s": [_NATURAL_FREQUENCY],
         "servo_zeta": [Interval(Real, 0, 10, closed="right")],
-        "pot_v_at_min_angle_v": [Interval(Real)],
-        "pot_v_at_max_angle_v": [Interval(Real)],
-        "stall_torque_nm": [_POSITIVE],
+        "pot_v_at_min_angle_v": [Plausible("V", -100.0, 100.0, "a potentiometer read by a DAQ card")],
+        "pot_v_at_max_angle_v": [Plausible("V", -100.0, 100.0, "a potentiometer read by a DAQ card")],
+        "stall_torque_nm": [Plausible("N m", 1e-4, 1e3, "a micro servo (0.01 N m) to an industrial drive")],
     }
 
     def __post_init__(self) -> None:
@@ -325,9 +427,54 @@ class Actuator:
         return math.radians(self.deg_per_command)
 
     @property
+    def cable_m_per_servo_rad(self) -> float:
+        """Cable drawn in per servo radian, ``r_M / gear_ratio`` (m/rad): E 3.11's ``r_M`` with the gearing."""
+        return self.pulley_radius_m / self.gear_ratio
+
+    @property
+    def pulley_deg_per_command(self) -> float:
+        """The command step at the pulley, ``deg_per_command / gear_ratio`` (0.8622 deg on the thesis rig)."""
+        return self.deg_per_command / self.gear_ratio
+
+    @property
     def pot_v_per_command(self) -> float:
         """Potentiometer volts per command: (2.4755 - 0.46688)/254 = 0.0079 V (3.2.4)."""
         return (self.pot_v_at_max_angle_v - self.pot_v_at_min_angle_v) / (self.command_max - self.command_min)
+
+
+@declare
+@dataclass(frozen=True)
+class Cables:
+    """The tendons that bend the digit (2.1, 2.2.1): the thesis's single cable, or an antagonistic pair.
+
+    The eccentricity is ``Geometry.cable_eccentricity_m`` (table 3.7's ``e``, kept there so older files load).
+
+    Attributes
+    ----------
+    count : int
+        1: the thesis's cable, bending one way; 2: an antagonistic pair bending both ways (2.1 asks for "a two
+        cable system to ensure rigidity"; the design study's ``pretension_n > 0``).
+    pretension_n : float
+        Tension both cables of a pair keep at rest (N); 0 with one cable, positive with a pair (a slack pair
+        cannot hold the digit straight).
+    guide_friction_ratio : float
+        Cable-guide friction, the share of the tension gained or lost across the guides
+        (:attr:`flexdigit.twin.calibration.Calibration.cable_friction_ratio`); 0.0548 fitted to the thesis's
+        actuated corr2 (7.5).
+    """
+
+    count: int = 1
+    pretension_n: float = 0.0
+    guide_friction_ratio: float = 0.05481279307004473
+
+    _parameter_constraints = {
+        "count": [Interval(Integral, 1, 2)],
+        "pretension_n": [Interval(Real, 0, 100, closed="both")],
+        "guide_friction_ratio": [Interval(Real, 0, 1, closed="both")],
+    }
+
+    def __post_init__(self) -> None:
+        validate_fields(self)
 
 
 @declare
@@ -349,9 +496,9 @@ class DigitDynamics:
     zeta_bare: float = 0.0025
 
     _parameter_constraints = {
-        "wn_housing_rad_s": [_POSITIVE],
+        "wn_housing_rad_s": [_NATURAL_FREQUENCY],
         "zeta_housing": [Interval(Real, 0, 10)],
-        "wn_bare_rad_s": [_POSITIVE],
+        "wn_bare_rad_s": [_NATURAL_FREQUENCY],
         "zeta_bare": [Interval(Real, 0, 10)],
     }
 
@@ -368,6 +515,7 @@ class RigParams:
     sensors: Sensors = field(default_factory=Sensors)
     actuator: Actuator = field(default_factory=Actuator)
     dynamics: DigitDynamics = field(default_factory=DigitDynamics)
+    cables: Cables = field(default_factory=Cables)
 
     def __post_init__(self) -> None:
         g = self.geometry
@@ -375,6 +523,28 @@ class RigParams:
             raise ParameterError(
                 f"The 'gauge_positions_m' parameter of Geometry must lie inside (0, {g.digit_length_m:g}]. "
                 f"Got {list(g.gauge_positions_m)!r} instead."
+            )
+        self._check_the_servo_bends_the_strip()
+
+    def _check_the_servo_bends_the_strip(self) -> None:
+        """A derived figure no single field shows: the servo must bend the strip through a useful part of its
+        rotation. Bending the strip's free length through ``theta`` takes a tip moment ``E I theta / l``, i.e. a
+        cable tension ``M / e`` and a servo torque ``M r_M / e`` (E 3.12, E 3.19: ``K2 = E I r_M / (l e)`` is that
+        moment per servo radian). The thesis rig needs 0.16 N m of its 0.297 N m stall torque for the full 90 deg;
+        a rig whose servo stalls before a tenth of its rotation (a 0.381 "m" strip: K2 = 8.9e7 N m/rad) is a slip
+        in the file, not a digit."""
+        g, a = self.geometry, self.actuator
+        rotation_rad = math.radians(g.max_rotation_per_section_deg * g.section_count)
+        moment_nm = self.bending_stiffness_n_m2 * rotation_rad / g.strip_length_m
+        torque_nm = moment_nm * a.cable_m_per_servo_rad / g.cable_eccentricity_m
+        if torque_nm * STRIP_BEND_FRACTION > a.stall_torque_nm:
+            k2 = self.bending_stiffness_n_m2 * a.pulley_radius_m / (g.strip_length_m * g.cable_eccentricity_m)
+            raise ParameterError(
+                f"The rig parameters describe a strip its servo cannot bend: K2 = E I r_M / (l e) = {k2:.3g} N m/rad "
+                f"needs {torque_nm * STRIP_BEND_FRACTION:.3g} N m of servo torque for a tenth of the digit's "
+                f"{math.degrees(rotation_rad):g} deg, and the servo stalls at {a.stall_torque_nm:g} N m (check "
+                "strip_thickness_m, strip_width_m, youngs_modulus_pa, pulley_radius_m, cable_eccentricity_m and "
+                "their units)"
             )
 
     @property
@@ -390,7 +560,9 @@ class RigParams:
         """Plain nested dict (lists for tuples), as written to TOML."""
         return {
             f.name: {
-                k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(getattr(self, f.name)).items()
+                k: list(v) if isinstance(v, tuple) else v
+                for k, v in dataclasses.asdict(getattr(self, f.name)).items()
+                if v is not None  # an optional key left out (TOML has no null)
             }
             for f in dataclasses.fields(self)
         }
@@ -421,13 +593,14 @@ class RigParams:
             converted = {}
             for key, value in values.items():
                 default = getattr(factory(), key)
-                if isinstance(default, tuple):
+                if isinstance(default, tuple) or default is None:  # None: an optional list, one per gauge
                     if not isinstance(value, list):
-                        raise ParameterError(
-                            f"{source}: [{name}] {key} must be a list like {list(default)!r}. Got {value!r} instead."
-                        )
+                        like = f"like {list(default)!r}" if default is not None else "with one value per gauge"
+                        raise ParameterError(f"{source}: [{name}] {key} must be a list {like}. Got {value!r} instead.")
                     value = tuple(value)
                 converted[key] = value
+            if name == "geometry":
+                converted = _derive_lengths(converted)
             try:
                 sections[name] = factory(**converted)
             except (ParameterError, TypeError, ValueError) as exc:
@@ -438,8 +611,192 @@ class RigParams:
             raise ParameterError(f"{source}: {exc}") from None
 
 
-def load_params(path: str | Path) -> RigParams:
+#: The description's limits (issue 24): a planar digit of 1-8 sections carrying 1-8 gauges. The dataclasses accept
+#: more (the design study probes a grid of gauge positions through one ``Geometry``); a *file* is held to these.
+MAX_SECTIONS = 8
+MAX_GAUGES = 8
+#: How closely lengths must add up (m): a micrometre, far below any workshop tolerance, far above float rounding.
+LENGTH_TOLERANCE_M = 1e-6
+
+
+def digit_inconsistencies(params: RigParams) -> list[str]:
+    """Every way the description contradicts itself, one line each naming the key; empty if it holds together.
+
+    The rules (the twin's layout, :func:`flexdigit.twin.digit.build_digit`): ``section_count`` sections of
+    ``section_length_m`` of free strip make ``strip_length_m``; each section's pitch ``digit_length_m /
+    section_count`` holds its free strip and one support, so the supports are ``(digit_length_m - strip_length_m)
+    / section_count`` long, centred at 0, pitch, 2 pitch, ... (half a support at the clamp and at the tip); a gauge
+    sits on the free strip, never on a support or past the strip; one ADC channel per gauge; a cable pair keeps a
+    pretension, a single cable none.
+
+    Examples
+    --------
+    >>> digit_inconsistencies(RigParams())
+    []
+    >>> four = RigParams(geometry=Geometry(section_count=4))   # 4 x 80 mm with digit_length_m left at 0.27
+    >>> digit_inconsistencies(four)[0].split(":")[0]
+    '[geometry] strip_length_m = 0.24 but section_count x section_length_m = 4 x 0.08 = 0.32 m'
+    """
+    g, s, c = params.geometry, params.sensors, params.cables
+    lines = []
+    n, count = g.section_count, len(g.gauge_positions_m)
+    if n > MAX_SECTIONS:
+        lines.append(f"[geometry] section_count = {n}: a digit has 1 to {MAX_SECTIONS} sections")
+    if count > MAX_GAUGES:
+        lines.append(f"[geometry] gauge_positions_m has {count} gauges: a digit carries 1 to {MAX_GAUGES}")
+    strip = n * g.section_length_m
+    if abs(strip - g.strip_length_m) > LENGTH_TOLERANCE_M:
+        lines.append(
+            f"[geometry] strip_length_m = {g.strip_length_m:g} but section_count x section_length_m = {n} x "
+            f"{g.section_length_m:g} = {strip:g} m: the lengths do not add up"
+        )
+    support = (g.digit_length_m - strip) / n
+    if support < -LENGTH_TOLERANCE_M:
+        lines.append(
+            f"[geometry] digit_length_m = {g.digit_length_m:g} is shorter than its {n} sections of "
+            f"{g.section_length_m:g} m ({strip:g} m): set it to {strip:g} m plus the supports, e.g. "
+            f"{n * (g.section_length_m + 0.01):g} m with 10 mm supports"
+        )
+    else:
+        half, pitch = 0.5 * max(support, 0.0), g.digit_length_m / n
+        for i, x in enumerate(g.gauge_positions_m):
+            k = round(x / pitch)  # the nearest support
+            if x > g.digit_length_m - half - LENGTH_TOLERANCE_M:
+                lines.append(
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is past the strip, which ends at "
+                    f"{g.digit_length_m - half:g} m"
+                )
+            elif abs(x - k * pitch) < half + LENGTH_TOLERANCE_M:
+                lines.append(
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {k * pitch:g} m "
+                    f"({k * pitch - half:g} to {k * pitch + half:g} m): put it on the strip"
+                )
+    if len(s.adc_channels) != count:
+        lines.append(
+            f"[sensors] adc_channels has {len(s.adc_channels)} channels for {count} gauges: one per gauge, e.g. "
+            f"{list(range(count))}"
+        )
+    for key in ("gauge_bridges", "gauge_factors", "amplifier_gains_v_per_v"):
+        values = getattr(s, key)
+        if values is not None and len(values) != count:
+            lines.append(f"[sensors] {key} has {len(values)} values for {count} gauges: one per gauge")
+    if c.count == 2 and c.pretension_n <= 0:
+        lines.append("[cables] pretension_n = 0 with count = 2: an antagonistic pair needs a pretension > 0 N")
+    if c.count == 1 and c.pretension_n > 0:
+        lines.append(f"[cables] pretension_n = {c.pretension_n:g} with count = 1: a single cable has no pretension")
+    return lines
+
+
+def derived_figures(params: RigParams) -> dict[str, float]:
+    """What the description implies (SI units), as ``flexdigit params`` prints it.
+
+    Examples
+    --------
+    >>> d = derived_figures(RigParams())
+    >>> round(d["support_length_m"], 4), round(d["tip_deg_per_command"], 3)   # 10 mm supports; E 3.15
+    (0.01, 1.735)
+    """
+    g, a = params.geometry, params.actuator
+    return {
+        "second_moment_m4": g.second_moment_m4,
+        "bending_stiffness_n_m2": params.bending_stiffness_n_m2,
+        "section_pitch_m": g.section_pitch_m,
+        "support_length_m": (g.digit_length_m - g.strip_length_m) / g.section_count,
+        "gauge_count": len(g.gauge_positions_m),
+        "rad_per_command": a.rad_per_command,
+        "deg_per_command": a.deg_per_command,
+        "pulley_deg_per_command": a.pulley_deg_per_command,
+        # E 3.15: tip rotation = pulley arc / eccentricity
+        "tip_deg_per_command": a.pulley_deg_per_command * a.pulley_radius_m / g.cable_eccentricity_m,
+        "pot_v_per_command": a.pot_v_per_command,
+        "adc_lsb_v": params.sensors.adc_lsb_v,
+    }
+
+
+def _attribute_notes(cls: type) -> dict[str, str]:
+    """Each attribute's description from a numpydoc ``Attributes`` section, one line."""
+    notes: dict[str, str] = {}
+    lines = (cls.__doc__ or "").split("\n")
+    names: list[str] = []
+    inside = False
+    for line in lines:
+        text = line.strip()
+        if text == "Attributes":
+            inside = True
+            continue
+        if not inside or not text or set(text) == {"-"}:
+            continue
+        if " : " in text and not line.startswith("        "):
+            names = [n.strip() for n in text.split(" : ")[0].split(",")]
+            continue
+        for name in names:
+            notes[name] = (notes.get(name, "") + " " + text).strip()
+    return notes
+
+
+def params_template(params: RigParams | None = None) -> str:
+    """An annotated parameter file: every key with its value (the thesis rig by default) and what it means.
+
+    Examples
+    --------
+    >>> text = params_template()
+    >>> RigParams.from_dict(tomllib.loads(text)) == RigParams()
+    True
+    """
+    import tomli_w
+
+    params = params or RigParams()
+    out = [
+        "# flexdigit: a planar digit described (SI units; 'command' is the servo board's 0..254 position).",
+        "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE",
+        f"# Rules: 1-{MAX_SECTIONS} sections; strip_length_m = section_count x section_length_m; supports of",
+        "# (digit_length_m - strip_length_m) / section_count centred every digit_length_m / section_count;",
+        f"# 1-{MAX_GAUGES} gauges on the strip, one adc_channels entry each; a cable pair needs a pretension.",
+    ]
+    for f in dataclasses.fields(params):
+        section = getattr(params, f.name)
+        notes = _attribute_notes(type(section))
+        first = (type(section).__doc__ or "").strip().split("\n")[0]
+        out += ["", f"# {first}", f"[{f.name}]"]
+        for key, value in dataclasses.asdict(section).items():
+            value = list(value) if isinstance(value, tuple) else value
+            if key in notes:
+                out.append(f"# {notes[key]}")
+            if value is None:  # optional: shown as an example, commented out
+                keys = ("gauge_bridges", "gauge_factors", "amplifier_gains_v_per_v")
+                example = dict(zip(keys, section.chain(len(params.geometry.gauge_positions_m)), strict=True))
+                out.append(f"# {key} = " + json.dumps(list(example.get(key, ()))))
+                continue
+            out.append(tomli_w.dumps({key: value}).strip())
+    return "\n".join(out) + "\n"
+
+
+def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
+    """The lengths a ``[geometry]`` table leaves out, derived from the ones it gives (issue 24): the strip from the
+    sections (``section_count x section_length_m``), the digit from the strip and the thesis's 10 mm supports.
+    A table that gives them all is checked (:func:`digit_inconsistencies`), never changed."""
+    count, section = geometry.get("section_count"), geometry.get("section_length_m")
+    if count is None and section is None:
+        return geometry  # the thesis's sections: its lengths are the defaults
+    if not isinstance(count, int | type(None)) or not isinstance(section, int | float | type(None)):
+        return geometry  # mistyped: the dataclass names the key
+    thesis = Geometry()
+    count = thesis.section_count if count is None else count
+    section = thesis.section_length_m if section is None else section
+    out = dict(geometry)
+    if "strip_length_m" not in out:
+        out["strip_length_m"] = count * section
+    if "digit_length_m" not in out and isinstance(out["strip_length_m"], int | float):
+        support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
+        out["digit_length_m"] = out["strip_length_m"] + count * support
+    return out
+
+
+def load_params(path: str | Path, *, check: bool = True) -> RigParams:
     """Read rig parameters from a TOML file; missing keys keep the thesis defaults.
+
+    With ``check`` (the default) a description that contradicts itself (:func:`digit_inconsistencies`) is refused
+    naming its first inconsistency; ``flexdigit params FILE`` loads without it to list them all.
 
     Raises
     ------
@@ -454,9 +811,14 @@ def load_params(path: str | Path) -> RigParams:
     text = read_text(path, "a rig parameter TOML")
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{path}: not valid TOML ({exc})") from None
-    return RigParams.from_dict(data, source=str(path))
+    params = RigParams.from_dict(data, source=str(path))
+    problems = digit_inconsistencies(params) if check else []
+    if problems:
+        more = f" (and {len(problems) - 1} more: flexdigit params {path})" if len(problems) > 1 else ""
+        raise ParameterError(f"{path}: {problems[0]}{more}")
+    return params
 
 
 def save_params(params: RigParams, path: str | Path, *, force: bool = False) -> Path:

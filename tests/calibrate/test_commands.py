@@ -216,7 +216,7 @@ def test_an_existing_output_is_refused_before_any_fit_and_thesis_excludes_record
     assert main(["calibrate", "--thesis", "--sweep", str(sweep), "--out", str(tmp_path / "x.toml")]) == 2
     assert "--thesis fits the thesis's figures: give it alone" in capsys.readouterr().err
     assert main(["calibrate", "--sweep", str(sweep), "--out", str(out), "--deflection-resolution-mm", "0"]) == 2
-    assert "--deflection-resolution-mm must be > 0" in capsys.readouterr().err
+    assert "'--deflection-resolution-mm' parameter of flexdigit calibrate must be" in capsys.readouterr().err
 
 
 def test_calibrate_thesis_writes_the_packaged_mechanics_and_fits_the_friction_to_the_score(

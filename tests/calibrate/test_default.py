@@ -21,11 +21,23 @@ from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import default_fit_record, packaged_calibration
 
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+
 RELEASE_RTOL = 0.03
 SLOPE_RTOL = 0.05
 DEFLECTION_ABS_MM = 0.5
 #: The re-fit must land on the packaged values (the fit is deterministic: fixed tolerances, seeded scores)
 REFIT_RTOL = 1e-5
+
+#: The re-fit's friction ratio must cross the thesis's corr2 within this many LEVEL_XTOL (1e-4) of the packaged
+#: one. The score is 8 trained networks' corr2, and training amplifies rounding: under the Haswell, SkylakeX,
+#: Nehalem and Prescott BLAS kernels its mean at one ratio differs by up to 3.1e-4 (ratios packaged +- 2..20
+#: LEVEL_XTOL measured), and within one kernel it is not monotone over 2 LEVEL_XTOL (by 2e-4), while its slope is
+#: only 2.5e-4 per LEVEL_XTOL: at +- 2 LEVEL_XTOL the crossing sat 1.1e-4 inside the noise (and outside it on
+#: another machine, 0.90002 at + 2). At +- 10 the scores are 0.9016 and 0.8964-0.8967 on all four kernels, clear of
+#: 0.8998 by 1.8e-3, 6x the kernels' spread; and 1e-3 of ratio is still a third of what the evidence fixes
+#: (8 seeds scattering by 0.02 in corr2: a standard error of 0.007, 30 LEVEL_XTOL of ratio).
+FRICTION_BRACKET_XTOLS = 10
 
 #: Record lengths of the simulated release tests (s), as the report uses them: the bare digit's amplitude decays
 #: with a time constant 1/(zeta wn) = 39 s, so a 12 s record holds too little decay for a zeta to survive the
@@ -94,10 +106,11 @@ def test_recalibrating_reproduces_the_packaged_default():
             )
     # The friction's only evidence is the thesis's actuated corr2, scored by the tactile pipeline (8 seeded runs of
     # the experiment per score). Brent's method returns a ratio within LEVEL_XTOL of a crossing of the target, so
-    # the packaged ratio is the re-fit's answer exactly when the score crosses 0.8998 within 2 LEVEL_XTOL of it:
-    # two scores instead of the ten of a full root find (flexdigit calibrate --thesis runs that).
+    # the packaged ratio is the re-fit's answer when the score crosses 0.8998 near it: two scores instead of the
+    # ten of a full root find (flexdigit calibrate --thesis runs that). How near: FRICTION_BRACKET_XTOLS.
     ratio = default.cable_friction_ratio
-    below = actuated_corr2_score(mechanics.calibration.replace(cable_friction_ratio=ratio - 2 * LEVEL_XTOL))
-    above = actuated_corr2_score(mechanics.calibration.replace(cable_friction_ratio=ratio + 2 * LEVEL_XTOL))
+    step = FRICTION_BRACKET_XTOLS * LEVEL_XTOL
+    below = actuated_corr2_score(mechanics.calibration.replace(cable_friction_ratio=ratio - step))
+    above = actuated_corr2_score(mechanics.calibration.replace(cable_friction_ratio=ratio + step))
     assert below >= targets.actuated_test_corr2 >= above  # corr2 falls as the friction grows
     assert len(default_fit_record()["residuals"]) == len(mechanics.residuals) + 1  # + the corr2 row

@@ -120,12 +120,12 @@ def test_gauge_alias_that_is_ambiguous_names_the_columns(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("extra", "expected"),
     [
-        (["--input-step", "inf"], "The 'input_step' parameter of identify must be a finite real number. Got inf"),
-        (["--input-step", "nan"], "The 'input_step' parameter of identify must be a finite real number. Got nan"),
+        (["--input-step", "inf"], "The '--input-step' parameter of flexdigit identify must be a finite real number"),
+        (["--input-step", "nan"], "The '--input-step' parameter of flexdigit identify must be a finite real number"),
         (["--input-step", "0"], "The 'input_step' parameter of identify must not be 0"),
         (["--t0", "-5"], "The 't0_s' parameter of identify (--t0) must be inside the record, 0 .. 1.998 s. Got -5"),
         (["--t0", "2.5"], "must be inside the record, 0 .. 1.998 s. Got 2.5 instead."),
-        (["--t0", "nan"], "The 't0_s' parameter of identify must be a finite real number. Got nan"),
+        (["--t0", "nan"], "The '--t0' parameter of flexdigit identify must be a finite real number"),
     ],
 )
 def test_bad_options_are_one_line_errors(tmp_path, capsys, extra, expected):

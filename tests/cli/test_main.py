@@ -73,7 +73,7 @@ def test_model_command_imports_no_heavy_library(argv):
     "argv, error_type, needle",
     [
         (["params", "--seed", "1", "--json"], "UsageError", "unrecognized arguments: --seed"),
-        (["collect", "thesis-6.1", "--out", "x.parquet", "--seed", "abc", "--json"], "UsageError", "invalid int"),
+        (["collect", "thesis-6.1", "--out", "x.parquet", "--seed", "abc", "--json"], "UsageError", "an integer"),
         (["simulate", "release", "--json"], "UsageError", "required: --out"),
         (["params", "missing.toml", "--json"], "FileNotFoundError", "no such file: missing.toml"),
         (["run", "--backend", "nosuch://x", "--json"], "ParameterError", "nosuch://x"),

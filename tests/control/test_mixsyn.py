@@ -10,6 +10,8 @@ from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixs
 from flexdigit.errors import DesignError
 from flexdigit.models.plant import build_plant
 
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+
 
 @pytest.fixture(scope="module")
 def result():

@@ -6,10 +6,10 @@ the harness, and checked from the host through the ``hil://`` backend, in simula
 - each fault (host silent, a gauge at an ADC rail, the rotation past its bound, a command out of range) ends in
   the safe state within one control period and reaches the host as a fault;
 - the loop closed on the board holds a 30 deg step on the twin, compared with flexdigit's Python loop on the
-  twin (same design, same period). The two actuator paths differ: the Python loop's commands go through the serial
-  board model (latched on its 20 ms frame, then the servo's 52 Hz pulse: 0-19 ms late), the board's through its
-  own pulse 1.4 ms after the update. The tolerances below are what that difference leaves (measured, see the
-  README); the issue's tighter ones are not met at 20 ms and say so there.
+  twin (same design, same period), both loops starting at a servo frame. The two actuator paths differ: the
+  Python loop's commands go through the serial board model (latched on its 20 ms frame, then the servo's 52 Hz
+  pulse: 0-19 ms late), the board's through its own pulse 1 ms after the update. The tolerances below are what
+  that difference leaves (measured, see the README); the issue's tighter ones are not met and say so there.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import subprocess
 import pytest
 
 from flexdigit.cli import main
-from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s, run_on_board
+from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s, board_servo_schedule, run_on_board
 from flexdigit.rig.base import open_rig
 
 #: The ATmega328P's flash (less the Uno's 512-byte bootloader) and RAM, bytes.
@@ -95,10 +95,16 @@ def test_each_fault_ends_in_the_safe_state_within_one_period(firmware):
     assert set(FAULTS.values()) >= {"host_timeout", "adc_rail", "rotation_bound", "command_range"}
 
 
-def _python_loop(period_s):
+def _python_loop(period_s, monkeypatch):
+    """flexdigit's loop on the twin (``run --backend sim``), its servo driven as the board drives it: the command
+    in force at each 20 ms frame, from the pulse 1 ms later (:func:`board_servo_schedule`), not through the serial
+    board's 52 Hz pulse (0-19 ms later). Same design, period, map source and start at a frame: like for like."""
     import io
     from contextlib import redirect_stdout
 
+    from flexdigit.twin.actuator import Servo
+
+    monkeypatch.setattr(Servo, "schedule", board_servo_schedule)
     buf = io.StringIO()
     with redirect_stdout(buf):
         code = main(["run", "--backend", "sim", "--setpoint-deg", "30", "--duration", "3", "--period", str(period_s),
@@ -107,14 +113,19 @@ def _python_loop(period_s):
     return json.loads(buf.getvalue())["step_metrics"]["true"]
 
 
+#: The issue's criteria for the 30 deg step, board against the Python loop: settling within 5 %, overshoot within
+#: 1 point (steady-state error within 0.2 deg: STEADY_TOLERANCE_DEG).
+SETTLING_FRACTION, OVERSHOOT_POINTS = 0.05, 1.0
+#: Where they are not met (measured, board / Python reference; README, `python benchmarks/bench_board.py`): at
+#: 20 ms the settling, 0.75 / 0.63 s (the board's true rotation peaks 0.73 deg over, past the 2 % band, and
+#: re-enters it later). Left: the board's samples are older than the Python loop's (the firmware uses the previous
+#: 1 ms tick's conversions) and 10-bit.
+NOT_MET = {0.020: {"settling": 0.25}}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "period_s, fmt, overshoot_points",
-    # at 2 ms (the shortest period leaving half the CPU idle) the overshoot differs by ~25 points: not bounded here,
-    # reported in the README (the servo reads one command in ten; the design assumes one sample of delay)
-    [(0.020, "float", 15.0), (0.020, "fixed", 15.0), (0.005, "float", 15.0), (0.002, "fixed", None)],
-)
-def test_loop_on_the_board_holds_a_30_deg_step(firmware, period_s, fmt, overshoot_points):
+@pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.020, "fixed"), (0.005, "float"), (0.002, "fixed")])
+def test_loop_on_the_board_holds_a_30_deg_step(firmware, period_s, fmt, monkeypatch):
     elf = firmware(period_s, fmt)
     rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)
     try:
@@ -123,15 +134,17 @@ def test_loop_on_the_board_holds_a_30_deg_step(firmware, period_s, fmt, overshoo
         rig.close()
     assert run.status == "completed", run.message
     assert run.period_s == pytest.approx(period_s)
+    assert run.time_s[0] == pytest.approx(period_s, abs=0.002)  # from the setpoint, as the host loop counts
     from flexdigit.rig.step_test import step_metrics
 
     board = step_metrics(run.time_s, run.true_rotation_deg, 30.0, 0.0, 1.735).to_dict()
-    python = _python_loop(period_s)
+    python = _python_loop(period_s, monkeypatch)
     assert abs(board["final_error_deg"] - python["final_error_deg"]) <= STEADY_TOLERANCE_DEG
     assert abs(board["final_error_deg"]) < 0.6  # inside the 2 % band of the setpoint
-    # the actuator paths differ (module docstring): the overshoot is the Python loop's within a few points
-    if overshoot_points is not None:
-        assert abs(board["overshoot_percent"] - python["overshoot_percent"]) <= overshoot_points
+    settling = NOT_MET.get(period_s, {}).get("settling", SETTLING_FRACTION)
+    overshoot = NOT_MET.get(period_s, {}).get("overshoot", OVERSHOOT_POINTS)
+    assert abs(board["overshoot_percent"] - python["overshoot_percent"]) <= overshoot
+    assert abs(board["settling_time_s"] - python["settling_time_s"]) <= settling * python["settling_time_s"]
 
 
 @pytest.mark.slow

@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from flexdigit.rig.sample_log import LOG_FORMAT, read_log_runs
-from flexdigit.tactile.dataset import JOURNAL_FORMAT, Journal, load_dataset, make_meta, read_journal
+from flexdigit.tactile.dataset import JOURNAL_FORMAT, Journal, load_dataset, make_meta, read_journal, row_checksum
 from flexdigit.tactile.model_io import load_model, save_model
 from flexdigit.tactile.pipeline import ThesisNetwork
 from flexdigit.tactile.protocols import Protocol
@@ -59,6 +59,7 @@ def _journal_lines() -> list[dict]:
                 "time_s": 0.5 * i,
             }
         )
+        rows[-1]["crc"] = row_checksum(rows[-1])
     return [header, *rows]
 
 

@@ -2,7 +2,7 @@
 specs): every generated file loads or gives the project's one-line error naming the file (issue 16). Valid seeds:
 the thesis defaults written by tomli_w, the packaged thesis-6.1 protocol and twin calibration, the shipped
 nodule phantom, the shipped sweep, scan and hold palpation protocols in one file, and the shipped
-thesis-tolerances study."""
+thesis-tolerances study, the rao2021 tendon robot written by tomli_w."""
 
 from __future__ import annotations
 
@@ -13,14 +13,16 @@ import pytest
 import tomli_w
 from hypothesis import given
 
+from digits import DIGITS
 from flexdigit.errors import FlexdigitError
 from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
-from flexdigit.params import RigParams, load_params
+from flexdigit.params import RigParams, load_params, params_template
 from flexdigit.studies.design_study import DesignSettings
 from flexdigit.studies.sensitivity import SensitivitySettings
 from flexdigit.studies.spec import load_spec
 from flexdigit.tactile.importer import ColumnMap
 from flexdigit.tactile.protocols import load_protocol
+from flexdigit.tdcr.description import ROBOTS, load_robot
 from flexdigit.twin.calibration import load_calibration
 
 from .strategies import assert_loader_contract, edited_document, mutated_bytes, toml_values
@@ -33,15 +35,20 @@ TISSUE = _PALPATION.joinpath("nodule-phantom.toml").read_bytes()
 PALPATION = _PALPATION.joinpath("scan.toml").read_bytes() + b"\n" + _PALPATION.joinpath("hold.toml").read_bytes()
 SPEC = resources.files("flexdigit.studies").joinpath("specs", "thesis-tolerances.toml").read_bytes()
 DESIGN = resources.files("flexdigit.studies").joinpath("specs", "thesis-design.toml").read_bytes()
+ROBOT = tomli_w.dumps(ROBOTS["rao2021"].to_dict()).encode()
 COLUMN_MAP = b'gauges = ["sg_a", "sg_b", "sg_c"]\ngauge_unit = "mV"\nload = "mass_g"\nposition = "x_mm"\n'
 
 LOADERS = {
     "params": (load_params, PARAMS),
+    # issue 24: the annotated template, and a digit of 5 sections and 8 gauges (tests/digits.py)
+    "params template": (load_params, params_template().encode()),
+    "digit": (load_params, tomli_w.dumps(DIGITS["five-sections-eight-gauges"]).encode()),
     "protocol": (load_protocol, PROTOCOL),
     "calibration": (load_calibration, CALIBRATION),
     "tissue": (load_tissue, TISSUE),
     "palpation": (load_palpation_protocol, PALPATION),
     "spec": (load_spec, SPEC),
+    "robot": (load_robot, ROBOT),
 }
 
 
@@ -91,6 +98,9 @@ def _fuzz_values(name):
 
 test_params_bytes = _fuzz_bytes("params")
 test_params_values = _fuzz_values("params")
+test_params_template_bytes = _fuzz_bytes("params template")
+test_digit_bytes = _fuzz_bytes("digit")
+test_digit_values = _fuzz_values("digit")
 test_protocol_bytes = _fuzz_bytes("protocol")
 test_protocol_values = _fuzz_values("protocol")
 test_calibration_bytes = _fuzz_bytes("calibration")
@@ -101,6 +111,8 @@ test_palpation_bytes = _fuzz_bytes("palpation")
 test_palpation_values = _fuzz_values("palpation")
 test_spec_bytes = _fuzz_bytes("spec")
 test_spec_values = _fuzz_values("spec")
+test_robot_bytes = _fuzz_bytes("robot")
+test_robot_values = _fuzz_values("robot")
 
 
 #: A key with a newline in it, as ``make fuzz`` (seed 0) generated it for the protocol, calibration and spec files:
@@ -125,6 +137,8 @@ _NEWLINE_CASES = {  # where the key goes: the top level, or a table
     "spec [sensitivity]": (_spec_settings, SPEC, ("sensitivity",)),
     "spec [design]": (_spec_settings, DESIGN, ("design",)),
     "column map": (ColumnMap.from_toml, COLUMN_MAP, ()),
+    "robot": (load_robot, ROBOT, ()),
+    "robot [backbone]": (load_robot, ROBOT, ("backbone",)),
 }
 
 

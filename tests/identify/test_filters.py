@@ -96,7 +96,8 @@ def test_butter_cutoff_must_be_below_nyquist():
 def test_butter_filter_is_scipys_sosfiltfilt_bit_for_bit():
     # butter_filter runs sosfiltfilt's steps itself with the design cached: scipy's own call is the reference, on
     # seeded random lengths (short records too, where the padding is the whole record), rates, cut-offs, orders,
-    # each filtered twice (the second from the cache)
+    # each filtered twice (the second from the cache). Exact: the same scipy steps in the same order, in one
+    # process (a cache, not another algorithm), so equal on whatever BLAS and CPU both run on
     from scipy import signal
 
     rng = np.random.default_rng(15)

@@ -6,6 +6,8 @@ from flexdigit.report.ch3_identify import build
 from flexdigit.report.chapter import ReportContext
 from oracles import assert_entries_unchanged
 
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+
 
 @pytest.fixture(scope="module")
 def chapter(tmp_path_factory):

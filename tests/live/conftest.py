@@ -52,11 +52,12 @@ class LiveServer:
             except OSError:
                 time.sleep(0.1)
 
-    def stop(self) -> dict:
-        """Ctrl-C, as a user stops it; the exit code and the --json summary."""
+    def stop(self, signum: int = signal.SIGINT) -> dict:
+        """Ctrl-C (or ``signum``: SIGTERM as systemd, SIGHUP as a closed terminal stops it); the exit code and the
+        --json summary."""
         import json
 
-        self.proc.send_signal(signal.SIGINT)
+        self.proc.send_signal(signum)
         out, _ = self.proc.communicate(timeout=30)
         self.stderr.close()
         self.returncode = self.proc.returncode

@@ -201,3 +201,26 @@ def test_a_recording_replays_at_1x_and_10x(tmp_path):
             assert 6 < ten < 13
     finally:
         srv.stop()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["SIGTERM", "SIGHUP"])
+def test_sigterm_and_sighup_stop_the_server_as_ctrl_c_does(live_server, tmp_path, name):
+    """Issue 22: systemd's SIGTERM and a closed terminal's SIGHUP shut the server down gracefully (the digit
+    relaxed, the recording closed with a stop record naming the signal), as Ctrl-C does; before, SIGHUP killed it
+    and left a recording without its summary."""
+    import signal
+
+    from mcap.reader import make_reader
+
+    from flexdigit.rig.recording import read_recording
+
+    record = tmp_path / f"{name}.mcap"
+    server = live_server("--record", str(record))
+    result = server.stop(getattr(signal, name))
+    assert server.returncode == 0  # stopping is how a live session ends
+    assert result["status"] == "stopped" and result["signal"] == name
+    _, _, footer = read_recording(record)
+    assert footer["stop"] == "stopped" and footer["signal"] == name
+    with open(record, "rb") as fh:  # the mcap library's reader: the summary a clean close writes
+        assert make_reader(fh).get_summary() is not None

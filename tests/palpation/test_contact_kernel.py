@@ -93,7 +93,7 @@ def test_refinement_and_evidence_are_the_numpy_arithmetic(estimator, readings):
     pos, f, c = estimator._refine(force, cost, grid)
     i = np.argmin(cost, axis=1)
     b = np.arange(i.size)
-    edge = (i == 0) | (i == grid.size - 1)  # the digit's ends: the grid entry itself
+    edge = (i == 0) | (i == grid.size - 1)  # the digit's ends: the grid entry itself (copied, so exactly)
     assert 0 < edge.sum() < i.size / 2
     np.testing.assert_array_equal(pos[edge], grid[i[edge]])
     np.testing.assert_array_equal(f[edge], force[b[edge], i[edge]])
@@ -146,7 +146,8 @@ def test_line_standard_deviations_from_the_tables_match_the_statics(estimator, r
 
 
 def test_one_reading_is_estimated_as_in_a_batch(estimator, readings):
-    # the latency path (one row) and a batch give the same numbers (a point and a line load)
+    # the latency path (one row) and a batch give the same numbers (a point and a line load): exactly, as the
+    # compiled kernel computes each row on its own with no BLAS call, so the batch size is the only change
     batch = estimator.predict(readings, 20).as_dict()
     for i in (0, 70):
         one = estimator.predict(readings[i : i + 1], 20).as_dict()

@@ -57,7 +57,7 @@ def test_partial_file_keeps_defaults(tmp_path):
             ["rig.toml", "equilibrium_command", "300", "integer inside [0, 254]"],
         ),
         ("[sensors]\nbridge = 'third'\n", ["bridge", "'third'", "'quarter', 'half', 'full'"]),
-        ("[sensors]\ngauge_factor = -1.0\n", ["gauge_factor", "-1.0", "inside (0, inf)"]),
+        ("[sensors]\ngauge_factor = -1.0\n", ["gauge_factor", "-1.0", "inside [0.1, 500]", "semiconductor"]),
         ("[sensors]\ngauge_factor = nan\n", ["gauge_factor", "finite"]),
         ("[geometry]\nlength = 1\n", ["unknown key 'length'", "[geometry]", "digit_length_m"]),
         ("[gemoetry]\n", ["unknown section 'gemoetry'"]),
@@ -105,3 +105,47 @@ def test_write_onto_a_directory_or_under_a_file_is_refused(tmp_path):
     (tmp_path / "plain").write_text("x")
     with pytest.raises(DataFileError, match="plain is not a directory"):
         save_params(RigParams(), tmp_path / "plain" / "rig.toml")
+
+
+# The unit slips and absurd numbers in a params file: each refused naming the file, the key, the value, the
+# plausible range and (where one fits) the slip.
+@pytest.mark.parametrize(
+    ("text", "fragments"),
+    [
+        ("[geometry]\nstrip_thickness_m = 0.381\n", ["strip_thickness_m", "0.381 m", "did you mean mm (0.000381 m)"]),
+        ("[material]\nyoungs_modulus_pa = 205\n", ["youngs_modulus_pa", "did you mean GPa (2.05e+11 Pa)"]),
+        ("[actuator]\npulley_radius_m = 11.5\n", ["pulley_radius_m", "did you mean mm (0.0115 m)"]),
+        ("[geometry]\ncable_eccentricity_m = 5.715\n", ["cable_eccentricity_m", "did you mean mm (0.005715 m)"]),
+        ("[geometry]\nstrip_length_m = 1000.0\n", ["strip_length_m", "1000.0 m", "inside [0.02, 2] m"]),
+        ("[geometry]\ndigit_length_m = 10.0\n", ["digit_length_m", "10.0 m", "inside [0.02, 2] m"]),
+        ("[sensors]\ngauge_factor = 1e6\n", ["gauge_factor", "1000000.0", "semiconductor gauges"]),
+        ("[sensors]\namplifier_gain_v_per_v = 1e308\n", ["amplifier_gain_v_per_v", "1e+308", "inside [0.001, 1e+07]"]),
+        ("[geometry]\nstrip_thickness_m = 5e-324\n", ["strip_thickness_m", "5e-324"]),
+        ("[actuator]\npwm_frequency_hz = 1e308\n", ["pwm_frequency_hz", "1e+308 Hz", "inside [1, 100000] Hz"]),
+    ],
+)
+def test_implausible_values_and_unit_slips_are_refused(tmp_path, text, fragments):
+    path = tmp_path / "rig.toml"
+    path.write_text(text)
+    with pytest.raises(ParameterError) as info:
+        load_params(path)
+    message = str(info.value)
+    assert message.startswith(str(path)) and "\n" not in message
+    for fragment in fragments:
+        assert fragment in message, message
+
+
+def test_a_strip_the_servo_cannot_bend_is_refused():
+    # each field inside its own range, together a strip 100 times too stiff for the servo: the derived check
+    geometry = Geometry(strip_thickness_m=4e-3, strip_width_m=0.05)
+    with pytest.raises(ParameterError, match=r"cannot bend: K2 = E I r_M / \(l e\) = .* N m/rad") as info:
+        RigParams(geometry=geometry)
+    assert "stalls at 0.297 N m" in str(info.value)
+
+
+def test_the_thesis_rig_bends_with_room_to_spare():
+    # 0.16 N m of servo torque for the full 90 deg (E 3.19 with table 3.7), against the 0.297 N m stall torque
+    p = RigParams()
+    g, a = p.geometry, p.actuator
+    torque = p.bending_stiffness_n_m2 * math.radians(90) / g.strip_length_m * a.pulley_radius_m / g.cable_eccentricity_m
+    assert 0.15 < torque < 0.17

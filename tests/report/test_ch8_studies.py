@@ -5,6 +5,8 @@ import pytest
 from flexdigit.report import ch8_studies
 from flexdigit.report.chapter import ReportContext
 
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+
 
 @pytest.fixture(scope="module")
 def chapter(tmp_path_factory):

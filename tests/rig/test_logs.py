@@ -67,6 +67,30 @@ def test_force_replaces(tmp_path):
     assert len(read_log_runs(log)) == 1
 
 
+def test_a_forced_run_that_stops_early_keeps_the_old_log_and_its_own_as_partial(tmp_path):
+    """--force writes beside the old log; an interrupted run (Ctrl-C here) leaves the old log intact and its own
+    record, footer included, in run.partial.jsonl (named in the result), never half of one over the other."""
+    log = tmp_path / "run.jsonl"
+    _run(log)
+    old = log.read_bytes()
+
+    class Interrupted(PI):
+        def step(self, setpoint, reading):
+            if getattr(self, "steps", 0) == 3:
+                raise KeyboardInterrupt
+            self.steps = getattr(self, "steps", 0) + 1
+            return super().step(setpoint, reading)
+
+    result = run_loop(FirstOrderRig(), Interrupted(), 1.0, 0.1, 0.02, log_path=log, log_mode="replace")
+    assert result.status == "interrupted"
+    assert log.read_bytes() == old
+    partial = tmp_path / "run.partial.jsonl"
+    assert result.log_path == partial and "run.jsonl is kept as it was" in result.message
+    header, samples, footer = read_log(partial)
+    assert len(samples) == 3 and footer["stop"] == "interrupted"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.jsonl", "run.partial.jsonl"]
+
+
 @pytest.mark.parametrize(
     "line, culprit",
     [

@@ -283,3 +283,20 @@ def test_a_damaged_recording_says_so(tmp_path):
     empty.write_bytes(b"")
     with pytest.raises(DataFileError, match="not an MCAP file"):
         open_rig(f"replay://{empty}")
+
+
+@pytest.mark.parametrize(("stop", "replaced"), [("completed", True), ("interrupted", False), ("fault", False)])
+def test_a_forced_recording_replaces_the_old_one_only_when_its_run_completes(tmp_path, stop, replaced):
+    """Written beside the old file; a stopped run leaves it intact and its own, readable, in rec.partial.mcap."""
+    path = tmp_path / "rec.mcap"
+    path.write_bytes(b"old recording")
+    rec = Recording(path, header={"backend": "sim"}, force=True)
+    rec.write_sample({"k": 0, "t": 0.0, "gauges_v": [0.1, 0.2, 0.3], "command": 8})
+    assert path.read_bytes() == b"old recording"  # while the run goes on
+    rec.close({"stop": stop})
+    written = path if replaced else tmp_path / "rec.partial.mcap"
+    assert rec.path == written
+    assert (path.read_bytes() == b"old recording") != replaced
+    with written.open("rb") as fh:
+        assert sum(1 for _ in make_reader(fh).iter_messages()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted({"rec.mcap", written.name})

@@ -94,7 +94,8 @@ def _run(capsys, *argv):
     [
         ("flipped", [], "left the physical range"),
         ("dead", [], "does not follow the command"),
-        ("good", ["--gain", "1e9"], "saturated at 254"),
+        # --gain 1e9 (saturating at once) is refused now by the flag's declared range; ten times the gain runs away
+        ("good", ["--gain", "10"], "left the physical range"),
     ],
 )
 def test_runaways_fault_to_the_safe_state(rotation_maps, capsys, which, extra, culprit):
@@ -117,3 +118,51 @@ def test_correct_loops_complete(rotation_maps, capsys, gain, setpoint):
     code, data = _run(capsys, *argv)
     assert code == 0 and data["status"] == "completed"
     assert abs(data["true_final_rotation_deg"] - setpoint) < 2.0  # a quantum of the servo (1.7 deg)
+
+
+# -- the library's run_loop: the same guard, on unless opted out (issues 22 and 23) -------------------------------
+def _library_run(map_path, **loop_options):
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.controllers import make_controller
+    from flexdigit.rig.loop import run_loop
+    from flexdigit.rig.rotation import load_rotation_map
+
+    rig = open_rig("sim")
+    controller = make_controller("digital20", rig, estimator=load_rotation_map(map_path))
+    truth = rig.tip_rotation_deg
+    peak = []
+    result = run_loop(rig, controller, 30.0, 3.0, on_sample=lambda *_: peak.append(truth()), **loop_options)
+    return rig, result, max(peak)
+
+
+def test_the_library_loop_guards_an_unstable_loop_by_default(rotation_maps):
+    rig, result, peak = _library_run(rotation_maps["flipped"])  # no guard given: the default one
+    assert result.status == "fault"
+    assert "runaway" in result.message and "left the physical range" in result.message
+    assert result.safe_command_sent and rig.closed
+    assert "digit relaxed to command 8" in result.message
+    assert peak < ROTATION_RANGE_DEG[1] + 5.0  # stopped within a sample of leaving the range (it went to 342+ deg)
+
+
+def test_the_library_loop_runs_unguarded_only_when_told(rotation_maps):
+    _, result, peak = _library_run(rotation_maps["flipped"], guard=False)  # the explicit opt-out
+    assert result.status == "completed"
+    assert peak > ROTATION_RANGE_DEG[1]  # what the guard is there for: the twin driven past its physical range
+    with pytest.raises(ValueError, match="'guard' parameter of run_loop must be a RunawayGuard, True"):
+        _library_run(rotation_maps["good"], guard=None)
+
+
+def test_the_default_guard_leaves_loops_on_other_quantities_to_the_truth():
+    # a loop whose measurement is not a rotation (gauge volts, a force) is judged by the twin's true rotation only
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.safety import default_guard
+
+    rig = open_rig("sim")
+    try:
+        guard = default_guard(rig, measure=lambda reading: reading.gauges_v[0])
+        assert not guard.measured and guard.truth is not None
+        guard.reset(8)
+        guard.check_command(0.0, 30.0, float("nan"), 254.0, 254, LIMITS)  # nothing to judge: no fault
+        guard.check_command(1.0, 30.0, float("nan"), 254.0, 254, LIMITS)
+    finally:
+        rig.close()

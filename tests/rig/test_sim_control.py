@@ -18,6 +18,7 @@ from flexdigit.control.design20ms import design_20ms
 from flexdigit.rig.backends.sim_backend import SimRig
 from flexdigit.rig.base import open_rig
 from flexdigit.rig.rotation import calibrate_rotation
+from flexdigit.rig.safety import ROTATION_RANGE_DEG
 from flexdigit.rig.sample_log import read_log
 from flexdigit.rig.step_test import step_test
 
@@ -80,11 +81,20 @@ def test_digital20_stays_stable_for_30_percent_gain_error(estimators, cal_seed, 
 
 
 def test_thesis_39hz_forward_euler_at_20ms_fails_on_the_twin(estimators):
-    st = step_test(open_rig("sim", seed=1), "thesis39-euler", estimator=estimators[0])
+    st = step_test(open_rig("sim", seed=1), "thesis39-euler", estimator=estimators[0], guard=False)
     # the command bangs between the ends of the range (the unstable pole at z = -3.9 alternates sign)
     commands = st.result.command[20:]
     assert np.mean((commands == 0) | (commands >= 240)) > 0.5
     assert st.metrics.settling_time_s == np.inf and st.metrics.overshoot_percent > 100
+
+
+def test_the_unstable_loop_is_stopped_by_the_default_guard(estimators):
+    # issue 23: the library's loop guards by default, as flexdigit run does: the same unstable loop ends in the safe
+    # state with a fault once the twin's true rotation leaves the physical range
+    st = step_test(open_rig("sim", seed=1), "thesis39-euler", estimator=estimators[0])
+    assert st.result.status == "fault" and "runaway" in st.result.message
+    assert st.result.safe_command_sent and "relaxed to command 8" in st.result.message
+    assert np.max(np.abs(st.rotation_deg)) < ROTATION_RANGE_DEG[1] + 30.0  # stopped within a sample or two of it
 
 
 def test_thesis_39hz_tustin_at_20ms_does_not_move_the_digit(estimators):
@@ -108,7 +118,7 @@ def test_sim_backend_virtual_time_is_deterministic_and_applies_loads():
 
     a, b, c = run(4), run(4), run(5)
     assert a.time_s == pytest.approx(1.0)
-    np.testing.assert_array_equal(a.gauges_v, b.gauges_v)  # same seed, same numbers
+    np.testing.assert_array_equal(a.gauges_v, b.gauges_v)  # same seed, same numbers: one path, one machine
     assert not np.array_equal(a.gauges_v, c.gauges_v)
     rig = SimRig(seed=4)
     rig.write_command(20)

@@ -164,12 +164,21 @@ def test_collect_on_a_replay_is_refused_before_any_reading(tmp_path, capsys):
 
 
 def test_console_operator_without_a_terminal_is_a_rig_error(monkeypatch):
-    def closed(prompt=""):
-        raise EOFError
+    import io
 
-    monkeypatch.setattr("builtins.input", closed)
+    monkeypatch.setattr("sys.stdin", io.StringIO(""))  # closed: end of file at once
     with pytest.raises(RigError, match=r"no operator to ask \(Hang 25 g"):
         console_operator("Hang 25 g at 200 mm from the base.")
+
+
+def test_console_operator_asks_on_stderr_and_waits_for_enter(monkeypatch, capsys):
+    import io
+
+    monkeypatch.setattr("sys.stdin", io.StringIO("\n"))
+    console_operator("Hang 25 g at 200 mm from the base.")
+    out, err = capsys.readouterr()
+    assert out == ""  # stdout carries a command's result (--json) and nothing else
+    assert err == "Hang 25 g at 200 mm from the base. Press Enter when done. "
 
 
 def test_a_board_with_no_gauge_source_says_so():

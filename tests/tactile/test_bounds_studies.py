@@ -227,7 +227,7 @@ def test_bayes_limits_are_seeded_and_refuse_repeated_settings():
     model = OneGauge()
     one = protocol_limits(model, [0.1, 0.2], [0.02, 0.02], [-1, -1], samples=500, seed=3)
     two = protocol_limits(model, [0.1, 0.2], [0.02, 0.02], [-1, -1], samples=500, seed=3)
-    np.testing.assert_array_equal(one.position_mse_m2, two.position_mse_m2)
+    np.testing.assert_array_equal(one.position_mse_m2, two.position_mse_m2)  # exact: one seed, one path, one machine
     with pytest.raises(ValueError, match="distinct settings"):
         protocol_limits(model, [0.1, 0.1], [0.02, 0.02], [-1, -1])
 

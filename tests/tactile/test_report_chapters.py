@@ -5,6 +5,8 @@ import pytest
 from flexdigit.report.build import reproduce
 from oracles import assert_entries_unchanged, assert_trained_entries_close
 
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+
 
 @pytest.mark.slow
 def test_tactile_chapters_build_in_fast_mode(tmp_path):

@@ -58,7 +58,7 @@ def test_interrupted_collection_resumes_without_loss_or_duplicate(tmp_path, make
 def test_same_seed_same_dataset(tmp_path, make_rig):
     a = collect(SMALL, make_rig(seed=7), tmp_path / "a.parquet")
     b = collect(SMALL, make_rig(seed=7), tmp_path / "b.parquet")
-    np.testing.assert_array_equal(a.gauges_v, b.gauges_v)
+    np.testing.assert_array_equal(a.gauges_v, b.gauges_v)  # exact: one seed, one code path, one machine
 
 
 def test_resume_refuses_another_protocol_and_existing_output(tmp_path, make_rig):

@@ -17,7 +17,7 @@ def test_sim_rig_collection_is_seeded_and_sees_the_load(tmp_path):
     a = collect_on_twin(TINY, tmp_path / "a.parquet", seed=3)
     b = collect_on_twin(TINY, tmp_path / "b.parquet", seed=3)
     c = collect_on_twin(TINY, tmp_path / "c.parquet", seed=4)
-    np.testing.assert_array_equal(a.gauges_v, b.gauges_v)  # same seed, same numbers
+    np.testing.assert_array_equal(a.gauges_v, b.gauges_v)  # same seed, same numbers: one path, one machine
     assert not np.array_equal(a.gauges_v, c.gauges_v)
     assert a.meta["rig"]["url"] == "sim" and "orientation='horizontal'" in a.meta["rig"]["repr"]
     # 25 g at the tip of a horizontal cantilever bends gauge 1 far beyond the twin's ~2 mV noise

@@ -65,7 +65,7 @@ def test_cli_out_of_range_command_is_one_short_line(tmp_path, capsys):
     assert main(["simulate", "load", "--commands", "300", "--out", str(tmp_path / "x.parquet")]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "Traceback" not in err
-    assert "'--commands'" in err and "integers inside [0, 254]" in err and err.endswith("Got 300 instead.")
+    assert "'--commands'" in err and "integer inside [0, 254]" in err and "Got 300 instead." in err
     assert "static_gauges_v" not in err and err.count("300") == 1
     assert not (tmp_path / "x.parquet").exists()
 
@@ -74,19 +74,19 @@ def test_cli_out_of_range_command_is_one_short_line(tmp_path, capsys):
     ("option", "value", "expected", "shown"),
     [
         ("--positions-cm", "30,5", "inside [0, 27) cm from the tip", "30"),
-        ("--loads-g", "25,nan", "inside (0, inf) g", "nan"),
-        ("--commands", "8..300", "inside [0, 254]", "[255, 256, 257, ...] (46 distinct values)"),
+        ("--loads-g", "25,nan", "a finite real number inside [0.1, 2000] g", "nan"),
+        ("--commands", "8..300", "inside [0, 254]", "300"),  # the range's end, refused before the range is built
     ],
 )
 def test_cli_load_options_are_checked_in_the_users_units(tmp_path, capsys, option, value, expected, shown):
     assert main(["simulate", "load", option, value, "--out", str(tmp_path / "x.parquet")]) == 2
     err = capsys.readouterr().err.strip()
-    assert f"'{option}'" in err and expected in err and err.endswith(f"Got {shown} instead.")
+    assert f"'{option}'" in err and expected in err and f"Got {shown} instead." in err
 
 
 def test_cli_empty_command_range(tmp_path, capsys):
     assert main(["simulate", "sweep", "--commands", "43..8", "--out", str(tmp_path / "x.csv")]) == 2
-    assert "at least one command" in capsys.readouterr().err
+    assert "low <= high" in capsys.readouterr().err
 
 
 # ------------------------------------------------------------------------------------------ Chain.solve_static

@@ -161,7 +161,8 @@ def test_bad_inputs_are_named():
 
 
 def test_threads_and_batch_size_do_not_change_a_bit():
-    # the kernel steps one rig at a time: blocks on two threads, or the rig in a batch of its own, same bits
+    # the kernel steps one rig at a time: blocks on two threads, or the rig in a batch of its own, same bits (no
+    # sum runs across rigs, so the thread count is exactly the property; one machine, no stored number)
     rigs = [RigParams(material=Material(youngs_modulus_pa=e)) for e in np.linspace(195e9, 215e9, 256)]
     runs = []
     for threads, batch in ((1, rigs), (2, rigs), (1, rigs[100:101])):

@@ -1,8 +1,12 @@
 """The twin's report chapter builds (fast mode) and every comparison with the thesis is a match."""
 
+import pytest
+
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import ReportContext
 from oracles import assert_entries_unchanged
+
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
 
 
 def test_twin_chapter_matches_the_thesis_figures(tmp_path):

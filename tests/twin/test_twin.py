@@ -22,7 +22,7 @@ def test_same_seed_same_numbers_different_seed_different_noise():
         return np.array(out)
 
     a, b, c = run(3), run(3), run(4)
-    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(a, b)  # exact: the same code path twice on one machine
     assert not np.array_equal(a, c)
 
 
@@ -254,7 +254,8 @@ READ_AT_CASES = {  # (Twin keywords, set-up, times): bare release, taut cable wi
 @pytest.mark.parametrize("case", READ_AT_CASES)
 def test_read_at_gives_the_read_loops_numbers_bit_for_bit(case):
     # Twin.read_at batches the reads between grid points; the loop of advance() + read() is the reference: the
-    # same random draws in the same order and the same operations, so every column equal, not just close
+    # same random draws in the same order and the same operations, so every column equal, not just close (both
+    # paths in one process: exactness is the property; no stored number is compared)
     kwargs, set_up, times = READ_AT_CASES[case]
     loop_twin, batch_twin = Twin(**kwargs), Twin(**kwargs)
     set_up(loop_twin)

@@ -34,7 +34,12 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit._table import Table, read_table
+from flexdigit._validation import Plausible
 from flexdigit.errors import DataFileError
+from flexdigit.params import GAUGE_V
+
+#: A deflection read at a gauge: a digit at most 2 m long (Geometry) deflects less than its length.
+DEFLECTION_MM = Plausible("mm", -2000.0, 2000.0, "a deflection of a digit at most 2 m long")
 
 __all__ = [
     "VOLT_UNITS",
@@ -101,7 +106,9 @@ def _three_gauges(table: Table, pattern: re.Pattern, units: dict[str, float], wh
 
 def _volts(table: Table, *, allow_empty: bool = False) -> np.ndarray:
     cols = _three_gauges(table, _GAUGE_STEM, VOLT_UNITS, "gauge-voltage", "gauge{g}_v or sg{g}_mv")
-    return np.column_stack([table.numbers(c, allow_empty=allow_empty) * f for c, f in cols])
+    return np.column_stack(
+        [table.plausible(c, table.numbers(c, allow_empty=allow_empty) * f, GAUGE_V) for c, f in cols]
+    )
 
 
 def _commands(table: Table) -> np.ndarray:
@@ -170,16 +177,18 @@ def read_sweep(path: str | Path, *, decimal: str | None = None) -> tuple[np.ndar
     """``(commands, volts (N, 3))`` of an actuation-sweep file."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 2, "an actuation sweep")
-    return _commands(table), _volts(table)
+    commands = _commands(table)
+    _distinct_commands(table, commands, "an actuation sweep", "a slope (E 3.20-3.22)")
+    return commands, _volts(table)
 
 
 def read_deflections(path: str | Path, *, decimal: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(commands, mm (3, N))`` of a deflection table; NaN where a cell is empty (not read)."""
     table = read_table(path, decimal=decimal)
-    _at_least(table, 1, "a deflection table")
+    _at_least(table, 2, "a deflection table")  # one row fixes no slope: the fit would be the prior's alone
     commands = _commands(table)
     cols = _three_gauges(table, _DEFLECTION_STEM, LENGTH_UNITS, "deflection", "y{g}_mm")
-    mm = np.vstack([table.numbers(c, allow_empty=True) * f for c, f in cols])
+    mm = np.vstack([table.plausible(c, table.numbers(c, allow_empty=True) * f, DEFLECTION_MM) for c, f in cols])
     repeated = [c for c in set(commands.tolist()) if np.sum(commands == c) > 1]
     if repeated:
         raise DataFileError(f"{path}: command {repeated[0]} appears twice in the deflection table; give one row each")
@@ -192,7 +201,9 @@ def read_rest(
     """``(time_s, volts (N, 3))`` of a record of the resting rig."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 16, "a rest record")
-    return _time_s(table, time_unit), _volts(table)
+    t, volts = _time_s(table, time_unit), _volts(table)
+    _not_constant(table, volts, "a rest record", "its noise")
+    return t, volts
 
 
 def read_actuated_rest(path: str | Path, *, decimal: str | None = None) -> tuple[int, np.ndarray]:
@@ -204,7 +215,28 @@ def read_actuated_rest(path: str | Path, *, decimal: str | None = None) -> tuple
         raise DataFileError(
             f"{path}: an actuated-rest record holds one command; this one has {sorted(set(commands.tolist()))}"
         )
-    return int(commands[0]), _volts(table)
+    volts = _volts(table)
+    _not_constant(table, volts, "an actuated-rest record", "a repeatability (cable_friction_ratio)")
+    return int(commands[0]), volts
+
+
+def _not_constant(table: Table, volts: np.ndarray, what: str, fits: str) -> None:
+    """Refuse a channel that holds one value in every row: a record too constant to fit (a cached DAQ value, a
+    disconnected gauge, readings never tapped), which would fit a friction or noise level of exactly 0."""
+    for g, column in zip(GAUGES, volts.T, strict=True):
+        finite = column[np.isfinite(column)]
+        if finite.size and float(np.ptp(finite)) == 0.0:
+            raise DataFileError(
+                f"{table.source}: {what} whose gauge {g} holds one value ({finite[0]:g} V) in all {finite.size} rows "
+                f"is too constant to give {fits}: a disconnected channel, or readings repeated from a cache?"
+            )
+
+
+def _distinct_commands(table: Table, commands: np.ndarray, what: str, fits: str) -> None:
+    if np.unique(commands).size < 2:
+        raise DataFileError(
+            f"{table.source}: {what} at one command ({int(commands[0])}) gives no {fits}; it needs two commands or more"
+        )
 
 
 def _at_least(table: Table, n: int, what: str) -> None:

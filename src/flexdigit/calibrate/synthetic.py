@@ -72,7 +72,9 @@ def write_csv(path: Path, header, rows, delimiter=",", decimal=".") -> Path:
             return text.replace(".", decimal) if decimal != "." else text
         return str(v)
 
-    with path.open("w", newline="", encoding="utf-8") as fh:
+    from flexdigit._io import atomic_write
+
+    with atomic_write(path, "w", force=True, newline="") as fh:  # synthetic records are made again at will
         writer = csv.writer(fh, delimiter=delimiter, lineterminator="\r\n")
         writer.writerow(header)
         writer.writerows([[cell(v) for v in row] for row in rows])

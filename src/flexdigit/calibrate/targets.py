@@ -160,7 +160,11 @@ class CalibrationTargets:
         deflection_resolution_mm : float
             The deflections' reading resolution (their residual scale in the fit).
         """
-        kw: dict[str, Any] = {"deflection_resolution_mm": float(deflection_resolution_mm)}
+        from flexdigit._validation import check_param
+        from flexdigit.rig.rotation_reference import READING_RESOLUTION_MM
+
+        resolution = check_param(deflection_resolution_mm, READING_RESOLUTION_MM, "deflection_resolution_mm", "Targets")
+        kw: dict[str, Any] = {"deflection_resolution_mm": resolution}
         for name, rec in (("bare", release_bare), ("housing", release_housing)):
             if rec is not None:
                 figures = release_figures(rec)

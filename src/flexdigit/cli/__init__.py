@@ -23,12 +23,14 @@ from pathlib import Path
 
 from flexdigit import __version__
 from flexdigit.errors import one_line
+from flexdigit.interrupts import stop_on_signals, stop_requested
 
 #: Modules that add sub-commands, in the order of the architecture (params -> ... -> report).
 COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.cli.params_file",
     "flexdigit.cli.model",
     "flexdigit.cli.simulate",
+    "flexdigit.cli.tdcr",
     "flexdigit.cli.identify",
     "flexdigit.cli.design",
     "flexdigit.cli.run",
@@ -50,6 +52,11 @@ class _Parser(argparse.ArgumentParser):
     """argparse, raising :class:`UsageError` instead of exiting, so that ``--json`` can report it as JSON."""
 
     def error(self, message: str):  # argparse's hook
+        # a declared flag's refusal (flexdigit._validation.Flag) in the format of every parameter message
+        flag, sep, rest = message.removeprefix("argument ").partition(": must ")
+        if sep and message.startswith("argument "):
+            command = self.prog.removeprefix("flexdigit").strip()
+            message = f"The '{flag.split('/')[-1]}' parameter of flexdigit {command} must {rest}"
         exc = UsageError(message)
         exc.prog = self.prog
         raise exc
@@ -69,8 +76,39 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run ``flexdigit`` with ``argv`` (default ``sys.argv[1:]``) and return the exit code."""
+    """Run ``flexdigit`` with ``argv`` (default ``sys.argv[1:]``) and return the exit code.
+
+    From the first import of a sub-command to its result, SIGTERM and SIGHUP stop the command as Ctrl-C does
+    (:mod:`flexdigit.interrupts`: the rig's safe state, footers, no temporary file left) and exit with 128 + the
+    signal's number; the result is printed after, with the default handlers back.
+    """
     argv = sys.argv[1:] if argv is None else list(argv)
+    with stop_on_signals():
+        try:
+            outcome = _run_command(argv)
+        except KeyboardInterrupt as exc:  # while the sub-commands load or the arguments are parsed
+            return _interrupted(exc, "", "--json" in argv)
+    if isinstance(outcome, int):
+        return outcome
+    result, wants_json = outcome
+    try:
+        if wants_json:
+            from flexdigit._json import to_jsonable  # numpy: not for --help or --version
+
+            json.dump(to_jsonable(result.data), sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        elif result.text:
+            print(result.text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # `flexdigit ... | head`: the reader left; say nothing more
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - keeps Python's exit-time flush quiet
+    except OSError:  # the terminal closed (SIGHUP): the work is done and saved, the exit code says how it ended
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115
+    return result.exit_code
+
+
+def _run_command(argv: list[str]):
+    """Parse ``argv`` and run the sub-command: ``(result, wants_json)``, or the exit code of an error reported."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -88,48 +126,53 @@ def main(argv: list[str] | None = None) -> int:
     wants_json = bool(getattr(args, "json", False))
     try:
         result = args.func(args)
-    except KeyboardInterrupt:
-        return _fail("interrupted", "KeyboardInterrupt", args.command_name, wants_json, 130)
-    except (ValueError, OSError, ArithmeticError, KeyError) as exc:
+    except KeyboardInterrupt as exc:
+        return _interrupted(exc, args.command_name, wants_json)
+    except Exception as exc:  # noqa: BLE001 - bad input or a bug: one line (and JSON), never a traceback
+        stop = stop_requested()
+        if stop is not None:  # a stop signal that C code (a numba kernel) handed back as another exception
+            return _interrupted(stop, args.command_name, wants_json)
         if args.debug:
             raise
-        return _fail(_message(exc), type(exc).__name__, args.command_name, wants_json, 2)
-    except Exception as exc:  # noqa: BLE001 - a bug, not bad input: still one line (and JSON), never a traceback
-        if args.debug:
-            raise
+        if isinstance(exc, ValueError | OSError | ArithmeticError | KeyError):  # bad input, named
+            return _fail(_message(exc), type(exc).__name__, args.command_name, wants_json, 2)
         text = f"internal error ({type(exc).__name__}: {exc}); please report it, --debug shows the traceback"
         return _fail(text, type(exc).__name__, args.command_name, wants_json, 2)
-    try:
-        if wants_json:
-            from flexdigit._json import to_jsonable  # numpy: not for --help or --version
-
-            json.dump(to_jsonable(result.data), sys.stdout, indent=2)
-            sys.stdout.write("\n")
-        elif result.text:
-            print(result.text)
-        sys.stdout.flush()
-    except BrokenPipeError:  # `flexdigit ... | head`: the reader left; say nothing more
-        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - keeps Python's exit-time flush quiet
-    return result.exit_code
+    return result, wants_json
 
 
 def _command_names(parser: argparse.ArgumentParser) -> set[str]:
     return {name for action in parser._subparsers._group_actions for name in action.choices}
 
 
-def _fail(message: str, error_type: str, command: str, wants_json: bool, code: int) -> int:
+def _interrupted(exc: KeyboardInterrupt, command: str, wants_json: bool) -> int:
+    """A stop by Ctrl-C or a signal: ``{"error": "interrupted by SIGTERM", "signal": "SIGTERM", ...}`` under
+    ``--json`` and the shell's exit code for it, 128 + the signal's number."""
+    name = getattr(exc, "signal_name", "SIGINT")
+    code = getattr(exc, "exit_code", 130)
+    return _fail(f"interrupted by {name}", "Interrupted", command, wants_json, code, signal=name)
+
+
+def _fail(message: str, error_type: str, command: str, wants_json: bool, code: int, signal: str | None = None) -> int:
     """Report an error: one line on stderr and, under ``--json``, an ``{"error": ...}`` object on stdout."""
     message = one_line(message)  # a library's message may carry newlines; ours are one line
     prefix = f"flexdigit {command}" if command else "flexdigit"
-    print(f"{prefix}: {'interrupted' if code == 130 else 'error: ' + message}", file=sys.stderr)
+    doc = {"error": message, "error_type": error_type, "command": command or None, "exit_code": code}
+    if signal is not None:
+        doc["signal"] = signal
+    try:  # a closed terminal (SIGHUP) takes stderr with it: the exit code still says it
+        print(f"{prefix}: {message if signal else 'error: ' + message}", file=sys.stderr)
+    except OSError:
+        pass
     if wants_json:
-        doc = {"error": message, "error_type": error_type, "command": command or None, "exit_code": code}
         try:
             json.dump(doc, sys.stdout)
             sys.stdout.write("\n")
             sys.stdout.flush()
         except BrokenPipeError:
             sys.stdout = open(os.devnull, "w")  # noqa: SIM115
+        except OSError:  # the terminal is gone (SIGHUP)
+            pass
     return code
 
 

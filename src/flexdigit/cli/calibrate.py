@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import Flag
 
 #: A fit that misses a release test's wn or zeta by more than this many percent, or a deflection by more than this
 #: many reading resolutions, is refused (unless --allow-poor-fit): the twin cannot reproduce those records together
@@ -34,7 +35,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--release-housed", action="append", metavar="FILE", help="release test with housing (repeatable)")
     p.add_argument("--sweep", metavar="FILE", help="actuation sweep: command and the three gauges")
     p.add_argument("--deflections", metavar="FILE", help="deflection table: command and y1..y3 (mm, cm or m)")
-    p.add_argument("--deflection-resolution-mm", type=float, default=0.5, help="reading resolution (default 0.5)")
+    from flexdigit.rig.rotation_reference import READING_RESOLUTION_MM
+
+    p.add_argument(
+        "--deflection-resolution-mm",
+        type=Flag(READING_RESOLUTION_MM),
+        default=0.5,
+        help="reading resolution (default 0.5)",
+    )
     p.add_argument("--rest", metavar="FILE", help="the resting rig: time and the three gauges (noise levels)")
     p.add_argument(
         "--actuated-rest", metavar="FILE", help="repeated readings of the unloaded actuated digit (friction level)"

@@ -5,9 +5,21 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag, Plausible
+from flexdigit.params import DIGIT_LENGTH_M
+
+
+def _collect_flags():
+    """The declarations the flags share with the library (imported when the parser is built)."""
+    from flexdigit.tactile.network_sizes import HIDDEN, TOL
+    from flexdigit.tactile.protocols import MAX_SETTLE_S
+
+    settle = Plausible("s", 0.0, MAX_SETTLE_S, "settle time per setting: an hour at most")
+    return HIDDEN, TOL, settle
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
+    hidden, tol, settle = _collect_flags()
     p = add_command(
         subparsers,
         "collect",
@@ -18,11 +30,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
     p.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv); resumes its journal")
     p.add_argument(
-        "--seed", type=int, default=None, help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)"
+        "--seed",
+        type=Flag(SEED),
+        default=None,
+        help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)",
     )
     p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (sim backends; default: the thesis's)")
     p.add_argument(
-        "--settle", type=float, default=None, help="settle time per setting, s, 0..3600 (default: protocol's)"
+        "--settle", type=Flag(settle), default=None, help="settle time per setting, s, 0..3600 (default: protocol's)"
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
@@ -52,7 +67,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     q.add_argument("--position", metavar="COLUMN", help="where the load hangs (may be empty on no-load rows)")
     q.add_argument("--position-unit", choices=("m", "cm", "mm"), help="default m")
     q.add_argument("--position-from", choices=("tip", "clamp"), help="what the position is measured from (default tip)")
-    q.add_argument("--digit-length-m", type=float, help="clamp to tip, m (default: the rig's, 0.27)")
+    q.add_argument("--digit-length-m", type=Flag(DIGIT_LENGTH_M), help="clamp to tip, m (default: the rig's, 0.27)")
     q.add_argument("--command", metavar="COLUMN", help="servo command column (default: none, servo relaxed)")
     q.add_argument("--repetition", metavar="COLUMN", help="repetition column (default: counted)")
     q.add_argument("--test", metavar="COLUMN", help="test column (default: derived, see the README)")
@@ -75,16 +90,23 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="position: m from the tip (loaded readings); position-index: the thesis's position number; "
         "magnitude: kg; contact: load / no load",
     )
-    p.add_argument("--hidden", type=int, default=None, help="hidden nodes (default: sweep as the thesis)")
-    p.add_argument("--tol", type=float, default=None, help="'learning gradient' (SCG tolerance; default: sweep)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--hidden", type=Flag(hidden), default=None, help="hidden nodes (default: sweep as the thesis)")
+    p.add_argument("--tol", type=Flag(tol), default=None, help="'learning gradient' (SCG tolerance; default: sweep)")
+    p.add_argument("--seed", type=Flag(SEED), default=0)
     p.add_argument("--model", default=None, help="model file to write (default: FILE stem + .<target>.model.json)")
     p.add_argument("--force", action="store_true", help="overwrite the model file if it exists")
 
     p = add_command(subparsers, "predict", _predict, help="predict with a saved model on a dataset")
     p.add_argument("model", help="a model file written by 'flexdigit train'")
     p.add_argument("file", help="a dataset")
-    p.add_argument("--limit", type=int, default=10, help="readings to list in the text output")
+    p.add_argument(
+        "--limit",
+        type=Flag(
+            Plausible("", 0, 1_000_000, "readings listed in the text output (--json lists them all)", integer=True)
+        ),
+        default=10,
+        help="readings to list in the text output",
+    )
 
 
 def _collect(args: argparse.Namespace) -> CommandResult:

@@ -10,7 +10,13 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
-from flexdigit.errors import DesignError
+from flexdigit._validation import SEED, Flag, Plausible
+
+# The design flags' plausible ranges (flexdigit._validation.Flag refuses the rest in one line naming the flag). The
+# library's own declarations (control.mixsyn, control.synthesis) say what is possible; these what is sensible to ask
+# of a digit sampled every 20 ms.
+#: The error filter's cut-off: the thesis tried 0.5 to 50 Hz (4.7); 0.01 Hz to 1 kHz brackets any rig's loop.
+FILTER_HZ = Plausible("Hz", 0.01, 1000.0, "an error-filter cut-off: the thesis tried 0.5 to 50 Hz")
 
 
 def register(subparsers) -> None:
@@ -20,28 +26,50 @@ def register(subparsers) -> None:
         func=lambda args: CommandResult(data=None, text=parser.format_help(), exit_code=2), command_name="design"
     )
     p = add_command(sub, "hinf", _hinf, help="the thesis's H-infinity design (4.4) for one error-filter cut-off")
-    p.add_argument("--filter-hz", type=float, required=True, help="cut-off of F(s) = 1/(s + 2 pi f), Hz")
+    p.add_argument("--filter-hz", type=Flag(FILTER_HZ), required=True, help="cut-off of F(s) = 1/(s + 2 pi f), Hz")
     p.add_argument("--plant", choices=("printed", "consistent"), default="printed")
-    p.add_argument("--eps", type=float, default=None, help="regularisation eps_u (default: fitted to the thesis)")
-    p.add_argument("--margin", type=float, default=None, help="gamma margin (default: fitted to the thesis)")
+    p.add_argument(
+        "--eps",
+        type=Flag(Plausible("", 0.0, 1e3, "a regularisation weight eps_u: the thesis's are near 1e-3")),
+        default=None,
+        help="regularisation eps_u (default: fitted to the thesis)",
+    )
+    p.add_argument(
+        "--margin",
+        type=Flag(Plausible("", 0.0, 100.0, "a gamma margin: a fraction above the optimal gamma")),
+        default=None,
+        help="gamma margin (default: fitted to the thesis)",
+    )
     p = add_command(sub, "sweep", _sweep, help="the filter sweep of 4.7 (additive tolerance per cut-off)")
-    p.add_argument("--filters", default="0.5,5,39,50", help="comma-separated cut-offs in Hz")
+    p.add_argument(
+        "--filters", type=Flag(FILTER_HZ, many=True), default="0.5,5,39,50", help="comma-separated cut-offs in Hz"
+    )
     p = add_command(sub, "mixsyn", _mixsyn, help="integral mixed-sensitivity design on the consistent plant")
-    p.add_argument("--bandwidth", type=float, default=None, help="W1 bandwidth, rad/s")
-    p.add_argument("--s-peak", type=float, default=None, help="allowed |S| peak")
-    p.add_argument("--w-command", type=float, default=None, help="weight on the command, 1/command")
-    p.add_argument("--w-disturbance", type=float, default=None, help="input-disturbance weight, commands")
-    p.add_argument("--seed", type=int, default=0, help="Monte Carlo seed")
-
-
-def _parse_filters(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise DesignError(f"The '--filters' option must be comma-separated numbers in Hz. Got {text!r}.") from None
-    if not values or any(not v > 0 for v in values):
-        raise DesignError(f"The '--filters' option must list positive cut-offs in Hz. Got {text!r}.")
-    return values
+    p.add_argument(
+        "--bandwidth",
+        type=Flag(Plausible("rad/s", 0.01, 1e4, "a loop bandwidth: the digit's mode is 13 rad/s, the loop 314")),
+        default=None,
+        help="W1 bandwidth, rad/s",
+    )
+    p.add_argument(
+        "--s-peak",
+        type=Flag(Plausible("", 1.0, 10.0, "a sensitivity peak of 0 to 20 dB; 2 (6 dB) is the usual")),
+        default=None,
+        help="allowed |S| peak",
+    )
+    p.add_argument(
+        "--w-command",
+        type=Flag(Plausible("1/command", 1e-9, 1e6, "a weight on the command, positive")),
+        default=None,
+        help="weight on the command, 1/command",
+    )
+    p.add_argument(
+        "--w-disturbance",
+        type=Flag(Plausible("commands", 0.0, 1e6, "an input-disturbance weight")),
+        default=None,
+        help="input-disturbance weight, commands",
+    )
+    p.add_argument("--seed", type=Flag(SEED), default=0, help="Monte Carlo seed")
 
 
 def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, margin=None) -> dict:
@@ -104,7 +132,7 @@ def _sweep(args: argparse.Namespace) -> CommandResult:
     lines = [
         "  f (Hz) | ||T_pq|| dB | thesis % | 100/dB at 10x gain | 1/||T_pq|| % of |G(0)| | T_uw step peak",
     ]
-    for f in _parse_filters(args.filters):
+    for f in args.filters:
         s = _design_summary(f)
         key = f"{f:g}Hz".replace(".", "p") if f"{f:g}Hz" not in printed else f"{f:g}Hz"
         s["thesis_percent"] = printed.get(key)

@@ -11,6 +11,7 @@ import argparse
 from pathlib import Path
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import Flag, Plausible
 
 #: Designs ``flexdigit export controller`` knows (those of ``flexdigit run --controller``).
 EXPORT_DESIGNS = ("digital20", "thesis39-euler", "thesis39-tustin")
@@ -31,11 +32,16 @@ def register(subparsers) -> None:
     p.set_defaults(command_name="export controller")
     p.add_argument("--out", type=Path, required=True, help="the C source to write (the header goes beside it, .h)")
     p.add_argument("--design", default="digital20", help=f"one of {', '.join(EXPORT_DESIGNS)} (default digital20)")
-    p.add_argument("--period-s", type=float, default=0.020, help="sample period, s (default 0.020)")
+    p.add_argument(
+        "--period-s",
+        type=Flag(Plausible("s", 1e-4, 1.0, "a control period: 0.1 ms (the ADC) to 1 s (the digit rings at 2 Hz)")),
+        default=0.020,
+        help="sample period, s, 1e-4..1 (default 0.020)",
+    )
     p.add_argument("--format", choices=("float", "fixed"), default="float", help="float32 or fixed point")
     p.add_argument(
         "--input-max",
-        type=float,
+        type=Flag(Plausible("", 1e-6, 1e4, "the controller's input in deg (or m for thesis39-*): 1e-6..1e4")),
         default=None,
         help="largest |controller input| the fixed point must hold (default 180 deg; 0.3 m for thesis39-*)",
     )

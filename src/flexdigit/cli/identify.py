@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from flexdigit._validation import Flag, Plausible
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     from flexdigit._command import add_command
@@ -42,7 +44,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
     parser.add_argument(
-        "--t0", type=float, help="step/release instant in s on the record's clock (default: found from the record)"
+        "--t0",
+        type=Flag(Plausible("s", -1e7, 1e7, "an instant on the record's clock: within about 4 months of its zero")),
+        help="step/release instant in s on the record's clock (default: found from the record)",
     )
     parser.add_argument(
         "--delay",
@@ -50,7 +54,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default="auto",
         help="lsq: fit the step instant too (a dead time); auto: when the record has samples before the step",
     )
-    parser.add_argument("--input-step", type=float, help="size of the input step (e.g. 51 commands) for the gain")
+    parser.add_argument(
+        "--input-step",
+        type=Flag(Plausible("", -1e6, 1e6, "an input step in the input's own unit (51 commands, 2 V)")),
+        help="size of the input step (e.g. 51 commands) for the gain",
+    )
     parser.add_argument(
         "--loss",
         choices=("soft_l1", "huber", "linear"),

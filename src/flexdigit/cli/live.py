@@ -7,8 +7,11 @@ flexdigit shape --accuracy [--seed 0] [--json]
 from __future__ import annotations
 
 import argparse
+from numbers import Integral
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag, Interval, Plausible
+from flexdigit.params import SERVO_COMMAND
 
 
 def register(subparsers) -> None:
@@ -21,14 +24,18 @@ def register(subparsers) -> None:
     live.add_argument("--backend", default="sim", help="sim (the twin, horizontal), serial://..., replay://FILE")
     live.add_argument("--model", default=None, help="a trained position network (flexdigit train) for the contact")
     live.add_argument("--host", default="127.0.0.1", help="address to listen on (default this machine only)")
-    live.add_argument("--port", type=int, default=8050, help="port (0: any free one; default 8050)")
+    live.add_argument(  # a TCP port number; 0 asks the system for a free one
+        "--port", type=Flag(Interval(Integral, 0, 65535)), default=8050, help="port (0: any free one; default 8050)"
+    )
     live.add_argument("--allow-remote", action="store_true", help="allow a --host other machines can reach")
     live.add_argument("--record", default=None, help="record the session to this MCAP file")
     live.add_argument("--force", action="store_true", help="replace an existing --record file")
     live.add_argument("--calibration", default=None, help="calibration TOML: the twin's, and the shape estimate's")
     live.add_argument("--rotation-map", default=None, help="rotation map (flexdigit run --rotation-map) on hardware")
     live.add_argument("--orientation", default=None, help="mounting on hardware: vertical, horizontal, hanging")
-    live.add_argument("--seed", type=int, default=None, help="twin noise seed (default: the URL's seed=, else 0)")
+    live.add_argument(
+        "--seed", type=Flag(SEED), default=None, help="twin noise seed (default: the URL's seed=, else 0)"
+    )
     parser = add_command(
         subparsers,
         "shape",
@@ -36,13 +43,20 @@ def register(subparsers) -> None:
         help="the digit's centre line (and a load) from the three gauge voltages, or the estimator's accuracy",
     )
     parser.add_argument("--gauges-v", default=None, help="the three gauge voltages, V, comma-separated (base first)")
-    parser.add_argument("--command", type=int, default=None, help="servo command in force (0..254); omit if unknown")
+    parser.add_argument(
+        "--command", type=Flag(SERVO_COMMAND), default=None, help="servo command in force (0..254); omit if unknown"
+    )
     parser.add_argument("--orientation", default="vertical", help="vertical (tip up), horizontal (cable up), hanging")
     parser.add_argument("--no-cable", action="store_true", help="cable detached (the non-actuated digit, ch. 6)")
     parser.add_argument("--load", default="weight", help="what a load is: weight, press or none")
-    parser.add_argument("--n-average", type=int, default=1, help="readings averaged into the one given")
+    parser.add_argument(
+        "--n-average",
+        type=Flag(Plausible("", 1, 1_000_000, "readings averaged into one: the thesis took 25", integer=True)),
+        default=1,
+        help="readings averaged into the one given",
+    )
     parser.add_argument("--accuracy", action="store_true", help="score the estimator against the twin instead")
-    parser.add_argument("--seed", type=int, default=0, help="noise seed of --accuracy")
+    parser.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed of --accuracy")
 
 
 def _live(args: argparse.Namespace) -> CommandResult:
@@ -64,12 +78,13 @@ def _live(args: argparse.Namespace) -> CommandResult:
     )
     try:
         serve(session, args.host, args.port, allow_remote=args.allow_remote)
-    except KeyboardInterrupt:
-        pass  # Ctrl-C is how a live session ends; uvicorn re-raises it once it has shut down
+    except KeyboardInterrupt as exc:  # Ctrl-C (or SIGTERM, SIGHUP) is how a live session ends: exit 0
+        session.stopped_by = session.stopped_by or getattr(exc, "signal_name", "SIGINT")
     finally:
         session.stop()
     data = {
         "status": session.error or "stopped",
+        "signal": session.stopped_by,  # what stopped it: SIGINT (Ctrl-C), SIGTERM, SIGHUP
         "backend": args.backend,
         "record": str(session.recording.path) if session.recording is not None else None,
         "overruns": session.state.overruns,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag
 
 #: Largest chi^2 per degree of freedom a palpation fit may leave and still be reported.
 MAX_CHI2_PER_DOF = 25.0
@@ -21,7 +22,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--protocol", default=None, help="a protocol TOML file or a built-in: sweep (default), scan, hold")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
     p.add_argument(
-        "--seed", type=int, default=None, help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)"
+        "--seed",
+        type=Flag(SEED),
+        default=None,
+        help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)",
     )
     p.add_argument("--log", default=None, help="JSON-lines log of every loop sample (scan: one file per offset)")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")

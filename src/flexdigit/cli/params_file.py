@@ -1,4 +1,4 @@
-"""``flexdigit params``: show, check or write the rig parameters."""
+"""``flexdigit params``: show, check or write a digit's description (the rig parameters)."""
 
 from __future__ import annotations
 
@@ -11,29 +11,49 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = add_command(subparsers, "params", _params, help="show, check or write the rig parameters (TOML)")
     parser.add_argument("file", nargs="?", help="a rig TOML to load and check (default: the thesis rig)")
     parser.add_argument("--write", metavar="FILE", help="write the parameters (defaults, or FILE's) as TOML")
-    parser.add_argument("--force", action="store_true", help="overwrite the --write file if it exists")
+    parser.add_argument("--template", metavar="FILE", help="write an annotated description of the thesis rig")
+    parser.add_argument("--force", action="store_true", help="overwrite the --write/--template file if it exists")
 
 
 def _params(args: argparse.Namespace) -> CommandResult:
-    from flexdigit.params import RigParams, load_params, save_params
+    from flexdigit.params import RigParams, derived_figures, digit_inconsistencies, load_params, save_params
 
-    params = load_params(args.file) if args.file else RigParams()
+    if args.template:
+        return _template(args)
+    params = load_params(args.file, check=False) if args.file else RigParams()
+    problems = digit_inconsistencies(params)
     data = params.to_dict()
-    derived = {
-        "second_moment_m4": params.geometry.second_moment_m4,
-        "bending_stiffness_n_m2": params.bending_stiffness_n_m2,
-        "rad_per_command": params.actuator.rad_per_command,
-        "deg_per_command": params.actuator.deg_per_command,
-        "pot_v_per_command": params.actuator.pot_v_per_command,
-        "adc_lsb_v": params.sensors.adc_lsb_v,
-    }
+    derived = derived_figures(params)
     lines = [f"rig parameters ({args.file or 'thesis defaults'}):"]
     for section, values in data.items():
         lines.append(f"[{section}]")
         lines.extend(f"  {k} = {v}" for k, v in values.items())
     lines.append("derived:")
     lines.extend(f"  {k} = {v:.6g}" for k, v in derived.items())
+    if problems:
+        # one line each, naming the key; nothing is written from a description that contradicts itself
+        text = "\n".join(f"{args.file}: {p}" for p in problems)
+        return CommandResult(data={"params": data, "derived": derived, "problems": problems}, text=text, exit_code=2)
     if args.write:
         path = save_params(params, args.write, force=args.force)
         lines.append(f"written to {path}")
-    return CommandResult(data={"params": data, "derived": derived, "written": args.write}, text="\n".join(lines))
+    return CommandResult(
+        data={"params": data, "derived": derived, "problems": [], "written": args.write}, text="\n".join(lines)
+    )
+
+
+def _template(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._io import atomic_write
+    from flexdigit.errors import DataFileError
+    from flexdigit.params import params_template
+
+    try:
+        with atomic_write(args.template, "w", force=args.force) as fh:
+            fh.write(params_template())
+    except FileExistsError:
+        raise
+    except OSError as exc:
+        raise DataFileError(f"cannot write the template to {args.template}: {exc.strerror or exc}") from None
+    return CommandResult(
+        data={"template": args.template}, text=f"annotated thesis-rig description written to {args.template}"
+    )

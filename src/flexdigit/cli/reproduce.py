@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -16,7 +17,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="reproduce the thesis end to end on the twin and write a report",
     )
     parser.add_argument("--out", default="report", help="output folder (default: report/)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of every random stream (default 0)")
+    parser.add_argument("--seed", type=Flag(SEED), default=0, help="seed of every random stream (default 0)")
     parser.add_argument("--params", help="rig parameter TOML (default: the thesis rig)")
     parser.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (default: fitted to the thesis)")
     parser.add_argument("--fast", action="store_true", help="smaller sweeps, for a quick look")
@@ -35,6 +36,11 @@ def _reproduce(args: argparse.Namespace) -> CommandResult:
 
     if args.workers is not None and args.workers < 1:
         raise ParameterError(f"--workers must be a positive integer. Got {args.workers} instead.")
+    if args.workers is not None:
+        from flexdigit._system import check_workers
+        from flexdigit.report.build import CHAPTER_BYTES
+
+        check_workers(args.workers, "--workers", CHAPTER_BYTES)
     check_report_dir(args.out, force=args.force)  # before the chapters run (minutes), not after
     params = load_params(args.params) if args.params else RigParams()
 

@@ -18,15 +18,23 @@ import sys
 from pathlib import Path
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import SEED, Flag, Plausible
 
 #: The estimated rotation is averaged over a centred 0.1 s window before its step figures are taken: its noise
 #: (~0.2 deg rms on the twin) is half the 2 % band of a 20 deg step (:func:`flexdigit.rig.step_test.step_metrics`).
 ESTIMATE_SMOOTH_S = 0.1
 #: Longest run ``flexdigit run`` takes, s (a day; a longer one is a typo, and would not end on the twin).
 MAX_DURATION_S = 86_400.0
+#: The run's flags, declared once (flexdigit._validation.Flag: refused by argparse, one line naming the flag).
+DURATION = Plausible("s", 0.0, MAX_DURATION_S, "a run of at most a day", closed="right")
+SETPOINT = Plausible("deg", -60.0, 120.0, "a beam rotation the digit reaches: 30 deg per section, 3 sections")
 
 
 def register(subparsers) -> None:
+    from flexdigit.rig.backends.stream_emulator import DURATION_S, RATE_HZ
+    from flexdigit.rig.controllers import ACTUATOR_GAIN
+    from flexdigit.rig.rotation_reference import READING_RESOLUTION_DEG, READING_RESOLUTION_MM
+
     parser = add_command(
         subparsers,
         "run",
@@ -35,13 +43,22 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--backend", default="sim", help="sim, sim+paced, serial://PORT?daq=0, replay://FILE")
     parser.add_argument("--controller", default="digital20", help="digital20, thesis39-euler, thesis39-tustin")
-    parser.add_argument("--setpoint-deg", type=float, default=30.0, help="beam rotation to hold, deg (default 30)")
-    parser.add_argument("--duration", type=float, default=3.0, help="run length, s (default 3)")
-    parser.add_argument("--period", type=float, default=None, help="sample period, s (default the 20 ms serial period)")
     parser.add_argument(
-        "--seed", type=int, default=None, help="twin noise seed (sim backends; default 0, or the URL's seed=)"
+        "--setpoint-deg", type=Flag(SETPOINT), default=30.0, help="beam rotation to hold, deg (default 30)"
     )
-    parser.add_argument("--gain", type=float, default=1.0, help="actuator gain error to emulate (robustness runs)")
+    parser.add_argument("--duration", type=Flag(DURATION), default=3.0, help="run length, s (default 3)")
+    parser.add_argument(
+        "--period",
+        type=Flag(Plausible("s", 1e-4, 1.0, "the loop's period: below 0.1 ms it only spins (rig.loop)")),
+        default=None,
+        help="sample period, s (default the 20 ms serial period)",
+    )
+    parser.add_argument(
+        "--seed", type=Flag(SEED), default=None, help="twin noise seed (sim backends; default 0, or the URL's seed=)"
+    )
+    parser.add_argument(
+        "--gain", type=Flag(ACTUATOR_GAIN), default=1.0, help="actuator gain error to emulate (robustness runs)"
+    )
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
     parser.add_argument(
         "--rotation-map",
@@ -57,10 +74,16 @@ def register(subparsers) -> None:
         "command (default on hardware), or a CSV of rotations or deflections measured on the rig",
     )
     parser.add_argument(
-        "--resolution-mm", type=float, default=0.5, help="reading resolution of measured deflections, mm (0.5)"
+        "--resolution-mm",
+        type=Flag(READING_RESOLUTION_MM),
+        default=0.5,
+        help="reading resolution of measured deflections, mm (0.5)",
     )
     parser.add_argument(
-        "--resolution-deg", type=float, default=1.0, help="reading resolution of measured rotations, deg (1)"
+        "--resolution-deg",
+        type=Flag(READING_RESOLUTION_DEG),
+        default=1.0,
+        help="reading resolution of measured rotations, deg (1)",
     )
     parser.add_argument(
         "--calibration",
@@ -97,9 +120,11 @@ def register(subparsers) -> None:
         help="try stream:// without hardware: the gauge stream's firmware (and a servo board) on pseudo-terminals",
     )
     emulator.add_argument("--twin", action="store_true", help="stream a twin's gauges and serve a servo board for it")
-    emulator.add_argument("--rate", type=float, default=100.0, help="lines per second (100, the firmware's)")
-    emulator.add_argument("--seed", type=int, default=0, help="twin and noise seed")
-    emulator.add_argument("--duration", type=float, default=None, help="stop after this many seconds (default Ctrl-C)")
+    emulator.add_argument("--rate", type=Flag(RATE_HZ), default=100.0, help="lines per second (100, the firmware's)")
+    emulator.add_argument("--seed", type=Flag(SEED), default=0, help="twin and noise seed")
+    emulator.add_argument(
+        "--duration", type=Flag(DURATION_S), default=None, help="stop after this many seconds (default Ctrl-C)"
+    )
 
 
 def _stream_emulator(args: argparse.Namespace) -> CommandResult:
@@ -122,7 +147,6 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS, make_controller
     from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
-    from flexdigit.rig.safety import RunawayGuard
     from flexdigit.rig.sample_log import check_appendable
     from flexdigit.rig.step_test import step_metrics
 
@@ -205,7 +229,6 @@ def _run(args: argparse.Namespace) -> CommandResult:
             period,
             log_path=args.log,
             log_mode="append" if args.append else "replace" if args.force else "new",
-            guard=RunawayGuard(truth=truth),
             on_sample=on_sample,
             measure=estimator,
             header={
@@ -264,6 +287,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
         "record": str(recording.path) if recording is not None else None,
+        "signal": result.extra.get("signal"),  # the signal that stopped the run (SIGTERM, SIGHUP, SIGINT), or null
     }
     truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if has_truth else ""
     text = (
@@ -276,8 +300,15 @@ def _run(args: argparse.Namespace) -> CommandResult:
         f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
         f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
     )
-    exit_code = {"completed": 0, "fault": 1, "interrupted": 130}[result.status]
+    # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
+    exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[result.status]
     return CommandResult(data=data, text=text, exit_code=exit_code)
+
+
+def _signal_exit_code(name: str | None) -> int:
+    import signal
+
+    return 128 + int(getattr(signal, name or "SIGINT"))
 
 
 def _run_on_board(args: argparse.Namespace) -> CommandResult:

@@ -10,32 +10,23 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
-from flexdigit._validation import check_values
+from flexdigit._validation import SEED, Flag, Plausible, check_values
 from flexdigit.errors import ParameterError
+from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M, SERVO_COMMAND
+
+# The experiments' flags, declared once (flexdigit._validation.Flag): argparse refuses a value outside its range
+# before anything is simulated, in one line naming the flag.
+#: A simulated record's length: the thesis's records are 1.5-8 s; ten minutes bounds the memory (x the rate).
+DURATION = Plausible("s", 0.01, 600.0, "a simulated record of 10 ms to 10 min")
+#: The sample rate of a simulated record: the thesis logged at 1 kHz; 10 kHz resolves every mode of the digit.
+RATE = Plausible("Hz", 1.0, 1e4, "sampling at 1 Hz to 10 kHz")
+#: Commands as a list ("0,20,40") or a range ("8..43"), each a servo position byte (both ends checked first).
+COMMANDS = Flag(SERVO_COMMAND, many=True, ranges=True)
 
 
-def _floats(text: str, name: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise ParameterError(f"--{name} must be comma-separated numbers. Got {text!r} instead.") from None
-    if not values:
-        raise ParameterError(f"--{name} must name at least one value. Got {text!r} instead.")
-    return values
-
-
-def _commands(text: str, params, experiment: str) -> list[int]:
-    """``"8..43"`` or ``"0,20,40"``, each inside the servo's command range (checked here, in the user's terms)."""
-    try:
-        if ".." in text:
-            lo, hi = text.split("..")
-            values = list(range(int(lo), int(hi) + 1))
-        else:
-            values = [int(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise ParameterError(f"--commands must be like '8..43' or '0,20,40'. Got {text!r} instead.") from None
-    if not values:
-        raise ParameterError(f"--commands must name at least one command (e.g. '8..43'). Got {text!r} instead.")
+def _commands(values: list[int], params, experiment: str) -> list[int]:
+    """Commands parsed by :data:`COMMANDS`, each inside this rig's command range (checked here, in the user's
+    terms: a rig file may narrow 0..254)."""
     a = params.actuator
     owner = f"flexdigit simulate {experiment}"
     check_values(values, "--commands", owner, low=a.command_min, high=a.command_max, integer=True)
@@ -55,39 +46,75 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     def common(p: argparse.ArgumentParser) -> None:
         p.add_argument("--out", required=True, help="output file (.parquet, or .csv)")
         p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
-        p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+        p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
         p.add_argument("--params", help="rig parameters TOML (default: the thesis rig)")
-        p.add_argument("--calibration", help="twin calibration TOML (default: fitted to the thesis)")
+        p.add_argument(
+            "--calibration",
+            help="twin calibration TOML (default: fitted to the thesis, scaled to the --params digit)",
+        )
         p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
     p = sub.add_parser("release", help="release test, cable removed (3.1.2, figure 3.6)")
     common(p)
     p.add_argument("--no-housing", action="store_true", help="bare strip (table 3.1)")
-    p.add_argument("--deflection-mm", type=float, default=20.0, help="initial tip deflection (mm)")
-    p.add_argument("--duration", type=float, default=8.0, help="seconds")
-    p.add_argument("--rate", type=float, default=1000.0, help="sample rate (Hz)")
+    p.add_argument(
+        "--deflection-mm",
+        type=Flag(Plausible("mm", -200.0, 200.0, "a release from at most 200 mm either side of straight")),
+        default=20.0,
+        help="initial tip deflection (mm)",
+    )
+    p.add_argument("--duration", type=Flag(DURATION), default=8.0, help="seconds")
+    p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
+    p.add_argument(
+        "--orientation",
+        default="vertical",
+        choices=("vertical", "hanging", "horizontal"),
+        help="vertical: tip up, as the thesis mounted it (2.2.4); a long digit buckles so, hang it",
+    )
     p = sub.add_parser("step", help="servo command step (3.2.4, figure 3.11)")
     common(p)
-    p.add_argument("--from", dest="command_from", type=int, default=0)
-    p.add_argument("--to", dest="command_to", type=int, default=51)
-    p.add_argument("--duration", type=float, default=1.5)
-    p.add_argument("--rate", type=float, default=1000.0)
+    p.add_argument("--from", dest="command_from", type=Flag(SERVO_COMMAND), default=0)
+    p.add_argument("--to", dest="command_to", type=Flag(SERVO_COMMAND), default=51)
+    p.add_argument("--duration", type=Flag(DURATION), default=1.5)
+    p.add_argument("--rate", type=Flag(RATE), default=1000.0)
     p.add_argument("--cable", action="store_true", help="keep the cable attached")
     p = sub.add_parser("sweep", help="actuation sweep, commands 8..43 (3.4.3, E 3.20-3.22)")
     common(p)
-    p.add_argument("--commands", default="8..43", help="'8..43' or '8,20,43'")
-    p.add_argument("--settle", type=float, default=3.0, help="settling time per command (s)")
-    p.add_argument("--samples", type=int, default=20, help="samples per command")
+    p.add_argument("--commands", type=COMMANDS, default="8..43", help="'8..43' or '8,20,43'")
+    p.add_argument(
+        "--settle",
+        type=Flag(Plausible("s", 0.0, 60.0, "the digit settles in ~3 s (wn 13 rad/s, zeta 0.07); a minute is ample")),
+        default=3.0,
+        help="settling time per command (s)",
+    )
+    p.add_argument(
+        "--samples",
+        type=Flag(Plausible("", 1, 10_000, "readings per command: the thesis took 20", integer=True)),
+        default=20,
+        help="samples per command",
+    )
     p = sub.add_parser("load", help="static load test (6.4-6.5, 7.1-7.2)")
     common(p)
-    p.add_argument("--loads-g", default="12.5,25,7.5", help="weights in grams (default: chapter 6)")
+    p.add_argument(
+        "--loads-g",
+        type=Flag(LOAD_KG.to("g", 1e3), many=True),
+        default="12.5,25,7.5",
+        help="weights in grams (default: chapter 6)",
+    )
     p.add_argument(
         "--positions-cm",
+        type=Flag(POSITION_FROM_TIP_M.to("cm", 1e2), many=True),
         default="0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,24",
         help="positions from the tip in cm (default: chapter 6)",
     )
-    p.add_argument("--commands", default=None, help="actuation commands, e.g. '0,20,40' (default: cable detached)")
-    p.add_argument("--repetitions", type=int, default=25)
+    p.add_argument(
+        "--commands", type=COMMANDS, default=None, help="actuation commands, e.g. '0,20,40' (default: cable detached)"
+    )
+    p.add_argument(
+        "--repetitions",
+        type=Flag(Plausible("", 1, 10_000, "repetitions of each load case: the thesis made 25", integer=True)),
+        default=25,
+    )
     p.add_argument("--orientation", default="horizontal", choices=("horizontal", "vertical", "hanging"))
 
 
@@ -98,11 +125,18 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.params import RigParams, load_params
     from flexdigit.twin import records as ex
     from flexdigit.twin.calibration import default_calibration, load_calibration
+    from flexdigit.twin.digit_calibration import calibration_for
 
     check_output(args.out, force=args.force)  # before the simulation, not after it
     params = load_params(args.params) if args.params else RigParams()
-    cal = load_calibration(args.calibration) if args.calibration else default_calibration()
+    if args.calibration:
+        cal = load_calibration(args.calibration)
+    elif params == RigParams():
+        cal = default_calibration()
+    else:  # a digit nobody has measured: the thesis's calibration scaled to it by the physics
+        cal = calibration_for(params)
     common = dict(seed=args.seed, params=params, calibration=cal)
+    gauges = range(1, len(params.geometry.gauge_positions_m) + 1)  # the digit's gauges, 1..G
     findings: dict = {}
     if args.experiment == "release" and args.deflection_mm == 0:
         # a release from no deflection is noise, and the fit below would report a wn and zeta fitted to it
@@ -116,11 +150,12 @@ def _run(args: argparse.Namespace) -> CommandResult:
             tip_deflection_m=args.deflection_mm * 1e-3,
             duration_s=args.duration,
             sample_rate_hz=args.rate,
+            orientation=args.orientation,
             **common,
         )
-        findings = _release_findings(res)
+        findings = _release_findings(res, gauges)
         lines = []
-        for g in (1, 2, 3):
+        for g in gauges:
             f = findings[f"gauge{g}"]
             if "error" in f:
                 lines.append(f"gauge {g}: not identified ({f['error']})")
@@ -148,18 +183,19 @@ def _run(args: argparse.Namespace) -> CommandResult:
         )
         cmd = res.column("command")
         lines = []
-        for g in (1, 2, 3):
+        thesis = params == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
+        for g in gauges:
             slope, offset = np.polyfit(cmd, res.column(f"gauge{g}_v"), 1)
             findings[f"gauge{g}"] = {"slope_v_per_command": float(slope), "offset_v": float(offset)}
-            lines.append(f"gauge {g}: V = {slope:.5f} command {offset:+.4f}   (E 3.2{g - 1})")
+            lines.append(f"gauge {g}: V = {slope:.5f} command {offset:+.4f}" + (f"   (E 3.2{g - 1})" if thesis else ""))
         text = "\n".join(lines)
     else:
         commands = None if args.commands is None else _commands(args.commands, params, "load")
         owner = "flexdigit simulate load"
-        loads_g = check_values(_floats(args.loads_g, "loads-g"), "--loads-g", owner, low=0, low_open=True, unit="g")
+        loads_g = args.loads_g
         length_cm = params.geometry.digit_length_m * 1e2
         positions_cm = check_values(
-            _floats(args.positions_cm, "positions-cm"),
+            args.positions_cm,
             "--positions-cm",
             owner,
             low=0,
@@ -176,7 +212,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
             orientation=args.orientation,
             **common,
         )
-        findings = {f"gauge{g}_mean_v": float(np.mean(res.column(f"gauge{g}_v"))) for g in (1, 2, 3)}
+        findings = {f"gauge{g}_mean_v": float(np.mean(res.column(f"gauge{g}_v"))) for g in gauges}
         text = f"{res.table.num_rows} samples"
     path = res.save(args.out, force=args.force)
     data = {
@@ -190,14 +226,14 @@ def _run(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=data, text=f"{res.metadata['experiment']}: {res.table.num_rows} rows -> {path}\n{text}")
 
 
-def _release_findings(record) -> dict:
+def _release_findings(record, gauges=(1, 2, 3)) -> dict:
     """wn and zeta of each gauge of a simulated release test by ``identify``'s lsq fit, and their medians: the
     reduction ``flexdigit calibrate`` applies to a rig's release tests, so one record gives one answer."""
     # the analysis sits above the twin (identify, calibrate); this command only presents it for the record it made
     from flexdigit.calibrate.targets import release_figures
     from flexdigit.identify.timeseries import series_from_table
 
-    figures = release_figures([series_from_table(record, f"gauge{g}") for g in (1, 2, 3)])
+    figures = release_figures([series_from_table(record, f"gauge{g}") for g in gauges])
     findings: dict = {"wn_rad_s": figures["wn_rad_s"], "zeta": figures["zeta"]}
     for fit in figures["fits"]:
         findings[fit.channel] = {"wn_rad_s": fit.wn_rad_s, "zeta": fit.zeta, "fit_percent": fit.fit_percent}

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from numbers import Integral
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._validation import Flag, Interval, Plausible
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -21,9 +23,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, help="directory for the journal, tables and figures (created)")
     p.add_argument("--scheduler", default=None, help="an existing Dask scheduler, tcp://HOST:PORT")
     p.add_argument("--workers", type=int, default=None, help="local Dask workers (default: one per core; 0: no Dask)")
-    p.add_argument("--n", type=int, default=None, help="sensitivity: Sobol base samples N (a power of 2)")
+    p.add_argument(  # the spec's own bounds (sobol_n 4..2**20, a power of 2) are checked with the spec
+        "--n",
+        type=Flag(Interval(Integral, 1, 2**20)),
+        default=None,
+        help="sensitivity: Sobol base samples N (a power of 2)",
+    )
     p.add_argument("--second-order", action="store_true", help="sensitivity: also second-order indices S2")
-    p.add_argument("--samples", type=int, default=None, help="design: candidate designs to evaluate (0: all)")
+    p.add_argument(
+        "--samples",
+        type=Flag(Plausible("", 0, 1_000_000, "candidate designs: a million twin evaluations is days", integer=True)),
+        default=None,
+        help="design: candidate designs to evaluate (0: all)",
+    )
     p.add_argument("--force", action="store_true", help="start over: replace the journal and outputs in --out")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 
@@ -37,6 +49,11 @@ def _study(args: argparse.Namespace) -> CommandResult:
 
     if args.workers is not None and args.workers < 0:
         raise ParameterError(f"--workers must be >= 0 (0: no Dask). Got {args.workers} instead.")
+    if args.workers is not None and args.scheduler is None:
+        from flexdigit._system import check_workers
+        from flexdigit.studies.execution import WORKER_BYTES
+
+        check_workers(args.workers, "--workers", WORKER_BYTES)
     if args.scheduler is not None:
         parse_scheduler(args.scheduler)
     out = Path(args.out)
@@ -62,17 +79,21 @@ def _run(args, out, run, settings, write):
     retry = done.exists() and not args.force and retry_rows(out) > 0
     if done.exists() and not args.force and not retry:
         raise OutputExistsError(f"{done}: this study has finished in {out}; pass --force to run it again")
+    from flexdigit._io import output_lock
+    from flexdigit.studies.execution import JOURNAL_NAME
+
     out.mkdir(exist_ok=True)
-    result = run(
-        args.spec_obj,
-        out,
-        settings=settings,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        force=args.force,
-        progress=not args.no_progress,
-    )
-    paths = write(result, out, force=args.force or retry)
+    with output_lock(out / JOURNAL_NAME):  # a second study into this --out is refused, never mixed with this one
+        result = run(
+            args.spec_obj,
+            out,
+            settings=settings,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            force=args.force,
+            progress=not args.no_progress,
+        )
+        paths = write(result, out, force=args.force or retry)
     summary = result.summary()
     summary["files"] = {k: str(v) for k, v in paths.items()}
     return result, summary

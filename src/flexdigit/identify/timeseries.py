@@ -35,10 +35,12 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit._validation import check_array
+from flexdigit import _io
+from flexdigit._validation import Plausible, check_array
 from flexdigit.errors import DataFileError, one_line
 
 __all__ = [
+    "SAMPLE_INTERVAL_S",
     "MIN_SAMPLES",
     "TIME_UNITS",
     "TIME_NAMES",
@@ -51,6 +53,11 @@ __all__ = [
     "series_from_table",
     "write_csv",
 ]
+
+#: The sample interval of a record to identify: the digit rings at ~2 Hz (13 rad/s, table 3.2) and the servo at
+#: ~3 Hz, so a record sampled slower than 10 Hz cannot show them; the thesis logged at 1 kHz. A record in ms read as
+#: s has a 1 "s" interval, and is named as such.
+SAMPLE_INTERVAL_S = Plausible("s", 1e-7, 0.1, "a record of the digit: 10 samples a second or more (the thesis: 1 kHz)")
 
 #: Fewest samples an identification record may have.
 MIN_SAMPLES = 20
@@ -221,7 +228,10 @@ def read_timeseries(
         that is not a number, time not strictly increasing, NaN runs, irregular sampling, fewer than
         :data:`MIN_SAMPLES` samples.
     """
+    from flexdigit._io import refuse_special
+
     p = Path(path)
+    refuse_special(p, "a CSV or Parquet record")
     if not p.is_file():
         raise DataFileError(f"{p}: no such file")
     suffix = p.suffix.lower()
@@ -345,8 +355,11 @@ def _find_time_column(p: str, columns: list[str], time_column: str | None) -> st
 
 def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
     """Columns, float data and the file line of each data row; names the line and column of a bad cell."""
+    from flexdigit._io import RECORDS_LIMIT, count_lines, read_bytes
+
+    count_lines(p, "a CSV record")  # a 10-million-row file is refused in a second, not read into gigabytes
     try:
-        text = p.read_text(encoding="utf-8-sig")
+        text = read_bytes(p, "a CSV record", RECORDS_LIMIT).decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataFileError(f"{p}: not a text CSV file (byte {exc.start} is not UTF-8)") from None
     numbered = [
@@ -357,11 +370,11 @@ def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
     if not numbered:
         raise DataFileError(f"{p}: empty file: expected a header row such as time_s,sg1_v")
     split = _splitter(p, [line for _, line in numbered[:21]])
-    header_line, header = numbered[0][0], [c.strip().strip('"') for c in split(numbered[0][1])]
+    header_line, header = numbered[0][0], [c.strip().strip('"') for c in split(numbered[0][1], numbered[0][0])]
     rows: list[list[str]] = []
     lines: list[int] = []
     for lineno, line in numbered[1:]:
-        row = split(line)
+        row = split(line, lineno)
         if not "".join(row).strip():
             continue
         if len(row) != len(header):
@@ -381,15 +394,26 @@ def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
 
 
 class _Splitter:
-    """Split a CSV line on one delimiter (quotes as in :mod:`csv`), or on runs of spaces (``delimiter=" "``)."""
+    """Split a CSV line on one delimiter (quotes as in :mod:`csv`), or on runs of spaces (``delimiter=" "``).
 
-    def __init__(self, delimiter: str):
-        self.delimiter = delimiter
+    A line :mod:`csv` cannot split (a field past its limit of 131072 characters: a file with a hole of NUL bytes,
+    a quote never closed) is a :class:`DataFileError` naming the file and the line, not a ``csv.Error``.
+    """
 
-    def __call__(self, line: str) -> list[str]:
+    def __init__(self, delimiter: str, path: Path | None = None):
+        self.delimiter, self.path = delimiter, path
+
+    def __call__(self, line: str, lineno: int | None = None) -> list[str]:
         if self.delimiter == " ":
             return [c.strip('"') for c in line.split()]
-        return next(csv.reader([line], delimiter=self.delimiter))
+        try:
+            return next(csv.reader([line], delimiter=self.delimiter))
+        except csv.Error as exc:
+            where = "" if lineno is None else f" line {lineno}:"
+            raise DataFileError(
+                f"{self.path}:{where} not a CSV row ({exc}; {len(line)} characters on one line): expected numbers "
+                f"separated by {self.delimiter!r}"
+            ) from None
 
 
 def _splitter(p: Path, lines: list[str]) -> _Splitter:
@@ -399,11 +423,14 @@ def _splitter(p: Path, lines: list[str]) -> _Splitter:
     ``;``. Without a consistent one, ``,``: the reader then names the first line whose fields do not match.
     """
     for delimiter in (*_DELIMITERS, " "):
-        split = _Splitter(delimiter)
-        counts = {len(split(line)) for line in lines}
+        split = _Splitter(delimiter, p)
+        try:
+            counts = {len(split(line)) for line in lines}
+        except DataFileError:
+            continue  # not this delimiter; the rows are read (and a bad one named) with the one chosen
         if len(counts) == 1 and counts.pop() >= 2:
             return split
-    return _Splitter(",")
+    return _Splitter(",", p)
 
 
 #: Cells read as a missing value (NaN).
@@ -434,8 +461,12 @@ def _parse_column(p: Path, name: str, cells: list[str], lines: list[int], decima
 def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
     import pyarrow.parquet as pq
 
+    from flexdigit._io import check_input
+
+    check_input(p, "a Parquet record")
     try:
-        table = pq.read_table(p)
+        with _io.open_input(p, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            table = pq.read_table(fh)
     except Exception as exc:  # pyarrow raises several types for a damaged file; all mean "cannot read it"
         raise DataFileError(f"{p}: not a readable Parquet file ({one_line(exc)})") from None
     try:  # pyarrow decodes the names only when asked: a damaged file's may not be UTF-8
@@ -470,6 +501,11 @@ def _check_series(t: np.ndarray, y: np.ndarray, source: str, tcol: str, ycol: st
         )
     _check_nan_runs(y, source, ycol, where)
     med = float(np.median(dt))
+    if not SAMPLE_INTERVAL_S.satisfied_by(med):
+        try:
+            SAMPLE_INTERVAL_S.check(med, "sample interval", None, DataFileError)
+        except DataFileError as exc:
+            raise DataFileError(f"{source}: column {tcol!r}: {str(exc).replace('parameter ', '', 1)}") from None
     off = np.nonzero(np.abs(dt - med) > SAMPLING_TOLERANCE * med)[0]
     if off.size:
         i = int(off[0]) + 1

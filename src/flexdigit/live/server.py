@@ -14,6 +14,22 @@ Safety (issue 12):
   site cannot drive the rig through the user's browser);
 - every client message is size-limited, rate-limited (a token bucket) and validated and clamped
   (:func:`flexdigit.live.session.validate_request`); a bad one gets an error message back, never an exception;
+
+Resources (issue 22): each page has its own budget and its own bounded queue, and nothing one page does can slow
+or lock out another:
+
+- the request budget is each page's own (:data:`RATE_PER_PAGE`); there is no shared one that two flooding pages
+  could drain for everyone. A page that keeps sending past its budget (:data:`FLOOD_DROPPED` requests dropped
+  beyond what the budget refills) is disconnected (close 1008);
+- each page has one frame in flight at most: the next is built only when the last has gone out, and never while
+  more than :data:`MAX_QUEUED_BYTES` wait in its connection's buffer (frames are skipped, not queued). A page that
+  does not take a frame for :data:`SLOW_DROP_S` is disconnected, and so is one that does not answer the
+  WebSocket ping within :data:`PING_TIMEOUT_S` (a client that never reads never answers: the kernel's socket
+  buffers would otherwise hide it for a minute). Its place (one of :data:`MAX_PAGES`) is free again within
+  seconds, so pages that stopped reading cannot keep the surgeon's page out;
+- a page never loses its place to a newer one: the page holding the setpoint (the controlling page) stays
+  connected however many others come and go, and a page beyond :data:`MAX_PAGES` is refused (1013, try again;
+  the packaged page retries every half second).
 - when the last page disconnects the digit is relaxed, and when the server stops (Ctrl-C, SIGTERM) the session
   sends the safe command, closes the port and closes the recording (:class:`~flexdigit.live.session.LiveSession`).
 """
@@ -21,10 +37,14 @@ Safety (issue 12):
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import ipaddress
 import json
+import signal
 import socket
+import struct
 import sys
+import threading
 import time
 from importlib import resources
 from typing import Any
@@ -41,9 +61,17 @@ ASSETS = {
 }
 #: Page updates per second pushed to each client (the loop makes 50 samples a second; the shape comes at 25).
 UPDATE_HZ = 30.0
-#: Requests a second from one page (``burst`` at once), and from all pages together.
+#: Requests a second from one page (``burst`` at once). Each page's own: no budget is shared between pages.
 RATE_PER_PAGE, BURST_PER_PAGE = 20.0, 40.0
-RATE_ALL, BURST_ALL = 40.0, 80.0
+#: Requests dropped past a page's budget (beyond what the budget refills) before the page is disconnected as
+#: flooding; a burst of a hundred clicks is told to slow down, a page sending without pause is cut off.
+FLOOD_DROPPED = 200.0
+#: Bytes waiting in a page's connection buffer above which its frames are skipped rather than queued.
+MAX_QUEUED_BYTES = 64 * 1024
+#: A page that has not taken a frame (its buffer full) for this long, s, is disconnected.
+SLOW_DROP_S = 3.0
+#: WebSocket keepalive: a ping every PING_INTERVAL_S, unanswered after PING_TIMEOUT_S disconnects the page, s.
+PING_INTERVAL_S, PING_TIMEOUT_S = 1.0, 2.0
 #: Pages served at once; one more is refused (WebSocket close 1013, "try again later").
 MAX_PAGES = 8
 #: The largest WebSocket frame read at all (bytes): a bigger one closes the connection (1009) before it is buffered.
@@ -145,7 +173,6 @@ def make_app(session, allowed_origins: set[str], *, any_address: bool = False):
         headers = {"Content-Security-Policy": csp, "X-Content-Type-Options": "nosniff", "Cache-Control": "no-store"}
         return Response(body, media_type=media, headers=headers)
 
-    everyone = TokenBucket(RATE_ALL, BURST_ALL)
     pages = [0]
 
     async def stream(websocket: WebSocket) -> None:
@@ -165,60 +192,101 @@ def make_app(session, allowed_origins: set[str], *, any_address: bool = False):
             raise
         session.connected()
         bucket = TokenBucket(RATE_PER_PAGE, BURST_PER_PAGE)
+        patience = TokenBucket(RATE_PER_PAGE, FLOOD_DROPPED)  # requests this page may have dropped
         told_at = -1.0  # when this page was last told to slow down (once a second at most)
+        transport = _transport(websocket)
+
+        def drop(why: str) -> None:
+            """Disconnect this page at once: its buffer is not flushed first (a page that does not read never
+            takes it), so its place and memory are free now; the receive loop then sees the disconnect."""
+            if transport is not None:
+                sock = transport.get_extra_info("socket")
+                if sock is not None:  # reset, not closed: the kernel drops the unsent frames now too
+                    with contextlib.suppress(OSError):
+                        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+                transport.abort()
+            else:  # pragma: no cover - another ASGI server: close as politely as it allows
+                asyncio.ensure_future(websocket.close(code=1008, reason=why))
+
+        async def send(text: str) -> None:
+            try:
+                await asyncio.wait_for(websocket.send_text(text), SLOW_DROP_S)
+            except TimeoutError:
+                drop("not reading")
+                raise WebSocketDisconnect(1008) from None
 
         async def push() -> None:
             since = -1
             period = 1.0 / UPDATE_HZ
             loop = asyncio.get_running_loop()
             next_at = loop.time()
+            taken_at = loop.time()  # when this page last took a frame
             sent_map = None
             while True:
-                frame = session.snapshot(since)
-                if frame["samples"]:
-                    since = frame["samples"][-1]["k"]
-                if frame["locatability"] is sent_map:  # the map changes with the command only: send it once
-                    frame["locatability"] = None
+                if transport is not None and transport.is_closing():
+                    # closing (uvicorn's keepalive gave up on it, or the page said goodbye): a buffer the page does
+                    # not read would keep the connection, and its place, open until it drained
+                    drop("closing")
+                    return
+                if transport is not None and transport.get_write_buffer_size() > MAX_QUEUED_BYTES:
+                    # behind: skip this frame (the next carries the samples since the last one sent)
+                    if loop.time() - taken_at > SLOW_DROP_S:
+                        drop("not reading")
+                        return
                 else:
-                    sent_map = frame["locatability"]
-                await websocket.send_text(_dumps(frame))
+                    frame = session.snapshot(since)
+                    if frame["samples"]:
+                        since = frame["samples"][-1]["k"]
+                    if frame["locatability"] is sent_map:  # the map changes with the command only: send it once
+                        frame["locatability"] = None
+                    else:
+                        sent_map = frame["locatability"]
+                    await send(_dumps(frame))
+                    taken_at = loop.time()
                 # absolute deadlines: the time a frame takes to build and send does not slow the rate
                 next_at = max(next_at + period, loop.time())
                 await asyncio.sleep(next_at - loop.time())
 
         sender = None
         try:
-            await websocket.send_text(_dumps(session.hello()))
+            await send(_dumps(session.hello()))
             sender = asyncio.create_task(push())
             while True:
                 message = await websocket.receive()
                 if message["type"] == "websocket.disconnect":
                     break
                 text = message.get("text")
-                if text is None:
-                    await websocket.send_text(_dumps({"type": "error", "message": "send JSON text, not binary"}))
-                    continue
-                if len(text) > MAX_REQUEST_BYTES:
-                    error = f"request too long ({len(text)} bytes, at most {MAX_REQUEST_BYTES})"
-                    await websocket.send_text(_dumps({"type": "error", "message": error}))
-                    continue
-                if not (bucket.take() and everyone.take()):
+                if not bucket.take():
+                    if not patience.take():  # past its budget without pause: flooding
+                        reason = f"flooding: more than {RATE_PER_PAGE:g} requests a second"
+                        try:
+                            await asyncio.wait_for(websocket.close(code=1008, reason=reason), 1.0)
+                        except TimeoutError:
+                            drop(reason)
+                        break
                     now = time.monotonic()
                     if now - told_at >= 1.0:  # dropped; said once a second, not once per message
                         told_at = now
                         error = f"too many requests (at most {RATE_PER_PAGE:g} a second); dropped until you slow down"
-                        await websocket.send_text(_dumps({"type": "error", "message": error}))
+                        await send(_dumps({"type": "error", "message": error}))
+                    continue
+                if text is None:
+                    await send(_dumps({"type": "error", "message": "send JSON text, not binary"}))
+                    continue
+                if len(text) > MAX_REQUEST_BYTES:
+                    error = f"request too long ({len(text)} bytes, at most {MAX_REQUEST_BYTES})"
+                    await send(_dumps({"type": "error", "message": error}))
                     continue
                 try:
                     accepted = session.request(json.loads(text))
                 except (ValueError, ParameterError) as exc:
-                    await websocket.send_text(_dumps({"type": "error", "message": str(exc)}))
+                    await send(_dumps({"type": "error", "message": str(exc)}))
                     continue
                 except Exception as exc:  # a request must never take the page's connection (or the server) down
                     error = f"request refused ({type(exc).__name__}: {exc})"
-                    await websocket.send_text(_dumps({"type": "error", "message": error[:300]}))
+                    await send(_dumps({"type": "error", "message": error[:300]}))
                     continue
-                await websocket.send_text(_dumps({"type": "ack", "request": accepted}))
+                await send(_dumps({"type": "ack", "request": accepted}))
         except (WebSocketDisconnect, RuntimeError, OSError):
             pass  # the page went away mid-send
         finally:
@@ -237,6 +305,15 @@ def make_app(session, allowed_origins: set[str], *, any_address: bool = False):
 
     routes = [Route(path, asset) for path in ASSETS] + [WebSocketRoute("/ws", stream)]
     return Starlette(routes=routes, lifespan=lifespan)
+
+
+def _transport(websocket):
+    """The asyncio transport under a Starlette WebSocket served by uvicorn (its ``receive`` is the protocol's bound
+    method), to read how much waits in its buffer and to drop a page that stopped reading; None elsewhere."""
+    protocol = getattr(getattr(websocket, "_receive", None), "__self__", None)
+    transport = getattr(protocol, "transport", None)
+    needed = ("abort", "get_write_buffer_size")
+    return transport if all(callable(getattr(transport, n, None)) for n in needed) else None
 
 
 def bind(host: str, port: int) -> socket.socket:
@@ -287,8 +364,48 @@ def serve(session, host: str = "127.0.0.1", port: int = 8050, *, allow_remote: b
         # no permessage-deflate: compressing 30 frames of ~3 kB a second cost the server more CPU (~2 % of a core)
         # than anything but the shape estimate, to save bandwidth a page on this machine or its LAN does not miss
         ws_per_message_deflate=False,
+        # a page that stops reading stops answering pings: found in seconds, not uvicorn's default 40 s (the
+        # kernel's socket buffers take a minute of frames before a send would wait)
+        ws_ping_interval=PING_INTERVAL_S,
+        ws_ping_timeout=PING_TIMEOUT_S,
         lifespan="on",
         timeout_graceful_shutdown=2,
         access_log=False,
     )
-    uvicorn.Server(config).run(sockets=[sock])
+    _server_class()(config, session).run(sockets=[sock])
+
+
+def _server_class():
+    """The server class, made on first use: uvicorn is imported only to serve."""
+    import uvicorn
+
+    class Server(uvicorn.Server):
+        """uvicorn's server, shut down gracefully by SIGHUP too (a closed terminal, as SIGINT and SIGTERM), telling
+        the session which signal stopped it (its recording's stop record names it). uvicorn raises the signal again
+        once it has shut down: :func:`flexdigit.interrupts.stop_on_signals` makes it an ``Interrupted``."""
+
+        def __init__(self, config, session) -> None:
+            super().__init__(config)
+            self.session = session
+
+        def handle_exit(self, sig: int, frame) -> None:
+            if self.session.stopped_by is None:
+                self.session.stopped_by = signal.Signals(sig).name
+            super().handle_exit(sig, frame)
+
+        @contextlib.contextmanager
+        def capture_signals(self):
+            with super().capture_signals():  # SIGINT, SIGTERM; raised again after, in reverse order
+                hup = getattr(signal, "SIGHUP", None)
+                if hup is None or threading.current_thread() is not threading.main_thread():
+                    yield
+                    return
+                previous = signal.getsignal(hup)
+                if previous != signal.SIG_IGN:  # nohup: stays ignored
+                    signal.signal(hup, self.handle_exit)
+                try:
+                    yield
+                finally:
+                    signal.signal(hup, previous)  # before uvicorn raises the captured signals again
+
+    return Server

@@ -22,7 +22,6 @@ trained network (``--model``) when given; a palpation estimate adds itself the s
 
 from __future__ import annotations
 
-import bisect
 import collections
 import concurrent.futures
 import math
@@ -317,6 +316,9 @@ class LiveSession:
     """
 
     HISTORY_S = 10.0
+    #: Requests waiting for the loop at most: more than every page's burst at once (the server's 8 pages x 40; the
+    #: loop applies them every 20 ms), so only a loop that is stuck refuses them, telling the page it is behind.
+    MAX_PENDING_REQUESTS = 512
     ESTIMATE_EVERY = 2  # frames: the shape at up to 25 Hz
     AVERAGE = 5  # readings averaged into each estimate (0.1 s)
     #: Re-estimate at least this often even when nothing moved (s).
@@ -366,7 +368,10 @@ class LiveSession:
             self.rig.close()
             raise
         self._lock = threading.Lock()
-        self._requests: queue.SimpleQueue = queue.SimpleQueue()
+        # bounded: pages within their budgets cannot pile requests up behind a loop that is stuck (a rig's read
+        # blocking); the relax on the last page leaving never waits for room (a flag when the queue is full)
+        self._requests: queue.Queue = queue.Queue(maxsize=self.MAX_PENDING_REQUESTS)
+        self._relax_due = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._estimator_thread: threading.Thread | None = None
@@ -381,6 +386,8 @@ class LiveSession:
         #: CPU time (s) the loop spent inside the rig's read and write: on the twin, its simulation of the digit
         self.rig_cpu_s = 0.0
         self.error: str | None = None
+        #: The signal that stopped the server (SIGINT, SIGTERM, SIGHUP), named in the recording's stop record.
+        self.stopped_by: str | None = None
 
     def _setup(self, model, record, force, rotation_map, orientation, seed) -> None:
         from flexdigit.shape.shape import ShapeEstimator
@@ -435,7 +442,7 @@ class LiveSession:
         if self.kind == "replay":
             samples = rig.samples
             self._replayed = samples
-            self._replayed_t = [float(x["t"]) - float(samples[0]["t"]) for x in samples]
+            self._replayed_t = rig.times_s - rig.times_s[0]  # an array: no float object per sample
             self._replay_length_s = float(samples[-1]["t"]) - float(samples[0]["t"])
             self.setpoint = None
             # a recording made under a controller (run, live's closed loop) has its setpoint and measured value in
@@ -495,7 +502,12 @@ class LiveSession:
             raise ParameterError("only the twin can be loaded from the page; on a rig the operator hangs weights")
         if kind == "speed" and self.kind != "replay":
             raise ParameterError("only a replay has a playback speed")
-        self._requests.put(clean)
+        try:
+            self._requests.put_nowait(clean)
+        except queue.Full:
+            raise ParameterError(
+                f"the rig loop is behind ({self.MAX_PENDING_REQUESTS} requests waiting); request dropped, try again"
+            ) from None
         return clean
 
     def connected(self) -> None:
@@ -508,7 +520,10 @@ class LiveSession:
             self.clients = max(self.clients - 1, 0)
             none_left = self.clients == 0
         if none_left:
-            self._requests.put({"type": "relax"})
+            try:
+                self._requests.put_nowait({"type": "relax"})
+            except queue.Full:  # never lost: the loop relaxes once it has emptied the queue
+                self._relax_due.set()
 
     def snapshot(self, since_k: int) -> dict[str, Any]:
         """Samples after ``since_k`` and the latest estimates, for one page update."""
@@ -571,7 +586,10 @@ class LiveSession:
                 self.rig.close()  # sends the equilibrium command, then releases the port
         finally:
             if self.recording is not None and not self.recording.closed:
-                self.recording.close({"stop": why, "message": self.error or why})
+                stop = {"stop": why, "message": self.error or why}
+                if self.stopped_by:
+                    stop["signal"] = self.stopped_by
+                self.recording.close(stop)
 
     def _run(self) -> None:
         from flexdigit.rig.loop import check_reading
@@ -671,7 +689,10 @@ class LiveSession:
             try:
                 req = self._requests.get_nowait()
             except queue.Empty:
-                return
+                if not self._relax_due.is_set():
+                    return
+                self._relax_due.clear()  # the last page left while the queue was full: after what it held
+                req = {"type": "relax"}
             kind = req["type"]
             if kind == "setpoint":
                 self.setpoint = req["value"]
@@ -697,7 +718,7 @@ class LiveSession:
         rig = self.rig
         if self.kind == "replay":
             # the recorded sample in force (a recording of any rate, starting at any time)
-            i = max(bisect.bisect_right(self._replayed_t, reading.time_s + 1e-9) - 1, 0)
+            i = max(int(np.searchsorted(self._replayed_t, reading.time_s + 1e-9, side="right")) - 1, 0)
             rec = self._replayed[i]
             return int(rec.get("command", equilibrium)), _finite(rec.get("setpoint")), _finite(rec.get("y"))
         y = None

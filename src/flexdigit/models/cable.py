@@ -46,7 +46,7 @@ __all__ = [
 
 def cable_shortening_m(theta_m_rad, params: RigParams | None = None):
     """``dl_M = theta_M r_M`` (E 3.11): cable shortening (m) for a servo rotation (rad); vectorised."""
-    r = (params or RigParams()).actuator.pulley_radius_m
+    r = (params or RigParams()).actuator.cable_m_per_servo_rad
     out = np.asarray(theta_m_rad, dtype=float) * r
     return out if out.ndim else float(out)
 
@@ -76,7 +76,12 @@ def k2_nm_per_rad(params: RigParams | None = None, *, second_moment_m4: float | 
     p = params or RigParams()
     i = p.geometry.second_moment_m4 if second_moment_m4 is None else check_positive(second_moment_m4, "I", "K2")
     g = p.geometry
-    return p.material.youngs_modulus_pa * i * p.actuator.pulley_radius_m / (g.digit_length_m * g.cable_eccentricity_m)
+    return (
+        p.material.youngs_modulus_pa
+        * i
+        * p.actuator.cable_m_per_servo_rad
+        / (g.digit_length_m * g.cable_eccentricity_m)
+    )
 
 
 def moment_nm(theta_m_rad, params: RigParams | None = None):
@@ -95,7 +100,7 @@ def deflection_m(x_m, theta_m_rad, params: RigParams | None = None):
     x = np.asarray(x_m, dtype=float)
     out = (
         np.asarray(theta_m_rad, dtype=float)
-        * p.actuator.pulley_radius_m
+        * p.actuator.cable_m_per_servo_rad
         * x**2
         / (2.0 * g.digit_length_m * g.cable_eccentricity_m)
     )
@@ -110,7 +115,7 @@ def tip_deflection_m(theta_m_rad, params: RigParams | None = None):
 def tip_rotation_rad(theta_m_rad, params: RigParams | None = None):
     """Tip rotation (rad) for a servo rotation (rad): ``l / rho = r_M theta_M / e``; vectorised."""
     p = params or RigParams()
-    out = np.asarray(theta_m_rad, dtype=float) * p.actuator.pulley_radius_m / p.geometry.cable_eccentricity_m
+    out = np.asarray(theta_m_rad, dtype=float) * p.actuator.cable_m_per_servo_rad / p.geometry.cable_eccentricity_m
     return out if out.ndim else float(out)
 
 

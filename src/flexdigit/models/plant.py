@@ -443,10 +443,10 @@ def _consistent(params: RigParams, output: str, gains: str) -> Plant:
         "curvature_per_moment_1_per_nm2": 1.0 / ei,
         f"{output}_per_curvature": out_gain,
     }
-    static = rad_per_command * a.pulley_radius_m * moment_per_shortening / ei * out_gain
+    static = rad_per_command * a.cable_m_per_servo_rad * moment_per_shortening / ei * out_gain
     notes = [
         "command -> MT(s) (unit DC gain) x rad/command -> r_M -> E I/(l e) -> E(s) housing -> 1/(E I) -> output.",
-        f"K2 = {a.pulley_radius_m * moment_per_shortening:.6g} N m/rad (E 3.19).",
+        f"K2 = {a.cable_m_per_servo_rad * moment_per_shortening:.6g} N m/rad (E 3.19).",
     ]
     if gains == "measured":
         measured = _measured_per_command(output, params)
@@ -459,7 +459,7 @@ def _consistent(params: RigParams, output: str, gains: str) -> Plant:
         notes.append(f"DC gain scaled to the measured {measured:.6g} {unit} per command (table 3.6, E 3.20-3.22).")
         static = measured
     tf = (static * mt * e_digit).normalised()
-    k2 = rad_per_command * a.pulley_radius_m * moment_per_shortening  # N m of tip moment per command
+    k2 = rad_per_command * a.cable_m_per_servo_rad * moment_per_shortening  # N m of tip moment per command
     abcd = _second_order_series(mt, k2, e_digit, static / k2)
     return Plant("consistent", output, tf, abcd, "command", unit, components, tuple(notes))
 

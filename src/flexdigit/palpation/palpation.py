@@ -186,6 +186,7 @@ def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, lo
         close_rig=False,
         header={"palpation": {"commands": list(protocol.commands), "plateau_s": protocol.plateau_s}},
     )
+    result.raise_if_interrupted()  # a stop (Ctrl-C, SIGTERM) ends the sweep and the command, not a rig fault
     if not result.ok:
         raise_from = result.message
         from flexdigit.errors import RigError
@@ -853,6 +854,7 @@ def hold_force(
         on_sample=(lambda k, t, y, c: true_force.append(truth())) if truth else None,
         close_rig=False,
     )
+    result.raise_if_interrupted()
     t = result.time_s
     est = np.array(controller.forces[: t.size])
     scored = np.array(true_force) if truth else est

@@ -161,7 +161,10 @@ def _read(name_or_path, builtin, kind: str) -> tuple[dict, str]:
         resource = resources.files(__package__).joinpath("palpation_data", f"{text_name}.toml")
         text, source = resource.read_text(), f"{kind} {text_name}"
     else:
+        from flexdigit._io import refuse_special
+
         path = Path(name_or_path)
+        refuse_special(path, f"a {kind} TOML")
         if not path.is_file():
             raise DataFileError(
                 f"no {kind} {text_name!r}: expected one of {', '.join(builtin)} or a TOML file that exists"
@@ -171,7 +174,7 @@ def _read(name_or_path, builtin, kind: str) -> tuple[dict, str]:
         text, source = read_text(path, f"a {kind} TOML"), str(path)  # binary garbage: named, not a codec error
     try:
         return tomllib.loads(text), source
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise DataFileError(f"{source}: not valid TOML ({exc})") from None
 
 

@@ -7,14 +7,21 @@ the headline figures and the per-chapter counts, then the chapters, long tables 
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import errno
 import html
 import importlib
 import json
 import multiprocessing
+import os
+import shutil
+import stat
+import tempfile
 import time
 import traceback
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import matplotlib
@@ -22,8 +29,9 @@ import matplotlib
 from flexdigit import __version__
 from flexdigit._io import atomic_write, check_output
 from flexdigit._json import to_jsonable
-from flexdigit._system import available_cores
+from flexdigit._system import available_cores, check_workers
 from flexdigit.errors import OutputExistsError
+from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import Chapter, ReportContext
@@ -81,9 +89,16 @@ def reproduce(
         builds them one after another in this process.
     """
     out = check_report_dir(out_dir, force=force)
-    ctx = ReportContext(out_dir=out, params=params or RigParams(), seed=seed, fast=fast)
+    with _new_report(out) as work:
+        summary = _build(work, params, seed, fast, chapters, progress, workers)
+    return replace(summary, out_dir=out)
+
+
+def _build(work: Path, params, seed, fast, chapters, progress, workers) -> ReportSummary:
+    """The report, built in the folder ``work``."""
+    ctx = ReportContext(out_dir=work, params=params or RigParams(), seed=seed, fast=fast)
     names = CHAPTERS if chapters is None else tuple(chapters)  # () is a value: no chapter
-    n_workers = available_cores() if workers is None else int(workers)
+    n_workers = available_cores() if workers is None else check_workers(int(workers), "workers", CHAPTER_BYTES)
     n_workers = max(1, min(n_workers, len(names) or 1))
     if n_workers == 1:
         done = {}
@@ -102,11 +117,83 @@ def reproduce(
         seconds={c.slug: done[n][2] for n, c in _pairs(names, done)},
         cpu_seconds={c.slug: done[n][3] for n, c in _pairs(names, done)},
     )
-    with atomic_write(out / "results.json", "w", force=True) as fh:  # checked above: ours to replace
+    with atomic_write(work / "results.json", "w") as fh:
         fh.write(json.dumps(to_jsonable(document), indent=2) + "\n")
-    with atomic_write(out / "index.html", "w", force=True) as fh:
+    with atomic_write(work / "index.html", "w") as fh:
         fh.write(_render(built, failed, ctx, document))
-    return ReportSummary(out, len(document["entries"]), document["counts"], [c.title for c in built], failed, seconds)
+    return ReportSummary(work, len(document["entries"]), document["counts"], [c.title for c in built], failed, seconds)
+
+
+#: What a report folder holds that the report wrote (anything else in it is the user's, and is kept).
+REPORT_ENTRIES = ("index.html", "results.json", "figures", "data")
+
+
+@contextlib.contextmanager
+def _new_report(out: Path) -> Iterator[Path]:
+    """A temporary folder beside ``out`` to build the report in, swapped in for ``out`` when the block ends
+    cleanly: until then the old report stays whole, and a stop (Ctrl-C, SIGTERM, an error) leaves it so, with
+    nothing behind (issue 22: an interrupted ``reproduce --force`` left the old index.html and results.json
+    beside some of the new figures, and ``.tmp`` files in figures/).
+
+    The swap is one step where the system allows it (Linux's ``renameat2(RENAME_EXCHANGE)``), else two renames
+    that a signal cannot split; files of the user's in ``out`` (not in :data:`REPORT_ENTRIES`) stay in it.
+    """
+    out = out.resolve()  # a symlinked report folder: the folder it points at is swapped, the link kept
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    try:
+        os.chmod(work, stat.S_IMODE(out.stat().st_mode) if out.is_dir() else 0o777 & ~_umask())
+        yield work
+        with signals_deferred():  # a signal waits for the swap's end: the folder is the old report or the new
+            _swap_in(work, out)
+    finally:
+        with signals_deferred():  # the old report swapped out, or the new one left unfinished
+            if not any(e.name not in REPORT_ENTRIES and not e.name.endswith(".tmp") for e in _entries(work)):
+                shutil.rmtree(work, ignore_errors=True)  # (never a file of the user's a failed move left there)
+
+
+def _entries(folder: Path) -> list[Path]:
+    try:
+        return list(folder.iterdir())
+    except FileNotFoundError:
+        return []
+
+
+def _swap_in(work: Path, out: Path) -> None:
+    """Put the folder ``work`` at ``out``; the old ``out`` (if any) ends at ``work``, less the user's files."""
+    if not out.is_dir():
+        os.rename(work, out)
+        return
+    if not _exchange(work, out):
+        old = work.with_name(work.name + ".old")
+        os.rename(out, old)
+        os.rename(work, out)
+        os.rename(old, work)
+    for entry in _entries(work):  # the old folder: what the user put beside the report goes in the new one
+        if entry.name not in REPORT_ENTRIES and not (out / entry.name).exists():
+            os.rename(entry, out / entry.name)
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two paths in one step (Linux's ``renameat2`` with ``RENAME_EXCHANGE``); False where the system or
+    the file system cannot (then nothing happened)."""
+    try:
+        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+    except (OSError, AttributeError):  # not Linux, or a C library without it
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    at_fdcwd, rename_exchange = -100, 2
+    if renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.ENOSYS, errno.EINVAL, errno.ENOTSUP):  # an old kernel, a file system without it
+        return False
+    raise OSError(code, os.strerror(code), str(b))
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _pairs(names, done):
@@ -182,6 +269,9 @@ def _counts(entries) -> dict[str, int]:
     return {s: sum(e["status"] == s for e in entries) for s in STATUSES}
 
 
+#: Memory one chapter's worker process may hold, bytes, for the cap on ``workers``
+#: (:func:`flexdigit._system.check_workers`): a chapter's sweeps and figures take a few hundred MB.
+CHAPTER_BYTES = 2**30
 #: Relative cost of each chapter (its seconds in one full run, 2 workers, on a quiet 2-core machine): only the order
 #: in which chapters are handed to the worker processes (longest first, so that no long chapter starts last), never
 #: their numbers. A chapter not listed counts as a short one.
@@ -204,7 +294,8 @@ def _build_chapter(module_name: str, ctx: ReportContext) -> tuple[Chapter | None
     start, cpu = time.perf_counter(), time.process_time()
     try:
         chapter, error = importlib.import_module(module_name).build(ctx), None
-    except Exception:  # a broken chapter must not hide the others; its traceback goes in the report
+    except Exception as exc:  # a broken chapter must not hide the others; its traceback goes in the report
+        raise_if_stopping(exc)  # a stop signal a compiled kernel handed back as another exception is a stop
         chapter, error = None, traceback.format_exc()
     return chapter, error, time.perf_counter() - start, time.process_time() - cpu
 
@@ -248,16 +339,31 @@ def _build_in_processes(names, ctx: ReportContext, workers: int, progress) -> di
     context = multiprocessing.get_context("spawn")  # a fresh interpreter: no state inherited from this one
     init = {"initializer": _worker_init, "initargs": (_calibration_state(),)}
     with ProcessPoolExecutor(workers, mp_context=context, **init) as pool:
-        futures = {pool.submit(_build_chapter, name, ctx): name for name in order}
-        for future in as_completed(futures):
-            name = futures[future]
-            try:
-                done[name] = future.result()
-            except Exception:  # the worker died (out of memory, killed): say so in the report
-                done[name] = (None, traceback.format_exc(), float("nan"), float("nan"))
-            if progress is not None:
-                progress(name)
+        try:
+            futures = {pool.submit(_build_chapter, name, ctx): name for name in order}
+            for future in as_completed(futures):
+                name = futures[future]
+                try:
+                    done[name] = future.result()
+                except Exception:  # the worker died (out of memory, killed): say so in the report
+                    done[name] = (None, traceback.format_exc(), float("nan"), float("nan"))
+                if progress is not None:
+                    progress(name)
+        except BaseException:  # a stop (Ctrl-C, SIGTERM): end the chapters now, not after minutes of them
+            _halt(pool)
+            raise
     return done
+
+
+def _halt(pool: ProcessPoolExecutor) -> None:
+    """Cancel the chapters not started and end the workers running the others (they write only in the report's
+    temporary folder, removed next)."""
+    processes = list((pool._processes or {}).values())  # the executor's own list; no public way to end them
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        process.terminate()
+    for process in processes:
+        process.join(timeout=30)
 
 
 def check_report_dir(out_dir: str | Path, *, force: bool = False) -> Path:
@@ -267,8 +373,8 @@ def check_report_dir(out_dir: str | Path, *, force: bool = False) -> Path:
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(f"{out}: is a file, not a report folder")
     if not out.exists():
-        check_output(out)  # names a missing parent directory
-        out.mkdir()
+        check_output(out)  # names a missing or read-only parent directory; the folder appears whole at the end
+        return out
     existing = [p for p in (out / "results.json", out / "index.html") if p.exists()]
     existing += sorted((out / "figures").glob("*.png"))[:1]
     if existing and not force:

@@ -30,6 +30,7 @@ __getattr__, __all__ = lazy_exports(
         "SampleLog": "flexdigit.rig.sample_log",
         "read_log": "flexdigit.rig.sample_log",
         "RunawayGuard": "flexdigit.rig.safety",
+        "default_guard": "flexdigit.rig.safety",
         "CONTROLLERS": "flexdigit.rig.controllers",
         "make_controller": "flexdigit.rig.controllers",
         "RotationEstimator": "flexdigit.rig.rotation",

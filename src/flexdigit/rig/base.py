@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import abc
 import math
+import sys
 import time
 import urllib.parse
 from collections.abc import Callable
@@ -121,12 +122,12 @@ def console_operator(message: str) -> None:
     """Ask the person at the rig to do something (hang a weight) and wait for Enter.
 
     With no one to ask (stdin closed or not a terminal at its end) it raises :class:`RigError` naming the step,
-    rather than dying in an ``EOFError``: whoever called it then leaves the rig in its safe state.
+    rather than dying in an ``EOFError``: whoever called it then leaves the rig in its safe state. The request goes
+    to stderr (``input`` writes it to stdout, which carries a command's result: ``--json`` then did not parse).
     """
-    try:
-        input(f"{message} Press Enter when done. ")
-    except EOFError:
-        raise RigError(f"no operator to ask ({message}): stdin is closed; run it from a terminal") from None
+    print(f"{message} Press Enter when done. ", end="", file=sys.stderr, flush=True)
+    if not sys.stdin or not sys.stdin.readline():
+        raise RigError(f"no operator to ask ({message}): stdin is closed; run it from a terminal")
 
 
 class Rig(abc.ABC):

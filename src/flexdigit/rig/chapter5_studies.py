@@ -120,7 +120,8 @@ def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: boo
     commands = (8, 14, 20, 26, 32) if fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
     est = calibrate_rotation(open_rig("sim", params, seed=seed), commands, settle_s=1.5 if fast else 2.0)
     runs = {
-        (name, gain): step_test(open_rig("sim", params, seed=seed + 1), name, estimator=est, gain=gain)
+        # unguarded: the chapter shows the thesis's forward-Euler design failing on the twin (5.1.2), not stopped
+        (name, gain): step_test(open_rig("sim", params, seed=seed + 1), name, estimator=est, gain=gain, guard=False)
         for name, gain in TWENTY_MS_CASES
     }
     rows = []

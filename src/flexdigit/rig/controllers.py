@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from flexdigit._validation import check_choice, check_positive, check_real
+from flexdigit._validation import Plausible, check_choice, check_param, check_positive
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Reading, Rig
 from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation
@@ -47,6 +47,10 @@ class _Wrapped:
 CONTROLLERS = ("digital20", "thesis39-euler", "thesis39-tustin")
 
 
+#: An actuator gain error to emulate (robustness runs): the servo gets gain x the asked deviation.
+ACTUATOR_GAIN = Plausible("", 0.1, 10.0, "an actuator gain error: a tenth to ten times the rig's own")
+
+
 def make_controller(
     name: str,
     rig: Rig,
@@ -64,7 +68,7 @@ def make_controller(
 
     check_choice(name, "controller", CONTROLLERS, "make_controller")
     check_positive(period_s, "period_s", "make_controller")
-    check_real(gain, "gain", "make_controller", low=0.0, low_open=True)
+    gain = check_param(gain, ACTUATOR_GAIN, "gain", "make_controller")
     params = rig.params
     if estimator is None:
         estimator = calibrate_rotation(rig)

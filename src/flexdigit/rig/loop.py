@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import os
+import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -28,8 +29,10 @@ import numpy as np
 
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_positive, check_real
-from flexdigit.errors import ParameterError, RigError
+from flexdigit.errors import Interrupted, ParameterError, RigError
+from flexdigit.interrupts import signals_deferred, stop_requested
 from flexdigit.rig.base import Reading, Rig
+from flexdigit.rig.safety import RunawayGuard, default_guard
 
 # the log's names, kept importable from here for code written before they had their own module
 from flexdigit.rig.sample_log import (  # noqa: F401
@@ -126,6 +129,15 @@ class LoopResult:
     def ok(self) -> bool:
         return self.status == "completed"
 
+    def raise_if_interrupted(self) -> None:
+        """Raise the stop again when the run was interrupted (the rig is already safe and the log closed): for a
+        caller whose work cannot go on without the run (a palpation sweep, the next step of a study).
+
+        Raises :class:`~flexdigit.errors.Interrupted` naming the signal that stopped the run (SIGINT for Ctrl-C).
+        """
+        if self.status == "interrupted":
+            raise Interrupted(getattr(signal, self.extra.get("signal") or "SIGINT"))
+
 
 def check_reading(reading: Reading, adc_range_v: tuple[float, float], margin_v: float = 1e-3) -> None:
     """Raise :class:`RigError` when a gauge reads NaN/inf or sits on an ADC rail (clipped), naming the gauge."""
@@ -159,7 +171,7 @@ def run_loop(
     recording: Any = None,
     summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None,
     log_mode: str = "new",
-    guard=None,
+    guard: RunawayGuard | bool = True,
     stall_s: float = 0.5,
 ) -> LoopResult:
     """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
@@ -198,9 +210,12 @@ def run_loop(
     stall_s : float
         A sample that starts more than this late (s) is a fault, not an overrun: the rig (a DAQ or stream gone
         silent, a read that blocked) or the computer stopped answering, and the loop has been blind that long.
-    guard : RunawayGuard, optional
+    guard : RunawayGuard or bool
         Runaway and plausibility checks on every sample (:mod:`flexdigit.rig.safety`); a fault it raises ends
-        the run in the safe state like any rig fault. ``flexdigit run`` always passes one.
+        the run in the safe state like any rig fault. On by default (``True``:
+        :func:`~flexdigit.rig.safety.default_guard`, which watches the twin's true rotation, and the measurement
+        when it is a rotation estimate); pass a :class:`~flexdigit.rig.safety.RunawayGuard` of your own, or opt
+        out with ``False``.
     log_mode : {"new", "append", "replace"}
         An existing ``log_path`` is refused (``"new"``), added to (``"append"``: a log of the same controller,
         period and rig settings) or replaced (``"replace"``, ``--force``); see :class:`SampleLog`.
@@ -221,6 +236,15 @@ def run_loop(
     n_samples = int(math.floor(duration / period + 1e-9))
     if n_samples < 1:
         raise ParameterError(f"The 'duration_s' parameter of run_loop must cover at least one period. Got {duration_s}")
+    if guard is True:
+        guard = default_guard(rig, measure)
+    elif guard is False:
+        guard = None
+    elif not isinstance(guard, RunawayGuard):
+        raise ParameterError(
+            f"The 'guard' parameter of run_loop must be a RunawayGuard, True (the default guard) or False (none). "
+            f"Got {guard!r} instead."
+        )
     adc_range = tuple(rig.params.sensors.adc_range_v)
     equilibrium = int(rig.params.actuator.equilibrium_command)
 
@@ -245,6 +269,7 @@ def run_loop(
     overruns = 0
     status, message = "completed", f"ran {n_samples} samples of {period * 1000:g} ms"
     pending_error: BaseException | None = None
+    stopped_by: str | None = None  # the signal that stopped the run
     framing = getattr(rig, "framing", None)  # a servo board whose frame allows fewer positions clamps lower
     command_limits = (
         float(rig.params.actuator.command_min),
@@ -287,65 +312,51 @@ def run_loop(
                 guard.check_rotation(t, y)
             u = controller.step(r, reading)
             sent = rig.write_command(u)
-            if log is not None or recording is not None:
-                record = {
-                    "k": k,
-                    "t": round(t, 9),
-                    "setpoint": r,
-                    "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
-                    "pot_v": _finite_or_none(reading.pot_v),
-                    "y": _finite_or_none(y),
-                    "command": sent,
-                }
-                if log is not None:
-                    log.write(record)
-                if recording is not None:
-                    recording.write_sample(record)
-            compute.append(timer() - w0)
-            starts.append(now)
-            lateness.append(late)
-            ts.append(t)
-            sps.append(r)
-            gauges.append(reading.gauges_v)
-            ys.append(y)
-            cmds.append(sent)
+            # a stop signal waits for the sample's end: the log, the recording and the result keep the same samples
+            with signals_deferred():
+                if log is not None or recording is not None:
+                    record = {
+                        "k": k,
+                        "t": round(t, 9),
+                        "setpoint": r,
+                        "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
+                        "pot_v": _finite_or_none(reading.pot_v),
+                        "y": _finite_or_none(y),
+                        "command": sent,
+                    }
+                    if log is not None:
+                        log.write(record)
+                    if recording is not None:
+                        recording.write_sample(record)
+                compute.append(timer() - w0)
+                starts.append(now)
+                lateness.append(late)
+                ts.append(t)
+                sps.append(r)
+                gauges.append(reading.gauges_v)
+                ys.append(y)
+                cmds.append(sent)
             if on_sample is not None:
                 on_sample(k, t, y, sent)
             if guard is not None:
                 guard.check_command(t, r, y, float(u), sent, command_limits)
             k += 1
-    except KeyboardInterrupt:
-        status, message = "interrupted", "interrupted by Ctrl-C"
-    except (RigError, OSError) as exc:
-        status, message = "fault", str(exc)
-    except BaseException as exc:  # a controller bug: safe state first, then let it propagate
-        status, message = "fault", f"{type(exc).__name__}: {exc}"
-        pending_error = exc
+    except BaseException as exc:
+        # Ctrl-C, or SIGTERM/SIGHUP under flexdigit.interrupts.stop_on_signals (which a compiled twin's kernel may
+        # hand back as another exception: asked first)
+        stop = exc if isinstance(exc, KeyboardInterrupt) else stop_requested()
+        if stop is not None:
+            status, message = "interrupted", _interruption(stop)
+            stopped_by = getattr(stop, "signal_name", "SIGINT")
+        elif isinstance(exc, RigError | OSError):
+            status, message = "fault", str(exc)
+        else:  # a controller bug: safe state first, then let it propagate
+            status, message = "fault", f"{type(exc).__name__}: {exc}"
+            pending_error = exc
 
-    safe = _safe_state(rig, equilibrium, close_rig)
-    if status != "completed":
-        when = f" at t = {ts[-1]:.3f} s" if ts else " before the first sample"
-        if "at t =" in message:
-            when = ""
-        relaxed = f"digit relaxed to command {equilibrium}" if safe else "could NOT send the safe command (port lost)"
-        message = f"{message}{when}; {relaxed}"
-    stop: dict[str, Any] = {"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns}
-    if summary is not None and ts:
-        stop["summary"] = to_jsonable(summary(np.array(ts), np.array(ys)))  # NaN/inf -> null
-    if recording is not None:
-        try:  # a full disk (or a vanished drive) must not hide the result
-            recording.close(stop)
-            message = f"{message}; recording: {recording.path}"
-        except OSError as exc:
-            message = f"{message}; recording: {recording.path} (not closed: {exc.strerror or exc})"
-    if log is not None:
-        try:  # a full disk (or a vanished drive) must not hide the result: the log keeps what it had
-            log.write(stop)
-            log.close()
-            message = f"{message}; log: {log.path}"
-        except OSError as exc:
-            log.abandon()
-            message = f"{message}; log: {log.path} (its last lines are lost: {exc.strerror or exc})"
+    with signals_deferred():  # the safe command and the closing records go out whole, whatever arrives meanwhile
+        safe, message = _finish(rig, equilibrium, close_rig, status, message, ts, ys, stopped_by, overruns, summary,
+                                recording, log)  # fmt: skip
     timing = TimingStats.from_arrays(period, np.array(starts), np.array(lateness), np.array(compute), overruns)
     result = LoopResult(
         status,
@@ -358,10 +369,55 @@ def run_loop(
         np.array(cmds, dtype=int),
         safe,
         log.path if log is not None else None,
+        {"signal": stopped_by} if stopped_by else {},
     )
     if pending_error is not None:
         raise pending_error
     return result
+
+
+def _interruption(exc: KeyboardInterrupt) -> str:
+    """``"interrupted by SIGTERM"``; a plain KeyboardInterrupt (Python's own Ctrl-C handler) is Ctrl-C."""
+    name = getattr(exc, "signal_name", None)
+    names = {None: "Ctrl-C", "SIGINT": "SIGINT (Ctrl-C)"}
+    return f"interrupted by {names.get(name, name)}"
+
+
+def _finish(rig, equilibrium, close_rig, status, message, ts, ys, stopped_by, overruns, summary, recording, log):
+    """The stop path of :func:`run_loop`: the safe state, then the closing record of the recording and the log
+    (naming the stop, and the signal when one stopped the run); ``(safe command sent, message)``."""
+    safe = _safe_state(rig, equilibrium, close_rig)
+    if status != "completed":
+        when = f" at t = {ts[-1]:.3f} s" if ts else " before the first sample"
+        if "at t =" in message:
+            when = ""
+        relaxed = f"digit relaxed to command {equilibrium}" if safe else "could NOT send the safe command (port lost)"
+        message = f"{message}{when}; {relaxed}"
+    stop: dict[str, Any] = {"stop": status, "message": message, "safe_command_sent": safe, "overruns": overruns}
+    if stopped_by:
+        stop["signal"] = stopped_by
+    if summary is not None and ts:
+        stop["summary"] = to_jsonable(summary(np.array(ts), np.array(ys)))  # NaN/inf -> null
+    if recording is not None:
+        try:  # a full disk (or a vanished drive) must not hide the result
+            recording.close(stop)
+            message = f"{message}; recording: {recording.path}"
+        except OSError as exc:
+            message = f"{message}; recording: {recording.path} (not closed: {exc.strerror or exc})"
+    if log is not None:
+        target = log.target
+        try:  # a full disk (or a vanished drive) must not hide the result: the log keeps what it had
+            log.write(stop)
+            log.close(complete=status == "completed")
+            kept = "" if log.path == target else f" (stopped: {target} is kept as it was)"
+            message = f"{message}; log: {log.path}{kept}"
+        except OSError as exc:
+            log.abandon()
+            if log.mode == "replace":
+                message = f"{message}; log: {target} is kept as it was (this run's log could not be written)"
+            else:
+                message = f"{message}; log: {target} (its last lines are lost: {exc.strerror or exc})"
+    return safe, message
 
 
 class realtime_priority:

@@ -43,16 +43,19 @@ from pathlib import Path
 from typing import Any
 
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.interrupts import signals_deferred, stop_requested
 
 __all__ = [
     "Recording",
     "read_recording",
+    "read_recording_columns",
     "read_metadata",
     "rig_metadata",
     "recording_rig",
     "iter_messages",
     "is_mcap",
     "SAMPLE_TOPIC",
+    "MAX_RECORD_BYTES",
     "SAMPLE_SCHEMA",
     "RECORDING_FORMAT",
 ]
@@ -60,6 +63,11 @@ __all__ = [
 RECORDING_FORMAT = "flexdigit-recording/1"
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 SAMPLE_TOPIC = "/flexdigit/sample"
+#: The largest MCAP record (a chunk, compressed or not, and a chunk's records once decompressed) flexdigit reads,
+#: bytes. A chunk is read whole into memory, so this bounds what reading a recording takes (a few times this, not a
+#: 1.2 GB chunk's 3.4 GB); flexdigit writes 16 KiB chunks and the mcap tools 1-4 MiB ones. A larger record is
+#: refused naming the file (a length claimed past the end of the file is a cut file, read up to there).
+MAX_RECORD_BYTES = 64 * 2**20
 _NULLABLE = {"type": ["number", "null"]}
 #: JSON Schema of a loop sample (the same fields as a JSON-lines loop log line).
 SAMPLE_SCHEMA: dict[str, Any] = {
@@ -89,10 +97,12 @@ SAMPLE_SCHEMA: dict[str, Any] = {
 
 def is_mcap(path: str | os.PathLike) -> bool:
     """True when the file starts with the MCAP magic bytes."""
-    try:
-        with open(path, "rb") as fh:
+    from flexdigit._io import RECORDS_LIMIT, open_input
+
+    try:  # a FIFO or a device is not one (and is never opened blocking): its reader refuses it by name
+        with open_input(path, "an MCAP recording", RECORDS_LIMIT) as fh:
             return fh.read(len(MCAP_MAGIC)) == MCAP_MAGIC
-    except OSError:
+    except (OSError, DataFileError):
         return False
 
 
@@ -106,7 +116,7 @@ def _metadata_values(values: dict[str, str]) -> dict[str, Any]:
     for k, v in values.items():
         try:
             out[k] = json.loads(v)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, RecursionError):  # not JSON (or nested past the parser): kept as text
             out[k] = v
     return out
 
@@ -144,15 +154,12 @@ class Recording:
     ) -> None:
         from mcap.writer import CompressionType, Writer
 
-        from flexdigit._io import check_output
+        from flexdigit._io import OutputStream, check_output
 
         self.path = check_output(path, force=force)
-        try:
-            self._file = open(self.path, "wb" if force else "xb")  # noqa: SIM115 - closed in close()
-        except FileExistsError:
-            from flexdigit.errors import OutputExistsError
-
-            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
+        # under the recording's lock; with force, written beside the old file and renamed over it at a complete end
+        self._out = OutputStream(self.path, "replace" if force else "new", binary=True)
+        self._file = self._out.file
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=CompressionType.NONE)
         self._writer.start(profile="", library=f"flexdigit ({RECORDING_FORMAT})")
         self._channels: dict[str, int] = {}
@@ -188,7 +195,7 @@ class Recording:
         if stamp >= 2**64:  # MCAP's times are unsigned 64-bit nanoseconds: 584 years
             raise ParameterError(f"Recording.write: time {time_s!r} s is beyond MCAP's 2**64 ns (584 years)")
         data = json.dumps(message, allow_nan=False, separators=(",", ":")).encode()
-        with self._lock:
+        with signals_deferred(), self._lock:  # a stop signal waits for the record's end: never a torn record
             if self._closed:
                 raise ParameterError(f"{self.path}: the recording is closed")
             self._writer.add_message(channel, log_time=stamp, data=data, publish_time=stamp, sequence=self._sequence)
@@ -197,7 +204,10 @@ class Recording:
             now = time.monotonic()
             if now - self._flushed_at >= self._flush_every_s:  # close the chunk: a killed run keeps it
                 self._flushed_at = now
-                self._writer.flush()
+                try:
+                    self._writer.flush()
+                except OSError as exc:  # a full disk: say which file
+                    raise self._out.failed(exc) from exc
 
     def write_sample(self, record: dict[str, Any]) -> None:
         """Append a loop sample (:data:`SAMPLE_SCHEMA`) at its time ``record["t"]``."""
@@ -208,26 +218,40 @@ class Recording:
         with self._lock:
             if self._closed:
                 return
-            self._writer.flush()
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            try:
+                self._writer.flush()
+                self._file.flush()
+                os.fsync(self._file.fileno())
+            except OSError as exc:  # a full disk: say which file
+                raise self._out.failed(exc) from exc
 
     def close(self, stop: dict[str, Any] | None = None) -> None:
-        """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice."""
-        with self._lock:
+        """Write the ``flexdigit.stop`` metadata, the summary and the footer, and close the file. Safe twice.
+
+        Closed plainly (no ``stop`` of the caller's) while a stop signal is being taken (:mod:`flexdigit.interrupts`),
+        the stop record says it was interrupted and names the signal."""
+        stop = dict(stop or {})
+        requested = stop_requested()
+        if requested is not None and stop.get("stop", "closed") == "closed":
+            stop = {**stop, "stop": "interrupted", "signal": requested.signal_name}
+        with signals_deferred(), self._lock:
             self._close(stop)
 
     def _close(self, stop: dict[str, Any] | None) -> None:
         if self._closed:
             return
+        stop = {"stop": "closed", **(stop or {})}
         try:
-            self._writer.add_metadata("flexdigit.stop", _metadata_text({"stop": "closed", **(stop or {})}))
+            self._writer.add_metadata("flexdigit.stop", _metadata_text(stop))
             self._writer.finish()
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            # a run that stopped before its end leaves an old recording (--force) intact, itself in STEM.partial.mcap
+            self.path = self._out.close(complete=stop["stop"] in ("closed", "completed"))
+        except OSError as exc:
+            self._out.abandon()
+            raise self._out.failed(exc) from exc
         finally:
             self._closed = True
-            self._file.close()
+            self._out.abandon()  # no-op once closed
 
     @property
     def closed(self) -> bool:
@@ -261,23 +285,83 @@ def rig_metadata(rig) -> dict[str, dict[str, Any]]:
 
 class _Records:
     """Every record of an MCAP file in order, tolerating a file cut short by a killed run: iterating stops at the
-    first record that cannot be read, and :attr:`stopped` then says why (None when the file was read to its end)."""
+    first record that cannot be read, and :attr:`stopped` then says why (None when the file was read to its end).
+
+    Streamed: one chunk in memory at a time, each at most :data:`MAX_RECORD_BYTES` read and as much decompressed
+    (a chunk claiming more, 2**62 bytes, is refused before anything is allocated)."""
 
     def __init__(self, path: Path) -> None:
         self.path, self.stopped = path, None
 
     def __iter__(self) -> Iterator[Any]:
         from mcap.exceptions import McapError
-        from mcap.stream_reader import StreamReader
+        from mcap.records import Chunk
+        from mcap.stream_reader import StreamReader, breakup_chunk
 
-        with open(self.path, "rb") as fh:
-            reader = StreamReader(_Bounded(fh, self.path.stat().st_size), skip_magic=False)
+        from flexdigit._io import RECORDS_LIMIT, open_input
+
+        size = self.path.stat().st_size
+        with open_input(self.path, "an MCAP recording", RECORDS_LIMIT) as fh:
+            reader = StreamReader(_Bounded(fh, size, self.path), skip_magic=False, emit_chunks=True)
             try:
-                yield from reader.records
-            except (McapError, EOFError, ValueError, OverflowError, struct.error) as exc:
+                for record in reader.records:
+                    if isinstance(record, Chunk):
+                        yield from breakup_chunk(self._decompressed(record, fh.tell()))
+                    else:
+                        yield record
+            except DataFileError:
+                raise  # refused, not cut short
+            except (McapError, EOFError, ValueError, OverflowError, struct.error, RuntimeError) as exc:
                 # the open chunk of a run that was killed: everything before it is kept (OverflowError: a length
-                # inside a chunk damaged past 2**63, which the reader's in-memory stream cannot even ask for)
+                # inside a chunk damaged past 2**63, which the reader's in-memory stream cannot even ask for;
+                # RuntimeError: zstandard's and lz4's errors on damaged compressed data)
                 self.stopped = f"{type(exc).__name__}: {exc}"[:200]
+
+    def _decompressed(self, chunk, end: int):
+        """``chunk`` with its records decompressed, never more than it claims nor :data:`MAX_RECORD_BYTES`."""
+        from mcap.records import Chunk
+
+        at = end - len(chunk.data)
+        if chunk.uncompressed_size > MAX_RECORD_BYTES:
+            raise DataFileError(
+                f"{self.path}: the chunk ending at byte {end:,} claims {chunk.uncompressed_size:,} bytes of records; "
+                f"flexdigit reads chunks of at most {MAX_RECORD_BYTES:,} bytes: write it with smaller chunks"
+            )
+        if chunk.compression == "":
+            return chunk
+        if chunk.compression == "zstd":
+            import zstandard
+
+            # bounded by the claim even when the frame does not say its size (a streaming compressor's)
+            try:
+                data = zstandard.ZstdDecompressor().decompress(chunk.data, max_output_size=chunk.uncompressed_size)
+            except zstandard.ZstdError as exc:  # damaged: read as a cut file
+                raise ValueError(f"the zstd chunk near byte {at}: {exc}") from None
+        elif chunk.compression == "lz4":
+            import lz4.frame
+
+            decompressor = lz4.frame.LZ4FrameDecompressor()
+            data = decompressor.decompress(chunk.data, max_length=chunk.uncompressed_size)
+            if not decompressor.eof:
+                raise ValueError(
+                    f"the lz4 chunk near byte {at} holds more than the {chunk.uncompressed_size} it claims"
+                )
+        else:
+            raise DataFileError(
+                f"{self.path}: a chunk compressed with {chunk.compression!r}; flexdigit reads none, zstd and lz4"
+            )
+        if len(data) != chunk.uncompressed_size:
+            raise ValueError(
+                f"the chunk near byte {at} holds {len(data)} bytes, not the {chunk.uncompressed_size} it claims"
+            )
+        return Chunk(
+            compression="",
+            data=data,
+            message_start_time=chunk.message_start_time,
+            message_end_time=chunk.message_end_time,
+            uncompressed_crc=chunk.uncompressed_crc,
+            uncompressed_size=chunk.uncompressed_size,
+        )
 
 
 def _records(path: Path) -> Iterator[Any]:
@@ -286,14 +370,20 @@ def _records(path: Path) -> Iterator[Any]:
 
 class _Bounded:
     """A binary file whose reads may not ask for more than it holds: a record length damaged into 2**60 would have
-    the MCAP reader allocate that much (a MemoryError, found by tests/fuzz); it ends the records as a cut file."""
+    the MCAP reader allocate that much (a MemoryError, found by tests/fuzz); it ends the records as a cut file. Nor
+    more than :data:`MAX_RECORD_BYTES` at once: a record that large is refused naming the file."""
 
-    def __init__(self, fh, size: int) -> None:
-        self._fh, self._size = fh, size
+    def __init__(self, fh, size: int, path: Path | None = None) -> None:
+        self._fh, self._size, self._path = fh, size, path
 
     def read(self, n: int = -1) -> bytes:
         if n is not None and n > self._size - self._fh.tell():
             raise EOFError("a record runs past the end of the file")
+        if n is not None and n > MAX_RECORD_BYTES:
+            raise DataFileError(
+                f"{self._path}: a record of {n:,} bytes at byte {self._fh.tell():,}; flexdigit reads MCAP records "
+                f"(chunks) of at most {MAX_RECORD_BYTES:,} bytes: write it with smaller chunks"
+            )
         return self._fh.read(n)
 
     def __getattr__(self, item):
@@ -308,7 +398,9 @@ def iter_messages(path: str | os.PathLike, topics=None, *, records=None) -> Iter
     """
     from mcap.records import Channel, Message
 
-    path = Path(path)
+    from flexdigit._io import RECORDS_LIMIT, check_input
+
+    path = check_input(path, "an MCAP recording", RECORDS_LIMIT)  # a FIFO, a device: named, never read
     if not is_mcap(path):
         raise DataFileError(f"{path}: not an MCAP file (no MCAP magic at the start)")
     channels: dict[int, str] = {}
@@ -331,6 +423,8 @@ def iter_messages(path: str | os.PathLike, topics=None, *, records=None) -> Iter
                 message = json.loads(record.data)
             except ValueError:
                 raise DataFileError(f"{path}: message {record.sequence} on {topic} is not JSON") from None
+            except RecursionError:
+                raise DataFileError(f"{path}: message {record.sequence} on {topic}: JSON nested too deep") from None
             yield topic, record.log_time * 1e-9, message
 
 
@@ -360,11 +454,27 @@ def read_recording(path: str | os.PathLike):
     :class:`~flexdigit.errors.DataFileError` naming the file when it holds no samples, a sample breaks the schema,
     or its ``flexdigit.run`` metadata is of another format.
     """
+    samples: list[dict[str, Any]] = []
+    header, footer = _read_samples(Path(path), samples.append)
+    return header, samples, footer
+
+
+def read_recording_columns(path: str | os.PathLike):
+    """:func:`read_recording` into columns (:class:`~flexdigit.rig.sample_log.SampleColumns`, 64 bytes a sample):
+    ``(header, columns, footer or None)``, streamed a chunk at a time."""
+    from flexdigit.rig.sample_log import SampleColumns
+
+    columns = SampleColumns()
+    header, footer = _read_samples(Path(path), columns.append)
+    return header, columns.arrays(), footer
+
+
+def _read_samples(path: Path, keep):
+    """Stream the recording's samples, checked, to ``keep``; its header and footer (see :func:`read_recording`)."""
     from mcap.records import Metadata
 
     from flexdigit.rig.sample_log import check_sample
 
-    path = Path(path)
     records = _Records(path)
     meta: dict[str, dict[str, Any]] = {}
 
@@ -374,19 +484,19 @@ def read_recording(path: str | os.PathLike):
                 meta[record.name] = _metadata_values(record.metadata)
             yield record
 
-    samples = [
-        _check_sample(path, i + 1, message, check_sample)
-        for i, (_, _, message) in enumerate(iter_messages(path, topics=[SAMPLE_TOPIC], records=collecting()))
-    ]
+    count = 0
+    for _, _, message in iter_messages(path, topics=[SAMPLE_TOPIC], records=collecting()):
+        count += 1
+        keep(_check_sample(path, count, message, check_sample))
     header = meta.get("flexdigit.run")
     if header is not None and header.get("format") != RECORDING_FORMAT:
         raise DataFileError(
             f"{path}: a recording of format {header.get('format')!r}; this flexdigit reads {RECORDING_FORMAT}"
         )
-    if not samples:
+    if not count:
         why = f" (the file is damaged or cut short: {records.stopped})" if records.stopped else ""
         raise DataFileError(f"{path}: no {SAMPLE_TOPIC} messages: not a flexdigit recording{why}")
-    return header if header is not None else {"format": None}, samples, meta.get("flexdigit.stop")
+    return header if header is not None else {"format": None}, meta.get("flexdigit.stop")
 
 
 #: JSON Schema of what happens to the rig besides its samples (weights hung, lifted, re-hung).

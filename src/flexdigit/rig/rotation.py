@@ -449,11 +449,15 @@ def load_rotation_map(path) -> RotationEstimator:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the key that is missing or wrong.
     """
+    from flexdigit._io import read_text
+
     path = Path(path)
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(read_text(path, "a rotation calibration JSON"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise DataFileError(f"{path}: not a rotation calibration, not JSON ({exc}); {_EXPECTED}") from None
+    except RecursionError:  # brackets nested past the parser's depth
+        raise DataFileError(f"{path}: not a rotation calibration (JSON nested too deep); {_EXPECTED}") from None
     est = RotationEstimator.from_dict(data, source=str(path))
     est.source_ = f"{getattr(est, 'source_', 'a saved map')}, loaded from {path}"
     return est

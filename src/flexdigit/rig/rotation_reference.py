@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_real
+from flexdigit._validation import Plausible, check_array, check_param, check_real
 from flexdigit.errors import DataFileError
 from flexdigit.params import RigParams
 
@@ -53,6 +53,8 @@ __all__ = [
 
 #: Table 3.6's ruler: deflections read to 0.5 mm.
 DEFLECTION_RESOLUTION_MM = 0.5
+#: The plausible reading resolution of a measured deflection: a micrometer's 1 um to a coarse ruler's 2 cm.
+READING_RESOLUTION_MM = Plausible("mm", 1e-3, 20.0, "a reading resolution of 1 um (a micrometer) to 2 cm")
 #: The sections' shares of the rotation are fitted around their compliances' (``1 / EI_k``) with this standard
 #: deviation in log ratio (~30 %): readings that stop short of the tip leave the last section nearly unseen, and
 #: the prior keeps the fit from trading its share against the rotation (a 0.5 mm rounding at 45/135/225 mm moved
@@ -60,6 +62,8 @@ DEFLECTION_RESOLUTION_MM = 0.5
 SHARE_PRIOR_SD = 0.3
 #: A protractor read to 1 degree.
 ROTATION_RESOLUTION_DEG = 1.0
+#: The plausible reading resolution of a measured rotation: 0.001 deg (an encoder) to 10 deg.
+READING_RESOLUTION_DEG = Plausible("deg", 1e-3, 10.0, "a reading resolution of 0.001 deg (an encoder) to 10 deg")
 _DEFLECTION_COLUMN = re.compile(r"^deflection_mm_at_([0-9]+(?:\.[0-9]+)?)mm$")
 _GAUGE_COLUMNS = ("gauge1_v", "gauge2_v", "gauge3_v")
 
@@ -282,12 +286,16 @@ def read_reference(
     """
     params = params or RigParams()
     path = Path(path)
-    res_mm = check_real(resolution_mm, "resolution_mm", "read_reference", low=0.0, low_open=True)
-    res_deg = check_real(resolution_deg, "resolution_deg", "read_reference", low=0.0, low_open=True)
+    res_mm = check_param(resolution_mm, READING_RESOLUTION_MM, "resolution_mm", "read_reference")
+    res_deg = check_param(resolution_deg, READING_RESOLUTION_DEG, "resolution_deg", "read_reference")
     if path.is_dir():
         raise DataFileError(f"{path}: a directory, not a file (expected a CSV of measured rotations or deflections)")
+    from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
+
+    count_lines(path, "a CSV of measured rotations or deflections")
     try:
-        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is no part of the header
+        # a spreadsheet's byte-order mark is no part of the header; a FIFO or device is refused, never read
+        text = read_text(path, "a CSV of measured rotations or deflections", RECORDS_LIMIT, encoding="utf-8-sig")
     except UnicodeDecodeError:
         raise DataFileError(f"{path}: not a text file (expected a CSV of measured rotations or deflections)") from None
     rows = [

@@ -29,8 +29,13 @@ from dataclasses import dataclass, field
 
 from flexdigit._validation import check_real
 from flexdigit.errors import RigError
+from flexdigit.rig.rotation import RotationEstimator
 
-__all__ = ["ROTATION_RANGE_DEG", "RunawayGuard"]
+__all__ = [
+    "ROTATION_RANGE_DEG",
+    "RunawayGuard",
+    "default_guard",
+]
 
 #: Beam (tip) rotations the digit can take without harm, deg: the setpoints ``flexdigit run`` accepts (-60..120)
 #: with 30 deg of margin. The cable only pulls one way; the twin can be driven far beyond (its elastica wraps).
@@ -54,6 +59,9 @@ class RunawayGuard:
         Share of the actuator's command range the command may move while the estimate stays put.
     truth : callable, optional
         ``truth() -> deg``: the true rotation where it is known (the twin's ``tip_rotation_deg``).
+    measured : bool
+        The loop's measurement is the beam rotation in degrees (a rotation map's estimate): check it too. False
+        watches only ``truth`` (a loop on another quantity: gauge volts, a contact force, a staircase of commands).
     """
 
     range_deg: tuple[float, float] = ROTATION_RANGE_DEG
@@ -61,6 +69,7 @@ class RunawayGuard:
     min_progress_deg: float = 1.0
     unanswered_fraction: float = 0.1
     truth: Callable[[], float] | None = None
+    measured: bool = True
     _saturated_since: float | None = field(default=None, init=False, repr=False)
     _saturated_error: float = field(default=math.nan, init=False, repr=False)
     _start: tuple[float, float] | None = field(default=None, init=False, repr=False)
@@ -83,7 +92,7 @@ class RunawayGuard:
     def check_rotation(self, t: float, estimated_deg: float) -> None:
         """Fault when the estimated or the true rotation is outside :attr:`range_deg`."""
         low, high = self.range_deg
-        values = [("estimated", estimated_deg)]
+        values = [("estimated", estimated_deg)] if self.measured else []
         if self.truth is not None:
             values.append(("true (twin)", float(self.truth())))
         for what, value in values:
@@ -109,6 +118,8 @@ class RunawayGuard:
         ``saturation_s`` without the error shrinking is a fault; at the bottom (the cable slack, the digit
         relaxed) only an error that grows is.
         """
+        if not self.measured:  # the measurement is not a rotation: nothing here to judge it by
+            return
         low, high = command_limits
         if self._start is None:
             self.reset(sent)
@@ -147,3 +158,14 @@ class RunawayGuard:
                 f"from {self._saturated_error:.1f} to {error:.1f} deg, at t = {t:.3f} s (a rotation map of the "
                 "wrong sign, or a gain error?)"
             )
+
+
+def default_guard(rig, measure) -> RunawayGuard:
+    """The guard :func:`~flexdigit.rig.loop.run_loop` keeps unless told not to (``guard=False``).
+
+    It watches the true rotation where the rig knows it (the twin's ``tip_rotation_deg``), and every check on the
+    measurement when that is the beam rotation in degrees (``measure`` a fitted
+    :class:`~flexdigit.rig.rotation.RotationEstimator`, as ``flexdigit run`` and ``make_controller("digital20",
+    ...)`` use); a loop on another quantity is judged by the truth alone, or not at all on hardware.
+    """
+    return RunawayGuard(truth=getattr(rig, "tip_rotation_deg", None), measured=isinstance(measure, RotationEstimator))

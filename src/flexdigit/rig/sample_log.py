@@ -18,9 +18,12 @@ import os
 from pathlib import Path
 from typing import Any
 
-from flexdigit._io import check_output
+import numpy as np
+
+from flexdigit._io import OutputStream, check_output
 from flexdigit._validation import check_int
-from flexdigit.errors import DataFileError, OutputExistsError, RigError
+from flexdigit.errors import DataFileError
+from flexdigit.interrupts import signals_deferred
 
 __all__ = [
     "LOG_FORMAT",
@@ -30,12 +33,20 @@ __all__ = [
     "check_appendable",
     "read_log",
     "read_log_runs",
+    "read_log_columns",
+    "SampleColumns",
+    "SampleView",
     "check_sample",
+    "MAX_LOG_LINE_BYTES",
 ]
 
 LOG_FORMAT = "flexdigit-loop-log/1"
 #: Header keys that must agree for a run to be appended to an existing log (``--append``).
 APPEND_KEYS = ("controller", "period_s", "rig_settings")
+#: The longest line of a loop log read, bytes: a sample is under 300, a header with the rig's settings a few kB.
+#: Logs are read a line at a time (never whole), so a longer line, a file with a hole of NUL bytes or no line
+#: breaks at all, is refused naming it after reading at most this much.
+MAX_LOG_LINE_BYTES = 1 << 20
 #: How :class:`SampleLog` treats an existing file: refuse it, add a run to it, or replace it (``--force``).
 LOG_MODES = ("new", "append", "replace")
 
@@ -64,27 +75,38 @@ class SampleLog:
         from flexdigit._validation import check_choice
 
         self.path = Path(path)
+        #: The log asked for (``path`` becomes ``STEM.partial.jsonl`` when a ``--force`` run stops early) and the mode.
+        self.target = self.path
         self.fsync_every = check_int(fsync_every, "fsync_every", "SampleLog", low=0)
         mode = check_choice(mode, "mode", LOG_MODES, "SampleLog")
+        self.mode = mode
         record = {"format": LOG_FORMAT, **header}
-        if mode == "append" and self.path.exists():
-            check_appendable(self.path, record)
-        else:
+        if mode != "append" or not self.path.exists():
             check_output(self.path, force=mode == "replace", hint="or --append to add this run to it")
+        # under the log's lock (a second run writing it is refused, never mixed); "replace" writes beside the old
+        # log, which close(complete=True) replaces (flexdigit._io.OutputStream)
+        self._out = OutputStream(self.path, mode, hint="or --append to add this run to it")
         try:
-            if mode == "replace":
-                self.path.unlink(missing_ok=True)
-            self._file = open(self.path, "a" if mode == "append" else "x", encoding="utf-8")  # noqa: SIM115
-        except FileExistsError:  # appeared since the check
-            raise OutputExistsError(f"{self.path}: the file exists; pass --force to overwrite it") from None
-        except OSError as exc:
-            raise RigError(f"cannot open the loop log {self.path}: {exc.strerror or exc}") from exc
+            if mode == "append" and self.path.stat().st_size:
+                check_appendable(self.path, record)
+        except BaseException:
+            self._out.abandon()
+            raise
+        self._file = self._out.file
         self._since_sync = 0
         self.lines = 0
         self.write(record)
 
     def write(self, record: dict[str, Any]) -> None:
-        self._file.write(json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n")
+        line = json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n"
+        with signals_deferred():  # a stop signal waits for the line's end: never a torn line
+            try:
+                self._write(line)
+            except OSError as exc:  # a full disk: say which file
+                raise self._out.failed(exc) from exc
+
+    def _write(self, line: str) -> None:
+        self._file.write(line)
         self._file.flush()
         self.lines += 1
         self._since_sync += 1
@@ -92,19 +114,16 @@ class SampleLog:
             os.fsync(self._file.fileno())
             self._since_sync = 0
 
-    def close(self) -> None:
-        if self._file.closed:
-            return
-        self._file.flush()
-        os.fsync(self._file.fileno())
-        self._file.close()
+    def close(self, complete: bool = True) -> Path:
+        """Flush, fsync and close; return where the log is: its path, or (a ``--force`` run that stopped before
+        its end, ``complete=False``) ``STEM.partial.jsonl`` beside the old log, which is kept intact."""
+        self.path = self._out.close(complete)
+        return self.path
 
     def abandon(self) -> None:
-        """Close without flushing what the OS refused (a full disk): the file keeps the lines already written."""
-        try:
-            self._file.close()
-        except OSError:
-            pass
+        """Close after a failed write (a full disk): a new or appended log keeps the lines already written; a
+        ``--force`` log's new file is removed and the old one kept."""
+        self._out.abandon()
 
 
 def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
@@ -113,12 +132,14 @@ def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the first setting that differs.
     """
+    from flexdigit._io import LOG_LIMIT, open_input
+
     path = Path(path)
-    with path.open("rb") as fh:
+    with open_input(path, "a flexdigit loop log", LOG_LIMIT) as fh:
         first = fh.readline()
     try:
         old = json.loads(first.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
         old = None
     if not isinstance(old, dict) or old.get("format") != LOG_FORMAT:
         raise DataFileError(
@@ -148,53 +169,184 @@ def read_log(
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and line when it is not a loop log.
     """
-    path = Path(path)
-    runs = read_log_runs(path)
-    if run is None:
-        if len(runs) > 1:
-            starts = ", ".join(str(start) for start, *_ in runs)
-            raise DataFileError(
-                f"{path}: holds {len(runs)} runs (appended; starting on lines {starts}); line {runs[1][0]} starts a "
-                "second run: choose one with read_log(path, run=N) or replay://FILE?run=N"
-            )
-        run = 1
+    kept: list[dict[str, Any]] = []
+    header, footer = _read_one_run(Path(path), run, kept.append)
+    return header, kept, footer
+
+
+def read_log_columns(
+    path: str | os.PathLike, run: int | None = None
+) -> tuple[dict[str, Any], dict[str, np.ndarray], dict[str, Any] | None]:
+    """:func:`read_log` into columns (:class:`SampleColumns`): ``(header, columns, footer or None)``.
+
+    Streamed: a line at a time into arrays of 64 bytes a sample, where a list of sample dicts takes ten times
+    that; what a replay of a long log holds (:class:`~flexdigit.rig.backends.replay_backend.ReplayRig`)."""
+    columns = SampleColumns()
+    header, footer = _read_one_run(Path(path), run, columns.append)
+    return header, columns.arrays(), footer
+
+
+def _read_one_run(path: Path, run: int | None, keep) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """Scan the log once, handing run ``run``'s samples (checked) to ``keep``; its header and footer."""
     from flexdigit._validation import check_int
 
-    index = check_int(run, "run", "read_log", low=1, high=len(runs), error=DataFileError)
-    _, header, samples, footer = runs[index - 1]
-    return header, samples, footer
+    want = 1 if run is None else run
+    runs = _scan_log(path, lambda index, sample: keep(sample) if index == want else None)
+    if run is None and len(runs) > 1:
+        starts = ", ".join(str(start) for start, *_ in runs)
+        raise DataFileError(
+            f"{path}: holds {len(runs)} runs (appended; starting on lines {starts}); line {runs[1][0]} starts a "
+            "second run: choose one with read_log(path, run=N) or replay://FILE?run=N"
+        )
+    index = check_int(want, "run", "read_log", low=1, high=len(runs), error=DataFileError)
+    _, header, footer = runs[index - 1]
+    return header, footer
 
 
 def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]]:
-    """Every run of a loop log as ``(first line number, header, samples, footer or None)``."""
-    from flexdigit._io import read_text
+    """Every run of a loop log as ``(first line number, header, samples, footer or None)``.
 
-    path = Path(path)
-    runs: list[tuple[int, dict[str, Any], list[dict[str, Any]], dict | None]] = []
-    lines = read_text(path, "a flexdigit loop log").splitlines()
-    for number, line in enumerate(lines, 1):
-        try:
-            record = json.loads(line)
-        except json.JSONDecodeError:
-            if number == len(lines):
+    Streamed: read a line at a time (at most :data:`MAX_LOG_LINE_BYTES` each), never the whole file."""
+    samples: dict[int, list[dict[str, Any]]] = {}
+    runs = _scan_log(Path(path), lambda index, sample: samples.setdefault(index, []).append(sample))
+    return [(start, header, samples.get(i, []), footer) for i, (start, header, footer) in enumerate(runs, 1)]
+
+
+def _scan_log(path: Path, on_sample) -> list[tuple[int, dict[str, Any], dict[str, Any] | None]]:
+    """Read a loop log a line at a time: ``(first line, header, footer or None)`` for each run; every sample,
+    checked, goes to ``on_sample(run index from 1, sample)`` as it is read (the caller keeps what it needs)."""
+    from flexdigit._io import LOG_LIMIT, open_input
+
+    runs: list[list] = []
+    with open_input(path, "a flexdigit loop log", LOG_LIMIT) as fh:  # a regular file (a FIFO would hang)
+        for number, raw, last in _log_lines(path, fh):
+            record = _log_record(path, number, raw, last)
+            if record is None:
                 break  # a line cut by a crash mid-write
-            raise DataFileError(f"{path}: line {number} is not JSON") from None
-        if not isinstance(record, dict):
-            raise DataFileError(f"{path}: line {number} is not a JSON object")
-        if number == 1 or "format" in record:
-            if record.get("format") != LOG_FORMAT:
-                raise DataFileError(f"{path}: line {number} is not a flexdigit loop log header (format {LOG_FORMAT})")
-            runs.append((number, record, [], None))
-        elif runs[-1][3] is not None:
-            raise DataFileError(f"{path}: line {number} follows the run's last line (its footer)")
-        elif "stop" in record:
-            start, header, samples, _ = runs[-1]
-            runs[-1] = (start, header, samples, record)
-        else:
-            runs[-1][2].append(check_sample(record, path, f"line {number}"))
+            if number == 1 or "format" in record:
+                if record.get("format") != LOG_FORMAT:
+                    raise DataFileError(
+                        f"{path}: line {number} is not a flexdigit loop log header (format {LOG_FORMAT})"
+                    )
+                runs.append([number, record, None])
+            elif runs[-1][2] is not None:
+                raise DataFileError(f"{path}: line {number} follows the run's last line (its footer)")
+            elif "stop" in record:
+                runs[-1][2] = record
+            else:
+                on_sample(len(runs), check_sample(record, path, f"line {number}"))
     if not runs:
         raise DataFileError(f"{path}: empty file, expected a flexdigit loop log")
-    return runs
+    return [tuple(r) for r in runs]
+
+
+class SampleColumns:
+    """Checked samples (:func:`check_sample`) kept as typed arrays, 64 bytes a sample, not as dicts (about 600).
+
+    :meth:`append` takes a sample dict; :meth:`arrays` gives ``t``, ``gauges_v`` (n x 3), ``pot_v``,
+    ``setpoint``, ``y`` (float, NaN for null) and ``command`` (int); :class:`SampleView` reads them back as
+    dicts, one at a time."""
+
+    _FLOATS = ("t", "g1", "g2", "g3", "pot_v", "setpoint", "y")
+
+    def __init__(self) -> None:
+        from array import array
+
+        self._floats = {name: array("d") for name in self._FLOATS}
+        self._command = array("h")
+
+    def append(self, sample: dict[str, Any]) -> None:
+        f = self._floats
+        f["t"].append(float(sample["t"]))
+        for name, g in zip(("g1", "g2", "g3"), sample["gauges_v"], strict=True):
+            f[name].append(math.nan if g is None else float(g))
+        for name in ("pot_v", "setpoint", "y"):
+            value = sample.get(name)
+            f[name].append(math.nan if value is None else float(value))
+        self._command.append(int(sample["command"]))
+
+    def __len__(self) -> int:
+        return len(self._command)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        f = {name: np.frombuffer(a, dtype=float) if len(a) else np.zeros(0) for name, a in self._floats.items()}
+        return {
+            "t": f["t"],
+            "gauges_v": np.column_stack([f["g1"], f["g2"], f["g3"]]) if len(self) else np.zeros((0, 3)),
+            "pot_v": f["pot_v"],
+            "setpoint": f["setpoint"],
+            "y": f["y"],
+            "command": np.frombuffer(self._command, dtype=np.int16).astype(int) if len(self) else np.zeros(0, int),
+        }
+
+
+class SampleView:
+    """Columns (:meth:`SampleColumns.arrays`) read as a sequence of sample dicts, each made when asked for (null
+    for NaN, as the log has it)."""
+
+    def __init__(self, columns: dict[str, np.ndarray]) -> None:
+        self._c = columns
+
+    def __len__(self) -> int:
+        return len(self._c["t"])
+
+    def __getitem__(self, i: int) -> dict[str, Any]:
+        if not -len(self) <= i < len(self):
+            raise IndexError(i)
+        c = self._c
+
+        def value(x: float) -> float | None:
+            return None if math.isnan(x) else float(x)
+
+        return {
+            "t": float(c["t"][i]),
+            "gauges_v": [value(g) for g in c["gauges_v"][i]],
+            "pot_v": value(c["pot_v"][i]),
+            "command": int(c["command"][i]),
+            "setpoint": value(c["setpoint"][i]),
+            "y": value(c["y"][i]),
+        }
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
+
+
+def _log_lines(path: Path, fh):
+    """``(line number, bytes, is the last line)`` for each line of ``fh``, one line read ahead."""
+    number, line = 0, fh.readline(MAX_LOG_LINE_BYTES + 1)
+    while line:
+        number += 1
+        if len(line) > MAX_LOG_LINE_BYTES:
+            raise DataFileError(
+                f"{path}: line {number} is longer than {MAX_LOG_LINE_BYTES:,} bytes; a loop log's lines are samples "
+                "of a few hundred (is it a loop log? a file with a hole of NUL bytes?)"
+            )
+        following = fh.readline(MAX_LOG_LINE_BYTES + 1)
+        yield number, line, not following
+        line = following
+
+
+def _log_record(path: Path, number: int, raw: bytes, last: bool) -> dict[str, Any] | None:
+    """One log line as a JSON object; None for a torn last line; a DataFileError naming the line otherwise."""
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DataFileError(
+            f"{path}: not a flexdigit loop log: binary or not UTF-8 (byte 0x{raw[exc.start]:02x} on line {number})"
+        ) from None
+    if "\x00" in text:
+        raise DataFileError(f"{path}: not a flexdigit loop log: binary (a NUL byte on line {number})")
+    try:
+        record = json.loads(text)
+    except json.JSONDecodeError:
+        if last:
+            return None
+        raise DataFileError(f"{path}: line {number} is not JSON") from None
+    except RecursionError:  # brackets nested past the parser's depth: no loop log line is
+        raise DataFileError(f"{path}: line {number} is not a loop log line (JSON nested too deep)") from None
+    if not isinstance(record, dict):
+        raise DataFileError(f"{path}: line {number} is not a JSON object")
+    return record
 
 
 def _is_finite(x: int | float) -> bool:

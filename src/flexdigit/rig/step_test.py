@@ -18,6 +18,7 @@ from flexdigit.rig.base import Rig
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import LoopResult, run_loop
 from flexdigit.rig.rotation import RotationEstimator
+from flexdigit.rig.safety import RunawayGuard
 
 __all__ = ["StepMetrics", "step_metrics", "StepTest", "step_test", "FINAL_WINDOW_S"]
 
@@ -171,11 +172,14 @@ def step_test(
     gain: float = 1.0,
     estimator: RotationEstimator | None = None,
     log_path=None,
+    guard: RunawayGuard | bool = True,
 ) -> StepTest:
     """Run a 0 -> ``step_deg`` beam-rotation step on ``rig`` with ``controller`` and measure it.
 
     The rotation scored is the twin's true tip rotation when the rig has one (``tip_rotation_deg``), else the
-    estimate from the gauges. The rig is closed at the end (relaxed to command 8).
+    estimate from the gauges. The rig is closed at the end (relaxed to command 8). ``guard``: the loop's runaway
+    guard (:func:`~flexdigit.rig.loop.run_loop`); ``False`` lets an unstable design run its course (on the twin
+    only: chapter 5's forward-Euler failure is shown that way).
     """
     from flexdigit.control.design20ms import design_plant
 
@@ -197,7 +201,9 @@ def step_test(
         on_sample=record,
         log_path=log_path,
         header={"experiment": "step", "step_deg": step, "gain": gain},
+        guard=guard,
     )
+    result.raise_if_interrupted()  # the step figures of a run cut short are not a step test's
     deg_per_command = float(np.real(design_plant(rig.params).dcgain()))
     metrics = step_metrics(result.time_s, np.array(rotation), step, step_time_s, deg_per_command)
     return StepTest(controller, gain, result, np.array(rotation), metrics)

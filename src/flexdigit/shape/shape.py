@@ -177,7 +177,7 @@ class DigitBeam:
             gravity=np.asarray(ORIENTATIONS[orientation], dtype=float) * G_STANDARD_M_S2,
             eccentricity_m=geo.cable_eccentricity_m,
             cable_stiffness_n_m=calibration.cable_stiffness_n_m,
-            pulley_radius_m=a.pulley_radius_m,
+            pulley_radius_m=a.cable_m_per_servo_rad,  # the gearing folded in (E 3.11)
             taut_angle_rad=float(command_to_angle_rad(a.equilibrium_command, params)),
             params=params,
         )

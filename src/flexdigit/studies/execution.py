@@ -15,7 +15,11 @@ Execution (:func:`run_rows`):
   flexdigit runs no process pool of its own.
 
 Every finished task's records are appended to a journal (``journal.jsonl`` in the study's directory: a header line
-with the study's fingerprint, then one line per row, flushed and fsynced), so a study killed at any point resumes
+with the study's fingerprint, then one line per row, flushed and fsynced; each row carries a CRC-32 of its canonical
+JSON and the study's fingerprint, so a row edited, renumbered, copied from another study, duplicated or outside
+the design is refused naming the file and line, and a line cut short by a
+kill is dropped and computed again; a journal of format 1, without checksums, is refused: its rows cannot be
+checked, ``--force`` starts over), so a study killed at any point resumes
 where it stopped when rerun with the same spec and directory; a journal written by a study with other settings
 is refused, never mixed (``--force`` starts over). A row whose evaluation raises is recorded with its error and
 its parameters and the study goes on; a task whose worker dies (Dask gives up on it once the workers it ran on
@@ -33,12 +37,15 @@ import os
 import re
 import sys
 import time
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from flexdigit._system import available_cores, check_workers
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.studies.metrics import MetricContext
 
 __all__ = [
@@ -48,13 +55,18 @@ __all__ = [
     "run_rows",
     "run_study",
     "parse_scheduler",
+    "check_scheduler_greets",
     "retry_rows",
     "JOURNAL_NAME",
     "TASK_FAILED",
 ]
 
 JOURNAL_NAME = "journal.jsonl"
-JOURNAL_FORMAT = 1
+#: 2: each row carries its checksum (``crc``); 1 (before it) is refused, its rows cannot be checked.
+JOURNAL_FORMAT = 2
+#: Memory one local Dask worker process holds, bytes, for the cap on ``workers`` (:func:`flexdigit._system.
+#: check_workers`): its imports alone take 120 MB (numpy, scipy, distributed, the twin), a task's models more.
+WORKER_BYTES = 512 * 2**20
 #: How the error of a row whose task failed (not the row itself: a worker died, the task could not run) begins
 TASK_FAILED = "task failed: "
 
@@ -112,6 +124,7 @@ def evaluate_rows(build, rows, values, metrics, context: MetricContext, task_key
                 sets.append(build(values[i], f"row {int(row)}"))
                 built.append(int(row))
             except Exception as exc:  # noqa: BLE001 - a row the rig refuses is that row's result
+                raise_if_stopping(exc)  # (a stop is not)
                 out.append(RowRecord(int(row), {}, _message(exc)))
         results = evaluate_many(sets, metrics, context)
         each = (time.perf_counter() - start) / max(1, len(rows))
@@ -139,31 +152,39 @@ class Journal:
         Start over: an existing journal is replaced.
     """
 
-    def __init__(self, path: Path, header: dict, *, force: bool = False) -> None:
+    def __init__(self, path: Path, header: dict, *, force: bool = False, design=None) -> None:
         self.path = Path(path)
         self.header = {"flexdigit_study_journal": JOURNAL_FORMAT, **header}
         self.records: dict[int, RowRecord] = {}
+        #: The study's rows of parameter values: a journalled row number outside them is refused (None: not checked).
+        self.design = None if design is None else np.asarray(design, dtype=float)
         if self.path.exists() and not force:
             self._read()
         else:
+            from flexdigit._io import atomic_write
+
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = self.path.with_name(f".{self.path.name}.tmp")
-            with tmp.open("w", encoding="utf-8") as fh:
+            # an exclusive, unpredictable temporary file: a symlink planted at a fixed name is never followed
+            with atomic_write(self.path, "w", force=True) as fh:
                 fh.write(json.dumps(self.header, sort_keys=True) + "\n")
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, self.path)
 
     def _read(self) -> None:
-        text = self.path.read_bytes()
+        from flexdigit._io import LOG_LIMIT, read_bytes
+
+        text = read_bytes(self.path, "a study journal", LOG_LIMIT)
         lines = text.split(b"\n")
         complete, tail = lines[:-1], lines[-1]
         if not complete:
             raise DataFileError(f"{self.path}: not a study journal (no header line)")
         try:
             header = json.loads(complete[0])
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):  # RecursionError: brackets nested past the parser's depth
             raise DataFileError(f"{self.path}: line 1 is not a study journal header") from None
+        if isinstance(header, dict) and header.get("flexdigit_study_journal") == 1:
+            raise DataFileError(
+                f"{self.path}: a study journal of format 1 (written before rows carried checksums): its rows cannot "
+                "be checked; --force starts the study over"
+            )
         if not isinstance(header, dict) or header.get("flexdigit_study_journal") != JOURNAL_FORMAT:
             raise DataFileError(f"{self.path}: line 1 is not a flexdigit study journal header")
         if header.get("fingerprint") != self.header.get("fingerprint"):
@@ -171,25 +192,68 @@ class Journal:
                 f"{self.path}: written by a study with other settings (fingerprint {header.get('fingerprint')}, "
                 f"this study {self.header.get('fingerprint')}); use another --out directory, or --force to start over"
             )
+        lines: dict[int, int] = {}
         for number, line in enumerate(complete[1:], start=2):
             if not line.strip():
                 continue
             try:
-                record = RowRecord.from_json(json.loads(line))
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError):
-                raise DataFileError(f"{self.path}: line {number} is not a row record") from None
+                data = json.loads(line)
+                record = RowRecord.from_json(data)
+                crc = data["crc"]
+            except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError, RecursionError):
+                raise DataFileError(f"{self.path}: line {number} is not a row record (with its checksum)") from None
+            where = f"{self.path}: line {number}"
+            if self.design is not None and not 0 <= record.row < len(self.design):
+                raise DataFileError(
+                    f"{where}: row {record.row} is outside the study's design (rows 0..{len(self.design) - 1}); the "
+                    "journal was edited or mixed with another study's"
+                )
+            if crc != self._checksum(data):
+                raise DataFileError(
+                    f"{where}: row {record.row}'s checksum does not match its number and values (edited, renumbered "
+                    "or copied from another study); --force starts the study over"
+                )
+            earlier = self.records.get(record.row)
+            # a failed task's placeholder may follow any record of its row, and a result may follow a placeholder
+            # (the rerun computes the row again); two results for one row are a duplicated line
+            if earlier is not None and earlier.done and record.done:
+                raise DataFileError(
+                    f"{where}: row {record.row} again, already recorded on line {lines[record.row]} (a duplicated "
+                    "line); --force starts the study over"
+                )
             self.records[record.row] = record
+            lines[record.row] = number
         if tail:  # a line cut short by a kill: drop it, the row is computed again
             with self.path.open("r+b") as fh:
                 fh.truncate(len(text) - len(tail))
 
+    def _checksum(self, data: dict) -> str:
+        """CRC-32 (8 hex digits) of a row record's canonical JSON (without its ``crc``: its row number, values,
+        error and time) and the study's fingerprint: a row is valid only as written, in its own study."""
+        body = {k: v for k, v in data.items() if k != "crc"}
+        text = json.dumps(body, sort_keys=True, separators=(",", ":")) + "|" + str(self.header.get("fingerprint"))
+        return f"{zlib.crc32(text.encode()):08x}"
+
     def append(self, records) -> None:
-        """Add finished rows, flushed and fsynced before returning."""
-        lines = "".join(json.dumps(r.to_json(), sort_keys=True) + "\n" for r in records)
-        with self.path.open("a", encoding="utf-8") as fh:
-            fh.write(lines)
-            fh.flush()
-            os.fsync(fh.fileno())
+        """Add finished rows (each with its checksum), flushed and fsynced before returning."""
+        lines = ""
+        for r in records:
+            data = r.to_json()
+            if self.design is not None and not 0 <= r.row < len(self.design):
+                raise ParameterError(f"row {r.row} is outside the study's design (rows 0..{len(self.design) - 1})")
+            lines += json.dumps({**data, "crc": self._checksum(data)}, sort_keys=True) + "\n"
+        try:
+            with signals_deferred(), self.path.open("a", encoding="utf-8") as fh:  # a stop waits for the rows' end
+                fh.write(lines)
+                fh.flush()
+                os.fsync(fh.fileno())
+        except OSError as exc:  # a full disk: say which file, and that a rerun resumes (a torn line is dropped)
+            from flexdigit.errors import OutputError
+
+            raise OutputError(
+                f"{self.path}: cannot write it: {exc.strerror or exc}; the rows before are kept: free some space "
+                "and rerun to resume"
+            ) from exc
         for r in records:
             self.records[r.row] = r
 
@@ -207,16 +271,93 @@ def parse_scheduler(url: str) -> str:
     return url
 
 
+#: How long a Dask scheduler has to accept a connection and greet it, s (each; every network wait has one).
+SCHEDULER_TIMEOUT_S = 5.0
+#: The largest greeting a Dask scheduler sends, bytes (its handshake is under 100 bytes): a longer first frame is
+#: not a scheduler's, and distributed itself would allocate whatever length it claims (3 EiB from an HTTP reply).
+MAX_GREETING_BYTES = 64 * 1024
+#: Dask's default scheduler port, for an address without one.
+DASK_PORT = 8786
+
+
+def check_scheduler_greets(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S) -> None:
+    """Raise :class:`OSError` naming ``address`` unless a Dask scheduler answers there within ``timeout_s``.
+
+    distributed's client waits for the scheduler's handshake without a deadline (a server that accepts and stays
+    silent hangs it forever, its ``timeout`` covers the connect only) and reads the handshake's 8-byte length
+    header unchecked (a server answering HTTP or garbage makes it allocate exabytes). So before a ``Client`` is
+    made, this opens a connection of its own, reads the greeting a scheduler sends unasked (distributed's TCP
+    framing: a little-endian uint64 length, then a uint64 frame count and one uint64 length per frame, then the
+    frames) with a timeout and checks that it is framed so, then closes it. Only ``tcp://`` addresses are checked;
+    ``tls://`` and the others are left to distributed.
+    """
+    import socket
+    import struct
+
+    scheme, _, location = address.partition("://")
+    if scheme != "tcp":
+        return
+    host, _, port = location.partition(":")
+    port = int(port) if port else DASK_PORT
+
+    def fail(why: str) -> OSError:
+        return OSError(f"{address}: not a Dask scheduler: {why}; expected a scheduler's address (dask scheduler)")
+
+    deadline = time.monotonic() + timeout_s
+
+    def receive(sock, n: int) -> bytes:
+        data = b""
+        while len(data) < n:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise fail(f"no greeting within {timeout_s:g} s of connecting")
+            sock.settimeout(left)
+            try:
+                chunk = sock.recv(n - len(data))
+            except TimeoutError:
+                raise fail(f"no greeting within {timeout_s:g} s of connecting") from None
+            if not chunk:
+                raise fail(f"the connection was closed after {len(data)} bytes of its greeting")
+            data += chunk
+        return data
+
+    try:
+        sock = socket.create_connection((host, port), timeout=timeout_s)
+    except OSError as exc:
+        raise OSError(f"cannot reach the Dask scheduler at {address}: {exc.strerror or exc}") from None
+    with sock:
+        try:
+            (length,) = struct.unpack("<Q", receive(sock, 8))
+            if not 16 <= length <= MAX_GREETING_BYTES:
+                raise fail(
+                    f"its first message claims {length} bytes (a scheduler's greeting is 16..{MAX_GREETING_BYTES})"
+                )
+            body = receive(sock, length)
+        except OSError as exc:
+            if str(exc).startswith(address):
+                raise
+            raise fail(f"{exc.strerror or exc}") from None
+    (count,) = struct.unpack_from("<Q", body)
+    if (
+        not 1 <= count <= (length - 8) // 8
+        or 8 * (1 + count) + sum(struct.unpack_from(f"<{count}Q", body, 8)) != length
+    ):
+        raise fail("its first message is not framed as distributed frames its messages")
+
+
 @contextlib.contextmanager
 def dask_client(scheduler: str | None, workers: int):
-    """A Dask ``Client``: on an existing scheduler, or on a local cluster of ``workers`` processes (127.0.0.1)."""
+    """A Dask ``Client``: on an existing scheduler (checked first: :func:`check_scheduler_greets`), or on a local
+    cluster of ``workers`` processes (127.0.0.1)."""
     from distributed import Client, LocalCluster
 
     if scheduler:
+        check_scheduler_greets(parse_scheduler(scheduler))
         try:
-            client = Client(parse_scheduler(scheduler), timeout="5s")
+            client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S:g}s")
         except OSError as exc:
-            raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+            why = str(exc) or f"{type(exc).__name__}: no answer within {SCHEDULER_TIMEOUT_S:g} s"
+            raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {why}") from None
         try:
             yield client
         finally:
@@ -295,7 +436,9 @@ def run_rows(
     chunks = [np.arange(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
     todo = [(key, rows) for key, rows in enumerate(chunks) if any(not _done(journal, r) for r in rows)]
     if workers is None:
-        workers = os.cpu_count() or 1
+        workers = available_cores()
+    if not scheduler:
+        check_workers(workers, "workers", WORKER_BYTES)
     bar, task = _progress(n, n - sum(len(r) for _, r in todo), progress and bool(todo), label)
     metrics = list(metrics)
     with bar:
@@ -304,7 +447,7 @@ def run_rows(
         if workers == 0 and not scheduler:
             for key, rows in todo:
                 records = evaluate_rows(build, rows, values[rows], metrics, context, key, seed)
-                journal.append(records)
+                journal.append(_new(journal, records))
                 bar.update(task, advance=len(rows))
             return dict(journal.records)
         from distributed import as_completed
@@ -336,13 +479,19 @@ def run_rows(
                 except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
                     message = f"{TASK_FAILED}{type(exc).__name__}: {exc}".splitlines()[0]
                     records = [RowRecord(int(r), {}, message) for r in rows]
-                journal.append(records)
+                journal.append(_new(journal, records))
                 bar.update(task, advance=len(rows))
     return dict(journal.records)
 
 
 def _identity(x):
     return x
+
+
+def _new(journal: Journal, records) -> list[RowRecord]:
+    """The records of a task whose rows are not yet done: a task retried for one failed row evaluates its whole
+    chunk again (the same numbers, seeded by the task's key), but a row already done is recorded once."""
+    return [r for r in records if not _done(journal, r.row)]
 
 
 def _done(journal: Journal, row) -> bool:
@@ -358,7 +507,7 @@ def retry_rows(out_dir) -> int:
         return 0
     failed = set()
     for line in path.read_bytes().split(b"\n")[1:]:
-        with contextlib.suppress(json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
+        with contextlib.suppress(json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError, RecursionError):
             record = RowRecord.from_json(json.loads(line))
             (failed.discard if record.done else failed.add)(record.row)
     return len(failed)
@@ -382,20 +531,24 @@ def run_study(
 ):
     """:func:`run_rows` with the study's journal in ``out_dir``; returns ``(outputs, errors)``: per metric an array
     over the rows (NaN where a row failed) and per row its error or None."""
-    journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force)
-    records = run_rows(
-        build,
-        values,
-        metrics,
-        context,
-        journal,
-        seed=seed,
-        chunk_size=chunk_size,
-        workers=workers,
-        scheduler=scheduler,
-        progress=progress,
-        label=label,
-    )
+    from flexdigit._io import output_lock
+
+    Path(out_dir).mkdir(parents=True, exist_ok=True)  # the lock file lives beside the journal
+    with output_lock(Path(out_dir) / JOURNAL_NAME):  # one study writes a journal at a time: never mixed
+        journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force, design=values)
+        records = run_rows(
+            build,
+            values,
+            metrics,
+            context,
+            journal,
+            seed=seed,
+            chunk_size=chunk_size,
+            workers=workers,
+            scheduler=scheduler,
+            progress=progress,
+            label=label,
+        )
     n = len(values)
     outputs = {m: np.array([records[i].values.get(m, math.nan) for i in range(n)]) for m in metrics}
     return outputs, [records[i].error for i in range(n)]

@@ -50,6 +50,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from flexdigit.interrupts import raise_if_stopping
 from flexdigit.studies.batched_loop import StepSchedule, step_figures
 from flexdigit.studies.parameter_set import ParameterSet
 
@@ -152,14 +153,15 @@ def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -
             columns = {n: np.asarray(METRICS[n].batched(parameter_sets, context), dtype=float) for n in batched}
             for i, values in enumerate(out):
                 values.update({n: float(columns[n][i]) for n in batched})
-        except Exception:  # noqa: BLE001 - find the culprit one set at a time below
-            pass
+        except Exception as exc:  # noqa: BLE001 - find the culprit one set at a time below
+            raise_if_stopping(exc)  # unless a stop signal came back from a compiled kernel as this exception
     for i, ps in enumerate(parameter_sets):
         try:
             for n in names:
                 if n not in out[i]:
                     out[i][n] = METRICS[n](ps, context)
         except Exception as exc:  # noqa: BLE001 - any failure of one evaluation is that set's result
+            raise_if_stopping(exc)  # (a stop is not a failure of the set)
             out[i] = exc
     return out
 
@@ -309,7 +311,7 @@ def loop_plant(ps: ParameterSet, period_s: float, delay_samples: int = 1):
     from flexdigit.models.servo import servo_unit_tf
 
     a = ps.params.actuator
-    metres_per_command = a.rad_per_command * a.pulley_radius_m
+    metres_per_command = a.rad_per_command * a.cable_m_per_servo_rad
     with _quiet():
         plant = ct.series(ct.ss(servo_unit_tf(ps.params)), actuated_model(ps)) * (np.degrees(1.0) * metres_per_command)
         held = ct.sample_system(plant, period_s, method="zoh")

@@ -6,6 +6,7 @@ Its own module, below both :mod:`~flexdigit.studies.spec` (which makes parameter
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 from flexdigit.params import RigParams
@@ -22,3 +23,18 @@ class ParameterSet:
     params: RigParams = field(default_factory=RigParams)
     calibration: Calibration = field(default_factory=default_calibration)
     antagonist_pretension_n: float | None = None
+
+    def description(self) -> RigParams:
+        """The rig as a parameter file describes it (issue 24: one description for the study and the commands):
+        the antagonistic pair, if any, in ``[cables]``.
+
+        Examples
+        --------
+        >>> ParameterSet(antagonist_pretension_n=5.0).description().cables.count
+        2
+        """
+        pre = self.antagonist_pretension_n
+        cables = (
+            self.params.cables if pre is None else dataclasses.replace(self.params.cables, count=2, pretension_n=pre)
+        )
+        return self.params.replace(cables=cables)

@@ -281,6 +281,11 @@ def run_sensitivity(
 
     Returns the result; :func:`write_outputs` writes its files.
     """
+    if not spec.parameters:  # SALib would fail on an empty problem (an IndexError, an internal error)
+        raise ParameterError(
+            f"study {spec.name!r} declares no uncertain parameters ([parameters.SECTION.FIELD] with a distribution): "
+            "a sensitivity study needs at least one (a design spec's grid is run with `flexdigit study design`)"
+        )
     settings = settings or SensitivitySettings.from_spec(spec)
     metrics = spec.metrics or SENSITIVITY_METRICS
     u, design = sensitivity_design(spec, settings)

@@ -317,7 +317,7 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
     """Parse a study spec from TOML text (see the module docstring); errors name ``source`` and the key."""
     try:
         doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{source}: not valid TOML ({exc})") from None
     known = {"study", "parameters", "sensitivity", "design"}
     unknown = sorted(set(doc) - known)
@@ -381,6 +381,9 @@ def _baseline(study: dict, source: str, base_dir: Path | None) -> ParameterSet:
         if not isinstance(value, str):
             raise ParameterError(f"{source}: [study] {key} must be a file name. Got {value!r} instead.")
         path = Path(value) if base_dir is None or Path(value).is_absolute() else base_dir / value
+        from flexdigit._io import refuse_special
+
+        refuse_special(path, f"the [study] {key} file of {source}")
         if not path.is_file():
             raise ParameterError(f"{source}: [study] {key}: no such file {str(path)!r}")
         try:

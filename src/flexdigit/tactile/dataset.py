@@ -21,14 +21,16 @@ from __future__ import annotations
 
 import json
 import os
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from flexdigit import __version__
+from flexdigit import __version__, _io
 from flexdigit._io import atomic_path, atomic_write
 from flexdigit.errors import DataFileError, one_line
+from flexdigit.interrupts import signals_deferred
 from flexdigit.tactile.protocols import Protocol
 
 __all__ = [
@@ -63,7 +65,11 @@ COLUMNS: dict[str, type] = {
     "time_s": np.float64,
 }
 GAUGE_COLUMNS = ("gauge1_v", "gauge2_v", "gauge3_v")
-JOURNAL_FORMAT = "flexdigit-tactile-journal/1"
+#: /2: every reading carries a CRC-32 of its canonical JSON (``crc``). A journal of /1 (before it) is still
+#: resumed, as legacy: its readings are real measurements that cannot be taken again, and are checked as before
+#: (consecutive, inside the protocol's plan) but not against a checksum they never had.
+JOURNAL_FORMAT = "flexdigit-tactile-journal/2"
+LEGACY_JOURNAL_FORMATS = ("flexdigit-tactile-journal/1",)
 DATASET_FORMAT = "flexdigit-tactile-dataset/1"
 
 
@@ -170,6 +176,7 @@ class Journal:
                     f"{path}: this journal was started with {key}={was!r}; this run has {key}={now!r}. Resume with "
                     "the same settings, or collect into another --out"
                 )
+            _check_journal_plan(path, rows, header)
             if good_bytes < path.stat().st_size:  # a crash mid-write left a partial line: drop it
                 with path.open("r+b") as fh:
                     fh.truncate(good_bytes)
@@ -180,11 +187,15 @@ class Journal:
         return cls(path, handle, fsync), rows
 
     def append(self, row: dict) -> None:
-        """Write one reading and flush it (and fsync it if asked)."""
-        self._fh.write(json.dumps(row) + "\n")
-        self._fh.flush()
-        if self._fsync:
-            os.fsync(self._fh.fileno())
+        """Write one reading with its checksum and flush it (and fsync it if asked); a stop signal waits for the
+        line's end."""
+        body = {k: v for k, v in row.items() if k != "crc"}
+        line = json.dumps({**body, "crc": row_checksum(body)}) + "\n"
+        with signals_deferred():
+            self._fh.write(line)
+            self._fh.flush()
+            if self._fsync:
+                os.fsync(self._fh.fileno())
 
     def close(self) -> None:
         self._fh.close()
@@ -215,9 +226,51 @@ def first_difference(was: object, now: object, prefix: str = "") -> tuple[str, o
     return None
 
 
+def row_checksum(row: dict) -> str:
+    """CRC-32 (8 hex digits) of a journalled reading's canonical JSON, without its own ``crc``.
+
+    Examples
+    --------
+    >>> row_checksum({"sample": 0, "gauge1_v": 0.5}) == row_checksum({"gauge1_v": 0.5, "sample": 0})
+    True
+    """
+    body = {k: v for k, v in row.items() if k != "crc"}
+    return f"{zlib.crc32(json.dumps(body, sort_keys=True, separators=(',', ':')).encode()):08x}"
+
+
+def _check_journal_plan(path: Path, rows: list[dict], header: dict) -> None:
+    """Every journalled reading must be one the protocol of the journal's header takes, where it takes it: a reading
+    beyond the plan (an out-of-design row) or whose settings differ from its sample's is refused naming its line."""
+    try:
+        protocol = Protocol.from_dict(header["protocol"])
+        plan = protocol.plan(float(header.get("digit_length_m", 0.270)))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DataFileError(f"{path}: line 1: the stored protocol is invalid ({one_line(exc)})") from None
+    total = protocol.sample_count
+    if len(rows) > total:  # first: rows past the plan say more than any one setting that differs
+        raise DataFileError(
+            f"{path}: line {total + 2} holds sample {rows[total]['sample']}, beyond the {total} readings protocol "
+            f"{protocol.name!r} takes (the journal was edited or mixed with another)"
+        )
+    for i, row in enumerate(rows):
+        number = i + 2
+        for name in ("test", "load_kg", "position_index", "command", "repetition", "position_from_tip_m"):
+            want, got = plan[name][row["sample"]].item(), row[name]
+            same = (got is None and want != want) or (
+                got is not None and (got == want or (isinstance(want, float) and abs(got - want) <= 1e-12))
+            )
+            if not same:
+                raise DataFileError(
+                    f"{path}: line {number}: sample {row['sample']} has {name} = {got!r}, but protocol "
+                    f"{protocol.name!r} takes {want!r} there (the journal was edited or mixed with another)"
+                )
+
+
 def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     """Header, complete readings, and the byte length of the complete part of a journal."""
-    data = path.read_bytes()
+    from flexdigit._io import LOG_LIMIT, read_bytes
+
+    data = read_bytes(path, "a collection journal", LOG_LIMIT)
     lines = data.split(b"\n")
     # Everything after the last newline is a partial line (or empty): it is not counted.
     complete, good_bytes = lines[:-1], data.rfind(b"\n") + 1
@@ -227,8 +280,9 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
         header = json.loads(complete[0])
     except ValueError:  # not JSON, or not UTF-8
         raise DataFileError(f"{path}: line 1 is not a journal header (not JSON)") from None
-    if not isinstance(header, dict) or header.get("journal") != JOURNAL_FORMAT:
+    if not isinstance(header, dict) or header.get("journal") not in (JOURNAL_FORMAT, *LEGACY_JOURNAL_FORMATS):
         raise DataFileError(f"{path}: line 1 is not a {JOURNAL_FORMAT} header")
+    checked = header["journal"] == JOURNAL_FORMAT
     rows = []
     for number, line in enumerate(complete[1:], start=2):
         try:
@@ -249,6 +303,11 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
             if not ok:
                 kind = "an integer" if np.dtype(dtype).kind == "i" else "a number or null"
                 raise DataFileError(f"{path}: line {number}: column '{name}' must be {kind}. Got {value!r}")
+        if checked and row.get("crc") != row_checksum(row):
+            raise DataFileError(
+                f"{path}: line {number}: the checksum of sample {row['sample']} does not match its values (the journal "
+                "was edited, or a line corrupted); remove this line and the ones after it to take them again"
+            )
         if row["sample"] != len(rows):
             raise DataFileError(
                 f"{path}: line {number} holds sample {row['sample']}, expected {len(rows)} "
@@ -349,8 +408,12 @@ def _load_parquet(path: Path) -> Dataset:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    from flexdigit._io import check_input
+
+    check_input(path, "a flexdigit dataset (Parquet)")
     try:
-        table = pq.read_table(path)
+        with _io.open_input(path, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+            table = pq.read_table(fh)
     except (pa.ArrowException, OSError) as exc:
         raise DataFileError(f"{path}: not a readable Parquet file ({one_line(exc)})") from None
     try:  # pyarrow decodes the names only when asked: a damaged file's may not be UTF-8
@@ -362,7 +425,7 @@ def _load_parquet(path: Path) -> Dataset:
         raise DataFileError(f"{path}: no flexdigit metadata (protocol and rig); not a flexdigit tactile dataset")
     try:
         meta = json.loads(meta_raw)
-    except (json.JSONDecodeError, UnicodeDecodeError):
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
         raise DataFileError(f"{path}: flexdigit metadata is not valid JSON") from None
     columns = {}
     for name, dtype in COLUMNS.items():
@@ -385,15 +448,16 @@ def _load_parquet(path: Path) -> Dataset:
 def _load_csv(path: Path) -> Dataset:
     from io import StringIO
 
-    from flexdigit._io import read_text
+    from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
 
-    with StringIO(read_text(path, "a flexdigit dataset CSV")) as fh:
+    count_lines(path, "a flexdigit dataset CSV")
+    with StringIO(read_text(path, "a flexdigit dataset CSV", RECORDS_LIMIT)) as fh:
         first = fh.readline()
         if not first.startswith("# "):
             raise DataFileError(f"{path}: line 1 must be '# {{json metadata}}' as written by flexdigit")
         try:
             meta = json.loads(first[2:])
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):
             raise DataFileError(f"{path}: line 1 metadata is not valid JSON") from None
         header = fh.readline().strip().split(",")
         missing = [c for c in COLUMNS if c not in header]

@@ -51,6 +51,7 @@ import numpy as np
 from flexdigit._table import Table, read_table
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.params import GAUGE_V
 from flexdigit.tactile.dataset import COLUMNS, Dataset, make_meta
 from flexdigit.tactile.protocols import RELAXED, Protocol
 
@@ -181,11 +182,16 @@ class ColumnMap:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
+        from flexdigit._io import refuse_special
+
+        refuse_special(path, "a column map TOML")
         if not path.is_file():
             raise DataFileError(f"{path}: not a file (a directory?); expected a column map TOML")
         try:
-            data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-        except tomllib.TOMLDecodeError as exc:
+            from flexdigit._io import read_bytes
+
+            data = tomllib.loads(read_bytes(path, "a column map TOML").decode("utf-8-sig"))
+        except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
             raise DataFileError(f"{path}: not valid TOML ({exc})") from None
         except UnicodeDecodeError as exc:
             raise DataFileError(f"{path}: not a text TOML file (byte {exc.start} is not UTF-8)") from None
@@ -255,7 +261,8 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
     }
     gauge_columns = [table.find(g, f"gauge {k}") for k, g in enumerate(cmap.gauges, start=1)]
     _check_distinct(table, {**{f"gauge {k}": c for k, c in enumerate(gauge_columns, start=1)}, **columns})
-    gauges = np.column_stack([table.numbers(c) for c in gauge_columns]) * GAUGE_UNITS[cmap.gauge_unit]
+    unit = GAUGE_UNITS[cmap.gauge_unit]  # a gauge in mV mapped as V is 1000 times off: named by the range check
+    gauges = np.column_stack([table.plausible(c, table.numbers(c) * unit, GAUGE_V) for c in gauge_columns])
     load = table.numbers(columns["load"]) * LOAD_UNITS[cmap.load_unit]
     _check_rows(table, columns["load"], load, (load < 0), "a negative mass; expected 0 (no load) or more")
     _check_rows(

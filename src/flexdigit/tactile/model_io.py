@@ -82,12 +82,12 @@ def load_model(path: str | Path) -> SavedModel:
     DataFileError
         If the file is not JSON, not a flexdigit model, of a newer version, or a field is missing or inconsistent.
     """
-    from flexdigit._io import read_text
+    from flexdigit._io import MODEL_LIMIT, read_text
     from flexdigit._validation import check_int, check_real
 
     path = Path(path)
     try:
-        doc = json.loads(read_text(path, "a model file"))
+        doc = json.loads(read_text(path, "a model file", MODEL_LIMIT))
     except json.JSONDecodeError as exc:
         raise DataFileError(f"{path}: not a model file (invalid JSON: {exc})") from None
     except RecursionError:

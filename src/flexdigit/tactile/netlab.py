@@ -27,13 +27,14 @@ True
 
 from __future__ import annotations
 
-from numbers import Integral, Real
+from numbers import Integral
 
 import numpy as np
 
 from flexdigit._estimator import Estimator, check_is_fitted
-from flexdigit._validation import Interval, check_array
+from flexdigit._validation import Interval, Plausible, check_array
 from flexdigit.errors import ParameterError
+from flexdigit.tactile.network_sizes import HIDDEN, TOL
 
 __all__ = ["SCG_SIGMA0", "mlp_unpack", "mlp_init", "mlp_forward", "mlp_error", "mlp_grad", "scg", "MLP"]
 
@@ -205,10 +206,10 @@ class MLP(Estimator):
     """
 
     _parameter_constraints = {
-        "hidden": [Interval(Integral, 1, 10_000)],
-        "tol": [Interval(Real, 0, None, closed="neither")],
-        "epochs": [Interval(Integral, 1, None)],
-        "iterations_per_epoch": [Interval(Integral, 1, None)],
+        "hidden": [HIDDEN],
+        "tol": [TOL],
+        "epochs": [Plausible("", 1, 1_000_000, "epochs: early stopping needs tens", integer=True)],
+        "iterations_per_epoch": [Plausible("", 1, 1_000_000, "SCG iterations per epoch", integer=True)],
         "random_state": [Interval(Integral, 0, None), None],
     }
 

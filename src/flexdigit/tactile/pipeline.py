@@ -44,6 +44,7 @@ from flexdigit.errors import ParameterError
 from flexdigit.tactile.accuracy import accuracy, corr2, percentage_error, relative_rmse, rmse
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.netlab import MLP
+from flexdigit.tactile.network_sizes import HIDDEN, TOL
 
 __all__ = [
     "TARGETS",
@@ -246,8 +247,8 @@ def _sweep(x, y, split, configs, epochs) -> list[SweepPoint]:
         "default_tol": [Interval(Real, 0, None, closed="neither")],
         "curve_hidden": [Interval(Integral, 1, None), None],
         "epochs": [Interval(Integral, 1, None)],
-        "fixed_hidden": [Interval(Integral, 1, None), None],
-        "fixed_tol": [Interval(Real, 0, None, closed="neither"), None],
+        "fixed_hidden": [HIDDEN, None],
+        "fixed_tol": [TOL, None],
         "target": [Options(TARGETS)],
     }
 )

@@ -30,8 +30,17 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_choice, check_int, check_real
+from flexdigit._validation import (
+    Plausible,
+    check_array,
+    check_choice,
+    check_int,
+    check_param,
+    check_plausible,
+    check_real,
+)
 from flexdigit.errors import ParameterError
+from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M
 
 __all__ = ["RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
 
@@ -40,6 +49,9 @@ RELAXED = -1
 
 #: Longest settle time (and reading interval) a protocol or ``collect --settle`` takes, s: an hour.
 MAX_SETTLE_S = 3600.0
+#: Time between the repeated readings of one setting: the rig's loop is 20 ms; 10 s is generous, and a 20 "s"
+#: interval is 20 ms written in the wrong unit.
+SAMPLE_INTERVAL_S = Plausible("s", 0.0, 10.0, "between repeated readings: the rig's loop period is 0.02 s")
 
 #: Names of the protocols packaged in ``tactile/protocols``.
 BUILTIN = ("thesis-6.1", "thesis-7.1", "thesis-7.1-no-load")
@@ -111,9 +123,11 @@ class Protocol:
         if not isinstance(self.name, str) or not self.name.strip():
             raise ParameterError(f"The 'name' parameter of Protocol must be a non-empty string. Got {self.name!r}.")
         loads = check_array(self.loads_kg, "loads_kg", owner, ndim=1, min_length=1, low=0, low_open=True, high=10)
+        check_plausible(loads, LOAD_KG, "loads_kg", owner)
         positions = check_array(
             self.positions_from_tip_m, "positions_from_tip_m", owner, ndim=1, min_length=1, low=0, high=10
         )
+        check_plausible(positions, POSITION_FROM_TIP_M, "positions_from_tip_m", owner)
         if len(set(positions.tolist())) != positions.size:
             raise ParameterError(
                 f"The 'positions_from_tip_m' parameter of {owner} must not repeat a position. "
@@ -133,7 +147,7 @@ class Protocol:
         object.__setattr__(
             self,
             "sample_interval_s",
-            check_real(self.sample_interval_s, "sample_interval_s", owner, low=0, high=MAX_SETTLE_S),
+            check_param(self.sample_interval_s, SAMPLE_INTERVAL_S, "sample_interval_s", owner),
         )
         check_choice(self.orientation, "orientation", ("horizontal", "vertical"), owner)
         if not isinstance(self.rehang, bool):
@@ -239,7 +253,7 @@ def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
     """
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{source}: not valid TOML ({exc})") from None
     unknown = sorted(set(data) - _KEYS)
     if unknown:
@@ -252,7 +266,9 @@ def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
             raise ParameterError(f"{source}: '{key}' must be a list. Got {data[key]!r} instead.")
     try:
         loads = check_array(data["loads_g"], "loads_g", source, ndim=1, min_length=1, low=0, low_open=True)
+        check_plausible(loads, LOAD_KG.to("g", 1e3), "loads_g", "the protocol")  # a load in kg written as g: named
         tips = check_array(data["positions_from_tip_cm"], "positions_from_tip_cm", source, ndim=1, min_length=1, low=0)
+        check_plausible(tips, POSITION_FROM_TIP_M.to("cm", 1e2), "positions_from_tip_cm", "the protocol")
         protocol = Protocol(
             name=data["name"],
             loads_kg=tuple(float(v) / 1000.0 for v in loads),
@@ -289,7 +305,10 @@ def load_protocol(name_or_path: str | Path) -> Protocol:
     if text_name in BUILTIN:
         resource = resources.files(__package__).joinpath("protocols", f"{text_name}.toml")
         return protocol_from_toml(resource.read_text(), source=f"protocol {text_name}")
+    from flexdigit._io import refuse_special
+
     path = Path(name_or_path)
+    refuse_special(path, "a protocol TOML")
     if not path.is_file():
         raise ParameterError(
             f"no protocol {text_name!r}: expected one of {', '.join(BUILTIN)} or a TOML file that exists"

@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from flexdigit._io import check_output
+from flexdigit._io import check_output, output_lock
 from flexdigit._validation import check_real
-from flexdigit.errors import DataFileError, ParameterError, RigError
+from flexdigit.errors import DataFileError, OutputError, ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
@@ -150,6 +150,25 @@ def collect(
     plan = protocol.plan(params.geometry.digit_length_m)
     meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v)
     meta["settings"] = effective_settings(protocol, rig, settle, settings)
+    # one collection writes ``out`` and its journal at a time: a second is refused (OutputBusyError), never mixed
+    with output_lock(out):
+        return _collect_locked(protocol, rig, out, journal_file, meta, plan, settle, progress, fsync, stop_after, force)
+
+
+def _collect_locked(
+    protocol: Protocol,
+    rig,
+    out: Path,
+    journal_file: Path,
+    meta: dict,
+    plan: dict,
+    settle: float,
+    progress: bool,
+    fsync: bool,
+    stop_after: int | None,
+    force: bool,
+) -> Dataset:
+    """:func:`collect` once its checks passed, holding ``out``'s lock."""
     if out.exists() and journal_file.exists() and not force:
         return _finish_compaction(out, journal_file, meta, protocol)
     check_output(out, force=force)
@@ -174,17 +193,32 @@ def collect(
                 if i < start:  # replaying what the journal holds: the twin must give it again, bit for bit
                     _check_replayed(journal_file, done[i], row)
                     continue
-                journal.append(row)
+                try:
+                    journal.append(row)
+                except OSError as exc:  # a full disk: say which file, and that a rerun resumes
+                    raise OutputError(
+                        f"{journal_file}: cannot write it: {exc.strerror or exc}; the readings before are kept: "
+                        "free some space and rerun to resume"
+                    ) from exc
                 taken += 1
                 if task is not None:
                     bar.advance(task)
     finally:
-        journal.close()
+        unwritten = None
+        try:  # its last buffered line may meet a full disk: the rig is still made safe, the file named
+            journal.close()
+        except OSError as exc:
+            unwritten = OutputError(
+                f"{journal_file}: cannot write it: {exc.strerror or exc}; the readings before are kept: free some "
+                "space and rerun to resume"
+            )
         try:  # leave the rig safe: nothing hanging, servo relaxed
             rig.clear_loads()
             rig.relax()
         except Exception:  # noqa: BLE001 - the original error (if any) matters more than a failed tidy-up
             pass
+        if unwritten is not None:
+            raise unwritten  # noqa: B012 - replaces the unnamed OSError the close raised
     dataset = load_dataset(journal_file, protocol)
     if len(dataset) == total:
         save_dataset(dataset, out, force=force)

@@ -74,7 +74,7 @@ def _rhs(psi, omega, sh, p, m, sm, rhs, s, co, w2, taut):
     """Mass matrix ``m``, ``sin``-weighted ``sm`` and ``M alpha = rhs`` at a point (DynamicState._rhs), and the
     number of taut cables per lane in ``taut``. ``sh``: the main cable's shortening, not finite when detached."""
     a, k, c, bw, ga, gb, e, kc, pre, anta = p
-    n = psi.shape[0]
+    n = a.shape[0]  # not psi's: the work rows (psi2 below) have at least 7 rows, a chain of fewer links fewer
     for j in range(n):
         for lane in range(LANES):
             s[j, lane] = np.sin(psi[j, lane])

@@ -378,7 +378,7 @@ class BatchedTwin:
         self._angle_max = np.array([math.radians(a.angle_max_deg) for a in act])
         self._wn = np.array([a.servo_wn_rad_s for a in act])
         self._zeta = np.array([a.servo_zeta for a in act])
-        self._pulley = np.array([a.pulley_radius_m for a in act])
+        self._pulley = np.array([a.cable_m_per_servo_rad for a in act])
         self._angle_taut = np.array(
             [float(command_to_angle_rad(a.equilibrium_command, p)) for a, p in zip(act, params_list, strict=True)]
         )

@@ -259,11 +259,16 @@ def load_calibration_record(path: str | Path) -> tuple[Calibration, dict[str, An
 def _read_toml(path: Path) -> dict:
     if not path.exists():
         raise FileNotFoundError(2, "No such file", str(path))
+    from flexdigit._io import refuse_special
+
+    refuse_special(path, "a calibration TOML")
     if not path.is_file():
         raise DataFileError(f"{path}: not a file (a directory?); expected a calibration TOML")
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
+        from flexdigit._io import read_text
+
+        return tomllib.loads(read_text(path, "a calibration TOML"))
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise DataFileError(f"{path}: not valid TOML ({exc})") from None
     except UnicodeDecodeError as exc:
         raise DataFileError(f"{path}: not a text TOML file (byte {exc.start} is not UTF-8)") from None

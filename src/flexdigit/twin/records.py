@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from flexdigit import __version__
+from flexdigit import __version__, _io
 from flexdigit._io import atomic_path, atomic_write
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive, check_real, check_values
@@ -111,19 +111,23 @@ class TwinRecord:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
+        from flexdigit._io import RECORDS_LIMIT, check_input, count_lines, read_text
+
+        check_input(path, "a twin record", RECORDS_LIMIT)
         if path.suffix.lower() == ".csv":
             import io
 
             import pyarrow.csv as pcsv
 
-            text = path.read_text()
+            count_lines(path, "a twin record CSV")
+            text = read_text(path, "a twin record CSV", RECORDS_LIMIT)
             meta, body = {}, []
             for line in text.splitlines(keepends=True):
                 if line.startswith("# ") and not body:
                     key, _, value = line[2:].partition(": ")
                     try:
                         meta[key] = json.loads(value)
-                    except json.JSONDecodeError:
+                    except (json.JSONDecodeError, RecursionError):
                         raise DataFileError(f"{path}: metadata line for {key!r} is not JSON") from None
                 else:
                     body.append(line)
@@ -135,7 +139,8 @@ class TwinRecord:
         import pyarrow.parquet as pq
 
         try:
-            table = pq.read_table(path)
+            with _io.open_input(path, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
+                table = pq.read_table(fh)
         except (pa.ArrowInvalid, OSError) as exc:
             raise DataFileError(f"{path}: not a Parquet file ({exc})") from None
         raw = (table.schema.metadata or {}).get(METADATA_KEY)
@@ -175,6 +180,25 @@ def _result(name: str, columns: dict[str, np.ndarray], arguments: dict, seed, pa
         "flexdigit_version": __version__,
     }
     return TwinRecord(table, meta)
+
+
+def _gauge_columns(params: RigParams) -> list[str]:
+    """``gauge1_v .. gaugeG_v``: one column per gauge of the digit (the thesis rig's three)."""
+    return [f"gauge{i + 1}_v" for i in range(len(params.geometry.gauge_positions_m))]
+
+
+def _check_upright(chain, orientation: str, owner: str) -> None:
+    """Refuse a digit that cannot stand straight in ``orientation``: a long or soft digit mounted tip up buckles
+    under its own weight and its supports' (the straight chain's tangent stiffness, springs plus gravity, has a
+    negative eigenvalue), and a release from there falls over instead of ringing."""
+    stiffness = chain.tangent_stiffness(np.zeros(chain.n), chain.g_gravity, False)
+    lowest = float(np.linalg.eigvalsh(0.5 * (stiffness + stiffness.T))[0])
+    if lowest < 0:
+        raise ParameterError(
+            f"The 'orientation' parameter of {owner} is {orientation!r}, but this digit buckles so under its own "
+            f"weight (straight, its lowest tangent stiffness is {lowest:.3g} N m/rad < 0): mount it 'hanging' (tip "
+            "down) or 'horizontal'."
+        )
 
 
 def _check_rate(duration_s, sample_rate_hz, owner):
@@ -220,6 +244,7 @@ def release_test(
         dt_s=RELEASE_DT_S,
         compiled=compiled,
     )
+    _check_upright(twin.chain, orientation, "release_test")
     unit = twin.chain.solve_static(tip_force_n=[[0.0, 1e-3]]).tip_m[0, 1] - twin.chain.solve_static().tip_m[0, 1]
     force = 1e-3 * deflection / unit
     for _ in range(3):  # the tip load-deflection curve bends a little: a few secant corrections
@@ -228,7 +253,7 @@ def release_test(
     twin.deflect(force)
     series = twin.read_at(times)
     gauges = series.gauges_v
-    cols = {"time_s": times, "gauge1_v": gauges[:, 0], "gauge2_v": gauges[:, 1], "gauge3_v": gauges[:, 2]}
+    cols = {"time_s": times, **{f"gauge{i + 1}_v": gauges[:, i] for i in range(gauges.shape[1])}}
     cols["tip_deflection_m"] = series.tip_m[:, 1]
     args = dict(housing=housing, tip_deflection_m=deflection, duration_s=duration_s, sample_rate_hz=sample_rate_hz)
     args["orientation"] = orientation
@@ -269,7 +294,7 @@ def servo_step_test(
     after = twin.read_at(times[times >= step_at])
     gauges, pot, cmd, angles = (np.concatenate(pair) for pair in zip(before[:4], after[:4], strict=True))
     cols = {"time_s": times, "command": cmd, "pot_v": pot, "servo_angle_rad": angles}
-    cols.update({f"gauge{i + 1}_v": gauges[:, i] for i in range(3)})
+    cols.update({f"gauge{i + 1}_v": gauges[:, i] for i in range(gauges.shape[1])})
     args = dict(command_from=c0, command_to=c1, step_at_s=step_at, duration_s=duration_s, cable=cable)
     args["sample_rate_hz"] = sample_rate_hz
     return _result("servo_step_test", cols, args, seed, params, calibration)
@@ -310,9 +335,7 @@ def actuation_sweep(
     n = check_int(samples, "samples", "actuation_sweep", low=1, high=100_000)
     rate = check_positive(sample_rate_hz, "sample_rate_hz", "actuation_sweep")
     twin = Twin(params, calibration, seed=seed, orientation=orientation, command=cmds[0], compiled=bool(compiled))
-    rows: dict[str, list] = {
-        k: [] for k in ("command", "sample", "time_s", "gauge1_v", "gauge2_v", "gauge3_v", "pot_v")
-    }
+    rows: dict[str, list] = {k: [] for k in ("command", "sample", "time_s", *_gauge_columns(params), "pot_v")}
     for c in cmds:
         twin.command(c)
         twin.advance(settle)
@@ -322,8 +345,8 @@ def actuation_sweep(
             g, p = twin.read()
             for key, val in zip(("command", "sample", "time_s", "pot_v"), (c, k, twin.time_s, p), strict=True):
                 rows[key].append(val)
-            for i in range(3):
-                rows[f"gauge{i + 1}_v"].append(g[i])
+            for i, name in enumerate(_gauge_columns(params)):
+                rows[name].append(g[i])
     cols = {k: np.asarray(v) for k, v in rows.items()}
     args = dict(commands=cmds, settle_s=settle, samples=n, sample_rate_hz=rate, orientation=orientation)
     return _result("actuation_sweep", cols, args, seed, params, calibration)
@@ -425,7 +448,7 @@ def static_load_test(
         "command": cmd_col,
         "repetition": rep,
     }
-    cols.update({f"gauge{i + 1}_v": volts[:, i] for i in range(3)})
+    cols.update({f"gauge{i + 1}_v": volts[:, i] for i in range(volts.shape[1])})
     args = dict(
         loads_kg=masses.tolist(),
         positions_from_tip_m=from_tip.tolist(),

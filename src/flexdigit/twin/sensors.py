@@ -41,6 +41,7 @@ test, leaves corr2 untouched (the report shows both).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from functools import lru_cache
 
@@ -139,7 +140,16 @@ class SensorChain:
         check_channels(params, calibration)
         s = params.sensors
         self.params = params
-        self.gain = s.amplifier_gain_v_per_v * s.excitation_v * np.asarray(calibration.channel_gain, dtype=float)
+        count = len(params.geometry.gauge_positions_m)
+        bridges, factors, amplifier = s.chain(count)
+        # a chain per gauge (issue 24): each gauge's bridge and gauge factor; the shared chain keeps its fast path
+        self._chains = (
+            [dataclasses.replace(s, bridge=b, gauge_factor=f) for b, f in zip(bridges, factors, strict=True)]
+            if s.per_gauge
+            else None
+        )
+        amp = np.asarray(amplifier, dtype=float) if s.amplifier_gains_v_per_v is not None else s.amplifier_gain_v_per_v
+        self.gain = amp * s.excitation_v * np.asarray(calibration.channel_gain, dtype=float)
         self.offset = np.asarray(calibration.channel_offset_v, dtype=float)
         self.white = np.asarray(calibration.noise_white_v, dtype=float)
         self.drift_rate = np.asarray(calibration.noise_drift_v_per_sqrt_s, dtype=float)
@@ -164,7 +174,15 @@ class SensorChain:
         kappa = np.asarray(curvature_1_m, dtype=float)
         eps_axial = np.asarray(axial_force_n, dtype=float) / self._ea
         bend = kappa * self._half_t
-        if self._half_bridge:
+        if self._chains is not None:
+            ratio = np.stack(
+                [
+                    bridge_ratio(bend[..., i] + eps_axial[..., i], -bend[..., i] + eps_axial[..., i], chain)
+                    for i, chain in enumerate(self._chains)
+                ],
+                axis=-1,
+            )
+        elif self._half_bridge:
             # E 2.2 for the half bridge, (R1 - R2) / (2 (R1 + R2)) with R = 1 + GF eps, inlined: the general
             # bridge_ratio costs ~15 us a read in conversions (tests check the two agree)
             gf = self._gf

@@ -66,7 +66,7 @@ def cable_shortening_m(command_or_angle, params: RigParams, *, is_angle: bool = 
     angle = np.asarray(command_or_angle, dtype=float)
     if not is_angle:
         angle = command_to_angle_rad(angle, params)
-    return a.pulley_radius_m * (angle - command_to_angle_rad(a.equilibrium_command, params))
+    return a.cable_m_per_servo_rad * (angle - command_to_angle_rad(a.equilibrium_command, params))
 
 
 class ReadSeries(NamedTuple):
@@ -153,7 +153,7 @@ class Twin:
         self._friction_xi = np.zeros(3)
         start = self.params.actuator.equilibrium_command if command is None else command
         self.servo = Servo(self.params, start)
-        self._pulley_m = self.params.actuator.pulley_radius_m
+        self._pulley_m = self.params.actuator.cable_m_per_servo_rad
         self._angle_taut = float(command_to_angle_rad(self.params.actuator.equilibrium_command, self.params))
         self._loads: list[tuple[float, float]] = []
         self._presses: list = []  # PointForce / Pressure (flexdigit.twin.contact)
@@ -657,7 +657,7 @@ def static_gauges_v(
         shortening = cable_shortening_m(cmd, params)
         if servo_offset_rad is not None:
             offset = check_values(servo_offset_rad, "servo_offset_rad", owner, unit="rad")
-            shortening = shortening + params.actuator.pulley_radius_m * np.broadcast_to(offset.reshape(-1), (b,))
+            shortening = shortening + params.actuator.cable_m_per_servo_rad * np.broadcast_to(offset.reshape(-1), (b,))
     forces = masses[..., None] * chain.gravity
     sol = chain.solve_static(pos, forces, cable_shortening_m=shortening)
     rng = np.random.default_rng(seed) if seed is not None else None

@@ -9,8 +9,6 @@ Reading past the end of the recording raises :class:`~flexdigit.errors.RigError`
 
 from __future__ import annotations
 
-import bisect
-import math
 from typing import Any
 
 import numpy as np
@@ -18,8 +16,8 @@ import numpy as np
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig, UrlOption
-from flexdigit.rig.recording import is_mcap, read_recording
-from flexdigit.rig.sample_log import read_log
+from flexdigit.rig.recording import is_mcap, read_recording_columns
+from flexdigit.rig.sample_log import SampleView, read_log_columns
 
 __all__ = ["ReplayRig", "from_url"]
 
@@ -36,18 +34,19 @@ class ReplayRig(Rig):
         mcap = is_mcap(path) or str(path).lower().endswith(".mcap")  # an .mcap that is not one is named as such
         if mcap and run not in (None, 1):
             raise ParameterError(f"replay://{path}?run={run}: an MCAP recording holds one run")
-        self.header, samples, self.footer = read_recording(path) if mcap else read_log(path, run)
-        if not samples:
+        # streamed into columns (64 bytes a sample; a list of sample dicts takes ten times that)
+        read = read_recording_columns if mcap else (lambda p: read_log_columns(p, run))
+        self.header, columns, self.footer = read(path)
+        if not len(columns["t"]):
             raise DataFileError(f"{path}: the log has no samples to replay")
-        self.samples = samples  # the recorded samples as read (dicts: t, gauges_v, pot_v, command, setpoint ...)
-        self._times = [float(s["t"]) for s in samples]
-        if any(b < a for a, b in zip(self._times, self._times[1:], strict=False)):
+        #: the recorded samples as read, a sequence of dicts (t, gauges_v, pot_v, command, setpoint, y) made on access
+        self.samples = SampleView(columns)
+        self._times = columns["t"]
+        if np.any(np.diff(self._times) < 0):
             raise DataFileError(f"{path}: sample times are not increasing")
-        self._gauges = np.array(
-            [[math.nan if g is None else float(g) for g in s["gauges_v"]] for s in samples], dtype=float
-        )
-        self._pot = np.array([math.nan if s.get("pot_v") is None else float(s["pot_v"]) for s in samples])
-        self.recorded_commands = np.array([int(s["command"]) for s in samples])
+        self._gauges = columns["gauges_v"]
+        self._pot = columns["pot_v"]
+        self.recorded_commands = columns["command"]
         self.commands_sent: list[tuple[float, int]] = []
         self._now = 0.0
         kwargs.setdefault("clock", lambda: self._now)
@@ -59,14 +58,19 @@ class ReplayRig(Rig):
         self._now += seconds
 
     @property
+    def times_s(self) -> np.ndarray:
+        """The recorded samples' times, s (a read-only array)."""
+        return self._times
+
+    @property
     def end_time_s(self) -> float:
-        return self._times[-1]
+        return float(self._times[-1])
 
     def _read(self) -> tuple[np.ndarray, float]:
         t = self.clock() + self._times[0]
         if t > self._times[-1] + 1e-9:
             raise RigError(f"{self.name}: the recording ends at t = {self._times[-1]:.3f} s")
-        i = max(bisect.bisect_right(self._times, t + 1e-9) - 1, 0)
+        i = max(int(np.searchsorted(self._times, t + 1e-9, side="right")) - 1, 0)
         return self._gauges[i].copy(), float(self._pot[i])
 
     def _send(self, command: int) -> None:

@@ -29,8 +29,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexdigit._validation import check_int, check_positive, check_real
+from flexdigit._validation import SEED, Flag, Plausible, check_int, check_param, check_positive
 from flexdigit.rig.backends.stream_framing import PROTOCOL_VERSION, encode_line
+
+#: Lines per second: the firmware streams 100; a 115200-baud serial line carries ~2,000 of these lines.
+RATE_HZ = Plausible("Hz", 0.1, 10_000.0, "lines per second: the firmware streams 100, a serial line carries ~2,000")
+#: How long the emulator runs when told: a week at most (a longer one is a typo; leave --duration out to run on).
+DURATION_S = Plausible("s", 0.0, 7 * 86_400.0, "a week at most; leave it out to run until Ctrl-C", closed="right")
 
 __all__ = ["Faults", "StreamEmulator", "main"]
 
@@ -95,7 +100,7 @@ class StreamEmulator:
     ) -> None:
         import tty
 
-        self.rate_hz = check_positive(rate_hz, "rate_hz", "StreamEmulator")
+        self.rate_hz = check_param(rate_hz, RATE_HZ, "rate_hz", "StreamEmulator")
         self.scale = check_positive(scale, "scale", "StreamEmulator")
         self.bits = check_int(bits, "bits", "StreamEmulator", low=2, high=32)
         self.faults = faults or Faults()
@@ -253,29 +258,31 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m flexdigit.rig.backends.stream_emulator", description=__doc__.split("\n")[0]
     )
     parser.add_argument("--twin", action="store_true", help="stream a twin's gauges and serve a servo board too")
-    parser.add_argument("--rate", type=float, default=100.0, help="lines per second (100)")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--duration", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
+    parser.add_argument("--rate", type=Flag(RATE_HZ), default=100.0, help="lines per second (100)")
+    parser.add_argument("--seed", type=Flag(SEED), default=0)
+    parser.add_argument(
+        "--duration", type=Flag(DURATION_S), default=None, help="stop after this many seconds (default: Ctrl-C)"
+    )
     args = parser.parse_args(argv)
     return run_emulator(args.twin, args.rate, args.seed, args.duration, print)
 
 
 def run_emulator(twin: bool, rate_hz: float, seed: int, duration_s: float | None, say) -> int:
     """Run an emulator until ``duration_s`` (or Ctrl-C), telling ``say`` the ports and how to use them."""
-    duration = None if duration_s is None else check_real(duration_s, "--duration", low=0.0)
+    duration = None if duration_s is None else check_param(duration_s, DURATION_S, "--duration", "stream-emulator")
     with StreamEmulator(twin=twin, rate_hz=rate_hz, seed=seed) as emulator:
-        say(f"gauge stream on {emulator.port}: stream://{emulator.port}")
-        if emulator.servo_port:
-            say(f"servo board on {emulator.servo_port}; the whole rig:")
-            say(f"  flexdigit run --backend 'serial://{emulator.servo_port}?daq=stream://{emulator.port}'")
-        try:
+        try:  # serving from the first line said: a stop from then on ends it as its duration would
+            say(f"gauge stream on {emulator.port}: stream://{emulator.port}")
+            if emulator.servo_port:
+                say(f"servo board on {emulator.servo_port}; the whole rig:")
+                say(f"  flexdigit run --backend 'serial://{emulator.servo_port}?daq=stream://{emulator.port}'")
             if duration is None:
                 while True:
                     time.sleep(1.0)
             else:
                 time.sleep(duration)
-        except KeyboardInterrupt:
-            pass
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM or SIGHUP (flexdigit.interrupts): how it ends
+            say(f"stopped by {getattr(exc, 'signal_name', 'SIGINT')}")
         say(f"sent {emulator.lines_sent} lines ({emulator.overflows} lost: nobody was reading)")
     return 0
 

@@ -1,0 +1,37 @@
+"""Tendon-driven continuum robots in three dimensions: description, rod statics and dynamics, sensing, recordings.
+
+The thesis's digit is the planar case of such a robot; this domain is its generalisation to space (issue 26):
+a Cosserat rod with any number of segments and tendons (:mod:`flexdigit.tdcr.description`), its static
+equilibrium by shooting (:mod:`flexdigit.tdcr.statics`) and its motion, implicit in time and shot in space
+(:mod:`flexdigit.tdcr.dynamics`), its shape from strain gauges on its faces (:mod:`flexdigit.tdcr.sensing`),
+and recordings of either that open in 3D in Foxglove (:mod:`flexdigit.tdcr.scene`).
+"""
+
+from flexdigit._lazy import lazy_exports
+
+#: Public names and the submodule each lives in: imported on first use (PEP 562), so that ``flexdigit --help``
+#: (which imports ``flexdigit.cli.tdcr``) does not load numba.
+__getattr__, __all__ = lazy_exports(
+    __name__,
+    {
+        "ROBOTS": "flexdigit.tdcr.description",
+        "Backbone": "flexdigit.tdcr.description",
+        "Robot": "flexdigit.tdcr.description",
+        "Segment": "flexdigit.tdcr.description",
+        "Tendon": "flexdigit.tdcr.description",
+        "get_robot": "flexdigit.tdcr.description",
+        "load_robot": "flexdigit.tdcr.description",
+        "robot_from_dict": "flexdigit.tdcr.description",
+        "StaticSolution": "flexdigit.tdcr.statics",
+        "solve_statics": "flexdigit.tdcr.statics",
+        "DynamicSolution": "flexdigit.tdcr.dynamics",
+        "simulate": "flexdigit.tdcr.dynamics",
+        "GaugeLayout": "flexdigit.tdcr.sensing",
+        "ShapeEstimate": "flexdigit.tdcr.sensing",
+        "gauge_layout": "flexdigit.tdcr.sensing",
+        "gauge_strains": "flexdigit.tdcr.sensing",
+        "estimate_shape": "flexdigit.tdcr.sensing",
+        "scene_update": "flexdigit.tdcr.scene",
+        "write_recording": "flexdigit.tdcr.scene",
+    },
+)

@@ -1,0 +1,222 @@
+"""Dynamics of a tendon-driven continuum robot: the Cosserat rod in time, implicit in time and shot in space.
+
+Till, Aloi & Rucker 2019 (IJRR 38(6), "Real-time dynamics of soft and continuum robots based on Cosserat rod
+models"): the time derivatives are replaced by BDF2 (backward Euler on the first step), so that each time step is
+a boundary-value problem in arc length of the same form as the statics (:mod:`flexdigit.tdcr.statics`), solved by
+the same shooting Newton, warm-started from the previous step (and its Jacobian). The rod carries its mass
+``rho A`` and rotary inertia ``rho J``; tendons, gravity, distributed and tip loads as in the statics; optional
+Kelvin-Voigt damping proportional to the stiffness (``damping_s``). BDF2's own numerical damping is
+``O((w dt)^4)`` a step: 1e-7 a step at 3.5 Hz and 1 ms.
+
+Limit: each step is single shooting, whose boundary-value problem amplifies by ``exp(L (rho A c0^2 / EI)^(1/4))``
+(``c0 = 1.5 / dt``): ~10 e-folds at ``w1 dt = 0.05`` whatever the rod, 12.6 at 1 ms on rao2021's backbone.
+There Newton can fail for larger motions (a 5 mm tip release at 1 ms stops after ~0.1 s; at 2 ms it runs): the
+step that fails is reported (``converged=False``, :class:`~flexdigit.errors.ConvergenceWarning`). Multiple
+shooting would lift this; it is not done.
+
+Examples
+--------
+>>> from flexdigit.tdcr import Robot, Segment, solve_statics
+>>> rod = Robot(name="rod", segments=(Segment(0.4, 10),))
+>>> bent = solve_statics(rod, [], tip_force_n=[0.005, 0, 0])
+>>> motion = simulate(rod, bent, 0.05, dt_s=5e-3)  # released: the tip starts back towards the axis
+>>> motion.converged, bool(motion.tip_positions_m[-1, 0] < bent.tip_position_m[0])
+(True, True)
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexdigit._validation import check_array, check_int, check_real
+from flexdigit.errors import ConvergenceWarning, ParameterError
+from flexdigit.tdcr import _rod_kernel
+from flexdigit.tdcr.description import Robot
+from flexdigit.tdcr.statics import StaticSolution, _nodes
+
+__all__ = ["DynamicSolution", "simulate"]
+
+
+@dataclass(frozen=True)
+class DynamicSolution:
+    """A time response of the robot.
+
+    Attributes
+    ----------
+    t_s : ndarray (m,)
+        Times, from 0 (the initial state) in steps of ``dt_s``; only the steps that converged.
+    s_m : ndarray (n,)
+        Arc length of every node.
+    positions_m : ndarray (m, n, 3)
+        Backbone positions, world frame.
+    rotations : ndarray (m, n, 3, 3)
+        Backbone frames (columns: the cross-section's axes in the world frame).
+    velocities_m_s, angular_velocities_rad_s : ndarray (m, n, 3)
+        Linear and angular velocities, body frame.
+    iterations : ndarray (m - 1,)
+        Newton iterations of each step.
+    converged : bool
+        Whether every step asked for converged (else the response stops at the last one that did).
+    """
+
+    t_s: np.ndarray
+    s_m: np.ndarray
+    positions_m: np.ndarray
+    rotations: np.ndarray
+    velocities_m_s: np.ndarray
+    angular_velocities_rad_s: np.ndarray
+    iterations: np.ndarray
+    converged: bool
+
+    @property
+    def tip_positions_m(self) -> np.ndarray:
+        return self.positions_m[:, -1]
+
+    def kinetic_energy_j(self, robot: Robot) -> np.ndarray:
+        """Kinetic energy at each time (J): ``1/2 (rho A |q|^2 + w . rho J w)`` integrated along the backbone."""
+        b = robot.backbone
+        rho_j = b.density_kg_m3 * b.second_moment_m4 * np.array([1.0, 1.0, 2.0])
+        density = 0.5 * (
+            b.mass_per_length_kg_m * (self.velocities_m_s**2).sum(-1)
+            + (rho_j * self.angular_velocities_rad_s**2).sum(-1)
+        )
+        return np.trapezoid(density, self.s_m, axis=1)
+
+
+def simulate(
+    robot: Robot,
+    initial: StaticSolution,
+    duration_s: float,
+    *,
+    dt_s: float = 1e-3,
+    tensions_n=None,
+    tip_force_n=None,
+    tip_moment_nm=None,
+    gravity_m_s2=None,
+    distributed_force_n_per_m=None,
+    damping_s: float = 0.0,
+    nodes_per_disk: int = 1,
+    substeps: int | None = None,
+    tol: float = 1e-6,
+    max_iter: int = 50,
+) -> DynamicSolution:
+    """The robot's motion from rest in ``initial`` under the given loads, held constant from ``t = 0``.
+
+    Parameters
+    ----------
+    robot : Robot
+    initial : StaticSolution
+        The state at ``t = 0`` (at rest), e.g. :func:`~flexdigit.tdcr.solve_statics` under other loads; solved
+        with the same ``nodes_per_disk``.
+    duration_s, dt_s : float
+        Simulated time and implicit time step (s).
+    tensions_n : sequence of float, optional
+        Tendon tensions from ``t = 0`` (default all zero: the tendons released).
+    tip_force_n, tip_moment_nm, gravity_m_s2, distributed_force_n_per_m : optional
+        As in :func:`~flexdigit.tdcr.solve_statics` (world frame); default none.
+    damping_s : float
+        Kelvin-Voigt material damping proportional to the stiffness, ``n = Kse (v - e3 + beta v_t)``,
+        ``m = Kbt (u + beta u_t)`` with ``beta = damping_s`` (s): mode ``i`` is damped with the ratio
+        ``beta w_i / 2``. Default 0 (none).
+    nodes_per_disk, substeps, max_iter :
+        As in :func:`~flexdigit.tdcr.solve_statics`, for each step.
+    tol : float
+        On each step's scaled tip residual. Looser than the statics' default: a step's shooting problem amplifies
+        round-off by ~exp(L (rho A c0^2 / EI)^(1/4)) (c0 = 1.5/dt), ~1e5 at 1 ms on rao2021, so its residual floor
+        is ~1e-9..1e-8; 1e-6 is a force error of ~1e-6 EI/L^2 (6e-8 N on rao2021).
+
+    Returns
+    -------
+    DynamicSolution
+    """
+    owner = "simulate"
+    if not isinstance(robot, Robot):
+        raise ParameterError(f"The 'robot' parameter of {owner} must be a Robot. Got {type(robot).__name__} instead.")
+    nodes_per_disk = check_int(nodes_per_disk, "nodes_per_disk", owner, low=1, high=100)
+    nodes, end_node = _nodes(robot, nodes_per_disk)
+    if not isinstance(initial, StaticSolution) or initial.s_m.shape != nodes.shape:
+        raise ParameterError(
+            f"The 'initial' parameter of {owner} must be a StaticSolution of this robot at nodes_per_disk="
+            f"{nodes_per_disk} ({nodes.size} nodes). Got {type(initial).__name__} instead."
+        )
+    duration_s = check_real(duration_s, "duration_s", owner, low=0.0, low_open=True)
+    dt_s = check_real(dt_s, "dt_s", owner, low=0.0, high=duration_s, low_open=True)
+    n_t = len(robot.tendons)
+    tau = np.zeros(n_t) if tensions_n is None else check_array(tensions_n, "tensions_n", owner, ndim=1, low=0.0)
+    if tau.shape != (n_t,):
+        raise ParameterError(
+            f"The 'tensions_n' parameter of {owner} must have one tension per tendon ({n_t}). Got {tau.size} instead."
+        )
+
+    def vector(value, name):
+        return np.zeros(3) if value is None else check_array(value, name, owner, shape=(3,))
+
+    tip_force = vector(tip_force_n, "tip_force_n")
+    tip_moment = vector(tip_moment_nm, "tip_moment_nm")
+    fdist = vector(distributed_force_n_per_m, "distributed_force_n_per_m")
+    b = robot.backbone
+    fdist = fdist + b.mass_per_length_kg_m * vector(gravity_m_s2, "gravity_m_s2")
+    if substeps is None:
+        spacing = np.diff(nodes).max()
+        substeps = max(1, int(np.ceil(spacing / (robot.length_m / 20) - 1e-9)))
+    substeps = check_int(substeps, "substeps", owner, low=1, high=1000)
+    tol = check_real(tol, "tol", owner, low=0.0, low_open=True)
+    damping_s = check_real(damping_s, "damping_s", owner, low=0.0)
+    max_iter = check_int(max_iter, "max_iter", owner, low=1)
+
+    y_init = np.zeros((nodes.size, _rod_kernel.RECORD))
+    y_init[:, 0:3] = initial.positions_m
+    y_init[:, 3:12] = initial.rotations.reshape(-1, 9)
+    y_init[:, 12:18] = initial.strains
+    y_init[:, 24:30] = initial.strains_before_jump
+    ei = b.bending_torsion_stiffness[0]
+    length = robot.length_m
+    scale = np.array([ei / length**2] * 3 + [ei / length] * 3)
+    inertia = np.array([b.mass_per_length_kg_m, *(b.density_kg_m3 * b.second_moment_m4 * np.array([1.0, 1.0, 2.0]))])
+    n_steps = int(round(duration_s / dt_s))
+    states = np.zeros((n_steps + 1, nodes.size, _rod_kernel.RECORD))
+    iterations = np.zeros(n_steps, dtype=np.int64)
+    done = _rod_kernel.simulate(
+        initial.base_wrench / scale,
+        y_init,
+        nodes,
+        substeps,
+        np.ascontiguousarray(robot.routing_m),
+        tau,
+        end_node,
+        b.shear_extension_stiffness,
+        b.bending_torsion_stiffness,
+        fdist,
+        np.zeros(3),
+        inertia,
+        damping_s,
+        tip_force,
+        tip_moment,
+        dt_s,
+        n_steps,
+        tol,
+        max_iter,
+        states,
+        iterations,
+    )
+    if done < n_steps:
+        warnings.warn(
+            f"simulate: step {done + 1} of {n_steps} (t = {(done + 1) * dt_s:.4g} s) did not converge on "
+            f"{robot.name!r}; the response stops at t = {done * dt_s:.4g} s with converged=False",
+            ConvergenceWarning,
+            stacklevel=2,
+        )
+    kept = states[: done + 1]
+    return DynamicSolution(
+        t_s=np.arange(done + 1) * dt_s,
+        s_m=nodes,
+        positions_m=kept[:, :, 0:3].copy(),
+        rotations=kept[:, :, 3:12].reshape(done + 1, -1, 3, 3).copy(),
+        velocities_m_s=kept[:, :, 18:21].copy(),
+        angular_velocities_rad_s=kept[:, :, 21:24].copy(),
+        iterations=iterations[:done].copy(),
+        converged=bool(done == n_steps),
+    )

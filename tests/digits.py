@@ -1,0 +1,94 @@
+"""The test digits of issue 24: planar digits other than (and including) the thesis rig, as parameter-file tables.
+
+Each is a consistent description (``flexdigit params FILE`` accepts it): together they cover 1, 2, 3, 4 and 5
+sections; 1, 2, 3, 4, 6 and 8 gauges; quarter, half and full bridges; one cable and an antagonistic pair; a geared
+servo; digits 0.15 to 0.5 m long. ``write_digit`` writes one as a TOML file, as a user would.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import tomli_w
+
+
+def _equal(count: int, length: float) -> list[float]:
+    """Gauge ``k`` of ``count`` at ``(k + 1/2) L / count``, rounded to 0.1 mm (a file a user would write)."""
+    return [round((k + 0.5) * length / count, 4) for k in range(count)]
+
+
+DIGITS: dict[str, dict] = {
+    "thesis": {},
+    # one 150 mm section, one quarter-bridge gauge: 0.16 m
+    "one-section": {
+        "geometry": {
+            "section_count": 1,
+            "section_length_m": 0.15,
+            "strip_length_m": 0.15,
+            "digit_length_m": 0.16,
+            "gauge_positions_m": [0.06],
+        },
+        "sensors": {"bridge": "quarter", "adc_channels": [0]},
+    },
+    # two 100 mm sections, two full-bridge gauges midway
+    "two-sections": {
+        "geometry": {
+            "section_count": 2,
+            "section_length_m": 0.10,
+            "strip_length_m": 0.20,
+            "digit_length_m": 0.22,
+            "gauge_positions_m": [0.055, 0.165],
+        },
+        "sensors": {"bridge": "full", "adc_channels": [0, 1]},
+    },
+    # the issue's 4 x 80 mm digit, described consistently, 4 gauges and the antagonistic pair
+    "four-sections-two-cables": {
+        "geometry": {
+            "section_count": 4,
+            "section_length_m": 0.08,
+            "strip_length_m": 0.32,
+            "digit_length_m": 0.36,
+            "gauge_positions_m": [0.045, 0.135, 0.225, 0.315],
+        },
+        "sensors": {"adc_channels": [0, 1, 2, 3]},
+        "cables": {"count": 2, "pretension_n": 5.0},
+    },
+    # five 90 mm sections, 0.5 m long, 8 full-bridge gauges two per section's strip
+    "five-sections-eight-gauges": {
+        "geometry": {
+            "section_count": 5,
+            "section_length_m": 0.09,
+            "strip_length_m": 0.45,
+            "digit_length_m": 0.50,
+            "gauge_positions_m": [0.03, 0.07, 0.13, 0.17, 0.23, 0.27, 0.33, 0.37],
+        },
+        "sensors": {"bridge": "full", "adc_channels": list(range(8))},
+    },
+    # the thesis geometry with 6 equally spaced quarter-bridge gauges and a 4:1 reduction on the servo
+    "six-gauges-geared": {
+        "geometry": {"gauge_positions_m": _equal(6, 0.27)},
+        "sensors": {"bridge": "quarter", "adc_channels": list(range(6))},
+        "actuator": {"gear_ratio": 4.0},
+    },
+    # a short digit: three 45 mm sections, 0.15 m, two gauges
+    "short": {
+        "geometry": {
+            "section_count": 3,
+            "section_length_m": 0.045,
+            "strip_length_m": 0.135,
+            "digit_length_m": 0.15,
+            "gauge_positions_m": [0.025, 0.125],
+        },
+        "sensors": {"adc_channels": [0, 1]},
+    },
+}
+
+
+def write_digit(name: str, directory: Path, **changes: dict) -> Path:
+    """Write digit ``name`` (with some sections' keys changed) as ``directory/name.toml``."""
+    data = {section: dict(values) for section, values in DIGITS[name].items()}
+    for section, values in changes.items():
+        data.setdefault(section, {}).update(values)
+    path = Path(directory) / f"{name}.toml"
+    path.write_text(tomli_w.dumps(data))
+    return path

@@ -1,0 +1,86 @@
+"""The 3D rod's dynamics against beam theory and its own statics.
+
+- A cantilever (the rao2021 backbone, 400 mm) released from a tip load in a diagonal plane oscillates at its first
+  bending frequency, Euler-Bernoulli's ``1.8751^2 sqrt(EI / (rho A L^4))`` (``oracles``), within ``FREQUENCY_RTOL``
+  (issue 26: 0.5 %), and in the plane it was bent in. BDF2's own dispersion at the step used, ``w dt = 0.045``, is
+  -0.07 % (the root of ``(3 z^2 - 4 z + 1) / 2 = i w dt z^2``); rotary inertia and shear shift the frequency by
+  ~(r/L)^2 ~ 3e-6.
+- With Kelvin-Voigt damping proportional to the stiffness (``beta K``), every mode of a beam is damped with the
+  ratio ``beta w / 2``: the first mode's amplitude, and so its energy (twice the rate), decays as
+  ``exp(-beta w1^2 t / 2)``, within ``DECAY_RTOL`` (measured: 0.1 %).
+- A static equilibrium is a rest state of the dynamics: rao2021 held by its tendons does not move.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import curve_fit
+
+from flexdigit.errors import ParameterError
+from flexdigit.tdcr import ROBOTS, Robot, Segment, solve_statics
+from flexdigit.tdcr.dynamics import simulate
+from oracles import euler_bernoulli_first_frequency
+
+FREQUENCY_RTOL = 0.005
+DECAY_RTOL = 0.02
+REST_ATOL_M = 1e-9  # 2.5e-9 of the length: a step's Newton stops at a residual of 1e-6 (a ~1e-8 N force)
+
+ROD = Robot(name="rod", segments=(Segment(0.4, 40),))
+
+
+def test_released_cantilever_oscillates_at_its_first_bending_frequency():
+    b = ROD.backbone
+    w1 = euler_bernoulli_first_frequency(b.bending_torsion_stiffness[0], b.mass_per_length_kg_m, ROD.length_m)
+    w2 = w1 * (4.6940911 / 1.8751040687) ** 2
+    plane = np.array([1.0, 1.0, 0.0]) / math.sqrt(2)
+    bent = solve_statics(ROD, [], tip_force_n=0.002 * plane)  # tip ~4 mm off axis: the linear range
+    motion = simulate(ROD, bent, 1.2, dt_s=0.045 / w1)
+    assert motion.converged
+    x = motion.tip_positions_m @ plane
+    across = motion.tip_positions_m @ np.array([-1.0, 1.0, 0.0]) / math.sqrt(2)
+    assert abs(across).max() < 1e-9 * ROD.length_m  # stays in the plane it was bent in
+
+    def modes(t, a1, b1, f1, a2, b2, f2, decay, offset):  # the first two modes (a tip load excites both)
+        second = np.exp(-decay * t) * (a2 * np.cos(f2 * t) + b2 * np.sin(f2 * t))
+        return a1 * np.cos(f1 * t) + b1 * np.sin(f1 * t) + second + offset
+
+    fit, _ = curve_fit(modes, motion.t_s, x, p0=[x[0], 0, w1, 0, 0, w2, 0, 0], maxfev=20000)
+    assert fit[2] == pytest.approx(w1, rel=FREQUENCY_RTOL)
+    assert abs(fit[7]) < 1e-3 * abs(x[0])  # about the straight rod
+
+
+def test_stiffness_proportional_damping_decays_the_first_mode_at_beta_w1_squared_over_2():
+    from scipy.signal import find_peaks
+
+    b = ROD.backbone
+    w1 = euler_bernoulli_first_frequency(b.bending_torsion_stiffness[0], b.mass_per_length_kg_m, ROD.length_m)
+    beta = 2 * 0.02 / w1  # the first mode's damping ratio 2 %
+    plane = np.array([1.0, 1.0, 0.0]) / math.sqrt(2)
+    bent = solve_statics(ROD, [], tip_force_n=0.002 * plane)
+    motion = simulate(ROD, bent, 3.0, dt_s=0.045 / w1, damping_s=beta)
+    assert motion.converged
+    x = motion.tip_positions_m @ plane
+    peaks, _ = find_peaks(x)
+    peaks = peaks[motion.t_s[peaks] > 0.5]  # the second mode (damped 6x faster, 12 %) gone by then
+    rate = -np.polyfit(motion.t_s[peaks], np.log(x[peaks]), 1)[0]
+    assert rate == pytest.approx(beta * w1**2 / 2, rel=DECAY_RTOL)
+    energy = motion.kinetic_energy_j(ROD)
+    late, early = energy[motion.t_s > 2.5].max(), energy[(motion.t_s > 0.5) & (motion.t_s < 1.0)].max()
+    assert late < early * math.exp(-2 * rate * 1.5) * 1.2  # the energy at twice the amplitude's rate
+
+
+def test_a_static_equilibrium_is_at_rest():
+    robot = ROBOTS["rao2021"]
+    held = solve_statics(robot, [4, 0, 0, 0, 2, 0])
+    motion = simulate(robot, held, 0.02, dt_s=1e-3, tensions_n=[4, 0, 0, 0, 2, 0])
+    assert motion.converged
+    drift = np.abs(motion.positions_m - held.positions_m).max()
+    assert drift < REST_ATOL_M
+    assert motion.kinetic_energy_j(robot).max() < 1e-12
+
+
+def test_initial_state_must_match_the_robot():
+    other = solve_statics(Robot(name="short", segments=(Segment(0.1, 5),)), [])
+    with pytest.raises(ParameterError, match="'initial' parameter of simulate"):
+        simulate(ROD, other, 0.01)

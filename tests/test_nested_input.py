@@ -1,0 +1,34 @@
+"""Brackets nested 10**5 deep in a file a user gives are bad input named by file, never a RecursionError reaching
+the top as an internal error (issue 22): the TOML loaders (params, study spec, protocol, calibration, tissue) and
+the JSON ones (rotation map)."""
+
+from __future__ import annotations
+
+import importlib
+
+import pytest
+
+DEPTH = 100_000
+TOML = "[study]\nname = " + "[" * DEPTH + "]" * DEPTH + "\n"
+JSON = "[" * DEPTH + "]" * DEPTH
+
+
+@pytest.mark.parametrize(
+    ("loader", "suffix", "text"),
+    [
+        ("flexdigit.params:load_params", ".toml", TOML),
+        ("flexdigit.studies.spec:load_spec", ".toml", TOML),
+        ("flexdigit.tactile.protocols:load_protocol", ".toml", TOML),
+        ("flexdigit.twin.calibration:load_calibration", ".toml", TOML),
+        ("flexdigit.palpation.palpation_files:load_tissue", ".toml", TOML),
+        ("flexdigit.rig.rotation:load_rotation_map", ".json", JSON),
+    ],
+)
+def test_deeply_nested_input_is_named(tmp_path, loader, suffix, text):
+    module, name = loader.split(":")
+    load = getattr(importlib.import_module(module), name)
+    path = tmp_path / f"deep{suffix}"
+    path.write_text(text)
+    with pytest.raises(ValueError) as err:  # DataFileError and ParameterError are ValueErrors
+        load(path)
+    assert str(err.value).startswith(str(path)), err.value
