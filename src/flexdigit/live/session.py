@@ -313,6 +313,9 @@ class LiveSession:
         Loop period (the servo board's 20 ms frame).
     seed : int, optional
         Twin noise seed (default: the URL's ``seed=``, else 0).
+    clock, sleep : callable
+        The loop's pacing: a monotonic clock (s) and a sleep, as :func:`flexdigit.rig.loop.run_loop` takes them
+        (default :func:`time.monotonic` and :func:`time.sleep`).
     """
 
     HISTORY_S = 10.0
@@ -343,8 +346,13 @@ class LiveSession:
         orientation: str | None = None,
         period_s: float = 0.020,
         seed: int | None = None,
+        clock=time.monotonic,
+        sleep=time.sleep,
     ) -> None:
         from flexdigit.rig.base import open_rig, parse_rig_url
+
+        # the loop's pacing clock, injected as run_loop's is (tests run it in virtual time)
+        self._clock, self._sleep = clock, sleep
         from flexdigit.twin.calibration import default_calibration, load_calibration
 
         self.calibration = default_calibration() if calibration is None else load_calibration(calibration)
@@ -599,7 +607,7 @@ class LiveSession:
         equilibrium = int(rig.params.actuator.equilibrium_command)
         if self.controller is not None:
             self.controller.reset(rig.command)
-        t0 = time.monotonic()
+        t0 = self._clock()
         virtual = 0.0  # replay time
         k = 0
         window: collections.deque = collections.deque(maxlen=self.AVERAGE)
@@ -609,9 +617,9 @@ class LiveSession:
                 self.state.status = "running"
             while not self._stop.is_set():
                 deadline = t0 + k * self.period_s / (self.speed if self.kind == "replay" else 1)
-                now = time.monotonic()
+                now = self._clock()
                 if now < deadline:
-                    time.sleep(deadline - now)
+                    self._sleep(deadline - now)
                 elif now - deadline > self.period_s:
                     with self._lock:
                         self.state.overruns += 1
@@ -619,17 +627,17 @@ class LiveSession:
                 speed = self.speed
                 self._apply_requests()
                 if self.speed != speed:  # a new replay speed: new deadlines from here, not a missed one
-                    t0 = time.monotonic() - k * self.period_s / self.speed
+                    t0 = self._clock() - k * self.period_s / self.speed
                 if self.paused and self.kind == "replay":
-                    t0 = time.monotonic() - k * self.period_s / self.speed
-                    time.sleep(self.period_s)
+                    t0 = self._clock() - k * self.period_s / self.speed
+                    self._sleep(self.period_s)
                     continue
                 if self.kind == "replay":
                     if virtual + self.period_s > self._replay_length_s:
                         with self._lock:
                             self.state.status = "replay finished"
                         self._stop.wait(0.2)
-                        t0 = time.monotonic() - k * self.period_s / self.speed  # waiting is not a missed deadline
+                        t0 = self._clock() - k * self.period_s / self.speed  # waiting is not a missed deadline
                         continue
                     rig.wait(self.period_s)
                     virtual += self.period_s
