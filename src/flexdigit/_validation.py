@@ -422,6 +422,7 @@ UNIT_SLIPS: dict[str, tuple[tuple[float, str], ...]] = {
     "mm": ((10.0, "cm"), (1e3, "m"), (1e-3, "um")),  # positions in cm read as mm
     "cm": ((1e-1, "mm"), (1e2, "m")),
     "Pa": ((1e9, "GPa"), (1e6, "MPa"), (1e3, "kPa")),  # E = 205 "Pa" meant GPa
+    "N/m^2": ((1e3, "kN/m^2 (kPa)"), (1e6, "N/mm^2 (MPa)")),  # a foundation modulus written in kPa
     "kg": ((1e-3, "g"),),
     "kg/m^3": ((1e3, "g/cm^3"),),
     "g": ((1e3, "kg"),),  # a load of 0.025 "g" meant kg

@@ -129,3 +129,48 @@ def test_cli_palpates_on_the_twin_and_never_clobbers(tmp_path, capsys):
     assert data["truth"]["modulus_n_m2"] == 800.0 and json.loads(out.read_text())["kind"] == "sweep"
     assert main(args) == 2  # --out exists: refused before any work
     assert "pass --force" in capsys.readouterr().err
+
+
+# Issue 22: plausible ranges. A value 1e308 or a thousand times off is refused in one line naming the file, the key
+# and, where a unit slip lands inside the range, the slip.
+IMPLAUSIBLE_TISSUES = [
+    (TISSUE.replace("modulus_n_m2 = 800", "modulus_n_m2 = 1e308"), "key 'tissue.modulus_n_m2' must be inside [1"),
+    (TISSUE.replace("modulus_n_m2 = 800", "modulus_n_m2 = 0.8"), "did you mean kN/m^2 (kPa) (800 N/m^2)?"),
+    (TISSUE.replace("gap_mm = 30", "gap_mm = 30000"), "key 'tissue.gap_mm' must be inside [-2000, 2000] mm"),
+    (TISSUE.replace("start_mm = 150", "start_mm = 0.15").replace("end_mm = 350", "end_mm = 0.35"), "did you mean m"),
+    (TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 250\nwidth_mm = 0.01\nratio = 3\n", "did you mean m (10 mm)?"),
+    (TISSUE + "\n[[tissue.inclusions]]\ncentre_mm = 250\nwidth_mm = 8\nratio = 1e308\n", "inclusions[0].ratio"),
+    (TISSUE + "damping_s_m = 1e308\n", "key 'tissue.damping_s_m' must be inside [0, 100] s/m"),
+]
+
+
+@pytest.mark.parametrize("text, message", IMPLAUSIBLE_TISSUES)
+def test_implausible_tissue_values_are_refused_naming_the_slip(tmp_path, text, message):
+    path = tmp_path / "tissue.toml"
+    path.write_text(text)
+    with pytest.raises(DataFileError, match=re.escape(message)) as err:
+        load_tissue(path)
+    assert str(path) in str(err.value) and "\n" not in str(err.value)
+
+
+IMPLAUSIBLE_PROTOCOLS = [
+    ("[sweep]\nsettle_s = 1e308\n", "key 'sweep.settle_s' must be inside [0, 3600] s"),
+    ("[sweep]\nperiod_s = 20\n", "key 'sweep.period_s' must be inside [0.0001, 1] s"),
+    ("[sweep]\nperiod_s = 20\n", "did you mean ms (0.02 s)?"),
+    ("[scan]\noffsets_mm = [-0.04, 0, 0.04]\n", "did you mean m (80 mm)?"),
+    ("[scan]\noffsets_mm = [0, 10, 1e308]\n", "key 'scan.offsets_mm'[2] must be inside"),
+    ("[scan]\noffsets_mm = [0, 10, 20]\ninclusion_width_mm = 0.01\n", "did you mean m (10 mm)?"),
+    ("[force]\nsetpoint_n = 1e308\n", "key 'force.setpoint_n' must be inside"),
+    ("[force]\nsetpoint_n = 0.1\ngain = 5e-324\n", "key 'force.gain' must be inside"),
+    ("[force]\nsetpoint_n = 0.1\nduration_s = 1e308\n", "key 'force.duration_s' must be inside"),
+    ("[force]\nsetpoint_n = 0.1\napproach_rate = 1e308\n", "key 'force.approach_rate' must be inside"),
+]
+
+
+@pytest.mark.parametrize("text, message", IMPLAUSIBLE_PROTOCOLS)
+def test_implausible_protocol_values_are_refused_naming_the_slip(tmp_path, text, message):
+    path = tmp_path / "protocol.toml"
+    path.write_text(text)
+    with pytest.raises(DataFileError, match=re.escape(message)) as err:
+        load_palpation_protocol(path)
+    assert str(path) in str(err.value) and "\n" not in str(err.value)

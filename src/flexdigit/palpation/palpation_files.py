@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from flexdigit._validation import Plausible, _interval_text, unit_slip
 from flexdigit.errors import DataFileError, ParameterError
 
 __all__ = [
@@ -56,6 +57,32 @@ _TISSUE_KEYS = {
     "inclusions",
 }
 _INCLUSION_KEYS = {"centre_mm", "width_mm", "ratio"}
+
+# Plausible ranges (flexdigit._validation.Plausible): generous for a user's own phantom or tissue, each with its
+# reason, so that a value 1e308 or a thousand times off (mm written as m) is refused naming the likely slip.
+#: Along the digit from its base: a digit is at most 2 m long (params.DIGIT_LENGTH_M); a body may reach past it.
+ALONG_DIGIT_MM = Plausible("mm", -2000.0, 4000.0, "along a digit at most 2 m long, from its base")
+#: A tissue's extent (end - start): shorter than 1 cm it is an inclusion of a body, not the body (and a body in m
+#: written as mm, under 1 m long, is then named as the m slip, not the cm one).
+TISSUE_LENGTH_MM = Plausible("mm", 10.0, 4000.0, "a body 1 cm to 4 m long beside the digit")
+#: An inclusion's width: below 1 mm the digit's own width (a few mm) spans it: palpation cannot tell it.
+INCLUSION_WIDTH_MM = Plausible("mm", 1.0, 2000.0, "a nodule 1 mm to 2 m wide")
+#: Surface to the straight digit's axis: within reach of a 2 m digit (0 touches it, negative starts pressed in).
+GAP_MM = Plausible("mm", -2000.0, 2000.0, "within reach of a digit at most 2 m long")
+#: Foundation modulus (N/m^2 for exponent 1): a wisp of foam (1 N/m^2: 0.01 N/m per cm pressed in) to steel
+#: under the strip; the thesis phantoms are 1e3 and 2e4.
+MODULUS_N_M2 = Plausible("N/m^2", 1.0, 1e10, "1 (a wisp of foam) to 1e10 (steel); the phantoms are 1e3 to 2e4")
+INCLUSION_RATIO = Plausible("", 1e-3, 1e3, "an inclusion a thousand times softer to a thousand times stiffer")
+DAMPING_S_M = Plausible("s/m", 0.0, 100.0, "Hunt-Crossley alpha: tissues 0.1 to 10 s/m")
+SETTLE_S = Plausible("s", 0.0, 3600.0, "settle time per setting: an hour at most")
+PERIOD_S = Plausible("s", 1e-4, 1.0, "the loop's period: 0.1 ms to 1 s (the thesis: 20 ms)")
+SCAN_OFFSET_MM = Plausible("mm", -2000.0, 2000.0, "moves along a digit at most 2 m long")
+#: A scan's offsets span (max - min): below 1 mm they are one position (a scan in m written as mm).
+SCAN_SPAN_MM = Plausible("mm", 1.0, 4000.0, "a scan across 1 mm to 4 m of the digit")
+SETPOINT_N = Plausible("N", 1e-4, 2.0, "a contact force of 0.1 mN to 2 N: the digit's gauges read ~0.1 N")
+DURATION_S = Plausible("s", 1e-3, 86_400.0, "a hold of 1 ms to a day")
+FORCE_GAIN = Plausible("commands / s / N", 1e-3, 1e5, "an integral gain (the protocol's: 30)")
+APPROACH_RATE = Plausible("commands / s", 1e-3, 1e4, "commands per second until contact (the protocol's: 4)")
 #: Most values a ``{from, to, step}`` series may expand to (a staircase has at most 255 commands).
 MAX_SERIES = 10_000
 _SECTIONS = {
@@ -95,6 +122,21 @@ class _Table:
             bounds = f"{left}{'-inf' if low is None else low}, {'inf)' if high is None else f'{high}]'}"
             raise DataFileError(f"{self.where(key)} must be inside {bounds}{text}; got {value!r}")
         return float(value)
+
+    def plausible(self, key, declared: Plausible, *, default=None):
+        """A real number (:meth:`real`) inside its declared plausible range, or one line naming the likely slip."""
+        value = self.real(key, default=default, unit=declared.unit)
+        return value if key not in self.data else self.declared(self.where(key), value, declared)
+
+    def declared(self, where: str, value: float, declared: Plausible) -> float:
+        """``value`` (a key's or a quantity derived from keys) if ``declared`` is satisfied; else one line."""
+        if declared.satisfied_by(value):
+            return float(value)
+        interval = _interval_text(declared.low, declared.high, declared.low_open, declared.high_open).strip()
+        unit = f" {declared.unit}" if declared.unit else ""
+        slip = unit_slip(value, declared.unit, declared.low, declared.high)
+        tail = f": did you mean {slip}?" if slip else ""
+        raise DataFileError(f"{where} must be {interval}{unit} ({declared.why}); got {value!r}{unit}{tail}")
 
     def optional_real(self, key, **kw):
         return self.real(key, **kw) if key in self.data else None
@@ -204,19 +246,21 @@ def load_tissue(name_or_path):
             f"{source}: expected one [tissue] table" + (f"; unknown table {extra[0]!r}" if extra else "")
         )
     t = _Table(data["tissue"], source, "tissue", _TISSUE_KEYS)
-    start = t.real("start_mm", unit="mm") / 1000
-    end = t.real("end_mm", unit="mm") / 1000
+    start = t.plausible("start_mm", ALONG_DIGIT_MM) / 1000
+    end = t.plausible("end_mm", ALONG_DIGIT_MM) / 1000
     if not end > start:
         raise DataFileError(f"{t.where('end_mm')} must be beyond 'start_mm' ({start * 1000:g}); got {end * 1000:g}")
-    gap = t.optional_real("gap_mm", unit="mm")
-    modulus = t.optional_real("modulus_n_m2", low=0, unit="N/m^2")
+    # a tissue in m written as mm (start 0.15, end 0.35) is 0.2 mm long: its extent names the slip
+    t.declared(f"{source}: the tissue's length 'end_mm' - 'start_mm'", (end - start) * 1000, TISSUE_LENGTH_MM)
+    gap = t.plausible("gap_mm", GAP_MM) if "gap_mm" in t.data else None
+    modulus = t.plausible("modulus_n_m2", MODULUS_N_M2) if "modulus_n_m2" in t.data else None
     inclusions = []
     raw = t.data.get("inclusions", [])
     if not isinstance(raw, list):
         raise DataFileError(f"{t.where('inclusions')} must be an array of tables [[tissue.inclusions]]; got {raw!r}")
     for i, item in enumerate(raw):
         inc = _Table(item, source, f"tissue.inclusions[{i}]", _INCLUSION_KEYS)
-        centre = inc.real("centre_mm", unit="mm") / 1000
+        centre = inc.plausible("centre_mm", ALONG_DIGIT_MM) / 1000
         if not start <= centre <= end:  # outside the body it would change nothing: a plausible wrong answer
             raise DataFileError(
                 f"{inc.where('centre_mm')} must lie in the tissue ({start * 1000:g}..{end * 1000:g} mm); "
@@ -225,8 +269,8 @@ def load_tissue(name_or_path):
         inclusions.append(
             Inclusion(
                 centre,
-                inc.real("width_mm", low=0, low_open=True, unit="mm") / 1000,
-                inc.real("ratio", low=0, low_open=True),
+                inc.plausible("width_mm", INCLUSION_WIDTH_MM) / 1000,
+                inc.plausible("ratio", INCLUSION_RATIO),
             )
         )
     try:
@@ -237,7 +281,7 @@ def load_tissue(name_or_path):
             1.0 if modulus is None else modulus,
             tuple(inclusions),
             exponent=t.real("exponent", default=1.0, low=1.0, high=3.0),
-            damping_s_m=t.real("damping_s_m", default=0.0, low=0.0, unit="s/m"),
+            damping_s_m=t.plausible("damping_s_m", DAMPING_S_M, default=0.0),
             side=t.text("side", default="cable", choices=("cable", "opposite")),
         )
     except ParameterError as exc:
@@ -275,10 +319,10 @@ def load_palpation_protocol(name_or_path=None) -> PalpationFile:
     try:
         sweep = PalpationProtocol(
             commands=tuple(s.series("commands", integer=True, default=list(default.commands))),
-            settle_s=s.real("settle_s", default=default.settle_s, low=0, unit="s"),
+            settle_s=s.plausible("settle_s", SETTLE_S, default=default.settle_s),
             readings=s.integer("readings", default=default.readings, low=1, high=100_000),
             tare_command=s.integer("tare_command", default=default.tare_command, low=0, high=254),
-            period_s=s.real("period_s", default=default.period_s, low=0, low_open=True, unit="s"),
+            period_s=s.plausible("period_s", PERIOD_S, default=default.period_s),
             model=s.text("model", default=default.model, choices=("linear", "hunt-crossley")),
         )
     except ParameterError as exc:
@@ -289,17 +333,21 @@ def load_palpation_protocol(name_or_path=None) -> PalpationFile:
         offsets = c.series("offsets_mm", unit="mm")
         if len(offsets) < 3:
             raise DataFileError(f"{c.where('offsets_mm')} must give at least 3 offsets; got {offsets!r}")
+        for i, offset in enumerate(offsets):
+            c.declared(f"{c.where('offsets_mm')}[{i}]", offset, SCAN_OFFSET_MM)
+        # offsets in m written as mm (-0.04 .. 0.04) span 0.08 mm: one position, not a scan
+        c.declared(f"{c.where('offsets_mm')} (their span)", max(offsets) - min(offsets), SCAN_SPAN_MM)
         scan = {
             "offsets_m": tuple(round(v / 1000, 9) for v in offsets),
-            "inclusion_width_m": c.real("inclusion_width_mm", default=10.0, low=0, low_open=True, unit="mm") / 1000,
+            "inclusion_width_m": c.plausible("inclusion_width_mm", INCLUSION_WIDTH_MM, default=10.0) / 1000,
         }
     force = None
     if "force" in data:
         f = _Table(data["force"], source, "force", _SECTIONS["force"])
         force = {
-            "setpoint_n": f.real("setpoint_n", low=0, low_open=True, high=2.0, unit="N"),
-            "duration_s": f.real("duration_s", default=10.0, low=0, low_open=True, unit="s"),
-            "gain": f.real("gain", default=30.0, low=0, low_open=True, unit="commands / s / N"),
-            "approach_rate": f.real("approach_rate", default=4.0, low=0, low_open=True, unit="commands / s"),
+            "setpoint_n": f.plausible("setpoint_n", SETPOINT_N),
+            "duration_s": f.plausible("duration_s", DURATION_S, default=10.0),
+            "gain": f.plausible("gain", FORCE_GAIN, default=30.0),
+            "approach_rate": f.plausible("approach_rate", APPROACH_RATE, default=4.0),
         }
     return PalpationFile(sweep, scan, force, source)
