@@ -54,3 +54,13 @@ def test_user_protocol_and_clear_errors(tmp_path):
     assert load_protocol("thesis-7.1").rehang and not p.rehang
     with pytest.raises(ParameterError, match="'rehang' parameter .* true or false. Got 'yes'"):
         protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [1]\nrehang = "yes"\n')
+
+
+def test_positions_in_mm_written_as_cm_name_the_slip():
+    # table 7.1's positions (0..18 cm) written in mm under positions_from_tip_cm: 0..1.8 m on a 0.27 m digit
+    text = 'name = "x"\nloads_g = [25]\npositions_from_tip_cm = [0, 20, 40, 60, 80, 100, 120, 140, 160, 180]\n'
+    with pytest.raises(ParameterError, match=r"must lie on the digit .* did you mean mm written as cm .*0\.18 m\)\?"):
+        protocol_from_toml(text).plan(0.27)
+    # beyond the digit even at a tenth: no slip guessed, just the range
+    with pytest.raises(ParameterError, match=r"must lie on the digit .* instead\.$"):
+        protocol_from_toml('name = "x"\nloads_g = [25]\npositions_from_tip_cm = [0, 150, 190]\n').plan(0.1)

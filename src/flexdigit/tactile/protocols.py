@@ -192,9 +192,19 @@ class Protocol:
         length = check_real(digit_length_m, "digit_length_m", "Protocol.plan", low=0, low_open=True)
         too_far = [p for p in self.positions_from_tip_m if p > length]
         if too_far:
+            # Beyond the tip is certainly wrong; if a tenth of every position lies on the digit, the likely slip is
+            # positions in mm written where cm are read (positions_from_tip_cm = [0, 20, .., 180]: 1.8 m). The
+            # converse, positions in cm read as mm (all within a tenth of the digit), has no sound rule: a protocol
+            # that loads only the tip's first 2.7 cm (0, 1, 2 cm) is a legitimate experiment (notes in #22).
+            tenth = max(self.positions_from_tip_m) / 10
+            slip = (
+                f": did you mean mm written as cm (a tenth of each: 0 to {tenth:g} m)?"
+                if tenth <= length and self.positions_from_tip_m
+                else "."
+            )
             raise ParameterError(
                 f"The 'positions_from_tip_m' parameter of Protocol {self.name!r} must lie on the digit "
-                f"(0 to {length:g} m from the tip). Got {too_far!r} instead."
+                f"(0 to {length:g} m from the tip). Got {too_far!r} instead{slip}"
             )
         rows: list[tuple] = []
         for test, (load, command) in enumerate(self.tests):
