@@ -32,3 +32,19 @@ def test_deeply_nested_input_is_named(tmp_path, loader, suffix, text):
     with pytest.raises(ValueError) as err:  # DataFileError and ParameterError are ValueErrors
         load(path)
     assert str(err.value).startswith(str(path)), err.value
+
+
+@pytest.mark.parametrize("line", [1, 2])
+def test_deeply_nested_collect_journal_is_named_by_file_and_line(tmp_path, line):
+    import json
+
+    from flexdigit.errors import DataFileError
+    from flexdigit.tactile.dataset import JOURNAL_FORMAT, read_journal
+
+    header = json.dumps({"journal": JOURNAL_FORMAT})
+    lines = [JSON, header] if line == 1 else [header, JSON]
+    path = tmp_path / "collect.journal"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataFileError) as err:
+        read_journal(path)
+    assert str(err.value).startswith(f"{path}: line {line} ") and "\n" not in str(err.value)

@@ -278,8 +278,8 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
         raise DataFileError(f"{path}: journal has no complete header line")
     try:
         header = json.loads(complete[0])
-    except ValueError:  # not JSON, or not UTF-8
-        raise DataFileError(f"{path}: line 1 is not a journal header (not JSON)") from None
+    except (ValueError, RecursionError):  # not JSON, not UTF-8, or nested past the parser (10^5 brackets)
+        raise DataFileError(f"{path}: line 1 is not a journal header (not JSON, or nested too deep)") from None
     if not isinstance(header, dict) or header.get("journal") not in (JOURNAL_FORMAT, *LEGACY_JOURNAL_FORMATS):
         raise DataFileError(f"{path}: line 1 is not a {JOURNAL_FORMAT} header")
     checked = header["journal"] == JOURNAL_FORMAT
@@ -287,8 +287,8 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     for number, line in enumerate(complete[1:], start=2):
         try:
             row = json.loads(line)
-        except ValueError:
-            raise DataFileError(f"{path}: line {number} is not valid JSON") from None
+        except (ValueError, RecursionError):  # RecursionError: brackets nested past the parser
+            raise DataFileError(f"{path}: line {number} is not valid JSON (or nested too deep)") from None
         if not isinstance(row, dict):
             raise DataFileError(f"{path}: line {number} is not a reading (a JSON object)")
         missing = [c for c in COLUMNS if c not in row]
