@@ -134,3 +134,57 @@ high = 0.26
         assert "gauge_positions_m" in row["error"]
     assert "release_wn_rad_s" in result.refused and "release_wn_rad_s" not in result.sobol
     assert "not finite" in capsys.readouterr().err
+
+
+def _flags(*command):
+    """The option strings of ``flexdigit COMMAND ...``."""
+    import argparse
+
+    from flexdigit.cli import build_parser
+
+    parser = build_parser()
+    for name in command:
+        sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        parser = sub.choices[name]
+    return {option for action in parser._actions for option in action.option_strings}
+
+
+def test_unconverged_warning_names_a_command_and_flag_that_exist(ishigami_metric, tmp_path, capsys):
+    # issue 27 item 5: `reproduce` printed "rerun with --n 64", a flag reproduce does not have
+    spec = spec_from_toml(f"[study]\nmetrics = ['{ishigami_metric}']\n" + SPEC)
+    settings = SensitivitySettings(morris_trajectories=0, sobol_n=8, convergence_tol=0.01, chunk_size=64)
+    run_sensitivity(spec, tmp_path / "a", settings=settings, workers=0, progress=False)
+    assert "rerun `flexdigit study sensitivity` with --n 32" in capsys.readouterr().err
+    assert "--n" in _flags("study")  # `study sensitivity SPEC --n N`
+    # the report's study (reproduce) names what reproduce has
+    from flexdigit.report.ch8_studies import rerun_hint
+
+    hint = rerun_hint(True, 16)
+    assert "--n" not in hint and "`flexdigit reproduce` without --fast" in hint
+    assert "--fast" in _flags("reproduce") and "--n" not in _flags("reproduce")
+    assert "`flexdigit study sensitivity thesis-tolerances --n 512`" in rerun_hint(False, 128)
+    run_sensitivity(spec, tmp_path / "b", settings=settings, workers=0, progress=False, rerun=hint)
+    err = capsys.readouterr().err
+    assert "NOT converged" in err and hint in err and "--n" not in err
+
+
+def test_figures_carry_the_n_used_and_say_not_converged(ishigami_metric, tmp_path, monkeypatch):
+    # issue 27 item 5: `study --n 8` titled its figures "N = 16" alone, and "not converged" was only on the terminal
+    from flexdigit.studies import figures
+
+    saved = {}
+    monkeypatch.setattr(figures, "_save", lambda fig, path, force: saved.setdefault(path.name, fig) and path)
+    spec = spec_from_toml(f"[study]\nmetrics = ['{ishigami_metric}']\n" + SPEC)
+    settings = SensitivitySettings(morris_trajectories=0, sobol_n=8, convergence_tol=0.01, chunk_size=64)
+    result = run_sensitivity(spec, tmp_path, settings=settings, workers=0, progress=False)
+    assert not result.convergence[ishigami_metric]["converged"]
+    figures.sensitivity_figures(result, tmp_path / "figures")
+    bars = saved[f"sobol_{ishigami_metric}.png"].axes[0].get_title()
+    assert "N = 16 (2 x 8: indices at 8 and 16 compared)" in bars
+    assert "NOT converged: moved" in bars and "between N = 8 and 16" in bars
+    total = saved["sobol_total_map.png"].axes[0]
+    assert "1 of 1 metrics NOT converged" in total.get_title()
+    assert [t.get_text() for t in total.get_yticklabels()] == [f"{ishigami_metric} (NOT converged)"]
+    # converged: no note
+    converged = dict(result.convergence[ishigami_metric], converged=True)
+    assert figures.convergence_note(converged) == ""

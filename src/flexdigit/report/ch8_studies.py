@@ -43,6 +43,14 @@ def build(ctx: ReportContext) -> Chapter:
     return chapter
 
 
+def rerun_hint(fast: bool, n: int) -> str:
+    """What the "NOT converged" warning of the report's study tells the user to run: a command and flags that exist
+    (``reproduce`` has ``--fast``, not ``--n``; ``study sensitivity`` has ``--n``)."""
+    if fast:
+        return "rerun `flexdigit reproduce` without --fast (N = 128)"
+    return f"`flexdigit study sensitivity thesis-tolerances --n {4 * n}` takes more samples"
+
+
 def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
     from flexdigit.studies import figures
     from flexdigit.studies.sensitivity import twin_sensitivity
@@ -51,7 +59,7 @@ def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
     spec = load_spec("thesis-tolerances")
     spec = dataclasses.replace(spec, parameters=tuple(p for p in spec.parameters if p.name in REPORT_PARAMETERS))
     n = 16 if ctx.fast else 128
-    result = twin_sensitivity(n, seed=ctx.seed, spec=spec)
+    result = twin_sensitivity(n, seed=ctx.seed, spec=spec, rerun=rerun_hint(ctx.fast, n))
     names = spec.names
     big = 2 * n
     chapter.paragraphs.append(
@@ -102,12 +110,12 @@ def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
             tuple(rows),
         )
     )
-    st = np.array([result.sobol[m][big]["ST"] for m in result.sobol])
-    fig = figures.total_index_map_figure(names, list(result.sobol), st, f"Total Sobol indices, N = {big}")
+    size = figures.sample_size_text(result.settings)
+    fig = figures.sensitivity_total_map(result, f"Total Sobol indices, {size}")
     chapter.figures.append(ctx.save_figure(fig, "studies_sobol_total", "Total Sobol indices of the twin's metrics."))
     metric = "release_wn_rad_s"
     if metric in result.sobol:
-        fig = figures.sobol_bars_figure(names, result.sobol[metric][big], f"{metric}: S1 and ST, 95 % intervals")
+        fig = figures.sensitivity_bars(result, metric, f"{metric}: S1 and ST, {size}, 95 % intervals")
         chapter.figures.append(
             ctx.save_figure(
                 fig,

@@ -10,7 +10,17 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["sobol_bars_figure", "total_index_map_figure", "s2_figure", "pareto_figure", "sensitivity_figures"]
+__all__ = [
+    "sobol_bars_figure",
+    "total_index_map_figure",
+    "s2_figure",
+    "pareto_figure",
+    "sample_size_text",
+    "convergence_note",
+    "sensitivity_bars",
+    "sensitivity_total_map",
+    "sensitivity_figures",
+]
 
 
 def _plt():
@@ -103,14 +113,54 @@ def pareto_figure(x, y, front, marks: dict, xlabel: str, ylabel: str, title: str
     return fig
 
 
+def sample_size_text(settings) -> str:
+    """The N a figure's indices come from, tied to the N asked for (``--n 8``): the study evaluates 2N base samples
+    and compares the indices at N and 2N, so the figures show 2N and say so.
+
+    >>> from flexdigit.studies.sensitivity import SensitivitySettings
+    >>> sample_size_text(SensitivitySettings(sobol_n=8))
+    'N = 16 (2 x 8: indices at 8 and 16 compared)'
+    """
+    n = settings.sobol_n
+    return f"N = {2 * n} (2 x {n}: indices at {n} and {2 * n} compared)"
+
+
+def convergence_note(conv: dict | None) -> str:
+    """``"NOT converged: ..."`` for a metric whose indices moved past the tolerance (on the figure, not only the
+    terminal), ``""`` when converged."""
+    if not conv or conv.get("converged", True):
+        return ""
+    small, big = conv["n"]
+    return f"NOT converged: moved {conv['max_change']:.3f} > {conv['tolerance']} between N = {small} and {big}"
+
+
+def sensitivity_bars(result, metric: str, title: str):
+    """:func:`sobol_bars_figure` of one metric at 2N, its title carrying the N used and any "NOT converged"."""
+    note = convergence_note(result.convergence.get(metric))
+    res = result.sobol[metric][2 * result.settings.sobol_n]
+    return sobol_bars_figure(result.spec.names, res, title + (f"\n{note}" if note else ""))
+
+
+def sensitivity_total_map(result, title: str):
+    """:func:`total_index_map_figure` at 2N; an unconverged metric's row says so, and the title counts them."""
+    big = 2 * result.settings.sobol_n
+    metrics = list(result.sobol)
+    st = np.array([result.sobol[m][big]["ST"] for m in metrics])
+    labels = [m + (" (NOT converged)" if convergence_note(result.convergence.get(m)) else "") for m in metrics]
+    off = sum(label.endswith("(NOT converged)") for label in labels)
+    tail = f"\n{off} of {len(metrics)} metrics NOT converged" if off else ""
+    return total_index_map_figure(result.spec.names, labels, st, title + tail)
+
+
 def sensitivity_figures(result, fig_dir: Path, *, force: bool = False) -> list[Path]:
     """Every figure of a sensitivity result, saved under ``fig_dir``."""
     names = result.spec.names
     big = 2 * result.settings.sobol_n
+    size = sample_size_text(result.settings)
     paths = []
     for metric, by_n in result.sobol.items():
         res = by_n[big]
-        fig = sobol_bars_figure(names, res, f"{metric}: Sobol indices, N = {big}, {result.settings.confidence:.0%} CI")
+        fig = sensitivity_bars(result, metric, f"{metric}: Sobol indices, {size}, {result.settings.confidence:.0%} CI")
         paths.append(_save(fig, fig_dir / f"sobol_{metric}.png", force))
         if "S2" in res:
             paths.append(
@@ -119,8 +169,6 @@ def sensitivity_figures(result, fig_dir: Path, *, force: bool = False) -> list[P
                 )
             )
     if result.sobol:
-        metrics = list(result.sobol)
-        st = np.array([result.sobol[m][big]["ST"] for m in metrics])
-        fig = total_index_map_figure(names, metrics, st, f"{result.spec.name}: total Sobol indices (N = {big})")
+        fig = sensitivity_total_map(result, f"{result.spec.name}: total Sobol indices, {size}")
         paths.append(_save(fig, fig_dir / "sobol_total_map.png", force))
     return paths

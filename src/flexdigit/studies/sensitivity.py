@@ -276,10 +276,13 @@ def run_sensitivity(
     scheduler: str | None = None,
     force: bool = False,
     progress: bool = True,
+    rerun: str | None = None,
 ) -> SensitivityResult:
     """Run (or resume) a sensitivity study; its journal lives in ``out_dir`` (see :mod:`flexdigit.studies.execution`).
 
-    Returns the result; :func:`write_outputs` writes its files.
+    ``rerun`` is what the "NOT converged" warning tells the user to do, in the caller's own terms (a command and a
+    flag that exist: ``flexdigit reproduce`` has no ``--n``); by default ``flexdigit study sensitivity`` with
+    ``--n`` at 4N. Returns the result; :func:`write_outputs` writes its files.
     """
     if not spec.parameters:  # SALib would fail on an empty problem (an IndexError, an internal error)
         raise ParameterError(
@@ -314,7 +317,7 @@ def run_sensitivity(
         label=f"sensitivity {spec.name}",
     )
     result = SensitivityResult(spec, settings, tuple(metrics), values, design, outputs, errors)
-    _analyse(result, u)
+    _analyse(result, u, rerun or f"rerun `flexdigit study sensitivity` with --n {4 * settings.sobol_n}")
     return result
 
 
@@ -326,7 +329,7 @@ def _fingerprint(spec, settings, metrics) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def _analyse(result: SensitivityResult, u: np.ndarray) -> None:
+def _analyse(result: SensitivityResult, u: np.ndarray, rerun: str) -> None:
     from SALib.analyze import morris as morris_analyze
 
     spec, settings = result.spec, result.settings
@@ -383,7 +386,7 @@ def _analyse(result: SensitivityResult, u: np.ndarray) -> None:
         if not converged:
             warn(
                 f"{metric}: Sobol indices NOT converged: they moved by {change:.3f} > {settings.convergence_tol} "
-                f"between N = {settings.sobol_n} and {2 * settings.sobol_n}; rerun with --n {4 * settings.sobol_n}"
+                f"between N = {settings.sobol_n} and {2 * settings.sobol_n}; {rerun}"
             )
 
 
@@ -441,12 +444,15 @@ TWIN_METRICS = (
 )
 
 
-def twin_sensitivity(sobol_n: int = 64, *, seed: int = 0, spec: StudySpec | None = None) -> SensitivityResult:
+def twin_sensitivity(
+    sobol_n: int = 64, *, seed: int = 0, spec: StudySpec | None = None, rerun: str | None = None
+) -> SensitivityResult:
     """The shipped tolerances' Sobol indices for the twin's metrics (:data:`TWIN_METRICS`), in this process.
 
     What ``flexdigit reproduce`` shows (no Dask cluster start-up inside the report): every evaluation is one pass
     of the batched twin, so 2N (d + 2) rows cost a few seconds. The control and tactile metrics need a controller
     design or a Monte Carlo per row: ``flexdigit study sensitivity thesis-tolerances`` computes them on Dask.
+    ``rerun``: the hint of the "NOT converged" warning (:func:`run_sensitivity`), in the caller's terms.
     """
     import dataclasses
     import tempfile
@@ -457,4 +463,4 @@ def twin_sensitivity(sobol_n: int = 64, *, seed: int = 0, spec: StudySpec | None
     spec = dataclasses.replace(spec, metrics=TWIN_METRICS, seed=seed)
     settings = SensitivitySettings(morris_trajectories=4, sobol_n=sobol_n, chunk_size=10**6, bootstrap=200)
     with tempfile.TemporaryDirectory() as tmp:
-        return run_sensitivity(spec, tmp, settings=settings, workers=0, progress=False)
+        return run_sensitivity(spec, tmp, settings=settings, workers=0, progress=False, rerun=rerun)
