@@ -40,17 +40,24 @@ def test_hangs_are_bounded(argv, culprit, tmp_path, capsys, work_must_not_start)
     assert list(tmp_path.iterdir()) == []
 
 
-def test_two_gauge_positions_meet_the_calibration_with_a_clear_message(tmp_path, capsys):
-    """They passed `params` and failed later with a numpy broadcast message. Rig TOMLs of other gauge counts are
-    legitimate (the design study varies it), so the twin names the disagreement with its calibration instead."""
+def test_two_gauge_positions_are_checked_whole_then_simulate(tmp_path, capsys):
+    """They passed `params` and failed later with a numpy broadcast message. A description is now checked whole
+    (issue 24: one ADC channel per gauge, named), and a consistent two-gauge digit simulates on the calibration
+    derived for it, one column per gauge."""
+    import pyarrow.parquet as pq
+
     rig = tmp_path / "rig.toml"
     rig.write_text("[geometry]\ngauge_positions_m = [0.045, 0.135]\n")
+    assert main(["params", str(rig)]) == 2
+    assert "adc_channels has 3 channels for 2 gauges" in capsys.readouterr().out
+    rig.write_text("[geometry]\ngauge_positions_m = [0.045, 0.135]\n[sensors]\nadc_channels = [0, 1]\n")
     assert main(["params", str(rig)]) == 0
     capsys.readouterr()
-    argv = ["simulate", "sweep", "--commands", "8,9", "--params", str(rig), "--out", str(tmp_path / "s.parquet")]
-    assert main([*argv, "--json"]) == 2
-    error = _error(capsys)["error"]
-    assert "place 2 gauge(s)" in error and "has 3 value(s) of 'channel_gain'" in error and "broadcast" not in error
+    out = tmp_path / "s.parquet"
+    assert main(["simulate", "sweep", "--commands", "8,9", "--params", str(rig), "--out", str(out)]) == 0
+    names = pq.read_schema(out).names
+    assert "gauge2_v" in names
+    assert "gauge3_v" not in names
 
 
 @pytest.mark.parametrize(
