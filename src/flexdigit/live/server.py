@@ -157,9 +157,7 @@ def make_app(session, allowed_origins: set[str], *, any_address: bool = False):
     from starlette.applications import Starlette
     from starlette.responses import Response
     from starlette.routing import Route, WebSocketRoute
-    from starlette.websockets import WebSocket, WebSocketDisconnect
-
-    from flexdigit.live.session import MAX_REQUEST_BYTES
+    from starlette.websockets import WebSocket
 
     assets = _asset_bytes()
     # 'self' covers the page's own ws:// address (CSP level 3)
@@ -191,108 +189,10 @@ def make_app(session, allowed_origins: set[str], *, any_address: bool = False):
             pages[0] -= 1
             raise
         session.connected()
-        bucket = TokenBucket(RATE_PER_PAGE, BURST_PER_PAGE)
-        patience = TokenBucket(RATE_PER_PAGE, FLOOD_DROPPED)  # requests this page may have dropped
-        told_at = -1.0  # when this page was last told to slow down (once a second at most)
-        transport = _transport(websocket)
-
-        def drop(why: str) -> None:
-            """Disconnect this page at once: its buffer is not flushed first (a page that does not read never
-            takes it), so its place and memory are free now; the receive loop then sees the disconnect."""
-            if transport is not None:
-                sock = transport.get_extra_info("socket")
-                if sock is not None:  # reset, not closed: the kernel drops the unsent frames now too
-                    with contextlib.suppress(OSError):
-                        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
-                transport.abort()
-            else:  # pragma: no cover - another ASGI server: close as politely as it allows
-                asyncio.ensure_future(websocket.close(code=1008, reason=why))
-
-        async def send(text: str) -> None:
-            try:
-                await asyncio.wait_for(websocket.send_text(text), SLOW_DROP_S)
-            except TimeoutError:
-                drop("not reading")
-                raise WebSocketDisconnect(1008) from None
-
-        async def push() -> None:
-            since = -1
-            period = 1.0 / UPDATE_HZ
-            loop = asyncio.get_running_loop()
-            next_at = loop.time()
-            taken_at = loop.time()  # when this page last took a frame
-            sent_map = None
-            while True:
-                if transport is not None and transport.is_closing():
-                    # closing (uvicorn's keepalive gave up on it, or the page said goodbye): a buffer the page does
-                    # not read would keep the connection, and its place, open until it drained
-                    drop("closing")
-                    return
-                if transport is not None and transport.get_write_buffer_size() > MAX_QUEUED_BYTES:
-                    # behind: skip this frame (the next carries the samples since the last one sent)
-                    if loop.time() - taken_at > SLOW_DROP_S:
-                        drop("not reading")
-                        return
-                else:
-                    frame = session.snapshot(since)
-                    if frame["samples"]:
-                        since = frame["samples"][-1]["k"]
-                    if frame["locatability"] is sent_map:  # the map changes with the command only: send it once
-                        frame["locatability"] = None
-                    else:
-                        sent_map = frame["locatability"]
-                    await send(_dumps(frame))
-                    taken_at = loop.time()
-                # absolute deadlines: the time a frame takes to build and send does not slow the rate
-                next_at = max(next_at + period, loop.time())
-                await asyncio.sleep(next_at - loop.time())
-
-        sender = None
         try:
-            await send(_dumps(session.hello()))
-            sender = asyncio.create_task(push())
-            while True:
-                message = await websocket.receive()
-                if message["type"] == "websocket.disconnect":
-                    break
-                text = message.get("text")
-                if not bucket.take():
-                    if not patience.take():  # past its budget without pause: flooding
-                        reason = f"flooding: more than {RATE_PER_PAGE:g} requests a second"
-                        try:
-                            await asyncio.wait_for(websocket.close(code=1008, reason=reason), 1.0)
-                        except TimeoutError:
-                            drop(reason)
-                        break
-                    now = time.monotonic()
-                    if now - told_at >= 1.0:  # dropped; said once a second, not once per message
-                        told_at = now
-                        error = f"too many requests (at most {RATE_PER_PAGE:g} a second); dropped until you slow down"
-                        await send(_dumps({"type": "error", "message": error}))
-                    continue
-                if text is None:
-                    await send(_dumps({"type": "error", "message": "send JSON text, not binary"}))
-                    continue
-                if len(text) > MAX_REQUEST_BYTES:
-                    error = f"request too long ({len(text)} bytes, at most {MAX_REQUEST_BYTES})"
-                    await send(_dumps({"type": "error", "message": error}))
-                    continue
-                try:
-                    accepted = session.request(json.loads(text))
-                except (ValueError, ParameterError) as exc:
-                    await send(_dumps({"type": "error", "message": str(exc)}))
-                    continue
-                except Exception as exc:  # a request must never take the page's connection (or the server) down
-                    error = f"request refused ({type(exc).__name__}: {exc})"
-                    await send(_dumps({"type": "error", "message": error[:300]}))
-                    continue
-                await send(_dumps({"type": "ack", "request": accepted}))
-        except (WebSocketDisconnect, RuntimeError, OSError):
-            pass  # the page went away mid-send
+            await _Page(websocket, session).serve()
         finally:
             pages[0] -= 1
-            if sender is not None:
-                sender.cancel()
             session.disconnected()
 
     @asynccontextmanager
@@ -305,6 +205,141 @@ def make_app(session, allowed_origins: set[str], *, any_address: bool = False):
 
     routes = [Route(path, asset) for path in ASSETS] + [WebSocketRoute("/ws", stream)]
     return Starlette(routes=routes, lifespan=lifespan)
+
+
+class _Page:
+    """One accepted page's connection: its own request budget, its frames pushed one at a time, its requests
+    answered one by one (issue 22: nothing one page does slows or locks out another)."""
+
+    def __init__(self, websocket, session) -> None:
+        self.websocket = websocket
+        self.session = session
+        self.bucket = TokenBucket(RATE_PER_PAGE, BURST_PER_PAGE)
+        self.patience = TokenBucket(RATE_PER_PAGE, FLOOD_DROPPED)  # requests this page may have dropped
+        self.told_at = -1.0  # when this page was last told to slow down (once a second at most)
+        self.transport = _transport(websocket)
+
+    async def serve(self) -> None:
+        """Greet the page, push it frames and answer its requests until it goes away."""
+        from starlette.websockets import WebSocketDisconnect
+
+        sender = None
+        try:
+            await self.send(_dumps(self.session.hello()))
+            sender = asyncio.create_task(self.push())
+            await self.receive()
+        except (WebSocketDisconnect, RuntimeError, OSError):
+            pass  # the page went away mid-send
+        finally:
+            if sender is not None:
+                sender.cancel()
+
+    def drop(self, why: str) -> None:
+        """Disconnect this page at once: its buffer is not flushed first (a page that does not read never
+        takes it), so its place and memory are free now; the receive loop then sees the disconnect."""
+        transport = self.transport
+        if transport is not None:
+            sock = transport.get_extra_info("socket")
+            if sock is not None:  # reset, not closed: the kernel drops the unsent frames now too
+                with contextlib.suppress(OSError):
+                    sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            transport.abort()
+        else:  # pragma: no cover - another ASGI server: close as politely as it allows
+            asyncio.ensure_future(self.websocket.close(code=1008, reason=why))
+
+    async def send(self, text: str) -> None:
+        from starlette.websockets import WebSocketDisconnect
+
+        try:
+            await asyncio.wait_for(self.websocket.send_text(text), SLOW_DROP_S)
+        except TimeoutError:
+            self.drop("not reading")
+            raise WebSocketDisconnect(1008) from None
+
+    async def error(self, message: str) -> None:
+        await self.send(_dumps({"type": "error", "message": message}))
+
+    async def push(self) -> None:
+        """Send the page a frame every 1/:data:`UPDATE_HZ` s, one in flight at most, skipping frames while its
+        buffer is full; drop the page when it has taken none for :data:`SLOW_DROP_S`."""
+        transport = self.transport
+        since = -1
+        period = 1.0 / UPDATE_HZ
+        loop = asyncio.get_running_loop()
+        next_at = loop.time()
+        taken_at = loop.time()  # when this page last took a frame
+        sent_map = None
+        while True:
+            if transport is not None and transport.is_closing():
+                # closing (uvicorn's keepalive gave up on it, or the page said goodbye): a buffer the page does
+                # not read would keep the connection, and its place, open until it drained
+                self.drop("closing")
+                return
+            if transport is not None and transport.get_write_buffer_size() > MAX_QUEUED_BYTES:
+                # behind: skip this frame (the next carries the samples since the last one sent)
+                if loop.time() - taken_at > SLOW_DROP_S:
+                    self.drop("not reading")
+                    return
+            else:
+                frame = self.session.snapshot(since)
+                if frame["samples"]:
+                    since = frame["samples"][-1]["k"]
+                if frame["locatability"] is sent_map:  # the map changes with the command only: send it once
+                    frame["locatability"] = None
+                else:
+                    sent_map = frame["locatability"]
+                await self.send(_dumps(frame))
+                taken_at = loop.time()
+            # absolute deadlines: the time a frame takes to build and send does not slow the rate
+            next_at = max(next_at + period, loop.time())
+            await asyncio.sleep(next_at - loop.time())
+
+    async def receive(self) -> None:
+        """Answer the page's requests until it disconnects or floods."""
+        while True:
+            message = await self.websocket.receive()
+            if message["type"] == "websocket.disconnect":
+                return
+            if not self.bucket.take():
+                if not self.patience.take():  # past its budget without pause: flooding
+                    await self.close_flooding()
+                    return
+                await self.tell_to_slow_down()
+                continue
+            await self.answer(message.get("text"))
+
+    async def close_flooding(self) -> None:
+        reason = f"flooding: more than {RATE_PER_PAGE:g} requests a second"
+        try:
+            await asyncio.wait_for(self.websocket.close(code=1008, reason=reason), 1.0)
+        except TimeoutError:
+            self.drop(reason)
+
+    async def tell_to_slow_down(self) -> None:
+        now = time.monotonic()
+        if now - self.told_at >= 1.0:  # dropped; said once a second, not once per message
+            self.told_at = now
+            await self.error(f"too many requests (at most {RATE_PER_PAGE:g} a second); dropped until you slow down")
+
+    async def answer(self, text: str | None) -> None:
+        """Validate one request and pass it to the session; an ack, or one line saying what was wrong."""
+        from flexdigit.live.session import MAX_REQUEST_BYTES
+
+        if text is None:
+            await self.error("send JSON text, not binary")
+            return
+        if len(text) > MAX_REQUEST_BYTES:
+            await self.error(f"request too long ({len(text)} bytes, at most {MAX_REQUEST_BYTES})")
+            return
+        try:
+            accepted = self.session.request(json.loads(text))
+        except (ValueError, ParameterError) as exc:
+            await self.error(str(exc))
+            return
+        except Exception as exc:  # a request must never take the page's connection (or the server) down
+            await self.error(f"request refused ({type(exc).__name__}: {exc})"[:300])
+            return
+        await self.send(_dumps({"type": "ack", "request": accepted}))
 
 
 def _transport(websocket):

@@ -645,42 +645,10 @@ class LiveSession:
                 reading = rig.read()
                 self.rig_cpu_s += time.thread_time() - start
                 check_reading(reading, adc)
-                wall_ms = time.time() * 1e3
-                command, setpoint, y = self._act(reading, equilibrium)
-                sample = Sample(
-                    k,
-                    reading.time_s,
-                    wall_ms,
-                    [round(float(g), 6) for g in reading.gauges_v],
-                    _finite(reading.pot_v),
-                    int(command),
-                    setpoint,
-                    y,
-                )
-                if self.recording is not None:
-                    self.recording.write_sample({kk: v for kk, v in sample.as_dict().items() if kk != "wall_ms"})
+                command = self._act_and_record(k, reading, equilibrium)
                 window.append(reading.gauges_v)
-                with self._lock:
-                    self.state.samples.append(sample)
                 if k % self.ESTIMATE_EVERY == 0 and len(window) == window.maxlen:
-                    mean = np.mean(window, axis=0)
-                    moved = last_job is None or estimate_due(
-                        float(np.max(np.abs(mean - last_job[0]))),
-                        command != last_job[1],
-                        reading.time_s - last_job[2],
-                        still_v=self._still_v,
-                        creep_v=self._creep_v,
-                        window_s=self.AVERAGE * self.period_s,
-                        max_gap_s=self.MAX_ESTIMATE_GAP_S,
-                    )
-                    if moved:
-                        # the estimate runs in its own thread: hand it the latest job (a slower one skips some)
-                        twin = getattr(rig, "twin", None)
-                        psi = None if twin is None else np.array(twin.state()[0])
-                        last_job = (mean, command, reading.time_s, psi)
-                        with self._job_ready:
-                            self._job = last_job
-                            self._job_ready.notify()
+                    last_job = self._offer_estimate(np.mean(window, axis=0), command, reading.time_s, last_job)
                 k += 1
         except (RigError, OSError) as exc:
             self.error = f"fault: {exc}"
@@ -690,6 +658,49 @@ class LiveSession:
             with self._lock:
                 self.state.status = self.error or "stopped"
             self._shutdown(self.error or "stopped")
+
+    def _act_and_record(self, k: int, reading, equilibrium: int) -> int:
+        """Act on reading ``k``, record it (file and page history) and return the command sent."""
+        wall_ms = time.time() * 1e3
+        command, setpoint, y = self._act(reading, equilibrium)
+        sample = Sample(
+            k,
+            reading.time_s,
+            wall_ms,
+            [round(float(g), 6) for g in reading.gauges_v],
+            _finite(reading.pot_v),
+            int(command),
+            setpoint,
+            y,
+        )
+        if self.recording is not None:
+            self.recording.write_sample({kk: v for kk, v in sample.as_dict().items() if kk != "wall_ms"})
+        with self._lock:
+            self.state.samples.append(sample)
+        return command
+
+    def _offer_estimate(self, mean, command: int, time_s: float, last_job):
+        """Hand the estimate thread a new job when the digit moved since ``last_job`` (:func:`estimate_due`);
+        the job handed, else ``last_job``."""
+        moved = last_job is None or estimate_due(
+            float(np.max(np.abs(mean - last_job[0]))),
+            command != last_job[1],
+            time_s - last_job[2],
+            still_v=self._still_v,
+            creep_v=self._creep_v,
+            window_s=self.AVERAGE * self.period_s,
+            max_gap_s=self.MAX_ESTIMATE_GAP_S,
+        )
+        if not moved:
+            return last_job
+        # the estimate runs in its own thread: hand it the latest job (a slower one skips some)
+        twin = getattr(self.rig, "twin", None)
+        psi = None if twin is None else np.array(twin.state()[0])
+        job = (mean, command, time_s, psi)
+        with self._job_ready:
+            self._job = job
+            self._job_ready.notify()
+        return job
 
     def _apply_requests(self) -> None:
         rig = self.rig

@@ -360,12 +360,7 @@ def calibrate_rotation(
         reference = angle_source
     cov, truth = None, None
     if isinstance(reference, MeasuredReference):
-        if commands is not None and sorted(int(c) for c in commands) != sorted(reference.commands.tolist()):
-            raise ParameterError(
-                f"calibrate_rotation: the sweep's commands {list(commands)} differ from those measured in "
-                f"{reference.source} {reference.commands.tolist()}"
-            )
-        commands = reference.commands.tolist()
+        commands = _measured_commands(reference, commands)
         cov = reference.rotation_cov_deg2
         source = f"{reference.kind} measured on the rig ({reference.source})"
         if reference.gauges_v is not None:  # readings taken with the measurements: no sweep needed
@@ -373,12 +368,7 @@ def calibrate_rotation(
             return _provenance(est, source, commands, [math.nan] * len(commands), reference.rotation_deg)
         angle = reference.angle_source()
     elif isinstance(reference, str) and reference == "twin":
-        truth = getattr(rig, "tip_rotation_deg", None)
-        if truth is None:
-            raise ParameterError(
-                f"{rig.name}: no way to know the true rotation on this backend; give a reference (a file of measured "
-                "rotations or deflections, or ask the operator with a protractor)"
-            )
+        truth = _twin_truth(rig)
         angle = None
         source = "twin (its own tip rotation)"
     elif callable(reference):
@@ -392,6 +382,42 @@ def calibrate_rotation(
             f"Got {reference!r} instead."
         )
     commands = [int(c) for c in (SWEEP_COMMANDS if commands is None else commands)]
+    X, sd_v, y, waited = _sweep(
+        rig, commands, angle, truth, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
+    )
+    if cov is None and callable(reference) and not isinstance(reference, str):
+        cov = np.eye(len(commands)) * sd**2
+    est = RotationEstimator().fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=np.asarray(sd_v))
+    return _provenance(est, source, commands, waited, np.asarray(y))
+
+
+def _measured_commands(reference, commands) -> list:
+    """The commands measured in ``reference``; a sweep given too must hold the same ones."""
+    if commands is not None and sorted(int(c) for c in commands) != sorted(reference.commands.tolist()):
+        raise ParameterError(
+            f"calibrate_rotation: the sweep's commands {list(commands)} differ from those measured in "
+            f"{reference.source} {reference.commands.tolist()}"
+        )
+    return reference.commands.tolist()
+
+
+def _twin_truth(rig: Rig) -> Callable[[], float]:
+    """The backend's own tip rotation (deg), the "twin" reference; refused where the backend has none."""
+    truth = getattr(rig, "tip_rotation_deg", None)
+    if truth is None:
+        raise ParameterError(
+            f"{rig.name}: no way to know the true rotation on this backend; give a reference (a file of measured "
+            "rotations or deflections, or ask the operator with a protractor)"
+        )
+    return truth
+
+
+def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, timeout_s):
+    """Hold each command and read the settled gauges and the reference rotation (``angle(command)``, or the
+    twin's ``truth()`` when ``angle`` is None), then relax the digit and let it settle again.
+
+    Returns the gauges (V), their standard errors (V), the rotations (deg) and the waits (s), one per command.
+    """
     X, sd_v, y, waited = [], [], [], []
     for command in commands:
         rig.write_command(command)
@@ -419,10 +445,7 @@ def calibrate_rotation(
         wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
     else:
         rig.wait(settle_s)
-    if cov is None and callable(reference) and not isinstance(reference, str):
-        cov = np.eye(len(commands)) * sd**2
-    est = RotationEstimator().fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=np.asarray(sd_v))
-    return _provenance(est, source, commands, waited, np.asarray(y))
+    return X, sd_v, y, waited
 
 
 def _provenance(est: RotationEstimator, source: str, commands, waited, rotation_deg) -> RotationEstimator:

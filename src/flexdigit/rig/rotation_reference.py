@@ -182,8 +182,6 @@ def rotations_from_deflections(
     >>> bool(np.all(np.abs(rot - np.degrees(true)) < 3 * np.sqrt(np.diag(cov)))), bool(np.sqrt(cov[-1, -1]) < 0.5)
     (True, True)
     """
-    from scipy.optimize import least_squares
-
     shape = DigitShape.from_params(params)
     owner = "rotations_from_deflections"
     s = check_array(
@@ -201,6 +199,17 @@ def rotations_from_deflections(
     prior = compliance * lengths / (compliance @ lengths)  # rotation share of each section at a common moment
     seen = np.array([np.any(s > a) for a in shape.flex_start_m])
     free_shares = s.size >= n_sec and bool(seen.all()) and n >= 2
+    theta, cov, rms, shares = _fit_sweep(shape, s, Y, sd, prior, free_shares)
+    return np.degrees(theta), cov * math.degrees(1.0) ** 2, rms, shares
+
+
+def _fit_sweep(shape: DigitShape, s, Y, sd: float, prior, free_shares: bool):
+    """The joint least-squares fit of :func:`rotations_from_deflections`: tip rotations (rad), their covariance
+    (rad^2), the rms residual (m) and the section shares (``prior`` unless ``free_shares``)."""
+    from scipy.optimize import least_squares
+
+    n = Y.shape[0]
+    lengths = shape.flex_length_m
 
     def unpack(p):
         if not free_shares:
@@ -233,7 +242,7 @@ def rotations_from_deflections(
         raise DataFileError("the deflections do not determine the rotations (readings all at zero or at one place?)")
     cov = np.linalg.inv(information)[:n, :n] * inflate**2
     theta, shares = unpack(fit.x)
-    return np.degrees(theta), cov * math.degrees(1.0) ** 2, rms, shares
+    return theta, cov, rms, shares
 
 
 @dataclass(frozen=True)
@@ -288,6 +297,35 @@ def read_reference(
     path = Path(path)
     res_mm = check_param(resolution_mm, READING_RESOLUTION_MM, "resolution_mm", "read_reference")
     res_deg = check_param(resolution_deg, READING_RESOLUTION_DEG, "resolution_deg", "read_reference")
+    rows = _data_rows(path)
+    header, delimiter, positions = _read_header(path, rows[0], params)
+    table = _read_table(path, rows[1:], header, delimiter, positions, params)
+    commands = np.array(table["command"], dtype=int)
+    if commands.size < 4:
+        raise DataFileError(f"{path}: {commands.size} commands measured; the map needs at least 4")
+    residual = None
+    if "rotation_deg" in header:
+        rotation = np.array(table["rotation_deg"])
+        cov = np.eye(commands.size) * (res_deg / math.sqrt(12)) ** 2
+        kind = "rotation"
+    else:
+        cols = sorted(positions, key=positions.get)
+        s = np.array([positions[h] for h in cols])
+        Y = np.array([table[h] for h in cols]).T / 1000
+        rotation, cov, rms, _ = rotations_from_deflections(
+            s, Y, sd_m=res_mm / 1000 / math.sqrt(12), params=params, stiffness=_section_stiffness(params)
+        )
+        residual = rms * 1000
+        kind = "deflections"
+    if not np.ptp(rotation) > 0:
+        raise DataFileError(f"{path}: the measured rotations do not vary over the commands")
+    gauges = any(h in _GAUGE_COLUMNS for h in header)
+    volts = np.array([table[h] for h in _GAUGE_COLUMNS]).T if gauges else None
+    return MeasuredReference(commands, rotation, cov, volts, kind, str(path), residual)
+
+
+def _data_rows(path: Path) -> list[tuple[int, str]]:
+    """The file's (line number, line) pairs that are neither blank nor comments; the first is the header."""
     if path.is_dir():
         raise DataFileError(f"{path}: a directory, not a file (expected a CSV of measured rotations or deflections)")
     from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
@@ -303,7 +341,12 @@ def read_reference(
     ]
     if not rows:
         raise DataFileError(f"{path}: no header and no data (expected 'command,rotation_deg' or deflection columns)")
-    header_line, header_text = rows[0]
+    return rows
+
+
+def _read_header(path: Path, row: tuple[int, str], params: RigParams):
+    """The checked column names, the delimiter and the deflection columns' positions (m from the base)."""
+    header_line, header_text = row
     delimiter = max(",;\t", key=header_text.count)
     header = [h.strip() for h in next(csv.reader(io.StringIO(header_text), delimiter=delimiter))]
     where = f"{path}, line {header_line}"
@@ -331,61 +374,52 @@ def read_reference(
     for h, p in positions.items():
         if not 0 < p * 1000 <= length_mm:
             raise DataFileError(f"{where}: column '{h}': the point must be inside (0, {length_mm:g}] mm from the base")
-    a = params.actuator
+    return header, delimiter, positions
+
+
+def _read_table(path: Path, rows, header: list[str], delimiter: str, positions: dict, params: RigParams):
+    """Column name -> the checked values of the data rows, in order."""
     table: dict[str, list[float]] = {h: [] for h in header}
-    seen: dict[int, int] = {}
-    for number, line in rows[1:]:
+    seen: dict[int, int] = {}  # command -> the line it was measured on
+    for number, line in rows:
         cells = [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delimiter))]
         if len(cells) != len(header):
             raise DataFileError(f"{path}, line {number}: {len(cells)} cells for {len(header)} columns")
         for h, cell in zip(header, cells, strict=True):
-            try:
-                value = float(cell)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise DataFileError(f"{path}, line {number}, column '{h}': expected a number, got {cell!r}")
+            value = _read_cell(f"{path}, line {number}", h, cell, positions, params.actuator)
             if h == "command":
-                if value != int(value) or not a.command_min <= value <= a.command_max:
-                    raise DataFileError(
-                        f"{path}, line {number}, column 'command': expected an integer command in "
-                        f"{a.command_min}..{a.command_max}, got {cell!r}"
-                    )
                 if int(value) in seen:
                     raise DataFileError(
                         f"{path}, line {number}: command {int(value)} already measured on line {seen[int(value)]}; "
                         "average repeated readings into one row"
                     )
                 seen[int(value)] = number
-            elif h in positions and abs(value) >= positions[h] * 1000:
-                raise DataFileError(
-                    f"{path}, line {number}, column '{h}': a point {positions[h] * 1000:g} mm along the digit cannot "
-                    f"move {value:g} mm sideways"
-                )
-            elif h == "rotation_deg" and not -180 < value < 180:
-                raise DataFileError(f"{path}, line {number}, column 'rotation_deg': expected -180..180 deg, got {cell}")
             table[h].append(value)
-    commands = np.array(table["command"], dtype=int)
-    if commands.size < 4:
-        raise DataFileError(f"{path}: {commands.size} commands measured; the map needs at least 4")
-    residual = None
-    if has_rotation:
-        rotation = np.array(table["rotation_deg"])
-        cov = np.eye(commands.size) * (res_deg / math.sqrt(12)) ** 2
-        kind = "rotation"
-    else:
-        cols = sorted(positions, key=positions.get)
-        s = np.array([positions[h] for h in cols])
-        Y = np.array([table[h] for h in cols]).T / 1000
-        rotation, cov, rms, _ = rotations_from_deflections(
-            s, Y, sd_m=res_mm / 1000 / math.sqrt(12), params=params, stiffness=_section_stiffness(params)
+    return table
+
+
+def _read_cell(where: str, h: str, cell: str, positions: dict, a) -> float:
+    """One cell's number, checked for its column (``a``: the actuator's parameters)."""
+    try:
+        value = float(cell)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise DataFileError(f"{where}, column '{h}': expected a number, got {cell!r}")
+    if h == "command":
+        if value != int(value) or not a.command_min <= value <= a.command_max:
+            raise DataFileError(
+                f"{where}, column 'command': expected an integer command in "
+                f"{a.command_min}..{a.command_max}, got {cell!r}"
+            )
+    elif h in positions and abs(value) >= positions[h] * 1000:
+        raise DataFileError(
+            f"{where}, column '{h}': a point {positions[h] * 1000:g} mm along the digit cannot "
+            f"move {value:g} mm sideways"
         )
-        residual = rms * 1000
-        kind = "deflections"
-    if not np.ptp(rotation) > 0:
-        raise DataFileError(f"{path}: the measured rotations do not vary over the commands")
-    volts = np.array([table[h] for h in _GAUGE_COLUMNS]).T if gauges else None
-    return MeasuredReference(commands, rotation, cov, volts, kind, str(path), residual)
+    elif h == "rotation_deg" and not -180 < value < 180:
+        raise DataFileError(f"{where}, column 'rotation_deg': expected -180..180 deg, got {cell}")
+    return value
 
 
 def _section_stiffness(params: RigParams) -> np.ndarray:

@@ -118,6 +118,17 @@ def board_servo_schedule(servo, value, issued_s: float, grid_s: float) -> float:
     return apply
 
 
+def _find_harness(elf, elf_path: Path, harness) -> Path:
+    """The simavr harness: the one given, else the one built next to the firmware, else one on the PATH."""
+    harness = Path(harness) if harness else elf_path.parent / HARNESS_NAME
+    if not harness.is_file():
+        found = shutil.which(HARNESS_NAME)
+        if found is None:
+            raise ParameterError(f"hil://{elf}: no simavr harness at {harness} (build it with 'make firmware')")
+        harness = Path(found)
+    return harness
+
+
 class HilRig(Rig):
     """The firmware on simavr, joined to the twin (see the module docstring).
 
@@ -163,13 +174,7 @@ class HilRig(Rig):
         self.elf = Path(elf)
         if not self.elf.is_file():
             raise ParameterError(f"hil://{elf}: no firmware image there (build it with 'make firmware')")
-        harness = Path(harness) if harness else self.elf.parent / HARNESS_NAME
-        if not harness.is_file():
-            found = shutil.which(HARNESS_NAME)
-            if found is None:
-                raise ParameterError(f"hil://{elf}: no simavr harness at {harness} (build it with 'make firmware')")
-            harness = Path(found)
-        self.harness = harness
+        self.harness = _find_harness(elf, self.elf, harness)
         if twin is None:
             from flexdigit.twin.twin import Twin
 
@@ -201,6 +206,11 @@ class HilRig(Rig):
         self._fault_seen = 0
         #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
         self.gauge_override: dict[int, float] = {}
+        self._start_board()
+
+    def _start_board(self) -> None:
+        """Start the harness running the firmware, take the board's banner and rest readings, and put it in its
+        mode; the harness stopped again if any of that fails."""
         self._stderr = tempfile.TemporaryFile(mode="w+")  # simavr's own messages: quoted if the harness stops
         self._proc = subprocess.Popen(
             [str(self.harness), str(self.elf)],
@@ -219,8 +229,8 @@ class HilRig(Rig):
             self._advance(0.2 - LEAD_S)
             if self.latest is None:
                 raise RigError(f"hil://{self.elf}: the firmware sent no sample in 0.2 s ({self.info_lines[-3:]})")
-            self._say("F1" if safe == "hold" else "F0")  # once the board listens
-            if mode == "board":
+            self._say("F1" if self.safe == "hold" else "F0")  # once the board listens
+            if self.mode == "board":
                 self.set_setpoint(self.setpoint_deg)
                 self._say("M2")
             else:
