@@ -179,38 +179,34 @@ def calibrate(
     -------
     CalibrationResult
     """
-    from scipy.optimize import least_squares
-
     from flexdigit.params import RigParams
 
     params = params or RigParams()
-    cal0 = initial or Calibration()
-    t = targets
+    cal, fitted, (cost, success, message) = _fit_mechanics(params, initial or Calibration(), targets, cells_per_section)
+    r = model_response(params, cal, targets, cells_per_section=cells_per_section)
+    cal, sweep_rows, copied = _fit_channels(cal, targets, r)
+    cal, friction_rows = _fit_friction(params, cal, targets, cells_per_section, friction_score)
+    if targets.sweep_commands is not None:
+        fitted += ["channel_gain", "channel_offset_v"]
+    fitted += copied
+    if friction_rows:
+        fitted.append("cable_friction_ratio")
+    rows = _mechanics_rows(targets, r) + sweep_rows + friction_rows
+    result = CalibrationResult(cal, rows, cost, success, message, fitted, targets)
+    _log.log(logging.INFO if verbose else logging.DEBUG, "calibration residuals:\n%s", result.table())
+    return result
 
-    def unpack(x):
-        m, ei, base, bs, bh, kc = np.exp(x)
-        return cal0.replace(
-            support_mass_kg=(m, m, m),
-            housing_ei_n_m2=(ei * base, ei, ei),
-            strip_beta_s=bs,
-            housing_beta_s=bh,
-            cable_stiffness_n_m=kc,
-        )
 
-    weight = np.asarray(t.deflection_weight, dtype=float) if t.deflection_mm is not None else None
+def _deflection_weight(t: CalibrationTargets) -> np.ndarray | None:
+    """The weight of each measured deflection (gauge x command), None without deflections."""
+    return np.asarray(t.deflection_weight, dtype=float) if t.deflection_mm is not None else None
 
-    def resid(x):
-        r = model_response(params, unpack(x), t, cells_per_section=cells_per_section)
-        out = []
-        for key in ("bare_wn", "bare_zeta", "housing_wn", "housing_zeta"):
-            target = getattr(t, key + ("_rad_s" if key.endswith("wn") else ""))
-            if target is not None:
-                out.append((r[key] / target - 1.0) / 0.01)
-        if weight is not None:
-            diff = (r["deflection_mm"] - np.asarray(t.deflection_mm)) / t.deflection_resolution_mm
-            out.extend((diff * weight)[weight > 0].tolist())
-        return np.array(out)
 
+def _mechanics_start(cal0: Calibration, t: CalibrationTargets) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+    """Start point and bounds (log scale) of the mechanics, and which of them the given targets identify.
+
+    A parameter not identified is pinned to its start value by bounds 1e-9 apart.
+    """
     m0 = cal0.support_mass_kg[0]
     ei0 = cal0.housing_ei_n_m2[1]
     base0 = cal0.housing_ei_n_m2[0] / ei0 if ei0 > 0 else 1.0
@@ -227,30 +223,71 @@ def calibrate(
     lower = np.log([1e-4, 1e-5, 0.2, 1e-7, 1e-6, 2e3])
     upper = np.log([0.5, 1.0, 200.0, 1.0, 1.0, 2e6])
     given = {name for name, value in vars(t).items() if value is not None}
+    weight = _deflection_weight(t)
     if weight is None or not np.any(weight > 0):
         given.discard("deflection_mm")
     free = [any(target in given for target in MECHANICS[name]) for name in MECHANICS]
     for k, is_free in enumerate(free):
         if not is_free:  # not identifiable from the targets given: keep it
             lower[k], upper[k] = x0[k] - 1e-9, x0[k] + 1e-9
-    fitted = [name for name, is_free in zip(MECHANICS, free, strict=True) if is_free]
-    if any(free):
-        fit = least_squares(
-            resid,
-            np.clip(x0, lower + 1e-9, upper - 1e-9),
-            bounds=(lower, upper),
-            x_scale=1.0,
-            xtol=1e-12,
-            ftol=1e-12,
-            gtol=1e-12,
-            max_nfev=400,
+    return x0, lower, upper, free
+
+
+def _fit_mechanics(
+    params, cal0: Calibration, t: CalibrationTargets, cells_per_section: int
+) -> tuple[Calibration, list[str], tuple[float, bool, str]]:
+    """The mechanics fitted to the wn, zeta and deflection targets: calibration, names fitted, solver outcome."""
+    from scipy.optimize import least_squares
+
+    def unpack(x):
+        m, ei, base, bs, bh, kc = np.exp(x)
+        return cal0.replace(
+            support_mass_kg=(m, m, m),
+            housing_ei_n_m2=(ei * base, ei, ei),
+            strip_beta_s=bs,
+            housing_beta_s=bh,
+            cable_stiffness_n_m=kc,
         )
-        x, cost, success, message = fit.x, float(fit.cost), bool(fit.success), str(fit.message)
-    else:
-        x, cost, success, message = x0, 0.0, True, "no mechanical target: mechanics kept"
-    cal = unpack(x) if any(free) else cal0
+
+    weight = _deflection_weight(t)
+
+    def resid(x):
+        r = model_response(params, unpack(x), t, cells_per_section=cells_per_section)
+        out = []
+        for key in ("bare_wn", "bare_zeta", "housing_wn", "housing_zeta"):
+            target = getattr(t, key + ("_rad_s" if key.endswith("wn") else ""))
+            if target is not None:
+                out.append((r[key] / target - 1.0) / 0.01)
+        if weight is not None:
+            diff = (r["deflection_mm"] - np.asarray(t.deflection_mm)) / t.deflection_resolution_mm
+            out.extend((diff * weight)[weight > 0].tolist())
+        return np.array(out)
+
+    x0, lower, upper, free = _mechanics_start(cal0, t)
+    fitted = [name for name, is_free in zip(MECHANICS, free, strict=True) if is_free]
+    if not any(free):
+        return cal0, [], (0.0, True, "no mechanical target: mechanics kept")
+    fit = least_squares(
+        resid,
+        np.clip(x0, lower + 1e-9, upper - 1e-9),
+        bounds=(lower, upper),
+        x_scale=1.0,
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=400,
+    )
     fitted = [name for name in fitted if name != "housing_base_factor"]
-    r = model_response(params, cal, t, cells_per_section=cells_per_section)
+    return unpack(fit.x), fitted, (float(fit.cost), bool(fit.success), str(fit.message))
+
+
+def _fit_channels(
+    cal: Calibration, t: CalibrationTargets, r: dict
+) -> tuple[Calibration, list[dict[str, Any]], list[str]]:
+    """Each channel's gain and offset fitted to its sweep line (linear least squares), the noise levels copied.
+
+    Returns the calibration, the sweep's residual rows and the names of the noise levels copied.
+    """
     gains, offsets = list(cal.channel_gain), list(cal.channel_offset_v)
     rows: list[dict[str, Any]] = []
     if t.sweep_commands is not None:
@@ -283,7 +320,14 @@ def calibrate(
         changes["noise_white_v"] = tuple(float(v) for v in t.noise_white_v)
     if t.noise_drift_v_per_sqrt_s is not None:
         changes["noise_drift_v_per_sqrt_s"] = tuple(float(v) for v in t.noise_drift_v_per_sqrt_s)
-    cal = cal.replace(**changes)
+    copied = [name for name in ("noise_white_v", "noise_drift_v_per_sqrt_s") if name in changes]
+    return cal.replace(**changes), rows, copied
+
+
+def _fit_friction(
+    params, cal: Calibration, t: CalibrationTargets, cells_per_section: int, friction_score
+) -> tuple[Calibration, list[dict[str, Any]]]:
+    """The cable-guide friction: from the actuated repeatability (closed form), else the actuated test corr2."""
     friction_rows: list[dict[str, Any]] = []
     if t.actuated_repeatability_v is not None:
         if t.actuated_repeatability_command is None:
@@ -312,6 +356,11 @@ def calibrate(
         friction_rows.append(
             dict(target="actuated test corr2 (7.5)", measured=t.actuated_test_corr2, twin=friction_score(cal), unit="")
         )
+    return cal, friction_rows
+
+
+def _mechanics_rows(t: CalibrationTargets, r: dict) -> list[dict[str, Any]]:
+    """The residual rows of the mechanics: wn and zeta (scale 1 %), deflections (scale: the reading resolution)."""
     head = []
     for key, label, unit in (
         ("bare_wn", "wn without housing (as table 3.1)", "rad/s"),
@@ -322,6 +371,7 @@ def calibrate(
         target = getattr(t, key + ("_rad_s" if key.endswith("wn") else ""))
         if target is not None:
             head.append(dict(target=label, measured=float(target), twin=r[key], unit=unit, scale=0.01 * float(target)))
+    weight = _deflection_weight(t)
     if weight is not None:
         for g in range(weight.shape[0]):
             for c, cmd in enumerate(t.deflection_commands):
@@ -335,14 +385,7 @@ def calibrate(
                             scale=float(t.deflection_resolution_mm),
                         )
                     )
-    if t.sweep_commands is not None:
-        fitted += ["channel_gain", "channel_offset_v"]
-    fitted += [name for name in ("noise_white_v", "noise_drift_v_per_sqrt_s") if name in changes]
-    if friction_rows:
-        fitted.append("cable_friction_ratio")
-    result = CalibrationResult(cal, head + rows + friction_rows, cost, success, message, fitted, targets)
-    _log.log(logging.INFO if verbose else logging.DEBUG, "calibration residuals:\n%s", result.table())
-    return result
+    return head
 
 
 def calibrate_to_thesis(params=None, *, verbose: bool = False) -> CalibrationResult:

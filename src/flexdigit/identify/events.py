@@ -177,23 +177,9 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
     DataFileError
         If the signal is constant: nothing at all can be identified from it.
     """
-    t, y = series.t_s, series.y
-    if np.ptp(y) == 0.0:
-        what = "step" if kind == "step" else "release"
-        raise DataFileError(
-            f"{series.name}: the signal is constant ({float(y[0]):g} {series.unit}".rstrip()
-            + f") over the whole record: no {what} to identify"
-        )
-    fs = 1.0 / series.dt_s
-    cleaned, hum = remove_hum(t, y)
-    noise = noise_std(cleaned)
-    spikes = find_spikes(cleaned, noise)
-    median5 = ndimage.median_filter(cleaned, size=5, mode="nearest")
-    despiked = cleaned.copy()
-    despiked[spikes] = median5[spikes]
-    cutoff = min(FIND_CUTOFF_HZ, 0.2 * fs)
-    smooth = butter_filter(despiked, fs, cutoff) if t.size > 30 else despiked
-    noise_smooth = noise * math.sqrt(min(1.0, 2.0 * cutoff / fs))
+    _refuse_constant(series, kind)
+    t = series.t_s
+    cleaned, hum, noise, spikes, smooth, noise_smooth = _clean(series)
     problems: list[Problem] = []
     input_step = None
     found_from = "given" if t0_s is not None else "signal"
@@ -213,20 +199,7 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
         input_step=input_step,
     )  # fmt: skip
     if first is None:
-        spread = float(np.ptp(smooth))
-        problems.append(
-            Problem(
-                f"no-{what}",
-                f"no {what} found: the signal varies by only {spread:.3g} {series.unit}".rstrip()
-                + f", {spread / max(noise_smooth, 1e-300):.2g} times its noise after low-pass filtering (expected a "
-                f"change of at least 8 times)",
-            )
-        )
-        level = float(np.median(smooth))
-        return Survey(
-            t0_s=t0_s, baseline_s=0.0, direction=0, start_level=level, end_level=level, delay_s=math.nan,
-            first_sample=0, problems=tuple(problems), **shared,
-        )  # fmt: skip
+        return _nothing_found(series, what, smooth, noise_smooth, t0_s, problems, shared)
     k_on, k_half, k_first, held, start, end, direction = first
     t_on = float(t[k_on])
     if t0_s is None and not held:
@@ -252,6 +225,53 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
         problems=tuple(problems),
         **shared,
     )
+
+
+def _refuse_constant(series: TimeSeries, kind: str) -> None:
+    """A constant signal: nothing at all can be identified from it."""
+    y = series.y
+    if np.ptp(y) == 0.0:
+        what = "step" if kind == "step" else "release"
+        raise DataFileError(
+            f"{series.name}: the signal is constant ({float(y[0]):g} {series.unit}".rstrip()
+            + f") over the whole record: no {what} to identify"
+        )
+
+
+def _clean(series: TimeSeries):
+    """The record with its hum out, the hum, noise level and spikes, the despiked low-passed signal and its noise."""
+    t, y = series.t_s, series.y
+    fs = 1.0 / series.dt_s
+    cleaned, hum = remove_hum(t, y)
+    noise = noise_std(cleaned)
+    spikes = find_spikes(cleaned, noise)
+    median5 = ndimage.median_filter(cleaned, size=5, mode="nearest")
+    despiked = cleaned.copy()
+    despiked[spikes] = median5[spikes]
+    cutoff = min(FIND_CUTOFF_HZ, 0.2 * fs)
+    smooth = butter_filter(despiked, fs, cutoff) if t.size > 30 else despiked
+    noise_smooth = noise * math.sqrt(min(1.0, 2.0 * cutoff / fs))
+    return cleaned, hum, noise, spikes, smooth, noise_smooth
+
+
+def _nothing_found(
+    series: TimeSeries, what: str, smooth, noise_smooth: float, t0_s, problems: list[Problem], shared: dict
+) -> Survey:
+    """The survey of a record where no step or release stands out of the noise (a "no-step"/"no-release" problem)."""
+    spread = float(np.ptp(smooth))
+    problems.append(
+        Problem(
+            f"no-{what}",
+            f"no {what} found: the signal varies by only {spread:.3g} {series.unit}".rstrip()
+            + f", {spread / max(noise_smooth, 1e-300):.2g} times its noise after low-pass filtering (expected a "
+            f"change of at least 8 times)",
+        )
+    )
+    level = float(np.median(smooth))
+    return Survey(
+        t0_s=t0_s, baseline_s=0.0, direction=0, start_level=level, end_level=level, delay_s=math.nan,
+        first_sample=0, problems=tuple(problems), **shared,
+    )  # fmt: skip
 
 
 def _first_swing(t, smooth, noise, t0_s, kind):

@@ -238,18 +238,45 @@ def identify(
     ParameterError
         If ``t0_s`` is outside the record or ``input_step`` is zero, not finite, or contradicts the command column.
     """
+    _check_choices(kind, method, smoothing, wn_from, loss)
+    t0_s, input_step = _check_instant_and_step(series, t0_s, input_step)
+    found, du = _survey_and_input_step(series, kind, t0_s, input_step)
+    warnings = _check_problems(series, kind, found.problems, force)
+    series, found = _from_the_hold_on(series, found, warnings)
+    smooth, features, problem = _read_features(series, found, kind, smoothing, filter_options, t0_s)
+    _refuse_release_without_undershoot(problem, kind, method, allow_overdamped, force, warnings)
+    fitted = _fit_model(series, found, kind, method, smooth, features, problem, t0_s, wn_from, fit_delay, loss, drift,
+                        filter_options)  # fmt: skip
+    _refuse_overdamped(series.name, kind, method, fitted.zeta, allow_overdamped, force, warnings)
+    return _identification(series, found, kind, method, smoothing, du, features, fitted, force, warnings)
+
+
+def _check_choices(kind: str, method: str, smoothing: str, wn_from: str, loss: str) -> None:
+    """Each string option of :func:`identify` is one of its choices."""
     check_choice(kind, "kind", KINDS, "identify")
     check_choice(method, "method", METHODS, "identify")
     check_choice(smoothing, "smoothing", FILTERS, "identify")
     check_choice(wn_from, "wn_from", ("settling", "damped"), "identify")
     check_choice(loss, "loss", LOSSES, "identify")
-    t = series.t_s
+
+
+def _check_instant_and_step(
+    series: TimeSeries, t0_s: float | None, input_step: float | None
+) -> tuple[float | None, float | None]:
+    """The given instant (inside the record) and input step (finite, non-zero), checked; None stays None."""
     if t0_s is not None:
-        t0_s = _check_instant(t0_s, t)
+        t0_s = _check_instant(t0_s, series.t_s)
     if input_step is not None:
         input_step = check_real(input_step, "input_step", "identify")
         if input_step == 0:
             raise ParameterError("The 'input_step' parameter of identify must not be 0 (the gain is output / input).")
+    return t0_s, input_step
+
+
+def _survey_and_input_step(
+    series: TimeSeries, kind: str, t0_s: float | None, input_step: float | None
+) -> tuple[Survey, float | None]:
+    """The record surveyed, and the input step: the command column's (a given one must agree), else the given one."""
     found = survey(series, kind, t0_s=t0_s)
     du = found.input_step
     if du is not None and input_step is not None and not math.isclose(du, input_step, rel_tol=1e-9):
@@ -259,99 +286,177 @@ def identify(
         )
     if du is None and input_step is not None:
         du = input_step
-    warnings = _check_problems(series, kind, found.problems, force)
-    if found.first_sample > 0:  # a release recorded from rest: the model describes the record from the hold on
-        i0 = found.first_sample
-        warnings.append(
-            f"the record before {float(t[i0]):.4g} s, where the digit is not yet held deflected, is left out of the fit"
-        )
-        series = TimeSeries(t[i0:], series.y[i0:], series.channel, series.unit, series.source, None, "",
-                            series.time_unit)  # fmt: skip
-        found = dataclasses.replace(
-            found,
-            cleaned=found.cleaned[i0:],
-            smooth=found.smooth[i0:],
-            spikes=found.spikes[found.spikes >= i0] - i0,
-            first_sample=0,
-        )
-        t = series.t_s
-    y = found.cleaned
-    t0_start = found.t0_s if found.t0_s is not None else float(t[0])
-    t0_features = t0_start if (kind == "step" or t0_s is not None) else None
-    smooth = apply_filter(t, y, smoothing, **_feature_filter_options(smoothing, filter_options, found, t))
+    return found, du
+
+
+def _from_the_hold_on(series: TimeSeries, found: Survey, warnings: list[str]) -> tuple[TimeSeries, Survey]:
+    """A release recorded from rest: the record and survey cut to where the digit is held deflected (warned)."""
+    if found.first_sample == 0:
+        return series, found
+    t, i0 = series.t_s, found.first_sample
+    warnings.append(
+        f"the record before {float(t[i0]):.4g} s, where the digit is not yet held deflected, is left out of the fit"
+    )
+    series = TimeSeries(t[i0:], series.y[i0:], series.channel, series.unit, series.source, None, "",
+                        series.time_unit)  # fmt: skip
+    found = dataclasses.replace(
+        found,
+        cleaned=found.cleaned[i0:],
+        smooth=found.smooth[i0:],
+        spikes=found.spikes[found.spikes >= i0] - i0,
+        first_sample=0,
+    )
+    return series, found
+
+
+def _start_instant(series: TimeSeries, found: Survey) -> float:
+    """The instant found, else the record's first sample: where a fit starts."""
+    return found.t0_s if found.t0_s is not None else float(series.t_s[0])
+
+
+def _read_features(
+    series: TimeSeries, found: Survey, kind: str, smoothing: str, filter_options: dict, t0_s: float | None
+) -> tuple[np.ndarray, ResponseFeatures | None, DataFileError | None]:
+    """The filtered record and its response features, or the reason they cannot be read (lsq and arx go on)."""
+    t = series.t_s
+    t0_features = _start_instant(series, found) if (kind == "step" or t0_s is not None) else None
+    smooth = apply_filter(t, found.cleaned, smoothing, **_feature_filter_options(smoothing, filter_options, found, t))
     try:
         features, problem = analyze_response(t, smooth, kind, t0_s=t0_features, source=series.name), None
     except DataFileError as exc:  # lsq and arx fit an overdamped step; the thesis method needs features
         features, problem = None, exc
+    return smooth, features, problem
+
+
+def _refuse_release_without_undershoot(
+    problem: DataFileError | None, kind: str, method: str, allow_overdamped: bool, force: bool, warnings: list[str]
+) -> None:
+    """A release that never undershoots is refused (always by the thesis method), or warned with ``force``."""
     if kind == "release" and isinstance(problem, NoOscillationError) and not allow_overdamped:
         if not force or method == "thesis":
             raise DataFileError(_not_oscillating(problem.finding)) from None
         warnings.append(_not_oscillating(problem.finding))
-    drift_per_s, drift_ref = 0.0, t0_start
+
+
+@dataclass(frozen=True)
+class _Fitted:
+    """The model one method gives: its parameters, its baseline drift and (lsq) the estimates' uncertainties."""
+
+    wn: float
+    zeta: float
+    offset: float
+    amplitude: float
+    t0: float
+    drift_per_s: float
+    drift_ref: float
+    estimates: dict[str, Estimate] | None
+
+
+def _fit_model(
+    series: TimeSeries,
+    found: Survey,
+    kind: str,
+    method: str,
+    smooth: np.ndarray,
+    features: ResponseFeatures | None,
+    problem: DataFileError | None,
+    t0_s: float | None,
+    wn_from: str,
+    fit_delay: bool | None,
+    loss: str,
+    drift: bool,
+    filter_options: dict,
+) -> _Fitted:
+    """The second-order model by the method asked for: the thesis's formulas, the ARX poles, or least squares."""
+    t, y, t0_start = series.t_s, found.cleaned, _start_instant(series, found)
     if method == "thesis":
         if problem is not None:
             raise problem
-        f = features
-        wn = f.wn_settling_rad_s if wn_from == "settling" else f.wn_damped_rad_s
-        if not math.isfinite(wn):
-            raise DataFileError(
-                f"{series.name}: the {kind} response does not settle inside the 2 % band before the record ends, "
-                "so the thesis's wn = 4/(zeta Ts) is undefined; record longer, filter harder, or use the lsq method"
-            )
-        zeta = f.zeta_os
-        if kind == "step":
-            offset, amplitude = f.initial_value, f.final_value - f.initial_value
-        else:
-            offset, amplitude = f.final_value, f.initial_value - f.final_value
-        t0, estimates = f.t0_s, None
-    elif method == "arx":
+        return _thesis_model(series.name, kind, features, wn_from, t0_start)
+    if method == "arx":
         t0 = t0_start if kind == "step" or t0_s is not None else (features.t0_s if features else t0_start)
         wn, zeta = _arx_mode(t, y, kind, t0, filter_options.get("cutoff_hz"))
         offset, amplitude = _offset_amplitude(t, y, kind, wn, zeta, t0)
-        estimates = None
+        return _Fitted(wn, zeta, offset, amplitude, t0, 0.0, t0_start, None)
+    if found.found_from == "signal":
+        fit_t0 = True
+    elif fit_delay is None:
+        fit_t0 = t0_s is None if kind == "release" else bool(t0_start > t[0] + 2 * series.dt_s)
     else:
-        if found.found_from == "signal":
-            fit_t0 = True
-        elif fit_delay is None:
-            fit_t0 = t0_s is None if kind == "release" else bool(t0_start > t[0] + 2 * series.dt_s)
-        else:
-            fit_t0 = bool(fit_delay)
-        model = SecondOrderFit(
-            kind=kind,
-            fit_t0=fit_t0,
-            t0_s=t0_start,
-            loss=loss,
-            f_scale=2.0 * found.noise_std if found.noise_std > 0 else None,
-            drift=drift,
-        ).fit(t, y, source=series.name, smoothed=smooth)
-        wn, zeta = model.wn_, model.zeta_
-        offset, amplitude, t0 = model.offset_, model.amplitude_, model.t0_
-        drift_per_s, drift_ref = model.drift_per_s_, model.drift_reference_s_
-        estimates = model.estimates_
+        fit_t0 = bool(fit_delay)
+    model = SecondOrderFit(
+        kind=kind,
+        fit_t0=fit_t0,
+        t0_s=t0_start,
+        loss=loss,
+        f_scale=2.0 * found.noise_std if found.noise_std > 0 else None,
+        drift=drift,
+    ).fit(t, y, source=series.name, smoothed=smooth)
+    return _Fitted(model.wn_, model.zeta_, model.offset_, model.amplitude_, model.t0_, model.drift_per_s_,
+                   model.drift_reference_s_, model.estimates_)  # fmt: skip
+
+
+def _thesis_model(name: str, kind: str, f: ResponseFeatures, wn_from: str, t0_start: float) -> _Fitted:
+    """The thesis method: zeta from the overshoot, wn from the settling time (or the damped period), 3.1.2."""
+    wn = f.wn_settling_rad_s if wn_from == "settling" else f.wn_damped_rad_s
+    if not math.isfinite(wn):
+        raise DataFileError(
+            f"{name}: the {kind} response does not settle inside the 2 % band before the record ends, "
+            "so the thesis's wn = 4/(zeta Ts) is undefined; record longer, filter harder, or use the lsq method"
+        )
+    if kind == "step":
+        offset, amplitude = f.initial_value, f.final_value - f.initial_value
+    else:
+        offset, amplitude = f.final_value, f.initial_value - f.final_value
+    return _Fitted(wn, f.zeta_os, offset, amplitude, f.t0_s, 0.0, t0_start, None)
+
+
+def _refuse_overdamped(
+    name: str, kind: str, method: str, zeta: float, allow_overdamped: bool, force: bool, warnings: list[str]
+) -> None:
+    """An overdamped fit is refused unless allowed, or warned with ``force``."""
     if zeta >= 1.0 and not allow_overdamped:
-        finding = f"{series.name}: the {method} fit of this {kind} test is overdamped (zeta = {float(zeta):.4g} >= 1)"
+        finding = f"{name}: the {method} fit of this {kind} test is overdamped (zeta = {float(zeta):.4g} >= 1)"
         message = _not_oscillating(finding) if kind == "release" else _overdamped_step(finding)
         if not force:
             raise DataFileError(message)
         warnings.append(message)
-    prediction = second_order_response(t, kind, wn, zeta, offset, amplitude, t0) + drift_per_s * (t - drift_ref)
+
+
+def _identification(
+    series: TimeSeries,
+    found: Survey,
+    kind: str,
+    method: str,
+    smoothing: str,
+    du: float | None,
+    features: ResponseFeatures | None,
+    m: _Fitted,
+    force: bool,
+    warnings: list[str],
+) -> Identification:
+    """The model's quality assessed against the record, and the result put together."""
+    t, y = series.t_s, found.cleaned
+    prediction = second_order_response(t, kind, m.wn, m.zeta, m.offset, m.amplitude, m.t0) + m.drift_per_s * (
+        t - m.drift_ref
+    )
     quality = assess(
         t,
         y,
         prediction,
         kind=kind,
-        wn_rad_s=float(wn),
-        zeta=float(zeta),
-        amplitude=float(amplitude),
-        t0_s=float(t0),
-        estimates=estimates,
+        wn_rad_s=float(m.wn),
+        zeta=float(m.zeta),
+        amplitude=float(m.amplitude),
+        t0_s=float(m.t0),
+        estimates=m.estimates,
         raw=series.y,
         noise_std=found.noise_std,
         unit=series.unit,
         method=method,
     )
     warnings += _check_problems(series, kind, quality.problems, force)
-    gain = amplitude / du if (kind == "step" and du) else amplitude
+    gain = m.amplitude / du if (kind == "step" and du) else m.amplitude
     return Identification(
         kind=kind,
         method=method,
@@ -359,18 +464,18 @@ def identify(
         source=series.source,
         channel=series.channel,
         unit=series.unit,
-        wn_rad_s=float(wn),
-        zeta=float(zeta),
+        wn_rad_s=float(m.wn),
+        zeta=float(m.zeta),
         gain=float(gain),
-        offset=float(offset),
-        amplitude=float(amplitude),
-        t0_s=float(t0),
-        estimates=estimates,
+        offset=float(m.offset),
+        amplitude=float(m.amplitude),
+        t0_s=float(m.t0),
+        estimates=m.estimates,
         features=features,
         corr2=quality.corr2,
         fit_percent=quality.fit_percent,
-        drift_per_s=float(drift_per_s),
-        drift_reference_s=float(drift_ref),
+        drift_per_s=float(m.drift_per_s),
+        drift_reference_s=float(m.drift_ref),
         survey=found,
         quality=quality,
         warnings=tuple(warnings) + quality.warnings,

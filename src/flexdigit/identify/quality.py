@@ -151,37 +151,80 @@ def assess(
     yv = np.asarray(y, dtype=float)
     m = np.asarray(model, dtype=float)
     fs = (t.size - 1) / (t[-1] - t[0])
-    r = yv - m
+    scale, clipped, slow, cutoff = _residual(yv - m, fs, wn_rad_s)
+    misfit, noise_misfit, limit = _misfit_percent(slow, fs, cutoff, amplitude, noise_std)
+    lb, block = _whiteness(clipped, fs, wn_rad_s)
+    raw_v = np.asarray(raw if raw is not None else yv, dtype=float)
+    problems = _saturation_and_misfit(t, raw_v, m, slow, kind, wn_rad_s, zeta, amplitude, t0_s, noise_std, unit,
+                                      misfit, limit, method)  # fmt: skip
+    problems += _uncertain(estimates)
+    warnings = _warnings(method, misfit, limit, lb, block / fs)
+    return FitQuality(
+        fit_percent=nrmse_fit(yv, m),
+        corr2=corr2(yv, m),
+        residual_std=scale,
+        misfit_percent=misfit,
+        noise_misfit_percent=noise_misfit,
+        whiteness=lb,
+        block_s=block / fs,
+        problems=tuple(problems),
+        warnings=tuple(warnings),
+    )
+
+
+def _residual(r: np.ndarray, fs: float, wn_rad_s: float) -> tuple[float, np.ndarray, np.ndarray, float]:
+    """The residual's robust scale, the residual with its spikes out, its slow part and that part's cut-off (Hz).
+
+    A systematic deviation is a run of samples, never a spike; the slow part is below 3 x the model's frequency.
+    """
     scale = 1.4826 * float(np.median(np.abs(r - np.median(r))))
     clipped = r.copy()  # spikes out (a systematic deviation is a run of samples, never a spike)
     spikes = find_spikes(r, scale)
     clipped[spikes] = np.median(r)
     fn = wn_rad_s / (2 * math.pi)
     cutoff = min(max(3.0 * fn, 1.0), 0.4 * fs)
-    slow = butter_filter(clipped, fs, cutoff) if t.size > 30 else clipped
+    slow = butter_filter(clipped, fs, cutoff) if r.size > 30 else clipped
+    return scale, clipped, slow, cutoff
+
+
+def _misfit_percent(
+    slow: np.ndarray, fs: float, cutoff: float, amplitude: float, noise_std: float
+) -> tuple[float, float, float]:
+    """The misfit (% of the response), what white noise alone leaves there, and the limit a misfit may reach."""
     # the 99th percentile, not the maximum: a brief fast transient (higher modes excited at the release, 3.1.2)
     # is not a misfit of the dominant mode, while a model error or a second step lasts
     misfit = 100.0 * float(np.percentile(np.abs(slow), 99)) / abs(amplitude) if amplitude else math.inf
     # what white noise alone leaves there: its 99th percentile through the same filter (Gaussian, 2.576 sigma)
     noise_misfit = 100.0 * 2.576 * noise_std * _noise_gain(fs, cutoff) / abs(amplitude) if amplitude else 0.0
-    limit = max(MAX_MISFIT_PERCENT, 2.0 * noise_misfit)
+    return misfit, noise_misfit, max(MAX_MISFIT_PERCENT, 2.0 * noise_misfit)
+
+
+def _whiteness(clipped: np.ndarray, fs: float, wn_rad_s: float):
+    """Ljung-Box test of the residual's block means (blocks of a tenth of the model's period) and the block size."""
+    fn = wn_rad_s / (2 * math.pi)
     block = max(1, int(fs / (10.0 * fn))) if fn > 0 else 1
     nb = clipped.size // block
     means = clipped[: nb * block].reshape(nb, block).mean(axis=1) if nb >= 8 else clipped
     lags = int(min(20, max(1, means.size // 5)))
-    lb = ljung_box(means, lags)
+    return ljung_box(means, lags), block
+
+
+def _saturation_and_misfit(
+    t, raw, m, slow, kind, wn_rad_s, zeta, amplitude, t0_s, noise_std, unit, misfit, limit, method
+) -> list[Problem]:
+    """A clipped record, and (for the fit of the whole record, ``lsq``) a misfit over the limit."""
     problems: list[Problem] = []
-    warnings: list[str] = []
-    sat = _saturation(t, np.asarray(raw if raw is not None else yv, dtype=float), m, noise_std, abs(amplitude), unit)
+    sat = _saturation(t, raw, m, noise_std, abs(amplitude), unit)
     if sat:
         problems.append(sat)
     if misfit > limit and method == "lsq":
         problems.append(_misfit(t, slow, kind, wn_rad_s, zeta, amplitude, t0_s, misfit, limit))
-    elif misfit > limit:
-        warnings.append(
-            f"the record deviates from the {method} method's model by up to {misfit:.2g} % of the response "
-            f"(more than {limit:.2g} %): its wn or zeta is off; the lsq method fits the whole record"
-        )
+    return problems
+
+
+def _uncertain(estimates: dict | None) -> list[Problem]:
+    """A problem for each of wn and zeta whose 95 % interval is wider than :data:`MAX_CI_HALFWIDTH` allows."""
+    problems: list[Problem] = []
     for name, limit in MAX_CI_HALFWIDTH.items():
         e = (estimates or {}).get(name)
         if e is not None and not (e.relative_halfwidth <= limit):
@@ -194,23 +237,24 @@ def assess(
                     "the record is too short or too noisy for this response",
                 )
             )
+    return problems
+
+
+def _warnings(method: str, misfit: float, limit: float, lb, block_s: float) -> list[str]:
+    """A misfit of another method than lsq (its own error, not the record's), and residuals that are not white."""
+    warnings: list[str] = []
+    if misfit > limit and method != "lsq":
+        warnings.append(
+            f"the record deviates from the {method} method's model by up to {misfit:.2g} % of the response "
+            f"(more than {limit:.2g} %): its wn or zeta is off; the lsq method fits the whole record"
+        )
     if lb.p_value < WHITENESS_P:
         warnings.append(
-            f"residuals not white (Ljung-Box p = {lb.p_value:.2g} over {lb.lags} lags of {block / fs * 1e3:.3g} ms "
+            f"residuals not white (Ljung-Box p = {lb.p_value:.2g} over {lb.lags} lags of {block_s * 1e3:.3g} ms "
             f"blocks; misfit {misfit:.2g} % of the response): the model misses some structure, so its "
             "confidence intervals are optimistic"
         )
-    return FitQuality(
-        fit_percent=nrmse_fit(yv, m),
-        corr2=corr2(yv, m),
-        residual_std=scale,
-        misfit_percent=misfit,
-        noise_misfit_percent=noise_misfit,
-        whiteness=lb,
-        block_s=block / fs,
-        problems=tuple(problems),
-        warnings=tuple(warnings),
-    )
+    return warnings
 
 
 def _saturation(t, raw, model, noise, amplitude, unit) -> Problem | None:

@@ -246,22 +246,9 @@ def analyze_response(
     y = check_array(y, "y", ndim=1, shape=(len(t),), error=DataFileError)
     yf = final_value_estimate(y) if final_value is None else float(final_value)
     noise = _noise_level(y)
-    if t0_s is not None:
-        t0 = float(t0_s)
-    elif kind == "step":
-        t0 = float(t[0])
-    else:
-        t0 = _release_time(t, y - yf, noise)
-        if t0 is None:
-            raise NoOscillationError(source, kind, yf)
+    t0 = _release_or_step_instant(t, y, kind, yf, noise, t0_s, source)
     i0 = min(int(np.searchsorted(t, t0)), len(t) - 1)
-    if initial_value is not None:
-        y0 = float(initial_value)
-    elif kind == "step":
-        before = y[t <= t0]
-        y0 = float(np.mean(before)) if before.size else float(y[0])
-    else:
-        y0 = float(np.interp(t0, t, y))
+    y0 = _initial_value(t, y, kind, t0, initial_value)
     size = yf - y0  # step size; for a release, minus the initial deflection
     if size == 0.0:
         raise DataFileError(f"{source}: the response does not move (initial value equals final value {yf:g})")
@@ -269,6 +256,37 @@ def analyze_response(
     s = (y[i0:] - y0) / size  # normalised equivalent step: 0 at t0, 1 at rest (a release is mirrored)
     x = s - 1.0  # deviation from the final value in units of the step; -1 at t0
     floor = 3.0 * noise / abs(size)  # below this an extremum is noise
+    ext_t, ext_v, crossings = _extrema_out_of_noise(tt, x, floor, source, kind, yf)
+    return _features(kind, tt, s, t0, y0, yf, size, ext_t, ext_v, crossings)
+
+
+def _release_or_step_instant(t, y, kind: str, yf: float, noise: float, t0_s: float | None, source: str) -> float:
+    """The release/step instant: the one given, a step's first sample, or where a release's first crossing points."""
+    if t0_s is not None:
+        return float(t0_s)
+    if kind == "step":
+        return float(t[0])
+    t0 = _release_time(t, y - yf, noise)
+    if t0 is None:
+        raise NoOscillationError(source, kind, yf)
+    return t0
+
+
+def _initial_value(t, y, kind: str, t0: float, initial_value: float | None) -> float:
+    """The value before the response: the one given, a step's mean up to ``t0``, a release's value at ``t0``."""
+    if initial_value is not None:
+        return float(initial_value)
+    if kind == "step":
+        before = y[t <= t0]
+        return float(np.mean(before)) if before.size else float(y[0])
+    return float(np.interp(t0, t, y))
+
+
+def _extrema_out_of_noise(tt, x, floor: float, source: str, kind: str, yf: float):
+    """The extrema (times, values) and crossings of the deviation ``x`` up to the first lost in the noise.
+
+    Raises :class:`NoOscillationError` when none stands out of it.
+    """
     ext_t, ext_v, crossings = _extrema(tt, x, max(0.005, floor))
     keep = ext_v > floor
     if ext_v.size and not keep.all():
@@ -276,6 +294,12 @@ def analyze_response(
         ext_t, ext_v, crossings = ext_t[:first_bad], ext_v[:first_bad], crossings[: first_bad + 1]
     if ext_t.size == 0:
         raise NoOscillationError(source, kind, yf)
+    return ext_t, ext_v, crossings
+
+
+def _features(kind, tt, s, t0, y0, yf, size, ext_t, ext_v, crossings) -> ResponseFeatures:
+    """The features read from the normalised step ``s`` (time ``tt`` from ``t0``) and its extrema."""
+    x = s - 1.0
     percent_os = 100.0 * float(ext_v[0])
     peak_time = float(ext_t[0])
     if len(crossings) >= 3:

@@ -18,14 +18,7 @@ SECTION = "8 (beyond)"
 
 def build(ctx: ReportContext) -> Chapter:
     """Build the shape chapter: tip and along-the-digit errors, one figure."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from flexdigit.shape.shape import ShapeEstimator, shape_accuracy, true_centre_line_m
-    from flexdigit.twin.calibration import default_calibration
-    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
+    from flexdigit.shape.shape import shape_accuracy
 
     chapter = Chapter(slug="ch8-shape", title="Beyond the thesis: the digit's shape from its three gauges")
     commands = tuple(range(8, 44, 10 if ctx.fast else 5))
@@ -42,6 +35,20 @@ def build(ctx: ReportContext) -> Chapter:
         "the bare digit upright and horizontal, and a 25 g weight every "
         f"{10 * (3 if ctx.fast else 1)} mm along the horizontal digit (chapters 6-7's mounting)."
     )
+    _accuracy_table(chapter, summary, commands)
+    _weight_entries(chapter, acc)
+    chapter.paragraphs.append(
+        "The shape is good to a millimetre or two wherever the weight's moment is seen, and the load's position "
+        "is not: with the cable taut its guide friction (fitted to chapter 7's corr2) moves each gauge by as much "
+        "as a 25 g weight a centimetre away does, and between gauges 1 and 2 position and mass trade off. The "
+        "shape survives because a misplaced load of the wrong mass bends the digit almost as the true one does."
+    )
+    chapter.figures.append(_figure(ctx))
+    return chapter
+
+
+def _accuracy_table(chapter: Chapter, summary, commands: tuple[int, ...]) -> None:
+    """Each case group's tip and along-the-digit errors: result entries and one table."""
     rows = []
     for group in summary:
         slug = group["case"].replace(", ", "_").replace(" ", "_")
@@ -90,6 +97,10 @@ def build(ctx: ReportContext) -> Chapter:
             tuple(rows),
         )
     )
+
+
+def _weight_entries(chapter: Chapter, acc) -> None:
+    """How often a hung weight is declared a contact, and how well it is then placed."""
     located = acc.contact & (acc.mass_kg > 0)
     err_mm = np.abs(acc.load_position_error_m[located]) * 1e3
     weighted = acc.mass_kg > 0
@@ -115,14 +126,19 @@ def build(ctx: ReportContext) -> Chapter:
                 "chapter 7's estimators reach 22-23 mm at the same friction.",
             )
         )
-    chapter.paragraphs.append(
-        "The shape is good to a millimetre or two wherever the weight's moment is seen, and the load's position "
-        "is not: with the cable taut its guide friction (fitted to chapter 7's corr2) moves each gauge by as much "
-        "as a 25 g weight a centimetre away does, and between gauges 1 and 2 position and mass trade off. The "
-        "shape survives because a misplaced load of the wrong mass bends the digit almost as the true one does."
-    )
 
-    # figure: three cases, estimated centre line with its band against the twin's
+
+def _figure(ctx: ReportContext):
+    """Three cases: the estimated centre line with its band against the twin's."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from flexdigit.shape.shape import ShapeEstimator, true_centre_line_m
+    from flexdigit.twin.calibration import default_calibration
+    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
+
     cases = [("vertical", 0.0, 0.0, 30), ("horizontal", 0.0, 0.0, 20), ("horizontal", 0.025, 0.20, 20)]
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
     for ax, (orientation, mass, position, command) in zip(axes, cases, strict=True):
@@ -153,12 +169,9 @@ def build(ctx: ReportContext) -> Chapter:
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("towards the cable (mm)")
     axes[0].legend(fontsize=7)
-    chapter.figures.append(
-        ctx.save_figure(
-            fig,
-            "shape_from_gauges",
-            "The centre line from the three gauges (one noisy reading) "
-            "against the twin's, with its two-standard-deviation band.",
-        )  # fmt: skip
+    return ctx.save_figure(
+        fig,
+        "shape_from_gauges",
+        "The centre line from the three gauges (one noisy reading) against the twin's, with its two-standard-deviation "
+        "band.",
     )
-    return chapter

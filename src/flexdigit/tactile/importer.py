@@ -254,41 +254,10 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
     table = read_table(path, delimiter=cmap.delimiter, decimal=cmap.decimal)
     if len(table) == 0:
         raise DataFileError(f"{path}: no readings after the header")
-    columns = {
-        role: table.find(getattr(cmap, role), f"the {ROLES[role]}")
-        for role in ROLES
-        if role != "gauges" and getattr(cmap, role) is not None
-    }
-    gauge_columns = [table.find(g, f"gauge {k}") for k, g in enumerate(cmap.gauges, start=1)]
-    _check_distinct(table, {**{f"gauge {k}": c for k, c in enumerate(gauge_columns, start=1)}, **columns})
-    unit = GAUGE_UNITS[cmap.gauge_unit]  # a gauge in mV mapped as V is 1000 times off: named by the range check
-    gauges = np.column_stack([table.plausible(c, table.numbers(c) * unit, GAUGE_V) for c in gauge_columns])
-    load = table.numbers(columns["load"]) * LOAD_UNITS[cmap.load_unit]
-    _check_rows(table, columns["load"], load, (load < 0), "a negative mass; expected 0 (no load) or more")
-    _check_rows(
-        table,
-        columns["load"],
-        load,
-        load > MAX_LOAD_KG,
-        f"more than {MAX_LOAD_KG:g} kg (a unit slip? the map says {cmap.load_unit})",
-    )
+    columns, gauges = _mapped_columns(table, cmap)
+    load = _load_kg(table, cmap, columns["load"])
     loaded = load > 0
-    raw_position = table.numbers(columns["position"], allow_empty=True)
-    position = raw_position * POSITION_UNITS[cmap.position_unit]
-    _check_rows(
-        table, columns["position"], raw_position, loaded & np.isnan(position), "a loaded reading needs a position"
-    )
-    length_text = f"{length_m / POSITION_UNITS[cmap.position_unit]:g} {cmap.position_unit}"
-    beyond = loaded & ((position < 0) | (position > length_m))
-    _check_rows(
-        table,
-        columns["position"],
-        raw_position,
-        beyond,
-        f"beyond the digit (0 to {length_text} from the {cmap.position_from})",
-    )
-    # to the nanometre: the same position read from the clamp must be the same from the tip on every row
-    from_tip = np.round(np.where(loaded, position if cmap.position_from == "tip" else length_m - position, np.nan), 9)
+    from_tip = _positions_from_tip_m(table, cmap, columns["position"], loaded, length_m)
     if not loaded.any():
         raise DataFileError(f"{path}: no loaded reading (every mass in column {columns['load']!r} is 0)")
     if "command" in columns:
@@ -334,7 +303,58 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
         "time_s": time_s,
     }
     data = {name: np.asarray(data[name], dtype=dtype) for name, dtype in COLUMNS.items()}
-    rig = {
+    return Dataset(data, make_meta(protocol, _rig_meta(path, table, cmap, columns), length_m))
+
+
+def _mapped_columns(table, cmap: ColumnMap) -> tuple[dict[str, str], np.ndarray]:
+    """The file's column of each mapped role (all distinct), and the gauges read in volts (range-checked)."""
+    columns = {
+        role: table.find(getattr(cmap, role), f"the {ROLES[role]}")
+        for role in ROLES
+        if role != "gauges" and getattr(cmap, role) is not None
+    }
+    gauge_columns = [table.find(g, f"gauge {k}") for k, g in enumerate(cmap.gauges, start=1)]
+    _check_distinct(table, {**{f"gauge {k}": c for k, c in enumerate(gauge_columns, start=1)}, **columns})
+    unit = GAUGE_UNITS[cmap.gauge_unit]  # a gauge in mV mapped as V is 1000 times off: named by the range check
+    gauges = np.column_stack([table.plausible(c, table.numbers(c) * unit, GAUGE_V) for c in gauge_columns])
+    return columns, gauges
+
+
+def _load_kg(table, cmap: ColumnMap, column: str) -> np.ndarray:
+    """The load column in kg, each mass 0 or more and at most :data:`MAX_LOAD_KG`."""
+    load = table.numbers(column) * LOAD_UNITS[cmap.load_unit]
+    _check_rows(table, column, load, (load < 0), "a negative mass; expected 0 (no load) or more")
+    _check_rows(
+        table,
+        column,
+        load,
+        load > MAX_LOAD_KG,
+        f"more than {MAX_LOAD_KG:g} kg (a unit slip? the map says {cmap.load_unit})",
+    )
+    return load
+
+
+def _positions_from_tip_m(table, cmap: ColumnMap, column: str, loaded: np.ndarray, length_m: float) -> np.ndarray:
+    """Each loaded reading's position from the tip (m, to the nanometre; NaN unloaded), on the digit."""
+    raw_position = table.numbers(column, allow_empty=True)
+    position = raw_position * POSITION_UNITS[cmap.position_unit]
+    _check_rows(table, column, raw_position, loaded & np.isnan(position), "a loaded reading needs a position")
+    length_text = f"{length_m / POSITION_UNITS[cmap.position_unit]:g} {cmap.position_unit}"
+    beyond = loaded & ((position < 0) | (position > length_m))
+    _check_rows(
+        table,
+        column,
+        raw_position,
+        beyond,
+        f"beyond the digit (0 to {length_text} from the {cmap.position_from})",
+    )
+    # to the nanometre: the same position read from the clamp must be the same from the tip on every row
+    return np.round(np.where(loaded, position if cmap.position_from == "tip" else length_m - position, np.nan), 9)
+
+
+def _rig_meta(path: Path, table, cmap: ColumnMap, columns: dict[str, str]) -> dict:
+    """The dataset's rig metadata: the file (and its hash), how it was read, and the columns derived."""
+    return {
         "url": "import",
         "source": str(path),
         "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
@@ -347,7 +367,6 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
             if role not in columns
         ],
     }
-    return Dataset(data, make_meta(protocol, rig, length_m))
 
 
 def _check_distinct(table: Table, columns: dict[str, str]) -> None:

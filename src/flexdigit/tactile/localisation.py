@@ -148,18 +148,47 @@ def localisation_study(
     raw = dataset
     dataset, since = tare(dataset)
     x = features(dataset, with_command=actuated)
-    n = len(dataset)
-    split = thesis_split(n, seed)
+    split = thesis_split(len(dataset), seed)
     mass = dataset["load_kg"]
     loaded = mass > 0
     pos = np.nan_to_num(dataset["position_from_tip_m"], nan=0.0)
-    y = np.column_stack([pos, mass])
-    tr = split.train[loaded[split.train]]
-    va = split.val[loaded[split.val]]
-    trva = np.concatenate([tr, va])
-    te = split.test[loaded[split.test]]
+    tr, va, te = (rows[loaded[rows]] for rows in (split.train, split.val, split.test))
     zone, crlb, crlb_known = reading_zones(model, raw, since)
+    mlps = _fit_networks(x, pos, mass, loaded, split, tr, va, seed, hidden, tol, epochs)
+    pos_pred, mass_pred, contact_pred, gp_std = _predictions(model, mlps, x, pos, mass, loaded, split, tr, va, te,
+                                                             length, seed, fast)  # fmt: skip
+    ident = zone[te] == ZONES[2]
+    pos_true, mass_true = pos[te], mass[te]
+    visible = zone[split.test] != ZONES[0]
+    contact_true = loaded.astype(float)[split.test]
+    return LocalisationResult(
+        test_rows=te,
+        zone=zone[te],
+        crlb_m=crlb[te],
+        crlb_known_mass_m=crlb_known[te],
+        position_pred_m=pos_pred,
+        position_true_m=pos_true,
+        mass_pred_kg=mass_pred,
+        mass_true_kg=mass_true,
+        crlb_rms_identifiable_m=float(np.sqrt(np.mean(crlb[te][ident] ** 2))),
+        crlb_known_rms_identifiable_m=float(np.sqrt(np.mean(crlb_known[te][ident] ** 2))),
+        gp_std_m=gp_std[:, 0],
+        bayes=_bayes_limits(model, raw, split.test, te[ident], split.test[visible], seed),
+        extra={
+            "split": split,
+            "identifiable_fraction": float(np.mean(ident)),
+            "zone_all": zone,
+            "crlb_all_m": crlb,
+            "contact_pred": contact_pred,
+            "contact_rows": split.test,
+            "contact_visible": visible,
+        },
+        **_scores(pos_pred, pos_true, mass_pred, mass_true, contact_pred, contact_true, ident, visible),
+    )
 
+
+def _fit_networks(x, pos, mass, loaded, split, tr, va, seed: int, hidden: int, tol: float, epochs: int):
+    """The thesis-architecture networks for position (loaded readings), magnitude and contact (all readings)."""
     rng = np.random.default_rng([seed, 7])
     mlp_pos = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
     mlp_pos.fit(x[tr], pos[tr], x[va], pos[va])
@@ -168,7 +197,17 @@ def localisation_study(
     mlp_contact = ThesisNetwork(hidden=hidden, tol=tol, epochs=epochs, random_state=int(rng.integers(2**31)))
     contact = loaded.astype(float)
     mlp_contact.fit(x[split.train], contact[split.train], x[split.val], contact[split.val])
+    return mlp_pos, mlp_mass, mlp_contact
 
+
+def _predictions(model, mlps, x, pos, mass, loaded, split, tr, va, te, length: float, seed: int, fast: bool):
+    """Each estimator's position and magnitude on the loaded test readings, and contact on all test readings.
+
+    Also the Gaussian process's standard deviations (position, magnitude) on the loaded test readings.
+    """
+    mlp_pos, mlp_mass, mlp_contact = mlps
+    y = np.column_stack([pos, mass])
+    trva = np.concatenate([tr, va])
     grid = {"position_step_m": 2e-3, "mass_steps": 41} if fast else {}
     inversion = BeamInversion(model, digit_length_m=length, max_mass_kg=2.0 * float(mass.max()), tared=True, **grid)
     inversion.fit(x[trva], y[trva])
@@ -190,23 +229,38 @@ def localisation_study(
         "beam inversion, known load set": set_pred[:, 1],
         "Gaussian process": gp_all[:, 1],
     }
-    ident = zone[te] == ZONES[2]
-    pos_true, mass_true = pos[te], mass[te]
     # contact: the thesis-style network thresholded at 0.5; the inversion's likelihood-ratio test against no load
     no_load_cost = inversion.no_load_cost(x[split.test])
     contact_pred = {
         "MLP (thesis architecture)": (mlp_contact.predict(x[split.test]) >= 0.5).astype(float),
         "beam inversion": (no_load_cost - inv_cost > CONTACT_CHI2).astype(float),
     }
-    visible = zone[split.test] != ZONES[0]
-    contact_true = contact[split.test]
+    return pos_pred, mass_pred, contact_pred, gp_std
 
-    def rel(p, t):
-        return float(np.sqrt(np.mean(((p - t) / t) ** 2))) if t.size else float("nan")
 
-    # Bayes limits, each with the prior of the readings it is scored on (more knowledge than any estimator has, so
-    # a floor for every estimator scored on those readings): identifiable loads; visible readings; all readings
-    ident_rows, visible_rows = te[ident], split.test[visible]
+def _rel_rmse(p, t) -> float:
+    """Root mean square of the relative error ``(p - t) / t`` (NaN for no readings)."""
+    return float(np.sqrt(np.mean(((p - t) / t) ** 2))) if t.size else float("nan")
+
+
+def _scores(pos_pred, pos_true, mass_pred, mass_true, contact_pred, contact_true, ident, visible) -> dict:
+    """Each estimator's scores: on all its test readings, and on the identifiable (visible, for contact) ones."""
+    return dict(
+        position_rmse_m={k: rmse(v, pos_true) for k, v in pos_pred.items()},
+        position_rmse_identifiable_m={k: rmse(v[ident], pos_true[ident]) for k, v in pos_pred.items()},
+        magnitude_rel_rmse={k: _rel_rmse(v, mass_true) for k, v in mass_pred.items()},
+        magnitude_rel_rmse_identifiable={k: _rel_rmse(v[ident], mass_true[ident]) for k, v in mass_pred.items()},
+        contact_accuracy={k: accuracy(v, contact_true) for k, v in contact_pred.items()},
+        contact_accuracy_visible={k: accuracy(v[visible], contact_true[visible]) for k, v in contact_pred.items()},
+    )
+
+
+def _bayes_limits(model, raw: Dataset, test_rows, ident_rows, visible_rows, seed: int) -> dict:
+    """The Bayes limits of position, magnitude and contact on the test readings.
+
+    Each with the prior of the readings it is scored on (more knowledge than any estimator has, so a floor for
+    every estimator scored on those readings): identifiable loads; visible readings; all readings.
+    """
 
     def limit(rows):
         lim = bayes_limits(model, raw, rows, seed=seed)
@@ -214,44 +268,14 @@ def localisation_study(
 
     lim_id, k_id = limit(ident_rows)
     lim_vis, k_vis = limit(visible_rows)
-    lim_all, k_all = limit(split.test)
-    bayes = {
+    lim_all, k_all = limit(test_rows)
+    return {
         "position_rmse_identifiable_m": float(np.sqrt(np.mean(lim_id.position_mse_m2[k_id]))),
         "magnitude_rel_rmse_identifiable": float(np.sqrt(np.mean(lim_id.magnitude_rel_mse[k_id]))),
         "contact_accuracy_visible": float(1.0 - np.mean(lim_vis.contact_error[k_vis])),
         "contact_accuracy": float(1.0 - np.mean(lim_all.contact_error[k_all])),
         "limits_identifiable": lim_id,
     }
-
-    return LocalisationResult(
-        test_rows=te,
-        zone=zone[te],
-        crlb_m=crlb[te],
-        crlb_known_mass_m=crlb_known[te],
-        position_pred_m=pos_pred,
-        position_true_m=pos_true,
-        mass_pred_kg=mass_pred,
-        mass_true_kg=mass_true,
-        position_rmse_m={k: rmse(v, pos_true) for k, v in pos_pred.items()},
-        position_rmse_identifiable_m={k: rmse(v[ident], pos_true[ident]) for k, v in pos_pred.items()},
-        crlb_rms_identifiable_m=float(np.sqrt(np.mean(crlb[te][ident] ** 2))),
-        crlb_known_rms_identifiable_m=float(np.sqrt(np.mean(crlb_known[te][ident] ** 2))),
-        magnitude_rel_rmse={k: rel(v, mass_true) for k, v in mass_pred.items()},
-        magnitude_rel_rmse_identifiable={k: rel(v[ident], mass_true[ident]) for k, v in mass_pred.items()},
-        contact_accuracy={k: accuracy(v, contact_true) for k, v in contact_pred.items()},
-        contact_accuracy_visible={k: accuracy(v[visible], contact_true[visible]) for k, v in contact_pred.items()},
-        gp_std_m=gp_std[:, 0],
-        bayes=bayes,
-        extra={
-            "split": split,
-            "identifiable_fraction": float(np.mean(ident)),
-            "zone_all": zone,
-            "crlb_all_m": crlb,
-            "contact_pred": contact_pred,
-            "contact_rows": split.test,
-            "contact_visible": visible,
-        },
-    )
 
 
 def bayes_limits(model, dataset: Dataset, rows=None, *, samples: int = 4000, seed: int = 0):

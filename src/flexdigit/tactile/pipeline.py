@@ -296,17 +296,11 @@ def run_pipeline(
     split = thesis_split(x.shape[0], seed)
     seeds = iter(np.random.default_rng([seed, 1]).integers(0, 2**31, size=1000))
     coarse, gradients = [int(h) for h in coarse], [float(g) for g in gradients]  # declared arrays arrive as floats
-    coarse_pts = []
     if fixed_hidden is None:
-        coarse_pts = _sweep(x, y, split, [(h, default_tol, next(seeds)) for h in coarse], epochs)
-    fine_pts: list[SweepPoint] = []
-    if fixed_hidden is not None:
-        best_hidden = int(fixed_hidden)
+        coarse_pts, fine_pts, best_hidden = _hidden_sweeps(x, y, split, coarse, fine_halfwidth, default_tol, seeds,
+                                                           epochs)  # fmt: skip
     else:
-        c = min(coarse_pts, key=lambda p: p.val_mse).hidden
-        fine = range(max(1, c - fine_halfwidth), c + fine_halfwidth + 1)
-        fine_pts = _sweep(x, y, split, [(h, default_tol, next(seeds)) for h in fine], epochs)
-        best_hidden = min(fine_pts + coarse_pts, key=lambda p: p.val_mse).hidden
+        coarse_pts, fine_pts, best_hidden = [], [], int(fixed_hidden)
     grad_pts: list[SweepPoint] = []
     if fixed_tol is not None:
         best_tol = float(fixed_tol)
@@ -314,11 +308,7 @@ def run_pipeline(
         grad_pts = _sweep(x, y, split, [(best_hidden, g, next(seeds)) for g in gradients], epochs)
         best_tol = min(grad_pts, key=lambda p: p.val_mse).tol
     curve_seed = next(seeds)  # drawn either way, so the final network's seed does not depend on curve_hidden
-    if curve_hidden is None:
-        curve_train = curve_val = np.empty(0)
-    else:
-        curve_model, _ = _train(x, y, split, curve_hidden, default_tol, curve_seed, epochs)
-        curve_train, curve_val = curve_model.train_error_, curve_model.val_error_
+    curve_train, curve_val = _curves(x, y, split, curve_hidden, default_tol, curve_seed, epochs)
     model, _ = _train(x, y, split, best_hidden, best_tol, next(seeds), epochs)
     y_test = y[split.test]
     y_pred = model.predict(x[split.test])
@@ -339,6 +329,27 @@ def run_pipeline(
         percent_error=percentage_error(y_pred, y_test),
         model=model,
     )
+
+
+def _hidden_sweeps(x, y, split, coarse, fine_halfwidth: int, default_tol: float, seeds, epochs: int):
+    """The coarse sweep of hidden sizes, the fine one around its best, and the best size of both (6.7).
+
+    ``seeds`` is the pipeline's seed iterator, drawn in sweep order.
+    """
+    coarse_pts = _sweep(x, y, split, [(h, default_tol, next(seeds)) for h in coarse], epochs)
+    c = min(coarse_pts, key=lambda p: p.val_mse).hidden
+    fine = range(max(1, c - fine_halfwidth), c + fine_halfwidth + 1)
+    fine_pts = _sweep(x, y, split, [(h, default_tol, next(seeds)) for h in fine], epochs)
+    best_hidden = min(fine_pts + coarse_pts, key=lambda p: p.val_mse).hidden
+    return coarse_pts, fine_pts, best_hidden
+
+
+def _curves(x, y, split, curve_hidden: int | None, tol: float, seed, epochs: int) -> tuple[np.ndarray, np.ndarray]:
+    """Training and validation error per iteration of a network of ``curve_hidden`` nodes (empty for None)."""
+    if curve_hidden is None:
+        return np.empty(0), np.empty(0)
+    curve_model, _ = _train(x, y, split, curve_hidden, tol, seed, epochs)
+    return curve_model.train_error_, curve_model.val_error_
 
 
 # ------------------------------------------------------------------------------------ strategies of 6.2.1
