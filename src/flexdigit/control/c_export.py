@@ -1220,55 +1220,23 @@ def analyse_export(
     """
     real = _Realisation(spec, fmt)
     exact, q = real.coefficients()
-    n, m = spec.nstates, spec.ninputs
+    n = spec.nstates
     if fmt is not None:
         input_max = fmt.input_max
     poles_e = np.linalg.eigvals(exact["A"]) if n else np.zeros(0)
     poles_q = np.linalg.eigvals(q["A"]) if n else np.zeros(0)
     shift = float(np.max(np.min(np.abs(poles_e[:, None] - poles_q[None, :]), axis=1))) if n else 0.0
-
-    def aw(c):
-        if not n:
-            return np.zeros((0, 0)), 0.0
-        Aaw = c["A"] - np.outer(c["L"], c["C"].reshape(-1))
-        return Aaw, float(np.max(np.abs(np.linalg.eigvals(Aaw))))
-
-    Aaw_e, rho_e = aw(exact)
-    _, rho_q = aw(q)
+    Aaw_e, rho_e = _anti_windup_update(exact, n)
+    _, rho_q = _anti_windup_update(q, n)
     cl_poles = cl_r = cl_r_e = gm = pm = gm_e = pm_e = None
     if plant_d is not None:
         cl_poles, cl_r, gm, pm = _loop_figures(q["A"], q["B"], q["C"], q["D"], plant_d, spec.period_s)
         _, cl_r_e, gm_e, pm_e = _loop_figures(spec.A, spec.B, spec.C, spec.D, plant_d, spec.period_s)
-    # bounds over the command range
-    u_dev = max(spec.u_max - spec.u_eq, spec.u_eq - spec.u_min)
-    headroom = None
-    if fmt is not None:
-        x_max, u_bound = np.asarray(fmt.state_bound), fmt.command_bound
-        sig = [(b, f) for b, f in zip(x_max, fmt.state_bits, strict=True)]
-        sig += [(input_max, fmt.input_bits), (u_bound, fmt.command_bits)]
-        headroom = float(min(31 - math.log2(max(b, 1e-30) * 2.0**f) for b, f in sig))
-        formats = {f"x{i}": fmt.q_name(b, 0) for i, b in enumerate(fmt.state_bits)}
-        formats.update(inputs=fmt.q_name(fmt.input_bits, 0), command=fmt.q_name(fmt.command_bits, 0))
-    else:
-        formats = {"all": "float32"}
-        try:
-            A_aw, B_aw, L = spec.aw_state_update
-            gain = _l1_gain(A_aw, np.hstack([B_aw, L])) if n else np.zeros((0, m + 1))
-            x_max = gain @ np.r_[np.full(m, input_max), u_dev]
-            u_bound = abs(spec.u_eq) + float(np.abs(spec.C).reshape(-1) @ x_max) + np.sum(np.abs(spec.D)) * input_max
-        except DesignError:
-            x_max, u_bound = None, None
+    formats, headroom, x_max, u_bound = _export_bounds(spec, fmt, input_max)
     if x_max is None or (n and rho_e >= 1):
         err = float("inf")
     else:
-        c_sat_max = (u_bound or 0.0) + max(abs(spec.u_min), abs(spec.u_max))
-        e_u1, e_x1 = real.one_step_bound(x_max, np.full(m, input_max), c_sat_max, 1.0 + spec.hysteresis)
-        if n:
-            # the per-sample errors accumulate through the anti-windup state update: sum_k |A_aw^k| e_x1
-            e_x = _l1_matrix_sum(Aaw_e) @ e_x1
-            err = float(np.abs(exact["C"]).reshape(-1) @ e_x + e_u1)
-        else:
-            err = e_u1
+        err = _command_error_bound(real, spec, exact["C"], Aaw_e, x_max, u_bound, input_max)
     cycles = []
     if plant_d is not None and setpoints:
         ctrl = FixedPointController(spec, fmt) if fmt is not None else Float32Controller(spec)
@@ -1297,6 +1265,54 @@ def analyse_export(
         command_error_bound=err,
         limit_cycles=tuple(cycles),
     )
+
+
+def _anti_windup_update(c, n: int):
+    """The anti-windup state update ``A - L C`` of coefficients ``c`` and its spectral radius."""
+    if not n:
+        return np.zeros((0, 0)), 0.0
+    Aaw = c["A"] - np.outer(c["L"], c["C"].reshape(-1))
+    return Aaw, float(np.max(np.abs(np.linalg.eigvals(Aaw))))
+
+
+def _export_bounds(spec: ControllerSpec, fmt: FixedFormat | None, input_max: float):
+    """``(signal formats, headroom bits, state bound, command bound)`` over the command range.
+
+    Fixed point: the format's bounds and its headroom below 31 bits. Float32: the anti-windup loop's l1 gain
+    from inputs and command deviation (bounds None when the design has no such gain).
+    """
+    n, m = spec.nstates, spec.ninputs
+    u_dev = max(spec.u_max - spec.u_eq, spec.u_eq - spec.u_min)
+    headroom = None
+    if fmt is not None:
+        x_max, u_bound = np.asarray(fmt.state_bound), fmt.command_bound
+        sig = [(b, f) for b, f in zip(x_max, fmt.state_bits, strict=True)]
+        sig += [(input_max, fmt.input_bits), (u_bound, fmt.command_bits)]
+        headroom = float(min(31 - math.log2(max(b, 1e-30) * 2.0**f) for b, f in sig))
+        formats = {f"x{i}": fmt.q_name(b, 0) for i, b in enumerate(fmt.state_bits)}
+        formats.update(inputs=fmt.q_name(fmt.input_bits, 0), command=fmt.q_name(fmt.command_bits, 0))
+    else:
+        formats = {"all": "float32"}
+        try:
+            A_aw, B_aw, L = spec.aw_state_update
+            gain = _l1_gain(A_aw, np.hstack([B_aw, L])) if n else np.zeros((0, m + 1))
+            x_max = gain @ np.r_[np.full(m, input_max), u_dev]
+            u_bound = abs(spec.u_eq) + float(np.abs(spec.C).reshape(-1) @ x_max) + np.sum(np.abs(spec.D)) * input_max
+        except DesignError:
+            x_max, u_bound = None, None
+    return formats, headroom, x_max, u_bound
+
+
+def _command_error_bound(real, spec: ControllerSpec, c_exact, Aaw_e, x_max, u_bound, input_max: float) -> float:
+    """Worst-case command error of the realisation: one step's error, accumulated through the anti-windup loop."""
+    n, m = spec.nstates, spec.ninputs
+    c_sat_max = (u_bound or 0.0) + max(abs(spec.u_min), abs(spec.u_max))
+    e_u1, e_x1 = real.one_step_bound(x_max, np.full(m, input_max), c_sat_max, 1.0 + spec.hysteresis)
+    if n:
+        # the per-sample errors accumulate through the anti-windup state update: sum_k |A_aw^k| e_x1
+        e_x = _l1_matrix_sum(Aaw_e) @ e_x1
+        return float(np.abs(c_exact).reshape(-1) @ e_x + e_u1)
+    return e_u1
 
 
 # -- the export ----------------------------------------------------------------------------------------------------

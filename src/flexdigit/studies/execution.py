@@ -444,44 +444,58 @@ def run_rows(
     with bar:
         if not todo:
             return dict(journal.records)
+        args = (build, values, metrics, context, journal, todo, seed, bar, task)
         if workers == 0 and not scheduler:
-            for key, rows in todo:
-                records = evaluate_rows(build, rows, values[rows], metrics, context, key, seed)
-                journal.append(_new(journal, records))
-                bar.update(task, advance=len(rows))
-            return dict(journal.records)
-        from distributed import as_completed
-
-        with dask_client(scheduler, workers) as client:
-            # the builder as a task of its own, not scattered data: a scattered object dies with the workers that
-            # hold it (all tasks after a worker death would fail); a task's result is computed again where needed
-            build_remote = client.submit(_identity, build, key=f"{label}-build-{journal.header.get('fingerprint', '')}")
-            futures = {}
-            for key, rows in todo:
-                fut = client.submit(
-                    evaluate_rows,
-                    build_remote,
-                    rows,
-                    values[rows],
-                    metrics,
-                    context,
-                    key,
-                    seed,
-                    key=f"{label}-{journal.header.get('fingerprint', '')}-{key}",
-                    pure=False,
-                    retries=0,
-                )
-                futures[fut] = rows
-            for fut in as_completed(list(futures)):
-                rows = futures[fut]
-                try:
-                    records = fut.result()
-                except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
-                    message = f"{TASK_FAILED}{type(exc).__name__}: {exc}".splitlines()[0]
-                    records = [RowRecord(int(r), {}, message) for r in rows]
-                journal.append(_new(journal, records))
-                bar.update(task, advance=len(rows))
+            _run_in_process(*args)
+        else:
+            _run_on_dask(*args, scheduler=scheduler, workers=workers, label=label)
     return dict(journal.records)
+
+
+def _run_in_process(build, values, metrics, context, journal: Journal, todo, seed: int, bar, task) -> None:
+    """:func:`run_rows`'s tasks one after the other in this process, each journalled as it ends."""
+    for key, rows in todo:
+        records = evaluate_rows(build, rows, values[rows], metrics, context, key, seed)
+        journal.append(_new(journal, records))
+        bar.update(task, advance=len(rows))
+
+
+def _run_on_dask(
+    build, values, metrics, context, journal: Journal, todo, seed: int, bar, task, *, scheduler, workers, label
+) -> None:
+    """:func:`run_rows`'s tasks on a Dask cluster, each journalled as it ends; a failed task journals its rows'
+    failure and the run goes on."""
+    from distributed import as_completed
+
+    with dask_client(scheduler, workers) as client:
+        # the builder as a task of its own, not scattered data: a scattered object dies with the workers that
+        # hold it (all tasks after a worker death would fail); a task's result is computed again where needed
+        build_remote = client.submit(_identity, build, key=f"{label}-build-{journal.header.get('fingerprint', '')}")
+        futures = {}
+        for key, rows in todo:
+            fut = client.submit(
+                evaluate_rows,
+                build_remote,
+                rows,
+                values[rows],
+                metrics,
+                context,
+                key,
+                seed,
+                key=f"{label}-{journal.header.get('fingerprint', '')}-{key}",
+                pure=False,
+                retries=0,
+            )
+            futures[fut] = rows
+        for fut in as_completed(list(futures)):
+            rows = futures[fut]
+            try:
+                records = fut.result()
+            except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
+                message = f"{TASK_FAILED}{type(exc).__name__}: {exc}".splitlines()[0]
+                records = [RowRecord(int(r), {}, message) for r in rows]
+            journal.append(_new(journal, records))
+            bar.update(task, advance=len(rows))
 
 
 def _identity(x):

@@ -133,6 +133,34 @@ def simulate(
     DynamicSolution
     """
     owner = "simulate"
+    nodes_per_disk, nodes, end_node = _checked_start(robot, initial, nodes_per_disk)
+    duration_s = check_real(duration_s, "duration_s", owner, low=0.0, low_open=True)
+    dt_s = check_real(dt_s, "dt_s", owner, low=0.0, high=duration_s, low_open=True)
+    loads = _checked_loads(robot, tensions_n, tip_force_n, tip_moment_nm, distributed_force_n_per_m, gravity_m_s2)
+    if substeps is None:
+        spacing = np.diff(nodes).max()
+        substeps = max(1, int(np.ceil(spacing / (robot.length_m / 20) - 1e-9)))
+    substeps = check_int(substeps, "substeps", owner, low=1, high=1000)
+    tol = check_real(tol, "tol", owner, low=0.0, low_open=True)
+    damping_s = check_real(damping_s, "damping_s", owner, low=0.0)
+    max_iter = check_int(max_iter, "max_iter", owner, low=1)
+    n_steps = int(round(duration_s / dt_s))
+    states, iterations, done = _integrate(
+        robot, initial, nodes, end_node, substeps, loads, damping_s, dt_s, n_steps, tol, max_iter
+    )
+    if done < n_steps:
+        warnings.warn(
+            f"simulate: step {done + 1} of {n_steps} (t = {(done + 1) * dt_s:.4g} s) did not converge on "
+            f"{robot.name!r}; the response stops at t = {done * dt_s:.4g} s with converged=False",
+            ConvergenceWarning,
+            stacklevel=2,
+        )
+    return _motion(states, iterations, done, n_steps, nodes, dt_s)
+
+
+def _checked_start(robot, initial, nodes_per_disk):
+    """:func:`simulate`'s checked ``(nodes_per_disk, nodes, end nodes)``: ``initial`` solved on those nodes."""
+    owner = "simulate"
     if not isinstance(robot, Robot):
         raise ParameterError(f"The 'robot' parameter of {owner} must be a Robot. Got {type(robot).__name__} instead.")
     nodes_per_disk = check_int(nodes_per_disk, "nodes_per_disk", owner, low=1, high=100)
@@ -142,8 +170,12 @@ def simulate(
             f"The 'initial' parameter of {owner} must be a StaticSolution of this robot at nodes_per_disk="
             f"{nodes_per_disk} ({nodes.size} nodes). Got {type(initial).__name__} instead."
         )
-    duration_s = check_real(duration_s, "duration_s", owner, low=0.0, low_open=True)
-    dt_s = check_real(dt_s, "dt_s", owner, low=0.0, high=duration_s, low_open=True)
+    return nodes_per_disk, nodes, end_node
+
+
+def _checked_loads(robot: Robot, tensions_n, tip_force_n, tip_moment_nm, distributed_force_n_per_m, gravity_m_s2):
+    """:func:`simulate`'s checked ``(tensions, force per length, tip force, tip moment)``, gravity included."""
+    owner = "simulate"
     n_t = len(robot.tendons)
     tau = np.zeros(n_t) if tensions_n is None else check_array(tensions_n, "tensions_n", owner, ndim=1, low=0.0)
     if tau.shape != (n_t,):
@@ -157,16 +189,17 @@ def simulate(
     tip_force = vector(tip_force_n, "tip_force_n")
     tip_moment = vector(tip_moment_nm, "tip_moment_nm")
     fdist = vector(distributed_force_n_per_m, "distributed_force_n_per_m")
-    b = robot.backbone
-    fdist = fdist + b.mass_per_length_kg_m * vector(gravity_m_s2, "gravity_m_s2")
-    if substeps is None:
-        spacing = np.diff(nodes).max()
-        substeps = max(1, int(np.ceil(spacing / (robot.length_m / 20) - 1e-9)))
-    substeps = check_int(substeps, "substeps", owner, low=1, high=1000)
-    tol = check_real(tol, "tol", owner, low=0.0, low_open=True)
-    damping_s = check_real(damping_s, "damping_s", owner, low=0.0)
-    max_iter = check_int(max_iter, "max_iter", owner, low=1)
+    fdist = fdist + robot.backbone.mass_per_length_kg_m * vector(gravity_m_s2, "gravity_m_s2")
+    return tau, fdist, tip_force, tip_moment
 
+
+def _integrate(robot: Robot, initial, nodes, end_node, substeps, loads, damping_s, dt_s, n_steps, tol, max_iter):
+    """Run the time-stepping kernel from ``initial``: ``(states per step, Newton iterations per step, steps done)``.
+
+    ``loads`` is ``(tensions, force per length, tip force, tip moment)``.
+    """
+    tau, fdist, tip_force, tip_moment = loads
+    b = robot.backbone
     y_init = np.zeros((nodes.size, _rod_kernel.RECORD))
     y_init[:, 0:3] = initial.positions_m
     y_init[:, 3:12] = initial.rotations.reshape(-1, 9)
@@ -176,7 +209,6 @@ def simulate(
     length = robot.length_m
     scale = np.array([ei / length**2] * 3 + [ei / length] * 3)
     inertia = np.array([b.mass_per_length_kg_m, *(b.density_kg_m3 * b.second_moment_m4 * np.array([1.0, 1.0, 2.0]))])
-    n_steps = int(round(duration_s / dt_s))
     states = np.zeros((n_steps + 1, nodes.size, _rod_kernel.RECORD))
     iterations = np.zeros(n_steps, dtype=np.int64)
     done = _rod_kernel.simulate(
@@ -202,13 +234,11 @@ def simulate(
         states,
         iterations,
     )
-    if done < n_steps:
-        warnings.warn(
-            f"simulate: step {done + 1} of {n_steps} (t = {(done + 1) * dt_s:.4g} s) did not converge on "
-            f"{robot.name!r}; the response stops at t = {done * dt_s:.4g} s with converged=False",
-            ConvergenceWarning,
-            stacklevel=2,
-        )
+    return states, iterations, done
+
+
+def _motion(states, iterations, done: int, n_steps: int, nodes, dt_s: float) -> DynamicSolution:
+    """The :class:`DynamicSolution` of the ``done`` steps the kernel ran (of ``n_steps``)."""
     kept = states[: done + 1]
     return DynamicSolution(
         t_s=np.arange(done + 1) * dt_s,

@@ -170,6 +170,32 @@ def solve_statics(
     (True, 0.4)
     """
     owner = "solve_statics"
+    loads = _checked_loads(robot, tensions_n, tip_force_n, tip_moment_nm, distributed_force_n_per_m, gravity_m_s2)
+    nodes_per_disk = check_int(nodes_per_disk, "nodes_per_disk", owner, low=1, high=100)
+    substeps = _default_substeps(robot, nodes_per_disk) if substeps is None else substeps
+    substeps = check_int(substeps, "substeps", owner, low=1, high=1000)
+    tol = check_real(tol, "tol", owner, low=0.0, low_open=True)
+    max_iter = check_int(max_iter, "max_iter", owner, low=0)
+    x0, scale = _newton_start(robot, loads, initial_base_wrench)
+    kernel_args = _kernel_args(robot, nodes_per_disk, substeps)
+    nodes = kernel_args[0]
+    out = np.empty((nodes.size, _rod_kernel.RECORD))
+    x, converged, iterations, residual = _shoot(kernel_args, loads, 1.0, x0, tol, max_iter, out)
+    if not converged and initial_base_wrench is None:
+        x, converged, iterations, residual = _continuation(kernel_args, loads, tol, max_iter, out, iterations)
+    if not converged:
+        warnings.warn(
+            f"solve_statics did not converge on {robot.name!r} in {iterations} Newton iterations: tip residual "
+            f"{residual:.3g} > tol {tol:.3g}; the result carries converged=False",
+            ConvergenceWarning,
+            stacklevel=2,
+        )
+    return _solution(nodes, out, np.array(x) * scale, converged, iterations, residual)
+
+
+def _checked_loads(robot, tensions_n, tip_force_n, tip_moment_nm, distributed_force_n_per_m, gravity_m_s2):
+    """:func:`solve_statics`'s checked ``(tensions, force per length, tip force, tip moment)``, gravity included."""
+    owner = "solve_statics"
     if not isinstance(robot, Robot):
         raise ParameterError(f"The 'robot' parameter of {owner} must be a Robot. Got {type(robot).__name__} instead.")
     n_t = len(robot.tendons)
@@ -184,13 +210,19 @@ def solve_statics(
     fdist = _vector(distributed_force_n_per_m, "distributed_force_n_per_m")
     if gravity_m_s2 is not None:
         fdist = fdist + robot.backbone.mass_per_length_kg_m * _vector(gravity_m_s2, "gravity_m_s2")
-    nodes_per_disk = check_int(nodes_per_disk, "nodes_per_disk", owner, low=1, high=100)
-    if substeps is None:
-        spacing = np.diff(np.concatenate([[0.0], robot.disk_positions_m])).max() / nodes_per_disk
-        substeps = max(1, int(np.ceil(spacing / (robot.length_m / 20) - 1e-9)))
-    substeps = check_int(substeps, "substeps", owner, low=1, high=1000)
-    tol = check_real(tol, "tol", owner, low=0.0, low_open=True)
-    max_iter = check_int(max_iter, "max_iter", owner, low=0)
+    return tau, fdist, tip_force, tip_moment
+
+
+def _default_substeps(robot: Robot, nodes_per_disk: int) -> int:
+    """RK4 steps per node interval for steps of at most 1/20 of the length."""
+    spacing = np.diff(np.concatenate([[0.0], robot.disk_positions_m])).max() / nodes_per_disk
+    return max(1, int(np.ceil(spacing / (robot.length_m / 20) - 1e-9)))
+
+
+def _newton_start(robot: Robot, loads, initial_base_wrench):
+    """Newton's start, scaled, and the scale ``(EI/L^2, EI/L)``: the given clamp wrench or the straight rigid
+    rod's under the same loads."""
+    _, fdist, tip_force, tip_moment = loads
     length = robot.length_m
     if initial_base_wrench is None:
         axis = np.array([0.0, 0.0, length])
@@ -198,13 +230,16 @@ def solve_statics(
             [tip_force + fdist * length, tip_moment + np.cross(axis, tip_force) + np.cross(axis / 2, fdist * length)]
         )
     else:
-        wrench = check_array(initial_base_wrench, "initial_base_wrench", owner, shape=(6,))
+        wrench = check_array(initial_base_wrench, "initial_base_wrench", "solve_statics", shape=(6,))
     ei = robot.backbone.bending_torsion_stiffness[0]
     scale = np.array([ei / length**2] * 3 + [ei / length] * 3)
-    x0 = wrench / scale
+    return wrench / scale, scale
 
+
+def _kernel_args(robot: Robot, nodes_per_disk: int, substeps: int) -> tuple:
+    """The shooting kernel's description of the robot: ``(nodes, substeps, routing, end nodes, Kse, Kbt)``."""
     nodes, end_node = _nodes(robot, nodes_per_disk)
-    kernel_args = (
+    return (
         nodes,
         substeps,
         np.ascontiguousarray(robot.routing_m),
@@ -212,40 +247,39 @@ def solve_statics(
         robot.backbone.shear_extension_stiffness,
         robot.backbone.bending_torsion_stiffness,
     )
-    out = np.empty((nodes.size, _rod_kernel.RECORD))
-    loads = (tau, fdist, tip_force, tip_moment)
-    x, converged, iterations, residual = _shoot(kernel_args, loads, 1.0, x0, tol, max_iter, out)
-    if not converged and initial_base_wrench is None:
-        # continuation in the load factor from the unloaded robot (whose clamp wrench is zero), halving the step
-        # where Newton fails: the equilibrium reached is the one continuous with the straight robot
-        done, step, x_done = 0.0, 0.25, np.zeros(6)
-        while done < 1.0 and step >= 1.0 / 1024:
-            target = min(1.0, done + step)
-            x_try, ok, its, residual = _shoot(kernel_args, loads, target, x_done, tol, max_iter, out)
-            iterations += its
-            if ok:
-                done, x_done, step = target, x_try, min(2 * step, 0.5)
-            else:
-                step /= 2
-        x, converged = x_done, done == 1.0 and ok
-    if not converged:
-        warnings.warn(
-            f"solve_statics did not converge on {robot.name!r} in {iterations} Newton iterations: tip residual "
-            f"{residual:.3g} > tol {tol:.3g}; the result carries converged=False",
-            ConvergenceWarning,
-            stacklevel=2,
-        )
+
+
+def _solution(nodes, out, base_wrench, converged, iterations, residual) -> StaticSolution:
+    """The :class:`StaticSolution` of the kernel's node records ``out``."""
     return StaticSolution(
         s_m=nodes,
         positions_m=out[:, 0:3].copy(),
         rotations=out[:, 3:12].reshape(-1, 3, 3).copy(),
         strains=out[:, 12:18].copy(),
         strains_before_jump=out[:, 24:30].copy(),
-        base_wrench=np.array(x) * scale,
+        base_wrench=base_wrench,
         converged=bool(converged),
         iterations=int(iterations),
         residual=float(residual),
     )
+
+
+def _continuation(kernel_args, loads, tol, max_iter, out, iterations):
+    """Continuation in the load factor from the unloaded robot (whose clamp wrench is zero), halving the step
+    where Newton fails: the equilibrium reached is the one continuous with the straight robot.
+
+    Returns ``(x, converged, iterations, residual)``, the iterations counted on from ``iterations``.
+    """
+    done, step, x_done = 0.0, 0.25, np.zeros(6)
+    while done < 1.0 and step >= 1.0 / 1024:
+        target = min(1.0, done + step)
+        x_try, ok, its, residual = _shoot(kernel_args, loads, target, x_done, tol, max_iter, out)
+        iterations += its
+        if ok:
+            done, x_done, step = target, x_try, min(2 * step, 0.5)
+        else:
+            step /= 2
+    return x_done, done == 1.0 and ok, iterations, residual
 
 
 def _shoot(kernel_args, loads, factor, x0, tol, max_iter, out):

@@ -118,49 +118,8 @@ class BatchedChains:
             digit_arrays(p, c, housing=housing, orientation=orientation, cells_per_section=cells_per_section)
             for p, c in zip(params, calibrations, strict=True)
         ]
-        layouts: dict[tuple, list[int]] = {}
-        for i, r in enumerate(rows):
-            key = tuple(
-                np.asarray(r[name], dtype=float).tobytes()
-                for name in ("length_m", "joint_s_m", "cell_length_m", "mass_s_m", "gauge_s_m", "gravity_ab_m_s2")
-            )
-            layouts.setdefault(key, []).append(i)
         first = Chain(**rows[0])
-        size, n = len(rows), first.n
-        k, c, a = (np.empty((size, n, n)) for _ in range(3))
-        g_grav = np.empty((size, n, 2))
-        to_curvature = np.empty((size,) + first._psi_to_gauge_curvature.shape)
-        link, s0 = np.empty((size, n)), np.empty(size)
-        for members in layouts.values():
-            template = first if members[0] == 0 else Chain(**rows[members[0]])
-            if template.n != n or template.gauge_s_m.size != first.gauge_s_m.size:
-                raise ParameterError(
-                    f"BatchedChains: rig {members[0]} has {template.n} springs and {template.gauge_s_m.size} gauges; "
-                    f"rig 0 has {n} and {first.gauge_s_m.size} (same section count, cells per section and gauge "
-                    "count across the batch)"
-                )
-            stack = {
-                name: check_array([rows[i][name] for i in members], name, "Chain", shape=(len(members), size_of), low=0)
-                for name, size_of in (
-                    ("joint_stiffness_nm_rad", n),
-                    ("joint_damping_nms_rad", n),
-                    ("mass_kg", template.mass_s_m.size),
-                    ("mass_inertia_kg_m2", template.mass_s_m.size),
-                )
-            }
-            k[members], c[members], a[members], g_grav[members] = chain_matrices(
-                template._d,
-                template._mass_lever,
-                template._mass_link,
-                stack["joint_stiffness_nm_rad"],
-                stack["joint_damping_nms_rad"],
-                stack["mass_kg"],
-                stack["mass_inertia_kg_m2"],
-                template.gravity,
-            )
-            to_curvature[members] = template._psi_to_gauge_curvature
-            link[members] = template.link_length_m
-            s0[members] = template.joint_s_m[0]
+        k, c, a, g_grav, to_curvature, link, s0 = _stacked_chain_matrices(rows, first)
         out = cls.__new__(cls)
         out.chains = None
         out._setup(
@@ -551,3 +510,56 @@ class BatchedTwin:
             f"BatchedTwin(size={self.size}, dt_s={self.dt_s:g}, time_s={self.time_s:g}, cable={self.cable}, "
             f"antagonist={bool(self.chains.antagonist.any())})"
         )
+
+
+def _shared_layouts(rows: list[dict]) -> list[list[int]]:
+    """Indices of the rigs whose springs, masses and gauges sit at the same places, one list per layout."""
+    layouts: dict[tuple, list[int]] = {}
+    for i, r in enumerate(rows):
+        key = tuple(
+            np.asarray(r[name], dtype=float).tobytes()
+            for name in ("length_m", "joint_s_m", "cell_length_m", "mass_s_m", "gauge_s_m", "gravity_ab_m_s2")
+        )
+        layouts.setdefault(key, []).append(i)
+    return list(layouts.values())
+
+
+def _stacked_chain_matrices(rows: list[dict], first: Chain):
+    """Stiffness, damping, inertia, gravity, gauge-curvature, link-length and base-joint arrays of every rig,
+    stacked (rig first), assembled once per shared layout with ``first`` (rig 0's chain) as the size reference."""
+    size, n = len(rows), first.n
+    k, c, a = (np.empty((size, n, n)) for _ in range(3))
+    g_grav = np.empty((size, n, 2))
+    to_curvature = np.empty((size,) + first._psi_to_gauge_curvature.shape)
+    link, s0 = np.empty((size, n)), np.empty(size)
+    for members in _shared_layouts(rows):
+        template = first if members[0] == 0 else Chain(**rows[members[0]])
+        if template.n != n or template.gauge_s_m.size != first.gauge_s_m.size:
+            raise ParameterError(
+                f"BatchedChains: rig {members[0]} has {template.n} springs and {template.gauge_s_m.size} gauges; "
+                f"rig 0 has {n} and {first.gauge_s_m.size} (same section count, cells per section and gauge "
+                "count across the batch)"
+            )
+        stack = {
+            name: check_array([rows[i][name] for i in members], name, "Chain", shape=(len(members), size_of), low=0)
+            for name, size_of in (
+                ("joint_stiffness_nm_rad", n),
+                ("joint_damping_nms_rad", n),
+                ("mass_kg", template.mass_s_m.size),
+                ("mass_inertia_kg_m2", template.mass_s_m.size),
+            )
+        }
+        k[members], c[members], a[members], g_grav[members] = chain_matrices(
+            template._d,
+            template._mass_lever,
+            template._mass_link,
+            stack["joint_stiffness_nm_rad"],
+            stack["joint_damping_nms_rad"],
+            stack["mass_kg"],
+            stack["mass_inertia_kg_m2"],
+            template.gravity,
+        )
+        to_curvature[members] = template._psi_to_gauge_curvature
+        link[members] = template.link_length_m
+        s0[members] = template.joint_s_m[0]
+    return k, c, a, g_grav, to_curvature, link, s0

@@ -390,45 +390,11 @@ def static_load_test(
     params = params or RigParams()
     calibration = calibration or default_calibration()
     length = params.geometry.digit_length_m
-    owner = "static_load_test"
-    # checked here, before the cases are repeated over positions, commands and repetitions, so a message
-    # quotes what the caller passed (once), not the broadcast batch
-    masses = check_values(_list(loads_kg, "loads_kg", owner), "loads_kg", owner, low=0, low_open=True, unit="kg")
-    from_tip = check_values(
-        _list(positions_from_tip_m, "positions_from_tip_m", owner),
-        "positions_from_tip_m",
-        owner,
-        low=0,
-        high=length,
-        high_open=True,
-        unit="m from the tip",
-        note=f"0 is the tip, {length:g} the clamp: nothing hangs beyond the tip, or at or behind the clamp",
+    masses, from_tip, reps, commands = _checked_static_plan(
+        loads_kg, positions_from_tip_m, repetitions, commands, params
     )
-    reps = check_int(repetitions, "repetitions", owner, low=1, high=100_000)
-    if commands is not None:
-        a = params.actuator
-        cmds = check_values(
-            _list(commands, "commands", owner),
-            "commands",
-            owner,
-            low=a.command_min,
-            high=a.command_max,
-            integer=True,
-            note="servo commands; None detaches the cable",
-        )
-        commands = [int(c) for c in cmds]
     cmd_list = [None] if commands is None else list(commands)
-    rows_m, rows_p, rows_c = [], [], []
-    for c in cmd_list:
-        if include_no_load:
-            rows_m.append(0.0)
-            rows_p.append(length)
-            rows_c.append(c)
-        for m in masses:
-            for p in from_tip:
-                rows_m.append(float(m))
-                rows_p.append(length - float(p))
-                rows_c.append(c)
+    rows_m, rows_p, rows_c = _static_cases(masses, from_tip, cmd_list, length, include_no_load)
     m_arr = np.repeat(np.array(rows_m), reps)
     p_arr = np.repeat(np.array(rows_p), reps)
     rep = np.tile(np.arange(reps), len(rows_m))
@@ -458,3 +424,55 @@ def static_load_test(
         orientation=orientation,
     )
     return _result("static_load_test", cols, args, seed, params, calibration)
+
+
+def _checked_static_plan(loads_kg, positions_from_tip_m, repetitions, commands, params: RigParams):
+    """:func:`static_load_test`'s checked ``(masses, positions from the tip, repetitions, commands or None)``.
+
+    Checked before the cases are repeated over positions, commands and repetitions, so a message quotes what
+    the caller passed (once), not the broadcast batch.
+    """
+    owner = "static_load_test"
+    length = params.geometry.digit_length_m
+    masses = check_values(_list(loads_kg, "loads_kg", owner), "loads_kg", owner, low=0, low_open=True, unit="kg")
+    from_tip = check_values(
+        _list(positions_from_tip_m, "positions_from_tip_m", owner),
+        "positions_from_tip_m",
+        owner,
+        low=0,
+        high=length,
+        high_open=True,
+        unit="m from the tip",
+        note=f"0 is the tip, {length:g} the clamp: nothing hangs beyond the tip, or at or behind the clamp",
+    )
+    reps = check_int(repetitions, "repetitions", owner, low=1, high=100_000)
+    if commands is not None:
+        a = params.actuator
+        cmds = check_values(
+            _list(commands, "commands", owner),
+            "commands",
+            owner,
+            low=a.command_min,
+            high=a.command_max,
+            integer=True,
+            note="servo commands; None detaches the cable",
+        )
+        commands = [int(c) for c in cmds]
+    return masses, from_tip, reps, commands
+
+
+def _static_cases(masses, from_tip, cmd_list, length: float, include_no_load: bool):
+    """One ``(mass, position from the base, command)`` row per case: per command a no-load case, then each
+    weight at each position."""
+    rows_m, rows_p, rows_c = [], [], []
+    for c in cmd_list:
+        if include_no_load:
+            rows_m.append(0.0)
+            rows_p.append(length)
+            rows_c.append(c)
+        for m in masses:
+            for p in from_tip:
+                rows_m.append(float(m))
+                rows_p.append(length - float(p))
+                rows_c.append(c)
+    return rows_m, rows_p, rows_c

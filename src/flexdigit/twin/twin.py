@@ -624,6 +624,29 @@ def static_gauges_v(
     """
     params = params or RigParams()
     calibration = calibration or default_calibration()
+    masses, pos = _static_load_cases(loads_mass_kg, positions_from_base_m, params)
+    b = masses.shape[0]
+    chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
+    shortening = _static_cable_shortening(commands, servo_offset_rad, b, params)
+    forces = masses[..., None] * chain.gravity
+    sol = chain.solve_static(pos, forces, cable_shortening_m=shortening)
+    rng = np.random.default_rng(seed) if seed is not None else None
+    sensors = SensorChain(params, calibration, rng if rng is not None else np.random.default_rng(0))
+    kappa = sol.curvature_1_m
+    if rng is not None and shortening is not None and sensors.friction_ratio > 0:
+        kappa = _with_guide_friction(kappa, sol, sensors, chain, seed, friction_draws)
+    volts = sensors.clean_v(kappa, sol.axial_force_n)
+    if rng is not None:
+        volts = volts + np.asarray(calibration.noise_white_v) * rng.standard_normal(volts.shape)
+    if adc:
+        from flexdigit.twin.sensors import adc as quantise
+
+        volts = quantise(volts, params.sensors)
+    return (volts, sol) if return_solution else volts
+
+
+def _static_load_cases(loads_mass_kg, positions_from_base_m, params: RigParams):
+    """Checked ``(masses, positions)`` of :func:`static_gauges_v`'s load cases, both shape (B, K)."""
     owner = "static_gauges_v"
     masses = check_values(loads_mass_kg, "loads_mass_kg", owner, low=0, unit="kg")
     if masses.ndim == 1:
@@ -642,48 +665,46 @@ def static_gauges_v(
             "The 'positions_from_base_m' parameter of static_gauges_v must have the shape of 'loads_mass_kg' "
             f"{masses.shape}. Got {np.shape(positions_from_base_m)} instead."
         )
-    b = masses.shape[0]
-    chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
-    shortening = None
-    if commands is not None:
-        a = params.actuator
-        cmd = check_values(commands, "commands", owner, low=a.command_min, high=a.command_max, integer=True)
-        if cmd.ndim and cmd.size not in (1, b):
-            raise ParameterError(
-                f"The 'commands' parameter of {owner} must be one command or one per load case ({b}). "
-                f"Got {cmd.size} commands instead."
-            )
-        cmd = np.broadcast_to(cmd.reshape(-1) if cmd.ndim else cmd, (b,))
-        shortening = cable_shortening_m(cmd, params)
-        if servo_offset_rad is not None:
-            offset = check_values(servo_offset_rad, "servo_offset_rad", owner, unit="rad")
-            shortening = shortening + params.actuator.cable_m_per_servo_rad * np.broadcast_to(offset.reshape(-1), (b,))
-    forces = masses[..., None] * chain.gravity
-    sol = chain.solve_static(pos, forces, cable_shortening_m=shortening)
-    rng = np.random.default_rng(seed) if seed is not None else None
-    sensors = SensorChain(params, calibration, rng if rng is not None else np.random.default_rng(0))
-    kappa = sol.curvature_1_m
-    if rng is not None and shortening is not None and sensors.friction_ratio > 0:
-        c_moment = chain.gauge_curvature_per_moment
-        if friction_draws is None:
-            friction_rng = np.random.default_rng([seed, FRICTION_STREAM])
-            kappa = sensors.friction_draw(kappa, sol.tension_n, c_moment, friction_rng)
-        else:
-            xi = check_values(friction_draws, "friction_draws", owner)
-            if xi.shape != kappa.shape:
-                raise ParameterError(
-                    f"The 'friction_draws' parameter of {owner} must have shape {kappa.shape} (load cases, gauges). "
-                    f"Got shape {xi.shape} instead."
-                )
-            kappa = kappa + sensors.friction_curvature_sd_1_m(sol.tension_n, c_moment) * xi
-    volts = sensors.clean_v(kappa, sol.axial_force_n)
-    if rng is not None:
-        volts = volts + np.asarray(calibration.noise_white_v) * rng.standard_normal(volts.shape)
-    if adc:
-        from flexdigit.twin.sensors import adc as quantise
+    return masses, pos
 
-        volts = quantise(volts, params.sensors)
-    return (volts, sol) if return_solution else volts
+
+def _static_cable_shortening(commands, servo_offset_rad, b: int, params: RigParams):
+    """Cable shortening (m) per load case of :func:`static_gauges_v`: its servo commands plus any shaft offset.
+
+    None when ``commands`` is None (cable detached).
+    """
+    if commands is None:
+        return None
+    owner = "static_gauges_v"
+    a = params.actuator
+    cmd = check_values(commands, "commands", owner, low=a.command_min, high=a.command_max, integer=True)
+    if cmd.ndim and cmd.size not in (1, b):
+        raise ParameterError(
+            f"The 'commands' parameter of {owner} must be one command or one per load case ({b}). "
+            f"Got {cmd.size} commands instead."
+        )
+    cmd = np.broadcast_to(cmd.reshape(-1) if cmd.ndim else cmd, (b,))
+    shortening = cable_shortening_m(cmd, params)
+    if servo_offset_rad is not None:
+        offset = check_values(servo_offset_rad, "servo_offset_rad", owner, unit="rad")
+        shortening = shortening + params.actuator.cable_m_per_servo_rad * np.broadcast_to(offset.reshape(-1), (b,))
+    return shortening
+
+
+def _with_guide_friction(kappa, sol, sensors: SensorChain, chain: Chain, seed: int, friction_draws):
+    """Gauge curvatures plus one cable-guide friction draw per case (fresh from ``seed``'s stream, or given)."""
+    owner = "static_gauges_v"
+    c_moment = chain.gauge_curvature_per_moment
+    if friction_draws is None:
+        friction_rng = np.random.default_rng([seed, FRICTION_STREAM])
+        return sensors.friction_draw(kappa, sol.tension_n, c_moment, friction_rng)
+    xi = check_values(friction_draws, "friction_draws", owner)
+    if xi.shape != kappa.shape:
+        raise ParameterError(
+            f"The 'friction_draws' parameter of {owner} must have shape {kappa.shape} (load cases, gauges). "
+            f"Got shape {xi.shape} instead."
+        )
+    return kappa + sensors.friction_curvature_sd_1_m(sol.tension_n, c_moment) * xi
 
 
 def friction_sd_v(
