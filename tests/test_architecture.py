@@ -292,40 +292,17 @@ MAX_FUNCTION_LINES = 80
 #: remove the entry when the function is split). The compiled ``_*_kernel.py`` modules are kernels as a whole.
 LONG_FUNCTIONS = {
     "flexdigit.rig.loop:run_loop": "to split",  # 222 lines
-    "flexdigit.identify.identification:identify": "to split",  # 206 lines
-    "flexdigit.calibrate.twin_fit:calibrate": "to split",  # 206 lines
     "flexdigit.twin.digit:Chain.solve_static": "kernel: the chain's static Newton solve, one loop",  # 178 lines
     "flexdigit.cli.run:_run": "to split",  # 162 lines
-    "flexdigit.report.ch8_shape:build": "to split",  # 146 lines
-    "flexdigit.tactile.localisation:localisation_study": "to split",  # 136 lines
     "flexdigit.control.c_export:_render_fixed": "kernel: one C template, in compile order",  # 131 lines
-    "flexdigit.identify.response:analyze_response": "to split",  # 129 lines
-    "flexdigit.twin.twin:static_gauges_v": "to split",  # 120 lines
-    "flexdigit.tactile.importer:import_readings": "to split",  # 118 lines
-    "flexdigit.live.server:make_app": "to split",  # 116 lines
     "flexdigit.control.c_export:_render_float": "kernel: one C template, in compile order",  # 116 lines
-    "flexdigit.identify.quality:assess": "to split",  # 115 lines
-    "flexdigit.rig.rotation_reference:read_reference": "to split",  # 111 lines
-    "flexdigit.rig.rotation:calibrate_rotation": "to split",  # 108 lines
-    "flexdigit.rig.rotation_reference:rotations_from_deflections": "to split",  # 106 lines
-    "flexdigit.control.c_export:analyse_export": "to split",  # 101 lines
     "flexdigit.control.synthesis:hinf_lmi": "kernel: the H-inf LMI (Gahinet-Apkarian) in one piece",  # 99 lines
     "flexdigit.cli.simulate:_run": "to split",  # 97 lines
-    "flexdigit.twin.records:static_load_test": "to split",  # 96 lines
     "flexdigit.cli.calibrate:_calibrate": "to split",  # 96 lines
-    "flexdigit.identify.events:survey": "to split",  # 95 lines
-    "flexdigit.live.session:LiveSession._run": "to split",  # 91 lines
-    "flexdigit.tactile.pipeline:run_pipeline": "to split",  # 87 lines
-    "flexdigit.twin.batched:BatchedChains.from_rigs": "to split",  # 86 lines
     "flexdigit.twin.contact:solve_contact": "kernel: the contact complementarity iteration",  # 84 lines
-    "flexdigit.studies.execution:run_rows": "to split",  # 84 lines
     "flexdigit.cli.collect:register": "to split",  # 89 lines
     "flexdigit.cli.run:register": "to split",  # 95 lines
     "flexdigit.cli.simulate:register": "to split",  # 83 lines
-    "flexdigit.live.server:make_app.stream": "to split",  # 119 lines
-    "flexdigit.rig.backends.hil_backend:HilRig.__init__": "to split",  # 84 lines
-    "flexdigit.tdcr.dynamics:simulate": "to split",  # 134 lines
-    "flexdigit.tdcr.statics:solve_statics": "to split",  # 130 lines
 }
 
 
