@@ -160,7 +160,49 @@ class LoopSettings:
 
     Every field is also a keyword of :func:`run_loop` (``run_loop(..., log_path="run.jsonl")`` is
     ``run_loop(..., settings=LoopSettings(log_path="run.jsonl"))``); a keyword given beside ``settings`` overrides
-    that field. The fields are documented under :func:`run_loop`'s parameters.
+    that field.
+
+    Attributes
+    ----------
+    period_s : float
+        Sample period, s (0.020 s: the servo board's rate, 5.2).
+    log_path : path-like, optional
+        JSON-lines sample log (see the module docstring).
+    clock : callable, optional
+        Monotonic clock the deadlines are kept on; the rig's clock by default (tests inject a fake).
+    timer : callable, optional
+        Wall-clock timer for compute time (``time.perf_counter``).
+    measure : callable, optional
+        ``measure(reading) -> float`` logged as ``y`` (e.g. beam rotation, deg); the controller's
+        ``measure`` attribute if it has one.
+    on_sample : callable, optional
+        ``on_sample(k, t, y, command)`` after each sample (progress display).
+    check_sensors : bool
+        Stop with a fault when a gauge is NaN or clipped (:func:`check_reading`).
+    close_rig : bool
+        Close the rig (port) when the loop ends, whatever the reason.
+    fsync_every : int
+        Samples between two ``fsync`` of the log (each line is flushed to the OS at once).
+    header : dict, optional
+        Extra entries of the log's first line.
+    recording : flexdigit.rig.recording.Recording, optional
+        An open MCAP recording: every sample goes to it as to the log, and the loop closes it with the stop
+        record (so a fault or Ctrl-C still leaves a complete, readable file).
+    summary : callable, optional
+        ``summary(time_s, measurement) -> dict`` of figures (e.g. the step metrics) written into the closing record
+        of the log and the recording under ``"summary"``, whatever the reason the loop stopped.
+    stall_s : float
+        A sample that starts more than this late (s) is a fault, not an overrun: the rig (a DAQ or stream gone
+        silent, a read that blocked) or the computer stopped answering, and the loop has been blind that long.
+    guard : RunawayGuard or bool
+        Runaway and plausibility checks on every sample (:mod:`flexdigit.rig.safety`); a fault it raises ends
+        the run in the safe state like any rig fault. On by default (``True``:
+        :func:`~flexdigit.rig.safety.default_guard`, which watches the twin's true rotation, and the measurement
+        when it is a rotation estimate); pass a :class:`~flexdigit.rig.safety.RunawayGuard` of your own, or opt
+        out with ``False``.
+    log_mode : {"new", "append", "replace"}
+        An existing ``log_path`` is refused (``"new"``), added to (``"append"``: a log of the same controller,
+        period and rig settings) or replaced (``"replace"``, ``--force``); see :class:`SampleLog`.
     """
 
     period_s: float = 0.020
@@ -207,43 +249,9 @@ def run_loop(
         Run length and sample period, s (0.020 s: the servo board's rate, 5.2).
     settings : LoopSettings, optional
         The settings below as one object; a keyword given beside it overrides its field.
-    log_path : path-like, optional
-        JSON-lines sample log (see the module docstring).
-    clock : callable, optional
-        Monotonic clock the deadlines are kept on; the rig's clock by default (tests inject a fake).
-    timer : callable, optional
-        Wall-clock timer for compute time (``time.perf_counter``).
-    measure : callable, optional
-        ``measure(reading) -> float`` logged as ``y`` (e.g. beam rotation, deg); the controller's
-        ``measure`` attribute if it has one.
-    on_sample : callable, optional
-        ``on_sample(k, t, y, command)`` after each sample (progress display).
-    check_sensors : bool
-        Stop with a fault when a gauge is NaN or clipped (:func:`check_reading`).
-    close_rig : bool
-        Close the rig (port) when the loop ends, whatever the reason.
-    fsync_every : int
-        Samples between two ``fsync`` of the log (each line is flushed to the OS at once).
-    header : dict, optional
-        Extra entries of the log's first line.
-    recording : flexdigit.rig.recording.Recording, optional
-        An open MCAP recording: every sample goes to it as to the log, and the loop closes it with the stop
-        record (so a fault or Ctrl-C still leaves a complete, readable file).
-    summary : callable, optional
-        ``summary(time_s, measurement) -> dict`` of figures (e.g. the step metrics) written into the closing record
-        of the log and the recording under ``"summary"``, whatever the reason the loop stopped.
-    stall_s : float
-        A sample that starts more than this late (s) is a fault, not an overrun: the rig (a DAQ or stream gone
-        silent, a read that blocked) or the computer stopped answering, and the loop has been blind that long.
-    guard : RunawayGuard or bool
-        Runaway and plausibility checks on every sample (:mod:`flexdigit.rig.safety`); a fault it raises ends
-        the run in the safe state like any rig fault. On by default (``True``:
-        :func:`~flexdigit.rig.safety.default_guard`, which watches the twin's true rotation, and the measurement
-        when it is a rotation estimate); pass a :class:`~flexdigit.rig.safety.RunawayGuard` of your own, or opt
-        out with ``False``.
-    log_mode : {"new", "append", "replace"}
-        An existing ``log_path`` is refused (``"new"``), added to (``"append"``: a log of the same controller,
-        period and rig settings) or replaced (``"replace"``, ``--force``); see :class:`SampleLog`.
+    **options
+        Any field of :class:`LoopSettings` by name (``log_path``, ``clock``, ``guard``, ``recording``, ...): the
+        keywords run_loop has always taken; each overrides that field of ``settings``.
 
     Returns
     -------
