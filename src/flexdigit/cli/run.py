@@ -30,9 +30,7 @@ SETPOINT = Plausible("deg", -60.0, 120.0, "a beam rotation the digit reaches: 30
 
 
 def register(subparsers) -> None:
-    from flexdigit.rig.backends.stream_emulator import DURATION_S, RATE_HZ
     from flexdigit.rig.controllers import ACTUATOR_GAIN
-    from flexdigit.rig.rotation_reference import READING_RESOLUTION_DEG, READING_RESOLUTION_MM
 
     parser = add_command(
         subparsers,
@@ -59,31 +57,7 @@ def register(subparsers) -> None:
         "--gain", type=Flag(ACTUATOR_GAIN), default=1.0, help="actuator gain error to emulate (robustness runs)"
     )
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
-    parser.add_argument(
-        "--rotation-map",
-        type=Path,
-        default=None,
-        help="gauge -> rotation map (JSON): loaded if it exists, else made and saved",
-    )
-    parser.add_argument(
-        "--map-from",
-        default=None,
-        metavar="twin|operator|FILE",
-        help="make the rotation map from: the (calibrated) twin's own rotation (default on sim), the operator at each "
-        "command (default on hardware), or a CSV of rotations or deflections measured on the rig",
-    )
-    parser.add_argument(
-        "--resolution-mm",
-        type=Flag(READING_RESOLUTION_MM),
-        default=0.5,
-        help="reading resolution of measured deflections, mm (0.5)",
-    )
-    parser.add_argument(
-        "--resolution-deg",
-        type=Flag(READING_RESOLUTION_DEG),
-        default=1.0,
-        help="reading resolution of measured rotations, deg (1)",
-    )
+    _add_map_flags(parser)
     parser.add_argument(
         "--calibration",
         type=Path,
@@ -111,6 +85,44 @@ def register(subparsers) -> None:
         action="store_true",
         help="close the loop on the board (hil://IMAGE.elf): the host sends the setpoint and watches",
     )
+
+    _add_stream_emulator(subparsers)
+
+
+def _add_map_flags(parser) -> None:
+    """The rotation map's flags: where it is kept and what it is made from."""
+    from flexdigit.rig.rotation_reference import READING_RESOLUTION_DEG, READING_RESOLUTION_MM
+
+    parser.add_argument(
+        "--rotation-map",
+        type=Path,
+        default=None,
+        help="gauge -> rotation map (JSON): loaded if it exists, else made and saved",
+    )
+    parser.add_argument(
+        "--map-from",
+        default=None,
+        metavar="twin|operator|FILE",
+        help="make the rotation map from: the (calibrated) twin's own rotation (default on sim), the operator at each "
+        "command (default on hardware), or a CSV of rotations or deflections measured on the rig",
+    )
+    parser.add_argument(
+        "--resolution-mm",
+        type=Flag(READING_RESOLUTION_MM),
+        default=0.5,
+        help="reading resolution of measured deflections, mm (0.5)",
+    )
+    parser.add_argument(
+        "--resolution-deg",
+        type=Flag(READING_RESOLUTION_DEG),
+        default=1.0,
+        help="reading resolution of measured rotations, deg (1)",
+    )
+
+
+def _add_stream_emulator(subparsers) -> None:
+    """``flexdigit stream-emulator``: stream:// without hardware."""
+    from flexdigit.rig.backends.stream_emulator import DURATION_S, RATE_HZ
 
     emulator = add_command(
         subparsers,
