@@ -10,7 +10,7 @@ import pytest
 
 from flexdigit.errors import DataFileError, RigError
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.loop import run_loop
+from flexdigit.rig.loop import LoopSettings, run_loop
 from flexdigit.rig.sample_log import read_log
 
 from .helpers import PI, FirstOrderRig
@@ -147,3 +147,24 @@ def test_realtime_priority_is_restored_or_untouched():
         inside = os.sched_getscheduler(0)
         assert inside == (os.SCHED_FIFO if rt.active else before)
     assert os.sched_getscheduler(0) == before
+
+
+def test_loop_settings_object_runs_as_the_keywords_do(tmp_path):
+    settings = LoopSettings(period_s=0.04, log_path=tmp_path / "a.jsonl", header={"who": "settings"})
+    by_settings = run_loop(FirstOrderRig(), PI(), 1.0, 1.0, settings=settings)
+    by_keywords = run_loop(
+        FirstOrderRig(), PI(), 1.0, 1.0, period_s=0.04, log_path=tmp_path / "b.jsonl", header={"who": "settings"}
+    )
+    assert by_settings.timing.samples == 25
+    np.testing.assert_array_equal(by_settings.command, by_keywords.command)  # same virtual clock, same plant
+    assert read_log(by_settings.log_path)[0]["who"] == "settings"
+
+
+def test_a_keyword_beside_settings_overrides_its_field():
+    result = run_loop(FirstOrderRig(), PI(), 1.0, 1.0, settings=LoopSettings(period_s=0.04), period_s=0.1)
+    assert result.timing.samples == 10
+
+
+def test_an_unknown_loop_keyword_is_refused_by_name():
+    with pytest.raises(TypeError, match="'log_pth'"):
+        run_loop(FirstOrderRig(), PI(), 1.0, 1.0, log_pth="x.jsonl")

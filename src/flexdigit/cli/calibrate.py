@@ -62,15 +62,42 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _calibrate(args: argparse.Namespace) -> CommandResult:
-    import dataclasses
-
     from flexdigit._io import check_output
-    from flexdigit.calibrate import record_files as rec
-    from flexdigit.calibrate.targets import CalibrationTargets, release_figures
-    from flexdigit.calibrate.twin_fit import THESIS_SOURCE, calibrate, calibrate_to_thesis
-    from flexdigit.errors import DesignError, ParameterError
+    from flexdigit.calibrate.twin_fit import THESIS_SOURCE, calibrate_to_thesis
     from flexdigit.params import RigParams, load_params
     from flexdigit.twin.calibration import load_calibration, packaged_calibration, save_calibration
+
+    given = _given_records(args)
+    out = check_output(args.out, force=args.force)  # refuse a bad destination before minutes of fitting
+    params = load_params(args.params) if args.params else RigParams()
+    initial = load_calibration(args.initial) if args.initial else packaged_calibration()
+    if args.thesis:
+        result, source, releases = calibrate_to_thesis(params), THESIS_SOURCE, {}
+    else:
+        result, source, releases = _fit_records(args, given, params, initial, out)
+    fit = result.fit_record(source)
+    if releases:
+        fit["release_tests"] = {key: _release_summary(fig) for key, fig in releases.items()}
+    save_calibration(result.calibration, out, fit, force=args.force)
+    row, miss = result.worst()
+    data = {
+        "out": str(out),
+        "success": result.success,
+        "worst": None if row is None else {"target": row["target"], "times_scale": miss},
+        "message": result.message,
+        "cost": result.cost,
+        "fitted": result.fitted,
+        "kept": [name for name in result.calibration.to_dict() if name not in result.fitted],
+        "residuals": result.residual_rows(),
+        "calibration": result.calibration.to_dict(),
+        "release_tests": fit.get("release_tests", {}),
+    }
+    return CommandResult(data=data, text=_calibrate_text(result, data, out))
+
+
+def _given_records(args: argparse.Namespace) -> dict:
+    """The record files given (flag name -> path or paths), the flags checked together."""
+    from flexdigit.errors import ParameterError
 
     given = {name: getattr(args, name) for name in RECORDS if getattr(args, name)}
     if args.thesis and given:
@@ -84,69 +111,67 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
         raise ParameterError(
             f"--deflection-resolution-mm must be > 0 (the reading resolution). Got {args.deflection_resolution_mm!r}"
         )
-    out = check_output(args.out, force=args.force)  # refuse a bad destination before minutes of fitting
-    params = load_params(args.params) if args.params else RigParams()
-    initial = load_calibration(args.initial) if args.initial else packaged_calibration()
-    releases: dict[str, dict] = {}
-    if args.thesis:
-        result = calibrate_to_thesis(params)
-        source = THESIS_SOURCE
-    else:
-        kw: dict = {"deflection_resolution_mm": args.deflection_resolution_mm}
-        release_targets: dict = {}
-        for key, name in (("bare", "release_bare"), ("housing", "release_housed")):
-            if name in given:
-                series = [
-                    s
-                    for path in given[name]
-                    for s in rec.read_release(path, time_unit=args.time_unit, decimal=args.decimal)
-                ]
-                releases[key] = release_figures(series)
-                release_targets[f"{key}_wn_rad_s"] = releases[key]["wn_rad_s"]
-                release_targets[f"{key}_zeta"] = releases[key]["zeta"]
-        if "sweep" in given:
-            kw["sweep"] = rec.read_sweep(given["sweep"], decimal=args.decimal)
-        if "deflections" in given:
-            kw["deflections"] = rec.read_deflections(given["deflections"], decimal=args.decimal)
-        if "rest" in given:
-            kw["rest"] = rec.read_rest(given["rest"], time_unit=args.time_unit, decimal=args.decimal)
-        if "actuated_rest" in given:
-            kw["actuated_rest"] = rec.read_actuated_rest(given["actuated_rest"], decimal=args.decimal)
-        targets = dataclasses.replace(CalibrationTargets.from_records(**kw), **release_targets)
-        result = calibrate(targets, params, initial=initial)
-        if not result.success:
-            raise DesignError(f"the fit did not converge ({result.message}); no calibration written to {out}")
-        row, miss = result.worst()
-        if miss > POOR_FIT and not args.allow_poor_fit:
-            raise DesignError(
-                f"the calibrated twin misses {row['target']} by {row['twin'] - row['measured']:+.4g} {row['unit']} "
-                f"({miss:.1f} times its scale of {row['scale']:.3g} {row['unit']}): it cannot reproduce these records "
-                f"together (different rigs or set-ups mixed? a unit slip?); no calibration written to {out} (pass "
-                "--allow-poor-fit to write it anyway)"
-            )
-        source = "flexdigit calibrate " + " ".join(
-            f"--{name.replace('_', '-')} {path}"
-            for name, paths in given.items()
-            for path in (paths if isinstance(paths, list) else [paths])
-        )
-    fit = result.fit_record(source)
-    if releases:
-        fit["release_tests"] = {key: _release_summary(fig) for key, fig in releases.items()}
-    save_calibration(result.calibration, out, fit, force=args.force)
-    rows = result.residual_rows()
+    return given
+
+
+def _fit_records(args, given: dict, params, initial, out):
+    """Calibrate to the record files: ``(result, source line, release figures by key)``; a failed or poor fit
+    (beyond ``--allow-poor-fit``) is refused naming what was missed."""
+    import dataclasses
+
+    from flexdigit.calibrate import record_files as rec
+    from flexdigit.calibrate.targets import CalibrationTargets
+    from flexdigit.calibrate.twin_fit import calibrate
+    from flexdigit.errors import DesignError
+
+    releases, release_targets = _release_targets(args, given)
+    kw: dict = {"deflection_resolution_mm": args.deflection_resolution_mm}
+    if "sweep" in given:
+        kw["sweep"] = rec.read_sweep(given["sweep"], decimal=args.decimal)
+    if "deflections" in given:
+        kw["deflections"] = rec.read_deflections(given["deflections"], decimal=args.decimal)
+    if "rest" in given:
+        kw["rest"] = rec.read_rest(given["rest"], time_unit=args.time_unit, decimal=args.decimal)
+    if "actuated_rest" in given:
+        kw["actuated_rest"] = rec.read_actuated_rest(given["actuated_rest"], decimal=args.decimal)
+    targets = dataclasses.replace(CalibrationTargets.from_records(**kw), **release_targets)
+    result = calibrate(targets, params, initial=initial)
+    if not result.success:
+        raise DesignError(f"the fit did not converge ({result.message}); no calibration written to {out}")
     row, miss = result.worst()
-    data = {
-        "out": str(out),
-        "success": result.success,
-        "worst": None if row is None else {"target": row["target"], "times_scale": miss},
-        "message": result.message,
-        "cost": result.cost,
-        "fitted": result.fitted,
-        "kept": [name for name in result.calibration.to_dict() if name not in result.fitted],
-        "residuals": rows,
-        "calibration": result.calibration.to_dict(),
-        "release_tests": fit.get("release_tests", {}),
-    }
+    if miss > POOR_FIT and not args.allow_poor_fit:
+        raise DesignError(
+            f"the calibrated twin misses {row['target']} by {row['twin'] - row['measured']:+.4g} {row['unit']} "
+            f"({miss:.1f} times its scale of {row['scale']:.3g} {row['unit']}): it cannot reproduce these records "
+            f"together (different rigs or set-ups mixed? a unit slip?); no calibration written to {out} (pass "
+            "--allow-poor-fit to write it anyway)"
+        )
+    source = "flexdigit calibrate " + " ".join(
+        f"--{name.replace('_', '-')} {path}"
+        for name, paths in given.items()
+        for path in (paths if isinstance(paths, list) else [paths])
+    )
+    return result, source, releases
+
+
+def _release_targets(args, given: dict) -> tuple[dict, dict]:
+    """The release tests' figures by key (bare, housing) and the fit targets they give."""
+    from flexdigit.calibrate import record_files as rec
+    from flexdigit.calibrate.targets import release_figures
+
+    releases: dict[str, dict] = {}
+    targets: dict = {}
+    for key, name in (("bare", "release_bare"), ("housing", "release_housed")):
+        if name in given:
+            read = [rec.read_release(path, time_unit=args.time_unit, decimal=args.decimal) for path in given[name]]
+            series = [s for records in read for s in records]
+            releases[key] = release_figures(series)
+            targets[f"{key}_wn_rad_s"] = releases[key]["wn_rad_s"]
+            targets[f"{key}_zeta"] = releases[key]["zeta"]
+    return releases, targets
+
+
+def _calibrate_text(result, data: dict, out) -> str:
     lines = [result.table(), ""]
     for key, summary in data["release_tests"].items():
         for r in summary["records"]:
@@ -156,7 +181,7 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
     lines.append("fitted: " + ", ".join(result.fitted))
     lines.append("kept from the starting calibration: " + (", ".join(data["kept"]) or "none"))
     lines.append(f"calibration written to {out}")
-    return CommandResult(data=data, text="\n".join(lines))
+    return "\n".join(lines)
 
 
 def _release_summary(figures: dict) -> dict:

@@ -20,6 +20,14 @@ def _collect_flags():
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     hidden, tol, settle = _collect_flags()
+    _add_collect(subparsers, settle)
+    _add_dataset(subparsers)
+    _add_train(subparsers, hidden, tol)
+    _add_predict(subparsers)
+
+
+def _add_collect(subparsers, settle) -> None:
+    """``flexdigit collect``'s flags."""
     p = add_command(
         subparsers,
         "collect",
@@ -43,6 +51,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
     p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset, and --record")
 
+
+def _add_dataset(subparsers) -> None:
+    """``flexdigit dataset``'s flags."""
     p = add_command(
         subparsers,
         "dataset",
@@ -81,6 +92,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     q.add_argument("--params", metavar="FILE", help="rig parameters TOML (for the digit length)")
     q.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
+
+def _add_train(subparsers, hidden, tol) -> None:
+    """``flexdigit train``'s flags."""
     p = add_command(subparsers, "train", _train, help="train the thesis's network on a dataset and save it as JSON")
     p.add_argument("file", help="a dataset written by 'flexdigit collect'")
     p.add_argument(
@@ -96,6 +110,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--model", default=None, help="model file to write (default: FILE stem + .<target>.model.json)")
     p.add_argument("--force", action="store_true", help="overwrite the model file if it exists")
 
+
+def _add_predict(subparsers) -> None:
+    """``flexdigit predict``'s flags."""
     p = add_command(subparsers, "predict", _predict, help="predict with a saved model on a dataset")
     p.add_argument("model", help="a model file written by 'flexdigit train'")
     p.add_argument("file", help="a dataset")

@@ -13,16 +13,15 @@ backends the report also gives the twin's true tip rotation (``true_*`` beside `
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from pathlib import Path
 
 from flexdigit._command import CommandResult, add_command
 from flexdigit._validation import SEED, Flag, Plausible
+from flexdigit.rig.step_test import ESTIMATE_SMOOTH_S
 
-#: The estimated rotation is averaged over a centred 0.1 s window before its step figures are taken: its noise
-#: (~0.2 deg rms on the twin) is half the 2 % band of a 20 deg step (:func:`flexdigit.rig.step_test.step_metrics`).
-ESTIMATE_SMOOTH_S = 0.1
 #: Longest run ``flexdigit run`` takes, s (a day; a longer one is a typo, and would not end on the twin).
 MAX_DURATION_S = 86_400.0
 #: The run's flags, declared once (flexdigit._validation.Flag: refused by argparse, one line naming the flag).
@@ -31,9 +30,7 @@ SETPOINT = Plausible("deg", -60.0, 120.0, "a beam rotation the digit reaches: 30
 
 
 def register(subparsers) -> None:
-    from flexdigit.rig.backends.stream_emulator import DURATION_S, RATE_HZ
     from flexdigit.rig.controllers import ACTUATOR_GAIN
-    from flexdigit.rig.rotation_reference import READING_RESOLUTION_DEG, READING_RESOLUTION_MM
 
     parser = add_command(
         subparsers,
@@ -60,31 +57,7 @@ def register(subparsers) -> None:
         "--gain", type=Flag(ACTUATOR_GAIN), default=1.0, help="actuator gain error to emulate (robustness runs)"
     )
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
-    parser.add_argument(
-        "--rotation-map",
-        type=Path,
-        default=None,
-        help="gauge -> rotation map (JSON): loaded if it exists, else made and saved",
-    )
-    parser.add_argument(
-        "--map-from",
-        default=None,
-        metavar="twin|operator|FILE",
-        help="make the rotation map from: the (calibrated) twin's own rotation (default on sim), the operator at each "
-        "command (default on hardware), or a CSV of rotations or deflections measured on the rig",
-    )
-    parser.add_argument(
-        "--resolution-mm",
-        type=Flag(READING_RESOLUTION_MM),
-        default=0.5,
-        help="reading resolution of measured deflections, mm (0.5)",
-    )
-    parser.add_argument(
-        "--resolution-deg",
-        type=Flag(READING_RESOLUTION_DEG),
-        default=1.0,
-        help="reading resolution of measured rotations, deg (1)",
-    )
+    _add_map_flags(parser)
     parser.add_argument(
         "--calibration",
         type=Path,
@@ -112,6 +85,44 @@ def register(subparsers) -> None:
         action="store_true",
         help="close the loop on the board (hil://IMAGE.elf): the host sends the setpoint and watches",
     )
+
+    _add_stream_emulator(subparsers)
+
+
+def _add_map_flags(parser) -> None:
+    """The rotation map's flags: where it is kept and what it is made from."""
+    from flexdigit.rig.rotation_reference import READING_RESOLUTION_DEG, READING_RESOLUTION_MM
+
+    parser.add_argument(
+        "--rotation-map",
+        type=Path,
+        default=None,
+        help="gauge -> rotation map (JSON): loaded if it exists, else made and saved",
+    )
+    parser.add_argument(
+        "--map-from",
+        default=None,
+        metavar="twin|operator|FILE",
+        help="make the rotation map from: the (calibrated) twin's own rotation (default on sim), the operator at each "
+        "command (default on hardware), or a CSV of rotations or deflections measured on the rig",
+    )
+    parser.add_argument(
+        "--resolution-mm",
+        type=Flag(READING_RESOLUTION_MM),
+        default=0.5,
+        help="reading resolution of measured deflections, mm (0.5)",
+    )
+    parser.add_argument(
+        "--resolution-deg",
+        type=Flag(READING_RESOLUTION_DEG),
+        default=1.0,
+        help="reading resolution of measured rotations, deg (1)",
+    )
+
+
+def _add_stream_emulator(subparsers) -> None:
+    """``flexdigit stream-emulator``: stream:// without hardware."""
+    from flexdigit.rig.backends.stream_emulator import DURATION_S, RATE_HZ
 
     emulator = add_command(
         subparsers,
@@ -142,19 +153,48 @@ def _stream_emulator(args: argparse.Namespace) -> CommandResult:
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
-    from flexdigit._io import check_output
-    from flexdigit._validation import check_real
-    from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
-    from flexdigit.rig.controllers import CONTROLLERS, make_controller
-    from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S, realtime_priority, run_loop
-    from flexdigit.rig.sample_log import check_appendable
-    from flexdigit.rig.step_test import step_metrics
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.loop import realtime_priority
+    from flexdigit.rig.step_test import run_step
 
     if args.on_board:
         return _run_on_board(args)
-    if args.controller not in CONTROLLERS:
-        from flexdigit.errors import ParameterError
+    duration, setpoint, sim, rig_options = _checked(args)
+    with contextlib.ExitStack() as stack:
+        rig = stack.enter_context(open_rig(args.backend, **rig_options))  # closed on the way out, whatever happens
+        settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): logged and reported
+        period, estimator = _period_and_map(args, rig, sim, settings)
+        recording = _recording(args, rig, stack, setpoint, period, duration, settings, estimator)
+        progress = None if (args.no_progress or args.json or not sys.stderr.isatty()) else _Progress(duration)
+        if args.realtime:
+            stack.enter_context(realtime_priority())
+        header = {"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend}
+        run = run_step(
+            rig, args.controller, setpoint, duration, period, estimator=estimator, gain=args.gain,
+            on_sample=progress.update if progress else None, log_path=args.log, log_mode=_log_mode(args),
+            header={**header, "rig_settings": settings}, recording=recording,
+        )  # fmt: skip
+    if progress:
+        progress.stop(_figures_line(run.figures))
+    data = _run_data(args, run, rig, settings, setpoint, period, estimator, recording)
+    # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
+    exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[run.result.status]
+    return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
 
+
+def _log_mode(args) -> str:
+    return "append" if args.append else "replace" if args.force else "new"
+
+
+def _checked(args) -> tuple[float, float, bool, dict]:
+    """The run's flags checked before the rig moves: ``(duration, setpoint, sim, the rig's options)``."""
+    from flexdigit._io import check_output
+    from flexdigit._validation import check_real
+    from flexdigit.errors import ParameterError
+    from flexdigit.rig.base import parse_rig_url, seed_option
+    from flexdigit.rig.controllers import CONTROLLERS
+
+    if args.controller not in CONTROLLERS:
         raise ParameterError(f"--controller must be one of {', '.join(CONTROLLERS)}. Got {args.controller!r} instead.")
     duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
@@ -166,91 +206,46 @@ def _run(args: argparse.Namespace) -> CommandResult:
         check_output(args.rotation_map, force=args.force)  # before the sweep, not after it
     # --seed reaches a hardware rig only to be refused (it has no noise); with --map-from twin it seeds the map's twin
     rig_options = twin_options if sim else ({} if args.map_from == "twin" else seed_option(args.backend, args.seed))
-    rig = open_rig(args.backend, **rig_options)
-    settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): logged and reported
-    try:
-        # 0 is a value (refused), not "not given"; below 0.1 ms the loop would only spin (--period 1e-7 hung)
-        period = rig.params.actuator.serial_period_s if args.period is None else args.period
-        period = check_real(period, "--period", low=MIN_PERIOD_S, high=MAX_PERIOD_S)
-        if args.log is not None and args.append and args.log.exists():
-            check_appendable(args.log, {"controller": args.controller, "period_s": period, "rig_settings": settings})
-        estimator = _rotation_map(args, rig, sim)
-        controller = make_controller(args.controller, rig, period_s=period, estimator=estimator, gain=args.gain)
-    except BaseException:
-        rig.close()
-        raise
-    progress = None if (args.no_progress or args.json or not sys.stderr.isatty()) else _Progress(duration)
-    # the twin knows the true beam rotation; the loop (and hardware) only has the gauges' estimate of it
-    truth = getattr(rig, "tip_rotation_deg", None)
-    true_rotation: list[float] = []
+    return duration, setpoint, sim, rig_options
 
-    def on_sample(k: int, t: float, y: float, command: int) -> None:
-        if truth is not None:
-            true_rotation.append(truth())
-        if progress:
-            progress.update(k, t, y, command)
 
-    recording = None
-    if args.record is not None:
-        from flexdigit.rig.recording import Recording, rig_metadata
+def _period_and_map(args, rig, sim: bool, settings: dict):
+    """The sample period (the rig's serial period by default) and the rotation map; an --append log checked."""
+    from flexdigit._validation import check_real
+    from flexdigit.rig.loop import MAX_PERIOD_S, MIN_PERIOD_S
+    from flexdigit.rig.sample_log import check_appendable
 
-        try:
-            recording = Recording(
-                args.record,
-                header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
-                        "period_s": period, "duration_s": duration, "seed": settings.get("seed")},
-                metadata={**rig_metadata(rig), "flexdigit.calibration": {"rotation_map": estimator.to_dict()}},
-                force=args.force,
-            )  # fmt: skip
-        except BaseException:
-            rig.close()
-            raise
-    priority = realtime_priority() if args.realtime else None
-    if priority is not None:
-        priority.__enter__()
-    deg_per_command = getattr(estimator, "deg_per_command_", math.nan)
-    if not (isinstance(deg_per_command, float) and math.isfinite(deg_per_command) and deg_per_command > 0):
-        deg_per_command = _deg_per_command(rig.params)
+    # 0 is a value (refused), not "not given"; below 0.1 ms the loop would only spin (--period 1e-7 hung)
+    period = rig.params.actuator.serial_period_s if args.period is None else args.period
+    period = check_real(period, "--period", low=MIN_PERIOD_S, high=MAX_PERIOD_S)
+    if args.log is not None and args.append and args.log.exists():
+        check_appendable(args.log, {"controller": args.controller, "period_s": period, "rig_settings": settings})
+    return period, _rotation_map(args, rig, sim)
 
-    def summary(time_s, estimated_deg) -> dict:
-        figures = {
-            "estimated": step_metrics(time_s, estimated_deg, setpoint, 0.0, deg_per_command, smooth_s=ESTIMATE_SMOOTH_S)
-        }
-        if truth is not None:
-            figures["true"] = step_metrics(time_s[: len(true_rotation)], true_rotation, setpoint, 0.0, deg_per_command)
-        return {name: m.to_dict() for name, m in figures.items()}
 
-    try:
-        result = run_loop(
-            rig,
-            controller,
-            setpoint,
-            duration,
-            period,
-            log_path=args.log,
-            log_mode="append" if args.append else "replace" if args.force else "new",
-            on_sample=on_sample,
-            measure=estimator,
-            header={
-                "controller": args.controller,
-                "setpoint_deg": setpoint,
-                "backend": args.backend,
-                "rig_settings": settings,
-            },
-            summary=summary,
-            recording=recording,
+def _recording(args, rig, stack, setpoint, period, duration, settings, estimator):
+    """The ``--record`` MCAP recording, open on ``stack`` (the loop closes it with its stop record), or None."""
+    if args.record is None:
+        return None
+    from flexdigit.rig.recording import Recording, rig_metadata
+
+    return stack.enter_context(
+        Recording(
+            args.record,
+            header={"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
+                    "period_s": period, "duration_s": duration, "seed": settings.get("seed")},
+            metadata={**rig_metadata(rig), "flexdigit.calibration": {"rotation_map": estimator.to_dict()}},
+            force=args.force,
         )
-    finally:
-        if priority is not None:
-            priority.__exit__(None, None, None)
-    figures = summary(result.time_s, result.measurement) if result.time_s.size >= 2 else {}
-    if progress:
-        progress.stop(_figures_line(figures))
-    t = result.timing
+    )  # fmt: skip
+
+
+def _run_data(args, run, rig, settings, setpoint, period, estimator, recording) -> dict:
+    """``run --json``: the run's status, timing, rotations, step figures, map and files."""
+    result, figures, t = run.result, run.figures, run.result.timing
     final, peak = _final_and_peak(result.time_s, result.measurement)
-    true_final, true_peak = _final_and_peak(result.time_s[: len(true_rotation)], true_rotation)
-    has_truth = truth is not None
-    data = {
+    true_final, true_peak = _final_and_peak(result.time_s[: len(run.true_rotation_deg)], run.true_rotation_deg)
+    return {
         "status": result.status,
         "message": result.message,
         "loop": "host",  # where the loop closed: here (the board closes it with --on-board)
@@ -269,14 +264,14 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "estimated_final_rotation_deg": final,
         "estimated_peak_rotation_deg": peak,
         # the twin's own tip rotation (sim backends only; null on hardware and replays)
-        "true_final_rotation_deg": true_final if has_truth else None,
-        "true_peak_rotation_deg": true_peak if has_truth else None,
+        "true_final_rotation_deg": true_final if run.has_truth else None,
+        "true_peak_rotation_deg": true_peak if run.has_truth else None,
         # rise, 2 % settling, overshoot, steady-state error (deg, commands), IAE of the step to the setpoint, from
         # the estimated rotation and, on the twin, the true one (null where there is none)
         "step_metrics": {
             "estimated": figures["estimated"] if figures else None,
             "true": figures.get("true"),
-            "deg_per_command": deg_per_command,
+            "deg_per_command": run.deg_per_command,
             "settling_band": 0.02,
             "estimate_smoothed_s": ESTIMATE_SMOOTH_S,
         },
@@ -289,20 +284,23 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "record": str(recording.path) if recording is not None else None,
         "signal": result.extra.get("signal"),  # the signal that stopped the run (SIGTERM, SIGHUP, SIGINT), or null
     }
-    truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if has_truth else ""
-    text = (
-        f"{args.controller} on {args.backend}: {result.status} ({result.message})\n"
+
+
+def _run_text(args, run, data: dict, setpoint: float, period: float) -> str:
+    t = run.result.timing
+    final, peak = data["estimated_final_rotation_deg"], data["estimated_peak_rotation_deg"]
+    true_final, true_peak = data["true_final_rotation_deg"], data["true_peak_rotation_deg"]
+    truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if run.has_truth else ""
+    return (
+        f"{args.controller} on {args.backend}: {run.result.status} ({run.result.message})\n"
         f"  rotation estimated from the gauges: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg"
         f"{truth_text}; last command {data['final_command']}\n"
-        f"  step: {_figures_line(figures)}\n"
+        f"  step: {_figures_line(run.figures)}\n"
         f"  rotation map: {data['rotation_map']['source']}; uncertainty {data['rotation_map']['uncertainty_deg']:.2f} "
         f"deg at {setpoint:g} deg\n"
         f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
         f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
     )
-    # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
-    exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[result.status]
-    return CommandResult(data=data, text=text, exit_code=exit_code)
 
 
 def _signal_exit_code(name: str | None) -> int:
@@ -368,11 +366,9 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
 
 def _deg_per_command(params) -> float:
     """Beam rotation per servo command of the design model (the cable model's 1.735 deg on the thesis rig)."""
-    import numpy as np
+    from flexdigit.rig.step_test import _deg_per_command
 
-    from flexdigit.control.design20ms import design_plant
-
-    return float(np.real(design_plant(params).dcgain()))
+    return _deg_per_command(params)
 
 
 def _figures_line(figures: dict) -> str:

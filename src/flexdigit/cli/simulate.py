@@ -43,19 +43,27 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     sub = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
 
-    def common(p: argparse.ArgumentParser) -> None:
-        p.add_argument("--out", required=True, help="output file (.parquet, or .csv)")
-        p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
-        p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
-        p.add_argument("--params", help="rig parameters TOML (default: the thesis rig)")
-        p.add_argument(
-            "--calibration",
-            help="twin calibration TOML (default: fitted to the thesis, scaled to the --params digit)",
-        )
-        p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+    for add in (_add_release, _add_step, _add_sweep, _add_load):
+        add(sub)
 
+
+def _common(p: argparse.ArgumentParser) -> None:
+    """The flags every experiment takes."""
+    p.add_argument("--out", required=True, help="output file (.parquet, or .csv)")
+    p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
+    p.add_argument("--params", help="rig parameters TOML (default: the thesis rig)")
+    p.add_argument(
+        "--calibration",
+        help="twin calibration TOML (default: fitted to the thesis, scaled to the --params digit)",
+    )
+    p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+
+
+def _add_release(sub) -> None:
+    """The release test's flags."""
     p = sub.add_parser("release", help="release test, cable removed (3.1.2, figure 3.6)")
-    common(p)
+    _common(p)
     p.add_argument("--no-housing", action="store_true", help="bare strip (table 3.1)")
     p.add_argument(
         "--deflection-mm",
@@ -71,15 +79,23 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         choices=("vertical", "hanging", "horizontal"),
         help="vertical: tip up, as the thesis mounted it (2.2.4); a long digit buckles so, hang it",
     )
+
+
+def _add_step(sub) -> None:
+    """The servo step's flags."""
     p = sub.add_parser("step", help="servo command step (3.2.4, figure 3.11)")
-    common(p)
+    _common(p)
     p.add_argument("--from", dest="command_from", type=Flag(SERVO_COMMAND), default=0)
     p.add_argument("--to", dest="command_to", type=Flag(SERVO_COMMAND), default=51)
     p.add_argument("--duration", type=Flag(DURATION), default=1.5)
     p.add_argument("--rate", type=Flag(RATE), default=1000.0)
     p.add_argument("--cable", action="store_true", help="keep the cable attached")
+
+
+def _add_sweep(sub) -> None:
+    """The actuation sweep's flags."""
     p = sub.add_parser("sweep", help="actuation sweep, commands 8..43 (3.4.3, E 3.20-3.22)")
-    common(p)
+    _common(p)
     p.add_argument("--commands", type=COMMANDS, default="8..43", help="'8..43' or '8,20,43'")
     p.add_argument(
         "--settle",
@@ -93,8 +109,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=20,
         help="samples per command",
     )
+
+
+def _add_load(sub) -> None:
+    """The static load test's flags."""
     p = sub.add_parser("load", help="static load test (6.4-6.5, 7.1-7.2)")
-    common(p)
+    _common(p)
     p.add_argument(
         "--loads-g",
         type=Flag(LOAD_KG.to("g", 1e3), many=True),
@@ -119,11 +139,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
-    import numpy as np
-
     from flexdigit._io import check_output
     from flexdigit.params import RigParams, load_params
-    from flexdigit.twin import records as ex
     from flexdigit.twin.calibration import default_calibration, load_calibration
     from flexdigit.twin.digit_calibration import calibration_for
 
@@ -137,83 +154,8 @@ def _run(args: argparse.Namespace) -> CommandResult:
         cal = calibration_for(params)
     common = dict(seed=args.seed, params=params, calibration=cal)
     gauges = range(1, len(params.geometry.gauge_positions_m) + 1)  # the digit's gauges, 1..G
-    findings: dict = {}
-    if args.experiment == "release" and args.deflection_mm == 0:
-        # a release from no deflection is noise, and the fit below would report a wn and zeta fitted to it
-        raise ParameterError(
-            "The '--deflection-mm' parameter of flexdigit simulate release must not be 0: a release test releases "
-            "the digit from a deflection (e.g. 20 mm, either sign). Got 0.0 instead."
-        )
-    if args.experiment == "release":
-        res = ex.release_test(
-            housing=not args.no_housing,
-            tip_deflection_m=args.deflection_mm * 1e-3,
-            duration_s=args.duration,
-            sample_rate_hz=args.rate,
-            orientation=args.orientation,
-            **common,
-        )
-        findings = _release_findings(res, gauges)
-        lines = []
-        for g in gauges:
-            f = findings[f"gauge{g}"]
-            if "error" in f:
-                lines.append(f"gauge {g}: not identified ({f['error']})")
-            else:
-                lines.append(
-                    f"gauge {g}: wn {f['wn_rad_s']:.3f} rad/s, zeta {f['zeta']:.4f} (fit {f['fit_percent']:.1f} %)"
-                )
-        lines.append(f"median: wn {findings['wn_rad_s']:.3f} rad/s, zeta {findings['zeta']:.4f}")
-        text = "\n".join(lines)
-    elif args.experiment == "step":
-        res = ex.servo_step_test(
-            command_from=args.command_from,
-            command_to=args.command_to,
-            duration_s=args.duration,
-            sample_rate_hz=args.rate,
-            cable=args.cable,
-            **common,
-        )
-        pot = res.column("pot_v")
-        findings = {"pot_start_v": float(pot[0]), "pot_peak_v": float(pot.max()), "pot_end_v": float(pot[-1])}
-        text = "pot: {pot_start_v:.4f} V -> peak {pot_peak_v:.4f} V -> {pot_end_v:.4f} V".format(**findings)
-    elif args.experiment == "sweep":
-        res = ex.actuation_sweep(
-            _commands(args.commands, params, "sweep"), settle_s=args.settle, samples=args.samples, **common
-        )
-        cmd = res.column("command")
-        lines = []
-        thesis = params == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
-        for g in gauges:
-            slope, offset = np.polyfit(cmd, res.column(f"gauge{g}_v"), 1)
-            findings[f"gauge{g}"] = {"slope_v_per_command": float(slope), "offset_v": float(offset)}
-            lines.append(f"gauge {g}: V = {slope:.5f} command {offset:+.4f}" + (f"   (E 3.2{g - 1})" if thesis else ""))
-        text = "\n".join(lines)
-    else:
-        commands = None if args.commands is None else _commands(args.commands, params, "load")
-        owner = "flexdigit simulate load"
-        loads_g = args.loads_g
-        length_cm = params.geometry.digit_length_m * 1e2
-        positions_cm = check_values(
-            args.positions_cm,
-            "--positions-cm",
-            owner,
-            low=0,
-            high=length_cm,
-            high_open=True,
-            unit="cm from the tip",
-            note=f"0 is the tip, {length_cm:g} the clamp: nothing hangs beyond the tip, or at or behind the clamp",
-        )
-        res = ex.static_load_test(
-            [g * 1e-3 for g in loads_g],
-            [c * 1e-2 for c in positions_cm],
-            commands=commands,
-            repetitions=args.repetitions,
-            orientation=args.orientation,
-            **common,
-        )
-        findings = {f"gauge{g}_mean_v": float(np.mean(res.column(f"gauge{g}_v"))) for g in gauges}
-        text = f"{res.table.num_rows} samples"
+    experiment = {"release": _release, "step": _step, "sweep": _sweep}.get(args.experiment, _load)
+    res, findings, text = experiment(args, params, gauges, common)
     path = res.save(args.out, force=args.force)
     data = {
         "experiment": res.metadata["experiment"],
@@ -224,6 +166,105 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "findings": findings,
     }
     return CommandResult(data=data, text=f"{res.metadata['experiment']}: {res.table.num_rows} rows -> {path}\n{text}")
+
+
+def _release(args, params, gauges, common: dict):
+    """``simulate release``: the record, each gauge's wn and zeta, and their lines."""
+    from flexdigit.twin import records as ex
+
+    if args.deflection_mm == 0:
+        # a release from no deflection is noise, and the fit below would report a wn and zeta fitted to it
+        raise ParameterError(
+            "The '--deflection-mm' parameter of flexdigit simulate release must not be 0: a release test releases "
+            "the digit from a deflection (e.g. 20 mm, either sign). Got 0.0 instead."
+        )
+    res = ex.release_test(
+        housing=not args.no_housing,
+        tip_deflection_m=args.deflection_mm * 1e-3,
+        duration_s=args.duration,
+        sample_rate_hz=args.rate,
+        orientation=args.orientation,
+        **common,
+    )
+    findings = _release_findings(res, gauges)
+    lines = []
+    for g in gauges:
+        f = findings[f"gauge{g}"]
+        if "error" in f:
+            lines.append(f"gauge {g}: not identified ({f['error']})")
+        else:
+            lines.append(
+                f"gauge {g}: wn {f['wn_rad_s']:.3f} rad/s, zeta {f['zeta']:.4f} (fit {f['fit_percent']:.1f} %)"
+            )
+    lines.append(f"median: wn {findings['wn_rad_s']:.3f} rad/s, zeta {findings['zeta']:.4f}")
+    return res, findings, "\n".join(lines)
+
+
+def _step(args, params, gauges, common: dict):
+    """``simulate step``: the record and the pot's start, peak and end."""
+    from flexdigit.twin import records as ex
+
+    res = ex.servo_step_test(
+        command_from=args.command_from,
+        command_to=args.command_to,
+        duration_s=args.duration,
+        sample_rate_hz=args.rate,
+        cable=args.cable,
+        **common,
+    )
+    pot = res.column("pot_v")
+    findings = {"pot_start_v": float(pot[0]), "pot_peak_v": float(pot.max()), "pot_end_v": float(pot[-1])}
+    return res, findings, "pot: {pot_start_v:.4f} V -> peak {pot_peak_v:.4f} V -> {pot_end_v:.4f} V".format(**findings)
+
+
+def _sweep(args, params, gauges, common: dict):
+    """``simulate sweep``: the record and each gauge's line against the command (E 3.20-3.22 on the thesis rig)."""
+    import numpy as np
+
+    from flexdigit.params import RigParams
+    from flexdigit.twin import records as ex
+
+    res = ex.actuation_sweep(
+        _commands(args.commands, params, "sweep"), settle_s=args.settle, samples=args.samples, **common
+    )
+    cmd = res.column("command")
+    lines, findings = [], {}
+    thesis = params == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
+    for g in gauges:
+        slope, offset = np.polyfit(cmd, res.column(f"gauge{g}_v"), 1)
+        findings[f"gauge{g}"] = {"slope_v_per_command": float(slope), "offset_v": float(offset)}
+        lines.append(f"gauge {g}: V = {slope:.5f} command {offset:+.4f}" + (f"   (E 3.2{g - 1})" if thesis else ""))
+    return res, findings, "\n".join(lines)
+
+
+def _load(args, params, gauges, common: dict):
+    """``simulate load``: the record and each gauge's mean."""
+    import numpy as np
+
+    from flexdigit.twin import records as ex
+
+    commands = None if args.commands is None else _commands(args.commands, params, "load")
+    length_cm = params.geometry.digit_length_m * 1e2
+    positions_cm = check_values(
+        args.positions_cm,
+        "--positions-cm",
+        "flexdigit simulate load",
+        low=0,
+        high=length_cm,
+        high_open=True,
+        unit="cm from the tip",
+        note=f"0 is the tip, {length_cm:g} the clamp: nothing hangs beyond the tip, or at or behind the clamp",
+    )
+    res = ex.static_load_test(
+        [g * 1e-3 for g in args.loads_g],
+        [c * 1e-2 for c in positions_cm],
+        commands=commands,
+        repetitions=args.repetitions,
+        orientation=args.orientation,
+        **common,
+    )
+    findings = {f"gauge{g}_mean_v": float(np.mean(res.column(f"gauge{g}_v"))) for g in gauges}
+    return res, findings, f"{res.table.num_rows} samples"
 
 
 def _release_findings(record, gauges=(1, 2, 3)) -> dict:

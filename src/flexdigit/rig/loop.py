@@ -21,7 +21,7 @@ import os
 import signal
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -32,6 +32,7 @@ from flexdigit._validation import check_positive, check_real
 from flexdigit.errors import Interrupted, ParameterError, RigError
 from flexdigit.interrupts import signals_deferred, stop_requested
 from flexdigit.rig.base import Reading, Rig
+from flexdigit.rig.recording import Recording
 from flexdigit.rig.safety import RunawayGuard, default_guard
 
 # the log's names, kept importable from here for code written before they had their own module
@@ -48,6 +49,7 @@ __all__ = [
     "LoopController",
     "TimingStats",
     "LoopResult",
+    "LoopSettings",
     "run_loop",
     "check_reading",
     "realtime_priority",
@@ -152,40 +154,18 @@ def check_reading(reading: Reading, adc_range_v: tuple[float, float], margin_v: 
             )
 
 
-def run_loop(
-    rig: Rig,
-    controller: LoopController,
-    setpoint: float | Callable[[float], float],
-    duration_s: float,
-    period_s: float = 0.020,
-    *,
-    log_path: str | os.PathLike | None = None,
-    clock: Callable[[], float] | None = None,
-    timer: Callable[[], float] | None = None,
-    measure: Callable[[Reading], float] | None = None,
-    on_sample: Callable[[int, float, float, int], None] | None = None,
-    check_sensors: bool = True,
-    close_rig: bool = True,
-    fsync_every: int = 50,
-    header: dict[str, Any] | None = None,
-    recording: Any = None,
-    summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None,
-    log_mode: str = "new",
-    guard: RunawayGuard | bool = True,
-    stall_s: float = 0.5,
-) -> LoopResult:
-    """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
+@dataclass(frozen=True)
+class LoopSettings:
+    """How :func:`run_loop` runs, beyond what it drives: the period, the log, the clocks, the checks.
 
-    Parameters
+    Every field is also a keyword of :func:`run_loop` (``run_loop(..., log_path="run.jsonl")`` is
+    ``run_loop(..., settings=LoopSettings(log_path="run.jsonl"))``); a keyword given beside ``settings`` overrides
+    that field.
+
+    Attributes
     ----------
-    rig : Rig
-        Any backend; its :meth:`~Rig.wait` lets time pass (virtual on the twin).
-    controller : LoopController
-        ``reset(command)`` then ``step(setpoint, reading) -> command`` each sample.
-    setpoint : float or callable
-        Setpoint (in the controller's unit, e.g. beam rotation deg), or a function of loop time (s).
-    duration_s, period_s : float
-        Run length and sample period, s (0.020 s: the servo board's rate, 5.2).
+    period_s : float
+        Sample period, s (0.020 s: the servo board's rate, 5.2).
     log_path : path-like, optional
         JSON-lines sample log (see the module docstring).
     clock : callable, optional
@@ -201,6 +181,10 @@ def run_loop(
         Stop with a fault when a gauge is NaN or clipped (:func:`check_reading`).
     close_rig : bool
         Close the rig (port) when the loop ends, whatever the reason.
+    fsync_every : int
+        Samples between two ``fsync`` of the log (each line is flushed to the OS at once).
+    header : dict, optional
+        Extra entries of the log's first line.
     recording : flexdigit.rig.recording.Recording, optional
         An open MCAP recording: every sample goes to it as to the log, and the loop closes it with the stop
         record (so a fault or Ctrl-C still leaves a complete, readable file).
@@ -219,6 +203,55 @@ def run_loop(
     log_mode : {"new", "append", "replace"}
         An existing ``log_path`` is refused (``"new"``), added to (``"append"``: a log of the same controller,
         period and rig settings) or replaced (``"replace"``, ``--force``); see :class:`SampleLog`.
+    """
+
+    period_s: float = 0.020
+    log_path: str | os.PathLike | None = None
+    clock: Callable[[], float] | None = None
+    timer: Callable[[], float] | None = None
+    measure: Callable[[Reading], float] | None = None
+    on_sample: Callable[[int, float, float, int], None] | None = None
+    check_sensors: bool = True
+    close_rig: bool = True
+    fsync_every: int = 50
+    header: dict[str, Any] | None = None
+    recording: Recording | None = None
+    summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None
+    log_mode: str = "new"
+    guard: RunawayGuard | bool = True
+    stall_s: float = 0.5
+
+
+_SETTING_NAMES = frozenset(f.name for f in fields(LoopSettings))
+
+
+def run_loop(
+    rig: Rig,
+    controller: LoopController,
+    setpoint: float | Callable[[float], float],
+    duration_s: float,
+    period_s: float | None = None,
+    *,
+    settings: LoopSettings | None = None,
+    **options: Any,
+) -> LoopResult:
+    """Run ``controller`` on ``rig`` for ``duration_s`` at ``period_s`` on absolute deadlines.
+
+    Parameters
+    ----------
+    rig : Rig
+        Any backend; its :meth:`~Rig.wait` lets time pass (virtual on the twin).
+    controller : LoopController
+        ``reset(command)`` then ``step(setpoint, reading) -> command`` each sample.
+    setpoint : float or callable
+        Setpoint (in the controller's unit, e.g. beam rotation deg), or a function of loop time (s).
+    duration_s, period_s : float
+        Run length and sample period, s (0.020 s: the servo board's rate, 5.2).
+    settings : LoopSettings, optional
+        The settings below as one object; a keyword given beside it overrides its field.
+    **options
+        Any field of :class:`LoopSettings` by name (``log_path``, ``clock``, ``guard``, ``recording``, ...): the
+        keywords run_loop has always taken; each overrides that field of ``settings``.
 
     Returns
     -------
@@ -226,154 +259,235 @@ def run_loop(
         ``status`` is ``"completed"``, ``"fault"`` or ``"interrupted"``; faults of the rig or the sensors are
         reported there (not raised). Exceptions raised by the controller are re-raised after the safe state.
     """
-    period = check_real(period_s, "period_s", "run_loop", low=MIN_PERIOD_S, high=MAX_PERIOD_S)
-    stall = check_real(stall_s, "stall_s", "run_loop", low=period, low_open=True)
-    duration = check_positive(duration_s, "duration_s", "run_loop")
-    clock = clock or rig.clock
-    timer = timer or time.perf_counter
-    measure = measure or getattr(controller, "measure", None) or (lambda r: math.nan)
-    target = setpoint if callable(setpoint) else (lambda t, _s=float(setpoint): _s)
-    n_samples = int(math.floor(duration / period + 1e-9))
-    if n_samples < 1:
-        raise ParameterError(f"The 'duration_s' parameter of run_loop must cover at least one period. Got {duration_s}")
+    s = _settings(settings, period_s, options)
+    run = _LoopRun.prepare(rig, controller, setpoint, duration_s, s)
+    run.log = _open_log(rig, controller, run, s)
+    samples = _Samples()
+    status, message = "completed", f"ran {run.n_samples} samples of {run.period * 1000:g} ms"
+    pending_error: BaseException | None = None
+    stopped_by: str | None = None  # the signal that stopped the run
+    try:
+        _sample_loop(rig, controller, run, s, samples)
+    except BaseException as exc:
+        status, message, stopped_by, pending_error = _classify_stop(exc)
+    with signals_deferred():  # the safe command and the closing records go out whole, whatever arrives meanwhile
+        safe, message = _finish(rig, run.equilibrium, s.close_rig, status, message, samples.ts, samples.ys,
+                                stopped_by, samples.overruns, s.summary, s.recording, run.log)  # fmt: skip
+    result = samples.result(run.period, status, message, safe, run.log, stopped_by)
+    if pending_error is not None:
+        raise pending_error
+    return result
+
+
+def _settings(settings: LoopSettings | None, period_s: float | None, options: dict[str, Any]) -> LoopSettings:
+    """The run's settings: ``settings`` (or the defaults), with ``period_s`` and the keywords laid over."""
+    unknown = sorted(set(options) - _SETTING_NAMES)
+    if unknown:
+        raise TypeError(f"run_loop() got an unexpected keyword argument {unknown[0]!r}")
+    if settings is not None and not isinstance(settings, LoopSettings):
+        raise ParameterError(f"The 'settings' parameter of run_loop must be a LoopSettings. Got {settings!r} instead.")
+    if period_s is not None:
+        options["period_s"] = period_s
+    return replace(settings or LoopSettings(), **options)
+
+
+@dataclass
+class _LoopRun:
+    """What :func:`run_loop` derives from its arguments before the first sample (checked, defaults filled in)."""
+
+    period: float
+    stall: float
+    duration: float
+    n_samples: int
+    clock: Callable[[], float]
+    timer: Callable[[], float]
+    measure: Callable[[Reading], float]
+    target: Callable[[float], float]
+    guard: RunawayGuard | None
+    adc_range: tuple[float, float]
+    equilibrium: int
+    command_limits: tuple[float, float]
+    log: SampleLog | None = None
+
+    @classmethod
+    def prepare(cls, rig: Rig, controller: LoopController, setpoint, duration_s, s: LoopSettings) -> _LoopRun:
+        period = check_real(s.period_s, "period_s", "run_loop", low=MIN_PERIOD_S, high=MAX_PERIOD_S)
+        stall = check_real(s.stall_s, "stall_s", "run_loop", low=period, low_open=True)
+        duration = check_positive(duration_s, "duration_s", "run_loop")
+        measure = s.measure or getattr(controller, "measure", None) or (lambda r: math.nan)
+        target = setpoint if callable(setpoint) else (lambda t, _s=float(setpoint): _s)
+        n_samples = int(math.floor(duration / period + 1e-9))
+        if n_samples < 1:
+            raise ParameterError(
+                f"The 'duration_s' parameter of run_loop must cover at least one period. Got {duration_s}"
+            )
+        framing = getattr(rig, "framing", None)  # a servo board whose frame allows fewer positions clamps lower
+        command_limits = (
+            float(rig.params.actuator.command_min),
+            float(min(rig.params.actuator.command_max, 254, getattr(framing, "max_position", 254))),
+        )
+        return cls(
+            period, stall, duration, n_samples, s.clock or rig.clock, s.timer or time.perf_counter, measure, target,
+            _resolve_guard(s.guard, rig, measure), tuple(rig.params.sensors.adc_range_v),
+            int(rig.params.actuator.equilibrium_command), command_limits,
+        )  # fmt: skip
+
+
+def _resolve_guard(guard: RunawayGuard | bool, rig: Rig, measure) -> RunawayGuard | None:
     if guard is True:
-        guard = default_guard(rig, measure)
-    elif guard is False:
-        guard = None
-    elif not isinstance(guard, RunawayGuard):
+        return default_guard(rig, measure)
+    if guard is False:
+        return None
+    if not isinstance(guard, RunawayGuard):
         raise ParameterError(
             f"The 'guard' parameter of run_loop must be a RunawayGuard, True (the default guard) or False (none). "
             f"Got {guard!r} instead."
         )
-    adc_range = tuple(rig.params.sensors.adc_range_v)
-    equilibrium = int(rig.params.actuator.equilibrium_command)
+    return guard
 
-    log = None
-    if log_path is not None:
-        meta = {
-            "rig": repr(rig),
-            "controller": type(controller).__name__,
-            "period_s": period,
-            "duration_s": duration,
-            "started_unix_s": time.time(),
-            **(header or {}),
-        }
-        try:
-            log = SampleLog(log_path, meta, fsync_every, mode=log_mode)
-        except BaseException:
-            _safe_state(rig, equilibrium, close_rig)  # nothing ran, but the caller gave us the rig to leave safe
-            raise
 
-    starts, lateness, compute = [], [], []
-    ts, sps, gauges, ys, cmds = [], [], [], [], []
-    overruns = 0
-    status, message = "completed", f"ran {n_samples} samples of {period * 1000:g} ms"
-    pending_error: BaseException | None = None
-    stopped_by: str | None = None  # the signal that stopped the run
-    framing = getattr(rig, "framing", None)  # a servo board whose frame allows fewer positions clamps lower
-    command_limits = (
-        float(rig.params.actuator.command_min),
-        float(min(rig.params.actuator.command_max, 254, getattr(framing, "max_position", 254))),
-    )
+def _open_log(rig: Rig, controller: LoopController, run: _LoopRun, s: LoopSettings) -> SampleLog | None:
+    """The sample log, or None without ``log_path``; a log that cannot be opened leaves the rig safe first."""
+    if s.log_path is None:
+        return None
+    meta = {
+        "rig": repr(rig),
+        "controller": type(controller).__name__,
+        "period_s": run.period,
+        "duration_s": run.duration,
+        "started_unix_s": time.time(),
+        **(s.header or {}),
+    }
     try:
-        controller.reset(rig.command)
-        if guard is not None:
-            guard.reset(rig.command)
-        t0 = clock()
-        k = 0
-        while k < n_samples:
-            deadline = t0 + k * period
-            now = clock()
-            if now < deadline:
-                rig.wait(deadline - now)
-                now = clock()
-            late = now - deadline
-            if late > stall:
-                raise RigError(
-                    f"the loop stalled: sample {k} started {late:.3f} s late (more than {stall:g} s); the rig (a DAQ "
-                    "or stream gone silent, a read that blocked) or the computer stopped answering"
-                )
-            if late > period:  # missed at least one whole deadline: count it and resynchronise, never burst
-                overruns += 1
-                skipped = int(late // period)
-                k += skipped
-                if k >= n_samples:
-                    break
-                deadline = t0 + k * period
-                late = now - deadline
-            w0 = timer()
-            reading = rig.read()
-            t = now - t0
-            r = float(target(t))
-            if check_sensors:
-                check_reading(reading, adc_range)
-            y = float(measure(reading))
-            if guard is not None:
-                guard.check_rotation(t, y)
-            u = controller.step(r, reading)
-            sent = rig.write_command(u)
-            # a stop signal waits for the sample's end: the log, the recording and the result keep the same samples
-            with signals_deferred():
-                if log is not None or recording is not None:
-                    record = {
-                        "k": k,
-                        "t": round(t, 9),
-                        "setpoint": r,
-                        "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
-                        "pot_v": _finite_or_none(reading.pot_v),
-                        "y": _finite_or_none(y),
-                        "command": sent,
-                    }
-                    if log is not None:
-                        log.write(record)
-                    if recording is not None:
-                        recording.write_sample(record)
-                compute.append(timer() - w0)
-                starts.append(now)
-                lateness.append(late)
-                ts.append(t)
-                sps.append(r)
-                gauges.append(reading.gauges_v)
-                ys.append(y)
-                cmds.append(sent)
-            if on_sample is not None:
-                on_sample(k, t, y, sent)
-            if guard is not None:
-                guard.check_command(t, r, y, float(u), sent, command_limits)
-            k += 1
-    except BaseException as exc:
-        # Ctrl-C, or SIGTERM/SIGHUP under flexdigit.interrupts.stop_on_signals (which a compiled twin's kernel may
-        # hand back as another exception: asked first)
-        stop = exc if isinstance(exc, KeyboardInterrupt) else stop_requested()
-        if stop is not None:
-            status, message = "interrupted", _interruption(stop)
-            stopped_by = getattr(stop, "signal_name", "SIGINT")
-        elif isinstance(exc, RigError | OSError):
-            status, message = "fault", str(exc)
-        else:  # a controller bug: safe state first, then let it propagate
-            status, message = "fault", f"{type(exc).__name__}: {exc}"
-            pending_error = exc
+        return SampleLog(s.log_path, meta, s.fsync_every, mode=s.log_mode)
+    except BaseException:
+        _safe_state(rig, run.equilibrium, s.close_rig)  # nothing ran, but the caller gave us the rig to leave safe
+        raise
 
-    with signals_deferred():  # the safe command and the closing records go out whole, whatever arrives meanwhile
-        safe, message = _finish(rig, equilibrium, close_rig, status, message, ts, ys, stopped_by, overruns, summary,
-                                recording, log)  # fmt: skip
-    timing = TimingStats.from_arrays(period, np.array(starts), np.array(lateness), np.array(compute), overruns)
-    result = LoopResult(
-        status,
-        message,
-        timing,
-        np.array(ts),
-        np.array(sps),
-        np.array(gauges).reshape(-1, 3) if gauges else np.zeros((0, 3)),
-        np.array(ys),
-        np.array(cmds, dtype=int),
-        safe,
-        log.path if log is not None else None,
-        {"signal": stopped_by} if stopped_by else {},
-    )
-    if pending_error is not None:
-        raise pending_error
-    return result
+
+@dataclass
+class _Samples:
+    """The samples kept so far, one list per column, and the overruns counted."""
+
+    starts: list[float] = field(default_factory=list)
+    lateness: list[float] = field(default_factory=list)
+    compute: list[float] = field(default_factory=list)
+    ts: list[float] = field(default_factory=list)
+    sps: list[float] = field(default_factory=list)
+    gauges: list[Any] = field(default_factory=list)
+    ys: list[float] = field(default_factory=list)
+    cmds: list[int] = field(default_factory=list)
+    overruns: int = 0
+
+    def append(self, now, late, compute_s, t, r, reading: Reading, y, sent) -> None:
+        self.compute.append(compute_s)
+        self.starts.append(now)
+        self.lateness.append(late)
+        self.ts.append(t)
+        self.sps.append(r)
+        self.gauges.append(reading.gauges_v)
+        self.ys.append(y)
+        self.cmds.append(sent)
+
+    def result(self, period, status, message, safe, log: SampleLog | None, stopped_by) -> LoopResult:
+        timing = TimingStats.from_arrays(
+            period, np.array(self.starts), np.array(self.lateness), np.array(self.compute), self.overruns
+        )
+        return LoopResult(
+            status,
+            message,
+            timing,
+            np.array(self.ts),
+            np.array(self.sps),
+            np.array(self.gauges).reshape(-1, 3) if self.gauges else np.zeros((0, 3)),
+            np.array(self.ys),
+            np.array(self.cmds, dtype=int),
+            safe,
+            log.path if log is not None else None,
+            {"signal": stopped_by} if stopped_by else {},
+        )
+
+
+def _sample_loop(rig: Rig, controller: LoopController, run: _LoopRun, s: LoopSettings, samples: _Samples) -> None:
+    """The samples on their deadlines ``t0 + k T``, until the last one or a fault (raised)."""
+    controller.reset(rig.command)
+    if run.guard is not None:
+        run.guard.reset(rig.command)
+    t0 = run.clock()
+    k = 0
+    while k < run.n_samples:
+        k, now, late = _wait_for_sample(rig, run, t0, k, samples)
+        if k >= run.n_samples:
+            break
+        _one_sample(rig, controller, run, s, samples, k, now - t0, now, late)
+        k += 1
+
+
+def _wait_for_sample(rig: Rig, run: _LoopRun, t0: float, k: int, samples: _Samples) -> tuple[int, float, float]:
+    """Wait for sample ``k``'s deadline; ``(k, start, lateness)``, ``k`` moved past the deadlines an overrun missed."""
+    deadline = t0 + k * run.period
+    now = run.clock()
+    if now < deadline:
+        rig.wait(deadline - now)
+        now = run.clock()
+    late = now - deadline
+    if late > run.stall:
+        raise RigError(
+            f"the loop stalled: sample {k} started {late:.3f} s late (more than {run.stall:g} s); the rig (a DAQ "
+            "or stream gone silent, a read that blocked) or the computer stopped answering"
+        )
+    if late > run.period:  # missed at least one whole deadline: count it and resynchronise, never burst
+        samples.overruns += 1
+        k += int(late // run.period)
+        late = now - (t0 + k * run.period)
+    return k, now, late
+
+
+def _one_sample(rig, controller, run: _LoopRun, s: LoopSettings, samples: _Samples, k, t, now, late) -> None:
+    """Read, check, compute, command, then log and keep the sample (a stop signal waits for its end)."""
+    w0 = run.timer()
+    reading = rig.read()
+    r = float(run.target(t))
+    if s.check_sensors:
+        check_reading(reading, run.adc_range)
+    y = float(run.measure(reading))
+    if run.guard is not None:
+        run.guard.check_rotation(t, y)
+    u = controller.step(r, reading)
+    sent = rig.write_command(u)
+    # a stop signal waits for the sample's end: the log, the recording and the result keep the same samples
+    with signals_deferred():
+        if run.log is not None or s.recording is not None:
+            record = {
+                "k": k,
+                "t": round(t, 9),
+                "setpoint": r,
+                "gauges_v": [_finite_or_none(g) for g in reading.gauges_v],
+                "pot_v": _finite_or_none(reading.pot_v),
+                "y": _finite_or_none(y),
+                "command": sent,
+            }
+            if run.log is not None:
+                run.log.write(record)
+            if s.recording is not None:
+                s.recording.write_sample(record)
+        samples.append(now, late, run.timer() - w0, t, r, reading, y, sent)
+    if s.on_sample is not None:
+        s.on_sample(k, t, y, sent)
+    if run.guard is not None:
+        run.guard.check_command(t, r, y, float(u), sent, run.command_limits)
+
+
+def _classify_stop(exc: BaseException) -> tuple[str, str, str | None, BaseException | None]:
+    """Why the loop stopped: ``(status, message, signal name, error to re-raise after the safe state)``."""
+    # Ctrl-C, or SIGTERM/SIGHUP under flexdigit.interrupts.stop_on_signals (which a compiled twin's kernel may
+    # hand back as another exception: asked first)
+    stop = exc if isinstance(exc, KeyboardInterrupt) else stop_requested()
+    if stop is not None:
+        return "interrupted", _interruption(stop), getattr(stop, "signal_name", "SIGINT"), None
+    if isinstance(exc, RigError | OSError):
+        return "fault", str(exc), None, None
+    return "fault", f"{type(exc).__name__}: {exc}", None, exc  # a controller bug: safe state first, then propagate
 
 
 def _interruption(exc: KeyboardInterrupt) -> str:

@@ -1,0 +1,52 @@
+"""Issue 23 (one implementation per job): ``flexdigit collect thesis-6.1`` and the library's ``collect`` on the twin
+give the same dataset. The command sets the twin up for the protocol (``sim_options``: the protocol's orientation,
+the cable only when it actuates, the 20 ms tactile step); the library call that passes the same options gives the
+same readings, and the documented plain ``open_rig("sim")`` does not yet (measured 2026-11-26: gauge 1 differs by up
+to 0.32 V, and the call takes 22 s against the command's 4 s)."""
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from flexdigit.cli import main
+from flexdigit.rig.base import open_rig
+from flexdigit.tactile.protocols import load_protocol
+from flexdigit.tactile.runner import collect
+from flexdigit.tactile.thesis_experiments import sim_options
+
+#: The same twin, seed and protocol: the same readings to the bit would hold today (one process, one kernel), but
+#: the kernel's BLAS orderings are not promised across runs; 1e-9 V is far inside the ADC's 16-bit quantum (~1.5e-4 V).
+GAUGE_ATOL_V = 1e-9
+GAUGES = ("gauge1_v", "gauge2_v", "gauge3_v")
+
+
+@pytest.fixture(scope="module")
+def command_dataset(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli") / "cli.parquet"
+    assert main(["collect", "thesis-6.1", "--out", str(out), "--no-progress"]) == 0
+    return pq.read_table(out)
+
+
+@pytest.mark.slow
+def test_collect_command_equals_the_library_call_with_the_protocols_twin(command_dataset, tmp_path):
+    protocol = load_protocol("thesis-6.1")
+    out = tmp_path / "lib.parquet"
+    collect(protocol, open_rig("sim", seed=0, **sim_options(protocol)), out, rig_url="sim")
+    library = pq.read_table(out)
+    assert library.num_rows == command_dataset.num_rows
+    for gauge in GAUGES:
+        np.testing.assert_allclose(library[gauge], command_dataset[gauge], rtol=0, atol=GAUGE_ATOL_V, err_msg=gauge)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 23: collect on open_rig('sim') ignores the protocol's orientation and step, which the command "
+    "applies (tactile.thesis_experiments.sim_options); the fix belongs in tactile/runner",
+)
+def test_collect_command_equals_the_documented_plain_library_call(command_dataset, tmp_path):
+    out = tmp_path / "plain.parquet"
+    collect(load_protocol("thesis-6.1"), open_rig("sim", seed=0), out)
+    library = pq.read_table(out)
+    for gauge in GAUGES:
+        np.testing.assert_allclose(library[gauge], command_dataset[gauge], rtol=0, atol=GAUGE_ATOL_V, err_msg=gauge)
