@@ -291,18 +291,11 @@ MAX_FUNCTION_LINES = 80
 #: Functions allowed to be longer, each with why: "kernel" (numerical code read as one piece) or "to split" (a debt:
 #: remove the entry when the function is split). The compiled ``_*_kernel.py`` modules are kernels as a whole.
 LONG_FUNCTIONS = {
-    "flexdigit.rig.loop:run_loop": "to split",  # 222 lines
     "flexdigit.twin.digit:Chain.solve_static": "kernel: the chain's static Newton solve, one loop",  # 178 lines
-    "flexdigit.cli.run:_run": "to split",  # 162 lines
     "flexdigit.control.c_export:_render_fixed": "kernel: one C template, in compile order",  # 131 lines
     "flexdigit.control.c_export:_render_float": "kernel: one C template, in compile order",  # 116 lines
     "flexdigit.control.synthesis:hinf_lmi": "kernel: the H-inf LMI (Gahinet-Apkarian) in one piece",  # 99 lines
-    "flexdigit.cli.simulate:_run": "to split",  # 97 lines
-    "flexdigit.cli.calibrate:_calibrate": "to split",  # 96 lines
     "flexdigit.twin.contact:solve_contact": "kernel: the contact complementarity iteration",  # 84 lines
-    "flexdigit.cli.collect:register": "to split",  # 89 lines
-    "flexdigit.cli.run:register": "to split",  # 95 lines
-    "flexdigit.cli.simulate:register": "to split",  # 83 lines
 }
 
 

@@ -1,18 +1,18 @@
 """Issue 23 (one implementation per job): ``flexdigit collect thesis-6.1`` and the library's ``collect`` on the twin
 give the same dataset. The command sets the twin up for the protocol (``sim_options``: the protocol's orientation,
-the cable only when it actuates, the 20 ms tactile step); the library call that passes the same options gives the
-same readings, and the documented plain ``open_rig("sim")`` does not yet (measured 2026-11-26: gauge 1 differs by up
-to 0.32 V, and the call takes 22 s against the command's 4 s)."""
+the cable only when it actuates, the 20 ms tactile step); the library's ``collect`` without a rig sets the twin up
+the same way, and gives the same readings (a plain ``open_rig("sim")``, the control loop's 2 ms twin in the default
+orientation, differed by up to 0.32 V on gauge 1 and took 22 s against the command's 4 s)."""
 
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
 from flexdigit.cli import main
+from flexdigit.errors import ParameterError
 from flexdigit.rig.base import open_rig
 from flexdigit.tactile.protocols import load_protocol
-from flexdigit.tactile.runner import collect
-from flexdigit.tactile.thesis_experiments import sim_options
+from flexdigit.tactile.runner import collect, sim_options
 
 #: The same twin, seed and protocol: the same readings to the bit would hold today (one process, one kernel), but
 #: the kernel's BLAS orderings are not promised across runs; 1e-9 V is far inside the ADC's 16-bit quantum (~1.5e-4 V).
@@ -39,14 +39,15 @@ def test_collect_command_equals_the_library_call_with_the_protocols_twin(command
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 23: collect on open_rig('sim') ignores the protocol's orientation and step, which the command "
-    "applies (tactile.thesis_experiments.sim_options); the fix belongs in tactile/runner",
-)
-def test_collect_command_equals_the_documented_plain_library_call(command_dataset, tmp_path):
+def test_collect_command_equals_the_library_call_without_a_rig(command_dataset, tmp_path):
     out = tmp_path / "plain.parquet"
-    collect(load_protocol("thesis-6.1"), open_rig("sim", seed=0), out)
+    collect(load_protocol("thesis-6.1"), out=out)
     library = pq.read_table(out)
+    assert library.num_rows == command_dataset.num_rows
     for gauge in GAUGES:
         np.testing.assert_allclose(library[gauge], command_dataset[gauge], rtol=0, atol=GAUGE_ATOL_V, err_msg=gauge)
+
+
+def test_collect_without_an_output_is_refused(tmp_path):
+    with pytest.raises(ParameterError, match="needs out"):
+        collect(load_protocol("thesis-6.1"))

@@ -162,7 +162,7 @@ def test_cli_resume_with_other_settings_is_refused_and_settle_0_is_recorded(tmp_
     assert not journal_path(out).exists() and not out.exists()  # refused before the first reading
     from flexdigit.rig.base import open_rig
     from flexdigit.tactile.runner import collect as collect_
-    from flexdigit.tactile.thesis_experiments import sim_options
+    from flexdigit.tactile.runner import sim_options
 
     started = Protocol("t", (0.0125,), (0.0, 0.05), repetitions=2)
     rig = open_rig("sim", seed=3, **sim_options(started))  # the rig `flexdigit collect` opens (numpy stepping)

@@ -5,8 +5,8 @@ import pytest
 
 from flexdigit.rig.base import open_rig
 from flexdigit.tactile.protocols import load_protocol
-from flexdigit.tactile.runner import collect
-from flexdigit.tactile.thesis_experiments import sim_options, twin_rig
+from flexdigit.tactile.runner import collect, sim_options
+from flexdigit.tactile.thesis_experiments import twin_rig
 
 
 @pytest.mark.parametrize(("name", "seed"), [("thesis-6.1", 3), ("thesis-7.1", 4)])

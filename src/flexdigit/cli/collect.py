@@ -134,8 +134,7 @@ def _collect(args: argparse.Namespace) -> CommandResult:
     from flexdigit.errors import ParameterError
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
     from flexdigit.tactile.protocols import MAX_SETTLE_S, load_protocol
-    from flexdigit.tactile.runner import collect, journal_path
-    from flexdigit.tactile.thesis_experiments import sim_options
+    from flexdigit.tactile.runner import collect, journal_path, sim_options
 
     protocol = load_protocol(args.protocol)
     out = Path(args.out)

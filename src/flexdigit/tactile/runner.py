@@ -30,7 +30,16 @@ from flexdigit.params import RigParams
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
 
-__all__ = ["PROTOCOL_SETTINGS", "journal_path", "describe_rig", "effective_settings", "collect", "load_or_collect"]
+__all__ = [
+    "PROTOCOL_SETTINGS",
+    "TACTILE_TWIN_DT_S",
+    "journal_path",
+    "describe_rig",
+    "effective_settings",
+    "sim_options",
+    "collect",
+    "load_or_collect",
+]
 
 #: The protocol fields that decide the readings (the free text and the name do not).
 PROTOCOL_SETTINGS = (
@@ -74,11 +83,54 @@ def effective_settings(protocol: Protocol, rig, settle_s: float, extra: dict | N
     }
 
 
+#: Twin step for tactile runs (s): the twin's own default. The sim backend defaults to 2 ms for the control
+#: loop's sake; load experiments only need the settled state, which is the same to 0.1 mV (checked in tests).
+TACTILE_TWIN_DT_S = 0.020
+
+
+def sim_options(protocol: Protocol, url: str = "sim") -> dict:
+    """Twin options a protocol implies (orientation; cable only when actuated; 20 ms step) unless the URL sets them."""
+    from flexdigit.rig.base import parse_rig_url
+
+    given = parse_rig_url(url).options
+    out = {}
+    if "dt_s" not in given:
+        out["dt_s"] = TACTILE_TWIN_DT_S
+    if "orientation" not in given:
+        out["orientation"] = protocol.orientation
+    if "cable" not in given:
+        out["cable"] = protocol.actuated
+    return out
+
+
+def _checked_options(protocol: Protocol, rig, settle_s, stop_after) -> float:
+    """The settle time to use (s), once ``settle_s``, ``stop_after`` and the rig are checked."""
+    settle = (
+        protocol.settle_s if settle_s is None else check_real(settle_s, "settle_s", "collect", low=0, high=MAX_SETTLE_S)
+    )
+    if stop_after is not None and (isinstance(stop_after, bool) or not isinstance(stop_after, int) or stop_after < 0):
+        raise ParameterError(f"The 'stop_after' parameter of collect must be an integer >= 0. Got {stop_after!r}.")
+    if not getattr(rig, "accepts_loads", True):
+        raise ParameterError(
+            f"{getattr(rig, 'name', rig)}: cannot collect a load protocol on it (it cannot hang weights); "
+            "collect on the twin (--backend sim) or a rig"
+        )
+    return settle
+
+
+def _protocol_twin(protocol: Protocol, seed: int):
+    """The twin ``flexdigit collect`` opens for ``protocol`` (``--backend sim``, ``--seed seed``)."""
+    from flexdigit.rig.base import open_rig
+
+    return open_rig("sim", seed=seed, **sim_options(protocol))
+
+
 def collect(
     protocol: Protocol,
-    rig,
-    out: str | Path,
+    rig=None,
+    out: str | Path | None = None,
     *,
+    seed: int = 0,
     params: RigParams | None = None,
     rig_url: str | None = None,
     settle_s: float | None = None,
@@ -94,10 +146,15 @@ def collect(
     ----------
     protocol : Protocol
         What to do.
-    rig : Rig
-        Any backend of :mod:`flexdigit.rig` that can hang weights (the twin, a serial board; not a replay).
+    rig : Rig, optional
+        Any backend of :mod:`flexdigit.rig` that can hang weights (the twin, a serial board; not a replay). None:
+        the twin set up for ``protocol`` as ``flexdigit collect`` sets it up (:func:`sim_options`: the protocol's
+        orientation, the cable only when it actuates, the 20 ms step), seeded with ``seed``; the same dataset as
+        the command (``tests/tactile/test_collect_command_equals_library.py``).
     out : path
-        The dataset to write. Its journal ``<out>.journal.jsonl`` is resumed if present.
+        The dataset to write (required). Its journal ``<out>.journal.jsonl`` is resumed if present.
+    seed : int
+        The twin's seed when ``rig`` is None (the command's ``--seed``, default 0); ignored otherwise.
     params : RigParams, optional
         For the digit length (positions from the tip -> from the base). Default: the thesis rig.
     rig_url : str, optional
@@ -134,19 +191,14 @@ def collect(
         If the rig fails; the journal keeps every reading taken before.
     """
     # -- every check before the first reading ------------------------------------------------------------------
+    if out is None:
+        raise ParameterError("collect needs out, the dataset to write (a .parquet path)")
+    if rig is None:
+        rig, rig_url = _protocol_twin(protocol, seed), rig_url or "sim"
     params = params or RigParams()
     out = Path(out)
     journal_file = journal_path(out)
-    settle = (
-        protocol.settle_s if settle_s is None else check_real(settle_s, "settle_s", "collect", low=0, high=MAX_SETTLE_S)
-    )
-    if stop_after is not None and (isinstance(stop_after, bool) or not isinstance(stop_after, int) or stop_after < 0):
-        raise ParameterError(f"The 'stop_after' parameter of collect must be an integer >= 0. Got {stop_after!r}.")
-    if not getattr(rig, "accepts_loads", True):
-        raise ParameterError(
-            f"{getattr(rig, 'name', rig)}: cannot collect a load protocol on it (it cannot hang weights); "
-            "collect on the twin (--backend sim) or a rig"
-        )
+    settle = _checked_options(protocol, rig, settle_s, stop_after)
     plan = protocol.plan(params.geometry.digit_length_m)
     meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v)
     meta["settings"] = effective_settings(protocol, rig, settle, settings)

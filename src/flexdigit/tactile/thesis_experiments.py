@@ -30,11 +30,9 @@ from flexdigit.tactile.pipeline import (
     targets,
 )
 from flexdigit.tactile.protocols import Protocol, load_protocol
-from flexdigit.tactile.runner import collect
+from flexdigit.tactile.runner import collect, sim_options
 
 __all__ = [
-    "TACTILE_TWIN_DT_S",
-    "sim_options",
     "twin_rig",
     "collect_on_twin",
     "DRAWS",
@@ -55,25 +53,6 @@ __all__ = [
     "criteria",
     "experiment_tables",
 ]
-
-#: Twin step for tactile runs (s): the twin's own default. The sim backend defaults to 2 ms for the control
-#: loop's sake; load experiments only need the settled state, which is the same to 0.1 mV (checked in tests).
-TACTILE_TWIN_DT_S = 0.020
-
-
-def sim_options(protocol: Protocol, url: str = "sim") -> dict:
-    """Twin options a protocol implies (orientation; cable only when actuated; 20 ms step) unless the URL sets them."""
-    from flexdigit.rig.base import parse_rig_url
-
-    given = parse_rig_url(url).options
-    out = {}
-    if "dt_s" not in given:
-        out["dt_s"] = TACTILE_TWIN_DT_S
-    if "orientation" not in given:
-        out["orientation"] = protocol.orientation
-    if "cable" not in given:
-        out["cable"] = protocol.actuated
-    return out
 
 
 def twin_rig(protocol: Protocol, *, seed: int = 0, params: RigParams | None = None, calibration=None):
