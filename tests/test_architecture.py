@@ -299,7 +299,6 @@ LONG_FUNCTIONS = {
     "flexdigit.control.synthesis:hinf_lmi": "kernel: the H-inf LMI (Gahinet-Apkarian) in one piece",  # 99 lines
     "flexdigit.cli.simulate:_run": "to split",  # 97 lines
     "flexdigit.cli.calibrate:_calibrate": "to split",  # 96 lines
-    "flexdigit.twin.contact:solve_contact": "kernel: the contact complementarity iteration",  # 84 lines
     "flexdigit.cli.collect:register": "to split",  # 89 lines
     "flexdigit.cli.run:register": "to split",  # 95 lines
     "flexdigit.cli.simulate:register": "to split",  # 83 lines
