@@ -688,13 +688,17 @@ def _reset_float_lines(spec: ControllerSpec, prefix: str) -> list[str]:
 
 
 def _render_float(spec: ControllerSpec, prefix: str) -> str:
-    n, m = spec.nstates, spec.ninputs
-    xs = [f"x{j}" for j in range(n)]
-    ws = ["w0"] if m == 1 else ["w0", "w1"]
-    lo, hi, ueq = _f32(spec.u_min), _f32(spec.u_max), _f32(spec.u_eq)
-    L = spec.aw_gain if spec.antiwindup == "back_calculation" else np.zeros(n)
-    Lq = spec.q_gain if spec.antiwindup == "back_calculation" else np.zeros(n)
-    out = [
+    """The float32 C source: the helpers, ``reset``, ``update`` and (with a rotation map) ``measure``/``step``."""
+    out = _float_helper_lines(prefix)
+    out += _reset_float_lines(spec, prefix)
+    out += _update_float_lines(spec, prefix)
+    out += _measure_lines(spec, prefix)
+    return "\n".join(out)
+
+
+def _float_helper_lines(prefix: str) -> list[str]:
+    """The include and the static ``round`` (ties to even) and ``finite`` helpers of the float32 source."""
+    return [
         f'#include "{prefix}.h"',
         "",
         "/* round to nearest, ties to even (Python's round) for 0 <= v < 2^15; no libm */",
@@ -716,8 +720,15 @@ def _render_float(spec: ControllerSpec, prefix: str) -> str:
         "}",
         "",
     ]
-    out += _reset_float_lines(spec, prefix)
-    out += [f"int {prefix}_update({prefix}_t *c, float r, float y, int16_t *command)", "{"]
+
+
+def _update_float_lines(spec: ControllerSpec, prefix: str) -> list[str]:
+    """``P_update`` in float32: state and command, clip, quantise, anti-windup, deadband, store."""
+    n, m = spec.nstates, spec.ninputs
+    xs = [f"x{j}" for j in range(n)]
+    ws = ["w0"] if m == 1 else ["w0", "w1"]
+    lo, hi, ueq = _f32(spec.u_min), _f32(spec.u_max), _f32(spec.u_eq)
+    out = [f"int {prefix}_update({prefix}_t *c, float r, float y, int16_t *command)", "{"]
     for j in range(n):
         out.append(f"    float x{j} = c->x[{j}];")
     if m == 1:
@@ -734,41 +745,58 @@ def _render_float(spec: ControllerSpec, prefix: str) -> str:
         "    }",
         f"    u_clip = u_raw > {hi} ? {hi} : (u_raw < {lo} ? {lo} : u_raw);",
     ]
-    if spec.quantise:
-        if spec.hysteresis > 0:
-            out += [
-                "    {",
-                "        float last = (float)c->last;",
-                "        float diff = u_clip - last;",
-                "        if (diff < 0.0f) { diff = -diff; }",
-                f"        if (diff < {_f32(0.5 + spec.hysteresis)} && {lo} <= last && last <= {hi}) {{",
-                "            u = last;",
-                "        } else {",
-                f"            u = (float){prefix}_round(u_clip);",
-                "        }",
-                "    }",
-            ]
-        else:
-            out.append(f"    u = (float){prefix}_round(u_clip);")
-    else:
-        out.append("    u = u_clip;")
+    out += _quantise_float_lines(spec, prefix)
     out.append("    c->saturated = (uint8_t)(u_clip != u_raw);")
+    out += _antiwindup_float_lines(spec)
+    out += _deadband_float_lines(spec)
+    out += [
+        "    c->u_raw = u_raw;",
+        f"    c->last = {prefix}_round(u);",
+        "    *command = c->last;",
+        f"    return {prefix.upper()}_OK;",
+        "}",
+        "",
+    ]
+    return out
+
+
+def _quantise_float_lines(spec: ControllerSpec, prefix: str) -> list[str]:
+    """``u`` from ``u_clip``: as it is, rounded, or rounded with hysteresis around the last command."""
+    if not spec.quantise:
+        return ["    u = u_clip;"]
+    if spec.hysteresis <= 0:
+        return [f"    u = (float){prefix}_round(u_clip);"]
+    lo, hi = _f32(spec.u_min), _f32(spec.u_max)
+    return [
+        "    {",
+        "        float last = (float)c->last;",
+        "        float diff = u_clip - last;",
+        "        if (diff < 0.0f) { diff = -diff; }",
+        f"        if (diff < {_f32(0.5 + spec.hysteresis)} && {lo} <= last && last <= {hi}) {{",
+        "            u = last;",
+        "        } else {",
+        f"            u = (float){prefix}_round(u_clip);",
+        "        }",
+        "    }",
+    ]
+
+
+def _antiwindup_float_lines(spec: ControllerSpec) -> list[str]:
+    """The state update ``c->x = z`` under the spec's anti-windup (back-calculation, clamp or none)."""
+    n = spec.nstates
     if spec.antiwindup == "back_calculation":
-        out.append("    {")
-        out.append("        float c_sat = u_clip - u_raw, c_q = u - u_clip;")
-        same = bool(np.array_equal(L, Lq))
-        if same:
+        L, Lq = spec.aw_gain, spec.q_gain
+        out = ["    {", "        float c_sat = u_clip - u_raw, c_q = u - u_clip;"]
+        if np.array_equal(L, Lq):
             out.append("        float c_all = c_sat + c_q;")
-        for i in range(n):
-            if same:
-                out.append(f"        c->x[{i}] = z{i} + {_f32(L[i])} * c_all;")
-            else:
-                out.append(f"        c->x[{i}] = z{i} + {_f32(L[i])} * c_sat + {_f32(Lq[i])} * c_q;")
-        out.append("        (void)c_sat; (void)c_q;")
-        out.append("    }")
-    elif spec.antiwindup == "clamp":
+            out += [f"        c->x[{i}] = z{i} + {_f32(L[i])} * c_all;" for i in range(n)]
+        else:
+            out += [f"        c->x[{i}] = z{i} + {_f32(L[i])} * c_sat + {_f32(Lq[i])} * c_q;" for i in range(n)]
+        return [*out, "        (void)c_sat; (void)c_q;", "    }"]
+    if spec.antiwindup == "clamp":
+        lo, hi = _f32(spec.u_min), _f32(spec.u_max)
         drift = _dot_float(spec.C.reshape(-1), [f"(z{j} - x{j})" for j in range(n)])
-        out += [
+        return [
             "    {",
             "        int update = 1;",
             "        if (c->saturated) {",
@@ -776,33 +804,28 @@ def _render_float(spec: ControllerSpec, prefix: str) -> str:
             f"            update = (u_raw > {hi} && drift < 0.0f) || (u_raw < {lo} && drift > 0.0f);",
             "        }",
             "        if (update) {",
-        ]
-        out += [f"            c->x[{i}] = z{i};" for i in range(n)]
-        out += ["        }", "    }"]
-    else:
-        out += [f"    c->x[{i}] = z{i};" for i in range(n)]
-    if spec.deadband is not None:
-        idx, width = spec.deadband
-        b = spec.B[idx]
-        bdot = f"{_f32(b[0])} * (r - y)" if m == 1 else f"{_f32(b[0])} * r + {_f32(b[1])} * y"
-        out += [
-            "    {",
-            "        float e = r - y;",
-            f"        if ({_f32(-width)} <= e && e <= {_f32(width)}) {{",
-            f"            c->x[{idx}] = c->x[{idx}] - ({bdot});",
+            *[f"            c->x[{i}] = z{i};" for i in range(n)],
             "        }",
             "    }",
         ]
-    out += [
-        "    c->u_raw = u_raw;",
-        f"    c->last = {prefix}_round(u);" if spec.quantise else f"    c->last = {prefix}_round(u);",
-        "    *command = c->last;",
-        f"    return {prefix.upper()}_OK;",
-        "}",
-        "",
+    return [f"    c->x[{i}] = z{i};" for i in range(n)]
+
+
+def _deadband_float_lines(spec: ControllerSpec) -> list[str]:
+    """Undo the error's contribution to the deadband state while ``|r - y| <= width`` (nothing without one)."""
+    if spec.deadband is None:
+        return []
+    idx, width = spec.deadband
+    b = spec.B[idx]
+    bdot = f"{_f32(b[0])} * (r - y)" if spec.ninputs == 1 else f"{_f32(b[0])} * r + {_f32(b[1])} * y"
+    return [
+        "    {",
+        "        float e = r - y;",
+        f"        if ({_f32(-width)} <= e && e <= {_f32(width)}) {{",
+        f"            c->x[{idx}] = c->x[{idx}] - ({bdot});",
+        "        }",
+        "    }",
     ]
-    out += _measure_lines(spec, prefix)
-    return "\n".join(out)
 
 
 def _measure_lines(spec: ControllerSpec, prefix: str) -> list[str]:
