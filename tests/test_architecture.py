@@ -294,7 +294,6 @@ LONG_FUNCTIONS = {
     "flexdigit.rig.loop:run_loop": "to split",  # 222 lines
     "flexdigit.twin.digit:Chain.solve_static": "kernel: the chain's static Newton solve, one loop",  # 178 lines
     "flexdigit.cli.run:_run": "to split",  # 162 lines
-    "flexdigit.control.c_export:_render_fixed": "kernel: one C template, in compile order",  # 131 lines
     "flexdigit.cli.simulate:_run": "to split",  # 97 lines
     "flexdigit.cli.calibrate:_calibrate": "to split",  # 96 lines
     "flexdigit.cli.collect:register": "to split",  # 89 lines
