@@ -292,7 +292,6 @@ MAX_FUNCTION_LINES = 80
 #: remove the entry when the function is split). The compiled ``_*_kernel.py`` modules are kernels as a whole.
 LONG_FUNCTIONS = {
     "flexdigit.rig.loop:run_loop": "to split",  # 222 lines
-    "flexdigit.twin.digit:Chain.solve_static": "kernel: the chain's static Newton solve, one loop",  # 178 lines
     "flexdigit.cli.run:_run": "to split",  # 162 lines
     "flexdigit.cli.simulate:_run": "to split",  # 97 lines
     "flexdigit.cli.calibrate:_calibrate": "to split",  # 96 lines
