@@ -290,13 +290,7 @@ def test_the_definition_finders_themselves():
 MAX_FUNCTION_LINES = 80
 #: Functions allowed to be longer, each with why: "kernel" (numerical code read as one piece) or "to split" (a debt:
 #: remove the entry when the function is split). The compiled ``_*_kernel.py`` modules are kernels as a whole.
-LONG_FUNCTIONS = {
-    "flexdigit.twin.digit:Chain.solve_static": "kernel: the chain's static Newton solve, one loop",  # 178 lines
-    "flexdigit.control.c_export:_render_fixed": "kernel: one C template, in compile order",  # 131 lines
-    "flexdigit.control.c_export:_render_float": "kernel: one C template, in compile order",  # 116 lines
-    "flexdigit.control.synthesis:hinf_lmi": "kernel: the H-inf LMI (Gahinet-Apkarian) in one piece",  # 99 lines
-    "flexdigit.twin.contact:solve_contact": "kernel: the contact complementarity iteration",  # 84 lines
-}
+LONG_FUNCTIONS = {}
 
 
 def _function_lengths(tree: ast.Module, module: str) -> dict[str, int]:

@@ -688,13 +688,17 @@ def _reset_float_lines(spec: ControllerSpec, prefix: str) -> list[str]:
 
 
 def _render_float(spec: ControllerSpec, prefix: str) -> str:
-    n, m = spec.nstates, spec.ninputs
-    xs = [f"x{j}" for j in range(n)]
-    ws = ["w0"] if m == 1 else ["w0", "w1"]
-    lo, hi, ueq = _f32(spec.u_min), _f32(spec.u_max), _f32(spec.u_eq)
-    L = spec.aw_gain if spec.antiwindup == "back_calculation" else np.zeros(n)
-    Lq = spec.q_gain if spec.antiwindup == "back_calculation" else np.zeros(n)
-    out = [
+    """The float32 C source: the helpers, ``reset``, ``update`` and (with a rotation map) ``measure``/``step``."""
+    out = _float_helper_lines(prefix)
+    out += _reset_float_lines(spec, prefix)
+    out += _update_float_lines(spec, prefix)
+    out += _measure_lines(spec, prefix)
+    return "\n".join(out)
+
+
+def _float_helper_lines(prefix: str) -> list[str]:
+    """The include and the static ``round`` (ties to even) and ``finite`` helpers of the float32 source."""
+    return [
         f'#include "{prefix}.h"',
         "",
         "/* round to nearest, ties to even (Python's round) for 0 <= v < 2^15; no libm */",
@@ -716,8 +720,15 @@ def _render_float(spec: ControllerSpec, prefix: str) -> str:
         "}",
         "",
     ]
-    out += _reset_float_lines(spec, prefix)
-    out += [f"int {prefix}_update({prefix}_t *c, float r, float y, int16_t *command)", "{"]
+
+
+def _update_float_lines(spec: ControllerSpec, prefix: str) -> list[str]:
+    """``P_update`` in float32: state and command, clip, quantise, anti-windup, deadband, store."""
+    n, m = spec.nstates, spec.ninputs
+    xs = [f"x{j}" for j in range(n)]
+    ws = ["w0"] if m == 1 else ["w0", "w1"]
+    lo, hi, ueq = _f32(spec.u_min), _f32(spec.u_max), _f32(spec.u_eq)
+    out = [f"int {prefix}_update({prefix}_t *c, float r, float y, int16_t *command)", "{"]
     for j in range(n):
         out.append(f"    float x{j} = c->x[{j}];")
     if m == 1:
@@ -734,41 +745,58 @@ def _render_float(spec: ControllerSpec, prefix: str) -> str:
         "    }",
         f"    u_clip = u_raw > {hi} ? {hi} : (u_raw < {lo} ? {lo} : u_raw);",
     ]
-    if spec.quantise:
-        if spec.hysteresis > 0:
-            out += [
-                "    {",
-                "        float last = (float)c->last;",
-                "        float diff = u_clip - last;",
-                "        if (diff < 0.0f) { diff = -diff; }",
-                f"        if (diff < {_f32(0.5 + spec.hysteresis)} && {lo} <= last && last <= {hi}) {{",
-                "            u = last;",
-                "        } else {",
-                f"            u = (float){prefix}_round(u_clip);",
-                "        }",
-                "    }",
-            ]
-        else:
-            out.append(f"    u = (float){prefix}_round(u_clip);")
-    else:
-        out.append("    u = u_clip;")
+    out += _quantise_float_lines(spec, prefix)
     out.append("    c->saturated = (uint8_t)(u_clip != u_raw);")
+    out += _antiwindup_float_lines(spec)
+    out += _deadband_float_lines(spec)
+    out += [
+        "    c->u_raw = u_raw;",
+        f"    c->last = {prefix}_round(u);",
+        "    *command = c->last;",
+        f"    return {prefix.upper()}_OK;",
+        "}",
+        "",
+    ]
+    return out
+
+
+def _quantise_float_lines(spec: ControllerSpec, prefix: str) -> list[str]:
+    """``u`` from ``u_clip``: as it is, rounded, or rounded with hysteresis around the last command."""
+    if not spec.quantise:
+        return ["    u = u_clip;"]
+    if spec.hysteresis <= 0:
+        return [f"    u = (float){prefix}_round(u_clip);"]
+    lo, hi = _f32(spec.u_min), _f32(spec.u_max)
+    return [
+        "    {",
+        "        float last = (float)c->last;",
+        "        float diff = u_clip - last;",
+        "        if (diff < 0.0f) { diff = -diff; }",
+        f"        if (diff < {_f32(0.5 + spec.hysteresis)} && {lo} <= last && last <= {hi}) {{",
+        "            u = last;",
+        "        } else {",
+        f"            u = (float){prefix}_round(u_clip);",
+        "        }",
+        "    }",
+    ]
+
+
+def _antiwindup_float_lines(spec: ControllerSpec) -> list[str]:
+    """The state update ``c->x = z`` under the spec's anti-windup (back-calculation, clamp or none)."""
+    n = spec.nstates
     if spec.antiwindup == "back_calculation":
-        out.append("    {")
-        out.append("        float c_sat = u_clip - u_raw, c_q = u - u_clip;")
-        same = bool(np.array_equal(L, Lq))
-        if same:
+        L, Lq = spec.aw_gain, spec.q_gain
+        out = ["    {", "        float c_sat = u_clip - u_raw, c_q = u - u_clip;"]
+        if np.array_equal(L, Lq):
             out.append("        float c_all = c_sat + c_q;")
-        for i in range(n):
-            if same:
-                out.append(f"        c->x[{i}] = z{i} + {_f32(L[i])} * c_all;")
-            else:
-                out.append(f"        c->x[{i}] = z{i} + {_f32(L[i])} * c_sat + {_f32(Lq[i])} * c_q;")
-        out.append("        (void)c_sat; (void)c_q;")
-        out.append("    }")
-    elif spec.antiwindup == "clamp":
+            out += [f"        c->x[{i}] = z{i} + {_f32(L[i])} * c_all;" for i in range(n)]
+        else:
+            out += [f"        c->x[{i}] = z{i} + {_f32(L[i])} * c_sat + {_f32(Lq[i])} * c_q;" for i in range(n)]
+        return [*out, "        (void)c_sat; (void)c_q;", "    }"]
+    if spec.antiwindup == "clamp":
+        lo, hi = _f32(spec.u_min), _f32(spec.u_max)
         drift = _dot_float(spec.C.reshape(-1), [f"(z{j} - x{j})" for j in range(n)])
-        out += [
+        return [
             "    {",
             "        int update = 1;",
             "        if (c->saturated) {",
@@ -776,33 +804,28 @@ def _render_float(spec: ControllerSpec, prefix: str) -> str:
             f"            update = (u_raw > {hi} && drift < 0.0f) || (u_raw < {lo} && drift > 0.0f);",
             "        }",
             "        if (update) {",
-        ]
-        out += [f"            c->x[{i}] = z{i};" for i in range(n)]
-        out += ["        }", "    }"]
-    else:
-        out += [f"    c->x[{i}] = z{i};" for i in range(n)]
-    if spec.deadband is not None:
-        idx, width = spec.deadband
-        b = spec.B[idx]
-        bdot = f"{_f32(b[0])} * (r - y)" if m == 1 else f"{_f32(b[0])} * r + {_f32(b[1])} * y"
-        out += [
-            "    {",
-            "        float e = r - y;",
-            f"        if ({_f32(-width)} <= e && e <= {_f32(width)}) {{",
-            f"            c->x[{idx}] = c->x[{idx}] - ({bdot});",
+            *[f"            c->x[{i}] = z{i};" for i in range(n)],
             "        }",
             "    }",
         ]
-    out += [
-        "    c->u_raw = u_raw;",
-        f"    c->last = {prefix}_round(u);" if spec.quantise else f"    c->last = {prefix}_round(u);",
-        "    *command = c->last;",
-        f"    return {prefix.upper()}_OK;",
-        "}",
-        "",
+    return [f"    c->x[{i}] = z{i};" for i in range(n)]
+
+
+def _deadband_float_lines(spec: ControllerSpec) -> list[str]:
+    """Undo the error's contribution to the deadband state while ``|r - y| <= width`` (nothing without one)."""
+    if spec.deadband is None:
+        return []
+    idx, width = spec.deadband
+    b = spec.B[idx]
+    bdot = f"{_f32(b[0])} * (r - y)" if spec.ninputs == 1 else f"{_f32(b[0])} * r + {_f32(b[1])} * y"
+    return [
+        "    {",
+        "        float e = r - y;",
+        f"        if ({_f32(-width)} <= e && e <= {_f32(width)}) {{",
+        f"            c->x[{idx}] = c->x[{idx}] - ({bdot});",
+        "        }",
+        "    }",
     ]
-    out += _measure_lines(spec, prefix)
-    return "\n".join(out)
 
 
 def _measure_lines(spec: ControllerSpec, prefix: str) -> list[str]:
@@ -824,15 +847,20 @@ def _measure_lines(spec: ControllerSpec, prefix: str) -> list[str]:
 
 
 def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
-    n, m = spec.nstates, spec.ninputs
-    P = prefix.upper()
+    """The fixed-point C source: the helpers, ``reset``, ``update_q``, ``update`` and ``measure``/``step``."""
+    out = _fixed_helper_lines(fmt, prefix)
+    out += _reset_fixed_lines(spec, fmt, prefix)
+    out += _update_q_fixed_lines(spec, fmt, prefix)
+    out += _update_fixed_lines(fmt, prefix)
+    out += _measure_lines(spec, prefix)
+    return "\n".join(out)
+
+
+def _fixed_helper_lines(fmt: FixedFormat, prefix: str) -> list[str]:
+    """The include and the static ``shift`` (only when a row shifts), ``round_q`` and ``to_q`` helpers."""
     f = fmt.command_bits
-    fpc = FixedPointController(spec, fmt)
-    xs = [f"c->x[{j}]" for j in range(n)]
-    ws = ["w0"] if m == 1 else ["w0", "w1"]
-    shifts = [r.shift for r in (*fmt.rows_state, fmt.row_output)]
     out = [f'#include "{prefix}.h"', ""]
-    if any(shifts):
+    if any(r.shift for r in (*fmt.rows_state, fmt.row_output)):
         out += [
             "/* round(v / 2^s), half up: the arithmetic right shift of a signed int64 (gcc and avr-gcc) */",
             f"static int32_t {prefix}_shift(int64_t v, int s)",
@@ -841,7 +869,7 @@ def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
             "}",
             "",
         ]
-    out += [
+    return out + [
         "/* nearest integer to v / 2^bits, ties to even (Python's round) */",
         f"static int16_t {prefix}_round_q(int32_t v)",
         "{",
@@ -860,31 +888,40 @@ def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
         "    return (int32_t)(s < 0.0f ? s - 0.5f : s + 0.5f);",
         "}",
         "",
-        f"void {prefix}_reset({prefix}_t *c, float command)",
-        "{",
-        f"    float dev = command - {_f32(spec.u_eq)};",
     ]
+
+
+def _reset_fixed_lines(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> list[str]:
+    """``P_reset`` in fixed point: the bumpless state for ``command``, each in its own Q format."""
+    n, f = spec.nstates, fmt.command_bits
+    out = [f"void {prefix}_reset({prefix}_t *c, float command)", "{", f"    float dev = command - {_f32(spec.u_eq)};"]
     pinv = spec.reset_state(spec.u_eq + 1.0) if n and np.any(spec.C) else np.zeros(n)
     for i in range(max(n, 1)):
         if i < n:
             out.append(f"    c->x[{i}] = {prefix}_to_q({_f32(pinv[i])} * dev, {_f32(2.0 ** fmt.state_bits[i])});")
         else:
             out.append(f"    c->x[{i}] = 0;")
-    out += [
+    return out + [
         f"    c->u_raw = {prefix}_to_q(command, {_f32(2.0**f)});",
         f"    c->last = {prefix}_round_q({prefix}_to_q(command, {_f32(2.0**f)}));",
         "    c->saturated = 0;",
         "}",
         "",
+    ]
+
+
+def _update_q_fixed_lines(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> list[str]:
+    """``P_update_q``: range checks, the command row, clip, quantise, the state rows (anti-windup in them)."""
+    n, m = spec.nstates, spec.ninputs
+    P = prefix.upper()
+    fpc = FixedPointController(spec, fmt)
+    xs = [f"c->x[{j}]" for j in range(n)]
+    ws = ["w0"] if m == 1 else ["w0", "w1"]
+    out = [
         f"int {prefix}_update_q({prefix}_t *c, int32_t r_q, int32_t y_q, int16_t *command)",
         "{",
         f"    const int32_t w_max = {fpc.w_max_q}L;",
-    ]
-    if m == 1:
-        out += ["    int32_t w0;"]
-    else:
-        out += ["    int32_t w0 = r_q, w1 = y_q;"]
-    out += [
+        "    int32_t w0;" if m == 1 else "    int32_t w0 = r_q, w1 = y_q;",
         "    int32_t u_raw, u_clip, u_q, c_sat, c_q;",
         "    int16_t u;",
         f"    int32_t xn[{max(n, 1)}];",
@@ -902,27 +939,8 @@ def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
     row = fmt.row_output
     u_expr = f"(int64_t){row.const}LL + {_dot_int(row.coefs, xs + ws)}"
     out.append(f"    u_raw = {_shift_expr(prefix, u_expr, row.shift)};")
-    lo, hi = fpc.lo_q, fpc.hi_q
-    out.append(f"    u_clip = u_raw > {hi}L ? {hi}L : (u_raw < {lo}L ? {lo}L : u_raw);")
-    if spec.quantise:
-        if spec.hysteresis > 0:
-            out += [
-                "    {",
-                f"        int32_t last_q = (int32_t)((uint32_t)(int32_t)c->last << {f});",
-                "        int32_t diff = u_clip - last_q;",
-                "        if (diff < 0) { diff = -diff; }",
-                f"        if (diff < {fpc.hyst_q}L && {lo}L <= last_q && last_q <= {hi}L) {{",
-                "            u = c->last;",
-                "        } else {",
-                f"            u = {prefix}_round_q(u_clip);",
-                "        }",
-                "    }",
-            ]
-        else:
-            out.append(f"    u = {prefix}_round_q(u_clip);")
-        out.append(f"    u_q = (int32_t)((uint32_t)(int32_t)u << {f});")
-    else:
-        out += ["    u_q = u_clip;", f"    u = {prefix}_round_q(u_clip);"]
+    out.append(f"    u_clip = u_raw > {fpc.hi_q}L ? {fpc.hi_q}L : (u_raw < {fpc.lo_q}L ? {fpc.lo_q}L : u_raw);")
+    out += _quantise_fixed_lines(spec, fmt, fpc, prefix)
     out += [
         "    c->saturated = (uint8_t)(u_clip != u_raw);",
         "    c_sat = u_clip - u_raw;",
@@ -933,7 +951,7 @@ def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
         r = fmt.rows_state[i]
         out.append(f"    xn[{i}] = {_shift_expr(prefix, _dot_int(r.coefs, [*xs, *ws, 'c_sat', 'c_q']), r.shift)};")
     out += [f"    c->x[{i}] = xn[{i}];" for i in range(n)]
-    out += [
+    return out + [
         "    (void)xn;",
         "    c->u_raw = u_raw;",
         "    c->last = u;",
@@ -941,19 +959,47 @@ def _render_fixed(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> str:
         f"    return {P}_OK;",
         "}",
         "",
+    ]
+
+
+def _quantise_fixed_lines(spec: ControllerSpec, fmt: FixedFormat, fpc: FixedPointController, prefix: str) -> list[str]:
+    """``u`` and ``u_q`` from ``u_clip``: as it is, rounded, or rounded with hysteresis around the last command."""
+    f = fmt.command_bits
+    if not spec.quantise:
+        return ["    u_q = u_clip;", f"    u = {prefix}_round_q(u_clip);"]
+    if spec.hysteresis > 0:
+        lo, hi = fpc.lo_q, fpc.hi_q
+        out = [
+            "    {",
+            f"        int32_t last_q = (int32_t)((uint32_t)(int32_t)c->last << {f});",
+            "        int32_t diff = u_clip - last_q;",
+            "        if (diff < 0) { diff = -diff; }",
+            f"        if (diff < {fpc.hyst_q}L && {lo}L <= last_q && last_q <= {hi}L) {{",
+            "            u = c->last;",
+            "        } else {",
+            f"            u = {prefix}_round_q(u_clip);",
+            "        }",
+            "    }",
+        ]
+    else:
+        out = [f"    u = {prefix}_round_q(u_clip);"]
+    return [*out, f"    u_q = (int32_t)((uint32_t)(int32_t)u << {f});"]
+
+
+def _update_fixed_lines(fmt: FixedFormat, prefix: str) -> list[str]:
+    """``P_update`` of the fixed-point source: the float inputs range-checked, converted, passed to ``update_q``."""
+    return [
         f"int {prefix}_update({prefix}_t *c, float r, float y, int16_t *command)",
         "{",
         f"    const float w_max = {_f32(fmt.input_max)};",
         "    if (!(r <= w_max && r >= -w_max && y <= w_max && y >= -w_max)) {   /* also NaN */",
-        f"        return {P}_FAULT_INPUT_RANGE;",
+        f"        return {prefix.upper()}_FAULT_INPUT_RANGE;",
         "    }",
         f"    return {prefix}_update_q(c, {prefix}_to_q(r, {_f32(2.0**fmt.input_bits)}), "
         f"{prefix}_to_q(y, {_f32(2.0**fmt.input_bits)}), command);",
         "}",
         "",
     ]
-    out += _measure_lines(spec, prefix)
-    return "\n".join(out)
 
 
 # -- analysis ----------------------------------------------------------------------------------------------------

@@ -335,6 +335,51 @@ def hinfsyn_plain(P, nmeas: int = 1, ncon: int = 1):
     return ct.hinfsyn(P, nmeas, ncon)
 
 
+def _lmi_coordinates(P, nmeas, ncon, nz):
+    """``(Ps, zscale)``: ``P`` scaled, ``z`` divided by ``zscale`` (optimum ``gamma`` O(1)), balanced if stable."""
+    Ps, _ = _scale(P, nmeas, ncon)
+    # gamma scale: normalise z so that the optimum is O(1) (the thesis problem has gamma ~ 0.02)
+    zscale = _upper_gamma(Ps, nmeas, ncon) / 1.05 if Ps.nstates else 1.0
+    if not (math.isfinite(zscale) and 0 < zscale < 1e11):
+        zscale = 1.0
+    C, D = np.array(Ps.C), np.array(Ps.D)
+    C[:nz] /= zscale
+    D[:nz] /= zscale
+    Ps = ct.ss(Ps.A, Ps.B, C, D)
+    if Ps.nstates and np.max(np.linalg.eigvals(Ps.A).real) < 0:
+        Ps = _balanced(Ps)
+    return Ps, zscale
+
+
+def _lmi_rounds(Ps, nw, nz, solver, strict, iterations, centre_margin):
+    """The best ``LmiResult`` of at most ``iterations`` (minimise, centre, re-coordinate) rounds (:func:`hinf_lmi`)."""
+    best, stalled = None, 0
+    for _ in range(iterations):
+        try:
+            res, viol = _lmi_once(Ps, nw, nz, solver, strict)
+        except DesignError:
+            if best is None:
+                raise
+            break
+        if best is None:
+            best = res
+        elif viol < 1e-8 and res.gamma < best.gamma:
+            stalled = stalled + 1 if res.gamma > best.gamma * (1 - 1e-4) else 0
+            best = res
+        else:
+            stalled += 1
+        if stalled >= 2 or not Ps.nstates:
+            break
+        try:
+            R, S = _lmi_centre(Ps, nw, nz, solver, strict, res.gamma * (1 + centre_margin))
+            T = _contragredient(R, S)
+        except (DesignError, np.linalg.LinAlgError):
+            break  # no better coordinates from here: keep the best level so far
+        Ti = np.linalg.inv(T)
+        Ps = ct.ss(Ti @ Ps.A @ T, Ti @ Ps.B, Ps.C @ T, Ps.D)
+    return best
+
+
 @validate_params(
     _PARTITION
     | {
@@ -407,42 +452,9 @@ def hinf_lmi(
     """
     P = as_statespace(P, "P", siso=False)
     nw, nz = _partition(P, nmeas, ncon)
-    Ps, _ = _scale(P, nmeas, ncon)
-    # gamma scale: normalise z so that the optimum is O(1) (the thesis problem has gamma ~ 0.02)
-    zscale = _upper_gamma(Ps, nmeas, ncon) / 1.05 if Ps.nstates else 1.0
-    if not (math.isfinite(zscale) and 0 < zscale < 1e11):
-        zscale = 1.0
-    C, D = np.array(Ps.C), np.array(Ps.D)
-    C[:nz] /= zscale
-    D[:nz] /= zscale
-    Ps = ct.ss(Ps.A, Ps.B, C, D)
-    if Ps.nstates and np.max(np.linalg.eigvals(Ps.A).real) < 0:
-        Ps = _balanced(Ps)
-    best, stalled = None, 0
+    Ps, zscale = _lmi_coordinates(P, nmeas, ncon, nz)
     with single_blas_thread():
-        for _ in range(iterations):
-            try:
-                res, viol = _lmi_once(Ps, nw, nz, solver, strict)
-            except DesignError:
-                if best is None:
-                    raise
-                break
-            if best is None:
-                best = res
-            elif viol < 1e-8 and res.gamma < best.gamma:
-                stalled = stalled + 1 if res.gamma > best.gamma * (1 - 1e-4) else 0
-                best = res
-            else:
-                stalled += 1
-            if stalled >= 2 or not Ps.nstates:
-                break
-            try:
-                R, S = _lmi_centre(Ps, nw, nz, solver, strict, res.gamma * (1 + centre_margin))
-                T = _contragredient(R, S)
-            except (DesignError, np.linalg.LinAlgError):
-                break  # no better coordinates from here: keep the best level so far
-            Ti = np.linalg.inv(T)
-            Ps = ct.ss(Ti @ Ps.A @ T, Ti @ Ps.B, Ps.C @ T, Ps.D)
+        best = _lmi_rounds(Ps, nw, nz, solver, strict, iterations, centre_margin)
     return LmiResult(best.gamma * zscale, best.R, best.S, best.status, solver)
 
 

@@ -474,6 +474,40 @@ class ContactSolution:
         return self.static.tip_m
 
 
+def _merged_loads(chain, loads, load_s_m, load_force_ab_n, cable_shortening_m):
+    """The per-case point loads with the world-fixed ``loads`` (as quadrature points) appended to each case."""
+    s_fixed, f_fixed = quadrature(chain, loads)
+    if load_s_m is None and not s_fixed.size:
+        return load_s_m, load_force_ab_n
+    b = 1 if cable_shortening_m is None else np.size(cable_shortening_m)
+    extra_s = np.zeros((b, 0)) if load_s_m is None else np.atleast_2d(np.asarray(load_s_m, dtype=float))
+    extra_f = np.zeros((b, 0, 2)) if load_force_ab_n is None else np.asarray(load_force_ab_n, dtype=float)
+    extra_f = extra_f.reshape(extra_s.shape[0], -1, 2)
+    rows = max(extra_s.shape[0], b)
+    load_s_m = np.concatenate(
+        [np.broadcast_to(extra_s, (rows, extra_s.shape[1])), np.broadcast_to(s_fixed, (rows, s_fixed.size))], axis=1
+    )
+    load_force_ab_n = np.concatenate(
+        [np.broadcast_to(extra_f, (rows, extra_f.shape[1], 2)), np.broadcast_to(f_fixed, (rows, s_fixed.size, 2))],
+        axis=1,
+    )
+    return load_s_m, load_force_ab_n
+
+
+def _stiffen_gradually(chain, tissue, solve, psi0):
+    """The last stage's solution of a stiffness continuation over ``CONTINUATION``.
+
+    A very stiff body makes semi-smooth Newton chatter between contact sets: stiffen it gradually instead, each
+    stage starting from the last stage's shape.
+    """
+    start = psi0
+    for factor in CONTINUATION:
+        stage = TissueContact(chain, tissue.replace(modulus_n_m2=factor * tissue.modulus_n_m2))
+        sol = solve(stage, start)
+        start = sol.psi_rad
+    return sol
+
+
 def solve_contact(
     chain,
     *,
@@ -507,20 +541,7 @@ def solve_contact(
     ConvergenceWarning
         If Newton stops before its tolerance (``converged`` is False); never silently.
     """
-    s_fixed, f_fixed = quadrature(chain, loads)
-    if load_s_m is not None or s_fixed.size:
-        b = 1 if cable_shortening_m is None else np.size(cable_shortening_m)
-        extra_s = np.zeros((b, 0)) if load_s_m is None else np.atleast_2d(np.asarray(load_s_m, dtype=float))
-        extra_f = np.zeros((b, 0, 2)) if load_force_ab_n is None else np.asarray(load_force_ab_n, dtype=float)
-        extra_f = extra_f.reshape(extra_s.shape[0], -1, 2)
-        rows = max(extra_s.shape[0], b)
-        load_s_m = np.concatenate(
-            [np.broadcast_to(extra_s, (rows, extra_s.shape[1])), np.broadcast_to(s_fixed, (rows, s_fixed.size))], axis=1
-        )
-        load_force_ab_n = np.concatenate(
-            [np.broadcast_to(extra_f, (rows, extra_f.shape[1], 2)), np.broadcast_to(f_fixed, (rows, s_fixed.size, 2))],
-            axis=1,
-        )
+    load_s_m, load_force_ab_n = _merged_loads(chain, loads, load_s_m, load_force_ab_n, cable_shortening_m)
     contact = TissueContact(chain, tissue) if tissue is not None and tissue.modulus_n_m2 > 0 else None
 
     def solve(body, start):
@@ -538,13 +559,7 @@ def solve_contact(
 
     sol = solve(contact, psi0)
     if not sol.converged and contact is not None:
-        # a very stiff body makes semi-smooth Newton chatter between contact sets: stiffen it gradually instead,
-        # each stage starting from the last stage's shape
-        start = psi0
-        for factor in CONTINUATION:
-            stage = TissueContact(chain, tissue.replace(modulus_n_m2=factor * tissue.modulus_n_m2))
-            sol = solve(stage, start)
-            start = sol.psi_rad
+        sol = _stiffen_gradually(chain, tissue, solve, psi0)
     b = sol.psi_rad.shape[0]
     converged = bool(sol.converged)
     if not converged:

@@ -340,31 +340,63 @@ class Chain:
             If it has not met ``tol`` after ``max_iter`` iterations: the result says so (``converged=False``).
         """
         owner = "Chain.solve_static"
+        load_s_m, load_force_ab_n = self._checked_point_loads(load_s_m, load_force_ab_n, owner)
+        tip_force_n, tip_moment_nm, cable_shortening_m, psi0, b = self._checked_static_inputs(
+            load_s_m, tip_force_n, tip_moment_nm, cable_shortening_m, psi0, owner
+        )
+        g, beyond = self._static_loads(b, load_s_m, load_force_ab_n, tip_force_n)
+        moment = np.broadcast_to(tip_moment_nm, (b,))
+        has_cable = cable_shortening_m is not None and self.cable_stiffness > 0
+        short = np.broadcast_to(cable_shortening_m, (b,)) if has_cable else None  # None: no cable
+        psi = np.zeros((b, self.n)) if psi0 is None else np.broadcast_to(psi0.reshape(-1, self.n), (b, self.n)).copy()
+        scale = max(float(np.max(self.stiffness)), 1e-300)
+        psi, iterations, converged, res, biggest = self._static_newton(
+            psi, g, moment, short, contact, tol * scale, max_iter, max_step_rad
+        )
+        if not np.all(np.isfinite(psi)):
+            bad = int(np.sum(~np.all(np.isfinite(psi), axis=1)))
+            raise ArithmeticError(f"static solve diverged (non-finite angles) in {bad} of {b} load cases")
+        if not converged:
+            warnings.warn(
+                f"{owner}: the Newton iteration did not meet its tolerance in {max_iter} iterations (largest "
+                f"residual {np.max(np.abs(res)) / scale:.3g} of the stiffness, last step {np.max(biggest):.3g} rad); "
+                "the solution has converged=False",
+                ConvergenceWarning,
+                stacklevel=2,
+            )
+        return self._static_solution(psi, beyond, short, contact, iterations, converged)
+
+    def _checked_point_loads(self, load_s_m, load_force_ab_n, owner):
+        """``(load_s_m (B, K), load_force_ab_n (B, K, 2))`` checked and shaped, or ``(None, None)``."""
         if (load_s_m is None) != (load_force_ab_n is None):
             given = "load_s_m" if load_force_ab_n is None else "load_force_ab_n"
             raise ParameterError(
                 f"The 'load_s_m' and 'load_force_ab_n' parameters of {owner} go together (a position and a force "
                 f"per load). Got only '{given}'."
             )
-        if load_s_m is not None:
-            load_s_m = check_values(
-                load_s_m,
-                "load_s_m",
-                owner,
-                low=0,
-                high=self.length_m,
-                unit="m",
-                note=f"{self.length_m:g} is the tip: a load beyond the tip is off the chain",
+        if load_s_m is None:
+            return None, None
+        load_s_m = check_values(
+            load_s_m,
+            "load_s_m",
+            owner,
+            low=0,
+            high=self.length_m,
+            unit="m",
+            note=f"{self.length_m:g} is the tip: a load beyond the tip is off the chain",
+        )
+        load_force_ab_n = check_values(load_force_ab_n, "load_force_ab_n", owner, unit="N")
+        # (B,) is one load per case, (B, K) K loads per case
+        load_s_m = load_s_m.reshape(load_s_m.shape[0], -1) if load_s_m.ndim else load_s_m.reshape(1, 1)
+        if load_force_ab_n.size != 2 * load_s_m.size or load_force_ab_n.shape[-1:] != (2,):
+            raise ParameterError(
+                f"The 'load_force_ab_n' parameter of {owner} must hold an (a, b) force per entry of 'load_s_m' "
+                f"(shape {(*load_s_m.shape, 2)}). Got shape {load_force_ab_n.shape} instead."
             )
-            load_force_ab_n = check_values(load_force_ab_n, "load_force_ab_n", owner, unit="N")
-            # (B,) is one load per case, (B, K) K loads per case
-            load_s_m = load_s_m.reshape(load_s_m.shape[0], -1) if load_s_m.ndim else load_s_m.reshape(1, 1)
-            if load_force_ab_n.size != 2 * load_s_m.size or load_force_ab_n.shape[-1:] != (2,):
-                raise ParameterError(
-                    f"The 'load_force_ab_n' parameter of {owner} must hold an (a, b) force per entry of 'load_s_m' "
-                    f"(shape {(*load_s_m.shape, 2)}). Got shape {load_force_ab_n.shape} instead."
-                )
-            load_force_ab_n = load_force_ab_n.reshape(*load_s_m.shape, 2)
+        return load_s_m, load_force_ab_n.reshape(*load_s_m.shape, 2)
+
+    def _checked_static_inputs(self, load_s_m, tip_force_n, tip_moment_nm, cable_shortening_m, psi0, owner):
+        """The other inputs of :meth:`solve_static` checked and shaped, and the batch size ``B`` they agree on."""
         if tip_force_n is not None:
             tip_force_n = check_values(tip_force_n, "tip_force_n", owner, unit="N")
             if tip_force_n.shape[-1:] != (2,) or tip_force_n.ndim > 2:
@@ -399,6 +431,10 @@ class Chain:
                     f"The 'psi0' parameter of {owner} must have shape ({b}, {self.n}) (or ({self.n},) for all "
                     f"cases). Got shape {psi0.shape} instead."
                 )
+        return tip_force_n, tip_moment_nm, cable_shortening_m, psi0, b
+
+    def _static_loads(self, b, load_s_m, load_force_ab_n, tip_force_n):
+        """``(G (B, n, 2), forces beyond each gauge (B, gauges, 2))``: gravity plus the world-fixed point loads."""
         g = np.broadcast_to(self.g_gravity, (b, self.n, 2)).copy()
         beyond = np.broadcast_to(self._mass_beyond_gauge[:, None] * self.gravity, (b, self.gauge_s_m.size, 2)).copy()
         if load_s_m is not None:
@@ -410,23 +446,42 @@ class Chain:
             tf = np.broadcast_to(tip_force_n, (b, 2))
             g += self.link_length_m[None, :, None] * tf[:, None, :]
             beyond += tf[:, None, :]
-        moment = np.broadcast_to(tip_moment_nm, (b,))
-        has_cable = cable_shortening_m is not None and self.cable_stiffness > 0
-        short = np.broadcast_to(cable_shortening_m if has_cable else np.zeros(1), (b,))
-        psi = np.zeros((b, self.n)) if psi0 is None else np.broadcast_to(psi0.reshape(-1, self.n), (b, self.n)).copy()
+        return g, beyond
+
+    def _static_solution(self, psi, beyond, short, contact, iterations, converged) -> StaticSolution:
+        """The :class:`StaticSolution` at the (finite) angles ``psi``: cable tension, gauge curvatures, axial forces."""
+        tension = self.cable_tension(psi[:, -1], short)[0] if short is not None else np.zeros(psi.shape[0])
+        if contact is not None:
+            beyond = beyond + contact.resultant(psi)[3]
+        return StaticSolution(
+            psi_rad=psi,
+            curvature_1_m=self.curvature_at_gauges(psi),
+            axial_force_n=self.axial_force(psi, beyond, tension),
+            tension_n=tension,
+            tip_m=self.tip(psi),
+            iterations=iterations,
+            converged=converged,
+        )
+
+    def _static_newton(self, psi, g, moment, short, contact, res_tol, max_iter, max_step_rad):
+        """The batched, step-limited Newton iteration of :meth:`solve_static` from ``psi`` (changed in place).
+
+        ``short`` is the cable shortening (None: no cable); ``res_tol`` the residual tolerance in N m. Returns
+        ``(psi, iterations, converged, last residual, last largest step per case)``.
+        """
+        b = psi.shape[0]
         ga, gb = g[..., 0], g[..., 1]
         e = self.eccentricity
         kc = self.cable_stiffness
-        scale = max(float(np.max(self.stiffness)), 1e-300)
         iterations, converged = 0, False
-        for iterations in range(1, max_iter + 1):  # noqa: B007 (reported below)
+        for iterations in range(1, max_iter + 1):  # noqa: B007 (returned)
             s, c = np.sin(psi), np.cos(psi)
             res = psi @ self.k_psi + s * ga - c * gb
             res[:, -1] -= moment
             jac = np.broadcast_to(self.k_psi, (b, self.n, self.n)).copy()
             idx = np.arange(self.n)
             jac[:, idx, idx] += c * ga + s * gb
-            if has_cable:
+            if short is not None:
                 tension, taut = self.cable_tension(psi[:, -1], short)
                 res[:, -1] -= e * tension
                 jac[:, -1, -1] += kc * e * e * taut
@@ -438,32 +493,10 @@ class Chain:
             biggest = np.max(np.abs(step), axis=1, keepdims=True)
             step *= np.minimum(1.0, max_step_rad / np.maximum(biggest, 1e-300))
             psi -= step
-            if np.max(np.abs(res)) < tol * scale and np.max(biggest) < 1e-9:
+            if np.max(np.abs(res)) < res_tol and np.max(biggest) < 1e-9:
                 converged = True
                 break
-        tension = self.cable_tension(psi[:, -1], short)[0] if has_cable else np.zeros(b)
-        if contact is not None and np.all(np.isfinite(psi)):
-            beyond = beyond + contact.resultant(psi)[3]
-        if not np.all(np.isfinite(psi)):
-            bad = int(np.sum(~np.all(np.isfinite(psi), axis=1)))
-            raise ArithmeticError(f"static solve diverged (non-finite angles) in {bad} of {b} load cases")
-        if not converged:
-            warnings.warn(
-                f"{owner}: the Newton iteration did not meet its tolerance in {max_iter} iterations (largest "
-                f"residual {np.max(np.abs(res)) / scale:.3g} of the stiffness, last step {np.max(biggest):.3g} rad); "
-                "the solution has converged=False",
-                ConvergenceWarning,
-                stacklevel=2,
-            )
-        return StaticSolution(
-            psi_rad=psi,
-            curvature_1_m=self.curvature_at_gauges(psi),
-            axial_force_n=self.axial_force(psi, beyond, tension),
-            tension_n=tension,
-            tip_m=self.tip(psi),
-            iterations=iterations,
-            converged=converged,
-        )
+        return psi, iterations, converged, res, biggest
 
     # ----------------------------------------------------------------------------------------------- dynamics
     def linear_modes(self, psi_eq=None, g_extra=None, cable_taut=False):
