@@ -40,7 +40,8 @@ def test_a_stop_signal_raises_interrupted_naming_it(signum, code):
     with pytest.raises(Interrupted) as caught, stop_on_signals():
         os.kill(os.getpid(), signum)
         _spin()
-    assert caught.value.signum == signum and caught.value.exit_code == code
+    assert caught.value.signum == signum
+    assert caught.value.exit_code == code
     assert str(caught.value) == f"interrupted by {signal.Signals(signum).name}"
     assert isinstance(caught.value, KeyboardInterrupt)  # every Ctrl-C path (finally, except KeyboardInterrupt) runs
 
@@ -109,7 +110,8 @@ def test_interrupted_pickles_with_its_signal():
     import pickle
 
     again = pickle.loads(pickle.dumps(Interrupted(signal.SIGHUP)))
-    assert again.signum == signal.SIGHUP and again.signal_name == "SIGHUP"
+    assert again.signum == signal.SIGHUP
+    assert again.signal_name == "SIGHUP"
 
 
 def _signal_inside_a_kernel(signum):
@@ -164,8 +166,10 @@ def test_the_loop_takes_a_stop_inside_its_rig_for_a_stop_not_a_bug():
     rig = open_rig("sim")
     with stop_on_signals():
         result = run_loop(rig, Kernel(), 0.0, 1.0, guard=False)
-    assert result.status == "interrupted" and result.extra["signal"] == "SIGHUP"
-    assert "interrupted by SIGHUP" in result.message and result.safe_command_sent
+    assert result.status == "interrupted"
+    assert result.extra["signal"] == "SIGHUP"
+    assert "interrupted by SIGHUP" in result.message
+    assert result.safe_command_sent
 
 
 def test_the_command_line_takes_it_for_a_stop_too(monkeypatch, capsys):
@@ -177,4 +181,5 @@ def test_the_command_line_takes_it_for_a_stop_too(monkeypatch, capsys):
     monkeypatch.setattr(params_commands, "_params", lambda args: _signal_inside_a_kernel(signal.SIGTERM))
     assert main(["params", "--json"]) == 143
     out = json.loads(capsys.readouterr().out)
-    assert out["signal"] == "SIGTERM" and out["error"] == "interrupted by SIGTERM"
+    assert out["signal"] == "SIGTERM"
+    assert out["error"] == "interrupted by SIGTERM"

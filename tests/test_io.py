@@ -109,8 +109,10 @@ def test_a_write_failing_at_fsync_is_a_failed_write_too(tmp_path, monkeypatch, c
     with pytest.raises(OutputError, match=rf"a.bin: cannot write it: {re.escape(os.strerror(code))}") as info:
         with atomic_write(out, force=True) as fh:
             fh.write(b"new")
-    assert info.value.errno == code and isinstance(info.value, OSError)
-    assert out.read_bytes() == b"old" and _names(tmp_path) == ["a.bin"]
+    assert info.value.errno == code
+    assert isinstance(info.value, OSError)
+    assert out.read_bytes() == b"old"
+    assert _names(tmp_path) == ["a.bin"]
 
 
 @pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
@@ -200,7 +202,8 @@ def test_an_output_that_is_not_a_regular_file_is_refused_even_with_force(tmp_pat
             attempt()
     after = os.lstat(path)
     assert (after.st_ino, stat.S_IFMT(after.st_mode)) == (before.st_ino, stat.S_IFMT(before.st_mode))
-    assert os.path.exists(os.devnull) and stat.S_ISCHR(os.stat(os.devnull).st_mode)
+    assert os.path.exists(os.devnull)
+    assert stat.S_ISCHR(os.stat(os.devnull).st_mode)
 
 
 @pytest.mark.parametrize("kind", ["fifo", "devnull-link", "socket"])
@@ -255,7 +258,8 @@ def test_a_forced_stream_is_written_beside_the_old_file_and_replaces_it_at_a_com
     stream.file.flush()
     assert out.read_text() == "old\n"  # while the run goes on, the old log is whole
     assert stream.close(complete=True) == out
-    assert out.read_text() == "new\n" and _names(tmp_path) == ["log.jsonl"]
+    assert out.read_text() == "new\n"
+    assert _names(tmp_path) == ["log.jsonl"]
 
 
 def test_a_stopped_forced_stream_keeps_the_old_file_and_its_own_as_partial(tmp_path):
@@ -275,7 +279,8 @@ def test_a_forced_stream_that_fails_to_write_leaves_the_old_file_and_no_debris(t
     stream = OutputStream(out, "replace", binary=True)
     stream.file.write(b"new")
     stream.abandon()
-    assert out.read_bytes() == b"old" and _names(tmp_path) == ["rec.mcap"]
+    assert out.read_bytes() == b"old"
+    assert _names(tmp_path) == ["rec.mcap"]
 
 
 def test_a_loop_log_on_a_full_disk_names_the_file_and_keeps_the_old_log(tmp_path, monkeypatch):
@@ -300,7 +305,8 @@ def test_a_loop_log_on_a_full_disk_names_the_file_and_keeps_the_old_log(tmp_path
     with pytest.raises(OutputError, match="old.jsonl: cannot write it: No space left on device; the previous file"):
         log.write({"k": 0})
     log.abandon()
-    assert out.read_text() == '{"format": "old"}\n' and _names(tmp_path) == ["old.jsonl"]
+    assert out.read_text() == '{"format": "old"}\n'
+    assert _names(tmp_path) == ["old.jsonl"]
 
 
 def test_a_second_writer_of_one_output_is_refused_not_mixed(tmp_path):
@@ -315,7 +321,8 @@ def test_a_second_writer_of_one_output_is_refused_not_mixed(tmp_path):
     )
     with output_lock(out), output_lock(out):
         done = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True, text=True, timeout=120)
-        assert done.stdout.startswith("OutputBusyError ") and f"pid {os.getpid()}" in done.stdout, done
+        assert done.stdout.startswith("OutputBusyError "), done
+        assert f"pid {os.getpid()}" in done.stdout, done
         assert "run.jsonl: another flexdigit process" in done.stdout
     assert _names(tmp_path) == []  # the lock file goes with the lock
     with OutputStream(out, "append").file as fh:  # free again
@@ -381,10 +388,12 @@ def test_a_one_shot_write_is_refused_while_another_process_holds_the_lock_and_le
         with atomic_write(out, "w") as fh:  # this process holds it: allowed (a collection saving its dataset)
             fh.write("ours")
         done = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True, text=True, timeout=120)
-    assert done.stdout.startswith("OutputBusyError ") and "p.toml: another flexdigit process" in done.stdout, done
+    assert done.stdout.startswith("OutputBusyError "), done
+    assert "p.toml: another flexdigit process" in done.stdout, done
     with atomic_write(out, "w", force=True) as fh:
         fh.write("again")
-    assert _names(tmp_path) == ["p.toml"] and out.read_text() == "again"
+    assert _names(tmp_path) == ["p.toml"]
+    assert out.read_text() == "again"
 
 
 def test_the_next_locked_writer_removes_a_dead_writers_temporary_file_but_not_a_live_ones(tmp_path):

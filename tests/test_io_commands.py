@@ -76,7 +76,10 @@ def test_a_fifo_input_is_refused_in_one_line_never_hangs(tmp_path, name):
     argv, what = INPUTS[name]
     done = _run([a.replace("{f}", "in") for a in argv], tmp_path)
     line = _one_line(done.stderr)
-    assert done.returncode == 2 and "in." in line and "is a FIFO (named pipe)" in line and what in line, line
+    assert done.returncode == 2, line
+    assert "in." in line, line
+    assert "is a FIFO (named pipe)" in line, line
+    assert what in line, line
 
 
 @pytest.mark.parametrize("name", ["params", "identify", "model", "calibrate records", "replay log"])
@@ -88,7 +91,8 @@ def test_a_device_input_is_refused_naming_it(tmp_path, capsys, monkeypatch, name
     argv, what = INPUTS[name]
     assert main([a.replace("{f}", "in") for a in argv]) == 2
     line = _one_line(capsys.readouterr().err)
-    assert f"is a character device (a symlink to {target}), not a regular file" in line and what in line, line
+    assert f"is a character device (a symlink to {target}), not a regular file" in line, line
+    assert what in line, line
 
 
 def test_a_directory_input_is_refused_naming_it(tmp_path, capsys):
@@ -139,9 +143,11 @@ def test_a_ten_million_row_csv_is_refused_by_name_in_bounded_memory(tmp_path):
         ).stdout
         code, rss_kb, stderr = json.loads(out)
         line = _one_line(stderr)
-        assert code == 2 and f"big.csv: more than {RECORDS_ROW_LIMIT:,} lines" in line, line
+        assert code == 2, line
+        assert f"big.csv: more than {RECORDS_ROW_LIMIT:,} lines" in line, line
         assert rss_kb < MAX_RSS_KB, (argv[0], rss_kb)
-    assert not (tmp_path / "d.parquet").exists() and not (tmp_path / "c.toml").exists()
+    assert not (tmp_path / "d.parquet").exists()
+    assert not (tmp_path / "c.toml").exists()
 
 
 # ----------------------------------------------------------------------------------------------------- outputs
@@ -162,8 +168,10 @@ def test_an_output_onto_a_fifo_or_a_device_is_refused_even_with_force(tmp_path, 
     before = os.lstat(out)
     assert main([*STEP, "--out", str(out), "--force"]) == 2
     line = _one_line(capsys.readouterr().err)
-    assert "not a regular file" in line and "not even with --force" in line, line
-    assert os.lstat(out).st_ino == before.st_ino and os.lstat(out).st_mode == before.st_mode
+    assert "not a regular file" in line, line
+    assert "not even with --force" in line, line
+    assert os.lstat(out).st_ino == before.st_ino
+    assert os.lstat(out).st_mode == before.st_mode
     assert sorted(os.listdir(tmp_path)) == ([] if kind == "dev-null" else ["o.parquet"])
 
 
@@ -233,7 +241,9 @@ def test_a_forced_table_on_a_full_disk_keeps_the_old_file_and_names_it(tmp_path)
         _fill(disk, 8 * 1024)
         done = _run([*STEP, "--duration", "5", "--out", "o.parquet", "--force"], disk)
         line = _one_line(done.stderr)
-        assert done.returncode == 2 and "o.parquet: cannot write it:" in line and "previous file is kept" in line
+        assert done.returncode == 2
+        assert "o.parquet: cannot write it:" in line
+        assert "previous file is kept" in line
         assert (disk / "o.parquet").read_bytes() == b"old results"
         assert sorted(p.name for p in disk.iterdir()) == ["filler", "o.parquet"]
 
@@ -247,7 +257,9 @@ def test_a_second_run_appending_to_a_log_in_use_is_refused(tmp_path):
     with output_lock(log):  # as a first run holds it for its whole length
         done = _run(["run", "--log", str(log), "--append", "--duration", "0.2"], tmp_path)
     line = _one_line(done.stderr)
-    assert done.returncode == 2 and "r.jsonl: another flexdigit process" in line and "is writing it" in line, line
+    assert done.returncode == 2, line
+    assert "r.jsonl: another flexdigit process" in line, line
+    assert "is writing it" in line, line
     assert log.read_bytes() == before
 
 
@@ -255,7 +267,8 @@ def test_a_collect_into_an_output_in_use_is_refused_before_its_journal(tmp_path)
     out = tmp_path / "d.parquet"
     with output_lock(out):
         done = _run(["collect", "thesis-6.1", "--no-progress", "--out", str(out)], tmp_path)
-    assert done.returncode == 2 and "d.parquet: another flexdigit process" in _one_line(done.stderr)
+    assert done.returncode == 2
+    assert "d.parquet: another flexdigit process" in _one_line(done.stderr)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
@@ -300,11 +313,14 @@ def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path):
         assert first.poll() is None, "the first run ended before the second was refused: the test proves nothing"
     finally:
         out, err = first.communicate(timeout=300)
-    assert second.returncode == 2 and "r.jsonl: another flexdigit process" in _one_line(second.stderr)
+    assert second.returncode == 2
+    assert "r.jsonl: another flexdigit process" in _one_line(second.stderr)
     assert first.returncode == 0, err
     runs = read_log_runs(log)
     # one run, whole (a loaded machine skips overrun samples, so no exact count), nothing of the second mixed in
-    assert len(runs) == 1 and runs[0][3]["stop"] == "completed" and 0 < len(runs[0][2]) <= 400
+    assert len(runs) == 1
+    assert runs[0][3]["stop"] == "completed"
+    assert 0 < len(runs[0][2]) <= 400
 
 
 @pytest.mark.slow
@@ -317,7 +333,8 @@ def test_a_collect_on_a_disk_that_fills_names_its_journal_and_a_rerun_resumes(tm
         argv = ["collect", "thesis-6.1", "--no-progress", "--out", "d.parquet"]
         done = _run(argv, disk, timeout=600)
         line = _one_line(done.stderr)
-        assert done.returncode == 2 and "cannot write it: No space left on device" in line, line
+        assert done.returncode == 2, line
+        assert "cannot write it: No space left on device" in line, line
         assert "readings before are kept: free some space and rerun to resume" in line
         (disk / "filler").unlink()
         assert _run(argv, disk, timeout=600).returncode == 0

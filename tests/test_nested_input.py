@@ -47,4 +47,5 @@ def test_deeply_nested_collect_journal_is_named_by_file_and_line(tmp_path, line)
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(DataFileError) as err:
         read_journal(path)
-    assert str(err.value).startswith(f"{path}: line {line} ") and "\n" not in str(err.value)
+    assert str(err.value).startswith(f"{path}: line {line} ")
+    assert "\n" not in str(err.value)

@@ -35,7 +35,8 @@ def test_existing_outputs_are_refused_without_force(argv, tmp_path, capsys):
     args = [a.replace("{out}", str(out)) for a in argv]
     assert main([*args, "--json"]) == 2
     doc = _error(capsys)
-    assert doc["error_type"] == "OutputExistsError" and "pass --force to overwrite it" in doc["error"]
+    assert doc["error_type"] == "OutputExistsError"
+    assert "pass --force to overwrite it" in doc["error"]
     assert out.read_bytes() == b"precious"
     assert main([*args, "--force", "--json"]) == 0
     capsys.readouterr()
@@ -57,7 +58,8 @@ def test_a_missing_directory_is_refused_before_the_work(argv, tmp_path, capsys, 
     work_must_not_start(Twin, "advance")
     assert main([a.replace("{out}", str(out)) for a in argv]) == 2
     err = capsys.readouterr().err
-    assert "missing" in err and "the work started" not in err
+    assert "missing" in err
+    assert "the work started" not in err
 
 
 def test_a_failed_parquet_write_keeps_the_old_file(tmp_path, monkeypatch):
@@ -98,11 +100,13 @@ def test_reproduce_refuses_a_folder_that_holds_a_report(tmp_path, capsys, monkey
     work_must_not_start(build, "_build_chapter")  # refused before any chapter is built
     assert main(["reproduce", "--out", str(tmp_path), "--fast", "--workers", "1", "--json"]) == 2
     error = _error(capsys)["error"]
-    assert "already holds a report (results.json); pass --force" in error and "the work started" not in error
+    assert "already holds a report (results.json); pass --force" in error
+    assert "the work started" not in error
     assert (tmp_path / "results.json").read_text() == "[]"
     monkeypatch.undo()  # the chapters build again
     from flexdigit.report.build import reproduce
 
     summary = reproduce(tmp_path, chapters=(), force=True)  # no chapter: an empty report, written over the old
-    assert json.loads((tmp_path / "results.json").read_text())["entries"] == [] and summary.entries == 0
+    assert json.loads((tmp_path / "results.json").read_text())["entries"] == []
+    assert summary.entries == 0
     assert (tmp_path / "index.html").exists()

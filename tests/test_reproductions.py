@@ -18,7 +18,8 @@ BINARY = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\xff\xfe"
 
 def _error(capsys) -> dict:
     captured = capsys.readouterr()
-    assert "Traceback" not in captured.err and captured.err.count("\n") == 1
+    assert "Traceback" not in captured.err
+    assert captured.err.count("\n") == 1
     return json.loads(captured.out)
 
 
@@ -36,7 +37,8 @@ def test_hangs_are_bounded(argv, culprit, tmp_path, capsys, work_must_not_start)
     work_must_not_start(Twin, "advance")
     assert main([a.replace("{tmp}", str(tmp_path)) for a in argv] + ["--json"]) == 2
     error = _error(capsys)["error"]
-    assert culprit in error and "the work started" not in error
+    assert culprit in error
+    assert "the work started" not in error
     assert list(tmp_path.iterdir()) == []
 
 
@@ -93,5 +95,6 @@ def test_binary_garbage_names_the_file(argv, tmp_path, capsys):
     bad.write_bytes(BINARY)
     assert main([a.replace("{bad}", str(bad)).replace("{tmp}", str(tmp_path)) for a in argv] + ["--json"]) == 2
     doc = _error(capsys)
-    assert str(bad) in doc["error"] and doc["error_type"] == "DataFileError", doc
+    assert str(bad) in doc["error"], doc
+    assert doc["error_type"] == "DataFileError", doc
     assert "codec" not in doc["error"]

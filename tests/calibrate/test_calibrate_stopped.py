@@ -27,6 +27,7 @@ def test_a_stopped_calibration_leaves_the_old_file(tmp_path, signum, code):
     exit_code, result, err = stop(proc, signum)
     name = signal.Signals(signum).name
     assert exit_code == code, err
-    assert result["signal"] == name and result["error"] == f"interrupted by {name}"
+    assert result["signal"] == name
+    assert result["error"] == f"interrupted by {name}"
     assert out.read_text() == "# the calibration of last week\n"
     assert [p.name for p in tmp_path.iterdir()] == ["cal.toml"]  # no temporary file

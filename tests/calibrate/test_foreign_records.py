@@ -141,7 +141,8 @@ def test_calibrate_json_reports_the_release_figures_of_a_foreign_record(tmp_path
     housed = report["release_tests"]["housing"]
     assert housed["wn_rad_s"] == pytest.approx(wn, rel=RELEASE_WN_RTOL)
     assert housed["zeta"] == pytest.approx(zeta, rel=RELEASE_ZETA_RTOL)
-    assert len(housed["records"]) == 3 and housed["skipped"] == []
+    assert len(housed["records"]) == 3
+    assert housed["skipped"] == []
     # the calibrated housed twin rings as the record does (its linear modes, no simulation)
     modes = build_digit(RigParams(), load_calibration(out), housing=True).linear_modes()
     assert float(modes[0][0]) == pytest.approx(wn, rel=RELEASE_WN_RTOL)

@@ -41,13 +41,15 @@ def test_train_and_predict_round_trip(dataset_file, tmp_path, capsys):
         ]
     )
     out = json.loads(capsys.readouterr().out)
-    assert code == 0 and out["hidden"] == 6
+    assert code == 0
+    assert out["hidden"] == 6
     # gauge 2 and 3 both see loads beyond gauge 3 (tip 0-4.5 cm) and gauge 1-2 beyond 13.5 cm: position is
     # determined, so a 6-node network on a clean closed-form cantilever locates it to well under 5 mm
     assert out["rmse_mm"] < 5.0
     assert main(["predict", str(model), str(dataset_file), "--json"]) == 0
     pred = json.loads(capsys.readouterr().out)
-    assert pred["target"] == "position" and pred["scores"]["corr2"] > 0.99
+    assert pred["target"] == "position"
+    assert pred["scores"]["corr2"] > 0.99
     assert len(pred["predicted"]) == 2 * 6 * 10  # the loaded readings
 
 

@@ -24,4 +24,5 @@ def test_cli_export_json(tmp_path, capsys):
     out = tmp_path / "c.c"
     assert main(["export", "controller", "--out", str(out), "--json", "--no-rotation-map"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["analysis"]["closed_loop_stable"] is True and doc["format"] == "float"
+    assert doc["analysis"]["closed_loop_stable"] is True
+    assert doc["format"] == "float"

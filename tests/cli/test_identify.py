@@ -38,14 +38,17 @@ def test_identify_release_thesis_method_text(tmp_path, capsys):
     p = _record(tmp_path / "rel.csv", "release", zeta=0.068, wn=13.1)
     assert main(["identify", "release", str(p), "--method", "thesis", "--channel", "sg1"]) == 0
     text = capsys.readouterr().out
-    assert "method thesis" in text and "wn = 4/(zeta Ts)" in text and "corr2" in text
+    assert "method thesis" in text
+    assert "wn = 4/(zeta Ts)" in text
+    assert "corr2" in text
 
 
 def test_no_undershoot_in_release_is_a_one_line_error(tmp_path, capsys):
     p = _record(tmp_path / "over.csv", "release", zeta=1.5, wn=13.1)
     assert main(["identify", "release", str(p), "--method", "thesis"]) == 2
     err = capsys.readouterr().err
-    assert "over.csv:sg1: no undershoot in this release test" in err and "Traceback" not in err
+    assert "over.csv:sg1: no undershoot in this release test" in err
+    assert "Traceback" not in err
 
 
 def test_missing_channel_is_a_one_line_error(tmp_path, capsys):
@@ -68,9 +71,11 @@ def test_release_without_undershoot_is_refused_by_every_method(tmp_path, capsys,
     p = _exponential_decay(tmp_path / "decay.csv")
     assert main(["identify", "release", str(p), *extra]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "Traceback" not in err
+    assert err.count("\n") == 1
+    assert "Traceback" not in err
     assert "decay.csv:sg1: no undershoot in this release test" in err
-    assert "expected an oscillating decay" in err and "--allow-overdamped" in err
+    assert "expected an oscillating decay" in err
+    assert "--allow-overdamped" in err
 
 
 def test_overdamped_release_default_method_refused_also_with_noise(tmp_path, capsys):
@@ -83,7 +88,8 @@ def test_allow_overdamped_opts_in_to_the_fit(tmp_path, capsys):
     p = _record(tmp_path / "over.csv", "release", zeta=1.5, wn=13.1, noise=0.002)
     assert main(["identify", "release", str(p), "--allow-overdamped", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["zeta"] == pytest.approx(1.5, rel=0.05) and out["wn_rad_s"] == pytest.approx(13.1, rel=0.05)
+    assert out["zeta"] == pytest.approx(1.5, rel=0.05)
+    assert out["wn_rad_s"] == pytest.approx(13.1, rel=0.05)
     assert "features" not in out  # no %OS to report
     # the thesis method cannot use it even when allowed
     assert main(["identify", "release", str(p), "--allow-overdamped", "--method", "thesis"]) == 2
@@ -96,7 +102,8 @@ def test_oscillating_release_with_the_default_method(tmp_path, capsys):
     assert main(["identify", "release", str(p), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["method"] == "lsq"
-    assert out["wn_rad_s"] == pytest.approx(13.1, rel=0.02) and out["zeta"] == pytest.approx(0.068, rel=0.02)
+    assert out["wn_rad_s"] == pytest.approx(13.1, rel=0.02)
+    assert out["zeta"] == pytest.approx(0.068, rel=0.02)
 
 
 @pytest.mark.parametrize(("column", "asked"), [("gauge1_v", "sg1"), ("gauge1_v", "sg1_v"), ("sg1_v", "gauge1")])
@@ -134,7 +141,9 @@ def test_bad_options_are_one_line_errors(tmp_path, capsys, extra, expected):
     p.write_text("\n".join(line.rsplit(",", 1)[0] for line in p.read_text().splitlines()) + "\n")  # no command
     assert main(["identify", "step", str(p), *extra]) == 2
     err = capsys.readouterr().err
-    assert expected in err and err.count("\n") == 1 and "Traceback" not in err
+    assert expected in err
+    assert err.count("\n") == 1
+    assert "Traceback" not in err
 
 
 def test_input_step_contradicting_the_command_column_is_refused(tmp_path, capsys):
@@ -163,16 +172,22 @@ def test_t0_zero_is_a_value_not_absent(tmp_path, capsys):
     np.savetxt(p, np.column_stack([t, y]), delimiter=",", header="time_s,pot_v", comments="", fmt="%.9g")
     assert main(["identify", "step", str(p), "--t0", "0", "--delay", "no", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["instant"]["found_from"] == "given" and out["t0_s"] == 0.0
-    assert out["wn_rad_s"] == pytest.approx(20.53, rel=0.01) and out["zeta"] == pytest.approx(0.5629, rel=0.02)
+    assert out["instant"]["found_from"] == "given"
+    assert out["t0_s"] == 0.0
+    assert out["wn_rad_s"] == pytest.approx(20.53, rel=0.01)
+    assert out["zeta"] == pytest.approx(0.5629, rel=0.02)
 
 
 def test_text_output_reports_the_instant_and_the_quality(tmp_path, capsys):
     p = _record(tmp_path / "step.csv", "step", zeta=0.5629, wn=20.53, noise=0.004)
     assert main(["identify", "step", str(p)]) == 0
     out = capsys.readouterr().out
-    assert "step at t = 0.2" in out and "from the 'command' column" in out and "step up" in out
-    assert "quality:" in out and "Ljung-Box" in out and "record: noise" in out
+    assert "step at t = 0.2" in out
+    assert "from the 'command' column" in out
+    assert "step up" in out
+    assert "quality:" in out
+    assert "Ljung-Box" in out
+    assert "record: noise" in out
 
 
 def test_simulate_release_from_no_deflection_is_refused(tmp_path, capsys):

@@ -21,7 +21,8 @@ def test_bad_file_gives_one_line_error(tmp_path, capsys):
     bad.write_text("[sensors]\ngauge_factor = 'big'\n")
     assert main(["params", str(bad)]) == 2
     err = capsys.readouterr().err
-    assert "gauge_factor" in err and "Traceback" not in err
+    assert "gauge_factor" in err
+    assert "Traceback" not in err
     assert main(["params", str(tmp_path / "missing.toml")]) == 2
     assert "no such file" in capsys.readouterr().err
 
@@ -84,15 +85,19 @@ def test_errors_are_json_on_stdout_under_json(argv, error_type, needle, tmp_path
     assert main(argv) == 2
     captured = capsys.readouterr()
     doc = json.loads(captured.out)  # stdout holds exactly one JSON object
-    assert doc["exit_code"] == 2 and doc["error_type"] == error_type and needle in doc["error"]
+    assert doc["exit_code"] == 2
+    assert doc["error_type"] == error_type
+    assert needle in doc["error"]
     assert doc["command"] == argv[0] or (argv[0] == "simulate" and doc["command"] == "simulate release")
-    assert "Traceback" not in captured.err and len(captured.err.strip().splitlines()) == 1
+    assert "Traceback" not in captured.err
+    assert len(captured.err.strip().splitlines()) == 1
 
 
 def test_errors_without_json_stay_one_line_on_stderr(capsys):
     assert main(["params", "--seed", "1"]) == 2
     captured = capsys.readouterr()
-    assert captured.out == "" and captured.err.startswith("flexdigit params: error: unrecognized arguments")
+    assert captured.out == ""
+    assert captured.err.startswith("flexdigit params: error: unrecognized arguments")
 
 
 def test_an_internal_error_is_one_line_not_a_traceback(monkeypatch, capsys):
@@ -104,7 +109,9 @@ def test_an_internal_error_is_one_line_not_a_traceback(monkeypatch, capsys):
     monkeypatch.setattr(pc, "_params", broken)
     assert main(["params", "--json"]) == 2
     doc = json.loads(capsys.readouterr().out)
-    assert doc["error_type"] == "RuntimeError" and "internal error" in doc["error"] and "boom" in doc["error"]
+    assert doc["error_type"] == "RuntimeError"
+    assert "internal error" in doc["error"]
+    assert "boom" in doc["error"]
 
 
 def test_collect_json_keeps_progress_off_stdout(tmp_path, capsys):
@@ -118,5 +125,6 @@ def test_collect_json_keeps_progress_off_stdout(tmp_path, capsys):
     assert main(["collect", str(protocol), "--out", str(out), "--json"]) == 0
     captured = capsys.readouterr()
     doc = json.loads(captured.out)
-    assert doc["samples"] == 1 + 2 * 2 and doc["protocol"] == "tiny"
+    assert doc["samples"] == 1 + 2 * 2
+    assert doc["protocol"] == "tiny"
     assert "tiny" in captured.err  # the bar was drawn, on stderr

@@ -15,7 +15,8 @@ def test_model_json_printed(capsys):
     data = json.loads(capsys.readouterr().out)
     plant = data["plant"]
     assert plant["num"][0] == pytest.approx(thesis_value("plant.g_num")[0], rel=PRINTED_4_DIGITS_RTOL)  # 48.7 (3.5)
-    assert plant["controllability_rank"] == 4 and plant["minimum_phase"] is True
+    assert plant["controllability_rank"] == 4
+    assert plant["minimum_phase"] is True
     assert data["closed_loop"]["num"][-1] == pytest.approx(
         thesis_value("plant.closed_loop_num")[0], rel=PRINTED_4_DIGITS_RTOL
     )
@@ -24,10 +25,12 @@ def test_model_json_printed(capsys):
 def test_model_text_consistent_with_explanations(capsys):
     assert main(["model", "--variant", "consistent", "--output", "tip_rotation_rad", "--explain"]) == 0
     out = capsys.readouterr().out
-    assert "[rad]" in out and "1. Digit factor" in out
+    assert "[rad]" in out
+    assert "1. Digit factor" in out
 
 
 def test_model_bad_output_is_one_line_error(capsys):
     assert main(["model", "--output", "tip_rotation_rad"]) == 2
     err = capsys.readouterr().err
-    assert "output" in err and "Traceback" not in err
+    assert "output" in err
+    assert "Traceback" not in err

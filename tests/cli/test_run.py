@@ -17,7 +17,9 @@ def test_run_digital20_json_with_log_and_saved_calibration(tmp_path, capsys):
     argv = ["run", "--json", "--duration", "2", "--setpoint-deg", "20", "--rotation-map", str(cal), "--log", str(log)]
     assert main(argv) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["status"] == "completed" and data["samples"] == 100 and data["overruns"] == 0
+    assert data["status"] == "completed"
+    assert data["samples"] == 100
+    assert data["overruns"] == 0
     assert abs(data["estimated_final_rotation_deg"] - 20) < 1.0  # measured rotation within about half a quantum
     # the sim backend also reports the twin's own rotation: within one quantum (1.7 deg) of the estimate at the end
     # and at the peak (the ill-posed least-squares map once read 41.5 deg at a true 31 deg)
@@ -30,7 +32,8 @@ def test_run_digital20_json_with_log_and_saved_calibration(tmp_path, capsys):
     assert 0.05 < true["rise_time_s"] < true["settling_time_s"] < 1.0
     for m in (est, true):
         assert 0.05 < m["rise_time_s"] < m["settling_to_final_s"] < 1.0
-        assert abs(m["final_error_deg"]) < 1.0 and m["overshoot_percent"] < 10
+        assert abs(m["final_error_deg"]) < 1.0
+        assert m["overshoot_percent"] < 10
         assert m["final_error_commands"] == pytest.approx(
             m["final_error_deg"] / data["step_metrics"]["deg_per_command"]
         )
@@ -41,8 +44,10 @@ def test_run_digital20_json_with_log_and_saved_calibration(tmp_path, capsys):
     assert est["final_error_deg"] == pytest.approx(data["estimated_final_rotation_deg"] - 20)
     # the log's closing record holds the same figures
     footer = read_log(log)[2]
-    assert cal.exists() and footer["stop"] == "completed"
-    assert footer["summary"]["estimated"] == pytest.approx(est) and footer["summary"]["true"] == pytest.approx(true)
+    assert cal.exists()
+    assert footer["stop"] == "completed"
+    assert footer["summary"]["estimated"] == pytest.approx(est)
+    assert footer["summary"]["true"] == pytest.approx(true)
     # second run reuses the saved map (no calibration sweep) and gives the same numbers: deterministic
     argv[-1] = str(tmp_path / "again.jsonl")
     assert main(argv) == 0
@@ -53,8 +58,10 @@ def test_run_digital20_json_with_log_and_saved_calibration(tmp_path, capsys):
     replay = ["run", "--json", "--backend", f"replay://{log}", "--rotation-map", str(cal), "--setpoint-deg", "20"]
     assert main([*replay, "--duration", "1"]) == 0
     replayed = json.loads(capsys.readouterr().out)
-    assert replayed["true_peak_rotation_deg"] is None and replayed["true_final_rotation_deg"] is None
-    assert replayed["step_metrics"]["true"] is None and replayed["step_metrics"]["estimated"]["rise_time_s"] > 0
+    assert replayed["true_peak_rotation_deg"] is None
+    assert replayed["true_final_rotation_deg"] is None
+    assert replayed["step_metrics"]["true"] is None
+    assert replayed["step_metrics"]["estimated"]["rise_time_s"] > 0
     assert replayed["estimated_peak_rotation_deg"] > 15  # the recorded gauges did move
 
 

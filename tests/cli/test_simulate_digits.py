@@ -44,5 +44,7 @@ def test_a_digit_that_buckles_tip_up_is_refused_in_one_line(tmp_path, capsys):
     argv = ["simulate", "release", "--params", str(path), "--out", str(tmp_path / "r.csv")]
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "buckles" in err[0] and "hanging" in err[0]
+    assert len(err) == 1
+    assert "buckles" in err[0]
+    assert "hanging" in err[0]
     assert not (tmp_path / "r.csv").exists()

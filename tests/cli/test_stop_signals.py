@@ -53,7 +53,8 @@ def test_run_with_log_and_record_stops_cleanly(tmp_path, signum, code):
     wait_until(lambda: lines(log) > SAMPLES_BEFORE_STOP, proc)
     exit_code, result, err = stop(proc, signum)
     assert exit_code == code, err
-    assert result["status"] == "interrupted" and result["signal"] == name
+    assert result["status"] == "interrupted"
+    assert result["signal"] == name
     assert f"interrupted by {name}" in result["message"]
     assert "Traceback" not in err
     _, samples, footer = read_log(log)
@@ -63,7 +64,8 @@ def test_run_with_log_and_record_stops_cleanly(tmp_path, signum, code):
     assert [s["k"] for s in recorded] == [s["k"] for s in samples]  # every logged sample, in order
     assert statistics.message_count == len(samples)
     (stopped,) = stops
-    assert stopped["stop"] == "interrupted" and stopped["signal"] == name
+    assert stopped["stop"] == "interrupted"
+    assert stopped["signal"] == name
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.jsonl", "run.mcap"]  # no temporary file left
 
 
@@ -96,7 +98,8 @@ def test_a_serial_rig_is_left_at_the_safe_command(tmp_path, rotation_map_file, s
         # the last frame the board got is the safe one (before: the servo stayed at its last command, e.g. 32)
         assert eventually(lambda: emulator.commands[-1] == 8, timeout_s=5.0), emulator.commands[-5:]
     assert exit_code == code, err
-    assert result["status"] == "interrupted" and result["signal"] == name
+    assert result["status"] == "interrupted"
+    assert result["signal"] == name
     _, _, footer = read_log(log)
     _check_footer(footer, name)
 
@@ -118,7 +121,8 @@ def test_a_palpation_sweep_on_a_serial_rig_stops_at_the_safe_command(tmp_path, s
         exit_code, result, err = stop(proc, signum)
         assert eventually(lambda: emulator.commands[-1] == 8, timeout_s=5.0), emulator.commands[-5:]
     assert exit_code == code, err
-    assert result["signal"] == name and result["error"] == f"interrupted by {name}"
+    assert result["signal"] == name
+    assert result["error"] == f"interrupted by {name}"
     _, _, footer = read_log(log)
     _check_footer(footer, name)
 
@@ -133,4 +137,5 @@ def test_the_stream_emulator_stops_as_with_ctrl_c(signum):
     proc.send_signal(signum)
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
-    assert f"stopped by {signal.Signals(signum).name}" in out and "lines (" in out
+    assert f"stopped by {signal.Signals(signum).name}" in out
+    assert "lines (" in out

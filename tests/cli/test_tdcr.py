@@ -20,7 +20,8 @@ def test_statics_json_gives_the_tip_and_the_backbone(capsys):
     np.testing.assert_allclose(frame[:3, 3], data["tip_position_m"])
     np.testing.assert_allclose(frame[:3, :3].T @ frame[:3, :3], np.eye(3), atol=1e-7)  # RK4 drift ~1e-8
     backbone = np.array(data["backbone_m"])
-    assert backbone.shape == (21, 3) and np.allclose(backbone[0], 0.0)
+    assert backbone.shape == (21, 3)
+    assert np.allclose(backbone[0], 0.0)
     np.testing.assert_allclose(backbone[-1], data["tip_position_m"])
 
 
@@ -30,7 +31,8 @@ def test_statics_from_a_file_with_tip_loads(tmp_path, capsys):
     argv = ["tdcr", "statics", str(path), "--tension-n", "1", "--tip-force-n=-0.01,0,0", "--tip-moment-nm", "0,0,0"]
     assert main(argv) == 0
     text = capsys.readouterr().out
-    assert "tip position" in text and "converged: True" in text
+    assert "tip position" in text
+    assert "converged: True" in text
 
 
 @pytest.mark.parametrize(
@@ -48,7 +50,8 @@ def test_bad_input_is_one_json_error(argv, needle, capsys):
     assert main(["tdcr", "statics", *argv, "--json"]) == 2
     captured = capsys.readouterr()
     error = json.loads(captured.out)
-    assert needle in error["error"] and error["exit_code"] == 2
+    assert needle in error["error"]
+    assert error["exit_code"] == 2
     assert captured.err.count("\n") == 1
 
 
@@ -59,7 +62,8 @@ def test_dynamics_json_gives_the_tip_path(capsys):
     data = json.loads(capsys.readouterr().out)
     assert data["converged"] is True
     tip = np.array(data["tip_position_m"])
-    assert tip.shape == (101, 3) and len(data["t_s"]) == 101
+    assert tip.shape == (101, 3)
+    assert len(data["t_s"]) == 101
     np.testing.assert_allclose(tip[0], [0.0, 0.0, 0.4], atol=1e-9)  # from rest, straight
     # undamped, it overshoots its static tip: the path reaches past it along the static tip's direction
     reach = tip @ RAO_TIP_M / np.linalg.norm(RAO_TIP_M)

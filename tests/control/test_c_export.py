@@ -335,11 +335,14 @@ def test_analysis_of_digital20(digital20):
     d, spec = digital20
     fmt = fixed_format(spec, 180.0)
     a = analyse_export(spec, fmt, plant_d=d.plant_d, setpoints=(0.0, 30.0))
-    assert a.closed_loop_stable and a.limit_cycle_free
+    assert a.closed_loop_stable
+    assert a.limit_cycle_free
     # the realised loop's poles are the design's within the pole shift
     np.testing.assert_allclose(np.sort(np.abs(a.closed_loop_poles)), np.sort(np.abs(d.closed_loop_poles)), atol=1e-6)
-    assert a.gain_margin_db > 6 and a.phase_margin_deg > 30
-    assert a.headroom_bits > 1 and a.command_error_bound < 1e-3
+    assert a.gain_margin_db > 6
+    assert a.phase_margin_deg > 30
+    assert a.headroom_bits > 1
+    assert a.command_error_bound < 1e-3
     assert "closed loop: stable" in repr(a)
 
 
@@ -353,7 +356,8 @@ def test_export_writes_both_files_and_never_overwrites(tmp_path, digital20):
     d, spec = digital20
     out = tmp_path / "ctrl.c"
     res = export_controller(spec, out, format="fixed", plant_d=d.plant_d)
-    assert out.exists() and (tmp_path / "ctrl.h").exists()
+    assert out.exists()
+    assert (tmp_path / "ctrl.h").exists()
     assert '#include "ctrl.h"' in out.read_text()
     with pytest.raises(OutputExistsError):
         export_controller(spec, out)

@@ -32,7 +32,9 @@ def study():
 def test_tustin_at_1ms_is_the_continuous_loop(study):
     # figure 5.4: "almost identical"
     one_ms = study["tustin"][1]
-    assert one_ms.period_s == 0.001 and one_ms.stable and one_ms.error < 1e-4
+    assert one_ms.period_s == 0.001
+    assert one_ms.stable
+    assert one_ms.error < 1e-4
 
 
 def test_tustin_degrades_monotonically_with_the_period(study):
@@ -46,7 +48,9 @@ def test_tustin_degrades_monotonically_with_the_period(study):
 def test_forward_euler_is_unstable_above_its_limit(study):
     # figure 5.6 / 5.7: stable at 5 ms, unstable at 10 and 20 ms (thesis: "above 10 ms very instable")
     fe = {round(loop.period_s, 4): loop for loop in study["forward_euler"]}
-    assert fe[0.005].stable and not fe[0.010].stable and not fe[0.020].stable
+    assert fe[0.005].stable
+    assert not fe[0.010].stable
+    assert not fe[0.020].stable
     limit = forward_euler_stability_limit_s(K39.poles())
     assert limit == pytest.approx(2 / 245.04, rel=PRINTED_POLE_RTOL)  # 8.2 ms, issue 6
     assert thesis_value("digital.euler_unstable_above_s") >= limit
@@ -71,12 +75,14 @@ def test_forward_euler_loses_the_beam_mode_cancellation(study):
 def test_one_sample_delay_makes_tustin_at_20ms_worse_but_not_unstable():
     plain = sampled_loop(G, K39, 0.020, "tustin")
     delayed = sampled_loop(G, K39, 0.020, "tustin", delay_samples=1)
-    assert delayed.stable and delayed.error > 5 * plain.error
+    assert delayed.stable
+    assert delayed.error > 5 * plain.error
 
 
 def test_20ms_design_is_stable_and_robust_on_its_model():
     d = design_20ms()
-    assert d.period_s == pytest.approx(0.020) and d.delay_samples == 1
+    assert d.period_s == pytest.approx(0.020)
+    assert d.delay_samples == 1
     assert d.deg_per_command == pytest.approx(1.735, rel=CABLE_MODEL_RTOL)  # cable model, models.plant docstring
     for gain in (0.7, 1.0, 1.3):  # issue 6: +-30 % plant gain
         loop = closed_loop(d.plant_d, d.controller, gain)
@@ -101,7 +107,8 @@ def test_20ms_design_tolerates_the_latch_being_early_or_a_sample_late():
 def test_observer_sees_the_applied_command():
     d = design_20ms()
     rt = d.runtime()
-    assert rt.antiwindup == "back_calculation" and np.array_equal(rt._q_gain, d.aw_gain)
+    assert rt.antiwindup == "back_calculation"
+    assert np.array_equal(rt._q_gain, d.aw_gain)
     # the aw gain is the observer's input matrix: exactly one state (the delay) takes the command
     assert np.count_nonzero(d.aw_gain) == 1
 

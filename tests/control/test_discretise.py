@@ -37,7 +37,8 @@ def test_forward_euler_equals_scipy_euler(T):
     ours = discretise(ss, T, "forward_euler")
     np.testing.assert_allclose(ours.A, Ad, rtol=EXACT_RTOL, atol=EXACT_ATOL)
     np.testing.assert_allclose(ours.B, Bd, rtol=EXACT_RTOL)
-    assert ours.dt == T and isinstance(discretise(K39, T, "forward_euler"), ct.TransferFunction)
+    assert ours.dt == T
+    assert isinstance(discretise(K39, T, "forward_euler"), ct.TransferFunction)
 
 
 @pytest.mark.parametrize("method", ["tustin", "forward_euler", "backward_euler", "zoh"])
@@ -114,7 +115,8 @@ def test_step_halving_on_forward_euler_of_a_first_order_lag():
     alphas = [h[0] for h in result.history]
     assert alphas[:2] == [0.032, 0.016]
     assert result.history[0][1] > 1  # 32 ms > 2/a = 20 ms: unstable, far from the 16 ms response
-    assert result.converged and result.history[-1][1] <= 0.05
+    assert result.converged
+    assert result.history[-1][1] <= 0.05
     assert all(h[1] > 0.05 for h in result.history[:-1])
     # the chosen alpha really meets the tolerance against alpha/2 (recomputed independently)
     t1, y1 = response(result.period_s)

@@ -22,7 +22,8 @@ def result():
 
 def test_requirement_i_command_in_servo_range(result):
     _, _, r = result
-    assert r["command_min"] >= -8.0 and r["command_max"] <= 246.0
+    assert r["command_min"] >= -8.0
+    assert r["command_max"] <= 246.0
     # at DC the command is 30 deg / |G(0)| (closed form from the plant's DC gain)
     plant = result[0]
     assert r["command_final"] == pytest.approx(math.radians(30) / plant.dc_gain, rel=1e-3)
@@ -44,7 +45,8 @@ def test_requirement_iv_robust_stability(result):
     assert r["monte_carlo"]["stable_fraction"] == 1.0
     assert r["monte_carlo"]["worst_pole_real"] < 0
     # small-gain certificate over a 2 x 4 partition of the box (one box is too conservative)
-    assert r["req_iv_small_gain"] and r["small_gain_partition_peak"] < 1.0
+    assert r["req_iv_small_gain"]
+    assert r["small_gain_partition_peak"] < 1.0
     assert r["small_gain_peak"] > 1.0  # the one-box unstructured bound fails: why the partition is needed
 
 

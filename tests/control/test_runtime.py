@@ -35,7 +35,9 @@ def test_two_input_form_is_r_and_y():
 def test_saturates_to_0_254_integers_and_never_255():
     c = RuntimeController(ct.tf([1.0], [1.0], T))
     out = c.simulate(np.linspace(-400, 400, 801), np.zeros(801))
-    assert out.min() == 0 and out.max() == 254 and out.dtype.kind == "i"
+    assert out.min() == 0
+    assert out.max() == 254
+    assert out.dtype.kind == "i"
     assert 255 not in out
     # inside the range it is the nearest integer to 8 + e
     e = np.linspace(-7.9, 240.0, 301)
@@ -56,17 +58,20 @@ def test_back_calculation_stops_windup():
     assert np.all(plain[100:] == 254)
     # back-calculation with L = 1 keeps the state at what the applied 254 needs: x = 254 - 8 - 0.5 * 300 + 0.1 * 300
     # = 126, so after the error flips the command is 8 + 126 - 0.5 = 133.5 -> 134 (round half to even), then falls
-    assert aw[100] == 134 and aw[199] < aw[100]
+    assert aw[100] == 134
+    assert aw[199] < aw[100]
     # feeding the rounding error back as well makes the integrator track the rounded command: it stalls
     stall = RuntimeController(pi, antiwindup="back_calculation", aw_gain=[1.0], aw_quantisation=True)
     out = stall.simulate(e, np.zeros_like(e))
-    assert out[100] == 134 and np.all(out[100:] == 134)
+    assert out[100] == 134
+    assert np.all(out[100:] == 134)
 
 
 def test_clamp_freezes_the_integrator_while_saturated():
     e = np.r_[np.full(100, 300.0), np.full(20, -1.0)]
     out = RuntimeController(_pi(kp=0.5), antiwindup="clamp").simulate(e, np.zeros_like(e))
-    assert out[99] == 254 and out[100] < 254
+    assert out[99] == 254
+    assert out[100] < 254
 
 
 def test_bumpless_start_from_the_command_in_force():
@@ -74,7 +79,8 @@ def test_bumpless_start_from_the_command_in_force():
     c.reset(20)
     assert c.update(0.0, 0.0) == 20  # zero error: no jump
     c.reset()
-    assert c.update(0.0, 0.0) == 8 and np.all(c.state == 0)
+    assert c.update(0.0, 0.0) == 8
+    assert np.all(c.state == 0)
 
 
 @pytest.mark.filterwarnings("ignore:overflow encountered")

@@ -211,7 +211,8 @@ def test_compiled_lmi_problems_are_dpp_and_reused(G):
 
     hinf_lmi(regularise(thesis_generalized_plant(G, filter_weight(5.0)), 1e-5))
     problems = dict(_LMI_PROBLEMS)
-    assert problems and all(p[0].is_dpp() for p in problems.values())
+    assert problems
+    assert all(p[0].is_dpp() for p in problems.values())
     hinf_lmi(regularise(thesis_generalized_plant(G, filter_weight(39.0)), 1e-6))  # same sizes: nothing new
     assert _LMI_PROBLEMS.keys() == problems.keys()
 

@@ -152,8 +152,10 @@ def test_run_on_board_cli_says_where_the_loop_ran(firmware, capsys):
     elf = firmware(0.020, "float")
     assert main(["run", "--on-board", "--backend", f"hil://{elf}", "--duration", "1.5", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["loop"] == "board" and doc["status"] == "completed"
-    assert doc["board"]["exec_max_cycles"] > 0 and doc["board"]["faults"] == []
+    assert doc["loop"] == "board"
+    assert doc["status"] == "completed"
+    assert doc["board"]["exec_max_cycles"] > 0
+    assert doc["board"]["faults"] == []
     assert main(["run", "--on-board", "--backend", "sim", "--json"]) == 2  # only a board closes the loop
 
 
@@ -162,7 +164,8 @@ def test_host_loop_runs_through_the_firmware(firmware, capsys):
     elf = firmware(0.020, "float")
     code = main(["run", "--backend", f"hil://{elf}", "--map-from", "twin", "--duration", "2", "--json"])
     doc = json.loads(capsys.readouterr().out)
-    assert code == 0 and doc["loop"] == "host"
+    assert code == 0
+    assert doc["loop"] == "host"
     assert abs(doc["true_final_rotation_deg"] - 30.0) < 1.0
 
 
@@ -190,7 +193,8 @@ def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, peri
         rig.close()
     start = [i for i, mode in marks if mode == 2][0]
     board = samples[start:]
-    assert len(board) >= 0.95 * 3.0 / period_s and tare == tare  # every period streamed; the board said its tare
+    assert len(board) >= 0.95 * 3.0 / period_s
+    assert tare == tare  # every period streamed; the board said its tare
     options = SimpleNamespace(no_rotation_map=False, rotation_map=None)
     runtime, _, rotation, _, _ = _export_design("digital20", period_s, options)
     runtime.reset(8)

@@ -156,7 +156,8 @@ def assert_loader_contract(load, path: Path, *, names_file: bool = True):
         return load(path)
     except FlexdigitError as exc:
         message = str(exc)
-        assert message and "\n" not in message, f"not a one-line message: {message!r}"
+        assert message, f"not a one-line message: {message!r}"
+        assert "\n" not in message, f"not a one-line message: {message!r}"
         if names_file:
             assert path.name in message, f"the message does not name the file: {message!r}"
         assert "Traceback" not in message

@@ -180,4 +180,5 @@ def test_a_column_named_with_a_newline_is_listed_on_one_line(folder, renamed, ex
     path = folder / "newline-column.parquet"
     pq.write_table(table, path)
     error = assert_loader_contract(lambda p: read_timeseries(p, "sg1"), path)
-    assert expected in str(error) and "'\\n'" in str(error)
+    assert expected in str(error)
+    assert "'\\n'" in str(error)

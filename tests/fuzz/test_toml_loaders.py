@@ -153,4 +153,5 @@ def test_an_unknown_key_with_a_newline_is_named_on_one_line(case, folder):
     path = folder / "newline-key.toml"
     path.write_bytes(tomli_w.dumps(doc).encode())
     error = assert_loader_contract(load, path)
-    assert isinstance(error, FlexdigitError) and "\\n" in str(error)  # the key, escaped
+    assert isinstance(error, FlexdigitError)
+    assert "\\n" in str(error)  # the key, escaped

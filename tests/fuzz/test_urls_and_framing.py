@@ -53,7 +53,8 @@ def test_url_parser(url):
     try:
         parsed, options = rig_url_options(url)
     except ParameterError as exc:
-        assert str(exc) and "\n" not in str(exc)
+        assert str(exc)
+        assert "\n" not in str(exc)
         return
     declared = {opt.name: opt for opt in MODULES[parsed.scheme].URL_OPTIONS}
     prefixes = getattr(MODULES[parsed.scheme], "URL_PREFIXES", ())
@@ -65,7 +66,8 @@ def test_url_parser(url):
         if value is None:
             assert opt.none
         elif opt.kind in ("int", "float"):
-            assert isinstance(value, int if opt.kind == "int" else float) and math.isfinite(value)
+            assert isinstance(value, int if opt.kind == "int" else float)
+            assert math.isfinite(value)
             assert opt.low is None or value >= opt.low
             assert opt.high is None or value <= opt.high
         elif opt.kind == "bool":
@@ -108,13 +110,15 @@ def test_frames_never_carry_255_or_a_position_beyond_the_framing(framing, data, 
         try:
             sent = rig.write_command(command)
         except ParameterError:  # NaN: refused, nothing sent
-            assert isinstance(command, float) and math.isnan(command)
+            assert isinstance(command, float)
+            assert math.isnan(command)
             continue
         assert 0 <= sent <= framing.max_position
     rig.close()  # relaxes: one more frame
     decoder = FrameDecoder(framing)
     frames = decoder.feed(bytes(port.sent))
-    assert decoder.dropped_bytes == 0 and len(port.sent) == 3 * len(frames)
+    assert decoder.dropped_bytes == 0
+    assert len(port.sent) == 3 * len(frames)
     assert all(
         ch == channel and 0 <= pos <= framing.max_position and pos not in (255, framing.sync) for ch, pos in frames
     )
@@ -127,7 +131,9 @@ def test_encode_frame_refuses_what_it_cannot_send(channel, position):
     except ParameterError as exc:
         assert "\n" not in str(exc)
         return
-    assert frame[0] == 0xFF and 0xFF not in frame[1:] and frame[2] <= 254
+    assert frame[0] == 0xFF
+    assert 0xFF not in frame[1:]
+    assert frame[2] <= 254
 
 
 @given(command=numbers)
@@ -139,7 +145,8 @@ def test_clamp_command_never_gives_255(command):
 @given(stream=st.binary(max_size=300), framing=framings())
 def test_the_decoder_never_yields_the_sync_byte_as_a_position(stream, framing):
     for ch, pos in FrameDecoder(framing).feed(stream):
-        assert ch <= framing.max_channel and pos != framing.sync
+        assert ch <= framing.max_channel
+        assert pos != framing.sync
 
 
 @given(stream=st.binary(max_size=600))
@@ -148,10 +155,12 @@ def test_any_stream_bytes_decode_into_events_never_an_exception(stream):
         assert event.kind in ("sample", "info", "garbled")
         if event.kind == "sample":
             sample = event.sample
-            assert 0 <= sample.seq < SEQ_MODULUS and 0 <= sample.t_us < TIME_MODULUS_US
+            assert 0 <= sample.seq < SEQ_MODULUS
+            assert 0 <= sample.t_us < TIME_MODULUS_US
             assert all(isinstance(v, int) for v in (*sample.gauges, *([sample.pot] if sample.pot is not None else [])))
         elif event.kind == "garbled":
-            assert event.reason and "\n" not in event.reason
+            assert event.reason
+            assert "\n" not in event.reason
 
 
 counts = st.integers(-(2**31), 2**31 - 1)

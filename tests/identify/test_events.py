@@ -24,7 +24,8 @@ def test_survey_finds_the_step_instant_either_way(t0, size):
     t = np.arange(0, 2.5, 0.002)
     y = _step(t, t0, size=size) + np.random.default_rng(1).normal(0, 0.01 * abs(size), t.size)
     s = survey(TimeSeries.from_arrays(t, y), "step")
-    assert s.found_from == "signal" and s.problems == ()
+    assert s.found_from == "signal"
+    assert s.problems == ()
     assert s.direction == (1 if size > 0 else -1)
     # the start value is where the response leaves the noise band, walked back: within 5 ms of the truth
     assert s.t0_s == pytest.approx(t0, abs=0.005)
@@ -35,7 +36,9 @@ def test_survey_finds_the_release_after_a_held_deflection():
     t = np.arange(0, 6, 0.001)
     y = 0.2 + 0.8 * free_response(t - 0.35, 13.1, 0.068) + np.random.default_rng(2).normal(0, 0.01, t.size)
     s = survey(TimeSeries.from_arrays(t, y), "release")
-    assert s.t0_s == pytest.approx(0.35, abs=0.01) and s.direction == -1 and s.problems == ()
+    assert s.t0_s == pytest.approx(0.35, abs=0.01)
+    assert s.direction == -1
+    assert s.problems == ()
     assert s.start_level == pytest.approx(1.0, abs=0.005)
 
 
@@ -43,7 +46,9 @@ def test_command_column_gives_the_instant():
     t = np.arange(0, 2, 0.002)
     u = np.where(t >= 0.5, 59.0, 8.0)  # first new command at 0.5 s: the step is between 0.498 and 0.5 s
     s = survey(TimeSeries.from_arrays(t, _step(t, 0.5), u=u), "step")
-    assert s.found_from == "command" and s.t0_s == pytest.approx(0.499) and s.input_step == 51.0
+    assert s.found_from == "command"
+    assert s.t0_s == pytest.approx(0.499)
+    assert s.input_step == 51.0
 
 
 def test_a_constant_record_has_nothing_to_identify():
@@ -82,7 +87,8 @@ def test_remove_hum_recovers_frequency_and_amplitude(f, fs):
     assert found.frequency_hz == pytest.approx(f, abs=0.01)
     assert found.amplitude == pytest.approx(0.03, rel=0.02)
     if 3 * f < 0.45 * fs:
-        assert found.harmonics == (1, 3) and found.amplitudes[1] == pytest.approx(0.01, rel=0.1)
+        assert found.harmonics == (1, 3)
+        assert found.amplitudes[1] == pytest.approx(0.01, rel=0.1)
     assert np.std(out - clean) == pytest.approx(0.004, rel=0.1)  # only the white noise is left
 
 
@@ -90,4 +96,5 @@ def test_no_hum_is_found_where_there_is_none():
     t = np.arange(0, 3, 0.001)
     y = _step(t, 0.4) + np.random.default_rng(5).normal(0, 0.01, t.size)
     out, found = remove_hum(t, y)
-    assert found is None and np.array_equal(out, y)
+    assert found is None
+    assert np.array_equal(out, y)

@@ -68,7 +68,8 @@ def test_release_that_does_not_oscillate_needs_allow_overdamped():
             identify(series, "release", method=method)
     r = identify(series, "release", method="lsq", allow_overdamped=True)
     assert r.features is None
-    assert r.wn_rad_s == pytest.approx(10.0, rel=0.05) and r.zeta == pytest.approx(1.5, rel=0.05)
+    assert r.wn_rad_s == pytest.approx(10.0, rel=0.05)
+    assert r.zeta == pytest.approx(1.5, rel=0.05)
 
 
 def test_thesis_method_on_the_same_records_is_biased_high_in_wn():
@@ -113,7 +114,8 @@ def test_arx_recovers_zoh_discretisation_of_servo_model():
     np.testing.assert_allclose(arx.a, sysd.den[0][0] / sysd.den[0][0][0], atol=1e-9)
     np.testing.assert_allclose(np.sort_complex(arx.poles), np.sort_complex(sysd.poles()), atol=1e-9)
     wn, zeta = arx.dominant_mode()
-    assert wn == pytest.approx(20.53, rel=1e-3) and zeta == pytest.approx(0.5629, rel=1e-3)
+    assert wn == pytest.approx(20.53, rel=1e-3)
+    assert zeta == pytest.approx(0.5629, rel=1e-3)
     assert float(arx.transfer_function().dcgain()) == pytest.approx(1.0, rel=1e-6)
 
 
@@ -166,7 +168,8 @@ def test_lsq_fits_an_overdamped_step_the_thesis_method_cannot():
         identify(series, "step", method="lsq", t0_s=0.1)
     r = identify(series, "step", method="lsq", t0_s=0.1, allow_overdamped=True)
     assert r.features is None
-    assert r.wn_rad_s == pytest.approx(10.0, rel=0.05) and r.zeta == pytest.approx(1.5, rel=0.05)
+    assert r.wn_rad_s == pytest.approx(10.0, rel=0.05)
+    assert r.zeta == pytest.approx(1.5, rel=0.05)
 
 
 # --- robust loss, drift, long records (issue 11) -----------------------------------------------------------------
@@ -197,7 +200,8 @@ def test_drift_is_fitted_with_the_model():
     t, y = _spiky_step(7, n_spikes=0, drift=0.05)  # 0.05 units/s: 10 % of the step over the record
     f = SecondOrderFit("step", t0_s=0.2, loss="soft_l1", drift=True).fit(t, y)
     assert f.drift_per_s_ == pytest.approx(0.05, abs=0.003)
-    assert f.wn_ == pytest.approx(SERVO["wn_rad_s"], rel=0.01) and f.zeta_ == pytest.approx(SERVO["zeta"], rel=0.02)
+    assert f.wn_ == pytest.approx(SERVO["wn_rad_s"], rel=0.01)
+    assert f.zeta_ == pytest.approx(SERVO["zeta"], rel=0.02)
     assert f.predict(t)[-1] == pytest.approx(1.5 + 0.05 * t[-1], abs=0.005)  # the prediction carries the drift
 
 

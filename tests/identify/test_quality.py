@@ -42,8 +42,10 @@ def _step_record(seed, noise=0.01, t0=0.2):
 def test_the_true_model_leaves_nothing_unexplained():
     t, model, y = _step_record(0)
     q = assess(t, y, model, kind="step", wn_rad_s=20.53, zeta=0.5629, amplitude=0.4, t0_s=0.2, noise_std=0.004)
-    assert q.problems == () and q.warnings == ()
-    assert q.misfit_percent < 2 and q.fit_percent > 95
+    assert q.problems == ()
+    assert q.warnings == ()
+    assert q.misfit_percent < 2
+    assert q.fit_percent > 95
     assert q.residual_std == pytest.approx(0.004, rel=0.1)
 
 
@@ -51,18 +53,21 @@ def test_a_wrong_model_is_a_poor_fit():
     t, _, y = _step_record(1)
     wrong = 1.0 + 0.4 * step_shape(t - 0.2, 14.0, 0.5629)  # wn 32 % low
     q = assess(t, y, wrong, kind="step", wn_rad_s=14.0, zeta=0.5629, amplitude=0.4, t0_s=0.2, noise_std=0.004)
-    assert [p.code for p in q.problems] == ["poor-fit"] and q.misfit_percent > 10
+    assert [p.code for p in q.problems] == ["poor-fit"]
+    assert q.misfit_percent > 10
     assert any("residuals not white" in w for w in q.warnings)
     # the thesis method's own errors are a warning, not a refusal of the record
     q = assess(t, y, wrong, kind="step", wn_rad_s=14.0, zeta=0.5629, amplitude=0.4, t0_s=0.2, method="thesis")
-    assert q.problems == () and any("deviates from the thesis method's model" in w for w in q.warnings)
+    assert q.problems == ()
+    assert any("deviates from the thesis method's model" in w for w in q.warnings)
 
 
 def test_a_second_step_after_the_first_settled_is_named():
     t, model, y = _step_record(2)
     y = y + 0.3 * step_shape(t - 1.2, 20.53, 0.5629)
     q = assess(t, y, model, kind="step", wn_rad_s=20.53, zeta=0.5629, amplitude=0.4, t0_s=0.2, noise_std=0.004)
-    assert q.problems[0].code == "two-steps" and "moves again from about 1.2" in q.problems[0].message
+    assert q.problems[0].code == "two-steps"
+    assert "moves again from about 1.2" in q.problems[0].message
 
 
 def test_clipping_is_saturation():
@@ -70,7 +75,8 @@ def test_clipping_is_saturation():
     rail = 1.0 + 0.4 * 1.08  # below the 12 % overshoot
     q = assess(t, np.minimum(y, rail), model, kind="step", wn_rad_s=20.53, zeta=0.5629, amplitude=0.4, t0_s=0.2,
                noise_std=0.002)  # fmt: skip
-    assert q.problems[0].code == "saturated" and f"stuck at {rail:.6g}" in q.problems[0].message
+    assert q.problems[0].code == "saturated"
+    assert f"stuck at {rail:.6g}" in q.problems[0].message
 
 
 def test_a_clipped_final_level_is_saturation_even_where_the_model_follows_it():
@@ -80,7 +86,8 @@ def test_a_clipped_final_level_is_saturation_even_where_the_model_follows_it():
     y = np.minimum(model + np.random.default_rng(4).normal(0, 0.004, t.size), 1.35)
     fitted = np.minimum(model, 1.35)
     q = assess(t, y, fitted, kind="step", wn_rad_s=20.0, zeta=1.2, amplitude=0.35, t0_s=0.2, noise_std=0.004)
-    assert q.problems[0].code == "saturated" and "times as many as any other value" in q.problems[0].message
+    assert q.problems[0].code == "saturated"
+    assert "times as many as any other value" in q.problems[0].message
 
 
 def test_a_quantised_plateau_is_not_saturation():

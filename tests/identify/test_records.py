@@ -41,7 +41,8 @@ def test_signal_holds_its_baseline_then_responds_and_carries_its_disturbances():
         rng, "step", wn=20.0, zeta=0.5, rate_hz=1000.0, duration_s=2.0, baseline_s=0.25, amplitude=-0.4,
         offset=1.0, noise=0.0, spikes=3, hum_hz=None, drift=0.0, start_s=3.0,
     )  # fmt: skip
-    assert t0 == pytest.approx(3.25) and t[0] == 3.0
+    assert t0 == pytest.approx(3.25)
+    assert t[0] == 3.0
     before = y[t < t0]
     assert np.sum(np.abs(before - 1.0) > 1e-12) <= 3  # the baseline, but for the spikes
     clean = 1.0 - 0.4 * step_shape(t - t0, 20.0, 0.5)
@@ -72,10 +73,13 @@ def test_the_generated_set_covers_every_case_of_issue_11(tmp_path):
     assert len(good) >= 20
     assert {r.kind for r in good} == {"step", "release"}
     assert {r.direction for r in good} == {1, -1}
-    assert any(r.baseline_s == 0 for r in good) and any(0.1 <= r.baseline_s <= 0.4 for r in good)
+    assert any(r.baseline_s == 0 for r in good)
+    assert any(0.1 <= r.baseline_s <= 0.4 for r in good)
     assert {r.hum_hz for r in good} == {None, 50.0, 60.0}
-    assert any(r.spikes for r in good) and any(r.drift for r in good)
-    assert min(r.rate_hz for r in good) == 200 and max(r.rate_hz for r in good) == 2000
+    assert any(r.spikes for r in good)
+    assert any(r.drift for r in good)
+    assert min(r.rate_hz for r in good) == 200
+    assert max(r.rate_hz for r in good) == 2000
     assert {r.time_unit for r in good} == {"s", "ms"}
     assert {r.command for r in good if r.kind == "step"} == {True, False}
     assert {r.layout for r in good} == set(LAYOUTS)

@@ -28,7 +28,8 @@ def test_read_timeseries_names_the_line_of_the_hole(tmp_path):
         text = str(exc)
     else:
         raise AssertionError("a record with a 300 kB line of NUL bytes was read")
-    assert text.startswith(f"{p}: line 62:") and "not a CSV row" in text, text
+    assert text.startswith(f"{p}: line 62:"), text
+    assert "not a CSV row" in text, text
 
 
 def test_read_table_names_the_line_of_the_hole(tmp_path):
@@ -47,4 +48,5 @@ def test_identify_on_a_sparse_record_is_bad_input_not_an_internal_error(tmp_path
     assert main(["identify", "step", str(p), "--json"]) == 2
     out = json.loads(capsys.readouterr().out)
     assert "internal error" not in json.dumps(out)
-    assert str(p) in json.dumps(out) and "line 62" in json.dumps(out)
+    assert str(p) in json.dumps(out)
+    assert "line 62" in json.dumps(out)

@@ -28,9 +28,11 @@ def _rows(n=50, dt=0.01):
 def test_reads_units_from_header_and_picks_first_channel(tmp_path):
     p = _write(tmp_path / "rec.csv", "time_ms,sg1_v,command", [(10 * k, 0.1 * k, 8 + (k > 5)) for k in range(30)])
     ts = read_timeseries(p)
-    assert ts.channel == "sg1" and ts.unit == "V"
+    assert ts.channel == "sg1"
+    assert ts.unit == "V"
     assert ts.t_s[1] == pytest.approx(0.01)  # ms -> s
-    assert ts.u is not None and ts.input_name == "command"
+    assert ts.u is not None
+    assert ts.input_name == "command"
     assert read_timeseries(p, "sg1_v").y[3] == pytest.approx(0.3)
 
 
@@ -179,7 +181,9 @@ def test_unknown_suffix(tmp_path):
 def test_series_from_in_memory_table_gets_the_same_checks():
     t = np.arange(40) * 0.01
     ts = series_from_table({"time_s": t, "pot_v": np.ones(40), "command": np.full(40, 51.0)}, "pot")
-    assert ts.unit == "V" and ts.u is not None and ts.input_name == "command"
+    assert ts.unit == "V"
+    assert ts.u is not None
+    assert ts.input_name == "command"
     y = np.ones(40)
     y[10:12] = np.nan
     with pytest.raises(DataFileError, match=r"table: column 'pot_v', row 11 to row 12: missing values"):
@@ -205,7 +209,8 @@ def test_layouts_of_other_rigs(tmp_path, header, sep, decimal, comments, index, 
     p = tmp_path / "rec.csv"
     p.write_text("\n".join(lines) + "\n")
     ts = read_timeseries(p, time_unit=time_unit)
-    assert ts.unit == "mV" and ts.time_unit == "ms"
+    assert ts.unit == "mV"
+    assert ts.time_unit == "ms"
     assert ts.t_s[:2] == pytest.approx([0.0, 0.01])
     assert ts.y[:2] == pytest.approx([1.5, 2.5])  # not the index column
 

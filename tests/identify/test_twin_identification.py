@@ -78,5 +78,6 @@ def test_cli_reads_the_twin_file_with_the_readme_channel_name(release_file, caps
     # the README says --channel sg1; the twin's files name the column gauge1_v: sgN and gaugeN are one gauge
     assert main(["identify", "release", str(release_file), "--channel", "sg1", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["channel"] == "gauge1" and out["unit"] == "V"
+    assert out["channel"] == "gauge1"
+    assert out["unit"] == "V"
     assert out["wn_rad_s"] == pytest.approx(DIGIT_WN, rel=0.03)

@@ -30,7 +30,8 @@ def test_a_trained_network_places_the_load_with_its_test_rmse_as_band(network_fi
     volts = static_gauges_v([0.025], [0.21])
     shape = ShapeEstimator(orientation="horizontal", cable=False).estimate(volts)
     out = source.estimate(volts[0], None, shape)
-    assert out["contact"] and abs(out["position_from_base_m"] - 0.21) < 0.01
+    assert out["contact"]
+    assert abs(out["position_from_base_m"] - 0.21) < 0.01
     assert out["position_sd_m"] == pytest.approx(rmse_mm / 1e3)
     bare = ShapeEstimator(orientation="horizontal", cable=False).estimate(static_gauges_v([0.0], [0.0]))
     assert not source.estimate(static_gauges_v([0.0], [0.0])[0], None, bare)["contact"]  # contact: beam inversion
@@ -47,6 +48,8 @@ def test_a_model_of_another_target_is_refused(network_file, tmp_path):
 def test_the_beam_contact_says_when_it_cannot_place_a_load():
     est = ShapeEstimator(orientation="horizontal", cable=False, n_average=10)
     located = BeamContact().estimate(None, None, est.estimate(static_gauges_v([0.025], [0.22])))
-    assert located["located"] and abs(located["position_from_base_m"] - 0.22) < 0.005
+    assert located["located"]
+    assert abs(located["position_from_base_m"] - 0.22) < 0.005
     confounded = BeamContact().estimate(None, None, est.estimate(static_gauges_v([0.025], [0.10])))
-    assert confounded["contact"] and not confounded["located"]  # between gauges 1 and 2
+    assert confounded["contact"]
+    assert not confounded["located"]  # between gauges 1 and 2

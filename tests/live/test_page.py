@@ -48,13 +48,15 @@ def test_page_streams_the_twin_and_the_slider_moves_the_digit(live_server, page,
         timeout_s=30,
         what="the digit to reach 30 deg",
     )
-    assert moved["last"]["state"]["engaged"] and moved["last"]["state"]["setpoint"] == 30
+    assert moved["last"]["state"]["engaged"]
+    assert moved["last"]["state"]["setpoint"] == 30
     assert moved["last"]["shape"]["tip_m"][1] > tip_before + 0.04  # the tip rose by centimetres
     # a click hangs the weight on the twin; the contact panel reports it (placed only coarsely: taut cable)
     _click(page, 0.22)
     loaded = wait_for(page, lambda s: s["last"]["state"]["loads"] and _contact(s)["contact"], what="a contact")
     mass, position = loaded["last"]["state"]["loads"][0]
-    assert mass == pytest.approx(0.025) and abs(position - 0.22) < 0.006  # the click's arc position, 5 mm grid
+    assert mass == pytest.approx(0.025)
+    assert abs(position - 0.22) < 0.006  # the click's arc position, 5 mm grid
     c = _contact(loaded)
     if c["located"]:
         assert abs(c["position_from_base_m"] - position) < LOCATE_TOL_M
@@ -64,9 +66,11 @@ def test_page_streams_the_twin_and_the_slider_moves_the_digit(live_server, page,
     wait_for(page, lambda s: not s["last"]["state"]["loads"], what="the load removed")
     assert page.console_errors == []
     result = server.stop()
-    assert result["status"] == "stopped" and server.returncode == 0
+    assert result["status"] == "stopped"
+    assert server.returncode == 0
     header, samples, footer = read_recording(tmp_path / "session.mcap")
-    assert footer["stop"] == "stopped" and samples[-1]["command"] == 8  # relaxed when the page went away
+    assert footer["stop"] == "stopped"
+    assert samples[-1]["command"] == 8  # relaxed when the page went away
     assert len(samples) > 100
 
 
@@ -98,7 +102,8 @@ def test_the_page_says_where_the_gauges_cannot_see_a_load(live_server, page):
     wait_for(page, lambda s: s["locMap"] is not None, timeout_s=40, what="the locatability map")
     loc = stats(page)["locMap"]
     blind = [s for s, sd in zip(loc["s_m"], loc["sd_m"], strict=True) if sd is None or sd > 0.005]
-    assert min(blind) < 0.045 and max(blind) >= 0.13  # clamp to gauge 2: no gauge, or gauge 1 alone, bends
+    assert min(blind) < 0.045
+    assert max(blind) >= 0.13  # clamp to gauge 2: no gauge, or gauge 1 alone, bends
     _click(page, 0.03)  # between the clamp and gauge 1
     page.wait_for_timeout(3000)
     c = _contact(stats(page))
@@ -117,11 +122,13 @@ def test_the_page_reconnects_after_a_server_restart(live_server, page):
     wait_for(page, lambda s: not s["connected"], what="the page to notice the server left")
     assert page.inner_text("#conn") == "reconnecting"
     # what is still drawn is no longer the digit: the page says so and greys it out
-    assert "unreachable" in page.inner_text("#status") and page.evaluate("document.body.classList.contains('stale')")
+    assert "unreachable" in page.inner_text("#status")
+    assert page.evaluate("document.body.classList.contains('stale')")
     again = live_server("--backend", "sim?cable=false", port=port)
     before = stats(page)["samples"]
     wait_for(page, lambda s: s["connected"] and s["samples"] > before + 20, timeout_s=60, what="the reconnection")
-    assert stats(page)["reconnects"] >= 1 and page.inner_text("#conn") == "live"
+    assert stats(page)["reconnects"] >= 1
+    assert page.inner_text("#conn") == "live"
     assert not page.evaluate("document.body.classList.contains('stale')")
     assert page.console_errors == [] or all("WebSocket" in e for e in page.console_errors)
     again.stop()
@@ -140,10 +147,12 @@ def test_a_second_page_shows_the_servers_setpoint_and_pause(live_server, browser
     other.goto(server.url)
     wait_for(other, lambda s: s["last"]["state"]["setpoint"] == 30, what="the second page's first frame")
     other.wait_for_timeout(300)
-    assert float(other.input_value("#setpoint")) == 30.0 and other.inner_text("#sp-value") == "30.0"
+    assert float(other.input_value("#setpoint")) == 30.0
+    assert other.inner_text("#sp-value") == "30.0"
     assert other.inner_text("#pause") == "resume"
     # a narrow window stacks the panels under the digit rather than squeezing the digit beside them
     shape, contact = other.locator("#shape").bounding_box(), other.locator("#contact").bounding_box()
-    assert shape["width"] > 600 and contact["y"] > shape["y"] + shape["height"]
+    assert shape["width"] > 600
+    assert contact["y"] > shape["y"] + shape["height"]
     other.context.close()
     server.stop()

@@ -72,7 +72,8 @@ def test_hostile_values_get_an_error_and_the_connection_stays(server):
         }
         for request, says in hostile.items():
             reply = _reply(ws, request)
-            assert reply["type"] == "error" and says in reply["message"], (request[:60], reply)
+            assert reply["type"] == "error", (request[:60], reply)
+            assert says in reply["message"], (request[:60], reply)
             assert len(reply["message"]) < 300  # a 400-digit number is named, not echoed
         assert _reply(ws, b"\x00binary")["type"] == "error"
         big = json.dumps({"type": "clear", "pad": "x" * REQUEST_BYTES})

@@ -229,7 +229,8 @@ def test_the_sessions_request_queue_is_bounded_and_the_relax_never_lost(tmp_path
         session.disconnected()  # the last page leaves with the queue full
         session.engaged = True
         session._apply_requests()
-        assert session.paused and not session.engaged  # every queued request applied, then the relax
+        assert session.paused
+        assert not session.engaged  # every queued request applied, then the relax
         assert session._requests.empty()
     finally:
         session.stop()

@@ -87,7 +87,8 @@ def test_every_message_is_validated_clamped_and_rate_limited(server):
         assert _next(ws, "ack")["request"]["value"] == 45.0  # clamped to the slider's range (hello's, deg)
         ws.send(json.dumps({"type": "load", "position_m": 5.0, "mass_g": 1e6, "kind": "weight"}))
         ack = _next(ws, "ack")["request"]
-        assert ack["position_m"] == 0.27 and ack["mass_g"] == 200.0  # onto the digit, at most 200 g
+        assert ack["position_m"] == 0.27
+        assert ack["mass_g"] == 200.0  # onto the digit, at most 200 g
         for _ in range(120):
             ws.send(json.dumps({"type": "clear"}))
         replies = [json.loads(ws.recv(timeout=5)) for _ in range(200)]
@@ -117,7 +118,8 @@ def test_the_digit_is_relaxed_when_the_last_page_leaves(server):
 
 
 def test_a_remote_host_needs_allow_remote():
-    assert check_host("127.0.0.1") == "127.0.0.1" and check_host("::1") == "::1"
+    assert check_host("127.0.0.1") == "127.0.0.1"
+    assert check_host("::1") == "::1"
     assert check_host("localhost") == "localhost"
     with pytest.raises(ParameterError, match="--allow-remote"):
         check_host("0.0.0.0")
@@ -127,7 +129,9 @@ def test_a_remote_host_needs_allow_remote():
     run = subprocess.run(
         [sys.executable, "-m", "flexdigit.cli", "live", "--host", "0.0.0.0"], capture_output=True, text=True
     )
-    assert run.returncode == 2 and "--allow-remote" in run.stderr and "Traceback" not in run.stderr
+    assert run.returncode == 2
+    assert "--allow-remote" in run.stderr
+    assert "Traceback" not in run.stderr
 
 
 def test_bad_files_are_named_before_anything_is_served(tmp_path):
@@ -142,7 +146,9 @@ def test_bad_files_are_named_before_anything_is_served(tmp_path):
         run = subprocess.run(
             [sys.executable, "-m", "flexdigit.cli", "live", *args], capture_output=True, text=True, timeout=120
         )
-        assert run.returncode == 2 and culprit in run.stderr and "Traceback" not in run.stderr, run.stderr
+        assert run.returncode == 2, run.stderr
+        assert culprit in run.stderr, run.stderr
+        assert "Traceback" not in run.stderr, run.stderr
 
 
 def test_request_validation_names_the_culprit():
@@ -180,7 +186,9 @@ def test_a_recording_replays_at_1x_and_10x(tmp_path):
     try:
         with _ws(srv) as ws:
             hello = _next(ws, "hello")
-            assert hello["kind"] == "replay" and hello["speeds"] == [1, 10] and not hello["can_command"]
+            assert hello["kind"] == "replay"
+            assert hello["speeds"] == [1, 10]
+            assert not hello["can_command"]
             assert hello["setpoint_unit"] == "deg"  # run's controller holds a beam rotation: its recorded unit
 
             def rate(seconds):  # recorded seconds played per wall second
@@ -219,8 +227,10 @@ def test_sigterm_and_sighup_stop_the_server_as_ctrl_c_does(live_server, tmp_path
     server = live_server("--record", str(record))
     result = server.stop(getattr(signal, name))
     assert server.returncode == 0  # stopping is how a live session ends
-    assert result["status"] == "stopped" and result["signal"] == name
+    assert result["status"] == "stopped"
+    assert result["signal"] == name
     _, _, footer = read_recording(record)
-    assert footer["stop"] == "stopped" and footer["signal"] == name
+    assert footer["stop"] == "stopped"
+    assert footer["signal"] == name
     with open(record, "rb") as fh:  # the mcap library's reader: the summary a clean close writes
         assert make_reader(fh).get_summary() is not None

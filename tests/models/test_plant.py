@@ -68,7 +68,8 @@ def test_printed_numerator_s0_and_pole_frequencies_do_not_depend_on_the_digit_da
     s0 = g.tf.den[0][0][-1] / g.tf.den[0][0][0]
     assert num == pytest.approx(ref.tf.num[0][0][-1] / ref.tf.den[0][0][0], rel=EXACT_RTOL)
     assert s0 == pytest.approx(ref.tf.den[0][0][-1] / ref.tf.den[0][0][0], rel=EXACT_RTOL)
-    assert _rel(num, thesis_value("plant.g_num")[0]) < 1e-3 and _rel(s0, thesis_value("plant.g_den")[-1]) < 1e-3
+    assert _rel(num, thesis_value("plant.g_num")[0]) < 1e-3
+    assert _rel(s0, thesis_value("plant.g_den")[-1]) < 1e-3
     upper = g.poles[g.poles.imag > 0]
     fast, slow = sorted(upper, key=lambda z: -abs(z))
     printed_fast, printed_slow = sorted((z for z in thesis_complex("plant.poles") if z.imag > 0), key=lambda z: -abs(z))
@@ -99,7 +100,8 @@ def test_closed_loop_with_printed_k1_matches_table_4_1():
 def test_printed_plant_structure_as_stated_in_3_5():
     g = build_plant("printed")
     assert g.zeros.size == 0
-    assert g.controllability_rank == 4 and g.observability_rank == 4
+    assert g.controllability_rank == 4
+    assert g.observability_rank == 4
     assert g.is_minimum_phase
     # companion form as printed: A first row = -den, C only in the last column
     assert g.ss.A[0, 3] == pytest.approx(-43535, rel=PRINTED_4_DIGITS_RTOL)
@@ -137,7 +139,8 @@ def test_consistent_plant_realisation_agrees_with_its_tf():
     ss_resp = np.array([complex(g.ss(1j * x)) for x in w])
     tf_resp = np.array([complex(g.tf(1j * x)) for x in w])
     assert _rel(ss_resp, tf_resp).max() < 1e-9
-    assert g.controllability_rank == 4 and g.observability_rank == 4
+    assert g.controllability_rank == 4
+    assert g.observability_rank == 4
 
 
 def test_consistent_poles_are_servo_and_housed_digit():
@@ -158,7 +161,8 @@ def test_explanations_are_numbered_and_cover_each_discrepancy():
 
 def test_output_choices_follow_gauge_count():
     p = RigParams(geometry=Geometry(gauge_positions_m=(0.1, 0.2)))
-    assert "deflection_sg2_m" in output_choices(p) and "deflection_sg3_m" not in output_choices(p)
+    assert "deflection_sg2_m" in output_choices(p)
+    assert "deflection_sg3_m" not in output_choices(p)
 
 
 @pytest.mark.parametrize(

@@ -83,8 +83,10 @@ def test_bad_coefficients_are_refused(num, den):
 )
 def test_plant_control_views_match_its_numpy_form(variant, output):
     g = build_plant(variant, output=output)
-    assert isinstance(g.tf, control.TransferFunction) and isinstance(g.ss, control.StateSpace)
-    assert _coef_close(g.tf.den[0][0], g.poly.den) and _coef_close(g.tf.num[0][0], g.poly.num)
+    assert isinstance(g.tf, control.TransferFunction)
+    assert isinstance(g.ss, control.StateSpace)
+    assert _coef_close(g.tf.den[0][0], g.poly.den)
+    assert _coef_close(g.tf.num[0][0], g.poly.num)
     assert g.ss.nstates == g.order == 4
     # the realisation is of the same G: python-control's own state-space -> transfer function conversion
     back = control.ss2tf(g.ss)

@@ -43,7 +43,8 @@ def test_a_line_load_over_a_gauge_is_told_from_a_point_with_25_readings():
     one = ContactEstimator(MODEL, commands=[20]).fit().predict(line, 20)
     many = ContactEstimator(MODEL, commands=[20], n_readings=25).fit().predict(line, 20)
     assert abs(one.log_odds_distributed[0]) < 3  # one reading cannot tell
-    assert many.kind[0] == "distributed" and many.log_odds_distributed[0] > 5
+    assert many.kind[0] == "distributed"
+    assert many.log_odds_distributed[0] > 5
     assert many.position_m[0] == pytest.approx(0.16, abs=5e-3)
     assert many.extent_m[0] == pytest.approx(0.08, abs=0.02)
     assert many.force_n[0] == pytest.approx(-0.5, rel=0.03)
@@ -72,7 +73,8 @@ def test_zones_follow_the_statics_of_a_pinned_tip():
     # before gauge 1 nothing bends; between gauges 1 and 2 only F (s - x1) is seen; the rigid tip support: the
     # cable's pinned tip angle absorbs the load's moment, only the force is seen
     assert list(b.zone) == [CONTACT_ZONES[0], CONTACT_ZONES[1], CONTACT_ZONES[3], CONTACT_ZONES[2]]
-    assert math.isfinite(b.force_crlb_n[3]) and b.force_crlb_n[3] < 0.01
+    assert math.isfinite(b.force_crlb_n[3])
+    assert b.force_crlb_n[3] < 0.01
     assert b.position_crlb_m[3] > 0.027
 
 
@@ -86,7 +88,8 @@ def test_line_load_bounds_shrink_as_one_over_sqrt_n():
     one = line_bounds(MODEL, [0.17], [0.04], [-0.5], 20)
     many = line_bounds(MODEL, [0.17], [0.04], [-0.5], 20, n_readings=25)
     for key in ("centre_m", "extent_m", "total_n"):
-        assert np.isfinite(one[key][0]) and many[key][0] == pytest.approx(one[key][0] / 5, rel=1e-6)
+        assert np.isfinite(one[key][0])
+        assert many[key][0] == pytest.approx(one[key][0] / 5, rel=1e-6)
     # 150..190 mm covers no gauge: the moments at the gauges are a point's at 170 mm, and only the taut cable's
     # tension (the pinned tip angle integrates the moment over the strip: a difference of F w^2 / 24) sees the
     # extent, far less sharply than the total

@@ -118,7 +118,8 @@ def test_the_compiled_fisher_inverse_is_numpys():
     got = np.empty((50, 3))
     _contact_kernel.fisher_sd(jac, 1.0 / sigma**2, got)
     want = fisher_sd(jac, sigma)
-    assert np.all(np.isinf(got[:8])) and np.all(np.isinf(want[:8]))
+    assert np.all(np.isinf(got[:8]))
+    assert np.all(np.isinf(want[:8]))
     np.testing.assert_allclose(got[8:], want[8:], rtol=KERNEL_REL)
 
 

@@ -36,7 +36,8 @@ def test_palpate_log_is_refused_then_replaced_with_force_and_the_urls_seed_is_us
     assert main([*argv, "--force", "--backend", "sim?seed=5"]) == 0
     assert json.loads(capsys.readouterr().out)["rig"]["seed"] == 5
     ((_, _, samples, footer),) = read_log_runs(log)  # one run: replaced, not appended
-    assert footer["stop"] == "completed" and len(samples) == 5  # 0.1 s of 20 ms frames
+    assert footer["stop"] == "completed"
+    assert len(samples) == 5  # 0.1 s of 20 ms frames
 
 
 def test_a_series_that_would_fill_the_memory_is_refused(tmp_path):

@@ -30,7 +30,8 @@ modulus_n_m2 = 800
 @pytest.mark.parametrize("name", TISSUES)
 def test_builtin_tissues_load(name):
     tissue, info = load_tissue(name)
-    assert info.placed_on_twin and tissue.start_m < tissue.end_m
+    assert info.placed_on_twin
+    assert tissue.start_m < tissue.end_m
 
 
 def test_builtin_protocols_load():
@@ -78,7 +79,8 @@ def test_bad_tissue_files_give_one_line_naming_the_key(tmp_path, text, message):
     path.write_text(text)
     with pytest.raises(DataFileError, match=re.escape(message)) as err:
         load_tissue(path)
-    assert str(path) in str(err.value) and "\n" not in str(err.value)
+    assert str(path) in str(err.value)
+    assert "\n" not in str(err.value)
 
 
 BAD_PROTOCOLS = [
@@ -107,7 +109,9 @@ def test_cli_refuses_a_bad_tissue_file_in_one_line(tmp_path, capsys):
     path.write_text(TISSUE.replace("gap_mm = 30", "gap_mm = nan"))
     assert main(["palpate", "--tissue", str(path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "tissue.gap_mm" in err and str(path) in err
+    assert err.count("\n") == 0
+    assert "tissue.gap_mm" in err
+    assert str(path) in err
 
 
 def test_cli_needs_gap_and_modulus_on_the_twin(tmp_path, capsys):
@@ -126,7 +130,8 @@ def test_cli_palpates_on_the_twin_and_never_clobbers(tmp_path, capsys):
     assert main(args) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["result"]["modulus_n_m2"] == pytest.approx(800.0, rel=0.1)
-    assert data["truth"]["modulus_n_m2"] == 800.0 and json.loads(out.read_text())["kind"] == "sweep"
+    assert data["truth"]["modulus_n_m2"] == 800.0
+    assert json.loads(out.read_text())["kind"] == "sweep"
     assert main(args) == 2  # --out exists: refused before any work
     assert "pass --force" in capsys.readouterr().err
 
@@ -150,7 +155,8 @@ def test_implausible_tissue_values_are_refused_naming_the_slip(tmp_path, text, m
     path.write_text(text)
     with pytest.raises(DataFileError, match=re.escape(message)) as err:
         load_tissue(path)
-    assert str(path) in str(err.value) and "\n" not in str(err.value)
+    assert str(path) in str(err.value)
+    assert "\n" not in str(err.value)
 
 
 IMPLAUSIBLE_PROTOCOLS = [
@@ -173,4 +179,5 @@ def test_implausible_protocol_values_are_refused_naming_the_slip(tmp_path, text,
     path.write_text(text)
     with pytest.raises(DataFileError, match=re.escape(message)) as err:
         load_palpation_protocol(path)
-    assert str(path) in str(err.value) and "\n" not in str(err.value)
+    assert str(path) in str(err.value)
+    assert "\n" not in str(err.value)

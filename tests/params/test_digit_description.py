@@ -112,18 +112,22 @@ def test_bad_descriptions_are_refused_in_one_line(case, tmp_path, capsys):
     with pytest.raises(ParameterError) as info:
         load_params(path)
     message = str(info.value)
-    assert "\n" not in message and key in message and str(path) in message
+    assert "\n" not in message
+    assert key in message
+    assert str(path) in message
     assert main(["params", str(path)]) == 2
     out = capsys.readouterr()
     lines = (out.out + out.err).strip().splitlines()
-    assert lines and all(str(path) in line for line in lines)
+    assert lines
+    assert all(str(path) in line for line in lines)
     assert any(key in line for line in lines)
 
 
 def test_the_gauge_on_a_support_names_the_support():
     params = RigParams.from_dict({"geometry": {"gauge_positions_m": [0.045, 0.093, 0.225]}})
     (line,) = digit_inconsistencies(params)
-    assert "support at 0.09 m" in line and math.isfinite(float(line.split("= ")[1].split(" m")[0]))
+    assert "support at 0.09 m" in line
+    assert math.isfinite(float(line.split("= ")[1].split(" m")[0]))
 
 
 def test_a_per_gauge_list_of_the_wrong_length_is_named(tmp_path):

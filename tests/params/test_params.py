@@ -93,7 +93,8 @@ def test_write_to_a_missing_directory_says_so(tmp_path, capsys):
     assert main(["params", "--write", str(target)]) == 2
     err = capsys.readouterr().err
     assert f"cannot write the rig parameters to {target}: the directory {target.parent} does not exist" in err
-    assert "no such file" not in err and "Traceback" not in err
+    assert "no such file" not in err
+    assert "Traceback" not in err
     assert not target.parent.exists()
 
 
@@ -130,7 +131,8 @@ def test_implausible_values_and_unit_slips_are_refused(tmp_path, text, fragments
     with pytest.raises(ParameterError) as info:
         load_params(path)
     message = str(info.value)
-    assert message.startswith(str(path)) and "\n" not in message
+    assert message.startswith(str(path))
+    assert "\n" not in message
     for fragment in fragments:
         assert fragment in message, message
 

@@ -60,17 +60,21 @@ def test_report_writes_entries_html_and_figures(tmp_path, chapters):
     assert set(entries[0]) == {"key", "section", "thesis", "ours", "unit", "rel_error", "status", "note", "chapter"}
     # every table as numbers (issue 15): cells keep their type, NaN becomes null
     (table,) = document["tables"]
-    assert table["key"] == "demo.gamma" and table["chapter"] == "demo"
-    assert table["rows"][3] == [1.5, pytest.approx(0.0185), "riccati"] and table["rows"][-1][1] is None
+    assert table["key"] == "demo.gamma"
+    assert table["chapter"] == "demo"
+    assert table["rows"][3] == [1.5, pytest.approx(0.0185), "riccati"]
+    assert table["rows"][-1][1] is None
     assert document["counts"] == {"match": 1, "discrepancy": 1, "new": 1}
     assert document["chapters"][0]["counts"] == {"match": 1, "discrepancy": 1, "new": 1}
     assert entries[0]["rel_error"] == pytest.approx(abs(0.0894 - 0.089377) / 0.089377)
     assert summary.counts == {"match": 1, "discrepancy": 1, "new": 1}
     html = (tmp_path / "index.html").read_text()
     assert "A &lt;b&gt; paragraph &amp; more." in html  # text is escaped, never raw HTML
-    assert "figures/demo_line.png" in html and (tmp_path / "figures" / "demo_line.png").stat().st_size > 1000
+    assert "figures/demo_line.png" in html
+    assert (tmp_path / "figures" / "demo_line.png").stat().st_size > 1000
     # the failing chapter is shown with its error, the good one is kept
-    assert "fd_test_bad_chapter" in summary.failed and "chapter exploded" in html
+    assert "fd_test_bad_chapter" in summary.failed
+    assert "chapter exploded" in html
     # the first screen: counts per chapter, then the chapters; the 15-row table collapsed under its title
     assert html.index("Chapters</h2>") < html.index("id='demo'")
     assert "<details><summary>gamma by two routes <code>demo.gamma</code> (15 rows)</summary>" in html
@@ -115,11 +119,13 @@ def test_parallel_chapters_give_the_same_numbers_in_reading_order(tmp_path, chap
     two = reproduce(tmp_path / "two", chapters=chapter_files, workers=2, seed=7)
     a = json.loads((tmp_path / "one" / "results.json").read_text())
     b = json.loads((tmp_path / "two" / "results.json").read_text())
-    assert a["entries"] == b["entries"] and a["tables"] == b["tables"]
+    assert a["entries"] == b["entries"]
+    assert a["tables"] == b["tables"]
     assert [e["key"] for e in b["entries"]] == ["fdpa.x0", "fdpb.x0"]  # reading order, the failed one left out
     # the same draws as numpy's generator seeded [seed, stream]: the chapter's own stream, in whichever process
     assert b["tables"][1]["rows"][2][0] == np.random.default_rng([7, 2]).normal(size=3)[2]
-    assert set(one.failed) == set(two.failed) == {"fdpc"} and "fdpc exploded" in two.failed["fdpc"]
+    assert set(one.failed) == set(two.failed) == {"fdpc"}
+    assert "fdpc exploded" in two.failed["fdpc"]
     assert set(two.seconds) == set(chapter_files)
 
 

@@ -73,7 +73,8 @@ def test_pole_statuses(chapter):
     for key in ("[1].real", "[1].imag", "[2].imag"):
         assert _entry(ch, f"plant.closed_loop.poles{key}").status == "match", key
     slow = _entry(ch, "plant.closed_loop.poles[2].real")
-    assert slow.status == "discrepancy" and slow.rel_error == pytest.approx(0.0104, abs=TABLE_4_1_REL_ERROR_ATOL)
+    assert slow.status == "discrepancy"
+    assert slow.rel_error == pytest.approx(0.0104, abs=TABLE_4_1_REL_ERROR_ATOL)
     assert "-0.2654" in slow.note
 
 
@@ -81,7 +82,8 @@ def test_release_table_entries(chapter):
     ch, _ = chapter
     assert _entry(ch, "table_3_2.zeta[1]").status == "match"
     garbled = _entry(ch, "table_3_2.zeta[2]")
-    assert garbled.status == "discrepancy" and "80.5973" in garbled.note
+    assert garbled.status == "discrepancy"
+    assert "80.5973" in garbled.note
 
 
 @pytest.mark.parametrize(("table", "name", "status"), [("3_1", "without_housing", "discrepancy"),
@@ -92,7 +94,8 @@ def test_release_table_wn_rows_are_printed_wn_beside_wd_over_sqrt(chapter, table
     t = thesis_value(f"digit.release_tests_{name}")
     for i, (wn, wd, z) in enumerate(zip(t["wn_rad_s"], t["wd_rad_s"], t["zeta"], strict=True), start=1):
         e = _entry(ch, f"table_{table}.wn_rad_s[{i}]")
-        assert e.thesis == wn and e.unit == "rad/s"
+        assert e.thesis == wn
+        assert e.unit == "rad/s"
         assert e.ours == pytest.approx(wd / math.sqrt(1 - z * z), rel=EXACT_RTOL)
         assert e.status == status
     assert not [e for e in ch.entries if "worst_rel" in e.key]
@@ -104,18 +107,22 @@ def test_table_3_4_every_cell_is_the_printed_value_beside_ours(chapter, col):
     printed = thesis_value(f"conversion.table_3_4_{col}")
     for c, value in zip(COMMANDS, printed, strict=True):
         e = _entry(ch, f"table_3_4.{col}[{c}]")
-        assert e.thesis == value and e.unit == "mm"
+        assert e.thesis == value
+        assert e.unit == "mm"
         if col != "y_max_mm" or c == 8:  # gauge columns reproduce to 2 decimals; y_max only its zero row
-            assert e.status == "match" and round(e.ours, 2) == value, (col, c)
+            assert e.status == "match", (col, c)
+            assert round(e.ours, 2) == value, (col, c)
         else:
-            assert e.status == "discrepancy" and "0.241" in e.note, c
+            assert e.status == "discrepancy", c
+            assert "0.241" in e.note, c
     assert not [e for e in ch.entries if e.key.endswith("rows_equal")]
 
 
 def test_table_3_4_y_max_note_gives_the_corrected_figure(chapter):
     ch, _ = chapter
     y_max = _entry(ch, "table_3_4.y_max_mm[24]")
-    assert y_max.thesis == 52.11 and y_max.ours == pytest.approx(65.41, abs=PRINTED_2_DECIMALS_ATOL)  # x = l = 0.270 m
+    assert y_max.thesis == 52.11
+    assert y_max.ours == pytest.approx(65.41, abs=PRINTED_2_DECIMALS_ATOL)  # x = l = 0.270 m
     assert "gives 52.11 mm here" in y_max.note  # at the fitted x = 0.241 m
 
 
@@ -126,7 +133,9 @@ def test_thesis_fields_are_printed_numbers_not_zero_placeholders(chapter):
     assert zeros == [f"table_3_4.{c}[8]" for c in ("y_sg1_mm", "y_sg2_mm", "y_sg3_mm", "y_max_mm")]
     # 1.7699 is implied by table 4.1, not printed: a new figure
     k1 = _entry(ch, "plant.closed_loop.K1")
-    assert k1.status == "new" and k1.thesis is None and k1.ours == pytest.approx(1.7699, abs=K1_PRINTED_ATOL)
+    assert k1.status == "new"
+    assert k1.thesis is None
+    assert k1.ours == pytest.approx(1.7699, abs=K1_PRINTED_ATOL)
 
 
 def test_explained_discrepancies(chapter):

@@ -49,7 +49,8 @@ def test_one_draw_crops_to_matplotlibs_tight_box(monkeypatch):
     assert np.all(np.abs(np.array(ours.shape) - np.array(theirs.shape)) <= SIZE_PX)
     # the same margins around the drawing: the 0.1 in pad (11 px) on every side, nothing cut
     assert np.all(np.abs(_ink_box(ours) - _ink_box(theirs)) <= INK_PX)
-    assert fig.dpi == plt.rcParams["figure.dpi"] and fig.canvas is not None  # the figure is left as it was
+    assert fig.dpi == plt.rcParams["figure.dpi"]
+    assert fig.canvas is not None  # the figure is left as it was
     plt.close(fig)
 
 

@@ -51,5 +51,6 @@ def test_a_bad_calibration_file_stops_reproduce_before_any_chapter(tmp_path, pro
     bad.write_text("[calibration]\nstrip_beta_s = 1e-3\n")
     assert main(["reproduce", "--calibration", str(bad), "--out", str(tmp_path / "report")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "bad.toml: [calibration] lacks key" in err[0]
+    assert len(err) == 1
+    assert "bad.toml: [calibration] lacks key" in err[0]
     assert probe_chapter == {}

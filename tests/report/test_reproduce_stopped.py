@@ -84,7 +84,8 @@ def test_a_stopped_reproduce_leaves_the_old_report_whole(tmp_path, chapters, sig
     exit_code, result, err = stop(proc, signum)
     name = signal.Signals(signum).name
     assert exit_code == code, err
-    assert result["signal"] == name and result["error"] == f"interrupted by {name}"
+    assert result["signal"] == name
+    assert result["error"] == f"interrupted by {name}"
     assert _tree(out) == before  # the old report, whole: no figure of the new run beside it
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chapters", "report"]  # no temporary folder left
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]

@@ -176,5 +176,8 @@ def test_a_replay_holds_its_samples_in_columns_not_dicts(tmp_path, kind):
     assert peak < REPLAY_BYTES_PER_SAMPLE * n, peak / n
     assert held < REPLAY_BYTES_PER_SAMPLE * n, held / n
     last = rig.samples[-1]  # read back as the log has it
-    assert len(rig.samples) == n and last["t"] == _sample(n - 1)["t"] and last["gauges_v"] == [1.0, 1.1, 1.2]
-    assert last["pot_v"] is None and last["command"] == 8
+    assert len(rig.samples) == n
+    assert last["t"] == _sample(n - 1)["t"]
+    assert last["gauges_v"] == [1.0, 1.1, 1.2]
+    assert last["pot_v"] is None
+    assert last["command"] == 8

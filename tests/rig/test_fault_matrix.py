@@ -293,12 +293,16 @@ def test_fault_ends_safe_with_the_log_readable(backend, fault, tmp_path, monkeyp
     # -- the safe state: relaxed where a port can take it, the port closed either way ------------------------------
     assert rig.closed
     if fault == "port lost":
-        assert not result.safe_command_sent and "could NOT send the safe command" in result.message
-        assert port.closed and port.last_command != 8  # the safe frame could not go out: the port was gone
+        assert not result.safe_command_sent
+        assert "could NOT send the safe command" in result.message
+        assert port.closed
+        assert port.last_command != 8  # the safe frame could not go out: the port was gone
     else:
-        assert result.safe_command_sent and "relaxed to command 8" in result.message
+        assert result.safe_command_sent
+        assert "relaxed to command 8" in result.message
         if port is not None:
-            assert port.last_command == 8 and port.closed
+            assert port.last_command == 8
+            assert port.closed
         if backend == "replay":
             assert rig.commands_sent[-1][1] == 8
         if backend.startswith("sim"):
@@ -306,7 +310,10 @@ def test_fault_ends_safe_with_the_log_readable(backend, fault, tmp_path, monkeyp
     # -- the log reads back with every sample taken -----------------------------------------------------------------
     ((_, header, samples, footer),) = read_log_runs(log)
     if fault == "disk full":
-        assert footer is None and len(samples) == FAULT_AT and "its last lines are lost" in result.message
+        assert footer is None
+        assert len(samples) == FAULT_AT
+        assert "its last lines are lost" in result.message
     else:
-        assert footer["stop"] == result.status and len(samples) == result.timing.samples
+        assert footer["stop"] == result.status
+        assert len(samples) == result.timing.samples
         assert footer["safe_command_sent"] == result.safe_command_sent

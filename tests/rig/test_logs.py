@@ -29,7 +29,8 @@ def test_an_existing_log_is_refused_and_the_rig_left_safe(tmp_path):
     with pytest.raises(OutputExistsError, match="pass --force to overwrite it or --append"):
         _run(log, rig=rig)
     assert log.read_bytes() == before  # untouched
-    assert rig.closed and rig.sent[-1] == 8  # relaxed and closed although nothing ran
+    assert rig.closed
+    assert rig.sent[-1] == 8  # relaxed and closed although nothing ran
 
 
 def test_append_adds_a_run_of_the_same_settings_and_refuses_another(tmp_path):
@@ -37,7 +38,8 @@ def test_append_adds_a_run_of_the_same_settings_and_refuses_another(tmp_path):
     _run(log)
     _run(log, "append")
     runs = read_log_runs(log)
-    assert [start for start, *_ in runs] == [1, 8] and all(len(samples) == 5 for _, _, samples, _ in runs)
+    assert [start for start, *_ in runs] == [1, 8]
+    assert all(len(samples) == 5 for _, _, samples, _ in runs)
     with pytest.raises(DataFileError, match="period_s=0.02, this run period_s=0.01"):
         _run(log, "append", period_s=0.01)
     assert len(read_log_runs(log)) == 2
@@ -56,7 +58,8 @@ def test_append_after_a_crash_drops_the_torn_line_only(tmp_path):
     _run(log)
     log.write_text(log.read_text() + '{"k": 99, "t"')  # power cut mid-line
     _run(log, "append")
-    assert len(read_log(log, run=1)[1]) == 5 and len(read_log(log, run=2)[1]) == 5
+    assert len(read_log(log, run=1)[1]) == 5
+    assert len(read_log(log, run=2)[1]) == 5
 
 
 def test_force_replaces(tmp_path):
@@ -85,9 +88,11 @@ def test_a_forced_run_that_stops_early_keeps_the_old_log_and_its_own_as_partial(
     assert result.status == "interrupted"
     assert log.read_bytes() == old
     partial = tmp_path / "run.partial.jsonl"
-    assert result.log_path == partial and "run.jsonl is kept as it was" in result.message
+    assert result.log_path == partial
+    assert "run.jsonl is kept as it was" in result.message
     header, samples, footer = read_log(partial)
-    assert len(samples) == 3 and footer["stop"] == "interrupted"
+    assert len(samples) == 3
+    assert footer["stop"] == "interrupted"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.jsonl", "run.partial.jsonl"]
 
 

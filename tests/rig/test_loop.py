@@ -20,16 +20,22 @@ def test_completed_run_tracks_and_logs_every_sample(tmp_path):
     rig = FirstOrderRig()
     log = tmp_path / "run.jsonl"
     result = run_loop(rig, PI(), setpoint=1.0, duration_s=2.0, period_s=0.02, log_path=log)
-    assert result.ok and result.timing.samples == 100 and result.timing.overruns == 0
+    assert result.ok
+    assert result.timing.samples == 100
+    assert result.timing.overruns == 0
     # virtual time: every sample exactly on its absolute deadline
     np.testing.assert_allclose(result.time_s, np.arange(100) * 0.02, atol=1e-12)
-    assert result.timing.jitter_max_s < 1e-12 and result.timing.mean_period_s == pytest.approx(0.02)
+    assert result.timing.jitter_max_s < 1e-12
+    assert result.timing.mean_period_s == pytest.approx(0.02)
     # PI with integral action: gauge 1 reaches the setpoint (first-order plant, closed-form steady state = r)
     assert result.measurement[-1] == pytest.approx(1.0, abs=0.05 * 1.0 + 0.05)  # within one command quantum (0.05 V)
     header, samples, footer = read_log(log)
-    assert header["period_s"] == 0.02 and len(samples) == 100 and footer["stop"] == "completed"
+    assert header["period_s"] == 0.02
+    assert len(samples) == 100
+    assert footer["stop"] == "completed"
     assert [s["command"] for s in samples] == list(result.command)
-    assert rig.closed and rig.sent[-1] == 8  # relaxed on the way out
+    assert rig.closed
+    assert rig.sent[-1] == 8  # relaxed on the way out
 
 
 def test_overrun_is_counted_and_deadlines_resync_without_bursting():
@@ -56,16 +62,21 @@ def test_nan_gauge_is_a_sensor_fault(tmp_path):
     log = tmp_path / "nan.jsonl"
     result = run_loop(rig, PI(), setpoint=1.0, duration_s=1.0, log_path=log)
     assert result.status == "fault"
-    assert "gauge 2 read nan" in result.message and "relaxed to command 8" in result.message
-    assert result.safe_command_sent and rig.sent[-1] == 8 and rig.closed
+    assert "gauge 2 read nan" in result.message
+    assert "relaxed to command 8" in result.message
+    assert result.safe_command_sent
+    assert rig.sent[-1] == 8
+    assert rig.closed
     _, samples, footer = read_log(log)
-    assert len(samples) == 6 and footer["stop"] == "fault"
+    assert len(samples) == 6
+    assert footer["stop"] == "fault"
 
 
 def test_clipped_gauge_is_a_sensor_fault():
     rig = FirstOrderRig(faults={3: lambda r: (np.array([5.0, 0.0, 0.0]), math.nan)})
     result = run_loop(rig, PI(), setpoint=1.0, duration_s=1.0)
-    assert result.status == "fault" and "gauge 1 clipped at +5.000 V" in result.message
+    assert result.status == "fault"
+    assert "gauge 1 clipped at +5.000 V" in result.message
     assert rig.sent[-1] == 8
 
 
@@ -78,8 +89,11 @@ def test_ctrl_c_relaxes_closes_and_keeps_the_log(tmp_path):
 
     log = tmp_path / "ctrlc.jsonl"
     result = run_loop(rig, PI(), setpoint=1.0, duration_s=5.0, log_path=log, on_sample=interrupt)
-    assert result.status == "interrupted" and "Ctrl-C" in result.message and str(log) in result.message
-    assert rig.sent[-1] == 8 and rig.closed
+    assert result.status == "interrupted"
+    assert "Ctrl-C" in result.message
+    assert str(log) in result.message
+    assert rig.sent[-1] == 8
+    assert rig.closed
     lines = log.read_text().splitlines()
     assert len(lines) == 1 + 25 + 1  # header, 25 samples (k = 0..24, each logged before the interrupt), footer
     assert all(json.loads(line) for line in lines)
@@ -94,13 +108,16 @@ def test_controller_bug_still_leaves_the_rig_safe():
 
     with pytest.raises(ZeroDivisionError):
         run_loop(rig, Broken(), setpoint=1.0, duration_s=1.0)
-    assert rig.sent[-1] == 8 and rig.closed
+    assert rig.sent[-1] == 8
+    assert rig.closed
 
 
 def test_port_lost_mid_run(tmp_path):
     rig = FirstOrderRig(faults={12: lambda r: (_ for _ in ()).throw(RigError("first-order: port lost"))})
     result = run_loop(rig, PI(), setpoint=1.0, duration_s=1.0, log_path=tmp_path / "lost.jsonl")
-    assert result.status == "fault" and "port lost" in result.message and rig.closed
+    assert result.status == "fault"
+    assert "port lost" in result.message
+    assert rig.closed
 
 
 def test_replay_reproduces_the_recorded_commands(tmp_path):

@@ -32,10 +32,12 @@ def test_recording_opens_in_the_mcap_reader_and_every_message_meets_its_schema(t
     with open(path, "rb") as fh:
         reader = make_reader(fh)  # the mcap library's seeking reader: it needs the summary a clean close writes
         summary = reader.get_summary()
-        assert summary is not None and summary.statistics.message_count == result.timing.samples == 50
+        assert summary is not None
+        assert summary.statistics.message_count == result.timing.samples == 50
         count = 0
         for schema, channel, message in reader.iter_messages():
-            assert channel.topic == SAMPLE_TOPIC and channel.message_encoding == "json"
+            assert channel.topic == SAMPLE_TOPIC
+            assert channel.message_encoding == "json"
             assert schema.encoding == "jsonschema"
             jsonschema.validate(json.loads(message.data), json.loads(schema.data))
             count += 1
@@ -52,7 +54,8 @@ def test_recording_holds_the_same_samples_as_the_json_lines_log(tmp_path):
     log_header, log_samples, log_footer = read_log(log_path)
     assert samples == log_samples
     assert footer["stop"] == log_footer["stop"] == "completed"
-    assert header["backend"] == "sim" and header["seed"] == 0
+    assert header["backend"] == "sim"
+    assert header["seed"] == 0
 
 
 def test_replay_reads_a_recording_as_it_reads_a_log(tmp_path):
@@ -81,7 +84,8 @@ def test_a_killed_run_keeps_every_flushed_sample(tmp_path):
     with open(copy, "ab") as fh:
         fh.write(b"\x06\x40\x00\x00")  # and a record torn mid-write
     header, samples, footer = read_recording(copy)
-    assert footer is None and header["backend"] == "sim"
+    assert footer is None
+    assert header["backend"] == "sim"
     assert [s["k"] for s in samples] == list(range(200))
     rec.close()
 
@@ -126,7 +130,8 @@ def test_run_records_and_replays_from_the_command_line(tmp_path, capsys):
     # the replay finds the rotation map the recording kept, so it needs no --calibration
     assert main(["run", "--backend", f"replay://{path}", "--duration", "0.9", "--json"]) == 0
     replayed = json.loads(capsys.readouterr().out)
-    assert replayed["status"] == "completed" and replayed["samples"] == 45
+    assert replayed["status"] == "completed"
+    assert replayed["samples"] == 45
     assert main(["run", "--backend", "sim", "--duration", "1", "--record", str(path)]) == 2
     assert "exists" in capsys.readouterr().err
 
@@ -149,7 +154,8 @@ def test_a_recorded_rig_keeps_every_reading_and_load(tmp_path):
     assert inner.closed
     messages = list(iter_messages(path))
     events = [m for topic, _, m in messages if topic == EVENT_TOPIC]
-    assert [e["event"] for e in events] == ["load", "clear"] and events[0]["mass_kg"] == 0.025
+    assert [e["event"] for e in events] == ["load", "clear"]
+    assert events[0]["mass_kg"] == 0.025
     _, samples, footer = read_recording(path)
     assert [s["gauges_v"] for s in samples] == [list(r.gauges_v) for r in readings]
     assert footer["stop"] == "closed"
@@ -232,7 +238,9 @@ def test_a_recording_by_another_writer_replays(tmp_path):
     samples = [{"t": 100 + 0.01 * k, "gauges_v": _gauges(100 + 0.01 * k), "command": 8 + k % 30} for k in range(300)]
     path = _foreign(tmp_path / "other.mcap", samples)
     header, read, footer = read_recording(path)
-    assert header == {"format": None} and footer is None and read == samples
+    assert header == {"format": None}
+    assert footer is None
+    assert read == samples
     with open_rig(f"replay://{path}") as rig:
         for tau in (0.0, 0.505, 1.234, 2.99):
             rig.wait(tau - rig.clock())
@@ -267,10 +275,13 @@ def test_a_malformed_foreign_recording_is_named_in_one_line(tmp_path, samples, o
     path = _foreign(tmp_path / "foreign.mcap", samples, **options)
     with pytest.raises(DataFileError, match=says) as err:
         open_rig(f"replay://{path}")
-    assert str(path) in str(err.value) and "\n" not in str(err.value)
+    assert str(path) in str(err.value)
+    assert "\n" not in str(err.value)
     assert main(["live", "--backend", f"replay://{path}"]) == 2
     message = capsys.readouterr().err
-    assert says in message and str(path) in message and message.count("\n") == 1
+    assert says in message
+    assert str(path) in message
+    assert message.count("\n") == 1
 
 
 def test_a_damaged_recording_says_so(tmp_path):

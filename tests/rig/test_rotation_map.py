@@ -166,11 +166,13 @@ def test_table_3_6_layout_reads_and_states_its_larger_uncertainty_without_the_ti
     text = "# thesis table 3.6\ncommand;deflection_mm_at_45mm;deflection_mm_at_135mm;deflection_mm_at_225mm\n"
     text += "".join(";".join(str(v) for v in row) + "\n" for row in rows)
     ref = read_reference(write(tmp_path, text))
-    assert ref.kind == "deflections" and ref.commands.tolist() == list(range(8, 25))
+    assert ref.kind == "deflections"
+    assert ref.commands.tolist() == list(range(8, 25))
     assert ref.gauges_v is None
     sd = np.sqrt(np.diag(ref.rotation_cov_deg2))
     # y_SG3 = 43.5 mm at 225 mm: a uniform arc through it turns ~2 x 43.5 / 225 rad ~ 22 deg at 225 mm, more at the tip
-    assert 20 < ref.rotation_deg[-1] < 35 and sd[-1] > 1.0
+    assert 20 < ref.rotation_deg[-1] < 35
+    assert sd[-1] > 1.0
 
 
 @pytest.mark.parametrize(
@@ -237,8 +239,10 @@ def test_a_map_saves_and_loads_with_its_provenance_and_refuses_to_clobber(tmp_pa
     again = load_rotation_map(path)
     np.testing.assert_array_equal(again.coef_, est.coef_)
     assert again.uncertainty_deg(30.0) == pytest.approx(est.uncertainty_deg(30.0))
-    assert again.commands_ == list(range(8, 33, 3)) and again.deg_per_command_ == pytest.approx(1.7)
-    assert "operator" in again.source_ and str(path) in again.source_
+    assert again.commands_ == list(range(8, 33, 3))
+    assert again.deg_per_command_ == pytest.approx(1.7)
+    assert "operator" in again.source_
+    assert str(path) in again.source_
     with pytest.raises(FileExistsError, match="pass --force"):
         save_rotation_map(est, path)
     data = json.loads(path.read_text())

@@ -94,7 +94,8 @@ def test_measured_deflections_give_a_map_that_holds_the_setpoint(tmp_path, nomin
     reference = read_reference(ruler_file(tmp_path, cal))
     est = calibrate_rotation(SimRig(seed=seed + 1, calibration=cal), reference=reference)
     st = step_test(SimRig(seed=seed, calibration=cal), "digital20", step_deg=SETPOINT_DEG, estimator=est)
-    assert st.result.ok and st.metrics.bounded
+    assert st.result.ok
+    assert st.metrics.bounded
     assert abs(st.metrics.final_error_deg) < TOLERANCE_DEG, case
     # the map's own claim: the uncertainty it states at the setpoint is small and covers its error
     assert est.uncertainty_deg(SETPOINT_DEG) < 0.3  # measured 0.19 deg
@@ -117,14 +118,17 @@ def test_run_json_states_the_map_it_used(tmp_path, capsys):
     assert main(argv) == 0
     data = json.loads(capsys.readouterr().out)
     used = data["rotation_map"]
-    assert "deflections measured on the rig" in used["source"] and str(ruler) in used["source"]
-    assert used["file"] == str(tmp_path / "map.json") and used["commands"] == list(COMMANDS)
+    assert "deflections measured on the rig" in used["source"]
+    assert str(ruler) in used["source"]
+    assert used["file"] == str(tmp_path / "map.json")
+    assert used["commands"] == list(COMMANDS)
     assert 0 < used["uncertainty_deg"] < 0.3
     assert abs(data["true_final_rotation_deg"] - 30) < TOLERANCE_DEG
     # the map is saved; a second run loads it (and says so) without a sweep
     assert main(argv[:4] + argv[6:]) == 0
     again = json.loads(capsys.readouterr().out)["rotation_map"]
-    assert "loaded from" in again["source"] and again["uncertainty_deg"] == pytest.approx(used["uncertainty_deg"])
+    assert "loaded from" in again["source"]
+    assert again["uncertainty_deg"] == pytest.approx(used["uncertainty_deg"])
     # making a map over an existing file is refused before any work, unless --force
     assert main(argv) == 2
     assert "pass --force" in capsys.readouterr().err

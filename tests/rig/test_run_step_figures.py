@@ -113,17 +113,22 @@ def test_run_json_step_figures_match_an_independent_computation(
                     "--rotation-map", str(rotation_map), "--log", str(log))  # fmt: skip
     t, y, footer = logged(log)
     figures = data["step_metrics"]
-    assert figures["settling_band"] == BAND and figures["estimate_smoothed_s"] == 0.1
+    assert figures["settling_band"] == BAND
+    assert figures["estimate_smoothed_s"] == 0.1
     ours = oracle(t, y, setpoint, figures["deg_per_command"], smooth=True)
     assert_figures_agree(ours, figures["estimated"])
     assert footer["summary"]["estimated"] == figures["estimated"]  # the log closes with the same figures
     true = figures["true"]
     if settles:
-        assert 0.3 < true["settling_time_s"] < 1.2 and abs(true["final_error_deg"]) < 0.87  # half a command
+        assert 0.3 < true["settling_time_s"] < 1.2
+        assert abs(true["final_error_deg"]) < 0.87  # half a command
     elif settles is False:
-        assert true["settling_time_s"] is None and true["final_error_deg"] is None
+        assert true["settling_time_s"] is None
+        assert true["final_error_deg"] is None
     else:  # zero setpoint: the digit stays at rest, so its error and IAE are zero and the rest undefined
-        assert true["final_error_deg"] == 0.0 and true["iae_deg_s"] == 0.0 and true["rise_time_s"] is None
+        assert true["final_error_deg"] == 0.0
+        assert true["iae_deg_s"] == 0.0
+        assert true["rise_time_s"] is None
 
 
 @pytest.mark.slow
@@ -136,18 +141,24 @@ def test_a_run_that_faults_before_settling_claims_no_settling(tmp_path, capsys, 
     replay = tmp_path / "replay.jsonl"
     data = run_json(capsys, "--backend", f"replay://{cut}", "--setpoint-deg", "30", "--duration", "2",
                     "--rotation-map", str(rotation_map), "--log", str(replay))  # fmt: skip
-    assert data["status"] == "fault" and "recording ends" in data["message"]
+    assert data["status"] == "fault"
+    assert "recording ends" in data["message"]
     t, y, _ = logged(replay)
     assert t[-1] == pytest.approx(0.88)
     figures = data["step_metrics"]["estimated"]
     assert_figures_agree(oracle(t, y, 30.0, data["step_metrics"]["deg_per_command"], smooth=True), figures)
-    assert figures["settling_time_s"] is None and figures["final_error_deg"] is None
-    assert figures["rise_time_s"] is not None and figures["iae_deg_s"] > 0
+    assert figures["settling_time_s"] is None
+    assert figures["final_error_deg"] is None
+    assert figures["rise_time_s"] is not None
+    assert figures["iae_deg_s"] > 0
 
 
 def test_a_one_sample_run_ends_cleanly_with_its_log_closed(tmp_path, capsys, rotation_map):
     log = tmp_path / "one.jsonl"
     data = run_json(capsys, "--duration", "0.02", "--rotation-map", str(rotation_map), "--log", str(log))
-    assert data["status"] == "completed" and data["samples"] == 1 and data["step_metrics"]["estimated"] is None
+    assert data["status"] == "completed"
+    assert data["samples"] == 1
+    assert data["step_metrics"]["estimated"] is None
     _, samples, footer = read_log(log)
-    assert len(samples) == 1 and footer["stop"] == "completed"
+    assert len(samples) == 1
+    assert footer["stop"] == "completed"

@@ -31,7 +31,8 @@ def _feed(guard, samples, setpoint=30.0):
 
 def test_the_rotation_range_is_the_physical_one():
     low, high = ROTATION_RANGE_DEG
-    assert _feed(RunawayGuard(), [(high, 20, 20)]) is None and _feed(RunawayGuard(), [(high + 0.1, 20, 20)]) == 0
+    assert _feed(RunawayGuard(), [(high, 20, 20)]) is None
+    assert _feed(RunawayGuard(), [(high + 0.1, 20, 20)]) == 0
     assert _feed(RunawayGuard(), [(low - 0.1, 20, 20)]) == 0
     twin_says = RunawayGuard(truth=lambda: 151.0)  # the twin's true rotation counts, where it is known
     assert _feed(twin_says, [(10.0, 20, 20)]) == 0
@@ -100,7 +101,10 @@ def _run(capsys, *argv):
 )
 def test_runaways_fault_to_the_safe_state(rotation_maps, capsys, which, extra, culprit):
     code, data = _run(capsys, "--rotation-map", str(rotation_maps[which]), *extra)
-    assert code == 1 and data["status"] == "fault" and "runaway" in data["message"] and culprit in data["message"]
+    assert code == 1
+    assert data["status"] == "fault"
+    assert "runaway" in data["message"]
+    assert culprit in data["message"]
     assert "digit relaxed to command 8" in data["message"]
     # it stopped before the twin's true rotation left the physical range (it reached 342-412 deg unguarded)
     assert data["true_peak_rotation_deg"] < ROTATION_RANGE_DEG[1]
@@ -109,14 +113,16 @@ def test_runaways_fault_to_the_safe_state(rotation_maps, capsys, which, extra, c
 def test_a_zero_map_is_refused_before_the_rig_moves(rotation_maps, capsys):
     """Issue 16's zero map: refused on load (by the map's own check) instead of run to a runaway."""
     code, data = _run(capsys, "--rotation-map", str(rotation_maps["zero"]))
-    assert code == 2 and "read no rotation from the gauges" in data["error"]
+    assert code == 2
+    assert "read no rotation from the gauges" in data["error"]
 
 
 @pytest.mark.parametrize("gain, setpoint", [(0.7, 30), (1.0, 30), (1.3, 30), (1.0, 120), (1.0, 0)])
 def test_correct_loops_complete(rotation_maps, capsys, gain, setpoint):
     argv = ["--rotation-map", str(rotation_maps["good"]), "--gain", str(gain), "--setpoint-deg", str(setpoint)]
     code, data = _run(capsys, *argv)
-    assert code == 0 and data["status"] == "completed"
+    assert code == 0
+    assert data["status"] == "completed"
     assert abs(data["true_final_rotation_deg"] - setpoint) < 2.0  # a quantum of the servo (1.7 deg)
 
 
@@ -138,8 +144,10 @@ def _library_run(map_path, **loop_options):
 def test_the_library_loop_guards_an_unstable_loop_by_default(rotation_maps):
     rig, result, peak = _library_run(rotation_maps["flipped"])  # no guard given: the default one
     assert result.status == "fault"
-    assert "runaway" in result.message and "left the physical range" in result.message
-    assert result.safe_command_sent and rig.closed
+    assert "runaway" in result.message
+    assert "left the physical range" in result.message
+    assert result.safe_command_sent
+    assert rig.closed
     assert "digit relaxed to command 8" in result.message
     assert peak < ROTATION_RANGE_DEG[1] + 5.0  # stopped within a sample of leaving the range (it went to 342+ deg)
 
@@ -160,7 +168,8 @@ def test_the_default_guard_leaves_loops_on_other_quantities_to_the_truth():
     rig = open_rig("sim")
     try:
         guard = default_guard(rig, measure=lambda reading: reading.gauges_v[0])
-        assert not guard.measured and guard.truth is not None
+        assert not guard.measured
+        assert guard.truth is not None
         guard.reset(8)
         guard.check_command(0.0, 30.0, float("nan"), 254.0, 254, LIMITS)  # nothing to judge: no fault
         guard.check_command(1.0, 30.0, float("nan"), 254.0, 254, LIMITS)

@@ -54,7 +54,8 @@ def test_digital20_meets_the_step_figures_on_the_twin(estimators, cal_seed, rig_
     rig = open_rig("sim", seed=rig_seed)
     st = step_test(rig, "digital20", estimator=estimators[cal_seed], log_path=tmp_path / "step.jsonl")
     m = st.metrics
-    assert st.result.ok and m.bounded
+    assert st.result.ok
+    assert m.bounded
     # measured 0.46-0.76 s, 1.4-2.2 %, 0.31 deg = 0.18 quantum (command 26 gives 30.31 deg on the twin)
     assert m.settling_time_s < 1.0  # 2 % band, issue 6
     assert m.overshoot_percent < 10.0
@@ -62,9 +63,11 @@ def test_digital20_meets_the_step_figures_on_the_twin(estimators, cal_seed, rig_
     # the loop's estimate stays within one quantum of the true rotation through the transient (measured <= 1.4
     # deg; the ill-posed least-squares map read 41.5 deg at a true 31 deg)
     assert np.max(np.abs(st.result.measurement - st.rotation_deg)) < QUANTUM_DEG
-    assert rig.closed and st.result.safe_command_sent
+    assert rig.closed
+    assert st.result.safe_command_sent
     _, samples, footer = read_log(tmp_path / "step.jsonl")
-    assert len(samples) == 150 and footer["stop"] == "completed"
+    assert len(samples) == 150
+    assert footer["stop"] == "completed"
 
 
 @pytest.mark.parametrize("gain", [0.7, 1.3])
@@ -72,7 +75,8 @@ def test_digital20_meets_the_step_figures_on_the_twin(estimators, cal_seed, rig_
 def test_digital20_stays_stable_for_30_percent_gain_error(estimators, cal_seed, rig_seed, gain):
     st = step_test(open_rig("sim", seed=rig_seed), "digital20", estimator=estimators[cal_seed], gain=gain)
     m = st.metrics
-    assert st.result.ok and m.bounded
+    assert st.result.ok
+    assert m.bounded
     assert m.final_error_quanta < 1.0
     assert np.ptp(st.rotation_deg[-25:]) < 3.5  # no growing oscillation: last 0.5 s within two quanta
     # measured at x1.3: 18.5-20.6 % overshoot, settled (2 %) in 0.36-0.38 s; at x0.7: < 2.1 %, 0.84-1.04 s
@@ -85,15 +89,18 @@ def test_thesis_39hz_forward_euler_at_20ms_fails_on_the_twin(estimators):
     # the command bangs between the ends of the range (the unstable pole at z = -3.9 alternates sign)
     commands = st.result.command[20:]
     assert np.mean((commands == 0) | (commands >= 240)) > 0.5
-    assert st.metrics.settling_time_s == np.inf and st.metrics.overshoot_percent > 100
+    assert st.metrics.settling_time_s == np.inf
+    assert st.metrics.overshoot_percent > 100
 
 
 def test_the_unstable_loop_is_stopped_by_the_default_guard(estimators):
     # issue 23: the library's loop guards by default, as flexdigit run does: the same unstable loop ends in the safe
     # state with a fault once the twin's true rotation leaves the physical range
     st = step_test(open_rig("sim", seed=1), "thesis39-euler", estimator=estimators[0])
-    assert st.result.status == "fault" and "runaway" in st.result.message
-    assert st.result.safe_command_sent and "relaxed to command 8" in st.result.message
+    assert st.result.status == "fault"
+    assert "runaway" in st.result.message
+    assert st.result.safe_command_sent
+    assert "relaxed to command 8" in st.result.message
     assert np.max(np.abs(st.rotation_deg)) < ROTATION_RANGE_DEG[1] + 30.0  # stopped within a sample or two of it
 
 
@@ -125,7 +132,8 @@ def test_sim_backend_virtual_time_is_deterministic_and_applies_loads():
     rig.wait(1.0)
     unloaded = rig.read().gauges_v
     assert not np.allclose(unloaded, a.gauges_v, atol=0.01)  # the 50 g load bends the digit
-    assert rig.twin.loads == [] and rig.loads == []
+    assert rig.twin.loads == []
+    assert rig.loads == []
 
 
 def test_paced_mode_follows_the_injected_clock():
@@ -136,8 +144,10 @@ def test_paced_mode_follows_the_injected_clock():
     rig.write_command(20)
     clock.sleep(0.35)  # wall time passes with nobody asking: the twin catches up at the next read
     reading = rig.read()
-    assert reading.time_s == pytest.approx(0.35) and rig.twin.time_s == pytest.approx(0.35)
+    assert reading.time_s == pytest.approx(0.35)
+    assert rig.twin.time_s == pytest.approx(0.35)
     rig.wait(0.15)
-    assert rig.read().time_s == pytest.approx(0.5) and rig.twin.time_s == pytest.approx(0.5)
+    assert rig.read().time_s == pytest.approx(0.5)
+    assert rig.twin.time_s == pytest.approx(0.5)
     rig.close()
     assert rig.twin.servo.pending[-1][1] == 8 or rig.twin.servo.command == 8  # relaxed on close

@@ -53,7 +53,9 @@ def test_bad_urls_are_refused_naming_the_option(url, culprit):
 def test_the_cli_gives_one_line_for_a_bad_url(url, capsys):
     assert main(["run", "--backend", url]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "unknown option" in err and "Traceback" not in err
+    assert err.count("\n") == 1
+    assert "unknown option" in err
+    assert "Traceback" not in err
 
 
 # -- declarations drive the checks: every declared option, just inside and just outside its range ---------------
@@ -125,7 +127,8 @@ def test_python_keywords_are_checked_by_the_same_declarations():
 
 def test_parse_keeps_text_for_callers_that_only_look():
     parsed = parse_rig_url("serial:///dev/ttyUSB0?baud=9600&pot=3")
-    assert parsed.options == {"baud": "9600", "pot": "3"} and parsed.where == "serial:///dev/ttyUSB0"
+    assert parsed.options == {"baud": "9600", "pot": "3"}
+    assert parsed.where == "serial:///dev/ttyUSB0"
 
 
 # -- the seed: the URL's, or --seed, never a default over an explicit URL option; what was used is recorded -------
@@ -159,7 +162,8 @@ def test_collect_on_a_replay_is_refused_before_any_reading(tmp_path, capsys):
     out = tmp_path / "d.parquet"
     assert main(["collect", "thesis-6.1", "--backend", f"replay://{log}", "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "cannot collect a load protocol on it" in err and "EOFError" not in err
+    assert "cannot collect a load protocol on it" in err
+    assert "EOFError" not in err
     assert list(tmp_path.iterdir()) == [log]  # no journal, no dataset
 
 
@@ -195,4 +199,5 @@ def test_run_on_a_board_with_no_gauge_source_says_so(tmp_path, capsys):
     argv = ["run", "--backend", "serial://loop://", "--rotation-map", str(cal), "--json"]
     assert main(argv) == 2
     doc = json.loads(capsys.readouterr().out)
-    assert doc["error_type"] == "RigError" and "no gauge source configured" in doc["error"]
+    assert doc["error_type"] == "RigError"
+    assert "no gauge source configured" in doc["error"]

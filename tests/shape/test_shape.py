@@ -143,8 +143,10 @@ def test_row_is_json_ready():
     volts = static_gauges_v([0.025], [0.22], [15], orientation="horizontal")
     row = ShapeEstimator(orientation="horizontal").estimate(volts, command=15).row(0, every=10)
     text = json.dumps(row, allow_nan=False)
-    assert row["contact"] is True and len(row["s_m"]) == 28  # every 10 mm and the tip
-    assert abs(row["load_position_from_base_m"] - 0.22) < LOCATE_M and "NaN" not in text
+    assert row["contact"] is True
+    assert len(row["s_m"]) == 28  # every 10 mm and the tip
+    assert abs(row["load_position_from_base_m"] - 0.22) < LOCATE_M
+    assert "NaN" not in text
 
 
 @pytest.mark.parametrize(

@@ -49,7 +49,8 @@ def test_equal_spacing_of_three_is_the_thesis_layout_and_stays_on_the_strip():
 def test_thesis_candidate_rebuilds_the_thesis_rig():
     ps = design_parameter_set(ParameterSet(), THESIS)
     base = RigParams()
-    assert ps.params.geometry == base.geometry and ps.params.sensors == base.sensors
+    assert ps.params.geometry == base.geometry
+    assert ps.params.sensors == base.sensors
     assert ps.params.actuator.deg_per_command == pytest.approx(base.actuator.deg_per_command)
     assert ps.antagonist_pretension_n is None
 
@@ -123,13 +124,15 @@ def test_d_optimal_crowding_at_the_clamp_is_the_cantilevers_not_the_twins():
     starts = [equal] + [sorted(rng.choice(grid.size, 3, replace=False).tolist()) for _ in range(3)]
     chosen, _ = exchange_search(closed, starts)
     np.testing.assert_allclose(grid[chosen], positions, atol=0.0025 + 1e-12)  # within one grid step
-    assert positions[0] == pytest.approx(grid[0]) and positions[2] < 0.5 * length
+    assert positions[0] == pytest.approx(grid[0])
+    assert positions[2] < 0.5 * length
 
 
 def test_candidates_sample_keeps_the_thesis_design():
     settings = DesignSettings(samples=25)
     got = candidates(settings, seed=3)
-    assert len(got) == 25 and any(c.is_thesis for c in got)
+    assert len(got) == 25
+    assert any(c.is_thesis for c in got)
     # and the thesis design's equal-spacing twins, the designs the front is read against
     assert {
         c.gauge_count
@@ -161,7 +164,8 @@ def test_bad_design_tables_are_named(table, expected):
     spec = spec_from_toml(f"[design]\n{table}\n", source="d.toml")
     with pytest.raises(ParameterError) as err:
         DesignSettings.from_spec(spec)
-    assert expected in str(err.value) and "d.toml" in str(err.value)
+    assert expected in str(err.value)
+    assert "d.toml" in str(err.value)
 
 
 def test_small_design_study_marks_the_thesis_on_its_front(tmp_path):
@@ -183,7 +187,8 @@ bayes_samples = 50
     )
     result = run_design(spec, tmp_path, workers=0, progress=False)
     marks = result.marked()
-    assert "thesis layout" in marks and "equal spacing, 3 gauges" in marks
+    assert "thesis layout" in marks
+    assert "equal spacing, 3 gauges" in marks
     obj = result.objective_matrix()
     # the front is exactly the non-dominated designs, and the full bridge dominates the thesis's half bridge
     assert set(result.front.tolist()) == set(pareto_front(obj).tolist())
@@ -193,4 +198,6 @@ bayes_samples = 50
 
 def test_shipped_design_spec_reads():
     settings = DesignSettings.from_spec(load_spec("thesis-design"))
-    assert settings.samples > 0 and 3 in settings.gauge_counts and "full" in settings.bridges
+    assert settings.samples > 0
+    assert 3 in settings.gauge_counts
+    assert "full" in settings.bridges

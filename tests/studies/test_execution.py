@@ -182,8 +182,10 @@ def test_a_worker_dying_mid_task_fails_that_task_only_and_a_rerun_computes_it(tm
     lines = len((out / JOURNAL_NAME).read_text().splitlines())
     sentinel.unlink()
     again = run_sensitivity(dying, out, settings=settings, workers=0, progress=False)
-    assert len((out / JOURNAL_NAME).read_text().splitlines()) == lines + 3 and retry_rows(out) == 0
-    assert not again.failed_rows and not again.refused
+    assert len((out / JOURNAL_NAME).read_text().splitlines()) == lines + 3
+    assert retry_rows(out) == 0
+    assert not again.failed_rows
+    assert not again.refused
     for metric in spec.metrics:
         np.testing.assert_array_equal(again.outputs[metric], ref.outputs[metric])
 
@@ -216,7 +218,8 @@ def test_journal_refuses_other_settings_and_drops_a_cut_line(tmp_path):
     with path.open("a") as fh:
         fh.write('{"row": 2, "val')  # a kill in the middle of a line
     again = Journal(path, {"fingerprint": "aaa"})
-    assert sorted(again.records) == [0, 1] and again.records[1].error == "ValueError: bad"
+    assert sorted(again.records) == [0, 1]
+    assert again.records[1].error == "ValueError: bad"
     assert path.read_text().endswith("}\n")
     with pytest.raises(DataFileError, match="other settings"):
         Journal(path, {"fingerprint": "bbb"})
@@ -255,7 +258,8 @@ def test_unreachable_scheduler_is_one_line(tmp_path, capsys):
         ]
     )
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and "Traceback" not in "\n".join(err)
+    assert code == 2
+    assert "Traceback" not in "\n".join(err)
     assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err[-1]
 
 
@@ -291,7 +295,8 @@ def test_a_study_stopped_by_sigterm_resumes_without_recomputing(tmp_path, worker
     wait_until(lambda: lines(journal) >= 6, proc)
     code, result, err = stop(proc, signal.SIGTERM)
     assert code == 143, err
-    assert result["signal"] == "SIGTERM" and result["error"] == "interrupted by SIGTERM"
+    assert result["signal"] == "SIGTERM"
+    assert result["error"] == "interrupted by SIGTERM"
     before = journal.read_text().splitlines()
     rows_total = len(_evaluations(ref))
     assert 6 <= len(before) < rows_total + 1, "the stop must land mid-study"

@@ -50,7 +50,8 @@ def _edited(line, **changes):
 
 def test_rows_round_trip_with_their_checksums(journal):
     again = Journal(journal, HEADER, design=DESIGN)
-    assert sorted(again.records) == [0, 1, 2, 3] and again.records[1].values == {"m": 2.0}
+    assert sorted(again.records) == [0, 1, 2, 3]
+    assert again.records[1].values == {"m": 2.0}
     assert all(len(json.loads(line)["crc"]) == 8 for line in _lines(journal)[1:])
 
 
@@ -69,7 +70,8 @@ def test_a_tampered_journal_is_refused_naming_file_and_line(journal, tamper, fra
     _write(journal, tamper(_lines(journal)))
     with pytest.raises(DataFileError) as err:
         Journal(journal, HEADER, design=DESIGN)
-    assert str(err.value).startswith(f"{journal}: ") and fragment in str(err.value), str(err.value)
+    assert str(err.value).startswith(f"{journal}: "), str(err.value)
+    assert fragment in str(err.value), str(err.value)
 
 
 def test_a_row_from_another_study_is_refused(journal, tmp_path):
@@ -91,7 +93,8 @@ def test_a_cut_last_line_is_dropped_and_its_row_computed_again(journal):
     lines = _lines(journal)
     _write(journal, [*lines[:-1], lines[-1][:20]], end="")  # a kill in the middle of row 3's line
     again = Journal(journal, HEADER, design=DESIGN)
-    assert sorted(again.records) == [0, 1, 2] and not _done(again, 3)
+    assert sorted(again.records) == [0, 1, 2]
+    assert not _done(again, 3)
     assert journal.read_text().endswith("}\n")
 
 

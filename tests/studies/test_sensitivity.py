@@ -104,7 +104,8 @@ def test_second_order_finds_the_x1_x3_interaction():
     y = np.sin(x[:, 0]) + A * np.sin(x[:, 1]) ** 2 + B * x[:, 2] ** 4 * np.sin(x[:, 0])
     res = sobol_indices(list("abc"), y, True, 100, 0.95, seed=0)
     assert res["S2"][0, 2] == pytest.approx(ST[2], abs=0.06)
-    assert abs(res["S2"][0, 1]) < 0.06 and abs(res["S2"][1, 2]) < 0.06
+    assert abs(res["S2"][0, 1]) < 0.06
+    assert abs(res["S2"][1, 2]) < 0.06
 
 
 def test_failed_rows_are_reported_with_their_parameters_and_block_the_indices(tmp_path, capsys):
@@ -127,12 +128,14 @@ high = 0.26
     result = run_sensitivity(spec, tmp_path, settings=settings, workers=0, progress=False)
     summary = result.summary()
     failed = summary["failed_rows"]
-    assert failed and len(failed) < result.values.shape[0]
+    assert failed
+    assert len(failed) < result.values.shape[0]
     for row in failed:
         p = row["parameters"]
         assert p["geometry.gauge_positions_m[1]"] >= p["geometry.gauge_positions_m[2]"]
         assert "gauge_positions_m" in row["error"]
-    assert "release_wn_rad_s" in result.refused and "release_wn_rad_s" not in result.sobol
+    assert "release_wn_rad_s" in result.refused
+    assert "release_wn_rad_s" not in result.sobol
     assert "not finite" in capsys.readouterr().err
 
 
@@ -160,12 +163,16 @@ def test_unconverged_warning_names_a_command_and_flag_that_exist(ishigami_metric
     from flexdigit.report.ch8_studies import rerun_hint
 
     hint = rerun_hint(True, 16)
-    assert "--n" not in hint and "`flexdigit reproduce` without --fast" in hint
-    assert "--fast" in _flags("reproduce") and "--n" not in _flags("reproduce")
+    assert "--n" not in hint
+    assert "`flexdigit reproduce` without --fast" in hint
+    assert "--fast" in _flags("reproduce")
+    assert "--n" not in _flags("reproduce")
     assert "`flexdigit study sensitivity thesis-tolerances --n 512`" in rerun_hint(False, 128)
     run_sensitivity(spec, tmp_path / "b", settings=settings, workers=0, progress=False, rerun=hint)
     err = capsys.readouterr().err
-    assert "NOT converged" in err and hint in err and "--n" not in err
+    assert "NOT converged" in err
+    assert hint in err
+    assert "--n" not in err
 
 
 def test_figures_carry_the_n_used_and_say_not_converged(ishigami_metric, tmp_path, monkeypatch):
@@ -181,7 +188,8 @@ def test_figures_carry_the_n_used_and_say_not_converged(ishigami_metric, tmp_pat
     figures.sensitivity_figures(result, tmp_path / "figures")
     bars = saved[f"sobol_{ishigami_metric}.png"].axes[0].get_title()
     assert "N = 16 (2 x 8: indices at 8 and 16 compared)" in bars
-    assert "NOT converged: moved" in bars and "between N = 8 and 16" in bars
+    assert "NOT converged: moved" in bars
+    assert "between N = 8 and 16" in bars
     total = saved["sobol_total_map.png"].axes[0]
     assert "1 of 1 metrics NOT converged" in total.get_title()
     assert [t.get_text() for t in total.get_yticklabels()] == [f"{ishigami_metric} (NOT converged)"]

@@ -54,7 +54,8 @@ relative = 0.2
     mu, sd = 0.5629, 0.05 * 0.5629
     np.testing.assert_allclose(zeta.ppf(u), stats.truncnorm.ppf(u, (0.5 - mu) / sd, math.inf, loc=mu, scale=sd))
     np.testing.assert_allclose(beta.ppf(u), beta.nominal * np.exp(0.6 * stats.norm.ppf(u)))
-    assert house.name == "calibration.housing_ei_n_m2[*]" and house.ppf(0.5) == pytest.approx(1.0)
+    assert house.name == "calibration.housing_ei_n_m2[*]"
+    assert house.ppf(0.5) == pytest.approx(1.0)
 
 
 def test_factor_and_element_apply_to_the_rig():
@@ -102,7 +103,8 @@ def test_rows_reusing_sections_equal_rows_built_from_scratch():
                 else:
                     new = value
                 params = dataclasses.replace(params, **{p.section: dataclasses.replace(section, **{p.field: new})})
-        assert ps.params == params and ps.calibration == cal
+        assert ps.params == params
+        assert ps.calibration == cal
     # a refused value is refused every time it comes (an error is never remembered as a section)
     bad = dict(zip(spec.names, spec.values_from_unit(base[:1])[0], strict=True)) | {"material.youngs_modulus_pa": -1}
     for _ in range(2):
@@ -173,7 +175,9 @@ def test_bad_specs_are_refused_naming_file_and_key(case, tmp_path):
     with pytest.raises(ParameterError) as err:
         load_spec(path)
     message = str(err.value)
-    assert expected in message and str(path) in message and "\n" not in message
+    assert expected in message
+    assert str(path) in message
+    assert "\n" not in message
 
 
 def test_cli_refuses_a_bad_spec_in_one_line(tmp_path, capsys):
@@ -181,8 +185,11 @@ def test_cli_refuses_a_bad_spec_in_one_line(tmp_path, capsys):
     path.write_text(BAD["negative stiffness"][0])
     code = main(["study", "sensitivity", str(path), "--out", str(tmp_path / "out"), "--workers", "0"])
     err = capsys.readouterr().err.strip()
-    assert code == 2 and "Traceback" not in err and len(err.splitlines()) == 1
-    assert "cable_stiffness_n_m" in err and str(path) in err
+    assert code == 2
+    assert "Traceback" not in err
+    assert len(err.splitlines()) == 1
+    assert "cable_stiffness_n_m" in err
+    assert str(path) in err
     assert not (tmp_path / "out").exists()
 
 

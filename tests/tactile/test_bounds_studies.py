@@ -24,7 +24,8 @@ def test_zones_follow_the_cantilever(cantilever_model):
     # no moment reaches a gauge beyond the load: clamp..gauge 1 invisible, gauge 1..2 one equation (confounded)
     b = cramer_rao(Cantilever(cantilever_model), [0.03, 0.10, 0.18, 0.26], 0.0125)
     assert b.zone.tolist() == [ZONES[0], ZONES[1], ZONES[2], ZONES[2]]
-    assert np.isinf(b.crlb_m[:2]).all() and np.isfinite(b.crlb_known_mass_m[1])
+    assert np.isinf(b.crlb_m[:2]).all()
+    assert np.isfinite(b.crlb_known_mass_m[1])
 
 
 def test_crlb_matches_closed_form(cantilever_model):
@@ -81,7 +82,8 @@ def test_tare_zeroes_each_test_on_its_no_load_readings(tmp_path, make_rig):
     for test in (0, 1):
         zero = (ds["test"] == test) & (ds["load_kg"] == 0)
         np.testing.assert_allclose(tared.gauges_v[zero].mean(axis=0), 0.0, atol=1e-12)
-    assert np.all(since >= 0) and since[ds["load_kg"] > 0].min() > 0
+    assert np.all(since >= 0)
+    assert since[ds["load_kg"] > 0].min() > 0
 
 
 def test_known_load_set_inversion_recovers_the_load(cantilever_model):
@@ -202,7 +204,8 @@ def test_bayes_contact_error_is_the_gaussian_tail():
     model = OneGauge(slope=1.0, sigma=0.01)
     lim = protocol_limits(model, [0.0, 0.2], [0.0, 0.1], [-1, -1], samples=40000, seed=1)
     assert lim.contact_error == pytest.approx([norm.cdf(-1.0)] * 2, abs=0.006)
-    assert np.isnan(lim.position_mse_m2[0]) and lim.position_mse_m2[1] == 0.0  # one loaded setting: no doubt
+    assert np.isnan(lim.position_mse_m2[0])
+    assert lim.position_mse_m2[1] == 0.0  # one loaded setting: no doubt
 
 
 def test_bayes_position_error_matches_numerical_integration():
@@ -251,7 +254,9 @@ def test_identifiability_map_zones_and_scaling_on_the_cantilever(cantilever_mode
     gauges = np.array([0.045, 0.135, 0.225])  # table 3.5, the cantilever's gauges
     out = identifiability_map(Cantilever(cantilever_model), [0.0125, 0.025], [RELAXED], 0.27, points=109)
     a = out["position_from_base_m"]
-    assert a[0] == 0.0 and a[-1] == pytest.approx(0.27) and len(out["cases"]) == 2
+    assert a[0] == 0.0
+    assert a[-1] == pytest.approx(0.27)
+    assert len(out["cases"]) == 2
     light, heavy = out["cases"]
     # zones change exactly at the gauges (closed form: a load bends only the gauges between it and the clamp)
     off = np.min(np.abs(a[:, None] - gauges[:2]), axis=1) > 0.003
@@ -278,5 +283,6 @@ def test_strategies_on_the_cantilever_err_only_where_no_gauge_bends(tmp_path, ma
     for s in scores:
         assert 1 - ambiguous / len(test) <= s.contact_accuracy <= best_possible, s
     parallel = scores[0]
-    assert parallel.position_corr2 > 0.99 and parallel.position_rmse_m < 0.005
+    assert parallel.position_corr2 > 0.99
+    assert parallel.position_rmse_m < 0.005
     assert scores[2].position_corr2 > 0.99  # cascaded: the thesis feared compounding errors; none to compound here

@@ -46,8 +46,10 @@ def test_a_stopped_collection_resumes_to_the_same_dataset(tmp_path, reference, s
     exit_code, result, err = stop(proc, signum)
     name = signal.Signals(signum).name
     assert exit_code == code, err
-    assert result["signal"] == name and result["error"] == f"interrupted by {name}"
-    assert not out.exists() and journal_path(out).exists()  # no dataset yet: the journal, for the rerun
+    assert result["signal"] == name
+    assert result["error"] == f"interrupted by {name}"
+    assert not out.exists()
+    assert journal_path(out).exists()  # no dataset yet: the journal, for the rerun
     assert sorted(p.name for p in tmp_path.iterdir()) == [journal_path(out).name]  # no temporary file
     done = subprocess.run([sys.executable, "-m", "flexdigit.cli", *map(str, argv)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
@@ -72,7 +74,8 @@ def test_a_stopped_collection_closes_its_recording_naming_the_signal(tmp_path, r
         reader = make_reader(fh)
         (stopped,) = [m.metadata for m in reader.iter_metadata() if m.name == "flexdigit.stop"]
         assert reader.get_summary().statistics.message_count > READINGS_BEFORE_STOP
-    assert stopped["stop"] == "interrupted" and stopped["signal"] == "SIGTERM"
+    assert stopped["stop"] == "interrupted"
+    assert stopped["signal"] == "SIGTERM"
 
 
 #: Rows of the foreign file: enough for the import to run some seconds, within the readers' row limit

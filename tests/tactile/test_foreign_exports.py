@@ -106,7 +106,8 @@ def test_matlab_percent_comments_are_skipped(tmp_path, capsys):
 
 def _one_line_error(capsys) -> str:
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("flexdigit dataset: error: "), err
+    assert len(err) == 1, err
+    assert err[0].startswith("flexdigit dataset: error: "), err
     return err[0]
 
 

@@ -91,13 +91,15 @@ def test_foreign_file_goes_import_train_predict_with_no_python(tmp_path, capsys)
     ds_path = tmp_path / "lab.parquet"
     assert main(["dataset", "import", str(src), "--out", str(ds_path), *FLAGS, "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
-    assert report["samples"] == len(rows) and report["delimiter"] == ";"
+    assert report["samples"] == len(rows)
+    assert report["delimiter"] == ";"
     assert report["tests"] == 2  # one per no-load block
     ds = load_dataset(ds_path)
     np.testing.assert_allclose(ds.gauges_v, [t[0] for t in truth], rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(ds["load_kg"], [t[1] for t in truth], rtol=1e-12)
     np.testing.assert_allclose(ds["position_from_tip_m"], [t[2] for t in truth], atol=1e-9)
-    assert set(ds["command"]) == {RELAXED} and not ds.protocol.actuated
+    assert set(ds["command"]) == {RELAXED}
+    assert not ds.protocol.actuated
     model = tmp_path / "pos.json"
     train = ["train", str(ds_path), "--target", "position", "--hidden", "8", "--tol", "1e-7", "--model", str(model)]
     assert main([*train, "--json"]) == 0
@@ -129,7 +131,8 @@ def test_a_column_map_toml_with_flags_winning_and_an_actuated_file(tmp_path, cap
     assert main(["dataset", "import", str(src), "--map", str(cmap), "--position-unit", "cm", "--out", str(out)]) == 0
     capsys.readouterr()
     ds = load_dataset(out)
-    assert ds.protocol.name == "bench rig" and ds.protocol.actuation_commands == (0, 20)
+    assert ds.protocol.name == "bench rig"
+    assert ds.protocol.actuation_commands == (0, 20)
     assert ds.protocol.positions_from_tip_m == (0.02, 0.1, 0.18)  # --position-unit cm won over the map's mm
     assert ds["repetition"].tolist() == [r[6] for r in rows]
     assert ds["test"].tolist() == [0] * 12 + [1] * 12  # a new test when the command changes
@@ -175,7 +178,8 @@ GOOD = [1.0, 2.0, 3.0, 25.0, 100.0]
 def test_bad_mapped_files_give_one_line_errors(tmp_path, capsys, header, rows, extra, message):
     assert _bad_case(tmp_path, header, rows, extra) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("flexdigit dataset: error: "), err
+    assert len(err) == 1, err
+    assert err[0].startswith("flexdigit dataset: error: "), err
     assert re.search(message, err[0]), err[0]
     assert not (tmp_path / "o.parquet").exists()
 
@@ -206,7 +210,8 @@ def test_map_and_flag_mistakes_are_named(tmp_path, capsys):
     existing = tmp_path / "o.parquet"
     existing.write_text("keep")
     assert main(["dataset", "import", str(src), *out, "--gauges", "a,b,c", "--load", "m", "--position", "x"]) == 2
-    assert "exists; pass --force" in capsys.readouterr().err and existing.read_text() == "keep"
+    assert "exists; pass --force" in capsys.readouterr().err
+    assert existing.read_text() == "keep"
 
 
 # ------------------------------------------------------------------------------------------- property test
@@ -300,4 +305,5 @@ def test_every_estimator_and_study_runs_on_an_imported_dataset(tmp_path):
     assert np.isfinite(loc.crlb_rms_identifiable_m)  # no time column: no drift, not NaN
     assert loc.position_rmse_m["Gaussian process"] < 0.02
     scores = compare_strategies(ds, hidden=6, tol=1e-5, epochs=5)
-    assert len(scores) == 3 and all(np.isfinite(s.position_corr2) for s in scores)
+    assert len(scores) == 3
+    assert all(np.isfinite(s.position_corr2) for s in scores)

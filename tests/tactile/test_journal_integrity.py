@@ -46,7 +46,8 @@ def test_every_reading_carries_its_checksum(stopped):
     _, _, lines = stopped
     for line in lines[1:]:
         row = json.loads(line)
-        assert row["crc"] == row_checksum(row) and len(row["crc"]) == 8
+        assert row["crc"] == row_checksum(row)
+        assert len(row["crc"]) == 8
 
 
 def _edit(lines, i, **changes):
@@ -75,8 +76,10 @@ def test_a_tampered_journal_is_refused_naming_file_and_line(stopped, tamper, fra
     before = path.read_bytes()
     with pytest.raises(DataFileError) as err:
         _collect(out)
-    assert str(err.value).startswith(f"{path}: ") and fragment in str(err.value), str(err.value)
-    assert path.read_bytes() == before and not out.exists()  # nothing taken, nothing written
+    assert str(err.value).startswith(f"{path}: "), str(err.value)
+    assert fragment in str(err.value), str(err.value)
+    assert path.read_bytes() == before
+    assert not out.exists()  # nothing taken, nothing written
 
 
 def _forged(line, **changes):

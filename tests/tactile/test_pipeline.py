@@ -59,7 +59,8 @@ def test_same_seed_same_numbers(cantilever_model):
     r1 = run_pipeline(x, y, seed=5, **kw)
     r2 = run_pipeline(x, y, seed=5, **kw)
     r3 = run_pipeline(x, y, seed=6, **kw)
-    assert r1.corr2 == r2.corr2 and np.array_equal(r1.y_pred, r2.y_pred)
+    assert r1.corr2 == r2.corr2
+    assert np.array_equal(r1.y_pred, r2.y_pred)
     assert [p.val_mse for p in r1.coarse] == [p.val_mse for p in r2.coarse]
     assert r1.corr2 != r3.corr2
     # the sweep picks the size with the lowest validation error among those it tried

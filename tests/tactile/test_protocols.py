@@ -19,7 +19,8 @@ def test_table_6_1_counts_match_thesis():
     assert np.sum(plan["load_kg"] == 0) == 75  # a no-load reading set at the start of every test
     assert np.all(plan["command"] == RELAXED)
     # first test starts with its no-load readings, then position 1 (the tip, 270 mm from the base)
-    assert plan["load_kg"][0] == 0 and plan["position_index"][25] == 1
+    assert plan["load_kg"][0] == 0
+    assert plan["position_index"][25] == 1
     assert plan["position_from_base_m"][25] == pytest.approx(0.270)
 
 
@@ -51,7 +52,8 @@ def test_user_protocol_and_clear_errors(tmp_path):
     with pytest.raises(ParameterError, match="must lie on the digit"):
         protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [30]\n').plan(0.27)
     # re-hanging before every repetition: the thesis protocols do (7.1), user protocols choose, with a bool
-    assert load_protocol("thesis-7.1").rehang and not p.rehang
+    assert load_protocol("thesis-7.1").rehang
+    assert not p.rehang
     with pytest.raises(ParameterError, match="'rehang' parameter .* true or false. Got 'yes'"):
         protocol_from_toml('name = "x"\nloads_g = [1]\npositions_from_tip_cm = [1]\nrehang = "yes"\n')
 

@@ -78,7 +78,8 @@ def test_a_stopped_collection_resumes_to_the_uninterrupted_dataset(tmp_path, ref
     out = tmp_path / "d.parquet"
     for _ in range(3):  # three stops at 7, 14 and 21 readings, then to the end
         partial = _collect_on_twin(out, stop_after=7)
-        assert len(partial) in (7, 14, 21) and journal_path(out).exists()
+        assert len(partial) in (7, 14, 21)
+        assert journal_path(out).exists()
     _assert_same_dataset(_collect_on_twin(out), ref)
     assert not journal_path(out).exists()
 
@@ -106,7 +107,8 @@ def test_kill_9_at_random_points_then_resume_gives_the_same_dataset(tmp_path, re
         else:
             resumed = _collect_on_twin(out)
         _assert_same_dataset(resumed, ref)
-        assert not journal_path(out).exists() and len(list(tmp_path.glob(f".t{trial}.parquet.*"))) <= 1
+        assert not journal_path(out).exists()
+        assert len(list(tmp_path.glob(f".t{trial}.parquet.*"))) <= 1
     assert kills_with_readings >= TRIALS // 3  # most kills landed mid-collection, not before or after it
 
 
@@ -159,7 +161,8 @@ def test_cli_resume_with_other_settings_is_refused_and_settle_0_is_recorded(tmp_
     out = tmp_path / "d.parquet"
     base = ["collect", str(protocol), "--out", str(out), "--no-progress"]
     assert main([*base, "--settle", "-1"]) == 2
-    assert not journal_path(out).exists() and not out.exists()  # refused before the first reading
+    assert not journal_path(out).exists()
+    assert not out.exists()  # refused before the first reading
     from flexdigit.rig.base import open_rig
     from flexdigit.tactile.runner import collect as collect_
     from flexdigit.tactile.runner import sim_options
@@ -174,7 +177,9 @@ def test_cli_resume_with_other_settings_is_refused_and_settle_0_is_recorded(tmp_
     assert "settle_s=0.0; this run has settle_s=1.0" in json.loads(capsys.readouterr().out)["error"]
     assert main([*base, "--seed", "3", "--settle", "0", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["resumed"] and doc["settings"]["settle_s"] == 0.0 and doc["settings"]["rig"]["seed"] == 3
+    assert doc["resumed"]
+    assert doc["settings"]["settle_s"] == 0.0
+    assert doc["settings"]["rig"]["seed"] == 3
     assert load_dataset(out).meta["settings"]["settle_s"] == 0.0
 
 
@@ -196,9 +201,11 @@ def test_existing_outputs_and_missing_directories_are_refused_before_any_reading
     out.write_bytes(b"precious")
     with pytest.raises(OutputExistsError):
         _collect_on_twin(out)
-    assert out.read_bytes() == b"precious" and not journal_path(out).exists()
+    assert out.read_bytes() == b"precious"
+    assert not journal_path(out).exists()
     assert main(["collect", "thesis-6.1", "--out", str(tmp_path / "no" / "d.parquet")]) == 2
-    assert "the directory" in capsys.readouterr().err and not (tmp_path / "no").exists()
+    assert "the directory" in capsys.readouterr().err
+    assert not (tmp_path / "no").exists()
 
 
 def test_a_stop_between_writing_the_dataset_and_removing_the_journal_is_finished(tmp_path, reference, monkeypatch):
@@ -216,7 +223,8 @@ def test_a_stop_between_writing_the_dataset_and_removing_the_journal_is_finished
     with pytest.raises(KeyboardInterrupt):
         _collect_on_twin(out)
     monkeypatch.setattr(runner, "save_dataset", save)
-    assert out.exists() and journal_path(out).exists()
+    assert out.exists()
+    assert journal_path(out).exists()
     _assert_same_dataset(_collect_on_twin(out), ref)  # finished: nothing collected again, the journal removed
     assert not journal_path(out).exists()
     # a dataset beside the journal of another, unfinished run is not silently taken for it

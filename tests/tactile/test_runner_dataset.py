@@ -23,7 +23,8 @@ SMALL = Protocol(
 def test_collect_writes_parquet_matching_closed_form(tmp_path, make_rig, cantilever_model):
     out = tmp_path / "d.parquet"
     ds = collect(SMALL, make_rig(seed=1), out)
-    assert out.exists() and not journal_path(out).exists()
+    assert out.exists()
+    assert not journal_path(out).exists()
     assert len(ds) == SMALL.sample_count == 2 * (3 + 3 * 4)
     back = load_dataset(out, SMALL)
     np.testing.assert_array_equal(back.gauges_v, ds.gauges_v)

@@ -85,7 +85,8 @@ def test_short_training_follows_the_reference_step_by_step(hidden, tol, epochs):
     xv, tv = _data(60, 3)
     net = MLP(hidden=hidden, tol=tol, epochs=epochs, iterations_per_epoch=13, random_state=hidden).fit(x, t, xv, tv)
     best, best_epoch, train, val, converged = _reference_fit(x, t, xv, tv, hidden, tol, epochs, 13, hidden)
-    assert net.best_epoch_ == best_epoch and net.converged_ == converged
+    assert net.best_epoch_ == best_epoch
+    assert net.converged_ == converged
     np.testing.assert_allclose(net.weights_, best, rtol=SHORT_TRAINING_RTOL, atol=SHORT_TRAINING_RTOL)
     np.testing.assert_allclose(net.train_error_, train, rtol=SHORT_TRAINING_RTOL)
     np.testing.assert_allclose(net.val_error_, val, rtol=SHORT_TRAINING_RTOL)
@@ -96,7 +97,8 @@ def test_a_large_tolerance_stops_training_early_as_netlab_does():
     x, t = _data(200, 5)
     net = MLP(hidden=5, tol=1e-1, epochs=50, iterations_per_epoch=50, random_state=0).fit(x, t)
     best, best_epoch, train, _, converged = _reference_fit(x, t, x, t, 5, 1e-1, 50, 50, 0)
-    assert net.converged_ and converged
+    assert net.converged_
+    assert converged
     assert len(net.train_error_) == len(train) < 51
     assert net.n_iter_ == 50 * (len(train) - 1)
 
@@ -109,7 +111,8 @@ def test_full_training_learns_as_the_reference_does():
     net = MLP(hidden=10, tol=1e-7, random_state=1).fit(x, t, xv, tv)
     *_, train, val, _ = _reference_fit(x, t, xv, tv, 10, 1e-7, 50, 50, 1)
     noise_floor = 0.05**2
-    assert net.val_error_[net.best_epoch_] < 1.5 * noise_floor and val.min() < 1.5 * noise_floor
+    assert net.val_error_[net.best_epoch_] < 1.5 * noise_floor
+    assert val.min() < 1.5 * noise_floor
     assert net.val_error_[net.best_epoch_] == pytest.approx(val.min(), rel=0.1)
 
 

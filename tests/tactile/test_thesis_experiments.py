@@ -27,4 +27,5 @@ def test_the_compiled_twin_reads_what_the_numpy_twin_reads(tmp_path, name, seed)
     assert a.columns.keys() == b.columns.keys()
     for column in a.columns:  # the gauges, the servo, the settings, the times
         assert np.array_equal(a[column], b[column], equal_nan=a[column].dtype.kind == "f"), column
-    assert a.meta["settings"]["rig"]["compiled"] and "compiled" not in b.meta["settings"]["rig"]
+    assert a.meta["settings"]["rig"]["compiled"]
+    assert "compiled" not in b.meta["settings"]["rig"]

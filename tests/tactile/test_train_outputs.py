@@ -23,7 +23,8 @@ def test_train_refuses_to_overwrite_a_model_before_training(tmp_path, capsys, ma
     model.write_text("precious")
     argv = ["train", str(data), "--hidden", "3", "--tol", "1e-4", "--model", str(model), "--json"]
     assert main(argv) == 2
-    assert "pass --force" in _error(capsys)["error"] and model.read_text() == "precious"
+    assert "pass --force" in _error(capsys)["error"]
+    assert model.read_text() == "precious"
     assert main([*argv, "--force"]) == 0
     assert json.loads(model.read_text())["hidden"] == 3
 
@@ -37,7 +38,8 @@ def test_zero_is_a_value_for_train(flag, tmp_path, capsys, make_rig):
     value = "1e-4" if other == "--tol" else "3"
     assert main(["train", str(data), flag, "0", other, value, "--json"]) == 2
     error = _error(capsys)["error"]
-    assert f"'{flag}' parameter of flexdigit train" in error and "Got 0" in error  # refused by its declared range
+    assert f"'{flag}' parameter of flexdigit train" in error
+    assert "Got 0" in error  # refused by its declared range
 
 
 @pytest.mark.parametrize(
@@ -65,7 +67,8 @@ def test_a_model_file_with_a_bad_field_names_it(field, value, culprit, tmp_path,
     capsys.readouterr()
     assert main(["predict", str(model), str(data), "--json"]) == 2
     error = _error(capsys)
-    assert error["error_type"] == "DataFileError" and error["error"].startswith(str(model))
+    assert error["error_type"] == "DataFileError"
+    assert error["error"].startswith(str(model))
     import re
 
     assert re.search(culprit, error["error"]), error["error"]

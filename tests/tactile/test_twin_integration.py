@@ -19,7 +19,8 @@ def test_sim_rig_collection_is_seeded_and_sees_the_load(tmp_path):
     c = collect_on_twin(TINY, tmp_path / "c.parquet", seed=4)
     np.testing.assert_array_equal(a.gauges_v, b.gauges_v)  # same seed, same numbers: one path, one machine
     assert not np.array_equal(a.gauges_v, c.gauges_v)
-    assert a.meta["rig"]["url"] == "sim" and "orientation='horizontal'" in a.meta["rig"]["repr"]
+    assert a.meta["rig"]["url"] == "sim"
+    assert "orientation='horizontal'" in a.meta["rig"]["repr"]
     # 25 g at the tip of a horizontal cantilever bends gauge 1 far beyond the twin's ~2 mV noise
     tip = a["position_index"] == 1
     assert abs(a.gauges_v[tip, 0].mean() - a.gauges_v[a["load_kg"] == 0, 0].mean()) > 0.02
@@ -30,8 +31,10 @@ def test_twin_cannot_see_a_load_before_gauge_1():
     # with the cable detached no moment reaches a gauge, so nothing can locate it (the thesis does not say so)
     model = TwinGaugeModel()
     b = cramer_rao(model, [0.03, 0.20, 0.26], 0.0125)
-    assert b.zone[0] == ZONES[0] and np.isinf(b.crlb_known_mass_m[0])
-    assert b.zone[2] == ZONES[2] and b.crlb_known_mass_m[2] < 0.01
+    assert b.zone[0] == ZONES[0]
+    assert np.isinf(b.crlb_known_mass_m[0])
+    assert b.zone[2] == ZONES[2]
+    assert b.crlb_known_mass_m[2] < 0.01
 
 
 def test_thesis_corr2_on_the_static_twin_is_near_the_printed_figure():

@@ -35,7 +35,8 @@ def test_rao2021_is_tdcr_modelings_example():
     b = robot.backbone
     assert robot.length_m == pytest.approx(0.4)
     assert [s.disk_count for s in robot.segments] == [10, 10]
-    assert b.youngs_modulus_pa == 54e9 and b.radius_m == 0.7e-3
+    assert b.youngs_modulus_pa == 54e9
+    assert b.radius_m == 0.7e-3
     assert b.shear_modulus_pa == pytest.approx(54e9 / 2.6)  # tdcr-modeling: G = E / (2 * 1.3)
     i = math.pi * 0.7e-3**4 / 4
     np.testing.assert_allclose(b.bending_torsion_stiffness, [54e9 * i, 54e9 * i, 2 * 54e9 / 2.6 * i])
@@ -78,7 +79,8 @@ def test_bad_robot_files_are_refused_in_one_line(tmp_path, text, names):
     with pytest.raises(ParameterError) as info:
         load_robot(path)
     message = str(info.value)
-    assert "\n" not in message and str(path) in message
+    assert "\n" not in message
+    assert str(path) in message
     for name in names:
         assert name in message
 

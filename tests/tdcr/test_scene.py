@@ -67,7 +67,8 @@ def test_a_static_recording_validates_and_draws_the_solution(tmp_path):
     sol = solve_statics(robot, TENSIONS, tip_force_n=tip_force)
     path = write_recording(tmp_path / "rao.mcap", robot, sol, tensions_n=TENSIONS, tip_force_n=tip_force)
     _, topics = _read(path)
-    assert len(topics["/tdcr/scene"]) == 1 and len(topics["/tdcr/tip"]) == 1
+    assert len(topics["/tdcr/scene"]) == 1
+    assert len(topics["/tdcr/tip"]) == 1
     _check_scene(topics["/tdcr/scene"])
     update = topics["/tdcr/scene"][0][3]
     entities = {e["id"]: e for e in update["entities"]}
@@ -123,7 +124,9 @@ def test_the_cli_records_and_refuses_to_overwrite(tmp_path, capsys):
     before = out.read_bytes()
     code = main(["tdcr", "statics", "rao2021", "--tension-n", "0,0,0,0,0,0", "--record", str(out)])
     err = capsys.readouterr().err
-    assert code != 0 and "exists" in err and len(err.strip().splitlines()) == 1
+    assert code != 0
+    assert "exists" in err
+    assert len(err.strip().splitlines()) == 1
     assert out.read_bytes() == before
     assert main(["tdcr", "statics", "rao2021", "--tension-n", "0,0,0,0,0,0", "--record", str(out), "--force"]) == 0
     _, topics = _read(out)
@@ -143,7 +146,8 @@ def test_the_validation_can_fail():
     stray["entities"][0]["lines"][0]["width"] = 1.0
     for message in (bad_type, bad_color):
         assert not VALIDATORS[0].is_valid(message)
-    assert VALIDATORS[0].is_valid(stray) and not VALIDATORS[1].is_valid(stray)
+    assert VALIDATORS[0].is_valid(stray)
+    assert not VALIDATORS[1].is_valid(stray)
 
 
 def test_the_dynamics_cli_records_every_step(tmp_path, capsys):

@@ -36,7 +36,8 @@ def _loads(seed=0):
 
 def test_sensing_is_exported():
     for name in ("GaugeLayout", "ShapeEstimate", "gauge_layout", "gauge_strains", "estimate_shape"):
-        assert name in tdcr.__all__ and getattr(tdcr, name) is not None
+        assert name in tdcr.__all__
+        assert getattr(tdcr, name) is not None
 
 
 def test_readings_of_a_pure_tendon_moment_match_the_closed_form():

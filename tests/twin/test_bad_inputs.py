@@ -43,8 +43,10 @@ def test_several_bad_commands_are_listed_distinct_and_capped():
 
 def test_load_position_beyond_the_tip_or_behind_the_clamp():
     msg = _message(lambda: ex.static_load_test([0.025], [0.05, -0.02]))
-    assert "'positions_from_tip_m'" in msg and "inside [0, 0.27) m from the tip" in msg
-    assert "beyond the tip" in msg and msg.endswith("Got -0.02 instead.")
+    assert "'positions_from_tip_m'" in msg
+    assert "inside [0, 0.27) m from the tip" in msg
+    assert "beyond the tip" in msg
+    assert msg.endswith("Got -0.02 instead.")
     msg = _message(lambda: ex.static_load_test([0.025], [0.30]))
     assert msg.endswith("Got 0.3 instead.")
 
@@ -52,21 +54,28 @@ def test_load_position_beyond_the_tip_or_behind_the_clamp():
 @pytest.mark.parametrize(("loads", "shown"), [([0.025, -0.01], "-0.01"), ([float("nan"), 0.025], "nan")])
 def test_negative_or_nan_mass(loads, shown):
     msg = _message(lambda: ex.static_load_test(loads, [0.05]))
-    assert "'loads_kg'" in msg and "inside (0, inf) kg" in msg and msg.endswith(f"Got {shown} instead.")
+    assert "'loads_kg'" in msg
+    assert "inside (0, inf) kg" in msg
+    assert msg.endswith(f"Got {shown} instead.")
 
 
 def test_static_gauges_v_quotes_a_repeated_bad_command_once():
     msg = _message(lambda: static_gauges_v(np.full(500, 0.01), np.full(500, 0.1), np.full(500, 300)))
-    assert "inside [0, 254]" in msg and msg.endswith("Got 300 instead.")
+    assert "inside [0, 254]" in msg
+    assert msg.endswith("Got 300 instead.")
 
 
 # ------------------------------------------------------------------------------------------------------ CLI
 def test_cli_out_of_range_command_is_one_short_line(tmp_path, capsys):
     assert main(["simulate", "load", "--commands", "300", "--out", str(tmp_path / "x.parquet")]) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "Traceback" not in err
-    assert "'--commands'" in err and "integer inside [0, 254]" in err and "Got 300 instead." in err
-    assert "static_gauges_v" not in err and err.count("300") == 1
+    assert len(err.splitlines()) == 1
+    assert "Traceback" not in err
+    assert "'--commands'" in err
+    assert "integer inside [0, 254]" in err
+    assert "Got 300 instead." in err
+    assert "static_gauges_v" not in err
+    assert err.count("300") == 1
     assert not (tmp_path / "x.parquet").exists()
 
 
@@ -81,7 +90,9 @@ def test_cli_out_of_range_command_is_one_short_line(tmp_path, capsys):
 def test_cli_load_options_are_checked_in_the_users_units(tmp_path, capsys, option, value, expected, shown):
     assert main(["simulate", "load", option, value, "--out", str(tmp_path / "x.parquet")]) == 2
     err = capsys.readouterr().err.strip()
-    assert f"'{option}'" in err and expected in err and f"Got {shown} instead." in err
+    assert f"'{option}'" in err
+    assert expected in err
+    assert f"Got {shown} instead." in err
 
 
 def test_cli_empty_command_range(tmp_path, capsys):
@@ -98,7 +109,9 @@ def chain():
 def test_solve_static_rejects_a_load_beyond_the_tip(chain):
     msg = _message(lambda: chain.solve_static([[0.30]], [[[0.0, 1e-3]]]))
     assert "'load_s_m' parameter of Chain.solve_static" in msg
-    assert "inside [0, 0.24] m" in msg and "beyond the tip" in msg and msg.endswith("Got 0.3 instead.")
+    assert "inside [0, 0.24] m" in msg
+    assert "beyond the tip" in msg
+    assert msg.endswith("Got 0.3 instead.")
     # a batch: only the culprit is quoted
     s = np.full((1000, 1), 0.1)
     s[17] = -0.01
@@ -126,7 +139,8 @@ def test_solve_static_rejects_mismatched_batches(chain):
     msg = _message(lambda: chain.solve_static(tip_force_n=[[0.0, 1e-3]] * 3, tip_moment_nm=[0.0, 1e-4]))
     assert "3 in 'tip_force_n', 2 in 'tip_moment_nm'" in msg
     msg = _message(lambda: chain.solve_static(load_s_m=[[0.1]]))
-    assert "go together" in msg and "'load_s_m'" in msg
+    assert "go together" in msg
+    assert "'load_s_m'" in msg
 
 
 def test_solve_static_still_broadcasts_one_case_against_many(chain):

@@ -50,7 +50,8 @@ def test_steps_like_n_scalar_twins(orientation):
         ref = _scalar_run(p, c, commands, steps, orientation=orientation)
         np.testing.assert_allclose(got[:, i], ref, atol=PSI_ATOL, rtol=0)
     # some members needed halved steps, alone
-    assert batch.substeps.max() > steps and batch.substeps.min() < batch.substeps.max()
+    assert batch.substeps.max() > steps
+    assert batch.substeps.min() < batch.substeps.max()
 
 
 def test_statics_and_modes_match_each_chain():
@@ -64,7 +65,8 @@ def test_statics_and_modes_match_each_chain():
     wn, zeta = batch.linear_modes()
     for i, ch in enumerate(chains):
         w, z = ch.linear_modes()
-        assert wn[i] == pytest.approx(w[0], rel=1e-10) and zeta[i] == pytest.approx(z[0], rel=1e-8)
+        assert wn[i] == pytest.approx(w[0], rel=1e-10)
+        assert zeta[i] == pytest.approx(z[0], rel=1e-8)
 
 
 def _seeded_rigs(count, seed):

@@ -44,7 +44,8 @@ def test_round_trip_keeps_every_value_and_the_fit_record(tmp_path):
     path = save_calibration(cal, tmp_path / "cal.toml", fit)
     assert load_calibration(path) == cal
     again, record = load_calibration_record(path)
-    assert again == cal and record["residuals"][0]["twin"] == 1.01
+    assert again == cal
+    assert record["residuals"][0]["twin"] == 1.01
 
 
 def test_a_hand_written_complete_file_loads(tmp_path):

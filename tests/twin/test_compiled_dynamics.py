@@ -60,7 +60,8 @@ def _drive(numpy_twin, compiled_twin, seed, events=60):
 )
 def test_compiled_steps_like_the_numpy_twin(options):
     numpy_twin, compiled_twin = _pair(**options)
-    assert compiled_twin.dynamics.compiled and not numpy_twin.dynamics.compiled
+    assert compiled_twin.dynamics.compiled
+    assert not numpy_twin.dynamics.compiled
     worst_psi, worst_v = _drive(numpy_twin, compiled_twin, seed=12)
     assert worst_psi <= PSI_ATOL
     assert worst_v <= VOLTS_ATOL
@@ -111,20 +112,23 @@ def test_noisy_readings_match_where_the_adc_does_not_round_across_a_level():
 def test_paced_backend_steps_compiled_by_default_and_virtual_time_does_not():
     paced = open_rig("sim+paced", seed=0)
     try:
-        assert paced.compiled and paced.settings()["compiled"] is True
+        assert paced.compiled
+        assert paced.settings()["compiled"] is True
     finally:
         paced.close()
     virtual = open_rig("sim", seed=0)
     try:
         # the report's runs: numpy, bit for bit, and the settings journals were written with (no new key)
-        assert not virtual.compiled and not virtual.twin.dynamics.compiled
+        assert not virtual.compiled
+        assert not virtual.twin.dynamics.compiled
         assert "compiled" not in virtual.settings()
     finally:
         virtual.close()
     for url, expected in (("sim+paced?compiled=false", False), ("sim?compiled=true", True)):
         rig = open_rig(url, seed=0)
         try:
-            assert rig.compiled is expected and rig.twin.dynamics.compiled is expected, url
+            assert rig.compiled is expected, url
+            assert rig.twin.dynamics.compiled is expected, url
         finally:
             rig.close()
 

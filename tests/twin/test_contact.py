@@ -157,7 +157,8 @@ def test_beam_on_elastic_foundation_matches_hetenyi():
         chain, tissue=Tissue(-0.01, 0.3, 0.0, k, side="opposite"), load_s_m=[[L_STRIP]], load_force_ab_n=[[[0, -p]]]
     )
     exact = hetenyi_tip_deflection(p, L_STRIP, EI_STRIP, k)
-    assert exact > 0 and -sol.tip_m[0, 1] == pytest.approx(exact, rel=FOUNDATION_RTOL)
+    assert exact > 0
+    assert -sol.tip_m[0, 1] == pytest.approx(exact, rel=FOUNDATION_RTOL)
     bare = p * L_STRIP**3 / (3 * EI_STRIP)
     assert exact < 0.8 * bare  # the foundation carries a real share of the load
 
@@ -259,7 +260,8 @@ def test_set_tissue_settle_starts_at_rest_in_contact():
     twin.set_tissue(Tissue(0.24, 0.30, 0.02, 5000.0), settle=True)
     force0, _, _ = twin.contact_state()
     twin.advance(1.0)
-    assert force0 < -0.1 and twin.contact_state()[0] == pytest.approx(force0, rel=1e-3)
+    assert force0 < -0.1
+    assert twin.contact_state()[0] == pytest.approx(force0, rel=1e-3)
 
 
 @pytest.mark.parametrize(

@@ -39,7 +39,8 @@ def test_small_deflection_tip_load_matches_pl3_over_3ei():
 def test_tip_load_converges_second_order():
     errors = [abs(tip_load_error(n)) for n in (6, 12, 24, 48)]
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
-    assert np.all(ratios > 3.8) and np.all(ratios < 4.2)  # error ~ h^2
+    assert np.all(ratios > 3.8)
+    assert np.all(ratios < 4.2)  # error ~ h^2
 
 
 @pytest.mark.parametrize("angle_deg", [10.0, 45.0, 90.0])
@@ -100,7 +101,8 @@ def test_frequency_converges_second_order():
     errors = [
         abs(Chain.uniform(L, EI, n, mass_per_length_kg_m=MU).linear_modes()[0][0] / exact - 1) for n in (6, 12, 24)
     ]
-    assert errors[0] / errors[1] > 3.5 and errors[1] / errors[2] > 3.5
+    assert errors[0] / errors[1] > 3.5
+    assert errors[1] / errors[2] > 3.5
 
 
 def test_small_deflection_limit_agrees_with_models_beam():
@@ -189,5 +191,6 @@ def test_unconverged_static_solve_says_so():
         short = chain.solve_static(tip_moment_nm=1.5708 * 0.012 / 0.24, max_iter=2)
     assert not short.converged
     full = chain.solve_static(tip_moment_nm=1.5708 * 0.012 / 0.24)
-    assert full.converged and full.iterations < 80
+    assert full.converged
+    assert full.iterations < 80
     assert abs(full.tip_m[0, 0] - short.tip_m[0, 0]) > 1e-4  # the unconverged answer really is off

@@ -18,7 +18,8 @@ def test_static_load_test_follows_the_thesis_protocol():
     assert t.table.num_rows == 3 * 16 * 25 + 25
     assert set(np.unique(t.column("command"))) == {-1}
     np.testing.assert_allclose(t.column("position_from_base_m") + t.column("position_from_tip_m"), 0.27)
-    assert t.metadata["units"]["gauge1_v"] == "V" and t.metadata["seed"] == 0
+    assert t.metadata["units"]["gauge1_v"] == "V"
+    assert t.metadata["seed"] == 0
 
 
 def test_experiments_are_deterministic_per_seed():
@@ -97,7 +98,8 @@ def test_cli_simulate_writes_a_file_and_reports_json(tmp_path, capsys):
     out = tmp_path / "step.parquet"
     assert main(["simulate", "step", "--out", str(out), "--duration", "0.5", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["experiment"] == "servo_step_test" and data["rows"] == 501
+    assert data["experiment"] == "servo_step_test"
+    assert data["rows"] == 501
     assert ex.TwinRecord.load(out).table.num_rows == 501
     # the potentiometer settles on the params line for command 51 (3.2.4)
     assert data["findings"]["pot_end_v"] == pytest.approx(0.46688 + 51 * (2.4755 - 0.46688) / 254, abs=0.02)
@@ -106,7 +108,8 @@ def test_cli_simulate_writes_a_file_and_reports_json(tmp_path, capsys):
 def test_cli_bad_input_is_one_line_exit_2(tmp_path, capsys):
     assert main(["simulate", "load", "--out", str(tmp_path / "x.parquet"), "--positions-cm", "30"]) == 2
     err = capsys.readouterr().err
-    assert "beyond the tip" in err and "Traceback" not in err
+    assert "beyond the tip" in err
+    assert "Traceback" not in err
     assert main(["simulate", "sweep", "--out", str(tmp_path / "x.csv"), "--commands", "8..x"]) == 2
     assert "--commands" in capsys.readouterr().err
 

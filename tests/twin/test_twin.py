@@ -121,7 +121,8 @@ def test_static_batch_equals_case_by_case_and_accepts_several_loads_per_case():
 
 def test_hanging_weight_bends_the_horizontal_digit_more_the_heavier_it_is():
     v = static_gauges_v([0.0, 0.0125, 0.025], [0.27, 0.27, 0.27], None, adc=False)
-    assert v[1, 0] < v[0, 0] and v[2, 0] < v[1, 0]  # gauge 1: more weight, more negative (bends away from cable)
+    assert v[1, 0] < v[0, 0]
+    assert v[2, 0] < v[1, 0]  # gauge 1: more weight, more negative (bends away from cable)
 
 
 def test_spring_moments_balance_the_weights_in_the_deformed_shape():

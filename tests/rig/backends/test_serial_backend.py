@@ -74,14 +74,17 @@ def board():
 
 def test_commands_reach_the_board_as_frames(board):
     rig = open_rig(f"serial://{board.port}?baud=9600&channel=2", sensor=lambda: (np.zeros(3), math.nan))
-    assert isinstance(rig, SerialRig) and rig.channel == 2 and rig.baud == 9600
+    assert isinstance(rig, SerialRig)
+    assert rig.channel == 2
+    assert rig.baud == 9600
     assert rig.write_command(43) == 43
     assert rig.write_command(300) == 254  # clamped; 255 is never sent
     assert rig.write_command(-7.2) == 0
     rig.close()  # relaxes: equilibrium command 8
     # first frame: the explicit equilibrium sent at open (bumpless start), last: the relax on close
     assert board.wait_frames(5) == [(2, 8), (2, 43), (2, 254), (2, 0), (2, 8)]
-    assert "baud=9600" in repr(rig) and "closed" in repr(rig)
+    assert "baud=9600" in repr(rig)
+    assert "closed" in repr(rig)
 
 
 def test_bad_url_options_name_the_culprit(board):
@@ -144,12 +147,14 @@ def test_board_vanishing_mid_run_stops_the_loop_safely(tmp_path, board):
     log = tmp_path / "run.jsonl"
     result = run_loop(rig, PI(), setpoint=0.02, duration_s=1.0, period_s=0.02, log_path=log, on_sample=unplug)
     assert result.status == "fault"
-    assert "port lost" in result.message and board.port in result.message
+    assert "port lost" in result.message
+    assert board.port in result.message
     assert "could NOT send the safe command" in result.message  # the board is gone: we say so, we do not pretend
     assert not result.safe_command_sent
     assert rig.closed
     header, samples, footer = read_log(log)
-    assert len(samples) == n_before and [s["k"] for s in samples] == list(range(n_before))
+    assert len(samples) == n_before
+    assert [s["k"] for s in samples] == list(range(n_before))
     assert footer["stop"] == "fault"
 
 
@@ -163,5 +168,6 @@ def test_serial_with_daq_reads_the_card_and_releases_it(board):
     assert rig.write_command(30) == 30
     card = rig.companions[0]
     rig.close()
-    assert card.closed and card._device.state == "released"
+    assert card.closed
+    assert card._device.state == "released"
     assert board.wait_frames(3)[-2:] == [(0, 30), (0, 8)]

@@ -85,7 +85,8 @@ def test_every_single_byte_error_is_caught():
 )
 def test_garbled_lines_say_why(line, reason):
     event = decode_line(line)
-    assert event.kind == "garbled" and reason in event.reason
+    assert event.kind == "garbled"
+    assert reason in event.reason
 
 
 def test_a_runaway_line_is_dropped_not_buffered():
@@ -178,7 +179,9 @@ def test_stream_rig_reads_the_emulator_and_cannot_move_the_servo():
         with pytest.raises(RigError, match="cannot move the servo"):
             rig.write_command(20)
         stats = rig.stats()  # (the banner went out before the port was opened: pyserial empties it on opening)
-        assert stats["samples"] >= 10 and stats["garbled"] == 0 and stats["dropped"] == 0
+        assert stats["samples"] >= 10
+        assert stats["garbled"] == 0
+        assert stats["dropped"] == 0
         rig.close()
         emulator.close()
 
@@ -210,8 +213,11 @@ def test_the_whole_rig_closes_the_loop_through_the_stream(rotation_map, tmp_path
         # the emulator's twin (true rotation) followed the 20 deg step within one command quantum (1.7 deg)
         assert abs(emulator.tip_rotation_deg() - 20.0) < 1.7
         stats = rig.companions[0].stats()
-        assert stats["samples"] > 150 and stats["garbled"] == 0 and stats["dropped"] == 0
-        assert eventually(lambda: emulator.commands[-1] == 8) and rig.closed  # relaxed and released at the end
+        assert stats["samples"] > 150
+        assert stats["garbled"] == 0
+        assert stats["dropped"] == 0
+        assert eventually(lambda: emulator.commands[-1] == 8)
+        assert rig.closed  # relaxed and released at the end
 
 
 @pytest.mark.slow
@@ -223,12 +229,16 @@ def test_the_whole_rig_closes_the_loop_through_the_stream(rotation_map, tmp_path
 def test_a_stream_that_stops_or_garbles_mid_run_ends_in_the_safe_state(rotation_map, tmp_path, faults, match):
     with StreamEmulator(twin=True, seed=1, faults=faults) as emulator:
         rig, result, log = closed_loop(emulator, rotation_map, tmp_path, duration_s=4.0)
-        assert result.status == "fault" and match in result.message, result.message
-        assert result.safe_command_sent and "relaxed to command 8" in result.message
+        assert result.status == "fault", result.message
+        assert match in result.message, result.message
+        assert result.safe_command_sent
+        assert "relaxed to command 8" in result.message
         assert eventually(lambda: emulator.commands[-1] == 8)  # the board got the safe command
-        assert rig.closed and rig.companions[0].closed  # both ports released
+        assert rig.closed
+        assert rig.companions[0].closed  # both ports released
         header, samples, footer = read_log(log)
-        assert footer["stop"] == "fault" and match in footer["message"]
+        assert footer["stop"] == "fault"
+        assert match in footer["message"]
         assert 0.5 < samples[-1]["t"] < 3.5  # it ran, then stopped at the fault (150 lines = 1.5 s of stream)
 
 
@@ -280,7 +290,10 @@ def test_the_firmware_lines_decode(tmp_path):
     out = subprocess.run([str(exe)], check=True, capture_output=True).stdout
     events = LineDecoder().feed(out)
     assert [e.kind for e in events] == ["sample", "sample"]
-    assert events[0].sample.seq == 65535 and events[0].sample.t_us == 4294967295
-    assert events[0].sample.gauges == (-2147483648, 2147483647, 0) and events[0].sample.pot == -5
-    assert events[1].sample.gauges == (120, -45, 3000) and events[1].sample.pot is None
+    assert events[0].sample.seq == 65535
+    assert events[0].sample.t_us == 4294967295
+    assert events[0].sample.gauges == (-2147483648, 2147483647, 0)
+    assert events[0].sample.pot == -5
+    assert events[1].sample.gauges == (120, -45, 3000)
+    assert events[1].sample.pot is None
     assert out.splitlines()[1] + b"\n" == encode_line(0, 1000, (120, -45, 3000)).replace(b"\r", b"")

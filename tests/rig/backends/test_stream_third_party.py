@@ -195,7 +195,9 @@ def test_start_up_junk_before_the_first_line_is_counted_not_held_against_the_str
         readings = read_for(source, 1.2)  # a run: 60 reads over 120 lines
         assert len(readings) > 40
         stats = source.stats()
-        assert stats["garbled"] == 4 and stats["info"] == 1 and stats["dropped"] == 0
+        assert stats["garbled"] == 4
+        assert stats["info"] == 1
+        assert stats["dropped"] == 0
         assert stats["info_lines"] == ["flexdigit-stream 1 adc=ADS1115 v_per_count=0.000125 rate_hz=100"]
     finally:
         source.close()
@@ -217,9 +219,12 @@ def test_duplicated_and_reordered_lines_are_counted_and_never_replace_a_newer_sa
     try:
         assert eventually(lambda: source.stats()["out_of_order"] >= 5, timeout_s=3.0)
         stats = source.stats()
-        assert stats["duplicated"] == 10 and stats["out_of_order"] == 4 + 1 and stats["restarts"] == 0
+        assert stats["duplicated"] == 10
+        assert stats["out_of_order"] == 4 + 1
+        assert stats["restarts"] == 0
         # each swap first looks like a dropped line (k skipped), then k arrives late
-        assert stats["dropped"] == 4 and stats["samples"] == 100 - 4
+        assert stats["dropped"] == 4
+        assert stats["samples"] == 100 - 4
         np.testing.assert_allclose(source.read_gauges()[0], np.array(gauges_of(99)) * SCALE)
     finally:
         source.close()
@@ -233,7 +238,9 @@ def test_a_board_reset_is_a_restart_and_reading_goes_on(board):
     try:
         assert eventually(lambda: source.stats()["samples"] == 80, timeout_s=3.0)
         stats = source.stats()
-        assert stats["restarts"] == 1 and stats["dropped"] == 0 and stats["out_of_order"] == 0
+        assert stats["restarts"] == 1
+        assert stats["dropped"] == 0
+        assert stats["out_of_order"] == 0
         source.read_gauges()
     finally:
         source.close()
@@ -252,7 +259,8 @@ def test_noise_long_lines_and_nul_bytes_are_counted_and_the_stream_goes_on(board
         readings = read_for(source, 0.1)
         np.testing.assert_allclose(readings[-1][0], np.array(gauges_of(199)) * SCALE)
         stats = source.stats()
-        assert stats["dropped"] == 0 and 3 <= stats["garbled"] <= 30
+        assert stats["dropped"] == 0
+        assert 3 <= stats["garbled"] <= 30
     finally:
         source.close()
 
@@ -455,12 +463,16 @@ def test_run_on_a_third_party_board_ends_in_the_safe_state_when_the_stream_fails
         )  # the safe command reached the board
     finally:
         servo.close()
-    assert code == 1 and out["status"] == "fault" and match in out["message"], out
+    assert code == 1, out
+    assert out["status"] == "fault", out
+    assert match in out["message"], out
     assert "relaxed to command 8" in out["message"]
     counts = out["gauge_source"]
-    assert counts["samples"] >= healthy_frames and (counts["garbled"] > 0) == (damage == "garble")
+    assert counts["samples"] >= healthy_frames
+    assert (counts["garbled"] > 0) == (damage == "garble")
     _, samples, footer = read_log(log)
-    assert footer["stop"] == "fault" and match in footer["message"]
+    assert footer["stop"] == "fault"
+    assert match in footer["message"]
     assert healthy_frames * 0.02 <= samples[-1]["t"] < 2.5  # it ran on the stream, then stopped at the fault
     # the step figures of a run cut short claim only what its record shows (the README's rules): a settling time
     # needs the last 0.5 s inside the band, a steady-state error the last 0.5 s steady, about its own mean
@@ -468,7 +480,8 @@ def test_run_on_a_third_party_board_ends_in_the_safe_state_when_the_stream_fails
     t, y = np.array([s["t"] for s in samples]), np.array([s["y"] for s in samples])
     tail = t >= t[-1] - 0.5
     if figures["settling_time_s"] is not None:
-        assert figures["settling_time_s"] <= t[-1] - 0.5 and np.all(np.abs(y[tail] - 20.0) <= 0.02 * 20.0)
+        assert figures["settling_time_s"] <= t[-1] - 0.5
+        assert np.all(np.abs(y[tail] - 20.0) <= 0.02 * 20.0)
     if figures["final_error_deg"] is not None:
         assert np.all(np.abs(y[tail] - y[tail].mean()) <= 0.02 * 20.0)
         assert figures["final_error_deg"] == pytest.approx(y[tail].mean() - 20.0, abs=1e-3)
@@ -545,15 +558,19 @@ def test_the_reference_sketch_runs_across_the_micros_wrap_and_a_third_party_read
     assert len(samples) == n_lines  # one line every 10 ms of the fake clock, also across the wrap
     seq = np.array([s[0] for s in samples])
     t_us = np.array([s[1] for s in samples], dtype=np.int64)
-    assert np.all(np.diff(seq) % 65536 == 1) and seq[0] == 0 and seq[-1] == (n_lines - 1) % 65536
-    assert np.all(np.diff(t_us) % 2**32 == 10_000) and t_us.min() < 10_000 < start <= t_us[0]
+    assert np.all(np.diff(seq) % 65536 == 1)
+    assert seq[0] == 0
+    assert seq[-1] == (n_lines - 1) % 65536
+    assert np.all(np.diff(t_us) % 2**32 == 10_000)
+    assert t_us.min() < 10_000 < start <= t_us[0]
     # the ADC's counts, gauges on A0..A2 and the pot on A3, in that order (the stub counts its conversions)
     k = 4 * np.arange(1, n_lines + 1)
     for ch in range(4):
         np.testing.assert_array_equal([s[2 + ch] for s in samples], ch * 1000 - 1500 + (k - 3 + ch) % 7)
     # flexdigit's decoder reads the same bytes the same way
     events = LineDecoder().feed(out)
-    assert [e.kind for e in events].count("sample") == n_lines and events[0].kind == "info"
+    assert [e.kind for e in events].count("sample") == n_lines
+    assert events[0].kind == "info"
     assert [(e.sample.seq, e.sample.t_us, *e.sample.gauges, e.sample.pot) for e in events[1:]] == samples
 
 
