@@ -86,13 +86,17 @@ def _closed_by_server(sock: socket.socket, deadline: float) -> bool:
 
 
 def _engage(ws, value: float) -> None:
+    """Send a setpoint and wait for its ack, then for a frame that shows it engaged: the server acks a request when
+    it is queued, and the loop applies it at its next tick, so a frame between the two may still say not engaged."""
     ws.send(json.dumps({"type": "setpoint", "value": value}))
     deadline = time.monotonic() + 10
+    acked = False
     while time.monotonic() < deadline:
         message = json.loads(ws.recv(timeout=10))
-        if message["type"] == "ack":
+        acked = acked or message["type"] == "ack"
+        if acked and message.get("state", {}).get("engaged"):
             return
-    raise AssertionError("the setpoint was not acknowledged")
+    raise AssertionError("the setpoint was not applied" if acked else "the setpoint was not acknowledged")
 
 
 @pytest.mark.slow
