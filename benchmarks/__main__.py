@@ -28,6 +28,8 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_board",
     "benchmarks.bench_resources",
 )
+#: Run only when named (``python -m benchmarks bench_converged``): half an hour of CPU.
+ON_REQUEST: tuple[str, ...] = ("benchmarks.bench_converged",)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -36,8 +38,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     rows = []
-    for name in MODULES:
-        if args.only and name.rsplit(".", 1)[-1] not in args.only:
+    for name in MODULES + ON_REQUEST:
+        named = name.rsplit(".", 1)[-1] in args.only
+        if (args.only and not named) or (name in ON_REQUEST and not named):
             continue
         start = time.perf_counter()
         print(f"running {name} ...", file=sys.stderr, flush=True)

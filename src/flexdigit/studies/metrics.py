@@ -245,6 +245,7 @@ def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -
     is retried one set at a time, so one bad set does not take the others down).
     """
     context = context or MetricContext()
+    _new_block()
     out: list[dict | Exception] = [{} for _ in parameter_sets]
     names = list(names)
     batched = [n for n in names if metric_of(n, context).batched is not None]
@@ -299,7 +300,7 @@ def _mid_shortening_m(ps: ParameterSet) -> float:
 _BATCH_CACHE: list = [None, None]  # (the list of parameter sets, its results): the metrics share one pass
 
 
-def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
+def twin_figures(parameter_sets, *, keep: bool = True) -> dict[str, np.ndarray]:
     """The twin metrics of many parameter sets at once (:class:`flexdigit.twin.batched.BatchedChains`).
 
     Release mode (cable removed), the actuated mode and the tip's rotational stiffness linearised mid-range, the
@@ -308,7 +309,7 @@ def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
     """
     from flexdigit.twin.twin import cable_shortening_m
 
-    if _BATCH_CACHE[0] is parameter_sets:
+    if keep and _BATCH_CACHE[0] is parameter_sets:
         return _BATCH_CACHE[1]
     chains = _chains(parameter_sets)
     wn, zeta = chains.linear_modes()
@@ -332,6 +333,8 @@ def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
         "_linear": chains.linearised(psi_mid, mid),
         "_mid_rotation_deg": np.degrees(psi_mid[:, -1] - tip_lo),
     }
+    if not keep:
+        return out
     _BATCH_CACHE[:] = [parameter_sets, out]
     for i, ps in enumerate(parameter_sets):  # each row's figures, for the per-row metrics built on them
         _ROWS[ps] = {k: tuple(x[i : i + 1] for x in v) if k == "_linear" else v[i : i + 1] for k, v in out.items()}
@@ -340,10 +343,22 @@ def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
     return out
 
 
-#: The twin figures of the last rows computed in a batch (:func:`twin_figures`), by parameter set: the linear loop
-#: metrics (:func:`actuated_model`) read a row's linearisation from its block's pass instead of solving it again.
+#: The twin figures of the rows of the block being evaluated (:func:`twin_figures`), by parameter set: the linear
+#: loop metrics (:func:`actuated_model`) read a row's linearisation from its block's pass instead of solving it again.
 _ROWS: dict = {}
 _ROWS_KEPT = 4096
+
+
+def _new_block() -> None:
+    """Forget the last block's rows and what was built on them (:func:`evaluate_many` calls it first): a row's
+    numbers then depend on its block alone (a batched pass rounds a rig's figures a little differently with other
+    block-mates), never on which blocks a process evaluated before, so a study on any number of Dask workers gives
+    the in-process numbers bit for bit (the blocks are the spec's chunks)."""
+    _ROWS.clear()
+    _BATCH_CACHE[:] = [None, None]
+    _LOOP_CACHE[:] = [None, None, None]
+    for cached in (actuated_model, loop_design, _loop, _single_loop):
+        cached.cache_clear()
 
 
 def _batched(name):
@@ -399,7 +414,9 @@ def rotation_gain_deg_per_command(ps: ParameterSet, ctx: MetricContext | None = 
 def _baseline_design(baseline: ParameterSet):
     from flexdigit.control.design20ms import design_20ms
 
-    return design_20ms(baseline.params, deg_per_command=rotation_gain_deg_per_command(baseline, MetricContext()))
+    # the baseline's own pass (not a block's): the same controller in every process, whatever it evaluated before
+    gain = float(twin_figures([baseline], keep=False)["rotation_gain_deg_per_command"][0])
+    return design_20ms(baseline.params, deg_per_command=gain)
 
 
 @contextlib.contextmanager
