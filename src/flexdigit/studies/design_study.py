@@ -606,8 +606,10 @@ def export_design(result: DesignResult, row: int, path: str | Path, *, force: bo
     """Write the rig description (the TOML of ``flexdigit params --template``, :func:`flexdigit.params.
     params_template`) of design ``row`` (its row in ``designs.parquet`` and ``summary.json``) on the Pareto front,
     so that ``flexdigit params`` checks it and every command takes it as ``--params``. The twin calibration is not
-    in it: the commands scale the thesis's to the digit (:func:`flexdigit.twin.calibration.calibration_for`), as
-    the design study scaled it. Never overwrites ``path`` without ``force``."""
+    in it: the commands scale the thesis's to the digit (:func:`flexdigit.twin.digit_calibration.calibration_for`),
+    while the study evaluated the design on the baseline calibration (its channels averaged for another gauge
+    count, :func:`design_parameter_set`), so a command's twin of a resized design is not exactly the study's.
+    Never overwrites ``path`` without ``force``."""
     from flexdigit._io import atomic_write
     from flexdigit.params import params_template
 
