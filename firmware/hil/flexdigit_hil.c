@@ -6,7 +6,7 @@
  *
  * One request a line on stdin, one reply a line on stdout:
  *
- *   V <mv0> <mv1> <mv2> <mv3>   the voltages on ADC0..ADC3 (millivolts, 0..5000), held until the next V
+ *   V <v0> <v1> <v2> <v3>       the voltages on ADC0..ADC3 (tenths of a millivolt, 0..50000), held until the next V
  *   U <hex>                     bytes for the firmware's UART receiver (delivered one per BYTE_US of AVR time)
  *   R <us>                      run the AVR for <us> microseconds of simulated time, then reply
  *       P <t_us> <pulse_cycles> <pulses> <exec_last> <exec_max> <execs> <pin_cycles> <hex of the UART's output>
@@ -37,6 +37,12 @@
 #define OUT_MAX 65536
 #define OCR1AL_ADDR 0x88    /* OCR1A in the ATmega328P's data space */
 #define TIMER1_PRESCALE 8UL /* the firmware's Timer1 clock: 0.5 us a tick */
+/* simavr converts an ADC input as vin x 1023 / AVcc (avr_adc.c), the ATmega328P as vin x 1024 / AVcc (datasheet
+   24.7): its AVcc is set to 5 V x 1023/1024 so the emulated ADC's steps fall where the chip's do (within 0.004 of
+   a step over the range), and the inputs are given in tenths of a millivolt (1/50 of a step), not millivolts (1/5):
+   the board's rest reading, which it tares its map on, then quantises as a real Uno's would */
+#define VOLT_UNITS_PER_V 10000L
+#define AVCC_UNITS 49951U /* 5 V x 1023 / 1024 in tenths of a millivolt */
 
 static avr_t *avr;
 static unsigned char out_buf[OUT_MAX];
@@ -140,7 +146,8 @@ int main(int argc, char **argv)
     avr_init(avr);
     avr_load_firmware(avr, &firmware);
     avr->frequency = FREQUENCY;
-    avr->vcc = avr->avcc = avr->aref = 5000;
+    avr->vcc = avr->aref = 5000;
+    avr->avcc = AVCC_UNITS;
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), uart_out, NULL);
     avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
     flags &= ~(uint32_t)AVR_UART_FLAG_STDIO;
@@ -148,14 +155,16 @@ int main(int argc, char **argv)
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 1), servo_pin, NULL);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 7), exec_pin, NULL);
     for (i = 0; i < 4; i++) {
-        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), 2500);
+        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), (uint32_t)(VOLT_UNITS_PER_V * 5 / 2));
     }
     while (fgets(line, sizeof(line), stdin)) {
         if (line[0] == 'V') {
-            long mv[4] = {2500, 2500, 2500, 2500};
-            sscanf(line + 1, "%ld %ld %ld %ld", &mv[0], &mv[1], &mv[2], &mv[3]);
+            long mid = VOLT_UNITS_PER_V * 5 / 2;
+            long vin[4] = {mid, mid, mid, mid};
+            sscanf(line + 1, "%ld %ld %ld %ld", &vin[0], &vin[1], &vin[2], &vin[3]);
             for (i = 0; i < 4; i++) {
-                long v = mv[i] < 0 ? 0 : (mv[i] > 5000 ? 5000 : mv[i]);
+                long top = 5L * VOLT_UNITS_PER_V;
+                long v = vin[i] < 0 ? 0 : (vin[i] > top ? top : vin[i]);
                 avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), (uint32_t)v);
             }
         } else if (line[0] == 'U') {

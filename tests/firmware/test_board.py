@@ -5,11 +5,9 @@ the harness, and checked from the host through the ``hil://`` backend, in simula
 
 - each fault (host silent, a gauge at an ADC rail, the rotation past its bound, a command out of range) ends in
   the safe state within one control period and reaches the host as a fault;
-- the loop closed on the board holds a 30 deg step on the twin, compared with flexdigit's Python loop on the
-  twin (same design, same period), both loops starting at a servo frame. The two actuator paths differ: the
-  Python loop's commands go through the serial board model (latched on its 20 ms frame, then the servo's 52 Hz
-  pulse: 0-19 ms late), the board's through its own pulse 1 ms after the update. The tolerances below are what
-  that difference leaves (measured, see the README); the issue's tighter ones are not met and say so there.
+- the loop closed on the board holds a 30 deg step on the twin as flexdigit's Python loop on the twin does
+  (``flexdigit run``, same design, period and rotation map, its twin's servo driven as the board drives it:
+  ``sim?servo_drive=timer``), within the issue's tolerances, over several noise seeds (see STEP_SEEDS).
 """
 
 from __future__ import annotations
@@ -20,7 +18,7 @@ import subprocess
 import pytest
 
 from flexdigit.cli import main
-from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s, board_servo_schedule, run_on_board
+from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s, run_on_board
 from flexdigit.rig.base import open_rig
 
 #: The ATmega328P's flash (less the Uno's 512-byte bootloader) and RAM, bytes.
@@ -95,56 +93,70 @@ def test_each_fault_ends_in_the_safe_state_within_one_period(firmware):
     assert set(FAULTS.values()) >= {"host_timeout", "adc_rail", "rotation_bound", "command_range"}
 
 
-def _python_loop(period_s, monkeypatch):
-    """flexdigit's loop on the twin (``run --backend sim``), its servo driven as the board drives it: the command
-    in force at each 20 ms frame, from the pulse 1 ms later (:func:`board_servo_schedule`), not through the serial
-    board's 52 Hz pulse (0-19 ms later). Same design, period, map source and start at a frame: like for like."""
-    import io
-    from contextlib import redirect_stdout
-
-    from flexdigit.twin.actuator import Servo
-
-    monkeypatch.setattr(Servo, "schedule", board_servo_schedule)
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        code = main(["run", "--backend", "sim", "--setpoint-deg", "30", "--duration", "3", "--period", str(period_s),
-                     "--json"])  # fmt: skip
-    assert code == 0
-    return json.loads(buf.getvalue())["step_metrics"]["true"]
-
-
 #: The issue's criteria for the 30 deg step, board against the Python loop: settling within 5 %, overshoot within
-#: 1 point (steady-state error within 0.2 deg: STEADY_TOLERANCE_DEG).
+#: 1 point, steady-state error within 0.2 deg (STEADY_TOLERANCE_DEG).
 SETTLING_FRACTION, OVERSHOOT_POINTS = 0.05, 1.0
-#: Where they are not met (measured, board / Python reference; README, `python benchmarks/bench_board.py`): at
-#: 20 ms the settling, 0.75 / 0.63 s (the board's true rotation peaks 0.73 deg over, past the 2 % band, and
-#: re-enters it later). Left: the board's samples are older than the Python loop's (the firmware uses the previous
-#: 1 ms tick's conversions) and 10-bit.
-NOT_MET = {0.020: {"settling": 0.25}}
+#: The noise seeds each loop runs with. One seed decides nothing: a servo command is 1.7 deg of rotation, so one
+#: command more or less at the peak moves the overshoot by ~3 points at 2 ms (the board's 10-bit readings: 15.1 %
+#: or 17.7-18.6 % by seed; the Python loop's 16-bit ones: 15.0-16.3 %), and a peak near the 2 % band moves the
+#: settling by a whole oscillation (the Python loop alone at 20 ms: 0.59-0.75 s over seeds 0-5). So the figures
+#: compared are typical ones over STEP_SEEDS: the median settling time (a discontinuous figure, bimodal by seed)
+#: and the mean overshoot and steady-state error. Measured (board / Python, 8 seeds; benchmarks/bench_board.py):
+#: see docs/board.md.
+STEP_SEEDS = range(8)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.020, "fixed"), (0.005, "float"), (0.002, "fixed")])
-def test_loop_on_the_board_holds_a_30_deg_step(firmware, period_s, fmt, monkeypatch):
-    elf = firmware(period_s, fmt)
-    rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)
+def _board_step(elf, seed: int) -> dict:
+    """The loop on the board (hil://, noise seed ``seed``): the twin's true step figures."""
+    from flexdigit.rig.step_test import step_metrics
+
+    rig = open_rig(f"hil://{elf}?seed={seed}", mode="board", setpoint_deg=30.0)
     try:
         run = run_on_board(rig, 30.0, 3.0)
     finally:
         rig.close()
     assert run.status == "completed", run.message
-    assert run.period_s == pytest.approx(period_s)
-    assert run.time_s[0] == pytest.approx(period_s, abs=0.002)  # from the setpoint, as the host loop counts
-    from flexdigit.rig.step_test import step_metrics
+    assert run.time_s[0] == pytest.approx(run.period_s, abs=0.002)  # from the setpoint, as the host loop counts
+    return step_metrics(run.time_s, run.true_rotation_deg, 30.0, 0.0, 1.735).to_dict()
 
-    board = step_metrics(run.time_s, run.true_rotation_deg, 30.0, 0.0, 1.735).to_dict()
-    python = _python_loop(period_s, monkeypatch)
+
+def _python_step(period_s: float, seed: int, rotation_map) -> dict:
+    """flexdigit's loop on the twin (``flexdigit run``), its servo driven as the board drives it (the command in
+    force at each 20 ms frame, from the pulse 1 ms later: ``servo_drive=timer``), on the board's rotation map."""
+    import io
+    from contextlib import redirect_stdout
+
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        code = main(["run", "--backend", f"sim?seed={seed}&servo_drive=timer", "--setpoint-deg", "30",
+                     "--duration", "3", "--period", str(period_s), "--rotation-map", str(rotation_map),
+                     "--json"])  # fmt: skip
+    assert code == 0
+    return json.loads(buf.getvalue())["step_metrics"]["true"]
+
+
+def _typical(figures: list[dict]) -> dict:
+    """The typical step figures over seeds (see STEP_SEEDS)."""
+    import numpy as np
+
+    return {
+        "settling_time_s": float(np.median([f["settling_time_s"] for f in figures])),
+        "overshoot_percent": float(np.mean([f["overshoot_percent"] for f in figures])),
+        "final_error_deg": float(np.mean([f["final_error_deg"] for f in figures])),
+    }
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.005, "float"), (0.002, "fixed")])
+def test_loop_on_the_board_holds_a_30_deg_step(firmware, rotation_map, period_s, fmt):
+    """At 20 ms, 5 ms and the shortest period the board sustains (2 ms: benchmarks/bench_board.py)."""
+    elf = firmware(period_s, fmt)
+    board = _typical([_board_step(elf, seed) for seed in STEP_SEEDS])
+    python = _typical([_python_step(period_s, seed, rotation_map) for seed in STEP_SEEDS])
     assert abs(board["final_error_deg"] - python["final_error_deg"]) <= STEADY_TOLERANCE_DEG
     assert abs(board["final_error_deg"]) < 0.6  # inside the 2 % band of the setpoint
-    settling = NOT_MET.get(period_s, {}).get("settling", SETTLING_FRACTION)
-    overshoot = NOT_MET.get(period_s, {}).get("overshoot", OVERSHOOT_POINTS)
-    assert abs(board["overshoot_percent"] - python["overshoot_percent"]) <= overshoot
-    assert abs(board["settling_time_s"] - python["settling_time_s"]) <= settling * python["settling_time_s"]
+    assert abs(board["overshoot_percent"] - python["overshoot_percent"]) <= OVERSHOOT_POINTS
+    assert abs(board["settling_time_s"] - python["settling_time_s"]) <= SETTLING_FRACTION * python["settling_time_s"]
 
 
 @pytest.mark.slow
@@ -176,7 +188,7 @@ COMMAND_MISMATCH_FRACTION = 0.02
 
 @pytest.mark.slow
 @pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.020, "fixed"), (0.005, "float")])
-def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, period_s, fmt):
+def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, rotation_map, period_s, fmt):
     """The loop on the board, sample for sample: each period's command is what flexdigit's Python controller (float64)
     computes from the same ADC counts (the board streams the counts its update used) through the same map."""
     from types import SimpleNamespace
@@ -195,7 +207,7 @@ def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, peri
     board = samples[start:]
     assert len(board) >= 0.95 * 3.0 / period_s
     assert tare == tare  # every period streamed; the board said its tare
-    options = SimpleNamespace(no_rotation_map=False, rotation_map=None)
+    options = SimpleNamespace(no_rotation_map=False, rotation_map=rotation_map)  # the image's map
     runtime, _, rotation, _, _ = _export_design("digital20", period_s, options)
     runtime.reset(8)
     mismatches = 0

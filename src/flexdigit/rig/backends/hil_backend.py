@@ -7,7 +7,9 @@ The firmware image (``make firmware``) runs unchanged on simavr's ATmega328P in 
 every ``step_s`` (0.5 ms) of AVR time it
 
 1. sets the voltages on the AVR's ADC pins from the twin's gauges (``2.5 V + gauge volts``: the level shift of the
-   board's front end, the AVR's ADC reading 0..5 V) and its pot;
+   board's front end, the AVR's ADC reading 0..5 V) and its pot, to a tenth of a millivolt; the harness makes
+   simavr's ADC convert as the ATmega328P's datasheet says (``vin x 1024 / 5 V``, not simavr's ``x 1023``), so
+   the board's readings, its rest reading (which it tares its map on) among them, are a real Uno's;
 2. runs the AVR for ``step_s`` and collects what its UART sent (stream-protocol lines) and the servo pulse its
    Timer1 generates (OCR1A latched at the pulse's start, as the hardware double-buffers it);
 3. turns the pulse width into the servo's command (1..2 ms over 0..254, unrounded: Timer1's 0.5 us resolution is
@@ -49,7 +51,6 @@ __all__ = [
     "FAULTS",
     "BoardRun",
     "run_on_board",
-    "board_servo_schedule",
 ]
 
 #: The harness executable ``make firmware`` builds beside the image.
@@ -59,6 +60,8 @@ F_CPU_HZ = 16_000_000
 #: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
 MID_V = 2.5
 VOLTS_PER_COUNT = 5.0 / 1024.0
+#: The harness takes the pins' voltages in tenths of a millivolt (a fiftieth of an ADC step).
+VOLT_UNITS_PER_V = 10_000
 #: The board's fault codes (firmware/flexdigit_board.c).
 FAULTS = {1: "host_timeout", 2: "adc_rail", 3: "rotation_bound", 4: "command_range", 5: "controller"}
 #: Stream samples kept in :attr:`HilRig.samples` (a day at 50 Hz would be 4 million: runs here are seconds).
@@ -90,32 +93,6 @@ def pulse_to_command(pulse_cycles: int, params: RigParams | None = None) -> floa
     pulse_us = pulse_cycles / (F_CPU_HZ / 1e6)
     span = float(min(a.command_max, 254) - a.command_min)
     return a.command_min + (pulse_us - 1000.0) / 1000.0 * span
-
-
-#: The board's servo frame (Timer1's TOP: 20 ms) and its pulse's start after the control tick at a frame boundary.
-SERVO_FRAME_S = 0.020
-PULSE_AFTER_TICK_S = 0.001
-
-
-def board_servo_schedule(servo, value, issued_s: float, grid_s: float) -> float:
-    """The board's actuator path, for the twin's :class:`~flexdigit.twin.actuator.Servo` (a drop-in for its
-    ``schedule``): the command in force at a 20 ms frame boundary drives the pulse that starts 1 ms later (Timer1
-    latches OCR1A at BOTTOM), and the servo follows from the next step of the twin's grid, as it does under
-    ``hil://``. The serial board's model instead latches on its 20 ms frame and waits for the servo's own 52 Hz
-    pulse (0-19 ms more). A host loop on a twin with this servo is the like-for-like reference for the loop on the
-    board (tests/firmware/test_board.py); returns the grid time the command takes effect (s).
-
-    >>> from flexdigit.params import RigParams
-    >>> from flexdigit.twin.actuator import Servo
-    >>> board_servo_schedule(Servo(RigParams(), 8), 30, 0.005, 0.002)   # the frame at 20 ms, its pulse at 21 ms
-    0.022
-    """
-    value = servo.check_command(value)
-    frame = math.ceil(issued_s / SERVO_FRAME_S - 1e-9) * SERVO_FRAME_S
-    apply = math.ceil((frame + PULSE_AFTER_TICK_S) / grid_s - 1e-9) * grid_s
-    servo.pending.append((apply, value))
-    servo.pending.sort(key=lambda item: item[0])
-    return apply
 
 
 def _find_harness(elf, elf_path: Path, harness) -> Path:
@@ -179,7 +156,9 @@ class HilRig(Rig):
             from flexdigit.twin.twin import Twin
 
             options = {} if calibration is None else {"calibration": calibration}
-            twin = Twin(params, seed=int(seed), dt_s=0.002, **options)
+            # the servo follows the pulses the board generates (measured below); "timer" says so in the twin's
+            # settings, and is how a host loop on the twin alone is driven to compare with it (sim?servo_drive=timer)
+            twin = Twin(params, seed=int(seed), dt_s=0.002, servo_drive="timer", **options)
         self.twin = twin
         self.seed, self.mode, self.safe, self.step_s = int(seed), mode, safe, float(step_s)
         self.setpoint_deg = float(setpoint_deg)
@@ -250,8 +229,8 @@ class HilRig(Rig):
         volts = [MID_V + float(g) for g in gauges] + [float(pot)]
         for channel, v in self.gauge_override.items():  # a wire off, a short: the fault tests
             volts[channel] = MID_V + v
-        mv = [int(round(v * 1000)) for v in volts]
-        out = f"V {mv[0]} {mv[1]} {mv[2]} {mv[3]}\n"
+        units = [int(round(v * VOLT_UNITS_PER_V)) for v in volts]
+        out = f"V {units[0]} {units[1]} {units[2]} {units[3]}\n"
         if self._outbox:
             out += "U " + self._outbox.hex() + "\n"
             self._outbox.clear()
