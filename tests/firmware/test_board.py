@@ -171,16 +171,6 @@ def test_run_on_board_cli_says_where_the_loop_ran(firmware, capsys):
     assert main(["run", "--on-board", "--backend", "sim", "--json"]) == 2  # only a board closes the loop
 
 
-@pytest.mark.slow
-def test_host_loop_runs_through_the_firmware(firmware, capsys):
-    elf = firmware(0.020, "float")
-    code = main(["run", "--backend", f"hil://{elf}", "--map-from", "twin", "--duration", "2", "--json"])
-    doc = json.loads(capsys.readouterr().out)
-    assert code == 0
-    assert doc["loop"] == "host"
-    assert abs(doc["true_final_rotation_deg"] - 30.0) < 1.0
-
-
 #: Share of board periods whose command may differ (by one) from the Python controller's: a float32 or fixed-point
 #: rounding can land the unrounded command on the other side of a half-integer (see tests/control/test_c_export.py).
 COMMAND_MISMATCH_FRACTION = 0.02
