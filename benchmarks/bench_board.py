@@ -129,5 +129,48 @@ def run() -> list[dict]:
                 rows.append({"name": f"board vs python loop, {period_s * 1e3:g} ms ({fmt}): {key}",
                              "value": board[key], "unit": unit, "goal": "",
                              "note": f"python loop on the twin: {python[key]:.4g}; {how} over "
-                                     f"{len(STEP_SEEDS)} seeds"})  # fmt: skip
+                                     f"{len(STEP_SEEDS)} seeds",
+                             "period_ms": period_s * 1e3, "format": fmt, "figure": key,
+                             "reference": python[key]})  # fmt: skip
     return rows
+
+
+#: The issue's criteria, board against the Python loop, per figure: (kind, tolerance).
+CRITERIA = {
+    "settling_time_s": ("fraction", 0.05),
+    "overshoot_percent": ("points", 1.0),
+    "final_error_deg": ("abs", 0.2),
+}
+
+
+def markdown(rows: list[dict]) -> str:
+    """The step table and the timing figures of docs/board.md, from :func:`run`'s rows (or their JSON)."""
+    lines = ["| period (format) | figure | board (hil://) | Python loop | difference | criterion | met |",
+             "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for row in rows:
+        if "figure" not in row:
+            continue
+        kind, tolerance = CRITERIA[row["figure"]]
+        diff = row["value"] - row["reference"]
+        if kind == "fraction":
+            shown, limit, met = (
+                f"{diff / row['reference'] * 100:+.1f} %",
+                f"within {tolerance * 100:g} %",
+                abs(diff) <= tolerance * row["reference"],
+            )
+        else:
+            unit = "points" if kind == "points" else row["unit"]
+            shown, limit, met = f"{diff:+.2f} {unit}", f"within {tolerance:g} {unit}", abs(diff) <= tolerance
+        lines.append(f"| {row['period_ms']:g} ms ({row['format']}) | {row['figure']} | {row['value']:.3f} | "
+                     f"{row['reference']:.3f} | {shown} | {limit} | {'yes' if met else 'NO'} |")  # fmt: skip
+    lines += ["", "| figure | value | unit | note |", "|---|---|---|---|"]
+    lines += [f"| {r['name']} | {r['value']:.4g} | {r['unit']} | {r['note']} |" for r in rows if "figure" not in r]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # python benchmarks/bench_board.py [--markdown] [ROWS.json]
+    if "--markdown" in sys.argv:
+        given = [a for a in sys.argv[1:] if a != "--markdown"]
+        print(markdown(json.loads(Path(given[0]).read_text()) if given else run()))
+    else:
+        print(json.dumps(run(), indent=2))
