@@ -37,6 +37,25 @@ def test_image_builds_without_warnings_and_fits(firmware, fmt):
     assert sizes.get(".data", 0) + sizes.get(".bss", 0) < RAM_BYTES - 512  # room for the stack
 
 
+@pytest.mark.slow
+def test_the_emulated_adc_converts_as_the_datasheet_says(firmware):
+    """ATmega328P datasheet 24.7: ADC = Vin x 1024 / Vref, truncated (simavr's own scales by 1023: the harness
+    corrects it). The board streams each count less 512 (its 2.5 V midpoint)."""
+    import math
+
+    import numpy as np
+
+    elf = firmware(0.020, "float")
+    rng = np.random.default_rng(7)
+    with open_rig(f"hil://{elf}", mode="host") as rig:
+        for gauge_v in rng.uniform(-2.49, 2.49, 12):
+            rig.gauge_override = {0: gauge_v, 1: -gauge_v / 2, 2: 0.0}
+            rig.wait(0.045)  # two stream lines (20 ms): the newest used the new volts
+            pins_v = [2.5 + round(v * 1e4) / 1e4 for v in (gauge_v, -gauge_v / 2, 0.0)]  # 0.1 mV on the pins
+            expected = tuple(math.floor(v * 1024 / 5.0) - 512 for v in pins_v)
+            assert rig.latest.gauges == expected, f"{gauge_v:+.4f} V"
+
+
 def _fault_time(rig, name):
     hits = [t for t, code, n in rig.faults if n == name]
     assert hits, f"no {name} fault reached the host; faults {rig.faults}, info {rig.info_lines[-5:]}"
