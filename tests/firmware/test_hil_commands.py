@@ -110,3 +110,14 @@ def test_live_session_loop_through_the_firmware_over_the_pty(firmware):
     assert len(session.state.samples) >= 20  # the loop read the board every period
     seqs = [f.seq for f in frames]
     assert seqs == sorted(seqs) and len(set(seqs)) >= 20  # fresh samples from the firmware each period
+
+
+def test_a_harness_without_a_pty_is_refused_naming_the_pipe(tmp_path):
+    """A machine without ptys (no /dev/pts): one line saying so and how to run without one, no hang."""
+    elf = tmp_path / "board.elf"
+    elf.write_bytes(b"\x7fELF")
+    harness = tmp_path / "flexdigit_hil"
+    harness.write_text("#!/bin/sh\necho 'flexdigit_hil: cannot open a pty (No such device)' >&2\nexit 2\n")
+    harness.chmod(0o755)
+    with pytest.raises(OSError, match=r"no pty \(flexdigit_hil: cannot open a pty.*\?uart=pipe"):
+        open_rig(f"hil://{elf}?harness={harness}")

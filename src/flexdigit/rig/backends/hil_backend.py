@@ -252,7 +252,10 @@ class HilRig(Rig):
 
         said = self._proc.stdout.readline().split()
         if len(said) != 2 or said[0] != "T":
-            raise RigError(f"hil://{self.elf}: the harness made no pty ({self._harness_said() or 'no reply'})")
+            raise RigError(
+                f"hil://{self.elf}: the harness made no pty ({self._harness_said() or 'no reply'}); "
+                f"hil://{self.elf}?uart=pipe carries the UART without one"
+            )
         self.port_path = said[1]
         try:
             self.port = serial.Serial(self.port_path, baudrate=BAUD, timeout=PTY_TIMEOUT_S, write_timeout=PTY_TIMEOUT_S)
