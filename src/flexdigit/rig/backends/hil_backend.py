@@ -44,7 +44,7 @@ import numpy as np
 
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.backends.stream_framing import LineDecoder
+from flexdigit.rig.backends.board_link import BAUD, FAULTS, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState
 from flexdigit.rig.base import Rig, UrlOption
 from flexdigit.twin.digit import ORIENTATIONS
 
@@ -63,22 +63,13 @@ __all__ = [
 HARNESS_NAME = "flexdigit_hil"
 #: The AVR's clock, Hz (an Uno's crystal).
 F_CPU_HZ = 16_000_000
-#: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
+#: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC (VOLTS_PER_COUNT: 10 bits over 5 V).
 MID_V = 2.5
-VOLTS_PER_COUNT = 5.0 / 1024.0
 #: The harness takes the pins' voltages in tenths of a millivolt (a fiftieth of an ADC step).
 VOLT_UNITS_PER_V = 10_000
-#: The board's fault codes (firmware/flexdigit_board.c).
-FAULTS = {1: "host_timeout", 2: "adc_rail", 3: "rotation_bound", 4: "command_range", 5: "controller"}
-#: Stream samples kept in :attr:`HilRig.samples` (a day at 50 Hz would be 4 million: runs here are seconds).
-MAX_KEPT_SAMPLES = 200_000
 #: How long before the board's control tick at 0.2 s the opening sends its mode line: its ~15 bytes at BYTE_US
 #: (50 us) take 0.75 ms to arrive (firmware/hil/flexdigit_hil.c).
 LEAD_S = 0.002
-#: The host sends a heartbeat line if it has said nothing for this long (the board's timeout is 0.5 s).
-HEARTBEAT_S = 0.1
-#: The board's baud rate (firmware/flexdigit_board.c: BAUD), set on the pty as on an Uno's port.
-BAUD = 250_000
 #: How long the host waits for bytes the harness said it put on the pty (wall clock): past it, the harness is gone.
 PTY_TIMEOUT_S = 5.0
 
@@ -191,23 +182,14 @@ class HilRig(Rig):
         super().__init__(
             twin.params, clock=lambda: self._time_s, sleep=self._wait_alive, operator=operator or (lambda m: None)
         )
-        self._decoder = LineDecoder()
         self._outbox = bytearray()
         self._last_said_s = 0.0
-        self.latest = None  # the newest stream sample
-        #: every stream sample (the ADC counts each board period used, and the command it applied), up to a limit
-        self.samples: list = []
-        #: the rotation the board's map read at rest when its loop started (it subtracts it), deg
-        self.board_tare_deg = float("nan")
-        #: ``(index into samples, mode)`` at each mode change the board announced
-        self.mode_marks: list[tuple[int, int]] = []
+        #: what the board said (its samples, faults, mode changes, tare): :class:`BoardState`
+        self.board = BoardState()
         self.board_command = float("nan")
-        self.faults: list[tuple[float, int, str]] = []
-        self.info_lines: list[str] = []
         self.pulses = 0
         self.exec_max_cycles = 0
         self.exec_cycles: list[int] = []
-        self._fault_seen = 0
         #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
         self.gauge_override: dict[int, float] = {}
         self._start_board()
@@ -299,20 +281,7 @@ class HilRig(Rig):
                 a = self.params.actuator
                 self.twin.servo.pending.clear()
                 self.twin.servo.command = min(max(command, a.command_min), a.command_max)
-        for event in self._decoder.feed(uart):
-            if event.kind == "sample":
-                self.latest = event.sample
-                if len(self.samples) < MAX_KEPT_SAMPLES:
-                    self.samples.append(event.sample)
-            elif event.kind == "info":
-                self.info_lines = [*self.info_lines[-49:], event.text]
-                words = event.text.split()
-                if len(words) >= 3 and words[0] == "fault":
-                    self.faults.append((self._time_s, int(words[1]), words[2]))
-                elif len(words) == 2 and words[0] == "mode":
-                    self.mode_marks.append((len(self.samples), int(words[1])))
-                elif len(words) == 2 and words[0] == "tare":
-                    self.board_tare_deg = int(words[1]) / 1e6
+        self.board.feed(uart, self._time_s)
 
     def _uart_to_board(self, data: bytes) -> str:
         """Send ``data`` to the board's receiver; the exchange's line saying so."""
@@ -370,11 +339,16 @@ class HilRig(Rig):
         self._advance(seconds)
 
     # -- the Rig contract ------------------------------------------------------------------------------------
+    # what the board said, by the names the tests and run_on_board read
+    latest = property(lambda self: self.board.latest, doc="The newest stream sample.")
+    samples = property(lambda self: self.board.samples, doc="Every stream sample, up to a limit.")
+    faults = property(lambda self: self.board.faults, doc="``(time_s, code, name)`` of each fault reported.")
+    info_lines = property(lambda self: self.board.info_lines, doc="The board's last information lines.")
+    mode_marks = property(lambda self: self.board.mode_marks, doc="``(index into samples, mode)`` per mode change.")
+    board_tare_deg = property(lambda self: self.board.tare_deg, doc="The rotation the board's map read at rest.")
+
     def _check_faults(self) -> None:
-        if len(self.faults) > self._fault_seen:
-            t, code, name = self.faults[-1]
-            self._fault_seen = len(self.faults)
-            raise RigError(f"hil://{self.elf.name}: the board reported fault {code} ({name}) at t = {t:.3f} s")
+        self.board.raise_new_fault(f"hil://{self.elf.name}")
 
     def _read(self) -> tuple[np.ndarray, float]:
         if self._time_s - self._last_said_s >= HEARTBEAT_S:
@@ -505,11 +479,7 @@ class BoardRun:
 
 def board_period_s(rig: HilRig) -> float:
     """The control period the image was built with (its banner's ``period_us``)."""
-    for line in rig.info_lines:
-        for word in line.split():
-            if word.startswith("period_us="):
-                return int(word.split("=", 1)[1]) / 1e6
-    raise RigError(f"hil://{rig.elf.name}: the firmware's banner does not give its period")
+    return rig.board.period_s(f"hil://{rig.elf.name}")
 
 
 def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float) -> BoardRun:
