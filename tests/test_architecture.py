@@ -48,6 +48,7 @@ SHARED = {
     "_table",
     "_result_table",
     "_estimator",
+    "_repr",
     "errors",
     "interrupts",
     "reference",

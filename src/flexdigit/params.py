@@ -29,6 +29,7 @@ from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
 
+from flexdigit._repr import differences, summary
 from flexdigit._validation import (
     Array,
     Interval,
@@ -609,6 +610,9 @@ class RigParams:
             return cls(**sections)
         except ParameterError as exc:
             raise ParameterError(f"{source}: {exc}") from None
+
+    def __repr__(self) -> str:
+        return summary(self, **(differences(self, RigParams()) or {"thesis_defaults": True}))
 
 
 #: The description's limits (issue 24): a planar digit of 1-8 sections carrying 1-8 gauges. The dataclasses accept

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit.params import RigParams
 from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import Calibration
@@ -89,6 +90,9 @@ class RigRecords:
     truth: Calibration
     files: dict[str, Path]
     seeds: dict[str, int]
+
+    def __repr__(self) -> str:
+        return summary(self, files=list(self.files), seeds=list(self.seeds.values()))
 
 
 def make_records(folder: Path, truth: Calibration, seed: int = 4) -> RigRecords:

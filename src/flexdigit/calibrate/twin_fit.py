@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit.calibrate.friction import actuated_rest_sd_v, fit_level, friction_ratio_from_repeatability
 from flexdigit.calibrate.targets import CalibrationTargets
 from flexdigit.errors import ParameterError
@@ -110,6 +111,16 @@ class CalibrationResult:
             record["targets"] = self.targets.to_dict()
         record["residuals"] = [dict(r) for r in self.residuals]
         return record
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            success=self.success,
+            cost=self.cost,
+            fitted=self.fitted,
+            targets=len(self.residuals),
+            message=self.message,
+        )
 
 
 def model_response(params, calibration: Calibration, targets: CalibrationTargets, *, cells_per_section: int = 3):

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import check_array
 from flexdigit.control._lsim import step_output
 from flexdigit.control._threads import single_blas_thread
@@ -54,6 +55,14 @@ class LoopMaps:
     @property
     def stable(self) -> bool:
         return bool(self.poles.size == 0 or np.max(self.poles.real) < 0)
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            closed_loop_order=len(self.poles),
+            stable=bool(np.all(np.real(self.poles) < 0)),
+            slowest_pole_real=(float(np.max(np.real(self.poles))), "rad/s"),
+        )
 
 
 def loop_maps(plant, controller) -> LoopMaps:

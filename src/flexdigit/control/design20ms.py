@@ -36,6 +36,7 @@ from numbers import Integral, Real
 import control as ct
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import (
     InstanceOf,
     Interval,
@@ -156,6 +157,16 @@ class Digital20msDesign:
             hysteresis=hysteresis,
             measure=measure,
             name=name,
+        )
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            period_s=self.period_s,
+            delay_samples=self.delay_samples,
+            controller_order=self.controller.nstates,
+            largest_pole_radius=float(np.max(np.abs(self.closed_loop_poles))),
+            deg_per_command=self.deg_per_command,
         )
 
 

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import control
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.identify.events import Problem, Survey, survey
@@ -167,6 +168,20 @@ class Identification:
                 "wn_from_damped_rad_s": f.wn_damped_rad_s,
             }
         return out
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            kind=self.kind,
+            method=self.method,
+            channel=self.channel,
+            wn_rad_s=self.wn_rad_s,
+            zeta=self.zeta,
+            gain=(self.gain, self.unit),
+            corr2=self.corr2,
+            fit_percent=self.fit_percent,
+            warnings=len(self.warnings),
+        )
 
 
 def identify(

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import _io
+from flexdigit._repr import summary
 from flexdigit._validation import Plausible, check_array
 from flexdigit.errors import DataFileError, one_line
 
@@ -156,6 +157,17 @@ class TimeSeries:
             self.u,
             self.input_name,
             self.time_unit,
+        )
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            channel=self.channel,
+            unit=self.unit,
+            samples=len(self.t_s),
+            duration_s=float(self.t_s[-1] - self.t_s[0]) if len(self.t_s) else 0.0,
+            input=self.input_name if self.u is not None else None,
+            source=self.source,
         )
 
 

@@ -28,6 +28,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from flexdigit._json import to_jsonable
+from flexdigit._repr import summary
 from flexdigit._validation import check_positive, check_real
 from flexdigit.errors import Interrupted, ParameterError, RigError
 from flexdigit.interrupts import signals_deferred, stop_requested
@@ -139,6 +140,19 @@ class LoopResult:
         """
         if self.status == "interrupted":
             raise Interrupted(getattr(signal, self.extra.get("signal") or "SIGINT"))
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            status=self.status,
+            message=self.message or None,
+            samples=len(self.time_s),
+            duration_s=float(self.time_s[-1] - self.time_s[0]) if len(self.time_s) else 0.0,
+            period_s=self.timing.period_s,
+            overruns=self.timing.overruns,
+            safe_command_sent=self.safe_command_sent,
+            log_path=self.log_path,
+        )
 
 
 def check_reading(reading: Reading, adc_range_v: tuple[float, float], margin_v: float = 1e-3) -> None:

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import check_real
 from flexdigit.rig.base import Rig
 from flexdigit.rig.controllers import make_controller
@@ -169,6 +170,19 @@ class StepTest:
     metrics: StepMetrics
     extra: dict = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            controller=self.controller,
+            gain=self.gain,
+            status=self.result.status,
+            samples=len(self.result.time_s),
+            rise_time_s=self.metrics.rise_time_s,
+            settling_time_s=self.metrics.settling_time_s,
+            overshoot_percent=self.metrics.overshoot_percent,
+            final_error_deg=self.metrics.final_error_deg,
+        )
+
 
 def step_test(
     rig: Rig,
@@ -238,6 +252,15 @@ class StepRun:
     true_rotation_deg: np.ndarray
     has_truth: bool
     deg_per_command: float
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            status=self.result.status,
+            samples=len(self.result.time_s),
+            has_truth=self.has_truth,
+            **{f"{k}_{f}": v.get(f) for k, v in self.figures.items() for f in ("rise_time_s", "overshoot_percent")},
+        )
 
 
 def run_step(

@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import InstanceOf, Interval, check_int, declare, validate_fields
 from flexdigit.errors import ParameterError
 
@@ -223,6 +224,18 @@ class Robot:
             "segments": [{"length_m": s.length_m, "disk_count": s.disk_count} for s in self.segments],
             "tendons": [{"offset_m": t.offset_m, "angle_deg": t.angle_deg, "disk": t.disk} for t in self.tendons],
         }
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            name=self.name,
+            length_m=sum(s.length_m for s in self.segments),
+            segments=len(self.segments),
+            disks=sum(s.disk_count for s in self.segments),
+            tendons=len(self.tendons),
+            backbone_radius_m=self.backbone.radius_m,
+            youngs_modulus_pa=self.backbone.youngs_modulus_pa,
+        )
 
 
 def _table(value: object, where: str, source: str) -> dict:
