@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 from flexdigit._repr import differences, summary
+from flexdigit.calibrate.twin_fit import CalibrationResult
 from flexdigit.control import design_20ms, thesis_design
+from flexdigit.control.analysis import StepFigures
 from flexdigit.identify import TimeSeries, identify
 from flexdigit.models.plant import build_plant
 from flexdigit.params import RigParams, Sensors
@@ -20,6 +22,8 @@ from flexdigit.rig.step_test import step_test
 from flexdigit.studies.parameter_set import ParameterSet
 from flexdigit.tdcr import Robot, Segment, Tendon, solve_statics
 from flexdigit.tdcr.dynamics import simulate
+from flexdigit.twin.calibration import Calibration
+from flexdigit.twin.digit import Chain
 from oracles import DIGIT, release_record
 
 #: A repr is a few lines at most.
@@ -108,3 +112,24 @@ def test_step_test_and_loop_result_print_status_and_figures():
     assert "status='completed'" in repr(test.result)
     assert f"samples={len(test.result.time_s)}" in repr(test.result)
     assert f"overshoot_percent={test.metrics.overshoot_percent:.4g}" in repr(test)
+
+
+def test_fields_summary_lists_every_field_short():
+    text = repr(StepFigures(0.1234567, 0.5, 0.6, 12.345678, 1.1, 0.2, 1.0, 0.0, 0.05, True))
+    assert text.startswith("StepFigures(rise_time_s=0.1235, settling_time_s=0.5, settling_to_final_s=0.6,")
+    assert "overshoot_percent=12.35" in text
+    assert text.endswith("iae=0.05, bounded=True)")
+
+
+def test_a_twin_static_solution_prints_its_arrays_by_shape():
+    solution = Chain.uniform(length_m=0.2, ei_n_m2=0.01, n_cells=40).solve_static(tip_force_n=[[0.0, 1e-4]])
+    assert len(_lines(solution)) <= MAX_LINES
+    assert "converged=True" in repr(solution)
+    assert "array" in repr(solution)
+
+
+def test_calibration_result_names_success_cost_and_fitted_fields():
+    result = CalibrationResult(Calibration(), cost=0.25, fitted=["strip_beta_s"], message="converged")
+    assert repr(result) == (
+        "CalibrationResult(success=True, cost=0.25, fitted=['strip_beta_s'], targets=0, message='converged')"
+    )

@@ -63,6 +63,9 @@ def _value(v) -> str:
             return "[" + ", ".join(repr(x) for x in v) + "]"
         return f"<{len(v)} items>"
     if isinstance(v, dict):
+        shown = {k: _value(x) for k, x in v.items()} if len(v) <= MAX_ELEMENTS // 2 else {}
+        if shown and all(len(x) <= 12 for x in shown.values()):
+            return "{" + ", ".join(f"{k!r}: {x}" for k, x in shown.items()) + "}"
         return f"<{len(v)} entries>"
     text = repr(v)
     return text if "\n" not in text and len(text) <= WIDTH // 2 else f"<{type(v).__name__}>"
@@ -84,6 +87,12 @@ def summary(obj, **figures) -> str:
             line = "    "
         line += text
     return "\n".join([*lines, line + ")"])
+
+
+def fields_summary(self) -> str:
+    """Every field of the dataclass ``self`` by :func:`summary` (arrays by shape, nested results by class): a
+    complete repr in a few lines for results with many fields, used as ``__repr__ = fields_summary``."""
+    return summary(self, **{f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.repr})
 
 
 def differences(obj, reference, prefix: str = "") -> dict:

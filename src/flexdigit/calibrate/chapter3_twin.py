@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.models.beam import elastica_tip_deflection
 from flexdigit.params import RigParams
@@ -66,6 +67,8 @@ class ReleaseFit:
         """The identification of ``channel``, or the first gauge identified."""
         return next((f for f in self.figures["fits"] if f.channel == channel), self.figures["fits"][0])
 
+    __repr__ = fields_summary
+
 
 def release_fit(housing: bool, *, duration_s: float, seed: int, params: RigParams | None = None) -> ReleaseFit:
     """Simulate a release test (20 mm tip deflection, 500 Hz) and fit it (see :class:`ReleaseFit`)."""
@@ -101,6 +104,8 @@ class Table36:
     worst_trusted_mm: float
     worst_all_mm: float
     table: ResultTable
+
+    __repr__ = fields_summary
 
 
 def table_3_6(params: RigParams | None = None, calibration=None) -> Table36:
@@ -235,6 +240,8 @@ class Chapter3TwinStudy:
     @property
     def tables(self) -> tuple[ResultTable, ...]:
         return (self.table_3_6.table, self.calibration_residuals, self.calibration_parameters, self.convergence)
+
+    __repr__ = fields_summary
 
 
 def chapter3_twin_study(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> Chapter3TwinStudy:

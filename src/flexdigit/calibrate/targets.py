@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_int
 from flexdigit.errors import DataFileError
 
@@ -190,6 +191,8 @@ class CalibrationTargets:
             kw["actuated_repeatability_command"] = command
             kw["actuated_repeatability_v"] = tuple(float(v) for v in np.std(volts, axis=0, ddof=1))
         return cls(**kw)
+
+    __repr__ = fields_summary
 
 
 def _plain(value):

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from flexdigit._repr import summary
+from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_array
 from flexdigit.control._lsim import step_output
 from flexdigit.control._threads import single_blas_thread
@@ -251,6 +251,8 @@ class StepFigures:
     steady_state_error: float
     iae: float
     bounded: bool
+
+    __repr__ = fields_summary
 
 
 def _settling_time(t: np.ndarray, error: np.ndarray, band: float) -> float:

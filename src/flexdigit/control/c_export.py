@@ -41,6 +41,7 @@ from pathlib import Path
 import control as ct
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_choice, check_real
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.errors import DesignError, ParameterError
@@ -209,6 +210,8 @@ class ControllerSpec:
             return np.zeros(self.nstates)
         return np.linalg.pinv(self.C.reshape(1, -1)).reshape(-1) * (c - self.u_eq)
 
+    __repr__ = fields_summary
+
 
 # -- fixed point: the format and a bit-exact Python model of the C ----------------------------------------------
 
@@ -320,6 +323,8 @@ class FixedFormat:
             "Lq": Lq,
             "u_eq": self.row_output.const * 2.0**-self.row_output.acc_bits,
         }
+
+    __repr__ = fields_summary
 
 
 def _make_row(values, source_bits, source_bounds, target_bits: int, const: float = 0.0) -> _Row:

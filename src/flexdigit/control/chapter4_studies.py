@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.control.analysis import (
     LoopMaps,
@@ -101,6 +102,8 @@ class K1Study:
     poles_at_that_k1: np.ndarray
     table: ResultTable
 
+    __repr__ = fields_summary
+
 
 def k1_closed_loop_study() -> K1Study:
     """Table 4.1 rebuilt: see :class:`K1Study`."""
@@ -147,6 +150,8 @@ class RegularisationFit:
     zeros_vs_plant_poles: float
     numerator_lead: float
 
+    __repr__ = fields_summary
+
 
 @dataclass(frozen=True)
 class GammaStudy:
@@ -174,6 +179,8 @@ class GammaStudy:
     path: ResultTable
     poles_5hz: ResultTable
     poles_39hz: ResultTable
+
+    __repr__ = fields_summary
 
 
 def fit_printed_controller(filter_hz: float, plant=None) -> RegularisationFit:
@@ -263,6 +270,8 @@ class FilterSweepStudy:
     table: ResultTable
     printed_39hz: dict
 
+    __repr__ = fields_summary
+
 
 def filter_sweep_study(plant=None) -> FilterSweepStudy:
     """The filter sweep of 4.7 on our designs: see :class:`FilterSweepStudy`."""
@@ -346,6 +355,8 @@ class Chapter4Study:
         """Every table of the chapter, in reading order."""
         g = self.gamma
         return (self.k1.table, g.poles_5hz, g.poles_39hz, g.routes, g.path, self.sweep.table, self.comparison)
+
+    __repr__ = fields_summary
 
 
 def chapter4_study(*, fast: bool = False, seed: int = 0) -> Chapter4Study:

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.identify.filters import fft_filter, noise_reduction, svd_filter
 from flexdigit.identify.fit import fit_linear, second_order_response
@@ -99,6 +100,8 @@ class RecordsTable:
     table: ResultTable
     mean_rel_error: dict
 
+    __repr__ = fields_summary
+
 
 def records_table(which: str, rng: np.random.Generator, *, fast: bool = False) -> RecordsTable:
     """Table 3.1 (``"without_housing"``, 20 s records) or 3.2 (``"with_housing"``, 8 s) from synthetic records."""
@@ -151,6 +154,8 @@ class NoisyRecordsStudy:
     records: int
     errors: dict
     table: ResultTable
+
+    __repr__ = fields_summary
 
 
 def noisy_records_study(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> NoisyRecordsStudy:
@@ -212,6 +217,8 @@ class TwinIdentification:
     fits: dict
     tip_fits: dict
     table: ResultTable
+
+    __repr__ = fields_summary
 
 
 def _intervals(r) -> tuple[float, float, float, float]:
@@ -296,6 +303,8 @@ class FilterTradeoff:
     @property
     def best_harmonics(self) -> int:
         return int(self.harmonics[int(np.argmax(self.fft_reduction))])
+
+    __repr__ = fields_summary
 
 
 def filter_tradeoff(
@@ -419,6 +428,8 @@ class Chapter3IdentifyStudy:
             self.deflection[1],
             self.voltage[1],
         )
+
+    __repr__ = fields_summary
 
 
 def chapter3_identify_study(

@@ -33,6 +33,7 @@ import numpy as np
 from scipy import optimize, stats
 from threadpoolctl import threadpool_limits
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.identify.response import analyze_response, final_value_estimate, free_response, noise_std
@@ -464,6 +465,8 @@ class ARXModel:
         p = s[0]
         return float(abs(p)), 1.0
 
+    __repr__ = fields_summary
+
 
 def fit_arx(y, u=None, *, dt_s: float, na: int = 2, nb: int = 1, nk: int = 1, constant: bool = True) -> ARXModel:
     """Fit an ARX model by linear least squares (``numpy.linalg.lstsq``).
@@ -553,6 +556,8 @@ class LinearRelation:
         from flexdigit.models.conversion import LinearFit
 
         return LinearFit(self.slope.value, self.intercept.value, self.rms)
+
+    __repr__ = fields_summary
 
 
 def fit_linear(x, y, *, confidence: float = 0.95) -> LinearRelation:

@@ -45,6 +45,7 @@ from numbers import Integral, Real
 import numpy as np
 
 from flexdigit._estimator import Estimator, check_is_fitted
+from flexdigit._repr import fields_summary
 from flexdigit._validation import (
     Array,
     Bool,
@@ -243,6 +244,8 @@ class ContactEstimate:
 
     def as_dict(self) -> dict:
         return {k: v.tolist() for k, v in self.__dict__.items()}
+
+    __repr__ = fields_summary
 
 
 class ContactEstimator(Estimator):

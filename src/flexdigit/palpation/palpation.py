@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_choice, check_int, check_real, check_values
 from flexdigit.errors import ParameterError
 
@@ -142,6 +143,8 @@ class SweepRecord:
     status: str = "completed"
     message: str = ""
 
+    __repr__ = fields_summary
+
 
 class _Staircase:
     """A loop controller that sends a scheduled command (it reads nothing): the sweep's open-loop staircase."""
@@ -234,6 +237,8 @@ class TissueFit:
     def stiffness_n_m_per_cm(self) -> float:
         """The modulus as the N/m of one centimetre of digit pressed in."""
         return 0.01 * self.modulus_n_m2
+
+    __repr__ = fields_summary
 
 
 class _TissueLikelihood:
@@ -460,6 +465,8 @@ class PalpationResult:
             "converged": f.converged,
         }
 
+    __repr__ = fields_summary
+
 
 def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, estimator=None) -> PalpationResult:
     """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope."""
@@ -580,6 +587,8 @@ class ScanResult:
     map_modulus_sd_n_m2: np.ndarray
     inclusion: dict
     records: list
+
+    __repr__ = fields_summary
 
 
 def scan(
@@ -801,6 +810,8 @@ class ForceHold:
     overshoot: float
     settling_s: float
     status: str
+
+    __repr__ = fields_summary
 
 
 def hold_force(

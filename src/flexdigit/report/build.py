@@ -29,6 +29,7 @@ import matplotlib
 from flexdigit import __version__
 from flexdigit._io import atomic_write, check_output
 from flexdigit._json import to_jsonable
+from flexdigit._repr import fields_summary
 from flexdigit._system import available_cores, check_workers
 from flexdigit.errors import OutputExistsError
 from flexdigit.interrupts import raise_if_stopping, signals_deferred
@@ -60,6 +61,8 @@ class ReportSummary:
     chapters: list[str]
     failed: dict[str, str] = field(default_factory=dict)
     seconds: dict[str, float] = field(default_factory=dict)
+
+    __repr__ = fields_summary
 
 
 def reproduce(

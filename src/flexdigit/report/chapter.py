@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 from flexdigit.report.results import Entry
@@ -38,6 +39,8 @@ class Chapter:
     entries: list[Entry] = field(default_factory=list)
     tables: list[ResultTable] = field(default_factory=list)
     figures: list[Figure] = field(default_factory=list)
+
+    __repr__ = fields_summary
 
 
 @dataclass

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 
@@ -102,6 +103,8 @@ class TwentyMsStudy:
     runs: dict
     table: ResultTable
     deg_per_command: float
+
+    __repr__ = fields_summary
 
 
 def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> TwentyMsStudy:
@@ -189,6 +192,8 @@ class Chapter5Study:
     @property
     def tables(self) -> tuple[ResultTable, ...]:
         return (self.sample_periods, self.twenty_ms.table)
+
+    __repr__ = fields_summary
 
 
 def chapter5_study(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> Chapter5Study:

@@ -28,7 +28,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from flexdigit._json import to_jsonable
-from flexdigit._repr import summary
+from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_positive, check_real
 from flexdigit.errors import Interrupted, ParameterError, RigError
 from flexdigit.interrupts import signals_deferred, stop_requested
@@ -107,6 +107,8 @@ class TimingStats:
             float(np.percentile(comp, 99)),
             float(np.max(comp)),
         )
+
+    __repr__ = fields_summary
 
 
 @dataclass

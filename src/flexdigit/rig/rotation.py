@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.rig.base import Reading, Rig
@@ -258,6 +259,8 @@ class Settled:
     noise_v: np.ndarray
     waited_s: float
     truth_deg: float
+
+    __repr__ = fields_summary
 
 
 def wait_until_settled(

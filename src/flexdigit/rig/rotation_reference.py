@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import Plausible, check_array, check_param, check_real
 from flexdigit.errors import DataFileError
 from flexdigit.params import RigParams
@@ -278,6 +279,8 @@ class MeasuredReference:
         """``angle_source(command) -> deg`` for :func:`~flexdigit.rig.rotation.calibrate_rotation`."""
         table = dict(zip(self.commands.tolist(), self.rotation_deg.tolist(), strict=True))
         return lambda command: table[int(command)]
+
+    __repr__ = fields_summary
 
 
 def read_reference(

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flexdigit._repr import summary
+from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_real
 from flexdigit.rig.base import Rig
 from flexdigit.rig.controllers import make_controller
@@ -87,6 +87,8 @@ class StepMetrics:
     def to_dict(self) -> dict:
         """The figures by name, units in the names (``--json``, the log's closing record)."""
         return dataclasses.asdict(self)
+
+    __repr__ = fields_summary
 
 
 def step_metrics(

@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexdigit._constants import G_STANDARD_M_S2
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
 from flexdigit.params import RigParams
@@ -244,6 +245,8 @@ class DigitBeam:
         """Moment (B, Q) of the digit's own weight for shapes (B, P+1, 2) through a :meth:`weight_operator`."""
         return _cross(np.matmul(operator, r_nodes), self.gravity)
 
+    __repr__ = fields_summary
+
 
 @dataclass
 class ShapeEstimate:
@@ -346,6 +349,8 @@ class ShapeEstimate:
             "load_force_sd_n": load(self.load_force_sd_n[i]),
             "load_mass_kg": load(self.load_mass_kg[i]),
         }
+
+    __repr__ = fields_summary
 
 
 class ShapeEstimator:
@@ -1022,6 +1027,8 @@ class ShapeAccuracy:
                 }
             )
         return out
+
+    __repr__ = fields_summary
 
 
 #: Where :func:`shape_accuracy` hangs its weight by default: every centimetre from the clamp to the tip (m).

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_real
 from flexdigit.control.analysis import step_figures
 from flexdigit.errors import DesignError
@@ -133,6 +134,8 @@ class StepResponses:
     high_deg: np.ndarray
     step_time_s: float
     schedule: StepSchedule
+
+    __repr__ = fields_summary
 
 
 def step_responses(

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit.errors import ParameterError
 from flexdigit.params import BRIDGE_TYPES, RigParams
 from flexdigit.studies.execution import run_study
@@ -482,6 +483,8 @@ class DesignResult:
         if failed:
             lines.append(f"  {len(failed)} designs failed (listed in summary.json)")
         return "\n".join(lines)
+
+    __repr__ = fields_summary
 
 
 class _Builder:

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_int, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.studies.execution import run_study, warn
@@ -202,6 +203,8 @@ class SensitivityResult:
             entry["range"] = [float(ok.min()), float(ok.max())] if ok.size else None
             out["metrics"][metric] = entry
         return out
+
+    __repr__ = fields_summary
 
 
 def _row(metric, method, index, parameter, parameter_2, n, value, conf) -> dict:

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit.tactile.protocols import RELAXED
 
 __all__ = [
@@ -85,6 +86,8 @@ class Bound:
     crlb_m: np.ndarray
     crlb_known_mass_m: np.ndarray
     zone: np.ndarray
+
+    __repr__ = fields_summary
 
 
 def noise_of(model, position_from_base_m, mass_kg, command) -> np.ndarray:
@@ -311,6 +314,8 @@ class ProtocolLimits:
         except KeyError as err:
             raise ValueError(f"reading at setting {err.args[0]} is not one of the protocol's settings") from None
 
+    __repr__ = fields_summary
+
 
 def _setting_keys(a, m, c) -> list[tuple]:
     a, m, c = (np.atleast_1d(np.asarray(v, dtype=float)) for v in (a, m, c))
@@ -478,6 +483,8 @@ class ContactBound:
     position_crlb_m: np.ndarray
     force_crlb_n: np.ndarray
     zone: np.ndarray
+
+    __repr__ = fields_summary
 
 
 def contact_bounds(model, position_m, force_n, command, *, n_readings: int = 1) -> ContactBound:

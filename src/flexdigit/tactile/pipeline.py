@@ -29,7 +29,7 @@ from numbers import Integral, Real
 import numpy as np
 
 from flexdigit._estimator import Estimator, check_is_fitted
-from flexdigit._repr import summary
+from flexdigit._repr import fields_summary, summary
 from flexdigit._system import available_cores
 from flexdigit._validation import (
     Array,
@@ -76,6 +76,8 @@ class Split:
     train: np.ndarray
     val: np.ndarray
     test: np.ndarray
+
+    __repr__ = fields_summary
 
 
 def thesis_split(n: int, seed: int) -> Split:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
@@ -233,6 +234,8 @@ class TactileExperimentResult:
     identifiability: dict
     extra: dict = field(default_factory=dict)
 
+    __repr__ = fields_summary
+
 
 def run_experiment(
     key: str,
@@ -349,6 +352,8 @@ class NoiseScan:
     target: float
     scale_match: float | None
 
+    __repr__ = fields_summary
+
 
 def white_noise_scan(
     key: str = "non_actuated",
@@ -457,6 +462,8 @@ class FrictionStudy:
     servo_equivalent: dict
     corr2_mean: float | None
     corr2_sd: float | None
+
+    __repr__ = fields_summary
 
 
 def friction_study(*, seed: int = 0, params: RigParams | None = None, fast: bool = False) -> FrictionStudy:

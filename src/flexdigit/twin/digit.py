@@ -46,6 +46,7 @@ import numpy as np
 from scipy.linalg.lapack import dgesv as _gesv
 
 from flexdigit._constants import G_STANDARD_M_S2
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_int, check_positive, check_real, check_values
 from flexdigit.errors import ConvergenceWarning, ParameterError
 
@@ -106,6 +107,8 @@ class StaticSolution:
     tip_m: np.ndarray
     iterations: int
     converged: bool = True
+
+    __repr__ = fields_summary
 
 
 def chain_matrices(d, mass_lever, mass_link, stiffness, damping, mass_kg, inertia, gravity):
