@@ -29,6 +29,7 @@ from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
 
+from flexdigit._io import atomic_write, read_text
 from flexdigit._repr import differences, summary
 from flexdigit._validation import (
     Array,
@@ -809,8 +810,6 @@ def load_params(path: str | Path, *, check: bool = True) -> RigParams:
     FileNotFoundError
         If the file does not exist.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     text = read_text(path, "a rig parameter TOML")
     try:
@@ -839,8 +838,6 @@ def save_params(params: RigParams, path: str | Path, *, force: bool = False) -> 
         If the file exists and ``force`` is false.
     """
     import tomli_w
-
-    from flexdigit._io import atomic_write
 
     path = Path(path)
     parent = path.parent

@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._io import read_text
 from flexdigit._repr import summary
 from flexdigit._validation import InstanceOf, Interval, check_int, declare, validate_fields
 from flexdigit.errors import ParameterError
@@ -303,8 +304,6 @@ def load_robot(path: str | Path) -> Robot:
     FileNotFoundError
         If the file does not exist.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     text = read_text(path, "a robot description TOML")
     try:
