@@ -33,6 +33,7 @@ from flexdigit.identify.response import settling_formula_bias
 from flexdigit.identify.timeseries import TimeSeries, series_from_table
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
+from flexdigit.twin.records import actuation_sweep, release_test, servo_step_test
 
 __all__ = [
     "DT_S",
@@ -232,8 +233,6 @@ def _intervals(r) -> tuple[float, float, float, float]:
 def twin_identification(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> TwinIdentification:
     """The twin's release test (gauge 1 and the tip) and servo step tests (51 commands; 3 runs when ``fast``,
     else 5), identified by the thesis method and by least squares."""
-    from flexdigit.twin.records import release_test, servo_step_test
-
     duration, rate = (5.0, 500.0) if fast else (8.0, 1000.0)
     rel = release_test(duration_s=duration, sample_rate_hz=rate, seed=seed, params=params)
     release, tip = series_from_table(rel, "gauge1"), series_from_table(rel, "tip_deflection")
@@ -365,8 +364,6 @@ def deflection_fits() -> tuple[list, ResultTable]:
 def voltage_fits(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> tuple[list, ResultTable]:
     """E 3.20-3.22 from the twin's actuation sweep (commands 8..43, each settled; 5 readings a command when
     ``fast``, else 20): ``(fits, table identify.voltage_fits)``."""
-    from flexdigit.twin.records import actuation_sweep
-
     sweep = actuation_sweep(samples=5 if fast else 20, seed=seed, params=params)
     commands = sweep.column("command").astype(float)
     printed = thesis_value("conversion.v_sg_fit")

@@ -34,8 +34,8 @@ from flexdigit._repr import summary
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.identify.events import Problem, Survey, survey
-from flexdigit.identify.filters import FILTERS, apply_filter, default_cutoff_hz
-from flexdigit.identify.fit import LOSSES, Estimate, SecondOrderFit, second_order_response
+from flexdigit.identify.filters import FILTERS, apply_filter, butter_filter, default_cutoff_hz
+from flexdigit.identify.fit import LOSSES, Estimate, SecondOrderFit, fit_arx, second_order_response
 from flexdigit.identify.quality import FitQuality, assess
 from flexdigit.identify.response import NoOscillationError, ResponseFeatures, analyze_response
 from flexdigit.identify.timeseries import TimeSeries
@@ -565,9 +565,6 @@ def _arx_mode(t, y, kind: str, t0: float, cutoff_hz: float | None) -> tuple[floa
     samples per cut-off period (50 per period of the dominant oscillation by default). A release record is used
     from two cut-off periods after the release, where the filter no longer mixes in the hold before it.
     """
-    from flexdigit.identify.filters import butter_filter, default_cutoff_hz
-    from flexdigit.identify.fit import fit_arx
-
     fs = (t.size - 1) / (t[-1] - t[0])
     cutoff = cutoff_hz or default_cutoff_hz(t, y)
     yf = butter_filter(y, fs, cutoff)
