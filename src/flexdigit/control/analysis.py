@@ -20,7 +20,7 @@ import control as ct
 import numpy as np
 
 from flexdigit._repr import fields_summary, summary
-from flexdigit._validation import check_array
+from flexdigit._validation import check_array, check_real
 from flexdigit.control._lsim import step_output
 from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.generalized import as_statespace
@@ -358,8 +358,6 @@ def step_figures(
     >>> round(f.rise_time_s, 3), round(f.settling_time_s, 3), f.overshoot_percent, round(f.iae, 4)
     (0.22, 0.391, 0.0, 0.1)
     """
-    from flexdigit._validation import check_real
-
     t, y = _after_step(t_s, y, step_time_s)
     tail_length = check_real(tail_s, "tail_s", "step_figures", low=0.0)
     confirm = check_real(confirm_s, "confirm_s", "step_figures", low=0.0)

@@ -41,8 +41,11 @@ from pathlib import Path
 import control as ct
 import numpy as np
 
+from flexdigit import __version__
+from flexdigit._io import atomic_write, check_output
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_choice, check_real
+from flexdigit.control.design20ms import closed_loop
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.errors import DesignError, ParameterError
 
@@ -607,8 +610,6 @@ def render_c(
     """
     if not prefix.isidentifier() or not prefix.isascii():
         raise ParameterError(f"The 'prefix' of render_c must be a C identifier. Got {prefix!r}.")
-    from flexdigit import __version__
-
     n, m = spec.nstates, spec.ninputs
     P = prefix.upper()
     fixed = fmt is not None
@@ -1209,8 +1210,6 @@ def _two_input(A, B, C, D, dt) -> ct.StateSpace:
 
 
 def _loop_figures(A, B, C, D, plant_d, dt):
-    from flexdigit.control.design20ms import closed_loop
-
     K2 = _two_input(A, B, C, D, dt)
     loop = closed_loop(plant_d, K2)
     poles = loop.poles()
@@ -1401,8 +1400,6 @@ def export_controller(
 
     Both destinations are checked before anything is written; neither is replaced without ``force``.
     """
-    from flexdigit._io import atomic_write, check_output
-
     format = check_choice(format, "format", FORMATS, "export_controller")
     out = Path(out)
     if out.suffix != ".c":

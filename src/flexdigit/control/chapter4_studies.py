@@ -39,8 +39,10 @@ from flexdigit.control.analysis import (
     step_metrics,
 )
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
+from flexdigit.control.mixsyn import check_requirements, design_mixsyn
 from flexdigit.control.synthesis import hinf_lmi, hinf_riccati, regularisation_path
 from flexdigit.control.thesis_designs import fit_thesis_regularisation, printed_controller, sorted_poles, thesis_design
+from flexdigit.models.plant import build_plant
 from flexdigit.reference import thesis_complex, thesis_value
 
 __all__ = [
@@ -71,8 +73,6 @@ PRINTED_GAIN_FACTOR = 10.0
 
 
 def _printed_plant():
-    from flexdigit.models.plant import build_plant
-
     return build_plant("printed")
 
 
@@ -369,9 +369,6 @@ def chapter4_study(*, fast: bool = False, seed: int = 0) -> Chapter4Study:
     seed : int
         Seed of that Monte Carlo.
     """
-    from flexdigit.control.mixsyn import check_requirements, design_mixsyn
-    from flexdigit.models.plant import build_plant
-
     G = _printed_plant().tf
     F = filter_weight(5.0)
     peak_printed = thesis_value("hinf.filter_peak_db")

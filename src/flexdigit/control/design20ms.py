@@ -47,7 +47,10 @@ from flexdigit._validation import (
 )
 from flexdigit.control.discretise import METHODS, discretise
 from flexdigit.control.runtime import RuntimeController
+from flexdigit.control.thesis_designs import printed_controller
 from flexdigit.errors import DesignError
+from flexdigit.models.plant import build_plant
+from flexdigit.models.servo import servo_unit_tf
 from flexdigit.params import RigParams
 
 __all__ = [
@@ -96,9 +99,6 @@ def design_plant(params: RigParams | None = None, deg_per_command: float | None 
     ``deg_per_command`` defaults to the cable model's tip rotation per command (1.735 deg,
     :func:`flexdigit.models.plant.build_plant` ``"consistent"``, ``output="tip_rotation_rad"``).
     """
-    from flexdigit.models.plant import build_plant
-    from flexdigit.models.servo import servo_unit_tf
-
     params = params or RigParams()
     if deg_per_command is None:
         deg_per_command = float(np.rad2deg(build_plant("consistent", params, output="tip_rotation_rad").dc_gain))
@@ -304,8 +304,6 @@ def thesis_controller(
 
     The runtime runs it on the error ``r - y`` in metres; no anti-windup (the thesis had none).
     """
-    from flexdigit.control.thesis_designs import printed_controller
-
     if method not in METHODS:
         raise DesignError(f"The 'method' parameter of thesis_controller must be one of {METHODS}. Got {method!r}.")
     Kd = discretise(ct.ss(printed_controller("39hz")), period_s, method)
