@@ -31,10 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_write, read_text
+from flexdigit._json import to_jsonable
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.rig.base import Reading, Rig
+from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
 
 __all__ = [
     "RotationEstimator",
@@ -357,8 +360,6 @@ def calibrate_rotation(
         Fitted, with ``source_``, ``commands_``, ``settle_time_s_`` (per reading) and ``deg_per_command_`` (the
         reference's rotation per command over the sweep) set, and :meth:`~RotationEstimator.uncertainty_deg`.
     """
-    from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
-
     if angle_source is not None:
         reference = angle_source
     cov, truth = None, None
@@ -462,9 +463,6 @@ def _provenance(est: RotationEstimator, source: str, commands, waited, rotation_
 
 def save_rotation_map(estimator: RotationEstimator, path, *, force: bool = False) -> Path:
     """Write a fitted map as JSON (atomically; an existing file only with ``force``)."""
-    from flexdigit._io import atomic_write
-    from flexdigit._json import to_jsonable
-
     with atomic_write(path, "w", force=force) as fh:
         json.dump(to_jsonable(estimator.to_dict()), fh, indent=1)
     return Path(path)
@@ -475,8 +473,6 @@ def load_rotation_map(path) -> RotationEstimator:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the key that is missing or wrong.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     try:
         data = json.loads(read_text(path, "a rotation calibration JSON"))

@@ -38,7 +38,8 @@ import numpy as np
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.backends.stream_framing import LineDecoder
-from flexdigit.rig.base import Rig, UrlOption
+from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
+from flexdigit.twin.twin import Twin
 
 __all__ = [
     "HilRig",
@@ -176,8 +177,6 @@ class HilRig(Rig):
             raise ParameterError(f"hil://{elf}: no firmware image there (build it with 'make firmware')")
         self.harness = _find_harness(elf, self.elf, harness)
         if twin is None:
-            from flexdigit.twin.twin import Twin
-
             options = {} if calibration is None else {"calibration": calibration}
             twin = Twin(params, seed=int(seed), dt_s=0.002, **options)
         self.twin = twin
@@ -422,8 +421,6 @@ class HilRig(Rig):
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> HilRig:
     """``hil://PATH.elf?seed=0&mode=host`` (see the module docstring)."""
-    from flexdigit.rig.base import RigURL, rig_url_options
-
     if not location:
         raise ParameterError("hil:// needs a firmware image, e.g. hil://firmware/build/flexdigit_board.elf")
     checked = rig_url_options(RigURL("hil", location), **options)[1]
