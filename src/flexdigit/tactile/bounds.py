@@ -38,7 +38,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexdigit._repr import fields_summary
+from flexdigit.params import RigParams
 from flexdigit.tactile.protocols import RELAXED
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, friction_sd_v, static_gauges_v
 
 __all__ = [
     "ZONES",
@@ -199,10 +202,6 @@ class TwinGaugeModel:
     """
 
     def __init__(self, params=None, calibration=None, orientation: str = "horizontal", cells_per_section=None) -> None:
-        from flexdigit.params import RigParams
-        from flexdigit.twin.calibration import default_calibration
-        from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION
-
         self.params = params or RigParams()
         self.calibration = calibration or default_calibration()
         self.orientation = orientation
@@ -245,8 +244,6 @@ class TwinGaugeModel:
     def _static(self, a, m, command, friction: bool) -> np.ndarray:
         """Voltages (or friction spread) of the cases ``(a, m)`` at one command, from one static solve kept for
         both; identical cases (a tare's no-load readings over a whole grid) solved once."""
-        from flexdigit.twin.twin import friction_sd_v, static_gauges_v
-
         settings = (self.params, self.calibration, self.orientation, self.cells_per_section)
         key = (int(command), a.tobytes(), m.tobytes())
         kept = self._kept

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import read_text, refuse_special
 from flexdigit._validation import (
     Plausible,
     check_array,
@@ -315,14 +316,10 @@ def load_protocol(name_or_path: str | Path) -> Protocol:
     if text_name in BUILTIN:
         resource = resources.files(__package__).joinpath("protocols", f"{text_name}.toml")
         return protocol_from_toml(resource.read_text(), source=f"protocol {text_name}")
-    from flexdigit._io import refuse_special
-
     path = Path(name_or_path)
     refuse_special(path, "a protocol TOML")
     if not path.is_file():
         raise ParameterError(
             f"no protocol {text_name!r}: expected one of {', '.join(BUILTIN)} or a TOML file that exists"
         )
-    from flexdigit._io import read_text
-
     return protocol_from_toml(read_text(path, "a protocol TOML"), source=str(path))
