@@ -28,8 +28,11 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from flexdigit._io import read_text, refuse_special
 from flexdigit._validation import Plausible, _interval_text, unit_slip
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.palpation.palpation import PalpationProtocol
+from flexdigit.twin.contact import Inclusion, Tissue
 
 __all__ = [
     "TISSUES",
@@ -203,16 +206,12 @@ def _read(name_or_path, builtin, kind: str) -> tuple[dict, str]:
         resource = resources.files(__package__).joinpath("palpation_data", f"{text_name}.toml")
         text, source = resource.read_text(), f"{kind} {text_name}"
     else:
-        from flexdigit._io import refuse_special
-
         path = Path(name_or_path)
         refuse_special(path, f"a {kind} TOML")
         if not path.is_file():
             raise DataFileError(
                 f"no {kind} {text_name!r}: expected one of {', '.join(builtin)} or a TOML file that exists"
             )
-        from flexdigit._io import read_text
-
         text, source = read_text(path, f"a {kind} TOML"), str(path)  # binary garbage: named, not a codec error
     try:
         return tomllib.loads(text), source
@@ -237,8 +236,6 @@ def load_tissue(name_or_path):
     Without ``gap_mm`` and ``modulus_n_m2`` the tissue is only located (``TissueFile.placed_on_twin`` False): enough
     for hardware, where palpation estimates them; the twin needs them to put the tissue there.
     """
-    from flexdigit.twin.contact import Inclusion, Tissue
-
     data, source = _read(name_or_path, TISSUES, "tissue")
     if set(data) != {"tissue"}:
         extra = sorted(set(data) - {"tissue"})
@@ -304,8 +301,6 @@ class PalpationFile:
 
 def load_palpation_protocol(name_or_path=None) -> PalpationFile:
     """A palpation protocol from a built-in name (:data:`PROTOCOLS`) or a TOML file (the default sweep if None)."""
-    from flexdigit.palpation.palpation import PalpationProtocol
-
     if name_or_path is None:
         name_or_path = "sweep"
     data, source = _read(name_or_path, PROTOCOLS, "palpation protocol")
