@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_write
 from flexdigit._repr import summary
 from flexdigit.params import RigParams
 from flexdigit.twin import records as ex
@@ -72,8 +73,6 @@ def write_csv(path: Path, header, rows, delimiter=",", decimal=".") -> Path:
             text = repr(float(v))
             return text.replace(".", decimal) if decimal != "." else text
         return str(v)
-
-    from flexdigit._io import atomic_write
 
     with atomic_write(path, "w", force=True, newline="") as fh:  # synthetic records are made again at will
         writer = csv.writer(fh, delimiter=delimiter, lineterminator="\r\n")
