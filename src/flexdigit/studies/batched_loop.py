@@ -27,6 +27,7 @@ from flexdigit._repr import fields_summary
 from flexdigit._validation import check_real
 from flexdigit.control.analysis import step_figures
 from flexdigit.errors import DesignError
+from flexdigit.twin.batched import BatchedTwin
 
 __all__ = ["StepSchedule", "BatchedRuntime", "StepResponses", "step_responses", "step_figures_batch"]
 
@@ -155,8 +156,6 @@ def step_responses(
         Per rig, the pretension of a second, antagonistic cable (N), None for the thesis's single cable
         (:class:`~flexdigit.twin.batched.BatchedTwin`).
     """
-    from flexdigit.twin.batched import BatchedTwin
-
     schedule = schedule or StepSchedule()
     ctl = BatchedRuntime(controllers)
     pre = antagonist = None
