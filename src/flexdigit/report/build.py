@@ -36,6 +36,12 @@ from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.twin.calibration import (
+    default_calibration,
+    default_calibration_source,
+    default_fit_record,
+    use_calibration,
+)
 
 __all__ = [
     "ReportSummary",
@@ -310,8 +316,6 @@ _WORKER_CONTEXT = contextlib.ExitStack()
 def _calibration_state():
     """The twin calibration a ``use_calibration`` block made the default here, to hand to the workers (a spawned
     process starts on the packaged one); None when it is the packaged one."""
-    from flexdigit.twin.calibration import default_calibration, default_calibration_source, default_fit_record
-
     source = default_calibration_source()
     return None if source == "packaged" else (default_calibration(), source, default_fit_record())
 
@@ -331,8 +335,6 @@ def _worker_init(calibration_state) -> None:
     os.environ.update(_ONE_THREAD)  # the libraries not loaded yet (SciPy's, slycot's OpenBLAS; scikit-learn's OpenMP)
     threadpool_limits(1)  # those already loaded (numpy's OpenBLAS)
     if calibration_state is not None:  # the parent's use_calibration block, for every chapter of this worker
-        from flexdigit.twin.calibration import use_calibration
-
         _WORKER_CONTEXT.enter_context(use_calibration(*calibration_state))
 
 
@@ -514,7 +516,5 @@ def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext,
 
 
 def _calibration_source() -> str:
-    from flexdigit.twin.calibration import default_calibration_source
-
     source = default_calibration_source()
     return "packaged (fitted to the thesis)" if source == "packaged" else source

@@ -8,7 +8,11 @@ import control as ct
 import numpy as np
 
 from flexdigit.control._lsim import step_output
+from flexdigit.control.analysis import loop_maps, root_locus
+from flexdigit.control.chapter4_studies import chapter4_study
+from flexdigit.control.generalized import filter_weight
 from flexdigit.control.thesis_designs import printed_controller
+from flexdigit.models.plant import build_plant
 from flexdigit.reference import thesis_value
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext
@@ -67,8 +71,6 @@ def _half_last_digit(printed: float) -> float:
 
 def build(ctx: ReportContext) -> Chapter:
     """Chapter 4 from :func:`flexdigit.control.chapter4_studies.chapter4_study`: entries, tables and figures."""
-    from flexdigit.control.chapter4_studies import chapter4_study
-
     study = chapter4_study(fast=ctx.fast, seed=ctx.seed)
     ch = Chapter("ch4", "Controller design (H-infinity, thesis chapter 4)")
     ch.paragraphs.append(
@@ -467,8 +469,6 @@ def _fig_loop_maps(plt, study, G, w, designs, fits):
 
 
 def _fig_steps(plt, study, G, w, designs, fits):
-    from flexdigit.control.analysis import loop_maps
-
     fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
     t = np.linspace(0, 1.0, 1000)
     for hz, d in designs.items():
@@ -482,9 +482,6 @@ def _fig_steps(plt, study, G, w, designs, fits):
 
 
 def _fig_root_locus(plt, study, G, w, designs, fits):
-    from flexdigit.control.analysis import root_locus
-    from flexdigit.models.plant import build_plant
-
     fig, ax = plt.subplots()
     gains = np.concatenate([[0.0], np.logspace(-1, 5, 400)])
     for name, plant in (("plant (4.4)", G), ("K1 closed loop (4.3)", build_plant("printed").closed_loop(study.k1.k1))):
@@ -497,8 +494,6 @@ def _fig_root_locus(plt, study, G, w, designs, fits):
 
 
 def _fig_tpq(plt, study, G, w, designs, fits):
-    from flexdigit.control.analysis import loop_maps
-
     fig, ax = plt.subplots()
     for hz, d in designs.items():
         ax.semilogx(
@@ -512,8 +507,6 @@ def _fig_tpq(plt, study, G, w, designs, fits):
 
 
 def _fig_mixsyn_step(plt, study, G, w, designs, fits):
-    from flexdigit.control.analysis import loop_maps
-
     mm = loop_maps(study.mixsyn_plant.tf, study.mixsyn.controller)
     fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
     t = np.linspace(0, 5, 2000)
@@ -526,8 +519,6 @@ def _fig_mixsyn_step(plt, study, G, w, designs, fits):
 
 
 def _fig_filter(plt, study, G, w, designs, fits):
-    from flexdigit.control.generalized import filter_weight
-
     peak_printed = thesis_value("hinf.filter_peak_db")
     w_read = study.filter_peak_read_at_rad_s
     fig, ax = plt.subplots()
@@ -544,8 +535,6 @@ def _fig_filter(plt, study, G, w, designs, fits):
 def _controller_root_locus(plt, G, K, K_printed, hz: float):
     """Two root loci (:func:`~flexdigit.control.analysis.root_locus`): ``1 + k K`` and ``1 + k G K``; closed-loop
     poles marked."""
-    from flexdigit.control.analysis import loop_maps, root_locus
-
     Kt = ct.tf(K)
     fig, axs = plt.subplots(1, 2, figsize=(10, 4.2))
     pk = np.linalg.eigvals(K.A)

@@ -15,13 +15,12 @@ from flexdigit.control.thesis_designs import printed_controller
 from flexdigit.reference import thesis_value
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import compare, new
+from flexdigit.rig.chapter5_studies import chapter5_study
 
 
 def build(ctx: ReportContext) -> Chapter:
     """Chapter 5 from :func:`flexdigit.rig.chapter5_studies.chapter5_study`: entries, tables and figures."""
     import matplotlib.pyplot as plt
-
-    from flexdigit.rig.chapter5_studies import chapter5_study
 
     study = chapter5_study(ctx.params, seed=int(ctx.rng(5).integers(1, 1000)), fast=ctx.fast)
     chapter = Chapter(slug="ch5-digital", title="Chapter 5: the digital controller and control at 20 ms")

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.palpation import palpation_studies as studies
+from flexdigit.palpation.palpation import PalpationProtocol
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import new
 
@@ -180,8 +181,6 @@ def _classification(ctx, ch) -> None:
 
 
 def _stiffness(ctx, ch, plt) -> None:
-    from flexdigit.palpation.palpation import PalpationProtocol
-
     protocol = PalpationProtocol(commands=tuple(range(8, 31, 2)))
     moduli = (300.0, 1500.0) if ctx.fast else (300.0, 750.0, 1500.0)
     s = studies.stiffness_study(moduli, seeds=(ctx.seed,), protocol=protocol)
@@ -239,8 +238,6 @@ def _stiffness(ctx, ch, plt) -> None:
 
 
 def _scan(ctx, ch, plt) -> None:
-    from flexdigit.palpation.palpation import PalpationProtocol
-
     offsets = np.arange(-0.02, 0.0201, 0.01)
     sc = studies.scan_study(
         offsets_m=offsets, protocol=PalpationProtocol(commands=tuple(range(8, 31, 3))), seed=ctx.seed
