@@ -145,13 +145,17 @@ def _collect(args: argparse.Namespace) -> CommandResult:
     if not (out.exists() and journal.exists()):  # both: a run stopped while tidying up, the runner finishes it
         check_output(out, force=args.force)
     resumed = journal.exists()
-    # on the twin, lie the digit as the protocol says and attach the cable only when it actuates
-    on_twin = parse_rig_url(args.backend).scheme.startswith("sim")
+    # on the twin, lie the digit as the protocol says and attach the cable only when it actuates; the firmware on
+    # the emulated board (hil://) holds a twin too, on its own 2 ms step
+    scheme = parse_rig_url(args.backend).scheme
+    on_twin = scheme.startswith("sim")
     if args.calibration and not on_twin:
         raise ParameterError(
             f"--calibration calibrates the twin: it needs a sim backend, not {args.backend!r} (a real rig is itself)"
         )
     options = sim_options(protocol, args.backend) if on_twin else {}
+    if scheme == "hil":
+        options = {k: v for k, v in sim_options(protocol, args.backend).items() if k in ("orientation", "cable")}
     if args.calibration:
         from flexdigit.twin.calibration import load_calibration
 

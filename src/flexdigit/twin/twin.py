@@ -119,6 +119,9 @@ class Twin:
         Step the digit with the compiled kernel (:meth:`~flexdigit.twin.digit.DynamicState.use_compiled`): ~5 x
         less CPU per simulated second, within 1e-9 rad of the default numpy path but not bit for bit, so off
         by default (the report's numbers come from the numpy path).
+    servo_drive : {"serial", "timer"}
+        How commands reach the servo (:mod:`flexdigit.twin.actuator`): the thesis's serial board, or a pulse the
+        controller's own timer generates (the reference firmware's: the loop on the board's timing).
     """
 
     def __init__(
@@ -134,6 +137,7 @@ class Twin:
         cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
         command: int | None = None,
         compiled: bool = False,
+        servo_drive: str = "serial",
     ):
         self.params = params or RigParams()
         self.calibration = calibration or default_calibration()
@@ -154,7 +158,7 @@ class Twin:
         # cable (a servo pulling it slides it one way, a repeatable state the calibration absorbs)
         self._friction_xi = np.zeros(3)
         start = self.params.actuator.equilibrium_command if command is None else command
-        self.servo = Servo(self.params, start)
+        self.servo = Servo(self.params, start, drive=servo_drive)
         self._pulley_m = self.params.actuator.cable_m_per_servo_rad
         self._angle_taut = float(command_to_angle_rad(self.params.actuator.equilibrium_command, self.params))
         self._loads: list[tuple[float, float]] = []
