@@ -18,6 +18,7 @@ import argparse
 import importlib
 import json
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -48,8 +49,17 @@ class UsageError(ValueError):
     """A command-line mistake argparse found (unknown option, a value of the wrong type)."""
 
 
+#: What argparse takes for a negative number rather than an option: also a comma list that starts with one
+#: (``--gauges-v -0.19,0.1,0.2``, ``--loads-g -5e-1,2``), which argparse alone refuses without ``=``.
+_NEGATIVE_VALUE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,\s*-?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)*$")
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse, raising :class:`UsageError` instead of exiting, so that ``--json`` can report it as JSON."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_VALUE  # argparse's hook (a private attribute, stable since 3.2)
 
     def error(self, message: str):  # argparse's hook
         # a declared flag's refusal (flexdigit._validation.Flag) in the format of every parameter message

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible, check_values
 from flexdigit.errors import ParameterError
 from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M, SERVO_COMMAND
@@ -58,6 +59,7 @@ def _common(p: argparse.ArgumentParser) -> None:
         help="twin calibration TOML (default: fitted to the thesis, scaled to the --params digit)",
     )
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+    add_plot_flag(p, "the record (gauges and pot in V over time, the command or the load's position)")
 
 
 def _add_release(sub) -> None:
@@ -140,11 +142,14 @@ def _add_load(sub) -> None:
 
 def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit._io import check_output
+    from flexdigit._plot import check_plot, save_plot
     from flexdigit.params import RigParams, load_params
     from flexdigit.twin.calibration import default_calibration, load_calibration
     from flexdigit.twin.digit_calibration import calibration_for
+    from flexdigit.twin.record_plot import record_figure
 
     check_output(args.out, force=args.force)  # before the simulation, not after it
+    check_plot(args.plot, "simulate", force=args.force)
     params = load_params(args.params) if args.params else RigParams()
     if args.calibration:
         cal = load_calibration(args.calibration)
@@ -157,6 +162,8 @@ def _run(args: argparse.Namespace) -> CommandResult:
     experiment = {"release": _release, "step": _step, "sweep": _sweep}.get(args.experiment, _load)
     res, findings, text = experiment(args, params, gauges, common)
     path = res.save(args.out, force=args.force)
+    if args.plot:
+        save_plot(record_figure(res), args.plot, "simulate", force=args.force)
     data = {
         "experiment": res.metadata["experiment"],
         "out": str(path),
@@ -164,6 +171,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "columns": res.table.column_names,
         "seed": args.seed,
         "findings": findings,
+        "plot": args.plot,
     }
     return CommandResult(data=data, text=f"{res.metadata['experiment']}: {res.table.num_rows} rows -> {path}\n{text}")
 
