@@ -30,6 +30,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="fit the twin to a rig's records (or to the thesis) and write a calibration TOML",
         description=__doc__.splitlines()[0],
     )
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("calibration")
     p.add_argument("--out", required=True, help="calibration TOML to write")
     p.add_argument("--force", action="store_true", help="overwrite --out (and --plot) if it exists")
     add_plot_flag(p, "the twin's residual on every target")

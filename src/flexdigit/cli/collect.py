@@ -35,6 +35,9 @@ def _add_collect(subparsers, settle) -> None:
         _collect,
         help="run a load protocol (thesis-6.1, thesis-7.1, thesis-7.1-no-load or a TOML file) and save the dataset",
     )
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("protocol")
     p.add_argument("protocol", help="a built-in protocol name or a protocol TOML file")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
     p.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv); resumes its journal")
@@ -68,6 +71,9 @@ def _add_dataset(subparsers) -> None:
         description="Map a foreign tactile readings file onto a flexdigit dataset. The column map comes from --map "
         "(a TOML with the keys below, without the dashes: gauges, gauge_unit, load, ...) and/or the flags, which win.",
     )
+    from flexdigit.cli._formats import epilog
+
+    q.epilog = epilog("dataset")
     q.add_argument("file", help="the readings: CSV-like text (delimiter detected) or .parquet")
     q.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv)")
     q.add_argument("--force", action="store_true", help="overwrite --out if it exists")
@@ -107,7 +113,7 @@ def _add_train(subparsers, hidden, tol) -> None:
     )
     p.add_argument("--hidden", type=Flag(hidden), default=None, help="hidden nodes (default: sweep as the thesis)")
     p.add_argument("--tol", type=Flag(tol), default=None, help="'learning gradient' (SCG tolerance; default: sweep)")
-    p.add_argument("--seed", type=Flag(SEED), default=0)
+    p.add_argument("--seed", type=Flag(SEED), default=0, help="seed of the split and the network's start")
     p.add_argument("--model", default=None, help="model file to write (default: FILE stem + .<target>.model.json)")
     p.add_argument("--force", action="store_true", help="overwrite the model file (and --plot) if it exists")
     add_plot_flag(p, "the held-out test readings' predicted against actual values")

@@ -28,7 +28,12 @@ def register(subparsers) -> None:
     )
     p = add_command(sub, "hinf", _hinf, help="the thesis's H-infinity design (4.4) for one error-filter cut-off")
     p.add_argument("--filter-hz", type=Flag(FILTER_HZ), required=True, help="cut-off of F(s) = 1/(s + 2 pi f), Hz")
-    p.add_argument("--plant", choices=("printed", "consistent"), default="printed")
+    p.add_argument(
+        "--plant",
+        choices=("printed", "consistent"),
+        default="printed",
+        help="printed: the thesis's G(s) of 3.5 as printed; consistent: its unit-correct rebuild",
+    )
     p.add_argument(
         "--eps",
         type=Flag(Plausible("", 0.0, 1e3, "a regularisation weight eps_u: the thesis's are near 1e-3")),

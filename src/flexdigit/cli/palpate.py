@@ -19,6 +19,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         _palpate,
         help="palpate tissue beside the digit: stiffness from a command sweep, a scan for an inclusion, force control",
     )
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("tissue", "palpation")
     p.add_argument("--tissue", required=True, help="a tissue TOML file or a built-in (soft-block, nodule-phantom, ...)")
     p.add_argument("--protocol", default=None, help="a protocol TOML file or a built-in: sweep (default), scan, hold")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")

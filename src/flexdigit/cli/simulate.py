@@ -87,10 +87,12 @@ def _add_step(sub) -> None:
     """The servo step's flags."""
     p = sub.add_parser("step", help="servo command step (3.2.4, figure 3.11)")
     _common(p)
-    p.add_argument("--from", dest="command_from", type=Flag(SERVO_COMMAND), default=0)
-    p.add_argument("--to", dest="command_to", type=Flag(SERVO_COMMAND), default=51)
-    p.add_argument("--duration", type=Flag(DURATION), default=1.5)
-    p.add_argument("--rate", type=Flag(RATE), default=1000.0)
+    p.add_argument("--from", dest="command_from", type=Flag(SERVO_COMMAND), default=0, help="servo command before")
+    p.add_argument(
+        "--to", dest="command_to", type=Flag(SERVO_COMMAND), default=51, help="servo command after (the thesis: 51)"
+    )
+    p.add_argument("--duration", type=Flag(DURATION), default=1.5, help="seconds")
+    p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
     p.add_argument("--cable", action="store_true", help="keep the cable attached")
 
 
@@ -136,8 +138,14 @@ def _add_load(sub) -> None:
         "--repetitions",
         type=Flag(Plausible("", 1, 10_000, "repetitions of each load case: the thesis made 25", integer=True)),
         default=25,
+        help="readings of each load case",
     )
-    p.add_argument("--orientation", default="horizontal", choices=("horizontal", "vertical", "hanging"))
+    p.add_argument(
+        "--orientation",
+        default="horizontal",
+        choices=("horizontal", "vertical", "hanging"),
+        help="how the digit lies (the thesis: horizontal, chapters 6-7)",
+    )
 
 
 def _run(args: argparse.Namespace) -> CommandResult:

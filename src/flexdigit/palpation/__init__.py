@@ -36,6 +36,7 @@ __getattr__, __all__ = lazy_exports(
         "scan_figure": "flexdigit.palpation.palpation_plot",
         "hold_figure": "flexdigit.palpation.palpation_plot",
         "load_tissue": "flexdigit.palpation.palpation_files",
+        "builtin_palpation_files": "flexdigit.palpation.palpation_files",
         "load_palpation_protocol": "flexdigit.palpation.palpation_files",
         "simulate_hangs": "flexdigit.palpation.active",
         "HangInversion": "flexdigit.palpation.active",

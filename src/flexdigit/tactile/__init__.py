@@ -23,6 +23,7 @@ __getattr__, __all__ = lazy_exports(
     {
         "Protocol": "flexdigit.tactile.protocols",
         "load_protocol": "flexdigit.tactile.protocols",
+        "builtin_protocols": "flexdigit.tactile.protocols",
         "collect": "flexdigit.tactile.runner",
         "load_or_collect": "flexdigit.tactile.runner",
         "Dataset": "flexdigit.tactile.dataset",
