@@ -136,3 +136,41 @@ def test_reproduce_says_each_chapter_is_done_with_its_time(tmp_path, wide_chapte
     seconds = float(re.fullmatch(r"Chapter 9: a wide one done in ([\d.]+) s", line.strip()).group(1))
     chapter = json.loads((tmp_path / "r" / "results.json").read_text())["chapters"][0]
     assert seconds == pytest.approx(chapter["seconds"], abs=0.05)  # the time results.json records, to 0.1 s
+
+
+#: What a chapter's text must not show a reader: a test file, a source file, a module below a domain.
+INTERNAL_PATH = re.compile(r"tests/|\b\w+\.py\b|flexdigit\.[a-z_0-9]+\.[a-z_0-9]+")
+
+
+def _chapter_texts():
+    """Every string a chapter module writes (not its docstrings, not its entries' notes), with where it is."""
+    import ast
+    from pathlib import Path
+
+    import flexdigit.report
+
+    for path in sorted(Path(flexdigit.report.__file__).parent.glob("ch*.py")):
+        tree = ast.parse(path.read_text())
+        skip = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Module | ast.FunctionDef | ast.ClassDef) and ast.get_docstring(node) is not None:
+                skip.add(id(node.body[0].value))
+            if isinstance(node, ast.keyword) and node.arg in ("note", "discrepancy_note"):
+                skip.update(id(n) for n in ast.walk(node.value))
+            if isinstance(node, ast.ImportFrom | ast.Import):
+                skip.update(id(n) for n in ast.walk(node))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in skip:
+                yield f"{path.name}:{node.lineno}", node.value
+
+
+def test_chapter_texts_name_no_internal_module_or_test_path():
+    found = [f"{where}: {INTERNAL_PATH.search(text).group(0)}" for where, text in _chapter_texts()
+             if INTERNAL_PATH.search(text)]  # fmt: skip
+    assert not found, found
+
+
+def test_the_internal_path_rule_itself():
+    assert INTERNAL_PATH.search("checked in tests/control/test_analysis.py")
+    assert INTERNAL_PATH.search("(flexdigit.control.design20ms)")
+    assert not INTERNAL_PATH.search("flexdigit.identify does the same (the ShapeEstimator of flexdigit.shape)")
