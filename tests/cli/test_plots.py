@@ -249,3 +249,25 @@ def test_an_existing_plot_is_kept_without_force_and_replaced_with_it(tmp_path, c
 
 def _refuse(*args, **kwargs):
     raise RuntimeError("the work started")
+
+
+SMALL_SCAN = (
+    "[sweep]\ncommands = { from = 8, to = 26, step = 3 }\nsettle_s = 2.0\nreadings = 10\n"
+    "[scan]\noffsets_mm = [-20, 0, 20]\ninclusion_width_mm = 10.0\n"
+)
+
+
+@pytest.mark.slow
+def test_palpate_scan_plots_the_stiffness_map_with_the_true_inclusion(tmp_path, drawn, capsys):
+    protocol, plot = tmp_path / "scan.toml", tmp_path / "scan.png"
+    protocol.write_text(SMALL_SCAN)
+    argv = ["palpate", "--tissue", "nodule-phantom", "--protocol", str(protocol), "--plot", str(plot), "--json"]
+    assert main(argv) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    ax = drawn[0].axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("position in the tissue (mm)", "modulus (N/m^2)")
+    lines = _lines(ax)
+    inclusion = data["inclusion"]
+    np.testing.assert_allclose(lines["inclusion (fitted)"].get_xdata()[0], inclusion["centre_in_tissue_mm"])
+    np.testing.assert_allclose(lines["inclusion (true, twin)"].get_xdata()[0], inclusion["true_centre_in_tissue_mm"])
