@@ -27,17 +27,19 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_palpation",
     "benchmarks.bench_board",
     "benchmarks.bench_resources",
+    "benchmarks.bench_plots",
 )
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks")
-    parser.add_argument("only", nargs="*", help="run only these modules (e.g. bench_twin)")
+    parser.add_argument("only", nargs="*", help="run only these modules (e.g. bench_twin, or twin)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     rows = []
     for name in MODULES:
-        if args.only and name.rsplit(".", 1)[-1] not in args.only:
+        short = name.rsplit(".", 1)[-1]
+        if args.only and short not in args.only and short.removeprefix("bench_") not in args.only:
             continue
         start = time.perf_counter()
         print(f"running {name} ...", file=sys.stderr, flush=True)

@@ -41,6 +41,7 @@ SHARED = {
     "_validation",
     "_constants",
     "_io",
+    "_plot",
     "_json",
     "_command",
     "_lazy",

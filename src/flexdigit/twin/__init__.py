@@ -22,6 +22,7 @@ __getattr__, __all__ = lazy_exports(
         "save_calibration": "flexdigit.twin.calibration",
         "use_calibration": "flexdigit.twin.calibration",
         "TwinRecord": "flexdigit.twin.records",
+        "record_figure": "flexdigit.twin.record_plot",
         "release_test": "flexdigit.twin.records",
         "servo_step_test": "flexdigit.twin.records",
         "actuation_sweep": "flexdigit.twin.records",
