@@ -97,7 +97,8 @@ def test_the_docs_examples_import_from_the_domain():
     deep = re.compile(r"^\s*from flexdigit\.\w+\.\w+[\w.]* import ")
     offenders = [
         f"{path.name}:{number}: {line.strip()}"
-        for path in [root / "README.md", *sorted((root / "docs").glob("*.md"))]
+        for path in [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+        if "_build" not in path.parts
         for number, line in enumerate(path.read_text().splitlines(), 1)
         if deep.match(line)
     ]
