@@ -31,7 +31,7 @@ lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks docs examples
 	$(BIN)/ruff format --check src tests benchmarks docs examples
 
-# The numbers must not depend on the BLAS kernel (README, "Portable numbers"): the tests marked `blas` run again under
+# The numbers must not depend on the BLAS kernel (docs/guide/reliability.md, "Portable numbers"): the tests marked `blas` run again under
 # OpenBLAS's own choice for this CPU (when the environment forces one) and under Nehalem (SSE only, what any x86-64
 # runs; unless the suite just ran there). About 40 s each; pytest's header names the kernel in use.
 BLAS_RUN := $(BIN)/pytest tests -m blas -p no:cacheprovider

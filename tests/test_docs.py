@@ -12,6 +12,7 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import os
+import re
 import subprocess
 import sys
 import types
@@ -95,6 +96,34 @@ def test_a_reference_page_shows_the_docstring_and_the_members(build):
     assert "Parameters" in page  # numpydoc's sections rendered
 
 
+def test_every_gallery_example_ran_in_the_build_and_shows_a_figure(build):
+    assert build.returncode == 0, build.stderr[-2000:]
+    examples = sorted((ROOT / "examples").glob("plot_*.py"))
+    assert len(examples) >= 12  # issue 28: at least 12, from a first step to a design study
+    for example in examples:
+        page = HTML / "auto_examples" / f"{example.stem}.html"
+        assert page.is_file(), example.name
+        figure = f"sphx_glr_{example.stem}_001.png"
+        assert figure in page.read_text(), f"{example.name} drew no figure"
+        assert (HTML / "_images" / figure).is_file(), figure
+
+
+def test_the_firmware_sketch_is_not_in_the_gallery(build):
+    assert build.returncode == 0, build.stderr[-2000:]
+    assert not list((HTML / "auto_examples").rglob("*flexdigit_stream*"))
+
+
+def test_every_example_imports_from_the_domains_not_their_modules():
+    deep = re.compile(r"^\s*(from|import) flexdigit\.\w+\.\w+")
+    offenders = [
+        f"{path.name}:{number}: {line.strip()}"
+        for path in sorted((ROOT / "examples").glob("plot_*.py"))
+        for number, line in enumerate(path.read_text().splitlines(), 1)
+        if deep.match(line)
+    ]
+    assert not offenders, offenders
+
+
 def test_the_benchmark_page_shows_the_json_rows_and_their_run():
     results = {
         "context": {"date_utc": "2026-11-26 10:00", "commit": "abc1234", "cpu_count": 2, "load_average_1min": 0.8},
@@ -122,3 +151,14 @@ def test_without_benchmark_results_the_page_says_how_to_measure_them():
     page = _generator().benchmark_page(None)
     assert "make bench" in page
     assert "|" not in page  # no table, so no number that was not measured
+
+
+def test_the_readme_is_one_screen_and_links_into_the_site():
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= README_MAX_LINES
+    for command in ("make run", "make test", "pip install"):
+        assert command in readme, command
+    links = re.findall(r"\]\((docs/[^)#]+)", readme)
+    assert len(links) >= 5
+    for link in links:
+        assert (ROOT / link).exists(), link

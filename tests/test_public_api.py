@@ -92,7 +92,7 @@ def test_importing_the_packages_loads_none_of_their_modules():
 
 
 def test_the_docs_examples_import_from_the_domain():
-    # a newcomer copies the README's imports: they show the public door, not a module behind it
+    # a newcomer copies the README's and the docs' imports: they show the public door, not a module behind it
     root = Path(__file__).resolve().parents[1]
     deep = re.compile(r"^\s*from flexdigit\.\w+\.\w+[\w.]* import ")
     offenders = [

@@ -9,7 +9,7 @@ the harness, and checked from the host through the ``hil://`` backend, in simula
   twin (same design, same period), both loops starting at a servo frame. The two actuator paths differ: the
   Python loop's commands go through the serial board model (latched on its 20 ms frame, then the servo's 52 Hz
   pulse: 0-19 ms late), the board's through its own pulse 1 ms after the update. The tolerances below are what
-  that difference leaves (measured, see the README); the issue's tighter ones are not met and say so there.
+  that difference leaves (measured: docs/backends/hil.md); the issue's tighter ones are not met and say so there.
 """
 
 from __future__ import annotations
@@ -116,7 +116,7 @@ def _python_loop(period_s, monkeypatch):
 #: The issue's criteria for the 30 deg step, board against the Python loop: settling within 5 %, overshoot within
 #: 1 point (steady-state error within 0.2 deg: STEADY_TOLERANCE_DEG).
 SETTLING_FRACTION, OVERSHOOT_POINTS = 0.05, 1.0
-#: Where they are not met (measured, board / Python reference; README, `python benchmarks/bench_board.py`): at
+#: Where they are not met (measured, board / Python reference; docs/backends/hil.md, benchmarks/bench_board.py): at
 #: 20 ms the settling, 0.75 / 0.63 s (the board's true rotation peaks 0.73 deg over, past the 2 % band, and
 #: re-enters it later). Left: the board's samples are older than the Python loop's (the firmware uses the previous
 #: 1 ms tick's conversions) and 10-bit.
