@@ -153,6 +153,48 @@ def test_without_benchmark_results_the_page_says_how_to_measure_them():
     assert "|" not in page  # no table, so no number that was not measured
 
 
+def test_the_findings_page_shows_every_entry_of_the_report():
+    results = {
+        "flexdigit": "0.1.0",
+        "seed": 0,
+        "fast": False,
+        "counts": {"match": 1, "discrepancy": 1, "new": 0},
+        "chapters": [{"slug": "ch3-models", "title": "Chapter 3: models"}],
+        "entries": [
+            {
+                "key": "table_3_1.zeta[1]",
+                "section": "3.1.2",
+                "thesis": 0.0008,
+                "ours": 0.000801557,
+                "unit": "",
+                "status": "match",
+                "note": "from %OS",
+                "chapter": "ch3-models",
+            },
+            {
+                "key": "plant.k1",
+                "section": "4.1",
+                "thesis": 1.7699,
+                "ours": 17.6991,
+                "unit": "command/mm",
+                "status": "discrepancy",
+                "note": "a slip | of 10x",
+                "chapter": "ch3-models",
+            },
+        ],
+    }
+    page = _generator().findings_page(results)
+    assert "## Chapter 3: models" in page
+    assert "| `table_3_1.zeta[1]` | 3.1.2 | 0.0008 | 0.00080156 |  | match | from %OS |" in page
+    assert "| `plant.k1` | 4.1 | 1.7699 | 17.699 | command/mm | discrepancy | a slip \\| of 10x |" in page
+    assert "1 entries match" in page
+
+
+def test_without_a_report_the_findings_page_says_how_to_make_one():
+    page = _generator().findings_page(None)
+    assert "make run" in page and "|" not in page
+
+
 def test_the_readme_is_one_screen_and_links_into_the_site():
     readme = (ROOT / "README.md").read_text()
     assert len(readme.splitlines()) <= README_MAX_LINES

@@ -1,10 +1,11 @@
 """Pages of the site generated at build time, so none is kept by hand: the API reference from each domain's
-``__all__`` and the benchmark tables from ``make bench``'s JSON (``benchmarks/results.json``).
+``__all__``, the benchmark tables from ``make bench``'s JSON (``benchmarks/results.json``), the findings from
+``make run``'s ``report/results.json`` and the rig backends' URL options from their declarations.
 
 A Sphinx extension (``conf.py`` lists it): on ``config-inited`` it writes ``docs/api/*.rst`` (one page per domain,
 an autosummary of its public names; autosummary then writes one page per name into ``docs/api/generated/``) and
-``docs/_generated/benchmarks.md``. A file is rewritten only when its text changes, so an unchanged build stays
-incremental. ``tests/test_docs.py`` imports :func:`domains` to check the built site against ``__all__``.
+``docs/_generated/*.md``. A file is rewritten only when its text changes, so an unchanged build stays incremental.
+``tests/test_docs.py`` checks the built site against every ``__all__`` and these pages against their JSON.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ DOCS = Path(__file__).resolve().parents[1]
 ROOT = DOCS.parent
 PACKAGE = ROOT / "src" / "flexdigit"
 BENCH_JSON = ROOT / "benchmarks" / "results.json"
+REPORT_JSON = ROOT / "report" / "results.json"  # what `make run` writes
 
 #: Public modules that are not packages but hold public names of their own (the top level's ``__all__`` names
 #: ``params``; ``errors`` and ``interrupts`` are what a caller catches and wraps).
@@ -186,6 +188,63 @@ def write_benchmark_page(app=None, config=None) -> None:
     _write_if_changed(DOCS / "_generated" / "benchmarks.md", benchmark_page(results))
 
 
+def _number(value: object) -> str:
+    if isinstance(value, bool) or value is None:
+        return "" if value is None else str(value)
+    if isinstance(value, int | float):
+        return f"{value:.5g}"
+    return _cell(value)
+
+
+def findings_page(results: dict | None) -> str:
+    """The report's entries (thesis figure, ours, status, note) per chapter, from ``make run``'s results.json."""
+    head = ["# Findings: the thesis against the twin", ""]
+    if results is None:
+        return "\n".join(
+            head
+            + [
+                "No report in this build: `make run` reproduces the thesis on the twin and writes",
+                "`report/results.json`; the next `make docs` turns it into the tables of this page (every entry: the",
+                "thesis's figure as printed, flexdigit's, and whether they match, differ for a stated reason, or are",
+                "new).",
+                "",
+            ]
+        )
+    counts = results.get("counts", {})
+    lines = head + [
+        f"From `report/results.json` (flexdigit {results.get('flexdigit', '?')}, seed {results.get('seed', '?')}"
+        + (", fast settings" if results.get("fast") else "")
+        + f"): {counts.get('match', 0)} entries match the thesis, {counts.get('discrepancy', 0)} differ for the "
+        f"reason their note gives, {counts.get('new', 0)} are new (figures the thesis does not have). "
+        "`report/index.html` shows them with their figures; this page is generated at every build.",
+        "",
+    ]
+    by_chapter: dict[str, list[dict]] = {}
+    for entry in results.get("entries", []):
+        by_chapter.setdefault(entry.get("chapter", "?"), []).append(entry)
+    titles = {c.get("slug"): c.get("title", c.get("slug")) for c in results.get("chapters", [])}
+    for slug, entries in by_chapter.items():
+        lines += [
+            f"## {titles.get(slug, slug)}",
+            "",
+            "| entry | section | thesis | ours | unit | status | note |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for e in entries:
+            lines.append(
+                f"| `{_cell(e.get('key', ''))}` | {_cell(e.get('section', ''))} | {_number(e.get('thesis'))} | "
+                f"{_number(e.get('ours'))} | {_cell(e.get('unit', ''))} | {_cell(e.get('status', ''))} | "
+                f"{_cell(e.get('note', ''))} |"
+            )
+        lines.append("")
+    return "\n".join(lines)
+
+
+def write_findings_page(app=None, config=None) -> None:
+    results = json.loads(REPORT_JSON.read_text()) if REPORT_JSON.exists() else None
+    _write_if_changed(DOCS / "_generated" / "findings.md", findings_page(results))
+
+
 def url_options_page(scheme: str) -> str:
     """The options a backend's URL takes, as a Markdown table, from its declarations (``URL_OPTIONS``)."""
     from flexdigit.rig import BACKENDS
@@ -213,4 +272,5 @@ def setup(app):
     app.connect("config-inited", write_api_pages)
     app.connect("config-inited", write_benchmark_page)
     app.connect("config-inited", write_url_option_pages)
+    app.connect("config-inited", write_findings_page)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
