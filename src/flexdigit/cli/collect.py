@@ -88,7 +88,7 @@ def _add_dataset(subparsers) -> None:
     q.add_argument("--digit-length-m", type=Flag(DIGIT_LENGTH_M), help="clamp to tip, m (default: the rig's, 0.27)")
     q.add_argument("--command", metavar="COLUMN", help="servo command column (default: none, servo relaxed)")
     q.add_argument("--repetition", metavar="COLUMN", help="repetition column (default: counted)")
-    q.add_argument("--test", metavar="COLUMN", help="test column (default: derived, see the README)")
+    q.add_argument("--test", metavar="COLUMN", help="test column (default: new at each command or tare)")
     q.add_argument("--time", metavar="COLUMN", help="time column (default: none)")
     q.add_argument("--time-unit", choices=("s", "ms"), help="default s")
     q.add_argument("--pot", metavar="COLUMN", help="potentiometer column, in the gauge unit (default: none)")

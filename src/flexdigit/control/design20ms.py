@@ -68,14 +68,21 @@ __all__ = [
 class Weights:
     """LQR and Kalman weights of :func:`design_20ms` (rotation in deg, command in commands).
 
-    q_rate : weight on the change of rotation per sample, (deg)^-2
-    r_u : weight on the command deviation, (command)^-2 (the rotation error has weight 1)
-    q_disturbance : variance of the input-disturbance random walk per sample, command^2
-    q_input : variance of the process noise at the servo input, command^2
-    r_measurement : variance of the rotation measurement, deg^2. The gauges' 2 mV noise alone is ~0.2 deg rms
-        through the gauge-to-rotation map, but the map is static: while the digit vibrates the gauges also see
-        dynamic bending, and the estimate leaves the true rotation by up to +-3 deg (seen on the twin). 10 deg^2
-        makes the observer trust the model through that, so the integer command does not chase the vibration.
+    Parameters
+    ----------
+    q_rate : float
+        Weight on the change of rotation per sample, (deg)^-2.
+    r_u : float
+        Weight on the command deviation, (command)^-2 (the rotation error has weight 1).
+    q_disturbance : float
+        Variance of the input-disturbance random walk per sample, command^2.
+    q_input : float
+        Variance of the process noise at the servo input, command^2.
+    r_measurement : float
+        Variance of the rotation measurement, deg^2. The gauges' 2 mV noise alone is ~0.2 deg rms through the
+        gauge-to-rotation map, but the map is static: while the digit vibrates the gauges also see dynamic
+        bending, and the estimate leaves the true rotation by up to +-3 deg (seen on the twin). 10 deg^2 makes
+        the observer trust the model through that, so the integer command does not chase the vibration.
     """
 
     q_rate: float = 100.0

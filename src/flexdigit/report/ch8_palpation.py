@@ -3,7 +3,7 @@
 Chapter 8 of the thesis says what its sensing is for: "to detect low frequency palpations, to identify variability
 in tissue stiffness, and to discriminate against distributed loads". This chapter shows the library's answers
 (:mod:`flexdigit.palpation.palpation_studies`) on the twin at the thesis's non-actuated noise level; it computes
-nothing itself. It runs small but honest settings (the README quotes the full studies and the command that
+nothing itself. It runs small but honest settings (docs/guide/palpation.md quotes the full studies and the command that
 measures each); every table is also in results.json.
 """
 
@@ -332,7 +332,7 @@ def _active(ctx, ch) -> None:
             SECTION,
             1000 * a["single_position_rmse_m"],
             "mm",
-            "the same settings, one reading at one command (the README's 22.5 mm is this over chapter 7's test split)",
+            "the same settings, one reading at one command (chapter 7's 22.5 mm is this over its test split)",
         )
     )
     e.append(

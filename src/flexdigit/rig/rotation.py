@@ -61,7 +61,7 @@ BIRGE_LIMIT = 2.0
 
 
 class RotationEstimator:
-    """Beam rotation (deg) from the three gauge voltages, ``w . gauges_v + b - tare`` (scikit-learn's contract).
+    """Beam rotation (deg) from the three gauge voltages, ``w @ gauges_v + b - tare`` (scikit-learn's contract).
 
     The calibration sweep moves the digit along one direction only (the cable's pull), so the three gauges are
     nearly collinear: on the twin the sweep's gauge matrix has singular values ~0.40 V against ~0.003 V, and the

@@ -21,6 +21,7 @@ __getattr__, __all__ = lazy_exports(
         "load_calibration": "flexdigit.twin.calibration",
         "save_calibration": "flexdigit.twin.calibration",
         "use_calibration": "flexdigit.twin.calibration",
+        "calibration_for": "flexdigit.twin.digit_calibration",
         "TwinRecord": "flexdigit.twin.records",
         "record_figure": "flexdigit.twin.record_plot",
         "release_test": "flexdigit.twin.records",
