@@ -27,10 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from flexdigit.errors import RigError
+from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.backends.board_link import BAUD, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState
-from flexdigit.rig.base import Rig, UrlOption
+from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 
 __all__ = ["BoardRig", "from_url", "URL_OPTIONS"]
 
@@ -223,9 +223,6 @@ class BoardRig(Rig):
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> BoardRig:
     """``board:///dev/ttyACM0?mode=host`` (see the module docstring)."""
-    from flexdigit.errors import ParameterError
-    from flexdigit.rig.base import RigURL, rig_url_options
-
     if not location:
         raise ParameterError("board:// needs the board's serial port, e.g. board:///dev/ttyACM0")
     checked = rig_url_options(RigURL("board", location), **options)[1]

@@ -45,8 +45,9 @@ import numpy as np
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.backends.board_link import BAUD, FAULTS, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState
-from flexdigit.rig.base import Rig, UrlOption
+from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 from flexdigit.twin.digit import ORIENTATIONS
+from flexdigit.twin.twin import Twin
 
 __all__ = [
     "HilRig",
@@ -164,8 +165,6 @@ class HilRig(Rig):
             raise ParameterError(f"hil://{elf}: no firmware image there (build it with 'make firmware')")
         self.harness = _find_harness(elf, self.elf, harness)
         if twin is None:
-            from flexdigit.twin.twin import Twin
-
             options = {} if calibration is None else {"calibration": calibration}
             # the servo follows the pulses the board generates (measured below); "timer" says so in the twin's
             # settings, and is how a host loop on the twin alone is driven to compare with it (sim?servo_drive=timer)
@@ -453,8 +452,6 @@ class HilRig(Rig):
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> HilRig:
     """``hil://PATH.elf?seed=0&mode=host`` (see the module docstring)."""
-    from flexdigit.rig.base import RigURL, rig_url_options
-
     if not location:
         raise ParameterError("hil:// needs a firmware image, e.g. hil://firmware/build/flexdigit_board.elf")
     checked = rig_url_options(RigURL("hil", location), **options)[1]

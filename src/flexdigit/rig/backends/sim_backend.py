@@ -21,11 +21,13 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._json import fingerprint
 from flexdigit._validation import check_real
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig, UrlOption
 from flexdigit.twin.actuator import SERVO_DRIVES
+from flexdigit.twin.twin import Twin
 
 __all__ = ["SimRig", "from_url", "from_url_paced", "DEFAULT_TWIN_DT_S"]
 
@@ -73,8 +75,6 @@ class SimRig(Rig):
     ) -> None:
         ready = twin is not None
         if twin is None:
-            from flexdigit.twin.twin import Twin
-
             # 2 ms, not the twin's 20 ms default: a loop closed every 20 ms acts on the digit's motion between
             # frames. The 30 deg step of the 20 ms design (seed 0) overshoots 2.69 % at 1 ms, 2.68 % at 2 ms,
             # 6.3 % at 5 ms and 5.5 % at 20 ms; 2 ms is the coarsest step that matches the 1 ms reference.
@@ -141,8 +141,6 @@ class SimRig(Rig):
 
     def settings(self) -> dict[str, Any]:
         """Backend, seed, how the twin is set up, and fingerprints of its calibration and rig parameters."""
-        from flexdigit._json import fingerprint
-
         twin = self.twin
         return (
             {
