@@ -26,7 +26,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["BUDGET", "MAX_UPDATE", "NO_PROGRESS", "RATE", "equilibrate", "forces", "node_frames", "run"]
+__all__ = ["BUDGET", "MAX_UPDATE", "MEASURE", "NO_PROGRESS", "RATE", "equilibrate", "forces", "node_frames", "run"]
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
@@ -37,6 +37,8 @@ RATE = 0.9
 BUDGET = 4
 #: The largest Newton update of a step's frames (rad) or nodes (of the length): a damped Newton beyond
 MAX_UPDATE = 0.1
+#: Steps between measurements of the chord Newton's rate (the others may stop after one update)
+MEASURE = 8
 
 
 @_jit
@@ -63,19 +65,17 @@ def _exp(th0, th1, th2, out):
 
 
 @_jit
-def _log_rel(a, b, out):
-    """``out = log(a^T b)`` as a rotation vector (angles below pi; neighbours and steps turn far less)."""
-
-    def rel(i, j):
-        return a[0, i] * b[0, j] + a[1, i] * b[1, j] + a[2, i] * b[2, j]
-
-    r21, r12, r02, r20, r10, r01 = rel(2, 1), rel(1, 2), rel(0, 2), rel(2, 0), rel(1, 0), rel(0, 1)
-    trace = rel(0, 0) + rel(1, 1) + rel(2, 2)
-    w0 = 0.5 * (r21 - r12)
-    w1 = 0.5 * (r02 - r20)
-    w2 = 0.5 * (r10 - r01)
+def _log_rel(a, b, out, rel):
+    """``out = log(a^T b)`` as a rotation vector, and ``rel = a^T b`` (angles below pi; neighbours and steps turn
+    far less)."""
+    for i in range(3):
+        for j in range(3):
+            rel[i, j] = a[0, i] * b[0, j] + a[1, i] * b[1, j] + a[2, i] * b[2, j]
+    w0 = 0.5 * (rel[2, 1] - rel[1, 2])
+    w1 = 0.5 * (rel[0, 2] - rel[2, 0])
+    w2 = 0.5 * (rel[1, 0] - rel[0, 1])
     s = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-    c = 0.5 * (trace - 1.0)
+    c = 0.5 * (rel[0, 0] + rel[1, 1] + rel[2, 2] - 1.0)
     f = np.arctan2(s, c) / s if s > 1e-10 else 1.0 + s * s / 6.0
     out[0] = f * w0
     out[1] = f * w1
@@ -122,15 +122,14 @@ def forces(
     m = np.empty(3)
     for i in range(n):
         if i == 0:
-            _log_rel(ident, q[0], kap[0])
+            _log_rel(ident, q[0], kap[0], rel)
         else:
-            _log_rel(q[i - 1], q[i], kap[i])
+            _log_rel(q[i - 1], q[i], kap[i], rel)
         for k in range(3):
             kap[i, k] /= voronoi[i]
             m[k] = kbt[k] * (g * kap[i, k] + beta * hkap[i, k])
             t[i, k] -= m[k]
         if i > 0:
-            _exp(kap[i, 0] * voronoi[i], kap[i, 1] * voronoi[i], kap[i, 2] * voronoi[i], rel)
             for k in range(3):
                 t[i - 1, k] += rel[k, 0] * m[0] + rel[k, 1] * m[1] + rel[k, 2] * m[2]
     pa = np.empty(3)
@@ -338,11 +337,34 @@ def equilibrate(x, q, model, hb, tol, max_iter):
 
 
 @_jit
-def _newton(z, z_guess, a, xh, qh, psih, vh, wh, mass, inertia, model, dmp, hb, tol, max_iter, length, work, keep):
+def _newton(
+    z,
+    z_guess,
+    a,
+    xh,
+    qh,
+    psih,
+    vh,
+    wh,
+    mass,
+    inertia,
+    model,
+    dmp,
+    hb,
+    tol,
+    max_iter,
+    length,
+    work,
+    keep,
+    kept_rate,
+    trust,
+):
     """One implicit step's Newton from ``z_guess`` into ``z``: a chord Newton with the Jacobian kept (``keep[0]``:
     whether ``work``'s is valid for this ``a``), turned with the frames; where it converges slower than RATE or
     would not reach ``tol`` within BUDGET iterations, Newton with the Jacobian refreshed (restarting from the guess
-    the first time). Updates are damped to MAX_UPDATE. Returns ``(converged, iterations)``."""
+    the first time). Updates are damped to MAX_UPDATE. ``kept_rate[0]``: the rate last measured with this
+    Jacobian; with ``trust``, a first update it makes small enough is accepted (Hairer & Wanner's RADAU5 carries
+    its ``faccon`` over steps so). Returns ``(converged, iterations)``."""
     jac, q_jac, turn, h, dz, res, xx, qq, f, t, sig, kap = work
     size = z.shape[0]
     z[:] = z_guess
@@ -361,6 +383,7 @@ def _newton(z, z_guess, a, xh, qh, psih, vh, wh, mass, inertia, model, dmp, hb, 
             _jacobian(z, h, hb, a, 1.0, xh, qh, psih, vh, wh, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, jac)
             _configure(z, a, xh, qh, psih, xx, q_jac)
             keep[0] = True
+            kept_rate[0] = RATE
             last = np.inf
             refresh = False
             since = 0
@@ -384,8 +407,11 @@ def _newton(z, z_guess, a, xh, qh, psih, vh, wh, mass, inertia, model, dmp, hb, 
         big *= cut
         if big == 0.0:
             return True, its
+        if last == np.inf and stale and trust and kept_rate[0] / (1.0 - kept_rate[0]) * big < tol:
+            return True, its
         if last < np.inf:  # scipy's BDF: the error left is about rate / (1 - rate) times the last update
             rate = big / last
+            kept_rate[0] = rate
             if rate < RATE and rate / (1.0 - rate) * big < tol:
                 return True, its
             # refresh where the rate would not reach tol within the Jacobian's budget (scipy's BDF's rule)
@@ -432,6 +458,7 @@ def _backward_euler(state, dt, pieces, model, mass, inertia, beta, hb, tol, max_
     xh = np.empty((n + 1, 3))
     qh = np.empty((n, 3, 3))
     keep = np.zeros(1, dtype=np.bool_)
+    rate = np.full(1, RATE)
     its = 0
     for _ in range(pieces):
         xh[:, :] = ox
@@ -462,6 +489,8 @@ def _backward_euler(state, dt, pieces, model, mass, inertia, beta, hb, tol, max_
             length,
             work,
             keep,
+            rate,
+            False,
         )
         its += more
         if not ok:
@@ -533,6 +562,8 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
         np.empty((n, 3)),
     )
     keep = np.zeros(1, dtype=np.bool_)
+    rate = np.full(1, RATE)  # the chord Newton's last rate, carried over steps (RADAU5's faccon)
+    scratch = np.empty((3, 3))
     xs[0] = x0
     qs[0] = q0
     for step in range(n_steps):
@@ -543,7 +574,7 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
                 xh[i, k] = (4.0 * x_now[i, k] - x_prev[i, k]) / 3.0
                 vh[i, k] = (4.0 * v_now[i, k] - v_prev[i, k]) / 3.0
         for e in range(n):
-            _log_rel(q_now[e], q_prev[e], psih[e])
+            _log_rel(q_now[e], q_prev[e], psih[e], scratch)
             for k in range(3):
                 psih[e, k] /= -3.0
                 wh[e, k] = (4.0 * w_now[e, k] - w_prev[e, k]) / 3.0
@@ -553,8 +584,28 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
                 z_guess[6 * e + k] = 2.0 * v_now[e + 1, k] - v_prev[e + 1, k]
                 z_guess[6 * e + 3 + k] = 2.0 * w_now[e, k] - w_prev[e, k]
         dmp = (g, beta, hsig, hkap)
+        trust = step % MEASURE != 0  # every MEASURE-th step, the rate measured again
         ok, its = _newton(
-            z, z_guess, a, xh, q_now, psih, vh, wh, mass, inertia, model, dmp, hb, tol, max_iter, length, work, keep
+            z,
+            z_guess,
+            a,
+            xh,
+            q_now,
+            psih,
+            vh,
+            wh,
+            mass,
+            inertia,
+            model,
+            dmp,
+            hb,
+            tol,
+            max_iter,
+            length,
+            work,
+            keep,
+            rate,
+            trust,
         )
         x_new, q_new, v_new, w_new, sig_new, kap_new = new
         if ok:
@@ -563,8 +614,10 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
                 for k in range(3):
                     v_new[e + 1, k] = z[6 * e + k]
                     w_new[e, k] = z[6 * e + 3 + k]
-            _state_strains(x_new, q_new, model, sig_new, kap_new)
+            if beta > 0.0:  # the damping's history; unused without
+                _state_strains(x_new, q_new, model, sig_new, kap_new)
         else:
+            rate[0] = RATE  # measured afresh on the next step
             pieces = 2
             while not ok and pieces <= 64:
                 ok, more = _backward_euler(
@@ -589,12 +642,13 @@ def node_frames(qs, out):
     (geodesically) between neighbouring elements', the last element's at the tip."""
     rv = np.empty(3)
     rot = np.empty((3, 3))
+    rel = np.empty((3, 3))
     n = qs.shape[1]
     for s in range(qs.shape[0]):
         out[s, 0] = np.eye(3)
         out[s, n] = qs[s, n - 1]
         for i in range(1, n):
-            _log_rel(qs[s, i - 1], qs[s, i], rv)
+            _log_rel(qs[s, i - 1], qs[s, i], rv, rel)
             _exp(0.5 * rv[0], 0.5 * rv[1], 0.5 * rv[2], rot)
             for r in range(3):
                 for c in range(3):
