@@ -6,7 +6,9 @@ sensor chain (:mod:`flexdigit.twin.sensors`) on one clock. It integrates on a fi
 grid states, so a caller sampling at 1 kHz costs no more than one at 50 Hz.
 
 The cable is just taut with the digit straight at the equilibrium command (8, table 3.4 note): the cable
-shortening is ``r_M (theta_M - theta_M(8))`` (E 3.11); below command 8 it is slack.
+shortening is ``r_M (theta_M - theta_M(8))`` (E 3.11); below command 8 it is slack. With an antagonistic pair
+(``[cables] count = 2``) both cables keep their pretension at the equilibrium command, and below it the second
+cable bends the digit the other way (:class:`~flexdigit.twin.digit.Chain`).
 
 Examples
 --------
@@ -67,6 +69,20 @@ def cable_shortening_m(command_or_angle, params: RigParams, *, is_angle: bool = 
     if not is_angle:
         angle = command_to_angle_rad(angle, params)
     return a.cable_m_per_servo_rad * (angle - command_to_angle_rad(a.equilibrium_command, params))
+
+
+def _default_calibration(params: RigParams) -> Calibration:
+    """The calibration a twin gets when none is given: the default (the thesis fit), or, for a digit of other
+    section or gauge counts, which it cannot describe, that fit scaled to the digit
+    (:func:`flexdigit.twin.digit_calibration.calibration_for`)."""
+    cal = default_calibration()
+    if len(cal.support_mass_kg) == params.geometry.section_count and len(cal.channel_gain) == len(
+        params.geometry.gauge_positions_m
+    ):
+        return cal
+    from flexdigit.twin.digit_calibration import calibration_for
+
+    return calibration_for(params)
 
 
 class ReadSeries(NamedTuple):
@@ -134,7 +150,7 @@ class Twin:
         compiled: bool = False,
     ):
         self.params = params or RigParams()
-        self.calibration = calibration or default_calibration()
+        self.calibration = calibration or _default_calibration(self.params)
         self.seed = check_int(seed, "seed", "Twin", low=0)
         self.orientation = check_choice(orientation, "orientation", tuple(ORIENTATIONS), "Twin")
         self.housing = bool(housing)
@@ -150,7 +166,7 @@ class Twin:
         self._curvature_per_moment = self.chain.gauge_curvature_per_moment
         # the cable-guide friction's state (standard-normal, per gauge section): zero until something jolts the
         # cable (a servo pulling it slides it one way, a repeatable state the calibration absorbs)
-        self._friction_xi = np.zeros(3)
+        self._friction_xi = np.zeros(len(self.params.geometry.gauge_positions_m))
         start = self.params.actuator.equilibrium_command if command is None else command
         self.servo = Servo(self.params, start)
         self._pulley_m = self.params.actuator.cable_m_per_servo_rad
@@ -303,7 +319,9 @@ class Twin:
         """Curvature and axial force at the gauges, cable tension (a group delay ago) and the servo angle now."""
         psi, theta = self._interpolate(t - self.sensors.delay_s, True)
         kappa = self.chain.curvature_at_gauges(psi)
-        if self.cable:
+        if self.cable and self.chain.antagonist:
+            tension = float(self.chain.cable_tension(psi[-1], self._shortening(theta))[0])
+        elif self.cable:
             stretch = self._shortening(theta) - self.chain.eccentricity * psi[-1]
             tension = self.chain.cable_stiffness * stretch if stretch > 0 else 0.0
         else:
@@ -431,7 +449,9 @@ class Twin:
         psi_d, theta_d = _hermite(at - self.sensors.delay_s, t0, h, psi0, om0, psi1, om1, th0, w0, th1, w1)
         psi_now, theta_now = _hermite(at, t0, h, psi0, om0, psi1, om1, th0, w0, th1, w1)
         kappa = self.chain.curvature_at_gauges(psi_d)
-        if self.cable:
+        if self.cable and self.chain.antagonist:
+            tension = self.chain.cable_tension(psi_d[:, -1], self._pulley_m * (theta_d - self._angle_taut))[0]
+        elif self.cable:
             stretch = self._pulley_m * (theta_d - self._angle_taut) - self.chain.eccentricity * psi_d[:, -1]
             tension = np.where(stretch > 0, self.chain.cable_stiffness * stretch, 0.0)
         else:
@@ -538,7 +558,7 @@ class Twin:
         The mechanics are untouched: re-hanging a weight at the same place leaves the settled shape as it was.
         Draws from the friction's own stream, so the white noise and drift are the same numbers.
         """
-        self._friction_xi = self.friction_rng.standard_normal(3)
+        self._friction_xi = self.friction_rng.standard_normal(self._friction_xi.size)
 
     @property
     def loads(self) -> list[tuple[float, float]]:
