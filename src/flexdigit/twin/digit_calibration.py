@@ -50,6 +50,7 @@ from flexdigit.twin.calibration import Calibration, packaged_calibration
 
 __all__ = [
     "calibration_for",
+    "twin_calibration",
 ]
 
 #: A gauge "at a thesis gauge's place" when their relative positions agree this closely (x / L, dimensionless).
@@ -108,3 +109,14 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
         noise_drift_v_per_sqrt_s=drift,
         cable_friction_ratio=params.cables.guide_friction_ratio,
     )
+
+
+def twin_calibration(params: RigParams | None = None) -> Calibration:
+    """The calibration a command gives the twin of ``params`` when no ``--calibration`` is given: the default one
+    (the thesis fit, :func:`flexdigit.twin.calibration.default_calibration`) on the thesis rig, else
+    :func:`calibration_for` the digit (as ``flexdigit simulate --params`` does)."""
+    from flexdigit.twin.calibration import default_calibration
+
+    if params is None or params == RigParams():
+        return default_calibration()
+    return calibration_for(params)

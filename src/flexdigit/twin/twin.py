@@ -35,6 +35,7 @@ from flexdigit.params import RigParams
 from flexdigit.twin.actuator import Servo
 from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
+from flexdigit.twin.digit_calibration import calibration_for
 from flexdigit.twin.sensors import SensorChain
 
 __all__ = [
@@ -48,6 +49,7 @@ __all__ = [
     "check_load",
     "static_gauges_v",
     "friction_sd_v",
+    "release_dynamics",
 ]
 
 DEFAULT_DT_S = 0.020
@@ -80,8 +82,6 @@ def _default_calibration(params: RigParams) -> Calibration:
         params.geometry.gauge_positions_m
     ):
         return cal
-    from flexdigit.twin.digit_calibration import calibration_for
-
     return calibration_for(params)
 
 
@@ -756,4 +756,37 @@ def friction_sd_v(
     sensors = SensorChain(params, calibration, np.random.default_rng(0))
     return sensors.friction_sd_v(
         solution.curvature_1_m, solution.axial_force_n, solution.tension_n, chain.gauge_curvature_per_moment
+    )
+
+
+def release_dynamics(params: RigParams, calibration: Calibration | None = None, *, orientation: str = "vertical"):
+    """The digit's release-test dynamics (3.1.2) from its twin: the first mode of the chain about straight with the
+    cable removed, housed (table 3.2's E(s)) and bare (table 3.1), as a :class:`~flexdigit.params.DigitDynamics`.
+
+    What a digit nobody has identified puts where the thesis rig has its tables' averages; on the thesis rig the
+    housed mode is its table 3.2 values to 0.01 % (13.1 rad/s, zeta 0.0679), the calibration having been fitted
+    to them.
+    """
+    from flexdigit.errors import DesignError
+    from flexdigit.params import DigitDynamics
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    cal = calibration if calibration is not None else twin_calibration(params)
+    modes = {}
+    for housed in (True, False):
+        chain = cached_digit(params, cal, housed, orientation, DEFAULT_CELLS_PER_SECTION)
+        stiffness = chain.tangent_stiffness(np.zeros(chain.n), chain.g_gravity, False)
+        if np.min(np.linalg.eigvalsh(0.5 * (stiffness + stiffness.T))) <= 0:
+            raise DesignError(
+                f"the straight digit ({params.geometry.section_count} sections, {params.geometry.digit_length_m:g} m)"
+                f" is not stable {orientation} without its cable (it buckles under its own weight): no release "
+                "mode, no plant; mount it hanging or horizontal"
+            )
+        wn, zeta = chain.linear_modes()
+        modes[housed] = (float(wn[0]), float(zeta[0]))
+    return DigitDynamics(
+        wn_housing_rad_s=modes[True][0],
+        zeta_housing=modes[True][1],
+        wn_bare_rad_s=modes[False][0],
+        zeta_bare=modes[False][1],
     )
