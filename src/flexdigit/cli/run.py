@@ -67,6 +67,12 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--params", type=Path, default=None, metavar="FILE", help="the digit's parameters TOML (default: thesis rig)"
     )
+    parser.add_argument(
+        "--orientation",
+        choices=("vertical", "hanging", "horizontal"),
+        default=None,
+        help="the twin's mount (sim backends; default tip up, or hanging for a --params digit that buckles tip up)",
+    )
     _add_map_flags(parser)
     parser.add_argument(
         "--calibration",
@@ -384,7 +390,7 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
         raise ParameterError(
             f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {args.backend!r}."
         )
-    for name in ("log", "record", "rotation_map", "calibration", "params"):
+    for name in ("log", "record", "rotation_map", "calibration", "params", "orientation"):
         if getattr(args, name) is not None:
             raise ParameterError(
                 f"--{name.replace('_', '-')} is not supported with --on-board (the board holds its map)"
@@ -469,6 +475,10 @@ def _twin_options(args, sim: bool) -> dict:
                 f"--calibration {args.calibration} is a twin calibration: it applies to the sim backends (or to "
                 f"--map-from twin), not --backend {args.backend}; a saved rotation map is --rotation-map FILE"
             )
+        if args.orientation is not None:
+            from flexdigit.errors import ParameterError
+
+            raise ParameterError(f"--orientation is the twin's mount: the sim backends only, not {args.backend}")
         return {}
     options = {} if args.seed is None else {"seed": args.seed}
     if args.calibration is not None:
@@ -479,7 +489,9 @@ def _twin_options(args, sim: bool) -> dict:
         from flexdigit.twin.digit_calibration import twin_calibration
 
         options["calibration"] = twin_calibration(args.digit)
-    if getattr(args, "digit", None) is not None and "orientation" not in _url_options(args.backend):
+    if getattr(args, "orientation", None) is not None:
+        options["orientation"] = args.orientation
+    elif getattr(args, "digit", None) is not None and "orientation" not in _url_options(args.backend):
         from flexdigit.control.design20ms import straight_is_stable
 
         if not straight_is_stable(args.digit, options.get("calibration"), "vertical"):

@@ -182,14 +182,18 @@ def digit_plant(params, calibration=None, *, orientation: str = "vertical", outp
     the cable (E 3.11-3.15 with the gearing), the digit's E(s) and the gauge chain to ``output``
     (:func:`flexdigit.models.plant.build_plant` ``"consistent"``, unit-correct). E(s) is the digit's release-test
     mode from its twin (:func:`flexdigit.twin.twin.release_dynamics`; the thesis rig: table 3.2's
-    values to 0.01 %), not the thesis's tables, which are its rig's alone.
+    values to 0.01 %), not the thesis's tables, which are its rig's alone; a file that gives ``[dynamics]``
+    (identified on that digit) is taken at its word.
     """
     import dataclasses
 
     from flexdigit.models.plant import build_plant
+    from flexdigit.params import DigitDynamics
     from flexdigit.twin.twin import release_dynamics
 
-    dynamics = release_dynamics(params, calibration, orientation=orientation)
+    # the file's [dynamics] when it gives them (identified on that digit), else its twin's release mode
+    given = params.dynamics != DigitDynamics()
+    dynamics = params.dynamics if given else release_dynamics(params, calibration, orientation=orientation)
     if not (dynamics.wn_housing_rad_s > 0 and dynamics.zeta_housing > 0):
         raise DesignError(f"the digit's release mode is not a damped vibration ({dynamics!r}): no plant to design on")
     return build_plant("consistent", dataclasses.replace(params, dynamics=dynamics), output=output)

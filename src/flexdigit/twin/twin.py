@@ -643,7 +643,7 @@ def static_gauges_v(
     ((2, 3), True)
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or _default_calibration(params)
     masses, pos = _static_load_cases(loads_mass_kg, positions_from_base_m, params)
     b = masses.shape[0]
     chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
@@ -751,7 +751,7 @@ def friction_sd_v(
     ((2, 3), True)
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or _default_calibration(params)
     chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
     sensors = SensorChain(params, calibration, np.random.default_rng(0))
     return sensors.friction_sd_v(
