@@ -10,6 +10,7 @@ import argparse
 from numbers import Integral
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Interval, Plausible
 from flexdigit.params import SERVO_COMMAND
 
@@ -57,6 +58,8 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--accuracy", action="store_true", help="score the estimator against the twin instead")
     parser.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed of --accuracy")
+    add_plot_flag(parser, "the estimated centre line with its 2 sd band, the tip and the load")
+    parser.add_argument("--force", action="store_true", help="overwrite an existing --plot file")
 
 
 def _live(args: argparse.Namespace) -> CommandResult:
@@ -94,10 +97,14 @@ def _live(args: argparse.Namespace) -> CommandResult:
 
 
 def _shape(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._plot import check_plot
     from flexdigit.errors import ParameterError
 
     if args.accuracy:
+        if args.plot:
+            raise ParameterError("--plot draws one reading's centre line: give --gauges-v, not --accuracy")
         return _accuracy(args)
+    check_plot(args.plot, "shape", force=args.force)
     if args.gauges_v is None:
         raise ParameterError("--gauges-v V1,V2,V3 is required (or --accuracy)")
     try:
@@ -136,6 +143,15 @@ def _shape(args: argparse.Namespace) -> CommandResult:
             "expected): check the calibration, --orientation, --command and --no-cable; no estimate given"
         )
         return CommandResult(data=row, text=text, exit_code=1)
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.shape.shape_plot import shape_figure
+
+        title = f"shape from gauges {args.gauges_v} V" + (
+            f", command {args.command}" if args.command is not None else ""
+        )
+        row["plot"] = str(save_plot(shape_figure(est, 0, title), args.plot, "shape", force=args.force))
+        text += f"\nplot -> {args.plot}"
     return CommandResult(data=row, text=text)
 
 

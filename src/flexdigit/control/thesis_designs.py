@@ -18,10 +18,14 @@ import numpy as np
 from scipy.optimize import minimize
 
 from flexdigit._validation import check_positive
+from flexdigit.control.analysis import is_stable, loop_maps
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
 from flexdigit.control.synthesis import HinfDesign, central_controller_poles, hinf_riccati
 from flexdigit.errors import ConvergenceWarning, DesignError
+from flexdigit.models.plant import build_plant
+from flexdigit.params import DigitDynamics
 from flexdigit.reference import thesis_complex, thesis_value
+from flexdigit.twin.twin import release_dynamics
 
 __all__ = [
     "THESIS_REGULARISATION",
@@ -62,8 +66,6 @@ def printed_controller(which: str) -> ct.TransferFunction:
 
 def thesis_plant(variant: str = "printed"):
     """The plant of 4.2 from :func:`flexdigit.models.plant.build_plant` (m of gauge-1 deflection per command)."""
-    from flexdigit.models.plant import build_plant
-
     return build_plant(variant).tf
 
 
@@ -187,10 +189,6 @@ def digit_plant(params, calibration=None, *, orientation: str = "vertical", outp
     """
     import dataclasses
 
-    from flexdigit.models.plant import build_plant
-    from flexdigit.params import DigitDynamics
-    from flexdigit.twin.twin import release_dynamics
-
     # the file's [dynamics] when it gives them (identified on that digit), else its twin's release mode
     given = params.dynamics != DigitDynamics()
     dynamics = params.dynamics if given else release_dynamics(params, calibration, orientation=orientation)
@@ -211,7 +209,6 @@ def digit_hinf_design(
     """The H-infinity design of 4.4 (:func:`thesis_design`) on a described digit's plant (:func:`digit_plant`,
     gauge-1 deflection in m per command), checked: returns ``(design, plant)``; a controller that does not
     stabilise the plant is refused (:class:`~flexdigit.errors.DesignError`, one line)."""
-    from flexdigit.control.analysis import is_stable, loop_maps
 
     plant = digit_plant(params, calibration, orientation=orientation)
     design = thesis_design(filter_hz, plant.tf, eps_u=eps_u, margin=margin)

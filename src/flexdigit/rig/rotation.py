@@ -31,10 +31,15 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_write, read_text
+from flexdigit._json import to_jsonable
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
-from flexdigit.params import MAX_GAUGES
+from flexdigit.models.cable import tip_rotation_per_command_deg
+from flexdigit.params import MAX_GAUGES, RigParams
 from flexdigit.rig.base import Reading, Rig
+from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
 
 __all__ = [
     "RotationEstimator",
@@ -60,8 +65,6 @@ def sweep_commands(params=None) -> tuple[int, ...]:
     (:data:`SWEEP_COMMANDS` on the thesis rig), ~5.2 deg apart at its own rotation per command (a geared servo
     takes more, finer commands); an antagonistic pair (``[cables] count = 2``) is swept ~40 deg either way,
     ~10.4 deg apart. Clipped to the actuator's range."""
-    from flexdigit.models.cable import tip_rotation_per_command_deg
-    from flexdigit.params import RigParams
 
     params = params or RigParams()
     a = params.actuator
@@ -79,7 +82,7 @@ BIRGE_LIMIT = 2.0
 
 
 class RotationEstimator:
-    """Beam rotation (deg) from the gauge voltages, ``w . gauges_v + b - tare`` (scikit-learn's contract): the
+    """Beam rotation (deg) from the gauge voltages, ``w @ gauges_v + b - tare`` (scikit-learn's contract): the
     thesis rig's three, or any digit's 1-8 (the map has one weight per gauge the sweep read).
 
     The calibration sweep moves the digit along one direction only (the cable's pull), so the three gauges are
@@ -289,6 +292,8 @@ class Settled:
     waited_s: float
     truth_deg: float
 
+    __repr__ = fields_summary
+
 
 def wait_until_settled(
     rig: Rig,
@@ -385,8 +390,6 @@ def calibrate_rotation(
         Fitted, with ``source_``, ``commands_``, ``settle_time_s_`` (per reading) and ``deg_per_command_`` (the
         reference's rotation per command over the sweep) set, and :meth:`~RotationEstimator.uncertainty_deg`.
     """
-    from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
-
     if angle_source is not None:
         reference = angle_source
     cov, truth = None, None
@@ -490,9 +493,6 @@ def _provenance(est: RotationEstimator, source: str, commands, waited, rotation_
 
 def save_rotation_map(estimator: RotationEstimator, path, *, force: bool = False) -> Path:
     """Write a fitted map as JSON (atomically; an existing file only with ``force``)."""
-    from flexdigit._io import atomic_write
-    from flexdigit._json import to_jsonable
-
     with atomic_write(path, "w", force=force) as fh:
         json.dump(to_jsonable(estimator.to_dict()), fh, indent=1)
     return Path(path)
@@ -503,8 +503,6 @@ def load_rotation_map(path) -> RotationEstimator:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the key that is missing or wrong.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     try:
         data = json.loads(read_text(path, "a rotation calibration JSON"))

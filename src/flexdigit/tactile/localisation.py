@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit.tactile.accuracy import accuracy, rmse
 from flexdigit.tactile.bounds import ZONES, cramer_rao, protocol_limits
 from flexdigit.tactile.dataset import Dataset
@@ -114,6 +115,8 @@ class LocalisationResult:
     def best(self) -> str:
         """The estimator with the lowest position RMSE over identifiable readings."""
         return min(self.position_rmse_identifiable_m, key=self.position_rmse_identifiable_m.get)
+
+    __repr__ = fields_summary
 
 
 def localisation_study(

@@ -27,6 +27,7 @@ from flexdigit._io import check_output, output_lock
 from flexdigit._validation import check_real
 from flexdigit.errors import DataFileError, OutputError, ParameterError, RigError
 from flexdigit.params import RigParams
+from flexdigit.rig.base import open_rig, parse_rig_url
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
 
@@ -90,8 +91,6 @@ TACTILE_TWIN_DT_S = 0.020
 
 def sim_options(protocol: Protocol, url: str = "sim") -> dict:
     """Twin options a protocol implies (orientation; cable only when actuated; 20 ms step) unless the URL sets them."""
-    from flexdigit.rig.base import parse_rig_url
-
     given = parse_rig_url(url).options
     out = {}
     if "dt_s" not in given:
@@ -120,8 +119,6 @@ def _checked_options(protocol: Protocol, rig, settle_s, stop_after) -> float:
 
 def _protocol_twin(protocol: Protocol, seed: int):
     """The twin ``flexdigit collect`` opens for ``protocol`` (``--backend sim``, ``--seed seed``)."""
-    from flexdigit.rig.base import open_rig
-
     return open_rig("sim", seed=seed, **sim_options(protocol))
 
 

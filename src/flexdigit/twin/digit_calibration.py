@@ -46,7 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, packaged_calibration
+from flexdigit.twin.calibration import Calibration, default_calibration, packaged_calibration
 
 __all__ = [
     "calibration_for",
@@ -115,7 +115,6 @@ def twin_calibration(params: RigParams | None = None) -> Calibration:
     """The calibration a command gives the twin of ``params`` when no ``--calibration`` is given: the default one
     (the thesis fit, :func:`flexdigit.twin.calibration.default_calibration`) on the thesis rig, else
     :func:`calibration_for` the digit (as ``flexdigit simulate --params`` does)."""
-    from flexdigit.twin.calibration import default_calibration
 
     if params is None or params == RigParams():
         return default_calibration()
