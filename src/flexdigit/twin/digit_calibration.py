@@ -46,10 +46,11 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, packaged_calibration
+from flexdigit.twin.calibration import Calibration, default_calibration, packaged_calibration
 
 __all__ = [
     "calibration_for",
+    "twin_calibration",
 ]
 
 #: A gauge "at a thesis gauge's place" when their relative positions agree this closely (x / L, dimensionless).
@@ -108,3 +109,13 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
         noise_drift_v_per_sqrt_s=drift,
         cable_friction_ratio=params.cables.guide_friction_ratio,
     )
+
+
+def twin_calibration(params: RigParams | None = None) -> Calibration:
+    """The calibration a command gives the twin of ``params`` when no ``--calibration`` is given: the default one
+    (the thesis fit, :func:`flexdigit.twin.calibration.default_calibration`) on the thesis rig, else
+    :func:`calibration_for` the digit (as ``flexdigit simulate --params`` does)."""
+
+    if params is None or params == RigParams():
+        return default_calibration()
+    return calibration_for(params)
