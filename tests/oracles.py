@@ -199,7 +199,7 @@ NUMPY_SCG_FILE = Path(__file__).with_name("data") / "report_fast_numpy_scg.json"
 #: branches part, so the networks differ as networks trained from other initial weights do. A change of rounding
 #: must move an entry less than a change of seed does: over seeds 0-4 of the fast report (which also redraw the
 #: data) corr2 has an SD of up to 0.006, the millimetre and ratio entries a relative SD of 3-44 %, the magnitude
-#: errors 14-28 %. The compiled trainer moved them by at most 0.0054 (corr2) and 7.6 % (README, tactile section); a
+#: errors 14-28 %. The compiled trainer moved them by at most 0.0054 (corr2) and 7.6 % (docs/guide/tactile.md); a
 #: change of CPU (numba compiles the kernel for the host: AVX2 or AVX-512) by up to 0.0013 (corr2) and 19.9 %
 #: (non_actuated.thesis_mlp_position_rmse_mm, 6.61 -> 5.29 mm). 35 % stays inside a change of seed's spread.
 TRAINED_CORR2_ATOL = 0.01

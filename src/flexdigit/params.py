@@ -29,6 +29,8 @@ from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
 
+from flexdigit._io import atomic_write, read_text
+from flexdigit._repr import differences, summary
 from flexdigit._validation import (
     Array,
     Interval,
@@ -610,6 +612,9 @@ class RigParams:
         except ParameterError as exc:
             raise ParameterError(f"{source}: {exc}") from None
 
+    def __repr__(self) -> str:
+        return summary(self, **(differences(self, RigParams()) or {"thesis_defaults": True}))
+
 
 #: The description's limits (issue 24): a planar digit of 1-8 sections carrying 1-8 gauges. The dataclasses accept
 #: more (the design study probes a grid of gauge positions through one ``Geometry``); a *file* is held to these.
@@ -805,8 +810,6 @@ def load_params(path: str | Path, *, check: bool = True) -> RigParams:
     FileNotFoundError
         If the file does not exist.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     text = read_text(path, "a rig parameter TOML")
     try:
@@ -835,8 +838,6 @@ def save_params(params: RigParams, path: str | Path, *, force: bool = False) -> 
         If the file exists and ``force`` is false.
     """
     import tomli_w
-
-    from flexdigit._io import atomic_write
 
     path = Path(path)
     parent = path.parent

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
 
 # The design flags' plausible ranges (flexdigit._validation.Flag refuses the rest in one line naming the flag). The
@@ -27,7 +28,12 @@ def register(subparsers) -> None:
     )
     p = add_command(sub, "hinf", _hinf, help="the thesis's H-infinity design (4.4) for one error-filter cut-off")
     p.add_argument("--filter-hz", type=Flag(FILTER_HZ), required=True, help="cut-off of F(s) = 1/(s + 2 pi f), Hz")
-    p.add_argument("--plant", choices=("printed", "consistent"), default="printed")
+    p.add_argument(
+        "--plant",
+        choices=("printed", "consistent"),
+        default="printed",
+        help="printed: the thesis's G(s) of 3.5 as printed; consistent: its unit-correct rebuild",
+    )
     p.add_argument(
         "--eps",
         type=Flag(Plausible("", 0.0, 1e3, "a regularisation weight eps_u: the thesis's are near 1e-3")),
@@ -40,6 +46,7 @@ def register(subparsers) -> None:
         default=None,
         help="gamma margin (default: fitted to the thesis)",
     )
+    _plot_flags(p)
     p = add_command(sub, "sweep", _sweep, help="the filter sweep of 4.7 (additive tolerance per cut-off)")
     p.add_argument(
         "--filters", type=Flag(FILTER_HZ, many=True), default="0.5,5,39,50", help="comma-separated cut-offs in Hz"
@@ -70,9 +77,24 @@ def register(subparsers) -> None:
         help="input-disturbance weight, commands",
     )
     p.add_argument("--seed", type=Flag(SEED), default=0, help="Monte Carlo seed")
+    _plot_flags(p)
 
 
-def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, margin=None) -> dict:
+def _plot_flags(p) -> None:
+    add_plot_flag(p, "the closed loop's step (output and command) and the Bode plot of L, S and T")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --plot file")
+
+
+def _save_plot(args, plant, controller, unit: str, title: str):
+    """``--plot``: the design's step and Bode figure (:func:`flexdigit.control.design_plot.design_figure`)."""
+    from flexdigit._plot import save_plot
+    from flexdigit.control.design_plot import design_figure
+
+    fig = design_figure(plant, controller, output_unit=unit, title=title)
+    return str(save_plot(fig, args.plot, "design", force=args.force))
+
+
+def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, margin=None, parts=None) -> dict:
     import control as ct
     import numpy as np
 
@@ -83,6 +105,8 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
     plant = build_plant(plant_variant).tf
     d = thesis_design(filter_hz, plant, eps_u=eps, margin=margin)
     K = d.controller
+    if parts is not None:  # --plot draws the plant and controller designed here
+        parts.update(plant=plant, controller=K)
     maps = loop_maps(plant, K)
     tzw, wzw = hinf_norm(maps.T_zw, "T_zw")
     tol = additive_tolerance(plant, K)
@@ -109,7 +133,14 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
 
 
 def _hinf(args: argparse.Namespace) -> CommandResult:
-    s = _design_summary(args.filter_hz, args.plant, args.eps, args.margin)
+    from flexdigit._plot import check_plot
+
+    check_plot(args.plot, "design", force=args.force)
+    parts: dict = {}
+    s = _design_summary(args.filter_hz, args.plant, args.eps, args.margin, parts)
+    if args.plot:
+        title = f"H-inf design, filter {args.filter_hz:g} Hz, {args.plant} plant (thesis 4.4)"
+        s["plot"] = _save_plot(args, parts["plant"], parts["controller"], "m", title)
     text = (
         f"H-inf design, F(s) = 1/(s + {2 * 3.141592653589793 * args.filter_hz:.4f}), {args.plant} plant\n"
         f"  gamma_opt {s['gamma_opt']:.6g}, central controller at {s['gamma']:.6g} (margin {s['margin']:.3g})\n"
@@ -154,9 +185,11 @@ def _mixsyn(args: argparse.Namespace) -> CommandResult:
 
     import numpy as np
 
+    from flexdigit._plot import check_plot
     from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixsyn
     from flexdigit.models.plant import build_plant
 
+    check_plot(args.plot, "design", force=args.force)
     overrides = {
         k: v
         for k, v in {
@@ -178,6 +211,9 @@ def _mixsyn(args: argparse.Namespace) -> CommandResult:
         "controller_den": np.asarray(d.controller.den[0][0]).tolist(),
         "requirements": req,
     }
+    if args.plot:
+        title = f"mixed-sensitivity design, consistent plant (beam rotation), order {d.order}"
+        data["plot"] = _save_plot(args, plant.tf, d.controller, "rad", title)
     if not req.get("stable"):
         return CommandResult(data=data, text="mixsyn: the nominal closed loop is unstable", exit_code=1)
     mc = req["monte_carlo"]

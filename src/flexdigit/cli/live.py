@@ -10,6 +10,7 @@ import argparse
 from numbers import Integral
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Interval, Plausible
 from flexdigit.params import SERVO_COMMAND
 
@@ -65,6 +66,8 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--accuracy", action="store_true", help="score the estimator against the twin instead")
     parser.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed of --accuracy")
+    add_plot_flag(parser, "the estimated centre line with its 2 sd band, the tip and the load")
+    parser.add_argument("--force", action="store_true", help="overwrite an existing --plot file")
 
 
 def _live(args: argparse.Namespace) -> CommandResult:
@@ -102,6 +105,7 @@ def _live(args: argparse.Namespace) -> CommandResult:
 
 
 def _shape(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._plot import check_plot
     from flexdigit.errors import ParameterError
     from flexdigit.params import RigParams, load_params
     from flexdigit.twin.digit_calibration import twin_calibration
@@ -109,7 +113,10 @@ def _shape(args: argparse.Namespace) -> CommandResult:
     params = load_params(args.params) if args.params else RigParams()
     calibration = twin_calibration(params, args.calibration)
     if args.accuracy:
+        if args.plot:
+            raise ParameterError("--plot draws one reading's centre line: give --gauges-v, not --accuracy")
         return _accuracy(args, params, calibration)
+    check_plot(args.plot, "shape", force=args.force)
     count = len(params.geometry.gauge_positions_m)
     names = ",".join(f"V{k}" for k in range(1, count + 1))
     if args.gauges_v is None:
@@ -158,6 +165,15 @@ def _shape(args: argparse.Namespace) -> CommandResult:
             "expected): check the calibration, --orientation, --command and --no-cable; no estimate given"
         )
         return CommandResult(data=row, text=text, exit_code=1)
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.shape.shape_plot import shape_figure
+
+        title = f"shape from gauges {args.gauges_v} V" + (
+            f", command {args.command}" if args.command is not None else ""
+        )
+        row["plot"] = str(save_plot(shape_figure(est, 0, title), args.plot, "shape", force=args.force))
+        text += f"\nplot -> {args.plot}"
     return CommandResult(data=row, text=text)
 
 

@@ -86,8 +86,8 @@ def _text(data: dict) -> str:
     lines = [
         f"plant ({p['variant']}): {p['input_unit']} -> {p['output']} [{p['output_unit']}]",
         f"  G(s) = ({_poly(p['num'])}) / ({_poly(p['den'])})",
-        "  poles: " + ", ".join(_complex(z) for z in p["poles"]),
-        "  zeros: " + (", ".join(_complex(z) for z in p["zeros"]) or "none"),
+        "  poles (rad/s): " + ", ".join(_complex(z) for z in p["poles"]),
+        "  zeros (rad/s): " + (", ".join(_complex(z) for z in p["zeros"]) or "none"),
         f"  DC gain: {p['dc_gain']:.6g} {p['output_unit']} per command",
         f"  controllability rank {p['controllability_rank']}, observability rank {p['observability_rank']} "
         f"(order {p['order']})",
@@ -103,7 +103,7 @@ def _text(data: dict) -> str:
         cl = data["closed_loop"]
         lines.append(f"closed loop with K1 = {cl['k1']:.5g} (table 4.1):")
         lines.append(f"  T(s) = ({_poly(cl['num'])}) / ({_poly(cl['den'])})")
-        lines.append("  poles: " + ", ".join(_complex(z) for z in cl["poles"]))
+        lines.append("  poles (rad/s): " + ", ".join(_complex(z) for z in cl["poles"]))
     lines.extend(f"note: {n}" for n in data["notes"])
     for item in data.get("discrepancies", []):
         lines.append(item)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag
 
 #: Largest chi^2 per degree of freedom a palpation fit may leave and still be reported.
@@ -18,6 +19,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         _palpate,
         help="palpate tissue beside the digit: stiffness from a command sweep, a scan for an inclusion, force control",
     )
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("tissue", "palpation")
     p.add_argument("--tissue", required=True, help="a tissue TOML file or a built-in (soft-block, nodule-phantom, ...)")
     p.add_argument("--protocol", default=None, help="a protocol TOML file or a built-in: sweep (default), scan, hold")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
@@ -33,7 +37,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--log", default=None, help="JSON-lines log of every loop sample (scan: one file per offset)")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
-    p.add_argument("--force", action="store_true", help="overwrite --out / --log if they exist")
+    p.add_argument("--force", action="store_true", help="overwrite --out / --log / --plot if they exist")
+    add_plot_flag(p, "force against indentation (sweep), the stiffness map (scan) or the force over time (hold)")
 
 
 def _sim_options(backend: str, kind: str, seed: int | None) -> dict:
@@ -62,7 +67,10 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     tissue, info = load_tissue(args.tissue)
     plan = load_palpation_protocol(args.protocol)
     kind = "force" if plan.force else ("scan" if plan.scan else "sweep")
+    from flexdigit._plot import check_plot
+
     out = check_output(args.out, force=args.force) if args.out else None
+    check_plot(args.plot, "palpate", force=args.force)
     logs = _log_paths(args.log, plan, args.force)
     sim = args.backend.split(":")[0].split("?")[0].startswith("sim")
     if sim and not info.placed_on_twin:
@@ -80,11 +88,13 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
         if kind == "force":
-            data, text = _force(rig, tissue, plan, logs[0], log_mode)
+            data, text, fig = _force(rig, tissue, plan, logs[0], log_mode)
         elif kind == "scan":
-            data, text = _scan(rig, tissue, plan, logs, log_mode, calibration)
+            data, text, fig = _scan(rig, tissue, plan, logs, log_mode, calibration)
         else:
-            data, text = _sweep(rig, tissue, plan, logs[0], log_mode, calibration)
+            data, text, fig = _sweep(
+                rig, tissue, plan, logs[0], log_mode, tissue.modulus_n_m2 if sim else None, calibration
+            )
     finally:
         rig.close()
     data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, "rig": settings, **data}
@@ -94,6 +104,11 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             "modulus_n_m2": tissue.modulus_n_m2,
             "exponent": tissue.exponent,
         }
+    if args.plot:
+        from flexdigit._plot import save_plot
+
+        data["plot"] = str(save_plot(fig(), args.plot, "palpate", force=args.force))
+        text += f"\nplot -> {args.plot}"
     if out is not None:
         import json
 
@@ -150,7 +165,7 @@ def _refuse_poor_fit(fit, what: str) -> None:
         )
 
 
-def _sweep(rig, tissue, plan, log, log_mode, calibration=None):
+def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
     import numpy as np
 
     from flexdigit.errors import DataFileError
@@ -204,7 +219,14 @@ def _sweep(rig, tissue, plan, log, log_mode, calibration=None):
     ]
     if plan.sweep.model == "hunt-crossley":
         lines.insert(3, f"  exponent  {f.exponent:9.3f} +- {f.exponent_sd:.3f}")
-    return data, "\n".join(lines)
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import indentation_figure
+
+        title = f"palpation of {tissue.side}-side tissue ({plan.sweep.model})"
+        return indentation_figure(result, true_modulus_n_m2=true_modulus, title=title)
+
+    return data, "\n".join(lines), figure
 
 
 def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
@@ -253,7 +275,14 @@ def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
         f"{1000 * inc['centre_sd_m']:.1f} mm into the tissue, {inc['ratio']:.2f} +- {inc['ratio_sd']:.2f} x stiffer "
         f"(base {inc['modulus_n_m2']:.0f} N/m^2)"
     )
-    return data, text
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import scan_figure
+
+        true_centre = data["inclusion"].get("true_centre_in_tissue_mm")
+        return scan_figure(result, true_centre_mm=true_centre, title=f"scan of {len(records)} offsets")
+
+    return data, text, figure
 
 
 def _force(rig, tissue, plan, log, log_mode):
@@ -292,4 +321,10 @@ def _force(rig, tissue, plan, log, log_mode):
         f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, within 10 % after "
         f"{held.settling_s:.2f} s ({data['scored_on']})"
     )
-    return data, text
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import hold_figure
+
+        return hold_figure(held, title=f"force control at {held.setpoint_n:g} N")
+
+    return data, text, figure

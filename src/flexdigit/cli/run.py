@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.rig.step_test import ESTIMATE_SMOOTH_S
 
@@ -74,8 +75,9 @@ def register(subparsers) -> None:
     writes.add_argument(
         "--force",
         action="store_true",
-        help="replace an existing --log or --record file, or --rotation-map when making one",
+        help="replace an existing --log, --record or --plot file, or --rotation-map when making one",
     )
+    add_plot_flag(parser, "the setpoint, the estimated and (twin) true rotation and the command over time")
     parser.add_argument("--no-progress", action="store_true", help="no live progress line")
     parser.add_argument(
         "--realtime", action="store_true", help="run the loop under SCHED_FIFO when permitted (hardware, sim+paced)"
@@ -158,6 +160,10 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.rig.step_test import run_step
 
     if args.on_board:
+        if args.plot:
+            from flexdigit.errors import ParameterError
+
+            raise ParameterError("--plot draws a run whose loop closes here; with --on-board the board closes it")
         return _run_on_board(args)
     duration, setpoint, sim, rig_options = _checked(args)
     with contextlib.ExitStack() as stack:
@@ -177,6 +183,12 @@ def _run(args: argparse.Namespace) -> CommandResult:
     if progress:
         progress.stop(_figures_line(run.figures))
     data = _run_data(args, run, rig, settings, setpoint, period, estimator, recording)
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.rig.run_plot import run_figure
+
+        title = f"{args.controller} on {args.backend}, step to {setpoint:g} deg"
+        data["plot"] = str(save_plot(run_figure(run, title), args.plot, "run", force=args.force))
     # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
     exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[run.result.status]
     return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
@@ -198,6 +210,9 @@ def _checked(args) -> tuple[float, float, bool, dict]:
         raise ParameterError(f"--controller must be one of {', '.join(CONTROLLERS)}. Got {args.controller!r} instead.")
     duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
+    from flexdigit._plot import check_plot
+
+    check_plot(args.plot, "run", force=args.force)  # before the rig moves, not after
     if args.log is not None and not (args.append and args.log.exists()):  # before the rig moves, not after
         check_output(args.log, force=args.force, hint="or --append to add this run to it")
     sim = parse_rig_url(args.backend).scheme in ("sim", "sim+paced")

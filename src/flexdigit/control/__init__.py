@@ -38,6 +38,7 @@ __getattr__, __all__ = lazy_exports(
         "mixed_sensitivity_plant": "flexdigit.control.generalized",
         "HinfDesign": "flexdigit.control.synthesis",
         "hinf_riccati": "flexdigit.control.synthesis",
+        "design_figure": "flexdigit.control.design_plot",
         "hinf_lmi": "flexdigit.control.synthesis",
         "regularisation_path": "flexdigit.control.synthesis",
         "reduce_controller": "flexdigit.control.synthesis",

@@ -36,6 +36,7 @@ from numbers import Integral, Real
 import control as ct
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import (
     InstanceOf,
     Interval,
@@ -46,7 +47,10 @@ from flexdigit._validation import (
 )
 from flexdigit.control.discretise import METHODS, discretise
 from flexdigit.control.runtime import RuntimeController
+from flexdigit.control.thesis_designs import printed_controller
 from flexdigit.errors import DesignError
+from flexdigit.models.plant import build_plant
+from flexdigit.models.servo import servo_unit_tf
 from flexdigit.params import RigParams
 
 __all__ = [
@@ -64,14 +68,21 @@ __all__ = [
 class Weights:
     """LQR and Kalman weights of :func:`design_20ms` (rotation in deg, command in commands).
 
-    q_rate : weight on the change of rotation per sample, (deg)^-2
-    r_u : weight on the command deviation, (command)^-2 (the rotation error has weight 1)
-    q_disturbance : variance of the input-disturbance random walk per sample, command^2
-    q_input : variance of the process noise at the servo input, command^2
-    r_measurement : variance of the rotation measurement, deg^2. The gauges' 2 mV noise alone is ~0.2 deg rms
-        through the gauge-to-rotation map, but the map is static: while the digit vibrates the gauges also see
-        dynamic bending, and the estimate leaves the true rotation by up to +-3 deg (seen on the twin). 10 deg^2
-        makes the observer trust the model through that, so the integer command does not chase the vibration.
+    Parameters
+    ----------
+    q_rate : float
+        Weight on the change of rotation per sample, (deg)^-2.
+    r_u : float
+        Weight on the command deviation, (command)^-2 (the rotation error has weight 1).
+    q_disturbance : float
+        Variance of the input-disturbance random walk per sample, command^2.
+    q_input : float
+        Variance of the process noise at the servo input, command^2.
+    r_measurement : float
+        Variance of the rotation measurement, deg^2. The gauges' 2 mV noise alone is ~0.2 deg rms through the
+        gauge-to-rotation map, but the map is static: while the digit vibrates the gauges also see dynamic
+        bending, and the estimate leaves the true rotation by up to +-3 deg (seen on the twin). 10 deg^2 makes
+        the observer trust the model through that, so the integer command does not chase the vibration.
     """
 
     q_rate: float = 100.0
@@ -95,9 +106,6 @@ def design_plant(params: RigParams | None = None, deg_per_command: float | None 
     ``deg_per_command`` defaults to the cable model's tip rotation per command (1.735 deg,
     :func:`flexdigit.models.plant.build_plant` ``"consistent"``, ``output="tip_rotation_rad"``).
     """
-    from flexdigit.models.plant import build_plant
-    from flexdigit.models.servo import servo_unit_tf
-
     params = params or RigParams()
     if deg_per_command is None:
         deg_per_command = float(np.rad2deg(build_plant("consistent", params, output="tip_rotation_rad").dc_gain))
@@ -156,6 +164,16 @@ class Digital20msDesign:
             hysteresis=hysteresis,
             measure=measure,
             name=name,
+        )
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            period_s=self.period_s,
+            delay_samples=self.delay_samples,
+            controller_order=self.controller.nstates,
+            largest_pole_radius=float(np.max(np.abs(self.closed_loop_poles))),
+            deg_per_command=self.deg_per_command,
         )
 
 
@@ -293,8 +311,6 @@ def thesis_controller(
 
     The runtime runs it on the error ``r - y`` in metres; no anti-windup (the thesis had none).
     """
-    from flexdigit.control.thesis_designs import printed_controller
-
     if method not in METHODS:
         raise DesignError(f"The 'method' parameter of thesis_controller must be one of {METHODS}. Got {method!r}.")
     Kd = discretise(ct.ss(printed_controller("39hz")), period_s, method)

@@ -21,6 +21,7 @@ from flexdigit._validation import check_positive
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
 from flexdigit.control.synthesis import HinfDesign, central_controller_poles, hinf_riccati
 from flexdigit.errors import ConvergenceWarning, DesignError
+from flexdigit.models.plant import build_plant
 from flexdigit.reference import thesis_complex, thesis_value
 
 __all__ = [
@@ -60,8 +61,6 @@ def printed_controller(which: str) -> ct.TransferFunction:
 
 def thesis_plant(variant: str = "printed"):
     """The plant of 4.2 from :func:`flexdigit.models.plant.build_plant` (m of gauge-1 deflection per command)."""
-    from flexdigit.models.plant import build_plant
-
     return build_plant(variant).tf
 
 

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._validation import _interval_text, check_real
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
 
@@ -251,8 +252,6 @@ class Rig(abc.ABC):
 
     def place_load(self, mass_kg: float, position_from_base_m: float) -> None:
         """Hang a point mass at a distance from the base (the twin applies it; on hardware the operator does)."""
-        from flexdigit._validation import check_real
-
         mass = check_real(mass_kg, "mass_kg", type(self).__name__, low=0.0)
         length = self.params.geometry.digit_length_m
         pos = check_real(position_from_base_m, "position_from_base_m", type(self).__name__, low=0.0, high=length)
@@ -266,8 +265,6 @@ class Rig(abc.ABC):
         The thesis repeats "the procedure" for every reading (6.4, 7.1); on hardware the operator does it. The twin
         re-hangs exactly, without a swing, so it only lets the cable settle afresh in its guides and does not wait.
         """
-        from flexdigit._validation import check_real
-
         settle = check_real(settle_s, "settle_s", type(self).__name__, low=0.0)
         self._check_open()
         self._rehang(settle)
@@ -372,8 +369,6 @@ class UrlOption:
 
     def expected(self) -> str:
         """What a valid value looks like, for messages."""
-        from flexdigit._validation import _interval_text
-
         if self.kind == "choice":
             text = "one of " + ", ".join(self.choices)
         elif self.kind == "bool":

@@ -12,6 +12,7 @@ from collections.abc import Callable
 import numpy as np
 
 from flexdigit._validation import Plausible, check_choice, check_param, check_positive
+from flexdigit.models.conversion import k3_printed_mm_per_v
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Reading, Rig
 from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation
@@ -21,8 +22,6 @@ __all__ = ["CONTROLLERS", "make_controller"]
 
 def _gauge1_deflection_m(params: RigParams, tare_v: float) -> Callable[[Reading], float]:
     """Gauge-1 deflection (m) from its voltage through the printed K3 (E 3.23, 6.5698 mm/V)."""
-    from flexdigit.models.conversion import k3_printed_mm_per_v
-
     k3_m_per_v = k3_printed_mm_per_v()[0] / 1000.0
     return lambda reading: (float(reading.gauges_v[0]) - tare_v) * k3_m_per_v
 
@@ -80,8 +79,6 @@ def make_controller(
         return _Wrapped(design.runtime(params, name=name), estimator, 1.0, gain, eq)
     method = "forward_euler" if name.endswith("euler") else "tustin"
     measure = _gauge1_deflection_m(params, float(np.mean([g[0] for g in rest])))
-    from flexdigit.models.conversion import k3_printed_mm_per_v
-
     # metres of gauge-1 deflection per degree: K3 (m/V) x the sweep's gauge-1 volts per degree
     scale = k3_printed_mm_per_v()[0] / 1000.0 * float(estimator.gauge_v_per_deg_[0])
     return _Wrapped(thesis_controller(method, period_s, params), measure, scale, gain, eq)

@@ -31,9 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_write, read_text
+from flexdigit._json import to_jsonable
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.rig.base import Reading, Rig
+from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
 
 __all__ = [
     "RotationEstimator",
@@ -57,7 +61,7 @@ BIRGE_LIMIT = 2.0
 
 
 class RotationEstimator:
-    """Beam rotation (deg) from the three gauge voltages, ``w . gauges_v + b - tare`` (scikit-learn's contract).
+    """Beam rotation (deg) from the three gauge voltages, ``w @ gauges_v + b - tare`` (scikit-learn's contract).
 
     The calibration sweep moves the digit along one direction only (the cable's pull), so the three gauges are
     nearly collinear: on the twin the sweep's gauge matrix has singular values ~0.40 V against ~0.003 V, and the
@@ -259,6 +263,8 @@ class Settled:
     waited_s: float
     truth_deg: float
 
+    __repr__ = fields_summary
+
 
 def wait_until_settled(
     rig: Rig,
@@ -354,8 +360,6 @@ def calibrate_rotation(
         Fitted, with ``source_``, ``commands_``, ``settle_time_s_`` (per reading) and ``deg_per_command_`` (the
         reference's rotation per command over the sweep) set, and :meth:`~RotationEstimator.uncertainty_deg`.
     """
-    from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
-
     if angle_source is not None:
         reference = angle_source
     cov, truth = None, None
@@ -459,9 +463,6 @@ def _provenance(est: RotationEstimator, source: str, commands, waited, rotation_
 
 def save_rotation_map(estimator: RotationEstimator, path, *, force: bool = False) -> Path:
     """Write a fitted map as JSON (atomically; an existing file only with ``force``)."""
-    from flexdigit._io import atomic_write
-    from flexdigit._json import to_jsonable
-
     with atomic_write(path, "w", force=force) as fh:
         json.dump(to_jsonable(estimator.to_dict()), fh, indent=1)
     return Path(path)
@@ -472,8 +473,6 @@ def load_rotation_map(path) -> RotationEstimator:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the key that is missing or wrong.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     try:
         data = json.loads(read_text(path, "a rotation calibration JSON"))

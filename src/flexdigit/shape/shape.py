@@ -53,9 +53,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexdigit._constants import G_STANDARD_M_S2
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
+from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.digit import ORIENTATIONS
+from flexdigit.twin.sensors import SensorChain
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
 
 __all__ = [
     "DigitBeam",
@@ -124,10 +130,6 @@ class DigitBeam:
         ds_m: float = 1e-3,
     ) -> DigitBeam:
         """The thesis digit (2.2, tables 3.5, 3.7) with the calibration's housing stiffness and support masses."""
-        from flexdigit.models.servo import command_to_angle_rad
-        from flexdigit.twin.calibration import default_calibration
-        from flexdigit.twin.digit import ORIENTATIONS
-
         params = params or RigParams()
         calibration = calibration or default_calibration()
         check_choice(orientation, "orientation", tuple(ORIENTATIONS), "DigitBeam")
@@ -244,6 +246,8 @@ class DigitBeam:
         """Moment (B, Q) of the digit's own weight for shapes (B, P+1, 2) through a :meth:`weight_operator`."""
         return _cross(np.matmul(operator, r_nodes), self.gravity)
 
+    __repr__ = fields_summary
+
 
 @dataclass
 class ShapeEstimate:
@@ -347,6 +351,8 @@ class ShapeEstimate:
             "load_mass_kg": load(self.load_mass_kg[i]),
         }
 
+    __repr__ = fields_summary
+
 
 class ShapeEstimator:
     """Centre line, cable tension and one load from the three gauge voltages (module docstring).
@@ -447,9 +453,6 @@ class ShapeEstimator:
         """Validate the settings and build the beam (once per settings, as scikit-learn validates in fit)."""
         if getattr(self, "ready_", None) == self._key():
             return
-        from flexdigit.twin.calibration import default_calibration
-        from flexdigit.twin.sensors import SensorChain
-
         owner = "ShapeEstimator"
         self.params_ = self.params or RigParams()
         self.calibration_ = self.calibration or default_calibration()
@@ -500,8 +503,6 @@ class ShapeEstimator:
         """Per reading, the cable shortening the command asks for over e (rad), or NaN where there is none."""
         if command is None or not self.cable:
             return np.full(b, np.nan)
-        from flexdigit.models.servo import command_to_angle_rad
-
         a = self.params_.actuator
         c = check_array(command, "command", "ShapeEstimator", low=a.command_min, high=a.command_max)
         c = np.broadcast_to(c.reshape(-1) if c.ndim else c, (b,))
@@ -1027,6 +1028,8 @@ class ShapeAccuracy:
             )
         return out
 
+    __repr__ = fields_summary
+
 
 #: Where :func:`shape_accuracy` hangs its weight by default: every centimetre from the clamp to the tip (m).
 ACCURACY_POSITIONS_M = tuple(round(0.01 * k, 2) for k in range(1, 28))
@@ -1058,9 +1061,6 @@ def shape_accuracy(
     >>> bool(np.all(acc.tip_error_m < 0.01))
     True
     """
-    from flexdigit.twin.calibration import default_calibration
-    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
-
     params = params or RigParams()
     calibration = calibration or default_calibration()
     a = params.actuator

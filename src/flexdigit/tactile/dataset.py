@@ -29,10 +29,19 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import __version__, _io
-from flexdigit._io import atomic_path, atomic_write
+from flexdigit._io import (
+    LOG_LIMIT,
+    RECORDS_LIMIT,
+    atomic_path,
+    atomic_write,
+    check_input,
+    count_lines,
+    read_bytes,
+    read_text,
+)
 from flexdigit.errors import DataFileError, one_line
 from flexdigit.interrupts import signals_deferred
-from flexdigit.tactile.protocols import Protocol
+from flexdigit.tactile.protocols import RELAXED, Protocol
 
 __all__ = [
     "COLUMNS",
@@ -314,8 +323,6 @@ def _check_journal_plan(path: Path, rows: list[dict], header: dict) -> None:
 
 def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     """Header, complete readings, and the byte length of the complete part of a journal."""
-    from flexdigit._io import LOG_LIMIT, read_bytes
-
     data = read_bytes(path, "a collection journal", LOG_LIMIT)
     lines = data.split(b"\n")
     # Everything after the last newline is a partial line (or empty): it is not counted.
@@ -455,8 +462,6 @@ def _load_parquet(path: Path) -> Dataset:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from flexdigit._io import check_input
-
     check_input(path, "a flexdigit dataset (Parquet)")
     try:
         with _io.open_input(path, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
@@ -495,8 +500,6 @@ def _load_parquet(path: Path) -> Dataset:
 
 def _load_csv(path: Path) -> Dataset:
     from io import StringIO
-
-    from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
 
     count_lines(path, "a flexdigit dataset CSV")
     with StringIO(read_text(path, "a flexdigit dataset CSV", RECORDS_LIMIT)) as fh:
@@ -604,8 +607,6 @@ def _adc_range(meta: dict, path: Path) -> tuple[float, float] | None:
 
 def _check_against_settings(dataset: Dataset, path: Path, protocol: Protocol) -> None:
     """Each imported reading's load, position and command must be one of its protocol's."""
-    from flexdigit.tactile.protocols import RELAXED
-
     allowed = {
         "load_kg": {0.0, *protocol.loads_kg},
         "position_from_tip_m": set(protocol.positions_from_tip_m),

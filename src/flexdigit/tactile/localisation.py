@@ -18,8 +18,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
+from flexdigit.params import RigParams
 from flexdigit.tactile.accuracy import accuracy, rmse
-from flexdigit.tactile.bounds import ZONES, cramer_rao, protocol_limits
+from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao, protocol_limits
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
@@ -116,6 +118,8 @@ class LocalisationResult:
     def best(self) -> str:
         """The estimator with the lowest position RMSE over identifiable readings."""
         return min(self.position_rmse_identifiable_m, key=self.position_rmse_identifiable_m.get)
+
+    __repr__ = fields_summary
 
 
 def localisation_study(
@@ -309,9 +313,6 @@ def readings_gauge_model(params=None, calibration=None):
     the readings then carry the rounding, and a Bayes limit without it would be a floor no estimator could reach.
     The studies' ``bayes_position_limit_mm`` models the readings the same way.
     """
-    from flexdigit.params import RigParams
-    from flexdigit.tactile.bounds import TwinGaugeModel
-
     model = TwinGaugeModel(params, calibration)
     lsb = (params or RigParams()).sensors.adc_lsb_v
     model.noise_v = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + lsb**2 / 12.0)

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import read_text, refuse_special
 from flexdigit._validation import (
     Plausible,
     check_array,
@@ -42,7 +43,7 @@ from flexdigit._validation import (
 from flexdigit.errors import ParameterError
 from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M
 
-__all__ = ["RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
+__all__ = ["builtin_protocols", "RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
 
 #: The ``command`` recorded when actuation is disabled (the servo relaxed, chapter 6).
 RELAXED = -1
@@ -335,14 +336,21 @@ def load_protocol(name_or_path: str | Path) -> Protocol:
     if text_name in BUILTIN:
         resource = resources.files(__package__).joinpath("protocols", f"{text_name}.toml")
         return protocol_from_toml(resource.read_text(), source=f"protocol {text_name}")
-    from flexdigit._io import refuse_special
-
     path = Path(name_or_path)
     refuse_special(path, "a protocol TOML")
     if not path.is_file():
         raise ParameterError(
             f"no protocol {text_name!r}: expected one of {', '.join(BUILTIN)} or a TOML file that exists"
         )
-    from flexdigit._io import read_text
-
     return protocol_from_toml(read_text(path, "a protocol TOML"), source=str(path))
+
+
+def builtin_protocols() -> dict[str, str]:
+    """The built-in load protocols (:data:`BUILTIN`), each with its one-line description.
+
+    Examples
+    --------
+    >>> builtin_protocols()["thesis-6.1"][:21]
+    'Non-actuated digit: l'
+    """
+    return {name: load_protocol(name).description for name in BUILTIN}

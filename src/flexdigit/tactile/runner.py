@@ -27,8 +27,10 @@ from flexdigit._io import check_output, output_lock
 from flexdigit._validation import check_real
 from flexdigit.errors import DataFileError, OutputError, ParameterError, RigError
 from flexdigit.params import RigParams
+from flexdigit.rig.base import open_rig, parse_rig_url
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
+from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = [
     "PROTOCOL_SETTINGS",
@@ -90,8 +92,6 @@ TACTILE_TWIN_DT_S = 0.020
 
 def sim_options(protocol: Protocol, url: str = "sim") -> dict:
     """Twin options a protocol implies (orientation; cable only when actuated; 20 ms step) unless the URL sets them."""
-    from flexdigit.rig.base import parse_rig_url
-
     given = parse_rig_url(url).options
     out = {}
     if "dt_s" not in given:
@@ -120,9 +120,6 @@ def _checked_options(protocol: Protocol, rig, settle_s, stop_after) -> float:
 
 def _protocol_twin(protocol: Protocol, seed: int, params: RigParams | None = None):
     """The twin ``flexdigit collect`` opens for ``protocol`` (``--backend sim``, ``--seed seed``, ``--params``)."""
-    from flexdigit.rig.base import open_rig
-    from flexdigit.twin.digit_calibration import twin_calibration
-
     options = sim_options(protocol)
     if params is not None and params != RigParams():
         options["calibration"] = twin_calibration(params)

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import check_array, check_int, check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
 from flexdigit.tdcr import _rod_kernel
@@ -84,6 +85,16 @@ class DynamicSolution:
             + (rho_j * self.angular_velocities_rad_s**2).sum(-1)
         )
         return np.trapezoid(density, self.s_m, axis=1)
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            converged=self.converged,
+            steps=len(self.t_s),
+            duration_s=float(self.t_s[-1] - self.t_s[0]) if len(self.t_s) else 0.0,
+            nodes=len(self.s_m),
+            final_tip_m=self.positions_m[-1, -1],
+        )
 
 
 def simulate(

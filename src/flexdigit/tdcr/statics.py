@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexdigit._constants import G_STANDARD_M_S2
+from flexdigit._repr import summary
 from flexdigit._validation import check_array, check_int, check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
 from flexdigit.tdcr import _rod_kernel
@@ -108,6 +109,16 @@ class StaticSolution:
             "s_m": self.s_m.tolist(),
             "backbone_m": self.positions_m.tolist(),
         }
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            converged=self.converged,
+            iterations=self.iterations,
+            residual=self.residual,
+            nodes=len(self.s_m),
+            tip_m=self.positions_m[-1],
+        )
 
 
 def _vector(value, name: str) -> np.ndarray:

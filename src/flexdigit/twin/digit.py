@@ -46,7 +46,8 @@ import numpy as np
 from scipy.linalg.lapack import dgesv as _gesv
 
 from flexdigit._constants import G_STANDARD_M_S2
-from flexdigit._validation import check_array, check_int, check_positive, check_real, check_values
+from flexdigit._repr import fields_summary
+from flexdigit._validation import check_array, check_choice, check_int, check_positive, check_real, check_values
 from flexdigit.errors import ConvergenceWarning, ParameterError
 
 __all__ = [
@@ -106,6 +107,8 @@ class StaticSolution:
     tip_m: np.ndarray
     iterations: int
     converged: bool = True
+
+    __repr__ = fields_summary
 
 
 def chain_matrices(d, mass_lever, mass_link, stiffness, damping, mass_kg, inertia, gravity):
@@ -839,8 +842,6 @@ def digit_arrays(
 ) -> dict:
     """The keyword arguments of :func:`build_digit`'s :class:`Chain`: springs, cells, masses, gauges, gravity, cable
     (for chains stacked without building each one, :meth:`flexdigit.twin.batched.BatchedChains.from_rigs`)."""
-    from flexdigit._validation import check_choice
-
     check_choice(orientation, "orientation", tuple(ORIENTATIONS), "build_digit")
     cells_per_section = check_int(cells_per_section, "cells_per_section", "build_digit", low=1, high=1000)
     geo, mat = params.geometry, params.material

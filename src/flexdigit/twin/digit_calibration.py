@@ -46,7 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, packaged_calibration
+from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration, packaged_calibration
 
 __all__ = [
     "calibration_for",
@@ -122,8 +122,6 @@ def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
     >>> twin_calibration(RigParams()) == default_calibration()
     True
     """
-    from flexdigit.twin.calibration import default_calibration, load_calibration
-
     if path is not None:
         return load_calibration(path)
     if params is None or params == RigParams():

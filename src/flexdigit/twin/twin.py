@@ -32,8 +32,10 @@ from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
 from flexdigit.twin.actuator import Servo
 from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.contact import Tissue, TissueContact, check_point_force, check_pressure, quadrature
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
 from flexdigit.twin.sensors import SensorChain
+from flexdigit.twin.sensors import adc as quantise
 
 __all__ = [
     "DEFAULT_DT_S",
@@ -117,6 +119,9 @@ class Twin:
         Step the digit with the compiled kernel (:meth:`~flexdigit.twin.digit.DynamicState.use_compiled`): ~5 x
         less CPU per simulated second, within 1e-9 rad of the default numpy path but not bit for bit, so off
         by default (the report's numbers come from the numpy path).
+    servo_drive : {"serial", "timer"}
+        How commands reach the servo (:mod:`flexdigit.twin.actuator`): the thesis's serial board, or a pulse the
+        controller's own timer generates (the reference firmware's: the loop on the board's timing).
     """
 
     def __init__(
@@ -132,6 +137,7 @@ class Twin:
         cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
         command: int | None = None,
         compiled: bool = False,
+        servo_drive: str = "serial",
     ):
         self.params = params or RigParams()
         self.calibration = calibration or default_calibration()
@@ -152,7 +158,7 @@ class Twin:
         # cable (a servo pulling it slides it one way, a repeatable state the calibration absorbs)
         self._friction_xi = np.zeros(3)
         start = self.params.actuator.equilibrium_command if command is None else command
-        self.servo = Servo(self.params, start)
+        self.servo = Servo(self.params, start, drive=servo_drive)
         self._pulley_m = self.params.actuator.cable_m_per_servo_rad
         self._angle_taut = float(command_to_angle_rad(self.params.actuator.equilibrium_command, self.params))
         self._loads: list[tuple[float, float]] = []
@@ -194,8 +200,6 @@ class Twin:
         )
 
     def _press_arrays(self):
-        from flexdigit.twin.contact import quadrature
-
         return quadrature(self.chain, self._presses)
 
     def _load_arrays(self):
@@ -483,16 +487,12 @@ class Twin:
         """Add a world-fixed sideways point force (N, + towards the cable side) at a position along the digit (m
         from the base); it stays (with any others) until :meth:`clear_presses`. The digit is not jolted: it moves
         from where it is (the next :meth:`advance` integrates the motion)."""
-        from flexdigit.twin.contact import check_point_force
-
         self._presses.append(check_point_force(position_from_base_m, force_n, self.chain.length_m, "Twin.press"))
         self._apply_loads()
 
     def apply_pressure(self, total_n: float, start_m: float, end_m: float) -> None:
         """Add a world-fixed sideways line load: ``total_n`` (N, + towards the cable side) spread evenly over the
         stretch ``start_m..end_m`` (m from the base). Stays until :meth:`clear_presses`."""
-        from flexdigit.twin.contact import check_pressure
-
         self._presses.append(check_pressure(start_m, end_m, total_n, self.chain.length_m, "Twin.apply_pressure"))
         self._apply_loads()
 
@@ -512,8 +512,6 @@ class Twin:
         The digit meets it where it is: with ``settle`` it is put at rest in the new static equilibrium instead
         (a body placed before the run, the digit already pressing on it).
         """
-        from flexdigit.twin.contact import Tissue, TissueContact
-
         if tissue is not None and not isinstance(tissue, Tissue):
             raise ParameterError(f"The 'tissue' parameter of Twin.set_tissue must be a Tissue or None. Got {tissue!r}.")
         self.tissue = tissue
@@ -639,8 +637,6 @@ def static_gauges_v(
     if rng is not None:
         volts = volts + np.asarray(calibration.noise_white_v) * rng.standard_normal(volts.shape)
     if adc:
-        from flexdigit.twin.sensors import adc as quantise
-
         volts = quantise(volts, params.sensors)
     return (volts, sol) if return_solution else volts
 
