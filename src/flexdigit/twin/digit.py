@@ -916,7 +916,7 @@ def digit_arrays(
             f"The 'support_mass_kg' parameter of Calibration must have {nsec} values (supports at "
             f"{[round((k + 1) * pitch, 4) for k in range(nsec)]} m). Got {supports.tolist()!r} instead."
         )
-    mass_s.append(pitch * (np.arange(nsec) + 1.0))
+    mass_s.append(np.minimum(pitch * (np.arange(nsec) + 1.0), length))  # n pitch may round past the tip
     mass_kg.append(supports)
     inertia.append(np.zeros(nsec))
     if housing and calibration.housing_mass_kg > 0:

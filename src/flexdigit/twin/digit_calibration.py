@@ -46,7 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, default_calibration, packaged_calibration
+from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration, packaged_calibration
 
 __all__ = [
     "calibration_for",
@@ -111,11 +111,19 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
     )
 
 
-def twin_calibration(params: RigParams | None = None) -> Calibration:
-    """The calibration a command gives the twin of ``params`` when no ``--calibration`` is given: the default one
-    (the thesis fit, :func:`flexdigit.twin.calibration.default_calibration`) on the thesis rig, else
-    :func:`calibration_for` the digit (as ``flexdigit simulate --params`` does)."""
+def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
+    """The calibration a twin of ``params`` runs with: the file ``path`` if given, else the packaged default
+    calibration for the thesis rig, else :func:`calibration_for` (the thesis's scaled to that digit).
 
+    Examples
+    --------
+    >>> from flexdigit.params import RigParams
+    >>> from flexdigit.twin.calibration import default_calibration
+    >>> twin_calibration(RigParams()) == default_calibration()
+    True
+    """
+    if path is not None:
+        return load_calibration(path)
     if params is None or params == RigParams():
         return default_calibration()
     return calibration_for(params)
