@@ -20,7 +20,7 @@ it as it opens an Uno's port (pyserial, 250000 baud, raw), so the host's bytes c
 bench; the exchange still gives the time (the harness says how many bytes each step sent; the host says how many
 it wrote), so nothing waits on the kernel's timing. ``uart=pipe`` carries the bytes in the exchange's lines.
 
-Nothing here reads the wall clock: a run repeats exactly. Two modes (``mode=``):
+Nothing here reads the wall clock (unless ``paced``, for the live page): a run repeats exactly. Two modes (``mode=``):
 
 - ``host``: the board streams the gauges and follows ``C<command>`` lines; flexdigit's loop on the host closes the
   loop through it (``flexdigit run --backend hil://...``), so the whole host stack meets the real firmware;
@@ -37,6 +37,7 @@ import math
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -83,6 +84,7 @@ URL_OPTIONS = (
     UrlOption("step_s", "float", low=1e-4, high=0.01, help="the AVR/twin exchange step, s"),
     UrlOption("orientation", "choice", choices=tuple(ORIENTATIONS), help="how the twin's digit lies (as sim's)"),
     UrlOption("cable", "bool", help="the twin's cable attached (as sim's)"),
+    UrlOption("paced", "bool", help="keep the emulated board at the wall clock's time (the live page)"),
     UrlOption("uart", "choice", choices=("pty", "pipe"), help="the firmware's UART: a pty the host opens, or a pipe"),
 )
 PYTHON_OPTIONS = ("twin", "operator", "calibration")
@@ -129,6 +131,9 @@ class HilRig(Rig):
     harness : path, optional
     orientation, cable :
         The twin's mounting and cable (as the ``sim`` backend's; ``flexdigit collect`` sets them from its protocol).
+    paced : bool
+        Keep the board at the wall clock's time: before each read and command (and in :meth:`wait`, after
+        sleeping) it runs up to it, as ``sim+paced`` keeps the twin (``flexdigit live`` opens it so).
     uart : {"pty", "pipe"}
         The firmware's UART: a pty the host opens as a serial port (pyserial), or carried in the exchange.
     step_s : float
@@ -140,7 +145,10 @@ class HilRig(Rig):
 
     name = "hil"
     accepts_loads = True
-    deterministic = True
+
+    @property
+    def deterministic(self) -> bool:  # simulated time: the same actions, the same readings
+        return not self.paced
 
     def __init__(
         self,
@@ -154,6 +162,7 @@ class HilRig(Rig):
         harness=None,
         step_s: float = 0.0005,
         uart: str = "pty",
+        paced: bool = False,
         orientation: str = "vertical",
         cable: bool = True,
         twin: Any = None,
@@ -178,9 +187,9 @@ class HilRig(Rig):
         self.port_path: str | None = None
         self.setpoint_deg = float(setpoint_deg)
         self._time_s = 0.0
-        super().__init__(
-            twin.params, clock=lambda: self._time_s, sleep=self._wait_alive, operator=operator or (lambda m: None)
-        )
+        self.paced = bool(paced)
+        self._wall0: float | None = None  # paced: the wall clock's reading at simulated time 0, once started
+        super().__init__(twin.params, clock=self._now, sleep=self._wait_alive, operator=operator or (lambda m: None))
         self._outbox = bytearray()
         self._last_said_s = 0.0
         #: what the board said (its samples, faults, mode changes, tare): :class:`BoardState`
@@ -192,6 +201,8 @@ class HilRig(Rig):
         #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
         self.gauge_override: dict[int, float] = {}
         self._start_board()
+        if self.paced:  # from here on the board's time is the wall clock's (its opening ran as fast as it could)
+            self._wall0 = time.monotonic() - self._time_s
 
     def _start_board(self) -> None:
         """Start the harness running the firmware, take the board's banner and rest readings, and put it in its
@@ -325,8 +336,25 @@ class HilRig(Rig):
             self.twin.advance(self.step_s)
             self._time_s += self.step_s
 
+    def _now(self) -> float:
+        """The rig's clock: simulated time, or (paced) the wall clock's since simulated time 0."""
+        return self._time_s if self._wall0 is None else time.monotonic() - self._wall0
+
+    def _catch_up(self) -> None:
+        """Paced: run the board (host alive) up to the wall clock's time."""
+        if self._wall0 is not None:
+            self._run_alive(self._now() - self._time_s)
+
     def _wait_alive(self, seconds: float) -> None:
-        """:meth:`wait`: time passes with the host alive (a heartbeat line every HEARTBEAT_S)."""
+        """:meth:`wait`: time passes with the host alive; paced, the wall clock's."""
+        if self._wall0 is None:
+            self._run_alive(seconds)
+        else:
+            time.sleep(seconds)
+            self._catch_up()
+
+    def _run_alive(self, seconds: float) -> None:
+        """Run the board ``seconds`` of simulated time, the host alive (a heartbeat line every HEARTBEAT_S)."""
         steps = int(round(seconds / self.step_s))
         for _ in range(steps):
             if self._time_s - self._last_said_s >= HEARTBEAT_S:
@@ -350,6 +378,7 @@ class HilRig(Rig):
         self.board.raise_new_fault(f"hil://{self.elf.name}")
 
     def _read(self) -> tuple[np.ndarray, float]:
+        self._catch_up()
         if self._time_s - self._last_said_s >= HEARTBEAT_S:
             self._say("W")
         self._check_faults()
@@ -358,6 +387,7 @@ class HilRig(Rig):
         return gauges, math.nan
 
     def _send(self, command: int) -> None:
+        self._catch_up()
         self._check_faults()
         self._say(f"C{int(command)}")
 
@@ -436,6 +466,7 @@ class HilRig(Rig):
             "safe": self.safe,
             "step_s": self.step_s,
             "uart": self.uart,
+            "paced": self.paced,
             "orientation": self.twin.orientation,
             "cable": bool(self.twin.cable),
             "harness": str(self.harness),
