@@ -7,6 +7,9 @@ import contextlib
 
 import numpy as np
 from distributed.diagnostics.plugin import WorkerPlugin
+from threadpoolctl import threadpool_limits
+
+from flexdigit.studies.metrics import evaluate_many
 
 __all__ = ["WarmWorker"]
 
@@ -24,10 +27,6 @@ class WarmWorker(WorkerPlugin):
         self.build, self.row, self.metrics, self.context = build, np.asarray(row, dtype=float), list(metrics), context
 
     def setup(self, worker=None) -> None:
-        from threadpoolctl import threadpool_limits
-
-        from flexdigit.studies.metrics import evaluate_many
-
         with threadpool_limits(1), contextlib.suppress(Exception):
             if self.row.size:
                 evaluate_many([self.build(self.row[0], "warm-up")], self.metrics, self.context)

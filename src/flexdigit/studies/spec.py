@@ -68,12 +68,15 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from flexdigit._io import read_text, refuse_special
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams, load_params
+from flexdigit.studies.metrics import METRICS, UserMetric, checked_value
 from flexdigit.studies.parameter_set import ParameterSet
 from flexdigit.twin.calibration import default_calibration, load_calibration
 
 __all__ = [
+    "shipped_specs",
     "DISTRIBUTIONS",
     "ParameterSet",
     "UncertainParameter",
@@ -319,10 +322,22 @@ def load_spec(name_or_path: str | Path) -> StudySpec:
         return spec_from_toml(ref.read_text(), source=f"{text_name}.toml")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory, not a study spec")
-    from flexdigit._io import read_text
-
     text = read_text(path, "a study spec TOML")  # binary garbage: named, not a codec error
     return spec_from_toml(text, source=str(path), base_dir=path.parent)
+
+
+def shipped_specs() -> dict[str, str]:
+    """The shipped study specs (:data:`SHIPPED_SPECS`), each with its kind and one-line description."""
+    import tomllib
+    from importlib import resources
+
+    out = {}
+    for name in SHIPPED_SPECS:
+        text = resources.files("flexdigit.studies").joinpath("specs").joinpath(f"{name}.toml").read_text()
+        doc = tomllib.loads(text)
+        kind = "design" if "design" in doc else "sensitivity"
+        out[name] = f"{kind} study: {doc.get('study', {}).get('description', '')}".rstrip(": ")
+    return out
 
 
 def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None) -> StudySpec:
@@ -356,8 +371,6 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
     baseline = _baseline(study, source, base_dir)
     user_metrics = _user_metrics(doc.get("metrics", {}), baseline, source)
     if metrics:
-        from flexdigit.studies.metrics import METRICS
-
         known_metrics = [*METRICS, *(u.name for u in user_metrics)]
         for m in metrics:
             if m not in known_metrics:
@@ -385,8 +398,6 @@ def _user_metrics(table, baseline: ParameterSet, source: str) -> tuple:
     ``unit`` and an optional ``description``: each imported and run once on the baseline rig here, so a missing
     module, a name that is not a function or a function that returns no number is one line naming its key now,
     not a column of failed rows later."""
-    from flexdigit.studies.metrics import METRICS, UserMetric, checked_value
-
     table = _table(table, "[metrics]", source)
     out = []
     for name, entry in table.items():
@@ -435,8 +446,6 @@ def _baseline(study: dict, source: str, base_dir: Path | None) -> ParameterSet:
         if not isinstance(value, str):
             raise ParameterError(f"{source}: [study] {key} must be a file name. Got {value!r} instead.")
         path = Path(value) if base_dir is None or Path(value).is_absolute() else base_dir / value
-        from flexdigit._io import refuse_special
-
         refuse_special(path, f"the [study] {key} file of {source}")
         if not path.is_file():
             raise ParameterError(f"{source}: [study] {key}: no such file {str(path)!r}")
