@@ -127,75 +127,30 @@ def _add_predict(subparsers) -> None:
 
 
 def _collect(args: argparse.Namespace) -> CommandResult:
-    from pathlib import Path
-
-    from flexdigit._io import check_output
-    from flexdigit._validation import check_real
-    from flexdigit.errors import ParameterError
-    from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
-    from flexdigit.tactile.protocols import MAX_SETTLE_S, load_protocol
-    from flexdigit.tactile.runner import collect, journal_path, sim_options
+    from flexdigit.tactile.protocols import load_protocol
+    from flexdigit.tactile.runner import collect_on, journal_path
 
     protocol = load_protocol(args.protocol)
-    out = Path(args.out)
-    # every option checked before the rig is opened (the runner checks them again before the first reading)
-    if args.settle is not None:
-        check_real(args.settle, "--settle", "flexdigit collect", low=0, high=MAX_SETTLE_S)
-    journal = journal_path(out)
-    if not (out.exists() and journal.exists()):  # both: a run stopped while tidying up, the runner finishes it
-        check_output(out, force=args.force)
-    resumed = journal.exists()
-    # on the twin, lie the digit as the protocol says and attach the cable only when it actuates
-    on_twin = parse_rig_url(args.backend).scheme.startswith("sim")
-    if args.calibration and not on_twin:
-        raise ParameterError(
-            f"--calibration calibrates the twin: it needs a sim backend, not {args.backend!r} (a real rig is itself)"
-        )
-    options = sim_options(protocol, args.backend) if on_twin else {}
-    if args.calibration:
-        from flexdigit.twin.calibration import load_calibration
-
-        options["calibration"] = load_calibration(args.calibration)
-    rig = open_rig(args.backend, **options, **seed_option(args.backend, args.seed))
-    if args.record is not None:
-        from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
-
-        try:
-            recording = Recording(
-                args.record,
-                header={
-                    "backend": args.backend,
-                    "protocol": protocol.name,
-                    "seed": rig.settings().get("seed"),
-                    "source": "collect",
-                },
-                metadata=rig_metadata(rig),
-                force=args.force,
-            )
-        except BaseException:
-            rig.close()
-            raise
-        rig = recording_rig(rig, recording)
-    try:
-        dataset = collect(
-            protocol,
-            rig,
-            out,
-            rig_url=args.backend,
-            settle_s=args.settle,
-            progress=not args.no_progress,
-            force=args.force,
-        )
-    finally:
-        rig.close()
+    resumed = journal_path(args.out).exists()
+    dataset = collect_on(
+        args.backend,
+        protocol,
+        args.out,
+        seed=args.seed,
+        calibration=args.calibration,
+        record=args.record,
+        settle_s=args.settle,
+        progress=not args.no_progress,
+        force=args.force,
+    )
     data = {
         "protocol": protocol.name,
         "samples": len(dataset),
-        "out": str(out),
+        "out": str(args.out),
         "resumed": resumed,
         "settings": dataset.meta.get("settings"),
     }
-    text = f"{protocol.name}: {len(dataset)} readings written to {out}" + (" (resumed)" if resumed else "")
+    text = f"{protocol.name}: {len(dataset)} readings written to {args.out}" + (" (resumed)" if resumed else "")
     return CommandResult(data=data, text=text)
 
 
@@ -203,10 +158,9 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
     import numpy as np
 
     from flexdigit._io import check_output
-    from flexdigit.errors import ParameterError
     from flexdigit.params import RigParams, load_params
     from flexdigit.tactile.dataset import save_dataset
-    from flexdigit.tactile.importer import ROLES, ColumnMap, import_readings
+    from flexdigit.tactile.importer import ColumnMap, import_readings
 
     out = check_output(args.out, force=args.force)
     flags = {
@@ -217,18 +171,7 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
             "orientation",
         )
     }  # fmt: skip
-    if args.gauges is not None:
-        flags["gauges"] = tuple(g.strip() for g in args.gauges.split(","))
-    if args.map:
-        cmap = ColumnMap.from_toml(args.map, **flags)
-    else:
-        missing = [flag for flag, key in (("--gauges", "gauges"), ("--load", "load"), ("--position", "position"))
-                   if flags.get(key) is None]  # fmt: skip
-        if missing:
-            raise ParameterError(
-                f"dataset import needs {missing[0]} (the {ROLES[missing[0][2:]]}): give the flags or a --map TOML"
-            )
-        cmap = ColumnMap.build({}, flags, source="the column flags")
+    cmap = ColumnMap.from_flags({**flags, "gauges": args.gauges}, args.map)
     params = load_params(args.params) if args.params else RigParams()
     dataset = import_readings(args.file, cmap, params=params)
     save_dataset(dataset, out, force=args.force)  # atomic, Parquet or (by the suffix) CSV
@@ -254,51 +197,17 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
 
 
 def _train(args: argparse.Namespace) -> CommandResult:
-    from pathlib import Path
+    from flexdigit.tactile.model_io import train_model
 
-    from flexdigit._io import check_output
-    from flexdigit.tactile.accuracy import accuracy, rmse
-    from flexdigit.tactile.dataset import load_dataset
-    from flexdigit.tactile.model_io import save_model
-    from flexdigit.tactile.pipeline import features, run_pipeline, targets
-
-    model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
-    check_output(model_path, force=args.force)  # before training (minutes), not after it
-    dataset = load_dataset(args.file)
-    target = args.target.replace("-", "_")
-    rows, y = targets(dataset, target)
-    actuated = dataset.protocol.actuated
-    x = features(dataset, with_command=actuated)[rows]
-    inputs = ["gauge1_v", "gauge2_v", "gauge3_v"] + (["command"] if actuated else [])
-    sweep = args.hidden is None or args.tol is None
-    result = run_pipeline(
-        x,
-        y,
-        seed=args.seed,
-        fixed_hidden=args.hidden,
-        fixed_tol=args.tol,
-        target=target,
-        curve_hidden=None,  # the error curves are not shown: no network for them
+    trained = train_model(
+        args.file, args.target, args.model, seed=args.seed, hidden=args.hidden, tol=args.tol, force=args.force
     )
-    scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
-    if target == "position":
-        scores["rmse_mm"] = 1000 * rmse(result.y_pred, result.y_test)
-    elif target == "magnitude":
-        scores["rmse_g"] = 1000 * rmse(result.y_pred, result.y_test)
-    elif target == "contact":
-        scores["accuracy"] = accuracy((result.y_pred >= 0.5).astype(float), result.y_test)
-    else:
-        scores["rmse_positions"] = rmse(result.y_pred, result.y_test)
-    save_model(
-        model_path,
-        result.model,
-        target=target,
-        inputs=inputs,
-        meta={"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores},
-        force=args.force,
-    )
-    data = {"target": target, "model": str(model_path), "swept": sweep, **scores}
-    lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]
+    scores = trained["scores"]
+    data = {"target": trained["target"], "model": trained["model"], "swept": trained["swept"], **scores}
+    lines = [
+        f"trained {trained['target']} network on {trained['rows']} readings of {trained['protocol']} -> "
+        f"{trained['model']}"
+    ]
     lines += [f"  {k} = {v:.6g}" if isinstance(v, float) else f"  {k} = {v}" for k, v in scores.items()]
     return CommandResult(data=data, text="\n".join(lines))
 
