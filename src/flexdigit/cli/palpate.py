@@ -192,20 +192,17 @@ def _sweep(rig, tissue, plan, log, log_mode):
 
 def _scan(rig, tissue, plan, logs, log_mode):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
-    from flexdigit.palpation.palpation import _truth_of, run_sweep, scan
+    from flexdigit.palpation.palpation import scan
 
-    model = ContactGaugeModel(rig.params)
-    records = []
-    for d, log in zip(plan.scan["offsets_m"], logs, strict=True):
-        rig.place_tissue(tissue.moved(d))
-        records.append(run_sweep(rig, plan.sweep, log_path=log, truth=_truth_of(rig), log_mode=log_mode))
     result = scan(
-        records,
+        rig,
         tissue,
         plan.scan["offsets_m"],
         plan.sweep,
-        model=model,
+        model=ContactGaugeModel(rig.params),
         inclusion_width_m=plan.scan["inclusion_width_m"],
+        log_paths=logs,
+        log_mode=log_mode,
     )
     for fit in result.local:
         _refuse_poor_fit(fit, "scan")
