@@ -1,6 +1,7 @@
-# flexdigit: `make run` reproduces the thesis on the twin; `make test` runs lint and the test suite;
-# `make bench` runs the benchmarks quoted in the README; `make fuzz` runs the loader fuzz tests at 10,000 examples
-# each (FUZZ_SEED=N for another seed). Each sets up .venv first when needed.
+# flexdigit: `make run` reproduces the thesis on the twin; `make test` runs lint, the docs build and the test suite;
+# `make docs` builds the documentation site (docs/_build/html, offline, warnings are errors); `make bench` runs the
+# benchmarks and writes benchmarks/results.json, from which the site's benchmark page is generated; `make fuzz` runs
+# the loader fuzz tests at 10,000 examples each (FUZZ_SEED=N for another seed). Each sets up .venv first when needed.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -11,7 +12,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 # The live page's tests drive Debian's chromium (no browser download); installed here when missing (CI runs as root).
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: setup run test lint bench fuzz clean browser avr firmware
+.PHONY: setup run test lint docs bench fuzz clean browser avr firmware
 
 setup: $(STAMP)
 
@@ -20,22 +21,30 @@ $(STAMP): pyproject.toml constraints.txt
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV) || { \
 	    echo "python venv module missing: installing python3-venv"; \
 	    apt-get update -qq && apt-get install -y -qq python3-venv && $(PYTHON) -m venv $(VENV); }
-	$(PIP) install -c constraints.txt -e '.[dev]'
+	$(PIP) install -c constraints.txt -e '.[dev,docs]'
 	@touch $(STAMP)
 
 run: $(STAMP)
 	$(BIN)/flexdigit reproduce --out report/ --force
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks
-	$(BIN)/ruff format --check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks docs examples
+	$(BIN)/ruff format --check src tests benchmarks docs examples
 
-# The numbers must not depend on the BLAS kernel (README, "Portable numbers"): the tests marked `blas` run again under
+# The numbers must not depend on the BLAS kernel (docs/guide/reliability.md, "Portable numbers"): the tests marked `blas` run again under
 # OpenBLAS's own choice for this CPU (when the environment forces one) and under Nehalem (SSE only, what any x86-64
 # runs; unless the suite just ran there). About 40 s each; pytest's header names the kernel in use.
 BLAS_RUN := $(BIN)/pytest tests -m blas -p no:cacheprovider
 
-test: lint browser avr
+# The site (Sphinx, numpydoc, myst, sphinx-gallery: every examples/plot_*.py runs in the build). Offline: no
+# intersphinx, nothing fetched. -W --keep-going: every warning is reported, and any one fails the build.
+# tests/test_docs.py runs the same command (incremental: nothing to redo right after this target).
+SPHINXOPTS ?= -W --keep-going -q
+docs: $(STAMP)
+	$(BIN)/python -m sphinx -b html $(SPHINXOPTS) docs docs/_build/html
+	@echo "the site: docs/_build/html/index.html"
+
+test: lint browser avr docs
 	$(BIN)/pytest
 	@if [ -n "$$OPENBLAS_CORETYPE" ]; then echo "blas tests, OpenBLAS's own kernel (OPENBLAS_CORETYPE unset)"; \
 	    env -u OPENBLAS_CORETYPE $(BLAS_RUN); fi
@@ -60,15 +69,15 @@ browser:
 	    || { echo "could not install chromium: run 'apt-get install chromium' as root"; exit 1; }
 
 $(BENCH_STAMP): $(STAMP)
-	$(PIP) install -c constraints.txt -e '.[dev,bench]'
+	$(PIP) install -c constraints.txt -e '.[dev,docs,bench]'
 	@touch $(BENCH_STAMP)
 
 bench: $(BENCH_STAMP) browser avr
-	$(BIN)/python -m benchmarks
+	$(BIN)/python -m benchmarks --out benchmarks/results.json --force
 
 FUZZ_SEED ?= 0
 fuzz: $(STAMP)
 	HYPOTHESIS_PROFILE=fuzz $(BIN)/pytest tests/fuzz -q -p no:cacheprovider --hypothesis-seed=$(FUZZ_SEED)
 
 clean:
-	rm -rf $(VENV) report .pytest_cache .ruff_cache
+	rm -rf $(VENV) report .pytest_cache .ruff_cache docs/_build docs/api/generated docs/auto_examples docs/_generated

@@ -1,1 +1,1 @@
-"""Benchmarks quoted in the README: ``make bench`` runs ``python -m benchmarks``; never part of the tests."""
+"""The benchmarks behind the site's benchmark page: ``make bench`` runs ``python -m benchmarks``; never in the tests."""

@@ -2,6 +2,10 @@
 
 Each module in :data:`MODULES` exposes ``run() -> list[dict]`` with keys ``name``, ``value``, ``unit``,
 ``goal`` (text, may be empty) and ``note``. Peers (PyElastica, plain hinfsyn) are timed in the same run.
+
+``--out FILE`` also writes the rows as JSON with where and when they were measured (``make bench`` writes
+``benchmarks/results.json``); the documentation's benchmark page is generated from that file (``docs/_ext``), so no
+figure is copied by hand.
 """
 
 from __future__ import annotations
@@ -9,13 +13,19 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
+import platform
+import subprocess
 import sys
 import time
+from datetime import UTC, datetime
+from pathlib import Path
 
 MODULES: tuple[str, ...] = (
     "benchmarks.bench_cli",
     "benchmarks.bench_control",
     "benchmarks.bench_twin",
+    "benchmarks.bench_digits",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
@@ -27,23 +37,59 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_palpation",
     "benchmarks.bench_board",
     "benchmarks.bench_resources",
+    "benchmarks.bench_plots",
 )
+
+
+def run_context() -> dict:
+    """Where and when the rows were measured: the figures are indicative, so the page says of what run they are."""
+    try:
+        commit = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=True
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        commit = ""
+    return {
+        "date_utc": datetime.now(UTC).strftime("%Y-%m-%d %H:%M"),
+        "commit": commit,
+        "cpu_count": os.cpu_count(),
+        "load_average_1min": os.getloadavg()[0],
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks")
-    parser.add_argument("only", nargs="*", help="run only these modules (e.g. bench_twin)")
+    parser.add_argument("only", nargs="*", help="run only these modules (e.g. bench_twin, or twin)")
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--out", type=Path, help="also write the rows and the run's context as JSON to this file")
+    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
     args = parser.parse_args(argv)
+    if args.out is not None:
+        from flexdigit._io import check_output
+
+        try:
+            check_output(args.out, force=args.force)  # before the minutes of measuring, not after
+        except OSError as exc:  # flexdigit's OutputError: one line naming the file
+            print(f"python -m benchmarks: {exc}", file=sys.stderr)
+            return 2
     rows = []
     for name in MODULES:
-        if args.only and name.rsplit(".", 1)[-1] not in args.only:
+        short = name.rsplit(".", 1)[-1]
+        if args.only and short not in args.only and short.removeprefix("bench_") not in args.only:
             continue
         start = time.perf_counter()
         print(f"running {name} ...", file=sys.stderr, flush=True)
         for row in importlib.import_module(name).run():
             rows.append({"module": name.rsplit(".", 1)[-1], **row})
         print(f"  {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
+    if args.out is not None:
+        from flexdigit._io import atomic_write
+
+        with atomic_write(args.out, "w", force=args.force) as fh:
+            json.dump({"context": run_context(), "rows": rows}, fh, indent=2)
+            fh.write("\n")
     if args.json:
         json.dump(rows, sys.stdout, indent=2)
         print()

@@ -1,4 +1,4 @@
-"""Bounded resources (issue 22), the figures behind the README's reliability claims:
+"""Bounded resources (issue 22), the figures behind the reliability claims of docs/guide/reliability.md:
 
 - ``surgeon locked out``: with every one of the live server's 8 places taken by clients that never read, how long
   the surgeon's page (retrying every half second, as the packaged page does) waits to be served, and the frames a

@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, settings
 
 matplotlib.use("Agg")
 
-#: Examples per property in ``make test`` and in ``make fuzz`` (quoted in the README).
+#: Examples per property in ``make test`` and in ``make fuzz`` (quoted in docs/guide/reliability.md).
 EXAMPLES = {"flexdigit": 200, "fuzz": 10_000}
 _COMMON = dict(
     deadline=None,  # a shared 2-core machine: timing is not a property

@@ -92,12 +92,13 @@ def test_importing_the_packages_loads_none_of_their_modules():
 
 
 def test_the_docs_examples_import_from_the_domain():
-    # a newcomer copies the README's imports: they show the public door, not a module behind it
+    # a newcomer copies the README's and the docs' imports: they show the public door, not a module behind it
     root = Path(__file__).resolve().parents[1]
     deep = re.compile(r"^\s*from flexdigit\.\w+\.\w+[\w.]* import ")
     offenders = [
         f"{path.name}:{number}: {line.strip()}"
-        for path in [root / "README.md", *sorted((root / "docs").glob("*.md"))]
+        for path in [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+        if "_build" not in path.parts
         for number, line in enumerate(path.read_text().splitlines(), 1)
         if deep.match(line)
     ]

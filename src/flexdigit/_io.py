@@ -1,6 +1,6 @@
 """Files in and out: the one way flexdigit writes an output and opens an input.
 
-Outputs (the guarantees the README's "Reliability" section states, each tested in ``tests/test_io.py``):
+Outputs (the guarantees docs/guide/reliability.md states, each tested in ``tests/test_io.py``):
 
 - **Atomic**: a new file goes to a temporary file beside its destination, created exclusively (``O_EXCL |
   O_NOFOLLOW``: a symlink planted at its name is never followed), complete and fsynced, then renamed into place

@@ -21,7 +21,7 @@ from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import default_fit_record, packaged_calibration
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 RELEASE_RTOL = 0.03
 SLOPE_RTOL = 0.05

@@ -108,7 +108,7 @@ def test_oscillating_release_with_the_default_method(tmp_path, capsys):
 
 @pytest.mark.parametrize(("column", "asked"), [("gauge1_v", "sg1"), ("gauge1_v", "sg1_v"), ("sg1_v", "gauge1")])
 def test_gauge_channels_answer_to_sg_and_gauge(tmp_path, capsys, column, asked):
-    # the README's --channel sg1 on a twin-style file (gauge1_v), and the other way round (--force: a first-order
+    # the guide's --channel sg1 on a twin-style file (gauge1_v), and the other way round (--force: a first-order
     # decay gives no second-order wn and zeta to stand behind, and this test is about the channel)
     p = _exponential_decay(tmp_path / "decay.csv", channel=column)
     assert main(["identify", "release", str(p), "--channel", asked, "--allow-overdamped", "--force", "--json"]) == 0

@@ -11,7 +11,7 @@ from flexdigit.report import ch4_control
 from flexdigit.report.chapter import ReportContext
 from oracles import assert_entries_unchanged
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 # thesis chapter 4 has figures 4.1-4.24; 4.6-4.8 and 4.17 are block diagrams (no data to reproduce)
 THESIS_FIGURE_KEYS = {f"4.{i}" for i in range(1, 25)}

@@ -10,7 +10,7 @@ from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixs
 from flexdigit.errors import DesignError
 from flexdigit.models.plant import build_plant
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ from flexdigit.control.thesis_designs import (
 from flexdigit.errors import DesignError, UnstableError
 from flexdigit.reference import thesis_complex, thesis_value
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 # Tolerances, each with the reason for its size
 GAMMA_ROUTE_RTOL = 0.01  # issue 5: the Riccati and LMI routes agree within 1 %

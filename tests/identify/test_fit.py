@@ -13,7 +13,7 @@ from flexdigit.identify.timeseries import TimeSeries
 from flexdigit.reference import thesis_value
 from oracles import DIGIT, SERVO, release_record, step_record
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 SEEDS = range(5)
 

@@ -6,7 +6,7 @@ from flexdigit.report.ch3_identify import build
 from flexdigit.report.chapter import ReportContext
 from oracles import assert_entries_unchanged
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 
 @pytest.fixture(scope="module")

@@ -75,7 +75,7 @@ def test_thesis_method_on_twin_step_overestimates_wn():
 
 
 def test_cli_reads_the_twin_file_with_the_readme_channel_name(release_file, capsys):
-    # the README says --channel sg1; the twin's files name the column gauge1_v: sgN and gaugeN are one gauge
+    # docs/guide/identify.md says --channel sg1; the twin's files name the column gauge1_v: sgN and gaugeN are one gauge
     assert main(["identify", "release", str(release_file), "--channel", "sg1", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["channel"] == "gauge1"

@@ -1,8 +1,8 @@
-"""The live server's WebSocket protocol as the README documents it, spoken by a client that is not the page: the
-``websockets`` library, written from the README's "The page's protocol" section alone.
+"""The live server's WebSocket protocol as docs/guide/live.md documents it, spoken by a client that is not the page: the
+``websockets`` library, written from docs/guide/live.md's "The page's protocol" section alone.
 
 What a hostile or careless client may send (numbers beyond a float, frames too big to buffer, floods over many
-connections, too many pages) is refused or clamped, and the server goes on serving; references are the README's
+connections, too many pages) is refused or clamped, and the server goes on serving; references are docs/guide/live.md's
 stated limits (512-byte requests, 4 KiB frames, 20 requests a second per page, each page its own budget, a page
 flooding past it closed, 8 pages, the hello's setpoint range) and the twin's own state (the weight it was given).
 """
@@ -21,7 +21,7 @@ from flexdigit.live.server import origin_allowed
 
 from .conftest import LiveServer
 
-#: The README's limits (the test reads them as a client would, not from the code).
+#: The limits of docs/guide/live.md (the test reads them as a client would, not from the code).
 REQUEST_BYTES, FRAME_BYTES, PAGE_RATE, PAGE_BURST, PAGES = 512, 4096, 20, 40, 8
 
 

@@ -9,7 +9,7 @@ from flexdigit.errors import ParameterError
 from flexdigit.models.plant import build_plant, companion_ss
 from flexdigit.models.polytf import PolyTF, ctrb, obsv
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 # Tolerances, each with the reason for its size
 POLY_RTOL = 1e-12  # the same polynomial products and sums as python-control: rounding only

@@ -52,4 +52,4 @@ def test_hang_inversion_needs_no_prior_and_still_beats_one_reading():
     v = simulate_hangs(MODEL, A, M, COMMANDS, repetitions=10, seed=2)
     est = inversion.predict(v)
     rmse = np.sqrt(np.mean((est[:, 0] - np.repeat(L - A, 10)) ** 2))
-    assert rmse < 0.0225  # chapter 7's single-reading Bayes limit (README), which knows the protocol
+    assert rmse < 0.0225  # chapter 7's single-reading Bayes limit (docs/guide/tactile.md), which knows the protocol

@@ -12,7 +12,7 @@ from flexdigit.report import ch3_models
 from flexdigit.report.chapter import ReportContext
 from oracles import assert_entries_unchanged
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 COMMANDS = thesis_value("conversion.table_3_4_commands")
 

@@ -5,7 +5,7 @@ import pytest
 from flexdigit.report import ch8_studies
 from flexdigit.report.chapter import ReportContext
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 
 @pytest.fixture(scope="module")

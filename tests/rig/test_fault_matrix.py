@@ -19,7 +19,7 @@ only: it refuses the loop's first command (tests/rig/backends/test_stream_backen
 Each cell checks: the run stops with ``fault`` or ``interrupted`` and a message naming the fault, the equilibrium
 command (8) was the last one the actuator got (where a port exists to take it), the rig is closed, and the log
 reads back (``read_log``) with every sample the loop took before the fault (and, unless the disk was full, the
-footer naming why it stopped). The README's fault table is this matrix.
+footer naming why it stopped). The fault table of docs/guide/rig.md is this matrix.
 """
 
 from __future__ import annotations
@@ -254,7 +254,7 @@ def _full_disk(monkeypatch, after_lines=FAULT_AT + 1):
     monkeypatch.setattr(SampleLog, "write", write)
 
 
-#: the cells that apply (the README's table shows the others as "n/a" with NOT_APPLICABLE's reason)
+#: the cells that apply (docs/guide/rig.md's table shows the others as "n/a" with NOT_APPLICABLE's reason)
 CELLS = [(b, f) for f in FAULTS for b in BACKENDS if (b, f) not in NOT_APPLICABLE]
 
 

@@ -212,7 +212,7 @@ def test_a_run_killed_with_sigkill_keeps_all_but_its_last_second(tmp_path):
 
 
 def _foreign(path, samples, *, topic=SAMPLE_TOPIC, encoding="json", raw=None):
-    """An MCAP written by the mcap library directly, as another program would from the README: the documented
+    """An MCAP written by the mcap library directly, as another program would from the recordings guide: the documented
     topic and fields, no flexdigit metadata."""
     from mcap.writer import Writer
 

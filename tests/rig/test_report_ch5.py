@@ -8,7 +8,7 @@ from flexdigit.report import ch5_digital
 from flexdigit.report.chapter import ReportContext
 from oracles import assert_entries_unchanged
 
-pytestmark = [pytest.mark.slow, pytest.mark.blas]  # blas: see README, Portable numbers
+pytestmark = [pytest.mark.slow, pytest.mark.blas]  # blas: see docs/guide/reliability.md, Portable numbers
 
 
 def test_chapter_5_entries_and_figures(tmp_path):

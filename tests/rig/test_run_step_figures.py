@@ -1,6 +1,6 @@
 """``flexdigit run --json``'s step figures against an independent computation from the logged samples.
 
-The oracle below is written from the README's definitions only (not from ``control.analysis.step_figures``): rise
+The oracle below is written from docs/guide/rig.md's definitions only (not from ``control.analysis.step_figures``): rise
 10-90 % of the step to the setpoint, 2 % settling about the setpoint and about the final value, overshoot beyond the
 setpoint in percent of the step, steady-state error = mean of the last 0.5 s minus the setpoint (deg, and over the
 rotation per command), IAE by the trapezoid rule; crossings interpolated between samples; the estimate averaged over
@@ -21,7 +21,7 @@ import pytest
 from flexdigit.cli import main
 from flexdigit.rig.sample_log import read_log
 
-#: the README's settling band and final window
+#: docs/guide/rig.md's settling band and final window
 BAND, WINDOW_S, SMOOTH_SAMPLES = 0.02, 0.5, 5
 
 
@@ -99,7 +99,7 @@ def logged(path):
 @pytest.mark.parametrize(
     ("controller", "setpoint", "duration", "settles"),
     [
-        ("digital20", 20.0, 2.0, True),  # the README's example
+        ("digital20", 20.0, 2.0, True),  # docs/guide/rig.md's example
         ("digital20", 30.0, 0.9, False),  # stopped before the digit settled
         ("digital20", 0.0, 1.0, None),  # a zero setpoint: no step to rise, settle or overshoot
         ("thesis39-euler", 30.0, 2.0, False),  # the thesis controller at 20 ms: runs away, faults at 0.24 s

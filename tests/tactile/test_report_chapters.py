@@ -5,7 +5,7 @@ import pytest
 from flexdigit.report.build import reproduce
 from oracles import assert_entries_unchanged, assert_trained_entries_close
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 
 @pytest.mark.slow

@@ -32,7 +32,7 @@ from flexdigit.twin.twin import cable_shortening_m, cached_digit
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from oracles import digit_contact_bvp, thesis_digit_segments  # noqa: E402
 
-pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (README, Portable numbers)
+pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make test` (docs/guide/reliability.md)
 
 BVP_RTOL = 0.01
 FOUNDATION_RTOL = 0.01

@@ -222,7 +222,7 @@ class StepFigures:
     rise_time_s : float
         From the first crossing of 10 % of the step to the first crossing of 90 % (inf if 90 % is never reached).
     settling_time_s : float
-        Time after the step from which the response stays within ``band`` x |step| of the target to the end of
+        Time after the step from which the response stays within ``band`` x ``|step|`` of the target to the end of
         the record (0 if it never leaves the band, inf if it is outside it at the end).
     settling_to_final_s : float
         The same about the measured final value instead of the target (MATLAB's ``stepinfo`` convention): when

@@ -82,7 +82,7 @@ LIMIT_CYCLE_TAIL = 500
 
 @dataclass(frozen=True)
 class RotationMap:
-    """The gauge -> measurement map the loop uses: ``y = coef . gauges_v + offset`` (offset = intercept - tare)."""
+    """The gauge -> measurement map the loop uses: ``y = coef @ gauges_v + offset`` (offset = intercept - tare)."""
 
     coef: tuple[float, float, float]
     offset: float

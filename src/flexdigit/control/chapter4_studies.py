@@ -322,7 +322,7 @@ class Chapter4Study:
     plant : TransferFunction
         The printed plant G(s) of 4.2.
     filter_peak_db : float
-        |F(0)| of the 5 Hz weight in dB, and ``filter_peak_read_at_rad_s``: where |F(j w)| is the printed peak.
+        ``|F(0)|`` of the 5 Hz weight in dB, and ``filter_peak_read_at_rad_s``: where ``|F(j w)|`` is the printed peak.
     printed_5hz_worst_pole : complex
         The rightmost closed-loop pole of the printed 5 Hz controller on the printed plant.
     loop_5hz : LoopMaps

@@ -35,6 +35,7 @@ from flexdigit.palpation.palpation import PalpationProtocol
 from flexdigit.twin.contact import Inclusion, Tissue
 
 __all__ = [
+    "builtin_palpation_files",
     "TISSUES",
     "PROTOCOLS",
     "MAX_SERIES",
@@ -228,6 +229,24 @@ class TissueFile:
     description: str
     source: str
     placed_on_twin: bool
+
+
+def builtin_palpation_files() -> dict[str, dict[str, str]]:
+    """The built-in tissues (:data:`TISSUES`) and palpation protocols (:data:`PROTOCOLS`), each with its one-line
+    description: ``{"tissues": {name: text}, "protocols": {name: text}}``."""
+    import tomllib
+
+    def first_comment(text: str) -> str:
+        lines = [line.lstrip("# ").strip() for line in text.splitlines() if line.startswith("#")]
+        return " ".join(lines).split(". ")[0].rstrip(".")
+
+    out: dict[str, dict[str, str]] = {"tissues": {}, "protocols": {}}
+    for kind, names in (("tissues", TISSUES), ("protocols", PROTOCOLS)):
+        for name in names:
+            text = resources.files(__package__).joinpath("palpation_data", f"{name}.toml").read_text()
+            doc = tomllib.loads(text)
+            out[kind][name] = doc.get("tissue", {}).get("description") or first_comment(text)
+    return out
 
 
 def load_tissue(name_or_path):

@@ -3,7 +3,7 @@ the Bayes limit, stiffness over a 5x range, a scan for an inclusion, force contr
 
 Each returns plain numbers (dicts of floats and arrays, its table as a
 :class:`~flexdigit._result_table.ResultTable` under ``"table"``) that the report chapter turns into entries and
-figures and the README quotes; every one takes a seed and size settings (the report runs them small, the README
+figures and the palpation guide quotes; every one takes a seed and size settings (the report runs them small, the guide
 full). Readings come from the twin's statics at a finer resolution (9 cells per section) than the
 estimators' model (3), with the twin's white noise and ADC, so no estimator inverts its own forward model.
 """

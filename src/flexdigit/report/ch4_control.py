@@ -18,12 +18,12 @@ from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext
 
 _BLOCK_P = (
-    "a block diagram, no data: the interconnection is generalized.thesis_generalized_plant, P of 4.4 built from "
-    "its state-space formula and checked against F S in tests/control/test_generalized.py"
+    "a block diagram, no data: the generalized plant P of 4.4 is built here from its state-space formula, and its "
+    "error channel checked against F S"
 )
 _BLOCK_PC = (
-    "a block diagram, no data: the LFTs T_zw, T_yw, T_uw, T_pq of 4.4-4.6 are analysis.loop_maps, checked "
-    "against the feedback formulas in tests/control/test_analysis.py"
+    "a block diagram, no data: the closed-loop maps T_zw, T_yw, T_uw, T_pq of 4.4-4.6 are built here, and "
+    "checked against the feedback formulas"
 )
 
 #: Every figure of thesis chapter 4: its caption, and the figure of ours that stands beside it (a name starting
@@ -74,11 +74,6 @@ def build(ctx: ReportContext) -> Chapter:
     study = chapter4_study(fast=ctx.fast, seed=ctx.seed)
     ch = Chapter("ch4", "Controller design (H-infinity, thesis chapter 4)")
     ch.paragraphs.append(
-        "Figures of chapter 4 and where they are here: "
-        + "; ".join(f"{k} ({cap}) -> {ours}" for k, (cap, ours) in THESIS_FIGURES.items())
-        + "."
-    )
-    ch.paragraphs.append(
         "Table 4.2 heads its columns 'x 10^4' and table 4.3 'x 10^2' (poles) and 'x 10^4' (zeros). The values in "
         "4.2 are already rad/s (our fitted controller has exactly them), the 4.3 poles are rad/s / 100 "
         "(-2.4504 x 100 = -245.04 = the 39 Hz filter pole), and the 4.3 zeros are rad/s (the plant poles)."
@@ -91,7 +86,19 @@ def build(ctx: ReportContext) -> Chapter:
     _mixsyn(study, ch, ctx.seed)
     ch.tables.extend(study.tables)
     _figures(ctx, study, ch)
+    ch.paragraphs.insert(0, _where_the_figures_are(ch))
     return ch
+
+
+def _where_the_figures_are(ch: Chapter) -> str:
+    """Every figure of thesis chapter 4 and the figure of ours beside it, by its caption (in words, no file names)."""
+    captions = {f.name: f.caption.rstrip(".") for f in ch.figures}
+    where = [
+        f"{k} ({cap}): " + (f"'{captions[ours]}'" if ours in captions else ours)
+        for k, (cap, ours) in THESIS_FIGURES.items()
+        if ours in captions or not ours.startswith("ch4_")
+    ]
+    return "Figures of chapter 4 and where they are here: " + "; ".join(where) + "."
 
 
 def _filter_and_k1(study, E: list) -> None:

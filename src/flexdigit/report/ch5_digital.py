@@ -27,7 +27,7 @@ def build(ctx: ReportContext) -> Chapter:
     chapter.paragraphs.append(
         "The printed 39 Hz H-infinity controller K(s) (4.7) is digitised by Tustin (5.1.1, E 5.1) and by forward "
         "Euler (5.1.2, the state-space method 5.2 implemented) and closed around the printed plant G(s) held by a "
-        "zero-order hold, u = K (w - y) as in 4.4 (flexdigit.control.discretise.sampled_loop). The loop is built in "
+        "zero-order hold, u = K (w - y) as in 4.4. The loop is built in "
         "state space: as high-order transfer-function products, the poles near z = 1 at 0.6 ms come out outside "
         "the unit circle from rounding alone."
     )
@@ -218,7 +218,7 @@ def _twenty_ms(study, chapter: Chapter) -> None:
         "deg); the controller must end on the nearest command, so the quantiser has no hysteresis."
     )
     chapter.paragraphs.append(
-        "Control at the servo board's 20 ms (flexdigit.control.design20ms): designed directly in discrete time on "
+        "Control at the servo board's 20 ms: designed directly in discrete time on "
         "the servo model held by a ZOH with one sample of transport delay; LQR state feedback with a rate penalty; "
         "a Kalman predictor with a constant input disturbance for offset-free tracking (no integrator to overshoot "
         "or wind up); the observer is fed the command actually sent (saturated and rounded), so the integer "

@@ -3,7 +3,7 @@
 Chapter 8 of the thesis says what its sensing is for: "to detect low frequency palpations, to identify variability
 in tissue stiffness, and to discriminate against distributed loads". This chapter shows the library's answers
 (:mod:`flexdigit.palpation.palpation_studies`) on the twin at the thesis's non-actuated noise level; it computes
-nothing itself. It runs small but honest settings (the README quotes the full studies and the command that
+nothing itself. It runs small but honest settings (docs/guide/palpation.md quotes the full studies and the command that
 measures each); every table is also in results.json.
 """
 
@@ -29,7 +29,7 @@ def build(ctx: ReportContext) -> Chapter:
     ch = Chapter(slug="ch8-palpation", title="Beyond the thesis: palpation")
     ch.paragraphs.append(
         "The digit presses into a compliant body beside it, the cable pulling it in: a unilateral Winkler (or "
-        "Hunt-Crossley) foundation in the twin (flexdigit.twin.contact), validated against an independent elastica "
+        "Hunt-Crossley) foundation in the twin, validated against an independent elastica "
         "boundary-value problem within 0.07 % on the tip and 0.44 % on the contact force. Noise: 2 mV white per "
         "reading and the twin's drift, the thesis's non-actuated level (no weight is hung, so no cable-guide "
         "friction), except for active sensing, which works at chapter 7's actuated level."
@@ -107,7 +107,7 @@ def _contact(ctx, ch, plt) -> None:
             )
         )
     ch.paragraphs.append(
-        "Which contacts the gauges cannot see (flexdigit.tactile.bounds.contact_bounds): before gauge 1 (45 mm) "
+        "Which contacts the gauges cannot see: before gauge 1 (45 mm) "
         "nothing bends; between gauges 1 and 2 only the product F (s - 45 mm) is seen (the taut cable's answer is "
         "proportional to it too), so force and position are confounded; on the rigid tip support (265-270 mm) the "
         "stiff cable pins the tip angle and absorbs the load's moment, so only the force is seen; just past gauge 2 "
@@ -332,7 +332,7 @@ def _active(ctx, ch) -> None:
             SECTION,
             1000 * a["single_position_rmse_m"],
             "mm",
-            "the same settings, one reading at one command (the README's 22.5 mm is this over chapter 7's test split)",
+            "the same settings, one reading at one command (chapter 7's 22.5 mm is this over its test split)",
         )
     )
     e.append(

@@ -28,7 +28,7 @@ def build(ctx: ReportContext) -> Chapter:
     summary = acc.summary()
     chapter.paragraphs.append(
         "The centre line is estimated from the three gauge voltages and the servo command alone "
-        "(flexdigit.shape.shape.ShapeEstimator): each gauge's curvature is M/EI (E 3.12) of a moment made of the "
+        "(the ShapeEstimator of flexdigit.shape): each gauge's curvature is M/EI (E 3.12) of a moment made of the "
         "cable's T e (3.3), the digit's own weight and one weight at an unknown place; with the cable taut the "
         "command fixes the tip angle (E 3.11, 3.14). The fit (tension, load and where) is integrated to a shape "
         "with large rotations kept. Each case is one noisy reading of the twin (white noise and, with the cable "

@@ -312,7 +312,7 @@ def run_step(
 
     result = run_loop(
         rig, ctl, setpoint_deg, duration_s, period_s, on_sample=sample, measure=estimator, summary=summary,
-        **loop_options,
+        truth=truth, **loop_options,
     )  # fmt: skip
     figures = summary(result.time_s, result.measurement) if result.time_s.size >= 2 else {}
     return StepRun(result, figures, np.array(true_rotation, dtype=float), truth is not None, deg_per_command)

@@ -75,6 +75,7 @@ from flexdigit.studies.parameter_set import ParameterSet
 from flexdigit.twin.calibration import default_calibration, load_calibration
 
 __all__ = [
+    "shipped_specs",
     "DISTRIBUTIONS",
     "ParameterSet",
     "UncertainParameter",
@@ -311,6 +312,20 @@ def load_spec(name_or_path: str | Path) -> StudySpec:
         raise IsADirectoryError(f"{path}: is a directory, not a study spec")
     text = read_text(path, "a study spec TOML")  # binary garbage: named, not a codec error
     return spec_from_toml(text, source=str(path), base_dir=path.parent)
+
+
+def shipped_specs() -> dict[str, str]:
+    """The shipped study specs (:data:`SHIPPED_SPECS`), each with its kind and one-line description."""
+    import tomllib
+    from importlib import resources
+
+    out = {}
+    for name in SHIPPED_SPECS:
+        text = resources.files("flexdigit.studies").joinpath("specs").joinpath(f"{name}.toml").read_text()
+        doc = tomllib.loads(text)
+        kind = "design" if "design" in doc else "sensitivity"
+        out[name] = f"{kind} study: {doc.get('study', {}).get('description', '')}".rstrip(": ")
+    return out
 
 
 def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None) -> StudySpec:

@@ -25,15 +25,13 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import __version__
-from flexdigit._io import MODEL_LIMIT, atomic_write, check_output, read_text
+from flexdigit._io import MODEL_LIMIT, atomic_write, read_text
 from flexdigit._validation import check_int, check_real
 from flexdigit.errors import DataFileError
-from flexdigit.tactile.accuracy import accuracy, rmse
-from flexdigit.tactile.dataset import load_dataset
 from flexdigit.tactile.netlab import MLP
-from flexdigit.tactile.pipeline import TARGETS, Normaliser, ThesisNetwork, features, run_pipeline, targets
+from flexdigit.tactile.pipeline import TARGETS, Normaliser, ThesisNetwork
 
-__all__ = ["MODEL_FORMAT", "MODEL_VERSION", "SavedModel", "save_model", "load_model", "train_model"]
+__all__ = ["MODEL_FORMAT", "MODEL_VERSION", "SavedModel", "save_model", "load_model"]
 
 MODEL_FORMAT = "flexdigit-tactile-model"
 MODEL_VERSION = 1
@@ -146,59 +144,3 @@ def load_model(path: str | Path) -> SavedModel:
     network.y_norm_.mean_, network.y_norm_.std_ = y_mean, y_std
     network.y_ndim_ = 1 if nout == 1 else 2
     return SavedModel(network, doc["target"], list(inputs), doc.get("meta", {}))
-
-
-def train_model(
-    dataset_path: str | Path,
-    target: str,
-    model_path: str | Path | None = None,
-    *,
-    seed: int = 0,
-    hidden: int | None = None,
-    tol: float | None = None,
-    force: bool = False,
-) -> dict:
-    """``flexdigit collect train``: train ``target``'s network on a dataset file and save it (:func:`save_model`).
-
-    ``target`` is a :func:`~flexdigit.tactile.pipeline.targets` name (``-`` or ``_``); ``model_path`` defaults to
-    ``<dataset>.<target>.model.json`` and is checked before training (minutes), not after. ``hidden`` and ``tol``
-    fix the network's size and learning gradient; either None: swept as in 6.3
-    (:func:`~flexdigit.tactile.pipeline.run_pipeline`, seeded by ``seed``).
-
-    Returns
-    -------
-    dict
-        ``target``, ``model`` (the path written), ``swept``, ``rows`` (readings trained on), ``protocol`` and
-        ``scores``: corr2, the size and gradient used, and the target's error (``rmse_mm``, ``rmse_g``,
-        ``accuracy`` or ``rmse_positions``).
-    """
-    path = Path(model_path) if model_path else Path(dataset_path).with_suffix(f".{target}.model.json")
-    check_output(path, force=force)
-    dataset = load_dataset(dataset_path)
-    target = target.replace("-", "_")
-    rows, y = targets(dataset, target)
-    actuated = dataset.protocol.actuated
-    x = features(dataset, with_command=actuated)[rows]
-    inputs = ["gauge1_v", "gauge2_v", "gauge3_v"] + (["command"] if actuated else [])
-    # the error curves are not shown: no network for them
-    result = run_pipeline(x, y, seed=seed, fixed_hidden=hidden, fixed_tol=tol, target=target, curve_hidden=None)
-    scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
-    if target == "position":
-        scores["rmse_mm"] = 1000 * rmse(result.y_pred, result.y_test)
-    elif target == "magnitude":
-        scores["rmse_g"] = 1000 * rmse(result.y_pred, result.y_test)
-    elif target == "contact":
-        scores["accuracy"] = accuracy((result.y_pred >= 0.5).astype(float), result.y_test)
-    else:
-        scores["rmse_positions"] = rmse(result.y_pred, result.y_test)
-    meta = {"dataset": str(dataset_path), "protocol": dataset.protocol.name, "seed": seed, "scores": scores}
-    save_model(path, result.model, target=target, inputs=inputs, meta=meta, force=force)
-    swept = hidden is None or tol is None
-    return {
-        "target": target,
-        "model": str(path),
-        "swept": swept,
-        "rows": len(rows),
-        "protocol": dataset.protocol.name,
-        "scores": scores,
-    }

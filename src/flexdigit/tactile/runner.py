@@ -31,7 +31,7 @@ from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
 from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
-from flexdigit.twin.calibration import load_calibration
+from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = [
     "PROTOCOL_SETTINGS",
@@ -120,9 +120,12 @@ def _checked_options(protocol: Protocol, rig, settle_s, stop_after) -> float:
     return settle
 
 
-def _protocol_twin(protocol: Protocol, seed: int):
-    """The twin ``flexdigit collect`` opens for ``protocol`` (``--backend sim``, ``--seed seed``)."""
-    return open_rig("sim", seed=seed, **sim_options(protocol))
+def _protocol_twin(protocol: Protocol, seed: int, params: RigParams | None = None):
+    """The twin ``flexdigit collect`` opens for ``protocol`` (``--backend sim``, ``--seed seed``, ``--params``)."""
+    options = sim_options(protocol)
+    if params is not None and params != RigParams():
+        options["calibration"] = twin_calibration(params)
+    return open_rig("sim", params, seed=seed, **options)
 
 
 def collect(
@@ -156,7 +159,8 @@ def collect(
     seed : int
         The twin's seed when ``rig`` is None (the command's ``--seed``, default 0); ignored otherwise.
     params : RigParams, optional
-        For the digit length (positions from the tip -> from the base). Default: the thesis rig.
+        The digit (default the thesis rig): its length, its ``G`` gauges (``gauge1_v`` .. ``gaugeG_v``; a rig
+        reading another count is refused) and, with ``rig`` None, its twin.
     rig_url : str, optional
         How the rig was opened, recorded in the metadata.
     settle_s : float, optional
@@ -194,13 +198,12 @@ def collect(
     if out is None:
         raise ParameterError("collect needs out, the dataset to write (a .parquet path)")
     if rig is None:
-        rig, rig_url = _protocol_twin(protocol, seed), rig_url or "sim"
-    params = params or RigParams()
-    out = Path(out)
-    journal_file = journal_path(out)
-    settle = _checked_options(protocol, rig, settle_s, stop_after)
-    plan = protocol.plan(params.geometry.digit_length_m)
-    meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v)
+        rig, rig_url = _protocol_twin(protocol, seed, params), rig_url or "sim"
+    out, params = Path(out), params or RigParams()
+    journal_file, settle = journal_path(out), _checked_options(protocol, rig, settle_s, stop_after)
+    plan = protocol.plan(params.geometry.digit_length_m)  # every position on the digit
+    meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v,
+                     len(params.geometry.gauge_positions_m))  # fmt: skip
     meta["settings"] = effective_settings(protocol, rig, settle, settings)
     # one collection writes ``out`` and its journal at a time: a second is refused (OutputBusyError), never mixed
     with output_lock(out):
@@ -221,6 +224,7 @@ def _collect_locked(
     force: bool,
 ) -> Dataset:
     """:func:`collect` once its checks passed, holding ``out``'s lock."""
+    gauge_count = meta["gauge_count"]
     if out.exists() and journal_file.exists() and not force:
         return _finish_compaction(out, journal_file, meta, protocol)
     check_output(out, force=force)
@@ -240,7 +244,7 @@ def _collect_locked(
             for i in range(0 if replay else start, total):
                 if i >= start and stop_after is not None and taken >= stop_after:
                     break
-                setting, reading = _take(rig, protocol, plan, i, setting, settle)
+                setting, reading = _take(rig, protocol, plan, i, setting, settle, gauge_count)
                 row = _row(plan, i, reading)
                 if i < start:  # replaying what the journal holds: the twin must give it again, bit for bit
                     _check_replayed(journal_file, done[i], row)
@@ -278,7 +282,7 @@ def _collect_locked(
     return dataset
 
 
-def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float):
+def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float, gauge_count: int):
     """Bring the rig to sample ``i``'s setting (or re-hang and wait between repetitions) and read it."""
     wanted = (int(plan["test"][i]), float(plan["load_kg"][i]), int(plan["position_index"][i]))
     command = int(plan["command"][i])
@@ -293,8 +297,11 @@ def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float):
             rig.wait(protocol.sample_interval_s)
     reading = rig.read()
     gauges = np.asarray(reading.gauges_v, dtype=float)
-    if gauges.shape != (3,) or not np.all(np.isfinite(gauges)):
-        raise RigError(f"rig returned gauge voltages {gauges.tolist()!r} at sample {i}; expected 3 finite")
+    if gauges.shape != (gauge_count,) or not np.all(np.isfinite(gauges)):
+        raise RigError(
+            f"rig returned gauge voltages {gauges.tolist()!r} at sample {i}; expected {gauge_count} finite (the "
+            "digit's gauges: give the rig's parameter file with --params)"
+        )
     return setting, reading
 
 
@@ -303,9 +310,7 @@ def _row(plan: dict, i: int, reading) -> dict:
     return {
         "sample": i,
         "test": int(plan["test"][i]),
-        "gauge1_v": float(gauges[0]),
-        "gauge2_v": float(gauges[1]),
-        "gauge3_v": float(gauges[2]),
+        **{f"gauge{k}_v": float(v) for k, v in enumerate(gauges, start=1)},
         "pot_v": _none_if_nan(reading.pot_v),
         "load_kg": float(plan["load_kg"][i]),
         "position_index": int(plan["position_index"][i]),
@@ -378,6 +383,7 @@ def collect_on(
     protocol: Protocol,
     out: str | Path,
     *,
+    params: RigParams | None = None,
     seed: int = 0,
     calibration: str | Path | None = None,
     record: str | Path | None = None,
@@ -388,33 +394,40 @@ def collect_on(
     """``flexdigit collect``: open the rig at ``backend``, take ``protocol`` on it into ``out`` and close it.
 
     On a twin URL (``sim...``) the twin is set up for the protocol (:func:`sim_options`) with ``seed`` (unless the
-    URL sets one) and the ``calibration`` TOML if given; a real rig refuses ``calibration``. ``record`` also writes
-    every reading and load to an MCAP file (:func:`flexdigit.rig.recording.recording_rig`). Every option is checked
-    before the rig is opened; the rig (and the recording) are closed on every path. The other arguments are
-    :func:`collect`'s.
+    URL sets one) and, when ``calibration`` (a TOML) or ``params`` (another digit) is given, the calibration of
+    :func:`~flexdigit.twin.digit_calibration.twin_calibration`; a real rig refuses ``calibration``. The emulated
+    board (``hil://``) takes the protocol's orientation and cable only (its firmware's twin keeps its own 2 ms
+    step). ``record`` also writes every reading and load to an MCAP file
+    (:func:`flexdigit.rig.recording.recording_rig`). Every option is checked before the rig is opened; the rig
+    (and the recording) are closed on every path. The other arguments are :func:`collect`'s.
     """
     out = Path(out)
     if settle_s is not None:
         check_real(settle_s, "--settle", "flexdigit collect", low=0, high=MAX_SETTLE_S)
     if not (out.exists() and journal_path(out).exists()):  # both: a run stopped while tidying up, collect finishes it
         check_output(out, force=force)
-    on_twin = parse_rig_url(backend).scheme.startswith("sim")
+    scheme = parse_rig_url(backend).scheme
+    on_twin = scheme.startswith("sim")
     if calibration and not on_twin:
         raise ParameterError(
             f"--calibration calibrates the twin: it needs a sim backend, not {backend!r} (a real rig is itself)"
         )
     options = sim_options(protocol, backend) if on_twin else {}
-    if calibration:
-        options["calibration"] = load_calibration(calibration)
+    if scheme == "hil":
+        options = {k: v for k, v in sim_options(protocol, backend).items() if k in ("orientation", "cable")}
+    if on_twin and (calibration or params is not None):
+        options["calibration"] = twin_calibration(params, calibration)
     with ExitStack() as stack:
-        rig = stack.enter_context(open_rig(backend, **options, **seed_option(backend, seed)))
+        rig = stack.enter_context(open_rig(backend, params, **options, **seed_option(backend, seed)))
         if record is not None:
             header = {"backend": backend, "protocol": protocol.name, "seed": rig.settings().get("seed")}
             recording = Recording(
                 record, header={**header, "source": "collect"}, metadata=rig_metadata(rig), force=force
             )
             rig = stack.enter_context(recording_rig(rig, recording))  # closes the rig, then the recording
-        return collect(protocol, rig, out, rig_url=backend, settle_s=settle_s, progress=progress, force=force)
+        return collect(
+            protocol, rig, out, params=params, rig_url=backend, settle_s=settle_s, progress=progress, force=force
+        )
 
 
 def load_or_collect(path: str | Path, protocol: Protocol, rig_factory, **kwargs) -> Dataset:

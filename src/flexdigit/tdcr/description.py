@@ -39,7 +39,17 @@ from flexdigit._repr import summary
 from flexdigit._validation import InstanceOf, Interval, check_int, declare, validate_fields
 from flexdigit.errors import ParameterError
 
-__all__ = ["Backbone", "Segment", "Tendon", "Robot", "ROBOTS", "load_robot", "robot_from_dict", "get_robot"]
+__all__ = [
+    "builtin_robots",
+    "Backbone",
+    "Segment",
+    "Tendon",
+    "Robot",
+    "ROBOTS",
+    "load_robot",
+    "robot_from_dict",
+    "get_robot",
+]
 
 _POSITIVE = Interval(Real, 0, None, closed="neither")
 
@@ -328,6 +338,19 @@ def _rao2021() -> Robot:
 
 #: Built-in robots by name.
 ROBOTS: dict[str, Robot] = {"rao2021": _rao2021()}
+
+
+def builtin_robots() -> dict[str, str]:
+    """The built-in robots (:data:`ROBOTS`), each with one line: segments, tendons, backbone."""
+    out = {}
+    for name, robot in ROBOTS.items():
+        lengths = " + ".join(f"{1e3 * s.length_m:g}" for s in robot.segments)
+        b = robot.backbone
+        out[name] = (
+            f"{len(robot.segments)} segments ({lengths} mm), {len(robot.tendons)} tendons, backbone radius "
+            f"{1e3 * b.radius_m:g} mm, E {b.youngs_modulus_pa / 1e9:g} GPa"
+        )
+    return out
 
 
 def get_robot(name_or_path: str | Path | Robot) -> Robot:

@@ -1,7 +1,7 @@
-"""``stream://`` against a board written by someone else: a microcontroller emulated here from the README alone.
+"""``stream://`` against a board written by someone else: a microcontroller emulated from docs/backends/stream.md alone.
 
 Nothing of flexdigit's emulator or encoder is used to make the bytes: :class:`ThirdPartyBoard` formats lines as the
-README's protocol section describes them (``$<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<CRC>\\r\\n``, CRC-16/XMODEM with
+docs/backends/stream.md describes them (``$<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<CRC>\\r\\n``, CRC-16/XMODEM with
 poly 0x1021, init 0, over the bytes between ``$`` and ``*``), with its own bitwise CRC (checked against the CRC
 catalogue's check value), and writes them to a pseudo-terminal as a USB serial board would, including what real
 boards and cables do: start-up junk, other line ends, a sequence number and a ``micros()`` that wrap, a board reset,
@@ -33,7 +33,7 @@ from oracles import eventually
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="needs os.openpty")
 
 EXAMPLES = os.path.join(os.path.dirname(__file__), "..", "..", "..", "examples", "flexdigit_stream")
-#: ADS1115 at +-4.096 V, the README's example scale (V per count)
+#: ADS1115 at +-4.096 V, docs/backends/stream.md's example scale (V per count)
 SCALE = 0.000125
 
 
@@ -50,7 +50,7 @@ def crc16_xmodem_bitwise(data: bytes) -> int:
 
 
 def board_line(seq, t_us, gauges, pot=None, end=b"\r\n") -> bytes:
-    """One line as the README describes it: decimal integer counts, CRC in upper-case hex."""
+    """One line as docs/backends/stream.md describes it: decimal integer counts, CRC in upper-case hex."""
     payload = ",".join(str(int(v)) for v in (seq, t_us, *gauges, *([] if pot is None else [pot]))).encode()
     return b"$" + payload + b"*" + b"%04X" % crc16_xmodem_bitwise(payload) + end
 
@@ -152,7 +152,7 @@ def test_my_crc_is_the_catalogue_crc16_xmodem():
     assert crc16_xmodem_bitwise(b"123456789") == 0x31C3  # CRC RevEng catalogue, CRC-16/XMODEM check value
 
 
-# -- what the README promises, read back ---------------------------------------------------------------------------
+# -- what docs/backends/stream.md promises, read back -----------------------------------------------------------
 @pytest.mark.parametrize("end", [b"\r\n", b"\n", b"\r", b"\n\r"], ids=["CRLF", "LF", "CR", "LFCR"])
 def test_counts_become_volts_whatever_the_line_end(board, end):
     lines = clean_lines(60, end=end)
@@ -379,7 +379,7 @@ def test_counts_beyond_the_adc_name_the_bits_option(board):
 
 # -- the whole rig: a third-party board behind the servo board, through `flexdigit run` ------------------------
 class ServoBoard:
-    """The MILINST board's side as the README states it: Mini SSC frames ``FF ch pos``; records every position."""
+    """The MILINST board's side as docs/backends/serial.md states it: Mini SSC frames ``FF ch pos``; records all."""
 
     def __init__(self) -> None:
         self.master, self._slave = os.openpty()
@@ -417,7 +417,7 @@ class ServoBoard:
 
 @pytest.fixture
 def hand_made_map(tmp_path):
-    """A rotation map written by hand in the README's JSON form: 10 deg per volt on each gauge."""
+    """A rotation map written by hand in the JSON form of docs/guide/rig.md: 10 deg per volt on each gauge."""
     path = tmp_path / "map.json"
     path.write_text(json.dumps({"coef": [10.0, 10.0, 10.0], "intercept": 0.0, "gauge_v_per_deg": [0.03] * 3}))
     return path
@@ -474,7 +474,7 @@ def test_run_on_a_third_party_board_ends_in_the_safe_state_when_the_stream_fails
     assert footer["stop"] == "fault"
     assert match in footer["message"]
     assert healthy_frames * 0.02 <= samples[-1]["t"] < 2.5  # it ran on the stream, then stopped at the fault
-    # the step figures of a run cut short claim only what its record shows (the README's rules): a settling time
+    # the step figures of a run cut short claim only what its record shows (docs/guide/rig.md's rules): a settling time
     # needs the last 0.5 s inside the band, a steady-state error the last 0.5 s steady, about its own mean
     figures = out["step_metrics"]["estimated"]
     t, y = np.array([s["t"] for s in samples]), np.array([s["y"] for s in samples])

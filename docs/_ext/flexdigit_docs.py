@@ -1,0 +1,276 @@
+"""Pages of the site generated at build time, so none is kept by hand: the API reference from each domain's
+``__all__``, the benchmark tables from ``make bench``'s JSON (``benchmarks/results.json``), the findings from
+``make run``'s ``report/results.json`` and the rig backends' URL options from their declarations.
+
+A Sphinx extension (``conf.py`` lists it): on ``config-inited`` it writes ``docs/api/*.rst`` (one page per domain,
+an autosummary of its public names; autosummary then writes one page per name into ``docs/api/generated/``) and
+``docs/_generated/*.md``. A file is rewritten only when its text changes, so an unchanged build stays incremental.
+``tests/test_docs.py`` checks the built site against every ``__all__`` and these pages against their JSON.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import types
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parents[1]
+ROOT = DOCS.parent
+PACKAGE = ROOT / "src" / "flexdigit"
+BENCH_JSON = ROOT / "benchmarks" / "results.json"
+REPORT_JSON = ROOT / "report" / "results.json"  # what `make run` writes
+
+#: Public modules that are not packages but hold public names of their own (the top level's ``__all__`` names
+#: ``params``; ``errors`` and ``interrupts`` are what a caller catches and wraps).
+MODULES = ("flexdigit.params", "flexdigit.errors", "flexdigit.interrupts")
+
+#: One line per domain for the reference's index (the domain's docstring says the rest).
+TITLES = {
+    "flexdigit": "the few objects a user starts from",
+    "flexdigit.params": "rig parameters: frozen dataclasses, SI units, TOML",
+    "flexdigit.reference": "the thesis's printed figures",
+    "flexdigit.models": "component models and the plant (chapters 2-3)",
+    "flexdigit.twin": "the digital twin",
+    "flexdigit.tdcr": "tendon-driven continuum robots in 3D",
+    "flexdigit.identify": "release and step tests to second-order models",
+    "flexdigit.control": "H-infinity design, analysis, discretisation, runtime, C export (chapters 4-5)",
+    "flexdigit.rig": "the Rig contract, the loop, logs, safety",
+    "flexdigit.rig.backends": "the rig backends, by URL",
+    "flexdigit.tactile": "load localisation (chapters 6-7)",
+    "flexdigit.shape": "the centre line from the gauges",
+    "flexdigit.palpation": "contact, tissue stiffness, force control",
+    "flexdigit.calibrate": "the twin fitted to a rig's records",
+    "flexdigit.live": "the live page and its server",
+    "flexdigit.studies": "sensitivity and design studies",
+    "flexdigit.report": "the reproduce-the-thesis report",
+    "flexdigit.errors": "the exceptions flexdigit raises",
+    "flexdigit.interrupts": "stops on signals",
+}
+
+
+def packages() -> list[str]:
+    """Every package of flexdigit but the command line (as ``tests/test_public_api.py`` lists them)."""
+    return sorted(
+        ".".join(("flexdigit", *p.parent.relative_to(PACKAGE).parts))
+        for p in PACKAGE.rglob("__init__.py")
+        if p.parent.name != "cli" and "static" not in p.parent.parts
+    )
+
+
+def public_names(module_name: str) -> list[str]:
+    """The names ``module_name`` exports that are not themselves modules (a domain listed at the top level)."""
+    module = importlib.import_module(module_name)
+    return [n for n in module.__all__ if not isinstance(getattr(module, n), types.ModuleType)]
+
+
+def domains() -> dict[str, list[str]]:
+    """Domain -> its public names, in the order of its ``__all__``: what the reference documents."""
+    return {name: public_names(name) for name in [*packages(), *MODULES]}
+
+
+def page_name(domain: str, name: str, found: dict[str, list[str]] | None = None) -> str:
+    """The reference page of ``domain.name``: its own, or for a name the top level re-exports from a domain
+    (``flexdigit.Twin`` is ``flexdigit.twin.Twin``) the domain's, so one object is described once."""
+    if domain != "flexdigit":
+        return f"{domain}.{name}"
+    found = domains() if found is None else found
+    obj = getattr(importlib.import_module(domain), name)
+    for other, names in found.items():
+        if other != domain and name in names and getattr(importlib.import_module(other), name) is obj:
+            return f"{other}.{name}"
+    return f"{domain}.{name}"
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    if path.exists() and path.read_text() == text:
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+
+
+def _domain_page(name: str, names: list[str], found: dict[str, list[str]]) -> str:
+    title = f"``{name}``"
+    lines = [
+        title,
+        "=" * len(title),
+        "",
+        f".. automodule:: {name}",
+        "   :no-members:",
+        "   :no-index:",
+        "",
+        f".. currentmodule:: {name}",
+        "",
+        ".. autosummary::",
+        "   :toctree: generated/",
+        "",
+    ]
+    # relative to the current module (autosummary refuses a name that repeats it): twin.Twin under flexdigit
+    lines += [f"   {page_name(name, n, found).removeprefix(name + '.')}" for n in names]
+    return "\n".join(lines) + "\n"
+
+
+def write_api_pages(app=None, config=None) -> None:
+    """``docs/api/index.rst`` and one page per domain (autosummary writes the per-name pages from them)."""
+    api = DOCS / "api"
+    found = domains()
+    index = [
+        "API reference",
+        "=============",
+        "",
+        "Every public name of every domain, one page each, generated from the domains' ``__all__``. Import from the",
+        "domain, never from a module behind it: ``from flexdigit.control import hinf_riccati``.",
+        "",
+    ]
+    index += [f"- :doc:`{name}`: {TITLES.get(name, '')} ({len(names)} names)" for name, names in found.items()]
+    index += ["", ".. toctree::", "   :hidden:", ""] + [f"   {name}" for name in found]
+    _write_if_changed(api / "index.rst", "\n".join(index) + "\n")
+    for name, names in found.items():
+        _write_if_changed(api / f"{name}.rst", _domain_page(name, names, found))
+    # a name dropped from an __all__ leaves its stub behind, which autosummary never removes: remove it here
+    pages = {page_name(d, n, found) for d, names in found.items() for n in names}
+    for stub in (api / "generated").glob("*.rst"):
+        if stub.stem not in pages:
+            stub.unlink()
+
+
+def _cell(text: object) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def benchmark_page(results: dict | None) -> str:
+    """The benchmark tables as Markdown, one per benchmark module, from ``make bench``'s JSON (or how to get it)."""
+    head = ["# Benchmarks", ""]
+    if results is None:
+        return "\n".join(
+            head
+            + [
+                "No benchmark results in this build: `make bench` measures them on your machine and writes",
+                "`benchmarks/results.json`; the next `make docs` turns that file into the tables of this page.",
+                "(`python -m benchmarks bench_twin --out FILE` runs one module.)",
+                "",
+            ]
+        )
+    ctx = results.get("context", {})
+    lines = head + [
+        f"Measured by `make bench` on {ctx.get('date_utc', '?')} UTC (commit `{ctx.get('commit', '?')}`, "
+        f"{ctx.get('cpu_count', '?')} cores, load average {ctx.get('load_average_1min', 0):.1f}, "
+        f"Python {ctx.get('python', '?')}). The figures are indicative: compare rows of one run with each other. "
+        "This page is generated from `benchmarks/results.json` at every build.",
+        "",
+    ]
+    modules: dict[str, list[dict]] = {}
+    for row in results.get("rows", []):
+        modules.setdefault(row.get("module", "?"), []).append(row)
+    for module, rows in modules.items():
+        lines += [
+            f"## {module}",
+            "",
+            f"`python -m benchmarks {module}`",
+            "",
+            "| benchmark | value | unit | goal |",
+            "|---|---|---|---|",
+        ]
+        for row in rows:
+            value = row.get("value")
+            shown = f"{value:.4g}" if isinstance(value, int | float) else _cell(value)
+            lines.append(
+                f"| {_cell(row.get('name', ''))} | {shown} | {_cell(row.get('unit', ''))} | "
+                f"{_cell(row.get('goal', ''))} |"
+            )
+        notes = [f"- {_cell(r['name'])}: {_cell(r['note'])}" for r in rows if r.get("note")]
+        lines += ["", *notes, ""] if notes else [""]
+    return "\n".join(lines)
+
+
+def write_benchmark_page(app=None, config=None) -> None:
+    results = json.loads(BENCH_JSON.read_text()) if BENCH_JSON.exists() else None
+    _write_if_changed(DOCS / "_generated" / "benchmarks.md", benchmark_page(results))
+
+
+def _number(value: object) -> str:
+    if isinstance(value, bool) or value is None:
+        return "" if value is None else str(value)
+    if isinstance(value, int | float):
+        return f"{value:.5g}"
+    return _cell(value)
+
+
+def findings_page(results: dict | None) -> str:
+    """The report's entries (thesis figure, ours, status, note) per chapter, from ``make run``'s results.json."""
+    head = ["# Findings: the thesis against the twin", ""]
+    if results is None:
+        return "\n".join(
+            head
+            + [
+                "No report in this build: `make run` reproduces the thesis on the twin and writes",
+                "`report/results.json`; the next `make docs` turns it into the tables of this page (every entry: the",
+                "thesis's figure as printed, flexdigit's, and whether they match, differ for a stated reason, or are",
+                "new).",
+                "",
+            ]
+        )
+    counts = results.get("counts", {})
+    lines = head + [
+        f"From `report/results.json` (flexdigit {results.get('flexdigit', '?')}, seed {results.get('seed', '?')}"
+        + (", fast settings" if results.get("fast") else "")
+        + f"): {counts.get('match', 0)} entries match the thesis, {counts.get('discrepancy', 0)} differ for the "
+        f"reason their note gives, {counts.get('new', 0)} are new (figures the thesis does not have). "
+        "`report/index.html` shows them with their figures; this page is generated at every build.",
+        "",
+    ]
+    by_chapter: dict[str, list[dict]] = {}
+    for entry in results.get("entries", []):
+        by_chapter.setdefault(entry.get("chapter", "?"), []).append(entry)
+    titles = {c.get("slug"): c.get("title", c.get("slug")) for c in results.get("chapters", [])}
+    for slug, entries in by_chapter.items():
+        lines += [
+            f"## {titles.get(slug, slug)}",
+            "",
+            "| entry | section | thesis | ours | unit | status | note |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for e in entries:
+            lines.append(
+                f"| `{_cell(e.get('key', ''))}` | {_cell(e.get('section', ''))} | {_number(e.get('thesis'))} | "
+                f"{_number(e.get('ours'))} | {_cell(e.get('unit', ''))} | {_cell(e.get('status', ''))} | "
+                f"{_cell(e.get('note', ''))} |"
+            )
+        lines.append("")
+    return "\n".join(lines)
+
+
+def write_findings_page(app=None, config=None) -> None:
+    results = json.loads(REPORT_JSON.read_text()) if REPORT_JSON.exists() else None
+    _write_if_changed(DOCS / "_generated" / "findings.md", findings_page(results))
+
+
+def url_options_page(scheme: str) -> str:
+    """The options a backend's URL takes, as a Markdown table, from its declarations (``URL_OPTIONS``)."""
+    from flexdigit.rig import BACKENDS
+
+    module = importlib.import_module(BACKENDS[scheme].partition(":")[0])
+    options = getattr(module, "URL_OPTIONS", ())
+    if not options:
+        return f"A `{scheme}` URL takes no options.\n"
+    lines = ["| option | value | meaning |", "|---|---|---|"]
+    for option in options:
+        lines.append(f"| `{option.name}` | {_cell(option.expected())} | {_cell(option.help)} |")
+    return "\n".join(lines) + "\n"
+
+
+def write_url_option_pages(app=None, config=None) -> None:
+    from flexdigit.rig import BACKENDS
+
+    for scheme in BACKENDS:
+        name = scheme.replace("+", "-")
+        _write_if_changed(DOCS / "_generated" / "url-options" / f"{name}.md", url_options_page(scheme))
+
+
+def setup(app):
+    # on config-inited: before Sphinx looks for source files and autosummary reads the pages written here
+    app.connect("config-inited", write_api_pages)
+    app.connect("config-inited", write_benchmark_page)
+    app.connect("config-inited", write_url_option_pages)
+    app.connect("config-inited", write_findings_page)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
