@@ -348,6 +348,10 @@ LAZY_IMPORTS = {
     ("flexdigit.twin.contact", "flexdigit.twin._contact_points"): "numba: imported and compiled on the first press",
     ("flexdigit.palpation.contact_estimation", "flexdigit.palpation._contact_kernel"): "numba, once in _kernel()",
     ("flexdigit.tactile.netlab", "flexdigit.tactile._scg_kernel"): "numba: imported and compiled when a net trains",
+    (
+        "flexdigit.studies.execution",
+        "flexdigit.studies._warm_worker",
+    ): "distributed, when a study runs on Dask",
     ("flexdigit.rig.step_test", "flexdigit.control.analysis"): "python-control; cli/run.py reads a constant here",
     ("flexdigit.rig.step_test", "flexdigit.control.design20ms"): "python-control; cli/run.py reads a constant here",
     ("flexdigit.rig.controllers", "flexdigit.control.design20ms"): "python-control; cli/run.py reads a constant here",
