@@ -153,11 +153,10 @@ def simulate(
     tol : float, optional
         ``"discrete"`` (default 1e-7): on the error left in each step's Newton (scipy's BDF estimate from the
         updates' rate), displacements over the length and rotations in rad; the floor that the finite-difference
-        Jacobian and round-off set is ~1e-10. Errors accumulate over steps as a phase: a 4 mm vibration of a 40-node
-        rod differs by 9 um after 1000 steps of 1 ms from tol = 1e-10 (1e-4 of its frequency).
-        ``"shooting"`` (default 1e-6): on each step's scaled tip residual, looser than the statics': a step's
-        shooting problem amplifies round-off by ~exp(L (rho A c0^2 / EI)^(1/4)) (c0 = 1.5/dt), ~1e5 at 1 ms on
-        rao2021, so its residual floor is ~1e-9..1e-8; 1e-6 is a force error of ~1e-6 EI/L^2.
+        Jacobian and round-off set is ~1e-10. Errors accumulate as a phase: a 4 mm vibration of a 40-node rod is
+        9 um off tol = 1e-10's after 1000 steps of 1 ms (1e-4 of its frequency).
+        ``"shooting"`` (default 1e-6): on each step's scaled tip residual, whose floor is ~1e-9..1e-8 (round-off
+        amplified ~1e5 at 1 ms on rao2021, see the module docstring); 1e-6 is a force error of ~1e-6 EI/L^2.
     method : {"discrete", "shooting"}
         The discretised rod stepped by BDF2 with a banded Newton (default; :mod:`flexdigit.tdcr._chain_kernel`),
         or the continuous rod shot at each step (Till et al. 2019; slower and it fails on large fast motions).
