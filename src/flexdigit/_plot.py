@@ -13,6 +13,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from flexdigit._io import atomic_path, check_output
+from flexdigit.errors import ParameterError
+
 __all__ = ["FIGURE_DPI", "PLOT_FORMATS", "check_plot", "new_figure", "save_plot", "add_plot_flag"]
 
 #: Pixels per inch of a PNG (the report's figures are saved at this DPI).
@@ -22,8 +25,6 @@ PLOT_FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
 
 
 def _format(path: Path, command: str) -> str:
-    from flexdigit.errors import ParameterError
-
     fmt = PLOT_FORMATS.get(path.suffix.lower())
     if fmt is None:
         raise ParameterError(
@@ -38,8 +39,6 @@ def check_plot(path: str | os.PathLike | None, command: str, *, force: bool = Fa
     ``force``); None when no plot was asked for."""
     if path is None:
         return None
-    from flexdigit._io import check_output
-
     path = Path(path)
     _format(path, command)
     return check_output(path, force=force)
@@ -55,8 +54,6 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, figsize=(7.0, 3.6), **subplots
 
 def save_plot(fig, path: str | os.PathLike, command: str = "", *, force: bool = False) -> Path:
     """Save ``fig`` to ``path`` (PNG, SVG or PDF by its suffix) atomically; an existing file only with ``force``."""
-    from flexdigit._io import atomic_path
-
     path = Path(path)
     fmt = _format(path, command)
     metadata = {"Date": None} if fmt == "svg" else {"CreationDate": None} if fmt == "pdf" else {}

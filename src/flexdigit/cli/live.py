@@ -57,9 +57,17 @@ def register(subparsers) -> None:
         subparsers,
         "shape",
         _shape,
-        help="the digit's centre line (and a load) from the three gauge voltages, or the estimator's accuracy",
+        help="the digit's centre line (and a load) from its gauge voltages, or the estimator's accuracy",
     )
-    parser.add_argument("--gauges-v", default=None, help="the three gauge voltages, V, comma-separated (base first)")
+    parser.add_argument(
+        "--gauges-v",
+        default=None,
+        help="the digit's gauge voltages, V, comma-separated (base first; 3 on the thesis's)",
+    )
+    parser.add_argument("--params", metavar="FILE", help="the digit's parameters TOML (default: the thesis rig)")
+    parser.add_argument(
+        "--calibration", metavar="FILE", help="its calibration TOML (default: the thesis's, scaled to the digit)"
+    )
     parser.add_argument(
         "--command", type=Flag(SERVO_COMMAND), default=None, help="servo command in force (0..254); omit if unknown"
     )
@@ -145,24 +153,38 @@ def _foxglove(args: argparse.Namespace) -> CommandResult:
 def _shape(args: argparse.Namespace) -> CommandResult:
     from flexdigit._plot import check_plot
     from flexdigit.errors import ParameterError
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.twin.digit_calibration import twin_calibration
 
+    params = load_params(args.params) if args.params else RigParams()
+    calibration = twin_calibration(params, args.calibration)
     if args.accuracy:
         if args.plot:
             raise ParameterError("--plot draws one reading's centre line: give --gauges-v, not --accuracy")
-        return _accuracy(args)
+        return _accuracy(args, params, calibration)
     check_plot(args.plot, "shape", force=args.force)
+    count = len(params.geometry.gauge_positions_m)
+    names = ",".join(f"V{k}" for k in range(1, count + 1))
     if args.gauges_v is None:
-        raise ParameterError("--gauges-v V1,V2,V3 is required (or --accuracy)")
+        raise ParameterError(f"--gauges-v {names} is required (or --accuracy)")
     try:
         volts = [float(x) for x in args.gauges_v.split(",")]
     except ValueError:
-        raise ParameterError(f"--gauges-v must be three numbers separated by commas. Got {args.gauges_v!r}.") from None
-    if len(volts) != 3:
-        raise ParameterError(f"--gauges-v must be three numbers separated by commas. Got {args.gauges_v!r}.")
+        volts = []
+    if len(volts) != count:
+        raise ParameterError(
+            f"--gauges-v must be {count} numbers separated by commas (one per gauge of the digit, {names}). "
+            f"Got {args.gauges_v!r}."
+        )
     from flexdigit.shape.shape import ShapeEstimator
 
     est_settings = ShapeEstimator(
-        orientation=args.orientation, cable=not args.no_cable, load=args.load, n_average=args.n_average
+        params,
+        calibration,
+        orientation=args.orientation,
+        cable=not args.no_cable,
+        load=args.load,
+        n_average=args.n_average,
     )
     est = est_settings.estimate(volts, command=args.command)
     row = est.row(0, every=10)
@@ -201,10 +223,14 @@ def _shape(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=row, text=text)
 
 
-def _accuracy(args: argparse.Namespace) -> CommandResult:
-    from flexdigit.shape.shape import shape_accuracy
+def _accuracy(args: argparse.Namespace, params, calibration) -> CommandResult:
+    from flexdigit.params import RigParams
+    from flexdigit.shape.shape import ACCURACY_POSITIONS_M, shape_accuracy
 
-    acc = shape_accuracy(tuple(range(8, 44, 5)), seed=args.seed)
+    # the thesis's load positions as fractions of its digit, on this digit
+    scale = params.geometry.digit_length_m / RigParams().geometry.digit_length_m
+    positions = tuple(round(x * scale, 4) for x in ACCURACY_POSITIONS_M)
+    acc = shape_accuracy(tuple(range(8, 44, 5)), positions, seed=args.seed, params=params, calibration=calibration)
     summary = acc.summary()
     lines = ["case                 cases  tip median  tip p95  tip max  RMS along  tip within 2 sd"]
     for g in summary:

@@ -31,6 +31,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)",
     )
+    p.add_argument("--params", metavar="FILE", help="the digit's parameters TOML (default: the thesis rig)")
+    p.add_argument(
+        "--calibration", metavar="FILE", help="twin calibration TOML (default: the thesis's, scaled to the digit)"
+    )
     p.add_argument("--log", default=None, help="JSON-lines log of every loop sample (scan: one file per offset)")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--force", action="store_true", help="overwrite --out / --log / --plot if they exist")
@@ -56,7 +60,9 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     from flexdigit._json import to_jsonable
     from flexdigit.errors import DataFileError
     from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
+    from flexdigit.params import RigParams, load_params
     from flexdigit.rig.base import open_rig
+    from flexdigit.twin.digit_calibration import twin_calibration
 
     tissue, info = load_tissue(args.tissue)
     plan = load_palpation_protocol(args.protocol)
@@ -72,16 +78,23 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             f"{info.source}: keys 'tissue.gap_mm' and 'tissue.modulus_n_m2' are needed on the twin (they place the "
             "tissue there; palpation then estimates them)"
         )
-    rig = open_rig(args.backend, **_sim_options(args.backend, kind, args.seed))
+    params = load_params(args.params) if args.params else RigParams()
+    calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
+    options = _sim_options(args.backend, kind, args.seed)
+    if sim and (args.params or args.calibration):
+        options["calibration"] = calibration
+    rig = open_rig(args.backend, params, **options)
     settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
         if kind == "force":
             data, text, fig = _force(rig, tissue, plan, logs[0], log_mode)
         elif kind == "scan":
-            data, text, fig = _scan(rig, tissue, plan, logs, log_mode)
+            data, text, fig = _scan(rig, tissue, plan, logs, log_mode, calibration)
         else:
-            data, text, fig = _sweep(rig, tissue, plan, logs[0], log_mode, tissue.modulus_n_m2 if sim else None)
+            data, text, fig = _sweep(
+                rig, tissue, plan, logs[0], log_mode, tissue.modulus_n_m2 if sim else None, calibration
+            )
     finally:
         rig.close()
     data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, "rig": settings, **data}
@@ -103,6 +116,12 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             json.dump(to_jsonable(data), fh, indent=2)
         text += f"\nwritten to {out}"
     return CommandResult(data=data, text=text)
+
+
+def _orientation(rig) -> str:
+    """How the digit is mounted: the twin's (``sim?orientation=hanging``: a long digit buckles tip up), else the
+    thesis's upright mounting."""
+    return rig.settings().get("orientation") or "vertical"
 
 
 def _log_paths(log, plan, force):
@@ -146,14 +165,14 @@ def _refuse_poor_fit(fit, what: str) -> None:
         )
 
 
-def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None):
+def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
     import numpy as np
 
     from flexdigit.errors import DataFileError
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import palpate, stiffness_bound
 
-    model = ContactGaugeModel(rig.params)
+    model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode)
     _refuse_poor_fit(result.fit, "palpation")
     touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
@@ -210,11 +229,11 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None):
     return data, "\n".join(lines), figure
 
 
-def _scan(rig, tissue, plan, logs, log_mode):
+def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import _truth_of, run_sweep, scan
 
-    model = ContactGaugeModel(rig.params)
+    model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     records = []
     for d, log in zip(plan.scan["offsets_m"], logs, strict=True):
         rig.place_tissue(tissue.moved(d))

@@ -366,11 +366,12 @@ class ContactEstimator(Estimator):
         self.s_grid_ = np.minimum(self.s_grid_[self.s_grid_ <= hi + 1e-9], hi)
         self.f_grid_ = self.sign_ * self.max_force_n * np.linspace(0.0, 1.0, FORCE_POINTS)
         self.tables_: dict[int, dict] = {}
+        n = len(self.model.params.geometry.gauge_positions_m)  # the digit's gauges
         self.offset_ = (
-            np.zeros(3) if self.offset_v is None else check_array(self.offset_v, "offset_v", owner, shape=(3,))
+            np.zeros(n) if self.offset_v is None else check_array(self.offset_v, "offset_v", owner, shape=(n,))
         )
         if X is not None and self.offset_v is None:
-            v, cmd = _split(X)
+            v, cmd = _split(X, len(self.model.params.geometry.gauge_positions_m))
             self.offset_ = np.mean(v - self.model.free_v(cmd), axis=0)
         for c in self.commands:
             self._line_table(int(c)) if self.classify else self._table(int(c))
@@ -383,10 +384,11 @@ class ContactEstimator(Estimator):
         s, f = self.s_grid_, self.f_grid_
         ss, ff = np.meshgrid(s, f[1:], indexing="ij")
         g0 = m.free_v([command])[0]
-        v = m.point_v(ss.ravel(), ff.ravel(), command).reshape(s.size, f.size - 1, 3) - g0
+        n = len(m.params.geometry.gauge_positions_m)  # the digit's gauges
+        v = m.point_v(ss.ravel(), ff.ravel(), command).reshape(s.size, f.size - 1, n) - g0
         design = np.stack([f[1:] ** k for k in range(1, POLY_DEGREE + 1)], axis=1)  # (nf, K)
         coef = np.linalg.lstsq(design, v.transpose(1, 0, 2).reshape(f.size - 1, -1), rcond=None)[0]
-        point = np.ascontiguousarray(coef.reshape(POLY_DEGREE, s.size, 3))  # (K, ns, 3)
+        point = np.ascontiguousarray(coef.reshape(POLY_DEGREE, s.size, n))  # (K, ns, gauges)
         table = {"g0": g0, "point": point}
         self.tables_[command] = table
         return table
@@ -413,8 +415,9 @@ class ContactEstimator(Estimator):
         nf = f.size - 1
         lv = m._volts(np.tile(ls, (nf, 1)), np.repeat(f[1:], centre.size)[:, None] * np.tile(lu, (nf, 1)), command)
         design = np.stack([f[1:] ** k for k in range(1, POLY_DEGREE + 1)], axis=1)
-        coef = np.linalg.lstsq(design, (lv.reshape(nf, centre.size, 3) - g0).reshape(nf, -1), rcond=None)[0]
-        return np.ascontiguousarray(coef.reshape(POLY_DEGREE, centre.size, 3))
+        n = len(m.params.geometry.gauge_positions_m)
+        coef = np.linalg.lstsq(design, (lv.reshape(nf, centre.size, n) - g0).reshape(nf, -1), rcond=None)[0]
+        return np.ascontiguousarray(coef.reshape(POLY_DEGREE, centre.size, n))
 
     def _line_derivatives(self, command: int, index) -> dict:
         """The line table with its derivatives in centre and extent (``line_dc``, ``line_dw``: K, G, 3, polynomials
@@ -425,9 +428,10 @@ class ContactEstimator(Estimator):
         table = self._line_table(command)
         cw, g0 = table["line_cw"], table["g0"]
         if "line_dc" not in table:
+            n = table["line"].shape[2]
             table.update(
-                line_dc=np.zeros((POLY_DEGREE, len(cw), 3)),
-                line_dw=np.zeros((POLY_DEGREE, len(cw), 3)),
+                line_dc=np.zeros((POLY_DEGREE, len(cw), n)),
+                line_dw=np.zeros((POLY_DEGREE, len(cw), n)),
                 line_derived=np.zeros(len(cw), dtype=bool),
             )
         need = np.unique(index[~table["line_derived"][index]])
@@ -461,10 +465,10 @@ class ContactEstimator(Estimator):
         """Estimate contact from readings: ``X`` (n, 4) gauges and command, or (n, 3) gauges with ``command``."""
         if command is not None:
             v = check_array(X, "X", "ContactEstimator.predict")
-            v = v.reshape(-1, 3)
+            v = v.reshape(-1, len(self.model.params.geometry.gauge_positions_m))
             cmd = np.broadcast_to(np.asarray(command), (v.shape[0],)).astype(int)
         else:
-            v, cmd = _split(X)
+            v, cmd = _split(X, len(self.model.params.geometry.gauge_positions_m))
         if not hasattr(self, "tables_"):
             check_is_fitted(self, "tables_")
         n = v.shape[0]
@@ -558,7 +562,7 @@ class ContactEstimator(Estimator):
         kernel = _kernel()
 
         t = self._line_derivatives(command, index)
-        jac = np.empty((index.size, 3, 3))
+        jac = np.empty((index.size, t["line"].shape[2], 3))
         kernel.line_jacobian(index, np.asarray(total, dtype=float), t["line"], t["line_dc"], t["line_dw"], jac)
         out = np.empty((index.size, 3))
         kernel.fisher_sd(jac, self.weight_, out)
@@ -593,8 +597,8 @@ def _log_evidence(cost, curvature) -> np.ndarray:
     return out
 
 
-def _split(X) -> tuple[np.ndarray, np.ndarray]:
+def _split(X, gauges: int = 3) -> tuple[np.ndarray, np.ndarray]:
     x = check_array(X, "X", "ContactEstimator", ndim=2)
-    if x.shape[1] != 4:
-        raise ParameterError(f"X must have 3 gauge columns and the command. Got {x.shape[1]} columns.")
-    return x[:, :3], x[:, 3].astype(int)
+    if x.shape[1] != gauges + 1:
+        raise ParameterError(f"X must have {gauges} gauge columns and the command. Got {x.shape[1]} columns.")
+    return x[:, :gauges], x[:, gauges].astype(int)

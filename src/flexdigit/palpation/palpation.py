@@ -488,11 +488,12 @@ def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, est
     if "true_force_n" in record.samples:
         curve["true_force_n"] = _plateau_truth(record, protocol)[sweep]
     touching = depth > 0
-    if np.count_nonzero(touching) >= 2:
-        w = 1.0 / np.maximum(est.force_sd_n[touching], 1e-12) ** 2
-        x, y = depth[touching], force[touching]
-        slope = float(np.sum(w * x * y) / np.sum(w * x * x))
-        slope_sd = float(1.0 / math.sqrt(np.sum(w * x * x)))
+    w = 1.0 / np.maximum(est.force_sd_n[touching], 1e-12) ** 2  # 0 where the gauges cannot see the force (sd inf)
+    x, y = depth[touching], force[touching]
+    information = float(np.sum(w * x * x))
+    if np.count_nonzero(touching) >= 2 and information > 0:
+        slope = float(np.sum(w * x * y) / information)
+        slope_sd = float(1.0 / math.sqrt(information))
     else:
         slope, slope_sd = math.nan, math.inf
     return PalpationResult(protocol, placed, fit, curve, slope, slope_sd, record)

@@ -419,7 +419,7 @@ class _Samples:
             timing,
             np.array(self.ts),
             np.array(self.sps),
-            np.array(self.gauges).reshape(-1, 3) if self.gauges else np.zeros((0, 3)),
+            np.array(self.gauges).reshape(len(self.gauges), -1) if self.gauges else np.zeros((0, 3)),  # (n, G)
             np.array(self.ys),
             np.array(self.cmds, dtype=int),
             safe,

@@ -112,7 +112,8 @@ class Normaliser(Estimator):
 
 
 def features(dataset: Dataset, with_command: bool = False) -> np.ndarray:
-    """Network inputs: the three gauge voltages (V), and the servo command if asked (chapter 7 extension)."""
+    """Network inputs: the gauge voltages (V; the digit's ``G``, three on the thesis rig), and the servo command if
+    asked (chapter 7 extension)."""
     x = dataset.gauges_v
     if with_command:
         x = np.column_stack([x, dataset["command"].astype(float)])

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit._plot import new_figure
+from flexdigit.errors import ParameterError
 
 __all__ = ["TARGET_UNITS", "target_unit", "prediction_figure"]
 
@@ -24,8 +25,6 @@ TARGET_UNITS: dict[str, tuple[str, str, float]] = {
 
 def target_unit(target: str) -> tuple[str, str, float]:
     """``(what, unit, scale)`` of a target (``"position"`` -> ``("load position from the tip", "mm", 1e3)``)."""
-    from flexdigit.errors import ParameterError
-
     if target.replace("-", "_") not in TARGET_UNITS:
         raise ParameterError(
             f"The 'target' parameter of target_unit must be one of {', '.join(TARGET_UNITS)}. Got {target!r} instead."

@@ -227,6 +227,26 @@ class Protocol:
             "repetition": np.array(cols[5], dtype=np.int64),
         }
 
+    def scaled_to(self, digit_length_m: float, reference_length_m: float = 0.270) -> Protocol:
+        """This protocol on a digit ``digit_length_m`` long: every position from the tip times
+        ``digit_length_m / reference_length_m`` (the thesis digit's 0.27 m by default), the same fractions of the
+        digit (as the design study probes its digits); itself when the lengths agree.
+
+        Examples
+        --------
+        >>> p = load_protocol("thesis-6.1").scaled_to(0.135)
+        >>> p.name, p.positions_from_tip_m[1] == load_protocol("thesis-6.1").positions_from_tip_m[1] / 2
+        ('thesis-6.1 on 0.135 m', True)
+        """
+        length = check_real(digit_length_m, "digit_length_m", "Protocol.scaled_to", low=0, low_open=True)
+        ref = check_real(reference_length_m, "reference_length_m", "Protocol.scaled_to", low=0, low_open=True)
+        if length == ref:
+            return self
+        from dataclasses import replace
+
+        positions = tuple(round(p * length / ref, 9) for p in self.positions_from_tip_m)
+        return replace(self, name=f"{self.name} on {length:g} m", positions_from_tip_m=positions)
+
     def to_dict(self) -> dict:
         """Plain dict (lists for tuples), as stored in datasets and journals."""
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
