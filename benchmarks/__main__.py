@@ -25,6 +25,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_cli",
     "benchmarks.bench_control",
     "benchmarks.bench_twin",
+    "benchmarks.bench_digits",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",

@@ -344,7 +344,8 @@ class Actuator:
     serial_period_s : float
         Commands reach the board every 20 ms (5.2): the loop cannot run faster.
     equilibrium_command : int
-        The command at which the digit is straight: 8 (table 3.4 note).
+        The command at which the digit is straight: 8 (table 3.4 note). A file describing a cable pair
+        (``[cables] count = 2``) without it puts it mid-range (127), so the digit bends both ways.
     operating_commands : tuple of int
         8..43: 0 to 30 degrees of beam rotation (3.4.1).
     servo_wn_rad_s, servo_zeta : float
@@ -603,6 +604,8 @@ class RigParams:
                 converted[key] = value
             if name == "geometry":
                 converted = _derive_lengths(converted)
+            if name == "actuator":
+                converted = _derive_pair_straight(converted, data.get("cables"))
             try:
                 sections[name] = factory(**converted)
             except (ParameterError, TypeError, ValueError) as exc:
@@ -794,6 +797,29 @@ def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
     if "digit_length_m" not in out and isinstance(out["strip_length_m"], int | float):
         support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
         out["digit_length_m"] = out["strip_length_m"] + count * support
+    return out
+
+
+#: The thesis rig's operating span above its straight command, commands (8..43, 3.4.1).
+_OPERATING_SPAN = 35
+
+
+def _derive_pair_straight(actuator: dict[str, Any], cables: Any) -> dict[str, Any]:
+    """An antagonistic pair (``[cables] count = 2``) bends both ways: where ``[actuator]`` leaves them out, the
+    straight (equilibrium) command is the middle of the command range and the operating commands span the thesis's
+    35 commands either side of it (the single cable's 8, at the range's foot, leaves nothing below straight).
+    Given keys are kept (and checked as ever)."""
+    if not isinstance(cables, dict) or cables.get("count") != 2 or "equilibrium_command" in actuator:
+        return actuator
+    defaults = Actuator()
+    low, high = actuator.get("command_min", defaults.command_min), actuator.get("command_max", defaults.command_max)
+    if not isinstance(low, int) or not isinstance(high, int) or isinstance(low, bool) or isinstance(high, bool):
+        return actuator  # mistyped: the dataclass names the key
+    out = dict(actuator)
+    straight = (low + high) // 2
+    out["equilibrium_command"] = straight
+    if "operating_commands" not in out:
+        out["operating_commands"] = (max(low, straight - _OPERATING_SPAN), min(high, straight + _OPERATING_SPAN))
     return out
 
 

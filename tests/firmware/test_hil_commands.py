@@ -97,8 +97,10 @@ def test_live_session_loop_through_the_firmware_over_the_pty(firmware):
         if len(frames) == 25:
             holder["session"]._stop.set()
 
-    session = LiveSession(
-        f"hil://{elf}", clock=lambda: holder["session"].rig.clock() if "session" in holder else 0.0, sleep=sleep
+    session = LiveSession(  # paced=0: the board's simulated time, given by the loop's sleep (exactly repeatable)
+        f"hil://{elf}?paced=0",
+        clock=lambda: holder["session"].rig.clock() if "session" in holder else 0.0,
+        sleep=sleep,
     )
     holder["session"] = session
     try:
@@ -110,3 +112,43 @@ def test_live_session_loop_through_the_firmware_over_the_pty(firmware):
     assert len(session.state.samples) >= 20  # the loop read the board every period
     seqs = [f.seq for f in frames]
     assert seqs == sorted(seqs) and len(set(seqs)) >= 20  # fresh samples from the firmware each period
+
+
+@pytest.mark.slow
+def test_live_keeps_the_board_at_the_wall_clocks_time(firmware):
+    """``flexdigit live --backend hil://...``: the session opens the board paced (as it opens the twin
+    ``sim+paced``), so the page's loop, sleeping on the wall clock, sees the board run and stream."""
+    import time
+
+    elf = firmware(0.020, "float")
+    frames = []
+
+    def sleep(seconds):  # the page's own pacing (the wall clock); it stops after 15 frames
+        time.sleep(seconds)
+        frames.append(session.rig.latest.seq)
+        if len(frames) == 15:
+            session._stop.set()
+
+    session = LiveSession(f"hil://{elf}", sleep=sleep)
+    try:
+        assert session.rig.settings()["paced"] is True
+        start = session.rig.board.latest.t_us
+        session._run()
+        end = session.rig.board.latest.t_us
+    finally:
+        session.rig.close()
+    assert session.error is None
+    # 15 frames of 20 ms on the wall clock: the board ran (without pacing it would still be at its opening)
+    assert end - start >= 10 * 20_000
+    assert len(set(frames)) >= 10
+
+
+def test_a_harness_without_a_pty_is_refused_naming_the_pipe(tmp_path):
+    """A machine without ptys (no /dev/pts): one line saying so and how to run without one, no hang."""
+    elf = tmp_path / "board.elf"
+    elf.write_bytes(b"\x7fELF")
+    harness = tmp_path / "flexdigit_hil"
+    harness.write_text("#!/bin/sh\necho 'flexdigit_hil: cannot open a pty (No such device)' >&2\nexit 2\n")
+    harness.chmod(0o755)
+    with pytest.raises(OSError, match=r"no pty \(flexdigit_hil: cannot open a pty.*\?uart=pipe"):
+        open_rig(f"hil://{elf}?harness={harness}")

@@ -26,7 +26,10 @@ def register(subparsers) -> None:
     live.add_argument("--model", default=None, help="a trained position network (flexdigit train) for the contact")
     live.add_argument("--host", default="127.0.0.1", help="address to listen on (default this machine only)")
     live.add_argument(  # a TCP port number; 0 asks the system for a free one
-        "--port", type=Flag(Interval(Integral, 0, 65535)), default=8050, help="port (0: any free one; default 8050)"
+        "--port",
+        type=Flag(Interval(Integral, 0, 65535)),
+        default=None,
+        help="port (0: any free one; default 8050, with --foxglove 8765)",
     )
     live.add_argument("--allow-remote", action="store_true", help="allow a --host other machines can reach")
     live.add_argument("--record", default=None, help="record the session to this MCAP file")
@@ -36,6 +39,19 @@ def register(subparsers) -> None:
     live.add_argument("--orientation", default=None, help="mounting on hardware: vertical, horizontal, hanging")
     live.add_argument(
         "--seed", type=Flag(SEED), default=None, help="twin noise seed (default: the URL's seed=, else 0)"
+    )
+    live.add_argument(
+        "--foxglove",
+        action="store_true",
+        help="stream a tendon robot (--robot) to Foxglove's WebSocket protocol instead of serving the page",
+    )
+    live.add_argument("--robot", default=None, help="with --foxglove: a tendon robot (rao2021 or a TOML file)")
+    live.add_argument("--tension-n", default=None, help="with --foxglove: tendon tensions from t = 0, N (T1,...,Tn)")
+    live.add_argument(
+        "--duration-s",
+        type=Flag(Plausible("s", 1e-3, 3600.0, "a streamed motion: up to an hour")),
+        default=5.0,
+        help="with --foxglove: simulated (and streamed) time, s (default 5)",
     )
     parser = add_command(
         subparsers,
@@ -75,6 +91,9 @@ def _live(args: argparse.Namespace) -> CommandResult:
     from flexdigit.live.server import check_host, serve
     from flexdigit.live.session import LiveSession
 
+    if args.foxglove or args.robot is not None:
+        return _foxglove(args)
+    args.port = 8050 if args.port is None else args.port
     check_host(args.host, args.allow_remote)
     check_int(args.port, "--port", low=0, high=65535)
     session = LiveSession(
@@ -102,6 +121,33 @@ def _live(args: argparse.Namespace) -> CommandResult:
     }
     text = f"flexdigit live: {data['status']}" + (f"; recording {data['record']}" if data["record"] else "")
     return CommandResult(data=data, text=text, exit_code=0 if session.error is None else 1)
+
+
+def _foxglove(args: argparse.Namespace) -> CommandResult:
+    """``live --foxglove --robot R --tension-n T``: the robot released into the tensions, streamed as it moves."""
+    import sys
+
+    from flexdigit.cli.tdcr import _tensions
+    from flexdigit.errors import ParameterError
+    from flexdigit.live.foxglove_stream import SCENE_TOPIC, FoxgloveStream, stream_motion
+    from flexdigit.tdcr import get_robot, simulate, solve_statics
+
+    if not args.foxglove or args.robot is None:
+        raise ParameterError("--robot and --foxglove go together: a tendon robot is streamed to Foxglove only")
+    robot = get_robot(args.robot)
+    tensions = [0.0] * len(robot.tendons) if args.tension_n is None else _tensions(args.tension_n, "tension-n", robot)
+    motion = simulate(robot, solve_statics(robot, [0.0] * len(robot.tendons)), args.duration_s, tensions_n=tensions)
+    port = 8765 if args.port is None else args.port
+    with FoxgloveStream(host=args.host, port=port, allow_remote=args.allow_remote) as stream:
+        url = f"ws://{args.host}:{stream.port}"
+        print(f"streaming {robot.name!r} on {url} ({SCENE_TOPIC}); Foxglove: Open connection -> {url}", file=sys.stderr)
+        try:
+            sent = stream_motion(stream, robot, motion, tensions_n=tensions)
+        except KeyboardInterrupt:
+            sent = None
+    data = {"robot": robot.name, "url": url, "topic": SCENE_TOPIC, "scenes": sent, "converged": motion.converged}
+    text = f"{robot.name}: {sent} scenes on {url} {SCENE_TOPIC}"
+    return CommandResult(data=data, text=text, exit_code=0 if motion.converged else 1)
 
 
 def _shape(args: argparse.Namespace) -> CommandResult:

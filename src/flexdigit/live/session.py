@@ -372,7 +372,9 @@ class LiveSession:
             self.rig = open_rig(self.rig_url, calibration=self.calibration, **given)
         else:
             self.rig_url = backend
-            self.rig = open_rig(backend)
+            # the emulated board keeps pace with the page, as the twin does (sim -> sim+paced)
+            paced = {"paced": True} if parsed.scheme == "hil" and "paced" not in parsed.options else {}
+            self.rig = open_rig(backend, **paced)
         try:
             self._setup(model, record, force, rotation_map, orientation, seed)
         except BaseException:

@@ -14,6 +14,7 @@ protocol handler::
     serial:///dev/ttyUSB0?daq=stream:///dev/ttyACM0&daq.baud=115200   the servo board with the stream's gauges
     replay://run.jsonl                      a recorded run played back
     hil://firmware/build/flexdigit_board.elf?mode=host   the reference firmware on simavr, joined to the twin
+    board:///dev/ttyACM0?mode=host           the reference firmware on a real Uno (docs/board.md)
 
 The servo command (0..254, integer) is a unit of its own: :func:`clamp_command` is the one place it is rounded
 and clamped, and 255 (the Mini SSC sync byte) can never come out of it (a board whose framing allows fewer
@@ -326,6 +327,7 @@ BACKENDS: dict[str, str] = {
     "replay": "flexdigit.rig.backends.replay_backend:from_url",
     "stream": "flexdigit.rig.backends.stream_backend:from_url",
     "hil": "flexdigit.rig.backends.hil_backend:from_url",
+    "board": "flexdigit.rig.backends.board_backend:from_url",
 }
 
 _TRUE = ("1", "true", "yes", "on")

@@ -20,7 +20,7 @@ it as it opens an Uno's port (pyserial, 250000 baud, raw), so the host's bytes c
 bench; the exchange still gives the time (the harness says how many bytes each step sent; the host says how many
 it wrote), so nothing waits on the kernel's timing. ``uart=pipe`` carries the bytes in the exchange's lines.
 
-Nothing here reads the wall clock: a run repeats exactly. Two modes (``mode=``):
+Nothing here reads the wall clock (unless ``paced``, for the live page): a run repeats exactly. Two modes (``mode=``):
 
 - ``host``: the board streams the gauges and follows ``C<command>`` lines; flexdigit's loop on the host closes the
   loop through it (``flexdigit run --backend hil://...``), so the whole host stack meets the real firmware;
@@ -37,6 +37,7 @@ import math
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -44,7 +45,7 @@ import numpy as np
 
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.backends.stream_framing import LineDecoder
+from flexdigit.rig.backends.board_link import BAUD, FAULTS, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState
 from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 from flexdigit.twin.digit import ORIENTATIONS
 from flexdigit.twin.twin import Twin
@@ -64,22 +65,13 @@ __all__ = [
 HARNESS_NAME = "flexdigit_hil"
 #: The AVR's clock, Hz (an Uno's crystal).
 F_CPU_HZ = 16_000_000
-#: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
+#: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC (VOLTS_PER_COUNT: 10 bits over 5 V).
 MID_V = 2.5
-VOLTS_PER_COUNT = 5.0 / 1024.0
 #: The harness takes the pins' voltages in tenths of a millivolt (a fiftieth of an ADC step).
 VOLT_UNITS_PER_V = 10_000
-#: The board's fault codes (firmware/flexdigit_board.c).
-FAULTS = {1: "host_timeout", 2: "adc_rail", 3: "rotation_bound", 4: "command_range", 5: "controller"}
-#: Stream samples kept in :attr:`HilRig.samples` (a day at 50 Hz would be 4 million: runs here are seconds).
-MAX_KEPT_SAMPLES = 200_000
 #: How long before the board's control tick at 0.2 s the opening sends its mode line: its ~15 bytes at BYTE_US
 #: (50 us) take 0.75 ms to arrive (firmware/hil/flexdigit_hil.c).
 LEAD_S = 0.002
-#: The host sends a heartbeat line if it has said nothing for this long (the board's timeout is 0.5 s).
-HEARTBEAT_S = 0.1
-#: The board's baud rate (firmware/flexdigit_board.c: BAUD), set on the pty as on an Uno's port.
-BAUD = 250_000
 #: How long the host waits for bytes the harness said it put on the pty (wall clock): past it, the harness is gone.
 PTY_TIMEOUT_S = 5.0
 
@@ -92,6 +84,7 @@ URL_OPTIONS = (
     UrlOption("step_s", "float", low=1e-4, high=0.01, help="the AVR/twin exchange step, s"),
     UrlOption("orientation", "choice", choices=tuple(ORIENTATIONS), help="how the twin's digit lies (as sim's)"),
     UrlOption("cable", "bool", help="the twin's cable attached (as sim's)"),
+    UrlOption("paced", "bool", help="keep the emulated board at the wall clock's time (the live page)"),
     UrlOption("uart", "choice", choices=("pty", "pipe"), help="the firmware's UART: a pty the host opens, or a pipe"),
 )
 PYTHON_OPTIONS = ("twin", "operator", "calibration")
@@ -138,6 +131,9 @@ class HilRig(Rig):
     harness : path, optional
     orientation, cable :
         The twin's mounting and cable (as the ``sim`` backend's; ``flexdigit collect`` sets them from its protocol).
+    paced : bool
+        Keep the board at the wall clock's time: before each read and command (and in :meth:`wait`, after
+        sleeping) it runs up to it, as ``sim+paced`` keeps the twin (``flexdigit live`` opens it so).
     uart : {"pty", "pipe"}
         The firmware's UART: a pty the host opens as a serial port (pyserial), or carried in the exchange.
     step_s : float
@@ -149,7 +145,10 @@ class HilRig(Rig):
 
     name = "hil"
     accepts_loads = True
-    deterministic = True
+
+    @property
+    def deterministic(self) -> bool:  # simulated time: the same actions, the same readings
+        return not self.paced
 
     def __init__(
         self,
@@ -163,6 +162,7 @@ class HilRig(Rig):
         harness=None,
         step_s: float = 0.0005,
         uart: str = "pty",
+        paced: bool = False,
         orientation: str = "vertical",
         cable: bool = True,
         twin: Any = None,
@@ -187,29 +187,22 @@ class HilRig(Rig):
         self.port_path: str | None = None
         self.setpoint_deg = float(setpoint_deg)
         self._time_s = 0.0
-        super().__init__(
-            twin.params, clock=lambda: self._time_s, sleep=self._wait_alive, operator=operator or (lambda m: None)
-        )
-        self._decoder = LineDecoder()
+        self.paced = bool(paced)
+        self._wall0: float | None = None  # paced: the wall clock's reading at simulated time 0, once started
+        super().__init__(twin.params, clock=self._now, sleep=self._wait_alive, operator=operator or (lambda m: None))
         self._outbox = bytearray()
         self._last_said_s = 0.0
-        self.latest = None  # the newest stream sample
-        #: every stream sample (the ADC counts each board period used, and the command it applied), up to a limit
-        self.samples: list = []
-        #: the rotation the board's map read at rest when its loop started (it subtracts it), deg
-        self.board_tare_deg = float("nan")
-        #: ``(index into samples, mode)`` at each mode change the board announced
-        self.mode_marks: list[tuple[int, int]] = []
+        #: what the board said (its samples, faults, mode changes, tare): :class:`BoardState`
+        self.board = BoardState()
         self.board_command = float("nan")
-        self.faults: list[tuple[float, int, str]] = []
-        self.info_lines: list[str] = []
         self.pulses = 0
         self.exec_max_cycles = 0
         self.exec_cycles: list[int] = []
-        self._fault_seen = 0
         #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
         self.gauge_override: dict[int, float] = {}
         self._start_board()
+        if self.paced:  # from here on the board's time is the wall clock's (its opening ran as fast as it could)
+            self._wall0 = time.monotonic() - self._time_s
 
     def _start_board(self) -> None:
         """Start the harness running the firmware, take the board's banner and rest readings, and put it in its
@@ -251,7 +244,10 @@ class HilRig(Rig):
 
         said = self._proc.stdout.readline().split()
         if len(said) != 2 or said[0] != "T":
-            raise RigError(f"hil://{self.elf}: the harness made no pty ({self._harness_said() or 'no reply'})")
+            raise RigError(
+                f"hil://{self.elf}: the harness made no pty ({self._harness_said() or 'no reply'}); "
+                f"hil://{self.elf}?uart=pipe carries the UART without one"
+            )
         self.port_path = said[1]
         try:
             self.port = serial.Serial(self.port_path, baudrate=BAUD, timeout=PTY_TIMEOUT_S, write_timeout=PTY_TIMEOUT_S)
@@ -295,20 +291,7 @@ class HilRig(Rig):
                 a = self.params.actuator
                 self.twin.servo.pending.clear()
                 self.twin.servo.command = min(max(command, a.command_min), a.command_max)
-        for event in self._decoder.feed(uart):
-            if event.kind == "sample":
-                self.latest = event.sample
-                if len(self.samples) < MAX_KEPT_SAMPLES:
-                    self.samples.append(event.sample)
-            elif event.kind == "info":
-                self.info_lines = [*self.info_lines[-49:], event.text]
-                words = event.text.split()
-                if len(words) >= 3 and words[0] == "fault":
-                    self.faults.append((self._time_s, int(words[1]), words[2]))
-                elif len(words) == 2 and words[0] == "mode":
-                    self.mode_marks.append((len(self.samples), int(words[1])))
-                elif len(words) == 2 and words[0] == "tare":
-                    self.board_tare_deg = int(words[1]) / 1e6
+        self.board.feed(uart, self._time_s)
 
     def _uart_to_board(self, data: bytes) -> str:
         """Send ``data`` to the board's receiver; the exchange's line saying so."""
@@ -353,8 +336,25 @@ class HilRig(Rig):
             self.twin.advance(self.step_s)
             self._time_s += self.step_s
 
+    def _now(self) -> float:
+        """The rig's clock: simulated time, or (paced) the wall clock's since simulated time 0."""
+        return self._time_s if self._wall0 is None else time.monotonic() - self._wall0
+
+    def _catch_up(self) -> None:
+        """Paced: run the board (host alive) up to the wall clock's time."""
+        if self._wall0 is not None:
+            self._run_alive(self._now() - self._time_s)
+
     def _wait_alive(self, seconds: float) -> None:
-        """:meth:`wait`: time passes with the host alive (a heartbeat line every HEARTBEAT_S)."""
+        """:meth:`wait`: time passes with the host alive; paced, the wall clock's."""
+        if self._wall0 is None:
+            self._run_alive(seconds)
+        else:
+            time.sleep(seconds)
+            self._catch_up()
+
+    def _run_alive(self, seconds: float) -> None:
+        """Run the board ``seconds`` of simulated time, the host alive (a heartbeat line every HEARTBEAT_S)."""
         steps = int(round(seconds / self.step_s))
         for _ in range(steps):
             if self._time_s - self._last_said_s >= HEARTBEAT_S:
@@ -366,13 +366,19 @@ class HilRig(Rig):
         self._advance(seconds)
 
     # -- the Rig contract ------------------------------------------------------------------------------------
+    # what the board said, by the names the tests and run_on_board read
+    latest = property(lambda self: self.board.latest, doc="The newest stream sample.")
+    samples = property(lambda self: self.board.samples, doc="Every stream sample, up to a limit.")
+    faults = property(lambda self: self.board.faults, doc="``(time_s, code, name)`` of each fault reported.")
+    info_lines = property(lambda self: self.board.info_lines, doc="The board's last information lines.")
+    mode_marks = property(lambda self: self.board.mode_marks, doc="``(index into samples, mode)`` per mode change.")
+    board_tare_deg = property(lambda self: self.board.tare_deg, doc="The rotation the board's map read at rest.")
+
     def _check_faults(self) -> None:
-        if len(self.faults) > self._fault_seen:
-            t, code, name = self.faults[-1]
-            self._fault_seen = len(self.faults)
-            raise RigError(f"hil://{self.elf.name}: the board reported fault {code} ({name}) at t = {t:.3f} s")
+        self.board.raise_new_fault(f"hil://{self.elf.name}")
 
     def _read(self) -> tuple[np.ndarray, float]:
+        self._catch_up()
         if self._time_s - self._last_said_s >= HEARTBEAT_S:
             self._say("W")
         self._check_faults()
@@ -381,6 +387,7 @@ class HilRig(Rig):
         return gauges, math.nan
 
     def _send(self, command: int) -> None:
+        self._catch_up()
         self._check_faults()
         self._say(f"C{int(command)}")
 
@@ -459,6 +466,7 @@ class HilRig(Rig):
             "safe": self.safe,
             "step_s": self.step_s,
             "uart": self.uart,
+            "paced": self.paced,
             "orientation": self.twin.orientation,
             "cable": bool(self.twin.cable),
             "harness": str(self.harness),
@@ -499,11 +507,7 @@ class BoardRun:
 
 def board_period_s(rig: HilRig) -> float:
     """The control period the image was built with (its banner's ``period_us``)."""
-    for line in rig.info_lines:
-        for word in line.split():
-            if word.startswith("period_us="):
-                return int(word.split("=", 1)[1]) / 1e6
-    raise RigError(f"hil://{rig.elf.name}: the firmware's banner does not give its period")
+    return rig.board.period_s(f"hil://{rig.elf.name}")
 
 
 def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float) -> BoardRun:
