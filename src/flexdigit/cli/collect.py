@@ -88,7 +88,9 @@ def _add_dataset(subparsers) -> None:
     q.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv)")
     q.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     q.add_argument("--map", metavar="TOML", help='column map file (keys as the flags, e.g. gauge_unit = "mV")')
-    q.add_argument("--gauges", metavar="A,B,C", help="the three gauge columns, gauge 1 (nearest the clamp) first")
+    q.add_argument(
+        "--gauges", metavar="A,B,C", help="the gauge columns, one per gauge (1 to 8), gauge 1 (nearest the clamp) first"
+    )
     q.add_argument("--gauge-unit", choices=("V", "mV"), help="unit of the gauge (and pot) columns (default V)")
     q.add_argument("--load", metavar="COLUMN", help="the hung mass (0 = no load)")
     q.add_argument("--load-unit", choices=("kg", "g"), help="default kg")
@@ -106,7 +108,9 @@ def _add_dataset(subparsers) -> None:
     q.add_argument("--decimal", choices=(".", ","), help="decimal mark (default: detected)")
     q.add_argument("--name", help="the dataset's protocol name (default: imported:<file stem>)")
     q.add_argument("--orientation", choices=("horizontal", "vertical"), help="how the digit lay (default horizontal)")
-    q.add_argument("--params", metavar="FILE", help="rig parameters TOML (for the digit length)")
+    q.add_argument(
+        "--params", metavar="FILE", help="the digit's parameters TOML (its length; --gauges must name its gauges)"
+    )
     q.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
 
@@ -206,7 +210,7 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
     import numpy as np
 
     from flexdigit._io import check_output
-    from flexdigit.params import RigParams, load_params
+    from flexdigit.params import load_params
     from flexdigit.tactile.dataset import save_dataset
     from flexdigit.tactile.importer import ColumnMap, import_readings
 
@@ -220,7 +224,7 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
         )
     }  # fmt: skip
     cmap = ColumnMap.from_flags({**flags, "gauges": args.gauges}, args.map)
-    params = load_params(args.params) if args.params else RigParams()
+    params = load_params(args.params) if args.params else None  # None: the thesis's length, any gauge count
     dataset = import_readings(args.file, cmap, params=params)
     save_dataset(dataset, out, force=args.force)  # atomic, Parquet or (by the suffix) CSV
     protocol = dataset.protocol

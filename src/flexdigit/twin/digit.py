@@ -314,6 +314,8 @@ class Chain:
         lead = shortening - self.eccentricity * psi_tip
         if not self.antagonist:
             return lead, -math.inf
+        if shortening == -math.inf:  # detached (the twin's cable=False): neither cable pulls, not the second at +inf
+            return -math.inf, -math.inf
         return self.cable_pretension_m + lead, self.cable_pretension_m - lead
 
     def axial_force(self, psi, g_forces_beyond_ab, tension):
