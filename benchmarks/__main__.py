@@ -25,6 +25,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_cli",
     "benchmarks.bench_control",
     "benchmarks.bench_twin",
+    "benchmarks.bench_digits",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
@@ -36,6 +37,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_palpation",
     "benchmarks.bench_board",
     "benchmarks.bench_resources",
+    "benchmarks.bench_plots",
 )
 
 
@@ -59,7 +61,7 @@ def run_context() -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks")
-    parser.add_argument("only", nargs="*", help="run only these modules (e.g. bench_twin)")
+    parser.add_argument("only", nargs="*", help="run only these modules (e.g. bench_twin, or twin)")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--out", type=Path, help="also write the rows and the run's context as JSON to this file")
     parser.add_argument("--force", action="store_true", help="replace an existing --out file")
@@ -74,7 +76,8 @@ def main(argv: list[str] | None = None) -> int:
             return 2
     rows = []
     for name in MODULES:
-        if args.only and name.rsplit(".", 1)[-1] not in args.only:
+        short = name.rsplit(".", 1)[-1]
+        if args.only and short not in args.only and short.removeprefix("bench_") not in args.only:
             continue
         start = time.perf_counter()
         print(f"running {name} ...", file=sys.stderr, flush=True)

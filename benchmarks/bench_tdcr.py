@@ -11,8 +11,9 @@
   and which PyElastica's 40/80-element Richardson extrapolation meets to ~5e-5 of the length. Both timed here,
   PyElastica's numba compile excluded by a warm-up run. The goal (issue 26): >= 1,000x at equal tip accuracy.
 
-- Dynamics: a 40-node cantilever released from a tip load, stepped at 1 kHz: real-time factor (goal >= 100) and
-  its first bending frequency against Euler-Bernoulli.
+- Dynamics: a 40-node cantilever released from a tip load, stepped at 1 kHz: real-time factor (goal >= 100) of the
+  discrete rod and of shooting side by side, and the first bending frequency against Euler-Bernoulli; rao2021
+  pulled from slack tendons by each.
 
 Run: ``python -m benchmarks bench_tdcr`` (PyElastica is in the ``bench`` extra).
 """
@@ -23,6 +24,7 @@ import contextlib
 import io
 import math
 import time
+import warnings
 
 import numpy as np
 
@@ -232,11 +234,12 @@ def bench_pyelastica(n_elements: int = 40, final_time: float = 3.0) -> list[dict
 
 
 def bench_dynamics(duration_s: float = 1.0, dt_s: float = 1e-3) -> list[dict]:
-    """A 40-node cantilever (the rao2021 backbone, 400 mm) released from a diagonal tip load, stepped at 1 kHz:
-    the real-time factor, and its first bending frequency against Euler-Bernoulli's."""
+    """A 40-node cantilever (the rao2021 backbone, 400 mm) released from a diagonal tip load, stepped at 1 kHz,
+    by the discrete rod (the default) and by shooting, side by side: the real-time factors, and the first bending
+    frequency against Euler-Bernoulli's. Then rao2021 pulled from slack tendons (4 and 2 N at once) by each."""
     from scipy.optimize import curve_fit
 
-    from flexdigit.tdcr import Robot, Segment, simulate, solve_statics
+    from flexdigit.tdcr import ROBOTS, Robot, Segment, simulate, solve_statics
 
     rod = Robot(name="rod", segments=(Segment(0.4, 39),))  # 40 nodes with the clamp
     b = rod.backbone
@@ -244,35 +247,58 @@ def bench_dynamics(duration_s: float = 1.0, dt_s: float = 1e-3) -> list[dict]:
     w2 = w1 * (4.6940911 / 1.8751040687) ** 2
     plane = np.array([1.0, 1.0, 0.0]) / math.sqrt(2)
     bent = solve_statics(rod, [], tip_force_n=0.002 * plane)
-    simulate(rod, bent, 10 * dt_s, dt_s=dt_s)  # numba compile
-    start = time.perf_counter()
-    motion = simulate(rod, bent, duration_s, dt_s=dt_s)
-    elapsed = time.perf_counter() - start
-    x = motion.tip_positions_m @ plane
 
     def modes(t, a1, b1, f1, a2, b2, f2, decay, offset):
         second = np.exp(-decay * t) * (a2 * np.cos(f2 * t) + b2 * np.sin(f2 * t))
         return a1 * np.cos(f1 * t) + b1 * np.sin(f1 * t) + second + offset
 
-    fit, _ = curve_fit(modes, motion.t_s, x, p0=[x[0], 0, w1, 0, 0, w2, 0, 0], maxfev=20000)
-    return [
-        {
-            "name": "tdcr dynamics, 40-node cantilever at 1 kHz, real-time factor",
-            "value": motion.t_s[-1] / elapsed,
-            "unit": "x",
-            "goal": ">= 100",
-            "note": f"{duration_s:g} s in {elapsed:.2f} s, {motion.iterations.mean():.1f} Newton iterations a step; "
-            f"converged {motion.converged}",
-        },
-        {
-            "name": "tdcr dynamics, first bending frequency vs Euler-Bernoulli",
-            "value": (fit[2] / w1 - 1) * 100,
-            "unit": "%",
-            "goal": "|.| <= 0.5",
-            "note": f"{fit[2] / (2 * math.pi):.4f} Hz vs {w1 / (2 * math.pi):.4f} Hz (BDF2 at w dt = "
-            f"{w1 * dt_s:.3f}: -{(w1 * dt_s) ** 2 / 3 * 100:.3f} %)",
-        },
-    ]
+    rows = []
+    for method, span_s in (("discrete", duration_s), ("shooting", duration_s / 5)):
+        simulate(rod, bent, 10 * dt_s, dt_s=dt_s, method=method)  # numba compile
+        start = time.perf_counter()
+        motion = simulate(rod, bent, span_s, dt_s=dt_s, method=method)
+        elapsed = time.perf_counter() - start
+        rows.append(
+            {
+                "name": f"tdcr dynamics ({method}), 40-node cantilever at 1 kHz, real-time factor",
+                "value": motion.t_s[-1] / elapsed,
+                "unit": "x",
+                "goal": ">= 100",
+                "note": f"{span_s:g} s in {elapsed:.3f} s, {motion.iterations.mean():.1f} Newton iterations a "
+                f"step; converged {motion.converged}",
+            }
+        )
+        if method == "discrete":
+            x = motion.tip_positions_m @ plane
+            fit, _ = curve_fit(modes, motion.t_s, x, p0=[x[0], 0, w1, 0, 0, w2, 0, 0], maxfev=20000)
+            rows.append(
+                {
+                    "name": "tdcr dynamics (discrete), first bending frequency vs Euler-Bernoulli",
+                    "value": (fit[2] / w1 - 1) * 100,
+                    "unit": "%",
+                    "goal": "|.| <= 0.5",
+                    "note": f"{fit[2] / (2 * math.pi):.4f} Hz vs {w1 / (2 * math.pi):.4f} Hz (BDF2 at w dt = "
+                    f"{w1 * dt_s:.3f}: -{(w1 * dt_s) ** 2 / 3 * 100:.3f} %)",
+                }
+            )
+    robot = ROBOTS["rao2021"]
+    slack = solve_statics(robot, [0.0] * 6)
+    for method in ("discrete", "shooting"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            start = time.perf_counter()
+            motion = simulate(robot, slack, 0.5, dt_s=dt_s, tensions_n=RAO_TENSIONS_N, method=method)
+            elapsed = time.perf_counter() - start
+        rows.append(
+            {
+                "name": f"tdcr dynamics ({method}), rao2021 pulled from slack by 4 and 2 N: time simulated",
+                "value": float(motion.t_s[-1]),
+                "unit": "s",
+                "goal": "0.5 (every step converges)",
+                "note": f"in {elapsed:.2f} s; converged {motion.converged}",
+            }
+        )
+    return rows
 
 
 def run() -> list[dict]:

@@ -3,9 +3,10 @@
  *
  * - Timer2 interrupt at SAMPLE_HZ (1 kHz): starts the ADC on channel 0; the ADC interrupt reads gauges 1..3
  *   (ADC0..ADC2, each behind a +2.5 V level shift: 0 V of gauge = count 512) and the servo pot (ADC3), one after
- *   the other, and marks the sample set fresh.
+ *   the other; the sample counts once its gauges are in (~0.32 ms after the tick).
  * - Every FD_CTRL_PERIOD_US the main loop runs the exported controller (ctrl.c, from
- *   `flexdigit export controller`) on the gauges' rotation estimate and sets the servo pulse.
+ *   `flexdigit export controller`) on the gauges' rotation estimate of that tick and sets the servo pulse (its
+ *   width latched by Timer1 at the pulse's start, 1 ms after the tick: the update, <= 0.55 ms, is done by then).
  * - Timer1, fast PWM (mode 14), 50 Hz, 0.5 us per tick: the servo pulse on OC1A (PB1, Uno pin 9), 1..2 ms for
  *   commands 0..254 (the serial servo board's range); 2000 ticks over that range.
  * - USART0 at BAUD: samples in flexdigit's stream protocol (`$seq,t_us,g1,g2,g3,command*CRC`: the ADC counts
@@ -72,7 +73,6 @@ ISR(TIMER2_COMPA_vect)
     if (!(TCCR1B & _BV(CS11))) {
         TCCR1B |= _BV(CS11); /* the servo's 50 Hz frame starts here: pulses at 1 ms + k x 20 ms */
     }
-    ticks++;
     time_ms++;
     if (host_idle < 0xFFFFU) {
         host_idle++;
@@ -87,15 +87,21 @@ ISR(ADC_vect)
     uint8_t ch = adc_channel;
     adc_work[ch] = ADC;
     ch++;
+    if (ch == 3) {
+        /* the gauges of this tick are in: the control period may use them now (~0.32 ms after the tick), not
+           the previous tick's (1 ms older); the pot's conversion follows while the update runs */
+        uint8_t i;
+        for (i = 0; i < 3; i++) {
+            adc_last[i] = adc_work[i];
+        }
+        ticks++;
+    } else if (ch == 4) {
+        adc_last[3] = adc_work[3];
+    }
     if (ch < 4) {
         adc_channel = ch;
         ADMUX = (uint8_t)(_BV(REFS0) | ch);
         ADCSRA |= _BV(ADSC);
-    } else {
-        uint8_t i;
-        for (i = 0; i < 4; i++) {
-            adc_last[i] = adc_work[i];
-        }
     }
 }
 

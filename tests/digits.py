@@ -92,3 +92,42 @@ def write_digit(name: str, directory: Path, **changes: dict) -> Path:
     path = Path(directory) / f"{name}.toml"
     path.write_text(tomli_w.dumps(data))
     return path
+
+
+def random_digit(seed: int) -> dict:
+    """A consistent planar digit drawn with ``seed`` (1-8 sections, 1-8 gauges on the free strip, 0.15-0.5 m, any
+    bridge, one or two cables, a gear ratio 1-4): a digit nobody wrote by hand, for the general case.
+
+    Supports are 10 mm (half a support at the clamp and the tip, as :func:`flexdigit.params.digit_inconsistencies`
+    lays them out); gauges sit at distinct 0.1 mm places at least 2 mm inside a section's free strip.
+    """
+    import numpy as np
+
+    rng = np.random.default_rng([24, seed])
+    sections = int(rng.integers(1, 9))
+    length = round(float(rng.uniform(0.15, 0.5)), 3)
+    support = 0.010
+    pitch = length / sections
+    section = round(pitch - support, 6)
+    count = int(rng.integers(1, 9))
+    places: set[float] = set()
+    while len(places) < count:  # a section's free strip runs from k pitch + support / 2 to (k + 1) pitch - support / 2
+        k = int(rng.integers(0, sections))
+        x = k * pitch + support / 2 + 0.002 + float(rng.uniform(0, section - 0.004))
+        places.add(round(x, 4))
+    bridge = str(rng.choice(["quarter", "half", "full"]))
+    data: dict = {
+        "geometry": {
+            "section_count": sections,
+            "section_length_m": section,
+            "strip_length_m": round(sections * section, 6),
+            "digit_length_m": length,
+            "gauge_positions_m": sorted(places),
+        },
+        "sensors": {"bridge": bridge, "adc_channels": list(range(count))},
+    }
+    if rng.random() < 0.5:
+        data["cables"] = {"count": 2, "pretension_n": round(float(rng.uniform(1.0, 8.0)), 2)}
+    if rng.random() < 0.5:
+        data["actuator"] = {"gear_ratio": round(float(rng.uniform(1.0, 4.0)), 2)}
+    return data

@@ -253,7 +253,9 @@ def assert_trained_entries_close(entries, chapter: str) -> None:
 # load: the strip's weight and the foundation ``(0, -side k(x) max(0, side y - gap)^n)`` where ``x`` lies inside the
 # body. Boundary conditions: clamped at ``s = 0``; at the tip ``N = 0`` and ``M = T e`` (the cable anchored at the
 # tip at eccentricity ``e``, thesis 3.3); ``T = k_c max(0, dL - e theta(L))`` (E 3.11, a tension-only cable of
-# stiffness ``k_c``) with ``T`` an unknown parameter. Point loads (the supports' weights, point forces) are jumps of
+# stiffness ``k_c``) with ``T`` an unknown parameter; with an antagonistic pair of pretension stretch ``p`` (a
+# second cable at ``-e`` wound the other way, thesis 2.1) ``T = k_c max(0, p + dL - e theta) - k_c max(0, p - dL +
+# e theta)``, the net pull. Point loads (the supports' weights, point forces) are jumps of
 # ``N`` between segments.
 
 
@@ -316,6 +318,7 @@ def digit_contact_bvp(
     eccentricity_m: float = 0.0,
     cable_stiffness_n_m: float = 0.0,
     cable_shortening_m: float | None = None,
+    cable_pretension_m: float | None = None,
     tissue: dict | None = None,
     point_forces_b: dict[float, float] | None = None,
     pressures_b: list[tuple[float, float, float]] = (),
@@ -404,7 +407,7 @@ def digit_contact_bvp(
             has_cable,
             eccentricity_m,
             cable_stiffness_n_m,
-            cable_shortening_m,
+            (cable_shortening_m, cable_pretension_m),
             strip_mass_per_m,
             point_masses,
             point_forces_b,
@@ -432,7 +435,7 @@ def _solve_pieces(
     has_cable,
     e,
     kc,
-    dl,
+    dl_pre,
     mu,
     point_masses,
     point_forces_b,
@@ -448,6 +451,7 @@ def _solve_pieces(
     from ``shape``; returns the solution, its shape and the layout (which cut in which segment, each modulus)."""
     s_fine, x_fine, y_fine, th_fine = shape
     length = segments[-1].s1
+    dl, pre = dl_pre
     # pieces: (lo, hi, ei) where lo/hi are a float or ("p", index into the free arcs)
     pieces = []
     free = []  # (cut x, arc guess)
@@ -533,7 +537,13 @@ def _solve_pieces(
         tip = zb[6 * (npiece - 1) : 6 * npiece]
         jump = point_load(length)
         res += [tip[3] - jump[0], tip[4] - jump[1], tip[5] - tension * e]
-        res.append(tension - kc * max(0.0, dl - e * tip[2]) if has_cable else tension)
+        if not has_cable:
+            res.append(tension)
+        elif pre is None:  # the thesis's single cable
+            res.append(tension - kc * max(0.0, dl - e * tip[2]))
+        else:  # the net pull of an antagonistic pair
+            lead = dl - e * tip[2]
+            res.append(tension - kc * (max(0.0, pre + lead) - max(0.0, pre - lead)))
         return np.array(res)
 
     tau = np.linspace(0.0, 1.0, nodes)

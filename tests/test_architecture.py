@@ -41,6 +41,7 @@ SHARED = {
     "_validation",
     "_constants",
     "_io",
+    "_plot",
     "_json",
     "_command",
     "_lazy",
@@ -48,6 +49,7 @@ SHARED = {
     "_table",
     "_result_table",
     "_estimator",
+    "_repr",
     "errors",
     "interrupts",
     "reference",
@@ -334,3 +336,87 @@ def test_no_function_is_longer_than_80_lines():
 def test_the_function_length_counter_itself():
     source = "def f():\n    def g():\n        pass\n    return g\n\n\nclass C:\n    def m(self):\n        return 1\n"
     assert _function_lengths(ast.parse(source), "m") == {"m:f": 4, "m:f.g": 2, "m:C.m": 2}
+
+
+#: flexdigit imports allowed inside a function outside the command line (docs/conventions.md: flexdigit's own
+#: imports at the module top), as (importing module, imported module) -> why. Only heavy third-party packages
+#: behind a flexdigit module qualify: numba behind the compiled kernels, python-control and scipy behind the
+#: modules the CLI's parser reads constants from (``flexdigit --help`` <= 0.3 s, tests/cli/test_main.py).
+LAZY_IMPORTS = {
+    ("flexdigit.twin.batched", "flexdigit.twin._batched_kernel"): "numba: imported and compiled when a batch runs",
+    ("flexdigit.twin.digit", "flexdigit.twin._batched_kernel"): "numba: imported and compiled when a batch runs",
+    ("flexdigit.twin.contact", "flexdigit.twin._contact_points"): "numba: imported and compiled on the first press",
+    ("flexdigit.palpation.contact_estimation", "flexdigit.palpation._contact_kernel"): "numba, once in _kernel()",
+    ("flexdigit.tactile.netlab", "flexdigit.tactile._scg_kernel"): "numba: imported and compiled when a net trains",
+    ("flexdigit.rig.step_test", "flexdigit.control.analysis"): "python-control; cli/run.py reads a constant here",
+    ("flexdigit.rig.step_test", "flexdigit.control.design20ms"): "python-control; cli/run.py reads a constant here",
+    ("flexdigit.rig.controllers", "flexdigit.control.design20ms"): "python-control; cli/run.py reads a constant here",
+    ("flexdigit.rig.backends.stream_emulator", "flexdigit.twin.twin"): "scipy; cli/run.py reads its defaults",
+}
+
+
+def _modules_imported(node: ast.Import | ast.ImportFrom, package: str) -> set[str]:
+    """The flexdigit modules ``node`` imports (``from flexdigit.palpation import _contact_kernel`` -> the kernel)."""
+    if isinstance(node, ast.Import):
+        return {a.name for a in node.names if a.name.startswith("flexdigit")}
+    if node.level:
+        base = package.split(".")[: len(package.split(".")) - node.level + 1]
+        name = ".".join(base + ([node.module] if node.module else []))
+    else:
+        name = node.module or ""
+    if not name.startswith("flexdigit"):
+        return set()
+    submodules = {f"{name}.{a.name}" for a in node.names}
+    found = {m for m in submodules if _is_module(m)}
+    return found or {name}
+
+
+def _is_module(name: str) -> bool:
+    path = PACKAGE.parent.joinpath(*name.split("."))
+    return path.with_suffix(".py").is_file() or (path / "__init__.py").is_file()
+
+
+def _imports_in_functions(tree: ast.Module, module: str, package: str) -> set[tuple[str, str]]:
+    """(module, imported flexdigit module) for every flexdigit import inside a function of ``tree``."""
+    out = set()
+
+    def visit(node, in_function):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, (ast.Import, ast.ImportFrom)) and in_function:
+                out.update((module, target) for target in _modules_imported(child, package))
+            visit(child, in_function or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)))
+
+    visit(tree, False)
+    return out
+
+
+def _lazy_imports() -> set[tuple[str, str]]:
+    out = set()
+    for path in sorted(PACKAGE.rglob("*.py")):
+        module = _module_name(path)
+        if module.startswith("flexdigit.cli"):
+            continue  # the command line imports per command: start-up time
+        package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+        out |= _imports_in_functions(ast.parse(path.read_text(), filename=str(path)), module, package)
+    return out
+
+
+def test_flexdigit_imports_sit_at_the_module_top():
+    found = _lazy_imports()
+    unexpected = sorted(found - set(LAZY_IMPORTS))
+    assert not unexpected, f"flexdigit imports inside functions (move them to the module top): {unexpected}"
+    stale = set(LAZY_IMPORTS) - found
+    assert not stale, f"no longer imported inside a function, remove them from LAZY_IMPORTS: {stale}"
+
+
+def test_the_lazy_import_finder_itself():
+    source = (
+        "from flexdigit.params import RigParams\n"
+        "def f():\n    from flexdigit.twin import _batched_kernel\n    import numpy\n"
+        "class C:\n    def m(self):\n        if True:\n            from .beam import x\n"
+    )
+    found = _imports_in_functions(ast.parse(source), "flexdigit.models.plant", "flexdigit.models")
+    assert found == {
+        ("flexdigit.models.plant", "flexdigit.twin._batched_kernel"),
+        ("flexdigit.models.plant", "flexdigit.models.beam"),
+    }

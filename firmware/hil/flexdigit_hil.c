@@ -2,14 +2,23 @@
  * flexdigit_hil: the firmware image on simavr's ATmega328P, driven in simulated time by flexdigit's `hil://`
  * backend over this process's stdin/stdout (issue 25, hardware in the loop).
  *
- *   flexdigit_hil FIRMWARE.elf
+ *   flexdigit_hil FIRMWARE.elf [--pty]
+ *
+ * With --pty the firmware's UART is a pseudo-terminal: the first line on stdout is `T <path>`, the serial port
+ * the host opens (as it opens an Uno's /dev/ttyACM0, in raw mode); the UART's bytes then travel over it, not in
+ * the replies. Time stays the host's to give: the reply to R says how many bytes the AVR sent in that step and
+ * they are on the pty before the reply is written; `U <n>` says the host has written n bytes to the pty, which
+ * the harness reads before it answers the next request (a pty's two sides are joined asynchronously by the
+ * kernel: counting the bytes, not polling for them, keeps a run exactly repeatable).
  *
  * One request a line on stdin, one reply a line on stdout:
  *
- *   V <mv0> <mv1> <mv2> <mv3>   the voltages on ADC0..ADC3 (millivolts, 0..5000), held until the next V
- *   U <hex>                     bytes for the firmware's UART receiver (delivered one per BYTE_US of AVR time)
+ *   V <v0> <v1> <v2> <v3>       the voltages on ADC0..ADC3 (tenths of a millivolt, 0..50000), held until the next V
+ *   U <hex>                     bytes for the firmware's UART receiver (delivered one per BYTE_US of AVR time);
+ *                               with --pty, U <n>: n bytes the host wrote to the pty, for the receiver
  *   R <us>                      run the AVR for <us> microseconds of simulated time, then reply
  *       P <t_us> <pulse_cycles> <pulses> <exec_last> <exec_max> <execs> <pin_cycles> <hex of the UART's output>
+ *         (with --pty: the number of bytes the UART sent to the pty in this step instead of their hex)
  *         pulse_cycles: width of the servo pulse begun last on PB1 (OC1A), CPU cycles (16 MHz): OCR1A as latched
  *           at the pulse's start (BOTTOM), which is what the hardware does. simavr 1.6 keeps the pin's waveform
  *           at the OCR1A it had when the timer was configured, so pin_cycles (the width seen on the pin) is
@@ -19,10 +28,16 @@
  *
  * The AVR's clock is its own: nothing here depends on the wall clock, so a run repeats exactly.
  */
+#define _XOPEN_SOURCE 600 /* posix_openpt, grantpt, unlockpt, ptsname */
+#define _DEFAULT_SOURCE     /* cfmakeraw */
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <simavr/avr_adc.h>
@@ -37,6 +52,12 @@
 #define OUT_MAX 65536
 #define OCR1AL_ADDR 0x88    /* OCR1A in the ATmega328P's data space */
 #define TIMER1_PRESCALE 8UL /* the firmware's Timer1 clock: 0.5 us a tick */
+/* simavr converts an ADC input as vin x 1023 / AVcc (avr_adc.c), the ATmega328P as vin x 1024 / AVcc (datasheet
+   24.7): its AVcc is set to 5 V x 1023/1024 so the emulated ADC's steps fall where the chip's do (within 0.004 of
+   a step over the range), and the inputs are given in tenths of a millivolt (1/50 of a step), not millivolts (1/5):
+   the board's rest reading, which it tares its map on, then quantises as a real Uno's would */
+#define VOLT_UNITS_PER_V 10000L
+#define AVCC_UNITS 49951U /* 5 V x 1023 / 1024 in tenths of a millivolt */
 
 static avr_t *avr;
 static unsigned char out_buf[OUT_MAX];
@@ -46,6 +67,71 @@ static size_t in_head, in_len;
 static avr_cycle_count_t pulse_rise, exec_rise;
 static unsigned long pulse_cycles, pulse_latched, pulses, exec_last, exec_max, execs;
 static FILE *reply;
+static int pty_master = -1, pty_slave = -1;
+#define PTY_TIMEOUT_MS 5000 /* the host's bytes are on their way once it says so: 5 s is a host gone */
+
+/* A pty in raw mode (no echo, no line editing, no CR/LF translation: a serial port's bytes as they are); the
+   harness keeps its slave side open too, so the host may close and reopen it without a hang-up. */
+static const char *open_pty(void)
+{
+    struct termios raw;
+    const char *path;
+    pty_master = posix_openpt(O_RDWR | O_NOCTTY);
+    if (pty_master < 0 || grantpt(pty_master) != 0 || unlockpt(pty_master) != 0 || !(path = ptsname(pty_master))) {
+        return NULL;
+    }
+    pty_slave = open(path, O_RDWR | O_NOCTTY);
+    if (pty_slave < 0 || tcgetattr(pty_slave, &raw) != 0) {
+        return NULL;
+    }
+    cfmakeraw(&raw);
+    if (tcsetattr(pty_slave, TCSANOW, &raw) != 0) {
+        return NULL;
+    }
+    return path;
+}
+
+/* Read exactly n bytes the host wrote to the pty into the receiver's queue; 0 on success. */
+static int read_pty(size_t n)
+{
+    while (n > 0) {
+        struct pollfd fd = {pty_master, POLLIN, 0};
+        unsigned char chunk[256];
+        ssize_t got;
+        size_t want = n < sizeof(chunk) ? n : sizeof(chunk);
+        if (poll(&fd, 1, PTY_TIMEOUT_MS) != 1) {
+            return -1;
+        }
+        got = read(pty_master, chunk, want);
+        if (got <= 0) {
+            if (got < 0 && errno == EINTR) continue;
+            return -1;
+        }
+        if (in_len == 0) in_head = 0;
+        if (in_head + in_len + (size_t)got > sizeof(in_buf)) {
+            return -1;
+        }
+        memcpy(in_buf + in_head + in_len, chunk, (size_t)got);
+        in_len += (size_t)got;
+        n -= (size_t)got;
+    }
+    return 0;
+}
+
+/* Write the UART's bytes of this step to the pty; 0 on success. */
+static int write_pty(void)
+{
+    size_t done = 0;
+    while (done < out_len) {
+        ssize_t put = write(pty_master, out_buf + done, out_len - done);
+        if (put < 0) {
+            if (errno == EINTR) continue;
+            return -1;
+        }
+        done += (size_t)put;
+    }
+    return 0;
+}
 
 static void uart_out(struct avr_irq_t *irq, uint32_t value, void *param)
 {
@@ -120,8 +206,9 @@ int main(int argc, char **argv)
     char line[8192];
     int i;
     uint32_t flags = 0;
-    if (argc != 2) {
-        fprintf(stderr, "usage: flexdigit_hil FIRMWARE.elf\n");
+    int use_pty = argc == 3 && strcmp(argv[2], "--pty") == 0;
+    if (argc != 2 && !use_pty) {
+        fprintf(stderr, "usage: flexdigit_hil FIRMWARE.elf [--pty]\n");
         return 2;
     }
     /* replies on the original stdout; anything simavr prints goes to stderr */
@@ -140,7 +227,8 @@ int main(int argc, char **argv)
     avr_init(avr);
     avr_load_firmware(avr, &firmware);
     avr->frequency = FREQUENCY;
-    avr->vcc = avr->avcc = avr->aref = 5000;
+    avr->vcc = avr->aref = 5000;
+    avr->avcc = AVCC_UNITS;
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), uart_out, NULL);
     avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
     flags &= ~(uint32_t)AVR_UART_FLAG_STDIO;
@@ -148,15 +236,31 @@ int main(int argc, char **argv)
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 1), servo_pin, NULL);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 7), exec_pin, NULL);
     for (i = 0; i < 4; i++) {
-        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), 2500);
+        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), (uint32_t)(VOLT_UNITS_PER_V * 5 / 2));
+    }
+    if (use_pty) {
+        const char *path = open_pty();
+        if (!path) {
+            fprintf(stderr, "flexdigit_hil: cannot open a pty (%s)\n", strerror(errno));
+            return 2;
+        }
+        fprintf(reply, "T %s\n", path);
+        fflush(reply);
     }
     while (fgets(line, sizeof(line), stdin)) {
         if (line[0] == 'V') {
-            long mv[4] = {2500, 2500, 2500, 2500};
-            sscanf(line + 1, "%ld %ld %ld %ld", &mv[0], &mv[1], &mv[2], &mv[3]);
+            long mid = VOLT_UNITS_PER_V * 5 / 2;
+            long vin[4] = {mid, mid, mid, mid};
+            sscanf(line + 1, "%ld %ld %ld %ld", &vin[0], &vin[1], &vin[2], &vin[3]);
             for (i = 0; i < 4; i++) {
-                long v = mv[i] < 0 ? 0 : (mv[i] > 5000 ? 5000 : mv[i]);
+                long top = 5L * VOLT_UNITS_PER_V;
+                long v = vin[i] < 0 ? 0 : (vin[i] > top ? top : vin[i]);
                 avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), (uint32_t)v);
+            }
+        } else if (line[0] == 'U' && use_pty) {
+            if (read_pty(strtoul(line + 1, NULL, 10)) != 0) {
+                fprintf(stderr, "flexdigit_hil: the host's bytes did not arrive on the pty\n");
+                return 3;
             }
         } else if (line[0] == 'U') {
             char *p = line + 1;
@@ -174,8 +278,16 @@ int main(int argc, char **argv)
             fprintf(reply, "P %llu %lu %lu %lu %lu %lu %lu ",
                     (unsigned long long)(avr->cycle / (FREQUENCY / 1000000UL)), pulse_latched, pulses, exec_last,
                     exec_max, execs, pulse_cycles);
-            for (k = 0; k < out_len; k++) {
-                fprintf(reply, "%02x", out_buf[k]);
+            if (use_pty) {
+                if (write_pty() != 0) {
+                    fprintf(stderr, "flexdigit_hil: cannot write to the pty (%s)\n", strerror(errno));
+                    return 3;
+                }
+                fprintf(reply, "%lu", (unsigned long)out_len);
+            } else {
+                for (k = 0; k < out_len; k++) {
+                    fprintf(reply, "%02x", out_buf[k]);
+                }
             }
             fprintf(reply, "\n");
             fflush(reply);

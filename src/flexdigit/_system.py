@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import os
 
+from flexdigit.errors import ParameterError
+
 
 def available_cores() -> int:
     """Cores this process may run on (its CPU affinity where the OS tells, else the machine's count)."""
@@ -59,8 +61,6 @@ def worker_limit(per_worker_bytes: float) -> tuple[int, str]:
 def check_workers(workers: int, what: str, per_worker_bytes: float) -> int:
     """``workers`` if this machine can run that many worker processes (:func:`worker_limit`), else a
     :class:`~flexdigit.errors.ParameterError` saying the limit and why: refused, never silently capped."""
-    from flexdigit.errors import ParameterError  # a leaf module: flexdigit's own imports only when refusing
-
     limit, why = worker_limit(per_worker_bytes)
     if workers > limit:
         raise ParameterError(

@@ -35,6 +35,8 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import _io
+from flexdigit._io import RECORDS_LIMIT, check_input, count_lines, read_bytes, refuse_special
+from flexdigit._validation import check_plausible
 from flexdigit.errors import DataFileError
 
 __all__ = ["Table", "read_table", "DELIMITERS"]
@@ -183,8 +185,6 @@ class Table:
         """``values`` (column ``column``, row for row, in the declaration's unit; NaN: not read) if every one is
         inside the :class:`~flexdigit._validation.Plausible` range ``declared``; else a :class:`DataFileError`
         naming the file, the line, the column, the value, the range and its likely unit slip."""
-        from flexdigit._validation import check_plausible
-
         out = np.asarray(values, dtype=float)
         read = ~np.isnan(out)
         try:
@@ -228,8 +228,6 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(2, "No such file", str(p))
-    from flexdigit._io import refuse_special
-
     refuse_special(p, "a CSV-like text or .parquet file")
     if not p.is_file():
         raise DataFileError(f"{p}: not a file (a directory?); expected a CSV-like text or .parquet file")
@@ -241,8 +239,6 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
         raise DataFileError(
             f"{p}: the delimiter must be one of ',', ';', 'tab', '|', 'whitespace'. Got {delimiter!r} instead."
         )
-    from flexdigit._io import check_input, count_lines
-
     if p.suffix.lower() == ".parquet":
         check_input(p, "a Parquet table")
         return _read_parquet(p, decimal or ".")
@@ -284,8 +280,6 @@ def read_table(path: str | Path, *, delimiter: str | None = None, decimal: str |
 
 def _text_lines(p: Path) -> list[tuple[int, str]]:
     """``(line number, line)`` of the lines that are neither blank nor comments; refuses binary and empty files."""
-    from flexdigit._io import RECORDS_LIMIT, read_bytes
-
     data = read_bytes(p, "a text table", RECORDS_LIMIT)
     if data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # UTF-16 with its byte-order mark
         try:

@@ -29,6 +29,8 @@ from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
 
+from flexdigit._io import atomic_write, read_text
+from flexdigit._repr import differences, summary
 from flexdigit._validation import (
     Array,
     Interval,
@@ -342,7 +344,8 @@ class Actuator:
     serial_period_s : float
         Commands reach the board every 20 ms (5.2): the loop cannot run faster.
     equilibrium_command : int
-        The command at which the digit is straight: 8 (table 3.4 note).
+        The command at which the digit is straight: 8 (table 3.4 note). A file describing a cable pair
+        (``[cables] count = 2``) without it puts it mid-range (127), so the digit bends both ways.
     operating_commands : tuple of int
         8..43: 0 to 30 degrees of beam rotation (3.4.1).
     servo_wn_rad_s, servo_zeta : float
@@ -601,6 +604,8 @@ class RigParams:
                 converted[key] = value
             if name == "geometry":
                 converted = _derive_lengths(converted)
+            if name == "actuator":
+                converted = _derive_pair_straight(converted, data.get("cables"))
             try:
                 sections[name] = factory(**converted)
             except (ParameterError, TypeError, ValueError) as exc:
@@ -609,6 +614,9 @@ class RigParams:
             return cls(**sections)
         except ParameterError as exc:
             raise ParameterError(f"{source}: {exc}") from None
+
+    def __repr__(self) -> str:
+        return summary(self, **(differences(self, RigParams()) or {"thesis_defaults": True}))
 
 
 #: The description's limits (issue 24): a planar digit of 1-8 sections carrying 1-8 gauges. The dataclasses accept
@@ -792,6 +800,29 @@ def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+#: The thesis rig's operating span above its straight command, commands (8..43, 3.4.1).
+_OPERATING_SPAN = 35
+
+
+def _derive_pair_straight(actuator: dict[str, Any], cables: Any) -> dict[str, Any]:
+    """An antagonistic pair (``[cables] count = 2``) bends both ways: where ``[actuator]`` leaves them out, the
+    straight (equilibrium) command is the middle of the command range and the operating commands span the thesis's
+    35 commands either side of it (the single cable's 8, at the range's foot, leaves nothing below straight).
+    Given keys are kept (and checked as ever)."""
+    if not isinstance(cables, dict) or cables.get("count") != 2 or "equilibrium_command" in actuator:
+        return actuator
+    defaults = Actuator()
+    low, high = actuator.get("command_min", defaults.command_min), actuator.get("command_max", defaults.command_max)
+    if not isinstance(low, int) or not isinstance(high, int) or isinstance(low, bool) or isinstance(high, bool):
+        return actuator  # mistyped: the dataclass names the key
+    out = dict(actuator)
+    straight = (low + high) // 2
+    out["equilibrium_command"] = straight
+    if "operating_commands" not in out:
+        out["operating_commands"] = (max(low, straight - _OPERATING_SPAN), min(high, straight + _OPERATING_SPAN))
+    return out
+
+
 def load_params(path: str | Path, *, check: bool = True) -> RigParams:
     """Read rig parameters from a TOML file; missing keys keep the thesis defaults.
 
@@ -805,8 +836,6 @@ def load_params(path: str | Path, *, check: bool = True) -> RigParams:
     FileNotFoundError
         If the file does not exist.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     text = read_text(path, "a rig parameter TOML")
     try:
@@ -835,8 +864,6 @@ def save_params(params: RigParams, path: str | Path, *, force: bool = False) -> 
         If the file exists and ``force`` is false.
     """
     import tomli_w
-
-    from flexdigit._io import atomic_write
 
     path = Path(path)
     parent = path.parent

@@ -228,7 +228,7 @@ def test_calibrate_thesis_writes_the_packaged_mechanics_and_fits_the_friction_to
     def score(calibration, *, params=None):
         return 1.0 - 2.0 * calibration.cable_friction_ratio
 
-    monkeypatch.setattr("flexdigit.tactile.thesis_experiments.actuated_corr2_score", score)
+    monkeypatch.setattr("flexdigit.calibrate.twin_fit.actuated_corr2_score", score)  # where calibrate looks it up
     out = tmp_path / "thesis.toml"
     assert main(["calibrate", "--thesis", "--out", str(out), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)

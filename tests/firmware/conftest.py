@@ -20,8 +20,9 @@ FIRMWARE = Path(__file__).resolve().parents[2] / "firmware"
 TOOLS = ("avr-gcc", "avr-objcopy", "avr-size", "gcc", "make")
 
 
-def build(tmp_root: Path, period_s: float, fmt: str) -> Path:
-    """``make -C firmware`` into a fresh directory; returns the image. Fails (never skips) without the tools."""
+def build(tmp_root: Path, period_s: float, fmt: str, rotation_map: Path) -> Path:
+    """``make -C firmware`` into a fresh directory, the controller exported with ``rotation_map``; returns the
+    image. Fails (never skips) without the tools."""
     missing = [t for t in TOOLS if shutil.which(t) is None]
     assert not missing, f"the firmware tests need {missing}: run 'make avr' (apt-get install gcc-avr avr-libc ...)"
     assert Path("/usr/include/simavr/sim_avr.h").exists(), "the HIL harness needs libsimavr-dev: run 'make avr'"
@@ -36,6 +37,7 @@ def build(tmp_root: Path, period_s: float, fmt: str) -> Path:
         f"BUILD={out}",
         f"PERIOD_S={period_s}",
         f"FORMAT={fmt}",
+        f"MAP={rotation_map}",
         f"FLEXDIGIT={sys.executable} -m flexdigit.cli",
     ]
     done = subprocess.run(cmd, capture_output=True, text=True, env=env)
@@ -44,15 +46,29 @@ def build(tmp_root: Path, period_s: float, fmt: str) -> Path:
 
 
 @pytest.fixture(scope="session")
-def firmware(tmp_path_factory):
-    """``firmware(period_s, fmt)`` -> the built image (cached per session)."""
+def rotation_map(tmp_path_factory) -> Path:
+    """The gauge -> rotation map every image of the session is exported with (calibrated on the twin, seed 0, as
+    ``flexdigit export controller`` calibrates it by default), saved as ``flexdigit run --rotation-map`` reads it:
+    the host loops the board is compared with run on the same map."""
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.rotation import calibrate_rotation, save_rotation_map
+
+    path = tmp_path_factory.mktemp("map") / "rotation-map.json"
+    with open_rig("sim") as rig:
+        save_rotation_map(calibrate_rotation(rig), path)
+    return path
+
+
+@pytest.fixture(scope="session")
+def firmware(tmp_path_factory, rotation_map):
+    """``firmware(period_s, fmt)`` -> the built image (cached per session), exported with :func:`rotation_map`."""
     root = tmp_path_factory.mktemp("firmware")
     cache: dict[tuple[float, str], Path] = {}
 
     def get(period_s: float = 0.020, fmt: str = "float") -> Path:
         key = (period_s, fmt)
         if key not in cache:
-            cache[key] = build(root, period_s, fmt)
+            cache[key] = build(root, period_s, fmt, rotation_map)
         return cache[key]
 
     return get

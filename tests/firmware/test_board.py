@@ -5,11 +5,9 @@ the harness, and checked from the host through the ``hil://`` backend, in simula
 
 - each fault (host silent, a gauge at an ADC rail, the rotation past its bound, a command out of range) ends in
   the safe state within one control period and reaches the host as a fault;
-- the loop closed on the board holds a 30 deg step on the twin, compared with flexdigit's Python loop on the
-  twin (same design, same period), both loops starting at a servo frame. The two actuator paths differ: the
-  Python loop's commands go through the serial board model (latched on its 20 ms frame, then the servo's 52 Hz
-  pulse: 0-19 ms late), the board's through its own pulse 1 ms after the update. The tolerances below are what
-  that difference leaves (measured: docs/backends/hil.md); the issue's tighter ones are not met and say so there.
+- the loop closed on the board holds a 30 deg step on the twin as flexdigit's Python loop on the twin does
+  (``flexdigit run``, same design, period and rotation map, its twin's servo driven as the board drives it:
+  ``sim?servo_drive=timer``), within the issue's tolerances, over several noise seeds (see STEP_SEEDS).
 """
 
 from __future__ import annotations
@@ -20,7 +18,7 @@ import subprocess
 import pytest
 
 from flexdigit.cli import main
-from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s, board_servo_schedule, run_on_board
+from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s, run_on_board
 from flexdigit.rig.base import open_rig
 
 #: The ATmega328P's flash (less the Uno's 512-byte bootloader) and RAM, bytes.
@@ -39,112 +37,168 @@ def test_image_builds_without_warnings_and_fits(firmware, fmt):
     assert sizes.get(".data", 0) + sizes.get(".bss", 0) < RAM_BYTES - 512  # room for the stack
 
 
+@pytest.mark.slow
+def test_the_emulated_adc_converts_as_the_datasheet_says(firmware):
+    """ATmega328P datasheet 24.7: ADC = Vin x 1024 / Vref, truncated (simavr's own scales by 1023: the harness
+    corrects it). The board streams each count less 512 (its 2.5 V midpoint)."""
+    import math
+
+    import numpy as np
+
+    elf = firmware(0.020, "float")
+    rng = np.random.default_rng(7)
+    with open_rig(f"hil://{elf}", mode="host") as rig:
+        for gauge_v in rng.uniform(-2.49, 2.49, 12):
+            rig.gauge_override = {0: gauge_v, 1: -gauge_v / 2, 2: 0.0}
+            rig.wait(0.045)  # two stream lines (20 ms): the newest used the new volts
+            pins_v = [2.5 + round(v * 1e4) / 1e4 for v in (gauge_v, -gauge_v / 2, 0.0)]  # 0.1 mV on the pins
+            expected = tuple(math.floor(v * 1024 / 5.0) - 512 for v in pins_v)
+            assert rig.latest.gauges == expected, f"{gauge_v:+.4f} V"
+
+
 def _fault_time(rig, name):
     hits = [t for t, code, n in rig.faults if n == name]
     assert hits, f"no {name} fault reached the host; faults {rig.faults}, info {rig.info_lines[-5:]}"
     return hits[0]
 
 
-@pytest.mark.slow
-def test_each_fault_ends_in_the_safe_state_within_one_period(firmware):
-    elf = firmware(0.020, "float")
-    # host silent: the board relaxes 0.5 s after the last line, within one period
-    rig = open_rig(f"hil://{elf}", mode="host")
-    period = board_period_s(rig)
-    rig.write_command(30)
-    rig.wait(0.1)
-    assert rig.board_command == pytest.approx(30, abs=0.1)
-    said = rig._last_said_s
+#: How late a fault may be seen after its cause, beyond one control period, s: the board checks once a period, on
+#: the sample set of its tick (~0.32 ms after it), and the host sees the pulse and the line within an exchange step.
+FAULT_SLACK_S = 0.002
+#: The equilibrium command the board relaxes to (firmware: FD_CTRL_COMMAND_EQ), within the 0.5 us pulse step.
+RELAXED, PULSE_STEP_COMMANDS = 8, 0.07
+
+
+def _host_silent(rig):
+    """The host says nothing past the board's 0.5 s timeout; the cause is its last line, 0.5 s on."""
+    cause = rig._last_said_s + 0.5
     rig.advance_silently(0.7)
-    t = _fault_time(rig, "host_timeout")
-    assert said + 0.5 <= t <= said + 0.5 + period + 0.002
-    assert rig.board_command == pytest.approx(8, abs=0.1)  # relaxed (the equilibrium command)
-    rig.close()
-    # a gauge wire off: the ADC at a rail
-    rig = open_rig(f"hil://{elf}", mode="host")
-    rig.write_command(20)
+    return cause
+
+
+def _wire_off(rig):
+    """A gauge wire off: 0 V on ADC1, the ADC at its rail."""
+    cause = rig.clock()
+    rig.gauge_override = {1: -2.5}
     rig.wait(0.1)
-    start = rig.clock()
-    rig.gauge_override = {1: -2.5}  # 0 V on the pin
+    return cause
+
+
+def _rotation_past_bound(rig):
+    """~4.8 V on each gauge pin: below the rail, the rotation estimate far past the board's 100 deg."""
+    cause = rig.clock()
+    rig.gauge_override = {0: 2.3, 1: 2.3, 2: 2.3}
     rig.wait(0.1)
-    assert start <= _fault_time(rig, "adc_rail") <= start + period + 0.002
-    assert rig.board_command == pytest.approx(8, abs=0.1)
-    with pytest.raises(OSError, match="adc_rail"):
-        rig.read()  # the host's loop sees it as a rig fault: its safe state
-    rig.close()
-    # the rotation estimate past its bound (the loop on the board), held rather than relaxed
-    rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=20.0, safe="hold")
-    rig.wait(0.6)
-    held = rig.board_command
-    start = rig.clock()
-    rig.gauge_override = {0: 2.3, 1: 2.3, 2: 2.3}  # ~4.8 V on each pin: below the rail, far past 100 deg
-    rig.wait(0.1)
-    assert start <= _fault_time(rig, "rotation_bound") <= start + period + 0.002
-    assert rig.board_command == pytest.approx(held, abs=1e-9)  # safe=hold keeps the pulse
-    rig.close()
-    # a command out of range from the host
-    rig = open_rig(f"hil://{elf}", mode="host")
-    rig.write_command(25)
-    rig.wait(0.1)
-    start = rig.clock()
+    return cause
+
+
+def _command_out_of_range(rig):
+    """The host commands 300 (0..254 allowed)."""
+    cause = rig.clock()
     rig.send_raw("C300")
     rig.wait(0.05)
-    assert start <= _fault_time(rig, "command_range") <= start + period + 0.002
-    assert rig.board_command == pytest.approx(8, abs=0.1)
-    rig.close()
+    return cause
+
+
+FAULT_CASES = {  # fault: (how it is caused, the board's mode, its safe action)
+    "host_timeout": (_host_silent, "host", "relax"),
+    "host_timeout-board": (_host_silent, "board", "relax"),  # the loop on the board outlives a stalled host
+    "adc_rail": (_wire_off, "host", "relax"),
+    "adc_rail-board": (_wire_off, "board", "hold"),
+    "rotation_bound": (_rotation_past_bound, "board", "hold"),
+    "command_range": (_command_out_of_range, "host", "relax"),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", FAULT_CASES)
+def test_each_fault_ends_in_the_safe_state_within_one_period(firmware, case):
+    """Each fault of the issue ends in the safe state (relax: the equilibrium command; hold: the pulse as it was)
+    within one control period of its cause, and reaches the host as a fault: its next read raises RigError."""
+    fault = case.split("-")[0]
+    cause_it, mode, safe = FAULT_CASES[case]
+    elf = firmware(0.020, "float")
+    with open_rig(f"hil://{elf}", mode=mode, setpoint_deg=20.0, safe=safe) as rig:
+        period = board_period_s(rig)
+        if mode == "host":
+            rig.write_command(30)
+        rig.wait(0.6)
+        before = rig.board_command
+        assert before == pytest.approx(30, abs=PULSE_STEP_COMMANDS) if mode == "host" else before > 12  # it moved
+        cause = cause_it(rig)
+        t = _fault_time(rig, fault)
+        assert cause <= t <= cause + period + FAULT_SLACK_S
+        expected = RELAXED if safe == "relax" else before
+        assert rig.board_command == pytest.approx(expected, abs=PULSE_STEP_COMMANDS)
+        with pytest.raises(OSError, match=fault):  # RigError: the host's loop takes its safe path
+            rig.read()
     assert set(FAULTS.values()) >= {"host_timeout", "adc_rail", "rotation_bound", "command_range"}
 
 
-def _python_loop(period_s, monkeypatch):
-    """flexdigit's loop on the twin (``run --backend sim``), its servo driven as the board drives it: the command
-    in force at each 20 ms frame, from the pulse 1 ms later (:func:`board_servo_schedule`), not through the serial
-    board's 52 Hz pulse (0-19 ms later). Same design, period, map source and start at a frame: like for like."""
-    import io
-    from contextlib import redirect_stdout
-
-    from flexdigit.twin.actuator import Servo
-
-    monkeypatch.setattr(Servo, "schedule", board_servo_schedule)
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        code = main(["run", "--backend", "sim", "--setpoint-deg", "30", "--duration", "3", "--period", str(period_s),
-                     "--json"])  # fmt: skip
-    assert code == 0
-    return json.loads(buf.getvalue())["step_metrics"]["true"]
-
-
 #: The issue's criteria for the 30 deg step, board against the Python loop: settling within 5 %, overshoot within
-#: 1 point (steady-state error within 0.2 deg: STEADY_TOLERANCE_DEG).
+#: 1 point, steady-state error within 0.2 deg (STEADY_TOLERANCE_DEG).
 SETTLING_FRACTION, OVERSHOOT_POINTS = 0.05, 1.0
-#: Where they are not met (measured, board / Python reference; docs/backends/hil.md, benchmarks/bench_board.py): at
-#: 20 ms the settling, 0.75 / 0.63 s (the board's true rotation peaks 0.73 deg over, past the 2 % band, and
-#: re-enters it later). Left: the board's samples are older than the Python loop's (the firmware uses the previous
-#: 1 ms tick's conversions) and 10-bit.
-NOT_MET = {0.020: {"settling": 0.25}}
+#: The noise seeds each loop runs with. One seed decides nothing: a servo command is 1.7 deg of rotation, so one
+#: command more or less at the peak moves the overshoot by ~3 points at 2 ms (the board's 10-bit readings: 15.1 %
+#: or 17.7-18.6 % by seed; the Python loop's 16-bit ones: 15.0-16.3 %), and a peak near the 2 % band moves the
+#: settling by a whole oscillation (the Python loop alone at 20 ms: 0.59-0.75 s over seeds 0-5). So the figures
+#: compared are typical ones over STEP_SEEDS: the median settling time (a discontinuous figure, bimodal by seed)
+#: and the mean overshoot and steady-state error. Measured (board / Python, 8 seeds; benchmarks/bench_board.py):
+#: see docs/board.md.
+STEP_SEEDS = range(8)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.020, "fixed"), (0.005, "float"), (0.002, "fixed")])
-def test_loop_on_the_board_holds_a_30_deg_step(firmware, period_s, fmt, monkeypatch):
-    elf = firmware(period_s, fmt)
-    rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)
+def _board_step(elf, seed: int) -> dict:
+    """The loop on the board (hil://, noise seed ``seed``): the twin's true step figures."""
+    from flexdigit.rig.step_test import step_metrics
+
+    rig = open_rig(f"hil://{elf}?seed={seed}", mode="board", setpoint_deg=30.0)
     try:
         run = run_on_board(rig, 30.0, 3.0)
     finally:
         rig.close()
     assert run.status == "completed", run.message
-    assert run.period_s == pytest.approx(period_s)
-    assert run.time_s[0] == pytest.approx(period_s, abs=0.002)  # from the setpoint, as the host loop counts
-    from flexdigit.rig.step_test import step_metrics
+    assert run.time_s[0] == pytest.approx(run.period_s, abs=0.002)  # from the setpoint, as the host loop counts
+    return step_metrics(run.time_s, run.true_rotation_deg, 30.0, 0.0, 1.735).to_dict()
 
-    board = step_metrics(run.time_s, run.true_rotation_deg, 30.0, 0.0, 1.735).to_dict()
-    python = _python_loop(period_s, monkeypatch)
+
+def _python_step(period_s: float, seed: int, rotation_map) -> dict:
+    """flexdigit's loop on the twin (``flexdigit run``), its servo driven as the board drives it (the command in
+    force at each 20 ms frame, from the pulse 1 ms later: ``servo_drive=timer``), on the board's rotation map."""
+    import io
+    from contextlib import redirect_stdout
+
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        code = main(["run", "--backend", f"sim?seed={seed}&servo_drive=timer", "--setpoint-deg", "30",
+                     "--duration", "3", "--period", str(period_s), "--rotation-map", str(rotation_map),
+                     "--json"])  # fmt: skip
+    assert code == 0
+    return json.loads(buf.getvalue())["step_metrics"]["true"]
+
+
+def _typical(figures: list[dict]) -> dict:
+    """The typical step figures over seeds (see STEP_SEEDS)."""
+    import numpy as np
+
+    return {
+        "settling_time_s": float(np.median([f["settling_time_s"] for f in figures])),
+        "overshoot_percent": float(np.mean([f["overshoot_percent"] for f in figures])),
+        "final_error_deg": float(np.mean([f["final_error_deg"] for f in figures])),
+    }
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.005, "float"), (0.002, "fixed")])
+def test_loop_on_the_board_holds_a_30_deg_step(firmware, rotation_map, period_s, fmt):
+    """At 20 ms, 5 ms and the shortest period the board sustains (2 ms: benchmarks/bench_board.py)."""
+    elf = firmware(period_s, fmt)
+    board = _typical([_board_step(elf, seed) for seed in STEP_SEEDS])
+    python = _typical([_python_step(period_s, seed, rotation_map) for seed in STEP_SEEDS])
     assert abs(board["final_error_deg"] - python["final_error_deg"]) <= STEADY_TOLERANCE_DEG
     assert abs(board["final_error_deg"]) < 0.6  # inside the 2 % band of the setpoint
-    settling = NOT_MET.get(period_s, {}).get("settling", SETTLING_FRACTION)
-    overshoot = NOT_MET.get(period_s, {}).get("overshoot", OVERSHOOT_POINTS)
-    assert abs(board["overshoot_percent"] - python["overshoot_percent"]) <= overshoot
-    assert abs(board["settling_time_s"] - python["settling_time_s"]) <= settling * python["settling_time_s"]
+    assert abs(board["overshoot_percent"] - python["overshoot_percent"]) <= OVERSHOOT_POINTS
+    assert abs(board["settling_time_s"] - python["settling_time_s"]) <= SETTLING_FRACTION * python["settling_time_s"]
 
 
 @pytest.mark.slow
@@ -159,16 +213,6 @@ def test_run_on_board_cli_says_where_the_loop_ran(firmware, capsys):
     assert main(["run", "--on-board", "--backend", "sim", "--json"]) == 2  # only a board closes the loop
 
 
-@pytest.mark.slow
-def test_host_loop_runs_through_the_firmware(firmware, capsys):
-    elf = firmware(0.020, "float")
-    code = main(["run", "--backend", f"hil://{elf}", "--map-from", "twin", "--duration", "2", "--json"])
-    doc = json.loads(capsys.readouterr().out)
-    assert code == 0
-    assert doc["loop"] == "host"
-    assert abs(doc["true_final_rotation_deg"] - 30.0) < 1.0
-
-
 #: Share of board periods whose command may differ (by one) from the Python controller's: a float32 or fixed-point
 #: rounding can land the unrounded command on the other side of a half-integer (see tests/control/test_c_export.py).
 COMMAND_MISMATCH_FRACTION = 0.02
@@ -176,7 +220,7 @@ COMMAND_MISMATCH_FRACTION = 0.02
 
 @pytest.mark.slow
 @pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.020, "fixed"), (0.005, "float")])
-def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, period_s, fmt):
+def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, rotation_map, period_s, fmt):
     """The loop on the board, sample for sample: each period's command is what flexdigit's Python controller (float64)
     computes from the same ADC counts (the board streams the counts its update used) through the same map."""
     from types import SimpleNamespace
@@ -195,7 +239,7 @@ def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, peri
     board = samples[start:]
     assert len(board) >= 0.95 * 3.0 / period_s
     assert tare == tare  # every period streamed; the board said its tare
-    options = SimpleNamespace(no_rotation_map=False, rotation_map=None)
+    options = SimpleNamespace(no_rotation_map=False, rotation_map=rotation_map)  # the image's map
     runtime, _, rotation, _, _ = _export_design("digital20", period_s, options)
     runtime.reset(8)
     mismatches = 0

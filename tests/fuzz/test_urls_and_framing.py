@@ -19,7 +19,15 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from flexdigit.errors import ParameterError
-from flexdigit.rig.backends import daq_backend, hil_backend, replay_backend, serial_backend, sim_backend, stream_backend
+from flexdigit.rig.backends import (
+    board_backend,
+    daq_backend,
+    hil_backend,
+    replay_backend,
+    serial_backend,
+    sim_backend,
+    stream_backend,
+)
 from flexdigit.rig.backends.serial_backend import SerialRig
 from flexdigit.rig.backends.servo_board import FrameDecoder, Framing, encode_frame
 from flexdigit.rig.backends.stream_framing import SEQ_MODULUS, TIME_MODULUS_US, LineDecoder, encode_line
@@ -28,7 +36,7 @@ from flexdigit.rig.base import BACKENDS, clamp_command, rig_url_options
 from .strategies import numbers
 
 MODULES = {"sim": sim_backend, "sim+paced": sim_backend, "serial": serial_backend, "daq": daq_backend}
-MODULES.update(replay=replay_backend, stream=stream_backend, hil=hil_backend)
+MODULES.update(replay=replay_backend, stream=stream_backend, hil=hil_backend, board=board_backend)
 DECLARED = sorted({opt.name for m in MODULES.values() for opt in m.URL_OPTIONS})
 
 values = st.one_of(

@@ -9,7 +9,15 @@ import pytest
 
 from flexdigit.cli import main
 from flexdigit.errors import ParameterError, RigError
-from flexdigit.rig.backends import daq_backend, hil_backend, replay_backend, serial_backend, sim_backend, stream_backend
+from flexdigit.rig.backends import (
+    board_backend,
+    daq_backend,
+    hil_backend,
+    replay_backend,
+    serial_backend,
+    sim_backend,
+    stream_backend,
+)
 from flexdigit.rig.base import BACKENDS, UrlOption, console_operator, open_rig, parse_rig_url, rig_url_options
 
 MODULES = {
@@ -19,6 +27,7 @@ MODULES = {
     "replay": replay_backend,
     "stream": stream_backend,
     "hil": hil_backend,
+    "board": board_backend,
 }
 LOCATION = {
     "sim": "sim",
@@ -27,6 +36,7 @@ LOCATION = {
     "replay": "replay://run.jsonl",
     "stream": "stream:///dev/null",
     "hil": "hil://image.elf",
+    "board": "board:///dev/ttyACM0",
 }
 
 

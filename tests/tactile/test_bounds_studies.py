@@ -156,6 +156,7 @@ def test_twin_gauge_model_noise_is_white_when_relaxed_and_adds_friction_when_tau
 def test_twin_gauge_model_solves_a_grid_once_for_its_voltages_and_noise(monkeypatch):
     # the inversion asks for a grid's voltages, then its noise, and tares on a grid of no-load cases: one solve each,
     # of the distinct cases only, with the numbers of a solve of every case (rounding: another batch size)
+    import flexdigit.tactile.bounds as bounds
     import flexdigit.twin.twin as twin
     from flexdigit.tactile.bounds import TwinGaugeModel
     from flexdigit.twin.calibration import default_calibration
@@ -168,7 +169,7 @@ def test_twin_gauge_model_solves_a_grid_once_for_its_voltages_and_noise(monkeypa
     cases = []
     solve = twin.static_gauges_v
     monkeypatch.setattr(
-        twin,
+        bounds,  # where TwinGaugeModel looks it up
         "static_gauges_v",
         lambda mass, pos, *args, **kw: cases.append(np.size(mass)) or solve(mass, pos, *args, **kw),
     )

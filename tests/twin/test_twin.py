@@ -40,6 +40,27 @@ def test_command_takes_effect_on_the_next_serial_frame_and_pwm_pulse():
     assert twin.servo.command == 60
 
 
+@pytest.mark.parametrize(
+    "issued_s, applies_s",
+    [(0.005, 0.022), (0.020, 0.022), (0.0201, 0.042), (0.038, 0.042), (0.040, 0.042)],
+)
+def test_timer_drive_latches_at_the_frame_and_pulses_1_ms_later(issued_s, applies_s):
+    """The firmware's Timer1 drive (firmware/flexdigit_board.c): a 20 ms frame, the pulse 1 ms after its start,
+    the width latched there; on the 2 ms grid the pulse at 21 ms takes effect at 22 ms (worked by hand)."""
+    twin = Twin(seed=0, dt_s=0.002, servo_drive="timer")
+    twin.advance(issued_s)
+    twin.command(60)
+    twin.advance(applies_s - issued_s)  # up to the grid point it takes effect at: the steps before it had 8
+    assert twin.servo.command == 8
+    twin.advance(twin.dt_s)  # the step from it has 60
+    assert twin.servo.command == 60
+
+
+def test_servo_drive_is_one_of_the_two():
+    with pytest.raises(ParameterError, match="drive"):
+        Twin(servo_drive="usb")
+
+
 def test_servo_follows_the_identified_second_order_step():
     # 3.2.4: zeta 0.5629, wn 20.53 rad/s -> overshoot 100 exp(-zeta pi / sqrt(1 - zeta^2)) = 11.8 %
     twin = Twin(seed=0, cable=False, command=0)

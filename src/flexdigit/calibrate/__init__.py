@@ -19,6 +19,7 @@ __getattr__, __all__ = lazy_exports(
         "CalibrationTargets": "flexdigit.calibrate.targets",
         "CalibrationResult": "flexdigit.calibrate.twin_fit",
         "calibrate": "flexdigit.calibrate.twin_fit",
+        "residual_figure": "flexdigit.calibrate.residual_plot",
         "calibrate_to_thesis": "flexdigit.calibrate.twin_fit",
         "Chapter3TwinStudy": "flexdigit.calibrate.chapter3_twin",
         "chapter3_twin_study": "flexdigit.calibrate.chapter3_twin",

@@ -21,10 +21,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
+from flexdigit.calibrate.targets import CalibrationTargets, release_figures
+from flexdigit.identify.fit import second_order_response
+from flexdigit.identify.timeseries import series_from_table
 from flexdigit.models.beam import elastica_tip_deflection
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
+from flexdigit.twin import records
+from flexdigit.twin.calibration import default_calibration, default_calibration_source, default_fit_record
+from flexdigit.twin.digit import Chain
+from flexdigit.twin.twin import Twin
 
 __all__ = [
     "CONVERGENCE_CELLS",
@@ -66,14 +74,11 @@ class ReleaseFit:
         """The identification of ``channel``, or the first gauge identified."""
         return next((f for f in self.figures["fits"] if f.channel == channel), self.figures["fits"][0])
 
+    __repr__ = fields_summary
+
 
 def release_fit(housing: bool, *, duration_s: float, seed: int, params: RigParams | None = None) -> ReleaseFit:
     """Simulate a release test (20 mm tip deflection, 500 Hz) and fit it (see :class:`ReleaseFit`)."""
-    from flexdigit.calibrate.targets import release_figures
-    from flexdigit.identify.fit import second_order_response
-    from flexdigit.identify.timeseries import series_from_table
-    from flexdigit.twin import records
-
     key = "with_housing" if housing else "without_housing"
     res = records.release_test(housing=housing, duration_s=duration_s, sample_rate_hz=500, seed=seed, params=params)
     t = res.column("time_s")
@@ -102,13 +107,11 @@ class Table36:
     worst_all_mm: float
     table: ResultTable
 
+    __repr__ = fields_summary
+
 
 def table_3_6(params: RigParams | None = None, calibration=None) -> Table36:
     """The twin's deflections at the gauges for table 3.6's commands (see :class:`Table36`)."""
-    from flexdigit.calibrate.targets import CalibrationTargets
-    from flexdigit.twin.calibration import default_calibration
-    from flexdigit.twin.twin import Twin
-
     p = params or RigParams()
     cal = calibration or default_calibration()
     targets = CalibrationTargets.from_thesis()
@@ -139,8 +142,6 @@ def physics_checks(cells: int = 12) -> dict[str, float]:
     the circular arc; ``elastica_pl2_ei_10``: a large tip load vs the elastica; ``first_frequency``: the first
     bending frequency vs Euler-Bernoulli.
     """
-    from flexdigit.twin.digit import Chain
-
     ei, length = 0.012, 0.24
     chain = Chain.uniform(length, ei, cells, mass_per_length_kg_m=0.038)
     tip = chain.solve_static(tip_force_n=[[0, 1e-6]]).tip_m[0, 1]
@@ -160,8 +161,6 @@ def physics_checks(cells: int = 12) -> dict[str, float]:
 
 def convergence_table(cells=CONVERGENCE_CELLS) -> ResultTable:
     """Relative errors against the closed forms as the cells are refined: second order (x 1/4 per halving)."""
-    from flexdigit.twin.digit import Chain
-
     ei, length, mu = 0.012, 0.24, 0.038
     exact_f = 1.8751040687**2 * math.sqrt(ei / (mu * length**4))
     rows = []
@@ -187,8 +186,6 @@ def convergence_table(cells=CONVERGENCE_CELLS) -> ResultTable:
 
 def calibration_tables(calibration=None) -> tuple[ResultTable, ResultTable]:
     """The calibration in use: its fit residuals and its parameters (one row per element of a list parameter)."""
-    from flexdigit.twin.calibration import default_calibration, default_calibration_source, default_fit_record
-
     cal = calibration or default_calibration()
     residuals = default_fit_record().get("residuals", [])
     source = default_calibration_source()
@@ -236,16 +233,14 @@ class Chapter3TwinStudy:
     def tables(self) -> tuple[ResultTable, ...]:
         return (self.table_3_6.table, self.calibration_residuals, self.calibration_parameters, self.convergence)
 
+    __repr__ = fields_summary
+
 
 def chapter3_twin_study(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> Chapter3TwinStudy:
     """The calibrated twin against chapter 3 (see the module docstring).
 
     ``seed`` seeds the simulated experiments; ``fast`` (tests) shortens the release tests and the sweep's settling.
     """
-    from flexdigit.twin import records
-    from flexdigit.twin.calibration import default_calibration
-    from flexdigit.twin.twin import Twin
-
     p = params or RigParams()
     cal = default_calibration()
     # the bare digit's time constant is 1/(zeta wn) = 39 s: a zeta from fewer seconds is at the noise's mercy

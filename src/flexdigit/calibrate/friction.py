@@ -14,6 +14,7 @@ import numpy as np
 from flexdigit._validation import check_array, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.twin.calibration import Calibration
+from flexdigit.twin.twin import friction_sd_v, static_gauges_v
 
 __all__ = ["LEVEL_XTOL", "fit_level", "actuated_rest_sd_v", "friction_ratio_from_repeatability"]
 
@@ -56,8 +57,6 @@ def fit_level(score, target: float, bracket: tuple[float, float] = (0.0, 0.3), x
 
 def _rest_friction_sd_v(params, calibration: Calibration, command: int, cells_per_section: int) -> np.ndarray:
     """Cable-guide friction's standard deviation (V, per gauge) of the unloaded horizontal digit at ``command``."""
-    from flexdigit.twin.twin import friction_sd_v, static_gauges_v
-
     _, sol = static_gauges_v(
         [0.0],
         [0.0],

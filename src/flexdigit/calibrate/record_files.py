@@ -36,6 +36,7 @@ import numpy as np
 from flexdigit._table import Table, read_table
 from flexdigit._validation import Plausible
 from flexdigit.errors import DataFileError
+from flexdigit.identify.timeseries import TimeSeries
 from flexdigit.params import GAUGE_V
 
 #: A deflection read at a gauge: a digit at most 2 m long (Geometry) deflects less than its length.
@@ -157,8 +158,6 @@ def _time_s(table: Table, time_unit: str | None) -> np.ndarray:
 def read_release(path: str | Path, *, time_unit: str | None = None, decimal: str | None = None) -> list:
     """Every gauge channel of a release-test file as a :class:`~flexdigit.identify.timeseries.TimeSeries` (volts),
     checked as ``identify`` checks a recording (increasing, uniform time; enough samples)."""
-    from flexdigit.identify.timeseries import TimeSeries
-
     table = read_table(path, decimal=decimal)
     columns = _gauge_columns(table, _GAUGE_STEM, VOLT_UNITS, "gauge-voltage")
     if not columns:

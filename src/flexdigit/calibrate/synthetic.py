@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_write
+from flexdigit._repr import summary
 from flexdigit.params import RigParams
 from flexdigit.twin import records as ex
 from flexdigit.twin.calibration import Calibration
@@ -72,8 +74,6 @@ def write_csv(path: Path, header, rows, delimiter=",", decimal=".") -> Path:
             return text.replace(".", decimal) if decimal != "." else text
         return str(v)
 
-    from flexdigit._io import atomic_write
-
     with atomic_write(path, "w", force=True, newline="") as fh:  # synthetic records are made again at will
         writer = csv.writer(fh, delimiter=delimiter, lineterminator="\r\n")
         writer.writerow(header)
@@ -89,6 +89,9 @@ class RigRecords:
     truth: Calibration
     files: dict[str, Path]
     seeds: dict[str, int]
+
+    def __repr__(self) -> str:
+        return summary(self, files=list(self.files), seeds=list(self.seeds.values()))
 
 
 def make_records(folder: Path, truth: Calibration, seed: int = 4) -> RigRecords:

@@ -21,8 +21,13 @@ from typing import Any
 
 import numpy as np
 
-from flexdigit._validation import check_array, check_int
+from flexdigit._repr import fields_summary
+from flexdigit._validation import check_array, check_int, check_param
 from flexdigit.errors import DataFileError
+from flexdigit.identify.identification import identify
+from flexdigit.identify.timeseries import TimeSeries
+from flexdigit.reference import thesis_value
+from flexdigit.rig.rotation_reference import READING_RESOLUTION_MM
 
 __all__ = ["CalibrationTargets", "release_figures", "sweep_lines", "noise_from_record"]
 
@@ -101,8 +106,6 @@ class CalibrationTargets:
         model); elsewhere the readings scatter by up to 3 mm between consecutive commands, which no smooth
         model follows.
         """
-        from flexdigit.reference import thesis_value
-
         bare = "digit.release_tests_without_housing"
         house = "digit.release_tests_with_housing"
         conv = "conversion"
@@ -160,9 +163,6 @@ class CalibrationTargets:
         deflection_resolution_mm : float
             The deflections' reading resolution (their residual scale in the fit).
         """
-        from flexdigit._validation import check_param
-        from flexdigit.rig.rotation_reference import READING_RESOLUTION_MM
-
         resolution = check_param(deflection_resolution_mm, READING_RESOLUTION_MM, "deflection_resolution_mm", "Targets")
         kw: dict[str, Any] = {"deflection_resolution_mm": resolution}
         for name, rec in (("bare", release_bare), ("housing", release_housing)):
@@ -190,6 +190,8 @@ class CalibrationTargets:
             kw["actuated_repeatability_command"] = command
             kw["actuated_repeatability_v"] = tuple(float(v) for v in np.std(volts, axis=0, ddof=1))
         return cls(**kw)
+
+    __repr__ = fields_summary
 
 
 def _plain(value):
@@ -219,9 +221,6 @@ def release_figures(records) -> dict[str, Any]:
     DataFileError
         When no record can be identified, with ``identify``'s reason for the first.
     """
-    from flexdigit.identify.identification import identify
-    from flexdigit.identify.timeseries import TimeSeries
-
     if isinstance(records, TimeSeries) or (
         isinstance(records, tuple) and len(records) == 2 and not isinstance(records[0], TimeSeries)
     ):

@@ -26,10 +26,16 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit.calibrate.friction import actuated_rest_sd_v, fit_level, friction_ratio_from_repeatability
 from flexdigit.calibrate.targets import CalibrationTargets
 from flexdigit.errors import ParameterError
+from flexdigit.params import RigParams
+from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 from flexdigit.twin.calibration import Calibration
+from flexdigit.twin.digit import build_digit
+from flexdigit.twin.sensors import SensorChain
+from flexdigit.twin.twin import cable_shortening_m
 
 _log = logging.getLogger(__name__)
 
@@ -111,13 +117,19 @@ class CalibrationResult:
         record["residuals"] = [dict(r) for r in self.residuals]
         return record
 
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            success=self.success,
+            cost=self.cost,
+            fitted=self.fitted,
+            targets=len(self.residuals),
+            message=self.message,
+        )
+
 
 def model_response(params, calibration: Calibration, targets: CalibrationTargets, *, cells_per_section: int = 3):
     """Everything the fit compares: modal wn/zeta bare and housed, deflections and bridge ratios on the sweep."""
-    from flexdigit.twin.digit import build_digit
-    from flexdigit.twin.sensors import SensorChain
-    from flexdigit.twin.twin import cable_shortening_m
-
     out: dict[str, Any] = {}
     bare = build_digit(params, calibration, housing=False, cells_per_section=cells_per_section)
     house = build_digit(params, calibration, housing=True, cells_per_section=cells_per_section)
@@ -179,8 +191,6 @@ def calibrate(
     -------
     CalibrationResult
     """
-    from flexdigit.params import RigParams
-
     params = params or RigParams()
     cal, fitted, (cost, success, message) = _fit_mechanics(params, initial or Calibration(), targets, cells_per_section)
     r = model_response(params, cal, targets, cells_per_section=cells_per_section)
@@ -395,7 +405,6 @@ def calibrate_to_thesis(params=None, *, verbose: bool = False) -> CalibrationRes
     pipeline averaged over 8 seeded repetitions (:func:`flexdigit.tactile.thesis_experiments.actuated_corr2_score`):
     minutes of CPU. ``flexdigit calibrate --thesis`` runs it.
     """
-    from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 
     def score(calibration: Calibration) -> float:
         return actuated_corr2_score(calibration, params=params)

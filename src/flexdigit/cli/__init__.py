@@ -18,6 +18,7 @@ import argparse
 import importlib
 import json
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -41,6 +42,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "flexdigit.cli.live",
     "flexdigit.cli.study",
     "flexdigit.cli.reproduce",
+    "flexdigit.cli.listing",  # `flexdigit list`: a module named list would shadow the builtin in this package
 )
 
 
@@ -48,8 +50,78 @@ class UsageError(ValueError):
     """A command-line mistake argparse found (unknown option, a value of the wrong type)."""
 
 
+#: What argparse takes for a negative number rather than an option: also a comma list that starts with one
+#: (``--gauges-v -0.19,0.1,0.2``, ``--loads-g -5e-1,2``), which argparse alone refuses without ``=``.
+_NEGATIVE_VALUE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,\s*-?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)*$")
+
+
+#: Sphinx roles and RST literals in help text (the sub-commands' docstrings are also the docs'): shown as plain text.
+_ROLE = re.compile(r":[a-z]+(?::[a-z]+)?:`~?(?:[^`<]*<)?([^`>]+)>?`")
+_LITERAL = re.compile(r"``([^`]+)``")
+
+
+def plain_text(text: str) -> str:
+    """Help text without RST markup: ````x```` -> ``x``, ``:func:`~flexdigit.a.b``` -> ``b``.
+
+    >>> plain_text("see :func:`~flexdigit.rig.open_rig` and ``--seed``")
+    'see open_rig and --seed'
+    """
+
+    def role(match: re.Match) -> str:
+        target = match.group(1)
+        return target.rsplit(".", 1)[-1] if match.group(0).startswith(":") and "`~" in match.group(0) else target
+
+    return _LITERAL.sub(r"\1", _ROLE.sub(role, text))
+
+
+class _HelpFormatter(argparse.HelpFormatter):
+    """Descriptions and epilogs wrapped by paragraph, indented lines (examples) kept as written; each option's
+    default shown (as argparse's ArgumentDefaultsHelpFormatter, but not "None" or "False", nor where the help
+    already gives it)."""
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        import textwrap
+
+        out = []
+        for block in text.split("\n\n"):
+            lines = block.splitlines()
+            if lines and all(line.startswith(" ") or not line for line in lines):
+                out.append("\n".join(indent + line for line in lines))  # an example: as written
+            else:
+                out.append(
+                    textwrap.fill(" ".join(block.split()), width, initial_indent=indent, subsequent_indent=indent)
+                )
+        return "\n\n".join(out)
+
+    def _get_help_string(self, action) -> str:
+        text = action.help or ""
+        default = action.default
+        if (
+            "%(default)" in text
+            or "default" in text.lower()
+            or default is None
+            or default is False
+            or default == argparse.SUPPRESS
+            or not action.option_strings
+            or isinstance(action, argparse._HelpAction | argparse._VersionAction)
+        ):
+            return text
+        return f"{text} (default: %(default)s)" if text else "(default: %(default)s)"
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse, raising :class:`UsageError` instead of exiting, so that ``--json`` can report it as JSON."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("formatter_class", _HelpFormatter)
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_VALUE  # argparse's hook (a private attribute, stable since 3.2)
+
+    def format_help(self) -> str:
+        return plain_text(super().format_help())
+
+    def format_usage(self) -> str:
+        return plain_text(super().format_usage())
 
     def error(self, message: str):  # argparse's hook
         # a declared flag's refusal (flexdigit._validation.Flag) in the format of every parameter message
@@ -63,9 +135,12 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from flexdigit.cli._formats import index
+
     parser = _Parser(
         prog="flexdigit",
         description="The cable-actuated flexible digit (Ward 2004 MPhil thesis), on its digital twin or a real rig.",
+        epilog=index(),
     )
     parser.add_argument("--version", action="version", version=f"flexdigit {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks instead of one-line errors")

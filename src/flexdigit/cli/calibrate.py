@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import Flag
 
 #: A fit that misses a release test's wn or zeta by more than this many percent, or a deflection by more than this
@@ -29,8 +30,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="fit the twin to a rig's records (or to the thesis) and write a calibration TOML",
         description=__doc__.splitlines()[0],
     )
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("calibration")
     p.add_argument("--out", required=True, help="calibration TOML to write")
-    p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    p.add_argument("--force", action="store_true", help="overwrite --out (and --plot) if it exists")
+    add_plot_flag(p, "the twin's residual on every target")
     p.add_argument("--release-bare", action="append", metavar="FILE", help="release test without housing (repeatable)")
     p.add_argument("--release-housed", action="append", metavar="FILE", help="release test with housing (repeatable)")
     p.add_argument("--sweep", metavar="FILE", help="actuation sweep: command and the three gauges")
@@ -68,7 +73,10 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
     from flexdigit.twin.calibration import load_calibration, packaged_calibration, save_calibration
 
     given = _given_records(args)
+    from flexdigit._plot import check_plot
+
     out = check_output(args.out, force=args.force)  # refuse a bad destination before minutes of fitting
+    check_plot(args.plot, "calibrate", force=args.force)
     params = load_params(args.params) if args.params else RigParams()
     initial = load_calibration(args.initial) if args.initial else packaged_calibration()
     if args.thesis:
@@ -92,7 +100,15 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
         "calibration": result.calibration.to_dict(),
         "release_tests": fit.get("release_tests", {}),
     }
-    return CommandResult(data=data, text=_calibrate_text(result, data, out))
+    text = _calibrate_text(result, data, out)
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.calibrate.residual_plot import residual_figure
+
+        fig = residual_figure(result, limit=None if args.thesis else POOR_FIT, title=f"calibration {out}")
+        data["plot"] = str(save_plot(fig, args.plot, "calibrate", force=args.force))
+        text += f"\nplot -> {args.plot}"
+    return CommandResult(data=data, text=text)
 
 
 def _given_records(args: argparse.Namespace) -> dict:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.params import DIGIT_LENGTH_M
 
@@ -34,6 +35,9 @@ def _add_collect(subparsers, settle) -> None:
         _collect,
         help="run a load protocol (thesis-6.1, thesis-7.1, thesis-7.1-no-load or a TOML file) and save the dataset",
     )
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("protocol")
     p.add_argument("protocol", help="a built-in protocol name or a protocol TOML file")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
     p.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv); resumes its journal")
@@ -43,7 +47,17 @@ def _add_collect(subparsers, settle) -> None:
         default=None,
         help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)",
     )
-    p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML (sim backends; default: the thesis's)")
+    p.add_argument(
+        "--calibration",
+        metavar="FILE",
+        help="twin calibration TOML (sim backends; default: the thesis's, scaled to the --params digit)",
+    )
+    p.add_argument(
+        "--params",
+        metavar="FILE",
+        help="the digit's parameters TOML (its length and gauges; on sim, its twin). Default: the thesis rig; a "
+        "built-in protocol's positions are scaled to the digit's length",
+    )
     p.add_argument(
         "--settle", type=Flag(settle), default=None, help="settle time per setting, s, 0..3600 (default: protocol's)"
     )
@@ -67,6 +81,9 @@ def _add_dataset(subparsers) -> None:
         description="Map a foreign tactile readings file onto a flexdigit dataset. The column map comes from --map "
         "(a TOML with the keys below, without the dashes: gauges, gauge_unit, load, ...) and/or the flags, which win.",
     )
+    from flexdigit.cli._formats import epilog
+
+    q.epilog = epilog("dataset")
     q.add_argument("file", help="the readings: CSV-like text (delimiter detected) or .parquet")
     q.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv)")
     q.add_argument("--force", action="store_true", help="overwrite --out if it exists")
@@ -106,9 +123,24 @@ def _add_train(subparsers, hidden, tol) -> None:
     )
     p.add_argument("--hidden", type=Flag(hidden), default=None, help="hidden nodes (default: sweep as the thesis)")
     p.add_argument("--tol", type=Flag(tol), default=None, help="'learning gradient' (SCG tolerance; default: sweep)")
-    p.add_argument("--seed", type=Flag(SEED), default=0)
+    p.add_argument("--seed", type=Flag(SEED), default=0, help="seed of the split and the network's start")
+    p.add_argument(
+        "--epochs",
+        type=Flag(Plausible("", 1, 10_000, "epochs of 50 SCG iterations: the thesis trained 50", integer=True)),
+        default=50,
+        help="epochs of 50 SCG iterations per network (default 50, the thesis's)",
+    )
+    p.add_argument(
+        "--bayes-limit",
+        action="store_true",
+        help="position target: also the localisation Bayes limit on the same test readings, from the twin of the "
+        "--params digit (with --calibration), and the network's RMSE over it",
+    )
+    p.add_argument("--params", metavar="FILE", help="the digit's parameters TOML, for --bayes-limit (default thesis)")
+    p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML, for --bayes-limit (default derived)")
     p.add_argument("--model", default=None, help="model file to write (default: FILE stem + .<target>.model.json)")
-    p.add_argument("--force", action="store_true", help="overwrite the model file if it exists")
+    p.add_argument("--force", action="store_true", help="overwrite the model file (and --plot) if it exists")
+    add_plot_flag(p, "the held-out test readings' predicted against actual values")
 
 
 def _add_predict(subparsers) -> None:
@@ -124,6 +156,22 @@ def _add_predict(subparsers) -> None:
         default=10,
         help="readings to list in the text output",
     )
+    add_plot_flag(p, "the predicted against the actual values")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --plot file")
+
+
+def _digit_protocol(args: argparse.Namespace):
+    """The ``--params`` digit and the protocol on it: a built-in's positions scaled to the digit's length (the same
+    fractions of it), a user protocol's checked against it, before the rig opens."""
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.tactile.protocols import BUILTIN, load_protocol
+
+    params = load_params(args.params) if args.params else RigParams()
+    protocol = load_protocol(args.protocol)
+    if args.protocol in BUILTIN:
+        protocol = protocol.scaled_to(params.geometry.digit_length_m)
+    protocol.plan(params.geometry.digit_length_m)
+    return params, protocol
 
 
 def _collect(args: argparse.Namespace) -> CommandResult:
@@ -133,10 +181,10 @@ def _collect(args: argparse.Namespace) -> CommandResult:
     from flexdigit._validation import check_real
     from flexdigit.errors import ParameterError
     from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
-    from flexdigit.tactile.protocols import MAX_SETTLE_S, load_protocol
+    from flexdigit.tactile.protocols import MAX_SETTLE_S
     from flexdigit.tactile.runner import collect, journal_path, sim_options
 
-    protocol = load_protocol(args.protocol)
+    params, protocol = _digit_protocol(args)
     out = Path(args.out)
     # every option checked before the rig is opened (the runner checks them again before the first reading)
     if args.settle is not None:
@@ -145,18 +193,22 @@ def _collect(args: argparse.Namespace) -> CommandResult:
     if not (out.exists() and journal.exists()):  # both: a run stopped while tidying up, the runner finishes it
         check_output(out, force=args.force)
     resumed = journal.exists()
-    # on the twin, lie the digit as the protocol says and attach the cable only when it actuates
-    on_twin = parse_rig_url(args.backend).scheme.startswith("sim")
+    # on the twin, lie the digit as the protocol says and attach the cable only when it actuates; the firmware on
+    # the emulated board (hil://) holds a twin too, on its own 2 ms step
+    scheme = parse_rig_url(args.backend).scheme
+    on_twin = scheme.startswith("sim")
     if args.calibration and not on_twin:
         raise ParameterError(
             f"--calibration calibrates the twin: it needs a sim backend, not {args.backend!r} (a real rig is itself)"
         )
     options = sim_options(protocol, args.backend) if on_twin else {}
-    if args.calibration:
-        from flexdigit.twin.calibration import load_calibration
+    if scheme == "hil":
+        options = {k: v for k, v in sim_options(protocol, args.backend).items() if k in ("orientation", "cable")}
+    if on_twin and (args.calibration or args.params):
+        from flexdigit.twin.digit_calibration import twin_calibration
 
-        options["calibration"] = load_calibration(args.calibration)
-    rig = open_rig(args.backend, **options, **seed_option(args.backend, args.seed))
+        options["calibration"] = twin_calibration(params, args.calibration)
+    rig = open_rig(args.backend, params, **options, **seed_option(args.backend, args.seed))
     if args.record is not None:
         from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
 
@@ -181,6 +233,7 @@ def _collect(args: argparse.Namespace) -> CommandResult:
             protocol,
             rig,
             out,
+            params=params,
             rig_url=args.backend,
             settle_s=args.settle,
             progress=not args.no_progress,
@@ -257,19 +310,26 @@ def _train(args: argparse.Namespace) -> CommandResult:
     from pathlib import Path
 
     from flexdigit._io import check_output
+    from flexdigit._plot import check_plot
+    from flexdigit.errors import ParameterError
     from flexdigit.tactile.accuracy import accuracy, rmse
     from flexdigit.tactile.dataset import load_dataset
     from flexdigit.tactile.model_io import save_model
     from flexdigit.tactile.pipeline import features, run_pipeline, targets
 
+    if (args.params or args.calibration) and not args.bayes_limit:
+        raise ParameterError("--params and --calibration describe the twin of --bayes-limit: give it too")
+    if args.bayes_limit and args.target != "position":
+        raise ParameterError(f"--bayes-limit is the position's limit: it needs --target position, not {args.target}")
     model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
     check_output(model_path, force=args.force)  # before training (minutes), not after it
+    check_plot(args.plot, "train", force=args.force)
     dataset = load_dataset(args.file)
     target = args.target.replace("-", "_")
     rows, y = targets(dataset, target)
     actuated = dataset.protocol.actuated
     x = features(dataset, with_command=actuated)[rows]
-    inputs = ["gauge1_v", "gauge2_v", "gauge3_v"] + (["command"] if actuated else [])
+    inputs = [*dataset.gauge_columns] + (["command"] if actuated else [])  # the network's inputs: G gauges (+ command)
     sweep = args.hidden is None or args.tol is None
     result = run_pipeline(
         x,
@@ -279,6 +339,7 @@ def _train(args: argparse.Namespace) -> CommandResult:
         fixed_tol=args.tol,
         target=target,
         curve_hidden=None,  # the error curves are not shown: no network for them
+        epochs=args.epochs,
     )
     scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
     if target == "position":
@@ -289,6 +350,8 @@ def _train(args: argparse.Namespace) -> CommandResult:
         scores["accuracy"] = accuracy((result.y_pred >= 0.5).astype(float), result.y_test)
     else:
         scores["rmse_positions"] = rmse(result.y_pred, result.y_test)
+    if args.bayes_limit:
+        scores.update(_bayes_scores(args, dataset, rows[result.split.test], scores["rmse_mm"]))
     save_model(
         model_path,
         result.model,
@@ -300,18 +363,43 @@ def _train(args: argparse.Namespace) -> CommandResult:
     data = {"target": target, "model": str(model_path), "swept": sweep, **scores}
     lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]
     lines += [f"  {k} = {v:.6g}" if isinstance(v, float) else f"  {k} = {v}" for k, v in scores.items()]
+    if args.plot:
+        title = f"{target} network on the test readings of {dataset.protocol.name}"
+        data["plot"] = _save_prediction_plot(args, "train", result.y_test, result.y_pred, target, title)
+        lines.append(f"  plot -> {args.plot}")
     return CommandResult(data=data, text="\n".join(lines))
+
+
+def _bayes_scores(args: argparse.Namespace, dataset, test_rows, rmse_mm: float) -> dict:
+    """The localisation Bayes limit on the network's test readings (the twin of ``--params``), and the ratio."""
+    from flexdigit.errors import ParameterError
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.tactile.localisation import position_bayes_rmse_m, readings_gauge_model
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    params = load_params(args.params) if args.params else RigParams()
+    if len(params.geometry.gauge_positions_m) != dataset.gauge_count:
+        raise ParameterError(
+            f"--params {args.params or '(the thesis rig)'} has {len(params.geometry.gauge_positions_m)} gauges but "
+            f"{args.file} holds {dataset.gauge_count}: give the parameters of the digit it was collected on"
+        )
+    model = readings_gauge_model(params, twin_calibration(params, args.calibration))
+    limit_mm = 1e3 * position_bayes_rmse_m(model, dataset, test_rows, seed=args.seed)
+    return {"bayes_limit_mm": limit_mm, "rmse_over_bayes_limit": rmse_mm / limit_mm if limit_mm > 0 else float("inf")}
 
 
 def _predict(args: argparse.Namespace) -> CommandResult:
     import numpy as np
 
+    from flexdigit._plot import check_plot
     from flexdigit.errors import DataFileError
     from flexdigit.tactile.accuracy import corr2, rmse
     from flexdigit.tactile.dataset import load_dataset
     from flexdigit.tactile.model_io import load_model
     from flexdigit.tactile.pipeline import targets
+    from flexdigit.tactile.prediction_plot import target_unit
 
+    check_plot(args.plot, "predict", force=args.force)
     saved = load_model(args.model)
     dataset = load_dataset(args.file)
     missing = [c for c in saved.inputs if c not in dataset.columns]
@@ -320,11 +408,28 @@ def _predict(args: argparse.Namespace) -> CommandResult:
     rows, y = targets(dataset, saved.target)
     x = np.column_stack([dataset[c].astype(float) for c in saved.inputs])[rows]
     pred = saved.network.predict(x)
-    scores = {"corr2": corr2(pred, y), "rmse": rmse(pred, y)}
+    what, unit, scale = target_unit(saved.target)
+    scores = {"corr2": corr2(pred, y), "rmse": rmse(pred, y)}  # rmse in the target's SI unit (m, kg)
+    if unit:
+        scores[f"rmse_{unit}"] = scale * scores["rmse"]
     data = {"target": saved.target, "samples": rows.tolist(), "predicted": pred, "actual": y, "scores": scores}
-    lines = [f"{saved.target}: {len(rows)} readings, corr2 {scores['corr2']:.4f}, RMSE {scores['rmse']:.4g}"]
+    rmse_text = f"{scale * scores['rmse']:.4g} " + (unit or {"position_index": "positions"}.get(saved.target, "(0..1)"))
+    lines = [f"{saved.target}: {len(rows)} readings, corr2 {scores['corr2']:.4f}, RMSE {rmse_text}"]
     lines += [
         f"  sample {int(dataset['sample'][r])}: predicted {p:.5g}, actual {t:.5g}"
         for r, p, t in zip(rows[: args.limit], pred[: args.limit], y[: args.limit], strict=True)
     ]
+    if args.plot:
+        title = f"{saved.target} predicted by {args.model} on {args.file}"
+        data["plot"] = _save_prediction_plot(args, "predict", y, pred, saved.target, title)
+        lines.append(f"  plot -> {args.plot}")
     return CommandResult(data=data, text="\n".join(lines))
+
+
+def _save_prediction_plot(args, command: str, actual, predicted, target: str, title: str) -> str:
+    """``--plot``: predicted against actual (:func:`flexdigit.tactile.prediction_plot.prediction_figure`)."""
+    from flexdigit._plot import save_plot
+    from flexdigit.tactile.prediction_plot import prediction_figure
+
+    fig = prediction_figure(actual, predicted, target, title)
+    return str(save_plot(fig, args.plot, command, force=args.force))

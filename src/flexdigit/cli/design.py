@@ -3,6 +3,12 @@
 * ``flexdigit design hinf --filter-hz F [--plant printed|consistent] [--eps E] [--margin M]``
 * ``flexdigit design sweep --filters 0.5,5,39,50``
 * ``flexdigit design mixsyn [--bandwidth W] [--w-command C] [--w-disturbance D] [--s-peak M]``
+* ``flexdigit design 20ms [--params FILE] [--calibration FILE]``: the 20 ms discrete design (5.2-5.3)
+
+``hinf`` and ``20ms`` take ``--params FILE`` (and ``--calibration FILE``): the design is then on that digit's plant,
+built the thesis's way from its components (servo, cable, the digit's own mode from its twin, gauge chain;
+:func:`flexdigit.control.thesis_designs.digit_plant`, :func:`flexdigit.control.design20ms.digit_design_20ms`), and
+a design that does not stabilise it is refused in one line (exit 2).
 """
 
 from __future__ import annotations
@@ -10,6 +16,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
 
 # The design flags' plausible ranges (flexdigit._validation.Flag refuses the rest in one line naming the flag). The
@@ -27,7 +34,13 @@ def register(subparsers) -> None:
     )
     p = add_command(sub, "hinf", _hinf, help="the thesis's H-infinity design (4.4) for one error-filter cut-off")
     p.add_argument("--filter-hz", type=Flag(FILTER_HZ), required=True, help="cut-off of F(s) = 1/(s + 2 pi f), Hz")
-    p.add_argument("--plant", choices=("printed", "consistent"), default="printed")
+    p.add_argument(
+        "--plant",
+        choices=("printed", "consistent"),
+        default="printed",
+        help="printed: the thesis's G(s) of 3.5 as printed; consistent: its unit-correct rebuild",
+    )
+    _add_digit_flags(p)
     p.add_argument(
         "--eps",
         type=Flag(Plausible("", 0.0, 1e3, "a regularisation weight eps_u: the thesis's are near 1e-3")),
@@ -40,6 +53,7 @@ def register(subparsers) -> None:
         default=None,
         help="gamma margin (default: fitted to the thesis)",
     )
+    _plot_flags(p)
     p = add_command(sub, "sweep", _sweep, help="the filter sweep of 4.7 (additive tolerance per cut-off)")
     p.add_argument(
         "--filters", type=Flag(FILTER_HZ, many=True), default="0.5,5,39,50", help="comma-separated cut-offs in Hz"
@@ -70,9 +84,59 @@ def register(subparsers) -> None:
         help="input-disturbance weight, commands",
     )
     p.add_argument("--seed", type=Flag(SEED), default=0, help="Monte Carlo seed")
+    _plot_flags(p)
+    p = add_command(sub, "20ms", _twenty_ms, help="the 20 ms discrete design (5.2-5.3) for the thesis rig or --params")
+    p.add_argument(
+        "--period",
+        type=Flag(Plausible("s", 1e-4, 1.0, "a loop period of 0.1 ms to 1 s")),
+        default=None,
+        help="sample period, s (default the digit's serial period, 20 ms)",
+    )
+    _add_digit_flags(p)
 
 
-def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, margin=None) -> dict:
+def _add_digit_flags(p) -> None:
+    p.add_argument("--params", default=None, metavar="FILE", help="the digit's parameters TOML (default: thesis rig)")
+    p.add_argument(
+        "--calibration", default=None, metavar="FILE", help="its twin calibration TOML (default: scaled to --params)"
+    )
+    p.add_argument(
+        "--orientation",
+        choices=("vertical", "hanging", "horizontal"),
+        default="vertical",
+        help="how the digit is mounted (its mode and stability depend on it; default tip up)",
+    )
+
+
+def _digit(args):
+    """``(params, calibration)`` of ``--params`` / ``--calibration`` (None, None: the thesis rig's design)."""
+    from flexdigit.params import load_params
+    from flexdigit.twin.calibration import load_calibration
+
+    params = load_params(args.params) if args.params else None
+    calibration = load_calibration(args.calibration) if args.calibration else None
+    if calibration is not None and params is None:
+        from flexdigit.params import RigParams
+
+        params = RigParams()
+    return params, calibration
+
+
+def _plot_flags(p) -> None:
+    add_plot_flag(p, "the closed loop's step (output and command) and the Bode plot of L, S and T")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --plot file")
+
+
+def _save_plot(args, plant, controller, unit: str, title: str):
+    """``--plot``: the design's step and Bode figure (:func:`flexdigit.control.design_plot.design_figure`)."""
+    from flexdigit._plot import save_plot
+    from flexdigit.control.design_plot import design_figure
+
+    fig = design_figure(plant, controller, output_unit=unit, title=title)
+    return str(save_plot(fig, args.plot, "design", force=args.force))
+
+
+def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, margin=None, parts=None) -> dict:
     import control as ct
     import numpy as np
 
@@ -83,6 +147,8 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
     plant = build_plant(plant_variant).tf
     d = thesis_design(filter_hz, plant, eps_u=eps, margin=margin)
     K = d.controller
+    if parts is not None:  # --plot draws the plant and controller designed here
+        parts.update(plant=plant, controller=K)
     maps = loop_maps(plant, K)
     tzw, wzw = hinf_norm(maps.T_zw, "T_zw")
     tol = additive_tolerance(plant, K)
@@ -109,7 +175,21 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
 
 
 def _hinf(args: argparse.Namespace) -> CommandResult:
-    s = _design_summary(args.filter_hz, args.plant, args.eps, args.margin)
+    from flexdigit._plot import check_plot
+
+    params, calibration = _digit(args)
+    if params is not None:
+        if args.plot:
+            from flexdigit.errors import ParameterError
+
+            raise ParameterError("--plot is the thesis rig's design only; not with --params or --calibration yet")
+        return _hinf_digit(args, params, calibration)
+    check_plot(args.plot, "design", force=args.force)
+    parts: dict = {}
+    s = _design_summary(args.filter_hz, args.plant, args.eps, args.margin, parts)
+    if args.plot:
+        title = f"H-inf design, filter {args.filter_hz:g} Hz, {args.plant} plant (thesis 4.4)"
+        s["plot"] = _save_plot(args, parts["plant"], parts["controller"], "m", title)
     text = (
         f"H-inf design, F(s) = 1/(s + {2 * 3.141592653589793 * args.filter_hz:.4f}), {args.plant} plant\n"
         f"  gamma_opt {s['gamma_opt']:.6g}, central controller at {s['gamma']:.6g} (margin {s['margin']:.3g})\n"
@@ -122,6 +202,109 @@ def _hinf(args: argparse.Namespace) -> CommandResult:
         f"  T_uw step peak {s['tuw_step_peak']:.4g} commands/m; T_yw settling {s['tyw_settling_s']:.3f} s"
     )
     return CommandResult(data=s, text=text)
+
+
+def _hinf_digit(args, params, calibration) -> CommandResult:
+    """``design hinf --params``: 4.4's design on the digit's own plant (gauge-1 deflection, m per command)."""
+    import control as ct
+    import numpy as np
+
+    from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps, step_metrics
+    from flexdigit.control.thesis_designs import digit_hinf_design, sorted_poles
+
+    d, plant = digit_hinf_design(
+        args.filter_hz, params, calibration, orientation=args.orientation, eps_u=args.eps, margin=args.margin
+    )
+    K = d.controller
+    maps = loop_maps(plant.tf, K)
+    tzw, wzw = hinf_norm(maps.T_zw, "T_zw")
+    tol = additive_tolerance(plant.tf, K)
+    tf = ct.tf(K)
+    data = {
+        "params": args.params,
+        "filter_hz": args.filter_hz,
+        "plant": "digit (consistent, from its components)",
+        "plant_num": np.asarray(plant.poly.num).tolist(),
+        "plant_den": np.asarray(plant.poly.den).tolist(),
+        "plant_poles": [[float(p.real), float(p.imag)] for p in plant.poles],
+        "plant_dc_gain_m_per_command": plant.dc_gain,
+        "digit_wn_rad_s": plant.factors["E_digit_housing"].den[-1] ** 0.5,
+        "gamma_opt": d.gamma_opt,
+        "gamma": d.gamma,
+        "margin": d.margin,
+        "controller_num": np.asarray(tf.num[0][0]).tolist(),
+        "controller_den": np.asarray(tf.den[0][0]).tolist(),
+        "controller_poles": [[float(p.real), float(p.imag)] for p in sorted_poles(np.linalg.eigvals(K.A))],
+        "closed_loop_stable": True,
+        "tzw_peak_db": 20 * np.log10(tzw),
+        "tzw_peak_rad_s": wzw,
+        "tpq_peak_db": tol["tpq_db"],
+        "additive_tolerance_m_per_command": tol["tolerance"],
+        "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
+        "tyw_settling_s": step_metrics(maps.T_yw, t_final=3.0)["settling_time_s"],
+        "thesis_columns": "not applicable (the thesis printed its own rig's designs only)",
+    }
+    text = (
+        f"H-inf design on {args.params}: F(s) = 1/(s + {2 * 3.141592653589793 * args.filter_hz:.4f}), the digit's "
+        f"plant from its components (gauge-1 deflection, {plant.dc_gain * 1e3:.4g} mm per command; E(s) wn "
+        f"{data['digit_wn_rad_s']:.4g} rad/s from its twin)\n"
+        f"  gamma_opt {d.gamma_opt:.6g}, central controller at {d.gamma:.6g} (margin {d.margin:.3g}); closed loop "
+        f"stable\n"
+        f"  ||T_zw|| {data['tzw_peak_db']:.4f} dB at {wzw:.3f} rad/s; ||T_pq|| {tol['tpq_db']:.2f} dB; additive "
+        f"tolerance {tol['tolerance']:.4g} m/command ({tol['tolerance_relative_percent']:.3g} % of |G(0)|)\n"
+        f"  T_yw settling {data['tyw_settling_s']:.3f} s; thesis columns not applicable"
+    )
+    return CommandResult(data=data, text=text)
+
+
+def _twenty_ms(args: argparse.Namespace) -> CommandResult:
+    """``design 20ms``: the discrete design the loop runs (``flexdigit run --controller digital20``)."""
+    import dataclasses
+
+    import control as ct
+    import numpy as np
+
+    from flexdigit.control.analysis import step_figures
+    from flexdigit.control.design20ms import closed_loop, digit_design_20ms, digit_first_mode
+    from flexdigit.params import RigParams
+
+    params, calibration = _digit(args)
+    params = params or RigParams()
+    thesis = params == RigParams()
+    d = digit_design_20ms(params, period_s=args.period, calibration=calibration, orientation=args.orientation)
+    mode = None if thesis else digit_first_mode(params, calibration, orientation=args.orientation)
+    loop = closed_loop(d.plant_d, d.controller)
+    t = np.arange(0.0, 3.0 + d.period_s / 2, d.period_s)
+    response = ct.forced_response(loop, t, np.full(t.size, 30.0))
+    figures = step_figures(response.time, np.asarray(response.outputs).reshape(-1), target=30.0)
+    radius = float(np.max(np.abs(d.closed_loop_poles)))
+    data = {
+        "params": args.params,
+        "period_s": d.period_s,
+        "delay_samples": d.delay_samples,
+        "deg_per_command": d.deg_per_command,
+        "digit_mode": None if mode is None else {"wn_rad_s": mode[0], "zeta": mode[1]},
+        "cables": params.cables.count,
+        "weights": d.weights.__dict__,
+        "closed_loop_pole_radius": radius,
+        "stable": radius < 1.0,
+        "linear_step_30deg": dataclasses.asdict(figures),
+        "dither": not thesis,
+    }
+    model = (
+        "servo x rotation per command (5.3)"
+        if mode is None
+        else f"servo x rotation per command x the digit's mode ({mode[0]:.3g} rad/s, zeta {mode[1]:.3g}, cable(s) "
+        f"taut, from its twin {args.orientation})"
+    )
+    text = (
+        f"20 ms design{' on ' + args.params if args.params else ''}: {model}; {d.deg_per_command:.4g} deg a command, "
+        f"{d.delay_samples} sample(s) of delay, period {d.period_s * 1000:g} ms\n"
+        f"  nominal loop poles inside |z| <= {radius:.4f} (stable); linear 30 deg step: settling "
+        f"{figures.settling_time_s:.3f} s, overshoot {figures.overshoot_percent:.2f} %\n"
+        f"  the loop on the twin: flexdigit run{' --params ' + args.params if args.params else ''} --setpoint-deg 30"
+    )
+    return CommandResult(data=data, text=text)
 
 
 def _sweep(args: argparse.Namespace) -> CommandResult:
@@ -154,9 +337,11 @@ def _mixsyn(args: argparse.Namespace) -> CommandResult:
 
     import numpy as np
 
+    from flexdigit._plot import check_plot
     from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixsyn
     from flexdigit.models.plant import build_plant
 
+    check_plot(args.plot, "design", force=args.force)
     overrides = {
         k: v
         for k, v in {
@@ -178,6 +363,9 @@ def _mixsyn(args: argparse.Namespace) -> CommandResult:
         "controller_den": np.asarray(d.controller.den[0][0]).tolist(),
         "requirements": req,
     }
+    if args.plot:
+        title = f"mixed-sensitivity design, consistent plant (beam rotation), order {d.order}"
+        data["plot"] = _save_plot(args, plant.tf, d.controller, "rad", title)
     if not req.get("stable"):
         return CommandResult(data=data, text="mixsyn: the nominal closed loop is unstable", exit_code=1)
     mc = req["monte_carlo"]

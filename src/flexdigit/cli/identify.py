@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import Flag, Plausible
 
 
@@ -70,8 +71,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--force",
         action="store_true",
         help="print the fit even when the record cannot be identified with confidence (the reasons are printed "
-        "as warnings, exit status 0)",
+        "as warnings, exit status 0); also overwrite an existing --plot file",
     )
+    add_plot_flag(parser, "the fitted model over the record and its residual")
     parser.add_argument(
         "--allow-overdamped",
         action="store_true",
@@ -83,9 +85,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _identify(args: argparse.Namespace):
     from flexdigit._command import CommandResult
+    from flexdigit._plot import check_plot, save_plot
+    from flexdigit.identify.fit_plot import fit_figure
     from flexdigit.identify.identification import identify
     from flexdigit.identify.timeseries import read_timeseries
 
+    check_plot(args.plot, "identify", force=args.force)
     series = read_timeseries(args.file, args.channel, time_unit=args.time_unit)
     result = identify(
         series,
@@ -124,6 +129,9 @@ def _identify(args: argparse.Namespace):
     ]
     lines += _quality_lines(result, unit)
     lines += [f"  warning: {w}" for w in result.warnings]
+    if args.plot:
+        data["plot"] = str(save_plot(fit_figure(series, result), args.plot, "identify", force=args.force))
+        lines.append(f"  plot -> {args.plot}")
     return CommandResult(data=data, text="\n".join(lines))
 
 

@@ -10,6 +10,7 @@ import argparse
 from numbers import Integral
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Interval, Plausible
 from flexdigit.params import SERVO_COMMAND
 
@@ -25,7 +26,10 @@ def register(subparsers) -> None:
     live.add_argument("--model", default=None, help="a trained position network (flexdigit train) for the contact")
     live.add_argument("--host", default="127.0.0.1", help="address to listen on (default this machine only)")
     live.add_argument(  # a TCP port number; 0 asks the system for a free one
-        "--port", type=Flag(Interval(Integral, 0, 65535)), default=8050, help="port (0: any free one; default 8050)"
+        "--port",
+        type=Flag(Interval(Integral, 0, 65535)),
+        default=None,
+        help="port (0: any free one; default 8050, with --foxglove 8765)",
     )
     live.add_argument("--allow-remote", action="store_true", help="allow a --host other machines can reach")
     live.add_argument("--record", default=None, help="record the session to this MCAP file")
@@ -36,13 +40,34 @@ def register(subparsers) -> None:
     live.add_argument(
         "--seed", type=Flag(SEED), default=None, help="twin noise seed (default: the URL's seed=, else 0)"
     )
+    live.add_argument(
+        "--foxglove",
+        action="store_true",
+        help="stream a tendon robot (--robot) to Foxglove's WebSocket protocol instead of serving the page",
+    )
+    live.add_argument("--robot", default=None, help="with --foxglove: a tendon robot (rao2021 or a TOML file)")
+    live.add_argument("--tension-n", default=None, help="with --foxglove: tendon tensions from t = 0, N (T1,...,Tn)")
+    live.add_argument(
+        "--duration-s",
+        type=Flag(Plausible("s", 1e-3, 3600.0, "a streamed motion: up to an hour")),
+        default=5.0,
+        help="with --foxglove: simulated (and streamed) time, s (default 5)",
+    )
     parser = add_command(
         subparsers,
         "shape",
         _shape,
-        help="the digit's centre line (and a load) from the three gauge voltages, or the estimator's accuracy",
+        help="the digit's centre line (and a load) from its gauge voltages, or the estimator's accuracy",
     )
-    parser.add_argument("--gauges-v", default=None, help="the three gauge voltages, V, comma-separated (base first)")
+    parser.add_argument(
+        "--gauges-v",
+        default=None,
+        help="the digit's gauge voltages, V, comma-separated (base first; 3 on the thesis's)",
+    )
+    parser.add_argument("--params", metavar="FILE", help="the digit's parameters TOML (default: the thesis rig)")
+    parser.add_argument(
+        "--calibration", metavar="FILE", help="its calibration TOML (default: the thesis's, scaled to the digit)"
+    )
     parser.add_argument(
         "--command", type=Flag(SERVO_COMMAND), default=None, help="servo command in force (0..254); omit if unknown"
     )
@@ -57,6 +82,8 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--accuracy", action="store_true", help="score the estimator against the twin instead")
     parser.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed of --accuracy")
+    add_plot_flag(parser, "the estimated centre line with its 2 sd band, the tip and the load")
+    parser.add_argument("--force", action="store_true", help="overwrite an existing --plot file")
 
 
 def _live(args: argparse.Namespace) -> CommandResult:
@@ -64,6 +91,9 @@ def _live(args: argparse.Namespace) -> CommandResult:
     from flexdigit.live.server import check_host, serve
     from flexdigit.live.session import LiveSession
 
+    if args.foxglove or args.robot is not None:
+        return _foxglove(args)
+    args.port = 8050 if args.port is None else args.port
     check_host(args.host, args.allow_remote)
     check_int(args.port, "--port", low=0, high=65535)
     session = LiveSession(
@@ -93,23 +123,68 @@ def _live(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=data, text=text, exit_code=0 if session.error is None else 1)
 
 
-def _shape(args: argparse.Namespace) -> CommandResult:
-    from flexdigit.errors import ParameterError
+def _foxglove(args: argparse.Namespace) -> CommandResult:
+    """``live --foxglove --robot R --tension-n T``: the robot released into the tensions, streamed as it moves."""
+    import sys
 
+    from flexdigit.cli.tdcr import _tensions
+    from flexdigit.errors import ParameterError
+    from flexdigit.live.foxglove_stream import SCENE_TOPIC, FoxgloveStream, stream_motion
+    from flexdigit.tdcr import get_robot, simulate, solve_statics
+
+    if not args.foxglove or args.robot is None:
+        raise ParameterError("--robot and --foxglove go together: a tendon robot is streamed to Foxglove only")
+    robot = get_robot(args.robot)
+    tensions = [0.0] * len(robot.tendons) if args.tension_n is None else _tensions(args.tension_n, "tension-n", robot)
+    motion = simulate(robot, solve_statics(robot, [0.0] * len(robot.tendons)), args.duration_s, tensions_n=tensions)
+    port = 8765 if args.port is None else args.port
+    with FoxgloveStream(host=args.host, port=port, allow_remote=args.allow_remote) as stream:
+        url = f"ws://{args.host}:{stream.port}"
+        print(f"streaming {robot.name!r} on {url} ({SCENE_TOPIC}); Foxglove: Open connection -> {url}", file=sys.stderr)
+        try:
+            sent = stream_motion(stream, robot, motion, tensions_n=tensions)
+        except KeyboardInterrupt:
+            sent = None
+    data = {"robot": robot.name, "url": url, "topic": SCENE_TOPIC, "scenes": sent, "converged": motion.converged}
+    text = f"{robot.name}: {sent} scenes on {url} {SCENE_TOPIC}"
+    return CommandResult(data=data, text=text, exit_code=0 if motion.converged else 1)
+
+
+def _shape(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._plot import check_plot
+    from flexdigit.errors import ParameterError
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    params = load_params(args.params) if args.params else RigParams()
+    calibration = twin_calibration(params, args.calibration)
     if args.accuracy:
-        return _accuracy(args)
+        if args.plot:
+            raise ParameterError("--plot draws one reading's centre line: give --gauges-v, not --accuracy")
+        return _accuracy(args, params, calibration)
+    check_plot(args.plot, "shape", force=args.force)
+    count = len(params.geometry.gauge_positions_m)
+    names = ",".join(f"V{k}" for k in range(1, count + 1))
     if args.gauges_v is None:
-        raise ParameterError("--gauges-v V1,V2,V3 is required (or --accuracy)")
+        raise ParameterError(f"--gauges-v {names} is required (or --accuracy)")
     try:
         volts = [float(x) for x in args.gauges_v.split(",")]
     except ValueError:
-        raise ParameterError(f"--gauges-v must be three numbers separated by commas. Got {args.gauges_v!r}.") from None
-    if len(volts) != 3:
-        raise ParameterError(f"--gauges-v must be three numbers separated by commas. Got {args.gauges_v!r}.")
+        volts = []
+    if len(volts) != count:
+        raise ParameterError(
+            f"--gauges-v must be {count} numbers separated by commas (one per gauge of the digit, {names}). "
+            f"Got {args.gauges_v!r}."
+        )
     from flexdigit.shape.shape import ShapeEstimator
 
     est_settings = ShapeEstimator(
-        orientation=args.orientation, cable=not args.no_cable, load=args.load, n_average=args.n_average
+        params,
+        calibration,
+        orientation=args.orientation,
+        cable=not args.no_cable,
+        load=args.load,
+        n_average=args.n_average,
     )
     est = est_settings.estimate(volts, command=args.command)
     row = est.row(0, every=10)
@@ -136,13 +211,26 @@ def _shape(args: argparse.Namespace) -> CommandResult:
             "expected): check the calibration, --orientation, --command and --no-cable; no estimate given"
         )
         return CommandResult(data=row, text=text, exit_code=1)
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.shape.shape_plot import shape_figure
+
+        title = f"shape from gauges {args.gauges_v} V" + (
+            f", command {args.command}" if args.command is not None else ""
+        )
+        row["plot"] = str(save_plot(shape_figure(est, 0, title), args.plot, "shape", force=args.force))
+        text += f"\nplot -> {args.plot}"
     return CommandResult(data=row, text=text)
 
 
-def _accuracy(args: argparse.Namespace) -> CommandResult:
-    from flexdigit.shape.shape import shape_accuracy
+def _accuracy(args: argparse.Namespace, params, calibration) -> CommandResult:
+    from flexdigit.params import RigParams
+    from flexdigit.shape.shape import ACCURACY_POSITIONS_M, shape_accuracy
 
-    acc = shape_accuracy(tuple(range(8, 44, 5)), seed=args.seed)
+    # the thesis's load positions as fractions of its digit, on this digit
+    scale = params.geometry.digit_length_m / RigParams().geometry.digit_length_m
+    positions = tuple(round(x * scale, 4) for x in ACCURACY_POSITIONS_M)
+    acc = shape_accuracy(tuple(range(8, 44, 5)), positions, seed=args.seed, params=params, calibration=calibration)
     summary = acc.summary()
     lines = ["case                 cases  tip median  tip p95  tip max  RMS along  tip within 2 sd"]
     for g in summary:

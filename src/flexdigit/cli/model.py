@@ -42,6 +42,7 @@ def _model(args: argparse.Namespace) -> CommandResult:
 
     # python-control is never imported here: it costs 2 s of start-up (see flexdigit.models.polytf)
     params = load_params(args.params) if args.params else RigParams()
+    params, derived = _digit_dynamics(params)
     plant = build_plant(args.variant, params, output=args.output, gains=args.gains)
     summary = plant.summary()
     components = {}
@@ -50,7 +51,14 @@ def _model(args: argparse.Namespace) -> CommandResult:
             components[name] = {"num": value.num.tolist(), "den": value.den.tolist()}
         else:
             components[name] = float(value)
-    data = {"plant": summary, "components": components, "notes": list(plant.notes)}
+    notes = list(plant.notes)
+    if derived:
+        d = params.dynamics
+        notes.append(
+            f"E(s) of this digit from its twin's release mode (no [dynamics] in the file): wn {d.wn_housing_rad_s:.4g} "
+            f"rad/s, zeta {d.zeta_housing:.4g} housed (the thesis's tables are its rig's alone)"
+        )
+    data = {"plant": summary, "components": components, "notes": notes}
     if plant.variant == "printed":
         k1 = closed_loop_printed_k1()
         cl = plant.closed_loop_poly(k1).normalised()
@@ -58,6 +66,25 @@ def _model(args: argparse.Namespace) -> CommandResult:
     if args.explain:
         data["discrepancies"] = explain_discrepancies(params)
     return CommandResult(data=data, text=_text(data))
+
+
+def _digit_dynamics(params):
+    """``(params, derived)``: a digit other than the thesis rig whose file gives no ``[dynamics]`` gets its twin's
+    release mode (:func:`flexdigit.twin.twin.release_dynamics`) for its E(s); else the params as they are."""
+    import dataclasses
+
+    from flexdigit.params import DigitDynamics, RigParams
+
+    if params == RigParams() or params.dynamics != DigitDynamics():
+        return params, False
+    from flexdigit.errors import DesignError
+    from flexdigit.twin.twin import release_dynamics
+
+    try:
+        dynamics = release_dynamics(params)
+    except DesignError:  # tip up it buckles: its mode hanging tip down, as simulate release --orientation hanging
+        dynamics = release_dynamics(params, orientation="hanging")
+    return dataclasses.replace(params, dynamics=dynamics), True
 
 
 def _sorted_poles(tf):
@@ -86,8 +113,8 @@ def _text(data: dict) -> str:
     lines = [
         f"plant ({p['variant']}): {p['input_unit']} -> {p['output']} [{p['output_unit']}]",
         f"  G(s) = ({_poly(p['num'])}) / ({_poly(p['den'])})",
-        "  poles: " + ", ".join(_complex(z) for z in p["poles"]),
-        "  zeros: " + (", ".join(_complex(z) for z in p["zeros"]) or "none"),
+        "  poles (rad/s): " + ", ".join(_complex(z) for z in p["poles"]),
+        "  zeros (rad/s): " + (", ".join(_complex(z) for z in p["zeros"]) or "none"),
         f"  DC gain: {p['dc_gain']:.6g} {p['output_unit']} per command",
         f"  controllability rank {p['controllability_rank']}, observability rank {p['observability_rank']} "
         f"(order {p['order']})",
@@ -103,7 +130,7 @@ def _text(data: dict) -> str:
         cl = data["closed_loop"]
         lines.append(f"closed loop with K1 = {cl['k1']:.5g} (table 4.1):")
         lines.append(f"  T(s) = ({_poly(cl['num'])}) / ({_poly(cl['den'])})")
-        lines.append("  poles: " + ", ".join(_complex(z) for z in cl["poles"]))
+        lines.append("  poles (rad/s): " + ", ".join(_complex(z) for z in cl["poles"]))
     lines.extend(f"note: {n}" for n in data["notes"])
     for item in data.get("discrepancies", []):
         lines.append(item)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag
 
 #: Largest chi^2 per degree of freedom a palpation fit may leave and still be reported.
@@ -18,6 +19,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         _palpate,
         help="palpate tissue beside the digit: stiffness from a command sweep, a scan for an inclusion, force control",
     )
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("tissue", "palpation")
     p.add_argument("--tissue", required=True, help="a tissue TOML file or a built-in (soft-block, nodule-phantom, ...)")
     p.add_argument("--protocol", default=None, help="a protocol TOML file or a built-in: sweep (default), scan, hold")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
@@ -27,9 +31,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="seed of the twin's noise (sim backends; default 0, or the URL's seed=)",
     )
+    p.add_argument("--params", metavar="FILE", help="the digit's parameters TOML (default: the thesis rig)")
+    p.add_argument(
+        "--calibration", metavar="FILE", help="twin calibration TOML (default: the thesis's, scaled to the digit)"
+    )
     p.add_argument("--log", default=None, help="JSON-lines log of every loop sample (scan: one file per offset)")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
-    p.add_argument("--force", action="store_true", help="overwrite --out / --log if they exist")
+    p.add_argument("--force", action="store_true", help="overwrite --out / --log / --plot if they exist")
+    add_plot_flag(p, "force against indentation (sweep), the stiffness map (scan) or the force over time (hold)")
 
 
 def _sim_options(backend: str, kind: str, seed: int | None) -> dict:
@@ -51,12 +60,17 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     from flexdigit._json import to_jsonable
     from flexdigit.errors import DataFileError
     from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
+    from flexdigit.params import RigParams, load_params
     from flexdigit.rig.base import open_rig
+    from flexdigit.twin.digit_calibration import twin_calibration
 
     tissue, info = load_tissue(args.tissue)
     plan = load_palpation_protocol(args.protocol)
     kind = "force" if plan.force else ("scan" if plan.scan else "sweep")
+    from flexdigit._plot import check_plot
+
     out = check_output(args.out, force=args.force) if args.out else None
+    check_plot(args.plot, "palpate", force=args.force)
     logs = _log_paths(args.log, plan, args.force)
     sim = args.backend.split(":")[0].split("?")[0].startswith("sim")
     if sim and not info.placed_on_twin:
@@ -64,16 +78,23 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             f"{info.source}: keys 'tissue.gap_mm' and 'tissue.modulus_n_m2' are needed on the twin (they place the "
             "tissue there; palpation then estimates them)"
         )
-    rig = open_rig(args.backend, **_sim_options(args.backend, kind, args.seed))
+    params = load_params(args.params) if args.params else RigParams()
+    calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
+    options = _sim_options(args.backend, kind, args.seed)
+    if sim and (args.params or args.calibration):
+        options["calibration"] = calibration
+    rig = open_rig(args.backend, params, **options)
     settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
         if kind == "force":
-            data, text = _force(rig, tissue, plan, logs[0], log_mode)
+            data, text, fig = _force(rig, tissue, plan, logs[0], log_mode)
         elif kind == "scan":
-            data, text = _scan(rig, tissue, plan, logs, log_mode)
+            data, text, fig = _scan(rig, tissue, plan, logs, log_mode, calibration)
         else:
-            data, text = _sweep(rig, tissue, plan, logs[0], log_mode)
+            data, text, fig = _sweep(
+                rig, tissue, plan, logs[0], log_mode, tissue.modulus_n_m2 if sim else None, calibration
+            )
     finally:
         rig.close()
     data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, "rig": settings, **data}
@@ -83,6 +104,11 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             "modulus_n_m2": tissue.modulus_n_m2,
             "exponent": tissue.exponent,
         }
+    if args.plot:
+        from flexdigit._plot import save_plot
+
+        data["plot"] = str(save_plot(fig(), args.plot, "palpate", force=args.force))
+        text += f"\nplot -> {args.plot}"
     if out is not None:
         import json
 
@@ -90,6 +116,12 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             json.dump(to_jsonable(data), fh, indent=2)
         text += f"\nwritten to {out}"
     return CommandResult(data=data, text=text)
+
+
+def _orientation(rig) -> str:
+    """How the digit is mounted: the twin's (``sim?orientation=hanging``: a long digit buckles tip up), else the
+    thesis's upright mounting."""
+    return rig.settings().get("orientation") or "vertical"
 
 
 def _log_paths(log, plan, force):
@@ -133,14 +165,14 @@ def _refuse_poor_fit(fit, what: str) -> None:
         )
 
 
-def _sweep(rig, tissue, plan, log, log_mode):
+def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
     import numpy as np
 
     from flexdigit.errors import DataFileError
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import palpate, stiffness_bound
 
-    model = ContactGaugeModel(rig.params)
+    model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode)
     _refuse_poor_fit(result.fit, "palpation")
     touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
@@ -187,14 +219,21 @@ def _sweep(rig, tissue, plan, log, log_mode):
     ]
     if plan.sweep.model == "hunt-crossley":
         lines.insert(3, f"  exponent  {f.exponent:9.3f} +- {f.exponent_sd:.3f}")
-    return data, "\n".join(lines)
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import indentation_figure
+
+        title = f"palpation of {tissue.side}-side tissue ({plan.sweep.model})"
+        return indentation_figure(result, true_modulus_n_m2=true_modulus, title=title)
+
+    return data, "\n".join(lines), figure
 
 
-def _scan(rig, tissue, plan, logs, log_mode):
+def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import _truth_of, run_sweep, scan
 
-    model = ContactGaugeModel(rig.params)
+    model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     records = []
     for d, log in zip(plan.scan["offsets_m"], logs, strict=True):
         rig.place_tissue(tissue.moved(d))
@@ -236,7 +275,14 @@ def _scan(rig, tissue, plan, logs, log_mode):
         f"{1000 * inc['centre_sd_m']:.1f} mm into the tissue, {inc['ratio']:.2f} +- {inc['ratio_sd']:.2f} x stiffer "
         f"(base {inc['modulus_n_m2']:.0f} N/m^2)"
     )
-    return data, text
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import scan_figure
+
+        true_centre = data["inclusion"].get("true_centre_in_tissue_mm")
+        return scan_figure(result, true_centre_mm=true_centre, title=f"scan of {len(records)} offsets")
+
+    return data, text, figure
 
 
 def _force(rig, tissue, plan, log, log_mode):
@@ -275,4 +321,10 @@ def _force(rig, tissue, plan, log, log_mode):
         f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, within 10 % after "
         f"{held.settling_s:.2f} s ({data['scored_on']})"
     )
-    return data, text
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import hold_figure
+
+        return hold_figure(held, title=f"force control at {held.setpoint_n:g} N")
+
+    return data, text, figure

@@ -8,7 +8,10 @@ from flexdigit._command import CommandResult, add_command
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
+    from flexdigit.cli._formats import epilog
+
     parser = add_command(subparsers, "params", _params, help="show, check or write the rig parameters (TOML)")
+    parser.epilog = epilog("params")
     parser.add_argument("file", nargs="?", help="a rig TOML to load and check (default: the thesis rig)")
     parser.add_argument("--write", metavar="FILE", help="write the parameters (defaults, or FILE's) as TOML")
     parser.add_argument("--template", metavar="FILE", help="write an annotated description of the thesis rig")

@@ -44,9 +44,9 @@ def _reproduce(args: argparse.Namespace) -> CommandResult:
     check_report_dir(args.out, force=args.force)  # before the chapters run (minutes), not after
     params = load_params(args.params) if args.params else RigParams()
 
-    def progress(name: str) -> None:
+    def progress(name: str, title: str, seconds: float) -> None:
         if not args.json:
-            print(f"  {name} ...", file=sys.stderr, flush=True)
+            print(f"  {title} done in {seconds:.1f} s", file=sys.stderr, flush=True)
 
     run = {"params": params, "seed": args.seed, "fast": args.fast, "progress": progress, "workers": args.workers}
     run["force"] = args.force  # checked above; the chapters' own files are then ours to replace

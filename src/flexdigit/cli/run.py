@@ -1,6 +1,7 @@
 """``flexdigit run``: a closed-loop run on any backend, with a live progress line (thesis ch. 5).
 
     flexdigit run --backend sim --controller digital20 --setpoint-deg 30 --duration 3
+    flexdigit run --params mine.toml --setpoint-deg -30          # your digit's twin (a cable pair bends both ways)
     flexdigit run --backend "serial:///dev/ttyUSB0?daq=0" --controller digital20 --setpoint-deg 20 --duration 10 \
         --log run.jsonl
 
@@ -8,6 +9,12 @@ The setpoint is a beam-rotation step from rest at t = 0. On the twin the rotatio
 twin first; on hardware the operator is asked for the angle at each calibration command (a protractor), or a
 saved map is loaded with ``--rotation-map``. The rotation the loop controls is the gauges' estimate; on the sim
 backends the report also gives the twin's true tip rotation (``true_*`` beside ``estimated_*``).
+
+``--params FILE`` describes the digit (``flexdigit params``): the twin is built from it (with ``--calibration``,
+or the thesis's calibration scaled to it, :func:`flexdigit.twin.digit_calibration.calibration_for`), the map is
+swept over its range (:func:`flexdigit.rig.rotation.sweep_commands`) and the controller designed for it. With an
+antagonistic pair (``[cables] count = 2``) one servo drives both cables, wound opposite ways on its pulley: the one
+serial command per sample moves both (the log's header says so), and setpoints of both signs are held.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ import sys
 from pathlib import Path
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.rig.step_test import ESTIMATE_SMOOTH_S
 
@@ -57,6 +65,15 @@ def register(subparsers) -> None:
         "--gain", type=Flag(ACTUATOR_GAIN), default=1.0, help="actuator gain error to emulate (robustness runs)"
     )
     parser.add_argument("--log", type=Path, default=None, help="JSON-lines sample log (survives Ctrl-C)")
+    parser.add_argument(
+        "--params", type=Path, default=None, metavar="FILE", help="the digit's parameters TOML (default: thesis rig)"
+    )
+    parser.add_argument(
+        "--orientation",
+        choices=("vertical", "hanging", "horizontal"),
+        default=None,
+        help="the twin's mount (sim backends; default tip up, or hanging for a --params digit that buckles tip up)",
+    )
     _add_map_flags(parser)
     parser.add_argument(
         "--calibration",
@@ -74,8 +91,9 @@ def register(subparsers) -> None:
     writes.add_argument(
         "--force",
         action="store_true",
-        help="replace an existing --log or --record file, or --rotation-map when making one",
+        help="replace an existing --log, --record or --plot file, or --rotation-map when making one",
     )
+    add_plot_flag(parser, "the setpoint, the estimated and (twin) true rotation and the command over time")
     parser.add_argument("--no-progress", action="store_true", help="no live progress line")
     parser.add_argument(
         "--realtime", action="store_true", help="run the loop under SCHED_FIFO when permitted (hardware, sim+paced)"
@@ -158,17 +176,25 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.rig.step_test import run_step
 
     if args.on_board:
+        if args.plot:
+            from flexdigit.errors import ParameterError
+
+            raise ParameterError("--plot draws a run whose loop closes here; with --on-board the board closes it")
         return _run_on_board(args)
     duration, setpoint, sim, rig_options = _checked(args)
     with contextlib.ExitStack() as stack:
-        rig = stack.enter_context(open_rig(args.backend, **rig_options))  # closed on the way out, whatever happens
+        # closed on the way out, whatever happens
+        rig = stack.enter_context(open_rig(args.backend, args.digit, **rig_options))
         settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): logged and reported
         period, estimator = _period_and_map(args, rig, sim, settings)
         recording = _recording(args, rig, stack, setpoint, period, duration, settings, estimator)
         progress = None if (args.no_progress or args.json or not sys.stderr.isatty()) else _Progress(duration)
         if args.realtime:
             stack.enter_context(realtime_priority())
-        header = {"controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend}
+        header = {
+            "controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
+            "cables": _cables(rig.params),
+        }  # fmt: skip
         run = run_step(
             rig, args.controller, setpoint, duration, period, estimator=estimator, gain=args.gain,
             on_sample=progress.update if progress else None, log_path=args.log, log_mode=_log_mode(args),
@@ -177,9 +203,29 @@ def _run(args: argparse.Namespace) -> CommandResult:
     if progress:
         progress.stop(_figures_line(run.figures))
     data = _run_data(args, run, rig, settings, setpoint, period, estimator, recording)
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.rig.run_plot import run_figure
+
+        title = f"{args.controller} on {args.backend}, step to {setpoint:g} deg"
+        data["plot"] = str(save_plot(run_figure(run, title), args.plot, "run", force=args.force))
     # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
     exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[run.result.status]
     return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
+
+
+def _cables(params) -> dict:
+    """How the digit is pulled, for the log and ``--json``: one cable, or a pair on one servo command."""
+    c = params.cables
+    if c.count == 1:
+        return {"count": 1, "command": "one serial command per sample pulls the cable (slack below straight)"}
+    return {
+        "count": 2,
+        "pretension_n": c.pretension_n,
+        "straight_command": params.actuator.equilibrium_command,
+        "command": "one serial command per sample drives both cables: one servo, the pair wound opposite ways on "
+        "its pulley (above the straight command the first cable pulls, below it the second)",
+    }
 
 
 def _log_mode(args) -> str:
@@ -198,6 +244,11 @@ def _checked(args) -> tuple[float, float, bool, dict]:
         raise ParameterError(f"--controller must be one of {', '.join(CONTROLLERS)}. Got {args.controller!r} instead.")
     duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
+    args.digit = _digit(args)
+    _check_reachable(setpoint, args.digit, args.params)
+    from flexdigit._plot import check_plot
+
+    check_plot(args.plot, "run", force=args.force)  # before the rig moves, not after
     if args.log is not None and not (args.append and args.log.exists()):  # before the rig moves, not after
         check_output(args.log, force=args.force, hint="or --append to add this run to it")
     sim = parse_rig_url(args.backend).scheme in ("sim", "sim+paced")
@@ -207,6 +258,36 @@ def _checked(args) -> tuple[float, float, bool, dict]:
     # --seed reaches a hardware rig only to be refused (it has no noise); with --map-from twin it seeds the map's twin
     rig_options = twin_options if sim else ({} if args.map_from == "twin" else seed_option(args.backend, args.seed))
     return duration, setpoint, sim, rig_options
+
+
+def _digit(args):
+    """The digit ``--params`` describes (None: the thesis rig)."""
+    if args.params is None:
+        return None
+    from flexdigit.params import load_params
+
+    return load_params(args.params)
+
+
+def _check_reachable(setpoint: float, params, source) -> None:
+    """Refuse a setpoint the digit's servo range cannot reach, by the cable model (E 3.15 with the gearing): above
+    the top command's rotation, or, with a cable pair, below the bottom command's (a single cable goes slack
+    below straight: the runaway guard knows that case)."""
+    from flexdigit.errors import ParameterError
+    from flexdigit.models.cable import tip_rotation_per_command_deg
+    from flexdigit.params import RigParams
+
+    p = params or RigParams()
+    a, per_command = p.actuator, tip_rotation_per_command_deg(p)
+    top = (a.command_max - a.equilibrium_command) * per_command
+    bottom = (a.command_min - a.equilibrium_command) * per_command
+    where = f" of the digit in {source}" if source is not None else ""
+    if setpoint > top or (p.cables.count == 2 and setpoint < bottom):
+        raise ParameterError(
+            f"--setpoint-deg {setpoint:g}: the servo{where} reaches {bottom if p.cables.count == 2 else 0:.1f} to "
+            f"{top:.1f} deg (commands {a.command_min}..{a.command_max}, straight at {a.equilibrium_command}, "
+            f"{per_command:.3f} deg a command); set [actuator] equilibrium_command nearer the middle"
+        )
 
 
 def _period_and_map(args, rig, sim: bool, settings: dict):
@@ -291,6 +372,9 @@ def _run_text(args, run, data: dict, setpoint: float, period: float) -> str:
     final, peak = data["estimated_final_rotation_deg"], data["estimated_peak_rotation_deg"]
     true_final, true_peak = data["true_final_rotation_deg"], data["true_peak_rotation_deg"]
     truth_text = f"; true (twin) final {true_final:.2f}, peak {true_peak:.2f} deg" if run.has_truth else ""
+    mount = data["rig"].get("orientation") if isinstance(data.get("rig"), dict) else None
+    if mount is not None and mount != "vertical" and args.params is not None:
+        truth_text += f" (the twin {mount}: tip up this digit buckles under its own weight, or as the URL asked)"
     return (
         f"{args.controller} on {args.backend}: {run.result.status} ({run.result.message})\n"
         f"  rotation estimated from the gauges: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg"
@@ -321,7 +405,7 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
         raise ParameterError(
             f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {args.backend!r}."
         )
-    for name in ("log", "record", "rotation_map", "calibration"):
+    for name in ("log", "record", "rotation_map", "calibration", "params", "orientation"):
         if getattr(args, name) is not None:
             raise ParameterError(
                 f"--{name.replace('_', '-')} is not supported with --on-board (the board holds its map)"
@@ -406,13 +490,35 @@ def _twin_options(args, sim: bool) -> dict:
                 f"--calibration {args.calibration} is a twin calibration: it applies to the sim backends (or to "
                 f"--map-from twin), not --backend {args.backend}; a saved rotation map is --rotation-map FILE"
             )
+        if args.orientation is not None:
+            from flexdigit.errors import ParameterError
+
+            raise ParameterError(f"--orientation is the twin's mount: the sim backends only, not {args.backend}")
         return {}
     options = {} if args.seed is None else {"seed": args.seed}
     if args.calibration is not None:
         from flexdigit.twin.calibration import load_calibration
 
         options["calibration"] = load_calibration(args.calibration)
+    elif getattr(args, "digit", None) is not None:
+        from flexdigit.twin.digit_calibration import twin_calibration
+
+        options["calibration"] = twin_calibration(args.digit)
+    if getattr(args, "orientation", None) is not None:
+        options["orientation"] = args.orientation
+    elif getattr(args, "digit", None) is not None and "orientation" not in _url_options(args.backend):
+        from flexdigit.control.design20ms import straight_is_stable
+
+        if not straight_is_stable(args.digit, options.get("calibration"), "vertical"):
+            # tip up it buckles under its supports' weight: its twin hangs (said in the output: rig.orientation)
+            options["orientation"] = "hanging"
     return options
+
+
+def _url_options(backend: str) -> dict:
+    from flexdigit.rig.base import rig_url_options
+
+    return rig_url_options(backend)[1]
 
 
 def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
@@ -450,7 +556,7 @@ def _rotation_map(args, rig, sim: bool):
             options = {**url_options, **options, "seed": rig.settings()["seed"] + 1}
         else:
             options["seed"] = options.get("seed", 0) + 1
-        est = calibrate_rotation(open_rig("sim", **options))
+        est = calibrate_rotation(open_rig("sim", rig.params, **options))
     elif source == "operator":
         if replay:
             raise ParameterError("a replay cannot be swept (it ignores commands); pass --rotation-map FILE")

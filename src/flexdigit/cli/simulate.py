@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible, check_values
 from flexdigit.errors import ParameterError
 from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M, SERVO_COMMAND
@@ -58,6 +59,7 @@ def _common(p: argparse.ArgumentParser) -> None:
         help="twin calibration TOML (default: fitted to the thesis, scaled to the --params digit)",
     )
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+    add_plot_flag(p, "the record (gauges and pot in V over time, the command or the load's position)")
 
 
 def _add_release(sub) -> None:
@@ -85,10 +87,12 @@ def _add_step(sub) -> None:
     """The servo step's flags."""
     p = sub.add_parser("step", help="servo command step (3.2.4, figure 3.11)")
     _common(p)
-    p.add_argument("--from", dest="command_from", type=Flag(SERVO_COMMAND), default=0)
-    p.add_argument("--to", dest="command_to", type=Flag(SERVO_COMMAND), default=51)
-    p.add_argument("--duration", type=Flag(DURATION), default=1.5)
-    p.add_argument("--rate", type=Flag(RATE), default=1000.0)
+    p.add_argument("--from", dest="command_from", type=Flag(SERVO_COMMAND), default=0, help="servo command before")
+    p.add_argument(
+        "--to", dest="command_to", type=Flag(SERVO_COMMAND), default=51, help="servo command after (the thesis: 51)"
+    )
+    p.add_argument("--duration", type=Flag(DURATION), default=1.5, help="seconds")
+    p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
     p.add_argument("--cable", action="store_true", help="keep the cable attached")
 
 
@@ -134,17 +138,26 @@ def _add_load(sub) -> None:
         "--repetitions",
         type=Flag(Plausible("", 1, 10_000, "repetitions of each load case: the thesis made 25", integer=True)),
         default=25,
+        help="readings of each load case",
     )
-    p.add_argument("--orientation", default="horizontal", choices=("horizontal", "vertical", "hanging"))
+    p.add_argument(
+        "--orientation",
+        default="horizontal",
+        choices=("horizontal", "vertical", "hanging"),
+        help="how the digit lies (the thesis: horizontal, chapters 6-7)",
+    )
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit._io import check_output
+    from flexdigit._plot import check_plot, save_plot
     from flexdigit.params import RigParams, load_params
     from flexdigit.twin.calibration import default_calibration, load_calibration
     from flexdigit.twin.digit_calibration import calibration_for
+    from flexdigit.twin.record_plot import record_figure
 
     check_output(args.out, force=args.force)  # before the simulation, not after it
+    check_plot(args.plot, "simulate", force=args.force)
     params = load_params(args.params) if args.params else RigParams()
     if args.calibration:
         cal = load_calibration(args.calibration)
@@ -157,6 +170,8 @@ def _run(args: argparse.Namespace) -> CommandResult:
     experiment = {"release": _release, "step": _step, "sweep": _sweep}.get(args.experiment, _load)
     res, findings, text = experiment(args, params, gauges, common)
     path = res.save(args.out, force=args.force)
+    if args.plot:
+        save_plot(record_figure(res), args.plot, "simulate", force=args.force)
     data = {
         "experiment": res.metadata["experiment"],
         "out": str(path),
@@ -164,6 +179,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "columns": res.table.column_names,
         "seed": args.seed,
         "findings": findings,
+        "plot": args.plot,
     }
     return CommandResult(data=data, text=f"{res.metadata['experiment']}: {res.table.num_rows} rows -> {path}\n{text}")
 

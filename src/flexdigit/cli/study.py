@@ -18,6 +18,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Run a study spec (a TOML file, or a shipped one: thesis-tolerances, thesis-design) on a local "
         "Dask cluster (one worker per core) or an existing one; rerunning with the same --out resumes it.",
     )
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("spec")
     p.add_argument("kind", choices=("sensitivity", "design"), help="which study")
     p.add_argument("spec", help="study spec TOML, or a shipped name (thesis-tolerances, thesis-design)")
     p.add_argument("--out", required=True, help="directory for the journal, tables and figures (created)")

@@ -37,7 +37,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description=__doc__.splitlines()[0],
     )
     sub = parser.add_subparsers(dest="tdcr_command", metavar="TDCR_COMMAND", required=True)
-    p = sub.add_parser("statics", help="static equilibrium under tendon tensions and tip loads")
+    from flexdigit.cli._formats import epilog
+
+    p = sub.add_parser("statics", help="static equilibrium under tendon tensions and tip loads", epilog=epilog("robot"))
     p.add_argument("robot", metavar="ROBOT", help="a built-in robot (rao2021) or a robot TOML file")
     p.add_argument("--tension-n", required=True, help="tendon tensions in N, one per tendon: '4,0,0,0,2,0'")
     vector = "(world frame; write a leading minus as --{}=-1,0,0)"
@@ -47,7 +49,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
-    p = sub.add_parser("dynamics", help="time response from a static shape to loads applied at t = 0")
+    p = sub.add_parser(
+        "dynamics", help="time response from a static shape to loads applied at t = 0", epilog=epilog("robot")
+    )
     p.add_argument("robot", metavar="ROBOT", help="a built-in robot (rao2021) or a robot TOML file")
     p.add_argument("--tension-n", required=True, help="tendon tensions from t = 0, in N, one per tendon")
     p.add_argument("--tip-force-n", help="tip force from t = 0, fx,fy,fz in N " + vector.format("tip-force-n"))

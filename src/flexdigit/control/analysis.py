@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from flexdigit._validation import check_array
+from flexdigit._repr import fields_summary, summary
+from flexdigit._validation import check_array, check_real
 from flexdigit.control._lsim import step_output
 from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.generalized import as_statespace
@@ -54,6 +55,14 @@ class LoopMaps:
     @property
     def stable(self) -> bool:
         return bool(self.poles.size == 0 or np.max(self.poles.real) < 0)
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            closed_loop_order=len(self.poles),
+            stable=bool(np.all(np.real(self.poles) < 0)),
+            slowest_pole_real=(float(np.max(np.real(self.poles))), "rad/s"),
+        )
 
 
 def loop_maps(plant, controller) -> LoopMaps:
@@ -243,6 +252,8 @@ class StepFigures:
     iae: float
     bounded: bool
 
+    __repr__ = fields_summary
+
 
 def _settling_time(t: np.ndarray, error: np.ndarray, band: float) -> float:
     """Start of the last stretch with ``error <= band`` (interpolated): 0 if never out, inf if out at the end."""
@@ -347,8 +358,6 @@ def step_figures(
     >>> round(f.rise_time_s, 3), round(f.settling_time_s, 3), f.overshoot_percent, round(f.iae, 4)
     (0.22, 0.391, 0.0, 0.1)
     """
-    from flexdigit._validation import check_real
-
     t, y = _after_step(t_s, y, step_time_s)
     tail_length = check_real(tail_s, "tail_s", "step_figures", low=0.0)
     confirm = check_real(confirm_s, "confirm_s", "step_figures", low=0.0)

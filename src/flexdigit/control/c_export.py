@@ -41,7 +41,11 @@ from pathlib import Path
 import control as ct
 import numpy as np
 
+from flexdigit import __version__
+from flexdigit._io import atomic_write, check_output
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_choice, check_real
+from flexdigit.control.design20ms import closed_loop
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.errors import DesignError, ParameterError
 
@@ -209,6 +213,8 @@ class ControllerSpec:
             return np.zeros(self.nstates)
         return np.linalg.pinv(self.C.reshape(1, -1)).reshape(-1) * (c - self.u_eq)
 
+    __repr__ = fields_summary
+
 
 # -- fixed point: the format and a bit-exact Python model of the C ----------------------------------------------
 
@@ -320,6 +326,8 @@ class FixedFormat:
             "Lq": Lq,
             "u_eq": self.row_output.const * 2.0**-self.row_output.acc_bits,
         }
+
+    __repr__ = fields_summary
 
 
 def _make_row(values, source_bits, source_bounds, target_bits: int, const: float = 0.0) -> _Row:
@@ -602,8 +610,6 @@ def render_c(
     """
     if not prefix.isidentifier() or not prefix.isascii():
         raise ParameterError(f"The 'prefix' of render_c must be a C identifier. Got {prefix!r}.")
-    from flexdigit import __version__
-
     n, m = spec.nstates, spec.ninputs
     P = prefix.upper()
     fixed = fmt is not None
@@ -1204,8 +1210,6 @@ def _two_input(A, B, C, D, dt) -> ct.StateSpace:
 
 
 def _loop_figures(A, B, C, D, plant_d, dt):
-    from flexdigit.control.design20ms import closed_loop
-
     K2 = _two_input(A, B, C, D, dt)
     loop = closed_loop(plant_d, K2)
     poles = loop.poles()
@@ -1396,8 +1400,6 @@ def export_controller(
 
     Both destinations are checked before anything is written; neither is replaced without ``force``.
     """
-    from flexdigit._io import atomic_write, check_output
-
     format = check_choice(format, "format", FORMATS, "export_controller")
     out = Path(out)
     if out.suffix != ".c":

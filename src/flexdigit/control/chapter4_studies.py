@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.control.analysis import (
     LoopMaps,
@@ -38,8 +39,10 @@ from flexdigit.control.analysis import (
     step_metrics,
 )
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
+from flexdigit.control.mixsyn import check_requirements, design_mixsyn
 from flexdigit.control.synthesis import hinf_lmi, hinf_riccati, regularisation_path
 from flexdigit.control.thesis_designs import fit_thesis_regularisation, printed_controller, sorted_poles, thesis_design
+from flexdigit.models.plant import build_plant
 from flexdigit.reference import thesis_complex, thesis_value
 
 __all__ = [
@@ -70,8 +73,6 @@ PRINTED_GAIN_FACTOR = 10.0
 
 
 def _printed_plant():
-    from flexdigit.models.plant import build_plant
-
     return build_plant("printed")
 
 
@@ -100,6 +101,8 @@ class K1Study:
     k1_for_table_slow_pair: float
     poles_at_that_k1: np.ndarray
     table: ResultTable
+
+    __repr__ = fields_summary
 
 
 def k1_closed_loop_study() -> K1Study:
@@ -147,6 +150,8 @@ class RegularisationFit:
     zeros_vs_plant_poles: float
     numerator_lead: float
 
+    __repr__ = fields_summary
+
 
 @dataclass(frozen=True)
 class GammaStudy:
@@ -174,6 +179,8 @@ class GammaStudy:
     path: ResultTable
     poles_5hz: ResultTable
     poles_39hz: ResultTable
+
+    __repr__ = fields_summary
 
 
 def fit_printed_controller(filter_hz: float, plant=None) -> RegularisationFit:
@@ -263,6 +270,8 @@ class FilterSweepStudy:
     table: ResultTable
     printed_39hz: dict
 
+    __repr__ = fields_summary
+
 
 def filter_sweep_study(plant=None) -> FilterSweepStudy:
     """The filter sweep of 4.7 on our designs: see :class:`FilterSweepStudy`."""
@@ -347,6 +356,8 @@ class Chapter4Study:
         g = self.gamma
         return (self.k1.table, g.poles_5hz, g.poles_39hz, g.routes, g.path, self.sweep.table, self.comparison)
 
+    __repr__ = fields_summary
+
 
 def chapter4_study(*, fast: bool = False, seed: int = 0) -> Chapter4Study:
     """Thesis chapter 4 rebuilt (designs, loops, sweep) and a servo-ready design beside it.
@@ -358,9 +369,6 @@ def chapter4_study(*, fast: bool = False, seed: int = 0) -> Chapter4Study:
     seed : int
         Seed of that Monte Carlo.
     """
-    from flexdigit.control.mixsyn import check_requirements, design_mixsyn
-    from flexdigit.models.plant import build_plant
-
     G = _printed_plant().tf
     F = filter_weight(5.0)
     peak_printed = thesis_value("hinf.filter_peak_db")

@@ -30,12 +30,14 @@ deviation from the equilibrium command 8 (:class:`~flexdigit.control.runtime.Run
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from numbers import Integral, Real
 
 import control as ct
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import (
     InstanceOf,
     Interval,
@@ -46,10 +48,18 @@ from flexdigit._validation import (
 )
 from flexdigit.control.discretise import METHODS, discretise
 from flexdigit.control.runtime import RuntimeController
+from flexdigit.control.thesis_designs import printed_controller
 from flexdigit.errors import DesignError
+from flexdigit.models.plant import build_plant
+from flexdigit.models.servo import servo_unit_tf
 from flexdigit.params import RigParams
+from flexdigit.twin.digit_calibration import twin_calibration
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit
 
 __all__ = [
+    "digit_first_mode",
+    "straight_is_stable",
+    "digit_design_20ms",
     "Weights",
     "Digital20msDesign",
     "design_plant",
@@ -95,21 +105,41 @@ class Weights:
     def __post_init__(self) -> None:
         validate_fields(self, error=DesignError)
 
+    def for_digit(self, deg_per_command: float, thesis_deg_per_command: float) -> Weights:
+        """The same weights in degrees for a digit whose command turns it ``deg_per_command`` instead of the
+        thesis rig's ``thesis_deg_per_command`` (a geared servo's finer step, another pulley or eccentricity): the
+        command terms scale by the square of the ratio, so the loop asks the same of the digit in degrees (the
+        thesis rig's ratio is 1: its weights unchanged)."""
+        ratio = deg_per_command / thesis_deg_per_command
+        return Weights(
+            q_rate=self.q_rate,
+            r_u=self.r_u * ratio**2,
+            q_disturbance=self.q_disturbance / ratio**2,
+            q_input=self.q_input / ratio**2,
+            r_measurement=self.r_measurement,
+        )
 
-def design_plant(params: RigParams | None = None, deg_per_command: float | None = None) -> ct.StateSpace:
+
+def design_plant(
+    params: RigParams | None = None, deg_per_command: float | None = None, digit_mode: tuple | None = None
+) -> ct.StateSpace:
     """Continuous design model: servo (3.2.4) x beam rotation per command, command -> deg.
 
     ``deg_per_command`` defaults to the cable model's tip rotation per command (1.735 deg,
-    :func:`flexdigit.models.plant.build_plant` ``"consistent"``, ``output="tip_rotation_rad"``).
+    :func:`flexdigit.models.plant.build_plant` ``"consistent"``, ``output="tip_rotation_rad"``). ``digit_mode``
+    ``(wn_rad_s, zeta)`` adds the digit's mode, ``wn^2/(s^2 + 2 zeta wn s + wn^2)`` (unit DC gain: the thesis's
+    E(s) of 3.1.2, :func:`digit_first_mode`), as the thesis's G(s) of 3.5 has it.
     """
-    from flexdigit.models.plant import build_plant
-    from flexdigit.models.servo import servo_unit_tf
-
     params = params or RigParams()
     if deg_per_command is None:
         deg_per_command = float(np.rad2deg(build_plant("consistent", params, output="tip_rotation_rad").dc_gain))
     k = check_positive(deg_per_command, "deg_per_command", "design_plant", error=DesignError)
-    return ct.ss(servo_unit_tf(params) * k)
+    if digit_mode is None:
+        return ct.ss(servo_unit_tf(params) * k)
+    wn, zeta = (float(v) for v in digit_mode)
+    if not (math.isfinite(wn) and wn > 0 and math.isfinite(zeta) and zeta > 0):
+        raise DesignError(f"design_plant: the digit's mode must have wn > 0 and zeta > 0. Got {digit_mode!r}.")
+    return ct.ss(servo_unit_tf(params) * k * ct.tf([wn**2], [1.0, 2.0 * zeta * wn, wn**2]))
 
 
 @dataclass(frozen=True)
@@ -145,7 +175,12 @@ class Digital20msDesign:
     weights: Weights
 
     def runtime(
-        self, params: RigParams | None = None, measure=None, name: str = "digital20", hysteresis: float = 0.0
+        self,
+        params: RigParams | None = None,
+        measure=None,
+        name: str = "digital20",
+        hysteresis: float = 0.0,
+        dither: bool = False,
     ) -> RuntimeController:
         """The controller ready for the loop: saturation, integer command, observer-fed anti-windup.
 
@@ -163,6 +198,17 @@ class Digital20msDesign:
             hysteresis=hysteresis,
             measure=measure,
             name=name,
+            dither=dither,
+        )
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            period_s=self.period_s,
+            delay_samples=self.delay_samples,
+            controller_order=self.controller.nstates,
+            largest_pole_radius=float(np.max(np.abs(self.closed_loop_poles))),
+            deg_per_command=self.deg_per_command,
         )
 
 
@@ -201,6 +247,7 @@ def design_20ms(
     delay_samples: int = 1,
     deg_per_command: float | None = None,
     weights: Weights | None = None,
+    digit_mode: tuple[float, float] | None = None,
 ) -> Digital20msDesign:
     """Design the discrete controller for the serial period (20 ms) with hold, delay and integer command.
 
@@ -214,6 +261,8 @@ def design_20ms(
     deg_per_command : float, optional
         Beam rotation per command (see :func:`design_plant`).
     weights : Weights, optional
+    digit_mode : (float, float), optional
+        The digit's mode ``(wn_rad_s, zeta)`` in the model (:func:`design_plant`); None: 5.3's model.
 
     Returns
     -------
@@ -230,8 +279,7 @@ def design_20ms(
     params = params or RigParams()
     T = params.actuator.serial_period_s if period_s is None else period_s
     nd = delay_samples
-    w = weights or Weights()
-    G = design_plant(params, deg_per_command)
+    w, G = weights or Weights(), design_plant(params, deg_per_command, digit_mode)
     dc = float(np.real(ct.dcgain(G)))
     Gd = ct.sample_system(G, T, method="zoh")
     A, B, C = np.asarray(Gd.A), np.asarray(Gd.B), np.asarray(Gd.C)
@@ -274,6 +322,78 @@ def design_20ms(
     return Digital20msDesign(controller, Bo.ravel(), plant_d, K, L, poles, T, nd, dc, w)
 
 
+#: The rotation estimate's variance a digit's observer assumes (deg^2), against the thesis rig's 10 (Weights): the
+#: estimate is a static map of the gauges, and while a digit vibrates it leaves the true rotation, more on a long
+#: digit whose first mode bends it into an S the gauges see and the tip hardly shows (0.5 m, 5 sections: the 30
+#: deg step rang 6 % for 1.1-1.6 s at 10, settled in 0.56 s at 100). Chosen on the test digits of tests/digits.py
+#: (seeds 0-2: 100 kept every one but the single-gauge digit under 1 s; 200 slowed that one to 1-2 s).
+DIGIT_R_MEASUREMENT_DEG2 = 100.0
+
+
+def digit_first_mode(params: RigParams, calibration=None, *, orientation: str = "vertical") -> tuple[float, float]:
+    """The digit's first mode ``(wn_rad_s, zeta)`` about straight with its cable(s) taut, from the twin's chain
+    (its linear modal analysis: housed, the calibration given or the one the twin would get,
+    :func:`flexdigit.twin.digit_calibration.twin_calibration`): the "digit model" of the plant, 3.1.2's E(s), for
+    a digit nobody has identified. Refused (:class:`~flexdigit.errors.DesignError`) when the straight digit is not
+    stable in ``orientation`` (a long digit tip up buckles under its supports' weight)."""
+    chain = _straight_chain(params, calibration, orientation)
+    if not straight_is_stable(params, calibration, orientation):
+        raise DesignError(
+            f"design: the straight digit ({params.geometry.section_count} sections, "
+            f"{params.geometry.digit_length_m:g} m) is not stable {orientation} (it buckles under its own weight): "
+            "no design can stand behind a loop on it; mount it hanging or horizontal"
+        )
+    wn, zeta = chain.linear_modes(cable_taut=params.cables.count)
+    return float(wn[0]), float(zeta[0])
+
+
+def _straight_chain(params: RigParams, calibration, orientation: str):
+
+    cal = calibration if calibration is not None else twin_calibration(params)
+    return cached_digit(params, cal, True, orientation, DEFAULT_CELLS_PER_SECTION)
+
+
+def straight_is_stable(params: RigParams, calibration=None, orientation: str = "vertical") -> bool:
+    """Whether the straight digit is a stable equilibrium in ``orientation``: its tangent stiffness (springs,
+    gravity, a pretensioned pair's cables) positive definite. A long digit tip up (``"vertical"``) is not when its
+    supports' weight passes the buckling load (0.5 m, 5 sections: ``pi^2 EI / 4 L^2`` = 0.16 N against 0.41 N)."""
+    chain = _straight_chain(params, calibration, orientation)
+    # straight at the straight command, a single cable is just taut: it holds the digit one way only (it slackens
+    # as the tip turns towards it), so it counts for nothing; a pretensioned pair holds it both ways
+    held = 2 if params.cables.count == 2 else 0
+    stiffness = chain.tangent_stiffness(np.zeros(chain.n), chain.g_gravity, held)
+    return bool(np.min(np.linalg.eigvalsh(0.5 * (stiffness + stiffness.T))) > 0)
+
+
+def digit_design_20ms(
+    params: RigParams | None = None,
+    *,
+    period_s: float | None = None,
+    calibration=None,
+    orientation: str = "vertical",
+    deg_per_command: float | None = None,
+) -> Digital20msDesign:
+    """The 20 ms design for a described digit (``flexdigit design 20ms --params``, ``flexdigit run --params``).
+
+    On the thesis rig it is :func:`design_20ms` as chapter 5 runs it. Any other digit's design model is built the
+    thesis's way from its own components: the servo (3.2.4), the cable model's rotation per command (E 3.15 with
+    the gearing) and the digit's mode from its twin (:func:`digit_first_mode`, cable(s) taut); the weights ask the same
+    of it in degrees (:meth:`Weights.for_digit`), its observer trusting the gauges' static map less
+    (:data:`DIGIT_R_MEASUREMENT_DEG2`). The nominal loop must be stable, else
+    :class:`~flexdigit.errors.DesignError`. ``deg_per_command`` replaces the cable model's rotation per command
+    by one measured on the digit (the rotation map's sweep, ``RotationEstimator.deg_per_command_``): a short,
+    stiff digit stretches its cable and turns less than the model says.
+    """
+    params = params or RigParams()
+    if params == RigParams():
+        return design_20ms(params, period_s=period_s)
+    mode = digit_first_mode(params, calibration, orientation=orientation)
+    thesis_dc = float(np.real(ct.dcgain(design_plant(RigParams()))))
+    dc = float(np.real(ct.dcgain(design_plant(params))))
+    weights = Weights(r_measurement=DIGIT_R_MEASUREMENT_DEG2).for_digit(dc, thesis_dc)
+    return design_20ms(params, period_s=period_s, weights=weights, digit_mode=mode, deg_per_command=deg_per_command)
+
+
 def closed_loop(plant_d, controller, gain: float = 1.0) -> ct.StateSpace:
     """Linear loop ``r -> y`` of a discrete plant (command -> y) and a two-input controller ``u = K [r; y]``.
 
@@ -300,8 +420,6 @@ def thesis_controller(
 
     The runtime runs it on the error ``r - y`` in metres; no anti-windup (the thesis had none).
     """
-    from flexdigit.control.thesis_designs import printed_controller
-
     if method not in METHODS:
         raise DesignError(f"The 'method' parameter of thesis_controller must be one of {METHODS}. Got {method!r}.")
     Kd = discretise(ct.ss(printed_controller("39hz")), period_s, method)

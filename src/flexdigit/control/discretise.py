@@ -28,6 +28,7 @@ from numbers import Integral, Real
 import control as ct
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import Callable as Callable_
 from flexdigit._validation import Interval, NoValidation, Options, declare, validate_fields, validate_params
 from flexdigit.control._lsim import step_output
@@ -324,6 +325,17 @@ class SampledLoop:
             return float("inf")
         d = np.abs(self.plant_poles_z[:, None] - self.controller_zeros_z[None, :])
         return float(np.max(np.min(d, axis=1)))
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            method=self.method,
+            period_s=self.period_s,
+            delay_samples=self.delay_samples,
+            spectral_radius=self.spectral_radius,
+            error=self.error,
+            samples=len(self.t_s),
+        )
 
 
 @validate_params(

@@ -26,6 +26,7 @@ import control as ct
 import numpy as np
 import scipy.linalg
 
+from flexdigit._repr import summary
 from flexdigit._validation import Array, Interval, NoValidation, Options, validate_params
 from flexdigit.control._threads import single_blas_thread
 from flexdigit.control.generalized import as_statespace, regularise, regularise_matrices
@@ -72,6 +73,17 @@ class HinfDesign:
     closed_loop: ct.StateSpace
     method: str = "riccati"
 
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            method=self.method,
+            gamma=self.gamma,
+            gamma_opt=self.gamma_opt,
+            achieved=self.achieved,
+            controller_order=self.controller.nstates,
+            closed_loop_order=self.closed_loop.nstates,
+        )
+
 
 @dataclass(frozen=True)
 class LmiResult:
@@ -82,6 +94,9 @@ class LmiResult:
     S: np.ndarray
     status: str
     solver: str
+
+    def __repr__(self) -> str:
+        return summary(self, gamma=self.gamma, status=self.status, solver=self.solver, order=self.R.shape[0])
 
 
 @dataclass(frozen=True)

@@ -18,10 +18,14 @@ import numpy as np
 from scipy.optimize import minimize
 
 from flexdigit._validation import check_positive
+from flexdigit.control.analysis import is_stable, loop_maps
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
 from flexdigit.control.synthesis import HinfDesign, central_controller_poles, hinf_riccati
 from flexdigit.errors import ConvergenceWarning, DesignError
+from flexdigit.models.plant import build_plant
+from flexdigit.params import DigitDynamics
 from flexdigit.reference import thesis_complex, thesis_value
+from flexdigit.twin.twin import release_dynamics
 
 __all__ = [
     "THESIS_REGULARISATION",
@@ -31,6 +35,8 @@ __all__ = [
     "fit_thesis_regularisation",
     "sorted_poles",
     "singular_infimum_witness",
+    "digit_plant",
+    "digit_hinf_design",
 ]
 
 #: ``(eps_u, margin)`` per cut-off (Hz) that reproduce the printed controller poles (tables 4.2, 4.3), as found
@@ -60,8 +66,6 @@ def printed_controller(which: str) -> ct.TransferFunction:
 
 def thesis_plant(variant: str = "printed"):
     """The plant of 4.2 from :func:`flexdigit.models.plant.build_plant` (m of gauge-1 deflection per command)."""
-    from flexdigit.models.plant import build_plant
-
     return build_plant(variant).tf
 
 
@@ -173,3 +177,45 @@ def singular_infimum_witness(plant, filter_hz: float, tau: float) -> float:
     S = 1 - lp  # = 1 - G Q with Q = lp / G
     F = filter_weight(filter_hz)
     return float(ct.linfnorm(ct.ss(F * S))[0]) if math.isfinite(tau) else math.nan
+
+
+def digit_plant(params, calibration=None, *, orientation: str = "vertical", output: str = "deflection_sg1_m"):
+    """The plant G(s) of a described digit, built the thesis's way from its components (3.5): the servo (3.2.4),
+    the cable (E 3.11-3.15 with the gearing), the digit's E(s) and the gauge chain to ``output``
+    (:func:`flexdigit.models.plant.build_plant` ``"consistent"``, unit-correct). E(s) is the digit's release-test
+    mode from its twin (:func:`flexdigit.twin.twin.release_dynamics`; the thesis rig: table 3.2's
+    values to 0.01 %), not the thesis's tables, which are its rig's alone; a file that gives ``[dynamics]``
+    (identified on that digit) is taken at its word.
+    """
+    import dataclasses
+
+    # the file's [dynamics] when it gives them (identified on that digit), else its twin's release mode
+    given = params.dynamics != DigitDynamics()
+    dynamics = params.dynamics if given else release_dynamics(params, calibration, orientation=orientation)
+    if not (dynamics.wn_housing_rad_s > 0 and dynamics.zeta_housing > 0):
+        raise DesignError(f"the digit's release mode is not a damped vibration ({dynamics!r}): no plant to design on")
+    return build_plant("consistent", dataclasses.replace(params, dynamics=dynamics), output=output)
+
+
+def digit_hinf_design(
+    filter_hz: float,
+    params,
+    calibration=None,
+    *,
+    orientation: str = "vertical",
+    eps_u: float | None = None,
+    margin: float | None = None,
+):
+    """The H-infinity design of 4.4 (:func:`thesis_design`) on a described digit's plant (:func:`digit_plant`,
+    gauge-1 deflection in m per command), checked: returns ``(design, plant)``; a controller that does not
+    stabilise the plant is refused (:class:`~flexdigit.errors.DesignError`, one line)."""
+
+    plant = digit_plant(params, calibration, orientation=orientation)
+    design = thesis_design(filter_hz, plant.tf, eps_u=eps_u, margin=margin)
+    maps = loop_maps(plant.tf, design.controller)
+    if not is_stable(maps.T_yw):
+        raise DesignError(
+            f"design hinf: the {filter_hz:g} Hz central controller does not stabilise this digit's plant "
+            f"(poles {np.round(plant.poles, 3).tolist()}): not a design to stand behind"
+        )
+    return design, plant

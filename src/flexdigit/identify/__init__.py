@@ -52,6 +52,7 @@ __getattr__, __all__ = lazy_exports(
         "assess": "flexdigit.identify.quality",
         "Identification": "flexdigit.identify.identification",
         "identify": "flexdigit.identify.identification",
+        "fit_figure": "flexdigit.identify.fit_plot",
         "average_runs": "flexdigit.identify.identification",
         "twin_identification": "flexdigit.identify.chapter3_identification",
         "noisy_records_study": "flexdigit.identify.chapter3_identification",

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.identify.filters import fft_filter, noise_reduction, svd_filter
 from flexdigit.identify.fit import fit_linear, second_order_response
@@ -32,6 +33,7 @@ from flexdigit.identify.response import settling_formula_bias
 from flexdigit.identify.timeseries import TimeSeries, series_from_table
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
+from flexdigit.twin.records import actuation_sweep, release_test, servo_step_test
 
 __all__ = [
     "DT_S",
@@ -99,6 +101,8 @@ class RecordsTable:
     table: ResultTable
     mean_rel_error: dict
 
+    __repr__ = fields_summary
+
 
 def records_table(which: str, rng: np.random.Generator, *, fast: bool = False) -> RecordsTable:
     """Table 3.1 (``"without_housing"``, 20 s records) or 3.2 (``"with_housing"``, 8 s) from synthetic records."""
@@ -151,6 +155,8 @@ class NoisyRecordsStudy:
     records: int
     errors: dict
     table: ResultTable
+
+    __repr__ = fields_summary
 
 
 def noisy_records_study(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> NoisyRecordsStudy:
@@ -213,6 +219,8 @@ class TwinIdentification:
     tip_fits: dict
     table: ResultTable
 
+    __repr__ = fields_summary
+
 
 def _intervals(r) -> tuple[float, float, float, float]:
     """The 95 % intervals of wn and zeta of an lsq identification (NaN where the method gives none)."""
@@ -225,8 +233,6 @@ def _intervals(r) -> tuple[float, float, float, float]:
 def twin_identification(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> TwinIdentification:
     """The twin's release test (gauge 1 and the tip) and servo step tests (51 commands; 3 runs when ``fast``,
     else 5), identified by the thesis method and by least squares."""
-    from flexdigit.twin.records import release_test, servo_step_test
-
     duration, rate = (5.0, 500.0) if fast else (8.0, 1000.0)
     rel = release_test(duration_s=duration, sample_rate_hz=rate, seed=seed, params=params)
     release, tip = series_from_table(rel, "gauge1"), series_from_table(rel, "tip_deflection")
@@ -297,6 +303,8 @@ class FilterTradeoff:
     def best_harmonics(self) -> int:
         return int(self.harmonics[int(np.argmax(self.fft_reduction))])
 
+    __repr__ = fields_summary
+
 
 def filter_tradeoff(
     params: RigParams | None = None, rng: np.random.Generator | None = None, *, fast: bool = False
@@ -356,8 +364,6 @@ def deflection_fits() -> tuple[list, ResultTable]:
 def voltage_fits(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> tuple[list, ResultTable]:
     """E 3.20-3.22 from the twin's actuation sweep (commands 8..43, each settled; 5 readings a command when
     ``fast``, else 20): ``(fits, table identify.voltage_fits)``."""
-    from flexdigit.twin.records import actuation_sweep
-
     sweep = actuation_sweep(samples=5 if fast else 20, seed=seed, params=params)
     commands = sweep.column("command").astype(float)
     printed = thesis_value("conversion.v_sg_fit")
@@ -419,6 +425,8 @@ class Chapter3IdentifyStudy:
             self.deflection[1],
             self.voltage[1],
         )
+
+    __repr__ = fields_summary
 
 
 def chapter3_identify_study(

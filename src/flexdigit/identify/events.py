@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
+from flexdigit._repr import fields_summary
 from flexdigit.errors import DataFileError
 from flexdigit.identify.filters import butter_filter
 from flexdigit.identify.response import noise_std
@@ -155,6 +156,8 @@ class Survey:
     smooth: np.ndarray
     input_step: float | None = None
     problems: tuple[Problem, ...] = field(default=())
+
+    __repr__ = fields_summary
 
 
 def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Survey:

@@ -33,10 +33,13 @@ import numpy as np
 from scipy import optimize, stats
 from threadpoolctl import threadpool_limits
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.identify.filters import apply_filter
 from flexdigit.identify.response import analyze_response, final_value_estimate, free_response, noise_std
 from flexdigit.identify.scores import corr2, nrmse_fit
+from flexdigit.models.conversion import LinearFit
 
 __all__ = [
     "Estimate",
@@ -367,8 +370,6 @@ class _Model:
 
 def _initial_guess(t: np.ndarray, y: np.ndarray, kind: str, t0_s: float | None, source: str, smooth=None) -> dict:
     """Start values: features of a smoothed copy when it over/undershoots, else critical damping and the rise time."""
-    from flexdigit.identify.filters import apply_filter
-
     smooth = apply_filter(t, y, "butter") if smooth is None else np.asarray(smooth, dtype=float)
     guess = {}
     try:
@@ -464,6 +465,8 @@ class ARXModel:
         p = s[0]
         return float(abs(p)), 1.0
 
+    __repr__ = fields_summary
+
 
 def fit_arx(y, u=None, *, dt_s: float, na: int = 2, nb: int = 1, nk: int = 1, constant: bool = True) -> ARXModel:
     """Fit an ARX model by linear least squares (``numpy.linalg.lstsq``).
@@ -550,9 +553,9 @@ class LinearRelation:
 
     def as_model(self):
         """The fit as :class:`flexdigit.models.conversion.LinearFit` (what the K1/K3 formulas take)."""
-        from flexdigit.models.conversion import LinearFit
-
         return LinearFit(self.slope.value, self.intercept.value, self.rms)
+
+    __repr__ = fields_summary
 
 
 def fit_linear(x, y, *, confidence: float = 0.95) -> LinearRelation:

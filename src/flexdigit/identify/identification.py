@@ -30,11 +30,12 @@ from dataclasses import dataclass, field
 import control
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.identify.events import Problem, Survey, survey
-from flexdigit.identify.filters import FILTERS, apply_filter, default_cutoff_hz
-from flexdigit.identify.fit import LOSSES, Estimate, SecondOrderFit, second_order_response
+from flexdigit.identify.filters import FILTERS, apply_filter, butter_filter, default_cutoff_hz
+from flexdigit.identify.fit import LOSSES, Estimate, SecondOrderFit, fit_arx, second_order_response
 from flexdigit.identify.quality import FitQuality, assess
 from flexdigit.identify.response import NoOscillationError, ResponseFeatures, analyze_response
 from flexdigit.identify.timeseries import TimeSeries
@@ -167,6 +168,20 @@ class Identification:
                 "wn_from_damped_rad_s": f.wn_damped_rad_s,
             }
         return out
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            kind=self.kind,
+            method=self.method,
+            channel=self.channel,
+            wn_rad_s=self.wn_rad_s,
+            zeta=self.zeta,
+            gain=(self.gain, self.unit),
+            corr2=self.corr2,
+            fit_percent=self.fit_percent,
+            warnings=len(self.warnings),
+        )
 
 
 def identify(
@@ -550,9 +565,6 @@ def _arx_mode(t, y, kind: str, t0: float, cutoff_hz: float | None) -> tuple[floa
     samples per cut-off period (50 per period of the dominant oscillation by default). A release record is used
     from two cut-off periods after the release, where the filter no longer mixes in the hold before it.
     """
-    from flexdigit.identify.filters import butter_filter, default_cutoff_hz
-    from flexdigit.identify.fit import fit_arx
-
     fs = (t.size - 1) / (t[-1] - t[0])
     cutoff = cutoff_hz or default_cutoff_hz(t, y)
     yf = butter_filter(y, fs, cutoff)

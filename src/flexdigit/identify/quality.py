@@ -28,6 +28,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit.identify.events import Problem, find_spikes
 from flexdigit.identify.filters import butter_filter
 from flexdigit.identify.scores import LjungBox, corr2, ljung_box, nrmse_fit
@@ -94,6 +95,8 @@ class FitQuality:
                 "white": self.whiteness.p_value >= WHITENESS_P,
             },
         }
+
+    __repr__ = fields_summary
 
 
 def assess(

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import check_array, check_choice, check_positive
 from flexdigit.errors import DataFileError
 from flexdigit.models.second_order import (
@@ -164,6 +165,18 @@ class ResponseFeatures:
     def step_size(self) -> float:
         """Final minus initial value (the step, or minus the initial deflection for a release)."""
         return self.final_value - self.initial_value
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            kind=self.kind,
+            percent_overshoot=self.percent_overshoot,
+            rise_time_s=self.rise_time_s,
+            settling_time_s=self.settling_time_s,
+            wd_rad_s=self.wd_rad_s,
+            zeta_log_decrement=self.zeta_log_decrement,
+            wn_damped_rad_s=self.wn_damped_rad_s,
+        )
 
 
 def final_value_estimate(y: np.ndarray, tail_fraction: float = 0.1) -> float:

@@ -36,6 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import _io
+from flexdigit._io import RECORDS_LIMIT, atomic_write, check_input, count_lines, read_bytes, refuse_special
+from flexdigit._repr import summary
 from flexdigit._validation import Plausible, check_array
 from flexdigit.errors import DataFileError, one_line
 
@@ -158,6 +160,17 @@ class TimeSeries:
             self.time_unit,
         )
 
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            channel=self.channel,
+            unit=self.unit,
+            samples=len(self.t_s),
+            duration_s=float(self.t_s[-1] - self.t_s[0]) if len(self.t_s) else 0.0,
+            input=self.input_name if self.u is not None else None,
+            source=self.source,
+        )
+
 
 def split_unit(column: str) -> tuple[str, str]:
     """``"sg1_v" -> ("sg1", "V")``, ``"Time (ms)" -> ("Time", "ms")``; a name without a known unit keeps ``""``.
@@ -228,8 +241,6 @@ def read_timeseries(
         that is not a number, time not strictly increasing, NaN runs, irregular sampling, fewer than
         :data:`MIN_SAMPLES` samples.
     """
-    from flexdigit._io import refuse_special
-
     p = Path(path)
     refuse_special(p, "a CSV or Parquet record")
     if not p.is_file():
@@ -355,8 +366,6 @@ def _find_time_column(p: str, columns: list[str], time_column: str | None) -> st
 
 def _read_csv(p: Path) -> tuple[list[str], dict[str, np.ndarray], list[int]]:
     """Columns, float data and the file line of each data row; names the line and column of a bad cell."""
-    from flexdigit._io import RECORDS_LIMIT, count_lines, read_bytes
-
     count_lines(p, "a CSV record")  # a 10-million-row file is refused in a second, not read into gigabytes
     try:
         text = read_bytes(p, "a CSV record", RECORDS_LIMIT).decode("utf-8-sig")
@@ -461,8 +470,6 @@ def _parse_column(p: Path, name: str, cells: list[str], lines: list[int], decima
 def _read_parquet(p: Path) -> tuple[list[str], dict[str, np.ndarray]]:
     import pyarrow.parquet as pq
 
-    from flexdigit._io import check_input
-
     check_input(p, "a Parquet record")
     try:
         with _io.open_input(p, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
@@ -535,8 +542,6 @@ def _check_nan_runs(y: np.ndarray, source: str, col: str, where) -> None:
 def write_csv(path: str | Path, ts: TimeSeries, *, force: bool = False) -> Path:
     """Write a series as a recording ``time_s,<channel>_<unit>[,command]`` that :func:`read_timeseries` reads
     (atomically; an existing file is refused unless ``force``)."""
-    from flexdigit._io import atomic_write
-
     p = Path(path)
     unit = {v: k for k, v in CHANNEL_UNITS.items()}.get(ts.unit, "")
     ycol = f"{ts.channel}_{unit}" if unit else ts.channel

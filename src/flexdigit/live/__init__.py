@@ -11,6 +11,8 @@ from flexdigit._lazy import lazy_exports
 __getattr__, __all__ = lazy_exports(
     __name__,
     {
+        "FoxgloveStream": "flexdigit.live.foxglove_stream",
+        "stream_motion": "flexdigit.live.foxglove_stream",
         "LiveSession": "flexdigit.live.session",
         "make_app": "flexdigit.live.server",
         "serve": "flexdigit.live.server",

@@ -50,6 +50,7 @@ from importlib import resources
 from typing import Any
 
 from flexdigit.errors import ParameterError
+from flexdigit.live.session import MAX_REQUEST_BYTES
 
 __all__ = ["make_app", "serve", "bind", "check_host", "origin_allowed", "ASSETS", "TokenBucket"]
 
@@ -323,8 +324,6 @@ class _Page:
 
     async def answer(self, text: str | None) -> None:
         """Validate one request and pass it to the session; an ack, or one line saying what was wrong."""
-        from flexdigit.live.session import MAX_REQUEST_BYTES
-
         if text is None:
             await self.error("send JSON text, not binary")
             return

@@ -35,6 +35,15 @@ import numpy as np
 
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError, RigError
+from flexdigit.live.schemas import CONTACT_SCHEMA, SHAPE_SCHEMA
+from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
+from flexdigit.rig.controllers import make_controller
+from flexdigit.rig.loop import check_reading
+from flexdigit.rig.recording import Recording, rig_metadata
+from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
+from flexdigit.shape.shape import ShapeEstimator
+from flexdigit.tactile.model_io import load_model
+from flexdigit.twin.calibration import default_calibration, load_calibration
 
 __all__ = [
     "LiveSession",
@@ -184,8 +193,6 @@ class NetworkContact(ContactSource):
     beam inversion (a position network has no "no load" answer)."""
 
     def __init__(self, path, digit_length_m: float) -> None:
-        from flexdigit.tactile.model_io import load_model
-
         self.model = load_model(path)
         if self.model.target != "position":
             raise ParameterError(f"{path}: a {self.model.target!r} model; the live page needs a 'position' model")
@@ -349,12 +356,8 @@ class LiveSession:
         clock=time.monotonic,
         sleep=time.sleep,
     ) -> None:
-        from flexdigit.rig.base import open_rig, parse_rig_url
-
         # the loop's pacing clock, injected as run_loop's is (tests run it in virtual time)
         self._clock, self._sleep = clock, sleep
-        from flexdigit.twin.calibration import default_calibration, load_calibration
-
         self.calibration = default_calibration() if calibration is None else load_calibration(calibration)
         self.period_s = check_real(period_s, "period_s", "LiveSession", low=0.005, high=1.0)
         parsed = parse_rig_url(backend)
@@ -398,8 +401,6 @@ class LiveSession:
         self.stopped_by: str | None = None
 
     def _setup(self, model, record, force, rotation_map, orientation, seed) -> None:
-        from flexdigit.shape.shape import ShapeEstimator
-
         rig = self.rig
         params = rig.params
         self.length_m = params.geometry.digit_length_m
@@ -429,10 +430,6 @@ class LiveSession:
         self.setpoint = float(params.actuator.equilibrium_command)
         if self.kind == "twin" and cable:
             # a static sweep on a twin of its own (virtual time, the twin's 20 ms step: nothing moves fast)
-            from flexdigit.rig.base import open_rig, rig_url_options
-            from flexdigit.rig.controllers import make_controller
-            from flexdigit.rig.rotation import calibrate_rotation
-
             _, options = rig_url_options(self.rig_url)
             options = {k: v for k, v in options.items() if k != "spin_s"}
             options.update(dt_s=0.02, seed=rig.settings()["seed"] + 1)
@@ -440,9 +437,6 @@ class LiveSession:
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
         elif self.kind == "rig" and rotation_map is not None:
-            from flexdigit.rig.controllers import make_controller
-            from flexdigit.rig.rotation import load_rotation_map
-
             estimator = load_rotation_map(rotation_map)
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
@@ -458,9 +452,6 @@ class LiveSession:
             self.recorded_controller = (getattr(rig, "header", None) or {}).get("controller")
             self.unit = "deg" if self.recorded_controller else "command"
         if record is not None:
-            from flexdigit.live.schemas import CONTACT_SCHEMA, SHAPE_SCHEMA
-            from flexdigit.rig.recording import Recording, rig_metadata
-
             self.recording = Recording(
                 record,
                 header={"backend": self.backend, "controller": "digital20" if self.controller else None,
@@ -600,8 +591,6 @@ class LiveSession:
                 self.recording.close(stop)
 
     def _run(self) -> None:
-        from flexdigit.rig.loop import check_reading
-
         rig = self.rig
         adc = tuple(rig.params.sensors.adc_range_v)
         equilibrium = int(rig.params.actuator.equilibrium_command)

@@ -45,6 +45,7 @@ from flexdigit._validation import (
     validate_fields,
     validate_params,
 )
+from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 
 __all__ = ["BETA1_L", "Cantilever", "elastica_tip_deflection"]
@@ -197,8 +198,6 @@ class Cantilever:
         nylon supports on the strip, which add mass the formula leaves out.
         """
         if self.mass_per_length_kg_m <= 0:
-            from flexdigit.errors import ParameterError
-
             raise ParameterError(
                 "The 'mass_per_length_kg_m' parameter of Cantilever must be > 0 for a natural frequency. Got 0."
             )

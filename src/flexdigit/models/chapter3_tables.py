@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.models import cable, conversion, second_order, servo
 from flexdigit.models.plant import Plant, build_plant
@@ -55,6 +56,8 @@ class ReleaseTable:
     wn_from_wd_rad_s: np.ndarray
     table: ResultTable
 
+    __repr__ = fields_summary
+
 
 def release_table(which: str) -> ReleaseTable:
     """Table 3.1 (``"without_housing"``) or 3.2 (``"with_housing"``) recomputed from its printed columns."""
@@ -85,6 +88,8 @@ class Table34:
     tip_x_fit_m: float
     ours_at_fit: dict
     table: ResultTable
+
+    __repr__ = fields_summary
 
 
 def table_3_4(params: RigParams | None = None) -> Table34:
@@ -135,6 +140,8 @@ class ConversionStudy:
     offsets_mm: np.ndarray
     table: ResultTable
 
+    __repr__ = fields_summary
+
 
 def conversion_study() -> ConversionStudy:
     """K1 and K3 (3.4.1, 3.4.3): see :class:`ConversionStudy`."""
@@ -167,6 +174,8 @@ class PlantStudy:
     measured: dict
     dc_gains: ResultTable
     poles: ResultTable
+
+    __repr__ = fields_summary
 
 
 def plant_study(params: RigParams | None = None) -> PlantStudy:
@@ -233,6 +242,8 @@ class Chapter3Study:
             self.plant.dc_gains,
             self.plant.poles,
         )
+
+    __repr__ = fields_summary
 
 
 def chapter3_study(params: RigParams | None = None) -> Chapter3Study:

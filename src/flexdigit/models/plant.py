@@ -63,6 +63,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.models import bridge, cable, conversion, second_order, servo
@@ -236,6 +237,16 @@ class Plant:
             "stable": self.is_stable,
             "minimum_phase": self.is_minimum_phase,
         }
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            variant=self.variant,
+            output=self.output,
+            order=self.order,
+            dc_gain=(self.dc_gain, f"{self.output_unit}/{self.input_unit}"),
+            poles=(self.poles, "rad/s"),
+        )
 
 
 def _sorted(values) -> np.ndarray:

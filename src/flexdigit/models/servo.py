@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexdigit._validation import Interval, check_choice, declare, validate_fields
+from flexdigit.errors import ParameterError
 from flexdigit.models.polytf import PolyTF
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
@@ -131,8 +132,6 @@ class PotentiometerMap:
     def __post_init__(self) -> None:
         validate_fields(self)
         if self.slope_deg_per_v == 0:
-            from flexdigit.errors import ParameterError
-
             raise ParameterError("The 'slope_deg_per_v' parameter of PotentiometerMap must be non-zero. Got 0.")
 
     @classmethod

@@ -45,7 +45,7 @@ def _sums(r, b, coef, g, w, f):
     cross = 0.0
     curv = 0.0
     cost = 0.0
-    for c in range(3):
+    for c in range(w.shape[0]):  # the gauges
         value, slope = _horner(coef, g, c, f)
         res = r[b, c] - value
         cross += w[c] * res * slope
@@ -71,7 +71,8 @@ def _newton(r, b, coef, g, w, sign, lim, f, steps):
 def profile(r, coef, w, sign, lim, half, force, cost, curv):
     """Best force, cost and the cost's half curvature in the force of every entry, in place (B, G).
 
-    ``r`` (B, 3) residual readings, ``coef`` (K, G, 3) polynomial coefficients (powers 1..K), ``w`` (3,) weights,
+    ``r`` (B, n) residual readings of the n gauges (3 on the thesis rig), ``coef`` (K, G, n) polynomial
+    coefficients (powers 1..K) over the G grid entries, ``w`` (n,) weights,
     ``sign`` the side's sign, ``lim`` the largest force. ``half < 0``: two Newton steps from the linear model's
     force on every entry (:meth:`ContactEstimator._profile`). ``half >= 0``: every entry at the linear model's
     (clipped) force, then Newton on the ``2 half + 1`` entries around the best (``_profile_near_best``: all a point
@@ -82,7 +83,7 @@ def profile(r, coef, w, sign, lim, half, force, cost, curv):
         for g in range(n_grid):
             num = 0.0
             den = 0.0
-            for c in range(3):
+            for c in range(w.shape[0]):
                 num += r[b, c] * w[c] * coef[0, g, c]
                 den += coef[0, g, c] * w[c] * coef[0, g, c]
             f = num / max(den, 1e-300)
@@ -146,7 +147,7 @@ def point_sd(position, force, grid, coef, w, out):
         i00 = 0.0
         i01 = 0.0
         i11 = 0.0
-        for c in range(3):
+        for c in range(w.shape[0]):
             d_pos = 0.0
             d_force = 0.0
             power = 1.0  # f^(k-1)
@@ -192,7 +193,7 @@ def line_jacobian(index, total, line, d_centre, d_extent, out):
     for b in range(index.size):
         i = index[b]
         f = total[b]
-        for c in range(3):
+        for c in range(line.shape[2]):
             dc = 0.0
             dw = 0.0
             dt = 0.0

@@ -20,6 +20,8 @@ import numpy as np
 from flexdigit._estimator import Estimator, check_is_fitted
 from flexdigit._validation import Array, HasMethods, Interval, check_array, check_int, check_positive
 from flexdigit.errors import ParameterError
+from flexdigit.tactile.bounds import hang_readings_model
+from flexdigit.twin.twin import static_gauges_v
 
 __all__ = ["simulate_hangs", "HangInversion", "HangPosterior"]
 
@@ -28,8 +30,6 @@ def simulate_hangs(model, position_from_base_m, mass_kg, commands, *, repetition
     """Readings (n, 3K) of hangs read at every command: one friction draw per hang, shared by its readings, and
     white noise and ADC quantisation per reading (the twin's sensor chain, statics). Rows are settings repeated
     ``repetitions`` times (setting-major)."""
-    from flexdigit.twin.twin import static_gauges_v
-
     a = np.repeat(np.atleast_1d(np.asarray(position_from_base_m, dtype=float)), repetitions)
     m = np.repeat(
         np.broadcast_to(np.asarray(mass_kg, dtype=float), np.shape(np.atleast_1d(position_from_base_m))), repetitions
@@ -94,8 +94,6 @@ class HangInversion(Estimator):
         )
 
     def fit(self, X=None, y=None) -> HangInversion:
-        from flexdigit.tactile.bounds import hang_readings_model
-
         self._validate_params()
         owner = "HangInversion"
         self.commands_ = [check_int(c, "commands", owner, low=0, high=254) for c in self.commands]
@@ -182,8 +180,6 @@ class HangPosterior(Estimator):
         self.digit_length_m = digit_length_m
 
     def fit(self, X=None, y=None) -> HangPosterior:
-        from flexdigit.tactile.bounds import hang_readings_model
-
         self._validate_params()
         self.a_ = np.atleast_1d(np.asarray(self.position_from_base_m, dtype=float))
         self.m_ = np.broadcast_to(np.asarray(self.mass_kg, dtype=float), self.a_.shape)

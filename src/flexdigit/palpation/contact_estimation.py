@@ -45,6 +45,7 @@ from numbers import Integral, Real
 import numpy as np
 
 from flexdigit._estimator import Estimator, check_is_fitted
+from flexdigit._repr import fields_summary
 from flexdigit._validation import (
     Array,
     Bool,
@@ -59,7 +60,12 @@ from flexdigit._validation import (
     check_values,
 )
 from flexdigit.errors import ParameterError
+from flexdigit.params import RigParams
 from flexdigit.tactile.bounds import line_steps
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.contact import Pressure, quadrature, solve_contact
+from flexdigit.twin.sensors import SensorChain
+from flexdigit.twin.twin import cable_shortening_m, cached_digit
 
 __all__ = [
     "DETECT_CHI2",
@@ -85,6 +91,14 @@ LINE_CENTRE_STEP_M = 0.002
 KINDS = ("none", "point", "distributed")
 
 
+def _kernel():
+    """The compiled kernels (:mod:`flexdigit.palpation._contact_kernel`), imported here once for every caller on
+    first use: numba's import and compilation are paid when a contact is estimated, not when this module loads."""
+    from flexdigit.palpation import _contact_kernel
+
+    return _contact_kernel
+
+
 class ContactGaugeModel:
     """The twin's static gauge voltages (noise-free, V) under contact, for any batch of cases.
 
@@ -106,11 +120,6 @@ class ContactGaugeModel:
     """
 
     def __init__(self, params=None, calibration=None, *, orientation="vertical", housing=True, cells_per_section=3):
-        from flexdigit.params import RigParams
-        from flexdigit.twin.calibration import default_calibration
-        from flexdigit.twin.sensors import SensorChain
-        from flexdigit.twin.twin import cached_digit
-
         self.params = params or RigParams()
         self.calibration = calibration or default_calibration()
         self.orientation = orientation
@@ -129,8 +138,6 @@ class ContactGaugeModel:
         return np.broadcast_to(c.reshape(-1) if c.ndim else c, (n,)).astype(int)
 
     def _volts(self, load_s, load_f, command):
-        from flexdigit.twin.twin import cable_shortening_m
-
         b = load_s.shape[0]
         cmd = self._commands(command, b)
         sol = self.chain.solve_static(
@@ -163,8 +170,6 @@ class ContactGaugeModel:
     def line_points(self, centre_m, extent_m) -> tuple[np.ndarray, np.ndarray]:
         """Point loads equivalent to even line loads of 1 N (:func:`flexdigit.twin.contact.quadrature`): arc
         positions and forces, (n, K), padded with zero forces."""
-        from flexdigit.twin.contact import Pressure, quadrature
-
         c = np.atleast_1d(np.asarray(centre_m, dtype=float))
         w = np.broadcast_to(np.asarray(extent_m, dtype=float), c.shape)
         lo, hi = c - w / 2, c + w / 2
@@ -186,9 +191,6 @@ class ContactGaugeModel:
     def tissue_solution(self, tissue, command, psi0=None):
         """The body's static contact at each command: :class:`flexdigit.twin.contact.ContactSolution` and the
         gauges (n, 3). ``psi0`` (n, links): a starting shape (a neighbouring tissue's solution)."""
-        from flexdigit.twin.contact import solve_contact
-        from flexdigit.twin.twin import cable_shortening_m
-
         cmd = np.atleast_1d(np.asarray(command)).astype(int)
         sol = solve_contact(
             self.chain, tissue=tissue, cable_shortening_m=cable_shortening_m(cmd, self.params), psi0=psi0
@@ -243,6 +245,8 @@ class ContactEstimate:
 
     def as_dict(self) -> dict:
         return {k: v.tolist() for k, v in self.__dict__.items()}
+
+    __repr__ = fields_summary
 
 
 class ContactEstimator(Estimator):
@@ -362,11 +366,12 @@ class ContactEstimator(Estimator):
         self.s_grid_ = np.minimum(self.s_grid_[self.s_grid_ <= hi + 1e-9], hi)
         self.f_grid_ = self.sign_ * self.max_force_n * np.linspace(0.0, 1.0, FORCE_POINTS)
         self.tables_: dict[int, dict] = {}
+        n = len(self.model.params.geometry.gauge_positions_m)  # the digit's gauges
         self.offset_ = (
-            np.zeros(3) if self.offset_v is None else check_array(self.offset_v, "offset_v", owner, shape=(3,))
+            np.zeros(n) if self.offset_v is None else check_array(self.offset_v, "offset_v", owner, shape=(n,))
         )
         if X is not None and self.offset_v is None:
-            v, cmd = _split(X)
+            v, cmd = _split(X, len(self.model.params.geometry.gauge_positions_m))
             self.offset_ = np.mean(v - self.model.free_v(cmd), axis=0)
         for c in self.commands:
             self._line_table(int(c)) if self.classify else self._table(int(c))
@@ -379,10 +384,11 @@ class ContactEstimator(Estimator):
         s, f = self.s_grid_, self.f_grid_
         ss, ff = np.meshgrid(s, f[1:], indexing="ij")
         g0 = m.free_v([command])[0]
-        v = m.point_v(ss.ravel(), ff.ravel(), command).reshape(s.size, f.size - 1, 3) - g0
+        n = len(m.params.geometry.gauge_positions_m)  # the digit's gauges
+        v = m.point_v(ss.ravel(), ff.ravel(), command).reshape(s.size, f.size - 1, n) - g0
         design = np.stack([f[1:] ** k for k in range(1, POLY_DEGREE + 1)], axis=1)  # (nf, K)
         coef = np.linalg.lstsq(design, v.transpose(1, 0, 2).reshape(f.size - 1, -1), rcond=None)[0]
-        point = np.ascontiguousarray(coef.reshape(POLY_DEGREE, s.size, 3))  # (K, ns, 3)
+        point = np.ascontiguousarray(coef.reshape(POLY_DEGREE, s.size, n))  # (K, ns, gauges)
         table = {"g0": g0, "point": point}
         self.tables_[command] = table
         return table
@@ -409,8 +415,9 @@ class ContactEstimator(Estimator):
         nf = f.size - 1
         lv = m._volts(np.tile(ls, (nf, 1)), np.repeat(f[1:], centre.size)[:, None] * np.tile(lu, (nf, 1)), command)
         design = np.stack([f[1:] ** k for k in range(1, POLY_DEGREE + 1)], axis=1)
-        coef = np.linalg.lstsq(design, (lv.reshape(nf, centre.size, 3) - g0).reshape(nf, -1), rcond=None)[0]
-        return np.ascontiguousarray(coef.reshape(POLY_DEGREE, centre.size, 3))
+        n = len(m.params.geometry.gauge_positions_m)
+        coef = np.linalg.lstsq(design, (lv.reshape(nf, centre.size, n) - g0).reshape(nf, -1), rcond=None)[0]
+        return np.ascontiguousarray(coef.reshape(POLY_DEGREE, centre.size, n))
 
     def _line_derivatives(self, command: int, index) -> dict:
         """The line table with its derivatives in centre and extent (``line_dc``, ``line_dw``: K, G, 3, polynomials
@@ -421,9 +428,10 @@ class ContactEstimator(Estimator):
         table = self._line_table(command)
         cw, g0 = table["line_cw"], table["g0"]
         if "line_dc" not in table:
+            n = table["line"].shape[2]
             table.update(
-                line_dc=np.zeros((POLY_DEGREE, len(cw), 3)),
-                line_dw=np.zeros((POLY_DEGREE, len(cw), 3)),
+                line_dc=np.zeros((POLY_DEGREE, len(cw), n)),
+                line_dw=np.zeros((POLY_DEGREE, len(cw), n)),
                 line_derived=np.zeros(len(cw), dtype=bool),
             )
         need = np.unique(index[~table["line_derived"][index]])
@@ -446,7 +454,7 @@ class ContactEstimator(Estimator):
         model's force, the force clipped to the side's range (compiled: :mod:`flexdigit.palpation._contact_kernel`).
         With ``half >= 0`` only the ``2 half + 1`` entries around the best at the linear model's force get the
         Newton steps (all a point estimate needs; the others keep the linear model's force and cost)."""
-        from flexdigit.palpation import _contact_kernel as kernel
+        kernel = _kernel()
 
         out = kernel.empty_profile(r.shape[0], coef.shape[1])
         r = np.ascontiguousarray(r, dtype=float)
@@ -457,10 +465,10 @@ class ContactEstimator(Estimator):
         """Estimate contact from readings: ``X`` (n, 4) gauges and command, or (n, 3) gauges with ``command``."""
         if command is not None:
             v = check_array(X, "X", "ContactEstimator.predict")
-            v = v.reshape(-1, 3)
+            v = v.reshape(-1, len(self.model.params.geometry.gauge_positions_m))
             cmd = np.broadcast_to(np.asarray(command), (v.shape[0],)).astype(int)
         else:
-            v, cmd = _split(X)
+            v, cmd = _split(X, len(self.model.params.geometry.gauge_positions_m))
         if not hasattr(self, "tables_"):
             check_is_fitted(self, "tables_")
         n = v.shape[0]
@@ -534,7 +542,7 @@ class ContactEstimator(Estimator):
     def _refine(self, force, cost, grid):
         """Best grid point, refined by a parabola through it and its neighbours (position and force; the force by the
         same parabola's weights, linear interpolation between the neighbours) and the cost there."""
-        from flexdigit.palpation import _contact_kernel as kernel
+        kernel = _kernel()
 
         out = np.empty((3, cost.shape[0]))
         kernel.refine(force, cost, grid, *out)
@@ -542,7 +550,7 @@ class ContactEstimator(Estimator):
 
     def _point_sd(self, position, force, table):
         """(n, 2) standard deviations of position and force, from the table's own derivatives."""
-        from flexdigit.palpation import _contact_kernel as kernel
+        kernel = _kernel()
 
         out = np.empty((position.size, 2))
         kernel.point_sd(position, force, self.s_grid_, table["point"], self.weight_, out)
@@ -551,10 +559,10 @@ class ContactEstimator(Estimator):
     def _line_sd(self, index, total, command):
         """(n, 3) standard deviations of centre, extent and total of the line table's entries ``index`` at forces
         ``total``, from the derivative tables (within 1 % of :func:`flexdigit.tactile.bounds.line_bounds`)."""
-        from flexdigit.palpation import _contact_kernel as kernel
+        kernel = _kernel()
 
         t = self._line_derivatives(command, index)
-        jac = np.empty((index.size, 3, 3))
+        jac = np.empty((index.size, t["line"].shape[2], 3))
         kernel.line_jacobian(index, np.asarray(total, dtype=float), t["line"], t["line_dc"], t["line_dw"], jac)
         out = np.empty((index.size, 3))
         kernel.fisher_sd(jac, self.weight_, out)
@@ -582,15 +590,15 @@ def _log_evidence(cost, curvature) -> np.ndarray:
     """``log sum_g exp(-cost_g / 2) sqrt(2 pi / curvature_g)`` over a grid (B, G), less ``log G``: the marginal
     likelihood under a uniform prior over the grid's entries, the force integrated out by Laplace's approximation
     about its best value (the common force prior's width cancels between hypotheses)."""
-    from flexdigit.palpation import _contact_kernel as kernel
+    kernel = _kernel()
 
     out = np.empty(cost.shape[0])
     kernel.log_evidence(cost, curvature, out)
     return out
 
 
-def _split(X) -> tuple[np.ndarray, np.ndarray]:
+def _split(X, gauges: int = 3) -> tuple[np.ndarray, np.ndarray]:
     x = check_array(X, "X", "ContactEstimator", ndim=2)
-    if x.shape[1] != 4:
-        raise ParameterError(f"X must have 3 gauge columns and the command. Got {x.shape[1]} columns.")
-    return x[:, :3], x[:, 3].astype(int)
+    if x.shape[1] != gauges + 1:
+        raise ParameterError(f"X must have {gauges} gauge columns and the command. Got {x.shape[1]} columns.")
+    return x[:, :gauges], x[:, gauges].astype(int)

@@ -33,8 +33,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_choice, check_int, check_real, check_values
-from flexdigit.errors import ParameterError
+from flexdigit.errors import ParameterError, RigError
+from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
+from flexdigit.rig.loop import run_loop
+from flexdigit.twin.contact import Inclusion, Tissue, TissueContact
 
 __all__ = [
     "MODELS",
@@ -142,6 +146,8 @@ class SweepRecord:
     status: str = "completed"
     message: str = ""
 
+    __repr__ = fields_summary
+
 
 class _Staircase:
     """A loop controller that sends a scheduled command (it reads nothing): the sweep's open-loop staircase."""
@@ -168,8 +174,6 @@ def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, lo
     ``log_mode``: what to do with an existing ``log_path`` (:func:`~flexdigit.rig.loop.run_loop`: refuse it,
     ``"replace"`` it, ``"append"`` to it).
     """
-    from flexdigit.rig.loop import run_loop
-
     sequence = [protocol.tare_command, *protocol.commands, protocol.tare_command]
     stairs = _Staircase(sequence, protocol.plateau_s)
     true_force = []
@@ -189,8 +193,6 @@ def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, lo
     result.raise_if_interrupted()  # a stop (Ctrl-C, SIGTERM) ends the sweep and the command, not a rig fault
     if not result.ok:
         raise_from = result.message
-        from flexdigit.errors import RigError
-
         raise RigError(f"palpation sweep stopped: {raise_from}")
     t = result.time_s
     plateau = np.minimum((t // protocol.plateau_s).astype(int), len(sequence) - 1)
@@ -234,6 +236,8 @@ class TissueFit:
     def stiffness_n_m_per_cm(self) -> float:
         """The modulus as the N/m of one centimetre of digit pressed in."""
         return 0.01 * self.modulus_n_m2
+
+    __repr__ = fields_summary
 
 
 class _TissueLikelihood:
@@ -368,8 +372,6 @@ def fit_tissue(
 def _start(like, model, placed, commands, fit_exponent):
     """A starting point from a coarse grid: gaps where the free digit's deepest point in the tissue's stretch
     would meet it at each plateau, moduli log-spaced 30..3e5 N/m^2."""
-    from flexdigit.twin.contact import Tissue
-
     free = model.tissue_solution(Tissue(placed.start_m, placed.end_m, 1.0, 0.0, side=placed.side), commands)[0]
     chain = model.chain
     s = np.linspace(0.0, chain.length_m, 55)
@@ -460,11 +462,11 @@ class PalpationResult:
             "converged": f.converged,
         }
 
+    __repr__ = fields_summary
+
 
 def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, estimator=None) -> PalpationResult:
     """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope."""
-    from flexdigit.palpation.contact_estimation import ContactEstimator
-
     fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley")
     sweep = ~record.tare
     cmds = record.command[sweep]
@@ -486,11 +488,12 @@ def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, est
     if "true_force_n" in record.samples:
         curve["true_force_n"] = _plateau_truth(record, protocol)[sweep]
     touching = depth > 0
-    if np.count_nonzero(touching) >= 2:
-        w = 1.0 / np.maximum(est.force_sd_n[touching], 1e-12) ** 2
-        x, y = depth[touching], force[touching]
-        slope = float(np.sum(w * x * y) / np.sum(w * x * x))
-        slope_sd = float(1.0 / math.sqrt(np.sum(w * x * x)))
+    w = 1.0 / np.maximum(est.force_sd_n[touching], 1e-12) ** 2  # 0 where the gauges cannot see the force (sd inf)
+    x, y = depth[touching], force[touching]
+    information = float(np.sum(w * x * x))
+    if np.count_nonzero(touching) >= 2 and information > 0:
+        slope = float(np.sum(w * x * y) / information)
+        slope_sd = float(1.0 / math.sqrt(information))
     else:
         slope, slope_sd = math.nan, math.inf
     return PalpationResult(protocol, placed, fit, curve, slope, slope_sd, record)
@@ -498,8 +501,6 @@ def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, est
 
 def _deepest(model, tissue, psi) -> np.ndarray:
     """Deepest penetration (m) of the digit into the tissue at each state (0 when clear)."""
-    from flexdigit.twin.contact import TissueContact
-
     _, _, delta, _, _ = TissueContact(model.chain, tissue).points(psi)
     return delta.max(axis=1, initial=0.0) if delta.size else np.zeros(psi.shape[0])
 
@@ -521,8 +522,6 @@ def palpate(
     On the twin the tissue is put there (``rig.place_tissue``) and the true contact force is logged beside each
     sample; on hardware the operator is asked to place it.
     """
-    from flexdigit.palpation.contact_estimation import ContactGaugeModel
-
     protocol = protocol or PalpationProtocol()
     model = model or ContactGaugeModel(rig.params)
     rig.place_tissue(placed)
@@ -581,6 +580,8 @@ class ScanResult:
     inclusion: dict
     records: list
 
+    __repr__ = fields_summary
+
 
 def scan(
     records_or_rig,
@@ -598,8 +599,6 @@ def scan(
     tissue at offset 0 (where it lies; its modulus and gap are not used). ``inclusion_width_m`` is the size of the
     nodule looked for: its ratio is fitted for that width (a narrower, stiffer one presses back alike).
     """
-    from flexdigit.palpation.contact_estimation import ContactGaugeModel
-
     protocol = protocol or PalpationProtocol()
     offsets = check_values(offsets_m, "offsets_m", "scan", unit="m").reshape(-1)
     if offsets.size < 3:
@@ -635,8 +634,6 @@ def _centroid_a(model, sol) -> float:
 
 def _fit_inclusion(records, model, uniform, offsets, local, position, map_k, width):
     """One inclusion fitted to every sweep of the scan: gap, base modulus, centre and ratio (width given)."""
-    from flexdigit.twin.contact import Inclusion
-
     gauges = np.concatenate([r.gauges_v for r in records])
     commands = np.concatenate([r.command for r in records])
     times = np.concatenate([r.time_s + 1e4 * j for j, r in enumerate(records)])  # (drift fitted per sweep below)
@@ -802,6 +799,8 @@ class ForceHold:
     settling_s: float
     status: str
 
+    __repr__ = fields_summary
+
 
 def hold_force(
     rig,
@@ -827,9 +826,6 @@ def hold_force(
     (steady force and error over the last ``window_s``, overshoot, 10 % settling time) use it there, and the
     estimate on hardware.
     """
-    from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
-    from flexdigit.rig.loop import run_loop
-
     setpoint = check_real(setpoint_n, "setpoint_n", "hold_force", low=0, low_open=True)
     model = model or ContactGaugeModel(rig.params)
     if estimator is None:

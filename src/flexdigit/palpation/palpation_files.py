@@ -28,10 +28,14 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from flexdigit._io import read_text, refuse_special
 from flexdigit._validation import Plausible, _interval_text, unit_slip
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.palpation.palpation import PalpationProtocol
+from flexdigit.twin.contact import Inclusion, Tissue
 
 __all__ = [
+    "builtin_palpation_files",
     "TISSUES",
     "PROTOCOLS",
     "MAX_SERIES",
@@ -203,16 +207,12 @@ def _read(name_or_path, builtin, kind: str) -> tuple[dict, str]:
         resource = resources.files(__package__).joinpath("palpation_data", f"{text_name}.toml")
         text, source = resource.read_text(), f"{kind} {text_name}"
     else:
-        from flexdigit._io import refuse_special
-
         path = Path(name_or_path)
         refuse_special(path, f"a {kind} TOML")
         if not path.is_file():
             raise DataFileError(
                 f"no {kind} {text_name!r}: expected one of {', '.join(builtin)} or a TOML file that exists"
             )
-        from flexdigit._io import read_text
-
         text, source = read_text(path, f"a {kind} TOML"), str(path)  # binary garbage: named, not a codec error
     try:
         return tomllib.loads(text), source
@@ -231,14 +231,30 @@ class TissueFile:
     placed_on_twin: bool
 
 
+def builtin_palpation_files() -> dict[str, dict[str, str]]:
+    """The built-in tissues (:data:`TISSUES`) and palpation protocols (:data:`PROTOCOLS`), each with its one-line
+    description: ``{"tissues": {name: text}, "protocols": {name: text}}``."""
+    import tomllib
+
+    def first_comment(text: str) -> str:
+        lines = [line.lstrip("# ").strip() for line in text.splitlines() if line.startswith("#")]
+        return " ".join(lines).split(". ")[0].rstrip(".")
+
+    out: dict[str, dict[str, str]] = {"tissues": {}, "protocols": {}}
+    for kind, names in (("tissues", TISSUES), ("protocols", PROTOCOLS)):
+        for name in names:
+            text = resources.files(__package__).joinpath("palpation_data", f"{name}.toml").read_text()
+            doc = tomllib.loads(text)
+            out[kind][name] = doc.get("tissue", {}).get("description") or first_comment(text)
+    return out
+
+
 def load_tissue(name_or_path):
     """A tissue from a built-in name (:data:`TISSUES`) or a TOML file: ``(Tissue, TissueFile)``.
 
     Without ``gap_mm`` and ``modulus_n_m2`` the tissue is only located (``TissueFile.placed_on_twin`` False): enough
     for hardware, where palpation estimates them; the twin needs them to put the tissue there.
     """
-    from flexdigit.twin.contact import Inclusion, Tissue
-
     data, source = _read(name_or_path, TISSUES, "tissue")
     if set(data) != {"tissue"}:
         extra = sorted(set(data) - {"tissue"})
@@ -304,8 +320,6 @@ class PalpationFile:
 
 def load_palpation_protocol(name_or_path=None) -> PalpationFile:
     """A palpation protocol from a built-in name (:data:`PROTOCOLS`) or a TOML file (the default sweep if None)."""
-    from flexdigit.palpation.palpation import PalpationProtocol
-
     if name_or_path is None:
         name_or_path = "sweep"
     data, source = _read(name_or_path, PROTOCOLS, "palpation protocol")

@@ -15,7 +15,21 @@ import math
 import numpy as np
 
 from flexdigit._result_table import ResultTable
-from flexdigit.tactile.bounds import CONTACT_ZONES, contact_bounds, gaussian_bayes_limits
+from flexdigit.palpation.active import HangInversion, HangPosterior, simulate_hangs
+from flexdigit.palpation.contact_estimation import LINE_CENTRE_STEP_M, ContactEstimator, ContactGaugeModel
+from flexdigit.palpation.palpation import (
+    PalpationProtocol,
+    analyse,
+    fit_tissue,
+    hold_force,
+    scan,
+    simulate_sweep,
+    stiffness_bound,
+)
+from flexdigit.rig.base import open_rig
+from flexdigit.tactile.bounds import CONTACT_ZONES, TwinGaugeModel, active_limits, contact_bounds, gaussian_bayes_limits
+from flexdigit.twin.contact import Inclusion, Tissue
+from flexdigit.twin.sensors import adc
 
 __all__ = [
     "PUBLISHED",
@@ -42,8 +56,6 @@ BOOTSTRAP_DRAWS = 200
 
 
 def _noisy(model, clean, n_readings, rng):
-    from flexdigit.twin.sensors import adc
-
     noise = model.noise_v / math.sqrt(n_readings) * rng.standard_normal(clean.shape)
     return adc(clean + noise, model.params.sensors) if n_readings == 1 else clean + noise
 
@@ -78,8 +90,6 @@ def contact_study(
     of a setting, 0.5 s at 50 Hz). ``position_ratio_ci95`` is the pooled position ratio's 95 % Monte Carlo interval
     (bootstrap over each contact's ``repetitions``): whether a ratio over 1 is the draw or the estimator.
     """
-    from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
-
     model = estimator_model or ContactGaugeModel()
     truth = truth_model or ContactGaugeModel(cells_per_section=9)
     s = np.arange(0.0, 0.2701, 0.01) if positions_m is None else np.asarray(positions_m, dtype=float)
@@ -140,8 +150,6 @@ def _prior_rows(region_m, extents_m, totals_n, prior_total_step_n, length_m):
     """:func:`classification_study`'s prior: every point of ``region_m`` (line centres' grid) and every line load
     centred there that fits on the digit, at every total of the ``prior_total_step_n`` grid and of ``totals_n``
     (pressing: negative); ``(kind, centre_m, extent_m, force_n)`` arrays."""
-    from flexdigit.palpation.contact_estimation import LINE_CENTRE_STEP_M
-
     grid = np.arange(region_m[0], region_m[1] + 1e-9, LINE_CENTRE_STEP_M)
     totals = np.arange(min(totals_n), max(totals_n) + 1e-9, prior_total_step_n)
     totals = np.unique(np.round(np.concatenate([totals, totals_n]), 9))
@@ -178,8 +186,6 @@ def classification_study(
     asked the same on ``repetitions`` noisy readings of each truth. Returns the per-truth accuracies and the
     accuracy over the truths where the limit allows 95 %.
     """
-    from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
-
     # at 25 readings the noise (0.4 mV) is as small as the 3-cell chain's discretisation error (0.4 % of the
     # signal): a 9-cell model reads a 27-cell truth (with 3 against 9 the estimator is 2 points less accurate)
     model = estimator_model or ContactGaugeModel(cells_per_section=9)
@@ -239,10 +245,6 @@ def stiffness_study(
 ) -> dict:
     """Palpation sweeps (the twin's statics and noise, drift included) over a range of moduli: the fitted modulus's
     relative errors, the fit's standard deviations and the Cramer-Rao bound of each."""
-    from flexdigit.palpation.contact_estimation import ContactGaugeModel
-    from flexdigit.palpation.palpation import PalpationProtocol, fit_tissue, simulate_sweep, stiffness_bound
-    from flexdigit.twin.contact import Tissue
-
     model = ContactGaugeModel()
     protocol = protocol or PalpationProtocol()
     placed = placed or Tissue(0.15, 0.35, 0.03, 1000.0)
@@ -282,10 +284,6 @@ def stiffness_study(
 def scan_study(*, offsets_m=None, protocol=None, seed=0, inclusion=(0.25, 0.01, 3.0)) -> dict:
     """A scan of the soft phantom with a 3x nodule (the twin's statics and noise): where the inclusion was found
     and its ratio, beside the truth."""
-    from flexdigit.palpation.contact_estimation import ContactGaugeModel
-    from flexdigit.palpation.palpation import PalpationProtocol, scan, simulate_sweep
-    from flexdigit.twin.contact import Inclusion, Tissue
-
     model = ContactGaugeModel()
     protocol = protocol or PalpationProtocol(commands=tuple(range(8, 31, 2)))
     placed = Tissue(0.15, 0.35, 0.03, 1000.0)
@@ -314,10 +312,6 @@ def scan_study(*, offsets_m=None, protocol=None, seed=0, inclusion=(0.25, 0.01, 
 def force_study(moduli_n_m2=(300.0, 1500.0), *, setpoint_n=0.1, duration_s=10.0, seed=2, dt_s=0.005) -> dict:
     """Force control on the dynamic twin through the 20 ms loop, one run per tissue modulus: steady error,
     ripple, overshoot and settling time of the true contact force."""
-    from flexdigit.palpation.palpation import hold_force
-    from flexdigit.rig.base import open_rig
-    from flexdigit.twin.contact import Tissue
-
     runs = []
     for k in moduli_n_m2:
         rig = open_rig("sim", seed=seed, dt_s=dt_s)
@@ -339,9 +333,6 @@ def force_study(moduli_n_m2=(300.0, 1500.0), *, setpoint_n=0.1, duration_s=10.0,
 def active_study(*, commands=(0, 20, 40), samples=2000, repetitions=20, seed=0, estimators=True) -> dict:
     """Chapter 7's settings (table 7.1: 25 and 37.5 g at 0..18 cm from the tip) read at every command under one
     hang, against one reading at one command: Bayes limits, and the two hang estimators on readings the twin draws."""
-    from flexdigit.palpation.active import HangInversion, HangPosterior, simulate_hangs
-    from flexdigit.tactile.bounds import TwinGaugeModel, active_limits
-
     model = TwinGaugeModel()
     length = float(model.params.geometry.digit_length_m)
     a, m = (g.ravel() for g in np.meshgrid(length - np.arange(0, 0.181, 0.02), [0.025, 0.0375], indexing="ij"))
@@ -393,10 +384,6 @@ def active_study(*, commands=(0, 20, 40), samples=2000, repetitions=20, seed=0, 
 def sweep_example(modulus_n_m2: float = 1000.0, *, protocol=None, seed=0):
     """One palpation sweep of the soft block (the twin's statics and noise) analysed as ``flexdigit palpate``
     does: its :class:`~flexdigit.palpation.palpation.PalpationResult` (fit, force-indentation curve, lumped slope)."""
-    from flexdigit.palpation.contact_estimation import ContactGaugeModel
-    from flexdigit.palpation.palpation import PalpationProtocol, analyse, simulate_sweep
-    from flexdigit.twin.contact import Tissue
-
     model = ContactGaugeModel()
     protocol = protocol or PalpationProtocol(commands=tuple(range(8, 31, 2)))
     placed = Tissue(0.15, 0.35, 0.03, float(modulus_n_m2))

@@ -29,12 +29,19 @@ import matplotlib
 from flexdigit import __version__
 from flexdigit._io import atomic_write, check_output
 from flexdigit._json import to_jsonable
+from flexdigit._repr import fields_summary
 from flexdigit._system import available_cores, check_workers
 from flexdigit.errors import OutputExistsError
 from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.twin.calibration import (
+    default_calibration,
+    default_calibration_source,
+    default_fit_record,
+    use_calibration,
+)
 
 __all__ = [
     "ReportSummary",
@@ -45,6 +52,8 @@ __all__ = [
     "EXPECTED_SECONDS",
     "check_report_dir",
     "COLLAPSE_ROWS",
+    "FRONT_FIGURES",
+    "entry_label",
 ]
 
 matplotlib.use("Agg")
@@ -60,6 +69,8 @@ class ReportSummary:
     chapters: list[str]
     failed: dict[str, str] = field(default_factory=dict)
     seconds: dict[str, float] = field(default_factory=dict)
+
+    __repr__ = fields_summary
 
 
 def reproduce(
@@ -82,7 +93,8 @@ def reproduce(
     Parameters
     ----------
     progress : callable, optional
-        Called with each chapter's module name as it starts (one worker) or finishes (several).
+        ``progress(module_name, title, seconds)`` as each chapter is done (its title, or the module's name if it
+        failed; its wall-clock seconds), for a display such as "Chapter 5: ... done in 3.2 s".
     workers : int, optional
         Chapters built at once, each in its own process (default: one per available core). Chapters are
         independent and seeded by ``seed`` and their own streams, so the numbers do not depend on it; ``1``
@@ -103,9 +115,8 @@ def _build(work: Path, params, seed, fast, chapters, progress, workers) -> Repor
     if n_workers == 1:
         done = {}
         for name in names:
-            if progress is not None:
-                progress(name)
             done[name] = _build_chapter(name, ctx)
+            _report_progress(progress, name, done[name])
     else:
         done = _build_in_processes(names, ctx, n_workers, progress)
     built = [done[n][0] for n in names if done[n][0] is not None]
@@ -307,8 +318,6 @@ _WORKER_CONTEXT = contextlib.ExitStack()
 def _calibration_state():
     """The twin calibration a ``use_calibration`` block made the default here, to hand to the workers (a spawned
     process starts on the packaged one); None when it is the packaged one."""
-    from flexdigit.twin.calibration import default_calibration, default_calibration_source, default_fit_record
-
     source = default_calibration_source()
     return None if source == "packaged" else (default_calibration(), source, default_fit_record())
 
@@ -328,8 +337,6 @@ def _worker_init(calibration_state) -> None:
     os.environ.update(_ONE_THREAD)  # the libraries not loaded yet (SciPy's, slycot's OpenBLAS; scikit-learn's OpenMP)
     threadpool_limits(1)  # those already loaded (numpy's OpenBLAS)
     if calibration_state is not None:  # the parent's use_calibration block, for every chapter of this worker
-        from flexdigit.twin.calibration import use_calibration
-
         _WORKER_CONTEXT.enter_context(use_calibration(*calibration_state))
 
 
@@ -347,12 +354,18 @@ def _build_in_processes(names, ctx: ReportContext, workers: int, progress) -> di
                     done[name] = future.result()
                 except Exception:  # the worker died (out of memory, killed): say so in the report
                     done[name] = (None, traceback.format_exc(), float("nan"), float("nan"))
-                if progress is not None:
-                    progress(name)
+                _report_progress(progress, name, done[name])
         except BaseException:  # a stop (Ctrl-C, SIGTERM): end the chapters now, not after minutes of them
             _halt(pool)
             raise
     return done
+
+
+def _report_progress(progress, name: str, built: tuple) -> None:
+    """Tell ``progress`` a chapter is done: its module name, its title (the name if it failed) and seconds."""
+    if progress is not None:
+        chapter, _, seconds, _ = built
+        progress(name, chapter.title if chapter is not None else name, seconds)
 
 
 def _halt(pool: ProcessPoolExecutor) -> None:
@@ -383,13 +396,19 @@ def check_report_dir(out_dir: str | Path, *, force: bool = False) -> Path:
 
 
 _CSS = """
-body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222;line-height:1.45}
+*{box-sizing:border-box}
+body{font-family:system-ui,sans-serif;max-width:1150px;margin:2em auto;padding:0 1em;color:#222;line-height:1.45}
+.scroll{max-width:100%;overflow-x:auto}
 table{border-collapse:collapse;margin:1em 0;font-size:0.9em}
-td,th{border:1px solid #ccc;padding:3px 7px;vertical-align:top}
+td,th{border:1px solid #ccc;padding:3px 7px;vertical-align:top;overflow-wrap:anywhere}
 th{background:#f3f3f3}.match{background:#e8f6e8}.discrepancy{background:#fff2d9}.new{background:#e8effa}
-.failed{background:#fde4e4;padding:0.5em;white-space:pre-wrap;font-family:monospace;font-size:0.8em}
-figure{display:inline-block;margin:0.5em;max-width:520px;vertical-align:top}figure img{max-width:100%}
-figcaption{font-size:0.85em;color:#444}code{background:#f5f5f5}
+.failed{background:#fde4e4;padding:0.5em;white-space:pre-wrap;overflow-wrap:anywhere;font-family:monospace;
+font-size:0.8em}
+p{overflow-wrap:anywhere}
+figure{margin:1em 0;max-width:100%}figure img{max-width:100%;height:auto;border:1px solid #eee}
+.gallery{display:grid;grid-template-columns:repeat(auto-fill,minmax(340px,1fr));gap:1em}
+.gallery figure{margin:0}
+figcaption{font-size:0.9em;color:#444}code{background:#f5f5f5;overflow-wrap:anywhere}
 details{margin:1em 0}summary{cursor:pointer;font-weight:600}
 """
 
@@ -416,13 +435,77 @@ def _cell(value: object) -> str:
 COLLAPSE_ROWS = 12
 
 
+@dataclass(frozen=True)
+class _Label:
+    """A table cell naming an entry in words, its key (as in ``results.json``) shown on hover."""
+
+    key: str
+
+    def __str__(self) -> str:
+        return entry_label(self.key)
+
+
 def _table_html(columns, rows, row_class=None) -> str:
-    head = "<table><tr>" + "".join(f"<th>{html.escape(c)}</th>" for c in columns) + "</tr>"
+    head = "<div class='scroll'><table><tr>" + "".join(f"<th>{html.escape(c)}</th>" for c in columns) + "</tr>"
     body = []
     for row in rows:
         cls = f" class='{row_class(row)}'" if row_class else ""
-        body.append(f"<tr{cls}>" + "".join(f"<td>{_cell(v)}</td>" for v in row) + "</tr>")
-    return head + "".join(body) + "</table>"
+        body.append(f"<tr{cls}>" + "".join(_td(v) for v in row) + "</tr>")
+    return head + "".join(body) + "</table></div>"
+
+
+def _td(value: object) -> str:
+    if isinstance(value, _Label):
+        return f"<td title='{html.escape(value.key)}'>{html.escape(str(value))}</td>"
+    return f"<td>{_cell(value)}</td>"
+
+
+#: The words of a key's unit suffix, dropped from its label (the unit has its own column).
+_UNIT_SUFFIXES = (
+    "_rad_s", "_n_m2", "_n_m", "_m_per_command", "_per_command", "_mm", "_db", "_percent", "_hz", "_deg", "_s",
+    "_v", "_n", "_m", "_kg", "_g",
+)  # fmt: skip
+#: Abbreviations of the keys, in words.
+_WORDS = {
+    "wn": "natural frequency wn",
+    "zeta": "damping ratio zeta",
+    "lsq": "least squares",
+    "rmse": "RMSE",
+    "corr2": "corr2",
+    "hinf": "H-infinity",
+    "sg1": "gauge 1",
+    "sg2": "gauge 2",
+    "sg3": "gauge 3",
+    "num": "numerator",
+    "den": "denominator",
+}
+
+
+def entry_label(key: str) -> str:
+    """An entry's key in words: ``"twin.release_with_housing.wn_rad_s"`` -> ``"twin, release with housing:
+    natural frequency wn"`` (the unit has its column; the key stays in ``results.json`` and on hover).
+
+    Examples
+    --------
+    >>> entry_label("twin.release_with_housing.wn_rad_s")
+    'twin, release with housing: natural frequency wn'
+    >>> entry_label("plant.G.den[s^0]")
+    'plant, G: denominator [s^0]'
+    """
+    parts = [p for p in key.split(".") if p]
+    words = []
+    for i, part in enumerate(parts):
+        stem, bracket, rest = part.partition("[")
+        if i == len(parts) - 1:
+            for suffix in _UNIT_SUFFIXES:
+                if stem.endswith(suffix) and len(stem) > len(suffix):
+                    stem = stem[: -len(suffix)]
+                    break
+        text = " ".join(_WORDS.get(w, w) for w in stem.split("_") if w)
+        words.append(text + (f" [{rest}" if bracket else ""))
+    if len(words) == 1:
+        return words[0]
+    return ", ".join(words[:-1]) + ": " + words[-1]
 
 
 def _collapsible(summary: str, inner: str, n_rows: int) -> str:
@@ -433,7 +516,37 @@ def _collapsible(summary: str, inner: str, n_rows: int) -> str:
 
 def _entry_row(e) -> list:
     rel = None if e.rel_error is None else f"{100 * e.rel_error:.3g} %"
-    return [e.key, e.section, e.thesis, e.ours, e.unit, rel, e.status, e.note]
+    return [_Label(e.key), e.section, e.thesis, e.ours, e.unit, rel, e.status, e.note]
+
+
+#: The pictures of the first screen: the digit itself, then a few of the thesis's figures beside ours (a figure
+#: whose chapter failed or was not built is left out).
+FRONT_FIGURES = (
+    "twin_shapes_and_servo_step",
+    "twin_release_tests",
+    "twin_actuation_sweep",
+    "ch5_20ms_twin",
+    "shape_from_gauges",
+    "palpation_force_indentation",
+)
+
+
+def _figure_html(fig) -> str:
+    """A figure linked to its full-size image (a click opens it)."""
+    src = f"figures/{html.escape(fig.name)}.png"
+    ref = f" (beside thesis {html.escape(fig.thesis_ref)})" if fig.thesis_ref else ""
+    return (
+        f"<figure><a href='{src}'><img src='{src}' alt='{html.escape(fig.caption)}' loading='lazy'></a>"
+        f"<figcaption>{html.escape(fig.caption)}{ref}</figcaption></figure>"
+    )
+
+
+def _gallery(chapters: list[Chapter]) -> str:
+    by_name = {f.name: f for c in chapters for f in c.figures}
+    shown = [by_name[name] for name in FRONT_FIGURES if name in by_name]
+    if not shown:
+        return ""
+    return "<div class='gallery'>" + "".join(_figure_html(f) for f in shown) + "</div>"
 
 
 def _front_page(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext, document: dict) -> list[str]:
@@ -448,16 +561,18 @@ def _front_page(chapters: list[Chapter], failed: dict[str, str], ctx: ReportCont
         + ". Each entry puts the figure as printed in the thesis beside ours: <span class='match'>match</span>, "
         "<span class='discrepancy'>discrepancy</span> (the note explains it and gives the corrected figure) or "
         "<span class='new'>new</span> (not in the thesis). The same entries, and every table as numbers, are in "
-        "<code>results.json</code>.</p>",
+        "<code>results.json</code> (hover over an entry for its key there). Click a figure for its full size.</p>",
+        _gallery(chapters),
         "<h2 id='headline'>Headline figures</h2>",
         _table_html(
-            ["figure", "key", "section", "thesis", "ours", "unit", "status", "note"],
+            ["figure", "section", "thesis", "ours", "unit", "status", "note"],
             [
-                [h["figure"], h["key"], by_key[h["key"]].section, by_key[h["key"]].thesis, by_key[h["key"]].ours]
-                + [by_key[h["key"]].unit, by_key[h["key"]].status, _first_sentence(by_key[h["key"]].note)]
+                [_Headline(h["key"], h["figure"]), by_key[h["key"]].section, by_key[h["key"]].thesis]
+                + [by_key[h["key"]].ours, by_key[h["key"]].unit, by_key[h["key"]].status]
+                + [_first_sentence(by_key[h["key"]].note)]
                 for h in document["headline"]
             ],
-            row_class=lambda row: row[6],
+            row_class=lambda row: row[5],
         ),  # fmt: skip
         "<h2 id='chapters'>Chapters</h2>",
         _table_html(
@@ -472,6 +587,16 @@ def _front_page(chapters: list[Chapter], failed: dict[str, str], ctx: ReportCont
     if failed:
         parts.append("<p class='failed'>Failed: " + ", ".join(html.escape(n) for n in failed) + " (below).</p>")
     return parts
+
+
+@dataclass(frozen=True)
+class _Headline(_Label):
+    """A headline entry: its words from :data:`HEADLINE`, its key on hover."""
+
+    words: str = ""
+
+    def __str__(self) -> str:
+        return self.words
 
 
 def _first_sentence(note: str) -> str:
@@ -490,7 +615,7 @@ def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext,
         parts.extend(f"<p>{html.escape(p)}</p>" for p in chapter.paragraphs)
         if chapter.entries:
             inner = _table_html(
-                ["key", "section", "thesis", "ours", "unit", "rel. error", "status", "note"],
+                ["entry", "section", "thesis", "ours", "unit", "rel. error", "status", "note"],
                 [_entry_row(e) for e in chapter.entries],
                 row_class=lambda row: row[6],
             )
@@ -498,12 +623,7 @@ def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext,
         for table in chapter.tables:
             title = f"{html.escape(table.title)} <code>{html.escape(table.key)}</code>"
             parts.append(_collapsible(title, _table_html(table.columns, table.rows), len(table.rows)))
-        for fig in chapter.figures:
-            ref = f" (beside thesis {html.escape(fig.thesis_ref)})" if fig.thesis_ref else ""
-            parts.append(
-                f"<figure><img src='figures/{html.escape(fig.name)}.png' alt='{html.escape(fig.caption)}'>"
-                f"<figcaption>{html.escape(fig.caption)}{ref}</figcaption></figure>"
-            )
+        parts.extend(_figure_html(fig) for fig in chapter.figures)
     for module_name, error in failed.items():
         parts.append(f"<h2>{html.escape(module_name)}: failed</h2><div class='failed'>{html.escape(error)}</div>")
     parts.append("</body></html>\n")
@@ -511,7 +631,5 @@ def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext,
 
 
 def _calibration_source() -> str:
-    from flexdigit.twin.calibration import default_calibration_source
-
     source = default_calibration_source()
     return "packaged (fitted to the thesis)" if source == "packaged" else source

@@ -12,6 +12,7 @@ import control
 import numpy as np
 
 from flexdigit.models import cable, conversion, second_order, servo
+from flexdigit.models.chapter3_tables import chapter3_study
 from flexdigit.models.plant import (
     PRINTED_DIGIT_DAMPING_1_PER_S,
     closed_loop_printed_k1,
@@ -31,8 +32,6 @@ def _printed_rtol(printed: float, decimals: int) -> float:
 
 def build(ctx: ReportContext) -> Chapter:
     """Chapter 3 from :func:`flexdigit.models.chapter3_tables.chapter3_study`: entries, tables and figures."""
-    from flexdigit.models.chapter3_tables import chapter3_study
-
     p = ctx.params
     study = chapter3_study(p)
     chapter = Chapter(slug="ch3-models", title="Chapter 3: component models and the plant G(s)")

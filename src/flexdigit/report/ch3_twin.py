@@ -12,16 +12,18 @@ import math
 
 import numpy as np
 
+from flexdigit.calibrate.chapter3_twin import chapter3_twin_study
+from flexdigit.identify.fit import second_order_response
 from flexdigit.reference import thesis_value
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import compare, new
+from flexdigit.twin import records as ex
+from flexdigit.twin.twin import Twin
 
 
 def build(ctx: ReportContext) -> Chapter:
     """The twin chapter from :func:`flexdigit.calibrate.chapter3_twin.chapter3_twin_study`: entries, tables and
     figures."""
-    from flexdigit.calibrate.chapter3_twin import chapter3_twin_study
-
     p = ctx.params
     seed = int(ctx.rng(3).integers(0, 2**31))
     study = chapter3_twin_study(p, seed=seed, fast=ctx.fast)
@@ -212,8 +214,6 @@ def _release_figure(ctx: ReportContext, release):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from flexdigit.identify.fit import second_order_response
-
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=False)
     for ax, housing, key in ((axes[0], True, "with_housing"), (axes[1], False, "without_housing")):
         res = release[housing].record
@@ -260,9 +260,6 @@ def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int):
     """Left: the digit's shape at commands 8..43 (large deflection). Right: a servo step against MT(s)."""
     import matplotlib.pyplot as plt
     import scipy.signal
-
-    from flexdigit.twin import records as ex
-    from flexdigit.twin.twin import Twin
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
     s = np.linspace(0.0, params.geometry.digit_length_m, 60)

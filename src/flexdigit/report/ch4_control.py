@@ -8,18 +8,22 @@ import control as ct
 import numpy as np
 
 from flexdigit.control._lsim import step_output
+from flexdigit.control.analysis import loop_maps, root_locus
+from flexdigit.control.chapter4_studies import chapter4_study
+from flexdigit.control.generalized import filter_weight
 from flexdigit.control.thesis_designs import printed_controller
+from flexdigit.models.plant import build_plant
 from flexdigit.reference import thesis_value
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext
 
 _BLOCK_P = (
-    "a block diagram, no data: the interconnection is generalized.thesis_generalized_plant, P of 4.4 built from "
-    "its state-space formula and checked against F S in tests/control/test_generalized.py"
+    "a block diagram, no data: the generalized plant P of 4.4 is built here from its state-space formula, and its "
+    "error channel checked against F S"
 )
 _BLOCK_PC = (
-    "a block diagram, no data: the LFTs T_zw, T_yw, T_uw, T_pq of 4.4-4.6 are analysis.loop_maps, checked "
-    "against the feedback formulas in tests/control/test_analysis.py"
+    "a block diagram, no data: the closed-loop maps T_zw, T_yw, T_uw, T_pq of 4.4-4.6 are built here, and "
+    "checked against the feedback formulas"
 )
 
 #: Every figure of thesis chapter 4: its caption, and the figure of ours that stands beside it (a name starting
@@ -67,15 +71,8 @@ def _half_last_digit(printed: float) -> float:
 
 def build(ctx: ReportContext) -> Chapter:
     """Chapter 4 from :func:`flexdigit.control.chapter4_studies.chapter4_study`: entries, tables and figures."""
-    from flexdigit.control.chapter4_studies import chapter4_study
-
     study = chapter4_study(fast=ctx.fast, seed=ctx.seed)
     ch = Chapter("ch4", "Controller design (H-infinity, thesis chapter 4)")
-    ch.paragraphs.append(
-        "Figures of chapter 4 and where they are here: "
-        + "; ".join(f"{k} ({cap}) -> {ours}" for k, (cap, ours) in THESIS_FIGURES.items())
-        + "."
-    )
     ch.paragraphs.append(
         "Table 4.2 heads its columns 'x 10^4' and table 4.3 'x 10^2' (poles) and 'x 10^4' (zeros). The values in "
         "4.2 are already rad/s (our fitted controller has exactly them), the 4.3 poles are rad/s / 100 "
@@ -89,7 +86,19 @@ def build(ctx: ReportContext) -> Chapter:
     _mixsyn(study, ch, ctx.seed)
     ch.tables.extend(study.tables)
     _figures(ctx, study, ch)
+    ch.paragraphs.insert(0, _where_the_figures_are(ch))
     return ch
+
+
+def _where_the_figures_are(ch: Chapter) -> str:
+    """Every figure of thesis chapter 4 and the figure of ours beside it, by its caption (in words, no file names)."""
+    captions = {f.name: f.caption.rstrip(".") for f in ch.figures}
+    where = [
+        f"{k} ({cap}): " + (f"'{captions[ours]}'" if ours in captions else ours)
+        for k, (cap, ours) in THESIS_FIGURES.items()
+        if ours in captions or not ours.startswith("ch4_")
+    ]
+    return "Figures of chapter 4 and where they are here: " + "; ".join(where) + "."
 
 
 def _filter_and_k1(study, E: list) -> None:
@@ -467,8 +476,6 @@ def _fig_loop_maps(plt, study, G, w, designs, fits):
 
 
 def _fig_steps(plt, study, G, w, designs, fits):
-    from flexdigit.control.analysis import loop_maps
-
     fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
     t = np.linspace(0, 1.0, 1000)
     for hz, d in designs.items():
@@ -482,9 +489,6 @@ def _fig_steps(plt, study, G, w, designs, fits):
 
 
 def _fig_root_locus(plt, study, G, w, designs, fits):
-    from flexdigit.control.analysis import root_locus
-    from flexdigit.models.plant import build_plant
-
     fig, ax = plt.subplots()
     gains = np.concatenate([[0.0], np.logspace(-1, 5, 400)])
     for name, plant in (("plant (4.4)", G), ("K1 closed loop (4.3)", build_plant("printed").closed_loop(study.k1.k1))):
@@ -497,8 +501,6 @@ def _fig_root_locus(plt, study, G, w, designs, fits):
 
 
 def _fig_tpq(plt, study, G, w, designs, fits):
-    from flexdigit.control.analysis import loop_maps
-
     fig, ax = plt.subplots()
     for hz, d in designs.items():
         ax.semilogx(
@@ -512,8 +514,6 @@ def _fig_tpq(plt, study, G, w, designs, fits):
 
 
 def _fig_mixsyn_step(plt, study, G, w, designs, fits):
-    from flexdigit.control.analysis import loop_maps
-
     mm = loop_maps(study.mixsyn_plant.tf, study.mixsyn.controller)
     fig, axs = plt.subplots(1, 2, figsize=(9, 3.5))
     t = np.linspace(0, 5, 2000)
@@ -526,8 +526,6 @@ def _fig_mixsyn_step(plt, study, G, w, designs, fits):
 
 
 def _fig_filter(plt, study, G, w, designs, fits):
-    from flexdigit.control.generalized import filter_weight
-
     peak_printed = thesis_value("hinf.filter_peak_db")
     w_read = study.filter_peak_read_at_rad_s
     fig, ax = plt.subplots()
@@ -544,8 +542,6 @@ def _fig_filter(plt, study, G, w, designs, fits):
 def _controller_root_locus(plt, G, K, K_printed, hz: float):
     """Two root loci (:func:`~flexdigit.control.analysis.root_locus`): ``1 + k K`` and ``1 + k G K``; closed-loop
     poles marked."""
-    from flexdigit.control.analysis import loop_maps, root_locus
-
     Kt = ct.tf(K)
     fig, axs = plt.subplots(1, 2, figsize=(10, 4.2))
     pk = np.linalg.eigvals(K.A)

@@ -15,20 +15,19 @@ from flexdigit.control.thesis_designs import printed_controller
 from flexdigit.reference import thesis_value
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import compare, new
+from flexdigit.rig.chapter5_studies import chapter5_study
 
 
 def build(ctx: ReportContext) -> Chapter:
     """Chapter 5 from :func:`flexdigit.rig.chapter5_studies.chapter5_study`: entries, tables and figures."""
     import matplotlib.pyplot as plt
 
-    from flexdigit.rig.chapter5_studies import chapter5_study
-
     study = chapter5_study(ctx.params, seed=int(ctx.rng(5).integers(1, 1000)), fast=ctx.fast)
     chapter = Chapter(slug="ch5-digital", title="Chapter 5: the digital controller and control at 20 ms")
     chapter.paragraphs.append(
         "The printed 39 Hz H-infinity controller K(s) (4.7) is digitised by Tustin (5.1.1, E 5.1) and by forward "
         "Euler (5.1.2, the state-space method 5.2 implemented) and closed around the printed plant G(s) held by a "
-        "zero-order hold, u = K (w - y) as in 4.4 (flexdigit.control.discretise.sampled_loop). The loop is built in "
+        "zero-order hold, u = K (w - y) as in 4.4. The loop is built in "
         "state space: as high-order transfer-function products, the poles near z = 1 at 0.6 ms come out outside "
         "the unit circle from rounding alone."
     )
@@ -219,7 +218,7 @@ def _twenty_ms(study, chapter: Chapter) -> None:
         "deg); the controller must end on the nearest command, so the quantiser has no hysteresis."
     )
     chapter.paragraphs.append(
-        "Control at the servo board's 20 ms (flexdigit.control.design20ms): designed directly in discrete time on "
+        "Control at the servo board's 20 ms: designed directly in discrete time on "
         "the servo model held by a ZOH with one sample of transport delay; LQR state feedback with a rate penalty; "
         "a Kalman predictor with a constant input disturbance for offset-free tracking (no integrator to overshoot "
         "or wind up); the observer is fed the command actually sent (saturated and rounded), so the integer "

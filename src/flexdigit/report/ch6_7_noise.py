@@ -11,12 +11,11 @@ from __future__ import annotations
 from flexdigit.reference import thesis_value
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.tactile.thesis_experiments import FRICTION_FIT_SEEDS, NOISE_SCALES, friction_study, white_noise_scan
 
 
 def build(ctx: ReportContext) -> Chapter:
     """The noise studies behind chapters 6 and 7's corr2."""
-    from flexdigit.tactile.thesis_experiments import NOISE_SCALES, friction_study, white_noise_scan
-
     scan = white_noise_scan(
         scales=(1.0, 4.0) if ctx.fast else NOISE_SCALES, seed=ctx.seed, params=ctx.params, epochs=10 if ctx.fast else 50
     )
@@ -61,8 +60,6 @@ def _friction_paragraph(friction) -> str:
 
 
 def _friction_entries(ctx: ReportContext, friction, e: list) -> None:
-    from flexdigit.tactile.thesis_experiments import FRICTION_FIT_SEEDS
-
     ratio = friction.ratio
     e.append(
         results.new(

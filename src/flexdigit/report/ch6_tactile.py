@@ -12,6 +12,9 @@ import numpy as np
 from flexdigit.reference import thesis_value
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.tactile.pipeline import Normaliser
+from flexdigit.tactile.protocols import load_protocol
+from flexdigit.tactile.thesis_experiments import criteria, experiment_tables, position_ratios, run_experiment
 
 TITLES = {
     "non_actuated": ("ch6-tactile", "Chapter 6: tactile sensing of the non-actuated digit", "6"),
@@ -31,8 +34,6 @@ def build(ctx: ReportContext) -> Chapter:
 def build_tactile(ctx: ReportContext, key: str) -> Chapter:
     """Chapter 6 (``non_actuated``) or 7 (``actuated``) from
     :func:`flexdigit.tactile.thesis_experiments.run_experiment`: entries, tables and figures."""
-    from flexdigit.tactile.thesis_experiments import experiment_tables, run_experiment
-
     exp = run_experiment(key, ctx.out_dir / "data", seed=ctx.seed, fast=ctx.fast, params=ctx.params)
     slug, title, _ = TITLES[key]
     chapter = Chapter(slug, title)
@@ -197,8 +198,6 @@ def _variant_entries(exp, e: list) -> None:
 
 def _beyond_entries(exp, e: list, length_mm: float) -> None:
     """Beyond the thesis: millimetres, the Cramer-Rao bound, contact and magnitude, four estimators."""
-    from flexdigit.tactile.thesis_experiments import position_ratios
-
     key, chap = exp.key, TITLES[exp.key][2]
     loc = exp.localisation
     best = loc.best
@@ -313,15 +312,11 @@ def _bayes_entries(exp, e: list) -> None:
 
 def load_protocolsamples(key: str) -> int:
     """Readings of the protocol as printed (thesis-6.1, thesis-7.1)."""
-    from flexdigit.tactile.protocols import load_protocol
-
     return load_protocol("thesis-6.1" if key == "non_actuated" else "thesis-7.1").sample_count
 
 
 def _criteria_paragraph(exp) -> str:
     """Issue 7's criteria on this experiment, each with its figure, and why a failing one fails."""
-    from flexdigit.tactile.thesis_experiments import criteria, position_ratios
-
     loc = exp.localisation
     best = loc.best
     rm = loc.position_rmse_identifiable_m
@@ -524,8 +519,6 @@ def _fig_raw(ctx, exp, slug, ref, plt):
 
 
 def _fig_normalised(ctx, exp, slug, ref, plt):
-    from flexdigit.tactile.pipeline import Normaliser
-
     ds = exp.dataset.subset(exp.pipeline_rows)
     split = exp.sweep.split
     x = ds.gauges_v

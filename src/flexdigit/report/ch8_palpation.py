@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.palpation import palpation_studies as studies
+from flexdigit.palpation.palpation import PalpationProtocol
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import new
 
@@ -28,7 +29,7 @@ def build(ctx: ReportContext) -> Chapter:
     ch = Chapter(slug="ch8-palpation", title="Beyond the thesis: palpation")
     ch.paragraphs.append(
         "The digit presses into a compliant body beside it, the cable pulling it in: a unilateral Winkler (or "
-        "Hunt-Crossley) foundation in the twin (flexdigit.twin.contact), validated against an independent elastica "
+        "Hunt-Crossley) foundation in the twin, validated against an independent elastica "
         "boundary-value problem within 0.07 % on the tip and 0.44 % on the contact force. Noise: 2 mV white per "
         "reading and the twin's drift, the thesis's non-actuated level (no weight is hung, so no cable-guide "
         "friction), except for active sensing, which works at chapter 7's actuated level."
@@ -106,7 +107,7 @@ def _contact(ctx, ch, plt) -> None:
             )
         )
     ch.paragraphs.append(
-        "Which contacts the gauges cannot see (flexdigit.tactile.bounds.contact_bounds): before gauge 1 (45 mm) "
+        "Which contacts the gauges cannot see: before gauge 1 (45 mm) "
         "nothing bends; between gauges 1 and 2 only the product F (s - 45 mm) is seen (the taut cable's answer is "
         "proportional to it too), so force and position are confounded; on the rigid tip support (265-270 mm) the "
         "stiff cable pins the tip angle and absorbs the load's moment, so only the force is seen; just past gauge 2 "
@@ -180,8 +181,6 @@ def _classification(ctx, ch) -> None:
 
 
 def _stiffness(ctx, ch, plt) -> None:
-    from flexdigit.palpation.palpation import PalpationProtocol
-
     protocol = PalpationProtocol(commands=tuple(range(8, 31, 2)))
     moduli = (300.0, 1500.0) if ctx.fast else (300.0, 750.0, 1500.0)
     s = studies.stiffness_study(moduli, seeds=(ctx.seed,), protocol=protocol)
@@ -239,8 +238,6 @@ def _stiffness(ctx, ch, plt) -> None:
 
 
 def _scan(ctx, ch, plt) -> None:
-    from flexdigit.palpation.palpation import PalpationProtocol
-
     offsets = np.arange(-0.02, 0.0201, 0.01)
     sc = studies.scan_study(
         offsets_m=offsets, protocol=PalpationProtocol(commands=tuple(range(8, 31, 3))), seed=ctx.seed

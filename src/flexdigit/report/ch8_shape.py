@@ -12,14 +12,15 @@ import numpy as np
 
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
+from flexdigit.shape.shape import ShapeEstimator, shape_accuracy, true_centre_line_m
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
 
 SECTION = "8 (beyond)"
 
 
 def build(ctx: ReportContext) -> Chapter:
     """Build the shape chapter: tip and along-the-digit errors, one figure."""
-    from flexdigit.shape.shape import shape_accuracy
-
     chapter = Chapter(slug="ch8-shape", title="Beyond the thesis: the digit's shape from its three gauges")
     commands = tuple(range(8, 44, 10 if ctx.fast else 5))
     positions = tuple(round(0.01 * k, 2) for k in range(1, 28, 3 if ctx.fast else 1))
@@ -27,7 +28,7 @@ def build(ctx: ReportContext) -> Chapter:
     summary = acc.summary()
     chapter.paragraphs.append(
         "The centre line is estimated from the three gauge voltages and the servo command alone "
-        "(flexdigit.shape.shape.ShapeEstimator): each gauge's curvature is M/EI (E 3.12) of a moment made of the "
+        "(the ShapeEstimator of flexdigit.shape): each gauge's curvature is M/EI (E 3.12) of a moment made of the "
         "cable's T e (3.3), the digit's own weight and one weight at an unknown place; with the cable taut the "
         "command fixes the tip angle (E 3.11, 3.14). The fit (tension, load and where) is integrated to a shape "
         "with large rotations kept. Each case is one noisy reading of the twin (white noise and, with the cable "
@@ -134,10 +135,6 @@ def _figure(ctx: ReportContext):
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from flexdigit.shape.shape import ShapeEstimator, true_centre_line_m
-    from flexdigit.twin.calibration import default_calibration
-    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
 
     cases = [("vertical", 0.0, 0.0, 30), ("horizontal", 0.0, 0.0, 20), ("horizontal", 0.025, 0.20, 20)]
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))

@@ -16,6 +16,10 @@ import numpy as np
 
 from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
 from flexdigit.report.results import new
+from flexdigit.studies import figures
+from flexdigit.studies.design_study import design_pareto_figure, showcase_design
+from flexdigit.studies.sensitivity import twin_sensitivity
+from flexdigit.studies.spec import load_spec
 
 #: Parameters of thesis-tolerances the report's study keeps: the 11 that move the twin's mechanics, and the
 #: servo's wn, which must come out with no effect (a check of the method).
@@ -52,10 +56,6 @@ def rerun_hint(fast: bool, n: int) -> str:
 
 
 def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
-    from flexdigit.studies import figures
-    from flexdigit.studies.sensitivity import twin_sensitivity
-    from flexdigit.studies.spec import load_spec
-
     spec = load_spec("thesis-tolerances")
     spec = dataclasses.replace(spec, parameters=tuple(p for p in spec.parameters if p.name in REPORT_PARAMETERS))
     n = 16 if ctx.fast else 128
@@ -127,8 +127,6 @@ def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
 
 
 def _design(ctx: ReportContext, chapter: Chapter) -> None:
-    from flexdigit.studies.design_study import design_pareto_figure, showcase_design
-
     result = showcase_design(8 if ctx.fast else 24, seed=ctx.seed, bayes_samples=50 if ctx.fast else 100)
     o = result.settings.objectives
     chapter.paragraphs.append(

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_path
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 from flexdigit.report.results import Entry
@@ -39,6 +41,8 @@ class Chapter:
     tables: list[ResultTable] = field(default_factory=list)
     figures: list[Figure] = field(default_factory=list)
 
+    __repr__ = fields_summary
+
 
 @dataclass
 class ReportContext:
@@ -62,8 +66,6 @@ class ReportContext:
     def save_figure(self, fig, name: str, caption: str, thesis_ref: str = "") -> Figure:
         """Save a matplotlib figure as ``figures/<name>.png``, close it, and return its :class:`Figure`."""
         import matplotlib.pyplot as plt
-
-        from flexdigit._io import atomic_path
 
         # the report folder was checked before any chapter ran (report.build.check_report_dir): ours to replace
         with atomic_path(self.figure_dir / f"{name}.png", force=True) as tmp:

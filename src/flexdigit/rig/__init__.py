@@ -39,6 +39,7 @@ __getattr__, __all__ = lazy_exports(
         "read_recording": "flexdigit.rig.recording",
         "StepTest": "flexdigit.rig.step_test",
         "StepMetrics": "flexdigit.rig.step_test",
+        "run_figure": "flexdigit.rig.run_plot",
         "Chapter5Study": "flexdigit.rig.chapter5_studies",
         "chapter5_study": "flexdigit.rig.chapter5_studies",
     },

@@ -14,6 +14,7 @@ protocol handler::
     serial:///dev/ttyUSB0?daq=stream:///dev/ttyACM0&daq.baud=115200   the servo board with the stream's gauges
     replay://run.jsonl                      a recorded run played back
     hil://firmware/build/flexdigit_board.elf?mode=host   the reference firmware on simavr, joined to the twin
+    board:///dev/ttyACM0?mode=host           the reference firmware on a real Uno (docs/board.md)
 
 The servo command (0..254, integer) is a unit of its own: :func:`clamp_command` is the one place it is rounded
 and clamped, and 255 (the Mini SSC sync byte) can never come out of it (a board whose framing allows fewer
@@ -35,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._validation import _interval_text, check_real
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
 
@@ -251,8 +253,6 @@ class Rig(abc.ABC):
 
     def place_load(self, mass_kg: float, position_from_base_m: float) -> None:
         """Hang a point mass at a distance from the base (the twin applies it; on hardware the operator does)."""
-        from flexdigit._validation import check_real
-
         mass = check_real(mass_kg, "mass_kg", type(self).__name__, low=0.0)
         length = self.params.geometry.digit_length_m
         pos = check_real(position_from_base_m, "position_from_base_m", type(self).__name__, low=0.0, high=length)
@@ -266,8 +266,6 @@ class Rig(abc.ABC):
         The thesis repeats "the procedure" for every reading (6.4, 7.1); on hardware the operator does it. The twin
         re-hangs exactly, without a swing, so it only lets the cable settle afresh in its guides and does not wait.
         """
-        from flexdigit._validation import check_real
-
         settle = check_real(settle_s, "settle_s", type(self).__name__, low=0.0)
         self._check_open()
         self._rehang(settle)
@@ -329,6 +327,7 @@ BACKENDS: dict[str, str] = {
     "replay": "flexdigit.rig.backends.replay_backend:from_url",
     "stream": "flexdigit.rig.backends.stream_backend:from_url",
     "hil": "flexdigit.rig.backends.hil_backend:from_url",
+    "board": "flexdigit.rig.backends.board_backend:from_url",
 }
 
 _TRUE = ("1", "true", "yes", "on")
@@ -372,8 +371,6 @@ class UrlOption:
 
     def expected(self) -> str:
         """What a valid value looks like, for messages."""
-        from flexdigit._validation import _interval_text
-
         if self.kind == "choice":
             text = "one of " + ", ".join(self.choices)
         elif self.kind == "bool":

@@ -21,8 +21,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
+from flexdigit.control.design20ms import design_20ms
+from flexdigit.control.discretise import forward_euler_stability_limit_s, halve_step, sample_period_study, sampled_loop
+from flexdigit.control.thesis_designs import printed_controller, thesis_plant
 from flexdigit.params import RigParams
+from flexdigit.rig.base import open_rig
+from flexdigit.rig.rotation import calibrate_rotation
+from flexdigit.rig.step_test import step_test
 
 __all__ = [
     "PERIODS_S",
@@ -47,8 +54,6 @@ TWENTY_MS_CASES = (
 
 
 def _printed_loop():
-    from flexdigit.control.thesis_designs import printed_controller, thesis_plant
-
     return thesis_plant("printed"), printed_controller("39hz")
 
 
@@ -58,8 +63,6 @@ def sample_period_table(periods_s=PERIODS_S, *, study: dict | None = None) -> Re
     Error: max |y - y_continuous| / max |y_continuous| of the closed-loop step (NaN where the loop is unstable);
     the Euler zero miss is how far forward Euler moves the controller zeros off the plant poles they cancel.
     """
-    from flexdigit.control.discretise import sample_period_study
-
     if study is None:
         G, K = _printed_loop()
         study = sample_period_study(G, K, list(periods_s), methods=("tustin", "forward_euler"), t_final_s=2.0)
@@ -103,6 +106,8 @@ class TwentyMsStudy:
     table: ResultTable
     deg_per_command: float
 
+    __repr__ = fields_summary
+
 
 def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> TwentyMsStudy:
     """0 -> 30 deg steps at the serial board's 20 ms on the nonlinear twin (:data:`TWENTY_MS_CASES`).
@@ -111,11 +116,6 @@ def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: boo
     (:func:`~flexdigit.rig.rotation.calibrate_rotation`); every step runs on a fresh twin seeded ``seed + 1``
     and is scored on its true tip rotation. ``fast`` calibrates on 5 commands instead of 9.
     """
-    from flexdigit.control.design20ms import design_20ms
-    from flexdigit.rig.base import open_rig
-    from flexdigit.rig.rotation import calibrate_rotation
-    from flexdigit.rig.step_test import step_test
-
     params = params or RigParams()
     commands = (8, 14, 20, 26, 32) if fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
     est = calibrate_rotation(open_rig("sim", params, seed=seed), commands, settle_s=1.5 if fast else 2.0)
@@ -190,6 +190,8 @@ class Chapter5Study:
     def tables(self) -> tuple[ResultTable, ...]:
         return (self.sample_periods, self.twenty_ms.table)
 
+    __repr__ = fields_summary
+
 
 def chapter5_study(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> Chapter5Study:
     """Thesis chapter 5 on the printed plant, and the 20 ms loop on the twin (see :class:`Chapter5Study`).
@@ -197,13 +199,6 @@ def chapter5_study(params: RigParams | None = None, *, seed: int = 0, fast: bool
     ``seed`` seeds the twin of the 20 ms study; ``fast`` uses 4 periods and a shorter calibration (tests).
     """
     import control as ct
-
-    from flexdigit.control.discretise import (
-        forward_euler_stability_limit_s,
-        halve_step,
-        sample_period_study,
-        sampled_loop,
-    )
 
     G, K = _printed_loop()
     Tc = ct.feedback(ct.series(K, G), 1)

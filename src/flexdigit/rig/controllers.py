@@ -7,22 +7,23 @@ digitised as 5.2 and 5.1.1 did, on gauge-1 deflection in metres.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 
 from flexdigit._validation import Plausible, check_choice, check_param, check_positive
+from flexdigit.models.conversion import k3_printed_mm_per_v
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Reading, Rig
 from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation
+from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = ["CONTROLLERS", "make_controller"]
 
 
 def _gauge1_deflection_m(params: RigParams, tare_v: float) -> Callable[[Reading], float]:
     """Gauge-1 deflection (m) from its voltage through the printed K3 (E 3.23, 6.5698 mm/V)."""
-    from flexdigit.models.conversion import k3_printed_mm_per_v
-
     k3_m_per_v = k3_printed_mm_per_v()[0] / 1000.0
     return lambda reading: (float(reading.gauges_v[0]) - tare_v) * k3_m_per_v
 
@@ -58,30 +59,49 @@ def make_controller(
     period_s: float = 0.020,
     estimator: RotationEstimator | None = None,
     gain: float = 1.0,
+    calibration=None,
 ) -> _Wrapped:
     """Build controller ``name`` for ``rig``; its setpoint is beam rotation in degrees for all of them.
 
     The thesis controllers work on gauge-1 deflection (m): the setpoint in degrees is converted with the sweep's
     gauge-1 volts per degree times the printed K3 (6.5698 mm/V, E 3.23).
+
+    ``digital20`` is designed for the rig's digit (:func:`flexdigit.control.design20ms.digit_design_20ms`: the
+    thesis rig's chapter-5 design, or another digit's from its own components); ``calibration`` is the twin
+    calibration of that digit when it is not the one its twin would get by default.
     """
-    from flexdigit.control.design20ms import design_20ms, thesis_controller
+    from flexdigit.control.design20ms import digit_design_20ms, thesis_controller
 
     check_choice(name, "controller", CONTROLLERS, "make_controller")
     check_positive(period_s, "period_s", "make_controller")
     gain = check_param(gain, ACTUATOR_GAIN, "gain", "make_controller")
     params = rig.params
+    twin = getattr(rig, "twin", None)  # on the twin: its own calibration and orientation
+    calibration = calibration if calibration is not None or twin is None else _own_calibration(twin)
+    orientation = twin.orientation if twin is not None else "vertical"
     if estimator is None:
         estimator = calibrate_rotation(rig)
     rest = [rig.read().gauges_v for _ in range(5)]
     estimator.tare(rest)
     eq = int(params.actuator.equilibrium_command)
     if name == "digital20":
-        design = design_20ms(params, period_s=period_s)
-        return _Wrapped(design.runtime(params, name=name), estimator, 1.0, gain, eq)
+        measured = getattr(estimator, "deg_per_command_", None)  # the sweep's rotation per command, if it has one
+        measured = measured if isinstance(measured, float) and math.isfinite(measured) and measured > 0 else None
+        design = digit_design_20ms(
+            params, period_s=period_s, calibration=calibration, orientation=orientation, deg_per_command=measured
+        )
+        # another digit than the thesis rig's is held between quanta (dithered: RuntimeController's ``dither``)
+        runtime = design.runtime(params, name=name, dither=params != RigParams())
+        return _Wrapped(runtime, estimator, 1.0, gain, eq)
     method = "forward_euler" if name.endswith("euler") else "tustin"
     measure = _gauge1_deflection_m(params, float(np.mean([g[0] for g in rest])))
-    from flexdigit.models.conversion import k3_printed_mm_per_v
-
     # metres of gauge-1 deflection per degree: K3 (m/V) x the sweep's gauge-1 volts per degree
     scale = k3_printed_mm_per_v()[0] / 1000.0 * float(estimator.gauge_v_per_deg_[0])
     return _Wrapped(thesis_controller(method, period_s, params), measure, scale, gain, eq)
+
+
+def _own_calibration(twin):
+    """The twin's calibration, or None when it is the one its digit gets by default (so the thesis rig keeps its
+    chapter-5 design)."""
+
+    return None if twin.calibration == twin_calibration(twin.params) else twin.calibration

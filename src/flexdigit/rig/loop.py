@@ -28,6 +28,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from flexdigit._json import to_jsonable
+from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_positive, check_real
 from flexdigit.errors import Interrupted, ParameterError, RigError
 from flexdigit.interrupts import signals_deferred, stop_requested
@@ -107,6 +108,8 @@ class TimingStats:
             float(np.max(comp)),
         )
 
+    __repr__ = fields_summary
+
 
 @dataclass
 class LoopResult:
@@ -139,6 +142,19 @@ class LoopResult:
         """
         if self.status == "interrupted":
             raise Interrupted(getattr(signal, self.extra.get("signal") or "SIGINT"))
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            status=self.status,
+            message=self.message or None,
+            samples=len(self.time_s),
+            duration_s=float(self.time_s[-1] - self.time_s[0]) if len(self.time_s) else 0.0,
+            period_s=self.timing.period_s,
+            overruns=self.timing.overruns,
+            safe_command_sent=self.safe_command_sent,
+            log_path=self.log_path,
+        )
 
 
 def check_reading(reading: Reading, adc_range_v: tuple[float, float], margin_v: float = 1e-3) -> None:
@@ -185,6 +201,9 @@ class LoopSettings:
         Samples between two ``fsync`` of the log (each line is flushed to the OS at once).
     header : dict, optional
         Extra entries of the log's first line.
+    truth : callable, optional
+        ``truth() -> float``: the twin's true tip rotation (deg) after each sample's command, logged as
+        ``true_rotation_deg`` beside the estimate ``y`` (hardware has none: leave it None).
     recording : flexdigit.rig.recording.Recording, optional
         An open MCAP recording: every sample goes to it as to the log, and the loop closes it with the stop
         record (so a fault or Ctrl-C still leaves a complete, readable file).
@@ -215,6 +234,7 @@ class LoopSettings:
     close_rig: bool = True
     fsync_every: int = 50
     header: dict[str, Any] | None = None
+    truth: Callable[[], float] | None = None
     recording: Recording | None = None
     summary: Callable[[np.ndarray, np.ndarray], dict[str, Any]] | None = None
     log_mode: str = "new"
@@ -399,7 +419,7 @@ class _Samples:
             timing,
             np.array(self.ts),
             np.array(self.sps),
-            np.array(self.gauges).reshape(-1, 3) if self.gauges else np.zeros((0, 3)),
+            np.array(self.gauges).reshape(len(self.gauges), -1) if self.gauges else np.zeros((0, 3)),  # (n, G)
             np.array(self.ys),
             np.array(self.cmds, dtype=int),
             safe,
@@ -468,7 +488,9 @@ def _one_sample(rig, controller, run: _LoopRun, s: LoopSettings, samples: _Sampl
                 "command": sent,
             }
             if run.log is not None:
-                run.log.write(record)
+                # the twin's truth goes to the log only (the recording's schema is the rig's, which has none)
+                truth = {} if s.truth is None else {"true_rotation_deg": _finite_or_none(float(s.truth()))}
+                run.log.write({**record, **truth})
             if s.recording is not None:
                 s.recording.write_sample(record)
         samples.append(now, late, run.timer() - w0, t, r, reading, y, sent)

@@ -42,8 +42,11 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from flexdigit._io import RECORDS_LIMIT, OutputStream, check_input, check_output, open_input
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.interrupts import signals_deferred, stop_requested
+from flexdigit.rig.base import Rig
+from flexdigit.rig.sample_log import SampleColumns, check_sample
 
 __all__ = [
     "Recording",
@@ -97,8 +100,6 @@ SAMPLE_SCHEMA: dict[str, Any] = {
 
 def is_mcap(path: str | os.PathLike) -> bool:
     """True when the file starts with the MCAP magic bytes."""
-    from flexdigit._io import RECORDS_LIMIT, open_input
-
     try:  # a FIFO or a device is not one (and is never opened blocking): its reader refuses it by name
         with open_input(path, "an MCAP recording", RECORDS_LIMIT) as fh:
             return fh.read(len(MCAP_MAGIC)) == MCAP_MAGIC
@@ -153,8 +154,6 @@ class Recording:
         flush_every_s: float = 1.0,
     ) -> None:
         from mcap.writer import CompressionType, Writer
-
-        from flexdigit._io import OutputStream, check_output
 
         self.path = check_output(path, force=force)
         # under the recording's lock; with force, written beside the old file and renamed over it at a complete end
@@ -298,8 +297,6 @@ class _Records:
         from mcap.records import Chunk
         from mcap.stream_reader import StreamReader, breakup_chunk
 
-        from flexdigit._io import RECORDS_LIMIT, open_input
-
         size = self.path.stat().st_size
         with open_input(self.path, "an MCAP recording", RECORDS_LIMIT) as fh:
             reader = StreamReader(_Bounded(fh, size, self.path), skip_magic=False, emit_chunks=True)
@@ -398,8 +395,6 @@ def iter_messages(path: str | os.PathLike, topics=None, *, records=None) -> Iter
     """
     from mcap.records import Channel, Message
 
-    from flexdigit._io import RECORDS_LIMIT, check_input
-
     path = check_input(path, "an MCAP recording", RECORDS_LIMIT)  # a FIFO, a device: named, never read
     if not is_mcap(path):
         raise DataFileError(f"{path}: not an MCAP file (no MCAP magic at the start)")
@@ -462,8 +457,6 @@ def read_recording(path: str | os.PathLike):
 def read_recording_columns(path: str | os.PathLike):
     """:func:`read_recording` into columns (:class:`~flexdigit.rig.sample_log.SampleColumns`, 64 bytes a sample):
     ``(header, columns, footer or None)``, streamed a chunk at a time."""
-    from flexdigit.rig.sample_log import SampleColumns
-
     columns = SampleColumns()
     header, footer = _read_samples(Path(path), columns.append)
     return header, columns.arrays(), footer
@@ -472,8 +465,6 @@ def read_recording_columns(path: str | os.PathLike):
 def _read_samples(path: Path, keep):
     """Stream the recording's samples, checked, to ``keep``; its header and footer (see :func:`read_recording`)."""
     from mcap.records import Metadata
-
-    from flexdigit.rig.sample_log import check_sample
 
     records = _Records(path)
     meta: dict[str, dict[str, Any]] = {}
@@ -522,8 +513,6 @@ def recording_rig(rig, recording: Recording):
     For code that drives a rig without a loop (the tactile protocols' ``collect``): closing the returned rig
     closes ``rig`` (safe command, port) and then the recording.
     """
-    from flexdigit.rig.base import Rig
-
     recording.add_channel(EVENT_TOPIC, EVENT_SCHEMA)
 
     class RecordingRig(Rig):

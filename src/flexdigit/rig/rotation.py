@@ -31,9 +31,15 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_write, read_text
+from flexdigit._json import to_jsonable
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
+from flexdigit.models.cable import tip_rotation_per_command_deg
+from flexdigit.params import MAX_GAUGES, RigParams
 from flexdigit.rig.base import Reading, Rig
+from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
 
 __all__ = [
     "RotationEstimator",
@@ -44,11 +50,30 @@ __all__ = [
     "load_rotation_map",
     "MAP_FORMAT",
     "SWEEP_COMMANDS",
+    "sweep_commands",
 ]
 
 MAP_FORMAT = "flexdigit-rotation-map/1"
 #: The default calibration sweep: 0..40 deg of rotation in nine steps.
 SWEEP_COMMANDS = (8, 11, 14, 17, 20, 23, 26, 29, 32)
+#: The sweep's step, deg of beam rotation: the thesis rig's 3 commands of 1.735 deg (E 3.15).
+SWEEP_STEP_DEG = 5.2
+
+
+def sweep_commands(params=None) -> tuple[int, ...]:
+    """The calibration sweep of a digit: nine commands from its straight one over ~40 deg of beam rotation
+    (:data:`SWEEP_COMMANDS` on the thesis rig), ~5.2 deg apart at its own rotation per command (a geared servo
+    takes more, finer commands); an antagonistic pair (``[cables] count = 2``) is swept ~40 deg either way,
+    ~10.4 deg apart. Clipped to the actuator's range."""
+
+    params = params or RigParams()
+    a = params.actuator
+    step = max(1, round(SWEEP_STEP_DEG / tip_rotation_per_command_deg(params)))
+    ks = range(-8, 9, 2) if params.cables.count == 2 else range(9)
+    commands = sorted({min(max(a.equilibrium_command + k * step, a.command_min), a.command_max) for k in ks})
+    return tuple(int(c) for c in commands)
+
+
 #: Draws of the Monte Carlo that propagates the reference's and the readings' uncertainty into the map.
 UNCERTAINTY_DRAWS = 400
 #: Residual variance over the variance the stated uncertainties explain above which they are not believed (the
@@ -57,7 +82,8 @@ BIRGE_LIMIT = 2.0
 
 
 class RotationEstimator:
-    """Beam rotation (deg) from the three gauge voltages, ``w @ gauges_v + b - tare`` (scikit-learn's contract).
+    """Beam rotation (deg) from the gauge voltages, ``w @ gauges_v + b - tare`` (scikit-learn's contract): the
+    thesis rig's three, or any digit's 1-8 (the map has one weight per gauge the sweep read).
 
     The calibration sweep moves the digit along one direction only (the cable's pull), so the three gauges are
     nearly collinear: on the twin the sweep's gauge matrix has singular values ~0.40 V against ~0.003 V, and the
@@ -79,7 +105,7 @@ class RotationEstimator:
     ----------
     method : {"sensitivity", "lstsq"}
         The fit (see above). ``"lstsq"`` is kept to show why it was replaced.
-    noise_v : sequence of 3 floats, optional
+    noise_v : sequence of floats, optional
         Per-gauge noise standard deviation (V) for the Gauss-Markov weights; equal weights if None.
     ridge : float
         Tikhonov term of ``"lstsq"`` (unused by ``"sensitivity"``).
@@ -99,18 +125,20 @@ class RotationEstimator:
         self.ridge = ridge
 
     def fit(self, gauges_v, rotation_deg, *, rotation_cov_deg2=None, gauges_sd_v=None) -> RotationEstimator:
-        """Fit the map to gauge readings (n, 3) at reference rotations (n,).
+        """Fit the map to gauge readings (n, G) at reference rotations (n,).
 
-        ``rotation_cov_deg2`` (n, n) is the reference rotations' covariance (deg^2) and ``gauges_sd_v`` (n, 3) the
+        ``rotation_cov_deg2`` (n, n) is the reference rotations' covariance (deg^2) and ``gauges_sd_v`` (n, G) the
         standard uncertainty of each averaged reading; both feed :meth:`uncertainty_deg` (zero if not given).
         """
         check_choice(self.method, "method", self.METHODS, "RotationEstimator")
         X = np.asarray(gauges_v, dtype=float)
         y = np.asarray(rotation_deg, dtype=float).reshape(-1)
-        if X.ndim != 2 or X.shape[1] != 3 or X.shape[0] != y.size or y.size < 4:
+        if X.ndim != 2 or not 1 <= X.shape[1] <= MAX_GAUGES or X.shape[0] != y.size or y.size < 4:
             raise DataFileError(
-                f"RotationEstimator.fit needs (n, 3) gauge voltages and n >= 4 angles. Got {X.shape} and {y.shape}."
+                f"RotationEstimator.fit needs (n, G) gauge voltages (1 <= G <= {MAX_GAUGES}) and n >= 4 angles. "
+                f"Got {X.shape} and {y.shape}."
             )
+        gauges = X.shape[1]
         if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
             raise DataFileError("RotationEstimator.fit: the calibration data contain NaN or inf")
         yc = y - y.mean()
@@ -123,9 +151,11 @@ class RotationEstimator:
         self.gauge_v_per_deg_ = sens
         if self.method == "sensitivity":
             if self.noise_v is None:
-                weight = np.ones(3)
+                weight = np.ones(gauges)
             else:
-                noise = check_array(self.noise_v, "noise_v", "RotationEstimator", shape=(3,), low=0.0, low_open=True)
+                noise = check_array(
+                    self.noise_v, "noise_v", "RotationEstimator", shape=(gauges,), low=0.0, low_open=True
+                )
                 weight = 1.0 / noise**2
             information = float(sens @ (weight * sens))
             if not information > 0:
@@ -135,19 +165,20 @@ class RotationEstimator:
             self.intercept_ = float(-self.coef_ @ offset)
         else:
             A = np.c_[X, np.ones(len(X))]
-            reg = check_real(self.ridge, "ridge", "RotationEstimator", low=0.0) * np.eye(4)
-            reg[3, 3] = 0.0
+            reg = check_real(self.ridge, "ridge", "RotationEstimator", low=0.0) * np.eye(gauges + 1)
+            reg[gauges, gauges] = 0.0
             coef = np.linalg.solve(A.T @ A + reg, A.T @ y)
-            self.coef_ = coef[:3]
-            self.intercept_ = float(coef[3])
+            self.coef_ = coef[:gauges]
+            self.intercept_ = float(coef[gauges])
         self.residual_deg_ = float(np.sqrt(np.mean((X @ self.coef_ + self.intercept_ - y) ** 2)))
         self.tare_deg_ = 0.0
         n = y.size
         cov = np.zeros((n, n)) if rotation_cov_deg2 is None else np.asarray(rotation_cov_deg2, dtype=float)
-        sd = np.zeros((n, 3)) if gauges_sd_v is None else np.asarray(gauges_sd_v, dtype=float)
-        if cov.shape != (n, n) or sd.shape != (n, 3) or not (np.all(np.isfinite(cov)) and np.all(np.isfinite(sd))):
+        sd = np.zeros((n, gauges)) if gauges_sd_v is None else np.asarray(gauges_sd_v, dtype=float)
+        good = np.all(np.isfinite(cov)) and np.all(np.isfinite(sd))
+        if cov.shape != (n, n) or sd.shape != (n, gauges) or not good:
             raise DataFileError(
-                f"RotationEstimator.fit: rotation_cov_deg2 must be ({n}, {n}) and gauges_sd_v ({n}, 3), finite"
+                f"RotationEstimator.fit: rotation_cov_deg2 must be ({n}, {n}) and gauges_sd_v ({n}, {gauges}), finite"
             )
         self.gauges_v_, self.rotation_deg_ = X, y
         self.rotation_cov_deg2_, self.gauges_sd_v_ = cov, sd
@@ -202,7 +233,9 @@ class RotationEstimator:
     def predict_one(self, gauges_v: np.ndarray) -> float:
         g = gauges_v
         c = self.coef_
-        return float(g[0] * c[0] + g[1] * c[1] + g[2] * c[2]) + self.intercept_ - self.tare_deg_
+        if c.size == 3:  # the thesis rig's, as ever (the loop's hot path)
+            return float(g[0] * c[0] + g[1] * c[1] + g[2] * c[2]) + self.intercept_ - self.tare_deg_
+        return float(np.dot(g, c)) + self.intercept_ - self.tare_deg_
 
     def tare(self, gauges_v, at_deg: float = 0.0) -> RotationEstimator:
         """Shift the map so ``gauges_v`` (mean of rows) reads ``at_deg``."""
@@ -258,6 +291,8 @@ class Settled:
     noise_v: np.ndarray
     waited_s: float
     truth_deg: float
+
+    __repr__ = fields_summary
 
 
 def wait_until_settled(
@@ -333,7 +368,8 @@ def calibrate_rotation(
     ----------
     rig : Rig
     commands : sequence of int, optional
-        The sweep (default :data:`SWEEP_COMMANDS`, or the commands of a measured ``reference``).
+        The sweep (default :func:`sweep_commands` of the rig's digit, :data:`SWEEP_COMMANDS` on the thesis rig,
+        or the commands of a measured ``reference``).
     reference : "twin", MeasuredReference or callable
         Where the reference rotations come from: the twin's own tip rotation (averaged over the same window as the
         readings), rotations measured on the rig (:mod:`flexdigit.rig.rotation_reference`; if it holds gauge
@@ -354,8 +390,6 @@ def calibrate_rotation(
         Fitted, with ``source_``, ``commands_``, ``settle_time_s_`` (per reading) and ``deg_per_command_`` (the
         reference's rotation per command over the sweep) set, and :meth:`~RotationEstimator.uncertainty_deg`.
     """
-    from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
-
     if angle_source is not None:
         reference = angle_source
     cov, truth = None, None
@@ -381,7 +415,7 @@ def calibrate_rotation(
             "The 'reference' parameter of calibrate_rotation must be 'twin', a MeasuredReference or a callable. "
             f"Got {reference!r} instead."
         )
-    commands = [int(c) for c in (SWEEP_COMMANDS if commands is None else commands)]
+    commands = [int(c) for c in (sweep_commands(rig.params) if commands is None else commands)]
     X, sd_v, y, waited = _sweep(
         rig, commands, angle, truth, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
     )
@@ -437,7 +471,7 @@ def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, tim
                 rows.append(rig.read().gauges_v)
                 truths.append(truth() if angle is None else math.nan)
             X.append(np.mean(rows, axis=0))
-            sd_v.append(np.zeros(3))
+            sd_v.append(np.zeros(len(rows[0])))
             waited.append(float(settle_s))
             y.append(float(np.mean(truths)) if angle is None else float(angle(command)))
     rig.relax()
@@ -459,9 +493,6 @@ def _provenance(est: RotationEstimator, source: str, commands, waited, rotation_
 
 def save_rotation_map(estimator: RotationEstimator, path, *, force: bool = False) -> Path:
     """Write a fitted map as JSON (atomically; an existing file only with ``force``)."""
-    from flexdigit._io import atomic_write
-    from flexdigit._json import to_jsonable
-
     with atomic_write(path, "w", force=force) as fh:
         json.dump(to_jsonable(estimator.to_dict()), fh, indent=1)
     return Path(path)
@@ -472,8 +503,6 @@ def load_rotation_map(path) -> RotationEstimator:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the key that is missing or wrong.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     try:
         data = json.loads(read_text(path, "a rotation calibration JSON"))
@@ -486,7 +515,7 @@ def load_rotation_map(path) -> RotationEstimator:
     return est
 
 
-_EXPECTED = "expected a flexdigit rotation map: coef[3], intercept, gauge_v_per_deg[3]"
+_EXPECTED = "expected a flexdigit rotation map: coef[G], intercept, gauge_v_per_deg[G] (G = 1..8 gauges)"
 
 
 def _from_dict(cls, data, source: str) -> RotationEstimator:
@@ -514,9 +543,10 @@ def _from_dict(cls, data, source: str) -> RotationEstimator:
         return value
 
     est = cls(method=str(data.get("method", "sensitivity")))
-    est.coef_ = array("coef", (3,))
+    gauges = len(data["coef"]) if isinstance(data["coef"], list) and 1 <= len(data["coef"]) <= MAX_GAUGES else 3
+    est.coef_ = array("coef", (gauges,))
     est.intercept_ = float(array("intercept", ()))
-    est.gauge_v_per_deg_ = array("gauge_v_per_deg", (3,))
+    est.gauge_v_per_deg_ = array("gauge_v_per_deg", (gauges,))
     if not np.any(est.coef_ != 0) or not abs(est.coef_ @ est.gauge_v_per_deg_) > 0:
         raise DataFileError(f"{source}: the map's 'coef' {est.coef_.tolist()} read no rotation from the gauges")
     est.tare_deg_ = 0.0
@@ -525,7 +555,7 @@ def _from_dict(cls, data, source: str) -> RotationEstimator:
     if "rotation_deg" in data:
         n = len(data["rotation_deg"]) if isinstance(data["rotation_deg"], list) else -1
         est.rotation_deg_ = array("rotation_deg", (n,))
-        for key, shape in (("gauges_v", (n, 3)), ("rotation_cov_deg2", (n, n)), ("gauges_sd_v", (n, 3))):
+        for key, shape in (("gauges_v", (n, gauges)), ("rotation_cov_deg2", (n, n)), ("gauges_sd_v", (n, gauges))):
             if key not in data:
                 raise DataFileError(f"{source}: 'rotation_deg' without {key!r}; {_EXPECTED}")
             setattr(est, f"{key}_", array(key, shape))

@@ -38,9 +38,12 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
+from flexdigit._repr import fields_summary
 from flexdigit._validation import Plausible, check_array, check_param, check_real
 from flexdigit.errors import DataFileError
 from flexdigit.params import RigParams
+from flexdigit.twin.calibration import default_calibration
 
 __all__ = [
     "DigitShape",
@@ -279,6 +282,8 @@ class MeasuredReference:
         table = dict(zip(self.commands.tolist(), self.rotation_deg.tolist(), strict=True))
         return lambda command: table[int(command)]
 
+    __repr__ = fields_summary
+
 
 def read_reference(
     path,
@@ -328,8 +333,6 @@ def _data_rows(path: Path) -> list[tuple[int, str]]:
     """The file's (line number, line) pairs that are neither blank nor comments; the first is the header."""
     if path.is_dir():
         raise DataFileError(f"{path}: a directory, not a file (expected a CSV of measured rotations or deflections)")
-    from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
-
     count_lines(path, "a CSV of measured rotations or deflections")
     try:
         # a spreadsheet's byte-order mark is no part of the header; a FIFO or device is refused, never read
@@ -424,8 +427,6 @@ def _read_cell(where: str, h: str, cell: str, positions: dict, a) -> float:
 
 def _section_stiffness(params: RigParams) -> np.ndarray:
     """Each section's bending stiffness (strip + the default calibration's housing), for the one-scale fit."""
-    from flexdigit.twin.calibration import default_calibration
-
     geo, mat = params.geometry, params.material
     housing = np.asarray(default_calibration().housing_ei_n_m2, dtype=float)
     strip = mat.youngs_modulus_pa * geo.second_moment_m4

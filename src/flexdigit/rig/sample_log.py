@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from flexdigit._io import OutputStream, check_output
-from flexdigit._validation import check_int
+from flexdigit._io import LOG_LIMIT, OutputStream, check_output, open_input
+from flexdigit._validation import check_choice, check_int
 from flexdigit.errors import DataFileError
 from flexdigit.interrupts import signals_deferred
 
@@ -72,8 +72,6 @@ class SampleLog:
     def __init__(
         self, path: str | os.PathLike, header: dict[str, Any], fsync_every: int = 50, *, mode: str = "new"
     ) -> None:
-        from flexdigit._validation import check_choice
-
         self.path = Path(path)
         #: The log asked for (``path`` becomes ``STEM.partial.jsonl`` when a ``--force`` run stops early) and the mode.
         self.target = self.path
@@ -132,8 +130,6 @@ def check_appendable(path: str | os.PathLike, header: dict[str, Any]) -> None:
 
     Raises :class:`~flexdigit.errors.DataFileError` naming the file and the first setting that differs.
     """
-    from flexdigit._io import LOG_LIMIT, open_input
-
     path = Path(path)
     with open_input(path, "a flexdigit loop log", LOG_LIMIT) as fh:
         first = fh.readline()
@@ -188,8 +184,6 @@ def read_log_columns(
 
 def _read_one_run(path: Path, run: int | None, keep) -> tuple[dict[str, Any], dict[str, Any] | None]:
     """Scan the log once, handing run ``run``'s samples (checked) to ``keep``; its header and footer."""
-    from flexdigit._validation import check_int
-
     want = 1 if run is None else run
     runs = _scan_log(path, lambda index, sample: keep(sample) if index == want else None)
     if run is None and len(runs) > 1:
@@ -215,8 +209,6 @@ def read_log_runs(path: str | os.PathLike) -> list[tuple[int, dict[str, Any], li
 def _scan_log(path: Path, on_sample) -> list[tuple[int, dict[str, Any], dict[str, Any] | None]]:
     """Read a loop log a line at a time: ``(first line, header, footer or None)`` for each run; every sample,
     checked, goes to ``on_sample(run index from 1, sample)`` as it is read (the caller keeps what it needs)."""
-    from flexdigit._io import LOG_LIMIT, open_input
-
     runs: list[list] = []
     with open_input(path, "a flexdigit loop log", LOG_LIMIT) as fh:  # a regular file (a FIFO would hang)
         for number, raw, last in _log_lines(path, fh):

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_real
 from flexdigit.rig.base import Rig
 from flexdigit.rig.controllers import make_controller
@@ -86,6 +87,8 @@ class StepMetrics:
     def to_dict(self) -> dict:
         """The figures by name, units in the names (``--json``, the log's closing record)."""
         return dataclasses.asdict(self)
+
+    __repr__ = fields_summary
 
 
 def step_metrics(
@@ -169,6 +172,19 @@ class StepTest:
     metrics: StepMetrics
     extra: dict = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            controller=self.controller,
+            gain=self.gain,
+            status=self.result.status,
+            samples=len(self.result.time_s),
+            rise_time_s=self.metrics.rise_time_s,
+            settling_time_s=self.metrics.settling_time_s,
+            overshoot_percent=self.metrics.overshoot_percent,
+            final_error_deg=self.metrics.final_error_deg,
+        )
+
 
 def step_test(
     rig: Rig,
@@ -239,6 +255,15 @@ class StepRun:
     has_truth: bool
     deg_per_command: float
 
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            status=self.result.status,
+            samples=len(self.result.time_s),
+            has_truth=self.has_truth,
+            **{f"{k}_{f}": v.get(f) for k, v in self.figures.items() for f in ("rise_time_s", "overshoot_percent")},
+        )
+
 
 def run_step(
     rig: Rig,
@@ -287,7 +312,7 @@ def run_step(
 
     result = run_loop(
         rig, ctl, setpoint_deg, duration_s, period_s, on_sample=sample, measure=estimator, summary=summary,
-        **loop_options,
+        truth=truth, **loop_options,
     )  # fmt: skip
     figures = summary(result.time_s, result.measurement) if result.time_s.size >= 2 else {}
     return StepRun(result, figures, np.array(true_rotation, dtype=float), truth is not None, deg_per_command)

@@ -14,6 +14,7 @@ __getattr__, __all__ = lazy_exports(
         "DigitBeam": "flexdigit.shape.shape",
         "ShapeEstimate": "flexdigit.shape.shape",
         "ShapeEstimator": "flexdigit.shape.shape",
+        "shape_figure": "flexdigit.shape.shape_plot",
         "ShapeAccuracy": "flexdigit.shape.shape",
         "shape_accuracy": "flexdigit.shape.shape",
     },

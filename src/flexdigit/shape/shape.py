@@ -53,9 +53,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexdigit._constants import G_STANDARD_M_S2
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
+from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.digit import ORIENTATIONS
+from flexdigit.twin.sensors import SensorChain
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
 
 __all__ = [
     "DigitBeam",
@@ -124,10 +130,6 @@ class DigitBeam:
         ds_m: float = 1e-3,
     ) -> DigitBeam:
         """The thesis digit (2.2, tables 3.5, 3.7) with the calibration's housing stiffness and support masses."""
-        from flexdigit.models.servo import command_to_angle_rad
-        from flexdigit.twin.calibration import default_calibration
-        from flexdigit.twin.digit import ORIENTATIONS
-
         params = params or RigParams()
         calibration = calibration or default_calibration()
         check_choice(orientation, "orientation", tuple(ORIENTATIONS), "DigitBeam")
@@ -244,6 +246,8 @@ class DigitBeam:
         """Moment (B, Q) of the digit's own weight for shapes (B, P+1, 2) through a :meth:`weight_operator`."""
         return _cross(np.matmul(operator, r_nodes), self.gravity)
 
+    __repr__ = fields_summary
+
 
 @dataclass
 class ShapeEstimate:
@@ -347,6 +351,8 @@ class ShapeEstimate:
             "load_mass_kg": load(self.load_mass_kg[i]),
         }
 
+    __repr__ = fields_summary
+
 
 class ShapeEstimator:
     """Centre line, cable tension and one load from the three gauge voltages (module docstring).
@@ -447,9 +453,6 @@ class ShapeEstimator:
         """Validate the settings and build the beam (once per settings, as scikit-learn validates in fit)."""
         if getattr(self, "ready_", None) == self._key():
             return
-        from flexdigit.twin.calibration import default_calibration
-        from flexdigit.twin.sensors import SensorChain
-
         owner = "ShapeEstimator"
         self.params_ = self.params or RigParams()
         self.calibration_ = self.calibration or default_calibration()
@@ -465,8 +468,9 @@ class ShapeEstimator:
             self.params_, self.calibration_, orientation=self.orientation, housing=bool(self.housing), ds_m=self.ds_m
         )
         sensors = SensorChain(self.params_, self.calibration_, np.random.default_rng(0))
-        self.volts_per_curvature_ = sensors.volts_per_curvature(np.zeros(3), np.zeros(3))
-        self.offset_v_ = sensors.clean_v(np.zeros(3), np.zeros(3))
+        g = self.gauges_ = len(self.params_.geometry.gauge_positions_m)  # G gauge rows, then the tip equation's
+        self.volts_per_curvature_ = sensors.volts_per_curvature(np.zeros(g), np.zeros(g))
+        self.offset_v_ = sensors.clean_v(np.zeros(g), np.zeros(g))
         self.white_v_ = np.asarray(self.calibration_.noise_white_v, dtype=float)
         self.friction_ratio_ = float(self.calibration_.cable_friction_ratio) if self.cable else 0.0
         beam = self.beam_
@@ -499,8 +503,6 @@ class ShapeEstimator:
         """Per reading, the cable shortening the command asks for over e (rad), or NaN where there is none."""
         if command is None or not self.cable:
             return np.full(b, np.nan)
-        from flexdigit.models.servo import command_to_angle_rad
-
         a = self.params_.actuator
         c = check_array(command, "command", "ShapeEstimator", low=a.command_min, high=a.command_max)
         c = np.broadcast_to(c.reshape(-1) if c.ndim else c, (b,))
@@ -519,8 +521,9 @@ class ShapeEstimator:
 
         Parameters
         ----------
-        gauges_v : array_like, shape (3,) or (B, 3)
-            Gauge voltages (V), gauges 1..3 from the base; averages of ``n_average`` readings each.
+        gauges_v : array_like, shape (G,) or (B, G)
+            Gauge voltages (V), gauges 1..G from the base (the thesis rig's 3); averages of ``n_average`` readings
+            each.
         command : int or array_like, shape (B,), optional
             The servo command in force (0..254). None: unknown or actuation disabled (no tip-angle equation).
         start : ShapeEstimate, optional
@@ -551,9 +554,9 @@ class ShapeEstimator:
         owner = "ShapeEstimator.estimate"
         v = check_array(gauges_v, "gauges_v", owner)
         v = v.reshape(1, -1) if v.ndim == 1 else v
-        if v.ndim != 2 or v.shape[1] != 3:
+        if v.ndim != 2 or v.shape[1] != self.gauges_:
             raise ParameterError(
-                f"The 'gauges_v' parameter of {owner} must have 3 gauge columns. "
+                f"The 'gauges_v' parameter of {owner} must have {self.gauges_} gauge columns (the digit's gauges). "
                 f"Got shape {np.shape(gauges_v)} instead."
             )
         beam = self.beam_
@@ -612,10 +615,11 @@ class ShapeEstimator:
         return np.sqrt(sd_white[None, :] ** 2 + friction**2)
 
     def _rows(self, r, psi, s_load=None):
-        """The measurement model: curvature at the three gauges and the tip-angle equation (4 rows).
+        """The measurement model: curvature at the G gauges and the tip-angle equation (G + 1 rows; 4 on the thesis
+        rig).
 
-        Returns ``a_T`` (4,) per unit tension, ``b_w`` (B, 4) from the digit's own weight and, for loads at
-        ``s_load`` (B, C) (``"nodes"``: every node of the grid), ``a_P`` (B, C, 4) per unit load force.
+        Returns ``a_T`` (G + 1,) per unit tension, ``b_w`` (B, G + 1) from the digit's own weight and, for loads at
+        ``s_load`` (B, C) (``"nodes"``: every node of the grid), ``a_P`` (B, C, G + 1) per unit load force.
         """
         beam = self.beam_
         inv_g = beam.gauge_inv_ei
@@ -669,16 +673,16 @@ class ShapeEstimator:
 
         ``hold``: a previous fit whose model choice is kept and near whose load position the position is sought.
         """
-        b = kappa_g.shape[0]
+        b, g = kappa_g.shape[0], self.gauges_
         cable = bool(self.cable)
         has_tip = np.isfinite(tip_eq)
         sd = np.concatenate([sd_k, np.full((b, 1), self.tip_angle_sd_rad)], axis=1)
         y = np.concatenate([kappa_g, np.where(has_tip, tip_eq, 0.0)[:, None]], axis=1)
         w = 1.0 / sd**2
-        w[:, 3] = np.where(has_tip, w[:, 3], 0.0)
+        w[:, g] = np.where(has_tip, w[:, g], 0.0)
         a_t, b_w, _ = self._rows(r, psi)
         res = y - b_w  # what the tension (and the load) must explain
-        t0, chi0 = _fit_tension(res, a_t, w, cable)
+        t0, chi0 = _fit_tension(res, a_t, w, cable, g)
         out = {"T": t0, "P": np.zeros(b), "sL": np.full(b, np.nan), "chi2_0": chi0, "chi2_1": chi0.copy()}
         out["contact"] = out["loaded"] = np.zeros(b, dtype=bool)
         out["interval_1sd"] = out["interval_2sd"] = np.full((b, 2), np.nan)
@@ -693,7 +697,7 @@ class ShapeEstimator:
         res = np.concatenate([res, np.zeros((b, 1))], axis=1)
         w = np.concatenate([w, np.full((b, 1), self.PRIOR_FORCE_N**-2.0)], axis=1)
         a_p = np.concatenate([a_p, np.ones(a_p.shape[:2] + (1,))], axis=-1)
-        t1, p1, chi1 = _fit_load(res[:, None, :], a_t, a_p, w[:, None, :], cable, positive, self.max_force_n)
+        t1, p1, chi1 = _fit_load(res[:, None, :], a_t, a_p, w[:, None, :], cable, positive, self.max_force_n, g)
         rows = np.arange(b)
         if hold is not None:
             near = np.abs(self.nodes_m_[None, :] - np.nan_to_num(hold["sL"])[:, None]) <= self.HOLD_WINDOW_M
@@ -703,7 +707,7 @@ class ShapeEstimator:
         refined = _parabola(self.nodes_m_, chi1, best)[:, None]
         _, _, a_ref = self._rows(r, psi, refined)
         a_ref = np.concatenate([a_ref, np.ones(a_ref.shape[:2] + (1,))], axis=-1)
-        t_r, p_r, chi_r = _fit_load(res[:, None, :], a_t, a_ref, w[:, None, :], cable, positive, self.max_force_n)
+        t_r, p_r, chi_r = _fit_load(res[:, None, :], a_t, a_ref, w[:, None, :], cable, positive, self.max_force_n, g)
         better = chi_r[:, 0] <= chi1[rows, best]
         s_hat = np.where(better, refined[:, 0], cand[rows, best])
         t_hat = np.where(better, t_r[:, 0], t1[rows, best])
@@ -758,11 +762,11 @@ class ShapeEstimator:
     def _uncertainty(self, fit, tip_eq, sd_k, r, psi) -> dict:
         """Parameter covariance (inverse Fisher information) and its image on the centre line."""
         beam = self.beam_
-        b = sd_k.shape[0]
+        b, g = sd_k.shape[0], self.gauges_
         taut = fit["T"] > 0
         contact = fit["loaded"]
         w = np.concatenate([1.0 / sd_k**2, np.full((b, 1), self.tip_angle_sd_rad**-2.0)], axis=1)
-        w[:, 3] = np.where(np.isfinite(tip_eq) & taut, w[:, 3], 0.0)
+        w[:, g] = np.where(np.isfinite(tip_eq) & taut, w[:, g], 0.0)
         step = 1e-3
         s_l = np.where(contact, fit["sL"], 0.0)
         s_lo, s_hi = np.clip(s_l - step, 0, beam.length_m), np.clip(s_l + step, 0, beam.length_m)
@@ -771,7 +775,7 @@ class ShapeEstimator:
         p = np.where(contact, fit["P"], 0.0)
         a_s = p[:, None] * (a_p[:, 2] - a_p[:, 1]) / d_sl[:, None]
         # Jacobian columns: T (while the cable is taut), P and s_L (with contact); inactive ones held exactly
-        cols = np.stack([np.broadcast_to(a_t, (b, 4)), a_p[:, 0], a_s], axis=2)  # (B, 4, 3)
+        cols = np.stack([np.broadcast_to(a_t, (b, g + 1)), a_p[:, 0], a_s], axis=2)  # (B, G + 1, 3)
         active = np.stack([taut, contact, contact], axis=1)
         fisher = np.einsum("bmi,bm,bmj->bij", cols, w, cols)
         both = active[:, :, None] & active[:, None, :]
@@ -827,7 +831,7 @@ class ShapeEstimator:
         beam = self.beam_
         s_l = np.atleast_1d(check_array(positions_from_base_m, "positions_from_base_m", "ShapeEstimator.predict"))
         p = np.broadcast_to(check_array(force_n, "force_n", "ShapeEstimator.predict"), s_l.shape).astype(float)
-        b = s_l.size
+        b, g = s_l.size, self.gauges_
         tip_eq = self._tip_equation(command, b)
         psi, r = self._straight(b)
         fit = {"T": np.zeros(b), "P": p, "sL": s_l, "contact": p != 0, "loaded": p != 0}
@@ -835,13 +839,13 @@ class ShapeEstimator:
         for _ in range(10 * int(self.max_iterations)):
             if np.all(np.isfinite(tip_eq)):
                 a_t, b_w, a_p = self._rows(r, psi, s_l[:, None])
-                psi_free = b_w[:, 3] + p * a_p[:, 0, 3]  # tip equation without the cable
-                fit["T"] = np.maximum((tip_eq - psi_free) / a_t[3], 0.0)
+                psi_free = b_w[:, g] + p * a_p[:, 0, g]  # tip equation without the cable
+                fit["T"] = np.maximum((tip_eq - psi_free) / a_t[g], 0.0)
             psi, r = settle.step(self._curvature_field(fit, r, psi))
             if settle.done:
                 break
         a_t, b_w, a_p = self._rows(r, psi, s_l[:, None])
-        kappa = fit["T"][:, None] * a_t[:3] + b_w[:, :3] + p[:, None] * a_p[:, 0, :3]
+        kappa = fit["T"][:, None] * a_t[:g] + b_w[:, :g] + p[:, None] * a_p[:, 0, :g]
         return kappa, fit, r, psi
 
     def locatability(self, positions_from_base_m, force_n: float = 0.25, command=None) -> np.ndarray:
@@ -903,9 +907,10 @@ class _Settle:
         return bool(np.all(self.change < self.tol_rad))
 
 
-def _fit_tension(res, a_t, w, cable: bool):
-    """T >= 0 alone: ``(T (B,), chi2 (B,))``. With T = 0 the tip row drops out (a slack cable fixes nothing)."""
-    chi_slack = np.sum(w[:, :3] * res[:, :3] ** 2, axis=1)
+def _fit_tension(res, a_t, w, cable: bool, gauges: int = 3):
+    """T >= 0 alone: ``(T (B,), chi2 (B,))``. With T = 0 the tip row (row ``gauges``, after the gauges') drops
+    out (a slack cable fixes nothing)."""
+    chi_slack = np.sum(w[:, :gauges] * res[:, :gauges] ** 2, axis=1)
     if not cable:
         return np.zeros(res.shape[0]), chi_slack
     t = np.sum(w * a_t * res, axis=1) / np.sum(w * a_t * a_t, axis=1)
@@ -914,12 +919,12 @@ def _fit_tension(res, a_t, w, cable: bool):
     return np.where(taut, t, 0.0), np.where(taut, chi_taut, chi_slack)
 
 
-def _fit_load(res, a_t, a_p, w, cable: bool, positive: bool, max_force_n: float = np.inf):
+def _fit_load(res, a_t, a_p, w, cable: bool, positive: bool, max_force_n: float = np.inf, gauges: int = 3):
     """(T, P) per candidate with T >= 0 (a cable only pulls), |P| <= ``max_force_n`` and, for weights, P >= 0: the
     active sets are enumerated (both free; P alone with the cable slack). Shapes (B, C); chi-square is infinite
     where no feasible load explains the readings."""
     slack_w = w.copy()
-    slack_w[..., 3] = 0.0
+    slack_w[..., gauges] = 0.0  # the tip row
     sp = np.sum(slack_w * a_p * a_p, axis=-1)
     p_only = np.sum(slack_w * a_p * res, axis=-1) / np.where(sp > 0, sp, 1.0)
     p_only = np.maximum(p_only, 0.0) if positive else p_only
@@ -1023,6 +1028,8 @@ class ShapeAccuracy:
             )
         return out
 
+    __repr__ = fields_summary
+
 
 #: Where :func:`shape_accuracy` hangs its weight by default: every centimetre from the clamp to the tip (m).
 ACCURACY_POSITIONS_M = tuple(round(0.01 * k, 2) for k in range(1, 28))
@@ -1054,9 +1061,6 @@ def shape_accuracy(
     >>> bool(np.all(acc.tip_error_m < 0.01))
     True
     """
-    from flexdigit.twin.calibration import default_calibration
-    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
-
     params = params or RigParams()
     calibration = calibration or default_calibration()
     a = params.actuator

@@ -29,6 +29,7 @@ __getattr__, __all__ = lazy_exports(
         "StudySpec": "flexdigit.studies.spec",
         "UncertainParameter": "flexdigit.studies.spec",
         "load_spec": "flexdigit.studies.spec",
+        "shipped_specs": "flexdigit.studies.spec",
         "SensitivitySettings": "flexdigit.studies.sensitivity",
         "SensitivityResult": "flexdigit.studies.sensitivity",
         "run_sensitivity": "flexdigit.studies.sensitivity",

@@ -23,9 +23,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_real
 from flexdigit.control.analysis import step_figures
 from flexdigit.errors import DesignError
+from flexdigit.twin.batched import BatchedTwin
 
 __all__ = ["StepSchedule", "BatchedRuntime", "StepResponses", "step_responses", "step_figures_batch"]
 
@@ -134,6 +136,8 @@ class StepResponses:
     step_time_s: float
     schedule: StepSchedule
 
+    __repr__ = fields_summary
+
 
 def step_responses(
     params, calibrations, controllers, mid_deg, schedule: StepSchedule | None = None, *, pretension_n=None
@@ -152,8 +156,6 @@ def step_responses(
         Per rig, the pretension of a second, antagonistic cable (N), None for the thesis's single cable
         (:class:`~flexdigit.twin.batched.BatchedTwin`).
     """
-    from flexdigit.twin.batched import BatchedTwin
-
     schedule = schedule or StepSchedule()
     ctl = BatchedRuntime(controllers)
     pre = antagonist = None

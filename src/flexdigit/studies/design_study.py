@@ -40,11 +40,17 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_path, atomic_write, check_output
+from flexdigit._json import to_jsonable
+from flexdigit._repr import fields_summary
 from flexdigit.errors import ParameterError
 from flexdigit.params import BRIDGE_TYPES, RigParams
 from flexdigit.studies.execution import run_study
+from flexdigit.studies.figures import _save, pareto_figure
 from flexdigit.studies.metrics import METRICS, MetricContext
-from flexdigit.studies.spec import ParameterSet, StudySpec
+from flexdigit.studies.spec import ParameterSet, StudySpec, spec_from_toml
+from flexdigit.tactile.protocols import load_protocol
+from flexdigit.twin.twin import static_gauges_v
 
 __all__ = [
     "DesignSettings",
@@ -270,8 +276,6 @@ def _grid(params: RigParams, step: float) -> np.ndarray:
 def _information(params: RigParams, calibration, step: float, masses: tuple[float, ...]):
     """Per load case (positions along the whole digit x the protocol's masses) and grid point, the gradient of
     the gauge voltage with respect to (position / L, mass / 25 g), in units of the noise; and the grid."""
-    from flexdigit.twin.twin import static_gauges_v
-
     grid = _grid(params, step)
     probe = params.replace(geometry=dataclasses.replace(params.geometry, gauge_positions_m=tuple(grid)))
     cal = calibration.replace(
@@ -313,8 +317,6 @@ def d_optimal_positions(count: int, ps: ParameterSet, *, step_m: float = 0.0025,
     until no move does; from equal spacing and ``starts - 1`` random layouts (seeded), keeping the best.
     Returns ``(positions, criterion, criterion_of_equal_spacing)``.
     """
-    from flexdigit.tactile.protocols import load_protocol
-
     masses = tuple(load_protocol("thesis-6.1").loads_kg)
     jac, grid = _information(ps.params, ps.calibration, step_m, masses)
     equal = [int(np.argmin(np.abs(grid - x))) for x in equal_positions(count, ps.params)]
@@ -483,6 +485,8 @@ class DesignResult:
             lines.append(f"  {len(failed)} designs failed (listed in summary.json)")
         return "\n".join(lines)
 
+    __repr__ = fields_summary
+
 
 class _Builder:
     """Picklable row -> ParameterSet for the executor: a row holds a candidate's index."""
@@ -569,10 +573,6 @@ def write_design_outputs(result: DesignResult, out_dir: str | Path, *, force: bo
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from flexdigit._io import atomic_path, atomic_write, check_output
-    from flexdigit._json import to_jsonable
-    from flexdigit.studies.figures import _save
-
     out_dir = Path(out_dir)
     paths = {
         "designs": out_dir / "designs.parquet",
@@ -597,8 +597,6 @@ def write_design_outputs(result: DesignResult, out_dir: str | Path, *, force: bo
 
 def design_pareto_figure(result: DesignResult):
     """The candidates in the first two objectives, the front, the thesis and equal-spacing designs marked."""
-    from flexdigit.studies.figures import pareto_figure
-
     o = result.settings.objectives
     x, y = result.outputs[o[0]], result.outputs[o[1]]
     front = pareto_front(np.column_stack([x, y]))
@@ -620,8 +618,6 @@ def showcase_design(samples: int = 24, *, seed: int = 0, bayes_samples: int = 10
     sample of ``samples`` designs (the thesis design always in) and the D-optimal placement check for 3 and 6
     gauges on a 5 mm grid. ``flexdigit study design thesis-design`` runs the full space on Dask."""
     import tempfile
-
-    from flexdigit.studies.spec import spec_from_toml
 
     spec = spec_from_toml(f"[study]\nname = 'showcase-design'\nseed = {int(seed)}\n[design]\n", source="showcase")
     settings = DesignSettings(

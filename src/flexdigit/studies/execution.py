@@ -43,10 +43,11 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import LOG_LIMIT, atomic_write, output_lock, read_bytes
 from flexdigit._system import available_cores, check_workers
-from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.errors import DataFileError, OutputError, ParameterError
 from flexdigit.interrupts import raise_if_stopping, signals_deferred
-from flexdigit.studies.metrics import MetricContext
+from flexdigit.studies.metrics import MetricContext, evaluate_many
 
 __all__ = [
     "Journal",
@@ -113,8 +114,6 @@ def evaluate_rows(build, rows, values, metrics, context: MetricContext, task_key
     """
     from threadpoolctl import threadpool_limits
 
-    from flexdigit.studies.metrics import evaluate_many
-
     out: list[RowRecord] = []
     with threadpool_limits(1):  # one core per worker: BLAS threads would fight the other workers
         start = time.perf_counter()
@@ -161,16 +160,12 @@ class Journal:
         if self.path.exists() and not force:
             self._read()
         else:
-            from flexdigit._io import atomic_write
-
             self.path.parent.mkdir(parents=True, exist_ok=True)
             # an exclusive, unpredictable temporary file: a symlink planted at a fixed name is never followed
             with atomic_write(self.path, "w", force=True) as fh:
                 fh.write(json.dumps(self.header, sort_keys=True) + "\n")
 
     def _read(self) -> None:
-        from flexdigit._io import LOG_LIMIT, read_bytes
-
         text = read_bytes(self.path, "a study journal", LOG_LIMIT)
         lines = text.split(b"\n")
         complete, tail = lines[:-1], lines[-1]
@@ -248,8 +243,6 @@ class Journal:
                 fh.flush()
                 os.fsync(fh.fileno())
         except OSError as exc:  # a full disk: say which file, and that a rerun resumes (a torn line is dropped)
-            from flexdigit.errors import OutputError
-
             raise OutputError(
                 f"{self.path}: cannot write it: {exc.strerror or exc}; the rows before are kept: free some space "
                 "and rerun to resume"
@@ -545,8 +538,6 @@ def run_study(
 ):
     """:func:`run_rows` with the study's journal in ``out_dir``; returns ``(outputs, errors)``: per metric an array
     over the rows (NaN where a row failed) and per row its error or None."""
-    from flexdigit._io import output_lock
-
     Path(out_dir).mkdir(parents=True, exist_ok=True)  # the lock file lives beside the journal
     with output_lock(Path(out_dir) / JOURNAL_NAME):  # one study writes a journal at a time: never mixed
         journal = Journal(Path(out_dir) / JOURNAL_NAME, header, force=force, design=values)

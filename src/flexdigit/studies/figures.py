@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_path
+
 __all__ = [
     "sobol_bars_figure",
     "total_index_map_figure",
@@ -33,8 +35,6 @@ def _plt():
 
 
 def _save(fig, path: Path, force: bool) -> Path:
-    from flexdigit._io import atomic_path
-
     plt = _plt()
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path, force=force) as tmp:

@@ -50,9 +50,19 @@ from functools import lru_cache
 
 import numpy as np
 
+from flexdigit.control.design20ms import closed_loop, design_20ms
+from flexdigit.control.thesis_designs import thesis_design
 from flexdigit.interrupts import raise_if_stopping
-from flexdigit.studies.batched_loop import StepSchedule, step_figures
+from flexdigit.models.plant import build_plant
+from flexdigit.models.servo import servo_unit_tf
+from flexdigit.params import RigParams
+from flexdigit.studies.batched_loop import StepSchedule, step_figures, step_figures_batch, step_responses
 from flexdigit.studies.parameter_set import ParameterSet
+from flexdigit.tactile.bounds import TwinGaugeModel, protocol_limits
+from flexdigit.tactile.localisation import identifiability_map
+from flexdigit.tactile.protocols import RELAXED, load_protocol
+from flexdigit.twin.batched import BatchedChains
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, cached_digit
 
 __all__ = ["Metric", "MetricContext", "METRICS", "evaluate", "register_metric", "SENSITIVITY_METRICS"]
 
@@ -168,16 +178,11 @@ def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -
 
 # ------------------------------------------------------------------------------------------------ the digit
 def _chain(ps: ParameterSet, cells: int | None = None):
-    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit
-
     return cached_digit(ps.params, ps.calibration, True, "vertical", cells or DEFAULT_CELLS_PER_SECTION)
 
 
 def _chains(parameter_sets):
     """The parameter sets' digits (housed, tip up as designed, 2.2.4) on the batched twin, with their cables."""
-    from flexdigit.twin.batched import BatchedChains
-    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION
-
     rigs = ([ps.params for ps in parameter_sets], [ps.calibration for ps in parameter_sets])
     options = {"housing": True, "orientation": "vertical", "cells_per_section": DEFAULT_CELLS_PER_SECTION}
     pre = [ps.antagonist_pretension_n for ps in parameter_sets]
@@ -191,8 +196,6 @@ def _chains(parameter_sets):
 
 def _mid_shortening_m(ps: ParameterSet) -> float:
     """Cable shortening at the middle of the operating commands (8..43 -> 25.5): where the loop works."""
-    from flexdigit.twin.twin import cable_shortening_m
-
     return float(cable_shortening_m(0.5 * sum(ps.params.actuator.operating_commands), ps.params))
 
 
@@ -206,8 +209,6 @@ def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
     rotation per command over the operating commands, and the linearised actuated digit's matrices (for
     :func:`actuated_model`).
     """
-    from flexdigit.twin.twin import cable_shortening_m
-
     if _BATCH_CACHE[0] is parameter_sets:
         return _BATCH_CACHE[1]
     chains = _chains(parameter_sets)
@@ -286,8 +287,6 @@ def rotation_gain_deg_per_command(ps: ParameterSet, ctx: MetricContext | None = 
 # -------------------------------------------------------------------------------------------------- control
 @lru_cache(maxsize=8)
 def _baseline_design(baseline: ParameterSet):
-    from flexdigit.control.design20ms import design_20ms
-
     return design_20ms(baseline.params, deg_per_command=rotation_gain_deg_per_command(baseline, MetricContext()))
 
 
@@ -308,8 +307,6 @@ def loop_plant(ps: ParameterSet, period_s: float, delay_samples: int = 1):
     with ``delay_samples`` samples of transport delay."""
     import control as ct
 
-    from flexdigit.models.servo import servo_unit_tf
-
     a = ps.params.actuator
     metres_per_command = a.rad_per_command * a.cable_m_per_servo_rad
     with _quiet():
@@ -324,16 +321,12 @@ def loop_design(ps: ParameterSet, ctx: MetricContext):
     """The 20 ms design the loop metrics run on ``ps``: the baseline rig's, or its own with ``ctx.redesign``."""
     if not ctx.redesign:
         return _baseline_design(ctx.baseline)
-    from flexdigit.control.design20ms import design_20ms
-
     return design_20ms(ps.params, deg_per_command=rotation_gain_deg_per_command(ps, ctx))
 
 
 @lru_cache(maxsize=4096)
 def _loop(ps: ParameterSet, ctx: MetricContext) -> dict:
     import control as ct
-
-    from flexdigit.control.design20ms import closed_loop
 
     design = loop_design(ps, ctx)
     plant_d = loop_plant(ps, design.period_s, design.delay_samples)
@@ -418,8 +411,6 @@ def twin_loop_figures(parameter_sets, ctx: MetricContext) -> dict[str, np.ndarra
     """The 20 ms loop run on the batched twin for many parameter sets at once (:mod:`flexdigit.studies.batched_loop`):
     settling time, overshoot and steady-state error of the context's setpoint step, centred on each rig's
     mid-range rotation (where the linear metrics linearise)."""
-    from flexdigit.studies.batched_loop import step_figures_batch, step_responses
-
     if _LOOP_CACHE[0] is parameter_sets and _LOOP_CACHE[1] == ctx:
         return _LOOP_CACHE[2]
     designs = [loop_design(ps, ctx) for ps in parameter_sets]
@@ -458,9 +449,6 @@ _loop_metric("steady_state_error_deg", "deg", "the 20 ms loop's final error afte
 
 @register_metric("hinf_gamma", "", "gamma of the thesis's H-infinity design on this rig's printed plant", "4.4")
 def hinf_gamma(ps: ParameterSet, ctx: MetricContext) -> float:
-    from flexdigit.control.thesis_designs import thesis_design
-    from flexdigit.models.plant import build_plant
-
     return float(thesis_design(ctx.hinf_filter_hz, plant=build_plant("printed", ps.params).tf).gamma)
 
 
@@ -468,8 +456,6 @@ def hinf_gamma(ps: ParameterSet, ctx: MetricContext) -> float:
 def gauge_model(ps: ParameterSet, cells_per_section: int | None = None):
     """The tactile gauge model of this rig (the twin's statics and its white noise plus the ADC's quantisation
     noise, ``lsb / sqrt(12)``), any number of gauges."""
-    from flexdigit.tactile.bounds import TwinGaugeModel
-
     model = TwinGaugeModel(ps.params, ps.calibration, cells_per_section=cells_per_section)
     lsb = ps.params.sensors.adc_lsb_v
     model.noise_v = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + lsb**2 / 12.0)
@@ -478,8 +464,6 @@ def gauge_model(ps: ParameterSet, cells_per_section: int | None = None):
 
 @lru_cache(maxsize=4)
 def _protocol_settings(name: str):
-    from flexdigit.tactile.protocols import RELAXED, load_protocol
-
     protocol = load_protocol(name)
     commands = protocol.actuation_commands or (RELAXED,)
     rows = []
@@ -493,9 +477,6 @@ def _protocol_settings(name: str):
 
 @register_metric("bayes_position_limit_mm", "mm", "chapter 6's localisation Bayes limit (RMS, one reading)", "6.5")
 def bayes_position_limit_mm(ps: ParameterSet, ctx: MetricContext) -> float:
-    from flexdigit.params import RigParams
-    from flexdigit.tactile.bounds import protocol_limits
-
     rows = _protocol_settings(ctx.protocol)
     length = ps.params.geometry.digit_length_m
     # positions from the tip, as fractions of the thesis digit: a larger or smaller digit is probed alike
@@ -516,9 +497,6 @@ def bayes_position_limit_mm(ps: ParameterSet, ctx: MetricContext) -> float:
 
 @register_metric("blind_zone_mm", "mm", "length from the clamp where a 25 g load bends no gauge", "6.5")
 def blind_zone_mm(ps: ParameterSet, ctx: MetricContext) -> float:
-    from flexdigit.tactile.localisation import identifiability_map
-    from flexdigit.tactile.protocols import RELAXED
-
     length = ps.params.geometry.digit_length_m
     points = int(round(length / ctx.blind_step_m)) + 1
     zones = identifiability_map(gauge_model(ps, ctx.tactile_cells), [ctx.blind_mass_kg], [RELAXED], length, points)

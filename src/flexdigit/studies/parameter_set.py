@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
+from flexdigit._repr import differences, summary
 from flexdigit.params import RigParams
 from flexdigit.twin.calibration import Calibration, default_calibration
 
@@ -38,3 +39,11 @@ class ParameterSet:
             self.params.cables if pre is None else dataclasses.replace(self.params.cables, count=2, pretension_n=pre)
         )
         return self.params.replace(cables=cables)
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            antagonist_pretension_n=self.antagonist_pretension_n,
+            **differences(self.params, RigParams()),
+            **{"calibration." + k: v for k, v in differences(self.calibration, default_calibration()).items()},
+        )

@@ -32,11 +32,15 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_path, atomic_write, check_output
+from flexdigit._json import to_jsonable
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_int, check_real
 from flexdigit.errors import ParameterError
+from flexdigit.studies import figures
 from flexdigit.studies.execution import run_study, warn
 from flexdigit.studies.metrics import METRICS, SENSITIVITY_METRICS, MetricContext
-from flexdigit.studies.spec import StudySpec
+from flexdigit.studies.spec import StudySpec, load_spec
 
 __all__ = ["SensitivitySettings", "SensitivityResult", "run_sensitivity", "sobol_indices", "write_outputs"]
 
@@ -202,6 +206,8 @@ class SensitivityResult:
             entry["range"] = [float(ok.min()), float(ok.max())] if ok.size else None
             out["metrics"][metric] = entry
         return out
+
+    __repr__ = fields_summary
 
 
 def _row(metric, method, index, parameter, parameter_2, n, value, conf) -> dict:
@@ -397,10 +403,6 @@ def write_outputs(result: SensitivityResult, out_dir: str | Path, *, force: bool
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from flexdigit._io import atomic_path, atomic_write, check_output
-    from flexdigit._json import to_jsonable
-    from flexdigit.studies import figures
-
     out_dir = Path(out_dir)
     paths = {
         "indices": out_dir / "indices.parquet",
@@ -456,8 +458,6 @@ def twin_sensitivity(
     """
     import dataclasses
     import tempfile
-
-    from flexdigit.studies.spec import load_spec
 
     spec = spec or load_spec("thesis-tolerances")
     spec = dataclasses.replace(spec, metrics=TWIN_METRICS, seed=seed)

@@ -67,12 +67,15 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from flexdigit._io import read_text, refuse_special
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams, load_params
+from flexdigit.studies.metrics import METRICS
 from flexdigit.studies.parameter_set import ParameterSet
 from flexdigit.twin.calibration import default_calibration, load_calibration
 
 __all__ = [
+    "shipped_specs",
     "DISTRIBUTIONS",
     "ParameterSet",
     "UncertainParameter",
@@ -307,10 +310,22 @@ def load_spec(name_or_path: str | Path) -> StudySpec:
         return spec_from_toml(ref.read_text(), source=f"{text_name}.toml")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory, not a study spec")
-    from flexdigit._io import read_text
-
     text = read_text(path, "a study spec TOML")  # binary garbage: named, not a codec error
     return spec_from_toml(text, source=str(path), base_dir=path.parent)
+
+
+def shipped_specs() -> dict[str, str]:
+    """The shipped study specs (:data:`SHIPPED_SPECS`), each with its kind and one-line description."""
+    import tomllib
+    from importlib import resources
+
+    out = {}
+    for name in SHIPPED_SPECS:
+        text = resources.files("flexdigit.studies").joinpath("specs").joinpath(f"{name}.toml").read_text()
+        doc = tomllib.loads(text)
+        kind = "design" if "design" in doc else "sensitivity"
+        out[name] = f"{kind} study: {doc.get('study', {}).get('description', '')}".rstrip(": ")
+    return out
 
 
 def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None) -> StudySpec:
@@ -342,8 +357,6 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
     if not isinstance(metrics, list) or not all(isinstance(m, str) for m in metrics):
         raise ParameterError(f"{source}: [study] metrics must be a list of metric names. Got {metrics!r} instead.")
     if metrics:
-        from flexdigit.studies.metrics import METRICS
-
         for m in metrics:
             if m not in METRICS:
                 raise ParameterError(
@@ -381,8 +394,6 @@ def _baseline(study: dict, source: str, base_dir: Path | None) -> ParameterSet:
         if not isinstance(value, str):
             raise ParameterError(f"{source}: [study] {key} must be a file name. Got {value!r} instead.")
         path = Path(value) if base_dir is None or Path(value).is_absolute() else base_dir / value
-        from flexdigit._io import refuse_special
-
         refuse_special(path, f"the [study] {key} file of {source}")
         if not path.is_file():
             raise ParameterError(f"{source}: [study] {key}: no such file {str(path)!r}")

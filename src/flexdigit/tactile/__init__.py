@@ -23,6 +23,7 @@ __getattr__, __all__ = lazy_exports(
     {
         "Protocol": "flexdigit.tactile.protocols",
         "load_protocol": "flexdigit.tactile.protocols",
+        "builtin_protocols": "flexdigit.tactile.protocols",
         "collect": "flexdigit.tactile.runner",
         "load_or_collect": "flexdigit.tactile.runner",
         "Dataset": "flexdigit.tactile.dataset",
@@ -41,6 +42,8 @@ __getattr__, __all__ = lazy_exports(
         "load_model": "flexdigit.tactile.model_io",
         "percentage_error": "flexdigit.tactile.accuracy",
         "rmse": "flexdigit.tactile.accuracy",
+        "prediction_figure": "flexdigit.tactile.prediction_plot",
+        "target_unit": "flexdigit.tactile.prediction_plot",
         "TwinGaugeModel": "flexdigit.tactile.bounds",
         "cramer_rao": "flexdigit.tactile.bounds",
         "protocol_limits": "flexdigit.tactile.bounds",

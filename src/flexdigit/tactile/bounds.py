@@ -37,7 +37,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
+from flexdigit.params import RigParams
 from flexdigit.tactile.protocols import RELAXED
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, friction_sd_v, static_gauges_v
 
 __all__ = [
     "ZONES",
@@ -85,6 +89,8 @@ class Bound:
     crlb_m: np.ndarray
     crlb_known_mass_m: np.ndarray
     zone: np.ndarray
+
+    __repr__ = fields_summary
 
 
 def noise_of(model, position_from_base_m, mass_kg, command) -> np.ndarray:
@@ -196,10 +202,6 @@ class TwinGaugeModel:
     """
 
     def __init__(self, params=None, calibration=None, orientation: str = "horizontal", cells_per_section=None) -> None:
-        from flexdigit.params import RigParams
-        from flexdigit.twin.calibration import default_calibration
-        from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION
-
         self.params = params or RigParams()
         self.calibration = calibration or default_calibration()
         self.orientation = orientation
@@ -242,8 +244,6 @@ class TwinGaugeModel:
     def _static(self, a, m, command, friction: bool) -> np.ndarray:
         """Voltages (or friction spread) of the cases ``(a, m)`` at one command, from one static solve kept for
         both; identical cases (a tare's no-load readings over a whole grid) solved once."""
-        from flexdigit.twin.twin import friction_sd_v, static_gauges_v
-
         settings = (self.params, self.calibration, self.orientation, self.cells_per_section)
         key = (int(command), a.tobytes(), m.tobytes())
         kept = self._kept
@@ -310,6 +310,8 @@ class ProtocolLimits:
             return np.array([keys[k] for k in _setting_keys(position_from_base_m, mass_kg, command)], dtype=int)
         except KeyError as err:
             raise ValueError(f"reading at setting {err.args[0]} is not one of the protocol's settings") from None
+
+    __repr__ = fields_summary
 
 
 def _setting_keys(a, m, c) -> list[tuple]:
@@ -478,6 +480,8 @@ class ContactBound:
     position_crlb_m: np.ndarray
     force_crlb_n: np.ndarray
     zone: np.ndarray
+
+    __repr__ = fields_summary
 
 
 def contact_bounds(model, position_m, force_n, command, *, n_readings: int = 1) -> ContactBound:

@@ -1,6 +1,7 @@
 """Tactile datasets: a tidy table of readings, a crash-safe journal, Parquet and CSV files.
 
-One row per reading: the three gauge voltages, the potentiometer voltage, the load (kg), where it hung (from the
+One row per reading: the gauge voltages (``gauge1_v`` .. ``gaugeG_v``, one per gauge of the digit, 1 to 8; the
+thesis rig's three), the potentiometer voltage, the load (kg), where it hung (from the
 tip and from the base, m), the servo command (:data:`~flexdigit.tactile.protocols.RELAXED` when actuation is
 disabled), the test and repetition, and the time. The protocol and the rig that produced it travel with it as
 metadata, so a dataset cannot silently be mixed up with another experiment.
@@ -28,14 +29,27 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import __version__, _io
-from flexdigit._io import atomic_path, atomic_write
+from flexdigit._io import (
+    LOG_LIMIT,
+    RECORDS_LIMIT,
+    atomic_path,
+    atomic_write,
+    check_input,
+    count_lines,
+    read_bytes,
+    read_text,
+)
 from flexdigit.errors import DataFileError, one_line
 from flexdigit.interrupts import signals_deferred
-from flexdigit.tactile.protocols import Protocol
+from flexdigit.tactile.protocols import RELAXED, Protocol
 
 __all__ = [
     "COLUMNS",
     "GAUGE_COLUMNS",
+    "MAX_GAUGES",
+    "gauge_columns",
+    "dataset_columns",
+    "gauge_count_of",
     "JOURNAL_FORMAT",
     "DATASET_FORMAT",
     "Dataset",
@@ -48,23 +62,53 @@ __all__ = [
     "load_dataset",
 ]
 
-#: Every column of a dataset and its numpy dtype.
-COLUMNS: dict[str, type] = {
-    "sample": np.int64,
-    "test": np.int64,
-    "gauge1_v": np.float64,
-    "gauge2_v": np.float64,
-    "gauge3_v": np.float64,
-    "pot_v": np.float64,
-    "load_kg": np.float64,
-    "position_index": np.int64,
-    "position_from_tip_m": np.float64,
-    "position_from_base_m": np.float64,
-    "command": np.int64,
-    "repetition": np.int64,
-    "time_s": np.float64,
-}
-GAUGE_COLUMNS = ("gauge1_v", "gauge2_v", "gauge3_v")
+#: Most gauges a digit carries (:class:`flexdigit.params.Geometry`); a dataset has one column per gauge.
+MAX_GAUGES = 8
+
+
+def gauge_columns(count: int = 3) -> tuple[str, ...]:
+    """The gauge columns of a dataset of a digit with ``count`` gauges: ``gauge1_v`` (nearest the clamp) first.
+
+    Examples
+    --------
+    >>> gauge_columns(4)
+    ('gauge1_v', 'gauge2_v', 'gauge3_v', 'gauge4_v')
+    """
+    return tuple(f"gauge{k}_v" for k in range(1, count + 1))
+
+
+def dataset_columns(count: int = 3) -> dict[str, type]:
+    """Every column of a dataset of a digit with ``count`` gauges, in order, and its numpy dtype."""
+    return {
+        "sample": np.int64,
+        "test": np.int64,
+        **dict.fromkeys(gauge_columns(count), np.float64),
+        "pot_v": np.float64,
+        "load_kg": np.float64,
+        "position_index": np.int64,
+        "position_from_tip_m": np.float64,
+        "position_from_base_m": np.float64,
+        "command": np.int64,
+        "repetition": np.int64,
+        "time_s": np.float64,
+    }
+
+
+#: Every column of a dataset of the thesis rig (three gauges) and its numpy dtype.
+COLUMNS: dict[str, type] = dataset_columns(3)
+GAUGE_COLUMNS = gauge_columns(3)
+
+
+def gauge_count_of(meta: dict, where: object = "dataset") -> int:
+    """The gauge count a dataset's (or journal's) metadata records: ``gauge_count``, 3 in files written before
+    datasets recorded it (the thesis rig's). Anything but an integer 1..:data:`MAX_GAUGES` is refused, naming
+    ``where``."""
+    value = meta.get("gauge_count", 3) if isinstance(meta, dict) else 3
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_GAUGES:
+        raise DataFileError(f"{where}: metadata 'gauge_count' must be an integer 1..{MAX_GAUGES}. Got {value!r}")
+    return value
+
+
 #: /2: every reading carries a CRC-32 of its canonical JSON (``crc``). A journal of /1 (before it) is still
 #: resumed, as legacy: its readings are real measurements that cannot be taken again, and are checked as before
 #: (consecutive, inside the protocol's plan) but not against a checksum they never had.
@@ -91,9 +135,19 @@ class Dataset:
         return self.columns[name]
 
     @property
+    def gauge_count(self) -> int:
+        """How many gauges the digit has (``meta["gauge_count"]``; 3, the thesis rig's, in older files)."""
+        return gauge_count_of(self.meta)
+
+    @property
+    def gauge_columns(self) -> tuple[str, ...]:
+        """The gauge columns, ``gauge1_v`` .. ``gaugeG_v``."""
+        return gauge_columns(self.gauge_count)
+
+    @property
     def gauges_v(self) -> np.ndarray:
-        """The three gauge voltages as an ``(n, 3)`` array (V)."""
-        return np.column_stack([self.columns[c] for c in GAUGE_COLUMNS])
+        """The gauge voltages as an ``(n, G)`` array (V), gauge 1 (nearest the clamp) first."""
+        return np.column_stack([self.columns[c] for c in self.gauge_columns])
 
     @property
     def contact(self) -> np.ndarray:
@@ -113,10 +167,11 @@ class Dataset:
         return f"Dataset(protocol={name!r}, samples={len(self)}, rig={self.meta.get('rig', {}).get('url', '?')!r})"
 
 
-def make_meta(protocol: Protocol, rig: dict, digit_length_m: float, adc_range_v=None) -> dict:
+def make_meta(protocol: Protocol, rig: dict, digit_length_m: float, adc_range_v=None, gauge_count: int = 3) -> dict:
     """The metadata stored with a dataset (and in its journal's header); ``adc_range_v`` (V) where it is known
-    (the card the readings were taken with; None for imported readings)."""
+    (the card the readings were taken with; None for imported readings); ``gauge_count``: the digit's gauges."""
     return {
+        "gauge_count": int(gauge_count),
         "format": DATASET_FORMAT,
         "protocol": protocol.to_dict(),
         "protocol_fingerprint": protocol.fingerprint,
@@ -268,8 +323,6 @@ def _check_journal_plan(path: Path, rows: list[dict], header: dict) -> None:
 
 def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     """Header, complete readings, and the byte length of the complete part of a journal."""
-    from flexdigit._io import LOG_LIMIT, read_bytes
-
     data = read_bytes(path, "a collection journal", LOG_LIMIT)
     lines = data.split(b"\n")
     # Everything after the last newline is a partial line (or empty): it is not counted.
@@ -283,6 +336,7 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
     if not isinstance(header, dict) or header.get("journal") not in (JOURNAL_FORMAT, *LEGACY_JOURNAL_FORMATS):
         raise DataFileError(f"{path}: line 1 is not a {JOURNAL_FORMAT} header")
     checked = header["journal"] == JOURNAL_FORMAT
+    columns = dataset_columns(gauge_count_of(header, f"{path}: line 1"))
     rows = []
     for number, line in enumerate(complete[1:], start=2):
         try:
@@ -291,10 +345,10 @@ def _read_journal(path: Path) -> tuple[dict, list[dict], int]:
             raise DataFileError(f"{path}: line {number} is not valid JSON (or nested too deep)") from None
         if not isinstance(row, dict):
             raise DataFileError(f"{path}: line {number} is not a reading (a JSON object)")
-        missing = [c for c in COLUMNS if c not in row]
+        missing = [c for c in columns if c not in row]
         if missing:
             raise DataFileError(f"{path}: line {number} lacks column '{missing[0]}'")
-        for name, dtype in COLUMNS.items():
+        for name, dtype in columns.items():
             value = row[name]
             if np.dtype(dtype).kind == "i":
                 ok = isinstance(value, int) and not isinstance(value, bool) and abs(value) < 2**63
@@ -321,12 +375,12 @@ def read_journal(path: str | Path) -> Dataset:
     """The readings of a journal so far, as a :class:`Dataset` (an interrupted run can still be analysed)."""
     header, rows, _ = _read_journal(Path(path))
     meta = {k: v for k, v in header.items() if k != "journal"}
-    return Dataset(_rows_to_columns(rows), meta)
+    return Dataset(_rows_to_columns(rows, dataset_columns(gauge_count_of(meta, path))), meta)
 
 
-def _rows_to_columns(rows: list[dict]) -> dict[str, np.ndarray]:
+def _rows_to_columns(rows: list[dict], columns: dict[str, type]) -> dict[str, np.ndarray]:
     out = {}
-    for name, dtype in COLUMNS.items():
+    for name, dtype in columns.items():
         values = [np.nan if r[name] is None else r[name] for r in rows]
         out[name] = np.array(values, dtype=dtype) if values else np.zeros(0, dtype=dtype)
     return out
@@ -345,7 +399,7 @@ def save_dataset(dataset: Dataset, path: str | Path, *, force: bool = False) -> 
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table = pa.table({name: dataset.columns[name] for name in COLUMNS})
+    table = pa.table({name: dataset.columns[name] for name in dataset_columns(dataset.gauge_count)})
     table = table.replace_schema_metadata({"flexdigit": json.dumps(dataset.meta)})
     with atomic_path(path, force=force) as tmp:
         pq.write_table(table, tmp)
@@ -355,7 +409,7 @@ def save_dataset(dataset: Dataset, path: str | Path, *, force: bool = False) -> 
 def export_csv(dataset: Dataset, path: str | Path, *, force: bool = False) -> Path:
     """Write ``dataset`` as CSV: a ``# {json metadata}`` first line, a header, one row per reading (atomic)."""
     path = Path(path)
-    names = list(COLUMNS)
+    names = list(dataset_columns(dataset.gauge_count))
     with atomic_write(path, "w", force=force) as fh:
         fh.write("# " + json.dumps(dataset.meta) + "\n")
         fh.write(",".join(names) + "\n")
@@ -408,8 +462,6 @@ def _load_parquet(path: Path) -> Dataset:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from flexdigit._io import check_input
-
     check_input(path, "a flexdigit dataset (Parquet)")
     try:
         with _io.open_input(path, "a Parquet file", _io.RECORDS_LIMIT) as fh:  # any name, even not UTF-8
@@ -427,10 +479,11 @@ def _load_parquet(path: Path) -> Dataset:
         meta = json.loads(meta_raw)
     except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
         raise DataFileError(f"{path}: flexdigit metadata is not valid JSON") from None
+    expected = dataset_columns(gauge_count_of(meta, path))
     columns = {}
-    for name, dtype in COLUMNS.items():
+    for name, dtype in expected.items():
         if name not in column_names:
-            raise DataFileError(f"{path}: missing column '{name}' (expected columns: {', '.join(COLUMNS)})")
+            raise DataFileError(f"{path}: missing column '{name}' (expected columns: {', '.join(expected)})")
         arrow_type = table.schema.field(name).type
         want_float = np.dtype(dtype).kind == "f"
         ok = pa.types.is_floating(arrow_type) if want_float else pa.types.is_integer(arrow_type)
@@ -448,8 +501,6 @@ def _load_parquet(path: Path) -> Dataset:
 def _load_csv(path: Path) -> Dataset:
     from io import StringIO
 
-    from flexdigit._io import RECORDS_LIMIT, count_lines, read_text
-
     count_lines(path, "a flexdigit dataset CSV")
     with StringIO(read_text(path, "a flexdigit dataset CSV", RECORDS_LIMIT)) as fh:
         first = fh.readline()
@@ -459,10 +510,11 @@ def _load_csv(path: Path) -> Dataset:
             meta = json.loads(first[2:])
         except (json.JSONDecodeError, RecursionError):
             raise DataFileError(f"{path}: line 1 metadata is not valid JSON") from None
+        expected = dataset_columns(gauge_count_of(meta, path))
         header = fh.readline().strip().split(",")
-        missing = [c for c in COLUMNS if c not in header]
+        missing = [c for c in expected if c not in header]
         if missing:
-            raise DataFileError(f"{path}: missing column '{missing[0]}' (expected columns: {', '.join(COLUMNS)})")
+            raise DataFileError(f"{path}: missing column '{missing[0]}' (expected columns: {', '.join(expected)})")
         values: dict[str, list] = {c: [] for c in header}
         for number, line in enumerate(fh, start=3):
             cells = line.rstrip("\n").split(",")
@@ -471,7 +523,7 @@ def _load_csv(path: Path) -> Dataset:
             for c, v in zip(header, cells, strict=True):
                 values[c].append(v)
     columns = {}
-    for name, dtype in COLUMNS.items():
+    for name, dtype in expected.items():
         try:
             columns[name] = np.array(values[name], dtype=float)
         except ValueError:
@@ -524,7 +576,7 @@ def _validate(dataset: Dataset, path: Path, protocol: Protocol | None, *, partia
         bad = int(np.flatnonzero(~np.all(np.isfinite(gauges), axis=1))[0])
         raise DataFileError(f"{path}: gauge voltage of sample {int(dataset['sample'][bad])} is not finite")
     adc = _adc_range(meta, path)
-    for name in (*GAUGE_COLUMNS, "pot_v") if adc is not None else ():
+    for name in (*dataset.gauge_columns, "pot_v") if adc is not None else ():
         values = dataset[name]
         with np.errstate(invalid="ignore"):
             outside = np.flatnonzero((values < adc[0]) | (values > adc[1]))
@@ -555,8 +607,6 @@ def _adc_range(meta: dict, path: Path) -> tuple[float, float] | None:
 
 def _check_against_settings(dataset: Dataset, path: Path, protocol: Protocol) -> None:
     """Each imported reading's load, position and command must be one of its protocol's."""
-    from flexdigit.tactile.protocols import RELAXED
-
     allowed = {
         "load_kg": {0.0, *protocol.loads_kg},
         "position_from_tip_m": set(protocol.positions_from_tip_m),

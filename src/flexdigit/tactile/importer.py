@@ -48,10 +48,11 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._io import read_bytes, refuse_special
 from flexdigit._table import Table, read_table
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.params import GAUGE_V
+from flexdigit.params import GAUGE_V, RigParams
 from flexdigit.tactile.dataset import COLUMNS, Dataset, make_meta
 from flexdigit.tactile.protocols import RELAXED, Protocol
 
@@ -182,14 +183,10 @@ class ColumnMap:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
-        from flexdigit._io import refuse_special
-
         refuse_special(path, "a column map TOML")
         if not path.is_file():
             raise DataFileError(f"{path}: not a file (a directory?); expected a column map TOML")
         try:
-            from flexdigit._io import read_bytes
-
             data = tomllib.loads(read_bytes(path, "a column map TOML").decode("utf-8-sig"))
         except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
             raise DataFileError(f"{path}: not valid TOML ({exc})") from None
@@ -246,8 +243,6 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
     DataFileError
         One line naming the file, the line and the column of the first bad cell, or the missing column.
     """
-    from flexdigit.params import RigParams
-
     cmap = column_map
     path = Path(path)
     length_m = cmap.digit_length_m or (params or RigParams()).geometry.digit_length_m

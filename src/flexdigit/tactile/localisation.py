@@ -18,8 +18,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
+from flexdigit.params import RigParams
 from flexdigit.tactile.accuracy import accuracy, rmse
-from flexdigit.tactile.bounds import ZONES, cramer_rao, protocol_limits
+from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao, protocol_limits
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
@@ -32,6 +34,8 @@ __all__ = [
     "LocalisationResult",
     "localisation_study",
     "bayes_limits",
+    "readings_gauge_model",
+    "position_bayes_rmse_m",
     "identifiability_map",
 ]
 
@@ -114,6 +118,8 @@ class LocalisationResult:
     def best(self) -> str:
         """The estimator with the lowest position RMSE over identifiable readings."""
         return min(self.position_rmse_identifiable_m, key=self.position_rmse_identifiable_m.get)
+
+    __repr__ = fields_summary
 
 
 def localisation_study(
@@ -297,6 +303,67 @@ def bayes_limits(model, dataset: Dataset, rows=None, *, samples: int = 4000, see
     return protocol_limits(
         model, k[:, 0], k[:, 1], k[:, 2], counts[keep], samples=samples, seed=[seed, 11], no_load_noise_v=white
     )
+
+
+def readings_gauge_model(params=None, calibration=None):
+    """The twin's gauge model (:class:`~flexdigit.tactile.bounds.TwinGaugeModel`) of a digit as its card reads it:
+    white noise and the ADC's quantisation, ``lsb / sqrt(12)`` (a uniform rounding error), per gauge, V.
+
+    The quantisation matters on a digit whose amplified noise is below one LSB (a quarter bridge's small signal):
+    the readings then carry the rounding, and a Bayes limit without it would be a floor no estimator could reach.
+    The studies' ``bayes_position_limit_mm`` models the readings the same way.
+    """
+    model = TwinGaugeModel(params, calibration)
+    lsb = (params or RigParams()).sensors.adc_lsb_v
+    model.noise_v = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + lsb**2 / 12.0)
+    return model
+
+
+def position_bayes_rmse_m(model, dataset: Dataset, rows, *, samples: int = 4000, seed: int = 0) -> float:
+    """The localisation Bayes limit on the loaded readings ``rows`` of ``dataset``: the RMS position error (m) of the
+    best estimator that knows the protocol's settings and their frequencies (:func:`bayes_limits`, from
+    :func:`~flexdigit.tactile.bounds.protocol_limits`: the posterior mean over the settings, which minimises the
+    squared error), averaged over those readings as a trained network's RMSE on them is.
+
+    The readings' noise is the model's (white noise and quantisation for :func:`readings_gauge_model`), not the
+    sensors' drift: a network is scored on test readings drawn at random from the same run as its training
+    readings, each setting's readings taken within a second, so it learns each setting's drifted mean, and a limit
+    counting the drift as noise would be no floor (it put the 8-gauge test digit's network at half of it). The
+    digit must have settled (the protocol's ``settle_s``): a swing is noise the limit does not count either.
+
+    Parameters
+    ----------
+    model : gauge model
+        The digit's static gauges and noise, e.g. :func:`readings_gauge_model`.
+    dataset : Dataset
+        The readings (any gauge count).
+    rows : array_like of int
+        Loaded readings (a network's test readings); a no-load row is refused, having no position.
+    samples, seed
+        Monte Carlo readings per setting, and their seed.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from flexdigit.tactile.dataset import Dataset, dataset_columns
+    >>> class Line:
+    ...     noise_v = np.array([1e-3])
+    ...     def gauges_v(self, a, m, command):
+    ...         a, m = np.broadcast_arrays(np.atleast_1d(a), np.atleast_1d(m))
+    ...         return (m * a)[:, None]  # 1 V per kg m: positions 1 mm apart under 1 kg are 1 sigma apart
+    >>> cols = {c: np.zeros(4, dtype=d) for c, d in dataset_columns(1).items()}
+    >>> cols["load_kg"][:] = 1.0
+    >>> cols["position_from_base_m"][:] = [0.100, 0.101, 0.200, 0.201]
+    >>> ds = Dataset(cols, {"gauge_count": 1})
+    >>> bool(1e-4 < position_bayes_rmse_m(Line(), ds, [0, 1, 2, 3]) < 1e-3)  # about 0.4 mm: the pairs mix
+    True
+    """
+    rows = np.asarray(rows, dtype=int)
+    if rows.size == 0 or np.any(dataset["load_kg"][rows] <= 0):
+        raise ValueError("position_bayes_rmse_m needs loaded readings (a no-load reading has no position)")
+    limits = bayes_limits(model, dataset, rows, samples=samples, seed=seed)
+    k = limits.index(dataset["position_from_base_m"][rows], dataset["load_kg"][rows], dataset["command"][rows])
+    return float(np.sqrt(np.mean(limits.position_mse_m2[k])))
 
 
 def identifiability_map(model, masses_kg, commands, digit_length_m: float, points: int = 271) -> dict:

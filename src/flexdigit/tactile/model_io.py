@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit import __version__
-from flexdigit._io import atomic_write
+from flexdigit._io import MODEL_LIMIT, atomic_write, read_text
+from flexdigit._validation import check_int, check_real
 from flexdigit.errors import DataFileError
 from flexdigit.tactile.netlab import MLP
 from flexdigit.tactile.pipeline import TARGETS, Normaliser, ThesisNetwork
@@ -82,9 +83,6 @@ def load_model(path: str | Path) -> SavedModel:
     DataFileError
         If the file is not JSON, not a flexdigit model, of a newer version, or a field is missing or inconsistent.
     """
-    from flexdigit._io import MODEL_LIMIT, read_text
-    from flexdigit._validation import check_int, check_real
-
     path = Path(path)
     try:
         doc = json.loads(read_text(path, "a model file", MODEL_LIMIT))

@@ -29,6 +29,7 @@ from numbers import Integral, Real
 import numpy as np
 
 from flexdigit._estimator import Estimator, check_is_fitted
+from flexdigit._repr import fields_summary, summary
 from flexdigit._system import available_cores
 from flexdigit._validation import (
     Array,
@@ -76,6 +77,8 @@ class Split:
     val: np.ndarray
     test: np.ndarray
 
+    __repr__ = fields_summary
+
 
 def thesis_split(n: int, seed: int) -> Split:
     """Shuffle ``n`` rows with ``seed`` and cut them 1/2, 1/3, 1/6 (6.6)."""
@@ -109,7 +112,8 @@ class Normaliser(Estimator):
 
 
 def features(dataset: Dataset, with_command: bool = False) -> np.ndarray:
-    """Network inputs: the three gauge voltages (V), and the servo command if asked (chapter 7 extension)."""
+    """Network inputs: the gauge voltages (V; the digit's ``G``, three on the thesis rig), and the servo command if
+    asked (chapter 7 extension)."""
     x = dataset.gauges_v
     if with_command:
         x = np.column_stack([x, dataset["command"].astype(float)])
@@ -216,6 +220,17 @@ class PipelineResult:
     percent_error: np.ndarray
     model: ThesisNetwork
     extra: dict = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            target=self.target,
+            best_hidden=self.best_hidden,
+            best_tol=self.best_tol,
+            corr2=self.corr2,
+            test_samples=len(self.y_test),
+            median_percent_error=float(np.median(np.abs(self.percent_error))) if np.size(self.percent_error) else None,
+        )
 
 
 def _train(x, y, split, hidden, tol, seed, epochs) -> tuple[ThesisNetwork, SweepPoint]:

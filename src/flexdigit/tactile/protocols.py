@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import read_text, refuse_special
 from flexdigit._validation import (
     Plausible,
     check_array,
@@ -42,7 +43,7 @@ from flexdigit._validation import (
 from flexdigit.errors import ParameterError
 from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M
 
-__all__ = ["RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
+__all__ = ["builtin_protocols", "RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
 
 #: The ``command`` recorded when actuation is disabled (the servo relaxed, chapter 6).
 RELAXED = -1
@@ -226,6 +227,26 @@ class Protocol:
             "repetition": np.array(cols[5], dtype=np.int64),
         }
 
+    def scaled_to(self, digit_length_m: float, reference_length_m: float = 0.270) -> Protocol:
+        """This protocol on a digit ``digit_length_m`` long: every position from the tip times
+        ``digit_length_m / reference_length_m`` (the thesis digit's 0.27 m by default), the same fractions of the
+        digit (as the design study probes its digits); itself when the lengths agree.
+
+        Examples
+        --------
+        >>> p = load_protocol("thesis-6.1").scaled_to(0.135)
+        >>> p.name, p.positions_from_tip_m[1] == load_protocol("thesis-6.1").positions_from_tip_m[1] / 2
+        ('thesis-6.1 on 0.135 m', True)
+        """
+        length = check_real(digit_length_m, "digit_length_m", "Protocol.scaled_to", low=0, low_open=True)
+        ref = check_real(reference_length_m, "reference_length_m", "Protocol.scaled_to", low=0, low_open=True)
+        if length == ref:
+            return self
+        from dataclasses import replace
+
+        positions = tuple(round(p * length / ref, 9) for p in self.positions_from_tip_m)
+        return replace(self, name=f"{self.name} on {length:g} m", positions_from_tip_m=positions)
+
     def to_dict(self) -> dict:
         """Plain dict (lists for tuples), as stored in datasets and journals."""
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
@@ -315,14 +336,21 @@ def load_protocol(name_or_path: str | Path) -> Protocol:
     if text_name in BUILTIN:
         resource = resources.files(__package__).joinpath("protocols", f"{text_name}.toml")
         return protocol_from_toml(resource.read_text(), source=f"protocol {text_name}")
-    from flexdigit._io import refuse_special
-
     path = Path(name_or_path)
     refuse_special(path, "a protocol TOML")
     if not path.is_file():
         raise ParameterError(
             f"no protocol {text_name!r}: expected one of {', '.join(BUILTIN)} or a TOML file that exists"
         )
-    from flexdigit._io import read_text
-
     return protocol_from_toml(read_text(path, "a protocol TOML"), source=str(path))
+
+
+def builtin_protocols() -> dict[str, str]:
+    """The built-in load protocols (:data:`BUILTIN`), each with its one-line description.
+
+    Examples
+    --------
+    >>> builtin_protocols()["thesis-6.1"][:21]
+    'Non-actuated digit: l'
+    """
+    return {name: load_protocol(name).description for name in BUILTIN}

@@ -27,8 +27,10 @@ from flexdigit._io import check_output, output_lock
 from flexdigit._validation import check_real
 from flexdigit.errors import DataFileError, OutputError, ParameterError, RigError
 from flexdigit.params import RigParams
+from flexdigit.rig.base import open_rig, parse_rig_url
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
+from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = [
     "PROTOCOL_SETTINGS",
@@ -90,8 +92,6 @@ TACTILE_TWIN_DT_S = 0.020
 
 def sim_options(protocol: Protocol, url: str = "sim") -> dict:
     """Twin options a protocol implies (orientation; cable only when actuated; 20 ms step) unless the URL sets them."""
-    from flexdigit.rig.base import parse_rig_url
-
     given = parse_rig_url(url).options
     out = {}
     if "dt_s" not in given:
@@ -118,11 +118,12 @@ def _checked_options(protocol: Protocol, rig, settle_s, stop_after) -> float:
     return settle
 
 
-def _protocol_twin(protocol: Protocol, seed: int):
-    """The twin ``flexdigit collect`` opens for ``protocol`` (``--backend sim``, ``--seed seed``)."""
-    from flexdigit.rig.base import open_rig
-
-    return open_rig("sim", seed=seed, **sim_options(protocol))
+def _protocol_twin(protocol: Protocol, seed: int, params: RigParams | None = None):
+    """The twin ``flexdigit collect`` opens for ``protocol`` (``--backend sim``, ``--seed seed``, ``--params``)."""
+    options = sim_options(protocol)
+    if params is not None and params != RigParams():
+        options["calibration"] = twin_calibration(params)
+    return open_rig("sim", params, seed=seed, **options)
 
 
 def collect(
@@ -156,7 +157,8 @@ def collect(
     seed : int
         The twin's seed when ``rig`` is None (the command's ``--seed``, default 0); ignored otherwise.
     params : RigParams, optional
-        For the digit length (positions from the tip -> from the base). Default: the thesis rig.
+        The digit (default the thesis rig): its length, its ``G`` gauges (``gauge1_v`` .. ``gaugeG_v``; a rig
+        reading another count is refused) and, with ``rig`` None, its twin.
     rig_url : str, optional
         How the rig was opened, recorded in the metadata.
     settle_s : float, optional
@@ -194,13 +196,12 @@ def collect(
     if out is None:
         raise ParameterError("collect needs out, the dataset to write (a .parquet path)")
     if rig is None:
-        rig, rig_url = _protocol_twin(protocol, seed), rig_url or "sim"
-    params = params or RigParams()
-    out = Path(out)
-    journal_file = journal_path(out)
-    settle = _checked_options(protocol, rig, settle_s, stop_after)
-    plan = protocol.plan(params.geometry.digit_length_m)
-    meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v)
+        rig, rig_url = _protocol_twin(protocol, seed, params), rig_url or "sim"
+    out, params = Path(out), params or RigParams()
+    journal_file, settle = journal_path(out), _checked_options(protocol, rig, settle_s, stop_after)
+    plan = protocol.plan(params.geometry.digit_length_m)  # every position on the digit
+    meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v,
+                     len(params.geometry.gauge_positions_m))  # fmt: skip
     meta["settings"] = effective_settings(protocol, rig, settle, settings)
     # one collection writes ``out`` and its journal at a time: a second is refused (OutputBusyError), never mixed
     with output_lock(out):
@@ -221,6 +222,7 @@ def _collect_locked(
     force: bool,
 ) -> Dataset:
     """:func:`collect` once its checks passed, holding ``out``'s lock."""
+    gauge_count = meta["gauge_count"]
     if out.exists() and journal_file.exists() and not force:
         return _finish_compaction(out, journal_file, meta, protocol)
     check_output(out, force=force)
@@ -240,7 +242,7 @@ def _collect_locked(
             for i in range(0 if replay else start, total):
                 if i >= start and stop_after is not None and taken >= stop_after:
                     break
-                setting, reading = _take(rig, protocol, plan, i, setting, settle)
+                setting, reading = _take(rig, protocol, plan, i, setting, settle, gauge_count)
                 row = _row(plan, i, reading)
                 if i < start:  # replaying what the journal holds: the twin must give it again, bit for bit
                     _check_replayed(journal_file, done[i], row)
@@ -278,7 +280,7 @@ def _collect_locked(
     return dataset
 
 
-def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float):
+def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float, gauge_count: int):
     """Bring the rig to sample ``i``'s setting (or re-hang and wait between repetitions) and read it."""
     wanted = (int(plan["test"][i]), float(plan["load_kg"][i]), int(plan["position_index"][i]))
     command = int(plan["command"][i])
@@ -293,8 +295,11 @@ def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float):
             rig.wait(protocol.sample_interval_s)
     reading = rig.read()
     gauges = np.asarray(reading.gauges_v, dtype=float)
-    if gauges.shape != (3,) or not np.all(np.isfinite(gauges)):
-        raise RigError(f"rig returned gauge voltages {gauges.tolist()!r} at sample {i}; expected 3 finite")
+    if gauges.shape != (gauge_count,) or not np.all(np.isfinite(gauges)):
+        raise RigError(
+            f"rig returned gauge voltages {gauges.tolist()!r} at sample {i}; expected {gauge_count} finite (the "
+            "digit's gauges: give the rig's parameter file with --params)"
+        )
     return setting, reading
 
 
@@ -303,9 +308,7 @@ def _row(plan: dict, i: int, reading) -> dict:
     return {
         "sample": i,
         "test": int(plan["test"][i]),
-        "gauge1_v": float(gauges[0]),
-        "gauge2_v": float(gauges[1]),
-        "gauge3_v": float(gauges[2]),
+        **{f"gauge{k}_v": float(v) for k, v in enumerate(gauges, start=1)},
         "pot_v": _none_if_nan(reading.pot_v),
         "load_kg": float(plan["load_kg"][i]),
         "position_index": int(plan["position_index"][i]),

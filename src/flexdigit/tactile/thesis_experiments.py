@@ -12,13 +12,16 @@ from pathlib import Path
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
+from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
+from flexdigit.rig.base import open_rig
 from flexdigit.tactile.accuracy import rmse
 from flexdigit.tactile.bounds import TwinGaugeModel
-from flexdigit.tactile.dataset import Dataset
+from flexdigit.tactile.dataset import COLUMNS, Dataset, make_meta
 from flexdigit.tactile.localisation import LocalisationResult, identifiability_map, localisation_study
 from flexdigit.tactile.pipeline import (
     COARSE_HIDDEN,
@@ -29,8 +32,10 @@ from flexdigit.tactile.pipeline import (
     run_pipeline,
     targets,
 )
-from flexdigit.tactile.protocols import Protocol, load_protocol
-from flexdigit.tactile.runner import collect, sim_options
+from flexdigit.tactile.protocols import RELAXED, Protocol, load_protocol
+from flexdigit.tactile.runner import collect, journal_path, sim_options
+from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.twin import static_gauges_v
 
 __all__ = [
     "twin_rig",
@@ -62,8 +67,6 @@ def twin_rig(protocol: Protocol, *, seed: int = 0, params: RigParams | None = No
     ADC's 16-bit quantum, so the readings are the numpy twin's (tests/tactile/test_thesis_experiments.py) for a
     fifth of the time (issue 15: reproduce in 60 s).
     """
-    from flexdigit.rig.base import open_rig
-
     options = sim_options(protocol) | {"compiled": True}
     if calibration is not None:
         options["calibration"] = calibration
@@ -80,8 +83,6 @@ def collect_on_twin(
     settle_s: float | None = None,
 ) -> Dataset:
     """Collect ``protocol`` on a fresh twin into ``out`` (replacing an older file and journal)."""
-    from flexdigit.tactile.runner import journal_path
-
     out = Path(out)
     out.unlink(missing_ok=True)
     journal_path(out).unlink(missing_ok=True)
@@ -115,16 +116,9 @@ def static_dataset(
     servo shaft offset (standard deviation, rad) per reading or per hang: the deadband hypothesis the report
     tests. ``time_s`` counts the readings.
     """
-    from flexdigit._validation import check_choice, check_real
-
     check_choice(friction_per, "friction_per", DRAWS, "static_dataset")
     check_choice(servo_jitter_per, "servo_jitter_per", DRAWS, "static_dataset")
     jitter = check_real(servo_jitter_rad, "servo_jitter_rad", "static_dataset", low=0)
-    from flexdigit.tactile.dataset import COLUMNS, make_meta
-    from flexdigit.tactile.protocols import RELAXED
-    from flexdigit.twin.calibration import default_calibration
-    from flexdigit.twin.twin import static_gauges_v
-
     params = params or RigParams()
     calibration = calibration or default_calibration()
     plan = protocol.plan(params.geometry.digit_length_m)
@@ -232,6 +226,8 @@ class TactileExperimentResult:
     thesis_mlp_position_m: dict
     identifiability: dict
     extra: dict = field(default_factory=dict)
+
+    __repr__ = fields_summary
 
 
 def run_experiment(
@@ -349,6 +345,8 @@ class NoiseScan:
     target: float
     scale_match: float | None
 
+    __repr__ = fields_summary
+
 
 def white_noise_scan(
     key: str = "non_actuated",
@@ -364,8 +362,6 @@ def white_noise_scan(
     readings), pipeline as :func:`pipeline_corr2_static`. Chapter 6 (cable detached) is the one this scans: the
     actuated loss is the cable-guide friction (:func:`friction_study`).
     """
-    from flexdigit.twin.calibration import default_calibration
-
     base = default_calibration()
     rows = []
     for scale in scales:
@@ -395,9 +391,6 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
     differences of the static twin (0.01 command). Returns the median, minimum and maximum in degrees and in
     microseconds of PWM pulse, and microseconds per command.
     """
-    from flexdigit.twin.calibration import default_calibration
-    from flexdigit.twin.twin import static_gauges_v
-
     params = params or RigParams()
     cal = calibration or default_calibration()
     a = params.actuator
@@ -458,6 +451,8 @@ class FrictionStudy:
     corr2_mean: float | None
     corr2_sd: float | None
 
+    __repr__ = fields_summary
+
 
 def friction_study(*, seed: int = 0, params: RigParams | None = None, fast: bool = False) -> FrictionStudy:
     """corr2 of the actuated experiment against the twin's actuated noise: none, the calibrated friction per
@@ -465,8 +460,6 @@ def friction_study(*, seed: int = 0, params: RigParams | None = None, fast: bool
 
     ``fast`` (tests): 10 epochs, fewer cases, no mean over the fit seeds.
     """
-    from flexdigit.twin.calibration import default_calibration
-
     cal = default_calibration()
     ratio = cal.cable_friction_ratio
     kw = {"seed": seed, "params": params, "epochs": 10 if fast else 50}

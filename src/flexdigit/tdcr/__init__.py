@@ -20,6 +20,7 @@ __getattr__, __all__ = lazy_exports(
         "Segment": "flexdigit.tdcr.description",
         "Tendon": "flexdigit.tdcr.description",
         "get_robot": "flexdigit.tdcr.description",
+        "builtin_robots": "flexdigit.tdcr.description",
         "load_robot": "flexdigit.tdcr.description",
         "robot_from_dict": "flexdigit.tdcr.description",
         "StaticSolution": "flexdigit.tdcr.statics",

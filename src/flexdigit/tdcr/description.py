@@ -34,10 +34,22 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._io import read_text
+from flexdigit._repr import summary
 from flexdigit._validation import InstanceOf, Interval, check_int, declare, validate_fields
 from flexdigit.errors import ParameterError
 
-__all__ = ["Backbone", "Segment", "Tendon", "Robot", "ROBOTS", "load_robot", "robot_from_dict", "get_robot"]
+__all__ = [
+    "builtin_robots",
+    "Backbone",
+    "Segment",
+    "Tendon",
+    "Robot",
+    "ROBOTS",
+    "load_robot",
+    "robot_from_dict",
+    "get_robot",
+]
 
 _POSITIVE = Interval(Real, 0, None, closed="neither")
 
@@ -224,6 +236,18 @@ class Robot:
             "tendons": [{"offset_m": t.offset_m, "angle_deg": t.angle_deg, "disk": t.disk} for t in self.tendons],
         }
 
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            name=self.name,
+            length_m=sum(s.length_m for s in self.segments),
+            segments=len(self.segments),
+            disks=sum(s.disk_count for s in self.segments),
+            tendons=len(self.tendons),
+            backbone_radius_m=self.backbone.radius_m,
+            youngs_modulus_pa=self.backbone.youngs_modulus_pa,
+        )
+
 
 def _table(value: object, where: str, source: str) -> dict:
     if not isinstance(value, dict):
@@ -290,8 +314,6 @@ def load_robot(path: str | Path) -> Robot:
     FileNotFoundError
         If the file does not exist.
     """
-    from flexdigit._io import read_text
-
     path = Path(path)
     text = read_text(path, "a robot description TOML")
     try:
@@ -316,6 +338,19 @@ def _rao2021() -> Robot:
 
 #: Built-in robots by name.
 ROBOTS: dict[str, Robot] = {"rao2021": _rao2021()}
+
+
+def builtin_robots() -> dict[str, str]:
+    """The built-in robots (:data:`ROBOTS`), each with one line: segments, tendons, backbone."""
+    out = {}
+    for name, robot in ROBOTS.items():
+        lengths = " + ".join(f"{1e3 * s.length_m:g}" for s in robot.segments)
+        b = robot.backbone
+        out[name] = (
+            f"{len(robot.segments)} segments ({lengths} mm), {len(robot.tendons)} tendons, backbone radius "
+            f"{1e3 * b.radius_m:g} mm, E {b.youngs_modulus_pa / 1e9:g} GPa"
+        )
+    return out
 
 
 def get_robot(name_or_path: str | Path | Robot) -> Robot:

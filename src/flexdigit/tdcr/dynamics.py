@@ -1,18 +1,30 @@
-"""Dynamics of a tendon-driven continuum robot: the Cosserat rod in time, implicit in time and shot in space.
+"""Dynamics of a tendon-driven continuum robot: a discretised Cosserat rod, implicit in time (BDF2).
 
-Till, Aloi & Rucker 2019 (IJRR 38(6), "Real-time dynamics of soft and continuum robots based on Cosserat rod
-models"): the time derivatives are replaced by BDF2 (backward Euler on the first step), so that each time step is
-a boundary-value problem in arc length of the same form as the statics (:mod:`flexdigit.tdcr.statics`), solved by
-the same shooting Newton, warm-started from the previous step (and its Jacobian). The rod carries its mass
-``rho A`` and rotary inertia ``rho J``; tendons, gravity, distributed and tip loads as in the statics; optional
-Kelvin-Voigt damping proportional to the stiffness (``damping_s``). BDF2's own numerical damping is
-``O((w dt)^4)`` a step: 1e-7 a step at 3.5 Hz and 1 ms.
+Why this way. Each time step of a Cosserat rod is stiff: on rao2021's backbone at 10 mm elements the axial and
+shear waves cross an element in ~4 us and the shortest bending mode's period is ~70 us, so an explicit
+integrator (PyElastica's Position Verlet) takes ~250,000 steps a second. An implicit step of 1 ms is stable
+whatever the stiffness, at the cost of a Newton solve. Two ways of doing it:
 
-Limit: each step is single shooting, whose boundary-value problem amplifies by ``exp(L (rho A c0^2 / EI)^(1/4))``
-(``c0 = 1.5 / dt``): ~10 e-folds at ``w1 dt = 0.05`` whatever the rod, 12.6 at 1 ms on rao2021's backbone.
-There Newton can fail for larger motions (a 5 mm tip release at 1 ms stops after ~0.1 s; at 2 ms it runs): the
-step that fails is reported (``converged=False``, :class:`~flexdigit.errors.ConvergenceWarning`). Multiple
-shooting would lift this; it is not done.
+- shot in space (Till, Aloi & Rucker 2019, IJRR 38(6)): the step is a boundary-value problem in arc length,
+  shot from the clamp (``method="shooting"``, the continuous rod of :mod:`flexdigit.tdcr.statics`). Its
+  shooting problem amplifies by ``exp(L (rho A c0^2 / EI)^(1/4))`` (``c0 = 1.5 / dt``): ~12 e-folds at 1 ms on
+  rao2021, so Newton fails for sudden tension changes or large fast motions (a 5 mm tip release at 1 ms stops
+  after ~0.1 s), and each step costs ~10 integrations of the rod (real-time factor 2.2 on a 40-node rod).
+- discretised in space (``method="discrete"``, the default; :mod:`flexdigit.tdcr._chain_kernel`): nodes and
+  element frames as PyElastica's rod (Gazzola et al. 2018), so that the step's unknowns, the new velocities, are
+  coupled only to their neighbours: the Newton matrix is banded (half bandwidth 11, 17 with tendons) and costs
+  ``O(n)`` to solve. The Jacobian (coloured finite differences) is kept over steps and turned with the element
+  frames (a co-rotated chord Newton): on a vibrating rod it is built once; where Newton slows (a sudden load)
+  it is rebuilt, which makes the step robust where shooting fails (rao2021 pulled from slack tendons by 4 and
+  2 N at once). Chosen over a chain of rigid links in joint coordinates (the planar twin's) because that
+  Newton matrix is dense (``O(n^3)``) and tendons would need the links' kinematics; over a Kirchhoff rod because
+  the shear and extension cost nothing extra here and keep tdcr-modeling's Cosserat model.
+
+The discrete rod is not the continuous one: on rao2021 at one element a disk its equilibrium is 6.4 mm (1.6 % of
+the length) from the shot statics, 2.2 mm at two (tendons on polylines through the disks). So the discrete rod
+first settles under the loads ``initial`` was solved for (:attr:`StaticSolution.loads`), then is released.
+BDF2's numerical damping is ``O((w dt)^4)`` a step; Kelvin-Voigt damping ``damping_s`` proportional to stiffness.
+Speed: ``python -m benchmarks bench_tdcr`` (real-time factor of a 40-node rod at 1 kHz).
 
 Examples
 --------
@@ -30,10 +42,12 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
+from flexdigit._repr import summary
 from flexdigit._validation import check_array, check_int, check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
-from flexdigit.tdcr import _rod_kernel
+from flexdigit.tdcr import _chain_kernel, _rod_kernel
 from flexdigit.tdcr.description import Robot
 from flexdigit.tdcr.statics import StaticSolution, _nodes
 
@@ -85,6 +99,16 @@ class DynamicSolution:
         )
         return np.trapezoid(density, self.s_m, axis=1)
 
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            converged=self.converged,
+            steps=len(self.t_s),
+            duration_s=float(self.t_s[-1] - self.t_s[0]) if len(self.t_s) else 0.0,
+            nodes=len(self.s_m),
+            final_tip_m=self.positions_m[-1, -1],
+        )
+
 
 def simulate(
     robot: Robot,
@@ -100,8 +124,9 @@ def simulate(
     damping_s: float = 0.0,
     nodes_per_disk: int = 1,
     substeps: int | None = None,
-    tol: float = 1e-6,
+    tol: float | None = None,
     max_iter: int = 50,
+    method: str = "discrete",
 ) -> DynamicSolution:
     """The robot's motion from rest in ``initial`` under the given loads, held constant from ``t = 0``.
 
@@ -121,33 +146,42 @@ def simulate(
         Kelvin-Voigt material damping proportional to the stiffness, ``n = Kse (v - e3 + beta v_t)``,
         ``m = Kbt (u + beta u_t)`` with ``beta = damping_s`` (s): mode ``i`` is damped with the ratio
         ``beta w_i / 2``. Default 0 (none).
-    nodes_per_disk, substeps, max_iter :
-        As in :func:`~flexdigit.tdcr.solve_statics`, for each step.
-    tol : float
-        On each step's scaled tip residual. Looser than the statics' default: a step's shooting problem amplifies
-        round-off by ~exp(L (rho A c0^2 / EI)^(1/4)) (c0 = 1.5/dt), ~1e5 at 1 ms on rao2021, so its residual floor
-        is ~1e-9..1e-8; 1e-6 is a force error of ~1e-6 EI/L^2 (6e-8 N on rao2021).
+    nodes_per_disk : int
+        Nodes per disk interval (the discrete rod's elements, or the shooting's output nodes).
+    substeps, max_iter :
+        As in :func:`~flexdigit.tdcr.solve_statics`, for each step (``substeps``: shooting only).
+    tol : float, optional
+        ``"discrete"`` (default 1e-8): on the error left in each step's Newton (scipy's BDF estimate from the
+        updates' rate), displacements over the length and rotations in rad; the floor that the finite-difference
+        Jacobian and round-off set is ~1e-10. ``"shooting"`` (default 1e-6): on each step's scaled tip residual,
+        looser than the statics': a step's shooting problem amplifies round-off by ~exp(L (rho A c0^2 / EI)^(1/4))
+        (c0 = 1.5/dt), ~1e5 at 1 ms on rao2021, so its residual floor is ~1e-9..1e-8; 1e-6 is a force error of
+        ~1e-6 EI/L^2.
+    method : {"discrete", "shooting"}
+        The discretised rod stepped by BDF2 with a banded Newton (default; :mod:`flexdigit.tdcr._chain_kernel`),
+        or the continuous rod shot at each step (Till et al. 2019; slower and it fails on large fast motions).
 
     Returns
     -------
     DynamicSolution
     """
     owner = "simulate"
+    if method not in ("discrete", "shooting"):
+        raise ParameterError(f"The 'method' parameter of {owner} must be 'discrete' or 'shooting'. Got {method!r}.")
     nodes_per_disk, nodes, end_node = _checked_start(robot, initial, nodes_per_disk)
     duration_s = check_real(duration_s, "duration_s", owner, low=0.0, low_open=True)
     dt_s = check_real(dt_s, "dt_s", owner, low=0.0, high=duration_s, low_open=True)
     loads = _checked_loads(robot, tensions_n, tip_force_n, tip_moment_nm, distributed_force_n_per_m, gravity_m_s2)
-    if substeps is None:
-        spacing = np.diff(nodes).max()
-        substeps = max(1, int(np.ceil(spacing / (robot.length_m / 20) - 1e-9)))
-    substeps = check_int(substeps, "substeps", owner, low=1, high=1000)
-    tol = check_real(tol, "tol", owner, low=0.0, low_open=True)
-    damping_s = check_real(damping_s, "damping_s", owner, low=0.0)
-    max_iter = check_int(max_iter, "max_iter", owner, low=1)
+    substeps, tol, damping_s, max_iter = _checked_options(robot, nodes, method, substeps, tol, damping_s, max_iter)
     n_steps = int(round(duration_s / dt_s))
-    states, iterations, done = _integrate(
-        robot, initial, nodes, end_node, substeps, loads, damping_s, dt_s, n_steps, tol, max_iter
-    )
+    if method == "discrete":
+        motion = _simulate_discrete(robot, initial, nodes, end_node, loads, damping_s, dt_s, n_steps, tol, max_iter)
+        done = motion.t_s.size - 1
+    else:
+        states, iterations, done = _integrate(
+            robot, initial, nodes, end_node, substeps, loads, damping_s, dt_s, n_steps, tol, max_iter
+        )
+        motion = _motion(states, iterations, done, n_steps, nodes, dt_s)
     if done < n_steps:
         warnings.warn(
             f"simulate: step {done + 1} of {n_steps} (t = {(done + 1) * dt_s:.4g} s) did not converge on "
@@ -155,7 +189,21 @@ def simulate(
             ConvergenceWarning,
             stacklevel=2,
         )
-    return _motion(states, iterations, done, n_steps, nodes, dt_s)
+    return motion
+
+
+def _checked_options(robot, nodes, method, substeps, tol, damping_s, max_iter):
+    """:func:`simulate`'s checked ``(substeps, tol, damping_s, max_iter)``, defaults filled in."""
+    owner = "simulate"
+    if substeps is None:
+        spacing = np.diff(nodes).max()
+        substeps = max(1, int(np.ceil(spacing / (robot.length_m / 20) - 1e-9)))
+    substeps = check_int(substeps, "substeps", owner, low=1, high=1000)
+    tol = (1e-8 if method == "discrete" else 1e-6) if tol is None else tol
+    tol = check_real(tol, "tol", owner, low=0.0, low_open=True)
+    damping_s = check_real(damping_s, "damping_s", owner, low=0.0)
+    max_iter = check_int(max_iter, "max_iter", owner, low=1)
+    return substeps, tol, damping_s, max_iter
 
 
 def _checked_start(robot, initial, nodes_per_disk):
@@ -247,6 +295,85 @@ def _motion(states, iterations, done: int, n_steps: int, nodes, dt_s: float) -> 
         rotations=kept[:, :, 3:12].reshape(done + 1, -1, 3, 3).copy(),
         velocities_m_s=kept[:, :, 18:21].copy(),
         angular_velocities_rad_s=kept[:, :, 21:24].copy(),
+        iterations=iterations[:done].copy(),
+        converged=bool(done == n_steps),
+    )
+
+
+def _discrete_model(robot: Robot, nodes, end_node, loads):
+    """The chain kernel's ``(model, node masses, element inertias, half bandwidth)`` of the robot on ``nodes``."""
+    tau, fdist, tip_force, tip_moment = (np.asarray(v, dtype=float) for v in loads)
+    b = robot.backbone
+    lengths = np.diff(nodes)
+    voronoi = np.concatenate([[lengths[0] / 2], (lengths[:-1] + lengths[1:]) / 2])
+    lumped = np.zeros(nodes.size)
+    lumped[:-1] += lengths / 2
+    lumped[1:] += lengths / 2
+    fnode = lumped[:, None] * fdist
+    fnode[-1] += tip_force
+    model = (
+        lengths,
+        voronoi,
+        np.asarray(b.shear_extension_stiffness, dtype=float),
+        np.asarray(b.bending_torsion_stiffness, dtype=float),
+        fnode,
+        tip_moment,
+        np.ascontiguousarray(robot.routing_m, dtype=float),
+        tau,
+        np.asarray(end_node, dtype=np.int64),
+    )
+    mass = b.mass_per_length_kg_m * lumped
+    inertia = b.density_kg_m3 * b.second_moment_m4 * np.array([1.0, 1.0, 2.0]) * lengths[:, None]
+    pulled = bool(np.any((tau > 0) & (np.asarray(end_node) >= 1)))
+    return model, mass, inertia, 17 if pulled else 11
+
+
+def _element_frames(rotations: np.ndarray) -> np.ndarray:
+    """Each element's frame, half-way (geodesically) between its end nodes' frames."""
+    first = Rotation.from_matrix(rotations[:-1])
+    half = (first.inv() * Rotation.from_matrix(rotations[1:])).as_rotvec() / 2
+    return (first * Rotation.from_rotvec(half)).as_matrix()
+
+
+def _simulate_discrete(robot, initial, nodes, end_node, loads, damping_s, dt_s, n_steps, tol, max_iter):
+    """The discrete rod's response: settled under ``initial.loads`` (if recorded), then stepped under ``loads``."""
+    x0 = np.ascontiguousarray(initial.positions_m, dtype=float)
+    q0 = np.ascontiguousarray(_element_frames(initial.rotations))
+    if initial.loads is not None:
+        model, _, _, hb = _discrete_model(robot, nodes, end_node, initial.loads)
+        x_rest, q_rest = x0.copy(), q0.copy()
+        if _chain_kernel.equilibrate(x_rest, q_rest, model, hb, 1e-10, 50) == _chain_kernel.NO_PROGRESS:
+            warnings.warn(
+                f"simulate: the discrete rod of {robot.name!r} found no equilibrium near 'initial' under its loads; "
+                "it starts from 'initial' as it is",
+                ConvergenceWarning,
+                stacklevel=3,
+            )
+        else:
+            x0, q0 = x_rest, q_rest
+    model, mass, inertia, hb = _discrete_model(robot, nodes, end_node, loads)
+    n = nodes.size - 1
+    xs = np.zeros((n_steps + 1, n + 1, 3))
+    qs = np.zeros((n_steps + 1, n, 3, 3))
+    vs = np.zeros((n_steps + 1, n + 1, 3))
+    ws = np.zeros((n_steps + 1, n, 3))
+    iterations = np.zeros(n_steps, dtype=np.int64)
+    done = _chain_kernel.run(
+        x0, q0, model, mass, inertia, damping_s, hb, dt_s, n_steps, tol, max_iter, xs, qs, vs, ws, iterations
+    )
+    kept = slice(0, done + 1)
+    frames = np.empty((done + 1, n + 1, 3, 3))
+    _chain_kernel.node_frames(qs[kept], frames)
+    w_nodes = np.zeros((done + 1, n + 1, 3))
+    w_nodes[:, 1:-1] = (ws[kept, :-1] + ws[kept, 1:]) / 2
+    w_nodes[:, -1] = ws[kept, -1]
+    return DynamicSolution(
+        t_s=np.arange(done + 1) * dt_s,
+        s_m=nodes,
+        positions_m=xs[kept].copy(),
+        rotations=frames,
+        velocities_m_s=vs[kept].copy(),
+        angular_velocities_rad_s=w_nodes,
         iterations=iterations[:done].copy(),
         converged=bool(done == n_steps),
     )

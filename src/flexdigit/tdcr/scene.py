@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._io import atomic_write
 from flexdigit.errors import ParameterError
 from flexdigit.tdcr.description import Robot
 
@@ -227,8 +228,6 @@ def write_recording(
         Where the recording was written.
     """
     from mcap.writer import CompressionType, Writer
-
-    from flexdigit._io import atomic_write
 
     if hasattr(solution, "t_s"):
         times, positions, rotations = solution.t_s, solution.positions_m, solution.rotations

@@ -39,6 +39,7 @@ from itertools import pairwise
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_int, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.tdcr.description import Robot
@@ -93,6 +94,8 @@ class GaugeLayout:
         """The distinct arc lengths gauges sit at, increasing."""
         return np.unique(self.s_m)
 
+    __repr__ = fields_summary
+
 
 @dataclass(frozen=True)
 class ShapeEstimate:
@@ -127,6 +130,8 @@ class ShapeEstimate:
         """Positions at arc lengths ``s_m`` (linear between the estimate's points; ``(..., 3)``)."""
         s_m = np.asarray(s_m, dtype=float)
         return np.stack([np.interp(s_m, self.s_m, self.positions_m[:, k]) for k in range(3)], axis=-1)
+
+    __repr__ = fields_summary
 
 
 def _segment_ends(robot: Robot) -> np.ndarray:

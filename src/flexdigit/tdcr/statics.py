@@ -29,11 +29,12 @@ Examples
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from flexdigit._constants import G_STANDARD_M_S2
+from flexdigit._repr import summary
 from flexdigit._validation import check_array, check_int, check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
 from flexdigit.tdcr import _rod_kernel
@@ -80,6 +81,9 @@ class StaticSolution:
     converged: bool
     iterations: int
     residual: float
+    #: The loads solved for, ``(tensions, force per length with gravity, tip force, tip moment)``: what the
+    #: dynamics' discrete rod settles under before it is released (None: taken as it is)
+    loads: tuple | None = field(default=None, repr=False, compare=False)
 
     @property
     def tip_position_m(self) -> np.ndarray:
@@ -108,6 +112,16 @@ class StaticSolution:
             "s_m": self.s_m.tolist(),
             "backbone_m": self.positions_m.tolist(),
         }
+
+    def __repr__(self) -> str:
+        return summary(
+            self,
+            converged=self.converged,
+            iterations=self.iterations,
+            residual=self.residual,
+            nodes=len(self.s_m),
+            tip_m=self.positions_m[-1],
+        )
 
 
 def _vector(value, name: str) -> np.ndarray:
@@ -190,7 +204,7 @@ def solve_statics(
             ConvergenceWarning,
             stacklevel=2,
         )
-    return _solution(nodes, out, np.array(x) * scale, converged, iterations, residual)
+    return _solution(nodes, out, np.array(x) * scale, converged, iterations, residual, loads)
 
 
 def _checked_loads(robot, tensions_n, tip_force_n, tip_moment_nm, distributed_force_n_per_m, gravity_m_s2):
@@ -249,7 +263,7 @@ def _kernel_args(robot: Robot, nodes_per_disk: int, substeps: int) -> tuple:
     )
 
 
-def _solution(nodes, out, base_wrench, converged, iterations, residual) -> StaticSolution:
+def _solution(nodes, out, base_wrench, converged, iterations, residual, loads=None) -> StaticSolution:
     """The :class:`StaticSolution` of the kernel's node records ``out``."""
     return StaticSolution(
         s_m=nodes,
@@ -261,6 +275,7 @@ def _solution(nodes, out, base_wrench, converged, iterations, residual) -> Stati
         converged=bool(converged),
         iterations=int(iterations),
         residual=float(residual),
+        loads=loads,
     )
 
 

@@ -23,6 +23,7 @@ __getattr__, __all__ = lazy_exports(
         "use_calibration": "flexdigit.twin.calibration",
         "calibration_for": "flexdigit.twin.digit_calibration",
         "TwinRecord": "flexdigit.twin.records",
+        "record_figure": "flexdigit.twin.record_plot",
         "release_test": "flexdigit.twin.records",
         "servo_step_test": "flexdigit.twin.records",
         "actuation_sweep": "flexdigit.twin.records",

@@ -8,6 +8,16 @@ theta'`` exactly between grid points (matrix exponential), with ``theta_cmd`` fr
 0 deg at command 0) and the mechanical range 0..219 deg enforced as a hard stop. The potentiometer maps the angle to
 volts with the line through params' end points (:class:`flexdigit.models.servo.PotentiometerMap`).
 
+Two drives bring the command to the servo (``Servo(..., drive=...)``, ``Twin(servo_drive=...)``,
+``sim?servo_drive=timer``):
+
+- ``"serial"`` (the thesis rig): the serial board above, 0-19 ms from the frame to the servo's own pulse;
+- ``"timer"`` (the reference firmware, ``firmware/flexdigit_board.c``): the microcontroller generates the pulse
+  itself on Timer1, one every 20 ms frame (TIMER_FRAME_S), starting TIMER_PULSE_AFTER_TICK_S (1 ms) after the
+  control tick at the frame's start; the hardware latches the pulse width at the pulse's start, so a command takes
+  effect at the first frame boundary at or after it is issued, 1 ms later. A host loop on a twin with this drive is
+  the like-for-like reference for the loop on the board (``tests/firmware/test_board.py``).
+
 The servo's identified model already includes whatever load it carried when identified; the cable tension is not
 fed back to it (the S-148 is position-controlled and its 0.297 N m stall torque is ~3x the ~0.1 N m the digit
 needs at command 43).
@@ -21,10 +31,17 @@ from functools import lru_cache
 import numpy as np
 import scipy.linalg
 
-from flexdigit._validation import check_int
+from flexdigit._validation import check_choice, check_int
 from flexdigit.models.servo import PotentiometerMap, command_to_angle_rad
 
-__all__ = ["Servo"]
+__all__ = ["Servo", "SERVO_DRIVES", "TIMER_FRAME_S", "TIMER_PULSE_AFTER_TICK_S"]
+
+#: How a command reaches the servo: the thesis's serial board, or a pulse from the controller's own timer.
+SERVO_DRIVES = ("serial", "timer")
+#: The timer drive's frame (the firmware's Timer1 TOP: 20 ms, the servo's 50 Hz) and its pulse's start after the
+#: control tick at a frame boundary (Timer1 is started 1 ms after the first tick: firmware/flexdigit_board.c), s.
+TIMER_FRAME_S = 0.020
+TIMER_PULSE_AFTER_TICK_S = 0.001
 
 
 @lru_cache(maxsize=32)
@@ -41,11 +58,14 @@ class Servo:
     params : RigParams
     command : int
         Initial command, at rest there.
+    drive : {"serial", "timer"}
+        How commands reach the servo (see the module docstring): the serial board, or the firmware's timer.
     """
 
-    def __init__(self, params, command: int):
+    def __init__(self, params, command: int, drive: str = "serial"):
         a = params.actuator
         self.params = params
+        self.drive = check_choice(drive, "drive", SERVO_DRIVES, "Servo")
         self.wn = a.servo_wn_rad_s
         self.zeta = a.servo_zeta
         self.angle_min = math.radians(a.angle_min_deg)
@@ -64,12 +84,25 @@ class Servo:
         return check_int(value, "command", "Twin", low=a.command_min, high=a.command_max)
 
     def schedule(self, value, issued_s: float, grid_s: float) -> float:
-        """Latch ``value`` at the next serial frame and PWM pulse; returns the grid time it takes effect (s)."""
+        """Latch ``value`` at the next frame and pulse of the drive; returns the grid time it takes effect (s).
+
+        Examples
+        --------
+        >>> from flexdigit.params import RigParams
+        >>> Servo(RigParams(), 8).schedule(30, 0.005, 0.002)  # frame at 20 ms, the servo's 52 Hz pulse at 38.5 ms
+        0.04
+        >>> Servo(RigParams(), 8, drive="timer").schedule(30, 0.005, 0.002)  # frame at 20 ms, its pulse at 21 ms
+        0.022
+        """
         value = self.check_command(value)
-        a = self.params.actuator
-        frame = math.ceil(issued_s / a.serial_period_s - 1e-9) * a.serial_period_s
-        pwm = 1.0 / a.pwm_frequency_hz
-        pulse = math.ceil(frame / pwm - 1e-9) * pwm
+        if self.drive == "timer":
+            frame = math.ceil(issued_s / TIMER_FRAME_S - 1e-9) * TIMER_FRAME_S
+            pulse = frame + TIMER_PULSE_AFTER_TICK_S
+        else:
+            a = self.params.actuator
+            frame = math.ceil(issued_s / a.serial_period_s - 1e-9) * a.serial_period_s
+            pwm = 1.0 / a.pwm_frequency_hz
+            pulse = math.ceil(frame / pwm - 1e-9) * pwm
         apply = math.ceil(pulse / grid_s - 1e-9) * grid_s
         self.pending.append((apply, value))
         self.pending.sort(key=lambda item: item[0])

@@ -61,6 +61,7 @@ from numbers import Real
 from pathlib import Path
 from typing import Any
 
+from flexdigit._io import atomic_write, read_text, refuse_special
 from flexdigit._validation import check_array, check_real
 from flexdigit.errors import DataFileError, ParameterError
 
@@ -259,14 +260,10 @@ def load_calibration_record(path: str | Path) -> tuple[Calibration, dict[str, An
 def _read_toml(path: Path) -> dict:
     if not path.exists():
         raise FileNotFoundError(2, "No such file", str(path))
-    from flexdigit._io import refuse_special
-
     refuse_special(path, "a calibration TOML")
     if not path.is_file():
         raise DataFileError(f"{path}: not a file (a directory?); expected a calibration TOML")
     try:
-        from flexdigit._io import read_text
-
         return tomllib.loads(read_text(path, "a calibration TOML"))
     except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise DataFileError(f"{path}: not valid TOML ({exc})") from None
@@ -297,8 +294,6 @@ def save_calibration(
     An existing file is refused unless ``force`` (:mod:`flexdigit._io`).
     """
     import tomli_w
-
-    from flexdigit._io import atomic_write
 
     doc: dict[str, Any] = {"calibration": calibration.to_dict()}
     if fit:

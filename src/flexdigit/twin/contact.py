@@ -49,6 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
 
@@ -472,6 +473,8 @@ class ContactSolution:
     @property
     def tip_m(self) -> np.ndarray:
         return self.static.tip_m
+
+    __repr__ = fields_summary
 
 
 def _merged_loads(chain, loads, load_s_m, load_force_ab_n, cable_shortening_m):

@@ -26,6 +26,12 @@ on the strip is self-equilibrated (a tendon in a duct does not buckle its duct) 
 at the gauges, which the half bridge cancels and a quarter bridge sees. The cable is a stiff, tension-only spring
 (``T = k_c max(0, r_M dtheta_M - e psi_tip)``, E 3.11), so a slack cable and a taut one are both handled.
 
+With an antagonistic pair (``[cables] count = 2``, 2.1's "two cable system") a second cable runs on the far side
+(eccentricity ``-e``), wound the other way on the same pulley, both pretensioned: ``T1 = k_c max(0, p + s - e
+psi_tip)``, ``T2 = k_c max(0, p - s + e psi_tip)`` with ``p = pretension / k_c`` (the batched twin's law,
+:mod:`flexdigit.twin.batched`): the tip carries ``e (T1 - T2)``, the strip ``T1 + T2`` of compression, and a
+command below the straight one bends the digit the other way.
+
 Axes: ``a`` along the undeformed digit (base to tip), ``b`` towards the cable side (positive bending). Angles in
 rad, lengths in m, forces in N, moments in N m.
 
@@ -39,6 +45,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 
@@ -46,7 +53,8 @@ import numpy as np
 from scipy.linalg.lapack import dgesv as _gesv
 
 from flexdigit._constants import G_STANDARD_M_S2
-from flexdigit._validation import check_array, check_int, check_positive, check_real, check_values
+from flexdigit._repr import fields_summary
+from flexdigit._validation import check_array, check_choice, check_int, check_positive, check_real, check_values
 from flexdigit.errors import ConvergenceWarning, ParameterError
 
 __all__ = [
@@ -107,6 +115,8 @@ class StaticSolution:
     iterations: int
     converged: bool = True
 
+    __repr__ = fields_summary
+
 
 def chain_matrices(d, mass_lever, mass_link, stiffness, damping, mass_kg, inertia, gravity):
     """A chain's constant matrices ``(K, C, A, G)``: ``K = D^T diag(k) D``, ``C`` alike, the mass matrix's
@@ -146,6 +156,10 @@ class Chain:
         Gravity in the (a, b) axes (m/s^2).
     cable_eccentricity_m, cable_stiffness_n_m : float
         Cable offset ``e`` from the neutral axis, and its tension-only stiffness (N/m).
+    cable_pretension_n : float
+        With ``antagonist``: the pretension both cables keep with the digit straight (N).
+    antagonist : bool
+        A second, antagonistic cable at ``-e`` (module docstring).
     """
 
     def __init__(
@@ -163,6 +177,8 @@ class Chain:
         cable_eccentricity_m=0.0,
         cable_stiffness_n_m=0.0,
         strip_axial_stiffness_n=np.inf,
+        cable_pretension_n=0.0,
+        antagonist=False,
     ):
         owner = "Chain"
         self.length_m = check_positive(length_m, "length_m", owner)
@@ -182,6 +198,10 @@ class Chain:
         self.eccentricity = check_real(cable_eccentricity_m, "cable_eccentricity_m", owner, low=0)
         self.cable_stiffness = check_real(cable_stiffness_n_m, "cable_stiffness_n_m", owner, low=0)
         self.strip_axial_stiffness = float(strip_axial_stiffness_n)
+        self.antagonist = bool(antagonist)
+        pretension = check_real(cable_pretension_n, "cable_pretension_n", owner, low=0) if antagonist else 0.0
+        #: The pretension as a stretch of each cable (m), ``p = pretension / k_c`` (0 without the antagonist).
+        self.cable_pretension_m = pretension / self.cable_stiffness if self.cable_stiffness > 0 else 0.0
         # phi = D psi: relative joint angles from absolute link angles (the clamp link has angle 0)
         d = np.eye(n) - np.eye(n, k=-1)
         self._d = d
@@ -274,10 +294,27 @@ class Chain:
         lever = self.levers(s_m)  # (.., K, n)
         return np.einsum("...kn,...kc->...nc", lever, np.asarray(force_ab_n, dtype=float))
 
+    def cable_tensions(self, psi_tip, cable_shortening_m):
+        """``(T1, T2, taut1, taut2)``: the main cable's tension ``k_c max(0, p + s - e psi_tip)`` (E 3.11; ``p`` = 0
+        with one cable) and the antagonist's ``k_c max(0, p - s + e psi_tip)`` (0 and False without one), N."""
+        lead = np.asarray(cable_shortening_m) - self.eccentricity * np.asarray(psi_tip)
+        stretch1 = self.cable_pretension_m + lead
+        stretch2 = self.cable_pretension_m - lead if self.antagonist else np.full_like(stretch1, -np.inf, dtype=float)
+        kc = self.cable_stiffness
+        return kc * np.maximum(stretch1, 0.0), kc * np.maximum(stretch2, 0.0), stretch1 > 0, stretch2 > 0
+
     def cable_tension(self, psi_tip, cable_shortening_m):
-        """Tension (N) of the tension-only cable: ``k_c max(0, r_M dtheta_M - e psi_tip)`` (E 3.11)."""
-        stretch = np.asarray(cable_shortening_m) - self.eccentricity * np.asarray(psi_tip)
-        return self.cable_stiffness * np.maximum(stretch, 0.0), stretch > 0
+        """Compression the cable(s) put on the strip (N), ``T1 + T2``, and whether any cable is taut."""
+        t1, t2, taut1, taut2 = self.cable_tensions(psi_tip, cable_shortening_m)
+        return t1 + t2, taut1 | taut2
+
+    def _cable_stretches(self, psi_tip: float, shortening: float) -> tuple[float, float]:
+        """The two cables' stretch (m) for the dynamics, as floats: ``p + s - e psi_tip`` and ``p - s + e psi_tip``
+        (-inf without the antagonist); the single cable's ``s - e psi_tip`` to the bit."""
+        lead = shortening - self.eccentricity * psi_tip
+        if not self.antagonist:
+            return lead, -math.inf
+        return self.cable_pretension_m + lead, self.cable_pretension_m - lead
 
     def axial_force(self, psi, g_forces_beyond_ab, tension):
         """Axial force (N, tension +) in the strip at the gauges: ``F_beyond . u - T`` (quasi-static)."""
@@ -482,9 +519,9 @@ class Chain:
             idx = np.arange(self.n)
             jac[:, idx, idx] += c * ga + s * gb
             if short is not None:
-                tension, taut = self.cable_tension(psi[:, -1], short)
-                res[:, -1] -= e * tension
-                jac[:, -1, -1] += kc * e * e * taut
+                t1, t2, taut1, taut2 = self.cable_tensions(psi[:, -1], short)
+                res[:, -1] -= e * (t1 - t2) if self.antagonist else e * t1
+                jac[:, -1, -1] += kc * e * e * (taut1 + taut2.astype(float) if self.antagonist else taut1)
             if contact is not None:
                 q_contact, dq_contact, _ = contact.generalized(psi)
                 res -= q_contact
@@ -520,10 +557,11 @@ class Chain:
         return wn[order], zeta[order]
 
     def tangent_stiffness(self, psi, g, cable_taut):
-        """``K_psi + diag(cos psi G_a + sin psi G_b) + k_c e^2 [taut]`` (n, n)."""
+        """``K_psi + diag(cos psi G_a + sin psi G_b) + k_c e^2 [taut]`` (n, n); ``cable_taut`` True or the number
+        of taut cables (2 for a pretensioned pair about the straight digit)."""
         k = self.k_psi + np.diag(np.cos(psi) * g[:, 0] + np.sin(psi) * g[:, 1])
         if cable_taut:
-            k[-1, -1] += self.cable_stiffness * self.eccentricity**2
+            k[-1, -1] += self.cable_stiffness * self.eccentricity**2 * float(cable_taut)
         return k
 
 
@@ -611,7 +649,8 @@ class DynamicState:
         return (
             self._a[None].copy(), ch.k_psi[None].copy(), ch.c_psi[None].copy(), bandwidth,
             self._ga[None].copy(), self._gb[None].copy(), ch.eccentricity * one, ch.cable_stiffness * one,
-            np.zeros(1), np.zeros(1, dtype=bool), self.MAX_ROTATION_PER_STEP_RAD, 0, 1, np.zeros(1, dtype=np.int64),
+            ch.cable_pretension_m * one, np.full(1, ch.antagonist), self.MAX_ROTATION_PER_STEP_RAD, 0, 1,
+            np.zeros(1, dtype=np.int64),
         )  # fmt: skip
 
     def set_loads(self, load_s_m, load_mass_kg, force_s_m=None, force_ab_n=None):
@@ -648,10 +687,10 @@ class DynamicState:
         m = self._a * np.cos(delta)
         sm = self._a * np.sin(delta)
         rhs = c * self._gb - s * self._ga - ch.k_psi @ psi - ch.c_psi @ omega - sm @ (omega * omega)
-        stretch = shortening - ch.eccentricity * psi[-1]
-        taut = stretch > 0
+        stretch1, stretch2 = ch._cable_stretches(psi[-1], shortening)
+        taut = int(stretch1 > 0) + int(stretch2 > 0)  # taut cables: each pulls the tip with k_c e^2 of stiffness
         if taut:
-            rhs[-1] += ch.eccentricity * ch.cable_stiffness * stretch
+            rhs[-1] += ch.eccentricity * ch.cable_stiffness * (max(stretch1, 0.0) - max(stretch2, 0.0))
         if self.contact is not None:
             q_contact, self._dq_psi, self._dq_omega = self.contact.generalized(psi[None], omega[None])
             rhs = rhs + q_contact[0]
@@ -710,9 +749,9 @@ class DynamicState:
         f_psi[idx, idx] += -(sm @ alpha) + (m @ w2) + c * self._ga + s * self._gb
         # dQ/dt of the cable (its shortening is linear in t over the step): the non-autonomous ROS2 terms
         q_t = np.zeros(ch.n)
-        if taut:
-            f_psi[-1, -1] += ch.cable_stiffness * ch.eccentricity**2
-            q_t[-1] = ch.eccentricity * ch.cable_stiffness * (shortening1 - shortening0) / h
+        if taut:  # per taut cable: -d(e (T1 - T2))/dpsi_tip = k_c e^2 and d/ds = k_c e (both cables' signs agree)
+            f_psi[-1, -1] += ch.cable_stiffness * ch.eccentricity**2 * taut
+            q_t[-1] = ch.eccentricity * ch.cable_stiffness * taut * (shortening1 - shortening0) / h
         f_omega = (2.0 * sm) * omega + ch.c_psi
         if self.contact is not None:  # F = M alpha + N - Q: the contact's Q enters with a minus
             f_psi = f_psi - self._dq_psi[0]
@@ -839,8 +878,6 @@ def digit_arrays(
 ) -> dict:
     """The keyword arguments of :func:`build_digit`'s :class:`Chain`: springs, cells, masses, gauges, gravity, cable
     (for chains stacked without building each one, :meth:`flexdigit.twin.batched.BatchedChains.from_rigs`)."""
-    from flexdigit._validation import check_choice
-
     check_choice(orientation, "orientation", tuple(ORIENTATIONS), "build_digit")
     cells_per_section = check_int(cells_per_section, "cells_per_section", "build_digit", low=1, high=1000)
     geo, mat = params.geometry, params.material
@@ -879,7 +916,7 @@ def digit_arrays(
             f"The 'support_mass_kg' parameter of Calibration must have {nsec} values (supports at "
             f"{[round((k + 1) * pitch, 4) for k in range(nsec)]} m). Got {supports.tolist()!r} instead."
         )
-    mass_s.append(pitch * (np.arange(nsec) + 1.0))
+    mass_s.append(np.minimum(pitch * (np.arange(nsec) + 1.0), length))  # n pitch may round past the tip
     mass_kg.append(supports)
     inertia.append(np.zeros(nsec))
     if housing and calibration.housing_mass_kg > 0:
@@ -901,4 +938,6 @@ def digit_arrays(
         "cable_eccentricity_m": geo.cable_eccentricity_m,
         "cable_stiffness_n_m": calibration.cable_stiffness_n_m,
         "strip_axial_stiffness_n": mat.youngs_modulus_pa * geo.cross_section_m2,
+        "cable_pretension_n": params.cables.pretension_n if params.cables.count == 2 else 0.0,
+        "antagonist": params.cables.count == 2,
     }

@@ -46,10 +46,11 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, packaged_calibration
+from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration, packaged_calibration
 
 __all__ = [
     "calibration_for",
+    "twin_calibration",
 ]
 
 #: A gauge "at a thesis gauge's place" when their relative positions agree this closely (x / L, dimensionless).
@@ -108,3 +109,21 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
         noise_drift_v_per_sqrt_s=drift,
         cable_friction_ratio=params.cables.guide_friction_ratio,
     )
+
+
+def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
+    """The calibration a twin of ``params`` runs with: the file ``path`` if given, else the packaged default
+    calibration for the thesis rig, else :func:`calibration_for` (the thesis's scaled to that digit).
+
+    Examples
+    --------
+    >>> from flexdigit.params import RigParams
+    >>> from flexdigit.twin.calibration import default_calibration
+    >>> twin_calibration(RigParams()) == default_calibration()
+    True
+    """
+    if path is not None:
+        return load_calibration(path)
+    if params is None or params == RigParams():
+        return default_calibration()
+    return calibration_for(params)

@@ -29,7 +29,7 @@ import numpy as np
 import pyarrow as pa
 
 from flexdigit import __version__, _io
-from flexdigit._io import atomic_path, atomic_write
+from flexdigit._io import RECORDS_LIMIT, atomic_path, atomic_write, check_input, count_lines, read_text
 from flexdigit._json import to_jsonable
 from flexdigit._validation import check_int, check_positive, check_real, check_values
 from flexdigit.errors import DataFileError, ParameterError
@@ -111,8 +111,6 @@ class TwinRecord:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
-        from flexdigit._io import RECORDS_LIMIT, check_input, count_lines, read_text
-
         check_input(path, "a twin record", RECORDS_LIMIT)
         if path.suffix.lower() == ".csv":
             import io

@@ -47,6 +47,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from flexdigit.errors import ParameterError
 from flexdigit.models.bridge import adc_quantise, gauge_resistance_ohm, wheatstone_ratio
 from flexdigit.params import Sensors
 
@@ -112,8 +113,6 @@ def check_channels(params, calibration) -> None:
     A rig TOML with two gauge positions met the packaged three-channel calibration in a numpy broadcast (issue 16);
     studies of other gauge counts give a calibration with one value per gauge (:mod:`flexdigit.studies.design_study`).
     """
-    from flexdigit.errors import ParameterError
-
     gauges = len(params.geometry.gauge_positions_m)
     for name in CHANNEL_FIELDS:
         channels = len(getattr(calibration, name))

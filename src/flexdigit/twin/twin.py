@@ -6,7 +6,9 @@ sensor chain (:mod:`flexdigit.twin.sensors`) on one clock. It integrates on a fi
 grid states, so a caller sampling at 1 kHz costs no more than one at 50 Hz.
 
 The cable is just taut with the digit straight at the equilibrium command (8, table 3.4 note): the cable
-shortening is ``r_M (theta_M - theta_M(8))`` (E 3.11); below command 8 it is slack.
+shortening is ``r_M (theta_M - theta_M(8))`` (E 3.11); below command 8 it is slack. With an antagonistic pair
+(``[cables] count = 2``) both cables keep their pretension at the equilibrium command, and below it the second
+cable bends the digit the other way (:class:`~flexdigit.twin.digit.Chain`).
 
 Examples
 --------
@@ -27,13 +29,16 @@ from typing import NamedTuple
 import numpy as np
 
 from flexdigit._validation import check_array, check_choice, check_int, check_real, check_values
-from flexdigit.errors import ParameterError
+from flexdigit.errors import DesignError, ParameterError
 from flexdigit.models.servo import command_to_angle_rad
-from flexdigit.params import RigParams
+from flexdigit.params import DigitDynamics, RigParams
 from flexdigit.twin.actuator import Servo
 from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.contact import Tissue, TissueContact, check_point_force, check_pressure, quadrature
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
+from flexdigit.twin.digit_calibration import calibration_for, twin_calibration
 from flexdigit.twin.sensors import SensorChain
+from flexdigit.twin.sensors import adc as quantise
 
 __all__ = [
     "DEFAULT_DT_S",
@@ -46,6 +51,7 @@ __all__ = [
     "check_load",
     "static_gauges_v",
     "friction_sd_v",
+    "release_dynamics",
 ]
 
 DEFAULT_DT_S = 0.020
@@ -67,6 +73,18 @@ def cable_shortening_m(command_or_angle, params: RigParams, *, is_angle: bool = 
     if not is_angle:
         angle = command_to_angle_rad(angle, params)
     return a.cable_m_per_servo_rad * (angle - command_to_angle_rad(a.equilibrium_command, params))
+
+
+def _default_calibration(params: RigParams) -> Calibration:
+    """The calibration a twin gets when none is given: the default (the thesis fit), or, for a digit of other
+    section or gauge counts, which it cannot describe, that fit scaled to the digit
+    (:func:`flexdigit.twin.digit_calibration.calibration_for`)."""
+    cal = default_calibration()
+    if len(cal.support_mass_kg) == params.geometry.section_count and len(cal.channel_gain) == len(
+        params.geometry.gauge_positions_m
+    ):
+        return cal
+    return calibration_for(params)
 
 
 class ReadSeries(NamedTuple):
@@ -117,6 +135,9 @@ class Twin:
         Step the digit with the compiled kernel (:meth:`~flexdigit.twin.digit.DynamicState.use_compiled`): ~5 x
         less CPU per simulated second, within 1e-9 rad of the default numpy path but not bit for bit, so off
         by default (the report's numbers come from the numpy path).
+    servo_drive : {"serial", "timer"}
+        How commands reach the servo (:mod:`flexdigit.twin.actuator`): the thesis's serial board, or a pulse the
+        controller's own timer generates (the reference firmware's: the loop on the board's timing).
     """
 
     def __init__(
@@ -132,9 +153,10 @@ class Twin:
         cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
         command: int | None = None,
         compiled: bool = False,
+        servo_drive: str = "serial",
     ):
         self.params = params or RigParams()
-        self.calibration = calibration or default_calibration()
+        self.calibration = calibration or _default_calibration(self.params)
         self.seed = check_int(seed, "seed", "Twin", low=0)
         self.orientation = check_choice(orientation, "orientation", tuple(ORIENTATIONS), "Twin")
         self.housing = bool(housing)
@@ -150,9 +172,9 @@ class Twin:
         self._curvature_per_moment = self.chain.gauge_curvature_per_moment
         # the cable-guide friction's state (standard-normal, per gauge section): zero until something jolts the
         # cable (a servo pulling it slides it one way, a repeatable state the calibration absorbs)
-        self._friction_xi = np.zeros(3)
+        self._friction_xi = np.zeros(len(self.params.geometry.gauge_positions_m))
         start = self.params.actuator.equilibrium_command if command is None else command
-        self.servo = Servo(self.params, start)
+        self.servo = Servo(self.params, start, drive=servo_drive)
         self._pulley_m = self.params.actuator.cable_m_per_servo_rad
         self._angle_taut = float(command_to_angle_rad(self.params.actuator.equilibrium_command, self.params))
         self._loads: list[tuple[float, float]] = []
@@ -194,8 +216,6 @@ class Twin:
         )
 
     def _press_arrays(self):
-        from flexdigit.twin.contact import quadrature
-
         return quadrature(self.chain, self._presses)
 
     def _load_arrays(self):
@@ -303,7 +323,9 @@ class Twin:
         """Curvature and axial force at the gauges, cable tension (a group delay ago) and the servo angle now."""
         psi, theta = self._interpolate(t - self.sensors.delay_s, True)
         kappa = self.chain.curvature_at_gauges(psi)
-        if self.cable:
+        if self.cable and self.chain.antagonist:
+            tension = float(self.chain.cable_tension(psi[-1], self._shortening(theta))[0])
+        elif self.cable:
             stretch = self._shortening(theta) - self.chain.eccentricity * psi[-1]
             tension = self.chain.cable_stiffness * stretch if stretch > 0 else 0.0
         else:
@@ -431,7 +453,9 @@ class Twin:
         psi_d, theta_d = _hermite(at - self.sensors.delay_s, t0, h, psi0, om0, psi1, om1, th0, w0, th1, w1)
         psi_now, theta_now = _hermite(at, t0, h, psi0, om0, psi1, om1, th0, w0, th1, w1)
         kappa = self.chain.curvature_at_gauges(psi_d)
-        if self.cable:
+        if self.cable and self.chain.antagonist:
+            tension = self.chain.cable_tension(psi_d[:, -1], self._pulley_m * (theta_d - self._angle_taut))[0]
+        elif self.cable:
             stretch = self._pulley_m * (theta_d - self._angle_taut) - self.chain.eccentricity * psi_d[:, -1]
             tension = np.where(stretch > 0, self.chain.cable_stiffness * stretch, 0.0)
         else:
@@ -483,16 +507,12 @@ class Twin:
         """Add a world-fixed sideways point force (N, + towards the cable side) at a position along the digit (m
         from the base); it stays (with any others) until :meth:`clear_presses`. The digit is not jolted: it moves
         from where it is (the next :meth:`advance` integrates the motion)."""
-        from flexdigit.twin.contact import check_point_force
-
         self._presses.append(check_point_force(position_from_base_m, force_n, self.chain.length_m, "Twin.press"))
         self._apply_loads()
 
     def apply_pressure(self, total_n: float, start_m: float, end_m: float) -> None:
         """Add a world-fixed sideways line load: ``total_n`` (N, + towards the cable side) spread evenly over the
         stretch ``start_m..end_m`` (m from the base). Stays until :meth:`clear_presses`."""
-        from flexdigit.twin.contact import check_pressure
-
         self._presses.append(check_pressure(start_m, end_m, total_n, self.chain.length_m, "Twin.apply_pressure"))
         self._apply_loads()
 
@@ -512,8 +532,6 @@ class Twin:
         The digit meets it where it is: with ``settle`` it is put at rest in the new static equilibrium instead
         (a body placed before the run, the digit already pressing on it).
         """
-        from flexdigit.twin.contact import Tissue, TissueContact
-
         if tissue is not None and not isinstance(tissue, Tissue):
             raise ParameterError(f"The 'tissue' parameter of Twin.set_tissue must be a Tissue or None. Got {tissue!r}.")
         self.tissue = tissue
@@ -538,7 +556,7 @@ class Twin:
         The mechanics are untouched: re-hanging a weight at the same place leaves the settled shape as it was.
         Draws from the friction's own stream, so the white noise and drift are the same numbers.
         """
-        self._friction_xi = self.friction_rng.standard_normal(3)
+        self._friction_xi = self.friction_rng.standard_normal(self._friction_xi.size)
 
     @property
     def loads(self) -> list[tuple[float, float]]:
@@ -623,7 +641,7 @@ def static_gauges_v(
     ((2, 3), True)
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or _default_calibration(params)
     masses, pos = _static_load_cases(loads_mass_kg, positions_from_base_m, params)
     b = masses.shape[0]
     chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
@@ -639,8 +657,6 @@ def static_gauges_v(
     if rng is not None:
         volts = volts + np.asarray(calibration.noise_white_v) * rng.standard_normal(volts.shape)
     if adc:
-        from flexdigit.twin.sensors import adc as quantise
-
         volts = quantise(volts, params.sensors)
     return (volts, sol) if return_solution else volts
 
@@ -731,9 +747,39 @@ def friction_sd_v(
     ((2, 3), True)
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or _default_calibration(params)
     chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
     sensors = SensorChain(params, calibration, np.random.default_rng(0))
     return sensors.friction_sd_v(
         solution.curvature_1_m, solution.axial_force_n, solution.tension_n, chain.gauge_curvature_per_moment
+    )
+
+
+def release_dynamics(params: RigParams, calibration: Calibration | None = None, *, orientation: str = "vertical"):
+    """The digit's release-test dynamics (3.1.2) from its twin: the first mode of the chain about straight with the
+    cable removed, housed (table 3.2's E(s)) and bare (table 3.1), as a :class:`~flexdigit.params.DigitDynamics`.
+
+    What a digit nobody has identified puts where the thesis rig has its tables' averages; on the thesis rig the
+    housed mode is its table 3.2 values to 0.01 % (13.1 rad/s, zeta 0.0679), the calibration having been fitted
+    to them.
+    """
+
+    cal = calibration if calibration is not None else twin_calibration(params)
+    modes = {}
+    for housed in (True, False):
+        chain = cached_digit(params, cal, housed, orientation, DEFAULT_CELLS_PER_SECTION)
+        stiffness = chain.tangent_stiffness(np.zeros(chain.n), chain.g_gravity, False)
+        if np.min(np.linalg.eigvalsh(0.5 * (stiffness + stiffness.T))) <= 0:
+            raise DesignError(
+                f"the straight digit ({params.geometry.section_count} sections, {params.geometry.digit_length_m:g} m)"
+                f" is not stable {orientation} without its cable (it buckles under its own weight): no release "
+                "mode, no plant; mount it hanging or horizontal"
+            )
+        wn, zeta = chain.linear_modes()
+        modes[housed] = (float(wn[0]), float(zeta[0]))
+    return DigitDynamics(
+        wn_housing_rad_s=modes[True][0],
+        zeta_housing=modes[True][1],
+        wn_bare_rad_s=modes[False][0],
+        zeta_bare=modes[False][1],
     )

@@ -2,8 +2,10 @@
 
 ``sim`` (the twin), ``serial`` (the thesis's servo board, :mod:`~flexdigit.rig.backends.servo_board` its frame),
 ``daq`` (a USB DAQ), ``stream`` (a microcontroller ADC over USB serial: :mod:`~flexdigit.rig.backends.stream_framing`
-encodes and decodes its lines, :mod:`~flexdigit.rig.backends.stream_emulator` plays a board) and ``replay`` (a
-recorded log). :func:`flexdigit.rig.base.open_rig` chooses one by name or URL.
+encodes and decodes its lines, :mod:`~flexdigit.rig.backends.stream_emulator` plays a board), ``replay`` (a
+recorded log), ``hil`` (the reference firmware on simavr, joined to the twin) and ``board`` (the same firmware on a
+real Uno; :mod:`~flexdigit.rig.backends.board_link` what it says). :func:`flexdigit.rig.base.open_rig` chooses
+one by name or URL.
 """
 
 from flexdigit._lazy import lazy_exports
@@ -18,6 +20,9 @@ __getattr__, __all__ = lazy_exports(
         "DaqRig": "flexdigit.rig.backends.daq_backend",
         "StreamRig": "flexdigit.rig.backends.stream_backend",
         "ReplayRig": "flexdigit.rig.backends.replay_backend",
+        "HilRig": "flexdigit.rig.backends.hil_backend",
+        "BoardRig": "flexdigit.rig.backends.board_backend",
+        "BoardState": "flexdigit.rig.backends.board_link",
         "StreamEmulator": "flexdigit.rig.backends.stream_emulator",
         "Framing": "flexdigit.rig.backends.servo_board",
         "encode_frame": "flexdigit.rig.backends.servo_board",

@@ -7,11 +7,18 @@ The firmware image (``make firmware``) runs unchanged on simavr's ATmega328P in 
 every ``step_s`` (0.5 ms) of AVR time it
 
 1. sets the voltages on the AVR's ADC pins from the twin's gauges (``2.5 V + gauge volts``: the level shift of the
-   board's front end, the AVR's ADC reading 0..5 V) and its pot;
+   board's front end, the AVR's ADC reading 0..5 V) and its pot, to a tenth of a millivolt; the harness makes
+   simavr's ADC convert as the ATmega328P's datasheet says (``vin x 1024 / 5 V``, not simavr's ``x 1023``), so
+   the board's readings, its rest reading (which it tares its map on) among them, are a real Uno's;
 2. runs the AVR for ``step_s`` and collects what its UART sent (stream-protocol lines) and the servo pulse its
    Timer1 generates (OCR1A latched at the pulse's start, as the hardware double-buffers it);
 3. turns the pulse width into the servo's command (1..2 ms over 0..254, unrounded: Timer1's 0.5 us resolution is
    finer than the serial board's command) and advances the twin ``step_s``.
+
+The firmware's UART is a pseudo-terminal (``uart=pty``, the default): the harness makes one and the host opens
+it as it opens an Uno's port (pyserial, 250000 baud, raw), so the host's bytes cross a serial port as on the
+bench; the exchange still gives the time (the harness says how many bytes each step sent; the host says how many
+it wrote), so nothing waits on the kernel's timing. ``uart=pipe`` carries the bytes in the exchange's lines.
 
 Nothing here reads the wall clock: a run repeats exactly. Two modes (``mode=``):
 
@@ -37,8 +44,10 @@ import numpy as np
 
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.backends.stream_framing import LineDecoder
-from flexdigit.rig.base import Rig, UrlOption
+from flexdigit.rig.backends.board_link import BAUD, FAULTS, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState
+from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
+from flexdigit.twin.digit import ORIENTATIONS
+from flexdigit.twin.twin import Twin
 
 __all__ = [
     "HilRig",
@@ -49,25 +58,21 @@ __all__ = [
     "FAULTS",
     "BoardRun",
     "run_on_board",
-    "board_servo_schedule",
 ]
 
 #: The harness executable ``make firmware`` builds beside the image.
 HARNESS_NAME = "flexdigit_hil"
 #: The AVR's clock, Hz (an Uno's crystal).
 F_CPU_HZ = 16_000_000
-#: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
+#: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC (VOLTS_PER_COUNT: 10 bits over 5 V).
 MID_V = 2.5
-VOLTS_PER_COUNT = 5.0 / 1024.0
-#: The board's fault codes (firmware/flexdigit_board.c).
-FAULTS = {1: "host_timeout", 2: "adc_rail", 3: "rotation_bound", 4: "command_range", 5: "controller"}
-#: Stream samples kept in :attr:`HilRig.samples` (a day at 50 Hz would be 4 million: runs here are seconds).
-MAX_KEPT_SAMPLES = 200_000
+#: The harness takes the pins' voltages in tenths of a millivolt (a fiftieth of an ADC step).
+VOLT_UNITS_PER_V = 10_000
 #: How long before the board's control tick at 0.2 s the opening sends its mode line: its ~15 bytes at BYTE_US
 #: (50 us) take 0.75 ms to arrive (firmware/hil/flexdigit_hil.c).
 LEAD_S = 0.002
-#: The host sends a heartbeat line if it has said nothing for this long (the board's timeout is 0.5 s).
-HEARTBEAT_S = 0.1
+#: How long the host waits for bytes the harness said it put on the pty (wall clock): past it, the harness is gone.
+PTY_TIMEOUT_S = 5.0
 
 URL_OPTIONS = (
     UrlOption("seed", "int", low=0, help="the twin's noise seed"),
@@ -76,6 +81,9 @@ URL_OPTIONS = (
     UrlOption("safe", "choice", choices=("relax", "hold"), help="the board's safe state: relax or hold"),
     UrlOption("harness", "str", help="the simavr harness (default: flexdigit_hil beside the image)"),
     UrlOption("step_s", "float", low=1e-4, high=0.01, help="the AVR/twin exchange step, s"),
+    UrlOption("orientation", "choice", choices=tuple(ORIENTATIONS), help="how the twin's digit lies (as sim's)"),
+    UrlOption("cable", "bool", help="the twin's cable attached (as sim's)"),
+    UrlOption("uart", "choice", choices=("pty", "pipe"), help="the firmware's UART: a pty the host opens, or a pipe"),
 )
 PYTHON_OPTIONS = ("twin", "operator", "calibration")
 
@@ -90,32 +98,6 @@ def pulse_to_command(pulse_cycles: int, params: RigParams | None = None) -> floa
     pulse_us = pulse_cycles / (F_CPU_HZ / 1e6)
     span = float(min(a.command_max, 254) - a.command_min)
     return a.command_min + (pulse_us - 1000.0) / 1000.0 * span
-
-
-#: The board's servo frame (Timer1's TOP: 20 ms) and its pulse's start after the control tick at a frame boundary.
-SERVO_FRAME_S = 0.020
-PULSE_AFTER_TICK_S = 0.001
-
-
-def board_servo_schedule(servo, value, issued_s: float, grid_s: float) -> float:
-    """The board's actuator path, for the twin's :class:`~flexdigit.twin.actuator.Servo` (a drop-in for its
-    ``schedule``): the command in force at a 20 ms frame boundary drives the pulse that starts 1 ms later (Timer1
-    latches OCR1A at BOTTOM), and the servo follows from the next step of the twin's grid, as it does under
-    ``hil://``. The serial board's model instead latches on its 20 ms frame and waits for the servo's own 52 Hz
-    pulse (0-19 ms more). A host loop on a twin with this servo is the like-for-like reference for the loop on the
-    board (tests/firmware/test_board.py); returns the grid time the command takes effect (s).
-
-    >>> from flexdigit.params import RigParams
-    >>> from flexdigit.twin.actuator import Servo
-    >>> board_servo_schedule(Servo(RigParams(), 8), 30, 0.005, 0.002)   # the frame at 20 ms, its pulse at 21 ms
-    0.022
-    """
-    value = servo.check_command(value)
-    frame = math.ceil(issued_s / SERVO_FRAME_S - 1e-9) * SERVO_FRAME_S
-    apply = math.ceil((frame + PULSE_AFTER_TICK_S) / grid_s - 1e-9) * grid_s
-    servo.pending.append((apply, value))
-    servo.pending.sort(key=lambda item: item[0])
-    return apply
 
 
 def _find_harness(elf, elf_path: Path, harness) -> Path:
@@ -145,6 +127,10 @@ class HilRig(Rig):
     safe : {"relax", "hold"}
         What the board does on a fault.
     harness : path, optional
+    orientation, cable :
+        The twin's mounting and cable (as the ``sim`` backend's; ``flexdigit collect`` sets them from its protocol).
+    uart : {"pty", "pipe"}
+        The firmware's UART: a pty the host opens as a serial port (pyserial), or carried in the exchange.
     step_s : float
         AVR/twin exchange step (s). The pins hold the twin's volts for a step, so the board's samples are up to a
         step older than a real ADC's: 0.5 ms, not 1 ms, brings the loop at 2 ms within a point of the Python
@@ -167,6 +153,9 @@ class HilRig(Rig):
         safe: str = "relax",
         harness=None,
         step_s: float = 0.0005,
+        uart: str = "pty",
+        orientation: str = "vertical",
+        cable: bool = True,
         twin: Any = None,
         operator=None,
         calibration=None,
@@ -176,34 +165,30 @@ class HilRig(Rig):
             raise ParameterError(f"hil://{elf}: no firmware image there (build it with 'make firmware')")
         self.harness = _find_harness(elf, self.elf, harness)
         if twin is None:
-            from flexdigit.twin.twin import Twin
-
             options = {} if calibration is None else {"calibration": calibration}
-            twin = Twin(params, seed=int(seed), dt_s=0.002, **options)
+            # the servo follows the pulses the board generates (measured below); "timer" says so in the twin's
+            # settings, and is how a host loop on the twin alone is driven to compare with it (sim?servo_drive=timer)
+            twin = Twin(
+                params, seed=int(seed), dt_s=0.002, servo_drive="timer", orientation=orientation, cable=cable, **options
+            )
         self.twin = twin
         self.seed, self.mode, self.safe, self.step_s = int(seed), mode, safe, float(step_s)
+        self.uart = uart
+        self.port = None  # the pty, opened as a serial port (uart="pty")
+        self.port_path: str | None = None
         self.setpoint_deg = float(setpoint_deg)
         self._time_s = 0.0
         super().__init__(
             twin.params, clock=lambda: self._time_s, sleep=self._wait_alive, operator=operator or (lambda m: None)
         )
-        self._decoder = LineDecoder()
         self._outbox = bytearray()
         self._last_said_s = 0.0
-        self.latest = None  # the newest stream sample
-        #: every stream sample (the ADC counts each board period used, and the command it applied), up to a limit
-        self.samples: list = []
-        #: the rotation the board's map read at rest when its loop started (it subtracts it), deg
-        self.board_tare_deg = float("nan")
-        #: ``(index into samples, mode)`` at each mode change the board announced
-        self.mode_marks: list[tuple[int, int]] = []
+        #: what the board said (its samples, faults, mode changes, tare): :class:`BoardState`
+        self.board = BoardState()
         self.board_command = float("nan")
-        self.faults: list[tuple[float, int, str]] = []
-        self.info_lines: list[str] = []
         self.pulses = 0
         self.exec_max_cycles = 0
         self.exec_cycles: list[int] = []
-        self._fault_seen = 0
         #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
         self.gauge_override: dict[int, float] = {}
         self._start_board()
@@ -213,7 +198,7 @@ class HilRig(Rig):
         mode; the harness stopped again if any of that fails."""
         self._stderr = tempfile.TemporaryFile(mode="w+")  # simavr's own messages: quoted if the harness stops
         self._proc = subprocess.Popen(
-            [str(self.harness), str(self.elf)],
+            [str(self.harness), str(self.elf), *(["--pty"] if self.uart == "pty" else [])],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=self._stderr,
@@ -221,6 +206,8 @@ class HilRig(Rig):
             bufsize=1,
         )
         try:
+            if self.uart == "pty":
+                self._open_port()
             # the banner, and the rest readings the board tares its map on; the mode line goes out LEAD_S before
             # 0.2 s so the board handles it before its control tick at 0.2 s, a servo frame boundary (every period
             # divides 20 ms; the pulse latching that tick's command begins 1 ms later): the loop's first command
@@ -240,6 +227,22 @@ class HilRig(Rig):
             self._stop()
             raise
 
+    def _open_port(self) -> None:
+        """Open the harness's pty as the host opens a board's serial port."""
+        import serial
+
+        said = self._proc.stdout.readline().split()
+        if len(said) != 2 or said[0] != "T":
+            raise RigError(
+                f"hil://{self.elf}: the harness made no pty ({self._harness_said() or 'no reply'}); "
+                f"hil://{self.elf}?uart=pipe carries the UART without one"
+            )
+        self.port_path = said[1]
+        try:
+            self.port = serial.Serial(self.port_path, baudrate=BAUD, timeout=PTY_TIMEOUT_S, write_timeout=PTY_TIMEOUT_S)
+        except (serial.SerialException, OSError) as exc:
+            raise RigError(f"hil://{self.elf}: cannot open the board's pty {self.port_path} ({exc})") from None
+
     # -- the exchange --------------------------------------------------------------------------------------------
     def _say(self, line: str) -> None:
         self._outbox += line.encode("ascii") + b"\n"
@@ -250,10 +253,10 @@ class HilRig(Rig):
         volts = [MID_V + float(g) for g in gauges] + [float(pot)]
         for channel, v in self.gauge_override.items():  # a wire off, a short: the fault tests
             volts[channel] = MID_V + v
-        mv = [int(round(v * 1000)) for v in volts]
-        out = f"V {mv[0]} {mv[1]} {mv[2]} {mv[3]}\n"
+        units = [int(round(v * VOLT_UNITS_PER_V)) for v in volts]
+        out = f"V {units[0]} {units[1]} {units[2]} {units[3]}\n"
         if self._outbox:
-            out += "U " + self._outbox.hex() + "\n"
+            out += self._uart_to_board(bytes(self._outbox))
             self._outbox.clear()
         out += f"R {int(round(self.step_s * 1e6))}\n"
         try:
@@ -269,7 +272,7 @@ class HilRig(Rig):
         exec_last, self.exec_max_cycles, execs = int(parts[4]), int(parts[5]), int(parts[6])
         if execs > len(self.exec_cycles):
             self.exec_cycles.append(exec_last)
-        uart = bytes.fromhex(parts[8]) if len(parts) > 8 else b""
+        uart = self._uart_from_board(parts[8] if len(parts) > 8 else "")
         if pulse:
             command = pulse_to_command(pulse, self.params)
             if command != self.board_command:
@@ -277,20 +280,33 @@ class HilRig(Rig):
                 a = self.params.actuator
                 self.twin.servo.pending.clear()
                 self.twin.servo.command = min(max(command, a.command_min), a.command_max)
-        for event in self._decoder.feed(uart):
-            if event.kind == "sample":
-                self.latest = event.sample
-                if len(self.samples) < MAX_KEPT_SAMPLES:
-                    self.samples.append(event.sample)
-            elif event.kind == "info":
-                self.info_lines = [*self.info_lines[-49:], event.text]
-                words = event.text.split()
-                if len(words) >= 3 and words[0] == "fault":
-                    self.faults.append((self._time_s, int(words[1]), words[2]))
-                elif len(words) == 2 and words[0] == "mode":
-                    self.mode_marks.append((len(self.samples), int(words[1])))
-                elif len(words) == 2 and words[0] == "tare":
-                    self.board_tare_deg = int(words[1]) / 1e6
+        self.board.feed(uart, self._time_s)
+
+    def _uart_to_board(self, data: bytes) -> str:
+        """Send ``data`` to the board's receiver; the exchange's line saying so."""
+        if self.port is None:
+            return f"U {data.hex()}\n"
+        try:
+            self.port.write(data)
+            self.port.flush()
+        except (OSError, ValueError) as exc:  # pyserial's SerialException and SerialTimeoutException are OSErrors
+            raise RigError(f"hil://{self.elf}: cannot write to the board's pty {self.port_path} ({exc})") from None
+        return f"U {len(data)}\n"
+
+    def _uart_from_board(self, field: str) -> bytes:
+        """What the board's UART sent in this step: in the reply (pipe), or that many bytes from the pty."""
+        if self.port is None:
+            return bytes.fromhex(field)
+        count = int(field or 0)
+        if not count:
+            return b""
+        try:
+            data = self.port.read(count)
+        except (OSError, ValueError) as exc:
+            raise RigError(f"hil://{self.elf}: cannot read the board's pty {self.port_path} ({exc})") from None
+        if len(data) != count:
+            raise RigError(f"hil://{self.elf}: {count} bytes from the board did not arrive on {self.port_path}")
+        return data
 
     def _harness_said(self) -> str:
         """The harness's last line on stderr (why it stopped), or ''."""
@@ -322,11 +338,16 @@ class HilRig(Rig):
         self._advance(seconds)
 
     # -- the Rig contract ------------------------------------------------------------------------------------
+    # what the board said, by the names the tests and run_on_board read
+    latest = property(lambda self: self.board.latest, doc="The newest stream sample.")
+    samples = property(lambda self: self.board.samples, doc="Every stream sample, up to a limit.")
+    faults = property(lambda self: self.board.faults, doc="``(time_s, code, name)`` of each fault reported.")
+    info_lines = property(lambda self: self.board.info_lines, doc="The board's last information lines.")
+    mode_marks = property(lambda self: self.board.mode_marks, doc="``(index into samples, mode)`` per mode change.")
+    board_tare_deg = property(lambda self: self.board.tare_deg, doc="The rotation the board's map read at rest.")
+
     def _check_faults(self) -> None:
-        if len(self.faults) > self._fault_seen:
-            t, code, name = self.faults[-1]
-            self._fault_seen = len(self.faults)
-            raise RigError(f"hil://{self.elf.name}: the board reported fault {code} ({name}) at t = {t:.3f} s")
+        self.board.raise_new_fault(f"hil://{self.elf.name}")
 
     def _read(self) -> tuple[np.ndarray, float]:
         if self._time_s - self._last_said_s >= HEARTBEAT_S:
@@ -382,6 +403,8 @@ class HilRig(Rig):
         self._stop()
 
     def _stop(self) -> None:
+        if self.port is not None:
+            self.port.close()
         proc = self._proc
         try:
             if proc.poll() is None:
@@ -412,18 +435,23 @@ class HilRig(Rig):
             "mode": self.mode,
             "safe": self.safe,
             "step_s": self.step_s,
+            "uart": self.uart,
+            "orientation": self.twin.orientation,
+            "cable": bool(self.twin.cable),
             "harness": str(self.harness),
         }
 
     def __repr__(self) -> str:
         state = "closed" if self._closed else "open"
-        return f"HilRig(elf={str(self.elf)!r}, mode={self.mode!r}, seed={self.seed}, safe={self.safe!r}, {state})"
+        port = f", port={self.port_path!r}" if self.port_path else ""
+        return (
+            f"HilRig(elf={str(self.elf)!r}, mode={self.mode!r}, seed={self.seed}, safe={self.safe!r}, "
+            f"uart={self.uart!r}{port}, {state})"
+        )
 
 
 def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -> HilRig:
     """``hil://PATH.elf?seed=0&mode=host`` (see the module docstring)."""
-    from flexdigit.rig.base import RigURL, rig_url_options
-
     if not location:
         raise ParameterError("hil:// needs a firmware image, e.g. hil://firmware/build/flexdigit_board.elf")
     checked = rig_url_options(RigURL("hil", location), **options)[1]
@@ -448,11 +476,7 @@ class BoardRun:
 
 def board_period_s(rig: HilRig) -> float:
     """The control period the image was built with (its banner's ``period_us``)."""
-    for line in rig.info_lines:
-        for word in line.split():
-            if word.startswith("period_us="):
-                return int(word.split("=", 1)[1]) / 1e6
-    raise RigError(f"hil://{rig.elf.name}: the firmware's banner does not give its period")
+    return rig.board.period_s(f"hil://{rig.elf.name}")
 
 
 def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float) -> BoardRun:

@@ -25,8 +25,10 @@ import numpy as np
 from flexdigit._validation import check_int, check_positive
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
+from flexdigit.rig.backends.daq_backend import from_url as daq_from_url
 from flexdigit.rig.backends.servo_board import MINI_SSC, Framing, encode_frame
-from flexdigit.rig.base import Rig, UrlOption, clamp_command
+from flexdigit.rig.backends.stream_backend import source_from_url
+from flexdigit.rig.base import Rig, RigURL, UrlOption, clamp_command, parse_rig_url, rig_url_options
 
 __all__ = ["SerialRig", "from_url"]
 
@@ -171,8 +173,6 @@ def _gauge_source(where: str, params, daq: str, pot: int | None, source_options:
     The source's own options (``daq.NAME=`` in the serial URL, or in the nested URL) are checked by that backend's
     declarations through the one parser, so an unknown one is refused by name as anywhere else.
     """
-    from flexdigit.rig.base import RigURL, parse_rig_url, rig_url_options
-
     bad = ParameterError(f"{where}: option daq={daq!r} must be a board number, daq://BOARD or stream://PORT")
     text = daq.strip()
     if "://" not in text:
@@ -198,11 +198,7 @@ def _gauge_source(where: str, params, daq: str, pot: int | None, source_options:
             python["uldaq"] = uldaq
     nested, checked = rig_url_options(RigURL(url.scheme, url.location, {**url.options, **source_options}), **python)
     if url.scheme == "stream":
-        from flexdigit.rig.backends.stream_backend import source_from_url
-
         return source_from_url(nested.location, checked)
-    from flexdigit.rig.backends.daq_backend import from_url as daq_from_url
-
     return daq_from_url(nested.location, params, checked)
 
 

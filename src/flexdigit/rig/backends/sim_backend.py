@@ -21,10 +21,13 @@ from typing import Any
 
 import numpy as np
 
+from flexdigit._json import fingerprint
 from flexdigit._validation import check_real
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig, UrlOption
+from flexdigit.twin.actuator import SERVO_DRIVES
+from flexdigit.twin.twin import Twin
 
 __all__ = ["SimRig", "from_url", "from_url_paced", "DEFAULT_TWIN_DT_S"]
 
@@ -72,8 +75,6 @@ class SimRig(Rig):
     ) -> None:
         ready = twin is not None
         if twin is None:
-            from flexdigit.twin.twin import Twin
-
             # 2 ms, not the twin's 20 ms default: a loop closed every 20 ms acts on the digit's motion between
             # frames. The 30 deg step of the 20 ms design (seed 0) overshoots 2.69 % at 1 ms, 2.68 % at 2 ms,
             # 6.3 % at 5 ms and 5.5 % at 20 ms; 2 ms is the coarsest step that matches the 1 ms reference.
@@ -140,19 +141,23 @@ class SimRig(Rig):
 
     def settings(self) -> dict[str, Any]:
         """Backend, seed, how the twin is set up, and fingerprints of its calibration and rig parameters."""
-        from flexdigit._json import fingerprint
-
         twin = self.twin
-        return {
-            "backend": self.name,
-            "seed": int(twin.seed),
-            "orientation": twin.orientation,
-            "housing": bool(twin.housing),
-            "cable": bool(twin.cable),
-            "dt_s": float(twin.dt_s),
-            "calibration_fingerprint": fingerprint(twin.calibration.to_dict()),
-            "params_fingerprint": fingerprint(twin.params.to_dict()),
-        } | ({"compiled": True} if self.compiled else {})  # only when on: older journals stay comparable
+        return (
+            {
+                "backend": self.name,
+                "seed": int(twin.seed),
+                "orientation": twin.orientation,
+                "housing": bool(twin.housing),
+                "cable": bool(twin.cable),
+                "dt_s": float(twin.dt_s),
+                "calibration_fingerprint": fingerprint(twin.calibration.to_dict()),
+                "params_fingerprint": fingerprint(twin.params.to_dict()),
+            }
+            | ({"compiled": True} if self.compiled else {})
+            | (  # only when on: older journals stay comparable
+                {"servo_drive": twin.servo.drive} if twin.servo.drive != "serial" else {}
+            )
+        )
 
     def tip_rotation_deg(self) -> float:
         """The twin's true tip (beam) rotation now, deg: the last link's absolute angle (not measurable on hardware)."""
@@ -173,6 +178,12 @@ URL_OPTIONS = (
     UrlOption("dt_s", "float", low=1e-5, high=0.02, help="the twin's integration step, s"),
     UrlOption("spin_s", "float", low=0.0, high=0.1, help="sim+paced: busy-wait the last spin_s of every wait, s"),
     UrlOption("compiled", "bool", help="step the digit compiled (default: sim+paced yes, sim no)"),
+    UrlOption(
+        "servo_drive",
+        "choice",
+        choices=SERVO_DRIVES,
+        help="how commands reach the servo: the serial board (the thesis rig) or a microcontroller's timer pulse",
+    ),
 )
 #: Keyword arguments only Python passes to :class:`SimRig` (objects, not text).
 PYTHON_OPTIONS = ("twin", "calibration", "cells_per_section", "command", "clock", "sleep", "operator")

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexdigit._validation import SEED, Flag, Plausible, check_int, check_param, check_positive
+from flexdigit.rig.backends.servo_board import FrameDecoder
 from flexdigit.rig.backends.stream_framing import PROTOCOL_VERSION, encode_line
 
 #: Lines per second: the firmware streams 100; a 115200-baud serial line carries ~2,000 of these lines.
@@ -121,8 +122,6 @@ class StreamEmulator:
         self._servo_master = self._servo_slave = None
         self.commands: list[int] = []
         if self.twin is not None:
-            from flexdigit.rig.backends.servo_board import FrameDecoder
-
             self._servo_master, self._servo_slave = os.openpty()
             tty.setraw(self._servo_slave)
             self.servo_port = os.ttyname(self._servo_slave)

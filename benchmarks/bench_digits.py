@@ -1,0 +1,110 @@
+"""Your digit beside the thesis rig (issue 24): the twin's real-time factor and its static load cases per second,
+for the thesis rig (3 sections, 3 gauges) and the 8-gauge, 5-section, 0.5 m digit of ``tests/digits.py``, timed in
+the same run.
+
+- Real-time factor: the twin as ``flexdigit run`` drives it (the ``sim`` backend's 2 ms step, read every 20 ms
+  serial frame, a command every 5th frame of a slow ramp over 30 commands from the straight one), 10 simulated
+  seconds, best of 3 on fresh twins. The 0.5 m digit hangs tip down (tip up it buckles under its supports' weight,
+  docs/digits.md), the thesis rig stands tip up as in the thesis; both with their cable.
+- Static cases per second: 5,000 random load cases (one weight of 7.5-37.5 g anywhere along the digit, commands
+  straight / +10 / +20), one batched :func:`~flexdigit.twin.twin.static_gauges_v` call, horizontal (chapters 6-7).
+
+``python -m benchmarks bench_digits``
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+#: The 8-gauge, 5-section digit of tests/digits.py ("five-sections-eight-gauges"), written out (benchmarks do not
+#: import the tests).
+FIVE_SECTIONS_EIGHT_GAUGES = {
+    "geometry": {
+        "section_count": 5,
+        "section_length_m": 0.09,
+        "strip_length_m": 0.45,
+        "digit_length_m": 0.50,
+        "gauge_positions_m": [0.03, 0.07, 0.13, 0.17, 0.23, 0.27, 0.33, 0.37],
+    },
+    "sensors": {"bridge": "full", "adc_channels": list(range(8))},
+}
+DIGITS = {"thesis rig (3 sections, 3 gauges)": ({}, "vertical"), "5 sections, 8 gauges, 0.5 m": (
+    FIVE_SECTIONS_EIGHT_GAUGES, "hanging")}  # fmt: skip
+
+
+def _params(description: dict):
+    from flexdigit.params import RigParams
+
+    return RigParams.from_dict(description)
+
+
+def bench_realtime(description: dict, orientation: str, sim_seconds: float = 10.0, repeats: int = 3) -> tuple:
+    """Simulated seconds per wall-clock second of the run twin of a digit; ``(factor, springs, elapsed)``."""
+    from flexdigit.rig.backends.sim_backend import DEFAULT_TWIN_DT_S
+    from flexdigit.twin.twin import Twin
+
+    params = _params(description)
+    straight = params.actuator.equilibrium_command
+    ramp = list(range(straight, straight + 31)) + list(range(straight + 29, straight, -1))
+
+    def run() -> tuple[float, int]:
+        twin = Twin(params, seed=0, orientation=orientation, dt_s=DEFAULT_TWIN_DT_S)
+        frame = params.actuator.serial_period_s
+        frames = int(round(sim_seconds / frame))
+        start = time.perf_counter()
+        for k in range(frames):
+            if k % 5 == 0:
+                twin.command(ramp[(k // 5) % len(ramp)])
+            twin.advance(frame)
+            twin.read()
+        return time.perf_counter() - start, twin.chain.n
+
+    elapsed, springs = min(run() for _ in range(repeats))
+    return sim_seconds / elapsed, springs, elapsed
+
+
+def bench_static(description: dict, cases: int = 5_000) -> tuple:
+    """Static load cases per second of a digit, one batched call; ``(rate, elapsed)``."""
+    from flexdigit.twin.twin import static_gauges_v
+
+    params = _params(description)
+    rng = np.random.default_rng(0)
+    length = params.geometry.digit_length_m
+    masses = rng.choice([0.0075, 0.0125, 0.025, 0.0375], cases)
+    positions = rng.uniform(0.1 * length, length, cases)
+    commands = params.actuator.equilibrium_command + rng.choice([0, 10, 20], cases)
+    static_gauges_v(masses[:10], positions[:10], commands[:10], params=params)  # warm the chain's cache
+    start = time.perf_counter()
+    static_gauges_v(masses, positions, commands, params=params, seed=0)
+    elapsed = time.perf_counter() - start
+    return cases / elapsed, elapsed
+
+
+def run() -> list[dict]:
+    rows = []
+    for name, (description, orientation) in DIGITS.items():
+        factor, springs, elapsed = bench_realtime(description, orientation)
+        rows.append(
+            {
+                "name": f"run twin real-time factor, {name}",
+                "value": factor,
+                "unit": "x",
+                "goal": ">= 1 (the loop)",
+                "note": f"2 ms step read each 20 ms frame, {orientation}; 10 s in {elapsed:.3f} s (best of 3), "
+                f"{springs} springs",
+            }
+        )
+    for name, (description, _) in DIGITS.items():
+        rate, elapsed = bench_static(description)
+        rows.append(
+            {
+                "name": f"static load cases per second, {name}",
+                "value": rate,
+                "unit": "cases/s",
+                "goal": "",
+                "note": f"5000 cases (one weight, three commands) in {elapsed:.3f} s, batched, horizontal",
+            }
+        )
+    return rows

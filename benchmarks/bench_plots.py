@@ -1,0 +1,81 @@
+"""What ``--plot FILE`` adds to a command (issue 28): drawing and saving each figure, best of 3 (goal <= 1 s each).
+
+The data are computed once, untimed (the command computes them anyway); only ``<domain>_figure(...)`` and
+``flexdigit._plot.save_plot`` (PNG, the report's DPI) are timed. ``python -m benchmarks plots``.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+REPEATS = 3
+GOAL_S = 1.0
+
+
+def _inputs() -> dict:
+    """name -> a function drawing that figure from data computed here, untimed."""
+    import numpy as np
+
+    from flexdigit.calibrate.residual_plot import residual_figure
+    from flexdigit.calibrate.targets import CalibrationTargets
+    from flexdigit.calibrate.twin_fit import calibrate
+    from flexdigit.control.design_plot import design_figure
+    from flexdigit.control.thesis_designs import thesis_design
+    from flexdigit.identify.fit_plot import fit_figure
+    from flexdigit.identify.identification import identify
+    from flexdigit.identify.timeseries import series_from_table
+    from flexdigit.models.plant import build_plant
+    from flexdigit.shape.shape import ShapeEstimator
+    from flexdigit.shape.shape_plot import shape_figure
+    from flexdigit.tactile.prediction_plot import prediction_figure
+    from flexdigit.twin.record_plot import record_figure
+    from flexdigit.twin.records import actuation_sweep, servo_step_test
+
+    step = servo_step_test(seed=0)  # 1.5 s at 1 kHz, as `flexdigit simulate step`
+    series = series_from_table(step, "pot")
+    fit = identify(series, "step")
+    plant = build_plant("printed").tf
+    controller = thesis_design(39.0, plant).controller
+    sweep = actuation_sweep([8, 22, 36, 43], settle_s=1.0, samples=3, seed=0)
+    targets = CalibrationTargets.from_records(sweep=_sweep_table(sweep))
+    calibration = calibrate(targets)
+    rng = np.random.default_rng(0)
+    actual = rng.uniform(0.0, 0.24, 1000)  # a thesis-sized test set: 1000 readings, m from the tip
+    estimate = ShapeEstimator().estimate([0.0085, 0.765, 0.151], command=22)
+    return {
+        "simulate step: record": lambda: record_figure(step),
+        "identify step: fit over the record": lambda: fit_figure(series, fit),
+        "design hinf: step and Bode": lambda: design_figure(plant, controller),
+        "predict: predicted vs actual (1000 readings)": lambda: prediction_figure(
+            actual, actual + rng.normal(0, 0.01, actual.size), "position"
+        ),
+        "calibrate: residuals per target": lambda: residual_figure(calibration),
+        "shape: centre line": lambda: shape_figure(estimate),
+    }
+
+
+def _sweep_table(record):
+    from flexdigit.calibrate.record_files import read_sweep
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = record.save(Path(tmp) / "sweep.csv")
+        return read_sweep(path)
+
+
+def run() -> list[dict]:
+    from flexdigit._plot import save_plot
+
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, draw in _inputs().items():
+            best = float("inf")
+            for _ in range(REPEATS):
+                start = time.perf_counter()
+                save_plot(draw(), Path(tmp) / "figure.png", force=True)
+                best = min(best, time.perf_counter() - start)
+            rows.append(
+                {"name": name, "value": best, "unit": "s", "goal": f"<= {GOAL_S:g} s", "note": f"best of {REPEATS}"}
+            )
+    return rows

@@ -1,0 +1,46 @@
+"""The figure of a closed-loop run (``flexdigit run ... --plot``): setpoint, estimate, true rotation and command.
+
+Top, the beam rotation: the setpoint, the loop's estimate from the gauges and, on the twin, its true rotation
+(what hardware cannot measure; thesis 5.4 judged its loops on the estimate alone); bottom, the servo command sent.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexdigit._plot import new_figure
+from flexdigit.rig.step_test import StepRun
+
+__all__ = ["run_figure"]
+
+
+def run_figure(run: StepRun, title: str = ""):
+    """A run's rotations (deg) and commands over time (s) as a matplotlib ``Figure`` of two axes.
+
+    Examples
+    --------
+    >>> from flexdigit.rig import open_rig
+    >>> from flexdigit.rig.rotation import calibrate_rotation
+    >>> from flexdigit.rig.step_test import run_step
+    >>> rig = open_rig("sim", seed=0)
+    >>> estimator = calibrate_rotation(rig, commands=(8, 20, 30))  # doctest: +SKIP
+    >>> fig = run_figure(run_step(rig, "digital20", 20.0, 0.2, 0.02, estimator=estimator))  # doctest: +SKIP
+    >>> rig.close()
+    """
+    r = run.result
+    t = np.asarray(r.time_s, float)
+    fig, (top, bottom) = new_figure(2, 1, figsize=(8.0, 5.0), sharex=True, height_ratios=(3, 2))
+    top.step(t, r.setpoint, where="post", color="k", ls=":", lw=1.0, label="setpoint")
+    top.plot(t, r.measurement, color="C0", label="estimate (gauges)")
+    if run.has_truth and run.true_rotation_deg.size:
+        n = run.true_rotation_deg.size
+        top.plot(t[:n], run.true_rotation_deg, color="C3", lw=1.0, label="true rotation (twin)")
+    top.set_ylabel("beam rotation (deg)")
+    top.legend(fontsize=7)
+    if title:
+        top.set_title(title, fontsize=9)
+    bottom.step(t, r.command, where="post", color="C2", label="command")
+    bottom.set_xlabel("time (s)")
+    bottom.set_ylabel("servo command")
+    bottom.legend(fontsize=7)
+    return fig

@@ -1,0 +1,123 @@
+"""The whole host stack against the firmware on simavr, over its UART as a pty (issue 25, step 3): the harness makes
+a pseudo-terminal, the ``hil://`` backend opens it as a board's serial port (pyserial), and ``flexdigit run``,
+``collect`` and ``live``'s session loop run through it. Short runs: each is a fraction of a simulated second to a
+few seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+import serial
+
+from flexdigit.cli import main
+from flexdigit.live.session import LiveSession
+from flexdigit.rig.base import open_rig
+from flexdigit.tactile.dataset import load_dataset
+
+#: A command is 1.735 deg of rotation on the design model; 1 deg of the twin's true rotation is a command's worth.
+TRUE_ROTATION_TOLERANCE_DEG = 1.0
+#: The board's readings against the twin's own (``collect`` on ``sim``, same protocol and seed, on the board twin's
+#: 2 ms step), V: three of the board's 10-bit counts (4.9 mV each: half a count of quantisation, the rest the
+#: noise drawn at other times; measured: at most 1.9 counts).
+BOARD_READING_TOLERANCE_V = 3 * 5.0 / 1024
+#: 12.5 g at 4 cm from the tip of the horizontal digit moves gauge 1 by 39-44 mV (both backends): at least this.
+LOAD_SIGNAL_MIN_V = 0.03
+PROTOCOL = (
+    'name = "hil"\nloads_g = [12.5]\npositions_from_tip_cm = [4]\nactuation_commands = [20]\n'
+    "repetitions = 1\nno_load_repetitions = 1\nsettle_s = 1.0\nrehang = false\n"
+)
+
+
+@pytest.mark.slow
+def test_the_uart_is_a_pty_the_host_opens_as_a_serial_port(firmware):
+    elf = firmware(0.020, "float")
+    with open_rig(f"hil://{elf}", mode="host") as rig:
+        assert isinstance(rig.port, serial.Serial)
+        assert rig.port_path.startswith("/dev/pts/") and os.path.exists(rig.port_path)
+        assert rig.port.baudrate == 250_000
+        assert rig.settings()["uart"] == "pty"
+        rig.write_command(30)
+        rig.wait(0.3)
+        over_pty = [(s.t_us, s.gauges, s.pot) for s in rig.samples]
+        command = rig.board_command
+    assert rig.port is not None and not rig.port.is_open  # closed with the rig
+    # the same bytes as when they travel in the exchange: a pty changes the transport, not the run
+    with open_rig(f"hil://{elf}?uart=pipe", mode="host") as rig:
+        rig.write_command(30)
+        rig.wait(0.3)
+        over_pipe = [(s.t_us, s.gauges, s.pot) for s in rig.samples]
+    assert over_pty == over_pipe
+    assert command == pytest.approx(30, abs=0.07)  # the board followed the host's command (0.5 us pulse steps)
+
+
+@pytest.mark.slow
+def test_run_through_the_firmware_over_the_pty(firmware, capsys):
+    elf = firmware(0.020, "float")
+    code = main(["run", "--backend", f"hil://{elf}", "--map-from", "twin", "--duration", "2", "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert doc["loop"] == "host"
+    assert doc["rig"]["uart"] == "pty"
+    assert abs(doc["true_final_rotation_deg"] - 30.0) < TRUE_ROTATION_TOLERANCE_DEG
+
+
+@pytest.mark.slow
+def test_collect_through_the_firmware_over_the_pty(firmware, tmp_path):
+    elf = firmware(0.020, "float")
+    protocol = tmp_path / "p.toml"
+    protocol.write_text(PROTOCOL)
+    out, reference = tmp_path / "hil.parquet", tmp_path / "sim.parquet"
+    for backend, path in ((f"hil://{elf}", out), ("sim?dt_s=0.002", reference)):
+        assert main(["collect", str(protocol), "--backend", backend, "--out", str(path), "--no-progress"]) == 0
+    data, twin = load_dataset(out), load_dataset(reference)
+    rig = data.meta["rig"]["settings"]
+    assert rig["uart"] == "pty"
+    assert rig["orientation"] == "horizontal"  # the protocol's mounting reached the board's twin
+    loads = np.asarray(data.columns["load_kg"])
+    np.testing.assert_array_equal(loads, twin.columns["load_kg"])
+    np.testing.assert_allclose(data.gauges_v, twin.gauges_v, atol=BOARD_READING_TOLERANCE_V)
+    gauge1 = np.asarray(data.gauges_v)[:, 0]
+    assert gauge1[loads == 0][0] - gauge1[loads > 0][0] > LOAD_SIGNAL_MIN_V  # the weight bends it down
+
+
+@pytest.mark.slow
+def test_live_session_loop_through_the_firmware_over_the_pty(firmware):
+    elf = firmware(0.020, "float")
+    holder: dict = {}
+    frames = []
+
+    def sleep(seconds):  # the loop's pacing on the board's simulated clock
+        rig = holder["session"].rig
+        rig.wait(seconds)
+        frames.append(rig.latest)
+        if len(frames) == 25:
+            holder["session"]._stop.set()
+
+    session = LiveSession(
+        f"hil://{elf}", clock=lambda: holder["session"].rig.clock() if "session" in holder else 0.0, sleep=sleep
+    )
+    holder["session"] = session
+    try:
+        assert session.rig.settings()["uart"] == "pty"
+        session._run()
+    finally:
+        session.rig.close()
+    assert session.error is None
+    assert len(session.state.samples) >= 20  # the loop read the board every period
+    seqs = [f.seq for f in frames]
+    assert seqs == sorted(seqs) and len(set(seqs)) >= 20  # fresh samples from the firmware each period
+
+
+def test_a_harness_without_a_pty_is_refused_naming_the_pipe(tmp_path):
+    """A machine without ptys (no /dev/pts): one line saying so and how to run without one, no hang."""
+    elf = tmp_path / "board.elf"
+    elf.write_bytes(b"\x7fELF")
+    harness = tmp_path / "flexdigit_hil"
+    harness.write_text("#!/bin/sh\necho 'flexdigit_hil: cannot open a pty (No such device)' >&2\nexit 2\n")
+    harness.chmod(0o755)
+    with pytest.raises(OSError, match=r"no pty \(flexdigit_hil: cannot open a pty.*\?uart=pipe"):
+        open_rig(f"hil://{elf}?harness={harness}")
