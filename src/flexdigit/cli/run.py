@@ -335,6 +335,8 @@ def _run_data(args, run, rig, settings, setpoint, period, estimator, recording) 
         "controller": args.controller,
         "setpoint_deg": setpoint,
         "period_s": period,
+        "params": None if args.params is None else str(args.params),
+        "cables": _cables(rig.params),  # how the serial command drives the digit's cable(s)
         "samples": t.samples,
         "overruns": t.overruns,
         "jitter_p50_s": t.jitter_p50_s,
