@@ -7,6 +7,7 @@ import argparse
 from flexdigit._command import CommandResult, add_command
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
+from flexdigit.cli._formats import epilog
 from flexdigit.params import DIGIT_LENGTH_M
 
 
@@ -35,8 +36,6 @@ def _add_collect(subparsers, settle) -> None:
         _collect,
         help="run a load protocol (thesis-6.1, thesis-7.1, thesis-7.1-no-load or a TOML file) and save the dataset",
     )
-    from flexdigit.cli._formats import epilog
-
     p.epilog = epilog("protocol")
     p.add_argument("protocol", help="a built-in protocol name or a protocol TOML file")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
@@ -81,8 +80,6 @@ def _add_dataset(subparsers) -> None:
         description="Map a foreign tactile readings file onto a flexdigit dataset. The column map comes from --map "
         "(a TOML with the keys below, without the dashes: gauges, gauge_unit, load, ...) and/or the flags, which win.",
     )
-    from flexdigit.cli._formats import epilog
-
     q.epilog = epilog("dataset")
     q.add_argument("file", help="the readings: CSV-like text (delimiter detected) or .parquet")
     q.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv)")
