@@ -436,8 +436,6 @@ LONG_CLI_FUNCTIONS = {
     "flexdigit.cli.run:register": "parser: one add_argument per flag, nothing computed",
     "flexdigit.cli.live:register": "parser: one add_argument per flag, nothing computed",
     "flexdigit.cli.tdcr:register": "parser: one add_argument per flag, nothing computed",
-    "flexdigit.cli.collect:_add_dataset": "parser: one add_argument per flag, nothing computed",
-    "flexdigit.cli.run:_run_data": "to split",
     "flexdigit.cli.collect:_train": "to split",
     "flexdigit.cli.design:_hinf_digit": "to split",
     "flexdigit.cli.design:_twenty_ms": "to split",
