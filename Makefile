@@ -12,9 +12,23 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 # The live page's tests drive Debian's chromium (no browser download); installed here when missing (CI runs as root).
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: setup run test lint docs bench fuzz clean browser avr firmware
+# The 3D robot page draws with three.js from npm, vendored into the package data here (nothing from a CDN at run
+# time); the file is built, not committed.
+THREE_VERSION := 0.187.0
+THREE_JS := src/flexdigit/live/static/vendor/three.module.js
 
-setup: $(STAMP)
+.PHONY: setup run test lint docs bench fuzz clean browser avr firmware three
+
+setup: $(STAMP) $(THREE_JS)
+
+three: $(THREE_JS)
+
+$(THREE_JS):
+	@command -v npm >/dev/null || { echo "the 3D robot page needs npm to vendor three.js: apt-get install npm"; exit 1; }
+	npm install --silent --no-save --no-audit --no-fund --prefix build/npm three@$(THREE_VERSION)
+	mkdir -p $(dir $(THREE_JS))
+	cp build/npm/node_modules/three/build/three.core.js $(dir $(THREE_JS))
+	cp build/npm/node_modules/three/build/three.module.js $(THREE_JS)
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "flexdigit needs Python >= 3.11 (found: $$($(PYTHON) --version))"; exit 1; }
@@ -44,7 +58,7 @@ docs: $(STAMP)
 	$(BIN)/python -m sphinx -b html $(SPHINXOPTS) docs docs/_build/html
 	@echo "the site: docs/_build/html/index.html"
 
-test: lint browser avr docs
+test: lint browser three avr docs
 	$(BIN)/pytest
 	@if [ -n "$$OPENBLAS_CORETYPE" ]; then echo "blas tests, OpenBLAS's own kernel (OPENBLAS_CORETYPE unset)"; \
 	    env -u OPENBLAS_CORETYPE $(BLAS_RUN); fi

@@ -94,8 +94,8 @@ def test_the_cli_streams_a_robot_released_into_its_tensions(capsys):
     assert data["url"].startswith("ws://127.0.0.1:")
 
 
-def test_the_cli_refuses_a_robot_without_foxglove(capsys):
+def test_the_cli_refuses_foxglove_without_a_robot(capsys):
     from flexdigit.cli import main
 
-    assert main(["live", "--robot", "rao2021", "--json"]) == 2
-    assert "--robot and --foxglove go together" in json.loads(capsys.readouterr().out)["error"]
+    assert main(["live", "--foxglove", "--json"]) == 2
+    assert "--foxglove needs --robot" in json.loads(capsys.readouterr().out)["error"]

@@ -115,3 +115,20 @@ def test_initial_state_must_match_the_robot():
     other = solve_statics(Robot(name="short", segments=(Segment(0.1, 5),)), [])
     with pytest.raises(ParameterError, match="'initial' parameter of simulate"):
         simulate(ROD, other, 0.01)
+
+
+def test_a_nodes_frame_is_half_way_between_its_elements():
+    """Against scipy's rotations: the half turn ``Q_a exp(log(Q_a^T Q_b) / 2)`` for turns up to 2.5 rad."""
+    from scipy.spatial.transform import Rotation
+
+    from flexdigit.tdcr import _chain_kernel
+
+    rng = np.random.default_rng(7)
+    first = Rotation.random(20, random_state=7)
+    turn = Rotation.from_rotvec(rng.normal(size=(20, 3)) * 0.8)
+    pairs = np.ascontiguousarray(np.stack([first.as_matrix(), (first * turn).as_matrix()], axis=1))
+    out = np.empty((20, 3, 3, 3))
+    _chain_kernel.node_frames(pairs, out)
+    expected = (first * Rotation.from_rotvec(turn.as_rotvec() / 2)).as_matrix()
+    np.testing.assert_allclose(out[:, 1], expected, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out[:, 0], np.broadcast_to(np.eye(3), (20, 3, 3)), rtol=0, atol=0)

@@ -43,15 +43,15 @@ def register(subparsers) -> None:
     live.add_argument(
         "--foxglove",
         action="store_true",
-        help="stream a tendon robot (--robot) to Foxglove's WebSocket protocol instead of serving the page",
+        help="stream the tendon robot (--robot) to Foxglove's WebSocket protocol instead of serving its 3D page",
     )
-    live.add_argument("--robot", default=None, help="with --foxglove: a tendon robot (rao2021 or a TOML file)")
-    live.add_argument("--tension-n", default=None, help="with --foxglove: tendon tensions from t = 0, N (T1,...,Tn)")
+    live.add_argument("--robot", default=None, help="a tendon robot (rao2021 or a TOML file): its 3D page")
+    live.add_argument("--tension-n", default=None, help="with --robot: tendon tensions from t = 0, N (T1,...,Tn)")
     live.add_argument(
         "--duration-s",
         type=Flag(Plausible("s", 1e-3, 3600.0, "a streamed motion: up to an hour")),
         default=5.0,
-        help="with --foxglove: simulated (and streamed) time, s (default 5)",
+        help="with --robot: simulated (and shown) time, s (default 5)",
     )
     parser = add_command(
         subparsers,
@@ -91,8 +91,10 @@ def _live(args: argparse.Namespace) -> CommandResult:
     from flexdigit.live.server import check_host, serve
     from flexdigit.live.session import LiveSession
 
-    if args.foxglove or args.robot is not None:
+    if args.foxglove:
         return _foxglove(args)
+    if args.robot is not None:
+        return _robot_page(args)
     args.port = 8050 if args.port is None else args.port
     check_host(args.host, args.allow_remote)
     check_int(args.port, "--port", low=0, high=65535)
@@ -132,8 +134,8 @@ def _foxglove(args: argparse.Namespace) -> CommandResult:
     from flexdigit.live.foxglove_stream import SCENE_TOPIC, FoxgloveStream, stream_motion
     from flexdigit.tdcr import get_robot, simulate, solve_statics
 
-    if not args.foxglove or args.robot is None:
-        raise ParameterError("--robot and --foxglove go together: a tendon robot is streamed to Foxglove only")
+    if args.robot is None:
+        raise ParameterError("--foxglove needs --robot: the tendon robot to stream")
     robot = get_robot(args.robot)
     tensions = [0.0] * len(robot.tendons) if args.tension_n is None else _tensions(args.tension_n, "tension-n", robot)
     motion = simulate(robot, solve_statics(robot, [0.0] * len(robot.tendons)), args.duration_s, tensions_n=tensions)
@@ -148,6 +150,24 @@ def _foxglove(args: argparse.Namespace) -> CommandResult:
     data = {"robot": robot.name, "url": url, "topic": SCENE_TOPIC, "scenes": sent, "converged": motion.converged}
     text = f"{robot.name}: {sent} scenes on {url} {SCENE_TOPIC}"
     return CommandResult(data=data, text=text, exit_code=0 if motion.converged else 1)
+
+
+def _robot_page(args: argparse.Namespace) -> CommandResult:
+    """``live --robot R --tension-n T``: the robot released into the tensions, drawn in 3D on the page."""
+    from flexdigit.cli.tdcr import _tensions
+    from flexdigit.live.robot_page import motion_frames, serve_robot
+    from flexdigit.tdcr import get_robot, simulate, solve_statics
+
+    robot = get_robot(args.robot)
+    tensions = [0.0] * len(robot.tendons) if args.tension_n is None else _tensions(args.tension_n, "tension-n", robot)
+    motion = simulate(robot, solve_statics(robot, [0.0] * len(robot.tendons)), args.duration_s, tensions_n=tensions)
+    frames = motion_frames(robot, motion)
+    try:
+        serve_robot(frames, args.host, 8050 if args.port is None else args.port, allow_remote=args.allow_remote)
+    except KeyboardInterrupt:
+        pass
+    data = {"robot": robot.name, "frames": len(frames["t_s"]), "converged": motion.converged, "status": "stopped"}
+    return CommandResult(data=data, text=f"{robot.name}: {len(frames['t_s'])} frames served", exit_code=0)
 
 
 def _shape(args: argparse.Namespace) -> CommandResult:

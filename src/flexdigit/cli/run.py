@@ -214,6 +214,11 @@ def _run(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
 
 
+def _digit_fields(args, rig) -> dict:
+    """``run --json``'s digit: the ``--params`` file and how the serial command drives its cable(s)."""
+    return {"params": None if args.params is None else str(args.params), "cables": _cables(rig.params)}
+
+
 def _cables(params) -> dict:
     """How the digit is pulled, for the log and ``--json``: one cable, or a pair on one servo command."""
     c = params.cables
@@ -335,6 +340,7 @@ def _run_data(args, run, rig, settings, setpoint, period, estimator, recording) 
         "controller": args.controller,
         "setpoint_deg": setpoint,
         "period_s": period,
+        **_digit_fields(args, rig),
         "samples": t.samples,
         "overruns": t.overruns,
         "jitter_p50_s": t.jitter_p50_s,
@@ -358,8 +364,7 @@ def _run_data(args, run, rig, settings, setpoint, period, estimator, recording) 
         },
         # which map turned the gauges into the rotation the loop held, and how far to trust it
         "rotation_map": _map_summary(estimator, args.rotation_map, setpoint),
-        # a gauge stream's counts (stream:// on its own or as the servo board's daq=): valid, dropped, garbled
-        "gauge_source": _source_stats(rig),
+        "gauge_source": _source_stats(rig),  # a gauge stream's counts (stream://, daq=): valid, dropped, garbled
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
         "record": str(recording.path) if recording is not None else None,

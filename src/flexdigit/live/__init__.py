@@ -13,6 +13,9 @@ __getattr__, __all__ = lazy_exports(
     {
         "FoxgloveStream": "flexdigit.live.foxglove_stream",
         "stream_motion": "flexdigit.live.foxglove_stream",
+        "make_robot_app": "flexdigit.live.robot_page",
+        "motion_frames": "flexdigit.live.robot_page",
+        "serve_robot": "flexdigit.live.robot_page",
         "LiveSession": "flexdigit.live.session",
         "make_app": "flexdigit.live.server",
         "serve": "flexdigit.live.server",

@@ -197,6 +197,29 @@ class ColumnMap:
         return cls.build(data, overrides, source=str(path))
 
     @classmethod
+    def from_flags(cls, flags: dict[str, Any], map_path: str | Path | None = None) -> ColumnMap:
+        """``flexdigit collect dataset``'s map: the ``map_path`` TOML with ``flags`` (those not None) winning, or
+        the flags alone, which must then name the gauge, load and position columns. ``flags["gauges"]`` may be one
+        comma-separated string.
+
+        Raises
+        ------
+        ParameterError
+            Without a map, naming the first of ``--gauges``, ``--load``, ``--position`` missing.
+        """
+        flags = dict(flags)
+        if isinstance(flags.get("gauges"), str):
+            flags["gauges"] = tuple(g.strip() for g in flags["gauges"].split(","))
+        if map_path:
+            return cls.from_toml(map_path, **flags)
+        missing = [key for key in ("gauges", "load", "position") if flags.get(key) is None]
+        if missing:
+            raise ParameterError(
+                f"dataset import needs --{missing[0]} (the {ROLES[missing[0]]}): give the flags or a --map TOML"
+            )
+        return cls.build({}, flags, source="the column flags")
+
+    @classmethod
     def build(cls, data: dict, overrides: dict | None = None, *, source: str = "column map") -> ColumnMap:
         """A map from a dict of keys (a TOML table) and ``overrides``, validated, errors naming ``source``."""
         allowed = [f.name for f in dataclasses.fields(cls)]

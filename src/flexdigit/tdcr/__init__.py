@@ -2,9 +2,10 @@
 
 The thesis's digit is the planar case of such a robot; this domain is its generalisation to space (issue 26):
 a Cosserat rod with any number of segments and tendons (:mod:`flexdigit.tdcr.description`), its static
-equilibrium by shooting (:mod:`flexdigit.tdcr.statics`) and its motion, implicit in time and shot in space
-(:mod:`flexdigit.tdcr.dynamics`), its shape from strain gauges on its faces (:mod:`flexdigit.tdcr.sensing`),
-and recordings of either that open in 3D in Foxglove (:mod:`flexdigit.tdcr.scene`).
+equilibrium by shooting (:mod:`flexdigit.tdcr.statics`) and its motion, implicit in time on a discretised rod
+(:mod:`flexdigit.tdcr.dynamics`), its shape from strain gauges on its faces (:mod:`flexdigit.tdcr.sensing`) and
+a point contact from them (:mod:`flexdigit.tdcr.contact_sensing`), and recordings of either that open in 3D in
+Foxglove (:mod:`flexdigit.tdcr.scene`).
 """
 
 from flexdigit._lazy import lazy_exports
@@ -32,6 +33,8 @@ __getattr__, __all__ = lazy_exports(
         "gauge_layout": "flexdigit.tdcr.sensing",
         "gauge_strains": "flexdigit.tdcr.sensing",
         "estimate_shape": "flexdigit.tdcr.sensing",
+        "ContactEstimate": "flexdigit.tdcr.contact_sensing",
+        "locate_contact": "flexdigit.tdcr.contact_sensing",
         "scene_update": "flexdigit.tdcr.scene",
         "write_recording": "flexdigit.tdcr.scene",
     },

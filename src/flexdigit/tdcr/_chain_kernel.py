@@ -639,19 +639,30 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
 @_jit
 def node_frames(qs, out):
     """Node frames ``out`` (m, n + 1, 3, 3) of element frames ``qs`` (m, n, 3, 3): the clamp's (identity), half-way
-    (geodesically) between neighbouring elements', the last element's at the tip."""
-    rv = np.empty(3)
-    rot = np.empty((3, 3))
+    (geodesically) between neighbouring elements', the last element's at the tip. The half-way turn of
+    ``R = Q_a^T Q_b`` (angle below pi) without trigonometry: ``sqrt(R) = I + A / (2 c) + (S - I) / (2 (1 + c))``,
+    ``A, S`` the antisymmetric and symmetric parts of ``R``, ``c = cos(angle / 2) = sqrt(1 + tr R) / 2``."""
     rel = np.empty((3, 3))
+    rot = np.empty((3, 3))
     n = qs.shape[1]
     for s in range(qs.shape[0]):
-        out[s, 0] = np.eye(3)
-        out[s, n] = qs[s, n - 1]
+        for r in range(3):
+            for c in range(3):
+                out[s, 0, r, c] = 1.0 if r == c else 0.0
+                out[s, n, r, c] = qs[s, n - 1, r, c]
         for i in range(1, n):
-            _log_rel(qs[s, i - 1], qs[s, i], rv, rel)
-            _exp(0.5 * rv[0], 0.5 * rv[1], 0.5 * rv[2], rot)
+            a = qs[s, i - 1]
+            b = qs[s, i]
             for r in range(3):
                 for c in range(3):
-                    out[s, i, r, c] = (
-                        qs[s, i - 1, r, 0] * rot[0, c] + qs[s, i - 1, r, 1] * rot[1, c] + qs[s, i - 1, r, 2] * rot[2, c]
-                    )
+                    rel[r, c] = a[0, r] * b[0, c] + a[1, r] * b[1, c] + a[2, r] * b[2, c]
+            half_cos = 0.5 * np.sqrt(max(1.0 + rel[0, 0] + rel[1, 1] + rel[2, 2], 0.0))
+            fa = 0.25 / half_cos
+            fs = 0.25 / (1.0 + half_cos)
+            for r in range(3):
+                for c in range(3):
+                    eye = 1.0 if r == c else 0.0
+                    rot[r, c] = eye + fa * (rel[r, c] - rel[c, r]) + fs * (rel[r, c] + rel[c, r] - 2.0 * eye)
+            for r in range(3):
+                for c in range(3):
+                    out[s, i, r, c] = a[r, 0] * rot[0, c] + a[r, 1] * rot[1, c] + a[r, 2] * rot[2, c]

@@ -300,6 +300,7 @@ class Chain:
         lead = np.asarray(cable_shortening_m) - self.eccentricity * np.asarray(psi_tip)
         stretch1 = self.cable_pretension_m + lead
         stretch2 = self.cable_pretension_m - lead if self.antagonist else np.full_like(stretch1, -np.inf, dtype=float)
+        stretch2 = np.where(np.isneginf(cable_shortening_m), -np.inf, stretch2)  # detached: neither cable pulls
         kc = self.cable_stiffness
         return kc * np.maximum(stretch1, 0.0), kc * np.maximum(stretch2, 0.0), stretch1 > 0, stretch2 > 0
 
@@ -918,7 +919,8 @@ def digit_arrays(
             f"The 'support_mass_kg' parameter of Calibration must have {nsec} values (supports at "
             f"{[round((k + 1) * pitch, 4) for k in range(nsec)]} m). Got {supports.tolist()!r} instead."
         )
-    mass_s.append(np.minimum(pitch * (np.arange(nsec) + 1.0), length))  # n pitch may round past the tip
+    # the tip support's centre is the tip: ``pitch x n`` may round a ulp past ``digit_length_m`` (0.3876 / 3 x 3)
+    mass_s.append(np.minimum(pitch * (np.arange(nsec) + 1.0), length))
     mass_kg.append(supports)
     inertia.append(np.zeros(nsec))
     if housing and calibration.housing_mass_kg > 0:
