@@ -22,7 +22,9 @@ import pytest
 
 import flexdigit
 
-pytestmark = pytest.mark.slow  # the first build of the site runs the gallery: a few minutes
+#: The first build of the site (a fresh clone without `make docs` before) imports every domain and runs the gallery:
+#: a few minutes on a loaded 2-core machine, more than pytest-timeout's 600 s default allows.
+pytestmark = [pytest.mark.slow, pytest.mark.timeout(1800)]
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"

@@ -198,7 +198,7 @@ def _number(value: object) -> str:
 
 def findings_page(results: dict | None) -> str:
     """The report's entries (thesis figure, ours, status, note) per chapter, from ``make run``'s results.json."""
-    head = ["# Findings: the thesis against the twin", ""]
+    head = ["# Findings", "", "The thesis against the twin, entry by entry.", ""]
     if results is None:
         return "\n".join(
             head

@@ -1,12 +1,15 @@
 /*
- * flexdigit-stream protocol, version 1: one checksummed ASCII line per sample (plain C, no Arduino dependency,
+ * flexdigit-stream protocol, version 2: one checksummed ASCII line per sample (plain C, no Arduino dependency,
  * so the host test suite compiles it with gcc and decodes its output with flexdigit's own decoder).
  *
- *   $<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<CRC>\r\n
+ *   $V2,<seq>,<t_us>,<G>,<g1>,...,<gG>[,<pot>]*<CRC>\r\n     version 2: any digit's G = 1..8 gauges
+ *   $<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<CRC>\r\n           version 1: three gauges (still read by the host)
  *
+ *   V2       the literal tag of a version-2 line
  *   seq      0..65535, +1 per line, wraps to 0: a gap tells the host a line was lost
  *   t_us     0..4294967295, micros() when the sample was taken
- *   g1..g3   gauges 1..3 (base to tip), signed ADC counts
+ *   G        how many gauges follow, 1..8
+ *   g1..gG   the gauges (base to tip), signed ADC counts
  *   pot      optional servo potentiometer, signed ADC counts
  *   CRC      4 hex digits, CRC-16/XMODEM (poly 0x1021, init 0) of the bytes between '$' and '*'
  *
@@ -18,9 +21,10 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#define FLEXDIGIT_STREAM_VERSION 1
-/* the longest line: "$65535,4294967295," + 4 x "-2147483648," + "*FFFF\r\n" + NUL */
-#define FLEXDIGIT_STREAM_LINE_MAX 96
+#define FLEXDIGIT_STREAM_VERSION 2
+#define FLEXDIGIT_STREAM_MAX_GAUGES 8
+/* the longest line: "$V2,65535,4294967295,8," + 9 x "-2147483648," + "*FFFF\r\n" + NUL = 138 bytes */
+#define FLEXDIGIT_STREAM_LINE_MAX 144
 
 static inline uint16_t flexdigit_crc16_xmodem(const char *data, int length) {
   uint16_t crc = 0;
@@ -33,7 +37,7 @@ static inline uint16_t flexdigit_crc16_xmodem(const char *data, int length) {
   return crc;
 }
 
-/* Format one sample into out (at least FLEXDIGIT_STREAM_LINE_MAX bytes); has_pot = 0 leaves the pot out.
+/* Format one version-1 sample (three gauges) into out (at least FLEXDIGIT_STREAM_LINE_MAX bytes); has_pot = 0 leaves the pot out.
  * Returns the line's length in bytes (without the terminating NUL). */
 static inline int flexdigit_format_line(char *out, uint16_t seq, uint32_t t_us, int32_t g1, int32_t g2, int32_t g3,
                                         int has_pot, int32_t pot) {
@@ -43,6 +47,25 @@ static inline int flexdigit_format_line(char *out, uint16_t seq, uint32_t t_us, 
     n += snprintf(out + n, (size_t)(FLEXDIGIT_STREAM_LINE_MAX - n), ",%ld", (long)pot);
   }
   uint16_t crc = flexdigit_crc16_xmodem(out + 1, n - 1); /* the bytes between '$' and '*' */
+  n += snprintf(out + n, (size_t)(FLEXDIGIT_STREAM_LINE_MAX - n), "*%04X\r\n", (unsigned)crc);
+  return n;
+}
+
+/* Format one version-2 sample of count (1..8) gauges g[0..count-1] into out (at least FLEXDIGIT_STREAM_LINE_MAX
+ * bytes); has_pot = 0 leaves the pot out. Returns the line's length in bytes (without the NUL), 0 for a bad count. */
+static inline int flexdigit_format_line_v2(char *out, uint16_t seq, uint32_t t_us, const int32_t *g, int count,
+                                           int has_pot, int32_t pot) {
+  if (count < 1 || count > FLEXDIGIT_STREAM_MAX_GAUGES) {
+    return 0;
+  }
+  int n = snprintf(out, FLEXDIGIT_STREAM_LINE_MAX, "$V2,%u,%lu,%d", (unsigned)seq, (unsigned long)t_us, count);
+  for (int i = 0; i < count; i++) {
+    n += snprintf(out + n, (size_t)(FLEXDIGIT_STREAM_LINE_MAX - n), ",%ld", (long)g[i]);
+  }
+  if (has_pot) {
+    n += snprintf(out + n, (size_t)(FLEXDIGIT_STREAM_LINE_MAX - n), ",%ld", (long)pot);
+  }
+  uint16_t crc = flexdigit_crc16_xmodem(out + 1, n - 1); /* the bytes between '$' and '*', the tag included */
   n += snprintf(out + n, (size_t)(FLEXDIGIT_STREAM_LINE_MAX - n), "*%04X\r\n", (unsigned)crc);
   return n;
 }

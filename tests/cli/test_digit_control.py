@@ -150,6 +150,7 @@ def test_params_design_and_run_on_the_digit(name, tmp_path, capsys):
         # the log says how the command drives the cable(s)
         header = json.loads(log.read_text().splitlines()[0])
         assert header["cables"]["count"] == params.cables.count
+        assert run["cables"] == header["cables"]
         # the held rotation is the elastica's under the commands held (an independent solution of the mechanics)
         samples = [json.loads(line) for line in log.read_text().splitlines()[1:] if '"k"' in line]
         held = [s["command"] for s in samples if s["t"] >= samples[-1]["t"] - 0.5]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flexdigit.control.analysis import closed_loop_poles, closed_loop_poles_batch, monte_carlo_stability
-from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixsyn, plant_family
+from flexdigit.control.mixsyn import MixsynSpec, check_requirements, design_mixsyn, mixsyn_on_the_digit, plant_family
 from flexdigit.errors import DesignError
 from flexdigit.models.plant import build_plant
 
@@ -109,3 +109,13 @@ def test_monte_carlo_batched_equals_sample_by_sample(result, scale):
     assert fast["worst_pole_real"] == pytest.approx(slow["worst_pole_real"], abs=1e-9)
     if scale > 1:
         assert 0 < fast["stable_fraction"] < 1
+
+
+def test_the_commands_one_call_is_the_design_and_its_check(result):
+    # `flexdigit design mixsyn` is mixsyn_on_the_digit: the same design as the two calls, every requirement met
+    _, d, req = result
+    design, checked = mixsyn_on_the_digit(seed=1)
+    assert design.hinf.gamma == pytest.approx(d.hinf.gamma, rel=1e-9)
+    assert checked["stable"] is True
+    assert checked["all_met"] is True
+    assert checked["min_damping"] == pytest.approx(req["min_damping"], rel=1e-9)

@@ -30,7 +30,14 @@ from flexdigit.rig.backends import (
 )
 from flexdigit.rig.backends.serial_backend import SerialRig
 from flexdigit.rig.backends.servo_board import FrameDecoder, Framing, encode_frame
-from flexdigit.rig.backends.stream_framing import SEQ_MODULUS, TIME_MODULUS_US, LineDecoder, encode_line
+from flexdigit.rig.backends.stream_framing import (
+    MAX_GAUGES,
+    SEQ_MODULUS,
+    TIME_MODULUS_US,
+    LineDecoder,
+    crc16_xmodem,
+    encode_line,
+)
 from flexdigit.rig.base import BACKENDS, clamp_command, rig_url_options
 
 from .strategies import numbers
@@ -205,3 +212,53 @@ def test_a_url_with_a_control_character_is_refused_on_one_line(url):
     with pytest.raises(ParameterError, match="must be printable text") as caught:
         rig_url_options(url)
     assert "\n" not in str(caught.value)
+
+
+# -- version 2 (issue 24): 1 to 8 gauges a line, version 1's three-gauge lines still read --------------------------
+@given(
+    samples=st.lists(
+        st.tuples(
+            st.integers(0, SEQ_MODULUS - 1),
+            st.integers(0, TIME_MODULUS_US - 1),
+            st.lists(counts, min_size=1, max_size=8).map(tuple),
+            st.none() | counts,
+            st.sampled_from([1, 2]),
+        ),
+        min_size=1,
+        max_size=10,
+    ),
+    data=st.data(),
+)
+def test_every_version_2_sample_comes_back_however_cut_beside_version_1(samples, data):
+    lines = [(seq, t, g, pot, version if len(g) == 3 else 2) for seq, t, g, pot, version in samples]
+    stream = b"".join(encode_line(seq, t, g, pot, version=v) for seq, t, g, pot, v in lines)
+    cuts = sorted(data.draw(st.lists(st.integers(0, len(stream)), max_size=8)))
+    decoder, events = LineDecoder(), []
+    for a, b in zip([0, *cuts], [*cuts, len(stream)], strict=True):
+        events += decoder.feed(stream[a:b])
+    assert [(e.sample.seq, e.sample.t_us, e.sample.gauges, e.sample.pot) for e in events] == [s[:4] for s in lines]
+
+
+@given(fields=st.lists(st.binary(max_size=12), max_size=14))
+def test_any_version_2_payload_with_a_good_checksum_decodes_or_is_garbled(fields):
+    """A board's line with the right checksum but any fields after ``V2``: a sample of 1-8 gauges, or garbled."""
+    payload = b",".join([b"V2", *fields]).replace(b"\n", b"").replace(b"\r", b"").replace(b"*", b"")
+    line = b"$" + payload + b"*" + f"{crc16_xmodem(payload):04X}".encode() + b"\r\n"
+    for event in LineDecoder().feed(line):
+        assert event.kind in ("sample", "garbled")
+        if event.kind == "sample":
+            assert 1 <= len(event.sample.gauges) <= MAX_GAUGES
+            assert len(payload.split(b",")) in (4 + len(event.sample.gauges), 5 + len(event.sample.gauges))
+        else:
+            assert event.reason
+            assert "\n" not in event.reason
+
+
+@given(count=st.integers(-2, 12), values=st.lists(counts, min_size=0, max_size=10))
+def test_a_version_2_line_whose_count_disagrees_with_its_fields_is_garbled(count, values):
+    assume(not (1 <= count <= MAX_GAUGES and len(values) in (count, count + 1)))
+    payload = ",".join(["V2", "1", "2", str(count), *map(str, values)]).encode()
+    line = b"$" + payload + b"*" + f"{crc16_xmodem(payload):04X}".encode() + b"\r\n"
+    (event,) = LineDecoder().feed(line)
+    assert event.kind == "garbled"
+    assert event.reason.startswith("version 2:")

@@ -201,3 +201,50 @@ def test_shipped_design_spec_reads():
     assert settings.samples > 0
     assert 3 in settings.gauge_counts
     assert "full" in settings.bridges
+
+
+def test_a_front_design_exports_a_params_file_the_commands_take(tmp_path, capsys):
+    # issue 24 item 6: design K on the front -> params TOML -> `flexdigit params` and `flexdigit simulate` take it
+    from flexdigit.cli import main
+    from flexdigit.params import load_params
+
+    spec = tmp_path / "d.toml"
+    spec.write_text(
+        """
+[study]
+seed = 3
+[design]
+gauge_counts = [4]
+layouts = ["equal"]
+bridges = ["full"]
+adc_bits = [16]
+servo_deg_per_command = [0.4311]
+eccentricity_m = [0.005715]
+pretension_n = [0.0, 5.0]
+size = [1.0, 1.25]
+bayes_samples = 50
+chunk_size = 2
+"""
+    )
+    out = tmp_path / "out"
+    base = ["study", "design", str(spec), "--out", str(out), "--workers", "0", "--no-progress"]
+    assert main([*base, "--json"]) == 0
+    summary = __import__("json").loads(capsys.readouterr().out)
+    front = [row["row"] for row in summary["pareto_front"]]
+    off = sorted(set(range(summary["candidates"])) - set(front))
+    k = front[0]
+    assert main([*base, "--export", str(k)]) == 0  # the finished study is read, not refused or rerun
+    exported = out / f"design-{k}.toml"
+    result = run_design(spec_from_toml(spec.read_text(), str(spec)), out, workers=0, progress=False)
+    expected = design_parameter_set(ParameterSet(), result.candidates[k], seed=3).description()
+    assert load_params(exported) == expected  # the design's own rig: 4 gauges, geared servo, its cables and size
+    assert len(load_params(exported).geometry.gauge_positions_m) == 4
+    assert main(["params", str(exported)]) == 0
+    assert main(["simulate", "release", "--params", str(exported), "--out", str(tmp_path / "r.parquet")]) == 0
+    capsys.readouterr()
+    assert main([*base, "--export", str(k)]) != 0  # never overwritten without --force
+    assert "exists" in capsys.readouterr().err
+    # a design off the front is refused in one line listing the front's rows
+    assert main([*base, "--export", str(off[0]), "--export-to", str(tmp_path / "x.toml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not on the Pareto front" in err and "\n" not in err

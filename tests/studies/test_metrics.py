@@ -18,6 +18,7 @@ from flexdigit.studies.metrics import (
 )
 from flexdigit.studies.spec import ParameterSet
 from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.sensors import CHANNEL_FIELDS
 
 WN_RTOL = 1e-3  # the default calibration's fit residual on table 3.2 is < 1e-5
 KINEMATIC_RTOL = 2e-3  # a 1e9 N/m cable pins the tip to r_M theta / e
@@ -157,3 +158,34 @@ def test_batched_metrics_equal_the_scalar_twin():
         assert values["release_wn_rad_s"] == pytest.approx(wn[0], rel=1e-9)
         assert values["release_zeta"] == pytest.approx(zeta[0], rel=1e-7)
         assert values["rotation_gain_deg_per_command"] == pytest.approx(np.degrees(tips[1] - tips[0]) / 35, rel=1e-9)
+
+
+def _seeded_rows(count: int, seed: int):
+    from flexdigit.studies.spec import load_spec
+
+    spec = load_spec("thesis-tolerances")
+    values = spec.values_from_unit(np.random.default_rng(seed).random((count, len(spec.parameters))))
+    return [spec.parameter_set(row) for row in values], MetricContext(baseline=spec.baseline, bayes_samples=200)
+
+
+def test_batched_tactile_limits_are_the_exact_ones_on_seeded_rows():
+    # the batched Bayes limit (compiled, draws made once) against protocol_limits itself, and the block-scanned
+    # blind zone against the whole Cramer-Rao map, on rows of the shipped tolerances and on a 5-gauge equal layout
+    from flexdigit.studies.metrics import (
+        BAYES_BATCH_RTOL,
+        _bayes_exact,
+        _blind_zone_exact,
+        bayes_limits,
+        blind_zones,
+    )
+
+    sets, ctx = _seeded_rows(5, seed=27)
+    five = RigParams(geometry=Geometry(gauge_positions_m=(0.02, 0.06, 0.10, 0.14, 0.18)))
+    cal = default_calibration()
+    cal5 = cal.replace(**{f: (getattr(cal, f)[0],) * 5 for f in CHANNEL_FIELDS})
+    sets.append(ParameterSet(five, cal5))
+    exact = [_bayes_exact(ps, ctx) for ps in sets]
+    np.testing.assert_allclose(bayes_limits(sets, ctx), exact, rtol=BAYES_BATCH_RTOL)
+    assert len(set(np.round(exact, 6))) == len(sets)  # the rows differ: a constant would not pass by chance
+    np.testing.assert_array_equal(blind_zones(sets, ctx), [_blind_zone_exact(ps, ctx) for ps in sets])
+    assert METRICS["bayes_position_limit_mm"](sets[0], ctx) == pytest.approx(exact[0], rel=BAYES_BATCH_RTOL)

@@ -82,22 +82,24 @@ def _protocol(path, step_m: float = 0.004) -> None:
     )
 
 
-def _palpation_files(directory, length_m: float, gear: float):
-    """A tissue beside the outer 45 % of the digit, 0.1 L from it, and a sweep whose commands turn the pulley as the
-    thesis's 8..30 do (times the gear ratio), each plateau held 20 s per metre of digit (5.4 s on the thesis rig,
-    whose housed digit rings ~3 s; a 0.5 m digit rings longer)."""
+def _palpation_files(directory, params):
+    """A tissue beside the outer 45 % of the digit, 0.1 L from it, and a sweep whose commands turn the pulley from the
+    digit's straight command as the thesis's 8..30 do (times the gear ratio; a pair's straight command is mid-range),
+    each plateau held 20 s per metre of digit (5.4 s on the thesis rig, whose housed digit rings ~3 s; a 0.5 m digit
+    rings longer)."""
+    length_m, gear = params.geometry.digit_length_m, params.actuator.gear_ratio
+    straight = params.actuator.equilibrium_command
     tissue = directory / "tissue.toml"
     tissue.write_text(
         f'[tissue]\nname = "digit-block"\nside = "cable"\nstart_mm = {550 * length_m:.1f}\n'
         f"end_mm = {1000 * length_m + 80:.1f}\ngap_mm = {100 * length_m:.1f}\nmodulus_n_m2 = 1000.0\n"
     )
-    top = min(254, int(round(8 + 22 * gear)))
+    top = min(254, int(round(straight + 22 * gear)))
     step = max(1, int(round(2 * gear)))
     sweep = directory / "sweep.toml"
     sweep.write_text(
-        f"[sweep]\ncommands = {{ from = 8, to = {top}, step = {step} }}\nsettle_s = {20 * length_m:.2f}\n"
-        "readings = 20\n"
-        'tare_command = 8\nmodel = "linear"\n'
+        f"[sweep]\ncommands = {{ from = {straight}, to = {top}, step = {step} }}\nsettle_s = {20 * length_m:.2f}\n"
+        f'readings = 20\ntare_command = {straight}\nmodel = "linear"\n'
     )
     return tissue, sweep
 
@@ -140,7 +142,7 @@ def test_digit_through_the_data_path(case, tmp_path, capsys):
     shape = ["shape", "--params", str(digit), f"--gauges-v={volts}", "--orientation", "horizontal", "--no-cable"]
     assert _json(shape, capsys)["contact"]
 
-    tissue, sweep = _palpation_files(tmp_path, params.geometry.digit_length_m, params.actuator.gear_ratio)
+    tissue, sweep = _palpation_files(tmp_path, params)
     palpate = ["palpate", "--params", str(digit), "--tissue", str(tissue), "--protocol", str(sweep)]
     result = _json([*palpate, "--backend", "sim?orientation=hanging"], capsys)["result"]
     assert result["modulus_sd_n_m2"] < MODULUS_SD_MAX * 1000.0

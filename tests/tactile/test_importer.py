@@ -189,8 +189,14 @@ def test_map_and_flag_mistakes_are_named(tmp_path, capsys):
     out = ["--out", str(tmp_path / "o.parquet")]
     assert main(["dataset", "import", str(src), *out, "--gauges", "a,b,c", "--load", "m"]) == 2
     assert "dataset import needs --position (the position column)" in capsys.readouterr().err
-    assert main(["dataset", "import", str(src), *out, "--gauges", "a,b", "--load", "m", "--position", "x"]) == 2
-    assert "'gauges' parameter of ColumnMap must be three column names" in capsys.readouterr().err
+    thesis = tmp_path / "thesis.toml"
+    thesis.write_text("")  # the thesis rig: three gauges
+    two = ["--gauges", "a,b", "--load", "m", "--position", "x", "--params", str(thesis)]
+    assert main(["dataset", "import", str(src), *out, *two]) == 2
+    assert "names 2 gauge columns but the digit has 3 gauges" in capsys.readouterr().err
+    nine = ",".join("abcmxabcm")
+    assert main(["dataset", "import", str(src), *out, "--gauges", nine, "--load", "m", "--position", "x"]) == 2
+    assert "'gauges' parameter of ColumnMap must be 1 to 8 column names" in capsys.readouterr().err
     bad_map = tmp_path / "m.toml"
     bad_map.write_text('gauges = ["a", "b", "c"]\nload = "m"\nposition = "x"\nload_units = "g"\n')
     assert main(["dataset", "import", str(src), *out, "--map", str(bad_map)]) == 2
@@ -307,3 +313,17 @@ def test_every_estimator_and_study_runs_on_an_imported_dataset(tmp_path):
     scores = compare_strategies(ds, hidden=6, tol=1e-5, epochs=5)
     assert len(scores) == 3
     assert all(np.isfinite(s.position_corr2) for s in scores)
+
+
+@pytest.mark.parametrize("count", [1, 5])
+def test_a_digit_of_g_gauges_imports_g_gauge_columns(tmp_path, capsys, count):
+    """A foreign file of a digit with ``count`` gauges: the dataset holds gauge1_v..gaugeG_v, in the file's order."""
+    names = [f"sg{k}" for k in range(count)]
+    rows = [[0.1 * (k + 1) for k in range(count)] + [25, 100], [0.2 * (k + 1) for k in range(count)] + [0, None]]
+    src = write_foreign(tmp_path / "g.csv", [*names, "m", "x"], rows, delimiter=",", decimal=".")
+    out = tmp_path / "g.parquet"
+    flags = ["--gauges", ",".join(names), "--load", "m", "--load-unit", "g", "--position", "x", "--position-unit", "mm"]
+    assert main(["dataset", "import", str(src), "--out", str(out), *flags]) == 0
+    ds = load_dataset(out)
+    assert ds.gauge_columns == tuple(f"gauge{k}_v" for k in range(1, count + 1))
+    np.testing.assert_allclose(ds.gauges_v[0], [0.1 * (k + 1) for k in range(count)], rtol=1e-12)

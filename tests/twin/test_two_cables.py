@@ -64,3 +64,26 @@ def test_compiled_steps_follow_numpy_with_the_pair():
     a = _settled(PAIR, straight - 20)
     b = _settled(PAIR, straight - 20, compiled=True)
     assert np.max(np.abs(a.state()[0] - b.state()[0])) < COMPILED_RAD
+
+
+def test_a_digit_whose_pitch_rounds_past_its_length_builds():
+    """0.3876 m in 3 sections: 0.3876 / 3 x 3 is a ulp past 0.3876, where the tip support's mass sat (the run of
+    such a digit failed with "'mass_s_m' ... must be inside [0, 0.3876]")."""
+    from flexdigit.twin.digit import build_digit
+    from flexdigit.twin.digit_calibration import calibration_for
+
+    params = RigParams.from_dict(
+        {
+            "geometry": {
+                "section_count": 3,
+                "section_length_m": 0.1192,
+                "strip_length_m": 0.3576,
+                "digit_length_m": 0.3876,
+                "gauge_positions_m": [0.06, 0.19, 0.32],
+            }
+        }
+    )
+    length = params.geometry.digit_length_m
+    assert params.geometry.section_pitch_m * 3 > length  # the rounding this is about
+    chain = build_digit(params, calibration_for(params))
+    assert chain.mass_s_m.max() == length

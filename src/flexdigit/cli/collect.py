@@ -7,6 +7,7 @@ import argparse
 from flexdigit._command import CommandResult, add_command
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
+from flexdigit.cli._formats import epilog
 from flexdigit.params import DIGIT_LENGTH_M
 
 
@@ -35,8 +36,6 @@ def _add_collect(subparsers, settle) -> None:
         _collect,
         help="run a load protocol (thesis-6.1, thesis-7.1, thesis-7.1-no-load or a TOML file) and save the dataset",
     )
-    from flexdigit.cli._formats import epilog
-
     p.epilog = epilog("protocol")
     p.add_argument("protocol", help="a built-in protocol name or a protocol TOML file")
     p.add_argument("--backend", default="sim", help="rig URL (default: sim, the digital twin)")
@@ -81,14 +80,14 @@ def _add_dataset(subparsers) -> None:
         description="Map a foreign tactile readings file onto a flexdigit dataset. The column map comes from --map "
         "(a TOML with the keys below, without the dashes: gauges, gauge_unit, load, ...) and/or the flags, which win.",
     )
-    from flexdigit.cli._formats import epilog
-
     q.epilog = epilog("dataset")
     q.add_argument("file", help="the readings: CSV-like text (delimiter detected) or .parquet")
     q.add_argument("--out", required=True, help="dataset to write (.parquet, or .csv)")
     q.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     q.add_argument("--map", metavar="TOML", help='column map file (keys as the flags, e.g. gauge_unit = "mV")')
-    q.add_argument("--gauges", metavar="A,B,C", help="the three gauge columns, gauge 1 (nearest the clamp) first")
+    q.add_argument(
+        "--gauges", metavar="A,B,C", help="the gauge columns, one per gauge (1 to 8), gauge 1 (nearest the clamp) first"
+    )
     q.add_argument("--gauge-unit", choices=("V", "mV"), help="unit of the gauge (and pot) columns (default V)")
     q.add_argument("--load", metavar="COLUMN", help="the hung mass (0 = no load)")
     q.add_argument("--load-unit", choices=("kg", "g"), help="default kg")
@@ -106,7 +105,9 @@ def _add_dataset(subparsers) -> None:
     q.add_argument("--decimal", choices=(".", ","), help="decimal mark (default: detected)")
     q.add_argument("--name", help="the dataset's protocol name (default: imported:<file stem>)")
     q.add_argument("--orientation", choices=("horizontal", "vertical"), help="how the digit lay (default horizontal)")
-    q.add_argument("--params", metavar="FILE", help="rig parameters TOML (for the digit length)")
+    q.add_argument(
+        "--params", metavar="FILE", help="the digit's parameters TOML (its length; --gauges must name its gauges)"
+    )
     q.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
 
@@ -175,80 +176,30 @@ def _digit_protocol(args: argparse.Namespace):
 
 
 def _collect(args: argparse.Namespace) -> CommandResult:
-    from pathlib import Path
-
-    from flexdigit._io import check_output
-    from flexdigit._validation import check_real
-    from flexdigit.errors import ParameterError
-    from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
-    from flexdigit.tactile.protocols import MAX_SETTLE_S
-    from flexdigit.tactile.runner import collect, journal_path, sim_options
+    from flexdigit.tactile.runner import collect_on, journal_path
 
     params, protocol = _digit_protocol(args)
-    out = Path(args.out)
-    # every option checked before the rig is opened (the runner checks them again before the first reading)
-    if args.settle is not None:
-        check_real(args.settle, "--settle", "flexdigit collect", low=0, high=MAX_SETTLE_S)
-    journal = journal_path(out)
-    if not (out.exists() and journal.exists()):  # both: a run stopped while tidying up, the runner finishes it
-        check_output(out, force=args.force)
-    resumed = journal.exists()
-    # on the twin, lie the digit as the protocol says and attach the cable only when it actuates; the firmware on
-    # the emulated board (hil://) holds a twin too, on its own 2 ms step
-    scheme = parse_rig_url(args.backend).scheme
-    on_twin = scheme.startswith("sim")
-    if args.calibration and not on_twin:
-        raise ParameterError(
-            f"--calibration calibrates the twin: it needs a sim backend, not {args.backend!r} (a real rig is itself)"
-        )
-    options = sim_options(protocol, args.backend) if on_twin else {}
-    if scheme == "hil":
-        options = {k: v for k, v in sim_options(protocol, args.backend).items() if k in ("orientation", "cable")}
-    if on_twin and (args.calibration or args.params):
-        from flexdigit.twin.digit_calibration import twin_calibration
-
-        options["calibration"] = twin_calibration(params, args.calibration)
-    rig = open_rig(args.backend, params, **options, **seed_option(args.backend, args.seed))
-    if args.record is not None:
-        from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
-
-        try:
-            recording = Recording(
-                args.record,
-                header={
-                    "backend": args.backend,
-                    "protocol": protocol.name,
-                    "seed": rig.settings().get("seed"),
-                    "source": "collect",
-                },
-                metadata=rig_metadata(rig),
-                force=args.force,
-            )
-        except BaseException:
-            rig.close()
-            raise
-        rig = recording_rig(rig, recording)
-    try:
-        dataset = collect(
-            protocol,
-            rig,
-            out,
-            params=params,
-            rig_url=args.backend,
-            settle_s=args.settle,
-            progress=not args.no_progress,
-            force=args.force,
-        )
-    finally:
-        rig.close()
+    resumed = journal_path(args.out).exists()
+    dataset = collect_on(
+        args.backend,
+        protocol,
+        args.out,
+        params=params if args.params else None,
+        seed=args.seed,
+        calibration=args.calibration,
+        record=args.record,
+        settle_s=args.settle,
+        progress=not args.no_progress,
+        force=args.force,
+    )
     data = {
         "protocol": protocol.name,
         "samples": len(dataset),
-        "out": str(out),
+        "out": str(args.out),
         "resumed": resumed,
         "settings": dataset.meta.get("settings"),
     }
-    text = f"{protocol.name}: {len(dataset)} readings written to {out}" + (" (resumed)" if resumed else "")
+    text = f"{protocol.name}: {len(dataset)} readings written to {args.out}" + (" (resumed)" if resumed else "")
     return CommandResult(data=data, text=text)
 
 
@@ -256,10 +207,9 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
     import numpy as np
 
     from flexdigit._io import check_output
-    from flexdigit.errors import ParameterError
-    from flexdigit.params import RigParams, load_params
+    from flexdigit.params import load_params
     from flexdigit.tactile.dataset import save_dataset
-    from flexdigit.tactile.importer import ROLES, ColumnMap, import_readings
+    from flexdigit.tactile.importer import ColumnMap, import_readings
 
     out = check_output(args.out, force=args.force)
     flags = {
@@ -270,19 +220,8 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
             "orientation",
         )
     }  # fmt: skip
-    if args.gauges is not None:
-        flags["gauges"] = tuple(g.strip() for g in args.gauges.split(","))
-    if args.map:
-        cmap = ColumnMap.from_toml(args.map, **flags)
-    else:
-        missing = [flag for flag, key in (("--gauges", "gauges"), ("--load", "load"), ("--position", "position"))
-                   if flags.get(key) is None]  # fmt: skip
-        if missing:
-            raise ParameterError(
-                f"dataset import needs {missing[0]} (the {ROLES[missing[0][2:]]}): give the flags or a --map TOML"
-            )
-        cmap = ColumnMap.build({}, flags, source="the column flags")
-    params = load_params(args.params) if args.params else RigParams()
+    cmap = ColumnMap.from_flags({**flags, "gauges": args.gauges}, args.map)
+    params = load_params(args.params) if args.params else None  # None: the thesis's length, any gauge count
     dataset = import_readings(args.file, cmap, params=params)
     save_dataset(dataset, out, force=args.force)  # atomic, Parquet or (by the suffix) CSV
     protocol = dataset.protocol

@@ -231,20 +231,17 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
 
 def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
-    from flexdigit.palpation.palpation import _truth_of, run_sweep, scan
+    from flexdigit.palpation.palpation import scan
 
-    model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
-    records = []
-    for d, log in zip(plan.scan["offsets_m"], logs, strict=True):
-        rig.place_tissue(tissue.moved(d))
-        records.append(run_sweep(rig, plan.sweep, log_path=log, truth=_truth_of(rig), log_mode=log_mode))
     result = scan(
-        records,
+        rig,
         tissue,
         plan.scan["offsets_m"],
         plan.sweep,
-        model=model,
+        model=ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig)),
         inclusion_width_m=plan.scan["inclusion_width_m"],
+        log_paths=logs,
+        log_mode=log_mode,
     )
     for fit in result.local:
         _refuse_poor_fit(fit, "scan")
@@ -280,7 +277,7 @@ def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
         from flexdigit.palpation.palpation_plot import scan_figure
 
         true_centre = data["inclusion"].get("true_centre_in_tissue_mm")
-        return scan_figure(result, true_centre_mm=true_centre, title=f"scan of {len(records)} offsets")
+        return scan_figure(result, true_centre_mm=true_centre, title=f"scan of {len(result.records)} offsets")
 
     return data, text, figure
 

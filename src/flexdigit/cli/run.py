@@ -335,6 +335,8 @@ def _run_data(args, run, rig, settings, setpoint, period, estimator, recording) 
         "controller": args.controller,
         "setpoint_deg": setpoint,
         "period_s": period,
+        "params": None if args.params is None else str(args.params),
+        "cables": _cables(rig.params),  # how the serial command drives the digit's cable(s)
         "samples": t.samples,
         "overruns": t.overruns,
         "jitter_p50_s": t.jitter_p50_s,
@@ -358,8 +360,7 @@ def _run_data(args, run, rig, settings, setpoint, period, estimator, recording) 
         },
         # which map turned the gauges into the rotation the loop held, and how far to trust it
         "rotation_map": _map_summary(estimator, args.rotation_map, setpoint),
-        # a gauge stream's counts (stream:// on its own or as the servo board's daq=): valid, dropped, garbled
-        "gauge_source": _source_stats(rig),
+        "gauge_source": _source_stats(rig),  # a gauge stream's counts (stream://, daq=): valid, dropped, garbled
         "final_command": int(result.command[-1]) if result.command.size else None,
         "log": str(result.log_path) if result.log_path else None,
         "record": str(recording.path) if recording is not None else None,

@@ -39,6 +39,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="design: candidate designs to evaluate (0: all)",
     )
+    p.add_argument(
+        "--export",
+        type=Flag(Interval(Integral, 0, 10**7)),
+        default=None,
+        metavar="K",
+        help="design: write the rig description (params TOML) of design K on the Pareto front (finishing the study "
+        "first; a finished one is read, not rerun)",
+    )
+    p.add_argument(
+        "--export-to", metavar="FILE", default=None, help="where --export writes (default OUT/design-K.toml)"
+    )
     p.add_argument("--force", action="store_true", help="start over: replace the journal and outputs in --out")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 
@@ -64,6 +75,8 @@ def _study(args: argparse.Namespace) -> CommandResult:
         raise NotADirectoryError(f"{out}: --out must be a directory")
     if not out.parent.is_dir():
         raise FileNotFoundError(f"{out}: the directory {out.parent} does not exist")
+    if args.kind == "sensitivity" and (args.export is not None or args.export_to is not None):
+        raise ParameterError("--export K is for design studies (flexdigit study design SPEC --out DIR --export K)")
     spec = load_spec(args.spec)
     if args.kind == "sensitivity":
         return _sensitivity(args, spec, out)
@@ -80,7 +93,8 @@ def _run(args, out, run, settings, write):
 
     done = out / "summary.json"
     retry = done.exists() and not args.force and retry_rows(out) > 0
-    if done.exists() and not args.force and not retry:
+    reading = done.exists() and not args.force and not retry and getattr(args, "export", None) is not None
+    if done.exists() and not args.force and not retry and not reading:
         raise OutputExistsError(f"{done}: this study has finished in {out}; pass --force to run it again")
     from flexdigit._io import output_lock
     from flexdigit.studies.execution import JOURNAL_NAME
@@ -96,7 +110,8 @@ def _run(args, out, run, settings, write):
             force=args.force,
             progress=not args.no_progress,
         )
-        paths = write(result, out, force=args.force or retry)
+        # a finished study read for --export: its journal gave every row, its files stay as they are
+        paths = {} if reading else write(result, out, force=args.force or retry)
     summary = result.summary()
     summary["files"] = {k: str(v) for k, v in paths.items()}
     return result, summary
@@ -130,4 +145,13 @@ def _design(args, spec, out) -> CommandResult:
     args.spec_obj = spec
     settings = DesignSettings.from_spec(spec, samples=args.samples)
     result, summary = _run(args, out, run_design, settings, write_design_outputs)
-    return CommandResult(data=summary, text=result.text())
+    text = result.text()
+    if args.export is not None:
+        from flexdigit.studies.design_study import export_design
+
+        target = export_design(
+            result, args.export, args.export_to or out / f"design-{args.export}.toml", force=args.force
+        )
+        summary["exported"] = {"design": args.export, "params": str(target)}
+        text += f"\ndesign {args.export}'s rig description written to {target} (flexdigit params {target})"
+    return CommandResult(data=summary, text=text)

@@ -45,6 +45,7 @@ __getattr__, __all__ = lazy_exports(
         "MixsynSpec": "flexdigit.control.mixsyn",
         "MixsynDesign": "flexdigit.control.mixsyn",
         "design_mixsyn": "flexdigit.control.mixsyn",
+        "mixsyn_on_the_digit": "flexdigit.control.mixsyn",
         "loop_maps": "flexdigit.control.analysis",
         "is_stable": "flexdigit.control.analysis",
         "hinf_norm": "flexdigit.control.analysis",

@@ -591,13 +591,16 @@ def scan(
     *,
     model=None,
     inclusion_width_m: float = 0.01,
+    log_paths=None,
+    log_mode: str = "new",
 ) -> ScanResult:
     """Palpate with the tissue moved along the digit by each offset, map the stiffness and find an inclusion.
 
     ``records_or_rig``: a rig (the tissue is placed at each offset, :meth:`flexdigit.rig.base.Rig.place_tissue`,
     and swept) or a list of :class:`SweepRecord`, one per offset (e.g. :func:`simulate_sweep`). ``placed`` is the
     tissue at offset 0 (where it lies; its modulus and gap are not used). ``inclusion_width_m`` is the size of the
-    nodule looked for: its ratio is fitted for that width (a narrower, stiffer one presses back alike).
+    nodule looked for: its ratio is fitted for that width (a narrower, stiffer one presses back alike). On a rig,
+    ``log_paths`` (one per offset, or None) and ``log_mode`` log each sweep (:func:`run_sweep`).
     """
     protocol = protocol or PalpationProtocol()
     offsets = check_values(offsets_m, "offsets_m", "scan", unit="m").reshape(-1)
@@ -610,9 +613,9 @@ def scan(
         rig = records_or_rig
         model = model or ContactGaugeModel(rig.params)
         records = []
-        for d in offsets:
+        for d, log in zip(offsets, log_paths or [None] * offsets.size, strict=True):
             rig.place_tissue(placed.moved(float(d)))
-            records.append(run_sweep(rig, protocol, truth=_truth_of(rig)))
+            records.append(run_sweep(rig, protocol, log_path=log, truth=_truth_of(rig), log_mode=log_mode))
     uniform = placed.replace(inclusions=())
     local, where = [], []
     for d, rec in zip(offsets, records, strict=True):

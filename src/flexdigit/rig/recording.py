@@ -4,8 +4,8 @@ PlotJuggler, Rerun, the ``mcap`` libraries and CLI).
 A recording holds one channel per topic, each with a JSON Schema (``jsonschema`` encoding, ``json`` messages) so
 another tool can decode and check it without flexdigit:
 
-- ``/flexdigit/sample``: what the loop logs (:mod:`flexdigit.rig.sample_log`): time, the three gauge voltages, the pot,
-  the command sent, the setpoint and the measured value;
+- ``/flexdigit/sample``: what the loop logs (:mod:`flexdigit.rig.sample_log`): time, the gauge voltages (one per
+  gauge), the pot, the command sent, the setpoint and the measured value;
 - channels a caller adds (:meth:`Recording.add_channel`): the live page adds ``/flexdigit/shape`` and
   ``/flexdigit/contact``; this module knows nothing of them (rig is below tactile and live in the import chain).
 
@@ -84,9 +84,9 @@ SAMPLE_SCHEMA: dict[str, Any] = {
         "gauges_v": {
             "type": "array",
             "items": _NULLABLE,
-            "minItems": 3,
-            "maxItems": 3,
-            "description": "gauge pair voltages 1..3 from the base, V",
+            "minItems": 1,
+            "maxItems": 8,
+            "description": "gauge voltages 1..G from the base (one per gauge of the digit; the thesis rig's 3), V",
         },
         "pot_v": {**_NULLABLE, "description": "servo potentiometer, V (null: no pot channel)"},
         "command": {"type": "integer", "minimum": 0, "maximum": 254, "description": "servo command sent"},
@@ -457,7 +457,7 @@ def read_recording(path: str | os.PathLike):
 def read_recording_columns(path: str | os.PathLike):
     """:func:`read_recording` into columns (:class:`~flexdigit.rig.sample_log.SampleColumns`, 64 bytes a sample):
     ``(header, columns, footer or None)``, streamed a chunk at a time."""
-    columns = SampleColumns()
+    columns = SampleColumns(path)
     header, footer = _read_samples(Path(path), columns.append)
     return header, columns.arrays(), footer
 

@@ -177,7 +177,7 @@ def read_log_columns(
 
     Streamed: a line at a time into arrays of 64 bytes a sample, where a list of sample dicts takes ten times
     that; what a replay of a long log holds (:class:`~flexdigit.rig.backends.replay_backend.ReplayRig`)."""
-    columns = SampleColumns()
+    columns = SampleColumns(path)
     header, footer = _read_one_run(Path(path), run, columns.append)
     return header, columns.arrays(), footer
 
@@ -235,23 +235,35 @@ def _scan_log(path: Path, on_sample) -> list[tuple[int, dict[str, Any], dict[str
 class SampleColumns:
     """Checked samples (:func:`check_sample`) kept as typed arrays, 64 bytes a sample, not as dicts (about 600).
 
-    :meth:`append` takes a sample dict; :meth:`arrays` gives ``t``, ``gauges_v`` (n x 3), ``pot_v``,
-    ``setpoint``, ``y`` (float, NaN for null) and ``command`` (int); :class:`SampleView` reads them back as
-    dicts, one at a time."""
+    :meth:`append` takes a sample dict; :meth:`arrays` gives ``t``, ``gauges_v`` (n x G: the digit's gauges, the
+    thesis rig's 3), ``pot_v``, ``setpoint``, ``y`` (float, NaN for null) and ``command`` (int); :class:`SampleView`
+    reads them back as dicts, one at a time. Every sample of a run has its first sample's gauge count; another is
+    refused naming ``source`` (the file)."""
 
-    _FLOATS = ("t", "g1", "g2", "g3", "pot_v", "setpoint", "y")
+    _FLOATS = ("t", "pot_v", "setpoint", "y")
 
-    def __init__(self) -> None:
+    def __init__(self, source: object = "samples") -> None:
         from array import array
 
+        self._array = array
+        self._source = source
         self._floats = {name: array("d") for name in self._FLOATS}
+        self._gauges: list = []  # one array per gauge, made at the first sample
         self._command = array("h")
 
     def append(self, sample: dict[str, Any]) -> None:
         f = self._floats
+        gauges = sample["gauges_v"]
+        if not len(self):
+            self._gauges = [self._array("d") for _ in gauges]
+        elif len(gauges) != len(self._gauges):
+            raise DataFileError(
+                f"{self._source}: sample {len(self)}: field 'gauges_v' has {len(gauges)} voltages but the run's first "
+                f"sample has {len(self._gauges)} (one per gauge of one digit)"
+            )
         f["t"].append(float(sample["t"]))
-        for name, g in zip(("g1", "g2", "g3"), sample["gauges_v"], strict=True):
-            f[name].append(math.nan if g is None else float(g))
+        for column, g in zip(self._gauges, gauges, strict=True):
+            column.append(math.nan if g is None else float(g))
         for name in ("pot_v", "setpoint", "y"):
             value = sample.get(name)
             f[name].append(math.nan if value is None else float(value))
@@ -264,7 +276,11 @@ class SampleColumns:
         f = {name: np.frombuffer(a, dtype=float) if len(a) else np.zeros(0) for name, a in self._floats.items()}
         return {
             "t": f["t"],
-            "gauges_v": np.column_stack([f["g1"], f["g2"], f["g3"]]) if len(self) else np.zeros((0, 3)),
+            "gauges_v": (
+                np.column_stack([np.frombuffer(g, dtype=float) for g in self._gauges])
+                if len(self)
+                else np.zeros((0, 3))
+            ),
             "pot_v": f["pot_v"],
             "setpoint": f["setpoint"],
             "y": f["y"],
@@ -348,6 +364,10 @@ def _is_finite(x: int | float) -> bool:
         return False
 
 
+#: Most gauges a sample carries (a digit has 1 to 8).
+MAX_GAUGES = 8
+
+
 def check_sample(record: dict[str, Any], path: Path, where: str) -> dict[str, Any]:
     """A sample as the loop writes it (a log line, a recording's message), or a DataFileError naming the file,
     ``where`` in it (``"line 7"``) and the field."""
@@ -366,12 +386,12 @@ def check_sample(record: dict[str, Any], path: Path, where: str) -> dict[str, An
         if value is not None and not _is_finite(value):  # JSON reads NaN, Infinity and 1e999; the loop writes null
             raise bad(key, "a finite number")
     gauges = record.get("gauges_v")
-    if not isinstance(gauges, list) or len(gauges) != 3:
-        raise bad("gauges_v", "a list of 3 voltages")
+    if not isinstance(gauges, list) or not 1 <= len(gauges) <= MAX_GAUGES:
+        raise bad("gauges_v", f"a list of 1 to {MAX_GAUGES} voltages (one per gauge; the thesis rig's 3)")
     if any(g is not None and (isinstance(g, bool) or not isinstance(g, int | float)) for g in gauges):
-        raise bad("gauges_v", "a list of 3 numbers (null for a non-finite reading)")
+        raise bad("gauges_v", "a list of numbers (null for a non-finite reading)")
     if any(g is not None and not _is_finite(g) for g in gauges):
-        raise bad("gauges_v", "a list of 3 finite numbers (null for a non-finite reading)")
+        raise bad("gauges_v", "a list of finite numbers (null for a non-finite reading)")
     command = record.get("command")
     if isinstance(command, bool) or not isinstance(command, int) or not 0 <= command <= 254:
         raise bad("command", "an integer 0..254")

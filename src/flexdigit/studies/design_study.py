@@ -44,7 +44,7 @@ from flexdigit._io import atomic_path, atomic_write, check_output
 from flexdigit._json import to_jsonable
 from flexdigit._repr import fields_summary
 from flexdigit.errors import ParameterError
-from flexdigit.params import BRIDGE_TYPES, RigParams
+from flexdigit.params import BRIDGE_TYPES, RigParams, params_template
 from flexdigit.studies.execution import run_study
 from flexdigit.studies.figures import _save, pareto_figure
 from flexdigit.studies.metrics import METRICS, MetricContext
@@ -62,6 +62,7 @@ __all__ = [
     "d_optimal_positions",
     "d_criterion",
     "pareto_front",
+    "export_design",
     "run_design",
     "write_design_outputs",
     "DESIGN_METRICS",
@@ -470,7 +471,7 @@ class DesignResult:
         lines = [f"{self.spec.name}: {len(self.candidates)} designs, Pareto front over {', '.join(o)}:"]
         for i in self.front[np.argsort(self.outputs[o[0]][self.front])]:
             values = ", ".join(f"{m} {self.outputs[m][i]:.3g}" for m in o)
-            lines.append(f"  {values}: {self.candidates[i].label()}")
+            lines.append(f"  design {i} (--export {i}): {values}: {self.candidates[i].label()}")
         for name, i in self.marked().items():
             values = ", ".join(f"{m} {self.outputs[m][i]:.3g}" for m in o)
             lines.append(f"  [{name}] {values}{' (on the front)' if i in set(self.front.tolist()) else ''}")
@@ -533,8 +534,14 @@ def run_design(
 
     settings = settings or DesignSettings.from_spec(spec)
     cands = candidates(settings, spec.seed)
-    metrics = list(dict.fromkeys([*DESIGN_METRICS, *settings.objectives]))
-    context = MetricContext(baseline=spec.baseline, redesign=True, seed=spec.seed, bayes_samples=settings.bayes_samples)
+    metrics = list(dict.fromkeys([*DESIGN_METRICS, *settings.objectives, *(u.name for u in spec.user_metrics)]))
+    context = MetricContext(
+        baseline=spec.baseline,
+        redesign=True,
+        seed=spec.seed,
+        bayes_samples=settings.bayes_samples,
+        user_metrics=spec.user_metrics,
+    )
     fingerprint = hashlib.sha256(
         json.dumps([spec.fingerprint(), dataclasses.asdict(settings)], sort_keys=True, default=repr).encode()
     ).hexdigest()[:16]
@@ -593,6 +600,35 @@ def write_design_outputs(result: DesignResult, out_dir: str | Path, *, force: bo
         json.dump(to_jsonable(result.summary()), fh, indent=2)
     _save(design_pareto_figure(result), paths["pareto"], force)
     return paths
+
+
+def export_design(result: DesignResult, row: int, path: str | Path, *, force: bool = False) -> Path:
+    """Write the rig description (the TOML of ``flexdigit params --template``, :func:`flexdigit.params.
+    params_template`) of design ``row`` (its row in ``designs.parquet`` and ``summary.json``) on the Pareto front,
+    so that ``flexdigit params`` checks it and every command takes it as ``--params``. The twin calibration is not
+    in it: the commands scale the thesis's to the digit (:func:`flexdigit.twin.digit_calibration.calibration_for`),
+    while the study evaluated the design on the baseline calibration (its channels averaged for another gauge
+    count, :func:`design_parameter_set`), so a command's twin of a resized design is not exactly the study's.
+    Never overwrites ``path`` without ``force``."""
+    front = sorted(int(i) for i in result.front)
+    if isinstance(row, bool) or not isinstance(row, int | np.integer) or int(row) not in front:
+        shown = ", ".join(str(i) for i in front[:20]) + (", ..." if len(front) > 20 else "")
+        raise ParameterError(
+            f"--export {row!r}: design {row!r} is not on the Pareto front of {result.spec.name}; its designs are rows "
+            f"{shown} (as summary.json's pareto_front lists them)"
+        )
+    row = int(row)
+    c = result.candidates[row]
+    ps = design_parameter_set(result.spec.baseline, c, grid_step_m=result.settings.grid_step_m, seed=result.spec.seed)
+    objectives = ", ".join(f"{m} {result.outputs[m][row]:.6g}" for m in result.settings.objectives)
+    text = params_template(ps.description()).replace(
+        "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE\n",
+        f"# Design {row} on the Pareto front of study {result.spec.name!r}: {c.label()}\n# ({objectives}); check "
+        "with: flexdigit params FILE\n",
+    )
+    with atomic_write(path, "w", force=force) as fh:
+        fh.write(text)
+    return Path(path)
 
 
 def design_pareto_figure(result: DesignResult):

@@ -344,6 +344,28 @@ def dask_client(scheduler: str | None, workers: int):
     cluster of ``workers`` processes (127.0.0.1)."""
     from distributed import Client, LocalCluster
 
+    with _quiet_distributed():
+        yield from _client(Client, LocalCluster, scheduler, workers)
+
+
+@contextlib.contextmanager
+def _quiet_distributed():
+    """distributed's own log records (a lost connection's traceback, its reconnection attempts) kept off the
+    terminal: what went wrong reaches the user as one line of ours."""
+    import logging
+
+    loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.comm")]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for lg, level in zip(loggers, levels, strict=True):
+            lg.setLevel(level)
+
+
+def _client(Client, LocalCluster, scheduler, workers):  # noqa: N803 - the classes, imported by the caller
     if scheduler:
         check_scheduler_greets(parse_scheduler(scheduler))
         try:
@@ -461,6 +483,10 @@ def _run_on_dask(
     from distributed import as_completed
 
     with dask_client(scheduler, workers) as client:
+        # every worker, and any that joins later (one restarted after a kill), warmed before its first task
+        from flexdigit.studies._warm_worker import WarmWorker
+
+        client.register_plugin(WarmWorker(build, values[:1], metrics, context), name=WarmWorker.name)
         # the builder as a task of its own, not scattered data: a scattered object dies with the workers that
         # hold it (all tasks after a worker death would fail); a task's result is computed again where needed
         build_remote = client.submit(_identity, build, key=f"{label}-build-{journal.header.get('fingerprint', '')}")
@@ -485,6 +511,8 @@ def _run_on_dask(
             try:
                 records = fut.result()
             except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
+                if client.status != "running":  # not the task: the scheduler is gone, every task with it
+                    _scheduler_lost(client, scheduler, journal)
                 message = f"{TASK_FAILED}{type(exc).__name__}: {exc}".splitlines()[0]
                 records = [RowRecord(int(r), {}, message) for r in rows]
             journal.append(_new(journal, records))
@@ -493,6 +521,17 @@ def _run_on_dask(
 
 def _identity(x):
     return x
+
+
+def _scheduler_lost(client, scheduler, journal: Journal):
+    """Raise the one line that says the scheduler vanished mid-study (its futures were cancelled: they are not the
+    rows' failures, nothing of them is journalled) and that a rerun resumes."""
+    address = scheduler or getattr(client.scheduler, "address", "the local cluster")
+    done = sum(1 for r in journal.records.values() if r.done)
+    raise OSError(
+        f"the Dask scheduler at {address} vanished mid-study ({done} rows journalled in {journal.path}); start it "
+        "again and rerun the same command to resume"
+    ) from None
 
 
 def _new(journal: Journal, records) -> list[RowRecord]:

@@ -50,21 +50,104 @@ from functools import lru_cache
 
 import numpy as np
 
+from flexdigit.control._lsim import step_output
 from flexdigit.control.design20ms import closed_loop, design_20ms
 from flexdigit.control.thesis_designs import thesis_design
+from flexdigit.errors import ParameterError
 from flexdigit.interrupts import raise_if_stopping
 from flexdigit.models.plant import build_plant
 from flexdigit.models.servo import servo_unit_tf
 from flexdigit.params import RigParams
+from flexdigit.studies._bayes_kernel import position_mse_m2
 from flexdigit.studies.batched_loop import StepSchedule, step_figures, step_figures_batch, step_responses
 from flexdigit.studies.parameter_set import ParameterSet
-from flexdigit.tactile.bounds import TwinGaugeModel, protocol_limits
+from flexdigit.tactile.bounds import TwinGaugeModel, cramer_rao, noise_of, protocol_limits
 from flexdigit.tactile.localisation import identifiability_map
 from flexdigit.tactile.protocols import RELAXED, load_protocol
 from flexdigit.twin.batched import BatchedChains
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, cached_digit
 
-__all__ = ["Metric", "MetricContext", "METRICS", "evaluate", "register_metric", "SENSITIVITY_METRICS"]
+__all__ = [
+    "Metric",
+    "MetricContext",
+    "METRICS",
+    "UserMetric",
+    "evaluate",
+    "metric_of",
+    "register_metric",
+    "SENSITIVITY_METRICS",
+]
+
+
+@dataclass(frozen=True)
+class UserMetric:
+    """A study's own metric (a spec's ``[metrics.NAME]`` table): ``function``, ``"module:function"``, of a
+    :class:`ParameterSet` returning a real number in ``unit``. It travels to the workers by name and is imported
+    there, so its module must be importable where the study runs (the path of the process, or the workers').
+
+    ``where`` names the spec key in every error (``"FILE: [metrics.NAME]"``).
+    """
+
+    name: str
+    function: str
+    unit: str
+    description: str = ""
+    where: str = ""
+
+    def resolve(self) -> Callable:
+        """The function, imported (one line naming :attr:`where` if the module or the name is missing, or if it
+        is not callable)."""
+        return _import_function(self.function, self.where or f"[metrics.{self.name}]")
+
+    def __call__(self, parameter_set: ParameterSet, context: MetricContext | None = None) -> float:
+        return checked_value(self.resolve()(parameter_set), self)
+
+
+def checked_value(value, metric: UserMetric) -> float:
+    """``value`` as a float, or one line naming the metric's spec key if it is not a real number."""
+    import numbers
+
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        shown = repr(value)
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        raise ParameterError(
+            f"{metric.where or f'[metrics.{metric.name}]'} function: {metric.function} returned {shown} "
+            f"({type(value).__name__}); expected a real number (in {metric.unit or 'its unit'})"
+        )
+    return float(value)
+
+
+@lru_cache(maxsize=64)
+def _import_function(target: str, where: str) -> Callable:
+    import importlib
+    import re
+
+    if not isinstance(target, str) or not re.fullmatch(r"[A-Za-z_][\w.]*:[A-Za-z_]\w*", target):
+        raise ParameterError(
+            f"{where} function: expected 'module:function' (e.g. 'my_metrics:tip_mass_g'). Got {target!r}"
+        )
+    module_name, _, attr = target.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        if exc.name and module_name.startswith(exc.name):
+            raise ParameterError(
+                f"{where} function: no module {module_name!r} on the Python path (put its directory on PYTHONPATH, "
+                "on the workers too)"
+            ) from None
+        raise ParameterError(f"{where} function: importing {module_name!r} failed: {_one_line(exc)}") from None
+    except Exception as exc:  # noqa: BLE001 - whatever the user's module raises on import, said in one line
+        raise ParameterError(f"{where} function: importing {module_name!r} failed: {_one_line(exc)}") from None
+    func = getattr(module, attr, None)
+    if func is None:
+        raise ParameterError(f"{where} function: module {module_name!r} has no {attr!r}")
+    if not callable(func):
+        raise ParameterError(f"{where} function: {target} is a {type(func).__name__}, not a function")
+    return func
+
+
+def _one_line(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}".splitlines()[0]
 
 
 @dataclass(frozen=True)
@@ -95,6 +178,9 @@ class MetricContext:
         The tactile protocol whose settings the Bayes limit uses (table 6.1).
     loop : StepSchedule
         The setpoint step the twin-run loop metrics score (:mod:`flexdigit.studies.batched_loop`).
+    user_metrics : tuple of UserMetric
+        The study's own metrics (its spec's ``[metrics.NAME]`` tables), found by :func:`metric_of` beside
+        :data:`METRICS`, on the workers too.
     """
 
     baseline: ParameterSet = field(default_factory=ParameterSet)
@@ -107,6 +193,7 @@ class MetricContext:
     hinf_filter_hz: float = 5.0
     protocol: str = "thesis-6.1"
     loop: StepSchedule = field(default_factory=StepSchedule)
+    user_metrics: tuple[UserMetric, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -142,10 +229,25 @@ def register_metric(name: str, unit: str, description: str, thesis_ref: str = ""
     return wrap
 
 
+def metric_of(name: str, context: MetricContext | None = None) -> Metric:
+    """The metric called ``name``: a built-in one (:data:`METRICS`) or one of the context's user metrics."""
+    if name in METRICS:
+        return METRICS[name]
+    for user in (context or MetricContext()).user_metrics:
+        if user.name == name:
+            return _user_metric(user)
+    raise ParameterError(f"unknown metric {name!r}; expected one of " + ", ".join(METRICS))
+
+
+@lru_cache(maxsize=64)
+def _user_metric(user: UserMetric) -> Metric:
+    return Metric(user.name, user.unit, user.description or user.function, lambda ps, ctx: user(ps), user.where)
+
+
 def evaluate(parameter_set: ParameterSet, names, context: MetricContext | None = None) -> dict[str, float]:
     """Every named metric of one parameter set (raises on the first that fails)."""
     context = context or MetricContext()
-    return {name: METRICS[name](parameter_set, context) for name in names}
+    return {name: metric_of(name, context)(parameter_set, context) for name in names}
 
 
 def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -> list[dict | Exception]:
@@ -155,9 +257,10 @@ def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -
     is retried one set at a time, so one bad set does not take the others down).
     """
     context = context or MetricContext()
+    _new_block()
     out: list[dict | Exception] = [{} for _ in parameter_sets]
     names = list(names)
-    batched = [n for n in names if METRICS[n].batched is not None]
+    batched = [n for n in names if metric_of(n, context).batched is not None]
     if batched and parameter_sets:
         try:
             columns = {n: np.asarray(METRICS[n].batched(parameter_sets, context), dtype=float) for n in batched}
@@ -169,7 +272,7 @@ def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -
         try:
             for n in names:
                 if n not in out[i]:
-                    out[i][n] = METRICS[n](ps, context)
+                    out[i][n] = metric_of(n, context)(ps, context)
         except Exception as exc:  # noqa: BLE001 - any failure of one evaluation is that set's result
             raise_if_stopping(exc)  # (a stop is not a failure of the set)
             out[i] = exc
@@ -202,14 +305,14 @@ def _mid_shortening_m(ps: ParameterSet) -> float:
 _BATCH_CACHE: list = [None, None]  # (the list of parameter sets, its results): the metrics share one pass
 
 
-def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
+def twin_figures(parameter_sets, *, keep: bool = True) -> dict[str, np.ndarray]:
     """The twin metrics of many parameter sets at once (:class:`flexdigit.twin.batched.BatchedChains`).
 
     Release mode (cable removed), the actuated mode and the tip's rotational stiffness linearised mid-range, the
     rotation per command over the operating commands, and the linearised actuated digit's matrices (for
     :func:`actuated_model`).
     """
-    if _BATCH_CACHE[0] is parameter_sets:
+    if keep and _BATCH_CACHE[0] is parameter_sets:
         return _BATCH_CACHE[1]
     chains = _chains(parameter_sets)
     wn, zeta = chains.linear_modes()
@@ -233,17 +336,42 @@ def twin_figures(parameter_sets) -> dict[str, np.ndarray]:
         "_linear": chains.linearised(psi_mid, mid),
         "_mid_rotation_deg": np.degrees(psi_mid[:, -1] - tip_lo),
     }
+    if not keep:
+        return out
     _BATCH_CACHE[:] = [parameter_sets, out]
+    for i, ps in enumerate(parameter_sets):  # each row's figures, for the per-row metrics built on them
+        _ROWS[ps] = {k: tuple(x[i : i + 1] for x in v) if k == "_linear" else v[i : i + 1] for k, v in out.items()}
+        while len(_ROWS) > _ROWS_KEPT:
+            _ROWS.pop(next(iter(_ROWS)))
     return out
+
+
+#: The twin figures of the rows of the block being evaluated (:func:`twin_figures`), by parameter set: the linear
+#: loop metrics (:func:`actuated_model`) read a row's linearisation from its block's pass instead of solving it again.
+_ROWS: dict = {}
+_ROWS_KEPT = 4096
+
+
+def _new_block() -> None:
+    """Forget the last block's rows and what was built on them (:func:`evaluate_many` calls it first): a row's
+    numbers then depend on its block alone (a batched pass rounds a rig's figures a little differently with other
+    block-mates), never on which blocks a process evaluated before, so a study on any number of Dask workers gives
+    the in-process numbers bit for bit (the blocks are the spec's chunks)."""
+    _ROWS.clear()
+    _BATCH_CACHE[:] = [None, None]
+    _LOOP_CACHE[:] = [None, None, None]
+    for cached in (actuated_model, loop_design, _loop, _single_loop):
+        cached.cache_clear()
 
 
 def _batched(name):
     return lambda parameter_sets, ctx: twin_figures(parameter_sets)[name]
 
 
-@lru_cache(maxsize=4096)
 def _single(ps: ParameterSet) -> dict[str, np.ndarray]:
-    return twin_figures([ps])
+    """One row's twin figures: from its block's batched pass if there was one (:data:`_ROWS`), else its own."""
+    hit = _ROWS.get(ps)
+    return hit if hit is not None else twin_figures([ps])
 
 
 def _one(name):
@@ -287,7 +415,9 @@ def rotation_gain_deg_per_command(ps: ParameterSet, ctx: MetricContext | None = 
 # -------------------------------------------------------------------------------------------------- control
 @lru_cache(maxsize=8)
 def _baseline_design(baseline: ParameterSet):
-    return design_20ms(baseline.params, deg_per_command=rotation_gain_deg_per_command(baseline, MetricContext()))
+    # the baseline's own pass (not a block's): the same controller in every process, whatever it evaluated before
+    gain = float(twin_figures([baseline], keep=False)["rotation_gain_deg_per_command"][0])
+    return design_20ms(baseline.params, deg_per_command=gain)
 
 
 @contextlib.contextmanager
@@ -334,7 +464,7 @@ def _loop(ps: ParameterSet, ctx: MetricContext) -> dict:
     if np.max(np.abs(loop.poles())) >= 1.0:
         return {"settling_time_s": math.inf, "overshoot_percent": math.inf, "gain_margin": 0.0}
     t = np.arange(0.0, 10.0, design.period_s)
-    y = np.squeeze(ct.step_response(loop, T=t).outputs)
+    y = step_output(loop, t)  # control.step_response's numbers, its recursion compiled (~10x faster)
     figures = step_figures(t, y, target=float(y[-1]))  # settling to the last sample, as the batched loop's
     settling, overshoot = figures.settling_time_s, figures.overshoot_percent
     # the loop broken at the plant input: u = K_y y + ..., so the return ratio is -K_y P
@@ -475,34 +605,143 @@ def _protocol_settings(name: str):
     return np.array(rows, dtype=float)
 
 
-@register_metric("bayes_position_limit_mm", "mm", "chapter 6's localisation Bayes limit (RMS, one reading)", "6.5")
-def bayes_position_limit_mm(ps: ParameterSet, ctx: MetricContext) -> float:
+def _bayes_settings(ps: ParameterSet, ctx: MetricContext):
+    """Table 6.1's settings on this rig: positions from the base (m, rounded to the micrometre as
+    :func:`flexdigit.tactile.bounds.protocol_limits` keys them), masses (kg), commands and repetitions."""
     rows = _protocol_settings(ctx.protocol)
     length = ps.params.geometry.digit_length_m
     # positions from the tip, as fractions of the thesis digit: a larger or smaller digit is probed alike
     scale = length / RigParams().geometry.digit_length_m
     a = np.where(rows[:, 1] > 0, length - rows[:, 0] * scale, 0.0)
-    limits = protocol_limits(
-        gauge_model(ps, ctx.tactile_cells),
-        a,
-        rows[:, 1],
-        rows[:, 2].astype(int),
-        rows[:, 3],
-        samples=ctx.bayes_samples,
-        seed=ctx.seed,
-    )
-    loaded = rows[:, 1] > 0
-    return 1e3 * float(np.sqrt(np.average(limits.position_mse_m2[loaded], weights=rows[loaded, 3])))
+    a = np.array([round(float(x), 6) if y > 0 else 0.0 for x, y in zip(a, rows[:, 1], strict=True)])
+    m = np.array([round(float(y), 9) for y in rows[:, 1]])
+    return a, m, rows[:, 2].astype(int), rows[:, 3]
 
 
-@register_metric("blind_zone_mm", "mm", "length from the clamp where a 25 g load bends no gauge", "6.5")
-def blind_zone_mm(ps: ParameterSet, ctx: MetricContext) -> float:
+def _bayes_exact(ps: ParameterSet, ctx: MetricContext) -> float:
+    """The Bayes position limit by :func:`flexdigit.tactile.bounds.protocol_limits` itself (the reference the
+    batched form :func:`bayes_limits` is tested against)."""
+    a, m, c, w = _bayes_settings(ps, ctx)
+    limits = protocol_limits(gauge_model(ps, ctx.tactile_cells), a, m, c, w, samples=ctx.bayes_samples, seed=ctx.seed)
+    loaded = m > 0
+    return 1e3 * float(np.sqrt(np.average(limits.position_mse_m2[loaded], weights=w[loaded])))
+
+
+@lru_cache(maxsize=8)
+def _bayes_draws(seed: int, samples: int, commands: tuple, gauges: int) -> np.ndarray:
+    """The standard normal draws :func:`~flexdigit.tactile.bounds.protocol_limits` makes, per setting
+    (settings, samples, gauges): command groups in ascending order, settings in their order within a group."""
+    rng = np.random.default_rng(seed)
+    c = np.asarray(commands)
+    out = np.empty((c.size, samples, gauges))
+    for value in np.unique(c):
+        for j in np.flatnonzero(c == value):
+            out[j] = rng.standard_normal((samples, gauges))
+    return out
+
+
+def _position_mse_m2(mean, sigma, a, m, c, w, eps) -> np.ndarray:
+    """:func:`~flexdigit.tactile.bounds.protocol_limits`' position MSE of every loaded setting (NaN elsewhere): the
+    same draws and the same Bayes estimate, group by group (:mod:`flexdigit.studies._bayes_kernel`)."""
+    mse = np.full(a.size, np.nan)
+    for value in np.unique(c):
+        group = np.flatnonzero(c == value)
+        loaded = m[group] > 0
+        drawn = np.flatnonzero(loaded)
+        if drawn.size:
+            log_prior = np.log(w[group] / w[group].sum())
+            args = (mean[group], sigma[group], a[group], loaded, log_prior, eps[group[drawn]], drawn)
+            mse[group[drawn]] = position_mse_m2(*(np.ascontiguousarray(x) for x in args))
+    return mse
+
+
+def bayes_limits(parameter_sets, ctx: MetricContext) -> np.ndarray:
+    """Chapter 6's Bayes position limit (mm) of many parameter sets: each rig's gauges solved on its own table 6.1
+    settings, the Monte Carlo draws made once for all of them (the common random numbers, the same as
+    :func:`~flexdigit.tactile.bounds.protocol_limits` draws) and scored by :func:`_position_mse_m2`. The same
+    numbers as the exact form up to rounding (tested: :data:`BAYES_BATCH_RTOL`)."""
+    out = np.empty(len(parameter_sets))
+    for i, ps in enumerate(parameter_sets):
+        a, m, c, w = _bayes_settings(ps, ctx)
+        model = gauge_model(ps, ctx.tactile_cells)
+        mean = model.gauges_v(a, m, c)
+        sigma = noise_of(model, a, m, c)
+        eps = _bayes_draws(int(ctx.seed), int(ctx.bayes_samples), tuple(c.tolist()), mean.shape[1])
+        loaded = m > 0
+        mse = _position_mse_m2(mean, sigma, a, m, c, w, eps)
+        out[i] = 1e3 * float(np.sqrt(np.average(mse[loaded], weights=w[loaded])))
+    return out
+
+
+#: How far the batched Bayes limit may stray from :func:`~flexdigit.tactile.bounds.protocol_limits` (relative): the
+#: same draws and estimate, the residuals summed in another order (a few ulps of each posterior's exponent).
+BAYES_BATCH_RTOL = 1e-9
+
+
+@register_metric(
+    "bayes_position_limit_mm",
+    "mm",
+    "chapter 6's localisation Bayes limit (RMS, one reading)",
+    "6.5",
+    batched=bayes_limits,
+)
+def bayes_position_limit_mm(ps: ParameterSet, ctx: MetricContext) -> float:
+    return float(bayes_limits([ps], ctx)[0])
+
+
+def _blind_zone_exact(ps: ParameterSet, ctx: MetricContext) -> float:
+    """The blind zone from :func:`flexdigit.tactile.localisation.identifiability_map` itself (the Cramer-Rao bounds
+    along the digit, the reference :func:`blind_zones` is tested against)."""
     length = ps.params.geometry.digit_length_m
     points = int(round(length / ctx.blind_step_m)) + 1
     zones = identifiability_map(gauge_model(ps, ctx.tactile_cells), [ctx.blind_mass_kg], [RELAXED], length, points)
     zone = zones["cases"][0]["zone"]
     seen = np.flatnonzero(zone != "no gauge bends")
     return 1e3 * float(zones["position_from_base_m"][seen[0]] if seen.size else length)
+
+
+#: Grid points of the blind-zone scan solved at a time, from the clamp out: the scan stops at the first block with a
+#: visible point, so a rig whose zone ends within 46 mm of the clamp (at 2 mm steps; the thesis rig's: 36 mm)
+#: solves one block of the 136 points along its digit.
+BLIND_BLOCK = 24
+
+
+def blind_zones(parameter_sets, ctx: MetricContext) -> np.ndarray:
+    """The blind zone (mm) of many parameter sets with two static solves per rig instead of the Cramer-Rao map's
+    six over the whole digit: a point is blind when the load moves no gauge by a tenth of its noise
+    (:func:`flexdigit.tactile.bounds.cramer_rao`'s test, on the same grid), or when no gauge's reading changes
+    with the position there (checked at the first visible point only, by the bounds' own Jacobian; the exact map
+    is run where it finds one). The grid is solved from the clamp out in blocks of :data:`BLIND_BLOCK` points,
+    stopping at the first visible one. The same grid point as the exact form on every rig tested (a point
+    within rounding of the tenth-of-the-noise threshold could move it by one grid step, ``ctx.blind_step_m``)."""
+    out = np.empty(len(parameter_sets))
+    for i, ps in enumerate(parameter_sets):
+        model = gauge_model(ps, ctx.tactile_cells)
+        length = ps.params.geometry.digit_length_m
+        grid = np.linspace(0.0, length, int(round(length / ctx.blind_step_m)) + 1)
+        unloaded = model.gauges_v(grid[:1], 0.0, RELAXED)  # the same for every point: no load
+        first = None
+        for start in range(0, grid.size, BLIND_BLOCK):
+            a = grid[start : start + BLIND_BLOCK]
+            m = np.full(a.shape, ctx.blind_mass_kg)
+            c = np.full(a.shape, RELAXED)
+            moved = np.abs(model.gauges_v(a, m, c) - unloaded)
+            seen = np.flatnonzero(~np.all(moved < 0.1 * noise_of(model, a, m, c), axis=1))
+            if seen.size:
+                first = a[seen[0]]
+                break
+        if first is not None and cramer_rao(model, [first], ctx.blind_mass_kg, RELAXED).zone[0] == "no gauge bends":
+            out[i] = _blind_zone_exact(ps, ctx)  # visible, yet no position information there: the map decides
+        else:
+            out[i] = 1e3 * float(length if first is None else first)
+    return out
+
+
+@register_metric(
+    "blind_zone_mm", "mm", "length from the clamp where a 25 g load bends no gauge", "6.5", batched=blind_zones
+)
+def blind_zone_mm(ps: ParameterSet, ctx: MetricContext) -> float:
+    return float(blind_zones([ps], ctx)[0])
 
 
 #: The metrics a sensitivity study computes unless its spec lists others.

@@ -39,7 +39,7 @@ from flexdigit._validation import check_int, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.studies import figures
 from flexdigit.studies.execution import run_study, warn
-from flexdigit.studies.metrics import METRICS, SENSITIVITY_METRICS, MetricContext
+from flexdigit.studies.metrics import SENSITIVITY_METRICS, MetricContext, metric_of
 from flexdigit.studies.spec import StudySpec, load_spec
 
 __all__ = ["SensitivitySettings", "SensitivityResult", "run_sensitivity", "sobol_indices", "write_outputs"]
@@ -181,7 +181,8 @@ class SensitivityResult:
             "metrics": {},
         }
         for metric in self.metrics:
-            entry: dict = {"unit": METRICS[metric].unit, "description": METRICS[metric].description}
+            about = metric_of(metric, MetricContext(user_metrics=self.spec.user_metrics))
+            entry: dict = {"unit": about.unit, "description": about.description}
             if metric in self.morris:
                 res = self.morris[metric]
                 entry["morris"] = {
@@ -296,10 +297,15 @@ def run_sensitivity(
             "a sensitivity study needs at least one (a design spec's grid is run with `flexdigit study design`)"
         )
     settings = settings or SensitivitySettings.from_spec(spec)
-    metrics = spec.metrics or SENSITIVITY_METRICS
+    metrics = spec.study_metrics(SENSITIVITY_METRICS)
     u, design = sensitivity_design(spec, settings)
     values = spec.values_from_unit(u)
-    context = MetricContext(baseline=spec.baseline, seed=spec.seed, bayes_samples=settings.bayes_samples)
+    context = MetricContext(
+        baseline=spec.baseline,
+        seed=spec.seed,
+        bayes_samples=settings.bayes_samples,
+        user_metrics=spec.user_metrics,
+    )
     out_dir = Path(out_dir)
     header = {
         "kind": "sensitivity",

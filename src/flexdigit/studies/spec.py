@@ -58,6 +58,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -70,7 +71,7 @@ from scipy import stats
 from flexdigit._io import read_text, refuse_special
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams, load_params
-from flexdigit.studies.metrics import METRICS
+from flexdigit.studies.metrics import METRICS, UserMetric, checked_value
 from flexdigit.studies.parameter_set import ParameterSet
 from flexdigit.twin.calibration import default_calibration, load_calibration
 
@@ -196,6 +197,9 @@ class StudySpec:
     baseline : ParameterSet
     source : str
         The file (or ``"spec"``) named in error messages.
+    user_metrics : tuple of UserMetric
+        The spec's own metrics (``[metrics.NAME]``: ``function = "module:function"`` of a parameter set and its
+        ``unit``), run after the built-in ones the study computes.
     """
 
     name: str
@@ -205,10 +209,16 @@ class StudySpec:
     settings: dict
     baseline: ParameterSet
     source: str = "spec"
+    user_metrics: tuple = ()
 
     @property
     def names(self) -> list[str]:
         return [p.name for p in self.parameters]
+
+    def study_metrics(self, default) -> tuple[str, ...]:
+        """The metrics a study computes: ``[study] metrics`` (or ``default``), then the spec's own not listed."""
+        listed = tuple(self.metrics or default)
+        return listed + tuple(u.name for u in self.user_metrics if u.name not in listed)
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the study's numbers (not the file's comments or layout)."""
@@ -220,6 +230,8 @@ class StudySpec:
             "parameters": [dataclasses.asdict(p) for p in self.parameters],
             "baseline": {"params": self.baseline.params.to_dict(), "calibration": self.baseline.calibration.to_dict()},
         }
+        if self.user_metrics:  # (absent otherwise: the fingerprints of specs without them stay as they were)
+            doc["user_metrics"] = [[u.name, u.function, u.unit] for u in self.user_metrics]
         text = json.dumps(doc, sort_keys=True, default=repr)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -334,7 +346,7 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
         doc = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{source}: not valid TOML ({exc})") from None
-    known = {"study", "parameters", "sensitivity", "design"}
+    known = {"study", "parameters", "sensitivity", "design", "metrics"}
     unknown = sorted(set(doc) - known)
     if unknown:
         raise ParameterError(
@@ -356,15 +368,17 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
     metrics = study.get("metrics", [])
     if not isinstance(metrics, list) or not all(isinstance(m, str) for m in metrics):
         raise ParameterError(f"{source}: [study] metrics must be a list of metric names. Got {metrics!r} instead.")
+    baseline = _baseline(study, source, base_dir)
+    user_metrics = _user_metrics(doc.get("metrics", {}), baseline, source)
     if metrics:
+        known_metrics = [*METRICS, *(u.name for u in user_metrics)]
         for m in metrics:
-            if m not in METRICS:
+            if m not in known_metrics:
                 raise ParameterError(
-                    f"{source}: [study] metrics: unknown metric {m!r}; expected one of " + ", ".join(METRICS)
+                    f"{source}: [study] metrics: unknown metric {m!r}; expected one of " + ", ".join(known_metrics)
                 )
         if len(set(metrics)) != len(metrics):
             raise ParameterError(f"{source}: [study] metrics lists a metric twice: {metrics!r}")
-    baseline = _baseline(study, source, base_dir)
     parameters = _parameters(doc.get("parameters", {}), baseline, source)
     if not parameters and "design" not in doc:
         raise ParameterError(f"{source}: no [parameters.SECTION.FIELD] tables: nothing is uncertain")
@@ -376,7 +390,45 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
                 "elements a distribution; give either the factor or the elements"
             )
     settings = {k: _table(doc[k], f"[{k}]", source) for k in ("sensitivity", "design") if k in doc}
-    return StudySpec(name, seed, tuple(parameters), tuple(metrics), settings, baseline, source)
+    return StudySpec(name, seed, tuple(parameters), tuple(metrics), settings, baseline, source, user_metrics)
+
+
+def _user_metrics(table, baseline: ParameterSet, source: str) -> tuple:
+    """The spec's own metrics, ``[metrics.NAME]`` with ``function = "module:function"`` (of a parameter set),
+    ``unit`` and an optional ``description``: each imported and run once on the baseline rig here, so a missing
+    module, a name that is not a function or a function that returns no number is one line naming its key now,
+    not a column of failed rows later."""
+    table = _table(table, "[metrics]", source)
+    out = []
+    for name, entry in table.items():
+        where = f"{source}: [metrics.{name}]"
+        if not re.fullmatch(r"[A-Za-z_]\w*", name) or name in METRICS:
+            raise ParameterError(
+                f"{where}: a metric's name must be a new identifier (letters, digits, _; the unit in it), not one of "
+                "the built-in metrics"
+            )
+        entry = _table(entry, f"[metrics.{name}]", source)
+        unknown = sorted(set(entry) - {"function", "unit", "description"})
+        if unknown:
+            raise ParameterError(f"{where}: unknown key {unknown[0]!r}; expected function, unit, description")
+        for key in ("function", "unit"):
+            if not isinstance(entry.get(key), str) or not entry[key]:
+                raise ParameterError(f"{where} {key}: a non-empty string is required. Got {entry.get(key)!r}")
+        description = entry.get("description", "")
+        if not isinstance(description, str):
+            raise ParameterError(f"{where} description: a string is required. Got {description!r}")
+        user = UserMetric(name, entry["function"], entry["unit"], description, where)
+        func = user.resolve()
+        try:
+            value = func(baseline)
+        except Exception as exc:  # noqa: BLE001 - the user's function failing on the baseline, said in one line
+            raise ParameterError(
+                f"{where} function: {user.function} raised on the baseline rig: "
+                + f"{type(exc).__name__}: {exc}".splitlines()[0]
+            ) from None
+        checked_value(value, user)
+        out.append(user)
+    return tuple(out)
 
 
 def _table(value, where: str, source: str) -> dict:

@@ -25,6 +25,7 @@ __getattr__, __all__ = lazy_exports(
         "load_protocol": "flexdigit.tactile.protocols",
         "builtin_protocols": "flexdigit.tactile.protocols",
         "collect": "flexdigit.tactile.runner",
+        "collect_on": "flexdigit.tactile.runner",
         "load_or_collect": "flexdigit.tactile.runner",
         "Dataset": "flexdigit.tactile.dataset",
         "load_dataset": "flexdigit.tactile.dataset",

@@ -53,7 +53,7 @@ from flexdigit._table import Table, read_table
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import GAUGE_V, RigParams
-from flexdigit.tactile.dataset import COLUMNS, Dataset, make_meta
+from flexdigit.tactile.dataset import MAX_GAUGES, Dataset, dataset_columns, make_meta
 from flexdigit.tactile.protocols import RELAXED, Protocol
 
 __all__ = [
@@ -84,8 +84,9 @@ class ColumnMap:
 
     Parameters
     ----------
-    gauges : tuple of 3 str
-        The gauge columns, gauge 1 (nearest the clamp) first.
+    gauges : tuple of str
+        The gauge columns, gauge 1 (nearest the clamp) first: one per gauge of the digit, 1 to 8 (the thesis rig's
+        three).
     gauge_unit : {"V", "mV"}
     load, load_unit : str, {"kg", "g"}
         The hung mass column (0 for no load) and its unit.
@@ -110,7 +111,7 @@ class ColumnMap:
         How the digit lay (the thesis's tactile experiments: horizontal).
     """
 
-    gauges: tuple[str, str, str]
+    gauges: tuple[str, ...]
     load: str
     position: str
     gauge_unit: str = "V"
@@ -133,11 +134,12 @@ class ColumnMap:
         owner = "ColumnMap"
         if (
             not isinstance(self.gauges, tuple | list)
-            or len(self.gauges) != 3
+            or not 1 <= len(self.gauges) <= MAX_GAUGES
             or not all(isinstance(g, str) and g.strip() for g in self.gauges)
         ):
             raise ParameterError(
-                f"The 'gauges' parameter of {owner} must be three column names, gauge 1 first. Got {self.gauges!r}."
+                f"The 'gauges' parameter of {owner} must be 1 to {MAX_GAUGES} column names, one per gauge, gauge 1 "
+                f"first. Got {self.gauges!r}."
             )
         object.__setattr__(self, "gauges", tuple(self.gauges))
         for key in ("load", "position"):
@@ -195,6 +197,29 @@ class ColumnMap:
         return cls.build(data, overrides, source=str(path))
 
     @classmethod
+    def from_flags(cls, flags: dict[str, Any], map_path: str | Path | None = None) -> ColumnMap:
+        """``flexdigit collect dataset``'s map: the ``map_path`` TOML with ``flags`` (those not None) winning, or
+        the flags alone, which must then name the gauge, load and position columns. ``flags["gauges"]`` may be one
+        comma-separated string.
+
+        Raises
+        ------
+        ParameterError
+            Without a map, naming the first of ``--gauges``, ``--load``, ``--position`` missing.
+        """
+        flags = dict(flags)
+        if isinstance(flags.get("gauges"), str):
+            flags["gauges"] = tuple(g.strip() for g in flags["gauges"].split(","))
+        if map_path:
+            return cls.from_toml(map_path, **flags)
+        missing = [key for key in ("gauges", "load", "position") if flags.get(key) is None]
+        if missing:
+            raise ParameterError(
+                f"dataset import needs --{missing[0]} (the {ROLES[missing[0]]}): give the flags or a --map TOML"
+            )
+        return cls.build({}, flags, source="the column flags")
+
+    @classmethod
     def build(cls, data: dict, overrides: dict | None = None, *, source: str = "column map") -> ColumnMap:
         """A map from a dict of keys (a TOML table) and ``overrides``, validated, errors naming ``source``."""
         allowed = [f.name for f in dataclasses.fields(cls)]
@@ -215,7 +240,7 @@ class ColumnMap:
 
 #: What each mapped column is, for messages.
 ROLES = {
-    "gauges": "three gauge columns",
+    "gauges": "gauge columns (one per gauge)",
     "load": "load column",
     "position": "position column",
     "command": "command column",
@@ -236,7 +261,8 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
         CSV-like text (delimiter detected) or Parquet.
     column_map : ColumnMap
     params : RigParams, optional
-        For the digit length when the map gives none.
+        The digit: its length when the map gives none, and its gauge count, which the map's gauge columns must
+        match.
 
     Raises
     ------
@@ -245,6 +271,11 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
     """
     cmap = column_map
     path = Path(path)
+    if params is not None and len(cmap.gauges) != len(params.geometry.gauge_positions_m):
+        raise ParameterError(
+            f"the column map names {len(cmap.gauges)} gauge columns but the digit has "
+            f"{len(params.geometry.gauge_positions_m)} gauges: one column per gauge, gauge 1 first"
+        )
     length_m = cmap.digit_length_m or (params or RigParams()).geometry.digit_length_m
     table = read_table(path, delimiter=cmap.delimiter, decimal=cmap.decimal)
     if len(table) == 0:
@@ -285,9 +316,7 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
     data = {
         "sample": np.arange(len(table), dtype=np.int64),
         "test": test,
-        "gauge1_v": gauges[:, 0],
-        "gauge2_v": gauges[:, 1],
-        "gauge3_v": gauges[:, 2],
+        **{f"gauge{k}_v": gauges[:, k - 1] for k in range(1, gauges.shape[1] + 1)},
         "pot_v": pot,
         "load_kg": load,
         "position_index": index,
@@ -297,8 +326,9 @@ def import_readings(path: str | Path, column_map: ColumnMap, *, params=None) -> 
         "repetition": repetition,
         "time_s": time_s,
     }
-    data = {name: np.asarray(data[name], dtype=dtype) for name, dtype in COLUMNS.items()}
-    return Dataset(data, make_meta(protocol, _rig_meta(path, table, cmap, columns), length_m))
+    count = gauges.shape[1]
+    data = {name: np.asarray(data[name], dtype=dtype) for name, dtype in dataset_columns(count).items()}
+    return Dataset(data, make_meta(protocol, _rig_meta(path, table, cmap, columns), length_m, gauge_count=count))
 
 
 def _mapped_columns(table, cmap: ColumnMap) -> tuple[dict[str, str], np.ndarray]:

@@ -18,7 +18,7 @@ reading would not be enough: the digit's swing and the sensor drift carry the hi
 
 from __future__ import annotations
 
-from contextlib import nullcontext
+from contextlib import ExitStack, nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +27,8 @@ from flexdigit._io import check_output, output_lock
 from flexdigit._validation import check_real
 from flexdigit.errors import DataFileError, OutputError, ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.base import open_rig, parse_rig_url
+from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
+from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
 from flexdigit.twin.digit_calibration import twin_calibration
@@ -40,6 +41,7 @@ __all__ = [
     "effective_settings",
     "sim_options",
     "collect",
+    "collect_on",
     "load_or_collect",
 ]
 
@@ -374,6 +376,58 @@ def _progress_bar(enabled: bool):
         transient=False,
         console=Console(stderr=True),
     )
+
+
+def collect_on(
+    backend: str,
+    protocol: Protocol,
+    out: str | Path,
+    *,
+    params: RigParams | None = None,
+    seed: int = 0,
+    calibration: str | Path | None = None,
+    record: str | Path | None = None,
+    settle_s: float | None = None,
+    progress: bool = False,
+    force: bool = False,
+) -> Dataset:
+    """``flexdigit collect``: open the rig at ``backend``, take ``protocol`` on it into ``out`` and close it.
+
+    On a twin URL (``sim...``) the twin is set up for the protocol (:func:`sim_options`) with ``seed`` (unless the
+    URL sets one) and, when ``calibration`` (a TOML) or ``params`` (another digit) is given, the calibration of
+    :func:`~flexdigit.twin.digit_calibration.twin_calibration`; a real rig refuses ``calibration``. The emulated
+    board (``hil://``) takes the protocol's orientation and cable only (its firmware's twin keeps its own 2 ms
+    step). ``record`` also writes every reading and load to an MCAP file
+    (:func:`flexdigit.rig.recording.recording_rig`). Every option is checked before the rig is opened; the rig
+    (and the recording) are closed on every path. The other arguments are :func:`collect`'s.
+    """
+    out = Path(out)
+    if settle_s is not None:
+        check_real(settle_s, "--settle", "flexdigit collect", low=0, high=MAX_SETTLE_S)
+    if not (out.exists() and journal_path(out).exists()):  # both: a run stopped while tidying up, collect finishes it
+        check_output(out, force=force)
+    scheme = parse_rig_url(backend).scheme
+    on_twin = scheme.startswith("sim")
+    if calibration and not on_twin:
+        raise ParameterError(
+            f"--calibration calibrates the twin: it needs a sim backend, not {backend!r} (a real rig is itself)"
+        )
+    options = sim_options(protocol, backend) if on_twin else {}
+    if scheme == "hil":
+        options = {k: v for k, v in sim_options(protocol, backend).items() if k in ("orientation", "cable")}
+    if on_twin and (calibration or params is not None):
+        options["calibration"] = twin_calibration(params, calibration)
+    with ExitStack() as stack:
+        rig = stack.enter_context(open_rig(backend, params, **options, **seed_option(backend, seed)))
+        if record is not None:
+            header = {"backend": backend, "protocol": protocol.name, "seed": rig.settings().get("seed")}
+            recording = Recording(
+                record, header={**header, "source": "collect"}, metadata=rig_metadata(rig), force=force
+            )
+            rig = stack.enter_context(recording_rig(rig, recording))  # closes the rig, then the recording
+        return collect(
+            protocol, rig, out, params=params, rig_url=backend, settle_s=settle_s, progress=progress, force=force
+        )
 
 
 def load_or_collect(path: str | Path, protocol: Protocol, rig_factory, **kwargs) -> Dataset:

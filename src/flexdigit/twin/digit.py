@@ -916,7 +916,8 @@ def digit_arrays(
             f"The 'support_mass_kg' parameter of Calibration must have {nsec} values (supports at "
             f"{[round((k + 1) * pitch, 4) for k in range(nsec)]} m). Got {supports.tolist()!r} instead."
         )
-    mass_s.append(np.minimum(pitch * (np.arange(nsec) + 1.0), length))  # n pitch may round past the tip
+    # the tip support's centre is the tip: ``pitch x n`` may round a ulp past ``digit_length_m`` (0.3876 / 3 x 3)
+    mass_s.append(np.minimum(pitch * (np.arange(nsec) + 1.0), length))
     mass_kg.append(supports)
     inertia.append(np.zeros(nsec))
     if housing and calibration.housing_mass_kg > 0:

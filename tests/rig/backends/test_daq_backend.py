@@ -9,6 +9,7 @@ import types
 import numpy as np
 import pytest
 
+from digits import _equal as equal_positions
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams, Sensors
 from flexdigit.rig.backends.daq_backend import MISSING_ULDAQ, DaqRig, uldaq_range
@@ -135,3 +136,21 @@ def test_pot_channel_from_the_url_is_read_after_the_gauges():
 def test_bad_pot_option_names_the_option_and_value(url, match):
     with pytest.raises(ParameterError, match=match):
         open_rig(url, uldaq=fake_uldaq({}))
+
+
+@pytest.mark.parametrize("count", [1, 5, 8])
+def test_a_digit_of_g_gauges_reads_g_channels_then_the_pot(count, tmp_path):
+    """A ``params`` digit of ``count`` gauges on channels 0..G-1 (issue 24): G values, the pot on the next channel."""
+    volts = {ch: 0.1 * (ch + 1) for ch in range(count)} | {count: 1.47}
+    params = RigParams.from_dict(
+        {
+            "geometry": {"gauge_positions_m": equal_positions(count, 0.27)},
+            "sensors": {"adc_channels": list(range(count))},
+        }
+    )
+    rig = open_rig(f"daq://0?pot={count}", params, uldaq=(ul := fake_uldaq(volts)))
+    reading = rig.read()
+    np.testing.assert_allclose(reading.gauges_v, [0.1 * (ch + 1) for ch in range(count)])
+    assert reading.pot_v == 1.47
+    assert [c[0] for c in ul.calls] == [*range(count), count]
+    rig.close()

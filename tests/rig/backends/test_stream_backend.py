@@ -127,9 +127,9 @@ def test_source_reads_volts_counts_gaps_and_refuses_another_protocol_version(pty
     stats = source.stats()
     assert (stats["samples"], stats["dropped"], stats["garbled"], stats["info"]) == (2, 2, 1, 1)
     assert math.isnan(source.read_gauges()[1])  # this line has no pot
-    os.write(master, b"# flexdigit-stream 2 adc=future\n")
+    os.write(master, b"# flexdigit-stream 3 adc=future\n")
     time.sleep(0.2)
-    with pytest.raises(RigError, match="protocol 2; this flexdigit reads version 1"):
+    with pytest.raises(RigError, match="protocol 3; this flexdigit reads versions 1 and 2"):
         source.read_gauges()
     source.close()
     assert source.closed
@@ -297,3 +297,32 @@ def test_the_firmware_lines_decode(tmp_path):
     assert events[1].sample.gauges == (120, -45, 3000)
     assert events[1].sample.pot is None
     assert out.splitlines()[1] + b"\n" == encode_line(0, 1000, (120, -45, 3000)).replace(b"\r", b"")
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler to build the firmware's protocol code")
+def test_the_firmware_version_2_lines_decode_for_one_to_eight_gauges(tmp_path):
+    main = tmp_path / "main.c"
+    main.write_text(
+        '#include "flexdigit_stream.h"\n'
+        "int main(void) {\n"
+        "  char line[FLEXDIGIT_STREAM_LINE_MAX];\n"
+        "  int32_t g[8] = {-2147483647L - 1, 2147483647L, 3, -4, 5, -6, 7, -8};\n"
+        "  for (int count = 0; count <= 9; count++) {\n"
+        "    uint16_t seq = (uint16_t)(65530 + count);\n"
+        "    int n = flexdigit_format_line_v2(line, seq, 4294967295UL, g, count, count % 2, -5);\n"
+        "    fwrite(line, 1, (size_t)n, stdout);\n"
+        "  }\n"
+        "  return 0;\n"
+        "}\n"
+    )
+    exe = tmp_path / "fw2"
+    subprocess.run(["gcc", "-std=c99", "-Wall", "-Werror", "-I", EXAMPLES, str(main), "-o", str(exe)], check=True)
+    out = subprocess.run([str(exe)], check=True, capture_output=True).stdout
+    events = LineDecoder().feed(out)  # counts 0 and 9 are refused by the firmware: no line
+    assert [e.kind for e in events] == ["sample"] * 8
+    g = (-2147483648, 2147483647, 3, -4, 5, -6, 7, -8)
+    for count, event in enumerate(events, start=1):
+        assert event.sample.gauges == g[:count]
+        assert event.sample.pot == (-5 if count % 2 else None)
+        assert event.sample.seq == (65530 + count) % 65536
+    assert out.splitlines()[0] + b"\n" == encode_line(65531, 4294967295, g[:1], -5).replace(b"\r", b"")

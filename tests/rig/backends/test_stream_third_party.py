@@ -55,7 +55,7 @@ def board_line(seq, t_us, gauges, pot=None, end=b"\r\n") -> bytes:
     return b"$" + payload + b"*" + b"%04X" % crc16_xmodem_bitwise(payload) + end
 
 
-_LINE = re.compile(rb"^\$(-?\d+(?:,-?\d+){4,5})\*([0-9A-F]{4})$")
+_LINE = re.compile(rb"^\$((?:V2,)?-?\d+(?:,-?\d+){3,11})\*([0-9A-F]{4})$")
 
 
 def parse_board_output(data: bytes) -> tuple[list[str], list[tuple[int, ...]]]:
@@ -68,7 +68,15 @@ def parse_board_output(data: bytes) -> tuple[list[str], list[tuple[int, ...]]]:
         m = _LINE.match(raw)
         assert m, raw
         assert int(m.group(2), 16) == crc16_xmodem_bitwise(m.group(1)), raw
-        samples.append(tuple(int(v) for v in m.group(1).split(b",")))
+        fields = m.group(1).split(b",")
+        if fields[0] == b"V2":  # version 2: the tag and the gauge count, then seq, t_us, the gauges (and the pot)
+            values = [int(v) for v in fields[1:]]
+            assert len(values) - 3 in (values[2], values[2] + 1), raw
+            values = values[:2] + values[3:]
+        else:
+            values = [int(v) for v in fields]
+            assert len(values) in (5, 6), raw
+        samples.append(tuple(values))
     return info, samples
 
 
@@ -501,6 +509,7 @@ struct FakeSerial {
   void print(const char *s) { fputs(s, stdout); }
   void print(int v) { printf("%d", v); }
   void println(const char *s) { fputs(s, stdout); fputs("\r\n", stdout); }
+  void println(int v) { printf("%d\r\n", v); }
   size_t write(const uint8_t *b, size_t n) { return fwrite(b, 1, n, stdout); }
 } Serial;
 """
@@ -554,7 +563,7 @@ def test_the_reference_sketch_runs_across_the_micros_wrap_and_a_third_party_read
     n_lines = 70_000  # past the 16-bit sequence wrap
     out = subprocess.run([str(exe), str(start), str(n_lines * 10)], check=True, capture_output=True).stdout
     info, samples = parse_board_output(out)
-    assert info == ["# flexdigit-stream 1 adc=ADS1115 v_per_count=0.000125 rate_hz=100"]
+    assert info == ["# flexdigit-stream 2 adc=ADS1115 v_per_count=0.000125 rate_hz=100 gauges=3"]
     assert len(samples) == n_lines  # one line every 10 ms of the fake clock, also across the wrap
     seq = np.array([s[0] for s in samples])
     t_us = np.array([s[1] for s in samples], dtype=np.int64)

@@ -1,4 +1,5 @@
-"""The DAQ backend: the three gauge channels of an MCC card through ``uldaq`` (thesis 2.5.1, table 2.2).
+"""The DAQ backend: the gauge channels of an MCC card through ``uldaq`` (thesis 2.5.1, table 2.2): the thesis rig's
+three, or one per gauge of a ``params`` digit (``sensors.adc_channels``, 1 to 8).
 
 The thesis reads the amplified half-bridges on analog inputs 0, 1, 2 (pins 2, 4, 6, "Ch n high") of a
 PCI-DAS1602/16 set to +-5 V. The channels and range come from ``params.sensors`` (``adc_channels``,
@@ -133,8 +134,9 @@ class DaqRig(Rig):
             values = [self._ai.a_in(ch, self.input_mode, self.range, self._ul.AInFlag.DEFAULT) for ch in channels]
         except Exception as exc:  # noqa: BLE001
             raise RigError(f"{self.name}: analog read failed ({exc})") from exc
-        pot = float(values[3]) if self.pot_channel is not None else math.nan
-        return np.asarray(values[:3], dtype=float), pot
+        count = len(self.channels)  # one per gauge of the digit (params.sensors.adc_channels: 1 to 8)
+        pot = float(values[count]) if self.pot_channel is not None else math.nan
+        return np.asarray(values[:count], dtype=float), pot
 
     def _read(self) -> tuple[np.ndarray, float]:
         return self.read_gauges()

@@ -42,7 +42,7 @@ import numpy as np
 
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.backends.stream_framing import PROTOCOL_VERSION, SEQ_MODULUS, LineDecoder, Sample
+from flexdigit.rig.backends.stream_framing import PROTOCOL_VERSIONS, SEQ_MODULUS, LineDecoder, Sample
 from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 
 __all__ = ["StreamSource", "StreamRig", "from_url", "source_from_url", "URL_OPTIONS"]
@@ -165,10 +165,11 @@ class StreamSource:
             self._counts["info"] += 1
             self.info_lines = [*self.info_lines[-19:], event.text]
             words = event.text.split()
-            if len(words) >= 2 and words[0] == "flexdigit-stream" and words[1] != str(PROTOCOL_VERSION):
+            known = [str(v) for v in PROTOCOL_VERSIONS]
+            if len(words) >= 2 and words[0] == "flexdigit-stream" and words[1] not in known:
                 self._error = RigError(
                     f"{self.name}: the board speaks flexdigit-stream protocol {words[1]}; this flexdigit reads "
-                    f"version {PROTOCOL_VERSION}"
+                    f"versions {' and '.join(known)}"
                 )
             return
         if event.kind == "garbled":
@@ -328,7 +329,14 @@ class StreamRig(Rig):
         self.name = source.name
 
     def _read(self) -> tuple[np.ndarray, float]:
-        return self.source.read_gauges()
+        gauges, pot = self.source.read_gauges()
+        expected = len(self.params.geometry.gauge_positions_m)
+        if gauges.size != expected:  # a board wired for another digit: its readings would be read as this one's
+            raise RigError(
+                f"{self.name}: the board sends {gauges.size} gauge(s) a line but the digit has {expected}: flash the "
+                "firmware with its gauge count, or give the digit's parameters (--params)"
+            )
+        return gauges, pot
 
     def _send(self, command: int) -> None:
         raise RigError(

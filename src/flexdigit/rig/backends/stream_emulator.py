@@ -30,8 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexdigit._validation import SEED, Flag, Plausible, check_int, check_param, check_positive
+from flexdigit.errors import ParameterError
+from flexdigit.params import RigParams
 from flexdigit.rig.backends.servo_board import FrameDecoder
 from flexdigit.rig.backends.stream_framing import PROTOCOL_VERSION, encode_line
+from flexdigit.twin.digit_calibration import twin_calibration
 
 #: Lines per second: the firmware streams 100; a 115200-baud serial line carries ~2,000 of these lines.
 RATE_HZ = Plausible("Hz", 0.1, 10_000.0, "lines per second: the firmware streams 100, a serial line carries ~2,000")
@@ -73,9 +76,15 @@ class StreamEmulator:
     ----------
     source : callable, optional
         ``source(t_s) -> (gauges_v, pot_v or None)`` in volts; default a resting digit (0.1, 0.5, 0.2 V with 2 mV of
-        seeded noise, no pot). Ignored with ``twin``.
+        seeded noise, no pot; on a ``params`` digit of G gauges, G values from 0.1 V up). Ignored with ``twin``.
     twin : bool or flexdigit.twin.Twin
-        Stream a twin's gauges and pot (True: ``Twin(seed=seed)``) and serve a servo board on :attr:`servo_port`.
+        Stream a twin's gauges and pot (True: ``Twin(params, seed=seed)`` with the digit's derived calibration) and
+        serve a servo board on :attr:`servo_port`.
+    params : RigParams, optional
+        The digit (default the thesis rig): its gauge count, and the twin's digit.
+    version : {1, 2}
+        The protocol version of the lines (the reference firmware's 2; 1, as boards flashed before it, carries
+        three gauges only).
     rate_hz : float
         Lines per second (the firmware's 100).
     scale : float
@@ -84,7 +93,7 @@ class StreamEmulator:
     seed : int
         Seeds the default source's noise and the corruption.
     banner : bool
-        Send the ``# flexdigit-stream 1 ...`` information line first.
+        Send the ``# flexdigit-stream 2 ... gauges=G`` information line first.
     """
 
     def __init__(
@@ -98,6 +107,8 @@ class StreamEmulator:
         faults: Faults | None = None,
         seed: int = 0,
         banner: bool = True,
+        params=None,
+        version: int = PROTOCOL_VERSION,
     ) -> None:
         import tty
 
@@ -108,11 +119,20 @@ class StreamEmulator:
         self.seed = check_int(seed, "seed", "StreamEmulator", low=0)
         self.rng = np.random.default_rng(self.seed)
         self.banner = bool(banner)
+        self.params = params or RigParams()
+        self.gauges = len(self.params.geometry.gauge_positions_m)
+        self.version = check_int(version, "version", "StreamEmulator", low=1, high=PROTOCOL_VERSION)
+        if self.version == 1 and self.gauges != 3:
+            raise ParameterError(
+                f"The 'version' parameter of StreamEmulator is 1, whose lines carry 3 gauges; the digit has "
+                f"{self.gauges}: use version 2"
+            )
         self.twin = None
         if twin is not False:
             from flexdigit.twin.twin import Twin
 
-            self.twin = Twin(seed=self.seed, dt_s=0.002) if twin is True else twin
+            calibration = twin_calibration(self.params)
+            self.twin = Twin(self.params, seed=self.seed, dt_s=0.002, calibration=calibration) if twin is True else twin
         self.source = source or self._resting
         self.master, self._slave = os.openpty()
         tty.setraw(self._slave)  # no echo, no newline translation: bytes pass as the firmware wrote them
@@ -135,7 +155,8 @@ class StreamEmulator:
         self._thread.start()
 
     def _resting(self, t_s: float):
-        return np.array([0.1, 0.5, 0.2]) + 0.002 * self.rng.standard_normal(3), None
+        rest = np.array([0.1, 0.5, 0.2]) if self.gauges == 3 else 0.1 * np.arange(1, self.gauges + 1)
+        return rest + 0.002 * self.rng.standard_normal(self.gauges), None
 
     def _twin_source(self, t_s: float):
         twin = self.twin
@@ -170,8 +191,8 @@ class StreamEmulator:
         try:
             if self.banner:
                 text = (
-                    f"# flexdigit-stream {PROTOCOL_VERSION} adc=emulator v_per_count={self.scale:g} "
-                    f"rate_hz={self.rate_hz:g}\r\n"
+                    f"# flexdigit-stream {self.version} adc=emulator v_per_count={self.scale:g} "
+                    f"rate_hz={self.rate_hz:g} gauges={self.gauges}\r\n"
                 )
                 self._write(text.encode("ascii"))
             next_at = time.monotonic()
@@ -194,7 +215,7 @@ class StreamEmulator:
                     continue
                 counts = np.clip(np.round(np.asarray(gauges, dtype=float) / self.scale), low, high).astype(int)
                 pot_counts = None if pot is None or not math.isfinite(pot) else int(round(pot / self.scale))
-                line = encode_line(seq, int(t * 1e6), counts, pot_counts)
+                line = encode_line(seq, int(t * 1e6), counts, pot_counts, version=self.version)
                 garble = (f.garble_after is not None and seq >= f.garble_after) or (
                     f.garble_every is not None and seq % f.garble_every == f.garble_every - 1
                 )

@@ -8,9 +8,15 @@ readings over USB serial. This module is the protocol, encoding and decoding byt
 is the transport and ``examples/flexdigit_stream/flexdigit_stream.ino`` the reference firmware.
 
 One line per sample, ASCII, sent ended by ``\\r\\n``; the host ends a line at ``\\n`` or ``\\r``, whichever
-comes, and skips empty lines, so ``\\r\\n``, ``\\n``, ``\\r`` and ``\\n\\r`` all read::
+comes, and skips empty lines, so ``\\r\\n``, ``\\n``, ``\\r`` and ``\\n\\r`` all read. Version 2 carries any
+digit's 1 to 8 gauges, version 1 the thesis rig's three; the host reads both, line by line::
 
-    $<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<crc>
+    $V2,<seq>,<t_us>,<G>,<g1>,...,<gG>[,<pot>]*<crc>     version 2: G gauges, 1 <= G <= 8
+    $<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<crc>           version 1: three gauges
+
+- ``V2``: the literal tag of a version-2 line (upper case; it is no integer, so no version-1 line starts so);
+- ``G``: how many gauge fields follow, 1..:data:`MAX_GAUGES`; the line then has ``4 + G`` fields, or ``5 + G``
+  with the pot (a count that disagrees with the fields is garbled);
 
 - every field is a decimal integer, an optional ``-`` then digits (no ``+``, no blanks, no decimal point, no
   exponent): ADC counts, not volts (the host multiplies by its ``scale``, volts per count);
@@ -22,18 +28,19 @@ comes, and skips empty lines, so ``\\r\\n``, ``\\n``, ``\\r`` and ``\\n\\r`` all
 - ``t_us``: 0..4294967295, the board's microsecond clock when the sample was taken (Arduino ``micros()``, which
   wraps after 71.6 minutes; ``millis()`` x 1000 will do). Kept with each sample, never used for timing: the host
   keeps its own clock, so a wrap or a jump is harmless;
-- ``g1, g2, g3``: the gauges, base to tip, as signed ADC counts;
+- ``g1 .. gG`` (``g1, g2, g3`` in version 1): the gauges, base to tip, as signed ADC counts;
 - ``pot``: optional (a line may have it or not), the servo potentiometer in signed ADC counts;
 - ``crc``: four hexadecimal digits (the firmware sends upper case; either case reads), CRC-16/XMODEM (polynomial
   0x1021, initial value 0, no reflection, no final XOR: Python's ``binascii.crc_hqx(payload, 0)``, avr-libc's
-  ``_crc_xmodem_update``; check value 0x31C3 for ``123456789``) of the bytes strictly between ``$`` and ``*``.
+  ``_crc_xmodem_update``; check value 0x31C3 for ``123456789``) of the bytes strictly between ``$`` and ``*``
+  (the ``V2,`` tag included).
 
 A line is at most :data:`MAX_LINE_BYTES` bytes; a longer run without a line end is garbage. Lines starting with
-``#`` are information from the firmware (its banner: ``# flexdigit-stream 1 adc=ADS1115 v_per_count=0.000125
-rate_hz=100``; a banner naming another protocol version is refused); they are counted and kept, never taken for
-data. Any other line, a line whose checksum does not match, or one whose fields are not what is written above is
-*garbled*, and counted as such (with the reason). Bytes are 8N1 at the baud rate both ends agree on (115200 in
-the reference firmware); the rate of lines is free (the host reads the newest).
+``#`` are information from the firmware (its banner: ``# flexdigit-stream 2 adc=ADS1115 v_per_count=0.000125
+rate_hz=100 gauges=5``; a banner naming a protocol version other than 1 or 2 is refused); they are counted and
+kept, never taken for data. Any other line, a line whose checksum does not match, or one whose fields are not what
+is written above is *garbled*, and counted as such (with the reason). Bytes are 8N1 at the baud rate both ends
+agree on (115200 in the reference firmware); the rate of lines is free (the host reads the newest).
 
 Examples
 --------
@@ -45,6 +52,11 @@ b'$7,1000000,120,-45,3000,812*4297\\r\\n'
 ['sample', 'garbled']
 >>> decoder.feed(line)[0].sample.gauges
 (120, -45, 3000)
+>>> v2 = encode_line(8, 1_020_000, (5, 6, 7, 8, 9))
+>>> v2
+b'$V2,8,1020000,5,5,6,7,8,9*2358\\r\\n'
+>>> decoder.feed(v2)[0].sample.gauges
+(5, 6, 7, 8, 9)
 """
 
 from __future__ import annotations
@@ -53,15 +65,29 @@ import binascii
 import re
 from dataclasses import dataclass
 
-__all__ = ["PROTOCOL_VERSION", "Sample", "Event", "LineDecoder", "encode_line", "crc16_xmodem"]
+__all__ = [
+    "PROTOCOL_VERSION",
+    "PROTOCOL_VERSIONS",
+    "MAX_GAUGES",
+    "Sample",
+    "Event",
+    "LineDecoder",
+    "encode_line",
+    "crc16_xmodem",
+]
 
-#: The version the banner line announces (``# flexdigit-stream 1 ...``).
-PROTOCOL_VERSION = 1
+#: The version the reference firmware's banner announces (``# flexdigit-stream 2 ...``).
+PROTOCOL_VERSION = 2
+#: The versions the host reads (a banner naming another is refused).
+PROTOCOL_VERSIONS = (1, 2)
+#: Most gauges a version-2 line carries (a digit has 1 to 8).
+MAX_GAUGES = 8
+_V2_TAG = b"V2"
 #: Sequence numbers run 0..SEQ_MODULUS - 1 and wrap.
 SEQ_MODULUS = 65536
 #: The board's microsecond clock wraps at 2^32.
 TIME_MODULUS_US = 2**32
-#: A line longer than this without a newline is garbage (a real line is < 70 bytes).
+#: A line longer than this without a newline is garbage (a real line is < 70 bytes; eight 32-bit gauges < 140).
 MAX_LINE_BYTES = 200
 _LINE_END = re.compile(rb"[\r\n]")
 _HEX4 = re.compile(rb"^[0-9A-Fa-f]{4}$")
@@ -78,11 +104,12 @@ def crc16_xmodem(payload: bytes) -> int:
 
 @dataclass(frozen=True)
 class Sample:
-    """One decoded line: sequence number, board time (us), gauge counts and pot counts (None if not sent)."""
+    """One decoded line: sequence number, board time (us), gauge counts (1 to 8, base first) and pot counts (None
+    if not sent)."""
 
     seq: int
     t_us: int
-    gauges: tuple[int, int, int]
+    gauges: tuple[int, ...]
     pot: int | None = None
 
 
@@ -96,14 +123,21 @@ class Event:
     reason: str = ""
 
 
-def encode_line(seq: int, t_us: int, gauges, pot: int | None = None) -> bytes:
-    """The bytes the firmware sends for one sample (see the module docstring)."""
-    fields = [int(seq) % SEQ_MODULUS, int(t_us) % TIME_MODULUS_US, *(int(g) for g in gauges)]
-    if len(fields) != 5:
-        raise ValueError(f"encode_line needs 3 gauge values. Got {len(fields) - 2}")
+def encode_line(seq: int, t_us: int, gauges, pot: int | None = None, version: int | None = None) -> bytes:
+    """The bytes the firmware sends for one sample (see the module docstring): version 1 for three gauges and
+    version 2 otherwise, unless ``version`` says (version 2 carries three as well)."""
+    values = [int(g) for g in gauges]
+    version = (1 if len(values) == 3 else 2) if version is None else version
+    if version not in PROTOCOL_VERSIONS:
+        raise ValueError(f"encode_line writes protocol version 1 or 2. Got {version!r}")
+    if version == 1 and len(values) != 3:
+        raise ValueError(f"a version-1 line carries 3 gauge values. Got {len(values)}")
+    if not 1 <= len(values) <= MAX_GAUGES:
+        raise ValueError(f"a version-2 line carries 1 to {MAX_GAUGES} gauge values. Got {len(values)}")
+    fields = [int(seq) % SEQ_MODULUS, int(t_us) % TIME_MODULUS_US, *([len(values)] if version == 2 else []), *values]
     if pot is not None:
         fields.append(int(pot))
-    payload = ",".join(str(v) for v in fields).encode("ascii")
+    payload = (b"V2," if version == 2 else b"") + ",".join(str(v) for v in fields).encode("ascii")
     return b"$" + payload + b"*" + f"{crc16_xmodem(payload):04X}".encode("ascii") + b"\r\n"
 
 
@@ -134,17 +168,27 @@ def decode_line(line: bytes) -> Event:
     if crc16_xmodem(payload) != expected:
         return Event("garbled", reason="checksum mismatch")
     parts = payload.split(b",")
-    if len(parts) not in (5, 6):
+    version2 = parts[0] == _V2_TAG
+    if version2:
+        parts = parts[1:]
+    elif len(parts) not in (5, 6):
         return Event("garbled", reason=f"{len(parts)} fields, expected 5 or 6")
     try:
         values = [_integer(p) for p in parts]
     except ValueError:
         return Event("garbled", reason="a field is not an integer")
+    count = 3
+    if version2:
+        if len(values) < 4 or not 1 <= values[2] <= MAX_GAUGES:
+            return Event("garbled", reason=f"version 2: no gauge count 1..{MAX_GAUGES} and its gauges")
+        count, values = values[2], values[:2] + values[3:]
+        if len(values) not in (2 + count, 3 + count):
+            return Event("garbled", reason=f"version 2: {len(values) - 2} values after a gauge count of {count}")
     seq, t_us = values[0], values[1]
     if not (0 <= seq < SEQ_MODULUS and 0 <= t_us < TIME_MODULUS_US):
         return Event("garbled", reason="sequence number or time out of range")
-    pot = values[5] if len(values) == 6 else None
-    return Event("sample", Sample(seq, t_us, (values[2], values[3], values[4]), pot))
+    pot = values[2 + count] if len(values) == 3 + count else None
+    return Event("sample", Sample(seq, t_us, tuple(values[2 : 2 + count]), pot))
 
 
 class LineDecoder:

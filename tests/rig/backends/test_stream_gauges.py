@@ -1,0 +1,55 @@
+"""Version 2 of the gauge stream on the wire (issue 24): a board streaming any digit's 1 to 8 gauges, read through
+``stream://`` as that digit's rig; a board of another gauge count refused in one line; version 1's three-gauge
+lines still read. The emulator stands in for the reference firmware (examples/flexdigit_stream)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from digits import write_digit
+from flexdigit.errors import ParameterError, RigError
+from flexdigit.params import RigParams, load_params
+from flexdigit.rig.backends.stream_emulator import StreamEmulator
+from flexdigit.rig.base import open_rig
+
+#: The emulator's resting digit: 0.1 V per gauge number with 2 mV of noise, quantised to 125 uV; a mean of ten
+#: readings is within 5 mV (2.5 sigma of one reading).
+REST_ATOL_V = 0.005
+
+pytestmark = pytest.mark.skipif(not hasattr(__import__("os"), "openpty"), reason="POSIX pty")
+
+
+@pytest.mark.parametrize("name", ["one-section", "five-sections-eight-gauges", "six-gauges-geared"])
+def test_a_version_2_board_streams_the_digits_gauges(name, tmp_path):
+    params = load_params(write_digit(name, tmp_path))
+    count = len(params.geometry.gauge_positions_m)
+    with StreamEmulator(seed=4, params=params) as emulator, open_rig(f"stream://{emulator.port}", params) as rig:
+        readings = []
+        for _ in range(10):
+            rig.wait(0.03)  # 100 lines/s: a fresh line between reads
+            readings.append(rig.read().gauges_v)
+        assert rig.source.stats()["garbled"] == 0
+    np.testing.assert_allclose(np.mean(readings, axis=0), 0.1 * np.arange(1, count + 1), atol=REST_ATOL_V)
+
+
+def test_a_version_1_board_still_reads_on_the_thesis_rig():
+    with StreamEmulator(seed=5, version=1) as emulator, open_rig(f"stream://{emulator.port}") as rig:
+        rig.wait(0.03)
+        np.testing.assert_allclose(rig.read().gauges_v, [0.1, 0.5, 0.2], atol=REST_ATOL_V * 3)
+        assert rig.source.stats()["garbled"] == 0
+
+
+def test_a_board_with_another_gauge_count_is_refused_in_one_line(tmp_path):
+    five = load_params(write_digit("five-sections-eight-gauges", tmp_path))
+    with StreamEmulator(seed=6) as emulator, open_rig(f"stream://{emulator.port}", five) as rig:
+        rig.wait(0.03)
+        with pytest.raises(RigError, match=r"sends 3 gauge\(s\) a line but the digit has 8") as err:
+            rig.read()
+        assert "\n" not in str(err.value)
+
+
+def test_a_version_1_emulator_of_another_digit_is_refused(tmp_path):
+    with pytest.raises(ParameterError, match="version 2"):
+        StreamEmulator(params=load_params(write_digit("short", tmp_path)), version=1)
+    assert RigParams().geometry.gauge_positions_m == (0.045, 0.135, 0.225)
