@@ -214,6 +214,11 @@ def _run(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
 
 
+def _digit_fields(args, rig) -> dict:
+    """``run --json``'s digit: the ``--params`` file and how the serial command drives its cable(s)."""
+    return {"params": None if args.params is None else str(args.params), "cables": _cables(rig.params)}
+
+
 def _cables(params) -> dict:
     """How the digit is pulled, for the log and ``--json``: one cable, or a pair on one servo command."""
     c = params.cables
@@ -335,8 +340,7 @@ def _run_data(args, run, rig, settings, setpoint, period, estimator, recording) 
         "controller": args.controller,
         "setpoint_deg": setpoint,
         "period_s": period,
-        "params": None if args.params is None else str(args.params),
-        "cables": _cables(rig.params),  # how the serial command drives the digit's cable(s)
+        **_digit_fields(args, rig),
         "samples": t.samples,
         "overruns": t.overruns,
         "jitter_p50_s": t.jitter_p50_s,

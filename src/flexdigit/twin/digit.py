@@ -300,6 +300,7 @@ class Chain:
         lead = np.asarray(cable_shortening_m) - self.eccentricity * np.asarray(psi_tip)
         stretch1 = self.cable_pretension_m + lead
         stretch2 = self.cable_pretension_m - lead if self.antagonist else np.full_like(stretch1, -np.inf, dtype=float)
+        stretch2 = np.where(np.isneginf(cable_shortening_m), -np.inf, stretch2)  # detached: neither cable pulls
         kc = self.cable_stiffness
         return kc * np.maximum(stretch1, 0.0), kc * np.maximum(stretch2, 0.0), stretch1 > 0, stretch2 > 0
 
@@ -314,6 +315,8 @@ class Chain:
         lead = shortening - self.eccentricity * psi_tip
         if not self.antagonist:
             return lead, -math.inf
+        if shortening == -math.inf:  # detached (the twin's cable=False): neither cable pulls, not the second at +inf
+            return -math.inf, -math.inf
         return self.cable_pretension_m + lead, self.cable_pretension_m - lead
 
     def axial_force(self, psi, g_forces_beyond_ab, tension):
