@@ -71,6 +71,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=1e-3,
         help="implicit time step, s, 1e-6..0.1 (default 1 ms)",
     )
+    p.add_argument(
+        "--method",
+        choices=("discrete", "shooting"),
+        default="discrete",
+        help="the discretised rod (default; fast, robust) or the continuous rod shot at each step",
+    )
     p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
@@ -139,7 +145,9 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
         initial = solve_statics(
             robot, start["tensions_n"], gravity_m_s2=loads.get("gravity_m_s2"), tip_force_n=start.get("tip_force_n")
         )
-        motion = simulate(robot, initial, args.duration_s, dt_s=args.dt_s, tensions_n=tensions, **loads)
+        motion = simulate(
+            robot, initial, args.duration_s, dt_s=args.dt_s, tensions_n=tensions, method=args.method, **loads
+        )
     converged = initial.converged and motion.converged
     record = _record(args, robot, motion, tensions, loads)
     data = {
@@ -149,6 +157,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
         "initial": {"converged": initial.converged, "tip_position_m": initial.tip_position_m.tolist(), **start},
         "converged": converged,
         "dt_s": args.dt_s,
+        "method": args.method,
         "t_s": motion.t_s.tolist(),
         "tip_position_m": motion.tip_positions_m.tolist(),
         "newton_iterations": motion.iterations.tolist(),
