@@ -126,6 +126,16 @@ def _record(args: argparse.Namespace, robot, solution, tensions, loads) -> dict:
     return {"recording": str(path)}
 
 
+def _start(args: argparse.Namespace, robot) -> dict:
+    """Where ``tdcr dynamics`` starts from: the statics of ``--from-tension-n`` (zero) and ``--from-tip-force-n``."""
+    start = {"tensions_n": [0.0] * len(robot.tendons)}
+    if args.from_tension_n is not None:
+        start["tensions_n"] = _tensions(args.from_tension_n, "from-tension-n", robot)
+    if args.from_tip_force_n is not None:
+        start["tip_force_n"] = _floats(args.from_tip_force_n, "from-tip-force-n", 3)
+    return start
+
+
 def _dynamics(args: argparse.Namespace) -> CommandResult:
     import warnings
 
@@ -135,11 +145,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
     robot = get_robot(args.robot)
     tensions = _tensions(args.tension_n, "tension-n", robot)
     loads = _loads(args)
-    start = {"tensions_n": [0.0] * len(robot.tendons)}
-    if args.from_tension_n is not None:
-        start["tensions_n"] = _tensions(args.from_tension_n, "from-tension-n", robot)
-    if args.from_tip_force_n is not None:
-        start["tip_force_n"] = _floats(args.from_tip_force_n, "from-tip-force-n", 3)
+    start = _start(args, robot)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)  # reported below, in the result and the exit code
         initial = solve_statics(
