@@ -133,8 +133,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
     from flexdigit.tdcr import get_robot, simulate, solve_statics
 
     robot = get_robot(args.robot)
-    tensions = _tensions(args.tension_n, "tension-n", robot)
-    loads = _loads(args)
+    tensions, loads = _tensions(args.tension_n, "tension-n", robot), _loads(args)
     start = {"tensions_n": [0.0] * len(robot.tendons)}
     if args.from_tension_n is not None:
         start["tensions_n"] = _tensions(args.from_tension_n, "from-tension-n", robot)
