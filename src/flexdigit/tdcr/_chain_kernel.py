@@ -547,12 +547,13 @@ def _backward_euler(state, dt, pieces, model, mass, inertia, beta, hb, tol, max_
 
 
 @_jit
-def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, qs, vs, ws, iterations):
+def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, rs, vs, ws, iterations):
     """March ``n_steps`` BDF2 steps of ``dt`` from rest at ``(x0, q0)`` (at rest before ``t = 0`` too: the
     history is the initial state). A step whose Newton fails is taken as 2, 4, .. 64 backward-Euler steps (the
-    BDF2 history, the states at both ends of a step of ``dt``, stays exact). Every step's nodes and frames into
-    ``xs, qs``, velocities into ``vs, ws``, Newton iterations into ``iterations``; returns the number of steps
-    that converged."""
+    BDF2 history, the states at both ends of a step of ``dt``, stays exact). Every step's nodes and node frames
+    (:func:`node_frames`) into ``xs, rs`` (m, n + 1, ..), node velocities and angular velocities (body frame; the
+    mean of the neighbouring elements') into ``vs, ws`` (m, n + 1, 3), Newton iterations into ``iterations``;
+    returns the number of steps that converged. Written as the steps go, so no element-wise history is kept."""
     n = q0.shape[0]
     size = 6 * n
     length = 0.0
@@ -607,7 +608,9 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
     rate = np.full(1, RATE)  # the chord Newton's last rate, carried over steps (RADAU5's faccon)
     scratch = np.empty((3, 3))
     xs[0] = x0
-    qs[0] = q0
+    _node_frames_of(q0, rs[0])
+    vs[0] = 0.0
+    ws[0] = 0.0
     for step in range(n_steps):
         x_prev, q_prev, v_prev, w_prev, sig_prev, kap_prev = prev
         x_now, q_now, v_now, w_now, sig_now, kap_now = now
@@ -672,10 +675,51 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
             return step
         prev, now, new = now, new, prev
         xs[step + 1] = now[0]
-        qs[step + 1] = now[1]
+        _node_frames_of(now[1], rs[step + 1])
         vs[step + 1] = now[2]
-        ws[step + 1] = now[3]
+        _node_angular_velocities_of(now[3], ws[step + 1])
     return n_steps
+
+
+@_jit
+def _node_frames_of(q, out):
+    """One state's node frames ``out`` (n + 1, 3, 3) of its element frames ``q`` (n, 3, 3), as :func:`node_frames`."""
+    rel = np.empty((3, 3))
+    rot = np.empty((3, 3))
+    n = q.shape[0]
+    for r in range(3):
+        for c in range(3):
+            out[0, r, c] = 1.0 if r == c else 0.0
+            out[n, r, c] = q[n - 1, r, c]
+    for i in range(1, n):
+        a = q[i - 1]
+        b = q[i]
+        for r in range(3):
+            for c in range(3):
+                rel[r, c] = a[0, r] * b[0, c] + a[1, r] * b[1, c] + a[2, r] * b[2, c]
+        half_cos = 0.5 * np.sqrt(max(1.0 + rel[0, 0] + rel[1, 1] + rel[2, 2], 0.0))
+        fa = 0.25 / half_cos
+        fs = 0.25 / (1.0 + half_cos)
+        for r in range(3):
+            for c in range(3):
+                eye = 1.0 if r == c else 0.0
+                rot[r, c] = eye + fa * (rel[r, c] - rel[c, r]) + fs * (rel[r, c] + rel[c, r] - 2.0 * eye)
+        for r in range(3):
+            for c in range(3):
+                out[i, r, c] = a[r, 0] * rot[0, c] + a[r, 1] * rot[1, c] + a[r, 2] * rot[2, c]
+
+
+@_jit
+def _node_angular_velocities_of(w, out):
+    """One state's node angular velocities ``out`` (n + 1, 3) of its elements' ``w`` (n, 3): the clamp's zero, the
+    mean of the neighbouring elements', the last element's at the tip."""
+    n = w.shape[0]
+    for k in range(3):
+        out[0, k] = 0.0
+        out[n, k] = w[n - 1, k]
+    for i in range(1, n):
+        for k in range(3):
+            out[i, k] = 0.5 * (w[i - 1, k] + w[i, k])
 
 
 @_jit
@@ -684,27 +728,5 @@ def node_frames(qs, out):
     (geodesically) between neighbouring elements', the last element's at the tip. The half-way turn of
     ``R = Q_a^T Q_b`` (angle below pi) without trigonometry: ``sqrt(R) = I + A / (2 c) + (S - I) / (2 (1 + c))``,
     ``A, S`` the antisymmetric and symmetric parts of ``R``, ``c = cos(angle / 2) = sqrt(1 + tr R) / 2``."""
-    rel = np.empty((3, 3))
-    rot = np.empty((3, 3))
-    n = qs.shape[1]
     for s in range(qs.shape[0]):
-        for r in range(3):
-            for c in range(3):
-                out[s, 0, r, c] = 1.0 if r == c else 0.0
-                out[s, n, r, c] = qs[s, n - 1, r, c]
-        for i in range(1, n):
-            a = qs[s, i - 1]
-            b = qs[s, i]
-            for r in range(3):
-                for c in range(3):
-                    rel[r, c] = a[0, r] * b[0, c] + a[1, r] * b[1, c] + a[2, r] * b[2, c]
-            half_cos = 0.5 * np.sqrt(max(1.0 + rel[0, 0] + rel[1, 1] + rel[2, 2], 0.0))
-            fa = 0.25 / half_cos
-            fs = 0.25 / (1.0 + half_cos)
-            for r in range(3):
-                for c in range(3):
-                    eye = 1.0 if r == c else 0.0
-                    rot[r, c] = eye + fa * (rel[r, c] - rel[c, r]) + fs * (rel[r, c] + rel[c, r] - 2.0 * eye)
-            for r in range(3):
-                for c in range(3):
-                    out[s, i, r, c] = a[r, 0] * rot[0, c] + a[r, 1] * rot[1, c] + a[r, 2] * rot[2, c]
+        _node_frames_of(qs[s], out[s])
