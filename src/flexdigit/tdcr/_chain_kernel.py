@@ -37,6 +37,7 @@ RATE = 0.9
 BUDGET = 4
 #: The largest Newton update of a step's frames (rad) or nodes (of the length): a damped Newton beyond
 MAX_UPDATE = 0.1
+_IDENTITY = np.eye(3)
 #: Steps between measurements of the chord Newton's rate (the others may stop after one update)
 MEASURE = 8
 
@@ -118,8 +119,11 @@ def forces(
             t[e, k] = 0.0
     for k in range(3):
         t[n - 1, k] += q[n - 1, 0, k] * tip_moment[0] + q[n - 1, 1, k] * tip_moment[1] + q[n - 1, 2, k] * tip_moment[2]
-    tb = np.empty(3)
-    nb = np.empty(3)
+    # one allocation for the scratch vectors (an allocation costs about what an element's forces do)
+    scratch = np.empty((7, 3))
+    tb, nb, m, pa, pb, fw, arm = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5], scratch[6]
+    rel = np.empty((3, 3))
+    disk = np.empty((3, 3)) if routing.shape[0] > 0 else rel
     for e in range(n):
         d0 = x[e + 1, 0] - x[e, 0]
         d1 = x[e + 1, 1] - x[e, 1]
@@ -137,12 +141,9 @@ def forces(
         t[e, 0] += tb[1] * nb[2] - tb[2] * nb[1]
         t[e, 1] += tb[2] * nb[0] - tb[0] * nb[2]
         t[e, 2] += tb[0] * nb[1] - tb[1] * nb[0]
-    ident = np.eye(3)
-    rel = np.empty((3, 3))
-    m = np.empty(3)
     for i in range(n):
         if i == 0:
-            _log_rel(ident, q[0], kap[0], rel)
+            _log_rel(_IDENTITY, q[0], kap[0], rel)
         else:
             _log_rel(q[i - 1], q[i], kap[i], rel)
         for k in range(3):
@@ -152,11 +153,6 @@ def forces(
         if i > 0:
             for k in range(3):
                 t[i - 1, k] += rel[k, 0] * m[0] + rel[k, 1] * m[1] + rel[k, 2] * m[2]
-    pa = np.empty(3)
-    pb = np.empty(3)
-    fw = np.empty(3)
-    disk = np.empty((3, 3))
-    arm = np.empty(3)
     for j in range(routing.shape[0]):
         if tau[j] == 0.0 or ends[j] < 1:
             continue
@@ -298,7 +294,7 @@ def _band_solve(jac, hb, rhs, out):
         out[i] = acc
     for i in range(size - 1, -1, -1):
         acc = out[i]
-        for j in range(i + 1, min(size, i + hb + 1)):
+        for j in range(min(size - 1, i + hb), i, -1):  # the unknown just solved (i + 1) last: a short chain
             acc -= jac[i, j - i + hb] * out[j]
         out[i] = acc / jac[i, hb]
 
