@@ -13,12 +13,14 @@ forces are ``-tau dL/dq``, a frictionless tendon at constant tension (the contin
 
 Time: BDF2 (A- and L-stable, Hairer & Wanner II.III) on positions, velocities and the body-frame angular
 velocities; a frame moves by ``Q^{n+1} = Q^n exp(psi)``, ``psi = -log(Q^{n T} Q^{n-1}) / 3 + (2 dt / 3) W^{n+1}``
-(BDF2 in the chart at ``Q^n``). The unknowns of a step are the new velocities, six a block (``v_{k+1}, W_k``);
-each block couples to its neighbours two blocks away at most (tendons), so the Jacobian is banded with half
-bandwidth 17 (11 without tendons). It is built by coloured finite differences (Curtis, Powell & Reid 1974: 35
-residual evaluations), factored by banded LU without pivoting (the matrix is mass + dt^2 stiffness of a stable
-rod), and reused over steps (a chord Newton, refreshed where it converges slower than a rate of 0.5: the rule
-of scipy's BDF and of Hairer & Wanner's RADAU5). Kelvin-Voigt damping ``beta K`` on the strains' BDF2 rates.
+(BDF2 in the chart at ``Q^n``). The unknowns of a step are the new velocities, six a block (``W_k, v_{k+1}``:
+the frame's first, which narrows the band by three over the node first); each block couples to its neighbours
+two blocks away at most (tendons), so the Jacobian is banded with half bandwidth 14 (8 without tendons; checked
+against a dense Jacobian in tests/tdcr/test_dynamics.py). It is built by coloured finite differences (Curtis,
+Powell & Reid 1974: 29 residual evaluations), factored by banded LU without pivoting (the matrix is mass +
+dt^2 stiffness of a stable rod), and reused over steps (a chord Newton, refreshed where it converges slower than a
+rate of 0.5: the rule of scipy's BDF and of Hairer & Wanner's RADAU5). Kelvin-Voigt damping ``beta K`` on the
+strains' BDF2 rates.
 """
 
 from __future__ import annotations
@@ -215,8 +217,8 @@ def _configure(z, a, xh, qh, psih, x, q):
         x[0, k] = xh[0, k]
     for e in range(n):
         for k in range(3):
-            x[e + 1, k] = xh[e + 1, k] + a * z[6 * e + k]
-        _exp(psih[e, 0] + a * z[6 * e + 3], psih[e, 1] + a * z[6 * e + 4], psih[e, 2] + a * z[6 * e + 5], rot)
+            x[e + 1, k] = xh[e + 1, k] + a * z[6 * e + 3 + k]
+        _exp(psih[e, 0] + a * z[6 * e], psih[e, 1] + a * z[6 * e + 1], psih[e, 2] + a * z[6 * e + 2], rot)
         for i in range(3):
             for j in range(3):
                 q[e, i, j] = qh[e, i, 0] * rot[0, j] + qh[e, i, 1] * rot[1, j] + qh[e, i, 2] * rot[2, j]
@@ -234,16 +236,16 @@ def _residual(z, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, x, q, f
     n = qh.shape[0]
     for e in range(n):
         b = 6 * e
-        w0, w1, w2 = z[b + 3], z[b + 4], z[b + 5]
+        w0, w1, w2 = z[b], z[b + 1], z[b + 2]
         j0, j1, j2 = inertia[e, 0] * w0, inertia[e, 1] * w1, inertia[e, 2] * w2
         gyro0 = w1 * j2 - w2 * j1
         gyro1 = w2 * j0 - w0 * j2
         gyro2 = w0 * j1 - w1 * j0
         for k in range(3):
-            res[b + k] = mf * mass[e + 1] * (z[b + k] - vh[e + 1, k]) - a * f[e + 1, k]
-        res[b + 3] = mf * (inertia[e, 0] * (w0 - wh[e, 0]) + a * gyro0) - a * t[e, 0]
-        res[b + 4] = mf * (inertia[e, 1] * (w1 - wh[e, 1]) + a * gyro1) - a * t[e, 1]
-        res[b + 5] = mf * (inertia[e, 2] * (w2 - wh[e, 2]) + a * gyro2) - a * t[e, 2]
+            res[b + 3 + k] = mf * mass[e + 1] * (z[b + 3 + k] - vh[e + 1, k]) - a * f[e + 1, k]
+        res[b] = mf * (inertia[e, 0] * (w0 - wh[e, 0]) + a * gyro0) - a * t[e, 0]
+        res[b + 1] = mf * (inertia[e, 1] * (w1 - wh[e, 1]) + a * gyro1) - a * t[e, 1]
+        res[b + 2] = mf * (inertia[e, 2] * (w2 - wh[e, 2]) + a * gyro2) - a * t[e, 2]
 
 
 @_jit
@@ -304,7 +306,7 @@ def _steps(size, a, length, relative):
     """Finite-difference steps: a displacement of ``relative`` of the length (velocities) and rad (frames)."""
     h = np.empty(size)
     for i in range(size):
-        h[i] = relative * (length if i % 6 < 3 else 1.0) / a
+        h[i] = relative * (length if i % 6 >= 3 else 1.0) / a
     return h
 
 
@@ -321,7 +323,7 @@ def _corotate(q, q_jac, turn, vec, backwards):
                     turn[e, i, j] = (
                         q[e, i, 0] * q_jac[e, j, 0] + q[e, i, 1] * q_jac[e, j, 1] + q[e, i, 2] * q_jac[e, j, 2]
                     )
-        b = 6 * e
+        b = 6 * e + 3  # the block's velocity
         v0, v1, v2 = vec[b], vec[b + 1], vec[b + 2]
         for i in range(3):
             if backwards:
@@ -363,7 +365,7 @@ def equilibrate(x, q, model, hb, tol, max_iter):
         _band_solve(jac, hb, res, dz)
         big = 0.0
         for i in range(size):
-            big = max(big, abs(dz[i]) / (length if i % 6 < 3 else 1.0))
+            big = max(big, abs(dz[i]) / (length if i % 6 >= 3 else 1.0))
         _configure(dz, 1.0, x, q, psih, xx, qq)
         x[:, :] = xx
         q[:, :, :] = qq
@@ -417,7 +419,7 @@ def _newton(
                 z[:] = z_guess
                 stale = False
             for i in range(size):
-                h[i] = 1e-8 * (length if i % 6 < 3 else 1.0) / a
+                h[i] = 1e-8 * (length if i % 6 >= 3 else 1.0) / a
             _jacobian(z, h, hb, a, 1.0, xh, qh, psih, vh, wh, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, jac)
             _configure(z, a, xh, qh, psih, xx, q_jac)
             keep[0] = True
@@ -434,7 +436,7 @@ def _newton(
         _corotate(qq, q_jac, turn, dz, False)
         big = 0.0
         for i in range(size):
-            d = a * abs(dz[i]) / (length if i % 6 < 3 else 1.0)
+            d = a * abs(dz[i]) / (length if i % 6 >= 3 else 1.0)
             if not d <= big:  # NaN too
                 big = d
         if not np.isfinite(big):
@@ -505,8 +507,8 @@ def _backward_euler(state, dt, pieces, model, mass, inertia, beta, hb, tol, max_
             for k in range(3):
                 hsig[e, k] = -osig[e, k] / sub
                 hkap[e, k] = -okap[e, k] / sub
-                guess[6 * e + k] = ov[e + 1, k]
-                guess[6 * e + 3 + k] = ow[e, k]
+                guess[6 * e + 3 + k] = ov[e + 1, k]
+                guess[6 * e + k] = ow[e, k]
         dmp = (1.0 + beta / sub, beta, hsig, hkap)
         ok, more = _newton(
             z,
@@ -536,8 +538,8 @@ def _backward_euler(state, dt, pieces, model, mass, inertia, beta, hb, tol, max_
         _configure(z, sub, xh, qh, psih, ox, oq)
         for e in range(n):
             for k in range(3):
-                ov[e + 1, k] = z[6 * e + k]
-                ow[e, k] = z[6 * e + 3 + k]
+                ov[e + 1, k] = z[6 * e + 3 + k]
+                ow[e, k] = z[6 * e + k]
         _state_strains(ox, oq, model, osig, okap)
     return True, its
 
@@ -622,8 +624,8 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
                 hsig[e, k] = (-4.0 * sig_now[e, k] + sig_prev[e, k]) / (2.0 * dt)
                 hkap[e, k] = (-4.0 * kap_now[e, k] + kap_prev[e, k]) / (2.0 * dt)
                 # the guess: the velocities extrapolated linearly
-                z_guess[6 * e + k] = 2.0 * v_now[e + 1, k] - v_prev[e + 1, k]
-                z_guess[6 * e + 3 + k] = 2.0 * w_now[e, k] - w_prev[e, k]
+                z_guess[6 * e + 3 + k] = 2.0 * v_now[e + 1, k] - v_prev[e + 1, k]
+                z_guess[6 * e + k] = 2.0 * w_now[e, k] - w_prev[e, k]
         dmp = (g, beta, hsig, hkap)
         trust = step % MEASURE != 0  # every MEASURE-th step, the rate measured again
         ok, its = _newton(
@@ -653,8 +655,8 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
             _configure(z, a, xh, q_now, psih, x_new, q_new)
             for e in range(n):
                 for k in range(3):
-                    v_new[e + 1, k] = z[6 * e + k]
-                    w_new[e, k] = z[6 * e + 3 + k]
+                    v_new[e + 1, k] = z[6 * e + 3 + k]
+                    w_new[e, k] = z[6 * e + k]
             if beta > 0.0:  # the damping's history; unused without
                 _state_strains(x_new, q_new, model, sig_new, kap_new)
         else:

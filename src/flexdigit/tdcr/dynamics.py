@@ -12,7 +12,7 @@ whatever the stiffness, at the cost of a Newton solve. Two ways of doing it:
   after ~0.1 s), and each step costs ~10 integrations of the rod (real-time factor 2.2 on a 40-node rod).
 - discretised in space (``method="discrete"``, the default; :mod:`flexdigit.tdcr._chain_kernel`): nodes and
   element frames as PyElastica's rod (Gazzola et al. 2018), so that the step's unknowns, the new velocities, are
-  coupled only to their neighbours: the Newton matrix is banded (half bandwidth 11, 17 with tendons) and costs
+  coupled only to their neighbours: the Newton matrix is banded (half bandwidth 8, 14 with tendons) and costs
   ``O(n)`` to solve. The Jacobian (coloured finite differences) is kept over steps and turned with the element
   frames (a co-rotated chord Newton): on a vibrating rod it is built once; where Newton slows (a sudden load)
   it is rebuilt, which makes the step robust where shooting fails (rao2021 pulled from slack tendons by 4 and
@@ -326,7 +326,7 @@ def _discrete_model(robot: Robot, nodes, end_node, loads):
     mass = b.mass_per_length_kg_m * lumped
     inertia = b.density_kg_m3 * b.second_moment_m4 * np.array([1.0, 1.0, 2.0]) * lengths[:, None]
     pulled = bool(np.any((tau > 0) & (np.asarray(end_node) >= 1)))
-    return model, mass, inertia, 17 if pulled else 11
+    return model, mass, inertia, 14 if pulled else 8
 
 
 def _element_frames(rotations: np.ndarray) -> np.ndarray:
