@@ -167,3 +167,19 @@ def test_the_step_jacobian_fits_in_the_band_the_kernel_assumes(robot, tensions_n
     jac = np.column_stack([(residual(z + 1e-6 * np.eye(6 * n)[j]) - r0) / 1e-6 for j in range(6 * n)])
     rows, cols = np.nonzero(np.abs(jac) > 1e-9 * np.abs(jac).max())  # above the differences' round-off
     assert np.abs(rows - cols).max() == hb
+
+
+def test_an_elements_frame_is_half_way_between_its_nodes():
+    """Against scipy's rotations, on frames 1e-9 off orthonormal (the statics' integrated frames are ~1e-10 off):
+    ``Q_a exp(log(Q_a^T Q_b) / 2)`` of the nearest rotations."""
+    from scipy.spatial.transform import Rotation
+
+    from flexdigit.tdcr.dynamics import _element_frames
+
+    rng = np.random.default_rng(11)
+    nodes = Rotation.random(21, random_state=11)
+    frames = nodes.as_matrix() + 1e-9 * rng.normal(size=(21, 3, 3))
+    first = Rotation.from_matrix(frames[:-1])
+    half = (first.inv() * Rotation.from_matrix(frames[1:])).as_rotvec() / 2
+    expected = (first * Rotation.from_rotvec(half)).as_matrix()
+    np.testing.assert_allclose(_element_frames(frames), expected, rtol=0, atol=1e-12)

@@ -28,7 +28,18 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["BUDGET", "MAX_UPDATE", "MEASURE", "NO_PROGRESS", "RATE", "equilibrate", "forces", "node_frames", "run"]
+__all__ = [
+    "BUDGET",
+    "MAX_UPDATE",
+    "MEASURE",
+    "NO_PROGRESS",
+    "RATE",
+    "element_frames",
+    "equilibrate",
+    "forces",
+    "node_frames",
+    "run",
+]
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
@@ -728,3 +739,10 @@ def node_frames(qs, out):
     ``A, S`` the antisymmetric and symmetric parts of ``R``, ``c = cos(angle / 2) = sqrt(1 + tr R) / 2``."""
     for s in range(qs.shape[0]):
         _node_frames_of(qs[s], out[s])
+
+
+@_jit
+def element_frames(rs, out):
+    """Element frames ``out`` (n, 3, 3) half-way (geodesically) between node frames ``rs`` (n + 1, 3, 3)."""
+    for e in range(out.shape[0]):
+        _half_way(rs[e], rs[e + 1], out[e])
