@@ -259,49 +259,25 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
 
 def _twenty_ms(args: argparse.Namespace) -> CommandResult:
     """``design 20ms``: the discrete design the loop runs (``flexdigit run --controller digital20``)."""
-    import dataclasses
-
-    import control as ct
-    import numpy as np
-
-    from flexdigit.control.analysis import step_figures
-    from flexdigit.control.design20ms import closed_loop, digit_design_20ms, digit_first_mode
-    from flexdigit.params import RigParams
+    from flexdigit.control.design20ms import digit_design_20ms_summary
 
     params, calibration = _digit(args)
-    params = params or RigParams()
-    thesis = params == RigParams()
-    d = digit_design_20ms(params, period_s=args.period, calibration=calibration, orientation=args.orientation)
-    mode = None if thesis else digit_first_mode(params, calibration, orientation=args.orientation)
-    loop = closed_loop(d.plant_d, d.controller)
-    t = np.arange(0.0, 3.0 + d.period_s / 2, d.period_s)
-    response = ct.forced_response(loop, t, np.full(t.size, 30.0))
-    figures = step_figures(response.time, np.asarray(response.outputs).reshape(-1), target=30.0)
-    radius = float(np.max(np.abs(d.closed_loop_poles)))
-    data = {
-        "params": args.params,
-        "period_s": d.period_s,
-        "delay_samples": d.delay_samples,
-        "deg_per_command": d.deg_per_command,
-        "digit_mode": None if mode is None else {"wn_rad_s": mode[0], "zeta": mode[1]},
-        "cables": params.cables.count,
-        "weights": d.weights.__dict__,
-        "closed_loop_pole_radius": radius,
-        "stable": radius < 1.0,
-        "linear_step_30deg": dataclasses.asdict(figures),
-        "dither": not thesis,
-    }
+    summary = digit_design_20ms_summary(
+        params, period_s=args.period, calibration=calibration, orientation=args.orientation
+    )
+    data = {"params": args.params, **summary}
+    mode, step = data["digit_mode"], data["linear_step_30deg"]
     model = (
         "servo x rotation per command (5.3)"
         if mode is None
-        else f"servo x rotation per command x the digit's mode ({mode[0]:.3g} rad/s, zeta {mode[1]:.3g}, cable(s) "
-        f"taut, from its twin {args.orientation})"
+        else f"servo x rotation per command x the digit's mode ({mode['wn_rad_s']:.3g} rad/s, zeta "
+        f"{mode['zeta']:.3g}, cable(s) taut, from its twin {args.orientation})"
     )
     text = (
-        f"20 ms design{' on ' + args.params if args.params else ''}: {model}; {d.deg_per_command:.4g} deg a command, "
-        f"{d.delay_samples} sample(s) of delay, period {d.period_s * 1000:g} ms\n"
-        f"  nominal loop poles inside |z| <= {radius:.4f} (stable); linear 30 deg step: settling "
-        f"{figures.settling_time_s:.3f} s, overshoot {figures.overshoot_percent:.2f} %\n"
+        f"20 ms design{' on ' + args.params if args.params else ''}: {model}; {data['deg_per_command']:.4g} deg a "
+        f"command, {data['delay_samples']} sample(s) of delay, period {data['period_s'] * 1000:g} ms\n"
+        f"  nominal loop poles inside |z| <= {data['closed_loop_pole_radius']:.4f} (stable); linear 30 deg step: "
+        f"settling {step['settling_time_s']:.3f} s, overshoot {step['overshoot_percent']:.2f} %\n"
         f"  the loop on the twin: flexdigit run{' --params ' + args.params if args.params else ''} --setpoint-deg 30"
     )
     return CommandResult(data=data, text=text)

@@ -61,6 +61,7 @@ __getattr__, __all__ = lazy_exports(
         "thesis_controller": "flexdigit.control.design20ms",
         "closed_loop": "flexdigit.control.design20ms",
         "digit_design_20ms": "flexdigit.control.design20ms",
+        "digit_design_20ms_summary": "flexdigit.control.design20ms",
         "digit_first_mode": "flexdigit.control.design20ms",
         "straight_is_stable": "flexdigit.control.design20ms",
         "digit_plant": "flexdigit.control.thesis_designs",
