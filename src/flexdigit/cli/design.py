@@ -206,52 +206,23 @@ def _hinf(args: argparse.Namespace) -> CommandResult:
 
 def _hinf_digit(args, params, calibration) -> CommandResult:
     """``design hinf --params``: 4.4's design on the digit's own plant (gauge-1 deflection, m per command)."""
-    import control as ct
-    import numpy as np
+    import math
 
-    from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps, step_metrics
-    from flexdigit.control.thesis_designs import digit_hinf_design, sorted_poles
+    from flexdigit.control.thesis_designs import digit_hinf_summary
 
-    d, plant = digit_hinf_design(
+    summary = digit_hinf_summary(
         args.filter_hz, params, calibration, orientation=args.orientation, eps_u=args.eps, margin=args.margin
     )
-    K = d.controller
-    maps = loop_maps(plant.tf, K)
-    tzw, wzw = hinf_norm(maps.T_zw, "T_zw")
-    tol = additive_tolerance(plant.tf, K)
-    tf = ct.tf(K)
-    data = {
-        "params": args.params,
-        "filter_hz": args.filter_hz,
-        "plant": "digit (consistent, from its components)",
-        "plant_num": np.asarray(plant.poly.num).tolist(),
-        "plant_den": np.asarray(plant.poly.den).tolist(),
-        "plant_poles": [[float(p.real), float(p.imag)] for p in plant.poles],
-        "plant_dc_gain_m_per_command": plant.dc_gain,
-        "digit_wn_rad_s": plant.factors["E_digit_housing"].den[-1] ** 0.5,
-        "gamma_opt": d.gamma_opt,
-        "gamma": d.gamma,
-        "margin": d.margin,
-        "controller_num": np.asarray(tf.num[0][0]).tolist(),
-        "controller_den": np.asarray(tf.den[0][0]).tolist(),
-        "controller_poles": [[float(p.real), float(p.imag)] for p in sorted_poles(np.linalg.eigvals(K.A))],
-        "closed_loop_stable": True,
-        "tzw_peak_db": 20 * np.log10(tzw),
-        "tzw_peak_rad_s": wzw,
-        "tpq_peak_db": tol["tpq_db"],
-        "additive_tolerance_m_per_command": tol["tolerance"],
-        "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
-        "tyw_settling_s": step_metrics(maps.T_yw, t_final=3.0)["settling_time_s"],
-        "thesis_columns": "not applicable (the thesis printed its own rig's designs only)",
-    }
+    data = {"params": args.params, **summary}
     text = (
-        f"H-inf design on {args.params}: F(s) = 1/(s + {2 * 3.141592653589793 * args.filter_hz:.4f}), the digit's "
-        f"plant from its components (gauge-1 deflection, {plant.dc_gain * 1e3:.4g} mm per command; E(s) wn "
-        f"{data['digit_wn_rad_s']:.4g} rad/s from its twin)\n"
-        f"  gamma_opt {d.gamma_opt:.6g}, central controller at {d.gamma:.6g} (margin {d.margin:.3g}); closed loop "
-        f"stable\n"
-        f"  ||T_zw|| {data['tzw_peak_db']:.4f} dB at {wzw:.3f} rad/s; ||T_pq|| {tol['tpq_db']:.2f} dB; additive "
-        f"tolerance {tol['tolerance']:.4g} m/command ({tol['tolerance_relative_percent']:.3g} % of |G(0)|)\n"
+        f"H-inf design on {args.params}: F(s) = 1/(s + {2 * math.pi * args.filter_hz:.4f}), the digit's plant from "
+        f"its components (gauge-1 deflection, {data['plant_dc_gain_m_per_command'] * 1e3:.4g} mm per command; E(s) "
+        f"wn {data['digit_wn_rad_s']:.4g} rad/s from its twin)\n"
+        f"  gamma_opt {data['gamma_opt']:.6g}, central controller at {data['gamma']:.6g} (margin "
+        f"{data['margin']:.3g}); closed loop stable\n"
+        f"  ||T_zw|| {data['tzw_peak_db']:.4f} dB at {data['tzw_peak_rad_s']:.3f} rad/s; ||T_pq|| "
+        f"{data['tpq_peak_db']:.2f} dB; additive tolerance {data['additive_tolerance_m_per_command']:.4g} m/command "
+        f"({data['additive_tolerance_relative_percent']:.3g} % of |G(0)|)\n"
         f"  T_yw settling {data['tyw_settling_s']:.3f} s; thesis columns not applicable"
     )
     return CommandResult(data=data, text=text)

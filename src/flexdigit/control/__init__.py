@@ -66,6 +66,7 @@ __getattr__, __all__ = lazy_exports(
         "straight_is_stable": "flexdigit.control.design20ms",
         "digit_plant": "flexdigit.control.thesis_designs",
         "digit_hinf_design": "flexdigit.control.thesis_designs",
+        "digit_hinf_summary": "flexdigit.control.thesis_designs",
         "RuntimeController": "flexdigit.control.runtime",
         "printed_controller": "flexdigit.control.thesis_designs",
         "thesis_plant": "flexdigit.control.thesis_designs",
