@@ -402,14 +402,8 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
     """``flexdigit run --on-board``: the loop closes on the board (the exported controller in its image)."""
     from flexdigit._validation import check_real
     from flexdigit.errors import ParameterError
-    from flexdigit.rig.backends.hil_backend import run_on_board
-    from flexdigit.rig.base import open_rig, parse_rig_url
-    from flexdigit.rig.step_test import step_metrics
+    from flexdigit.rig.step_test import board_step_test
 
-    if parse_rig_url(args.backend).scheme != "hil":
-        raise ParameterError(
-            f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {args.backend!r}."
-        )
     for name in ("log", "record", "rotation_map", "calibration", "params", "orientation"):
         if getattr(args, name) is not None:
             raise ParameterError(
@@ -417,40 +411,18 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
             )
     duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
-    options = {"mode": "board", "setpoint_deg": setpoint} | ({} if args.seed is None else {"seed": args.seed})
-    rig = open_rig(args.backend, **options)
-    try:
-        settings = rig.settings()
-        run = run_on_board(rig, setpoint, duration)
-        stats = rig.stats()
-    finally:
-        rig.close()
-    dpc = _deg_per_command(rig.params)
-    metrics = step_metrics(run.time_s, run.true_rotation_deg, setpoint, 0.0, dpc) if run.time_s.size >= 2 else None
-    final, peak = _final_and_peak(run.time_s, run.true_rotation_deg)
-    data = {
-        "status": run.status,
-        "message": run.message,
-        "loop": "board",
-        "backend": args.backend,
-        "rig": settings,
-        "setpoint_deg": setpoint,
-        "period_s": run.period_s,
-        "samples": int(run.time_s.size),
-        "true_final_rotation_deg": final,
-        "true_peak_rotation_deg": peak,
-        "step_metrics": {"true": metrics.to_dict() if metrics else None, "deg_per_command": dpc},
-        "final_command": float(run.command[-1]) if run.command.size else None,
-        "board": stats,
-    }
+    run = board_step_test(args.backend, setpoint, duration, seed=args.seed)
+    data = {"status": run["status"], "message": run["message"], "loop": "board", "backend": args.backend, **run}
+    metrics, stats = run["step_metrics"]["true"], run["board"]
     text = (
-        f"loop on the board ({args.backend}): {run.status} ({run.message})\n"
-        f"  true (twin) rotation: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg\n"
-        f"  step: {_figures_line({'true': metrics.to_dict()}) if metrics else 'too few samples'}\n"
-        f"  board: {run.time_s.size} periods of {run.period_s * 1000:g} ms, update <= {stats['exec_max_cycles']} "
+        f"loop on the board ({args.backend}): {run['status']} ({run['message']})\n"
+        f"  true (twin) rotation: final {run['true_final_rotation_deg']:.2f} deg (setpoint {setpoint:g}), peak "
+        f"{run['true_peak_rotation_deg']:.2f} deg\n"
+        f"  step: {_figures_line({'true': metrics}) if metrics else 'too few samples'}\n"
+        f"  board: {run['samples']} periods of {run['period_s'] * 1000:g} ms, update <= {stats['exec_max_cycles']} "
         f"cycles ({stats['exec_max_cycles'] / 16:.0f} us at 16 MHz), faults {stats['faults'] or 'none'}"
     )
-    return CommandResult(data=data, text=text, exit_code={"completed": 0, "fault": 1}[run.status])
+    return CommandResult(data=data, text=text, exit_code={"completed": 0, "fault": 1}[run["status"]])
 
 
 def _deg_per_command(params) -> float:
