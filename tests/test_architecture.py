@@ -440,7 +440,6 @@ LONG_CLI_FUNCTIONS = {
     "flexdigit.cli.palpate:_palpate": "to split",
     "flexdigit.cli.palpate:_scan": "to split",
     "flexdigit.cli.palpate:_sweep": "to split",
-    "flexdigit.cli.run:_rotation_map": "to split",
 }
 
 

@@ -511,19 +511,17 @@ def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
 
 def _rotation_map(args, rig, sim: bool):
     """The gauge -> rotation map: loaded from ``--rotation-map``, or made (``--map-from``) and saved there."""
-    from flexdigit.errors import ParameterError
-    from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
-    from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map, save_rotation_map
+    from flexdigit.rig.base import parse_rig_url, rig_url_options
+    from flexdigit.rig.rotation import RotationEstimator, load_rotation_map, make_rotation_map, save_rotation_map
 
     path, source = args.rotation_map, args.map_from
     if path is not None and path.exists() and source is None:
         return load_rotation_map(path)
     replay = parse_rig_url(args.backend).scheme == "replay"
     if replay and source is None and _recorded_map(rig) is not None:
-        from flexdigit.rig.rotation import RotationEstimator
-
         return RotationEstimator.from_dict(_recorded_map(rig), source=rig.path)  # the map the recording was run with
     source = source or ("twin" if sim else "operator")
+    options = {}
     if source == "twin":
         # the twin (calibrated to the rig with --calibration): a separate one, read at its own tip rotation, set up
         # as the URL says when the rig is the twin, with the next seed
@@ -533,29 +531,23 @@ def _rotation_map(args, rig, sim: bool):
             options = {**url_options, **options, "seed": rig.settings()["seed"] + 1}
         else:
             options["seed"] = options.get("seed", 0) + 1
-        est = calibrate_rotation(open_rig("sim", rig.params, **options))
-    elif source == "operator":
-        if replay:
-            raise ParameterError("a replay cannot be swept (it ignores commands); pass --rotation-map FILE")
-
-        def ask(command: int) -> float:
-            return float(input(f"Command {command}, digit at rest: tip rotation now, deg? "))
-
-        est = calibrate_rotation(rig, reference=ask, reference_sd_deg=args.resolution_deg / math.sqrt(12))
-    else:
-        from flexdigit.rig.rotation_reference import read_reference
-
-        reference = read_reference(
-            Path(source), rig.params, resolution_mm=args.resolution_mm, resolution_deg=args.resolution_deg
-        )
-        if replay and reference.gauges_v is None:
-            raise ParameterError(
-                f"a replay cannot be swept; {source} needs gauge1_v, gauge2_v, gauge3_v columns to fit the map alone"
-            )
-        est = calibrate_rotation(rig, reference=reference)
+    est = make_rotation_map(
+        rig,
+        source,
+        twin_options=options,
+        ask=_ask_operator,
+        resolution_mm=args.resolution_mm,
+        resolution_deg=args.resolution_deg,
+        replay=replay,
+    )
     if path is not None:
         save_rotation_map(est, path, force=args.force)
     return est
+
+
+def _ask_operator(command: int) -> float:
+    """The operator's protractor reading at ``command`` (``--map-from operator``)."""
+    return float(input(f"Command {command}, digit at rest: tip rotation now, deg? "))
 
 
 def _map_summary(estimator, path, setpoint: float) -> dict:
