@@ -438,7 +438,6 @@ LONG_CLI_FUNCTIONS = {
     "flexdigit.cli.tdcr:register": "parser: one add_argument per flag, nothing computed",
     "flexdigit.cli.collect:_train": "to split",
     "flexdigit.cli.palpate:_palpate": "to split",
-    "flexdigit.cli.palpate:_scan": "to split",
     "flexdigit.cli.palpate:_sweep": "to split",
 }
 

@@ -246,8 +246,27 @@ def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
     for fit in result.local:
         _refuse_poor_fit(fit, "scan")
     inc = result.inclusion
+    data = _scan_data(result, tissue, plan.scan["offsets_m"])
+    text = (
+        f"scan of {len(plan.scan['offsets_m'])} offsets: inclusion {1000 * inc['centre_m']:.1f} +- "
+        f"{1000 * inc['centre_sd_m']:.1f} mm into the tissue, {inc['ratio']:.2f} +- {inc['ratio_sd']:.2f} x stiffer "
+        f"(base {inc['modulus_n_m2']:.0f} N/m^2)"
+    )
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import scan_figure
+
+        true_centre = data["inclusion"].get("true_centre_in_tissue_mm")
+        return scan_figure(result, true_centre_mm=true_centre, title=f"scan of {len(result.records)} offsets")
+
+    return data, text, figure
+
+
+def _scan_data(result, tissue, offsets_m) -> dict:
+    """``palpate --json`` of a scan: the stiffness map and the inclusion found, in mm (the truth on the twin)."""
+    inc = result.inclusion
     data = {
-        "offsets_mm": [1000 * d for d in plan.scan["offsets_m"]],
+        "offsets_mm": [1000 * d for d in offsets_m],
         "map": {
             "position_in_tissue_mm": (1000 * result.map_position_m).tolist(),
             "modulus_n_m2": result.map_modulus_n_m2.tolist(),
@@ -267,19 +286,7 @@ def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
         true = tissue.inclusions[0]
         data["inclusion"]["true_centre_in_tissue_mm"] = 1000 * (true.centre_m - tissue.start_m)
         data["inclusion"]["true_ratio"] = true.ratio
-    text = (
-        f"scan of {len(plan.scan['offsets_m'])} offsets: inclusion {1000 * inc['centre_m']:.1f} +- "
-        f"{1000 * inc['centre_sd_m']:.1f} mm into the tissue, {inc['ratio']:.2f} +- {inc['ratio_sd']:.2f} x stiffer "
-        f"(base {inc['modulus_n_m2']:.0f} N/m^2)"
-    )
-
-    def figure():
-        from flexdigit.palpation.palpation_plot import scan_figure
-
-        true_centre = data["inclusion"].get("true_centre_in_tissue_mm")
-        return scan_figure(result, true_centre_mm=true_centre, title=f"scan of {len(result.records)} offsets")
-
-    return data, text, figure
+    return data
 
 
 def _force(rig, tissue, plan, log, log_mode):
