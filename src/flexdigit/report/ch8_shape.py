@@ -23,7 +23,8 @@ def build(ctx: ReportContext) -> Chapter:
     """Build the shape chapter: tip and along-the-digit errors, one figure."""
     chapter = Chapter(slug="ch8-shape", title="Beyond the thesis: the digit's shape from its three gauges")
     commands = tuple(range(8, 44, 10 if ctx.fast else 5))
-    positions = tuple(round(0.01 * k, 2) for k in range(1, 28, 3 if ctx.fast else 1))
+    length_m = ctx.params.geometry.digit_length_m  # 27 places along the digit (every 10 mm on the thesis rig)
+    positions = tuple(round(length_m * k / 27, 3) for k in range(1, 28, 3 if ctx.fast else 1))
     acc = shape_accuracy(commands, positions, 0.025, seed=ctx.seed, params=ctx.params)
     summary = acc.summary()
     chapter.paragraphs.append(

@@ -54,6 +54,12 @@ class ReportContext:
     fast: bool = False
 
     @property
+    def thesis_rig(self) -> bool:
+        """Whether the report is the thesis rig's (its figures are compared with the thesis's) or another digit's
+        (the thesis's columns are not applicable, its rig's own experiments skipped)."""
+        return self.params == RigParams()
+
+    @property
     def figure_dir(self) -> Path:
         path = self.out_dir / "figures"
         path.mkdir(parents=True, exist_ok=True)
