@@ -17,7 +17,7 @@ from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 from flexdigit.report.results import Entry
 
-__all__ = ["Chapter", "Figure", "ReportContext", "ResultTable"]
+__all__ = ["Chapter", "Figure", "ReportContext", "ResultTable", "skipped"]
 
 
 @dataclass
@@ -42,6 +42,11 @@ class Chapter:
     figures: list[Figure] = field(default_factory=list)
 
     __repr__ = fields_summary
+
+
+def skipped(slug: str, title: str, reason: str) -> Chapter:
+    """A chapter that does not apply to the report's digit: no entries, one paragraph saying why."""
+    return Chapter(slug=slug, title=title, paragraphs=[f"Skipped for this digit: {reason}"])
 
 
 @dataclass
