@@ -88,7 +88,7 @@ def release_fit(housing: bool, *, duration_s: float, seed: int, params: RigParam
     z_t = thesis_value(f"digit.release_tests_{key}.zeta_avg")
     gauge2 = next((f for f in figures["fits"] if f.channel == "gauge2"), figures["fits"][0])
     model = second_order_response(t, "release", wn_t, z_t, gauge2.offset, gauge2.amplitude, gauge2.t0_s)
-    corr = float(np.corrcoef(model, res.column("gauge2_v"))[0, 1])
+    corr = float(np.corrcoef(model, res.column(f"{gauge2.channel}_v"))[0, 1])
     return ReleaseFit(res, figures, corr)
 
 

@@ -137,7 +137,9 @@ def _figure(ctx: ReportContext):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    cases = [("vertical", 0.0, 0.0, 30), ("horizontal", 0.0, 0.0, 20), ("horizontal", 0.025, 0.20, 20)]
+    # the load at 200 mm of the thesis rig's 270: the same fraction of another digit
+    at_m = 0.20 if ctx.thesis_rig else round(0.20 / 0.27 * ctx.params.geometry.digit_length_m, 3)
+    cases = [("vertical", 0.0, 0.0, 30), ("horizontal", 0.0, 0.0, 20), ("horizontal", 0.025, at_m, 20)]
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
     for ax, (orientation, mass, position, command) in zip(axes, cases, strict=True):
         volts, sol = static_gauges_v(
