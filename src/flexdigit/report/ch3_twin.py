@@ -43,9 +43,9 @@ def build(ctx: ReportContext) -> Chapter:
     _sweep_entries(study, fits, ch.entries)
     ch.figures.append(_sweep_figure(ctx, study.sweep, fits))
     ch.figures.append(_shapes_and_step_figure(ctx, p, study.calibration, seed))
-    ch.entries.extend(_check_entries(study.checks))
-    ch.tables.extend(study.tables)
     if not ctx.thesis_rig:
+        ch.entries.extend(_check_entries(study.checks))
+        ch.tables.extend(study.tables)
         ch.paragraphs.append(
             "This digit is not the thesis rig: its twin runs on the thesis's calibration scaled to its description "
             "(flexdigit params prints what it derives), the thesis's columns are not applicable, and table 3.6 "
@@ -76,6 +76,8 @@ def build(ctx: ReportContext) -> Chapter:
         "supply nearer 0.1 V, or a lower gauge factor or gain). The spread between channels (gauge 2 is "
         f"{gains[1] / gains[0]:.2f} x gauge 1) is the per-channel difference the thesis's lines show."
     )
+    ch.entries.extend(_check_entries(study.checks))
+    ch.tables.extend(study.tables)
     return ch
 
 
