@@ -603,9 +603,11 @@ def write_design_outputs(result: DesignResult, out_dir: str | Path, *, force: bo
 
 
 def export_design(result: DesignResult, row: int, path: str | Path, *, force: bool = False) -> Path:
-    """Write the rig description (the TOML of ``flexdigit params --template``, :func:`flexdigit.params.
-    params_template`) of design ``row`` (its row in ``designs.parquet`` and ``summary.json``) on the Pareto front,
-    so that ``flexdigit params`` checks it and every command takes it as ``--params``. The twin calibration is not
+    """Write the rig description of design ``row`` on the Pareto front, as a parameter TOML.
+
+    The file is the TOML of ``flexdigit params --template`` (:func:`flexdigit.params.params_template`) for the
+    design's row in ``designs.parquet`` and ``summary.json``, so that ``flexdigit params`` checks it and every
+    command takes it as ``--params``. The twin calibration is not
     in it: the commands scale the thesis's to the digit (:func:`flexdigit.twin.digit_calibration.calibration_for`),
     while the study evaluated the design on the baseline calibration (its channels averaged for another gauge
     count, :func:`design_parameter_set`), so a command's twin of a resized design is not exactly the study's.
