@@ -182,26 +182,8 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
             "needed for a stiffness): sweep to higher commands ('commands') or place the tissue nearer"
         )
     bound = stiffness_bound(model, result.fit.tissue, plan.sweep, fit_exponent=plan.sweep.model == "hunt-crossley")
-    summary = result.summary()
-    data = {
-        "protocol": {
-            "commands": list(plan.sweep.commands),
-            "settle_s": plan.sweep.settle_s,
-            "readings": plan.sweep.readings,
-        },
-        "result": summary,
-        "cramer_rao": {"gap_mm": 1000 * bound["gap_m"], "modulus_n_m2": bound["modulus_n_m2"]},
-        "curve": {
-            "command": result.curve["command"].tolist(),
-            "force_n": result.curve["force_n"].tolist(),
-            "force_sd_n": result.curve["force_sd_n"].tolist(),
-            "indentation_mm": (1000 * result.curve["indentation_m"]).tolist(),
-            "model_force_n": result.curve["model_force_n"].tolist(),
-            **({"true_force_n": result.curve["true_force_n"].tolist()} if "true_force_n" in result.curve else {}),
-        },
-    }
-    if "true_force_n" in result.curve:
-        data["modulus_rel_error"] = summary["modulus_n_m2"] / tissue.modulus_n_m2 - 1
+    data = _sweep_data(result, plan, bound, tissue)
+    summary = data["result"]
     f = result.fit
     lines = [
         f"palpation of {tissue.side}-side tissue at {1000 * tissue.start_m:g}-{1000 * tissue.end_m:g} mm, "
@@ -227,6 +209,31 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
         return indentation_figure(result, true_modulus_n_m2=true_modulus, title=title)
 
     return data, "\n".join(lines), figure
+
+
+def _sweep_data(result, plan, bound, tissue) -> dict:
+    """``palpate --json`` of a sweep: the protocol, the fit, its Cramer-Rao bound and the curve, in mm."""
+    summary = result.summary()
+    data = {
+        "protocol": {
+            "commands": list(plan.sweep.commands),
+            "settle_s": plan.sweep.settle_s,
+            "readings": plan.sweep.readings,
+        },
+        "result": summary,
+        "cramer_rao": {"gap_mm": 1000 * bound["gap_m"], "modulus_n_m2": bound["modulus_n_m2"]},
+        "curve": {
+            "command": result.curve["command"].tolist(),
+            "force_n": result.curve["force_n"].tolist(),
+            "force_sd_n": result.curve["force_sd_n"].tolist(),
+            "indentation_mm": (1000 * result.curve["indentation_m"]).tolist(),
+            "model_force_n": result.curve["model_force_n"].tolist(),
+            **({"true_force_n": result.curve["true_force_n"].tolist()} if "true_force_n" in result.curve else {}),
+        },
+    }
+    if "true_force_n" in result.curve:
+        data["modulus_rel_error"] = summary["modulus_n_m2"] / tissue.modulus_n_m2 - 1
+    return data
 
 
 def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
