@@ -436,7 +436,6 @@ LONG_CLI_FUNCTIONS = {
     "flexdigit.cli.run:register": "parser: one add_argument per flag, nothing computed",
     "flexdigit.cli.live:register": "parser: one add_argument per flag, nothing computed",
     "flexdigit.cli.tdcr:register": "parser: one add_argument per flag, nothing computed",
-    "flexdigit.cli.palpate:_palpate": "to split",
 }
 
 

@@ -56,13 +56,8 @@ def _sim_options(backend: str, kind: str, seed: int | None) -> dict:
 
 
 def _palpate(args: argparse.Namespace) -> CommandResult:
-    from flexdigit._io import atomic_write, check_output
-    from flexdigit._json import to_jsonable
-    from flexdigit.errors import DataFileError
+    from flexdigit._io import check_output
     from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
-    from flexdigit.params import RigParams, load_params
-    from flexdigit.rig.base import open_rig
-    from flexdigit.twin.digit_calibration import twin_calibration
 
     tissue, info = load_tissue(args.tissue)
     plan = load_palpation_protocol(args.protocol)
@@ -72,18 +67,7 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     out = check_output(args.out, force=args.force) if args.out else None
     check_plot(args.plot, "palpate", force=args.force)
     logs = _log_paths(args.log, plan, args.force)
-    sim = args.backend.split(":")[0].split("?")[0].startswith("sim")
-    if sim and not info.placed_on_twin:
-        raise DataFileError(
-            f"{info.source}: keys 'tissue.gap_mm' and 'tissue.modulus_n_m2' are needed on the twin (they place the "
-            "tissue there; palpation then estimates them)"
-        )
-    params = load_params(args.params) if args.params else RigParams()
-    calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
-    options = _sim_options(args.backend, kind, args.seed)
-    if sim and (args.params or args.calibration):
-        options["calibration"] = calibration
-    rig = open_rig(args.backend, params, **options)
+    sim, rig, calibration = _palpation_rig(args, info, kind)
     settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
@@ -104,6 +88,38 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             "modulus_n_m2": tissue.modulus_n_m2,
             "exponent": tissue.exponent,
         }
+    return CommandResult(data=data, text=text + _save_outputs(args, data, fig, out))
+
+
+def _palpation_rig(args: argparse.Namespace, info, kind: str):
+    """``(sim, rig, calibration)``: the rig of ``--backend`` for ``--params``, its twin placing the tissue (which
+    the twin needs placed: gap and modulus), and the calibration of the twin and the gauge model."""
+    from flexdigit.errors import DataFileError
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.rig.base import open_rig
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    sim = args.backend.split(":")[0].split("?")[0].startswith("sim")
+    if sim and not info.placed_on_twin:
+        raise DataFileError(
+            f"{info.source}: keys 'tissue.gap_mm' and 'tissue.modulus_n_m2' are needed on the twin (they place the "
+            "tissue there; palpation then estimates them)"
+        )
+    params = load_params(args.params) if args.params else RigParams()
+    calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
+    options = _sim_options(args.backend, kind, args.seed)
+    if sim and (args.params or args.calibration):
+        options["calibration"] = calibration
+    rig = open_rig(args.backend, params, **options)
+    return sim, rig, calibration
+
+
+def _save_outputs(args: argparse.Namespace, data: dict, fig, out) -> str:
+    """Save ``--plot`` and ``--out`` (atomic, refusing to overwrite without ``--force``); the lines saying so."""
+    from flexdigit._io import atomic_write
+    from flexdigit._json import to_jsonable
+
+    text = ""
     if args.plot:
         from flexdigit._plot import save_plot
 
@@ -115,7 +131,7 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
         with atomic_write(out, "w", force=args.force) as fh:
             json.dump(to_jsonable(data), fh, indent=2)
         text += f"\nwritten to {out}"
-    return CommandResult(data=data, text=text)
+    return text
 
 
 def _orientation(rig) -> str:
