@@ -439,8 +439,6 @@ LONG_CLI_FUNCTIONS = {
     "flexdigit.cli.collect:_train": "to split",
     "flexdigit.cli.design:_hinf_digit": "to split",
     "flexdigit.cli.design:_twenty_ms": "to split",
-    "flexdigit.cli.identify:_identify": "to split",
-    "flexdigit.cli.live:_shape": "to split",
     "flexdigit.cli.palpate:_palpate": "to split",
     "flexdigit.cli.palpate:_scan": "to split",
     "flexdigit.cli.palpate:_sweep": "to split",

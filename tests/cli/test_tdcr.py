@@ -74,3 +74,15 @@ def test_dynamics_refuses_a_wrong_initial_tension_count(capsys):
     argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "0,0,0,0,0,0", "--from-tension-n", "1,0", "--json"]
     assert main(argv) == 2
     assert "--from-tension-n must give one tension per tendon" in json.loads(capsys.readouterr().out)["error"]
+
+
+def test_dynamics_by_either_method_holds_rao2021_at_rest(capsys):
+    """Either method, started at rest in the static shape under the same tensions, stays there (the discrete rod in
+    its own equilibrium, which it settles in before t = 0)."""
+    for method in ("discrete", "shooting"):
+        argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "4,0,0,0,2,0", "--from-tension-n", "4,0,0,0,2,0"]
+        assert main([*argv, "--duration-s", "0.005", "--method", method, "--json"]) == 0
+        data = json.loads(capsys.readouterr().out)
+        tip = np.array(data["tip_position_m"])
+        assert data["method"] == method
+        assert np.abs(tip - tip[0]).max() < 1e-9

@@ -5,7 +5,7 @@ node) settled under the tensions and the contact; its gauge readings come from i
 shape without the contact is the same model's (so that what the estimate sees is the contact, not a difference
 of models). The estimate is first order in the force about that shape: its errors grow with the deflection the
 contact causes (measured: the place exact and the force within 0.1 % on a straight rod at 12 mN; 1 mm and
-1.8 % on rao2021 under tensions at 18 mN).
+1.7 % on rao2021 under tensions at 18 mN).
 """
 
 import numpy as np

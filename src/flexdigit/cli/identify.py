@@ -105,6 +105,16 @@ def _identify(args: argparse.Namespace):
         force=args.force,
     )
     data = result.summary()
+    lines = _report_lines(args, series, result, data)
+    if args.plot:
+        data["plot"] = str(save_plot(fit_figure(series, result), args.plot, "identify", force=args.force))
+        lines.append(f"  plot -> {args.plot}")
+    return CommandResult(data=data, text="\n".join(lines))
+
+
+def _report_lines(args: argparse.Namespace, series, result, data: dict) -> list[str]:
+    """The text report of an identification: the record, the instant figures, wn and zeta with their intervals,
+    the thesis's formulas, the model, its validation and quality, and the warnings."""
     unit = f" {series.unit}" if series.unit else ""
     how = f", {args.loss} loss" if args.method == "lsq" else ""
     lines = [
@@ -129,10 +139,7 @@ def _identify(args: argparse.Namespace):
     ]
     lines += _quality_lines(result, unit)
     lines += [f"  warning: {w}" for w in result.warnings]
-    if args.plot:
-        data["plot"] = str(save_plot(fit_figure(series, result), args.plot, "identify", force=args.force))
-        lines.append(f"  plot -> {args.plot}")
-    return CommandResult(data=data, text="\n".join(lines))
+    return lines
 
 
 def _instant_line(result, series) -> str:

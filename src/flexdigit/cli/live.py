@@ -194,19 +194,7 @@ def _shape(args: argparse.Namespace) -> CommandResult:
             raise ParameterError("--plot draws one reading's centre line: give --gauges-v, not --accuracy")
         return _accuracy(args, params, calibration)
     check_plot(args.plot, "shape", force=args.force)
-    count = len(params.geometry.gauge_positions_m)
-    names = ",".join(f"V{k}" for k in range(1, count + 1))
-    if args.gauges_v is None:
-        raise ParameterError(f"--gauges-v {names} is required (or --accuracy)")
-    try:
-        volts = [float(x) for x in args.gauges_v.split(",")]
-    except ValueError:
-        volts = []
-    if len(volts) != count:
-        raise ParameterError(
-            f"--gauges-v must be {count} numbers separated by commas (one per gauge of the digit, {names}). "
-            f"Got {args.gauges_v!r}."
-        )
+    volts = _gauge_volts(args.gauges_v, len(params.geometry.gauge_positions_m))
     from flexdigit.shape.shape import ShapeEstimator
 
     est_settings = ShapeEstimator(
@@ -219,22 +207,7 @@ def _shape(args: argparse.Namespace) -> CommandResult:
     )
     est = est_settings.estimate(volts, command=args.command)
     row = est.row(0, every=10)
-    tip_mm = [1e3 * x for x in row["tip_m"]]
-    text = (
-        f"tip at {tip_mm[0]:.1f}, {tip_mm[1]:.1f} mm (along, towards the cable), "
-        f"+- {1e3 * max(row['tip_sd_m']):.1f} mm; tip angle {row['tip_angle_deg']:.1f} deg; "
-        f"cable tension {row['tension_n']:.2f} N\n"
-    )
-    if row["contact"]:
-        lo, hi = row["load_position_interval_m"]
-        sd = row["load_position_sd_m"]
-        sd_text = "not locatable" if sd is None else f"+- {1e3 * sd:.1f} mm"
-        text += (
-            f"contact: a {row['load_kind']} at {1e3 * row['load_position_from_base_m']:.0f} mm from the base "
-            f"({sd_text}; consistent {1e3 * lo:.0f}..{1e3 * hi:.0f} mm), force {row['load_force_n']:.3f} N"
-        )
-    else:
-        text += "no contact"
+    text = _shape_text(row)
     if not row["consistent"]:
         chi2 = float(est.chi2_load[0] if row["contact"] else est.chi2_no_load[0])
         text = (
@@ -252,6 +225,46 @@ def _shape(args: argparse.Namespace) -> CommandResult:
         row["plot"] = str(save_plot(shape_figure(est, 0, title), args.plot, "shape", force=args.force))
         text += f"\nplot -> {args.plot}"
     return CommandResult(data=row, text=text)
+
+
+def _gauge_volts(gauges_v: str | None, count: int) -> list[float]:
+    """``--gauges-v V1,V2,...``: one number per gauge of the digit, else a one-line error naming the flag."""
+    from flexdigit.errors import ParameterError
+
+    names = ",".join(f"V{k}" for k in range(1, count + 1))
+    if gauges_v is None:
+        raise ParameterError(f"--gauges-v {names} is required (or --accuracy)")
+    try:
+        volts = [float(x) for x in gauges_v.split(",")]
+    except ValueError:
+        volts = []
+    if len(volts) != count:
+        raise ParameterError(
+            f"--gauges-v must be {count} numbers separated by commas (one per gauge of the digit, {names}). "
+            f"Got {gauges_v!r}."
+        )
+    return volts
+
+
+def _shape_text(row: dict) -> str:
+    """One estimate's report: the tip, its angle, the cable's tension and the contact, if any."""
+    tip_mm = [1e3 * x for x in row["tip_m"]]
+    text = (
+        f"tip at {tip_mm[0]:.1f}, {tip_mm[1]:.1f} mm (along, towards the cable), "
+        f"+- {1e3 * max(row['tip_sd_m']):.1f} mm; tip angle {row['tip_angle_deg']:.1f} deg; "
+        f"cable tension {row['tension_n']:.2f} N\n"
+    )
+    if row["contact"]:
+        lo, hi = row["load_position_interval_m"]
+        sd = row["load_position_sd_m"]
+        sd_text = "not locatable" if sd is None else f"+- {1e3 * sd:.1f} mm"
+        text += (
+            f"contact: a {row['load_kind']} at {1e3 * row['load_position_from_base_m']:.0f} mm from the base "
+            f"({sd_text}; consistent {1e3 * lo:.0f}..{1e3 * hi:.0f} mm), force {row['load_force_n']:.3f} N"
+        )
+    else:
+        text += "no contact"
+    return text
 
 
 def _accuracy(args: argparse.Namespace, params, calibration) -> CommandResult:

@@ -71,6 +71,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=1e-3,
         help="implicit time step, s, 1e-6..0.1 (default 1 ms)",
     )
+    p.add_argument(
+        "--method",
+        choices=("discrete", "shooting"),
+        default="discrete",
+        help="the discretised rod (default; fast, robust) or the continuous rod shot at each step",
+    )
     p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
@@ -120,6 +126,16 @@ def _record(args: argparse.Namespace, robot, solution, tensions, loads) -> dict:
     return {"recording": str(path)}
 
 
+def _start(args: argparse.Namespace, robot) -> dict:
+    """Where ``tdcr dynamics`` starts from: the statics of ``--from-tension-n`` (zero) and ``--from-tip-force-n``."""
+    start = {"tensions_n": [0.0] * len(robot.tendons)}
+    if args.from_tension_n is not None:
+        start["tensions_n"] = _tensions(args.from_tension_n, "from-tension-n", robot)
+    if args.from_tip_force_n is not None:
+        start["tip_force_n"] = _floats(args.from_tip_force_n, "from-tip-force-n", 3)
+    return start
+
+
 def _dynamics(args: argparse.Namespace) -> CommandResult:
     import warnings
 
@@ -129,17 +145,15 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
     robot = get_robot(args.robot)
     tensions = _tensions(args.tension_n, "tension-n", robot)
     loads = _loads(args)
-    start = {"tensions_n": [0.0] * len(robot.tendons)}
-    if args.from_tension_n is not None:
-        start["tensions_n"] = _tensions(args.from_tension_n, "from-tension-n", robot)
-    if args.from_tip_force_n is not None:
-        start["tip_force_n"] = _floats(args.from_tip_force_n, "from-tip-force-n", 3)
+    start = _start(args, robot)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)  # reported below, in the result and the exit code
         initial = solve_statics(
             robot, start["tensions_n"], gravity_m_s2=loads.get("gravity_m_s2"), tip_force_n=start.get("tip_force_n")
         )
-        motion = simulate(robot, initial, args.duration_s, dt_s=args.dt_s, tensions_n=tensions, **loads)
+        motion = simulate(
+            robot, initial, args.duration_s, dt_s=args.dt_s, tensions_n=tensions, method=args.method, **loads
+        )
     converged = initial.converged and motion.converged
     record = _record(args, robot, motion, tensions, loads)
     data = {
@@ -149,6 +163,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
         "initial": {"converged": initial.converged, "tip_position_m": initial.tip_position_m.tolist(), **start},
         "converged": converged,
         "dt_s": args.dt_s,
+        "method": args.method,
         "t_s": motion.t_s.tolist(),
         "tip_position_m": motion.tip_positions_m.tolist(),
         "newton_iterations": motion.iterations.tolist(),

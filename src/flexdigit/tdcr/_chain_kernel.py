@@ -83,6 +83,26 @@ def _log_rel(a, b, out, rel):
 
 
 @_jit
+def _half_way(a, b, out):
+    """``out = a sqrt(a^T b)``: the frame half-way (geodesically) between ``a`` and ``b`` (see :func:`node_frames`)."""
+    rel = np.empty((3, 3))
+    rot = np.empty((3, 3))
+    for r in range(3):
+        for c in range(3):
+            rel[r, c] = a[0, r] * b[0, c] + a[1, r] * b[1, c] + a[2, r] * b[2, c]
+    half_cos = 0.5 * np.sqrt(max(1.0 + rel[0, 0] + rel[1, 1] + rel[2, 2], 0.0))
+    fa = 0.25 / half_cos
+    fs = 0.25 / (1.0 + half_cos)
+    for r in range(3):
+        for c in range(3):
+            eye = 1.0 if r == c else 0.0
+            rot[r, c] = eye + fa * (rel[r, c] - rel[c, r]) + fs * (rel[r, c] + rel[c, r] - 2.0 * eye)
+    for r in range(3):
+        for c in range(3):
+            out[r, c] = a[r, 0] * rot[0, c] + a[r, 1] * rot[1, c] + a[r, 2] * rot[2, c]
+
+
+@_jit
 def forces(
     x, q, lengths, voronoi, kse, kbt, g, beta, hsig, hkap, fnode, tip_moment, routing, tau, ends, f, t, sig, kap
 ):
@@ -135,41 +155,57 @@ def forces(
     pa = np.empty(3)
     pb = np.empty(3)
     fw = np.empty(3)
+    disk = np.empty((3, 3))
+    arm = np.empty(3)
     for j in range(routing.shape[0]):
         if tau[j] == 0.0 or ends[j] < 1:
             continue
         r0, r1, r2 = routing[j, 0], routing[j, 1], routing[j, 2]
+        end = ends[j]
+        if end < n:
+            _half_way(q[end - 1], q[end], disk)
+        else:
+            disk[:, :] = q[n - 1]
+        for k in range(3):
+            arm[k] = disk[k, 0] * r0 + disk[k, 1] * r1 + disk[k, 2] * r2
         pa[0], pa[1], pa[2] = x[0, 0] + r0, x[0, 1] + r1, x[0, 2] + r2
-        for e in range(ends[j] + 1):  # segment from point e - 1 to point e: point e < end is element e's middle
-            last = e == ends[j]
-            el = e - 1 if last else e
+        for e in range(end + 1):
             for k in range(3):
-                off = q[el, k, 0] * r0 + q[el, k, 1] * r1 + q[el, k, 2] * r2
-                pb[k] = (x[e, k] if last else 0.5 * (x[e, k] + x[e + 1, k])) + off
+                if e == end:
+                    pb[k] = x[e, k] + arm[k]
+                else:
+                    pb[k] = 0.5 * (x[e, k] + x[e + 1, k]) + q[e, k, 0] * r0 + q[e, k, 1] * r1 + q[e, k, 2] * r2
             dx0, dx1, dx2 = pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]
             ln = np.sqrt(dx0 * dx0 + dx1 * dx1 + dx2 * dx2)
             u0, u1, u2 = tau[j] * dx0 / ln, tau[j] * dx1 / ln, tau[j] * dx2 / ln
-            # the tendon pulls point e back along the segment (-tau u) and point e - 1 forward (+tau u)
             for side in range(2):
                 p = e - 1 + side
                 sgn = 1.0 if side == 0 else -1.0
                 if p < 0:
                     continue
                 fw[0], fw[1], fw[2] = sgn * u0, sgn * u1, sgn * u2
-                pel = p - 1 if p == ends[j] else p
-                if p == ends[j]:
+                if p == end:
                     for k in range(3):
                         f[p, k] += fw[k]
-                else:
-                    for k in range(3):
-                        f[p, k] += 0.5 * fw[k]
-                        f[p + 1, k] += 0.5 * fw[k]
-                b0 = q[pel, 0, 0] * fw[0] + q[pel, 1, 0] * fw[1] + q[pel, 2, 0] * fw[2]
-                b1 = q[pel, 0, 1] * fw[0] + q[pel, 1, 1] * fw[1] + q[pel, 2, 1] * fw[2]
-                b2 = q[pel, 0, 2] * fw[0] + q[pel, 1, 2] * fw[1] + q[pel, 2, 2] * fw[2]
-                t[pel, 0] += r1 * b2 - r2 * b1
-                t[pel, 1] += r2 * b0 - r0 * b2
-                t[pel, 2] += r0 * b1 - r1 * b0
+                    w0 = arm[1] * fw[2] - arm[2] * fw[1]
+                    w1 = arm[2] * fw[0] - arm[0] * fw[2]
+                    w2 = arm[0] * fw[1] - arm[1] * fw[0]
+                    share = 0.5 if end < n else 1.0
+                    for el in (end - 1, end):
+                        if el >= n:
+                            continue
+                        for k in range(3):
+                            t[el, k] += share * (q[el, 0, k] * w0 + q[el, 1, k] * w1 + q[el, 2, k] * w2)
+                    continue
+                for k in range(3):
+                    f[p, k] += 0.5 * fw[k]
+                    f[p + 1, k] += 0.5 * fw[k]
+                b0 = q[p, 0, 0] * fw[0] + q[p, 1, 0] * fw[1] + q[p, 2, 0] * fw[2]
+                b1 = q[p, 0, 1] * fw[0] + q[p, 1, 1] * fw[1] + q[p, 2, 1] * fw[2]
+                b2 = q[p, 0, 2] * fw[0] + q[p, 1, 2] * fw[1] + q[p, 2, 2] * fw[2]
+                t[p, 0] += r1 * b2 - r2 * b1
+                t[p, 1] += r2 * b0 - r0 * b2
+                t[p, 2] += r0 * b1 - r1 * b0
             for k in range(3):
                 pa[k] = pb[k]
 
@@ -224,17 +260,23 @@ def _jacobian(z, h, hb, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, 
     zz = z.copy()
     _residual(z, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, x, q, f, t, sig, kap, r0)
     colours = 2 * hb + 1
+    central = mf == 0.0  # statics: central differences (its soft modes are ~1e-11 of its stiff ones)
     for i in range(size):
         for j in range(colours):
             jac[i, j] = 0.0
     for c in range(min(colours, size)):
+        if central:
+            for j in range(c, size, colours):
+                zz[j] = z[j] - h[j]
+            _residual(zz, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, x, q, f, t, sig, kap, r0)
         for j in range(c, size, colours):
             zz[j] = z[j] + h[j]
         _residual(zz, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, x, q, f, t, sig, kap, r1)
         for j in range(c, size, colours):
             zz[j] = z[j]
+            span = 2.0 * h[j] if central else h[j]
             for i in range(max(0, j - hb), min(size, j + hb + 1)):
-                jac[i, j - i + hb] = (r1[i] - r0[i]) / h[j]
+                jac[i, j - i + hb] = (r1[i] - r0[i]) / span
     for k in range(size):  # Doolittle, in the band
         piv = jac[k, hb]
         for i in range(k + 1, min(size, k + hb + 1)):
@@ -262,11 +304,11 @@ def _band_solve(jac, hb, rhs, out):
 
 
 @_jit
-def _steps(size, a, length):
-    """Finite-difference steps: a displacement of 1e-8 of the length (velocities) and 1e-8 rad (frames)."""
+def _steps(size, a, length, relative):
+    """Finite-difference steps: a displacement of ``relative`` of the length (velocities) and rad (frames)."""
     h = np.empty(size)
     for i in range(size):
-        h[i] = 1e-8 * (length if i % 6 < 3 else 1.0) / a
+        h[i] = relative * (length if i % 6 < 3 else 1.0) / a
     return h
 
 
@@ -316,7 +358,7 @@ def equilibrate(x, q, model, hb, tol, max_iter):
     qq = q.copy()
     mass = np.zeros(n + 1)
     inertia = np.zeros((n, 3))
-    h = _steps(size, 1.0, length)
+    h = _steps(size, 1.0, length, 1e-5)  # central differences: error ~h^2
     for it in range(max_iter):
         _jacobian(z, h, hb, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, jac)
         _residual(z, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, res)

@@ -20,9 +20,10 @@ whatever the stiffness, at the cost of a Newton solve. Two ways of doing it:
   Newton matrix is dense (``O(n^3)``) and tendons would need the links' kinematics; over a Kirchhoff rod because
   the shear and extension cost nothing extra here and keep tdcr-modeling's Cosserat model.
 
-The discrete rod is not the continuous one: on rao2021 at one element a disk its equilibrium is 6.4 mm (1.6 % of
-the length) from the shot statics, 2.2 mm at two (tendons on polylines through the disks). So the discrete rod
-first settles under the loads ``initial`` was solved for (:attr:`StaticSolution.loads`), then is released.
+The discrete rod is not the continuous one: on rao2021 at one element a disk its equilibrium is 11.2 mm (2.8 % of
+the length) from the shot statics, 2.8 mm at two, 0.71 mm at four: second order in the element length (a disk a
+tendon ends on is turned half-way between its neighbouring elements). So the discrete rod first settles under
+the loads ``initial`` was solved for (:attr:`StaticSolution.loads`), then is released.
 BDF2's numerical damping is ``O((w dt)^4)`` a step; Kelvin-Voigt damping ``damping_s`` proportional to stiffness.
 Speed: ``python -m benchmarks bench_tdcr`` (real-time factor of a 40-node rod at 1 kHz).
 
