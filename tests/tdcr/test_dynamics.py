@@ -183,3 +183,16 @@ def test_an_elements_frame_is_half_way_between_its_nodes():
     half = (first.inv() * Rotation.from_matrix(frames[1:])).as_rotvec() / 2
     expected = (first * Rotation.from_rotvec(half)).as_matrix()
     np.testing.assert_allclose(_element_frames(frames), expected, rtol=0, atol=1e-12)
+
+
+def test_a_response_too_long_to_keep_is_refused_before_it_is_allocated(capsys):
+    # hostile review: 'tdcr dynamics --duration-s 600 --dt-s 1e-6' ended in 'internal error (MemoryError: Unable
+    # to allocate 282. GiB ...)'
+    with pytest.raises(ParameterError, match=r"600000000 steps of 41 nodes.*at most 1 GiB"):
+        simulate(ROD, solve_statics(ROD, []), 600.0, dt_s=1e-6)
+    from flexdigit.cli import main
+
+    argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "4,0,0,0,2,0", "--duration-s", "600", "--dt-s", "1e-6"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert "duration_s 600 s" in err and "dt_s 1e-06 s" in err and "\n" not in err
