@@ -616,6 +616,10 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
     keep = np.zeros(1, dtype=np.bool_)
     rate = np.full(1, RATE)  # the chord Newton's last rate, carried over steps (RADAU5's faccon)
     scratch = np.empty((3, 3))
+    # the last step's turn of each frame, psi (Q^{n+1} = Q^n exp(psi)): log(Q^{n T} Q^{n-1}) is -psi, no log needed
+    # after a BDF2 step (after a backward-Euler fallback, and at the start, it is taken from the frames)
+    turned = np.empty((n, 3))
+    turn_known = False
     xs[0] = x0
     _node_frames_of(q0, rs[0])
     vs[0] = 0.0
@@ -628,9 +632,14 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
                 xh[i, k] = (4.0 * x_now[i, k] - x_prev[i, k]) / 3.0
                 vh[i, k] = (4.0 * v_now[i, k] - v_prev[i, k]) / 3.0
         for e in range(n):
-            _log_rel(q_now[e], q_prev[e], psih[e], scratch)
+            if turn_known:
+                for k in range(3):
+                    psih[e, k] = turned[e, k] / 3.0
+            else:
+                _log_rel(q_now[e], q_prev[e], psih[e], scratch)
+                for k in range(3):
+                    psih[e, k] /= -3.0
             for k in range(3):
-                psih[e, k] /= -3.0
                 wh[e, k] = (4.0 * w_now[e, k] - w_prev[e, k]) / 3.0
                 hsig[e, k] = (-4.0 * sig_now[e, k] + sig_prev[e, k]) / (2.0 * dt)
                 hkap[e, k] = (-4.0 * kap_now[e, k] + kap_prev[e, k]) / (2.0 * dt)
@@ -668,10 +677,17 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
                 for k in range(3):
                     v_new[e + 1, k] = z[6 * e + 3 + k]
                     w_new[e, k] = z[6 * e + k]
+            turn_known = True
+            for e in range(n):
+                for k in range(3):
+                    turned[e, k] = psih[e, k] + a * z[6 * e + k]
+                if turned[e, 0] ** 2 + turned[e, 1] ** 2 + turned[e, 2] ** 2 > 9.0:
+                    turn_known = False  # near pi, log(exp(psi)) wraps: the frames' log as before
             if beta > 0.0:  # the damping's history; unused without
                 _state_strains(x_new, q_new, model, sig_new, kap_new)
         else:
             rate[0] = RATE  # measured afresh on the next step
+            turn_known = False
             pieces = 2
             while not ok and pieces <= 64:
                 ok, more = _backward_euler(
