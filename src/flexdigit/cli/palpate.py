@@ -10,6 +10,10 @@ from flexdigit._validation import SEED, Flag
 
 #: Largest chi^2 per degree of freedom a palpation fit may leave and still be reported.
 MAX_CHI2_PER_DOF = 25.0
+#: A sweep's modulus uncertain by more than this fraction of itself is no measurement (a digit that barely presses
+#: the tissue fits a near-zero modulus at a made-up gap: 1.7 +- 2.4 N/m^2 for a true 1000); a sweep that presses
+#: it measures within a few per cent (soft-block on the thesis rig: 994 +- 18).
+MAX_MODULUS_REL_SD = 0.5
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -169,7 +173,7 @@ def _tissue_dict(tissue, info) -> dict:
     }
 
 
-def _refuse_poor_fit(fit, what: str) -> None:
+def _refuse_poor_fit(fit, what: str, max_rel_sd: float | None = None) -> None:
     from flexdigit.errors import DataFileError
 
     per_dof = fit.chi2 / max(fit.dof, 1)
@@ -178,6 +182,12 @@ def _refuse_poor_fit(fit, what: str) -> None:
             f"{what}: the gauges do not fit the tissue model (chi2/dof = {per_dof:.1f}, converged = {fit.converged}): "
             "check where the tissue lies ('start_mm', 'end_mm', 'side') and let each plateau settle longer "
             "('settle_s'); no stiffness reported"
+        )
+    if max_rel_sd is not None and not fit.modulus_sd_n_m2 <= max_rel_sd * fit.modulus_n_m2:
+        raise DataFileError(
+            f"{what}: the modulus is not determined ({fit.modulus_n_m2:.3g} +- {fit.modulus_sd_n_m2:.2g}, more than "
+            f"{max_rel_sd:.0%} of itself): the digit barely presses the tissue; sweep to higher commands "
+            "('commands') or place the tissue nearer; no stiffness reported"
         )
 
 
@@ -190,7 +200,7 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
 
     model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode)
-    _refuse_poor_fit(result.fit, "palpation")
+    _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
     touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
     if touching < 3:
         raise DataFileError(
