@@ -33,7 +33,7 @@ from flexdigit.identify.response import settling_formula_bias
 from flexdigit.identify.timeseries import TimeSeries, series_from_table
 from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
-from flexdigit.twin.records import actuation_sweep, release_test, servo_step_test
+from flexdigit.twin.records import actuation_sweep, release_orientation, release_test, servo_step_test
 
 __all__ = [
     "DT_S",
@@ -232,13 +232,18 @@ def _intervals(r) -> tuple[float, float, float, float]:
 
 def twin_identification(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> TwinIdentification:
     """The twin's release test (gauge 1 and the tip) and servo step tests (51 commands; 3 runs when ``fast``,
-    else 5), identified by the thesis method and by least squares."""
+    else 5), identified by the thesis method and by least squares; the digit tip up, or hanging when it buckles
+    so (:func:`~flexdigit.twin.records.release_orientation`)."""
     duration, rate = (5.0, 500.0) if fast else (8.0, 1000.0)
-    rel = release_test(duration_s=duration, sample_rate_hz=rate, seed=seed, params=params)
+    mount = release_orientation(params)
+    rel = release_test(duration_s=duration, sample_rate_hz=rate, seed=seed, params=params, orientation=mount)
     release, tip = series_from_table(rel, "gauge1"), series_from_table(rel, "tip_deflection")
     steps = [
         series_from_table(
-            servo_step_test(command_to=STEP_COMMANDS, sample_rate_hz=rate, seed=seed + k, params=params), "pot"
+            servo_step_test(
+                command_to=STEP_COMMANDS, sample_rate_hz=rate, seed=seed + k, params=params, orientation=mount
+            ),
+            "pot",
         )
         for k in range(3 if fast else 5)
     ]
@@ -364,7 +369,9 @@ def deflection_fits() -> tuple[list, ResultTable]:
 def voltage_fits(params: RigParams | None = None, *, seed: int = 0, fast: bool = False) -> tuple[list, ResultTable]:
     """E 3.20-3.22 from the twin's actuation sweep (commands 8..43, each settled; 5 readings a command when
     ``fast``, else 20): ``(fits, table identify.voltage_fits)``."""
-    sweep = actuation_sweep(samples=5 if fast else 20, seed=seed, params=params)
+    sweep = actuation_sweep(
+        samples=5 if fast else 20, seed=seed, params=params, orientation=release_orientation(params)
+    )
     commands = sweep.column("command").astype(float)
     # the printed lines are the thesis rig's gauges: NaN beside another digit's
     nan = {"slope": math.nan, "offset": math.nan}
