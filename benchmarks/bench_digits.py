@@ -8,6 +8,8 @@ the same run.
   docs/digits.md), the thesis rig stands tip up as in the thesis; both with their cable.
 - Static cases per second: 5,000 random load cases (one weight of 7.5-37.5 g anywhere along the digit, commands
   straight / +10 / +20), one batched :func:`~flexdigit.twin.twin.static_gauges_v` call, horizontal (chapters 6-7).
+- The report of the 0.5 m digit: ``flexdigit reproduce --fast --params D.toml --workers 1`` (every chapter, one
+  process), wall time of the command a user runs, interpreter start-up included.
 
 ``python -m benchmarks bench_digits``
 """
@@ -107,4 +109,33 @@ def run() -> list[dict]:
                 "note": f"5000 cases (one weight, three commands) in {elapsed:.3f} s, batched, horizontal",
             }
         )
+    wall, entries = bench_report(FIVE_SECTIONS_EIGHT_GAUGES)
+    rows.append(
+        {
+            "name": "reproduce --fast --params, 5 sections, 8 gauges, 0.5 m",
+            "value": wall,
+            "unit": "s",
+            "goal": "",
+            "note": f"{entries} entries, every chapter in one process (--workers 1), exit 0",
+        }
+    )
     return rows
+
+
+def bench_report(description: dict) -> tuple[float, int]:
+    """Wall time (s) of ``flexdigit reproduce --fast --params`` on the digit, and its report's entries."""
+    import json
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    import tomli_w
+
+    folder = Path(tempfile.mkdtemp())
+    (folder / "digit.toml").write_text(tomli_w.dumps(description))
+    command = ["reproduce", "--fast", "--params", str(folder / "digit.toml"), "--out", str(folder / "report")]
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "flexdigit.cli", *command, "--workers", "1"], check=True)
+    wall = time.perf_counter() - start
+    return wall, len(json.loads((folder / "report" / "results.json").read_text())["entries"])

@@ -81,3 +81,27 @@ def test_cli_reads_the_twin_file_with_the_readme_channel_name(release_file, caps
     assert out["channel"] == "gauge1"
     assert out["unit"] == "V"
     assert out["wn_rad_s"] == pytest.approx(DIGIT_WN, rel=0.03)
+
+
+def test_twin_identification_of_a_stiff_damped_digit(tmp_path):
+    # tests/digits.py's 0.16 m one-section digit decays in 1 / (zeta wn) = 0.16 s: its fast release record is cut
+    # to 8 of those (not 5 s of exact zero at the tip, where the robust fit's intervals scattered, zeta +-61 %),
+    # and the least-squares fits give back the twin's own housed mode (its linear modal analysis) within issue 4's 3 %
+    # (the 20 mm release is not quite linear: zeta 1.1 % below)
+    from digits import write_digit
+    from flexdigit.identify.chapter3_identification import RELEASE_TIME_CONSTANTS, twin_identification
+    from flexdigit.params import load_params
+    from flexdigit.twin.calibration import use_calibration
+    from flexdigit.twin.digit_calibration import calibration_for
+    from flexdigit.twin.twin import release_dynamics
+
+    params = load_params(write_digit("one-section", tmp_path))
+    calibration = calibration_for(params)  # as reproduce --params runs it
+    mode = release_dynamics(params, calibration)
+    with use_calibration(calibration):
+        r = twin_identification(params, seed=0, fast=True)
+    tau = 1.0 / (mode.zeta_housing * mode.wn_housing_rad_s)
+    assert r.tip.t_s[-1] == pytest.approx(RELEASE_TIME_CONSTANTS * tau, abs=0.01)
+    for fit in (r.tip_fits["lsq"], r.fits[("digit", "lsq")]):
+        assert fit.wn_rad_s == pytest.approx(mode.wn_housing_rad_s, rel=0.03)
+        assert fit.zeta == pytest.approx(mode.zeta_housing, rel=0.03)

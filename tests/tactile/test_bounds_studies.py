@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from flexdigit.errors import ParameterError
 from flexdigit.tactile.bounds import ZONES, cramer_rao, protocol_limits
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.localisation import localisation_study
@@ -287,3 +288,31 @@ def test_strategies_on_the_cantilever_err_only_where_no_gauge_bends(tmp_path, ma
     assert parallel.position_corr2 > 0.99
     assert parallel.position_rmse_m < 0.005
     assert scores[2].position_corr2 > 0.99  # cascaded: the thesis feared compounding errors; none to compound here
+
+
+class Gauges:
+    """A cantilever's G gauges at ``places_m`` (1 V per N m of bending moment), noise ``NOISE`` each."""
+
+    def __init__(self, places_m):
+        self.places_m = np.asarray(places_m, dtype=float)
+        self.noise_v = np.full(self.places_m.size, NOISE)
+
+    def gauges_v(self, a, m, command):
+        a, m = np.broadcast_arrays(np.atleast_1d(a), np.atleast_1d(m))
+        return (9.81 * m)[:, None] * np.clip(a[:, None] - self.places_m, 0, None)
+
+
+@pytest.mark.parametrize("places_m", [[0.05, 0.10], [0.02, 0.06, 0.10, 0.14, 0.18, 0.22, 0.26, 0.28]])
+def test_beam_inversion_takes_the_models_gauge_count(places_m):
+    # noise-free readings of a load beyond the last gauge (every gauge bends: position and mass identifiable)
+    # give back the load; G + 1 columns carry the command; any other count is refused naming the expected one
+    model = Gauges(places_m)
+    a, m = np.array([0.29, 0.295]), np.array([0.02, 0.035])
+    v = model.gauges_v(a, m, None)
+    est = BeamInversion(model, digit_length_m=0.3, max_mass_kg=0.05, calibrate=False).fit(v)
+    assert est.gain_.shape == (len(places_m),)
+    np.testing.assert_allclose(est.predict(v), np.column_stack([0.3 - a, m]), atol=1e-5)
+    with_command = np.column_stack([v, np.full(2, -1)])
+    np.testing.assert_allclose(est.predict(with_command), est.predict(v), atol=1e-12)
+    with pytest.raises(ParameterError, match=f"X must have {len(places_m)} gauge column"):
+        est.predict(np.zeros((2, len(places_m) + 2)))

@@ -136,3 +136,22 @@ def test_release_test_on_the_compiled_kernel_reads_what_the_numpy_twin_reads(hou
     np.testing.assert_allclose(
         fast.column("tip_deflection_m"), reference.column("tip_deflection_m"), rtol=0, atol=1e-15
     )
+
+
+def test_release_orientation_hangs_only_a_digit_that_buckles_tip_up(tmp_path):
+    # tests/digits.py: 0.5 m, 5 sections buckles tip up under its supports' weight (release_test refuses it so);
+    # the thesis rig and the short digit stand (the thesis mounted its rig tip up, 2.2.4)
+    from digits import write_digit
+    from flexdigit.params import load_params
+    from flexdigit.twin.digit_calibration import calibration_for
+    from flexdigit.twin.records import release_orientation
+
+    assert release_orientation() == "vertical"
+    assert release_orientation(load_params(write_digit("short", tmp_path))) == "vertical"
+    long = load_params(write_digit("five-sections-eight-gauges", tmp_path))
+    assert release_orientation(long) == "hanging"
+    cal = calibration_for(long)
+    with pytest.raises(ParameterError, match="buckles"):
+        ex.release_test(duration_s=0.1, params=long, calibration=cal)
+    record = ex.release_test(duration_s=0.1, params=long, calibration=cal, orientation=release_orientation(long, cal))
+    assert np.isfinite(record.column("tip_deflection_m")).all()

@@ -77,10 +77,15 @@ class ReleaseFit:
     __repr__ = fields_summary
 
 
-def release_fit(housing: bool, *, duration_s: float, seed: int, params: RigParams | None = None) -> ReleaseFit:
-    """Simulate a release test (20 mm tip deflection, 500 Hz) and fit it (see :class:`ReleaseFit`)."""
+def release_fit(
+    housing: bool, *, duration_s: float, seed: int, params: RigParams | None = None, orientation: str = "vertical"
+) -> ReleaseFit:
+    """Simulate a release test (20 mm tip deflection, 500 Hz, the digit mounted ``orientation``) and fit it (see
+    :class:`ReleaseFit`)."""
     key = "with_housing" if housing else "without_housing"
-    res = records.release_test(housing=housing, duration_s=duration_s, sample_rate_hz=500, seed=seed, params=params)
+    res = records.release_test(
+        housing=housing, duration_s=duration_s, sample_rate_hz=500, seed=seed, params=params, orientation=orientation
+    )
     t = res.column("time_s")
     gauges = [name.removesuffix("_v") for name in res.table.column_names if name.startswith("gauge")]  # G of them
     figures = release_figures([series_from_table(res, gauge) for gauge in gauges])
@@ -217,7 +222,8 @@ class Chapter3TwinStudy:
     ``releases``: housing (bool) -> :class:`ReleaseFit`; ``sweep``: the simulated actuation sweep and
     ``sweep_fits`` (slope V/command, offset V per gauge); ``table_3_6``: None on a digit other than the thesis rig
     (its readings are the thesis rig's); ``tip_angle_43_rad``: the twin's tip rotation at command
-    43; ``checks``: :func:`physics_checks`.
+    43; ``checks``: :func:`physics_checks`; ``orientation``: the mount of every simulated record
+    (:func:`flexdigit.twin.records.release_orientation`: tip up, or hanging for a digit that buckles tip up).
     """
 
     calibration: object
@@ -230,6 +236,7 @@ class Chapter3TwinStudy:
     calibration_residuals: ResultTable
     calibration_parameters: ResultTable
     convergence: ResultTable
+    orientation: str = "vertical"
 
     @property
     def tables(self) -> tuple[ResultTable, ...]:
@@ -246,12 +253,15 @@ def chapter3_twin_study(params: RigParams | None = None, *, seed: int = 0, fast:
     """
     p = params or RigParams()
     cal = default_calibration()
+    mount = records.release_orientation(p, cal)  # tip up as the thesis, unless the digit buckles so: then hung
     # the bare digit's time constant is 1/(zeta wn) = 39 s: a zeta from fewer seconds is at the noise's mercy
     duration = {False: 15.0 if fast else 30.0, True: 5.0 if fast else 8.0}
-    releases = {h: release_fit(h, duration_s=duration[h], seed=seed, params=p) for h in (False, True)}
+    releases = {
+        h: release_fit(h, duration_s=duration[h], seed=seed, params=p, orientation=mount) for h in (False, True)
+    }
     # 20 readings a command even in fast mode: the taut cable's guide friction scatters single readings by
     # 10-40 mV (twin calibration, chapter 7), which 5 readings leave in the small E 3.22 intercept
-    sweep = records.actuation_sweep(settle_s=2.0 if fast else 3.0, samples=20, seed=seed, params=p)
+    sweep = records.actuation_sweep(settle_s=2.0 if fast else 3.0, samples=20, seed=seed, params=p, orientation=mount)
     cmds = sweep.column("command")
     gauges = [name for name in sweep.table.column_names if name.startswith("gauge")]  # one per gauge of the digit
     fits = tuple(tuple(float(v) for v in np.polyfit(cmds, sweep.column(name), 1)) for name in gauges)
@@ -262,9 +272,10 @@ def chapter3_twin_study(params: RigParams | None = None, *, seed: int = 0, fast:
         sweep=sweep,
         sweep_fits=fits,
         table_3_6=table_3_6(p, cal) if p == RigParams() else None,  # the thesis rig's measured deflections
-        tip_angle_43_rad=float(Twin(p, cal, command=43).state()[0][-1]),
+        tip_angle_43_rad=float(Twin(p, cal, command=43, orientation=mount).state()[0][-1]),
         checks=physics_checks(),
         calibration_residuals=residuals,
         calibration_parameters=parameters,
         convergence=convergence_table(),
+        orientation=mount,
     )

@@ -42,7 +42,7 @@ def build(ctx: ReportContext) -> Chapter:
     fits = thesis_value("conversion.v_sg_fit") if ctx.thesis_rig else [None] * len(study.sweep_fits)
     _sweep_entries(study, fits, ch.entries)
     ch.figures.append(_sweep_figure(ctx, study.sweep, fits))
-    ch.figures.append(_shapes_and_step_figure(ctx, p, study.calibration, seed))
+    ch.figures.append(_shapes_and_step_figure(ctx, p, study.calibration, seed, study.orientation))
     if not ctx.thesis_rig:
         ch.entries.extend(_check_entries(study.checks))
         ch.tables.extend(study.tables)
@@ -51,6 +51,11 @@ def build(ctx: ReportContext) -> Chapter:
             "(flexdigit params prints what it derives), the thesis's columns are not applicable, and table 3.6 "
             "(the thesis rig's measured deflections) is skipped."
         )
+        if study.orientation != "vertical":
+            ch.paragraphs.append(
+                f"Tip up this digit buckles under its own and its supports' weight: every record here is of the "
+                f"digit mounted {study.orientation} (tip down), as `flexdigit run --params` mounts it."
+            )
         return ch
     _table_3_6_entries(study.table_3_6, ch.entries)
     cal = study.calibration
@@ -278,7 +283,7 @@ def _sweep_figure(ctx: ReportContext, sweep, fits):
     )
 
 
-def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int):
+def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int, orientation: str = "vertical"):
     """Left: the digit's shape at commands 8..43 (large deflection). Right: a servo step against MT(s)."""
     import matplotlib.pyplot as plt
     import scipy.signal
@@ -286,7 +291,7 @@ def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int):
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
     s = np.linspace(0.0, params.geometry.digit_length_m, 60)
     for command in (8, 15, 22, 29, 36, 43):
-        twin = Twin(params, cal, command=command)
+        twin = Twin(params, cal, command=command, orientation=orientation)
         xy = twin.chain.positions(twin.state()[0], s) * 1e3
         left.plot(xy[:, 1], xy[:, 0], label=f"command {command}")
         g = twin.chain.positions(twin.state()[0], params.geometry.gauge_positions_m) * 1e3
@@ -296,7 +301,15 @@ def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int):
     left.set_aspect("equal")
     left.legend(fontsize=7)
     left.set_title("twin: digit shape (dots: gauges)")
-    res = ex.servo_step_test(command_from=0, command_to=51, duration_s=1.0, seed=seed, params=params, calibration=cal)
+    res = ex.servo_step_test(
+        command_from=0,
+        command_to=51,
+        duration_s=1.0,
+        seed=seed,
+        params=params,
+        calibration=cal,
+        orientation=orientation,
+    )
     t = res.column("time_s")
     pot = res.column("pot_v")
     step_at = float(t[np.argmax(res.column("command") == 51)])

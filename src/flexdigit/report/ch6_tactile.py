@@ -352,6 +352,12 @@ def _criteria_paragraph(exp) -> str:
     if met["best_over_thesis_network"] and met["worst_position_rmse_over_crlb"]:
         return text
     ratios = np.array(list(position_ratios(exp, "thesis network").values()))
+    if not ratios.size:  # e.g. one gauge, command fixed: one voltage cannot tell both position and mass
+        return text + (
+            " Why: no test reading is identifiable: with the mass unknown, this digit's gauges cannot tell the "
+            "position and the mass of a load apart (the Cramer-Rao bound is infinite), so the ratio-to-bound "
+            "criterion has nothing to score."
+        )
     spread = float(np.std(np.unique(exp.dataset["position_from_tip_m"][exp.dataset["load_kg"] > 0])))
     ident = loc.zone == "identifiable"
     over = float(np.mean(loc.crlb_m[ident] > spread)) if ident.any() else float("nan")
@@ -501,15 +507,16 @@ def _fig_test(ctx, opt, slug, refs, plt):
 def _fig_raw(ctx, exp, slug, ref, plt):
     ds = exp.dataset
     loaded = ds["load_kg"] > 0
-    fig, axes = plt.subplots(1, 3, figsize=(11, 3.4), sharex=True)
-    for i, ax in enumerate(axes):
+    gauges = ds.gauges_v.shape[1]  # the digit's G gauges, one panel each (the thesis rig's 3)
+    fig, axes = plt.subplots(1, gauges, figsize=(11 * max(gauges, 3) / 3, 3.4), sharex=True, squeeze=False)
+    for i, ax in enumerate(axes[0]):
         for m in np.unique(ds["load_kg"][loaded]):
             for c in np.unique(ds["command"]):
                 sel = loaded & (ds["load_kg"] == m) & (ds["command"] == c)
                 lab = f"{1000 * m:g} g" + (f", cmd {c}" if c >= 0 else "")
                 ax.plot(100 * ds["position_from_tip_m"][sel], ds.gauges_v[sel, i], ".", ms=2, label=lab)
         ax.set(title=f"gauge {i + 1}", xlabel="load position from tip (cm)", ylabel="V" if i == 0 else None)
-    axes[0].legend(fontsize=6)
+    axes[0, 0].legend(fontsize=6)
     return ctx.save_figure(
         fig,
         f"{slug}-raw",
@@ -524,7 +531,7 @@ def _fig_normalised(ctx, exp, slug, ref, plt):
     x = ds.gauges_v
     z = Normaliser().fit(x[split.train]).transform(x[np.concatenate([split.train, split.val, split.test])])
     fig, ax = plt.subplots(figsize=(6, 3.4))
-    for i in range(3):
+    for i in range(z.shape[1]):
         ax.plot(z[:, i], ".", ms=2, label=f"gauge {i + 1}")
     ax.set(xlabel="reading (shuffled: training, validation, test)", ylabel="normalised (E 6.1)")
     ax.legend(fontsize=7)

@@ -23,7 +23,7 @@ import numpy as np
 
 from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
-from flexdigit.control.design20ms import design_20ms
+from flexdigit.control.design20ms import design_20ms, straight_is_stable
 from flexdigit.control.discretise import forward_euler_stability_limit_s, halve_step, sample_period_study, sampled_loop
 from flexdigit.control.thesis_designs import printed_controller, thesis_plant
 from flexdigit.params import RigParams
@@ -114,14 +114,19 @@ def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: boo
 
     The rotation is estimated from the gauges by a map calibrated on a static sweep of the twin seeded ``seed``
     (:func:`~flexdigit.rig.rotation.calibrate_rotation`); every step runs on a fresh twin seeded ``seed + 1``
-    and is scored on its true tip rotation. ``fast`` calibrates on 5 commands instead of 9.
+    and is scored on its true tip rotation. ``fast`` calibrates on 5 commands instead of 9. The twin stands tip up
+    as the thesis's, or hangs when the digit buckles so (as ``flexdigit run --params`` mounts it).
     """
     params = params or RigParams()
+    mount = "vertical" if straight_is_stable(params, None, "vertical") else "hanging"
     commands = (8, 14, 20, 26, 32) if fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
-    est = calibrate_rotation(open_rig("sim", params, seed=seed), commands, settle_s=1.5 if fast else 2.0)
+    rig = open_rig("sim", params, seed=seed, orientation=mount)
+    est = calibrate_rotation(rig, commands, settle_s=1.5 if fast else 2.0)
     runs = {
         # unguarded: the chapter shows the thesis's forward-Euler design failing on the twin (5.1.2), not stopped
-        (name, gain): step_test(open_rig("sim", params, seed=seed + 1), name, estimator=est, gain=gain, guard=False)
+        (name, gain): step_test(
+            open_rig("sim", params, seed=seed + 1, orientation=mount), name, estimator=est, gain=gain, guard=False
+        )
         for name, gain in TWENTY_MS_CASES
     }
     rows = []

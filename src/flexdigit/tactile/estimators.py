@@ -1,15 +1,16 @@
 """Load estimators beyond the thesis's MLP, on the same inputs: a beam-model inversion and a Gaussian process.
 
-Both follow scikit-learn's contract. Inputs ``X`` are the gauge voltages (n, 3), optionally with the servo
-command as a 4th column (actuated experiments); targets ``Y`` are ``(position_from_tip_m, load_kg)`` (n, 2) of
-loaded readings.
+Both follow scikit-learn's contract. Inputs ``X`` are the gauge voltages (n, G) of a digit's G gauges (1-8; the
+thesis rig's 3), optionally with the servo command as a last column (actuated experiments); targets ``Y`` are
+``(position_from_tip_m, load_kg)`` (n, 2) of loaded readings.
 
 * :class:`BeamInversion`: least squares on a static gauge model (the twin's, :mod:`flexdigit.tactile.bounds`):
   ``(a, m) = argmin sum_i ((v_i - g_i(a, m, c)) / sigma_i)^2`` on a dense (position, mass) grid with
   parabolic refinement; ``fit`` only calibrates a per-gauge gain and offset of the model on the training
-  readings (6 numbers; a real rig's gains differ from the model's). This is the maximum-likelihood estimate
-  under the model's Gaussian noise, the estimator the Cramer-Rao bound is about. A model whose noise depends on
-  the load (``noise_at``: the twin's cable-guide friction, which grows with the cable tension) is weighted by it:
+  readings (2 G numbers, G the model's gauges: ``noise_v``'s length; a real rig's gains differ from the model's).
+  This is the maximum-likelihood estimate under the model's Gaussian noise, the estimator the Cramer-Rao bound
+  is about. A model whose noise depends on the load (``noise_at``: the twin's cable-guide friction, which grows
+  with the cable tension) is weighted by it:
   the grid cost is then the full negative log-likelihood, ``sum_i ((v_i - g_i) / sigma_i)^2 + 2 log sigma_i``,
   and the refinement keeps the weights of the best grid point.
 * :class:`GPLocaliser`: scikit-learn ``GaussianProcessRegressor`` (anisotropic RBF + white noise) on the
@@ -45,12 +46,16 @@ from flexdigit.tactile.protocols import RELAXED
 __all__ = ["BeamInversion", "GPLocaliser"]
 
 
-def _split_x(X) -> tuple[np.ndarray, np.ndarray]:
+def _split_x(X, gauges: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``gauges`` gauge columns of ``X`` and the command column (``RELAXED`` when ``X`` has none)."""
     x = check_array(X, "X", "estimator", ndim=2)
-    if x.shape[1] not in (3, 4):
-        raise ParameterError(f"X must have 3 gauge columns (and optionally the command). Got {x.shape[1]} columns.")
-    command = x[:, 3].astype(int) if x.shape[1] == 4 else np.full(x.shape[0], RELAXED)
-    return x[:, :3], command
+    if x.shape[1] not in (gauges, gauges + 1):
+        raise ParameterError(
+            f"X must have {gauges} gauge column(s) (the model's gauges; and optionally the command). "
+            f"Got {x.shape[1]} columns."
+        )
+    command = x[:, gauges].astype(int) if x.shape[1] == gauges + 1 else np.full(x.shape[0], RELAXED)
+    return x[:, :gauges], command
 
 
 class BeamInversion(Estimator):
@@ -121,22 +126,24 @@ class BeamInversion(Estimator):
             a, m = self.a_grid_, self.m_grid_
             aa, mm = np.meshgrid(a, m, indexing="ij")
             g = self._model(aa.ravel(), mm.ravel(), np.full(aa.size, command))
-            self.grids_[command] = g.reshape(a.size, m.size, 3)
-            self.noise_grids_[command] = self._noise(aa.ravel(), mm.ravel(), command).reshape(a.size, m.size, 3)
+            gauges = self.noise_v_.size
+            self.grids_[command] = g.reshape(a.size, m.size, gauges)
+            self.noise_grids_[command] = self._noise(aa.ravel(), mm.ravel(), command).reshape(a.size, m.size, gauges)
         return self.grids_[command]
 
     def _noise(self, a, m, command: int) -> np.ndarray:
-        """Standard deviation (V) of a reading at ``(a, m)`` (n, 3), in the calibrated model's units."""
+        """Standard deviation (V) of a reading at ``(a, m)`` (n, G), in the calibrated model's units."""
         a = np.atleast_1d(a)
         if hasattr(self.model, "noise_at"):
             sigma = np.asarray(self.model.noise_at(a, np.broadcast_to(m, a.shape), np.full(a.size, command)))
         else:
-            sigma = np.broadcast_to(self.noise_v_, (a.size, 3))
+            sigma = np.broadcast_to(self.noise_v_, (a.size, self.noise_v_.size))
         return sigma * np.abs(self.gain_)
 
     def no_load_cost(self, X) -> np.ndarray:
         """Negative log-likelihood (as the fit's cost) of each reading under "nothing hung"."""
-        v, command = _split_x(X)
+        check_is_fitted(self, "grids_")
+        v, command = _split_x(X, self.noise_v_.size)
         cost = np.empty(v.shape[0])
         for value in np.unique(command):
             rows = command == value
@@ -153,10 +160,11 @@ class BeamInversion(Estimator):
         self.m_grid_ = np.linspace(0.0, float(self.max_mass_kg), int(self.mass_steps))
         self.grids_: dict[int, np.ndarray] = {}
         self.noise_grids_: dict[int, np.ndarray] = {}
-        self.noise_v_ = np.asarray(self.model.noise_v, dtype=float)
-        self.gain_ = np.ones(3)
-        self.offset_ = np.zeros(3)
-        v, command = _split_x(X)
+        self.noise_v_ = np.atleast_1d(np.asarray(self.model.noise_v, dtype=float))
+        gauges = self.noise_v_.size
+        self.gain_ = np.ones(gauges)
+        self.offset_ = np.zeros(gauges)
+        v, command = _split_x(X, gauges)
         if self.load_set:
             if Y is None:
                 raise ParameterError("BeamInversion(load_set=True).fit needs Y (position, mass) to learn the loads.")
@@ -165,7 +173,7 @@ class BeamInversion(Estimator):
         if self.calibrate and Y is not None:
             y = check_array(Y, "Y", "BeamInversion.fit", ndim=2, shape=(v.shape[0], 2))
             g = self._model(length - y[:, 0], y[:, 1], command)
-            for i in range(3):  # v_i ~ gain_i g_i + offset_i, least squares (6 numbers)
+            for i in range(gauges):  # v_i ~ gain_i g_i + offset_i, least squares (2 G numbers)
                 design = np.column_stack([g[:, i], np.ones(len(g))])
                 if np.ptp(g[:, i]) > 0:
                     (self.gain_[i], self.offset_[i]), *_ = np.linalg.lstsq(design, v[:, i], rcond=None)
@@ -176,7 +184,7 @@ class BeamInversion(Estimator):
     def predict(self, X, return_cost: bool = False):
         """``(n, 2)``: position from the tip (m) and mass (kg) of each reading (and the residual cost if asked)."""
         check_is_fitted(self, "grids_")
-        v, command = _split_x(X)
+        v, command = _split_x(X, self.noise_v_.size)
         out = np.empty((v.shape[0], 2))
         cost = np.empty(v.shape[0])
         for value in np.unique(command):
@@ -186,11 +194,11 @@ class BeamInversion(Estimator):
             log_term = 2 * np.sum(np.log(sigma), axis=2)
             a0 = np.empty(rows.size)
             m0 = np.empty(rows.size)
-            s0 = np.empty((rows.size, 3))
+            s0 = np.empty((rows.size, v.shape[1]))
             for start in range(0, rows.size, 32):  # batches bound the (batch, na, nm) temporaries
                 r = rows[start : start + 32]
                 d = np.broadcast_to(log_term, (r.size,) + grid.shape[:2]).copy()
-                for i in range(3):
+                for i in range(v.shape[1]):
                     d += ((v[r, i, None, None] - grid[None, :, :, i]) / sigma[None, :, :, i]) ** 2
                 ia, im = np.unravel_index(d.reshape(r.size, -1).argmin(axis=1), d.shape[1:])
                 a0[start : start + 32], m0[start : start + 32] = self.a_grid_[ia], self.m_grid_[im]
@@ -208,7 +216,7 @@ class BeamInversion(Estimator):
         return g
 
     def no_load_v(self, command) -> np.ndarray:
-        """The calibrated model's reading with nothing hung, for each command (n, 3)."""
+        """The calibrated model's reading with nothing hung, for each command (n, G)."""
         command = np.atleast_1d(command)
         return self._model(np.zeros(command.size), np.zeros(command.size), command) * self.gain_ + self.offset_
 
@@ -218,7 +226,7 @@ class BeamInversion(Estimator):
 
     def _gauss_newton(self, v, a, m, command, sigma, iterations: int = 4):
         """Refine grid estimates by damped Gauss-Newton on the model itself (joint in position and mass), with
-        the noise ``sigma`` (n, 3) of each reading's best grid point held."""
+        the noise ``sigma`` (n, G) of each reading's best grid point held."""
         step_a, step_m = 1e-4, 1e-5
         cost, g = self._cost(v, a, m, command, sigma)
         for _ in range(iterations):

@@ -25,6 +25,7 @@ __getattr__, __all__ = lazy_exports(
         "TwinRecord": "flexdigit.twin.records",
         "record_figure": "flexdigit.twin.record_plot",
         "release_test": "flexdigit.twin.records",
+        "release_orientation": "flexdigit.twin.records",
         "servo_step_test": "flexdigit.twin.records",
         "actuation_sweep": "flexdigit.twin.records",
         "static_load_test": "flexdigit.twin.records",

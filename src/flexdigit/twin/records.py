@@ -35,13 +35,14 @@ from flexdigit._validation import check_int, check_positive, check_real, check_v
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
 from flexdigit.twin.calibration import Calibration, default_calibration
-from flexdigit.twin.twin import Twin, static_gauges_v
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, Twin, _default_calibration, cached_digit, static_gauges_v
 
 __all__ = [
     "METADATA_KEY",
     "RELEASE_DT_S",
     "TwinRecord",
     "release_test",
+    "release_orientation",
     "servo_step_test",
     "actuation_sweep",
     "static_load_test",
@@ -199,6 +200,22 @@ def _check_upright(chain, orientation: str, owner: str) -> None:
         )
 
 
+def release_orientation(params: RigParams | None = None, calibration: Calibration | None = None) -> str:
+    """The mount the digit's release tests (cable removed) can use: ``"vertical"`` (tip up, as the thesis mounted
+    it, 2.2.4) when the straight digit stands so, housed and bare, else ``"hanging"`` (tip down: gravity then
+    stiffens it). A long digit tip up buckles under its supports' weight (tests/digits.py's 0.5 m, 5 sections);
+    ``run --params`` hangs such a digit too. The calibration is the twin's default when not given (the default
+    calibration, or for a digit it cannot describe, that fit scaled to the digit)."""
+    params = params or RigParams()
+    calibration = calibration or _default_calibration(params)
+    for housed in (True, False):
+        chain = cached_digit(params, calibration, housed, "vertical", DEFAULT_CELLS_PER_SECTION)
+        stiffness = chain.tangent_stiffness(np.zeros(chain.n), chain.g_gravity, False)
+        if np.linalg.eigvalsh(0.5 * (stiffness + stiffness.T))[0] < 0:  # _check_upright's test
+            return "hanging"
+    return "vertical"
+
+
 def _check_rate(duration_s, sample_rate_hz, owner):
     duration = check_real(duration_s, "duration_s", owner, low=0, low_open=True, high=3600)
     rate = check_real(sample_rate_hz, "sample_rate_hz", owner, low=1, high=100_000)
@@ -269,8 +286,10 @@ def servo_step_test(
     seed: int = 0,
     params: RigParams | None = None,
     calibration: Calibration | None = None,
+    orientation: str = "vertical",
 ) -> TwinRecord:
-    """A servo command step (3.2.4: to 51), potentiometer and gauges sampled; cable detached by default.
+    """A servo command step (3.2.4: to 51), potentiometer and gauges sampled; cable detached by default; the digit
+    mounted ``orientation`` (tip up as the thesis; ``"hanging"`` for one that buckles so, :func:`release_orientation`).
 
     Returns
     -------
@@ -284,7 +303,7 @@ def servo_step_test(
     c1 = check_int(command_to, "command_to", "servo_step_test", low=a.command_min, high=a.command_max)
     step_at = check_real(step_at_s, "step_at_s", "servo_step_test", low=0)
     _, _, times = _check_rate(duration_s, sample_rate_hz, "servo_step_test")
-    twin = Twin(params, calibration, seed=seed, cable=cable, command=c0)
+    twin = Twin(params, calibration, seed=seed, cable=cable, command=c0, orientation=orientation)
     before = twin.read_at(times[times < step_at])
     if before.command.size < times.size:  # the step is sent at step_at, before the first read at or after it
         twin.advance(max(step_at - twin.time_s, 0.0))
@@ -295,6 +314,7 @@ def servo_step_test(
     cols.update({f"gauge{i + 1}_v": gauges[:, i] for i in range(gauges.shape[1])})
     args = dict(command_from=c0, command_to=c1, step_at_s=step_at, duration_s=duration_s, cable=cable)
     args["sample_rate_hz"] = sample_rate_hz
+    args["orientation"] = orientation
     return _result("servo_step_test", cols, args, seed, params, calibration)
 
 
