@@ -16,7 +16,6 @@ import numpy as np
 from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_real
 from flexdigit.errors import ParameterError
-from flexdigit.rig.backends.hil_backend import run_on_board
 from flexdigit.rig.base import Rig, open_rig, parse_rig_url
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import LoopResult, run_loop
@@ -355,6 +354,8 @@ def board_step_test(backend: str, setpoint_deg: float, duration_s: float, *, see
         raise ParameterError(
             f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {backend!r}."
         )
+    from flexdigit.rig.backends.hil_backend import run_on_board  # the twin (scipy): cli/run.py reads constants here
+
     options = {"mode": "board", "setpoint_deg": setpoint_deg} | ({} if seed is None else {"seed": seed})
     rig = open_rig(backend, **options)
     try:
