@@ -444,7 +444,11 @@ def unit_slip(value: float, unit: str, low: float | None, high: float | None) ->
     'mm (0.000381 m)'
     >>> unit_slip(205.0, "Pa", 1e8, 1e12)
     'GPa (2.05e+11 Pa)'
+    >>> unit_slip(0.0, "s", 0.0, 10.0)  # zero is zero in any unit (an open bound at 0 refused it)
+    ''
     """
+    if value == 0:
+        return ""
     for factor, name in UNIT_SLIPS.get(unit, ()):
         meant = value * factor
         if (low is None or meant >= low) and (high is None or meant <= high):

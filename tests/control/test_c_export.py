@@ -37,7 +37,7 @@ from flexdigit.control.c_export import (
 )
 from flexdigit.control.design20ms import design_20ms, thesis_controller
 from flexdigit.control.runtime import RuntimeController
-from flexdigit.errors import DesignError, OutputExistsError
+from flexdigit.errors import DesignError, OutputExistsError, ParameterError
 
 #: The compiler and the flags the issue names: any warning fails the build.
 GCC = shutil.which("gcc")
@@ -411,3 +411,29 @@ def test_export_writes_both_files_and_never_overwrites(tmp_path, digital20):
     export_controller(spec, out, force=True)
     assert "float32" in (tmp_path / "ctrl.h").read_text()
     assert res.analysis.format == "fixed"
+
+
+# Hostile review: '--prefix int16' wrote a header whose 'int16_t' struct redeclared <stdint.h>'s type, so the
+# export did not compile; a 300-character prefix passed though C99 guarantees 31 significant characters.
+@pytest.mark.parametrize("prefix", ["int16", "uint8", "int_fast32", "uintptr", "1abc", "a-b", "", "x" * 23])
+def test_prefixes_that_make_bad_c_are_refused_in_one_line(digital20, prefix):
+    d, spec = digital20
+    with pytest.raises(ParameterError) as info:
+        render_c(spec, prefix=prefix)
+    message = str(info.value)
+    assert "\n" not in message
+    assert repr(prefix) in message and "--prefix" in message and "<stdint.h>" in message
+
+
+@pytest.mark.parametrize("prefix", ["int", "int24", "uint8x", "x" * 22])
+def test_prefixes_near_the_refused_ones_compile(tmp_path, digital20, prefix):
+    """C keywords are fine (the prefix is never used bare); so are names beside the <stdint.h> ones."""
+    _need_gcc()
+    d, spec = digital20
+    c_text, h_text = render_c(spec, prefix=prefix, header_name="ctl.h")
+    (tmp_path / "ctl.c").write_text(c_text)
+    (tmp_path / "ctl.h").write_text(h_text)
+    build = subprocess.run(
+        [GCC, *CFLAGS, "-c", "-o", str(tmp_path / "ctl.o"), str(tmp_path / "ctl.c")], capture_output=True, text=True
+    )
+    assert build.returncode == 0, build.stderr

@@ -99,3 +99,13 @@ def test_the_cli_refuses_foxglove_without_a_robot(capsys):
 
     assert main(["live", "--foxglove", "--json"]) == 2
     assert "--foxglove needs --robot" in json.loads(capsys.readouterr().out)["error"]
+
+
+@pytest.mark.parametrize("flag", [["--tension-n", "4,0,0,0,2,0"], ["--duration-s", "2"], ["--tension-n", ""]])
+def test_the_cli_refuses_robot_flags_without_a_robot(capsys, flag):
+    # hostile review: 'flexdigit live --tension-n 4,0,0,0,2,0' served the digit's page, the tensions ignored
+    from flexdigit.cli import main
+
+    assert main(["live", *flag, "--json"]) == 2
+    error = json.loads(capsys.readouterr().out)["error"]
+    assert f"{flag[0]} is for a tendon robot" in error and "--robot" in error

@@ -217,3 +217,21 @@ def test_shape_from_euler_bernoulli_gauges_is_the_closed_form_deflection(s_load,
     assert e.angle_rad[0, -1] == pytest.approx(rotation, rel=0.01)
     assert e.tip_m[0, 0] == pytest.approx(length, abs=1e-5)  # small deflection: the tip hardly comes back
     assert e.load_position_from_base_m[0] == pytest.approx(s_load, abs=LOCATE_M)
+
+
+@pytest.mark.parametrize("volts", [(30.0, 40.0, 50.0), (5.01, 0.0, 0.0), (0.0, -1e308, 0.0)])
+def test_readings_beyond_the_adc_range_are_refused_naming_the_range(volts, capsys):
+    # hostile review: `flexdigit shape --gauges-v=30,40,50` printed 'tip angle 6900.9 deg; cable tension
+    # 1445.06 N' as an estimate, from readings the thesis rig's +-5 V ADC cannot give
+    with pytest.raises(ParameterError, match=r"gauges_v.*sensors.adc_range_v.*\[-5, 5\]"):
+        ShapeEstimator().estimate(np.array(volts))
+    from flexdigit.cli import main
+
+    assert main(["shape", f"--gauges-v={','.join(map(str, volts))}"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "adc_range_v" in err and "\n" not in err
+
+
+def test_readings_at_the_adc_rails_are_still_estimated():
+    fit = ShapeEstimator().estimate(np.array([[5.0, 5.0, 5.0], [-5.0, -5.0, -5.0]]))
+    assert fit.consistent.shape == (2,)  # judged by the fit (chi-square), not refused

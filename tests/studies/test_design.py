@@ -248,3 +248,23 @@ chunk_size = 2
     assert main([*base, "--export", str(off[0]), "--export-to", str(tmp_path / "x.toml")]) == 2
     err = capsys.readouterr().err.strip()
     assert "not on the Pareto front" in err and "\n" not in err
+
+
+@pytest.mark.parametrize("kind", ["file", "directory", "no parent"])
+def test_an_export_target_that_cannot_be_written_is_refused_before_the_study_runs(tmp_path, capsys, kind):
+    # hostile review: '--export K --export-to EXISTING' ran the whole study, then refused the file and advised
+    # --force, which would run the study again from its start
+    from flexdigit.cli import main
+
+    target = {"file": tmp_path / "taken.toml", "directory": tmp_path, "no parent": tmp_path / "no" / "x.toml"}[kind]
+    if kind == "file":
+        target.write_text("# someone's rig\n")
+    out = tmp_path / "out"
+    argv = ["study", "design", "thesis-design", "--out", str(out), "--workers", "0", "--export", "0"]
+    assert main([*argv, "--export-to", str(target), "--no-progress"]) != 0
+    err = capsys.readouterr().err.strip()
+    assert str(target) in err and "\n" not in err
+    assert not out.exists()  # no journal: nothing ran
+    if kind == "file":
+        assert "runs the study again" in err
+        assert target.read_text() == "# someone's rig\n"

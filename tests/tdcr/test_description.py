@@ -71,6 +71,12 @@ def test_toml_file_and_built_in_agree(tmp_path):
         ("[[segments]]\nlength_m = 0.1\ntendons = 3\n", ["tendons"]),
         ("colour = 'red'\n", ["colour"]),
         ("[[segments]\n", ["not valid TOML"]),
+        # hostile review: finite but absurd values used to overflow into NaN or an OverflowError naming no key
+        ("[[segments]]\nlength_m = 1e308\n", ["length_m", "[[segments]] 1", "[1e-06, 100]"]),
+        ("[backbone]\nradius_m = 1e200\n", ["radius_m", "[backbone]", "[1e-06, 1]"]),
+        ("[backbone]\nyoungs_modulus_pa = 1e-300\n", ["youngs_modulus_pa", "[1000, 1e+13]"]),
+        ("[[segments]]\nlength_m = 0.1\n[[tendons]]\noffset_m = 1e300\ndisk = 1\n", ["offset_m", "[0, 10]"]),
+        ("[backbone]\ndensity_kg_m3 = inf\n", ["density_kg_m3"]),
     ],
 )
 def test_bad_robot_files_are_refused_in_one_line(tmp_path, text, names):

@@ -133,3 +133,16 @@ def test_a_nodes_frame_is_half_way_between_its_elements():
     expected = (first * Rotation.from_rotvec(turn.as_rotvec() / 2)).as_matrix()
     np.testing.assert_allclose(out[:, 1], expected, rtol=0, atol=1e-12)
     np.testing.assert_allclose(out[:, 0], np.broadcast_to(np.eye(3), (20, 3, 3)), rtol=0, atol=0)
+
+
+def test_a_response_too_long_to_keep_is_refused_before_it_is_allocated(capsys):
+    # hostile review: 'tdcr dynamics --duration-s 600 --dt-s 1e-6' ended in 'internal error (MemoryError: Unable
+    # to allocate 282. GiB ...)'
+    with pytest.raises(ParameterError, match=r"600000000 steps of 41 nodes.*at most 1 GiB"):
+        simulate(ROD, solve_statics(ROD, []), 600.0, dt_s=1e-6)
+    from flexdigit.cli import main
+
+    argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "4,0,0,0,2,0", "--duration-s", "600", "--dt-s", "1e-6"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert "duration_s 600 s" in err and "dt_s 1e-06 s" in err and "\n" not in err

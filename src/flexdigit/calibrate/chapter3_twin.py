@@ -82,12 +82,13 @@ def release_fit(housing: bool, *, duration_s: float, seed: int, params: RigParam
     key = "with_housing" if housing else "without_housing"
     res = records.release_test(housing=housing, duration_s=duration_s, sample_rate_hz=500, seed=seed, params=params)
     t = res.column("time_s")
-    figures = release_figures([series_from_table(res, f"gauge{g}") for g in (1, 2, 3)])
+    gauges = [name.removesuffix("_v") for name in res.table.column_names if name.startswith("gauge")]  # G of them
+    figures = release_figures([series_from_table(res, gauge) for gauge in gauges])
     wn_t = thesis_value(f"digit.release_tests_{key}.wn_avg_rad_s")
     z_t = thesis_value(f"digit.release_tests_{key}.zeta_avg")
     gauge2 = next((f for f in figures["fits"] if f.channel == "gauge2"), figures["fits"][0])
     model = second_order_response(t, "release", wn_t, z_t, gauge2.offset, gauge2.amplitude, gauge2.t0_s)
-    corr = float(np.corrcoef(model, res.column("gauge2_v"))[0, 1])
+    corr = float(np.corrcoef(model, res.column(f"{gauge2.channel}_v"))[0, 1])
     return ReleaseFit(res, figures, corr)
 
 
@@ -214,7 +215,8 @@ class Chapter3TwinStudy:
     """Everything the twin chapter shows; tables in :attr:`tables`.
 
     ``releases``: housing (bool) -> :class:`ReleaseFit`; ``sweep``: the simulated actuation sweep and
-    ``sweep_fits`` (slope V/command, offset V per gauge); ``tip_angle_43_rad``: the twin's tip rotation at command
+    ``sweep_fits`` (slope V/command, offset V per gauge); ``table_3_6``: None on a digit other than the thesis rig
+    (its readings are the thesis rig's); ``tip_angle_43_rad``: the twin's tip rotation at command
     43; ``checks``: :func:`physics_checks`.
     """
 
@@ -222,7 +224,7 @@ class Chapter3TwinStudy:
     releases: dict
     sweep: object
     sweep_fits: tuple[tuple[float, float], ...]
-    table_3_6: Table36
+    table_3_6: Table36 | None
     tip_angle_43_rad: float
     checks: dict
     calibration_residuals: ResultTable
@@ -231,7 +233,8 @@ class Chapter3TwinStudy:
 
     @property
     def tables(self) -> tuple[ResultTable, ...]:
-        return (self.table_3_6.table, self.calibration_residuals, self.calibration_parameters, self.convergence)
+        thesis = () if self.table_3_6 is None else (self.table_3_6.table,)
+        return (*thesis, self.calibration_residuals, self.calibration_parameters, self.convergence)
 
     __repr__ = fields_summary
 
@@ -250,14 +253,15 @@ def chapter3_twin_study(params: RigParams | None = None, *, seed: int = 0, fast:
     # 10-40 mV (twin calibration, chapter 7), which 5 readings leave in the small E 3.22 intercept
     sweep = records.actuation_sweep(settle_s=2.0 if fast else 3.0, samples=20, seed=seed, params=p)
     cmds = sweep.column("command")
-    fits = tuple(tuple(float(v) for v in np.polyfit(cmds, sweep.column(f"gauge{g}_v"), 1)) for g in (1, 2, 3))
+    gauges = [name for name in sweep.table.column_names if name.startswith("gauge")]  # one per gauge of the digit
+    fits = tuple(tuple(float(v) for v in np.polyfit(cmds, sweep.column(name), 1)) for name in gauges)
     residuals, parameters = calibration_tables(cal)
     return Chapter3TwinStudy(
         calibration=cal,
         releases=releases,
         sweep=sweep,
         sweep_fits=fits,
-        table_3_6=table_3_6(p, cal),
+        table_3_6=table_3_6(p, cal) if p == RigParams() else None,  # the thesis rig's measured deflections
         tip_angle_43_rad=float(Twin(p, cal, command=43).state()[0][-1]),
         checks=physics_checks(),
         calibration_residuals=residuals,

@@ -55,7 +55,7 @@ def register(subparsers) -> None:
     live.add_argument(
         "--duration-s",
         type=Flag(Plausible("s", 1e-3, 3600.0, "a streamed motion: up to an hour")),
-        default=5.0,
+        default=None,
         help="with --robot: simulated (and shown) time, s (default 5)",
     )
     parser = add_command(
@@ -96,6 +96,7 @@ def _live(args: argparse.Namespace) -> CommandResult:
     from flexdigit.live.server import check_host, serve
     from flexdigit.live.session import LiveSession
 
+    _check_robot_flags(args)
     if args.foxglove:
         return _foxglove(args)
     if args.robot is not None:
@@ -130,6 +131,16 @@ def _live(args: argparse.Namespace) -> CommandResult:
     }
     text = f"flexdigit live: {data['status']}" + (f"; recording {data['record']}" if data["record"] else "")
     return CommandResult(data=data, text=text, exit_code=0 if session.error is None else 1)
+
+
+def _check_robot_flags(args: argparse.Namespace) -> None:
+    """Refuse --tension-n or --duration-s without --robot (the digit's page would ignore them); default 5 s."""
+    from flexdigit.errors import ParameterError
+
+    given = [f for f, v in (("--tension-n", args.tension_n), ("--duration-s", args.duration_s)) if v is not None]
+    if args.robot is None and given:
+        raise ParameterError(f"{given[0]} is for a tendon robot: give --robot NAME|FILE with it")
+    args.duration_s = 5.0 if args.duration_s is None else args.duration_s
 
 
 def _foxglove(args: argparse.Namespace) -> CommandResult:

@@ -62,5 +62,5 @@ def _reproduce(args: argparse.Namespace) -> CommandResult:
         f"report written to {summary.out_dir / 'index.html'} and {summary.out_dir / 'results.json'}",
         f"{summary.entries} entries: " + ", ".join(f"{n} {s}" for s, n in summary.counts.items()),
     ]
-    lines += [f"chapter {name} FAILED:\n{error}" for name, error in summary.failed.items()]
+    lines += [f"chapter {name} FAILED: {error}" for name, error in summary.failed.items()]
     return CommandResult(data=summary, text="\n".join(lines), exit_code=1 if summary.failed else 0)

@@ -144,14 +144,18 @@ def _design(args, spec, out) -> CommandResult:
 
     args.spec_obj = spec
     settings = DesignSettings.from_spec(spec, samples=args.samples)
+    target = args.export_to or out / f"design-{args.export}.toml"
+    if args.export is not None and (args.export_to is not None or out.is_dir()):
+        from flexdigit._io import check_output
+
+        # before the study runs (hours, for a big one), not after; and --force would also run it again
+        check_output(target, force=args.force, hint="(which also runs the study again) or give --export-to FILE")
     result, summary = _run(args, out, run_design, settings, write_design_outputs)
     text = result.text()
     if args.export is not None:
         from flexdigit.studies.design_study import export_design
 
-        target = export_design(
-            result, args.export, args.export_to or out / f"design-{args.export}.toml", force=args.force
-        )
+        target = export_design(result, args.export, target, force=args.force)
         summary["exported"] = {"design": args.export, "params": str(target)}
         text += f"\ndesign {args.export}'s rig description written to {target} (flexdigit params {target})"
     return CommandResult(data=summary, text=text)

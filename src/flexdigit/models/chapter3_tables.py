@@ -16,6 +16,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,25 +93,39 @@ class Table34:
     __repr__ = fields_summary
 
 
+def table_3_4_gauge_columns(ours: dict) -> list[str]:
+    """``y_sg1_mm .. y_sgG_mm``: the gauge columns of :func:`flexdigit.models.cable.table_3_4`, in gauge order."""
+    return sorted((k for k in ours if k.startswith("y_sg")), key=lambda k: int(k[4:-3]))
+
+
+def table_3_4_printed(column: str, params: RigParams, rows: int) -> list[float]:
+    """Table 3.4's printed ``column`` on the thesis rig; NaN on another digit (its gauges and tip are elsewhere)."""
+    if params == RigParams():
+        return list(thesis_value(f"conversion.table_3_4_{column}"))
+    return [math.nan] * rows
+
+
 def table_3_4(params: RigParams | None = None) -> Table34:
     """Table 3.4 reproduced (mm; E 3.15 with 0.8622 deg per command)."""
     p = params or RigParams()
     ours = cable.table_3_4(params=p)
     x_fit = cable.fit_tip_x_m(thesis_value("conversion.table_3_4_y_max_mm"), params=p)
     ours_fit = cable.table_3_4(params=p, tip_x_m=round(x_fit, 3))
+    columns = [*table_3_4_gauge_columns(ours), "y_max_mm"]
+    printed = {col: table_3_4_printed(col, p, len(ours["commands"])) for col in columns}
     rows = []
     for j, c in enumerate(ours["commands"]):
         row = [int(c)]
-        for col in ("y_sg1_mm", "y_sg2_mm", "y_sg3_mm", "y_max_mm"):
-            row += [thesis_value(f"conversion.table_3_4_{col}")[j], float(ours[col][j])]
+        for col in columns:
+            row += [printed[col][j], float(ours[col][j])]
         row.append(float(ours_fit["y_max_mm"][j]))
         rows.append(tuple(row))
+    gauges = tuple(name for col in columns[:-1] for name in (f"sg{col[4:-3]}_printed_mm", f"sg{col[4:-3]}_ours_mm"))
     table = ResultTable(
         "models.table_3_4",
         "Table 3.4 reproduced (mm; E 3.15 with 0.8622 deg per command; the last column at the tip position "
         f"x = {round(x_fit, 3)} m the printed y_max column fits)",
-        ("command", "sg1_printed_mm", "sg1_ours_mm", "sg2_printed_mm", "sg2_ours_mm", "sg3_printed_mm")
-        + ("sg3_ours_mm", "y_max_printed_mm", "y_max_ours_at_l_mm", "y_max_ours_at_fitted_x_mm"),
+        ("command", *gauges, "y_max_printed_mm", "y_max_ours_at_l_mm", "y_max_ours_at_fitted_x_mm"),
         tuple(rows),
     )
     return Table34(ours, x_fit, ours_fit, table)

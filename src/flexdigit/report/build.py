@@ -36,12 +36,14 @@ from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
 from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.report.results import not_applicable, thesis_comparisons
 from flexdigit.twin.calibration import (
     default_calibration,
     default_calibration_source,
     default_fit_record,
     use_calibration,
 )
+from flexdigit.twin.digit_calibration import calibration_for
 
 __all__ = [
     "ReportSummary",
@@ -101,9 +103,22 @@ def reproduce(
         builds them one after another in this process.
     """
     out = check_report_dir(out_dir, force=force)
-    with _new_report(out) as work:
+    with _new_report(out) as work, _digit_calibration(params):
         summary = _build(work, params, seed, fast, chapters, progress, workers)
     return replace(summary, out_dir=out)
+
+
+@contextlib.contextmanager
+def _digit_calibration(params: RigParams | None) -> Iterator[None]:
+    """Every twin of every chapter on the calibration of the digit ``params`` describes: for a digit other than
+    the thesis rig, with no calibration given (a ``use_calibration`` block), the thesis's scaled to it
+    (:func:`flexdigit.twin.digit_calibration.calibration_for`; the packaged one has the thesis rig's 3 sections
+    and 3 gauges, and the chapters' studies take the default calibration)."""
+    if params is None or params == RigParams() or default_calibration_source() != "packaged":
+        yield
+        return
+    with use_calibration(calibration_for(params), source="derived from the digit's description"):
+        yield
 
 
 def _build(work: Path, params, seed, fast, chapters, progress, workers) -> ReportSummary:
@@ -303,12 +318,24 @@ EXPECTED_SECONDS = {
 def _build_chapter(module_name: str, ctx: ReportContext) -> tuple[Chapter | None, str | None, float, float]:
     """``(chapter, None, seconds, cpu_seconds)``, or ``(None, traceback, seconds, cpu_seconds)`` if it failed."""
     start, cpu = time.perf_counter(), time.process_time()
+    thesis_rig = ctx.params == RigParams()
     try:
-        chapter, error = importlib.import_module(module_name).build(ctx), None
-    except Exception as exc:  # a broken chapter must not hide the others; its traceback goes in the report
+        with thesis_comparisons(thesis_rig):
+            chapter, error = importlib.import_module(module_name).build(ctx), None
+        if not thesis_rig:  # another digit: no entry stands against the thesis rig's figure, however it was made
+            chapter.entries = [not_applicable(e) for e in chapter.entries]
+    except Exception as exc:  # a broken chapter must not hide the others; one line says why in the report
         raise_if_stopping(exc)  # a stop signal a compiled kernel handed back as another exception is a stop
-        chapter, error = None, traceback.format_exc()
+        chapter, error = None, _one_line(exc)
     return chapter, error, time.perf_counter() - start, time.process_time() - cpu
+
+
+def _one_line(exc: BaseException) -> str:
+    """Why a chapter failed, in one line: the error's type and message, and the line of flexdigit that raised it."""
+    frames = [f for f in traceback.extract_tb(exc.__traceback__) if "flexdigit" in f.filename] or [None]
+    where = f" (at {Path(frames[-1].filename).name}:{frames[-1].lineno})" if frames[-1] is not None else ""
+    message = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {message}{where}"
 
 
 #: What a worker process keeps entered for its lifetime (the calibration the report runs on).
@@ -352,8 +379,8 @@ def _build_in_processes(names, ctx: ReportContext, workers: int, progress) -> di
                 name = futures[future]
                 try:
                     done[name] = future.result()
-                except Exception:  # the worker died (out of memory, killed): say so in the report
-                    done[name] = (None, traceback.format_exc(), float("nan"), float("nan"))
+                except Exception as exc:  # the worker died (out of memory, killed): say so in the report
+                    done[name] = (None, _one_line(exc), float("nan"), float("nan"))
                 _report_progress(progress, name, done[name])
         except BaseException:  # a stop (Ctrl-C, SIGTERM): end the chapters now, not after minutes of them
             _halt(pool)

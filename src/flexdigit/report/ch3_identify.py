@@ -441,7 +441,7 @@ def _voltage_fits(fits: list, e: list[Entry]) -> None:
             compare(
                 f"identify.v_sg_fit.sg{k + 1}.slope_v_per_command",
                 "3.4.3",
-                float(printed[k]["slope"]),
+                float(printed[k]["slope"]) if k < len(printed) else math.nan,  # NaN: another digit's gauge
                 r.slope.value,
                 "V/command",
                 rtol=0.03,

@@ -12,7 +12,7 @@ import control
 import numpy as np
 
 from flexdigit.models import cable, conversion, second_order, servo
-from flexdigit.models.chapter3_tables import chapter3_study
+from flexdigit.models.chapter3_tables import chapter3_study, table_3_4_gauge_columns, table_3_4_printed
 from flexdigit.models.plant import (
     PRINTED_DIGIT_DAMPING_1_PER_S,
     closed_loop_printed_k1,
@@ -320,8 +320,9 @@ def _cable(p, study, e: list[Entry]) -> None:
     n_fit_equal = int(
         np.sum(np.round(ours_fit["y_max_mm"], 2) == np.asarray(thesis_value("conversion.table_3_4_y_max_mm")))
     )
-    for col, label in (("y_sg1_mm", "gauge 1"), ("y_sg2_mm", "gauge 2"), ("y_sg3_mm", "gauge 3"), ("y_max_mm", "tip")):
-        printed = np.asarray(thesis_value(f"conversion.table_3_4_{col}"), dtype=float)
+    gauges = [(col, f"gauge {col[4:-3]}") for col in table_3_4_gauge_columns(ours)]
+    for col, label in (*gauges, ("y_max_mm", "tip")):
+        printed = np.asarray(table_3_4_printed(col, p, len(cmds)), dtype=float)
         if col == "y_max_mm":
             where = f"x = l = {p.geometry.digit_length_m} m (E 3.14)"
         else:

@@ -39,10 +39,19 @@ def build(ctx: ReportContext) -> Chapter:
     )
     _release_entries(study, ch.entries)
     ch.figures.append(_release_figure(ctx, study.releases))
-    fits = thesis_value("conversion.v_sg_fit")
+    fits = thesis_value("conversion.v_sg_fit") if ctx.thesis_rig else [None] * len(study.sweep_fits)
     _sweep_entries(study, fits, ch.entries)
     ch.figures.append(_sweep_figure(ctx, study.sweep, fits))
     ch.figures.append(_shapes_and_step_figure(ctx, p, study.calibration, seed))
+    if not ctx.thesis_rig:
+        ch.entries.extend(_check_entries(study.checks))
+        ch.tables.extend(study.tables)
+        ch.paragraphs.append(
+            "This digit is not the thesis rig: its twin runs on the thesis's calibration scaled to its description "
+            "(flexdigit params prints what it derives), the thesis's columns are not applicable, and table 3.6 "
+            "(the thesis rig's measured deflections) is skipped."
+        )
+        return ch
     _table_3_6_entries(study.table_3_6, ch.entries)
     cal = study.calibration
     ch.paragraphs.append(
@@ -114,9 +123,18 @@ def _release_entries(study, e: list) -> None:
         ]
 
 
+_SWEEP_NOTE = "Straight line through this digit's simulated sweep, commands 8..43."
+
+
 def _sweep_entries(study, fits, e: list) -> None:
     """E 3.20-3.22 from the simulated actuation sweep."""
     for g, (fit, (slope, offset)) in enumerate(zip(fits, study.sweep_fits, strict=True), start=1):
+        if fit is None:  # a digit other than the thesis rig: E 3.20-3.22 are the thesis rig's gauges
+            e += [
+                new(f"twin.sweep.gauge{g}.slope_v_per_command", "3.4.3", slope, "V/command", _SWEEP_NOTE),
+                new(f"twin.sweep.gauge{g}.offset_v", "3.4.3", offset, "V", _SWEEP_NOTE + " Intercept."),
+            ]
+            continue
         e += [
             compare(
                 f"twin.sweep.gauge{g}.slope_v_per_command",
@@ -218,15 +236,17 @@ def _release_figure(ctx: ReportContext, release):
     for ax, housing, key in ((axes[0], True, "with_housing"), (axes[1], False, "without_housing")):
         res = release[housing].record
         t = res.column("time_s")
-        y = res.column("gauge2_v")
-        gauge2 = release[housing].gauge_fit("gauge2")
-        wn = thesis_value(f"digit.release_tests_{key}.wn_avg_rad_s")
-        z = thesis_value(f"digit.release_tests_{key}.zeta_avg")
-        model = second_order_response(t, "release", wn, z, gauge2.offset, gauge2.amplitude, gauge2.t0_s)
-        ax.plot(t, y, lw=0.8, label="twin (gauge 2, through the sensor chain)")
-        ax.plot(t, model, "--", lw=0.8, label=f"thesis model: wn {wn:.2f} rad/s, zeta {z:.4f}")
+        gauge2 = release[housing].gauge_fit("gauge2")  # gauge 2, or the digit's first gauge identified
+        y = res.column(f"{gauge2.channel}_v")
+        name = gauge2.channel.replace("gauge", "gauge ")
+        ax.plot(t, y, lw=0.8, label=f"twin ({name}, through the sensor chain)")
+        if ctx.thesis_rig:
+            wn = thesis_value(f"digit.release_tests_{key}.wn_avg_rad_s")
+            z = thesis_value(f"digit.release_tests_{key}.zeta_avg")
+            model = second_order_response(t, "release", wn, z, gauge2.offset, gauge2.amplitude, gauge2.t0_s)
+            ax.plot(t, model, "--", lw=0.8, label=f"thesis model: wn {wn:.2f} rad/s, zeta {z:.4f}")
         ax.set_title("with housing (table 3.2)" if housing else "without housing (table 3.1)")
-        ax.set_ylabel("gauge 2 (V)")
+        ax.set_ylabel(f"{name} (V)")
         ax.legend(loc="upper right", fontsize=8)
     axes[1].set_xlabel("time (s)")
     fig.tight_layout()
@@ -245,6 +265,8 @@ def _sweep_figure(ctx: ReportContext, sweep, fits):
     cmds = sweep.column("command")
     for g, fit in enumerate(fits, start=1):
         ax.plot(cmds, sweep.column(f"gauge{g}_v"), ".", ms=3, label=f"twin gauge {g}")
+        if fit is None:  # no thesis line for another digit's gauge
+            continue
         line = np.array([cmds.min(), cmds.max()])
         ax.plot(line, fit["slope"] * line + fit["offset"], "-", lw=0.8, label=f"E 3.2{g - 1}")
     ax.set_xlabel("command")

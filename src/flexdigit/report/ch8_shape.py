@@ -23,7 +23,8 @@ def build(ctx: ReportContext) -> Chapter:
     """Build the shape chapter: tip and along-the-digit errors, one figure."""
     chapter = Chapter(slug="ch8-shape", title="Beyond the thesis: the digit's shape from its three gauges")
     commands = tuple(range(8, 44, 10 if ctx.fast else 5))
-    positions = tuple(round(0.01 * k, 2) for k in range(1, 28, 3 if ctx.fast else 1))
+    length_m = ctx.params.geometry.digit_length_m  # 27 places along the digit (every 10 mm on the thesis rig)
+    positions = tuple(round(length_m * k / 27, 3) for k in range(1, 28, 3 if ctx.fast else 1))
     acc = shape_accuracy(commands, positions, 0.025, seed=ctx.seed, params=ctx.params)
     summary = acc.summary()
     chapter.paragraphs.append(
@@ -136,7 +137,9 @@ def _figure(ctx: ReportContext):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    cases = [("vertical", 0.0, 0.0, 30), ("horizontal", 0.0, 0.0, 20), ("horizontal", 0.025, 0.20, 20)]
+    # the load at 200 mm of the thesis rig's 270: the same fraction of another digit
+    at_m = 0.20 if ctx.thesis_rig else round(0.20 / 0.27 * ctx.params.geometry.digit_length_m, 3)
+    cases = [("vertical", 0.0, 0.0, 30), ("horizontal", 0.0, 0.0, 20), ("horizontal", 0.025, at_m, 20)]
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
     for ax, (orientation, mass, position, command) in zip(axes, cases, strict=True):
         volts, sol = static_gauges_v(

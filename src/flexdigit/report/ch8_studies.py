@@ -14,7 +14,7 @@ import dataclasses
 
 import numpy as np
 
-from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
+from flexdigit.report.chapter import Chapter, ReportContext, ResultTable, skipped
 from flexdigit.report.results import new
 from flexdigit.studies import figures
 from flexdigit.studies.design_study import design_pareto_figure, showcase_design
@@ -41,7 +41,15 @@ REPORT_PARAMETERS = (
 
 def build(ctx: ReportContext) -> Chapter:
     """Build the chapter."""
-    chapter = Chapter(slug="ch8-studies", title="Beyond the thesis: sensitivity and design")
+    title = "Beyond the thesis: sensitivity and design"
+    if not ctx.thesis_rig:
+        return skipped(
+            "ch8-studies",
+            title,
+            "the sensitivity study's tolerances and the design study's space are the thesis rig's "
+            "(flexdigit study runs them on any spec).",
+        )
+    chapter = Chapter(slug="ch8-studies", title=title)
     _sensitivity(ctx, chapter)
     _design(ctx, chapter)
     return chapter

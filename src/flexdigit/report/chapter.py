@@ -17,7 +17,7 @@ from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 from flexdigit.report.results import Entry
 
-__all__ = ["Chapter", "Figure", "ReportContext", "ResultTable"]
+__all__ = ["Chapter", "Figure", "ReportContext", "ResultTable", "skipped"]
 
 
 @dataclass
@@ -44,6 +44,11 @@ class Chapter:
     __repr__ = fields_summary
 
 
+def skipped(slug: str, title: str, reason: str) -> Chapter:
+    """A chapter that does not apply to the report's digit: no entries, one paragraph saying why."""
+    return Chapter(slug=slug, title=title, paragraphs=[f"Skipped for this digit: {reason}"])
+
+
 @dataclass
 class ReportContext:
     """What every chapter builder gets: the rig parameters, where to save figures, a seed, a speed switch."""
@@ -52,6 +57,12 @@ class ReportContext:
     params: RigParams = field(default_factory=RigParams)
     seed: int = 0
     fast: bool = False
+
+    @property
+    def thesis_rig(self) -> bool:
+        """Whether the report is the thesis rig's (its figures are compared with the thesis's) or another digit's
+        (the thesis's columns are not applicable, its rig's own experiments skipped)."""
+        return self.params == RigParams()
 
     @property
     def figure_dir(self) -> Path:

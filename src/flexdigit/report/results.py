@@ -3,15 +3,22 @@
 An entry is ``{key, section, thesis, ours, unit, rel_error, status, note}``. ``thesis`` is the number as printed;
 ``status`` is ``match`` (within the stated tolerance), ``discrepancy`` (the note explains it and gives the
 corrected figure) or ``new`` (a figure the thesis does not have).
+
+On a digit other than the thesis rig (``reproduce --params mine.toml``) the thesis's figures are of another digit:
+inside :func:`thesis_comparisons` ``(False)`` every entry's ``thesis`` is :data:`NOT_APPLICABLE`, its ``rel_error``
+None and its status ``new`` (:func:`not_applicable`), so no figure of that digit is compared with the thesis's by
+accident.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
-from dataclasses import dataclass
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
 from typing import Literal
 
-__all__ = ["Entry", "relative_error", "compare", "new"]
+__all__ = ["Entry", "relative_error", "compare", "new", "NOT_APPLICABLE", "not_applicable", "thesis_comparisons"]
 
 Status = Literal["match", "discrepancy", "new"]
 
@@ -28,6 +35,39 @@ class Entry:
     rel_error: float | None
     status: Status
     note: str = ""
+
+
+#: The ``thesis`` column of an entry computed for a digit other than the thesis rig.
+NOT_APPLICABLE = "not applicable"
+
+#: Whether entries are compared with the thesis's figures (the thesis rig) or not (any other digit); a stack.
+_COMPARING = [True]
+
+
+@contextlib.contextmanager
+def thesis_comparisons(enabled: bool) -> Iterator[None]:
+    """Inside the block, :func:`compare` compares with the thesis (``enabled``, the thesis rig) or marks the thesis
+    column :data:`NOT_APPLICABLE` (another digit). Process-wide; the previous setting comes back on exit."""
+    _COMPARING.append(bool(enabled))
+    try:
+        yield
+    finally:
+        _COMPARING.pop()
+
+
+def not_applicable(entry: Entry) -> Entry:
+    """``entry`` for a digit other than the thesis rig: its ``thesis`` column :data:`NOT_APPLICABLE`, no relative
+    error, status ``new``; an entry the thesis has no figure for is returned as it is.
+
+    Examples
+    --------
+    >>> not_applicable(Entry("x", "3.1", 2.0, 2.5, "", 0.25, "discrepancy", "why")).thesis
+    'not applicable'
+    """
+    if entry.thesis is None and entry.status == "new":
+        return entry
+    note = f"thesis figure of the thesis rig, not applicable to this digit. {entry.note}".strip()
+    return replace(entry, thesis=NOT_APPLICABLE, rel_error=None, status="new", note=note)
 
 
 def relative_error(thesis: float, ours: float) -> float:
@@ -65,6 +105,8 @@ def compare(
     'match'
     """
     ours_f, thesis_f = float(ours), float(thesis)
+    if not _COMPARING[-1]:  # another digit: its figure stands alone, never against the thesis rig's
+        return not_applicable(Entry(key, section, thesis_f, ours_f, unit, None, "discrepancy", note))
     if not (math.isfinite(ours_f) and math.isfinite(thesis_f)):
         err = None
         status: Status = "discrepancy"

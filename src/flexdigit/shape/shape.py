@@ -552,7 +552,9 @@ class ShapeEstimator:
         """
         self._setup()
         owner = "ShapeEstimator.estimate"
-        v = check_array(gauges_v, "gauges_v", owner)
+        # the ADC cannot read beyond its range: 30, 40, 50 V was 'fitted' by a digit curled through 6900 deg
+        low, high = self.params_.sensors.adc_range_v
+        v = check_array(gauges_v, "gauges_v", f"{owner} (ADC readings: sensors.adc_range_v)", low=low, high=high)
         v = v.reshape(1, -1) if v.ndim == 1 else v
         if v.ndim != 2 or v.shape[1] != self.gauges_:
             raise ParameterError(

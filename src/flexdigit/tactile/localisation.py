@@ -62,7 +62,7 @@ def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
             gauges[rows] -= gauges[zero].mean(axis=0)
             since[rows] = np.abs(time[rows] - time[zero].mean())
     columns = dict(dataset.columns)
-    for i, name in enumerate(("gauge1_v", "gauge2_v", "gauge3_v")):
+    for i, name in enumerate(dataset.gauge_columns):
         columns[name] = gauges[:, i]
     return Dataset(columns, dict(dataset.meta)), since
 

@@ -21,7 +21,7 @@ from flexdigit.reference import thesis_value
 from flexdigit.rig.base import open_rig
 from flexdigit.tactile.accuracy import rmse
 from flexdigit.tactile.bounds import TwinGaugeModel
-from flexdigit.tactile.dataset import COLUMNS, Dataset, make_meta
+from flexdigit.tactile.dataset import Dataset, dataset_columns, gauge_columns, make_meta
 from flexdigit.tactile.localisation import LocalisationResult, identifiability_map, localisation_study
 from flexdigit.tactile.pipeline import (
     COARSE_HIDDEN,
@@ -124,12 +124,13 @@ def static_dataset(
     plan = protocol.plan(params.geometry.digit_length_m)
     n = protocol.sample_count
     pos = np.nan_to_num(plan["position_from_base_m"], nan=0.0)
-    gauges = np.empty((n, 3))
+    count = len(params.geometry.gauge_positions_m)  # the digit's gauges (the thesis rig's 3)
+    gauges = np.empty((n, count))
     rng_seed = np.random.default_rng(seed).integers(2**31, size=len(set(plan["command"].tolist())))
     # one hang = one (test, position) of the plan; draws for the "hang" options from their own streams
     _, hang = np.unique(np.column_stack([plan["test"], plan["position_index"]]), axis=0, return_inverse=True)
     hang = hang.ravel()
-    xi = np.random.default_rng([seed, 2]).standard_normal((hang.max() + 1, 3))[hang]
+    xi = np.random.default_rng([seed, 2]).standard_normal((hang.max() + 1, count))[hang]
     jitter_rng = np.random.default_rng([seed, 3])
     offsets = jitter * (
         jitter_rng.standard_normal(n)
@@ -150,11 +151,19 @@ def static_dataset(
             servo_offset_rad=None if c == RELAXED or jitter == 0 else offsets[rows],
         )
     columns = {k: np.asarray(v) for k, v in plan.items()}
-    columns.update(gauge1_v=gauges[:, 0], gauge2_v=gauges[:, 1], gauge3_v=gauges[:, 2])
+    columns.update(zip(gauge_columns(count), gauges.T, strict=True))
     columns["pot_v"] = np.full(n, np.nan)
     columns["time_s"] = np.arange(n, dtype=float)
-    meta = make_meta(protocol, {"url": "static-twin", "repr": "static_gauges_v"}, params.geometry.digit_length_m)
-    return Dataset({k: columns[k].astype(d) for k, d in COLUMNS.items()}, meta)
+    rig = {"url": "static-twin", "repr": "static_gauges_v"}
+    meta = make_meta(protocol, rig, params.geometry.digit_length_m, gauge_count=count)
+    return Dataset({k: columns[k].astype(d) for k, d in dataset_columns(count).items()}, meta)
+
+
+def _digit_protocol(name: str, params: RigParams | None = None) -> Protocol:
+    """The built-in protocol ``name`` on the digit ``params`` describes: its positions scaled to the digit's length
+    (:meth:`~flexdigit.tactile.protocols.Protocol.scaled_to`, as ``flexdigit collect --params`` does); the
+    protocol itself on a digit as long as the thesis rig's."""
+    return load_protocol(name).scaled_to((params or RigParams()).geometry.digit_length_m)
 
 
 def pipeline_corr2_static(
@@ -166,7 +175,7 @@ def pipeline_corr2_static(
     (:func:`static_dataset`, which ``static_kw`` goes to), loaded readings only, as :func:`run_experiment` feeds
     the position network.
     """
-    protocol = load_protocol(EXPERIMENTS[key][0])
+    protocol = _digit_protocol(EXPERIMENTS[key][0], params)
     ds = static_dataset(protocol, seed=seed, params=params, calibration=calibration, **static_kw)
     ds = ds.subset(np.flatnonzero(ds["load_kg"] > 0))
     _, y = targets(ds, "position_index")
@@ -246,7 +255,7 @@ def run_experiment(
     """
     params = params or RigParams()
     name, curve_hidden = EXPERIMENTS[key]
-    protocol = load_protocol(name)
+    protocol = _digit_protocol(name, params)
     data_dir = Path(data_dir)
     data_dir.mkdir(parents=True, exist_ok=True)
     # fast mode (tests) settles 2 s instead of the protocol's 10-15 s: quicker, but the digit still swings a little
@@ -394,7 +403,7 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
     params = params or RigParams()
     cal = calibration or default_calibration()
     a = params.actuator
-    plan = load_protocol("thesis-7.1-no-load").plan(params.geometry.digit_length_m)
+    plan = _digit_protocol("thesis-7.1-no-load", params).plan(params.geometry.digit_length_m)
     keys = np.unique(
         np.column_stack([plan["load_kg"], np.nan_to_num(plan["position_from_base_m"]), plan["command"]]), axis=0
     )

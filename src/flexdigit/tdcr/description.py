@@ -51,7 +51,14 @@ __all__ = [
     "get_robot",
 ]
 
-_POSITIVE = Interval(Real, 0, None, closed="neither")
+# Physical ranges, wide enough for any tendon robot yet narrow enough that the rod's stiffnesses (r^4, E r^4) and
+# the disk positions stay finite: a value beyond them (1e308 m, 1e-300 Pa) is a typo, and the solver would
+# otherwise answer with NaN or an overflow that names no key.
+_MODULUS_PA = Interval(Real, 1e3, 1e13)  # soft silicone ~1 MPa .. diamond ~1.2 TPa, with a decade each side
+_RADIUS_M = Interval(Real, 1e-6, 1.0)
+_LENGTH_M = Interval(Real, 1e-6, 100.0)
+_OFFSET_M = Interval(Real, 0, 10.0)
+_DENSITY_KG_M3 = Interval(Real, 0, 1e5)  # osmium is 22.6e3 kg/m^3
 
 
 @declare
@@ -77,10 +84,10 @@ class Backbone:
     density_kg_m3: float = 6450.0
 
     _parameter_constraints = {
-        "youngs_modulus_pa": [_POSITIVE],
+        "youngs_modulus_pa": [_MODULUS_PA],
         "poisson_ratio": [Interval(Real, -1, 0.5, closed="right")],
-        "radius_m": [_POSITIVE],
-        "density_kg_m3": [Interval(Real, 0, None, closed="left")],
+        "radius_m": [_RADIUS_M],
+        "density_kg_m3": [_DENSITY_KG_M3],
     }
 
     def __post_init__(self) -> None:
@@ -126,7 +133,7 @@ class Segment:
     disk_count: int = 10
 
     _parameter_constraints = {
-        "length_m": [_POSITIVE],
+        "length_m": [_LENGTH_M],
         "disk_count": [Interval(Integral, 1, 1000)],
     }
 
@@ -147,7 +154,7 @@ class Tendon:
     disk: int = 10
 
     _parameter_constraints = {
-        "offset_m": [Interval(Real, 0, None, closed="left")],
+        "offset_m": [_OFFSET_M],
         "angle_deg": [Interval(Real, -360, 360)],
         "disk": [Interval(Integral, 1, None)],
     }

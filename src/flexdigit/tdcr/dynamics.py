@@ -174,7 +174,7 @@ def simulate(
     dt_s = check_real(dt_s, "dt_s", owner, low=0.0, high=duration_s, low_open=True)
     loads = _checked_loads(robot, tensions_n, tip_force_n, tip_moment_nm, distributed_force_n_per_m, gravity_m_s2)
     substeps, tol, damping_s, max_iter = _checked_options(robot, nodes, method, substeps, tol, damping_s, max_iter)
-    n_steps = int(round(duration_s / dt_s))
+    n_steps = _checked_steps(duration_s, dt_s, nodes.size)
     if method == "discrete":
         motion = _simulate_discrete(robot, initial, nodes, end_node, loads, damping_s, dt_s, n_steps, tol, max_iter)
         done = motion.t_s.size - 1
@@ -191,6 +191,24 @@ def simulate(
             stacklevel=2,
         )
     return motion
+
+
+#: The most memory the response's node positions may take (its (steps + 1, nodes, 3) float64 history).
+MAX_HISTORY_BYTES = 2**30
+
+
+def _checked_steps(duration_s: float, dt_s: float, n_nodes: int) -> int:
+    """The number of steps, refused if the response is too long to keep (600 s in steps of 1 us was a
+    MemoryError)."""
+    n_steps = int(round(duration_s / dt_s))
+    size = (n_steps + 1) * n_nodes * 3 * 8
+    if size > MAX_HISTORY_BYTES:
+        raise ParameterError(
+            f"simulate: duration_s {duration_s:g} s in steps of dt_s {dt_s:g} s is {n_steps} steps of {n_nodes} "
+            f"nodes, {size / 2**30:.3g} GiB of positions; expected at most {MAX_HISTORY_BYTES / 2**30:g} GiB: "
+            "a shorter duration or a larger step"
+        )
+    return n_steps
 
 
 def _checked_options(robot, nodes, method, substeps, tol, damping_s, max_iter):
