@@ -47,7 +47,10 @@ def test_a_two_cable_digit_is_held_below_straight(tmp_path):
     path = write_digit("four-sections-two-cables", tmp_path)
     params = load_params(path)
     virtual = VirtualClock(frames=int(6.0 / PERIOD_S), keep=int(2.0 / PERIOD_S))
-    session = LiveSession("sim", params=path, seed=0, period_s=PERIOD_S, clock=virtual.clock, sleep=virtual.sleep)
+    record = tmp_path / "pair.mcap"
+    session = LiveSession(
+        "sim", params=path, seed=0, period_s=PERIOD_S, clock=virtual.clock, sleep=virtual.sleep, record=record
+    )
     virtual.session = session
     try:
         hello = session.hello()
@@ -68,6 +71,14 @@ def test_a_two_cable_digit_is_held_below_straight(tmp_path):
     assert np.mean([s["command"] for s in last_2s]) < params.actuator.equilibrium_command - 5
     assert np.mean(virtual.true_deg) == pytest.approx(-20.0, abs=HOLD_TOL_DEG)
     assert np.mean([s["y"] for s in last_2s]) == pytest.approx(-20.0, abs=HOLD_TOL_DEG)
+    # its recording replays as that digit: four gauges, the pair's range, without --params
+    replay = LiveSession(f"replay://{record}")
+    try:
+        hello = replay.hello()
+    finally:
+        replay.rig.close()
+    assert (len(hello["gauges_m"]), hello["section_count"], hello["cables"]) == (4, 4, 2)
+    assert hello["setpoint_range"][0] < 0
 
 
 def test_a_single_cable_setpoint_stays_at_or_above_straight_and_a_pair_takes_both_signs():

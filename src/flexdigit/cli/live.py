@@ -97,6 +97,10 @@ def _live(args: argparse.Namespace) -> CommandResult:
     from flexdigit.live.session import LiveSession
 
     _check_robot_flags(args)
+    if args.params is not None and (args.robot is not None or args.foxglove):
+        from flexdigit.errors import ParameterError
+
+        raise ParameterError("--params describes a planar digit; a tendon robot (--robot) is described by its own file")
     if args.foxglove:
         return _foxglove(args)
     if args.robot is not None:

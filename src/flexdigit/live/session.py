@@ -259,6 +259,33 @@ class NetworkContact(ContactSource):
 # -- the session -------------------------------------------------------------------------------------------------
 
 
+def _recorded_digit(path: str):
+    """The digit an MCAP recording was made on (its ``flexdigit.rig`` metadata: parameters and, of a twin, its
+    calibration), so that a replay draws and estimates with the recorded gauges; ``(None, None)`` for a loop log or
+    a recording without them (the thesis rig, as before). A recording that cannot be read is left to the replay
+    backend to name."""
+    from flexdigit.rig.recording import read_metadata
+    from flexdigit.twin.calibration import Calibration
+
+    if not str(path).lower().endswith(".mcap"):
+        return None, None
+    try:
+        rig = read_metadata(path).get("flexdigit.rig") or {}
+    except Exception:  # noqa: BLE001 - the replay backend opens it next and says what is wrong with it
+        return None, None
+    if not isinstance(rig.get("params"), dict):
+        return None, None
+    # written as dataclasses.asdict: an optional key left out is None there (RigParams.to_dict drops them too)
+    recorded_params = {
+        section: {k: v for k, v in values.items() if v is not None} if isinstance(values, dict) else values
+        for section, values in rig["params"].items()
+    }
+    params = RigParams.from_dict(recorded_params, source=f"{path}: its recorded parameters")
+    recorded = rig.get("twin_calibration")
+    calibration = Calibration.from_dict(recorded, f"{path}: its recorded calibration") if recorded else None
+    return params, calibration
+
+
 def estimate_due(
     change_v: float,
     command_changed: bool,
@@ -399,10 +426,16 @@ class LiveSession:
         # the loop's pacing clock, injected as run_loop's is (tests run it in virtual time)
         self._clock, self._sleep = clock, sleep
         given_params = params if params is None or isinstance(params, RigParams) else load_params(params)
-        self.calibration = twin_calibration(given_params, calibration)
         self.period_s = check_real(period_s, "period_s", "LiveSession", low=0.005, high=1.0)
         parsed = parse_rig_url(backend)
         self.kind = {"sim": "twin", "sim+paced": "twin", "replay": "replay"}.get(parsed.scheme, "rig")
+        recorded_calibration = None
+        if self.kind == "replay" and given_params is None:  # the recorded digit: its gauges, sections, cables
+            given_params, recorded_calibration = _recorded_digit(parsed.location)
+        if calibration is None and recorded_calibration is not None:
+            self.calibration = recorded_calibration
+        else:
+            self.calibration = twin_calibration(given_params, calibration)
         self.backend = backend
         if self.kind == "twin":
             options = {"orientation": "horizontal", **parsed.options}
