@@ -41,10 +41,11 @@ from flexdigit.params import RigParams, load_params
 from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import check_reading
-from flexdigit.rig.recording import Recording, rig_metadata
+from flexdigit.rig.recording import Recording, read_metadata, rig_metadata
 from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
 from flexdigit.shape.shape import ShapeEstimator
 from flexdigit.tactile.model_io import load_model
+from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = [
@@ -264,9 +265,6 @@ def _recorded_digit(path: str):
     calibration), so that a replay draws and estimates with the recorded gauges; ``(None, None)`` for a loop log or
     a recording without them (the thesis rig, as before). A recording that cannot be read is left to the replay
     backend to name."""
-    from flexdigit.rig.recording import read_metadata
-    from flexdigit.twin.calibration import Calibration
-
     if not str(path).lower().endswith(".mcap"):
         return None, None
     try:
