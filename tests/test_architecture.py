@@ -436,14 +436,6 @@ LONG_CLI_FUNCTIONS = {
     "flexdigit.cli.run:register": "parser: one add_argument per flag, nothing computed",
     "flexdigit.cli.live:register": "parser: one add_argument per flag, nothing computed",
     "flexdigit.cli.tdcr:register": "parser: one add_argument per flag, nothing computed",
-    "flexdigit.cli.collect:_train": "to split",
-    "flexdigit.cli.design:_hinf_digit": "to split",
-    "flexdigit.cli.design:_twenty_ms": "to split",
-    "flexdigit.cli.palpate:_palpate": "to split",
-    "flexdigit.cli.palpate:_scan": "to split",
-    "flexdigit.cli.palpate:_sweep": "to split",
-    "flexdigit.cli.run:_run_on_board": "to split",
-    "flexdigit.cli.run:_rotation_map": "to split",
 }
 
 

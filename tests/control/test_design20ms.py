@@ -127,3 +127,18 @@ def test_thesis_controller_forward_euler_at_20ms_is_unstable_as_a_runtime():
     assert np.max(np.abs(rt.sys.poles())) == pytest.approx(3.90, abs=PRINTED_2_DECIMALS_ATOL)
     tustin = thesis_controller("tustin", 0.020)
     assert np.max(np.abs(tustin.sys.poles())) < 1
+
+
+def test_digit_design_20ms_summary_on_the_thesis_rig_is_chapter_5s_design():
+    from flexdigit.control.design20ms import digit_design_20ms_summary
+
+    s, d = digit_design_20ms_summary(), design_20ms()
+    # the same design as design_20ms(): 20 ms, one sample of transport delay (module docstring, step 1)
+    assert (s["period_s"], s["delay_samples"], s["digit_mode"], s["dither"]) == (0.02, 1, None, False)
+    assert s["deg_per_command"] == pytest.approx(d.deg_per_command, rel=1e-12)
+    assert s["closed_loop_pole_radius"] == pytest.approx(float(np.max(np.abs(d.closed_loop_poles))), rel=1e-12)
+    assert s["stable"] and s["closed_loop_pole_radius"] < 1.0
+    # offset-free (step 3 of the design): the linear 30 deg step ends at 30 deg; 1e-6 deg is far below a quantum
+    step = s["linear_step_30deg"]
+    assert step["final"] == pytest.approx(30.0, abs=1e-6)
+    assert 0.0 < step["settling_time_s"] < 3.0

@@ -122,3 +122,20 @@ def test_design_commands_take_params(tmp_path, capsys):
     assert main(["design", "20ms", "--params", str(long)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "buckles" in err[0] and "hanging" in err[0]
+
+
+def test_digit_hinf_summary_is_the_design_on_the_digits_own_plant():
+    from flexdigit.control.thesis_designs import digit_hinf_design, digit_hinf_summary
+
+    params = RigParams.from_dict(DIGITS["two-sections"])
+    s = digit_hinf_summary(39.0, params)
+    design, plant = digit_hinf_design(39.0, params)
+    # E(s) is this digit's release mode (its twin), not table 3.2's
+    assert s["digit_wn_rad_s"] == pytest.approx(release_dynamics(params).wn_housing_rad_s)
+    assert s["digit_wn_rad_s"] != pytest.approx(TABLE_3_2[0], rel=1e-2)
+    assert s["gamma"] == pytest.approx(design.gamma) and s["gamma"] >= s["gamma_opt"]
+    # small gain (thesis 4.6): the tolerance is 1/||T_pq||, and its percentage is that over |G(0)|
+    assert s["additive_tolerance_m_per_command"] == pytest.approx(10 ** (-s["tpq_peak_db"] / 20), rel=1e-9)
+    assert s["additive_tolerance_relative_percent"] == pytest.approx(
+        100 * s["additive_tolerance_m_per_command"] / abs(s["plant_dc_gain_m_per_command"]), rel=1e-9
+    )

@@ -250,3 +250,20 @@ def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, rota
         mismatches += u != sample.pot
     assert mismatches <= COMMAND_MISMATCH_FRACTION * len(board), f"{mismatches} of {len(board)} differ"
     assert max(s.pot for s in board) > 20  # the step really moved the servo
+
+
+@pytest.mark.slow
+def test_board_step_test_is_the_step_the_board_closes(firmware):
+    from flexdigit.errors import ParameterError
+    from flexdigit.rig.step_test import board_step_test
+
+    elf = firmware(0.020, "float")
+    run = board_step_test(f"hil://{elf}", 30.0, 1.5, seed=STEP_SEEDS[0])
+    assert run["status"] == "completed", run["message"]
+    assert run["samples"] == 75  # 1.5 s of 20 ms board periods, counted from the setpoint
+    # inside the 2 % band of the setpoint by 1.5 s, as test_loop_on_the_board_holds_a_30_deg_step asks at 3 s
+    assert abs(run["true_final_rotation_deg"] - 30.0) < 0.6
+    assert run["true_peak_rotation_deg"] >= run["true_final_rotation_deg"]
+    assert run["board"]["faults"] == []
+    with pytest.raises(ParameterError, match="hil://IMAGE.elf"):
+        board_step_test("sim", 30.0, 1.0)

@@ -8,6 +8,7 @@ import json
 
 import pytest
 
+from digits import write_digit
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError
 from flexdigit.palpation.palpation_files import MAX_SERIES, load_palpation_protocol
@@ -49,3 +50,13 @@ def test_a_series_that_would_fill_the_memory_is_refused(tmp_path):
         load_palpation_protocol(path)
     path.write_text("[sweep]\ncommands = { from = 8, to = 30, step = 2 }\n")  # the same form, sized: loads
     assert load_palpation_protocol(path).sweep.commands == tuple(range(8, 31, 2))
+
+
+def test_a_sweep_that_barely_presses_the_tissue_reports_no_modulus(tmp_path, capsys):
+    # the geared digit's built-in sweep does not reach soft-block (surface 30 mm away): its fit found a near-zero
+    # modulus at a made-up gap (1.7 +- 2.4 N/m^2 for a true 1000) and printed it; now no stiffness is reported
+    params = write_digit("six-gauges-geared", tmp_path)
+    code = main(["palpate", "--tissue", "soft-block", "--params", str(params)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "the modulus is not determined" in err

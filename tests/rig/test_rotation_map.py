@@ -258,3 +258,34 @@ def test_a_map_saves_and_loads_with_its_provenance_and_refuses_to_clobber(tmp_pa
     )
     assert load_rotation_map(legacy).predict_one(np.ones(3)) == pytest.approx(6.5)
     assert RigParams().actuator.equilibrium_command == 8  # the sweep above relaxed to it
+
+
+def test_make_rotation_map_from_the_operator_or_a_file_and_a_replay_only_from_gauges_in_the_file(tmp_path):
+    from flexdigit.errors import ParameterError
+    from flexdigit.rig.rotation import make_rotation_map
+
+    rig = SignalRig(lambda t, c: (c - 8) * 0.01 * (1 - math.exp(-t / 0.05)))
+    est = make_rotation_map(rig, "operator", ask=lambda c: (c - 8) * 1.7, resolution_deg=1.0)
+    assert est.deg_per_command_ == pytest.approx(1.7)
+    assert "operator" in est.source_
+    # a 1 deg protractor reads with a uniform error: sd 1/sqrt(12) = 0.29 deg (calibrate_rotation's default too)
+    same = calibrate_rotation(
+        SignalRig(lambda t, c: (c - 8) * 0.01 * (1 - math.exp(-t / 0.05))),
+        reference=lambda c: (c - 8) * 1.7,
+        reference_sd_deg=1.0 / math.sqrt(12),
+    )
+    assert est.uncertainty_deg(30.0) == pytest.approx(same.uncertainty_deg(30.0), rel=1e-9)
+    with pytest.raises(ParameterError, match="replay cannot be swept"):
+        make_rotation_map(rig, "operator", ask=lambda c: 0.0, replay=True)
+    with pytest.raises(ParameterError, match="needs ask"):
+        make_rotation_map(rig, "operator")
+    angles = np.array([0.0, 10, 20, 30, 40])
+    no_gauges = write(tmp_path, "command,rotation_deg\n" + "".join(f"{8 + 6 * i},{a}\n" for i, a in enumerate(angles)))
+    with pytest.raises(ParameterError, match="gauge1_v"):
+        make_rotation_map(rig, no_gauges, replay=True)
+    X = OFFSET + np.outer(angles, SENS)
+    text = "command,rotation_deg,gauge1_v,gauge2_v,gauge3_v\n" + "".join(
+        f"{8 + 6 * i},{a},{g[0]},{g[1]},{g[2]}\n" for i, (a, g) in enumerate(zip(angles, X, strict=True))
+    )
+    mapped = make_rotation_map(rig, write(tmp_path, text, "gauges.csv"), replay=True)
+    assert mapped.predict_one(OFFSET + 25 * SENS) == pytest.approx(25.0, abs=1e-9)

@@ -95,3 +95,19 @@ def test_model_file_round_trip_and_errors(tmp_path, cantilever_model):
         load_model(tmp_path / "b.json")
     with pytest.raises(NotFittedError, match="not fitted"):  # scikit-learn's contract (a ValueError)
         MLP().predict(x)
+
+
+def test_target_scores_are_in_the_units_train_reports():
+    from types import SimpleNamespace
+
+    from flexdigit.tactile.pipeline import target_scores
+
+    y_test = np.array([0.010, 0.020, 0.030, 0.040])
+    result = SimpleNamespace(target="position", y_test=y_test, y_pred=y_test + 0.002, corr2=0.9, best_hidden=7,
+                             best_tol=1e-5)  # fmt: skip
+    # a constant 2 mm error: its RMS is 2 mm
+    assert target_scores(result) == pytest.approx(
+        {"corr2": 0.9, "hidden": 7, "learning_gradient": 1e-5, "rmse_mm": 2.0}, rel=1e-9
+    )
+    result.target, result.y_pred = "magnitude", y_test - 0.003  # kg: 3 g off
+    assert target_scores(result)["rmse_g"] == pytest.approx(3.0, rel=1e-9)

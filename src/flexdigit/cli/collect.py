@@ -245,31 +245,37 @@ def _dataset(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=data, text=text)
 
 
-def _train(args: argparse.Namespace) -> CommandResult:
+def _train_output(args: argparse.Namespace):
+    """``train``'s flags checked together and its outputs checked free, before training (minutes), not after it:
+    returns the model's path (``--model``, or the dataset's name with ``.TARGET.model.json``)."""
     from pathlib import Path
 
     from flexdigit._io import check_output
     from flexdigit._plot import check_plot
     from flexdigit.errors import ParameterError
-    from flexdigit.tactile.accuracy import accuracy, rmse
-    from flexdigit.tactile.dataset import load_dataset
-    from flexdigit.tactile.model_io import save_model
-    from flexdigit.tactile.pipeline import features, run_pipeline, targets
 
     if (args.params or args.calibration) and not args.bayes_limit:
         raise ParameterError("--params and --calibration describe the twin of --bayes-limit: give it too")
     if args.bayes_limit and args.target != "position":
         raise ParameterError(f"--bayes-limit is the position's limit: it needs --target position, not {args.target}")
     model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
-    check_output(model_path, force=args.force)  # before training (minutes), not after it
+    check_output(model_path, force=args.force)
     check_plot(args.plot, "train", force=args.force)
+    return model_path
+
+
+def _train(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.tactile.dataset import load_dataset
+    from flexdigit.tactile.model_io import save_model
+    from flexdigit.tactile.pipeline import features, run_pipeline, target_scores, targets
+
+    model_path = _train_output(args)
     dataset = load_dataset(args.file)
     target = args.target.replace("-", "_")
     rows, y = targets(dataset, target)
     actuated = dataset.protocol.actuated
     x = features(dataset, with_command=actuated)[rows]
     inputs = [*dataset.gauge_columns] + (["command"] if actuated else [])  # the network's inputs: G gauges (+ command)
-    sweep = args.hidden is None or args.tol is None
     result = run_pipeline(
         x,
         y,
@@ -280,15 +286,7 @@ def _train(args: argparse.Namespace) -> CommandResult:
         curve_hidden=None,  # the error curves are not shown: no network for them
         epochs=args.epochs,
     )
-    scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
-    if target == "position":
-        scores["rmse_mm"] = 1000 * rmse(result.y_pred, result.y_test)
-    elif target == "magnitude":
-        scores["rmse_g"] = 1000 * rmse(result.y_pred, result.y_test)
-    elif target == "contact":
-        scores["accuracy"] = accuracy((result.y_pred >= 0.5).astype(float), result.y_test)
-    else:
-        scores["rmse_positions"] = rmse(result.y_pred, result.y_test)
+    scores = target_scores(result)
     if args.bayes_limit:
         scores.update(_bayes_scores(args, dataset, rows[result.split.test], scores["rmse_mm"]))
     save_model(
@@ -299,7 +297,7 @@ def _train(args: argparse.Namespace) -> CommandResult:
         meta={"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores},
         force=args.force,
     )
-    data = {"target": target, "model": str(model_path), "swept": sweep, **scores}
+    data = {"target": target, "model": str(model_path), "swept": args.hidden is None or args.tol is None, **scores}
     lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]
     lines += [f"  {k} = {v:.6g}" if isinstance(v, float) else f"  {k} = {v}" for k, v in scores.items()]
     if args.plot:

@@ -206,52 +206,23 @@ def _hinf(args: argparse.Namespace) -> CommandResult:
 
 def _hinf_digit(args, params, calibration) -> CommandResult:
     """``design hinf --params``: 4.4's design on the digit's own plant (gauge-1 deflection, m per command)."""
-    import control as ct
-    import numpy as np
+    import math
 
-    from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps, step_metrics
-    from flexdigit.control.thesis_designs import digit_hinf_design, sorted_poles
+    from flexdigit.control.thesis_designs import digit_hinf_summary
 
-    d, plant = digit_hinf_design(
+    summary = digit_hinf_summary(
         args.filter_hz, params, calibration, orientation=args.orientation, eps_u=args.eps, margin=args.margin
     )
-    K = d.controller
-    maps = loop_maps(plant.tf, K)
-    tzw, wzw = hinf_norm(maps.T_zw, "T_zw")
-    tol = additive_tolerance(plant.tf, K)
-    tf = ct.tf(K)
-    data = {
-        "params": args.params,
-        "filter_hz": args.filter_hz,
-        "plant": "digit (consistent, from its components)",
-        "plant_num": np.asarray(plant.poly.num).tolist(),
-        "plant_den": np.asarray(plant.poly.den).tolist(),
-        "plant_poles": [[float(p.real), float(p.imag)] for p in plant.poles],
-        "plant_dc_gain_m_per_command": plant.dc_gain,
-        "digit_wn_rad_s": plant.factors["E_digit_housing"].den[-1] ** 0.5,
-        "gamma_opt": d.gamma_opt,
-        "gamma": d.gamma,
-        "margin": d.margin,
-        "controller_num": np.asarray(tf.num[0][0]).tolist(),
-        "controller_den": np.asarray(tf.den[0][0]).tolist(),
-        "controller_poles": [[float(p.real), float(p.imag)] for p in sorted_poles(np.linalg.eigvals(K.A))],
-        "closed_loop_stable": True,
-        "tzw_peak_db": 20 * np.log10(tzw),
-        "tzw_peak_rad_s": wzw,
-        "tpq_peak_db": tol["tpq_db"],
-        "additive_tolerance_m_per_command": tol["tolerance"],
-        "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
-        "tyw_settling_s": step_metrics(maps.T_yw, t_final=3.0)["settling_time_s"],
-        "thesis_columns": "not applicable (the thesis printed its own rig's designs only)",
-    }
+    data = {"params": args.params, **summary}
     text = (
-        f"H-inf design on {args.params}: F(s) = 1/(s + {2 * 3.141592653589793 * args.filter_hz:.4f}), the digit's "
-        f"plant from its components (gauge-1 deflection, {plant.dc_gain * 1e3:.4g} mm per command; E(s) wn "
-        f"{data['digit_wn_rad_s']:.4g} rad/s from its twin)\n"
-        f"  gamma_opt {d.gamma_opt:.6g}, central controller at {d.gamma:.6g} (margin {d.margin:.3g}); closed loop "
-        f"stable\n"
-        f"  ||T_zw|| {data['tzw_peak_db']:.4f} dB at {wzw:.3f} rad/s; ||T_pq|| {tol['tpq_db']:.2f} dB; additive "
-        f"tolerance {tol['tolerance']:.4g} m/command ({tol['tolerance_relative_percent']:.3g} % of |G(0)|)\n"
+        f"H-inf design on {args.params}: F(s) = 1/(s + {2 * math.pi * args.filter_hz:.4f}), the digit's plant from "
+        f"its components (gauge-1 deflection, {data['plant_dc_gain_m_per_command'] * 1e3:.4g} mm per command; E(s) "
+        f"wn {data['digit_wn_rad_s']:.4g} rad/s from its twin)\n"
+        f"  gamma_opt {data['gamma_opt']:.6g}, central controller at {data['gamma']:.6g} (margin "
+        f"{data['margin']:.3g}); closed loop stable\n"
+        f"  ||T_zw|| {data['tzw_peak_db']:.4f} dB at {data['tzw_peak_rad_s']:.3f} rad/s; ||T_pq|| "
+        f"{data['tpq_peak_db']:.2f} dB; additive tolerance {data['additive_tolerance_m_per_command']:.4g} m/command "
+        f"({data['additive_tolerance_relative_percent']:.3g} % of |G(0)|)\n"
         f"  T_yw settling {data['tyw_settling_s']:.3f} s; thesis columns not applicable"
     )
     return CommandResult(data=data, text=text)
@@ -259,49 +230,25 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
 
 def _twenty_ms(args: argparse.Namespace) -> CommandResult:
     """``design 20ms``: the discrete design the loop runs (``flexdigit run --controller digital20``)."""
-    import dataclasses
-
-    import control as ct
-    import numpy as np
-
-    from flexdigit.control.analysis import step_figures
-    from flexdigit.control.design20ms import closed_loop, digit_design_20ms, digit_first_mode
-    from flexdigit.params import RigParams
+    from flexdigit.control.design20ms import digit_design_20ms_summary
 
     params, calibration = _digit(args)
-    params = params or RigParams()
-    thesis = params == RigParams()
-    d = digit_design_20ms(params, period_s=args.period, calibration=calibration, orientation=args.orientation)
-    mode = None if thesis else digit_first_mode(params, calibration, orientation=args.orientation)
-    loop = closed_loop(d.plant_d, d.controller)
-    t = np.arange(0.0, 3.0 + d.period_s / 2, d.period_s)
-    response = ct.forced_response(loop, t, np.full(t.size, 30.0))
-    figures = step_figures(response.time, np.asarray(response.outputs).reshape(-1), target=30.0)
-    radius = float(np.max(np.abs(d.closed_loop_poles)))
-    data = {
-        "params": args.params,
-        "period_s": d.period_s,
-        "delay_samples": d.delay_samples,
-        "deg_per_command": d.deg_per_command,
-        "digit_mode": None if mode is None else {"wn_rad_s": mode[0], "zeta": mode[1]},
-        "cables": params.cables.count,
-        "weights": d.weights.__dict__,
-        "closed_loop_pole_radius": radius,
-        "stable": radius < 1.0,
-        "linear_step_30deg": dataclasses.asdict(figures),
-        "dither": not thesis,
-    }
+    summary = digit_design_20ms_summary(
+        params, period_s=args.period, calibration=calibration, orientation=args.orientation
+    )
+    data = {"params": args.params, **summary}
+    mode, step = data["digit_mode"], data["linear_step_30deg"]
     model = (
         "servo x rotation per command (5.3)"
         if mode is None
-        else f"servo x rotation per command x the digit's mode ({mode[0]:.3g} rad/s, zeta {mode[1]:.3g}, cable(s) "
-        f"taut, from its twin {args.orientation})"
+        else f"servo x rotation per command x the digit's mode ({mode['wn_rad_s']:.3g} rad/s, zeta "
+        f"{mode['zeta']:.3g}, cable(s) taut, from its twin {args.orientation})"
     )
     text = (
-        f"20 ms design{' on ' + args.params if args.params else ''}: {model}; {d.deg_per_command:.4g} deg a command, "
-        f"{d.delay_samples} sample(s) of delay, period {d.period_s * 1000:g} ms\n"
-        f"  nominal loop poles inside |z| <= {radius:.4f} (stable); linear 30 deg step: settling "
-        f"{figures.settling_time_s:.3f} s, overshoot {figures.overshoot_percent:.2f} %\n"
+        f"20 ms design{' on ' + args.params if args.params else ''}: {model}; {data['deg_per_command']:.4g} deg a "
+        f"command, {data['delay_samples']} sample(s) of delay, period {data['period_s'] * 1000:g} ms\n"
+        f"  nominal loop poles inside |z| <= {data['closed_loop_pole_radius']:.4f} (stable); linear 30 deg step: "
+        f"settling {step['settling_time_s']:.3f} s, overshoot {step['overshoot_percent']:.2f} %\n"
         f"  the loop on the twin: flexdigit run{' --params ' + args.params if args.params else ''} --setpoint-deg 30"
     )
     return CommandResult(data=data, text=text)

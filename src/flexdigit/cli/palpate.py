@@ -10,6 +10,10 @@ from flexdigit._validation import SEED, Flag
 
 #: Largest chi^2 per degree of freedom a palpation fit may leave and still be reported.
 MAX_CHI2_PER_DOF = 25.0
+#: A sweep's modulus uncertain by more than this fraction of itself is no measurement (a digit that barely presses
+#: the tissue fits a near-zero modulus at a made-up gap: 1.7 +- 2.4 N/m^2 for a true 1000); a sweep that presses
+#: it measures within a few per cent (soft-block on the thesis rig: 994 +- 18).
+MAX_MODULUS_REL_SD = 0.5
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -56,13 +60,8 @@ def _sim_options(backend: str, kind: str, seed: int | None) -> dict:
 
 
 def _palpate(args: argparse.Namespace) -> CommandResult:
-    from flexdigit._io import atomic_write, check_output
-    from flexdigit._json import to_jsonable
-    from flexdigit.errors import DataFileError
+    from flexdigit._io import check_output
     from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
-    from flexdigit.params import RigParams, load_params
-    from flexdigit.rig.base import open_rig
-    from flexdigit.twin.digit_calibration import twin_calibration
 
     tissue, info = load_tissue(args.tissue)
     plan = load_palpation_protocol(args.protocol)
@@ -72,18 +71,7 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     out = check_output(args.out, force=args.force) if args.out else None
     check_plot(args.plot, "palpate", force=args.force)
     logs = _log_paths(args.log, plan, args.force)
-    sim = args.backend.split(":")[0].split("?")[0].startswith("sim")
-    if sim and not info.placed_on_twin:
-        raise DataFileError(
-            f"{info.source}: keys 'tissue.gap_mm' and 'tissue.modulus_n_m2' are needed on the twin (they place the "
-            "tissue there; palpation then estimates them)"
-        )
-    params = load_params(args.params) if args.params else RigParams()
-    calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
-    options = _sim_options(args.backend, kind, args.seed)
-    if sim and (args.params or args.calibration):
-        options["calibration"] = calibration
-    rig = open_rig(args.backend, params, **options)
+    sim, rig, calibration = _palpation_rig(args, info, kind)
     settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
@@ -104,6 +92,38 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             "modulus_n_m2": tissue.modulus_n_m2,
             "exponent": tissue.exponent,
         }
+    return CommandResult(data=data, text=text + _save_outputs(args, data, fig, out))
+
+
+def _palpation_rig(args: argparse.Namespace, info, kind: str):
+    """``(sim, rig, calibration)``: the rig of ``--backend`` for ``--params``, its twin placing the tissue (which
+    the twin needs placed: gap and modulus), and the calibration of the twin and the gauge model."""
+    from flexdigit.errors import DataFileError
+    from flexdigit.params import RigParams, load_params
+    from flexdigit.rig.base import open_rig
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    sim = args.backend.split(":")[0].split("?")[0].startswith("sim")
+    if sim and not info.placed_on_twin:
+        raise DataFileError(
+            f"{info.source}: keys 'tissue.gap_mm' and 'tissue.modulus_n_m2' are needed on the twin (they place the "
+            "tissue there; palpation then estimates them)"
+        )
+    params = load_params(args.params) if args.params else RigParams()
+    calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
+    options = _sim_options(args.backend, kind, args.seed)
+    if sim and (args.params or args.calibration):
+        options["calibration"] = calibration
+    rig = open_rig(args.backend, params, **options)
+    return sim, rig, calibration
+
+
+def _save_outputs(args: argparse.Namespace, data: dict, fig, out) -> str:
+    """Save ``--plot`` and ``--out`` (atomic, refusing to overwrite without ``--force``); the lines saying so."""
+    from flexdigit._io import atomic_write
+    from flexdigit._json import to_jsonable
+
+    text = ""
     if args.plot:
         from flexdigit._plot import save_plot
 
@@ -115,7 +135,7 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
         with atomic_write(out, "w", force=args.force) as fh:
             json.dump(to_jsonable(data), fh, indent=2)
         text += f"\nwritten to {out}"
-    return CommandResult(data=data, text=text)
+    return text
 
 
 def _orientation(rig) -> str:
@@ -153,7 +173,7 @@ def _tissue_dict(tissue, info) -> dict:
     }
 
 
-def _refuse_poor_fit(fit, what: str) -> None:
+def _refuse_poor_fit(fit, what: str, max_rel_sd: float | None = None) -> None:
     from flexdigit.errors import DataFileError
 
     per_dof = fit.chi2 / max(fit.dof, 1)
@@ -162,6 +182,12 @@ def _refuse_poor_fit(fit, what: str) -> None:
             f"{what}: the gauges do not fit the tissue model (chi2/dof = {per_dof:.1f}, converged = {fit.converged}): "
             "check where the tissue lies ('start_mm', 'end_mm', 'side') and let each plateau settle longer "
             "('settle_s'); no stiffness reported"
+        )
+    if max_rel_sd is not None and not fit.modulus_sd_n_m2 <= max_rel_sd * fit.modulus_n_m2:
+        raise DataFileError(
+            f"{what}: the modulus is not determined ({fit.modulus_n_m2:.3g} +- {fit.modulus_sd_n_m2:.2g}, more than "
+            f"{max_rel_sd:.0%} of itself): the digit barely presses the tissue; sweep to higher commands "
+            "('commands') or place the tissue nearer; no stiffness reported"
         )
 
 
@@ -174,7 +200,7 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
 
     model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode)
-    _refuse_poor_fit(result.fit, "palpation")
+    _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
     touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
     if touching < 3:
         raise DataFileError(
@@ -182,26 +208,8 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
             "needed for a stiffness): sweep to higher commands ('commands') or place the tissue nearer"
         )
     bound = stiffness_bound(model, result.fit.tissue, plan.sweep, fit_exponent=plan.sweep.model == "hunt-crossley")
-    summary = result.summary()
-    data = {
-        "protocol": {
-            "commands": list(plan.sweep.commands),
-            "settle_s": plan.sweep.settle_s,
-            "readings": plan.sweep.readings,
-        },
-        "result": summary,
-        "cramer_rao": {"gap_mm": 1000 * bound["gap_m"], "modulus_n_m2": bound["modulus_n_m2"]},
-        "curve": {
-            "command": result.curve["command"].tolist(),
-            "force_n": result.curve["force_n"].tolist(),
-            "force_sd_n": result.curve["force_sd_n"].tolist(),
-            "indentation_mm": (1000 * result.curve["indentation_m"]).tolist(),
-            "model_force_n": result.curve["model_force_n"].tolist(),
-            **({"true_force_n": result.curve["true_force_n"].tolist()} if "true_force_n" in result.curve else {}),
-        },
-    }
-    if "true_force_n" in result.curve:
-        data["modulus_rel_error"] = summary["modulus_n_m2"] / tissue.modulus_n_m2 - 1
+    data = _sweep_data(result, plan, bound, tissue)
+    summary = data["result"]
     f = result.fit
     lines = [
         f"palpation of {tissue.side}-side tissue at {1000 * tissue.start_m:g}-{1000 * tissue.end_m:g} mm, "
@@ -229,6 +237,31 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
     return data, "\n".join(lines), figure
 
 
+def _sweep_data(result, plan, bound, tissue) -> dict:
+    """``palpate --json`` of a sweep: the protocol, the fit, its Cramer-Rao bound and the curve, in mm."""
+    summary = result.summary()
+    data = {
+        "protocol": {
+            "commands": list(plan.sweep.commands),
+            "settle_s": plan.sweep.settle_s,
+            "readings": plan.sweep.readings,
+        },
+        "result": summary,
+        "cramer_rao": {"gap_mm": 1000 * bound["gap_m"], "modulus_n_m2": bound["modulus_n_m2"]},
+        "curve": {
+            "command": result.curve["command"].tolist(),
+            "force_n": result.curve["force_n"].tolist(),
+            "force_sd_n": result.curve["force_sd_n"].tolist(),
+            "indentation_mm": (1000 * result.curve["indentation_m"]).tolist(),
+            "model_force_n": result.curve["model_force_n"].tolist(),
+            **({"true_force_n": result.curve["true_force_n"].tolist()} if "true_force_n" in result.curve else {}),
+        },
+    }
+    if "true_force_n" in result.curve:
+        data["modulus_rel_error"] = summary["modulus_n_m2"] / tissue.modulus_n_m2 - 1
+    return data
+
+
 def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import scan
@@ -246,8 +279,27 @@ def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
     for fit in result.local:
         _refuse_poor_fit(fit, "scan")
     inc = result.inclusion
+    data = _scan_data(result, tissue, plan.scan["offsets_m"])
+    text = (
+        f"scan of {len(plan.scan['offsets_m'])} offsets: inclusion {1000 * inc['centre_m']:.1f} +- "
+        f"{1000 * inc['centre_sd_m']:.1f} mm into the tissue, {inc['ratio']:.2f} +- {inc['ratio_sd']:.2f} x stiffer "
+        f"(base {inc['modulus_n_m2']:.0f} N/m^2)"
+    )
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import scan_figure
+
+        true_centre = data["inclusion"].get("true_centre_in_tissue_mm")
+        return scan_figure(result, true_centre_mm=true_centre, title=f"scan of {len(result.records)} offsets")
+
+    return data, text, figure
+
+
+def _scan_data(result, tissue, offsets_m) -> dict:
+    """``palpate --json`` of a scan: the stiffness map and the inclusion found, in mm (the truth on the twin)."""
+    inc = result.inclusion
     data = {
-        "offsets_mm": [1000 * d for d in plan.scan["offsets_m"]],
+        "offsets_mm": [1000 * d for d in offsets_m],
         "map": {
             "position_in_tissue_mm": (1000 * result.map_position_m).tolist(),
             "modulus_n_m2": result.map_modulus_n_m2.tolist(),
@@ -267,19 +319,7 @@ def _scan(rig, tissue, plan, logs, log_mode, calibration=None):
         true = tissue.inclusions[0]
         data["inclusion"]["true_centre_in_tissue_mm"] = 1000 * (true.centre_m - tissue.start_m)
         data["inclusion"]["true_ratio"] = true.ratio
-    text = (
-        f"scan of {len(plan.scan['offsets_m'])} offsets: inclusion {1000 * inc['centre_m']:.1f} +- "
-        f"{1000 * inc['centre_sd_m']:.1f} mm into the tissue, {inc['ratio']:.2f} +- {inc['ratio_sd']:.2f} x stiffer "
-        f"(base {inc['modulus_n_m2']:.0f} N/m^2)"
-    )
-
-    def figure():
-        from flexdigit.palpation.palpation_plot import scan_figure
-
-        true_centre = data["inclusion"].get("true_centre_in_tissue_mm")
-        return scan_figure(result, true_centre_mm=true_centre, title=f"scan of {len(result.records)} offsets")
-
-    return data, text, figure
+    return data
 
 
 def _force(rig, tissue, plan, log, log_mode):

@@ -402,14 +402,8 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
     """``flexdigit run --on-board``: the loop closes on the board (the exported controller in its image)."""
     from flexdigit._validation import check_real
     from flexdigit.errors import ParameterError
-    from flexdigit.rig.backends.hil_backend import run_on_board
-    from flexdigit.rig.base import open_rig, parse_rig_url
-    from flexdigit.rig.step_test import step_metrics
+    from flexdigit.rig.step_test import board_step_test
 
-    if parse_rig_url(args.backend).scheme != "hil":
-        raise ParameterError(
-            f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {args.backend!r}."
-        )
     for name in ("log", "record", "rotation_map", "calibration", "params", "orientation"):
         if getattr(args, name) is not None:
             raise ParameterError(
@@ -417,40 +411,18 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
             )
     duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
-    options = {"mode": "board", "setpoint_deg": setpoint} | ({} if args.seed is None else {"seed": args.seed})
-    rig = open_rig(args.backend, **options)
-    try:
-        settings = rig.settings()
-        run = run_on_board(rig, setpoint, duration)
-        stats = rig.stats()
-    finally:
-        rig.close()
-    dpc = _deg_per_command(rig.params)
-    metrics = step_metrics(run.time_s, run.true_rotation_deg, setpoint, 0.0, dpc) if run.time_s.size >= 2 else None
-    final, peak = _final_and_peak(run.time_s, run.true_rotation_deg)
-    data = {
-        "status": run.status,
-        "message": run.message,
-        "loop": "board",
-        "backend": args.backend,
-        "rig": settings,
-        "setpoint_deg": setpoint,
-        "period_s": run.period_s,
-        "samples": int(run.time_s.size),
-        "true_final_rotation_deg": final,
-        "true_peak_rotation_deg": peak,
-        "step_metrics": {"true": metrics.to_dict() if metrics else None, "deg_per_command": dpc},
-        "final_command": float(run.command[-1]) if run.command.size else None,
-        "board": stats,
-    }
+    run = board_step_test(args.backend, setpoint, duration, seed=args.seed)
+    data = {"status": run["status"], "message": run["message"], "loop": "board", "backend": args.backend, **run}
+    metrics, stats = run["step_metrics"]["true"], run["board"]
     text = (
-        f"loop on the board ({args.backend}): {run.status} ({run.message})\n"
-        f"  true (twin) rotation: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg\n"
-        f"  step: {_figures_line({'true': metrics.to_dict()}) if metrics else 'too few samples'}\n"
-        f"  board: {run.time_s.size} periods of {run.period_s * 1000:g} ms, update <= {stats['exec_max_cycles']} "
+        f"loop on the board ({args.backend}): {run['status']} ({run['message']})\n"
+        f"  true (twin) rotation: final {run['true_final_rotation_deg']:.2f} deg (setpoint {setpoint:g}), peak "
+        f"{run['true_peak_rotation_deg']:.2f} deg\n"
+        f"  step: {_figures_line({'true': metrics}) if metrics else 'too few samples'}\n"
+        f"  board: {run['samples']} periods of {run['period_s'] * 1000:g} ms, update <= {stats['exec_max_cycles']} "
         f"cycles ({stats['exec_max_cycles'] / 16:.0f} us at 16 MHz), faults {stats['faults'] or 'none'}"
     )
-    return CommandResult(data=data, text=text, exit_code={"completed": 0, "fault": 1}[run.status])
+    return CommandResult(data=data, text=text, exit_code={"completed": 0, "fault": 1}[run["status"]])
 
 
 def _deg_per_command(params) -> float:
@@ -539,19 +511,17 @@ def _final_and_peak(time_s, rotation_deg) -> tuple[float, float]:
 
 def _rotation_map(args, rig, sim: bool):
     """The gauge -> rotation map: loaded from ``--rotation-map``, or made (``--map-from``) and saved there."""
-    from flexdigit.errors import ParameterError
-    from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
-    from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map, save_rotation_map
+    from flexdigit.rig.base import parse_rig_url, rig_url_options
+    from flexdigit.rig.rotation import RotationEstimator, load_rotation_map, make_rotation_map, save_rotation_map
 
     path, source = args.rotation_map, args.map_from
     if path is not None and path.exists() and source is None:
         return load_rotation_map(path)
     replay = parse_rig_url(args.backend).scheme == "replay"
     if replay and source is None and _recorded_map(rig) is not None:
-        from flexdigit.rig.rotation import RotationEstimator
-
         return RotationEstimator.from_dict(_recorded_map(rig), source=rig.path)  # the map the recording was run with
     source = source or ("twin" if sim else "operator")
+    options = {}
     if source == "twin":
         # the twin (calibrated to the rig with --calibration): a separate one, read at its own tip rotation, set up
         # as the URL says when the rig is the twin, with the next seed
@@ -561,29 +531,23 @@ def _rotation_map(args, rig, sim: bool):
             options = {**url_options, **options, "seed": rig.settings()["seed"] + 1}
         else:
             options["seed"] = options.get("seed", 0) + 1
-        est = calibrate_rotation(open_rig("sim", rig.params, **options))
-    elif source == "operator":
-        if replay:
-            raise ParameterError("a replay cannot be swept (it ignores commands); pass --rotation-map FILE")
-
-        def ask(command: int) -> float:
-            return float(input(f"Command {command}, digit at rest: tip rotation now, deg? "))
-
-        est = calibrate_rotation(rig, reference=ask, reference_sd_deg=args.resolution_deg / math.sqrt(12))
-    else:
-        from flexdigit.rig.rotation_reference import read_reference
-
-        reference = read_reference(
-            Path(source), rig.params, resolution_mm=args.resolution_mm, resolution_deg=args.resolution_deg
-        )
-        if replay and reference.gauges_v is None:
-            raise ParameterError(
-                f"a replay cannot be swept; {source} needs gauge1_v, gauge2_v, gauge3_v columns to fit the map alone"
-            )
-        est = calibrate_rotation(rig, reference=reference)
+    est = make_rotation_map(
+        rig,
+        source,
+        twin_options=options,
+        ask=_ask_operator,
+        resolution_mm=args.resolution_mm,
+        resolution_deg=args.resolution_deg,
+        replay=replay,
+    )
     if path is not None:
         save_rotation_map(est, path, force=args.force)
     return est
+
+
+def _ask_operator(command: int) -> float:
+    """The operator's protractor reading at ``command`` (``--map-from operator``)."""
+    return float(input(f"Command {command}, digit at rest: tip rotation now, deg? "))
 
 
 def _map_summary(estimator, path, setpoint: float) -> dict:

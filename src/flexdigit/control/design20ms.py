@@ -30,6 +30,7 @@ deviation from the equilibrium command 8 (:class:`~flexdigit.control.runtime.Run
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from numbers import Integral, Real
@@ -46,6 +47,7 @@ from flexdigit._validation import (
     validate_fields,
     validate_params,
 )
+from flexdigit.control.analysis import step_figures
 from flexdigit.control.discretise import METHODS, discretise
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.control.thesis_designs import printed_controller
@@ -60,6 +62,7 @@ __all__ = [
     "digit_first_mode",
     "straight_is_stable",
     "digit_design_20ms",
+    "digit_design_20ms_summary",
     "Weights",
     "Digital20msDesign",
     "design_plant",
@@ -392,6 +395,69 @@ def digit_design_20ms(
     dc = float(np.real(ct.dcgain(design_plant(params))))
     weights = Weights(r_measurement=DIGIT_R_MEASUREMENT_DEG2).for_digit(dc, thesis_dc)
     return design_20ms(params, period_s=period_s, weights=weights, digit_mode=mode, deg_per_command=deg_per_command)
+
+
+def digit_design_20ms_summary(
+    params: RigParams | None = None,
+    *,
+    period_s: float | None = None,
+    calibration=None,
+    orientation: str = "vertical",
+    step_deg: float = 30.0,
+    step_duration_s: float = 3.0,
+) -> dict:
+    """A digit's 20 ms design and its figures, as ``flexdigit design 20ms`` reports them.
+
+    Parameters
+    ----------
+    params : RigParams, optional
+        The digit (default: the thesis rig, whose design is chapter 5's :func:`design_20ms`).
+    period_s : float, optional
+        Sampling period, s (default: the design's 20 ms).
+    calibration : optional
+        The twin's calibration for the digit's mode (default: the one the twin would get).
+    orientation : str
+        How the digit is mounted (``"vertical"``, ``"hanging"``, ...), for its mode.
+    step_deg : float
+        The linear step the nominal loop is tried with, deg (5.3's 30 deg).
+    step_duration_s : float
+        How long that step is simulated, s.
+
+    Returns
+    -------
+    dict
+        ``period_s``, ``delay_samples``, ``deg_per_command``, ``digit_mode`` (``{"wn_rad_s", "zeta"}``, None on the
+        thesis rig), ``cables``, ``weights``, ``closed_loop_pole_radius``, ``stable`` (radius < 1),
+        ``linear_step_30deg`` (:func:`~flexdigit.control.analysis.step_figures` of the step) and ``dither``
+        (True for any digit but the thesis's).
+
+    Raises
+    ------
+    DesignError
+        When the digit's straight pose is not stable, or its nominal loop is not
+        (:func:`digit_design_20ms`).
+    """
+    params = params or RigParams()
+    thesis = params == RigParams()
+    d = digit_design_20ms(params, period_s=period_s, calibration=calibration, orientation=orientation)
+    mode = None if thesis else digit_first_mode(params, calibration, orientation=orientation)
+    loop = closed_loop(d.plant_d, d.controller)
+    t = np.arange(0.0, step_duration_s + d.period_s / 2, d.period_s)
+    response = ct.forced_response(loop, t, np.full(t.size, step_deg))
+    figures = step_figures(response.time, np.asarray(response.outputs).reshape(-1), target=step_deg)
+    radius = float(np.max(np.abs(d.closed_loop_poles)))
+    return {
+        "period_s": d.period_s,
+        "delay_samples": d.delay_samples,
+        "deg_per_command": d.deg_per_command,
+        "digit_mode": None if mode is None else {"wn_rad_s": mode[0], "zeta": mode[1]},
+        "cables": params.cables.count,
+        "weights": d.weights.__dict__,
+        "closed_loop_pole_radius": radius,
+        "stable": radius < 1.0,
+        "linear_step_30deg": dataclasses.asdict(figures),
+        "dither": not thesis,
+    }
 
 
 def closed_loop(plant_d, controller, gain: float = 1.0) -> ct.StateSpace:

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from flexdigit._validation import check_positive
-from flexdigit.control.analysis import is_stable, loop_maps
+from flexdigit.control.analysis import additive_tolerance, hinf_norm, is_stable, loop_maps, step_metrics
 from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
 from flexdigit.control.synthesis import HinfDesign, central_controller_poles, hinf_riccati
 from flexdigit.errors import ConvergenceWarning, DesignError
@@ -37,6 +37,7 @@ __all__ = [
     "singular_infimum_witness",
     "digit_plant",
     "digit_hinf_design",
+    "digit_hinf_summary",
 ]
 
 #: ``(eps_u, margin)`` per cut-off (Hz) that reproduce the printed controller poles (tables 4.2, 4.3), as found
@@ -219,3 +220,73 @@ def digit_hinf_design(
             f"(poles {np.round(plant.poles, 3).tolist()}): not a design to stand behind"
         )
     return design, plant
+
+
+def digit_hinf_summary(
+    filter_hz: float,
+    params,
+    calibration=None,
+    *,
+    orientation: str = "vertical",
+    eps_u: float | None = None,
+    margin: float | None = None,
+) -> dict:
+    """The H-infinity design of 4.4 on a described digit's plant and its figures, as ``flexdigit design hinf
+    --params`` reports them.
+
+    Parameters
+    ----------
+    filter_hz : float
+        Cut-off of the error filter ``F(s) = 1/(s + 2 pi f)``, Hz.
+    params : RigParams
+        The digit.
+    calibration : optional
+        The twin's calibration for the digit's mode (default: the one the twin would get).
+    orientation : str
+        How the digit is mounted, for its mode.
+    eps_u, margin : float, optional
+        Regularisation and distance from ``gamma_opt`` (default: :data:`THESIS_REGULARISATION`'s 5 Hz pair).
+
+    Returns
+    -------
+    dict
+        The plant (``plant_num``, ``plant_den``, ``plant_poles`` as ``[re, im]``, ``plant_dc_gain_m_per_command``,
+        ``digit_wn_rad_s``), the design (``gamma_opt``, ``gamma``, ``margin``, ``controller_num``,
+        ``controller_den``, ``controller_poles``) and its figures (``tzw_peak_db`` at ``tzw_peak_rad_s``,
+        ``tpq_peak_db``, ``additive_tolerance_m_per_command``, ``additive_tolerance_relative_percent``,
+        ``tyw_settling_s`` over 3 s).
+
+    Raises
+    ------
+    DesignError
+        When the central controller does not stabilise the digit's plant (:func:`digit_hinf_design`).
+    """
+    d, plant = digit_hinf_design(filter_hz, params, calibration, orientation=orientation, eps_u=eps_u, margin=margin)
+    K = d.controller
+    maps = loop_maps(plant.tf, K)
+    tzw, wzw = hinf_norm(maps.T_zw, "T_zw")
+    tol = additive_tolerance(plant.tf, K)
+    tf = ct.tf(K)
+    return {
+        "filter_hz": filter_hz,
+        "plant": "digit (consistent, from its components)",
+        "plant_num": np.asarray(plant.poly.num).tolist(),
+        "plant_den": np.asarray(plant.poly.den).tolist(),
+        "plant_poles": [[float(p.real), float(p.imag)] for p in plant.poles],
+        "plant_dc_gain_m_per_command": plant.dc_gain,
+        "digit_wn_rad_s": plant.factors["E_digit_housing"].den[-1] ** 0.5,
+        "gamma_opt": d.gamma_opt,
+        "gamma": d.gamma,
+        "margin": d.margin,
+        "controller_num": np.asarray(tf.num[0][0]).tolist(),
+        "controller_den": np.asarray(tf.den[0][0]).tolist(),
+        "controller_poles": [[float(p.real), float(p.imag)] for p in sorted_poles(np.linalg.eigvals(K.A))],
+        "closed_loop_stable": True,
+        "tzw_peak_db": 20 * np.log10(tzw),
+        "tzw_peak_rad_s": wzw,
+        "tpq_peak_db": tol["tpq_db"],
+        "additive_tolerance_m_per_command": tol["tolerance"],
+        "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
+        "tyw_settling_s": step_metrics(maps.T_yw, t_final=3.0)["settling_time_s"],
+        "thesis_columns": "not applicable (the thesis printed its own rig's designs only)",
+    }

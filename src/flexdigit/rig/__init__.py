@@ -35,6 +35,7 @@ __getattr__, __all__ = lazy_exports(
         "make_controller": "flexdigit.rig.controllers",
         "RotationEstimator": "flexdigit.rig.rotation",
         "calibrate_rotation": "flexdigit.rig.rotation",
+        "make_rotation_map": "flexdigit.rig.rotation",
         "Recording": "flexdigit.rig.recording",
         "read_recording": "flexdigit.rig.recording",
         "StepTest": "flexdigit.rig.step_test",

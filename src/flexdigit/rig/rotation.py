@@ -38,12 +38,13 @@ from flexdigit._validation import check_array, check_choice, check_int, check_re
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.params import MAX_GAUGES, RigParams
-from flexdigit.rig.base import Reading, Rig
-from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference
+from flexdigit.rig.base import Reading, Rig, open_rig
+from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference, read_reference
 
 __all__ = [
     "RotationEstimator",
     "calibrate_rotation",
+    "make_rotation_map",
     "wait_until_settled",
     "Settled",
     "save_rotation_map",
@@ -348,6 +349,64 @@ def wait_until_settled(
                 f"{worst + 1}: spread {spread[worst] * 1000:.2f} mV and drift {drift[worst] * 1000:+.2f} mV over "
                 f"{window:g} s, against noise {noise[worst] * 1000:.2f} mV)"
             )
+
+
+def make_rotation_map(
+    rig: Rig,
+    source: str | Path = "twin",
+    *,
+    twin_options: dict | None = None,
+    ask: Callable[[int], float] | None = None,
+    resolution_mm: float = 0.5,
+    resolution_deg: float = 1.0,
+    replay: bool = False,
+) -> RotationEstimator:
+    """The gauge -> rotation map of ``rig`` (``flexdigit run --map-from``), made from one of three references.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig whose gauges are mapped.
+    source : "twin", "operator" or path
+        ``"twin"``: a separate twin of ``rig.params`` (opened with ``twin_options``), swept and read at its own tip
+        rotation; ``"operator"``: ``rig`` swept, ``ask(command) -> deg`` at each command (a protractor read to
+        ``resolution_deg``, a uniform error of ``resolution_deg / sqrt(12)`` standard deviation); a path: rotations
+        (or deflections) measured on the rig (:func:`~flexdigit.rig.rotation_reference.read_reference`, read to
+        ``resolution_mm`` / ``resolution_deg``).
+    twin_options : dict, optional
+        Keyword options of the ``"sim"`` rig the twin map is made on (``seed``, ``calibration``, ...).
+    ask : callable, optional
+        The operator's reading, required with ``source="operator"``.
+    resolution_mm, resolution_deg : float
+        Reading resolutions of measured deflections (mm) and rotations (deg): 0.5 mm, 1 deg by default.
+    replay : bool
+        ``rig`` replays a recording: it ignores commands, so it cannot be swept; only a reference file holding the
+        gauge readings (``gauge1_v``, ...) can map it.
+
+    Returns
+    -------
+    RotationEstimator
+        The fitted map (:func:`calibrate_rotation`).
+
+    Raises
+    ------
+    ParameterError
+        A replay asked to be swept, or ``"operator"`` without ``ask``.
+    """
+    if source == "twin":
+        return calibrate_rotation(open_rig("sim", rig.params, **(twin_options or {})))
+    if source == "operator":
+        if replay:
+            raise ParameterError("a replay cannot be swept (it ignores commands); pass --rotation-map FILE")
+        if ask is None:
+            raise ParameterError("make_rotation_map: source 'operator' needs ask(command) -> deg")
+        return calibrate_rotation(rig, reference=ask, reference_sd_deg=resolution_deg / math.sqrt(12))
+    reference = read_reference(Path(source), rig.params, resolution_mm=resolution_mm, resolution_deg=resolution_deg)
+    if replay and reference.gauges_v is None:
+        raise ParameterError(
+            f"a replay cannot be swept; {source} needs gauge1_v, gauge2_v, gauge3_v columns to fit the map alone"
+        )
+    return calibrate_rotation(rig, reference=reference)
 
 
 def calibrate_rotation(

@@ -15,7 +15,9 @@ import numpy as np
 
 from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_real
-from flexdigit.rig.base import Rig
+from flexdigit.errors import ParameterError
+from flexdigit.rig.backends.hil_backend import run_on_board
+from flexdigit.rig.base import Rig, open_rig, parse_rig_url
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import LoopResult, run_loop
 from flexdigit.rig.rotation import RotationEstimator
@@ -28,6 +30,7 @@ __all__ = [
     "step_test",
     "StepRun",
     "run_step",
+    "board_step_test",
     "FINAL_WINDOW_S",
     "ESTIMATE_SMOOTH_S",
 ]
@@ -323,3 +326,57 @@ def _deg_per_command(params) -> float:
     from flexdigit.control.design20ms import design_plant
 
     return float(np.real(design_plant(params).dcgain()))
+
+
+def board_step_test(backend: str, setpoint_deg: float, duration_s: float, *, seed: int | None = None) -> dict:
+    """A step from rest with the loop closed on the board (``flexdigit run --on-board``): the exported controller
+    in the image runs it, the host only sends the setpoint and watches the twin's true rotation.
+
+    Parameters
+    ----------
+    backend : str
+        A board that closes the loop: ``hil://IMAGE.elf`` (other schemes are refused, ParameterError).
+    setpoint_deg : float
+        The beam-rotation step, deg.
+    duration_s : float
+        How long the host watches, s.
+    seed : int, optional
+        The twin's seed (default: the URL's or the backend's).
+
+    Returns
+    -------
+    dict
+        ``status`` (``"completed"`` or ``"fault"``), ``message``, ``rig`` (its settings), ``setpoint_deg``,
+        ``period_s``, ``samples``, ``true_final_rotation_deg`` (mean of the last :data:`FINAL_WINDOW_S`),
+        ``true_peak_rotation_deg``, ``step_metrics`` (``{"true": StepMetrics.to_dict() or None,
+        "deg_per_command"}``), ``final_command`` and ``board`` (its stats: ``exec_max_cycles``, ``faults``).
+    """
+    if parse_rig_url(backend).scheme != "hil":
+        raise ParameterError(
+            f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {backend!r}."
+        )
+    options = {"mode": "board", "setpoint_deg": setpoint_deg} | ({} if seed is None else {"seed": seed})
+    rig = open_rig(backend, **options)
+    try:
+        settings = rig.settings()
+        run = run_on_board(rig, setpoint_deg, duration_s)
+        stats = rig.stats()
+    finally:
+        rig.close()
+    dpc = _deg_per_command(rig.params)
+    t, y = run.time_s, run.true_rotation_deg
+    metrics = step_metrics(t, y, setpoint_deg, 0.0, dpc) if t.size >= 2 else None
+    final = float(y[t >= t[-1] - FINAL_WINDOW_S].mean()) if y.size else math.nan
+    return {
+        "status": run.status,
+        "message": run.message,
+        "rig": settings,
+        "setpoint_deg": setpoint_deg,
+        "period_s": run.period_s,
+        "samples": int(t.size),
+        "true_final_rotation_deg": final,
+        "true_peak_rotation_deg": float(y.max()) if y.size else math.nan,
+        "step_metrics": {"true": metrics.to_dict() if metrics else None, "deg_per_command": dpc},
+        "final_command": float(run.command[-1]) if run.command.size else None,
+        "board": stats,
+    }

@@ -35,6 +35,7 @@ __getattr__, __all__ = lazy_exports(
         "thesis_split": "flexdigit.tactile.pipeline",
         "ThesisNetwork": "flexdigit.tactile.pipeline",
         "run_pipeline": "flexdigit.tactile.pipeline",
+        "target_scores": "flexdigit.tactile.pipeline",
         "compare_strategies": "flexdigit.tactile.pipeline",
         "MLP": "flexdigit.tactile.netlab",
         "BeamInversion": "flexdigit.tactile.estimators",

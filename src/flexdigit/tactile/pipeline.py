@@ -60,6 +60,7 @@ __all__ = [
     "SweepPoint",
     "PipelineResult",
     "run_pipeline",
+    "target_scores",
     "StrategyScore",
     "compare_strategies",
 ]
@@ -437,4 +438,31 @@ def compare_strategies(dataset: Dataset, *, hidden: int = 18, tol: float = 1e-7,
     x3 = np.column_stack([x2, m_all])
     p3 = net().fit(x3[tr_l], pos[tr_l], x3[va_l], pos[va_l])
     scores.append(score("cascaded", c_all[te], m_all[te], p3.predict(x3[te])))
+    return scores
+
+
+def target_scores(result: PipelineResult) -> dict:
+    """The scores ``flexdigit train`` reports and keeps with a network, from its test readings.
+
+    Parameters
+    ----------
+    result : PipelineResult
+        A trained network's :func:`run_pipeline` result.
+
+    Returns
+    -------
+    dict
+        ``corr2``, ``hidden``, ``learning_gradient`` and the target's error: ``rmse_mm`` (position, m -> mm),
+        ``rmse_g`` (magnitude, kg -> g), ``accuracy`` (contact, thresholded at 0.5) or ``rmse_positions``
+        (position index).
+    """
+    scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
+    if result.target == "position":
+        scores["rmse_mm"] = 1000 * rmse(result.y_pred, result.y_test)
+    elif result.target == "magnitude":
+        scores["rmse_g"] = 1000 * rmse(result.y_pred, result.y_test)
+    elif result.target == "contact":
+        scores["accuracy"] = accuracy((result.y_pred >= 0.5).astype(float), result.y_test)
+    else:
+        scores["rmse_positions"] = rmse(result.y_pred, result.y_test)
     return scores
