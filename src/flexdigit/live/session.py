@@ -42,7 +42,7 @@ from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import check_reading
 from flexdigit.rig.recording import Recording, read_metadata, rig_metadata
-from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
+from flexdigit.rig.rotation import load_rotation_map, make_rotation_map
 from flexdigit.shape.shape import ShapeEstimator
 from flexdigit.tactile.model_io import load_model
 from flexdigit.twin.calibration import Calibration
@@ -510,7 +510,8 @@ class LiveSession:
             options["seed"] = rig.settings()["seed"] + 1
             if params == RigParams():  # the thesis rig's map is the same at the twin's coarsest step, sooner; another
                 options["dt_s"] = 0.02  # digit's may not settle at it (a 4 x 80 mm pair, horizontal, rings at 20 ms)
-            estimator = calibrate_rotation(open_rig("sim", params, calibration=self.calibration, **options))
+            # the map run --params makes (make_rotation_map's twin source), on a twin of this digit
+            estimator = make_rotation_map(rig, "twin", twin_options={"calibration": self.calibration, **options})
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
         elif self.kind == "rig" and rotation_map is not None:
