@@ -1,6 +1,12 @@
-"""Where the time of a shooting tdcr dynamics step goes (method="shooting"; the default is the discrete rod).
+"""Where the time of a tdcr dynamics step goes: the discrete rod's (the default) and shooting's.
 
 Run: ``PYTHONPATH=src python benchmarks/profile_tdcr_dynamics.py`` (under the CPU lock on a shared machine).
+
+The discrete rod (:func:`discrete`): a step is about one Newton iteration (the Jacobian kept), i.e. one residual
+(the frames' exponentials and the forces), one banded solve and the frames' bookkeeping; each part is timed in a
+compiled loop (no Python call overhead), CPU time.
+
+Shooting (:func:`main`):
 
 A step is a shooting problem: Newton (Broyden) on the six clamp-wrench unknowns, every iterate one RK4 integration
 of the rod from base to tip (4 right-hand sides per interval). The script prints the real-time factor, the Newton
@@ -69,8 +75,69 @@ def main() -> None:
         print(f"dt {step * 1e3:g} ms: {m.iterations.mean():.2f} Newton iterations a step, converged {m.converged}")
 
 
+def discrete(repeats: int = 20000) -> None:
+    """The discrete rod's step on the 40-node cantilever of bench_tdcr.py, by part (CPU time, compiled loops)."""
+    import numba
+
+    from flexdigit.tdcr import Robot, Segment, _chain_kernel, simulate, solve_statics
+    from flexdigit.tdcr.dynamics import _discrete_model, _element_frames
+    from flexdigit.tdcr.statics import _nodes
+
+    rod = Robot(name="rod", segments=(Segment(0.4, 39),))
+    plane = np.array([1.0, 1.0, 0.0]) / math.sqrt(2)
+    bent = solve_statics(rod, [], tip_force_n=0.002 * plane)
+    simulate(rod, bent, 0.01)  # compile
+    start = time.process_time()
+    motion = simulate(rod, bent, 1.0)
+    per_step = (time.process_time() - start) / 1000
+    print(f"discrete: {per_step * 1e6:.1f} us a step of 1 ms (CPU), {motion.iterations.mean():.2f} Newton iterations")
+    nodes, ends = _nodes(rod, 1)
+    model, mass, inertia, hb = _discrete_model(rod, nodes, ends, (np.zeros(0), np.zeros(3), np.zeros(3), np.zeros(3)))
+    x, q = bent.positions_m, np.ascontiguousarray(_element_frames(bent.rotations))
+    n, a = q.shape[0], 2e-3 / 3
+    z = np.random.default_rng(0).normal(size=6 * n) * 1e-3
+    zero = np.zeros((n, 3))
+    step = (x, q, zero, np.zeros((n + 1, 3)), zero, mass, inertia, model, (1.0, 0.0, zero, zero))
+    work = (np.empty((n + 1, 3)), np.empty((n, 3, 3)), np.empty((n + 1, 3)), *(np.empty((n, 3)) for _ in range(3)))
+    res, out, jac, frames = np.empty(6 * n), np.empty(6 * n), np.empty((6 * n, 2 * hb + 1)), np.empty((n + 1, 3, 3))
+    _chain_kernel._jacobian(z, np.full(6 * n, 1e-8), hb, a, 1.0, *step, *work, jac)
+
+    @numba.njit
+    def residual(count, z, a, step, work, res):
+        for _ in range(count):
+            _chain_kernel._residual(z, a, 1.0, *step, *work, res)
+
+    @numba.njit
+    def band_solve(count, jac, hb, res, out):
+        for _ in range(count):
+            _chain_kernel._band_solve(jac, hb, res, out)
+
+    @numba.njit
+    def configure(count, z, a, x, q, psih, xx, qq):
+        for _ in range(count):
+            _chain_kernel._configure(z, a, x, q, psih, xx, qq)
+
+    @numba.njit
+    def node_frames(count, q, frames):
+        for _ in range(count):
+            _chain_kernel._node_frames_of(q, frames)
+
+    parts = {
+        "residual (configure + forces + inertia)": lambda c: residual(c, z, a, step, work, res),
+        "banded solve": lambda c: band_solve(c, jac, hb, res, out),
+        "configure alone (the frames' exponentials)": lambda c: configure(c, z, a, x, q, zero, *work[:2]),
+        "node frames (the response)": lambda c: node_frames(c, q, frames),
+    }
+    for name, part in parts.items():
+        part(1)  # compile
+        start = time.process_time()
+        part(repeats)
+        print(f"  {name}: {(time.process_time() - start) / repeats * 1e6:.2f} us")
+
+
 if __name__ == "__main__":
     import warnings
 
     warnings.simplefilter("ignore")
+    discrete()
     main()

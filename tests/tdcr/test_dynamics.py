@@ -135,6 +135,56 @@ def test_a_nodes_frame_is_half_way_between_its_elements():
     np.testing.assert_allclose(out[:, 0], np.broadcast_to(np.eye(3), (20, 3, 3)), rtol=0, atol=0)
 
 
+@pytest.mark.parametrize(("robot", "tensions_n"), [(ROBOTS["rao2021"], [1, 2, 3, 4, 5, 6]), (ROD, [])])
+def test_the_step_jacobian_fits_in_the_band_the_kernel_assumes(robot, tensions_n):
+    """A dense forward-difference Jacobian of one step's residual (every unknown perturbed alone; damping,
+    gravity, tip force and moment on): no entry outside the half bandwidth :func:`_discrete_model` gives, the
+    outermost diagonal used (the band is no wider than it must be). A band too narrow would not give wrong
+    answers, only a Newton that converges slowly or not at all."""
+    from flexdigit.tdcr import _chain_kernel
+    from flexdigit.tdcr.dynamics import _discrete_model, _element_frames
+    from flexdigit.tdcr.statics import _nodes
+
+    nodes, ends = _nodes(robot, 1)
+    sol = solve_statics(robot, tensions_n)
+    loads = (np.asarray(tensions_n, float), np.array([0, 0, -0.1]), np.array([0.01, 0, 0]), np.array([0, 1e-3, 0]))
+    model, mass, inertia, hb = _discrete_model(robot, nodes, ends, loads)
+    x, q = sol.positions_m, np.ascontiguousarray(_element_frames(sol.rotations))
+    n = q.shape[0]
+    rng = np.random.default_rng(3)
+    z = rng.normal(size=6 * n) * 0.1
+    history = tuple(rng.normal(size=shape) for shape in ((n, 3), (n + 1, 3), (n, 3), (n, 3), (n, 3)))
+    psih, vh, wh, hsig, hkap = (h * 0.01 if i == 0 else h for i, h in enumerate(history))
+    scratch = (np.empty((n + 1, 3)), np.empty((n, 3, 3)), np.empty((n + 1, 3)), *(np.empty((n, 3)) for _ in range(3)))
+
+    def residual(zz):
+        res = np.empty(6 * n)
+        dmp = (1.3, 0.01, hsig, hkap)
+        _chain_kernel._residual(zz, 1e-3, 1.0, x, q, psih, vh, wh, mass, inertia, model, dmp, *scratch, res)
+        return res
+
+    r0 = residual(z)
+    jac = np.column_stack([(residual(z + 1e-6 * np.eye(6 * n)[j]) - r0) / 1e-6 for j in range(6 * n)])
+    rows, cols = np.nonzero(np.abs(jac) > 1e-9 * np.abs(jac).max())  # above the differences' round-off
+    assert np.abs(rows - cols).max() == hb
+
+
+def test_an_elements_frame_is_half_way_between_its_nodes():
+    """Against scipy's rotations, on frames 1e-9 off orthonormal (the statics' integrated frames are ~1e-10 off):
+    ``Q_a exp(log(Q_a^T Q_b) / 2)`` of the nearest rotations."""
+    from scipy.spatial.transform import Rotation
+
+    from flexdigit.tdcr.dynamics import _element_frames
+
+    rng = np.random.default_rng(11)
+    nodes = Rotation.random(21, random_state=11)
+    frames = nodes.as_matrix() + 1e-9 * rng.normal(size=(21, 3, 3))
+    first = Rotation.from_matrix(frames[:-1])
+    half = (first.inv() * Rotation.from_matrix(frames[1:])).as_rotvec() / 2
+    expected = (first * Rotation.from_rotvec(half)).as_matrix()
+    np.testing.assert_allclose(_element_frames(frames), expected, rtol=0, atol=1e-12)
+
+
 def test_a_response_too_long_to_keep_is_refused_before_it_is_allocated(capsys):
     # hostile review: 'tdcr dynamics --duration-s 600 --dt-s 1e-6' ended in 'internal error (MemoryError: Unable
     # to allocate 282. GiB ...)'

@@ -13,12 +13,14 @@ forces are ``-tau dL/dq``, a frictionless tendon at constant tension (the contin
 
 Time: BDF2 (A- and L-stable, Hairer & Wanner II.III) on positions, velocities and the body-frame angular
 velocities; a frame moves by ``Q^{n+1} = Q^n exp(psi)``, ``psi = -log(Q^{n T} Q^{n-1}) / 3 + (2 dt / 3) W^{n+1}``
-(BDF2 in the chart at ``Q^n``). The unknowns of a step are the new velocities, six a block (``v_{k+1}, W_k``);
-each block couples to its neighbours two blocks away at most (tendons), so the Jacobian is banded with half
-bandwidth 17 (11 without tendons). It is built by coloured finite differences (Curtis, Powell & Reid 1974: 35
-residual evaluations), factored by banded LU without pivoting (the matrix is mass + dt^2 stiffness of a stable
-rod), and reused over steps (a chord Newton, refreshed where it converges slower than a rate of 0.5: the rule
-of scipy's BDF and of Hairer & Wanner's RADAU5). Kelvin-Voigt damping ``beta K`` on the strains' BDF2 rates.
+(BDF2 in the chart at ``Q^n``). The unknowns of a step are the new velocities, six a block (``W_k, v_{k+1}``:
+the frame's first, which narrows the band by three over the node first); each block couples to its neighbours
+two blocks away at most (tendons), so the Jacobian is banded with half bandwidth 14 (8 without tendons; checked
+against a dense Jacobian in tests/tdcr/test_dynamics.py). It is built by coloured finite differences (Curtis,
+Powell & Reid 1974: 29 residual evaluations), factored by banded LU without pivoting (the matrix is mass +
+dt^2 stiffness of a stable rod), and reused over steps (a chord Newton, refreshed where it converges slower than a
+rate of 0.5: the rule of scipy's BDF and of Hairer & Wanner's RADAU5). Kelvin-Voigt damping ``beta K`` on the
+strains' BDF2 rates.
 """
 
 from __future__ import annotations
@@ -26,7 +28,18 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["BUDGET", "MAX_UPDATE", "MEASURE", "NO_PROGRESS", "RATE", "equilibrate", "forces", "node_frames", "run"]
+__all__ = [
+    "BUDGET",
+    "MAX_UPDATE",
+    "MEASURE",
+    "NO_PROGRESS",
+    "RATE",
+    "element_frames",
+    "equilibrate",
+    "forces",
+    "node_frames",
+    "run",
+]
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
@@ -37,6 +50,7 @@ RATE = 0.9
 BUDGET = 4
 #: The largest Newton update of a step's frames (rad) or nodes (of the length): a damped Newton beyond
 MAX_UPDATE = 0.1
+_IDENTITY = np.eye(3)
 #: Steps between measurements of the chord Newton's rate (the others may stop after one update)
 MEASURE = 8
 
@@ -118,8 +132,11 @@ def forces(
             t[e, k] = 0.0
     for k in range(3):
         t[n - 1, k] += q[n - 1, 0, k] * tip_moment[0] + q[n - 1, 1, k] * tip_moment[1] + q[n - 1, 2, k] * tip_moment[2]
-    tb = np.empty(3)
-    nb = np.empty(3)
+    # one allocation for the scratch vectors (an allocation costs about what an element's forces do)
+    scratch = np.empty((7, 3))
+    tb, nb, m, pa, pb, fw, arm = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5], scratch[6]
+    rel = np.empty((3, 3))
+    disk = np.empty((3, 3)) if routing.shape[0] > 0 else rel
     for e in range(n):
         d0 = x[e + 1, 0] - x[e, 0]
         d1 = x[e + 1, 1] - x[e, 1]
@@ -137,12 +154,9 @@ def forces(
         t[e, 0] += tb[1] * nb[2] - tb[2] * nb[1]
         t[e, 1] += tb[2] * nb[0] - tb[0] * nb[2]
         t[e, 2] += tb[0] * nb[1] - tb[1] * nb[0]
-    ident = np.eye(3)
-    rel = np.empty((3, 3))
-    m = np.empty(3)
     for i in range(n):
         if i == 0:
-            _log_rel(ident, q[0], kap[0], rel)
+            _log_rel(_IDENTITY, q[0], kap[0], rel)
         else:
             _log_rel(q[i - 1], q[i], kap[i], rel)
         for k in range(3):
@@ -152,11 +166,6 @@ def forces(
         if i > 0:
             for k in range(3):
                 t[i - 1, k] += rel[k, 0] * m[0] + rel[k, 1] * m[1] + rel[k, 2] * m[2]
-    pa = np.empty(3)
-    pb = np.empty(3)
-    fw = np.empty(3)
-    disk = np.empty((3, 3))
-    arm = np.empty(3)
     for j in range(routing.shape[0]):
         if tau[j] == 0.0 or ends[j] < 1:
             continue
@@ -219,8 +228,8 @@ def _configure(z, a, xh, qh, psih, x, q):
         x[0, k] = xh[0, k]
     for e in range(n):
         for k in range(3):
-            x[e + 1, k] = xh[e + 1, k] + a * z[6 * e + k]
-        _exp(psih[e, 0] + a * z[6 * e + 3], psih[e, 1] + a * z[6 * e + 4], psih[e, 2] + a * z[6 * e + 5], rot)
+            x[e + 1, k] = xh[e + 1, k] + a * z[6 * e + 3 + k]
+        _exp(psih[e, 0] + a * z[6 * e], psih[e, 1] + a * z[6 * e + 1], psih[e, 2] + a * z[6 * e + 2], rot)
         for i in range(3):
             for j in range(3):
                 q[e, i, j] = qh[e, i, 0] * rot[0, j] + qh[e, i, 1] * rot[1, j] + qh[e, i, 2] * rot[2, j]
@@ -238,16 +247,16 @@ def _residual(z, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, x, q, f
     n = qh.shape[0]
     for e in range(n):
         b = 6 * e
-        w0, w1, w2 = z[b + 3], z[b + 4], z[b + 5]
+        w0, w1, w2 = z[b], z[b + 1], z[b + 2]
         j0, j1, j2 = inertia[e, 0] * w0, inertia[e, 1] * w1, inertia[e, 2] * w2
         gyro0 = w1 * j2 - w2 * j1
         gyro1 = w2 * j0 - w0 * j2
         gyro2 = w0 * j1 - w1 * j0
         for k in range(3):
-            res[b + k] = mf * mass[e + 1] * (z[b + k] - vh[e + 1, k]) - a * f[e + 1, k]
-        res[b + 3] = mf * (inertia[e, 0] * (w0 - wh[e, 0]) + a * gyro0) - a * t[e, 0]
-        res[b + 4] = mf * (inertia[e, 1] * (w1 - wh[e, 1]) + a * gyro1) - a * t[e, 1]
-        res[b + 5] = mf * (inertia[e, 2] * (w2 - wh[e, 2]) + a * gyro2) - a * t[e, 2]
+            res[b + 3 + k] = mf * mass[e + 1] * (z[b + 3 + k] - vh[e + 1, k]) - a * f[e + 1, k]
+        res[b] = mf * (inertia[e, 0] * (w0 - wh[e, 0]) + a * gyro0) - a * t[e, 0]
+        res[b + 1] = mf * (inertia[e, 1] * (w1 - wh[e, 1]) + a * gyro1) - a * t[e, 1]
+        res[b + 2] = mf * (inertia[e, 2] * (w2 - wh[e, 2]) + a * gyro2) - a * t[e, 2]
 
 
 @_jit
@@ -298,7 +307,7 @@ def _band_solve(jac, hb, rhs, out):
         out[i] = acc
     for i in range(size - 1, -1, -1):
         acc = out[i]
-        for j in range(i + 1, min(size, i + hb + 1)):
+        for j in range(min(size - 1, i + hb), i, -1):  # the unknown just solved (i + 1) last: a short chain
             acc -= jac[i, j - i + hb] * out[j]
         out[i] = acc / jac[i, hb]
 
@@ -308,7 +317,7 @@ def _steps(size, a, length, relative):
     """Finite-difference steps: a displacement of ``relative`` of the length (velocities) and rad (frames)."""
     h = np.empty(size)
     for i in range(size):
-        h[i] = relative * (length if i % 6 < 3 else 1.0) / a
+        h[i] = relative * (length if i % 6 >= 3 else 1.0) / a
     return h
 
 
@@ -325,7 +334,7 @@ def _corotate(q, q_jac, turn, vec, backwards):
                     turn[e, i, j] = (
                         q[e, i, 0] * q_jac[e, j, 0] + q[e, i, 1] * q_jac[e, j, 1] + q[e, i, 2] * q_jac[e, j, 2]
                     )
-        b = 6 * e
+        b = 6 * e + 3  # the block's velocity
         v0, v1, v2 = vec[b], vec[b + 1], vec[b + 2]
         for i in range(3):
             if backwards:
@@ -367,7 +376,7 @@ def equilibrate(x, q, model, hb, tol, max_iter):
         _band_solve(jac, hb, res, dz)
         big = 0.0
         for i in range(size):
-            big = max(big, abs(dz[i]) / (length if i % 6 < 3 else 1.0))
+            big = max(big, abs(dz[i]) / (length if i % 6 >= 3 else 1.0))
         _configure(dz, 1.0, x, q, psih, xx, qq)
         x[:, :] = xx
         q[:, :, :] = qq
@@ -421,7 +430,7 @@ def _newton(
                 z[:] = z_guess
                 stale = False
             for i in range(size):
-                h[i] = 1e-8 * (length if i % 6 < 3 else 1.0) / a
+                h[i] = 1e-8 * (length if i % 6 >= 3 else 1.0) / a
             _jacobian(z, h, hb, a, 1.0, xh, qh, psih, vh, wh, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, jac)
             _configure(z, a, xh, qh, psih, xx, q_jac)
             keep[0] = True
@@ -438,7 +447,7 @@ def _newton(
         _corotate(qq, q_jac, turn, dz, False)
         big = 0.0
         for i in range(size):
-            d = a * abs(dz[i]) / (length if i % 6 < 3 else 1.0)
+            d = a * abs(dz[i]) / (length if i % 6 >= 3 else 1.0)
             if not d <= big:  # NaN too
                 big = d
         if not np.isfinite(big):
@@ -509,8 +518,8 @@ def _backward_euler(state, dt, pieces, model, mass, inertia, beta, hb, tol, max_
             for k in range(3):
                 hsig[e, k] = -osig[e, k] / sub
                 hkap[e, k] = -okap[e, k] / sub
-                guess[6 * e + k] = ov[e + 1, k]
-                guess[6 * e + 3 + k] = ow[e, k]
+                guess[6 * e + 3 + k] = ov[e + 1, k]
+                guess[6 * e + k] = ow[e, k]
         dmp = (1.0 + beta / sub, beta, hsig, hkap)
         ok, more = _newton(
             z,
@@ -540,19 +549,20 @@ def _backward_euler(state, dt, pieces, model, mass, inertia, beta, hb, tol, max_
         _configure(z, sub, xh, qh, psih, ox, oq)
         for e in range(n):
             for k in range(3):
-                ov[e + 1, k] = z[6 * e + k]
-                ow[e, k] = z[6 * e + 3 + k]
+                ov[e + 1, k] = z[6 * e + 3 + k]
+                ow[e, k] = z[6 * e + k]
         _state_strains(ox, oq, model, osig, okap)
     return True, its
 
 
 @_jit
-def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, qs, vs, ws, iterations):
+def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, rs, vs, ws, iterations):
     """March ``n_steps`` BDF2 steps of ``dt`` from rest at ``(x0, q0)`` (at rest before ``t = 0`` too: the
     history is the initial state). A step whose Newton fails is taken as 2, 4, .. 64 backward-Euler steps (the
-    BDF2 history, the states at both ends of a step of ``dt``, stays exact). Every step's nodes and frames into
-    ``xs, qs``, velocities into ``vs, ws``, Newton iterations into ``iterations``; returns the number of steps
-    that converged."""
+    BDF2 history, the states at both ends of a step of ``dt``, stays exact). Every step's nodes and node frames
+    (:func:`node_frames`) into ``xs, rs`` (m, n + 1, ..), node velocities and angular velocities (body frame; the
+    mean of the neighbouring elements') into ``vs, ws`` (m, n + 1, 3), Newton iterations into ``iterations``;
+    returns the number of steps that converged. Written as the steps go, so no element-wise history is kept."""
     n = q0.shape[0]
     size = 6 * n
     length = 0.0
@@ -606,8 +616,14 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
     keep = np.zeros(1, dtype=np.bool_)
     rate = np.full(1, RATE)  # the chord Newton's last rate, carried over steps (RADAU5's faccon)
     scratch = np.empty((3, 3))
+    # the last step's turn of each frame, psi (Q^{n+1} = Q^n exp(psi)): log(Q^{n T} Q^{n-1}) is -psi, no log needed
+    # after a BDF2 step (after a backward-Euler fallback, and at the start, it is taken from the frames)
+    turned = np.empty((n, 3))
+    turn_known = False
     xs[0] = x0
-    qs[0] = q0
+    _node_frames_of(q0, rs[0])
+    vs[0] = 0.0
+    ws[0] = 0.0
     for step in range(n_steps):
         x_prev, q_prev, v_prev, w_prev, sig_prev, kap_prev = prev
         x_now, q_now, v_now, w_now, sig_now, kap_now = now
@@ -616,15 +632,20 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
                 xh[i, k] = (4.0 * x_now[i, k] - x_prev[i, k]) / 3.0
                 vh[i, k] = (4.0 * v_now[i, k] - v_prev[i, k]) / 3.0
         for e in range(n):
-            _log_rel(q_now[e], q_prev[e], psih[e], scratch)
+            if turn_known:
+                for k in range(3):
+                    psih[e, k] = turned[e, k] / 3.0
+            else:
+                _log_rel(q_now[e], q_prev[e], psih[e], scratch)
+                for k in range(3):
+                    psih[e, k] /= -3.0
             for k in range(3):
-                psih[e, k] /= -3.0
                 wh[e, k] = (4.0 * w_now[e, k] - w_prev[e, k]) / 3.0
                 hsig[e, k] = (-4.0 * sig_now[e, k] + sig_prev[e, k]) / (2.0 * dt)
                 hkap[e, k] = (-4.0 * kap_now[e, k] + kap_prev[e, k]) / (2.0 * dt)
                 # the guess: the velocities extrapolated linearly
-                z_guess[6 * e + k] = 2.0 * v_now[e + 1, k] - v_prev[e + 1, k]
-                z_guess[6 * e + 3 + k] = 2.0 * w_now[e, k] - w_prev[e, k]
+                z_guess[6 * e + 3 + k] = 2.0 * v_now[e + 1, k] - v_prev[e + 1, k]
+                z_guess[6 * e + k] = 2.0 * w_now[e, k] - w_prev[e, k]
         dmp = (g, beta, hsig, hkap)
         trust = step % MEASURE != 0  # every MEASURE-th step, the rate measured again
         ok, its = _newton(
@@ -654,12 +675,19 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
             _configure(z, a, xh, q_now, psih, x_new, q_new)
             for e in range(n):
                 for k in range(3):
-                    v_new[e + 1, k] = z[6 * e + k]
-                    w_new[e, k] = z[6 * e + 3 + k]
+                    v_new[e + 1, k] = z[6 * e + 3 + k]
+                    w_new[e, k] = z[6 * e + k]
+            turn_known = True
+            for e in range(n):
+                for k in range(3):
+                    turned[e, k] = psih[e, k] + a * z[6 * e + k]
+                if turned[e, 0] ** 2 + turned[e, 1] ** 2 + turned[e, 2] ** 2 > 9.0:
+                    turn_known = False  # near pi, log(exp(psi)) wraps: the frames' log as before
             if beta > 0.0:  # the damping's history; unused without
                 _state_strains(x_new, q_new, model, sig_new, kap_new)
         else:
             rate[0] = RATE  # measured afresh on the next step
+            turn_known = False
             pieces = 2
             while not ok and pieces <= 64:
                 ok, more = _backward_euler(
@@ -672,10 +700,51 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
             return step
         prev, now, new = now, new, prev
         xs[step + 1] = now[0]
-        qs[step + 1] = now[1]
+        _node_frames_of(now[1], rs[step + 1])
         vs[step + 1] = now[2]
-        ws[step + 1] = now[3]
+        _node_angular_velocities_of(now[3], ws[step + 1])
     return n_steps
+
+
+@_jit
+def _node_frames_of(q, out):
+    """One state's node frames ``out`` (n + 1, 3, 3) of its element frames ``q`` (n, 3, 3), as :func:`node_frames`."""
+    rel = np.empty((3, 3))
+    rot = np.empty((3, 3))
+    n = q.shape[0]
+    for r in range(3):
+        for c in range(3):
+            out[0, r, c] = 1.0 if r == c else 0.0
+            out[n, r, c] = q[n - 1, r, c]
+    for i in range(1, n):
+        a = q[i - 1]
+        b = q[i]
+        for r in range(3):
+            for c in range(3):
+                rel[r, c] = a[0, r] * b[0, c] + a[1, r] * b[1, c] + a[2, r] * b[2, c]
+        half_cos = 0.5 * np.sqrt(max(1.0 + rel[0, 0] + rel[1, 1] + rel[2, 2], 0.0))
+        fa = 0.25 / half_cos
+        fs = 0.25 / (1.0 + half_cos)
+        for r in range(3):
+            for c in range(3):
+                eye = 1.0 if r == c else 0.0
+                rot[r, c] = eye + fa * (rel[r, c] - rel[c, r]) + fs * (rel[r, c] + rel[c, r] - 2.0 * eye)
+        for r in range(3):
+            for c in range(3):
+                out[i, r, c] = a[r, 0] * rot[0, c] + a[r, 1] * rot[1, c] + a[r, 2] * rot[2, c]
+
+
+@_jit
+def _node_angular_velocities_of(w, out):
+    """One state's node angular velocities ``out`` (n + 1, 3) of its elements' ``w`` (n, 3): the clamp's zero, the
+    mean of the neighbouring elements', the last element's at the tip."""
+    n = w.shape[0]
+    for k in range(3):
+        out[0, k] = 0.0
+        out[n, k] = w[n - 1, k]
+    for i in range(1, n):
+        for k in range(3):
+            out[i, k] = 0.5 * (w[i - 1, k] + w[i, k])
 
 
 @_jit
@@ -684,27 +753,12 @@ def node_frames(qs, out):
     (geodesically) between neighbouring elements', the last element's at the tip. The half-way turn of
     ``R = Q_a^T Q_b`` (angle below pi) without trigonometry: ``sqrt(R) = I + A / (2 c) + (S - I) / (2 (1 + c))``,
     ``A, S`` the antisymmetric and symmetric parts of ``R``, ``c = cos(angle / 2) = sqrt(1 + tr R) / 2``."""
-    rel = np.empty((3, 3))
-    rot = np.empty((3, 3))
-    n = qs.shape[1]
     for s in range(qs.shape[0]):
-        for r in range(3):
-            for c in range(3):
-                out[s, 0, r, c] = 1.0 if r == c else 0.0
-                out[s, n, r, c] = qs[s, n - 1, r, c]
-        for i in range(1, n):
-            a = qs[s, i - 1]
-            b = qs[s, i]
-            for r in range(3):
-                for c in range(3):
-                    rel[r, c] = a[0, r] * b[0, c] + a[1, r] * b[1, c] + a[2, r] * b[2, c]
-            half_cos = 0.5 * np.sqrt(max(1.0 + rel[0, 0] + rel[1, 1] + rel[2, 2], 0.0))
-            fa = 0.25 / half_cos
-            fs = 0.25 / (1.0 + half_cos)
-            for r in range(3):
-                for c in range(3):
-                    eye = 1.0 if r == c else 0.0
-                    rot[r, c] = eye + fa * (rel[r, c] - rel[c, r]) + fs * (rel[r, c] + rel[c, r] - 2.0 * eye)
-            for r in range(3):
-                for c in range(3):
-                    out[s, i, r, c] = a[r, 0] * rot[0, c] + a[r, 1] * rot[1, c] + a[r, 2] * rot[2, c]
+        _node_frames_of(qs[s], out[s])
+
+
+@_jit
+def element_frames(rs, out):
+    """Element frames ``out`` (n, 3, 3) half-way (geodesically) between node frames ``rs`` (n + 1, 3, 3)."""
+    for e in range(out.shape[0]):
+        _half_way(rs[e], rs[e + 1], out[e])
