@@ -32,6 +32,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_tactile",
     "benchmarks.bench_calibrate",
     "benchmarks.bench_live",
+    "benchmarks.bench_livegauges",
     "benchmarks.bench_studies",
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",

@@ -46,10 +46,11 @@ def _cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
 
 
-def _start_server(log: Path) -> tuple[subprocess.Popen, str, float]:
+def _start_server(log: Path, *args: str) -> tuple[subprocess.Popen, str, float]:
+    """``flexdigit live --port 0 ARGS``: the process, its URL and the seconds it took to print it."""
     err = open(log, "w")  # noqa: SIM115 - the server's whole life
     start = time.monotonic()
-    proc = subprocess.Popen([sys.executable, "-m", "flexdigit.cli", "live", "--port", "0"], stderr=err)
+    proc = subprocess.Popen([sys.executable, "-m", "flexdigit.cli", "live", "--port", "0", *args], stderr=err)
     deadline = start + 180
     while time.monotonic() < deadline:
         match = re.search(r"(http://127\.0\.0\.1:\d+/)", log.read_text())

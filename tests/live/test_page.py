@@ -41,6 +41,8 @@ def test_page_streams_the_twin_and_the_slider_moves_the_digit(live_server, page,
     later = wait_for(page, lambda s: s["samples"] >= first["samples"] + 30, timeout_s=10, what="more samples")
     assert later["last"]["samples"] == [] or later["last"]["samples"][-1]["t"] > first["last"]["samples"][-1]["t"]
     tip_before = later["last"]["shape"]["tip_m"][1]
+    assert page.evaluate("() => flexdigit.traces") == 3  # the thesis rig's three gauges, one trace each
+    assert page.locator("#gauge-legend .gauge-key").count() == 3
     page.locator("#setpoint").fill("30")
     moved = wait_for(
         page,

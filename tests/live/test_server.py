@@ -137,11 +137,15 @@ def test_a_remote_host_needs_allow_remote():
 def test_bad_files_are_named_before_anything_is_served(tmp_path):
     bad = tmp_path / "rig.toml"
     bad.write_text("[calibration]\nsupport_mass_kg = 'heavy'\n")
+    two_gauges_at_one_place = tmp_path / "digit.toml"
+    two_gauges_at_one_place.write_text("[geometry]\ngauge_positions_m = [0.05, 0.05, 0.2]\n")
     for args, culprit in (
         (["--calibration", str(bad)], "rig.toml"),
         (["--calibration", str(tmp_path / "missing.toml")], "missing.toml"),
         (["--model", str(bad)], "rig.toml"),
         (["--backend", f"replay://{tmp_path / 'none.mcap'}"], "none.mcap"),
+        (["--params", str(two_gauges_at_one_place)], "gauge_positions_m"),  # issue 24: a digit's file
+        (["--params", str(tmp_path / "mine.toml")], "mine.toml"),
     ):
         run = subprocess.run(
             [sys.executable, "-m", "flexdigit.cli", "live", *args], capture_output=True, text=True, timeout=120

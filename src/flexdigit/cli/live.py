@@ -34,7 +34,12 @@ def register(subparsers) -> None:
     live.add_argument("--allow-remote", action="store_true", help="allow a --host other machines can reach")
     live.add_argument("--record", default=None, help="record the session to this MCAP file")
     live.add_argument("--force", action="store_true", help="replace an existing --record file")
-    live.add_argument("--calibration", default=None, help="calibration TOML: the twin's, and the shape estimate's")
+    live.add_argument("--params", metavar="FILE", help="the digit's parameters TOML (default: the thesis rig)")
+    live.add_argument(
+        "--calibration",
+        default=None,
+        help="calibration TOML: the twin's, and the shape estimate's (default: the thesis's, scaled to the digit)",
+    )
     live.add_argument("--rotation-map", default=None, help="rotation map (flexdigit run --rotation-map) on hardware")
     live.add_argument("--orientation", default=None, help="mounting on hardware: vertical, horizontal, hanging")
     live.add_argument(
@@ -92,6 +97,10 @@ def _live(args: argparse.Namespace) -> CommandResult:
     from flexdigit.live.session import LiveSession
 
     _check_robot_flags(args)
+    if args.params is not None and (args.robot is not None or args.foxglove):
+        from flexdigit.errors import ParameterError
+
+        raise ParameterError("--params describes a planar digit; a tendon robot (--robot) is described by its own file")
     if args.foxglove:
         return _foxglove(args)
     if args.robot is not None:
@@ -104,6 +113,7 @@ def _live(args: argparse.Namespace) -> CommandResult:
         model=args.model,
         record=args.record,
         force=args.force,
+        params=args.params,
         calibration=args.calibration,
         rotation_map=args.rotation_map,
         orientation=args.orientation,
@@ -119,6 +129,7 @@ def _live(args: argparse.Namespace) -> CommandResult:
         "status": session.error or "stopped",
         "signal": session.stopped_by,  # what stopped it: SIGINT (Ctrl-C), SIGTERM, SIGHUP
         "backend": args.backend,
+        "params": args.params,
         "record": str(session.recording.path) if session.recording is not None else None,
         "overruns": session.state.overruns,
     }

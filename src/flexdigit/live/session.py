@@ -36,14 +36,17 @@ import numpy as np
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.live.schemas import CONTACT_SCHEMA, SHAPE_SCHEMA
+from flexdigit.models.cable import tip_rotation_per_command_deg
+from flexdigit.params import RigParams, load_params
 from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import check_reading
-from flexdigit.rig.recording import Recording, rig_metadata
-from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
+from flexdigit.rig.recording import Recording, read_metadata, rig_metadata
+from flexdigit.rig.rotation import load_rotation_map, make_rotation_map
 from flexdigit.shape.shape import ShapeEstimator
 from flexdigit.tactile.model_io import load_model
-from flexdigit.twin.calibration import default_calibration, load_calibration
+from flexdigit.twin.calibration import Calibration
+from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = [
     "LiveSession",
@@ -54,6 +57,7 @@ __all__ = [
     "estimate_due",
     "REQUESTS",
     "SETPOINT_RANGES",
+    "setpoint_range",
 ]
 
 #: The page's requests and their fields: ``{type: {field: (kind, low, high)}}``; numbers are clamped to the range
@@ -69,6 +73,37 @@ REQUESTS: dict[str, dict[str, tuple]] = {
 MAX_REQUEST_BYTES = 512
 #: The setpoint slider's range per unit: beam rotation (the controller's, deg) or the servo command itself (open loop).
 SETPOINT_RANGES = {"deg": (0.0, 45.0), "command": (0.0, 60.0)}
+
+
+def setpoint_range(params: RigParams, unit: str) -> tuple[float, float]:
+    """The slider's range on the digit ``params`` describes, in ``unit`` (:data:`SETPOINT_RANGES`'s keys).
+
+    A beam rotation within :data:`SETPOINT_RANGES` and what the servo reaches by the cable model (E 3.15 with the
+    gearing: ``(command - straight) x deg per command``); with an antagonistic pair (``cables.count = 2``) the
+    digit bends both ways, so the range runs as far below zero as the servo's lowest command reaches, at most
+    as far as above it. Open loop (``command``), the serial command itself (with a pair, 60 commands each side of
+    the straight one).
+
+    Examples
+    --------
+    >>> setpoint_range(RigParams(), "deg")
+    (0.0, 45.0)
+    >>> pair = RigParams.from_dict({"cables": {"count": 2, "pretension_n": 5.0}})  # straight at command 127
+    >>> setpoint_range(pair, "deg"), setpoint_range(pair, "command")
+    ((-45.0, 45.0), (67.0, 187.0))
+    """
+    low, high = SETPOINT_RANGES[unit]
+    a = params.actuator
+    two = params.cables.count == 2
+    if unit == "command":  # a pair: as many commands each side of straight as the single cable's slider spans
+        if two:
+            straight = a.equilibrium_command
+            return (float(max(a.command_min, straight - high)), float(min(a.command_max, straight + high)))
+        return (low, min(high, float(a.command_max)))
+    per_command = tip_rotation_per_command_deg(params)
+    top = min(high, (a.command_max - a.equilibrium_command) * per_command)
+    bottom = max(-high, (a.command_min - a.equilibrium_command) * per_command) if two else low
+    return (round(float(bottom), 3), round(float(top), 3))
 
 
 def validate_request(
@@ -225,6 +260,30 @@ class NetworkContact(ContactSource):
 # -- the session -------------------------------------------------------------------------------------------------
 
 
+def _recorded_digit(path: str):
+    """The digit an MCAP recording was made on (its ``flexdigit.rig`` metadata: parameters and, of a twin, its
+    calibration), so that a replay draws and estimates with the recorded gauges; ``(None, None)`` for a loop log or
+    a recording without them (the thesis rig, as before). A recording that cannot be read is left to the replay
+    backend to name."""
+    if not str(path).lower().endswith(".mcap"):
+        return None, None
+    try:
+        rig = read_metadata(path).get("flexdigit.rig") or {}
+    except Exception:  # noqa: BLE001 - the replay backend opens it next and says what is wrong with it
+        return None, None
+    if not isinstance(rig.get("params"), dict):
+        return None, None
+    # written as dataclasses.asdict: an optional key left out is None there (RigParams.to_dict drops them too)
+    recorded_params = {
+        section: {k: v for k, v in values.items() if v is not None} if isinstance(values, dict) else values
+        for section, values in rig["params"].items()
+    }
+    params = RigParams.from_dict(recorded_params, source=f"{path}: its recorded parameters")
+    recorded = rig.get("twin_calibration")
+    calibration = Calibration.from_dict(recorded, f"{path}: its recorded calibration") if recorded else None
+    return params, calibration
+
+
 def estimate_due(
     change_v: float,
     command_changed: bool,
@@ -309,9 +368,14 @@ class LiveSession:
         A trained position network for the contact panel.
     record : path, optional
         An MCAP recording of the session (refused if it exists unless ``force``).
+    params : path or RigParams, optional
+        The digit (``flexdigit params``): its twin on ``sim``, the rig's description on hardware; any section and
+        gauge count, one cable or an antagonistic pair (then the setpoint takes both signs). The thesis rig by
+        default.
     calibration : path, optional
         A calibration TOML (``flexdigit calibrate``): the twin's on ``sim``, and on every backend the channel
-        gains, offsets, stiffness and noise the shape estimate uses; the thesis's fit by default.
+        gains, offsets, stiffness and noise the shape estimate uses; by default the thesis's fit, scaled to the
+        digit (:func:`flexdigit.twin.digit_calibration.twin_calibration`, as ``flexdigit run --params`` does).
     rotation_map : path, optional
         A rotation map (``flexdigit run --rotation-map``) for the controller on hardware; the twin calibrates its own.
     orientation : str, optional
@@ -322,7 +386,7 @@ class LiveSession:
         Twin noise seed (default: the URL's ``seed=``, else 0).
     clock, sleep : callable
         The loop's pacing: a monotonic clock (s) and a sleep, as :func:`flexdigit.rig.loop.run_loop` takes them
-        (default :func:`time.monotonic` and :func:`time.sleep`).
+        (default :func:`time.monotonic` and :func:`time.sleep`); the twin (``sim``) runs on the same clock.
     """
 
     HISTORY_S = 10.0
@@ -348,6 +412,7 @@ class LiveSession:
         model=None,
         record=None,
         force: bool = False,
+        params=None,
         calibration=None,
         rotation_map=None,
         orientation: str | None = None,
@@ -358,10 +423,17 @@ class LiveSession:
     ) -> None:
         # the loop's pacing clock, injected as run_loop's is (tests run it in virtual time)
         self._clock, self._sleep = clock, sleep
-        self.calibration = default_calibration() if calibration is None else load_calibration(calibration)
+        given_params = params if params is None or isinstance(params, RigParams) else load_params(params)
         self.period_s = check_real(period_s, "period_s", "LiveSession", low=0.005, high=1.0)
         parsed = parse_rig_url(backend)
         self.kind = {"sim": "twin", "sim+paced": "twin", "replay": "replay"}.get(parsed.scheme, "rig")
+        recorded_calibration = None
+        if self.kind == "replay" and given_params is None:  # the recorded digit: its gauges, sections, cables
+            given_params, recorded_calibration = _recorded_digit(parsed.location)
+        if calibration is None and recorded_calibration is not None:
+            self.calibration = recorded_calibration
+        else:
+            self.calibration = twin_calibration(given_params, calibration)
         self.backend = backend
         if self.kind == "twin":
             options = {"orientation": "horizontal", **parsed.options}
@@ -369,12 +441,13 @@ class LiveSession:
             self.rig_url = f"sim+paced?{query}"
             # the URL's seed= or the seed given, never one silently over the other (issue 16)
             given = {} if seed is None else {"seed": seed}
-            self.rig = open_rig(self.rig_url, calibration=self.calibration, **given)
+            # the twin keeps the loop's clock (a test's virtual one steps it in virtual time)
+            self.rig = open_rig(self.rig_url, given_params, calibration=self.calibration, clock=clock, **given)
         else:
             self.rig_url = backend
             # the emulated board keeps pace with the page, as the twin does (sim -> sim+paced)
             paced = {"paced": True} if parsed.scheme == "hil" and "paced" not in parsed.options else {}
-            self.rig = open_rig(backend, **paced)
+            self.rig = open_rig(backend, given_params, **paced)
         try:
             self._setup(model, record, force, rotation_map, orientation, seed)
         except BaseException:
@@ -434,14 +507,18 @@ class LiveSession:
             # a static sweep on a twin of its own (virtual time, the twin's 20 ms step: nothing moves fast)
             _, options = rig_url_options(self.rig_url)
             options = {k: v for k, v in options.items() if k != "spin_s"}
-            options.update(dt_s=0.02, seed=rig.settings()["seed"] + 1)
-            estimator = calibrate_rotation(open_rig("sim", calibration=self.calibration, **options))
+            options["seed"] = rig.settings()["seed"] + 1
+            if params == RigParams():  # the thesis rig's map is the same at the twin's coarsest step, sooner; another
+                options["dt_s"] = 0.02  # digit's may not settle at it (a 4 x 80 mm pair, horizontal, rings at 20 ms)
+            # the map run --params makes (make_rotation_map's twin source), on a twin of this digit
+            estimator = make_rotation_map(rig, "twin", twin_options={"calibration": self.calibration, **options})
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
         elif self.kind == "rig" and rotation_map is not None:
             estimator = load_rotation_map(rotation_map)
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)
             self.unit, self.setpoint = "deg", 0.0
+        self.setpoint_range = setpoint_range(params, self.unit)
         self.recording = None
         if self.kind == "replay":
             samples = rig.samples
@@ -453,6 +530,7 @@ class LiveSession:
             # the controller's unit, the beam rotation; one without (collect, open loop, another writer's) commands
             self.recorded_controller = (getattr(rig, "header", None) or {}).get("controller")
             self.unit = "deg" if self.recorded_controller else "command"
+            self.setpoint_range = setpoint_range(params, self.unit)
         if record is not None:
             self.recording = Recording(
                 record,
@@ -480,9 +558,12 @@ class LiveSession:
             "cable": self.cable,
             "digit_length_m": self.length_m,
             "gauges_m": list(g.gauge_positions_m),
+            "section_count": g.section_count,
             "supports_m": [g.section_pitch_m * (k + 1) for k in range(g.section_count)],
+            "cables": self.rig.params.cables.count,
+            "straight_command": int(self.rig.params.actuator.equilibrium_command),
             "setpoint_unit": self.unit,
-            "setpoint_range": list(SETPOINT_RANGES[self.unit]),
+            "setpoint_range": list(self.setpoint_range),
             "can_command": self.kind != "replay" and self.cable,
             "can_load": self.kind == "twin",
             "loads_g": [12.5, 25.0, 37.5, 50.0],
@@ -495,7 +576,7 @@ class LiveSession:
 
     def request(self, message: object) -> dict[str, Any]:
         """Validate a page request and queue it for the loop; returns the clamped request (raises when bad)."""
-        clean = validate_request(message, self.length_m, SETPOINT_RANGES[self.unit])
+        clean = validate_request(message, self.length_m, self.setpoint_range)
         kind = clean["type"]
         if kind in ("setpoint",) and not (self.kind != "replay" and self.cable):
             raise ParameterError("this backend takes no setpoint (a replay, or the cable is detached)")

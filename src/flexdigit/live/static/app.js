@@ -1,16 +1,20 @@
 // flexdigit live: the digit's shape, its gauges and the contact estimate, streamed from the rig loop.
 // One WebSocket (/ws) brings a "hello" (the digit, what may be asked) then "frame"s at 25 Hz; the page sends
 // requests (setpoint, load, clear, pause, speed) that the server validates, clamps and rate-limits.
+// The digit is the hello's: its length scales the view, its sections' supports and its G gauges (1-8) are drawn,
+// one gauge trace each with a legend; with two cables the slider runs below zero (bending the other way).
 "use strict";
 
 (function () {
   const $ = (id) => document.getElementById(id);
   const HISTORY_S = 10;
-  const COLORS = ["#2f6fb5", "#d1495b", "#2e8b57"];
-  const view = { x0: -15, x1: 300, y0: -90, y1: 90 }; // mm, the shape canvas's window
+  // one colour per gauge (up to 8): the first three are the thesis page's
+  const COLORS = ["#2f6fb5", "#d1495b", "#2e8b57", "#e0a100", "#7b3fa0", "#17becf", "#8c564b", "#e377c2"];
+  // mm, the shape canvas's window: the thesis's 270 mm digit in -15..300 x -90..90, scaled to the hello's digit
+  const view = { x0: -15, x1: 300, y0: -90, y1: 90, grid: 50 };
   const stats = (window.flexdigit = {
     frames: 0, draws: 0, samples: 0, latenciesMs: [], drawTimes: [], errors: [], hello: null,
-    last: null, connected: false, reconnects: 0,
+    last: null, connected: false, reconnects: 0, traces: 0,
   });
   let ws = null, hello = null, last = null, samples = [], dirty = false, paused = false, lastSend = 0;
   let pendingSetpoint = null, locMap = null, synced = false, pauseSent = 0;
@@ -55,7 +59,12 @@
     synced = false; // the controls take the server's state from its first frame
     document.body.classList.remove("stale");
     $("backend").textContent = msg.backend + " (" + msg.kind + ", " + msg.orientation +
-      (msg.cable ? "" : ", cable detached") + ")";
+      (msg.cable ? "" : ", cable detached") + (msg.cables === 2 ? ", two cables" : "") + "; " +
+      msg.section_count + " section" + (msg.section_count === 1 ? "" : "s") + ", " +
+      (msg.digit_length_m * 1e3).toFixed(0) + " mm, " + msg.gauges_m.length + " gauge" +
+      (msg.gauges_m.length === 1 ? "" : "s") + ")";
+    setView(msg.digit_length_m);
+    gaugeLegend(msg.gauges_m);
     const slider = $("setpoint");
     slider.min = msg.setpoint_range[0];
     slider.max = msg.setpoint_range[1];
@@ -83,6 +92,25 @@
         speeds.appendChild(b);
       }
     }
+  }
+
+  function setView(lengthM) { // the window keeps the thesis page's proportions to the digit's length
+    const L = lengthM * 1e3, k = L / 270;
+    view.x0 = -15 * k; view.x1 = 300 * k; view.y0 = -90 * k; view.y1 = 90 * k;
+    view.grid = L <= 200 ? 25 : L <= 400 ? 50 : 100;
+  }
+  function gaugeLegend(gaugesM) { // one entry per gauge: its colour, its name and its place on the strip
+    const legend = $("gauge-legend");
+    legend.innerHTML = "";
+    gaugesM.forEach((sm, i) => {
+      const item = document.createElement("span");
+      item.className = "gauge-key";
+      const sw = document.createElement("i");
+      sw.className = "sw"; sw.style.background = COLORS[i % COLORS.length];
+      item.appendChild(sw);
+      item.appendChild(document.createTextNode("gauge " + (i + 1) + " at " + (sm * 1e3).toFixed(0) + " mm"));
+      legend.appendChild(item);
+    });
   }
 
   function onFrame(msg) {
@@ -174,13 +202,31 @@
     return [pts[i][0] + w * (pts[i + 1][0] - pts[i][0]), pts[i][1] + w * (pts[i + 1][1] - pts[i][1])];
   }
 
+  function fitView(lines) { // a digit that bends or sags past the window widens it (never narrows: no jitter)
+    for (const line of lines) for (const p of line) {
+      const margin = 0.08 * (view.x1 - view.x0);
+      if (p[1] + margin > view.y1) view.y1 = p[1] + margin;
+      if (p[1] - margin < view.y0) view.y0 = p[1] - margin;
+      if (p[0] + margin > view.x1) view.x1 = p[0] + margin;
+    }
+  }
+
   function drawShape() {
     const c = $("shape"), ctx = c.getContext("2d");
+    if (last && last.shape) {
+      const toMm = (line) => line.map((p) => [p[0] * 1e3, p[1] * 1e3]);
+      fitView([toMm(last.shape.centre_line_m)].concat(last.truth && last.truth.length ? [toMm(last.truth)] : []));
+    }
     ctx.clearRect(0, 0, c.width, c.height);
     ctx.strokeStyle = "#e6eaee"; ctx.lineWidth = 1; ctx.fillStyle = "#8a97a5"; ctx.font = "11px system-ui";
-    for (let x = 0; x <= 300; x += 50) { polyline(ctx, c, [[x, view.y0], [x, view.y1]]); ctx.stroke(); }
-    for (let y = -50; y <= 50; y += 50) { polyline(ctx, c, [[view.x0, y], [view.x1, y]]); ctx.stroke(); }
-    for (let x = 0; x <= 250; x += 50) { const [px, py] = toPx(c, x, view.y0); ctx.fillText(x + " mm", px + 2, py - 4); }
+    const step = view.grid;
+    for (let x = 0; x <= view.x1; x += step) { polyline(ctx, c, [[x, view.y0], [x, view.y1]]); ctx.stroke(); }
+    for (let y = step * Math.ceil(view.y0 / step); y <= view.y1; y += step) {
+      polyline(ctx, c, [[view.x0, y], [view.x1, y]]); ctx.stroke();
+    }
+    for (let x = 0; x <= view.x1 - step / 2; x += step) {
+      const [px, py] = toPx(c, x, view.y0); ctx.fillText(x + " mm", px + 2, py - 4);
+    }
     const [cx0, cy0] = toPx(c, view.x0, 12), [cx1, cy1] = toPx(c, 0, -12);
     ctx.fillStyle = "#56616d"; ctx.fillRect(cx0, cy0, cx1 - cx0, cy1 - cy0); // the clamp
     if (!last || !last.shape) return;
@@ -246,7 +292,7 @@
     }
   }
 
-  function drawTraces(id, series, yLabel) {
+  function drawTraces(id, series, yLabel, inlineNames = true) {
     const c = $(id), ctx = c.getContext("2d");
     ctx.clearRect(0, 0, c.width, c.height);
     const left = 46, right = c.width - 8, top = 16, bottom = c.height - 20;
@@ -277,8 +323,10 @@
         if (started) ctx.lineTo(X(smp.t), Y(v)); else { ctx.moveTo(X(smp.t), Y(v)); started = true; }
       }
       ctx.stroke(); ctx.setLineDash([]);
+      if (!inlineNames) continue; // named in the legend below the canvas
       ctx.fillStyle = ser.color; ctx.fillText(ser.name, lx, 12); lx += ctx.measureText(ser.name).width + 14;
     }
+    return series.length;
   }
 
   function fmtMm(m) { return m === null || m === undefined ? "–" : (m * 1e3).toFixed(1) + " mm"; }
@@ -292,7 +340,8 @@
       (hello && !hello.can_command ? "; no actuation here" : "") + (st.paused ? "; paused" : "") +
       (hello && hello.kind === "replay" ? "; replay at " + st.speed + "x" : "");
     const replay = hello && hello.kind === "replay";
-    $("engaged").textContent = replay ? "(as recorded)" : st.engaged ? "(holding)" : "(relaxed: command 8)";
+    const straight = hello ? hello.straight_command : 8;
+    $("engaged").textContent = replay ? "(as recorded)" : st.engaged ? "(holding)" : "(relaxed: command " + straight + ")";
     const lastSample = samples[samples.length - 1];
     if (replay && lastSample) { // a replay's setpoint is the recording's, sample by sample
       const sp = lastSample.setpoint;
@@ -327,7 +376,10 @@
     if (dirty && !paused && last && stats.connected) {
       const t0 = performance.now();
       drawShape();
-      drawTraces("gauges", [0, 1, 2].map((i) => ({ name: "gauge " + (i + 1), color: COLORS[i], get: (s) => s.gauges_v[i] })), "V");
+      const gauges = hello ? hello.gauges_m.length : 0; // one trace per gauge of the digit
+      stats.traces = drawTraces("gauges", Array.from({ length: gauges }, (_, i) => ({
+        name: "gauge " + (i + 1), color: COLORS[i % COLORS.length], get: (s) => s.gauges_v[i],
+      })), "V", false);
       drawTraces("actuator", [
         { name: "command", color: "#111", get: (s) => s.command },
         { name: "setpoint", color: "#2e8b57", dash: [5, 3], get: (s) => s.setpoint },
