@@ -14,7 +14,7 @@ import math
 
 import pytest
 
-from digits import DIGITS, write_digit
+from digits import write_digit
 from flexdigit.cli import main
 from flexdigit.report.results import NOT_APPLICABLE
 
@@ -26,10 +26,15 @@ BUCKLES = "five-sections-eight-gauges"
 WN_RTOL = 0.03
 #: The chapters skipped on any digit other than the thesis rig, with their reason (docs/digits.md)
 SKIPPED = 2
+#: The digits whose whole report is built here (~18 s each): one gauge (identify's record cut to its mode, the tactile
+#: chapter's "nothing identifiable"), a buckling 8-gauge digit (hung), a 4-gauge cable pair. The other test digits'
+#: commands run in tests/tactile/test_digit_data_path.py and tests/cli/test_digit_control.py; their reports passed
+#: this test too when it was written (six digits, 96 s: kept out of `make test` for its 15-minute budget).
+REPORTED = ("one-section", BUCKLES, "four-sections-two-cables")
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [n for n in DIGITS if n != "thesis"])
+@pytest.mark.parametrize("name", REPORTED)
 def test_the_report_of_a_digit(name, tmp_path, capsys):
     path = write_digit(name, tmp_path)
     report = tmp_path / "report"
