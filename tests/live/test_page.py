@@ -62,8 +62,9 @@ def test_page_streams_the_twin_and_the_slider_moves_the_digit(live_server, page,
     c = _contact(loaded)
     if c["located"]:
         assert abs(c["position_from_base_m"] - position) < LOCATE_TOL_M
-    else:  # the page says it cannot place it to a centimetre here, and why
-        assert "placed only" in page.inner_text("#c-note") or "cannot place it" in page.inner_text("#c-note")
+    else:  # the page says it cannot place it to a centimetre here, and why (read once: the note updates live)
+        note = page.inner_text("#c-note")
+        assert "placed only" in note or "cannot place it" in note
     page.click("#clear")
     wait_for(page, lambda s: not s["last"]["state"]["loads"], what="the load removed")
     assert page.console_errors == []
