@@ -189,3 +189,53 @@ def test_batched_tactile_limits_are_the_exact_ones_on_seeded_rows():
     assert len(set(np.round(exact, 6))) == len(sets)  # the rows differ: a constant would not pass by chance
     np.testing.assert_array_equal(blind_zones(sets, ctx), [_blind_zone_exact(ps, ctx) for ps in sets])
     assert METRICS["bayes_position_limit_mm"](sets[0], ctx) == pytest.approx(exact[0], rel=BAYES_BATCH_RTOL)
+
+
+def test_relaxed_statics_leave_the_tactile_metrics_as_they_are():
+    # the tactile metrics are computed once per relaxed_statics view: the fields it resets must not be read at all
+    # (equal, not close), and a field it keeps must still move them (else the test could not fail)
+    import dataclasses
+
+    from flexdigit.studies.metrics import _bayes_row, _blind_row, relaxed_statics
+
+    sets, ctx = _seeded_rows(2, seed=41)
+    for ps in sets:
+        p, c = ps.params, ps.calibration
+        moved = ParameterSet(
+            p.replace(
+                actuator=dataclasses.replace(
+                    p.actuator,
+                    pulley_radius_m=1.3 * p.actuator.pulley_radius_m,
+                    servo_wn_rad_s=2.0 * p.actuator.servo_wn_rad_s,
+                ),
+                geometry=dataclasses.replace(p.geometry, cable_eccentricity_m=0.7 * p.geometry.cable_eccentricity_m),
+            ),
+            c.replace(
+                cable_stiffness_n_m=3.0 * c.cable_stiffness_n_m, strip_beta_s=5 * c.strip_beta_s, housing_beta_s=0.2
+            ),
+        )
+        view = relaxed_statics(moved, ctx.baseline)
+        assert view == relaxed_statics(ps, ctx.baseline)
+        assert (_bayes_row(moved, ctx), _blind_row(moved, ctx)) == (_bayes_row(view, ctx), _blind_row(view, ctx))
+    noisier = ParameterSet(ps.params, ps.calibration.replace(noise_white_v=tuple(2 * np.asarray(c.noise_white_v))))
+    assert _bayes_row(noisier, ctx) > 1.2 * _bayes_row(ps, ctx)  # twice the noise: a clearly larger limit
+
+
+def test_kept_values_do_not_depend_on_the_rows_evaluated_before():
+    # hinf_gamma and the tactile limits are kept by their exact inputs across blocks: the same row gives the same
+    # numbers first, after its base row, and alone in a fresh process's state (caches emptied)
+    from flexdigit.control.thesis_designs import thesis_design
+    from flexdigit.models.plant import build_plant
+    from flexdigit.studies import metrics
+
+    sets, ctx = _seeded_rows(3, seed=43)
+    names = ["hinf_gamma", "bayes_position_limit_mm", "blind_zone_mm"]
+    forward = metrics.evaluate_many(sets, names, ctx)
+    metrics._HINF.clear()
+    metrics._TACTILE.clear()
+    backward = metrics.evaluate_many(sets[::-1], names, ctx)[::-1]
+    assert forward == backward
+    for ps, values in zip(sets, forward, strict=True):
+        fresh = thesis_design(ctx.hinf_filter_hz, plant=build_plant("printed", ps.params).tf).gamma
+        assert values["hinf_gamma"] == fresh
+    assert len({v["hinf_gamma"] for v in forward}) == len(sets)  # the rows' plants differ

@@ -42,6 +42,7 @@ Monte Carlo noise; the same seed gives the same numbers on any worker.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import warnings
 from collections.abc import Callable
@@ -579,7 +580,30 @@ _loop_metric("steady_state_error_deg", "deg", "the 20 ms loop's final error afte
 
 @register_metric("hinf_gamma", "", "gamma of the thesis's H-infinity design on this rig's printed plant", "4.4")
 def hinf_gamma(ps: ParameterSet, ctx: MetricContext) -> float:
-    return float(thesis_design(ctx.hinf_filter_hz, plant=build_plant("printed", ps.params).tf).gamma)
+    """Gamma of the design on the printed plant, once per distinct plant: the plant (a fourth-order transfer
+    function of four of the shipped tolerances) costs a tenth of the design, and in a Saltelli design most rows
+    move a parameter it does not read, so their plant is another row's coefficient for coefficient."""
+    plant = build_plant("printed", ps.params).tf
+    key = (float(ctx.hinf_filter_hz), np.asarray(plant.num[0][0]).tobytes(), np.asarray(plant.den[0][0]).tobytes())
+    return _kept(_HINF, key, lambda: float(thesis_design(ctx.hinf_filter_hz, plant=plant).gamma))
+
+
+#: Values kept by their exact inputs (:func:`_kept`): a row's value is then a function of its own inputs alone, the
+#: same whichever rows a process evaluated before (unlike the block caches :func:`_new_block` clears).
+_HINF: dict = {}
+_TACTILE: dict = {}
+_KEPT_VALUES = 1024  # a Saltelli row repeats a row at most d + 2 rows back (its base sample's A)
+
+
+def _kept(store: dict, key, compute: Callable[[], float]) -> float:
+    """``store[key]``, computed by ``compute()`` on the first call (the oldest entries dropped beyond
+    :data:`_KEPT_VALUES`). Failures are not kept: they raise again for the row that asks."""
+    hit = store.get(key)
+    if hit is None:
+        hit = store[key] = compute()
+        while len(store) > _KEPT_VALUES:
+            store.pop(next(iter(store)))
+    return hit
 
 
 # -------------------------------------------------------------------------------------------------- tactile
@@ -660,17 +684,47 @@ def bayes_limits(parameter_sets, ctx: MetricContext) -> np.ndarray:
     settings, the Monte Carlo draws made once for all of them (the common random numbers, the same as
     :func:`~flexdigit.tactile.bounds.protocol_limits` draws) and scored by :func:`_position_mse_m2`. The same
     numbers as the exact form up to rounding (tested: :data:`BAYES_BATCH_RTOL`)."""
+    relaxed = bool(np.all(_protocol_settings(ctx.protocol)[:, 2] == RELAXED))
     out = np.empty(len(parameter_sets))
     for i, ps in enumerate(parameter_sets):
-        a, m, c, w = _bayes_settings(ps, ctx)
-        model = gauge_model(ps, ctx.tactile_cells)
-        mean = model.gauges_v(a, m, c)
-        sigma = noise_of(model, a, m, c)
-        eps = _bayes_draws(int(ctx.seed), int(ctx.bayes_samples), tuple(c.tolist()), mean.shape[1])
-        loaded = m > 0
-        mse = _position_mse_m2(mean, sigma, a, m, c, w, eps)
-        out[i] = 1e3 * float(np.sqrt(np.average(mse[loaded], weights=w[loaded])))
+        view = relaxed_statics(ps, ctx.baseline) if relaxed else ps
+        out[i] = _kept(_TACTILE, ("bayes", view, ctx), lambda view=view: _bayes_row(view, ctx))
     return out
+
+
+def _bayes_row(ps: ParameterSet, ctx: MetricContext) -> float:
+    a, m, c, w = _bayes_settings(ps, ctx)
+    model = gauge_model(ps, ctx.tactile_cells)
+    mean = model.gauges_v(a, m, c)
+    sigma = noise_of(model, a, m, c)
+    eps = _bayes_draws(int(ctx.seed), int(ctx.bayes_samples), tuple(c.tolist()), mean.shape[1])
+    loaded = m > 0
+    mse = _position_mse_m2(mean, sigma, a, m, c, w, eps)
+    return 1e3 * float(np.sqrt(np.average(mse[loaded], weights=w[loaded])))
+
+
+def relaxed_statics(ps: ParameterSet, baseline: ParameterSet) -> ParameterSet:
+    """``ps`` with what its relaxed statics never read set to ``baseline``'s: the actuator section, the cable's
+    eccentricity, stiffness and guide friction, and the damping (``strip_beta_s``, ``housing_beta_s``).
+
+    The tactile metrics read the digit relaxed (:data:`~flexdigit.tactile.protocols.RELAXED`), which the twin
+    models with the cable detached (:class:`~flexdigit.tactile.bounds.TwinGaugeModel`), and in equilibrium, where
+    no damper acts. Rows that differ only there (in a Saltelli design of the shipped tolerances, 7 of the 18
+    parameters) have one value, computed once (:func:`_kept`); the test holds the view's metrics to the row's own
+    (equal, not close: the fields are not read at all)."""
+    base_p, base_c = baseline.params, baseline.calibration
+    params = ps.params.replace(
+        actuator=base_p.actuator,
+        geometry=dataclasses.replace(ps.params.geometry, cable_eccentricity_m=base_p.geometry.cable_eccentricity_m),
+    )
+    calibration = dataclasses.replace(
+        ps.calibration,
+        strip_beta_s=base_c.strip_beta_s,
+        housing_beta_s=base_c.housing_beta_s,
+        cable_stiffness_n_m=base_c.cable_stiffness_n_m,
+        cable_friction_ratio=base_c.cable_friction_ratio,
+    )
+    return ParameterSet(params, calibration, ps.antagonist_pretension_n)
 
 
 #: How far the batched Bayes limit may stray from :func:`~flexdigit.tactile.bounds.protocol_limits` (relative): the
@@ -716,25 +770,29 @@ def blind_zones(parameter_sets, ctx: MetricContext) -> np.ndarray:
     within rounding of the tenth-of-the-noise threshold could move it by one grid step, ``ctx.blind_step_m``)."""
     out = np.empty(len(parameter_sets))
     for i, ps in enumerate(parameter_sets):
-        model = gauge_model(ps, ctx.tactile_cells)
-        length = ps.params.geometry.digit_length_m
-        grid = np.linspace(0.0, length, int(round(length / ctx.blind_step_m)) + 1)
-        unloaded = model.gauges_v(grid[:1], 0.0, RELAXED)  # the same for every point: no load
-        first = None
-        for start in range(0, grid.size, BLIND_BLOCK):
-            a = grid[start : start + BLIND_BLOCK]
-            m = np.full(a.shape, ctx.blind_mass_kg)
-            c = np.full(a.shape, RELAXED)
-            moved = np.abs(model.gauges_v(a, m, c) - unloaded)
-            seen = np.flatnonzero(~np.all(moved < 0.1 * noise_of(model, a, m, c), axis=1))
-            if seen.size:
-                first = a[seen[0]]
-                break
-        if first is not None and cramer_rao(model, [first], ctx.blind_mass_kg, RELAXED).zone[0] == "no gauge bends":
-            out[i] = _blind_zone_exact(ps, ctx)  # visible, yet no position information there: the map decides
-        else:
-            out[i] = 1e3 * float(length if first is None else first)
+        view = relaxed_statics(ps, ctx.baseline)
+        out[i] = _kept(_TACTILE, ("blind", view, ctx), lambda view=view: _blind_row(view, ctx))
     return out
+
+
+def _blind_row(ps: ParameterSet, ctx: MetricContext) -> float:
+    model = gauge_model(ps, ctx.tactile_cells)
+    length = ps.params.geometry.digit_length_m
+    grid = np.linspace(0.0, length, int(round(length / ctx.blind_step_m)) + 1)
+    unloaded = model.gauges_v(grid[:1], 0.0, RELAXED)  # the same for every point: no load
+    first = None
+    for start in range(0, grid.size, BLIND_BLOCK):
+        a = grid[start : start + BLIND_BLOCK]
+        m = np.full(a.shape, ctx.blind_mass_kg)
+        c = np.full(a.shape, RELAXED)
+        moved = np.abs(model.gauges_v(a, m, c) - unloaded)
+        seen = np.flatnonzero(~np.all(moved < 0.1 * noise_of(model, a, m, c), axis=1))
+        if seen.size:
+            first = a[seen[0]]
+            break
+    if first is not None and cramer_rao(model, [first], ctx.blind_mass_kg, RELAXED).zone[0] == "no gauge bends":
+        return _blind_zone_exact(ps, ctx)  # visible, yet no position information there: the map decides
+    return 1e3 * float(length if first is None else first)
 
 
 @register_metric(
