@@ -21,7 +21,8 @@ What each one means (thesis section in brackets):
   of delay. The controller is the one
   designed for the baseline rig (a rig built to these tolerances runs the thesis rig's controller), unless the
   context says ``redesign`` (the design study designs one per candidate). ``gain_margin`` is the loop's gain
-  margin broken at the plant input (a factor; the stability margin);
+  margin broken at the plant input (a factor; the stability margin); ``time_outside_band_s`` the time the step
+  spends outside the 2 % band (:func:`time_outside_band_s`: the settling time without its jumps);
 - ``twin_settling_time_s``, ``twin_overshoot_percent``, ``twin_steady_state_error_deg``: the same loop *run* on
   the batched twin (:mod:`flexdigit.studies.batched_loop`): integer commands latched on the serial frame and the PWM
   pulse,
@@ -457,16 +458,35 @@ def loop_design(ps: ParameterSet, ctx: MetricContext):
 
 @lru_cache(maxsize=4096)
 def _loop(ps: ParameterSet, ctx: MetricContext) -> dict:
+    """The linear loop's figures, once per distinct loop: with the baseline's controller the loop is a function of
+    the row's linearised digit (its block's pass), its servo and its pulley alone, so rows that move only the
+    gauges (5 of the 18 shipped tolerances) share the figures of a row with the same digit, bit for bit."""
+    if ctx.redesign:
+        return _loop_figures(ps, ctx)
+    a = ps.params.actuator
+    key = (
+        ctx,
+        tuple(x.tobytes() for x in _single(ps)["_linear"]),
+        a.servo_wn_rad_s,
+        a.servo_zeta,
+        a.rad_per_command * a.cable_m_per_servo_rad,
+    )
+    return _kept(_LOOPS, key, lambda: _loop_figures(ps, ctx))
+
+
+def _loop_figures(ps: ParameterSet, ctx: MetricContext) -> dict:
     import control as ct
 
     design = loop_design(ps, ctx)
     plant_d = loop_plant(ps, design.period_s, design.delay_samples)
     loop = closed_loop(plant_d, design.controller)
     if np.max(np.abs(loop.poles())) >= 1.0:
-        return {"settling_time_s": math.inf, "overshoot_percent": math.inf, "gain_margin": 0.0}
+        nothing = {"settling_time_s": math.inf, "overshoot_percent": math.inf, "time_outside_band_s": math.inf}
+        return {**nothing, "gain_margin": 0.0}
     t = np.arange(0.0, 10.0, design.period_s)
     y = step_output(loop, t)  # control.step_response's numbers, its recursion compiled (~10x faster)
     figures = step_figures(t, y, target=float(y[-1]))  # settling to the last sample, as the batched loop's
+    outside = time_outside_band_s(t, y, target=float(y[-1]))
     settling, overshoot = figures.settling_time_s, figures.overshoot_percent
     # the loop broken at the plant input: u = K_y y + ..., so the return ratio is -K_y P
     k = design.controller
@@ -477,7 +497,32 @@ def _loop(ps: ParameterSet, ctx: MetricContext) -> dict:
         "settling_time_s": settling,
         "overshoot_percent": overshoot,
         "gain_margin": float(gm),
+        "time_outside_band_s": outside,
     }
+
+
+def time_outside_band_s(t_s, y, *, target: float, initial: float = 0.0, band: float = 0.02) -> float:
+    """How long a step response spends outside the settling band (s): the measure of the times when
+    ``|y - target| > band |target - initial|``, the response linear between samples.
+
+    The 2 % settling time is the *last* time outside the band, so it jumps when a late ripple grows through the
+    band's edge: by half a ringing period (0.1 s) on the 20 ms loop, whose two modes beat; a sensitivity study
+    of it needs many more samples (docs/studies.md). This is its continuous sibling: equal to it for a response
+    that leaves the band once (a monotone approach), smaller by the stretches a ringing response spends back in
+    the band, and a ripple that just touches the edge adds its short time outside, not a jump. Infinite if the
+    response is still outside at the end of the record.
+    """
+    t = np.asarray(t_s, dtype=float)
+    step = float(target) - float(initial)
+    e = np.abs(np.asarray(y, dtype=float) - float(target)) - band * abs(step)  # > 0: outside
+    if not np.all(np.isfinite(e)) or step == 0:
+        return math.nan
+    if e[-1] > 0:
+        return math.inf
+    e0, e1, dt = e[:-1], e[1:], np.diff(t)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(e0 > 0, np.where(e1 > 0, 1.0, e0 / (e0 - e1)), np.where(e1 > 0, e1 / (e1 - e0), 0.0))
+    return float(np.sum(dt * share))
 
 
 def gain_margin_frd(loop) -> float:
@@ -523,6 +568,16 @@ def gain_margin_frd(loop) -> float:
 @register_metric("settling_time_s", "s", "2 % settling of the 20 ms loop's step (linear model)", "5.2")
 def settling_time_s(ps: ParameterSet, ctx: MetricContext) -> float:
     return _loop(ps, ctx)["settling_time_s"]
+
+
+@register_metric(
+    "time_outside_band_s",
+    "s",
+    "time the 20 ms loop's step spends outside its 2 % band (linear model): the settling time without jumps",
+    "5.2",
+)
+def time_outside_band(ps: ParameterSet, ctx: MetricContext) -> float:
+    return _loop(ps, ctx)["time_outside_band_s"]
 
 
 @register_metric("overshoot_percent", "%", "overshoot of the 20 ms loop's step (linear model)", "5.2")
@@ -592,6 +647,7 @@ def hinf_gamma(ps: ParameterSet, ctx: MetricContext) -> float:
 #: same whichever rows a process evaluated before (unlike the block caches :func:`_new_block` clears).
 _HINF: dict = {}
 _TACTILE: dict = {}
+_LOOPS: dict = {}
 _KEPT_VALUES = 1024  # a Saltelli row repeats a row at most d + 2 rows back (its base sample's A)
 
 
@@ -802,13 +858,16 @@ def blind_zone_mm(ps: ParameterSet, ctx: MetricContext) -> float:
     return float(blind_zones([ps], ctx)[0])
 
 
-#: The metrics a sensitivity study computes unless its spec lists others.
+#: The metrics a sensitivity study computes unless its spec lists others. The loop's speed is scored by
+#: ``time_outside_band_s``, not ``settling_time_s``: the settling time jumps by half a ringing period where a late
+#: ripple touches the band, and its Sobol indices moved by 0.09 between N = 256 and 512 where the continuous
+#: figure's moved by 0.04 (same rows, same leading parameters; docs/studies.md). A spec may still list either.
 SENSITIVITY_METRICS = (
     "release_wn_rad_s",
     "release_zeta",
     "actuated_wn_rad_s",
     "rotation_gain_deg_per_command",
-    "settling_time_s",
+    "time_outside_band_s",
     "overshoot_percent",
     "gain_margin",
     "hinf_gamma",
