@@ -278,3 +278,20 @@ def test_time_outside_band_is_continuous_where_the_loops_settling_time_jumps():
     assert rows[1]["settling_time_s"] - rows[0]["settling_time_s"] > 0.2
     assert abs(rows[1]["time_outside_band_s"] - rows[0]["time_outside_band_s"]) < 0.002
     assert rows[0]["time_outside_band_s"] == pytest.approx(rows[0]["settling_time_s"], rel=1e-9)  # left once
+
+
+def test_position_information_test_is_the_cramer_rao_zones():
+    # the blind-zone scan's check at its first visible point against cramer_rao's zone: a load between the clamp
+    # and the first gauge bends no gauge (no information), one beyond it does; on seeded rows of the tolerances
+    from flexdigit.studies.metrics import _position_informative, gauge_model
+    from flexdigit.tactile.bounds import cramer_rao
+    from flexdigit.tactile.protocols import RELAXED
+
+    sets, ctx = _seeded_rows(2, seed=47)
+    for ps in sets:
+        model = gauge_model(ps, ctx.tactile_cells)
+        for a in (0.004, 0.06, 0.15):
+            zone = cramer_rao(model, [a], ctx.blind_mass_kg, RELAXED).zone[0]
+            assert _position_informative(model, a, ctx.blind_mass_kg) == (zone != "no gauge bends"), (a, zone)
+        assert not _position_informative(model, 0.004, ctx.blind_mass_kg)
+        assert _position_informative(model, 0.15, ctx.blind_mass_kg)

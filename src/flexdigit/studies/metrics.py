@@ -63,7 +63,7 @@ from flexdigit.params import RigParams
 from flexdigit.studies._bayes_kernel import position_mse_m2
 from flexdigit.studies.batched_loop import StepSchedule, step_figures, step_figures_batch, step_responses
 from flexdigit.studies.parameter_set import ParameterSet
-from flexdigit.tactile.bounds import TwinGaugeModel, cramer_rao, noise_of, protocol_limits
+from flexdigit.tactile.bounds import TwinGaugeModel, noise_of, protocol_limits
 from flexdigit.tactile.localisation import identifiability_map
 from flexdigit.tactile.protocols import RELAXED, load_protocol
 from flexdigit.twin.batched import BatchedChains
@@ -846,9 +846,24 @@ def _blind_row(ps: ParameterSet, ctx: MetricContext) -> float:
         if seen.size:
             first = a[seen[0]]
             break
-    if first is not None and cramer_rao(model, [first], ctx.blind_mass_kg, RELAXED).zone[0] == "no gauge bends":
+    if first is not None and not _position_informative(model, first, ctx.blind_mass_kg):
         return _blind_zone_exact(ps, ctx)  # visible, yet no position information there: the map decides
     return 1e3 * float(length if first is None else first)
+
+
+def _position_informative(model, position_m: float, mass_kg: float, step_m: float = 2e-4) -> bool:
+    """Whether a visible relaxed load at ``position_m`` carries position information: the Fisher information of the
+    position, :func:`~flexdigit.tactile.bounds.cramer_rao`'s ``faa``, is positive. Relaxed, the noise does not
+    depend on the load, so ``faa = sum (dg/da)^2 / sigma^2`` and only ``dg/da`` is needed: the bounds' central
+    difference (its step), two static solves of the six ``cramer_rao`` makes (it also differentiates by the mass
+    and repeats the visibility test the scan has just made)."""
+    a = np.array([position_m + step_m, position_m - step_m])
+    m = np.full(2, mass_kg)
+    c = np.full(2, RELAXED)
+    g = model.gauges_v(a, m, c)
+    sigma = noise_of(model, a[:1], m[:1], c[:1])[0]
+    faa = float(np.sum(((g[0] - g[1]) / (2 * step_m)) ** 2 / sigma**2))
+    return faa > 0
 
 
 @register_metric(
