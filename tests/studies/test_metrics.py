@@ -231,8 +231,7 @@ def test_kept_values_do_not_depend_on_the_rows_evaluated_before():
     sets, ctx = _seeded_rows(3, seed=43)
     names = ["hinf_gamma", "bayes_position_limit_mm", "blind_zone_mm", "settling_time_s", "gain_margin"]
     forward = metrics.evaluate_many(sets, names, ctx)
-    for kept in (metrics._HINF, metrics._TACTILE, metrics._LOOPS):
-        kept.clear()
+    metrics._forget_kept()
     backward = metrics.evaluate_many(sets[::-1], names, ctx)[::-1]
     assert forward == backward
     for ps, values in zip(sets, forward, strict=True):

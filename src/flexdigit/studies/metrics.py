@@ -651,6 +651,12 @@ _LOOPS: dict = {}
 _KEPT_VALUES = 1024  # a Saltelli row repeats a row at most d + 2 rows back (its base sample's A)
 
 
+def _forget_kept() -> None:
+    """Empty the values kept by their inputs (benchmarks and tests measure a metric from scratch with it)."""
+    for store in (_HINF, _TACTILE, _LOOPS):
+        store.clear()
+
+
 def _kept(store: dict, key, compute: Callable[[], float]) -> float:
     """``store[key]``, computed by ``compute()`` on the first call (the oldest entries dropped beyond
     :data:`_KEPT_VALUES`). Failures are not kept: they raise again for the row that asks."""
