@@ -72,6 +72,39 @@ def _same(records, reference) -> bool:
     return records.keys() == reference.keys() and all(bits(records[r]) == bits(reference[r]) for r in reference)
 
 
+_SIDE_SCRIPT = """
+import sys, time, warnings
+warnings.simplefilter("ignore")
+from benchmarks.bench_dask import _rows, _run, CHUNK
+count, seed = int(sys.argv[1]), int(sys.argv[2])
+spec, values, ctx = _rows(count + CHUNK, seed=seed)
+_run(spec, values[:CHUNK], ctx)  # imports and caches, not timed
+print("ready", flush=True)
+sys.stdin.readline()  # both processes start together
+wall, cpu, _ = _run(spec, values[CHUNK:], ctx)
+print(wall, cpu, flush=True)
+"""
+
+
+def _side_by_side(count: int, processes: int) -> tuple[float, float]:
+    """``processes`` in-process runs of ``count`` rows each at once, no Dask (what the machine's cores give two
+    single-threaded jobs): the wall time of the slowest and their CPU time, summed."""
+    import subprocess
+    import sys
+
+    root = str(Path(__file__).resolve().parents[1])
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")])))
+    procs = [subprocess.Popen([sys.executable, "-c", _SIDE_SCRIPT, str(count), str(10 + i)], env=env, text=True,
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE) for i in range(processes)]  # fmt: skip
+    for p in procs:
+        assert p.stdout.readline().strip() == "ready"
+    for p in procs:
+        p.stdin.write("go\n")
+        p.stdin.flush()
+    walls, cpus = zip(*(map(float, p.communicate()[0].split()) for p in procs), strict=True)
+    return max(walls), sum(cpus)
+
+
 def run() -> list[dict]:
     warnings.simplefilter("ignore")
     from flexdigit.studies.execution import dask_client
@@ -101,6 +134,7 @@ def run() -> list[dict]:
                 per_task_ms = 1e3 * (dask_one - serial_one) / len(one)
         runs[n] = {"wall": wall, "startup": startup, "workers": workers_cpu, "own": own_cpu,
                    "same": _same(records, reference)}  # fmt: skip
+    side = {n: _side_by_side(count // 4, n) for n in (1, 2)}
     load_after = os.getloadavg()[0]
     rows = [
         {"name": f"study of {count} rows, in process (no Dask)", "value": serial, "unit": "s", "goal": ">= 30",
@@ -118,6 +152,9 @@ def run() -> list[dict]:
         {"name": "Dask speed-up, 2 workers over 1", "value": runs[1]["wall"] / runs[2]["wall"], "unit": "x",
          "goal": ">= 1.8", "note": "on 2 cores; the workers share them with the client, the scheduler and any other "
          "job (see the load average)"},
+        {"name": "no Dask: 2 processes side by side over 1, the same work each", "unit": "x", "goal": "",
+         "value": 2 * side[1][0] / side[2][0], "note": f"{count // 4} rows each, in process; what 2 cores give two "
+         f"single-threaded jobs here: CPU {side[1][1]:.1f} s alone, {side[2][1] / 2:.1f} s each side by side"},
         {"name": "worker CPU over in-process CPU, the same rows", "value": sum(runs[1]["workers"]) / serial_cpu,
          "unit": "x", "goal": "~1", "note": "one worker; above 1: what a worker spends beyond the rows' work"},
         {"name": "rows the same bit for bit as in process (1 and 2 workers)",
