@@ -189,3 +189,23 @@ def test_batched_tactile_limits_are_the_exact_ones_on_seeded_rows():
     assert len(set(np.round(exact, 6))) == len(sets)  # the rows differ: a constant would not pass by chance
     np.testing.assert_array_equal(blind_zones(sets, ctx), [_blind_zone_exact(ps, ctx) for ps in sets])
     assert METRICS["bayes_position_limit_mm"](sets[0], ctx) == pytest.approx(exact[0], rel=BAYES_BATCH_RTOL)
+
+
+def test_a_described_pair_reaches_the_batched_metrics():
+    # issue 24: a digit file's antagonistic pair ([cables] count = 2, no study override) is the pair the metrics
+    # score; the scalar twin's chain of that description is the reference (over the pair's operating commands,
+    # both sides of straight; the single cable would stay slack below it)
+    from flexdigit.studies.metrics import _chain, evaluate_many
+    from flexdigit.twin.twin import cable_shortening_m
+
+    pair = RigParams.from_dict({"cables": {"count": 2, "pretension_n": 5.0}})
+    ps = ParameterSet(pair)
+    assert ps.pair_pretension_n == 5.0
+    (values,) = evaluate_many([ps], ["rotation_gain_deg_per_command"])
+    low, high = pair.actuator.operating_commands
+    chain = _chain(ps)
+    assert chain.antagonist
+    tips = chain.solve_static(cable_shortening_m=cable_shortening_m(np.array([low, high]), pair)).psi_rad[:, -1]
+    assert tips[0] < 0 < tips[1]
+    expected = np.degrees(tips[1] - tips[0]) / (high - low)
+    assert values["rotation_gain_deg_per_command"] == pytest.approx(expected, rel=1e-9)
