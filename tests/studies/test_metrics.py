@@ -294,3 +294,23 @@ def test_position_information_test_is_the_cramer_rao_zones():
             assert _position_informative(model, a, ctx.blind_mass_kg) == (zone != "no gauge bends"), (a, zone)
         assert not _position_informative(model, 0.004, ctx.blind_mass_kg)
         assert _position_informative(model, 0.15, ctx.blind_mass_kg)
+
+
+def test_a_described_pair_reaches_the_batched_metrics():
+    # issue 24: a digit file's antagonistic pair ([cables] count = 2, no study override) is the pair the metrics
+    # score; the scalar twin's chain of that description is the reference (over the pair's operating commands,
+    # both sides of straight; the single cable would stay slack below it)
+    from flexdigit.studies.metrics import _chain, evaluate_many
+    from flexdigit.twin.twin import cable_shortening_m
+
+    pair = RigParams.from_dict({"cables": {"count": 2, "pretension_n": 5.0}})
+    ps = ParameterSet(pair)
+    assert ps.pair_pretension_n == 5.0
+    (values,) = evaluate_many([ps], ["rotation_gain_deg_per_command"])
+    low, high = pair.actuator.operating_commands
+    chain = _chain(ps)
+    assert chain.antagonist
+    tips = chain.solve_static(cable_shortening_m=cable_shortening_m(np.array([low, high]), pair)).psi_rad[:, -1]
+    assert tips[0] < 0 < tips[1]
+    expected = np.degrees(tips[1] - tips[0]) / (high - low)
+    assert values["rotation_gain_deg_per_command"] == pytest.approx(expected, rel=1e-9)

@@ -290,7 +290,7 @@ def _chains(parameter_sets):
     """The parameter sets' digits (housed, tip up as designed, 2.2.4) on the batched twin, with their cables."""
     rigs = ([ps.params for ps in parameter_sets], [ps.calibration for ps in parameter_sets])
     options = {"housing": True, "orientation": "vertical", "cells_per_section": DEFAULT_CELLS_PER_SECTION}
-    pre = [ps.antagonist_pretension_n for ps in parameter_sets]
+    pre = [ps.pair_pretension_n for ps in parameter_sets]
     if all(p is None for p in pre):
         return BatchedChains.from_rigs(*rigs, **options)
     # a batch mixing one and two cables: a single cable is the pair with the second one never taut
@@ -606,7 +606,7 @@ def twin_loop_figures(parameter_sets, ctx: MetricContext) -> dict[str, np.ndarra
         [d.runtime(ps.params) for d, ps in zip(designs, parameter_sets, strict=True)],
         twin_figures(parameter_sets)["_mid_rotation_deg"],
         ctx.loop,
-        pretension_n=[ps.antagonist_pretension_n for ps in parameter_sets],
+        pretension_n=[ps.pair_pretension_n for ps in parameter_sets],
     )
     out = step_figures_batch(run)
     _LOOP_CACHE[:] = [parameter_sets, ctx, out]
