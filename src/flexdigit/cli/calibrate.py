@@ -62,11 +62,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help=f"write the calibration even if the twin misses a target by more than {POOR_FIT:g} of its scale",
     )
-    p.add_argument(
-        "--initial",
-        metavar="FILE",
-        help="calibration to start from (default: the packaged one, scaled to the digit of --params)",
-    )
+    scaled = "calibration to start from (default: the packaged one, scaled to the digit of --params)"
+    p.add_argument("--initial", metavar="FILE", help=scaled)
     p.add_argument("--params", metavar="FILE", help="rig parameters TOML (default: the thesis rig)")
 
 
