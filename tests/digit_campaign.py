@@ -11,7 +11,8 @@ Every drawn digit is meant to be valid and usable: its servo reaches a 30 deg ti
 with a pair) and its amplifiers keep the gauges inside the ADC's range at that rotation (estimated below from
 ``eps = (t / 2) kappa``); those two bounds are physics a user would check, not flexdigit's code.
 
-Run the campaign (each command a subprocess, as a user would type it; ``--commands`` to choose; results as JSON)::
+Run the campaign (each command a subprocess, as a user would type it; ``--commands`` to choose; results as JSON;
+``CAMPAIGN_SRC=DIR`` runs another checkout's sources, e.g. the commit before the fixes)::
 
     flock /work/locks/heavy.lock python tests/digit_campaign.py --seeds 0-11 --out campaign.json
 """
@@ -165,13 +166,26 @@ def to_toml(data: dict) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ the commands
-def _protocol(path: Path, length_m: float) -> None:
-    """A tactile protocol within the digit: one 10 g load at 12 places over its outer 40 %, 20 repetitions."""
-    step_cm = round(100 * 0.4 * length_m / 11, 2)
-    tips_cm = [round(step_cm * k, 2) for k in range(12)]
+def _protocol(path: Path, digit: Path) -> None:
+    """A tactile protocol within the digit: one 10 g load at 19 places from the tip, 40 repetitions, spaced half the
+    digit's Cramer-Rao bound of the position there (0.5 to 4 mm; tests/tactile/test_digit_data_path.py): closer
+    than the gauges resolve, so the Bayes limit is the gauges' resolution, which a network's continuous regression
+    can approach (well-separated places put the limit near zero, and no ratio to it means anything)."""
+    from flexdigit.params import load_params
+    from flexdigit.tactile.bounds import cramer_rao
+    from flexdigit.tactile.localisation import readings_gauge_model
+    from flexdigit.tactile.protocols import RELAXED
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    params = load_params(digit)
+    length = params.geometry.digit_length_m
+    model = readings_gauge_model(params, twin_calibration(params))
+    bound = cramer_rao(model, [length, length - 0.036, length - 0.072], 0.010, RELAXED).crlb_known_mass_m
+    step_m = float(np.clip(round(0.5 * np.median(bound), 4), 0.0005, 0.004))
+    tips_cm = [round(100 * step_m * k, 2) for k in range(19)]
     path.write_text(
         'name = "campaign"\nloads_g = [10.0]\n'
-        f"positions_from_tip_cm = {tips_cm}\nrepetitions = 20\nno_load_repetitions = 10\nsettle_s = 10.0\n"
+        f"positions_from_tip_cm = {tips_cm}\nrepetitions = 40\nno_load_repetitions = 10\nsettle_s = 10.0\n"
     )
 
 
@@ -238,7 +252,7 @@ def _argv(command: str, digit: Path, work: Path, data: dict, hanging: bool) -> l
     if command in ("run+30", "run-30"):
         return ["run", *p, f"--setpoint-deg={command[3:]}", "--duration", "2.5", "--seed", "0", *orient]
     if command == "collect":
-        _protocol(work / "protocol.toml", data["geometry"]["digit_length_m"])
+        _protocol(work / "protocol.toml", digit)
         return ["collect", str(work / "protocol.toml"), *p, "--out", str(work / "data.parquet"), "--no-progress"]
     if command == "train":
         return ["train", str(work / "data.parquet"), "--hidden", "10", "--bayes-limit", *p,
@@ -272,7 +286,7 @@ def _a_reading(path: Path, gauges: int) -> str:
 
 def run_command(argv: list[str], timeout_s: float = 900.0) -> dict:
     """Run ``flexdigit ARGV --json`` in a subprocess: exit code, a traceback seen, the JSON, the last error line."""
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1] / "src")}
+    env = {**os.environ, "PYTHONPATH": os.environ.get("CAMPAIGN_SRC", str(Path(__file__).parents[1] / "src"))}
     start = time.perf_counter()
     try:
         done = subprocess.run(
@@ -304,12 +318,13 @@ def _buckles(outcome: dict) -> bool:
     return outcome["code"] == 2 and "buckl" in outcome["error"]
 
 
-def run_digit(data: dict, work: Path, commands=COMMANDS) -> dict[str, dict]:
-    """Every command on the digit ``data`` in ``work``; a digit that buckles tip up is run hanging from then on
-    (the CLI's own advice, as a user would follow it)."""
+def run_digit(data: dict, work: Path, commands=COMMANDS, digit: Path | None = None) -> dict[str, dict]:
+    """Every command on the digit ``data`` in ``work`` (written there, unless ``digit`` is its file already); a
+    digit that buckles tip up is run hanging from then on (the CLI's own advice, as a user would follow it)."""
     work.mkdir(parents=True, exist_ok=True)
-    digit = work / "digit.toml"
-    digit.write_text(to_toml(data))
+    if digit is None:
+        digit = work / "digit.toml"
+        digit.write_text(to_toml(data))
     pair = data.get("cables", {}).get("count") == 2
     hanging = False
     outcomes: dict[str, dict] = {}
@@ -325,14 +340,126 @@ def run_digit(data: dict, work: Path, commands=COMMANDS) -> dict[str, dict]:
     return outcomes
 
 
+def figures(command: str, result) -> dict:
+    """The figures worth keeping of a command's JSON (the step, the Bayes ratio, the fitted release)."""
+    if not isinstance(result, dict):
+        return {}
+    if command.startswith("run"):
+        true = result.get("step_metrics", {}).get("true", {})
+        return {
+            "settling_time_s": true.get("settling_time_s"),
+            "overshoot_percent": true.get("overshoot_percent"),
+            "true_final_rotation_deg": result.get("true_final_rotation_deg"),
+            "status": result.get("status"),
+        }
+    if command == "train":
+        return {k: result.get(k) for k in ("rmse_over_bayes_limit", "bayes_limit_mm", "rmse_mm") if k in result}
+    return {}
+
+
 def passed(outcome: dict) -> bool:
     """Exit 0 and no traceback."""
     return outcome["code"] == 0 and not outcome["traceback"]
 
 
+#: A small design study whose front holds the issue's kind of recommendation: 6 gauges, D-optimal or equal, full
+#: bridges, the cable pair or one, a 4:1 geared servo, three sizes (0.2-0.34 m).
+STUDY_SPEC = """
+[study]
+name = "campaign-front"
+seed = 24
+[design]
+gauge_counts = [6]
+layouts = ["equal", "d-optimal"]
+bridges = ["full"]
+adc_bits = [16]
+servo_deg_per_command = [0.2156]
+eccentricity_m = [0.005715]
+pretension_n = [0.0, 5.0]
+size = [0.75, 1.0, 1.25]
+bayes_samples = 100
+chunk_size = 4
+"""
+
+
+def study_digits(work: Path) -> dict[str, Path]:
+    """Run the design study of :data:`STUDY_SPEC` and export every design on its front (``flexdigit study design
+    SPEC --out DIR --export K``): ``{"front-K": file}``."""
+    work.mkdir(parents=True, exist_ok=True)
+    spec = work / "spec.toml"
+    spec.write_text(STUDY_SPEC)
+    base = ["study", "design", str(spec), "--out", str(work / "study"), "--workers", "0", "--no-progress"]
+    first = run_command(base)
+    if not passed(first):
+        raise RuntimeError(f"the design study failed: {first['error']}")
+    files = {}
+    for row in first["json"]["pareto_front"]:
+        k = row["row"]
+        target = work / f"front-{k}.toml"
+        exported = run_command([*base, "--export", str(k), "--export-to", str(target)])
+        if not passed(exported):
+            raise RuntimeError(f"--export {k} failed: {exported['error']}")
+        files[f"front-{k}"] = target
+    return files
+
+
+def independent_checks(data: dict) -> dict[str, float]:
+    """The issue's references on the digit (in-process: they are not commands): the twin's static tip error under a
+    tip load (alpha^2 = 1) and under the cable (a 30 deg shortening), relative to the ``solve_bvp`` elastica's
+    deflection at 27 cells per section, hanging (``tests/oracles.py``); the release's identified wn (base gauge,
+    8 s at 500 Hz) relative to the chain's first linear mode."""
+    from flexdigit.identify.identification import identify
+    from flexdigit.identify.timeseries import TimeSeries
+    from flexdigit.params import RigParams
+    from flexdigit.twin import records
+    from flexdigit.twin.digit import build_digit
+    from flexdigit.twin.digit_calibration import calibration_for
+    from oracles import digit_contact_bvp, thesis_digit_segments
+
+    params = RigParams.from_dict(data)
+    cal = calibration_for(params)
+    g = params.geometry
+    segments, supports = thesis_digit_segments(params, cal)
+    pair = params.cables.count == 2
+
+    def elastica(**load):
+        return digit_contact_bvp(
+            segments,
+            strip_mass_per_m=params.material.strip_density_kg_m3 * g.cross_section_m2,
+            point_masses=dict(zip(supports, cal.support_mass_kg, strict=True)),
+            gravity_ab=(9.80665, 0.0),
+            eccentricity_m=g.cable_eccentricity_m,
+            cable_stiffness_n_m=cal.cable_stiffness_n_m,
+            cable_pretension_m=params.cables.pretension_n / cal.cable_stiffness_n_m if pair else None,
+            tol=1e-8,
+            max_nodes=100_000,
+            **load,
+        )
+
+    twin = build_digit(params, cal, orientation="hanging", cells_per_section=27)
+    force = (params.bending_stiffness_n_m2 + min(cal.housing_ei_n_m2)) / g.digit_length_m**2
+    shortening = g.cable_eccentricity_m * math.radians(30.0)
+    out = {}
+    for name, load, solve in (
+        ("tip_load", {"point_forces_b": {g.digit_length_m: force}}, {"tip_force_n": [[0.0, force]]}),
+        ("cable", {"cable_shortening_m": shortening}, {"cable_shortening_m": [shortening]}),
+    ):
+        ref = elastica(**load)
+        deflection = float(np.linalg.norm(ref.tip - np.array([g.digit_length_m, 0.0])))
+        tip = twin.solve_static(**solve).tip_m[0]
+        out[f"{name}_rel_error"] = float(np.linalg.norm(tip - ref.tip)) / deflection if ref.converged else math.nan
+    wn = float(build_digit(params, cal, orientation="hanging").linear_modes()[0][0])
+    rec = records.release_test(
+        duration_s=8.0, sample_rate_hz=500, seed=1, params=params, calibration=cal, orientation="hanging"
+    )
+    fit = identify(TimeSeries.from_arrays(rec.column("time_s"), rec.column("gauge1_v"), channel="g1"), "release")
+    out["release_wn_rel_error"] = fit.wn_rad_s / wn - 1.0
+    return out
+
+
 def _seeds(text: str) -> list[int]:
     seeds: list[int] = []
-    for part in text.split(","):
+    for part in filter(None, text.split(",")):
         lo, _, hi = part.partition("-")
         seeds += list(range(int(lo), int(hi or lo) + 1))
     return seeds
@@ -340,24 +467,40 @@ def _seeds(text: str) -> list[int]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seeds", default="0-7", help="digit seeds, e.g. 0-7 or 1,4,9")
+    parser.add_argument("--seeds", default="0-7", help="digit seeds, e.g. 0-7 or 1,4,9 ('' for none)")
     parser.add_argument("--commands", default=",".join(COMMANDS))
     parser.add_argument("--work", type=Path, default=Path("/tmp/digit-campaign"))
     parser.add_argument("--out", type=Path, help="write the outcomes as JSON")
     parser.add_argument("--show", action="store_true", help="only print the digits")
+    parser.add_argument("--checks", action="store_true", help="also the independent checks (elastica, modes)")
+    parser.add_argument("--study", action="store_true", help="also the design study's front, exported")
     args = parser.parse_args(argv)
     commands = tuple(args.commands.split(","))
     results = {}
-    for seed in _seeds(args.seeds):
-        data = campaign_digit(seed)
+    digits: list[tuple[object, dict, Path | None]] = [(seed, campaign_digit(seed), None) for seed in _seeds(args.seeds)]
+    if args.study:
+        import tomllib
+
+        for name, path in study_digits(args.work / "study").items():
+            digits.append((name, tomllib.loads(path.read_text()), path))
+    for seed, data, path in digits:
         print(f"seed {seed}: {describe(data)}", flush=True)
         if args.show:
             continue
-        outcomes = run_digit(data, args.work / f"seed-{seed}", commands)
+        checks = {}
+        if args.checks:
+            checks = independent_checks(data)
+            print("  checks: " + ", ".join(f"{k} {v:.2e}" for k, v in checks.items()), flush=True)
+        outcomes = run_digit(data, args.work / f"seed-{seed}", commands, path) if commands != ("",) else {}
         for command, outcome in outcomes.items():
             mark = "ok  " if passed(outcome) else "FAIL"
-            print(f"  {mark} {command:<17} {outcome.get('seconds', '')} s {outcome['error'][:150]}", flush=True)
-        results[seed] = {"digit": data, "outcomes": {k: {**v, "json": None} for k, v in outcomes.items()}}
+            shown = figures(command, outcome["json"]) or ""
+            print(f"  {mark} {command:<17} {outcome.get('seconds', '')} s {outcome['error'][:150]} {shown}", flush=True)
+        results[seed] = {
+            "digit": data,
+            "checks": checks,
+            "outcomes": {k: {**v, "json": figures(k, v["json"])} for k, v in outcomes.items()},
+        }
         if args.out:
             args.out.write_text(json.dumps(results, indent=1))
     total = sum(len(r["outcomes"]) for r in results.values())
