@@ -32,6 +32,18 @@ print(time.process_time() - start)
 """
 
 
+def _study_rows(n_base: int):
+    import dataclasses
+
+    from flexdigit.studies.metrics import SENSITIVITY_METRICS, MetricContext
+    from flexdigit.studies.sensitivity import SensitivitySettings, sensitivity_design
+    from flexdigit.studies.spec import load_spec
+
+    spec = dataclasses.replace(load_spec("thesis-tolerances"), metrics=SENSITIVITY_METRICS)
+    u, _ = sensitivity_design(spec, SensitivitySettings(morris_trajectories=0, sobol_n=n_base))
+    return spec, spec.values_from_unit(u), MetricContext(baseline=spec.baseline)
+
+
 def _compile_seconds() -> float:
     """CPU time of the kernel's first call with an empty numba cache, in a fresh process (what a new machine pays
     once; later processes load the compiled code from the cache)."""
