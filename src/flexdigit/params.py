@@ -97,12 +97,14 @@ class Geometry:
     ----------
     section_count : int
         Number of sections (2.2): 3.
-    section_length_m : float
-        Spring-steel strip length per section (2.2.2): 80 mm.
+    section_length_m : float or tuple of float
+        Spring-steel strip length per section (2.2.2): 80 mm. One value: every section that long; a list of
+        ``section_count`` values: each section its own length, from the base (their sum is ``strip_length_m``).
     strip_thickness_m, strip_width_m : float
         Strip cross-section, 0.015 in x 0.5 in (2.2.2).
     digit_length_m : float
-        ``l`` of table 3.7, clamp to tip: 270 mm. Supports sit every ``digit_length_m / section_count``.
+        ``l`` of table 3.7, clamp to tip: 270 mm. Its ``digit_length_m - strip_length_m`` are ``section_count``
+        supports of equal length, half a support at the clamp and at the tip (:attr:`section_bounds_m`).
     strip_length_m : float
         Free strip length, 3 x 80 mm = 240 mm; table 3.4's ``y_max`` column fits x ~ 0.241 m, i.e. this.
     cable_eccentricity_m : float
@@ -116,7 +118,7 @@ class Geometry:
     """
 
     section_count: int = 3
-    section_length_m: float = 0.080
+    section_length_m: float | tuple[float, ...] = 0.080
     strip_thickness_m: float = 0.381e-3
     strip_width_m: float = 12.7e-3
     digit_length_m: float = 0.270
@@ -128,7 +130,10 @@ class Geometry:
 
     _parameter_constraints = {
         "section_count": [Plausible("", 1, 50, "1 to 50 sectional supports; more is a continuum", integer=True)],
-        "section_length_m": [Plausible("m", 1e-3, 2.0, "a section 1 mm to the longest digit, 2 m")],
+        "section_length_m": [
+            Plausible("m", 1e-3, 2.0, "a section 1 mm to the longest digit, 2 m"),
+            Array(ndim=1, min_length=1, low=1e-3, high=2.0),  # one per section: each 1 mm to 2 m
+        ],
         "strip_thickness_m": [Plausible("m", 1e-5, 5e-3, "a strip 0.01 to 5 mm thick: foil to a stiff plate")],
         "strip_width_m": [Plausible("m", 1e-4, 0.2, "a strip 0.1 mm to 20 cm wide")],
         "digit_length_m": [DIGIT_LENGTH_M],
@@ -141,12 +146,6 @@ class Geometry:
 
     def __post_init__(self) -> None:
         owner = type(self).__name__
-        if isinstance(self.section_length_m, tuple | list):  # a list per section: said plainly, not "not a number"
-            raise ParameterError(
-                f"The 'section_length_m' parameter of {owner} is one length (m) for every section: sections of "
-                "unequal lengths are not supported yet (docs/digits.md). "
-                f"Got {list(self.section_length_m)!r} instead."
-            )
         positions = self.gauge_positions_m
         if isinstance(positions, tuple | list) and len(set(map(repr, positions))) < len(positions):
             raise ParameterError(
@@ -154,6 +153,14 @@ class Geometry:
                 f"Got {list(positions)!r} instead."
             )
         validate_fields(self)
+        if isinstance(self.section_length_m, tuple | list):  # one length per section, from the base
+            lengths = check_array(self.section_length_m, "section_length_m", owner, ndim=1, low=1e-3, high=2.0)
+            if lengths.size != self.section_count:
+                raise ParameterError(
+                    f"The 'section_length_m' parameter of {owner} must be one length or {self.section_count} "
+                    f"(one per section). Got {lengths.tolist()!r} instead."
+                )
+            object.__setattr__(self, "section_length_m", tuple(float(x) for x in lengths))
         check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
         positions = check_array(
             self.gauge_positions_m,
@@ -175,8 +182,74 @@ class Geometry:
 
     @property
     def section_pitch_m(self) -> float:
-        """Distance between sectional supports along the digit, ``digit_length_m / section_count``."""
+        """Distance between sectional supports along the digit, ``digit_length_m / section_count`` (the mean
+        pitch of unequal sections: :attr:`section_bounds_m` gives each one)."""
         return self.digit_length_m / self.section_count
+
+    @property
+    def equal_sections(self) -> bool:
+        """True if ``section_length_m`` is one length for every section (the thesis rig's)."""
+        return not isinstance(self.section_length_m, tuple)
+
+    @property
+    def section_lengths_m(self) -> tuple[float, ...]:
+        """Each section's free strip (m), from the base: ``strip_length_m / section_count`` each for one
+        ``section_length_m`` (as the twin has always laid them out), else the list given."""
+        if self.equal_sections:
+            return (self.strip_length_m / self.section_count,) * self.section_count
+        return self.section_length_m
+
+    @property
+    def support_length_m(self) -> float:
+        """Each support's length (m): ``(digit_length_m - strip_length_m) / section_count`` (10 mm; half of one at
+        the clamp and half at the tip)."""
+        return (self.digit_length_m - self.strip_length_m) / self.section_count
+
+    @property
+    def section_bounds_m(self) -> tuple[tuple[float, float], ...]:
+        """Where each section's free strip starts and ends along the digit (m from the clamp): the one source of the
+        layout (twin chain, beam, elastica oracle, shape, gauge checks, design study).
+
+        Sections follow one another from the clamp, each its free strip then a support, half a support at the clamp
+        and at the tip (2.2). Equal sections keep the twin's arithmetic, ``k p + h`` to ``(k + 1) p - h`` with
+        pitch ``p = digit_length_m / section_count``, so the thesis rig's arrays do not move by a bit.
+
+        Examples
+        --------
+        >>> [(round(a, 4), round(b, 4)) for a, b in Geometry().section_bounds_m]
+        [(0.005, 0.085), (0.095, 0.175), (0.185, 0.265)]
+        >>> g = Geometry(section_count=2, section_length_m=(0.1, 0.06), strip_length_m=0.16, digit_length_m=0.18,
+        ...              gauge_positions_m=(0.05, 0.14))
+        >>> [(round(a, 4), round(b, 4)) for a, b in g.section_bounds_m]
+        [(0.005, 0.105), (0.115, 0.175)]
+        """
+        n = self.section_count
+        if self.equal_sections:
+            pitch = self.section_pitch_m
+            half = 0.5 * (pitch - self.strip_length_m / n)
+            return tuple((k * pitch + half, (k + 1) * pitch - half) for k in range(n))
+        support, bounds, start = self.support_length_m, [], 0.5 * self.support_length_m
+        for length in self.section_length_m:
+            bounds.append((start, start + length))
+            start += length + support
+        return tuple(bounds)
+
+    @property
+    def support_centres_m(self) -> tuple[float, ...]:
+        """The centres of the ``section_count`` supports that end the sections (m from the clamp; the last is the
+        tip): where the support masses sit. Equal sections: ``p, 2 p, ...``, the last never past the tip.
+
+        Examples
+        --------
+        >>> [round(c, 4) for c in Geometry().support_centres_m]
+        [0.09, 0.18, 0.27]
+        """
+        n, length = self.section_count, self.digit_length_m
+        if self.equal_sections:
+            pitch = self.section_pitch_m
+            return tuple(min(pitch * (k + 1.0), length) for k in range(n))
+        half = 0.5 * self.support_length_m
+        return tuple(min(end + half, length) for _, end in self.section_bounds_m[:-1]) + (length,)
 
     @property
     def cross_section_m2(self) -> float:
@@ -658,32 +731,39 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
         lines.append(f"[geometry] section_count = {n}: a digit has 1 to {MAX_SECTIONS} sections")
     if count > MAX_GAUGES:
         lines.append(f"[geometry] gauge_positions_m has {count} gauges: a digit carries 1 to {MAX_GAUGES}")
-    strip = n * g.section_length_m
+    if g.equal_sections:
+        strip = n * g.section_length_m
+        sections = f"section_count x section_length_m = {n} x {g.section_length_m:g}"
+        example = n * (g.section_length_m + 0.01)
+    else:
+        strip = math.fsum(g.section_length_m)
+        sections = "the sum of section_length_m " + "[" + ", ".join(f"{x:g}" for x in g.section_length_m) + "]"
+        example = strip + n * 0.01
     if abs(strip - g.strip_length_m) > LENGTH_TOLERANCE_M:
         lines.append(
-            f"[geometry] strip_length_m = {g.strip_length_m:g} but section_count x section_length_m = {n} x "
-            f"{g.section_length_m:g} = {strip:g} m: the lengths do not add up"
+            f"[geometry] strip_length_m = {g.strip_length_m:g} but {sections} = {strip:g} m: the lengths do not add up"
         )
     support = (g.digit_length_m - strip) / n
     if support < -LENGTH_TOLERANCE_M:
         lines.append(
             f"[geometry] digit_length_m = {g.digit_length_m:g} is shorter than its {n} sections of "
-            f"{g.section_length_m:g} m ({strip:g} m): set it to {strip:g} m plus the supports, e.g. "
-            f"{n * (g.section_length_m + 0.01):g} m with 10 mm supports"
+            f"{_lengths_text(g)} m ({strip:g} m): set it to {strip:g} m plus the supports, e.g. "
+            f"{example:g} m with 10 mm supports"
         )
     else:
-        half, pitch = 0.5 * max(support, 0.0), g.digit_length_m / n
+        half = 0.5 * max(support, 0.0)
+        centres = (0.0, *g.support_centres_m)  # the clamp's half support, then the one ending each section
         for i, x in enumerate(g.gauge_positions_m):
-            k = round(x / pitch)  # the nearest support
+            at = min(centres, key=lambda centre: abs(x - centre))  # the nearest support
             if x > g.digit_length_m - half - LENGTH_TOLERANCE_M:
                 lines.append(
                     f"[geometry] gauge_positions_m[{i}] = {x:g} m is past the strip, which ends at "
                     f"{g.digit_length_m - half:g} m"
                 )
-            elif abs(x - k * pitch) < half + LENGTH_TOLERANCE_M:
+            elif abs(x - at) < half + LENGTH_TOLERANCE_M:
                 lines.append(
-                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {k * pitch:g} m "
-                    f"({k * pitch - half:g} to {k * pitch + half:g} m): put it on the strip"
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {at:g} m "
+                    f"({at - half:g} to {at + half:g} m): put it on the strip"
                 )
     for i in range(1, count):  # repr-equal places are refused on loading; these are apart by less than the tolerance
         gap = g.gauge_positions_m[i] - g.gauge_positions_m[i - 1]
@@ -708,8 +788,16 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
     return lines
 
 
-def derived_figures(params: RigParams) -> dict[str, float]:
-    """What the description implies (SI units), as ``flexdigit params`` prints it.
+def _lengths_text(g: Geometry) -> str:
+    """``section_length_m`` as a message shows it: ``0.08`` or ``[0.1, 0.06]``."""
+    if g.equal_sections:
+        return f"{g.section_length_m:g}"
+    return "[" + ", ".join(f"{x:g}" for x in g.section_length_m) + "]"
+
+
+def derived_figures(params: RigParams) -> dict[str, float | list[float]]:
+    """What the description implies (SI units), as ``flexdigit params`` prints it: figures, and where each
+    section's free strip starts and ends and each support's centre sits (m from the clamp).
 
     Examples
     --------
@@ -722,7 +810,10 @@ def derived_figures(params: RigParams) -> dict[str, float]:
         "second_moment_m4": g.second_moment_m4,
         "bending_stiffness_n_m2": params.bending_stiffness_n_m2,
         "section_pitch_m": g.section_pitch_m,
-        "support_length_m": (g.digit_length_m - g.strip_length_m) / g.section_count,
+        "support_length_m": g.support_length_m,
+        "section_starts_m": [a for a, _ in g.section_bounds_m],
+        "section_ends_m": [b for _, b in g.section_bounds_m],
+        "support_centres_m": list(g.support_centres_m),
         "gauge_count": len(g.gauge_positions_m),
         "rad_per_command": a.rad_per_command,
         "deg_per_command": a.deg_per_command,
@@ -770,8 +861,10 @@ def params_template(params: RigParams | None = None) -> str:
     out = [
         "# flexdigit: a planar digit described (SI units; 'command' is the servo board's 0..254 position).",
         "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE",
-        f"# Rules: 1-{MAX_SECTIONS} sections; strip_length_m = section_count x section_length_m; supports of",
-        "# (digit_length_m - strip_length_m) / section_count centred every digit_length_m / section_count;",
+        f"# Rules: 1-{MAX_SECTIONS} sections; section_length_m one length for all (strip_length_m = section_count x",
+        "# section_length_m) or a list of section_count lengths from the base (strip_length_m = their sum);",
+        "# section_count supports of (digit_length_m - strip_length_m) / section_count each end a section (half",
+        "# a support at the clamp); `flexdigit params FILE` prints where each section starts and ends;",
         f"# 1-{MAX_GAUGES} gauges on the strip, one adc_channels entry each; a cable pair needs a pretension.",
     ]
     for f in dataclasses.fields(params):
@@ -794,19 +887,21 @@ def params_template(params: RigParams | None = None) -> str:
 
 def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
     """The lengths a ``[geometry]`` table leaves out, derived from the ones it gives (issue 24): the strip from the
-    sections (``section_count x section_length_m``), the digit from the strip and the thesis's 10 mm supports.
+    sections (``section_count x section_length_m``, or the sum of a list of lengths), the digit from the strip and
+    the thesis's 10 mm supports.
     A table that gives them all is checked (:func:`digit_inconsistencies`), never changed."""
     count, section = geometry.get("section_count"), geometry.get("section_length_m")
     if count is None and section is None:
         return geometry  # the thesis's sections: its lengths are the defaults
-    if not isinstance(count, int | type(None)) or not isinstance(section, int | float | type(None)):
+    lengths = isinstance(section, list) and all(isinstance(x, int | float) and not isinstance(x, bool) for x in section)
+    if not isinstance(count, int | type(None)) or not (lengths or isinstance(section, int | float | type(None))):
         return geometry  # mistyped: the dataclass names the key
     thesis = Geometry()
-    count = thesis.section_count if count is None else count
+    count = (len(section) if lengths else thesis.section_count) if count is None else count
     section = thesis.section_length_m if section is None else section
     out = dict(geometry)
     if "strip_length_m" not in out:
-        out["strip_length_m"] = count * section
+        out["strip_length_m"] = math.fsum(section) if lengths else count * section
     if "digit_length_m" not in out and isinstance(out["strip_length_m"], int | float):
         support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
         out["digit_length_m"] = out["strip_length_m"] + count * support

@@ -12,7 +12,9 @@ become under that digit's description, each by the law below. ``0`` subscripts a
 - ``housing_ei_n_m2``: the elastomer housing encloses strip and cable guides, a section ``w`` wide and ``~2 e``
   tall, so its bending stiffness scales as ``w (2 e)^3``: ``EI_h = EI_h0 (w / w0) (e / e0)^3``. The base section
   keeps the thesis's base value (stiffened by the clamp, 3.4.1: gauge 1 barely bends), the others the thesis's
-  uniform value (the mean of its sections 2..n).
+  uniform value (the mean of its sections 2..n). ``EI`` is a property of the cross-section, not of the length:
+  each section's rotational stiffness in the twin's chain is ``EI / l_k`` over its own free length ``l_k``
+  (``Geometry.section_bounds_m``), so sections of unequal lengths scale with their own length there.
 - ``strip_beta_s``, ``housing_beta_s``: stiffness-proportional damping ``c = beta k``; ``beta`` is a relaxation
   time of the material (spring steel, elastomer), the same in any geometry: kept.
 - ``cable_stiffness_n_m``: ``k = E_c A_c / l_c`` with the cable's run ``l_c`` along the digit: ``k = k0 L0 / L``.
@@ -80,8 +82,7 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
     width = g.strip_width_m / g0.strip_width_m
     ecc = g.cable_eccentricity_m / g0.cable_eccentricity_m
     length = g.digit_length_m / g0.digit_length_m
-    support = (g.digit_length_m - g.strip_length_m) / n
-    support0 = (g0.digit_length_m - g0.strip_length_m) / g0.section_count
+    support, support0 = g.support_length_m, g0.support_length_m
     support_mass = float(np.mean(ref.support_mass_kg)) * (support / support0) * width * ecc
     housing = np.asarray(ref.housing_ei_n_m2, dtype=float) * width * ecc**3
     uniform = float(np.mean(housing[1:])) if housing.size > 1 else float(housing[0])
