@@ -82,14 +82,16 @@ DIGITS: dict[str, dict] = {
         },
         "sensors": {"adc_channels": [0, 1]},
     },
-    # sections of unequal lengths (60, 100, 80 mm from the base) on the thesis's 0.27 m, a gauge midway on each
+    # sections of unequal lengths (60, 100, 80 mm from the base) and supports (10, 12, 10 mm: half the first at
+    # the clamp, the last one's centre at the tip), 0.272 m, a gauge midway on each section's strip
     "unequal-sections": {
         "geometry": {
             "section_count": 3,
             "section_length_m": [0.06, 0.10, 0.08],
+            "support_lengths_m": [0.01, 0.012, 0.01],
             "strip_length_m": 0.24,
-            "digit_length_m": 0.27,
-            "gauge_positions_m": [0.035, 0.125, 0.225],
+            "digit_length_m": 0.272,
+            "gauge_positions_m": [0.035, 0.125, 0.227],
         },
     },
 }

@@ -115,6 +115,9 @@ class Geometry:
         30 degrees per section, to keep the spring steel elastic (2.2).
     guide_hole_diameter_m : float
         Cable guide holes, 0.042 in (2.2.1).
+    support_lengths_m : tuple of float, optional
+        One nylon support length per section, the support that ends it (the last one's centre is the tip; half of
+        the first sits at the clamp); left out: ``(digit_length_m - strip_length_m) / section_count`` each (10 mm).
     """
 
     section_count: int = 3
@@ -127,6 +130,7 @@ class Geometry:
     gauge_positions_m: tuple[float, ...] = (0.045, 0.135, 0.225)
     max_rotation_per_section_deg: float = 30.0
     guide_hole_diameter_m: float = 1.067e-3
+    support_lengths_m: tuple[float, ...] | None = None
 
     _parameter_constraints = {
         "section_count": [Plausible("", 1, 50, "1 to 50 sectional supports; more is a continuum", integer=True)],
@@ -142,6 +146,7 @@ class Geometry:
         "gauge_positions_m": [Array(ndim=1, min_length=1, increasing=True, low=0, low_open=True)],
         "max_rotation_per_section_deg": [Interval(Real, 0, 180, closed="right")],
         "guide_hole_diameter_m": [Plausible("m", 1e-5, 0.02, "a cable guide hole 0.01 to 20 mm across")],
+        "support_lengths_m": [Array(ndim=1, min_length=1, low=0.0, high=2.0), None],  # one per section, 0 to 2 m
     }
 
     def __post_init__(self) -> None:
@@ -161,6 +166,14 @@ class Geometry:
                     f"(one per section). Got {lengths.tolist()!r} instead."
                 )
             object.__setattr__(self, "section_length_m", tuple(float(x) for x in lengths))
+        if self.support_lengths_m is not None:  # one support per section, the one that ends it
+            supports = check_array(self.support_lengths_m, "support_lengths_m", owner, ndim=1, low=0.0, high=2.0)
+            if supports.size != self.section_count:
+                raise ParameterError(
+                    f"The 'support_lengths_m' parameter of {owner} must have {self.section_count} values (one per "
+                    f"section). Got {supports.tolist()!r} instead."
+                )
+            object.__setattr__(self, "support_lengths_m", tuple(float(x) for x in supports))
         check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
         positions = check_array(
             self.gauge_positions_m,
@@ -188,22 +201,32 @@ class Geometry:
 
     @property
     def equal_sections(self) -> bool:
-        """True if ``section_length_m`` is one length for every section (the thesis rig's)."""
-        return not isinstance(self.section_length_m, tuple)
+        """True if ``section_length_m`` is one length for every section and no ``support_lengths_m`` is given (the
+        thesis rig's layout)."""
+        return not isinstance(self.section_length_m, tuple) and self.support_lengths_m is None
 
     @property
     def section_lengths_m(self) -> tuple[float, ...]:
         """Each section's free strip (m), from the base: ``strip_length_m / section_count`` each for one
         ``section_length_m`` (as the twin has always laid them out), else the list given."""
-        if self.equal_sections:
+        if not isinstance(self.section_length_m, tuple):
             return (self.strip_length_m / self.section_count,) * self.section_count
         return self.section_length_m
 
     @property
     def support_length_m(self) -> float:
-        """Each support's length (m): ``(digit_length_m - strip_length_m) / section_count`` (10 mm; half of one at
-        the clamp and half at the tip)."""
+        """``(digit_length_m - strip_length_m) / section_count`` (m): each support's length (10 mm on the thesis
+        rig; half of one at the clamp and half at the tip) unless ``support_lengths_m`` gives them
+        (:attr:`supports_m`)."""
         return (self.digit_length_m - self.strip_length_m) / self.section_count
+
+    @property
+    def supports_m(self) -> tuple[float, ...]:
+        """Each support's length (m), the one that ends section ``k``: ``support_lengths_m`` if given, else
+        :attr:`support_length_m` each."""
+        if self.support_lengths_m is None:
+            return (self.support_length_m,) * self.section_count
+        return self.support_lengths_m
 
     @property
     def section_bounds_m(self) -> tuple[tuple[float, float], ...]:
@@ -228,8 +251,9 @@ class Geometry:
             pitch = self.section_pitch_m
             half = 0.5 * (pitch - self.strip_length_m / n)
             return tuple((k * pitch + half, (k + 1) * pitch - half) for k in range(n))
-        support, bounds, start = self.support_length_m, [], 0.5 * self.support_length_m
-        for length in self.section_length_m:
+        supports, bounds = self.supports_m, []
+        start = 0.5 * supports[0]  # half the first support at the clamp (2.2)
+        for length, support in zip(self.section_lengths_m, supports, strict=True):
             bounds.append((start, start + length))
             start += length + support
         return tuple(bounds)
@@ -248,8 +272,8 @@ class Geometry:
         if self.equal_sections:
             pitch = self.section_pitch_m
             return tuple(min(pitch * (k + 1.0), length) for k in range(n))
-        half = 0.5 * self.support_length_m
-        return tuple(min(end + half, length) for _, end in self.section_bounds_m[:-1]) + (length,)
+        ends = [end + 0.5 * support for (_, end), support in zip(self.section_bounds_m, self.supports_m, strict=True)]
+        return tuple(min(c, length) for c in ends[:-1]) + (length,)
 
     @property
     def cross_section_m2(self) -> float:
@@ -677,7 +701,8 @@ class RigParams:
                 default = getattr(factory(), key)
                 if isinstance(default, tuple) or default is None:  # None: an optional list, one per gauge
                     if not isinstance(value, list):
-                        like = f"like {list(default)!r}" if default is not None else "with one value per gauge"
+                        per = "section" if key == "support_lengths_m" else "gauge"
+                        like = f"like {list(default)!r}" if default is not None else f"with one value per {per}"
                         raise ParameterError(f"{source}: [{name}] {key} must be a list {like}. Got {value!r} instead.")
                     value = tuple(value)
                 converted[key] = value
@@ -731,7 +756,7 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
         lines.append(f"[geometry] section_count = {n}: a digit has 1 to {MAX_SECTIONS} sections")
     if count > MAX_GAUGES:
         lines.append(f"[geometry] gauge_positions_m has {count} gauges: a digit carries 1 to {MAX_GAUGES}")
-    if g.equal_sections:
+    if not isinstance(g.section_length_m, tuple):
         strip = n * g.section_length_m
         sections = f"section_count x section_length_m = {n} x {g.section_length_m:g}"
         example = n * (g.section_length_m + 0.01)
@@ -744,21 +769,32 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
             f"[geometry] strip_length_m = {g.strip_length_m:g} but {sections} = {strip:g} m: the lengths do not add up"
         )
     support = (g.digit_length_m - strip) / n
-    if support < -LENGTH_TOLERANCE_M:
+    given = g.support_lengths_m
+    if given is not None:  # half the first at the clamp, the others whole, the last one's centre at the tip
+        digit = strip + 0.5 * given[0] + math.fsum(given[:-1]) + 0.5 * given[-1]
+        if abs(digit - g.digit_length_m) > LENGTH_TOLERANCE_M:
+            lines.append(
+                f"[geometry] digit_length_m = {g.digit_length_m:g} but the strip ({strip:g} m) and support_lengths_m "
+                f"{list(given)} (half the first, the others whole, half the last) make {digit:g} m: the lengths do "
+                "not add up"
+            )
+    elif support < -LENGTH_TOLERANCE_M:
         lines.append(
             f"[geometry] digit_length_m = {g.digit_length_m:g} is shorter than its {n} sections of "
             f"{_lengths_text(g)} m ({strip:g} m): set it to {strip:g} m plus the supports, e.g. "
             f"{example:g} m with 10 mm supports"
         )
-    else:
-        half = 0.5 * max(support, 0.0)
-        centres = (0.0, *g.support_centres_m)  # the clamp's half support, then the one ending each section
+    if given is not None or support >= -LENGTH_TOLERANCE_M:
+        halves = [0.5 * max(x, 0.0) for x in g.supports_m]
+        # the clamp's half support (as long as half the first), then the one ending each section
+        supports = [(0.0, halves[0]), *zip(g.support_centres_m, halves, strict=True)]
+        tip_half = halves[-1]
         for i, x in enumerate(g.gauge_positions_m):
-            at = min(centres, key=lambda centre: abs(x - centre))  # the nearest support
-            if x > g.digit_length_m - half - LENGTH_TOLERANCE_M:
+            at, half = min(supports, key=lambda centre_half: abs(x - centre_half[0]))  # the nearest support
+            if x > g.digit_length_m - tip_half - LENGTH_TOLERANCE_M:
                 lines.append(
                     f"[geometry] gauge_positions_m[{i}] = {x:g} m is past the strip, which ends at "
-                    f"{g.digit_length_m - half:g} m"
+                    f"{g.digit_length_m - tip_half:g} m"
                 )
             elif abs(x - at) < half + LENGTH_TOLERANCE_M:
                 lines.append(
@@ -790,7 +826,7 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
 
 def _lengths_text(g: Geometry) -> str:
     """``section_length_m`` as a message shows it: ``0.08`` or ``[0.1, 0.06]``."""
-    if g.equal_sections:
+    if not isinstance(g.section_length_m, tuple):
         return f"{g.section_length_m:g}"
     return "[" + ", ".join(f"{x:g}" for x in g.section_length_m) + "]"
 
@@ -811,6 +847,7 @@ def derived_figures(params: RigParams) -> dict[str, float | list[float]]:
         "bending_stiffness_n_m2": params.bending_stiffness_n_m2,
         "section_pitch_m": g.section_pitch_m,
         "support_length_m": g.support_length_m,
+        "supports_m": list(g.supports_m),
         "section_starts_m": [a for a, _ in g.section_bounds_m],
         "section_ends_m": [b for _, b in g.section_bounds_m],
         "support_centres_m": list(g.support_centres_m),
@@ -876,6 +913,9 @@ def params_template(params: RigParams | None = None) -> str:
             value = list(value) if isinstance(value, tuple) else value
             if key in notes:
                 out.append(f"# {notes[key]}")
+            if value is None and key == "support_lengths_m":  # optional: the thesis's, commented out
+                out.append(f"# {key} = " + json.dumps([round(x, 12) for x in params.geometry.supports_m]))
+                continue
             if value is None:  # optional: shown as an example, commented out
                 keys = ("gauge_bridges", "gauge_factors", "amplifier_gains_v_per_v")
                 example = dict(zip(keys, section.chain(len(params.geometry.gauge_positions_m)), strict=True))
@@ -891,7 +931,7 @@ def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
     the thesis's 10 mm supports.
     A table that gives them all is checked (:func:`digit_inconsistencies`), never changed."""
     count, section = geometry.get("section_count"), geometry.get("section_length_m")
-    if count is None and section is None:
+    if count is None and section is None and "support_lengths_m" not in geometry:
         return geometry  # the thesis's sections: its lengths are the defaults
     lengths = isinstance(section, list) and all(isinstance(x, int | float) and not isinstance(x, bool) for x in section)
     if not isinstance(count, int | type(None)) or not (lengths or isinstance(section, int | float | type(None))):
@@ -902,9 +942,18 @@ def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
     out = dict(geometry)
     if "strip_length_m" not in out:
         out["strip_length_m"] = math.fsum(section) if lengths else count * section
+    supports = geometry.get("support_lengths_m")
     if "digit_length_m" not in out and isinstance(out["strip_length_m"], int | float):
-        support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
-        out["digit_length_m"] = out["strip_length_m"] + count * support
+        if (
+            isinstance(supports, list | tuple)
+            and supports
+            and all(isinstance(x, int | float) and not isinstance(x, bool) for x in supports)
+        ):  # half the first at the clamp, the others whole, the last one's centre at the tip
+            extra = 0.5 * supports[0] + math.fsum(supports[:-1]) + 0.5 * supports[-1]
+            out["digit_length_m"] = out["strip_length_m"] + extra
+        else:
+            support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
+            out["digit_length_m"] = out["strip_length_m"] + count * support
     return out
 
 

@@ -16,8 +16,8 @@ from flexdigit.params import load_params
 # calibrate on the twin's own noisy records: its fit meets each release/sweep target to this (the fitted twin
 # reproduces the records it was simulated from; 1e-6 measured on seed 0, the noise is in both sides)
 FIT_RTOL = 1e-3
-# the layout the file implies: 60, 100, 80 mm of strip with 10 mm supports (m, printed to 6 significant digits)
-STARTS_M, ENDS_M = [0.005, 0.075, 0.185], [0.065, 0.175, 0.265]
+# the layout the file implies: 60, 100, 80 mm of strip with 10, 12, 10 mm supports (m)
+STARTS_M, ENDS_M = [0.005, 0.075, 0.187], [0.065, 0.175, 0.267]
 
 
 def _json(argv, capsys) -> dict:
@@ -30,8 +30,8 @@ def test_params_prints_where_each_unequal_section_lies(tmp_path, capsys):
     assert main(["params", str(path)]) == 0
     out = capsys.readouterr().out
     assert "section_length_m = [0.06, 0.1, 0.08]" in out
-    assert "section_starts_m = [0.005, 0.075, 0.185]" in out
-    assert "support_centres_m = [0.07, 0.18, 0.27]" in out
+    assert "section_starts_m = [0.005, 0.075, 0.187]" in out
+    assert "support_centres_m = [0.07, 0.181, 0.272]" in out
     derived = _json(["params", str(path)], capsys)["derived"]
     assert derived["section_starts_m"] == pytest.approx(STARTS_M, abs=1e-12)
     assert derived["section_ends_m"] == pytest.approx(ENDS_M, abs=1e-12)

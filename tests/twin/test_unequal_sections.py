@@ -77,13 +77,22 @@ def test_the_thesis_shape_beam_keeps_its_flexible_cells_to_the_bit():
 
 
 def test_unequal_bounds_follow_the_lengths_from_the_base():
-    # 60, 100, 80 mm of strip with (0.27 - 0.24) / 3 = 10 mm supports, half of one at the clamp (2.2's layout)
+    # 60, 100, 80 mm of strip, supports of 10, 12, 10 mm after each, half the first at the clamp (2.2's layout)
     g = UNEQUAL.geometry
-    expected = [(0.005, 0.065), (0.075, 0.175), (0.185, 0.265)]
+    expected = [(0.005, 0.065), (0.075, 0.175), (0.187, 0.267)]
     assert np.asarray(g.section_bounds_m) == pytest.approx(np.asarray(expected), abs=LENGTH_ATOL_M)
-    assert g.support_centres_m == pytest.approx((0.07, 0.18, 0.27), abs=LENGTH_ATOL_M)
+    assert g.support_centres_m == pytest.approx((0.07, 0.181, 0.272), abs=LENGTH_ATOL_M)
     assert g.support_centres_m[-1] == g.digit_length_m  # the tip support's mass never past the tip
     assert not g.equal_sections and Geometry().equal_sections
+    # one support length given for all: the same layout as leaving them out (to rounding)
+    same = Geometry(support_lengths_m=(0.01, 0.01, 0.01))
+    assert np.asarray(same.section_bounds_m) == pytest.approx(np.asarray(Geometry().section_bounds_m), abs=1e-15)
+
+
+def test_each_support_weighs_by_its_own_length():
+    # calibration_for: a support's mass scales with its length (the block l_s w 2e); the thesis's 10 mm weigh m0
+    m0 = float(np.mean(default_calibration().support_mass_kg))
+    assert calibration_for(UNEQUAL).support_mass_kg == pytest.approx((m0, 1.2 * m0, m0), rel=1e-12)
 
 
 def test_unequal_sections_put_cells_stiffness_and_housing_mass_on_their_own_length():
@@ -133,4 +142,6 @@ def test_an_unequal_digit_scaled_by_the_design_study_keeps_its_proportions():
 
     scaled = _scaled(UNEQUAL, 1.5).geometry
     assert scaled.section_lengths_m == pytest.approx((0.09, 0.15, 0.12), abs=LENGTH_ATOL_M)
+    assert scaled.supports_m == pytest.approx((0.015, 0.018, 0.015), abs=LENGTH_ATOL_M)
+    assert scaled.support_centres_m[-1] == scaled.digit_length_m
     assert math.fsum(scaled.section_lengths_m) == pytest.approx(scaled.strip_length_m, abs=LENGTH_ATOL_M)

@@ -348,7 +348,12 @@ def _scaled(params: RigParams, size: float) -> RigParams:
     g = params.geometry
     geometry = dataclasses.replace(
         g,
-        section_length_m=g.section_length_m * size if g.equal_sections else tuple(x * size for x in g.section_length_m),
+        section_length_m=(
+            tuple(x * size for x in g.section_length_m)
+            if isinstance(g.section_length_m, tuple)
+            else g.section_length_m * size
+        ),
+        support_lengths_m=None if g.support_lengths_m is None else tuple(x * size for x in g.support_lengths_m),
         digit_length_m=g.digit_length_m * size,
         strip_length_m=g.strip_length_m * size,
         gauge_positions_m=tuple(x * size for x in g.gauge_positions_m),
