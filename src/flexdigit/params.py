@@ -731,31 +731,10 @@ MAX_GAUGES = 8
 LENGTH_TOLERANCE_M = 1e-6
 
 
-def digit_inconsistencies(params: RigParams) -> list[str]:
-    """Every way the description contradicts itself, one line each naming the key; empty if it holds together.
-
-    The rules (the twin's layout, :func:`flexdigit.twin.digit.build_digit`): ``section_count`` sections of
-    ``section_length_m`` of free strip make ``strip_length_m``; each section's pitch ``digit_length_m /
-    section_count`` holds its free strip and one support, so the supports are ``(digit_length_m - strip_length_m)
-    / section_count`` long, centred at 0, pitch, 2 pitch, ... (half a support at the clamp and at the tip); a gauge
-    sits on the free strip, never on a support or past the strip; one ADC channel per gauge; a cable pair keeps a
-    pretension, a single cable none.
-
-    Examples
-    --------
-    >>> digit_inconsistencies(RigParams())
-    []
-    >>> four = RigParams(geometry=Geometry(section_count=4))   # 4 x 80 mm with digit_length_m left at 0.27
-    >>> digit_inconsistencies(four)[0].split(":")[0]
-    '[geometry] strip_length_m = 0.24 but section_count x section_length_m = 4 x 0.08 = 0.32 m'
-    """
-    g, s, c = params.geometry, params.sensors, params.cables
-    lines = []
-    n, count = g.section_count, len(g.gauge_positions_m)
-    if n > MAX_SECTIONS:
-        lines.append(f"[geometry] section_count = {n}: a digit has 1 to {MAX_SECTIONS} sections")
-    if count > MAX_GAUGES:
-        lines.append(f"[geometry] gauge_positions_m has {count} gauges: a digit carries 1 to {MAX_GAUGES}")
+def _layout_inconsistencies(g: Geometry) -> list[str]:
+    """The lengths that do not add up and the gauges off the strip (:func:`digit_inconsistencies`)."""
+    lines: list[str] = []
+    n = g.section_count
     if not isinstance(g.section_length_m, tuple):
         strip = n * g.section_length_m
         sections = f"section_count x section_length_m = {n} x {g.section_length_m:g}"
@@ -801,6 +780,36 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
                     f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {at:g} m "
                     f"({at - half:g} to {at + half:g} m): put it on the strip"
                 )
+    return lines
+
+
+def digit_inconsistencies(params: RigParams) -> list[str]:
+    """Every way the description contradicts itself, one line each naming the key; empty if it holds together.
+
+    The rules (the twin's layout, :func:`flexdigit.twin.digit.build_digit`, :attr:`Geometry.section_bounds_m`):
+    ``section_count`` sections of ``section_length_m`` (one length, or one per section) of free strip make
+    ``strip_length_m``; each section is followed by one support, ``support_lengths_m`` long if given, else
+    ``(digit_length_m - strip_length_m) / section_count``, half the first at the clamp and the last one's centre at
+    the tip (equal sections: centred at 0, pitch, 2 pitch, ...); a gauge sits on the free strip, never on a
+    support or past the strip; one ADC channel per gauge; a cable pair keeps a
+    pretension, a single cable none.
+
+    Examples
+    --------
+    >>> digit_inconsistencies(RigParams())
+    []
+    >>> four = RigParams(geometry=Geometry(section_count=4))   # 4 x 80 mm with digit_length_m left at 0.27
+    >>> digit_inconsistencies(four)[0].split(":")[0]
+    '[geometry] strip_length_m = 0.24 but section_count x section_length_m = 4 x 0.08 = 0.32 m'
+    """
+    g, s, c = params.geometry, params.sensors, params.cables
+    lines = []
+    n, count = g.section_count, len(g.gauge_positions_m)
+    if n > MAX_SECTIONS:
+        lines.append(f"[geometry] section_count = {n}: a digit has 1 to {MAX_SECTIONS} sections")
+    if count > MAX_GAUGES:
+        lines.append(f"[geometry] gauge_positions_m has {count} gauges: a digit carries 1 to {MAX_GAUGES}")
+    lines += _layout_inconsistencies(g)
     for i in range(1, count):  # repr-equal places are refused on loading; these are apart by less than the tolerance
         gap = g.gauge_positions_m[i] - g.gauge_positions_m[i - 1]
         if gap < LENGTH_TOLERANCE_M:
