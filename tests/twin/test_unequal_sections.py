@@ -60,6 +60,22 @@ def test_equal_sections_keep_their_arrays_to_the_bit(name, cells):
     assert np.array_equal(supports, old["support_s_m"])
 
 
+@pytest.mark.parametrize("name", EQUAL)
+def test_equal_sections_keep_their_rotation_reference_and_stretches_to_the_bit(name):
+    from flexdigit.rig.rotation_reference import DigitShape
+    from flexdigit.studies.design_study import SUPPORT_CLEARANCE_M, _strip_stretches
+
+    params = RigParams.from_dict(DIGITS[name])
+    geo = params.geometry
+    pitch, flex = geo.section_pitch_m, geo.strip_length_m / geo.section_count
+    half = 0.5 * (pitch - flex)
+    starts = tuple(k * pitch + half for k in range(geo.section_count))
+    assert DigitShape.from_params(params) == DigitShape(geo.digit_length_m, starts, tuple(a + flex for a in starts))
+    clear = SUPPORT_CLEARANCE_M
+    old = [(k * pitch + half + clear, (k + 1) * pitch - half - clear) for k in range(geo.section_count)]
+    assert _strip_stretches(params) == old
+
+
 def test_the_thesis_shape_beam_keeps_its_flexible_cells_to_the_bit():
     """DigitBeam (shape/) against its equal-pitch rule: ``x - k p`` strictly inside ``(h, p - h)``."""
     from flexdigit.shape.shape import DigitBeam
