@@ -48,6 +48,10 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: Returned by :func:`equilibrate` when Newton did not converge.
 NO_PROGRESS = -1
 RATE = 0.9
+#: The rate of the static chord Newton above which its Jacobian is rebuilt
+EQUILIBRIUM_RATE = 0.5
+#: The update (of the length, or rad) below which the static Newton keeps its Jacobian
+CHORD_FROM = 1e-5
 #: Newton iterations a Jacobian is given to converge before it is refreshed
 BUDGET = 4
 #: The largest Newton update of a step's frames (rad) or nodes (of the length): a damped Newton beyond
@@ -436,8 +440,9 @@ def _corotate(q, q_jac, turn, vec, backwards):
 
 @_jit
 def equilibrate(x, q, model, hb, tol, max_iter):
-    """Newton on the static balance from ``(x, q)`` (overwritten with the equilibrium); the Jacobian fresh each
-    iteration. Returns the iterations taken, or :data:`NO_PROGRESS`."""
+    """Newton on the static balance from ``(x, q)`` (overwritten with the equilibrium); the Jacobian kept while
+    the updates shrink faster than EQUILIBRIUM_RATE (a chord Newton: a start near the equilibrium needs one
+    Jacobian, the costly part), else rebuilt. Returns the iterations taken, or :data:`NO_PROGRESS`."""
     n = q.shape[0]
     size = 6 * n
     length = 0.0
@@ -460,8 +465,13 @@ def equilibrate(x, q, model, hb, tol, max_iter):
     mass = np.zeros(n + 1)
     inertia = np.zeros((n, 3))
     h = _steps(size, 1.0, length, 1e-5)  # central differences: error ~h^2
+    last = np.inf  # the last update with the kept Jacobian; inf: rebuild it
+    rate = 0.0
     for it in range(max_iter):
-        _jacobian(z, h, hb, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, jac)
+        if last == np.inf:
+            _jacobian(
+                z, h, hb, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, jac
+            )
         _residual(z, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, res)
         for i in range(size):
             res[i] = -res[i]
@@ -469,13 +479,23 @@ def equilibrate(x, q, model, hb, tol, max_iter):
         big = 0.0
         for i in range(size):
             big = max(big, abs(dz[i]) / (length if i % 6 >= 3 else 1.0))
+        if not np.isfinite(big) or big > 1.0:
+            return NO_PROGRESS
+        if last < np.inf:  # the Jacobian kept (a chord Newton): the error left is rate / (1 - rate) of the update
+            rate = big / last
+            if rate >= EQUILIBRIUM_RATE:  # too slow (or diverging): this update dropped, the Jacobian rebuilt
+                last = np.inf
+                continue
         _configure(dz, 1.0, x, q, psih, xx, qq)
         x[:, :] = xx
         q[:, :, :] = qq
-        if big < tol:
+        if last == np.inf:  # a fresh Jacobian: Newton's update, quadratic
+            if big < tol:
+                return it + 1
+        elif rate / (1.0 - rate) * big < tol:
             return it + 1
-        if not np.isfinite(big) or big > 1.0:
-            return NO_PROGRESS
+        # far from the equilibrium Newton's quadratic rate is worth a fresh Jacobian; near it the chord's is not
+        last = big if big < CHORD_FROM else np.inf
     return NO_PROGRESS
 
 
