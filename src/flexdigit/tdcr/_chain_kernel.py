@@ -359,7 +359,16 @@ def _jacobian(z, h, hb, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, 
             span = 2.0 * h[j] if central else h[j]
             for i in range(max(0, j - hb), min(size, j + hb + 1)):
                 jac[i, j - i + hb] = (r1[i] - r0[i]) / span
-    for k in range(size):  # Doolittle, in the band; the pivot kept as its reciprocal (no division in the solve)
+    _band_factor(jac, hb)
+
+
+@_jit
+def _band_factor(jac, hb):
+    """LU (Doolittle, no pivoting: the matrix is mass + dt^2 stiffness of a stable rod) of the band ``jac``
+    (``jac[i, j - i + hb]``, zero outside the matrix), in place; the pivots kept as their reciprocals (no
+    division in :func:`_band_solve`)."""
+    size = jac.shape[0]
+    for k in range(size):
         inv = 1.0 / jac[k, hb]
         jac[k, hb] = inv
         for i in range(k + 1, min(size, k + hb + 1)):
