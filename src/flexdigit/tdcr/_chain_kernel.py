@@ -55,6 +55,8 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: Returned by :func:`equilibrate` when Newton did not converge.
 NO_PROGRESS = -1
 RATE = 0.9
+#: Multiplied by rather than divided by in a step's history (its ~500 divisions were ~8 % of a step)
+THIRD = 1.0 / 3.0
 #: The rate of the static chord Newton above which its Jacobian is rebuilt
 EQUILIBRIUM_RATE = 0.5
 #: The update (of the length, or rad) below which the static Newton keeps its Jacobian
@@ -162,9 +164,10 @@ def forces(
         tb0 = q00 * d0 + q10 * d1 + q20 * d2
         tb1 = q01 * d0 + q11 * d1 + q21 * d2
         tb2 = q02 * d0 + q12 * d1 + q22 * d2
-        s0 = tb0 / lengths[e]
-        s1 = tb1 / lengths[e]
-        s2 = tb2 / lengths[e] - 1.0
+        per_length = 1.0 / lengths[e]  # one division, not three (a division costs ~5 multiplications)
+        s0 = tb0 * per_length
+        s1 = tb1 * per_length
+        s2 = tb2 * per_length - 1.0
         sig[e, 0] = s0
         sig[e, 1] = s1
         sig[e, 2] = s2
@@ -188,9 +191,10 @@ def forces(
             k0, k1, k2, r00, r01, r02, r10, r11, r12, r20, r21, r22 = _log_rel(_IDENTITY, 0, q, 0)
         else:
             k0, k1, k2, r00, r01, r02, r10, r11, r12, r20, r21, r22 = _log_rel(q, i - 1, q, i)
-        k0 /= voronoi[i]
-        k1 /= voronoi[i]
-        k2 /= voronoi[i]
+        per_length = 1.0 / voronoi[i]
+        k0 *= per_length
+        k1 *= per_length
+        k2 *= per_length
         kap[i, 0] = k0
         kap[i, 1] = k1
         kap[i, 2] = k2
@@ -547,6 +551,7 @@ def _newton(
     jac, q_jac, turn, h, padded, res, xx, qq, f, t, sig, kap = work
     size = z.shape[0]
     dz = padded[hb : hb + size]
+    a_per_length = a / length  # an update's size: displacements over the length, rotations in rad
     z[:] = z_guess
     last = np.inf
     stale = keep[0]
@@ -576,7 +581,7 @@ def _newton(
         _corotate(qq, q_jac, turn, dz, False)
         big = 0.0
         for i in range(size):
-            d = a * abs(dz[i]) / (length if i % 6 >= 3 else 1.0)
+            d = abs(dz[i]) * (a_per_length if i % 6 >= 3 else a)
             if not d <= big:  # NaN too
                 big = d
         if not np.isfinite(big):
@@ -757,19 +762,19 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
         x_now, q_now, v_now, w_now, sig_now, kap_now = now
         for i in range(n + 1):
             for k in range(3):
-                xh[i, k] = (4.0 * x_now[i, k] - x_prev[i, k]) / 3.0
-                vh[i, k] = (4.0 * v_now[i, k] - v_prev[i, k]) / 3.0
+                xh[i, k] = (4.0 * x_now[i, k] - x_prev[i, k]) * THIRD
+                vh[i, k] = (4.0 * v_now[i, k] - v_prev[i, k]) * THIRD
         for e in range(n):
             if turn_known:
                 for k in range(3):
-                    psih[e, k] = turned[e, k] / 3.0
+                    psih[e, k] = turned[e, k] * THIRD
             else:
                 turn = _log_rel(q_now, e, q_prev, e)
                 psih[e, 0] = turn[0] / -3.0
                 psih[e, 1] = turn[1] / -3.0
                 psih[e, 2] = turn[2] / -3.0
             for k in range(3):
-                wh[e, k] = (4.0 * w_now[e, k] - w_prev[e, k]) / 3.0
+                wh[e, k] = (4.0 * w_now[e, k] - w_prev[e, k]) * THIRD
                 if beta > 0.0:  # the damping's history (zero without: its divisions were ~8 % of a step)
                     hsig[e, k] = (-4.0 * sig_now[e, k] + sig_prev[e, k]) / (2.0 * dt)
                     hkap[e, k] = (-4.0 * kap_now[e, k] + kap_prev[e, k]) / (2.0 * dt)
