@@ -38,6 +38,9 @@ from flexdigit.errors import DesignError
 from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.models.servo import servo_unit_tf
 from flexdigit.params import RigParams
+from flexdigit.twin.digit_calibration import twin_calibration
+from flexdigit.twin.sensors import SensorChain
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, cached_digit
 
 __all__ = ["DigitModel", "digit_model", "MAX_MODES"]
 
@@ -77,8 +80,6 @@ class DigitModel:
 
 def _operating_shape(chain, params: RigParams, at_deg: float):
     """The chain's static solution at the command nearest ``at_deg`` of tip rotation (cable model, E 3.15)."""
-    from flexdigit.twin.twin import cable_shortening_m
-
     a = params.actuator
     command = a.equilibrium_command + round(at_deg / tip_rotation_per_command_deg(params))
     command = min(max(command, a.command_min), a.command_max)
@@ -122,9 +123,6 @@ def digit_model(
     >>> m.plant.noutputs, round(m.deg_per_command, 1), bool(m.modes_wn_rad_s[0] < 157)
     (2, 1.7, True)
     """
-    from flexdigit.twin.digit_calibration import twin_calibration
-    from flexdigit.twin.sensors import SensorChain
-    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit
 
     cal = calibration if calibration is not None else twin_calibration(params)
     cells = cells_per_section or DEFAULT_CELLS_PER_SECTION
@@ -140,18 +138,7 @@ def digit_model(
     k = chain.tangent_stiffness(psi, chain.g_gravity, taut)
     b = np.zeros(n)
     b[-1] = chain.cable_stiffness * chain.eccentricity * taut
-    # the measured rotation: curvature at the gauges, each channel's volts per curvature, the static map's weights
-    d = np.asarray(chain._psi_to_gauge_curvature, dtype=float)  # (G, n), linear in psi
-    sensors = SensorChain(params, cal, np.random.default_rng(0))
-    vpc = sensors.volts_per_curvature(solution.curvature_1_m[0], solution.axial_force_n[0])
-    static = np.linalg.solve(k, b)  # shape per metre of shortening
-    sens_v_per_rad = vpc * (d @ static) / static[-1]  # each gauge's volts per radian of tip rotation
-    information = float(sens_v_per_rad @ sens_v_per_rad)
-    if not information > 0:
-        raise DesignError("design: the digit's gauges do not see the cable's bending (no gauge on a bent strip)")
-    weights = sens_v_per_rad / information  # rad per volt, as the sweep's map fits them
-    c_measured = (weights * vpc) @ d  # (n,), rad per rad
-    sd_deg = math.degrees(float(np.sqrt(np.sum((weights * np.asarray(sensors.white)) ** 2))))
+    c_measured, sd_deg = _measured_rotation(chain, params, cal, solution, np.linalg.solve(k, b))
     # modal form of the chain, modes below Nyquist kept, the rest matched at DC
     minv = np.linalg.inv(m)
     a_chain = np.block([[np.zeros((n, n)), np.eye(n)], [-minv @ k, -minv @ chain.c_psi]])
@@ -175,6 +162,23 @@ def digit_model(
         measurement_sd_deg=sd_deg,
         operating_deg=math.degrees(float(psi[-1])),
     )
+
+
+def _measured_rotation(chain, params: RigParams, calibration, solution, static: np.ndarray):
+    """The rotation the gauges measure as a row of the chain's angles (rad per rad), and one reading's standard
+    deviation from their white noise (deg): curvature at the gauges (linear in the angles), each channel's volts
+    per curvature at the operating shape, and the weights the sweep's equal-weight map gives them (each gauge's
+    sensitivity along the static shape ``static`` over their sum of squares, :class:`RotationEstimator`)."""
+    d = np.asarray(chain._psi_to_gauge_curvature, dtype=float)  # (G, n)
+    sensors = SensorChain(params, calibration, np.random.default_rng(0))
+    vpc = sensors.volts_per_curvature(solution.curvature_1_m[0], solution.axial_force_n[0])
+    sens_v_per_rad = vpc * (d @ static) / static[-1]  # each gauge's volts per radian of tip rotation
+    information = float(sens_v_per_rad @ sens_v_per_rad)
+    if not information > 0:
+        raise DesignError("design: the digit's gauges do not see the cable's bending (no gauge on a bent strip)")
+    weights = sens_v_per_rad / information  # rad per volt, as the sweep's map fits them
+    sd_deg = math.degrees(float(np.sqrt(np.sum((weights * np.asarray(sensors.white)) ** 2))))
+    return (weights * vpc) @ d, sd_deg
 
 
 def _truncated(a: np.ndarray, b: np.ndarray, c: np.ndarray, nyquist_rad_s: float):
