@@ -118,28 +118,31 @@ def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
     return ch
 
 
-def _contact(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
+def _contact_study(ctx, digit: DigitSetting | None) -> tuple[dict, float]:
+    """The contact study (point contacts every ``step`` m along the digit) and its ``step``."""
     step = 0.02 if ctx.fast else 0.01
+    forces = (0.1,) if ctx.fast else (0.1, 0.2)
     if digit is None:
         c = studies.contact_study(
-            positions_m=np.arange(0.0, 0.2701, step),
-            forces_n=(0.1,) if ctx.fast else (0.1, 0.2),
-            n_readings=25,
-            repetitions=20,
-            seed=ctx.seed,
+            positions_m=np.arange(0.0, 0.2701, step), forces_n=forces, n_readings=25, repetitions=20, seed=ctx.seed
         )
-    else:
-        step *= digit.scale
-        c = studies.contact_study(
-            positions_m=np.arange(0.0, digit.length_m + 1e-4, step),
-            forces_n=(0.1,) if ctx.fast else (0.1, 0.2),
-            command=digit.command(12),
-            n_readings=25,
-            repetitions=20,
-            seed=ctx.seed,
-            estimator_model=digit.contact_model(3),
-            truth_model=digit.contact_model(9),
-        )
+        return c, step
+    step *= digit.scale
+    c = studies.contact_study(
+        positions_m=np.arange(0.0, digit.length_m + 1e-4, step),
+        forces_n=forces,
+        command=digit.command(12),
+        n_readings=25,
+        repetitions=20,
+        seed=ctx.seed,
+        estimator_model=digit.contact_model(3),
+        truth_model=digit.contact_model(9),
+    )
+    return c, step
+
+
+def _contact(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
+    c, step = _contact_study(ctx, digit)
     e = ch.entries
     forces = " and ".join(f"{f:g}" for f in np.unique(-c["force_n"]))
     pub = studies.PUBLISHED
