@@ -292,7 +292,8 @@ def thesis_digit_segments(params, calibration, *, housing: bool = True) -> tuple
     half = 0.5 * (pitch - geo.strip_length_m / n)
     ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4
     segments = []
-    supports = [pitch * (k + 1) for k in range(n)]
+    # the last support's centre is the tip itself: pitch * n can round past it (7 x 0.24 / 7), dropping its mass
+    supports = [min(pitch * (k + 1), geo.digit_length_m) for k in range(n)]
     edge = 0.0
     for k in range(n):
         lo, hi = k * pitch + half, (k + 1) * pitch - half

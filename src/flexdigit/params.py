@@ -552,8 +552,8 @@ class RigParams:
                 f"The rig parameters describe a strip its servo cannot bend: K2 = E I r_M / (l e) = {k2:.3g} N m/rad "
                 f"needs {torque_nm * STRIP_BEND_FRACTION:.3g} N m of servo torque for a tenth of the digit's "
                 f"{math.degrees(rotation_rad):g} deg, and the servo stalls at {a.stall_torque_nm:g} N m (check "
-                "strip_thickness_m, strip_width_m, youngs_modulus_pa, pulley_radius_m, cable_eccentricity_m and "
-                "their units)"
+                "strip_thickness_m, strip_width_m, youngs_modulus_pa, pulley_radius_m, gear_ratio, "
+                "cable_eccentricity_m and their units)"
             )
 
     @property
@@ -685,6 +685,13 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
                     f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {k * pitch:g} m "
                     f"({k * pitch - half:g} to {k * pitch + half:g} m): put it on the strip"
                 )
+    for i in range(1, count):  # repr-equal places are refused on loading; these are apart by less than the tolerance
+        gap = g.gauge_positions_m[i] - g.gauge_positions_m[i - 1]
+        if gap < LENGTH_TOLERANCE_M:
+            lines.append(
+                f"[geometry] gauge_positions_m[{i}] = {g.gauge_positions_m[i]!r} m is {gap * 1e6:.3g} um from "
+                f"gauge_positions_m[{i - 1}]: two gauges at one place (positions count to 1 um)"
+            )
     if len(s.adc_channels) != count:
         lines.append(
             f"[sensors] adc_channels has {len(s.adc_channels)} channels for {count} gauges: one per gauge, e.g. "

@@ -241,7 +241,15 @@ class Chain:
         return np.clip(s_m[..., None] - self.joint_s_m, 0.0, self.link_length_m)
 
     def _interpolation(self, s_query: np.ndarray) -> np.ndarray:
-        """Matrix W (Q, n): curvature at ``s_query`` = W @ (phi / h), linear between springs of the same span."""
+        """Matrix W (Q, n): curvature at ``s_query`` = W @ (phi / h), linear between springs of the same span and
+        linearly extrapolated from its two end springs beyond them (the half cell between a span's end spring and
+        its support).
+
+        A spring's ``phi / h`` is its cell's mean curvature, the curvature at the cell's centre to O(h^2); along a
+        strip of one stiffness the moment of point loads and the cable is linear, so the line through the end
+        springs reads a gauge near a support as the continuum does, where holding the end spring's value was off
+        by the moment's slope times up to half a cell (2.8 % at 1.7 mm from a support on a 23 mm section with 3
+        cells; a gauge on a spring, as the thesis's midway gauges are, reads its spring either way)."""
         s = self.joint_s_m
         w = np.zeros((s_query.size, self.n))
         # a "span" is a run of springs whose cells touch (no rigid stretch between them)
@@ -250,6 +258,11 @@ class Chain:
         for q, sq in enumerate(s_query):
             j = int(np.argmin(np.abs(s - sq)))
             idx = np.flatnonzero(span == span[j])
+            if idx.size >= 2 and (sq < s[idx[0]] or sq > s[idx[-1]]):
+                a, b = (idx[0], idx[1]) if sq < s[idx[0]] else (idx[-2], idx[-1])
+                t = (sq - s[a]) / (s[b] - s[a])
+                w[q, a], w[q, b] = 1.0 - t, t
+                continue
             eye = np.eye(idx.size)
             for c in range(idx.size):
                 w[q, idx[c]] = np.interp(sq, s[idx], eye[c])
