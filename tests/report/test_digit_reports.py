@@ -60,6 +60,7 @@ def test_the_report_of_a_digit(name, tmp_path, capsys):
     )
     assert mine["palpation.active.posterior_position_mm"] < 1.3 * mine["palpation.active.bayes_position_mm"]
     assert any(key.startswith("studies.sobol.release_wn_rad_s.") for key in mine)
+    assert "palpation.force.steady_error" in mine and "palpation.scan.inclusion_error_mm" in mine
     # the tactile chapters on the digit's G gauges: in one of its experiments (non-actuated, actuated) at least,
     # both a Bayes limit and the thesis network's position RMSE (a one-gauge digit can tell position from mass
     # only with the command as a second input)

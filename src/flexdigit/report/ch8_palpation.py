@@ -107,13 +107,15 @@ def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
         f"body beside its outer 45 % ({1000 * digit.tissue().start_m:.0f} mm on, {1000 * digit.tissue().gap_m:.0f} mm"
         f" away), commands counted from its straight command {ctx.params.actuator.equilibrium_command} (x its "
         f"gearing {ctx.params.actuator.gear_ratio:g}). Noise: the twin's white noise and drift; active sensing at "
-        "its actuated level. Force control is not run on this digit: its loop's gains and approach rate are the "
-        "thesis rig's (docs/digits.md)."
+        "its actuated level. Force control runs the thesis rig's loop, its rates per turn of the pulley (x the "
+        "gearing): its figures are the twin's true force, so a digit whose gauges misjudge the force (one gauge, a "
+        "short digit) or that presses slowly (a long one) shows it here."
     )
     _contact(ctx, ch, plt, digit)
     _classification(ctx, ch, digit)
     _stiffness(ctx, ch, plt, digit)
     _scan(ctx, ch, plt, digit)
+    _force(ctx, ch, plt, digit)
     _active(ctx, ch, digit)
     return ch
 
@@ -420,8 +422,9 @@ def _scan(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
     ch.figures.append(ctx.save_figure(fig, "palpation_scan", "Stiffness map of a scan and the inclusion fitted to it"))
 
 
-def _force(ctx, ch, plt) -> None:
-    f = studies.force_study((1000.0,), duration_s=8.0, seed=ctx.seed + 2)
+def _force(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
+    on = {} if digit is None else {"model": digit.contact_model(), "placed": digit.tissue()}
+    f = studies.force_study((1000.0,), duration_s=8.0, seed=ctx.seed + 2, **on)
     run = f["runs"][0]
     e = ch.entries
     e.append(
