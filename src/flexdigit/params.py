@@ -141,6 +141,12 @@ class Geometry:
 
     def __post_init__(self) -> None:
         owner = type(self).__name__
+        if isinstance(self.section_length_m, tuple | list):  # a list per section: said plainly, not "not a number"
+            raise ParameterError(
+                f"The 'section_length_m' parameter of {owner} is one length (m) for every section: sections of "
+                "unequal lengths are not supported yet (docs/digits.md). "
+                f"Got {list(self.section_length_m)!r} instead."
+            )
         positions = self.gauge_positions_m
         if isinstance(positions, tuple | list) and len(set(map(repr, positions))) < len(positions):
             raise ParameterError(

@@ -102,6 +102,11 @@ BAD = {
         },
         "section_count = 9",
     ),
+    # sections of unequal lengths: not supported yet, said so (docs/digits.md), not "not a finite real number"
+    "sections of unequal lengths": (
+        {"geometry": {"section_count": 2, "section_length_m": [0.08, 0.12], "strip_length_m": 0.2}},
+        "unequal lengths are not supported yet",
+    ),
 }
 
 

@@ -25,6 +25,8 @@ strains' BDF2 rates.
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
@@ -50,7 +52,15 @@ RATE = 0.9
 BUDGET = 4
 #: The largest Newton update of a step's frames (rad) or nodes (of the length): a damped Newton beyond
 MAX_UPDATE = 0.1
-_IDENTITY = np.eye(3)
+_IDENTITY = np.eye(3)[None]
+#: Below this squared angle (rad^2) the frames' trigonometry is replaced by Taylor series, whose first term left
+#: out is ~1e-18 relative there (``asin(s)/s`` to ``s^14``, ``sin(a)/a`` and ``(1 - cos a)/a^2`` to ``a^12``):
+#: neighbouring elements' frames and a step's turn are well within it, and the series cost a third of the
+#: trigonometric functions
+SMALL_ANGLE2 = 0.01
+ASIN = np.array([math.comb(2 * k, k) / (4.0**k * (2 * k + 1)) for k in range(8)])
+SIN = np.array([(-1.0) ** k / math.factorial(2 * k + 1) for k in range(7)])
+COS = np.array([(-1.0) ** k / math.factorial(2 * k + 2) for k in range(7)])
 #: Steps between measurements of the chord Newton's rate (the others may stop after one update)
 MEASURE = 8
 
@@ -59,9 +69,9 @@ MEASURE = 8
 def _exp(th0, th1, th2, out):
     """Rodrigues: ``out = exp(hat(th))``."""
     a2 = th0 * th0 + th1 * th1 + th2 * th2
-    if a2 < 1e-12:
-        s = 1.0 - a2 / 6.0
-        c = 0.5 - a2 / 24.0
+    if a2 < SMALL_ANGLE2:  # sin(a) / a and (1 - cos(a)) / a^2 by their series: a step turns a frame little
+        s = 1.0 + a2 * (SIN[1] + a2 * (SIN[2] + a2 * (SIN[3] + a2 * (SIN[4] + a2 * (SIN[5] + a2 * SIN[6])))))
+        c = COS[0] + a2 * (COS[1] + a2 * (COS[2] + a2 * (COS[3] + a2 * (COS[4] + a2 * (COS[5] + a2 * COS[6])))))
     else:
         a = np.sqrt(a2)
         s = np.sin(a) / a
@@ -79,21 +89,28 @@ def _exp(th0, th1, th2, out):
 
 
 @_jit
-def _log_rel(a, b, out, rel):
-    """``out = log(a^T b)`` as a rotation vector, and ``rel = a^T b`` (angles below pi; neighbours and steps turn
-    far less)."""
+def _log_rel(qa, ia, qb, ib, out, io, rel):
+    """``out[io] = log(a^T b)`` as a rotation vector, and ``rel = a^T b``, of ``a = qa[ia]``, ``b = qb[ib]`` (angles
+    below pi; neighbours and steps turn far less). Indices, not views: a view's reference count costs more here
+    than the arithmetic."""
     for i in range(3):
         for j in range(3):
-            rel[i, j] = a[0, i] * b[0, j] + a[1, i] * b[1, j] + a[2, i] * b[2, j]
+            rel[i, j] = qa[ia, 0, i] * qb[ib, 0, j] + qa[ia, 1, i] * qb[ib, 1, j] + qa[ia, 2, i] * qb[ib, 2, j]
     w0 = 0.5 * (rel[2, 1] - rel[1, 2])
     w1 = 0.5 * (rel[0, 2] - rel[2, 0])
     w2 = 0.5 * (rel[1, 0] - rel[0, 1])
-    s = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    s2 = w0 * w0 + w1 * w1 + w2 * w2
     c = 0.5 * (rel[0, 0] + rel[1, 1] + rel[2, 2] - 1.0)
-    f = np.arctan2(s, c) / s if s > 1e-10 else 1.0 + s * s / 6.0
-    out[0] = f * w0
-    out[1] = f * w1
-    out[2] = f * w2
+    if c > 0.0 and s2 < SMALL_ANGLE2:  # asin(s) / s by its series
+        f = 1.0 + s2 * (
+            ASIN[1] + s2 * (ASIN[2] + s2 * (ASIN[3] + s2 * (ASIN[4] + s2 * (ASIN[5] + s2 * (ASIN[6] + s2 * ASIN[7])))))
+        )
+    else:
+        sn = np.sqrt(s2)
+        f = np.arctan2(sn, c) / sn
+    out[io, 0] = f * w0
+    out[io, 1] = f * w1
+    out[io, 2] = f * w2
 
 
 @_jit
@@ -156,9 +173,9 @@ def forces(
         t[e, 2] += tb[0] * nb[1] - tb[1] * nb[0]
     for i in range(n):
         if i == 0:
-            _log_rel(_IDENTITY, q[0], kap[0], rel)
+            _log_rel(_IDENTITY, 0, q, 0, kap, 0, rel)
         else:
-            _log_rel(q[i - 1], q[i], kap[i], rel)
+            _log_rel(q, i - 1, q, i, kap, i, rel)
         for k in range(3):
             kap[i, k] /= voronoi[i]
             m[k] = kbt[k] * (g * kap[i, k] + beta * hkap[i, k])
@@ -286,10 +303,11 @@ def _jacobian(z, h, hb, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, 
             span = 2.0 * h[j] if central else h[j]
             for i in range(max(0, j - hb), min(size, j + hb + 1)):
                 jac[i, j - i + hb] = (r1[i] - r0[i]) / span
-    for k in range(size):  # Doolittle, in the band
-        piv = jac[k, hb]
+    for k in range(size):  # Doolittle, in the band; the pivot kept as its reciprocal (no division in the solve)
+        inv = 1.0 / jac[k, hb]
+        jac[k, hb] = inv
         for i in range(k + 1, min(size, k + hb + 1)):
-            lik = jac[i, k - i + hb] / piv
+            lik = jac[i, k - i + hb] * inv
             jac[i, k - i + hb] = lik
             if lik != 0.0:
                 for j in range(k + 1, min(size, k + hb + 1)):
@@ -297,19 +315,40 @@ def _jacobian(z, h, hb, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, 
 
 
 @_jit
-def _band_solve(jac, hb, rhs, out):
-    """``out = (LU)^-1 rhs`` for the factored band ``jac``."""
+def _band_solve(jac, hb, rhs, padded):
+    """``padded[hb : hb + size] = (LU)^-1 rhs`` for the factored band ``jac`` (pivots as reciprocals);
+    ``padded`` has ``hb`` zeros at each end (kept so), and ``jac``'s entries outside the matrix are zero, so every row
+    is the same loop. The three unknowns just solved are kept in registers: through memory each would wait for
+    its store to be forwarded, which was most of the solve's time."""
     size = rhs.shape[0]
+    l1 = 0.0
+    l2 = 0.0
+    l3 = 0.0
     for i in range(size):
         acc = rhs[i]
-        for k in range(max(0, i - hb), i):
-            acc -= jac[i, k - i + hb] * out[k]
-        out[i] = acc
+        for p in range(hb - 3):
+            acc -= jac[i, p] * padded[i + p]
+        acc -= jac[i, hb - 3] * l3
+        acc -= jac[i, hb - 2] * l2
+        new = acc - jac[i, hb - 1] * l1
+        padded[i + hb] = new
+        l3 = l2
+        l2 = l1
+        l1 = new
+    l1 = 0.0
+    l2 = 0.0
+    l3 = 0.0
     for i in range(size - 1, -1, -1):
-        acc = out[i]
-        for j in range(min(size - 1, i + hb), i, -1):  # the unknown just solved (i + 1) last: a short chain
-            acc -= jac[i, j - i + hb] * out[j]
-        out[i] = acc / jac[i, hb]
+        acc = padded[i + hb]
+        for p in range(2 * hb, hb + 3, -1):
+            acc -= jac[i, p] * padded[i + p]
+        acc -= jac[i, hb + 3] * l3
+        acc -= jac[i, hb + 2] * l2
+        new = (acc - jac[i, hb + 1] * l1) * jac[i, hb]
+        padded[i + hb] = new
+        l3 = l2
+        l2 = l1
+        l1 = new
 
 
 @_jit
@@ -353,7 +392,8 @@ def equilibrate(x, q, model, hb, tol, max_iter):
     for e in range(n):
         length += model[0][e]
     z = np.zeros(size)
-    dz = np.empty(size)
+    padded = np.zeros(size + 2 * hb)
+    dz = padded[hb : hb + size]
     res = np.empty(size)
     jac = np.empty((size, 2 * hb + 1))
     zero3 = np.zeros((n + 1, 3))
@@ -373,7 +413,7 @@ def equilibrate(x, q, model, hb, tol, max_iter):
         _residual(z, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, res)
         for i in range(size):
             res[i] = -res[i]
-        _band_solve(jac, hb, res, dz)
+        _band_solve(jac, hb, res, padded)
         big = 0.0
         for i in range(size):
             big = max(big, abs(dz[i]) / (length if i % 6 >= 3 else 1.0))
@@ -416,8 +456,9 @@ def _newton(
     the first time). Updates are damped to MAX_UPDATE. ``kept_rate[0]``: the rate last measured with this
     Jacobian; with ``trust``, a first update it makes small enough is accepted (Hairer & Wanner's RADAU5 carries
     its ``faccon`` over steps so). Returns ``(converged, iterations)``."""
-    jac, q_jac, turn, h, dz, res, xx, qq, f, t, sig, kap = work
+    jac, q_jac, turn, h, padded, res, xx, qq, f, t, sig, kap = work
     size = z.shape[0]
+    dz = padded[hb : hb + size]
     z[:] = z_guess
     last = np.inf
     stale = keep[0]
@@ -443,7 +484,7 @@ def _newton(
         _corotate(qq, q_jac, turn, res, True)
         for i in range(size):
             res[i] = -res[i]
-        _band_solve(jac, hb, res, dz)
+        _band_solve(jac, hb, res, padded)
         _corotate(qq, q_jac, turn, dz, False)
         big = 0.0
         for i in range(size):
@@ -590,7 +631,7 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
         np.empty((n, 3, 3)),
         np.empty((n, 3, 3)),
         np.empty(size),
-        np.empty(size),
+        np.zeros(size + 2 * hb),  # the Newton update, padded for the banded solve
         np.empty(size),
         np.empty((n + 1, 3)),
         np.empty((n, 3, 3)),
@@ -604,7 +645,7 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
         np.empty((n, 3, 3)),
         np.empty((n, 3, 3)),
         np.empty(size),
-        np.empty(size),
+        np.zeros(size + 2 * hb),  # the Newton update, padded for the banded solve
         np.empty(size),
         np.empty((n + 1, 3)),
         np.empty((n, 3, 3)),
@@ -636,7 +677,7 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
                 for k in range(3):
                     psih[e, k] = turned[e, k] / 3.0
             else:
-                _log_rel(q_now[e], q_prev[e], psih[e], scratch)
+                _log_rel(q_now, e, q_prev, e, psih, e, scratch)
                 for k in range(3):
                     psih[e, k] /= -3.0
             for k in range(3):
