@@ -137,7 +137,7 @@ def contact_study(
         out["position_ratio_ci95"] = _pooled_rms_ci95((pos - ss[:, None])[seen], seed, out["seen_crlb_position_m"])
         # the band between gauge 2 and the rigid tip support, where the published figures are comparable
         geo = model.params.geometry
-        tip_support = 0.5 * (geo.section_pitch_m - geo.strip_length_m / geo.section_count)
+        tip_support = 0.5 * geo.supports_m[-1]
         two = len(geo.gauge_positions_m) > 1  # a one-gauge digit has no band past a second gauge
         band = seen & (ss > geo.gauge_positions_m[min(1, len(geo.gauge_positions_m) - 1)])
         band &= ss <= model.length_m - tip_support
