@@ -332,7 +332,10 @@ def force_study(
         try:
             rig.place_tissue(placed.replace(modulus_n_m2=float(k)))
             region = (placed.start_m, min(placed.end_m, length))
-            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model))
+            # the loop's rates are the thesis rig's per turn of its pulley: a gearing's finer command, times it
+            gear = rig.params.actuator.gear_ratio
+            rates = {} if gear == 1.0 else {"gain": 30.0 * gear, "approach_rate": 4.0 * gear}
+            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model, **rates))
         finally:
             rig.close()
     return {

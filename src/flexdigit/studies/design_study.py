@@ -401,6 +401,8 @@ def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: f
             operating_commands=(act.equilibrium_command, top),
         ),
     )
+    if c.pretension_n == 0 and params.cables.count == 2:  # "1 cable": a baseline's described pair is dropped, so
+        params = params.replace(cables=dataclasses.replace(params.cables, count=1))  # it is not scored as a pair
     return ParameterSet(params, cal, c.pretension_n if c.pretension_n > 0 else None)
 
 
