@@ -161,3 +161,12 @@ def test_an_unequal_digit_scaled_by_the_design_study_keeps_its_proportions():
     assert scaled.supports_m == pytest.approx((0.015, 0.018, 0.015), abs=LENGTH_ATOL_M)
     assert scaled.support_centres_m[-1] == scaled.digit_length_m
     assert math.fsum(scaled.section_lengths_m) == pytest.approx(scaled.strip_length_m, abs=LENGTH_ATOL_M)
+
+
+def test_one_length_keeps_its_unit_slip_hint_and_a_list_its_element_check():
+    from flexdigit.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"Got 80.0 m instead: did you mean mm \(0.08 m\)\?"):
+        Geometry(section_length_m=80.0)
+    with pytest.raises(ParameterError, match=r"'section_length_m' parameter of Geometry .*Got \[0.1, 80.0, 0.1\]"):
+        Geometry(section_length_m=[0.1, 80.0, 0.1])
