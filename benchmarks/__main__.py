@@ -35,6 +35,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_live",
     "benchmarks.bench_livegauges",
     "benchmarks.bench_studies",
+    "benchmarks.bench_dask",
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
     "benchmarks.bench_board",

@@ -1,14 +1,9 @@
-"""Studies benchmarks: what one evaluation of each metric costs (the batched forms against the exact ones), the
-Dask speed-up (2 workers against 1) and per-task overhead, and the batched twin's real-time factor.
+"""Studies benchmarks: what one evaluation of each metric costs (the batched forms against the exact ones) and the
+batched twin's real-time factor (the Dask speed-up and per-task overhead: :mod:`benchmarks.bench_dask`).
 
 - Per evaluation: each of the ten sensitivity metrics alone, one row at a time, and all ten on blocks of 8 rows as
   a study evaluates them (CPU time in one thread, rows of the shipped tolerances, seeded); the tactile limits'
   exact forms (``protocol_limits``, ``identifiability_map``: what every row cost before issue 27) in the same run.
-- Dask: the shipped thesis-tolerances spec, all ten metrics, on a Saltelli design of 2 x 64 x (18 + 2) = 2560
-  rows in tasks of 8 (the spec's chunk), in process (>= 30 s), then on a warm ``LocalCluster`` of 1 and of 2
-  single-threaded worker processes (start-up timed apart). The study's journal is written as in a real run. The
-  machine's load average is noted: other jobs on a 2-core machine lower the speed-up.
-- Per-task overhead: 200 one-row tasks on one worker against the same rows in process, per task.
 - Batched twin: N = 1000 parameter sets (E and the housing stiffness drawn, seeded), a 0 -> 30 deg command step
   (the first 2 s include the halved steps of the transient) and 2 s of quiet following; aggregate real-time
   factor = N x simulated time / wall time, and per CPU second of all threads (less sensitive to other jobs), and
@@ -22,9 +17,19 @@ from __future__ import annotations
 import tempfile
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
+
+_COMPILE_SCRIPT = """
+import time
+from flexdigit.params import RigParams
+from flexdigit.twin.batched import BatchedTwin
+twin = BatchedTwin(RigParams())
+twin.command([30])
+start = time.process_time()
+twin.advance(0.02)
+print(time.process_time() - start)
+"""
 
 
 def _study_rows(n_base: int):
@@ -37,110 +42,6 @@ def _study_rows(n_base: int):
     spec = dataclasses.replace(load_spec("thesis-tolerances"), metrics=SENSITIVITY_METRICS)
     u, _ = sensitivity_design(spec, SensitivitySettings(morris_trajectories=0, sobol_n=n_base))
     return spec, spec.values_from_unit(u), MetricContext(baseline=spec.baseline)
-
-
-def _run(spec, values, ctx, *, workers, scheduler, chunk):
-    from flexdigit.studies.execution import Journal, run_rows
-
-    with tempfile.TemporaryDirectory() as tmp:
-        journal = Journal(Path(tmp) / "journal.jsonl", {"fingerprint": "bench"})
-        start = time.perf_counter()
-        run_rows(
-            spec.parameter_set,
-            values,
-            spec.metrics,
-            ctx,
-            journal,
-            seed=0,
-            chunk_size=chunk,
-            workers=workers,
-            scheduler=scheduler,
-            progress=False,
-            label="bench",
-        )
-        return time.perf_counter() - start
-
-
-def _dask_rows() -> list[dict]:
-    import os
-
-    from distributed import LocalCluster
-
-    spec, values, ctx = _study_rows(64)
-    chunk = 8
-    rows = []
-    _run(spec, values[:16], ctx, workers=0, scheduler=None, chunk=chunk)  # imports and caches, not timed
-    load = os.getloadavg()[0]
-    serial = _run(spec, values, ctx, workers=0, scheduler=None, chunk=chunk)
-    wall = {}
-    for n in (1, 2):
-        start = time.perf_counter()
-        with LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None, silence_logs=40
-        ) as cluster:
-            startup = time.perf_counter() - start
-            _run(spec, values[: 8 * n], ctx, workers=n, scheduler=cluster.scheduler_address, chunk=chunk)  # warm
-            wall[n] = _run(spec, values, ctx, workers=n, scheduler=cluster.scheduler_address, chunk=chunk)
-            if n == 1:
-                one = values[:200]
-                serial_one = _run(spec, one, ctx, workers=0, scheduler=None, chunk=1)
-                per_task = (
-                    _run(spec, one, ctx, workers=1, scheduler=cluster.scheduler_address, chunk=1) - serial_one
-                ) / len(one)
-        rows.append(
-            {"name": f"LocalCluster start-up, {n} worker(s)", "value": startup, "unit": "s", "goal": "", "note": ""}
-        )
-    rows += [
-        {
-            "name": f"study of {len(values)} evaluations, in process (no Dask)",
-            "value": serial,
-            "unit": "s",
-            "goal": "",
-            "note": f"{1e3 * serial / len(values):.2f} ms per evaluation (all ten metrics, blocks of {chunk} rows); "
-            f"load average {load:.2f} before, {os.getloadavg()[0]:.2f} after the Dask runs",
-        },
-        {
-            "name": f"study of {len(values)} evaluations, 1 Dask worker",
-            "value": wall[1],
-            "unit": "s",
-            "goal": "",
-            "note": "",
-        },
-        {
-            "name": f"study of {len(values)} evaluations, 2 Dask workers",
-            "value": wall[2],
-            "unit": "s",
-            "goal": "",
-            "note": "",
-        },
-        {
-            "name": "Dask speed-up, 2 workers over 1",
-            "value": wall[1] / wall[2],
-            "unit": "x",
-            "goal": ">= 1.8",
-            "note": "on 2 cores, a workload >= 30 s in process; other jobs on the machine lower it",
-        },
-        {
-            "name": "per-task overhead (Dask + journal), one-row tasks",
-            "value": 1e3 * per_task,
-            "unit": "ms",
-            "goal": "",
-            "note": "worker minus in-process time per task, 200 tasks on one worker",
-        },
-    ]
-    return rows
-
-
-_COMPILE_SCRIPT = """
-import time
-from flexdigit.params import RigParams
-from flexdigit.twin.batched import BatchedTwin
-twin = BatchedTwin(RigParams())
-twin.command([30])
-start = time.process_time()
-twin.advance(0.02)
-print(time.process_time() - start)
-"""
 
 
 def _compile_seconds() -> float:
@@ -240,6 +141,7 @@ def _metric_rows() -> list[dict]:
         MetricContext,
         _bayes_exact,
         _blind_zone_exact,
+        _forget_kept,
         evaluate_many,
     )
     from flexdigit.studies.spec import load_spec
@@ -258,13 +160,25 @@ def _metric_rows() -> list[dict]:
     with threadpool_limits(1):  # as a study's worker runs them
         evaluate_many(sets[:1], SENSITIVITY_METRICS, ctx)  # warm: the baseline controller, kernels, tables
         for name in SENSITIVITY_METRICS:
+            _forget_kept()  # each metric from scratch (the loop's three share one computation in a study)
             value = cpu_ms(lambda name=name: [evaluate_many([p], [name], ctx) for p in sets[1:9]], 8)
             rows.append({"name": f"metric {name}, one evaluation", "value": value, "unit": "ms", "goal": "",
                          "note": "CPU, one thread, one row at a time"})  # fmt: skip
         blocks = [sets[i : i + 8] for i in range(9, 41, 8)]
+        _forget_kept()
         value = cpu_ms(lambda: [evaluate_many(b, SENSITIVITY_METRICS, ctx) for b in blocks], 32)
         rows.append({"name": "all ten metrics, per row, in blocks of 8 rows", "value": value, "unit": "ms",
-                     "goal": "", "note": "CPU, one thread: what a study's row costs"})  # fmt: skip
+                     "goal": "", "note": "CPU, one thread: independent random rows (nothing repeats)"})  # fmt: skip
+        # a study's rows: Saltelli's, where most rows move one parameter and share the values that do not read it
+        study_spec, values, _ = _study_rows(16)
+        study = [study_spec.parameter_set(v) for v in values[:320]]
+        _forget_kept()
+        value = cpu_ms(
+            lambda: [evaluate_many(study[i : i + 8], SENSITIVITY_METRICS, ctx) for i in range(0, 320, 8)], 320
+        )
+        rows.append({"name": "all ten metrics, per row, a Saltelli design in blocks of 8 rows", "value": value,
+                     "unit": "ms", "goal": "", "note": "CPU, one thread: the first 320 rows of a study's "
+                     "design (16 base samples, 18 parameters), what a study's row costs"})  # fmt: skip
         for name, exact in (("bayes_position_limit_mm", _bayes_exact), ("blind_zone_mm", _blind_zone_exact)):
             value = cpu_ms(lambda exact=exact: [exact(p, ctx) for p in sets[1:5]], 4)
             note = "tactile.bounds / tactile.localisation per row, CPU, one thread"
@@ -275,4 +189,4 @@ def _metric_rows() -> list[dict]:
 
 def run() -> list[dict]:
     warnings.simplefilter("ignore")
-    return _metric_rows() + _dask_rows() + _batched_rows()
+    return _metric_rows() + _batched_rows()

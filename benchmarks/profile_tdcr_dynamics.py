@@ -99,7 +99,8 @@ def discrete(repeats: int = 20000) -> None:
     zero = np.zeros((n, 3))
     step = (x, q, zero, np.zeros((n + 1, 3)), zero, mass, inertia, model, (1.0, 0.0, zero, zero))
     work = (np.empty((n + 1, 3)), np.empty((n, 3, 3)), np.empty((n + 1, 3)), *(np.empty((n, 3)) for _ in range(3)))
-    res, out, jac, frames = np.empty(6 * n), np.empty(6 * n), np.empty((6 * n, 2 * hb + 1)), np.empty((n + 1, 3, 3))
+    res, jac, frames = np.empty(6 * n), np.empty((6 * n, 2 * hb + 1)), np.empty((n + 1, 3, 3))
+    out = np.zeros(6 * n + 2 * hb)  # the solve's update, padded by hb zeros at each end
     _chain_kernel._jacobian(z, np.full(6 * n, 1e-8), hb, a, 1.0, *step, *work, jac)
 
     @numba.njit

@@ -145,6 +145,18 @@ def check_choice(
     return value
 
 
+def _holds_text_or_truth(value: object) -> bool:
+    """Whether ``value`` (a list, tuple or array, nested) holds a string or a boolean, which ``np.array(...,
+    dtype=float)`` would silently read as a number (``["0.05"]`` as 0.05, ``[true]`` as 1.0)."""
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "bUS":
+            return True
+        return value.dtype.kind == "O" and any(_holds_text_or_truth(v) for v in value.ravel())
+    if isinstance(value, list | tuple):
+        return any(_holds_text_or_truth(v) for v in value)
+    return isinstance(value, str | bytes | bool | np.bool_)
+
+
 def check_array(
     value: object,
     name: str,
@@ -171,6 +183,8 @@ def check_array(
     try:
         out = np.array(value, dtype=float, copy=True)
     except (TypeError, ValueError):
+        _fail(name, owner, "an array of real numbers", value, error)
+    if _holds_text_or_truth(value):  # numpy reads "0.05" and True as numbers: a file's typo, not a value
         _fail(name, owner, "an array of real numbers", value, error)
 
     def fail(expected: str):  # the message (and the array as a list in it) only built for a value that fails

@@ -6,13 +6,20 @@ them.
 
 from __future__ import annotations
 
+import fcntl
 import math
+import os
+import select
+import struct
+import termios
+import threading
+import time
 
 import numpy as np
 
 from flexdigit.rig.base import Rig
 
-__all__ = ["FakeClock", "FirstOrderRig", "PI"]
+__all__ = ["FakeClock", "FirstOrderRig", "PI", "HostOpens"]
 
 
 class FakeClock:
@@ -80,3 +87,47 @@ class PI:
         e = setpoint - self.measure(reading)
         self.integral += self.ki * self.period_s * e
         return self.integral + self.kp * e
+
+
+class HostOpens:
+    """When the host has opened the far end of a pty, known from the pty itself, not from a fixed delay.
+
+    pyserial empties the port's input when it opens it (as the host of a USB board does), so a line a test board
+    writes before that is lost, and a fixed head start (0.2 s, 0.3 s) loses it on a loaded machine. In packet mode
+    (``TIOCPKT``, tty_ioctl(4)) the master reads a status byte with ``TIOCPKT_FLUSHREAD`` set when the other end
+    flushes its input: :meth:`wait` returns once that has happened, so the first line goes out after the flush.
+    Only for a board that writes to its master and never reads it (in packet mode reads carry a status byte).
+    """
+
+    def __init__(self, master: int) -> None:
+        self.master = master
+        fcntl.ioctl(master, termios.TIOCPKT, struct.pack("i", 1))
+        self.opened = threading.Event()
+
+    def wait(self, timeout_s: float = 60.0, halt: threading.Event | None = None) -> bool:
+        """Block until the host has opened (flushed) the port; False after ``timeout_s`` or once ``halt`` is set."""
+        deadline = time.monotonic() + timeout_s
+        while not self.opened.is_set():
+            if (halt is not None and halt.is_set()) or time.monotonic() > deadline:
+                return False
+            ready, _, _ = select.select([self.master], [], [], 0.05)
+            if not ready:
+                continue
+            try:
+                status = os.read(self.master, 4096)[:1]
+            except OSError:
+                return False
+            if status and status[0] & termios.TIOCPKT_FLUSHREAD:
+                self.opened.set()
+        return True
+
+    def send(self, data: bytes, timeout_s: float = 60.0) -> threading.Thread:
+        """Write ``data`` once the host has opened the port (in a thread, as a board streams while the host opens)."""
+
+        def run():
+            if self.wait(timeout_s):
+                os.write(self.master, data)
+
+        thread = threading.Thread(target=run, daemon=True)
+        thread.start()
+        return thread

@@ -151,6 +151,36 @@ def test_antagonist_adds_k_e2_at_the_tip_and_bends_both_ways():
     assert np.all(twins.tip_rotation_deg() < -5.0)
 
 
+def test_a_described_pair_keeps_its_pretension_like_the_scalar_twin():
+    # issue 24: a digit whose [cables] describes the antagonistic pair runs on the batched twin as on the scalar one
+    # (each rig's own pretension, no pretension_n argument): both signs of bending, the step through the slack
+    # cable, the same numbers to PSI_ATOL
+    pair5 = RigParams.from_dict({"cables": {"count": 2, "pretension_n": 5.0}})
+    pair2 = RigParams.from_dict({"cables": {"count": 2, "pretension_n": 2.0}})
+    rigs = [(pair5, CAL), (pair2, CAL.replace(cable_stiffness_n_m=2.0e4)), (RigParams(), CAL)]
+    straight = [p.actuator.equilibrium_command for p, _ in rigs]
+    schedule = {0: [c - 20 for c in straight], 60: [c + 20 for c in straight]}
+    batch = BatchedTwin([p for p, _ in rigs], [c for _, c in rigs])
+    got = []
+    for k in range(120):
+        if k in schedule:
+            batch.command([max(0, c) for c in schedule[k]])
+        batch.advance(batch.dt_s)
+        got.append(batch.psi.copy())
+        if k == 59:
+            below = batch.tip_rotation_deg().copy()
+    got = np.array(got)
+    for i, (p, c) in enumerate(rigs):
+        commands = {k: max(0, v[i]) for k, v in schedule.items()}
+        np.testing.assert_allclose(got[:, i], _scalar_run(p, c, commands, 120), atol=PSI_ATOL, rtol=0)
+    assert np.all(below[:2] < -5.0)  # the pair bends the digit back below straight (ignored, the digit stays put)
+    # detached (cable=False): neither cable of the pair pulls, as the scalar twin's cable=False
+    loose = BatchedTwin([pair5], [CAL], cable=False)
+    loose.command([0])
+    loose.advance(0.5)
+    assert abs(loose.tip_rotation_deg()[0]) < 1e-9
+
+
 def test_bad_inputs_are_named():
     with pytest.raises(ValueError, match="command"):
         BatchedTwin(RigParams()).command([255])

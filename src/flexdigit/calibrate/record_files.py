@@ -94,19 +94,21 @@ def _gauge_columns(table: Table, pattern: re.Pattern, units: dict[str, float], w
     return out
 
 
-def _three_gauges(table: Table, pattern: re.Pattern, units: dict[str, float], what: str, example: str):
+def _the_gauges(table: Table, pattern: re.Pattern, units: dict[str, float], what: str, example: str, count: int):
+    """The columns of gauges 1..``count`` (the digit's gauges), each required."""
     columns = _gauge_columns(table, pattern, units, what)
-    missing = [g for g in GAUGES if g not in columns]
+    gauges = range(1, count + 1)
+    missing = [g for g in gauges if g not in columns]
     if missing:
         raise DataFileError(
-            f"{table.source}: no {what} column for gauge {missing[0]} (expected e.g. {example.format(g=missing[0])}; "
-            f"columns: {', '.join(table.columns)})"
+            f"{table.source}: no {what} column for gauge {missing[0]} of the digit's {count} (expected e.g. "
+            f"{example.format(g=missing[0])}; columns: {', '.join(table.columns)})"
         )
-    return [columns[g] for g in GAUGES]
+    return [columns[g] for g in gauges]
 
 
-def _volts(table: Table, *, allow_empty: bool = False) -> np.ndarray:
-    cols = _three_gauges(table, _GAUGE_STEM, VOLT_UNITS, "gauge-voltage", "gauge{g}_v or sg{g}_mv")
+def _volts(table: Table, *, allow_empty: bool = False, gauges: int = len(GAUGES)) -> np.ndarray:
+    cols = _the_gauges(table, _GAUGE_STEM, VOLT_UNITS, "gauge-voltage", "gauge{g}_v or sg{g}_mv", gauges)
     return np.column_stack(
         [table.plausible(c, table.numbers(c, allow_empty=allow_empty) * f, GAUGE_V) for c, f in cols]
     )
@@ -172,21 +174,26 @@ def read_release(path: str | Path, *, time_unit: str | None = None, decimal: str
     ]
 
 
-def read_sweep(path: str | Path, *, decimal: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """``(commands, volts (N, 3))`` of an actuation-sweep file."""
+def read_sweep(
+    path: str | Path, *, decimal: str | None = None, gauges: int = len(GAUGES)
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(commands, volts (N, G))`` of an actuation-sweep file, the digit's ``gauges`` channels (3 on the thesis
+    rig)."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 2, "an actuation sweep")
     commands = _commands(table)
     _distinct_commands(table, commands, "an actuation sweep", "a slope (E 3.20-3.22)")
-    return commands, _volts(table)
+    return commands, _volts(table, gauges=gauges)
 
 
-def read_deflections(path: str | Path, *, decimal: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """``(commands, mm (3, N))`` of a deflection table; NaN where a cell is empty (not read)."""
+def read_deflections(
+    path: str | Path, *, decimal: str | None = None, gauges: int = len(GAUGES)
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(commands, mm (G, N))`` of a deflection table; NaN where a cell is empty (not read)."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 2, "a deflection table")  # one row fixes no slope: the fit would be the prior's alone
     commands = _commands(table)
-    cols = _three_gauges(table, _DEFLECTION_STEM, LENGTH_UNITS, "deflection", "y{g}_mm")
+    cols = _the_gauges(table, _DEFLECTION_STEM, LENGTH_UNITS, "deflection", "y{g}_mm", gauges)
     mm = np.vstack([table.plausible(c, table.numbers(c, allow_empty=True) * f, DEFLECTION_MM) for c, f in cols])
     repeated = [c for c in set(commands.tolist()) if np.sum(commands == c) > 1]
     if repeated:
@@ -195,18 +202,20 @@ def read_deflections(path: str | Path, *, decimal: str | None = None) -> tuple[n
 
 
 def read_rest(
-    path: str | Path, *, time_unit: str | None = None, decimal: str | None = None
+    path: str | Path, *, time_unit: str | None = None, decimal: str | None = None, gauges: int = len(GAUGES)
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(time_s, volts (N, 3))`` of a record of the resting rig."""
+    """``(time_s, volts (N, G))`` of a record of the resting rig."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 16, "a rest record")
-    t, volts = _time_s(table, time_unit), _volts(table)
+    t, volts = _time_s(table, time_unit), _volts(table, gauges=gauges)
     _not_constant(table, volts, "a rest record", "its noise")
     return t, volts
 
 
-def read_actuated_rest(path: str | Path, *, decimal: str | None = None) -> tuple[int, np.ndarray]:
-    """``(command, volts (N, 3))`` of repeated readings of the unloaded, actuated digit at one command."""
+def read_actuated_rest(
+    path: str | Path, *, decimal: str | None = None, gauges: int = len(GAUGES)
+) -> tuple[int, np.ndarray]:
+    """``(command, volts (N, G))`` of repeated readings of the unloaded, actuated digit at one command."""
     table = read_table(path, decimal=decimal)
     _at_least(table, 3, "an actuated-rest record")
     commands = _commands(table)
@@ -214,7 +223,7 @@ def read_actuated_rest(path: str | Path, *, decimal: str | None = None) -> tuple
         raise DataFileError(
             f"{path}: an actuated-rest record holds one command; this one has {sorted(set(commands.tolist()))}"
         )
-    volts = _volts(table)
+    volts = _volts(table, gauges=gauges)
     _not_constant(table, volts, "an actuated-rest record", "a repeatability (cable_friction_ratio)")
     return int(commands[0]), volts
 
@@ -222,7 +231,7 @@ def read_actuated_rest(path: str | Path, *, decimal: str | None = None) -> tuple
 def _not_constant(table: Table, volts: np.ndarray, what: str, fits: str) -> None:
     """Refuse a channel that holds one value in every row: a record too constant to fit (a cached DAQ value, a
     disconnected gauge, readings never tapped), which would fit a friction or noise level of exactly 0."""
-    for g, column in zip(GAUGES, volts.T, strict=True):
+    for g, column in enumerate(volts.T, start=1):
         finite = column[np.isfinite(column)]
         if finite.size and float(np.ptp(finite)) == 0.0:
             raise DataFileError(

@@ -34,6 +34,7 @@ from flexdigit.params import RigParams
 from flexdigit.tactile.thesis_experiments import actuated_corr2_score
 from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.digit import build_digit
+from flexdigit.twin.digit_calibration import calibration_for
 from flexdigit.twin.sensors import SensorChain
 from flexdigit.twin.twin import cable_shortening_m
 
@@ -128,11 +129,19 @@ class CalibrationResult:
         )
 
 
-def model_response(params, calibration: Calibration, targets: CalibrationTargets, *, cells_per_section: int = 3):
-    """Everything the fit compares: modal wn/zeta bare and housed, deflections and bridge ratios on the sweep."""
+def model_response(
+    params,
+    calibration: Calibration,
+    targets: CalibrationTargets,
+    *,
+    cells_per_section: int = 3,
+    orientation: str = "vertical",
+):
+    """Everything the fit compares: modal wn/zeta bare and housed, deflections and bridge ratios on the sweep, of
+    the digit mounted as the records were taken (``orientation``: tip up as the thesis's; a long digit hangs)."""
     out: dict[str, Any] = {}
-    bare = build_digit(params, calibration, housing=False, cells_per_section=cells_per_section)
-    house = build_digit(params, calibration, housing=True, cells_per_section=cells_per_section)
+    bare = build_digit(params, calibration, housing=False, orientation=orientation, cells_per_section=cells_per_section)
+    house = build_digit(params, calibration, housing=True, orientation=orientation, cells_per_section=cells_per_section)
     out["bare_wn"], out["bare_zeta"] = (float(v[0]) for v in bare.linear_modes())
     out["housing_wn"], out["housing_zeta"] = (float(v[0]) for v in house.linear_modes())
     if targets.deflection_commands is not None:
@@ -142,7 +151,8 @@ def model_response(params, calibration: Calibration, targets: CalibrationTargets
     if targets.sweep_commands is not None:
         cmds = np.asarray(targets.sweep_commands, dtype=float)
         sol = house.solve_static(cable_shortening_m=cable_shortening_m(cmds, params))
-        unit = calibration.replace(channel_gain=(1.0,) * 3, channel_offset_v=(0.0,) * 3)
+        gauges = len(params.geometry.gauge_positions_m)
+        unit = calibration.replace(channel_gain=(1.0,) * gauges, channel_offset_v=(0.0,) * gauges)
         out["sweep_unit_v"] = SensorChain(params, unit, np.random.default_rng(0)).clean_v(
             sol.curvature_1_m, sol.axial_force_n
         )
@@ -157,6 +167,7 @@ def calibrate(
     cells_per_section: int = 3,
     verbose: bool = False,
     friction_score=None,
+    orientation: str = "vertical",
 ) -> CalibrationResult:
     """Fit the twin's free parameters to measured targets (``scipy.optimize.least_squares``).
 
@@ -175,12 +186,16 @@ def calibrate(
         E.g. :meth:`CalibrationTargets.from_thesis` or :meth:`CalibrationTargets.from_records`.
     params : RigParams, optional
     initial : Calibration, optional
-        Starting point and the values of everything not fitted (default: the nominal :class:`Calibration`).
+        Starting point and the values of everything not fitted (default: the nominal :class:`Calibration` on the
+        thesis rig, :func:`~flexdigit.twin.digit_calibration.calibration_for` on another digit).
     cells_per_section : int
         Resolution of the digit model the calibration is for.
     verbose : bool
         Log the residual table at INFO (else at DEBUG) on the ``flexdigit.calibrate.twin_fit`` logger; the library
         prints nothing (``result.table()`` gives the same table).
+    orientation : {"vertical", "hanging", "horizontal"}
+        How the digit was mounted for the release tests, sweep and deflections: tip up as the thesis's (3.1.2,
+        3.4.3); a digit that buckles so was recorded hanging.
     friction_score : callable, optional
         ``friction_score(calibration) -> corr2``: the thesis pipeline's actuated test corr2 on a twin with that
         calibration (e.g. :func:`flexdigit.tactile.thesis_experiments.actuated_corr2_score`, its mean over 8 seeded
@@ -192,8 +207,10 @@ def calibrate(
     CalibrationResult
     """
     params = params or RigParams()
-    cal, fitted, (cost, success, message) = _fit_mechanics(params, initial or Calibration(), targets, cells_per_section)
-    r = model_response(params, cal, targets, cells_per_section=cells_per_section)
+    if initial is None:  # the nominal calibration is the thesis rig's; another digit starts from it scaled to it
+        initial = Calibration() if params == RigParams() else calibration_for(params)
+    cal, fitted, (cost, success, message) = _fit_mechanics(params, initial, targets, cells_per_section, orientation)
+    r = model_response(params, cal, targets, cells_per_section=cells_per_section, orientation=orientation)
     cal, sweep_rows, copied = _fit_channels(cal, targets, r)
     cal, friction_rows = _fit_friction(params, cal, targets, cells_per_section, friction_score)
     if targets.sweep_commands is not None:
@@ -218,7 +235,7 @@ def _mechanics_start(cal0: Calibration, t: CalibrationTargets) -> tuple[np.ndarr
     A parameter not identified is pinned to its start value by bounds 1e-9 apart.
     """
     m0 = cal0.support_mass_kg[0]
-    ei0 = cal0.housing_ei_n_m2[1]
+    ei0 = cal0.housing_ei_n_m2[-1]  # a section past the base (the base's own on a one-section digit)
     base0 = cal0.housing_ei_n_m2[0] / ei0 if ei0 > 0 else 1.0
     x0 = np.log(
         [
@@ -244,16 +261,18 @@ def _mechanics_start(cal0: Calibration, t: CalibrationTargets) -> tuple[np.ndarr
 
 
 def _fit_mechanics(
-    params, cal0: Calibration, t: CalibrationTargets, cells_per_section: int
+    params, cal0: Calibration, t: CalibrationTargets, cells_per_section: int, orientation: str = "vertical"
 ) -> tuple[Calibration, list[str], tuple[float, bool, str]]:
     """The mechanics fitted to the wn, zeta and deflection targets: calibration, names fitted, solver outcome."""
     from scipy.optimize import least_squares
 
+    sections = params.geometry.section_count
+
     def unpack(x):
         m, ei, base, bs, bh, kc = np.exp(x)
-        return cal0.replace(
-            support_mass_kg=(m, m, m),
-            housing_ei_n_m2=(ei * base, ei, ei),
+        return cal0.replace(  # one value per section: the base section's housing stiffened by the clamp factor
+            support_mass_kg=(m,) * sections,
+            housing_ei_n_m2=(ei * base,) + (ei,) * (sections - 1),
             strip_beta_s=bs,
             housing_beta_s=bh,
             cable_stiffness_n_m=kc,
@@ -262,7 +281,7 @@ def _fit_mechanics(
     weight = _deflection_weight(t)
 
     def resid(x):
-        r = model_response(params, unpack(x), t, cells_per_section=cells_per_section)
+        r = model_response(params, unpack(x), t, cells_per_section=cells_per_section, orientation=orientation)
         out = []
         for key in ("bare_wn", "bare_zeta", "housing_wn", "housing_zeta"):
             target = getattr(t, key + ("_rad_s" if key.endswith("wn") else ""))
@@ -274,6 +293,9 @@ def _fit_mechanics(
         return np.array(out)
 
     x0, lower, upper, free = _mechanics_start(cal0, t)
+    if sections == 1:  # one section: its housing is the base's, the base factor is no separate parameter
+        base = list(MECHANICS).index("housing_base_factor")
+        lower[base], upper[base], free[base] = x0[base] - 1e-9, x0[base] + 1e-9, False
     fitted = [name for name, is_free in zip(MECHANICS, free, strict=True) if is_free]
     if not any(free):
         return cal0, [], (0.0, True, "no mechanical target: mechanics kept")
@@ -311,7 +333,7 @@ def _fit_channels(
             slope, intercept = np.polyfit(cmds, model, 1)
             rows.append(
                 dict(
-                    target=f"sweep slope gauge {ch + 1} (as E 3.2{ch})",
+                    target=f"sweep slope gauge {ch + 1}{_as_thesis(ch)}",
                     measured=t.sweep_slopes_v_per_command[ch],
                     twin=float(slope),
                     unit="V/command",
@@ -319,7 +341,7 @@ def _fit_channels(
             )
             rows.append(
                 dict(
-                    target=f"sweep offset gauge {ch + 1} (as E 3.2{ch})",
+                    target=f"sweep offset gauge {ch + 1}{_as_thesis(ch)}",
                     measured=t.sweep_offsets_v[ch],
                     twin=float(intercept),
                     unit="V",
@@ -332,6 +354,11 @@ def _fit_channels(
         changes["noise_drift_v_per_sqrt_s"] = tuple(float(v) for v in t.noise_drift_v_per_sqrt_s)
     copied = [name for name in ("noise_white_v", "noise_drift_v_per_sqrt_s") if name in changes]
     return cal.replace(**changes), rows, copied
+
+
+def _as_thesis(channel: int) -> str:
+    """The thesis's gauge-volt line a channel's sweep line compares with (E 3.20-3.22), for its three gauges."""
+    return f" (as E 3.2{channel})" if channel < 3 else ""
 
 
 def _fit_friction(

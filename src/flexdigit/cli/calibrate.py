@@ -20,6 +20,8 @@ from flexdigit._validation import Flag
 #: (records of different rigs or set-ups mixed, a unit slip, a gauge wired to the wrong channel...).
 POOR_FIT = 3.0
 RECORDS = ("release_bare", "release_housed", "sweep", "deflections", "rest", "actuated_rest")
+#: How a digit is mounted for its records: tip up as the thesis's; a long digit buckles so and hangs (tip down).
+MOUNTS = ("vertical", "hanging", "horizontal")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -53,6 +55,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--actuated-rest", metavar="FILE", help="repeated readings of the unloaded actuated digit (friction level)"
     )
     p.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
+    p.add_argument("--orientation", choices=MOUNTS, default="vertical", help="how the records' digit was mounted")
     p.add_argument(
         "--decimal", choices=(".", ","), default=None, help="decimal mark of the tables (default: detected per file)"
     )
@@ -62,7 +65,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help=f"write the calibration even if the twin misses a target by more than {POOR_FIT:g} of its scale",
     )
-    p.add_argument("--initial", metavar="FILE", help="calibration to start from (default: the packaged one)")
+    scaled = "calibration to start from (default: the packaged one, scaled to the digit of --params)"
+    p.add_argument("--initial", metavar="FILE", help=scaled)
     p.add_argument("--params", metavar="FILE", help="rig parameters TOML (default: the thesis rig)")
 
 
@@ -70,7 +74,8 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
     from flexdigit._io import check_output
     from flexdigit.calibrate.twin_fit import THESIS_SOURCE, calibrate_to_thesis
     from flexdigit.params import RigParams, load_params
-    from flexdigit.twin.calibration import load_calibration, packaged_calibration, save_calibration
+    from flexdigit.twin.calibration import load_calibration, save_calibration
+    from flexdigit.twin.digit_calibration import twin_calibration
 
     given = _given_records(args)
     from flexdigit._plot import check_plot
@@ -78,7 +83,8 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
     out = check_output(args.out, force=args.force)  # refuse a bad destination before minutes of fitting
     check_plot(args.plot, "calibrate", force=args.force)
     params = load_params(args.params) if args.params else RigParams()
-    initial = load_calibration(args.initial) if args.initial else packaged_calibration()
+    # a digit nobody has measured starts from the thesis's calibration scaled to it (one value per section, gauge)
+    initial = load_calibration(args.initial) if args.initial else twin_calibration(params)
     if args.thesis:
         result, source, releases = calibrate_to_thesis(params), THESIS_SOURCE, {}
     else:
@@ -142,16 +148,17 @@ def _fit_records(args, given: dict, params, initial, out):
 
     releases, release_targets = _release_targets(args, given)
     kw: dict = {"deflection_resolution_mm": args.deflection_resolution_mm}
+    gauges = len(params.geometry.gauge_positions_m)  # the digit's gauges: gauge1 .. gaugeG in every record
     if "sweep" in given:
-        kw["sweep"] = rec.read_sweep(given["sweep"], decimal=args.decimal)
+        kw["sweep"] = rec.read_sweep(given["sweep"], decimal=args.decimal, gauges=gauges)
     if "deflections" in given:
-        kw["deflections"] = rec.read_deflections(given["deflections"], decimal=args.decimal)
+        kw["deflections"] = rec.read_deflections(given["deflections"], decimal=args.decimal, gauges=gauges)
     if "rest" in given:
-        kw["rest"] = rec.read_rest(given["rest"], time_unit=args.time_unit, decimal=args.decimal)
+        kw["rest"] = rec.read_rest(given["rest"], time_unit=args.time_unit, decimal=args.decimal, gauges=gauges)
     if "actuated_rest" in given:
-        kw["actuated_rest"] = rec.read_actuated_rest(given["actuated_rest"], decimal=args.decimal)
+        kw["actuated_rest"] = rec.read_actuated_rest(given["actuated_rest"], decimal=args.decimal, gauges=gauges)
     targets = dataclasses.replace(CalibrationTargets.from_records(**kw), **release_targets)
-    result = calibrate(targets, params, initial=initial)
+    result = calibrate(targets, params, initial=initial, orientation=args.orientation)
     if not result.success:
         raise DesignError(f"the fit did not converge ({result.message}); no calibration written to {out}")
     row, miss = result.worst()

@@ -149,6 +149,20 @@ def _add_stream_emulator(subparsers) -> None:
         help="try stream:// without hardware: the gauge stream's firmware (and a servo board) on pseudo-terminals",
     )
     emulator.add_argument("--twin", action="store_true", help="stream a twin's gauges and serve a servo board for it")
+    emulator.add_argument(
+        "--params",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="the digit's parameters TOML: its G gauges on the wire (protocol 2) and its twin (default: thesis rig)",
+    )
+    emulator.add_argument(
+        "--calibration",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="the twin's calibration TOML (with --twin; default the thesis's scaled to the digit)",
+    )
     emulator.add_argument("--rate", type=Flag(RATE_HZ), default=100.0, help="lines per second (100, the firmware's)")
     emulator.add_argument("--seed", type=Flag(SEED), default=0, help="twin and noise seed")
     emulator.add_argument(
@@ -166,7 +180,9 @@ def _stream_emulator(args: argparse.Namespace) -> CommandResult:
         if not args.json:
             print(line, flush=True)
 
-    run_emulator(args.twin, args.rate, args.seed, args.duration, say)
+    run_emulator(
+        args.twin, args.rate, args.seed, args.duration, say, params_path=args.params, calibration_path=args.calibration
+    )
     return CommandResult(data={"lines": said}, text="")
 
 
@@ -404,7 +420,14 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
     from flexdigit.errors import ParameterError
     from flexdigit.rig.step_test import board_step_test
 
-    for name in ("log", "record", "rotation_map", "calibration", "params", "orientation"):
+    if args.params is not None:
+        raise ParameterError(
+            f"--params {args.params} is not supported with --on-board: the board's image runs the thesis rig's "
+            "exported controller and map on 3 gauges (flexdigit export controller designs for the thesis rig only); "
+            "close your digit's loop on the host instead: --backend hil://IMAGE.elf without --on-board, or "
+            "serial://...?daq=stream://... (docs/digits.md)"
+        )
+    for name in ("log", "record", "rotation_map", "calibration", "orientation"):
         if getattr(args, name) is not None:
             raise ParameterError(
                 f"--{name.replace('_', '-')} is not supported with --on-board (the board holds its map)"
@@ -546,8 +569,23 @@ def _rotation_map(args, rig, sim: bool):
 
 
 def _ask_operator(command: int) -> float:
-    """The operator's protractor reading at ``command`` (``--map-from operator``)."""
-    return float(input(f"Command {command}, digit at rest: tip rotation now, deg? "))
+    """The operator's protractor reading at ``command`` (``--map-from operator``), asked on stderr (stdout carries
+    the result); no one to ask, or no number, is one line, not a traceback."""
+    from flexdigit.errors import ParameterError, RigError
+
+    print(f"Command {command}, digit at rest: tip rotation now, deg? ", end="", file=sys.stderr, flush=True)
+    text = sys.stdin.readline() if sys.stdin else ""
+    if not text:
+        raise RigError(
+            f"no operator to read the tip rotation at command {command}: stdin is closed; run it from a terminal, or "
+            "give --rotation-map FILE or --map-from twin"
+        )
+    try:
+        return float(text)
+    except ValueError:
+        raise ParameterError(
+            f"The tip rotation at command {command} must be a number of degrees. Got {text.strip()!r} instead."
+        ) from None
 
 
 def _map_summary(estimator, path, setpoint: float) -> dict:

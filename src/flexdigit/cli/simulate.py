@@ -13,7 +13,7 @@ from flexdigit._command import CommandResult, add_command
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible, check_values
 from flexdigit.errors import ParameterError
-from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M, SERVO_COMMAND
+from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M, SERVO_COMMAND, RigParams
 
 # The experiments' flags, declared once (flexdigit._validation.Flag): argparse refuses a value outside its range
 # before anything is simulated, in one line naming the flag.
@@ -23,6 +23,8 @@ DURATION = Plausible("s", 0.01, 600.0, "a simulated record of 10 ms to 10 min")
 RATE = Plausible("Hz", 1.0, 1e4, "sampling at 1 Hz to 10 kHz")
 #: Commands as a list ("0,20,40") or a range ("8..43"), each a servo position byte (both ends checked first).
 COMMANDS = Flag(SERVO_COMMAND, many=True, ranges=True)
+#: Chapter 6's load positions from the tip (cm) on the thesis digit (6.4: 0 to 14 cm, and 24 cm near the clamp).
+CHAPTER6_POSITIONS_CM = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 24)
 
 
 def _commands(values: list[int], params, experiment: str) -> list[int]:
@@ -100,7 +102,13 @@ def _add_sweep(sub) -> None:
     """The actuation sweep's flags."""
     p = sub.add_parser("sweep", help="actuation sweep, commands 8..43 (3.4.3, E 3.20-3.22)")
     _common(p)
-    p.add_argument("--commands", type=COMMANDS, default="8..43", help="'8..43' or '8,20,43'")
+    p.add_argument(
+        "--commands",
+        type=COMMANDS,
+        default=None,
+        help="'8..43' or '8,20,43' (default: the digit's [actuator] operating_commands, 8..43 on the thesis rig; "
+        "92..162 for a cable pair straight at 127)",
+    )
     p.add_argument(
         "--settle",
         type=Flag(Plausible("s", 0.0, 60.0, "the digit settles in ~3 s (wn 13 rad/s, zeta 0.07); a minute is ample")),
@@ -112,6 +120,12 @@ def _add_sweep(sub) -> None:
         type=Flag(Plausible("", 1, 10_000, "readings per command: the thesis took 20", integer=True)),
         default=20,
         help="samples per command",
+    )
+    p.add_argument(
+        "--orientation",
+        default="vertical",
+        choices=("vertical", "hanging", "horizontal"),
+        help="vertical: tip up, as the thesis swept it (3.4.3); a long digit buckles so, hang it",
     )
 
 
@@ -128,8 +142,9 @@ def _add_load(sub) -> None:
     p.add_argument(
         "--positions-cm",
         type=Flag(POSITION_FROM_TIP_M.to("cm", 1e2), many=True),
-        default="0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,24",
-        help="positions from the tip in cm (default: chapter 6)",
+        default=None,
+        help="positions from the tip in cm (default: chapter 6's 0..14 and 24 cm, on another digit at the same "
+        "fractions of its length)",
     )
     p.add_argument(
         "--commands", type=COMMANDS, default=None, help="actuation commands, e.g. '0,20,40' (default: cable detached)"
@@ -240,8 +255,9 @@ def _sweep(args, params, gauges, common: dict):
     from flexdigit.params import RigParams
     from flexdigit.twin import records as ex
 
+    commands = None if args.commands is None else _commands(args.commands, params, "sweep")
     res = ex.actuation_sweep(
-        _commands(args.commands, params, "sweep"), settle_s=args.settle, samples=args.samples, **common
+        commands, settle_s=args.settle, samples=args.samples, orientation=args.orientation, **common
     )
     cmd = res.column("command")
     lines, findings = [], {}
@@ -261,8 +277,12 @@ def _load(args, params, gauges, common: dict):
 
     commands = None if args.commands is None else _commands(args.commands, params, "load")
     length_cm = params.geometry.digit_length_m * 1e2
+    given = args.positions_cm
+    if given is None:  # chapter 6's places on the 27 cm thesis digit, at the same fractions of this one's length
+        scale = params.geometry.digit_length_m / RigParams().geometry.digit_length_m
+        given = [round(c * scale, 2) for c in CHAPTER6_POSITIONS_CM]
     positions_cm = check_values(
-        args.positions_cm,
+        given,
         "--positions-cm",
         "flexdigit simulate load",
         low=0,

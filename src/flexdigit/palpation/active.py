@@ -35,7 +35,7 @@ def simulate_hangs(model, position_from_base_m, mass_kg, commands, *, repetition
         np.broadcast_to(np.asarray(mass_kg, dtype=float), np.shape(np.atleast_1d(position_from_base_m))), repetitions
     )
     rng = np.random.default_rng(seed)
-    xi = rng.standard_normal((a.size, 3))
+    xi = rng.standard_normal((a.size, len(model.params.geometry.gauge_positions_m)))
     out = []
     for j, c in enumerate(commands):
         out.append(

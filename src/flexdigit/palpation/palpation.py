@@ -551,8 +551,9 @@ def simulate_sweep(model, tissue, protocol: PalpationProtocol, *, seed=0, drift_
         if drift_v_per_sqrt_s is None
         else np.asarray(drift_v_per_sqrt_s, dtype=float)
     )
-    steps = np.sqrt(np.diff(np.concatenate([[0.0], times])))[:, None] * rate * rng.standard_normal((sequence.size, 3))
-    white = model.noise_v / math.sqrt(protocol.readings) * rng.standard_normal((sequence.size, 3))
+    shape = (sequence.size, clean.shape[1])  # the digit's G gauges
+    steps = np.sqrt(np.diff(np.concatenate([[0.0], times])))[:, None] * rate * rng.standard_normal(shape)
+    white = model.noise_v / math.sqrt(protocol.readings) * rng.standard_normal(shape)
     gauges = clean + np.cumsum(steps, axis=0) + white
     tare = np.zeros(sequence.size, dtype=bool)
     tare[[0, -1]] = True
@@ -840,7 +841,12 @@ def hold_force(
     rest = np.array([rig.read().gauges_v for _ in range(10)])
     offset = rest.mean(axis=0) - model.free_v([eq])[0]
     sign = -1.0 if side == "cable" else 1.0
-    controller = ForceController(estimator, offset, gain=gain, low=eq, sign=sign, approach_rate=approach_rate)
+    # the thesis rig's 8..60: 52 commands of pulley past straight (times a gearing), within the servo's range
+    act = rig.params.actuator
+    high = min(int(act.command_max), eq + int(round(52 * act.gear_ratio)))
+    controller = ForceController(
+        estimator, offset, gain=gain, low=eq, high=high, sign=sign, approach_rate=approach_rate
+    )
     truth = _truth_of(rig)
     true_force = []
     result = run_loop(

@@ -137,9 +137,11 @@ def contact_study(
         out["position_ratio_ci95"] = _pooled_rms_ci95((pos - ss[:, None])[seen], seed, out["seen_crlb_position_m"])
         # the band between gauge 2 and the rigid tip support, where the published figures are comparable
         geo = model.params.geometry
-        tip_support = 0.5 * (geo.section_pitch_m - geo.strip_length_m / geo.section_count)
-        band = seen & (ss > geo.gauge_positions_m[1]) & (ss <= model.length_m - tip_support)
-        if np.any(band):
+        tip_support = 0.5 * geo.supports_m[-1]
+        two = len(geo.gauge_positions_m) > 1  # a one-gauge digit has no band past a second gauge
+        band = seen & (ss > geo.gauge_positions_m[min(1, len(geo.gauge_positions_m) - 1)])
+        band &= ss <= model.length_m - tip_support
+        if two and np.any(band):
             out["band_m"] = (float(ss[band].min()), float(ss[band].max()))
             out["band_rms_position_m"] = float(np.sqrt(np.mean(rms_pos[band] ** 2)))
             out["band_rms_force_rel"] = float(np.sqrt(np.mean((rms_force[band] / ff[band]) ** 2)))
@@ -193,7 +195,7 @@ def classification_study(
     kind, c, w, f = _prior_rows(region_m, extents_m, totals_n, prior_total_step_n, truth.length_m)
     point = kind == "point"
     weights = np.where(point, 0.5 / point.sum(), 0.5 / (~point).sum())  # the two classes equally likely
-    clean = np.empty((kind.size, 3))
+    clean = np.empty((kind.size, len(truth.params.geometry.gauge_positions_m)))
     clean[point] = truth.point_v(c[point], f[point], command)
     clean[~point] = truth.line_v(c[~point], w[~point], f[~point], command)
     phase = ((c - region_m[0]) / truth_step_m) % 1.0
@@ -241,11 +243,12 @@ def classification_study(
 
 
 def stiffness_study(
-    moduli_n_m2=(300.0, 600.0, 900.0, 1200.0, 1500.0), *, seeds=(0, 1, 2), protocol=None, placed=None
+    moduli_n_m2=(300.0, 600.0, 900.0, 1200.0, 1500.0), *, seeds=(0, 1, 2), protocol=None, placed=None, model=None
 ) -> dict:
     """Palpation sweeps (the twin's statics and noise, drift included) over a range of moduli: the fitted modulus's
-    relative errors, the fit's standard deviations and the Cramer-Rao bound of each."""
-    model = ContactGaugeModel()
+    relative errors, the fit's standard deviations and the Cramer-Rao bound of each. ``model``: the digit's
+    :class:`ContactGaugeModel` (default the thesis rig's), which both draws the sweeps and fits them."""
+    model = model or ContactGaugeModel()
     protocol = protocol or PalpationProtocol()
     placed = placed or Tissue(0.15, 0.35, 0.03, 1000.0)
     rel, sd, bound, gap = [], [], [], []
@@ -281,12 +284,13 @@ def stiffness_study(
     }
 
 
-def scan_study(*, offsets_m=None, protocol=None, seed=0, inclusion=(0.25, 0.01, 3.0)) -> dict:
+def scan_study(*, offsets_m=None, protocol=None, seed=0, inclusion=(0.25, 0.01, 3.0), model=None, placed=None) -> dict:
     """A scan of the soft phantom with a 3x nodule (the twin's statics and noise): where the inclusion was found
-    and its ratio, beside the truth."""
-    model = ContactGaugeModel()
+    and its ratio, beside the truth. ``model`` and ``placed``: another digit's :class:`ContactGaugeModel` and the
+    phantom beside it (default the thesis rig's and the soft block 0.15-0.35 m, 30 mm away)."""
+    model = model or ContactGaugeModel()
     protocol = protocol or PalpationProtocol(commands=tuple(range(8, 31, 2)))
-    placed = Tissue(0.15, 0.35, 0.03, 1000.0)
+    placed = placed or Tissue(0.15, 0.35, 0.03, 1000.0)
     phantom = placed.replace(inclusions=(Inclusion(*inclusion),))
     offsets = np.arange(-0.04, 0.0401, 0.01) if offsets_m is None else np.asarray(offsets_m, dtype=float)
     records = [simulate_sweep(model, phantom.moved(float(d)), protocol, seed=[seed, j]) for j, d in enumerate(offsets)]
@@ -309,15 +313,29 @@ def scan_study(*, offsets_m=None, protocol=None, seed=0, inclusion=(0.25, 0.01, 
     }
 
 
-def force_study(moduli_n_m2=(300.0, 1500.0), *, setpoint_n=0.1, duration_s=10.0, seed=2, dt_s=0.005) -> dict:
+def force_study(
+    moduli_n_m2=(300.0, 1500.0), *, setpoint_n=0.1, duration_s=10.0, seed=2, dt_s=0.005, model=None, placed=None
+) -> dict:
     """Force control on the dynamic twin through the 20 ms loop, one run per tissue modulus: steady error,
-    ripple, overshoot and settling time of the true contact force."""
+    ripple, overshoot and settling time of the true contact force. ``model``: another digit's
+    :class:`ContactGaugeModel` (its params, calibration and mount make the twin), ``placed`` the tissue beside it
+    (its modulus replaced; default the thesis rig and the soft block 0.15-0.35 m, 30 mm away)."""
+    placed = placed or Tissue(0.15, 0.35, 0.03, 1000.0)
+    options = {}
+    if model is not None:
+        options = {"calibration": model.calibration, "orientation": model.orientation}
+    params = None if model is None else model.params
+    length = 0.27 if params is None else params.geometry.digit_length_m  # the thesis rig's 270 mm
     runs = []
     for k in moduli_n_m2:
-        rig = open_rig("sim", seed=seed, dt_s=dt_s)
+        rig = open_rig("sim", params, seed=seed, dt_s=dt_s, **options)
         try:
-            rig.place_tissue(Tissue(0.15, 0.35, 0.03, float(k)))
-            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=(0.15, 0.27)))
+            rig.place_tissue(placed.replace(modulus_n_m2=float(k)))
+            region = (placed.start_m, min(placed.end_m, length))
+            # the loop's rates are the thesis rig's per turn of its pulley: a gearing's finer command, times it
+            gear = rig.params.actuator.gear_ratio
+            rates = {} if gear == 1.0 else {"gain": 30.0 * gear, "approach_rate": 4.0 * gear}
+            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model, **rates))
         finally:
             rig.close()
     return {
@@ -330,12 +348,15 @@ def force_study(moduli_n_m2=(300.0, 1500.0), *, setpoint_n=0.1, duration_s=10.0,
     }
 
 
-def active_study(*, commands=(0, 20, 40), samples=2000, repetitions=20, seed=0, estimators=True) -> dict:
+def active_study(*, commands=(0, 20, 40), samples=2000, repetitions=20, seed=0, estimators=True, model=None) -> dict:
     """Chapter 7's settings (table 7.1: 25 and 37.5 g at 0..18 cm from the tip) read at every command under one
-    hang, against one reading at one command: Bayes limits, and the two hang estimators on readings the twin draws."""
-    model = TwinGaugeModel()
+    hang, against one reading at one command: Bayes limits, and the two hang estimators on readings the twin draws.
+    ``model``: another digit's :class:`~flexdigit.tactile.bounds.TwinGaugeModel` (default the thesis rig's); the
+    hangs then reach two thirds of its length from the tip at most (the thesis's 18 cm of 27)."""
+    model = model or TwinGaugeModel()
     length = float(model.params.geometry.digit_length_m)
-    a, m = (g.ravel() for g in np.meshgrid(length - np.arange(0, 0.181, 0.02), [0.025, 0.0375], indexing="ij"))
+    reach = min(0.18, 2.0 * length / 3.0)
+    a, m = (g.ravel() for g in np.meshgrid(length - np.arange(0, reach + 1e-3, 0.02), [0.025, 0.0375], indexing="ij"))
     out = {
         "commands": list(commands),
         **{
@@ -348,8 +369,11 @@ def active_study(*, commands=(0, 20, 40), samples=2000, repetitions=20, seed=0, 
         v = simulate_hangs(model, a, m, commands, repetitions=repetitions, seed=[seed, 5])
         true_tip, true_m = np.repeat(length - a, repetitions), np.repeat(m, repetitions)
         for name, est in (
-            ("posterior", HangPosterior(model, commands, a, m).fit()),
-            ("inversion", HangInversion(model, commands, position_step_m=2e-3, mass_steps=31).fit()),
+            ("posterior", HangPosterior(model, commands, a, m, digit_length_m=length).fit()),
+            (
+                "inversion",
+                HangInversion(model, commands, digit_length_m=length, position_step_m=2e-3, mass_steps=31).fit(),
+            ),
         ):
             p = est.predict(v)
             out[f"{name}_position_rmse_m"] = float(np.sqrt(np.mean((p[:, 0] - true_tip) ** 2)))
@@ -381,11 +405,13 @@ def active_study(*, commands=(0, 20, 40), samples=2000, repetitions=20, seed=0, 
     return out
 
 
-def sweep_example(modulus_n_m2: float = 1000.0, *, protocol=None, seed=0):
+def sweep_example(modulus_n_m2: float = 1000.0, *, protocol=None, seed=0, model=None, placed=None):
     """One palpation sweep of the soft block (the twin's statics and noise) analysed as ``flexdigit palpate``
-    does: its :class:`~flexdigit.palpation.palpation.PalpationResult` (fit, force-indentation curve, lumped slope)."""
-    model = ContactGaugeModel()
+    does: its :class:`~flexdigit.palpation.palpation.PalpationResult` (fit, force-indentation curve, lumped slope).
+    ``model`` and ``placed``: another digit's :class:`ContactGaugeModel` and the tissue beside it (its modulus
+    replaced by ``modulus_n_m2``); default the thesis rig's and the soft block 0.15-0.35 m, 30 mm away."""
+    model = model or ContactGaugeModel()
     protocol = protocol or PalpationProtocol(commands=tuple(range(8, 31, 2)))
-    placed = Tissue(0.15, 0.35, 0.03, float(modulus_n_m2))
+    placed = (placed or Tissue(0.15, 0.35, 0.03, 1000.0)).replace(modulus_n_m2=float(modulus_n_m2))
     record = simulate_sweep(model, placed, protocol, seed=seed)
     return analyse(record, placed.replace(modulus_n_m2=1.0, gap_m=0.0), protocol, model)

@@ -28,7 +28,7 @@ from flexdigit.control.discretise import forward_euler_stability_limit_s, halve_
 from flexdigit.control.thesis_designs import printed_controller, thesis_plant
 from flexdigit.params import RigParams
 from flexdigit.rig.base import open_rig
-from flexdigit.rig.rotation import calibrate_rotation
+from flexdigit.rig.rotation import calibrate_rotation, sweep_commands
 from flexdigit.rig.step_test import step_test
 
 __all__ = [
@@ -119,7 +119,10 @@ def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: boo
     """
     params = params or RigParams()
     mount = "vertical" if straight_is_stable(params, None, "vertical") else "hanging"
-    commands = (8, 14, 20, 26, 32) if fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
+    if params == RigParams():
+        commands = (8, 14, 20, 26, 32) if fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
+    else:  # the digit's own sweep, as `run --params` maps it (a pair straight at 127 swept both ways)
+        commands = sweep_commands(params)[:: 2 if fast else 1]
     rig = open_rig("sim", params, seed=seed, orientation=mount)
     est = calibrate_rotation(rig, commands, settle_s=1.5 if fast else 2.0)
     runs = {

@@ -342,9 +342,12 @@ def check_scheduler_greets(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S)
 def dask_client(scheduler: str | None, workers: int):
     """A Dask ``Client``: on an existing scheduler (checked first: :func:`check_scheduler_greets`), or on a local
     cluster of ``workers`` processes (127.0.0.1)."""
+    import dask
     from distributed import Client, LocalCluster
 
-    with _quiet_distributed():
+    from flexdigit.studies._warm_worker import DASK_CONFIG
+
+    with _quiet_distributed(), dask.config.set(DASK_CONFIG):
         yield from _client(Client, LocalCluster, scheduler, workers)
 
 

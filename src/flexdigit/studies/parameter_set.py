@@ -40,6 +40,23 @@ class ParameterSet:
         )
         return self.params.replace(cables=cables)
 
+    @property
+    def pair_pretension_n(self) -> float | None:
+        """The antagonistic pair's pretension (N) this rig runs with, None for a single cable: the study's
+        ``antagonist_pretension_n`` if set, else the pair its parameters describe (``[cables] count = 2``), so a
+        digit's own description reaches the batched twin as it reaches the scalar one.
+
+        Examples
+        --------
+        >>> from flexdigit.params import Cables
+        >>> ParameterSet(RigParams(cables=Cables(count=2, pretension_n=3.0))).pair_pretension_n
+        3.0
+        >>> ParameterSet().pair_pretension_n is None
+        True
+        """
+        cables = self.description().cables
+        return float(cables.pretension_n) if cables.count == 2 else None
+
     def __repr__(self) -> str:
         return summary(
             self,

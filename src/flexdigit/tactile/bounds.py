@@ -407,7 +407,7 @@ def point_jacobian(model, position_m, force_n, command, step_m: float = 2e-4, re
     batch_s = np.concatenate([hi, lo, s, s])
     batch_f = np.concatenate([f, f, f + df, f - df])
     cmd = np.broadcast_to(np.asarray(command), s.shape)
-    v = model.point_v(batch_s, batch_f, np.tile(cmd, 4)).reshape(4, s.size, 3)
+    v = model.point_v(batch_s, batch_f, np.tile(cmd, 4)).reshape(4, s.size, -1)  # G gauges
     d_pos = (v[0] - v[1]) / (hi - lo)[:, None]
     d_force = (v[2] - v[3]) / (2 * df)[:, None]
     return np.stack([d_pos, d_force], axis=2)
@@ -624,14 +624,15 @@ def hang_readings_model(model, position_from_base_m, mass_kg, commands):
         means.append(model.gauges_v(a, m, cc))
         total = noise_of(model, a, m, cc)
         friction.append(np.sqrt(np.maximum(total**2 - white**2, 0.0)))
-    k, dim = a.size, 3 * len(cmds)
+    gauges = means[0].shape[1]  # the digit's G gauges
+    k, dim = a.size, gauges * len(cmds)
     mean = np.concatenate(means, axis=1)
-    fric = np.stack(friction, axis=1)  # (k, K, 3)
+    fric = np.stack(friction, axis=1)  # (k, K, G)
     cov = np.zeros((k, dim, dim))
     idx = np.arange(dim)
-    cov[:, idx, idx] = np.tile(white**2, len(cmds))
-    for g in range(3):
-        rows = np.arange(len(cmds)) * 3 + g
+    cov[:, idx, idx] = np.tile(np.broadcast_to(white**2, (gauges,)), len(cmds))
+    for g in range(gauges):
+        rows = np.arange(len(cmds)) * gauges + g
         cov[:, rows[:, None], rows[None, :]] += fric[:, :, g, None] * fric[:, None, :, g]
     return mean, np.linalg.cholesky(cov)
 

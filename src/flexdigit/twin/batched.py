@@ -59,7 +59,8 @@ class BatchedChains:
     ----------
     chains : sequence of Chain
     pretension_n : array_like, shape (N,), optional
-        With a second, antagonistic cable: both cables' pretension (N); None: the thesis's single cable.
+        With a second, antagonistic cable: both cables' pretension (N); None: each chain's own cables (its
+        description's ``[cables]``: the pair and its pretension, or the thesis's single cable).
     antagonist : array_like of bool, shape (N,), optional
         Which chains have the second cable (default: all of them when ``pretension_n`` is given).
     """
@@ -75,6 +76,10 @@ class BatchedChains:
                     f"and {g} (same section count, cells per section and gauge count across the batch)"
                 )
         self.chains = list(chains)
+        if pretension_n is None:  # the chains' own cables (a pair described in [cables] keeps its pretension)
+            pretension_n, antagonist = _described_cables(
+                [ch.cable_pretension_m * ch.cable_stiffness for ch in chains], [ch.antagonist for ch in chains]
+            )
         g_grav = np.stack([ch.g_gravity for ch in chains])
         self._setup(
             np.stack([ch.k_psi for ch in chains]),
@@ -118,6 +123,10 @@ class BatchedChains:
             digit_arrays(p, c, housing=housing, orientation=orientation, cells_per_section=cells_per_section)
             for p, c in zip(params, calibrations, strict=True)
         ]
+        if pretension_n is None:  # the rigs' own cables, as build_digit gives each chain
+            pretension_n, antagonist = _described_cables(
+                [r["cable_pretension_n"] for r in rows], [r["antagonist"] for r in rows]
+            )
         first = Chain(**rows[0])
         k, c, a, g_grav, to_curvature, link, s0 = _stacked_chain_matrices(rows, first)
         out = cls.__new__(cls)
@@ -260,6 +269,16 @@ class BatchedChains:
         return m, self.c.copy(), k, b
 
 
+def _described_cables(pretension_n, antagonist):
+    """``(pretension_n, antagonist)`` for :meth:`BatchedChains._setup` from each rig's own cables (its
+    description's ``[cables]``, as :func:`~flexdigit.twin.digit.digit_arrays` reads it): ``(None, None)`` when no
+    rig has the antagonistic pair (the single cable of the thesis)."""
+    antagonist = [bool(a) for a in antagonist]
+    if not any(antagonist):
+        return None, None
+    return [float(p) if a else 0.0 for p, a in zip(pretension_n, antagonist, strict=True)], antagonist
+
+
 class BatchedTwin:
     """N rigs on one clock: integer commands in (one per rig), tip rotations and gauge curvatures out.
 
@@ -274,7 +293,8 @@ class BatchedTwin:
         Integration step (s), rounded to a divisor of the serial period.
     cells_per_section : int
     pretension_n : array_like, shape (N,), optional
-        A second, antagonistic cable with this pretension on both cables (N); None: the thesis's single cable.
+        A second, antagonistic cable with this pretension on both cables (N); None: each rig's own ``cables``
+        (an antagonistic pair with its ``pretension_n``, as the scalar twin runs it, or the single cable).
     antagonist : array_like of bool, shape (N,), optional
         Which rigs have the second cable when ``pretension_n`` is given (default: all of them).
     command : int or array_like, optional
@@ -327,7 +347,9 @@ class BatchedTwin:
         chains = [
             cached_digit(p, c, bool(housing), orientation, cells) for p, c in zip(params_list, cal_list, strict=True)
         ]
-        self.chains = BatchedChains(chains, pretension_n if self.cable else None, antagonist)
+        if not self.cable:  # detached: no cable pulls, neither the pair's second one
+            pretension_n, antagonist = np.zeros(self.size), np.zeros(self.size, dtype=bool)
+        self.chains = BatchedChains(chains, pretension_n, antagonist)
         act = [p.actuator for p in params_list]
         self._cmd_lo = np.array([a.command_min for a in act])
         self._cmd_hi = np.array([a.command_max for a in act])

@@ -29,7 +29,7 @@ import numpy as np
 
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.backends.board_link import BAUD, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState
+from flexdigit.rig.backends.board_link import BAUD, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState, check_board_digit
 from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 
 __all__ = ["BoardRig", "from_url", "URL_OPTIONS"]
@@ -94,6 +94,8 @@ class BoardRig(Rig):
         self.port_name, self.baud, self.mode, self.safe = str(port), int(baud), mode, safe
         self.setpoint_deg, self.startup_s, self.timeout_s = float(setpoint_deg), float(startup), float(timeout)
         self._pause = sleep or time.sleep
+        if params is not None:
+            check_board_digit(params, f"board://{self.port_name}")
         super().__init__(params, clock=clock or time.monotonic, sleep=self._wait_alive, operator=operator)
         self.board = BoardState()
         self._last_said_s = -math.inf

@@ -22,10 +22,23 @@ from __future__ import annotations
 
 import math
 
-from flexdigit.errors import RigError
+from flexdigit.errors import ParameterError, RigError
+from flexdigit.params import RigParams
 from flexdigit.rig.backends.stream_framing import LineDecoder
 
-__all__ = ["BoardState", "FAULTS", "VOLTS_PER_COUNT", "HEARTBEAT_S", "BAUD", "MAX_KEPT_SAMPLES"]
+__all__ = [
+    "BoardState",
+    "FAULTS",
+    "VOLTS_PER_COUNT",
+    "HEARTBEAT_S",
+    "BAUD",
+    "MAX_KEPT_SAMPLES",
+    "FIRMWARE_GAUGES",
+    "check_board_digit",
+]
+
+#: Gauges the reference firmware reads (ADC0..ADC2; ADC3 is the servo's pot): the thesis rig's three.
+FIRMWARE_GAUGES = 3
 
 #: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
 VOLTS_PER_COUNT = 5.0 / 1024.0
@@ -90,3 +103,39 @@ class BoardState:
                 if word.startswith("period_us="):
                     return int(word.split("=", 1)[1]) / 1e6
         raise RigError(f"{where}: the firmware's banner does not give its period")
+
+
+def check_board_digit(params, where: str) -> None:
+    """Refuse, in one line naming the backend, a digit the reference firmware cannot serve (issue 24).
+
+    The firmware reads :data:`FIRMWARE_GAUGES` gauges, and its image carries the thesis rig's exported controller:
+    its straight command (where its safe state relaxes) and its command range are the thesis rig's
+    (``flexdigit export controller`` designs for the thesis rig only). A digit with another gauge count, or another
+    straight command or range (an antagonistic pair straightens mid-range), would be read wrong or relaxed into a
+    bend. A digit of three gauges with the thesis's commands (another length, sections, bridge) is served.
+
+    Examples
+    --------
+    >>> from flexdigit.params import RigParams
+    >>> check_board_digit(RigParams(), "hil://board.elf")
+    >>> four = RigParams.from_dict({"sensors": {"adc_channels": [0, 1, 2, 3]},
+    ...     "geometry": {"gauge_positions_m": [0.045, 0.1, 0.15, 0.2]}})
+    >>> check_board_digit(four, "hil://board.elf")
+    Traceback (most recent call last):
+    ...
+    flexdigit.errors.ParameterError: hil://board.elf: the reference firmware reads 3 gauges ...; the digit has 4 ...
+    """
+    if params is None:  # the thesis rig
+        return
+    thesis, a = RigParams().actuator, params.actuator
+    gauges = len(params.geometry.gauge_positions_m)
+    commands = (a.equilibrium_command, a.command_min, a.command_max)
+    if gauges == FIRMWARE_GAUGES and commands == (thesis.equilibrium_command, thesis.command_min, thesis.command_max):
+        return
+    raise ParameterError(
+        f"{where}: the reference firmware reads {FIRMWARE_GAUGES} gauges and relaxes to the thesis rig's straight "
+        f"command {thesis.equilibrium_command} (range {thesis.command_min}..{thesis.command_max}); the digit has "
+        f"{gauges} gauges, straight command {a.equilibrium_command} (range {a.command_min}..{a.command_max}): not "
+        "supported on the board (docs/digits.md); close the loop on the host through the stream instead "
+        "(flexdigit stream-emulator --params)"
+    )

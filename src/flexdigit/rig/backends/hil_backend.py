@@ -45,7 +45,14 @@ import numpy as np
 
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.backends.board_link import BAUD, FAULTS, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState
+from flexdigit.rig.backends.board_link import (
+    BAUD,
+    FAULTS,
+    HEARTBEAT_S,
+    VOLTS_PER_COUNT,
+    BoardState,
+    check_board_digit,
+)
 from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 from flexdigit.twin.digit import ORIENTATIONS
 from flexdigit.twin.twin import Twin
@@ -172,6 +179,7 @@ class HilRig(Rig):
         self.elf = Path(elf)
         if not self.elf.is_file():
             raise ParameterError(f"hil://{elf}: no firmware image there (build it with 'make firmware')")
+        check_board_digit(params if twin is None else twin.params, f"hil://{elf}")
         self.harness = _find_harness(elf, self.elf, harness)
         if twin is None:
             options = {} if calibration is None else {"calibration": calibration}

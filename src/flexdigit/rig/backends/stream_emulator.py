@@ -31,7 +31,7 @@ import numpy as np
 
 from flexdigit._validation import SEED, Flag, Plausible, check_int, check_param, check_positive
 from flexdigit.errors import ParameterError
-from flexdigit.params import RigParams
+from flexdigit.params import RigParams, load_params
 from flexdigit.rig.backends.servo_board import FrameDecoder
 from flexdigit.rig.backends.stream_framing import PROTOCOL_VERSION, encode_line
 from flexdigit.twin.digit_calibration import twin_calibration
@@ -82,6 +82,9 @@ class StreamEmulator:
         serve a servo board on :attr:`servo_port`.
     params : RigParams, optional
         The digit (default the thesis rig): its gauge count, and the twin's digit.
+    calibration : Calibration, optional
+        The twin's calibration (default :func:`~flexdigit.twin.digit_calibration.twin_calibration` of ``params``:
+        the packaged one on the thesis rig, the thesis's scaled to any other digit). Only with ``twin=True``.
     version : {1, 2}
         The protocol version of the lines (the reference firmware's 2; 1, as boards flashed before it, carries
         three gauges only).
@@ -109,6 +112,7 @@ class StreamEmulator:
         banner: bool = True,
         params=None,
         version: int = PROTOCOL_VERSION,
+        calibration=None,
     ) -> None:
         import tty
 
@@ -131,7 +135,7 @@ class StreamEmulator:
         if twin is not False:
             from flexdigit.twin.twin import Twin
 
-            calibration = twin_calibration(self.params)
+            calibration = twin_calibration(self.params) if calibration is None else calibration
             self.twin = Twin(self.params, seed=self.seed, dt_s=0.002, calibration=calibration) if twin is True else twin
         self.source = source or self._resting
         self.master, self._slave = os.openpty()
@@ -278,24 +282,46 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m flexdigit.rig.backends.stream_emulator", description=__doc__.split("\n")[0]
     )
     parser.add_argument("--twin", action="store_true", help="stream a twin's gauges and serve a servo board too")
+    parser.add_argument("--params", default=None, metavar="FILE", help="the digit's parameters TOML (thesis rig)")
     parser.add_argument("--rate", type=Flag(RATE_HZ), default=100.0, help="lines per second (100)")
     parser.add_argument("--seed", type=Flag(SEED), default=0)
     parser.add_argument(
         "--duration", type=Flag(DURATION_S), default=None, help="stop after this many seconds (default: Ctrl-C)"
     )
     args = parser.parse_args(argv)
-    return run_emulator(args.twin, args.rate, args.seed, args.duration, print)
+    return run_emulator(args.twin, args.rate, args.seed, args.duration, print, params_path=args.params)
 
 
-def run_emulator(twin: bool, rate_hz: float, seed: int, duration_s: float | None, say) -> int:
-    """Run an emulator until ``duration_s`` (or Ctrl-C), telling ``say`` the ports and how to use them."""
+def run_emulator(
+    twin: bool,
+    rate_hz: float,
+    seed: int,
+    duration_s: float | None,
+    say,
+    *,
+    params_path=None,
+    calibration_path=None,
+) -> int:
+    """Run an emulator until ``duration_s`` (or Ctrl-C), telling ``say`` the ports and how to use them.
+
+    ``params_path`` is a digit's parameters TOML (default the thesis rig): the stream carries its G gauges (protocol
+    version 2) and, with ``twin``, the twin is that digit's, with the calibration of ``calibration_path`` (default
+    the thesis's scaled to the digit, :func:`~flexdigit.twin.digit_calibration.twin_calibration`).
+    """
     duration = None if duration_s is None else check_param(duration_s, DURATION_S, "--duration", "stream-emulator")
-    with StreamEmulator(twin=twin, rate_hz=rate_hz, seed=seed) as emulator:
+    if calibration_path is not None and not twin:
+        raise ParameterError(
+            f"--calibration {calibration_path} is the twin's calibration: it needs --twin (the resting digit has none)"
+        )
+    params = None if params_path is None else load_params(params_path)
+    calibration = None if calibration_path is None else twin_calibration(params, calibration_path)
+    with StreamEmulator(twin=twin, rate_hz=rate_hz, seed=seed, params=params, calibration=calibration) as emulator:
         try:  # serving from the first line said: a stop from then on ends it as its duration would
-            say(f"gauge stream on {emulator.port}: stream://{emulator.port}")
+            say(f"gauge stream on {emulator.port}: stream://{emulator.port} ({emulator.gauges} gauges a line)")
             if emulator.servo_port:
+                digit = "" if params_path is None else f" --params {params_path}"
                 say(f"servo board on {emulator.servo_port}; the whole rig:")
-                say(f"  flexdigit run --backend 'serial://{emulator.servo_port}?daq=stream://{emulator.port}'")
+                say(f"  flexdigit run{digit} --backend 'serial://{emulator.servo_port}?daq=stream://{emulator.port}'")
             if duration is None:
                 while True:
                     time.sleep(1.0)
