@@ -1,4 +1,4 @@
-# flexdigit: `make run` reproduces the thesis on the twin; `make test` runs lint, the docs build and the test suite;
+# flexdigit: `make run` reproduces the thesis on the twin; `make test` runs lint and the test suite (the docs build in it);
 # `make docs` builds the documentation site (docs/_build/html, offline, warnings are errors); `make bench` runs the
 # benchmarks and writes benchmarks/results.json, from which the site's benchmark page is generated; `make fuzz` runs
 # the loader fuzz tests at 10,000 examples each (FUZZ_SEED=N for another seed). Each sets up .venv first when needed.
@@ -45,21 +45,33 @@ lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks docs examples
 	$(BIN)/ruff format --check src tests benchmarks docs examples
 
+# The suite runs on two pytest-xdist workers, each taking whole files (--dist loadfile: a module's set-up, a live
+# server or a firmware image, is made once), the longest files first (tests/conftest.py). Measured on this 2-core
+# machine: tests/live, rig and firmware (449 tests) 354 s in one process, 195 s on two workers; one process used
+# 0.7-0.9 of one core (live servers, browsers, ptys and simavr wait on the wall clock), so a second worker all
+# but halves the run. The site's build is not a step of its own: tests/test_docs.py runs the same command, offline,
+# first, on one worker while the other runs the tests (before, `make docs` ran alone for a minute, one core idle).
+# PYTEST_WORKERS=0: one process, as `pytest` alone runs.
+PYTEST_WORKERS ?= 2
+PYTEST := $(BIN)/pytest -n $(PYTEST_WORKERS) --dist loadfile
+
 # The numbers must not depend on the BLAS kernel (docs/guide/reliability.md, "Portable numbers"): the tests marked `blas` run again under
 # OpenBLAS's own choice for this CPU (when the environment forces one) and under Nehalem (SSE only, what any x86-64
-# runs; unless the suite just ran there). About 40 s each; pytest's header names the kernel in use.
-BLAS_RUN := $(BIN)/pytest tests -m blas -p no:cacheprovider
+# runs; unless the suite just ran there). About 35 s each in one process, on the two workers about 20 s; pytest's
+# header names the kernel in use.
+BLAS_RUN := $(PYTEST) tests -m blas -p no:cacheprovider
 
 # The site (Sphinx, numpydoc, myst, sphinx-gallery: every examples/plot_*.py runs in the build). Offline: no
 # intersphinx, nothing fetched. -W --keep-going: every warning is reported, and any one fails the build.
-# tests/test_docs.py runs the same command (incremental: nothing to redo right after this target).
+# tests/test_docs.py runs the same command (incremental: nothing to redo right after this target); `make test` leaves
+# the build to it.
 SPHINXOPTS ?= -W --keep-going -q
 docs: $(STAMP)
 	$(BIN)/python -m sphinx -b html $(SPHINXOPTS) docs docs/_build/html
 	@echo "the site: docs/_build/html/index.html"
 
-test: lint browser three avr docs
-	$(BIN)/pytest
+test: lint browser three avr $(STAMP)
+	$(PYTEST)
 	@if [ -n "$$OPENBLAS_CORETYPE" ]; then echo "blas tests, OpenBLAS's own kernel (OPENBLAS_CORETYPE unset)"; \
 	    env -u OPENBLAS_CORETYPE $(BLAS_RUN); fi
 	@if [ "$$OPENBLAS_CORETYPE" != Nehalem ]; then echo "blas tests, OPENBLAS_CORETYPE=Nehalem"; \

@@ -35,6 +35,19 @@ def pytest_report_header(config):
     return f"openblas kernel: {', '.join(kernels) or 'none'} (OPENBLAS_CORETYPE={asked})"
 
 
+#: The documentation site's build (tests/test_docs.py: Sphinx and the gallery's examples, a minute or more); first.
+FIRST = "test_docs.py"
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """Run the longest files first: the site's build, then every file with a ``slow`` test, then the rest (each group
+    in its collected order). ``make test`` runs two pytest-xdist workers that take whole files (``--dist
+    loadfile``): started first, the long files overlap the short ones instead of one left running alone at the end
+    (longest-processing-time-first scheduling). The order is the same in every worker, as xdist requires."""
+    slow = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: (item.path.name != FIRST, item.path not in slow))
+
+
 def _work_started(*args, **kwargs):
     raise RuntimeError("the work started")
 

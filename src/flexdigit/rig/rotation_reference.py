@@ -87,10 +87,8 @@ class DigitShape:
     @classmethod
     def from_params(cls, params: RigParams | None = None) -> DigitShape:
         geo = (params or RigParams()).geometry
-        pitch, flex = geo.section_pitch_m, geo.strip_length_m / geo.section_count
-        half = 0.5 * (pitch - flex)
-        starts = tuple(k * pitch + half for k in range(geo.section_count))
-        return cls(geo.digit_length_m, starts, tuple(s + flex for s in starts))
+        bounds = geo.section_bounds_m  # unequal sections too
+        return cls(geo.digit_length_m, tuple(a for a, _ in bounds), tuple(b for _, b in bounds))
 
     @property
     def flex_length_m(self) -> np.ndarray:
