@@ -157,6 +157,10 @@ class Geometry:
                 f"The 'gauge_positions_m' parameter of {owner} puts two gauges at one place: one gauge per position. "
                 f"Got {list(positions)!r} instead."
             )
+        if not isinstance(self.section_length_m, tuple | list):  # one length: its own message (a unit slip named)
+            self._parameter_constraints["section_length_m"][0].check(
+                self.section_length_m, "section_length_m", owner, ParameterError
+            )
         validate_fields(self)
         if isinstance(self.section_length_m, tuple | list):  # one length per section, from the base
             lengths = check_array(self.section_length_m, "section_length_m", owner, ndim=1, low=1e-3, high=2.0)

@@ -60,6 +60,22 @@ def test_equal_sections_keep_their_arrays_to_the_bit(name, cells):
     assert np.array_equal(supports, old["support_s_m"])
 
 
+@pytest.mark.parametrize("name", EQUAL)
+def test_equal_sections_keep_their_rotation_reference_and_stretches_to_the_bit(name):
+    from flexdigit.rig.rotation_reference import DigitShape
+    from flexdigit.studies.design_study import SUPPORT_CLEARANCE_M, _strip_stretches
+
+    params = RigParams.from_dict(DIGITS[name])
+    geo = params.geometry
+    pitch, flex = geo.section_pitch_m, geo.strip_length_m / geo.section_count
+    half = 0.5 * (pitch - flex)
+    starts = tuple(k * pitch + half for k in range(geo.section_count))
+    assert DigitShape.from_params(params) == DigitShape(geo.digit_length_m, starts, tuple(a + flex for a in starts))
+    clear = SUPPORT_CLEARANCE_M
+    old = [(k * pitch + half + clear, (k + 1) * pitch - half - clear) for k in range(geo.section_count)]
+    assert _strip_stretches(params) == old
+
+
 def test_the_thesis_shape_beam_keeps_its_flexible_cells_to_the_bit():
     """DigitBeam (shape/) against its equal-pitch rule: ``x - k p`` strictly inside ``(h, p - h)``."""
     from flexdigit.shape.shape import DigitBeam
@@ -145,3 +161,12 @@ def test_an_unequal_digit_scaled_by_the_design_study_keeps_its_proportions():
     assert scaled.supports_m == pytest.approx((0.015, 0.018, 0.015), abs=LENGTH_ATOL_M)
     assert scaled.support_centres_m[-1] == scaled.digit_length_m
     assert math.fsum(scaled.section_lengths_m) == pytest.approx(scaled.strip_length_m, abs=LENGTH_ATOL_M)
+
+
+def test_one_length_keeps_its_unit_slip_hint_and_a_list_its_element_check():
+    from flexdigit.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"Got 80.0 m instead: did you mean mm \(0.08 m\)\?"):
+        Geometry(section_length_m=80.0)
+    with pytest.raises(ParameterError, match=r"'section_length_m' parameter of Geometry .*Got \[0.1, 80.0, 0.1\]"):
+        Geometry(section_length_m=[0.1, 80.0, 0.1])

@@ -87,8 +87,9 @@ class DigitShape:
     @classmethod
     def from_params(cls, params: RigParams | None = None) -> DigitShape:
         geo = (params or RigParams()).geometry
-        bounds = geo.section_bounds_m  # unequal sections too
-        return cls(geo.digit_length_m, tuple(a for a, _ in bounds), tuple(b for _, b in bounds))
+        starts = tuple(a for a, _ in geo.section_bounds_m)  # unequal sections too
+        # start + length, as ever (not the bound's end, which rounds apart by an ulp on some equal digits)
+        return cls(geo.digit_length_m, starts, tuple(a + x for a, x in zip(starts, geo.section_lengths_m, strict=True)))
 
     @property
     def flex_length_m(self) -> np.ndarray:
