@@ -99,3 +99,15 @@ def test_a_digit_that_buckles_tip_up_is_swept_hanging(tmp_path, capsys):
     assert "\n" not in err and "buckles" in err and "hanging" in err
     _json([*argv, "--commands", "8,20", "--orientation", "hanging"], capsys)
     assert pd.read_parquet(sweep)["command"].tolist() == [8, 20]
+
+
+def test_shape_says_a_reading_is_at_the_adcs_rail(tmp_path, capsys):
+    """Campaign digit 7 lying horizontal sags so far that two of its hot amplifiers sit at the ADC's -2.5 V: the
+    estimate is rightly refused, and the line now says which gauges are clipped rather than only the chi-square."""
+    digit = _digit(7, tmp_path)
+    volts = "-2.354736,-2.5,-2.5,-1.314697,-0.467529,-0.107422,-0.014648"  # the campaign's collected reading
+    argv = ["shape", "--params", str(digit), f"--gauges-v={volts}", "--orientation", "horizontal", "--no-cable"]
+    assert main(argv) == 1
+    out = capsys.readouterr().out.strip()
+    assert "\n" not in out
+    assert "gauge 2 reads -2.5 V, gauge 3 reads -2.5 V, the ADC's end of range [-2.5, 2.5] V: clipped" in out

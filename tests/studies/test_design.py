@@ -1,5 +1,6 @@
 """The design study: layouts, candidates, the D-criterion and the Pareto front against independent checks."""
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -237,6 +238,12 @@ chunk_size = 2
     exported = out / f"design-{k}.toml"
     result = run_design(spec_from_toml(spec.read_text(), str(spec)), out, workers=0, progress=False)
     expected = design_parameter_set(ParameterSet(), result.candidates[k], seed=3).description()
+    if expected.cables.count == 2:  # a pair is exported straight mid-range, its 30 deg either side (issue 24)
+        a = expected.actuator
+        span = a.operating_commands[1] - a.equilibrium_command
+        expected = expected.replace(
+            actuator=dataclasses.replace(a, equilibrium_command=127, operating_commands=(127 - span, 127 + span))
+        )
     assert load_params(exported) == expected  # the design's own rig: 4 gauges, geared servo, its cables and size
     assert len(load_params(exported).geometry.gauge_positions_m) == 4
     assert main(["params", str(exported)]) == 0
@@ -268,3 +275,18 @@ def test_an_export_target_that_cannot_be_written_is_refused_before_the_study_run
     if kind == "file":
         assert "runs the study again" in err
         assert target.read_text() == "# someone's rig\n"
+
+
+def test_a_pair_design_is_exported_bending_both_ways():
+    """Regression (issue-24 campaign, the study's front): a pair design was exported straight at the single
+    cable's command 8, so `run --setpoint-deg -30` on it was refused (the servo reached -3.5 deg at most). It is
+    exported straight mid-range (127, as a pair described without a straight command) with the design's span of
+    commands either side; a single cable's design is exported as it was."""
+    from flexdigit.params import Actuator, Cables, RigParams
+    from flexdigit.studies.design_study import _bends_both_ways
+
+    design = RigParams(actuator=Actuator(operating_commands=(8, 78)), cables=Cables(count=2, pretension_n=5.0))
+    exported = _bends_both_ways(design).actuator
+    assert (exported.equilibrium_command, exported.operating_commands) == (127, (57, 197))
+    single = RigParams(actuator=Actuator(operating_commands=(8, 78)))
+    assert _bends_both_ways(single) == single

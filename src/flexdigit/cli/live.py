@@ -224,6 +224,7 @@ def _shape(args: argparse.Namespace) -> CommandResult:
         text = (
             f"the readings do not fit this rig (chi-square {chi2:.0f}, at most {est_settings.misfit_chi2:g} "
             "expected): check the calibration, --orientation, --command and --no-cable; no estimate given"
+            + _at_the_rail(volts, params.sensors)
         )
         return CommandResult(data=row, text=text, exit_code=1)
     if args.plot:
@@ -236,6 +237,17 @@ def _shape(args: argparse.Namespace) -> CommandResult:
         row["plot"] = str(save_plot(shape_figure(est, 0, title), args.plot, "shape", force=args.force))
         text += f"\nplot -> {args.plot}"
     return CommandResult(data=row, text=text)
+
+
+def _at_the_rail(volts: list[float], sensors) -> str:
+    """``"; gauge 2 reads -2.5 V, ..."`` for readings at the ADC's end of range (clipped: no shape fits them), else
+    ``""``. The card's codes run from ``lo`` to ``hi - 1 LSB``."""
+    (lo, hi), lsb = sensors.adc_range_v, sensors.adc_lsb_v
+    ends = (lo + lsb / 2, hi - 1.5 * lsb)
+    railed = [f"gauge {k} reads {v:g} V" for k, v in enumerate(volts, start=1) if v <= ends[0] or v >= ends[1]]
+    if not railed:
+        return ""
+    return f"; {', '.join(railed)}, the ADC's end of range [{lo:g}, {hi:g}] V: clipped (lower the amplifier gain)"
 
 
 def _gauge_volts(gauges_v: str | None, count: int) -> list[float]:

@@ -624,7 +624,7 @@ def export_design(result: DesignResult, row: int, path: str | Path, *, force: bo
     c = result.candidates[row]
     ps = design_parameter_set(result.spec.baseline, c, grid_step_m=result.settings.grid_step_m, seed=result.spec.seed)
     objectives = ", ".join(f"{m} {result.outputs[m][row]:.6g}" for m in result.settings.objectives)
-    text = params_template(ps.description()).replace(
+    text = params_template(_bends_both_ways(ps.description())).replace(
         "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE\n",
         f"# Design {row} on the Pareto front of study {result.spec.name!r}: {c.label()}\n# ({objectives}); check "
         "with: flexdigit params FILE\n",
@@ -632,6 +632,20 @@ def export_design(result: DesignResult, row: int, path: str | Path, *, force: bo
     with atomic_write(path, "w", force=force) as fh:
         fh.write(text)
     return Path(path)
+
+
+def _bends_both_ways(params: RigParams) -> RigParams:
+    """A design with the cable pair, straight mid-range and operating as far either side as the design's 30 deg
+    (its ``operating_commands`` above straight), as a pair described without a straight command is
+    (:func:`flexdigit.params.load_params`): exported straight at the single cable's 8, it could never bend back
+    (``run --setpoint-deg -30`` refused it). A single cable's design is returned as it is."""
+    a = params.actuator
+    if params.cables.count != 2:
+        return params
+    span = a.operating_commands[1] - a.equilibrium_command
+    middle = (a.command_min + a.command_max + 1) // 2
+    low, high = max(a.command_min, middle - span), min(a.command_max, middle + span)
+    return params.replace(actuator=dataclasses.replace(a, equilibrium_command=middle, operating_commands=(low, high)))
 
 
 def design_pareto_figure(result: DesignResult):
