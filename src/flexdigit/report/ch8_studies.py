@@ -119,6 +119,12 @@ def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
                     )
                 )
         rows.append((metric, *(v for j in range(len(names)) for v in (res["ST"][j], res["ST_conf"][j]))))
+    if not rows:  # a digit whose tolerances reach rows it cannot run (a servo that stalls): said, not drawn empty
+        chapter.paragraphs.append(
+            "No metric has Sobol indices: each was refused on some rows of the design (the entries "
+            "studies.sobol.METRIC say why), and Saltelli's estimators need every row."
+        )
+        return
     chapter.tables.append(
         ResultTable(
             "studies.sobol_total",
