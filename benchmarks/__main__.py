@@ -26,6 +26,8 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_control",
     "benchmarks.bench_twin",
     "benchmarks.bench_digits",
+    "benchmarks.bench_unequal",
+    "benchmarks.bench_digitctl2",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",

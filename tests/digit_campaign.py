@@ -239,11 +239,11 @@ def _argv(command: str, digit: Path, work: Path, data: dict, hanging: bool) -> l
     if command == "simulate-load":
         return ["simulate", "load", *p, "--out", f"{out}.parquet"]
     if command == "simulate-sweep":
-        return ["simulate", "sweep", *p, "--out", f"{out}.parquet"]
+        return ["simulate", "sweep", *p, "--out", f"{out}.parquet", *orient]
     if command == "calibrate":
         return [
             "calibrate", *p, "--release-housed", str(work / "simulate-release.parquet"),
-            "--sweep", str(work / "simulate-sweep.parquet"), "--out", f"{out}.toml", "--allow-poor-fit",
+            "--sweep", str(work / "simulate-sweep.parquet"), "--out", f"{out}.toml", "--allow-poor-fit", *orient,
         ]  # fmt: skip
     if command == "design-20ms":
         return ["design", "20ms", *p, *orient]

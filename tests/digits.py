@@ -1,8 +1,9 @@
 """The test digits of issue 24: planar digits other than (and including) the thesis rig, as parameter-file tables.
 
 Each is a consistent description (``flexdigit params FILE`` accepts it): together they cover 1, 2, 3, 4 and 5
-sections; 1, 2, 3, 4, 6 and 8 gauges; quarter, half and full bridges; one cable and an antagonistic pair; a geared
-servo; digits 0.15 to 0.5 m long. ``write_digit`` writes one as a TOML file, as a user would.
+sections (one of unequal lengths); 1, 2, 3, 4, 6 and 8 gauges; quarter, half and full bridges; one cable and an
+antagonistic pair; a geared servo; digits 0.15 to 0.5 m long. ``write_digit`` writes one as a TOML file, as a
+user would.
 """
 
 from __future__ import annotations
@@ -80,6 +81,18 @@ DIGITS: dict[str, dict] = {
             "gauge_positions_m": [0.025, 0.125],
         },
         "sensors": {"adc_channels": [0, 1]},
+    },
+    # sections of unequal lengths (60, 100, 80 mm from the base) and supports (10, 12, 10 mm: half the first at
+    # the clamp, the last one's centre at the tip), 0.272 m, a gauge midway on each section's strip
+    "unequal-sections": {
+        "geometry": {
+            "section_count": 3,
+            "section_length_m": [0.06, 0.10, 0.08],
+            "support_lengths_m": [0.01, 0.012, 0.01],
+            "strip_length_m": 0.24,
+            "digit_length_m": 0.272,
+            "gauge_positions_m": [0.035, 0.125, 0.227],
+        },
     },
 }
 

@@ -285,18 +285,15 @@ class BVPSolution:
 
 def thesis_digit_segments(params, calibration, *, housing: bool = True) -> tuple[list[Segment], list[float]]:
     """The digit as 2.2 describes it: three 80 mm strips between 10 mm rigid supports (half supports at the clamp
-    and the tip); returns the segments and the support positions (m), where the supports' masses sit."""
+    and the tip), or any digit's strips where ``Geometry.section_bounds_m`` puts them (unequal sections too);
+    returns the segments and the support positions (m), where the supports' masses sit."""
     geo, mat = params.geometry, params.material
-    n = geo.section_count
-    pitch = geo.section_pitch_m
-    half = 0.5 * (pitch - geo.strip_length_m / n)
     ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4
     segments = []
-    # the last support's centre is the tip itself: pitch * n can round past it (7 x 0.24 / 7), dropping its mass
-    supports = [min(pitch * (k + 1), geo.digit_length_m) for k in range(n)]
+    # the layout the description gives (unequal sections too); the last support's centre is the tip itself
+    supports = list(geo.support_centres_m)
     edge = 0.0
-    for k in range(n):
-        lo, hi = k * pitch + half, (k + 1) * pitch - half
+    for k, (lo, hi) in enumerate(geo.section_bounds_m):
         segments.append(Segment(edge, lo, np.inf))
         segments.append(Segment(lo, hi, ei_strip + (calibration.housing_ei_n_m2[k] if housing else 0.0)))
         edge = hi

@@ -97,12 +97,14 @@ class Geometry:
     ----------
     section_count : int
         Number of sections (2.2): 3.
-    section_length_m : float
-        Spring-steel strip length per section (2.2.2): 80 mm.
+    section_length_m : float or tuple of float
+        Spring-steel strip length per section (2.2.2): 80 mm. One value: every section that long; a list of
+        ``section_count`` values: each section its own length, from the base (their sum is ``strip_length_m``).
     strip_thickness_m, strip_width_m : float
         Strip cross-section, 0.015 in x 0.5 in (2.2.2).
     digit_length_m : float
-        ``l`` of table 3.7, clamp to tip: 270 mm. Supports sit every ``digit_length_m / section_count``.
+        ``l`` of table 3.7, clamp to tip: 270 mm. Its ``digit_length_m - strip_length_m`` are ``section_count``
+        supports of equal length, half a support at the clamp and at the tip (:attr:`section_bounds_m`).
     strip_length_m : float
         Free strip length, 3 x 80 mm = 240 mm; table 3.4's ``y_max`` column fits x ~ 0.241 m, i.e. this.
     cable_eccentricity_m : float
@@ -113,10 +115,13 @@ class Geometry:
         30 degrees per section, to keep the spring steel elastic (2.2).
     guide_hole_diameter_m : float
         Cable guide holes, 0.042 in (2.2.1).
+    support_lengths_m : tuple of float, optional
+        One nylon support length per section, the support that ends it (the last one's centre is the tip; half of
+        the first sits at the clamp); left out: ``(digit_length_m - strip_length_m) / section_count`` each (10 mm).
     """
 
     section_count: int = 3
-    section_length_m: float = 0.080
+    section_length_m: float | tuple[float, ...] = 0.080
     strip_thickness_m: float = 0.381e-3
     strip_width_m: float = 12.7e-3
     digit_length_m: float = 0.270
@@ -125,10 +130,14 @@ class Geometry:
     gauge_positions_m: tuple[float, ...] = (0.045, 0.135, 0.225)
     max_rotation_per_section_deg: float = 30.0
     guide_hole_diameter_m: float = 1.067e-3
+    support_lengths_m: tuple[float, ...] | None = None
 
     _parameter_constraints = {
         "section_count": [Plausible("", 1, 50, "1 to 50 sectional supports; more is a continuum", integer=True)],
-        "section_length_m": [Plausible("m", 1e-3, 2.0, "a section 1 mm to the longest digit, 2 m")],
+        "section_length_m": [
+            Plausible("m", 1e-3, 2.0, "a section 1 mm to the longest digit, 2 m"),
+            Array(ndim=1, min_length=1, low=1e-3, high=2.0),  # one per section: each 1 mm to 2 m
+        ],
         "strip_thickness_m": [Plausible("m", 1e-5, 5e-3, "a strip 0.01 to 5 mm thick: foil to a stiff plate")],
         "strip_width_m": [Plausible("m", 1e-4, 0.2, "a strip 0.1 mm to 20 cm wide")],
         "digit_length_m": [DIGIT_LENGTH_M],
@@ -137,23 +146,38 @@ class Geometry:
         "gauge_positions_m": [Array(ndim=1, min_length=1, increasing=True, low=0, low_open=True)],
         "max_rotation_per_section_deg": [Interval(Real, 0, 180, closed="right")],
         "guide_hole_diameter_m": [Plausible("m", 1e-5, 0.02, "a cable guide hole 0.01 to 20 mm across")],
+        "support_lengths_m": [Array(ndim=1, min_length=1, low=0.0, high=2.0), None],  # one per section, 0 to 2 m
     }
 
     def __post_init__(self) -> None:
         owner = type(self).__name__
-        if isinstance(self.section_length_m, tuple | list):  # a list per section: said plainly, not "not a number"
-            raise ParameterError(
-                f"The 'section_length_m' parameter of {owner} is one length (m) for every section: sections of "
-                "unequal lengths are not supported yet (docs/digits.md). "
-                f"Got {list(self.section_length_m)!r} instead."
-            )
         positions = self.gauge_positions_m
         if isinstance(positions, tuple | list) and len(set(map(repr, positions))) < len(positions):
             raise ParameterError(
                 f"The 'gauge_positions_m' parameter of {owner} puts two gauges at one place: one gauge per position. "
                 f"Got {list(positions)!r} instead."
             )
+        if not isinstance(self.section_length_m, tuple | list):  # one length: its own message (a unit slip named)
+            self._parameter_constraints["section_length_m"][0].check(
+                self.section_length_m, "section_length_m", owner, ParameterError
+            )
         validate_fields(self)
+        if isinstance(self.section_length_m, tuple | list):  # one length per section, from the base
+            lengths = check_array(self.section_length_m, "section_length_m", owner, ndim=1, low=1e-3, high=2.0)
+            if lengths.size != self.section_count:
+                raise ParameterError(
+                    f"The 'section_length_m' parameter of {owner} must be one length or {self.section_count} "
+                    f"(one per section). Got {lengths.tolist()!r} instead."
+                )
+            object.__setattr__(self, "section_length_m", tuple(float(x) for x in lengths))
+        if self.support_lengths_m is not None:  # one support per section, the one that ends it
+            supports = check_array(self.support_lengths_m, "support_lengths_m", owner, ndim=1, low=0.0, high=2.0)
+            if supports.size != self.section_count:
+                raise ParameterError(
+                    f"The 'support_lengths_m' parameter of {owner} must have {self.section_count} values (one per "
+                    f"section). Got {supports.tolist()!r} instead."
+                )
+            object.__setattr__(self, "support_lengths_m", tuple(float(x) for x in supports))
         check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
         positions = check_array(
             self.gauge_positions_m,
@@ -175,8 +199,85 @@ class Geometry:
 
     @property
     def section_pitch_m(self) -> float:
-        """Distance between sectional supports along the digit, ``digit_length_m / section_count``."""
+        """Distance between sectional supports along the digit, ``digit_length_m / section_count`` (the mean
+        pitch of unequal sections: :attr:`section_bounds_m` gives each one)."""
         return self.digit_length_m / self.section_count
+
+    @property
+    def equal_sections(self) -> bool:
+        """True if ``section_length_m`` is one length for every section and no ``support_lengths_m`` is given (the
+        thesis rig's layout)."""
+        return not isinstance(self.section_length_m, tuple) and self.support_lengths_m is None
+
+    @property
+    def section_lengths_m(self) -> tuple[float, ...]:
+        """Each section's free strip (m), from the base: ``strip_length_m / section_count`` each for one
+        ``section_length_m`` (as the twin has always laid them out), else the list given."""
+        if not isinstance(self.section_length_m, tuple):
+            return (self.strip_length_m / self.section_count,) * self.section_count
+        return self.section_length_m
+
+    @property
+    def support_length_m(self) -> float:
+        """``(digit_length_m - strip_length_m) / section_count`` (m): each support's length (10 mm on the thesis
+        rig; half of one at the clamp and half at the tip) unless ``support_lengths_m`` gives them
+        (:attr:`supports_m`)."""
+        return (self.digit_length_m - self.strip_length_m) / self.section_count
+
+    @property
+    def supports_m(self) -> tuple[float, ...]:
+        """Each support's length (m), the one that ends section ``k``: ``support_lengths_m`` if given, else
+        :attr:`support_length_m` each."""
+        if self.support_lengths_m is None:
+            return (self.support_length_m,) * self.section_count
+        return self.support_lengths_m
+
+    @property
+    def section_bounds_m(self) -> tuple[tuple[float, float], ...]:
+        """Where each section's free strip starts and ends along the digit (m from the clamp): the one source of the
+        layout (twin chain, beam, elastica oracle, shape, gauge checks, design study).
+
+        Sections follow one another from the clamp, each its free strip then a support, half a support at the clamp
+        and at the tip (2.2). Equal sections keep the twin's arithmetic, ``k p + h`` to ``(k + 1) p - h`` with
+        pitch ``p = digit_length_m / section_count``, so the thesis rig's arrays do not move by a bit.
+
+        Examples
+        --------
+        >>> [(round(a, 4), round(b, 4)) for a, b in Geometry().section_bounds_m]
+        [(0.005, 0.085), (0.095, 0.175), (0.185, 0.265)]
+        >>> g = Geometry(section_count=2, section_length_m=(0.1, 0.06), strip_length_m=0.16, digit_length_m=0.18,
+        ...              gauge_positions_m=(0.05, 0.14))
+        >>> [(round(a, 4), round(b, 4)) for a, b in g.section_bounds_m]
+        [(0.005, 0.105), (0.115, 0.175)]
+        """
+        n = self.section_count
+        if self.equal_sections:
+            pitch = self.section_pitch_m
+            half = 0.5 * (pitch - self.strip_length_m / n)
+            return tuple((k * pitch + half, (k + 1) * pitch - half) for k in range(n))
+        supports, bounds = self.supports_m, []
+        start = 0.5 * supports[0]  # half the first support at the clamp (2.2)
+        for length, support in zip(self.section_lengths_m, supports, strict=True):
+            bounds.append((start, start + length))
+            start += length + support
+        return tuple(bounds)
+
+    @property
+    def support_centres_m(self) -> tuple[float, ...]:
+        """The centres of the ``section_count`` supports that end the sections (m from the clamp; the last is the
+        tip): where the support masses sit. Equal sections: ``p, 2 p, ...``, the last never past the tip.
+
+        Examples
+        --------
+        >>> [round(c, 4) for c in Geometry().support_centres_m]
+        [0.09, 0.18, 0.27]
+        """
+        n, length = self.section_count, self.digit_length_m
+        if self.equal_sections:
+            pitch = self.section_pitch_m
+            return tuple(min(pitch * (k + 1.0), length) for k in range(n))
+        ends = [end + 0.5 * support for (_, end), support in zip(self.section_bounds_m, self.supports_m, strict=True)]
+        return tuple(min(c, length) for c in ends[:-1]) + (length,)
 
     @property
     def cross_section_m2(self) -> float:
@@ -604,7 +705,8 @@ class RigParams:
                 default = getattr(factory(), key)
                 if isinstance(default, tuple) or default is None:  # None: an optional list, one per gauge
                     if not isinstance(value, list):
-                        like = f"like {list(default)!r}" if default is not None else "with one value per gauge"
+                        per = "section" if key == "support_lengths_m" else "gauge"
+                        like = f"like {list(default)!r}" if default is not None else f"with one value per {per}"
                         raise ParameterError(f"{source}: [{name}] {key} must be a list {like}. Got {value!r} instead.")
                     value = tuple(value)
                 converted[key] = value
@@ -633,14 +735,67 @@ MAX_GAUGES = 8
 LENGTH_TOLERANCE_M = 1e-6
 
 
+def _layout_inconsistencies(g: Geometry) -> list[str]:
+    """The lengths that do not add up and the gauges off the strip (:func:`digit_inconsistencies`)."""
+    lines: list[str] = []
+    n = g.section_count
+    if not isinstance(g.section_length_m, tuple):
+        strip = n * g.section_length_m
+        sections = f"section_count x section_length_m = {n} x {g.section_length_m:g}"
+        example = n * (g.section_length_m + 0.01)
+    else:
+        strip = math.fsum(g.section_length_m)
+        sections = "the sum of section_length_m " + "[" + ", ".join(f"{x:g}" for x in g.section_length_m) + "]"
+        example = strip + n * 0.01
+    if abs(strip - g.strip_length_m) > LENGTH_TOLERANCE_M:
+        lines.append(
+            f"[geometry] strip_length_m = {g.strip_length_m:g} but {sections} = {strip:g} m: the lengths do not add up"
+        )
+    support = (g.digit_length_m - strip) / n
+    given = g.support_lengths_m
+    if given is not None:  # half the first at the clamp, the others whole, the last one's centre at the tip
+        digit = strip + 0.5 * given[0] + math.fsum(given[:-1]) + 0.5 * given[-1]
+        if abs(digit - g.digit_length_m) > LENGTH_TOLERANCE_M:
+            lines.append(
+                f"[geometry] digit_length_m = {g.digit_length_m:g} but the strip ({strip:g} m) and support_lengths_m "
+                f"{list(given)} (half the first, the others whole, half the last) make {digit:g} m: the lengths do "
+                "not add up"
+            )
+    elif support < -LENGTH_TOLERANCE_M:
+        lines.append(
+            f"[geometry] digit_length_m = {g.digit_length_m:g} is shorter than its {n} sections of "
+            f"{_lengths_text(g)} m ({strip:g} m): set it to {strip:g} m plus the supports, e.g. "
+            f"{example:g} m with 10 mm supports"
+        )
+    if given is not None or support >= -LENGTH_TOLERANCE_M:
+        halves = [0.5 * max(x, 0.0) for x in g.supports_m]
+        # the clamp's half support (as long as half the first), then the one ending each section
+        supports = [(0.0, halves[0]), *zip(g.support_centres_m, halves, strict=True)]
+        tip_half = halves[-1]
+        for i, x in enumerate(g.gauge_positions_m):
+            at, half = min(supports, key=lambda centre_half: abs(x - centre_half[0]))  # the nearest support
+            if x > g.digit_length_m - tip_half - LENGTH_TOLERANCE_M:
+                lines.append(
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is past the strip, which ends at "
+                    f"{g.digit_length_m - tip_half:g} m"
+                )
+            elif abs(x - at) < half + LENGTH_TOLERANCE_M:
+                lines.append(
+                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {at:g} m "
+                    f"({at - half:g} to {at + half:g} m): put it on the strip"
+                )
+    return lines
+
+
 def digit_inconsistencies(params: RigParams) -> list[str]:
     """Every way the description contradicts itself, one line each naming the key; empty if it holds together.
 
-    The rules (the twin's layout, :func:`flexdigit.twin.digit.build_digit`): ``section_count`` sections of
-    ``section_length_m`` of free strip make ``strip_length_m``; each section's pitch ``digit_length_m /
-    section_count`` holds its free strip and one support, so the supports are ``(digit_length_m - strip_length_m)
-    / section_count`` long, centred at 0, pitch, 2 pitch, ... (half a support at the clamp and at the tip); a gauge
-    sits on the free strip, never on a support or past the strip; one ADC channel per gauge; a cable pair keeps a
+    The rules (the twin's layout, :func:`flexdigit.twin.digit.build_digit`, :attr:`Geometry.section_bounds_m`):
+    ``section_count`` sections of ``section_length_m`` (one length, or one per section) of free strip make
+    ``strip_length_m``; each section is followed by one support, ``support_lengths_m`` long if given, else
+    ``(digit_length_m - strip_length_m) / section_count``, half the first at the clamp and the last one's centre at
+    the tip (equal sections: centred at 0, pitch, 2 pitch, ...); a gauge sits on the free strip, never on a
+    support or past the strip; one ADC channel per gauge; a cable pair keeps a
     pretension, a single cable none.
 
     Examples
@@ -658,33 +813,7 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
         lines.append(f"[geometry] section_count = {n}: a digit has 1 to {MAX_SECTIONS} sections")
     if count > MAX_GAUGES:
         lines.append(f"[geometry] gauge_positions_m has {count} gauges: a digit carries 1 to {MAX_GAUGES}")
-    strip = n * g.section_length_m
-    if abs(strip - g.strip_length_m) > LENGTH_TOLERANCE_M:
-        lines.append(
-            f"[geometry] strip_length_m = {g.strip_length_m:g} but section_count x section_length_m = {n} x "
-            f"{g.section_length_m:g} = {strip:g} m: the lengths do not add up"
-        )
-    support = (g.digit_length_m - strip) / n
-    if support < -LENGTH_TOLERANCE_M:
-        lines.append(
-            f"[geometry] digit_length_m = {g.digit_length_m:g} is shorter than its {n} sections of "
-            f"{g.section_length_m:g} m ({strip:g} m): set it to {strip:g} m plus the supports, e.g. "
-            f"{n * (g.section_length_m + 0.01):g} m with 10 mm supports"
-        )
-    else:
-        half, pitch = 0.5 * max(support, 0.0), g.digit_length_m / n
-        for i, x in enumerate(g.gauge_positions_m):
-            k = round(x / pitch)  # the nearest support
-            if x > g.digit_length_m - half - LENGTH_TOLERANCE_M:
-                lines.append(
-                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is past the strip, which ends at "
-                    f"{g.digit_length_m - half:g} m"
-                )
-            elif abs(x - k * pitch) < half + LENGTH_TOLERANCE_M:
-                lines.append(
-                    f"[geometry] gauge_positions_m[{i}] = {x:g} m is on the support at {k * pitch:g} m "
-                    f"({k * pitch - half:g} to {k * pitch + half:g} m): put it on the strip"
-                )
+    lines += _layout_inconsistencies(g)
     for i in range(1, count):  # repr-equal places are refused on loading; these are apart by less than the tolerance
         gap = g.gauge_positions_m[i] - g.gauge_positions_m[i - 1]
         if gap < LENGTH_TOLERANCE_M:
@@ -708,8 +837,16 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
     return lines
 
 
-def derived_figures(params: RigParams) -> dict[str, float]:
-    """What the description implies (SI units), as ``flexdigit params`` prints it.
+def _lengths_text(g: Geometry) -> str:
+    """``section_length_m`` as a message shows it: ``0.08`` or ``[0.1, 0.06]``."""
+    if not isinstance(g.section_length_m, tuple):
+        return f"{g.section_length_m:g}"
+    return "[" + ", ".join(f"{x:g}" for x in g.section_length_m) + "]"
+
+
+def derived_figures(params: RigParams) -> dict[str, float | list[float]]:
+    """What the description implies (SI units), as ``flexdigit params`` prints it: figures, and where each
+    section's free strip starts and ends and each support's centre sits (m from the clamp).
 
     Examples
     --------
@@ -722,7 +859,11 @@ def derived_figures(params: RigParams) -> dict[str, float]:
         "second_moment_m4": g.second_moment_m4,
         "bending_stiffness_n_m2": params.bending_stiffness_n_m2,
         "section_pitch_m": g.section_pitch_m,
-        "support_length_m": (g.digit_length_m - g.strip_length_m) / g.section_count,
+        "support_length_m": g.support_length_m,
+        "supports_m": list(g.supports_m),
+        "section_starts_m": [a for a, _ in g.section_bounds_m],
+        "section_ends_m": [b for _, b in g.section_bounds_m],
+        "support_centres_m": list(g.support_centres_m),
         "gauge_count": len(g.gauge_positions_m),
         "rad_per_command": a.rad_per_command,
         "deg_per_command": a.deg_per_command,
@@ -770,8 +911,10 @@ def params_template(params: RigParams | None = None) -> str:
     out = [
         "# flexdigit: a planar digit described (SI units; 'command' is the servo board's 0..254 position).",
         "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE",
-        f"# Rules: 1-{MAX_SECTIONS} sections; strip_length_m = section_count x section_length_m; supports of",
-        "# (digit_length_m - strip_length_m) / section_count centred every digit_length_m / section_count;",
+        f"# Rules: 1-{MAX_SECTIONS} sections; section_length_m one length for all (strip_length_m = section_count x",
+        "# section_length_m) or a list of section_count lengths from the base (strip_length_m = their sum);",
+        "# section_count supports of (digit_length_m - strip_length_m) / section_count each end a section (half",
+        "# a support at the clamp); `flexdigit params FILE` prints where each section starts and ends;",
         f"# 1-{MAX_GAUGES} gauges on the strip, one adc_channels entry each; a cable pair needs a pretension.",
     ]
     for f in dataclasses.fields(params):
@@ -783,6 +926,9 @@ def params_template(params: RigParams | None = None) -> str:
             value = list(value) if isinstance(value, tuple) else value
             if key in notes:
                 out.append(f"# {notes[key]}")
+            if value is None and key == "support_lengths_m":  # optional: the thesis's, commented out
+                out.append(f"# {key} = " + json.dumps([round(x, 12) for x in params.geometry.supports_m]))
+                continue
             if value is None:  # optional: shown as an example, commented out
                 keys = ("gauge_bridges", "gauge_factors", "amplifier_gains_v_per_v")
                 example = dict(zip(keys, section.chain(len(params.geometry.gauge_positions_m)), strict=True))
@@ -794,22 +940,33 @@ def params_template(params: RigParams | None = None) -> str:
 
 def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
     """The lengths a ``[geometry]`` table leaves out, derived from the ones it gives (issue 24): the strip from the
-    sections (``section_count x section_length_m``), the digit from the strip and the thesis's 10 mm supports.
+    sections (``section_count x section_length_m``, or the sum of a list of lengths), the digit from the strip and
+    the thesis's 10 mm supports.
     A table that gives them all is checked (:func:`digit_inconsistencies`), never changed."""
     count, section = geometry.get("section_count"), geometry.get("section_length_m")
-    if count is None and section is None:
+    if count is None and section is None and "support_lengths_m" not in geometry:
         return geometry  # the thesis's sections: its lengths are the defaults
-    if not isinstance(count, int | type(None)) or not isinstance(section, int | float | type(None)):
+    lengths = isinstance(section, list) and all(isinstance(x, int | float) and not isinstance(x, bool) for x in section)
+    if not isinstance(count, int | type(None)) or not (lengths or isinstance(section, int | float | type(None))):
         return geometry  # mistyped: the dataclass names the key
     thesis = Geometry()
-    count = thesis.section_count if count is None else count
+    count = (len(section) if lengths else thesis.section_count) if count is None else count
     section = thesis.section_length_m if section is None else section
     out = dict(geometry)
     if "strip_length_m" not in out:
-        out["strip_length_m"] = count * section
+        out["strip_length_m"] = math.fsum(section) if lengths else count * section
+    supports = geometry.get("support_lengths_m")
     if "digit_length_m" not in out and isinstance(out["strip_length_m"], int | float):
-        support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
-        out["digit_length_m"] = out["strip_length_m"] + count * support
+        if (
+            isinstance(supports, list | tuple)
+            and supports
+            and all(isinstance(x, int | float) and not isinstance(x, bool) for x in supports)
+        ):  # half the first at the clamp, the others whole, the last one's centre at the tip
+            extra = 0.5 * supports[0] + math.fsum(supports[:-1]) + 0.5 * supports[-1]
+            out["digit_length_m"] = out["strip_length_m"] + extra
+        else:
+            support = (thesis.digit_length_m - thesis.strip_length_m) / thesis.section_count
+            out["digit_length_m"] = out["strip_length_m"] + count * support
     return out
 
 

@@ -84,3 +84,18 @@ def test_calibrate_fits_a_digits_own_records(tmp_path, capsys):
     assert len(rows) == 5
     for row in rows:
         assert abs(row["twin"] - row["measured"]) <= 0.02 * abs(row["measured"]), row
+
+
+def test_a_digit_that_buckles_tip_up_is_swept_hanging(tmp_path, capsys):
+    """Regression: campaign digit 2 (one 0.39 m section of 0.25 mm strip) buckles tip up; ``simulate sweep`` swept
+    it so anyway (it had no --orientation), the digit fell over, and ``calibrate`` fitted negative channel gains to
+    that record. The sweep now refuses the vertical mount in one line and takes ``--orientation hanging``
+    (``calibrate --orientation hanging`` fits such records: the campaign's digit 2)."""
+    digit = _digit(2, tmp_path)
+    sweep = tmp_path / "sweep.parquet"
+    argv = ["simulate", "sweep", "--params", str(digit), "--out", str(sweep), "--settle", "0.2", "--samples", "1"]
+    assert main([*argv, "--commands", "8,20"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "buckles" in err and "hanging" in err
+    _json([*argv, "--commands", "8,20", "--orientation", "hanging"], capsys)
+    assert pd.read_parquet(sweep)["command"].tolist() == [8, 20]

@@ -49,8 +49,10 @@ def test_each_digits_20ms_design_is_stable(name):
     orientation = "vertical" if straight_is_stable(params) else "hanging"
     d = digit_design_20ms(params, orientation=orientation)
     assert np.max(np.abs(d.closed_loop_poles)) < 1.0
-    assert d.controller.nstates == 6  # servo 2, the digit's mode 2, delay 1, disturbance 1 (the thesis's: 4)
+    # the observer is the model (servo 2, the chain's modes below Nyquist, delay 1) and the disturbance
+    assert d.controller.nstates == d.plant_d.nstates + 1 > 4
     assert d.deg_per_command > 0
+    assert d.choice.meets, d.choice.failing
 
 
 def test_a_digit_that_buckles_tip_up_is_refused_a_design():

@@ -152,3 +152,20 @@ def test_a_harness_without_a_pty_is_refused_naming_the_pipe(tmp_path):
     harness.chmod(0o755)
     with pytest.raises(OSError, match=r"no pty \(flexdigit_hil: cannot open a pty.*\?uart=pipe"):
         open_rig(f"hil://{elf}?harness={harness}")
+
+
+@pytest.mark.slow
+def test_run_params_of_a_digit_the_firmware_serves(firmware, tmp_path, capsys):
+    # issue 24: a 0.30 m digit of 3 sections and 3 gauges at other places (the thesis's commands) through the
+    # firmware, its twin from --params: the loop on the host, the true rotation at the setpoint
+    digit = tmp_path / "three.toml"
+    digit.write_text(
+        "[geometry]\nsection_count = 3\nsection_length_m = 0.09\nstrip_length_m = 0.27\ndigit_length_m = 0.30\n"
+        "gauge_positions_m = [0.05, 0.15, 0.25]\n"
+    )
+    elf = firmware(0.020, "float")
+    args = ["run", "--params", str(digit), "--backend", f"hil://{elf}", "--map-from", "twin", "--duration", "2"]
+    assert main([*args, "--setpoint-deg", "20", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["params"] == str(digit)
+    assert abs(doc["true_final_rotation_deg"] - 20.0) < TRUE_ROTATION_TOLERANCE_DEG

@@ -131,3 +131,31 @@ def test_a_servo_too_weak_for_its_gearing_names_the_gear_ratio(tmp_path):
     path.write_text(to_toml(data))
     with pytest.raises(ParameterError, match=r"cannot bend.*gear_ratio"):
         load_params(path)
+
+
+@st.composite
+def hostile_unequal_digits(draw):
+    """The test digit of unequal sections and supports (tests/digits.py) with one geometry key made hostile, or one
+    element of its per-section lists: ``(document, key, what)``."""
+    from digits import DIGITS
+
+    doc = copy.deepcopy(DIGITS["unequal-sections"])
+    key = draw(st.sampled_from(["section_length_m", "support_lengths_m", "section_count", "digit_length_m"]))
+    name = draw(st.sampled_from(list(HOSTILE)))
+    if isinstance(doc["geometry"][key], list) and draw(st.booleans()):
+        doc["geometry"][key][draw(st.integers(0, 2))] = HOSTILE[name]
+        return doc, key, f"element {name}"
+    doc["geometry"][key] = HOSTILE[name]
+    return doc, key, name
+
+
+@given(case=hostile_unequal_digits())
+def test_a_hostile_per_section_length_is_refused_in_one_line_naming_it(case, tmp_path_factory):
+    """Sections of unequal lengths: a hostile length or support (or count, or digit length) is refused naming its
+    key, never laid out as another digit (a support of 0 or 1e-30 m no longer adds up to the digit's length)."""
+    doc, key, what = case
+    path = tmp_path_factory.mktemp("hostile") / "digit.toml"
+    path.write_text(to_toml(doc))
+    outcome = assert_loader_contract(load_params, path)
+    assert isinstance(outcome, ParameterError), f"[geometry] {key} = {what} was accepted"
+    assert key in str(outcome), str(outcome)

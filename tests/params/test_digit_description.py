@@ -23,9 +23,17 @@ def test_each_test_digit_loads_and_derives(name, tmp_path):
     d = derived_figures(params)
     g = params.geometry
     # the sections and supports add up to the digit
-    assert g.section_count * (g.section_length_m + d["support_length_m"]) == pytest.approx(
-        g.digit_length_m, abs=LENGTH_ATOL_M
+    supports = d["supports_m"]  # half the first at the clamp, the others whole, the last one's centre at the tip
+    assert math.fsum(g.section_lengths_m) + 0.5 * supports[0] + sum(supports[:-1]) + 0.5 * supports[-1] == (
+        pytest.approx(g.digit_length_m, abs=LENGTH_ATOL_M)
     )
+    # each section's free strip is its length, after its predecessor and one support; the last support ends the tip
+    bounds = list(zip(d["section_starts_m"], d["section_ends_m"], strict=True))
+    assert [b - a for a, b in bounds] == pytest.approx(list(g.section_lengths_m), abs=LENGTH_ATOL_M)
+    assert bounds[0][0] == pytest.approx(0.5 * supports[0], abs=LENGTH_ATOL_M)
+    gaps = [a - b for (_, b), (a, _) in zip(bounds[:-1], bounds[1:], strict=True)]
+    assert gaps == pytest.approx(supports[:-1], abs=LENGTH_ATOL_M)
+    assert d["support_centres_m"][-1] == g.digit_length_m
     assert d["gauge_count"] == len(g.gauge_positions_m) == len(params.sensors.adc_channels)
     # E 3.15 with the gearing: tip degrees per command = servo step / gear ratio x r_M / e
     a = params.actuator
@@ -102,10 +110,25 @@ BAD = {
         },
         "section_count = 9",
     ),
-    # sections of unequal lengths: not supported yet, said so (docs/digits.md), not "not a finite real number"
-    "sections of unequal lengths": (
-        {"geometry": {"section_count": 2, "section_length_m": [0.08, 0.12], "strip_length_m": 0.2}},
-        "unequal lengths are not supported yet",
+    # sections of unequal lengths: the list must have one length per section, add up and leave room for supports
+    "unequal lengths, one short": ({"geometry": {"section_length_m": [0.08, 0.16]}}, "section_length_m"),
+    "unequal lengths that do not add up": (
+        {"geometry": {"section_length_m": [0.06, 0.10, 0.09], "strip_length_m": 0.24}},  # 0.25 m: 10 mm over
+        "the sum of section_length_m [0.06, 0.1, 0.09] = 0.25 m",
+    ),
+    "unequal lengths, a gauge on a moved support": (
+        {"geometry": {"section_length_m": [0.125, 0.035, 0.08]}},  # the first support centred at 0.135 m
+        "gauge_positions_m[1] = 0.135 m is on the support at 0.135 m",
+    ),
+    "unequal lengths, not a number": ({"geometry": {"section_length_m": [0.06, "0.1", 0.08]}}, "section_length_m"),
+    "supports that do not add up": (
+        {"geometry": {"support_lengths_m": [0.01, 0.02, 0.01], "digit_length_m": 0.27}},  # 0.28 m
+        "support_lengths_m [0.01, 0.02, 0.01]",
+    ),
+    "a support short": ({"geometry": {"support_lengths_m": [0.01, 0.01]}}, "support_lengths_m"),
+    "a gauge on a longer support": (
+        {"geometry": {"support_lengths_m": [0.01, 0.02, 0.01], "gauge_positions_m": [0.045, 0.135, 0.19]}},
+        "gauge_positions_m[2] = 0.19 m is on the support at 0.185 m (0.175 to 0.195 m)",  # 20 mm: 0.28 m long
     ),
 }
 

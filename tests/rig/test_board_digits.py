@@ -45,3 +45,22 @@ def test_run_on_board_with_params_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2
     assert "--params" in err and "--on-board" in err and "\n" not in err
+
+
+def test_a_hardware_map_with_no_operator_is_one_line(monkeypatch, capsys):
+    # run on hardware asks the operator for the rotation at each command (--map-from operator): with stdin at its
+    # end that is one line naming what to give instead, not an EOFError; a reply that is no number is named too
+    import io
+
+    from flexdigit.cli.run import _ask_operator
+    from flexdigit.errors import RigError
+
+    monkeypatch.setattr("sys.stdin", io.StringIO(""))
+    with pytest.raises(RigError, match="--map-from twin"):
+        _ask_operator(8)
+    monkeypatch.setattr("sys.stdin", io.StringIO("ten\n"))
+    with pytest.raises(ParameterError, match="'ten'"):
+        _ask_operator(8)
+    monkeypatch.setattr("sys.stdin", io.StringIO("12.5\n"))
+    assert _ask_operator(8) == 12.5
+    assert "tip rotation now" in capsys.readouterr().err

@@ -26,3 +26,17 @@ def test_a_design_is_a_consistent_description(index, tmp_path):
     path = tmp_path / "design.toml"
     path.write_text(tomli_w.dumps(description.to_dict()))
     assert load_params(path) == description
+
+
+def test_a_one_cable_design_from_a_pair_digit_is_one_cable():
+    # a study whose baseline digit describes the pair ([cables] count = 2): its "1 cable" candidates drop the pair
+    # (the batched twin takes a described pair, so a kept one would score them as pairs under a "1 cable" label)
+    from digits import DIGITS
+    from flexdigit.params import RigParams
+
+    pair = RigParams.from_dict(DIGITS["four-sections-two-cables"])
+    settings = dataclasses.replace(SETTINGS, layouts=("equal",))
+    for candidate in candidates(settings, 0)[::11]:
+        ps = design_parameter_set(ParameterSet(pair), candidate)
+        assert ps.pair_pretension_n == (candidate.pretension_n if candidate.pretension_n > 0 else None)
+        assert ps.description().cables.count == (2 if candidate.pretension_n > 0 else 1)

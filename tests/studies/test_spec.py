@@ -198,3 +198,34 @@ def test_fingerprint_ignores_layout_but_not_numbers():
     b = spec_from_toml("# a comment\n" + GOOD.replace("high = 215e9", "high   =   2.15e11"))
     c = spec_from_toml(GOOD.replace("215e9", "216e9"))
     assert a.fingerprint() == b.fingerprint() != c.fingerprint()
+
+
+def test_a_spec_about_another_digit_takes_its_tolerances_about_that_digit(tmp_path):
+    # issue 24: the shipped tolerances about a digit's description (the report's studies chapter on that digit):
+    # a delta range is about the digit's value, a tuple factor covers its section count, and the thesis rig's
+    # three gauge positions are left out for a one-gauge digit (fields)
+    from digits import DIGITS
+    from flexdigit.params import RigParams
+    from flexdigit.studies.parameter_set import ParameterSet
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    data = {k: dict(v) for k, v in DIGITS["one-section"].items()}
+    data["geometry"]["strip_thickness_m"] = 0.5e-3
+    digit = RigParams.from_dict(data)
+    baseline = ParameterSet(digit, twin_calibration(digit))
+    with pytest.raises(ParameterError, match=r"element tables 0\.\.0"):  # the thesis rig's gauges 1..3
+        load_spec("thesis-tolerances", baseline=baseline)
+    fields = ("geometry.strip_thickness_m", "calibration.housing_ei_n_m2")
+    spec = load_spec("thesis-tolerances", baseline=baseline, fields=fields)
+    assert spec.names == ["geometry.strip_thickness_m", "calibration.housing_ei_n_m2[*]"]
+    thickness = spec.parameters[0]
+    assert float(thickness.ppf(0.0)) == pytest.approx(0.5e-3 - 0.0127e-3, rel=1e-12)  # delta 0.0005 in about 0.5 mm
+    row = spec.parameter_set({"geometry.strip_thickness_m": 0.5e-3, "calibration.housing_ei_n_m2[*]": 1.1})
+    assert len(row.calibration.housing_ei_n_m2) == 1
+    assert row.calibration.housing_ei_n_m2[0] == pytest.approx(1.1 * baseline.calibration.housing_ei_n_m2[0])
+    # a spec naming its own baseline and given another: one line, not a silent choice
+    path = tmp_path / "s.toml"
+    (tmp_path / "d.toml").write_text("")
+    path.write_text('[study]\nparams = "d.toml"\n' + GOOD.split("\n", 3)[3])
+    with pytest.raises(ParameterError, match=r"\[study\] params names the baseline rig"):
+        load_spec(path, baseline=baseline)

@@ -196,3 +196,53 @@ def test_a_response_too_long_to_keep_is_refused_before_it_is_allocated(capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert "duration_s 600 s" in err and "dt_s 1e-06 s" in err and "\n" not in err
+
+
+@pytest.mark.parametrize("hb", [8, 14])
+@pytest.mark.parametrize("size", [6, 234])
+def test_the_kernels_banded_lu_solves_as_scipy_does(hb, size):
+    """The kernel's banded LU (no pivoting, reciprocal pivots) and its padded solve against scipy's
+    ``solve_banded`` (LAPACK gbsv, partial pivoting), on a random diagonally dominant band (a step's matrix is
+    mass + dt^2 stiffness), at the rod's size and below the band's width."""
+    from scipy.linalg import solve_banded
+
+    from flexdigit.tdcr import _chain_kernel
+
+    rng = np.random.default_rng(5)
+    band = rng.normal(size=(size, 2 * hb + 1))
+    band[:, hb] = 2 * hb + 1 + rng.random(size)
+    for i in range(size):  # zero outside the matrix, as _jacobian leaves it
+        for c in range(2 * hb + 1):
+            if not 0 <= i + c - hb < size:
+                band[i, c] = 0.0
+    rhs = rng.normal(size=size)
+    ab = np.zeros((2 * hb + 1, size))  # LAPACK's layout: ab[hb + i - j, j] = a[i, j]
+    for i in range(size):
+        for c in range(2 * hb + 1):
+            if 0 <= i + c - hb < size:
+                ab[2 * hb - c, i + c - hb] = band[i, c]
+    expected = solve_banded((hb, hb), ab, rhs)
+    padded = np.zeros(size + 2 * hb)
+    _chain_kernel._band_factor(band, hb)
+    _chain_kernel._band_solve(band, hb, rhs, padded)
+    np.testing.assert_allclose(padded[hb : hb + size], expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+    assert not padded[:hb].any() and not padded[hb + size :].any()  # the padding stays zero
+
+
+@pytest.mark.parametrize("angle", [1e-9, 0.05, 0.0999, 0.1001, 0.7, 3.0])
+def test_the_kernels_rotations_match_scipys_either_side_of_its_series(angle):
+    """Below 0.1 rad the kernel's exponential and logarithm use Taylor series, above it trigonometry: both
+    against scipy's rotation vectors to round-off (the series' first term left out is ~1e-18)."""
+    from scipy.spatial.transform import Rotation
+
+    from flexdigit.tdcr import _chain_kernel
+
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    rotvec = angle * axis
+    matrix = Rotation.from_rotvec(rotvec).as_matrix()
+    np.testing.assert_allclose(np.reshape(_chain_kernel._exp9(*rotvec), (3, 3)), matrix, rtol=0, atol=2e-16 * 8)
+    base = Rotation.from_rotvec([0.2, 0.1, -0.4]).as_matrix()
+    turned = base @ matrix
+    logged = _chain_kernel._log_rel(base[None], 0, turned[None], 0)
+    np.testing.assert_allclose(logged[:3], rotvec, rtol=0, atol=1e-15 * max(1.0, angle) * 8)
+    np.testing.assert_allclose(np.reshape(logged[3:], (3, 3)), matrix, rtol=0, atol=1e-15)

@@ -129,11 +129,19 @@ class CalibrationResult:
         )
 
 
-def model_response(params, calibration: Calibration, targets: CalibrationTargets, *, cells_per_section: int = 3):
-    """Everything the fit compares: modal wn/zeta bare and housed, deflections and bridge ratios on the sweep."""
+def model_response(
+    params,
+    calibration: Calibration,
+    targets: CalibrationTargets,
+    *,
+    cells_per_section: int = 3,
+    orientation: str = "vertical",
+):
+    """Everything the fit compares: modal wn/zeta bare and housed, deflections and bridge ratios on the sweep, of
+    the digit mounted as the records were taken (``orientation``: tip up as the thesis's; a long digit hangs)."""
     out: dict[str, Any] = {}
-    bare = build_digit(params, calibration, housing=False, cells_per_section=cells_per_section)
-    house = build_digit(params, calibration, housing=True, cells_per_section=cells_per_section)
+    bare = build_digit(params, calibration, housing=False, orientation=orientation, cells_per_section=cells_per_section)
+    house = build_digit(params, calibration, housing=True, orientation=orientation, cells_per_section=cells_per_section)
     out["bare_wn"], out["bare_zeta"] = (float(v[0]) for v in bare.linear_modes())
     out["housing_wn"], out["housing_zeta"] = (float(v[0]) for v in house.linear_modes())
     if targets.deflection_commands is not None:
@@ -159,6 +167,7 @@ def calibrate(
     cells_per_section: int = 3,
     verbose: bool = False,
     friction_score=None,
+    orientation: str = "vertical",
 ) -> CalibrationResult:
     """Fit the twin's free parameters to measured targets (``scipy.optimize.least_squares``).
 
@@ -184,6 +193,9 @@ def calibrate(
     verbose : bool
         Log the residual table at INFO (else at DEBUG) on the ``flexdigit.calibrate.twin_fit`` logger; the library
         prints nothing (``result.table()`` gives the same table).
+    orientation : {"vertical", "hanging", "horizontal"}
+        How the digit was mounted for the release tests, sweep and deflections: tip up as the thesis's (3.1.2,
+        3.4.3); a digit that buckles so was recorded hanging.
     friction_score : callable, optional
         ``friction_score(calibration) -> corr2``: the thesis pipeline's actuated test corr2 on a twin with that
         calibration (e.g. :func:`flexdigit.tactile.thesis_experiments.actuated_corr2_score`, its mean over 8 seeded
@@ -197,8 +209,8 @@ def calibrate(
     params = params or RigParams()
     if initial is None:  # the nominal calibration is the thesis rig's; another digit starts from it scaled to it
         initial = Calibration() if params == RigParams() else calibration_for(params)
-    cal, fitted, (cost, success, message) = _fit_mechanics(params, initial, targets, cells_per_section)
-    r = model_response(params, cal, targets, cells_per_section=cells_per_section)
+    cal, fitted, (cost, success, message) = _fit_mechanics(params, initial, targets, cells_per_section, orientation)
+    r = model_response(params, cal, targets, cells_per_section=cells_per_section, orientation=orientation)
     cal, sweep_rows, copied = _fit_channels(cal, targets, r)
     cal, friction_rows = _fit_friction(params, cal, targets, cells_per_section, friction_score)
     if targets.sweep_commands is not None:
@@ -249,7 +261,7 @@ def _mechanics_start(cal0: Calibration, t: CalibrationTargets) -> tuple[np.ndarr
 
 
 def _fit_mechanics(
-    params, cal0: Calibration, t: CalibrationTargets, cells_per_section: int
+    params, cal0: Calibration, t: CalibrationTargets, cells_per_section: int, orientation: str = "vertical"
 ) -> tuple[Calibration, list[str], tuple[float, bool, str]]:
     """The mechanics fitted to the wn, zeta and deflection targets: calibration, names fitted, solver outcome."""
     from scipy.optimize import least_squares
@@ -269,7 +281,7 @@ def _fit_mechanics(
     weight = _deflection_weight(t)
 
     def resid(x):
-        r = model_response(params, unpack(x), t, cells_per_section=cells_per_section)
+        r = model_response(params, unpack(x), t, cells_per_section=cells_per_section, orientation=orientation)
         out = []
         for key in ("bare_wn", "bare_zeta", "housing_wn", "housing_zeta"):
             target = getattr(t, key + ("_rad_s" if key.endswith("wn") else ""))

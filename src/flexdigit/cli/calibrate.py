@@ -20,6 +20,8 @@ from flexdigit._validation import Flag
 #: (records of different rigs or set-ups mixed, a unit slip, a gauge wired to the wrong channel...).
 POOR_FIT = 3.0
 RECORDS = ("release_bare", "release_housed", "sweep", "deflections", "rest", "actuated_rest")
+#: How a digit is mounted for its records: tip up as the thesis's; a long digit buckles so and hangs (tip down).
+MOUNTS = ("vertical", "hanging", "horizontal")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -53,6 +55,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--actuated-rest", metavar="FILE", help="repeated readings of the unloaded actuated digit (friction level)"
     )
     p.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
+    p.add_argument("--orientation", choices=MOUNTS, default="vertical", help="how the records' digit was mounted")
     p.add_argument(
         "--decimal", choices=(".", ","), default=None, help="decimal mark of the tables (default: detected per file)"
     )
@@ -155,7 +158,7 @@ def _fit_records(args, given: dict, params, initial, out):
     if "actuated_rest" in given:
         kw["actuated_rest"] = rec.read_actuated_rest(given["actuated_rest"], decimal=args.decimal, gauges=gauges)
     targets = dataclasses.replace(CalibrationTargets.from_records(**kw), **release_targets)
-    result = calibrate(targets, params, initial=initial)
+    result = calibrate(targets, params, initial=initial, orientation=args.orientation)
     if not result.success:
         raise DesignError(f"the fit did not converge ({result.message}); no calibration written to {out}")
     row, miss = result.worst()

@@ -237,20 +237,32 @@ def _twenty_ms(args: argparse.Namespace) -> CommandResult:
         params, period_s=args.period, calibration=calibration, orientation=args.orientation
     )
     data = {"params": args.params, **summary}
-    mode, step = data["digit_mode"], data["linear_step_30deg"]
+    step, digit, search = data["linear_step_30deg"], data["model"], data["search"]
     model = (
         "servo x rotation per command (5.3)"
-        if mode is None
-        else f"servo x rotation per command x the digit's mode ({mode['wn_rad_s']:.3g} rad/s, zeta "
-        f"{mode['zeta']:.3g}, cable(s) taut, from its twin {args.orientation})"
+        if digit is None
+        else "servo x the twin's chain linearised at "
+        f"{digit['operating_deg']:.0f} deg, cable(s) taut, {args.orientation}: modes "
+        + ", ".join(f"{w:.3g}" for w in digit["modes_wn_rad_s"])
+        + f" rad/s kept, {len(digit['truncated_wn_rad_s'])} above Nyquist truncated"
     )
     text = (
         f"20 ms design{' on ' + args.params if args.params else ''}: {model}; {data['deg_per_command']:.4g} deg a "
         f"command, {data['delay_samples']} sample(s) of delay, period {data['period_s'] * 1000:g} ms\n"
         f"  nominal loop poles inside |z| <= {data['closed_loop_pole_radius']:.4f} (stable); linear 30 deg step: "
         f"settling {step['settling_time_s']:.3f} s, overshoot {step['overshoot_percent']:.2f} %\n"
-        f"  the loop on the twin: flexdigit run{' --params ' + args.params if args.params else ''} --setpoint-deg 30"
     )
+    if search is not None:
+        text += (
+            f"  weights searched ({search['candidates']} candidates, plant gain x "
+            f"{min(search['gain_errors']):g}-{max(search['gain_errors']):g}): worst settling "
+            f"{search['worst_settling_time_s']:.3f} s, overshoot {search['worst_overshoot_percent']:.2f} %, noise "
+            f"{search['noise_sd_deg']:.3f} deg\n"
+        )
+        if not search["meets"]:
+            text += f"  NOT meeting issue 24's step figures on its model: {search['failing']}\n"
+    where = f" --params {args.params}" if args.params else ""
+    text += f"  the loop on the twin: flexdigit run{where} --setpoint-deg 30"
     return CommandResult(data=data, text=text)
 
 

@@ -32,7 +32,7 @@ def _params(args: argparse.Namespace) -> CommandResult:
         lines.append(f"[{section}]")
         lines.extend(f"  {k} = {v}" for k, v in values.items())
     lines.append("derived:")
-    lines.extend(f"  {k} = {v:.6g}" for k, v in derived.items())
+    lines.extend(f"  {k} = {_figure(v)}" for k, v in derived.items())
     if problems:
         # one line each, naming the key; nothing is written from a description that contradicts itself
         text = "\n".join(f"{args.file}: {p}" for p in problems)
@@ -43,6 +43,13 @@ def _params(args: argparse.Namespace) -> CommandResult:
     return CommandResult(
         data={"params": data, "derived": derived, "problems": [], "written": args.write}, text="\n".join(lines)
     )
+
+
+def _figure(value) -> str:
+    """A derived figure as ``params`` prints it: ``0.09`` or ``[0.005, 0.085]``."""
+    if isinstance(value, list):
+        return "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
+    return f"{value:.6g}"
 
 
 def _template(args: argparse.Namespace) -> CommandResult:

@@ -569,8 +569,23 @@ def _rotation_map(args, rig, sim: bool):
 
 
 def _ask_operator(command: int) -> float:
-    """The operator's protractor reading at ``command`` (``--map-from operator``)."""
-    return float(input(f"Command {command}, digit at rest: tip rotation now, deg? "))
+    """The operator's protractor reading at ``command`` (``--map-from operator``), asked on stderr (stdout carries
+    the result); no one to ask, or no number, is one line, not a traceback."""
+    from flexdigit.errors import ParameterError, RigError
+
+    print(f"Command {command}, digit at rest: tip rotation now, deg? ", end="", file=sys.stderr, flush=True)
+    text = sys.stdin.readline() if sys.stdin else ""
+    if not text:
+        raise RigError(
+            f"no operator to read the tip rotation at command {command}: stdin is closed; run it from a terminal, or "
+            "give --rotation-map FILE or --map-from twin"
+        )
+    try:
+        return float(text)
+    except ValueError:
+        raise ParameterError(
+            f"The tip rotation at command {command} must be a number of degrees. Got {text.strip()!r} instead."
+        ) from None
 
 
 def _map_summary(estimator, path, setpoint: float) -> dict:

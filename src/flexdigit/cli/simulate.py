@@ -121,6 +121,12 @@ def _add_sweep(sub) -> None:
         default=20,
         help="samples per command",
     )
+    p.add_argument(
+        "--orientation",
+        default="vertical",
+        choices=("vertical", "hanging", "horizontal"),
+        help="vertical: tip up, as the thesis swept it (3.4.3); a long digit buckles so, hang it",
+    )
 
 
 def _add_load(sub) -> None:
@@ -250,7 +256,9 @@ def _sweep(args, params, gauges, common: dict):
     from flexdigit.twin import records as ex
 
     commands = None if args.commands is None else _commands(args.commands, params, "sweep")
-    res = ex.actuation_sweep(commands, settle_s=args.settle, samples=args.samples, **common)
+    res = ex.actuation_sweep(
+        commands, settle_s=args.settle, samples=args.samples, orientation=args.orientation, **common
+    )
     cmd = res.column("command")
     lines, findings = [], {}
     thesis = params == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's

@@ -6,7 +6,10 @@
 - :mod:`~flexdigit.control.mixsyn`: mixed-sensitivity design against requirements (``design_mixsyn``);
 - :mod:`~flexdigit.control.analysis`: loop maps, stability, margins, ``step_figures``;
 - :mod:`~flexdigit.control.discretise`: s -> z (Tustin, forward Euler) and the sampled loop;
-- :mod:`~flexdigit.control.design20ms`: the 20 ms digital design (``design_20ms``);
+- :mod:`~flexdigit.control.design20ms`: the 20 ms digital design (``design_20ms``, a described digit's
+  ``digit_design_20ms``);
+- :mod:`~flexdigit.control.digit_model`: a described digit's design model, its twin's chain linearised and
+  truncated (``digit_model``);
 - :mod:`~flexdigit.control.runtime`: the controller the loop runs (``RuntimeController``);
 - :mod:`~flexdigit.control.c_export`: that controller as C99 for a microcontroller, float32 or fixed point, and
   the analysis of its quantisation (``export_controller``, ``analyse_export``);
@@ -64,6 +67,10 @@ __getattr__, __all__ = lazy_exports(
         "digit_design_20ms_summary": "flexdigit.control.design20ms",
         "digit_first_mode": "flexdigit.control.design20ms",
         "straight_is_stable": "flexdigit.control.design20ms",
+        "stiffness_share": "flexdigit.control.design20ms",
+        "digit_weights": "flexdigit.control.design20ms",
+        "WeightsChoice": "flexdigit.control.design20ms",
+        "DigitModel": "flexdigit.control.digit_model",
         "digit_plant": "flexdigit.control.thesis_designs",
         "digit_hinf_design": "flexdigit.control.thesis_designs",
         "digit_hinf_summary": "flexdigit.control.thesis_designs",

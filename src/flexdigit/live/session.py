@@ -559,7 +559,7 @@ class LiveSession:
             "digit_length_m": self.length_m,
             "gauges_m": list(g.gauge_positions_m),
             "section_count": g.section_count,
-            "supports_m": [g.section_pitch_m * (k + 1) for k in range(g.section_count)],
+            "supports_m": list(g.support_centres_m),
             "cables": self.rig.params.cables.count,
             "straight_command": int(self.rig.params.actuator.equilibrium_command),
             "setpoint_unit": self.unit,

@@ -137,7 +137,7 @@ def contact_study(
         out["position_ratio_ci95"] = _pooled_rms_ci95((pos - ss[:, None])[seen], seed, out["seen_crlb_position_m"])
         # the band between gauge 2 and the rigid tip support, where the published figures are comparable
         geo = model.params.geometry
-        tip_support = 0.5 * (geo.section_pitch_m - geo.strip_length_m / geo.section_count)
+        tip_support = 0.5 * geo.supports_m[-1]
         two = len(geo.gauge_positions_m) > 1  # a one-gauge digit has no band past a second gauge
         band = seen & (ss > geo.gauge_positions_m[min(1, len(geo.gauge_positions_m) - 1)])
         band &= ss <= model.length_m - tip_support
@@ -332,7 +332,10 @@ def force_study(
         try:
             rig.place_tissue(placed.replace(modulus_n_m2=float(k)))
             region = (placed.start_m, min(placed.end_m, length))
-            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model))
+            # the loop's rates are the thesis rig's per turn of its pulley: a gearing's finer command, times it
+            gear = rig.params.actuator.gear_ratio
+            rates = {} if gear == 1.0 else {"gain": 30.0 * gear, "approach_rate": 4.0 * gear}
+            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model, **rates))
         finally:
             rig.close()
     return {

@@ -9,14 +9,61 @@ measures each); every table is also in results.json.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from flexdigit.palpation import palpation_studies as studies
+from flexdigit.palpation.contact_estimation import ContactGaugeModel
 from flexdigit.palpation.palpation import PalpationProtocol
-from flexdigit.report.chapter import Chapter, ReportContext, skipped
+from flexdigit.params import RigParams
+from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import new
+from flexdigit.tactile.bounds import TwinGaugeModel
+from flexdigit.twin.contact import Tissue
+from flexdigit.twin.records import release_orientation
 
 SECTION = "beyond: palpation"
+#: The thesis rig's length (m): a digit's regions, extents and scan offsets are the thesis's scaled by L / this.
+THESIS_LENGTH_M = 0.27
+
+
+@dataclass(frozen=True)
+class DigitSetting:
+    """The chapter's studies on a digit other than the thesis rig, laid out as on the thesis rig relative to the
+    digit: the tissue beside its outer 45 % (from 0.55 L to 80 mm past the tip, 0.1 L away, as the digit tests'
+    ``palpate --params`` runs), commands from its straight command up by the thesis's 22 (x its gearing), contact
+    estimates at straight + 12 (the thesis's command 20), its mount (hung tip down if it buckles tip up)."""
+
+    params: RigParams
+    orientation: str
+    fast: bool
+
+    @property
+    def length_m(self) -> float:
+        return float(self.params.geometry.digit_length_m)
+
+    @property
+    def scale(self) -> float:
+        return self.length_m / THESIS_LENGTH_M
+
+    def command(self, thesis_offset: int) -> int:
+        """The command ``thesis_offset`` thesis commands past straight (the thesis's 8), times the gearing."""
+        a = self.params.actuator
+        return int(min(a.command_max, max(a.command_min, a.equilibrium_command + round(thesis_offset * a.gear_ratio))))
+
+    def protocol(self, every: int) -> PalpationProtocol:
+        straight, step = (
+            self.params.actuator.equilibrium_command,
+            max(1, round(every * self.params.actuator.gear_ratio)),
+        )
+        return PalpationProtocol(commands=tuple(range(straight, self.command(22) + 1, step)), tare_command=straight)
+
+    def tissue(self) -> Tissue:
+        return Tissue(0.55 * self.length_m, self.length_m + 0.08, 0.1 * self.length_m, 1000.0)
+
+    def contact_model(self, cells_per_section: int = 3) -> ContactGaugeModel:
+        return ContactGaugeModel(self.params, orientation=self.orientation, cells_per_section=cells_per_section)
 
 
 def build(ctx: ReportContext) -> Chapter:
@@ -27,11 +74,9 @@ def build(ctx: ReportContext) -> Chapter:
     import matplotlib.pyplot as plt
 
     title = "Beyond the thesis: palpation"
-    if not ctx.thesis_rig:  # not done yet: the studies below build the thesis rig's twin
-        return skipped(
-            "ch8-palpation", title, "the palpation studies of this chapter model the thesis rig only so far."
-        )
     ch = Chapter(slug="ch8-palpation", title=title)
+    if not ctx.thesis_rig:
+        return _digit_chapter(ctx, ch, plt)
     ch.paragraphs.append(
         "The digit presses into a compliant body beside it, the cable pulling it in: a unilateral Winkler (or "
         "Hunt-Crossley) foundation in the twin, validated against an independent elastica "
@@ -48,18 +93,74 @@ def build(ctx: ReportContext) -> Chapter:
     return ch
 
 
-def _contact(ctx, ch, plt) -> None:
+def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
+    """The chapter on a digit other than the thesis rig: the same studies laid out on it (:class:`DigitSetting`),
+    force control left out (its loop's gains are the thesis rig's; docs/digits.md)."""
+    digit = DigitSetting(ctx.params, release_orientation(ctx.params), ctx.fast)
+    g = ctx.params.geometry
+    ch.paragraphs.append(
+        f"This digit ({g.section_count} sections, {len(g.gauge_positions_m)} gauges, {1000 * digit.length_m:.0f} "
+        "mm) presses into a compliant body beside it, the cable pulling it in, on its own twin (the calibration of "
+        "every chapter of this report) and its own gauge model, mounted "
+        f"{'tip up' if digit.orientation == 'vertical' else 'tip down (it buckles tip up)'}. The thesis rig's "
+        "settings are laid out on the digit: positions, regions and extents scaled by its length over 270 mm, the "
+        f"body beside its outer 45 % ({1000 * digit.tissue().start_m:.0f} mm on, {1000 * digit.tissue().gap_m:.0f} mm"
+        f" away), commands counted from its straight command {ctx.params.actuator.equilibrium_command} (x its "
+        f"gearing {ctx.params.actuator.gear_ratio:g}). Noise: the twin's white noise and drift; active sensing at "
+        "its actuated level. Force control runs the thesis rig's loop, its rates per turn of the pulley (x the "
+        "gearing): its figures are the twin's true force, so a digit whose gauges misjudge the force (one gauge, a "
+        "short digit) or that presses slowly (a long one) shows it here."
+    )
+    _contact(ctx, ch, plt, digit)
+    _classification(ctx, ch, digit)
+    _stiffness(ctx, ch, plt, digit)
+    _scan(ctx, ch, plt, digit)
+    _force(ctx, ch, plt, digit)
+    _active(ctx, ch, digit)
+    return ch
+
+
+def _contact_study(ctx, digit: DigitSetting | None) -> tuple[dict, float]:
+    """The contact study (point contacts every ``step`` m along the digit) and its ``step``."""
     step = 0.02 if ctx.fast else 0.01
+    forces = (0.1,) if ctx.fast else (0.1, 0.2)
+    if digit is None:
+        c = studies.contact_study(
+            positions_m=np.arange(0.0, 0.2701, step), forces_n=forces, n_readings=25, repetitions=20, seed=ctx.seed
+        )
+        return c, step
+    step *= digit.scale
     c = studies.contact_study(
-        positions_m=np.arange(0.0, 0.2701, step),
-        forces_n=(0.1,) if ctx.fast else (0.1, 0.2),
+        positions_m=np.arange(0.0, digit.length_m + 1e-4, step),
+        forces_n=forces,
+        command=digit.command(12),
         n_readings=25,
         repetitions=20,
         seed=ctx.seed,
+        estimator_model=digit.contact_model(3),
+        truth_model=digit.contact_model(9),
     )
+    return c, step
+
+
+def _contact(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
+    c, step = _contact_study(ctx, digit)
     e = ch.entries
     forces = " and ".join(f"{f:g}" for f in np.unique(-c["force_n"]))
     pub = studies.PUBLISHED
+    if "seen_rms_position_m" not in c:  # a digit whose gauges see no contact fully (one gauge: F s only)
+        e.append(
+            new(
+                "palpation.contact.identifiable",
+                SECTION,
+                0,
+                "contacts",
+                f"of {len(c['zone'])} point contacts of {forces} N, none tells position and force apart",
+            )
+        )
+        _zones(c, e, forces, step)
+        _contact_figure(ctx, ch, plt, c)
+        return
     e.append(
         new(
             "palpation.contact.position_rmse_mm",
@@ -101,6 +202,27 @@ def _contact(ctx, ch, plt) -> None:
                 f"mm); best published {1000 * pub['location_m']:.1f} mm (1 % of the length)",
             )
         )
+    _zones(c, e, forces, step)
+    if digit is not None:
+        ch.paragraphs.append(
+            "Which contacts the gauges cannot see (the zones above): before the first gauge nothing bends; between "
+            "the first two gauges, or past the only one, only the product of force and lever is seen; on the tip "
+            "support only the force. Where the gauges see the contact, the estimate against its Cramer-Rao bound."
+        )
+        _contact_figure(ctx, ch, plt, c)
+        return
+    ch.paragraphs.append(
+        "Which contacts the gauges cannot see: before gauge 1 (45 mm) "
+        "nothing bends; between gauges 1 and 2 only the product F (s - 45 mm) is seen (the taut cable's answer is "
+        "proportional to it too), so force and position are confounded; on the rigid tip support (265-270 mm) the "
+        "stiff cable pins the tip angle and absorbs the load's moment, so only the force is seen; just past gauge 2 "
+        "and in the last section a distant rival explains the reading nearly as well (ambiguous). Where the gauges "
+        "see the contact the estimate is at its Cramer-Rao bound."
+    )
+    _contact_figure(ctx, ch, plt, c)
+
+
+def _zones(c: dict, e: list, forces: str, step: float) -> None:
     for zone, count in c["zone_counts"].items():
         e.append(
             new(
@@ -111,15 +233,6 @@ def _contact(ctx, ch, plt) -> None:
                 f"cases per identifiability zone ({forces} N, every {1000 * step:g} mm)",
             )
         )
-    ch.paragraphs.append(
-        "Which contacts the gauges cannot see: before gauge 1 (45 mm) "
-        "nothing bends; between gauges 1 and 2 only the product F (s - 45 mm) is seen (the taut cable's answer is "
-        "proportional to it too), so force and position are confounded; on the rigid tip support (265-270 mm) the "
-        "stiff cable pins the tip angle and absorbs the load's moment, so only the force is seen; just past gauge 2 "
-        "and in the last section a distant rival explains the reading nearly as well (ambiguous). Where the gauges "
-        "see the contact the estimate is at its Cramer-Rao bound."
-    )
-    _contact_figure(ctx, ch, plt, c)
 
 
 def _contact_figure(ctx, ch, plt, c: dict) -> None:
@@ -145,14 +258,26 @@ def _contact_figure(ctx, ch, plt, c: dict) -> None:
     )
 
 
-def _classification(ctx, ch) -> None:
+def _classification(ctx, ch, digit: DigitSetting | None = None) -> None:
     small = {
         "region_m": (0.12, 0.24),
         "extents_m": (0.04, 0.08, 0.12),
         "totals_n": (0.2, 0.4),
         "prior_total_step_n": 0.04,
+        "truth_step_m": 0.04,
     }
-    cl = studies.classification_study(**small, truth_step_m=0.04, repetitions=10, samples=100, seed=ctx.seed)
+    if digit is not None:  # the thesis's layout scaled to the digit; models of 3 and 9 cells a section in fast mode
+        r = digit.scale
+        cells = (3, 9) if ctx.fast else (9, 27)
+        small.update(
+            region_m=(0.12 * r, 0.24 * r),
+            extents_m=tuple(w * r for w in small["extents_m"]),
+            truth_step_m=0.04 * r,
+            command=digit.command(12),
+            estimator_model=digit.contact_model(cells[0]),
+            truth_model=digit.contact_model(cells[1]),
+        )
+    cl = studies.classification_study(**small, repetitions=10, samples=100, seed=ctx.seed)
     e = ch.entries
     e.append(
         new(
@@ -185,10 +310,13 @@ def _classification(ctx, ch) -> None:
     ch.tables.append(cl["table"])
 
 
-def _stiffness(ctx, ch, plt) -> None:
+def _stiffness(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
     protocol = PalpationProtocol(commands=tuple(range(8, 31, 2)))
     moduli = (300.0, 1500.0) if ctx.fast else (300.0, 750.0, 1500.0)
-    s = studies.stiffness_study(moduli, seeds=(ctx.seed,), protocol=protocol)
+    on = {}
+    if digit is not None:
+        protocol, on = digit.protocol(2), {"model": digit.contact_model(), "placed": digit.tissue()}
+    s = studies.stiffness_study(moduli, seeds=(ctx.seed,), protocol=protocol, **on)
     e = ch.entries
     e.append(
         new(
@@ -213,7 +341,7 @@ def _stiffness(ctx, ch, plt) -> None:
     ch.tables.append(s["table"])
     for k, r in zip(s["moduli_n_m2"], s["rel_error"], strict=True):
         e.append(new(f"palpation.stiffness.rel_error_at_{k / 100:g}_n_m_per_cm", SECTION, r, "", "table row"))
-    result = studies.sweep_example(1000.0, protocol=protocol, seed=ctx.seed)
+    result = studies.sweep_example(1000.0, protocol=protocol, seed=ctx.seed, **on)
     cv = result.curve
     fig, ax = plt.subplots(figsize=(5.5, 3.6))
     ax.errorbar(
@@ -242,11 +370,23 @@ def _stiffness(ctx, ch, plt) -> None:
     )
 
 
-def _scan(ctx, ch, plt) -> None:
+def _scan(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
     offsets = np.arange(-0.02, 0.0201, 0.01)
-    sc = studies.scan_study(
-        offsets_m=offsets, protocol=PalpationProtocol(commands=tuple(range(8, 31, 3))), seed=ctx.seed
-    )
+    if digit is None:
+        sc = studies.scan_study(
+            offsets_m=offsets, protocol=PalpationProtocol(commands=tuple(range(8, 31, 3))), seed=ctx.seed
+        )
+    else:  # the nodule under the outer part of the digit, as the thesis rig's 250 mm is (0.8 of the way on)
+        offsets = offsets * digit.scale
+        placed = digit.tissue()
+        sc = studies.scan_study(
+            offsets_m=offsets,
+            protocol=digit.protocol(3),
+            seed=ctx.seed,
+            inclusion=(placed.start_m + 0.8 * (digit.length_m - placed.start_m), 0.01, 3.0),
+            model=digit.contact_model(),
+            placed=placed,
+        )
     e = ch.entries
     e.append(
         new(
@@ -255,7 +395,7 @@ def _scan(ctx, ch, plt) -> None:
             1000 * sc["centre_error_m"],
             "mm",
             f"a 10 mm nodule 3x stiffer, {1000 * sc['true_centre_m']:.0f} mm into the phantom, {len(offsets)} "
-            "offsets 10 mm apart; issue: within 10 mm",
+            f"offsets {1000 * (offsets[1] - offsets[0]):.0f} mm apart; issue: within 10 mm",
         )
     )
     e.append(
@@ -282,8 +422,9 @@ def _scan(ctx, ch, plt) -> None:
     ch.figures.append(ctx.save_figure(fig, "palpation_scan", "Stiffness map of a scan and the inclusion fitted to it"))
 
 
-def _force(ctx, ch, plt) -> None:
-    f = studies.force_study((1000.0,), duration_s=8.0, seed=ctx.seed + 2)
+def _force(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
+    on = {} if digit is None else {"model": digit.contact_model(), "placed": digit.tissue()}
+    f = studies.force_study((1000.0,), duration_s=8.0, seed=ctx.seed + 2, **on)
     run = f["runs"][0]
     e = ch.entries
     e.append(
@@ -319,8 +460,14 @@ def _force(ctx, ch, plt) -> None:
     )
 
 
-def _active(ctx, ch) -> None:
-    a = studies.active_study(samples=500 if ctx.fast else 1000, repetitions=10, seed=ctx.seed)
+def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
+    on = {}
+    if digit is not None:  # the hangs of chapter 7 (tip down or level, as TwinGaugeModel's default)
+        on = {
+            "commands": (digit.command(-8), digit.command(12), digit.command(32)),
+            "model": TwinGaugeModel(digit.params),
+        }
+    a = studies.active_study(samples=500 if ctx.fast else 1000, repetitions=10, seed=ctx.seed, **on)
     e = ch.entries
     e.append(
         new(

@@ -87,10 +87,9 @@ class DigitShape:
     @classmethod
     def from_params(cls, params: RigParams | None = None) -> DigitShape:
         geo = (params or RigParams()).geometry
-        pitch, flex = geo.section_pitch_m, geo.strip_length_m / geo.section_count
-        half = 0.5 * (pitch - flex)
-        starts = tuple(k * pitch + half for k in range(geo.section_count))
-        return cls(geo.digit_length_m, starts, tuple(s + flex for s in starts))
+        starts = tuple(a for a, _ in geo.section_bounds_m)  # unequal sections too
+        # start + length, as ever (not the bound's end, which rounds apart by an ulp on some equal digits)
+        return cls(geo.digit_length_m, starts, tuple(a + x for a, x in zip(starts, geo.section_lengths_m, strict=True)))
 
     @property
     def flex_length_m(self) -> np.ndarray:

@@ -138,9 +138,7 @@ class DigitBeam:
         n = max(int(round(length / check_real(ds_m, "ds_m", "DigitBeam", low=1e-5, high=0.01))), 10)
         ds = length / n
         s = (np.arange(n) + 0.5) * ds
-        pitch = geo.section_pitch_m
-        flex = geo.strip_length_m / geo.section_count
-        half = 0.5 * (pitch - flex)
+        bounds = np.asarray(geo.section_bounds_m)  # (section_count, 2): each section's free strip
         ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4
         housing_ei = np.asarray(calibration.housing_ei_n_m2, dtype=float)
         if housing_ei.size != geo.section_count:
@@ -151,15 +149,14 @@ class DigitBeam:
 
         def inv_ei_at(x):
             x = np.asarray(x, dtype=float)
-            k = np.clip(np.floor(x / pitch).astype(int), 0, geo.section_count - 1)
-            local = x - k * pitch
-            flexible = (local > half) & (local < pitch - half)
+            k = np.clip(np.searchsorted(bounds[:, 0], x, side="right") - 1, 0, geo.section_count - 1)
+            flexible = (x > bounds[k, 0]) & (x < bounds[k, 1])
             ei = ei_strip + (housing_ei[k] if housing else 0.0)
             return np.where(flexible, 1.0 / ei, 0.0)
 
         mu = mat.strip_density_kg_m3 * geo.cross_section_m2
         supports = np.asarray(calibration.support_mass_kg, dtype=float)
-        support_s = pitch * (np.arange(geo.section_count) + 1.0)
+        support_s = np.asarray(geo.support_centres_m)
         housing_mass = calibration.housing_mass_kg if housing else 0.0
         flexible_cells = inv_ei_at(s) > 0
         cell_mass = mu * ds + (housing_mass / max(int(flexible_cells.sum()), 1)) * flexible_cells

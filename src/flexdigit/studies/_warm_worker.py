@@ -14,7 +14,14 @@ from threadpoolctl import threadpool_limits
 
 from flexdigit.studies.metrics import evaluate_many
 
-__all__ = ["WarmWorker", "WORKER_INTERVALS_S", "MALLOC_THRESHOLDS_BYTES"]
+__all__ = [
+    "WarmWorker",
+    "tune_worker",
+    "tuning_state",
+    "DASK_CONFIG",
+    "WORKER_INTERVALS_S",
+    "MALLOC_THRESHOLDS_BYTES",
+]
 
 #: The longest period, s, of a worker's housekeeping callbacks during a study (distributed's defaults: the event
 #: loop's health tick 20 ms, the system monitor 500 ms, the memory monitor 100 ms). Each wakes the worker's event
@@ -29,6 +36,17 @@ WORKER_INTERVALS_S = {"tick": 1.0, "monitor": 5.0, "memory_monitor": 1.0}
 #: thresholds on 64-bit (``DEFAULT_MMAP_THRESHOLD_MAX`` 32 MiB, the trim threshold twice the mmap one).
 MALLOC_THRESHOLDS_BYTES = {"mmap": 32 * 2**20, "trim": 64 * 2**20}
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # mallopt's parameters (glibc's malloc.h)
+#: distributed's settings for the local cluster a study starts (:func:`flexdigit.studies.execution.dask_client`:
+#: its scheduler and nannies in the study's process, its workers spawned with them): no ``MALLOC_TRIM_THRESHOLD_``
+#: from the nanny (:data:`MALLOC_THRESHOLDS_BYTES` says why), no sampling profiler, housekeeping at
+#: :data:`WORKER_INTERVALS_S`. The workers of an existing cluster are tuned the same way as they are warmed.
+DASK_CONFIG = {
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": f"{WORKER_INTERVALS_S['tick']:g}s",
+    "distributed.admin.system-monitor.interval": f"{WORKER_INTERVALS_S['monitor']:g}s",
+    "distributed.worker.memory.monitor-interval": f"{WORKER_INTERVALS_S['memory_monitor']:g}s",
+}
 
 
 class WarmWorker(WorkerPlugin):
@@ -61,7 +79,7 @@ def tune_worker(dask_worker) -> dict:
       ``MALLOC_TRIM_THRESHOLD_`` (Linux with glibc only; elsewhere nothing).
 
     A worker started by :func:`flexdigit.studies.execution.dask_client` has all three from its configuration
-    already (:data:`flexdigit.studies.execution.DASK_CONFIG`); ``dask worker`` processes get them here.
+    already (:data:`DASK_CONFIG`); ``dask worker`` processes get them here.
     """
     changed = {}
     callbacks = getattr(dask_worker, "periodic_callbacks", {})

@@ -241,13 +241,7 @@ def _is_equal_twin(c: Candidate) -> bool:
 # ----------------------------------------------------------------------------------------------------- layouts
 def _strip_stretches(params: RigParams) -> list[tuple[float, float]]:
     """The flexible stretches of the strip between the nylon supports (m from the base), with a clearance."""
-    g = params.geometry
-    pitch = g.section_pitch_m
-    half = 0.5 * (pitch - g.strip_length_m / g.section_count)
-    return [
-        (k * pitch + half + SUPPORT_CLEARANCE_M, (k + 1) * pitch - half - SUPPORT_CLEARANCE_M)
-        for k in range(g.section_count)
-    ]
+    return [(a + SUPPORT_CLEARANCE_M, b - SUPPORT_CLEARANCE_M) for a, b in params.geometry.section_bounds_m]
 
 
 def _onto_strip(x: float, params: RigParams) -> float:
@@ -354,7 +348,12 @@ def _scaled(params: RigParams, size: float) -> RigParams:
     g = params.geometry
     geometry = dataclasses.replace(
         g,
-        section_length_m=g.section_length_m * size,
+        section_length_m=(
+            tuple(x * size for x in g.section_length_m)
+            if isinstance(g.section_length_m, tuple)
+            else g.section_length_m * size
+        ),
+        support_lengths_m=None if g.support_lengths_m is None else tuple(x * size for x in g.support_lengths_m),
         digit_length_m=g.digit_length_m * size,
         strip_length_m=g.strip_length_m * size,
         gauge_positions_m=tuple(x * size for x in g.gauge_positions_m),
@@ -402,6 +401,8 @@ def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: f
             operating_commands=(act.equilibrium_command, top),
         ),
     )
+    if c.pretension_n == 0 and params.cables.count == 2:  # "1 cable": a baseline's described pair is dropped, so
+        params = params.replace(cables=dataclasses.replace(params.cables, count=1))  # it is not scored as a pair
     return ParameterSet(params, cal, c.pretension_n if c.pretension_n > 0 else None)
 
 

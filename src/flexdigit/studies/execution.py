@@ -68,18 +68,6 @@ JOURNAL_FORMAT = 2
 #: Memory one local Dask worker process holds, bytes, for the cap on ``workers`` (:func:`flexdigit._system.
 #: check_workers`): its imports alone take 120 MB (numpy, scipy, distributed, the twin), a task's models more.
 WORKER_BYTES = 512 * 2**20
-#: distributed's settings for the local cluster a study starts (its scheduler and nannies in this process, its
-#: workers spawned with them): no ``MALLOC_TRIM_THRESHOLD_`` from the nanny (it freezes glibc's mmap threshold:
-#: every array over 128 KiB is mapped afresh), no sampling profiler, housekeeping callbacks slowed. The reasons,
-#: measured, are at :data:`flexdigit.studies._warm_worker.WORKER_INTERVALS_S` and ``MALLOC_THRESHOLDS_BYTES``;
-#: the workers of an existing cluster are tuned the same way as they are warmed.
-DASK_CONFIG = {
-    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-    "distributed.worker.profile.enabled": False,
-    "distributed.admin.tick.interval": "1s",
-    "distributed.admin.system-monitor.interval": "5s",
-    "distributed.worker.memory.monitor-interval": "1s",
-}
 #: How the error of a row whose task failed (not the row itself: a worker died, the task could not run) begins
 TASK_FAILED = "task failed: "
 
@@ -356,6 +344,8 @@ def dask_client(scheduler: str | None, workers: int):
     cluster of ``workers`` processes (127.0.0.1)."""
     import dask
     from distributed import Client, LocalCluster
+
+    from flexdigit.studies._warm_worker import DASK_CONFIG
 
     with _quiet_distributed(), dask.config.set(DASK_CONFIG):
         yield from _client(Client, LocalCluster, scheduler, workers)

@@ -303,8 +303,16 @@ def _replaced(section, changes: tuple):
 
 
 # --------------------------------------------------------------------------------------------------- reading
-def load_spec(name_or_path: str | Path) -> StudySpec:
+def load_spec(
+    name_or_path: str | Path, *, baseline: ParameterSet | None = None, fields: tuple[str, ...] | None = None
+) -> StudySpec:
     """Read a study spec: a file, or the name of a shipped one (:data:`SHIPPED_SPECS`).
+
+    ``baseline``: the rig the spec's tolerances are taken about (a digit's description and calibration), instead of
+    the spec's ``[study] params`` / ``calibration`` (refused if it names them too) or the thesis rig; its
+    relative and ``delta`` ranges are then about that rig's values. ``fields``: keep only these
+    ``[parameters.SECTION.FIELD]`` tables (``"section.field"``), e.g. the ones that apply to such a rig (the thesis
+    rig's three gauge positions do not to a digit of one gauge).
 
     Raises
     ------
@@ -319,11 +327,11 @@ def load_spec(name_or_path: str | Path) -> StudySpec:
         from importlib import resources
 
         ref = resources.files("flexdigit.studies").joinpath("specs").joinpath(f"{text_name}.toml")
-        return spec_from_toml(ref.read_text(), source=f"{text_name}.toml")
+        return spec_from_toml(ref.read_text(), source=f"{text_name}.toml", baseline=baseline, fields=fields)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory, not a study spec")
     text = read_text(path, "a study spec TOML")  # binary garbage: named, not a codec error
-    return spec_from_toml(text, source=str(path), base_dir=path.parent)
+    return spec_from_toml(text, source=str(path), base_dir=path.parent, baseline=baseline, fields=fields)
 
 
 def shipped_specs() -> dict[str, str]:
@@ -340,12 +348,26 @@ def shipped_specs() -> dict[str, str]:
     return out
 
 
-def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None) -> StudySpec:
-    """Parse a study spec from TOML text (see the module docstring); errors name ``source`` and the key."""
+def spec_from_toml(
+    text: str,
+    source: str = "spec",
+    base_dir: Path | None = None,
+    baseline: ParameterSet | None = None,
+    fields: tuple[str, ...] | None = None,
+) -> StudySpec:
+    """Parse a study spec from TOML text (see the module docstring); errors name ``source`` and the key.
+    ``baseline``: the rig to take the tolerances about; ``fields``: the parameter tables kept (:func:`load_spec`)."""
     try:
         doc = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ParameterError(f"{source}: not valid TOML ({exc})") from None
+    table = doc.get("parameters")
+    if fields is not None and isinstance(table, dict):
+        keep = set(fields)
+        doc["parameters"] = {
+            s: {f: e for f, e in t.items() if f"{s}.{f}" in keep} if isinstance(t, dict) else t
+            for s, t in table.items()
+        }
     known = {"study", "parameters", "sensitivity", "design", "metrics"}
     unknown = sorted(set(doc) - known)
     if unknown:
@@ -368,7 +390,13 @@ def spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None
     metrics = study.get("metrics", [])
     if not isinstance(metrics, list) or not all(isinstance(m, str) for m in metrics):
         raise ParameterError(f"{source}: [study] metrics must be a list of metric names. Got {metrics!r} instead.")
-    baseline = _baseline(study, source, base_dir)
+    if baseline is None:
+        baseline = _baseline(study, source, base_dir)
+    elif "params" in study or "calibration" in study:
+        named = "params" if "params" in study else "calibration"
+        raise ParameterError(
+            f"{source}: [study] {named} names the baseline rig, and another was given: give the baseline one way"
+        )
     user_metrics = _user_metrics(doc.get("metrics", {}), baseline, source)
     if metrics:
         known_metrics = [*METRICS, *(u.name for u in user_metrics)]

@@ -21,6 +21,13 @@ Powell & Reid 1974: 29 residual evaluations), factored by banded LU without pivo
 dt^2 stiffness of a stable rod), and reused over steps (a chord Newton, refreshed where it converges slower than a
 rate of 0.5: the rule of scipy's BDF and of Hairer & Wanner's RADAU5). Kelvin-Voigt damping ``beta K`` on the
 strains' BDF2 rates.
+
+Speed (a step of the 40-node rod is ~1.15 Newton iterations: one residual and one banded solve each): the whole
+march is one compiled call writing the response in place; rotations are computed in scalars (a 3x3 scratch array
+is memory the outputs might alias, reloaded after every store) with indices rather than views (a view's
+reference count costs more than its arithmetic); below 0.1 rad the frames' exp and log use Taylor series; the
+banded solve keeps its newest unknowns in registers (through memory each row waited for the last one's store).
+``benchmarks/profile_tdcr_dynamics.py`` times the parts.
 """
 
 from __future__ import annotations
@@ -48,6 +55,12 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: Returned by :func:`equilibrate` when Newton did not converge.
 NO_PROGRESS = -1
 RATE = 0.9
+#: Multiplied by rather than divided by in a step's history (its ~500 divisions were ~8 % of a step)
+THIRD = 1.0 / 3.0
+#: The rate of the static chord Newton above which its Jacobian is rebuilt
+EQUILIBRIUM_RATE = 0.5
+#: The update (of the length, or rad) below which the static Newton keeps its Jacobian
+CHORD_FROM = 1e-5
 #: Newton iterations a Jacobian is given to converge before it is refreshed
 BUDGET = 4
 #: The largest Newton update of a step's frames (rad) or nodes (of the length): a damped Newton beyond
@@ -66,41 +79,25 @@ MEASURE = 8
 
 
 @_jit
-def _exp(th0, th1, th2, out):
-    """Rodrigues: ``out = exp(hat(th))``."""
-    a2 = th0 * th0 + th1 * th1 + th2 * th2
-    if a2 < SMALL_ANGLE2:  # sin(a) / a and (1 - cos(a)) / a^2 by their series: a step turns a frame little
-        s = 1.0 + a2 * (SIN[1] + a2 * (SIN[2] + a2 * (SIN[3] + a2 * (SIN[4] + a2 * (SIN[5] + a2 * SIN[6])))))
-        c = COS[0] + a2 * (COS[1] + a2 * (COS[2] + a2 * (COS[3] + a2 * (COS[4] + a2 * (COS[5] + a2 * COS[6])))))
-    else:
-        a = np.sqrt(a2)
-        s = np.sin(a) / a
-        c = (1.0 - np.cos(a)) / a2
-    d = 1.0 - c * a2
-    out[0, 0] = d + c * th0 * th0
-    out[1, 1] = d + c * th1 * th1
-    out[2, 2] = d + c * th2 * th2
-    out[0, 1] = c * th0 * th1 - s * th2
-    out[1, 0] = c * th0 * th1 + s * th2
-    out[0, 2] = c * th0 * th2 + s * th1
-    out[2, 0] = c * th0 * th2 - s * th1
-    out[1, 2] = c * th1 * th2 - s * th0
-    out[2, 1] = c * th1 * th2 + s * th0
-
-
-@_jit
-def _log_rel(qa, ia, qb, ib, out, io, rel):
-    """``out[io] = log(a^T b)`` as a rotation vector, and ``rel = a^T b``, of ``a = qa[ia]``, ``b = qb[ib]`` (angles
-    below pi; neighbours and steps turn far less). Indices, not views: a view's reference count costs more here
-    than the arithmetic."""
-    for i in range(3):
-        for j in range(3):
-            rel[i, j] = qa[ia, 0, i] * qb[ib, 0, j] + qa[ia, 1, i] * qb[ib, 1, j] + qa[ia, 2, i] * qb[ib, 2, j]
-    w0 = 0.5 * (rel[2, 1] - rel[1, 2])
-    w1 = 0.5 * (rel[0, 2] - rel[2, 0])
-    w2 = 0.5 * (rel[1, 0] - rel[0, 1])
+def _log_rel(qa, ia, qb, ib):
+    """``log(a^T b)`` as a rotation vector and ``a^T b``: twelve scalars (the vector, then the matrix row by row),
+    of ``a = qa[ia]``, ``b = qb[ib]`` (angles below pi; neighbours and steps turn far less). Indices and scalars,
+    not views and scratch arrays: a view's reference count costs more here than the arithmetic, and a scratch
+    array is memory the outputs might alias."""
+    r00 = qa[ia, 0, 0] * qb[ib, 0, 0] + qa[ia, 1, 0] * qb[ib, 1, 0] + qa[ia, 2, 0] * qb[ib, 2, 0]
+    r01 = qa[ia, 0, 0] * qb[ib, 0, 1] + qa[ia, 1, 0] * qb[ib, 1, 1] + qa[ia, 2, 0] * qb[ib, 2, 1]
+    r02 = qa[ia, 0, 0] * qb[ib, 0, 2] + qa[ia, 1, 0] * qb[ib, 1, 2] + qa[ia, 2, 0] * qb[ib, 2, 2]
+    r10 = qa[ia, 0, 1] * qb[ib, 0, 0] + qa[ia, 1, 1] * qb[ib, 1, 0] + qa[ia, 2, 1] * qb[ib, 2, 0]
+    r11 = qa[ia, 0, 1] * qb[ib, 0, 1] + qa[ia, 1, 1] * qb[ib, 1, 1] + qa[ia, 2, 1] * qb[ib, 2, 1]
+    r12 = qa[ia, 0, 1] * qb[ib, 0, 2] + qa[ia, 1, 1] * qb[ib, 1, 2] + qa[ia, 2, 1] * qb[ib, 2, 2]
+    r20 = qa[ia, 0, 2] * qb[ib, 0, 0] + qa[ia, 1, 2] * qb[ib, 1, 0] + qa[ia, 2, 2] * qb[ib, 2, 0]
+    r21 = qa[ia, 0, 2] * qb[ib, 0, 1] + qa[ia, 1, 2] * qb[ib, 1, 1] + qa[ia, 2, 2] * qb[ib, 2, 1]
+    r22 = qa[ia, 0, 2] * qb[ib, 0, 2] + qa[ia, 1, 2] * qb[ib, 1, 2] + qa[ia, 2, 2] * qb[ib, 2, 2]
+    w0 = 0.5 * (r21 - r12)
+    w1 = 0.5 * (r02 - r20)
+    w2 = 0.5 * (r10 - r01)
     s2 = w0 * w0 + w1 * w1 + w2 * w2
-    c = 0.5 * (rel[0, 0] + rel[1, 1] + rel[2, 2] - 1.0)
+    c = 0.5 * (r00 + r11 + r22 - 1.0)
     if c > 0.0 and s2 < SMALL_ANGLE2:  # asin(s) / s by its series
         f = 1.0 + s2 * (
             ASIN[1] + s2 * (ASIN[2] + s2 * (ASIN[3] + s2 * (ASIN[4] + s2 * (ASIN[5] + s2 * (ASIN[6] + s2 * ASIN[7])))))
@@ -108,9 +105,7 @@ def _log_rel(qa, ia, qb, ib, out, io, rel):
     else:
         sn = np.sqrt(s2)
         f = np.arctan2(sn, c) / sn
-    out[io, 0] = f * w0
-    out[io, 1] = f * w1
-    out[io, 2] = f * w2
+    return f * w0, f * w1, f * w2, r00, r01, r02, r10, r11, r12, r20, r21, r22
 
 
 @_jit
@@ -149,40 +144,70 @@ def forces(
             t[e, k] = 0.0
     for k in range(3):
         t[n - 1, k] += q[n - 1, 0, k] * tip_moment[0] + q[n - 1, 1, k] * tip_moment[1] + q[n - 1, 2, k] * tip_moment[2]
-    # one allocation for the scratch vectors (an allocation costs about what an element's forces do)
-    scratch = np.empty((7, 3))
-    tb, nb, m, pa, pb, fw, arm = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5], scratch[6]
-    rel = np.empty((3, 3))
-    disk = np.empty((3, 3)) if routing.shape[0] > 0 else rel
-    for e in range(n):
+    # one allocation for the tendons' scratch vectors (an allocation costs about what an element's forces do)
+    scratch = np.empty((4, 3))
+    pa, pb, fw, arm = scratch[0], scratch[1], scratch[2], scratch[3]
+    disk = np.empty((3, 3))
+    for e in range(n):  # in scalars (see _log_rel)
         d0 = x[e + 1, 0] - x[e, 0]
         d1 = x[e + 1, 1] - x[e, 1]
         d2 = x[e + 1, 2] - x[e, 2]
-        for k in range(3):
-            tb[k] = q[e, 0, k] * d0 + q[e, 1, k] * d1 + q[e, 2, k] * d2
-            sig[e, k] = tb[k] / lengths[e]
-        sig[e, 2] -= 1.0
-        for k in range(3):
-            nb[k] = kse[k] * (g * sig[e, k] + beta * hsig[e, k])
-        for k in range(3):
-            nw = q[e, k, 0] * nb[0] + q[e, k, 1] * nb[1] + q[e, k, 2] * nb[2]
-            f[e, k] += nw
-            f[e + 1, k] -= nw
-        t[e, 0] += tb[1] * nb[2] - tb[2] * nb[1]
-        t[e, 1] += tb[2] * nb[0] - tb[0] * nb[2]
-        t[e, 2] += tb[0] * nb[1] - tb[1] * nb[0]
+        q00 = q[e, 0, 0]
+        q01 = q[e, 0, 1]
+        q02 = q[e, 0, 2]
+        q10 = q[e, 1, 0]
+        q11 = q[e, 1, 1]
+        q12 = q[e, 1, 2]
+        q20 = q[e, 2, 0]
+        q21 = q[e, 2, 1]
+        q22 = q[e, 2, 2]
+        tb0 = q00 * d0 + q10 * d1 + q20 * d2
+        tb1 = q01 * d0 + q11 * d1 + q21 * d2
+        tb2 = q02 * d0 + q12 * d1 + q22 * d2
+        per_length = 1.0 / lengths[e]  # one division, not three (a division costs ~5 multiplications)
+        s0 = tb0 * per_length
+        s1 = tb1 * per_length
+        s2 = tb2 * per_length - 1.0
+        sig[e, 0] = s0
+        sig[e, 1] = s1
+        sig[e, 2] = s2
+        nb0 = kse[0] * (g * s0 + beta * hsig[e, 0])
+        nb1 = kse[1] * (g * s1 + beta * hsig[e, 1])
+        nb2 = kse[2] * (g * s2 + beta * hsig[e, 2])
+        nw0 = q00 * nb0 + q01 * nb1 + q02 * nb2
+        nw1 = q10 * nb0 + q11 * nb1 + q12 * nb2
+        nw2 = q20 * nb0 + q21 * nb1 + q22 * nb2
+        f[e, 0] += nw0
+        f[e, 1] += nw1
+        f[e, 2] += nw2
+        f[e + 1, 0] -= nw0
+        f[e + 1, 1] -= nw1
+        f[e + 1, 2] -= nw2
+        t[e, 0] += tb1 * nb2 - tb2 * nb1
+        t[e, 1] += tb2 * nb0 - tb0 * nb2
+        t[e, 2] += tb0 * nb1 - tb1 * nb0
     for i in range(n):
         if i == 0:
-            _log_rel(_IDENTITY, 0, q, 0, kap, 0, rel)
+            k0, k1, k2, r00, r01, r02, r10, r11, r12, r20, r21, r22 = _log_rel(_IDENTITY, 0, q, 0)
         else:
-            _log_rel(q, i - 1, q, i, kap, i, rel)
-        for k in range(3):
-            kap[i, k] /= voronoi[i]
-            m[k] = kbt[k] * (g * kap[i, k] + beta * hkap[i, k])
-            t[i, k] -= m[k]
+            k0, k1, k2, r00, r01, r02, r10, r11, r12, r20, r21, r22 = _log_rel(q, i - 1, q, i)
+        per_length = 1.0 / voronoi[i]
+        k0 *= per_length
+        k1 *= per_length
+        k2 *= per_length
+        kap[i, 0] = k0
+        kap[i, 1] = k1
+        kap[i, 2] = k2
+        m0 = kbt[0] * (g * k0 + beta * hkap[i, 0])
+        m1 = kbt[1] * (g * k1 + beta * hkap[i, 1])
+        m2 = kbt[2] * (g * k2 + beta * hkap[i, 2])
+        t[i, 0] -= m0
+        t[i, 1] -= m1
+        t[i, 2] -= m2
         if i > 0:
-            for k in range(3):
-                t[i - 1, k] += rel[k, 0] * m[0] + rel[k, 1] * m[1] + rel[k, 2] * m[2]
+            t[i - 1, 0] += r00 * m0 + r01 * m1 + r02 * m2
+            t[i - 1, 1] += r10 * m0 + r11 * m1 + r12 * m2
+            t[i - 1, 2] += r20 * m0 + r21 * m1 + r22 * m2
     for j in range(routing.shape[0]):
         if tau[j] == 0.0 or ends[j] < 1:
             continue
@@ -237,19 +262,61 @@ def forces(
 
 
 @_jit
+def _exp9(th0, th1, th2):
+    """Rodrigues as nine scalars (row by row): ``exp(hat(th))``, kept in registers by its callers (a scratch array
+    would be memory that the outputs might alias)."""
+    a2 = th0 * th0 + th1 * th1 + th2 * th2
+    if a2 < SMALL_ANGLE2:  # sin(a) / a and (1 - cos(a)) / a^2 by their series: a step turns a frame little
+        s = 1.0 + a2 * (SIN[1] + a2 * (SIN[2] + a2 * (SIN[3] + a2 * (SIN[4] + a2 * (SIN[5] + a2 * SIN[6])))))
+        c = COS[0] + a2 * (COS[1] + a2 * (COS[2] + a2 * (COS[3] + a2 * (COS[4] + a2 * (COS[5] + a2 * COS[6])))))
+    else:
+        a = np.sqrt(a2)
+        s = np.sin(a) / a
+        c = (1.0 - np.cos(a)) / a2
+    d = 1.0 - c * a2
+    return (
+        d + c * th0 * th0,
+        c * th0 * th1 - s * th2,
+        c * th0 * th2 + s * th1,
+        c * th0 * th1 + s * th2,
+        d + c * th1 * th1,
+        c * th1 * th2 - s * th0,
+        c * th0 * th2 - s * th1,
+        c * th1 * th2 + s * th0,
+        d + c * th2 * th2,
+    )
+
+
+@_jit
 def _configure(z, a, xh, qh, psih, x, q):
     """The configuration of the unknowns ``z``: ``x_i = xh_i + a v_i``, ``Q_e = qh_e exp(psih_e + a W_e)``."""
     n = qh.shape[0]
-    rot = np.empty((3, 3))
     for k in range(3):
         x[0, k] = xh[0, k]
     for e in range(n):
         for k in range(3):
             x[e + 1, k] = xh[e + 1, k] + a * z[6 * e + 3 + k]
-        _exp(psih[e, 0] + a * z[6 * e], psih[e, 1] + a * z[6 * e + 1], psih[e, 2] + a * z[6 * e + 2], rot)
-        for i in range(3):
-            for j in range(3):
-                q[e, i, j] = qh[e, i, 0] * rot[0, j] + qh[e, i, 1] * rot[1, j] + qh[e, i, 2] * rot[2, j]
+        g00 = qh[e, 0, 0]
+        g01 = qh[e, 0, 1]
+        g02 = qh[e, 0, 2]
+        g10 = qh[e, 1, 0]
+        g11 = qh[e, 1, 1]
+        g12 = qh[e, 1, 2]
+        g20 = qh[e, 2, 0]
+        g21 = qh[e, 2, 1]
+        g22 = qh[e, 2, 2]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = _exp9(
+            psih[e, 0] + a * z[6 * e], psih[e, 1] + a * z[6 * e + 1], psih[e, 2] + a * z[6 * e + 2]
+        )
+        q[e, 0, 0] = g00 * r00 + g01 * r10 + g02 * r20
+        q[e, 0, 1] = g00 * r01 + g01 * r11 + g02 * r21
+        q[e, 0, 2] = g00 * r02 + g01 * r12 + g02 * r22
+        q[e, 1, 0] = g10 * r00 + g11 * r10 + g12 * r20
+        q[e, 1, 1] = g10 * r01 + g11 * r11 + g12 * r21
+        q[e, 1, 2] = g10 * r02 + g11 * r12 + g12 * r22
+        q[e, 2, 0] = g20 * r00 + g21 * r10 + g22 * r20
+        q[e, 2, 1] = g20 * r01 + g21 * r11 + g22 * r21
+        q[e, 2, 2] = g20 * r02 + g21 * r12 + g22 * r22
 
 
 @_jit
@@ -303,7 +370,16 @@ def _jacobian(z, h, hb, a, mf, xh, qh, psih, vh, wh, mass, inertia, model, dmp, 
             span = 2.0 * h[j] if central else h[j]
             for i in range(max(0, j - hb), min(size, j + hb + 1)):
                 jac[i, j - i + hb] = (r1[i] - r0[i]) / span
-    for k in range(size):  # Doolittle, in the band; the pivot kept as its reciprocal (no division in the solve)
+    _band_factor(jac, hb)
+
+
+@_jit
+def _band_factor(jac, hb):
+    """LU (Doolittle, no pivoting: the matrix is mass + dt^2 stiffness of a stable rod) of the band ``jac``
+    (``jac[i, j - i + hb]``, zero outside the matrix), in place; the pivots kept as their reciprocals (no
+    division in :func:`_band_solve`)."""
+    size = jac.shape[0]
+    for k in range(size):
         inv = 1.0 / jac[k, hb]
         jac[k, hb] = inv
         for i in range(k + 1, min(size, k + hb + 1)):
@@ -384,8 +460,9 @@ def _corotate(q, q_jac, turn, vec, backwards):
 
 @_jit
 def equilibrate(x, q, model, hb, tol, max_iter):
-    """Newton on the static balance from ``(x, q)`` (overwritten with the equilibrium); the Jacobian fresh each
-    iteration. Returns the iterations taken, or :data:`NO_PROGRESS`."""
+    """Newton on the static balance from ``(x, q)`` (overwritten with the equilibrium); the Jacobian kept while
+    the updates shrink faster than EQUILIBRIUM_RATE (a chord Newton: a start near the equilibrium needs one
+    Jacobian, the costly part), else rebuilt. Returns the iterations taken, or :data:`NO_PROGRESS`."""
     n = q.shape[0]
     size = 6 * n
     length = 0.0
@@ -408,8 +485,13 @@ def equilibrate(x, q, model, hb, tol, max_iter):
     mass = np.zeros(n + 1)
     inertia = np.zeros((n, 3))
     h = _steps(size, 1.0, length, 1e-5)  # central differences: error ~h^2
+    last = np.inf  # the last update with the kept Jacobian; inf: rebuild it
+    rate = 0.0
     for it in range(max_iter):
-        _jacobian(z, h, hb, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, jac)
+        if last == np.inf:
+            _jacobian(
+                z, h, hb, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, jac
+            )
         _residual(z, 1.0, 0.0, x, q, psih, zero3, zero3, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, res)
         for i in range(size):
             res[i] = -res[i]
@@ -417,13 +499,23 @@ def equilibrate(x, q, model, hb, tol, max_iter):
         big = 0.0
         for i in range(size):
             big = max(big, abs(dz[i]) / (length if i % 6 >= 3 else 1.0))
+        if not np.isfinite(big) or big > 1.0:
+            return NO_PROGRESS
+        if last < np.inf:  # the Jacobian kept (a chord Newton): the error left is rate / (1 - rate) of the update
+            rate = big / last
+            if rate >= EQUILIBRIUM_RATE:  # too slow (or diverging): this update dropped, the Jacobian rebuilt
+                last = np.inf
+                continue
         _configure(dz, 1.0, x, q, psih, xx, qq)
         x[:, :] = xx
         q[:, :, :] = qq
-        if big < tol:
+        if last == np.inf:  # a fresh Jacobian: Newton's update, quadratic
+            if big < tol:
+                return it + 1
+        elif rate / (1.0 - rate) * big < tol:
             return it + 1
-        if not np.isfinite(big) or big > 1.0:
-            return NO_PROGRESS
+        # far from the equilibrium Newton's quadratic rate is worth a fresh Jacobian; near it the chord's is not
+        last = big if big < CHORD_FROM else np.inf
     return NO_PROGRESS
 
 
@@ -459,6 +551,7 @@ def _newton(
     jac, q_jac, turn, h, padded, res, xx, qq, f, t, sig, kap = work
     size = z.shape[0]
     dz = padded[hb : hb + size]
+    a_per_length = a / length  # an update's size: displacements over the length, rotations in rad
     z[:] = z_guess
     last = np.inf
     stale = keep[0]
@@ -488,7 +581,7 @@ def _newton(
         _corotate(qq, q_jac, turn, dz, False)
         big = 0.0
         for i in range(size):
-            d = a * abs(dz[i]) / (length if i % 6 >= 3 else 1.0)
+            d = abs(dz[i]) * (a_per_length if i % 6 >= 3 else a)
             if not d <= big:  # NaN too
                 big = d
         if not np.isfinite(big):
@@ -622,8 +715,8 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
     vh = np.empty((n + 1, 3))
     wh = np.empty((n, 3))
     psih = np.empty((n, 3))
-    hsig = np.empty((n, 3))
-    hkap = np.empty((n, 3))
+    hsig = np.zeros((n, 3))
+    hkap = np.zeros((n, 3))
     z = np.zeros(size)
     z_guess = np.zeros(size)
     work = (
@@ -656,7 +749,6 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
     )
     keep = np.zeros(1, dtype=np.bool_)
     rate = np.full(1, RATE)  # the chord Newton's last rate, carried over steps (RADAU5's faccon)
-    scratch = np.empty((3, 3))
     # the last step's turn of each frame, psi (Q^{n+1} = Q^n exp(psi)): log(Q^{n T} Q^{n-1}) is -psi, no log needed
     # after a BDF2 step (after a backward-Euler fallback, and at the start, it is taken from the frames)
     turned = np.empty((n, 3))
@@ -670,20 +762,22 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
         x_now, q_now, v_now, w_now, sig_now, kap_now = now
         for i in range(n + 1):
             for k in range(3):
-                xh[i, k] = (4.0 * x_now[i, k] - x_prev[i, k]) / 3.0
-                vh[i, k] = (4.0 * v_now[i, k] - v_prev[i, k]) / 3.0
+                xh[i, k] = (4.0 * x_now[i, k] - x_prev[i, k]) * THIRD
+                vh[i, k] = (4.0 * v_now[i, k] - v_prev[i, k]) * THIRD
         for e in range(n):
             if turn_known:
                 for k in range(3):
-                    psih[e, k] = turned[e, k] / 3.0
+                    psih[e, k] = turned[e, k] * THIRD
             else:
-                _log_rel(q_now, e, q_prev, e, psih, e, scratch)
-                for k in range(3):
-                    psih[e, k] /= -3.0
+                turn = _log_rel(q_now, e, q_prev, e)
+                psih[e, 0] = turn[0] / -3.0
+                psih[e, 1] = turn[1] / -3.0
+                psih[e, 2] = turn[2] / -3.0
             for k in range(3):
-                wh[e, k] = (4.0 * w_now[e, k] - w_prev[e, k]) / 3.0
-                hsig[e, k] = (-4.0 * sig_now[e, k] + sig_prev[e, k]) / (2.0 * dt)
-                hkap[e, k] = (-4.0 * kap_now[e, k] + kap_prev[e, k]) / (2.0 * dt)
+                wh[e, k] = (4.0 * w_now[e, k] - w_prev[e, k]) * THIRD
+                if beta > 0.0:  # the damping's history (zero without: its divisions were ~8 % of a step)
+                    hsig[e, k] = (-4.0 * sig_now[e, k] + sig_prev[e, k]) / (2.0 * dt)
+                    hkap[e, k] = (-4.0 * kap_now[e, k] + kap_prev[e, k]) / (2.0 * dt)
                 # the guess: the velocities extrapolated linearly
                 z_guess[6 * e + 3 + k] = 2.0 * v_now[e + 1, k] - v_prev[e + 1, k]
                 z_guess[6 * e + k] = 2.0 * w_now[e, k] - w_prev[e, k]
@@ -749,30 +843,53 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
 
 @_jit
 def _node_frames_of(q, out):
-    """One state's node frames ``out`` (n + 1, 3, 3) of its element frames ``q`` (n, 3, 3), as :func:`node_frames`."""
-    rel = np.empty((3, 3))
-    rot = np.empty((3, 3))
+    """One state's node frames ``out`` (n + 1, 3, 3) of its element frames ``q`` (n, 3, 3), as :func:`node_frames`
+    (in scalars: see :func:`_exp9`)."""
     n = q.shape[0]
     for r in range(3):
         for c in range(3):
             out[0, r, c] = 1.0 if r == c else 0.0
             out[n, r, c] = q[n - 1, r, c]
     for i in range(1, n):
-        a = q[i - 1]
-        b = q[i]
-        for r in range(3):
-            for c in range(3):
-                rel[r, c] = a[0, r] * b[0, c] + a[1, r] * b[1, c] + a[2, r] * b[2, c]
-        half_cos = 0.5 * np.sqrt(max(1.0 + rel[0, 0] + rel[1, 1] + rel[2, 2], 0.0))
+        a00 = q[i - 1, 0, 0]
+        a01 = q[i - 1, 0, 1]
+        a02 = q[i - 1, 0, 2]
+        a10 = q[i - 1, 1, 0]
+        a11 = q[i - 1, 1, 1]
+        a12 = q[i - 1, 1, 2]
+        a20 = q[i - 1, 2, 0]
+        a21 = q[i - 1, 2, 1]
+        a22 = q[i - 1, 2, 2]
+        r00 = a00 * q[i, 0, 0] + a10 * q[i, 1, 0] + a20 * q[i, 2, 0]
+        r01 = a00 * q[i, 0, 1] + a10 * q[i, 1, 1] + a20 * q[i, 2, 1]
+        r02 = a00 * q[i, 0, 2] + a10 * q[i, 1, 2] + a20 * q[i, 2, 2]
+        r10 = a01 * q[i, 0, 0] + a11 * q[i, 1, 0] + a21 * q[i, 2, 0]
+        r11 = a01 * q[i, 0, 1] + a11 * q[i, 1, 1] + a21 * q[i, 2, 1]
+        r12 = a01 * q[i, 0, 2] + a11 * q[i, 1, 2] + a21 * q[i, 2, 2]
+        r20 = a02 * q[i, 0, 0] + a12 * q[i, 1, 0] + a22 * q[i, 2, 0]
+        r21 = a02 * q[i, 0, 1] + a12 * q[i, 1, 1] + a22 * q[i, 2, 1]
+        r22 = a02 * q[i, 0, 2] + a12 * q[i, 1, 2] + a22 * q[i, 2, 2]
+        half_cos = 0.5 * np.sqrt(max(1.0 + r00 + r11 + r22, 0.0))
         fa = 0.25 / half_cos
         fs = 0.25 / (1.0 + half_cos)
-        for r in range(3):
-            for c in range(3):
-                eye = 1.0 if r == c else 0.0
-                rot[r, c] = eye + fa * (rel[r, c] - rel[c, r]) + fs * (rel[r, c] + rel[c, r] - 2.0 * eye)
-        for r in range(3):
-            for c in range(3):
-                out[i, r, c] = a[r, 0] * rot[0, c] + a[r, 1] * rot[1, c] + a[r, 2] * rot[2, c]
+        h00 = 1.0 + fs * (2.0 * r00 - 2.0)
+        h01 = fa * (r01 - r10) + fs * (r01 + r10)
+        h02 = fa * (r02 - r20) + fs * (r02 + r20)
+        h10 = fa * (r10 - r01) + fs * (r10 + r01)
+        h11 = 1.0 + fs * (2.0 * r11 - 2.0)
+        h12 = fa * (r12 - r21) + fs * (r12 + r21)
+        h20 = fa * (r20 - r02) + fs * (r20 + r02)
+        h21 = fa * (r21 - r12) + fs * (r21 + r12)
+        h22 = 1.0 + fs * (2.0 * r22 - 2.0)
+        out[i, 0, 0] = a00 * h00 + a01 * h10 + a02 * h20
+        out[i, 0, 1] = a00 * h01 + a01 * h11 + a02 * h21
+        out[i, 0, 2] = a00 * h02 + a01 * h12 + a02 * h22
+        out[i, 1, 0] = a10 * h00 + a11 * h10 + a12 * h20
+        out[i, 1, 1] = a10 * h01 + a11 * h11 + a12 * h21
+        out[i, 1, 2] = a10 * h02 + a11 * h12 + a12 * h22
+        out[i, 2, 0] = a20 * h00 + a21 * h10 + a22 * h20
+        out[i, 2, 1] = a20 * h01 + a21 * h11 + a22 * h21
+        out[i, 2, 2] = a20 * h02 + a21 * h12 + a22 * h22
 
 
 @_jit

@@ -865,7 +865,8 @@ def build_digit(
 
     Each of the ``section_count`` sections is ``section_pitch_m`` long (90 mm): a flexible strip of
     ``strip_length_m / section_count`` (80 mm) between rigid nylon supports, half a support (5 mm) at each end, so
-    the supports sit at 0, 90, 180, 270 mm and the gauges (45, 135, 225 mm) midway on the strip. The flexible part
+    the supports sit at 0, 90, 180, 270 mm and the gauges (45, 135, 225 mm) midway on the strip. Sections of
+    unequal lengths are laid out by ``Geometry.section_bounds_m`` and ``support_centres_m``. The flexible part
     of section ``k`` has ``EI = E I_strip + housing_ei_n_m2[k]`` (with ``housing``), cut into ``cells_per_section``
     cells (odd, so the gauges fall on a spring). Masses: the strip (rigid-bar links, density from params), the
     support masses at 90, 180, 270 mm and the housing mass spread on the sections. Damping is stiffness-
@@ -898,9 +899,7 @@ def digit_arrays(
     cells_per_section = check_int(cells_per_section, "cells_per_section", "build_digit", low=1, high=1000)
     geo, mat = params.geometry, params.material
     nsec = geo.section_count
-    pitch = geo.section_pitch_m
-    flex = geo.strip_length_m / nsec
-    half_support = 0.5 * (pitch - flex)
+    bounds = geo.section_bounds_m  # each section's free strip (unequal sections too)
     ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4
     housing_ei = np.asarray(calibration.housing_ei_n_m2, dtype=float)
     if housing_ei.size != nsec:
@@ -910,7 +909,7 @@ def digit_arrays(
         )
     s_list, h_list, k_strip, k_house = [], [], [], []
     for k in range(nsec):
-        s, h = uniform_cells(k * pitch + half_support, (k + 1) * pitch - half_support, cells_per_section)
+        s, h = uniform_cells(*bounds[k], cells_per_section)
         s_list.append(s)
         h_list.append(h)
         k_strip.append(ei_strip / h)
@@ -930,15 +929,17 @@ def digit_arrays(
     if supports.size != nsec:
         raise ParameterError(
             f"The 'support_mass_kg' parameter of Calibration must have {nsec} values (supports at "
-            f"{[round((k + 1) * pitch, 4) for k in range(nsec)]} m). Got {supports.tolist()!r} instead."
+            f"{[round(c, 4) for c in geo.support_centres_m]} m). Got {supports.tolist()!r} instead."
         )
-    # the tip support's centre is the tip: ``pitch x n`` may round a ulp past ``digit_length_m`` (0.3876 / 3 x 3)
-    mass_s.append(np.minimum(pitch * (np.arange(nsec) + 1.0), length))
+    mass_s.append(np.asarray(geo.support_centres_m))  # the tip support's centre never past the tip
     mass_kg.append(supports)
     inertia.append(np.zeros(nsec))
     if housing and calibration.housing_mass_kg > 0:
         mass_s.append(s)
-        mass_kg.append(np.full(s.size, calibration.housing_mass_kg / s.size))
+        if geo.equal_sections:  # every cell equally long: the same share each (as ever, to the bit)
+            mass_kg.append(np.full(s.size, calibration.housing_mass_kg / s.size))
+        else:  # a cell's share of the housing is its share of the strip: a longer section carries more
+            mass_kg.append(calibration.housing_mass_kg * h / h.sum())
         inertia.append(np.zeros(s.size))
     g = np.asarray(ORIENTATIONS[orientation]) * G_STANDARD_M_S2
     return {

@@ -8,11 +8,14 @@ become under that digit's description, each by the law below. ``0`` subscripts a
 
 - ``support_mass_kg``: a nylon support is a block as long as the support (``l_s``, 10 mm), as wide as the strip
   (``w``) and about as tall as the cable guides either side of the strip (``2 e``): its mass scales with that
-  volume, ``m = m0 (l_s / l_s0) (w / w0) (e / e0)``, one value per support.
+  volume, ``m = m0 (l_s / l_s0) (w / w0) (e / e0)``, one value per support, each by its own length
+  (``Geometry.supports_m``: ``support_lengths_m`` if the description gives them).
 - ``housing_ei_n_m2``: the elastomer housing encloses strip and cable guides, a section ``w`` wide and ``~2 e``
   tall, so its bending stiffness scales as ``w (2 e)^3``: ``EI_h = EI_h0 (w / w0) (e / e0)^3``. The base section
   keeps the thesis's base value (stiffened by the clamp, 3.4.1: gauge 1 barely bends), the others the thesis's
-  uniform value (the mean of its sections 2..n).
+  uniform value (the mean of its sections 2..n). ``EI`` is a property of the cross-section, not of the length:
+  each section's rotational stiffness in the twin's chain is ``EI / l_k`` over its own free length ``l_k``
+  (``Geometry.section_bounds_m``), so sections of unequal lengths scale with their own length there.
 - ``strip_beta_s``, ``housing_beta_s``: stiffness-proportional damping ``c = beta k``; ``beta`` is a relaxation
   time of the material (spring steel, elastomer), the same in any geometry: kept.
 - ``cable_stiffness_n_m``: ``k = E_c A_c / l_c`` with the cable's run ``l_c`` along the digit: ``k = k0 L0 / L``.
@@ -80,9 +83,8 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
     width = g.strip_width_m / g0.strip_width_m
     ecc = g.cable_eccentricity_m / g0.cable_eccentricity_m
     length = g.digit_length_m / g0.digit_length_m
-    support = (g.digit_length_m - g.strip_length_m) / n
-    support0 = (g0.digit_length_m - g0.strip_length_m) / g0.section_count
-    support_mass = float(np.mean(ref.support_mass_kg)) * (support / support0) * width * ecc
+    support0 = g0.support_length_m
+    support_mass = tuple(float(np.mean(ref.support_mass_kg)) * (s / support0) * width * ecc for s in g.supports_m)
     housing = np.asarray(ref.housing_ei_n_m2, dtype=float) * width * ecc**3
     uniform = float(np.mean(housing[1:])) if housing.size > 1 else float(housing[0])
     housing_ei = (float(housing[0]),) + (uniform,) * (n - 1)
@@ -99,7 +101,7 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
     white = tuple(float(v) for v in float(np.mean(ref.noise_white_v)) * amplify)
     drift = tuple(float(v) for v in float(np.mean(ref.noise_drift_v_per_sqrt_s)) * amplify)
     return ref.replace(
-        support_mass_kg=(support_mass,) * n,
+        support_mass_kg=support_mass,
         housing_ei_n_m2=housing_ei,
         cable_stiffness_n_m=ref.cable_stiffness_n_m / length,
         housing_mass_kg=ref.housing_mass_kg * width * ecc * length,

@@ -353,6 +353,7 @@ def actuation_sweep(
     n = check_int(samples, "samples", "actuation_sweep", low=1, high=100_000)
     rate = check_positive(sample_rate_hz, "sample_rate_hz", "actuation_sweep")
     twin = Twin(params, calibration, seed=seed, orientation=orientation, command=cmds[0], compiled=bool(compiled))
+    _check_upright(twin.chain, orientation, "actuation_sweep")  # tip up, a long digit falls over: no sweep
     rows: dict[str, list] = {k: [] for k in ("command", "sample", "time_s", *_gauge_columns(params), "pot_v")}
     for c in cmds:
         twin.command(c)

@@ -122,3 +122,33 @@ def test_run_params_closes_a_digits_loop_through_the_stream(tmp_path, capsys):
         assert seen[-1] == pytest.approx(-20.0, abs=quantum)
         assert run["gauge_source"]["garbled"] == 0
         assert len(run["rotation_map"]["coef_deg_per_v"]) == 4
+
+
+def test_live_params_reads_a_digits_gauges_through_the_stream(tmp_path):
+    # `flexdigit live --params D --backend serial://SERVO?daq=stream://PORT`: the live page's loop on the hardware
+    # path of the 4-gauge pair digit (its emulated twin), open loop at the digit's straight command
+    import time
+
+    from flexdigit.live.session import LiveSession
+
+    params = load_params(write_digit("four-sections-two-cables", tmp_path))
+    with StreamEmulator(twin=True, seed=2, params=params) as emulator:
+        holder: dict = {}
+
+        def sleep(seconds):
+            time.sleep(seconds)
+            if len(holder["session"].state.samples) >= 15:
+                holder["session"]._stop.set()
+
+        backend = f"serial://{emulator.servo_port}?daq=stream://{emulator.port}"
+        session = LiveSession(backend, params=params, sleep=sleep)
+        holder["session"] = session
+        try:
+            session._run()
+        finally:
+            session.rig.close()
+        assert session.error is None
+        samples = session.state.samples
+        assert len(samples) >= 15 and all(len(s.gauges_v) == 4 for s in samples)
+        assert {s.command for s in samples} == {params.actuator.equilibrium_command}  # straight: 127, not 8
+        assert abs(emulator.tip_rotation_deg()) < 1.0  # the pair's digit held straight

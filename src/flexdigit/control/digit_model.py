@@ -1,0 +1,224 @@
+"""A described digit's design model: the twin's chain linearised with its cable(s) taut, its modes truncated.
+
+The thesis's G(s) (3.5) is servo x cable x one digit mode. A digit nobody has identified has more than one mode
+that matters: a 0.5 m digit's first mode is 1.5 Hz with zeta 0.02, within the servo's bandwidth, and its gauges,
+spread along the strip, see the higher modes the tip hardly shows. Here the model is built from the same chain the
+twin integrates (:mod:`flexdigit.twin.digit`), linearised about the static shape half-way to the step:
+
+``M psi'' + C psi' + K psi = b s``, ``M = A cos(psi_j - psi_k)``, ``K`` the tangent stiffness (springs, gravity,
+``k_c e^2`` per taut cable), ``b = k_c e`` per taut cable on the tip link (E 3.11), ``s`` the cable shortening
+(the pulley's metres per command times the servo's angle, 3.2.4 and E 3.11).
+
+Two outputs, both in degrees:
+
+- the **tip rotation** ``psi_n`` (what the loop is asked to hold, and scored on);
+- the **rotation the loop measures**: the gauges' curvature ``kappa = D psi`` through each channel's volts per
+  curvature (:meth:`flexdigit.twin.sensors.SensorChain.volts_per_curvature`) and the static map the calibration
+  sweep fits (:class:`flexdigit.rig.rotation.RotationEstimator`, equal weights: its weights are the gauges'
+  sensitivities along the static shape over their sum of squares). Statically the two agree; while the digit
+  vibrates they do not, and the design knows by how much.
+
+**Modal truncation.** Of the chain's ``n`` modes (3 cells a section: up to 24) the model keeps those below the
+Nyquist frequency of the loop's sample period (``pi / T``, 157 rad/s at 20 ms), at most :data:`MAX_MODES`: a
+mode above it cannot be acted on by a command held for T (the hold's gain there is below 2/pi and falling), and it
+aliases onto a slower frequency if kept as if it could. The truncated modes' static share is kept (the residual
+is matched at DC, python-control's ``modred(..., "matchdc")``), so the model's rotation per command is the chain's.
+The noise of the measured rotation is the gauges' white noise through the map's weights.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+
+from flexdigit.errors import DesignError
+from flexdigit.models.cable import tip_rotation_per_command_deg
+from flexdigit.models.servo import servo_unit_tf
+from flexdigit.params import RigParams
+from flexdigit.twin.digit_calibration import twin_calibration
+from flexdigit.twin.sensors import SensorChain
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, cached_digit
+
+__all__ = ["DigitModel", "digit_model", "MAX_MODES"]
+
+#: The most chain modes a design model keeps (below the loop's Nyquist frequency, lowest first): with the servo,
+#: the delay and the disturbance an observer of at most 2 + 2 x 6 + 2 states.
+MAX_MODES = 6
+
+
+@dataclass(frozen=True)
+class DigitModel:
+    """The design model of one digit (module docstring).
+
+    Attributes
+    ----------
+    plant : control.StateSpace
+        Continuous, command deviation -> ``[tip rotation, measured rotation]`` (deg).
+    deg_per_command : float
+        Its DC gain (both outputs).
+    modes_wn_rad_s, modes_zeta : ndarray
+        The chain's modes kept (cable(s) taut, about the operating shape).
+    truncated_wn_rad_s : ndarray
+        The modes left out (above the Nyquist frequency, or past :data:`MAX_MODES`).
+    measurement_sd_deg : float
+        Standard deviation of one reading of the measured rotation from the gauges' white noise, deg.
+    operating_deg : float
+        The tip rotation the chain was linearised about, deg.
+    """
+
+    plant: ct.StateSpace
+    deg_per_command: float
+    modes_wn_rad_s: np.ndarray
+    modes_zeta: np.ndarray
+    truncated_wn_rad_s: np.ndarray
+    measurement_sd_deg: float
+    operating_deg: float
+
+
+def _operating_shape(chain, params: RigParams, at_deg: float):
+    """The chain's static solution at the command nearest ``at_deg`` of tip rotation (cable model, E 3.15)."""
+    a = params.actuator
+    command = a.equilibrium_command + round(at_deg / tip_rotation_per_command_deg(params))
+    command = min(max(command, a.command_min), a.command_max)
+    shortening = float(cable_shortening_m(command, params))
+    solution = chain.solve_static(cable_shortening_m=np.array([shortening]))
+    if not bool(np.all(solution.converged)):
+        raise DesignError(f"design: the digit's static shape at command {command} did not converge")
+    return solution, shortening
+
+
+def digit_model(
+    params: RigParams,
+    calibration=None,
+    *,
+    orientation: str = "vertical",
+    period_s: float = 0.020,
+    at_deg: float = 15.0,
+    cells_per_section: int | None = None,
+) -> DigitModel:
+    """The design model of a described digit (module docstring), linearised at ``at_deg`` of tip rotation.
+
+    Parameters
+    ----------
+    params : RigParams
+    calibration : Calibration, optional
+        The twin's (default: the one the twin gets for the digit).
+    orientation : str
+        How the digit is mounted (gravity on the chain).
+    period_s : float
+        The loop's sample period (the truncation's Nyquist frequency), s.
+    at_deg : float
+        The operating tip rotation, deg (half the 30 deg step).
+
+    Returns
+    -------
+    DigitModel
+
+    Examples
+    --------
+    >>> m = digit_model(RigParams())
+    >>> m.plant.noutputs, round(m.deg_per_command, 1), bool(m.modes_wn_rad_s[0] < 157)
+    (2, 1.7, True)
+    """
+
+    cal = calibration if calibration is not None else twin_calibration(params)
+    cells = cells_per_section or DEFAULT_CELLS_PER_SECTION
+    chain = cached_digit(params, cal, True, orientation, cells)
+    solution, shortening = _operating_shape(chain, params, at_deg)
+    psi = np.asarray(solution.psi_rad[0], dtype=float)
+    _, _, taut1, taut2 = chain.cable_tensions(psi[-1], shortening)
+    taut = float(bool(taut1)) + float(bool(taut2))
+    if taut == 0:
+        raise DesignError(f"design: the digit's cable is slack at {at_deg:g} deg; no command reaches the tip")
+    n = chain.n
+    m = chain.a_mass * np.cos(psi[:, None] - psi[None, :])
+    k = chain.tangent_stiffness(psi, chain.g_gravity, taut)
+    b = np.zeros(n)
+    b[-1] = chain.cable_stiffness * chain.eccentricity * taut
+    c_measured, sd_deg = _measured_rotation(chain, params, cal, solution, np.linalg.solve(k, b))
+    # modal form of the chain, modes below Nyquist kept, the rest matched at DC
+    minv = np.linalg.inv(m)
+    a_chain = np.block([[np.zeros((n, n)), np.eye(n)], [-minv @ k, -minv @ chain.c_psi]])
+    b_chain = np.concatenate([np.zeros(n), minv @ b])[:, None]
+    c_chain = np.zeros((2, 2 * n))
+    c_chain[0, n - 1] = 1.0
+    c_chain[1, :n] = c_measured
+    reduced, dropped, kept = _truncated(a_chain, b_chain, np.degrees(c_chain), math.pi / period_s)
+    metres_per_command = params.actuator.rad_per_command * params.actuator.cable_m_per_servo_rad
+    plant = _balanced(ct.series(ct.ss(servo_unit_tf(params)), reduced) * metres_per_command)
+    dc = np.real(np.asarray(ct.dcgain(plant))).reshape(-1)
+    lam_kept = np.linalg.eigvals(np.asarray(reduced.A))
+    lam_kept = lam_kept[lam_kept.imag > 0]
+    order = np.argsort(np.abs(lam_kept))
+    return DigitModel(
+        plant=plant,
+        deg_per_command=float(dc[0]),
+        modes_wn_rad_s=np.abs(lam_kept[order]),
+        modes_zeta=-lam_kept[order].real / np.abs(lam_kept[order]),
+        truncated_wn_rad_s=dropped,
+        measurement_sd_deg=sd_deg,
+        operating_deg=math.degrees(float(psi[-1])),
+    )
+
+
+def _measured_rotation(chain, params: RigParams, calibration, solution, static: np.ndarray):
+    """The rotation the gauges measure as a row of the chain's angles (rad per rad), and one reading's standard
+    deviation from their white noise (deg): curvature at the gauges (linear in the angles), each channel's volts
+    per curvature at the operating shape, and the weights the sweep's equal-weight map gives them (each gauge's
+    sensitivity along the static shape ``static`` over their sum of squares, :class:`RotationEstimator`)."""
+    d = np.asarray(chain._psi_to_gauge_curvature, dtype=float)  # (G, n)
+    sensors = SensorChain(params, calibration, np.random.default_rng(0))
+    vpc = sensors.volts_per_curvature(solution.curvature_1_m[0], solution.axial_force_n[0])
+    sens_v_per_rad = vpc * (d @ static) / static[-1]  # each gauge's volts per radian of tip rotation
+    information = float(sens_v_per_rad @ sens_v_per_rad)
+    if not information > 0:
+        raise DesignError("design: the digit's gauges do not see the cable's bending (no gauge on a bent strip)")
+    weights = sens_v_per_rad / information  # rad per volt, as the sweep's map fits them
+    sd_deg = math.degrees(float(np.sqrt(np.sum((weights * np.asarray(sensors.white)) ** 2))))
+    return (weights * vpc) @ d, sd_deg
+
+
+def _truncated(a: np.ndarray, b: np.ndarray, c: np.ndarray, nyquist_rad_s: float):
+    """Modal truncation of ``(a, b, c)`` keeping the lowest modes below ``nyquist_rad_s`` (at most
+    :data:`MAX_MODES`), the others' static share kept as a feedthrough (matched at DC).
+
+    The kept modes' invariant subspace is spanned by the real and imaginary parts of their eigenvectors; ``P``, the
+    spectral projector onto it (real: conjugate pairs are kept together), gives the reduced system
+    ``(W a V, W b, c V)`` with ``W = V^+ P``, and the rest's DC share ``-c a^-1 (I - P) b``. Returns
+    ``(system, the dropped modes' wn (rad/s), the kept modes' wn)``.
+    """
+    lam, vectors = np.linalg.eig(a)
+    left = np.linalg.inv(vectors)
+    upper = lam.imag >= 0
+    # a vibration mode below Nyquist is kept; a real pole (an overdamped cell mode's slow branch, near the stiffness-
+    # proportional damping's 1 / beta) only when slower than the sampling (time constant over 2 / Nyquist = T / pi x 2)
+    vibrating = np.abs(lam.imag) > 0
+    slow = np.where(vibrating, np.abs(lam) < nyquist_rad_s, np.abs(lam) < nyquist_rad_s / 2)
+    ranked = np.sort(np.abs(lam[upper & slow]))[:MAX_MODES]
+    cutoff = ranked[-1] if ranked.size else 0.0
+    keep = slow & (np.abs(lam) <= cutoff * (1 + 1e-9))
+    projector = np.real(vectors[:, keep] @ left[keep, :])
+    basis = np.hstack([vectors[:, keep & upper].real, vectors[:, keep & upper & (lam.imag > 0)].imag])
+    w = np.linalg.pinv(basis) @ projector
+    rest = np.eye(a.shape[0]) - projector
+    feedthrough = -c @ np.linalg.solve(a, rest @ b)
+    system = ct.ss(w @ a @ basis, w @ b, c @ basis, feedthrough)
+    return system, np.sort(np.abs(lam[upper & ~keep])), ranked
+
+
+def _balanced(system: ct.StateSpace) -> ct.StateSpace:
+    """The same system with its states scaled (LAPACK's balancing of ``[[A, B], [C, 0]]``): the series of the
+    servo (radians) and the chain (per metre of cable) spans nine decades between ``B`` and ``C``, which the
+    Riccati solvers of the design refuse ("spectrum too close to the boundary")."""
+    import scipy.linalg
+
+    a, b, c, d = (np.asarray(x, dtype=float) for x in (system.A, system.B, system.C, system.D))
+    n = a.shape[0]
+    whole = np.zeros((n + 1, n + 1))
+    whole[:n, :n], whole[:n, n:], whole[n:, :n] = a, b, c[-1:]
+    _, (scale, _) = scipy.linalg.matrix_balance(whole, permute=False, separate=True)
+    t = scale[:n] / scale[n]
+    return ct.ss(a * t[None, :] / t[:, None], b / t[:, None], c * t[None, :], d)
