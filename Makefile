@@ -57,8 +57,8 @@ PYTEST := $(BIN)/pytest -n $(PYTEST_WORKERS) --dist loadfile
 
 # The numbers must not depend on the BLAS kernel (docs/guide/reliability.md, "Portable numbers"): the tests marked `blas` run again under
 # OpenBLAS's own choice for this CPU (when the environment forces one) and under Nehalem (SSE only, what any x86-64
-# runs; unless the suite just ran there). About 35 s each in one process, on the two workers about 20 s; pytest's
-# header names the kernel in use.
+# runs; unless the suite just ran there). 33-35 s each in one process on an idle machine; on the two workers 30 and
+# 35 s with other work loading the machine (load 4-5). pytest's header names the kernel in use.
 BLAS_RUN := $(PYTEST) tests -m blas -p no:cacheprovider
 
 # The site (Sphinx, numpydoc, myst, sphinx-gallery: every examples/plot_*.py runs in the build). Offline: no
