@@ -133,6 +133,11 @@ def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
             tuple(rows),
         )
     )
+    _sensitivity_figures(ctx, chapter, result)
+
+
+def _sensitivity_figures(ctx: ReportContext, chapter: Chapter, result) -> None:
+    """The study's total-index map and the release frequency's bars."""
     size = figures.sample_size_text(result.settings)
     fig = figures.sensitivity_total_map(result, f"Total Sobol indices, {size}")
     chapter.figures.append(ctx.save_figure(fig, "studies_sobol_total", "Total Sobol indices of the twin's metrics."))
