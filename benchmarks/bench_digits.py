@@ -84,9 +84,11 @@ def bench_static(description: dict, cases: int = 5_000) -> tuple:
     return cases / elapsed, elapsed
 
 
-def run() -> list[dict]:
+def speed_rows(digits: dict) -> list[dict]:
+    """The twin's real-time factor, then its static load cases per second, of each ``name: (description,
+    orientation)`` in ``digits``, timed in this run (shared with :mod:`benchmarks.bench_unequal`)."""
     rows = []
-    for name, (description, orientation) in DIGITS.items():
+    for name, (description, orientation) in digits.items():
         factor, springs, elapsed = bench_realtime(description, orientation)
         rows.append(
             {
@@ -98,7 +100,7 @@ def run() -> list[dict]:
                 f"{springs} springs",
             }
         )
-    for name, (description, _) in DIGITS.items():
+    for name, (description, _) in digits.items():
         rate, elapsed = bench_static(description)
         rows.append(
             {
@@ -109,6 +111,11 @@ def run() -> list[dict]:
                 "note": f"5000 cases (one weight, three commands) in {elapsed:.3f} s, batched, horizontal",
             }
         )
+    return rows
+
+
+def run() -> list[dict]:
+    rows = speed_rows(DIGITS)
     wall, entries = bench_report(FIVE_SECTIONS_EIGHT_GAUGES)
     rows.append(
         {

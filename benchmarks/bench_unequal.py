@@ -8,7 +8,7 @@ per chain (``Geometry.section_bounds_m``), so the two should run alike: same sec
 
 from __future__ import annotations
 
-from benchmarks.bench_digits import bench_realtime, bench_static
+from benchmarks.bench_digits import speed_rows
 
 #: The test digit "unequal-sections" of tests/digits.py, written out (benchmarks do not import the tests).
 UNEQUAL_SECTIONS = {
@@ -21,31 +21,11 @@ UNEQUAL_SECTIONS = {
         "gauge_positions_m": [0.035, 0.125, 0.227],
     },
 }
-DIGITS = {"thesis rig (3 x 80 mm)": {}, "unequal sections (60/100/80 mm)": UNEQUAL_SECTIONS}
+DIGITS = {
+    "thesis rig (3 x 80 mm)": ({}, "vertical"),
+    "unequal sections (60/100/80 mm)": (UNEQUAL_SECTIONS, "vertical"),
+}
 
 
 def run() -> list[dict]:
-    rows = []
-    for name, description in DIGITS.items():
-        factor, springs, elapsed = bench_realtime(description, "vertical")
-        rows.append(
-            {
-                "name": f"run twin real-time factor, {name}",
-                "value": factor,
-                "unit": "x",
-                "goal": ">= 1 (the loop)",
-                "note": f"2 ms step read each 20 ms frame, vertical; 10 s in {elapsed:.3f} s (best of 3), "
-                f"{springs} springs",
-            }
-        )
-        rate, elapsed = bench_static(description)
-        rows.append(
-            {
-                "name": f"static load cases per second, {name}",
-                "value": rate,
-                "unit": "cases/s",
-                "goal": "",
-                "note": f"5000 cases (one weight, three commands) in {elapsed:.3f} s, batched, horizontal",
-            }
-        )
-    return rows
+    return speed_rows(DIGITS)
