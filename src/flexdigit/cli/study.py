@@ -15,14 +15,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "study",
         _study,
         help="sensitivity (Morris, Sobol) or design study (Pareto front) over a spec, on Dask",
-        description="Run a study spec (a TOML file, or a shipped one: thesis-tolerances, thesis-design) on a local "
-        "Dask cluster (one worker per core) or an existing one; rerunning with the same --out resumes it.",
+        description="Run a study spec (a TOML file, or a shipped one: thesis-tolerances, thesis-design, "
+        "thesis-taper) on a local Dask cluster (one worker per core) or an existing one; rerunning with the same "
+        "--out resumes it.",
     )
     from flexdigit.cli._formats import epilog
 
     p.epilog = epilog("spec")
     p.add_argument("kind", choices=("sensitivity", "design"), help="which study")
-    p.add_argument("spec", help="study spec TOML, or a shipped name (thesis-tolerances, thesis-design)")
+    p.add_argument("spec", help="study spec TOML, or a shipped name (thesis-tolerances, thesis-design, thesis-taper)")
     p.add_argument("--out", required=True, help="directory for the journal, tables and figures (created)")
     p.add_argument("--scheduler", default=None, help="an existing Dask scheduler, tcp://HOST:PORT")
     p.add_argument("--workers", type=int, default=None, help="local Dask workers (default: one per core; 0: no Dask)")
