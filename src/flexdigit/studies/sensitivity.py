@@ -56,6 +56,12 @@ __all__ = [
 #: Morris levels are placed on these quantiles of each distribution (0 and 1 are infinite for a normal).
 MORRIS_QUANTILES = (0.005, 0.995)
 
+#: What :func:`sobol_indices` computes, by whether the design is second-order (``summary.json``'s ``sobol_estimator``).
+SOBOL_ESTIMATORS = {
+    False: "SALib.analyze.sobol: S1 Saltelli et al. 2010, ST Jansen, on A, AB_i, B",
+    True: "mean of SALib's S1, ST, S2 on (A, AB_i, B) and on (B, BA_i, A): Saltelli 2002 (averaged_sobol_indices)",
+}
+
 
 @dataclass(frozen=True)
 class SensitivitySettings:
@@ -177,6 +183,7 @@ class SensitivityResult:
             ],
             "evaluations": int(self.values.shape[0]),
             "sobol_n": [self.settings.sobol_n, 2 * self.settings.sobol_n],
+            "sobol_estimator": SOBOL_ESTIMATORS[self.settings.second_order],
             "failed_rows": [
                 {
                     "row": i,
