@@ -49,7 +49,7 @@ def run() -> list[dict]:
             "note": "what run --params spends before the loop without a kept design",
         },
         {
-            "name": "20 ms design, 0.5 m 8-gauge digit, kept (--controller FILE)",
+            "name": "20 ms design, 0.5 m 8-gauge digit, kept design file",
             "value": kept_s,
             "unit": "s",
             "goal": "",
