@@ -1,8 +1,8 @@
 """A digit's 20 ms design kept in a file, so that a run need not search its weights again.
 
-``flexdigit run --params D.toml`` designs the digit's controller before every run (:func:`~flexdigit.control.
-design20ms.digit_design_20ms`): on a digit other than the thesis rig that is a search of 48-96 weight candidates
-on its linearised chain, 2-8 s (0.02 s on the thesis rig, whose weights are chapter 5's). The search's outcome is
+``flexdigit run --params D.toml`` designs the digit's controller before every run
+(:func:`~flexdigit.control.design20ms.digit_design_20ms`): on a digit other than the thesis rig that is a search of
+48-96 weight candidates on its linearised chain, 2-8 s (0.02 s on the thesis rig, whose weights are chapter 5's). The search's outcome is
 its weights; the rest of the design (the model, one LQR and one Kalman predictor) is cheap. So a kept design is
 the weights the search chose, with what they were chosen for:
 
