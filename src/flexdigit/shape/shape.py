@@ -642,6 +642,10 @@ class ShapeEstimator:
     #: The global search's lever arms have settled when no tangent angle moves by more than this (rad): enough to
     #: rank the candidates; the chosen one is then settled to ``tol_rad``.
     SEARCH_TOL_RAD = 1e-4
+    #: The global search's answer replaces the local one where it lowers chi-square by more than this: the local
+    #: answer is otherwise inside the one-standard-deviation profile interval of the better one (chi-square
+    #: within 1), as good an estimate, and the thesis rig's estimates stay what they were.
+    SEARCH_GAIN_CHI2 = 1.0
 
     def _global_search(self, kappa_g, tip_eq, sd_white, local):
         """The load's position over the whole digit, each candidate on its own settled shape (profile likelihood).
@@ -652,8 +656,9 @@ class ShapeEstimator:
         started from the straight digit it walks to the nearest local minimum (a load at the tip of a 0.40 m strip
         found at 0.30 m, chi-square 37). Here every candidate of a coarse grid (:attr:`SEARCH_POSITIONS`) gets its
         own fixed point, force and tension fitted on the shape that force bends; the best one seeds the local fit
-        again, held to its branch from the start, and that replaces the first answer wherever it fits better.
-        Readings the local fit left without a load and consistent with the model keep it.
+        again, held to its branch from the start, and that replaces the first answer wherever it fits better (by
+        more than :attr:`SEARCH_GAIN_CHI2`). Readings the local fit left without a load and consistent with the
+        model keep it.
         """
         fit, psi, r, tension, change = local
         chosen = np.where(fit["loaded"], fit["chi2_1"], fit["chi2_0"])
@@ -662,7 +667,7 @@ class ShapeEstimator:
             return local
         grid = self._search_positions()
         best_s, best_chi, start_psi, start_r, start_t = self._profile(kappa_g[todo], tip_eq[todo], sd_white, grid)
-        again = np.isfinite(best_chi) & (best_chi < chosen[todo])
+        again = np.isfinite(best_chi) & (best_chi < chosen[todo] - self.SEARCH_GAIN_CHI2)
         todo, best_s = todo[again], best_s[again]
         if todo.size == 0:
             return local
@@ -672,7 +677,7 @@ class ShapeEstimator:
             int(self.max_iterations), hold,
         )  # fmt: skip
         redo_chi = np.where(redo[0]["loaded"], redo[0]["chi2_1"], redo[0]["chi2_0"])
-        better = redo_chi < chosen[todo]
+        better = redo_chi < chosen[todo] - self.SEARCH_GAIN_CHI2
         todo = todo[better]
         fit = {k: v.copy() for k, v in fit.items()}
         for key, value in redo[0].items():
