@@ -24,7 +24,7 @@ import json
 import numpy as np
 import pytest
 
-from digit_campaign import campaign_digit, to_toml
+from digit_campaign import ADC_MARGIN, campaign_digit, to_toml
 from digits import random_digit
 from flexdigit.cli import main
 from flexdigit.params import RigParams
@@ -104,8 +104,8 @@ def test_shape_command_places_the_sagging_digits_tip_load(tmp_path, capsys):
     assert row["load_mass_kg"] == pytest.approx(MASS_KG, rel=FORCE_RTOL)
 
 
-#: Drawn digits that sag 48-64 deg lying horizontal (campaign 0, 14; tests/digits.py 5, 11), by generator.
-DRAWN = [("campaign", 0), ("campaign", 14), ("random", 5), ("random", 11)]
+#: Drawn digits that sag 48-72 deg lying horizontal (campaign 0, 7, 14; tests/digits.py 5, 11), by generator.
+DRAWN = [("campaign", 0), ("campaign", 7), ("campaign", 14), ("random", 5), ("random", 11)]
 
 
 @pytest.mark.parametrize(("generator", "seed"), DRAWN)
@@ -123,3 +123,18 @@ def test_loads_on_drawn_digits_are_found_on_the_converged_twin(generator, seed):
     assert np.all(np.abs(e.load_position_from_base_m - where) <= 2 * e.load_position_sd_m + LOCATE_FLOOR_M)
     assert e.load_force_n == pytest.approx(MASS_KG * G, rel=FORCE_RTOL)
     assert np.max(np.linalg.norm(e.tip_m - sol.tip_m, axis=1)) < TIP_M
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_campaign_gains_keep_the_sagging_digit_off_the_adc_rail(seed):
+    """The campaign's amplifiers are drawn for the gauges' largest curvature including the digit's own weight
+    (``worst_curvature_1_m``): lying horizontal with the campaign's 10 g at the tip, every reading stays inside
+    ``ADC_MARGIN`` of the range (seed 7's gains, drawn for 35 deg of bending only, put gauges 2 and 3 at -2.5 V)."""
+    params, cal = _digit(campaign_digit(seed))
+    length = params.geometry.digit_length_m
+    volts = static_gauges_v(
+        [0.0, MASS_KG], [0.0, length], None, params=params, calibration=cal, orientation="horizontal", adc=False,
+        cells_per_section=27,
+    )  # fmt: skip
+    high = params.sensors.adc_range_v[1]
+    assert np.max(np.abs(volts)) < ADC_MARGIN * high
