@@ -634,7 +634,7 @@ class ShapeEstimator:
             tension = fit["T"]
             if settle.done:
                 break
-        return fit, psi, r, tension, settle.residual
+        return fit, psi, r, tension, settle.gap
 
     #: The global search's candidate load positions: this many equally spaced along the digit (the tip included),
     #: and the middle of every stretch between neighbouring gauges.
@@ -715,7 +715,7 @@ class ShapeEstimator:
                                psi[rows], s_l[rows])  # fmt: skip
             psi[rows], r[rows] = settle.step_rows(self._curvature_field(fit, r[rows], psi[rows]), rows)
             tension[rows] = fit["T"]
-            rows = rows[settle.residual[rows] >= self.SEARCH_TOL_RAD]
+            rows = rows[~settle.settled[rows]]
             if rows.size == 0:
                 break
         fit = self._fit_at(kappa, tip, self._sd_curvature(sd_white, tension), r, psi, s_l)
@@ -1025,13 +1025,14 @@ class _Settle:
     fixed point). From the first update that does not contract, a reading's step is Aitken's dynamic relaxation
     (Irons and Tuck 1969; Kuttler and Wall 2008, fluid-structure coupling): ``w_k = -w_(k-1) r_(k-1).(r_k -
     r_(k-1)) / |r_k - r_(k-1)|^2`` over the curvature updates ``r``, the secant estimate of the step that lands
-    on the fixed point, kept within [:attr:`MIN_RELAX`, 1]. The shape has settled when the whole update moves no
-    tangent angle by ``tol_rad`` or more.
+    on the fixed point, at most 1 (halved instead where it is below :attr:`MIN_RELAX` or not positive: the
+    updates jump where the fit switches, a bound or a slack cable). The shape has settled when the whole update moves no
+    tangent angle by ``tol_rad`` or more, or, where the updates jump, when the halved steps do.
     """
 
     #: An update at least this share of the last one (in tangent angle) is not converging: relax from then on.
     CONTRACTION = 0.9
-    #: The smallest share of an update taken (Aitken's factor is clipped to [MIN_RELAX, 1]).
+    #: The smallest Aitken factor taken as one: below it the updates jump rather than overshoot.
     MIN_RELAX = 0.02
 
     def __init__(self, beam: DigitBeam, psi: np.ndarray, tol_rad: float) -> None:
@@ -1066,8 +1067,11 @@ class _Settle:
         denom = np.sum(diff * diff, axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
             secant = -self.relax[rows] * np.sum(last * diff, axis=1) / denom
-        secant = np.where(np.isfinite(secant) & (denom > 0), secant, self.relax[rows])
-        relax = np.where(aitken, np.clip(secant, self.MIN_RELAX, 1.0), 1.0)
+        # a secant step below MIN_RELAX (or none): the updates jump (a bound of the fit, the cable going slack),
+        # so there is no smooth fixed point to aim at; halve the step instead, as the plain rule did
+        aim = np.isfinite(secant) & (denom > 0) & (secant >= self.MIN_RELAX)
+        relax = np.where(aim, np.minimum(secant, 1.0), 0.5 * self.relax[rows])
+        relax = np.where(aitken, relax, 1.0)
         new = current + relax[:, None] * update
         psi, r, _ = self.beam.integrate(new)
         self.change[rows] = np.max(np.abs(psi - self.psi[rows]), axis=1)
@@ -1076,8 +1080,19 @@ class _Settle:
         return psi, r
 
     @property
+    def settled(self) -> np.ndarray:
+        """Per reading: the whole update is below ``tol_rad``, or its steps, halved below :attr:`MIN_RELAX` where
+        the updates jump, move less than that (the shape sits where the fit switches)."""
+        return (self.residual < self.tol_rad) | ((self.relax < self.MIN_RELAX) & (self.change < self.tol_rad))
+
+    @property
+    def gap(self) -> np.ndarray:
+        """Per reading, how far from settled (rad): 0 where :attr:`settled`, else the whole last update."""
+        return np.where(self.settled, 0.0, self.residual)
+
+    @property
     def done(self) -> bool:
-        return bool(np.all(self.residual < self.tol_rad))
+        return bool(np.all(self.settled))
 
 
 def _fit_tension(res, a_t, w, cable: bool, gauges: int = 3):
