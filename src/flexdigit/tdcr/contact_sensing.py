@@ -224,6 +224,24 @@ class ContactSensing:
             seen = seen - (seen @ unseen) * unseen
         return float(np.linalg.norm(self.estimate.force_n - seen))
 
+    def to_dict(self) -> dict:
+        """Plain values: the estimate (``s_m``, ``position_m``, ``force_n``, ...), and the truth and errors."""
+        est = self.estimate
+        return {
+            "gauges": int(self.layout.s_m.size),
+            "strains": self.strains.tolist(),
+            "s_m": est.s_m,
+            "position_m": est.position_m.tolist(),
+            "force_n": est.force_n.tolist(),
+            "unseen_direction": None if est.unseen_direction is None else est.unseen_direction.tolist(),
+            "visible_from_m": est.visible_from_m,
+            "residual_per_m": est.residual,
+            "true_s_m": self.true_s_m,
+            "true_force_n": None if self.true_force_n is None else self.true_force_n.tolist(),
+            "place_error_m": self.place_error_m,
+            "force_error_n": self.force_error_n,
+        }
+
     __repr__ = fields_summary
 
 

@@ -394,8 +394,9 @@ class ShapeSensing:
         """Angle of the rotation between the estimated and the twin's tip frames (deg)."""
         if self.twin is None:
             return None
-        cos = (np.trace(self.estimate.tip_rotation.T @ self.twin.tip_rotation) - 1.0) / 2.0
-        return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+        # ||R1 - R2||_F = 2 sqrt(2) sin(angle / 2): exact to round-off near 0, where arccos of the trace is not
+        chord = np.linalg.norm(self.estimate.tip_rotation - self.twin.tip_rotation) / (2.0 * math.sqrt(2.0))
+        return float(np.degrees(2.0 * np.arcsin(min(chord, 1.0))))
 
     __repr__ = fields_summary
 
