@@ -71,7 +71,7 @@ from flexdigit.studies.metrics import UserMetric
 from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity
 from flexdigit.studies.spec import CHECK_SIGMAS, UncertainParameter, _parameter, _table
 from flexdigit.tdcr.description import Robot, get_robot
-from flexdigit.tdcr.release import release_test
+from flexdigit.tdcr.experiments import release_test
 from flexdigit.tdcr.statics import StaticSolution, solve_statics
 
 __all__ = [

@@ -1,4 +1,7 @@
-"""A tendon robot's release test: held by a small tip force under its tensions, let go, its first frequency.
+"""A tendon robot's experiments on the twin: the release test (its first frequency) and a tension step.
+
+What ``flexdigit simulate release|step --robot ROBOT`` runs; each returns a :class:`RobotExperiment` whose
+:meth:`~RobotExperiment.save` writes the tip's path as a tidy table (Parquet, or CSV), as the digit's do.
 
 The thesis's release test (3.1.2) on the digit, in space: the robot rests under its tendon tensions and a tip
 force, the force is removed at ``t = 0`` and the tip swings about the equilibrium under the tensions alone
@@ -26,12 +29,15 @@ Examples
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import atomic_path, atomic_write
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_int, check_real
 from flexdigit.errors import ConvergenceWarning, ParameterError
@@ -39,7 +45,7 @@ from flexdigit.tdcr.description import Robot
 from flexdigit.tdcr.dynamics import DynamicSolution, simulate
 from flexdigit.tdcr.statics import StaticSolution, solve_statics
 
-__all__ = ["ReleaseTest", "release_test", "euler_bernoulli_first_hz", "pencil_frequency_hz"]
+__all__ = ["RobotExperiment", "release_test", "step_test", "euler_bernoulli_first_hz", "pencil_frequency_hz"]
 
 #: The first root of ``1 + cos(b) cosh(b) = 0``: a uniform cantilever's first mode is ``b^2 sqrt(EI / rho A) / L^2``.
 CANTILEVER_ROOT = 1.8751040687119611
@@ -84,32 +90,77 @@ def pencil_frequency_hz(y, dt_s: float, order: int = 7) -> float:
 
 
 @dataclass(frozen=True)
-class ReleaseTest:
-    """A release test's response and what it measured.
+class RobotExperiment:
+    """An experiment's response and what it measured.
 
     Attributes
     ----------
+    experiment : str
+        ``"release"`` or ``"step"``.
+    robot : Robot
     tensions_n : ndarray
-        The tendon tensions, held throughout.
+        The tendon tensions after ``t = 0`` (a release holds them throughout).
     tip_force_n : ndarray (3,)
-        The force held at the tip before ``t = 0`` (world frame).
+        The force held at the tip before ``t = 0`` (world frame; zero for a step).
     initial : StaticSolution
-        The held shape.
+        The shape at rest before ``t = 0``.
     motion : DynamicSolution
-        The response after the release.
+        The response.
     first_frequency_hz : float
-        The first mode's frequency read from the tip's path (NaN if the response stopped unconverged).
+        A release's first mode read from the tip's path (NaN for a step, or if the response stopped unconverged).
     euler_bernoulli_hz : float
-        The straight backbone's as a uniform cantilever (:func:`euler_bernoulli_first_hz`): the reference a
-        robot without tensions meets.
+        The straight backbone's first mode as a uniform cantilever (:func:`euler_bernoulli_first_hz`): the
+        reference a robot without tensions meets.
     """
 
+    experiment: str
+    robot: Robot
     tensions_n: np.ndarray
     tip_force_n: np.ndarray
     initial: StaticSolution
     motion: DynamicSolution
     first_frequency_hz: float
     euler_bernoulli_hz: float
+
+    def metadata(self) -> dict:
+        """What made the table: the experiment, the robot's description, the loads and the step."""
+        t = self.motion.t_s
+        return {
+            "experiment": f"tdcr {self.experiment}",
+            "robot": self.robot.to_dict(),
+            "tensions_n": self.tensions_n.tolist(),
+            "tip_force_n": self.tip_force_n.tolist(),
+            "initial_tip_position_m": self.initial.tip_position_m.tolist(),
+            "dt_s": float(t[1] - t[0]) if t.size > 1 else None,
+            "converged": self.motion.converged,
+            "first_frequency_hz": None if math.isnan(self.first_frequency_hz) else self.first_frequency_hz,
+            "units": {"t_s": "s", "tip_x_m": "m", "tip_y_m": "m", "tip_z_m": "m"},
+        }
+
+    def save(self, path, *, force: bool = False) -> Path:
+        """Write the tip's path (``t_s, tip_x_m, tip_y_m, tip_z_m``) as Parquet, or CSV when ``path`` ends in
+        ``.csv`` (the metadata as leading ``# key: json`` lines, as the digit's records); atomic, and refused if
+        the file exists unless ``force``. Returns the path."""
+        import pyarrow as pa
+
+        path = Path(path)
+        tip = self.motion.tip_positions_m
+        table = pa.table({"t_s": self.motion.t_s, "tip_x_m": tip[:, 0], "tip_y_m": tip[:, 1], "tip_z_m": tip[:, 2]})
+        meta = self.metadata()
+        if path.suffix.lower() == ".csv":
+            import pyarrow.csv as pcsv
+
+            sink = pa.BufferOutputStream()
+            pcsv.write_csv(table, sink)
+            head = "".join(f"# {k}: {json.dumps(v)}\n" for k, v in meta.items())
+            with atomic_write(path, "w", force=force) as fh:
+                fh.write(head + sink.getvalue().to_pybytes().decode())
+            return path
+        import pyarrow.parquet as pq
+
+        with atomic_path(path, force=force) as tmp:
+            pq.write_table(table.replace_schema_metadata({b"flexdigit": json.dumps(meta).encode()}), tmp)
+        return path
 
     __repr__ = fields_summary
 
@@ -122,9 +173,11 @@ def release_test(
     direction=(1.0, 0.0, 0.0),
     periods: float = 3.0,
     steps_per_period: int = 200,
+    duration_s: float | None = None,
+    dt_s: float | None = None,
     gravity_m_s2=None,
     damping_s: float = 0.0,
-) -> ReleaseTest:
+) -> RobotExperiment:
     """Release the robot from a tip force under ``tensions_n`` and measure its first frequency.
 
     Parameters
@@ -139,6 +192,8 @@ def release_test(
         The force's direction, world frame (normalised).
     periods, steps_per_period : float, int
         The response's length and step, in periods of :func:`euler_bernoulli_first_hz`.
+    duration_s, dt_s : float, optional
+        The response's length and step in seconds instead (a record's; at least 20 steps a period).
     gravity_m_s2, damping_s :
         As in :func:`~flexdigit.tdcr.simulate`.
     """
@@ -154,12 +209,15 @@ def release_test(
     steps_per_period = check_int(steps_per_period, "steps_per_period", owner, low=20, high=10_000)
     force = 3 * robot.backbone.bending_torsion_stiffness[0] * deflection / length**3 * way / np.linalg.norm(way)
     reference = euler_bernoulli_first_hz(robot)
-    dt = 1.0 / (reference * steps_per_period)
+    dt = 1.0 / (reference * steps_per_period) if dt_s is None else dt_s
+    dt = check_real(dt, "dt_s", owner, low=0.0, high=1.0 / (20 * reference), low_open=True)
+    duration = periods / reference if duration_s is None else duration_s
+    duration = check_real(duration, "duration_s", owner, low=3 * dt, high=1e4)
     held = solve_statics(robot, tensions, tip_force_n=force, gravity_m_s2=gravity_m_s2)
     motion = simulate(
         robot,
         held,
-        periods / reference,
+        duration,
         dt_s=dt,
         tensions_n=tensions,
         gravity_m_s2=gravity_m_s2,
@@ -174,4 +232,43 @@ def release_test(
             ConvergenceWarning,
             stacklevel=2,
         )
-    return ReleaseTest(np.asarray(tensions, dtype=float), force, held, motion, frequency, reference)
+    return RobotExperiment(
+        "release", robot, np.asarray(tensions, dtype=float), force, held, motion, frequency, reference
+    )
+
+
+def step_test(
+    robot: Robot,
+    tensions_n,
+    *,
+    from_tensions_n=None,
+    duration_s: float = 1.0,
+    dt_s: float = 1e-3,
+    gravity_m_s2=None,
+    damping_s: float = 0.0,
+) -> RobotExperiment:
+    """A tension step: the robot at rest under ``from_tensions_n`` (default all zero), ``tensions_n`` from
+    ``t = 0`` (:func:`~flexdigit.tdcr.simulate`, the discrete rod).
+
+    Examples
+    --------
+    >>> from flexdigit.tdcr import ROBOTS
+    >>> step = step_test(ROBOTS["rao2021"], [1, 0, 0, 0, 0, 0], duration_s=0.05, dt_s=5e-3)
+    >>> step.motion.converged, len(step.motion.t_s)
+    (True, 11)
+    """
+    start = np.zeros(len(robot.tendons)) if from_tensions_n is None else from_tensions_n
+    initial = solve_statics(robot, start, gravity_m_s2=gravity_m_s2)
+    motion = simulate(
+        robot, initial, duration_s, dt_s=dt_s, tensions_n=tensions_n, gravity_m_s2=gravity_m_s2, damping_s=damping_s
+    )
+    return RobotExperiment(
+        "step",
+        robot,
+        np.asarray(tensions_n, dtype=float),
+        np.zeros(3),
+        initial,
+        motion,
+        math.nan,
+        euler_bernoulli_first_hz(robot),
+    )
