@@ -12,8 +12,11 @@ and exit code 1. ``--record OUT.mcap`` also writes the shape(s) as an MCAP recor
 ``--readings`` CSV, or, with ``--tension-n`` alone, from the twin's own readings (with ``--noise-std`` and
 ``--seed``), printed beside the twin's shape with the errors. ``contact`` finds a point contact's place and
 force from the same gauges (:func:`flexdigit.tdcr.sense_contact`), about the twin's shape under ``--tension-n``;
-from readings, or from the twin pressed at ``--contact-s-m`` by ``--contact-force-n``. ``study`` runs a Sobol
-sensitivity study of a robot (:func:`flexdigit.studies.robot_study.run_robot_sensitivity`).
+from readings, or from the twin pressed at ``--contact-s-m`` by ``--contact-force-n``.
+
+Elsewhere a robot is ``--robot ROBOT``: ``flexdigit simulate release|step --robot`` (its release test and first
+frequency, a tension step), ``flexdigit live --robot``; and ``flexdigit study sensitivity SPEC`` runs a spec whose
+``[study]`` names a robot (:mod:`flexdigit.studies.robot_study`; shipped: ``rao2021-tolerances``).
 """
 
 from __future__ import annotations
