@@ -83,6 +83,7 @@ __all__ = [
     "robot_spec_from_toml",
     "run_robot_sensitivity",
     "SHIPPED_ROBOT_SPECS",
+    "shipped_robot_specs",
 ]
 
 #: Uncertain fields of a robot: section -> fields (the list-valued ones take a factor or elements).
@@ -246,6 +247,17 @@ def _apply(baseline: RobotCase, parameters, values: dict, label: str) -> RobotCa
 
 #: Robot study specs shipped with flexdigit (``flexdigit study sensitivity rao2021-tolerances --out DIR``).
 SHIPPED_ROBOT_SPECS = ("rao2021-tolerances",)
+
+
+def shipped_robot_specs() -> dict[str, str]:
+    """The shipped robot study specs (:data:`SHIPPED_ROBOT_SPECS`), each with its one-line description."""
+    from importlib import resources
+
+    out = {}
+    for name in SHIPPED_ROBOT_SPECS:
+        text = resources.files("flexdigit.studies").joinpath("specs").joinpath(f"{name}.toml").read_text()
+        out[name] = "sensitivity study: " + tomllib.loads(text)["study"].get("description", "")
+    return out
 
 
 def is_robot_spec(name_or_path) -> bool:
