@@ -66,7 +66,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit._io import read_text
-from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.errors import ParameterError
 from flexdigit.studies.metrics import UserMetric
 from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity
 from flexdigit.studies.spec import CHECK_SIGMAS, UncertainParameter, _parameter, _table
@@ -294,8 +294,8 @@ def _robot(study: dict, source: str, base_dir: Path | None) -> Robot:
         path = base_dir / path
     try:
         return get_robot(str(path) if path.suffix.lower() == ".toml" else value)
-    except (ParameterError, DataFileError, FileNotFoundError) as exc:
-        raise ParameterError(f"{source}: [study] robot: {exc}") from None
+    except (ValueError, OSError) as exc:  # ParameterError, DataFileError, no such file, a NUL in the name
+        raise ParameterError(f"{source}: [study] robot: {exc}".splitlines()[0]) from None
 
 
 def robot_spec_from_toml(text: str, source: str = "spec", base_dir: Path | None = None) -> RobotStudySpec:
@@ -330,7 +330,12 @@ def robot_spec_from_toml(text: str, source: str = "spec", base_dir: Path | None 
             f"({len(robot.tendons)}). Got {tensions!r} instead."
         )
     metrics = study.get("metrics", list(DEFAULT_METRICS))
-    if not isinstance(metrics, list) or not metrics or len(set(map(str, metrics))) != len(metrics):
+    if (
+        not isinstance(metrics, list)
+        or not metrics
+        or not all(isinstance(m, str) for m in metrics)
+        or len(set(metrics)) != len(metrics)
+    ):
         raise ParameterError(f"{source}: [study] metrics must be a list of distinct metric names. Got {metrics!r}")
     for m in metrics:
         if m not in ROBOT_METRICS:
