@@ -29,6 +29,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_unequal",
     "benchmarks.bench_digitctl2",
     "benchmarks.bench_tdcr",
+    "benchmarks.bench_tdcrcli",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",

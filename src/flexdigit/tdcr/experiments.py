@@ -73,7 +73,9 @@ def pencil_frequency_hz(y, dt_s: float, order: int = 7) -> float:
     dt_s = check_real(dt_s, "dt_s", "pencil_frequency_hz", low=0.0, low_open=True)
     order = check_int(order, "order", "pencil_frequency_hz", low=1)
     n = y.size
-    pencil = n // 3
+    # the pencil parameter: n / 3 is the noise-optimal choice (Hua & Sarkar), but a noise-free response needs only
+    # more than ``order``; 8 x order keeps the SVD ~0.5 ms instead of ~20 ms for 600 samples, the same frequency
+    pencil = min(n // 3, 8 * order)
     hankel = np.lib.stride_tricks.sliding_window_view(y, pencil + 1)  # (n - pencil, pencil + 1)
     _, sing, vh = np.linalg.svd(hankel, full_matrices=False)
     rank = min(order, int(np.sum(sing > 1e-10 * sing[0])))  # fewer components than order: no poles of round-off
