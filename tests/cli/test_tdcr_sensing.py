@@ -58,13 +58,13 @@ def test_shape_from_the_twin_shows_estimate_and_truth(capsys):
     assert data["source"] == "twin"
     assert data["gauges"] == 36  # 3 stations x 2 segments x (4 faces + a rosette pair)
     np.testing.assert_allclose(data["twin"]["tip_position_m"], RAO_TIP_M, atol=RAO_ATOL_M)
-    np.testing.assert_allclose(data["estimate"]["tip_position_m"], data["twin"]["tip_position_m"], atol=1e-6)
+    np.testing.assert_allclose(data["tip_position_m"], data["twin"]["tip_position_m"], atol=1e-6)
     assert data["tip_error_m"] < TENDON_ONLY_ATOL_M
     assert data["tip_angle_error_deg"] < 1e-3
-    backbone = np.array(data["estimate"]["backbone_m"])
+    backbone = np.array(data["backbone_m"])
     assert backbone.shape == (21, 3) and np.allclose(backbone[0], 0.0)
-    frame = np.array(data["estimate"]["tip_frame"])
-    np.testing.assert_allclose(frame[:3, 3], data["estimate"]["tip_position_m"])
+    frame = np.array(data["tip_frame"])
+    np.testing.assert_allclose(frame[:3, 3], data["tip_position_m"])
     np.testing.assert_allclose(frame[:3, :3].T @ frame[:3, :3], np.eye(3), atol=1e-9)
 
 
@@ -92,7 +92,7 @@ def test_shape_from_closed_form_readings_is_the_arc(tmp_path, capsys):
     data = _json(capsys, argv)
     turned = k * 0.2  # the curvature is per unstretched length (Cosserat: dR/ds = R u, dp/ds = R v)
     arc = (1 + stretch) * np.array([0.0, (1 - math.cos(turned)) / k, math.sin(turned) / k])
-    np.testing.assert_allclose(data["estimate"]["tip_position_m"], arc, atol=ARC_ATOL_M)
+    np.testing.assert_allclose(data["tip_position_m"], arc, atol=ARC_ATOL_M)
     assert data["twin"] is None and "tip_error_m" not in data
 
 
@@ -105,7 +105,7 @@ def test_shape_from_a_readings_file_with_the_twin_beside_it(tmp_path, capsys):
     argv = ["tdcr", "shape", "rao2021", "--readings", str(path), "--tension-n", "1,0,2,0,0,1.5"]
     data = _json(capsys, [*argv, "--tip-force-n", "0.02,-0.01,0"])
     assert data["source"] == "readings"
-    np.testing.assert_allclose(data["estimate"]["tip_position_m"], twin.estimate.tip_position_m, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(data["tip_position_m"], twin.estimate.tip_position_m, rtol=0, atol=1e-12)
     assert data["tip_error_m"] == pytest.approx(twin.tip_error_m, abs=1e-12)
     assert data["tip_error_m"] < 2.5e-4  # tests/tdcr/test_sensing.py's bound with a microstrain of noise
 

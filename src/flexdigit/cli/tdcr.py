@@ -391,8 +391,9 @@ def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
         **loads,
         "gauges": int(found.layout.s_m.size),
         "strains": found.strains.tolist(),
-        "s_m": s_disks.tolist(),
-        "estimate": _pose(est.position_at(s_disks), est.tip_rotation) | {"rotations": est.rotations[at].tolist()},
+        "s_m": s_disks.tolist(),  # the estimate at the base and the disks, as tdcr statics gives the twin's
+        **_pose(est.position_at(s_disks), est.tip_rotation),
+        "rotations": est.rotations[at].tolist(),
         "twin": None,
     }
     lines = [
