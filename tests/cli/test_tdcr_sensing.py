@@ -93,7 +93,7 @@ def test_shape_from_closed_form_readings_is_the_arc(tmp_path, capsys):
     turned = k * 0.2  # the curvature is per unstretched length (Cosserat: dR/ds = R u, dp/ds = R v)
     arc = (1 + stretch) * np.array([0.0, (1 - math.cos(turned)) / k, math.sin(turned) / k])
     np.testing.assert_allclose(data["tip_position_m"], arc, atol=ARC_ATOL_M)
-    assert data["twin"] is None and "tip_error_m" not in data
+    assert data["twin"] is None and data["tip_error_m"] is None
 
 
 def test_shape_from_a_readings_file_with_the_twin_beside_it(tmp_path, capsys):
@@ -172,3 +172,20 @@ def test_bad_input_is_one_line(argv, needle, capsys):
     data = _json(capsys, ["tdcr", *argv], code=2)
     assert needle in data["error"]
     assert capsys.readouterr().err.count("\n") <= 1
+
+
+def test_shape_record_opens_as_a_scene(tmp_path, capsys):
+    """--record writes the estimated shape as an MCAP recording whose scene's backbone is the estimate's."""
+    from mcap.reader import make_reader
+
+    out = tmp_path / "shape.mcap"
+    data = _json(capsys, ["tdcr", "shape", "rao2021", "--tension-n", "4,0,0,0,2,0", "--record", str(out)])
+    assert data["recording"] == str(out)
+    with out.open("rb") as fh:
+        messages = [(c.topic, json.loads(m.data)) for _, c, m in make_reader(fh).iter_messages()]
+    scene = next(m for topic, m in messages if topic == "/tdcr/scene")
+    backbone = next(e for e in scene["entities"] if e["id"] == "backbone")["lines"][0]["points"]
+    points = np.array([[p["x"], p["y"], p["z"]] for p in backbone])
+    np.testing.assert_allclose(points, data["backbone_m"], atol=1e-12)
+    assert main(["tdcr", "shape", "rao2021", "--tension-n", "4,0,0,0,2,0", "--record", str(out)]) == 2
+    assert "pass --force" in capsys.readouterr().err

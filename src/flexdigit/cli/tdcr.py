@@ -23,8 +23,6 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 from flexdigit._command import CommandResult, add_command
 from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.errors import ParameterError
@@ -126,7 +124,7 @@ def _add_sensing_flags(p: argparse.ArgumentParser, stations: int) -> None:
     )
     p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
     p.add_argument("--out", metavar="FILE.json", help="also write the result (as --json prints it) to FILE")
-    p.add_argument("--force", action="store_true", help="replace the --out file if it exists")
+    p.add_argument("--force", action="store_true", help="replace the --out (and --record) file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
 
@@ -145,6 +143,9 @@ def _add_shape(sub, vector: str) -> None:
     p.add_argument("--tip-force-n", help="tip force fx,fy,fz in N " + vector.format("tip-force-n"))
     p.add_argument("--tip-moment-nm", help="tip moment mx,my,mz in N m " + vector.format("tip-moment-nm"))
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
+    p.add_argument(
+        "--record", metavar="OUT.mcap", help="also write the estimated shape as an MCAP recording (Foxglove 3D)"
+    )
 
 
 def _add_contact(sub) -> None:
@@ -319,17 +320,6 @@ def _readings(args: argparse.Namespace, robot) -> dict:
     return {"layout": layout, "strains": strains}
 
 
-def _pose(positions, rotation) -> dict:
-    tip = positions[-1]
-    frame = [[*row, float(p)] for row, p in zip(rotation.tolist(), tip, strict=True)] + [[0.0, 0.0, 0.0, 1.0]]
-    return {
-        "tip_position_m": tip.tolist(),
-        "tip_rotation": rotation.tolist(),
-        "tip_frame": frame,
-        "backbone_m": positions.tolist(),
-    }
-
-
 def _mm(p) -> str:
     return "({:.3f}, {:.3f}, {:.3f}) mm".format(*(1e3 * float(v) for v in p))
 
@@ -348,12 +338,12 @@ def _write_out(args: argparse.Namespace, data: dict) -> None:
 
 
 def _sensing(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._io import check_output
     from flexdigit.tdcr import get_robot
 
-    if args.out is not None:  # refused before the work, not after it
-        from flexdigit._io import check_output
-
-        check_output(args.out, force=args.force)
+    for path in (args.out, getattr(args, "record", None)):  # refused before the work, not after it
+        if path is not None:
+            check_output(path, force=args.force)
     robot = get_robot(args.robot)
     given = _readings(args, robot)
     common = {"noise_std": args.noise_std, "seed": args.seed, "stations_per_segment": args.stations_per_segment}
@@ -383,37 +373,28 @@ def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
     loads = _loads(args)
     tensions = None if args.tension_n is None else _tensions(args.tension_n, "tension-n", robot)
     found = sense_shape(robot, given.get("strains"), layout=given.get("layout"), tensions_n=tensions, **loads, **common)
-    s_disks = np.concatenate([[0.0], robot.disk_positions_m])
-    est = found.estimate
-    at = np.minimum(np.searchsorted(est.s_m, s_disks - 1e-12), est.s_m.size - 1)  # each disk's estimate point
-    data = {
-        "tensions_n": tensions,
-        **loads,
-        "gauges": int(found.layout.s_m.size),
-        "strains": found.strains.tolist(),
-        "s_m": s_disks.tolist(),  # the estimate at the base and the disks, as tdcr statics gives the twin's
-        **_pose(est.position_at(s_disks), est.tip_rotation),
-        "rotations": est.rotations[at].tolist(),
-        "twin": None,
-    }
+    data = {"tensions_n": tensions, **loads, **found.to_dict(robot)}
+    if args.record is not None:
+        from flexdigit.tdcr import write_recording
+
+        pulls = [0.0] * len(robot.tendons) if tensions is None else tensions
+        disks = found.estimate.at_disks(robot)
+        tip = loads.get("tip_force_n")
+        path = write_recording(args.record, robot, disks, tensions_n=pulls, tip_force_n=tip, force=args.force)
+        data["recording"] = str(path)
+    source = "given readings" if given else f"the twin's readings, noise {args.noise_std:g}, seed {args.seed}"
     lines = [
-        f"{robot.name}: shape from {found.layout.s_m.size} gauges ("
-        + ("given readings" if given else f"the twin's readings, noise {args.noise_std:g}, seed {args.seed}")
-        + ")",
-        f"estimated tip: {_mm(est.tip_position_m)}",
+        f"{robot.name}: shape from {found.layout.s_m.size} gauges ({source})",
+        f"estimated tip: {_mm(found.estimate.tip_position_m)}",
     ]
     if found.twin is not None:
-        twin = found.twin
-        keep = np.searchsorted(twin.s_m, s_disks - 1e-12)
-        data["twin"] = {"converged": twin.converged, **_pose(twin.positions_m[keep], twin.tip_rotation)}
-        data["tip_error_m"] = found.tip_error_m
-        data["max_error_m"] = found.max_error_m
-        data["tip_angle_error_deg"] = found.tip_angle_error_deg
         lines += [
-            f"twin's tip:    {_mm(twin.tip_position_m)}",
+            f"twin's tip:    {_mm(found.twin.tip_position_m)}",
             f"tip error {1e3 * found.tip_error_m:.4f} mm, largest along the backbone {1e3 * found.max_error_m:.4f} "
             f"mm, tip angle {found.tip_angle_error_deg:.4f} deg",
         ]
+    if "recording" in data:
+        lines.append(f"recording: {data['recording']}")
     return data, lines
 
 

@@ -139,6 +139,16 @@ class ShapeEstimate:
     def tip_rotation(self) -> np.ndarray:
         return self.rotations[-1]
 
+    def at_disks(self, robot: Robot) -> ShapeEstimate:
+        """The estimate at the base and the robot's disks only (each disk is on a step's end of
+        :func:`estimate_shape`): the nodes a :class:`~flexdigit.tdcr.StaticSolution` has at ``nodes_per_disk=1``,
+        e.g. for :func:`~flexdigit.tdcr.write_recording`."""
+        s_disks = np.concatenate([[0.0], robot.disk_positions_m])
+        at = np.array([int(np.argmin(np.abs(self.s_m - s))) for s in s_disks])
+        if np.abs(self.s_m[at] - s_disks).max() > 1e-9 * max(robot.length_m, 1.0):
+            raise ParameterError(f"at_disks: this estimate was not integrated on {robot.name!r}'s disks")
+        return ShapeEstimate(s_disks, self.positions_m[at], self.rotations[at], self.curvatures[at])
+
     def position_at(self, s_m) -> np.ndarray:
         """Positions at arc lengths ``s_m`` (linear between the estimate's points; ``(..., 3)``)."""
         s_m = np.asarray(s_m, dtype=float)
@@ -244,7 +254,8 @@ def estimate_shape(robot: Robot, layout: GaugeLayout, strains, *, step_m: float 
     strains : array (g,)
         The readings, in the layout's order (:func:`gauge_strains` on the twin, or measured).
     step_m : float
-        Integration step (m); the error it adds is ``O(step^2)`` per length, ~1e-7 m at 1 mm on rao2021.
+        Integration step (m), at most: each segment is integrated in equal steps with every disk on a step's end;
+        the error it adds is ``O(step^2)`` per length, ~1e-7 m at 1 mm on rao2021.
     """
     strains = check_array(strains, "strains", "estimate_shape", shape=layout.s_m.shape)
     step_m = check_real(step_m, "step_m", "estimate_shape", low=0.0, low_open=True)
@@ -261,7 +272,8 @@ def estimate_shape(robot: Robot, layout: GaugeLayout, strains, *, step_m: float 
         degree = min(xs.size - 1, 2)
         mid, half = 0.5 * (a + b), 0.5 * (b - a)  # fit in a scaled coordinate: well conditioned
         coeffs = [np.polyfit((xs - mid) / half, us[:, c], degree) for c in range(4)]
-        steps = max(int(math.ceil((b - a) / step_m)), 1)
+        per_disk = max(int(math.ceil((b - a) / robot.segments[j].disk_count / step_m)), 1)
+        steps = per_disk * robot.segments[j].disk_count  # every disk on a step's end: its frame exact, not interpolated
         h = (b - a) / steps
         for k in range(steps):
             s_mid = a + (k + 0.5) * h  # midpoint curvature, exact rotation: second order
@@ -398,7 +410,40 @@ class ShapeSensing:
         chord = np.linalg.norm(self.estimate.tip_rotation - self.twin.tip_rotation) / (2.0 * math.sqrt(2.0))
         return float(np.degrees(2.0 * np.arcsin(min(chord, 1.0))))
 
+    def to_dict(self, robot: Robot) -> dict:
+        """Plain values: the estimate's tip pose and backbone at the base and disks (the keys and nodes of
+        :meth:`StaticSolution.to_dict <flexdigit.tdcr.StaticSolution.to_dict>`), the readings, and the twin's
+        shape under ``twin`` with the errors (None without a twin)."""
+        disks = self.estimate.at_disks(robot)
+        out = {
+            "gauges": int(self.layout.s_m.size),
+            "strains": self.strains.tolist(),
+            **_pose_dict(disks.s_m, disks.positions_m, disks.rotations),
+            "rotations": disks.rotations.tolist(),
+            "twin": None,
+            "tip_error_m": self.tip_error_m,
+            "max_error_m": self.max_error_m,
+            "tip_angle_error_deg": self.tip_angle_error_deg,
+        }
+        if self.twin is not None:
+            keep = np.searchsorted(self.twin.s_m, disks.s_m - 1e-12)
+            twin = _pose_dict(disks.s_m, self.twin.positions_m[keep], self.twin.rotations[keep])
+            out["twin"] = {"converged": self.twin.converged, **twin}
+        return out
+
     __repr__ = fields_summary
+
+
+def _pose_dict(s_m, positions, rotations) -> dict:
+    frame = np.eye(4)
+    frame[:3, :3], frame[:3, 3] = rotations[-1], positions[-1]
+    return {
+        "tip_position_m": positions[-1].tolist(),
+        "tip_rotation": rotations[-1].tolist(),
+        "tip_frame": frame.tolist(),
+        "s_m": np.asarray(s_m).tolist(),
+        "backbone_m": positions.tolist(),
+    }
 
 
 def sense_shape(
