@@ -246,9 +246,10 @@ def _held(robot: Robot, tensions, force, gravity_m_s2, dt_s: float, reference_hz
 
     :func:`~flexdigit.tdcr.simulate` settles the discrete rod by Newton from the shot statics (~2.8 % of the length
     away at one element a disk). Where that Newton finds nothing (measured: 4 of the first 60 rows of the
-    rao2021-tolerances study; the rod then started where the shot statics left it, its first frequency 0.7 % off),
-    the rod is relaxed instead: its held motion damped at ~0.5 of critical in the first mode (Kelvin-Voigt
-    ``beta = 1 / w1``) for 4 periods, its last state the start (passed with no loads, so not settled again).
+    rao2021-tolerances study; the rod then started where the shot statics left it: on one, 17 mm from its rest and
+    its first frequency 0.7 % off), the rod is relaxed instead: its held motion damped at ~0.5 of critical in the
+    first mode (Kelvin-Voigt ``beta = 1 / w1``) for 4 periods, its last state the start (passed with no loads, so
+    not settled again).
     """
     shot = solve_statics(robot, tensions, tip_force_n=force, gravity_m_s2=gravity_m_s2)
     nodes, ends = _nodes(robot, 1)
