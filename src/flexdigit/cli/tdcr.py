@@ -434,5 +434,6 @@ def _contact(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
         lines.append(
             f"twin pressed at s = {1e3 * found.true_s_m:.1f} mm: place error {1e3 * found.place_error_m:.2f} mm, "
             f"force error {1e3 * found.force_error_n:.3f} mN"
+            + (" (nearer the base than the gauges can see)" if found.true_s_m < est.visible_from_m else "")
         )
     return data, lines
