@@ -85,6 +85,8 @@ def test_step_of_rao2021_to_csv(tmp_path, capsys):
         (["step", "--robot", "rao2021", "--from-tension-n=-1,0,0,0,0,0"], "--from-tension-n must give one"),
         (["release", "--robot", "rao2022"], "unknown robot 'rao2022'"),
         (["release", "--robot", "rao2021", "--rate", "10"], "'dt_s' parameter of release_test"),
+        (["release", "--tension-n", "1"], "--tension-n is a tendon robot's: give --robot"),
+        (["step", "--from-tension-n", "1"], "--from-tension-n is a tendon robot's"),
     ],
 )
 def test_bad_robot_experiments_are_one_line(tmp_path, argv, needle, capsys):

@@ -197,6 +197,9 @@ def _run(args: argparse.Namespace) -> CommandResult:
     check_output(args.out, force=args.force)  # before the simulation, not after it
     if args.robot is not None:
         return _robot(args)
+    for flag in ("tension_n", "from_tension_n"):  # the digit's experiment would ignore them
+        if getattr(args, flag, None) is not None:
+            raise ParameterError(f"--{flag.replace('_', '-')} is a tendon robot's: give --robot NAME|FILE with it")
     check_plot(args.plot, "simulate", force=args.force)
     params = load_params(args.params) if args.params else RigParams()
     if args.calibration:
