@@ -210,12 +210,12 @@ class ContactSensing:
 
     @property
     def place_error_m(self) -> float | None:
-        """|estimated - true| arc length (m)."""
+        """``|estimated - true|`` arc length (m)."""
         return None if self.true_s_m is None else abs(self.estimate.s_m - self.true_s_m)
 
     @property
     def force_error_n(self) -> float | None:
-        """|estimated - true force| (N), the true force less its component along ``unseen_direction``."""
+        """``|estimated - true force|`` (N), the true force less its component along ``unseen_direction``."""
         if self.true_force_n is None:
             return None
         seen = self.true_force_n
