@@ -31,6 +31,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_digitctl2",
     "benchmarks.bench_designunequal",
     "benchmarks.bench_tdcr",
+    "benchmarks.bench_tdcrcli",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
