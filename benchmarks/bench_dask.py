@@ -68,12 +68,32 @@ def _usage() -> dict:
     return {"cpu": times.user + times.system, "task": tasks, "ivcs": resource.getrusage(resource.RUSAGE_SELF).ru_nivcsw}
 
 
+def _kept_computed(reset: bool = False) -> int:
+    """How many values kept by their inputs this process computed (not found kept) since the last reset: the
+    metrics' :func:`flexdigit.studies.metrics._kept` wrapped by a counter on the first call."""
+    from flexdigit.studies import metrics
+
+    if not hasattr(metrics, "_bench_computed"):
+        kept, metrics._bench_computed = metrics._kept, [0]
+
+        def counted(store, key, compute):
+            metrics._bench_computed[0] += key not in store
+            return kept(store, key, compute)
+
+        metrics._kept = counted
+    count = metrics._bench_computed[0]
+    if reset:
+        metrics._bench_computed[0] = 0
+    return count
+
+
 def _run(spec, values, ctx, *, scheduler=None, chunk=CHUNK):
     """One study run from empty kept values: wall time, this process's CPU, and the records by row."""
     from flexdigit.studies.execution import Journal, run_rows
     from flexdigit.studies.metrics import _forget_kept
 
     _forget_kept()
+    _kept_computed(reset=True)
     with tempfile.TemporaryDirectory() as tmp:
         journal = Journal(Path(tmp) / "journal.jsonl", {"fingerprint": "bench"})
         cpu, start = time.process_time(), time.perf_counter()
@@ -101,11 +121,13 @@ def _on_dask(client, spec, values, ctx, *, chunk=CHUNK) -> dict:
     from flexdigit.studies.metrics import _forget_kept
 
     client.run(_forget_kept)
+    client.run(_kept_computed, reset=True)
     before = client.run(_usage)
     wall, own, records = _run(spec, values, ctx, scheduler=client.scheduler.address, chunk=chunk)
     after = client.run(_usage)
     use = {k: sorted(after[w][k] - before[w][k] for w in before) for k in ("cpu", "task", "ivcs")}
-    return {"wall": wall, "own": own, "records": records, **use}
+    computed = sum(client.run(_kept_computed).values())
+    return {"wall": wall, "own": own, "records": records, "computed": computed, **use}
 
 
 def _same(records, reference) -> bool:
@@ -162,6 +184,7 @@ def run() -> list[dict]:
     spec, values, ctx = _rows(count)
     load_before = os.getloadavg()[0]
     serial, serial_cpu, reference = _run(spec, values, ctx)
+    serial_computed = _kept_computed()
     serial_one, _, _ = _run(spec, values[:96], ctx, chunk=1)
     runs = {}
     for n in (1, 2):
@@ -212,6 +235,10 @@ def run() -> list[dict]:
         {"name": "workers' CPU, 2 over 1, the same rows", "value": sum(two["cpu"]) / sum(one["cpu"]), "unit": "x",
          "goal": "~1", "note": f"one block a task: {sum(old['cpu']) / sum(one['cpu']):.3f}x; 2 plain processes "
          f"side by side over 1: {side[2][1] / 2 / side[1][1]:.3f}x"},
+        {"name": "values kept by their inputs computed, 2 workers over in process", "unit": "x", "goal": "~1",
+         "value": two["computed"] / serial_computed,
+         "note": f"H-infinity, tactile and loop values: {serial_computed:,} in process, {one['computed']:,} on 1 "
+         f"worker, {two['computed']:,} on 2, {old['computed']:,} on 2 with one block a task"},
         {"name": "worker CPU over in-process CPU, the same rows", "value": sum(one["cpu"]) / serial_cpu,
          "unit": "x", "goal": "~1", "note": "one worker; above 1: what a worker spends beyond the rows' work"},
         {"name": "rows the same bit for bit as in process (every Dask run)", "unit": "1 = yes", "goal": "1",
