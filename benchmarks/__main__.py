@@ -30,6 +30,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_digitshape",
     "benchmarks.bench_digitctl2",
     "benchmarks.bench_tdcr",
+    "benchmarks.bench_tdcrcli",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",

@@ -59,7 +59,6 @@ def _study(args: argparse.Namespace) -> CommandResult:
 
     from flexdigit.errors import ParameterError
     from flexdigit.studies.execution import parse_scheduler
-    from flexdigit.studies.spec import load_spec
 
     if args.workers is not None and args.workers < 0:
         raise ParameterError(f"--workers must be >= 0 (0: no Dask). Got {args.workers} instead.")
@@ -77,10 +76,24 @@ def _study(args: argparse.Namespace) -> CommandResult:
         raise FileNotFoundError(f"{out}: the directory {out.parent} does not exist")
     if args.kind == "sensitivity" and (args.export is not None or args.export_to is not None):
         raise ParameterError("--export K is for design studies (flexdigit study design SPEC --out DIR --export K)")
-    spec = load_spec(args.spec)
+    spec = _load(args)
     if args.kind == "sensitivity":
         return _sensitivity(args, spec, out)
     return _design(args, spec, out)
+
+
+def _load(args: argparse.Namespace):
+    """The spec: a rig's (:func:`~flexdigit.studies.spec.load_spec`) or, when its [study] names a robot, a tendon
+    robot's (:mod:`flexdigit.studies.robot_study`: sensitivity only)."""
+    from flexdigit.errors import ParameterError
+    from flexdigit.studies.robot_study import is_robot_spec, load_robot_spec
+    from flexdigit.studies.spec import load_spec
+
+    if not is_robot_spec(args.spec):
+        return load_spec(args.spec)
+    if args.kind != "sensitivity":
+        raise ParameterError(f"{args.spec}: a robot study spec ([study] robot) runs as a sensitivity study only")
+    return load_robot_spec(args.spec)
 
 
 def _run(args, out, run, settings, write):
