@@ -81,6 +81,7 @@ from flexdigit.twin.digit import Chain, digit_arrays
 
 __all__ = [
     "calibration_for",
+    "decay_time_constant_s",
     "first_mode_rad_s",
     "twin_calibration",
 ]
@@ -132,6 +133,23 @@ def first_mode_rad_s(params: RigParams, calibration: Calibration) -> float:
     arrays["gravity_ab_m_s2"] = np.zeros(2)
     wn, _ = Chain(**arrays).linear_modes()
     return float(wn[0])
+
+
+def decay_time_constant_s(params: RigParams, calibration: Calibration) -> float:
+    """The time constant (s) of the digit's slowest-decaying vibration, ``1 / min(zeta wn)`` over the modes of its
+    housed chain straight with its cable(s) taut (how a sweep or a loop holds it), without gravity: ``zeta wn`` is
+    about ``c / 2m``, which gravity's stiffness hardly moves (a 0.44 m phosphor-bronze pair: 5.3 s tip up, 5.4 s
+    hung). What a wait for the digit to come to rest scales with.
+
+    Examples
+    --------
+    >>> round(decay_time_constant_s(RigParams(), packaged_calibration()), 2)
+    0.44
+    """
+    arrays = digit_arrays(params, calibration, housing=True, cells_per_section=MODAL_CELLS_PER_SECTION)
+    arrays["gravity_ab_m_s2"] = np.zeros(2)
+    wn, zeta = Chain(**arrays).linear_modes(cable_taut=params.cables.count)
+    return float(1.0 / np.min(zeta * wn))
 
 
 def _scaled_statics(params: RigParams, ref: Calibration, thesis: RigParams) -> Calibration:
