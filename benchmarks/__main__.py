@@ -28,6 +28,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_digits",
     "benchmarks.bench_unequal",
     "benchmarks.bench_digitctl2",
+    "benchmarks.bench_damping",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
