@@ -29,6 +29,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_unequal",
     "benchmarks.bench_digitshape",
     "benchmarks.bench_digitctl2",
+    "benchmarks.bench_damping",
     "benchmarks.bench_designunequal",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_tdcrcli",
