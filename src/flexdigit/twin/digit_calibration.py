@@ -77,7 +77,6 @@ import numpy as np
 
 from flexdigit.params import RigParams
 from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration, packaged_calibration
-from flexdigit.twin.digit import Chain, digit_arrays
 
 __all__ = [
     "calibration_for",
@@ -129,9 +128,7 @@ def first_mode_rad_s(params: RigParams, calibration: Calibration) -> float:
     >>> round(first_mode_rad_s(RigParams(), packaged_calibration()), 2)
     14.97
     """
-    arrays = digit_arrays(params, calibration, housing=True, cells_per_section=MODAL_CELLS_PER_SECTION)
-    arrays["gravity_ab_m_s2"] = np.zeros(2)
-    wn, _ = Chain(**arrays).linear_modes()
+    wn, _ = _weightless_chain(params, calibration).linear_modes()
     return float(wn[0])
 
 
@@ -146,10 +143,17 @@ def decay_time_constant_s(params: RigParams, calibration: Calibration) -> float:
     >>> round(decay_time_constant_s(RigParams(), packaged_calibration()), 2)
     0.44
     """
+    wn, zeta = _weightless_chain(params, calibration).linear_modes(cable_taut=params.cables.count)
+    return float(1.0 / np.min(zeta * wn))
+
+
+def _weightless_chain(params: RigParams, calibration: Calibration):
+    """The housed digit's chain at :data:`MODAL_CELLS_PER_SECTION` cells a section, without gravity."""
+    from flexdigit.twin.digit import Chain, digit_arrays
+
     arrays = digit_arrays(params, calibration, housing=True, cells_per_section=MODAL_CELLS_PER_SECTION)
     arrays["gravity_ab_m_s2"] = np.zeros(2)
-    wn, zeta = Chain(**arrays).linear_modes(cable_taut=params.cables.count)
-    return float(1.0 / np.min(zeta * wn))
+    return Chain(**arrays)
 
 
 def _scaled_statics(params: RigParams, ref: Calibration, thesis: RigParams) -> Calibration:
