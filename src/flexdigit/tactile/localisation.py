@@ -24,7 +24,7 @@ from flexdigit.tactile.accuracy import accuracy, rmse
 from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao, protocol_limits
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
-from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
+from flexdigit.tactile.pipeline import ThesisNetwork, features, run_pipeline, targets, thesis_split
 
 __all__ = [
     "ESTIMATORS",
@@ -36,6 +36,9 @@ __all__ = [
     "bayes_limits",
     "readings_gauge_model",
     "position_bayes_rmse_m",
+    "network_readings",
+    "train_network",
+    "tared_noise_v",
     "identifiability_map",
 ]
 
@@ -45,26 +48,78 @@ CONTACT_CHI2 = 13.8155
 
 
 def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
-    """Subtract from every test's readings the mean of its no-load readings (taken at its start, 6.5, 7.2).
+    """Subtract from every reading the mean of the no-load readings taken before it in its test (6.5, 7.2).
 
-    Returns the tared dataset and, per reading, the seconds since its tare (since the first reading for tests
-    without no-load readings, which are left as they are; 0 when the readings have no times, e.g. imported).
+    The no-load readings of a test come in blocks (one at its start in the thesis's protocols; one before every
+    position with ``tare_each_position``); a reading is tared on the last block before it (in sample order), a
+    reading of a block on its own block, and a test's readings before its first block (an imported file's order)
+    on the mean of all its no-load readings. Tests without no-load readings are left as they are.
+
+    Returns the tared dataset and, per reading, the seconds since its tare (the tare block's mean time; since the
+    first reading for tests without no-load readings; 0 when the readings have no times, e.g. imported).
     """
     gauges = dataset.gauges_v.copy()
     time = dataset["time_s"]
     if not np.all(np.isfinite(time)):  # readings imported without times: none accrues drift since its tare
         time = np.zeros(len(dataset))
     since = time - time.min()
+    order = np.argsort(dataset["sample"], kind="stable")
+    unloaded = dataset["load_kg"] == 0
     for test in np.unique(dataset["test"]):
-        rows = dataset["test"] == test
-        zero = rows & (dataset["load_kg"] == 0)
-        if zero.any():
-            gauges[rows] -= gauges[zero].mean(axis=0)
-            since[rows] = np.abs(time[rows] - time[zero].mean())
+        rows = order[dataset["test"][order] == test]  # the test's readings in sample order
+        zero = np.flatnonzero(unloaded[rows])  # where its no-load readings are in that order
+        if not zero.size:
+            continue
+        first = np.r_[True, np.diff(zero) != 1]  # a block starts where the no-load run does
+        block = np.cumsum(first) - 1  # each no-load reading's block
+        blocks = [rows[zero[block == b]] for b in range(int(block[-1]) + 1)]
+        refs = [(gauges[b].mean(axis=0), time[b].mean()) for b in blocks]
+        whole = (gauges[rows[zero]].mean(axis=0), time[rows[zero]].mean())
+        last = np.searchsorted(zero, np.arange(rows.size), side="right") - 1  # the last no-load reading at or before
+        for row, k in zip(rows, last, strict=True):
+            ref, ref_t = whole if k < 0 else refs[block[k]]
+            gauges[row] = gauges[row] - ref
+            since[row] = abs(time[row] - ref_t)
     columns = dict(dataset.columns)
     for i, name in enumerate(dataset.gauge_columns):
         columns[name] = gauges[:, i]
     return Dataset(columns, dict(dataset.meta)), since
+
+
+def network_readings(dataset: Dataset) -> Dataset:
+    """The readings a network is trained on and predicts from: tared on the no-load readings before each position
+    (:func:`tare`) when the protocol took them there (``tare_each_position``), else as read (the thesis's
+    networks: raw gauge voltages, normalised)."""
+    return tare(dataset)[0] if dataset.protocol.tare_each_position else dataset
+
+
+def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, tol=None, epochs: int = 50):
+    """``flexdigit train``'s network: the thesis's pipeline (:func:`~flexdigit.tactile.pipeline.run_pipeline`, no
+    error curves) on the dataset's readings as :func:`network_readings` gives them (tared before each position when
+    the protocol took them so), its G gauges and, on an actuated protocol, the command.
+
+    Returns ``(result, rows, inputs)``: the pipeline's result, the dataset rows with the target, and the inputs'
+    column names (what ``predict`` reads)."""
+    rows, y = targets(dataset, target)
+    actuated = dataset.protocol.actuated
+    x = features(network_readings(dataset), with_command=actuated)[rows]
+    inputs = [*dataset.gauge_columns] + (["command"] if actuated else [])
+    result = run_pipeline(
+        x, y, seed=seed, fixed_hidden=hidden, fixed_tol=tol, target=target, curve_hidden=None, epochs=epochs
+    )
+    return result, rows, inputs
+
+
+def tared_noise_v(model, dataset: Dataset, rows) -> np.ndarray:
+    """Each gauge's noise (V) in the tared readings ``rows`` of ``dataset`` (:func:`tare`): the model's, plus
+    the noise of the tare (the mean of a block of ``no_load_repetitions`` readings, ``sigma^2 / n``) and the drift
+    accumulated between the tare and the reading (``rate^2 t``, the mean ``t`` over ``rows``; the model's
+    ``drift_v_per_sqrt_s``, if it has one)."""
+    noise = np.asarray(model.noise_v, dtype=float)
+    blocks = max(1, int(dataset.protocol.no_load_repetitions))
+    rate = np.asarray(getattr(model, "drift_v_per_sqrt_s", np.zeros_like(noise)), dtype=float)
+    since = float(np.mean(tare(dataset)[1][np.asarray(rows, dtype=int)]))
+    return np.sqrt(noise**2 * (1.0 + 1.0 / blocks) + rate**2 * since)
 
 
 def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -319,17 +374,24 @@ def readings_gauge_model(params=None, calibration=None):
     return model
 
 
-def position_bayes_rmse_m(model, dataset: Dataset, rows, *, samples: int = 4000, seed: int = 0) -> float:
+def position_bayes_rmse_m(
+    model, dataset: Dataset, rows, *, samples: int = 4000, seed: int = 0, tared: bool | None = None
+) -> float:
     """The localisation Bayes limit on the loaded readings ``rows`` of ``dataset``: the RMS position error (m) of the
     best estimator that knows the protocol's settings and their frequencies (:func:`bayes_limits`, from
     :func:`~flexdigit.tactile.bounds.protocol_limits`: the posterior mean over the settings, which minimises the
     squared error), averaged over those readings as a trained network's RMSE on them is.
 
-    The readings' noise is the model's (white noise and quantisation for :func:`readings_gauge_model`), not the
-    sensors' drift: a network is scored on test readings drawn at random from the same run as its training
-    readings, each setting's readings taken within a second, so it learns each setting's drifted mean, and a limit
-    counting the drift as noise would be no floor (it put the 8-gauge test digit's network at half of it). The
-    digit must have settled (the protocol's ``settle_s``): a swing is noise the limit does not count either.
+    On readings tared before each position (``tared``; None: when the protocol took them so,
+    :func:`network_readings`) the noise is :func:`tared_noise_v`'s: the tare's own noise and the drift since it
+    counted, as the network's readings carry them. Otherwise the readings' noise is the model's (white noise and
+    quantisation for :func:`readings_gauge_model`), not the sensors' drift over the run: a network is scored on
+    test readings drawn at random from the same run as its training readings, each setting's readings taken within
+    a second, so it learns each setting's drifted mean, and a limit counting the whole run's drift as noise would
+    be no floor (it put the 8-gauge test digit's network at half of it); where the drift moves neighbouring
+    settings' means past each other (a one-gauge digit), no smooth network follows it, which the tare per position
+    (``tare_each_position``) removes. The digit must have settled (the protocol's ``settle_s``, and
+    ``wait_until_steady``): a swing is noise the limit does not count either.
 
     Parameters
     ----------
@@ -361,6 +423,11 @@ def position_bayes_rmse_m(model, dataset: Dataset, rows, *, samples: int = 4000,
     rows = np.asarray(rows, dtype=int)
     if rows.size == 0 or np.any(dataset["load_kg"][rows] <= 0):
         raise ValueError("position_bayes_rmse_m needs loaded readings (a no-load reading has no position)")
+    if dataset.protocol.tare_each_position if tared is None else tared:
+        import copy
+
+        model = copy.copy(model)  # the same statics, the tared readings' noise
+        model.noise_v = tared_noise_v(model, dataset, rows)
     limits = bayes_limits(model, dataset, rows, samples=samples, seed=seed)
     k = limits.index(dataset["position_from_base_m"][rows], dataset["load_kg"][rows], dataset["command"][rows])
     return float(np.sqrt(np.mean(limits.position_mse_m2[k])))
