@@ -173,9 +173,9 @@ def test_a_still_gauge_under_an_lsb_is_steady():
 
 
 def test_a_tare_before_each_position_plans_and_subtracts_the_readings_just_before():
-    """The plan puts the no-load block before every position; ``tare`` subtracts from each reading the mean of the
-    block just before it (a closed-form drift: 1 mV per reading, so the tared readings lose it to the block's
-    mid-point), and the thesis's layout (one block per test) is tared as before, on that block."""
+    """The plan puts the no-load block before every position; ``tare`` subtracts from each reading the blocks
+    around it interpolated in time (a closed-form drift, 1 mV per reading, removed exactly), the block before it
+    where none follows, and the thesis's layout (one block per test) as before, on that block."""
     from flexdigit.tactile.dataset import Dataset, dataset_columns
     from flexdigit.tactile.localisation import tare
 
@@ -194,10 +194,10 @@ def test_a_tare_before_each_position_plans_and_subtracts_the_readings_just_befor
     cols["gauge1_v"] = 1e-3 * np.arange(n) + np.where(plan["load_kg"] > 0, 0.5, 0.0)  # drift + the load's signal
     ds = Dataset(cols, {"gauge_count": 1, "protocol": each.to_dict()})
     tared, since = tare(ds)
-    # position 1's readings (samples 2-4) on the block 0-1 (mean 0.5 mV, 1.5 s before sample 2)
-    np.testing.assert_allclose(tared.gauges_v[2:5, 0], 0.5 + 1e-3 * (np.arange(2, 5) - 0.5), atol=1e-15)
-    np.testing.assert_allclose(since[2:5], np.arange(2, 5) - 0.5)
-    # position 2's (samples 7-9) on the block 5-6, not on the test's first one
+    # position 1's readings (samples 2-4) between the blocks 0-1 and 5-6: the two interpolated, the drift gone
+    np.testing.assert_allclose(tared.gauges_v[2:5, 0], 0.5, atol=1e-15)
+    np.testing.assert_allclose(since[2:5], [1.5, 2.5, 1.5])  # to the nearer block's mean time (0.5 or 5.5)
+    # position 2's (samples 7-9), no block after: on the block 5-6, not on the test's first one
     np.testing.assert_allclose(tared.gauges_v[7:10, 0], 0.5 + 1e-3 * (np.arange(7, 10) - 5.5), atol=1e-15)
     # one block at the start (the thesis's layout): every reading on it
     once = {k: np.r_[v[:2], v[2:5], v[7:10]] for k, v in cols.items()}

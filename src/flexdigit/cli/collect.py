@@ -273,15 +273,15 @@ def _train(args: argparse.Namespace) -> CommandResult:
     model_path = _train_output(args)
     dataset = load_dataset(args.file)
     target = args.target.replace("-", "_")
-    result, rows, inputs = train_network(
+    result, rows, inputs, tared = train_network(
         dataset, target, seed=args.seed, hidden=args.hidden, tol=args.tol, epochs=args.epochs
     )
     scores = target_scores(result)
     if args.bayes_limit:
         scores.update(_bayes_scores(args, dataset, rows[result.split.test], scores["rmse_mm"]))
-    tared = dataset.protocol.tare_each_position  # predict tares its readings alike
     meta = {"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores}
-    save_model(model_path, result.model, target=target, inputs=inputs, meta={**meta, "tared": tared}, force=args.force)
+    meta["tared"] = tared  # the kept network reads tared readings: predict tares its readings alike
+    save_model(model_path, result.model, target=target, inputs=inputs, meta=meta, force=args.force)
     swept = args.hidden is None or args.tol is None
     data = {"target": target, "model": str(model_path), "swept": swept, "tared": tared, **scores}
     lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]

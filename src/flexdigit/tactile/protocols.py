@@ -119,11 +119,10 @@ class Protocol:
         before it (:func:`flexdigit.tactile.localisation.tare`), as a lab zeroes a balance before each weighing,
         so the gauges' drift over a long run (a random walk: 1.4 times the white noise over 200 s on the thesis's
         chain) leaves the readings (a one-gauge digit's network was 1.44 x its Bayes limit with the drift in its
-        readings, 0.99 without). ``flexdigit train`` and ``predict`` tare such a dataset's readings, and the Bayes
-        limit counts the tare's own noise. A protocol TOML with no-load readings turns it on unless it says
-        ``tare_each_position = false``, as the thesis's built-in protocols do ("a no load condition was measured
-        at the start of every test", 6.5, 7.2); here, and for a stored protocol written before the option, it is
-        off.
+        readings, 0.99 without). ``flexdigit train`` and ``predict`` tare such a dataset's readings. A protocol
+        TOML with no-load readings turns it on unless it says ``tare_each_position = false``, as the thesis's
+        built-in protocols do ("a no load condition was measured at the start of every test", 6.5, 7.2); here,
+        and for a stored protocol written before the option, it is off.
     description, thesis_ref : str
         Free text.
     """

@@ -73,7 +73,7 @@ STEADY_FACTOR = 1.15
 STEADY_WINDOW_S = 2.0
 #: The longest a check waits for a steady reading (s), as a multiple of the settle time (and at least a minute):
 #: a rig noisier than its model is never "steady", and its readings are then taken after this wait.
-STEADY_CAP_SETTLES = 10.0
+STEADY_CAP_SETTLES = 30.0
 
 
 def journal_path(out: str | Path) -> Path:
