@@ -204,3 +204,34 @@ def test_a_tare_before_each_position_plans_and_subtracts_the_readings_just_befor
     once["sample"] = np.arange(8)
     tared_once, _ = tare(Dataset(once, {"gauge_count": 1}))
     np.testing.assert_allclose(tared_once.gauges_v[2:, 0], once["gauge1_v"][2:] - 0.5e-3, atol=1e-15)
+
+
+def _drifting_dataset(drift_v_per_reading: float, no_load: int, seed: int):
+    """One gauge reading 10 mV per cm of a load's position plus 2 mV of white noise and a random-walk drift, the
+    no-load block (``no_load`` readings) before each of 12 positions, 20 readings each (closed form)."""
+    from flexdigit.tactile.dataset import Dataset, dataset_columns
+
+    protocol = Protocol("d", (0.01,), tuple(0.01 * k for k in range(12)), repetitions=20,
+                        no_load_repetitions=no_load, tare_each_position=True)  # fmt: skip
+    plan = protocol.plan(0.27)
+    n = len(plan["sample"])
+    rng = np.random.default_rng(seed)
+    drift = np.cumsum(drift_v_per_reading * rng.standard_normal(n))
+    signal = np.where(plan["load_kg"] > 0, 1.0 * np.nan_to_num(plan["position_from_tip_m"]), 0.0)
+    cols = {c: np.zeros(n, dtype=d) for c, d in dataset_columns(1).items()}
+    for key in plan:
+        cols[key] = plan[key]
+    cols["time_s"] = 0.5 * np.arange(n)
+    cols["gauge1_v"] = 0.05 + signal + drift + NOISE_V * rng.standard_normal(n)
+    return Dataset(cols, {"gauge_count": 1, "protocol": protocol.to_dict()})
+
+
+def test_train_keeps_tared_readings_where_drift_weighs_more_and_raw_ones_where_the_tare_does():
+    from flexdigit.tactile.localisation import train_network
+
+    # a drift of 2 mV a reading: positions 1 cm apart (10 mV) are scrambled as read, not once tared
+    _, _, _, tared = train_network(_drifting_dataset(0.002, 5, seed=1), "position", hidden=5, tol=1e-7, epochs=20)
+    assert tared
+    # no drift and a one-reading tare: the tare only adds its 2 mV to every reading of a position
+    _, _, _, tared = train_network(_drifting_dataset(0.0, 1, seed=2), "position", hidden=5, tol=1e-7, epochs=20)
+    assert not tared
