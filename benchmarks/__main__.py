@@ -27,6 +27,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_twin",
     "benchmarks.bench_digits",
     "benchmarks.bench_unequal",
+    "benchmarks.bench_digitshape",
     "benchmarks.bench_digitctl2",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_identify",
