@@ -36,6 +36,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
+    "benchmarks.bench_digittac",
     "benchmarks.bench_calibrate",
     "benchmarks.bench_live",
     "benchmarks.bench_livegauges",
