@@ -68,28 +68,29 @@ def _random_digit(seed: int) -> dict:
 
 
 # tests/digits.py's random_digit (1-8 sections, 0.15-0.5 m, 1-8 gauges, any bridge, one cable or a pair, gear
-# 1-4): 6 a 0.43 m single geared cable (hung: it nearly buckles tip up), 23 a 0.49 m single section with one
-# gauge, 9 7 sections geared (hung); 11 (8 sections, 0.43 m, a geared pair), 18 (8 sections, 0.47 m, a pair) and 21
-# (6 sections, 0.44 m, a pair), all hung: nearly undamped (zeta 0.02 with the cable taut) while the scaled
-# calibration kept the thesis's relaxation times, they settle since a digit keeps the thesis rig's modal damping
-# (twin.digit_calibration; docs/digits.md: seed 0 at +-30 deg 0.27-0.76 s). Not here: 4 (6 sections, 0.38 m, a
-# pair, tip up), whose gauge map leaves the true rotation 0.6 deg off at +30; 23 (one 0.475 m section, 4 gauges,
-# hung), which passed with relaxation times kept and overshoots 21 % since (its gauges swing +-9 deg about the tip
-# on its first mode, now zeta 0.094 with the cable taut; the design chosen on its model, 0.37 s and 3.8 % there, is
-# faster than before, 0.60 s and 2.0 %): a model-twin mismatch not yet understood (docs/digits.md, "Not yet").
-RANDOM = {f"random-{seed}": random_digit(seed) for seed in (6, 9, 11, 18, 21)}
+# 1-4): 6 a 0.43 m single geared cable (hung: it nearly buckles tip up), 9 7 sections geared (hung); 11 (8 sections,
+# 0.43 m, a geared pair), 18 (8 sections, 0.47 m, a pair) and 21 (6 sections, 0.44 m, a pair), all hung: nearly
+# undamped (zeta 0.02 with the cable taut) while the scaled calibration kept the thesis's relaxation times, they
+# settle since a digit keeps the thesis rig's modal damping (twin.digit_calibration; docs/digits.md); 23 (one
+# 0.475 m section, 4 gauges, hung), which overshot 21 % while its design model dropped its 200 rad/s mode (above
+# the loop's Nyquist frequency, matched at DC: the model's gauges led the twin's, control.digit_model). Not here: 4
+# (6 sections, 0.38 m, a pair, tip up), whose gauge map leaves the true rotation 0.6 deg off at +30.
+RANDOM = {f"random-{seed}": random_digit(seed) for seed in (6, 9, 11, 18, 21, 23)}
 SEEDED = {**{f"seeded-{seed}": _random_digit(seed) for seed in (3, 11)}, **RANDOM}
 ALL = {**DIGITS, **SEEDED}
 #: The twin's seeds each test digit's step is run with (the sweep's twin takes the next one): two, so a design that
 #: settles on one seed's noise by luck does not pass (seed 2 found one-section at 2.1 s and the 0.5 m digit at 1.6 s).
 RUN_SEEDS = ("0", "2")
 #: Runs known to miss the settling, with why; each must still miss it (so that a fix removes it from here). The
-#: one-section digit reads its rotation through one quarter-bridge gauge, 0.49 deg of noise a reading: its map, fitted
-#: on a sweep during which the gauge drifts, holds 30 deg with a +-0.2 deg offset that varies with the seed, and the
-#: loop's jitter (0.1-0.2 deg sd after 1 s, either damping law) then leaves the 2 % band (0.6 deg) now and then:
-#: seed 2 settled at 0.43 s with relaxation times kept and does not with the modal damping (30.6 deg at 2.1 s);
-#: seeds 0 and 1 settle under both (0.66 / 0.50 s now). docs/digits.md, "Not yet".
-KNOWN_MISSES = {("one-section", 30.0, "2"): "one noisy gauge, a map offset of 0.2 deg: out of the band at 2.1 s"}
+#: one-section digit reads its rotation through one quarter-bridge gauge (0.41 deg of noise a reading, drifting):
+#: its map, fitted on a sweep during which the gauge drifts, reads 30 deg 0.25 deg high on seed 1 (0.01 on seed 0;
+#: measured with a 400-reading tare, so not the tare's 5 readings), the loop holds the true rotation at 29.8 and
+#: its jitter (0.16 deg sd after 1 s) leaves the 2 % band (0.6 deg) now and then. Seed 2, which missed while the
+#: design model dropped the modes above the loop's Nyquist frequency, settles since (0.44 s). docs/digits.md,
+#: "Not yet": the map's error, not the loop's.
+KNOWN_MISSES = {("one-section", 30.0, "1"): "one drifting gauge, its map 0.25 deg high at 30 deg"}
+#: Extra twin seeds run for a digit (its known misses' seeds).
+EXTRA_SEEDS = {"one-section": ("1",)}
 
 
 def _write(name: str, directory) -> object:
@@ -153,6 +154,7 @@ def test_params_design_and_run_on_the_digit(name, tmp_path, capsys):
     assert design["stable"]
     assert design["closed_loop_pole_radius"] < 1.0
     seeds = RUN_SEEDS if name in DIGITS else RUN_SEEDS[:1]  # the drawn digits on one seed: the suite stays short
+    seeds = (*seeds, *EXTRA_SEEDS.get(name, ()))
     for setpoint, seed in ((s, seed) for s in _setpoints(params) for seed in seeds):
         log = tmp_path / f"run{setpoint:+g}-{seed}.jsonl"
         argv = ["run", "--params", str(path), f"--setpoint-deg={setpoint:g}", "--duration", RUN_S, "--seed", seed]

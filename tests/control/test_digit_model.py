@@ -72,7 +72,7 @@ def test_the_truncated_model_responds_as_the_whole_chain(digit, monkeypatch):
     params = RigParams.from_dict(digit)
     kept = digit_model(params)
     monkeypatch.setattr(digit_model_module, "MAX_MODES", 1000)
-    whole = digit_model(params, period_s=1e-9)  # Nyquist far above every mode: nothing truncated
+    whole = digit_model(params)  # every mode kept: nothing truncated
     assert whole.truncated_wn_rad_s.size == 0
     assert kept.plant.nstates < whole.plant.nstates
     for w in FREQUENCIES_RAD_S:
@@ -128,3 +128,39 @@ def test_a_digit_near_buckling_tip_up_is_refused_naming_its_margin():
     assert stiffness_share(params, orientation="hanging") > 1.0
     assert digit_design_20ms(params, orientation="hanging").choice.meets
     assert stiffness_share(RigParams()) == pytest.approx(0.77, abs=0.01)
+
+
+#: The design model against the nonlinear twin on a small step about the operating shape (tip and measured rotation,
+#: rms over the first 0.5 s over the step's size): 0.2 % and 0.5 % on random_digit(23), the linearisation's own
+#: error. Kept to the modes below the loop's Nyquist frequency (its 200 rad/s third mode matched at DC) the model
+#: missed them by 7 % and 25 % (its measured rotation led and outswung the twin's), and the design chosen on it
+#: overshot 21 % on the twin.
+REPLAY_RTOL = 0.02
+
+
+def test_the_model_replays_the_twins_step_on_a_long_section():
+    """``random_digit(23)`` (one 0.475 m section, 4 gauges, hung): a 4-command step about 15 deg on the twin (the
+    nonlinear chain, integrated, no noise read) and on the model, from rest; the step issued at 3 s, where a serial
+    frame and a servo pulse coincide, so it reaches the servo without delay on both."""
+    from digits import random_digit
+    from flexdigit.twin.twin import Twin
+
+    params = RigParams.from_dict(random_digit(23))
+    model = digit_model(params, orientation="hanging")
+    start = params.actuator.equilibrium_command + round(model.operating_deg / model.deg_per_command) - 2
+    twin = Twin(params, seed=0, orientation="hanging", command=start)
+    twin.advance(3.0)
+    psi0, _ = twin.state()
+    twin.command(start + 4)
+    t = np.arange(1, 26) * 0.020
+    ours = []
+    for _ in t:
+        twin.advance(0.020)
+        psi, _ = twin.state()
+        ours.append([np.degrees(psi[-1] - psi0[-1]), model.measured_deg_per_rad @ (psi - psi0)])
+    ours = np.asarray(ours)
+    response = ct.forced_response(model.plant, np.r_[0.0, t], np.full(t.size + 1, 4.0))
+    predicted = np.asarray(response.outputs)[:, 1:].T
+    step = 4.0 * model.deg_per_command
+    error = np.sqrt(np.mean((predicted - ours) ** 2, axis=0)) / step
+    assert np.all(error < REPLAY_RTOL), error

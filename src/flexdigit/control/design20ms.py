@@ -593,7 +593,7 @@ def digit_design_20ms(
     """The 20 ms design for a described digit (``flexdigit design 20ms --params``, ``flexdigit run --params``).
 
     On the thesis rig it is :func:`design_20ms` as chapter 5 runs it. Any other digit is designed on its twin's
-    chain linearised half-way to the step, the modes below the loop's Nyquist frequency kept
+    chain linearised half-way to the step, its lowest modes kept
     (:func:`~flexdigit.control.digit_model.digit_model`: tip rotation held, the gauges' fused rotation measured),
     with weights searched on that model (:func:`digit_weights`: the worst step over a +-12 % plant gain, the
     gauges' noise through the loop). The straight digit must be stable as mounted (:func:`digit_first_mode`).
@@ -615,7 +615,7 @@ def digit_design_20ms(
 def _digit_design(params, period_s, calibration, orientation, deg_per_command, weights=None):
     digit_first_mode(params, calibration, orientation=orientation)  # refused if it buckles as mounted
     T = params.actuator.serial_period_s if period_s is None else period_s
-    model = digit_model(params, calibration, orientation=orientation, period_s=T)
+    model = digit_model(params, calibration, orientation=orientation)
     G = model.plant
     if deg_per_command is not None:
         G = G * (float(deg_per_command) / model.deg_per_command)

@@ -18,12 +18,17 @@ Two outputs, both in degrees:
   sensitivities along the static shape over their sum of squares). Statically the two agree; while the digit
   vibrates they do not, and the design knows by how much.
 
-**Modal truncation.** Of the chain's ``n`` modes (3 cells a section: up to 24) the model keeps those below the
-Nyquist frequency of the loop's sample period (``pi / T``, 157 rad/s at 20 ms), at most :data:`MAX_MODES`: a
-mode above it cannot be acted on by a command held for T (the hold's gain there is below 2/pi and falling), and it
-aliases onto a slower frequency if kept as if it could. The truncated modes' static share is kept (the residual
-is matched at DC, python-control's ``modred(..., "matchdc")``), so the model's rotation per command is the chain's.
-The noise of the measured rotation is the gauges' white noise through the map's weights.
+**Modal truncation.** Of the chain's ``n`` modes (3 cells a section: up to 24) the model keeps the lowest
+:data:`MAX_MODES` (vibrating, or the real poles of overdamped cells), whatever their frequency against the loop's
+Nyquist frequency; the others' static share is kept (the residual is matched at DC, python-control's
+``modred(..., "matchdc")``), so the model's rotation per command is the chain's. A mode above Nyquist is not
+negligible because the command cannot excite it at its own frequency: matched at DC it answers the servo at once,
+while a stiffness-damped mode lags it by ``2 zeta / wn`` (9 ms for ``random_digit(23)``'s third mode, 200 rad/s,
+zeta 0.93), and where that mode carries a large static share of the gauges (a long section whose gauges bend
+against its first mode) the model's measured rotation then leads and outswings the twin's (32.9 against 13.7 deg
+40 ms into a step; kept, 13.7 against 13.8); a design chosen on it overshot 21 % on the twin. Sampling a kept mode
+above Nyquist with the hold (``sample_system(..., "zoh")``) is exact at the samples: it aliases in the model as it
+does on the rig. The noise of the measured rotation is the gauges' white noise through the map's weights.
 """
 
 from __future__ import annotations
@@ -44,8 +49,8 @@ from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, c
 
 __all__ = ["DigitModel", "digit_model", "MAX_MODES"]
 
-#: The most chain modes a design model keeps (below the loop's Nyquist frequency, lowest first): with the servo,
-#: the delay and the disturbance an observer of at most 2 + 2 x 6 + 2 states.
+#: The most chain modes a design model keeps (lowest first; module docstring): with the servo, the delay and the
+#: disturbance an observer of at most 2 + 2 x 6 + 2 states.
 MAX_MODES = 6
 
 
@@ -62,11 +67,14 @@ class DigitModel:
     modes_wn_rad_s, modes_zeta : ndarray
         The chain's modes kept (cable(s) taut, about the operating shape).
     truncated_wn_rad_s : ndarray
-        The modes left out (above the Nyquist frequency, or past :data:`MAX_MODES`).
+        The modes left out (past the lowest :data:`MAX_MODES`).
     measurement_sd_deg : float
         Standard deviation of one reading of the measured rotation from the gauges' white noise, deg.
     operating_deg : float
         The tip rotation the chain was linearised about, deg.
+    measured_deg_per_rad : ndarray or None
+        The measured rotation as a row of the chain's angles (deg per rad of each link's angle): what the plant's
+        second output reads of a state of the chain (its static map at the operating shape).
     """
 
     plant: ct.StateSpace
@@ -76,6 +84,7 @@ class DigitModel:
     truncated_wn_rad_s: np.ndarray
     measurement_sd_deg: float
     operating_deg: float
+    measured_deg_per_rad: np.ndarray | None = None
 
 
 def _operating_shape(chain, params: RigParams, at_deg: float):
@@ -95,7 +104,6 @@ def digit_model(
     calibration=None,
     *,
     orientation: str = "vertical",
-    period_s: float = 0.020,
     at_deg: float = 15.0,
     cells_per_section: int | None = None,
 ) -> DigitModel:
@@ -108,8 +116,6 @@ def digit_model(
         The twin's (default: the one the twin gets for the digit).
     orientation : str
         How the digit is mounted (gravity on the chain).
-    period_s : float
-        The loop's sample period (the truncation's Nyquist frequency), s.
     at_deg : float
         The operating tip rotation, deg (half the 30 deg step).
 
@@ -139,14 +145,14 @@ def digit_model(
     b = np.zeros(n)
     b[-1] = chain.cable_stiffness * chain.eccentricity * taut
     c_measured, sd_deg = _measured_rotation(chain, params, cal, solution, np.linalg.solve(k, b))
-    # modal form of the chain, modes below Nyquist kept, the rest matched at DC
+    # modal form of the chain, the lowest modes kept, the rest matched at DC
     minv = np.linalg.inv(m)
     a_chain = np.block([[np.zeros((n, n)), np.eye(n)], [-minv @ k, -minv @ chain.c_psi]])
     b_chain = np.concatenate([np.zeros(n), minv @ b])[:, None]
     c_chain = np.zeros((2, 2 * n))
     c_chain[0, n - 1] = 1.0
     c_chain[1, :n] = c_measured
-    reduced, dropped, kept = _truncated(a_chain, b_chain, np.degrees(c_chain), math.pi / period_s)
+    reduced, dropped, kept = _truncated(a_chain, b_chain, np.degrees(c_chain))
     metres_per_command = params.actuator.rad_per_command * params.actuator.cable_m_per_servo_rad
     plant = _balanced(ct.series(ct.ss(servo_unit_tf(params)), reduced) * metres_per_command)
     dc = np.real(np.asarray(ct.dcgain(plant))).reshape(-1)
@@ -161,6 +167,7 @@ def digit_model(
         truncated_wn_rad_s=dropped,
         measurement_sd_deg=sd_deg,
         operating_deg=math.degrees(float(psi[-1])),
+        measured_deg_per_rad=np.degrees(c_measured),
     )
 
 
@@ -181,9 +188,9 @@ def _measured_rotation(chain, params: RigParams, calibration, solution, static: 
     return (weights * vpc) @ d, sd_deg
 
 
-def _truncated(a: np.ndarray, b: np.ndarray, c: np.ndarray, nyquist_rad_s: float):
-    """Modal truncation of ``(a, b, c)`` keeping the lowest modes below ``nyquist_rad_s`` (at most
-    :data:`MAX_MODES`), the others' static share kept as a feedthrough (matched at DC).
+def _truncated(a: np.ndarray, b: np.ndarray, c: np.ndarray):
+    """Modal truncation of ``(a, b, c)`` keeping its lowest :data:`MAX_MODES` modes (a conjugate pair or a real
+    pole each, by ``|lambda|``), the others' static share kept as a feedthrough (matched at DC).
 
     The kept modes' invariant subspace is spanned by the real and imaginary parts of their eigenvectors; ``P``, the
     spectral projector onto it (real: conjugate pairs are kept together), gives the reduced system
@@ -193,13 +200,11 @@ def _truncated(a: np.ndarray, b: np.ndarray, c: np.ndarray, nyquist_rad_s: float
     lam, vectors = np.linalg.eig(a)
     left = np.linalg.inv(vectors)
     upper = lam.imag >= 0
-    # a vibration mode below Nyquist is kept; a real pole (an overdamped cell mode's slow branch, near the stiffness-
-    # proportional damping's 1 / beta) only when slower than the sampling (time constant over 2 / Nyquist = T / pi x 2)
-    vibrating = np.abs(lam.imag) > 0
-    slow = np.where(vibrating, np.abs(lam) < nyquist_rad_s, np.abs(lam) < nyquist_rad_s / 2)
-    ranked = np.sort(np.abs(lam[upper & slow]))[:MAX_MODES]
+    # the lowest modes, vibrating or real (an overdamped cell mode's branches), whatever the loop's Nyquist frequency
+    # (module docstring: a mode above it matched at DC answers the servo too early)
+    ranked = np.sort(np.abs(lam[upper]))[:MAX_MODES]
     cutoff = ranked[-1] if ranked.size else 0.0
-    keep = slow & (np.abs(lam) <= cutoff * (1 + 1e-9))
+    keep = np.abs(lam) <= cutoff * (1 + 1e-9)
     projector = np.real(vectors[:, keep] @ left[keep, :])
     basis = np.hstack([vectors[:, keep & upper].real, vectors[:, keep & upper & (lam.imag > 0)].imag])
     w = np.linalg.pinv(basis) @ projector
