@@ -123,6 +123,29 @@ def test_seed_2_gauges_within_the_tolerance_of_the_converged_twin():
     assert gauge3 > 2 * DISTRIBUTED_RTOL and hung3 > 5 * HUNG_RTOL  # what the old default gave
 
 
+def test_the_shape_estimator_fits_seed_2_readings_of_the_default_twin():
+    """The shape helper's symptom: seed 2's readings at 3 cells fit no beam (chi-square ~1,250-1,560 for 7 gauges,
+    as a weight of 2 g at 0.6 L and at the tip, or none); the default twin's readings fit the estimator's beam at the
+    chi-square of noise (a few for 7 gauges, below the estimator's own misfit threshold)."""
+    from flexdigit.shape.shape import ShapeEstimator
+    from flexdigit.twin.twin import static_gauges_v
+
+    params = RigParams.from_dict(campaign_digit(2))
+    cal = calibration_for(params)
+    length = params.geometry.digit_length_m
+    masses, places = [0.0, 0.002, 0.002], [0.0, 0.6 * length, length]
+    estimator = ShapeEstimator(params, cal, orientation="horizontal")
+
+    def chi2(cells):
+        volts = static_gauges_v(
+            masses, places, params=params, calibration=cal, orientation="horizontal", adc=False, cells_per_section=cells
+        )
+        return estimator.estimate(volts).chi2_load
+
+    assert chi2(None).max() < 5.0
+    assert chi2(3).min() > 100.0
+
+
 def test_an_explicit_resolution_is_honoured():
     params = RigParams.from_dict(DIGITS["unequal-sections"])
     cal = calibration_for(params)
