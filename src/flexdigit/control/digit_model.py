@@ -18,17 +18,18 @@ Two outputs, both in degrees:
   sensitivities along the static shape over their sum of squares). Statically the two agree; while the digit
   vibrates they do not, and the design knows by how much.
 
-**Modal truncation.** Of the chain's ``n`` modes (3 cells a section: up to 24) the model keeps the lowest
-:data:`MAX_MODES` (vibrating, or the real poles of overdamped cells), whatever their frequency against the loop's
-Nyquist frequency; the others' static share is kept (the residual is matched at DC, python-control's
-``modred(..., "matchdc")``), so the model's rotation per command is the chain's. A mode above Nyquist is not
-negligible because the command cannot excite it at its own frequency: matched at DC it answers the servo at once,
-while a stiffness-damped mode lags it by ``2 zeta / wn`` (9 ms for ``random_digit(23)``'s third mode, 200 rad/s,
-zeta 0.93), and where that mode carries a large static share of the gauges (a long section whose gauges bend
-against its first mode) the model's measured rotation then leads and outswings the twin's (32.9 against 13.7 deg
-40 ms into a step; kept, 13.7 against 13.8); a design chosen on it overshot 21 % on the twin. Sampling a kept mode
-above Nyquist with the hold (``sample_system(..., "zoh")``) is exact at the samples: it aliases in the model as it
-does on the rig. The noise of the measured rotation is the gauges' white noise through the map's weights.
+**Modal truncation.** Of the chain's ``n`` modes (one a cell, :func:`flexdigit.twin.digit.default_cells`) the
+model keeps the lowest :data:`MAX_MODES` (vibrating, or the real poles of overdamped cells), whatever their
+frequency against the loop's Nyquist frequency; the others' static share is kept (the residual is matched at
+DC, python-control's ``modred(..., "matchdc")``), so the model's rotation per command is the chain's. A mode
+above Nyquist is not negligible because the command cannot excite it at its own frequency: matched at DC it
+answers the servo at once, while a stiffness-damped mode lags it by ``2 zeta / wn``. Where such a mode carries a
+large static share of the gauges the model's measured rotation leads and outswings the twin's:
+``random_digit(23)`` (one 0.475 m section, hung, at 3 cells a section), its 200 rad/s third mode (zeta 0.93)
+dropped, read 32.9 deg where the twin's gauges read 13.7, 40 ms into a step (kept: 13.7 against 13.8), and the
+design chosen on it overshot 21 % on the twin. Sampled with the hold (``sample_system(..., "zoh")``) a kept mode
+above Nyquist is exact at the samples: it aliases in the model as it does on the rig. The noise of the measured
+rotation is the gauges' white noise through the map's weights.
 """
 
 from __future__ import annotations
