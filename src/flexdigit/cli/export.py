@@ -88,6 +88,8 @@ def _export_controller(args: argparse.Namespace) -> CommandResult:
         input_max = check_real(args.input_max, "--input-max", low=0.0, low_open=True)
     spec = ControllerSpec.from_runtime(runtime, rotation, setpoint_scale=scale)
     setpoints = [s * scale for s in (0.0, 10.0, 30.0)]  # the rotations of the loop's tests, deg
+    if params is not None and params.cables.count == 2:
+        setpoints.append(-30.0)  # a cable pair bends both ways
     result = export_controller(
         spec,
         args.out,
