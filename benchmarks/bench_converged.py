@@ -9,7 +9,8 @@ Half an hour of CPU: not in ``make bench``'s default set; run it alone, under th
 Figures: wall time per study (goal <= 600 s for the first two) and the CPU seconds it took, how many metrics the
 convergence check passed (no Sobol S1 or ST moving by more than the spec's 0.05 between N and 2N), each metric's
 largest move, and the machine's load average before and after (other jobs share the 2 cores: a loaded machine
-runs longer).
+runs longer). The second-order study's S1 and ST are the mean over both halves of its design
+(``flexdigit.studies.sensitivity.averaged_sobol_indices``), the first-order study's SALib's own.
 ``FLEXDIGIT_BENCH_OUT`` keeps the studies' directories (default: a temporary directory, removed).
 """
 

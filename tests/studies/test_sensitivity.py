@@ -81,7 +81,9 @@ def test_ishigami_indices_converge_to_the_closed_form(ishigami_metric, tmp_path)
     assert set(table.columns) == {"metric", "method", "index", "parameter", "parameter_2", "n_base", "value", "conf"}
     st = table.query("method == 'sobol' and index == 'ST' and n_base == 1024").set_index("parameter")["value"]
     np.testing.assert_allclose(st[list(spec.names)].to_numpy(), res["ST"])
-    assert json.loads(paths["summary"].read_text())["metrics"][ishigami_metric]["convergence"]["converged"]
+    summary = json.loads(paths["summary"].read_text())
+    assert summary["metrics"][ishigami_metric]["convergence"]["converged"]
+    assert summary["sobol_estimator"].startswith("SALib.analyze.sobol")  # a first-order design: SALib's own
     assert (tmp_path / "figures" / f"sobol_{ishigami_metric}.png").stat().st_size > 1000
     with pytest.raises(OutputExistsError):
         write_outputs(result, tmp_path)

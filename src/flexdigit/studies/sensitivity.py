@@ -8,7 +8,9 @@ the effects of all system parameters". Given a spec (:mod:`flexdigit.studies.spe
    unbounded normal has no 0 and 100 % quantile);
 2. estimates Sobol's first-order and total indices (S1, ST; S2 on request) with Saltelli's design
    (``SALib.sample.sobol``, scrambled Sobol points mapped through each distribution's inverse CDF) and
-   ``SALib.analyze.sobol``, with bootstrap confidence intervals;
+   ``SALib.analyze.sobol``, with bootstrap confidence intervals; a second-order design's S1, ST and S2 average
+   SALib's estimates over both halves of the design (A with AB_i, and B with BA_i: :func:`averaged_sobol_indices`,
+   Saltelli 2002), a lower variance for no extra evaluation;
 3. checks convergence: the design at 2N contains the design at N (the Sobol sequence extends), so the indices are
    computed at both from one set of evaluations; a metric converged when no S1 or ST moves by more than
    ``convergence_tol`` (default 0.05) between N and 2N. An unconverged metric is flagged and named, and the
@@ -42,10 +44,23 @@ from flexdigit.studies.execution import run_study, warn
 from flexdigit.studies.metrics import SENSITIVITY_METRICS, MetricContext, metric_of
 from flexdigit.studies.spec import StudySpec, load_spec
 
-__all__ = ["SensitivitySettings", "SensitivityResult", "run_sensitivity", "sobol_indices", "write_outputs"]
+__all__ = [
+    "SensitivitySettings",
+    "SensitivityResult",
+    "averaged_sobol_indices",
+    "run_sensitivity",
+    "sobol_indices",
+    "write_outputs",
+]
 
 #: Morris levels are placed on these quantiles of each distribution (0 and 1 are infinite for a normal).
 MORRIS_QUANTILES = (0.005, 0.995)
+
+#: What :func:`sobol_indices` computes, by whether the design is second-order (``summary.json``'s ``sobol_estimator``).
+SOBOL_ESTIMATORS = {
+    False: "SALib.analyze.sobol: S1 Saltelli et al. 2010, ST Jansen, on A, AB_i, B",
+    True: "mean of SALib's S1, ST, S2 on (A, AB_i, B) and on (B, BA_i, A): Saltelli 2002 (averaged_sobol_indices)",
+}
 
 
 @dataclass(frozen=True)
@@ -168,6 +183,7 @@ class SensitivityResult:
             ],
             "evaluations": int(self.values.shape[0]),
             "sobol_n": [self.settings.sobol_n, 2 * self.settings.sobol_n],
+            "sobol_estimator": SOBOL_ESTIMATORS[self.settings.second_order],
             "failed_rows": [
                 {
                     "row": i,
@@ -257,21 +273,92 @@ def sensitivity_design(spec: StudySpec, settings: SensitivitySettings) -> tuple[
 
 
 def sobol_indices(spec_or_names, outputs, second_order: bool, bootstrap: int, confidence: float, seed: int) -> dict:
-    """``SALib.analyze.sobol`` on one metric's outputs (Saltelli order), as arrays; bootstrap seeded."""
+    """Sobol indices of one metric's outputs (Saltelli order, ``SALib.sample.sobol``), as arrays; bootstrap seeded.
+
+    A first-order design (rows A, AB_i, B) is ``SALib.analyze.sobol``: S1 by Saltelli et al. (2010), ST by Jansen.
+    A second-order design also holds the rows BA_i (B with column i from A), and with them every index has a second
+    estimate, the same estimator with A and B exchanged (Saltelli 2002, "Making best use of model evaluations to
+    compute sensitivity indices", Comput. Phys. Commun. 145, 280-297): S1, ST and S2 are the mean of the two
+    (:func:`averaged_sobol_indices`), a lower variance for no extra evaluation.
+    """
     from SALib.analyze import sobol as sobol_analyze
 
     names = spec_or_names.names if hasattr(spec_or_names, "names") else list(spec_or_names)
+    if second_order:
+        return averaged_sobol_indices(names, outputs, bootstrap, confidence, seed)
     problem = {"num_vars": len(names), "names": names, "bounds": [[0.0, 1.0]] * len(names)}
     res = sobol_analyze.analyze(
         problem,
         np.asarray(outputs, dtype=float),
-        calc_second_order=second_order,
+        calc_second_order=False,
         num_resamples=bootstrap,
         conf_level=confidence,
         seed=_salib_seed(seed, 3),
     )
-    keys = ("S1", "S1_conf", "ST", "ST_conf") + (("S2", "S2_conf") if second_order else ())
-    return {k: np.asarray(res[k], dtype=float) for k in keys}
+    return {k: np.asarray(res[k], dtype=float) for k in ("S1", "S1_conf", "ST", "ST_conf")}
+
+
+def averaged_sobol_indices(names, outputs, bootstrap: int, confidence: float, seed: int) -> dict:
+    """S1, ST and S2 of a second-order Saltelli design from both of its halves, with bootstrap intervals.
+
+    ``SALib.analyze.sobol`` estimates S1 (Saltelli et al. 2010) and ST (Jansen) from the rows A, AB_i and B alone,
+    and S2 (Saltelli 2002) from BA_j and AB_k. Exchanging A and B gives the same estimators on B, BA_i and A
+    (BA_i is B with column i from A): a second estimate of each index from the other half of the evaluations
+    (Saltelli 2002, "Making best use of model evaluations to compute sensitivity indices", Comput. Phys. Commun.
+    145, 280-297; Saltelli et al. 2010, Comput. Phys. Commun. 181, 259-270). Each index here is the mean of its
+    two estimates: SALib's estimate on the design, and SALib's on the design with A and B exchanged
+    (``tests/studies/test_sensitivity_averaged.py`` checks it against both, with the same resamples).
+
+    The two halves share A and B, so they are correlated: the mean has (1 + rho) / 2 of one half's variance
+    (rho their correlation, halves of equal variance), no gain where rho = 1 (the total index of an input that
+    enters the output additively is the same from both halves), half the variance where rho = 0 and less where
+    the halves err in opposite directions (rho < 0: the S1 of the Ishigami function's x3, whose true S1 is 0).
+    The bootstrap draws its resamples of the N base rows as SALib does (the same generator and seed) and evaluates
+    both halves on each resample, so an interval is that of the mean.
+    ``names``: the parameters, in column order; ``outputs``: the model outputs in SALib's order, N (2D + 2) values.
+    Returns arrays ``S1, S1_conf, ST, ST_conf`` (D) and ``S2, S2_conf`` (D x D, upper triangle; NaN elsewhere).
+    """
+    from scipy.stats import norm
+
+    y = np.asarray(outputs, dtype=float)
+    d = len(names)
+    if y.ndim != 1 or y.size == 0 or y.size % (2 * d + 2):
+        raise ParameterError(
+            f"averaged_sobol_indices needs the outputs of a second-order Saltelli design: N (2D + 2) = N x "
+            f"{2 * d + 2} values for D = {d} parameters. Got shape {y.shape} instead."
+        )
+    n = y.size // (2 * d + 2)
+    rows = ((y - y.mean()) / y.std()).reshape(n, 2 * d + 2)  # SALib normalises the outputs so, and orders rows so
+    # SALib's resamples of the base rows: np.random.default_rng(seed).integers(N, size=(N, resamples))
+    r = np.random.default_rng(_salib_seed(seed, 3)).integers(n, size=(n, bootstrap))
+    point = _both_halves(rows[:, None, :], d)
+    boot = _both_halves(rows[r], d)
+    z = norm.ppf(0.5 + confidence / 2)
+    upper = np.triu(np.ones((d, d), dtype=bool), 1)
+    out = {}
+    for key in ("S1", "ST", "S2"):
+        out[key] = point[key][0]
+        out[f"{key}_conf"] = z * boot[key].std(axis=0, ddof=1)
+    for key in ("S2", "S2_conf"):
+        out[key] = np.where(upper, out[key], np.nan)
+    return out
+
+
+def _both_halves(rows: np.ndarray, d: int) -> dict[str, np.ndarray]:
+    """The mean of SALib's S1, ST and S2 estimators (``SALib.analyze.sobol.first_order``, ``total_order``,
+    ``second_order``) on (A, AB, B) and on (B, BA, A), for rows of shape (N, resamples, 2D + 2); arrays with the
+    resamples first."""
+    a, ab, ba, b = rows[..., 0], rows[..., 1 : d + 1], rows[..., d + 1 : 2 * d + 1], rows[..., 2 * d + 1]
+    var = np.var(np.concatenate([a, b]), axis=0)[:, None]  # SALib's: the variance of A and B together
+    # first_order(A, AB, B) = mean(B (AB - A)) / var, and exchanged; total_order(A, AB, B) = mean((A - AB)^2) / 2 var
+    s1 = np.mean(b[..., None] * (ab - a[..., None]) + a[..., None] * (ba - b[..., None]), axis=0) / (2 * var)
+    st = np.mean((a[..., None] - ab) ** 2 + (b[..., None] - ba) ** 2, axis=0) / (4 * var)
+    # closed second-order index of (j, k): BA_j and AB_k share x_j (from A) and x_k (from B); AB_j and BA_k alike
+    n = rows.shape[0]
+    closed = (np.einsum("nrj,nrk->rjk", ba, ab) + np.einsum("nrj,nrk->rjk", ab, ba)) / (2 * n)
+    closed = (closed - np.mean(a * b, axis=0)[:, None, None]) / var[..., None]
+    s2 = closed - s1[:, :, None] - s1[:, None, :]
+    return {"S1": s1, "ST": st, "S2": s2}
 
 
 def run_sensitivity(
