@@ -106,3 +106,16 @@ def test_an_image_built_for_another_digit_is_refused_in_one_line(digit_firmware,
     # and the thesis rig's own run on it (no --params: 3 gauges, straight at 8)
     assert main(["run", "--on-board", "--backend", f"hil://{elf}", "--duration", "1"]) == 2
     assert "the digit has 3 gauges, straight command 8" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_the_hosts_loop_through_a_digits_image(digit_firmware, capsys):
+    """The whole host stack through the firmware (``hil://`` in host mode): the board streams the digit's 6 gauges
+    in version-2 lines and follows the host's commands; ``run --params`` closes the loop on the host."""
+    elf, params = digit_firmware("six-gauges-geared")
+    args = ["run", "--params", str(params), "--backend", f"hil://{elf}", "--map-from", "twin", "--duration", "2"]
+    assert main([*args, "--setpoint-deg", "30", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["loop"] == "host"
+    assert abs(doc["true_final_rotation_deg"] - 30.0) < FINAL_FRACTION * 30.0
+    assert doc["step_metrics"]["true"]["settling_time_s"] < SETTLING_LIMIT_S

@@ -91,16 +91,19 @@ def _export_controller(args: argparse.Namespace) -> CommandResult:
     if params is not None and params.cables.count == 2:
         setpoints.append(-30.0)  # a cable pair bends both ways
     result = export_controller(
-        spec,
-        args.out,
-        format=args.format,
-        input_max=input_max,
-        plant_d=plant_d,
-        setpoints=setpoints,
-        prefix=args.prefix,
-        force=args.force,
-    )
-    data = {
+        spec, args.out, format=args.format, input_max=input_max, plant_d=plant_d, setpoints=setpoints,
+        prefix=args.prefix, force=args.force,
+    )  # fmt: skip
+    a = result.analysis
+    code = 0 if (a.closed_loop_stable is not False) else 1
+    data = _export_data(args, design, period, result, spec, scale)
+    return CommandResult(data=data, text=f"wrote {result.source_path} and {result.header_path}\n{a!r}", exit_code=code)
+
+
+def _export_data(args, design: str, period: float, result, spec, scale: float) -> dict:
+    """``export controller --json``: the files, the design, the digit's map and commands, the analysis."""
+    rotation = spec.rotation
+    return {
         "source": str(result.source_path),
         "header": str(result.header_path),
         "format": result.format,
@@ -116,9 +119,6 @@ def _export_controller(args: argparse.Namespace) -> CommandResult:
         "dither": spec.dither,
         "analysis": result.analysis.to_dict(),
     }
-    a = result.analysis
-    code = 0 if (a.closed_loop_stable is not False) else 1
-    return CommandResult(data=data, text=f"wrote {result.source_path} and {result.header_path}\n{a!r}", exit_code=code)
 
 
 def _export_design(design: str, period: float, args):
