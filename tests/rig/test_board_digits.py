@@ -49,6 +49,11 @@ def test_an_image_for_another_digit_is_refused_by_its_banner(tmp_path):
     check_board_image(old, None, "board://x")
     with pytest.raises(ParameterError, match="has 4 gauges, straight command 127"):
         check_board_image(old, pair, "board://x")
+    garbled = BoardState()
+    garbled.feed(BANNER.format(g="six", s=8).encode(), time_s=0.0)
+    with pytest.raises(OSError, match="gauges=six") as err:  # RigError: one line, not a ValueError
+        check_board_image(garbled, None, "board://x")
+    assert "\n" not in str(err.value)
 
 
 def test_a_hardware_map_with_no_operator_is_one_line(monkeypatch, capsys):

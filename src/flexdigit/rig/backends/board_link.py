@@ -172,7 +172,14 @@ def check_board_image(board: BoardState, params, where: str) -> None:
     p = params or RigParams()
     a = p.actuator
     want = (len(p.geometry.gauge_positions_m), int(a.equilibrium_command), (int(a.command_min), int(a.command_max)))
-    got = board.image_digit()
+    try:
+        got = board.image_digit()
+    except ValueError:
+        words = [board.banner_value(k) for k in ("gauges", "straight", "range")]
+        raise RigError(
+            f"{where}: the firmware's banner does not say which digit its image was built for as expected "
+            f"(gauges={words[0]} straight={words[1]} range={words[2]}: integers, range LOW..HIGH)"
+        ) from None
     if got != want:
         raise ParameterError(
             f"{where}: the firmware image was built for {got[0]} gauges, straight command {got[1]}, commands "
