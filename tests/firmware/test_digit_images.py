@@ -37,11 +37,16 @@ def _on_board(capsys, elf, params, setpoint: float) -> dict:
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("name", "setpoint", "gauges"),
-    [("six-gauges-geared", 30.0, 6), ("four-sections-two-cables", 30.0, 4), ("four-sections-two-cables", -30.0, 4)],
+    ("name", "setpoint", "gauges", "fmt"),
+    [
+        ("six-gauges-geared", 30.0, 6, "float"),
+        ("six-gauges-geared", 30.0, 6, "fixed"),
+        ("four-sections-two-cables", 30.0, 4, "float"),
+        ("four-sections-two-cables", -30.0, 4, "float"),
+    ],
 )
-def test_a_digits_image_holds_its_30_deg_step_on_the_board(digit_firmware, capsys, name, setpoint, gauges):
-    elf, params = digit_firmware(name)
+def test_a_digits_image_holds_its_30_deg_step_on_the_board(digit_firmware, capsys, name, setpoint, gauges, fmt):
+    elf, params = digit_firmware(name, 0.020, fmt)
     doc = _on_board(capsys, elf, params, setpoint)
     assert doc["loop"] == "board" and doc["params"] == str(params)
     assert f"gauges={gauges}" in " ".join(doc["board"]["info_lines"])
