@@ -8,8 +8,9 @@ a pretension, cable eccentricity, guide friction, a geared servo, 12-16 bit ADCs
 materials and 0.2-0.5 mm thick, 6-20 mm wide, digits 0.15-0.5 m long.
 
 Every drawn digit is meant to be valid and usable: its servo reaches a 30 deg tip rotation with margin (both ways
-with a pair) and its amplifiers keep the gauges inside the ADC's range at that rotation (estimated below from
-``eps = (t / 2) kappa``); those two bounds are physics a user would check, not flexdigit's code.
+with a pair) and its amplifiers keep the gauges inside the ADC's range at 35 deg of bending and under the digit's
+own weight lying horizontal (:func:`worst_curvature_1_m`, read through ``eps = (t / 2) kappa``); those bounds are
+physics a user would check, not flexdigit's code.
 
 Run the campaign (each command a subprocess, as a user would type it; ``--commands`` to choose; results as JSON;
 ``CAMPAIGN_SRC=DIR`` runs another checkout's sources, e.g. the commit before the fixes)::
@@ -57,6 +58,29 @@ ADC_MARGIN = 0.8
 CHANNEL_FACTOR = 0.13
 
 
+#: A nylon support's mass (kg) on the thesis rig: 10 mm long, 12.7 mm wide (the strip's), about twice the cable's
+#: 5.715 mm eccentricity tall, screws included (the packaged calibration's fit to table 3.1's wn, 8.385 g); a
+#: builder's support scales with that volume (the derived calibration's rule, flexdigit.twin.digit_calibration).
+SUPPORT_KG = 0.008385
+
+
+def worst_curvature_1_m(
+    x_m, length_m, strip_m, thickness_m, width_m, youngs_pa, density_kg_m3, supports_m, support_kg
+) -> float:
+    """The largest curvature (1/m) a gauge at ``x_m`` sees in use, as a builder would bound it: the cable's 35 deg
+    of bending (twice the mean over the strip, where the curvature peaks) and the digit's own weight lying
+    horizontal, ``M(x) = g (mu (L - x)^2 / 2 + sum m_k (c_k - x))`` over the strip and the supports beyond ``x``
+    on the straight digit (the largest lever arms), over the strip's ``EI`` alone (the housing only stiffens).
+    The larger of the two: the digit lies horizontal with its cable detached (chapter 6) or pulling it up against
+    its weight (chapter 7, cable side up), and bends both ways (a pair) only upright or hanging, where the straight
+    digit's weight bends nothing."""
+    cable = 2.0 * math.radians(35.0) / strip_m
+    mu = density_kg_m3 * thickness_m * width_m
+    moment = 9.80665 * (mu * (length_m - x_m) ** 2 / 2 + sum(support_kg * (c - x_m) for c in supports_m if c > x_m))
+    weight = moment / (youngs_pa * width_m * thickness_m**3 / 12.0)
+    return max(cable, weight)
+
+
 def campaign_digit(seed: int) -> dict:
     """A valid digit description (a dict of TOML tables) drawn with ``seed``; see the module docstring."""
     rng = np.random.default_rng([24, 1024, seed])
@@ -86,11 +110,16 @@ def campaign_digit(seed: int) -> dict:
     bridges = [str(rng.choice(BRIDGES)) for _ in range(count)]
     factors = [round(float(rng.uniform(0.8, 2.2)), 2) for _ in range(count)]
     adc_span = float(rng.choice([5.0, 10.0]))
-    # gain bound: the surface strain at 35 deg spread over the strip, amplified, inside the ADC's range
-    strain = 0.5 * thickness * math.radians(35.0) / (sections * section)
+    # gain bound: each gauge's largest curvature, the cable's and the digit's own weight's, amplified inside the
+    # ADC's range (the draws do not depend on the bound: the same digits as before it counted the weight)
+    supports = [(k + 1) * pitch for k in range(sections)]  # the last support's centre at the tip
+    support_kg = SUPPORT_KG * (support / 0.010) * (width / 0.0127) * (eccentricity / 0.005715)
     gains = []
-    for bridge, factor in zip(bridges, factors, strict=True):
-        volts_per_gain = CHANNEL_FACTOR * 1.0 * factor * BRIDGE_ARMS[bridge] * strain * 2  # x2: curvature peaks
+    for bridge, factor, x in zip(bridges, factors, positions, strict=True):
+        kappa = worst_curvature_1_m(
+            x, length, sections * section, thickness, width, youngs, density, supports, support_kg
+        )  # fmt: skip
+        volts_per_gain = CHANNEL_FACTOR * 1.0 * factor * BRIDGE_ARMS[bridge] * 0.5 * thickness * kappa
         top = ADC_MARGIN * (adc_span / 2) / volts_per_gain
         gains.append(round(float(min(20000.0, rng.uniform(0.25, 1.0) * top)), 0))
     data: dict = {

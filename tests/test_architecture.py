@@ -357,6 +357,7 @@ LAZY_IMPORTS = {
     ("flexdigit.rig.controllers", "flexdigit.control.design20ms"): "python-control; cli/run.py reads a constant here",
     ("flexdigit.rig.backends.stream_emulator", "flexdigit.twin.twin"): "scipy; cli/run.py reads its defaults",
     ("flexdigit.rig.step_test", "flexdigit.rig.backends.hil_backend"): "scipy (its twin); cli/run.py reads a constant",
+    ("flexdigit.twin.digit_calibration", "flexdigit.twin.digit"): "scipy; cli/run.py reads constants beside it",
 }
 
 

@@ -103,8 +103,13 @@ def test_a_digit_that_buckles_tip_up_is_swept_hanging(tmp_path, capsys):
 
 def test_shape_says_a_reading_is_at_the_adcs_rail(tmp_path, capsys):
     """Campaign digit 7 lying horizontal sags so far that two of its hot amplifiers sit at the ADC's -2.5 V: the
-    estimate is rightly refused, and the line now says which gauges are clipped rather than only the chi-square."""
-    digit = _digit(7, tmp_path)
+    estimate is rightly refused, and the line now says which gauges are clipped rather than only the chi-square.
+    The digit keeps the amplifiers it was drawn with then (the campaign now bounds the gains by the digit's own
+    weight too, and draws 0.23-0.25 of these for gauges 1-4)."""
+    data = campaign_digit(7)
+    data["sensors"]["amplifier_gains_v_per_v"] = [20000.0, 20000.0, 12337.0, 17837.0, 20000.0, 7620.0, 20000.0]
+    digit = tmp_path / "seed-7.toml"
+    digit.write_text(to_toml(data))
     volts = "-2.354736,-2.5,-2.5,-1.314697,-0.467529,-0.107422,-0.014648"  # the campaign's collected reading
     argv = ["shape", "--params", str(digit), f"--gauges-v={volts}", "--orientation", "horizontal", "--no-cable"]
     assert main(argv) == 1

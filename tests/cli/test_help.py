@@ -114,6 +114,7 @@ def test_each_file_format_is_described_in_a_help(name):
 
 def _builtins():
     from flexdigit.palpation.palpation_files import PROTOCOLS, TISSUES
+    from flexdigit.studies.robot_study import SHIPPED_ROBOT_SPECS
     from flexdigit.studies.spec import SHIPPED_SPECS
     from flexdigit.tactile.protocols import BUILTIN
     from flexdigit.tdcr.description import ROBOTS
@@ -121,7 +122,7 @@ def _builtins():
     return {
         "protocols": (*BUILTIN, *PROTOCOLS),
         "tissues": TISSUES,
-        "specs": SHIPPED_SPECS,
+        "specs": (*SHIPPED_SPECS, *SHIPPED_ROBOT_SPECS),
         "robots": tuple(ROBOTS),
     }
 

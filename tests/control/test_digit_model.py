@@ -28,9 +28,12 @@ from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, c
 # a central difference over +-1 command of the nonlinear statics agrees to its curvature, ~1e-6 on these digits.
 STATICS_RTOL = 1e-4
 # Below the servo's bandwidth (20 rad/s) and up to 30 rad/s the truncated model's response is the full chain's
-# within 3 % (the truncated modes' dynamics, matched at DC only; 2.7 % at 30 rad/s on the 8-section digit).
-RESPONSE_RTOL = 0.03
-FREQUENCIES_RAD_S = (1.0, 10.0, 30.0)
+# within 3 % up to 10 rad/s (the truncated modes' dynamics, matched at DC only: 1.8 % at 10 rad/s on the 8-section
+# pair) and 6 % at 30 rad/s (5.1 % there: with the damping law's larger beta on a long digit, 2.7 x the thesis's,
+# its overdamped cells' real poles sit at 57 rad/s, a cluster of twenty past the model's six modes, and 340-1800
+# rad/s, matched at DC; 2.7 % when beta was the thesis's).
+RESPONSE_RTOL = {1.0: 0.03, 10.0: 0.03, 30.0: 0.06}
+FREQUENCIES_RAD_S = tuple(RESPONSE_RTOL)
 
 EIGHT_SECTIONS = {
     "geometry": {
@@ -75,12 +78,13 @@ def test_the_truncated_model_responds_as_the_whole_chain(digit, monkeypatch):
     for w in FREQUENCIES_RAD_S:
         ours = np.asarray(ct.evalfr(kept.plant, 1j * w)).reshape(-1)
         full = np.asarray(ct.evalfr(whole.plant, 1j * w)).reshape(-1)
-        assert np.all(np.abs(ours / full - 1) < RESPONSE_RTOL), (w, ours, full)
+        assert np.all(np.abs(ours / full - 1) < RESPONSE_RTOL[w]), (w, ours, full)
 
 
 def test_the_long_digits_slow_mode_is_in_its_model():
-    """The 0.5 m digit hung: its first mode, 1.5 Hz with zeta 0.02 (issue 24's figures), is the chain's own about
-    the operating shape (its linear modal analysis, :meth:`Chain.linear_modes`)."""
+    """The 0.5 m digit hung: its first mode, 1.5 Hz, is the chain's own about the operating shape (its linear modal
+    analysis, :meth:`Chain.linear_modes`), damped as the damping law gives it (the thesis rig's first-mode zeta
+    carried over, ``twin.digit_calibration``: 0.07 with the cable taut; 0.02 when relaxation times were kept)."""
     params = RigParams.from_dict(DIGITS["five-sections-eight-gauges"])
     model = digit_model(params, orientation="hanging")
     chain = cached_digit(params, twin_calibration(params), True, "hanging", DEFAULT_CELLS_PER_SECTION)
@@ -90,7 +94,7 @@ def test_the_long_digits_slow_mode_is_in_its_model():
     assert model.modes_wn_rad_s[0] == pytest.approx(wn[0], rel=1e-6)
     assert model.modes_zeta[0] == pytest.approx(zeta[0], rel=1e-6)
     assert model.modes_wn_rad_s[0] / (2 * np.pi) == pytest.approx(1.5, abs=0.1)
-    assert model.modes_zeta[0] == pytest.approx(0.02, abs=0.01)
+    assert model.modes_zeta[0] == pytest.approx(0.07, abs=0.01)
 
 
 def test_the_search_holds_its_limits_on_the_model():

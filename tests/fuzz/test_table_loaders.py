@@ -1,6 +1,7 @@
 """Fuzz the table loaders (tactile datasets in Parquet and CSV, DAQ time series in CSV and Parquet): every
 generated file loads or gives the project's one-line error naming the file (issue 16). Valid seeds are made here
-from a protocol's plan and seeded numbers, and a damped sine written with the csv module."""
+from a protocol's plan and seeded numbers, a damped sine written with the csv module, and a tendon robot's gauge
+readings (``flexdigit tdcr shape --readings``)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from hypothesis import strategies as st
 from flexdigit.identify.timeseries import read_timeseries
 from flexdigit.tactile.dataset import COLUMNS, Dataset, export_csv, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import Protocol
+from flexdigit.tdcr import ROBOTS, read_readings, sense_shape
 
 from .strategies import assert_loader_contract, edited_document, json_values, mutated_bytes, numbers
 
@@ -45,6 +47,10 @@ def folder(tmp_path_factory):
     rows = "".join(f"{float(a)!r},{float(b)!r},8\n" for a, b in zip(t, y, strict=True))
     (folder / "rec.csv").write_text("time_s,sg1_v,command\n" + rows)
     pq.write_table(pa.table({"time_s": t, "sg1_v": y}), folder / "rec.parquet")
+    shape = sense_shape(ROBOTS["rao2021"], tensions_n=[4, 0, 0, 0, 2, 0], stations_per_segment=2)
+    gauges = zip(shape.layout.s_m, shape.layout.angles_deg, shape.layout.tilts_deg, shape.strains, strict=True)
+    rows = "".join(f"{float(s)!r},{float(a)!r},{float(b)!r},{float(e)!r}\n" for s, a, b, e in gauges)
+    (folder / "gauges.csv").write_text("s_m,angle_deg,tilt_deg,strain\n" + rows)  # a tendon robot's readings
     return folder
 
 
@@ -53,6 +59,7 @@ def test_the_seeds_load(folder):
     assert len(load_dataset(folder / "valid.csv")) == PROTOCOL.sample_count
     assert read_timeseries(folder / "rec.csv", "sg1").t_s.size == 200
     assert read_timeseries(folder / "rec.parquet", "sg1").t_s.size == 200
+    assert read_readings(folder / "gauges.csv", ROBOTS["rao2021"])[1].size == 24
 
 
 def _bytes_test(seed_name, target_name, load):
@@ -70,6 +77,7 @@ test_dataset_parquet_bytes = _bytes_test("valid.parquet", "bytes.parquet", load_
 test_dataset_csv_bytes = _bytes_test("valid.csv", "bytes.csv", load_dataset)
 test_timeseries_csv_bytes = _bytes_test("rec.csv", "bytes-rec.csv", lambda p: read_timeseries(p, "sg1"))
 test_timeseries_parquet_bytes = _bytes_test("rec.parquet", "bytes-rec.parquet", lambda p: read_timeseries(p, "sg1"))
+test_gauge_readings_bytes = _bytes_test("gauges.csv", "bytes-gauges.csv", lambda p: read_readings(p, ROBOTS["rao2021"]))
 
 #: Column values a table may hold: numbers of every kind, text, nulls, booleans.
 cells = st.one_of(numbers, st.none(), st.booleans(), st.text(max_size=6))

@@ -2,7 +2,7 @@
 specs): every generated file loads or gives the project's one-line error naming the file (issue 16). Valid seeds:
 the thesis defaults written by tomli_w, the packaged thesis-6.1 protocol and twin calibration, the shipped
 nodule phantom, the shipped sweep, scan and hold palpation protocols in one file, and the shipped
-thesis-tolerances study, the rao2021 tendon robot written by tomli_w."""
+thesis-tolerances study, the rao2021 tendon robot written by tomli_w, the shipped rao2021-tolerances robot study."""
 
 from __future__ import annotations
 
@@ -18,6 +18,7 @@ from flexdigit.errors import FlexdigitError
 from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
 from flexdigit.params import RigParams, load_params, params_template
 from flexdigit.studies.design_study import DesignSettings
+from flexdigit.studies.robot_study import load_robot_spec
 from flexdigit.studies.sensitivity import SensitivitySettings
 from flexdigit.studies.spec import load_spec
 from flexdigit.tactile.importer import ColumnMap
@@ -36,6 +37,7 @@ PALPATION = _PALPATION.joinpath("scan.toml").read_bytes() + b"\n" + _PALPATION.j
 SPEC = resources.files("flexdigit.studies").joinpath("specs", "thesis-tolerances.toml").read_bytes()
 DESIGN = resources.files("flexdigit.studies").joinpath("specs", "thesis-design.toml").read_bytes()
 ROBOT = tomli_w.dumps(ROBOTS["rao2021"].to_dict()).encode()
+ROBOT_SPEC = resources.files("flexdigit.studies").joinpath("specs", "rao2021-tolerances.toml").read_bytes()
 COLUMN_MAP = b'gauges = ["sg_a", "sg_b", "sg_c"]\ngauge_unit = "mV"\nload = "mass_g"\nposition = "x_mm"\n'
 
 LOADERS = {
@@ -49,6 +51,7 @@ LOADERS = {
     "palpation": (load_palpation_protocol, PALPATION),
     "spec": (load_spec, SPEC),
     "robot": (load_robot, ROBOT),
+    "robot spec": (load_robot_spec, ROBOT_SPEC),
 }
 
 
@@ -113,6 +116,8 @@ test_spec_bytes = _fuzz_bytes("spec")
 test_spec_values = _fuzz_values("spec")
 test_robot_bytes = _fuzz_bytes("robot")
 test_robot_values = _fuzz_values("robot")
+test_robot_spec_bytes = _fuzz_bytes("robot spec")
+test_robot_spec_values = _fuzz_values("robot spec")
 
 
 #: A key with a newline in it, as ``make fuzz`` (seed 0) generated it for the protocol, calibration and spec files:

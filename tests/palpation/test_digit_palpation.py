@@ -99,9 +99,9 @@ def test_a_sweep_of_g_gauges_is_drawn_with_g_noise_columns(name):
 
 
 def test_a_geared_digit_holds_the_force_with_the_loops_rates_geared():
-    # the force loop's rates are per turn of the pulley: with a 4:1 gearing four times the commands a second (at
-    # the thesis's 4 commands/s the geared digit had not reached the tissue after 8 s: -96 % steady error). The
-    # issue's figures for the thesis rig: within 10 % steady, < 20 % overshoot (true force, from the twin)
+    # the force loop's gains are the digit's (palpation.force_gains): with a 4:1 gearing about four times the
+    # thesis's (at the thesis's 4 commands/s the geared digit had not reached the tissue after 8 s: -96 % steady
+    # error). The figures for the thesis rig: within 10 % steady, < 20 % overshoot (true force, twin)
     geared = RigParams.from_dict(DIGITS["six-gauges-geared"])
     length = geared.geometry.digit_length_m
     f = studies.force_study(

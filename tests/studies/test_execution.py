@@ -15,7 +15,16 @@ import pytest
 
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.studies.execution import JOURNAL_NAME, TASK_FAILED, Journal, RowRecord, parse_scheduler, retry_rows
+from flexdigit.studies.execution import (
+    JOURNAL_NAME,
+    TASK_FAILED,
+    TASK_ROWS_MAX,
+    Journal,
+    RowRecord,
+    parse_scheduler,
+    retry_rows,
+    task_sizes,
+)
 from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity, write_outputs
 from flexdigit.studies.spec import StudySpec, spec_from_toml
 
@@ -306,3 +315,18 @@ def test_a_study_stopped_by_sigterm_resumes_without_recomputing(tmp_path, worker
     after = journal.read_text().splitlines()
     assert after[: len(before)] == before  # every row finished before the stop was kept whole, not recomputed
     assert _evaluations(out).equals(_evaluations(ref))
+
+
+def test_dask_tasks_take_consecutive_blocks_shrinking_to_one_at_the_end():
+    # guided sizes, worked by hand: ceil(left / (4 slots x 2 workers)) blocks of the 40 left, then of 35, 30, ...
+    assert task_sizes(40, 2, 1) == [5, 5, 4, 4, 3, 3, 2, 2, 2, 2] + [1] * 8
+    # the N = 1024 study's 5,144 blocks of 8 on 2 workers: 32 blocks (256 rows) a task at most, single blocks last
+    sizes = task_sizes(5144, 2, 8)
+    assert sum(sizes) == 5144
+    assert sizes[0] == TASK_ROWS_MAX // 8 == 32
+    assert sizes == sorted(sizes, reverse=True)
+    assert sizes[-8:] == [1] * 8
+    assert len(sizes) < 5144 / 20  # what the client, the scheduler and the workers' event loops handle
+    # blocks larger than the cap: one a task; and no workers yet known: sized as for one
+    assert task_sizes(3, 2, 10**6) == [1, 1, 1]
+    assert task_sizes(9, 0, 1) == task_sizes(9, 1, 1) == [3, 2, 1, 1, 1, 1]

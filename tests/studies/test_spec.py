@@ -26,7 +26,7 @@ def test_shipped_tolerances_have_sources_and_enough_parameters():
     spec = load_spec("thesis-tolerances")
     assert len(spec.parameters) >= 12
     assert all(p.source for p in spec.parameters)
-    assert set(SHIPPED_SPECS) == {"thesis-tolerances", "thesis-design"}
+    assert set(SHIPPED_SPECS) == {"thesis-tolerances", "thesis-design", "thesis-taper"}
     assert "design" in load_spec("thesis-design").settings  # a design spec needs no uncertain parameter
 
 

@@ -12,10 +12,11 @@ resolution and a network's continuous regression can approach it (well-separated
 near zero, where a regression that cannot snap to them has no chance and no ratio means anything).
 
 Tolerances:
-- ``BAYES_RATIO_MAX = 1.3``: the issue's. ``BAYES_RATIO_MIN = 0.6``: the limit is a floor on drift-free readings;
-  the twin's drift, a random walk over the run, shifts consecutive positions' means apart, which a network trained
-  on the same run can use (0.73 on the geared six-gauge digit, 0.89 on the thesis rig, 1.01-1.06 elsewhere), and a
-  test set of ~130 readings scores an RMSE to ~6 %; below 0.6 the limit would be wrong.
+- ``BAYES_RATIO_MAX = 1.3``: the issue's. ``BAYES_RATIO_MIN = 0.6``: the limit is a floor on the readings' white
+  noise; a setting's offset (the drift, a tare's error), shared by its training and test readings, is something a
+  network trained on the same run can use, and a test set of ~130 readings scores an RMSE to ~6 %; below 0.6 the
+  limit would be wrong. The protocol (a TOML) reads steady and tares before each position, ``train`` keeping the
+  raw or tared readings by validation (docs/digits.md "Tactile data of your digit").
 - ``MODULUS_SIGMAS = 3``: palpation's modulus within three of its own standard deviations of the tissue's true
   1000 N/m^2 (the thesis rig's is 997 +- 17; the drawn 2-gauge 0.43 m digit's 1418 +- 237, its chi^2/dof 5),
   and ``MODULUS_SD_MAX = 0.5``: that standard deviation under half the modulus (the estimate says something).

@@ -36,7 +36,11 @@ def test_table_7_1_counts_match_thesis():
 
 def test_user_protocol_and_clear_errors(tmp_path):
     p = protocol_from_toml('name = "mine"\nloads_g = [10]\npositions_from_tip_cm = [0, 5]\nrepetitions = 2\n')
-    assert p.sample_count == 2 * 2 + 25
+    assert p.sample_count == 2 * (25 + 2)  # the 25 no-load readings before each position (tare_each_position)
+    once = protocol_from_toml(
+        'name = "mine"\nloads_g = [10]\npositions_from_tip_cm = [0, 5]\nrepetitions = 2\ntare_each_position = false\n'
+    )
+    assert once.sample_count == 2 * 2 + 25  # at the start of the test only, as the thesis's (6.5, 7.2)
     with pytest.raises(ParameterError, match="missing key 'loads_g'"):
         protocol_from_toml('name = "x"\npositions_from_tip_cm = [1]\n')
     with pytest.raises(ParameterError, match="unknown key 'load_g'"):

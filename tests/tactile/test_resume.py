@@ -164,10 +164,13 @@ def test_cli_resume_with_other_settings_is_refused_and_settle_0_is_recorded(tmp_
     assert not journal_path(out).exists()
     assert not out.exists()  # refused before the first reading
     from flexdigit.rig.base import open_rig
+    from flexdigit.tactile.protocols import protocol_from_toml
     from flexdigit.tactile.runner import collect as collect_
     from flexdigit.tactile.runner import sim_options
 
-    started = Protocol("t", (0.0125,), (0.0, 0.05), repetitions=2)
+    started = protocol_from_toml(protocol.read_text())  # the command's protocol, its TOML defaults and all
+    assert started == Protocol("t", (0.0125,), (0.0, 0.05), repetitions=2, wait_until_steady=True,
+                               tare_each_position=True)  # fmt: skip
     rig = open_rig("sim", seed=3, **sim_options(started))  # the rig `flexdigit collect` opens (numpy stepping)
     collect_(started, rig, out, settle_s=0, stop_after=3)
     assert main([*base, "--seed", "4", "--settle", "0", "--json"]) == 2

@@ -11,10 +11,8 @@ contact causes (measured: the place exact and the force within 0.1 % on a straig
 import numpy as np
 import pytest
 
-from flexdigit.tdcr import ROBOTS, Robot, Segment, _chain_kernel, gauge_layout, gauge_strains, solve_statics
+from flexdigit.tdcr import ROBOTS, Robot, Segment, gauge_layout, gauge_strains, pressed_shape, sense_contact
 from flexdigit.tdcr.contact_sensing import locate_contact
-from flexdigit.tdcr.dynamics import _discrete_model, _element_frames
-from flexdigit.tdcr.statics import StaticSolution, _nodes
 
 PLACE_ATOL_M = 2e-3
 FORCE_RTOL = 0.05
@@ -22,26 +20,10 @@ FORCE_RTOL = 0.05
 
 def _twin(robot, tensions, nodes_per_disk, contact_node=None, force_n=None):
     """The discrete rod settled under the tensions (and a contact force at a node), as a StaticSolution."""
-    nodes, ends = _nodes(robot, nodes_per_disk)
-    loads = (np.asarray(tensions, dtype=float), np.zeros(3), np.zeros(3), np.zeros(3))
-    model, _, _, hb = _discrete_model(robot, nodes, ends, loads)
-    if contact_node is not None:
-        model[4][contact_node] += force_n
-    n = nodes.size - 1
-    start = solve_statics(robot, tensions, nodes_per_disk=nodes_per_disk)  # Newton's start: the shot rod's shape
-    x = start.positions_m.copy()
-    q = np.ascontiguousarray(_element_frames(start.rotations))
-    assert _chain_kernel.equilibrate(x, q, model, hb, 1e-10, 100) != _chain_kernel.NO_PROGRESS
-    sig, kap = np.empty((n, 3)), np.empty((n, 3))
-    _chain_kernel._state_strains(x, q, model, sig, kap)
-    frames = np.empty((1, n + 1, 3, 3))
-    _chain_kernel.node_frames(q[None], frames)
-    strains = np.zeros((n + 1, 6))
-    v = sig + [0.0, 0.0, 1.0]
-    strains[0, :3], strains[-1, :3] = v[0], v[-1]
-    strains[1:-1, :3] = (v[:-1] + v[1:]) / 2
-    strains[:-1, 3:] = kap  # the tip carries no moment
-    return StaticSolution(nodes, x, frames[0], strains, strains, np.zeros(6), True, 0, 0.0)
+    if contact_node is None:
+        return pressed_shape(robot, tensions, nodes_per_disk=nodes_per_disk)
+    s_m = pressed_shape(robot, tensions, nodes_per_disk=nodes_per_disk).s_m[contact_node]
+    return pressed_shape(robot, tensions, contact_s_m=s_m, contact_force_n=force_n, nodes_per_disk=nodes_per_disk)
 
 
 @pytest.mark.parametrize(
@@ -80,3 +62,22 @@ def test_contacts_near_the_base_are_out_of_sight():
     estimate = locate_contact(robot, layout, gauge_strains(_twin(robot, [], 1), layout), _twin(robot, [], 1))
     assert estimate.visible_from_m == pytest.approx(0.15)  # the second station
     assert estimate.s_m >= estimate.visible_from_m
+
+
+def test_sense_contact_presses_the_twin_and_reports_its_errors():
+    """The one call behind ``flexdigit tdcr contact``: the same numbers as the steps above, and seeded noise."""
+    robot = ROBOTS["rao2021"]
+    found = sense_contact(robot, [2, 0, 0, 0, 1, 0], contact_s_m=0.27, contact_force_n=[-0.01, 0.015, 0.0])
+    assert found.true_s_m == pytest.approx(0.27)
+    assert found.place_error_m < PLACE_ATOL_M
+    assert found.force_error_n < FORCE_RTOL * np.hypot(0.01, 0.015)
+    noisy = [
+        sense_contact(
+            robot, [2, 0, 0, 0, 1, 0], contact_s_m=0.27, contact_force_n=[-0.01, 0.015, 0.0], noise_std=1e-6, seed=3
+        ).strains
+        for _ in range(2)
+    ]
+    np.testing.assert_array_equal(*noisy)
+    assert np.abs(noisy[0] - found.strains).max() > 0  # the noise is there
+    with pytest.raises(ValueError, match="readings"):
+        sense_contact(robot, [2, 0, 0, 0, 1, 0])

@@ -114,3 +114,51 @@ def test_layouts_that_cannot_see_the_shape_are_refused():
         gauge_strains(twin, off)
     with pytest.raises(ParameterError, match="strains"):
         estimate_shape(robot, first_only, [0.0])
+
+
+def _write_readings(path, layout, strains):
+    rows = ["s_m,angle_deg,tilt_deg,strain"]
+    rows += [
+        f"{float(s)!r},{float(a)!r},{float(t)!r},{float(e)!r}"
+        for s, a, t, e in zip(layout.s_m, layout.angles_deg, layout.tilts_deg, strains, strict=True)
+    ]
+    path.write_text("\n".join(rows) + "\n")
+
+
+def test_sense_shape_from_a_readings_file_is_the_twins_estimate(tmp_path):
+    """The readings written to a file and read back give the estimate of the twin's own readings, bit for bit
+    (repr round-trips floats), and the twin beside it is the truth they came from."""
+    robot = ROBOTS["rao2021"]
+    tensions, forces = _loads()
+    from_twin = tdcr.sense_shape(robot, tensions_n=tensions[0], tip_force_n=forces[0], noise_std=1e-6, seed=4)
+    assert from_twin.tip_error_m < NOISY_TIP_ATOL_M
+    assert from_twin.max_error_m >= from_twin.tip_error_m * 0.5
+    assert from_twin.tip_angle_error_deg < 0.1
+    path = tmp_path / "gauges.csv"
+    _write_readings(path, from_twin.layout, from_twin.strains)
+    layout, strains = tdcr.read_readings(path, robot)
+    from_file = tdcr.sense_shape(robot, strains, layout=layout)
+    np.testing.assert_array_equal(from_file.estimate.positions_m, from_twin.estimate.positions_m)
+    assert from_file.twin is None and from_file.tip_error_m is None
+
+
+@pytest.mark.parametrize(
+    ("text", "needle"),
+    [
+        ("", "empty"),
+        ("s_m,angle_deg\n0.1,0\n", "header"),
+        ("s_m,angle_deg,strain,volts\n0.1,0,0,1\n", "header"),
+        ("s_m,angle_deg,strain\n0.1,0\n", "line 2: 2 cells"),
+        ("s_m,angle_deg,strain\n0.1,0,x\n", "line 2: strain 'x' is not a finite number"),
+        ("s_m,angle_deg,strain\n0.1,0,nan\n", "line 2: strain 'nan'"),
+        ("s_m,angle_deg,strain\n0.1,0,0\n0.5,0,0\n", "line 3: s_m 0.5 is off the backbone"),
+        ("s_m,angle_deg,strain\n0.1,0,2000\n", "line 2: strain 2000 is not a strain gauge's reading"),
+    ],
+)
+def test_bad_readings_files_are_refused_in_one_line(tmp_path, text, needle):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(ValueError, match="bad.csv") as info:
+        tdcr.read_readings(path, ROBOTS["rao2021"])
+    assert needle in str(info.value)
+    assert "\n" not in str(info.value)

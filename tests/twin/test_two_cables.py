@@ -54,7 +54,7 @@ def test_a_single_cable_goes_slack_below_straight():
     one = RigParams.from_dict(DIGITS["two-sections"])
     twin = Twin(one, dt_s=0.002, command=20)
     twin.command(0)
-    twin.advance(2.0)
+    twin.advance(4.0)  # zeta 0.06 at 20 rad/s: a 0.8 s time constant, 20 deg ring down to 0.2 deg
     assert twin.cable_tension_n() == 0.0
     assert abs(math.degrees(twin.state()[0][-1])) < 0.5  # relaxed: only self-weight, tip up
 

@@ -111,13 +111,19 @@ high = 215e9
 """,
     ),
     "robot": (
-        "tendon robot (TOML, 'flexdigit tdcr statics|dynamics FILE'; built-ins: 'flexdigit list robots')",
-        "The backbone rod, its segments (each with its disks) and the tendons (offset, angle, last disk).",
+        "tendon robot (TOML, 'flexdigit tdcr statics|dynamics|shape|contact FILE', 'simulate release|step --robot "
+        "FILE'; built-ins: 'flexdigit list robots')",
+        "The backbone rod ([backbone]: Young's modulus, Poisson's ratio, radius, density; SI units), its segments "
+        "([[segments]]: length and disk count, disks equally spaced, the last at the segment's end) and the tendons "
+        "([[tendons]]: offset from the axis, angle from the disk's x axis, the disk it ends on, counted from the "
+        "base over all segments); every key optional but one segment.",
         """\
 name = "my-robot"
 [backbone]
 youngs_modulus_pa = 54e9
+poisson_ratio = 0.3
 radius_m = 0.0007
+density_kg_m3 = 6450.0
 [[segments]]
 length_m = 0.2
 disk_count = 10

@@ -266,38 +266,24 @@ def _train_output(args: argparse.Namespace):
 
 def _train(args: argparse.Namespace) -> CommandResult:
     from flexdigit.tactile.dataset import load_dataset
+    from flexdigit.tactile.localisation import train_network
     from flexdigit.tactile.model_io import save_model
-    from flexdigit.tactile.pipeline import features, run_pipeline, target_scores, targets
+    from flexdigit.tactile.pipeline import target_scores
 
     model_path = _train_output(args)
     dataset = load_dataset(args.file)
     target = args.target.replace("-", "_")
-    rows, y = targets(dataset, target)
-    actuated = dataset.protocol.actuated
-    x = features(dataset, with_command=actuated)[rows]
-    inputs = [*dataset.gauge_columns] + (["command"] if actuated else [])  # the network's inputs: G gauges (+ command)
-    result = run_pipeline(
-        x,
-        y,
-        seed=args.seed,
-        fixed_hidden=args.hidden,
-        fixed_tol=args.tol,
-        target=target,
-        curve_hidden=None,  # the error curves are not shown: no network for them
-        epochs=args.epochs,
+    result, rows, inputs, tared = train_network(
+        dataset, target, seed=args.seed, hidden=args.hidden, tol=args.tol, epochs=args.epochs
     )
     scores = target_scores(result)
     if args.bayes_limit:
         scores.update(_bayes_scores(args, dataset, rows[result.split.test], scores["rmse_mm"]))
-    save_model(
-        model_path,
-        result.model,
-        target=target,
-        inputs=inputs,
-        meta={"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores},
-        force=args.force,
-    )
-    data = {"target": target, "model": str(model_path), "swept": args.hidden is None or args.tol is None, **scores}
+    meta = {"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores}
+    meta["tared"] = tared  # the kept network reads tared readings: predict tares its readings alike
+    save_model(model_path, result.model, target=target, inputs=inputs, meta=meta, force=args.force)
+    swept = args.hidden is None or args.tol is None
+    data = {"target": target, "model": str(model_path), "swept": swept, "tared": tared, **scores}
     lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]
     lines += [f"  {k} = {v:.6g}" if isinstance(v, float) else f"  {k} = {v}" for k, v in scores.items()]
     if args.plot:
@@ -332,6 +318,7 @@ def _predict(args: argparse.Namespace) -> CommandResult:
     from flexdigit.errors import DataFileError
     from flexdigit.tactile.accuracy import corr2, rmse
     from flexdigit.tactile.dataset import load_dataset
+    from flexdigit.tactile.localisation import tare
     from flexdigit.tactile.model_io import load_model
     from flexdigit.tactile.pipeline import targets
     from flexdigit.tactile.prediction_plot import target_unit
@@ -343,7 +330,8 @@ def _predict(args: argparse.Namespace) -> CommandResult:
     if missing:
         raise DataFileError(f"{args.file}: the model needs column '{missing[0]}'")
     rows, y = targets(dataset, saved.target)
-    x = np.column_stack([dataset[c].astype(float) for c in saved.inputs])[rows]
+    readings = tare(dataset)[0] if saved.meta.get("tared") is True else dataset  # as the network was trained
+    x = np.column_stack([readings[c].astype(float) for c in saved.inputs])[rows]
     pred = saved.network.predict(x)
     what, unit, scale = target_unit(saved.target)
     scores = {"corr2": corr2(pred, y), "rmse": rmse(pred, y)}  # rmse in the target's SI unit (m, kg)

@@ -3,7 +3,9 @@
 * ``flexdigit design hinf --filter-hz F [--plant printed|consistent] [--eps E] [--margin M]``
 * ``flexdigit design sweep --filters 0.5,5,39,50``
 * ``flexdigit design mixsyn [--bandwidth W] [--w-command C] [--w-disturbance D] [--s-peak M]``
-* ``flexdigit design 20ms [--params FILE] [--calibration FILE]``: the 20 ms discrete design (5.2-5.3)
+* ``flexdigit design 20ms [--params FILE] [--calibration FILE] [--out ctrl.json]``: the 20 ms discrete design
+  (5.2-5.3); ``--out`` keeps it (:mod:`flexdigit.control.kept_design`) for ``flexdigit run --params FILE
+  --controller ctrl.json``, which then does not search the digit's weights again
 
 ``hinf`` and ``20ms`` take ``--params FILE`` (and ``--calibration FILE``): the design is then on that digit's plant,
 built the thesis's way from its components (servo, cable, the digit's own mode from its twin, gauge chain;
@@ -93,6 +95,13 @@ def register(subparsers) -> None:
         help="sample period, s (default the digit's serial period, 20 ms)",
     )
     _add_digit_flags(p)
+    p.add_argument(
+        "--out",
+        default=None,
+        metavar="FILE",
+        help="keep the design (JSON, the digit's fingerprint in it) for: flexdigit run --params FILE --controller OUT",
+    )
+    p.add_argument("--force", action="store_true", help="overwrite an existing --out file")
 
 
 def _add_digit_flags(p) -> None:
@@ -230,13 +239,16 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
 
 def _twenty_ms(args: argparse.Namespace) -> CommandResult:
     """``design 20ms``: the discrete design the loop runs (``flexdigit run --controller digital20``)."""
+    from flexdigit._io import check_output
     from flexdigit.control.design20ms import digit_design_20ms_summary
 
+    if args.out is not None:
+        check_output(args.out, force=args.force)  # before the search, not after it
     params, calibration = _digit(args)
     summary = digit_design_20ms_summary(
         params, period_s=args.period, calibration=calibration, orientation=args.orientation
     )
-    data = {"params": args.params, **summary}
+    data = {"params": args.params, **summary, "out": _keep(args, params, calibration, summary)}
     step, digit, search = data["linear_step_30deg"], data["model"], data["search"]
     model = (
         "servo x rotation per command (5.3)"
@@ -262,8 +274,20 @@ def _twenty_ms(args: argparse.Namespace) -> CommandResult:
         if not search["meets"]:
             text += f"  NOT meeting issue 24's step figures on its model: {search['failing']}\n"
     where = f" --params {args.params}" if args.params else ""
-    text += f"  the loop on the twin: flexdigit run{where} --setpoint-deg 30"
-    return CommandResult(data=data, text=text)
+    kept = f" --controller {data['out']}" if data["out"] else ""
+    text += f"  {'kept in ' + data['out'] + '; ' if kept else ''}the loop on the twin: flexdigit run{where}{kept}"
+    return CommandResult(data=data, text=text + " --setpoint-deg 30")
+
+
+def _keep(args, params, calibration, summary: dict) -> str | None:
+    """``design 20ms --out``: the design kept for ``run --controller FILE`` (its weights, the digit's
+    fingerprint); None without ``--out``."""
+    if args.out is None:
+        return None
+    from flexdigit.control.kept_design import keep_design, write_kept_design
+
+    kept = keep_design(params, calibration, orientation=args.orientation, summary=summary, params_file=args.params)
+    return str(write_kept_design(kept, args.out, force=args.force))
 
 
 def _sweep(args: argparse.Namespace) -> CommandResult:

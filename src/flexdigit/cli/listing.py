@@ -39,12 +39,16 @@ def _builtins(kind: str) -> dict[str, dict[str, str]]:
             "flexdigit palpate --protocol NAME (palpation protocols)": palpation["protocols"],
         }
     if kind == "specs":
+        from flexdigit.studies.robot_study import shipped_robot_specs
         from flexdigit.studies.spec import shipped_specs
 
-        return {"flexdigit study sensitivity|design NAME": shipped_specs()}
+        return {
+            "flexdigit study sensitivity|design NAME": shipped_specs(),
+            "flexdigit study sensitivity NAME (tendon robots)": shipped_robot_specs(),
+        }
     from flexdigit.tdcr.description import builtin_robots
 
-    return {"flexdigit tdcr statics|dynamics NAME": builtin_robots()}
+    return {"flexdigit tdcr statics|dynamics|shape|contact NAME (simulate|live --robot NAME)": builtin_robots()}
 
 
 def _list(args: argparse.Namespace) -> CommandResult:

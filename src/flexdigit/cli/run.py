@@ -15,6 +15,10 @@ or the thesis's calibration scaled to it, :func:`flexdigit.twin.digit_calibratio
 swept over its range (:func:`flexdigit.rig.rotation.sweep_commands`) and the controller designed for it. With an
 antagonistic pair (``[cables] count = 2``) one servo drives both cables, wound opposite ways on its pulley: the one
 serial command per sample moves both (the log's header says so), and setpoints of both signs are held.
+
+``--controller FILE.json`` runs a kept 20 ms design (``flexdigit design 20ms --params D.toml --out FILE.json``,
+:mod:`flexdigit.control.kept_design`) instead of searching the digit's weights again: refused in one line if it is
+another digit's (before the rig moves), or another calibration's, mount's or period's (before the loop starts).
 """
 
 from __future__ import annotations
@@ -47,7 +51,12 @@ def register(subparsers) -> None:
         help="run a controller in closed loop on the twin or the rig (beam-rotation step)",
     )
     parser.add_argument("--backend", default="sim", help="sim, sim+paced, serial://PORT?daq=0, replay://FILE")
-    parser.add_argument("--controller", default="digital20", help="digital20, thesis39-euler, thesis39-tustin")
+    parser.add_argument(
+        "--controller",
+        default="digital20",
+        help="digital20, thesis39-euler, thesis39-tustin, or a kept digital20 design FILE.json (flexdigit design 20ms "
+        "--params D.toml --out FILE.json: its weights are not searched again)",
+    )
     parser.add_argument(
         "--setpoint-deg", type=Flag(SETPOINT), default=30.0, help="beam rotation to hold, deg (default 30)"
     )
@@ -211,10 +220,12 @@ def _run(args: argparse.Namespace) -> CommandResult:
             "controller": args.controller, "setpoint_deg": setpoint, "backend": args.backend,
             "cables": _cables(rig.params),
         }  # fmt: skip
+        if args.kept is not None:
+            header["controller_file"] = args.kept.source
         run = run_step(
             rig, args.controller, setpoint, duration, period, estimator=estimator, gain=args.gain,
             on_sample=progress.update if progress else None, log_path=args.log, log_mode=_log_mode(args),
-            header={**header, "rig_settings": settings}, recording=recording,
+            header={**header, "rig_settings": settings}, recording=recording, kept=args.kept,
         )  # fmt: skip
     if progress:
         progress.stop(_figures_line(run.figures))
@@ -261,11 +272,18 @@ def _checked(args) -> tuple[float, float, bool, dict]:
     from flexdigit.rig.base import parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS
 
-    if args.controller not in CONTROLLERS:
-        raise ParameterError(f"--controller must be one of {', '.join(CONTROLLERS)}. Got {args.controller!r} instead.")
+    args.kept = None
+    if args.controller not in CONTROLLERS and not _is_design_file(args.controller):
+        raise ParameterError(
+            f"--controller must be one of {', '.join(CONTROLLERS)}, or a kept design FILE.json (flexdigit design 20ms "
+            f"--out FILE.json). Got {args.controller!r} instead."
+        )
     duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
     args.digit = _digit(args)
+    if args.controller not in CONTROLLERS:
+        args.kept = _kept_design(args.controller, args.digit)
+        args.controller = "digital20"
     _check_reachable(setpoint, args.digit, args.params)
     from flexdigit._plot import check_plot
 
@@ -279,6 +297,20 @@ def _checked(args) -> tuple[float, float, bool, dict]:
     # --seed reaches a hardware rig only to be refused (it has no noise); with --map-from twin it seeds the map's twin
     rig_options = twin_options if sim else ({} if args.map_from == "twin" else seed_option(args.backend, args.seed))
     return duration, setpoint, sim, rig_options
+
+
+def _is_design_file(controller: str) -> bool:
+    """A ``--controller`` that names a kept design rather than a controller: a .json file name, or a file."""
+    return controller.endswith(".json") or Path(controller).is_file()
+
+
+def _kept_design(path: str, params):
+    """The kept design ``--controller`` names, refused in one line if it is not ``params``'s digit's."""
+    from flexdigit.control.kept_design import read_kept_design
+
+    kept = read_kept_design(path)
+    kept.check_digit(params)
+    return kept
 
 
 def _digit(args):
@@ -354,6 +386,7 @@ def _run_data(args, run, rig, settings, setpoint, period, estimator, recording) 
         "backend": args.backend,
         "rig": settings,
         "controller": args.controller,
+        "controller_file": args.kept.source if args.kept is not None else None,  # a kept design: no weights search
         "setpoint_deg": setpoint,
         "period_s": period,
         **_digit_fields(args, rig),
@@ -396,8 +429,9 @@ def _run_text(args, run, data: dict, setpoint: float, period: float) -> str:
     mount = data["rig"].get("orientation") if isinstance(data.get("rig"), dict) else None
     if mount is not None and mount != "vertical" and args.params is not None:
         truth_text += f" (the twin {mount}: tip up this digit buckles under its own weight, or as the URL asked)"
+    kept = f" (kept in {args.kept.source})" if args.kept is not None else ""
     return (
-        f"{args.controller} on {args.backend}: {run.result.status} ({run.result.message})\n"
+        f"{args.controller}{kept} on {args.backend}: {run.result.status} ({run.result.message})\n"
         f"  rotation estimated from the gauges: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg"
         f"{truth_text}; last command {data['final_command']}\n"
         f"  step: {_figures_line(run.figures)}\n"
@@ -420,6 +454,11 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
     from flexdigit.errors import ParameterError
     from flexdigit.rig.step_test import board_step_test
 
+    if _is_design_file(args.controller):
+        raise ParameterError(
+            f"--controller {args.controller} is not supported with --on-board: the board runs the controller exported "
+            "into its image"
+        )
     for name in ("log", "record", "rotation_map", "orientation"):
         if getattr(args, name) is not None:
             raise ParameterError(

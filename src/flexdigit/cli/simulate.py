@@ -3,6 +3,12 @@
 Each writes its tidy table (Parquet, or CSV when FILE ends in .csv) with the parameters, calibration and seed in
 its metadata, and prints what the thesis took from that experiment (release: wn and zeta per gauge; step: the
 potentiometer's rise; sweep: the E 3.20-3.22 lines; load: rows and mean voltages).
+
+With ``--robot ROBOT`` (a tendon robot: a built-in or a robot TOML, ``flexdigit tdcr``), ``release`` and ``step``
+run on the robot's twin instead (:mod:`flexdigit.tdcr.experiments`) and write the tip's path (``t_s, tip_x_m,
+tip_y_m, tip_z_m``): a release from a tip deflection under ``--tension-n`` (its first frequency printed beside the
+straight backbone's Euler-Bernoulli one), or a step from ``--from-tension-n`` to ``--tension-n``. ``sweep`` and
+``load`` are the digit's servo and weights; with ``--robot`` they are refused in one line.
 """
 
 from __future__ import annotations
@@ -62,6 +68,20 @@ def _common(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
     add_plot_flag(p, "the record (gauges and pot in V over time, the command or the load's position)")
+    p.add_argument(
+        "--robot",
+        metavar="ROBOT",
+        help="a tendon robot instead of the digit (release and step only): a built-in (rao2021) or a robot TOML "
+        "(backbone, segments and disks, tendons: see flexdigit tdcr statics --help)",
+    )
+
+
+def _robot_flags(p: argparse.ArgumentParser, step: bool) -> None:
+    """The robot's flags of release and step (``--robot``)."""
+    what = "after t = 0" if step else "held throughout"
+    p.add_argument("--tension-n", help=f"with --robot: tendon tensions {what}, N, one per tendon (default all 0)")
+    if step:
+        p.add_argument("--from-tension-n", help="with --robot: tensions before t = 0, N (default all 0)")
 
 
 def _add_release(sub) -> None:
@@ -81,8 +101,10 @@ def _add_release(sub) -> None:
         "--orientation",
         default="vertical",
         choices=("vertical", "hanging", "horizontal"),
-        help="vertical: tip up, as the thesis mounted it (2.2.4); a long digit buckles so, hang it",
+        help="vertical: tip up, as the thesis mounted it (2.2.4); a long digit buckles so, hang it (with --robot: "
+        "gravity along -z, +z or -x of the robot's base frame)",
     )
+    _robot_flags(p, step=False)
 
 
 def _add_step(sub) -> None:
@@ -96,6 +118,7 @@ def _add_step(sub) -> None:
     p.add_argument("--duration", type=Flag(DURATION), default=1.5, help="seconds")
     p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
     p.add_argument("--cable", action="store_true", help="keep the cable attached")
+    _robot_flags(p, step=True)
 
 
 def _add_sweep(sub) -> None:
@@ -172,6 +195,11 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.twin.record_plot import record_figure
 
     check_output(args.out, force=args.force)  # before the simulation, not after it
+    if args.robot is not None:
+        return _robot(args)
+    for flag in ("tension_n", "from_tension_n"):  # the digit's experiment would ignore them
+        if getattr(args, flag, None) is not None:
+            raise ParameterError(f"--{flag.replace('_', '-')} is a tendon robot's: give --robot NAME|FILE with it")
     check_plot(args.plot, "simulate", force=args.force)
     params = load_params(args.params) if args.params else RigParams()
     if args.calibration:
@@ -317,3 +345,71 @@ def _release_findings(record, gauges=(1, 2, 3)) -> dict:
     for skip in figures["skipped"]:
         findings[skip["record"].rpartition(":")[2]] = {"error": skip["reason"]}
     return findings
+
+
+# ---------------------------------------------------------------------------------------------- a tendon robot
+#: The digit's flags that mean nothing to a robot, refused with --robot when given (the value set, the default).
+_DIGIT_ONLY = {"params": None, "calibration": None, "plot": None, "no_housing": False, "cable": False}
+
+
+def _robot(args: argparse.Namespace) -> CommandResult:
+    """``simulate release|step --robot ROBOT``: the experiment on the robot's twin, its table written."""
+    from flexdigit._constants import G_STANDARD_M_S2
+    from flexdigit.tdcr import euler_bernoulli_first_hz, get_robot, release_test, step_test
+
+    if args.experiment not in ("release", "step"):
+        raise ParameterError(
+            f"flexdigit simulate {args.experiment} is the digit's (servo commands, weights): a robot's experiments "
+            "are release and step (its statics: flexdigit tdcr statics ROBOT --tension-n ...)"
+        )
+    for name, default in _DIGIT_ONLY.items():
+        if getattr(args, name, default) != default:
+            raise ParameterError(f"--{name.replace('_', '-')} is the digit's; it does not apply with --robot")
+    robot = get_robot(args.robot)
+    tensions = _robot_tensions(args.tension_n, "--tension-n", robot)
+    if args.experiment == "release":
+        g = G_STANDARD_M_S2
+        gravity = {"vertical": (0, 0, -g), "hanging": (0, 0, g), "horizontal": (-g, 0, 0)}[args.orientation]
+        sign = 1.0 if args.deflection_mm >= 0 else -1.0
+        test = release_test(
+            robot,
+            tensions,
+            tip_deflection_m=abs(args.deflection_mm) * 1e-3,
+            direction=(sign, 0.0, 0.0),
+            duration_s=args.duration,
+            dt_s=1.0 / args.rate,
+            gravity_m_s2=gravity,
+        )
+    else:
+        start = _robot_tensions(args.from_tension_n, "--from-tension-n", robot)
+        test = step_test(robot, tensions, from_tensions_n=start, duration_s=args.duration, dt_s=1.0 / args.rate)
+    path = test.save(args.out, force=args.force)
+    data = {**test.metadata(), "out": str(path), "rows": int(test.motion.t_s.size)}
+    data["euler_bernoulli_hz"] = euler_bernoulli_first_hz(robot)
+    tip = test.motion.tip_positions_m * 1e3
+    lines = [
+        f"{data['experiment']} of {robot.name}: {tip.shape[0]} rows -> {path} (converged: {test.motion.converged})",
+        "tip from ({:.3f}, {:.3f}, {:.3f}) mm to ({:.3f}, {:.3f}, {:.3f}) mm".format(*tip[0], *tip[-1]),
+    ]
+    if args.experiment == "release":
+        lines.append(
+            f"first frequency {test.first_frequency_hz:.4f} Hz (the straight backbone as an Euler-Bernoulli "
+            f"cantilever: {data['euler_bernoulli_hz']:.4f} Hz)"
+        )
+    return CommandResult(data=data, text="\n".join(lines), exit_code=0 if test.motion.converged else 1)
+
+
+def _robot_tensions(text: str | None, flag: str, robot) -> list[float]:
+    """A robot's tensions flag: one number >= 0 per tendon (default all zero), refused in one line naming it."""
+    if text is None or (not text.strip() and not robot.tendons):
+        return [0.0] * len(robot.tendons)
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != len(robot.tendons) or not all(0 <= v < float("inf") for v in values):
+        raise ParameterError(
+            f"{flag} must give one tension >= 0 N per tendon of {robot.name!r} ({len(robot.tendons)}, comma-"
+            f"separated). Got {text!r} instead."
+        )
+    return values

@@ -15,14 +15,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "study",
         _study,
         help="sensitivity (Morris, Sobol) or design study (Pareto front) over a spec, on Dask",
-        description="Run a study spec (a TOML file, or a shipped one: thesis-tolerances, thesis-design) on a local "
-        "Dask cluster (one worker per core) or an existing one; rerunning with the same --out resumes it.",
+        description="Run a study spec (a TOML file, or a shipped one: thesis-tolerances, thesis-design, "
+        "thesis-taper) on a local Dask cluster (one worker per core) or an existing one; rerunning with the same "
+        "--out resumes it.",
     )
     from flexdigit.cli._formats import epilog
 
     p.epilog = epilog("spec")
     p.add_argument("kind", choices=("sensitivity", "design"), help="which study")
-    p.add_argument("spec", help="study spec TOML, or a shipped name (thesis-tolerances, thesis-design)")
+    p.add_argument("spec", help="study spec TOML, or a shipped name (thesis-tolerances, thesis-design, thesis-taper)")
     p.add_argument("--out", required=True, help="directory for the journal, tables and figures (created)")
     p.add_argument("--scheduler", default=None, help="an existing Dask scheduler, tcp://HOST:PORT")
     p.add_argument("--workers", type=int, default=None, help="local Dask workers (default: one per core; 0: no Dask)")
@@ -59,7 +60,6 @@ def _study(args: argparse.Namespace) -> CommandResult:
 
     from flexdigit.errors import ParameterError
     from flexdigit.studies.execution import parse_scheduler
-    from flexdigit.studies.spec import load_spec
 
     if args.workers is not None and args.workers < 0:
         raise ParameterError(f"--workers must be >= 0 (0: no Dask). Got {args.workers} instead.")
@@ -77,10 +77,24 @@ def _study(args: argparse.Namespace) -> CommandResult:
         raise FileNotFoundError(f"{out}: the directory {out.parent} does not exist")
     if args.kind == "sensitivity" and (args.export is not None or args.export_to is not None):
         raise ParameterError("--export K is for design studies (flexdigit study design SPEC --out DIR --export K)")
-    spec = load_spec(args.spec)
+    spec = _load(args)
     if args.kind == "sensitivity":
         return _sensitivity(args, spec, out)
     return _design(args, spec, out)
+
+
+def _load(args: argparse.Namespace):
+    """The spec: a rig's (:func:`~flexdigit.studies.spec.load_spec`) or, when its [study] names a robot, a tendon
+    robot's (:mod:`flexdigit.studies.robot_study`: sensitivity only)."""
+    from flexdigit.errors import ParameterError
+    from flexdigit.studies.robot_study import is_robot_spec, load_robot_spec
+    from flexdigit.studies.spec import load_spec
+
+    if not is_robot_spec(args.spec):
+        return load_spec(args.spec)
+    if args.kind != "sensitivity":
+        raise ParameterError(f"{args.spec}: a robot study spec ([study] robot) runs as a sensitivity study only")
+    return load_robot_spec(args.spec)
 
 
 def _run(args, out, run, settings, write):

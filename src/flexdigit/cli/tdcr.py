@@ -1,4 +1,4 @@
-"""``flexdigit tdcr statics|dynamics ROBOT --tension-n T1,...,Tn [...] [--json]``: a tendon robot in 3D.
+"""``flexdigit tdcr statics|dynamics|shape|contact ROBOT [--tension-n T1,...,Tn] [...] [--json]``: a tendon robot.
 
 ROBOT is a built-in name (``rao2021``) or a robot TOML file (:mod:`flexdigit.tdcr.description`). ``statics``
 prints the tip position and frame and, under ``--json``, the backbone (every disk) as well. ``dynamics`` starts
@@ -6,6 +6,17 @@ from the static shape under ``--from-tension-n`` / ``--from-tip-force-n`` (defau
 loads at t = 0 and prints the tip's path. A solve that does not converge is reported with ``converged: false``
 and exit code 1. ``--record OUT.mcap`` also writes the shape(s) as an MCAP recording with a
 ``foxglove.SceneUpdate`` channel (:mod:`flexdigit.tdcr.scene`): it opens in Foxglove's 3D panel.
+
+``shape`` estimates the backbone and the tip pose from strain gauges on the backbone's faces
+(:func:`flexdigit.tdcr.sense_shape`): from ``--strains`` (one per gauge of the default layout) or a
+``--readings`` CSV, or, with ``--tension-n`` alone, from the twin's own readings (with ``--noise-std`` and
+``--seed``), printed beside the twin's shape with the errors. ``contact`` finds a point contact's place and
+force from the same gauges (:func:`flexdigit.tdcr.sense_contact`), about the twin's shape under ``--tension-n``;
+from readings, or from the twin pressed at ``--contact-s-m`` by ``--contact-force-n``.
+
+Elsewhere a robot is ``--robot ROBOT``: ``flexdigit simulate release|step --robot`` (its release test and first
+frequency, a tension step), ``flexdigit live --robot``; and ``flexdigit study sensitivity SPEC`` runs a spec whose
+``[study]`` names a robot (:mod:`flexdigit.studies.robot_study`; shipped: ``rao2021-tolerances``).
 """
 
 from __future__ import annotations
@@ -13,7 +24,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
-from flexdigit._validation import Flag, Plausible
+from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.errors import ParameterError
 
 
@@ -80,19 +91,99 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+    _add_shape(sub, vector)
+    _add_contact(sub)
+
+
+#: The gauges' default layout, described once for the help of shape and contact.
+LAYOUT_HELP = (
+    "gauges at STATIONS evenly inside each segment, each station with axial gauges on the faces at 0, 90, 180 and "
+    "270 deg from the cross-section's x axis and a +-45 deg torsion rosette on the 0 deg face, in that order "
+    "(flexdigit.tdcr.gauge_layout)"
+)
+READINGS_HELP = "a CSV of gauge readings: header s_m,angle_deg,strain[,tilt_deg], one row per gauge (strain: m/m)"
+
+
+def _add_sensing_flags(p: argparse.ArgumentParser, stations: int) -> None:
+    """The readings flags ``shape`` and ``contact`` share."""
+    p.add_argument("robot", metavar="ROBOT", help="a built-in robot (rao2021) or a robot TOML file")
+    p.add_argument("--strains", help=f"readings, one per gauge of the default layout: {LAYOUT_HELP}")
+    p.add_argument("--readings", metavar="FILE.csv", help=READINGS_HELP)
+    p.add_argument(
+        "--stations-per-segment",
+        type=Flag(Plausible("", 1, 100, "gauge stations per segment", integer=True)),
+        default=stations,
+        metavar="STATIONS",
+        help=f"the default layout's stations per segment (default {stations})",
+    )
+    p.add_argument(
+        "--noise-std",
+        type=Flag(Plausible("", 0.0, 1e-3, "white noise on the twin's readings, as a strain: 1e-6 is a microstrain")),
+        default=0.0,
+        help="white noise on the twin's readings, strain (default 0; a good amplifier: 1e-6)",
+    )
+    p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
+    p.add_argument("--out", metavar="FILE.json", help="also write the result (as --json prints it) to FILE")
+    p.add_argument("--force", action="store_true", help="replace the --out (and --record) file if it exists")
+    p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+
+
+def _add_shape(sub, vector: str) -> None:
+    from flexdigit.cli._formats import epilog
+
+    p = sub.add_parser(
+        "shape",
+        help="backbone and tip pose from strain gauges on the backbone's faces, estimate vs twin",
+        description="Estimate the backbone and the tip pose from strain gauges: from --strains or --readings, or "
+        "from the twin's own readings under --tension-n (and loads), shown beside the twin's shape.",
+        epilog=epilog("robot"),
+    )
+    _add_sensing_flags(p, 3)
+    p.add_argument("--tension-n", help="tendon tensions in N, one per tendon: the twin to read (or compare with)")
+    p.add_argument("--tip-force-n", help="tip force fx,fy,fz in N " + vector.format("tip-force-n"))
+    p.add_argument("--tip-moment-nm", help="tip moment mx,my,mz in N m " + vector.format("tip-moment-nm"))
+    p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
+    p.add_argument(
+        "--record", metavar="OUT.mcap", help="also write the estimated shape as an MCAP recording (Foxglove 3D)"
+    )
+
+
+def _add_contact(sub) -> None:
+    from flexdigit.cli._formats import epilog
+
+    p = sub.add_parser(
+        "contact",
+        help="a point contact's place and force in space from the gauges",
+        description="Locate a point contact and measure its force from strain gauges, about the twin's shape "
+        "under --tension-n: from --strains or --readings, or from the twin pressed at --contact-s-m by "
+        "--contact-force-n (the truth shown beside the estimate).",
+        epilog=epilog("robot"),
+    )
+    _add_sensing_flags(p, 4)
+    p.add_argument("--tension-n", required=True, help="tendon tensions in N, one per tendon ('' for none)")
+    p.add_argument(
+        "--contact-s-m",
+        type=Flag(Plausible("m", 0.0, 100.0, "a place along the backbone, from its base")),
+        help="where to press the twin: arc length from the base, m",
+    )
+    p.add_argument("--contact-force-n", help="the force to press the twin with, fx,fy,fz in N, world frame")
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
-    if args.record is not None:  # refused before the solve, not after it
+    if getattr(args, "record", None) is not None:  # refused before the solve, not after it
         from flexdigit._io import check_output
 
         check_output(args.record, force=args.force)
+    if args.tdcr_command in ("shape", "contact"):
+        return _sensing(args)
     if args.tdcr_command == "dynamics":
         return _dynamics(args)
     return _statics(args)
 
 
 def _tensions(text: str, flag: str, robot) -> list[float]:
+    if not robot.tendons and not text.strip():
+        return []  # a rod without tendons: --tension-n ''
     tensions = _floats(text, flag)
     if len(tensions) != len(robot.tendons):
         raise ParameterError(
@@ -204,3 +295,145 @@ def _statics(args: argparse.Namespace) -> CommandResult:
         *([f"recording: {record['recording']}"] if record else []),
     ]
     return CommandResult(data=data, text="\n".join(lines), exit_code=0 if sol.converged else 1)
+
+
+def _readings(args: argparse.Namespace, robot) -> dict:
+    """``--strains`` / ``--readings`` as ``sense_*``'s ``strains`` and ``layout`` (empty: the twin reads)."""
+    from flexdigit.tdcr import gauge_layout, read_readings
+
+    if args.strains is not None and args.readings is not None:
+        raise ParameterError("give the readings one way: --strains or --readings FILE.csv, not both")
+    if args.readings is not None:
+        layout, strains = read_readings(args.readings, robot)
+        return {"layout": layout, "strains": strains}
+    if args.strains is None:
+        return {}
+    layout = gauge_layout(robot, args.stations_per_segment)
+    strains = _floats(args.strains, "strains")
+    if len(strains) != layout.s_m.size:
+        per = layout.s_m.size // (args.stations_per_segment * len(robot.segments))
+        raise ParameterError(
+            f"--strains must give one reading per gauge of the layout on {robot.name!r}: {layout.s_m.size} "
+            f"({args.stations_per_segment} stations x {len(robot.segments)} segments x {per} gauges, see --help). "
+            f"Got {len(strains)} instead."
+        )
+    return {"layout": layout, "strains": strains}
+
+
+def _mm(p) -> str:
+    return "({:.3f}, {:.3f}, {:.3f}) mm".format(*(1e3 * float(v) for v in p))
+
+
+def _write_out(args: argparse.Namespace, data: dict) -> None:
+    if args.out is None:
+        return
+    import json
+
+    from flexdigit._io import atomic_write
+    from flexdigit._json import to_jsonable
+
+    with atomic_write(args.out, "w", force=args.force) as fh:
+        json.dump(to_jsonable(data), fh, indent=1)
+    data["out"] = str(args.out)
+
+
+def _sensing(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._io import check_output
+    from flexdigit.tdcr import get_robot
+
+    for path in (args.out, getattr(args, "record", None)):  # refused before the work, not after it
+        if path is not None:
+            check_output(path, force=args.force)
+    robot = get_robot(args.robot)
+    given = _readings(args, robot)
+    common = {"noise_std": args.noise_std, "seed": args.seed, "stations_per_segment": args.stations_per_segment}
+    if given and args.noise_std:
+        raise ParameterError("--noise-std is added to the twin's readings: it does not apply to --strains/--readings")
+    head = {"robot": robot.name, "source": "readings" if given else "twin", "noise_std": args.noise_std}
+    head["seed"] = args.seed
+    if args.tdcr_command == "shape":
+        data, lines = _shape(args, robot, given, common)
+    else:
+        data, lines = _contact(args, robot, given, common)
+    data = {**head, **data}
+    _write_out(args, data)
+    if "out" in data:
+        lines.append(f"written: {data['out']}")
+    return CommandResult(data=data, text="\n".join(lines))
+
+
+def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
+    from flexdigit.tdcr import sense_shape
+
+    if not given and args.tension_n is None:
+        raise ParameterError(
+            "tdcr shape needs readings (--strains or --readings FILE.csv) or the loads to read the twin under "
+            "(--tension-n T1,...,Tn)"
+        )
+    loads = _loads(args)
+    tensions = None if args.tension_n is None else _tensions(args.tension_n, "tension-n", robot)
+    found = sense_shape(robot, given.get("strains"), layout=given.get("layout"), tensions_n=tensions, **loads, **common)
+    data = {"tensions_n": tensions, **loads, **found.to_dict(robot)}
+    if args.record is not None:
+        from flexdigit.tdcr import write_recording
+
+        pulls = [0.0] * len(robot.tendons) if tensions is None else tensions
+        disks = found.estimate.at_disks(robot)
+        tip = loads.get("tip_force_n")
+        path = write_recording(args.record, robot, disks, tensions_n=pulls, tip_force_n=tip, force=args.force)
+        data["recording"] = str(path)
+    source = "given readings" if given else f"the twin's readings, noise {args.noise_std:g}, seed {args.seed}"
+    lines = [
+        f"{robot.name}: shape from {found.layout.s_m.size} gauges ({source})",
+        f"estimated tip: {_mm(found.estimate.tip_position_m)}",
+    ]
+    if found.twin is not None:
+        lines += [
+            f"twin's tip:    {_mm(found.twin.tip_position_m)}",
+            f"tip error {1e3 * found.tip_error_m:.4f} mm, largest along the backbone {1e3 * found.max_error_m:.4f} "
+            f"mm, tip angle {found.tip_angle_error_deg:.4f} deg",
+        ]
+    if "recording" in data:
+        lines.append(f"recording: {data['recording']}")
+    return data, lines
+
+
+def _contact(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
+    from flexdigit.tdcr import sense_contact
+
+    tensions = _tensions(args.tension_n, "tension-n", robot)
+    force = None if args.contact_force_n is None else _floats(args.contact_force_n, "contact-force-n", 3)
+    if given and (force is not None or args.contact_s_m is not None):
+        raise ParameterError("--contact-s-m/--contact-force-n press the twin: give them or readings, not both")
+    if not given and (force is None or args.contact_s_m is None):
+        raise ParameterError(
+            "tdcr contact needs readings (--strains or --readings FILE.csv) or a contact to press the twin with "
+            "(--contact-s-m S --contact-force-n fx,fy,fz)"
+        )
+    found = sense_contact(
+        robot,
+        tensions,
+        given.get("strains"),
+        layout=given.get("layout"),
+        contact_s_m=args.contact_s_m,
+        contact_force_n=force,
+        **common,
+    )
+    est = found.estimate
+    data = {"tensions_n": tensions, **found.to_dict()}
+    unseen = data["unseen_direction"]
+    f = est.force_n
+    lines = [
+        f"{robot.name}: contact from {found.layout.s_m.size} gauges (visible beyond {1e3 * est.visible_from_m:.1f} mm)",
+        f"at s = {1e3 * est.s_m:.1f} mm, {_mm(est.position_m)}",
+        f"force ({1e3 * f[0]:.3f}, {1e3 * f[1]:.3f}, {1e3 * f[2]:.3f}) mN",
+    ]
+    if unseen is not None:
+        lines.append("unseen: the force along ({:+.3f}, {:+.3f}, {:+.3f}) makes no moment at any gauge".format(*unseen))
+    if found.true_s_m is not None:
+        lines.append(
+            f"twin pressed at s = {1e3 * found.true_s_m:.1f} mm: place error {1e3 * found.place_error_m:.2f} mm, "
+            f"force error {1e3 * found.force_error_n:.3f} mN"
+            + (" (nearer the base than the gauges can see)" if found.true_s_m < est.visible_from_m else "")
+        )
+    return data, lines

@@ -8,6 +8,8 @@
 - :mod:`~flexdigit.control.discretise`: s -> z (Tustin, forward Euler) and the sampled loop;
 - :mod:`~flexdigit.control.design20ms`: the 20 ms digital design (``design_20ms``, a described digit's
   ``digit_design_20ms``);
+- :mod:`~flexdigit.control.kept_design`: a digit's 20 ms design kept in a file, checked to be that digit's
+  (``keep_design``, ``write_kept_design``, ``read_kept_design``);
 - :mod:`~flexdigit.control.digit_model`: a described digit's design model, its twin's chain linearised and
   truncated (``digit_model``);
 - :mod:`~flexdigit.control.runtime`: the controller the loop runs (``RuntimeController``);
@@ -70,6 +72,10 @@ __getattr__, __all__ = lazy_exports(
         "stiffness_share": "flexdigit.control.design20ms",
         "digit_weights": "flexdigit.control.design20ms",
         "WeightsChoice": "flexdigit.control.design20ms",
+        "KeptDesign": "flexdigit.control.kept_design",
+        "keep_design": "flexdigit.control.kept_design",
+        "write_kept_design": "flexdigit.control.kept_design",
+        "read_kept_design": "flexdigit.control.kept_design",
         "DigitModel": "flexdigit.control.digit_model",
         "digit_plant": "flexdigit.control.thesis_designs",
         "digit_hinf_design": "flexdigit.control.thesis_designs",

@@ -588,6 +588,7 @@ def digit_design_20ms(
     calibration=None,
     orientation: str = "vertical",
     deg_per_command: float | None = None,
+    weights: Weights | None = None,
 ) -> Digital20msDesign:
     """The 20 ms design for a described digit (``flexdigit design 20ms --params``, ``flexdigit run --params``).
 
@@ -599,14 +600,19 @@ def digit_design_20ms(
     ``deg_per_command`` rescales the model to a rotation per command measured on the digit (the rotation map's
     sweep, ``RotationEstimator.deg_per_command_``): a short, stiff digit stretches its cable and turns less
     than the model says. The choice is :attr:`Digital20msDesign.choice`.
+
+    ``weights``: a design kept from an earlier search (:mod:`~flexdigit.control.kept_design`), the weights it chose
+    on the model's own rotation per command; the search is skipped and they are rescaled to ``deg_per_command`` as
+    the search rescales its candidates (:meth:`Weights.for_digit`), ``choice`` then None. On the thesis rig they
+    are chapter 5's design's weights.
     """
     params = params or RigParams()
     if params == RigParams():
-        return design_20ms(params, period_s=period_s)
-    return _digit_design(params, period_s, calibration, orientation, deg_per_command)[0]
+        return design_20ms(params, period_s=period_s, weights=weights)
+    return _digit_design(params, period_s, calibration, orientation, deg_per_command, weights)[0]
 
 
-def _digit_design(params, period_s, calibration, orientation, deg_per_command):
+def _digit_design(params, period_s, calibration, orientation, deg_per_command, weights=None):
     digit_first_mode(params, calibration, orientation=orientation)  # refused if it buckles as mounted
     T = params.actuator.serial_period_s if period_s is None else period_s
     model = digit_model(params, calibration, orientation=orientation, period_s=T)
@@ -615,6 +621,8 @@ def _digit_design(params, period_s, calibration, orientation, deg_per_command):
         G = G * (float(deg_per_command) / model.deg_per_command)
     dc = float(np.real(np.asarray(ct.dcgain(G))).reshape(-1)[0])
     thesis_dc = float(np.real(ct.dcgain(design_plant(RigParams()))))
+    if weights is not None:  # kept (chosen on the model's own gain): rescaled as the search scales its candidates
+        return _design(G, T, 1, weights.for_digit(dc, model.deg_per_command)), model
     light = bool(model.modes_zeta.size and np.min(model.modes_zeta) < LIGHT_DAMPING)
     choice = digit_weights(G, T, model.measurement_sd_deg, dc / thesis_dc, lightly_damped=light)
     design = _design(G, T, 1, choice.weights)

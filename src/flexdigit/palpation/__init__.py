@@ -32,6 +32,7 @@ __getattr__, __all__ = lazy_exports(
         "scan": "flexdigit.palpation.palpation",
         "ForceController": "flexdigit.palpation.palpation",
         "hold_force": "flexdigit.palpation.palpation",
+        "rig_contact_model": "flexdigit.palpation.palpation",
         "indentation_figure": "flexdigit.palpation.palpation_plot",
         "scan_figure": "flexdigit.palpation.palpation_plot",
         "hold_figure": "flexdigit.palpation.palpation_plot",

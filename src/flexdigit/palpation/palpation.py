@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -39,6 +40,7 @@ from flexdigit.errors import ParameterError, RigError
 from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
 from flexdigit.rig.loop import run_loop
 from flexdigit.twin.contact import Inclusion, Tissue, TissueContact
+from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = [
     "MODELS",
@@ -57,6 +59,11 @@ __all__ = [
     "ForceController",
     "ForceHold",
     "hold_force",
+    "rig_contact_model",
+    "THESIS_FORCE_GAIN",
+    "THESIS_APPROACH_RATE",
+    "force_per_command",
+    "force_gains",
 ]
 
 MODELS = ("linear", "hunt-crossley")
@@ -523,11 +530,76 @@ def palpate(
     sample; on hardware the operator is asked to place it.
     """
     protocol = protocol or PalpationProtocol()
-    model = model or ContactGaugeModel(rig.params)
+    model = model or rig_contact_model(rig)
     rig.place_tissue(placed)
     truth = _truth_of(rig)
     record = run_sweep(rig, protocol, log_path=log_path, truth=truth, log_mode=log_mode)
     return analyse(record, placed, protocol, model)
+
+
+#: The thesis rig's force loop (:func:`hold_force`): integral gain (commands / s / N) and approach rate
+#: (commands / s), and what they were chosen on: the soft block (1000 N/m^2) 30 mm beside 0.15-0.35 m, 0.1 N.
+THESIS_FORCE_GAIN = 30.0
+THESIS_APPROACH_RATE = 4.0
+_THESIS_FORCE_TISSUE = (0.15, 0.35, 0.03, 1000.0)
+
+
+def force_per_command(model, tissue: Tissue, setpoint_n: float) -> float:
+    """The contact force a command adds where the statics of ``model`` first press ``setpoint_n`` (N) into
+    ``tissue`` (N per command, the loop's plant gain at its setpoint), from the digit's straight command up its
+    thesis range (52 commands x its gearing); NaN if it never presses that hard there."""
+    act = model.params.actuator
+    eq = int(act.equilibrium_command)
+    commands = np.arange(eq, min(int(act.command_max), eq + int(round(52 * act.gear_ratio))) + 1)
+    force = np.abs(model.tissue_solution(tissue, commands)[0].contact_force_n)
+    reached = np.flatnonzero(force >= setpoint_n)
+    if not reached.size or reached[0] == 0:
+        return math.nan
+    k = int(reached[0])
+    return float(force[k] - force[k - 1])
+
+
+@lru_cache(maxsize=1)
+def _thesis_force_per_command() -> float:
+    return force_per_command(ContactGaugeModel(), Tissue(*_THESIS_FORCE_TISSUE), 0.1)
+
+
+def force_gains(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "cable") -> dict:
+    """The force loop's gains derived from the digit of ``model``: ``{"gain", "approach_rate", "force_per_command_n"}``.
+
+    The thesis rig's integral gain (:data:`THESIS_FORCE_GAIN`) put the loop's crossover, gain x the force a command
+    presses, at ~0.8 rad/s, well below the digit's lightly damped mode. A digit whose command presses less (a long
+    or geared digit: its 0.5 m five-section one 0.011 N a command against the thesis rig's 0.027; a 4:1 gearing
+    0.0068) was held by that gain 4 times slower, still pressing 23 % short after 8 s. The gain here keeps the
+    thesis's crossover: ``30 x k_thesis / k_digit``, to three figures (30 on the thesis rig), ``k`` the force per
+    command where the statics first press ``setpoint_n`` into the thesis's soft block laid out beside the digit's
+    ``region_m`` as beside the thesis rig's (from its start to 80 mm past its end, 30 mm x L / 0.27 m away; the
+    digit's outer 45 % without a region; a real tissue's stiffness is as unknown to the loop on the thesis rig).
+    The approach rate turns the pulley as fast as the thesis's 4 commands per second (x the gearing).
+    """
+    length = float(model.params.geometry.digit_length_m)
+    start, end = (0.55 * length, length) if region_m is None else (float(region_m[0]), float(region_m[1]))
+    modulus = _THESIS_FORCE_TISSUE[3]
+    tissue = Tissue(start, end + 0.08, 0.03 * length / 0.27, modulus, side=side)
+    k = force_per_command(model, tissue, setpoint_n)
+    if not k > 0:  # never presses the setpoint there: the thesis rig's rates per turn of the pulley
+        k = _thesis_force_per_command() / model.params.actuator.gear_ratio
+    gain = float(f"{THESIS_FORCE_GAIN * _thesis_force_per_command() / k:.3g}")
+    return {
+        "gain": gain,
+        "approach_rate": THESIS_APPROACH_RATE * float(model.params.actuator.gear_ratio),
+        "force_per_command_n": k,
+    }
+
+
+def rig_contact_model(rig) -> ContactGaugeModel:
+    """The gauge model of the digit ``rig`` carries: its parameters, its twin's calibration and mount on the twin
+    (``sim?orientation=hanging`` included), else the digit's default calibration
+    (:func:`~flexdigit.twin.digit_calibration.twin_calibration`) mounted tip up. Before, a rig of another digit
+    was read through the thesis rig's calibration, tip up, whatever its own: another digit's channel gains."""
+    twin = getattr(rig, "twin", None)
+    calibration = getattr(twin, "calibration", None) or twin_calibration(rig.params)
+    return ContactGaugeModel(rig.params, calibration, orientation=getattr(twin, "orientation", None) or "vertical")
 
 
 def _truth_of(rig):
@@ -612,7 +684,7 @@ def scan(
         model = model or ContactGaugeModel()
     else:
         rig = records_or_rig
-        model = model or ContactGaugeModel(rig.params)
+        model = model or rig_contact_model(rig)
         records = []
         for d, log in zip(offsets, log_paths or [None] * offsets.size, strict=True):
             rig.place_tissue(placed.moved(float(d)))
@@ -802,6 +874,8 @@ class ForceHold:
     overshoot: float
     settling_s: float
     status: str
+    gain: float = math.nan  # the loop's integral gain (commands / s / N) and approach rate (commands / s)
+    approach_rate: float = math.nan
 
     __repr__ = fields_summary
 
@@ -813,11 +887,11 @@ def hold_force(
     duration_s: float = 10.0,
     model=None,
     estimator=None,
-    gain: float = 30.0,
+    gain: float | None = None,
     window_s: float = 3.0,
     side: str = "cable",
     region_m=None,
-    approach_rate: float = 4.0,
+    approach_rate: float | None = None,
     log_path=None,
     log_mode: str = "new",
 ) -> ForceHold:
@@ -829,9 +903,17 @@ def hold_force(
     estimate; the figures
     (steady force and error over the last ``window_s``, overshoot, 10 % settling time) use it there, and the
     estimate on hardware.
+
+    ``gain`` and ``approach_rate`` default to the digit's own (:func:`force_gains`): the thesis rig's 30 commands
+    per second per N and 4 commands per second, scaled so that the loop's crossover (gain x the force a command
+    presses) and the pulley's approach speed are the thesis rig's on any digit.
     """
     setpoint = check_real(setpoint_n, "setpoint_n", "hold_force", low=0, low_open=True)
-    model = model or ContactGaugeModel(rig.params)
+    model = model or rig_contact_model(rig)
+    if gain is None or approach_rate is None:
+        derived = force_gains(model, setpoint, region_m=region_m, side=side)
+        gain = derived["gain"] if gain is None else gain
+        approach_rate = derived["approach_rate"] if approach_rate is None else approach_rate
     if estimator is None:
         region = None if region_m is None else region_m
         estimator = ContactEstimator(model, classify=False, side=side, region_m=region).fit()
@@ -862,7 +944,14 @@ def hold_force(
     result.raise_if_interrupted()
     t = result.time_s
     est = np.array(controller.forces[: t.size])
-    scored = np.array(true_force) if truth else est
+    figures = _hold_figures(t, np.array(true_force) if truth else est, setpoint, window_s)
+    true = np.array(true_force) if truth else None
+    return ForceHold(setpoint, t, result.command, est, true, *figures, result.status, float(gain), float(approach_rate))
+
+
+def _hold_figures(t, scored, setpoint: float, window_s: float) -> tuple:
+    """A hold's figures from its scored force: steady force and error and ripple over the last ``window_s``,
+    overshoot, and the settling time (the last time outside 10 % of the setpoint)."""
     last = t >= t[-1] - window_s if t.size else np.zeros(0, dtype=bool)
     steady = float(np.mean(scored[last])) if np.any(last) else math.nan
     outside = np.flatnonzero(np.abs(scored - setpoint) > 0.1 * setpoint)
@@ -871,16 +960,10 @@ def hold_force(
         if outside.size and outside[-1] + 1 < t.size
         else (0.0 if not outside.size else math.inf)
     )
-    return ForceHold(
-        setpoint,
-        t,
-        result.command,
-        est,
-        np.array(true_force) if truth else None,
+    return (
         steady,
         (steady - setpoint) / setpoint,
         float(np.std(scored[last])) if np.any(last) else math.nan,
         float(max(0.0, (np.max(scored) - setpoint) / setpoint)) if scored.size else math.nan,
         settling,
-        result.status,
     )

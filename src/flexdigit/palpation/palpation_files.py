@@ -85,8 +85,8 @@ SCAN_OFFSET_MM = Plausible("mm", -2000.0, 2000.0, "moves along a digit at most 2
 SCAN_SPAN_MM = Plausible("mm", 1.0, 4000.0, "a scan across 1 mm to 4 m of the digit")
 SETPOINT_N = Plausible("N", 1e-4, 2.0, "a contact force of 0.1 mN to 2 N: the digit's gauges read ~0.1 N")
 DURATION_S = Plausible("s", 1e-3, 86_400.0, "a hold of 1 ms to a day")
-FORCE_GAIN = Plausible("commands / s / N", 1e-3, 1e5, "an integral gain (the protocol's: 30)")
-APPROACH_RATE = Plausible("commands / s", 1e-3, 1e4, "commands per second until contact (the protocol's: 4)")
+FORCE_GAIN = Plausible("commands / s / N", 1e-3, 1e5, "an integral gain (the thesis rig's: 30)")
+APPROACH_RATE = Plausible("commands / s", 1e-3, 1e4, "commands per second until contact (the thesis rig's: 4)")
 #: Most values a ``{from, to, step}`` series may expand to (a staircase has at most 255 commands).
 MAX_SERIES = 10_000
 _SECTIONS = {
@@ -361,7 +361,8 @@ def load_palpation_protocol(name_or_path=None) -> PalpationFile:
         force = {
             "setpoint_n": f.plausible("setpoint_n", SETPOINT_N),
             "duration_s": f.plausible("duration_s", DURATION_S, default=10.0),
-            "gain": f.plausible("gain", FORCE_GAIN, default=30.0),
-            "approach_rate": f.plausible("approach_rate", APPROACH_RATE, default=4.0),
+            # not given: the digit's own (palpation.force_gains: the thesis rig's 30 and 4 on the thesis rig)
+            "gain": f.plausible("gain", FORCE_GAIN) if "gain" in f.data else None,
+            "approach_rate": f.plausible("approach_rate", APPROACH_RATE) if "approach_rate" in f.data else None,
         }
     return PalpationFile(sweep, scan, force, source)

@@ -332,10 +332,8 @@ def force_study(
         try:
             rig.place_tissue(placed.replace(modulus_n_m2=float(k)))
             region = (placed.start_m, min(placed.end_m, length))
-            # the loop's rates are the thesis rig's per turn of its pulley: a gearing's finer command, times it
-            gear = rig.params.actuator.gear_ratio
-            rates = {} if gear == 1.0 else {"gain": 30.0 * gear, "approach_rate": 4.0 * gear}
-            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model, **rates))
+            # the loop's gains are the digit's own (palpation.force_gains: the thesis rig's on the thesis rig)
+            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model))
         finally:
             rig.close()
     return {

@@ -60,6 +60,7 @@ def make_controller(
     estimator: RotationEstimator | None = None,
     gain: float = 1.0,
     calibration=None,
+    kept=None,
 ) -> _Wrapped:
     """Build controller ``name`` for ``rig``; its setpoint is beam rotation in degrees for all of them.
 
@@ -68,7 +69,10 @@ def make_controller(
 
     ``digital20`` is designed for the rig's digit (:func:`flexdigit.control.design20ms.digit_design_20ms`: the
     thesis rig's chapter-5 design, or another digit's from its own components); ``calibration`` is the twin
-    calibration of that digit when it is not the one its twin would get by default.
+    calibration of that digit when it is not the one its twin would get by default. ``kept``: a
+    :class:`~flexdigit.control.kept_design.KeptDesign` of ``digital20`` for this digit (``flexdigit design 20ms
+    --out``): checked against the rig's digit, calibration, mount and ``period_s`` (refused in one line), and its
+    weights used instead of searching them again.
     """
     from flexdigit.control.design20ms import digit_design_20ms, thesis_controller
 
@@ -87,8 +91,17 @@ def make_controller(
     if name == "digital20":
         measured = getattr(estimator, "deg_per_command_", None)  # the sweep's rotation per command, if it has one
         measured = measured if isinstance(measured, float) and math.isfinite(measured) and measured > 0 else None
+        weights = None
+        if kept is not None:
+            kept.check(params, calibration, orientation=orientation, period_s=period_s, source=kept.source)
+            weights = kept.weights
         design = digit_design_20ms(
-            params, period_s=period_s, calibration=calibration, orientation=orientation, deg_per_command=measured
+            params,
+            period_s=period_s,
+            calibration=calibration,
+            orientation=orientation,
+            deg_per_command=measured,
+            weights=weights,
         )
         # another digit than the thesis rig's is held between quanta (dithered: RuntimeController's ``dither``)
         runtime = design.runtime(params, name=name, dither=params != RigParams())

@@ -40,12 +40,14 @@ from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.params import MAX_GAUGES, RigParams
 from flexdigit.rig.base import Reading, Rig, open_rig
 from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference, read_reference
+from flexdigit.twin.digit_calibration import decay_time_constant_s, twin_calibration
 
 __all__ = [
     "RotationEstimator",
     "calibrate_rotation",
     "make_rotation_map",
     "wait_until_settled",
+    "settle_timeout_s",
     "Settled",
     "save_rotation_map",
     "load_rotation_map",
@@ -409,6 +411,33 @@ def make_rotation_map(
     return calibrate_rotation(rig, reference=reference)
 
 
+#: The least time a sweep reading waits for the digit to come to rest before giving up, s (the thesis rig rests
+#: within 1-3 s of a command).
+SETTLE_TIMEOUT_S = 30.0
+#: Time constants of the digit's slowest vibration a reading may wait at most: a swing decays by e^-10, a 5 deg one
+#: to 2e-4 deg, below any gauge's noise.
+SETTLE_TIME_CONSTANTS = 10.0
+
+
+def settle_timeout_s(rig: Rig) -> float:
+    """A sweep reading's time limit on ``rig``: :data:`SETTLE_TIMEOUT_S`, or :data:`SETTLE_TIME_CONSTANTS` time
+    constants of the digit's slowest vibration where that is longer
+    (:func:`~flexdigit.twin.digit_calibration.decay_time_constant_s` of its twin's calibration, or on hardware of
+    the one its description gets). A lightly damped digit (a 0.44 m phosphor-bronze pair, zeta 0.015: 5.3 s) is
+    read once at rest instead of refused after a fixed 30 s; the thesis rig's 0.44 s leaves 30 s.
+
+    Examples
+    --------
+    >>> from flexdigit.rig.base import open_rig
+    >>> settle_timeout_s(open_rig("sim"))
+    30.0
+    """
+    twin = getattr(rig, "twin", None)
+    params = rig.params
+    calibration = twin.calibration if twin is not None else twin_calibration(params)
+    return max(SETTLE_TIMEOUT_S, SETTLE_TIME_CONSTANTS * decay_time_constant_s(params, calibration))
+
+
 def calibrate_rotation(
     rig: Rig,
     commands=None,
@@ -417,7 +446,7 @@ def calibrate_rotation(
     settle_s: float | None = None,
     samples: int = 5,
     window_s: float = 1.0,
-    timeout_s: float = 30.0,
+    timeout_s: float | None = None,
     reference_sd_deg: float | None = None,
     angle_source: Callable[[int], float] | None = None,
 ) -> RotationEstimator:
@@ -437,7 +466,8 @@ def calibrate_rotation(
         None (default): wait until the readings show the digit at rest (:func:`wait_until_settled`). A number: the
         old fixed wait, then ``samples`` readings 20 ms apart (kept to compare with).
     window_s, timeout_s : float
-        :func:`wait_until_settled`'s window and time limit.
+        :func:`wait_until_settled`'s window and time limit (default :func:`settle_timeout_s`: from the digit's
+        own modal damping).
     reference_sd_deg : float, optional
         Standard uncertainty of a callable reference's rotations (deg): a 1 deg protractor's 0.29 by default.
     angle_source : callable, optional
@@ -451,6 +481,8 @@ def calibrate_rotation(
     """
     if angle_source is not None:
         reference = angle_source
+    if timeout_s is None:
+        timeout_s = settle_timeout_s(rig)
     cov, truth = None, None
     if isinstance(reference, MeasuredReference):
         commands = _measured_commands(reference, commands)

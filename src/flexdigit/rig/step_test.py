@@ -277,6 +277,7 @@ def run_step(
     estimator: RotationEstimator,
     gain: float = 1.0,
     on_sample=None,
+    kept=None,
     **loop_options,
 ) -> StepRun:
     """Hold ``setpoint_deg`` from rest at t = 0 with ``controller`` on ``rig``, and take the step's figures.
@@ -285,9 +286,9 @@ def run_step(
     rotation by ``estimator``; the figures of the estimate and (twin) of the true rotation go into the closing
     record of the log and the recording, and into :attr:`StepRun.figures`. ``loop_options`` are
     :class:`~flexdigit.rig.loop.LoopSettings` fields (``log_path``, ``recording``, ``header``, ...); the rig is
-    closed at the end, relaxed.
+    closed at the end, relaxed. ``kept``: a kept ``digital20`` design for the rig's digit (:func:`make_controller`).
     """
-    ctl = make_controller(controller, rig, period_s=period_s, estimator=estimator, gain=gain)
+    ctl = make_controller(controller, rig, period_s=period_s, estimator=estimator, gain=gain, kept=kept)
     truth = getattr(rig, "tip_rotation_deg", None)  # the twin knows the true rotation; hardware only estimates it
     true_rotation: list[float] = []
     deg_per_command = getattr(estimator, "deg_per_command_", math.nan)

@@ -23,7 +23,11 @@ of its own, written from the thesis's beam relations rather than from the twin's
    ``contact_chi2`` (a likelihood-ratio test) and the load's moment is above the noise.
 4. **Integrate.** ``psi(s) = int kappa``, ``r(s) = int (cos psi, sin psi)`` on a 1 mm grid (large rotations kept);
    the lever arms of the world-fixed forces depend on the shape, so steps 2-4 repeat from the straight digit
-   until the shape settles (``tol_rad``).
+   until the shape settles (``tol_rad``). Each round ranks the load's positions on the last shape's lever arms,
+   a linearisation that holds while the shape changes little with the load; where a digit sags far under its own
+   weight it does not (a 0.40 m strip of 0.25 mm turns 73-84 deg lying horizontal), so wherever a load is found
+   or the readings do not fit, a global search settles every candidate position of a coarse grid on its own
+   shape and restarts the fit from the best one if it fits better (:meth:`ShapeEstimator._global_search`).
 5. **Uncertainty.** The noise model is the calibration's: white noise per reading (``/sqrt(n_average)`` when
    readings are averaged), and, while the cable is taut, the cable-guide friction, a moment ``ratio e T`` per
    section that averaging does not remove (:mod:`flexdigit.twin.sensors`). The parameters' covariance is the
@@ -242,6 +246,18 @@ class DigitBeam:
     def weight_moment(self, r_nodes: np.ndarray, operator: np.ndarray) -> np.ndarray:
         """Moment (B, Q) of the digit's own weight for shapes (B, P+1, 2) through a :meth:`weight_operator`."""
         return _cross(np.matmul(operator, r_nodes), self.gravity)
+
+    def weight_moment_at(self, r_nodes: np.ndarray, x_m) -> np.ndarray:
+        """:meth:`weight_moment` at arc positions ``x_m`` (Q,) without the (Q, P+1) operator: suffix sums of the
+        masses' ``m_k r_k``, O(P + K) a shape instead of O(Q P) (the cells' moment of thousands of shapes at once
+        in the estimator's global search)."""
+        x = np.atleast_1d(np.asarray(x_m, dtype=float))
+        r_k = self.at(r_nodes, self.mass_s_m)  # (B, K, 2)
+        suffix = np.cumsum((self.mass_kg[:, None] * r_k)[:, ::-1], axis=1)[:, ::-1]
+        suffix = np.concatenate([suffix, np.zeros(r_k.shape[:1] + (1, 2))], axis=1)
+        suffix_m = np.r_[np.cumsum(self.mass_kg[::-1])[::-1], 0.0]
+        j = np.searchsorted(self.mass_s_m, x, side="right")  # first mass beyond x
+        return _cross(suffix[:, j] - suffix_m[j][:, None] * self.at(r_nodes, x), self.gravity)
 
     __repr__ = fields_summary
 
@@ -563,19 +579,16 @@ class ShapeEstimator:
         kappa_g = self.curvature_from_volts(v)
         tip_eq = self._tip_equation(command, b)
         sd_white = (self.white_v_ / math.sqrt(self.n_average)) / np.abs(self.volts_per_curvature_)
-        if start is not None and start.centre_line_m.shape[:2] == (b, self.nodes_m_.size):
+        warm = start is not None and start.centre_line_m.shape[:2] == (b, self.nodes_m_.size)
+        if warm:
             psi, r, tension, rounds = start.angle_rad, start.centre_line_m, start.tension_n, 0
         else:
             (psi, r), tension, rounds = self._straight(b), np.zeros(b), int(self.max_iterations)
-        settle, fit = _Settle(beam, psi, self.tol_rad), None
-        for k in range(rounds):
-            hold = fit if k >= self.HOLD_AFTER else None
-            fit = self._fit(kappa_g, tip_eq, self._sd_curvature(sd_white, tension), r, psi, hold)
-            psi, r = settle.step(self._curvature_field(fit, r, psi))
-            tension = fit["T"]
-            if settle.done:
-                break
-        change = settle.change
+        fit, psi, r, tension, change = self._settle(kappa_g, tip_eq, sd_white, psi, r, tension, rounds)
+        if not warm and self.load != "none":
+            fit, psi, r, tension, change = self._global_search(
+                kappa_g, tip_eq, sd_white, (fit, psi, r, tension, change)
+            )
         unsettled = int(np.sum(change >= self.tol_rad)) if rounds else 0
         sd_k = self._sd_curvature(sd_white, tension)
         fit = self._fit(kappa_g, tip_eq, sd_k, r, psi, fit if rounds > self.HOLD_AFTER else None)
@@ -607,6 +620,130 @@ class ShapeEstimator:
             load_kind=self.load,
         )
         return estimate, unsettled, change, rounds
+
+    def _settle(self, kappa_g, tip_eq, sd_white, psi, r, tension, rounds: int, hold: dict | None = None):
+        """Fit and shape in turn from the lever arms ``(psi, r)`` until the shape settles (at most ``rounds``
+        updates): ``(fit, psi, r, tension, last change (B,))``. The model choice and the load's branch are held
+        after :attr:`HOLD_AFTER` updates, or from the start near ``hold``'s load (a start from the global search).
+        """
+        settle, fit = _Settle(self.beam_, psi, self.tol_rad), None
+        for k in range(rounds):
+            held = (fit or hold) if hold is not None else (fit if k >= self.HOLD_AFTER else None)
+            fit = self._fit(kappa_g, tip_eq, self._sd_curvature(sd_white, tension), r, psi, held)
+            psi, r = settle.step(self._curvature_field(fit, r, psi))
+            tension = fit["T"]
+            if settle.done:
+                break
+        return fit, psi, r, tension, settle.gap
+
+    #: The global search's candidate load positions: this many equally spaced along the digit (the tip included),
+    #: and the middle of every stretch between neighbouring gauges.
+    SEARCH_POSITIONS = 24
+    #: The global search's lever arms have settled when no tangent angle moves by more than this (rad): enough to
+    #: rank the candidates; the chosen one is then settled to ``tol_rad``.
+    SEARCH_TOL_RAD = 1e-4
+    #: The global search's answer replaces the local one where it lowers chi-square by more than this: the local
+    #: answer is otherwise inside the one-standard-deviation profile interval of the better one (chi-square
+    #: within 1), as good an estimate, and the thesis rig's estimates stay what they were.
+    SEARCH_GAIN_CHI2 = 1.0
+
+    def _global_search(self, kappa_g, tip_eq, sd_white, local):
+        """The load's position over the whole digit, each candidate on its own settled shape (profile likelihood).
+
+        The local fit ranks load positions on one shape's lever arms, the shape of its last guess. Where a digit
+        sags far under its own weight (a long, thin strip lying horizontal: 70-85 deg at the tip) the shape depends
+        on where the load hangs as much as the readings do, so that ranking is a linearisation about a wrong shape:
+        started from the straight digit it walks to the nearest local minimum (a load at the tip of a 0.40 m strip
+        found at 0.30 m, chi-square 37). Here every candidate of a coarse grid (:attr:`SEARCH_POSITIONS`) gets its
+        own fixed point, force and tension fitted on the shape that force bends; the best one seeds the local fit
+        again, held to its branch from the start, and that replaces the first answer wherever it fits better (by
+        more than :attr:`SEARCH_GAIN_CHI2`). Readings the local fit left without a load and consistent with the
+        model keep it.
+        """
+        fit, psi, r, tension, change = local
+        chosen = np.where(fit["loaded"], fit["chi2_1"], fit["chi2_0"])
+        todo = np.flatnonzero(fit["loaded"] | (chosen > self.misfit_chi2))
+        if todo.size == 0:
+            return local
+        grid = self._search_positions()
+        best_s, best_chi, start_psi, start_r, start_t = self._profile(kappa_g[todo], tip_eq[todo], sd_white, grid)
+        again = np.isfinite(best_chi) & (best_chi < chosen[todo] - self.SEARCH_GAIN_CHI2)
+        todo, best_s = todo[again], best_s[again]
+        if todo.size == 0:
+            return local
+        hold = {"sL": best_s, "loaded": np.ones(todo.size, dtype=bool)}
+        redo = self._settle(
+            kappa_g[todo], tip_eq[todo], sd_white, start_psi[again], start_r[again], start_t[again],
+            int(self.max_iterations), hold,
+        )  # fmt: skip
+        redo_chi = np.where(redo[0]["loaded"], redo[0]["chi2_1"], redo[0]["chi2_0"])
+        better = redo_chi < chosen[todo] - self.SEARCH_GAIN_CHI2
+        todo = todo[better]
+        fit = {k: v.copy() for k, v in fit.items()}
+        for key, value in redo[0].items():
+            fit[key][todo] = value[better]
+        out = [fit]
+        for whole, part in zip((psi, r, tension, change), redo[1:], strict=True):
+            whole = whole.copy()
+            whole[todo] = part[better]
+            out.append(whole)
+        return tuple(out)
+
+    def _search_positions(self) -> np.ndarray:
+        """The global search's candidates (m): an even grid to the tip and the middle of each stretch between
+        neighbouring gauges (and between the last gauge and the tip), on the grid's nodes."""
+        length = self.beam_.length_m
+        ends = np.r_[self.beam_.gauge_s_m, length]
+        middles = 0.5 * (ends[:-1] + ends[1:])
+        even = length * np.arange(1, self.SEARCH_POSITIONS + 1) / self.SEARCH_POSITIONS
+        nodes = np.round(np.r_[even, middles] / self.beam_.ds_m) * self.beam_.ds_m
+        return np.unique(np.clip(nodes, self.beam_.ds_m, length))
+
+    def _profile(self, kappa_g, tip_eq, sd_white, grid):
+        """Every reading (B) at every candidate position (C) settled with the load held there: the best candidate
+        per reading ``(position (B,), chi-square (B,), psi (B, P+1), r (B, P+1, 2), tension (B,))``."""
+        b, c = kappa_g.shape[0], grid.size
+        kappa = np.repeat(kappa_g, c, axis=0)
+        tip = np.repeat(tip_eq, c)
+        s_l = np.tile(grid, b)
+        psi, r = self._straight(b * c)
+        tension = np.zeros(b * c)
+        settle = _Settle(self.beam_, psi.copy(), self.SEARCH_TOL_RAD)
+        rows = np.arange(b * c)  # the shapes still moving: settled ones drop out (the slowest set the count)
+        for _ in range(int(self.max_iterations)):
+            fit = self._fit_at(kappa[rows], tip[rows], self._sd_curvature(sd_white, tension[rows]), r[rows],
+                               psi[rows], s_l[rows])  # fmt: skip
+            psi[rows], r[rows] = settle.step_rows(self._curvature_field(fit, r[rows], psi[rows]), rows)
+            tension[rows] = fit["T"]
+            rows = rows[~settle.settled[rows]]
+            if rows.size == 0:
+                break
+        fit = self._fit_at(kappa, tip, self._sd_curvature(sd_white, tension), r, psi, s_l)
+        chi = np.where(fit["loaded"], fit["chi2_1"], np.inf).reshape(b, c)
+        best = np.argmin(chi, axis=1)
+        pick = np.arange(b) * c + best
+        return grid[best], chi[np.arange(b), best], psi[pick], r[pick], fit["T"][pick]
+
+    def _fit_at(self, kappa_g, tip_eq, sd_k, r, psi, s_load) -> dict:
+        """Weighted least squares for (T, P) with the load held at ``s_load`` (B,): what :meth:`_fit` does at one
+        candidate (the force's prior row included)."""
+        b, g = kappa_g.shape[0], self.gauges_
+        has_tip = np.isfinite(tip_eq)
+        sd = np.concatenate([sd_k, np.full((b, 1), self.tip_angle_sd_rad)], axis=1)
+        y = np.concatenate([kappa_g, np.where(has_tip, tip_eq, 0.0)[:, None]], axis=1)
+        w = 1.0 / sd**2
+        w[:, g] = np.where(has_tip, w[:, g], 0.0)
+        a_t, b_w, a_p = self._rows(r, psi, s_load[:, None])
+        res = np.concatenate([y - b_w, np.zeros((b, 1))], axis=1)
+        w = np.concatenate([w, np.full((b, 1), self.PRIOR_FORCE_N**-2.0)], axis=1)
+        a_p = np.concatenate([a_p, np.ones(a_p.shape[:2] + (1,))], axis=-1)
+        t, p, chi = _fit_load(
+            res[:, None, :], np.append(a_t, 0.0), a_p, w[:, None, :], bool(self.cable), self.load == "weight",
+            self.max_force_n, g,
+        )  # fmt: skip
+        loaded = p[:, 0] != 0
+        s_l = np.where(loaded, s_load, np.nan)
+        return {"T": t[:, 0], "P": p[:, 0], "sL": s_l, "loaded": loaded, "chi2_1": chi[:, 0]}
 
     def _sd_curvature(self, sd_white: np.ndarray, tension: np.ndarray) -> np.ndarray:
         """Per reading and gauge, the curvature noise (1/m): white (averaged) and the cable-guide friction."""
@@ -734,7 +871,7 @@ class ShapeEstimator:
     def _curvature_field(self, fit, r, psi) -> np.ndarray:
         """kappa(s) on the cells (B, P) for the fitted (T, P, s_L) on the shape ``r``."""
         beam = self.beam_
-        m = fit["T"][:, None] * beam.eccentricity_m + beam.weight_moment(r, self.weight_cells_)
+        m = fit["T"][:, None] * beam.eccentricity_m + beam.weight_moment_at(r, beam.s_m)
         if np.any(fit["loaded"]):
             s_l = np.where(fit["loaded"], fit["sL"], 0.0)
             m = m + np.where(fit["loaded"], fit["P"], 0.0)[:, None] * self._load_moment(r, psi, s_l)
@@ -880,30 +1017,82 @@ class _Start:
 class _Settle:
     """The fixed point of the lever arms: curvature from the shape, shape from the curvature, repeated.
 
-    A heavily loaded free digit (a large sag) makes the plain iteration overshoot; wherever an update grew, the
-    next ones are under-relaxed (the step halved each time, and let grow again by a quarter while updates shrink).
+    The plain iteration takes each new curvature field whole while its update shrinks to :attr:`CONTRACTION` of
+    the last one or less. A heavily loaded free digit (a large sag) makes it overshoot: a 0.47 m digit of eight
+    sections lying horizontal swung between 18 and 99 deg at the tip for ever (its equilibrium: 63 deg), each
+    update 0.1 % smaller than the last; halving the step whenever an update grew never caught that, and where it
+    did halve, the steps shrank to nothing with the update still large (a shape "settled" 0.01 rad from its
+    fixed point). From the first update that does not contract, a reading's step is Aitken's dynamic relaxation
+    (Irons and Tuck 1969; Kuttler and Wall 2008, fluid-structure coupling): ``w_k = -w_(k-1) r_(k-1).(r_k -
+    r_(k-1)) / |r_k - r_(k-1)|^2`` over the curvature updates ``r``, the secant estimate of the step that lands
+    on the fixed point, at most 1 (halved instead where it is below :attr:`MIN_RELAX` or not positive: the
+    updates jump where the fit switches, a bound or a slack cable). The shape has settled when the whole update moves no
+    tangent angle by ``tol_rad`` or more, or, where the updates jump, when the halved steps do.
     """
+
+    #: An update at least this share of the last one (in tangent angle) is not converging: relax from then on.
+    CONTRACTION = 0.9
+    #: The smallest Aitken factor taken as one: below it the updates jump rather than overshoot.
+    MIN_RELAX = 0.02
 
     def __init__(self, beam: DigitBeam, psi: np.ndarray, tol_rad: float) -> None:
         self.beam, self.psi, self.tol_rad = beam, psi, tol_rad
         self.curvature = None
-        self.relax = np.ones(psi.shape[0])
-        self.change = np.full(psi.shape[0], np.inf)
+        b = psi.shape[0]
+        self.relax = np.ones(b)
+        self.aitken = np.zeros(b, dtype=bool)  # rows that left the plain iteration
+        self.update = None  # the last whole update of the curvature (B, P)
+        self.change = np.full(b, np.inf)  # the tangent angle the last step moved (rad)
+        self.residual = np.full(b, np.inf)  # the tangent angle the whole last update would have moved (rad)
 
     def step(self, target: np.ndarray):
         """Move towards the curvature field ``target`` (B, P); return the new ``(psi, r)``."""
-        if self.curvature is not None:
-            target = self.curvature + self.relax[:, None] * (target - self.curvature)
-        psi, r, _ = self.beam.integrate(target)
-        change = np.max(np.abs(psi - self.psi), axis=1)
-        if self.curvature is not None:
-            self.relax = np.where(change > self.change, 0.5 * self.relax, np.minimum(1.0, 1.25 * self.relax))
-        self.psi, self.curvature, self.change = psi, target, change
+        return self.step_rows(target, slice(None))
+
+    def step_rows(self, target: np.ndarray, rows):
+        """:meth:`step` for the shapes ``rows`` only (``target`` (R, P)), the others left where they are (the first
+        call takes every row)."""
+        if self.curvature is None:
+            psi, r, _ = self.beam.integrate(target)
+            self.change = np.max(np.abs(psi - self.psi), axis=1)
+            self.residual = self.change.copy()
+            self.psi, self.curvature = psi, target
+            self.update = np.zeros_like(target)
+            return psi, r
+        current, last = self.curvature[rows], self.update[rows]
+        update = target - current
+        whole = np.max(np.abs(np.cumsum(update, axis=1) * self.beam.ds_m), axis=1)
+        aitken = self.aitken[rows] | (whole > self.CONTRACTION * self.residual[rows])
+        diff = update - last
+        denom = np.sum(diff * diff, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            secant = -self.relax[rows] * np.sum(last * diff, axis=1) / denom
+        # a secant step below MIN_RELAX (or none): the updates jump (a bound of the fit, the cable going slack),
+        # so there is no smooth fixed point to aim at; halve the step instead, as the plain rule did
+        aim = np.isfinite(secant) & (denom > 0) & (secant >= self.MIN_RELAX)
+        relax = np.where(aim, np.minimum(secant, 1.0), 0.5 * self.relax[rows])
+        relax = np.where(aitken, relax, 1.0)
+        new = current + relax[:, None] * update
+        psi, r, _ = self.beam.integrate(new)
+        self.change[rows] = np.max(np.abs(psi - self.psi[rows]), axis=1)
+        self.residual[rows], self.relax[rows], self.aitken[rows] = whole, relax, aitken
+        self.psi[rows], self.curvature[rows], self.update[rows] = psi, new, update
         return psi, r
 
     @property
+    def settled(self) -> np.ndarray:
+        """Per reading: the whole update is below ``tol_rad``, or its steps, halved below :attr:`MIN_RELAX` where
+        the updates jump, move less than that (the shape sits where the fit switches)."""
+        return (self.residual < self.tol_rad) | ((self.relax < self.MIN_RELAX) & (self.change < self.tol_rad))
+
+    @property
+    def gap(self) -> np.ndarray:
+        """Per reading, how far from settled (rad): 0 where :attr:`settled`, else the whole last update."""
+        return np.where(self.settled, 0.0, self.residual)
+
+    @property
     def done(self) -> bool:
-        return bool(np.all(self.change < self.tol_rad))
+        return bool(np.all(self.settled))
 
 
 def _fit_tension(res, a_t, w, cable: bool, gauges: int = 3):

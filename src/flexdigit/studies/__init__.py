@@ -7,7 +7,8 @@
   convergence check;
 - :mod:`~flexdigit.studies.design_study`: the design study (gauges, bridge, ADC, servo, cable, size) and its Pareto
   front;
-- :mod:`~flexdigit.studies.execution`: evaluation on Dask distributed (or in process), seeded, resumable.
+- :mod:`~flexdigit.studies.execution`: evaluation on Dask distributed (or in process), seeded, resumable;
+- :mod:`~flexdigit.studies.robot_study`: the sensitivity of a tendon robot (issue 26), on the same machinery.
 
 This domain sits above tactile in the import chain: it reads the twin, control and tactile; nothing but the report
 imports it.
@@ -40,6 +41,9 @@ __getattr__, __all__ = lazy_exports(
         "run_design": "flexdigit.studies.design_study",
         "export_design": "flexdigit.studies.design_study",
         "run_study": "flexdigit.studies.execution",
+        "RobotStudySpec": "flexdigit.studies.robot_study",
+        "load_robot_spec": "flexdigit.studies.robot_study",
+        "run_robot_sensitivity": "flexdigit.studies.robot_study",
         "StepSchedule": "flexdigit.studies.batched_loop",
         "step_responses": "flexdigit.studies.batched_loop",
     },

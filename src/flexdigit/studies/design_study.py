@@ -18,6 +18,11 @@ size has on ... stiffness and stability"; 2.3.1 names the quarter, half and full
   with that pretension (:mod:`flexdigit.twin.batched`);
 - ``size`` [0.75, 1.0, 1.25]: every length along the digit scaled (sections, supports, gauges), the strip's
   cross-section and the cable's eccentricity kept;
+- ``section_taper`` [1.0]: the tip section's free strip over the base section's, the sections' lengths in
+  geometric progression from the base (``l_k = l_0 r^(k / (n - 1))``) with their sum, the supports and the digit's
+  length kept (:func:`tapered`); 1 keeps the baseline's own sections (equal on the thesis rig). The ``thesis``
+  layout's gauges keep their place within their section (midway, on the thesis rig); ``equal`` and
+  ``d-optimal`` are laid on the tapered strip;
 - ``samples`` [0]: 0 evaluates every combination; a positive number evaluates that many, drawn without
   replacement with the study's seed, always including the thesis design and its equal-spacing twins (the thesis
   design with 4, 5, 6 equally spaced gauges), the designs the front is read against.
@@ -62,6 +67,7 @@ __all__ = [
     "d_optimal_positions",
     "d_criterion",
     "pareto_front",
+    "tapered",
     "export_design",
     "run_design",
     "write_design_outputs",
@@ -89,7 +95,11 @@ _THESIS_DESIGN = {
     "eccentricity_m": 5.715e-3,
     "pretension_n": 0.0,
     "size": 1.0,
+    "section_taper": 1.0,
 }
+#: The tapers a study may ask for (tip section over base section): past 5:1 either way a section of a 3-section
+#: thesis-sized digit is shorter than the 20 mm its gauge and guide need.
+TAPER_RANGE = (0.2, 5.0)
 
 
 @dataclass(frozen=True)
@@ -104,6 +114,7 @@ class DesignSettings:
     eccentricity_m: tuple[float, ...] = (0.004, 5.715e-3, 0.008)
     pretension_n: tuple[float, ...] = (0.0, 5.0)
     size: tuple[float, ...] = (0.75, 1.0, 1.25)
+    section_taper: tuple[float, ...] = (1.0,)
     samples: int = 0
     objectives: tuple[str, ...] = ("bayes_position_limit_mm", "settling_time_s")
     chunk_size: int = 4
@@ -162,6 +173,9 @@ class DesignSettings:
             bad("pretension_n", "pretensions in [0, 100] N (0: one cable)", list(self.pretension_n))
         if any(not 0.25 <= s <= 4 for s in self.size):
             bad("size", "scale factors in [0.25, 4]", list(self.size))
+        low, high = TAPER_RANGE
+        if any(not low <= r <= high for r in self.section_taper):
+            bad("section_taper", f"tip-over-base length ratios in [{low:g}, {high:g}]", list(self.section_taper))
         if self.samples < 0:
             bad("samples", "an integer >= 0 (0: every combination)", self.samples)
         if len(self.objectives) < 2 or any(o not in DESIGN_METRICS for o in self.objectives):
@@ -186,6 +200,7 @@ class Candidate:
     eccentricity_m: float
     pretension_n: float
     size: float
+    section_taper: float = 1.0
 
     @property
     def is_thesis(self) -> bool:
@@ -199,7 +214,7 @@ class Candidate:
         return (
             f"{self.gauge_count} gauges {self.layout}, {self.bridge} bridge, {self.adc_bits} bit, "
             f"{self.servo_deg_per_command:.3g} deg/cmd, e {1e3 * self.eccentricity_m:.3g} mm, {cable}, "
-            f"size x{self.size:g}"
+            f"size x{self.size:g}" + (f", taper {self.section_taper:g}" if self.section_taper != 1.0 else "")
         )
 
 
@@ -217,6 +232,7 @@ def candidates(settings: DesignSettings, seed: int) -> list[Candidate]:
             settings.eccentricity_m,
             settings.pretension_n,
             settings.size,
+            settings.section_taper,
         )
         if c[1] != "thesis" or c[0] == 3
     ]
@@ -361,6 +377,42 @@ def _scaled(params: RigParams, size: float) -> RigParams:
     return params.replace(geometry=geometry)
 
 
+def tapered(params: RigParams, ratio: float) -> RigParams:
+    """The digit with its sections' free strips tapered: the tip section ``ratio`` times as long as the base one,
+    the lengths in geometric progression from the base (``l_k = l_0 ratio^(k / (n - 1))``), their sum (the strip),
+    every support and the digit's length kept. Each gauge keeps its place within its section (a gauge on a support
+    keeps its place on it): the thesis's mid-section gauges stay mid-section. ``ratio`` 1 returns ``params``
+    itself (the baseline's own sections, equal or not).
+
+    Examples
+    --------
+    >>> g = tapered(RigParams(), 0.5).geometry
+    >>> [round(1e3 * x, 2) for x in g.section_length_m], round(1e3 * g.digit_length_m, 1)
+    ([108.74, 76.89, 54.37], 270.0)
+    >>> [round(1e3 * (a + b) / 2, 2) for a, b in g.section_bounds_m], [round(1e3 * x, 2) for x in g.gauge_positions_m]
+    ([59.37, 162.18, 237.82], [59.37, 162.18, 237.82])
+    """
+    if ratio == 1.0:
+        return params
+    g = params.geometry
+    n = g.section_count
+    if n < 2:
+        raise ParameterError(
+            f"[design] section_taper {ratio:g}: the baseline digit has {n} section; a taper needs two or more "
+            "(section_taper = [1.0] keeps it)"
+        )
+    weights = ratio ** (np.arange(n) / (n - 1))
+    lengths = tuple(float(x) for x in g.strip_length_m * weights / weights.sum())
+    new = dataclasses.replace(
+        g, section_length_m=lengths, strip_length_m=math.fsum(lengths), support_lengths_m=g.supports_m
+    )
+    # the layout's knots (clamp, each section's ends, tip) old -> new: sections stretch, supports move whole
+    old_knots = [0.0, *itertools.chain.from_iterable(g.section_bounds_m), g.digit_length_m]
+    new_knots = [0.0, *itertools.chain.from_iterable(new.section_bounds_m), new.digit_length_m]
+    positions = tuple(float(x) for x in np.interp(g.gauge_positions_m, old_knots, new_knots))
+    return params.replace(geometry=dataclasses.replace(new, gauge_positions_m=positions))
+
+
 @lru_cache(maxsize=256)
 def _d_optimal_cached(count: int, base: ParameterSet, step: float, seed: int) -> tuple[float, ...]:
     return d_optimal_positions(count, base, step_m=step, seed=seed)[0]
@@ -368,7 +420,7 @@ def _d_optimal_cached(count: int, base: ParameterSet, step: float, seed: int) ->
 
 def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: float = 0.0025, seed: int = 0):
     """The rig of a candidate design, built from the baseline (see the module docstring)."""
-    params = _scaled(baseline.params, c.size)
+    params = tapered(_scaled(baseline.params, c.size), c.section_taper)
     geo = params.geometry
     cal = baseline.calibration
     if c.layout == "thesis":
@@ -519,6 +571,20 @@ def placement_report(ps: ParameterSet, counts, *, step_m: float, seed: int) -> l
     return out
 
 
+def study_fingerprint(spec: StudySpec, settings: DesignSettings) -> str:
+    """The journal's fingerprint of a design study (:mod:`flexdigit.studies.execution` resumes only its own). A
+    study without tapers (``section_taper`` [1.0]) keeps the fingerprint it had before tapers existed, so its
+    journals resume."""
+    import hashlib
+    import json
+
+    options = dataclasses.asdict(settings)
+    if settings.section_taper == (1.0,):
+        del options["section_taper"]
+    text = json.dumps([spec.fingerprint(), options], sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def run_design(
     spec: StudySpec,
     out_dir: str | Path,
@@ -530,9 +596,6 @@ def run_design(
     progress: bool = True,
 ) -> DesignResult:
     """Run (or resume) a design study in ``out_dir`` (journal, see :mod:`flexdigit.studies.execution`)."""
-    import hashlib
-    import json
-
     settings = settings or DesignSettings.from_spec(spec)
     cands = candidates(settings, spec.seed)
     metrics = list(dict.fromkeys([*DESIGN_METRICS, *settings.objectives, *(u.name for u in spec.user_metrics)]))
@@ -543,9 +606,7 @@ def run_design(
         bayes_samples=settings.bayes_samples,
         user_metrics=spec.user_metrics,
     )
-    fingerprint = hashlib.sha256(
-        json.dumps([spec.fingerprint(), dataclasses.asdict(settings)], sort_keys=True, default=repr).encode()
-    ).hexdigest()[:16]
+    fingerprint = study_fingerprint(spec, settings)
     header = {"kind": "design", "study": spec.name, "fingerprint": fingerprint, "rows": len(cands)}
     build = _Builder(spec.baseline, cands, settings.grid_step_m, spec.seed)
     values = np.arange(len(cands), dtype=float)[:, None]

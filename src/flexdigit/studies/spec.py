@@ -98,7 +98,7 @@ CHECK_SIGMAS = 6.0
 _LOG_MAX_FLOAT = math.log(np.finfo(float).max)  # math.exp beyond it raises OverflowError
 SECTIONS = ("geometry", "material", "sensors", "actuator", "dynamics", "calibration")
 #: Specs shipped with flexdigit (``flexdigit study sensitivity thesis-tolerances``).
-SHIPPED_SPECS = ("thesis-tolerances", "thesis-design")
+SHIPPED_SPECS = ("thesis-tolerances", "thesis-design", "thesis-taper")
 
 
 @dataclass(frozen=True)

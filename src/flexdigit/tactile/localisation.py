@@ -24,7 +24,7 @@ from flexdigit.tactile.accuracy import accuracy, rmse
 from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao, protocol_limits
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
-from flexdigit.tactile.pipeline import ThesisNetwork, features, thesis_split
+from flexdigit.tactile.pipeline import ThesisNetwork, features, run_pipeline, targets, thesis_split
 
 __all__ = [
     "ESTIMATORS",
@@ -36,6 +36,7 @@ __all__ = [
     "bayes_limits",
     "readings_gauge_model",
     "position_bayes_rmse_m",
+    "train_network",
     "identifiability_map",
 ]
 
@@ -45,26 +46,82 @@ CONTACT_CHI2 = 13.8155
 
 
 def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
-    """Subtract from every test's readings the mean of its no-load readings (taken at its start, 6.5, 7.2).
+    """Subtract from every reading the mean of the no-load readings taken before it in its test (6.5, 7.2).
 
-    Returns the tared dataset and, per reading, the seconds since its tare (since the first reading for tests
-    without no-load readings, which are left as they are; 0 when the readings have no times, e.g. imported).
+    The no-load readings of a test come in blocks (one at its start in the thesis's protocols; one before every
+    position with ``tare_each_position``); a reading is tared on the last block before it (in sample order) or,
+    between two blocks, on the two interpolated in time to it (the drift between them removed, as a lab brackets
+    a weighing with two zero readings), a reading of a block on its own block, and a test's readings before its
+    first block (an imported file's order) on the mean of all its no-load readings. Tests without no-load
+    readings are left as they are; the thesis's layout (one block, at the start) is tared as it always was.
+
+    Returns the tared dataset and, per reading, the seconds since its tare (the nearer tare block's mean time;
+    since the first reading for tests without no-load readings; 0 when the readings have no times, e.g.
+    imported).
     """
     gauges = dataset.gauges_v.copy()
     time = dataset["time_s"]
     if not np.all(np.isfinite(time)):  # readings imported without times: none accrues drift since its tare
         time = np.zeros(len(dataset))
     since = time - time.min()
+    order = np.argsort(dataset["sample"], kind="stable")
+    unloaded = dataset["load_kg"] == 0
     for test in np.unique(dataset["test"]):
-        rows = dataset["test"] == test
-        zero = rows & (dataset["load_kg"] == 0)
-        if zero.any():
-            gauges[rows] -= gauges[zero].mean(axis=0)
-            since[rows] = np.abs(time[rows] - time[zero].mean())
+        rows = order[dataset["test"][order] == test]  # the test's readings in sample order
+        zero = np.flatnonzero(unloaded[rows])  # where its no-load readings are in that order
+        if not zero.size:
+            continue
+        first = np.r_[True, np.diff(zero) != 1]  # a block starts where the no-load run does
+        block = np.cumsum(first) - 1  # each no-load reading's block
+        blocks = [rows[zero[block == b]] for b in range(int(block[-1]) + 1)]
+        refs = [(gauges[b].mean(axis=0), time[b].mean()) for b in blocks]
+        whole = (gauges[rows[zero]].mean(axis=0), time[rows[zero]].mean())
+        last = np.searchsorted(zero, np.arange(rows.size), side="right") - 1  # the last no-load reading at or before
+        for row, k in zip(rows, last, strict=True):
+            ref, ref_t = whole if k < 0 else refs[block[k]]
+            after = int(block[k]) + 1 if k >= 0 else len(refs)
+            if k >= 0 and not unloaded[row] and after < len(refs) and time[rows[zero[block == after]][0]] > ref_t:
+                # a block after it too (a tare before each position): the drift between the two, interpolated in time
+                ref2, t2 = refs[after]
+                w = (time[row] - ref_t) / (t2 - ref_t)
+                ref, since[row] = (1.0 - w) * ref + w * ref2, min(abs(time[row] - ref_t), abs(t2 - time[row]))
+            else:
+                since[row] = abs(time[row] - ref_t)
+            gauges[row] = gauges[row] - ref
     columns = dict(dataset.columns)
     for i, name in enumerate(dataset.gauge_columns):
         columns[name] = gauges[:, i]
     return Dataset(columns, dict(dataset.meta)), since
+
+
+def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, tol=None, epochs: int = 50):
+    """``flexdigit train``'s network: the thesis's pipeline (:func:`~flexdigit.tactile.pipeline.run_pipeline`, no
+    error curves) on the dataset's G gauges and, on an actuated protocol, the command.
+
+    On a dataset tared before each position (``tare_each_position``) the network is trained on the readings as
+    read and on the tared ones (:func:`tare`), with the same split and seeds, and the one with the lower
+    validation error is kept, as the thesis chose its hidden nodes: a tare removes the drift between positions
+    but adds its own block's noise to every reading of a position, and which weighs more depends on the digit
+    (a one-gauge digit's network: 1.44 x its Bayes limit as read, 1.14 tared; a 12-bit six-gauge one's 1.03 as
+    read, 1.36 tared). The test readings are not looked at.
+
+    Returns ``(result, rows, inputs, tared)``: the pipeline's result, the dataset rows with the target, the inputs'
+    column names (what ``predict`` reads) and whether the kept network reads tared readings.
+    """
+    rows, y = targets(dataset, target)
+    actuated = dataset.protocol.actuated
+    inputs = [*dataset.gauge_columns] + (["command"] if actuated else [])
+    options = {"seed": seed, "fixed_hidden": hidden, "fixed_tol": tol, "target": target, "curve_hidden": None}
+    best = None
+    for tared in (False, True) if dataset.protocol.tare_each_position else (False,):
+        readings = tare(dataset)[0] if tared else dataset
+        x = features(readings, with_command=actuated)[rows]
+        result = run_pipeline(x, y, epochs=epochs, **options)
+        val = result.split.val
+        val_mse = float(np.mean((result.model.predict(x[val]) - y[val]) ** 2))
+        if best is None or val_mse < best[0]:
+            best = (val_mse, result, tared)
+    return best[1], rows, inputs, best[2]
 
 
 def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -326,10 +383,15 @@ def position_bayes_rmse_m(model, dataset: Dataset, rows, *, samples: int = 4000,
     squared error), averaged over those readings as a trained network's RMSE on them is.
 
     The readings' noise is the model's (white noise and quantisation for :func:`readings_gauge_model`), not the
-    sensors' drift: a network is scored on test readings drawn at random from the same run as its training
-    readings, each setting's readings taken within a second, so it learns each setting's drifted mean, and a limit
-    counting the drift as noise would be no floor (it put the 8-gauge test digit's network at half of it). The
-    digit must have settled (the protocol's ``settle_s``): a swing is noise the limit does not count either.
+    sensors' drift, nor a tare's error (on readings tared before each position, :func:`tare`): a
+    network is scored on
+    test readings drawn at random from the same run as its training readings, each setting's readings taken within
+    a second (and tared on one block), so it can learn each setting's offset, and a limit counting the drift or
+    the tare as noise would be no floor (the whole run's drift put the 8-gauge test digit's network at half of
+    it; the drift since each tare and the tare's noise a 7-gauge drawn digit's at a third); where the drift
+    moves neighbouring settings' means past each other (a one-gauge digit), no smooth network follows it, which
+    the tare per position (``tare_each_position``) removes. The digit must have settled (the protocol's
+    ``settle_s``, and ``wait_until_steady``): a swing is noise the limit does not count either.
 
     Parameters
     ----------

@@ -18,6 +18,7 @@ reading would not be enough: the digit's swing and the sensor drift carry the hi
 
 from __future__ import annotations
 
+import warnings
 from contextlib import ExitStack, nullcontext
 from pathlib import Path
 
@@ -40,6 +41,10 @@ __all__ = [
     "describe_rig",
     "effective_settings",
     "sim_options",
+    "STEADY_FACTOR",
+    "STEADY_WINDOW_S",
+    "still_scatter_v",
+    "wait_until_steady",
     "collect",
     "collect_on",
     "load_or_collect",
@@ -56,6 +61,19 @@ PROTOCOL_SETTINGS = (
     "rehang",
     "orientation",
 )
+
+#: A steady reading (:func:`wait_until_steady`): over a window of :data:`STEADY_WINDOW_S`, every gauge's standard
+#: deviation within this factor of what a still gauge scatters (:func:`still_scatter_v`). A swing of amplitude
+#: ``A`` adds ``A^2 / 2`` to the variance, so a steady window leaves at most ``A = sqrt(2 (1.15^2 - 1)) = 0.80``
+#: sigma. With 100 readings the deviation of pure noise scatters by ``1 / sqrt(2 x 99) = 7 %``: a still digit fails
+#: the test now and then (2 sigma per gauge) and costs one more window, never a reading.
+STEADY_FACTOR = 1.15
+#: Length of the window a steadiness check reads (s): two seconds, a few periods of a digit's first mode (the
+#: slowest drawn digits ring near 1.5-2 Hz), read at the protocol's ``sample_interval_s`` (20 ms: 100 readings).
+STEADY_WINDOW_S = 2.0
+#: The longest a check waits for a steady reading (s), as a multiple of the settle time (and at least a minute):
+#: a rig noisier than its model is never "steady", and its readings are then taken after this wait.
+STEADY_CAP_SETTLES = 30.0
 
 
 def journal_path(out: str | Path) -> Path:
@@ -79,8 +97,11 @@ def effective_settings(protocol: Protocol, rig, settle_s: float, extra: dict | N
     parameter fingerprints ...) and ``extra`` (anything else the caller applies, e.g. a calibration file).
     """
     proto = protocol.to_dict()
+    # the steadiness check and the tare per position only when on: the thesis protocols' settings (and their
+    # journals) are as they were
+    keys = PROTOCOL_SETTINGS + tuple(k for k in ("wait_until_steady", "tare_each_position") if getattr(protocol, k))
     return {
-        "protocol": {key: proto[key] for key in PROTOCOL_SETTINGS},
+        "protocol": {key: proto[key] for key in keys},
         "settle_s": float(settle_s),
         "rig": rig.settings() if hasattr(rig, "settings") else {"backend": type(rig).__name__},
         **(extra or {}),
@@ -103,6 +124,48 @@ def sim_options(protocol: Protocol, url: str = "sim") -> dict:
     if "cable" not in given:
         out["cable"] = protocol.actuated
     return out
+
+
+def still_scatter_v(rig, params: RigParams) -> np.ndarray:
+    """The most each gauge's readings scatter (standard deviation, V) when nothing moves: the white noise of the
+    rig's twin calibration (a twin rig's own, else the digit's default one,
+    :func:`~flexdigit.twin.digit_calibration.twin_calibration`) and half an ADC step either side,
+    ``sqrt(sigma^2 + lsb^2 / 4)``. Not the readings' average rounding noise ``lsb / sqrt(12)``: a gauge whose white
+    noise is under an LSB toggles between two codes, a deviation of up to ``lsb / 2`` when its value sits on a code
+    boundary (a 12-bit gauge with 0.6 mV of noise and 2.4 mV steps read 1.36 x the average one, still)."""
+    twin = getattr(rig, "twin", None)
+    calibration = getattr(twin, "calibration", None) or twin_calibration(params)
+    white = np.asarray(calibration.noise_white_v, dtype=float)
+    return np.sqrt(white**2 + params.sensors.adc_lsb_v**2 / 4.0)
+
+
+def wait_until_steady(rig, noise_v, interval_s: float, cap_s: float) -> tuple[float, bool]:
+    """Read the rig in windows of :data:`STEADY_WINDOW_S` until every gauge's standard deviation over a window is
+    within :data:`STEADY_FACTOR` of ``noise_v`` (what a still gauge scatters, :func:`still_scatter_v`), or ``cap_s``
+    has passed.
+
+    An experimenter's wait for a still reading: the fixed settle time that suits one digit leaves another one
+    ringing (a 0.17 m cable-pair digit of 0.2 mm strip still swung 6 sigma 10 s after its load was hung, and its
+    network's RMSE was 1.7 x the Bayes limit, which assumes settled readings; read when steady, 1.0 x). The
+    readings of the check are not kept. Returns the seconds it read and whether the rig was found steady.
+    """
+    interval = interval_s if interval_s > 0 else TACTILE_TWIN_DT_S
+    count = max(10, int(round(STEADY_WINDOW_S / interval)))
+    limit = STEADY_FACTOR * np.asarray(noise_v, dtype=float)
+    waited = 0.0
+    while True:
+        window = np.empty((count, limit.size))
+        for k in range(count):
+            rig.wait(interval)
+            gauges = np.asarray(rig.read().gauges_v, dtype=float)
+            if gauges.shape != limit.shape:  # another digit's rig: the reading that follows is refused, naming it
+                return waited, True
+            window[k] = gauges
+        waited += count * interval
+        if np.all(window.std(axis=0, ddof=1) <= limit):
+            return waited, True
+        if waited >= cap_s:
+            return waited, False
 
 
 def _checked_options(protocol: Protocol, rig, settle_s, stop_after) -> float:
@@ -202,12 +265,47 @@ def collect(
     out, params = Path(out), params or RigParams()
     journal_file, settle = journal_path(out), _checked_options(protocol, rig, settle_s, stop_after)
     plan = protocol.plan(params.geometry.digit_length_m)  # every position on the digit
-    meta = make_meta(protocol, describe_rig(rig, rig_url), params.geometry.digit_length_m, params.sensors.adc_range_v,
-                     len(params.geometry.gauge_positions_m))  # fmt: skip
-    meta["settings"] = effective_settings(protocol, rig, settle, settings)
+    meta, steady = _meta_and_check(protocol, rig, rig_url, params, settle, settings)
     # one collection writes ``out`` and its journal at a time: a second is refused (OutputBusyError), never mixed
     with output_lock(out):
-        return _collect_locked(protocol, rig, out, journal_file, meta, plan, settle, progress, fsync, stop_after, force)
+        return _collect_locked(
+            protocol, rig, out, journal_file, meta, plan, settle, progress, fsync, stop_after, force, steady
+        )
+
+
+def _meta_and_check(protocol: Protocol, rig, rig_url, params: RigParams, settle: float, settings):
+    """The dataset's metadata (its effective settings) and the steadiness check (None when the protocol has none)."""
+    g = params.geometry
+    meta = make_meta(protocol, describe_rig(rig, rig_url), g.digit_length_m, params.sensors.adc_range_v,
+                     len(g.gauge_positions_m))  # fmt: skip
+    meta["settings"] = effective_settings(protocol, rig, settle, settings)
+    steady = _SteadyCheck(still_scatter_v(rig, params), protocol, settle) if protocol.wait_until_steady else None
+    return meta, steady
+
+
+class _SteadyCheck:
+    """The steadiness check of one collection: the gauges' noise, the cap, and how many settings it checked."""
+
+    def __init__(self, noise_v, protocol: Protocol, settle_s: float) -> None:
+        self.noise_v = noise_v
+        self.interval_s = protocol.sample_interval_s
+        self.cap_s = min(MAX_SETTLE_S, STEADY_CAP_SETTLES * max(settle_s, 6.0))
+        self.checked = self.unsteady = 0
+
+    def __call__(self, rig) -> None:
+        _, steady = wait_until_steady(rig, self.noise_v, self.interval_s, self.cap_s)
+        self.checked += 1
+        self.unsteady += not steady
+
+    def warn(self, out: Path) -> None:
+        """Say (a warning) how many settings were read unsteady, after the cap, if any."""
+        if self.unsteady:
+            warnings.warn(
+                f"{out}: {self.unsteady} of {self.checked} settings were not steady (gauges within "
+                f"{STEADY_FACTOR:g} x their noise over {STEADY_WINDOW_S:g} s) after {self.cap_s:g} s; their "
+                "readings carry the swing or the rig is noisier than its calibration says",
+                stacklevel=4,  # collect's caller
+            )
 
 
 def _collect_locked(
@@ -222,8 +320,9 @@ def _collect_locked(
     fsync: bool,
     stop_after: int | None,
     force: bool,
+    steady=None,
 ) -> Dataset:
-    """:func:`collect` once its checks passed, holding ``out``'s lock."""
+    """:func:`collect` once its checks passed, holding ``out``'s lock; ``steady`` the steadiness check (or None)."""
     gauge_count = meta["gauge_count"]
     if out.exists() and journal_file.exists() and not force:
         return _finish_compaction(out, journal_file, meta, protocol)
@@ -244,7 +343,7 @@ def _collect_locked(
             for i in range(0 if replay else start, total):
                 if i >= start and stop_after is not None and taken >= stop_after:
                     break
-                setting, reading = _take(rig, protocol, plan, i, setting, settle, gauge_count)
+                setting, reading = _take(rig, protocol, plan, i, setting, settle, gauge_count, steady)
                 row = _row(plan, i, reading)
                 if i < start:  # replaying what the journal holds: the twin must give it again, bit for bit
                     _check_replayed(journal_file, done[i], row)
@@ -279,20 +378,27 @@ def _collect_locked(
     if len(dataset) == total:
         save_dataset(dataset, out, force=force)
         journal_file.unlink()
+    if steady is not None:
+        steady.warn(out)
     return dataset
 
 
-def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float, gauge_count: int):
-    """Bring the rig to sample ``i``'s setting (or re-hang and wait between repetitions) and read it."""
+def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float, gauge_count: int, steady=None):
+    """Bring the rig to sample ``i``'s setting (or re-hang and wait between repetitions), wait until it is steady
+    if ``steady`` (:class:`_SteadyCheck`) and read it."""
     wanted = (int(plan["test"][i]), float(plan["load_kg"][i]), int(plan["position_index"][i]))
     command = int(plan["command"][i])
     if wanted != setting:
         _apply_setting(rig, command, float(plan["load_kg"][i]), float(plan["position_from_base_m"][i]))
         rig.wait(settle)
+        if steady is not None:
+            steady(rig)
         setting = wanted
     else:
         if protocol.rehang and plan["load_kg"][i] > 0:
             rig.rehang(settle)
+            if steady is not None:
+                steady(rig)
         if protocol.sample_interval_s > 0:
             rig.wait(protocol.sample_interval_s)
     reading = rig.read()

@@ -29,11 +29,13 @@ import numpy as np
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_real
 from flexdigit.errors import ParameterError
+from flexdigit.tdcr import _chain_kernel
 from flexdigit.tdcr.description import Robot
-from flexdigit.tdcr.sensing import GaugeLayout, _station_curvatures, gauge_strains
-from flexdigit.tdcr.statics import StaticSolution
+from flexdigit.tdcr.dynamics import _discrete_model, _element_frames
+from flexdigit.tdcr.sensing import GaugeLayout, _station_curvatures, gauge_layout, gauge_strains
+from flexdigit.tdcr.statics import StaticSolution, _nodes, solve_statics
 
-__all__ = ["ContactEstimate", "locate_contact"]
+__all__ = ["ContactEstimate", "ContactSensing", "locate_contact", "pressed_shape", "sense_contact"]
 
 
 @dataclass(frozen=True)
@@ -130,3 +132,164 @@ def locate_contact(
         visible_from_m=float(stations[1]),
         residual=residual,
     )
+
+
+def pressed_shape(
+    robot: Robot, tensions_n, *, contact_s_m: float | None = None, contact_force_n=None, nodes_per_disk: int = 2
+) -> StaticSolution:
+    """The robot's equilibrium under ``tensions_n`` and a point force ``contact_force_n`` (N, world frame) at the
+    node nearest ``contact_s_m`` (m from the base), or none: the discrete rod (:mod:`flexdigit.tdcr.dynamics`,
+    which takes a force at any node) settled by Newton, from the shot rod's shape.
+
+    The shape without a contact is the same model's, so that what :func:`locate_contact` sees between the two is
+    the contact, not a difference of models (the discrete rod is second order in its element length: 0.7 mm from
+    the shot statics on rao2021 at 4 elements a disk).
+
+    Raises
+    ------
+    ParameterError
+        Naming the bad argument; also if the rod finds no equilibrium (a force that buckles it).
+    """
+    owner = "pressed_shape"
+    start = solve_statics(robot, tensions_n, nodes_per_disk=nodes_per_disk)  # Newton's start; checks the tensions
+    nodes, ends = _nodes(robot, nodes_per_disk)
+    loads = (np.asarray(tensions_n, dtype=float), np.zeros(3), np.zeros(3), np.zeros(3))
+    model, _, _, hb = _discrete_model(robot, nodes, ends, loads)
+    node = None
+    if contact_force_n is not None:
+        force = check_array(contact_force_n, "contact_force_n", owner, shape=(3,))
+        if contact_s_m is None:
+            raise ParameterError(f"{owner}: a contact force needs its place, contact_s_m (m from the base)")
+        s_c = check_real(contact_s_m, "contact_s_m", owner, low=0.0, high=robot.length_m, low_open=True)
+        node = int(np.argmin(np.abs(nodes - s_c)))
+        model[4][node] += force
+    n = nodes.size - 1
+    x = start.positions_m.copy()
+    q = np.ascontiguousarray(_element_frames(start.rotations))
+    if _chain_kernel.equilibrate(x, q, model, hb, 1e-10, 100) == _chain_kernel.NO_PROGRESS:
+        raise ParameterError(
+            f"{owner}: the rod of {robot.name!r} finds no equilibrium under these tensions and this contact "
+            "(a force that large buckles it or pushes it past where the first-order contact estimate holds)"
+        )
+    sig, kap = np.empty((n, 3)), np.empty((n, 3))
+    _chain_kernel._state_strains(x, q, model, sig, kap)
+    frames = np.empty((1, n + 1, 3, 3))
+    _chain_kernel.node_frames(q[None], frames)
+    strains = np.zeros((n + 1, 6))
+    v = sig + [0.0, 0.0, 1.0]
+    strains[0, :3], strains[-1, :3] = v[0], v[-1]
+    strains[1:-1, :3] = (v[:-1] + v[1:]) / 2
+    strains[:-1, 3:] = kap  # element curvatures at their first node; the tip carries no moment
+    return StaticSolution(nodes, x, frames[0], strains, strains, np.zeros(6), True, 0, 0.0)
+
+
+@dataclass(frozen=True)
+class ContactSensing:
+    """What :func:`sense_contact` found.
+
+    Attributes
+    ----------
+    layout : GaugeLayout
+    strains : ndarray (g,)
+        The readings with the contact (the pressed twin's, with any noise, or given).
+    estimate : ContactEstimate
+    free : StaticSolution
+        The twin's shape without the contact, about which the estimate is made.
+    true_s_m : float or None
+        Where the twin was pressed (the node nearest the asked place), when it was.
+    true_force_n : ndarray (3,) or None
+        The force it was pressed with.
+    """
+
+    layout: GaugeLayout
+    strains: np.ndarray
+    estimate: ContactEstimate
+    free: StaticSolution
+    true_s_m: float | None = None
+    true_force_n: np.ndarray | None = None
+
+    @property
+    def place_error_m(self) -> float | None:
+        """``|estimated - true|`` arc length (m)."""
+        return None if self.true_s_m is None else abs(self.estimate.s_m - self.true_s_m)
+
+    @property
+    def force_error_n(self) -> float | None:
+        """``|estimated - true force|`` (N), the true force less its component along ``unseen_direction``."""
+        if self.true_force_n is None:
+            return None
+        seen = self.true_force_n
+        unseen = self.estimate.unseen_direction
+        if unseen is not None:
+            seen = seen - (seen @ unseen) * unseen
+        return float(np.linalg.norm(self.estimate.force_n - seen))
+
+    def to_dict(self) -> dict:
+        """Plain values: the estimate (``s_m``, ``position_m``, ``force_n``, ...), and the truth and errors."""
+        est = self.estimate
+        return {
+            "gauges": int(self.layout.s_m.size),
+            "strains": self.strains.tolist(),
+            "s_m": est.s_m,
+            "position_m": est.position_m.tolist(),
+            "force_n": est.force_n.tolist(),
+            "unseen_direction": None if est.unseen_direction is None else est.unseen_direction.tolist(),
+            "visible_from_m": est.visible_from_m,
+            "residual_per_m": est.residual,
+            "true_s_m": self.true_s_m,
+            "true_force_n": None if self.true_force_n is None else self.true_force_n.tolist(),
+            "place_error_m": self.place_error_m,
+            "force_error_n": self.force_error_n,
+        }
+
+    __repr__ = fields_summary
+
+
+def sense_contact(
+    robot: Robot,
+    tensions_n,
+    strains=None,
+    *,
+    layout: GaugeLayout | None = None,
+    contact_s_m: float | None = None,
+    contact_force_n=None,
+    noise_std: float = 0.0,
+    seed: int | None = None,
+    stations_per_segment: int = 4,
+    nodes_per_disk: int = 2,
+    step_m: float = 1e-3,
+) -> ContactSensing:
+    """A point contact's place and force from the gauges: given ``strains``, or the twin's readings pressed at
+    ``contact_s_m`` by ``contact_force_n`` (with ``noise_std`` of seeded white noise), about the twin's shape
+    under ``tensions_n`` without it (:func:`pressed_shape`, :func:`locate_contact`).
+
+    Examples
+    --------
+    >>> from flexdigit.tdcr import Robot, Segment
+    >>> rod = Robot(name="rod", segments=(Segment(0.4, 40),))
+    >>> found = sense_contact(rod, [], contact_s_m=0.3, contact_force_n=[0.01, 0, 0])
+    >>> round(found.estimate.s_m, 3), bool(found.force_error_n < 1e-3)
+    (0.3, True)
+    """
+    owner = "sense_contact"
+    layout = gauge_layout(robot, stations_per_segment) if layout is None else layout
+    if not isinstance(layout, GaugeLayout):
+        raise ParameterError(f"The 'layout' parameter of {owner} must be a GaugeLayout. Got {type(layout).__name__}.")
+    free = pressed_shape(robot, tensions_n, nodes_per_disk=nodes_per_disk)
+    true_s = true_force = None
+    if strains is None:
+        if contact_force_n is None:
+            raise ParameterError(
+                f"{owner}: give the gauges' readings (strains) or a contact to press the twin with (contact_s_m, "
+                "contact_force_n)"
+            )
+        pressed = pressed_shape(
+            robot, tensions_n, contact_s_m=contact_s_m, contact_force_n=contact_force_n, nodes_per_disk=nodes_per_disk
+        )
+        true_s = float(free.s_m[int(np.argmin(np.abs(free.s_m - contact_s_m)))])
+        true_force = np.asarray(contact_force_n, dtype=float)
+        noise_std = check_real(noise_std, "noise_std", owner, low=0.0)
+        strains = gauge_strains(pressed, layout, noise_std=noise_std, seed=seed)
+    strains = check_array(strains, "strains", owner, shape=layout.s_m.shape)
+    estimate = locate_contact(robot, layout, strains, free, step_m=step_m)
+    return ContactSensing(layout, strains, estimate, free, true_s, true_force)

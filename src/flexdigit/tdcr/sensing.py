@@ -33,18 +33,31 @@ True
 
 from __future__ import annotations
 
+import csv
 import math
 from dataclasses import dataclass
 from itertools import pairwise
+from pathlib import Path
 
 import numpy as np
 
+from flexdigit._io import read_text
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_int, check_real
-from flexdigit.errors import ParameterError
+from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.tdcr.description import Robot
+from flexdigit.tdcr.statics import StaticSolution, solve_statics
 
-__all__ = ["GaugeLayout", "ShapeEstimate", "gauge_layout", "gauge_strains", "estimate_shape"]
+__all__ = [
+    "GaugeLayout",
+    "ShapeEstimate",
+    "ShapeSensing",
+    "gauge_layout",
+    "gauge_strains",
+    "estimate_shape",
+    "read_readings",
+    "sense_shape",
+]
 
 
 @dataclass(frozen=True)
@@ -125,6 +138,16 @@ class ShapeEstimate:
     @property
     def tip_rotation(self) -> np.ndarray:
         return self.rotations[-1]
+
+    def at_disks(self, robot: Robot) -> ShapeEstimate:
+        """The estimate at the base and the robot's disks only (each disk is on a step's end of
+        :func:`estimate_shape`): the nodes a :class:`~flexdigit.tdcr.StaticSolution` has at ``nodes_per_disk=1``,
+        e.g. for :func:`~flexdigit.tdcr.write_recording`."""
+        s_disks = np.concatenate([[0.0], robot.disk_positions_m])
+        at = np.array([int(np.argmin(np.abs(self.s_m - s))) for s in s_disks])
+        if np.abs(self.s_m[at] - s_disks).max() > 1e-9 * max(robot.length_m, 1.0):
+            raise ParameterError(f"at_disks: this estimate was not integrated on {robot.name!r}'s disks")
+        return ShapeEstimate(s_disks, self.positions_m[at], self.rotations[at], self.curvatures[at])
 
     def position_at(self, s_m) -> np.ndarray:
         """Positions at arc lengths ``s_m`` (linear between the estimate's points; ``(..., 3)``)."""
@@ -231,7 +254,8 @@ def estimate_shape(robot: Robot, layout: GaugeLayout, strains, *, step_m: float 
     strains : array (g,)
         The readings, in the layout's order (:func:`gauge_strains` on the twin, or measured).
     step_m : float
-        Integration step (m); the error it adds is ``O(step^2)`` per length, ~1e-7 m at 1 mm on rao2021.
+        Integration step (m), at most: each segment is integrated in equal steps with every disk on a step's end;
+        the error it adds is ``O(step^2)`` per length, ~1e-7 m at 1 mm on rao2021.
     """
     strains = check_array(strains, "strains", "estimate_shape", shape=layout.s_m.shape)
     step_m = check_real(step_m, "step_m", "estimate_shape", low=0.0, low_open=True)
@@ -248,7 +272,8 @@ def estimate_shape(robot: Robot, layout: GaugeLayout, strains, *, step_m: float 
         degree = min(xs.size - 1, 2)
         mid, half = 0.5 * (a + b), 0.5 * (b - a)  # fit in a scaled coordinate: well conditioned
         coeffs = [np.polyfit((xs - mid) / half, us[:, c], degree) for c in range(4)]
-        steps = max(int(math.ceil((b - a) / step_m)), 1)
+        per_disk = max(int(math.ceil((b - a) / robot.segments[j].disk_count / step_m)), 1)
+        steps = per_disk * robot.segments[j].disk_count  # every disk on a step's end: its frame exact, not interpolated
         h = (b - a) / steps
         for k in range(steps):
             s_mid = a + (k + 0.5) * h  # midpoint curvature, exact rotation: second order
@@ -266,3 +291,217 @@ def estimate_shape(robot: Robot, layout: GaugeLayout, strains, *, step_m: float 
             u_all.append(u[:2])
     u_all.insert(0, u_all[0])
     return ShapeEstimate(np.array(s_all), np.array(p_all), np.array(r_all), np.array(u_all))
+
+
+#: Columns of a gauge readings file (:func:`read_readings`); ``tilt_deg`` may be left out (0: axial gauges).
+READINGS_COLUMNS = ("s_m", "angle_deg", "strain", "tilt_deg")
+#: The most gauges a readings file may list (a robot with a gauge every millimetre on four faces of 2.5 m).
+MAX_GAUGES = 10_000
+
+
+def read_readings(path, robot: Robot) -> tuple[GaugeLayout, np.ndarray]:
+    """A gauge readings file: a CSV with a header ``s_m,angle_deg,strain[,tilt_deg]`` and one row per gauge
+    (arc length from the base in m, face angle from the cross-section's x axis in deg, the reading as a strain,
+    dimensionless, and the grid's tilt from the axis in deg). The gauges sit on the backbone's surface.
+
+    Returns the layout and the readings; a bad file raises one line naming the file, the line and the value.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from flexdigit.tdcr import ROBOTS
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "gauges.csv"
+    >>> _ = path.write_text("s_m,angle_deg,strain\\n0.1,0,0\\n0.1,90,0\\n0.3,0,0\\n0.3,90,0\\n")
+    >>> layout, strains = read_readings(path, ROBOTS["rao2021"])
+    >>> layout.s_m.tolist(), strains.tolist()
+    ([0.1, 0.1, 0.3, 0.3], [0.0, 0.0, 0.0, 0.0])
+    """
+    path = Path(path)
+    text = read_text(path, "a gauge readings CSV (s_m,angle_deg,strain[,tilt_deg])")
+    rows = [(k, row) for k, row in enumerate(csv.reader(text.splitlines()), start=1) if any(c.strip() for c in row)]
+    if not rows:
+        raise DataFileError(f"{path}: empty; expected a header s_m,angle_deg,strain[,tilt_deg] and a row per gauge")
+    header = [c.strip() for c in rows[0][1]]
+    missing = [c for c in READINGS_COLUMNS[:3] if c not in header]
+    unknown = [c for c in header if c not in READINGS_COLUMNS]
+    if missing or unknown or len(set(header)) != len(header):
+        raise DataFileError(
+            f"{path}: line {rows[0][0]}: header {','.join(header)!r}; expected the columns s_m, angle_deg, strain "
+            "and optionally tilt_deg, each once"
+        )
+    if not 1 <= len(rows) - 1 <= MAX_GAUGES:
+        raise DataFileError(f"{path}: {len(rows) - 1} gauge rows; expected 1 to {MAX_GAUGES}")
+    values = np.zeros((len(rows) - 1, len(READINGS_COLUMNS)))
+    for i, (line, row) in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise DataFileError(f"{path}: line {line}: {len(row)} cells; expected {len(header)} ({','.join(header)})")
+        for name, cell in zip(header, row, strict=True):
+            try:
+                value = float(cell)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                raise DataFileError(f"{path}: line {line}: {name} {cell.strip()!r} is not a finite number")
+            values[i, READINGS_COLUMNS.index(name)] = value
+    try:
+        layout = GaugeLayout(
+            values[:, 0], values[:, 1], robot.backbone.radius_m, values[:, 3], robot.backbone.poisson_ratio
+        )
+    except ParameterError as exc:
+        raise DataFileError(f"{path}: {exc}") from None
+    length = robot.length_m
+    outside = np.flatnonzero((layout.s_m < 0) | (layout.s_m > length))
+    if outside.size:
+        i = int(outside[0])
+        raise DataFileError(
+            f"{path}: line {rows[i + 1][0]}: s_m {layout.s_m[i]:g} is off the backbone of {robot.name!r}; "
+            f"expected 0 .. {length:g} m"
+        )
+    strains = values[:, 2]
+    if np.abs(strains).max() > 0.1:  # 10 %: beyond any metal backbone's (NiTi's superelastic plateau ~6-8 %)
+        i = int(np.argmax(np.abs(strains)))
+        raise DataFileError(
+            f"{path}: line {rows[i + 1][0]}: strain {strains[i]:g} is not a strain gauge's reading; expected a "
+            "dimensionless strain within +-0.1 (1e-6 is a microstrain)"
+        )
+    return layout, strains
+
+
+@dataclass(frozen=True)
+class ShapeSensing:
+    """What :func:`sense_shape` found: the readings, the shape they imply and, where known, the twin's.
+
+    Attributes
+    ----------
+    layout : GaugeLayout
+    strains : ndarray (g,)
+        The readings the estimate used (the twin's, with any noise, or given).
+    estimate : ShapeEstimate
+    twin : StaticSolution or None
+        The twin's shape under the given loads (the truth the readings came from, or the model's prediction
+        beside measured readings); None when no loads were given.
+    """
+
+    layout: GaugeLayout
+    strains: np.ndarray
+    estimate: ShapeEstimate
+    twin: StaticSolution | None
+
+    @property
+    def tip_error_m(self) -> float | None:
+        """Distance between the estimated and the twin's tip (m)."""
+        if self.twin is None:
+            return None
+        return float(np.linalg.norm(self.estimate.tip_position_m - self.twin.tip_position_m))
+
+    @property
+    def max_error_m(self) -> float | None:
+        """Largest distance between the estimated and the twin's backbone, at the twin's nodes (m)."""
+        if self.twin is None:
+            return None
+        return float(np.linalg.norm(self.estimate.position_at(self.twin.s_m) - self.twin.positions_m, axis=1).max())
+
+    @property
+    def tip_angle_error_deg(self) -> float | None:
+        """Angle of the rotation between the estimated and the twin's tip frames (deg)."""
+        if self.twin is None:
+            return None
+        # ||R1 - R2||_F = 2 sqrt(2) sin(angle / 2): exact to round-off near 0, where arccos of the trace is not
+        chord = np.linalg.norm(self.estimate.tip_rotation - self.twin.tip_rotation) / (2.0 * math.sqrt(2.0))
+        return float(np.degrees(2.0 * np.arcsin(min(chord, 1.0))))
+
+    def to_dict(self, robot: Robot) -> dict:
+        """Plain values: the estimate's tip pose and backbone at the base and disks (the keys and nodes of
+        :meth:`StaticSolution.to_dict <flexdigit.tdcr.StaticSolution.to_dict>`), the readings, and the twin's
+        shape under ``twin`` with the errors (None without a twin)."""
+        disks = self.estimate.at_disks(robot)
+        out = {
+            "gauges": int(self.layout.s_m.size),
+            "strains": self.strains.tolist(),
+            **_pose_dict(disks.s_m, disks.positions_m, disks.rotations),
+            "rotations": disks.rotations.tolist(),
+            "twin": None,
+            "tip_error_m": self.tip_error_m,
+            "max_error_m": self.max_error_m,
+            "tip_angle_error_deg": self.tip_angle_error_deg,
+        }
+        if self.twin is not None:
+            keep = np.searchsorted(self.twin.s_m, disks.s_m - 1e-12)
+            twin = _pose_dict(disks.s_m, self.twin.positions_m[keep], self.twin.rotations[keep])
+            out["twin"] = {"converged": self.twin.converged, **twin}
+        return out
+
+    __repr__ = fields_summary
+
+
+def _pose_dict(s_m, positions, rotations) -> dict:
+    frame = np.eye(4)
+    frame[:3, :3], frame[:3, 3] = rotations[-1], positions[-1]
+    return {
+        "tip_position_m": positions[-1].tolist(),
+        "tip_rotation": rotations[-1].tolist(),
+        "tip_frame": frame.tolist(),
+        "s_m": np.asarray(s_m).tolist(),
+        "backbone_m": positions.tolist(),
+    }
+
+
+def sense_shape(
+    robot: Robot,
+    strains=None,
+    *,
+    layout: GaugeLayout | None = None,
+    tensions_n=None,
+    tip_force_n=None,
+    tip_moment_nm=None,
+    gravity_m_s2=None,
+    noise_std: float = 0.0,
+    seed: int | None = None,
+    stations_per_segment: int = 3,
+    step_m: float = 1e-3,
+) -> ShapeSensing:
+    """The robot's shape from its gauges: given ``strains``, or the twin's readings under ``tensions_n`` (and
+    the other loads), with ``noise_std`` of seeded white noise, beside the twin's own shape.
+
+    Parameters
+    ----------
+    robot : Robot
+    strains : array (g,), optional
+        Measured readings in ``layout``'s order (e.g. :func:`read_readings`). None: the twin's.
+    layout : GaugeLayout, optional
+        Default :func:`gauge_layout` with ``stations_per_segment`` stations, four faces and a torsion rosette.
+    tensions_n, tip_force_n, tip_moment_nm, gravity_m_s2 : optional
+        The loads (:func:`~flexdigit.tdcr.solve_statics`); ``tensions_n`` is required without ``strains``. With
+        ``strains`` they give the twin's prediction to compare with.
+    noise_std, seed : float, int
+        White noise on the twin's readings (strain), from ``numpy.random.default_rng(seed)``.
+    step_m : float
+        The estimate's integration step (:func:`estimate_shape`).
+
+    Examples
+    --------
+    >>> from flexdigit.tdcr import ROBOTS
+    >>> found = sense_shape(ROBOTS["rao2021"], tensions_n=[4, 0, 0, 0, 2, 0])
+    >>> bool(found.tip_error_m < 1e-6)   # tendons alone: constant curvature per segment, recovered exactly
+    True
+    """
+    owner = "sense_shape"
+    layout = gauge_layout(robot, stations_per_segment) if layout is None else layout
+    if not isinstance(layout, GaugeLayout):
+        raise ParameterError(f"The 'layout' parameter of {owner} must be a GaugeLayout. Got {type(layout).__name__}.")
+    twin = None
+    if tensions_n is not None:
+        twin = solve_statics(
+            robot,
+            tensions_n,
+            tip_force_n=tip_force_n,
+            tip_moment_nm=tip_moment_nm,
+            gravity_m_s2=gravity_m_s2,
+            nodes_per_disk=4,  # the readings interpolate strains between nodes: 4 a disk is within 1e-5 m
+        )
+    elif strains is None:
+        raise ParameterError(f"{owner}: give the gauges' readings (strains) or the loads (tensions_n) to read them")
+    if strains is None:
+        strains = gauge_strains(twin, layout, noise_std=noise_std, seed=seed)
+    strains = check_array(strains, "strains", owner, shape=layout.s_m.shape)
+    return ShapeSensing(layout, strains, estimate_shape(robot, layout, strains, step_m=step_m), twin)

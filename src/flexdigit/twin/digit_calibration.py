@@ -16,8 +16,8 @@ become under that digit's description, each by the law below. ``0`` subscripts a
   uniform value (the mean of its sections 2..n). ``EI`` is a property of the cross-section, not of the length:
   each section's rotational stiffness in the twin's chain is ``EI / l_k`` over its own free length ``l_k``
   (``Geometry.section_bounds_m``), so sections of unequal lengths scale with their own length there.
-- ``strip_beta_s``, ``housing_beta_s``: stiffness-proportional damping ``c = beta k``; ``beta`` is a relaxation
-  time of the material (spring steel, elastomer), the same in any geometry: kept.
+- ``strip_beta_s``, ``housing_beta_s``: stiffness-proportional damping ``c = beta k``, scaled so that the digit's
+  first mode keeps the thesis rig's damping ratio: ``beta = beta0 wn1_0 / wn1`` (below, "The damping law").
 - ``cable_stiffness_n_m``: ``k = E_c A_c / l_c`` with the cable's run ``l_c`` along the digit: ``k = k0 L0 / L``.
 - ``housing_mass_kg``: the housing's volume ``~ w (2 e) L``: ``m_h = m_h0 (w / w0)(e / e0)(L / L0)`` (0 on the
   thesis rig: its mass is folded into its fitted stiffness).
@@ -32,6 +32,29 @@ become under that digit's description, each by the law below. ``0`` subscripts a
   potentiometer and card).
 - ``cable_friction_ratio``: the description's ``[cables] guide_friction_ratio`` (default: the thesis's fit).
 
+The damping law
+---------------
+The thesis fits ``beta`` to the zetas of its release tests (tables 3.1, 3.2), so a ``beta`` is only known at the
+thesis rig's frequencies. Stiffness-proportional damping dissipates per cycle ``pi beta w`` times the energy
+stored: its loss factor ``eta = beta w`` grows with frequency. The internal damping of metals (spring steel,
+bronzes, titanium) and of filled elastomers is not viscous but close to hysteretic: the energy lost per cycle is
+a fraction of the energy stored that hardly depends on the frequency (Lazan, *Damping of Materials and Members in
+Structural Mechanics*, 1968; Nashif, Jones and Henderson, *Vibration Damping*, 1985, ch. 2-3; Adhikari, *Damping
+Models for Structural Vibration*, 2000, ch. 1: a frequency-independent loss factor is the usual model of
+structural damping, and a viscous model is matched to it at the frequency of the mode that matters). What
+carries over from one digit to another of the same materials is then the loss factor ``eta``, i.e. the modal
+damping ratio ``zeta = eta / 2``, not the relaxation time ``beta``: keeping ``beta`` makes a long, soft digit
+(first mode 5 rad/s) three times less damped than the thesis rig (15 rad/s) and a short one three times more,
+which no material does. So ``beta`` is matched at the digit's first bending mode:
+``beta = beta0 wn1_0 / wn1``, the same factor for strip and housing (each material keeps its loss factor
+``eta = beta0 wn1_0``; the digit's first-mode ``zeta`` is the thesis rig's, up to how its strain energy splits
+between strip and housing). ``wn1`` is the first mode of the chain's linear modal analysis
+(:meth:`flexdigit.twin.digit.Chain.linear_modes`) of the housed digit, straight, without its cable and without
+gravity (a property of the structure, not of how it is mounted: a long digit that would buckle tip up still has
+one), at the twin's 3 cells per section; ``wn1_0`` the same of the thesis rig with the reference calibration.
+On the thesis rig the factor is exactly 1 (the same chain both times). A user's calibration file, fitted to the
+digit's own records (``flexdigit calibrate``), replaces all of this (:func:`twin_calibration`).
+
 On the thesis rig every ratio is 1 and every relative position a thesis gauge's, so the packaged calibration comes
 back (``tests/twin/test_digit_calibration.py`` holds the table, within 5 % per value as issue 24 asks; in fact to
 rounding).
@@ -42,9 +65,13 @@ Examples
 >>> from flexdigit.twin.calibration import packaged_calibration
 >>> calibration_for(RigParams()).housing_ei_n_m2 == packaged_calibration().housing_ei_n_m2
 True
+>>> calibration_for(RigParams()).strip_beta_s == packaged_calibration().strip_beta_s   # factor exactly 1
+True
 """
 
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 
@@ -53,8 +80,15 @@ from flexdigit.twin.calibration import Calibration, default_calibration, load_ca
 
 __all__ = [
     "calibration_for",
+    "decay_time_constant_s",
+    "first_mode_rad_s",
     "twin_calibration",
 ]
+
+#: Cells per section of the chain whose first mode sets the damping factor: the twin's default
+#: (``flexdigit.twin.twin.DEFAULT_CELLS_PER_SECTION``, which imports this module), so the twin's own chain gets the
+#: thesis rig's first-mode damping ratio (tests/twin/test_digit_calibration.py holds the two equal).
+MODAL_CELLS_PER_SECTION = 3
 
 #: A gauge "at a thesis gauge's place" when their relative positions agree this closely (x / L, dimensionless).
 _SAME_PLACE = 1e-9
@@ -78,6 +112,52 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
     """
     ref = reference if reference is not None else packaged_calibration()
     thesis = RigParams()
+    scaled = _scaled_statics(params, ref, thesis)
+    damping = first_mode_rad_s(thesis, ref) / first_mode_rad_s(params, scaled)  # wn1_0 / wn1: the damping law
+    return scaled.replace(strip_beta_s=ref.strip_beta_s * damping, housing_beta_s=ref.housing_beta_s * damping)
+
+
+@lru_cache(maxsize=64)
+def first_mode_rad_s(params: RigParams, calibration: Calibration) -> float:
+    """The first bending mode (rad/s) of the housed digit, straight, its cable slack, without gravity (the chain's
+    linear modal analysis at :data:`MODAL_CELLS_PER_SECTION` cells a section): the frequency the damping law
+    matches the materials' loss factors at (module docstring).
+
+    Examples
+    --------
+    >>> round(first_mode_rad_s(RigParams(), packaged_calibration()), 2)
+    14.97
+    """
+    wn, _ = _weightless_chain(params, calibration).linear_modes()
+    return float(wn[0])
+
+
+def decay_time_constant_s(params: RigParams, calibration: Calibration) -> float:
+    """The time constant (s) of the digit's slowest-decaying vibration, ``1 / min(zeta wn)`` over the modes of its
+    housed chain straight with its cable(s) taut (how a sweep or a loop holds it), without gravity: ``zeta wn`` is
+    about ``c / 2m``, which gravity's stiffness hardly moves (a 0.44 m phosphor-bronze pair: 5.3 s tip up, 5.4 s
+    hung). What a wait for the digit to come to rest scales with.
+
+    Examples
+    --------
+    >>> round(decay_time_constant_s(RigParams(), packaged_calibration()), 2)
+    0.44
+    """
+    wn, zeta = _weightless_chain(params, calibration).linear_modes(cable_taut=params.cables.count)
+    return float(1.0 / np.min(zeta * wn))
+
+
+def _weightless_chain(params: RigParams, calibration: Calibration):
+    """The housed digit's chain at :data:`MODAL_CELLS_PER_SECTION` cells a section, without gravity."""
+    from flexdigit.twin.digit import Chain, digit_arrays
+
+    arrays = digit_arrays(params, calibration, housing=True, cells_per_section=MODAL_CELLS_PER_SECTION)
+    arrays["gravity_ab_m_s2"] = np.zeros(2)
+    return Chain(**arrays)
+
+
+def _scaled_statics(params: RigParams, ref: Calibration, thesis: RigParams) -> Calibration:
+    """Every law of the module docstring but the damping's (``ref``'s ``beta`` kept)."""
     g, g0 = params.geometry, thesis.geometry
     n = g.section_count
     width = g.strip_width_m / g0.strip_width_m

@@ -31,15 +31,18 @@ import pyarrow as pa
 from flexdigit import __version__, _io
 from flexdigit._io import RECORDS_LIMIT, atomic_path, atomic_write, check_input, count_lines, read_text
 from flexdigit._json import to_jsonable
-from flexdigit._validation import check_int, check_positive, check_real, check_values
+from flexdigit._validation import check_choice, check_int, check_positive, check_real, check_values
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
 from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.digit import ORIENTATIONS
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, Twin, _default_calibration, cached_digit, static_gauges_v
 
 __all__ = [
     "METADATA_KEY",
     "RELEASE_DT_S",
+    "RELEASE_WN_STEP_RAD",
+    "release_step_s",
     "TwinRecord",
     "release_test",
     "release_orientation",
@@ -55,6 +58,15 @@ METADATA_KEY = b"flexdigit"
 #: 1.1 % above (numerical damping); a calibration fitted to such records carries that into the housing stiffness
 #: (~1.5 % per 0.2 % of wn). At 10 ms both wn are within 0.03 % and the bare zeta within 0.2 %, for no more time.
 RELEASE_DT_S = 0.01
+#: The most a release step may advance the digit's first mode (``wn h``, rad). The step's period error grows as
+#: ``(wn h)^2``, ~4 % x (wn h)^2 in the identified wn: the thesis rig's 13-17 rad/s at 10 ms is 0.13-0.17 (above:
+#: 0.03 %), but a short stiff digit's mode is faster (0.15 m, three 45 mm sections, hung: 51 rad/s, 0.51 a step)
+#: and its identified wn came out 1.0 % below its linear mode at 10 ms, 0.04 % at 2 ms
+#: (tests/twin/test_digit_calibration.py's release test). A release step is ``min(RELEASE_DT_S,
+#: RELEASE_WN_STEP_RAD / wn)`` (:func:`release_step_s`): 10 ms on the thesis rig and on any digit up to 40 rad/s,
+#: as before (a finer step on a 29 rad/s digit, the campaign's seed 1, made chapter 3's gauge-1 fit find its flat
+#: first peak "saturated"), 6.7 ms on that 0.15 m digit.
+RELEASE_WN_STEP_RAD = 0.4
 
 
 @dataclass
@@ -222,6 +234,23 @@ def _check_rate(duration_s, sample_rate_hz, owner):
     return duration, rate, np.arange(int(math.floor(duration * rate)) + 1) / rate
 
 
+def release_step_s(chain, period_s: float) -> float:
+    """The integration step (s) of a release of ``chain`` (cable removed, as mounted): :data:`RELEASE_DT_S`, or
+    shorter so that its first mode turns at most :data:`RELEASE_WN_STEP_RAD` a step; a divisor of the serial
+    period ``period_s`` (what :class:`Twin` rounds its step to), never rounded up past the bound.
+
+    Examples
+    --------
+    >>> from flexdigit.params import RigParams
+    >>> from flexdigit.twin.calibration import default_calibration
+    >>> release_step_s(cached_digit(RigParams(), default_calibration(), True, "vertical", 3), 0.02)
+    0.01
+    """
+    wn = float(chain.linear_modes()[0][0])
+    bound = min(RELEASE_DT_S, RELEASE_WN_STEP_RAD / wn)
+    return period_s / math.ceil(period_s / bound - 1e-9)
+
+
 def release_test(
     *,
     housing: bool = True,
@@ -249,6 +278,9 @@ def release_test(
     calibration = calibration or default_calibration()
     deflection = check_real(tip_deflection_m, "tip_deflection_m", "release_test", low=-0.1, high=0.1)
     _, _, times = _check_rate(duration_s, sample_rate_hz, "release_test")
+    check_choice(orientation, "orientation", tuple(ORIENTATIONS), "release_test")
+    chain = cached_digit(params, calibration, bool(housing), orientation, DEFAULT_CELLS_PER_SECTION)
+    _check_upright(chain, orientation, "release_test")
     twin = Twin(
         params,
         calibration,
@@ -256,10 +288,9 @@ def release_test(
         orientation=orientation,
         housing=housing,
         cable=False,
-        dt_s=RELEASE_DT_S,
+        dt_s=release_step_s(chain, params.actuator.serial_period_s),
         compiled=compiled,
     )
-    _check_upright(twin.chain, orientation, "release_test")
     unit = twin.chain.solve_static(tip_force_n=[[0.0, 1e-3]]).tip_m[0, 1] - twin.chain.solve_static().tip_m[0, 1]
     force = 1e-3 * deflection / unit
     for _ in range(3):  # the tip load-deflection curve bends a little: a few secant corrections
