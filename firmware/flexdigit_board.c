@@ -81,6 +81,7 @@ static const char *const FAULT_NAMES[] = {"none", "host_timeout", "adc_rail", "r
 /* -- sampling (interrupts) -------------------------------------------------------------------------------------- */
 static volatile uint16_t adc_work[GAUGES];
 static volatile uint16_t adc_last[GAUGES];
+static volatile uint32_t adc_last_ms; /* the tick (time_ms) adc_last was sampled at */
 static volatile uint8_t adc_channel;
 static volatile uint16_t ticks;     /* samples since the last control period */
 static volatile uint32_t time_ms;   /* board clock, ms */
@@ -117,6 +118,7 @@ ISR(ADC_vect)
         for (i = 0; i < GAUGES; i++) {
             adc_last[i] = adc_work[i];
         }
+        adc_last_ms = time_ms; /* this tick's: its conversions end well inside it (G x 0.104 ms < 1 ms) */
         ticks++;
     } else {
         adc_channel = ch;
@@ -132,6 +134,7 @@ static volatile uint8_t tx_head, tx_tail;
 #define RX_SIZE 64U
 static volatile uint8_t rx_buf[RX_SIZE];
 static volatile uint8_t rx_head, rx_tail;
+static volatile uint8_t rx_ms[RX_SIZE]; /* each byte's arrival, time_ms's low byte (the line's end dates it) */
 static char rx_line[24];
 static uint8_t rx_len;
 
@@ -151,6 +154,7 @@ ISR(USART_RX_vect)
     uint8_t c = UDR0;
     if (next != rx_tail) { /* full: the byte is lost (the host's next line resynchronises) */
         rx_buf[rx_head] = c;
+        rx_ms[rx_head] = (uint8_t)time_ms;
         rx_head = next;
     }
 }
@@ -196,9 +200,18 @@ static uint8_t safe_hold = 0;
 static float setpoint_deg = 0.0f;
 static uint16_t sample_raw[GAUGES]; /* the ADC counts the last period used */
 static uint32_t sample_ms;
-static float rest_v[GAUGES];
+static float rest_deg = 0.0f; /* the rotation the map reads at rest (the mean of the rest readings' rotations) */
 static uint8_t rest_n = 0;
 static float tare_deg = 0.0f; /* the rotation the map reads at rest, subtracted while the loop runs */
+/* The loop's inputs from the host (a setpoint, the loop's start) take effect at the first control tick after the
+   line arrived (its last byte's time_ms), whenever the main loop gets to the line or to that tick's update: a line
+   that arrives while a tick's conversions are still running, or while the main loop is busy, otherwise decides by
+   a few microseconds whether that tick's update sees it (its tare, an extra update on an older sample: a startup
+   race that moved the 2 ms loop's overshoot by 3 points, docs/board.md). */
+static uint8_t setpoint_pending = 0, board_pending = 0, board_started = 0;
+static int16_t board_reset_command = -1; /* the command ctrl was reset from for the pending start (-1: not yet) */
+static float setpoint_next;
+static uint32_t setpoint_ms, board_ms; /* when the pending line arrived */
 
 static void enter_safe(uint8_t code)
 {
@@ -212,31 +225,38 @@ static void enter_safe(uint8_t code)
         send_text(line);
     }
     mode = MODE_SAFE;
+    board_pending = 0; /* a loop start not yet due is void */
 }
 
-static void handle_line(const char *line)
+static void handle_line(const char *line, uint32_t line_ms)
 {
     long value = strtol(line + 1, NULL, 10);
     char out[32];
     switch (line[0]) {
     case 'S':
-        setpoint_deg = (float)value / 1000.0f;
+        if (setpoint_pending && setpoint_ms != line_ms) {
+            setpoint_deg = setpoint_next; /* the previous one holds for the ticks between the two */
+        }
+        setpoint_next = (float)value / 1000.0f;
+        setpoint_ms = line_ms;
+        setpoint_pending = 1;
         break;
     case 'M':
         if (value < MODE_SAFE || value > MODE_BOARD) {
             return;
         }
         fault = FAULT_NONE;
+        board_pending = 0;
         if (value == MODE_BOARD) {
-            float rest[GAUGES];
-            uint8_t i;
-            for (i = 0; i < GAUGES; i++) {
-                rest[i] = rest_v[i];
+            /* the loop starts (tared, reset, mode 2) at the first control tick after this line: control_period */
+            board_pending = 1;
+            board_ms = line_ms;
+            board_reset_command = -1;
+            if (mode != MODE_BOARD) { /* ctrl is idle: reset it now, off the start tick's update (its latency) */
+                fd_ctrl_reset(&ctrl, (float)command_now); /* bumpless: from the command in force */
+                board_reset_command = command_now;
             }
-            tare_deg = fd_ctrl_measure(rest);
-            fd_ctrl_reset(&ctrl, (float)command_now); /* bumpless: from the command in force */
-            snprintf(out, sizeof(out), "# tare %ld\r\n", (long)(tare_deg * 1.0e6f)); /* micro-degrees */
-            send_text(out);
+            return;
         }
         if (value == MODE_SAFE) {
             enter_safe(FAULT_NONE);
@@ -260,6 +280,31 @@ static void handle_line(const char *line)
     }
 }
 
+/* The loop starts on the board: tared on the rest reading of the ticks before this one, reset bumpless from the
+   command in force (done when the line came, unless the host has commanded since): nothing slow before the start
+   tick's update, which must be done before the pulse latches it (PULSE_DELAY_MS after the tick). */
+static void start_board_loop(void)
+{
+    tare_deg = rest_deg;
+    if (board_reset_command != command_now) {
+        fd_ctrl_reset(&ctrl, (float)command_now);
+    }
+    mode = MODE_BOARD;
+    board_pending = 0;
+    board_started = 1; /* said after the update (announce_board_loop), not before it */
+}
+
+/* What the host reads of the loop's start: the tare and the mode, before the first period's sample line. */
+static void announce_board_loop(void)
+{
+    char out[32];
+    board_started = 0;
+    snprintf(out, sizeof(out), "# tare %ld\r\n", (long)(tare_deg * 1.0e6f)); /* micro-degrees */
+    send_text(out);
+    snprintf(out, sizeof(out), "# mode %u\r\n", (unsigned)MODE_BOARD);
+    send_text(out);
+}
+
 static void control_period(void)
 {
     uint16_t raw[GAUGES];
@@ -271,8 +316,16 @@ static void control_period(void)
     for (i = 0; i < GAUGES; i++) {
         raw[i] = adc_last[i];
     }
-    sample_ms = time_ms;
+    sample_ms = adc_last_ms;
     sei();
+    /* the host's lines that arrived before this sample's tick: they hold from this update on */
+    if (setpoint_pending && setpoint_ms < sample_ms) {
+        setpoint_deg = setpoint_next;
+        setpoint_pending = 0;
+    }
+    if (board_pending && board_ms < sample_ms && fault == FAULT_NONE) {
+        start_board_loop();
+    }
     for (i = 0; i < GAUGES; i++) {
         sample_raw[i] = raw[i]; /* what this period used: streamed, so the host sees the loop's own inputs */
     }
@@ -280,15 +333,15 @@ static void control_period(void)
         /* + half a count: the ADC truncates, so a count stands for the middle of its 4.9 mV step */
         g[i] = ((float)((int16_t)raw[i] - MID_COUNT) + 0.5f) * VOLTS_PER_COUNT;
     }
+    rotation = fd_ctrl_measure(g);
     if (mode != MODE_BOARD) {
         /* the rest reading the loop is tared on when it starts (as the host's loop tares its map): the mean of
-           the last readings, the first REST_SAMPLES of them equally weighted, then an exponential average */
+           the last readings' rotations (the map is affine: the rotation of their mean), the first REST_SAMPLES
+           of them equally weighted, then an exponential average */
         if (rest_n < REST_SAMPLES) {
             rest_n++;
         }
-        for (i = 0; i < GAUGES; i++) {
-            rest_v[i] += (g[i] - rest_v[i]) / (float)rest_n;
-        }
+        rest_deg += (rotation - rest_deg) / (float)rest_n;
     }
     if (mode != MODE_SAFE) {
         for (i = 0; i < GAUGES; i++) {
@@ -300,7 +353,7 @@ static void control_period(void)
             enter_safe(FAULT_HOST_TIMEOUT);
         }
     }
-    rotation = fd_ctrl_measure(g) - tare_deg;
+    rotation -= tare_deg;
     if (mode == MODE_BOARD) {
         int code;
         /* the rotation bound is on the loop's own estimate of the beam rotation (deg) */
@@ -377,13 +430,19 @@ int main(void)
     for (;;) {
         while (rx_tail != rx_head) {
             char c = (char)rx_buf[rx_tail];
+            uint8_t stamp = rx_ms[rx_tail];
             rx_tail = (uint8_t)((rx_tail + 1U) % RX_SIZE);
             if (c == '\n' || c == '\r') {
                 if (rx_len > 0) {
+                    uint32_t now;
                     rx_line[rx_len] = '\0';
                     rx_len = 0;
+                    cli();
+                    now = time_ms;
                     host_idle = 0;
-                    handle_line(rx_line);
+                    sei();
+                    /* the line's time: its last byte's (a low byte, < 256 ms ago) */
+                    handle_line(rx_line, now - (uint8_t)((uint8_t)now - stamp));
                 }
             } else if (rx_len < sizeof(rx_line) - 1U) {
                 rx_line[rx_len] = c;
@@ -395,6 +454,9 @@ int main(void)
             ticks = (uint16_t)(ticks - CONTROL_DIV);
             sei();
             control_period();
+            if (board_started) {
+                announce_board_loop();
+            }
             periods++;
             if (periods >= STREAM_DIV) {
                 periods = 0;

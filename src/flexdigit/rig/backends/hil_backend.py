@@ -233,7 +233,8 @@ class HilRig(Rig):
             if self.uart == "pty":
                 self._open_port()
             # the banner, and the rest readings the board tares its map on; the mode line goes out LEAD_S before
-            # 0.2 s so the board handles it before its control tick at 0.2 s, a servo frame boundary (every period
+            # 0.2 s so it has arrived before the control tick at 0.2 s, where the board starts its loop (at the first
+            # tick after the line's arrival, whenever its main loop reads it), a servo frame boundary (every period
             # divides 20 ms; the pulse latching that tick's command begins 1 ms later): the loop's first command
             # then reaches the servo at once, as the host loop's first does on the twin's serial board (its frame
             # at t = 0). Starting at a random phase instead delays the first command by up to 19 ms.
