@@ -26,6 +26,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_control",
     "benchmarks.bench_twin",
     "benchmarks.bench_digits",
+    "benchmarks.bench_cells",
     "benchmarks.bench_unequal",
     "benchmarks.bench_digitshape",
     "benchmarks.bench_digitctl2",

@@ -125,6 +125,6 @@ def test_collect_json_keeps_progress_off_stdout(tmp_path, capsys):
     assert main(["collect", str(protocol), "--out", str(out), "--json"]) == 0
     captured = capsys.readouterr()
     doc = json.loads(captured.out)
-    assert doc["samples"] == 1 + 2 * 2
+    assert doc["samples"] == 2 * (1 + 2)  # a protocol file tares before each position (docs/tactile): no-load + 2 each
     assert doc["protocol"] == "tiny"
     assert "tiny" in captured.err  # the bar was drawn, on stderr

@@ -98,3 +98,21 @@ def test_palpate_holds_force_on_a_digit_from_the_command_line(tmp_path, capsys):
     held = json.loads(capsys.readouterr().out)
     assert held["kind"] == "force" and held["scored_on"] == "true contact force (twin)"
     assert abs(held["steady_error"]) < HOLD, held["steady_error"]
+
+
+def test_a_digits_gains_inside_its_calibration_context_scale_from_the_thesis_rig():
+    """Inside `reproduce --params` the default calibration is the digit's (8 sections here): the thesis rig's force
+    per command that the gains scale from must still be the thesis rig's own (it raised "housing_ei_n_m2 must have
+    3 values" in the report's palpation chapter, and its cache would keep a value from whichever context came first)."""
+    from flexdigit.palpation import palpation as module
+    from flexdigit.twin.calibration import use_calibration
+
+    params, model = _digit("five-sections-eight-gauges")
+    length = params.geometry.digit_length_m
+    module._thesis_force_per_command.cache_clear()
+    outside = force_gains(model, 0.1, region_m=(0.55 * length, length))
+    module._thesis_force_per_command.cache_clear()
+    with use_calibration(model.calibration, "digit"):
+        inside = force_gains(model, 0.1, region_m=(0.55 * length, length))
+    assert inside["gain"] == outside["gain"]
+    assert inside["gain"] > THESIS_FORCE_GAIN  # a long digit presses less a command: a larger gain

@@ -70,7 +70,9 @@ def _rest_friction_sd_v(params, calibration: Calibration, command: int, cells_pe
     return friction_sd_v(sol, params, calibration, cells_per_section=cells_per_section)[0]
 
 
-def actuated_rest_sd_v(params, calibration: Calibration, command: int, cells_per_section: int = 3) -> np.ndarray:
+def actuated_rest_sd_v(
+    params, calibration: Calibration, command: int, cells_per_section: int | None = None
+) -> np.ndarray:
     """Standard deviation (V, per gauge) of one reading of the unloaded digit, horizontal, held at ``command``.
 
     White noise and cable-guide friction, independent (:mod:`flexdigit.twin.sensors`); drift left out (a
@@ -81,7 +83,7 @@ def actuated_rest_sd_v(params, calibration: Calibration, command: int, cells_per
 
 
 def friction_ratio_from_repeatability(
-    params, calibration: Calibration, command: int, sd_v, cells_per_section: int = 3
+    params, calibration: Calibration, command: int, sd_v, cells_per_section: int | None = None
 ) -> float:
     """``cable_friction_ratio`` from the measured spread of the unloaded actuated digit's readings (closed form).
 

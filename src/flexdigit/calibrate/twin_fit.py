@@ -134,7 +134,7 @@ def model_response(
     calibration: Calibration,
     targets: CalibrationTargets,
     *,
-    cells_per_section: int = 3,
+    cells_per_section: int | None = None,
     orientation: str = "vertical",
 ):
     """Everything the fit compares: modal wn/zeta bare and housed, deflections and bridge ratios on the sweep, of
@@ -164,7 +164,7 @@ def calibrate(
     params=None,
     *,
     initial: Calibration | None = None,
-    cells_per_section: int = 3,
+    cells_per_section: int | None = None,
     verbose: bool = False,
     friction_score=None,
     orientation: str = "vertical",

@@ -110,7 +110,8 @@ class ContactGaugeModel:
     orientation : str
         How the digit is mounted ("vertical", tip up: the designed mounting and the palpation set-up).
     housing : bool
-    cells_per_section : int
+    cells_per_section : int, sequence of int or None
+        Springs per section (None: :func:`flexdigit.twin.digit.default_cells`).
 
     Attributes
     ----------
@@ -119,7 +120,7 @@ class ContactGaugeModel:
         cable-guide friction is absent until a weight is hung, :mod:`flexdigit.twin.sensors`).
     """
 
-    def __init__(self, params=None, calibration=None, *, orientation="vertical", housing=True, cells_per_section=3):
+    def __init__(self, params=None, calibration=None, *, orientation="vertical", housing=True, cells_per_section=None):
         self.params = params or RigParams()
         self.calibration = calibration or default_calibration()
         self.orientation = orientation

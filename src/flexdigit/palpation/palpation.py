@@ -38,7 +38,9 @@ from flexdigit._repr import fields_summary
 from flexdigit._validation import check_choice, check_int, check_real, check_values
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
+from flexdigit.params import RigParams
 from flexdigit.rig.loop import run_loop
+from flexdigit.twin.calibration import packaged_calibration
 from flexdigit.twin.contact import Inclusion, Tissue, TissueContact
 from flexdigit.twin.digit_calibration import twin_calibration
 
@@ -561,7 +563,10 @@ def force_per_command(model, tissue: Tissue, setpoint_n: float) -> float:
 
 @lru_cache(maxsize=1)
 def _thesis_force_per_command() -> float:
-    return force_per_command(ContactGaugeModel(), Tissue(*_THESIS_FORCE_TISSUE), 0.1)
+    # the thesis rig's own description and packaged calibration, not the defaults: inside `reproduce --params` the
+    # default calibration is the user's digit's (another section count), and this value is cached once
+    thesis = ContactGaugeModel(RigParams(), packaged_calibration())
+    return force_per_command(thesis, Tissue(*_THESIS_FORCE_TISSUE), 0.1)
 
 
 def force_gains(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "cable") -> dict:

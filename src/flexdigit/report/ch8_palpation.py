@@ -62,7 +62,7 @@ class DigitSetting:
     def tissue(self) -> Tissue:
         return Tissue(0.55 * self.length_m, self.length_m + 0.08, 0.1 * self.length_m, 1000.0)
 
-    def contact_model(self, cells_per_section: int = 3) -> ContactGaugeModel:
+    def contact_model(self, cells_per_section: int | None = None) -> ContactGaugeModel:
         return ContactGaugeModel(self.params, orientation=self.orientation, cells_per_section=cells_per_section)
 
 

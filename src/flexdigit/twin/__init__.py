@@ -38,5 +38,6 @@ __getattr__, __all__ = lazy_exports(
         "SensorChain": "flexdigit.twin.sensors",
         "Chain": "flexdigit.twin.digit",
         "build_digit": "flexdigit.twin.digit",
+        "default_cells": "flexdigit.twin.digit",
     },
 )

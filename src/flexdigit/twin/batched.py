@@ -46,10 +46,18 @@ from flexdigit.errors import ParameterError
 from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
 from flexdigit.twin.calibration import Calibration, default_calibration
-from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, chain_matrices, digit_arrays
+from flexdigit.twin.digit import (
+    ORIENTATIONS,
+    Chain,
+    DynamicState,
+    chain_matrices,
+    default_cells,
+    digit_arrays,
+    section_cells,
+)
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, DEFAULT_DT_S, cached_digit
 
-__all__ = ["BatchedChains", "BatchedTwin"]
+__all__ = ["BatchedChains", "BatchedTwin", "batch_cells"]
 
 
 class BatchedChains:
@@ -119,8 +127,9 @@ class BatchedChains:
                 f"BatchedChains.from_rigs needs one calibration per rig (at least one). Got {len(params)} rigs and "
                 f"{len(calibrations)} calibrations instead."
             )
+        cells = batch_cells(params, cells_per_section, "BatchedChains.from_rigs")
         rows = [
-            digit_arrays(p, c, housing=housing, orientation=orientation, cells_per_section=cells_per_section)
+            digit_arrays(p, c, housing=housing, orientation=orientation, cells_per_section=cells)
             for p, c in zip(params, calibrations, strict=True)
         ]
         if pretension_n is None:  # the rigs' own cables, as build_digit gives each chain
@@ -291,7 +300,8 @@ class BatchedTwin:
     housing, cable : bool
     dt_s : float
         Integration step (s), rounded to a divisor of the serial period.
-    cells_per_section : int
+    cells_per_section : int, sequence of int or None
+        Springs per section; None: :func:`batch_cells`, the finest of the rigs' default resolutions.
     pretension_n : array_like, shape (N,), optional
         A second, antagonistic cable with this pretension on both cables (N); None: each rig's own ``cables``
         (an antagonistic pair with its ``pretension_n``, as the scalar twin runs it, or the single cable).
@@ -330,7 +340,7 @@ class BatchedTwin:
                 "per rig (or one for all)"
             )
         check_choice(orientation, "orientation", tuple(ORIENTATIONS), "BatchedTwin")
-        cells = check_int(cells_per_section, "cells_per_section", "BatchedTwin", low=1, high=1000)
+        cells = batch_cells(params_list, cells_per_section, "BatchedTwin")
         self.params, self.calibrations = params_list, cal_list
         self.size = len(params_list)
         self.cable = bool(cable)
@@ -544,6 +554,22 @@ def _shared_layouts(rows: list[dict]) -> list[list[int]]:
         )
         layouts.setdefault(key, []).append(i)
     return list(layouts.values())
+
+
+def batch_cells(params, cells_per_section=None, owner: str = "BatchedTwin"):
+    """The cells per section of a batch: an explicit count as given; None: section by section the most any rig's
+    :func:`~flexdigit.twin.digit.default_cells` asks for (a batch stacks chains of one size; a rig of the batch is
+    then cut at least as finely as its own default, e.g. the design study's scaled digits). Rigs of different
+    section counts keep their own defaults (and the stacking refuses them, naming both sizes)."""
+    params = list(params)
+    if cells_per_section is not None:
+        if np.ndim(cells_per_section) == 0:  # one count for every section of every rig
+            return check_int(cells_per_section, "cells_per_section", owner, low=1, high=1000)
+        return section_cells(params[0].geometry, cells_per_section, owner) if params else cells_per_section
+    counts = {default_cells(p.geometry) for p in params}
+    if len(counts) <= 1 or len({len(c) for c in counts}) > 1:
+        return None
+    return tuple(int(n) for n in np.max(np.array(sorted(counts)), axis=0))
 
 
 def _stacked_chain_matrices(rows: list[dict], first: Chain):

@@ -67,6 +67,9 @@ __all__ = [
     "uniform_cells",
     "build_digit",
     "digit_arrays",
+    "default_cells",
+    "MAX_CELL_LENGTH_M",
+    "MIN_CELLS_PER_SECTION",
 ]
 
 
@@ -853,13 +856,54 @@ def _chain_uniform(
 Chain.uniform = staticmethod(_chain_uniform)
 
 
+#: The longest spring cell (m) of the default resolution: each section's free strip is cut into cells no longer
+#: than this. Chosen by the convergence study of ``tests/twin/test_cell_resolution.py`` (docs/digits.md, "The
+#: twin's resolution"): on drawn digits 0.15-0.5 m long the gauges' strain and the tip deflection stay within
+#: 1 % of the converged twin; the thesis rig's 80 mm sections keep their 3 cells (80 / 27 = 2.96).
+MAX_CELL_LENGTH_M = 0.027
+#: The fewest cells of a section (odd, so a gauge midway on a section falls on a spring, as on the thesis rig).
+MIN_CELLS_PER_SECTION = 3
+
+
+def default_cells(geometry) -> tuple[int, ...]:
+    """Cells per section of the default resolution: ``ceil(l_k / MAX_CELL_LENGTH_M)``, at least
+    ``MIN_CELLS_PER_SECTION`` and odd, for each section's free strip ``l_k`` (``Geometry.section_bounds_m``,
+    unequal sections too). The thesis rig's 80 mm sections: ``(3, 3, 3)``.
+
+    >>> from flexdigit.params import RigParams
+    >>> default_cells(RigParams().geometry)
+    (3, 3, 3)
+    """
+    out = []
+    for start, end in geometry.section_bounds_m:
+        n = max(MIN_CELLS_PER_SECTION, math.ceil((end - start) / MAX_CELL_LENGTH_M - 1e-9))
+        out.append(n + 1 - n % 2)  # odd: the next odd count when even
+    return tuple(out)
+
+
+def section_cells(geometry, cells_per_section=None, owner: str = "build_digit") -> tuple[int, ...]:
+    """Cells of each section: :func:`default_cells` for None, one int for every section, or one per section."""
+    nsec = geometry.section_count
+    if cells_per_section is None:
+        return default_cells(geometry)
+    if np.ndim(cells_per_section) == 0:
+        return (check_int(cells_per_section, "cells_per_section", owner, low=1, high=1000),) * nsec
+    cells = tuple(cells_per_section)
+    if len(cells) != nsec:
+        raise ParameterError(
+            f"The 'cells_per_section' parameter of {owner} must be one count or {nsec} (one per section). "
+            f"Got {list(cells)!r} instead."
+        )
+    return tuple(check_int(c, "cells_per_section", owner, low=1, high=1000) for c in cells)
+
+
 def build_digit(
     params,
     calibration,
     *,
     housing: bool = True,
     orientation: str = "vertical",
-    cells_per_section: int = 3,
+    cells_per_section=None,
 ) -> Chain:
     """The thesis digit as a :class:`Chain` (2.2, table 3.5, table 3.7).
 
@@ -868,9 +912,10 @@ def build_digit(
     the supports sit at 0, 90, 180, 270 mm and the gauges (45, 135, 225 mm) midway on the strip. Sections of
     unequal lengths are laid out by ``Geometry.section_bounds_m`` and ``support_centres_m``. The flexible part
     of section ``k`` has ``EI = E I_strip + housing_ei_n_m2[k]`` (with ``housing``), cut into ``cells_per_section``
-    cells (odd, so the gauges fall on a spring). Masses: the strip (rigid-bar links, density from params), the
-    support masses at 90, 180, 270 mm and the housing mass spread on the sections. Damping is stiffness-
-    proportional: ``c = beta_strip k_strip + beta_housing k_housing``.
+    cells (:func:`default_cells`: no longer than ``MAX_CELL_LENGTH_M``, odd, so a mid-section gauge falls on a
+    spring). Masses: the strip (rigid-bar links, density from params), the support masses at 90, 180, 270 mm and
+    the housing mass spread on the sections. Damping is stiffness-proportional:
+    ``c = beta_strip k_strip + beta_housing k_housing``.
 
     Parameters
     ----------
@@ -880,8 +925,9 @@ def build_digit(
     housing : bool
         With the elastomer housing (table 3.2) or the bare strip (table 3.1).
     orientation : {"vertical", "hanging", "horizontal"}
-    cells_per_section : int
-        Springs per section.
+    cells_per_section : int, sequence of int or None
+        Springs per section (one count for all, or one per section); None: :func:`default_cells`, cells no longer
+        than ``MAX_CELL_LENGTH_M``.
     """
     return Chain(
         **digit_arrays(
@@ -891,13 +937,13 @@ def build_digit(
 
 
 def digit_arrays(
-    params, calibration, *, housing: bool = True, orientation: str = "vertical", cells_per_section: int = 3
+    params, calibration, *, housing: bool = True, orientation: str = "vertical", cells_per_section=None
 ) -> dict:
     """The keyword arguments of :func:`build_digit`'s :class:`Chain`: springs, cells, masses, gauges, gravity, cable
     (for chains stacked without building each one, :meth:`flexdigit.twin.batched.BatchedChains.from_rigs`)."""
     check_choice(orientation, "orientation", tuple(ORIENTATIONS), "build_digit")
-    cells_per_section = check_int(cells_per_section, "cells_per_section", "build_digit", low=1, high=1000)
     geo, mat = params.geometry, params.material
+    cells = section_cells(geo, cells_per_section)
     nsec = geo.section_count
     bounds = geo.section_bounds_m  # each section's free strip (unequal sections too)
     ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4
@@ -909,7 +955,7 @@ def digit_arrays(
         )
     s_list, h_list, k_strip, k_house = [], [], [], []
     for k in range(nsec):
-        s, h = uniform_cells(*bounds[k], cells_per_section)
+        s, h = uniform_cells(*bounds[k], cells[k])
         s_list.append(s)
         h_list.append(h)
         k_strip.append(ei_strip / h)

@@ -55,14 +55,22 @@ __all__ = [
 ]
 
 DEFAULT_DT_S = 0.020
-DEFAULT_CELLS_PER_SECTION = 3
+#: None: each section cut by :func:`flexdigit.twin.digit.default_cells` (cells no longer than
+#: ``MAX_CELL_LENGTH_M``; the thesis rig's 3 per section); an int or a per-section tuple passed instead is honoured.
+DEFAULT_CELLS_PER_SECTION = None
 #: Second word of the seed of the cable-guide friction's generator, ``default_rng([seed, FRICTION_STREAM])``.
 FRICTION_STREAM = 1
 
 
+def cached_digit(params: RigParams, calibration: Calibration, housing: bool, orientation: str, cells=None) -> Chain:
+    """:func:`build_digit`, cached (parameters are frozen and hashable; ``cells`` None, a count or one per section)."""
+    if cells is not None and np.ndim(cells) > 0:
+        cells = tuple(cells)
+    return _cached_digit(params, calibration, housing, orientation, cells)
+
+
 @lru_cache(maxsize=32)
-def cached_digit(params: RigParams, calibration: Calibration, housing: bool, orientation: str, cells: int) -> Chain:
-    """:func:`build_digit`, cached (parameters are frozen and hashable)."""
+def _cached_digit(params: RigParams, calibration: Calibration, housing: bool, orientation: str, cells) -> Chain:
     return build_digit(params, calibration, housing=housing, orientation=orientation, cells_per_section=cells)
 
 
@@ -127,8 +135,8 @@ class Twin:
         Cable attached (False: the release-test set-up of 3.1.2, cable removed).
     dt_s : float
         Integration step (s), rounded to a divisor of the serial period.
-    cells_per_section : int
-        Springs per section of the digit model.
+    cells_per_section : int, sequence of int or None
+        Springs per section of the digit model (None: :func:`~flexdigit.twin.digit.default_cells`).
     command : int, optional
         Initial command (default the equilibrium command, 8); the twin starts at rest in equilibrium there.
     compiled : bool
@@ -613,7 +621,8 @@ def static_gauges_v(
     orientation : {"horizontal", "vertical", "hanging"}
         Horizontal by default: the weights hang off a horizontal digit, cable side up (chapters 6-7).
     housing : bool
-    cells_per_section : int
+    cells_per_section : int, sequence of int or None
+        Springs per section (None: :func:`~flexdigit.twin.digit.default_cells`).
     seed : int, optional
         With a seed, add the calibration's white noise and, where the cable is taut, one draw of the cable-guide
         friction per case (drift is a slow process, not per case). The same seed gives the same white noise as
