@@ -46,6 +46,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
     "benchmarks.bench_board",
+    "benchmarks.bench_digitboard",
     "benchmarks.bench_resources",
     "benchmarks.bench_plots",
 )

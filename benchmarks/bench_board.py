@@ -121,7 +121,7 @@ def run() -> list[dict]:
         rows.append({"name": "board: servo command step (Timer1, 0.5 us ticks over 1-2 ms)", "value": 2000 / 254,
                      "unit": "x finer", "goal": "",
                      "note": "2000 pulse widths over the range against the serial board's 254 commands"})  # fmt: skip
-        for period_s, fmt in ((0.020, "float"), (0.005, "float"), (min(shortest.values()), "fixed")):
+        for period_s, fmt in ((0.020, "float"), (0.005, "float"), (shortest["fixed"], "fixed")):
             elf = _build(root, period_s, fmt)
             board = _typical([_step(elf, seed) for seed in STEP_SEEDS])
             python = _typical([_python_step(period_s, seed, _rotation_map(root)) for seed in STEP_SEEDS])

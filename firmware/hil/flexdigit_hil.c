@@ -13,7 +13,8 @@
  *
  * One request a line on stdin, one reply a line on stdout:
  *
- *   V <v0> <v1> <v2> <v3>       the voltages on ADC0..ADC3 (tenths of a millivolt, 0..50000), held until the next V
+ *   V <v0> .. <vk>              the voltages on ADC0..ADCk, k < 8 (tenths of a millivolt, 0..50000), held until the
+ *                               next V; pins not given hold 2.5 V (the firmware reads its G gauges on ADC0..ADC(G-1))
  *   U <hex>                     bytes for the firmware's UART receiver (delivered one per BYTE_US of AVR time);
  *                               with --pty, U <n>: n bytes the host wrote to the pty, for the receiver
  *   R <us>                      run the AVR for <us> microseconds of simulated time, then reply
@@ -58,6 +59,7 @@
    the board's rest reading, which it tares its map on, then quantises as a real Uno's would */
 #define VOLT_UNITS_PER_V 10000L
 #define AVCC_UNITS 49951U /* 5 V x 1023 / 1024 in tenths of a millivolt */
+#define ADC_PINS 8          /* ADC0..ADC7 (the Uno's DIP package brings out ADC0..ADC5) */
 
 static avr_t *avr;
 static unsigned char out_buf[OUT_MAX];
@@ -235,7 +237,7 @@ int main(int argc, char **argv)
     avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 1), servo_pin, NULL);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 7), exec_pin, NULL);
-    for (i = 0; i < 4; i++) {
+    for (i = 0; i < ADC_PINS; i++) {
         avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), (uint32_t)(VOLT_UNITS_PER_V * 5 / 2));
     }
     if (use_pty) {
@@ -249,12 +251,16 @@ int main(int argc, char **argv)
     }
     while (fgets(line, sizeof(line), stdin)) {
         if (line[0] == 'V') {
-            long mid = VOLT_UNITS_PER_V * 5 / 2;
-            long vin[4] = {mid, mid, mid, mid};
-            sscanf(line + 1, "%ld %ld %ld %ld", &vin[0], &vin[1], &vin[2], &vin[3]);
-            for (i = 0; i < 4; i++) {
+            char *p = line + 1;
+            for (i = 0; i < ADC_PINS; i++) {
+                char *end;
                 long top = 5L * VOLT_UNITS_PER_V;
-                long v = vin[i] < 0 ? 0 : (vin[i] > top ? top : vin[i]);
+                long v = strtol(p, &end, 10);
+                if (end == p) {
+                    break; /* the pins not given keep their voltage */
+                }
+                p = end;
+                v = v < 0 ? 0 : (v > top ? top : v);
                 avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + i), (uint32_t)v);
             }
         } else if (line[0] == 'U' && use_pty) {

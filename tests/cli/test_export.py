@@ -26,3 +26,58 @@ def test_cli_export_json(tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["analysis"]["closed_loop_stable"] is True
     assert doc["format"] == "float"
+
+
+def test_cli_export_a_digits_own_design(tmp_path, capsys):
+    """``--params`` (issue 24): the pair of cables' digit exports its own design, the controller ``flexdigit run
+    --params`` builds on its twin (same matrices), its 4-gauge map, its straight command 127 and the dither."""
+    import numpy as np
+
+    from digits import write_digit
+    from flexdigit.cli import main
+    from flexdigit.params import load_params
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.controllers import make_controller
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    path = write_digit("four-sections-two-cables", tmp_path)
+    out = tmp_path / "pair.c"
+    assert main(["export", "controller", "--out", str(out), "--params", str(path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["gauges"], doc["straight_command"], doc["dither"]) == (4, 127, True)
+    assert doc["analysis"]["closed_loop_stable"] is True
+    header = out.with_suffix(".h").read_text()
+    assert "#define FD_CTRL_GAUGES 4" in header and "#define FD_CTRL_COMMAND_EQ 127" in header
+    params = load_params(path)
+    with open_rig("sim", params, calibration=twin_calibration(params)) as rig:
+        host = make_controller("digital20", rig).runtime  # what run --params closes the loop with
+    from types import SimpleNamespace
+
+    from flexdigit.cli.export import _digit_export_design
+
+    options = SimpleNamespace(calibration=None, rotation_map=None, no_rotation_map=False, params=path)
+    exported, _, rotation, _, _ = _digit_export_design(params, 0.02, options)
+    assert exported.dither and host.dither
+    # the same sweep on the same seed's twin: the same map, the same measured rotation per command, the same design
+    np.testing.assert_allclose(rotation.coef, doc["rotation_map"]["coef"], rtol=1e-9)
+    for a, b in zip(
+        (exported.sys.A, exported.sys.B, exported.sys.C, exported.sys.D),
+        (host.sys.A, host.sys.B, host.sys.C, host.sys.D),
+        strict=True,
+    ):
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+
+
+def test_cli_export_params_refusals_are_one_line(tmp_path, capsys):
+    from digits import write_digit
+    from flexdigit.cli import main
+
+    path = write_digit("two-sections", tmp_path)
+    out = str(tmp_path / "x.c")
+    assert main(["export", "controller", "--out", out, "--params", str(path), "--design", "thesis39-tustin"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--design thesis39-tustin" in err and "\n" not in err
+    assert main(["export", "controller", "--out", out, "--calibration", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--params" in err and "\n" not in err
+    assert not (tmp_path / "x.c").exists()

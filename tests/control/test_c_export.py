@@ -79,6 +79,9 @@ int main(void)
         for (i = 0; i < CTL_NSTATES; i++) {
             printf(" %.9g", (double)c.x[i]);
         }
+#if CTL_DITHER
+        printf(" %.9g", (double)c.carry);
+#endif
         printf("\n");
     }
     return 0;
@@ -101,6 +104,9 @@ int main(void)
         for (i = 0; i < CTL_NSTATES; i++) {
             printf(" %ld", (long)c.x[i]);
         }
+#if CTL_DITHER
+        printf(" %ld", (long)c.carry);
+#endif
         printf("\n");
     }
     return 0;
@@ -172,6 +178,7 @@ def _compare_float(spec: ControllerSpec, data: np.ndarray, r, y, fmt=None) -> in
     u_scale = 2.0**-fmt.command_bits if fmt else 1.0
     x_prev = np.zeros(n)
     last = int(round(spec.u_eq))
+    carry = 0.0  # the dither's carried rounding error (spec.dither), synchronised like the state
     ambiguous = 0
     C, D = spec.C.reshape(-1), spec.D.reshape(-1)
     lo, hi = spec.u_min, spec.u_max
@@ -181,6 +188,7 @@ def _compare_float(spec: ControllerSpec, data: np.ndarray, r, y, fmt=None) -> in
         assert ret == 0, f"sample {k}: the C returned fault {ret}"
         rc._v[:n] = x_prev
         rc.last_command = last
+        rc._carry = carry
         w = np.array([r[k] - y[k]]) if m == 1 else np.array([r[k], y[k]])
         u_raw = spec.u_eq + C @ x_prev + D @ w
         u_py = rc.update(r[k], y[k])
@@ -191,18 +199,26 @@ def _compare_float(spec: ControllerSpec, data: np.ndarray, r, y, fmt=None) -> in
         near = [abs((u_clip % 1.0) - 0.5), abs(u_raw - hi), abs(u_raw - lo)]
         if spec.hysteresis:
             near.append(abs(abs(u_clip - last) - (0.5 + spec.hysteresis)))
+        if spec.dither:  # the rounding of the carried command, and the carry's clip at +-0.5
+            wanted = u_clip + carry
+            near += [abs((wanted % 1.0) - 0.5), abs(abs(wanted - u_py) - 0.5)]
         if spec.deadband is not None:
             near.append(abs(abs(r[k] - y[k]) - spec.deadband[1]) / max(1.0, abs(r[k] - y[k])) * 1e3)
         if spec.antiwindup == "clamp" and (u_raw > hi or u_raw < lo):
             # the freeze decision: the sign of the drift C (A x + B w - x), which the C has to its rounding
             drift = C @ (spec.A @ x_prev + spec.B @ w - x_prev)
             near.append(abs(drift) - np.abs(C) @ e_x)
-        if min(near) <= e_u:
+        carry_c = data[k, 3 + n] * u_scale if spec.dither else 0.0
+        # with dither the C also rounds the sum u_clip + carry: half a float32 ulp of up to 256 (fixed: exact)
+        tol = e_u + (2.0**-16 if spec.dither and fmt is None else 0.0)
+        if min(near) <= tol:
             ambiguous += 1
         else:
             assert u_c == int(round(u_py)), f"sample {k}: command {u_c} vs {u_py}"
             np.testing.assert_array_less(np.abs(x_c - rc.state), e_x + 1e-300, err_msg=f"sample {k}: state")
-        x_prev, last = x_c, u_c
+            # the carry is the unrounded command less the integer one: it errs as the command does
+            assert abs(carry_c - rc._carry) <= tol, f"sample {k}: carry {carry_c} vs {rc._carry}"
+        x_prev, last, carry = x_c, u_c, carry_c
     assert ambiguous <= AMBIGUOUS_FRACTION * len(r) + 1, f"{ambiguous} ambiguous samples of {len(r)}"
     return ambiguous
 
@@ -437,3 +453,82 @@ def test_prefixes_near_the_refused_ones_compile(tmp_path, digital20, prefix):
         [GCC, *CFLAGS, "-c", "-o", str(tmp_path / "ctl.o"), str(tmp_path / "ctl.c")], capture_output=True, text=True
     )
     assert build.returncode == 0, build.stderr
+
+
+# -- a described digit's design (issue 24): its G-gauge map, its straight command, the runtime's dither ----------
+
+
+@pytest.fixture(scope="module", params=["six-gauges-geared", "four-sections-two-cables"])
+def digit_export(request):
+    """A test digit's 20 ms design as ``flexdigit run --params`` runs it (dithered), with a made-up map over its
+    gauges (6 weights; 4 for the pair, whose commands are signed about its straight command 127)."""
+    from digits import DIGITS
+    from flexdigit.control.design20ms import digit_design_20ms
+    from flexdigit.params import RigParams
+
+    params = RigParams.from_dict(DIGITS[request.param])
+    d = digit_design_20ms(params, period_s=0.02)
+    gauges = len(params.geometry.gauge_positions_m)
+    weights = tuple(float(v) for v in np.linspace(20.0, 60.0, gauges))
+    spec = ControllerSpec.from_runtime(d.runtime(params, dither=True), RotationMap(weights, -1.5))
+    return request.param, params, d, spec
+
+
+def test_digit_float_export_with_dither_matches_runtime(tmp_path, digit_export):
+    name, params, d, spec = digit_export
+    assert spec.dither and spec.u_eq == params.actuator.equilibrium_command
+    run = _build(tmp_path, spec)
+    rng = np.random.default_rng(11)
+    for step, scale in ((30.0, None), (-30.0, None), (None, 60.0), (None, 400.0)):
+        r, y = _inputs(rng, 400, scale, 2, step)
+        data = run(zip(r, y, strict=True))
+        _compare_float(spec, data, r, y)
+        carry = data[:, 3 + spec.nstates]  # the rounding error carried: at most half a command, and used
+        assert np.all(np.abs(carry) <= 0.5) and np.mean(carry != 0) > 0.5
+
+
+def test_digit_fixed_export_with_dither_is_the_python_model_bit_for_bit(tmp_path, digit_export):
+    name, params, d, spec = digit_export
+    fmt = fixed_format(spec, 180.0)
+    run = _build(tmp_path, spec, fmt)
+    rng = np.random.default_rng(12)
+    b = fmt.input_bits
+    rq = [int(v) for v in rng.integers(-(60 << b), 60 << b, 800)]
+    yq = [int(v) for v in rng.integers(-(60 << b), 60 << b, 800)]
+    rq[:400] = [30 << b] * 400
+    yq[:400] = [int(v) for v in (30 << b) * (1 - np.exp(-np.arange(400) / 20.0))]
+    data = run(zip(rq, yq, strict=True))
+    model = FixedPointController(spec, fmt)
+    for k, (a, c) in enumerate(zip(rq, yq, strict=True)):
+        u = model.update(a, c)
+        assert [u, model.u_raw_q, *model.x, model.carry_q] == [int(v) for v in data[k, 1:]], f"sample {k}"
+    assert len({int(v) for v in data[300:400, 1]}) == 2  # the step's command dithered between two neighbours
+
+
+def test_a_digits_map_over_its_gauges_in_c(tmp_path, digit_export):
+    name, params, d, spec = digit_export
+    _need_gcc()
+    c_text, h_text = render_c(spec, prefix="ctl")
+    g = spec.rotation.gauges
+    assert f"#define CTL_GAUGES {g}" in h_text and "#define CTL_DITHER 1" in h_text
+    (tmp_path / "ctl.c").write_text(c_text)
+    (tmp_path / "ctl.h").write_text(h_text)
+    volts = [0.25 * (-1) ** i * (i + 1) / g for i in range(g)]
+    (tmp_path / "m.c").write_text(
+        '#include <stdio.h>\n#include "ctl.h"\nint main(void){ const float g[CTL_GAUGES] = {'
+        + ", ".join(f"{v!r}f" for v in volts)
+        + '};\n printf("%.9g\\n", (double)ctl_measure(g)); return 0; }\n'
+    )
+    subprocess.run(
+        [GCC, *CFLAGS, "-o", str(tmp_path / "m"), str(tmp_path / "ctl.c"), str(tmp_path / "m.c")], check=True
+    )
+    got = float(subprocess.run([str(tmp_path / "m")], capture_output=True, text=True, check=True).stdout)
+    want = spec.rotation([float(np.float32(v)) for v in volts])
+    assert got == pytest.approx(want, abs=(2 * g + 2) * 2.0**-24 * 60)  # 2G float32 operations on terms <= 60 deg
+    _avr_compiles(tmp_path, spec)
+    _avr_compiles(tmp_path, spec, fixed_format(spec, 180.0))
+
+
+def test_a_map_of_nine_gauges_is_refused():
+    with pytest.raises(ParameterError, match="1 to 8"):
+        RotationMap(tuple(range(9)), 0.0)

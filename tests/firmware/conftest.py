@@ -20,13 +20,14 @@ FIRMWARE = Path(__file__).resolve().parents[2] / "firmware"
 TOOLS = ("avr-gcc", "avr-objcopy", "avr-size", "gcc", "make")
 
 
-def build(tmp_root: Path, period_s: float, fmt: str, rotation_map: Path) -> Path:
-    """``make -C firmware`` into a fresh directory, the controller exported with ``rotation_map``; returns the
-    image. Fails (never skips) without the tools."""
+def build(tmp_root: Path, period_s: float, fmt: str, rotation_map: Path | None, params: Path | None = None) -> Path:
+    """``make -C firmware`` into a fresh directory, the controller exported with ``rotation_map`` (None: calibrated
+    on the twin by the export) for the digit ``params`` (None: the thesis rig); returns the image. Fails (never
+    skips) without the tools."""
     missing = [t for t in TOOLS if shutil.which(t) is None]
     assert not missing, f"the firmware tests need {missing}: run 'make avr' (apt-get install gcc-avr avr-libc ...)"
     assert Path("/usr/include/simavr/sim_avr.h").exists(), "the HIL harness needs libsimavr-dev: run 'make avr'"
-    out = tmp_root / f"{fmt}-{int(round(period_s * 1e6))}us"
+    out = tmp_root / f"{fmt}-{int(round(period_s * 1e6))}us{'-' + params.stem if params else ''}"
     src = str(Path(flexdigit.__file__).resolve().parents[1])
     env = dict(os.environ, PYTHONPATH=src + os.pathsep + os.environ.get("PYTHONPATH", ""))
     cmd = [
@@ -37,7 +38,8 @@ def build(tmp_root: Path, period_s: float, fmt: str, rotation_map: Path) -> Path
         f"BUILD={out}",
         f"PERIOD_S={period_s}",
         f"FORMAT={fmt}",
-        f"MAP={rotation_map}",
+        f"MAP={rotation_map or ''}",
+        f"PARAMS={params or ''}",
         f"FLEXDIGIT={sys.executable} -m flexdigit.cli",
     ]
     done = subprocess.run(cmd, capture_output=True, text=True, env=env)
@@ -69,6 +71,25 @@ def firmware(tmp_path_factory, rotation_map):
         key = (period_s, fmt)
         if key not in cache:
             cache[key] = build(root, period_s, fmt, rotation_map)
+        return cache[key]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def digit_firmware(tmp_path_factory):
+    """``digit_firmware(name, period_s, fmt)`` -> ``(image, params file)`` of a test digit (tests/digits.py), built
+    as ``make firmware PARAMS=name.toml`` builds it (its map calibrated on its twin by the export), cached."""
+    from digits import write_digit
+
+    root = tmp_path_factory.mktemp("digit-firmware")
+    cache: dict[tuple[str, float, str], tuple[Path, Path]] = {}
+
+    def get(name: str, period_s: float = 0.020, fmt: str = "float") -> tuple[Path, Path]:
+        key = (name, period_s, fmt)
+        if key not in cache:
+            params = write_digit(name, root)
+            cache[key] = (build(root, period_s, fmt, None, params), params)
         return cache[key]
 
     return get

@@ -1,50 +1,59 @@
 """A digit's ``--params`` on the reference firmware's backends (issue 24): ``board://`` (an Uno) and ``hil://`` (its
-image on simavr) serve a digit the firmware can read (3 gauges, the thesis rig's commands: its image's exported
-controller relaxes to the thesis's straight command) and refuse any other in one line before a port or harness is
-opened; ``run --on-board --params`` is refused in one line (the image's controller is the thesis rig's)."""
+image on simavr) serve a digit of up to 6 gauges (the Uno's A0..A5) on an image built for it (``make firmware
+PARAMS=D.toml``), refuse a digit of more gauges in one line naming the key before a port or harness is opened, and
+refuse an image built for another digit (its banner's gauges, straight command, range) in one line. The runs on
+such images are in tests/firmware/test_digit_images.py."""
 
 from __future__ import annotations
 
 import pytest
 
 from digits import write_digit
-from flexdigit.cli import main
 from flexdigit.errors import ParameterError
 from flexdigit.params import load_params
-from flexdigit.rig.backends.board_link import check_board_digit
+from flexdigit.rig.backends.board_link import BoardState, check_board_digit, check_board_image
 from flexdigit.rig.base import open_rig
 
 
-@pytest.mark.parametrize(
-    ("name", "reason"),
-    [("five-sections-eight-gauges", "the digit has 8 gauges"), ("four-sections-two-cables", "straight command 127")],
-)
-def test_the_boards_refuse_a_digit_their_firmware_cannot_serve(name, reason, tmp_path):
-    params = load_params(write_digit(name, tmp_path))
+def test_the_boards_refuse_a_digit_of_more_gauges_than_the_uno_reads(tmp_path):
+    params = load_params(write_digit("five-sections-eight-gauges", tmp_path))
     elf = tmp_path / "board.elf"
     elf.write_bytes(b"\x7fELF")  # refused before the image is read or the harness looked for
     for url in (f"hil://{elf}", "board://loop://"):
-        with pytest.raises(ParameterError, match=reason) as err:
+        with pytest.raises(ParameterError, match=r"gauge_positions_m has 8 gauges.*at most 6") as err:
             open_rig(url, params)
         message = str(err.value)
         assert message.startswith(url.split("?")[0]) and "\n" not in message
 
 
-def test_a_three_gauge_digit_with_the_thesis_commands_is_served():
-    # the thesis geometry with its 3 gauges moved: read as the firmware reads it, relaxed where it relaxes
-    from flexdigit.params import RigParams
-
-    moved = RigParams.from_dict({"geometry": {"gauge_positions_m": [0.06, 0.14, 0.2]}})
-    check_board_digit(moved, "board://x")
+@pytest.mark.parametrize("name", ["thesis", "six-gauges-geared", "four-sections-two-cables", "one-section"])
+def test_a_digit_of_up_to_six_gauges_is_served(name, tmp_path):
+    check_board_digit(load_params(write_digit(name, tmp_path)), "board://x")
     check_board_digit(None, "board://x")
 
 
-def test_run_on_board_with_params_is_one_line(tmp_path, capsys):
-    path = write_digit("two-sections", tmp_path)
-    code = main(["run", "--on-board", "--backend", f"hil://{tmp_path / 'board.elf'}", "--params", str(path)])
-    err = capsys.readouterr().err.strip()
-    assert code == 2
-    assert "--params" in err and "--on-board" in err and "\n" not in err
+BANNER = "# flexdigit-stream 2 adc=atmega328p period_us=20000 fixed=0 gauges={g} straight={s} range=0..254\r\n"
+
+
+def test_an_image_for_another_digit_is_refused_by_its_banner(tmp_path):
+    pair = load_params(write_digit("four-sections-two-cables", tmp_path))
+    board = BoardState()
+    board.feed(BANNER.format(g=4, s=127).encode(), time_s=0.0)
+    assert board.image_digit() == (4, 127, (0, 254))
+    check_board_image(board, pair, "hil://pair.elf")  # its own image
+    with pytest.raises(ParameterError, match="built for 4 gauges, straight command 127.*has 3 gauges") as err:
+        check_board_image(board, None, "hil://pair.elf")  # the thesis rig on it
+    assert "\n" not in str(err.value) and "PARAMS=" in str(err.value)
+    old = BoardState()  # an image from before G gauges says nothing: the thesis rig's
+    old.feed(b"# flexdigit-stream 1 period_us=20000\r\n", time_s=0.0)
+    check_board_image(old, None, "board://x")
+    with pytest.raises(ParameterError, match="has 4 gauges, straight command 127"):
+        check_board_image(old, pair, "board://x")
+    garbled = BoardState()
+    garbled.feed(BANNER.format(g="six", s=8).encode(), time_s=0.0)
+    with pytest.raises(OSError, match="gauges=six") as err:  # RigError: one line, not a ValueError
+        check_board_image(garbled, None, "board://x")
+    assert "\n" not in str(err.value)
 
 
 def test_a_hardware_map_with_no_operator_is_one_line(monkeypatch, capsys):

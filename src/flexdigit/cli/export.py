@@ -2,7 +2,14 @@
 quantisation (issue 25; :mod:`flexdigit.control.c_export`).
 
 * ``flexdigit export controller --out ctrl.c [--design digital20] [--period-s 0.02] [--format float|fixed]``
-  ``[--input-max X] [--prefix P] [--rotation-map FILE | --no-rotation-map] [--force] [--json]``
+  ``[--params D.toml [--calibration C.toml]] [--input-max X] [--prefix P] [--rotation-map FILE | --no-rotation-map]``
+  ``[--force] [--json]``
+
+With ``--params`` (issue 24) the export is that digit's own 20 ms design (``flexdigit run --params`` runs the same
+one on the host: :func:`flexdigit.control.design20ms.digit_design_20ms`, two outputs, the tip and the gauges' fused
+rotation), its rotation map over its G gauges (calibrated on its twin, as ``run --params`` makes it, or
+``--rotation-map``), its straight command and range (a cable pair straightens mid-range: its commands are signed
+about it), and the runtime's dither (the rounding error carried to the next sample), as the host loop runs it.
 """
 
 from __future__ import annotations
@@ -46,6 +53,16 @@ def register(subparsers) -> None:
         help="largest |controller input| the fixed point must hold (default 180 deg; 0.3 m for thesis39-*)",
     )
     p.add_argument("--prefix", default="fd_ctrl", help="C identifier prefix (default fd_ctrl)")
+    p.add_argument(
+        "--params", type=Path, default=None, metavar="FILE", help="the digit's parameters TOML (default: thesis rig)"
+    )
+    p.add_argument(
+        "--calibration",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="the digit's twin calibration TOML (default: the thesis's scaled to the digit)",
+    )
     maps = p.add_mutually_exclusive_group()
     maps.add_argument(
         "--rotation-map", type=Path, default=None, help="gauge -> rotation map JSON (default: calibrated on the twin)"
@@ -62,22 +79,31 @@ def _export_controller(args: argparse.Namespace) -> CommandResult:
     design = check_choice(args.design, "--design", EXPORT_DESIGNS, "flexdigit export controller")
     period = check_real(args.period_s, "--period-s", low=1e-4, high=1.0)
     check_output(args.out, force=args.force)  # before any design work
-    runtime, plant_d, rotation, scale, input_max = _export_design(design, period, args)
+    params = _digit(args, design)
+    if params is not None:
+        runtime, plant_d, rotation, scale, input_max = _digit_export_design(params, period, args)
+    else:
+        runtime, plant_d, rotation, scale, input_max = _export_design(design, period, args)
     if args.input_max is not None:
         input_max = check_real(args.input_max, "--input-max", low=0.0, low_open=True)
     spec = ControllerSpec.from_runtime(runtime, rotation, setpoint_scale=scale)
     setpoints = [s * scale for s in (0.0, 10.0, 30.0)]  # the rotations of the loop's tests, deg
+    if params is not None and params.cables.count == 2:
+        setpoints.append(-30.0)  # a cable pair bends both ways
     result = export_controller(
-        spec,
-        args.out,
-        format=args.format,
-        input_max=input_max,
-        plant_d=plant_d,
-        setpoints=setpoints,
-        prefix=args.prefix,
-        force=args.force,
-    )
-    data = {
+        spec, args.out, format=args.format, input_max=input_max, plant_d=plant_d, setpoints=setpoints,
+        prefix=args.prefix, force=args.force,
+    )  # fmt: skip
+    a = result.analysis
+    code = 0 if (a.closed_loop_stable is not False) else 1
+    data = _export_data(args, design, period, result, spec, scale)
+    return CommandResult(data=data, text=f"wrote {result.source_path} and {result.header_path}\n{a!r}", exit_code=code)
+
+
+def _export_data(args, design: str, period: float, result, spec, scale: float) -> dict:
+    """``export controller --json``: the files, the design, the digit's map and commands, the analysis."""
+    rotation = spec.rotation
+    return {
         "source": str(result.source_path),
         "header": str(result.header_path),
         "format": result.format,
@@ -86,11 +112,13 @@ def _export_controller(args: argparse.Namespace) -> CommandResult:
         "prefix": result.prefix,
         "rotation_map": None if rotation is None else {"coef": list(rotation.coef), "offset": rotation.offset},
         "setpoint_scale": scale,
+        "params": None if args.params is None else str(args.params),
+        "gauges": None if rotation is None else rotation.gauges,
+        "straight_command": int(round(spec.u_eq)),
+        "command_range": [spec.u_min, spec.u_max],
+        "dither": spec.dither,
         "analysis": result.analysis.to_dict(),
     }
-    a = result.analysis
-    code = 0 if (a.closed_loop_stable is not False) else 1
-    return CommandResult(data=data, text=f"wrote {result.source_path} and {result.header_path}\n{a!r}", exit_code=code)
 
 
 def _export_design(design: str, period: float, args):
@@ -128,3 +156,69 @@ def _export_design(design: str, period: float, args):
     scale = k3 * float(estimator.gauge_v_per_deg_[0])
     plant_d = ct.sample_system(ct.ss(build_plant("printed", params).tf), period, method="zoh")
     return thesis_controller(method, period, params), plant_d, rotation, scale, 0.3
+
+
+def _digit(args, design: str):
+    """The digit ``--params`` describes, or None for the thesis rig (no ``--params``, or a file describing it)."""
+    from flexdigit.errors import ParameterError
+
+    if args.params is None:
+        if args.calibration is not None:
+            raise ParameterError(
+                f"--calibration {args.calibration} is a digit's twin calibration: give its --params FILE too"
+            )
+        return None
+    from flexdigit.params import RigParams, load_params
+
+    params = load_params(args.params)
+    if params == RigParams() and args.calibration is None:
+        return None  # the thesis rig: chapter 5's design, as without --params
+    if design != "digital20":
+        raise ParameterError(
+            f"--design {design} is the thesis rig's printed H-infinity controller on gauge 1: with --params "
+            f"{args.params} only --design digital20 (the digit's own 20 ms design) is exported"
+        )
+    return params
+
+
+def _digit_export_design(params, period: float, args):
+    """A described digit's export: the controller ``flexdigit run --params`` runs on the host (its own 20 ms design
+    on the rotation per command its map's sweep measured, dithered), its discrete design plant, the rotation map
+    over its gauges (calibrated on its twin, tared at rest), setpoint scale 1 and input range 180 deg."""
+    import math
+
+    import numpy as np
+
+    from flexdigit.control.c_export import RotationMap
+    from flexdigit.control.design20ms import digit_design_20ms, straight_is_stable
+    from flexdigit.errors import ParameterError
+    from flexdigit.params import RigParams
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    if args.calibration is not None:
+        from flexdigit.twin.calibration import load_calibration
+
+        calibration = load_calibration(args.calibration)
+    else:
+        calibration = twin_calibration(params)
+    # tip up, a digit that buckles under its supports' weight is mounted hanging (as run --params mounts its twin)
+    orientation = "vertical" if straight_is_stable(params, calibration, "vertical") else "hanging"
+    with open_rig("sim", params, calibration=calibration, orientation=orientation) as rig:
+        estimator = load_rotation_map(args.rotation_map) if args.rotation_map else calibrate_rotation(rig)
+        rest = np.array([rig.read().gauges_v for _ in range(5)])
+    gauges = len(params.geometry.gauge_positions_m)
+    weights = np.asarray(estimator.coef_).reshape(-1).size
+    if weights != gauges:
+        raise ParameterError(
+            f"--rotation-map {args.rotation_map} weighs {weights} gauge(s); the digit in {args.params} has {gauges}"
+        )
+    estimator.tare(rest)
+    measured = getattr(estimator, "deg_per_command_", None)
+    measured = measured if isinstance(measured, float) and math.isfinite(measured) and measured > 0 else None
+    own = None if args.calibration is None else calibration
+    d = digit_design_20ms(params, period_s=period, calibration=own, orientation=orientation, deg_per_command=measured)
+    runtime = d.runtime(params, name="digital20", dither=params != RigParams())  # as run --params runs it
+    rotation = None if args.no_rotation_map else RotationMap.from_estimator(estimator)
+    return runtime, d.plant_d, rotation, 1.0, 180.0

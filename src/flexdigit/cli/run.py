@@ -454,27 +454,33 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
     from flexdigit.errors import ParameterError
     from flexdigit.rig.step_test import board_step_test
 
-    if args.params is not None:
-        raise ParameterError(
-            f"--params {args.params} is not supported with --on-board: the board's image runs the thesis rig's "
-            "exported controller and map on 3 gauges (flexdigit export controller designs for the thesis rig only); "
-            "close your digit's loop on the host instead: --backend hil://IMAGE.elf without --on-board, or "
-            "serial://...?daq=stream://... (docs/digits.md)"
-        )
     if _is_design_file(args.controller):
         raise ParameterError(
             f"--controller {args.controller} is not supported with --on-board: the board runs the controller exported "
             "into its image"
         )
-    for name in ("log", "record", "rotation_map", "calibration", "orientation"):
+    for name in ("log", "record", "rotation_map", "orientation"):
         if getattr(args, name) is not None:
             raise ParameterError(
                 f"--{name.replace('_', '-')} is not supported with --on-board (the board holds its map)"
             )
     duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
     setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
-    run = board_step_test(args.backend, setpoint, duration, seed=args.seed)
-    data = {"status": run["status"], "message": run["message"], "loop": "board", "backend": args.backend, **run}
+    # --params: the digit the board's image was built for (make firmware PARAMS=...; the board's banner is checked
+    # against it) and the twin it meets, calibrated and mounted as run --params's twin (--calibration for its twin)
+    args.digit = _digit(args)
+    _check_reachable(setpoint, args.digit, args.params)
+    twin = _twin_options(args, True) if args.params is not None or args.calibration is not None else {}
+    twin.pop("seed", None)
+    run = board_step_test(args.backend, setpoint, duration, seed=args.seed, params=args.digit, twin_options=twin)
+    data = {
+        "status": run["status"],
+        "message": run["message"],
+        "loop": "board",
+        "backend": args.backend,
+        "params": None if args.params is None else str(args.params),
+        **run,
+    }
     metrics, stats = run["step_metrics"]["true"], run["board"]
     text = (
         f"loop on the board ({args.backend}): {run['status']} ({run['message']})\n"

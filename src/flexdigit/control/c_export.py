@@ -2,8 +2,9 @@
 
 The thesis's conclusion asks for the controller to run where the gauges are read: on the microcontroller. This
 module writes the :class:`~flexdigit.control.runtime.RuntimeController` (state-space difference equation,
-saturation to 0..254, the integer command, anti-windup, hysteresis, deadband, bumpless reset) and the gauge ->
-rotation map as C that needs no heap, no libm and no library, in one of two number formats:
+saturation to 0..254, the integer command, anti-windup, hysteresis or dither, deadband, bumpless reset) and the
+gauge -> rotation map of any digit's 1 to 8 gauges as C that needs no heap, no libm and no library, in one of two
+number formats:
 
 ``float32``
     every signal and coefficient an IEEE single (the ATmega328P emulates it in software; a Cortex-M4F has it in
@@ -81,26 +82,45 @@ LIMIT_CYCLE_SAMPLES = 3000
 LIMIT_CYCLE_TAIL = 500
 
 
+#: Most gauges a rotation map weighs (a digit has 1 to 8, issue 24; the stream protocol's version 2 carries 8).
+MAX_MAP_GAUGES = 8
+
+
 @dataclass(frozen=True)
 class RotationMap:
-    """The gauge -> measurement map the loop uses: ``y = coef @ gauges_v + offset`` (offset = intercept - tare)."""
+    """The gauge -> measurement map the loop uses: ``y = coef @ gauges_v + offset`` (offset = intercept - tare),
+    one weight per gauge of the digit (1 to :data:`MAX_MAP_GAUGES`, base first)."""
 
-    coef: tuple[float, float, float]
+    coef: tuple[float, ...]
     offset: float
     unit: str = "deg"
+
+    def __post_init__(self) -> None:
+        c = np.asarray(self.coef, dtype=float).reshape(-1)
+        if not 1 <= c.size <= MAX_MAP_GAUGES or not np.all(np.isfinite(c)) or not math.isfinite(self.offset):
+            raise ParameterError(
+                f"a rotation map needs 1 to {MAX_MAP_GAUGES} finite gauge weights and a finite offset. "
+                f"Got {c.tolist()!r}, {self.offset!r}."
+            )
+
+    @property
+    def gauges(self) -> int:
+        """How many gauges the map weighs."""
+        return len(self.coef)
 
     @classmethod
     def from_estimator(cls, estimator) -> RotationMap:
         """From a fitted and tared :class:`flexdigit.rig.rotation.RotationEstimator` (duck-typed: control sits
-        below rig in the chain)."""
+        below rig in the chain), of any number of gauges."""
         c = np.asarray(estimator.coef_, dtype=float).reshape(-1)
-        if c.shape != (3,):
-            raise ParameterError(f"a rotation map needs 3 gauge weights. Got {c.tolist()!r}.")
         return cls(tuple(float(v) for v in c), float(estimator.intercept_) - float(estimator.tare_deg_))
 
     def __call__(self, gauges_v) -> float:
-        g = gauges_v
-        return float(g[0] * self.coef[0] + g[1] * self.coef[1] + g[2] * self.coef[2]) + self.offset
+        # summed in order, as the C does (a dot product's order would change the last bit)
+        total = 0.0
+        for g, c in zip(gauges_v, self.coef, strict=True):
+            total += float(g) * c
+        return float(total) + self.offset
 
 
 @dataclass(frozen=True)
@@ -117,6 +137,8 @@ class ControllerSpec:
         ``L`` on ``clip(u_raw) - u_raw`` and ``Lq`` on ``u - clip(u_raw)``.
     quantise : bool
     hysteresis : float
+    dither : bool
+        The runtime's error-feedback quantisation (the rounding error carried to the next sample).
     deadband : (int, float) or None
     rotation : RotationMap or None
     setpoint_scale : float
@@ -141,6 +163,7 @@ class ControllerSpec:
     rotation: RotationMap | None = None
     setpoint_scale: float = 1.0
     name: str = "controller"
+    dither: bool = False
 
     @classmethod
     def from_runtime(
@@ -169,6 +192,7 @@ class ControllerSpec:
             rotation=rotation,
             setpoint_scale=check_real(setpoint_scale, "setpoint_scale", "ControllerSpec"),
             name=rc.name,
+            dither=bool(rc.dither and rc.quantise),
         )
 
     @property
@@ -202,6 +226,7 @@ class ControllerSpec:
             deadband=self.deadband,
             hysteresis=self.hysteresis,
             name=self.name,
+            dither=self.dither,
         )
         rc.u_min, rc.u_max, rc.u_eq = self.u_min, self.u_max, self.u_eq
         rc.reset()
@@ -462,6 +487,7 @@ class FixedPointController:
         self.last = _round_half_even_q(to_q(c, self.fmt.command_bits), self.fmt.command_bits)
         self.saturated = False
         self.u_raw_q = 0
+        self.carry_q = 0  # the dither's carried rounding error, command_bits fractional bits
 
     def state_real(self) -> np.ndarray:
         return np.array([x * 2.0**-b for x, b in zip(self.x, self.fmt.state_bits, strict=True)])
@@ -485,6 +511,11 @@ class FixedPointController:
             last_q = self.last << f
             if spec.hysteresis > 0 and abs(u_clip - last_q) < self.hyst_q and self.lo_q <= last_q <= self.hi_q:
                 u = self.last
+            elif spec.dither:
+                wanted = u_clip + self.carry_q
+                u = min(max(_round_half_even_q(wanted, f), self.lo_q >> f), self.hi_q >> f)
+                half = 1 << (f - 1)
+                self.carry_q = min(max(wanted - (u << f), -half), half)
             else:
                 u = _round_half_even_q(u_clip, f)
             u_q = u << f
@@ -609,6 +640,8 @@ _HEADER_COMMON = """\
 #define {P}_SETPOINT_SCALE {scale}
 #define {P}_FIXED_POINT {is_fixed}
 #define {P}_HAS_MEASURE {has_measure}
+#define {P}_GAUGES {gauges}
+#define {P}_DITHER {dither}
 /* update() return codes */
 #define {P}_OK 0
 #define {P}_FAULT_NONFINITE 1
@@ -625,8 +658,8 @@ def render_c(
 
         void P_reset(P_t *c, float command);          bumpless start at command (the runtime's reset)
         int  P_update(P_t *c, float r, float y, int16_t *command);   one sample; 0 or a fault code
-        float P_measure(const float gauges_v[3]);     the rotation map (when exported)
-        int  P_step(P_t *c, float setpoint, const float gauges_v[3], int16_t *command);
+        float P_measure(const float gauges_v[P_GAUGES]);   the rotation map (when exported), G = 1..8 gauges
+        int  P_step(P_t *c, float setpoint, const float gauges_v[P_GAUGES], int16_t *command);
         int  P_update_q(P_t *c, int32_t r_q, int32_t y_q, int16_t *command);   fixed point only
 
     ``c->u_raw`` holds the last unrounded command (float, or Q for fixed) and ``c->x`` the state.
@@ -661,6 +694,8 @@ def render_c(
         scale=_f32(spec.setpoint_scale),
         is_fixed=1 if fixed else 0,
         has_measure=0 if spec.rotation is None else 1,
+        gauges=0 if spec.rotation is None else spec.rotation.gauges,
+        dither=1 if spec.dither and spec.quantise and spec.hysteresis <= 0 else 0,
     )
     nx = max(n, 1)  # a zero-length array is not C99
     if fixed:
@@ -669,12 +704,14 @@ def render_c(
             f"/* inputs must satisfy |w| <= {fmt.input_max:g} (the analysed range) */\n\n"
             f"typedef struct {{\n    int32_t x[{nx}];   /* state; fractional bits {list(fmt.state_bits)} */\n"
             f"    int32_t u_raw;   /* last unrounded command, {fmt.command_bits} fractional bits */\n"
+            f"    int32_t carry;   /* the dither's carried rounding error, {fmt.command_bits} fractional bits */\n"
             f"    int16_t last;    /* last command */\n    uint8_t saturated;\n}} {prefix}_t;\n\n"
             f"int {prefix}_update_q({prefix}_t *c, int32_t r_q, int32_t y_q, int16_t *command);\n"
         )
     else:
         head += (
             f"\ntypedef struct {{\n    float x[{nx}];\n    float u_raw;     /* last unrounded command */\n"
+            f"    float carry;     /* the dither's carried rounding error */\n"
             f"    int16_t last;    /* last command */\n    uint8_t saturated;\n}} {prefix}_t;\n\n"
         )
     head += (
@@ -684,8 +721,9 @@ def render_c(
     if spec.rotation is not None:
         head += (
             f"/* the gauge -> measurement ({spec.rotation.unit}) map of the loop */\n"
-            f"float {prefix}_measure(const float gauges_v[3]);\n"
-            f"int {prefix}_step({prefix}_t *c, float setpoint, const float gauges_v[3], int16_t *command);\n"
+            f"float {prefix}_measure(const float gauges_v[{P}_GAUGES]);\n"
+            f"int {prefix}_step({prefix}_t *c, float setpoint, const float gauges_v[{P}_GAUGES], "
+            "int16_t *command);\n"
         )
     head += f"\n#endif /* {P}_H */\n"
     body = _render_fixed(spec, fmt, prefix) if fixed else _render_float(spec, prefix)
@@ -707,6 +745,7 @@ def _reset_float_lines(spec: ControllerSpec, prefix: str) -> list[str]:
         lines.append(f"    c->x[{i}] = {_f32(pinv[i]) if i < n else '0.0f'} * dev;")
     lines += [
         "    c->u_raw = command;",
+        "    c->carry = 0.0f;",
         f"    c->last = {prefix}_round(command);",
         "    c->saturated = 0;",
         "}",
@@ -792,6 +831,19 @@ def _quantise_float_lines(spec: ControllerSpec, prefix: str) -> list[str]:
     """``u`` from ``u_clip``: as it is, rounded, or rounded with hysteresis around the last command."""
     if not spec.quantise:
         return ["    u = u_clip;"]
+    if spec.hysteresis <= 0 and spec.dither:
+        # the runtime's dither: the rounding error carried to the next sample (at most half a command)
+        lo, hi = _f32(spec.u_min), _f32(spec.u_max)
+        return [
+            "    {",
+            "        float wanted = u_clip + c->carry;",
+            "        float e;",
+            f"        u = (float){prefix}_round(wanted);",
+            f"        u = u < {lo} ? {lo} : (u > {hi} ? {hi} : u);",
+            "        e = wanted - u;",
+            "        c->carry = e < -0.5f ? -0.5f : (e > 0.5f ? 0.5f : e);",
+            "    }",
+        ]
     if spec.hysteresis <= 0:
         return [f"    u = (float){prefix}_round(u_clip);"]
     lo, hi = _f32(spec.u_min), _f32(spec.u_max)
@@ -860,13 +912,15 @@ def _measure_lines(spec: ControllerSpec, prefix: str) -> list[str]:
     if spec.rotation is None:
         return []
     rot = spec.rotation
+    P = prefix.upper()
+    names = [f"gauges_v[{i}]" for i in range(rot.gauges)]
     return [
-        f"float {prefix}_measure(const float gauges_v[3])",
+        f"float {prefix}_measure(const float gauges_v[{P}_GAUGES])",
         "{",
-        f"    return {_dot_float(rot.coef, ['gauges_v[0]', 'gauges_v[1]', 'gauges_v[2]'])} + {_f32(rot.offset)};",
+        f"    return {_dot_float(rot.coef, names)} + {_f32(rot.offset)};",
         "}",
         "",
-        f"int {prefix}_step({prefix}_t *c, float setpoint, const float gauges_v[3], int16_t *command)",
+        f"int {prefix}_step({prefix}_t *c, float setpoint, const float gauges_v[{P}_GAUGES], int16_t *command)",
         "{",
         f"    return {prefix}_update(c, setpoint * {_f32(spec.setpoint_scale)}, {prefix}_measure(gauges_v), command);",
         "}",
@@ -931,6 +985,7 @@ def _reset_fixed_lines(spec: ControllerSpec, fmt: FixedFormat, prefix: str) -> l
             out.append(f"    c->x[{i}] = 0;")
     return out + [
         f"    c->u_raw = {prefix}_to_q(command, {_f32(2.0**f)});",
+        "    c->carry = 0;",
         f"    c->last = {prefix}_round_q({prefix}_to_q(command, {_f32(2.0**f)}));",
         "    c->saturated = 0;",
         "}",
@@ -1007,6 +1062,19 @@ def _quantise_fixed_lines(spec: ControllerSpec, fmt: FixedFormat, fpc: FixedPoin
             "        } else {",
             f"            u = {prefix}_round_q(u_clip);",
             "        }",
+            "    }",
+        ]
+    elif spec.dither:
+        lo, hi = fpc.lo_q >> f, fpc.hi_q >> f
+        half = 1 << (f - 1)
+        out = [
+            "    {",
+            "        int32_t wanted = u_clip + c->carry;",
+            "        int32_t e;",
+            f"        u = {prefix}_round_q(wanted);",
+            f"        u = (int16_t)(u < {lo} ? {lo} : (u > {hi} ? {hi} : u));",
+            f"        e = wanted - (int32_t)((uint32_t)(int32_t)u << {f});",
+            f"        c->carry = e < -{half}L ? -{half}L : (e > {half}L ? {half}L : e);",
             "    }",
         ]
     else:
@@ -1130,7 +1198,10 @@ class QuantisedAnalysis:
         integer commands agree (commands; inf when the state is unbounded).
     limit_cycles : tuple of dict
         For each setpoint: the command's peak-to-peak over the last samples of a closed-loop run with the integer
-        command, and its period (0: constant).
+        command, and its period (0: constant, or no period: a dithered command toggles without one).
+    dithered : bool
+        The command is dithered (the rounding error carried): it toggles between neighbours by design, so a
+        peak-to-peak of one command is its working, not a limit cycle to avoid.
     """
 
     format: str
@@ -1155,6 +1226,7 @@ class QuantisedAnalysis:
     headroom_bits: float | None
     command_error_bound: float
     limit_cycles: tuple
+    dithered: bool = False
 
     @property
     def closed_loop_stable(self) -> bool | None:
@@ -1204,7 +1276,8 @@ class QuantisedAnalysis:
                 + ("none" if lc["peak_to_peak"] == 0 else f"{lc['peak_to_peak']} p-p, period {lc['period_samples']}")
                 for lc in self.limit_cycles
             ]
-            lines.append("  limit cycles (setpoint: command): " + "; ".join(parts))
+            note = " (dithered: one command peak-to-peak is the dither's toggling)" if self.dithered else ""
+            lines.append("  limit cycles (setpoint: command): " + "; ".join(parts) + note)
         return "\n".join(lines)
 
 
@@ -1336,6 +1409,7 @@ def analyse_export(
         headroom_bits=headroom,
         command_error_bound=err,
         limit_cycles=tuple(cycles),
+        dithered=bool(spec.dither and spec.quantise and spec.hysteresis <= 0),
     )
 
 

@@ -328,7 +328,15 @@ def _deg_per_command(params) -> float:
     return float(np.real(design_plant(params).dcgain()))
 
 
-def board_step_test(backend: str, setpoint_deg: float, duration_s: float, *, seed: int | None = None) -> dict:
+def board_step_test(
+    backend: str,
+    setpoint_deg: float,
+    duration_s: float,
+    *,
+    seed: int | None = None,
+    params=None,
+    twin_options: dict | None = None,
+) -> dict:
     """A step from rest with the loop closed on the board (``flexdigit run --on-board``): the exported controller
     in the image runs it, the host only sends the setpoint and watches the twin's true rotation.
 
@@ -342,6 +350,11 @@ def board_step_test(backend: str, setpoint_deg: float, duration_s: float, *, see
         How long the host watches, s.
     seed : int, optional
         The twin's seed (default: the URL's or the backend's).
+    params : RigParams, optional
+        The digit (issue 24; default the thesis rig): the board's image must have been built for it (``make
+        firmware PARAMS=D.toml``), and the twin the board meets is that digit's.
+    twin_options : dict, optional
+        The twin's ``calibration`` and ``orientation`` (as ``flexdigit run --params`` sets them).
 
     Returns
     -------
@@ -358,7 +371,7 @@ def board_step_test(backend: str, setpoint_deg: float, duration_s: float, *, see
     from flexdigit.rig.backends.hil_backend import run_on_board  # the twin (scipy): cli/run.py reads constants here
 
     options = {"mode": "board", "setpoint_deg": setpoint_deg} | ({} if seed is None else {"seed": seed})
-    rig = open_rig(backend, **options)
+    rig = open_rig(backend, params, **options, **(twin_options or {}))
     try:
         settings = rig.settings()
         run = run_on_board(rig, setpoint_deg, duration_s)
@@ -377,7 +390,8 @@ def board_step_test(backend: str, setpoint_deg: float, duration_s: float, *, see
         "period_s": run.period_s,
         "samples": int(t.size),
         "true_final_rotation_deg": final,
-        "true_peak_rotation_deg": float(y.max()) if y.size else math.nan,
+        # the extreme towards the setpoint (a cable pair's negative step peaks below it)
+        "true_peak_rotation_deg": (float(y.min()) if setpoint_deg < 0 else float(y.max())) if y.size else math.nan,
         "step_metrics": {"true": metrics.to_dict() if metrics else None, "deg_per_command": dpc},
         "final_command": float(run.command[-1]) if run.command.size else None,
         "board": stats,

@@ -29,7 +29,14 @@ import numpy as np
 
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.params import RigParams
-from flexdigit.rig.backends.board_link import BAUD, HEARTBEAT_S, VOLTS_PER_COUNT, BoardState, check_board_digit
+from flexdigit.rig.backends.board_link import (
+    BAUD,
+    HEARTBEAT_S,
+    VOLTS_PER_COUNT,
+    BoardState,
+    check_board_digit,
+    check_board_image,
+)
 from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 
 __all__ = ["BoardRig", "from_url", "URL_OPTIONS"]
@@ -129,6 +136,7 @@ class BoardRig(Rig):
                 )
             self._pause(POLL_S)
             self._drain()
+        check_board_image(self.board, self.params, self.where)  # its banner: the digit its image was built for
         self._say("F1" if self.safe == "hold" else "F0")
         if self.mode == "board":
             self.set_setpoint(self.setpoint_deg)

@@ -3,8 +3,9 @@ travel: the board on simavr (:mod:`flexdigit.rig.backends.hil_backend`) and a re
 (:mod:`flexdigit.rig.backends.board_backend`) share it.
 
 The board streams each control period's ADC counts (signed about its 2.5 V midpoint) and the command it applied
-in the stream protocol (:mod:`flexdigit.rig.backends.stream_framing`), and information lines: its banner
-(``# flexdigit-stream 1 ... period_us=20000``), ``# mode <0|1|2>``, ``# tare <micro-deg>`` (the rotation its map
+in the stream protocol (:mod:`flexdigit.rig.backends.stream_framing`, version 2: its G gauges), and information
+lines: its banner (``# flexdigit-stream 2 ... period_us=20000 fixed=0 gauges=3 straight=8 range=0..254
+pulse_delay_ms=1``: the digit its image was built for), ``# mode <0|1|2>``, ``# tare <micro-deg>`` (the rotation its map
 read at rest when its loop started) and ``# fault <code> <name>``. The host sends one command a line: ``S<millideg>``
 setpoint, ``M<0|1|2>`` mode (safe, host commands, loop on the board), ``C<command>``, ``F<0|1>`` safe action
 (relax, hold), ``W`` heartbeat (the board's safe state follows 0.5 s of silence).
@@ -34,11 +35,17 @@ __all__ = [
     "BAUD",
     "MAX_KEPT_SAMPLES",
     "FIRMWARE_GAUGES",
+    "MAX_BOARD_GAUGES",
     "check_board_digit",
+    "check_board_image",
 ]
 
-#: Gauges the reference firmware reads (ADC0..ADC2; ADC3 is the servo's pot): the thesis rig's three.
+#: Gauges the reference firmware reads when its banner does not say (an image built before issue 24's G gauges):
+#: the thesis rig's three.
 FIRMWARE_GAUGES = 3
+#: Most gauges the reference firmware reads: the Uno's analogue pins A0..A5 (ADC0..ADC5; ADC6 and ADC7 exist only
+#: on the surface-mount ATmega328P).
+MAX_BOARD_GAUGES = 6
 
 #: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
 VOLTS_PER_COUNT = 5.0 / 1024.0
@@ -98,44 +105,84 @@ class BoardState:
 
     def period_s(self, where: str) -> float:
         """The control period the image was built with (its banner's ``period_us``), s."""
+        value = self.banner_value("period_us")
+        if value is None:
+            raise RigError(f"{where}: the firmware's banner does not give its period")
+        return int(value) / 1e6
+
+    def banner_value(self, key: str) -> str | None:
+        """The banner's ``key=value`` (``gauges``, ``straight``, ``range``, ``period_us``...), or None."""
         for line in self.info_lines:
-            for word in line.split():
-                if word.startswith("period_us="):
-                    return int(word.split("=", 1)[1]) / 1e6
-        raise RigError(f"{where}: the firmware's banner does not give its period")
+            words = line.split()
+            if words[:1] != ["flexdigit-stream"]:
+                continue
+            for word in words:
+                if word.startswith(key + "="):
+                    return word.split("=", 1)[1]
+        return None
+
+    def image_digit(self) -> tuple[int, int, tuple[int, int]]:
+        """``(gauges, straight command, (command min, max))`` the image was built for (its banner; an image that
+        does not say is the thesis rig's: 3 gauges, straight at 8, 0..254)."""
+        gauges = self.banner_value("gauges")
+        straight = self.banner_value("straight")
+        span = self.banner_value("range")
+        low, high = (0, 254) if span is None else (int(v) for v in span.split(".."))
+        return (
+            FIRMWARE_GAUGES if gauges is None else int(gauges),
+            8 if straight is None else int(straight),
+            (low, high),
+        )
 
 
 def check_board_digit(params, where: str) -> None:
-    """Refuse, in one line naming the backend, a digit the reference firmware cannot serve (issue 24).
+    """Refuse, in one line naming the backend and the key, a digit no image of the reference firmware can serve.
 
-    The firmware reads :data:`FIRMWARE_GAUGES` gauges, and its image carries the thesis rig's exported controller:
-    its straight command (where its safe state relaxes) and its command range are the thesis rig's
-    (``flexdigit export controller`` designs for the thesis rig only). A digit with another gauge count, or another
-    straight command or range (an antagonistic pair straightens mid-range), would be read wrong or relaxed into a
-    bend. A digit of three gauges with the thesis's commands (another length, sections, bridge) is served.
+    The firmware reads gauge k on the Uno's ADCk, so a digit of more than :data:`MAX_BOARD_GAUGES` gauges (the
+    Uno's six analogue pins) cannot be read. Any other digit is served by an image built for it (``make firmware
+    PARAMS=D.toml``: its own controller, map, straight command); :func:`check_board_image` then checks, once the
+    board has said what it was built for, that the image is that digit's.
 
     Examples
     --------
     >>> from flexdigit.params import RigParams
     >>> check_board_digit(RigParams(), "hil://board.elf")
-    >>> four = RigParams.from_dict({"sensors": {"adc_channels": [0, 1, 2, 3]},
-    ...     "geometry": {"gauge_positions_m": [0.045, 0.1, 0.15, 0.2]}})
-    >>> check_board_digit(four, "hil://board.elf")
+    >>> eight = RigParams.from_dict({"sensors": {"adc_channels": list(range(8))},
+    ...     "geometry": {"gauge_positions_m": [0.02, 0.05, 0.08, 0.11, 0.14, 0.17, 0.2, 0.23]}})
+    >>> check_board_digit(eight, "hil://board.elf")
     Traceback (most recent call last):
     ...
-    flexdigit.errors.ParameterError: hil://board.elf: the reference firmware reads 3 gauges ...; the digit has 4 ...
+    flexdigit.errors.ParameterError: hil://board.elf: the digit's [geometry] gauge_positions_m has 8 gauges; ...
     """
     if params is None:  # the thesis rig
         return
-    thesis, a = RigParams().actuator, params.actuator
     gauges = len(params.geometry.gauge_positions_m)
-    commands = (a.equilibrium_command, a.command_min, a.command_max)
-    if gauges == FIRMWARE_GAUGES and commands == (thesis.equilibrium_command, thesis.command_min, thesis.command_max):
-        return
-    raise ParameterError(
-        f"{where}: the reference firmware reads {FIRMWARE_GAUGES} gauges and relaxes to the thesis rig's straight "
-        f"command {thesis.equilibrium_command} (range {thesis.command_min}..{thesis.command_max}); the digit has "
-        f"{gauges} gauges, straight command {a.equilibrium_command} (range {a.command_min}..{a.command_max}): not "
-        "supported on the board (docs/digits.md); close the loop on the host through the stream instead "
-        "(flexdigit stream-emulator --params)"
-    )
+    if gauges > MAX_BOARD_GAUGES:
+        raise ParameterError(
+            f"{where}: the digit's [geometry] gauge_positions_m has {gauges} gauges; the reference firmware reads "
+            f"at most {MAX_BOARD_GAUGES} (the Uno's analogue pins A0..A5, gauge k on ADCk): not supported on the "
+            "board (docs/board.md); close the loop on the host through a gauge stream instead "
+            "(flexdigit stream-emulator --params)"
+        )
+
+
+def check_board_image(board: BoardState, params, where: str) -> None:
+    """Refuse, in one line, an image built for another digit than ``params`` (its banner's gauges, straight
+    command and range, :meth:`BoardState.image_digit`): it would read the gauges wrong, or relax into a bend."""
+    p = params or RigParams()
+    a = p.actuator
+    want = (len(p.geometry.gauge_positions_m), int(a.equilibrium_command), (int(a.command_min), int(a.command_max)))
+    try:
+        got = board.image_digit()
+    except ValueError:
+        words = [board.banner_value(k) for k in ("gauges", "straight", "range")]
+        raise RigError(
+            f"{where}: the firmware's banner does not say which digit its image was built for as expected "
+            f"(gauges={words[0]} straight={words[1]} range={words[2]}: integers, range LOW..HIGH)"
+        ) from None
+    if got != want:
+        raise ParameterError(
+            f"{where}: the firmware image was built for {got[0]} gauges, straight command {got[1]}, commands "
+            f"{got[2][0]}..{got[2][1]}; the digit has {want[0]} gauges, straight command {want[1]}, commands "
+            f"{want[2][0]}..{want[2][1]}: build the image for it (make firmware PARAMS=your-digit.toml)"
+        )

@@ -6,14 +6,18 @@ The firmware image (``make firmware``) runs unchanged on simavr's ATmega328P in 
 (``firmware/hil/flexdigit_hil.c``, against libsimavr) that this backend drives over a pipe, in *simulated* time:
 every ``step_s`` (0.5 ms) of AVR time it
 
-1. sets the voltages on the AVR's ADC pins from the twin's gauges (``2.5 V + gauge volts``: the level shift of the
-   board's front end, the AVR's ADC reading 0..5 V) and its pot, to a tenth of a millivolt; the harness makes
+1. sets the voltages on the AVR's ADC pins from the twin's G gauges (gauge k on ADCk, ``2.5 V + gauge volts``: the
+   level shift of the board's front end, the AVR's ADC reading 0..5 V), to a tenth of a millivolt; the harness makes
    simavr's ADC convert as the ATmega328P's datasheet says (``vin x 1024 / 5 V``, not simavr's ``x 1023``), so
    the board's readings, its rest reading (which it tares its map on) among them, are a real Uno's;
 2. runs the AVR for ``step_s`` and collects what its UART sent (stream-protocol lines) and the servo pulse its
    Timer1 generates (OCR1A latched at the pulse's start, as the hardware double-buffers it);
 3. turns the pulse width into the servo's command (1..2 ms over 0..254, unrounded: Timer1's 0.5 us resolution is
    finer than the serial board's command) and advances the twin ``step_s``.
+
+A digit of issue 24 (``params``, ``flexdigit run --on-board --params D.toml``) runs on an image built for it
+(``make firmware PARAMS=D.toml``); the board's banner says what its image was built for (gauges, straight command,
+range), and another digit's image is refused in one line (:func:`~flexdigit.rig.backends.board_link.check_board_image`).
 
 The firmware's UART is a pseudo-terminal (``uart=pty``, the default): the harness makes one and the host opens
 it as it opens an Uno's port (pyserial, 250000 baud, raw), so the host's bytes cross a serial port as on the
@@ -52,6 +56,7 @@ from flexdigit.rig.backends.board_link import (
     VOLTS_PER_COUNT,
     BoardState,
     check_board_digit,
+    check_board_image,
 )
 from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
 from flexdigit.twin.digit import ORIENTATIONS
@@ -228,13 +233,15 @@ class HilRig(Rig):
             if self.uart == "pty":
                 self._open_port()
             # the banner, and the rest readings the board tares its map on; the mode line goes out LEAD_S before
-            # 0.2 s so the board handles it before its control tick at 0.2 s, a servo frame boundary (every period
+            # 0.2 s so it has arrived before the control tick at 0.2 s, where the board starts its loop (at the first
+            # tick after the line's arrival, whenever its main loop reads it), a servo frame boundary (every period
             # divides 20 ms; the pulse latching that tick's command begins 1 ms later): the loop's first command
             # then reaches the servo at once, as the host loop's first does on the twin's serial board (its frame
             # at t = 0). Starting at a random phase instead delays the first command by up to 19 ms.
             self._advance(0.2 - LEAD_S)
             if self.latest is None:
                 raise RigError(f"hil://{self.elf}: the firmware sent no sample in 0.2 s ({self.info_lines[-3:]})")
+            check_board_image(self.board, self.twin.params, f"hil://{self.elf}")
             self._say("F1" if self.safe == "hold" else "F0")  # once the board listens
             if self.mode == "board":
                 self.set_setpoint(self.setpoint_deg)
@@ -268,12 +275,11 @@ class HilRig(Rig):
         self._last_said_s = self._time_s
 
     def _exchange(self) -> None:
-        gauges, pot = self.twin.read()
-        volts = [MID_V + float(g) for g in gauges] + [float(pot)]
+        gauges, _ = self.twin.read()
+        volts = [MID_V + float(g) for g in gauges]  # gauge k on ADCk (the board reads no pot)
         for channel, v in self.gauge_override.items():  # a wire off, a short: the fault tests
             volts[channel] = MID_V + v
-        units = [int(round(v * VOLT_UNITS_PER_V)) for v in volts]
-        out = f"V {units[0]} {units[1]} {units[2]} {units[3]}\n"
+        out = "V " + " ".join(str(int(round(v * VOLT_UNITS_PER_V))) for v in volts) + "\n"
         if self._outbox:
             out += self._uart_to_board(bytes(self._outbox))
             self._outbox.clear()
