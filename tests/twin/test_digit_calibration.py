@@ -91,11 +91,12 @@ def test_the_thesis_rig_keeps_its_damping_bit_for_bit():
     assert cal == ref
 
 
-def test_the_modal_chain_is_the_twins():
+def test_the_modal_chain_is_the_thesis_rigs_twin():
+    """The law's chain is the thesis rig's own twin resolution, so its factor is exactly 1 there."""
+    from flexdigit.twin import default_cells
     from flexdigit.twin.digit_calibration import MODAL_CELLS_PER_SECTION
-    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION
 
-    assert MODAL_CELLS_PER_SECTION == DEFAULT_CELLS_PER_SECTION
+    assert tuple(default_cells(RigParams().geometry)) == (MODAL_CELLS_PER_SECTION,) * 3
 
 
 # The modal strain energy method (Ungar and Kerwin 1962; Johnson and Kienholz, AIAA J. 20, 1982): a lightly damped
@@ -109,8 +110,9 @@ MSE_RTOL = 0.005
 
 def _free_chain(params, cal, housing):
     from flexdigit.twin.digit import Chain, digit_arrays
+    from flexdigit.twin.digit_calibration import MODAL_CELLS_PER_SECTION
 
-    arrays = digit_arrays(params, cal, housing=housing)
+    arrays = digit_arrays(params, cal, housing=housing, cells_per_section=MODAL_CELLS_PER_SECTION)
     arrays["gravity_ab_m_s2"] = np.zeros(2)
     return Chain(**arrays)
 

@@ -85,9 +85,10 @@ __all__ = [
     "twin_calibration",
 ]
 
-#: Cells per section of the chain whose first mode sets the damping factor: the twin's default
-#: (``flexdigit.twin.twin.DEFAULT_CELLS_PER_SECTION``, which imports this module), so the twin's own chain gets the
-#: thesis rig's first-mode damping ratio (tests/twin/test_digit_calibration.py holds the two equal).
+#: Cells per section of the chain whose first mode sets the damping factor: 3, the thesis rig's own resolution
+#: (:func:`flexdigit.twin.default_cells` gives it 3), so the factor is exactly 1 there. Longer sections get finer
+#: twins (27 mm cells) but keep the law's 3-cell first mode: the factor is a scaling estimate, and the step figures
+#: of the test digits were measured with it (tests/twin/test_digit_calibration.py).
 MODAL_CELLS_PER_SECTION = 3
 
 #: A gauge "at a thesis gauge's place" when their relative positions agree this closely (x / L, dimensionless).
