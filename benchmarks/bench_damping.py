@@ -8,18 +8,8 @@ thesis rig's (the same call, its modal factor exactly 1), caches cleared each ti
 
 from __future__ import annotations
 
-import time
-
+from benchmarks.bench_digitctl2 import best_of
 from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
-
-
-def _best_of(function, repeats: int = 5) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def run() -> list[dict]:
@@ -34,14 +24,14 @@ def run() -> list[dict]:
     return [
         {
             "name": "calibration_for, thesis rig (two modal analyses, 9 springs)",
-            "value": _best_of(lambda: derived(RigParams())) * 1e3,
+            "value": best_of(lambda: derived(RigParams()), 5) * 1e3,
             "unit": "ms",
             "goal": "",
             "note": "twin_calibration gives the thesis rig its packaged one",
         },
         {
             "name": "calibration_for, 0.5 m 8-gauge digit (9 + 15 springs)",
-            "value": _best_of(lambda: derived(digit)) * 1e3,
+            "value": best_of(lambda: derived(digit), 5) * 1e3,
             "unit": "ms",
             "goal": "",
             "note": "per twin of a digit without a calibration file (uncached)",

@@ -9,19 +9,10 @@ run on the 0.5 m 8-gauge digit hung. Best of 3.
 from __future__ import annotations
 
 import tempfile
-import time
 from pathlib import Path
 
+from benchmarks.bench_digitctl2 import best_of
 from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
-
-
-def _best_of(function, repeats: int = 3) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def run() -> list[dict]:
@@ -30,7 +21,7 @@ def run() -> list[dict]:
     from flexdigit.params import RigParams
 
     digit = RigParams.from_dict(FIVE_SECTIONS_EIGHT_GAUGES)
-    searched_s = _best_of(lambda: digit_design_20ms(digit, orientation="hanging"))
+    searched_s = best_of(lambda: digit_design_20ms(digit, orientation="hanging"))
     with tempfile.TemporaryDirectory() as tmp:
         path = write_kept_design(keep_design(digit, orientation="hanging"), Path(tmp) / "ctrl.json")
 
@@ -39,7 +30,7 @@ def run() -> list[dict]:
             design.check(digit, None, orientation="hanging", period_s=0.02)
             return digit_design_20ms(digit, orientation="hanging", weights=design.weights)
 
-        kept_s = _best_of(kept)
+        kept_s = best_of(kept)
     return [
         {
             "name": "20 ms design, 0.5 m 8-gauge digit, weights searched",

@@ -15,7 +15,8 @@ import time
 from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
 
 
-def _best_of(function, repeats: int = 3) -> float:
+def best_of(function, repeats: int = 3) -> float:
+    """The shortest of ``repeats`` wall times of ``function()``, s (also bench_damping's and bench_designunequal's)."""
     best = float("inf")
     for _ in range(repeats):
         start = time.perf_counter()
@@ -29,8 +30,8 @@ def run() -> list[dict]:
     from flexdigit.params import RigParams
 
     digit = RigParams.from_dict(FIVE_SECTIONS_EIGHT_GAUGES)
-    thesis_s = _best_of(lambda: digit_design_20ms(RigParams()))
-    digit_s = _best_of(lambda: digit_design_20ms(digit, orientation="hanging"))
+    thesis_s = best_of(lambda: digit_design_20ms(RigParams()))
+    digit_s = best_of(lambda: digit_design_20ms(digit, orientation="hanging"))
     return [
         {"name": "20 ms design, thesis rig", "value": thesis_s, "unit": "s", "goal": "", "note": "chapter 5's"},
         {
