@@ -58,6 +58,16 @@ def test_the_site_builds_offline_with_no_warning(build):
     assert (HTML / "index.html").is_file()
 
 
+def test_no_page_of_the_site_loads_a_script_or_style_from_the_network(build):
+    """sphinx-gallery's timing pages loaded jQuery and DataTables from CDNs: a site read offline broke there."""
+    assert build.returncode == 0, build.stderr[-2000:]
+    remote = re.compile(r"<(?:script|link)\b[^>]*\b(?:src|href)=\"(?:https?:)?//")
+    pages = sorted(HTML.rglob("*.html"))
+    assert len(pages) > 100  # the whole site, not an empty walk
+    offenders = [str(p.relative_to(HTML)) for p in pages if remote.search(p.read_text(errors="replace"))]
+    assert not offenders, offenders
+
+
 def _packages() -> list[str]:
     # every package but the command line, found from the files (not from the generator under test)
     return sorted(

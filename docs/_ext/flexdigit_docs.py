@@ -267,10 +267,22 @@ def write_url_option_pages(app=None, config=None) -> None:
         _write_if_changed(DOCS / "_generated" / "url-options" / f"{name}.md", url_options_page(scheme))
 
 
+#: Pages conf.py excludes (sphinx-gallery's timing pages, which load scripts from CDNs): a build made before they
+#: were excluded left their HTML behind, which Sphinx never removes.
+UNPUBLISHED = ("sg_execution_times", "auto_examples/sg_execution_times")
+
+
+def remove_unpublished_pages(app, exception) -> None:
+    for page in UNPUBLISHED:
+        for path in (Path(app.outdir) / f"{page}.html", Path(app.outdir) / "_sources" / f"{page}.rst.txt"):
+            path.unlink(missing_ok=True)
+
+
 def setup(app):
     # on config-inited: before Sphinx looks for source files and autosummary reads the pages written here
     app.connect("config-inited", write_api_pages)
     app.connect("config-inited", write_benchmark_page)
     app.connect("config-inited", write_url_option_pages)
     app.connect("config-inited", write_findings_page)
+    app.connect("build-finished", remove_unpublished_pages)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

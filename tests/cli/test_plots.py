@@ -271,3 +271,65 @@ def test_palpate_scan_plots_the_stiffness_map_with_the_true_inclusion(tmp_path, 
     inclusion = data["inclusion"]
     np.testing.assert_allclose(lines["inclusion (fitted)"].get_xdata()[0], inclusion["centre_in_tissue_mm"])
     np.testing.assert_allclose(lines["inclusion (true, twin)"].get_xdata()[0], inclusion["true_centre_in_tissue_mm"])
+
+
+# ------------------------------------------------------------------------------------ a tendon robot (issue 26)
+ROBOT_STEP = ["simulate", "step", "--robot", "rao2021", "--tension-n", "2,0,0,0,0,0", "--duration", "0.05"]
+
+
+def test_simulate_robot_plots_the_tip_path_of_its_table(tmp_path, drawn, capsys):
+    import pandas as pd
+
+    table, plot = tmp_path / "rstep.csv", tmp_path / "rstep.png"
+    assert main([*ROBOT_STEP, "--out", str(table), "--plot", str(plot)]) == 0
+    assert f"plot -> {plot}" in capsys.readouterr().out
+    assert _written(plot)
+    rows = pd.read_csv(table, comment="#")
+    axes = drawn[0].axes
+    assert [ax.get_ylabel() for ax in axes] == ["tip x (mm)", "tip y (mm)", "tip z (mm)"]
+    assert axes[-1].get_xlabel() == "time (s)"
+    for ax, column in zip(axes, ("tip_x_m", "tip_y_m", "tip_z_m"), strict=True):
+        line = ax.get_lines()[0]
+        np.testing.assert_allclose(line.get_xdata(), rows["t_s"], rtol=1e-9)
+        np.testing.assert_allclose(line.get_ydata(), 1e3 * rows[column], rtol=1e-9, atol=1e-9)
+    # 2 N on the tendon at 90 deg pulls the tip towards +y and shortens its height (the robot is 400 mm long)
+    assert rows["tip_y_m"].iloc[-1] > 1e-3 and rows["tip_z_m"].iloc[-1] < 0.4
+    # a still coordinate (x: the pull has no x component) is drawn on a 1 mm span, not blown up to round-off
+    low, high = axes[0].get_ylim()
+    assert high - low >= 1.0
+
+
+def test_simulate_robot_refuses_a_bad_plot_before_the_simulation(tmp_path, capsys, work_must_not_start):
+    import flexdigit.tdcr.experiments
+
+    work_must_not_start(flexdigit.tdcr.experiments, "step_test")
+    assert main([*ROBOT_STEP, "--out", str(tmp_path / "r.csv"), "--plot", str(tmp_path / "r.jpg")]) == 2
+    assert "must be a file ending in .png, .svg or .pdf" in capsys.readouterr().err
+
+
+def test_tdcr_shape_plots_the_estimate_beside_the_twin(tmp_path, drawn, capsys):
+    plot = tmp_path / "shape.svg"
+    argv = ["tdcr", "shape", "rao2021", "--tension-n", "2,0,0,1,0,0", "--plot", str(plot), "--json"]
+    assert main(argv) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["plot"] == str(plot)
+    assert _written(plot)
+    side, front, error = drawn[0].axes
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in (side, front)] == [("x (mm)", "z (mm)"), ("y (mm)", "z (mm)")]
+    assert (error.get_xlabel(), error.get_ylabel()) == (
+        "arc length from the base (mm)",
+        "distance to the twin's backbone (mm)",
+    )
+    lines = _lines(front)
+    assert {"estimate (gauges)", "twin", "gauge stations"} <= set(lines)
+    # the lines are the backbones the command printed: the estimate's tip and the twin's, in mm
+    estimate, twin = lines["estimate (gauges)"], lines["twin"]
+    np.testing.assert_allclose(
+        [estimate.get_xdata()[-1], estimate.get_ydata()[-1]], 1e3 * np.asarray(result["tip_position_m"])[1:], rtol=1e-9
+    )
+    np.testing.assert_allclose(
+        [twin.get_xdata()[-1], twin.get_ydata()[-1]], 1e3 * np.asarray(result["twin"]["tip_position_m"])[1:], rtol=1e-9
+    )
+    # the distance panel ends at the tip error the command reported (the twin's last node is the tip)
+    np.testing.assert_allclose(error.get_lines()[0].get_ydata()[-1], 1e3 * result["tip_error_m"], rtol=1e-9)
+    assert len(_lines(side)["gauge stations"].get_xdata()) == 2 * 3  # 3 stations in each of 2 segments

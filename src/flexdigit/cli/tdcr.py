@@ -124,7 +124,7 @@ def _add_sensing_flags(p: argparse.ArgumentParser, stations: int) -> None:
     )
     p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
     p.add_argument("--out", metavar="FILE.json", help="also write the result (as --json prints it) to FILE")
-    p.add_argument("--force", action="store_true", help="replace the --out (and --record) file if it exists")
+    p.add_argument("--force", action="store_true", help="replace the --out (and --record, --plot) file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
 
@@ -145,6 +145,13 @@ def _add_shape(sub, vector: str) -> None:
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
     p.add_argument(
         "--record", metavar="OUT.mcap", help="also write the estimated shape as an MCAP recording (Foxglove 3D)"
+    )
+    from flexdigit._plot import add_plot_flag
+
+    add_plot_flag(
+        p,
+        "the estimated backbone beside the twin's, seen from the side (x-z) and the front (y-z) in mm, and the "
+        "distance between them along the backbone",
     )
 
 
@@ -344,6 +351,10 @@ def _sensing(args: argparse.Namespace) -> CommandResult:
     for path in (args.out, getattr(args, "record", None)):  # refused before the work, not after it
         if path is not None:
             check_output(path, force=args.force)
+    if getattr(args, "plot", None) is not None:
+        from flexdigit._plot import check_plot
+
+        check_plot(args.plot, "tdcr shape", force=args.force)
     robot = get_robot(args.robot)
     given = _readings(args, robot)
     common = {"noise_std": args.noise_std, "seed": args.seed, "stations_per_segment": args.stations_per_segment}
@@ -382,6 +393,11 @@ def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
         tip = loads.get("tip_force_n")
         path = write_recording(args.record, robot, disks, tensions_n=pulls, tip_force_n=tip, force=args.force)
         data["recording"] = str(path)
+    if args.plot is not None:
+        from flexdigit._plot import save_plot
+        from flexdigit.tdcr import shape_figure
+
+        data["plot"] = str(save_plot(shape_figure(found, robot), args.plot, "tdcr shape", force=args.force))
     source = "given readings" if given else f"the twin's readings, noise {args.noise_std:g}, seed {args.seed}"
     lines = [
         f"{robot.name}: shape from {found.layout.s_m.size} gauges ({source})",
@@ -395,6 +411,8 @@ def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
         ]
     if "recording" in data:
         lines.append(f"recording: {data['recording']}")
+    if "plot" in data:
+        lines.append(f"plot -> {data['plot']}")
     return data, lines
 
 
