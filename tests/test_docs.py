@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import json
 import os
 import re
 import subprocess
@@ -216,3 +217,51 @@ def test_the_readme_is_one_screen_and_links_into_the_site():
     assert len(links) >= 5
     for link in links:
         assert (ROOT / link).exists(), link
+
+
+def test_a_benchmark_table_takes_the_rows_of_its_module_and_name():
+    results = {
+        "rows": [
+            {"module": "bench_a", "name": "twin real-time factor", "value": 16.7123, "unit": "x", "note": "best of 3"},
+            {"module": "bench_a", "name": "cases per second", "value": 82900.4, "unit": "cases/s"},
+            {"module": "bench_b", "name": "twin real-time factor", "value": 2.0, "unit": "x"},
+        ]
+    }
+    rows = _generator().benchmark_rows
+    assert rows(results, "bench_a") == [
+        ["twin real-time factor", "16.71", "x", "best of 3"],
+        ["cases per second", "8.29e+04", "cases/s", ""],
+    ]
+    assert rows(results, match="real-time") == [["twin real-time factor", "16.71", "x", "best of 3"], [
+        "twin real-time factor", "2", "x", ""]]  # fmt: skip
+    line = _generator().measured_line(
+        {"context": {"date_utc": "2026-11-26 16:15", "commit": "0c598c5"}}, "b.json", "bench_a"
+    )
+    assert "`b.json`" in line and "2026-11-26 16:15" in line and "`python -m benchmarks bench_a --out b.json`" in line
+
+
+#: ```{benchmark-table} FILE``` and its options in a page's Markdown.
+BENCHMARK_TABLE = re.compile(r"```\{benchmark-table\} (\S+)\n((?::\w+: .*\n)*)```")
+
+
+def test_every_benchmark_table_of_the_site_shows_its_json_rows(build):
+    """The docs' benchmark tables are generated from the JSON a benchmark run wrote, never copied by hand."""
+    assert build.returncode == 0, build.stderr[-2000:]
+    generator = _generator()
+    tables = 0
+    for page in sorted(DOCS.rglob("*.md")):
+        if "_build" in page.parts:
+            continue
+        for path, options in BENCHMARK_TABLE.findall(page.read_text()):
+            opts = dict(re.findall(r":(\w+): (.*)", options))
+            html = (HTML / page.relative_to(DOCS).with_suffix(".html")).read_text()
+            source = ROOT / path
+            if not source.exists():
+                assert "Not measured in this build" in html and f"{path}</span>" in html, (page.name, path)
+                continue
+            rows = generator.benchmark_rows(json.loads(source.read_text()), opts.get("module"), opts.get("match"))
+            assert rows, (page.name, path)
+            for name, value, _unit, _note in rows:
+                assert f"<p>{value}</p>" in html, (page.name, name, value)
+            tables += 1
+    assert tables >= 3  # digits.md's and studies.md's, from the JSON kept in benchmarks/
