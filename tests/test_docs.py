@@ -9,6 +9,7 @@ anything would warn and fail.
 
 from __future__ import annotations
 
+import html
 import importlib
 import importlib.util
 import json
@@ -265,3 +266,18 @@ def test_every_benchmark_table_of_the_site_shows_its_json_rows(build):
                 assert f"<p>{value}</p>" in html, (page.name, name, value)
             tables += 1
     assert tables >= 3  # digits.md's and studies.md's, from the JSON kept in benchmarks/
+
+
+def test_every_file_format_is_on_the_site_with_its_example(build):
+    """The help describes each file flexdigit reads with an example; the site shows the same, generated."""
+    from flexdigit.cli._formats import FORMATS
+
+    assert build.returncode == 0, build.stderr[-2000:]
+    page = (HTML / "_generated" / "file-formats.html").read_text()
+    text = re.sub(r"<[^>]+>", "", page)
+    for title, _what, example in FORMATS.values():
+        heading = title.split(" (")[0]
+        assert heading[1:] in text, heading
+        for line in example.strip().splitlines():  # each example line, as html escapes it
+            assert html.escape(line.strip(), quote=False) in text, (heading, line)
+    assert "file-formats.html" in (HTML / "guide" / "cli.html").read_text()  # linked from the command line's guide

@@ -259,6 +259,43 @@ def url_options_page(scheme: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def file_formats_page() -> str:
+    """Every file format flexdigit reads, with its example: the text ``--help`` shows (``flexdigit.cli._formats``,
+    whose examples tests/cli/test_help.py loads with each format's reader), so the site and the help agree."""
+    from flexdigit.cli._formats import FORMATS, WHERE
+
+    lines = [
+        "# File formats",
+        "",
+        "Every file flexdigit reads, what it holds and an example that loads, as `flexdigit COMMAND --help` shows",
+        "them (this page is generated from the same text). Units are SI unless a key names another; an unknown key",
+        "is refused in one line naming the file and the key. The built-in files a command takes by name:",
+        "`flexdigit list protocols|tissues|specs|robots`.",
+        "",
+    ]
+    for name, (title, what, example) in FORMATS.items():
+        heading, _, rest = title.partition(" (")
+        suffix = "json" if example.lstrip().startswith("{") else "toml" if "=" in example else "text"
+        lines += [
+            f"## {heading[0].upper()}{heading[1:]}",
+            "",
+            f"({rest}" if rest else "",
+            "",
+            what,
+            f"In the help: `{WHERE[name]}`." if name in WHERE else "",
+            "",
+            f"```{suffix}",
+            example.rstrip("\n"),
+            "```",
+            "",
+        ]
+    return "\n".join(lines)
+
+
+def write_file_formats_page(app=None, config=None) -> None:
+    _write_if_changed(DOCS / "_generated" / "file-formats.md", file_formats_page())
+
+
 def write_url_option_pages(app=None, config=None) -> None:
     from flexdigit.rig import BACKENDS
 
@@ -369,6 +406,7 @@ def setup(app):
     app.connect("config-inited", write_benchmark_page)
     app.connect("config-inited", write_url_option_pages)
     app.connect("config-inited", write_findings_page)
+    app.connect("config-inited", write_file_formats_page)
     app.connect("build-finished", remove_unpublished_pages)
     app.add_directive("benchmark-table", benchmark_table_directive())
     return {"parallel_read_safe": True, "parallel_write_safe": True}

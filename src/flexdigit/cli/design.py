@@ -102,6 +102,9 @@ def register(subparsers) -> None:
         help="keep the design (JSON, the digit's fingerprint in it) for: flexdigit run --params FILE --controller OUT",
     )
     p.add_argument("--force", action="store_true", help="overwrite an existing --out file")
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("kept_design")
 
 
 def _add_digit_flags(p) -> None:

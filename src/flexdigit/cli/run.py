@@ -50,6 +50,9 @@ def register(subparsers) -> None:
         _run,
         help="run a controller in closed loop on the twin or the rig (beam-rotation step)",
     )
+    from flexdigit.cli._formats import epilog
+
+    parser.epilog = epilog("kept_design")
     parser.add_argument("--backend", default="sim", help="sim, sim+paced, serial://PORT?daq=0, replay://FILE")
     parser.add_argument(
         "--controller",

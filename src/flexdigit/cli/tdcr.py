@@ -136,7 +136,7 @@ def _add_shape(sub, vector: str) -> None:
         help="backbone and tip pose from strain gauges on the backbone's faces, estimate vs twin",
         description="Estimate the backbone and the tip pose from strain gauges: from --strains or --readings, or "
         "from the twin's own readings under --tension-n (and loads), shown beside the twin's shape.",
-        epilog=epilog("robot"),
+        epilog=epilog("robot", "gauge_readings"),
     )
     _add_sensing_flags(p, 3)
     p.add_argument("--tension-n", help="tendon tensions in N, one per tendon: the twin to read (or compare with)")
@@ -164,7 +164,7 @@ def _add_contact(sub) -> None:
         description="Locate a point contact and measure its force from strain gauges, about the twin's shape "
         "under --tension-n: from --strains or --readings, or from the twin pressed at --contact-s-m by "
         "--contact-force-n (the truth shown beside the estimate).",
-        epilog=epilog("robot"),
+        epilog=epilog("robot", "gauge_readings"),
     )
     _add_sensing_flags(p, 4)
     p.add_argument("--tension-n", required=True, help="tendon tensions in N, one per tendon ('' for none)")
