@@ -150,6 +150,11 @@ def test_train_and_predict_plot_predicted_against_actual(tmp_path, drawn, capsys
     readings = _lines(drawn[1].axes[0])["readings"]
     shown = np.sqrt(np.mean((readings.get_ydata() - readings.get_xdata()) ** 2))
     np.testing.assert_allclose(shown, rmse_mm, rtol=1e-3)  # printed to 4 digits
+    # each printed prediction carries its unit, the one the plot shows (they were bare metres)
+    printed = np.array(re.findall(r"predicted ([-\d.e+]+) mm, actual ([-\d.e+]+) mm", text), float)
+    assert len(printed) == min(10, len(readings.get_xdata()))  # predict's --limit default
+    np.testing.assert_allclose(printed[:, 0], readings.get_ydata()[: len(printed)], rtol=1e-4, atol=1e-3)
+    np.testing.assert_allclose(printed[:, 1], readings.get_xdata()[: len(printed)], rtol=1e-4, atol=1e-3)
 
 
 HOLD = "[force]\nsetpoint_n = 0.2\nduration_s = 0.1\n"

@@ -299,7 +299,7 @@ def _sweep(args: argparse.Namespace) -> CommandResult:
     printed = thesis_value("hinf.additive_tolerance_percent")
     rows = []
     lines = [
-        "  f (Hz) | ||T_pq|| dB | thesis % | 100/dB at 10x gain | 1/||T_pq|| % of |G(0)| | T_uw step peak",
+        "  f (Hz) | ||T_pq|| dB | thesis % | 100/dB at 10x gain | 1/||T_pq|| % of |G(0)| | T_uw step peak (commands/m)",
     ]
     for f in args.filters:
         s = _design_summary(f)
@@ -350,8 +350,8 @@ def _mixsyn(args: argparse.Namespace) -> CommandResult:
     text = (
         f"mixed-sensitivity design on the consistent plant (beam rotation, rad), order {d.order}, "
         f"gamma {d.hinf.gamma:.4g}\n"
-        f"  (i)   30 deg step: command {req['command_min']:+.2f} .. {req['command_max']:+.2f} about 8 "
-        f"(window {req['command_window']}): {'ok' if req['req_i_command_ok'] else 'FAIL'}\n"
+        f"  (i)   30 deg step: command {req['command_min']:+.2f} .. {req['command_max']:+.2f} servo commands about "
+        f"8 (window {req['command_window']}): {'ok' if req['req_i_command_ok'] else 'FAIL'}\n"
         f"  (ii)  |S(0)| = {req['sensitivity_dc']:.2e}: {'ok' if req['req_ii_integral'] else 'FAIL'}\n"
         f"  (iii) min closed-loop damping {req['min_damping']:.3f}: {'ok' if req['req_iii_damping'] else 'FAIL'}\n"
         f"  (iv)  gain x0.7..1.3, beam wn x0.8..1.2: grid {'stable' if req['grid_stable'] else 'UNSTABLE'}, "
