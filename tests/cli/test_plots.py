@@ -338,3 +338,25 @@ def test_tdcr_shape_plots_the_estimate_beside_the_twin(tmp_path, drawn, capsys):
     # the distance panel ends at the tip error the command reported (the twin's last node is the tip)
     np.testing.assert_allclose(error.get_lines()[0].get_ydata()[-1], 1e3 * result["tip_error_m"], rtol=1e-9)
     assert len(_lines(side)["gauge stations"].get_xdata()) == 2 * 3  # 3 stations in each of 2 segments
+
+
+def test_design_hinf_plots_the_design_on_a_digits_own_plant(tmp_path, drawn, capsys):
+    """`design hinf --params --plot` was refused ("the thesis rig's design only"): a user's digit is drawn too."""
+    from digits import write_digit
+
+    digit, plot = write_digit("short", tmp_path), tmp_path / "hinf.png"
+    argv = ["design", "hinf", "--filter-hz", "5", "--params", str(digit), "--plot", str(plot), "--json"]
+    assert main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["plot"] == str(plot) and _written(plot)
+    step_y, bode_mag, _, _ = drawn[0].axes
+    assert step_y.get_ylabel() == "y per unit step (m/m)"
+    # the step drawn settles (2 %) when the design's own analysis said it does
+    y = _lines(step_y)["output y (T_yw)"]
+    t, out = y.get_xdata(), y.get_ydata()
+    outside = np.flatnonzero(np.abs(out - out[-1]) > 0.02 * abs(out[-1]))
+    assert abs(t[outside[-1] + 1] - summary["tyw_settling_s"]) <= 2 * (t[1] - t[0]) + 0.01 * summary["tyw_settling_s"]
+    # and the loop's gain at the lowest frequency drawn is the plant's DC gain times the controller's
+    k0 = summary["controller_num"][-1] / summary["controller_den"][-1]
+    loop_db = 20 * np.log10(abs(summary["plant_dc_gain_m_per_command"] * k0))
+    assert abs(_lines(bode_mag)["L = G K"].get_ydata()[0] - loop_db) < 0.1  # 0.1 rad/s: far below the digit's mode
