@@ -360,3 +360,22 @@ def test_design_hinf_plots_the_design_on_a_digits_own_plant(tmp_path, drawn, cap
     k0 = summary["controller_num"][-1] / summary["controller_den"][-1]
     loop_db = 20 * np.log10(abs(summary["plant_dc_gain_m_per_command"] * k0))
     assert abs(_lines(bode_mag)["L = G K"].get_ydata()[0] - loop_db) < 0.1  # 0.1 rad/s: far below the digit's mode
+
+
+def test_the_readmes_own_digit_commands_end_in_plots(tmp_path, monkeypatch, capsys):
+    """Issue 28: from the README to a plotted step of one's own digit. The README's commands, as written, run
+    (the template is the user's file before they edit it) and leave the plots they promise."""
+    import shlex
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    block = readme.split("## Your own digit, plotted", 1)[1].split("\n\n")[1]
+    commands = [shlex.split(line, comments=True) for line in block.splitlines() if line.strip()]
+    assert [c[:2] for c in commands] == [["flexdigit", "params"], ["flexdigit", "params"], ["flexdigit", "simulate"],
+                                         ["flexdigit", "run"]]  # fmt: skip
+    monkeypatch.chdir(tmp_path)
+    for argv in commands:
+        assert main(argv[1:]) == 0, (argv, capsys.readouterr().err)
+    for plot in ("step.png", "run.png"):
+        assert _written(tmp_path / plot), plot
+    assert "plot -> run.png" in capsys.readouterr().out
