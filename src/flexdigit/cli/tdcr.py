@@ -395,9 +395,9 @@ def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
         data["recording"] = str(path)
     if args.plot is not None:
         from flexdigit._plot import save_plot
-        from flexdigit.tdcr import shape_figure
+        from flexdigit.tdcr import backbone_figure
 
-        data["plot"] = str(save_plot(shape_figure(found, robot), args.plot, "tdcr shape", force=args.force))
+        data["plot"] = str(save_plot(backbone_figure(found, robot), args.plot, "tdcr shape", force=args.force))
     source = "given readings" if given else f"the twin's readings, noise {args.noise_std:g}, seed {args.seed}"
     lines = [
         f"{robot.name}: shape from {found.layout.s_m.size} gauges ({source})",

@@ -13,7 +13,7 @@ import numpy as np
 
 from flexdigit._plot import new_figure
 
-__all__ = ["experiment_figure", "shape_figure"]
+__all__ = ["experiment_figure", "backbone_figure"]
 
 #: The tip's coordinates, in the order of ``tip_positions_m``'s columns (world frame: z along the unloaded backbone).
 AXES = ("x", "y", "z")
@@ -53,7 +53,7 @@ def experiment_figure(test):
     return fig
 
 
-def shape_figure(found, robot=None):
+def backbone_figure(found, robot=None):
     """What :func:`~flexdigit.tdcr.sense_shape` found as a matplotlib ``Figure``: the estimated backbone (and the
     twin's, when known) seen from the side (x-z) and from the front (y-z), in mm, the gauge stations marked;
     beside a twin, a third panel with the distance between the two backbones along the arc length.
