@@ -379,3 +379,25 @@ def test_the_readmes_own_digit_commands_end_in_plots(tmp_path, monkeypatch, caps
     for plot in ("step.png", "run.png"):
         assert _written(tmp_path / plot), plot
     assert "plot -> run.png" in capsys.readouterr().out
+
+
+def test_tdcr_contact_plots_the_estimate_and_where_the_twin_was_pressed(tmp_path, drawn, capsys):
+    plot = tmp_path / "contact.pdf"
+    argv = ["tdcr", "contact", "rao2021", "--tension-n", "2,0,0,0,0,0", "--contact-s-m", "0.3"]
+    argv += ["--contact-force-n", "0,0.05,0", "--plot", str(plot), "--json"]
+    assert main(argv) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["plot"] == str(plot) and _written(plot)
+    side, front = drawn[0].axes
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in (side, front)] == [("x (mm)", "z (mm)"), ("y (mm)", "z (mm)")]
+    lines = _lines(front)
+    assert {"backbone (without the contact)", "estimated contact", "pressed here (twin)"} <= set(lines)
+    # the estimated contact is drawn where the command reported it, in mm
+    estimated = lines["estimated contact"]
+    shown = [estimated.get_xdata()[0], estimated.get_ydata()[0]]
+    np.testing.assert_allclose(shown, 1e3 * np.asarray(result["position_m"])[1:], rtol=1e-9)
+    # and the twin was pressed on its backbone, 300 mm along it: the mark lies on the drawn line
+    pressed = lines["pressed here (twin)"]
+    backbone = lines["backbone (without the contact)"]
+    y_at = np.interp(pressed.get_ydata()[0], backbone.get_ydata(), backbone.get_xdata())
+    assert abs(pressed.get_xdata()[0] - y_at) < 0.5  # mm: between two of the backbone's drawn nodes

@@ -174,6 +174,13 @@ def _add_contact(sub) -> None:
         help="where to press the twin: arc length from the base, m",
     )
     p.add_argument("--contact-force-n", help="the force to press the twin with, fx,fy,fz in N, world frame")
+    from flexdigit._plot import add_plot_flag
+
+    add_plot_flag(
+        p,
+        "the backbone without the contact from the side (x-z) and the front (y-z) in mm, the estimated contact "
+        "with its force's direction and where the twin was pressed",
+    )
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
@@ -354,7 +361,7 @@ def _sensing(args: argparse.Namespace) -> CommandResult:
     if getattr(args, "plot", None) is not None:
         from flexdigit._plot import check_plot
 
-        check_plot(args.plot, "tdcr shape", force=args.force)
+        check_plot(args.plot, f"tdcr {args.tdcr_command}", force=args.force)
     robot = get_robot(args.robot)
     given = _readings(args, robot)
     common = {"noise_std": args.noise_std, "seed": args.seed, "stations_per_segment": args.stations_per_segment}
@@ -454,4 +461,10 @@ def _contact(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
             f"force error {1e3 * found.force_error_n:.3f} mN"
             + (" (nearer the base than the gauges can see)" if found.true_s_m < est.visible_from_m else "")
         )
+    if args.plot is not None:
+        from flexdigit._plot import save_plot
+        from flexdigit.tdcr import contact_figure
+
+        data["plot"] = str(save_plot(contact_figure(found, robot), args.plot, "tdcr contact", force=args.force))
+        lines.append(f"plot -> {data['plot']}")
     return data, lines

@@ -51,5 +51,6 @@ __getattr__, __all__ = lazy_exports(
         "write_recording": "flexdigit.tdcr.scene",
         "experiment_figure": "flexdigit.tdcr.robot_plot",
         "backbone_figure": "flexdigit.tdcr.robot_plot",
+        "contact_figure": "flexdigit.tdcr.robot_plot",
     },
 )
