@@ -157,3 +157,10 @@ def test_list_refuses_an_unknown_kind_in_one_line(capsys):
     err = capsys.readouterr().err.strip()
     assert "invalid choice: 'robot'" in err
     assert "\n" not in err
+
+
+def test_no_help_asks_for_an_equals_sign_before_a_negative_value():
+    """A negative value or comma list needs no `=` (`--tip-force-n -1,0,0`); tdcr's help still said it did."""
+    unwrapped = {command: re.sub(r"-\n\s+", "-", text) for command, text in HELP.items()}  # argparse breaks at "-"
+    offenders = [command for command, text in unwrapped.items() if re.search(r"--[\w-]+=-", text)]
+    assert not offenders, offenders

@@ -401,3 +401,12 @@ def test_tdcr_contact_plots_the_estimate_and_where_the_twin_was_pressed(tmp_path
     backbone = lines["backbone (without the contact)"]
     y_at = np.interp(pressed.get_ydata()[0], backbone.get_ydata(), backbone.get_xdata())
     assert abs(pressed.get_xdata()[0] - y_at) < 0.5  # mm: between two of the backbone's drawn nodes
+
+
+def test_a_negative_vector_needs_no_equals_sign(capsys):
+    # tdcr's help told users to write --tip-force-n=-1,0,0; the parser takes the plain form
+    assert (
+        main(["tdcr", "statics", "rao2021", "--tension-n", "0,0,0,0,0,0", "--tip-force-n", "-0.01,0,0", "--json"]) == 0
+    )
+    tip = json.loads(capsys.readouterr().out)["tip_position_m"]
+    assert tip[0] < -1e-3  # 10 mN pushes the straight 400 mm rod's tip towards -x

@@ -53,7 +53,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = sub.add_parser("statics", help="static equilibrium under tendon tensions and tip loads", epilog=epilog("robot"))
     p.add_argument("robot", metavar="ROBOT", help="a built-in robot (rao2021) or a robot TOML file")
     p.add_argument("--tension-n", required=True, help="tendon tensions in N, one per tendon: '4,0,0,0,2,0'")
-    vector = "(world frame; write a leading minus as --{}=-1,0,0)"
+    vector = "(world frame, e.g. --{} -1,0,0)"
     p.add_argument("--tip-force-n", help="tip force fx,fy,fz in N " + vector.format("tip-force-n"))
     p.add_argument("--tip-moment-nm", help="tip moment mx,my,mz in N m " + vector.format("tip-moment-nm"))
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
