@@ -492,3 +492,62 @@ def test_no_cli_function_is_longer_than_45_lines():
     )
     stale = set(LONG_CLI_FUNCTIONS) - set(found)
     assert not stale, f"no longer over {MAX_CLI_FUNCTION_LINES} lines, remove them from LONG_CLI_FUNCTIONS: {stale}"
+
+
+# -- the tests' own rules (issue 23): one fact per assert, no module-level warning filter, helpers not in conftest
+TESTS = Path(__file__).resolve().parent
+
+
+def _test_trees():
+    for path in sorted(TESTS.rglob("*.py")):
+        yield path.relative_to(TESTS), ast.parse(path.read_text(), filename=str(path))
+
+
+def _chained_asserts(tree: ast.Module) -> list[int]:
+    """Lines of ``assert a and b``: two facts in one, so a failure does not say which (write two asserts)."""
+    return [
+        node.lineno
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Assert) and isinstance(node.test, ast.BoolOp) and isinstance(node.test.op, ast.And)
+    ]
+
+
+def _module_warning_filters(tree: ast.Module) -> list[int]:
+    """Lines of a ``warnings.filterwarnings``/``simplefilter`` call at a module's top level: it silences the
+    warning for every test that runs after the import (``@pytest.mark.filterwarnings`` scopes it to one test)."""
+    return [
+        node.lineno
+        for node in tree.body
+        if isinstance(node, ast.Expr)
+        and isinstance(node.value, ast.Call)
+        and isinstance(node.value.func, ast.Attribute)
+        and node.value.func.attr in ("filterwarnings", "simplefilter")
+    ]
+
+
+def _conftest_imports(tree: ast.Module) -> list[int]:
+    """Lines importing from a conftest: shared helpers live in a module (tests/rig/helpers.py), a conftest only
+    makes fixtures (under --import-mode=importlib a conftest is not an importable module anyway)."""
+    return [
+        node.lineno
+        for node in ast.walk(tree)
+        if (isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[-1] == "conftest")
+        or (isinstance(node, ast.Import) and any(a.name.split(".")[-1] == "conftest" for a in node.names))
+    ]
+
+
+@pytest.mark.parametrize("rule", [_chained_asserts, _module_warning_filters, _conftest_imports])
+def test_the_tests_keep_their_rules(rule):
+    found = {str(path): lines for path, tree in _test_trees() if (lines := rule(tree))}
+    assert not found, f"{rule.__doc__.split(':')[0]}: {found}"
+
+
+def test_the_test_rule_finders_themselves():
+    tree = ast.parse(
+        "import warnings\nwarnings.filterwarnings('ignore')\nfrom .conftest import stats\n"
+        "def test_x():\n    warnings.simplefilter('error')\n    assert 1 and 2\n"
+        "    assert 1 or 2\n    assert 1, 'a and b'\n"
+    )
+    assert _chained_asserts(tree) == [6]
+    assert _module_warning_filters(tree) == [2]  # not the one inside the test
+    assert _conftest_imports(tree) == [3]
