@@ -138,12 +138,9 @@ def _export_design(design: str, period: float, args):
         from flexdigit.rig.base import open_rig
         from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
 
-        rig = open_rig("sim")
-        try:
+        with open_rig("sim") as rig:
             estimator = load_rotation_map(args.rotation_map) if args.rotation_map else calibrate_rotation(rig)
             rest = np.array([rig.read().gauges_v for _ in range(5)])
-        finally:
-            rig.close()
         estimator.tare(rest)
     if design == "digital20":
         d = design_20ms(params, period_s=period)
