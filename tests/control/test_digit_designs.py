@@ -11,7 +11,7 @@ import pytest
 
 from digits import DIGITS, write_digit
 from flexdigit.cli import main
-from flexdigit.control.design20ms import Weights, design_20ms, digit_design_20ms, straight_is_stable
+from flexdigit.control.design20ms import Weights, design_20ms, digit_design_20ms, digit_mount, straight_is_stable
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.errors import DesignError
 from flexdigit.params import RigParams
@@ -60,6 +60,12 @@ def test_a_digit_that_buckles_tip_up_is_refused_a_design():
     assert not straight_is_stable(params, orientation="vertical")
     with pytest.raises(DesignError, match="buckles"):
         digit_design_20ms(params)
+
+
+def test_one_mount_for_a_digits_twin():
+    # issue 23: `run --params`, `export --params` and chapter 5 each chose the mount themselves; one call now
+    assert digit_mount(RigParams()) == "vertical"  # the thesis rig stands tip up
+    assert digit_mount(RigParams.from_dict(DIGITS["five-sections-eight-gauges"])) == "hanging"  # buckles tip up
 
 
 def test_weights_in_degrees():
