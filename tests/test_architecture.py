@@ -177,6 +177,20 @@ def test_the_named_module_finder_itself():
     assert _named_modules(tree) == {"flexdigit.report.build", "flexdigit.rig.backends.sim_backend"}
 
 
+def test_no_import_runs_up_the_chain():
+    found = {(source, dest): f"{module} imports {target}" for module, target, source, dest in _violations()}
+    unexpected = {k: v for k, v in found.items() if k not in KNOWN}
+    assert not unexpected, "imports up the chain (params -> ... -> report -> cli):\n" + "\n".join(unexpected.values())
+    stale = set(KNOWN) - set(found)
+    assert not stale, f"known violations no longer present, remove them from KNOWN: {stale}"
+
+
+def test_no_domain_imports_the_cli():
+    # neither the entry point nor a sub-command's module: python-control's hidden cycle of issue 15
+    offenders = [m for m, source, _, dest in _edges() if dest == "cli" and source != "cli"]
+    assert not offenders, offenders
+
+
 @pytest.mark.parametrize(
     ("source", "target", "bad"),
     [
