@@ -180,3 +180,11 @@ def test_a_study_spec_prints_its_name_and_parameter_count():
     assert len(text) <= MAX_CHARS
     assert f"parameters=<{len(spec.parameters)} items>" in text
     assert "settings=['sensitivity']" in text
+
+
+def test_a_twin_chain_prints_its_links_and_mass_not_the_object_address():
+    chain = Chain.uniform(length_m=0.2, ei_n_m2=0.01, n_cells=40)
+    text = repr(chain)
+    assert len(_lines(chain)) <= MAX_LINES
+    assert text.startswith("Chain(links=40, length_m=0.2,")  # was <flexdigit.twin.digit.Chain object at 0x...>
+    assert f"total_mass_kg={chain.mass_kg.sum():.4g}" in text
