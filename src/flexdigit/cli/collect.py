@@ -325,10 +325,12 @@ def _predict(args: argparse.Namespace) -> CommandResult:
     rows, pred, y, scores = result.rows, result.predicted, result.actual, result.scores
     data = {"target": saved.target, "samples": rows.tolist(), "predicted": pred, "actual": y, "scores": scores}
     _, unit, scale = target_unit(saved.target)
-    rmse_text = f"{scale * scores['rmse']:.4g} " + (unit or {"position_index": "positions"}.get(saved.target, "(0..1)"))
+    shown_unit = unit or {"position_index": "positions"}.get(saved.target, "(0..1)")
+    rmse_text = f"{scale * scores['rmse']:.4g} {shown_unit}"
     lines = [f"{saved.target}: {len(rows)} readings, corr2 {scores['corr2']:.4f}, RMSE {rmse_text}"]
-    lines += [
-        f"  sample {int(dataset['sample'][r])}: predicted {p:.5g}, actual {t:.5g}"
+    lines += [  # in the unit of the RMSE (mm, g), as the plot shows them
+        f"  sample {int(dataset['sample'][r])}: predicted {scale * p:.5g} {shown_unit}, actual {scale * t:.5g} "
+        f"{shown_unit}"
         for r, p, t in zip(rows[: args.limit], pred[: args.limit], y[: args.limit], strict=True)
     ]
     if args.plot:
