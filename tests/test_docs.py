@@ -241,7 +241,9 @@ def test_a_benchmark_table_takes_the_rows_of_its_module_and_name():
     line = _generator().measured_line(
         {"context": {"date_utc": "2026-11-26 16:15", "commit": "0c598c5"}}, "b.json", "bench_a"
     )
-    assert "`b.json`" in line and "2026-11-26 16:15" in line and "`python -m benchmarks bench_a --out b.json`" in line
+    assert "`b.json`" in line
+    assert "2026-11-26 16:15" in line
+    assert "`python -m benchmarks bench_a --out b.json`" in line
 
 
 #: ```{benchmark-table} FILE``` and its options in a page's Markdown.
@@ -261,7 +263,8 @@ def test_every_benchmark_table_of_the_site_shows_its_json_rows(build):
             html = (HTML / page.relative_to(DOCS).with_suffix(".html")).read_text()
             source = ROOT / path
             if not source.exists():
-                assert "Not measured in this build" in html and f"{path}</span>" in html, (page.name, path)
+                assert "Not measured in this build" in html, (page.name, path)
+                assert f"{path}</span>" in html, (page.name, path)
                 continue
             rows = generator.benchmark_rows(json.loads(source.read_text()), opts.get("module"), opts.get("match"))
             assert rows, (page.name, path)
