@@ -156,8 +156,10 @@ def test_the_benchmark_page_shows_the_json_rows_and_their_run():
     page = _generator().benchmark_page(results)
     assert "| H-inf design | 2.123 | ms | <= 20 ms |" in page
     assert "| real-time factor | 175 | x | >= 100 |" in page
-    assert "## bench_control" in page and "## bench_twin" in page
-    assert "abc1234" in page and "2026-11-26 10:00" in page
+    assert "## bench_control" in page
+    assert "## bench_twin" in page
+    assert "abc1234" in page
+    assert "2026-11-26 10:00" in page
     assert "- real-time factor: best of 3" in page
 
 
@@ -206,7 +208,8 @@ def test_the_findings_page_shows_every_entry_of_the_report():
 
 def test_without_a_report_the_findings_page_says_how_to_make_one():
     page = _generator().findings_page(None)
-    assert "make run" in page and "|" not in page
+    assert "make run" in page
+    assert "|" not in page
 
 
 def test_the_readme_is_one_screen_and_links_into_the_site():
@@ -238,7 +241,9 @@ def test_a_benchmark_table_takes_the_rows_of_its_module_and_name():
     line = _generator().measured_line(
         {"context": {"date_utc": "2026-11-26 16:15", "commit": "0c598c5"}}, "b.json", "bench_a"
     )
-    assert "`b.json`" in line and "2026-11-26 16:15" in line and "`python -m benchmarks bench_a --out b.json`" in line
+    assert "`b.json`" in line
+    assert "2026-11-26 16:15" in line
+    assert "`python -m benchmarks bench_a --out b.json`" in line
 
 
 #: ```{benchmark-table} FILE``` and its options in a page's Markdown.
@@ -258,14 +263,16 @@ def test_every_benchmark_table_of_the_site_shows_its_json_rows(build):
             built = (HTML / page.relative_to(DOCS).with_suffix(".html")).read_text()
             source = ROOT / path
             if not source.exists():
-                assert "Not measured in this build" in built and f"{path}</span>" in built, (page.name, path)
+                assert "Not measured in this build" in built, (page.name, path)
+                assert f"{path}</span>" in built, (page.name, path)
                 continue
             rows = generator.benchmark_rows(json.loads(source.read_text()), opts.get("module"), opts.get("match"))
             assert rows, (page.name, path)
             # each row's name as written ("--fast", not an en dash; an apostrophe may be typeset)
             shown = html.unescape(built).replace("\u2019", "'")
             for name, value, _unit, _note in rows:
-                assert f"<p>{name}</p>" in shown and f"<p>{value}</p>" in shown, (page.name, name, value)
+                assert f"<p>{name}</p>" in shown, (page.name, name)
+                assert f"<p>{value}</p>" in shown, (page.name, name, value)
             tables += 1
     assert tables >= 3  # digits.md's and studies.md's, from the JSON kept in benchmarks/
 

@@ -298,7 +298,8 @@ def test_simulate_robot_plots_the_tip_path_of_its_table(tmp_path, drawn, capsys)
         np.testing.assert_allclose(line.get_xdata(), rows["t_s"], rtol=1e-9)
         np.testing.assert_allclose(line.get_ydata(), 1e3 * rows[column], rtol=1e-9, atol=1e-9)
     # 2 N on the tendon at 90 deg pulls the tip towards +y and shortens its height (the robot is 400 mm long)
-    assert rows["tip_y_m"].iloc[-1] > 1e-3 and rows["tip_z_m"].iloc[-1] < 0.4
+    assert rows["tip_y_m"].iloc[-1] > 1e-3
+    assert rows["tip_z_m"].iloc[-1] < 0.4
     # a still coordinate (x: the pull has no x component) is drawn on a 1 mm span, not blown up to round-off
     low, high = axes[0].get_ylim()
     assert high - low >= 1.0
@@ -348,7 +349,8 @@ def test_design_hinf_plots_the_design_on_a_digits_own_plant(tmp_path, drawn, cap
     argv = ["design", "hinf", "--filter-hz", "5", "--params", str(digit), "--plot", str(plot), "--json"]
     assert main(argv) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["plot"] == str(plot) and _written(plot)
+    assert summary["plot"] == str(plot)
+    assert _written(plot)
     step_y, bode_mag, _, _ = drawn[0].axes
     assert step_y.get_ylabel() == "y per unit step (m/m)"
     # the step drawn settles (2 %) when the design's own analysis said it does
@@ -387,7 +389,8 @@ def test_tdcr_contact_plots_the_estimate_and_where_the_twin_was_pressed(tmp_path
     argv += ["--contact-force-n", "0,0.05,0", "--plot", str(plot), "--json"]
     assert main(argv) == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["plot"] == str(plot) and _written(plot)
+    assert result["plot"] == str(plot)
+    assert _written(plot)
     side, front = drawn[0].axes
     assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in (side, front)] == [("x (mm)", "z (mm)"), ("y (mm)", "z (mm)")]
     lines = _lines(front)

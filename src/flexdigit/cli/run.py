@@ -556,10 +556,10 @@ def _twin_options(args, sim: bool) -> dict:
     if getattr(args, "orientation", None) is not None:
         options["orientation"] = args.orientation
     elif getattr(args, "digit", None) is not None and "orientation" not in _url_options(args.backend):
-        from flexdigit.control.design20ms import straight_is_stable
+        from flexdigit.control.design20ms import digit_mount
 
-        if not straight_is_stable(args.digit, options.get("calibration"), "vertical"):
-            # tip up it buckles under its supports' weight: its twin hangs (said in the output: rig.orientation)
+        # tip up a digit may buckle under its supports' weight: its twin then hangs (said in the output)
+        if digit_mount(args.digit, options.get("calibration")) == "hanging":
             options["orientation"] = "hanging"
     return options
 
