@@ -413,3 +413,19 @@ def test_a_negative_vector_needs_no_equals_sign(capsys):
     )
     tip = json.loads(capsys.readouterr().out)["tip_position_m"]
     assert tip[0] < -1e-3  # 10 mN pushes the straight 400 mm rod's tip towards -x
+
+
+@pytest.mark.slow  # the design's robustness checks (Monte Carlo, small-gain boxes): ~10 s
+def test_design_mixsyn_plots_a_step_that_ends_on_the_setpoint(tmp_path, drawn, capsys):
+    plot = tmp_path / "mixsyn.svg"
+    assert main(["design", "mixsyn", "--plot", str(plot), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    step_y, bode_mag, _, _ = drawn[0].axes
+    assert step_y.get_ylabel() == "y per unit step (rad/rad)"  # the beam rotation, the plant this design is for
+    # integral action (|S(0)| reported ~0): the drawn step ends on the setpoint, and |S| at the lowest frequency
+    # drawn is far below 0 dB
+    assert summary["requirements"]["sensitivity_dc"] < 1e-6
+    y = _lines(step_y)["output y (T_yw)"].get_ydata()
+    assert abs(y[-1] - 1.0) < 0.01
+    assert _lines(bode_mag)["S (T_zw)"].get_ydata()[0] < -20.0
