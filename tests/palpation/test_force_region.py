@@ -116,3 +116,33 @@ def test_a_one_gauge_sweep_refuses_the_force_from_the_gauges_alone(tmp_path, cap
     assert data["result"]["lumped_stiffness_n_m"] is None
     fit = data["result"]
     assert abs(fit["modulus_n_m2"] - 1000.0) < 4 * fit["modulus_sd_n_m2"]  # the fit is at its own uncertainty
+
+
+def test_the_servo_model_steps_as_the_second_order_closed_form():
+    """The loop's servo model over 20 ms periods against the underdamped step response
+    ``1 - exp(-zeta wn t) sin(wd t + acos zeta) / sqrt(1 - zeta^2)`` (the thesis's 20.53 rad/s, 0.5629)."""
+    from flexdigit.palpation.palpation import _servo_step
+
+    wn, zeta, period = 20.53, 0.5629, 0.020
+    a, b = _servo_step(wn, zeta, period)
+    x = np.zeros(2)
+    wd = wn * math.sqrt(1 - zeta**2)
+    for k in range(1, 16):
+        x = a @ x + b * 1.0
+        t = k * period
+        exact = 1 - math.exp(-zeta * wn * t) * math.sin(wd * t + math.acos(zeta)) / math.sqrt(1 - zeta**2)
+        assert x[0] == pytest.approx(exact, abs=1e-12)
+
+
+def test_the_servo_is_modelled_where_its_lag_reads_as_force():
+    """The servo lags a 4 commands / s ramp by 4 x 2 zeta / wn = 0.22 command: the thesis rig's three gauges read
+    it as 0.1 mN (its loop as before), the one-gauge digit's as 31 mN, above its 30 mN contact threshold."""
+    from flexdigit.palpation.palpation import SERVO_LAG_FORCE, servo_lag_force
+
+    thesis = ContactGaugeModel()
+    estimator = ContactEstimator(thesis, classify=False, region_m=(0.15, 0.27)).fit()
+    assert servo_lag_force(thesis, estimator, 4.0, 10) < SERVO_LAG_FORCE * 0.1
+    one = _model("one-section")
+    region = force_region(one, 0.1, region_m=(0.088, 0.16))
+    estimator = ContactEstimator(one, classify=False, region_m=region["region_m"]).fit()
+    assert servo_lag_force(one, estimator, 4.0, 10) > 0.3 * 0.1
