@@ -386,6 +386,18 @@ def _force(rig, tissue, plan, log, log_mode):
         log_path=log,
         log_mode=log_mode,
     )
+    data, text = _hold_data(held)
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import hold_figure
+
+        return hold_figure(held, title=f"force control at {held.setpoint_n:g} N")
+
+    return data, text, figure
+
+
+def _hold_data(held) -> tuple[dict, str]:
+    """``palpate --json`` of a hold and its text: the figures, the contact place, the estimate's uncertainty."""
     data = {
         "setpoint_n": held.setpoint_n,
         "steady_force_n": held.steady_force_n,
@@ -411,10 +423,4 @@ def _force(rig, tissue, plan, log, log_mode):
         + f" ({place['reason']})"
         + (f"\n{data['estimate_note']}" if "estimate_note" in data else "")
     )
-
-    def figure():
-        from flexdigit.palpation.palpation_plot import hold_figure
-
-        return hold_figure(held, title=f"force control at {held.setpoint_n:g} N")
-
-    return data, text, figure
+    return data, text

@@ -1128,12 +1128,12 @@ def hold_force(
 ) -> ForceHold:
     """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
 
-    Tares on 10 readings at the equilibrium command first (nothing must touch the digit there), then runs
-    :class:`ForceController`. ``region_m`` (m from the base): where the contact can be (where the tissue lies),
-    which steadies the estimate when nothing touches yet. On the twin the true contact force is logged beside the
-    estimate; the figures
-    (steady force and error over the last ``window_s``, overshoot, 10 % settling time) use it there, and the
-    estimate on hardware.
+    Tares on :data:`TARE_READINGS` readings at the equilibrium command first (nothing must touch the digit there),
+    then runs :class:`ForceController`. ``region_m`` (m from the base): where the contact can be (where the tissue
+    lies), which steadies the estimate when nothing touches yet; :func:`force_region` narrows it where the force
+    read hangs on the place, and ``ForceHold.region`` says what was decided. On the twin the true contact force is
+    logged beside the estimate; the figures (steady force and error over the last ``window_s``, overshoot, 10 %
+    settling time) use it there, and the estimate on hardware.
 
     ``gain`` and ``approach_rate`` default to the digit's own (:func:`force_gains`): the thesis rig's 30 commands
     per second per N and 4 commands per second, scaled so that the loop's crossover (gain x the force a command
@@ -1150,29 +1150,8 @@ def hold_force(
     region = force_region(model, setpoint, region_m=region_m, side=side, window_s=window_s)
     if estimator is None:
         estimator = ContactEstimator(model, classify=False, side=side, region_m=region["region_m"]).fit()
-    eq = int(rig.params.actuator.equilibrium_command)
-    rig.write_command(eq)
-    rig.wait(1.0)
-    rest = np.array([rig.read().gauges_v for _ in range(TARE_READINGS)])
-    offset = rest.mean(axis=0) - model.free_v([eq])[0]
-    sign = -1.0 if side == "cable" else 1.0
-    # the thesis rig's 8..60: 52 commands of pulley past straight (times a gearing), within the servo's range
-    act = rig.params.actuator
-    high = min(int(act.command_max), eq + int(round(52 * act.gear_ratio)))
-    # the servo's lag behind the approach read as force: modelled where it would read as more than 2 % (not on the
-    # thesis rig: 0.1 mN)
-    lag_force = servo_lag_force(model, estimator, approach_rate, min(eq + 2, high))
-    servo = (act.servo_wn_rad_s, act.servo_zeta) if lag_force > SERVO_LAG_FORCE * setpoint else None
-    region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None}
-    # the contact shows on enough readings that their noise stays DETECT_SIGMAS below the threshold (1 on the
-    # thesis rig: 3.3 mN a reading against 30 mN; 13 on the one-gauge digit, 36 mN a reading)
-    detect = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
-    region["detect_readings"] = detect
+    controller, region = _force_controller(rig, model, estimator, region, setpoint, gain, approach_rate, side)
     region["held_force_sd_n"] = _held_force_sd(model, region.get("force_sd_n", math.nan), duration_s)
-    controller = ForceController(
-        estimator, offset, gain=gain, low=eq, high=high, sign=sign, approach_rate=approach_rate, servo=servo,
-        contact_fraction=CONTACT_FRACTION, detect_readings=detect,
-    )  # fmt: skip
     truth = _truth_of(rig)
     place = _place_of(rig)
     true_force, true_place = [], []
@@ -1196,18 +1175,51 @@ def hold_force(
     est = np.array(controller.forces[: t.size])
     figures = _hold_figures(t, np.array(true_force) if truth else est, setpoint, window_s)
     true = np.array(true_force) if truth else None
-    # the place from the window's mean reading at the mean command sent (what the Cramer-Rao sd over the window is
-    # for: a median of one-reading estimates is biased where the region ends at the tip, 37 mm on the thesis rig)
-    window = t >= t[-1] - window_s if t.size else np.zeros(0, dtype=bool)
-    steady_place = math.nan
-    if np.any(window) and region.get("place_told", False):
-        controller.force(result.gauges_v[window].mean(axis=0), float(np.mean(result.command[window])))
-        steady_place = controller.place_m
+    steady_place = _steady_place(controller, result, window_s) if region.get("place_told", False) else math.nan
     return ForceHold(
         setpoint, t, result.command, est, true, *figures, result.status, float(gain), float(approach_rate),
         region=region, place_m=np.array(controller.places[: t.size]),
         true_place_m=np.array(true_place) if truth else None, window_s=float(window_s), steady_place_m=steady_place,
     )  # fmt: skip
+
+
+def _force_controller(rig, model, estimator, region, setpoint, gain, approach_rate, side):
+    """Tare the rig at its straight command and build the hold's :class:`ForceController`; ``region`` (a copy) gains
+    what was decided: whether the servo is modelled, the readings the contact shows on."""
+    eq = int(rig.params.actuator.equilibrium_command)
+    rig.write_command(eq)
+    rig.wait(1.0)
+    rest = np.array([rig.read().gauges_v for _ in range(TARE_READINGS)])
+    offset = rest.mean(axis=0) - model.free_v([eq])[0]
+    sign = -1.0 if side == "cable" else 1.0
+    # the thesis rig's 8..60: 52 commands of pulley past straight (times a gearing), within the servo's range
+    act = rig.params.actuator
+    high = min(int(act.command_max), eq + int(round(52 * act.gear_ratio)))
+    # the servo's lag behind the approach read as force: modelled where it would read as more than 2 % (not on the
+    # thesis rig: 0.1 mN)
+    lag_force = servo_lag_force(model, estimator, approach_rate, min(eq + 2, high))
+    servo = (act.servo_wn_rad_s, act.servo_zeta) if lag_force > SERVO_LAG_FORCE * setpoint else None
+    region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None}
+    # the contact shows on enough readings that their noise stays DETECT_SIGMAS below the threshold (1 on the
+    # thesis rig: 3.3 mN a reading against 30 mN; 13 on the one-gauge digit, 36 mN a reading)
+    detect = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
+    region["detect_readings"] = detect
+    controller = ForceController(
+        estimator, offset, gain=gain, low=eq, high=high, sign=sign, approach_rate=approach_rate, servo=servo,
+        contact_fraction=CONTACT_FRACTION, detect_readings=detect,
+    )  # fmt: skip
+    return controller, region
+
+
+def _steady_place(controller, result, window_s: float) -> float:
+    """The place from the window's mean reading at the mean command sent (what the Cramer-Rao sd over the window is
+    for: a median of one-reading estimates is biased where the region ends at the tip, 37 mm on the thesis rig)."""
+    t = result.time_s
+    window = t >= t[-1] - window_s if t.size else np.zeros(0, dtype=bool)
+    if not np.any(window):
+        return math.nan
+    controller.force(result.gauges_v[window].mean(axis=0), float(np.mean(result.command[window])))
+    return controller.place_m
 
 
 def _hold_figures(t, scored, setpoint: float, window_s: float) -> tuple:
