@@ -616,7 +616,7 @@ def force_gains(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "c
 
 #: How far (relative) the force of a one-reading point-contact estimate may move as its place wanders within that
 #: reading's noise (:data:`PLACE_WANDER_CHI2`) before force control narrows where it looks (:func:`force_region`):
-#: the issue's 10 % (the thesis rig's 5.7 %, its loop -4.1 %; the short digit's 35 %, its loop -31 %).
+#: the issue's 10 % (the thesis rig's 4.4 %, its loop -4.1 %; the short digit's 35 %, its loop -31 %).
 FORCE_PLACE_SPREAD = 0.10
 #: chi^2 above the best place that one reading's noise lets the place estimate wander to (2 sd of one parameter).
 PLACE_WANDER_CHI2 = 4.0
