@@ -136,7 +136,7 @@ def test_the_servo_model_steps_as_the_second_order_closed_form():
 
 def test_the_servo_is_modelled_where_its_lag_reads_as_force():
     """The servo lags a 4 commands / s ramp by 4 x 2 zeta / wn = 0.22 command: the thesis rig's three gauges read
-    it as 0.1 mN (its loop as before), the one-gauge digit's as 31 mN, above its 30 mN contact threshold."""
+    it as 1.7 mN (its loop as before), the one-gauge digit's as 31 mN, above its 30 mN contact threshold."""
     from flexdigit.palpation.palpation import SERVO_LAG_FORCE, servo_lag_force
 
     thesis = ContactGaugeModel()

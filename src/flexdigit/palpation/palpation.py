@@ -1028,17 +1028,15 @@ def _servo_step(wn: float, zeta: float, period_s: float) -> tuple[np.ndarray, np
     return step[:2, :2], step[:2, 2]
 
 
-#: The force (relative to the setpoint) the servo's lag behind the approach ramp may read as before the force loop
-#: models the servo (:func:`servo_lag_force`): a fifth of the issue's 10 % (the thesis rig's 0.1 %, the one-gauge
-#: digit's 31 %, which declared a contact before any and led the true force through the hold).
-SERVO_LAG_FORCE = 0.02
-
-
 #: The force loop declares the contact at this fraction of the setpoint (:class:`ForceController`).
 CONTACT_FRACTION = 0.3
 #: Standard deviations of the averaged estimate's noise below the contact threshold (:func:`hold_force`): one
 #: reading's noise passes 3 sd once in 700 readings, 14 s of the loop.
 DETECT_SIGMAS = 3.0
+#: The force (relative to the setpoint) the servo's lag behind the approach ramp may read as before the force loop
+#: models the servo (:func:`servo_lag_force`): the contact threshold over DETECT_SIGMAS, as for the noise (the
+#: thesis rig's 1.7 %; the one-gauge digit's 31 %, which declared a contact before any and led the true force).
+SERVO_LAG_FORCE = CONTACT_FRACTION / DETECT_SIGMAS
 
 
 def _held_force_sd(model, force_sd_n: float, duration_s: float) -> float:
@@ -1195,8 +1193,8 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
     # the thesis rig's 8..60: 52 commands of pulley past straight (times a gearing), within the servo's range
     act = rig.params.actuator
     high = min(int(act.command_max), eq + int(round(52 * act.gear_ratio)))
-    # the servo's lag behind the approach read as force: modelled where it would read as more than 2 % (not on the
-    # thesis rig: 0.1 mN)
+    # the servo's lag behind the approach read as force: modelled where it would read as more than 10 % of the
+    # setpoint (not on the thesis rig: 1.7 mN at 0.1 N)
     lag_force = servo_lag_force(model, estimator, approach_rate, min(eq + 2, high))
     servo = (act.servo_wn_rad_s, act.servo_zeta) if lag_force > SERVO_LAG_FORCE * setpoint else None
     region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None}
