@@ -1199,7 +1199,7 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
     servo = (act.servo_wn_rad_s, act.servo_zeta) if lag_force > SERVO_LAG_FORCE * setpoint else None
     region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None}
     # the contact shows on enough readings that their noise stays DETECT_SIGMAS below the threshold (1 on the
-    # thesis rig: 3.3 mN a reading against 30 mN; 13 on the one-gauge digit, 36 mN a reading)
+    # thesis rig: 3.3 mN a reading against 30 mN; 14 on the one-gauge digit, 36 mN a reading)
     detect = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
     region["detect_readings"] = detect
     controller = ForceController(
