@@ -38,18 +38,23 @@ def test_the_short_digit_holds_its_force_and_tells_the_place(tmp_path, capsys):
     assert held["scored_on"] == "true contact force (twin)"
     assert abs(held["steady_error"]) < HOLD, held["steady_error"]
     place = held["contact_place"]
-    assert place["told"] and place["narrowed"]
+    assert place["told"]
+    assert place["narrowed"]
     assert place["searched_mm"][0] > 120.0  # from its outer gauge (125 mm) on, not from the tissue's 82.5 mm
     assert abs(place["error_mm"]) < PLACE_MM, place
-    assert "estimate_note" not in held and held["estimate_sd_n"] < HOLD * held["setpoint_n"]
+    assert "estimate_note" not in held
+    assert held["estimate_sd_n"] < HOLD * held["setpoint_n"]
 
 
 @pytest.mark.parametrize("name", ["one-section"])
 def test_a_one_gauge_digit_refuses_the_place_and_says_how_uncertain_its_force_is(name, tmp_path, capsys):
     held = _hold(name, tmp_path, capsys)
     place = held["contact_place"]
-    assert place["steady_mm"] is None and place["error_mm"] is None and not place["told"]
+    assert place["steady_mm"] is None
+    assert place["error_mm"] is None
+    assert not place["told"]
     assert "one gauge" in place["reason"]
     assert place["true_steady_mm"] is not None  # the twin's contact was there: the place is refused, not missed
-    assert "uncertain" in held["estimate_note"] and held["estimate_sd_n"] > HOLD * held["setpoint_n"]
+    assert "uncertain" in held["estimate_note"]
+    assert held["estimate_sd_n"] > HOLD * held["setpoint_n"]
     assert abs(held["steady_force_n"] - held["setpoint_n"]) < 3 * held["estimate_sd_n"]

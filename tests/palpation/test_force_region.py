@@ -50,8 +50,10 @@ def _placed(model) -> Tissue:
 
 def test_the_thesis_rig_searches_its_whole_region():
     region = force_region(ContactGaugeModel(), 0.1, region_m=(0.15, 0.27))
-    assert region["region_m"] == (0.15, 0.27) and not region["narrowed"]
-    assert region["spread"] < FORCE_PLACE_SPREAD and region["place_told"]
+    assert region["region_m"] == (0.15, 0.27)
+    assert not region["narrowed"]
+    assert region["spread"] < FORCE_PLACE_SPREAD
+    assert region["place_told"]
 
 
 def test_the_short_digits_force_hangs_on_the_place_until_narrowed():
@@ -60,7 +62,8 @@ def test_the_short_digits_force_hangs_on_the_place_until_narrowed():
     model = _model("short")
     length = model.length_m
     region = force_region(model, 0.1, region_m=(0.55 * length, length))
-    assert region["narrowed"] and region["spread"] > FORCE_PLACE_SPREAD
+    assert region["narrowed"]
+    assert region["spread"] > FORCE_PLACE_SPREAD
     lo, hi = region["region_m"]
     assert lo > 0.125 - 0.002  # from the outer gauge (125 mm) on: the shear between the gauges is the force
     tissue = Tissue(0.55 * length, length + 0.08, 0.03 * length / 0.27, 1000.0)
@@ -84,7 +87,8 @@ def test_a_digit_whose_force_hangs_on_the_place_holds_it(name):
     if name == "one-section":
         # one gauge: the place is assumed, and refused as an estimate; its 36 mN a reading and drift leave the
         # force it holds uncertain by more than 10 %, which it says, and the true error lies within that
-        assert not run.region["place_told"] and "one gauge" in run.region["reason"]
+        assert not run.region["place_told"]
+        assert "one gauge" in run.region["reason"]
         assert math.isnan(run.steady_place_m)
         sd = run.region["held_force_sd_n"]
         assert sd > HOLD * 0.1
@@ -112,7 +116,8 @@ def test_a_one_gauge_sweep_refuses_the_force_from_the_gauges_alone(tmp_path, cap
     assert main(["palpate", "--params", str(digit), "--tissue", str(tissue), "--protocol", str(sweep), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     curve = data["curve"]
-    assert all(f is None for f in curve["force_n"]) and "one gauge" in curve["force_refused"]
+    assert all(f is None for f in curve["force_n"])
+    assert "one gauge" in curve["force_refused"]
     assert data["result"]["lumped_stiffness_n_m"] is None
     fit = data["result"]
     assert abs(fit["modulus_n_m2"] - 1000.0) < 4 * fit["modulus_sd_n_m2"]  # the fit is at its own uncertainty
