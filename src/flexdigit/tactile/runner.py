@@ -541,8 +541,5 @@ def load_or_collect(path: str | Path, protocol: Protocol, rig_factory, **kwargs)
     path = Path(path)
     if path.exists():
         return load_dataset(path, protocol)
-    rig = rig_factory()
-    try:
+    with rig_factory() as rig:
         return collect(protocol, rig, path, **kwargs)
-    finally:
-        rig.close()

@@ -86,11 +86,8 @@ def collect_on_twin(
     out = Path(out)
     out.unlink(missing_ok=True)
     journal_path(out).unlink(missing_ok=True)
-    rig = twin_rig(protocol, seed=seed, params=params, calibration=calibration)
-    try:
+    with twin_rig(protocol, seed=seed, params=params, calibration=calibration) as rig:
         return collect(protocol, rig, out, params=params, rig_url="sim", settle_s=settle_s)
-    finally:
-        rig.close()
 
 
 #: How often a random disturbance is drawn in :func:`static_dataset`: every reading, or once per hang (setting)
