@@ -160,7 +160,7 @@ def _digit_protocol(name: str, params: RigParams | None = None) -> Protocol:
     """The built-in protocol ``name`` on the digit ``params`` describes: its positions scaled to the digit's length
     (:meth:`~flexdigit.tactile.protocols.Protocol.scaled_to`, as ``flexdigit collect --params`` does); the
     protocol itself on a digit as long as the thesis rig's."""
-    return load_protocol(name).scaled_to((params or RigParams()).geometry.digit_length_m)
+    return load_protocol(name, params or RigParams())
 
 
 def pipeline_corr2_static(
