@@ -223,8 +223,7 @@ def collect(
         The twin's seed when ``rig`` is None (the command's ``--seed``, default 0); ignored otherwise.
     params : RigParams, optional
         The digit (default the thesis rig): its length, its ``G`` gauges (``gauge1_v`` .. ``gaugeG_v``; a rig
-        reading another count is refused) and, with ``rig`` None, its twin. A built-in protocol on it, its positions
-        scaled to its length as ``flexdigit collect --params`` runs it: ``load_protocol(name, params)``.
+        reading another count is refused), with ``rig`` None its twin; a protocol on it: ``load_protocol(name, params)``
     rig_url : str, optional
         How the rig was opened, recorded in the metadata.
     settle_s : float, optional
