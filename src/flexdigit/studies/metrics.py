@@ -304,6 +304,19 @@ def _mid_shortening_m(ps: ParameterSet) -> float:
     return float(cable_shortening_m(0.5 * sum(ps.params.actuator.operating_commands), ps.params))
 
 
+#: The tip moment (N m) whose turn gives ``tip_stiffness_nm_per_rad``: small, the linear stiffness about the
+#: mid-range shape.
+PROBE_MOMENT_NM = 1e-4
+
+#: Why a metric may have no value on a row that ran (NaN, never inf): the study refuses that metric on such rows
+#: in these words (:attr:`flexdigit.studies.sensitivity.SensitivityResult.refused`), as it refuses a failed row.
+UNDEFINED: dict[str, str] = {
+    "tip_stiffness_nm_per_rad": (
+        f"the {PROBE_MOMENT_NM:g} N m probe moment did not turn the tip (the static solve came back to the same "
+        "angles), so moment / turn has no value"
+    ),
+}
+
 _BATCH_CACHE: list = [None, None]  # (the list of parameter sets, its results): the metrics share one pass
 
 
@@ -327,14 +340,17 @@ def twin_figures(parameter_sets, *, keep: bool = True) -> dict[str, np.ndarray]:
     tip_hi = chains.solve_static(ends[:, 1])[:, -1]
     psi_mid = chains.solve_static(mid)
     act_wn, _ = chains.linear_modes(psi_mid, mid)
-    moment = 1e-4  # N m: small, the linear stiffness about the mid-range shape
+    moment = PROBE_MOMENT_NM
     turned = chains.solve_static(mid, tip_moment_nm=np.full(len(parameter_sets), moment), psi0=psi_mid)[:, -1]
+    turn = turned - psi_mid[:, -1]
+    with np.errstate(divide="ignore", invalid="ignore"):  # a row whose tip did not turn: NaN, refused (UNDEFINED)
+        stiffness = np.where(turn != 0.0, moment / turn, np.nan)
     out = {
         "release_wn_rad_s": wn,
         "release_zeta": zeta,
         "actuated_wn_rad_s": act_wn,
         "rotation_gain_deg_per_command": np.degrees(tip_hi - tip_lo) / (commands[:, 1] - commands[:, 0]),
-        "tip_stiffness_nm_per_rad": moment / (turned - psi_mid[:, -1]),
+        "tip_stiffness_nm_per_rad": stiffness,
         "_linear": chains.linearised(psi_mid, mid),
         "_mid_rotation_deg": np.degrees(psi_mid[:, -1] - tip_lo),
     }

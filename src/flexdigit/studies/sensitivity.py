@@ -41,7 +41,7 @@ from flexdigit._validation import check_int, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.studies import figures
 from flexdigit.studies.execution import run_study, warn
-from flexdigit.studies.metrics import SENSITIVITY_METRICS, MetricContext, metric_of
+from flexdigit.studies.metrics import SENSITIVITY_METRICS, UNDEFINED, MetricContext, metric_of
 from flexdigit.studies.spec import StudySpec, load_spec
 
 __all__ = [
@@ -420,6 +420,14 @@ def run_sensitivity(
     return result
 
 
+def _undefined(metric: str, value: float) -> str:
+    """Why ``metric`` has no value on a row that ran: the metric's own words (:data:`metrics.UNDEFINED`) for a NaN,
+    else the value itself (an infinity from a user's metric)."""
+    if math.isnan(value) and metric in UNDEFINED:
+        return f"{metric} undefined: {UNDEFINED[metric]}"
+    return f"{metric} = {value}"
+
+
 def _fingerprint(spec, settings, metrics) -> str:
     import hashlib
     import json
@@ -439,7 +447,7 @@ def _analyse(result: SensitivityResult, u: np.ndarray, rerun: str) -> None:
         bad = np.flatnonzero(~np.isfinite(y))
         if bad.size:
             i = int(bad[0])
-            why = result.errors[i] or f"{metric} = {y[i]}"
+            why = result.errors[i] or _undefined(metric, y[i])
             params = ", ".join(f"{n}={v:.6g}" for n, v in zip(names, result.values[i], strict=True))
             result.refused[metric] = (
                 f"not finite on {bad.size} of {y.size} rows (e.g. row {i}: {why}; {params}): "

@@ -395,7 +395,8 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
 
     ``ratio x T / (dT/dtheta)`` at every (load, position, command) of the protocol, the slope by central
     differences of the static twin (0.01 command). Returns the median, minimum and maximum in degrees and in
-    microseconds of PWM pulse, and microseconds per command.
+    microseconds of PWM pulse, and microseconds per command, over the settings whose cable is taut
+    (``taut_settings`` of ``settings``; NaN if none is: a slack cable's tension has no scatter to convert).
     """
     params = params or RigParams()
     cal = calibration or default_calibration()
@@ -419,16 +420,22 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
         )
         tension.append(sol.tension_n)
     slope = (tension[2] - tension[0]) / (2 * d)  # N per rad of servo shaft
-    deg = np.degrees(cal.cable_friction_ratio * tension[1] / slope)
+    # a setting whose cable is slack (no tension, and the servo's turn does not change it: a short digit bent
+    # that far by the load) has no friction scatter to express as an angle: left out, and counted
+    taut = (tension[1] > 0.0) & (slope != 0.0)
+    deg = np.degrees(cal.cable_friction_ratio * tension[1][taut] / np.abs(slope[taut]))  # a magnitude (2 cables)
     us_per_deg = 1e6 * (a.pulse_width_max_s - a.pulse_width_min_s) / (a.angle_max_deg - a.angle_min_deg)
+    median, low, high = (np.median(deg), deg.min(), deg.max()) if deg.size else (np.nan,) * 3
     return {
-        "median_deg": float(np.median(deg)),
-        "min_deg": float(deg.min()),
-        "max_deg": float(deg.max()),
-        "median_us": float(np.median(deg) * us_per_deg),
-        "min_us": float(deg.min() * us_per_deg),
-        "max_us": float(deg.max() * us_per_deg),
+        "median_deg": float(median),
+        "min_deg": float(low),
+        "max_deg": float(high),
+        "median_us": float(median * us_per_deg),
+        "min_us": float(low * us_per_deg),
+        "max_us": float(high * us_per_deg),
         "us_per_command": float(a.deg_per_command * us_per_deg),
+        "settings": len(keys),
+        "taut_settings": int(taut.sum()),
     }
 
 
