@@ -82,14 +82,30 @@ def test_the_study_refuses_the_metric_naming_it_the_row_and_why(stuck_probe):
 
 
 def test_the_eight_gauge_digit_report_study_has_no_infinity(tmp_path):
+    """The 5-section, 8-gauge digit (0.5 m, derived calibration) buckles under its weight upright: its tangent
+    stiffness at rest has a negative eigenvalue, so its release mode, and its mid-range mode and tip stiffness
+    (was -294..0.014 N m/rad, and inf on 8 rows), are refused in words; the rotation gain is still computed."""
     params = load_params(write_digit("five-sections-eight-gauges", tmp_path))
     with use_calibration(calibration_for(params), source="test"), warnings.catch_warnings():
         warnings.simplefilter("error")
-        result = twin_sensitivity(4, seed=0, spec=_report_spec(ParameterSet(params, default_calibration())))
+        baseline = ParameterSet(params, default_calibration())
+        result = twin_sensitivity(4, seed=0, spec=_report_spec(baseline))
+        chains = BatchedChains.from_rigs([params], [baseline.calibration], housing=True, orientation="vertical")
+    at_rest = chains.linearised(np.zeros((1, chains.n)), np.array([-np.inf]))[2][0]
+    assert np.linalg.eigvalsh(at_rest)[0] < 0  # the cause, on the twin's own matrices
     for name in result.metrics:
         assert not np.isinf(result.outputs[name]).any(), name
         if np.isnan(result.outputs[name]).any():  # where a row has no value, the study says why in words
-            assert "undefined:" in result.refused[name] or "Error" in result.refused[name]
+            assert f"{name} undefined: {UNDEFINED[name]}" in result.refused[name]
+    assert "does not stand upright" in result.refused["release_wn_rad_s"]
+    assert np.all(result.outputs[STIFFNESS][np.isfinite(result.outputs[STIFFNESS])] > 0)  # never a negative one
+    assert "rotation_gain_deg_per_command" not in result.refused
+
+
+def test_the_thesis_rig_stands_and_keeps_every_twin_metric():
+    result = twin_sensitivity(4, seed=0, spec=_report_spec())
+    assert not result.refused
+    assert np.all(result.outputs[STIFFNESS] > 0)
 
 
 @pytest.mark.parametrize("digit", ["one-section", "short"])

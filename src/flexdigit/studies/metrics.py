@@ -310,10 +310,14 @@ PROBE_MOMENT_NM = 1e-4
 
 #: Why a metric may have no value on a row that ran (NaN, never inf): the study refuses that metric on such rows
 #: in these words (:attr:`flexdigit.studies.sensitivity.SensitivityResult.refused`), as it refuses a failed row.
+_BUCKLED = "its tangent stiffness has a negative eigenvalue: the digit buckles under its weight"
 UNDEFINED: dict[str, str] = {
+    "release_wn_rad_s": f"the digit does not stand upright with the cable removed ({_BUCKLED}): no release mode",
+    "release_zeta": f"the digit does not stand upright with the cable removed ({_BUCKLED}): no release mode",
+    "actuated_wn_rad_s": f"the mid-range shape is not a stable equilibrium ({_BUCKLED} and the cable's pull)",
     "tip_stiffness_nm_per_rad": (
-        f"the {PROBE_MOMENT_NM:g} N m probe moment did not turn the tip (the static solve came back to the same "
-        "angles), so moment / turn has no value"
+        f"the mid-range shape is not a stable equilibrium ({_BUCKLED} and the cable's pull), or the "
+        f"{PROBE_MOMENT_NM:g} N m probe moment did not turn the tip (the static solve came back to the same angles)"
     ),
 }
 
@@ -343,15 +347,19 @@ def twin_figures(parameter_sets, *, keep: bool = True) -> dict[str, np.ndarray]:
     moment = PROBE_MOMENT_NM
     turned = chains.solve_static(mid, tip_moment_nm=np.full(len(parameter_sets), moment), psi0=psi_mid)[:, -1]
     turn = turned - psi_mid[:, -1]
+    linear = chains.linearised(psi_mid, mid)
+    # a digit that buckles under its weight (and the cable's pull) has no stable shape there: no mode, no stiffness
+    upright = _stable(chains.linearised(np.zeros_like(psi_mid), np.full(len(parameter_sets), -np.inf))[2])
+    held = _stable(linear[2])
     with np.errstate(divide="ignore", invalid="ignore"):  # a row whose tip did not turn: NaN, refused (UNDEFINED)
-        stiffness = np.where(turn != 0.0, moment / turn, np.nan)
+        stiffness = np.where((turn != 0.0) & held, moment / turn, np.nan)
     out = {
-        "release_wn_rad_s": wn,
-        "release_zeta": zeta,
-        "actuated_wn_rad_s": act_wn,
+        "release_wn_rad_s": np.where(upright, wn, np.nan),
+        "release_zeta": np.where(upright, zeta, np.nan),
+        "actuated_wn_rad_s": np.where(held, act_wn, np.nan),
         "rotation_gain_deg_per_command": np.degrees(tip_hi - tip_lo) / (commands[:, 1] - commands[:, 0]),
         "tip_stiffness_nm_per_rad": stiffness,
-        "_linear": chains.linearised(psi_mid, mid),
+        "_linear": linear,
         "_mid_rotation_deg": np.degrees(psi_mid[:, -1] - tip_lo),
     }
     if not keep:
@@ -362,6 +370,11 @@ def twin_figures(parameter_sets, *, keep: bool = True) -> dict[str, np.ndarray]:
         while len(_ROWS) > _ROWS_KEPT:
             _ROWS.pop(next(iter(_ROWS)))
     return out
+
+
+def _stable(stiffness) -> np.ndarray:
+    """Whether each chain's tangent stiffness (N, n, n), symmetric, is positive definite: a stable equilibrium."""
+    return np.linalg.eigvalsh(stiffness)[:, 0] > 0.0
 
 
 #: The twin figures of the rows of the block being evaluated (:func:`twin_figures`), by parameter set: the linear
