@@ -354,6 +354,9 @@ def _release_swing(smooth, noise, end):
     k_on = k_top + (int(leave[0]) - 1 if leave.size else k_cross - k_top)
     away = np.nonzero(~near[: k_on + 1])[0]
     k_first = int(away[-1]) + 1 if away.size else 0
+    hold = _hold_off_the_extreme(smooth, noise, end, peak, band, k_top, k_cross)
+    if hold is not None and hold[1] - hold[0] > k_on - k_first:
+        k_first, k_on = hold
     held = True
     if np.any(side * (smooth[:k_first] - end) < -band):
         # the signal swung through its rest level before this extreme: the record starts in mid-swing (a gauge near
@@ -364,6 +367,37 @@ def _release_swing(smooth, noise, end):
     k_half = k_on + int(half[0]) if half.size else smooth.size - 1
     direction = 1 if smooth[k_half] > start else -1
     return k_on, k_half, k_first, held, start, end, direction
+
+
+#: How far (fraction of the swing) a hold may sit from the first extreme of a release and still be its hold.
+HOLD_OFFSET = 0.1
+
+
+def _hold_off_the_extreme(smooth, noise, end, peak, band, k_top, k_cross):
+    """``(first, onset)`` of a hold a little off the release's first extreme, or None.
+
+    The extreme need not be the hold: the low-pass filter's start-up at a record's first sample can stand a few
+    noise deviations off it, and a gauge near the clamp can swing past its held level just after the release (a
+    higher mode, 3.1.2). The hold is then the stretch within :data:`HOLD_OFFSET` of the swing of that extreme,
+    before the crossing, flat within ``band`` of its median; it counts only when it lasts longer than the
+    time from its end to the crossing (a record that starts at the release has no such stretch: its first
+    samples are the swing's slow start).
+    """
+    wide = np.abs(smooth[: k_cross + 1] - smooth[k_top]) <= HOLD_OFFSET * peak
+    outside = np.nonzero(~wide[: k_top + 1])[0]
+    first = int(outside[-1]) + 1 if outside.size else 0
+    after = np.nonzero(~wide[k_top:])[0]
+    last = k_top + int(after[0]) if after.size else k_cross
+    if last - first < 3:
+        return None
+    level = float(np.median(smooth[first:last]))
+    flat = np.abs(smooth[first:last] - level) <= band
+    start = first + int(np.argmax(flat))  # past a start-up transient
+    leave = np.nonzero(~flat[start - first :])[0]
+    onset = start + int(leave[0]) - 1 if leave.size else last - 1
+    if onset - start <= k_cross - onset or abs(level - end) < 8.0 * noise:
+        return None
+    return start, onset
 
 
 def _shape_problems(series, kind, t, smooth, noise, t0, k_on, start, end, delay) -> list[Problem]:
