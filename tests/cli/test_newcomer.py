@@ -55,3 +55,76 @@ def test_a_bad_gauges_key_names_the_file_the_key_and_a_toml_list(tmp_path, capsy
     assert code == 2 and err.count("\n") == 1
     assert f"{columns}: key 'gauges' must be 1 to 8 column names (a TOML list" in err
     assert "ColumnMap" not in err
+
+
+def _template_edited(tmp_path, name="mine", *, keep: dict[str, str] | None = None):
+    """The newcomer's digit from the template: 2 x 0.10 m sections of a 0.3 x 12 mm strip, 4 gauges, edited in place
+    (``keep`` uncomments or sets more keys)."""
+    template = tmp_path / "template.toml"
+    if not template.exists():
+        assert main(["params", "--template", str(template)]) == 0
+    edits = {
+        "section_count": "2",
+        "section_length_m": "0.10",
+        "strip_thickness_m": "0.0003",
+        "strip_width_m": "0.012",
+        "gauge_positions_m": "[0.03, 0.07, 0.13, 0.17]",
+        "adc_channels": "[0, 1, 2, 3]",
+        **(keep or {}),
+    }
+    lines, skip = [], False
+    for line in template.read_text().splitlines():
+        key = line.lstrip("# ").split(" = ")[0] if " = " in line else None
+        if skip:
+            skip = not line.startswith("]")
+            continue
+        if key in edits:
+            lines.append(f"{key} = {edits[key]}")
+            skip = line.rstrip().endswith("[")  # a list tomli_w wrote over several lines
+            continue
+        lines.append(line)
+    path = tmp_path / f"{name}.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_the_template_derives_the_lengths_of_an_edited_digit(tmp_path, capsys):
+    # the template leaves strip_length_m and digit_length_m out: its sections give them (10 mm supports)
+    path = _template_edited(tmp_path)
+    capsys.readouterr()
+    assert main(["params", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["params"]["geometry"]["strip_length_m"] == pytest.approx(0.20, abs=1e-12)
+    assert out["params"]["geometry"]["digit_length_m"] == pytest.approx(0.22, abs=1e-12)
+    assert out["notes"] == []
+    assert main(["params", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert "  digit_length_m = 0.22\n" in text  # not 0.22000000000000003
+
+
+def test_a_leftover_digit_length_is_noted_with_the_supports_it_makes(tmp_path, capsys):
+    # the thesis's 0.27 m kept for a 0.20 m strip: (0.27 - 0.20) / 2 = 35 mm supports, and gauge 3 on one
+    path = _template_edited(tmp_path, keep={"digit_length_m": "0.27"})
+    capsys.readouterr()
+    assert main(["params", str(path)]) == 2
+    err = capsys.readouterr().out.splitlines()  # the command's result: its problems, one line each
+    assert err[0].startswith(f"{path}: [geometry] gauge_positions_m[2] = 0.13 m is on the support at 0.135 m")
+    assert "digit_length_m = 0.27 (the thesis rig's) makes 2 supports of 35 mm" in err[1]
+    assert "leave digit_length_m out (0.22 m, 10 mm supports)" in err[1]
+    # gauges clear of the long supports: consistent, and noted
+    moved = _template_edited(
+        tmp_path, "moved", keep={"digit_length_m": "0.27", "gauge_positions_m": "[0.03, 0.07, 0.17, 0.2]"}
+    )
+    capsys.readouterr()
+    assert main(["params", str(moved)]) == 0
+    assert "note: [geometry] digit_length_m = 0.27 (the thesis rig's) makes 2 supports of 35 mm" in (
+        capsys.readouterr().out
+    )
+
+
+def test_a_changed_dynamics_table_is_noted_as_read_by_no_twin(tmp_path, capsys):
+    path = _template_edited(tmp_path, keep={"wn_housing_rad_s": "20.0"})
+    capsys.readouterr()
+    assert main(["params", str(path), "--json"]) == 0
+    notes = json.loads(capsys.readouterr().out)["notes"]
+    assert notes == [notes[0]] and notes[0].startswith("[dynamics] wn_housing_rad_s differs from the thesis rig's")
