@@ -2,6 +2,7 @@
 with the command line they typed."""
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -128,3 +129,37 @@ def test_a_changed_dynamics_table_is_noted_as_read_by_no_twin(tmp_path, capsys):
     assert main(["params", str(path), "--json"]) == 0
     notes = json.loads(capsys.readouterr().out)["notes"]
     assert notes == [notes[0]] and notes[0].startswith("[dynamics] wn_housing_rad_s differs from the thesis rig's")
+
+
+def _own_digit_section() -> str:
+    page = (Path(__file__).resolve().parents[2] / "docs" / "getting-started.md").read_text()
+    return page.split("## Your own digit, plotted")[1].split("\n## ")[0]
+
+
+@pytest.mark.slow
+def test_the_getting_started_own_digit_steps_run_as_written(tmp_path, monkeypatch, capsys):
+    # the page's commands, in order, then its Python: a 30 deg closed-loop step of the newcomer's digit, plotted
+    import matplotlib.pyplot as plt
+
+    section = _own_digit_section()
+    commands = [line.split("  #")[0].split()[1:] for line in section.splitlines() if line.startswith("    flexdigit ")]
+    assert [c[0] for c in commands] == ["params", "params", "run"]
+    assert "--setpoint-deg" in commands[2] and "--params" in commands[2]
+    monkeypatch.chdir(tmp_path)
+    assert main(commands[0]) == 0
+    edited = _template_edited(tmp_path, "edited")
+    (tmp_path / "mine.toml").write_text(edited.read_text())  # what "edit the sections, ..." stands for
+    for argv in commands[1:]:
+        assert main(argv) == 0, capsys.readouterr()
+    assert Path("step.png").stat().st_size > 0
+    shown = []
+    monkeypatch.setattr(plt, "show", lambda: shown.append(plt.gcf()))
+    blocks = section.split("```python\n")[1:]
+    assert len(blocks) == 1
+    exec(blocks[0].split("```")[0], {})  # noqa: S102 (the page's own code)
+    (axes,) = shown[0].axes
+    labels = [line.get_label() for line in axes.get_lines()]
+    assert labels == ["setpoint", "y", "true_rotation_deg"]
+    true_deg = axes.get_lines()[2].get_ydata()
+    assert true_deg[-1] == pytest.approx(30.0, abs=0.6)  # the loop holds 30 deg within 2 % (issue 24)
+    plt.close("all")
