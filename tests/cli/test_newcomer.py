@@ -149,9 +149,12 @@ def test_the_getting_started_own_digit_steps_run_as_written(tmp_path, monkeypatc
     assert main(commands[0]) == 0
     edited = _template_edited(tmp_path, "edited")
     (tmp_path / "mine.toml").write_text(edited.read_text())  # what "edit the sections, ..." stands for
+    drawn = _drawn_figures(monkeypatch)
     for argv in commands[1:]:
         assert main(argv) == 0, capsys.readouterr()
     assert Path("step.png").stat().st_size > 0
+    assert drawn[0].axes[0].get_title() == "digit mine: digital20 on sim, step to 30 deg"  # whose digit
+    assert "digital20 on sim, digit mine (mine.toml): completed" in capsys.readouterr().out
     shown = []
     monkeypatch.setattr(plt, "show", lambda: shown.append(plt.gcf()))
     blocks = section.split("```python\n")[1:]
@@ -163,3 +166,30 @@ def test_the_getting_started_own_digit_steps_run_as_written(tmp_path, monkeypatc
     true_deg = axes.get_lines()[2].get_ydata()
     assert true_deg[-1] == pytest.approx(30.0, abs=0.6)  # the loop holds 30 deg within 2 % (issue 24)
     plt.close("all")
+
+
+def _drawn_figures(monkeypatch) -> list:
+    """The figures the commands save with ``--plot`` (still saved), to read their titles."""
+    import flexdigit._plot
+
+    drawn, save = [], flexdigit._plot.save_plot
+    monkeypatch.setattr(flexdigit._plot, "save_plot", lambda fig, *a, **k: (drawn.append(fig), save(fig, *a, **k))[1])
+    return drawn
+
+
+def test_a_simulated_record_of_a_described_digit_is_titled_with_its_name(tmp_path, monkeypatch, capsys):
+    path = _template_edited(tmp_path)
+    capsys.readouterr()
+    drawn = _drawn_figures(monkeypatch)
+    out, plot = tmp_path / "s.csv", tmp_path / "s.png"
+    argv = ["simulate", "step", "--params", str(path), "--cable", "--to", "30", "--out", str(out), "--plot", str(plot)]
+    assert main(argv) == 0
+    assert capsys.readouterr().out.startswith(f"servo_step_test of digit mine ({path}): 1501 rows")
+    assert drawn[0].axes[0].get_title() == "servo step on the twin of digit mine (as thesis 3.2.4)"
+    assert plot.stat().st_size > 0
+    # the thesis rig's record keeps its title
+    assert (
+        main(["simulate", "step", "--to", "30", "--out", str(tmp_path / "t.csv"), "--plot", str(tmp_path / "t.png")])
+        == 0
+    )
+    assert drawn[1].axes[0].get_title() == "servo step on the twin (thesis 3.2.4, figure 3.11)"
