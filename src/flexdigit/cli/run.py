@@ -234,13 +234,16 @@ def _run(args: argparse.Namespace) -> CommandResult:
         from flexdigit._plot import save_plot
         from flexdigit.rig.run_plot import run_figure
 
-        title = f"{args.controller} on {args.backend}, step to {setpoint:g} deg"
-        if args.params is not None:
-            title = f"digit {digit_name(args.params)}: {title}"
-        data["plot"] = str(save_plot(run_figure(run, title), args.plot, "run", force=args.force))
+        data["plot"] = str(save_plot(run_figure(run, _plot_title(args, setpoint)), args.plot, "run", force=args.force))
     # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
     exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[run.result.status]
     return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
+
+
+def _plot_title(args, setpoint: float) -> str:
+    """``digital20 on sim, step to 30 deg``, after whose digit it is when ``--params`` names one."""
+    title = f"{args.controller} on {args.backend}, step to {setpoint:g} deg"
+    return title if args.params is None else f"digit {digit_name(args.params)}: {title}"
 
 
 def _digit_fields(args, rig) -> dict:
