@@ -59,6 +59,7 @@ __all__ = [
     "derived_figures",
     "params_template",
     "description_notes",
+    "builtin_digits",
     "load_params",
     "save_params",
 ]
@@ -1067,8 +1068,36 @@ def _derive_pair_straight(actuator: dict[str, Any], cables: Any) -> dict[str, An
     return out
 
 
+def _builtin_digit_files() -> dict[str, Any]:
+    """The example digits packaged in ``flexdigit/reference/digits``: name (the file's stem) -> its resource."""
+    from importlib import resources
+
+    folder = resources.files("flexdigit.reference").joinpath("digits")
+    return {
+        f.name.removesuffix(".toml"): f
+        for f in sorted(folder.iterdir(), key=lambda f: f.name)
+        if f.name.endswith(".toml")
+    }
+
+
+def builtin_digits() -> dict[str, str]:
+    """The example digits a command takes by name (``--params two-sections-four-gauges``) to start from: name ->
+    its first comment line (``flexdigit list digits``; ``flexdigit params NAME --write mine.toml`` copies one).
+
+    Examples
+    --------
+    >>> builtin_digits()["thesis-rig"][:16]
+    'The thesis rig: '
+    """
+    return {
+        name: f.read_text(encoding="utf-8").splitlines()[0].lstrip("# ").strip()
+        for name, f in _builtin_digit_files().items()
+    }
+
+
 def load_params(path: str | Path, *, check: bool = True) -> RigParams:
-    """Read rig parameters from a TOML file; missing keys keep the thesis defaults.
+    """Read rig parameters from a TOML file, or a built-in example digit by name (:func:`builtin_digits`) when no
+    such file exists; missing keys keep the thesis defaults.
 
     With ``check`` (the default) a description that contradicts itself (:func:`digit_inconsistencies`) is refused
     naming its first inconsistency; ``flexdigit params FILE`` loads without it to list them all.
@@ -1081,6 +1110,9 @@ def load_params(path: str | Path, *, check: bool = True) -> RigParams:
         If the file does not exist.
     """
     path = Path(path)
+    builtin = _builtin_digit_files().get(str(path)) if not path.exists() else None
+    if builtin is not None:
+        path = Path(str(builtin))
     text = read_text(path, "a rig parameter TOML")
     try:
         data = tomllib.loads(text)

@@ -193,3 +193,35 @@ def test_a_simulated_record_of_a_described_digit_is_titled_with_its_name(tmp_pat
         == 0
     )
     assert drawn[1].axes[0].get_title() == "servo step on the twin (thesis 3.2.4, figure 3.11)"
+
+
+def test_list_digits_names_example_digits_every_command_takes(tmp_path, monkeypatch, capsys):
+    from flexdigit.params import RigParams, builtin_digits, description_notes, digit_inconsistencies, load_params
+
+    assert main(["list", "digits", "--json"]) == 0
+    (listed,) = json.loads(capsys.readouterr().out).values()
+    assert set(listed) == {
+        "thesis-rig",
+        "two-sections-four-gauges",
+        "four-sections-two-cables",
+        "five-sections-eight-gauges",
+    }
+    assert listed == builtin_digits()
+    monkeypatch.chdir(tmp_path)
+    digits = {name: load_params(name) for name in listed}
+    assert digits["thesis-rig"] == RigParams()
+    newcomer = load_params(_template_edited(tmp_path))  # the same digit from the template, edited
+    assert digits["two-sections-four-gauges"] == newcomer
+    g = digits["four-sections-two-cables"].geometry
+    assert (g.strip_length_m, g.digit_length_m) == pytest.approx((0.32, 0.36), abs=1e-12)  # 4 x 80 mm, 10 mm supports
+    for name, params in digits.items():
+        assert digit_inconsistencies(params) == [] and description_notes(params) == [], name
+        assert len(params.sensors.adc_channels) == len(params.geometry.gauge_positions_m), name
+    # copied to edit; a file of that name in the folder is read instead
+    assert main(["params", "two-sections-four-gauges", "--write", "copy.toml"]) == 0
+    assert load_params("copy.toml") == newcomer
+    (tmp_path / "thesis-rig").write_text(
+        "[geometry]\nsection_count = 2\nsection_length_m = 0.1\ngauge_positions_m = [0.05]\n"
+        "[sensors]\nadc_channels = [0]\n"
+    )
+    assert load_params("thesis-rig").geometry.section_count == 2
