@@ -24,7 +24,8 @@ def test_train_writes_its_model_with_out_as_the_other_commands(dataset_file, tmp
     model = tmp_path / "m.json"
     argv = ["train", str(dataset_file), "--target", "contact", "--hidden", "3", "--tol", "1e-4", "--json"]
     assert main([*argv, "--out", str(model)]) == 0
-    assert json.loads(capsys.readouterr().out)["model"] == str(model) and model.is_file()
+    assert json.loads(capsys.readouterr().out)["model"] == str(model)
+    assert model.is_file()
     assert main([*argv, "--out", str(model)]) == 2  # never over it without --force
     assert "--force" in capsys.readouterr().err
     assert main([*argv, "--model", str(tmp_path / "n.json")]) == 0  # the old name still works
@@ -53,7 +54,8 @@ def test_a_bad_gauges_key_names_the_file_the_key_and_a_toml_list(tmp_path, capsy
         ["dataset", "import", str(_readings(tmp_path)), "--map", str(columns), "--out", str(tmp_path / "o.csv")]
     )
     err = capsys.readouterr().err
-    assert code == 2 and err.count("\n") == 1
+    assert code == 2
+    assert err.count("\n") == 1
     assert f"{columns}: key 'gauges' must be 1 to 8 column names (a TOML list" in err
     assert "ColumnMap" not in err
 
@@ -128,7 +130,8 @@ def test_a_changed_dynamics_table_is_noted_as_read_by_no_twin(tmp_path, capsys):
     capsys.readouterr()
     assert main(["params", str(path), "--json"]) == 0
     notes = json.loads(capsys.readouterr().out)["notes"]
-    assert notes == [notes[0]] and notes[0].startswith("[dynamics] wn_housing_rad_s differs from the thesis rig's")
+    assert len(notes) == 1
+    assert notes[0].startswith("[dynamics] wn_housing_rad_s differs from the thesis rig's")
 
 
 def _own_digit_section() -> str:
@@ -144,7 +147,8 @@ def test_the_getting_started_own_digit_steps_run_as_written(tmp_path, monkeypatc
     section = _own_digit_section()
     commands = [line.split("  #")[0].split()[1:] for line in section.splitlines() if line.startswith("    flexdigit ")]
     assert [c[0] for c in commands] == ["params", "params", "run"]
-    assert "--setpoint-deg" in commands[2] and "--params" in commands[2]
+    assert "--setpoint-deg" in commands[2]
+    assert "--params" in commands[2]
     monkeypatch.chdir(tmp_path)
     assert main(commands[0]) == 0
     edited = _template_edited(tmp_path, "edited")
@@ -215,7 +219,8 @@ def test_list_digits_names_example_digits_every_command_takes(tmp_path, monkeypa
     g = digits["four-sections-two-cables"].geometry
     assert (g.strip_length_m, g.digit_length_m) == pytest.approx((0.32, 0.36), abs=1e-12)  # 4 x 80 mm, 10 mm supports
     for name, params in digits.items():
-        assert digit_inconsistencies(params) == [] and description_notes(params) == [], name
+        assert digit_inconsistencies(params) == [], name
+        assert description_notes(params) == [], name
         assert len(params.sensors.adc_channels) == len(params.geometry.gauge_positions_m), name
     # copied to edit; a file of that name in the folder is read instead
     assert main(["params", "two-sections-four-gauges", "--write", "copy.toml"]) == 0

@@ -69,7 +69,8 @@ def test_a_channel_is_named_in_any_case(lab_files):
     assert read_timeseries(lab_files[0], "Sg2_v").channel == "SG2"
     assert read_timeseries(lab_files[0], "gauge3").channel == "SG3"  # the twin's name for the same gauge
     # the clock is read as ms and the decimal comma as a point
-    assert series.t_s[0] == pytest.approx(CLOCK_START_S) and series.dt_s == pytest.approx(1e-3)
+    assert series.t_s[0] == pytest.approx(CLOCK_START_S)
+    assert series.dt_s == pytest.approx(1e-3)
 
 
 def test_a_case_blind_match_of_two_columns_is_refused(tmp_path):
