@@ -1,4 +1,4 @@
-"""``flexdigit list digits|protocols|tissues|specs|robots``: the built-in files a command takes by name, one line each.
+"""``flexdigit list digits|protocols|...``: the built-in files a command takes by name, one line each.
 
 What ``--params`` (digits), ``collect`` and ``palpate --protocol`` (protocols), ``palpate --tissue`` (tissues),
 ``study`` (specs) and ``tdcr --robot`` (robots) accept instead of a file of your own; each domain lists its own.
