@@ -203,7 +203,7 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
     )  # fmt: skip
     if first is None:
         return _nothing_found(series, what, smooth, noise_smooth, t0_s, problems, shared)
-    k_on, k_half, k_first, held, start, end, direction = first
+    k_on, k_half, k_first, held, start, end, direction, hold = first
     t_on = float(t[k_on])
     if t0_s is None and not held:
         # in mid-swing the instant may lie before the record: the extreme a quarter period before the first crossing
@@ -215,6 +215,8 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
         t0_s = max(float(t[k_first]), t_on - 0.2 * float(t[k_half] - t_on)) if k_on > k_first else float(t[k_first])
     delay = float(t[k_half] - t0_s)
     baseline = max(0.0, float(t0_s - t[k_first])) if held else 0.0
+    if hold is not None:  # the hold the extreme's band missed: reported, while the fit starts where it did
+        baseline = max(baseline, float(t[hold[1]] - t[hold[0]]))
     if not growing:  # a growing record has no settled levels or delay time to judge it by
         problems += _shape_problems(series, kind, t, smooth, noise_smooth, float(t0_s), k_on, start, end, delay)
     return Survey(
@@ -278,7 +280,8 @@ def _nothing_found(
 
 
 def _first_swing(t, smooth, noise, t0_s, kind):
-    """``(onset, half-way, first sample, held, start level, end level, direction)`` of the first swing, or None.
+    """``(onset, half-way, first sample, held, start level, end level, direction, hold)`` of the first swing, or
+    None; ``hold`` is ``(first, last)`` sample of a release's hold that sits off its first extreme (else None).
 
     Step: the start level is the median of the first 20 ms (at least 3 samples), refined to the median of
     everything before the onset; the half-way index is the first sample at half the largest deviation from it.
@@ -313,7 +316,7 @@ def _first_swing(t, smooth, noise, t0_s, kind):
         if k_on >= 3:
             start = float(np.median(smooth[: k_on + 1]))
     direction = 1 if smooth[k_half] > start else -1
-    return k_on, k_half, 0, True, start, end, direction
+    return k_on, k_half, 0, True, start, end, direction, None
 
 
 def _crossings(t, x, hysteresis: float) -> list[float]:
@@ -355,8 +358,8 @@ def _release_swing(smooth, noise, end):
     away = np.nonzero(~near[: k_on + 1])[0]
     k_first = int(away[-1]) + 1 if away.size else 0
     hold = _hold_off_the_extreme(smooth, noise, end, peak, band, k_top, k_cross)
-    if hold is not None and hold[1] - hold[0] > k_on - k_first:
-        k_first, k_on = hold
+    if hold is not None and hold[1] - hold[0] <= k_on - k_first:
+        hold = None  # the extreme's band found it already
     held = True
     if np.any(side * (smooth[:k_first] - end) < -band):
         # the signal swung through its rest level before this extreme: the record starts in mid-swing (a gauge near
@@ -366,7 +369,7 @@ def _release_swing(smooth, noise, end):
     half = np.nonzero(np.abs(smooth[k_on:] - end) <= 0.5 * abs(start - end))[0]
     k_half = k_on + int(half[0]) if half.size else smooth.size - 1
     direction = 1 if smooth[k_half] > start else -1
-    return k_on, k_half, k_first, held, start, end, direction
+    return k_on, k_half, k_first, held, start, end, direction, hold
 
 
 #: How far (fraction of the swing) a hold may sit from the first extreme of a release and still be its hold.
@@ -381,7 +384,8 @@ def _hold_off_the_extreme(smooth, noise, end, peak, band, k_top, k_cross):
     higher mode, 3.1.2). The hold is then the stretch within :data:`HOLD_OFFSET` of the swing of that extreme,
     before the crossing, flat within ``band`` of its median; it counts only when it lasts longer than the
     time from its end to the crossing (a record that starts at the release has no such stretch: its first
-    samples are the swing's slow start).
+    samples are the swing's slow start). It is the baseline :func:`survey` reports; the fit still starts where
+    the extreme's band put it, so records whose hold that band found are identified exactly as before.
     """
     wide = np.abs(smooth[: k_cross + 1] - smooth[k_top]) <= HOLD_OFFSET * peak
     outside = np.nonzero(~wide[: k_top + 1])[0]
