@@ -108,7 +108,9 @@ def _friction_entries(ctx: ReportContext, friction, e: list) -> None:
         )
         return
     slack = eq["settings"] - eq["taut"]
-    where = f"the {eq['taut']} of them where the cable is taut" if slack else "the protocol's settings"
+    where = "the protocol's settings"  # the thesis rig: all 63 taut
+    if slack:
+        where = f"the {eq['taut']} of the protocol's {eq['settings']} settings where the cable is taut"
     e.append(
         results.new(
             "actuated.cable_friction_equivalent_servo_deg",
