@@ -171,14 +171,10 @@ def _digit_protocol(args: argparse.Namespace):
     """The ``--params`` digit and the protocol on it: a built-in's positions scaled to the digit's length (the same
     fractions of it), a user protocol's checked against it, before the rig opens."""
     from flexdigit.params import RigParams, load_params
-    from flexdigit.tactile.protocols import BUILTIN, load_protocol
+    from flexdigit.tactile.protocols import load_protocol
 
     params = load_params(args.params) if args.params else RigParams()
-    protocol = load_protocol(args.protocol)
-    if args.protocol in BUILTIN:
-        protocol = protocol.scaled_to(params.geometry.digit_length_m)
-    protocol.plan(params.geometry.digit_length_m)
-    return params, protocol
+    return params, load_protocol(args.protocol, params)
 
 
 def _collect(args: argparse.Namespace) -> CommandResult:

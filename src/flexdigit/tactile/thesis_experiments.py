@@ -86,11 +86,8 @@ def collect_on_twin(
     out = Path(out)
     out.unlink(missing_ok=True)
     journal_path(out).unlink(missing_ok=True)
-    rig = twin_rig(protocol, seed=seed, params=params, calibration=calibration)
-    try:
+    with twin_rig(protocol, seed=seed, params=params, calibration=calibration) as rig:
         return collect(protocol, rig, out, params=params, rig_url="sim", settle_s=settle_s)
-    finally:
-        rig.close()
 
 
 #: How often a random disturbance is drawn in :func:`static_dataset`: every reading, or once per hang (setting)
@@ -163,7 +160,7 @@ def _digit_protocol(name: str, params: RigParams | None = None) -> Protocol:
     """The built-in protocol ``name`` on the digit ``params`` describes: its positions scaled to the digit's length
     (:meth:`~flexdigit.tactile.protocols.Protocol.scaled_to`, as ``flexdigit collect --params`` does); the
     protocol itself on a digit as long as the thesis rig's."""
-    return load_protocol(name).scaled_to((params or RigParams()).geometry.digit_length_m)
+    return load_protocol(name, params or RigParams())
 
 
 def pipeline_corr2_static(
