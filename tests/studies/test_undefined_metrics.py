@@ -125,7 +125,7 @@ def test_slack_settings_are_left_out_of_the_servo_equivalent(tmp_path, digit):
     )
     taut = int(np.sum(sol.tension_n > 0))
     assert eq["settings"] == len(keys)
-    assert 0 < eq["taut_settings"] == taut < len(keys)  # these short digits' cable is slack under some loads
+    assert 0 < eq["taut"] == taut < len(keys)  # these short digits' cable is slack under some loads
     assert 0 < eq["min_deg"] <= eq["median_deg"] <= eq["max_deg"] < 90  # a slack cable's 0 deg is not counted
     assert eq["median_us"] == pytest.approx(eq["median_deg"] * eq["us_per_command"] / params.actuator.deg_per_command)
 
@@ -134,5 +134,5 @@ def test_two_cables_servo_equivalent_is_a_magnitude(tmp_path):
     params = load_params(write_digit("four-sections-two-cables", tmp_path))
     with use_calibration(calibration_for(params), source="test"):
         eq = equivalent_servo_angle(params)
-    assert eq["taut_settings"] == eq["settings"]
+    assert eq["taut"] == eq["settings"]
     assert eq["min_deg"] > 0  # was -5.7..-2.5 deg: the pair's tension falls as the servo turns

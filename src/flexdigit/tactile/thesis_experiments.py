@@ -395,8 +395,10 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
 
     ``ratio x T / (dT/dtheta)`` at every (load, position, command) of the protocol, the slope by central
     differences of the static twin (0.01 command). Returns the median, minimum and maximum in degrees and in
-    microseconds of PWM pulse, and microseconds per command, over the settings whose cable is taut
-    (``taut_settings`` of ``settings``; NaN if none is: a slack cable's tension has no scatter to convert).
+    microseconds of PWM pulse, and microseconds per command, over the settings where the cable is taut (a slack
+    cable's tension does not move with the servo: no angle stands for its friction); ``taut`` counts them, and
+    with none every figure is None and ``reason`` says why. The angle is a magnitude: an antagonistic pair's
+    tension falls as the servo turns.
     """
     params = params or RigParams()
     cal = calibration or default_calibration()
@@ -420,22 +422,30 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
         )
         tension.append(sol.tension_n)
     slope = (tension[2] - tension[0]) / (2 * d)  # N per rad of servo shaft
-    # a setting whose cable is slack (no tension, and the servo's turn does not change it: a short digit bent
-    # that far by the load) has no friction scatter to express as an angle: left out, and counted
-    taut = (tension[1] > 0.0) & (slope != 0.0)
-    deg = np.degrees(cal.cable_friction_ratio * tension[1][taut] / np.abs(slope[taut]))  # a magnitude (2 cables)
     us_per_deg = 1e6 * (a.pulse_width_max_s - a.pulse_width_min_s) / (a.angle_max_deg - a.angle_min_deg)
-    median, low, high = (np.median(deg), deg.min(), deg.max()) if deg.size else (np.nan,) * 3
+    # taut: the cable carries tension and the servo's turn moves it (a short digit bent by the load past the
+    # cable's reach carries none, 0 / 0 before); a magnitude, for the antagonistic pair's falling tension too
+    taut = (tension[1] > 0.0) & (slope != 0.0)
+    if not taut.any():
+        return {
+            **dict.fromkeys(("median_deg", "min_deg", "max_deg", "median_us", "min_us", "max_us")),
+            "us_per_command": float(a.deg_per_command * us_per_deg),
+            "taut": 0,
+            "settings": len(keys),
+            "reason": f"the cable is slack at all {len(keys)} settings of the protocol: its tension does not move "
+            "with the servo",
+        }
+    deg = np.degrees(cal.cable_friction_ratio * tension[1][taut] / np.abs(slope[taut]))
     return {
-        "median_deg": float(median),
-        "min_deg": float(low),
-        "max_deg": float(high),
-        "median_us": float(median * us_per_deg),
-        "min_us": float(low * us_per_deg),
-        "max_us": float(high * us_per_deg),
+        "median_deg": float(np.median(deg)),
+        "min_deg": float(deg.min()),
+        "max_deg": float(deg.max()),
+        "median_us": float(np.median(deg) * us_per_deg),
+        "min_us": float(deg.min() * us_per_deg),
+        "max_us": float(deg.max() * us_per_deg),
         "us_per_command": float(a.deg_per_command * us_per_deg),
+        "taut": int(taut.sum()),
         "settings": len(keys),
-        "taut_settings": int(taut.sum()),
     }
 
 
