@@ -8,11 +8,15 @@ a weight hung anywhere (:func:`flexdigit.shape.shape.shape_accuracy`); it comput
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
+from flexdigit.errors import ConvergenceWarning
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
 from flexdigit.shape.shape import ShapeEstimator, shape_accuracy, true_centre_line_m
+from flexdigit.twin.batched import BatchedChains
 from flexdigit.twin.calibration import default_calibration
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
 
@@ -25,7 +29,10 @@ def build(ctx: ReportContext) -> Chapter:
     commands = tuple(range(8, 44, 10 if ctx.fast else 5))
     length_m = ctx.params.geometry.digit_length_m  # 27 places along the digit (every 10 mm on the thesis rig)
     positions = tuple(round(length_m * k / 27, 3) for k in range(1, 28, 3 if ctx.fast else 1))
-    acc = shape_accuracy(commands, positions, 0.025, seed=ctx.seed, params=ctx.params)
+    with warnings.catch_warnings(record=True) as unsettled:  # said in words below, not a warning with a path
+        warnings.simplefilter("always", ConvergenceWarning)
+        acc = shape_accuracy(commands, positions, 0.025, seed=ctx.seed, params=ctx.params)
+        figure = _figure(ctx)
     summary = acc.summary()
     chapter.paragraphs.append(
         f"The centre line is estimated from the {ctx.gauges_text.replace('gauge', 'gauge voltage')} and the servo "
@@ -46,8 +53,27 @@ def build(ctx: ReportContext) -> Chapter:
         "as a 25 g weight a centimetre away does, and between gauges 1 and 2 position and mass trade off. The "
         "shape survives because a misplaced load of the wrong mass bends the digit almost as the true one does."
     )
-    chapter.figures.append(_figure(ctx))
+    unsettled = [w for w in unsettled if issubclass(w.category, ConvergenceWarning)]
+    if unsettled:
+        chapter.paragraphs.append(_unsettled_text(ctx, len(unsettled)))
+    chapter.figures.append(figure)
     return chapter
+
+
+def _unsettled_text(ctx: ReportContext, count: int) -> str:
+    """What the twin's unconverged static solves (``count`` batches) mean for this chapter, in words."""
+    chains = BatchedChains.from_rigs([ctx.params], [default_calibration()], housing=True, orientation="vertical")
+    at_rest = chains.linearised(np.zeros((1, chains.n)), np.array([-np.inf]))[2][0]
+    why = (
+        "upright, this digit buckles under its own weight (the twin's tangent stiffness at rest has a negative "
+        "eigenvalue), so there is no settled upright shape to compare with"
+        if np.linalg.eigvalsh(at_rest)[0] <= 0
+        else "no equilibrium was found for some of its cases"
+    )
+    return (
+        f"On this digit the twin's static solve did not settle in {count} batch(es) of these cases: {why}. The "
+        "rows of those cases score the estimator against an unsettled shape, not against the digit."
+    )
 
 
 def _accuracy_table(chapter: Chapter, summary, commands: tuple[int, ...]) -> None:

@@ -1,0 +1,35 @@
+"""The shape chapter on a digit that cannot stand upright: said in words, no ConvergenceWarning on the console.
+
+The 5-section, 8-gauge test digit (0.5 m, derived calibration) buckles under its weight upright, so the twin's
+static solve of the chapter's upright cases (bare, command 8..43) does not settle; ``reproduce --params`` printed
+two ``ConvergenceWarning``s with an internal path (issue 24's follow-up).
+"""
+
+import warnings
+
+from digits import write_digit
+from flexdigit.params import RigParams, load_params
+from flexdigit.report import ch8_shape
+from flexdigit.report.chapter import ReportContext
+from flexdigit.twin.calibration import use_calibration
+from flexdigit.twin.digit_calibration import calibration_for
+
+UNSETTLED = "the twin's static solve did not settle"
+
+
+def _chapter(tmp_path, params):
+    with use_calibration(calibration_for(params), source="test"), warnings.catch_warnings():
+        warnings.simplefilter("error")  # any Python warning escaping the chapter fails the test
+        return ch8_shape.build(ReportContext(out_dir=tmp_path, params=params, fast=True))
+
+
+def test_a_digit_that_buckles_upright_is_said_in_words(tmp_path):
+    chapter = _chapter(tmp_path, load_params(write_digit("five-sections-eight-gauges", tmp_path)))
+    text = " ".join(chapter.paragraphs)
+    assert UNSETTLED in text
+    assert "buckles under its own weight" in text
+
+
+def test_the_thesis_rig_chapter_has_no_such_sentence(tmp_path):
+    chapter = _chapter(tmp_path, RigParams())
+    assert UNSETTLED not in " ".join(chapter.paragraphs)
