@@ -286,10 +286,10 @@ def _chain(ps: ParameterSet, cells: int | None = None):
     return cached_digit(ps.params, ps.calibration, True, "vertical", cells or DEFAULT_CELLS_PER_SECTION)
 
 
-def _chains(parameter_sets):
+def _chains(parameter_sets, orientation: str = "vertical"):
     """The parameter sets' digits (housed, tip up as designed, 2.2.4) on the batched twin, with their cables."""
     rigs = ([ps.params for ps in parameter_sets], [ps.calibration for ps in parameter_sets])
-    options = {"housing": True, "orientation": "vertical", "cells_per_section": DEFAULT_CELLS_PER_SECTION}
+    options = {"housing": True, "orientation": orientation, "cells_per_section": DEFAULT_CELLS_PER_SECTION}
     pre = [ps.pair_pretension_n for ps in parameter_sets]
     if all(p is None for p in pre):
         return BatchedChains.from_rigs(*rigs, **options)
@@ -312,8 +312,8 @@ PROBE_MOMENT_NM = 1e-4
 #: in these words (:attr:`flexdigit.studies.sensitivity.SensitivityResult.refused`), as it refuses a failed row.
 _BUCKLED = "its tangent stiffness has a negative eigenvalue: the digit buckles under its weight"
 UNDEFINED: dict[str, str] = {
-    "release_wn_rad_s": f"the digit does not stand upright with the cable removed ({_BUCKLED}): no release mode",
-    "release_zeta": f"the digit does not stand upright with the cable removed ({_BUCKLED}): no release mode",
+    "release_wn_rad_s": f"the digit stands neither tip up nor hung with the cable removed ({_BUCKLED})",
+    "release_zeta": f"the digit stands neither tip up nor hung with the cable removed ({_BUCKLED})",
     "actuated_wn_rad_s": f"the mid-range shape is not a stable equilibrium ({_BUCKLED} and the cable's pull)",
     "tip_stiffness_nm_per_rad": (
         f"the mid-range shape is not a stable equilibrium ({_BUCKLED} and the cable's pull), or the "
@@ -330,10 +330,36 @@ def twin_figures(parameter_sets, *, keep: bool = True) -> dict[str, np.ndarray]:
     Release mode (cable removed), the actuated mode and the tip's rotational stiffness linearised mid-range, the
     rotation per command over the operating commands, and the linearised actuated digit's matrices (for
     :func:`actuated_model`).
+
+    Tip up, as the thesis mounted the digit; a digit that buckles so under its own weight (the straight chain's
+    tangent stiffness has a negative eigenvalue, e.g. tests/digits.py's 0.5 m, 5-section digit) is hung tip down,
+    as :func:`flexdigit.twin.records.release_orientation` and ``run --params`` mount it. A figure about a shape
+    that is not a stable equilibrium in that mount is NaN (:data:`UNDEFINED` says why).
     """
     if keep and _BATCH_CACHE[0] is parameter_sets:
         return _BATCH_CACHE[1]
-    chains = _chains(parameter_sets)
+    out = _mounted_figures(parameter_sets, "vertical")
+    fallen = np.flatnonzero(~out.pop("_upright"))
+    if fallen.size:  # those rows hung (gravity then stiffens them), the others as they stood
+        hung = _mounted_figures([parameter_sets[i] for i in fallen], "hanging")
+        hung.pop("_upright")
+        for name, values in hung.items():
+            for mine, theirs in zip(out[name], values, strict=True) if name == "_linear" else [(out[name], values)]:
+                mine[fallen] = theirs
+    if not keep:
+        return out
+    _BATCH_CACHE[:] = [parameter_sets, out]
+    for i, ps in enumerate(parameter_sets):  # each row's figures, for the per-row metrics built on them
+        _ROWS[ps] = {k: tuple(x[i : i + 1] for x in v) if k == "_linear" else v[i : i + 1] for k, v in out.items()}
+        while len(_ROWS) > _ROWS_KEPT:
+            _ROWS.pop(next(iter(_ROWS)))
+    return out
+
+
+def _mounted_figures(parameter_sets, orientation: str) -> dict[str, np.ndarray]:
+    """:func:`twin_figures` of the digits mounted ``orientation``, and ``_upright``: whether each stands straight
+    so with the cable removed."""
+    chains = _chains(parameter_sets, orientation)
     wn, zeta = chains.linear_modes()
     commands = np.array([ps.params.actuator.operating_commands for ps in parameter_sets], dtype=float)
     ends = np.array(
@@ -361,14 +387,8 @@ def twin_figures(parameter_sets, *, keep: bool = True) -> dict[str, np.ndarray]:
         "tip_stiffness_nm_per_rad": stiffness,
         "_linear": linear,
         "_mid_rotation_deg": np.degrees(psi_mid[:, -1] - tip_lo),
+        "_upright": upright,
     }
-    if not keep:
-        return out
-    _BATCH_CACHE[:] = [parameter_sets, out]
-    for i, ps in enumerate(parameter_sets):  # each row's figures, for the per-row metrics built on them
-        _ROWS[ps] = {k: tuple(x[i : i + 1] for x in v) if k == "_linear" else v[i : i + 1] for k, v in out.items()}
-        while len(_ROWS) > _ROWS_KEPT:
-            _ROWS.pop(next(iter(_ROWS)))
     return out
 
 
