@@ -54,6 +54,9 @@ __all__ = [
     "MAP_FORMAT",
     "SWEEP_COMMANDS",
     "sweep_commands",
+    "sweep_protocol",
+    "SWEEPS",
+    "tare_at_rest",
 ]
 
 MAP_FORMAT = "flexdigit-rotation-map/1"
@@ -75,6 +78,35 @@ def sweep_commands(params=None) -> tuple[int, ...]:
     ks = range(-8, 9, 2) if params.cables.count == 2 else range(9)
     commands = sorted({min(max(a.equilibrium_command + k * step, a.command_min), a.command_max) for k in ks})
     return tuple(int(c) for c in commands)
+
+
+#: The calibration sweep's protocols (:func:`calibrate_rotation`'s ``sweep``): ``"plain"`` visits the commands once,
+#: in order (the thesis rig's, whose report it makes); ``"referenced"`` returns to the straight command between
+#: them, so each reading is taken against the gauges' drift at straight just before and after it.
+SWEEPS = ("plain", "referenced")
+
+
+def sweep_protocol(params=None, reference="twin") -> str:
+    """The sweep :func:`calibrate_rotation` runs by default: ``"referenced"`` for a digit other than the thesis rig
+    mapped on its twin, ``"plain"`` on the thesis rig (the protocol its report, ``flexdigit reproduce``, was made
+    with) and for a protractor or a measured reference (read to 1 deg or 0.5 mm, far coarser than the drift).
+
+    Why: a gauge's amplifier drifts (a random walk, ``noise_drift_v_per_sqrt_s``), and over a plain sweep the drift
+    leans the fitted slope. One coarse quarter bridge (the one-section test digit: 4.8 mV a degree, 0.2 mV/sqrt(s) of
+    drift) ends a 10 s sweep 0.13 deg off, and its map's sensitivity scatters 0.54 % (sd) between twin seeds, 1 %
+    at worst: 0.16-0.3 deg at 30 deg. Referenced to straight before and after each command, it scatters 0.09 %
+    (0.2 % at worst; 10 seeds each, /tmp measurements quoted in docs/digits.md).
+
+    Examples
+    --------
+    >>> from flexdigit.params import RigParams
+    >>> pair = RigParams.from_dict({"cables": {"count": 2, "pretension_n": 3.0}})
+    >>> sweep_protocol(RigParams()), sweep_protocol(pair), sweep_protocol(pair, reference=lambda command: 0.0)
+    ('plain', 'referenced', 'plain')
+    """
+    params = params or RigParams()
+    twin = isinstance(reference, str) and reference == "twin"
+    return "referenced" if twin and params != RigParams() else "plain"
 
 
 #: Draws of the Monte Carlo that propagates the reference's and the readings' uncertainty into the map.
@@ -276,8 +308,9 @@ class RotationEstimator:
 
 
 #: Where a map came from, kept with it (set by :func:`calibrate_rotation`): the source, the sweep's commands, the
-#: time each reading waited for the digit to settle, and the rotation per command the sweep measured.
-_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command")
+#: time each reading waited for the digit to settle (each visit's, straight ones included, for a referenced sweep),
+#: the rotation per command the sweep measured and, where it was not the plain one, the sweep's protocol.
+_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command", "sweep")
 
 
 @dataclass(frozen=True)
@@ -351,6 +384,31 @@ def wait_until_settled(
                 f"{worst + 1}: spread {spread[worst] * 1000:.2f} mV and drift {drift[worst] * 1000:+.2f} mV over "
                 f"{window:g} s, against noise {noise[worst] * 1000:.2f} mV)"
             )
+
+
+#: Readings of the thesis rig's tare (its chapter-5 runs and report: kept as they were).
+THESIS_TARE_READINGS = 5
+
+
+def tare_at_rest(estimator: RotationEstimator, rig: Rig, *, window_s: float = 1.0) -> np.ndarray:
+    """Tare ``estimator`` on ``rig`` at rest where it stands (the straight command: 0 deg by definition).
+
+    On the thesis rig, the mean of :data:`THESIS_TARE_READINGS` readings (its runs and report as they were). On any
+    other digit, the mean of a window of ``window_s`` at rest (:func:`wait_until_settled`, which also checks that
+    the digit is at rest): five readings leave the tare as noisy as ``noise / sqrt(5)``, 0.19 deg on one coarse
+    quarter bridge (0.41 deg a reading) and 0.25 deg on ``random_digit(4)``'s three, an offset the loop then holds
+    for the whole run; a 1 s window's 50 readings leave 0.06 and 0.08 deg, and the gauges' drift over the window
+    (0.04 deg/sqrt(s) on the coarse gauge) about as much again: near the least total for that gauge
+    (``window = sqrt(3 white^2 / (rate drift^2))``, 2.4 s, 0.053 deg).
+
+    Returns the gauges (V) the map was tared on, the mean of the readings (:meth:`RotationEstimator.tare`).
+    """
+    if rig.params == RigParams():
+        rest = np.asarray([rig.read().gauges_v for _ in range(THESIS_TARE_READINGS)])
+    else:
+        rest = wait_until_settled(rig, window_s=window_s, timeout_s=settle_timeout_s(rig)).gauges_v[None, :]
+    estimator.tare(rest)
+    return rest.mean(axis=0)
 
 
 def make_rotation_map(
@@ -449,6 +507,7 @@ def calibrate_rotation(
     timeout_s: float | None = None,
     reference_sd_deg: float | None = None,
     angle_source: Callable[[int], float] | None = None,
+    sweep: str | None = None,
 ) -> RotationEstimator:
     """Static calibration sweep: hold each command, wait for the digit to settle, read, fit gauges -> rotation.
 
@@ -472,6 +531,12 @@ def calibrate_rotation(
         Standard uncertainty of a callable reference's rotations (deg): a 1 deg protractor's 0.29 by default.
     angle_source : callable, optional
         Same as a callable ``reference`` (the earlier name).
+    sweep : {"plain", "referenced"}, optional
+        ``"plain"``: each command once, in order. ``"referenced"``: the straight command before, between and after
+        the others, each reading corrected by the gauges (and the reference) at straight interpolated to its time:
+        a drift slow against a command's settling cancels, at the cost of twice the settles. Default
+        :func:`sweep_protocol` (referenced on a digit other than the thesis rig mapped on its twin). Only with
+        ``settle_s`` None (readings taken at rest).
 
     Returns
     -------
@@ -479,6 +544,7 @@ def calibrate_rotation(
         Fitted, with ``source_``, ``commands_``, ``settle_time_s_`` (per reading) and ``deg_per_command_`` (the
         reference's rotation per command over the sweep) set, and :meth:`~RotationEstimator.uncertainty_deg`.
     """
+    owner = "calibrate_rotation"
     if angle_source is not None:
         reference = angle_source
     if timeout_s is None:
@@ -492,28 +558,34 @@ def calibrate_rotation(
             est = RotationEstimator().fit(reference.gauges_v, reference.rotation_deg, rotation_cov_deg2=cov)
             return _provenance(est, source, commands, [math.nan] * len(commands), reference.rotation_deg)
         angle = reference.angle_source()
-    elif isinstance(reference, str) and reference == "twin":
-        truth = _twin_truth(rig)
-        angle = None
-        source = "twin (its own tip rotation)"
-    elif callable(reference):
-        angle = reference
-        sd = ROTATION_RESOLUTION_DEG / math.sqrt(12) if reference_sd_deg is None else reference_sd_deg
-        sd = check_real(sd, "reference_sd_deg", "calibrate_rotation", low=0.0)
-        source = "operator (measured at each command)"
     else:
-        raise ParameterError(
-            "The 'reference' parameter of calibrate_rotation must be 'twin', a MeasuredReference or a callable. "
-            f"Got {reference!r} instead."
-        )
+        angle, truth, source, sd = _twin_or_operator(rig, reference, reference_sd_deg)
     commands = [int(c) for c in (sweep_commands(rig.params) if commands is None else commands)]
-    X, sd_v, y, waited = _sweep(
-        rig, commands, angle, truth, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
+    sweep = check_choice(sweep_protocol(rig.params, reference) if sweep is None else sweep, "sweep", SWEEPS, owner)
+    X, sd_v, y, waited = _run_sweep(
+        rig, commands, angle, truth, sweep, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
     )
     if cov is None and callable(reference) and not isinstance(reference, str):
         cov = np.eye(len(commands)) * sd**2
     est = RotationEstimator().fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=np.asarray(sd_v))
-    return _provenance(est, source, commands, waited, np.asarray(y))
+    est = _provenance(est, source, commands, waited, np.asarray(y))
+    if sweep != "plain":  # a plain sweep's map reads as before (the thesis rig's saved maps and logs unchanged)
+        est.sweep_ = sweep
+    return est
+
+
+def _twin_or_operator(rig: Rig, reference, reference_sd_deg):
+    """``(angle, truth, source, sd)`` of the ``"twin"`` or a callable reference of :func:`calibrate_rotation`."""
+    if isinstance(reference, str) and reference == "twin":
+        return None, _twin_truth(rig), "twin (its own tip rotation)", None
+    if callable(reference):
+        sd = ROTATION_RESOLUTION_DEG / math.sqrt(12) if reference_sd_deg is None else reference_sd_deg
+        sd = check_real(sd, "reference_sd_deg", "calibrate_rotation", low=0.0)
+        return reference, None, "operator (measured at each command)", sd
+    raise ParameterError(
+        "The 'reference' parameter of calibrate_rotation must be 'twin', a MeasuredReference or a callable. "
+        f"Got {reference!r} instead."
+    )
 
 
 def _measured_commands(reference, commands) -> list:
@@ -535,6 +607,17 @@ def _twin_truth(rig: Rig) -> Callable[[], float]:
             "rotations or deflections, or ask the operator with a protractor)"
         )
     return truth
+
+
+def _run_sweep(rig: Rig, commands, angle, truth, sweep: str, *, settle_s, samples, window_s, timeout_s):
+    """:func:`_sweep` or :func:`_sweep_referenced`, as ``sweep`` says (the referenced one only at rest)."""
+    if sweep == "plain":
+        return _sweep(
+            rig, commands, angle, truth, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
+        )
+    if settle_s is not None:
+        raise ParameterError("calibrate_rotation: sweep='referenced' reads the digit at rest; give settle_s=None")
+    return _sweep_referenced(rig, commands, angle, truth, window_s=window_s, timeout_s=timeout_s)
 
 
 def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, timeout_s):
@@ -570,6 +653,53 @@ def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, tim
         wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
     else:
         rig.wait(settle_s)
+    return X, sd_v, y, waited
+
+
+def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s):
+    """:func:`_sweep` with the straight command read before, between and after the others (``sweep="referenced"``).
+
+    Each reading (gauges, and the reference rotation) is taken against the straight readings just before and after
+    it: their values linearly interpolated to its time are its drift since the mean straight reading, subtracted
+    (the classical A-B-A drift correction of weighing and of strain-gauge zero checks). The straight command itself
+    is represented by the mean of its readings. Returns :func:`_sweep`'s lists, one row per command of
+    ``commands``; the waits are per visit (every visit's, in order).
+    """
+    straight = int(rig.params.actuator.equilibrium_command)
+    visits = [straight]
+    for command in commands:
+        if command != straight:
+            visits += [command, straight]
+    gauges, sds, rotations, times, waited = [], [], [], [], []
+    for command in visits:
+        rig.write_command(command)
+        settled = wait_until_settled(
+            rig, window_s=window_s, timeout_s=timeout_s, truth=truth if angle is None else None
+        )
+        gauges.append(settled.gauges_v)
+        sds.append(settled.sd_v)
+        waited.append(settled.waited_s)
+        rotations.append(settled.truth_deg if angle is None else float(angle(command)))
+        times.append(rig.clock() - window_s / 2)  # the window's middle: only differences between visits matter
+    rig.relax()
+    wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
+    G, S, Y, T = np.asarray(gauges), np.asarray(sds), np.asarray(rotations), np.asarray(times)
+    at = np.array([c == straight for c in visits])
+    # the straight readings' drift from their mean, interpolated to every visit
+    drift_v = np.column_stack([np.interp(T, T[at], G[at, g] - G[at, g].mean()) for g in range(G.shape[1])])
+    drift_deg = np.interp(T, T[at], Y[at] - Y[at].mean())
+    straight_sd = np.sqrt(np.mean(S[at] ** 2, axis=0))
+    X, sd_v, y = [], [], []
+    for command in commands:
+        if command == straight:
+            X.append(G[at].mean(axis=0))
+            sd_v.append(np.sqrt(np.sum(S[at] ** 2, axis=0)) / at.sum())
+            y.append(float(Y[at].mean()))
+        else:
+            k = visits.index(command, 1)
+            X.append(G[k] - drift_v[k])
+            sd_v.append(np.hypot(S[k], straight_sd))
+            y.append(float(Y[k] - drift_deg[k]))
     return X, sd_v, y, waited
 
 
