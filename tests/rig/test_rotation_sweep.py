@@ -14,10 +14,10 @@ import math
 import numpy as np
 import pytest
 
-from flexdigit.errors import ParameterError
+from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig
-from flexdigit.rig.rotation import calibrate_rotation, sweep_protocol, tare_at_rest
+from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation, sweep_protocol, tare_at_rest
 
 from .helpers import FakeClock
 
@@ -33,15 +33,17 @@ THESIS = RigParams()
 
 class DriftingRig(Rig):
     """At rest at once after each command (no dynamics): gauges ``OFFSET + s theta + drift_v_per_s t + noise``,
-    ``theta = DEG_PER_COMMAND (command - straight) + curvature theta^2`` read as the true tip rotation."""
+    ``theta = DEG_PER_COMMAND (command - straight)`` read as the true tip rotation; ``curvature_v_per_deg2`` adds
+    ``c theta^2`` to each gauge (a quarter bridge reading a cable pair's summed tension)."""
 
     name = "drifting"
 
-    def __init__(self, drift_v_per_s, *, noise_v=NOISE_V, seed=0, params=DIGIT):
+    def __init__(self, drift_v_per_s, *, noise_v=NOISE_V, seed=0, params=DIGIT, curvature_v_per_deg2=(0.0, 0.0)):
         self.clock_ = FakeClock()
         super().__init__(params, clock=self.clock_, sleep=self.clock_.sleep)
         self.drift = np.asarray(drift_v_per_s, dtype=float)
         self.noise_v = noise_v
+        self.curvature = np.asarray(curvature_v_per_deg2, dtype=float)
         self.rng = np.random.default_rng(seed)
 
     def tip_rotation_deg(self) -> float:
@@ -49,7 +51,7 @@ class DriftingRig(Rig):
 
     def _read(self):
         theta = self.tip_rotation_deg()
-        gauges = OFFSET_V + SENS_V_PER_DEG * theta + self.drift * self.clock_.now
+        gauges = OFFSET_V + SENS_V_PER_DEG * theta + self.curvature * theta**2 + self.drift * self.clock_.now
         return gauges + self.noise_v * self.rng.standard_normal(gauges.size), math.nan
 
     def _send(self, command):
@@ -118,3 +120,60 @@ def test_a_digit_is_tared_on_a_window_at_rest_the_thesis_rig_on_five_readings():
         spreads[params == THESIS] = np.std(tares)
     assert spreads[True] == pytest.approx(per_reading_deg / math.sqrt(5), rel=0.3)
     assert spreads[False] == pytest.approx(per_reading_deg / math.sqrt(50), rel=0.3)
+
+
+# -- a gauge curved in the rotation ------------------------------------------------------------------------------
+#: The digit with an antagonistic pair: straight mid-range (command 127), swept +-40 deg.
+PAIR = RigParams.from_dict(
+    {
+        "geometry": {"gauge_positions_m": [0.06, 0.2]},
+        "sensors": {"adc_channels": [0, 1]},
+        "cables": {"count": 2, "pretension_n": 3.0},
+    }
+)
+CURVATURE_V_PER_DEG2 = np.array([2.0e-6, 1.0e-6])
+
+
+def test_a_gauge_curved_in_the_rotation_gets_its_quadratic_term_and_the_map_reads_true_both_ways():
+    # the affine map of gauges g = a + s theta + c theta^2 swept symmetrically over +-40 deg, tared at straight, reads
+    # theta + (w . c) theta^2 (the sweep's theta^2 is orthogonal to its theta): w . c = (s . c) / (s . s) = 4.29e-4
+    # deg/deg^2, 0.39 deg high at +-30 deg; the map with the quadratic term inverts u = theta + q theta^2, so it reads
+    # true to the noise, with a linear drift on top that the referenced sweep cancels. Over 30 seeds: q 2.5 % off
+    # (sd 6 %), the gauges' curvatures sd 7 and 16 %, the reading at +-30 deg sd 0.034 / 0.042 deg (the stated
+    # uncertainty 0.040); the bounds below are ~3 sd
+    q_true = float(SENS_V_PER_DEG @ CURVATURE_V_PER_DEG2 / (SENS_V_PER_DEG @ SENS_V_PER_DEG))
+    rig = DriftingRig([0.5e-3, -0.5e-3], params=PAIR, curvature_v_per_deg2=CURVATURE_V_PER_DEG2, seed=5)
+    est = calibrate_rotation(rig)
+    assert est.degree == 2
+    assert est.quadratic_ == pytest.approx(q_true, rel=0.2)
+    np.testing.assert_allclose(est.gauge_v_per_deg2_, CURVATURE_V_PER_DEG2, atol=5e-7)
+    straight = OFFSET_V
+    est.tare(straight)
+    for theta in (30.0, -30.0, 10.0):
+        gauges = OFFSET_V + SENS_V_PER_DEG * theta + CURVATURE_V_PER_DEG2 * theta**2
+        assert est.predict_one(gauges) == pytest.approx(theta, abs=0.15)
+        assert est.predict(gauges[None, :])[0] == pytest.approx(est.predict_one(gauges), abs=1e-12)
+    affine = RotationEstimator().fit(est.gauges_v_, est.rotation_deg_).tare(straight)
+    gauges = OFFSET_V + SENS_V_PER_DEG * 30.0 + CURVATURE_V_PER_DEG2 * 900.0
+    assert affine.predict_one(gauges) - 30.0 == pytest.approx(q_true * 900.0, abs=0.15)  # what the term removes
+    # the map round-trips through its file with the term, and states an uncertainty of the noise's size
+    again = RotationEstimator.from_dict(est.to_dict()).tare(straight)
+    assert again.predict_one(gauges) == pytest.approx(est.predict_one(gauges), abs=1e-12)
+    assert 0.005 < est.uncertainty_deg(30.0) < 0.2
+
+
+def test_a_straight_gauge_keeps_the_affine_map():
+    est = calibrate_rotation(DriftingRig([0.5e-3, -0.5e-3], params=PAIR, seed=6))
+    assert est.degree == 1
+    assert est.quadratic_ == 0.0
+    assert "degree" not in est.to_dict()  # an affine map's file is as before
+
+
+def test_a_map_file_with_a_bad_degree_is_refused_in_one_line():
+    est = calibrate_rotation(DriftingRig([0.0, 0.0], params=PAIR, curvature_v_per_deg2=CURVATURE_V_PER_DEG2))
+    data = est.to_dict()
+    with pytest.raises(DataFileError, match="'degree' must be 1 or 2"):
+        RotationEstimator.from_dict({**data, "degree": 3}, source="m.json")
+    del data["quadratic"]
+    with pytest.raises(DataFileError, match="m.json: 'degree' 2 without 'quadratic'"):
+        RotationEstimator.from_dict(data, source="m.json")

@@ -144,6 +144,12 @@ class RotationEstimator:
         Per-gauge noise standard deviation (V) for the Gauss-Markov weights; equal weights if None.
     ridge : float
         Tikhonov term of ``"lstsq"`` (unused by ``"sensitivity"``).
+    degree : {1, 2}
+        ``"sensitivity"`` only. 1: each gauge linear in the rotation (the affine map). 2: each gauge
+        ``g = a + s theta + c theta^2`` (a quarter bridge of a cable pair reads the cables' summed tension, which
+        grows on both sides of straight once one cable slackens: a V the affine map splits into 0.3 deg errors at
+        +-30 deg, ``random_digit(20)``). The map then reads ``u = w . g + b = theta + q theta^2`` (``q = w . c``,
+        ``quadratic_``) and inverts it exactly, ``theta = 2 u / (1 + sqrt(1 + 4 q u))``; the tare is on ``u``.
 
     Examples
     --------
@@ -153,11 +159,14 @@ class RotationEstimator:
     """
 
     METHODS = ("sensitivity", "lstsq")
+    #: The map's reading's curvature, deg per deg^2 (``degree`` 2; 0 for an affine map).
+    quadratic_ = 0.0
 
-    def __init__(self, method: str = "sensitivity", noise_v=None, ridge: float = 1e-9) -> None:
+    def __init__(self, method: str = "sensitivity", noise_v=None, ridge: float = 1e-9, degree: int = 1) -> None:
         self.method = method
         self.noise_v = noise_v
         self.ridge = ridge
+        self.degree = degree
 
     def fit(self, gauges_v, rotation_deg, *, rotation_cov_deg2=None, gauges_sd_v=None) -> RotationEstimator:
         """Fit the map to gauge readings (n, G) at reference rotations (n,).
@@ -183,7 +192,16 @@ class RotationEstimator:
             )
         # each gauge's volts per degree along the sweep (least-squares slopes): the sensitivities s
         sens = ((X - X.mean(axis=0)).T @ yc) / float(yc @ yc)
+        offset = X.mean(axis=0) - sens * y.mean()  # gauges at 0 deg
+        curvature = np.zeros(gauges)
+        if self.degree not in (1, 2) or isinstance(self.degree, bool):
+            raise ParameterError(f"The 'degree' parameter of RotationEstimator must be 1 or 2. Got {self.degree!r}.")
+        if self.degree == 2:
+            if self.method != "sensitivity" or y.size < 5 or np.unique(y).size < 3:
+                raise DataFileError("RotationEstimator.fit: degree 2 needs method 'sensitivity' and >= 3 rotations")
+            offset, sens, curvature = np.linalg.lstsq(np.c_[np.ones(y.size), y, y * y], X, rcond=None)[0]
         self.gauge_v_per_deg_ = sens
+        self.gauge_v_per_deg2_ = curvature
         if self.method == "sensitivity":
             if self.noise_v is None:
                 weight = np.ones(gauges)
@@ -195,7 +213,6 @@ class RotationEstimator:
             information = float(sens @ (weight * sens))
             if not information > 0:
                 raise DataFileError("RotationEstimator.fit: the gauges did not change over the sweep")
-            offset = X.mean(axis=0) - sens * y.mean()  # gauges at 0 deg
             self.coef_ = weight * sens / information
             self.intercept_ = float(-self.coef_ @ offset)
         else:
@@ -205,8 +222,9 @@ class RotationEstimator:
             coef = np.linalg.solve(A.T @ A + reg, A.T @ y)
             self.coef_ = coef[:gauges]
             self.intercept_ = float(coef[gauges])
-        self.residual_deg_ = float(np.sqrt(np.mean((X @ self.coef_ + self.intercept_ - y) ** 2)))
+        self.quadratic_ = float(self.coef_ @ curvature)
         self.tare_deg_ = 0.0
+        self.residual_deg_ = float(np.sqrt(np.mean((self.predict(X) - y) ** 2)))
         n = y.size
         cov = np.zeros((n, n)) if rotation_cov_deg2 is None else np.asarray(rotation_cov_deg2, dtype=float)
         sd = np.zeros((n, gauges)) if gauges_sd_v is None else np.asarray(gauges_sd_v, dtype=float)
@@ -240,13 +258,19 @@ class RotationEstimator:
         except np.linalg.LinAlgError:
             chol = np.diag(np.sqrt(np.clip(np.diag(self.rotation_cov_deg2_), 0.0, None)))
         sens, offset = self.gauge_v_per_deg_, X.mean(axis=0) - self.gauge_v_per_deg_ * y.mean()
+        if self.degree == 2:  # the gauge curves fitted now: offsets (0 deg), slopes and curvatures
+            offset, sens, curvature = np.linalg.lstsq(np.c_[np.ones(n), y, y * y], X, rcond=None)[0]
         held = np.empty(UNCERTAINTY_DRAWS)
         for k in range(UNCERTAINTY_DRAWS):
             y_k = y + chol @ rng.standard_normal(n)
             X_k = X + self.gauges_sd_v_ * rng.standard_normal(X.shape)
-            m = RotationEstimator(self.method, self.noise_v, self.ridge).fit(X_k, y_k)
-            # the refitted map reads `at` where w'(a + s theta) + b' = at, on the gauge lines fitted now
-            held[k] = (at - m.intercept_ - m.coef_ @ offset) / (m.coef_ @ sens)
+            m = RotationEstimator(self.method, self.noise_v, self.ridge, self.degree).fit(X_k, y_k)
+            if self.degree == 1:
+                # the refitted map reads `at` where w'(a + s theta) + b' = at, on the gauge lines fitted now
+                held[k] = (at - m.intercept_ - m.coef_ @ offset) / (m.coef_ @ sens)
+            else:  # ... where w'(a + s theta + c theta^2) + b' = at + q' at^2, on the gauge curves fitted now
+                r = at + m.quadratic_ * at * at - m.intercept_ - m.coef_ @ offset
+                held[k] = _quadratic_root(float(m.coef_ @ sens), float(m.coef_ @ curvature), r)
         spread = float(np.std(held))
         dof = n - 2
         if dof > 0:
@@ -263,20 +287,28 @@ class RotationEstimator:
         return spread
 
     def predict(self, gauges_v) -> np.ndarray:
-        return np.asarray(gauges_v, dtype=float) @ self.coef_ + self.intercept_ - self.tare_deg_
+        u = np.asarray(gauges_v, dtype=float) @ self.coef_ + self.intercept_ - self.tare_deg_
+        q = getattr(self, "quadratic_", 0.0)
+        return u if q == 0.0 else 2.0 * u / (1.0 + np.sqrt(np.maximum(1.0 + 4.0 * q * u, 0.0)))
 
     def predict_one(self, gauges_v: np.ndarray) -> float:
         g = gauges_v
         c = self.coef_
         if c.size == 3:  # the thesis rig's, as ever (the loop's hot path)
-            return float(g[0] * c[0] + g[1] * c[1] + g[2] * c[2]) + self.intercept_ - self.tare_deg_
-        return float(np.dot(g, c)) + self.intercept_ - self.tare_deg_
+            u = float(g[0] * c[0] + g[1] * c[1] + g[2] * c[2]) + self.intercept_ - self.tare_deg_
+        else:
+            u = float(np.dot(g, c)) + self.intercept_ - self.tare_deg_
+        q = self.quadratic_
+        return u if q == 0.0 else 2.0 * u / (1.0 + math.sqrt(max(1.0 + 4.0 * q * u, 0.0)))
 
     def tare(self, gauges_v, at_deg: float = 0.0) -> RotationEstimator:
-        """Shift the map so ``gauges_v`` (mean of rows) reads ``at_deg``."""
+        """Shift the map so ``gauges_v`` (mean of rows) reads ``at_deg`` (the shift is on the map's linear
+        reading ``u``: ``at + q at^2`` there)."""
         g = np.atleast_2d(np.asarray(gauges_v, dtype=float)).mean(axis=0)
+        q, self.quadratic_ = self.quadratic_, 0.0
         self.tare_deg_ = 0.0
-        self.tare_deg_ = float(self.predict_one(g) - at_deg)
+        self.tare_deg_ = float(self.predict_one(g) - (at_deg + q * at_deg * at_deg if q else at_deg))
+        self.quadratic_ = q
         return self
 
     def __call__(self, reading: Reading) -> float:
@@ -292,6 +324,8 @@ class RotationEstimator:
             "gauge_v_per_deg": self.gauge_v_per_deg_.tolist(),
             "residual_deg": self.residual_deg_ if math.isfinite(self.residual_deg_) else None,
         }
+        if self.degree == 2:  # an affine map's file stays as it was
+            out.update(degree=2, quadratic=self.quadratic_, gauge_v_per_deg2=self.gauge_v_per_deg2_.tolist())
         if hasattr(self, "rotation_deg_"):  # the sweep it was fitted on: its uncertainty can be told again
             out["gauges_v"] = self.gauges_v_.tolist()
             out["rotation_deg"] = self.rotation_deg_.tolist()
@@ -568,10 +602,32 @@ def calibrate_rotation(
     if cov is None and callable(reference) and not isinstance(reference, str):
         cov = np.eye(len(commands)) * sd**2
     est = RotationEstimator().fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=np.asarray(sd_v))
+    if sweep == "referenced":
+        est = _curved_if_material(est, cov, np.asarray(sd_v))
     est = _provenance(est, source, commands, waited, np.asarray(y))
     if sweep != "plain":  # a plain sweep's map reads as before (the thesis rig's saved maps and logs unchanged)
         est.sweep_ = sweep
     return est
+
+
+#: How far (deg, anywhere on the sweep, both maps tared at straight) the map with each gauge's quadratic term must
+#: read from the affine one for the term to be kept: 3 standard deviations of that difference from the readings'
+#: noise alone on the coarsest test digit (one quarter bridge, 0.06 deg a referenced point), so a straight gauge
+#: keeps the affine map (and its variance) and a curved one (``random_digit(20)``: 0.33 deg at +-30 deg) does not.
+CURVATURE_MATERIAL_DEG = 0.15
+
+
+def _curved_if_material(affine: RotationEstimator, cov, sd_v) -> RotationEstimator:
+    """The map with each gauge's quadratic term (``degree=2``) where it reads more than
+    :data:`CURVATURE_MATERIAL_DEG` from ``affine`` somewhere on the sweep, else ``affine``."""
+    X, y = affine.gauges_v_, affine.rotation_deg_
+    if y.size < 5 or np.unique(y).size < 3:
+        return affine
+    curved = RotationEstimator(degree=2).fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=sd_v)
+    straight = X[int(np.argmin(np.abs(y)))]
+    gap = curved.tare(straight).predict(X) - affine.tare(straight).predict(X)
+    curved.tare_deg_ = affine.tare_deg_ = 0.0
+    return curved if float(np.max(np.abs(gap))) > CURVATURE_MATERIAL_DEG else affine
 
 
 def _twin_or_operator(rig: Rig, reference, reference_sd_deg):
@@ -739,6 +795,11 @@ def load_rotation_map(path) -> RotationEstimator:
 _EXPECTED = "expected a flexdigit rotation map: coef[G], intercept, gauge_v_per_deg[G] (G = 1..8 gauges)"
 
 
+def _quadratic_root(slope: float, curvature: float, r: float) -> float:
+    """The root of ``curvature x^2 + slope x = r`` that tends to ``r / slope`` as ``curvature`` -> 0 (slope > 0)."""
+    return 2.0 * r / (slope + math.sqrt(max(slope * slope + 4.0 * curvature * r, 0.0)))
+
+
 def _from_dict(cls, data, source: str) -> RotationEstimator:
     """:meth:`RotationEstimator.from_dict`."""
     if not isinstance(data, dict):
@@ -746,6 +807,7 @@ def _from_dict(cls, data, source: str) -> RotationEstimator:
     if data.get("format", MAP_FORMAT) != MAP_FORMAT:
         raise DataFileError(f"{source}: format {data.get('format')!r}; this flexdigit reads {MAP_FORMAT!r}")
     known = {"format", "method", "coef", "intercept", "gauge_v_per_deg", "residual_deg", "gauges_v", "rotation_deg"}
+    known |= {"degree", "quadratic", "gauge_v_per_deg2"}
     known |= {"rotation_cov_deg2", "gauges_sd_v", *_PROVENANCE}
     unknown = sorted(set(data) - known)
     if unknown:
@@ -771,6 +833,16 @@ def _from_dict(cls, data, source: str) -> RotationEstimator:
     if not np.any(est.coef_ != 0) or not abs(est.coef_ @ est.gauge_v_per_deg_) > 0:
         raise DataFileError(f"{source}: the map's 'coef' {est.coef_.tolist()} read no rotation from the gauges")
     est.tare_deg_ = 0.0
+    est.quadratic_ = 0.0
+    if data.get("degree", 1) not in (1, 2):
+        raise DataFileError(f"{source}: 'degree' must be 1 or 2; got {data.get('degree')!r:.40}")
+    if data.get("degree", 1) == 2:
+        for key in ("quadratic", "gauge_v_per_deg2"):
+            if key not in data:
+                raise DataFileError(f"{source}: 'degree' 2 without {key!r}; {_EXPECTED}")
+        est.degree = 2
+        est.quadratic_ = float(array("quadratic", ()))
+        est.gauge_v_per_deg2_ = array("gauge_v_per_deg2", (gauges,))
     residual = data.get("residual_deg")
     est.residual_deg_ = float(residual) if isinstance(residual, int | float) else math.nan
     if "rotation_deg" in data:
