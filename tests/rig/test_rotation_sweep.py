@@ -177,3 +177,10 @@ def test_a_map_file_with_a_bad_degree_is_refused_in_one_line():
     del data["quadratic"]
     with pytest.raises(DataFileError, match="m.json: 'degree' 2 without 'quadratic'"):
         RotationEstimator.from_dict(data, source="m.json")
+
+
+def test_a_sweep_with_a_fixed_wait_stays_plain_on_a_digit():
+    # the report's chapter-5 studies sweep any digit with a fixed wait (settle_s): that sweep is the plain one
+    est = calibrate_rotation(DriftingRig([0.0, 0.0]), settle_s=0.5)
+    assert not hasattr(est, "sweep_")
+    assert len(est.settle_time_s_) == len(est.commands_)

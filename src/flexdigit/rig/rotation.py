@@ -569,8 +569,9 @@ def calibrate_rotation(
         ``"plain"``: each command once, in order. ``"referenced"``: the straight command before, between and after
         the others, each reading corrected by the gauges (and the reference) at straight interpolated to its time:
         a drift slow against a command's settling cancels, at the cost of twice the settles. Default
-        :func:`sweep_protocol` (referenced on a digit other than the thesis rig mapped on its twin). Only with
-        ``settle_s`` None (readings taken at rest).
+        :func:`sweep_protocol` (referenced on a digit other than the thesis rig mapped on its twin) when readings
+        are taken at rest (``settle_s`` None), plain after a fixed wait (the report's chapter-5 studies); a
+        referenced sweep with a fixed wait is refused.
 
     Returns
     -------
@@ -595,7 +596,8 @@ def calibrate_rotation(
     else:
         angle, truth, source, sd = _twin_or_operator(rig, reference, reference_sd_deg)
     commands = [int(c) for c in (sweep_commands(rig.params) if commands is None else commands)]
-    sweep = check_choice(sweep_protocol(rig.params, reference) if sweep is None else sweep, "sweep", SWEEPS, owner)
+    default = sweep_protocol(rig.params, reference) if settle_s is None else "plain"  # a fixed wait: as it was
+    sweep = check_choice(default if sweep is None else sweep, "sweep", SWEEPS, owner)
     X, sd_v, y, waited = _run_sweep(
         rig, commands, angle, truth, sweep, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
     )
