@@ -184,3 +184,45 @@ def test_a_sweep_with_a_fixed_wait_stays_plain_on_a_digit():
     est = calibrate_rotation(DriftingRig([0.0, 0.0]), settle_s=0.5)
     assert not hasattr(est, "sweep_")
     assert len(est.settle_time_s_) == len(est.commands_)
+
+
+# -- on the twin: the map against the twin's own statics ---------------------------------------------------------
+def _held_on_twin(params, seed: int, setpoints) -> list[float]:
+    """The true rotation (deg) at which the map `run --params` fits (a sweep of the twin seeded ``seed``), tared on
+    the clean straight gauges, reads each setpoint: on the twin's noise-free static equilibria
+    (:func:`~flexdigit.twin.twin.static_gauges_v`) at every command of the range, interpolated."""
+    from flexdigit.rig.base import open_rig
+    from flexdigit.twin.twin import static_gauges_v
+
+    est = calibrate_rotation(open_rig("sim", params, seed=seed))
+    a = params.actuator
+    commands = np.arange(max(a.command_min, a.equilibrium_command - 30), a.equilibrium_command + 31)
+    zeros = np.zeros(commands.size)
+    gauges, sol = static_gauges_v(zeros, zeros, commands, params=params, orientation="vertical", adc=False,
+                                  return_solution=True)  # fmt: skip
+    straight = int(np.flatnonzero(commands == a.equilibrium_command)[0])
+    truth = np.degrees(sol.psi_rad[:, -1] - sol.psi_rad[straight, -1])
+    read = est.tare(gauges[straight]).predict(gauges)
+    return [float(np.interp(s, read, truth)) for s in setpoints]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_the_one_section_digits_map_holds_30_deg_on_its_twins_statics(seed):
+    # one quarter bridge, 4.8 mV a degree, 0.2 mV/sqrt(s) of drift: the plain sweep's maps held 29.69 / 29.71 / 30.04
+    # deg on these seeds (its drift), the referenced one 29.992 / 29.993 / 29.998; its spread from the readings'
+    # noise is 0.09 % (0.027 deg at 30), so 0.1 deg is ~3.5 sd and a third of the plain sweep's error
+    from digits import DIGITS
+
+    params = RigParams.from_dict(DIGITS["one-section"])
+    assert _held_on_twin(params, seed, [30.0]) == pytest.approx([30.0], abs=0.1)
+
+
+def test_a_quarter_bridge_pairs_curved_map_holds_both_signs_on_its_twins_statics():
+    # random_digit(20): 4 quarter bridges on a pair; the affine map held +30.34 / -29.68 deg (clean static gauges),
+    # the curved one +30.07 / -29.94 (seed 1; the V of the pair's summed tension is not quite a parabola)
+    from digits import random_digit
+
+    params = RigParams.from_dict(random_digit(20))
+    plus, minus = _held_on_twin(params, 1, [30.0, -30.0])
+    assert plus == pytest.approx(30.0, abs=0.15)
+    assert minus == pytest.approx(-30.0, abs=0.15)
