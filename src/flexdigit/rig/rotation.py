@@ -617,13 +617,29 @@ def calibrate_rotation(
 #: noise alone on the coarsest test digit (one quarter bridge, 0.06 deg a referenced point), so a straight gauge
 #: keeps the affine map (and its variance) and a curved one (``random_digit(20)``: 0.33 deg at +-30 deg) does not.
 CURVATURE_MATERIAL_DEG = 0.15
+#: Two-sided level at which the sweep's curvature must be significant too (the t statistic of ``u^2`` in the
+#: reference rotations regressed on ``1, u, u^2``, ``u`` the affine map's reading): a lightly damped digit's readings
+#: scatter more than the threshold above assumes (``random_digit(18)``: 0.11 deg a point, t = 2.2 on one seed,
+#: where ``random_digit(20)``'s curve gives t = 10-17).
+CURVATURE_LEVEL = 0.01
 
 
 def _curved_if_material(affine: RotationEstimator, cov, sd_v) -> RotationEstimator:
-    """The map with each gauge's quadratic term (``degree=2``) where it reads more than
-    :data:`CURVATURE_MATERIAL_DEG` from ``affine`` somewhere on the sweep, else ``affine``."""
+    """The map with each gauge's quadratic term (``degree=2``) where the sweep's curvature is significant at
+    :data:`CURVATURE_LEVEL` and that map reads more than :data:`CURVATURE_MATERIAL_DEG` from ``affine`` somewhere on
+    the sweep, else ``affine``."""
+    from scipy.stats import t as student_t
+
     X, y = affine.gauges_v_, affine.rotation_deg_
-    if y.size < 5 or np.unique(y).size < 3:
+    dof = y.size - 3
+    if dof < 2 or np.unique(y).size < 3:
+        return affine
+    u = affine.predict(X)
+    A = np.c_[np.ones_like(u), u, u * u]
+    fit, *_ = np.linalg.lstsq(A, y, rcond=None)
+    residual = y - A @ fit
+    variance = float(residual @ residual) / dof * np.linalg.pinv(A.T @ A)[2, 2]
+    if not abs(fit[2]) > student_t.ppf(1 - CURVATURE_LEVEL / 2, dof) * math.sqrt(variance):
         return affine
     curved = RotationEstimator(degree=2).fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=sd_v)
     straight = X[int(np.argmin(np.abs(y)))]
