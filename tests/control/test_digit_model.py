@@ -241,6 +241,7 @@ def test_random_digit_18_settles_at_minus_30_deg_on_seed_1(tmp_path, capsys):
     assert main(argv) == 0
     run = json.loads(capsys.readouterr().out)
     true = run["step_metrics"]["true"]
-    assert true["settling_time_s"] is not None and true["settling_time_s"] < 1.0
+    assert true["settling_time_s"] is not None
+    assert true["settling_time_s"] < 1.0
     assert true["overshoot_percent"] < 10.0
     assert abs(run["true_final_rotation_deg"] + 30.0) < 0.6
