@@ -34,6 +34,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_designunequal",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_tdcrcli",
+    "benchmarks.bench_tdcrfix",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
