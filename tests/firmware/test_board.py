@@ -304,3 +304,20 @@ def test_the_loops_start_makes_its_first_pulse_wherever_the_line_lands(firmware)
                 f"line at +{k * 0.1:.1f} ms: the pulse after the start tick is {rig.board_command:.2f}, "
                 f"the first update commanded {first.pot}"
             )
+
+
+def test_a_build_with_other_options_is_rebuilt(tmp_path, make_image, rotation_map):
+    """``make`` in a build directory that holds an image of other options rebuilds the export and the image: the
+    period and the format in the new image's header are the ones asked for, not the old build's."""
+    out = tmp_path / "build"
+    make_image(out, 0.020, "float")
+    assert "#define FD_CTRL_PERIOD_US 20000UL" in (out / "ctrl.h").read_text()
+    first = (out / "flexdigit_board.elf").read_bytes()
+    make_image(out, 0.005, "fixed")
+    header = (out / "ctrl.h").read_text()
+    assert "#define FD_CTRL_PERIOD_US 5000UL" in header and "#define FD_CTRL_FIXED_POINT 1" in header
+    assert (out / "flexdigit_board.elf").read_bytes() != first
+    assert (out / "options").read_text().split() == [
+        "design=digital20", "period_s=0.005", "format=fixed", f"map={rotation_map}", "params=", "calibration=",
+        "pulse_delay_ms=1",
+    ]  # fmt: skip
