@@ -24,9 +24,13 @@
  *   safe state (relax to the equilibrium command, or hold) and `# fault <code> <name>`; cleared by an M line.
  * - PD7 (Uno pin 7) is high while the control update runs: its width is the update's execution time (a pin of
  *   another port than the servo's, so its writes never touch OC1A's port).
+ * - With nothing to do (no byte from the host to read, no control period due), the CPU sleeps in idle mode (the
+ *   timers, the ADC and the UART run on) until the next interrupt: the cycles it sleeps are what is left of the CPU
+ *   (the simavr harness counts them: benchmarks/bench_board.py's idle share), and a real board draws less.
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
+#include <avr/sleep.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -419,6 +423,8 @@ int main(void)
     UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
     UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
     fd_ctrl_reset(&ctrl, (float)FD_CTRL_COMMAND_EQ);
+    /* idle mode (SM2..0 = 000): avr-libc's set_sleep_mode() does not pass -Wconversion */
+    SMCR = (uint8_t)(SMCR & (uint8_t)~(_BV(SM2) | _BV(SM1) | _BV(SM0)));
     sei();
     snprintf(banner, sizeof(banner),
              "# flexdigit-stream %d adc=atmega328p v_per_count=0.0048828125 rate_hz=%lu board=flexdigit-board "
@@ -464,5 +470,15 @@ int main(void)
                 seq++;
             }
         }
+        /* nothing to do: sleep until an interrupt. Checked with interrupts off, and SLEEP follows SEI before any
+           interrupt can run (avr-libc's sleep.h idiom), so work an interrupt brings in between is never slept on */
+        cli();
+        if (rx_tail == rx_head && ticks < CONTROL_DIV) {
+            sleep_enable();
+            sei();
+            sleep_cpu();
+            sleep_disable();
+        }
+        sei();
     }
 }

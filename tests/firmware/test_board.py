@@ -321,3 +321,33 @@ def test_a_build_with_other_options_is_rebuilt(tmp_path, make_image, rotation_ma
         "design=digital20", "period_s=0.005", "format=fixed", f"map={rotation_map}", "params=", "calibration=",
         "pulse_delay_ms=1",
     ]  # fmt: skip
+
+
+def _idle_share(rig, seconds: float) -> float:
+    """The share of the board's cycles its CPU slept over the next ``seconds`` (the harness counts them)."""
+    cycles, idle = rig.board_cycles, rig.idle_cycles
+    rig.wait(seconds)
+    return (rig.idle_cycles - idle) / (rig.board_cycles - cycles)
+
+
+@pytest.mark.slow
+def test_the_idle_share_is_what_the_update_leaves(firmware):
+    """Two measurements of the emulated ATmega328P that must agree: the cycles its CPU sleeps (the firmware sleeps
+    whenever it has nothing to do) and the width of the PD7 pulse around each control update. The same image with
+    the loop on the board sleeps less than with the host commanding (no update runs) by the updates' cycles, less
+    the rest reading's float division and map the board skips while its loop runs (<= 1000 cycles a period)."""
+    import numpy as np
+
+    period_cycles = 0.002 * 16e6
+    elf = firmware(0.002, "fixed")
+    with open_rig(f"hil://{elf}", mode="host") as rig:
+        rig.wait(0.2)
+        host = _idle_share(rig, 0.5)
+    with open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0) as rig:
+        rig.wait(0.2)
+        n = len(rig.exec_cycles)
+        board = _idle_share(rig, 0.5)
+        update = float(np.mean(rig.exec_cycles[n:]))
+        assert rig.stats()["idle_fraction"] == pytest.approx(rig.idle_cycles / rig.board_cycles)
+    assert 0.0 < board < host < 1.0
+    assert 0.0 <= update - (host - board) * period_cycles <= 1000.0
