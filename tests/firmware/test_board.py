@@ -141,7 +141,7 @@ def test_each_fault_ends_in_the_safe_state_within_one_period(firmware, case):
 SETTLING_FRACTION, OVERSHOOT_POINTS = 0.05, 1.0
 #: The noise seeds each loop runs with. One seed decides nothing: a servo command is 1.7 deg of rotation, so one
 #: command more or less at the peak moves the overshoot by ~3 points at 2 ms (the Python loop's 16-bit readings:
-#: 15.0-16.3 % by seed; the board's 10-bit ones: 15.15 % on each seed since its loop's start is dated by the line's
+#: 15.0-16.3 % by seed; the board's 10-bit ones: 15.15 % or 16.28 % since its loop's start is dated by the line's
 #: arrival, 15.1 % or 17.7-19.1 % before: a startup race, docs/board.md), and a peak near the 2 % band moves the
 #: settling by a whole oscillation (the Python loop alone at 20 ms: 0.59-0.75 s over seeds 0-5). So the figures
 #: compared are typical ones over STEP_SEEDS: the median settling time (a discontinuous figure, bimodal by seed)
@@ -212,6 +212,9 @@ def test_run_on_board_cli_says_where_the_loop_ran(firmware, capsys):
     assert doc["status"] == "completed"
     assert doc["board"]["exec_max_cycles"] > 0
     assert doc["board"]["faults"] == []
+    assert 0.5 < doc["board"]["idle_fraction"] < 1.0  # the share of the run its CPU slept (20 ms: ~88 %)
+    assert main(["run", "--on-board", "--backend", f"hil://{elf}", "--duration", "0.5"]) == 0
+    assert capsys.readouterr().out.startswith(f"loop on the board (hil://{elf})")  # the log says it too
     assert main(["run", "--on-board", "--backend", "sim", "--json"]) == 2  # only a board closes the loop
 
 
