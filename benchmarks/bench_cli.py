@@ -1,4 +1,5 @@
-"""Start-up of the ``flexdigit`` command: ``--help``, ``--version``, ``params`` and ``model`` (goal <= 0.5 s each).
+"""Start-up of the ``flexdigit`` command: ``--help`` (goal <= 0.3 s, issue 23), ``--version``, ``params`` and
+``model`` (goal <= 0.5 s each).
 
 Each is a fresh process (``python -m flexdigit.cli ...`` from this interpreter), best of 5: the figure a user
 waits for. Sub-command modules only register their options; the libraries a command needs (python-control,
@@ -15,6 +16,8 @@ import time
 
 REPEATS = 5
 GOAL_S = 0.5
+#: ``flexdigit --help``: what every user waits for first (issue 23's "Done when": <= 0.3 s).
+HELP_GOAL_S = 0.3
 
 
 def _best_of(argv: list[str], repeats: int = REPEATS) -> float:
@@ -35,7 +38,7 @@ def run() -> list[dict]:
                 "name": "flexdigit " + " ".join(args),
                 "value": _best_of(cli + args),
                 "unit": "s",
-                "goal": f"<= {GOAL_S} s",
+                "goal": f"<= {HELP_GOAL_S if args == ['--help'] else GOAL_S} s",
                 "note": f"fresh process, best of {REPEATS}",
             }
         )

@@ -30,6 +30,8 @@ def _inputs() -> dict:
     from flexdigit.shape.shape import ShapeEstimator
     from flexdigit.shape.shape_plot import shape_figure
     from flexdigit.tactile.prediction_plot import prediction_figure
+    from flexdigit.tdcr import ROBOTS, backbone_figure, contact_figure, experiment_figure, sense_contact, sense_shape
+    from flexdigit.tdcr import step_test as robot_step_test
     from flexdigit.twin.record_plot import record_figure
     from flexdigit.twin.records import actuation_sweep, servo_step_test
 
@@ -44,6 +46,10 @@ def _inputs() -> dict:
     rng = np.random.default_rng(0)
     actual = rng.uniform(0.0, 0.24, 1000)  # a thesis-sized test set: 1000 readings, m from the tip
     estimate = ShapeEstimator().estimate([0.0085, 0.765, 0.151], command=22)
+    robot, pulls = ROBOTS["rao2021"], [2.0, 0, 0, 1.0, 0, 0]
+    robot_step = robot_step_test(robot, pulls, duration_s=1.0, dt_s=1e-3)  # 1 s at 1 kHz, as `simulate --robot`
+    robot_shape = sense_shape(robot, tensions_n=pulls, noise_std=1e-6, seed=0)
+    robot_contact = sense_contact(robot, pulls, contact_s_m=0.3, contact_force_n=[0.0, 0.05, 0.0])
     return {
         "simulate step: record": lambda: record_figure(step),
         "identify step: fit over the record": lambda: fit_figure(series, fit),
@@ -53,6 +59,9 @@ def _inputs() -> dict:
         ),
         "calibrate: residuals per target": lambda: residual_figure(calibration),
         "shape: centre line": lambda: shape_figure(estimate),
+        "simulate step --robot: the tip's path (1001 samples)": lambda: experiment_figure(robot_step),
+        "tdcr shape: backbone beside the twin's": lambda: backbone_figure(robot_shape, robot),
+        "tdcr contact: the contact on the backbone": lambda: contact_figure(robot_contact, robot),
     }
 
 

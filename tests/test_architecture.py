@@ -11,6 +11,7 @@ tdcr (tendon robots in 3D, issue 26) sits at the twin's rank.
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -121,6 +122,59 @@ def _violations():
 def test_every_domain_is_on_the_chain():
     domains = {d.name for d in PACKAGE.iterdir() if d.is_dir() and (d / "__init__.py").exists()}
     assert domains <= set(RANK) | {"reference"}, domains - set(RANK)
+
+
+def test_every_top_level_module_is_a_domain_or_shared():
+    # a module beside params.py that is neither would escape every rule here (its imports are not checked)
+    modules = {p.stem for p in PACKAGE.glob("*.py")}
+    assert modules <= set(RANK) | SHARED, modules - set(RANK) - SHARED
+
+
+def test_the_shared_modules_import_no_domain():
+    # what makes them leaves every domain may use; the package's own __init__ names the start-up objects lazily
+    offenders = {
+        f"{_module_name(path)} imports {target}"
+        for path in sorted(PACKAGE.rglob("*.py"))
+        if _domain(_module_name(path)) is None and _module_name(path) != "flexdigit"
+        for target in _imports(path) | _named_modules(path)
+        if _domain(target) is not None
+    }
+    assert not offenders, offenders
+
+
+#: A module named in a string: ``lazy_exports``'s name -> module maps, ``BACKENDS``' "module:factory" entries.
+NAMED_MODULE = re.compile(r"flexdigit(\.\w+)+(:\w+)?")
+
+
+def _named_modules(path: Path | ast.Module) -> set[str]:
+    """The flexdigit modules ``path`` (or its parsed tree) names as whole strings, which ``importlib`` imports
+    when used: an import by name ties the modules as an ``import`` does (a domain's ``__init__`` exporting a name
+    of a domain above it would be an upward import no ``import`` statement shows)."""
+    tree = path if isinstance(path, ast.Module) else ast.parse(path.read_text(), filename=str(path))
+    return {
+        node.value.partition(":")[0]
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and NAMED_MODULE.fullmatch(node.value)
+    }
+
+
+def test_no_module_named_in_a_string_runs_up_the_chain():
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        source = _domain(_module_name(path))
+        for target in _named_modules(path):
+            dest = _domain(target)
+            if source in RANK and dest in RANK and dest != source and RANK[dest] >= RANK[source]:
+                found.append(f"{_module_name(path)} names {target}")
+    assert not found, found
+
+
+def test_the_named_module_finder_itself():
+    tree = ast.parse(
+        'X = {"a": "flexdigit.report.build", "b": "flexdigit.rig.backends.sim_backend:from_url"}\n'
+        '"""flexdigit.twin names no module: a sentence."""\nY = "flexdigit"'
+    )
+    assert _named_modules(tree) == {"flexdigit.report.build", "flexdigit.rig.backends.sim_backend"}
 
 
 def test_no_import_runs_up_the_chain():
@@ -452,3 +506,62 @@ def test_no_cli_function_is_longer_than_45_lines():
     )
     stale = set(LONG_CLI_FUNCTIONS) - set(found)
     assert not stale, f"no longer over {MAX_CLI_FUNCTION_LINES} lines, remove them from LONG_CLI_FUNCTIONS: {stale}"
+
+
+# -- the tests' own rules (issue 23): one fact per assert, no module-level warning filter, helpers not in conftest
+TESTS = Path(__file__).resolve().parent
+
+
+def _test_trees():
+    for path in sorted(TESTS.rglob("*.py")):
+        yield path.relative_to(TESTS), ast.parse(path.read_text(), filename=str(path))
+
+
+def _chained_asserts(tree: ast.Module) -> list[int]:
+    """Lines of ``assert a and b``: two facts in one, so a failure does not say which (write two asserts)."""
+    return [
+        node.lineno
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Assert) and isinstance(node.test, ast.BoolOp) and isinstance(node.test.op, ast.And)
+    ]
+
+
+def _module_warning_filters(tree: ast.Module) -> list[int]:
+    """Lines of a ``warnings.filterwarnings``/``simplefilter`` call at a module's top level: it silences the
+    warning for every test that runs after the import (``@pytest.mark.filterwarnings`` scopes it to one test)."""
+    return [
+        node.lineno
+        for node in tree.body
+        if isinstance(node, ast.Expr)
+        and isinstance(node.value, ast.Call)
+        and isinstance(node.value.func, ast.Attribute)
+        and node.value.func.attr in ("filterwarnings", "simplefilter")
+    ]
+
+
+def _conftest_imports(tree: ast.Module) -> list[int]:
+    """Lines importing from a conftest: shared helpers live in a module (tests/rig/helpers.py), a conftest only
+    makes fixtures (under --import-mode=importlib a conftest is not an importable module anyway)."""
+    return [
+        node.lineno
+        for node in ast.walk(tree)
+        if (isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[-1] == "conftest")
+        or (isinstance(node, ast.Import) and any(a.name.split(".")[-1] == "conftest" for a in node.names))
+    ]
+
+
+@pytest.mark.parametrize("rule", [_chained_asserts, _module_warning_filters, _conftest_imports])
+def test_the_tests_keep_their_rules(rule):
+    found = {str(path): lines for path, tree in _test_trees() if (lines := rule(tree))}
+    assert not found, f"{rule.__doc__.split(':')[0]}: {found}"
+
+
+def test_the_test_rule_finders_themselves():
+    tree = ast.parse(
+        "import warnings\nwarnings.filterwarnings('ignore')\nfrom .conftest import stats\n"
+        "def test_x():\n    warnings.simplefilter('error')\n    assert 1 and 2\n"
+        "    assert 1 or 2\n    assert 1, 'a and b'\n"
+    )
+    assert _chained_asserts(tree) == [6]
+    assert _module_warning_filters(tree) == [2]  # not the one inside the test
+    assert _conftest_imports(tree) == [3]

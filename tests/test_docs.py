@@ -9,8 +9,10 @@ anything would warn and fail.
 
 from __future__ import annotations
 
+import html
 import importlib
 import importlib.util
+import json
 import os
 import re
 import subprocess
@@ -56,6 +58,16 @@ def test_the_site_builds_offline_with_no_warning(build):
     assert build.returncode == 0, build.stderr[-4000:]
     assert "WARNING" not in build.stderr, build.stderr[-4000:]
     assert (HTML / "index.html").is_file()
+
+
+def test_no_page_of_the_site_loads_a_script_or_style_from_the_network(build):
+    """sphinx-gallery's timing pages loaded jQuery and DataTables from CDNs: a site read offline broke there."""
+    assert build.returncode == 0, build.stderr[-2000:]
+    remote = re.compile(r"<(?:script|link)\b[^>]*\b(?:src|href)=\"(?:https?:)?//")
+    pages = sorted(HTML.rglob("*.html"))
+    assert len(pages) > 100  # the whole site, not an empty walk
+    offenders = [str(p.relative_to(HTML)) for p in pages if remote.search(p.read_text(errors="replace"))]
+    assert not offenders, offenders
 
 
 def _packages() -> list[str]:
@@ -144,8 +156,10 @@ def test_the_benchmark_page_shows_the_json_rows_and_their_run():
     page = _generator().benchmark_page(results)
     assert "| H-inf design | 2.123 | ms | <= 20 ms |" in page
     assert "| real-time factor | 175 | x | >= 100 |" in page
-    assert "## bench_control" in page and "## bench_twin" in page
-    assert "abc1234" in page and "2026-11-26 10:00" in page
+    assert "## bench_control" in page
+    assert "## bench_twin" in page
+    assert "abc1234" in page
+    assert "2026-11-26 10:00" in page
     assert "- real-time factor: best of 3" in page
 
 
@@ -194,7 +208,8 @@ def test_the_findings_page_shows_every_entry_of_the_report():
 
 def test_without_a_report_the_findings_page_says_how_to_make_one():
     page = _generator().findings_page(None)
-    assert "make run" in page and "|" not in page
+    assert "make run" in page
+    assert "|" not in page
 
 
 def test_the_readme_is_one_screen_and_links_into_the_site():
@@ -206,3 +221,69 @@ def test_the_readme_is_one_screen_and_links_into_the_site():
     assert len(links) >= 5
     for link in links:
         assert (ROOT / link).exists(), link
+
+
+def test_a_benchmark_table_takes_the_rows_of_its_module_and_name():
+    results = {
+        "rows": [
+            {"module": "bench_a", "name": "twin real-time factor", "value": 16.7123, "unit": "x", "note": "best of 3"},
+            {"module": "bench_a", "name": "cases per second", "value": 82900.4, "unit": "cases/s"},
+            {"module": "bench_b", "name": "twin real-time factor", "value": 2.0, "unit": "x"},
+        ]
+    }
+    rows = _generator().benchmark_rows
+    assert rows(results, "bench_a") == [
+        ["twin real-time factor", "16.71", "x", "best of 3"],
+        ["cases per second", "8.29e+04", "cases/s", ""],
+    ]
+    assert rows(results, match="real-time") == [["twin real-time factor", "16.71", "x", "best of 3"], [
+        "twin real-time factor", "2", "x", ""]]  # fmt: skip
+    line = _generator().measured_line(
+        {"context": {"date_utc": "2026-11-26 16:15", "commit": "0c598c5"}}, "b.json", "bench_a"
+    )
+    assert "`b.json`" in line
+    assert "2026-11-26 16:15" in line
+    assert "`python -m benchmarks bench_a --out b.json`" in line
+
+
+#: ```{benchmark-table} FILE``` and its options in a page's Markdown.
+BENCHMARK_TABLE = re.compile(r"```\{benchmark-table\} (\S+)\n((?::\w+: .*\n)*)```")
+
+
+def test_every_benchmark_table_of_the_site_shows_its_json_rows(build):
+    """The docs' benchmark tables are generated from the JSON a benchmark run wrote, never copied by hand."""
+    assert build.returncode == 0, build.stderr[-2000:]
+    generator = _generator()
+    tables = 0
+    for page in sorted(DOCS.rglob("*.md")):
+        if "_build" in page.parts:
+            continue
+        for path, options in BENCHMARK_TABLE.findall(page.read_text()):
+            opts = dict(re.findall(r":(\w+): (.*)", options))
+            html = (HTML / page.relative_to(DOCS).with_suffix(".html")).read_text()
+            source = ROOT / path
+            if not source.exists():
+                assert "Not measured in this build" in html, (page.name, path)
+                assert f"{path}</span>" in html, (page.name, path)
+                continue
+            rows = generator.benchmark_rows(json.loads(source.read_text()), opts.get("module"), opts.get("match"))
+            assert rows, (page.name, path)
+            for name, value, _unit, _note in rows:
+                assert f"<p>{value}</p>" in html, (page.name, name, value)
+            tables += 1
+    assert tables >= 3  # digits.md's and studies.md's, from the JSON kept in benchmarks/
+
+
+def test_every_file_format_is_on_the_site_with_its_example(build):
+    """The help describes each file flexdigit reads with an example; the site shows the same, generated."""
+    from flexdigit.cli._formats import FORMATS
+
+    assert build.returncode == 0, build.stderr[-2000:]
+    page = (HTML / "_generated" / "file-formats.html").read_text()
+    text = re.sub(r"<[^>]+>", "", page)
+    for title, _what, example in FORMATS.values():
+        heading = title.split(" (")[0]
+        assert heading[1:] in text, heading
+        for line in example.strip().splitlines():  # each example line, as html escapes it
+            assert html.escape(line.strip(), quote=False) in text, (heading, line)
+    assert "file-formats.html" in (HTML / "guide" / "cli.html").read_text()  # linked from the command line's guide

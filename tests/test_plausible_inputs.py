@@ -161,5 +161,7 @@ def test_a_zero_outside_an_open_range_suggests_no_unit_slip(capsys):
     # hostile review: 'stream-emulator --duration 0' said 'Got 0.0 s instead: did you mean ms (0 s)?'
     assert main(["stream-emulator", "--duration", "0"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "--duration" in err and "(0, 604800]" in err and "Got 0.0 s instead." in err
+    assert "--duration" in err
+    assert "(0, 604800]" in err
+    assert "Got 0.0 s instead." in err
     assert "did you mean" not in err

@@ -91,18 +91,39 @@ def test_importing_the_packages_loads_none_of_their_modules():
     assert out == ""
 
 
+#: An import from a module behind a domain: ``from flexdigit.tactile.runner import collect``, also as
+#: ``import flexdigit.tactile.runner`` and in a doctest's ``>>>`` line.
+DEEP_IMPORT = re.compile(r"^\s*(>>> |\.\.\. )?\s*(from flexdigit\.\w+\.\w+[\w.]* import |import flexdigit\.\w+\.\w+)")
+
+
 def test_the_docs_examples_import_from_the_domain():
-    # a newcomer copies the README's and the docs' imports: they show the public door, not a module behind it
+    # a newcomer copies the README's, the docs' and the gallery's imports: they show the public door, not a module
+    # behind it
     root = Path(__file__).resolve().parents[1]
-    deep = re.compile(r"^\s*from flexdigit\.\w+\.\w+[\w.]* import ")
+    pages = [root / "README.md", *sorted((root / "docs").rglob("*.md")), *sorted((root / "docs").rglob("*.rst"))]
     offenders = [
         f"{path.name}:{number}: {line.strip()}"
-        for path in [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+        for path in [*pages, *sorted((root / "examples").glob("*.py"))]
         if "_build" not in path.parts
         for number, line in enumerate(path.read_text().splitlines(), 1)
-        if deep.match(line)
+        if DEEP_IMPORT.match(line)
     ]
     assert not offenders, offenders
+
+
+@pytest.mark.parametrize(
+    ("line", "deep"),
+    [
+        ("from flexdigit.tactile.runner import collect", True),
+        ("    import flexdigit.tactile.runner as runner", True),
+        (">>> from flexdigit.twin.twin import Twin", True),
+        ("from flexdigit.tactile import collect", False),
+        ("import flexdigit", False),
+        ("from flexdigit import Twin", False),
+    ],
+)
+def test_the_deep_import_pattern_itself(line, deep):
+    assert bool(DEEP_IMPORT.match(line)) is deep
 
 
 MODULES = sorted(

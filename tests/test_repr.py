@@ -7,27 +7,36 @@ independently of the object's own properties where one can be.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from flexdigit._repr import differences, summary
 from flexdigit.calibrate.twin_fit import CalibrationResult
-from flexdigit.control import design_20ms, thesis_design
+from flexdigit.control import design_20ms, mixsyn_on_the_digit, thesis_design
 from flexdigit.control.analysis import StepFigures
 from flexdigit.identify import TimeSeries, identify
 from flexdigit.models.plant import build_plant
 from flexdigit.params import RigParams, Sensors
 from flexdigit.rig import open_rig
 from flexdigit.rig.step_test import step_test
+from flexdigit.studies import load_spec
 from flexdigit.studies.parameter_set import ParameterSet
 from flexdigit.tdcr import Robot, Segment, Tendon, solve_statics
 from flexdigit.tdcr.dynamics import simulate
-from flexdigit.twin.calibration import Calibration
+from flexdigit.twin import release_test
+from flexdigit.twin.calibration import Calibration, default_calibration
 from flexdigit.twin.digit import Chain
 from oracles import DIGIT, release_record
 
 #: A repr is a few lines at most.
 MAX_LINES = 3
+#: A parameter object lists every field, so may take a few more (the twin's Calibration: 12 fields, 5 lines).
+MAX_FIELD_LINES = 6
+#: Characters of the longest repr a user meets here; before issue 23's audit a Calibration printed 620 (17-digit
+#: floats), a TwinRecord 3,300 (pyarrow's dump), a StudySpec 5,700 (every parameter's source).
+MAX_CHARS = 600
 
 
 def _lines(obj) -> list[str]:
@@ -133,3 +142,49 @@ def test_calibration_result_names_success_cost_and_fitted_fields():
     assert repr(result) == (
         "CalibrationResult(success=True, cost=0.25, fitted=['strip_beta_s'], targets=0, message='converged')"
     )
+
+
+def test_the_twin_calibration_prints_every_field_to_four_digits():
+    cal = default_calibration()
+    text = repr(cal)
+    assert len(text.splitlines()) <= MAX_FIELD_LINES
+    assert len(text) <= MAX_CHARS
+    assert f"cable_stiffness_n_m={cal.cable_stiffness_n_m:.4g}" in text
+    assert f"strip_beta_s={cal.strip_beta_s:.4g}," in text
+    assert text.count("=") == len(dataclasses.fields(cal))  # complete: every field named once
+
+
+def test_a_twin_record_prints_its_experiment_and_size_not_its_table():
+    record = release_test(seed=0, duration_s=1.0)
+    text = repr(record)
+    assert len(_lines(record)) <= MAX_LINES
+    assert text.startswith("TwinRecord(experiment='release_test', seed=0, rows=")
+    assert f"rows={record.table.num_rows}," in text
+    assert "'gauge1_v'" in text
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")  # python-control's warnings on the weights, beside the point
+def test_a_mixsyn_design_prints_its_order_and_gamma_not_its_coefficients():
+    design = mixsyn_on_the_digit()[0]
+    text = repr(design)
+    assert len(_lines(design)) <= MAX_LINES
+    assert "array" not in text  # the generated repr printed the controller's coefficient arrays over 6 lines
+    assert f"controller_order={len(design.controller.den[0][0]) - 1}" in text
+    assert f"gamma={design.hinf.gamma:.4g}" in text
+
+
+def test_a_study_spec_prints_its_name_and_parameter_count():
+    spec = load_spec("thesis-tolerances")
+    text = repr(spec)
+    assert len(_lines(spec)) <= MAX_LINES
+    assert len(text) <= MAX_CHARS
+    assert f"parameters=<{len(spec.parameters)} items>" in text
+    assert "settings=['sensitivity']" in text
+
+
+def test_a_twin_chain_prints_its_links_and_mass_not_the_object_address():
+    chain = Chain.uniform(length_m=0.2, ei_n_m2=0.01, n_cells=40)
+    text = repr(chain)
+    assert len(_lines(chain)) <= MAX_LINES
+    assert text.startswith("Chain(links=40, length_m=0.2,")  # was <flexdigit.twin.digit.Chain object at 0x...>
+    assert f"total_mass_kg={chain.mass_kg.sum():.4g}" in text

@@ -259,6 +259,43 @@ def url_options_page(scheme: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def file_formats_page() -> str:
+    """Every file format flexdigit reads, with its example: the text ``--help`` shows (``flexdigit.cli._formats``,
+    whose examples tests/cli/test_help.py loads with each format's reader), so the site and the help agree."""
+    from flexdigit.cli._formats import FORMATS, WHERE
+
+    lines = [
+        "# File formats",
+        "",
+        "Every file flexdigit reads, what it holds and an example that loads, as `flexdigit COMMAND --help` shows",
+        "them (this page is generated from the same text). Units are SI unless a key names another; an unknown key",
+        "is refused in one line naming the file and the key. The built-in files a command takes by name:",
+        "`flexdigit list protocols|tissues|specs|robots`.",
+        "",
+    ]
+    for name, (title, what, example) in FORMATS.items():
+        heading, _, rest = title.partition(" (")
+        suffix = "json" if example.lstrip().startswith("{") else "toml" if "=" in example else "text"
+        lines += [
+            f"## {heading[0].upper()}{heading[1:]}",
+            "",
+            f"({rest}" if rest else "",
+            "",
+            what,
+            f"In the help: `{WHERE[name]}`." if name in WHERE else "",
+            "",
+            f"```{suffix}",
+            example.rstrip("\n"),
+            "```",
+            "",
+        ]
+    return "\n".join(lines)
+
+
+def write_file_formats_page(app=None, config=None) -> None:
+    _write_if_changed(DOCS / "_generated" / "file-formats.md", file_formats_page())
+
+
 def write_url_option_pages(app=None, config=None) -> None:
     from flexdigit.rig import BACKENDS
 
@@ -267,10 +304,109 @@ def write_url_option_pages(app=None, config=None) -> None:
         _write_if_changed(DOCS / "_generated" / "url-options" / f"{name}.md", url_options_page(scheme))
 
 
+def benchmark_rows(results: dict, module: str | None = None, match: str | None = None) -> list[list[str]]:
+    """The rows of a benchmark JSON (``python -m benchmarks ... --out FILE``) as table cells ``[benchmark, value,
+    unit, note]``: those of ``module`` whose name contains ``match`` (each optional), in the file's order."""
+    cells = []
+    for row in results.get("rows", []):
+        if module is not None and row.get("module") != module:
+            continue
+        if match is not None and match not in str(row.get("name", "")):
+            continue
+        value = row.get("value")
+        shown = f"{value:.4g}" if isinstance(value, int | float) and not isinstance(value, bool) else str(value)
+        cells.append([str(row.get("name", "")), shown, str(row.get("unit", "")), str(row.get("note", ""))])
+    return cells
+
+
+def measured_line(results: dict, path: str, module: str | None) -> str:
+    """Where a generated table's figures come from: the file, its run's date, commit and load, the command."""
+    ctx = results.get("context", {})
+    load = ctx.get("load_average_1min")
+    command = ctx.get("command") or f"python -m benchmarks {module or ''} --out {path}".replace("  ", " ")
+    return (
+        f"Generated at build time from `{path}` (measured {ctx.get('date_utc', '?')} UTC, commit "
+        f"`{ctx.get('commit', '?')}`, {ctx.get('cpu_count', '?')} cores"
+        + (f", load average {load:.1f}" if isinstance(load, int | float) else "")
+        + f"): `{command}`."
+    )
+
+
+def benchmark_table_directive():
+    """The ``{benchmark-table} FILE`` directive (options ``:module:``, ``:match:``): a table of a benchmark JSON's
+    rows made at build time, so the figures a page shows are the file's, never copied by hand; the line under it
+    says when, where and by what command they were measured. Without the file (``make bench`` writes
+    ``benchmarks/results.json``, which git does not keep) a line saying how to measure them."""
+    from docutils import nodes
+    from docutils.parsers.rst import directives
+    from sphinx.util.docutils import SphinxDirective
+
+    def paragraph(text: str):
+        # `code` spans as literals, the rest as text (the directive's own lines; no other markup in them)
+        para = nodes.paragraph()
+        for k, part in enumerate(text.split("`")):
+            para += nodes.literal(part, part) if k % 2 else nodes.Text(part)
+        return para
+
+    class Directive(SphinxDirective):
+        required_arguments = 1
+        option_spec = {"module": directives.unchanged, "match": directives.unchanged}
+
+        def run(self):
+            path = self.arguments[0]
+            module, match = self.options.get("module"), self.options.get("match")
+            source = ROOT / path
+            self.env.note_dependency(str(source))
+            if not source.exists():
+                return [
+                    paragraph(
+                        f"Not measured in this build: `python -m benchmarks {module or ''} --out {path}` (or "
+                        "`make bench` for `benchmarks/results.json`) measures these rows on your machine; the next "
+                        "`make docs` shows them here."
+                    )
+                ]
+            results = json.loads(source.read_text())
+            rows = benchmark_rows(results, module, match)
+            if not rows:
+                raise self.error(f"{path}: no row of module {module!r} whose name contains {match!r}")
+            table = nodes.table(classes=["benchmark-table"])
+            group = nodes.tgroup(cols=4)
+            table += group
+            for width in (30, 8, 6, 40):
+                group += nodes.colspec(colwidth=width)
+            head, body = nodes.thead(), nodes.tbody()
+            group += head
+            group += body
+            for target, cells in ((head, ["benchmark", "value", "unit", "note"]), *((body, r) for r in rows)):
+                row = nodes.row()
+                for cell in cells:
+                    entry = nodes.entry()
+                    entry += nodes.paragraph(cell, cell)
+                    row += entry
+                target += row
+            return [table, paragraph(measured_line(results, path, module))]
+
+    return Directive
+
+
+#: Pages conf.py excludes (sphinx-gallery's timing pages, which load scripts from CDNs): a build made before they
+#: were excluded left their HTML behind, which Sphinx never removes.
+UNPUBLISHED = ("sg_execution_times", "auto_examples/sg_execution_times")
+
+
+def remove_unpublished_pages(app, exception) -> None:
+    for page in UNPUBLISHED:
+        for path in (Path(app.outdir) / f"{page}.html", Path(app.outdir) / "_sources" / f"{page}.rst.txt"):
+            path.unlink(missing_ok=True)
+
+
 def setup(app):
     # on config-inited: before Sphinx looks for source files and autosummary reads the pages written here
     app.connect("config-inited", write_api_pages)
     app.connect("config-inited", write_benchmark_page)
     app.connect("config-inited", write_url_option_pages)
     app.connect("config-inited", write_findings_page)
+    app.connect("config-inited", write_file_formats_page)
+    app.connect("build-finished", remove_unpublished_pages)
+    app.add_directive("benchmark-table", benchmark_table_directive())
     return {"parallel_read_safe": True, "parallel_write_safe": True}

@@ -8,7 +8,9 @@ Layout (data flows one way): ``params`` -> ``models`` -> ``twin`` -> ``identify`
     import flexdigit
 
     rig = flexdigit.open_rig("sim")                      # the digital twin behind the Rig contract
-    dataset = flexdigit.collect(flexdigit.load_protocol("thesis-6.1"), rig, "thesis-6.1.parquet")
+    loop = flexdigit.run_loop(rig, flexdigit.make_controller("digital20", rig), 30.0, 2.0)  # guarded
+    # without a rig, the twin set up for the protocol as `flexdigit collect thesis-6.1` sets it up: the same data
+    dataset = flexdigit.collect(flexdigit.load_protocol("thesis-6.1"), out="thesis-6.1.parquet")
 
 Everything is imported on first use: ``import flexdigit`` loads no domain.
 """

@@ -96,7 +96,9 @@ def test_a_digit_that_buckles_tip_up_is_swept_hanging(tmp_path, capsys):
     argv = ["simulate", "sweep", "--params", str(digit), "--out", str(sweep), "--settle", "0.2", "--samples", "1"]
     assert main([*argv, "--commands", "8,20"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "\n" not in err and "buckles" in err and "hanging" in err
+    assert "\n" not in err
+    assert "buckles" in err
+    assert "hanging" in err
     _json([*argv, "--commands", "8,20", "--orientation", "hanging"], capsys)
     assert pd.read_parquet(sweep)["command"].tolist() == [8, 20]
 

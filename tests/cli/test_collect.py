@@ -4,6 +4,9 @@ import numpy as np
 import pytest
 
 from flexdigit.cli import main
+from flexdigit.errors import DataFileError
+from flexdigit.tactile import load_dataset, predict_dataset
+from flexdigit.tactile.model_io import SavedModel, load_model
 from flexdigit.tactile.protocols import Protocol
 from flexdigit.tactile.runner import collect
 
@@ -14,6 +17,8 @@ SMALL = Protocol(
     repetitions=10,
     no_load_repetitions=10,
 )
+#: The command and the library run the same code in one process: the same numbers but for summation order.
+SAME_RTOL = 1e-12
 
 
 @pytest.fixture
@@ -93,3 +98,30 @@ def test_collect_on_the_twin_uses_the_given_calibration(tmp_path, capsys):
     args = ["collect", str(protocol), "--backend", "replay:///nope.jsonl", "--calibration", str(path)]
     assert main([*args, "--out", str(tmp_path / "x.parquet")]) == 2
     assert "--calibration calibrates the twin: it needs a sim backend" in capsys.readouterr().err
+
+
+def test_predict_is_the_library_call(dataset_file, tmp_path, capsys):
+    # issue 23: `flexdigit predict` parses, calls tactile.predict_dataset and formats; it computed the tare, the
+    # inputs and the scores itself before
+    model = tmp_path / "pos.json"
+    argv = ["train", str(dataset_file), "--hidden", "4", "--tol", "1e-5", "--model", str(model), "--json"]
+    assert main(argv) == 0
+    capsys.readouterr()
+    assert main(["predict", str(model), str(dataset_file), "--json"]) == 0
+    command = json.loads(capsys.readouterr().out)
+    library = predict_dataset(load_model(model), load_dataset(dataset_file))
+    assert command["samples"] == library.rows.tolist()
+    np.testing.assert_allclose(command["predicted"], library.predicted, rtol=SAME_RTOL)
+    np.testing.assert_allclose(command["actual"], library.actual, rtol=SAME_RTOL)
+    # the scores against numpy's own Pearson coefficient and a plain RMSE
+    pearson = np.corrcoef(library.predicted, library.actual)[0, 1]
+    assert library.scores["corr2"] == pytest.approx(pearson, rel=SAME_RTOL)
+    error_mm = 1e3 * np.sqrt(np.mean((library.predicted - library.actual) ** 2))
+    assert library.scores["rmse_mm"] == pytest.approx(error_mm, rel=SAME_RTOL)
+    assert command["scores"]["rmse_mm"] == pytest.approx(error_mm, rel=SAME_RTOL)
+
+
+def test_predict_dataset_names_a_missing_input_column(dataset_file):
+    saved = SavedModel(network=None, target="position", inputs=["gauge1_v", "gauge9_v"])
+    with pytest.raises(DataFileError, match="d.parquet: the model needs column 'gauge9_v'"):
+        predict_dataset(saved, load_dataset(dataset_file), source=str(dataset_file))

@@ -47,7 +47,8 @@ def test_cli_export_a_digits_own_design(tmp_path, capsys):
     assert (doc["gauges"], doc["straight_command"], doc["dither"]) == (4, 127, True)
     assert doc["analysis"]["closed_loop_stable"] is True
     header = out.with_suffix(".h").read_text()
-    assert "#define FD_CTRL_GAUGES 4" in header and "#define FD_CTRL_COMMAND_EQ 127" in header
+    assert "#define FD_CTRL_GAUGES 4" in header
+    assert "#define FD_CTRL_COMMAND_EQ 127" in header
     params = load_params(path)
     with open_rig("sim", params, calibration=twin_calibration(params)) as rig:
         host = make_controller("digital20", rig).runtime  # what run --params closes the loop with
@@ -57,7 +58,8 @@ def test_cli_export_a_digits_own_design(tmp_path, capsys):
 
     options = SimpleNamespace(calibration=None, rotation_map=None, no_rotation_map=False, params=path)
     exported, _, rotation, _, _ = _digit_export_design(params, 0.02, options)
-    assert exported.dither and host.dither
+    assert exported.dither
+    assert host.dither
     # the same sweep on the same seed's twin: the same map, the same measured rotation per command, the same design
     np.testing.assert_allclose(rotation.coef, doc["rotation_map"]["coef"], rtol=1e-9)
     for a, b in zip(
@@ -76,8 +78,10 @@ def test_cli_export_params_refusals_are_one_line(tmp_path, capsys):
     out = str(tmp_path / "x.c")
     assert main(["export", "controller", "--out", out, "--params", str(path), "--design", "thesis39-tustin"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "--design thesis39-tustin" in err and "\n" not in err
+    assert "--design thesis39-tustin" in err
+    assert "\n" not in err
     assert main(["export", "controller", "--out", out, "--calibration", str(path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert "--params" in err and "\n" not in err
+    assert "--params" in err
+    assert "\n" not in err
     assert not (tmp_path / "x.c").exists()

@@ -150,6 +150,11 @@ def test_train_and_predict_plot_predicted_against_actual(tmp_path, drawn, capsys
     readings = _lines(drawn[1].axes[0])["readings"]
     shown = np.sqrt(np.mean((readings.get_ydata() - readings.get_xdata()) ** 2))
     np.testing.assert_allclose(shown, rmse_mm, rtol=1e-3)  # printed to 4 digits
+    # each printed prediction carries its unit, the one the plot shows (they were bare metres)
+    printed = np.array(re.findall(r"predicted ([-\d.e+]+) mm, actual ([-\d.e+]+) mm", text), float)
+    assert len(printed) == min(10, len(readings.get_xdata()))  # predict's --limit default
+    np.testing.assert_allclose(printed[:, 0], readings.get_ydata()[: len(printed)], rtol=1e-4, atol=1e-3)
+    np.testing.assert_allclose(printed[:, 1], readings.get_xdata()[: len(printed)], rtol=1e-4, atol=1e-3)
 
 
 HOLD = "[force]\nsetpoint_n = 0.2\nduration_s = 0.1\n"
@@ -271,3 +276,140 @@ def test_palpate_scan_plots_the_stiffness_map_with_the_true_inclusion(tmp_path, 
     inclusion = data["inclusion"]
     np.testing.assert_allclose(lines["inclusion (fitted)"].get_xdata()[0], inclusion["centre_in_tissue_mm"])
     np.testing.assert_allclose(lines["inclusion (true, twin)"].get_xdata()[0], inclusion["true_centre_in_tissue_mm"])
+
+
+# ------------------------------------------------------------------------------------ a tendon robot (issue 26)
+ROBOT_STEP = ["simulate", "step", "--robot", "rao2021", "--tension-n", "2,0,0,0,0,0", "--duration", "0.05"]
+
+
+def test_simulate_robot_plots_the_tip_path_of_its_table(tmp_path, drawn, capsys):
+    import pandas as pd
+
+    table, plot = tmp_path / "rstep.csv", tmp_path / "rstep.png"
+    assert main([*ROBOT_STEP, "--out", str(table), "--plot", str(plot)]) == 0
+    assert f"plot -> {plot}" in capsys.readouterr().out
+    assert _written(plot)
+    rows = pd.read_csv(table, comment="#")
+    axes = drawn[0].axes
+    assert [ax.get_ylabel() for ax in axes] == ["tip x (mm)", "tip y (mm)", "tip z (mm)"]
+    assert axes[-1].get_xlabel() == "time (s)"
+    for ax, column in zip(axes, ("tip_x_m", "tip_y_m", "tip_z_m"), strict=True):
+        line = ax.get_lines()[0]
+        np.testing.assert_allclose(line.get_xdata(), rows["t_s"], rtol=1e-9)
+        np.testing.assert_allclose(line.get_ydata(), 1e3 * rows[column], rtol=1e-9, atol=1e-9)
+    # 2 N on the tendon at 90 deg pulls the tip towards +y and shortens its height (the robot is 400 mm long)
+    assert rows["tip_y_m"].iloc[-1] > 1e-3
+    assert rows["tip_z_m"].iloc[-1] < 0.4
+    # a still coordinate (x: the pull has no x component) is drawn on a 1 mm span, not blown up to round-off
+    low, high = axes[0].get_ylim()
+    assert high - low >= 1.0
+
+
+def test_simulate_robot_refuses_a_bad_plot_before_the_simulation(tmp_path, capsys, work_must_not_start):
+    import flexdigit.tdcr.experiments
+
+    work_must_not_start(flexdigit.tdcr.experiments, "step_test")
+    assert main([*ROBOT_STEP, "--out", str(tmp_path / "r.csv"), "--plot", str(tmp_path / "r.jpg")]) == 2
+    assert "must be a file ending in .png, .svg or .pdf" in capsys.readouterr().err
+
+
+def test_tdcr_shape_plots_the_estimate_beside_the_twin(tmp_path, drawn, capsys):
+    plot = tmp_path / "shape.svg"
+    argv = ["tdcr", "shape", "rao2021", "--tension-n", "2,0,0,1,0,0", "--plot", str(plot), "--json"]
+    assert main(argv) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["plot"] == str(plot)
+    assert _written(plot)
+    side, front, error = drawn[0].axes
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in (side, front)] == [("x (mm)", "z (mm)"), ("y (mm)", "z (mm)")]
+    assert (error.get_xlabel(), error.get_ylabel()) == (
+        "arc length from the base (mm)",
+        "distance to the twin's backbone (mm)",
+    )
+    lines = _lines(front)
+    assert {"estimate (gauges)", "twin", "gauge stations"} <= set(lines)
+    # the lines are the backbones the command printed: the estimate's tip and the twin's, in mm
+    estimate, twin = lines["estimate (gauges)"], lines["twin"]
+    np.testing.assert_allclose(
+        [estimate.get_xdata()[-1], estimate.get_ydata()[-1]], 1e3 * np.asarray(result["tip_position_m"])[1:], rtol=1e-9
+    )
+    np.testing.assert_allclose(
+        [twin.get_xdata()[-1], twin.get_ydata()[-1]], 1e3 * np.asarray(result["twin"]["tip_position_m"])[1:], rtol=1e-9
+    )
+    # the distance panel ends at the tip error the command reported (the twin's last node is the tip)
+    np.testing.assert_allclose(error.get_lines()[0].get_ydata()[-1], 1e3 * result["tip_error_m"], rtol=1e-9)
+    assert len(_lines(side)["gauge stations"].get_xdata()) == 2 * 3  # 3 stations in each of 2 segments
+
+
+def test_design_hinf_plots_the_design_on_a_digits_own_plant(tmp_path, drawn, capsys):
+    """`design hinf --params --plot` was refused ("the thesis rig's design only"): a user's digit is drawn too."""
+    from digits import write_digit
+
+    digit, plot = write_digit("short", tmp_path), tmp_path / "hinf.png"
+    argv = ["design", "hinf", "--filter-hz", "5", "--params", str(digit), "--plot", str(plot), "--json"]
+    assert main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["plot"] == str(plot)
+    assert _written(plot)
+    step_y, bode_mag, _, _ = drawn[0].axes
+    assert step_y.get_ylabel() == "y per unit step (m/m)"
+    # the step drawn settles (2 %) when the design's own analysis said it does
+    y = _lines(step_y)["output y (T_yw)"]
+    t, out = y.get_xdata(), y.get_ydata()
+    outside = np.flatnonzero(np.abs(out - out[-1]) > 0.02 * abs(out[-1]))
+    assert abs(t[outside[-1] + 1] - summary["tyw_settling_s"]) <= 2 * (t[1] - t[0]) + 0.01 * summary["tyw_settling_s"]
+    # and the loop's gain at the lowest frequency drawn is the plant's DC gain times the controller's
+    k0 = summary["controller_num"][-1] / summary["controller_den"][-1]
+    loop_db = 20 * np.log10(abs(summary["plant_dc_gain_m_per_command"] * k0))
+    assert abs(_lines(bode_mag)["L = G K"].get_ydata()[0] - loop_db) < 0.1  # 0.1 rad/s: far below the digit's mode
+
+
+def test_the_readmes_own_digit_commands_end_in_plots(tmp_path, monkeypatch, capsys):
+    """Issue 28: from the README to a plotted step of one's own digit. The README's commands, as written, run
+    (the template is the user's file before they edit it) and leave the plots they promise."""
+    import shlex
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    block = readme.split("## Your own digit, plotted", 1)[1].split("\n\n")[1]
+    commands = [shlex.split(line, comments=True) for line in block.splitlines() if line.strip()]
+    assert [c[:2] for c in commands] == [["flexdigit", "params"], ["flexdigit", "params"], ["flexdigit", "simulate"],
+                                         ["flexdigit", "run"]]  # fmt: skip
+    monkeypatch.chdir(tmp_path)
+    for argv in commands:
+        assert main(argv[1:]) == 0, (argv, capsys.readouterr().err)
+    for plot in ("step.png", "run.png"):
+        assert _written(tmp_path / plot), plot
+    assert "plot -> run.png" in capsys.readouterr().out
+
+
+def test_tdcr_contact_plots_the_estimate_and_where_the_twin_was_pressed(tmp_path, drawn, capsys):
+    plot = tmp_path / "contact.pdf"
+    argv = ["tdcr", "contact", "rao2021", "--tension-n", "2,0,0,0,0,0", "--contact-s-m", "0.3"]
+    argv += ["--contact-force-n", "0,0.05,0", "--plot", str(plot), "--json"]
+    assert main(argv) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["plot"] == str(plot)
+    assert _written(plot)
+    side, front = drawn[0].axes
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in (side, front)] == [("x (mm)", "z (mm)"), ("y (mm)", "z (mm)")]
+    lines = _lines(front)
+    assert {"backbone (without the contact)", "estimated contact", "pressed here (twin)"} <= set(lines)
+    # the estimated contact is drawn where the command reported it, in mm
+    estimated = lines["estimated contact"]
+    shown = [estimated.get_xdata()[0], estimated.get_ydata()[0]]
+    np.testing.assert_allclose(shown, 1e3 * np.asarray(result["position_m"])[1:], rtol=1e-9)
+    # and the twin was pressed on its backbone, 300 mm along it: the mark lies on the drawn line
+    pressed = lines["pressed here (twin)"]
+    backbone = lines["backbone (without the contact)"]
+    y_at = np.interp(pressed.get_ydata()[0], backbone.get_ydata(), backbone.get_xdata())
+    assert abs(pressed.get_xdata()[0] - y_at) < 0.5  # mm: between two of the backbone's drawn nodes
+
+
+def test_a_negative_vector_needs_no_equals_sign(capsys):
+    # tdcr's help told users to write --tip-force-n=-1,0,0; the parser takes the plain form
+    assert (
+        main(["tdcr", "statics", "rao2021", "--tension-n", "0,0,0,0,0,0", "--tip-force-n", "-0.01,0,0", "--json"]) == 0
+    )
+    tip = json.loads(capsys.readouterr().out)["tip_position_m"]
+    assert tip[0] < -1e-3  # 10 mN pushes the straight 400 mm rod's tip towards -x

@@ -62,7 +62,8 @@ def test_shape_from_the_twin_shows_estimate_and_truth(capsys):
     assert data["tip_error_m"] < TENDON_ONLY_ATOL_M
     assert data["tip_angle_error_deg"] < 1e-3
     backbone = np.array(data["backbone_m"])
-    assert backbone.shape == (21, 3) and np.allclose(backbone[0], 0.0)
+    assert backbone.shape == (21, 3)
+    assert np.allclose(backbone[0], 0.0)
     frame = np.array(data["tip_frame"])
     np.testing.assert_allclose(frame[:3, 3], data["tip_position_m"])
     np.testing.assert_allclose(frame[:3, :3].T @ frame[:3, :3], np.eye(3), atol=1e-9)
@@ -93,7 +94,8 @@ def test_shape_from_closed_form_readings_is_the_arc(tmp_path, capsys):
     turned = k * 0.2  # the curvature is per unstretched length (Cosserat: dR/ds = R u, dp/ds = R v)
     arc = (1 + stretch) * np.array([0.0, (1 - math.cos(turned)) / k, math.sin(turned) / k])
     np.testing.assert_allclose(data["tip_position_m"], arc, atol=ARC_ATOL_M)
-    assert data["twin"] is None and data["tip_error_m"] is None
+    assert data["twin"] is None
+    assert data["tip_error_m"] is None
 
 
 def test_shape_from_a_readings_file_with_the_twin_beside_it(tmp_path, capsys):

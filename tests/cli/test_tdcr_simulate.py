@@ -42,12 +42,14 @@ def test_release_of_a_rod_rings_at_its_first_frequency(tmp_path, capsys):
         out = tmp_path / f"{orientation}.parquet"
         argv = ["simulate", "release", "--robot", str(robot), "--out", str(out), "--orientation", orientation]
         data = _json(capsys, [*argv, "--deflection-mm", "1", "--rate", "10000", "--duration", "0.08"])
-        assert data["converged"] is True and data["rows"] == 801
+        assert data["converged"] is True
+        assert data["rows"] == 801
         found[orientation] = data["first_frequency_hz"]
         table = pq.read_table(out)
         assert table.column_names == ["t_s", "tip_x_m", "tip_y_m", "tip_z_m"]
         meta = json.loads(table.schema.metadata[b"flexdigit"])
-        assert meta["experiment"] == "tdcr release" and meta["robot"]["name"] == "short-rod"
+        assert meta["experiment"] == "tdcr release"
+        assert meta["robot"]["name"] == "short-rod"
         np.testing.assert_allclose(np.diff(table.column("t_s").to_numpy()), 1e-4, rtol=1e-9)
     ei = 54e9 * math.pi * 0.7e-3**4 / 4
     reference = euler_bernoulli_first_frequency(ei, 6450 * math.pi * 0.7e-3**2, 0.1) / (2 * math.pi)
@@ -63,7 +65,8 @@ def test_step_of_rao2021_to_csv(tmp_path, capsys):
     out = tmp_path / "step.csv"
     argv = ["simulate", "step", "--robot", "rao2021", "--tension-n", "4,0,0,0,2,0", "--out", str(out)]
     data = _json(capsys, [*argv, "--duration", "0.5", "--rate", "200"])
-    assert data["experiment"] == "tdcr step" and data["rows"] == 101
+    assert data["experiment"] == "tdcr step"
+    assert data["rows"] == 101
     lines = out.read_text().splitlines()
     assert lines[0] == '# experiment: "tdcr step"'
     rows = np.loadtxt([r for r in lines if not r.startswith("#")][1:], delimiter=",")

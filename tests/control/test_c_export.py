@@ -492,7 +492,9 @@ def test_prefixes_that_make_bad_c_are_refused_in_one_line(digital20, prefix):
         render_c(spec, prefix=prefix)
     message = str(info.value)
     assert "\n" not in message
-    assert repr(prefix) in message and "--prefix" in message and "<stdint.h>" in message
+    assert repr(prefix) in message
+    assert "--prefix" in message
+    assert "<stdint.h>" in message
 
 
 @pytest.mark.parametrize("prefix", ["int", "int24", "uint8x", "x" * 22])
@@ -530,7 +532,8 @@ def digit_export(request):
 
 def test_digit_float_export_with_dither_matches_runtime(tmp_path, digit_export):
     name, params, d, spec = digit_export
-    assert spec.dither and spec.u_eq == params.actuator.equilibrium_command
+    assert spec.dither
+    assert spec.u_eq == params.actuator.equilibrium_command
     run = _build(tmp_path, spec)
     rng = np.random.default_rng(11)
     for step, scale in ((30.0, None), (-30.0, None), (None, 60.0), (None, 400.0)):
@@ -538,7 +541,8 @@ def test_digit_float_export_with_dither_matches_runtime(tmp_path, digit_export):
         data = run(zip(r, y, strict=True))
         _compare_float(spec, data, r, y)
         carry = data[:, 3 + spec.nstates]  # the rounding error carried: at most half a command, and used
-        assert np.all(np.abs(carry) <= 0.5) and np.mean(carry != 0) > 0.5
+        assert np.all(np.abs(carry) <= 0.5)
+        assert np.mean(carry != 0) > 0.5
 
 
 def test_digit_fixed_export_with_dither_is_the_python_model_bit_for_bit(tmp_path, digit_export):
@@ -564,7 +568,8 @@ def test_a_digits_map_over_its_gauges_in_c(tmp_path, digit_export):
     _need_gcc()
     c_text, h_text = render_c(spec, prefix="ctl")
     g = spec.rotation.gauges
-    assert f"#define CTL_GAUGES {g}" in h_text and "#define CTL_DITHER 1" in h_text
+    assert f"#define CTL_GAUGES {g}" in h_text
+    assert "#define CTL_DITHER 1" in h_text
     (tmp_path / "ctl.c").write_text(c_text)
     (tmp_path / "ctl.h").write_text(h_text)
     _check_measure(tmp_path, spec, [0.25 * (-1) ** i * (i + 1) / g for i in range(g)])

@@ -137,7 +137,8 @@ def test_digit_design_20ms_summary_on_the_thesis_rig_is_chapter_5s_design():
     assert (s["period_s"], s["delay_samples"], s["digit_mode"], s["dither"]) == (0.02, 1, None, False)
     assert s["deg_per_command"] == pytest.approx(d.deg_per_command, rel=1e-12)
     assert s["closed_loop_pole_radius"] == pytest.approx(float(np.max(np.abs(d.closed_loop_poles))), rel=1e-12)
-    assert s["stable"] and s["closed_loop_pole_radius"] < 1.0
+    assert s["stable"]
+    assert s["closed_loop_pole_radius"] < 1.0
     # offset-free (step 3 of the design): the linear 30 deg step ends at 30 deg; 1e-6 deg is far below a quantum
     step = s["linear_step_30deg"]
     assert step["final"] == pytest.approx(30.0, abs=1e-6)

@@ -11,7 +11,7 @@ import pytest
 
 from digits import DIGITS, write_digit
 from flexdigit.cli import main
-from flexdigit.control.design20ms import Weights, design_20ms, digit_design_20ms, straight_is_stable
+from flexdigit.control.design20ms import Weights, design_20ms, digit_design_20ms, digit_mount, straight_is_stable
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.errors import DesignError
 from flexdigit.params import RigParams
@@ -62,6 +62,12 @@ def test_a_digit_that_buckles_tip_up_is_refused_a_design():
         digit_design_20ms(params)
 
 
+def test_one_mount_for_a_digits_twin():
+    # issue 23: `run --params`, `export --params` and chapter 5 each chose the mount themselves; one call now
+    assert digit_mount(RigParams()) == "vertical"  # the thesis rig stands tip up
+    assert digit_mount(RigParams.from_dict(DIGITS["five-sections-eight-gauges"])) == "hanging"  # buckles tip up
+
+
 def test_weights_in_degrees():
     w = Weights()
     assert w.for_digit(1.735, 1.735) == w
@@ -90,7 +96,9 @@ def test_the_dithered_command_averages_the_unrounded_one():
 def test_the_sweep_follows_the_digits_range():
     assert sweep_commands() == SWEEP_COMMANDS
     pair = sweep_commands(RigParams.from_dict(DIGITS["four-sections-two-cables"]))
-    assert len(pair) == 9 and pair[4] == 127 and pair[0] - 127 == -(pair[-1] - 127)  # both ways about straight
+    assert len(pair) == 9
+    assert pair[4] == 127
+    assert pair[0] - 127 == -(pair[-1] - 127)  # both ways about straight
     geared = sweep_commands(RigParams.from_dict(DIGITS["six-gauges-geared"]))
     assert geared[1] - geared[0] == 12  # 5.2 deg at a quarter of 1.735 deg a command
 
@@ -123,7 +131,9 @@ def test_design_commands_take_params(tmp_path, capsys):
     long = write_digit("five-sections-eight-gauges", tmp_path)
     assert main(["design", "20ms", "--params", str(long)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "buckles" in err[0] and "hanging" in err[0]
+    assert len(err) == 1
+    assert "buckles" in err[0]
+    assert "hanging" in err[0]
 
 
 def test_digit_hinf_summary_is_the_design_on_the_digits_own_plant():
@@ -135,7 +145,8 @@ def test_digit_hinf_summary_is_the_design_on_the_digits_own_plant():
     # E(s) is this digit's release mode (its twin), not table 3.2's
     assert s["digit_wn_rad_s"] == pytest.approx(release_dynamics(params).wn_housing_rad_s)
     assert s["digit_wn_rad_s"] != pytest.approx(TABLE_3_2[0], rel=1e-2)
-    assert s["gamma"] == pytest.approx(design.gamma) and s["gamma"] >= s["gamma_opt"]
+    assert s["gamma"] == pytest.approx(design.gamma)
+    assert s["gamma"] >= s["gamma_opt"]
     # small gain (thesis 4.6): the tolerance is 1/||T_pq||, and its percentage is that over |G(0)|
     assert s["additive_tolerance_m_per_command"] == pytest.approx(10 ** (-s["tpq_peak_db"] / 20), rel=1e-9)
     assert s["additive_tolerance_relative_percent"] == pytest.approx(

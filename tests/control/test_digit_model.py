@@ -100,7 +100,8 @@ def test_the_long_digits_slow_mode_is_in_its_model():
 def test_the_search_holds_its_limits_on_the_model():
     d = digit_design_20ms(RigParams.from_dict(EIGHT_SECTIONS), orientation="hanging")  # it keeps 0.55 tip up
     c = d.choice
-    assert c.meets and c.failing is None
+    assert c.meets
+    assert c.failing is None
     assert c.overshoot_percent < OVERSHOOT_LIMIT_PERCENT
     assert c.noise_sd_deg < NOISE_LIMIT_DEG
     assert c.command_noise_deg < COMMAND_NOISE_LIMIT_DEG

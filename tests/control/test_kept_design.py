@@ -49,7 +49,8 @@ def searched():
 
 
 def test_kept_weights_give_the_searched_design_back(searched):
-    assert searched.choice is not None and searched.choice.candidates == 48  # it was searched
+    assert searched.choice is not None
+    assert searched.choice.candidates == 48  # it was searched
     kept = digit_design_20ms(DIGIT, weights=_kept(searched).weights)
     assert kept.choice is None  # not searched
     assert kept.weights == searched.weights
@@ -74,7 +75,9 @@ def test_at_a_measured_rotation_per_command_they_are_the_search_candidates_desig
 
 def test_the_thesis_rig_keeps_chapter_5s_design():
     k = keep_design()
-    assert k.weights == Weights() and k.period_s == 0.02 and k.search is None
+    assert k.weights == Weights()
+    assert k.period_s == 0.02
+    assert k.search is None
     assert k.params_fingerprint == params_fingerprint(RigParams())
     for a, b in zip(_matrices(digit_design_20ms(weights=k.weights)), _matrices(design_20ms()), strict=True):
         assert np.array_equal(a, b)  # one code path, the same weights object's values
@@ -84,7 +87,8 @@ def test_a_kept_design_round_trips_and_is_never_overwritten(tmp_path, searched):
     kept = dataclasses.replace(_kept(searched), search={"meets": True}, params_file="d.toml")
     path = write_kept_design(kept, tmp_path / "c.json")
     back = read_kept_design(path)
-    assert back == kept and back.source == str(path)
+    assert back == kept
+    assert back.source == str(path)
     with pytest.raises(OutputExistsError):
         write_kept_design(kept, path)
     write_kept_design(dataclasses.replace(kept, period_s=0.01), path, force=True)
@@ -108,7 +112,9 @@ def test_another_digit_calibration_mount_or_period_is_refused_in_one_line(search
         with pytest.raises(ParameterError) as err:
             kept.check(params, cal, orientation=mount, period_s=period)
         message = str(err.value)
-        assert message.startswith("c.json: ") and expected in message and "\n" not in message
+        assert message.startswith("c.json: ")
+        assert expected in message
+        assert "\n" not in message
 
 
 def _good() -> dict:
@@ -144,4 +150,6 @@ def test_a_file_that_is_not_a_kept_design_is_refused_naming_it(case, tmp_path):
     with pytest.raises(DataFileError) as err:
         read_kept_design(path)
     message = str(err.value)
-    assert message.startswith(f"{path}: ") and expected in message and "\n" not in message
+    assert message.startswith(f"{path}: ")
+    assert expected in message
+    assert "\n" not in message

@@ -101,7 +101,8 @@ def test_host_mode_follows_the_hosts_commands_and_heartbeats(emulator):
         assert [mode for _, mode in rig.board.mode_marks] == [1]
         said = rig._port.written
     # closing relaxed the digit ("C8"), put the board in its safe state ("M0") and released the port
-    assert rig._port.written == said + len(b"C8\nM0\n") and not rig._port.is_open
+    assert rig._port.written == said + len(b"C8\nM0\n")
+    assert not rig._port.is_open
 
 
 @pytest.mark.slow

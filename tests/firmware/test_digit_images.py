@@ -48,7 +48,8 @@ def _on_board(capsys, elf, params, setpoint: float) -> dict:
 def test_a_digits_image_holds_its_30_deg_step_on_the_board(digit_firmware, capsys, name, setpoint, gauges, fmt):
     elf, params = digit_firmware(name, 0.020, fmt)
     doc = _on_board(capsys, elf, params, setpoint)
-    assert doc["loop"] == "board" and doc["params"] == str(params)
+    assert doc["loop"] == "board"
+    assert doc["params"] == str(params)
     assert f"gauges={gauges}" in " ".join(doc["board"]["info_lines"])
     assert doc["board"]["faults"] == []
     m = doc["step_metrics"]["true"]
@@ -82,7 +83,8 @@ def test_a_digits_board_commands_are_the_python_controllers(digit_firmware):
         rig.close()
     assert run.status == "completed", run.message
     board = samples[[i for i, mode in marks if mode == 2][0] :]
-    assert len(board) >= 95 and all(len(s.gauges) == 6 for s in board)
+    assert len(board) >= 95
+    assert all(len(s.gauges) == 6 for s in board)
     options = SimpleNamespace(calibration=None, rotation_map=None, no_rotation_map=False, params=path)
     runtime, _, rotation, _, _ = _digit_export_design(params, 0.020, options)  # what the image was exported from
     assert runtime.dither
@@ -106,7 +108,8 @@ def test_an_image_built_for_another_digit_is_refused_in_one_line(digit_firmware,
     args = ["run", "--on-board", "--params", str(other), "--backend", f"hil://{elf}", "--duration", "1"]
     assert main(args) == 2
     err = capsys.readouterr().err.strip()
-    assert "built for 4 gauges, straight command 127" in err and "the digit has 2 gauges" in err
+    assert "built for 4 gauges, straight command 127" in err
+    assert "the digit has 2 gauges" in err
     assert "\n" not in err
     # and the thesis rig's own run on it (no --params: 3 gauges, straight at 8)
     assert main(["run", "--on-board", "--backend", f"hil://{elf}", "--duration", "1"]) == 2

@@ -37,14 +37,16 @@ def test_the_uart_is_a_pty_the_host_opens_as_a_serial_port(firmware):
     elf = firmware(0.020, "float")
     with open_rig(f"hil://{elf}", mode="host") as rig:
         assert isinstance(rig.port, serial.Serial)
-        assert rig.port_path.startswith("/dev/pts/") and os.path.exists(rig.port_path)
+        assert rig.port_path.startswith("/dev/pts/")
+        assert os.path.exists(rig.port_path)
         assert rig.port.baudrate == 250_000
         assert rig.settings()["uart"] == "pty"
         rig.write_command(30)
         rig.wait(0.3)
         over_pty = [(s.t_us, s.gauges, s.pot) for s in rig.samples]
         command = rig.board_command
-    assert rig.port is not None and not rig.port.is_open  # closed with the rig
+    assert rig.port is not None
+    assert not rig.port.is_open  # closed with the rig
     # the same bytes as when they travel in the exchange: a pty changes the transport, not the run
     with open_rig(f"hil://{elf}?uart=pipe", mode="host") as rig:
         rig.write_command(30)
@@ -111,7 +113,8 @@ def test_live_session_loop_through_the_firmware_over_the_pty(firmware):
     assert session.error is None
     assert len(session.state.samples) >= 20  # the loop read the board every period
     seqs = [f.seq for f in frames]
-    assert seqs == sorted(seqs) and len(set(seqs)) >= 20  # fresh samples from the firmware each period
+    assert seqs == sorted(seqs)
+    assert len(set(seqs)) >= 20  # fresh samples from the firmware each period
 
 
 @pytest.mark.slow

@@ -6,62 +6,12 @@ The Makefile installs chromium when it is missing (``make test``); without it th
 from __future__ import annotations
 
 import os
-import re
-import signal
-import subprocess
-import sys
-import time
-from pathlib import Path
 
 import pytest
 
 from flexdigit.live.browser import CHROMIUM, launch
 
-START_TIMEOUT_S = 120  # imports and the twin's rotation calibration, on a busy 2-core machine
-
-
-class LiveServer:
-    """``flexdigit live`` as a user starts it; :meth:`stop` sends Ctrl-C (SIGINT) and returns its JSON result."""
-
-    def __init__(self, tmp_path: Path, *args: str, port: int = 0) -> None:
-        self.stderr_path = tmp_path / f"live-{time.monotonic_ns()}.err"
-        self.stderr = open(self.stderr_path, "w")  # noqa: SIM115 - closed in stop()
-        cmd = [sys.executable, "-m", "flexdigit.cli", "live", "--port", str(port), "--json", *args]
-        self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=self.stderr, text=True)
-        deadline = time.monotonic() + START_TIMEOUT_S
-        self.url = None
-        while time.monotonic() < deadline and self.proc.poll() is None:
-            match = re.search(r"(http://127\.0\.0\.1:\d+/)", self.stderr_path.read_text())
-            if match:
-                self.url = match.group(1)
-                break
-            time.sleep(0.2)
-        if self.url is None:
-            self.proc.kill()
-            raise RuntimeError(f"flexdigit live did not start: {self.stderr_path.read_text()[-2000:]}")
-        self.port = int(self.url.rsplit(":", 1)[1].strip("/"))
-        self._wait_listening()
-
-    def _wait_listening(self) -> None:
-        import urllib.request
-
-        for _ in range(100):
-            try:
-                urllib.request.urlopen(self.url, timeout=2).read()
-                return
-            except OSError:
-                time.sleep(0.1)
-
-    def stop(self, signum: int = signal.SIGINT) -> dict:
-        """Ctrl-C (or ``signum``: SIGTERM as systemd, SIGHUP as a closed terminal stops it); the exit code and the
-        --json summary."""
-        import json
-
-        self.proc.send_signal(signum)
-        out, _ = self.proc.communicate(timeout=30)
-        self.stderr.close()
-        self.returncode = self.proc.returncode
-        return json.loads(out) if out.strip() else {}
+from .live_helpers import LiveServer
 
 
 @pytest.fixture
@@ -101,23 +51,3 @@ def page(browser):
     page.on("pageerror", lambda e: page.console_errors.append(str(e)))
     yield page
     context.close()
-
-
-def stats(page) -> dict:
-    """The page's own counters (window.flexdigit): frames received, draws, samples, latencies, state."""
-    return page.evaluate(
-        "() => ({frames: flexdigit.frames, draws: flexdigit.draws, samples: flexdigit.samples,"
-        " connected: flexdigit.connected, reconnects: flexdigit.reconnects, errors: flexdigit.errors,"
-        " last: flexdigit.last, hello: flexdigit.hello, locMap: flexdigit.locMap || null})"
-    )
-
-
-def wait_for(page, predicate, timeout_s: float = 20.0, what: str = "condition"):
-    """Poll the page's stats until ``predicate(stats)`` holds; return the stats (fail naming ``what``)."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        s = stats(page)
-        if s["last"] is not None and predicate(s):
-            return s
-        page.wait_for_timeout(200)
-    pytest.fail(f"timed out after {timeout_s} s waiting for {what}; last: {str(stats(page)['last'])[:600]}")

@@ -108,4 +108,5 @@ def test_the_cli_refuses_robot_flags_without_a_robot(capsys, flag):
 
     assert main(["live", *flag, "--json"]) == 2
     error = json.loads(capsys.readouterr().out)["error"]
-    assert f"{flag[0]} is for a tendon robot" in error and "--robot" in error
+    assert f"{flag[0]} is for a tendon robot" in error
+    assert "--robot" in error

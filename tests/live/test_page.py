@@ -14,7 +14,7 @@ import pytest
 
 from flexdigit.rig.recording import read_recording
 
-from .conftest import stats, wait_for
+from .live_helpers import stats, wait_for
 
 LOCATE_TOL_M = 0.010  # the 1 cm
 ROTATION_TOL_DEG = 2.0  # the controller's 2 % band is 0.6 deg; the page shows a 0.1 s average of a noisy estimate

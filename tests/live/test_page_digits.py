@@ -10,7 +10,7 @@ import pytest
 
 from digits import write_digit
 
-from .conftest import stats, wait_for
+from .live_helpers import stats, wait_for
 
 pytestmark = pytest.mark.slow
 

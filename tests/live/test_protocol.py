@@ -19,7 +19,7 @@ from websockets.sync.client import connect
 
 from flexdigit.live.server import origin_allowed
 
-from .conftest import LiveServer
+from .live_helpers import LiveServer
 
 #: The limits of docs/guide/live.md (the test reads them as a client would, not from the code).
 REQUEST_BYTES, FRAME_BYTES, PAGE_RATE, PAGE_BURST, PAGES = 512, 4096, 20, 40, 8

@@ -20,7 +20,7 @@ from websockets.sync.client import connect
 
 from flexdigit.live.server import MAX_PAGES, PING_INTERVAL_S, PING_TIMEOUT_S, SLOW_DROP_S
 
-from .conftest import LiveServer
+from .live_helpers import LiveServer
 
 #: How long a page that stopped reading may hold its place: found by the keepalive (a ping, unanswered), with a
 #: margin for a busy 2-core machine. Before issue 22 such a page held it for uvicorn's 20 + 20 s.

@@ -19,7 +19,7 @@ from flexdigit.errors import ParameterError
 from flexdigit.live.server import TokenBucket, check_host
 from flexdigit.live.session import validate_request
 
-from .conftest import LiveServer
+from .live_helpers import LiveServer
 
 
 @pytest.fixture(scope="module")

@@ -25,3 +25,31 @@ def test_the_loop_sleeps_to_its_deadlines_on_the_injected_clock():
     # the first sample is due at once; every later one a period after the one before, on the virtual clock
     assert sleeps == pytest.approx([PERIOD_S] * 5, abs=1e-12)
     assert now[0] == pytest.approx(100.0 + 5 * PERIOD_S, abs=1e-12)
+
+
+class _Submits:
+    """Stands for the session's map worker: records what it is given, computes nothing."""
+
+    def __init__(self):
+        self.keys = []
+
+    def submit(self, func, key):
+        self.keys.append(key)
+
+
+def test_the_locatability_map_waits_for_a_held_command_on_the_injected_clock():
+    # the map is computed only for a command held half a second; that half second is the session's clock's
+    # (it read time.monotonic, so a virtual clock never reached it and the wall clock did in tests)
+    now = [100.0]
+    session = LiveSession("sim", period_s=PERIOD_S, seed=0, clock=lambda: now[0], sleep=lambda s: None)
+    try:
+        session._loc_worker = worker = _Submits()
+        assert session._locatability(20) is None
+        now[0] += 0.4
+        session._locatability(20)
+        assert worker.keys == []  # held 0.4 s: not yet
+        now[0] += 0.2
+        session._locatability(20)
+        assert worker.keys == [20]  # held 0.6 s on the virtual clock
+    finally:
+        session.rig.close()

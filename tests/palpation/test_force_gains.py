@@ -80,7 +80,8 @@ def test_the_rig_model_is_the_rigs_digit_and_calibration():
     calibration = twin_calibration(params)
     with open_rig("sim", params, seed=0, calibration=calibration, orientation="hanging", dt_s=0.005) as rig:
         model = rig_contact_model(rig)
-        assert model.calibration == calibration and model.orientation == "hanging"
+        assert model.calibration == calibration
+        assert model.orientation == "hanging"
         rig.place_tissue(Tissue(0.09, 0.23, 0.015, 1000.0))
         held = hold_force(rig, 0.1, duration_s=0.5, region_m=(0.09, 0.15))
     assert held.gain == force_gains(model, 0.1, region_m=(0.09, 0.15))["gain"]
@@ -96,7 +97,8 @@ def test_palpate_holds_force_on_a_digit_from_the_command_line(tmp_path, capsys):
     argv = ["palpate", "--params", str(digit), "--tissue", str(tissue), "--protocol", "hold", "--json"]
     assert main(argv) == 0
     held = json.loads(capsys.readouterr().out)
-    assert held["kind"] == "force" and held["scored_on"] == "true contact force (twin)"
+    assert held["kind"] == "force"
+    assert held["scored_on"] == "true contact force (twin)"
     assert abs(held["steady_error"]) < HOLD, held["steady_error"]
 
 

@@ -43,7 +43,8 @@ def test_the_report_of_a_digit(name, tmp_path, capsys):
     document = json.loads((report / "results.json").read_text())
     entries = document["entries"]
     # no entry of this digit stands against the thesis rig's figure
-    assert entries and all(e["status"] == "new" and e["rel_error"] is None for e in entries)
+    assert entries
+    assert all(e["status"] == "new" and e["rel_error"] is None for e in entries)
     assert all(e["thesis"] in (None, NOT_APPLICABLE) for e in entries)
     assert any(e["thesis"] == NOT_APPLICABLE for e in entries)
     control = [e for e in entries if e["chapter"] == "ch4" and isinstance(e["ours"], float)]
@@ -60,7 +61,8 @@ def test_the_report_of_a_digit(name, tmp_path, capsys):
     )
     assert mine["palpation.active.posterior_position_mm"] < 1.3 * mine["palpation.active.bayes_position_mm"]
     assert any(key.startswith("studies.sobol.release_wn_rad_s.") for key in mine)
-    assert "palpation.force.steady_error" in mine and "palpation.scan.inclusion_error_mm" in mine
+    assert "palpation.force.steady_error" in mine
+    assert "palpation.scan.inclusion_error_mm" in mine
     # the tactile chapters on the digit's G gauges: in one of its experiments (non-actuated, actuated) at least,
     # both a Bayes limit and the thesis network's position RMSE (a one-gauge digit can tell position from mass
     # only with the command as a second input)

@@ -23,7 +23,8 @@ def test_the_boards_refuse_a_digit_of_more_gauges_than_the_uno_reads(tmp_path):
         with pytest.raises(ParameterError, match=r"gauge_positions_m has 8 gauges.*at most 6") as err:
             open_rig(url, params)
         message = str(err.value)
-        assert message.startswith(url.split("?")[0]) and "\n" not in message
+        assert message.startswith(url.split("?")[0])
+        assert "\n" not in message
 
 
 @pytest.mark.parametrize("name", ["thesis", "six-gauges-geared", "four-sections-two-cables", "one-section"])
@@ -43,7 +44,8 @@ def test_an_image_for_another_digit_is_refused_by_its_banner(tmp_path):
     check_board_image(board, pair, "hil://pair.elf")  # its own image
     with pytest.raises(ParameterError, match="built for 4 gauges, straight command 127.*has 3 gauges") as err:
         check_board_image(board, None, "hil://pair.elf")  # the thesis rig on it
-    assert "\n" not in str(err.value) and "PARAMS=" in str(err.value)
+    assert "\n" not in str(err.value)
+    assert "PARAMS=" in str(err.value)
     old = BoardState()  # an image from before G gauges says nothing: the thesis rig's
     old.feed(b"# flexdigit-stream 1 period_us=20000\r\n", time_s=0.0)
     check_board_image(old, None, "board://x")

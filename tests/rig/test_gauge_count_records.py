@@ -39,7 +39,8 @@ def test_collect_records_and_replays_the_digits_gauges(tmp_path, capsys):
     # every reading is kept: the recording holds the dataset's readings and those read while waiting for the
     # digit to be steady (a protocol TOML's default), in order
     recorded = columns["gauges_v"]
-    assert recorded.shape[1] == 8 and len(recorded) >= len(dataset)
+    assert recorded.shape[1] == 8
+    assert len(recorded) >= len(dataset)
     match = [np.flatnonzero(np.all(np.abs(recorded - row) <= 1e-12, axis=1)) for row in dataset.gauges_v]
     assert all(m.size for m in match)
     assert np.all(np.diff([m[0] for m in match]) > 0)

@@ -229,7 +229,8 @@ def test_readings_beyond_the_adc_range_are_refused_naming_the_range(volts, capsy
 
     assert main(["shape", f"--gauges-v={','.join(map(str, volts))}"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "adc_range_v" in err and "\n" not in err
+    assert "adc_range_v" in err
+    assert "\n" not in err
 
 
 def test_readings_at_the_adc_rails_are_still_estimated():

@@ -81,7 +81,8 @@ def test_a_load_on_a_far_sagging_digit_is_found_where_the_elastica_puts_it(fract
     est = ShapeEstimator(params, cal, orientation="horizontal", cable=False)
     e = est.estimate(est.volts_from_curvature(kappa[None, :]))
     assert np.degrees(e.angle_rad[0, -1]) < -75  # it does sag that far
-    assert e.consistent[0] and e.contact[0], (e.chi2_load, e.chi2_no_load)
+    assert e.consistent[0], (e.chi2_load, e.chi2_no_load)
+    assert e.contact[0], (e.chi2_load, e.chi2_no_load)
     error = abs(e.load_position_from_base_m[0] - s_load)
     assert error <= 2 * e.load_position_sd_m[0] + LOCATE_FLOOR_M, (e.load_position_from_base_m, s_load)
     assert e.load_force_n[0] == pytest.approx(MASS_KG * G, rel=FORCE_RTOL)
@@ -101,7 +102,8 @@ def test_shape_command_places_the_sagging_digits_tip_load(tmp_path, capsys):
     code = main([*argv, "--orientation", "horizontal", "--no-cable", "--json"])
     row = json.loads(capsys.readouterr().out)
     assert code == 0, row
-    assert row["contact"] and row["consistent"]
+    assert row["contact"]
+    assert row["consistent"]
     assert abs(row["load_position_from_base_m"] - length) <= 2 * row["load_position_sd_m"] + LOCATE_FLOOR_M
     assert row["load_mass_kg"] == pytest.approx(MASS_KG, rel=FORCE_RTOL)
 
@@ -121,7 +123,8 @@ def test_loads_on_drawn_digits_are_found_on_the_converged_twin(generator, seed):
         adc=False, cells_per_section=27, return_solution=True,
     )  # fmt: skip
     e = ShapeEstimator(params, cal, orientation="horizontal", cable=False).estimate(volts)
-    assert np.all(e.consistent) and np.all(e.contact)
+    assert np.all(e.consistent)
+    assert np.all(e.contact)
     assert np.all(np.abs(e.load_position_from_base_m - where) <= 2 * e.load_position_sd_m + LOCATE_FLOOR_M)
     assert e.load_force_n == pytest.approx(MASS_KG * G, rel=FORCE_RTOL)
     assert np.max(np.linalg.norm(e.tip_m - sol.tip_m, axis=1)) < TIP_M
@@ -158,5 +161,6 @@ def test_a_long_digit_that_made_the_lever_arms_swing_settles_on_its_equilibrium(
     assert np.degrees(sol.psi_rad[0, -1]) < -60  # it does sag that far
     assert np.degrees(psi[0, -1]) == pytest.approx(np.degrees(sol.psi_rad[0, -1]), abs=TIP_ANGLE_DEG)
     e = est.estimate(volts)
-    assert e.consistent[0] and not e.contact[0]
+    assert e.consistent[0]
+    assert not e.contact[0]
     assert np.linalg.norm(e.tip_m[0] - sol.tip_m[0]) < TIP_M

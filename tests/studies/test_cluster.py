@@ -198,4 +198,5 @@ def test_a_scheduler_that_vanishes_mid_study_is_one_line(setup):
     assert proc.returncode != 0
     assert "Traceback" not in stderr
     assert len(lines) == 1, stderr
-    assert address in lines[0] and "rerun" in lines[0]
+    assert address in lines[0]
+    assert "rerun" in lines[0]

@@ -254,7 +254,8 @@ chunk_size = 2
     # a design off the front is refused in one line listing the front's rows
     assert main([*base, "--export", str(off[0]), "--export-to", str(tmp_path / "x.toml")]) == 2
     err = capsys.readouterr().err.strip()
-    assert "not on the Pareto front" in err and "\n" not in err
+    assert "not on the Pareto front" in err
+    assert "\n" not in err
 
 
 @pytest.mark.parametrize("kind", ["file", "directory", "no parent"])
@@ -270,7 +271,8 @@ def test_an_export_target_that_cannot_be_written_is_refused_before_the_study_run
     argv = ["study", "design", "thesis-design", "--out", str(out), "--workers", "0", "--export", "0"]
     assert main([*argv, "--export-to", str(target), "--no-progress"]) != 0
     err = capsys.readouterr().err.strip()
-    assert str(target) in err and "\n" not in err
+    assert str(target) in err
+    assert "\n" not in err
     assert not out.exists()  # no journal: nothing ran
     if kind == "file":
         assert "runs the study again" in err

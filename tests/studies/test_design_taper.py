@@ -91,7 +91,8 @@ def test_the_shipped_thesis_design_study_is_unchanged():
     settings = DesignSettings.from_spec(spec)
     cands = candidates(settings, spec.seed)
     assert len(candidates(dataclasses.replace(settings, samples=0), spec.seed)) == 2916
-    assert len(cands) == 400 and all(c.section_taper == 1.0 for c in cands)
+    assert len(cands) == 400
+    assert all(c.section_taper == 1.0 for c in cands)
     options = [dataclasses.astuple(c)[:-1] for c in cands]  # the options main had, in its order
     assert hashlib.sha256(repr(options).encode()).hexdigest()[:16] == THESIS_DESIGN_CANDIDATES_SHA
     assert study_fingerprint(spec, settings) == THESIS_DESIGN_FINGERPRINT
@@ -102,7 +103,8 @@ def test_the_shipped_thesis_design_study_is_unchanged():
 
 def test_the_shipped_taper_study_reads():
     settings = DesignSettings.from_spec(load_spec("thesis-taper"))
-    assert 1.0 in settings.section_taper and min(settings.section_taper) < 1 < max(settings.section_taper)
+    assert 1.0 in settings.section_taper
+    assert min(settings.section_taper) < 1 < max(settings.section_taper)
     cands = candidates(settings, 0)
     assert sum(c.is_thesis for c in cands) == 1  # the thesis design (untapered) is marked on its front
 
@@ -166,7 +168,8 @@ bayes_samples = 50
     base = ["study", "design", str(spec), "--out", str(out), "--workers", "0", "--no-progress"]
     assert main([*base, "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["candidates"] == 2 and {r["section_taper"] for r in summary["pareto_front"]} <= {0.5, 2.0}
+    assert summary["candidates"] == 2
+    assert {r["section_taper"] for r in summary["pareto_front"]} <= {0.5, 2.0}
     k = summary["pareto_front"][0]["row"]
     taper = summary["pareto_front"][0]["section_taper"]
     assert main([*base, "--export", str(k)]) == 0
@@ -177,7 +180,8 @@ bayes_samples = 50
     assert main(["params", str(exported)]) == 0
     release = tmp_path / "release.parquet"
     argv = ["simulate", "release", "--params", str(exported), "--out", str(release), "--duration", "3"]
-    assert main(argv) == 0 and release.exists()
+    assert main(argv) == 0
+    assert release.exists()
     # its twin (the exported file's, calibration scaled to it) bends under a tip load as the elastica of its geometry
     cal = calibration_for(params)
     length = params.geometry.digit_length_m

@@ -89,7 +89,8 @@ relative = {SPREAD}
     assert names == ["backbone.youngs_modulus_pa", "backbone.density_kg_m3", "tendons.offset_m[*]"]
     np.testing.assert_allclose(res["S1"][[0, 2]], [s_e, s_d], atol=SOBOL_ATOL)
     np.testing.assert_allclose(res["ST"][[0, 2]], [1 - s_d, 1 - s_e], atol=SOBOL_ATOL)
-    assert res["S1"][1] == 0.0 and res["ST"][1] == 0.0
+    assert res["S1"][1] == 0.0
+    assert res["ST"][1] == 0.0
     # the angle itself: T d L / EI at the nominal robot (the Cosserat rod's extension couples at ~1e-4)
     case = result.spec.baseline
     ei = case.robot.backbone.bending_torsion_stiffness[0]
@@ -181,7 +182,8 @@ relative = 0.1
     summary = json.loads(capsys.readouterr().out)
     assert set(summary["metrics"]) == {"tip_angle_deg", "tip_z_m"}
     assert summary["metrics"]["tip_angle_deg"]["unit"] == "deg"
-    assert (out / "indices.parquet").exists() and (out / "summary.json").exists()
+    assert (out / "indices.parquet").exists()
+    assert (out / "summary.json").exists()
     assert main([*argv, "--json"]) == 2  # finished: refused without --force
     assert "pass --force" in json.loads(capsys.readouterr().out)["error"]
     assert main(["study", "design", str(path), "--out", str(tmp_path / "d"), "--json"]) == 2

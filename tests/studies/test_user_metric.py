@@ -75,7 +75,9 @@ def test_a_user_metric_runs_like_the_built_in_ones(user_module, tmp_path):
     # a row whose value is not a number is that row's error, naming the spec key
     bad = MetricContext(user_metrics=(spec.user_metrics[0].__class__("w", f"{user_module}:words", "g", "", "x"),))
     (out,) = evaluate_many([ps], ["w"], bad)
-    assert isinstance(out, ParameterError) and "x function:" in str(out) and "'heavy'" in str(out)
+    assert isinstance(out, ParameterError)
+    assert "x function:" in str(out)
+    assert "'heavy'" in str(out)
 
 
 @pytest.mark.parametrize(

@@ -20,6 +20,16 @@ GAUGE_ATOL_V = 1e-9
 GAUGES = ("gauge1_v", "gauge2_v", "gauge3_v")
 
 
+def _assert_same_dataset(library, command):
+    """Every column: the gauges within GAUGE_ATOL_V, the rest (what was done when: loads, positions, commands,
+    times, sample numbers) exactly, the no-load rows' NaN positions included; and the same metadata."""
+    assert library.column_names == command.column_names
+    for name in library.column_names:
+        mine, theirs = library[name].to_numpy(), command[name].to_numpy()
+        atol = GAUGE_ATOL_V if name in GAUGES or name == "pot_v" else 0.0
+        np.testing.assert_allclose(mine, theirs, rtol=0, atol=atol, equal_nan=True, err_msg=name)
+
+
 @pytest.fixture(scope="module")
 def command_dataset(tmp_path_factory):
     out = tmp_path_factory.mktemp("cli") / "cli.parquet"
@@ -34,8 +44,7 @@ def test_collect_command_equals_the_library_call_with_the_protocols_twin(command
     collect(protocol, open_rig("sim", seed=0, **sim_options(protocol)), out, rig_url="sim")
     library = pq.read_table(out)
     assert library.num_rows == command_dataset.num_rows
-    for gauge in GAUGES:
-        np.testing.assert_allclose(library[gauge], command_dataset[gauge], rtol=0, atol=GAUGE_ATOL_V, err_msg=gauge)
+    _assert_same_dataset(library, command_dataset)
 
 
 @pytest.mark.slow
@@ -44,8 +53,9 @@ def test_collect_command_equals_the_library_call_without_a_rig(command_dataset, 
     collect(load_protocol("thesis-6.1"), out=out)
     library = pq.read_table(out)
     assert library.num_rows == command_dataset.num_rows
-    for gauge in GAUGES:
-        np.testing.assert_allclose(library[gauge], command_dataset[gauge], rtol=0, atol=GAUGE_ATOL_V, err_msg=gauge)
+    _assert_same_dataset(library, command_dataset)
+    # and the same record of how it was taken: rig settings, protocol, seed, versions
+    assert library.schema.metadata[b"flexdigit"] == command_dataset.schema.metadata[b"flexdigit"]
 
 
 def test_collect_without_an_output_is_refused(tmp_path):

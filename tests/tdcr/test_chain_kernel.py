@@ -47,7 +47,9 @@ def test_the_faster_kernel_follows_the_kernel_before_it(bent, monkeypatch):
     with mock.patch.object(dynamics, "_chain_kernel", _kernel_before(monkeypatch)):
         before = simulate(ROD, bent, 0.3)
         converged = simulate(ROD, bent, 0.3, tol=1e-10)
-    assert now.converged and before.converged and converged.converged
+    assert now.converged
+    assert before.converged
+    assert converged.converged
     allowed = np.abs(before.positions_m - converged.positions_m).max()
     assert allowed > 1e-7  # the tolerance's error is there to compare with (3.1e-6 m)
     gap = np.abs(now.positions_m - before.positions_m).max()

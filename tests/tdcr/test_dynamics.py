@@ -195,7 +195,9 @@ def test_a_response_too_long_to_keep_is_refused_before_it_is_allocated(capsys):
     argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "4,0,0,0,2,0", "--duration-s", "600", "--dt-s", "1e-6"]
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
-    assert "duration_s 600 s" in err and "dt_s 1e-06 s" in err and "\n" not in err
+    assert "duration_s 600 s" in err
+    assert "dt_s 1e-06 s" in err
+    assert "\n" not in err
 
 
 @pytest.mark.parametrize("hb", [8, 14])
@@ -226,7 +228,8 @@ def test_the_kernels_banded_lu_solves_as_scipy_does(hb, size):
     _chain_kernel._band_factor(band, hb)
     _chain_kernel._band_solve(band, hb, rhs, padded)
     np.testing.assert_allclose(padded[hb : hb + size], expected, rtol=0, atol=1e-13 * np.abs(expected).max())
-    assert not padded[:hb].any() and not padded[hb + size :].any()  # the padding stays zero
+    assert not padded[:hb].any()
+    assert not padded[hb + size :].any()  # the padding stays zero
 
 
 @pytest.mark.parametrize("angle", [1e-9, 0.05, 0.0999, 0.1001, 0.7, 3.0])

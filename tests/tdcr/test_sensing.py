@@ -139,7 +139,8 @@ def test_sense_shape_from_a_readings_file_is_the_twins_estimate(tmp_path):
     layout, strains = tdcr.read_readings(path, robot)
     from_file = tdcr.sense_shape(robot, strains, layout=layout)
     np.testing.assert_array_equal(from_file.estimate.positions_m, from_twin.estimate.positions_m)
-    assert from_file.twin is None and from_file.tip_error_m is None
+    assert from_file.twin is None
+    assert from_file.tip_error_m is None
 
 
 @pytest.mark.parametrize(

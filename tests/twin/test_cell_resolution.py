@@ -105,7 +105,8 @@ def test_a_short_digit_keeps_three_cells_and_long_sections_are_cut_finer():
     geo = RigParams.from_dict(DIGITS["unequal-sections"]).geometry
     cells = default_cells(geo)
     for n, (start, end) in zip(cells, geo.section_bounds_m, strict=True):
-        assert n % 2 == 1 and (end - start) / n <= MAX_CELL_LENGTH_M < (end - start) / max(n - 2, 1)
+        assert n % 2 == 1
+        assert (end - start) / n <= MAX_CELL_LENGTH_M < (end - start) / max(n - 2, 1)
     assert cells == (3, 5, 3)
     # seed 2: one 0.39 m section
     geo = RigParams.from_dict(campaign_digit(2)).geometry
@@ -117,10 +118,13 @@ def test_seed_2_gauges_within_the_tolerance_of_the_converged_twin():
     (hung weights) off the converged twin; the default's 15 cells bring both within the tolerance."""
     params = RigParams.from_dict(campaign_digit(2))
     (gauge, tip), (hung_gauge, hung_tip) = resolution_errors(params, default_cells(params.geometry))
-    assert gauge < DISTRIBUTED_RTOL and tip < DISTRIBUTED_RTOL
-    assert hung_gauge < HUNG_RTOL and hung_tip < DISTRIBUTED_RTOL
+    assert gauge < DISTRIBUTED_RTOL
+    assert tip < DISTRIBUTED_RTOL
+    assert hung_gauge < HUNG_RTOL
+    assert hung_tip < DISTRIBUTED_RTOL
     (gauge3, _), (hung3, _) = resolution_errors(params, 3)
-    assert gauge3 > 2 * DISTRIBUTED_RTOL and hung3 > 5 * HUNG_RTOL  # what the old default gave
+    assert gauge3 > 2 * DISTRIBUTED_RTOL
+    assert hung3 > 5 * HUNG_RTOL  # what the old default gave
 
 
 def test_the_shape_estimator_fits_seed_2_readings_of_the_default_twin():

@@ -99,7 +99,8 @@ def test_unequal_bounds_follow_the_lengths_from_the_base():
     assert np.asarray(g.section_bounds_m) == pytest.approx(np.asarray(expected), abs=LENGTH_ATOL_M)
     assert g.support_centres_m == pytest.approx((0.07, 0.181, 0.272), abs=LENGTH_ATOL_M)
     assert g.support_centres_m[-1] == g.digit_length_m  # the tip support's mass never past the tip
-    assert not g.equal_sections and Geometry().equal_sections
+    assert not g.equal_sections
+    assert Geometry().equal_sections
     # one support length given for all: the same layout as leaving them out (to rounding)
     same = Geometry(support_lengths_m=(0.01, 0.01, 0.01))
     assert np.asarray(same.section_bounds_m) == pytest.approx(np.asarray(Geometry().section_bounds_m), abs=1e-15)
@@ -137,7 +138,8 @@ def test_the_design_study_keeps_its_stretches_on_the_unequal_strip():
 
     stretches = _strip_stretches(UNEQUAL)
     for (a, b), (lo, hi) in zip(stretches, UNEQUAL.geometry.section_bounds_m, strict=True):
-        assert a == pytest.approx(lo + SUPPORT_CLEARANCE_M) and b == pytest.approx(hi - SUPPORT_CLEARANCE_M)
+        assert a == pytest.approx(lo + SUPPORT_CLEARANCE_M)
+        assert b == pytest.approx(hi - SUPPORT_CLEARANCE_M)
 
 
 def test_the_shape_beam_bends_only_on_the_unequal_strips():

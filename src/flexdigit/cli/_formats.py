@@ -133,6 +133,56 @@ angle_deg = 90.0
 disk = 10
 """,
     ),
+    "kept_design": (
+        "kept 20 ms design (JSON, written by 'flexdigit design 20ms --out FILE', read by 'flexdigit run "
+        "--controller FILE')",
+        "The weights a digit's 20 ms design chose and what they were chosen for: the fingerprints of the digit's "
+        "parameters and of its twin calibration, its mounting, the loop's period (s) and the model's rotation per "
+        "command (deg); a run refuses a file made for another digit. Written by the command, not by hand.",
+        """\
+{
+  "format": "flexdigit-20ms-design-1",
+  "params_fingerprint": "66e059881a8e0150",
+  "params_file": null,
+  "calibration_fingerprint": "8f8caa6bdc5c8198",
+  "orientation": "vertical",
+  "period_s": 0.02,
+  "deg_per_command": 1.7349701366069392,
+  "weights": {"q_rate": 100.0, "r_u": 30.0, "q_disturbance": 0.1, "q_input": 1.0, "r_measurement": 10.0,
+              "q_shape": 0.0},
+  "search": null
+}
+""",
+    ),
+    "gauge_readings": (
+        "tendon robot gauge readings (CSV, 'flexdigit tdcr shape|contact ROBOT --readings FILE')",
+        "A header s_m,angle_deg,strain[,tilt_deg] and one row per gauge: its arc length from the base (m), its "
+        "face's angle from the cross-section's x axis (deg), its reading as a strain (m/m) and, for a rosette, "
+        "its grid's tilt from the backbone's axis (deg, default 0).",
+        """\
+s_m,angle_deg,strain
+0.1,0,0.00012
+0.1,90,-0.00003
+0.3,0,0.00025
+0.3,90,0.00001
+""",
+    ),
+    "record": (
+        "recorded test (CSV or Parquet, 'flexdigit identify release|step FILE', 'flexdigit calibrate "
+        "--release-bare FILE')",
+        "A header row, then one row per sample: a time column (time_s, time_ms, or time with --time-unit) and "
+        "channels named with their unit (sg1_v .. sg3_v or gauge1_v .., pot_v; _mv for millivolts), separated by "
+        "commas, semicolons, tabs or spaces; '#' lines are comments; an optional command column gives a step's "
+        "input.",
+        """\
+# a step test, sampled at 1 kHz (an identification needs 20 samples or more)
+time_s,command,pot_v,sg1_v
+0.000,0,0.467,-0.121
+0.001,0,0.468,-0.120
+0.002,51,0.468,-0.121
+0.003,51,0.471,-0.119
+""",
+    ),
 }
 
 
@@ -146,6 +196,9 @@ WHERE = {
     "palpation": "flexdigit palpate --help",
     "spec": "flexdigit study --help",
     "robot": "flexdigit tdcr statics --help",
+    "record": "flexdigit identify --help",
+    "kept_design": "flexdigit design 20ms --help",
+    "gauge_readings": "flexdigit tdcr shape --help",
 }
 
 

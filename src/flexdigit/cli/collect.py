@@ -312,36 +312,25 @@ def _bayes_scores(args: argparse.Namespace, dataset, test_rows, rmse_mm: float) 
 
 
 def _predict(args: argparse.Namespace) -> CommandResult:
-    import numpy as np
-
     from flexdigit._plot import check_plot
-    from flexdigit.errors import DataFileError
-    from flexdigit.tactile.accuracy import corr2, rmse
     from flexdigit.tactile.dataset import load_dataset
-    from flexdigit.tactile.localisation import tare
+    from flexdigit.tactile.localisation import predict_dataset
     from flexdigit.tactile.model_io import load_model
-    from flexdigit.tactile.pipeline import targets
     from flexdigit.tactile.prediction_plot import target_unit
 
     check_plot(args.plot, "predict", force=args.force)
     saved = load_model(args.model)
     dataset = load_dataset(args.file)
-    missing = [c for c in saved.inputs if c not in dataset.columns]
-    if missing:
-        raise DataFileError(f"{args.file}: the model needs column '{missing[0]}'")
-    rows, y = targets(dataset, saved.target)
-    readings = tare(dataset)[0] if saved.meta.get("tared") is True else dataset  # as the network was trained
-    x = np.column_stack([readings[c].astype(float) for c in saved.inputs])[rows]
-    pred = saved.network.predict(x)
-    what, unit, scale = target_unit(saved.target)
-    scores = {"corr2": corr2(pred, y), "rmse": rmse(pred, y)}  # rmse in the target's SI unit (m, kg)
-    if unit:
-        scores[f"rmse_{unit}"] = scale * scores["rmse"]
+    result = predict_dataset(saved, dataset, source=str(args.file))
+    rows, pred, y, scores = result.rows, result.predicted, result.actual, result.scores
     data = {"target": saved.target, "samples": rows.tolist(), "predicted": pred, "actual": y, "scores": scores}
-    rmse_text = f"{scale * scores['rmse']:.4g} " + (unit or {"position_index": "positions"}.get(saved.target, "(0..1)"))
+    _, unit, scale = target_unit(saved.target)
+    shown_unit = unit or {"position_index": "positions"}.get(saved.target, "(0..1)")
+    rmse_text = f"{scale * scores['rmse']:.4g} {shown_unit}"
     lines = [f"{saved.target}: {len(rows)} readings, corr2 {scores['corr2']:.4f}, RMSE {rmse_text}"]
-    lines += [
-        f"  sample {int(dataset['sample'][r])}: predicted {p:.5g}, actual {t:.5g}"
+    lines += [  # in the unit of the RMSE (mm, g), as the plot shows them
+        f"  sample {int(dataset['sample'][r])}: predicted {scale * p:.5g} {shown_unit}, actual {scale * t:.5g} "
+        f"{shown_unit}"
         for r, p, t in zip(rows[: args.limit], pred[: args.limit], y[: args.limit], strict=True)
     ]
     if args.plot:

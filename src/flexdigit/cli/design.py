@@ -16,6 +16,7 @@ a design that does not stabilise it is refused in one line (exit 2).
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from flexdigit._command import CommandResult, add_command
 from flexdigit._plot import add_plot_flag
@@ -102,6 +103,9 @@ def register(subparsers) -> None:
         help="keep the design (JSON, the digit's fingerprint in it) for: flexdigit run --params FILE --controller OUT",
     )
     p.add_argument("--force", action="store_true", help="overwrite an existing --out file")
+    from flexdigit.cli._formats import epilog
+
+    p.epilog = epilog("kept_design")
 
 
 def _add_digit_flags(p) -> None:
@@ -186,14 +190,10 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
 def _hinf(args: argparse.Namespace) -> CommandResult:
     from flexdigit._plot import check_plot
 
+    check_plot(args.plot, "design", force=args.force)
     params, calibration = _digit(args)
     if params is not None:
-        if args.plot:
-            from flexdigit.errors import ParameterError
-
-            raise ParameterError("--plot is the thesis rig's design only; not with --params or --calibration yet")
         return _hinf_digit(args, params, calibration)
-    check_plot(args.plot, "design", force=args.force)
     parts: dict = {}
     s = _design_summary(args.filter_hz, args.plant, args.eps, args.margin, parts)
     if args.plot:
@@ -209,6 +209,7 @@ def _hinf(args: argparse.Namespace) -> CommandResult:
         f"({s['additive_tolerance_relative_percent']:.3g} % of |G(0)|; thesis arithmetic 100/dB = "
         f"{s['thesis_arithmetic_percent']:.3g} %)\n"
         f"  T_uw step peak {s['tuw_step_peak']:.4g} commands/m; T_yw settling {s['tyw_settling_s']:.3f} s"
+        + (f"\n  plot -> {s['plot']}" if args.plot else "")
     )
     return CommandResult(data=s, text=text)
 
@@ -223,6 +224,13 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
         args.filter_hz, params, calibration, orientation=args.orientation, eps_u=args.eps, margin=args.margin
     )
     data = {"params": args.params, **summary}
+    if args.plot:  # the plant and the controller the design reported, as transfer functions
+        import control as ct
+
+        plant = ct.tf(data["plant_num"], data["plant_den"])
+        controller = ct.tf(data["controller_num"], data["controller_den"])
+        title = f"H-inf design on {Path(args.params).name}, filter {args.filter_hz:g} Hz (thesis 4.4)"
+        data["plot"] = _save_plot(args, plant, controller, "m", title)
     text = (
         f"H-inf design on {args.params}: F(s) = 1/(s + {2 * math.pi * args.filter_hz:.4f}), the digit's plant from "
         f"its components (gauge-1 deflection, {data['plant_dc_gain_m_per_command'] * 1e3:.4g} mm per command; E(s) "
@@ -233,6 +241,7 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
         f"{data['tpq_peak_db']:.2f} dB; additive tolerance {data['additive_tolerance_m_per_command']:.4g} m/command "
         f"({data['additive_tolerance_relative_percent']:.3g} % of |G(0)|)\n"
         f"  T_yw settling {data['tyw_settling_s']:.3f} s; thesis columns not applicable"
+        + (f"\n  plot -> {data['plot']}" if args.plot else "")
     )
     return CommandResult(data=data, text=text)
 
@@ -296,7 +305,7 @@ def _sweep(args: argparse.Namespace) -> CommandResult:
     printed = thesis_value("hinf.additive_tolerance_percent")
     rows = []
     lines = [
-        "  f (Hz) | ||T_pq|| dB | thesis % | 100/dB at 10x gain | 1/||T_pq|| % of |G(0)| | T_uw step peak",
+        "  f (Hz) | ||T_pq|| dB | thesis % | 100/dB at 10x gain | 1/||T_pq|| % of |G(0)| | T_uw step peak (commands/m)",
     ]
     for f in args.filters:
         s = _design_summary(f)
@@ -347,8 +356,8 @@ def _mixsyn(args: argparse.Namespace) -> CommandResult:
     text = (
         f"mixed-sensitivity design on the consistent plant (beam rotation, rad), order {d.order}, "
         f"gamma {d.hinf.gamma:.4g}\n"
-        f"  (i)   30 deg step: command {req['command_min']:+.2f} .. {req['command_max']:+.2f} about 8 "
-        f"(window {req['command_window']}): {'ok' if req['req_i_command_ok'] else 'FAIL'}\n"
+        f"  (i)   30 deg step: command {req['command_min']:+.2f} .. {req['command_max']:+.2f} servo commands about "
+        f"8 (window {req['command_window']}): {'ok' if req['req_i_command_ok'] else 'FAIL'}\n"
         f"  (ii)  |S(0)| = {req['sensitivity_dc']:.2e}: {'ok' if req['req_ii_integral'] else 'FAIL'}\n"
         f"  (iii) min closed-loop damping {req['min_damping']:.3f}: {'ok' if req['req_iii_damping'] else 'FAIL'}\n"
         f"  (iv)  gain x0.7..1.3, beam wn x0.8..1.2: grid {'stable' if req['grid_stable'] else 'UNSTABLE'}, "

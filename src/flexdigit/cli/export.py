@@ -138,12 +138,9 @@ def _export_design(design: str, period: float, args):
         from flexdigit.rig.base import open_rig
         from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
 
-        rig = open_rig("sim")
-        try:
+        with open_rig("sim") as rig:
             estimator = load_rotation_map(args.rotation_map) if args.rotation_map else calibrate_rotation(rig)
             rest = np.array([rig.read().gauges_v for _ in range(5)])
-        finally:
-            rig.close()
         estimator.tare(rest)
     if design == "digital20":
         d = design_20ms(params, period_s=period)
@@ -190,7 +187,7 @@ def _digit_export_design(params, period: float, args):
     import numpy as np
 
     from flexdigit.control.c_export import RotationMap
-    from flexdigit.control.design20ms import digit_design_20ms, straight_is_stable
+    from flexdigit.control.design20ms import digit_design_20ms, digit_mount
     from flexdigit.errors import ParameterError
     from flexdigit.params import RigParams
     from flexdigit.rig.base import open_rig
@@ -204,7 +201,7 @@ def _digit_export_design(params, period: float, args):
     else:
         calibration = twin_calibration(params)
     # tip up, a digit that buckles under its supports' weight is mounted hanging (as run --params mounts its twin)
-    orientation = "vertical" if straight_is_stable(params, calibration, "vertical") else "hanging"
+    orientation = digit_mount(params, calibration)
     with open_rig("sim", params, calibration=calibration, orientation=orientation) as rig:
         estimator = load_rotation_map(args.rotation_map) if args.rotation_map else calibrate_rotation(rig)
         rest = np.array([rig.read().gauges_v for _ in range(5)])

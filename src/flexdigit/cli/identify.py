@@ -26,6 +26,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "record that cannot be identified with confidence exits with status 2 and says why, unless --force."
         ),
     )
+    from flexdigit.cli._formats import epilog
+
+    parser.epilog = epilog("record")
     parser.add_argument("kind", choices=("release", "step"), help="the experiment")
     parser.add_argument("file", help="the recording (.csv or .parquet)")
     parser.add_argument(

@@ -216,11 +216,11 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
         f"{len(plan.sweep.commands)} plateaus ({plan.sweep.model})",
         f"  modulus   {f.modulus_n_m2:9.1f} +- {f.modulus_sd_n_m2:.1f} "
         + (
-            f"N/m^2 ({f.stiffness_n_m_per_cm:.2f} N/m per cm; "
+            f"N/m^2 ({f.stiffness_n_m_per_cm:.2f} N/m per cm; Cramer-Rao sd {bound['modulus_n_m2']:.1f} N/m^2)"
             if plan.sweep.model == "linear"
-            else f"N/m^{1 + f.exponent:.2f} (k of k delta^n; "
-        )
-        + f"Cramer-Rao {bound['modulus_n_m2']:.1f})",
+            else f"N/m^{1 + f.exponent:.2f} (k of k delta^n; Cramer-Rao sd {bound['modulus_n_m2']:.1f} "
+            f"N/m^{1 + f.exponent:.2f})"
+        ),
         f"  gap       {1000 * f.gap_m:9.3f} +- {1000 * f.gap_sd_m:.3f} mm",
         f"  lumped    {result.lumped_stiffness_n_m:9.2f} N/m (force against deepest indentation)",
         f"  chi2/dof  {summary['chi2_per_dof']:9.2f}",

@@ -50,6 +50,9 @@ def register(subparsers) -> None:
         _run,
         help="run a controller in closed loop on the twin or the rig (beam-rotation step)",
     )
+    from flexdigit.cli._formats import epilog
+
+    parser.epilog = epilog("kept_design")
     parser.add_argument("--backend", default="sim", help="sim, sim+paced, serial://PORT?daq=0, replay://FILE")
     parser.add_argument(
         "--controller",
@@ -439,6 +442,7 @@ def _run_text(args, run, data: dict, setpoint: float, period: float) -> str:
         f"deg at {setpoint:g} deg\n"
         f"  timing: {t.samples} samples of {period * 1000:g} ms, {t.overruns} overruns, jitter p99 "
         f"{t.jitter_p99_s * 1000:.3f} ms, compute {t.compute_mean_s * 1e6:.0f} us"
+        + (f"\n  plot -> {data['plot']}" if data.get("plot") else "")
     )
 
 
@@ -552,10 +556,10 @@ def _twin_options(args, sim: bool) -> dict:
     if getattr(args, "orientation", None) is not None:
         options["orientation"] = args.orientation
     elif getattr(args, "digit", None) is not None and "orientation" not in _url_options(args.backend):
-        from flexdigit.control.design20ms import straight_is_stable
+        from flexdigit.control.design20ms import digit_mount
 
-        if not straight_is_stable(args.digit, options.get("calibration"), "vertical"):
-            # tip up it buckles under its supports' weight: its twin hangs (said in the output: rig.orientation)
+        # tip up a digit may buckle under its supports' weight: its twin then hangs (said in the output)
+        if digit_mount(args.digit, options.get("calibration")) == "hanging":
             options["orientation"] = "hanging"
     return options
 

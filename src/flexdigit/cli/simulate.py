@@ -59,7 +59,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _common(p: argparse.ArgumentParser) -> None:
     """The flags every experiment takes."""
     p.add_argument("--out", required=True, help="output file (.parquet, or .csv)")
-    p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    p.add_argument("--force", action="store_true", help="overwrite --out (and --plot) if it exists")
     p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
     p.add_argument("--params", help="rig parameters TOML (default: the thesis rig)")
     p.add_argument(
@@ -67,7 +67,11 @@ def _common(p: argparse.ArgumentParser) -> None:
         help="twin calibration TOML (default: fitted to the thesis, scaled to the --params digit)",
     )
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
-    add_plot_flag(p, "the record (gauges and pot in V over time, the command or the load's position)")
+    add_plot_flag(
+        p,
+        "the record (gauges and pot in V over time, the command or the load's position; with --robot the tip's "
+        "x, y and z in mm over time)",
+    )
     p.add_argument(
         "--robot",
         metavar="ROBOT",
@@ -195,12 +199,12 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.twin.record_plot import record_figure
 
     check_output(args.out, force=args.force)  # before the simulation, not after it
+    check_plot(args.plot, "simulate", force=args.force)
     if args.robot is not None:
         return _robot(args)
     for flag in ("tension_n", "from_tension_n"):  # the digit's experiment would ignore them
         if getattr(args, flag, None) is not None:
             raise ParameterError(f"--{flag.replace('_', '-')} is a tendon robot's: give --robot NAME|FILE with it")
-    check_plot(args.plot, "simulate", force=args.force)
     params = load_params(args.params) if args.params else RigParams()
     if args.calibration:
         cal = load_calibration(args.calibration)
@@ -224,6 +228,8 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "findings": findings,
         "plot": args.plot,
     }
+    if args.plot:
+        text += f"\nplot -> {args.plot}"
     return CommandResult(data=data, text=f"{res.metadata['experiment']}: {res.table.num_rows} rows -> {path}\n{text}")
 
 
@@ -349,13 +355,12 @@ def _release_findings(record, gauges=(1, 2, 3)) -> dict:
 
 # ---------------------------------------------------------------------------------------------- a tendon robot
 #: The digit's flags that mean nothing to a robot, refused with --robot when given (the value set, the default).
-_DIGIT_ONLY = {"params": None, "calibration": None, "plot": None, "no_housing": False, "cable": False}
+_DIGIT_ONLY = {"params": None, "calibration": None, "no_housing": False, "cable": False}
 
 
 def _robot(args: argparse.Namespace) -> CommandResult:
     """``simulate release|step --robot ROBOT``: the experiment on the robot's twin, its table written."""
-    from flexdigit._constants import G_STANDARD_M_S2
-    from flexdigit.tdcr import euler_bernoulli_first_hz, get_robot, release_test, step_test
+    from flexdigit.tdcr import euler_bernoulli_first_hz, get_robot
 
     if args.experiment not in ("release", "step"):
         raise ParameterError(
@@ -366,6 +371,35 @@ def _robot(args: argparse.Namespace) -> CommandResult:
         if getattr(args, name, default) != default:
             raise ParameterError(f"--{name.replace('_', '-')} is the digit's; it does not apply with --robot")
     robot = get_robot(args.robot)
+    test = _robot_test(args, robot)
+    path = test.save(args.out, force=args.force)
+    data = {**test.metadata(), "out": str(path), "rows": int(test.motion.t_s.size)}
+    data["euler_bernoulli_hz"] = euler_bernoulli_first_hz(robot)
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.tdcr import experiment_figure
+
+        data["plot"] = str(save_plot(experiment_figure(test), args.plot, "simulate", force=args.force))
+    tip = test.motion.tip_positions_m * 1e3
+    lines = [
+        f"{data['experiment']} of {robot.name}: {tip.shape[0]} rows -> {path} (converged: {test.motion.converged})",
+        "tip from ({:.3f}, {:.3f}, {:.3f}) mm to ({:.3f}, {:.3f}, {:.3f}) mm".format(*tip[0], *tip[-1]),
+    ]
+    if args.experiment == "release":
+        lines.append(
+            f"first frequency {test.first_frequency_hz:.4f} Hz (the straight backbone as an Euler-Bernoulli "
+            f"cantilever: {data['euler_bernoulli_hz']:.4f} Hz)"
+        )
+    if args.plot:
+        lines.append(f"plot -> {data['plot']}")
+    return CommandResult(data=data, text="\n".join(lines), exit_code=0 if test.motion.converged else 1)
+
+
+def _robot_test(args: argparse.Namespace, robot):
+    """The release or step test ``simulate --robot`` asks for (:func:`flexdigit.tdcr.release_test`, ``step_test``)."""
+    from flexdigit._constants import G_STANDARD_M_S2
+    from flexdigit.tdcr import release_test, step_test
+
     tensions = _robot_tensions(args.tension_n, "--tension-n", robot)
     if args.experiment == "release":
         g = G_STANDARD_M_S2
@@ -383,20 +417,7 @@ def _robot(args: argparse.Namespace) -> CommandResult:
     else:
         start = _robot_tensions(args.from_tension_n, "--from-tension-n", robot)
         test = step_test(robot, tensions, from_tensions_n=start, duration_s=args.duration, dt_s=1.0 / args.rate)
-    path = test.save(args.out, force=args.force)
-    data = {**test.metadata(), "out": str(path), "rows": int(test.motion.t_s.size)}
-    data["euler_bernoulli_hz"] = euler_bernoulli_first_hz(robot)
-    tip = test.motion.tip_positions_m * 1e3
-    lines = [
-        f"{data['experiment']} of {robot.name}: {tip.shape[0]} rows -> {path} (converged: {test.motion.converged})",
-        "tip from ({:.3f}, {:.3f}, {:.3f}) mm to ({:.3f}, {:.3f}, {:.3f}) mm".format(*tip[0], *tip[-1]),
-    ]
-    if args.experiment == "release":
-        lines.append(
-            f"first frequency {test.first_frequency_hz:.4f} Hz (the straight backbone as an Euler-Bernoulli "
-            f"cantilever: {data['euler_bernoulli_hz']:.4f} Hz)"
-        )
-    return CommandResult(data=data, text="\n".join(lines), exit_code=0 if test.motion.converged else 1)
+    return test
 
 
 def _robot_tensions(text: str | None, flag: str, robot) -> list[float]:

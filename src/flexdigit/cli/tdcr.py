@@ -53,7 +53,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = sub.add_parser("statics", help="static equilibrium under tendon tensions and tip loads", epilog=epilog("robot"))
     p.add_argument("robot", metavar="ROBOT", help="a built-in robot (rao2021) or a robot TOML file")
     p.add_argument("--tension-n", required=True, help="tendon tensions in N, one per tendon: '4,0,0,0,2,0'")
-    vector = "(world frame; write a leading minus as --{}=-1,0,0)"
+    vector = "(world frame, e.g. --{} -1,0,0)"
     p.add_argument("--tip-force-n", help="tip force fx,fy,fz in N " + vector.format("tip-force-n"))
     p.add_argument("--tip-moment-nm", help="tip moment mx,my,mz in N m " + vector.format("tip-moment-nm"))
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
@@ -124,7 +124,7 @@ def _add_sensing_flags(p: argparse.ArgumentParser, stations: int) -> None:
     )
     p.add_argument("--seed", type=Flag(SEED), default=0, help="noise seed (default 0)")
     p.add_argument("--out", metavar="FILE.json", help="also write the result (as --json prints it) to FILE")
-    p.add_argument("--force", action="store_true", help="replace the --out (and --record) file if it exists")
+    p.add_argument("--force", action="store_true", help="replace the --out (and --record, --plot) file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
 
 
@@ -136,7 +136,7 @@ def _add_shape(sub, vector: str) -> None:
         help="backbone and tip pose from strain gauges on the backbone's faces, estimate vs twin",
         description="Estimate the backbone and the tip pose from strain gauges: from --strains or --readings, or "
         "from the twin's own readings under --tension-n (and loads), shown beside the twin's shape.",
-        epilog=epilog("robot"),
+        epilog=epilog("robot", "gauge_readings"),
     )
     _add_sensing_flags(p, 3)
     p.add_argument("--tension-n", help="tendon tensions in N, one per tendon: the twin to read (or compare with)")
@@ -145,6 +145,13 @@ def _add_shape(sub, vector: str) -> None:
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
     p.add_argument(
         "--record", metavar="OUT.mcap", help="also write the estimated shape as an MCAP recording (Foxglove 3D)"
+    )
+    from flexdigit._plot import add_plot_flag
+
+    add_plot_flag(
+        p,
+        "the estimated backbone beside the twin's, seen from the side (x-z) and the front (y-z) in mm, and the "
+        "distance between them along the backbone",
     )
 
 
@@ -157,7 +164,7 @@ def _add_contact(sub) -> None:
         description="Locate a point contact and measure its force from strain gauges, about the twin's shape "
         "under --tension-n: from --strains or --readings, or from the twin pressed at --contact-s-m by "
         "--contact-force-n (the truth shown beside the estimate).",
-        epilog=epilog("robot"),
+        epilog=epilog("robot", "gauge_readings"),
     )
     _add_sensing_flags(p, 4)
     p.add_argument("--tension-n", required=True, help="tendon tensions in N, one per tendon ('' for none)")
@@ -167,6 +174,13 @@ def _add_contact(sub) -> None:
         help="where to press the twin: arc length from the base, m",
     )
     p.add_argument("--contact-force-n", help="the force to press the twin with, fx,fy,fz in N, world frame")
+    from flexdigit._plot import add_plot_flag
+
+    add_plot_flag(
+        p,
+        "the backbone without the contact from the side (x-z) and the front (y-z) in mm, the estimated contact "
+        "with its force's direction and where the twin was pressed",
+    )
 
 
 def _run(args: argparse.Namespace) -> CommandResult:
@@ -344,6 +358,10 @@ def _sensing(args: argparse.Namespace) -> CommandResult:
     for path in (args.out, getattr(args, "record", None)):  # refused before the work, not after it
         if path is not None:
             check_output(path, force=args.force)
+    if getattr(args, "plot", None) is not None:
+        from flexdigit._plot import check_plot
+
+        check_plot(args.plot, f"tdcr {args.tdcr_command}", force=args.force)
     robot = get_robot(args.robot)
     given = _readings(args, robot)
     common = {"noise_std": args.noise_std, "seed": args.seed, "stations_per_segment": args.stations_per_segment}
@@ -382,6 +400,11 @@ def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
         tip = loads.get("tip_force_n")
         path = write_recording(args.record, robot, disks, tensions_n=pulls, tip_force_n=tip, force=args.force)
         data["recording"] = str(path)
+    if args.plot is not None:
+        from flexdigit._plot import save_plot
+        from flexdigit.tdcr import backbone_figure
+
+        data["plot"] = str(save_plot(backbone_figure(found, robot), args.plot, "tdcr shape", force=args.force))
     source = "given readings" if given else f"the twin's readings, noise {args.noise_std:g}, seed {args.seed}"
     lines = [
         f"{robot.name}: shape from {found.layout.s_m.size} gauges ({source})",
@@ -395,6 +418,8 @@ def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
         ]
     if "recording" in data:
         lines.append(f"recording: {data['recording']}")
+    if "plot" in data:
+        lines.append(f"plot -> {data['plot']}")
     return data, lines
 
 
@@ -436,4 +461,10 @@ def _contact(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
             f"force error {1e3 * found.force_error_n:.3f} mN"
             + (" (nearer the base than the gauges can see)" if found.true_s_m < est.visible_from_m else "")
         )
+    if args.plot is not None:
+        from flexdigit._plot import save_plot
+        from flexdigit.tdcr import contact_figure
+
+        data["plot"] = str(save_plot(contact_figure(found, robot), args.plot, "tdcr contact", force=args.force))
+        lines.append(f"plot -> {data['plot']}")
     return data, lines

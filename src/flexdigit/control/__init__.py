@@ -69,6 +69,7 @@ __getattr__, __all__ = lazy_exports(
         "digit_design_20ms_summary": "flexdigit.control.design20ms",
         "digit_first_mode": "flexdigit.control.design20ms",
         "straight_is_stable": "flexdigit.control.design20ms",
+        "digit_mount": "flexdigit.control.design20ms",
         "stiffness_share": "flexdigit.control.design20ms",
         "digit_weights": "flexdigit.control.design20ms",
         "WeightsChoice": "flexdigit.control.design20ms",

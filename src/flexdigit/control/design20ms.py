@@ -62,6 +62,7 @@ from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit
 __all__ = [
     "digit_first_mode",
     "straight_is_stable",
+    "digit_mount",
     "stiffness_share",
     "digit_weights",
     "WeightsChoice",
@@ -415,6 +416,13 @@ def straight_is_stable(params: RigParams, calibration=None, orientation: str = "
     pretensioned pair's cables). A long digit tip up (``"vertical"``) does not when its supports' weight nears the
     buckling load (0.5 m, 5 sections: ``pi^2 EI / 4 L^2`` = 0.16 N against 0.41 N: it buckles)."""
     return stiffness_share(params, calibration, orientation) > STIFFNESS_MARGIN
+
+
+def digit_mount(params: RigParams, calibration=None) -> str:
+    """How a digit's twin is mounted for a run: tip up (``"vertical"``, the thesis rig) when the straight digit
+    stands so (:func:`straight_is_stable`), else ``"hanging"``: one choice for ``flexdigit run --params``, ``export
+    --params`` and chapter 5 of the report on a digit."""
+    return "vertical" if straight_is_stable(params, calibration, "vertical") else "hanging"
 
 
 #: The plant gains a digit's design must hold its step on (x the model's): the cable model and the linearisation

@@ -22,6 +22,7 @@ from numbers import Real
 import control as ct
 import numpy as np
 
+from flexdigit._repr import summary
 from flexdigit._validation import Interval, declare, validate_fields
 from flexdigit.control._lsim import step_output
 from flexdigit.control.analysis import (
@@ -105,6 +106,18 @@ class MixsynDesign:
     @property
     def order(self) -> int:
         return len(np.trim_zeros(self.controller.den[0][0], "f")) - 1
+
+    def __repr__(self) -> str:
+        # the controller's order and the figures, not its coefficient arrays (python-control prints them in full)
+        spec = self.spec
+        return summary(
+            self,
+            controller_order=self.order,
+            gamma=self.hinf.gamma,
+            bandwidth_rad_s=spec.bandwidth_rad_s,
+            s_peak=spec.s_peak,
+            integral_eps=spec.integral_eps,
+        )
 
 
 def disturbance_plant(plant, w1, w2, wd) -> ct.StateSpace:

@@ -872,7 +872,7 @@ class LiveSession:
         # two, and the map moves slowly with the command (the taut cable's friction grows with its tension: a
         # 25 g load's median sd is 22 mm at command 15, 43 mm at 25), while each map costs half a second of CPU
         key = int(self.MAP_COMMAND_STEP * round(int(command) / self.MAP_COMMAND_STEP)) if self.cable else None
-        now = time.monotonic()
+        now = self._clock()  # the injected clock, as the loop's pacing
         if key != getattr(self, "_loc_seen", "unset"):
             self._loc_seen, self._loc_since = key, now
         if getattr(self, "_loc_sent", "unset") == key:

@@ -23,7 +23,7 @@ import numpy as np
 
 from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
-from flexdigit.control.design20ms import design_20ms, straight_is_stable
+from flexdigit.control.design20ms import design_20ms, digit_mount
 from flexdigit.control.discretise import forward_euler_stability_limit_s, halve_step, sample_period_study, sampled_loop
 from flexdigit.control.thesis_designs import printed_controller, thesis_plant
 from flexdigit.params import RigParams
@@ -118,7 +118,7 @@ def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: boo
     as the thesis's, or hangs when the digit buckles so (as ``flexdigit run --params`` mounts it).
     """
     params = params or RigParams()
-    mount = "vertical" if straight_is_stable(params, None, "vertical") else "hanging"
+    mount = digit_mount(params)
     if params == RigParams():
         commands = (8, 14, 20, 26, 32) if fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
     else:  # the digit's own sweep, as `run --params` maps it (a pair straight at 127 swept both ways)

@@ -66,6 +66,7 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit._io import read_text
+from flexdigit._repr import summary
 from flexdigit.errors import ParameterError
 from flexdigit.studies.metrics import UserMetric
 from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity
@@ -176,6 +177,18 @@ class RobotStudySpec:
     @property
     def names(self) -> list[str]:
         return [p.name for p in self.parameters]
+
+    def __repr__(self) -> str:
+        # the study at a glance (issue 23: the generated repr printed every parameter's source, 5,700 characters)
+        return summary(
+            self,
+            name=self.name,
+            seed=self.seed,
+            parameters=self.names,
+            metrics=self.metrics,
+            settings=list(self.settings),
+            source=self.source,
+        )
 
     def study_metrics(self, default=()) -> tuple[str, ...]:
         return tuple(self.metrics)

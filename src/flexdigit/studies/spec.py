@@ -69,6 +69,7 @@ import numpy as np
 from scipy import stats
 
 from flexdigit._io import read_text, refuse_special
+from flexdigit._repr import summary
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams, load_params
 from flexdigit.studies.metrics import METRICS, UserMetric, checked_value
@@ -214,6 +215,18 @@ class StudySpec:
     @property
     def names(self) -> list[str]:
         return [p.name for p in self.parameters]
+
+    def __repr__(self) -> str:
+        # the study at a glance (issue 23: the generated repr printed every parameter's source, 5,700 characters)
+        return summary(
+            self,
+            name=self.name,
+            seed=self.seed,
+            parameters=self.names,
+            metrics=self.metrics,
+            settings=list(self.settings),
+            source=self.source,
+        )
 
     def study_metrics(self, default) -> tuple[str, ...]:
         """The metrics a study computes: ``[study] metrics`` (or ``default``), then the spec's own not listed."""

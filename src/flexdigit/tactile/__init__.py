@@ -51,6 +51,8 @@ __getattr__, __all__ = lazy_exports(
         "protocol_limits": "flexdigit.tactile.bounds",
         "LocalisationResult": "flexdigit.tactile.localisation",
         "localisation_study": "flexdigit.tactile.localisation",
+        "Prediction": "flexdigit.tactile.localisation",
+        "predict_dataset": "flexdigit.tactile.localisation",
         "run_experiment": "flexdigit.tactile.thesis_experiments",
         "experiment_tables": "flexdigit.tactile.thesis_experiments",
         "white_noise_scan": "flexdigit.tactile.thesis_experiments",

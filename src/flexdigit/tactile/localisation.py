@@ -19,12 +19,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexdigit._repr import fields_summary
+from flexdigit.errors import DataFileError
 from flexdigit.params import RigParams
-from flexdigit.tactile.accuracy import accuracy, rmse
+from flexdigit.tactile.accuracy import accuracy, corr2, rmse
 from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao, protocol_limits
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.pipeline import ThesisNetwork, features, run_pipeline, targets, thesis_split
+from flexdigit.tactile.prediction_plot import target_unit
 
 __all__ = [
     "ESTIMATORS",
@@ -37,6 +39,8 @@ __all__ = [
     "readings_gauge_model",
     "position_bayes_rmse_m",
     "train_network",
+    "Prediction",
+    "predict_dataset",
     "identifiability_map",
 ]
 
@@ -122,6 +126,55 @@ def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, 
         if best is None or val_mse < best[0]:
             best = (val_mse, result, tared)
     return best[1], rows, inputs, best[2]
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """A saved network's predictions on a dataset (:func:`predict_dataset`, ``flexdigit predict``).
+
+    Attributes
+    ----------
+    target : str
+    rows : ndarray of int
+        The dataset rows with the target (the loaded readings for a position or a magnitude).
+    predicted, actual : ndarray
+        The network's and the dataset's values of the target, in its SI unit (m from the tip, kg, ...).
+    scores : dict
+        ``corr2`` and ``rmse`` (the target's SI unit), and ``rmse_<unit>`` where the target has a display unit
+        (``rmse_mm``, ``rmse_g``).
+    """
+
+    target: str
+    rows: np.ndarray
+    predicted: np.ndarray
+    actual: np.ndarray
+    scores: dict
+
+    __repr__ = fields_summary
+
+
+def predict_dataset(saved, dataset: Dataset, *, source: str = "the dataset") -> Prediction:
+    """Predict ``saved``'s target (a :class:`~flexdigit.tactile.model_io.SavedModel`) on every reading of
+    ``dataset`` that has it, reading the inputs as the network was trained: tared when it was (``meta["tared"]``,
+    :func:`train_network`), as read otherwise; scored by corr2 and the RMSE.
+
+    Raises
+    ------
+    DataFileError
+        If the dataset lacks a column the model reads (named, with ``source``).
+    """
+    missing = [c for c in saved.inputs if c not in dataset.columns]
+    if missing:
+        raise DataFileError(f"{source}: the model needs column '{missing[0]}'")
+    rows, actual = targets(dataset, saved.target)
+    readings = tare(dataset)[0] if saved.meta.get("tared") is True else dataset
+    x = np.column_stack([readings[c].astype(float) for c in saved.inputs])[rows]
+    predicted = saved.network.predict(x)
+    scores = {"corr2": corr2(predicted, actual), "rmse": rmse(predicted, actual)}
+    _, unit, scale = target_unit(saved.target)
+    if unit:
+        scores[f"rmse_{unit}"] = scale * scores["rmse"]
+    return Prediction(saved.target, rows, predicted, actual, scores)
 
 
 def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -4,8 +4,9 @@ The thesis's digit is the planar case of such a robot; this domain is its genera
 a Cosserat rod with any number of segments and tendons (:mod:`flexdigit.tdcr.description`), its static
 equilibrium by shooting (:mod:`flexdigit.tdcr.statics`) and its motion, implicit in time on a discretised rod
 (:mod:`flexdigit.tdcr.dynamics`), its shape from strain gauges on its faces (:mod:`flexdigit.tdcr.sensing`) and
-a point contact from them (:mod:`flexdigit.tdcr.contact_sensing`), and recordings of either that open in 3D in
-Foxglove (:mod:`flexdigit.tdcr.scene`).
+a point contact from them (:mod:`flexdigit.tdcr.contact_sensing`), recordings of either that open in 3D in
+Foxglove (:mod:`flexdigit.tdcr.scene`), and the figures the commands draw with ``--plot``
+(:mod:`flexdigit.tdcr.robot_plot`).
 """
 
 from flexdigit._lazy import lazy_exports
@@ -48,5 +49,8 @@ __getattr__, __all__ = lazy_exports(
         "pencil_frequency_hz": "flexdigit.tdcr.experiments",
         "scene_update": "flexdigit.tdcr.scene",
         "write_recording": "flexdigit.tdcr.scene",
+        "experiment_figure": "flexdigit.tdcr.robot_plot",
+        "backbone_figure": "flexdigit.tdcr.robot_plot",
+        "contact_figure": "flexdigit.tdcr.robot_plot",
     },
 )

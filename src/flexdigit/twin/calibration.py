@@ -62,6 +62,7 @@ from pathlib import Path
 from typing import Any
 
 from flexdigit._io import atomic_write, read_text, refuse_special
+from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_real
 from flexdigit.errors import DataFileError, ParameterError
 
@@ -150,6 +151,9 @@ class Calibration:
     noise_drift_v_per_sqrt_s: tuple[float, ...] = (2e-4, 2e-4, 2e-4)
     pot_noise_v: float = 0.005
     cable_friction_ratio: float = 0.0
+
+    #: every field to 4 significant digits, a few lines (issue 23: the generated repr printed 17 digits a float)
+    __repr__ = fields_summary
 
     def __post_init__(self) -> None:
         owner = type(self).__name__

@@ -53,7 +53,7 @@ import numpy as np
 from scipy.linalg.lapack import dgesv as _gesv
 
 from flexdigit._constants import G_STANDARD_M_S2
-from flexdigit._repr import fields_summary
+from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_array, check_choice, check_int, check_positive, check_real, check_values
 from flexdigit.errors import ConvergenceWarning, ParameterError
 
@@ -228,6 +228,19 @@ class Chain:
         self._gauge_on_chain = (self._gauge_link >= 0).astype(float)
         # curvature at the gauges = W (phi / h) = W diag(1/h) D psi: one product per read
         self._psi_to_gauge_curvature = self._gauge_interp @ (d / self.cell_length_m[:, None])
+
+    def __repr__(self) -> str:
+        # what the chain is, not its matrices (issue 23: a model prints a summary)
+        return summary(
+            self,
+            links=self.n,
+            length_m=self.length_m,
+            masses=self.mass_kg.size,
+            gauges=self.gauge_s_m.size,
+            total_mass_kg=float(self.mass_kg.sum()),
+            cable_stiffness_n_m=self.cable_stiffness,
+            antagonist=self.antagonist,
+        )
 
     # ----------------------------------------------------------------------------------------------- geometry
     @property

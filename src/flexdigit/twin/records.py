@@ -31,6 +31,7 @@ import pyarrow as pa
 from flexdigit import __version__, _io
 from flexdigit._io import RECORDS_LIMIT, atomic_path, atomic_write, check_input, count_lines, read_text
 from flexdigit._json import to_jsonable
+from flexdigit._repr import summary
 from flexdigit._validation import check_choice, check_int, check_positive, check_real, check_values
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
@@ -82,6 +83,16 @@ class TwinRecord:
 
     table: pa.Table
     metadata: dict[str, Any]
+
+    def __repr__(self) -> str:
+        # what made it and the table's shape, not pyarrow's dump of every column (issue 23: 3,300 characters)
+        return summary(
+            self,
+            experiment=self.metadata.get("experiment"),
+            seed=self.metadata.get("seed"),
+            rows=self.table.num_rows,
+            columns=self.table.column_names,
+        )
 
     def column(self, name: str) -> np.ndarray:
         """One column as a numpy array."""

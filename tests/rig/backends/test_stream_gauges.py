@@ -90,7 +90,9 @@ def test_the_emulator_command_streams_a_digits_gauges(tmp_path, capsys):
     calibration = tmp_path / "cal.toml"
     assert main(["stream-emulator", "--calibration", str(calibration), "--duration", "0.1"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "--calibration" in err and "--twin" in err and "\n" not in err
+    assert "--calibration" in err
+    assert "--twin" in err
+    assert "\n" not in err
 
 
 @pytest.mark.slow
@@ -149,6 +151,7 @@ def test_live_params_reads_a_digits_gauges_through_the_stream(tmp_path):
             session.rig.close()
         assert session.error is None
         samples = session.state.samples
-        assert len(samples) >= 15 and all(len(s.gauges_v) == 4 for s in samples)
+        assert len(samples) >= 15
+        assert all(len(s.gauges_v) == 4 for s in samples)
         assert {s.command for s in samples} == {params.actuator.equilibrium_command}  # straight: 127, not 8
         assert abs(emulator.tip_rotation_deg()) < 1.0  # the pair's digit held straight
