@@ -372,7 +372,8 @@ def test_property_float_export_holds_to_the_runtime(
         RotationMap(tuple(float(v) for v in rng.uniform(-80, 80, gauges)), float(rng.normal())) if gauges else None
     )
     spec = ControllerSpec.from_runtime(rc, rotation)
-    assert spec.dither == dither and spec.u_eq == straight
+    assert spec.dither == dither
+    assert spec.u_eq == straight
     folder = tmp_path_factory.mktemp("prop")
     run = _build(folder, spec)
     r, y = _inputs(rng, 200, scale, m)
