@@ -25,6 +25,10 @@ SETTLING_LIMIT_S, OVERSHOOT_LIMIT_PERCENT, FINAL_FRACTION = 1.0, 10.0, 0.02
 #: Share of board periods whose command may differ (by one) from the Python controller's: a float32 rounding can
 #: land the dithered command on the other side of a half-integer (tests/control/test_c_export.py).
 COMMAND_MISMATCH_FRACTION = 0.05
+#: One ADC conversion at the firmware's 125 kHz ADC clock, s: 13 clocks (ATmega328P datasheet 24.4); the CPU's clock.
+CONVERSION_S, F_CPU_HZ = 13 / 125e3, 16e6
+#: A bound on the rotation map's time, s: 2G float32 operations of avr-gcc's soft float (~150 cycles each) for G <= 6.
+MAP_S = 12 * 150 / 16e6
 
 
 def _on_board(capsys, elf, params, setpoint: float) -> dict:
@@ -59,6 +63,11 @@ def test_a_digits_image_holds_its_30_deg_step_on_the_board(digit_firmware, capsy
     straight = 127 if name.startswith("four") else 8
     # the command held: above the straight command for +30 deg, below it for -30 (the pair's signed command)
     assert (doc["final_command"] - straight) * setpoint > 0
+    # each period's command is ready before Timer1 latches it, PULSE_DELAY_MS after the tick: the tick's G
+    # conversions, the map (~2G float operations, < MAP_S) and the update (its widest PD7 pulse) fit in the delay
+    banner = " ".join(doc["board"]["info_lines"])
+    delay_s = int(banner.split("pulse_delay_ms=")[1].split()[0]) / 1000
+    assert gauges * CONVERSION_S + MAP_S + doc["board"]["exec_max_cycles"] / F_CPU_HZ < delay_s
 
 
 @pytest.mark.slow
