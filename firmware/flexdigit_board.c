@@ -93,13 +93,17 @@ static volatile uint16_t host_idle; /* ms since the last line from the host */
 
 ISR(TIMER2_COMPA_vect)
 {
+    static uint8_t servo_start_in = PULSE_DELAY_MS - 1;
     if (!(TCCR1B & _BV(CS11))) {
-        /* the servo's 50 Hz frame starts here: pulses at (PULSE_DELAY_MS - 1) ms + k x 20 ms from this tick, so
-           PULSE_DELAY_MS after each control tick (the control ticks fall 1 ms before a frame's start) */
-#if PULSE_DELAY_MS > 1
-        TCNT1 = (uint16_t)(SERVO_TOP + 1UL - (PULSE_DELAY_MS - 1UL) * 2000UL);
-#endif
-        TCCR1B |= _BV(CS11);
+        /* the servo's 50 Hz frame starts (PULSE_DELAY_MS - 1) ticks after the first: pulses at (PULSE_DELAY_MS - 1)
+           ms + k x 20 ms from the first tick, so PULSE_DELAY_MS after each control tick (the control ticks fall
+           1 ms before a frame's start). Timer1 is started late rather than preset (TCNT1 written while stopped):
+           simavr 1.6 ignores that write, so the emulated pulse came 1 ms after the tick whatever the delay */
+        if (servo_start_in == 0) {
+            TCCR1B |= _BV(CS11);
+        } else {
+            servo_start_in--;
+        }
     }
     time_ms++;
     if (host_idle < 0xFFFFU) {
