@@ -49,6 +49,8 @@ exclude_patterns = [
     "auto_examples/sg_execution_times.rst",
 ]
 suppress_warnings: list[str] = []
+# quotes and ellipses, not dashes: "--force" in a generated table's cell (a benchmark's name) stays an option
+smartquotes_action = "qe"
 
 # -- myst: the README's tutorials moved here as they were written (headings linked by their slug)
 myst_heading_anchors = 3

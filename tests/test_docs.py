@@ -260,16 +260,19 @@ def test_every_benchmark_table_of_the_site_shows_its_json_rows(build):
             continue
         for path, options in BENCHMARK_TABLE.findall(page.read_text()):
             opts = dict(re.findall(r":(\w+): (.*)", options))
-            html = (HTML / page.relative_to(DOCS).with_suffix(".html")).read_text()
+            built = (HTML / page.relative_to(DOCS).with_suffix(".html")).read_text()
             source = ROOT / path
             if not source.exists():
-                assert "Not measured in this build" in html, (page.name, path)
-                assert f"{path}</span>" in html, (page.name, path)
+                assert "Not measured in this build" in built, (page.name, path)
+                assert f"{path}</span>" in built, (page.name, path)
                 continue
             rows = generator.benchmark_rows(json.loads(source.read_text()), opts.get("module"), opts.get("match"))
             assert rows, (page.name, path)
+            # each row's name as written ("--fast", not an en dash; an apostrophe may be typeset)
+            shown = html.unescape(built).replace("\u2019", "'")
             for name, value, _unit, _note in rows:
-                assert f"<p>{value}</p>" in html, (page.name, name, value)
+                assert f"<p>{name}</p>" in shown, (page.name, name)
+                assert f"<p>{value}</p>" in shown, (page.name, name, value)
             tables += 1
     assert tables >= 3  # digits.md's and studies.md's, from the JSON kept in benchmarks/
 

@@ -373,7 +373,7 @@ def test_the_readmes_own_digit_commands_end_in_plots(tmp_path, monkeypatch, caps
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     block = readme.split("## Your own digit, plotted", 1)[1].split("\n\n")[1]
     commands = [shlex.split(line, comments=True) for line in block.splitlines() if line.strip()]
-    assert [c[:2] for c in commands] == [["flexdigit", "params"], ["flexdigit", "params"], ["flexdigit", "simulate"],
+    assert [c[:2] for c in commands] == [["flexdigit", "list"], ["flexdigit", "params"], ["flexdigit", "params"], ["flexdigit", "simulate"],
                                          ["flexdigit", "run"]]  # fmt: skip
     monkeypatch.chdir(tmp_path)
     for argv in commands:
@@ -413,3 +413,19 @@ def test_a_negative_vector_needs_no_equals_sign(capsys):
     )
     tip = json.loads(capsys.readouterr().out)["tip_position_m"]
     assert tip[0] < -1e-3  # 10 mN pushes the straight 400 mm rod's tip towards -x
+
+
+@pytest.mark.slow  # the design's robustness checks (Monte Carlo, small-gain boxes): ~10 s
+def test_design_mixsyn_plots_a_step_that_ends_on_the_setpoint(tmp_path, drawn, capsys):
+    plot = tmp_path / "mixsyn.svg"
+    assert main(["design", "mixsyn", "--plot", str(plot), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    step_y, bode_mag, _, _ = drawn[0].axes
+    assert step_y.get_ylabel() == "y per unit step (rad/rad)"  # the beam rotation, the plant this design is for
+    # integral action (|S(0)| reported ~0): the drawn step ends on the setpoint, and |S| at the lowest frequency
+    # drawn is far below 0 dB
+    assert summary["requirements"]["sensitivity_dc"] < 1e-6
+    y = _lines(step_y)["output y (T_yw)"].get_ydata()
+    assert abs(y[-1] - 1.0) < 0.01
+    assert _lines(bode_mag)["S (T_zw)"].get_ydata()[0] < -20.0

@@ -1,7 +1,9 @@
 import numpy as np
 import pytest
 
+from digits import write_digit
 from flexdigit.errors import ParameterError
+from flexdigit.params import RigParams, load_params
 from flexdigit.reference import thesis_value
 from flexdigit.tactile.protocols import RELAXED, load_protocol, protocol_from_toml
 
@@ -70,3 +72,20 @@ def test_positions_in_mm_written_as_cm_name_the_slip():
     # beyond the digit even at a tenth: no slip guessed, just the range
     with pytest.raises(ParameterError, match=r"must lie on the digit .* instead\.$"):
         protocol_from_toml('name = "x"\nloads_g = [25]\npositions_from_tip_cm = [0, 150, 190]\n').plan(0.1)
+
+
+def test_a_protocol_for_a_digit_is_one_library_call(tmp_path):
+    # issue 23: `flexdigit collect PROTOCOL --params FILE` scaled a built-in protocol to the digit in the command
+    # line; load_protocol(name, params) is that call now, and the command makes it
+    short = load_params(write_digit("short", tmp_path))  # 0.15 m long
+    thesis = load_protocol("thesis-6.1")
+    on_short = load_protocol("thesis-6.1", short)
+    ratio = short.geometry.digit_length_m / RigParams().geometry.digit_length_m
+    assert on_short.positions_from_tip_m == pytest.approx([x * ratio for x in thesis.positions_from_tip_m], abs=1e-9)
+    assert on_short.loads_kg == thesis.loads_kg
+    assert load_protocol("thesis-6.1", RigParams()) == thesis  # the thesis digit: as written
+    user = tmp_path / "far.toml"
+    user.write_text('name = "far"\nloads_g = [25]\npositions_from_tip_cm = [20]\n')
+    assert load_protocol(user).positions_from_tip_m == (0.2,)  # no digit given: as written, unchecked
+    with pytest.raises(ParameterError, match="must lie on the digit"):
+        load_protocol(user, short)  # a user's protocol is checked, not scaled: 20 cm is off a 15 cm digit

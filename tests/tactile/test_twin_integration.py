@@ -6,7 +6,8 @@ import pytest
 from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao
 from flexdigit.tactile.pipeline import features, run_pipeline, targets
 from flexdigit.tactile.protocols import Protocol, load_protocol
-from flexdigit.tactile.thesis_experiments import collect_on_twin, static_dataset
+from flexdigit.tactile.runner import load_or_collect
+from flexdigit.tactile.thesis_experiments import collect_on_twin, static_dataset, twin_rig
 
 TINY = Protocol(
     "tiny", loads_kg=(0.025,), positions_from_tip_m=(0.0, 0.10), repetitions=3, no_load_repetitions=2, settle_s=0.5
@@ -24,6 +25,22 @@ def test_sim_rig_collection_is_seeded_and_sees_the_load(tmp_path):
     # 25 g at the tip of a horizontal cantilever bends gauge 1 far beyond the twin's ~2 mV noise
     tip = a["position_index"] == 1
     assert abs(a.gauges_v[tip, 0].mean() - a.gauges_v[a["load_kg"] == 0, 0].mean()) > 0.02
+
+
+def test_load_or_collect_closes_the_rig_it_opened_and_then_loads(tmp_path):
+    opened = []
+
+    def factory():
+        opened.append(twin_rig(TINY, seed=3))
+        return opened[-1]
+
+    path = tmp_path / "d.parquet"
+    first = load_or_collect(path, TINY, factory)
+    assert len(opened) == 1
+    assert opened[0].closed  # held by `with`: closed on the way out
+    again = load_or_collect(path, TINY, factory)
+    assert len(opened) == 1  # the file holds the protocol's dataset: loaded, no rig opened
+    np.testing.assert_array_equal(again.gauges_v, first.gauges_v)
 
 
 def test_twin_cannot_see_a_load_before_gauge_1():

@@ -366,5 +366,6 @@ def _mixsyn(args: argparse.Namespace) -> CommandResult:
         f"({'certified' if req['req_iv_small_gain'] else 'NOT certified'}); one-box unstructured |T| l = "
         f"{req['small_gain_peak']:.3g}\n"
         f"  settling {req['settling_time_s']:.2f} s, overshoot {req['overshoot_percent']:.1f} %"
+        + (f"\n  plot -> {data['plot']}" if args.plot else "")
     )
     return CommandResult(data=data, text=text, exit_code=0 if req["all_met"] else 1)

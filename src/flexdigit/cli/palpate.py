@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit._command import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command, digit_name
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag
 
@@ -123,11 +123,16 @@ def _save_outputs(args: argparse.Namespace, data: dict, fig, out) -> str:
     from flexdigit._io import atomic_write
     from flexdigit._json import to_jsonable
 
-    text = ""
+    text = f"\non digit {digit_name(args.params)} ({args.params})" if args.params else ""
     if args.plot:
         from flexdigit._plot import save_plot
 
-        data["plot"] = str(save_plot(fig(), args.plot, "palpate", force=args.force))
+        figure = fig()
+        if args.params:  # whose digit: the --params file's stem before the first title
+            ax = next((a for a in figure.axes if a.get_title()), None)
+            if ax is not None:
+                ax.set_title(f"digit {digit_name(args.params)}: {ax.get_title()}", fontsize=ax.title.get_fontsize())
+        data["plot"] = str(save_plot(figure, args.plot, "palpate", force=args.force))
         text += f"\nplot -> {args.plot}"
     if out is not None:
         import json
@@ -255,6 +260,7 @@ def _sweep_data(result, plan, bound, tissue) -> dict:
             "indentation_mm": (1000 * result.curve["indentation_m"]).tolist(),
             "model_force_n": result.curve["model_force_n"].tolist(),
             **({"true_force_n": result.curve["true_force_n"].tolist()} if "true_force_n" in result.curve else {}),
+            **({"force_refused": result.curve["force_refused"]} if "force_refused" in result.curve else {}),
         },
     }
     if "true_force_n" in result.curve:
@@ -322,6 +328,52 @@ def _scan_data(result, tissue, offsets_m) -> dict:
     return data
 
 
+#: A hold whose read force is uncertain by more than this fraction of the setpoint says so (the issue's 10 %).
+HOLD_TOLERANCE = 0.10
+
+
+def _uncertainty_data(held) -> dict:
+    """``palpate --json`` of how far the gauges' force estimate can be trusted over the hold (1 sd, N) and, where it
+    is more than :data:`HOLD_TOLERANCE` of the setpoint, the reason in one line."""
+    import math
+
+    sd = held.region.get("held_force_sd_n", math.nan)
+    if not math.isfinite(sd):
+        return {}
+    data = {"estimate_sd_n": sd}
+    if sd > HOLD_TOLERANCE * held.setpoint_n:
+        data["estimate_note"] = (
+            f"the force read is uncertain by {1000 * sd:.0f} mN (1 sd: the tare's noise and the gauges' drift over "
+            f"the hold), more than {HOLD_TOLERANCE:.0%} of the {held.setpoint_n:g} N setpoint: one reading tells this "
+            f"contact's force to {1000 * held.region['force_sd_n']:.0f} mN"
+        )
+    return data
+
+
+def _place_data(held) -> dict:
+    """``palpate --json`` of a hold's contact place: where it was looked for, the estimate over the figures' window
+    (null where the gauges cannot tell it, with the reason), and on the twin the true centroid and the error."""
+    import math
+
+    def mm(x):
+        return None if x is None or not math.isfinite(x) else 1000 * x
+
+    region = held.region
+    searched = region.get("region_m")
+    data = {
+        "searched_mm": None if searched is None else [1000 * searched[0], 1000 * searched[1]],
+        "narrowed": bool(region.get("narrowed", False)),
+        "told": bool(region.get("place_told", False)),
+        "reason": region.get("reason", ""),
+        "steady_mm": mm(held.steady_place_m),
+    }
+    if held.true_place_m is not None:
+        data["true_steady_mm"] = mm(held.true_steady_place_m)
+        both = data["steady_mm"] is not None and data["true_steady_mm"] is not None
+        data["error_mm"] = data["steady_mm"] - data["true_steady_mm"] if both else None
+    return data
+
+
 def _force(rig, tissue, plan, log, log_mode):
     from flexdigit.palpation.palpation import hold_force
 
@@ -339,6 +391,18 @@ def _force(rig, tissue, plan, log, log_mode):
         log_path=log,
         log_mode=log_mode,
     )
+    data, text = _hold_data(held)
+
+    def figure():
+        from flexdigit.palpation.palpation_plot import hold_figure
+
+        return hold_figure(held, title=f"force control at {held.setpoint_n:g} N")
+
+    return data, text, figure
+
+
+def _hold_data(held) -> tuple[dict, str]:
+    """``palpate --json`` of a hold and its text: the figures, the contact place, the estimate's uncertainty."""
     data = {
         "setpoint_n": held.setpoint_n,
         "steady_force_n": held.steady_force_n,
@@ -348,20 +412,20 @@ def _force(rig, tissue, plan, log, log_mode):
         "settling_s": held.settling_s,
         "status": held.status,
         "scored_on": "true contact force (twin)" if held.true_force_n is not None else "estimated force",
+        "contact_place": _place_data(held),
+        **_uncertainty_data(held),
         "time_s": held.time_s.tolist(),
         "command": held.command.tolist(),
         "force_n": held.force_n.tolist(),
         **({"true_force_n": held.true_force_n.tolist()} if held.true_force_n is not None else {}),
     }
+    place = data["contact_place"]
     text = (
         f"held {held.setpoint_n:g} N: steady {held.steady_force_n:.4f} N ({100 * held.steady_error:+.1f} %), ripple "
         f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, within 10 % after "
-        f"{held.settling_s:.2f} s ({data['scored_on']})"
+        f"{held.settling_s:.2f} s ({data['scored_on']})\n"
+        + (f"contact at {place['steady_mm']:.1f} mm" if place["steady_mm"] is not None else "contact place: not told")
+        + f" ({place['reason']})"
+        + (f"\n{data['estimate_note']}" if "estimate_note" in data else "")
     )
-
-    def figure():
-        from flexdigit.palpation.palpation_plot import hold_figure
-
-        return hold_figure(held, title=f"force control at {held.setpoint_n:g} N")
-
-    return data, text, figure
+    return data, text

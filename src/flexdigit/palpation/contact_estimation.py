@@ -520,6 +520,17 @@ class ContactEstimator(Estimator):
         out["force_sd_n"][rows] = np.where(is_line, line_sd[:, 2], point_sd[:, 1])
         out["extent_sd_m"][rows] = np.where(is_line, line_sd[:, 1], np.nan)
 
+    def force_profile(self, gauges_v, command: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The point-force hypothesis along the grid for each reading: ``(positions_m (P,), force_n (n, P),
+        chi2 (n, P))``, the force that best explains the reading with the contact at each grid position and the
+        cost there above the best position's (0 at the estimate). Where the chi^2 stays within a reading's noise
+        (a few units) the gauges cannot tell the place; how far the force moves there says whether they tell the
+        force all the same (:func:`flexdigit.palpation.palpation.force_region`)."""
+        t = self._table(int(command))
+        r = np.atleast_2d(np.asarray(gauges_v, dtype=float)) - self.offset_ - t["g0"]
+        force, cost, _ = self._profile(r, t["point"])
+        return self.s_grid_.copy(), force, cost - cost.min(axis=1, keepdims=True)
+
     def rival_chi2(self, gauges_v, command: int) -> np.ndarray:
         """How much worse the best *other* local minimum of the point-contact cost explains each reading (chi^2, n),
         inf when the cost along the digit has one minimum. For noise-free readings: a small value means a distant

@@ -371,13 +371,10 @@ def board_step_test(
     from flexdigit.rig.backends.hil_backend import run_on_board  # the twin (scipy): cli/run.py reads constants here
 
     options = {"mode": "board", "setpoint_deg": setpoint_deg} | ({} if seed is None else {"seed": seed})
-    rig = open_rig(backend, params, **options, **(twin_options or {}))
-    try:
+    with open_rig(backend, params, **options, **(twin_options or {})) as rig:
         settings = rig.settings()
         run = run_on_board(rig, setpoint_deg, duration_s)
         stats = rig.stats()
-    finally:
-        rig.close()
     dpc = _deg_per_command(rig.params)
     t, y = run.time_s, run.true_rotation_deg
     metrics = step_metrics(t, y, setpoint_deg, 0.0, dpc) if t.size >= 2 else None

@@ -42,7 +42,7 @@ from flexdigit._validation import (
     check_real,
 )
 from flexdigit.errors import ParameterError
-from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M
+from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M, RigParams
 
 __all__ = ["builtin_protocols", "RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
 
@@ -365,14 +365,40 @@ def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
     return protocol
 
 
-def load_protocol(name_or_path: str | Path) -> Protocol:
+def load_protocol(name_or_path: str | Path, params: RigParams | None = None) -> Protocol:
     """A built-in protocol by name (see :data:`BUILTIN`) or a user protocol from a TOML file.
+
+    Parameters
+    ----------
+    name_or_path : str or path
+    params : RigParams, optional
+        The digit it will run on. A built-in protocol's positions are then scaled to the digit's length (the same
+        fractions of it, :meth:`Protocol.scaled_to`), and any protocol is checked against the digit (its positions
+        on it, :meth:`Protocol.plan`) before a rig opens: the protocol ``flexdigit collect PROTOCOL --params FILE``
+        runs. None: the protocol as written.
 
     Raises
     ------
     ParameterError
-        If the name is unknown and no such file exists, or the file is invalid.
+        If the name is unknown and no such file exists, the file is invalid, or a position lies off the digit.
+
+    Examples
+    --------
+    >>> from flexdigit.params import RigParams
+    >>> load_protocol("thesis-6.1", RigParams()) == load_protocol("thesis-6.1")  # the thesis digit: as written
+    True
     """
+    protocol = _read_protocol(name_or_path)
+    if params is None:
+        return protocol
+    length_m = params.geometry.digit_length_m
+    if str(name_or_path) in BUILTIN:
+        protocol = protocol.scaled_to(length_m)
+    protocol.plan(length_m)
+    return protocol
+
+
+def _read_protocol(name_or_path: str | Path) -> Protocol:
     text_name = str(name_or_path)
     if text_name in BUILTIN:
         resource = resources.files(__package__).joinpath("protocols", f"{text_name}.toml")

@@ -223,7 +223,7 @@ def collect(
         The twin's seed when ``rig`` is None (the command's ``--seed``, default 0); ignored otherwise.
     params : RigParams, optional
         The digit (default the thesis rig): its length, its ``G`` gauges (``gauge1_v`` .. ``gaugeG_v``; a rig
-        reading another count is refused) and, with ``rig`` None, its twin.
+        reading another count is refused), with ``rig`` None its twin; a protocol on it: ``load_protocol(name, params)``
     rig_url : str, optional
         How the rig was opened, recorded in the metadata.
     settle_s : float, optional
@@ -541,8 +541,5 @@ def load_or_collect(path: str | Path, protocol: Protocol, rig_factory, **kwargs)
     path = Path(path)
     if path.exists():
         return load_dataset(path, protocol)
-    rig = rig_factory()
-    try:
+    with rig_factory() as rig:
         return collect(protocol, rig, path, **kwargs)
-    finally:
-        rig.close()

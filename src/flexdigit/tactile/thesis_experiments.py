@@ -86,11 +86,8 @@ def collect_on_twin(
     out = Path(out)
     out.unlink(missing_ok=True)
     journal_path(out).unlink(missing_ok=True)
-    rig = twin_rig(protocol, seed=seed, params=params, calibration=calibration)
-    try:
+    with twin_rig(protocol, seed=seed, params=params, calibration=calibration) as rig:
         return collect(protocol, rig, out, params=params, rig_url="sim", settle_s=settle_s)
-    finally:
-        rig.close()
 
 
 #: How often a random disturbance is drawn in :func:`static_dataset`: every reading, or once per hang (setting)
@@ -163,7 +160,7 @@ def _digit_protocol(name: str, params: RigParams | None = None) -> Protocol:
     """The built-in protocol ``name`` on the digit ``params`` describes: its positions scaled to the digit's length
     (:meth:`~flexdigit.tactile.protocols.Protocol.scaled_to`, as ``flexdigit collect --params`` does); the
     protocol itself on a digit as long as the thesis rig's."""
-    return load_protocol(name).scaled_to((params or RigParams()).geometry.digit_length_m)
+    return load_protocol(name, params or RigParams())
 
 
 def pipeline_corr2_static(
@@ -398,7 +395,9 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
 
     ``ratio x T / (dT/dtheta)`` at every (load, position, command) of the protocol, the slope by central
     differences of the static twin (0.01 command). Returns the median, minimum and maximum in degrees and in
-    microseconds of PWM pulse, and microseconds per command.
+    microseconds of PWM pulse, and microseconds per command, over the settings where the cable is taut (a slack
+    cable's tension does not move with the servo: no angle stands for its friction); ``taut`` counts them, and
+    with none every figure is None and ``reason`` says why.
     """
     params = params or RigParams()
     cal = calibration or default_calibration()
@@ -422,8 +421,18 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
         )
         tension.append(sol.tension_n)
     slope = (tension[2] - tension[0]) / (2 * d)  # N per rad of servo shaft
-    deg = np.degrees(cal.cable_friction_ratio * tension[1] / slope)
     us_per_deg = 1e6 * (a.pulse_width_max_s - a.pulse_width_min_s) / (a.angle_max_deg - a.angle_min_deg)
+    taut = slope > 0
+    if not taut.any():
+        return {
+            **dict.fromkeys(("median_deg", "min_deg", "max_deg", "median_us", "min_us", "max_us")),
+            "us_per_command": float(a.deg_per_command * us_per_deg),
+            "taut": 0,
+            "settings": len(keys),
+            "reason": f"the cable is slack at all {len(keys)} settings of the protocol: its tension does not move "
+            "with the servo",
+        }
+    deg = np.degrees(cal.cable_friction_ratio * tension[1][taut] / slope[taut])
     return {
         "median_deg": float(np.median(deg)),
         "min_deg": float(deg.min()),
@@ -432,6 +441,8 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
         "min_us": float(deg.min() * us_per_deg),
         "max_us": float(deg.max() * us_per_deg),
         "us_per_command": float(a.deg_per_command * us_per_deg),
+        "taut": int(taut.sum()),
+        "settings": len(keys),
     }
 
 

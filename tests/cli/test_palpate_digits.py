@@ -1,0 +1,60 @@
+"""`flexdigit palpate --protocol hold --params D.toml --json` on the digits whose force hung on the contact's place
+(issue 24: the short digit held -29 %, the one-gauge digit had no contact place to stand on), from the command line.
+
+References: the twin's true contact force and centroid, logged beside every sample (``true_force_n``,
+``contact_place.true_steady_mm``). Tolerances: ``HOLD = 0.10``, the issue's 10 % of the setpoint over the hold's
+last 3 s; ``PLACE_MM = 15``: the estimate's median place against the twin's centroid over the same 3 s (the point
+model reads a 20-30 mm stretch of contact; 9 mm apart on the short digit, its Cramer-Rao sd 6.7 mm over 3 s).
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from digits import DIGITS, write_digit
+from flexdigit.cli import main
+
+HOLD = 0.10
+PLACE_MM = 15.0
+
+
+def _hold(name: str, tmp_path, capsys) -> dict:
+    digit = write_digit(name, tmp_path)
+    length_mm = 1000 * DIGITS[name]["geometry"]["digit_length_m"]
+    tissue = tmp_path / "tissue.toml"
+    tissue.write_text(
+        f'[tissue]\nname = "block"\nside = "cable"\nstart_mm = {0.55 * length_mm:.1f}\nend_mm = {length_mm + 80:.1f}'
+        f"\ngap_mm = {0.1 * length_mm:.1f}\nmodulus_n_m2 = 1000.0\n"
+    )
+    argv = ["palpate", "--params", str(digit), "--tissue", str(tissue), "--protocol", "hold", "--json"]
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_the_short_digit_holds_its_force_and_tells_the_place(tmp_path, capsys):
+    held = _hold("short", tmp_path, capsys)
+    assert held["scored_on"] == "true contact force (twin)"
+    assert abs(held["steady_error"]) < HOLD, held["steady_error"]
+    place = held["contact_place"]
+    assert place["told"]
+    assert place["narrowed"]
+    assert place["searched_mm"][0] > 120.0  # from its outer gauge (125 mm) on, not from the tissue's 82.5 mm
+    assert abs(place["error_mm"]) < PLACE_MM, place
+    assert "estimate_note" not in held
+    assert held["estimate_sd_n"] < HOLD * held["setpoint_n"]
+
+
+@pytest.mark.parametrize("name", ["one-section"])
+def test_a_one_gauge_digit_refuses_the_place_and_says_how_uncertain_its_force_is(name, tmp_path, capsys):
+    held = _hold(name, tmp_path, capsys)
+    place = held["contact_place"]
+    assert place["steady_mm"] is None
+    assert place["error_mm"] is None
+    assert not place["told"]
+    assert "one gauge" in place["reason"]
+    assert place["true_steady_mm"] is not None  # the twin's contact was there: the place is refused, not missed
+    assert "uncertain" in held["estimate_note"]
+    assert held["estimate_sd_n"] > HOLD * held["setpoint_n"]
+    assert abs(held["steady_force_n"] - held["setpoint_n"]) < 3 * held["estimate_sd_n"]
