@@ -28,3 +28,5 @@ ax.set_title("Command 0 -> 20 on the twin")
 ax.legend()
 fig.tight_layout()
 print(f"gauges after 1.5 s: {np.round(gauges_v[-1], 3)} V")
+
+plt.show()

@@ -26,3 +26,5 @@ ax.set_ylabel("|G(jw)| (m per command)")
 ax.set_title("The plant G(s), printed and unit-consistent")
 ax.legend()
 fig.tight_layout()
+
+plt.show()

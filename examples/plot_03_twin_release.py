@@ -23,3 +23,5 @@ ax.set_title("Release test, housed digit (thesis 3.1.2)")
 ax.legend()
 fig.tight_layout()
 print(record.summary() if callable(getattr(record, "summary", None)) else record.metadata)
+
+plt.show()

@@ -33,3 +33,5 @@ ax.set_ylabel("servo pot (V)")
 ax.set_title("Servo step test identified")
 ax.legend()
 fig.tight_layout()
+
+plt.show()

@@ -32,3 +32,5 @@ ax2.set_xlabel("time (s)")
 ax2.set_ylabel("deflection per unit setpoint")
 ax2.set_title("T_yw step")
 fig.tight_layout()
+
+plt.show()

@@ -26,3 +26,5 @@ ax2.set_xlabel("time (s)")
 ax2.set_ylabel("servo command")
 fig.suptitle("digital20 on the twin, 20 ms period")
 fig.tight_layout()
+
+plt.show()

@@ -38,3 +38,5 @@ ax.set_xlabel("actual position from the tip (mm)")
 ax.set_ylabel("predicted (mm)")
 ax.set_title(f"Chapter 6 on the twin: RMS {error_mm:.1f} mm")
 fig.tight_layout()
+
+plt.show()

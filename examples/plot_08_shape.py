@@ -32,3 +32,5 @@ ax.set_ylabel("along the digit (mm)")
 ax.set_title("Shape from the gauges, 2 sd band (x: the twin's tip)")
 ax.legend(fontsize=8)
 fig.tight_layout()
+
+plt.show()

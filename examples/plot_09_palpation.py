@@ -37,3 +37,5 @@ ax.set_ylabel("contact force (N)")
 ax.set_title(f"Soft block: {fit.modulus_n_m2:.0f} N/m^2 fitted")
 ax.legend()
 fig.tight_layout()
+
+plt.show()

@@ -78,3 +78,5 @@ ax2.set_xlabel("actual (mm from tip)")
 ax2.set_ylabel("predicted (mm)")
 ax2.legend()
 fig.tight_layout()
+
+plt.show()

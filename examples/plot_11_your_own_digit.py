@@ -52,3 +52,5 @@ ax2.set_ylabel("gauge (V)")
 ax2.legend(fontsize=7)
 fig.suptitle("Command 0 -> 20 on two digits")
 fig.tight_layout()
+
+plt.show()

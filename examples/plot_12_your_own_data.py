@@ -57,3 +57,5 @@ ax.set_xlabel("actual position from the clamp (mm)")
 ax.set_ylabel("predicted (mm)")
 ax.set_title(f"Imported readings: RMS {rms_mm:.1f} mm")
 fig.tight_layout()
+
+plt.show()

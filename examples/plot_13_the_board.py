@@ -49,3 +49,5 @@ ax.set_ylabel("Im z")
 ax.set_title("digital20 at 20 ms, exported to C")
 ax.legend(fontsize=8)
 fig.tight_layout()
+
+plt.show()

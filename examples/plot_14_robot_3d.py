@@ -29,3 +29,5 @@ ax.set_zlabel("z (m)")
 ax.set_title("rao2021 under tendon tension")
 ax.legend(fontsize=8)
 fig.tight_layout()
+
+plt.show()

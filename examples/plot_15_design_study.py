@@ -42,3 +42,5 @@ ax.set_yscale("log")
 ax.set_title("12 sampled designs")
 ax.legend()
 fig.tight_layout()
+
+plt.show()

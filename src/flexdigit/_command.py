@@ -10,7 +10,7 @@ import argparse
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-__all__ = ["CommandResult", "add_command"]
+__all__ = ["CommandResult", "add_command", "digit_name"]
 
 
 @dataclass
@@ -21,6 +21,16 @@ class CommandResult:
     text: str = ""
     exit_code: int = 0
     extra: dict = field(default_factory=dict)
+
+
+def digit_name(params_path) -> str | None:
+    """Whose digit a command ran on, for titles and output: the ``--params`` file's stem (``mine`` for
+    ``lab/mine.toml``), or None for the thesis rig (no ``--params``)."""
+    if params_path is None:
+        return None
+    from pathlib import Path
+
+    return Path(params_path).stem
 
 
 def add_command(

@@ -58,6 +58,8 @@ __all__ = [
     "digit_inconsistencies",
     "derived_figures",
     "params_template",
+    "description_notes",
+    "builtin_digits",
     "load_params",
     "save_params",
 ]
@@ -837,6 +839,51 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
     return lines
 
 
+#: The thesis rig's support length (m): 2.2.1's nylon sections, ``(0.27 - 0.24) / 3``; what a description that
+#: leaves ``digit_length_m`` out gets.
+THESIS_SUPPORT_M = 0.010
+
+
+def description_notes(params: RigParams) -> list[str]:
+    """What a consistent description does that its author may not expect, one line each naming the key (``flexdigit
+    params FILE`` prints them; nothing is refused): supports longer or shorter than the thesis's 10 mm, derived from
+    a ``digit_length_m`` given with other sections (the template's 0.27 m kept for a 0.20 m strip makes 35 mm
+    supports), and a ``[dynamics]`` table that differs from the thesis's, which no twin reads.
+
+    Examples
+    --------
+    >>> g = Geometry(section_count=2, section_length_m=0.1, strip_length_m=0.2, gauge_positions_m=(0.03, 0.17))
+    >>> description_notes(RigParams(geometry=g))[0].split(":")[0]
+    "[geometry] digit_length_m = 0.27 (the thesis rig's) makes 2 supports of 35 mm"
+    >>> description_notes(RigParams())
+    []
+    """
+    g, notes = params.geometry, []
+    support = g.support_length_m
+    if g.support_lengths_m is None and abs(support - THESIS_SUPPORT_M) > LENGTH_TOLERANCE_M and support >= 0:
+        thesis = " (the thesis rig's)" if g.digit_length_m == Geometry.digit_length_m else ""
+        ten = g.strip_length_m + g.section_count * THESIS_SUPPORT_M
+        notes.append(
+            f"[geometry] digit_length_m = {g.digit_length_m:.6g}{thesis} makes {g.section_count} supports of "
+            f"{support * 1e3:.6g} mm: ({g.digit_length_m:.6g} - the {g.strip_length_m:.6g} m strip) / "
+            f"{g.section_count} sections; the thesis's are {THESIS_SUPPORT_M * 1e3:g} mm. If that is not your digit, "
+            f"leave digit_length_m out ({ten:.6g} m, 10 mm supports) or give support_lengths_m"
+        )
+    changed = [
+        f.name
+        for f in dataclasses.fields(DigitDynamics)
+        if getattr(params.dynamics, f.name) != getattr(DigitDynamics(), f.name)
+    ]
+    if changed:
+        notes.append(
+            f"[dynamics] {', '.join(changed)} {'differs' if len(changed) == 1 else 'differ'} from the thesis rig's, "
+            "but no twin reads [dynamics]: a digit's "
+            "dynamics come from its geometry, material and calibration; [dynamics] only sets chapter 3's synthetic "
+            "identification records"
+        )
+    return notes
+
+
 def _lengths_text(g: Geometry) -> str:
     """``section_length_m`` as a message shows it: ``0.08`` or ``[0.1, 0.06]``."""
     if not isinstance(g.section_length_m, tuple):
@@ -916,16 +963,28 @@ def params_template(params: RigParams | None = None) -> str:
         "# section_count supports of (digit_length_m - strip_length_m) / section_count each end a section (half",
         "# a support at the clamp); `flexdigit params FILE` prints where each section starts and ends;",
         f"# 1-{MAX_GAUGES} gauges on the strip, one adc_channels entry each; a cable pair needs a pretension.",
+        "# Keys commented out are derived (strip_length_m, digit_length_m: from the sections and 10 mm supports)",
+        "# or optional; a key left out keeps the value shown. [dynamics] is the thesis rig's, read by no twin.",
     ]
+    derivable = _derivable_lengths(params.geometry)
     for f in dataclasses.fields(params):
         section = getattr(params, f.name)
         notes = _attribute_notes(type(section))
         first = (type(section).__doc__ or "").strip().split("\n")[0]
         out += ["", f"# {first}", f"[{f.name}]"]
+        if f.name == "dynamics":
+            out += [
+                "# No twin reads these (a digit's dynamics come from its geometry, material and calibration): the",
+                "# thesis rig's identified values, for chapter 3's synthetic identification records only.",
+            ]
         for key, value in dataclasses.asdict(section).items():
             value = list(value) if isinstance(value, tuple) else value
             if key in notes:
                 out.append(f"# {notes[key]}")
+            if key in derivable:  # what the sections give: written out, a stale copy outlives an edited section
+                out.append(f"# Derived when left out ({derivable[key]}); give it only to have it checked.")
+                out.append("# " + tomli_w.dumps({key: value}).strip())
+                continue
             if value is None and key == "support_lengths_m":  # optional: the thesis's, commented out
                 out.append(f"# {key} = " + json.dumps([round(x, 12) for x in params.geometry.supports_m]))
                 continue
@@ -936,6 +995,22 @@ def params_template(params: RigParams | None = None) -> str:
                 continue
             out.append(tomli_w.dumps({key: value}).strip())
     return "\n".join(out) + "\n"
+
+
+def _derivable_lengths(g: Geometry) -> dict[str, str]:
+    """``strip_length_m`` and ``digit_length_m`` where the description's sections give them exactly (the template
+    leaves them out), each with how it is derived."""
+    if g.support_lengths_m is not None:
+        return {}
+    sections = list(g.section_length_m) if isinstance(g.section_length_m, tuple) else g.section_length_m
+    derived = _derive_lengths({"section_count": g.section_count, "section_length_m": sections})
+    how = {
+        "strip_length_m": "the sum of section_length_m"
+        if isinstance(sections, list)
+        else "section_count x section_length_m",
+        "digit_length_m": "strip_length_m plus section_count supports of 10 mm",
+    }
+    return {key: text for key, text in how.items() if derived.get(key) == getattr(g, key)}
 
 
 def _derive_lengths(geometry: dict[str, Any]) -> dict[str, Any]:
@@ -993,8 +1068,36 @@ def _derive_pair_straight(actuator: dict[str, Any], cables: Any) -> dict[str, An
     return out
 
 
+def _builtin_digit_files() -> dict[str, Any]:
+    """The example digits packaged in ``flexdigit/reference/digits``: name (the file's stem) -> its resource."""
+    from importlib import resources
+
+    folder = resources.files("flexdigit.reference").joinpath("digits")
+    return {
+        f.name.removesuffix(".toml"): f
+        for f in sorted(folder.iterdir(), key=lambda f: f.name)
+        if f.name.endswith(".toml")
+    }
+
+
+def builtin_digits() -> dict[str, str]:
+    """The example digits a command takes by name (``--params two-sections-four-gauges``) to start from: name ->
+    its first comment line (``flexdigit list digits``; ``flexdigit params NAME --write mine.toml`` copies one).
+
+    Examples
+    --------
+    >>> builtin_digits()["thesis-rig"][:16]
+    'The thesis rig: '
+    """
+    return {
+        name: f.read_text(encoding="utf-8").splitlines()[0].lstrip("# ").strip()
+        for name, f in _builtin_digit_files().items()
+    }
+
+
 def load_params(path: str | Path, *, check: bool = True) -> RigParams:
-    """Read rig parameters from a TOML file; missing keys keep the thesis defaults.
+    """Read rig parameters from a TOML file, or a built-in example digit by name (:func:`builtin_digits`) when no
+    such file exists; missing keys keep the thesis defaults.
 
     With ``check`` (the default) a description that contradicts itself (:func:`digit_inconsistencies`) is refused
     naming its first inconsistency; ``flexdigit params FILE`` loads without it to list them all.
@@ -1007,6 +1110,9 @@ def load_params(path: str | Path, *, check: bool = True) -> RigParams:
         If the file does not exist.
     """
     path = Path(path)
+    builtin = _builtin_digit_files().get(str(path)) if not path.exists() else None
+    if builtin is not None:
+        path = Path(str(builtin))
     text = read_text(path, "a rig parameter TOML")
     try:
         data = tomllib.loads(text)

@@ -196,7 +196,7 @@ def test_map_and_flag_mistakes_are_named(tmp_path, capsys):
     assert "names 2 gauge columns but the digit has 3 gauges" in capsys.readouterr().err
     nine = ",".join("abcmxabcm")
     assert main(["dataset", "import", str(src), *out, "--gauges", nine, "--load", "m", "--position", "x"]) == 2
-    assert "'gauges' parameter of ColumnMap must be 1 to 8 column names" in capsys.readouterr().err
+    assert "the column flags: --gauges must be 1 to 8 column names" in capsys.readouterr().err
     bad_map = tmp_path / "m.toml"
     bad_map.write_text('gauges = ["a", "b", "c"]\nload = "m"\nposition = "x"\nload_units = "g"\n')
     assert main(["dataset", "import", str(src), *out, "--map", str(bad_map)]) == 2
@@ -206,7 +206,7 @@ def test_map_and_flag_mistakes_are_named(tmp_path, capsys):
     assert "m.toml: missing key 'position' (the position column)" in capsys.readouterr().err
     bad_map.write_text('gauges = ["a", "b", "c"]\nload = "m"\nposition = "x"\ngauge_unit = "uV"\n')
     assert main(["dataset", "import", str(src), *out, "--map", str(bad_map)]) == 2
-    assert "m.toml: The 'gauge_unit' parameter of ColumnMap must be one of 'V', 'mV'" in capsys.readouterr().err
+    assert "m.toml: key 'gauge_unit' must be one of 'V', 'mV'" in capsys.readouterr().err
     # a decimal comma in a ','-separated file (quoted cells) read with '.' is named as such
     comma = tmp_path / "c.csv"
     comma.write_text('a,b,c,m,x\n"1,0","2,0","3,0",25,100\n')

@@ -11,7 +11,9 @@ from __future__ import annotations
 FORMATS: dict[str, tuple[str, str, str]] = {
     "params": (
         "rig parameters (TOML, --params)",
-        "Any of the tables and keys 'flexdigit params' prints; what is left out keeps the thesis rig's value.",
+        "Any of the tables and keys 'flexdigit params' prints; what is left out keeps the thesis rig's value, "
+        "except strip_length_m and digit_length_m: derived from the sections a file gives (and 10 mm supports). "
+        "[dynamics] is the thesis rig's identified values: no twin reads it.",
         """\
 [geometry]
 digit_length_m = 0.27

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit._command import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command, digit_name
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import Flag
 
@@ -111,10 +111,15 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
         from flexdigit._plot import save_plot
         from flexdigit.calibrate.residual_plot import residual_figure
 
-        fig = residual_figure(result, limit=None if args.thesis else POOR_FIT, title=f"calibration {out}")
+        fig = residual_figure(result, limit=None if args.thesis else POOR_FIT, title=_plot_title(args, out))
         data["plot"] = str(save_plot(fig, args.plot, "calibrate", force=args.force))
         text += f"\nplot -> {args.plot}"
     return CommandResult(data=data, text=text)
+
+
+def _plot_title(args: argparse.Namespace, out) -> str:
+    """``calibration cal.toml``, and whose digit when ``--params`` names one."""
+    return f"calibration {out}" + (f" of digit {digit_name(args.params)}" if args.params else "")
 
 
 def _given_records(args: argparse.Namespace) -> dict:

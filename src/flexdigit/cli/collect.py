@@ -114,7 +114,7 @@ def _add_dataset(subparsers) -> None:
 def _add_train(subparsers, hidden, tol) -> None:
     """``flexdigit train``'s flags."""
     p = add_command(subparsers, "train", _train, help="train the thesis's network on a dataset and save it as JSON")
-    p.add_argument("file", help="a dataset written by 'flexdigit collect'")
+    p.add_argument("file", help="a dataset written by 'flexdigit collect' or 'flexdigit dataset import'")
     p.add_argument(
         "--target",
         default="position",
@@ -139,7 +139,13 @@ def _add_train(subparsers, hidden, tol) -> None:
     )
     p.add_argument("--params", metavar="FILE", help="the digit's parameters TOML, for --bayes-limit (default thesis)")
     p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML, for --bayes-limit (default derived)")
-    p.add_argument("--model", default=None, help="model file to write (default: FILE stem + .<target>.model.json)")
+    p.add_argument(
+        "--model",
+        "--out",
+        dest="model",
+        default=None,
+        help="model file to write (default: FILE stem + .<target>.model.json)",
+    )
     p.add_argument("--force", action="store_true", help="overwrite the model file (and --plot) if it exists")
     add_plot_flag(p, "the held-out test readings' predicted against actual values")
 

@@ -33,7 +33,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("file", help="the recording (.csv or .parquet)")
     parser.add_argument(
         "--channel",
-        help="column to analyse, with or without its unit; sg1 and gauge1 name the same strain gauge "
+        help="column to analyse, with or without its unit, in any case (sg1 for 'SG1 (V)'); sg1 and gauge1 name the "
+        "same strain gauge "
         "(default: the first channel)",
     )
     parser.add_argument(

@@ -1,7 +1,7 @@
-"""``flexdigit list protocols|tissues|specs|robots``: the built-in files a command takes by name, one line each.
+"""``flexdigit list digits|protocols|...``: the built-in files a command takes by name, one line each.
 
-What ``collect`` and ``palpate --protocol`` (protocols), ``palpate --tissue`` (tissues), ``study`` (specs) and
-``tdcr --robot`` (robots) accept instead of a file of your own; each domain lists its own.
+What ``--params`` (digits), ``collect`` and ``palpate --protocol`` (protocols), ``palpate --tissue`` (tissues),
+``study`` (specs) and ``tdcr --robot`` (robots) accept instead of a file of your own; each domain lists its own.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import argparse
 
 from flexdigit._command import CommandResult, add_command
 
-KINDS = ("protocols", "tissues", "specs", "robots")
+KINDS = ("digits", "protocols", "tissues", "specs", "robots")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -18,7 +18,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         subparsers,
         "list",
         _list,
-        help="list the built-in protocols, tissues, study specs or robots, one line each",
+        help="list the built-in example digits, protocols, tissues, study specs or robots, one line each",
         description=__doc__.splitlines()[0].replace("``", ""),
     )
     parser.add_argument("kind", choices=KINDS, help="what to list")
@@ -26,6 +26,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _builtins(kind: str) -> dict[str, dict[str, str]]:
     """Per group (the command that takes them), name -> one line."""
+    if kind == "digits":
+        from flexdigit.params import builtin_digits
+
+        return {
+            "--params NAME on any command (copy one to edit: flexdigit params NAME --write mine.toml)": builtin_digits()
+        }
     if kind in ("protocols", "tissues"):
         from flexdigit.palpation.palpation_files import builtin_palpation_files
 

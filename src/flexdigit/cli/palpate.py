@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit._command import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command, digit_name
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag
 
@@ -123,11 +123,16 @@ def _save_outputs(args: argparse.Namespace, data: dict, fig, out) -> str:
     from flexdigit._io import atomic_write
     from flexdigit._json import to_jsonable
 
-    text = ""
+    text = f"\non digit {digit_name(args.params)} ({args.params})" if args.params else ""
     if args.plot:
         from flexdigit._plot import save_plot
 
-        data["plot"] = str(save_plot(fig(), args.plot, "palpate", force=args.force))
+        figure = fig()
+        if args.params:  # whose digit: the --params file's stem before the first title
+            ax = next((a for a in figure.axes if a.get_title()), None)
+            if ax is not None:
+                ax.set_title(f"digit {digit_name(args.params)}: {ax.get_title()}", fontsize=ax.title.get_fontsize())
+        data["plot"] = str(save_plot(figure, args.plot, "palpate", force=args.force))
         text += f"\nplot -> {args.plot}"
     if out is not None:
         import json

@@ -19,30 +19,52 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _params(args: argparse.Namespace) -> CommandResult:
-    from flexdigit.params import RigParams, derived_figures, digit_inconsistencies, load_params, save_params
+    from flexdigit.params import (
+        RigParams,
+        derived_figures,
+        description_notes,
+        digit_inconsistencies,
+        load_params,
+        save_params,
+    )
 
     if args.template:
         return _template(args)
     params = load_params(args.file, check=False) if args.file else RigParams()
     problems = digit_inconsistencies(params)
+    notes = description_notes(params)
     data = params.to_dict()
     derived = derived_figures(params)
     lines = [f"rig parameters ({args.file or 'thesis defaults'}):"]
     for section, values in data.items():
         lines.append(f"[{section}]")
-        lines.extend(f"  {k} = {v}" for k, v in values.items())
+        lines.extend(f"  {k} = {_value(v)}" for k, v in values.items())
     lines.append("derived:")
     lines.extend(f"  {k} = {_figure(v)}" for k, v in derived.items())
+    lines.extend(f"note: {n}" for n in notes)
     if problems:
-        # one line each, naming the key; nothing is written from a description that contradicts itself
-        text = "\n".join(f"{args.file}: {p}" for p in problems)
-        return CommandResult(data={"params": data, "derived": derived, "problems": problems}, text=text, exit_code=2)
+        # one line each, naming the key; nothing is written from a description that contradicts itself (a note
+        # may say why: the template's digit_length_m kept for shorter sections puts the gauges on long supports)
+        text = "\n".join([*(f"{args.file}: {p}" for p in problems), *(f"{args.file}: note: {n}" for n in notes)])
+        data = {"params": data, "derived": derived, "problems": problems, "notes": notes}
+        return CommandResult(data=data, text=text, exit_code=2)
     if args.write:
         path = save_params(params, args.write, force=args.force)
         lines.append(f"written to {path}")
     return CommandResult(
-        data={"params": data, "derived": derived, "problems": [], "written": args.write}, text="\n".join(lines)
+        data={"params": data, "derived": derived, "problems": [], "notes": notes, "written": args.write},
+        text="\n".join(lines),
     )
+
+
+def _value(value) -> str:
+    """A parameter as ``params`` prints it: floats to 12 significant digits, so a derived length reads 0.22, not
+    0.22000000000000003 (a file keeps every digit)."""
+    if isinstance(value, float):
+        return f"{value:.12g}"
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    return str(value)
 
 
 def _figure(value) -> str:

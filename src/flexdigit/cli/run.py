@@ -29,7 +29,7 @@ import math
 import sys
 from pathlib import Path
 
-from flexdigit._command import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command, digit_name
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.rig.step_test import ESTIMATE_SMOOTH_S
@@ -237,11 +237,16 @@ def _run(args: argparse.Namespace) -> CommandResult:
         from flexdigit._plot import save_plot
         from flexdigit.rig.run_plot import run_figure
 
-        title = f"{args.controller} on {args.backend}, step to {setpoint:g} deg"
-        data["plot"] = str(save_plot(run_figure(run, title), args.plot, "run", force=args.force))
+        data["plot"] = str(save_plot(run_figure(run, _plot_title(args, setpoint)), args.plot, "run", force=args.force))
     # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
     exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[run.result.status]
     return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
+
+
+def _plot_title(args, setpoint: float) -> str:
+    """``digital20 on sim, step to 30 deg``, after whose digit it is when ``--params`` names one."""
+    title = f"{args.controller} on {args.backend}, step to {setpoint:g} deg"
+    return title if args.params is None else f"digit {digit_name(args.params)}: {title}"
 
 
 def _digit_fields(args, rig) -> dict:
@@ -433,8 +438,9 @@ def _run_text(args, run, data: dict, setpoint: float, period: float) -> str:
     if mount is not None and mount != "vertical" and args.params is not None:
         truth_text += f" (the twin {mount}: tip up this digit buckles under its own weight, or as the URL asked)"
     kept = f" (kept in {args.kept.source})" if args.kept is not None else ""
+    digit = f", digit {digit_name(args.params)} ({args.params})" if args.params is not None else ""
     return (
-        f"{args.controller}{kept} on {args.backend}: {run.result.status} ({run.result.message})\n"
+        f"{args.controller}{kept} on {args.backend}{digit}: {run.result.status} ({run.result.message})\n"
         f"  rotation estimated from the gauges: final {final:.2f} deg (setpoint {setpoint:g}), peak {peak:.2f} deg"
         f"{truth_text}; last command {data['final_command']}\n"
         f"  step: {_figures_line(run.figures)}\n"

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit._command import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command, digit_name
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible, check_values
 from flexdigit.errors import ParameterError
@@ -218,7 +218,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
     res, findings, text = experiment(args, params, gauges, common)
     path = res.save(args.out, force=args.force)
     if args.plot:
-        save_plot(record_figure(res), args.plot, "simulate", force=args.force)
+        save_plot(record_figure(res, digit=digit_name(args.params)), args.plot, "simulate", force=args.force)
     data = {
         "experiment": res.metadata["experiment"],
         "out": str(path),
@@ -230,7 +230,9 @@ def _run(args: argparse.Namespace) -> CommandResult:
     }
     if args.plot:
         text += f"\nplot -> {args.plot}"
-    return CommandResult(data=data, text=f"{res.metadata['experiment']}: {res.table.num_rows} rows -> {path}\n{text}")
+    digit = f" of digit {digit_name(args.params)} ({args.params})" if args.params else ""
+    head = f"{res.metadata['experiment']}{digit}: {res.table.num_rows} rows -> {path}"
+    return CommandResult(data=data, text=f"{head}\n{text}")
 
 
 def _release(args, params, gauges, common: dict):

@@ -203,7 +203,7 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
     )  # fmt: skip
     if first is None:
         return _nothing_found(series, what, smooth, noise_smooth, t0_s, problems, shared)
-    k_on, k_half, k_first, held, start, end, direction = first
+    k_on, k_half, k_first, held, start, end, direction, hold = first
     t_on = float(t[k_on])
     if t0_s is None and not held:
         # in mid-swing the instant may lie before the record: the extreme a quarter period before the first crossing
@@ -215,6 +215,8 @@ def survey(series: TimeSeries, kind: str, *, t0_s: float | None = None) -> Surve
         t0_s = max(float(t[k_first]), t_on - 0.2 * float(t[k_half] - t_on)) if k_on > k_first else float(t[k_first])
     delay = float(t[k_half] - t0_s)
     baseline = max(0.0, float(t0_s - t[k_first])) if held else 0.0
+    if hold is not None:  # the hold the extreme's band missed: reported, while the fit starts where it did
+        baseline = max(baseline, float(t[hold[1]] - t[hold[0]]))
     if not growing:  # a growing record has no settled levels or delay time to judge it by
         problems += _shape_problems(series, kind, t, smooth, noise_smooth, float(t0_s), k_on, start, end, delay)
     return Survey(
@@ -278,7 +280,8 @@ def _nothing_found(
 
 
 def _first_swing(t, smooth, noise, t0_s, kind):
-    """``(onset, half-way, first sample, held, start level, end level, direction)`` of the first swing, or None.
+    """``(onset, half-way, first sample, held, start level, end level, direction, hold)`` of the first swing, or
+    None; ``hold`` is ``(first, last)`` sample of a release's hold that sits off its first extreme (else None).
 
     Step: the start level is the median of the first 20 ms (at least 3 samples), refined to the median of
     everything before the onset; the half-way index is the first sample at half the largest deviation from it.
@@ -313,7 +316,7 @@ def _first_swing(t, smooth, noise, t0_s, kind):
         if k_on >= 3:
             start = float(np.median(smooth[: k_on + 1]))
     direction = 1 if smooth[k_half] > start else -1
-    return k_on, k_half, 0, True, start, end, direction
+    return k_on, k_half, 0, True, start, end, direction, None
 
 
 def _crossings(t, x, hysteresis: float) -> list[float]:
@@ -354,6 +357,9 @@ def _release_swing(smooth, noise, end):
     k_on = k_top + (int(leave[0]) - 1 if leave.size else k_cross - k_top)
     away = np.nonzero(~near[: k_on + 1])[0]
     k_first = int(away[-1]) + 1 if away.size else 0
+    hold = _hold_off_the_extreme(smooth, noise, end, peak, band, k_top, k_cross)
+    if hold is not None and hold[1] - hold[0] <= k_on - k_first:
+        hold = None  # the extreme's band found it already
     held = True
     if np.any(side * (smooth[:k_first] - end) < -band):
         # the signal swung through its rest level before this extreme: the record starts in mid-swing (a gauge near
@@ -363,7 +369,39 @@ def _release_swing(smooth, noise, end):
     half = np.nonzero(np.abs(smooth[k_on:] - end) <= 0.5 * abs(start - end))[0]
     k_half = k_on + int(half[0]) if half.size else smooth.size - 1
     direction = 1 if smooth[k_half] > start else -1
-    return k_on, k_half, k_first, held, start, end, direction
+    return k_on, k_half, k_first, held, start, end, direction, hold
+
+
+#: How far (fraction of the swing) a hold may sit from the first extreme of a release and still be its hold.
+HOLD_OFFSET = 0.1
+
+
+def _hold_off_the_extreme(smooth, noise, end, peak, band, k_top, k_cross):
+    """``(first, onset)`` of a hold a little off the release's first extreme, or None.
+
+    The extreme need not be the hold: the low-pass filter's start-up at a record's first sample can stand a few
+    noise deviations off it, and a gauge near the clamp can swing past its held level just after the release (a
+    higher mode, 3.1.2). The hold is then the stretch within :data:`HOLD_OFFSET` of the swing of that extreme,
+    before the crossing, flat within ``band`` of its median; it counts only when it lasts longer than the
+    time from its end to the crossing (a record that starts at the release has no such stretch: its first
+    samples are the swing's slow start). It is the baseline :func:`survey` reports; the fit still starts where
+    the extreme's band put it, so records whose hold that band found are identified exactly as before.
+    """
+    wide = np.abs(smooth[: k_cross + 1] - smooth[k_top]) <= HOLD_OFFSET * peak
+    outside = np.nonzero(~wide[: k_top + 1])[0]
+    first = int(outside[-1]) + 1 if outside.size else 0
+    after = np.nonzero(~wide[k_top:])[0]
+    last = k_top + int(after[0]) if after.size else k_cross
+    if last - first < 3:
+        return None
+    level = float(np.median(smooth[first:last]))
+    flat = np.abs(smooth[first:last] - level) <= band
+    start = first + int(np.argmax(flat))  # past a start-up transient
+    leave = np.nonzero(~flat[start - first :])[0]
+    onset = start + int(leave[0]) - 1 if leave.size else last - 1
+    if onset - start <= k_cross - onset or abs(level - end) < 8.0 * noise:
+        return None
+    return start, onset
 
 
 def _shape_problems(series, kind, t, smooth, noise, t0, k_on, start, end, delay) -> list[Problem]:

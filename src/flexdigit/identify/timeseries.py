@@ -5,12 +5,13 @@ column names, ``<name>_<unit>`` (``time_s``, ``time_ms``, ``t_us``, ``sg1_v``, `
 ``<name> (<unit>)`` / ``<name>[<unit>]`` (``Time (ms)``, ``Pot (V)``, ``t[s]``). A time column with no unit
 (``time``, ``t``) needs ``time_unit=`` (``--time-unit`` on the command line); a time unit given for a column that
 names another one is refused. A channel is picked by its full column name or its name without the unit (``sg1``
-for ``sg1_v``); without one, the first channel that is not an input (``command``, ``u``) or an unnamed index
-column (pandas' ``to_csv``) is used. CSV files may be separated by ``,`` ``;`` tabs or spaces (found from the
-header and the first rows), with ``#`` comment lines; with a separator other than ``,`` a decimal comma
-(``0,25``) is read as a decimal point. Strain-gauge channels answer to either
-name, ``sgN`` (a DAQ recording, the thesis) or ``gaugeN`` (the twin's files), when the file has only one of
-them. An input column, when present, is kept with the series (the servo command of a step test).
+for ``sg1_v``), in any case when that names one column (``sg1`` for ``SG1 (V)``); without one, the first
+channel that is not an input (``command``, ``u``) or an unnamed index column (pandas' ``to_csv``) is used. CSV
+files may be separated by ``,`` ``;`` tabs or spaces (found from the header and the first rows), with ``#``
+comment lines; with a separator other than ``,`` a decimal comma (``0,25``) is read as a decimal point.
+Strain-gauge channels answer to either name, ``sgN`` (a DAQ recording, the thesis) or ``gaugeN`` (the twin's
+files), when the file has only one of them. An input column, when present, is kept with the series (the servo
+command of a step test).
 :func:`series_from_table` does the same for a table in memory, such as the twin's experiments
 (:mod:`flexdigit.twin.records`).
 
@@ -221,7 +222,8 @@ def read_timeseries(
     path : str or Path
         The recording: a header row then one row per sample (CSV; ``#`` lines are comments), or a Parquet table.
     channel : str, optional
-        Column to read, by full name (``sg1_v``) or without its unit (``sg1``); ``sgN`` and ``gaugeN`` name
+        Column to read, by full name (``sg1_v``) or without its unit (``sg1``), in any case when that names one
+        column (``sg1`` for ``SG1 (V)``); ``sgN`` and ``gaugeN`` name
         the same gauge when only one of them is in the file (the twin writes ``gauge1_v``). Default: the first
         channel that is not the time or an input column.
     time_unit : {"s", "ms", "us"}, optional
@@ -333,11 +335,25 @@ def _names(columns: list[str]) -> str:
 
 
 def _match_channel(p: str, columns: list[str], channel: str) -> str:
-    """The column ``channel`` names: exactly, without its unit, or through the gauge alias ``sgN`` <-> ``gaugeN``."""
+    """The column ``channel`` names: exactly, without its unit, or through the gauge alias ``sgN`` <-> ``gaugeN``;
+    then the same ignoring case (``sg1`` for ``SG1 (V)``) when that names one column only."""
     matches = [c for c in columns if c == channel] or [c for c in columns if split_unit(c)[0] == channel]
     if matches:
         return matches[0]
+    folded = channel.strip().casefold()
     stem, unit = split_unit(channel)
+    for same in (
+        lambda c: c.strip().casefold() == folded,
+        lambda c: split_unit(c)[0].casefold() == folded,
+        lambda c: split_unit(c)[0].casefold() == stem.casefold() and split_unit(c)[1].casefold() == unit.casefold(),
+    ):
+        matches = [c for c in columns if same(c)]
+        if len(matches) == 1:
+            return matches[0]
+        if len(matches) > 1:
+            raise DataFileError(
+                f"{p}: channel {channel!r} is ambiguous: it could be any of {_names(matches)}; name the column"
+            )
     m = _GAUGE_ALIAS.match(stem)
     if m is not None:
         other = ("gauge" if m.group(1).lower() == "sg" else "sg") + m.group(2)

@@ -12,6 +12,7 @@ import errno
 import html
 import importlib
 import json
+import math
 import multiprocessing
 import os
 import shutil
@@ -453,8 +454,8 @@ def _cell(value: object) -> str:
         return f"<a href='#{html.escape(value.slug)}'>{html.escape(value.text)}</a>"
     if isinstance(value, bool):
         return "yes" if value else "no"
-    if isinstance(value, float):
-        return f"{value:.6g}"
+    if isinstance(value, float):  # NaN: no figure there (a thesis column of another digit, a case not run)
+        return "n/a" if math.isnan(value) else f"{value:.6g}"
     return html.escape("" if value is None else str(value))
 
 

@@ -32,7 +32,7 @@ def build(ctx: ReportContext) -> Chapter:
         "the unit circle from rounding alone."
     )
     _sampling(study, chapter.entries)
-    _twenty_ms(study, chapter)
+    _twenty_ms(ctx, study, chapter)
     chapter.tables.extend(study.tables)
     K = printed_controller("39hz")
     chapter.figures.append(_fig_tustin(ctx, plt, study.loops, study.periods_s))
@@ -209,13 +209,16 @@ def _fig_zplane(ctx, plt, K):
     )
 
 
-def _twenty_ms(study, chapter: Chapter) -> None:
+def _twenty_ms(ctx, study, chapter: Chapter) -> None:
     """Control at 20 ms on the twin: the direct design and its plant-gain cases, the thesis's controller."""
+    quantum = study.twenty_ms.deg_per_command
+    where = " (on the twin, command 26 gives ~30.3 deg)" if ctx.thesis_rig else ""
     chapter.paragraphs.append(
-        "Why a 2 % band is hard here: one command turns the beam by about 1.7 deg, so 30 deg sits between two "
-        "reachable rotations and a 2 % band (0.6 deg) is narrower than half a quantum (0.87 deg). Whether the "
-        "band can be met depends on where 30 deg falls on the command grid (on the twin, command 26 gives ~30.3 "
-        "deg); the controller must end on the nearest command, so the quantiser has no hysteresis."
+        f"Why a 2 % band is hard here: one command turns the beam by about {quantum:.2g} deg, so 30 deg sits "
+        f"between two reachable rotations and a 2 % band (0.6 deg) is {'narrower' if quantum > 1.2 else 'wider'} "
+        f"than half a quantum ({quantum / 2:.2g} deg). Whether the band can be met depends on where 30 deg falls on "
+        f"the command grid{where}; the controller must end on the nearest command, so the quantiser has no "
+        "hysteresis."
     )
     chapter.paragraphs.append(
         "Control at the servo board's 20 ms: designed directly in discrete time on "
@@ -224,7 +227,7 @@ def _twenty_ms(study, chapter: Chapter) -> None:
         "or wind up); the observer is fed the command actually sent (saturated and rounded), so the integer "
         "command causes no limit cycle. Measured on the "
         "nonlinear twin (2 ms integration) through the same loop and sim backend a rig run uses; the beam "
-        "rotation is estimated from the three gauges by a map calibrated on a static sweep and tared at rest."
+        f"rotation is estimated from the {ctx.gauges_text} by a map calibrated on a static sweep and tared at rest."
     )
     runs = study.twenty_ms.runs
     nominal = runs[("digital20", 1.0)].metrics
@@ -258,8 +261,12 @@ def _twenty_ms(study, chapter: Chapter) -> None:
             "5.2",
             runs[("thesis39-euler", 1.0)].metrics.peak_deg,
             "deg",
-            "The thesis's state-space (forward Euler) controller at 20 ms on the twin: the command bangs between "
-            "0 and 254 - the instability figure 5.7 shows.",
+            "The thesis's state-space (forward Euler) controller at 20 ms on the twin: "
+            + (
+                "the command bangs between 0 and 254 - the instability figure 5.7 shows."
+                if _bangs(runs[("thesis39-euler", 1.0)], ctx.params)
+                else "on this digit its command does not bang between its limits."
+            ),
         )
     )
     e.append(
@@ -272,6 +279,13 @@ def _twenty_ms(study, chapter: Chapter) -> None:
             "than one command: the digit does not move.",
         )
     )
+
+
+def _bangs(step, params) -> bool:
+    """Whether a step's command hit both ends of the command range (bang-bang: the loop unstable)."""
+    command = np.asarray(step.result.command)
+    a = params.actuator
+    return bool(command.size and command.min() <= a.command_min and command.max() >= a.command_max)
 
 
 def _fig_twenty_ms(ctx, plt, twenty_ms):
@@ -290,9 +304,13 @@ def _fig_twenty_ms(ctx, plt, twenty_ms):
     )
     axes[0].legend(fontsize=7)
     axes[1].set(xlabel="t (s)", ylabel="command")
-    return ctx.save_figure(
-        fig,
-        "ch5_20ms_twin",
-        "A 30 deg beam-rotation step at 20 ms on the nonlinear twin (clipped to -20..80 deg).",
-        thesis_ref="figure 5.7",
-    )
+    caption = "A 30 deg beam-rotation step at 20 ms on the nonlinear twin (clipped to -20..80 deg)."
+    euler = twenty_ms.runs[("thesis39-euler", 1.0)]
+    if not ctx.thesis_rig and _bangs(euler, ctx.params):  # the thesis rig's caption says it in figure 5.7's words
+        a = ctx.params.actuator
+        caption += (
+            f" The thesis's forward-Euler controller (thesis39-euler) fails on this digit too: its command bangs "
+            f"between {a.command_min} and {a.command_max}, its rotation reaches {float(euler.metrics.peak_deg):.0f} "
+            "deg and is clipped here."
+        )
+    return ctx.save_figure(fig, "ch5_20ms_twin", caption, thesis_ref="figure 5.7")

@@ -95,14 +95,30 @@ def _friction_entries(ctx: ReportContext, friction, e: list) -> None:
             )
         )
     eq = friction.servo_equivalent
+    if eq["median_deg"] is None:
+        e.append(
+            results.new(
+                "actuated.cable_friction_equivalent_servo_deg",
+                "7 (twin calibration)",
+                "not computed",
+                "deg",
+                "The tension scatter as a servo shaft angle (ratio x T / (dT/dtheta)) is not computed: "
+                f"{eq['reason']}.",
+            )
+        )
+        return
+    slack = eq["settings"] - eq["taut"]
+    where = "the protocol's settings"  # the thesis rig: all 63 taut
+    if slack:
+        where = f"the {eq['taut']} of the protocol's {eq['settings']} settings where the cable is taut"
     e.append(
         results.new(
             "actuated.cable_friction_equivalent_servo_deg",
             "7 (twin calibration)",
             eq["median_deg"],
             "deg",
-            "The same tension scatter expressed as a servo shaft angle (ratio x T / (dT/dtheta), over the protocol's "
-            f"settings): median {eq['median_deg']:.2f} deg = {eq['median_us']:.1f} us of PWM pulse "
+            f"The same tension scatter expressed as a servo shaft angle (ratio x T / (dT/dtheta), over {where}"
+            f"): median {eq['median_deg']:.2f} deg = {eq['median_us']:.1f} us of PWM pulse "
             f"({eq['min_deg']:.2f}-{eq['max_deg']:.2f} deg, {eq['min_us']:.1f}-{eq['max_us']:.1f} us; "
             f"{ctx.params.actuator.deg_per_command:.4f} deg = one command = {eq['us_per_command']:.3f} us). A hobby "
             "servo's deadband is a few us (a fraction of a degree to ~1 deg), so the servo alone could not scatter "

@@ -21,14 +21,15 @@ SECTION = "8 (beyond)"
 
 def build(ctx: ReportContext) -> Chapter:
     """Build the shape chapter: tip and along-the-digit errors, one figure."""
-    chapter = Chapter(slug="ch8-shape", title="Beyond the thesis: the digit's shape from its three gauges")
+    chapter = Chapter(slug="ch8-shape", title=f"Beyond the thesis: the digit's shape from its {ctx.gauges_text}")
     commands = tuple(range(8, 44, 10 if ctx.fast else 5))
     length_m = ctx.params.geometry.digit_length_m  # 27 places along the digit (every 10 mm on the thesis rig)
     positions = tuple(round(length_m * k / 27, 3) for k in range(1, 28, 3 if ctx.fast else 1))
     acc = shape_accuracy(commands, positions, 0.025, seed=ctx.seed, params=ctx.params)
     summary = acc.summary()
     chapter.paragraphs.append(
-        "The centre line is estimated from the three gauge voltages and the servo command alone "
+        f"The centre line is estimated from the {ctx.gauges_text.replace('gauge', 'gauge voltage')} and the servo "
+        "command alone "
         "(the ShapeEstimator of flexdigit.shape): each gauge's curvature is M/EI (E 3.12) of a moment made of the "
         "cable's T e (3.3), the digit's own weight and one weight at an unknown place; with the cable taut the "
         "command fixes the tip angle (E 3.11, 3.14). The fit (tension, load and where) is integrated to a shape "
@@ -172,6 +173,6 @@ def _figure(ctx: ReportContext):
     return ctx.save_figure(
         fig,
         "shape_from_gauges",
-        "The centre line from the three gauges (one noisy reading) against the twin's, with its two-standard-deviation "
-        "band.",
+        f"The centre line from the {ctx.gauges_text} (one noisy reading) against the twin's, with its "
+        "two-standard-deviation band.",
     )

@@ -65,6 +65,14 @@ class ReportContext:
         return self.params == RigParams()
 
     @property
+    def gauges_text(self) -> str:
+        """The digit's gauges in words, as chapter texts and captions name them: "three gauges" on the thesis rig,
+        "four gauges" on a four-gauge digit."""
+        count = len(self.params.geometry.gauge_positions_m)
+        words = ("no", "one", "two", "three", "four", "five", "six", "seven", "eight")
+        return f"{words[count] if count < len(words) else count} gauge{'' if count == 1 else 's'}"
+
+    @property
     def figure_dir(self) -> Path:
         path = self.out_dir / "figures"
         path.mkdir(parents=True, exist_ok=True)

@@ -61,10 +61,11 @@ def not_applicable(entry: Entry) -> Entry:
 
     Examples
     --------
-    >>> not_applicable(Entry("x", "3.1", 2.0, 2.5, "", 0.25, "discrepancy", "why")).thesis
-    'not applicable'
+    >>> once = not_applicable(Entry("x", "3.1", 2.0, 2.5, "", 0.25, "discrepancy", "why"))
+    >>> once.thesis, not_applicable(once) == once   # marked once, however often it passes here
+    ('not applicable', True)
     """
-    if entry.thesis is None and entry.status == "new":
+    if (entry.thesis is None and entry.status == "new") or entry.thesis == NOT_APPLICABLE:
         return entry
     note = f"thesis figure of the thesis rig, not applicable to this digit. {entry.note}".strip()
     return replace(entry, thesis=NOT_APPLICABLE, rel_error=None, status="new", note=note)

@@ -41,6 +41,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import math
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -232,10 +233,25 @@ class ColumnMap:
                 raise DataFileError(f"{source}: missing key '{key}' (the {ROLES[key]})")
         if isinstance(merged.get("gauges"), list):
             merged["gauges"] = tuple(merged["gauges"])
+        elif isinstance(merged.get("gauges"), str):  # "A,B,C", as --gauges takes it
+            merged["gauges"] = tuple(g.strip() for g in merged["gauges"].split(","))
         try:
             return cls(**merged)
         except (ParameterError, TypeError) as exc:
-            raise DataFileError(f"{source}: {exc}") from None
+            raise DataFileError(f"{source}: {_as_key(str(exc), from_flags=source == 'the column flags')}") from None
+
+
+def _as_key(message: str, *, from_flags: bool) -> str:
+    """A :class:`ColumnMap` message as the user wrote the map: "key 'gauges' ..." in a TOML file, "--gauges ..."
+    on the command line (never the class's name), with what a file should hold."""
+    match = re.match(r"The '(\w+)' parameter of ColumnMap must be (.*)", message, re.S)
+    if not match:
+        return message
+    key, rest = match.groups()
+    if key == "gauges" and not from_flags:
+        rest = rest.replace("column names,", 'column names (a TOML list, gauges = ["A", "B", "C"], or "A,B,C"),', 1)
+    name = "--" + key.replace("_", "-") if from_flags else f"key '{key}'"
+    return f"{name} must be {rest}"
 
 
 #: What each mapped column is, for messages.

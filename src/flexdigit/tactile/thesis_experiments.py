@@ -395,7 +395,9 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
 
     ``ratio x T / (dT/dtheta)`` at every (load, position, command) of the protocol, the slope by central
     differences of the static twin (0.01 command). Returns the median, minimum and maximum in degrees and in
-    microseconds of PWM pulse, and microseconds per command.
+    microseconds of PWM pulse, and microseconds per command, over the settings where the cable is taut (a slack
+    cable's tension does not move with the servo: no angle stands for its friction); ``taut`` counts them, and
+    with none every figure is None and ``reason`` says why.
     """
     params = params or RigParams()
     cal = calibration or default_calibration()
@@ -419,8 +421,18 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
         )
         tension.append(sol.tension_n)
     slope = (tension[2] - tension[0]) / (2 * d)  # N per rad of servo shaft
-    deg = np.degrees(cal.cable_friction_ratio * tension[1] / slope)
     us_per_deg = 1e6 * (a.pulse_width_max_s - a.pulse_width_min_s) / (a.angle_max_deg - a.angle_min_deg)
+    taut = slope > 0
+    if not taut.any():
+        return {
+            **dict.fromkeys(("median_deg", "min_deg", "max_deg", "median_us", "min_us", "max_us")),
+            "us_per_command": float(a.deg_per_command * us_per_deg),
+            "taut": 0,
+            "settings": len(keys),
+            "reason": f"the cable is slack at all {len(keys)} settings of the protocol: its tension does not move "
+            "with the servo",
+        }
+    deg = np.degrees(cal.cable_friction_ratio * tension[1][taut] / slope[taut])
     return {
         "median_deg": float(np.median(deg)),
         "min_deg": float(deg.min()),
@@ -429,6 +441,8 @@ def equivalent_servo_angle(params: RigParams | None = None, calibration=None) ->
         "min_us": float(deg.min() * us_per_deg),
         "max_us": float(deg.max() * us_per_deg),
         "us_per_command": float(a.deg_per_command * us_per_deg),
+        "taut": int(taut.sum()),
+        "settings": len(keys),
     }
 
 

@@ -16,9 +16,10 @@ def _gauges(record: TwinRecord) -> list[str]:
     return [c for c in record.table.column_names if c.startswith("gauge") and c.endswith("_v")]
 
 
-def record_figure(record: TwinRecord):
+def record_figure(record: TwinRecord, *, digit: str | None = None):
     """The record's figure as a matplotlib ``Figure``: gauges (and the potentiometer) in V against time (s), the
-    command or the load's position (cm from the tip), by the record's experiment.
+    command or the load's position (cm from the tip), by the record's experiment; titled with ``digit``'s name
+    (a ``--params`` file's stem) when it is not the thesis rig's.
 
     Examples
     --------
@@ -40,18 +41,18 @@ def record_figure(record: TwinRecord):
         bottom.set_xlabel("time (s)")
         bottom.set_ylabel("voltage (V)")
         bottom.legend(fontsize=7)
-        top.set_title("servo step on the twin (thesis 3.2.4, figure 3.11)", fontsize=9)
+        top.set_title(_title("servo step", "3.2.4, figure 3.11", digit), fontsize=9)
         return fig
     fig, ax = new_figure()
     if experiment == "actuation_sweep":
         x, xlabel, style = record.column("command"), "servo command", "o"
-        title = "actuation sweep on the twin (thesis 3.4.3, figure 3.17)"
+        title = _title("actuation sweep", "3.4.3, figure 3.17", digit)
     elif experiment == "static_load_test":
         x, xlabel, style = record.column("position_from_tip_m") * 1e2, "load position from the tip (cm)", "o"
-        title = "static load test on the twin (thesis 6.4-6.5)"
+        title = _title("static load test", "6.4-6.5", digit)
     else:
         x, xlabel, style = record.column("time_s"), "time (s)", "-"
-        title = "release test on the twin (thesis 3.1.2, figure 3.6)"
+        title = _title("release test", "3.1.2, figure 3.6", digit)
     for name in gauges:
         ax.plot(x, record.column(name), style, ms=3, label=_label(name))
     ax.set_xlabel(xlabel)
@@ -59,6 +60,14 @@ def record_figure(record: TwinRecord):
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7)
     return fig
+
+
+def _title(experiment: str, thesis: str, digit: str | None) -> str:
+    """``release test on the twin (thesis 3.1.2, figure 3.6)``; another digit's: ``release test on the twin of
+    digit mine (as thesis 3.1.2)``."""
+    if digit is None:
+        return f"{experiment} on the twin (thesis {thesis})"
+    return f"{experiment} on the twin of digit {digit} (as thesis {thesis.split(',')[0]})"
 
 
 def _label(column: str) -> str:
