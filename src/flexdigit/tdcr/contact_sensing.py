@@ -16,7 +16,8 @@ That first-order fit is the start. Given the tensions, :func:`locate_contact` th
 readings through the twin itself (the discrete rod pressed by the force, spread linearly between the two nodes
 around ``s_c``, settled by Newton; ``scipy.optimize.least_squares``): a 50 mN push bends rao2021 by tens of
 millimetres, where the first-order fit's force was 15-25 % off. The fit's one-sigma uncertainty (``s_std_m``,
-``force_std_n``) comes from its Jacobian and the readings' noise (or the residual, if larger).
+``force_std_n``) comes from its Jacobian and the readings' noise (or the residual's estimate of it, per degree
+of freedom, if larger).
 
 Where the gauges cannot see it, it says so:
 
@@ -294,7 +295,8 @@ def _refined(first: ContactEstimate, twin: _Twin, layout: GaugeLayout, strains, 
     if shape is None:
         return first
     rms = float(np.sqrt(np.mean(fit.fun**2))) * _STRAIN_SCALE
-    sigma = max(noise_std, rms)
+    dof = max(strains.size - fit.x.size, 1)
+    sigma = max(noise_std, rms * np.sqrt(strains.size / dof))  # the noise, or the residual's estimate of it
     jac = fit.jac / np.concatenate([[_PLACE_SCALE_M], [_FORCE_SCALE_N] * 3]) * _STRAIN_SCALE
     _, sing, vt = np.linalg.svd(fit.jac[:, 1:])  # the force's directions, in the fit's units
     unseen = vt[-1] if sing[-1] < 1e-6 * sing[0] else None
