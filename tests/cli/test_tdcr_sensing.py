@@ -150,6 +150,19 @@ def test_contact_the_reviewers_case_and_its_honest_lines(capsys):
     assert "force (" not in text
 
 
+@pytest.mark.parametrize(
+    ("reading", "needle"),
+    [
+        ("1", "no fit: the twin holds no equilibrium"),  # 100 % strain everywhere: no contact the rod can bear
+        ("1e-4", "poor fit: "),  # a uniform stretch, which no point contact makes (113 microstrain left)
+    ],
+)
+def test_contact_readings_no_contact_explains_are_said_so(capsys, reading, needle):
+    argv = ["tdcr", "contact", "rao2021", "--tension-n", "2,0,0,0,1,0", "--strains", ",".join([reading] * 48)]
+    assert main(argv) == 0
+    assert needle in capsys.readouterr().out
+
+
 def test_statics_says_what_its_solve_did(capsys):
     """Tendons alone: the start (zero clamp wrench: their pull is internal) already balances the tip, said so
     rather than '0 Newton iterations'; a tip force takes Newton iterations, counted."""

@@ -29,6 +29,8 @@ from flexdigit.errors import ParameterError
 
 #: ``tdcr contact`` says a force is barely seen when its one-sigma uncertainty exceeds this share of its size.
 _UNCERTAIN = 0.2
+#: ... and a fit poor when it leaves more than this RMS strain (ten times a good amplifier's noise).
+_POOR_FIT = 1e-5
 
 
 def _floats(text: str, name: str, count: int | None = None) -> list[float]:
@@ -446,13 +448,21 @@ def _estimate_lines(est) -> list[str]:
             f"out of sight: the readings fit a contact at or nearer the base than {1e3 * est.visible_from_m:.1f} mm, "
             "where one gauge station at most sees it: place and force not determined"
         ]
-    f, sd = est.force_n, np.zeros(3) if est.force_std_n is None else est.force_std_n
+    if not est.refined:
+        return [
+            f"no fit: the twin holds no equilibrium under the first-order estimate ({np.linalg.norm(est.force_n):.3g} "
+            f"N at {1e3 * est.s_m:.1f} mm): these readings are not a point contact the robot can bear"
+        ]
+    f, sd = est.force_n, est.force_std_n
     lines = [
-        f"at s = {1e3 * est.s_m:.1f} mm"
-        + ("" if est.s_std_m is None else f" +- {1e3 * est.s_std_m:.2g}")
-        + f", {_mm(est.position_m)}",
+        f"at s = {1e3 * est.s_m:.1f} mm" + f" +- {1e3 * est.s_std_m:.2g}" + f", {_mm(est.position_m)}",
         "force ({}) mN".format(", ".join(f"{1e3 * v:.3f} +- {1e3 * e:.2g}" for v, e in zip(f, sd, strict=True))),
     ]
+    if est.strain_rms > _POOR_FIT:
+        lines.append(
+            f"poor fit: {est.strain_rms * 1e6:.3g} microstrain RMS of the readings left unexplained (not one point "
+            "contact, or the twin's model is off): the numbers above are only the best such fit"
+        )
     if np.linalg.norm(sd) > _UNCERTAIN * np.linalg.norm(f):
         lines.append(
             f"uncertain: the gauges barely see this force (one sigma {1e3 * np.linalg.norm(sd):.3g} mN, more "
