@@ -77,10 +77,13 @@ test: lint browser three avr $(STAMP)
 	@if [ "$$OPENBLAS_CORETYPE" != Nehalem ]; then echo "blas tests, OPENBLAS_CORETYPE=Nehalem"; \
 	    OPENBLAS_CORETYPE=Nehalem $(BLAS_RUN); fi
 
-# The reference firmware (issue 25): Debian's AVR toolchain and simavr, installed here when missing.
-AVR_PACKAGES := gcc-avr avr-libc binutils-avr simavr libsimavr-dev
+# The reference firmware (issue 25): Debian's AVR toolchain and simavr, installed here when missing; and the host's
+# C compiler, which builds the simavr harness and compiles the exported controller in its tests (a slim image has
+# none: gcc-avr does not bring it).
+AVR_PACKAGES := gcc-avr avr-libc binutils-avr simavr libsimavr-dev gcc libc6-dev
 avr:
-	@{ command -v avr-gcc >/dev/null && test -f /usr/lib/avr/include/avr/io.h && test -f /usr/include/simavr/sim_avr.h; } || { \
+	@{ command -v avr-gcc >/dev/null && test -f /usr/lib/avr/include/avr/io.h && test -f /usr/include/simavr/sim_avr.h \
+	    && command -v gcc >/dev/null && test -f /usr/include/stdio.h; } || { \
 	    echo "the firmware and its HIL tests need Debian's $(AVR_PACKAGES): installing them"; \
 	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(AVR_PACKAGES) >/dev/null; } \
 	    || { echo "could not install them: run 'apt-get install $(AVR_PACKAGES)' as root"; exit 1; }

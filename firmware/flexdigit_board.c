@@ -24,9 +24,13 @@
  *   safe state (relax to the equilibrium command, or hold) and `# fault <code> <name>`; cleared by an M line.
  * - PD7 (Uno pin 7) is high while the control update runs: its width is the update's execution time (a pin of
  *   another port than the servo's, so its writes never touch OC1A's port).
+ * - With nothing to do (no byte from the host to read, no control period due), the CPU sleeps in idle mode (the
+ *   timers, the ADC and the UART run on) until the next interrupt: the cycles it sleeps are what is left of the CPU
+ *   (the simavr harness counts them: benchmarks/bench_board.py's idle share), and a real board draws less.
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
+#include <avr/sleep.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -89,13 +93,17 @@ static volatile uint16_t host_idle; /* ms since the last line from the host */
 
 ISR(TIMER2_COMPA_vect)
 {
+    static uint8_t servo_start_in = PULSE_DELAY_MS - 1;
     if (!(TCCR1B & _BV(CS11))) {
-        /* the servo's 50 Hz frame starts here: pulses at (PULSE_DELAY_MS - 1) ms + k x 20 ms from this tick, so
-           PULSE_DELAY_MS after each control tick (the control ticks fall 1 ms before a frame's start) */
-#if PULSE_DELAY_MS > 1
-        TCNT1 = (uint16_t)(SERVO_TOP + 1UL - (PULSE_DELAY_MS - 1UL) * 2000UL);
-#endif
-        TCCR1B |= _BV(CS11);
+        /* the servo's 50 Hz frame starts (PULSE_DELAY_MS - 1) ticks after the first: pulses at (PULSE_DELAY_MS - 1)
+           ms + k x 20 ms from the first tick, so PULSE_DELAY_MS after each control tick (the control ticks fall
+           1 ms before a frame's start). Timer1 is started late rather than preset (TCNT1 written while stopped):
+           simavr 1.6 ignores that write, so the emulated pulse came 1 ms after the tick whatever the delay */
+        if (servo_start_in == 0) {
+            TCCR1B |= _BV(CS11);
+        } else {
+            servo_start_in--;
+        }
     }
     time_ms++;
     if (host_idle < 0xFFFFU) {
@@ -419,6 +427,8 @@ int main(void)
     UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
     UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
     fd_ctrl_reset(&ctrl, (float)FD_CTRL_COMMAND_EQ);
+    /* idle mode (SM2..0 = 000): avr-libc's set_sleep_mode() does not pass -Wconversion */
+    SMCR = (uint8_t)(SMCR & (uint8_t)~(_BV(SM2) | _BV(SM1) | _BV(SM0)));
     sei();
     snprintf(banner, sizeof(banner),
              "# flexdigit-stream %d adc=atmega328p v_per_count=0.0048828125 rate_hz=%lu board=flexdigit-board "
@@ -464,5 +474,15 @@ int main(void)
                 seq++;
             }
         }
+        /* nothing to do: sleep until an interrupt. Checked with interrupts off, and SLEEP follows SEI before any
+           interrupt can run (avr-libc's sleep.h idiom), so work an interrupt brings in between is never slept on */
+        cli();
+        if (rx_tail == rx_head && ticks < CONTROL_DIV) {
+            sleep_enable();
+            sei();
+            sleep_cpu();
+            sleep_disable();
+        }
+        sei();
     }
 }

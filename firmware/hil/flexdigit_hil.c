@@ -18,13 +18,16 @@
  *   U <hex>                     bytes for the firmware's UART receiver (delivered one per BYTE_US of AVR time);
  *                               with --pty, U <n>: n bytes the host wrote to the pty, for the receiver
  *   R <us>                      run the AVR for <us> microseconds of simulated time, then reply
- *       P <t_us> <pulse_cycles> <pulses> <exec_last> <exec_max> <execs> <pin_cycles> <hex of the UART's output>
+ *       P <t_us> <pulse_cycles> <pulses> <exec_last> <exec_max> <execs> <pin_cycles> <idle_cycles> <hex of the
+ *         UART's output>
  *         (with --pty: the number of bytes the UART sent to the pty in this step instead of their hex)
  *         pulse_cycles: width of the servo pulse begun last on PB1 (OC1A), CPU cycles (16 MHz): OCR1A as latched
  *           at the pulse's start (BOTTOM), which is what the hardware does. simavr 1.6 keeps the pin's waveform
  *           at the OCR1A it had when the timer was configured, so pin_cycles (the width seen on the pin) is
  *           reported beside it but not used.
  *         pulses: pulses begun so far; exec_*: width of the high pulses on PD7 (the control update), cycles
+ *         idle_cycles: cycles the CPU has slept so far (the firmware sleeps, SLEEP_MODE_IDLE, whenever it has
+ *           nothing to do: no interrupt, no control period, no host line due): what is left of it for more work
  *   Q                           quit
  *
  * The AVR's clock is its own: nothing here depends on the wall clock, so a run repeats exactly.
@@ -68,6 +71,7 @@ static unsigned char in_buf[4096];
 static size_t in_head, in_len;
 static avr_cycle_count_t pulse_rise, exec_rise;
 static unsigned long pulse_cycles, pulse_latched, pulses, exec_last, exec_max, execs;
+static unsigned long long idle_cycles;
 static FILE *reply;
 static int pty_master = -1, pty_slave = -1;
 #define PTY_TIMEOUT_MS 5000 /* the host's bytes are on their way once it says so: 5 s is a host gone */
@@ -174,6 +178,26 @@ static void exec_pin(struct avr_irq_t *irq, uint32_t value, void *param)
     }
 }
 
+/* The CPU sleeps (SLEEP): simavr skips to its next cycle timer (a peripheral's event, or one of run_us's below)
+   and calls this with the cycles skipped; it then adds 1 + how_long to the clock. simavr's own callback usleeps
+   that long (wall-clock pacing): here the time is only counted, so a run stays in simulated time. */
+static void sleep_counted(avr_t *a, avr_cycle_count_t how_long)
+{
+    (void)a;
+    idle_cycles += 1ULL + how_long;
+}
+
+/* A cycle timer that does nothing: it bounds a sleep, so the CPU wakes no later than run_us's end or its next
+   received byte (both deadlines the harness keeps between avr_run calls). */
+static int end_deadline, byte_deadline; /* the two deadlines' params: simavr keeps one timer per (callback, param) */
+static avr_cycle_count_t deadline(avr_t *a, avr_cycle_count_t when, void *param)
+{
+    (void)a;
+    (void)when;
+    (void)param;
+    return 0;
+}
+
 static int hexval(int c)
 {
     if (c >= '0' && c <= '9') return c - '0';
@@ -187,12 +211,16 @@ static void run_us(unsigned long us)
     avr_cycle_count_t end = avr->cycle + (avr_cycle_count_t)us * (FREQUENCY / 1000000UL);
     avr_cycle_count_t next_byte = avr->cycle;
     avr_irq_t *rx = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+    avr_cycle_timer_register(avr, end - avr->cycle, deadline, &end_deadline);
     while (avr->cycle < end) {
         if (in_len > 0 && avr->cycle >= next_byte) {
             avr_raise_irq(rx, in_buf[in_head]);
             in_head++;
             in_len--;
             next_byte = avr->cycle + BYTE_US * (FREQUENCY / 1000000UL);
+            if (in_len > 0 && next_byte < end) {
+                avr_cycle_timer_register(avr, next_byte - avr->cycle, deadline, &byte_deadline);
+            }
         }
         int state = avr_run(avr);
         if (state == cpu_Done || state == cpu_Crashed) {
@@ -231,6 +259,7 @@ int main(int argc, char **argv)
     avr->frequency = FREQUENCY;
     avr->vcc = avr->aref = 5000;
     avr->avcc = AVCC_UNITS;
+    avr->sleep = sleep_counted;
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), uart_out, NULL);
     avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
     flags &= ~(uint32_t)AVR_UART_FLAG_STDIO;
@@ -281,9 +310,9 @@ int main(int argc, char **argv)
             unsigned long us = strtoul(line + 1, NULL, 10);
             size_t k;
             run_us(us);
-            fprintf(reply, "P %llu %lu %lu %lu %lu %lu %lu ",
+            fprintf(reply, "P %llu %lu %lu %lu %lu %lu %lu %llu ",
                     (unsigned long long)(avr->cycle / (FREQUENCY / 1000000UL)), pulse_latched, pulses, exec_last,
-                    exec_max, execs, pulse_cycles);
+                    exec_max, execs, pulse_cycles, idle_cycles);
             if (use_pty) {
                 if (write_pty() != 0) {
                     fprintf(stderr, "flexdigit_hil: cannot write to the pty (%s)\n", strerror(errno));

@@ -73,23 +73,25 @@ def _random_digit(seed: int) -> dict:
 # undamped (zeta 0.02 with the cable taut) while the scaled calibration kept the thesis's relaxation times, they
 # settle since a digit keeps the thesis rig's modal damping (twin.digit_calibration; docs/digits.md); 23 (one
 # 0.475 m section, 4 gauges, hung), which overshot 21 % while its design model dropped its 200 rad/s mode (above
-# the loop's Nyquist frequency, matched at DC: the model's gauges led the twin's, control.digit_model). Not here: 4
-# (6 sections, 0.38 m, a pair, tip up), whose gauge map leaves the true rotation 0.6 deg off at +30.
-RANDOM = {f"random-{seed}": random_digit(seed) for seed in (6, 9, 11, 18, 21, 23)}
+# the loop's Nyquist frequency, matched at DC: the model's gauges led the twin's, control.digit_model); 4
+# (6 sections, 0.38 m, a pair, 3 quarter bridges, tip up), whose map held the true rotation 0.58 deg short of +30 on
+# seed 0 (29.42 deg): its sweep's gauge drift and a 5-reading tare (0.25 deg of noise on its three coarse gauges),
+# until the sweep was referenced to straight and the tare read a window at rest (rig.rotation).
+RANDOM = {f"random-{seed}": random_digit(seed) for seed in (4, 6, 9, 11, 18, 21, 23)}
 SEEDED = {**{f"seeded-{seed}": _random_digit(seed) for seed in (3, 11)}, **RANDOM}
 ALL = {**DIGITS, **SEEDED}
 #: The twin's seeds each test digit's step is run with (the sweep's twin takes the next one): two, so a design that
 #: settles on one seed's noise by luck does not pass (seed 2 found one-section at 2.1 s and the 0.5 m digit at 1.6 s).
 RUN_SEEDS = ("0", "2")
 #: Runs known to miss the settling, with why; each must still miss it (so that a fix removes it from here). The
-#: one-section digit reads its rotation through one quarter-bridge gauge (0.41 deg of noise a reading, drifting):
-#: its map, fitted on a sweep during which the gauge drifts, is off by up to 0.26 deg at 30 deg depending on the
-#: seed (measured with a 400-reading tare, so not the tare's 5 readings), the loop holds the true rotation that far
-#: off and its jitter (0.16 deg sd after 1 s) leaves the 2 % band (0.6 deg) now and then: which seed misses moves
-#: with every change of the twin or the design (seed 2 at 3 cells and the model cut at Nyquist, seed 1 with the
-#: lowest modes kept, seed 2 again, 1.13 s, with twin.digit.default_cells). docs/digits.md, "Not yet": the map's
-#: error, not the loop's.
-KNOWN_MISSES = {("one-section", 30.0, "2"): "one drifting gauge, its map 0.2 deg off at 30 deg: 1.13 s"}
+#: one-section digit reads its rotation through one quarter-bridge gauge (0.41 deg of noise a reading, drifting).
+#: Its map was off by up to 0.3 deg at 30 deg (the gauge's drift during the sweep, and a 5-reading tare); referenced
+#: to straight and tared on a window at rest it holds 30 deg within 0.01 deg statically (seeds 0-2), but the loop's
+#: jitter on that one noisy gauge (the true rotation's sd 0.18 deg after 1 s: the dithered command, one quantum
+#: 1.67 deg, toggling 25-27) still leaves the 2 % band (0.6 deg) late in some runs: seed 2 at 2.05 s (30.65 deg),
+#: seed 5 at 1.94 s, of seeds 0-7 (before: seeds 2, 3, 4 at 1.08-1.13 s). The loop's noise, not the map's error
+#: (docs/digits.md, "Not yet").
+KNOWN_MISSES = {("one-section", 30.0, "2"): "the loop's jitter on one noisy gauge: 30.65 deg at 2.05 s"}
 
 
 def _write(name: str, directory) -> object:

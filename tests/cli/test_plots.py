@@ -373,8 +373,8 @@ def test_the_readmes_own_digit_commands_end_in_plots(tmp_path, monkeypatch, caps
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     block = readme.split("## Your own digit, plotted", 1)[1].split("\n\n")[1]
     commands = [shlex.split(line, comments=True) for line in block.splitlines() if line.strip()]
-    assert [c[:2] for c in commands] == [["flexdigit", "list"], ["flexdigit", "params"], ["flexdigit", "params"], ["flexdigit", "simulate"],
-                                         ["flexdigit", "run"]]  # fmt: skip
+    expected = [["flexdigit", "list"], ["flexdigit", "params"], ["flexdigit", "params"], ["flexdigit", "simulate"]]
+    assert [c[:2] for c in commands] == [*expected, ["flexdigit", "run"]]
     monkeypatch.chdir(tmp_path)
     for argv in commands:
         assert main(argv[1:]) == 0, (argv, capsys.readouterr().err)

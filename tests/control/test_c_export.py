@@ -328,33 +328,88 @@ def _random_stable(seed: int, n: int, m: int) -> ct.StateSpace:
     return ct.ss(A, rng.normal(size=(n, m)) * 3, rng.normal(size=(1, n)), rng.normal(size=(1, m)), 0.01)
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=24, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     seed=st.integers(0, 2**31 - 1),
     n=st.integers(1, 4),
     m=st.sampled_from([1, 2]),
     antiwindup=st.sampled_from(["none", "back_calculation", "clamp"]),
-    hysteresis=st.sampled_from([0.0, 0.25]),
+    rounding=st.sampled_from(["round", "hysteresis", "dither"]),
     deadband=st.booleans(),
     scale=st.sampled_from([1.0, 30.0, 300.0]),
+    straight=st.sampled_from([8, 127]),
+    gauges=st.integers(0, 6),
 )
 def test_property_float_export_holds_to_the_runtime(
-    tmp_path_factory, seed, n, m, antiwindup, hysteresis, deadband, scale
+    tmp_path_factory, seed, n, m, antiwindup, rounding, deadband, scale, straight, gauges
 ):
+    """Random stable designs, with what ``export controller --params`` gives a digit's: the command rounded
+    plainly, with hysteresis or with the runtime's dither (the carried rounding error), a straight command of 8 or
+    a cable pair's 127, a rotation map over G gauges (0: none; at most the Uno's 6). Each is held to the Python
+    controller sample for sample in C (and its map to the Python map) and built for the AVR without a warning."""
+    import dataclasses
+
+    from flexdigit.params import RigParams
+
     sys = _random_stable(seed, n, m)
     rng = np.random.default_rng(seed)
     kwargs = {}
     if antiwindup == "back_calculation":
-        kwargs = {"aw_gain": rng.normal(size=n) * 0.1, "aw_quantisation": bool(rng.integers(2))}
+        kwargs = {"aw_gain": _stable_aw_gain(sys, rng), "aw_quantisation": bool(rng.integers(2))}
+    hysteresis, dither = (0.25 if rounding == "hysteresis" else 0.0), rounding == "dither"
+    base = RigParams()
+    params = base.replace(actuator=dataclasses.replace(base.actuator, equilibrium_command=straight))
     rc = RuntimeController(
-        sys, antiwindup=antiwindup, hysteresis=hysteresis, deadband=(0, 0.5) if deadband else None, **kwargs
+        sys,
+        params,
+        antiwindup=antiwindup,
+        hysteresis=hysteresis,
+        deadband=(0, 0.5) if deadband else None,
+        dither=dither,
+        **kwargs,
     )
-    spec = ControllerSpec.from_runtime(rc)
+    rotation = (
+        RotationMap(tuple(float(v) for v in rng.uniform(-80, 80, gauges)), float(rng.normal())) if gauges else None
+    )
+    spec = ControllerSpec.from_runtime(rc, rotation)
+    assert spec.dither == dither
+    assert spec.u_eq == straight
     folder = tmp_path_factory.mktemp("prop")
     run = _build(folder, spec)
     r, y = _inputs(rng, 200, scale, m)
     _compare_float(spec, run(zip(r, y, strict=True)), r, y)
+    if rotation is not None:
+        _check_measure(folder, spec, rng.uniform(-2.4, 2.4, gauges))
     _avr_compiles(folder, spec)  # and the same source builds for the board, warning-free
+
+
+def _stable_aw_gain(sys: ct.StateSpace, rng) -> np.ndarray:
+    """A random back-calculation gain L that keeps the design stable when saturated: there the state runs on
+    ``A - L C`` (the command's share of the state fed back), which a random L can make unstable (the state then
+    diverges, and the C export rightly reports it non-finite). Halved until that spectral radius is below 1."""
+    A, C = np.asarray(sys.A), np.asarray(sys.C)
+    L = rng.normal(size=A.shape[0]) * 0.1
+    while np.max(np.abs(np.linalg.eigvals(A - np.outer(L, C)))) >= 0.99:
+        L = L / 2
+    return L
+
+
+def _check_measure(tmp_path, spec, volts) -> None:
+    """The export's map (``ctl_measure``) on gauge volts ``volts`` is the Python map's, to float32 rounding."""
+    g = spec.rotation.gauges
+    (tmp_path / "m.c").write_text(
+        '#include <stdio.h>\n#include "ctl.h"\nint main(void){ const float g[CTL_GAUGES] = {'
+        + ", ".join(f"{float(v)!r}f" for v in volts)
+        + '};\n printf("%.9g\\n", (double)ctl_measure(g)); return 0; }\n'
+    )
+    subprocess.run(
+        [GCC, *CFLAGS, "-o", str(tmp_path / "m"), str(tmp_path / "ctl.c"), str(tmp_path / "m.c")], check=True
+    )
+    got = float(subprocess.run([str(tmp_path / "m")], capture_output=True, text=True, check=True).stdout)
+    want = spec.rotation([float(np.float32(v)) for v in volts])
+    # 2G + 2 float32 operations on terms of at most max|weight| x max|volts| (+ the offset)
+    term = max(abs(w) for w in spec.rotation.coef) * max(2.5, *np.abs(volts)) + abs(spec.rotation.offset)
+    assert got == pytest.approx(want, abs=(2 * g + 2) * 2.0**-24 * term)
 
 
 @pytest.mark.parametrize(  # the thesis's forward-Euler controller has no fixed-point export (its state update
@@ -518,18 +573,7 @@ def test_a_digits_map_over_its_gauges_in_c(tmp_path, digit_export):
     assert "#define CTL_DITHER 1" in h_text
     (tmp_path / "ctl.c").write_text(c_text)
     (tmp_path / "ctl.h").write_text(h_text)
-    volts = [0.25 * (-1) ** i * (i + 1) / g for i in range(g)]
-    (tmp_path / "m.c").write_text(
-        '#include <stdio.h>\n#include "ctl.h"\nint main(void){ const float g[CTL_GAUGES] = {'
-        + ", ".join(f"{v!r}f" for v in volts)
-        + '};\n printf("%.9g\\n", (double)ctl_measure(g)); return 0; }\n'
-    )
-    subprocess.run(
-        [GCC, *CFLAGS, "-o", str(tmp_path / "m"), str(tmp_path / "ctl.c"), str(tmp_path / "m.c")], check=True
-    )
-    got = float(subprocess.run([str(tmp_path / "m")], capture_output=True, text=True, check=True).stdout)
-    want = spec.rotation([float(np.float32(v)) for v in volts])
-    assert got == pytest.approx(want, abs=(2 * g + 2) * 2.0**-24 * 60)  # 2G float32 operations on terms <= 60 deg
+    _check_measure(tmp_path, spec, [0.25 * (-1) ** i * (i + 1) / g for i in range(g)])
     _avr_compiles(tmp_path, spec)
     _avr_compiles(tmp_path, spec, fixed_format(spec, 180.0))
 

@@ -20,14 +20,21 @@ FIRMWARE = Path(__file__).resolve().parents[2] / "firmware"
 TOOLS = ("avr-gcc", "avr-objcopy", "avr-size", "gcc", "make")
 
 
-def build(tmp_root: Path, period_s: float, fmt: str, rotation_map: Path | None, params: Path | None = None) -> Path:
-    """``make -C firmware`` into a fresh directory, the controller exported with ``rotation_map`` (None: calibrated
-    on the twin by the export) for the digit ``params`` (None: the thesis rig); returns the image. Fails (never
-    skips) without the tools."""
+def build(
+    tmp_root: Path,
+    period_s: float,
+    fmt: str,
+    rotation_map: Path | None,
+    params: Path | None = None,
+    out: Path | None = None,
+) -> Path:
+    """``make -C firmware`` into a fresh directory (or ``out``), the controller exported with ``rotation_map`` (None:
+    calibrated on the twin by the export) for the digit ``params`` (None: the thesis rig); returns the image. Fails
+    (never skips) without the tools."""
     missing = [t for t in TOOLS if shutil.which(t) is None]
     assert not missing, f"the firmware tests need {missing}: run 'make avr' (apt-get install gcc-avr avr-libc ...)"
     assert Path("/usr/include/simavr/sim_avr.h").exists(), "the HIL harness needs libsimavr-dev: run 'make avr'"
-    out = tmp_root / f"{fmt}-{int(round(period_s * 1e6))}us{'-' + params.stem if params else ''}"
+    out = out or tmp_root / f"{fmt}-{int(round(period_s * 1e6))}us{'-' + params.stem if params else ''}"
     src = str(Path(flexdigit.__file__).resolve().parents[1])
     env = dict(os.environ, PYTHONPATH=src + os.pathsep + os.environ.get("PYTHONPATH", ""))
     cmd = [
@@ -91,5 +98,16 @@ def digit_firmware(tmp_path_factory):
             params = write_digit(name, root)
             cache[key] = (build(root, period_s, fmt, None, params), params)
         return cache[key]
+
+    return get
+
+
+@pytest.fixture
+def make_image(rotation_map):
+    """``make_image(out, period_s, fmt)``: ``make -C firmware BUILD=out ...`` (no cache), exported with
+    :func:`rotation_map`; returns the image."""
+
+    def get(out: Path, period_s: float, fmt: str) -> Path:
+        return build(out.parent, period_s, fmt, rotation_map, out=out)
 
     return get

@@ -141,7 +141,7 @@ def test_each_fault_ends_in_the_safe_state_within_one_period(firmware, case):
 SETTLING_FRACTION, OVERSHOOT_POINTS = 0.05, 1.0
 #: The noise seeds each loop runs with. One seed decides nothing: a servo command is 1.7 deg of rotation, so one
 #: command more or less at the peak moves the overshoot by ~3 points at 2 ms (the Python loop's 16-bit readings:
-#: 15.0-16.3 % by seed; the board's 10-bit ones: 15.15 % on each seed since its loop's start is dated by the line's
+#: 15.0-16.3 % by seed; the board's 10-bit ones: 15.15 % or 16.28 % since its loop's start is dated by the line's
 #: arrival, 15.1 % or 17.7-19.1 % before: a startup race, docs/board.md), and a peak near the 2 % band moves the
 #: settling by a whole oscillation (the Python loop alone at 20 ms: 0.59-0.75 s over seeds 0-5). So the figures
 #: compared are typical ones over STEP_SEEDS: the median settling time (a discontinuous figure, bimodal by seed)
@@ -212,6 +212,9 @@ def test_run_on_board_cli_says_where_the_loop_ran(firmware, capsys):
     assert doc["status"] == "completed"
     assert doc["board"]["exec_max_cycles"] > 0
     assert doc["board"]["faults"] == []
+    assert 0.5 < doc["board"]["idle_fraction"] < 1.0  # the share of the run its CPU slept (20 ms: ~88 %)
+    assert main(["run", "--on-board", "--backend", f"hil://{elf}", "--duration", "0.5"]) == 0
+    assert capsys.readouterr().out.startswith(f"loop on the board (hil://{elf})")  # the log says it too
     assert main(["run", "--on-board", "--backend", "sim", "--json"]) == 2  # only a board closes the loop
 
 
@@ -304,3 +307,51 @@ def test_the_loops_start_makes_its_first_pulse_wherever_the_line_lands(firmware)
                 f"line at +{k * 0.1:.1f} ms: the pulse after the start tick is {rig.board_command:.2f}, "
                 f"the first update commanded {first.pot}"
             )
+
+
+def test_a_build_with_other_options_is_rebuilt(tmp_path, make_image, rotation_map):
+    """``make`` in a build directory that holds an image of other options rebuilds the export and the image: the
+    period and the format in the new image's header are the ones asked for, not the old build's."""
+    out = tmp_path / "build"
+    make_image(out, 0.020, "float")
+    assert "#define FD_CTRL_PERIOD_US 20000UL" in (out / "ctrl.h").read_text()
+    first = (out / "flexdigit_board.elf").read_bytes()
+    make_image(out, 0.005, "fixed")
+    header = (out / "ctrl.h").read_text()
+    assert "#define FD_CTRL_PERIOD_US 5000UL" in header
+    assert "#define FD_CTRL_FIXED_POINT 1" in header
+    assert (out / "flexdigit_board.elf").read_bytes() != first
+    assert (out / "options").read_text().split() == [
+        "design=digital20", "period_s=0.005", "format=fixed", f"map={rotation_map}", "params=", "calibration=",
+        "pulse_delay_ms=1",
+    ]  # fmt: skip
+
+
+def _idle_share(rig, seconds: float) -> float:
+    """The share of the board's cycles its CPU slept over the next ``seconds`` (the harness counts them)."""
+    cycles, idle = rig.board_cycles, rig.idle_cycles
+    rig.wait(seconds)
+    return (rig.idle_cycles - idle) / (rig.board_cycles - cycles)
+
+
+@pytest.mark.slow
+def test_the_idle_share_is_what_the_update_leaves(firmware):
+    """Two measurements of the emulated ATmega328P that must agree: the cycles its CPU sleeps (the firmware sleeps
+    whenever it has nothing to do) and the width of the PD7 pulse around each control update. The same image with
+    the loop on the board sleeps less than with the host commanding (no update runs) by the updates' cycles, less
+    the rest reading's float division and map the board skips while its loop runs (<= 1000 cycles a period)."""
+    import numpy as np
+
+    period_cycles = 0.002 * 16e6
+    elf = firmware(0.002, "fixed")
+    with open_rig(f"hil://{elf}", mode="host") as rig:
+        rig.wait(0.2)
+        host = _idle_share(rig, 0.5)
+    with open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0) as rig:
+        rig.wait(0.2)
+        n = len(rig.exec_cycles)
+        board = _idle_share(rig, 0.5)
+        update = float(np.mean(rig.exec_cycles[n:]))
+        assert rig.stats()["idle_fraction"] == pytest.approx(rig.idle_cycles / rig.board_cycles)
+    assert 0.0 < board < host < 1.0
+    assert 0.0 <= update - (host - board) * period_cycles <= 1000.0

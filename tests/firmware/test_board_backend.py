@@ -65,7 +65,7 @@ class Emulator:
                 self.told = self.port.written
             self.proc.stdin.write(request + f"R {STEP_US}\n")
             self.proc.stdin.flush()
-            self.sent += int(self.proc.stdout.readline().split()[8])
+            self.sent += int(self.proc.stdout.readline().split()[-1])  # the reply ends with the bytes sent
             self.t_s += STEP_US * 1e-6
             # what the board sent is on the pty before the rig looks: its reads repeat exactly
             deadline = time.monotonic() + PTY_WAIT_S

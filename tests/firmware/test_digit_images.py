@@ -25,6 +25,12 @@ SETTLING_LIMIT_S, OVERSHOOT_LIMIT_PERCENT, FINAL_FRACTION = 1.0, 10.0, 0.02
 #: Share of board periods whose command may differ (by one) from the Python controller's: a float32 rounding can
 #: land the dithered command on the other side of a half-integer (tests/control/test_c_export.py).
 COMMAND_MISMATCH_FRACTION = 0.05
+#: One ADC conversion at the firmware's 125 kHz ADC clock, s: 13 clocks (ATmega328P datasheet 24.4); the CPU's clock.
+CONVERSION_S, F_CPU_HZ = 13 / 125e3, 16e6
+#: A bound on the rotation map's time, s: 2G float32 operations of avr-gcc's soft float (~150 cycles each) for G <= 6.
+MAP_S = 12 * 150 / 16e6
+#: How late after it rose the host sees a pulse, s: at the end of the exchange steps (0.5 ms each) it rose in.
+PULSE_SEEN_WITHIN_S = 0.002
 
 
 def _on_board(capsys, elf, params, setpoint: float) -> dict:
@@ -59,6 +65,11 @@ def test_a_digits_image_holds_its_30_deg_step_on_the_board(digit_firmware, capsy
     straight = 127 if name.startswith("four") else 8
     # the command held: above the straight command for +30 deg, below it for -30 (the pair's signed command)
     assert (doc["final_command"] - straight) * setpoint > 0
+    # each period's command is ready before Timer1 latches it, PULSE_DELAY_MS after the tick: the tick's G
+    # conversions, the map (~2G float operations, < MAP_S) and the update (its widest PD7 pulse) fit in the delay
+    banner = " ".join(doc["board"]["info_lines"])
+    delay_s = int(banner.split("pulse_delay_ms=")[1].split()[0]) / 1000
+    assert gauges * CONVERSION_S + MAP_S + doc["board"]["exec_max_cycles"] / F_CPU_HZ < delay_s
 
 
 @pytest.mark.slow
@@ -127,3 +138,41 @@ def test_the_hosts_loop_through_a_digits_image(digit_firmware, capsys):
     assert doc["loop"] == "host"
     assert abs(doc["true_final_rotation_deg"] - 30.0) < FINAL_FRACTION * 30.0
     assert doc["step_metrics"]["true"]["settling_time_s"] < SETTLING_LIMIT_S
+
+
+@pytest.mark.slow
+def test_a_digits_pulse_carries_its_own_periods_command(digit_firmware):
+    """The servo pulse starts the banner's delay after the control tick (Timer1 started that late: simavr ignores
+    a preset TCNT1, which had left every pulse 1 ms after its tick) and carries the command of that tick's update,
+    which the board streamed for that tick."""
+    from flexdigit.params import load_params
+    from flexdigit.rig.base import open_rig
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    elf, path = digit_firmware("six-gauges-geared", 0.020, "float")
+    params = load_params(path)
+    step_s = 0.0005
+    with open_rig(f"hil://{elf}", params, mode="board", setpoint_deg=30.0, calibration=twin_calibration(params)) as rig:
+        banner = " ".join(rig.info_lines)
+        delay_s = int(banner.split("pulse_delay_ms=")[1].split()[0]) / 1000
+        assert delay_s == 0.005
+        rig.wait(0.2)
+        pulses = []
+        while len(pulses) < 30:  # 0.6 s of the step: the command changes from period to period
+            count = rig.pulses
+            rig.wait(step_s)
+            if rig.pulses != count:
+                pulses.append((rig.board_cycles / F_CPU_HZ, rig.board_command))  # the AVR's time, as its lines'
+        rig.wait(0.05)  # the last periods' lines
+        by_tick = {round(s.t_us / 1000): s.pot for s in rig.samples}
+    changed = 0
+    for t, command in pulses:
+        tick_ms = 20 * round((t - delay_s) * 1000 / 20)  # the control ticks, every 20 ms (the lines' times)
+        # seen at the end of the exchange steps the pulse rose in (a wait of 0.5 ms may run up to ~1 ms of them):
+        # a pulse 1 ms after its tick, as before, would be 4 ms early
+        lag_s = t - delay_s - tick_ms / 1000
+        assert 0 <= lag_s <= PULSE_SEEN_WITHIN_S, f"pulse seen at {t:.5f} s: not {delay_s} s after a tick"
+        assert tick_ms in by_tick
+        assert command == pytest.approx(by_tick[tick_ms], abs=0.07)  # the 0.5 us pulse step
+        changed += by_tick[tick_ms] != by_tick.get(tick_ms - 20)
+    assert changed >= 5  # the commands moved: a pulse one period late would show

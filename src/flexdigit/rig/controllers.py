@@ -10,13 +10,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-import numpy as np
-
 from flexdigit._validation import Plausible, check_choice, check_param, check_positive
 from flexdigit.models.conversion import k3_printed_mm_per_v
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Reading, Rig
-from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation
+from flexdigit.rig.rotation import RotationEstimator, calibrate_rotation, tare_at_rest
 from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = ["CONTROLLERS", "make_controller"]
@@ -85,8 +83,7 @@ def make_controller(
     orientation = twin.orientation if twin is not None else "vertical"
     if estimator is None:
         estimator = calibrate_rotation(rig)
-    rest = [rig.read().gauges_v for _ in range(5)]
-    estimator.tare(rest)
+    rest_v = tare_at_rest(estimator, rig)  # the digit at rest at its straight command reads 0 deg
     eq = int(params.actuator.equilibrium_command)
     if name == "digital20":
         measured = getattr(estimator, "deg_per_command_", None)  # the sweep's rotation per command, if it has one
@@ -107,7 +104,7 @@ def make_controller(
         runtime = design.runtime(params, name=name, dither=params != RigParams())
         return _Wrapped(runtime, estimator, 1.0, gain, eq)
     method = "forward_euler" if name.endswith("euler") else "tustin"
-    measure = _gauge1_deflection_m(params, float(np.mean([g[0] for g in rest])))
+    measure = _gauge1_deflection_m(params, float(rest_v[0]))
     # metres of gauge-1 deflection per degree: K3 (m/V) x the sweep's gauge-1 volts per degree
     scale = k3_printed_mm_per_v()[0] / 1000.0 * float(estimator.gauge_v_per_deg_[0])
     return _Wrapped(thesis_controller(method, period_s, params), measure, scale, gain, eq)

@@ -54,6 +54,9 @@ __all__ = [
     "MAP_FORMAT",
     "SWEEP_COMMANDS",
     "sweep_commands",
+    "sweep_protocol",
+    "SWEEPS",
+    "tare_at_rest",
 ]
 
 MAP_FORMAT = "flexdigit-rotation-map/1"
@@ -75,6 +78,35 @@ def sweep_commands(params=None) -> tuple[int, ...]:
     ks = range(-8, 9, 2) if params.cables.count == 2 else range(9)
     commands = sorted({min(max(a.equilibrium_command + k * step, a.command_min), a.command_max) for k in ks})
     return tuple(int(c) for c in commands)
+
+
+#: The calibration sweep's protocols (:func:`calibrate_rotation`'s ``sweep``): ``"plain"`` visits the commands once,
+#: in order (the thesis rig's, whose report it makes); ``"referenced"`` returns to the straight command between
+#: them, so each reading is taken against the gauges' drift at straight just before and after it.
+SWEEPS = ("plain", "referenced")
+
+
+def sweep_protocol(params=None, reference="twin") -> str:
+    """The sweep :func:`calibrate_rotation` runs by default: ``"referenced"`` for a digit other than the thesis rig
+    mapped on its twin, ``"plain"`` on the thesis rig (the protocol its report, ``flexdigit reproduce``, was made
+    with) and for a protractor or a measured reference (read to 1 deg or 0.5 mm, far coarser than the drift).
+
+    Why: a gauge's amplifier drifts (a random walk, ``noise_drift_v_per_sqrt_s``), and over a plain sweep the drift
+    leans the fitted slope. One coarse quarter bridge (the one-section test digit: 4.8 mV a degree, 0.2 mV/sqrt(s) of
+    drift) ends a 10 s sweep 0.13 deg off, and its map's sensitivity scatters 0.54 % (sd) between twin seeds, 1 %
+    at worst: 0.16-0.3 deg at 30 deg. Referenced to straight before and after each command, it scatters 0.09 %
+    (0.2 % at worst; 10 seeds each, /tmp measurements quoted in docs/digits.md).
+
+    Examples
+    --------
+    >>> from flexdigit.params import RigParams
+    >>> pair = RigParams.from_dict({"cables": {"count": 2, "pretension_n": 3.0}})
+    >>> sweep_protocol(RigParams()), sweep_protocol(pair), sweep_protocol(pair, reference=lambda command: 0.0)
+    ('plain', 'referenced', 'plain')
+    """
+    params = params or RigParams()
+    twin = isinstance(reference, str) and reference == "twin"
+    return "referenced" if twin and params != RigParams() else "plain"
 
 
 #: Draws of the Monte Carlo that propagates the reference's and the readings' uncertainty into the map.
@@ -112,6 +144,12 @@ class RotationEstimator:
         Per-gauge noise standard deviation (V) for the Gauss-Markov weights; equal weights if None.
     ridge : float
         Tikhonov term of ``"lstsq"`` (unused by ``"sensitivity"``).
+    degree : {1, 2}
+        ``"sensitivity"`` only. 1: each gauge linear in the rotation (the affine map). 2: each gauge
+        ``g = a + s theta + c theta^2`` (a quarter bridge of a cable pair reads the cables' summed tension, which
+        grows on both sides of straight once one cable slackens: a V the affine map splits into 0.3 deg errors at
+        +-30 deg, ``random_digit(20)``). The map then reads ``u = w . g + b = theta + q theta^2`` (``q = w . c``,
+        ``quadratic_``) and inverts it exactly, ``theta = 2 u / (1 + sqrt(1 + 4 q u))``; the tare is on ``u``.
 
     Examples
     --------
@@ -121,11 +159,14 @@ class RotationEstimator:
     """
 
     METHODS = ("sensitivity", "lstsq")
+    #: The map's reading's curvature, deg per deg^2 (``degree`` 2; 0 for an affine map).
+    quadratic_ = 0.0
 
-    def __init__(self, method: str = "sensitivity", noise_v=None, ridge: float = 1e-9) -> None:
+    def __init__(self, method: str = "sensitivity", noise_v=None, ridge: float = 1e-9, degree: int = 1) -> None:
         self.method = method
         self.noise_v = noise_v
         self.ridge = ridge
+        self.degree = degree
 
     def fit(self, gauges_v, rotation_deg, *, rotation_cov_deg2=None, gauges_sd_v=None) -> RotationEstimator:
         """Fit the map to gauge readings (n, G) at reference rotations (n,).
@@ -151,7 +192,16 @@ class RotationEstimator:
             )
         # each gauge's volts per degree along the sweep (least-squares slopes): the sensitivities s
         sens = ((X - X.mean(axis=0)).T @ yc) / float(yc @ yc)
+        offset = X.mean(axis=0) - sens * y.mean()  # gauges at 0 deg
+        curvature = np.zeros(gauges)
+        if self.degree not in (1, 2) or isinstance(self.degree, bool):
+            raise ParameterError(f"The 'degree' parameter of RotationEstimator must be 1 or 2. Got {self.degree!r}.")
+        if self.degree == 2:
+            if self.method != "sensitivity" or y.size < 5 or np.unique(y).size < 3:
+                raise DataFileError("RotationEstimator.fit: degree 2 needs method 'sensitivity' and >= 3 rotations")
+            offset, sens, curvature = np.linalg.lstsq(np.c_[np.ones(y.size), y, y * y], X, rcond=None)[0]
         self.gauge_v_per_deg_ = sens
+        self.gauge_v_per_deg2_ = curvature
         if self.method == "sensitivity":
             if self.noise_v is None:
                 weight = np.ones(gauges)
@@ -163,7 +213,6 @@ class RotationEstimator:
             information = float(sens @ (weight * sens))
             if not information > 0:
                 raise DataFileError("RotationEstimator.fit: the gauges did not change over the sweep")
-            offset = X.mean(axis=0) - sens * y.mean()  # gauges at 0 deg
             self.coef_ = weight * sens / information
             self.intercept_ = float(-self.coef_ @ offset)
         else:
@@ -173,8 +222,9 @@ class RotationEstimator:
             coef = np.linalg.solve(A.T @ A + reg, A.T @ y)
             self.coef_ = coef[:gauges]
             self.intercept_ = float(coef[gauges])
-        self.residual_deg_ = float(np.sqrt(np.mean((X @ self.coef_ + self.intercept_ - y) ** 2)))
+        self.quadratic_ = float(self.coef_ @ curvature)
         self.tare_deg_ = 0.0
+        self.residual_deg_ = float(np.sqrt(np.mean((self.predict(X) - y) ** 2)))
         n = y.size
         cov = np.zeros((n, n)) if rotation_cov_deg2 is None else np.asarray(rotation_cov_deg2, dtype=float)
         sd = np.zeros((n, gauges)) if gauges_sd_v is None else np.asarray(gauges_sd_v, dtype=float)
@@ -208,13 +258,19 @@ class RotationEstimator:
         except np.linalg.LinAlgError:
             chol = np.diag(np.sqrt(np.clip(np.diag(self.rotation_cov_deg2_), 0.0, None)))
         sens, offset = self.gauge_v_per_deg_, X.mean(axis=0) - self.gauge_v_per_deg_ * y.mean()
+        if self.degree == 2:  # the gauge curves fitted now: offsets (0 deg), slopes and curvatures
+            offset, sens, curvature = np.linalg.lstsq(np.c_[np.ones(n), y, y * y], X, rcond=None)[0]
         held = np.empty(UNCERTAINTY_DRAWS)
         for k in range(UNCERTAINTY_DRAWS):
             y_k = y + chol @ rng.standard_normal(n)
             X_k = X + self.gauges_sd_v_ * rng.standard_normal(X.shape)
-            m = RotationEstimator(self.method, self.noise_v, self.ridge).fit(X_k, y_k)
-            # the refitted map reads `at` where w'(a + s theta) + b' = at, on the gauge lines fitted now
-            held[k] = (at - m.intercept_ - m.coef_ @ offset) / (m.coef_ @ sens)
+            m = RotationEstimator(self.method, self.noise_v, self.ridge, self.degree).fit(X_k, y_k)
+            if self.degree == 1:
+                # the refitted map reads `at` where w'(a + s theta) + b' = at, on the gauge lines fitted now
+                held[k] = (at - m.intercept_ - m.coef_ @ offset) / (m.coef_ @ sens)
+            else:  # ... where w'(a + s theta + c theta^2) + b' = at + q' at^2, on the gauge curves fitted now
+                r = at + m.quadratic_ * at * at - m.intercept_ - m.coef_ @ offset
+                held[k] = _quadratic_root(float(m.coef_ @ sens), float(m.coef_ @ curvature), r)
         spread = float(np.std(held))
         dof = n - 2
         if dof > 0:
@@ -231,20 +287,28 @@ class RotationEstimator:
         return spread
 
     def predict(self, gauges_v) -> np.ndarray:
-        return np.asarray(gauges_v, dtype=float) @ self.coef_ + self.intercept_ - self.tare_deg_
+        u = np.asarray(gauges_v, dtype=float) @ self.coef_ + self.intercept_ - self.tare_deg_
+        q = getattr(self, "quadratic_", 0.0)
+        return u if q == 0.0 else 2.0 * u / (1.0 + np.sqrt(np.maximum(1.0 + 4.0 * q * u, 0.0)))
 
     def predict_one(self, gauges_v: np.ndarray) -> float:
         g = gauges_v
         c = self.coef_
         if c.size == 3:  # the thesis rig's, as ever (the loop's hot path)
-            return float(g[0] * c[0] + g[1] * c[1] + g[2] * c[2]) + self.intercept_ - self.tare_deg_
-        return float(np.dot(g, c)) + self.intercept_ - self.tare_deg_
+            u = float(g[0] * c[0] + g[1] * c[1] + g[2] * c[2]) + self.intercept_ - self.tare_deg_
+        else:
+            u = float(np.dot(g, c)) + self.intercept_ - self.tare_deg_
+        q = self.quadratic_
+        return u if q == 0.0 else 2.0 * u / (1.0 + math.sqrt(max(1.0 + 4.0 * q * u, 0.0)))
 
     def tare(self, gauges_v, at_deg: float = 0.0) -> RotationEstimator:
-        """Shift the map so ``gauges_v`` (mean of rows) reads ``at_deg``."""
+        """Shift the map so ``gauges_v`` (mean of rows) reads ``at_deg`` (the shift is on the map's linear
+        reading ``u``: ``at + q at^2`` there)."""
         g = np.atleast_2d(np.asarray(gauges_v, dtype=float)).mean(axis=0)
+        q, self.quadratic_ = self.quadratic_, 0.0
         self.tare_deg_ = 0.0
-        self.tare_deg_ = float(self.predict_one(g) - at_deg)
+        self.tare_deg_ = float(self.predict_one(g) - (at_deg + q * at_deg * at_deg if q else at_deg))
+        self.quadratic_ = q
         return self
 
     def __call__(self, reading: Reading) -> float:
@@ -260,6 +324,8 @@ class RotationEstimator:
             "gauge_v_per_deg": self.gauge_v_per_deg_.tolist(),
             "residual_deg": self.residual_deg_ if math.isfinite(self.residual_deg_) else None,
         }
+        if self.degree == 2:  # an affine map's file stays as it was
+            out.update(degree=2, quadratic=self.quadratic_, gauge_v_per_deg2=self.gauge_v_per_deg2_.tolist())
         if hasattr(self, "rotation_deg_"):  # the sweep it was fitted on: its uncertainty can be told again
             out["gauges_v"] = self.gauges_v_.tolist()
             out["rotation_deg"] = self.rotation_deg_.tolist()
@@ -276,8 +342,9 @@ class RotationEstimator:
 
 
 #: Where a map came from, kept with it (set by :func:`calibrate_rotation`): the source, the sweep's commands, the
-#: time each reading waited for the digit to settle, and the rotation per command the sweep measured.
-_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command")
+#: time each reading waited for the digit to settle (each visit's, straight ones included, for a referenced sweep),
+#: the rotation per command the sweep measured and, where it was not the plain one, the sweep's protocol.
+_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command", "sweep")
 
 
 @dataclass(frozen=True)
@@ -351,6 +418,31 @@ def wait_until_settled(
                 f"{worst + 1}: spread {spread[worst] * 1000:.2f} mV and drift {drift[worst] * 1000:+.2f} mV over "
                 f"{window:g} s, against noise {noise[worst] * 1000:.2f} mV)"
             )
+
+
+#: Readings of the thesis rig's tare (its chapter-5 runs and report: kept as they were).
+THESIS_TARE_READINGS = 5
+
+
+def tare_at_rest(estimator: RotationEstimator, rig: Rig, *, window_s: float = 1.0) -> np.ndarray:
+    """Tare ``estimator`` on ``rig`` at rest where it stands (the straight command: 0 deg by definition).
+
+    On the thesis rig, the mean of :data:`THESIS_TARE_READINGS` readings (its runs and report as they were). On any
+    other digit, the mean of a window of ``window_s`` at rest (:func:`wait_until_settled`, which also checks that
+    the digit is at rest): five readings leave the tare as noisy as ``noise / sqrt(5)``, 0.19 deg on one coarse
+    quarter bridge (0.41 deg a reading) and 0.25 deg on ``random_digit(4)``'s three, an offset the loop then holds
+    for the whole run; a 1 s window's 50 readings leave 0.06 and 0.08 deg, and the gauges' drift over the window
+    (0.04 deg/sqrt(s) on the coarse gauge) about as much again: near the least total for that gauge
+    (``window = sqrt(3 white^2 / (rate drift^2))``, 2.4 s, 0.053 deg).
+
+    Returns the gauges (V) the map was tared on, the mean of the readings (:meth:`RotationEstimator.tare`).
+    """
+    if rig.params == RigParams():
+        rest = np.asarray([rig.read().gauges_v for _ in range(THESIS_TARE_READINGS)])
+    else:
+        rest = wait_until_settled(rig, window_s=window_s, timeout_s=settle_timeout_s(rig)).gauges_v[None, :]
+    estimator.tare(rest)
+    return rest.mean(axis=0)
 
 
 def make_rotation_map(
@@ -449,6 +541,7 @@ def calibrate_rotation(
     timeout_s: float | None = None,
     reference_sd_deg: float | None = None,
     angle_source: Callable[[int], float] | None = None,
+    sweep: str | None = None,
 ) -> RotationEstimator:
     """Static calibration sweep: hold each command, wait for the digit to settle, read, fit gauges -> rotation.
 
@@ -472,6 +565,13 @@ def calibrate_rotation(
         Standard uncertainty of a callable reference's rotations (deg): a 1 deg protractor's 0.29 by default.
     angle_source : callable, optional
         Same as a callable ``reference`` (the earlier name).
+    sweep : {"plain", "referenced"}, optional
+        ``"plain"``: each command once, in order. ``"referenced"``: the straight command before, between and after
+        the others, each reading corrected by the gauges (and the reference) at straight interpolated to its time:
+        a drift slow against a command's settling cancels, at the cost of twice the settles. Default
+        :func:`sweep_protocol` (referenced on a digit other than the thesis rig mapped on its twin) when readings
+        are taken at rest (``settle_s`` None), plain after a fixed wait (the report's chapter-5 studies); a
+        referenced sweep with a fixed wait is refused.
 
     Returns
     -------
@@ -479,6 +579,7 @@ def calibrate_rotation(
         Fitted, with ``source_``, ``commands_``, ``settle_time_s_`` (per reading) and ``deg_per_command_`` (the
         reference's rotation per command over the sweep) set, and :meth:`~RotationEstimator.uncertainty_deg`.
     """
+    owner = "calibrate_rotation"
     if angle_source is not None:
         reference = angle_source
     if timeout_s is None:
@@ -492,28 +593,73 @@ def calibrate_rotation(
             est = RotationEstimator().fit(reference.gauges_v, reference.rotation_deg, rotation_cov_deg2=cov)
             return _provenance(est, source, commands, [math.nan] * len(commands), reference.rotation_deg)
         angle = reference.angle_source()
-    elif isinstance(reference, str) and reference == "twin":
-        truth = _twin_truth(rig)
-        angle = None
-        source = "twin (its own tip rotation)"
-    elif callable(reference):
-        angle = reference
-        sd = ROTATION_RESOLUTION_DEG / math.sqrt(12) if reference_sd_deg is None else reference_sd_deg
-        sd = check_real(sd, "reference_sd_deg", "calibrate_rotation", low=0.0)
-        source = "operator (measured at each command)"
     else:
-        raise ParameterError(
-            "The 'reference' parameter of calibrate_rotation must be 'twin', a MeasuredReference or a callable. "
-            f"Got {reference!r} instead."
-        )
+        angle, truth, source, sd = _twin_or_operator(rig, reference, reference_sd_deg)
     commands = [int(c) for c in (sweep_commands(rig.params) if commands is None else commands)]
-    X, sd_v, y, waited = _sweep(
-        rig, commands, angle, truth, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
+    default = sweep_protocol(rig.params, reference) if settle_s is None else "plain"  # a fixed wait: as it was
+    sweep = check_choice(default if sweep is None else sweep, "sweep", SWEEPS, owner)
+    X, sd_v, y, waited = _run_sweep(
+        rig, commands, angle, truth, sweep, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
     )
     if cov is None and callable(reference) and not isinstance(reference, str):
         cov = np.eye(len(commands)) * sd**2
     est = RotationEstimator().fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=np.asarray(sd_v))
-    return _provenance(est, source, commands, waited, np.asarray(y))
+    if sweep == "referenced":
+        est = _curved_if_material(est, cov, np.asarray(sd_v))
+    est = _provenance(est, source, commands, waited, np.asarray(y))
+    if sweep != "plain":  # a plain sweep's map reads as before (the thesis rig's saved maps and logs unchanged)
+        est.sweep_ = sweep
+    return est
+
+
+#: How far (deg, anywhere on the sweep, both maps tared at straight) the map with each gauge's quadratic term must
+#: read from the affine one for the term to be kept: 3 standard deviations of that difference from the readings'
+#: noise alone on the coarsest test digit (one quarter bridge, 0.06 deg a referenced point), so a straight gauge
+#: keeps the affine map (and its variance) and a curved one (``random_digit(20)``: 0.33 deg at +-30 deg) does not.
+CURVATURE_MATERIAL_DEG = 0.15
+#: Two-sided level at which the sweep's curvature must be significant too (the t statistic of ``u^2`` in the
+#: reference rotations regressed on ``1, u, u^2``, ``u`` the affine map's reading): a lightly damped digit's readings
+#: scatter more than the threshold above assumes (``random_digit(18)``: 0.11 deg a point, t = 2.2 on one seed,
+#: where ``random_digit(20)``'s curve gives t = 10-17).
+CURVATURE_LEVEL = 0.01
+
+
+def _curved_if_material(affine: RotationEstimator, cov, sd_v) -> RotationEstimator:
+    """The map with each gauge's quadratic term (``degree=2``) where the sweep's curvature is significant at
+    :data:`CURVATURE_LEVEL` and that map reads more than :data:`CURVATURE_MATERIAL_DEG` from ``affine`` somewhere on
+    the sweep, else ``affine``."""
+    from scipy.stats import t as student_t
+
+    X, y = affine.gauges_v_, affine.rotation_deg_
+    dof = y.size - 3
+    if dof < 2 or np.unique(y).size < 3:
+        return affine
+    u = affine.predict(X)
+    A = np.c_[np.ones_like(u), u, u * u]
+    fit, *_ = np.linalg.lstsq(A, y, rcond=None)
+    residual = y - A @ fit
+    variance = float(residual @ residual) / dof * np.linalg.pinv(A.T @ A)[2, 2]
+    if not abs(fit[2]) > student_t.ppf(1 - CURVATURE_LEVEL / 2, dof) * math.sqrt(variance):
+        return affine
+    curved = RotationEstimator(degree=2).fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=sd_v)
+    straight = X[int(np.argmin(np.abs(y)))]
+    gap = curved.tare(straight).predict(X) - affine.tare(straight).predict(X)
+    curved.tare_deg_ = affine.tare_deg_ = 0.0
+    return curved if float(np.max(np.abs(gap))) > CURVATURE_MATERIAL_DEG else affine
+
+
+def _twin_or_operator(rig: Rig, reference, reference_sd_deg):
+    """``(angle, truth, source, sd)`` of the ``"twin"`` or a callable reference of :func:`calibrate_rotation`."""
+    if isinstance(reference, str) and reference == "twin":
+        return None, _twin_truth(rig), "twin (its own tip rotation)", None
+    if callable(reference):
+        sd = ROTATION_RESOLUTION_DEG / math.sqrt(12) if reference_sd_deg is None else reference_sd_deg
+        sd = check_real(sd, "reference_sd_deg", "calibrate_rotation", low=0.0)
+        return reference, None, "operator (measured at each command)", sd
+    raise ParameterError(
+        "The 'reference' parameter of calibrate_rotation must be 'twin', a MeasuredReference or a callable. "
+        f"Got {reference!r} instead."
+    )
 
 
 def _measured_commands(reference, commands) -> list:
@@ -535,6 +681,17 @@ def _twin_truth(rig: Rig) -> Callable[[], float]:
             "rotations or deflections, or ask the operator with a protractor)"
         )
     return truth
+
+
+def _run_sweep(rig: Rig, commands, angle, truth, sweep: str, *, settle_s, samples, window_s, timeout_s):
+    """:func:`_sweep` or :func:`_sweep_referenced`, as ``sweep`` says (the referenced one only at rest)."""
+    if sweep == "plain":
+        return _sweep(
+            rig, commands, angle, truth, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
+        )
+    if settle_s is not None:
+        raise ParameterError("calibrate_rotation: sweep='referenced' reads the digit at rest; give settle_s=None")
+    return _sweep_referenced(rig, commands, angle, truth, window_s=window_s, timeout_s=timeout_s)
 
 
 def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, timeout_s):
@@ -570,6 +727,53 @@ def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, tim
         wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
     else:
         rig.wait(settle_s)
+    return X, sd_v, y, waited
+
+
+def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s):
+    """:func:`_sweep` with the straight command read before, between and after the others (``sweep="referenced"``).
+
+    Each reading (gauges, and the reference rotation) is taken against the straight readings just before and after
+    it: their values linearly interpolated to its time are its drift since the mean straight reading, subtracted
+    (the classical A-B-A drift correction of weighing and of strain-gauge zero checks). The straight command itself
+    is represented by the mean of its readings. Returns :func:`_sweep`'s lists, one row per command of
+    ``commands``; the waits are per visit (every visit's, in order).
+    """
+    straight = int(rig.params.actuator.equilibrium_command)
+    visits = [straight]
+    for command in commands:
+        if command != straight:
+            visits += [command, straight]
+    gauges, sds, rotations, times, waited = [], [], [], [], []
+    for command in visits:
+        rig.write_command(command)
+        settled = wait_until_settled(
+            rig, window_s=window_s, timeout_s=timeout_s, truth=truth if angle is None else None
+        )
+        gauges.append(settled.gauges_v)
+        sds.append(settled.sd_v)
+        waited.append(settled.waited_s)
+        rotations.append(settled.truth_deg if angle is None else float(angle(command)))
+        times.append(rig.clock() - window_s / 2)  # the window's middle: only differences between visits matter
+    rig.relax()
+    wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
+    G, S, Y, T = np.asarray(gauges), np.asarray(sds), np.asarray(rotations), np.asarray(times)
+    at = np.array([c == straight for c in visits])
+    # the straight readings' drift from their mean, interpolated to every visit
+    drift_v = np.column_stack([np.interp(T, T[at], G[at, g] - G[at, g].mean()) for g in range(G.shape[1])])
+    drift_deg = np.interp(T, T[at], Y[at] - Y[at].mean())
+    straight_sd = np.sqrt(np.mean(S[at] ** 2, axis=0))
+    X, sd_v, y = [], [], []
+    for command in commands:
+        if command == straight:
+            X.append(G[at].mean(axis=0))
+            sd_v.append(np.sqrt(np.sum(S[at] ** 2, axis=0)) / at.sum())
+            y.append(float(Y[at].mean()))
+        else:
+            k = visits.index(command, 1)
+            X.append(G[k] - drift_v[k])
+            sd_v.append(np.hypot(S[k], straight_sd))
+            y.append(float(Y[k] - drift_deg[k]))
     return X, sd_v, y, waited
 
 
@@ -609,6 +813,11 @@ def load_rotation_map(path) -> RotationEstimator:
 _EXPECTED = "expected a flexdigit rotation map: coef[G], intercept, gauge_v_per_deg[G] (G = 1..8 gauges)"
 
 
+def _quadratic_root(slope: float, curvature: float, r: float) -> float:
+    """The root of ``curvature x^2 + slope x = r`` that tends to ``r / slope`` as ``curvature`` -> 0 (slope > 0)."""
+    return 2.0 * r / (slope + math.sqrt(max(slope * slope + 4.0 * curvature * r, 0.0)))
+
+
 def _from_dict(cls, data, source: str) -> RotationEstimator:
     """:meth:`RotationEstimator.from_dict`."""
     if not isinstance(data, dict):
@@ -616,6 +825,7 @@ def _from_dict(cls, data, source: str) -> RotationEstimator:
     if data.get("format", MAP_FORMAT) != MAP_FORMAT:
         raise DataFileError(f"{source}: format {data.get('format')!r}; this flexdigit reads {MAP_FORMAT!r}")
     known = {"format", "method", "coef", "intercept", "gauge_v_per_deg", "residual_deg", "gauges_v", "rotation_deg"}
+    known |= {"degree", "quadratic", "gauge_v_per_deg2"}
     known |= {"rotation_cov_deg2", "gauges_sd_v", *_PROVENANCE}
     unknown = sorted(set(data) - known)
     if unknown:
@@ -641,6 +851,16 @@ def _from_dict(cls, data, source: str) -> RotationEstimator:
     if not np.any(est.coef_ != 0) or not abs(est.coef_ @ est.gauge_v_per_deg_) > 0:
         raise DataFileError(f"{source}: the map's 'coef' {est.coef_.tolist()} read no rotation from the gauges")
     est.tare_deg_ = 0.0
+    est.quadratic_ = 0.0
+    if data.get("degree", 1) not in (1, 2):
+        raise DataFileError(f"{source}: 'degree' must be 1 or 2; got {data.get('degree')!r:.40}")
+    if data.get("degree", 1) == 2:
+        for key in ("quadratic", "gauge_v_per_deg2"):
+            if key not in data:
+                raise DataFileError(f"{source}: 'degree' 2 without {key!r}; {_EXPECTED}")
+        est.degree = 2
+        est.quadratic_ = float(array("quadratic", ()))
+        est.gauge_v_per_deg2_ = array("gauge_v_per_deg2", (gauges,))
     residual = data.get("residual_deg")
     est.residual_deg_ = float(residual) if isinstance(residual, int | float) else math.nan
     if "rotation_deg" in data:

@@ -15,6 +15,10 @@ every ``step_s`` (0.5 ms) of AVR time it
 3. turns the pulse width into the servo's command (1..2 ms over 0..254, unrounded: Timer1's 0.5 us resolution is
    finer than the serial board's command) and advances the twin ``step_s``.
 
+The harness also counts the cycles the board's CPU sleeps (the firmware sleeps whenever it has nothing to do):
+:attr:`HilRig.idle_cycles` against :attr:`HilRig.board_cycles`, the share ``stats()`` reports as ``idle_fraction``
+(what is left of the CPU: ``python -m benchmarks bench_board``).
+
 A digit of issue 24 (``params``, ``flexdigit run --on-board --params D.toml``) runs on an image built for it
 (``make firmware PARAMS=D.toml``); the board's banner says what its image was built for (gauges, straight command,
 range), and another digit's image is refused in one line (:func:`~flexdigit.rig.backends.board_link.check_board_image`).
@@ -211,6 +215,10 @@ class HilRig(Rig):
         self.pulses = 0
         self.exec_max_cycles = 0
         self.exec_cycles: list[int] = []
+        #: the board's clock and the cycles its CPU has slept (idle) so far, both from its start: the idle share
+        #: of a stretch of a run is the difference of ``idle_cycles`` over that of ``board_cycles``
+        self.board_cycles = 0
+        self.idle_cycles = 0
         #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
         self.gauge_override: dict[int, float] = {}
         self._start_board()
@@ -291,13 +299,14 @@ class HilRig(Rig):
         except (BrokenPipeError, OSError) as exc:
             raise RigError(f"hil://{self.elf}: the simavr harness failed ({exc})") from None
         parts = reply.split()
-        if len(parts) < 8 or parts[0] != "P":
+        if len(parts) < 9 or parts[0] != "P":
             raise RigError(f"hil://{self.elf}: the simavr harness stopped ({self._harness_said() or 'no reply'})")
         pulse, self.pulses = int(parts[2]), int(parts[3])
         exec_last, self.exec_max_cycles, execs = int(parts[4]), int(parts[5]), int(parts[6])
         if execs > len(self.exec_cycles):
             self.exec_cycles.append(exec_last)
-        uart = self._uart_from_board(parts[8] if len(parts) > 8 else "")
+        self.board_cycles, self.idle_cycles = int(parts[1]) * (F_CPU_HZ // 1_000_000), int(parts[8])
+        uart = self._uart_from_board(parts[9] if len(parts) > 9 else "")
         if pulse:
             command = pulse_to_command(pulse, self.params)
             if command != self.board_command:
@@ -468,6 +477,7 @@ class HilRig(Rig):
             "pulses": self.pulses,
             "faults": [{"t_s": t, "code": c, "name": n} for t, c, n in self.faults],
             "exec_max_cycles": self.exec_max_cycles,
+            "idle_fraction": self.idle_cycles / self.board_cycles if self.board_cycles else None,
             "info_lines": list(self.info_lines[-10:]),
         }
 
