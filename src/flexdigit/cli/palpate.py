@@ -229,6 +229,7 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
         f"  gap       {1000 * f.gap_m:9.3f} +- {1000 * f.gap_sd_m:.3f} mm",
         f"  lumped    {result.lumped_stiffness_n_m:9.2f} N/m (force against deepest indentation)",
         f"  chi2/dof  {summary['chi2_per_dof']:9.2f}",
+        _force_read_line(result.curve),
     ]
     if plan.sweep.model == "hunt-crossley":
         lines.insert(3, f"  exponent  {f.exponent:9.3f} +- {f.exponent_sd:.3f}")
@@ -240,6 +241,16 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
         return indentation_figure(result, true_modulus_n_m2=true_modulus, title=title)
 
     return data, "\n".join(lines), figure
+
+
+def _force_read_line(curve) -> str:
+    """The text's line on the curve's forces from the gauges: on how many plateaus one was read, and where not."""
+    read = curve["force_read"]
+    missing = [int(c) for c in curve["command"][~read]]
+    line = f"  force     read from the gauges on {int(read.sum())} of {read.size} plateaus"
+    if missing:
+        line += f"; no force read at commands {missing} (no contact seen, or its sd infinite or over the value)"
+    return line
 
 
 def _sweep_data(result, plan, bound, tissue) -> dict:
@@ -257,6 +268,7 @@ def _sweep_data(result, plan, bound, tissue) -> dict:
             "command": result.curve["command"].tolist(),
             "force_n": result.curve["force_n"].tolist(),
             "force_sd_n": result.curve["force_sd_n"].tolist(),
+            "force_read": result.curve["force_read"].tolist(),
             "indentation_mm": (1000 * result.curve["indentation_m"]).tolist(),
             "model_force_n": result.curve["model_force_n"].tolist(),
             **({"true_force_n": result.curve["true_force_n"].tolist()} if "true_force_n" in result.curve else {}),

@@ -450,7 +450,8 @@ class PalpationResult:
     """One palpation: the fit, the force-indentation curve, the lumped stiffness.
 
     ``curve`` holds per sweep plateau (tares excluded): ``command``, ``force_n`` and ``force_sd_n`` (from the
-    gauges alone, the contact force pressing the digit back, > 0), ``indentation_m`` (deepest penetration of the
+    gauges alone, the contact force pressing the digit back, > 0; NaN where no force is read), ``force_read``
+    (bool: a contact seen, its sd finite and under the force), ``indentation_m`` (deepest penetration of the
     fitted tissue), ``model_force_n`` (the fitted tissue's force) and, on the twin, ``true_force_n``.
     """
 
@@ -483,26 +484,34 @@ class PalpationResult:
 
 
 def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, estimator=None) -> PalpationResult:
-    """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope."""
+    """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope.
+
+    The curve's ``force_n`` is NaN ("no force read", ``force_read`` False) where the gauges read no force: the
+    estimator saw no contact, or its standard deviation is infinite or over the value (:func:`_force_read`).
+    """
     fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley")
     sweep = ~record.tare
     cmds = record.command[sweep]
     if estimator is None:
-        estimator = ContactEstimator(model, classify=False, n_readings=record.readings, side=placed.side).fit()
+        estimator = ContactEstimator(
+            model, classify=False, n_readings=record.readings, side=placed.side, region_m=_tissue_region(model, placed)
+        ).fit()
     # the fit's offsets and drifts at each plateau's time, taken off before the force is estimated
     nuisance = fit.offset_v + np.outer(record.time_s, fit.drift_v_per_s)
     est = estimator.predict(record.gauges_v[sweep] - nuisance[sweep], cmds)
     sol, _ = model.tissue_solution(fit.tissue, cmds)
     depth = _deepest(model, fit.tissue, sol.static.psi_rad)
-    force = -placed.sign * est.point_force_n  # the tissue pushes back: report it as a positive force
+    read = _force_read(est)
     # one gauge reads one number, the force times its lever: no force from the gauges alone (its Cramer-Rao sd is
     # infinite at every plateau; it read 0.95 N where the twin pressed 0.22 N)
     told = np.full(cmds.size, len(model.params.geometry.gauge_positions_m) > 1)
-    force = np.where(told, force, np.nan)
+    read &= told
+    force = np.where(read, -placed.sign * est.point_force_n, np.nan)  # the tissue pushes back: a positive force
     curve = {
         "command": cmds,
         "force_n": force,
-        "force_sd_n": est.force_sd_n,
+        "force_sd_n": np.where(read, est.force_sd_n, np.nan),
+        "force_read": read,
         "indentation_m": depth,
         "model_force_n": -placed.sign * sol.contact_force_n,
     }
@@ -513,16 +522,36 @@ def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, est
             "one gauge reads one number, the contact's force times its lever (infinite Cramer-Rao sd): no force "
             "from the gauges alone (model_force_n is the fitted tissue's, its place known)"
         )
-    touching = (depth > 0) & told
-    w = 1.0 / np.maximum(est.force_sd_n[touching], 1e-12) ** 2
+    slope, slope_sd = _lumped_slope(depth, force, curve["force_sd_n"], (depth > 0) & read)
+    return PalpationResult(protocol, placed, fit, curve, slope, slope_sd, record)
+
+
+def _tissue_region(model, placed) -> tuple[float, float]:
+    """Arc positions (m) where the tissue can touch the digit: from where it starts (a bent digit's arc position
+    is past its point's distance along the tissue) to the tip. The whole digit let a few millivolts of mismatch
+    read as a large force near the clamp, where the gauges barely see one (0.57 N at no contact, 4-gauge digit)."""
+    step = 2e-3  # two of the estimator's default grid steps: the least region it takes
+    return min(max(float(placed.start_m), 0.0), model.length_m - step), model.length_m
+
+
+def _force_read(est) -> np.ndarray:
+    """Plateaus where the gauges read a force: a contact seen (its likelihood ratio over the estimator's
+    threshold) and a finite standard deviation no larger than the force. Elsewhere the point estimate is the
+    profile's clip (``max_force_n``, 1 N, where the gauges are blind to a force) or noise: no force read."""
+    force, sd = np.abs(est.point_force_n), est.force_sd_n
+    with np.errstate(invalid="ignore"):
+        return est.contact & np.isfinite(sd) & np.isfinite(force) & (sd <= force)
+
+
+def _lumped_slope(depth, force, force_sd, touching) -> tuple[float, float]:
+    """Weighted least-squares slope through the origin of force against indentation (N/m) and its sd, on the
+    plateaus ``touching`` (NaN, inf with fewer than two)."""
+    w = 1.0 / np.maximum(force_sd[touching], 1e-12) ** 2
     x, y = depth[touching], force[touching]
     information = float(np.sum(w * x * x))
     if np.count_nonzero(touching) >= 2 and information > 0:
-        slope = float(np.sum(w * x * y) / information)
-        slope_sd = float(1.0 / math.sqrt(information))
-    else:
-        slope, slope_sd = math.nan, math.inf
-    return PalpationResult(protocol, placed, fit, curve, slope, slope_sd, record)
+        return float(np.sum(w * x * y) / information), float(1.0 / math.sqrt(information))
+    return math.nan, math.inf
 
 
 def _deepest(model, tissue, psi) -> np.ndarray:

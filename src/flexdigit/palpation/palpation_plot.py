@@ -2,8 +2,8 @@
 map, a force hold over time.
 
 - :func:`indentation_figure`: per sweep plateau the contact force from the gauges (with its standard deviation)
-  against the indentation of the fitted tissue, the fitted tissue's force and, on the twin, the true contact force
-  (thesis 8: stiffness from the digit's gauges alone);
+  against the indentation of the fitted tissue (a cross on the axis where the gauges read no force), the fitted
+  tissue's force and, on the twin, the true contact force (thesis 8: stiffness from the digit's gauges alone);
 - :func:`scan_figure`: the local modulus along the tissue, the fitted inclusion and, on the twin, the true one;
 - :func:`hold_figure`: the force held under force control, estimated and (twin) true, and the command.
 """
@@ -24,7 +24,13 @@ def indentation_figure(result, *, true_modulus_n_m2: float | None = None, title:
     depth_mm = 1e3 * np.asarray(c["indentation_m"], float)
     order = np.argsort(depth_mm)
     fig, ax = new_figure(figsize=(6.5, 4.0))
-    ax.errorbar(depth_mm, c["force_n"], yerr=c["force_sd_n"], fmt="o", ms=4, capsize=2, label="from the gauges")
+    read = np.asarray(c.get("force_read", np.isfinite(c["force_n"])), bool)
+    ax.errorbar(depth_mm[read], np.asarray(c["force_n"])[read], yerr=np.asarray(c["force_sd_n"])[read], fmt="o", ms=4,
+                capsize=2, label="from the gauges")  # fmt: skip
+    if not np.all(read):  # a marker on the axis, not a force: the gauges read none there
+        label = f"no force read ({np.count_nonzero(~read)} plateaus: no contact seen, or sd over the value)"
+        ax.plot(depth_mm[~read], np.zeros(np.count_nonzero(~read)), "x", color="0.4", ms=6, clip_on=False,
+                transform=ax.get_xaxis_transform(), label=label)  # fmt: skip
     ax.plot(depth_mm[order], np.asarray(c["model_force_n"])[order], color="C1", label="fitted tissue")
     if "true_force_n" in c:
         ax.plot(depth_mm[order], np.asarray(c["true_force_n"])[order], "s--", ms=3, color="C3", lw=1.0,
