@@ -35,6 +35,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_map",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_tdcrcli",
+    "benchmarks.bench_tdcrfix",
     "benchmarks.bench_identify",
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",

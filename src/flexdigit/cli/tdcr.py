@@ -27,6 +27,11 @@ from flexdigit._command import CommandResult, add_command
 from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.errors import ParameterError
 
+#: ``tdcr contact`` says a force is barely seen when its one-sigma uncertainty exceeds this share of its size.
+_UNCERTAIN = 0.2
+#: ... and a fit poor when it leaves more than this RMS strain (ten times a good amplifier's noise).
+_POOR_FIT = 1e-5
+
 
 def _floats(text: str, name: str, count: int | None = None) -> list[float]:
     try:
@@ -285,6 +290,17 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=data, text="\n".join(lines), exit_code=0 if converged else 1)
 
 
+def _newton_said(sol) -> str:
+    """What the shooting did: Newton's iterations, or none when its start (the clamp wrench of the loads on the
+    straight rod: zero under tendons alone, whose pull is internal) already met the tip's balance."""
+    if sol.iterations == 0:
+        return (
+            "no Newton step needed: the start, the straight rod's clamp wrench, met the tip, "
+            f"residual {sol.residual:.2g}"
+        )
+    return f"{sol.iterations} Newton iterations, residual {sol.residual:.2g}"
+
+
 def _statics(args: argparse.Namespace) -> CommandResult:
     import warnings
 
@@ -305,7 +321,7 @@ def _statics(args: argparse.Namespace) -> CommandResult:
         f"tip position: ({tip[0]:.3f}, {tip[1]:.3f}, {tip[2]:.3f}) mm",
         "tip frame (columns: x, y, z axes; last: position in m):",
         *("  " + "  ".join(f"{v:+.6f}" for v in row) for row in sol.tip_frame[:3]),
-        f"converged: {sol.converged} ({sol.iterations} Newton iterations, residual {sol.residual:.2g})",
+        f"converged: {sol.converged} ({_newton_said(sol)})",
         *([f"recording: {record['recording']}"] if record else []),
     ]
     return CommandResult(data=data, text="\n".join(lines), exit_code=0 if sol.converged else 1)
@@ -423,6 +439,38 @@ def _shape(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
     return data, lines
 
 
+def _estimate_lines(est) -> list[str]:
+    """The contact's place and force with their sigmas, or that it is out of sight; a barely seen force said."""
+    import numpy as np
+
+    if est.out_of_sight:
+        return [
+            f"out of sight: the readings fit a contact at or nearer the base than {1e3 * est.visible_from_m:.1f} mm, "
+            "where one gauge station at most sees it: place and force not determined"
+        ]
+    if not est.refined:
+        return [
+            f"no fit: the twin holds no equilibrium under the first-order estimate ({np.linalg.norm(est.force_n):.3g} "
+            f"N at {1e3 * est.s_m:.1f} mm): these readings are not a point contact the robot can bear"
+        ]
+    f, sd = est.force_n, est.force_std_n
+    lines = [
+        f"at s = {1e3 * est.s_m:.1f} mm" + f" +- {1e3 * est.s_std_m:.2g}" + f", {_mm(est.position_m)}",
+        "force ({}) mN".format(", ".join(f"{1e3 * v:.3f} +- {1e3 * e:.2g}" for v, e in zip(f, sd, strict=True))),
+    ]
+    if est.strain_rms > _POOR_FIT:
+        lines.append(
+            f"poor fit: {est.strain_rms * 1e6:.3g} microstrain RMS of the readings left unexplained (not one point "
+            "contact, or the twin's model is off): the numbers above are only the best such fit"
+        )
+    if np.linalg.norm(sd) > _UNCERTAIN * np.linalg.norm(f):
+        lines.append(
+            f"uncertain: the gauges barely see this force (one sigma {1e3 * np.linalg.norm(sd):.3g} mN, more "
+            f"than {_UNCERTAIN:.0%} of its size)"
+        )
+    return lines
+
+
 def _contact(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
     from flexdigit.tdcr import sense_contact
 
@@ -447,11 +495,9 @@ def _contact(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
     est = found.estimate
     data = {"tensions_n": tensions, **found.to_dict()}
     unseen = data["unseen_direction"]
-    f = est.force_n
     lines = [
         f"{robot.name}: contact from {found.layout.s_m.size} gauges (visible beyond {1e3 * est.visible_from_m:.1f} mm)",
-        f"at s = {1e3 * est.s_m:.1f} mm, {_mm(est.position_m)}",
-        f"force ({1e3 * f[0]:.3f}, {1e3 * f[1]:.3f}, {1e3 * f[2]:.3f}) mN",
+        *_estimate_lines(est),
     ]
     if unseen is not None:
         lines.append("unseen: the force along ({:+.3f}, {:+.3f}, {:+.3f}) makes no moment at any gauge".format(*unseen))
