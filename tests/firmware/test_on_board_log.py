@@ -75,8 +75,10 @@ def test_run_on_board_logs_and_plots_what_the_host_watched(firmware, tmp_path, c
     # never over a file without --force; with it, the log is replaced by the new run's
     assert main([*argv, "--log", str(log)]) == 2
     assert "--force" in capsys.readouterr().err
-    assert main([*argv, "--log", str(log), "--force"]) == 0
+    assert main([*argv, "--log", str(log), "--force", "--orientation", "horizontal", "--json"]) == 0
     assert len(read_log(log)[1]) == 60
+    # --orientation reaches the twin the board meets (no longer refused): the log's settings say so
+    assert read_log(log)[0]["rig_settings"]["orientation"] == "horizontal"
 
 
 def test_run_on_board_refuses_only_what_cannot_apply(tmp_path, capsys):
