@@ -113,7 +113,8 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--on-board",
         action="store_true",
-        help="close the loop on the board (hil://IMAGE.elf): the host sends the setpoint and watches",
+        help="close the loop on the board (hil://IMAGE.elf): the host sends the setpoint and watches; --log and "
+        "--plot keep what it watched (the board's gauges and command, the twin's true rotation)",
     )
 
     _add_stream_emulator(subparsers)
@@ -204,10 +205,6 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit.rig.step_test import run_step
 
     if args.on_board:
-        if args.plot:
-            from flexdigit.errors import ParameterError
-
-            raise ParameterError("--plot draws a run whose loop closes here; with --on-board the board closes it")
         return _run_on_board(args)
     duration, setpoint, sim, rig_options = _checked(args)
     with contextlib.ExitStack() as stack:
@@ -460,37 +457,29 @@ def _signal_exit_code(name: str | None) -> int:
 
 def _run_on_board(args: argparse.Namespace) -> CommandResult:
     """``flexdigit run --on-board``: the loop closes on the board (the exported controller in its image)."""
-    from flexdigit._validation import check_real
-    from flexdigit.errors import ParameterError
     from flexdigit.rig.step_test import board_step_test
 
-    if _is_design_file(args.controller):
-        raise ParameterError(
-            f"--controller {args.controller} is not supported with --on-board: the board runs the controller exported "
-            "into its image"
-        )
-    for name in ("log", "record", "rotation_map", "orientation"):
-        if getattr(args, name) is not None:
-            raise ParameterError(
-                f"--{name.replace('_', '-')} is not supported with --on-board (the board holds its map)"
-            )
-    duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
-    setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
-    # --params: the digit the board's image was built for (make firmware PARAMS=...; the board's banner is checked
-    # against it) and the twin it meets, calibrated and mounted as run --params's twin (--calibration for its twin)
-    args.digit = _digit(args)
-    _check_reachable(setpoint, args.digit, args.params)
-    twin = _twin_options(args, True) if args.params is not None or args.calibration is not None else {}
+    duration, setpoint = _on_board_checked(args)
+    twin = (
+        _twin_options(args, True)
+        if any(v is not None for v in (args.params, args.calibration, args.orientation))
+        else {}
+    )
     twin.pop("seed", None)
-    run = board_step_test(args.backend, setpoint, duration, seed=args.seed, params=args.digit, twin_options=twin)
-    data = {
-        "status": run["status"],
-        "message": run["message"],
-        "loop": "board",
-        "backend": args.backend,
-        "params": None if args.params is None else str(args.params),
-        **run,
-    }
+    run = board_step_test(
+        args.backend, setpoint, duration, seed=args.seed, params=args.digit, twin_options=twin, log_path=args.log,
+        log_mode=_log_mode(args),
+    )  # fmt: skip
+    series = run.pop("series")
+    data = {"status": run["status"], "message": run["message"], "loop": "board", "backend": args.backend,
+            "params": None if args.params is None else str(args.params), **run}  # fmt: skip
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.rig.run_plot import board_run_figure
+
+        title = f"loop on the board ({args.backend}), step to {setpoint:g} deg"
+        figure = board_run_figure({**run, "series": series}, title)
+        data["plot"] = str(save_plot(figure, args.plot, "run", force=args.force))
     metrics, stats = run["step_metrics"]["true"], run["board"]
     text = (
         f"loop on the board ({args.backend}): {run['status']} ({run['message']})\n"
@@ -499,8 +488,39 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
         f"  step: {_figures_line({'true': metrics}) if metrics else 'too few samples'}\n"
         f"  board: {run['samples']} periods of {run['period_s'] * 1000:g} ms, update <= {stats['exec_max_cycles']} "
         f"cycles ({stats['exec_max_cycles'] / 16:.0f} us at 16 MHz), faults {stats['faults'] or 'none'}"
+        + (f"\n  log -> {data['log']}" if data["log"] else "")
+        + (f"\n  plot -> {data['plot']}" if data.get("plot") else "")
     )
     return CommandResult(data=data, text=text, exit_code={"completed": 0, "fault": 1}[run["status"]])
+
+
+def _on_board_checked(args) -> tuple[float, float]:
+    """``run --on-board``'s flags checked before the board starts: ``(duration, setpoint)``; what cannot apply to
+    a loop on the board refused with why."""
+    from flexdigit._io import check_output
+    from flexdigit._plot import check_plot
+    from flexdigit._validation import check_real
+    from flexdigit.errors import ParameterError
+
+    if _is_design_file(args.controller):
+        raise ParameterError(
+            f"--controller {args.controller} is not supported with --on-board: the board runs the controller exported "
+            "into its image (make firmware)"
+        )
+    if args.rotation_map is not None:
+        raise ParameterError("--rotation-map is not supported with --on-board: the board holds its map (in its image)")
+    if args.record is not None:
+        raise ParameterError("--record is not written for a loop on the board yet: --log keeps its every period")
+    duration = check_real(args.duration, "--duration", low=0, low_open=True, high=MAX_DURATION_S)
+    setpoint = check_real(args.setpoint_deg, "--setpoint-deg", low=-60.0, high=120.0)
+    # --params: the digit the board's image was built for (make firmware PARAMS=...; the board's banner is checked
+    # against it) and the twin it meets, calibrated and mounted as run --params's twin (--calibration for its twin)
+    args.digit = _digit(args)
+    _check_reachable(setpoint, args.digit, args.params)
+    check_plot(args.plot, "run", force=args.force)  # before the board starts, not after
+    if args.log is not None and not (args.append and args.log.exists()):
+        check_output(args.log, force=args.force, hint="or --append to add this run to it")
+    return duration, setpoint
 
 
 def _deg_per_command(params) -> float:

@@ -11,7 +11,7 @@ import numpy as np
 from flexdigit._plot import new_figure
 from flexdigit.rig.step_test import StepRun
 
-__all__ = ["run_figure"]
+__all__ = ["run_figure", "board_run_figure"]
 
 
 def run_figure(run: StepRun, title: str = ""):
@@ -28,18 +28,33 @@ def run_figure(run: StepRun, title: str = ""):
     >>> rig.close()
     """
     r = run.result
-    t = np.asarray(r.time_s, float)
+    truth = run.true_rotation_deg if run.has_truth else None
+    return _figure(r.time_s, r.setpoint, r.measurement, truth, r.command, title)
+
+
+def board_run_figure(run: dict, title: str = ""):
+    """The same figure for a run whose loop closed on the board (:func:`~flexdigit.rig.step_test.board_step_test`'s
+    result): the setpoint, the twin's true rotation and the board's command (its servo pulse, in commands); no
+    estimate line, the board does not stream its estimate."""
+    s = run["series"]
+    t = np.asarray(s["time_s"], float)
+    return _figure(t, np.full(t.size, run["setpoint_deg"]), None, s["true_rotation_deg"], s["command"], title)
+
+
+def _figure(time_s, setpoint, estimate, truth, command, title: str):
+    t = np.asarray(time_s, float)
     fig, (top, bottom) = new_figure(2, 1, figsize=(8.0, 5.0), sharex=True, height_ratios=(3, 2))
-    top.step(t, r.setpoint, where="post", color="k", ls=":", lw=1.0, label="setpoint")
-    top.plot(t, r.measurement, color="C0", label="estimate (gauges)")
-    if run.has_truth and run.true_rotation_deg.size:
-        n = run.true_rotation_deg.size
-        top.plot(t[:n], run.true_rotation_deg, color="C3", lw=1.0, label="true rotation (twin)")
+    top.step(t, setpoint, where="post", color="k", ls=":", lw=1.0, label="setpoint")
+    if estimate is not None:
+        top.plot(t, estimate, color="C0", label="estimate (gauges)")
+    if truth is not None and np.size(truth):
+        n = np.size(truth)
+        top.plot(t[:n], truth, color="C3", lw=1.0, label="true rotation (twin)")
     top.set_ylabel("beam rotation (deg)")
     top.legend(fontsize=7)
     if title:
         top.set_title(title, fontsize=9)
-    bottom.step(t, r.command, where="post", color="C2", label="command")
+    bottom.step(t, command, where="post", color="C2", label="command")
     bottom.set_xlabel("time (s)")
     bottom.set_ylabel("servo command")
     bottom.legend(fontsize=7)

@@ -38,6 +38,8 @@ __all__ = [
     "SampleView",
     "check_sample",
     "MAX_LOG_LINE_BYTES",
+    "board_log_header",
+    "board_log_sample",
 ]
 
 LOG_FORMAT = "flexdigit-loop-log/1"
@@ -396,3 +398,41 @@ def check_sample(record: dict[str, Any], path: Path, where: str) -> dict[str, An
     if isinstance(command, bool) or not isinstance(command, int) or not 0 <= command <= 254:
         raise bad("command", "an integer 0..254")
     return record
+
+
+def board_log_header(backend: str, settings: dict, period_s: float, board, setpoint_deg: float, duration_s: float):
+    """The header of a run whose loop closed on the board (``flexdigit run --on-board --log``): ``loop`` "board",
+    the backend, the image's period and number format (its banner's ``fixed``: ``"fixed"`` or ``"float"``)."""
+    fixed = board.banner_value("fixed")
+    return {
+        "loop": "board",
+        "controller": "board",  # the controller exported into the image (APPEND_KEYS)
+        "backend": backend,
+        "period_s": period_s,
+        "duration_s": duration_s,
+        "setpoint_deg": setpoint_deg,
+        "image_format": None if fixed is None else ("fixed" if fixed == "1" else "float"),
+        "rig_settings": settings,
+        "estimate": "not streamed: the board streams the gauges it used and its command, not its rotation estimate",
+    }
+
+
+def board_log_sample(t: float, setpoint_deg: float, reading, true_deg: float, command: float) -> dict[str, Any]:
+    """One watched board period as a loop log's sample: ``y`` null (the board does not stream its estimate);
+    ``command`` the board's servo pulse as the nearest serial command (0..254, what the log's readers take) and
+    ``board_command`` the pulse itself in commands (Timer1 resolves finer than one)."""
+
+    def finite(x: float) -> float | None:
+        return float(x) if math.isfinite(x) else None
+
+    pulse = finite(float(command))
+    return {
+        "t": round(float(t), 9),
+        "setpoint": float(setpoint_deg),
+        "gauges_v": [finite(float(g)) for g in reading.gauges_v],
+        "pot_v": finite(float(reading.pot_v)),
+        "y": None,
+        "command": None if pulse is None else min(max(int(round(pulse)), 0), 254),
+        "board_command": pulse,
+        "true_rotation_deg": finite(float(true_deg)),
+    }

@@ -7,6 +7,7 @@ IAE).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import LoopResult, run_loop
 from flexdigit.rig.rotation import RotationEstimator
 from flexdigit.rig.safety import RunawayGuard
+from flexdigit.rig.sample_log import SampleLog, board_log_header, board_log_sample
 
 __all__ = [
     "StepMetrics",
@@ -336,6 +338,8 @@ def board_step_test(
     seed: int | None = None,
     params=None,
     twin_options: dict | None = None,
+    log_path=None,
+    log_mode: str = "new",
 ) -> dict:
     """A step from rest with the loop closed on the board (``flexdigit run --on-board``): the exported controller
     in the image runs it, the host only sends the setpoint and watches the twin's true rotation.
@@ -355,6 +359,12 @@ def board_step_test(
         firmware PARAMS=D.toml``), and the twin the board meets is that digit's.
     twin_options : dict, optional
         The twin's ``calibration`` and ``orientation`` (as ``flexdigit run --params`` sets them).
+    log_path : path-like, optional
+        Write the run's log here, as a host run's (:mod:`flexdigit.rig.sample_log`, :func:`board_log_header`):
+        every watched period's setpoint, the gauges the board streamed, its command and the twin's true rotation
+        (``y`` is null: the board does not stream its rotation estimate).
+    log_mode : {"new", "append", "replace"}
+        What to do with an existing log (:class:`~flexdigit.rig.sample_log.SampleLog`).
 
     Returns
     -------
@@ -362,18 +372,17 @@ def board_step_test(
         ``status`` (``"completed"`` or ``"fault"``), ``message``, ``rig`` (its settings), ``setpoint_deg``,
         ``period_s``, ``samples``, ``true_final_rotation_deg`` (mean of the last :data:`FINAL_WINDOW_S`),
         ``true_peak_rotation_deg``, ``step_metrics`` (``{"true": StepMetrics.to_dict() or None,
-        "deg_per_command"}``), ``final_command`` and ``board`` (its stats: ``exec_max_cycles``, ``faults``).
+        "deg_per_command"}``), ``final_command``, ``board`` (its stats: ``exec_max_cycles``, ``faults``), ``log``
+        (its path or None) and ``series`` (``time_s``, ``true_rotation_deg``, ``command``: what ``--plot`` draws).
     """
     if parse_rig_url(backend).scheme != "hil":
         raise ParameterError(
             f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {backend!r}."
         )
-    from flexdigit.rig.backends.hil_backend import run_on_board  # the twin (scipy): cli/run.py reads constants here
-
     options = {"mode": "board", "setpoint_deg": setpoint_deg} | ({} if seed is None else {"seed": seed})
     with open_rig(backend, params, **options, **(twin_options or {})) as rig:
         settings = rig.settings()
-        run = run_on_board(rig, setpoint_deg, duration_s)
+        run, log_path = _watch_board(rig, backend, settings, setpoint_deg, duration_s, log_path, log_mode)
         stats = rig.stats()
     dpc = _deg_per_command(rig.params)
     t, y = run.time_s, run.true_rotation_deg
@@ -392,4 +401,28 @@ def board_step_test(
         "step_metrics": {"true": metrics.to_dict() if metrics else None, "deg_per_command": dpc},
         "final_command": float(run.command[-1]) if run.command.size else None,
         "board": stats,
+        "log": None if log_path is None else str(log_path),
+        "series": {"time_s": t, "true_rotation_deg": y, "command": run.command},
     }
+
+
+def _watch_board(rig, backend: str, settings: dict, setpoint_deg: float, duration_s: float, log_path, log_mode: str):
+    """:func:`board_step_test`'s watch of the board, every period logged when ``log_path`` is given: ``(run, the
+    log's path or None)``."""
+    # the twin (scipy): cli/run.py reads constants here
+    from flexdigit.rig.backends.hil_backend import board_period_s, run_on_board
+
+    if log_path is None:
+        return run_on_board(rig, setpoint_deg, duration_s), None
+    header = board_log_header(backend, settings, board_period_s(rig), rig.board, setpoint_deg, duration_s)
+    log = SampleLog(log_path, header, mode=log_mode)
+    with contextlib.ExitStack() as stack:
+        stack.callback(log.abandon)  # an error before the footer: the lines written are kept
+
+        def logged(t, reading, true_deg, command) -> None:
+            log.write(board_log_sample(t, setpoint_deg, reading, true_deg, command))
+
+        run = run_on_board(rig, setpoint_deg, duration_s, on_period=logged)
+        stack.pop_all()
+    log.write({"stop": run.status, "message": run.message, "safe_command_sent": None, "overruns": 0})
+    return run, log.close(complete=run.status == "completed")

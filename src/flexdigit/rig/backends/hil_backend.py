@@ -534,12 +534,13 @@ def board_period_s(rig: HilRig) -> float:
     return rig.board.period_s(f"hil://{rig.elf.name}")
 
 
-def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float) -> BoardRun:
+def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float, on_period=None) -> BoardRun:
     """Close the loop on the board: send the setpoint, then watch (read every board period, which is also the
     host's heartbeat) for ``duration_s``. A fault the board reports ends the run with status ``"fault"``.
 
     Times are from the setpoint's sending, as the host's loop counts them from its first sample (the step's
-    time 0 in both): the rig's clock already counts the opening's 0.2 s of rest readings."""
+    time 0 in both): the rig's clock already counts the opening's 0.2 s of rest readings. ``on_period(t, reading,
+    true_deg, command)``, when given, sees every period as it is watched (the run's log)."""
     period = board_period_s(rig)
     t0 = rig.clock()
     rig.set_setpoint(setpoint_deg)
@@ -551,10 +552,12 @@ def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float) -> BoardRu
     try:
         for _ in range(n):
             rig.wait(period)
-            rig.read()
+            reading = rig.read()
             t.append(rig.clock() - t0)
             truth.append(rig.tip_rotation_deg())
             command.append(rig.board_command)
+            if on_period is not None:
+                on_period(t[-1], reading, truth[-1], command[-1])
     except RigError as exc:
         status, message = "fault", str(exc)
     return BoardRun(t, truth, command, status, message, period)
