@@ -27,6 +27,7 @@ class VirtualClock:
 
     def __init__(self, frames: int, keep: int) -> None:
         self.now, self.frames, self.keep = 0.0, frames, keep
+        self.origin = 0.0  # the loop's start: the rig's waits while the session sets up come before it
         self.session: LiveSession | None = None
         self.true_deg: list[float] = []
 
@@ -35,7 +36,9 @@ class VirtualClock:
 
     def sleep(self, dt: float) -> None:
         self.now += dt
-        k = int(round(self.now / PERIOD_S))
+        if self.session is None:  # the session setting up (its tare at rest waits on this clock)
+            return
+        k = int(round((self.now - self.origin) / PERIOD_S))
         if k > self.frames - self.keep:
             self.true_deg.append(self.session.rig.tip_rotation_deg())
         if k >= self.frames:
@@ -51,7 +54,7 @@ def test_a_two_cable_digit_is_held_below_straight(tmp_path):
     session = LiveSession(
         "sim", params=path, seed=0, period_s=PERIOD_S, clock=virtual.clock, sleep=virtual.sleep, record=record
     )
-    virtual.session = session
+    virtual.session, virtual.origin = session, virtual.now
     try:
         hello = session.hello()
         assert hello["cables"] == 2

@@ -441,8 +441,10 @@ class LiveSession:
             self.rig_url = f"sim+paced?{query}"
             # the URL's seed= or the seed given, never one silently over the other (issue 16)
             given = {} if seed is None else {"seed": seed}
-            # the twin keeps the loop's clock (a test's virtual one steps it in virtual time)
-            self.rig = open_rig(self.rig_url, given_params, calibration=self.calibration, clock=clock, **given)
+            # the twin keeps the loop's clock (a test's virtual one steps it in virtual time), and an injected sleep
+            # with it: the rig's own waits (the tare at rest) must move that clock, not spin on it
+            pacing = {"clock": clock} if sleep is time.sleep else {"clock": clock, "sleep": sleep}
+            self.rig = open_rig(self.rig_url, given_params, calibration=self.calibration, **pacing, **given)
         else:
             self.rig_url = backend
             # the emulated board keeps pace with the page, as the twin does (sim -> sim+paced)
