@@ -62,3 +62,19 @@ def work_must_not_start(monkeypatch):
             monkeypatch.setattr(obj, name, _work_started)
 
     return patch
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """The figures :func:`flexdigit._plot.save_plot` saved, in order (the ``--plot`` tests read their lines)."""
+    import flexdigit._plot
+
+    figures = []
+    save = flexdigit._plot.save_plot
+
+    def keep(fig, path, command="", *, force=False):
+        figures.append(fig)
+        return save(fig, path, command, force=force)
+
+    monkeypatch.setattr(flexdigit._plot, "save_plot", keep)
+    return figures

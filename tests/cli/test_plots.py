@@ -15,27 +15,12 @@ import re
 import numpy as np
 import pytest
 
-import flexdigit._plot
 from flexdigit.cli import main
 
 #: What a file of each format starts with.
 MAGIC = {".png": b"\x89PNG", ".pdf": b"%PDF", ".svg": b"<?xml"}
 #: A figure's data are the computation's own floats, copied: equal but for float formatting in JSON and text.
 SAME_RTOL = 1e-12
-
-
-@pytest.fixture
-def drawn(monkeypatch):
-    """The figures ``save_plot`` saved, in order."""
-    figures = []
-    save = flexdigit._plot.save_plot
-
-    def keep(fig, path, command="", *, force=False):
-        figures.append(fig)
-        return save(fig, path, command, force=force)
-
-    monkeypatch.setattr(flexdigit._plot, "save_plot", keep)
-    return figures
 
 
 def _lines(ax) -> dict:

@@ -13,7 +13,6 @@ import json
 import numpy as np
 import pytest
 
-import flexdigit._plot
 from flexdigit.cli import main
 from flexdigit.rig.sample_log import read_log
 from flexdigit.rig.step_test import FINAL_WINDOW_S
@@ -21,20 +20,6 @@ from flexdigit.rig.step_test import FINAL_WINDOW_S
 #: The log's floats are the run's, through JSON (repr: exact) and one mean over the final window: equal up to the
 #: mean's summation order.
 SAME_RTOL = 1e-12
-
-
-@pytest.fixture
-def drawn(monkeypatch):
-    """The figures ``save_plot`` saved, in order (as tests/cli/test_plots.py catches them)."""
-    figures = []
-    save = flexdigit._plot.save_plot
-
-    def keep(fig, path, command="", *, force=False):
-        figures.append(fig)
-        return save(fig, path, command, force=force)
-
-    monkeypatch.setattr(flexdigit._plot, "save_plot", keep)
-    return figures
 
 
 @pytest.mark.slow
