@@ -12,6 +12,8 @@ from pathlib import Path
 
 import tomli_w
 
+from flexdigit.params import Geometry, RigParams, Sensors
+
 
 def _equal(count: int, length: float) -> list[float]:
     """Gauge ``k`` of ``count`` at ``(k + 1/2) L / count``, rounded to 0.1 mm (a file a user would write)."""
@@ -95,6 +97,21 @@ DIGITS: dict[str, dict] = {
         },
     },
 }
+
+
+def newcomer_digit():
+    """The newcomer's digit of issue 28's trial, as RigParams: 2 x 0.10 m sections of a 0.3 x 12 mm strip, 4
+    half-bridge gauges, one cable."""
+    geometry = Geometry(
+        section_count=2,
+        section_length_m=0.10,
+        strip_length_m=0.20,
+        digit_length_m=0.22,
+        strip_thickness_m=0.0003,
+        strip_width_m=0.012,
+        gauge_positions_m=(0.03, 0.07, 0.13, 0.17),
+    )
+    return RigParams(geometry=geometry, sensors=Sensors(adc_channels=(0, 1, 2, 3)))
 
 
 def write_digit(name: str, directory: Path, **changes: dict) -> Path:

@@ -5,10 +5,10 @@ that starts at 984 ms, 250 ms of hold before the release. Made from the twin's r
 import numpy as np
 import pytest
 
+from digits import newcomer_digit
 from flexdigit.errors import DataFileError
 from flexdigit.identify import identify
 from flexdigit.identify.timeseries import read_timeseries
-from flexdigit.params import Geometry, RigParams
 from flexdigit.twin.digit_calibration import calibration_for
 from flexdigit.twin.records import release_test
 
@@ -20,23 +20,9 @@ INSTANT_TOLERANCE_S = 0.01
 BASELINE_TOLERANCE_S = 0.03
 
 
-def _newcomer_digit() -> RigParams:
-    geometry = Geometry(
-        section_count=2,
-        section_length_m=0.10,
-        strip_length_m=0.20,
-        digit_length_m=0.22,
-        strip_thickness_m=0.0003,
-        strip_width_m=0.012,
-        gauge_positions_m=(0.03, 0.07, 0.13, 0.17),
-    )
-    params = RigParams(geometry=geometry)
-    return params.replace(sensors=params.sensors.__class__(adc_channels=(0, 1, 2, 3)))
-
-
 def _lab_file(path, seed: int) -> None:
     """The twin's release record with a noisy hold in front, written the way a lab's logger writes it."""
-    params = _newcomer_digit()
+    params = newcomer_digit()
     record = release_test(duration_s=2.5, seed=seed, params=params, calibration=calibration_for(params))
     table = record.table
     gauges = [c for c in table.column_names if c.startswith("gauge")]

@@ -6,6 +6,7 @@ import warnings
 
 import pytest
 
+from digits import newcomer_digit
 from flexdigit.params import Geometry, RigParams, Sensors
 from flexdigit.report.build import _cell
 from flexdigit.report.chapter import ReportContext
@@ -13,23 +14,9 @@ from flexdigit.tactile.thesis_experiments import equivalent_servo_angle
 from flexdigit.twin.digit_calibration import calibration_for
 
 
-def _four_gauges() -> RigParams:
-    """The newcomer's digit: 2 x 0.10 m sections of a 0.3 x 12 mm strip, 4 half-bridge gauges, one cable."""
-    geometry = Geometry(
-        section_count=2,
-        section_length_m=0.10,
-        strip_length_m=0.20,
-        digit_length_m=0.22,
-        strip_thickness_m=0.0003,
-        strip_width_m=0.012,
-        gauge_positions_m=(0.03, 0.07, 0.13, 0.17),
-    )
-    return RigParams(geometry=geometry, sensors=Sensors(adc_channels=(0, 1, 2, 3)))
-
-
 def test_texts_count_the_digits_gauges(tmp_path):
     assert ReportContext(tmp_path).gauges_text == "three gauges"  # the thesis rig's texts unchanged
-    assert ReportContext(tmp_path, params=_four_gauges()).gauges_text == "four gauges"
+    assert ReportContext(tmp_path, params=newcomer_digit()).gauges_text == "four gauges"
     one = RigParams(geometry=Geometry(gauge_positions_m=(0.045,)), sensors=Sensors(adc_channels=(0,)))
     assert ReportContext(tmp_path, params=one).gauges_text == "one gauge"
 
@@ -42,7 +29,7 @@ def test_a_table_cell_without_a_figure_reads_n_a():
 def test_the_friction_as_a_servo_angle_leaves_out_the_slack_settings():
     # at command 0 with no load the newcomer's cable is slack: its tension does not move with the servo (0 / 0);
     # the median was NaN, printed "median nan deg = nan us", with a RuntimeWarning naming a source line
-    params = _four_gauges()
+    params = newcomer_digit()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         eq = equivalent_servo_angle(params, calibration_for(params))
