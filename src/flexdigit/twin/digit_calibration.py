@@ -53,7 +53,8 @@ between strip and housing). ``wn1`` is the first mode of the chain's linear moda
 gravity (a property of the structure, not of how it is mounted: a long digit that would buckle tip up still has
 one), at the twin's 3 cells per section; ``wn1_0`` the same of the thesis rig with the reference calibration.
 On the thesis rig the factor is exactly 1 (the same chain both times). A user's calibration file, fitted to the
-digit's own records (``flexdigit calibrate``), replaces all of this (:func:`twin_calibration`).
+digit's own records (``flexdigit calibrate``), replaces all of this (:func:`twin_calibration`, the one default
+of every twin built without a calibration).
 
 On the thesis rig every ratio is 1 and every relative position a thesis gauge's, so the packaged calibration comes
 back (``tests/twin/test_digit_calibration.py`` holds the table, within 5 % per value as issue 24 asks; in fact to
@@ -76,7 +77,13 @@ from functools import lru_cache
 import numpy as np
 
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration, packaged_calibration
+from flexdigit.twin.calibration import (
+    Calibration,
+    default_calibration,
+    default_calibration_source,
+    load_calibration,
+    packaged_calibration,
+)
 
 __all__ = [
     "calibration_for",
@@ -195,18 +202,44 @@ def _scaled_statics(params: RigParams, ref: Calibration, thesis: RigParams) -> C
 
 
 def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
-    """The calibration a twin of ``params`` runs with: the file ``path`` if given, else the packaged default
-    calibration for the thesis rig, else :func:`calibration_for` (the thesis's scaled to that digit).
+    """The calibration a twin of ``params`` runs with when none is passed: the one default of the library and the
+    CLI alike (:class:`~flexdigit.twin.twin.Twin`, ``open_rig("sim", params)``, every command's ``--params``).
+
+    In order: the file ``path`` if given; the calibration a :func:`~flexdigit.twin.calibration.use_calibration`
+    block made the default, if it has one value per section and per gauge of ``params`` (``reproduce
+    --calibration``); the packaged thesis fit for the thesis rig (``params`` None or equal to ``RigParams()``);
+    else :func:`calibration_for` (the thesis's scaled to that digit). Any other digit, even one of 3 sections and
+    3 gauges like the thesis rig's, is not the rig the packaged fit was measured on: its twin gets the scaled one.
 
     Examples
     --------
-    >>> from flexdigit.params import RigParams
+    >>> from flexdigit.params import Geometry, RigParams
     >>> from flexdigit.twin.calibration import default_calibration
     >>> twin_calibration(RigParams()) == default_calibration()
+    True
+    >>> thick = RigParams(geometry=Geometry(strip_thickness_m=0.5e-3))   # 3 sections and 3 gauges, another strip
+    >>> twin_calibration(thick) == calibration_for(thick) != default_calibration()
     True
     """
     if path is not None:
         return load_calibration(path)
-    if params is None or params == RigParams():
+    params = RigParams() if params is None else params
+    if default_calibration_source() != "packaged" and _describes(default_calibration(), params):
         return default_calibration()
+    if params == RigParams():
+        return packaged_calibration()
+    return _calibration_for_cached(params)
+
+
+def _describes(calibration: Calibration, params: RigParams) -> bool:
+    """Whether ``calibration`` has one value per section (support masses) and per gauge (channel gains) of
+    ``params``."""
+    return len(calibration.support_mass_kg) == params.geometry.section_count and len(calibration.channel_gain) == len(
+        params.geometry.gauge_positions_m
+    )
+
+
+@lru_cache(maxsize=64)
+def _calibration_for_cached(params: RigParams) -> Calibration:
+    """:func:`calibration_for` from the packaged calibration, cached (twins of one digit are built many times)."""
     return calibration_for(params)
