@@ -163,8 +163,8 @@ class DesignSettings:
             bad("layouts", "a list of " + ", ".join(LAYOUTS), list(self.layouts))
         if any(x not in BRIDGE_TYPES for x in self.bridges):
             bad("bridges", "a list of " + ", ".join(BRIDGE_TYPES), list(self.bridges))
-        if any(not 4 <= b <= 24 for b in self.adc_bits):
-            bad("adc_bits", "bit counts in 4..24", list(self.adc_bits))
+        if any(not 8 <= b <= 24 for b in self.adc_bits):  # a digit's own range (flexdigit.params.Sensors)
+            bad("adc_bits", "bit counts in 8..24", list(self.adc_bits))
         if any(not 0 < d <= 360.0 / 254 for d in self.servo_deg_per_command):
             bad("servo_deg_per_command", f"steps in (0, {360 / 254:.4g}] degrees", list(self.servo_deg_per_command))
         if any(not 0 < e <= 0.02 for e in self.eccentricity_m):
