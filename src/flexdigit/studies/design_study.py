@@ -55,6 +55,7 @@ from flexdigit.studies.figures import _save, pareto_figure
 from flexdigit.studies.metrics import METRICS, MetricContext
 from flexdigit.studies.spec import ParameterSet, StudySpec, spec_from_toml
 from flexdigit.tactile.protocols import load_protocol
+from flexdigit.twin.digit_calibration import calibration_for
 from flexdigit.twin.twin import static_gauges_v
 
 __all__ = [
@@ -63,6 +64,7 @@ __all__ = [
     "DesignResult",
     "candidates",
     "design_parameter_set",
+    "design_calibration",
     "equal_positions",
     "d_optimal_positions",
     "d_criterion",
@@ -422,7 +424,7 @@ def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: f
     """The rig of a candidate design, built from the baseline (see the module docstring)."""
     params = tapered(_scaled(baseline.params, c.size), c.section_taper)
     geo = params.geometry
-    cal = baseline.calibration
+    cal = design_calibration(baseline, params)  # the resized digit's, for the D-optimal placement
     if c.layout == "thesis":
         if c.gauge_count != 3:
             raise ParameterError(f"the 'thesis' layout has 3 gauges. Got {c.gauge_count}.")
@@ -433,14 +435,6 @@ def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: f
         base = ParameterSet(params, cal)
         positions = _d_optimal_cached(c.gauge_count, base, grid_step_m, seed)
     n = c.gauge_count
-    mean = {k: float(np.mean(getattr(cal, k))) for k in ("channel_gain", "noise_white_v", "noise_drift_v_per_sqrt_s")}
-    if n != len(cal.channel_gain):  # new channels: the thesis channels' mean gain and noise, no offset
-        cal = cal.replace(
-            channel_gain=(mean["channel_gain"],) * n,
-            channel_offset_v=(0.0,) * n,
-            noise_white_v=(mean["noise_white_v"],) * n,
-            noise_drift_v_per_sqrt_s=(mean["noise_drift_v_per_sqrt_s"],) * n,
-        )
     act = params.actuator
     gain = c.servo_deg_per_command * act.pulley_radius_m / c.eccentricity_m  # tip deg per command (E 3.15)
     top = min(act.command_max, act.equilibrium_command + math.ceil(30.0 / gain))  # 30 deg of tip rotation (3.4.1)
@@ -455,7 +449,36 @@ def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: f
     )
     if c.pretension_n == 0 and params.cables.count == 2:  # "1 cable": a baseline's described pair is dropped, so
         params = params.replace(cables=dataclasses.replace(params.cables, count=1))  # it is not scored as a pair
-    return ParameterSet(params, cal, c.pretension_n if c.pretension_n > 0 else None)
+    return ParameterSet(params, design_calibration(baseline, params), c.pretension_n if c.pretension_n > 0 else None)
+
+
+def design_calibration(baseline: ParameterSet, params: RigParams):
+    """The twin calibration a design ``params`` is scored on: the baseline's own where the design keeps its
+    structure (geometry, material and amplifiers: only the bridge, ADC, servo step or cables differ, so the fitted
+    values hold), else the baseline's scaled to the design by the laws of
+    :func:`flexdigit.twin.digit_calibration.calibration_for` (a resized digit's supports, cable run and first mode,
+    an eccentricity's housing, the channels of new gauges at their relative places). A design is a digit nobody
+    has measured: it is scored on the calibration the commands give its exported file
+    (:func:`flexdigit.twin.digit_calibration.twin_calibration`), not on the baseline's unscaled.
+
+    Examples
+    --------
+    >>> from flexdigit.twin.calibration import packaged_calibration
+    >>> thesis = ParameterSet()
+    >>> design_calibration(thesis, RigParams()) == packaged_calibration()
+    True
+    >>> big = design_parameter_set(thesis, Candidate(3, "thesis", "half", 16, 219 / 254, 5.715e-3, 0.0, 1.25))
+    >>> round(big.calibration.cable_stiffness_n_m / packaged_calibration().cable_stiffness_n_m, 4)   # k = EA / l
+    0.8
+    """
+    base = baseline.params
+    gauges = len(params.geometry.gauge_positions_m)
+    same = (
+        params.geometry == base.geometry
+        and params.material == base.material
+        and params.sensors.chain(gauges)[2] == base.sensors.chain(gauges)[2]
+    )
+    return baseline.calibration if same else calibration_for(params, baseline.calibration, base)
 
 
 # ----------------------------------------------------------------------------------------------------- pareto
@@ -671,8 +694,7 @@ def export_design(result: DesignResult, row: int, path: str | Path, *, force: bo
     design's row in ``designs.parquet`` and ``summary.json``, so that ``flexdigit params`` checks it and every
     command takes it as ``--params``. The twin calibration is not
     in it: the commands scale the thesis's to the digit (:func:`flexdigit.twin.digit_calibration.calibration_for`),
-    while the study evaluated the design on the baseline calibration (its channels averaged for another gauge
-    count, :func:`design_parameter_set`), so a command's twin of a resized design is not exactly the study's.
+    as the study scored the design (:func:`design_calibration`; on a thesis-rig baseline the same calibration).
     Never overwrites ``path`` without ``force``."""
     front = sorted(int(i) for i in result.front)
     if isinstance(row, bool) or not isinstance(row, int | np.integer) or int(row) not in front:
