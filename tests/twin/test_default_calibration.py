@@ -84,3 +84,10 @@ def test_a_use_calibration_block_is_every_fitting_twins_default(small):
         )
         assert twin_calibration(two) == calibration_for(two)
     assert Twin(small).calibration == calibration_for(small)
+
+
+def test_a_batched_twin_takes_each_rigs_default(small):
+    from flexdigit.twin.batched import BatchedTwin
+
+    twins = BatchedTwin([RigParams(), small])
+    assert twins.calibrations == [packaged_calibration(), calibration_for(small)]
