@@ -133,3 +133,14 @@ def test_shape_accuracy_command_on_a_pair(capsys):
     medians = {g["case"]: g["tip_error_median_mm"] for g in out["groups"]}
     assert max(medians["bare, upright"], medians["bare, horizontal"]) < 1.0  # the trial's: 168 mm
     assert medians["weight, horizontal"] < 2.0
+
+
+@pytest.mark.filterwarnings("error")
+def test_shape_accuracy_command_says_a_buckling_digit_is_hung(capsys):
+    code = main(["shape", "--accuracy", "--params", str(HANDMADE / "five_unequal_bronze_full.toml")])
+    text = capsys.readouterr().out
+    assert code == 0
+    assert "the digit buckles tip up: its bare cases are hanging" in text
+    assert "bare, upright" not in text
+    hanging = next(line for line in text.splitlines() if line.startswith("bare, hanging"))
+    assert float(hanging.split()[3]) < 2.0  # its median tip error, mm (the trial's upright worst: 278 mm)

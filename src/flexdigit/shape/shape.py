@@ -1246,6 +1246,9 @@ class ShapeAccuracy:
         Whether the estimator declared a load.
     load_position_error_m, load_position_sd_m : ndarray, shape (B,)
         Its load position's error and standard deviation (m; NaN without contact).
+    settled : ndarray of bool, shape (B,)
+        Whether the estimate's lever arms settled (``tol_rad``): where not, the row is an estimate it cannot
+        stand behind (flagged here and by ``shape --accuracy``, rather than warned about).
     """
 
     case: np.ndarray
@@ -1258,13 +1261,14 @@ class ShapeAccuracy:
     contact: np.ndarray
     load_position_error_m: np.ndarray
     load_position_sd_m: np.ndarray
+    settled: np.ndarray
     seed: int = 0
     #: The bare group's mount: "vertical" (tip up), or "hanging" for a digit that buckles tip up.
     mount: str = "vertical"
 
     def summary(self) -> list[dict]:
         """Per case group: cases, tip error median / 95th percentile / max (mm), mean RMS along the digit (mm),
-        share of tips within two of their standard deviations, contact rate."""
+        share of tips within two of their standard deviations, contact rate, estimates unsettled."""
         out = []
         for group in dict.fromkeys(self.case.tolist()):
             rows = self.case == group
@@ -1279,6 +1283,7 @@ class ShapeAccuracy:
                     "rms_error_mean_mm": float(np.mean(self.rms_error_m[rows]) * 1e3),
                     "tip_within_2sd": float(np.mean(self.tip_error_m[rows] <= 2 * self.tip_sd_m[rows])),
                     "contact_rate": float(np.mean(self.contact[rows])),
+                    "unsettled": int(np.sum(~self.settled[rows])),
                 }
             )
         return out
@@ -1368,7 +1373,8 @@ def shape_accuracy(
             m, s, c, params=params, calibration=calibration, orientation=orientation, seed=seed + k,
             return_solution=True,
         )  # fmt: skip
-        est = ShapeEstimator(params, calibration, orientation=orientation).estimate(volts, command=c)
+        estimator = ShapeEstimator(params, calibration, orientation=orientation)
+        est, _, change, rounds = estimator._estimate(volts, c, None)  # unsettled rows: a column, not a warning
         chain = cached_digit(params, calibration, True, orientation, DEFAULT_CELLS_PER_SECTION)
         truth = true_centre_line_m(sol.psi_rad, chain, est.s_m)
         dist = np.linalg.norm(est.centre_line_m - truth, axis=-1)
@@ -1382,4 +1388,5 @@ def shape_accuracy(
         columns["contact"].append(est.contact)
         columns["load_position_error_m"].append(np.where(m > 0, est.load_position_from_base_m - s, np.nan))
         columns["load_position_sd_m"].append(est.load_position_sd_m)
+        columns["settled"].append(change < estimator.tol_rad if rounds else np.ones(c.size, dtype=bool))
     return ShapeAccuracy(**{k: np.concatenate(v) for k, v in columns.items()}, seed=seed, mount=mount)
