@@ -115,3 +115,15 @@ def test_a_one_gauge_digit_reads_no_force_where_its_point_guess_read_one():
     # the old reading of nothing, one reading's noise clipped at zero force: E max(0, X) = sigma / sqrt(2 pi) = 14 mN
     # for sigma = 36 mN (11 mN here); the mean of 150 such has an sd of ~1.7 mN, so 5 mN is 3 of them above 0
     assert np.mean(guesses) > 0.005
+
+
+def test_a_hold_tares_long_enough_for_its_noise_and_no_longer_than_10_s():
+    """The tare's force error (one reading's force sd over the root of the readings) within a third of 10 % of the
+    setpoint: the thesis rig's 3.3 mN a reading keeps its 10 readings; the one-gauge digit's 36 mN needs 118; a
+    digit whose gauges barely see the force is capped at 500 (10 s of readings), not left to tare for minutes."""
+    from flexdigit.palpation.palpation import MAX_TARE_READINGS, TARE_READINGS, TARE_SHARE, _tare_readings
+
+    assert _tare_readings(0.0033, 0.1) == TARE_READINGS
+    n = _tare_readings(0.036, 0.1)
+    assert 0.036 / np.sqrt(n) <= TARE_SHARE * 0.1 < 0.036 / np.sqrt(n - 1)
+    assert _tare_readings(1.0, 0.1) == MAX_TARE_READINGS

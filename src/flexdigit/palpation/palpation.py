@@ -670,6 +670,10 @@ TARE_READINGS = 10
 #: The tare's force error (1 sd) a hold allows, relative to its setpoint: a third of the issue's 10 % (more readings
 #: where one reading's force is noisier, :func:`_tare_readings`).
 TARE_SHARE = 0.10 / 3
+#: At most this many readings in a tare (10 s of the loop's 20 ms readings) ...
+MAX_TARE_READINGS = 500
+#: ... and in an estimate's mean (0.5 s: at the loop's ~0.8 rad/s crossover a 0.25 s delay, 0.2 rad of phase).
+MAX_AVERAGE_READINGS = 25
 
 
 def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "cable", window_s: float = 3.0) -> dict:
@@ -1251,7 +1255,8 @@ def hold_force(
     if estimator is None:
         # each estimate on the mean of enough readings for its noise to stay DETECT_SIGMAS below the contact
         # threshold (1 on the thesis rig: 3.3 mN a reading against 30 mN; 14 on the one-gauge digit, 36 mN a reading)
-        average = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
+        needed = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
+        average = min(MAX_AVERAGE_READINGS, needed)
         estimator = ContactEstimator(
             model, classify=region.get("classify", False), side=side, region_m=region["region_m"], n_readings=average
         ).fit()
@@ -1325,7 +1330,7 @@ def _tare_readings(force_sd_n: float, setpoint_n: float) -> int:
     118 readings, 2.4 s; the thesis rig 3.3 mN, its 10)."""
     if not math.isfinite(force_sd_n):
         return TARE_READINGS
-    return max(TARE_READINGS, math.ceil((force_sd_n / (TARE_SHARE * setpoint_n)) ** 2))
+    return min(MAX_TARE_READINGS, max(TARE_READINGS, math.ceil((force_sd_n / (TARE_SHARE * setpoint_n)) ** 2)))
 
 
 def _tare(rig, readings: int) -> np.ndarray:
