@@ -66,9 +66,10 @@ def test_a_hold_says_what_its_estimates_decided(tmp_path, capsys):
     reading at a time on the short digit (3 gauges' worth of noise: 6.6 mN a reading against a 30 mN threshold)."""
     held = _hold("short", tmp_path, capsys)
     window = [t >= held["time_s"][-1] - 3.0 for t in held["time_s"]]
-    assert len(held["kind"]) == len(held["time_s"])
+    assert held["kind"] == "force"  # what the command did, not overwritten by the samples' decisions
+    assert len(held["decision"]) == len(held["time_s"])
     assert held["decisions"] == {"none": 0, "point": sum(window), "distributed": 0}
-    assert held["kind"][0] == "none"  # the first reading, at the straight command: nothing touches
+    assert held["decision"][0] == "none"  # the first reading, at the straight command: nothing touches
     assert held["average_readings"] == 1
     assert held["tare_readings"] == 10
 

@@ -439,7 +439,7 @@ def _hold_data(held) -> tuple[dict, str]:
         "time_s": held.time_s.tolist(),
         "command": held.command.tolist(),
         "force_n": held.force_n.tolist(),
-        "kind": [] if held.kind is None else held.kind.tolist(),
+        "decision": [] if held.kind is None else held.kind.tolist(),
         **({"true_force_n": held.true_force_n.tolist()} if held.true_force_n is not None else {}),
     }
     place = data["contact_place"]

@@ -973,7 +973,7 @@ class ForceController:
     commands around it, interpolated. **The force follows the contact
     decision** (:meth:`estimate`): nothing touching reads 0 N, a point contact its point force, a line load (a
     classifying estimator) its total; before, every reading was converted as a point force at the guessed place, so
-    noise with nothing touching read as a force (clipped at zero: +30 mN on the one-gauge digit). The command
+    noise with nothing touching read as a force (clipped at zero: +11 mN on the one-gauge digit). The command
     integrates the force error (``gain`` commands per second per N, clamped to ``low..high``: no wind-up), and is
     rounded with error feedback (a first-order sigma-delta): the integer commands sent average to the continuous
     one, a resolution the servo (20 rad/s) and the digit (13 rad/s) filter the 25 Hz toggling out of, finer than the
