@@ -72,6 +72,7 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
+        plan = _laid_out(plan, rig, calibration, tissue.side, info.source)
         if kind == "force":
             data, text, fig = _force(rig, tissue, plan, logs[0], log_mode)
         elif kind == "scan":
@@ -83,6 +84,8 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     finally:
         rig.close()
     data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, "rig": settings, **data}
+    if settings.get("orientation") == "hanging":
+        text += "\nmounted tip down (hanging): this digit buckles tip up (as `flexdigit run --params` mounts it)"
     if sim:
         data["truth"] = {
             "gap_mm": 1000 * tissue.gap_m,
@@ -90,6 +93,38 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             "exponent": tissue.exponent,
         }
     return CommandResult(data=data, text=text + _save_outputs(args, data, fig, out))
+
+
+def _laid_out(plan, rig, calibration, side: str, tissue_source: str):
+    """The protocol on the rig's digit: the built-in sweep's thesis commands (and those a file leaves out) from its
+    straight command towards the tissue, as far in tip rotation, each plateau settling as much longer as the digit
+    rings (palpation.digit_protocol); a file's own commands checked to press towards the tissue
+    (palpation.check_sweep_commands). One line naming the file if not."""
+    from dataclasses import replace
+
+    from flexdigit.errors import DataFileError, ParameterError
+    from flexdigit.palpation.contact_estimation import ContactGaugeModel
+    from flexdigit.palpation.palpation import check_sweep_commands, digit_protocol, towards
+
+    params = rig.params
+    try:
+        sign = towards(params, side)
+    except ParameterError as exc:
+        raise DataFileError(f"{tissue_source}: key 'tissue.side': {exc}") from None
+    if plan.force:
+        if sign < 0:
+            raise DataFileError(
+                f"{tissue_source}: key 'tissue.side' = 'opposite': force control presses the digit towards its cable "
+                "side (commands above straight); an antagonistic pair's other side is not held yet"
+            )
+        return plan
+    try:
+        model = ContactGaugeModel(params, calibration, orientation=_orientation(rig))
+        sweep = digit_protocol(plan.sweep, params, side, laid_out=plan.laid_out, model=model)
+        check_sweep_commands(sweep, params, side)
+    except ParameterError as exc:
+        raise DataFileError(f"{plan.source}: [sweep] {exc}") from None
+    return replace(plan, sweep=sweep)
 
 
 def _palpation_rig(args: argparse.Namespace, info, kind: str):
@@ -111,8 +146,21 @@ def _palpation_rig(args: argparse.Namespace, info, kind: str):
     options = _sim_options(args.backend, kind, args.seed, params)
     if sim and (args.params or args.calibration):
         options["calibration"] = calibration
+    if sim and args.params and "orientation" not in _url_options(args.backend):
+        from flexdigit.control.design20ms import digit_mount
+
+        # a digit that buckles tip up hangs, as `run --params` mounts it (said in the output): tip up its twin
+        # sagged off its straight command and the gauge model's statics did not converge (69 warnings, > 6 min)
+        if digit_mount(params, calibration) == "hanging":
+            options["orientation"] = "hanging"
     rig = open_rig(args.backend, params, **options)
     return sim, rig, calibration
+
+
+def _url_options(backend: str) -> dict:
+    from flexdigit.rig.base import rig_url_options
+
+    return rig_url_options(backend)[1]
 
 
 def _save_outputs(args: argparse.Namespace, data: dict, fig, out) -> str:
@@ -201,7 +249,8 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
     from flexdigit.palpation.palpation import palpate, stiffness_bound
 
     model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
-    result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode)
+    # the gauges' random-walk drift weighed in the fit (palpation.fit_tissue): a 75 s sweep's wander read as stiffness
+    result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode, drift=True)
     _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
     touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
     if touching < 3:
@@ -209,7 +258,9 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
             f"palpation: the digit reached the tissue on {touching} of {len(result.curve['command'])} plateaus (3 "
             "needed for a stiffness): sweep to higher commands ('commands') or place the tissue nearer"
         )
-    bound = stiffness_bound(model, result.fit.tissue, plan.sweep, fit_exponent=plan.sweep.model == "hunt-crossley")
+    bound = stiffness_bound(
+        model, result.fit.tissue, plan.sweep, fit_exponent=plan.sweep.model == "hunt-crossley", drift=True
+    )
     data = _sweep_data(result, plan, bound, tissue)
     summary = data["result"]
     f = result.fit
@@ -400,6 +451,12 @@ def _force(rig, tissue, plan, log, log_mode):
         log_path=log,
         log_mode=log_mode,
     )
+    unreached = held.unreached()
+    if unreached:  # never a success that touched nothing: the digit relaxed, one line, exit 2
+        from flexdigit.errors import RigError
+
+        straight = rig.relax()
+        raise RigError(f"hold: {unreached}; digit relaxed to command {straight}")
     data, text = _hold_data(held)
 
     def figure():

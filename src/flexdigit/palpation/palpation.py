@@ -47,6 +47,13 @@ from flexdigit.twin.digit_calibration import twin_calibration
 __all__ = [
     "MODELS",
     "PalpationProtocol",
+    "THESIS_STRAIGHT",
+    "command_scale",
+    "towards",
+    "digit_command",
+    "digit_protocol",
+    "check_sweep_commands",
+    "ring_time_s",
     "SweepRecord",
     "run_sweep",
     "TissueFit",
@@ -131,6 +138,119 @@ class PalpationProtocol:
     def duration_s(self) -> float:
         """The whole sweep, tares included (s)."""
         return (len(self.commands) + 2) * self.plateau_s
+
+
+#: The thesis rig's straight command: the built-in protocols count their commands from it.
+THESIS_STRAIGHT = 8
+
+
+def command_scale(params) -> float:
+    """Commands of ``params``'s digit per command of the thesis rig for the same tip rotation: the thesis's cable-model
+    1.735 deg a command over the digit's (:func:`flexdigit.models.cable.tip_rotation_per_command_deg`: its servo
+    step, gearing, pulley radius and cable eccentricity). 1 on the thesis rig, the gear ratio on a geared copy of it
+    (3 on a 3:1), 5.6 on a servo of 0.216 deg a command (the design study's front design 30: 0.31 deg of tip)."""
+    from flexdigit.models.cable import tip_rotation_per_command_deg
+
+    # to 12 figures: a 3:1 copy of the thesis rig scales by 3, not 2.9999999999999996
+    return float(f"{tip_rotation_per_command_deg(RigParams()) / tip_rotation_per_command_deg(params):.12g}")
+
+
+def towards(params, side: str = "cable") -> int:
+    """+1 if the digit's commands above its straight one bend it towards a body on ``side``, -1 if those below do
+    (an antagonistic pair, ``side`` "opposite"). A single cable bends the digit towards its cable side only: a body
+    on the other side is refused in one line (:class:`~flexdigit.errors.ParameterError`)."""
+    check_choice(side, "side", ("cable", "opposite"), "towards")
+    if side == "cable":
+        return 1
+    if params.cables.count == 2:
+        return -1
+    raise ParameterError(
+        "tissue side 'opposite': this digit's single cable bends it towards its cable side only, never into a body on "
+        "the other side; place the tissue on side 'cable' (or describe an antagonistic pair, [cables] count = 2)"
+    )
+
+
+def digit_command(params, thesis_command: float, side: str = "cable") -> int:
+    """The command of ``params``'s digit as far past its straight command, towards ``side``, in tip rotation as
+    ``thesis_command`` is past the thesis rig's straight 8 (:func:`command_scale`), within the servo's range."""
+    a = params.actuator
+    past = (float(thesis_command) - THESIS_STRAIGHT) * command_scale(params)
+    command = int(a.equilibrium_command) + towards(params, side) * int(round(past))
+    return int(min(int(a.command_max), max(int(a.command_min), command)))
+
+
+def ring_time_s(model) -> float:
+    """The slowest time constant ``1 / (zeta wn)`` (s) of ``model``'s digit (its chain's linear modes, housed, as
+    mounted): the thesis rig's 1.12 s (13.1 rad/s, zeta 0.068); a 0.5 m one-section digit's 4.9 s."""
+    wn, zeta = model.chain.linear_modes()
+    return float(np.max(1.0 / (np.asarray(zeta) * np.asarray(wn))))
+
+
+@lru_cache(maxsize=1)
+def _thesis_ring_time_s() -> float:
+    return ring_time_s(ContactGaugeModel(RigParams(), packaged_calibration()))
+
+
+def digit_protocol(
+    protocol: PalpationProtocol,
+    params,
+    side: str = "cable",
+    *,
+    laid_out=("commands", "tare_command"),
+    model=None,
+):
+    """A protocol written for the thesis rig (commands counted from its straight 8) laid out on ``params``'s digit:
+    each command the same tip rotation past the digit's straight command (:func:`digit_command`), towards the tissue
+    (above it on the cable side; below it for an antagonistic pair's other side), the tare at its straight command.
+
+    ``laid_out`` names which of ``commands``, ``tare_command`` and ``settle_s`` are the thesis's (a protocol file's
+    own values are the user's, kept, and checked by :func:`check_sweep_commands`). Commands that fall on one after
+    rounding (a coarser step than the thesis's) are taken once; fewer than 3 left is refused. Before, the built-in
+    sweep ran 8..30 and tared at 8 on every digit: 119 commands below an antagonistic pair's straight 127 (a runaway
+    at -124 deg), or 22 fine steps of a 0.31 deg servo that never reached the tissue.
+
+    ``settle_s`` (with ``model``, the digit's gauge model as mounted): the thesis's settling times the digit's
+    slowest ring (:func:`ring_time_s`) over the thesis rig's, never shorter: the thesis's 2.5 s is 2.2 of its 1.12 s
+    time constants; the 0.5 m one-section digit (4.9 s) rang through its 2.5 s plateaus, chi2/dof 948."""
+    commands = protocol.commands
+    if "commands" in laid_out:
+        commands = tuple(dict.fromkeys(digit_command(params, c, side) for c in protocol.commands))
+    tare = digit_command(params, protocol.tare_command, side) if "tare_command" in laid_out else protocol.tare_command
+    if len(commands) < 3:
+        raise ParameterError(
+            f"the sweep's commands laid out on this digit ({tare} straight, {command_scale(params):.3g} of its "
+            f"commands a thesis command) are {list(commands)}: fewer than 3 distinct commands; give 'commands' for it"
+        )
+    settle = protocol.settle_s
+    if "settle_s" in laid_out and model is not None:
+        settle = max(settle, round(settle * ring_time_s(model) / _thesis_ring_time_s(), 1))
+    return PalpationProtocol(
+        commands=commands,
+        settle_s=settle,
+        readings=protocol.readings,
+        tare_command=tare,
+        period_s=protocol.period_s,
+        model=protocol.model,
+    )
+
+
+def check_sweep_commands(protocol: PalpationProtocol, params, side: str = "cable") -> None:
+    """Refuse, in one line, a sweep (or tare) command that bends ``params``'s digit away from a body on ``side`` past
+    its straight command: an antagonistic pair bends both ways, and the thesis's 8..30 are 119 commands the wrong way
+    of a pair's straight 127. (Below a single cable's straight command its cable is slack: harmless, allowed.)"""
+    if params.cables.count != 2:
+        towards(params, side)
+        return
+    straight = int(params.actuator.equilibrium_command)
+    sign = towards(params, side)
+    away = [c for c in (protocol.tare_command, *protocol.commands) if sign * (c - straight) < 0]
+    if away:
+        direction = "above" if sign > 0 else "below"
+        raise ParameterError(
+            f"the sweep's command {away[0]} bends this digit away from the {side}-side tissue: its straight command "
+            f"is {straight} and it presses the tissue {direction} it; give 'commands' and 'tare_command' from "
+            f"{straight} {direction} (or leave them out: the built-in sweep laid out on the digit)"
+        )
 
 
 @dataclass
@@ -260,9 +380,15 @@ class TissueFit:
 
 class _TissueLikelihood:
     """Weighted residuals of the plateaus' gauges under a tissue hypothesis, nuisance offsets and drifts profiled
-    out (variable projection: for a given tissue they are a linear least-squares fit per gauge)."""
+    out (variable projection: for a given tissue they are a linear least-squares fit per gauge).
 
-    def __init__(self, model, commands, times, gauges, sigma, tissue_of, nuisance: bool = True):
+    ``walk_v_per_sqrt_s`` (per gauge): the gauges' random-walk drift, whose wander about the fitted line is
+    correlated from plateau to plateau: the residuals are then whitened by each gauge's covariance (white noise plus
+    ``walk^2 min(t_i, t_j)`` from the first plateau) and the nuisance fitted by generalised least squares. Without it
+    (white noise only) a 75 s sweep's walk read as stiffness: the 2 x 65 mm pair's twin sweeps fitted 1155, 970 and
+    1111 N/m^2 for 1000 (seeds 0-2), each "+- 29" (5 sd); with the walk's drift off the twin, 1015 +- 19."""
+
+    def __init__(self, model, commands, times, gauges, sigma, tissue_of, nuisance: bool = True, walk_v_per_sqrt_s=None):
         self.model = model
         self.commands = np.asarray(commands, dtype=int)
         self.gauges = np.asarray(gauges, dtype=float)
@@ -274,6 +400,26 @@ class _TissueLikelihood:
         self.tissue_of = tissue_of
         self.evaluations = 0
         self._shapes: dict[int, np.ndarray] = {}
+        self.whiten = None  # per gauge: W with W C W^T = I
+        if walk_v_per_sqrt_s is not None and self.design is not None:
+            walk = np.broadcast_to(np.asarray(walk_v_per_sqrt_s, dtype=float), (self.gauges.shape[1],))
+            sigma = np.broadcast_to(self.sigma, (self.gauges.shape[1],))
+            since = t - t.min()
+            shared = np.minimum.outer(since, since)
+            self.whiten = [
+                np.linalg.inv(np.linalg.cholesky(np.diag(np.full(t.size, sd**2)) + rate**2 * shared))
+                for sd, rate in zip(sigma, walk, strict=True)
+            ]
+
+    def _gls(self, r):
+        """Per gauge: the whitened residual after the GLS nuisance fit, and the nuisance's coefficients."""
+        out, coefs = np.empty_like(r), []
+        for g, w in enumerate(self.whiten):
+            design, rw = w @ self.design, w @ r[:, g]
+            coef, *_ = np.linalg.lstsq(design, rw, rcond=None)
+            out[:, g] = rw - design @ coef
+            coefs.append(coef)
+        return out, np.array(coefs).T
 
     def predict(self, theta):
         self.evaluations += 1
@@ -289,6 +435,8 @@ class _TissueLikelihood:
 
     def residuals(self, theta):
         r = self.gauges - self.predict(theta)
+        if self.whiten is not None:
+            return self._gls(r)[0].ravel()
         if self.design is not None:
             coef, *_ = np.linalg.lstsq(self.design, r, rcond=None)
             r = r - self.design @ coef
@@ -298,7 +446,10 @@ class _TissueLikelihood:
         r = self.gauges - self.predict(theta)
         if self.design is None:
             return np.zeros(3), np.zeros(3)
-        coef, *_ = np.linalg.lstsq(self.design, r, rcond=None)
+        if self.whiten is not None:
+            coef = self._gls(r)[1]
+        else:
+            coef, *_ = np.linalg.lstsq(self.design, r, rcond=None)
         return coef[0] - coef[1] * self._t0 / self._span, coef[1] / self._span
 
 
@@ -326,6 +477,7 @@ def fit_tissue(
     fit_exponent: bool = False,
     sigma_v=None,
     start=None,
+    drift: bool = False,
 ) -> TissueFit:
     """Fit a tissue's gap and modulus (and Hunt-Crossley exponent) to a sweep's plateaus (module docstring).
 
@@ -346,6 +498,10 @@ def fit_tissue(
         Noise of one plateau mean per gauge (V); default the model's white noise over ``record.readings``.
     start : TissueFit, optional
         Start from this fit's gap and modulus (a neighbouring sweep's) instead of a coarse grid search.
+    drift : bool
+        Weigh the gauges' random-walk drift (the calibration's ``noise_drift_v_per_sqrt_s``) in the likelihood
+        (:class:`_TissueLikelihood`): the modulus and its sd honest over a long sweep (``flexdigit palpate``). Off,
+        white noise only, as the report's studies have always fitted.
     """
     sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(record.readings) if sigma_v is None else sigma_v
     like = _TissueLikelihood(
@@ -355,6 +511,7 @@ def fit_tissue(
         record.gauges_v,
         sigma,
         lambda th: placed.replace(gap_m=th[0], modulus_n_m2=math.exp(th[1]), exponent=th[2] if fit_exponent else 1.0),
+        walk_v_per_sqrt_s=_walk(model) if drift else None,
     )
     if start is None:
         x0 = _start(like, model, placed, record.command, fit_exponent)
@@ -387,6 +544,11 @@ def fit_tissue(
     )
 
 
+def _walk(model) -> np.ndarray:
+    """The gauges' random-walk drift (V / sqrt(s)) of ``model``'s calibration."""
+    return np.asarray(model.calibration.noise_drift_v_per_sqrt_s, dtype=float)
+
+
 def _start(like, model, placed, commands, fit_exponent):
     """A starting point from a coarse grid: gaps where the free digit's deepest point in the tissue's stretch
     would meet it at each plateau, moduli log-spaced 30..3e5 N/m^2."""
@@ -413,7 +575,9 @@ def _start(like, model, placed, commands, fit_exponent):
     return x0
 
 
-def stiffness_bound(model, tissue, protocol: PalpationProtocol, *, fit_exponent: bool = False) -> dict:
+def stiffness_bound(
+    model, tissue, protocol: PalpationProtocol, *, fit_exponent: bool = False, drift: bool = False
+) -> dict:
     """Cramer-Rao standard deviations of the gap (m), modulus (N/m^2) and exponent from one sweep of
     ``protocol`` on ``tissue``, with the gauges' white noise over ``readings`` and the nuisance offsets and drifts
     estimated as the fit does."""
@@ -428,6 +592,7 @@ def stiffness_bound(model, tissue, protocol: PalpationProtocol, *, fit_exponent:
         clean,
         sigma,
         lambda th: tissue.replace(gap_m=th[0], modulus_n_m2=math.exp(th[1]), exponent=th[2] if fit_exponent else 1.0),
+        walk_v_per_sqrt_s=_walk(model) if drift else None,
     )
     theta = np.array([tissue.gap_m, math.log(tissue.modulus_n_m2)] + ([tissue.exponent] if fit_exponent else []))
     steps = np.array([1e-5, 1e-3] + ([1e-3] if fit_exponent else []))
@@ -484,13 +649,15 @@ class PalpationResult:
     __repr__ = fields_summary
 
 
-def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, estimator=None) -> PalpationResult:
+def analyse(
+    record: SweepRecord, placed, protocol: PalpationProtocol, model, estimator=None, *, drift: bool = False
+) -> PalpationResult:
     """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope.
 
     The curve's ``force_n`` is NaN ("no force read", ``force_read`` False) where the gauges read no force: the
     estimator saw no contact, or its standard deviation is infinite or over the value (:func:`_force_read`).
     """
-    fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley")
+    fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley", drift=drift)
     sweep = ~record.tare
     cmds = record.command[sweep]
     if estimator is None:
@@ -571,19 +738,27 @@ def _plateau_truth(record: SweepRecord, protocol: PalpationProtocol) -> np.ndarr
 
 
 def palpate(
-    rig, placed, protocol: PalpationProtocol | None = None, *, model=None, log_path=None, log_mode: str = "new"
+    rig,
+    placed,
+    protocol: PalpationProtocol | None = None,
+    *,
+    model=None,
+    log_path=None,
+    log_mode: str = "new",
+    drift: bool = False,
 ) -> PalpationResult:
     """Run a palpation on ``rig`` with the tissue ``placed`` beside the digit (:func:`run_sweep`, :func:`analyse`).
 
     On the twin the tissue is put there (``rig.place_tissue``) and the true contact force is logged beside each
-    sample; on hardware the operator is asked to place it.
+    sample; on hardware the operator is asked to place it. ``drift``: weigh the gauges' random-walk drift in the fit
+    (:func:`fit_tissue`).
     """
     protocol = protocol or PalpationProtocol()
     model = model or rig_contact_model(rig)
     rig.place_tissue(placed)
     truth = _truth_of(rig)
     record = run_sweep(rig, protocol, log_path=log_path, truth=truth, log_mode=log_mode)
-    return analyse(record, placed, protocol, model)
+    return analyse(record, placed, protocol, model, drift=drift)
 
 
 def twin_step_s(kind: str, params=None) -> float:
@@ -608,16 +783,22 @@ _THESIS_FORCE_TISSUE = (0.15, 0.35, 0.03, 1000.0)
 def force_per_command(model, tissue: Tissue, setpoint_n: float) -> float:
     """The contact force a command adds where the statics of ``model`` first press ``setpoint_n`` (N) into
     ``tissue`` (N per command, the loop's plant gain at its setpoint), from the digit's straight command up its
-    thesis range (52 commands x its gearing); NaN if it never presses that hard there."""
-    act = model.params.actuator
-    eq = int(act.equilibrium_command)
-    commands = np.arange(eq, min(int(act.command_max), eq + int(round(52 * act.gear_ratio))) + 1)
+    thesis range (:func:`_press_commands`); NaN if it never presses that hard there."""
+    commands = _press_commands(model.params)
     force = np.abs(model.tissue_solution(tissue, commands)[0].contact_force_n)
     reached = np.flatnonzero(force >= setpoint_n)
     if not reached.size or reached[0] == 0:
         return math.nan
     k = int(reached[0])
     return float(force[k] - force[k - 1])
+
+
+def _press_commands(params) -> np.ndarray:
+    """The commands force control may press with: the thesis rig's 8..60 laid out on the digit, from its straight
+    command up as far in tip rotation (:func:`digit_command`: 52 commands x its gearing on a copy of the thesis
+    rig; before, 52 x the gearing on any digit, 11 deg of tip on a 0.31 deg servo that never reached the tissue)."""
+    eq = int(params.actuator.equilibrium_command)
+    return np.arange(eq, digit_command(params, THESIS_STRAIGHT + 52) + 1)
 
 
 @lru_cache(maxsize=1)
@@ -639,7 +820,8 @@ def force_gains(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "c
     command where the statics first press ``setpoint_n`` into the thesis's soft block laid out beside the digit's
     ``region_m`` as beside the thesis rig's (from its start to 80 mm past its end, 30 mm x L / 0.27 m away; the
     digit's outer 45 % without a region; a real tissue's stiffness is as unknown to the loop on the thesis rig).
-    The approach rate turns the pulley as fast as the thesis's 4 commands per second (x the gearing).
+    The approach rate turns the tip as fast as the thesis's 4 commands per second (x :func:`command_scale`: the
+    gearing on a geared copy of the thesis rig).
     """
     length = float(model.params.geometry.digit_length_m)
     start, end = (0.55 * length, length) if region_m is None else (float(region_m[0]), float(region_m[1]))
@@ -647,11 +829,11 @@ def force_gains(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "c
     tissue = Tissue(start, end + 0.08, 0.03 * length / 0.27, modulus, side=side)
     k = force_per_command(model, tissue, setpoint_n)
     if not k > 0:  # never presses the setpoint there: the thesis rig's rates per turn of the pulley
-        k = _thesis_force_per_command() / model.params.actuator.gear_ratio
+        k = _thesis_force_per_command() / command_scale(model.params)
     gain = float(f"{THESIS_FORCE_GAIN * _thesis_force_per_command() / k:.3g}")
     return {
         "gain": gain,
-        "approach_rate": THESIS_APPROACH_RATE * float(model.params.actuator.gear_ratio),
+        "approach_rate": THESIS_APPROACH_RATE * command_scale(model.params),
         "force_per_command_n": k,
     }
 
@@ -698,9 +880,7 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
     length = float(model.params.geometry.digit_length_m)
     start, end = (0.55 * length, length) if region_m is None else (float(region_m[0]), float(region_m[1]))
     tissue = Tissue(start, end + 0.08, 0.03 * length / 0.27, _THESIS_FORCE_TISSUE[3], side=side)
-    act = model.params.actuator
-    eq = int(act.equilibrium_command)
-    commands = np.arange(eq, min(int(act.command_max), eq + int(round(52 * act.gear_ratio))) + 1)
+    commands = _press_commands(model.params)
     sol, volts = model.tissue_solution(tissue, commands)
     force = np.abs(sol.contact_force_n)
     reached = np.flatnonzero(force >= setpoint_n)
@@ -1193,6 +1373,34 @@ class ForceHold:
     #: "distributed"; :meth:`ForceController.estimate`)
     force_sd_n: np.ndarray | None = None
     kind: np.ndarray | None = None
+    #: whether the loop read a contact (its estimate passed CONTACT_FRACTION of the setpoint), and the last command
+    #: it may press with (:func:`_press_commands`)
+    touched: bool = True
+    high_command: int = 254
+
+    def unreached(self) -> str:
+        """Why the hold never held its setpoint, in one line ("" when it did): no contact read up to its last
+        command; or pressing at its last command over the figures' window and reading under 90 % of the setpoint;
+        or, on the twin, a true force under half the setpoint over the window (the gauges misread a contact).
+        Before, a hold that never touched reported "completed" with a steady force of 0 N (error -100 %)."""
+        window = self._window()
+        if not self.touched:
+            return (
+                f"never reached {self.setpoint_n:g} N: no contact read in {self.time_s[-1]:.1f} s, pressing up to "
+                f"command {int(np.max(self.command))} of its last {self.high_command} (the tissue out of reach?)"
+            )
+        estimated = float(np.mean(self.force_n[window])) if np.any(window) else 0.0
+        if np.all(self.command[window] >= self.high_command) and estimated < 0.9 * self.setpoint_n:
+            return (
+                f"never reached {self.setpoint_n:g} N: pressing at its last command {self.high_command}, the gauges "
+                f"read {estimated:.3g} N over the last {self.window_s:g} s"
+            )
+        if self.true_force_n is not None and self.steady_force_n < 0.5 * self.setpoint_n:
+            return (
+                f"never reached {self.setpoint_n:g} N: the twin's true contact force was {self.steady_force_n:.3g} N "
+                f"over the last {self.window_s:g} s while the gauges read {estimated:.3g} N"
+            )
+        return ""
 
     def decisions(self) -> dict:
         """How many samples of the figures' window each contact decision took (``{"none": n, "point": n, ...}``)."""
@@ -1244,6 +1452,11 @@ def hold_force(
     presses) and the pulley's approach speed are the thesis rig's on any digit.
     """
     setpoint = check_real(setpoint_n, "setpoint_n", "hold_force", low=0, low_open=True)
+    if towards(rig.params, side) < 0:
+        raise ParameterError(
+            "force control presses the digit towards its cable side (commands above straight): an antagonistic "
+            "pair's 'opposite'-side tissue is not held yet; place it on side 'cable'"
+        )
     model = model or rig_contact_model(rig)
     if gain is None or approach_rate is None:
         derived = force_gains(model, setpoint, region_m=region_m, side=side)
@@ -1293,6 +1506,7 @@ def hold_force(
         region=region, place_m=np.array(controller.places[: t.size]),
         true_place_m=np.array(true_place) if truth else None, window_s=float(window_s), steady_place_m=steady_place,
         force_sd_n=np.array(controller.force_sds[: t.size]), kind=np.array(controller.kinds[: t.size], dtype=str),
+        touched=bool(controller.touching), high_command=int(controller.high),
     )  # fmt: skip
 
 
@@ -1305,9 +1519,9 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
     tare = _tare_readings(region.get("force_sd_n", math.nan), setpoint)
     offset = _tare(rig, tare) - model.free_v([eq])[0]
     sign = -1.0 if side == "cable" else 1.0
-    # the thesis rig's 8..60: 52 commands of pulley past straight (times a gearing), within the servo's range
+    # the thesis rig's 8..60, laid out on the digit (_press_commands)
     act = rig.params.actuator
-    high = min(int(act.command_max), eq + int(round(52 * act.gear_ratio)))
+    high = int(_press_commands(rig.params)[-1])
     # the servo's lag behind the approach read as force: modelled where it would read as more than 10 % of the
     # setpoint (not on the thesis rig: 1.7 mN at 0.1 N)
     lag_force = servo_lag_force(model, estimator, approach_rate, min(eq + 2, high))
