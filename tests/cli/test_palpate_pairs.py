@@ -85,3 +85,33 @@ def test_a_hold_that_never_touches_fails_in_one_line(tmp_path, capsys):
     assert len(err.splitlines()) == 1
     assert "never reached 0.1 N" in err and "digit relaxed to command 8" in err
     assert not out.exists()
+
+
+def test_a_hold_refuses_tissue_past_the_tip_in_one_line(capsys):
+    # soft-block starts at 150 mm, the 0.15 m pair's tip: the contact estimator's region was empty (a ParameterError
+    # about 'region_m' of ContactEstimator)
+    argv = ["palpate", "--params", str(HANDMADE / "short_pair_quarter.toml"), "--tissue", "soft-block"]
+    assert main([*argv, "--protocol", "hold"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "tissue soft-block: key 'tissue.start_mm' = 150" in err
+
+
+@pytest.mark.slow
+def test_a_digit_that_buckles_tip_up_is_palpated_hanging_without_warnings(capsys, recwarn):
+    """five_unequal_bronze_full tip up: 69 ConvergenceWarnings and still running at 6 min; hung as `run` hangs it."""
+    data = _sweep("five_unequal_bronze_full", capsys)
+    assert data["rig"]["orientation"] == "hanging"
+    assert not [w for w in recwarn if "Convergence" in type(w.message).__name__], [str(w.message) for w in recwarn]
+    r = data["result"]
+    assert abs(r["modulus_n_m2"] - 1000.0) < SIGMAS * r["modulus_sd_n_m2"], r
+
+
+@pytest.mark.slow
+def test_a_long_lightly_damped_section_settles_and_measures(capsys):
+    """The 0.49 m one-section digit rang through 2.5 s plateaus: chi2/dof 948; now 10.8 s (+5.4 s to close)."""
+    data = _sweep("one_long_section_full", capsys)
+    assert data["protocol"]["settle_s"] == pytest.approx(10.8)
+    r = data["result"]
+    assert r["chi2_per_dof"] < 4.0
+    assert abs(r["modulus_n_m2"] - 1000.0) < SIGMAS * r["modulus_sd_n_m2"], r

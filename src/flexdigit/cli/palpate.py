@@ -74,7 +74,7 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     try:
         plan = _laid_out(plan, rig, calibration, tissue.side, info.source)
         if kind == "force":
-            data, text, fig = _force(rig, tissue, plan, logs[0], log_mode)
+            data, text, fig = _force(rig, tissue, plan, logs[0], log_mode, info.source)
         elif kind == "scan":
             data, text, fig = _scan(rig, tissue, plan, logs, log_mode, calibration)
         else:
@@ -308,6 +308,8 @@ def _sweep_data(result, plan, bound, tissue) -> dict:
         "protocol": {
             "commands": list(plan.sweep.commands),
             "settle_s": plan.sweep.settle_s,
+            "return_settle_s": plan.sweep.return_settle_s,
+            "tare_command": plan.sweep.tare_command,
             "readings": plan.sweep.readings,
         },
         "result": summary,
@@ -434,12 +436,20 @@ def _place_data(held) -> dict:
     return data
 
 
-def _force(rig, tissue, plan, log, log_mode):
+def _force(rig, tissue, plan, log, log_mode, source="tissue"):
     from flexdigit.palpation.palpation import hold_force
 
     f = plan.force
+    length = rig.params.geometry.digit_length_m
+    if tissue.start_m > length - 2e-3:  # the contact estimator's least region: two of its 1 mm grid steps
+        from flexdigit.errors import DataFileError
+
+        raise DataFileError(
+            f"{source}: key 'tissue.start_mm' = {1000 * tissue.start_m:g}: the tissue starts at or past the digit's "
+            f"{1000 * length:g} mm tip, where force control cannot press it; place it along the digit"
+        )
     rig.place_tissue(tissue)
-    end = min(tissue.end_m, rig.params.geometry.digit_length_m)
+    end = min(tissue.end_m, length)
     held = hold_force(
         rig,
         f["setpoint_n"],

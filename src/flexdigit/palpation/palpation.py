@@ -106,6 +106,10 @@ class PalpationProtocol:
         Loop period (s): 0.020, the servo board's frame (5.2).
     model : {"linear", "hunt-crossley"}
         The tissue model fitted: Winkler (``q = k delta``) or Hunt-Crossley (``q = k delta^n``, ``n`` fitted).
+    return_settle_s : float
+        Extra settling of the closing tare (s): the step back from the last command is the whole sweep, not one
+        command (:func:`digit_protocol` sets it on a digit whose gauges see that step ring longer than the thesis
+        rig's; 0 on it).
     """
 
     commands: tuple[int, ...] = tuple(range(8, 31))
@@ -114,6 +118,7 @@ class PalpationProtocol:
     tare_command: int = 8
     period_s: float = 0.020
     model: str = "linear"
+    return_settle_s: float = 0.0
 
     def __post_init__(self) -> None:
         owner = "PalpationProtocol"
@@ -125,6 +130,9 @@ class PalpationProtocol:
         object.__setattr__(self, "commands", tuple(int(c) for c in cmds))
         object.__setattr__(self, "period_s", check_real(self.period_s, "period_s", owner, low=1e-3, high=1.0))
         object.__setattr__(self, "settle_s", check_real(self.settle_s, "settle_s", owner, low=0.0, high=600.0))
+        object.__setattr__(
+            self, "return_settle_s", check_real(self.return_settle_s, "return_settle_s", owner, low=0.0, high=600.0)
+        )
         object.__setattr__(self, "readings", check_int(self.readings, "readings", owner, low=1, high=100_000))
         object.__setattr__(self, "tare_command", check_int(self.tare_command, "tare_command", owner, low=0, high=254))
         check_choice(self.model, "model", MODELS, owner)
@@ -137,7 +145,13 @@ class PalpationProtocol:
     @property
     def duration_s(self) -> float:
         """The whole sweep, tares included (s)."""
-        return (len(self.commands) + 2) * self.plateau_s
+        return (len(self.commands) + 2) * self.plateau_s + self.return_settle_s
+
+    def reading_times_s(self) -> np.ndarray:
+        """Mid-time (s from the start) of each plateau's readings, the tares included."""
+        times = self.plateau_s * (np.arange(len(self.commands) + 2) + 1.0) - 0.5 * self.readings * self.period_s
+        times[-1] += self.return_settle_s
+        return times
 
 
 #: The thesis rig's straight command: the built-in protocols count their commands from it.
@@ -191,6 +205,18 @@ def _thesis_ring_time_s() -> float:
     return ring_time_s(ContactGaugeModel(RigParams(), packaged_calibration()))
 
 
+def _return_swing(model, tare: int, last: int, readings: int) -> float:
+    """The closing tare's step, ``last`` back to ``tare``, on the gauges, in plateau-mean noise sds (the largest)."""
+    v = model.free_v([tare, last])
+    return float(np.max(np.abs(v[1] - v[0]) / (np.asarray(model.noise_v, dtype=float) / math.sqrt(readings))))
+
+
+@lru_cache(maxsize=1)
+def _thesis_return_swing() -> float:
+    p = PalpationProtocol()
+    return _return_swing(ContactGaugeModel(RigParams(), packaged_calibration()), p.tare_command, p.commands[-1], 20)
+
+
 def digit_protocol(
     protocol: PalpationProtocol,
     params,
@@ -211,7 +237,10 @@ def digit_protocol(
 
     ``settle_s`` (with ``model``, the digit's gauge model as mounted): the thesis's settling times the digit's
     slowest ring (:func:`ring_time_s`) over the thesis rig's, never shorter: the thesis's 2.5 s is 2.2 of its 1.12 s
-    time constants; the 0.5 m one-section digit (4.9 s) rang through its 2.5 s plateaus, chi2/dof 948."""
+    time constants; the 0.5 m one-section digit (4.9 s) rang through its 2.5 s plateaus, chi2/dof 948. The closing
+    tare steps back the whole sweep: where the gauges see that step ``S`` times larger (in their noise) than the
+    thesis rig's (587 sd), it settles ``ring ln S`` longer (``return_settle_s``; the one-section digit's 3x: 5.4 s;
+    its closing tare was 28 sd off at 10.8 s)."""
     commands = protocol.commands
     if "commands" in laid_out:
         commands = tuple(dict.fromkeys(digit_command(params, c, side) for c in protocol.commands))
@@ -221,12 +250,16 @@ def digit_protocol(
             f"the sweep's commands laid out on this digit ({tare} straight, {command_scale(params):.3g} of its "
             f"commands a thesis command) are {list(commands)}: fewer than 3 distinct commands; give 'commands' for it"
         )
-    settle = protocol.settle_s
+    settle, back = protocol.settle_s, protocol.return_settle_s
     if "settle_s" in laid_out and model is not None:
-        settle = max(settle, round(settle * ring_time_s(model) / _thesis_ring_time_s(), 1))
+        ring = ring_time_s(model)
+        settle = max(settle, round(settle * ring / _thesis_ring_time_s(), 1))
+        swing = _return_swing(model, tare, commands[-1], protocol.readings)
+        back = max(back, round(ring * math.log(max(1.0, swing / _thesis_return_swing())), 1))
     return PalpationProtocol(
         commands=commands,
         settle_s=settle,
+        return_settle_s=back,
         readings=protocol.readings,
         tare_command=tare,
         period_s=protocol.period_s,
@@ -583,6 +616,7 @@ def stiffness_bound(
     estimated as the fit does."""
     commands = [protocol.tare_command, *protocol.commands, protocol.tare_command]
     times = protocol.plateau_s * (np.arange(len(commands)) + 0.5)
+    times[-1] += protocol.return_settle_s
     sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(protocol.readings)
     clean = model.tissue_solution(tissue, commands)[1]
     like = _TissueLikelihood(
@@ -988,7 +1022,7 @@ def simulate_sweep(model, tissue, protocol: PalpationProtocol, *, seed=0, drift_
     (:func:`palpate`) agrees with it once the plateaus settle (tests)."""
     rng = np.random.default_rng(seed)
     sequence = np.array([protocol.tare_command, *protocol.commands, protocol.tare_command])
-    times = protocol.plateau_s * (np.arange(sequence.size) + 1.0) - 0.5 * protocol.readings * protocol.period_s
+    times = protocol.reading_times_s()
     sol, clean = model.tissue_solution(tissue, sequence)
     rate = (
         np.asarray(model.calibration.noise_drift_v_per_sqrt_s, dtype=float)
