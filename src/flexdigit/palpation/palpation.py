@@ -1193,6 +1193,18 @@ class ForceHold:
     #: "distributed"; :meth:`ForceController.estimate`)
     force_sd_n: np.ndarray | None = None
     kind: np.ndarray | None = None
+    #: whether the loop saw the contact (left its approach for the integral) during the hold
+    touched: bool = True
+
+    def limit_reached(self) -> bool:
+        """Whether the hold ended short of its setpoint (more than 10 %, on the scored force) with the loop at the
+        highest command it may send (``region["command_range"]``: 52 commands past straight, x the gearing): the
+        digit cannot press that hard there, which no gain would change."""
+        top = self.region.get("command_range", (None, None))[1]
+        window = self._window()
+        if top is None or not np.any(window) or not self.steady_error < -0.1:
+            return False
+        return bool(np.max(self.command[window]) >= top)
 
     def decisions(self) -> dict:
         """How many samples of the figures' window each contact decision took (``{"none": n, "point": n, ...}``)."""
@@ -1293,6 +1305,7 @@ def hold_force(
         region=region, place_m=np.array(controller.places[: t.size]),
         true_place_m=np.array(true_place) if truth else None, window_s=float(window_s), steady_place_m=steady_place,
         force_sd_n=np.array(controller.force_sds[: t.size]), kind=np.array(controller.kinds[: t.size], dtype=str),
+        touched=bool(getattr(controller, "touching", True)),
     )  # fmt: skip
 
 
@@ -1316,7 +1329,8 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
     # their noise to stay DETECT_SIGMAS below the threshold)
     average = int(getattr(estimator, "n_readings", 1))
     region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None,
-              "average_readings": average, "tare_readings": tare, "classify": bool(estimator.classify)}  # fmt: skip
+              "average_readings": average, "tare_readings": tare, "classify": bool(estimator.classify),
+              "command_range": (eq, high)}  # fmt: skip
     controller = ForceController(
         estimator, offset, gain=gain, low=eq, high=high, sign=sign, approach_rate=approach_rate, servo=servo,
         contact_fraction=CONTACT_FRACTION, average_readings=average,
