@@ -1244,10 +1244,13 @@ def hold_force(
 ) -> ForceHold:
     """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
 
-    Tares on :data:`TARE_READINGS` readings at the equilibrium command first (nothing must touch the digit there),
-    then runs :class:`ForceController`. ``region_m`` (m from the base): where the contact can be (where the tissue
-    lies), which steadies the estimate when nothing touches yet; :func:`force_region` narrows it where the force
-    read hangs on the place, and ``ForceHold.region`` says what was decided. On the twin the true contact force is
+    Tares at the equilibrium command first (nothing must touch the digit there; :data:`TARE_READINGS` readings, more
+    where one reading's force is noisy: ``region["tare_readings"]``), then runs :class:`ForceController`, whose force
+    follows the contact decision, each estimate on the mean of ``region["average_readings"]`` readings (1 unless one
+    reading's noise would pass the contact threshold, :data:`DETECT_SIGMAS`). ``region_m`` (m from the base): where
+    the contact can be (where the tissue lies), which steadies the estimate when nothing touches yet;
+    :func:`force_region` narrows it where the force read hangs on the place, and ``ForceHold.region`` says what was
+    decided. On the twin the true contact force is
     logged beside the estimate; the figures (steady force and error over the last ``window_s``, overshoot, 10 %
     settling time) use it there, and the estimate on hardware.
 
