@@ -1012,11 +1012,9 @@ class ForceController:
         continuous command. The servo lags a ramp by ``2 zeta / wn`` (55 ms on the thesis rig's): where a digit's
         gauges read that lag as force (:func:`servo_lag_force`), the estimate led the true force by it.
 
-    Attributes
-    ----------
-    forces, force_sds, kinds, places : list
-        Per sample: the force held (N, > 0 pressing), its standard deviation (N, the estimator's at its decision),
-        the decision ("none", "point", "distributed") and the point estimate's place (m from the base).
+    Per sample it keeps the force held (``forces``, N, > 0 pressing), its standard deviation (``force_sds``, N, the
+    estimator's at its decision), the decision (``kinds``: "none", "point", "distributed") and the point estimate's
+    place (``places``, m from the base).
     """
 
     def __init__(
