@@ -477,6 +477,24 @@ def _force(rig, tissue, plan, log, log_mode, source="tissue"):
     return data, text, figure
 
 
+def _limit_data(held) -> dict:
+    """``palpate --json``'s ``limit_note``: why a hold ended short, in one line: no contact seen (the approach did
+    not reach the body), or the loop at its highest command
+    (:meth:`~flexdigit.palpation.palpation.ForceHold.limit_reached`)."""
+    if not held.touched and held.command.size:
+        return {
+            "limit_note": f"no contact seen in the hold: the approach reached command {int(held.command[-1])} at "
+            f"{held.approach_rate:g} commands/s; hold longer ('duration_s') or place the body nearer"
+        }
+    if not held.limit_reached():
+        return {}
+    top = held.region["command_range"][1]
+    return {
+        "limit_note": f"the loop reached its highest command ({top}: the thesis rig's 60 in tip rotation) short of "
+        f"{held.setpoint_n:g} N: the digit does not press that hard there; place the body nearer"
+    }
+
+
 def _decisions_line(data: dict) -> str:
     """The text's line on what the estimates of the figures' window decided (the force held follows it)."""
     counts = data["decisions"]
@@ -501,6 +519,7 @@ def _hold_data(held) -> tuple[dict, str]:
         # how many of the last window's estimates decided each kind of contact (the force follows the decision)
         "decisions": held.decisions(),
         "average_readings": held.region.get("average_readings", 1),
+        **_limit_data(held),
         "tare_readings": held.region.get("tare_readings"),
         **_uncertainty_data(held),
         "time_s": held.time_s.tolist(),
@@ -517,6 +536,7 @@ def _hold_data(held) -> tuple[dict, str]:
         + (f"contact at {place['steady_mm']:.1f} mm" if place["steady_mm"] is not None else "contact place: not told")
         + f" ({place['reason']})\n"
         + _decisions_line(data)
+        + (f"\n{data['limit_note']}" if "limit_note" in data else "")
         + (f"\n{data['estimate_note']}" if "estimate_note" in data else "")
     )
     return data, text

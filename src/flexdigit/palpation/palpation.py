@@ -1226,11 +1226,9 @@ class ForceController:
         continuous command. The servo lags a ramp by ``2 zeta / wn`` (55 ms on the thesis rig's): where a digit's
         gauges read that lag as force (:func:`servo_lag_force`), the estimate led the true force by it.
 
-    Attributes
-    ----------
-    forces, force_sds, kinds, places : list
-        Per sample: the force held (N, > 0 pressing), its standard deviation (N, the estimator's at its decision),
-        the decision ("none", "point", "distributed") and the point estimate's place (m from the base).
+    Per sample it keeps the force held (``forces``, N, > 0 pressing), its standard deviation (``force_sds``, N, the
+    estimator's at its decision), the decision (``kinds``: "none", "point", "distributed") and the point estimate's
+    place (``places``, m from the base).
     """
 
     def __init__(
@@ -1281,7 +1279,9 @@ class ForceController:
         (continuous) ``position``: the estimator's decided force (0 for no contact, the point force, or a line
         load's total) at the two commands around it, interpolated; the decision and sd of the nearer command.
         Also sets :attr:`place_m` (the point estimate's place)."""
-        lo = int(math.floor(position))
+        # the two commands around it within the servo's range (a digit pressing up to its last command, 254)
+        top = int(self.estimator.model.params.actuator.command_max)
+        lo = min(int(math.floor(position)), top - 1)
         frac = position - lo
         v = np.asarray(gauges_v, dtype=float) - self.offset_v
         est = self.estimator.predict(np.vstack([v, v]), np.array([lo, lo + 1]))
@@ -1436,6 +1436,16 @@ class ForceHold:
             )
         return ""
 
+    def limit_reached(self) -> bool:
+        """Whether the hold ended short of its setpoint (more than 10 %, on the scored force) with the loop at the
+        highest command it may send (``region["command_range"]``: the thesis rig's 8..60 in tip rotation): the
+        digit cannot press that hard there, which no gain would change."""
+        top = self.region.get("command_range", (None, None))[1]
+        window = self._window()
+        if top is None or not np.any(window) or not self.steady_error < -0.1:
+            return False
+        return bool(np.max(self.command[window]) >= top)
+
     def decisions(self) -> dict:
         """How many samples of the figures' window each contact decision took (``{"none": n, "point": n, ...}``)."""
         if self.kind is None:
@@ -1474,10 +1484,13 @@ def hold_force(
 ) -> ForceHold:
     """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
 
-    Tares on :data:`TARE_READINGS` readings at the equilibrium command first (nothing must touch the digit there),
-    then runs :class:`ForceController`. ``region_m`` (m from the base): where the contact can be (where the tissue
-    lies), which steadies the estimate when nothing touches yet; :func:`force_region` narrows it where the force
-    read hangs on the place, and ``ForceHold.region`` says what was decided. On the twin the true contact force is
+    Tares at the equilibrium command first (nothing must touch the digit there; :data:`TARE_READINGS` readings, more
+    where one reading's force is noisy: ``region["tare_readings"]``), then runs :class:`ForceController`, whose force
+    follows the contact decision, each estimate on the mean of ``region["average_readings"]`` readings (1 unless one
+    reading's noise would pass the contact threshold, :data:`DETECT_SIGMAS`). ``region_m`` (m from the base): where
+    the contact can be (where the tissue lies), which steadies the estimate when nothing touches yet;
+    :func:`force_region` narrows it where the force read hangs on the place, and ``ForceHold.region`` says what was
+    decided. On the twin the true contact force is
     logged beside the estimate; the figures (steady force and error over the last ``window_s``, overshoot, 10 %
     settling time) use it there, and the estimate on hardware.
 
@@ -1540,7 +1553,7 @@ def hold_force(
         region=region, place_m=np.array(controller.places[: t.size]),
         true_place_m=np.array(true_place) if truth else None, window_s=float(window_s), steady_place_m=steady_place,
         force_sd_n=np.array(controller.force_sds[: t.size]), kind=np.array(controller.kinds[: t.size], dtype=str),
-        touched=bool(controller.touching), high_command=int(controller.high),
+        touched=bool(getattr(controller, "touching", True)), high_command=int(controller.high),
     )  # fmt: skip
 
 
@@ -1564,7 +1577,8 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
     # their noise to stay DETECT_SIGMAS below the threshold)
     average = int(getattr(estimator, "n_readings", 1))
     region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None,
-              "average_readings": average, "tare_readings": tare, "classify": bool(estimator.classify)}  # fmt: skip
+              "average_readings": average, "tare_readings": tare, "classify": bool(estimator.classify),
+              "command_range": (eq, high)}  # fmt: skip
     controller = ForceController(
         estimator, offset, gain=gain, low=eq, high=high, sign=sign, approach_rate=approach_rate, servo=servo,
         contact_fraction=CONTACT_FRACTION, average_readings=average,
