@@ -30,9 +30,9 @@ PAIR = RigParams.from_dict(DIGITS["four-sections-two-cables"])
 THESIS_PAST = 22
 
 
-def _geared(ratio: float) -> RigParams:
-    """The pair with a gearing of ``ratio`` (below 1: a coarser command step)."""
-    return RigParams.from_dict({**DIGITS["four-sections-two-cables"], "actuator": {"gear_ratio": ratio}})
+def _coarse(times: float) -> RigParams:
+    """The pair with a pulley ``times`` the thesis rig's 11.5 mm: ``times`` the tip rotation a command."""
+    return RigParams.from_dict({**DIGITS["four-sections-two-cables"], "actuator": {"pulley_radius_m": 0.0115 * times}})
 
 
 def test_on_the_thesis_rig_the_builtin_sweep_is_unchanged():
@@ -66,13 +66,13 @@ def test_a_geared_digit_takes_its_gearing_per_thesis_command():
 
 
 def test_a_coarser_step_keeps_each_command_once():
-    coarse = _geared(0.25)  # 4 thesis steps a command
+    coarse = _coarse(4.0)  # 4 thesis steps a command
     laid = digit_protocol(PalpationProtocol(), coarse)
     assert laid.commands == tuple(range(127, 127 + round(THESIS_PAST / 4) + 1))
 
 
 def test_a_coarse_step_with_too_few_commands_is_refused():
-    coarse = _geared(0.1)
+    coarse = _coarse(8.0)
     with pytest.raises(ParameterError, match="fewer than 3 distinct commands"):
         digit_protocol(PalpationProtocol(commands=(8, 10, 12)), coarse)
 

@@ -556,8 +556,14 @@ def fit_tissue(
     gap, logk = float(sol.x[0]), float(sol.x[1])
     k = math.exp(logk)
     n = float(sol.x[2]) if fit_exponent else 1.0
+    # the offsets and drifts reported (and taken off the force-indentation curve): the straight line through the
+    # plateaus' residuals that the two tares pin, as without the walk (its GLS line left the thesis rig's first
+    # contact plateaus 4-5 mN off the twin's force)
+    like.whiten = None
     offset, drift = like.nuisance(sol.x)
-    dof = like.gauges.size - sol.x.size - (like.design.shape[1] * 3 if like.design is not None else 0)
+    # an offset and a drift per gauge (G of them: it counted 3 on every digit)
+    nuisances = like.design.shape[1] * like.gauges.shape[1] if like.design is not None else 0
+    dof = like.gauges.size - sol.x.size - nuisances
     # readings the model explains worse than their noise (ringing, drift, a model error) widen the uncertainty
     sd = sd * math.sqrt(max(1.0, 2 * sol.cost / max(dof, 1)))
     return TissueFit(
