@@ -91,3 +91,19 @@ def test_a_single_cable_never_presses_the_other_side():
     assert towards(PAIR, "opposite") == -1
     with pytest.raises(ParameterError, match="single cable bends it towards its cable side only"):
         towards(RigParams(), "opposite")
+
+
+def test_a_region_narrowed_to_the_tissues_end_keeps_two_grid_steps():
+    """The 0.49 m section's contact centroid lies at soft-block's end (350 mm) of its region: the hold's search was
+    narrowed to 349-350 mm, one grid step, and ContactEstimator refused it ('region_m' error, exit 2)."""
+    from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
+    from flexdigit.palpation.palpation import force_region
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    params = load_params(HANDMADE / "one_long_section_full.toml")  # stands tip up
+    model = ContactGaugeModel(params, twin_calibration(params))
+    region = force_region(model, 0.1, region_m=(0.15, 0.35))
+    low, high = region["region_m"]
+    assert region["narrowed"]
+    assert high == pytest.approx(0.35) and high - low > 0.002
+    ContactEstimator(model, region_m=region["region_m"]).fit()  # accepted

@@ -947,6 +947,9 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
         while hi < s.size - 1 and told[hi + 1]:
             hi += 1
         lo, hi = max(0, min(lo, i - 1)), min(s.size - 1, max(hi, i + 1))  # at least two grid steps
+        if hi - lo < 3:  # ... and three where the centroid is the region's last point (the 0.49 m section's ends at
+            lo = max(0, hi - 3)  # soft-block's 350 mm: 349-350 mm, then 348-350 mm a float under ContactEstimator's
+            hi = min(s.size - 1, lo + 3)  # two grid steps, both refused)
         searched = (float(s[lo]), float(s[hi]))
     place_sd, force_sd = _contact_sd(model, centroid, truth, command, side)
     place_sd /= math.sqrt(max(1.0, window_s / 0.020))  # over the window's 20 ms readings
