@@ -59,7 +59,8 @@ def test_thesis_commands_given_for_a_pair_are_refused_in_one_line(tmp_path, caps
     assert main([*argv, "--protocol", str(protocol)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
-    assert str(protocol) in err and "straight command is 127" in err
+    assert str(protocol) in err
+    assert "straight command is 127" in err
 
 
 def test_a_single_cable_refuses_tissue_on_its_other_side(tmp_path, capsys):
@@ -70,7 +71,8 @@ def test_a_single_cable_refuses_tissue_on_its_other_side(tmp_path, capsys):
     assert main(["palpate", "--tissue", str(tissue)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
-    assert "'tissue.side'" in err and "single cable" in err
+    assert "'tissue.side'" in err
+    assert "single cable" in err
 
 
 def test_a_hold_that_never_touches_fails_in_one_line(tmp_path, capsys):
@@ -83,7 +85,8 @@ def test_a_hold_that_never_touches_fails_in_one_line(tmp_path, capsys):
     assert main(["palpate", "--tissue", str(tissue), "--protocol", str(protocol), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
-    assert "never reached 0.1 N" in err and "digit relaxed to command 8" in err
+    assert "never reached 0.1 N" in err
+    assert "digit relaxed to command 8" in err
     assert not out.exists()
 
 

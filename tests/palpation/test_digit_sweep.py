@@ -105,5 +105,6 @@ def test_a_region_narrowed_to_the_tissues_end_keeps_two_grid_steps():
     region = force_region(model, 0.1, region_m=(0.15, 0.35))
     low, high = region["region_m"]
     assert region["narrowed"]
-    assert high == pytest.approx(0.35) and high - low > 0.002
+    assert high == pytest.approx(0.35)
+    assert high - low > 0.002
     ContactEstimator(model, region_m=region["region_m"]).fit()  # accepted

@@ -70,4 +70,5 @@ def test_a_long_lightly_damped_digit_settles_longer():
     assert laid.settle_s == pytest.approx(2.5 * ring / 1.12, abs=0.1)
     assert 0.5 * ring < laid.return_settle_s < 2 * ring  # its closing step 3x the thesis rig's on the gauges
     kept = digit_protocol(PalpationProtocol(settle_s=3.0), model.params, model=model, laid_out=("commands",))
-    assert kept.settle_s == 3.0 and kept.return_settle_s == 0.0  # a file's own settle_s is the user's
+    assert kept.settle_s == 3.0  # a file's own settle_s is the user's
+    assert kept.return_settle_s == 0.0

@@ -241,26 +241,30 @@ def _refuse_poor_fit(fit, what: str, max_rel_sd: float | None = None) -> None:
         )
 
 
-def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
+def _refuse_untouched(curve) -> None:
+    """One line if the digit reached the tissue on fewer than 3 plateaus (a stiffness needs 3)."""
     import numpy as np
 
     from flexdigit.errors import DataFileError
+
+    touching = int(np.count_nonzero(curve["indentation_m"] > 0))
+    if touching < 3:
+        raise DataFileError(
+            f"palpation: the digit reached the tissue on {touching} of {len(curve['command'])} plateaus (3 "
+            "needed for a stiffness): sweep to higher commands ('commands') or place the tissue nearer"
+        )
+
+
+def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import palpate, stiffness_bound
 
     model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
-    # the gauges' random-walk drift weighed in the fit (palpation.fit_tissue): a 75 s sweep's wander read as stiffness
     result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode, drift=True)
     _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
-    touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
-    if touching < 3:
-        raise DataFileError(
-            f"palpation: the digit reached the tissue on {touching} of {len(result.curve['command'])} plateaus (3 "
-            "needed for a stiffness): sweep to higher commands ('commands') or place the tissue nearer"
-        )
-    bound = stiffness_bound(
-        model, result.fit.tissue, plan.sweep, fit_exponent=plan.sweep.model == "hunt-crossley", drift=True
-    )
+    _refuse_untouched(result.curve)
+    hunt = plan.sweep.model == "hunt-crossley"
+    bound = stiffness_bound(model, result.fit.tissue, plan.sweep, fit_exponent=hunt, drift=True)  # the walk weighed
     data = _sweep_data(result, plan, bound, tissue)
     summary = data["result"]
     f = result.fit

@@ -37,6 +37,7 @@ import numpy as np
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_choice, check_int, check_real, check_values
 from flexdigit.errors import ParameterError, RigError
+from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
 from flexdigit.params import RigParams
 from flexdigit.rig.loop import run_loop
@@ -163,8 +164,6 @@ def command_scale(params) -> float:
     1.735 deg a command over the digit's (:func:`flexdigit.models.cable.tip_rotation_per_command_deg`: its servo
     step, gearing, pulley radius and cable eccentricity). 1 on the thesis rig, the gear ratio on a geared copy of it
     (3 on a 3:1), 5.6 on a servo of 0.216 deg a command (the design study's front design 30: 0.31 deg of tip)."""
-    from flexdigit.models.cable import tip_rotation_per_command_deg
-
     # to 12 figures: a 3:1 copy of the thesis rig scales by 3, not 2.9999999999999996
     return float(f"{tip_rotation_per_command_deg(RigParams()) / tip_rotation_per_command_deg(params):.12g}")
 
@@ -947,9 +946,8 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
         while hi < s.size - 1 and told[hi + 1]:
             hi += 1
         lo, hi = max(0, min(lo, i - 1)), min(s.size - 1, max(hi, i + 1))  # at least two grid steps
-        if hi - lo < 3:  # ... and three where the centroid is the region's last point (the 0.49 m section's ends at
-            lo = max(0, hi - 3)  # soft-block's 350 mm: 349-350 mm, then 348-350 mm a float under ContactEstimator's
-            hi = min(s.size - 1, lo + 3)  # two grid steps, both refused)
+        if hi - lo < 3:  # the centroid the region's end (the 0.49 m section, soft-block: 349-350 mm, refused by
+            lo, hi = max(0, hi - 3), min(s.size - 1, max(0, hi - 3) + 3)  # ContactEstimator; 348-350 a float short)
         searched = (float(s[lo]), float(s[hi]))
     place_sd, force_sd = _contact_sd(model, centroid, truth, command, side)
     place_sd /= math.sqrt(max(1.0, window_s / 0.020))  # over the window's 20 ms readings
@@ -1508,11 +1506,7 @@ def hold_force(
     presses) and the pulley's approach speed are the thesis rig's on any digit.
     """
     setpoint = check_real(setpoint_n, "setpoint_n", "hold_force", low=0, low_open=True)
-    if towards(rig.params, side) < 0:
-        raise ParameterError(
-            "force control presses the digit towards its cable side (commands above straight): an antagonistic "
-            "pair's 'opposite'-side tissue is not held yet; place it on side 'cable'"
-        )
+    _check_presses(rig.params, side)
     model = model or rig_contact_model(rig)
     if gain is None or approach_rate is None:
         derived = force_gains(model, setpoint, region_m=region_m, side=side)
@@ -1542,15 +1536,9 @@ def hold_force(
         true_place.append(place())
 
     result = run_loop(
-        rig,
-        controller,
-        setpoint,
-        duration_s,
-        log_path=log_path,
-        log_mode=log_mode,
-        on_sample=on_sample if truth else None,
-        close_rig=False,
-    )
+        rig, controller, setpoint, duration_s, log_path=log_path, log_mode=log_mode,
+        on_sample=on_sample if truth else None, close_rig=False,
+    )  # fmt: skip
     result.raise_if_interrupted()
     t = result.time_s
     est = np.array(controller.forces[: t.size])
@@ -1564,6 +1552,16 @@ def hold_force(
         force_sd_n=np.array(controller.force_sds[: t.size]), kind=np.array(controller.kinds[: t.size], dtype=str),
         touched=bool(getattr(controller, "touching", True)), high_command=int(controller.high),
     )  # fmt: skip
+
+
+def _check_presses(params, side: str) -> None:
+    """Refuse (one line) a body force control cannot press: on a single cable's other side (:func:`towards`), or on
+    an antagonistic pair's other side (the loop presses with commands above straight only)."""
+    if towards(params, side) < 0:
+        raise ParameterError(
+            "force control presses the digit towards its cable side (commands above straight): an antagonistic "
+            "pair's 'opposite'-side tissue is not held yet; place it on side 'cable'"
+        )
 
 
 def _force_controller(rig, model, estimator, region, setpoint, gain, approach_rate, side):
