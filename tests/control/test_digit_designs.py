@@ -190,3 +190,39 @@ def test_a_coarse_maps_digit_gets_a_quiet_observer_and_others_keep_theirs(monkey
     one = digit_design_20ms(RigParams.from_dict(DIGITS["one-section"]))
     assert one.choice.meets
     assert one.choice.candidates == grid * len(dz.SEARCH_Q_DISTURBANCE) * len(dz.SEARCH_R_FACTORS)
+
+
+def test_a_design_whose_process_covariance_rounds_asymmetric_is_made():
+    """``random_digit(37)`` (2 sections, 0.155 m, 3 full bridges, geared 2.38:1): python-control refused its
+    Kalman predictor ("QN must be a symmetric matrix", its issue 1174: ``G q G'`` off by roundoff), so its design
+    failed; the covariance is now formed symmetric and given with ``G = I``, the same equation."""
+    from digits import random_digit
+
+    d = digit_design_20ms(RigParams.from_dict(random_digit(37)))
+    assert np.max(np.abs(d.closed_loop_poles)) < 1.0
+    assert d.choice.meets, d.choice.failing
+
+
+def test_the_predictor_gain_given_its_covariance_is_dlqes():
+    """The fallback of ``_predictor_gain`` (the covariance ``G q G'`` formed, ``G = I``) solves the same Riccati
+    equation as ``control.dlqe`` with ``G``: on chapter 5's observer model they agree to 1e-9."""
+    import control as ct
+
+    from flexdigit.control.design20ms import _predictor_gain
+
+    d = design_20ms()
+    n = d.plant_d.nstates
+    A = np.zeros((n + 1, n + 1))
+    A[:n, :n] = d.plant_d.A
+    A[: n - 1, n : n + 1] = d.plant_d.A[: n - 1, n - 1 : n]  # the disturbance enters where the delayed command does
+    A[n, n] = 1.0
+    C = np.hstack([np.asarray(d.plant_d.C), [[0.0]]])
+    G = np.zeros((n + 1, 2))
+    G[: n - 1, 0:1] = d.plant_d.A[: n - 1, n - 1 : n]
+    G[n, 1] = 1.0
+    q = np.diag([1.0, 0.1])
+    expected, _, _ = ct.dlqe(A, G, C, q, [[10.0]])
+    covariance = G @ q @ G.T
+    alone, _, _ = ct.dlqe(A, np.eye(n + 1), C, (covariance + covariance.T) / 2, [[10.0]])
+    np.testing.assert_allclose(np.asarray(alone).ravel(), np.asarray(expected).ravel(), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(_predictor_gain(A, G, C, q, 10.0).ravel(), np.asarray(expected).ravel(), rtol=0)

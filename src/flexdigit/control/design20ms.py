@@ -341,8 +341,7 @@ def _design(G: ct.StateSpace, T: float, nd: int, w: Weights) -> Digital20msDesig
     Gn = np.zeros((no, 2))
     Gn[:n, 0:1] = B
     Gn[na, 1] = 1.0
-    L, _, _ = ct.dlqe(Ao, Gn, Co, np.diag([w.q_input, w.q_disturbance]), [[w.r_measurement]])
-    L = np.asarray(L).reshape(no, 1)
+    L = _predictor_gain(Ao, Gn, Co, np.diag([w.q_input, w.q_disturbance]), w.r_measurement)
     # steady state per degree of setpoint: u_ss = 1/dc - d, x_servo_ss = (I - A)^-1 B / dc, delays = u_ss
     u_ss = 1.0 / dc
     x_ss = np.linalg.solve(np.eye(n) - A, B * u_ss)
@@ -361,6 +360,25 @@ def _design(G: ct.StateSpace, T: float, nd: int, w: Weights) -> Digital20msDesig
         raise DesignError("design_20ms: the nominal loop is unstable; check the weights")
     held = None if C_all.shape[0] == 1 else ct.ss(Aa, Ba, Ca, np.zeros((1, 1)), T)
     return Digital20msDesign(controller, Bo.ravel(), plant_d, K, L, poles, T, nd, dc, w, held)
+
+
+def _predictor_gain(A: np.ndarray, G: np.ndarray, C: np.ndarray, q: np.ndarray, r: float) -> np.ndarray:
+    """The Kalman predictor's gain (``control.dlqe``, process noise ``q`` entering through ``G``, measurement
+    variance ``r``), as a column.
+
+    python-control forms the process covariance ``G q G'`` itself and refuses it when its roundoff leaves it
+    asymmetric by more than one machine epsilon (python-control issue 1174, "QN must be a symmetric matrix"):
+    ``random_digit(37)``'s balanced model did, and its design failed. Then the covariance is formed here,
+    symmetrised, and given with ``G = I``: the same equation; every other design is computed as before, bit for bit.
+    """
+    try:
+        L, _, _ = ct.dlqe(A, G, C, q, [[r]])
+    except ct.ControlArgument as error:
+        if "symmetric" not in str(error):
+            raise
+        covariance = G @ q @ G.T
+        L, _, _ = ct.dlqe(A, np.eye(A.shape[0]), C, (covariance + covariance.T) / 2, [[r]])
+    return np.asarray(L).reshape(A.shape[0], 1)
 
 
 def digit_first_mode(params: RigParams, calibration=None, *, orientation: str = "vertical") -> tuple[float, float]:
