@@ -696,6 +696,31 @@ def _quantised_settling(design: Digital20msDesign, params: RigParams, step_deg: 
     return worst
 
 
+def _scored_candidates(model, grid) -> list:
+    """``(settling, overshoot, noise, command noise, weights, design)`` of each ``(r_u, q_rate, q_disturbance,
+    measurement factor, q_shape)`` of ``grid`` (:func:`digit_weights`) that can be designed; ``model`` is
+    ``(G, period_s, measurement_sd_deg, noise_var, ratio, shaped_mode)``."""
+    G, period_s, measurement_sd_deg, noise_var, ratio, shaped_mode = model
+    scored = []
+    for r_u, q_rate, q_d, factor, q_shape in grid:
+        w = Weights(q_rate, r_u, q_d, 1.0, noise_var * factor, q_shape).for_digit(ratio, 1.0)
+        try:
+            d = _digit_candidate(G, period_s, w, shaped_mode)
+        except (DesignError, ValueError, ArithmeticError, np.linalg.LinAlgError):
+            continue
+        scored.append((*_score(d, measurement_sd_deg), w, d))
+    return scored
+
+
+def _qualifying(scored) -> list:
+    """The candidates of :func:`_scored_candidates` under the overshoot and both noise limits."""
+    return [
+        c
+        for c in scored
+        if c[1] < OVERSHOOT_LIMIT_PERCENT and c[2] < NOISE_LIMIT_DEG and c[3] < COMMAND_NOISE_LIMIT_DEG
+    ]
+
+
 def digit_weights(
     G: ct.StateSpace,
     period_s: float,
@@ -729,28 +754,10 @@ def digit_weights(
     """
     noise_var = max(measurement_sd_deg**2, MIN_R_MEASUREMENT_DEG2)
     shapes = SEARCH_Q_SHAPE if lightly_damped else (0.0,)
-
-    def candidates(grid) -> list:
-        scored = []
-        for r_u, q_rate, q_d, factor, q_shape in grid:
-            w = Weights(q_rate, r_u, q_d, 1.0, noise_var * factor, q_shape).for_digit(ratio, 1.0)
-            try:
-                d = _digit_candidate(G, period_s, w, shaped_mode)
-            except (DesignError, ValueError, ArithmeticError, np.linalg.LinAlgError):
-                continue
-            scored.append((*_score(d, measurement_sd_deg), w, d))
-        return scored
-
-    def qualifying(scored) -> list:
-        return [
-            c
-            for c in scored
-            if c[1] < OVERSHOOT_LIMIT_PERCENT and c[2] < NOISE_LIMIT_DEG and c[3] < COMMAND_NOISE_LIMIT_DEG
-        ]
-
+    model = (G, period_s, measurement_sd_deg, noise_var, ratio, shaped_mode)
     first = list(itertools.product(SEARCH_R_U, SEARCH_Q_RATE, SEARCH_Q_DISTURBANCE, SEARCH_R_FACTORS, shapes))
-    scored = candidates(first)
-    good = qualifying(scored)
+    scored = _scored_candidates(model, first)
+    good = _qualifying(scored)
     if not good:  # a coarse map's noise: the quieter candidates (QUIET_*), the grid's own left as they were
         quiet = itertools.product(
             SEARCH_R_U,
@@ -759,8 +766,8 @@ def digit_weights(
             SEARCH_R_FACTORS + QUIET_R_FACTORS,
             shapes,
         )
-        scored += candidates([c for c in quiet if c not in set(first)])
-        good = qualifying(scored)
+        scored += _scored_candidates(model, [c for c in quiet if c not in set(first)])
+        good = _qualifying(scored)
     stable = [c for c in scored if math.isfinite(c[1])]
     if not stable:
         raise DesignError("design: no weights of the search give a stable loop on the digit's model")
