@@ -48,6 +48,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_dask",
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
+    "benchmarks.bench_force",
     "benchmarks.bench_board",
     "benchmarks.bench_digitboard",
     "benchmarks.bench_resources",
