@@ -32,6 +32,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_digitctl2",
     "benchmarks.bench_damping",
     "benchmarks.bench_designunequal",
+    "benchmarks.bench_noisy",
     "benchmarks.bench_map",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_tdcrcli",
