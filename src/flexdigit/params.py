@@ -196,7 +196,12 @@ class Geometry:
                     f"section). Got {supports.tolist()!r} instead."
                 )
             object.__setattr__(self, "support_lengths_m", tuple(float(x) for x in supports))
-        check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
+        check_real(self.strip_length_m, "strip_length_m", owner, low=0, low_open=True)
+        if self.strip_length_m > self.digit_length_m:  # either key can be the one written wrong: name both
+            raise ParameterError(
+                f"The 'digit_length_m' parameter of {owner} ({self.digit_length_m:g} m) must be at least "
+                f"'strip_length_m' ({self.strip_length_m:g} m): the digit is its strip plus the supports"
+            )
         positions = check_array(
             self.gauge_positions_m,
             "gauge_positions_m",
