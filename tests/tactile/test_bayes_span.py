@@ -1,0 +1,98 @@
+"""The localisation Bayes limit of ``flexdigit train --bayes-limit`` (issue 24): known answers, and the failure
+classes of the hand-made digits' trial (/work/coord/trial_report.md, docs/digits.md "Bayes limit of your digit").
+
+- A linear gauge ``g = k m a`` with white noise ``sigma``: a reading well inside the span is located to
+  ``sigma / (k m)`` (the Gaussian posterior of a flat prior; closed form). ``MC_RTOL = 0.12``: 1000 draws give the
+  MSE to ``sqrt(2 / 1000)`` = 4.5 % (one sd), the RMS to half that; 0.12 on the RMS is over 5 sd.
+- Positions many sigmas apart (a stiff or high-gain digit on the thesis's 1 cm positions): the settings-aware
+  limit falls to nothing (the trial's PEEK digit: 1.4e-11 mm) while the span limit stays ``sigma / (k m)``.
+- A limit the grid cannot resolve is refused in one line, never printed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flexdigit.tactile.bounds import span_position_mse_m2
+from flexdigit.tactile.dataset import Dataset, dataset_columns
+from flexdigit.tactile.localisation import position_bayes_rmse_m
+
+MC_RTOL = 0.12
+
+
+class Linear:
+    """One gauge reading ``slope * m * a`` volts (a in m, m in kg), white noise ``noise_v``."""
+
+    def __init__(self, slope_v_per_kg_m: float, noise_v: float) -> None:
+        self.slope = slope_v_per_kg_m
+        self.noise_v = np.array([noise_v])
+
+    def gauges_v(self, a, m, command):
+        a, m = np.broadcast_arrays(np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(m, float)))
+        return (self.slope * m * a)[:, None]
+
+
+def _dataset(positions_m, mass_kg: float = 1.0, repeats: int = 1) -> Dataset:
+    a = np.repeat(np.asarray(positions_m, dtype=float), repeats)
+    cols = {c: np.zeros(a.size, dtype=d) for c, d in dataset_columns(1).items()}
+    cols["load_kg"][:] = mass_kg
+    cols["position_from_base_m"][:] = a
+    cols["command"][:] = -1
+    return Dataset(cols, {"gauge_count": 1})
+
+
+def test_linear_gauge_is_located_to_sigma_over_slope():
+    model = Linear(1.0, 1e-3)  # 1 mm per sigma under 1 kg
+    a = np.array([0.05, 0.1, 0.15])  # the span 0.05..0.15 m; 0.1 m is 50 sigma from either end
+    mse = span_position_mse_m2(model, a, np.ones(3), -1, step_m=2.5e-4, samples=1000, seed=0)
+    assert np.sqrt(mse[1]) == pytest.approx(1e-3, rel=MC_RTOL)
+
+
+def test_stretches_around_positions_are_the_prior():
+    """With ``half_width_m`` the prior is the stretches around the positions: two positions 10 sigma apart
+    with stretches of 2 sigma each way locate no worse than the truncated Gaussian, better than the whole span;
+    a half-width of 50 sigma gives the span's answer."""
+    model = Linear(1.0, 1e-3)
+    a = np.array([0.05, 0.06])
+    narrow = span_position_mse_m2(model, a, np.ones(2), -1, step_m=2.5e-4, half_width_m=2e-3, samples=1000, seed=2)
+    wide = span_position_mse_m2(model, a, np.ones(2), -1, step_m=2.5e-4, half_width_m=0.05, samples=1000, seed=2)
+    # a flat prior on +-2 sigma: the posterior mean's RMS error is under the prior's own sd, 4 / sqrt(12) sigma
+    assert np.all(np.sqrt(narrow) < 4e-3 / np.sqrt(12))
+    assert np.sqrt(wide) == pytest.approx([1e-3, 1e-3], rel=MC_RTOL)
+
+
+def test_heavier_load_is_located_better_in_proportion():
+    """The slope scales with the mass: twice the mass, half the limit (the same Gaussian posterior, k m doubled)."""
+    model = Linear(1.0, 1e-3)
+    a = np.array([0.05, 0.1, 0.1, 0.15])
+    m = np.array([1.0, 1.0, 2.0, 1.0])
+    mse = span_position_mse_m2(model, a, m, -1, step_m=1e-4, samples=1000, seed=1)
+    assert np.sqrt(mse[2]) == pytest.approx(0.5e-3, rel=MC_RTOL)
+
+
+def test_positions_many_sigmas_apart_keep_a_span_limit():
+    """The trial's failure class: 1 cm positions with a 1 mm resolution are 10 sigma apart. Knowing the positions
+    the posterior never mixes them (the settings limit is ~0: P(mix) ~ Q(5) ~ 3e-7); the span limit is the
+    resolution, what a regression of a continuous position can reach."""
+    model = Linear(1.0, 1e-3)
+    ds = _dataset(np.arange(0.05, 0.2001, 0.01))
+    inner = np.arange(2, 14)  # away from the span's ends
+    settings = position_bayes_rmse_m(model, ds, inner, samples=1000, prior="settings")
+    stretches = position_bayes_rmse_m(model, ds, inner, samples=4000)
+    assert settings < 1e-5  # 0.01 mm: not one of 12000 draws mixed two positions by more than that
+    # positions continuous within half a step (5 sigma) of each: the Gaussian posterior, barely cut
+    assert stretches == pytest.approx(1e-3, rel=MC_RTOL)
+
+
+def test_unresolved_limit_is_refused():
+    """A limit under two grid steps (here 1e-9 m against a 0.25 mm grid over a 1 m span) is refused, not printed."""
+    model = Linear(1.0, 1e-12)
+    ds = _dataset([0.0, 0.5, 1.0])
+    with pytest.raises(ValueError, match=r"under two steps of its position grid"):
+        position_bayes_rmse_m(model, ds, [1], samples=400)
+
+
+def test_unknown_prior_is_refused():
+    with pytest.raises(ValueError, match=r"prior must be 'span' or 'settings', not 'flat'"):
+        position_bayes_rmse_m(Linear(1.0, 1e-3), _dataset([0.1, 0.2]), [0], prior="flat")
