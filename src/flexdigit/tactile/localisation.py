@@ -483,15 +483,10 @@ def position_bayes_rmse_m(
     to them), which a load between them would not find.
 
     The readings' noise is the model's (white noise and quantisation for :func:`readings_gauge_model`), not the
-    sensors' drift, nor a tare's error (on readings tared before each position, :func:`tare`): a
-    network is scored on
-    test readings drawn at random from the same run as its training readings, each setting's readings taken within
-    a second (and tared on one block), so it can learn each setting's offset, and a limit counting the drift or
-    the tare as noise would be no floor (the whole run's drift put the 8-gauge test digit's network at half of
-    it; the drift since each tare and the tare's noise a 7-gauge drawn digit's at a third); where the drift
-    moves neighbouring settings' means past each other (a one-gauge digit), no smooth network follows it, which
-    the tare per position (``tare_each_position``) removes. The digit must have settled (the protocol's
-    ``settle_s``, and ``wait_until_steady``): a swing is noise the limit does not count either.
+    sensors' drift nor a tare's error: each setting's readings are taken within a second (and tared on one block),
+    so a network trained on the same run can learn a setting's offset, and counting it as noise would make the
+    limit no floor (a drawn 7-gauge digit's network at a third of it). The digit must have settled (``settle_s``,
+    ``wait_until_steady``): a swing is noise the limit does not count either.
 
     Parameters
     ----------
@@ -542,6 +537,12 @@ def position_bayes_rmse_m(
         limits = bayes_limits(model, dataset, rows, samples=samples, seed=seed)
         k = limits.index(dataset["position_from_base_m"][rows], dataset["load_kg"][rows], dataset["command"][rows])
         return float(np.sqrt(np.mean(limits.position_mse_m2[k])))
+    return _span_limit_m(model, dataset, rows, samples=samples, seed=seed)
+
+
+def _span_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int) -> float:
+    """:func:`position_bayes_rmse_m`'s span prior: the grid a quarter of the smallest Cramer-Rao bound (mass
+    known), at most :data:`SPAN_GRID_MAX` points; a limit under two steps refused."""
     mass = dataset["load_kg"]
     loaded = np.flatnonzero(mass > 0)
     a = np.round(dataset["position_from_base_m"][loaded], 6)
