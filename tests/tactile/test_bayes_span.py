@@ -78,9 +78,12 @@ def test_positions_many_sigmas_apart_keep_a_span_limit():
     model = Linear(1.0, 1e-3)
     ds = _dataset(np.arange(0.05, 0.2001, 0.01))
     inner = np.arange(2, 14)  # away from the span's ends
-    settings = position_bayes_rmse_m(model, ds, inner, samples=1000, prior="settings")
+    from flexdigit.tactile.localisation import bayes_limits
+
+    limits = bayes_limits(model, ds, inner, samples=1000)
+    settings = float(np.sqrt(np.nanmean(limits.position_mse_m2)))
     stretches = position_bayes_rmse_m(model, ds, inner, samples=4000)
-    assert settings < 1e-5  # 0.01 mm: not one of 12000 draws mixed two positions by more than that
+    assert settings < 1e-5  # 0.01 mm: not one of 16000 draws mixed two positions by more than that
     # positions continuous within half a step (5 sigma) of each: the Gaussian posterior, barely cut
     assert stretches == pytest.approx(1e-3, rel=MC_RTOL)
 
@@ -91,6 +94,14 @@ def test_unresolved_limit_is_refused():
     ds = _dataset([0.0, 0.5, 1.0])
     with pytest.raises(ValueError, match=r"under two steps of its position grid"):
         position_bayes_rmse_m(model, ds, [1], samples=400)
+
+
+def test_settings_limit_the_draws_never_resolved_is_refused():
+    """Positions 100 sigma apart: no draw mixes two, the settings limit would print as rounding (the trial's
+    1.4e-11 mm); refused in one line naming the prior to use."""
+    ds = _dataset(np.arange(0.05, 0.2001, 0.01))
+    with pytest.raises(ValueError, match=r"never mixed two positions; not reported \(use prior='span'\)"):
+        position_bayes_rmse_m(Linear(1.0, 1e-4), ds, np.arange(16), samples=200, prior="settings")
 
 
 def test_unknown_prior_is_refused():

@@ -39,6 +39,7 @@ __all__ = [
     "readings_gauge_model",
     "position_bayes_rmse_m",
     "SPAN_GRID_MAX",
+    "SETTINGS_RESOLVED",
     "train_network",
     "EPOCHS_MAX",
     "LONGER_GAIN",
@@ -461,6 +462,9 @@ def readings_gauge_model(params=None, calibration=None):
 #: The span prior's grid: a quarter of the smallest Cramer-Rao bound (adds under 1 % to the limit), at most this
 #: many points per command's span (beyond, the step is coarser and a limit under two steps is refused).
 SPAN_GRID_MAX = 4000
+#: A settings-prior limit under this fraction of the protocol's step is refused: the Monte Carlo never mixed two
+#: positions (the hand-made PEEK digit's 1.4e-11 mm; the pairwise mix-up probability put it near 1e-4 mm)
+SETTINGS_RESOLVED = 1e-3
 
 
 def position_bayes_rmse_m(
@@ -536,7 +540,15 @@ def position_bayes_rmse_m(
     if prior == "settings":
         limits = bayes_limits(model, dataset, rows, samples=samples, seed=seed)
         k = limits.index(dataset["position_from_base_m"][rows], dataset["load_kg"][rows], dataset["command"][rows])
-        return float(np.sqrt(np.mean(limits.position_mse_m2[k])))
+        limit = float(np.sqrt(np.mean(limits.position_mse_m2[k])))
+        distinct = np.unique(limits.position_from_base_m[limits.mass_kg > 0])
+        step = float(np.median(np.diff(distinct))) if distinct.size > 1 else 0.0
+        if limit < SETTINGS_RESOLVED * step:  # no draw mixed two positions: the Monte Carlo saw only rounding
+            raise ValueError(
+                f"the settings Bayes limit ({1e3 * limit:.3g} mm) is under {SETTINGS_RESOLVED:g} of the protocol's "
+                f"step ({1e3 * step:.3g} mm): its draws never mixed two positions; not reported (use prior='span')"
+            )
+        return limit
     return _span_limit_m(model, dataset, rows, samples=samples, seed=seed)
 
 
