@@ -45,17 +45,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_plot_flag(p, "force against indentation (sweep), the stiffness map (scan) or the force over time (hold)")
 
 
-def _sim_options(backend: str, kind: str, seed: int | None) -> dict:
+def _sim_options(backend: str, kind: str, seed: int | None, params) -> dict:
+    from flexdigit.palpation.palpation import twin_step_s
     from flexdigit.rig.base import parse_rig_url, seed_option
 
     url = parse_rig_url(backend)
     options = seed_option(backend, seed)  # --seed only when given: the URL's seed= is not overridden by a default
-    if not url.scheme.startswith("sim"):
-        return options
-    if "dt_s" not in url.options:
-        # a quasi-static sweep needs no finer step than 10 ms (the fit's chi^2 is the same at 2 ms); force control
-        # acts between frames, 5 ms
-        options["dt_s"] = 0.005 if kind == "force" else 0.01
+    if url.scheme.startswith("sim") and "dt_s" not in url.options:
+        options["dt_s"] = twin_step_s(kind, params)
     return options
 
 
@@ -111,7 +108,7 @@ def _palpation_rig(args: argparse.Namespace, info, kind: str):
         )
     params = load_params(args.params) if args.params else RigParams()
     calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
-    options = _sim_options(args.backend, kind, args.seed)
+    options = _sim_options(args.backend, kind, args.seed, params)
     if sim and (args.params or args.calibration):
         options["calibration"] = calibration
     rig = open_rig(args.backend, params, **options)
@@ -413,6 +410,33 @@ def _force(rig, tissue, plan, log, log_mode):
     return data, text, figure
 
 
+def _limit_data(held) -> dict:
+    """``palpate --json``'s ``limit_note``: why a hold ended short, in one line: no contact seen (the approach did
+    not reach the body), or the loop at its highest command
+    (:meth:`~flexdigit.palpation.palpation.ForceHold.limit_reached`)."""
+    if not held.touched and held.command.size:
+        return {
+            "limit_note": f"no contact seen in the hold: the approach reached command {int(held.command[-1])} at "
+            f"{held.approach_rate:g} commands/s; hold longer ('duration_s') or place the body nearer"
+        }
+    if not held.limit_reached():
+        return {}
+    top = held.region["command_range"][1]
+    return {
+        "limit_note": f"the loop reached its highest command ({top}: 52 past straight, x the gearing) short of "
+        f"{held.setpoint_n:g} N: the digit does not press that hard there; place the body nearer"
+    }
+
+
+def _decisions_line(data: dict) -> str:
+    """The text's line on what the estimates of the figures' window decided (the force held follows it)."""
+    counts = data["decisions"]
+    said = ", ".join(f"{kind} {n}" for kind, n in counts.items() if n)
+    average = data["average_readings"]
+    each = "each reading" if average == 1 else f"the mean of each {average} readings"
+    return f"contact decided on {each} over the last window: {said or 'no estimate'}"
+
+
 def _hold_data(held) -> tuple[dict, str]:
     """``palpate --json`` of a hold and its text: the figures, the contact place, the estimate's uncertainty."""
     data = {
@@ -425,10 +449,16 @@ def _hold_data(held) -> tuple[dict, str]:
         "status": held.status,
         "scored_on": "true contact force (twin)" if held.true_force_n is not None else "estimated force",
         "contact_place": _place_data(held),
+        # how many of the last window's estimates decided each kind of contact (the force follows the decision)
+        "decisions": held.decisions(),
+        "average_readings": held.region.get("average_readings", 1),
+        **_limit_data(held),
+        "tare_readings": held.region.get("tare_readings"),
         **_uncertainty_data(held),
         "time_s": held.time_s.tolist(),
         "command": held.command.tolist(),
         "force_n": held.force_n.tolist(),
+        "decision": [] if held.kind is None else held.kind.tolist(),
         **({"true_force_n": held.true_force_n.tolist()} if held.true_force_n is not None else {}),
     }
     place = data["contact_place"]
@@ -437,7 +467,9 @@ def _hold_data(held) -> tuple[dict, str]:
         f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, within 10 % after "
         f"{held.settling_s:.2f} s ({data['scored_on']})\n"
         + (f"contact at {place['steady_mm']:.1f} mm" if place["steady_mm"] is not None else "contact place: not told")
-        + f" ({place['reason']})"
+        + f" ({place['reason']})\n"
+        + _decisions_line(data)
+        + (f"\n{data['limit_note']}" if "limit_note" in data else "")
         + (f"\n{data['estimate_note']}" if "estimate_note" in data else "")
     )
     return data, text

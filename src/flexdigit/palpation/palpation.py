@@ -67,6 +67,7 @@ __all__ = [
     "force_per_command",
     "force_gains",
     "force_region",
+    "twin_step_s",
     "servo_lag_force",
     "SERVO_LAG_FORCE",
     "CONTACT_FRACTION",
@@ -585,6 +586,18 @@ def palpate(
     return analyse(record, placed, protocol, model)
 
 
+def twin_step_s(kind: str, params=None) -> float:
+    """The twin's integration step (s) for a palpation on the sim backend: ``kind`` "force" (a hold: the loop acts
+    between frames) 5 ms; "sweep" or "scan" (quasi-static plateaus) 10 ms on the thesis rig (the fit's chi^2 the same
+    at 2 ms), 5 ms on any other digit. At 10 ms the 2 x 0.10 m four-gauge example digit's barely taut cable chatters
+    at the first command past straight (a 33 Hz limit cycle, a third of the step rate: the cable slack at every
+    reading, 1.6-4 mV on the gauges read as a 3 mN contact where nothing touches); at 5 ms it rests, taut (0.22 N),
+    as its statics say. None of the other 39 test and drawn digits chatters there at 10 ms."""
+    if kind == "force":
+        return 0.005
+    return 0.01 if params is None or params == RigParams() else 0.005
+
+
 #: The thesis rig's force loop (:func:`hold_force`): integral gain (commands / s / N) and approach rate
 #: (commands / s), and what they were chosen on: the soft block (1000 N/m^2) 30 mm beside 0.15-0.35 m, 0.1 N.
 THESIS_FORCE_GAIN = 30.0
@@ -652,8 +665,15 @@ PLACE_WANDER_CHI2 = 4.0
 #: Where the search is narrowed to: the places whose profiled force reads the reference press within this (a fifth
 #: of the issue's 10 %).
 FORCE_TOLD = 0.02
-#: Readings the force loop tares on at the straight command (nothing touching) before it presses.
+#: Readings the force loop tares on at the straight command (nothing touching) before it presses (at least).
 TARE_READINGS = 10
+#: The tare's force error (1 sd) a hold allows, relative to its setpoint: a third of the issue's 10 % (more readings
+#: where one reading's force is noisier, :func:`_tare_readings`).
+TARE_SHARE = 0.10 / 3
+#: At most this many readings in a tare (10 s of the loop's 20 ms readings) ...
+MAX_TARE_READINGS = 500
+#: ... and in an estimate's mean (0.5 s: at the loop's ~0.8 rad/s crossover a 0.25 s delay, 0.2 rad of phase).
+MAX_AVERAGE_READINGS = 25
 
 
 def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "cable", window_s: float = 3.0) -> dict:
@@ -685,7 +705,7 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
     force = np.abs(sol.contact_force_n)
     reached = np.flatnonzero(force >= setpoint_n)
     out = {"region_m": region_m, "narrowed": False, "spread": math.nan, "place_told": False, "place_sd_m": math.inf,
-           "force_sd_n": math.nan}  # fmt: skip
+           "force_sd_n": math.nan, "point_error": math.nan, "classify": False}  # fmt: skip
     if not reached.size:
         return {**out, "reason": "the digit never presses the reference body that hard: place not checked"}
     k = int(reached[0])
@@ -710,6 +730,11 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
         searched = (float(s[lo]), float(s[hi]))
     place_sd, force_sd = _contact_sd(model, centroid, truth, command, side)
     place_sd /= math.sqrt(max(1.0, window_s / 0.020))  # over the window's 20 ms readings
+    # the reference press is a stretch of contact: where the point hypothesis misreads its total by more than
+    # FORCE_TOLD (a gauge inside the stretch), the loop weighs the line-load hypothesis too (ContactEstimator's
+    # classify); on every test digit and random_digit(0..30) it reads it within 2 % (the thesis rig 0.006 %)
+    best = ContactEstimator(model, classify=False, side=side, region_m=searched).fit().predict(volts[k], command)
+    point_error = float(abs(abs(best.point_force_n[0]) - truth) / truth)
     width = (searched[1] - searched[0]) if searched is not None else length
     gauges = len(model.params.geometry.gauge_positions_m)
     place_told = gauges > 1 and place_sd <= width
@@ -730,7 +755,7 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
         )
     return {**out, "region_m": searched, "narrowed": searched != region_m, "spread": spread,
             "place_told": bool(place_told), "place_sd_m": float(place_sd), "force_sd_n": force_sd,
-            "reason": reason}  # fmt: skip
+            "point_error": point_error, "classify": point_error > FORCE_TOLD, "reason": reason}  # fmt: skip
 
 
 def _contact_sd(model, place_m: float, force_n: float, command: int, side: str) -> tuple[float, float]:
@@ -942,21 +967,24 @@ class _ScanLikelihood(_TissueLikelihood):
 class ForceController:
     """Hold a set contact force with the 20 ms loop, from the gauges' force estimate (integral control).
 
-    Each sample the contact force is estimated from the reading
-    (:class:`flexdigit.palpation.contact_estimation.ContactEstimator`,
-    point hypothesis) at the servo's position, which is taken as the controller's own continuous command (the
-    servo low-passes what it is sent): the estimate at the two integer commands around it, interpolated. The
-    command integrates the force error (``gain`` commands per second per N, clamped to ``low..high``: no wind-up),
-    and is rounded with error feedback (a first-order sigma-delta): the integer commands sent average to the
-    continuous one, a resolution the servo (20 rad/s) and the digit (13 rad/s) filter the 25 Hz toggling out of,
-    finer than the ~0.03 N a whole command step presses. Integral action alone has no overshoot while the
-    crossover (``gain`` x ~0.03 N per command) stays well below the digit's lightly damped mode.
+    Each sample the contact is estimated from the reading
+    (:class:`flexdigit.palpation.contact_estimation.ContactEstimator`) at the servo's position, which is taken as the
+    controller's own continuous command (the servo low-passes what it is sent): the estimate at the two integer
+    commands around it, interpolated. **The force follows the contact
+    decision** (:meth:`estimate`): nothing touching reads 0 N, a point contact its point force, a line load (a
+    classifying estimator) its total; before, every reading was converted as a point force at the guessed place, so
+    noise with nothing touching read as a force (clipped at zero: +11 mN on the one-gauge digit). The command
+    integrates the force error (``gain`` commands per second per N, clamped to ``low..high``: no wind-up), and is
+    rounded with error feedback (a first-order sigma-delta): the integer commands sent average to the continuous
+    one, a resolution the servo (20 rad/s) and the digit (13 rad/s) filter the 25 Hz toggling out of, finer than the
+    ~0.03 N a whole command step presses. Integral action alone has no overshoot while the crossover (``gain`` x
+    ~0.03 N per command) stays well below the digit's lightly damped mode.
 
     Parameters
     ----------
     estimator : ContactEstimator
-        Fitted (point hypothesis; ``classify=False`` is enough).
-    offset_v : array_like (3,)
+        Fitted; its ``n_readings`` should be ``average_readings`` (the noise its decision weighs).
+    offset_v : array_like (G,)
         Subtracted from every reading first (the tare: readings at rest minus the model's).
     gain : float
         Integral gain (commands / s / N).
@@ -972,12 +1000,21 @@ class ForceController:
         ``sign * estimate``, positive.
     detect_readings : int
         The contact shows when the mean of the last this many estimates passes ``contact_fraction`` of the
-        setpoint (1: each estimate; more where one reading's noise alone would pass it, :data:`DETECT_SIGMAS`).
+        setpoint (1: each estimate).
+    average_readings : int
+        Each estimate is made on the mean of the last this many tared readings, at their mean servo position (1: each
+        reading alone, the thesis rig). A noisy gauge's single reading cannot decide a contact at the setpoint (the
+        one-gauge digit: 36 mN a reading against a 30 mN threshold); their mean can, and its estimate is not
+        clipped at zero force as a mean of one-reading estimates is.
     servo : (float, float), optional
         The servo's natural frequency (rad/s) and damping ratio: the force is then estimated at the position the
         servo's second-order model reaches from the commands sent (zero-order hold over ``period_s``), not at the
         continuous command. The servo lags a ramp by ``2 zeta / wn`` (55 ms on the thesis rig's): where a digit's
         gauges read that lag as force (:func:`servo_lag_force`), the estimate led the true force by it.
+
+    Per sample it keeps the force held (``forces``, N, > 0 pressing), its standard deviation (``force_sds``, N, the
+    estimator's at its decision), the decision (``kinds``: "none", "point", "distributed") and the point estimate's
+    place (``places``, m from the base).
     """
 
     def __init__(
@@ -994,8 +1031,10 @@ class ForceController:
         contact_fraction=0.3,
         servo=None,
         detect_readings=1,
+        average_readings=1,
     ) -> None:
         self.detect_readings = check_int(detect_readings, "detect_readings", "ForceController", low=1)
+        self.average_readings = check_int(average_readings, "average_readings", "ForceController", low=1)
         self.approach_rate = check_real(approach_rate, "approach_rate", "ForceController", low=0, low_open=True)
         self.contact_fraction = check_real(contact_fraction, "contact_fraction", "ForceController", low=0, high=1)
         self.estimator = estimator
@@ -1005,6 +1044,8 @@ class ForceController:
         self.low, self.high = int(low), int(high)
         self.sign = sign
         self.forces: list[float] = []
+        self.force_sds: list[float] = []
+        self.kinds: list[str] = []
         self.places: list[float] = []  # the point estimate's place (m from the base) per sample
         self.place_m = math.nan
         self.servo = servo
@@ -1013,25 +1054,48 @@ class ForceController:
     def reset(self, command: int) -> None:
         self.u = float(command)
         self.residue = 0.0
-        self.forces = []
-        self.places = []
+        self.forces, self.force_sds, self.kinds, self.places = [], [], [], []
+        self._readings: list[np.ndarray] = []
+        self._positions: list[float] = []
         self.touching = False
         self._servo_state = np.array([float(command), 0.0])
 
-    def force(self, gauges_v, position: float) -> float:
-        """Contact force (N, > 0 pressing) from one reading with the servo at the (continuous) ``position``."""
+    def estimate(self, gauges_v, position: float) -> tuple[float, float, str]:
+        """``(force (N, > 0 pressing), its sd (N), decision)`` from one (mean) reading with the servo at the
+        (continuous) ``position``: the estimator's decided force (0 for no contact, the point force, or a line
+        load's total) at the two commands around it, interpolated; the decision and sd of the nearer command.
+        Also sets :attr:`place_m` (the point estimate's place)."""
         lo = int(math.floor(position))
         frac = position - lo
         v = np.asarray(gauges_v, dtype=float) - self.offset_v
         est = self.estimator.predict(np.vstack([v, v]), np.array([lo, lo + 1]))
-        f = self.sign * est.point_force_n
+        near = int(frac >= 0.5)
         self.place_m = float((1 - frac) * est.point_position_m[0] + frac * est.point_position_m[1])
-        return float((1 - frac) * f[0] + frac * f[1])
+        # one decision for the reading: its likelihood ratio against nothing, interpolated as the force is
+        if (1 - frac) * est.chi2_contact[0] + frac * est.chi2_contact[1] <= self.estimator.detect_chi2:
+            return 0.0, float(est.force_sd_n[near]), "none"
+        kind = "distributed" if est.kind[near] == "distributed" else "point"
+        f = self.sign * (est.line_total_n if kind == "distributed" else est.point_force_n)
+        return float((1 - frac) * f[0] + frac * f[1]), float(est.force_sd_n[near]), kind
+
+    def force(self, gauges_v, position: float) -> float:
+        """Contact force (N, > 0 pressing) from one reading with the servo at the (continuous) ``position``, as
+        the contact decision says (:meth:`estimate`)."""
+        return self.estimate(gauges_v, position)[0]
 
     def step(self, setpoint: float, reading) -> float:
         # where the servo is: the continuous command, or the servo's model driven by the commands sent
-        f = self.force(reading.gauges_v, self.u if self._servo is None else self._servo_state[0])
+        n = self.average_readings
+        self._readings = [*self._readings, np.asarray(reading.gauges_v, dtype=float)][-n:]
+        self._positions = [*self._positions, self.u if self._servo is None else self._servo_state[0]][-n:]
+        if self.average_readings == 1:  # (the thesis rig: its estimates to the last bit as before)
+            mean_v, position = self._readings[-1], self._positions[-1]
+        else:
+            mean_v, position = np.mean(self._readings, axis=0), float(np.mean(self._positions))
+        f, sd, kind = self.estimate(mean_v, position)
         self.forces.append(f)
+        self.force_sds.append(sd)
+        self.kinds.append(kind)
         self.places.append(self.place_m)
         if not self.touching and np.mean(self.forces[-self.detect_readings :]) > self.contact_fraction * setpoint:
             self.touching = True
@@ -1068,13 +1132,13 @@ DETECT_SIGMAS = 3.0
 SERVO_LAG_FORCE = CONTACT_FRACTION / DETECT_SIGMAS
 
 
-def _held_force_sd(model, force_sd_n: float, duration_s: float) -> float:
-    """How uncertain (1 sd, N) the force a hold reads is, its noise averaged out: the tare's :data:`TARE_READINGS`
+def _held_force_sd(model, force_sd_n: float, duration_s: float, tare_readings: int = TARE_READINGS) -> float:
+    """How uncertain (1 sd, N) the force a hold reads is, its noise averaged out: the tare's ``tare_readings``
     readings and the gauges' random-walk drift over the hold (its wait and duration), in force through one reading's
     force sd with the place known (the drift's share of a reading's noise, root-mean-square over the gauges)."""
     cal = model.calibration
     ratio = float(np.sqrt(np.mean((np.asarray(cal.noise_drift_v_per_sqrt_s) / np.asarray(model.noise_v)) ** 2)))
-    return float(force_sd_n * math.sqrt(1.0 / TARE_READINGS + ratio**2 * (1.0 + duration_s)))
+    return float(force_sd_n * math.sqrt(1.0 / tare_readings + ratio**2 * (1.0 + duration_s)))
 
 
 def _detect_readings(force_sd_n: float, threshold_n: float) -> int:
@@ -1098,9 +1162,9 @@ def servo_lag_force(model, estimator, approach_rate: float, command: int) -> flo
 
 @dataclass
 class ForceHold:
-    """A force-control run: per sample ``time_s``, ``command``, ``force_n`` (estimated) and, on the twin,
-    ``true_force_n``; the figures over the last ``window_s``: mean true (or estimated) force and its error,
-    and the overshoot (largest force over the setpoint, relative)."""
+    """A force-control run: per sample ``time_s``, ``command``, ``force_n`` (estimated, as the contact decision
+    says: ``kind``, ``force_sd_n``) and, on the twin, ``true_force_n``; the figures over the last ``window_s``: mean
+    true (or estimated) force and its error, and the overshoot (largest force over the setpoint, relative)."""
 
     setpoint_n: float
     time_s: np.ndarray
@@ -1123,6 +1187,29 @@ class ForceHold:
 
     #: the place estimated from the window's mean reading (NaN where the gauges cannot tell it: ``region``)
     steady_place_m: float = math.nan
+    #: per sample: the estimate's standard deviation (N) and the contact decision it follows ("none", "point",
+    #: "distributed"; :meth:`ForceController.estimate`)
+    force_sd_n: np.ndarray | None = None
+    kind: np.ndarray | None = None
+    #: whether the loop saw the contact (left its approach for the integral) during the hold
+    touched: bool = True
+
+    def limit_reached(self) -> bool:
+        """Whether the hold ended short of its setpoint (more than 10 %, on the scored force) with the loop at the
+        highest command it may send (``region["command_range"]``: 52 commands past straight, x the gearing): the
+        digit cannot press that hard there, which no gain would change."""
+        top = self.region.get("command_range", (None, None))[1]
+        window = self._window()
+        if top is None or not np.any(window) or not self.steady_error < -0.1:
+            return False
+        return bool(np.max(self.command[window]) >= top)
+
+    def decisions(self) -> dict:
+        """How many samples of the figures' window each contact decision took (``{"none": n, "point": n, ...}``)."""
+        if self.kind is None:
+            return {}
+        kinds = self.kind[self._window()]
+        return {k: int(np.count_nonzero(kinds == k)) for k in ("none", "point", "distributed")}
 
     @property
     def true_steady_place_m(self) -> float:
@@ -1155,10 +1242,13 @@ def hold_force(
 ) -> ForceHold:
     """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
 
-    Tares on :data:`TARE_READINGS` readings at the equilibrium command first (nothing must touch the digit there),
-    then runs :class:`ForceController`. ``region_m`` (m from the base): where the contact can be (where the tissue
-    lies), which steadies the estimate when nothing touches yet; :func:`force_region` narrows it where the force
-    read hangs on the place, and ``ForceHold.region`` says what was decided. On the twin the true contact force is
+    Tares at the equilibrium command first (nothing must touch the digit there; :data:`TARE_READINGS` readings, more
+    where one reading's force is noisy: ``region["tare_readings"]``), then runs :class:`ForceController`, whose force
+    follows the contact decision, each estimate on the mean of ``region["average_readings"]`` readings (1 unless one
+    reading's noise would pass the contact threshold, :data:`DETECT_SIGMAS`). ``region_m`` (m from the base): where
+    the contact can be (where the tissue lies), which steadies the estimate when nothing touches yet;
+    :func:`force_region` narrows it where the force read hangs on the place, and ``ForceHold.region`` says what was
+    decided. On the twin the true contact force is
     logged beside the estimate; the figures (steady force and error over the last ``window_s``, overshoot, 10 %
     settling time) use it there, and the estimate on hardware.
 
@@ -1176,9 +1266,17 @@ def hold_force(
     # by more than 10 % along it (force_region; the thesis rig's searches its whole region as before)
     region = force_region(model, setpoint, region_m=region_m, side=side, window_s=window_s)
     if estimator is None:
-        estimator = ContactEstimator(model, classify=False, side=side, region_m=region["region_m"]).fit()
+        # each estimate on the mean of enough readings for its noise to stay DETECT_SIGMAS below the contact
+        # threshold (1 on the thesis rig: 3.3 mN a reading against 30 mN; 14 on the one-gauge digit, 36 mN a reading)
+        needed = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
+        average = min(MAX_AVERAGE_READINGS, needed)
+        estimator = ContactEstimator(
+            model, classify=region.get("classify", False), side=side, region_m=region["region_m"], n_readings=average
+        ).fit()
     controller, region = _force_controller(rig, model, estimator, region, setpoint, gain, approach_rate, side)
-    region["held_force_sd_n"] = _held_force_sd(model, region.get("force_sd_n", math.nan), duration_s)
+    region["held_force_sd_n"] = _held_force_sd(
+        model, region.get("force_sd_n", math.nan), duration_s, region["tare_readings"]
+    )
     truth = _truth_of(rig)
     place = _place_of(rig)
     true_force, true_place = [], []
@@ -1207,6 +1305,8 @@ def hold_force(
         setpoint, t, result.command, est, true, *figures, result.status, float(gain), float(approach_rate),
         region=region, place_m=np.array(controller.places[: t.size]),
         true_place_m=np.array(true_place) if truth else None, window_s=float(window_s), steady_place_m=steady_place,
+        force_sd_n=np.array(controller.force_sds[: t.size]), kind=np.array(controller.kinds[: t.size], dtype=str),
+        touched=bool(getattr(controller, "touching", True)),
     )  # fmt: skip
 
 
@@ -1216,8 +1316,8 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
     eq = int(rig.params.actuator.equilibrium_command)
     rig.write_command(eq)
     rig.wait(1.0)
-    rest = np.array([rig.read().gauges_v for _ in range(TARE_READINGS)])
-    offset = rest.mean(axis=0) - model.free_v([eq])[0]
+    tare = _tare_readings(region.get("force_sd_n", math.nan), setpoint)
+    offset = _tare(rig, tare) - model.free_v([eq])[0]
     sign = -1.0 if side == "cable" else 1.0
     # the thesis rig's 8..60: 52 commands of pulley past straight (times a gearing), within the servo's range
     act = rig.params.actuator
@@ -1226,16 +1326,38 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
     # setpoint (not on the thesis rig: 1.7 mN at 0.1 N)
     lag_force = servo_lag_force(model, estimator, approach_rate, min(eq + 2, high))
     servo = (act.servo_wn_rad_s, act.servo_zeta) if lag_force > SERVO_LAG_FORCE * setpoint else None
-    region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None}
-    # the contact shows on enough readings that their noise stays DETECT_SIGMAS below the threshold (1 on the
-    # thesis rig: 3.3 mN a reading against 30 mN; 14 on the one-gauge digit, 36 mN a reading)
-    detect = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
-    region["detect_readings"] = detect
+    # each estimate (and the contact's decision) on the mean of the estimator's readings (hold_force: enough for
+    # their noise to stay DETECT_SIGMAS below the threshold)
+    average = int(getattr(estimator, "n_readings", 1))
+    region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None,
+              "average_readings": average, "tare_readings": tare, "classify": bool(estimator.classify),
+              "command_range": (eq, high)}  # fmt: skip
     controller = ForceController(
         estimator, offset, gain=gain, low=eq, high=high, sign=sign, approach_rate=approach_rate, servo=servo,
-        contact_fraction=CONTACT_FRACTION, detect_readings=detect,
+        contact_fraction=CONTACT_FRACTION, average_readings=average,
     )  # fmt: skip
     return controller, region
+
+
+def _tare_readings(force_sd_n: float, setpoint_n: float) -> int:
+    """Readings the hold tares on: :data:`TARE_READINGS`, or enough for the tare's force error (one reading's force
+    sd over their root) to stay within :data:`TARE_SHARE` of the setpoint (the one-gauge digit: 36 mN a reading,
+    118 readings, 2.4 s; the thesis rig 3.3 mN, its 10)."""
+    if not math.isfinite(force_sd_n):
+        return TARE_READINGS
+    return min(MAX_TARE_READINGS, max(TARE_READINGS, math.ceil((force_sd_n / (TARE_SHARE * setpoint_n)) ** 2)))
+
+
+def _tare(rig, readings: int) -> np.ndarray:
+    """The mean of ``readings`` gauge readings at rest: :data:`TARE_READINGS` read at once (the thesis rig's tare, as
+    it was), more read one loop period (20 ms) apart, as the loop reads them."""
+    if readings <= TARE_READINGS:
+        return np.array([rig.read().gauges_v for _ in range(readings)]).mean(axis=0)
+    rest = []
+    for _ in range(readings):
+        rest.append(rig.read().gauges_v)
+        rig.wait(0.020)
+    return np.array(rest).mean(axis=0)
 
 
 def _steady_place(controller, result, window_s: float) -> float:
