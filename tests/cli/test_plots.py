@@ -414,3 +414,75 @@ def test_design_mixsyn_plots_a_step_that_ends_on_the_setpoint(tmp_path, drawn, c
     y = _lines(step_y)["output y (T_yw)"].get_ydata()
     assert abs(y[-1] - 1.0) < 0.01
     assert _lines(bode_mag)["S (T_zw)"].get_ydata()[0] < -20.0
+
+
+def test_tdcr_contact_that_finds_nothing_exits_non_zero_and_writes_nothing(tmp_path, capsys):
+    """A contact nearer the base than the second gauge station (out of sight) has no place or force the command can
+    stand behind: exit 1, the reason in one line (also under --json), no --out and no --plot written."""
+    out, plot = tmp_path / "contact.json", tmp_path / "contact.png"
+    argv = ["tdcr", "contact", "rao2021", "--tension-n", "2,0,0,0,1,0", "--contact-s-m", "0.05"]
+    argv += ["--contact-force-n", "0,0.05,0", "--out", str(out), "--plot", str(plot)]
+    assert main(argv) == 1
+    text = capsys.readouterr().out
+    refused = [line for line in text.splitlines() if line.startswith("out of sight:")]
+    assert len(refused) == 1
+    assert "place and force not determined" in refused[0]
+    assert not out.exists()
+    assert not plot.exists()
+    assert main([*argv, "--json"]) == 1
+    data = json.loads(capsys.readouterr().out)
+    assert data["refused"] == refused[0]
+    assert data["out_of_sight"] is True
+    assert data["s_m"] is None
+
+
+def test_tdcr_statics_plots_the_backbone_it_solved(tmp_path, drawn, capsys):
+    plot = tmp_path / "statics.png"
+    argv = ["tdcr", "statics", "rao2021", "--tension-n", "2,0,0,1,0,0", "--plot", str(plot), "--json"]
+    assert main(argv) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["plot"] == str(plot)
+    assert _written(plot)
+    side, front, top = drawn[0].axes
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in drawn[0].axes] == [
+        ("x (mm)", "z (mm)"),
+        ("y (mm)", "z (mm)"),
+        ("x (mm)", "y (mm)"),
+    ]
+    assert "rao2021" in drawn[0].get_suptitle()
+    backbone_mm = 1e3 * np.asarray(result["backbone_m"])
+    for ax, (i, j) in zip((side, front, top), ((0, 2), (1, 2), (0, 1)), strict=True):
+        line = _lines(ax)["backbone"]
+        np.testing.assert_allclose(line.get_xdata(), backbone_mm[:, i], rtol=SAME_RTOL, atol=1e-12)
+        np.testing.assert_allclose(line.get_ydata(), backbone_mm[:, j], rtol=SAME_RTOL, atol=1e-12)
+        tip = _lines(ax)["tip"]
+        np.testing.assert_allclose(
+            [tip.get_xdata()[0], tip.get_ydata()[0]], 1e3 * np.asarray(result["tip_position_m"])[[i, j]]
+        )
+    # 2 N on the tendon at 90 deg bends the rod towards +y (the tip well off the base's axis), 1 N opposite less so
+    assert result["tip_position_m"][1] > 0.05
+    assert len(_lines(front)["disks"].get_xdata()) == 20  # rao2021's 20 disks (10 a segment)
+
+
+def test_tdcr_dynamics_plots_the_tip_path_it_printed(tmp_path, drawn, capsys):
+    plot = tmp_path / "dynamics.svg"
+    argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "2,0,0,0,0,0", "--duration-s", "0.02"]
+    assert main([*argv, "--plot", str(plot), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["plot"] == str(plot)
+    assert _written(plot)
+    axes = drawn[0].axes
+    assert [ax.get_ylabel() for ax in axes] == ["tip x (mm)", "tip y (mm)", "tip z (mm)"]
+    assert axes[-1].get_xlabel() == "time (s)"
+    assert "rao2021" in axes[0].get_title()
+    tip_mm = 1e3 * np.asarray(result["tip_position_m"])
+    for k, ax in enumerate(axes):
+        line = ax.get_lines()[0]
+        np.testing.assert_allclose(line.get_xdata(), result["t_s"], rtol=SAME_RTOL)
+        np.testing.assert_allclose(line.get_ydata(), tip_mm[:, k], rtol=SAME_RTOL, atol=1e-12)
+    assert tip_mm[-1, 1] > tip_mm[0, 1]  # the pull at 90 deg moves the tip towards +y
+    capsys.readouterr()
+    plot.write_bytes(b"precious")  # an existing plot is kept without --force, refused before the simulation
+    assert main([*argv, "--plot", str(plot)]) == 2
+    assert "pass --force" in capsys.readouterr().err
+    assert plot.read_bytes() == b"precious"
