@@ -486,3 +486,79 @@ def test_tdcr_dynamics_plots_the_tip_path_it_printed(tmp_path, drawn, capsys):
     assert main([*argv, "--plot", str(plot)]) == 2
     assert "pass --force" in capsys.readouterr().err
     assert plot.read_bytes() == b"precious"
+
+
+#: The 20 ms figure's step is the loop the command scored, redrawn from its weights: the same settling time but
+#: for the rebuilt design's round-off (BLAS orderings in the LQR and Kalman solves), far below a 20 ms sample.
+REDRAWN_RTOL = 1e-6
+
+
+def _step_drawn(ax, label):
+    from flexdigit.control.analysis import step_figures
+
+    line = _lines(ax)[label]
+    return step_figures(line.get_xdata(), line.get_ydata(), target=30.0)
+
+
+def test_design_20ms_plots_the_step_it_scored_and_the_loops_frequency_response(tmp_path, drawn, capsys):
+    plot = tmp_path / "d20.png"
+    assert main(["design", "20ms", "--plot", str(plot), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["plot"] == str(plot)
+    assert _written(plot)
+    step_ax, bode_mag, command_ax, bode_phase = drawn[0].axes
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in drawn[0].axes] == [
+        ("", "tip rotation (deg)"),
+        ("", "magnitude (dB)"),
+        ("time (s)", "command change (servo commands)"),
+        ("frequency (rad/s)", "phase of L (deg)"),
+    ]
+    assert "thesis rig" in drawn[0].get_suptitle()
+    shown = _step_drawn(step_ax, "tip rotation")
+    scored = data["linear_step_30deg"]
+    assert shown.settling_time_s == pytest.approx(scored["settling_time_s"], rel=REDRAWN_RTOL)
+    assert shown.overshoot_percent == pytest.approx(scored["overshoot_percent"], rel=REDRAWN_RTOL, abs=1e-9)
+    # the command the loop ends on turns the digit 30 deg at the rotation per command the command printed
+    command = command_ax.get_lines()[0].get_ydata()
+    assert command[-1] * data["deg_per_command"] == pytest.approx(30.0, rel=1e-3)
+    # integral action: the tip follows a slow setpoint (|T| ~ 0 dB) and |S| is small where |L| is large
+    mag = _lines(bode_mag)
+    w = mag["L (loop gain)"].get_xdata()
+    assert w[-1] <= np.pi / data["period_s"]  # up to Nyquist, not beyond
+    assert abs(mag["T (setpoint to tip)"].get_ydata()[0]) < 0.1
+    np.testing.assert_allclose(
+        mag["S = 1/(1 + L)"].get_ydata()[0], -mag["L (loop gain)"].get_ydata()[0], atol=0.1
+    )  # |S| = 1/|1 + L| ~ 1/|L| where |L| >> 1 (30 dB at 0.1 rad/s: within 0.1 dB)
+
+
+@pytest.mark.slow  # a described digit's weights search, 2-8 s
+def test_design_20ms_plots_a_described_digits_design_without_searching_again(tmp_path, drawn, capsys):
+    from digits import write_digit
+
+    digit, plot = write_digit("short", tmp_path), tmp_path / "d20.svg"
+    assert main(["design", "20ms", "--params", str(digit), "--plot", str(plot), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    assert "short" in drawn[0].get_suptitle()
+    shown = _step_drawn(drawn[0].axes[0], "tip rotation")
+    assert shown.settling_time_s == pytest.approx(data["linear_step_30deg"]["settling_time_s"], rel=REDRAWN_RTOL)
+
+
+def test_design_sweep_plots_the_swept_tolerance_beside_the_thesis(tmp_path, drawn, capsys):
+    plot = tmp_path / "sweep.pdf"
+    assert main(["design", "sweep", "--filters", "5,39", "--plot", str(plot), "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    top, bottom = drawn[0].axes
+    assert (top.get_ylabel(), bottom.get_xlabel(), bottom.get_ylabel()) == (
+        "||T_pq|| (dB)",
+        "error filter cut-off (Hz)",
+        "additive tolerance (%)",
+    )
+    np.testing.assert_allclose(top.get_lines()[0].get_xdata(), [5.0, 39.0])
+    np.testing.assert_allclose(top.get_lines()[0].get_ydata(), [r["tpq_peak_db"] for r in rows], rtol=SAME_RTOL)
+    lines = _lines(bottom)
+    ours = lines["1/||T_pq||, % of |G(0)| (flexdigit)"].get_ydata()
+    np.testing.assert_allclose(ours, [r["additive_tolerance_relative_percent"] for r in rows], rtol=SAME_RTOL)
+    # the thesis's printed percentages (reference/thesis.toml hinf.additive_tolerance_percent) drawn as printed
+    np.testing.assert_allclose(lines["thesis (as printed)"].get_ydata(), [0.85, 22.48])
