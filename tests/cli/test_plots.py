@@ -562,3 +562,38 @@ def test_design_sweep_plots_the_swept_tolerance_beside_the_thesis(tmp_path, draw
     np.testing.assert_allclose(ours, [r["additive_tolerance_relative_percent"] for r in rows], rtol=SAME_RTOL)
     # the thesis's printed percentages (reference/thesis.toml hinf.additive_tolerance_percent) drawn as printed
     np.testing.assert_allclose(lines["thesis (as printed)"].get_ydata(), [0.85, 22.48])
+
+
+SMALL_PROTOCOL = """name = "small"
+orientation = "horizontal"
+loads_g = [20.0]
+positions_from_tip_cm = [0, 5, 10]
+repetitions = 2
+no_load_repetitions = 2
+settle_s = 0.5
+"""
+
+
+def test_collect_plots_the_datasets_gauges_against_place_and_time(tmp_path, drawn, capsys):
+    from flexdigit.tactile.dataset import load_dataset
+
+    protocol, out, plot = tmp_path / "small.toml", tmp_path / "d.parquet", tmp_path / "d.png"
+    protocol.write_text(SMALL_PROTOCOL)
+    assert main(["collect", str(protocol), "--out", str(out), "--plot", str(plot), "--no-progress", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["plot"] == str(plot)
+    assert _written(plot)
+    by_place, by_time = drawn[0].axes
+    assert (by_place.get_xlabel(), by_place.get_ylabel()) == ("load position from the tip (mm)", "gauge voltage (V)")
+    assert (by_time.get_xlabel(), by_time.get_ylabel()) == ("time (s)", "gauge voltage (V)")
+    assert "small" in drawn[0].get_suptitle()
+    dataset = load_dataset(out)
+    loaded = dataset["load_kg"] > 0
+    assert loaded.sum() == 6  # 3 positions x 2 repetitions of 20 g
+    assert len(dataset) == 12  # and as many readings with no load hung
+    for k, name in enumerate(dataset.gauge_columns):
+        shown = _lines(by_place)[f"gauge {k + 1}"]
+        np.testing.assert_allclose(shown.get_xdata(), 1e3 * dataset["position_from_tip_m"][loaded], rtol=SAME_RTOL)
+        np.testing.assert_allclose(shown.get_ydata(), dataset[name][loaded], rtol=SAME_RTOL)
+        over_time = _lines(by_time)[f"gauge {k + 1}"]
+        np.testing.assert_allclose(over_time.get_xdata(), dataset["time_s"], rtol=SAME_RTOL)
+    assert set(np.unique(_lines(by_place)["gauge 1"].get_xdata())) == {0.0, 50.0, 100.0}  # the protocol's places
