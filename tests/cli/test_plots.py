@@ -597,3 +597,104 @@ def test_collect_plots_the_datasets_gauges_against_place_and_time(tmp_path, draw
         over_time = _lines(by_time)[f"gauge {k + 1}"]
         np.testing.assert_allclose(over_time.get_xdata(), dataset["time_s"], rtol=SAME_RTOL)
     assert set(np.unique(_lines(by_place)["gauge 1"].get_xdata())) == {0.0, 50.0, 100.0}  # the protocol's places
+
+
+ROD = """name = "one-tendon"
+[[segments]]
+length_m = 0.2
+disk_count = 10
+[[tendons]]
+offset_m = 0.01
+angle_deg = 90.0
+disk = 10
+"""
+ROD_STUDY = """[study]
+robot = "rod.toml"
+tensions_n = [0.5]
+metrics = {metrics}
+[sensitivity]
+morris_trajectories = 2
+[parameters.backbone.youngs_modulus_pa]
+distribution = "uniform"
+relative = 0.1
+[parameters.tendons.offset_m]
+distribution = "uniform"
+relative = 0.1
+"""
+
+
+def _robot_study(tmp_path, capsys, drawn, metrics: str) -> tuple[dict, object]:
+    (tmp_path / "rod.toml").write_text(ROD)
+    spec, plot = tmp_path / "spec.toml", tmp_path / "study.png"
+    spec.write_text(ROD_STUDY.format(metrics=metrics))
+    argv = ["study", "sensitivity", str(spec), "--out", str(tmp_path / "out"), "--workers", "0", "--n", "8"]
+    assert main([*argv, "--no-progress", "--plot", str(plot), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["plot"] == str(plot)
+    assert _written(plot)
+    assert drawn[0].get_suptitle() == "study spec on robot one-tendon"
+    return summary, drawn[0]
+
+
+def test_study_sensitivity_plots_the_total_indices_of_every_metric(tmp_path, capsys, drawn):
+    summary, fig = _robot_study(tmp_path, capsys, drawn, '["tip_angle_deg", "tip_z_m"]')
+    ax = fig.axes[0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["backbone.youngs_modulus_pa", "tendons.offset_m[*]"]
+    # each metric a row, "(NOT converged)" after it at this small N
+    assert [t.get_text().split(" (")[0] for t in ax.get_yticklabels()] == ["tip_angle_deg", "tip_z_m"]
+    assert fig.axes[1].get_ylabel() == "total Sobol index ST"  # the colour bar
+    shown = np.asarray(ax.get_images()[0].get_array())
+    for i, metric in enumerate(("tip_angle_deg", "tip_z_m")):
+        sobol = summary["metrics"][metric]["sobol"]
+        st = [sobol[name]["ST"] for name in ("backbone.youngs_modulus_pa", "tendons.offset_m[*]")]
+        np.testing.assert_allclose(shown[i], np.clip(st, 0, 1), rtol=SAME_RTOL)
+    # the tip angle T d L / EI: the modulus and the offset both matter, each near half (uniform +-10 % spreads)
+    assert np.all(shown[0] > 0.3)
+
+
+def test_study_sensitivity_of_one_metric_plots_its_indices_with_intervals(tmp_path, capsys, drawn):
+    summary, fig = _robot_study(tmp_path, capsys, drawn, '["tip_angle_deg"]')
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "Sobol index"
+    sobol = summary["metrics"]["tip_angle_deg"]["sobol"]
+    from matplotlib.container import BarContainer
+
+    s1_bars, st_bars = (c for c in ax.containers if isinstance(c, BarContainer))
+    names = ("backbone.youngs_modulus_pa", "tendons.offset_m[*]")
+    np.testing.assert_allclose([b.get_height() for b in s1_bars], [sobol[n]["S1"] for n in names], rtol=SAME_RTOL)
+    np.testing.assert_allclose([b.get_height() for b in st_bars], [sobol[n]["ST"] for n in names], rtol=SAME_RTOL)
+    assert "N = 16" in ax.get_title()  # the 2N the indices are from
+
+
+DESIGN_SPEC = """[study]
+seed = 3
+[design]
+gauge_counts = [4]
+layouts = ["equal"]
+bridges = ["full"]
+adc_bits = [16]
+servo_deg_per_command = [0.4311]
+eccentricity_m = [0.005715]
+pretension_n = [0.0, 5.0]
+size = [1.0, 1.25]
+bayes_samples = 50
+chunk_size = 2
+"""
+
+
+def test_study_design_plots_its_pareto_front(tmp_path, capsys, drawn):
+    spec, plot = tmp_path / "small.toml", tmp_path / "front.svg"
+    spec.write_text(DESIGN_SPEC)
+    argv = ["study", "design", str(spec), "--out", str(tmp_path / "out"), "--workers", "0", "--no-progress"]
+    assert main([*argv, "--plot", str(plot), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    assert drawn[0].get_suptitle() == "study small on the thesis rig"
+    ax = drawn[0].axes[0]
+    x_name, y_name = summary["objectives"]
+    assert ax.get_xlabel().startswith(x_name)
+    assert ax.get_ylabel().startswith(y_name)
+    front = _lines(ax)["Pareto front"]
+    printed = sorted((row[x_name], row[y_name]) for row in summary["pareto_front"])
+    np.testing.assert_allclose(sorted(zip(front.get_xdata(), front.get_ydata(), strict=True)), printed, rtol=SAME_RTOL)
+    assert len(ax.collections[0].get_offsets()) == summary["candidates"]  # every candidate drawn
