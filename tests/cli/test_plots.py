@@ -31,6 +31,15 @@ def _written(path) -> bool:
     return path.read_bytes().startswith(MAGIC[path.suffix])
 
 
+def _plotted(argv, plot, capsys) -> dict:
+    """Run a command with ``--plot PLOT --json``: what it printed, the plot written where it says."""
+    assert main([*argv, "--plot", str(plot), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["plot"] == str(plot)
+    assert _written(plot)
+    return result
+
+
 def test_simulate_plots_its_record_and_identify_its_fit(tmp_path, drawn, capsys):
     record, plot = tmp_path / "step.csv", tmp_path / "step.png"
     assert main(["simulate", "step", "--duration", "0.6", "--out", str(record), "--plot", str(plot)]) == 0
@@ -437,12 +446,7 @@ def test_tdcr_contact_that_finds_nothing_exits_non_zero_and_writes_nothing(tmp_p
 
 
 def test_tdcr_statics_plots_the_backbone_it_solved(tmp_path, drawn, capsys):
-    plot = tmp_path / "statics.png"
-    argv = ["tdcr", "statics", "rao2021", "--tension-n", "2,0,0,1,0,0", "--plot", str(plot), "--json"]
-    assert main(argv) == 0
-    result = json.loads(capsys.readouterr().out)
-    assert result["plot"] == str(plot)
-    assert _written(plot)
+    result = _plotted(["tdcr", "statics", "rao2021", "--tension-n", "2,0,0,1,0,0"], tmp_path / "statics.png", capsys)
     side, front, top = drawn[0].axes
     assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in drawn[0].axes] == [
         ("x (mm)", "z (mm)"),
@@ -467,10 +471,7 @@ def test_tdcr_statics_plots_the_backbone_it_solved(tmp_path, drawn, capsys):
 def test_tdcr_dynamics_plots_the_tip_path_it_printed(tmp_path, drawn, capsys):
     plot = tmp_path / "dynamics.svg"
     argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "2,0,0,0,0,0", "--duration-s", "0.02"]
-    assert main([*argv, "--plot", str(plot), "--json"]) == 0
-    result = json.loads(capsys.readouterr().out)
-    assert result["plot"] == str(plot)
-    assert _written(plot)
+    result = _plotted(argv, plot, capsys)
     axes = drawn[0].axes
     assert [ax.get_ylabel() for ax in axes] == ["tip x (mm)", "tip y (mm)", "tip z (mm)"]
     assert axes[-1].get_xlabel() == "time (s)"
@@ -501,11 +502,7 @@ def _step_drawn(ax, label):
 
 
 def test_design_20ms_plots_the_step_it_scored_and_the_loops_frequency_response(tmp_path, drawn, capsys):
-    plot = tmp_path / "d20.png"
-    assert main(["design", "20ms", "--plot", str(plot), "--json"]) == 0
-    data = json.loads(capsys.readouterr().out)
-    assert data["plot"] == str(plot)
-    assert _written(plot)
+    data = _plotted(["design", "20ms"], tmp_path / "d20.png", capsys)
     step_ax, bode_mag, command_ax, bode_phase = drawn[0].axes
     assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in drawn[0].axes] == [
         ("", "tip rotation (deg)"),
@@ -599,56 +596,43 @@ def test_collect_plots_the_datasets_gauges_against_place_and_time(tmp_path, draw
     assert set(np.unique(_lines(by_place)["gauge 1"].get_xdata())) == {0.0, 50.0, 100.0}  # the protocol's places
 
 
-ROD = """name = "one-tendon"
-[[segments]]
-length_m = 0.2
-disk_count = 10
-[[tendons]]
-offset_m = 0.01
-angle_deg = 90.0
-disk = 10
-"""
-ROD_STUDY = """[study]
-robot = "rod.toml"
-tensions_n = [0.5]
+ROBOT_STUDY = """[study]
+robot = "rao2021"
+tensions_n = [1, 0, 0, 0, 0, 0]
 metrics = {metrics}
-[sensitivity]
-morris_trajectories = 2
+[parameters.loads.tensions_n.0]
+distribution = "uniform"
+relative = 0.1
 [parameters.backbone.youngs_modulus_pa]
 distribution = "uniform"
 relative = 0.1
-[parameters.tendons.offset_m]
-distribution = "uniform"
-relative = 0.1
+[sensitivity]
+morris_trajectories = 2
 """
 
 
 def _robot_study(tmp_path, capsys, drawn, metrics: str) -> tuple[dict, object]:
-    (tmp_path / "rod.toml").write_text(ROD)
-    spec, plot = tmp_path / "spec.toml", tmp_path / "study.png"
-    spec.write_text(ROD_STUDY.format(metrics=metrics))
+    spec = tmp_path / "spec.toml"
+    spec.write_text(ROBOT_STUDY.format(metrics=metrics))
     argv = ["study", "sensitivity", str(spec), "--out", str(tmp_path / "out"), "--workers", "0", "--n", "8"]
-    assert main([*argv, "--no-progress", "--plot", str(plot), "--json"]) == 0
-    summary = json.loads(capsys.readouterr().out)
-    assert summary["plot"] == str(plot)
-    assert _written(plot)
-    assert drawn[0].get_suptitle() == "study spec on robot one-tendon"
+    summary = _plotted([*argv, "--no-progress"], tmp_path / "study.png", capsys)
+    assert drawn[0].get_suptitle() == "study spec on robot rao2021"
     return summary, drawn[0]
 
 
 def test_study_sensitivity_plots_the_total_indices_of_every_metric(tmp_path, capsys, drawn):
     summary, fig = _robot_study(tmp_path, capsys, drawn, '["tip_angle_deg", "tip_z_m"]')
     ax = fig.axes[0]
-    assert [t.get_text() for t in ax.get_xticklabels()] == ["backbone.youngs_modulus_pa", "tendons.offset_m[*]"]
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["loads.tensions_n[0]", "backbone.youngs_modulus_pa"]
     # each metric a row, "(NOT converged)" after it at this small N
     assert [t.get_text().split(" (")[0] for t in ax.get_yticklabels()] == ["tip_angle_deg", "tip_z_m"]
     assert fig.axes[1].get_ylabel() == "total Sobol index ST"  # the colour bar
     shown = np.asarray(ax.get_images()[0].get_array())
     for i, metric in enumerate(("tip_angle_deg", "tip_z_m")):
         sobol = summary["metrics"][metric]["sobol"]
-        st = [sobol[name]["ST"] for name in ("backbone.youngs_modulus_pa", "tendons.offset_m[*]")]
+        st = [sobol[name]["ST"] for name in ("loads.tensions_n[0]", "backbone.youngs_modulus_pa")]
         np.testing.assert_allclose(shown[i], np.clip(st, 0, 1), rtol=SAME_RTOL)
-    # the tip angle T d L / EI: the modulus and the offset both matter, each near half (uniform +-10 % spreads)
+    # the tip angle T d L / EI: the tension and the modulus both matter, each near half (uniform +-10 % spreads)
     assert np.all(shown[0] > 0.3)
 
 
@@ -660,36 +644,19 @@ def test_study_sensitivity_of_one_metric_plots_its_indices_with_intervals(tmp_pa
     from matplotlib.container import BarContainer
 
     s1_bars, st_bars = (c for c in ax.containers if isinstance(c, BarContainer))
-    names = ("backbone.youngs_modulus_pa", "tendons.offset_m[*]")
+    names = ("loads.tensions_n[0]", "backbone.youngs_modulus_pa")
     np.testing.assert_allclose([b.get_height() for b in s1_bars], [sobol[n]["S1"] for n in names], rtol=SAME_RTOL)
     np.testing.assert_allclose([b.get_height() for b in st_bars], [sobol[n]["ST"] for n in names], rtol=SAME_RTOL)
     assert "N = 16" in ax.get_title()  # the 2N the indices are from
 
 
-DESIGN_SPEC = """[study]
-seed = 3
-[design]
-gauge_counts = [4]
-layouts = ["equal"]
-bridges = ["full"]
-adc_bits = [16]
-servo_deg_per_command = [0.4311]
-eccentricity_m = [0.005715]
-pretension_n = [0.0, 5.0]
-size = [1.0, 1.25]
-bayes_samples = 50
-chunk_size = 2
-"""
-
-
 def test_study_design_plots_its_pareto_front(tmp_path, capsys, drawn):
-    spec, plot = tmp_path / "small.toml", tmp_path / "front.svg"
-    spec.write_text(DESIGN_SPEC)
-    argv = ["study", "design", str(spec), "--out", str(tmp_path / "out"), "--workers", "0", "--no-progress"]
-    assert main([*argv, "--plot", str(plot), "--json"]) == 0
+    plot = tmp_path / "front.svg"
+    argv = ["study", "design", "thesis-design", "--samples", "3", "--out", str(tmp_path / "out"), "--workers", "0"]
+    assert main([*argv, "--no-progress", "--plot", str(plot), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert _written(plot)
-    assert drawn[0].get_suptitle() == "study small on the thesis rig"
+    assert drawn[0].get_suptitle() == "study thesis-design on the thesis rig"
     ax = drawn[0].axes[0]
     x_name, y_name = summary["objectives"]
     assert ax.get_xlabel().startswith(x_name)

@@ -53,19 +53,25 @@ def design_figure(plant, controller, *, output_unit: str = "m", t_final_s: float
         "S (T_zw)": _freq(maps.T_zw, w),
         "T (T_yw)": _freq(maps.T_yw, w),
     }
+    _bode(am, ap, w, resp, "L = G K", "Bode plot")
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return fig
+
+
+def _bode(am, ap, w: np.ndarray, resp: dict, loop: str, title: str) -> None:
+    """Magnitudes (dB) of ``resp`` (name -> complex response on ``w``) on ``am``, the phase of ``resp[loop]`` on
+    ``ap``, against frequency in rad/s."""
     for name, h in resp.items():
         am.semilogx(w, 20 * np.log10(np.abs(h)), label=name)
     am.axhline(0.0, color="k", lw=0.5)
     am.set_ylabel("magnitude (dB)")
-    am.set_title("Bode plot", fontsize=9)
+    am.set_title(title, fontsize=9)
     am.legend(fontsize=7)
-    ap.semilogx(w, np.degrees(np.unwrap(np.angle(resp["L = G K"]))), label="L = G K")
+    ap.semilogx(w, np.degrees(np.unwrap(np.angle(resp[loop]))), label=loop)
     ap.axhline(-180.0, color="k", ls=":", lw=0.8)
     ap.set_xlabel("frequency (rad/s)")
     ap.set_ylabel("phase of L (deg)")
-    if title:
-        fig.suptitle(title, fontsize=9)
-    return fig
 
 
 def _step(sys, t: np.ndarray) -> np.ndarray:
@@ -118,16 +124,7 @@ def twenty_ms_figure(design, *, step_deg: float = 30.0, duration_s: float = 3.0,
     w = np.logspace(-1, np.log10(np.pi / plant.dt), 600) * (1 - 1e-9)  # Nyquist's last sample, not above it
     loop = -_freq(controller[0, 1], w) * _freq(plant, w)  # L: the return ratio of the measured rotation's path
     resp = {"L (loop gain)": loop, "S = 1/(1 + L)": 1.0 / (1.0 + loop), "T (setpoint to tip)": _freq(to_tip, w)}
-    for name, h in resp.items():
-        am.semilogx(w, 20 * np.log10(np.abs(h)), label=name)
-    am.axhline(0.0, color="k", lw=0.5)
-    am.set_ylabel("magnitude (dB)")
-    am.set_title(f"frequency response, up to Nyquist ({np.pi / plant.dt:.0f} rad/s)", fontsize=9)
-    am.legend(fontsize=7)
-    ap.semilogx(w, np.degrees(np.unwrap(np.angle(loop))), label="L (loop gain)")
-    ap.axhline(-180.0, color="k", ls=":", lw=0.8)
-    ap.set_xlabel("frequency (rad/s)")
-    ap.set_ylabel("phase of L (deg)")
+    _bode(am, ap, w, resp, "L (loop gain)", f"frequency response, up to Nyquist ({np.pi / plant.dt:.0f} rad/s)")
     if title:
         fig.suptitle(title, fontsize=9)
     return fig
