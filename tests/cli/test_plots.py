@@ -634,6 +634,13 @@ def test_study_sensitivity_plots_the_total_indices_of_every_metric(tmp_path, cap
         np.testing.assert_allclose(shown[i], np.clip(st, 0, 1), rtol=SAME_RTOL)
     # the tip angle T d L / EI: the tension and the modulus both matter, each near half (uniform +-10 % spreads)
     assert np.all(shown[0] > 0.3)
+    # a finished study is read for --plot, not run again (nor refused): the same indices drawn
+    argv = ["study", "sensitivity", str(tmp_path / "spec.toml"), "--out", str(tmp_path / "out"), "--n", "8"]
+    journal = (tmp_path / "out" / "journal.jsonl").read_bytes()
+    again = _plotted([*argv, "--workers", "0", "--no-progress"], tmp_path / "again.png", capsys)
+    assert (tmp_path / "out" / "journal.jsonl").read_bytes() == journal
+    np.testing.assert_allclose(np.asarray(drawn[1].axes[0].get_images()[0].get_array()), shown, rtol=SAME_RTOL)
+    assert again["metrics"] == summary["metrics"]
 
 
 def test_study_sensitivity_of_one_metric_plots_its_indices_with_intervals(tmp_path, capsys, drawn):

@@ -117,13 +117,15 @@ def _run(args, out, run, settings, write):
     """Run a study in ``out`` (created), write its files, return ``(result, summary)``.
 
     A finished study is refused (before any work) unless some of its tasks failed (a worker died): a rerun then
-    computes those rows again and rewrites the outputs."""
+    computes those rows again and rewrites the outputs; or unless it is asked for ``--export`` or ``--plot``: its
+    journal is then read, nothing computed again, its files left as they are."""
     from flexdigit.errors import OutputExistsError
     from flexdigit.studies.execution import retry_rows
 
     done = out / "summary.json"
     retry = done.exists() and not args.force and retry_rows(out) > 0
-    reading = done.exists() and not args.force and not retry and getattr(args, "export", None) is not None
+    asks = getattr(args, "export", None) is not None or args.plot is not None  # of the finished study: read it
+    reading = done.exists() and not args.force and not retry and asks
     if done.exists() and not args.force and not retry and not reading:
         raise OutputExistsError(f"{done}: this study has finished in {out}; pass --force to run it again")
     from flexdigit._io import output_lock
@@ -140,7 +142,7 @@ def _run(args, out, run, settings, write):
             force=args.force,
             progress=not args.no_progress,
         )
-        # a finished study read for --export: its journal gave every row, its files stay as they are
+        # a finished study read for --export or --plot: its journal gave every row, its files stay as they are
         paths = {} if reading else write(result, out, force=args.force or retry)
     summary = result.summary()
     summary["files"] = {k: str(v) for k, v in paths.items()}
