@@ -547,6 +547,7 @@ def test_design_sweep_plots_the_swept_tolerance_beside_the_thesis(tmp_path, draw
     rows = json.loads(capsys.readouterr().out)
     assert _written(plot)
     top, bottom = drawn[0].axes
+    assert "thesis rig's printed plant" in top.get_title()
     assert (top.get_ylabel(), bottom.get_xlabel(), bottom.get_ylabel()) == (
         "||T_pq|| (dB)",
         "error filter cut-off (Hz)",

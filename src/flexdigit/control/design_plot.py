@@ -148,7 +148,8 @@ def sweep_figure(filters_hz, tpq_peak_db, tolerance_percent, thesis_percent=None
     fig, (top, bottom) = new_figure(2, 1, figsize=(7.0, 5.0), sharex=True)
     top.semilogx(f[order], np.asarray(tpq_peak_db, float)[order], "-o", ms=4, label="||T_pq||")
     top.set_ylabel("||T_pq|| (dB)")
-    top.set_title(title or "H-inf designs across the error filter's cut-off (thesis 4.7)", fontsize=9)
+    default = "H-inf designs on the thesis rig's printed plant, across the error filter's cut-off (thesis 4.7)"
+    top.set_title(title or default, fontsize=9)
     series = {
         "1/||T_pq||, % of |G(0)| (flexdigit)": (tolerance_percent, "-o"),
         "thesis (as printed)": (thesis_percent, "s"),
