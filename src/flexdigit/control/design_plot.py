@@ -5,7 +5,7 @@ a setpoint step, T_yw, and the command it takes, T_uw); right, the Bode plot of 
 sensitivity S and complementary sensitivity T (the shapes 4.4 weights). :func:`twenty_ms_figure` (``design 20ms``):
 the same four panels for the 20 ms discrete design (5.2-5.3), its step the tip's in degrees, its frequency response
 up to the Nyquist frequency. :func:`sweep_figure` (``design sweep``): the filter sweep of 4.7, the additive
-tolerance and ||T_pq|| against the error filter's cut-off. Computed by python-control here, drawn on the report's
+tolerance and ``||T_pq||`` against the error filter's cut-off. Computed by python-control here, drawn on the report's
 figure style.
 """
 
@@ -133,9 +133,9 @@ def twenty_ms_figure(design, *, step_deg: float = 30.0, duration_s: float = 3.0,
 def sweep_figure(filters_hz, tpq_peak_db, tolerance_percent, thesis_percent=None, thesis_arithmetic_percent=None,
                  *, title: str = ""):  # fmt: skip
     """The error-filter sweep of 4.7 (``flexdigit design sweep``) as a matplotlib ``Figure`` of two axes against
-    the cut-off (Hz, log): ||T_pq|| (dB), and the additive tolerance (%, log) as 1/||T_pq|| of |G(0)| beside the
-    thesis's printed percentages and its arithmetic 100/(||T_pq|| in dB) at the printed controllers' 10x gain,
-    each where there is one (None or NaN where not).
+    the cut-off (Hz, log): ``||T_pq||`` (dB), and the additive tolerance (%, log) as ``1/||T_pq||`` of ``|G(0)|``
+    beside the thesis's printed percentages and its arithmetic ``100/(||T_pq|| in dB)`` at the printed controllers'
+    10x gain, each where there is one (None or NaN where not).
 
     Examples
     --------
