@@ -342,6 +342,11 @@ def _identified(resid, x0: np.ndarray, candidates: list[int]) -> tuple[list[int]
     :data:`IDENTIFIED_SHARE`), from the scaled residuals' finite-difference Jacobian at the start: the chosen
     indices, and for each one left out the chosen one it cannot be told from (None: it moves nothing)."""
     f0 = resid(x0)
+    if not np.all(np.isfinite(f0)):
+        raise ParameterError(
+            "The starting calibration's twin has no finite modes or deflections as mounted (does the digit buckle "
+            "in that orientation? give --orientation hanging, or --initial FILE)"
+        )
     step = 1e-3
     columns = {}
     for k in candidates:
