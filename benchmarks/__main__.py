@@ -32,6 +32,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_digitctl2",
     "benchmarks.bench_damping",
     "benchmarks.bench_designunequal",
+    "benchmarks.bench_noisy",
     "benchmarks.bench_map",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_tdcrcli",
@@ -40,6 +41,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
     "benchmarks.bench_digittac",
+    "benchmarks.bench_bayes",
     "benchmarks.bench_calibrate",
     "benchmarks.bench_calfix",
     "benchmarks.bench_live",
@@ -48,10 +50,12 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_dask",
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
+    "benchmarks.bench_force",
     "benchmarks.bench_board",
     "benchmarks.bench_digitboard",
     "benchmarks.bench_resources",
     "benchmarks.bench_plots",
+    "benchmarks.bench_plots2",
 )
 #: Run only when named (``python -m benchmarks bench_converged``): half an hour of CPU.
 ON_REQUEST: tuple[str, ...] = ("benchmarks.bench_converged",)

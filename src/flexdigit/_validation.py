@@ -207,7 +207,15 @@ def check_array(
         if (low is not None and ((out < low) | ((out == low) if low_open else False)).any()) or (
             high is not None and ((out > high) | ((out == high) if high_open else False)).any()
         ):
-            fail(f"an array with values{_interval_text(low, high, low_open, high_open)}")
+            bad = ~((out >= low if low is not None else True) & (out <= high if high is not None else True))
+            if low_open and low is not None:
+                bad |= out == low
+            if high_open and high is not None:
+                bad |= out == high
+            first = np.argwhere(bad)[0]
+            where = ", ".join(str(int(i)) for i in first)
+            interval = _interval_text(low, high, low_open, high_open)
+            fail(f"an array with values{interval} (element {where}: {out[tuple(first)]:g})")
     return out
 
 
@@ -904,7 +912,7 @@ def check_param(value, declared, name: str, owner: str | None = None, *, error: 
     if value is None and None in items:
         return None
     real = [c for c in items if c is not None]
-    if len(real) == 1 and None not in items:
+    if len(real) == 1:  # a value that is not None can only meet the one constraint: its own, precise message
         return real[0].check(value, name, owner, error)
     for c in real:
         try:

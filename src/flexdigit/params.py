@@ -196,7 +196,12 @@ class Geometry:
                     f"section). Got {supports.tolist()!r} instead."
                 )
             object.__setattr__(self, "support_lengths_m", tuple(float(x) for x in supports))
-        check_real(self.strip_length_m, "strip_length_m", owner, low=0, high=self.digit_length_m, low_open=True)
+        check_real(self.strip_length_m, "strip_length_m", owner, low=0, low_open=True)
+        if self.strip_length_m > self.digit_length_m:  # either key can be the one written wrong: name both
+            raise ParameterError(
+                f"The 'digit_length_m' parameter of {owner} ({self.digit_length_m:g} m) must be at least "
+                f"'strip_length_m' ({self.strip_length_m:g} m): the digit is its strip plus the supports"
+            )
         positions = check_array(
             self.gauge_positions_m,
             "gauge_positions_m",
@@ -1024,9 +1029,11 @@ def params_template(params: RigParams | None = None) -> str:
         "# or optional; a key left out keeps the value shown. [dynamics] is the thesis rig's, read by no twin.",
     ]
     derivable = _derivable_lengths(params.geometry)
+    thesis_rig = RigParams()
     for f in dataclasses.fields(params):
         section = getattr(params, f.name)
         notes = _attribute_notes(type(section))
+        thesis = dataclasses.asdict(getattr(thesis_rig, f.name))
         first = (type(section).__doc__ or "").strip().split("\n")[0]
         out += ["", f"# {first}", f"[{f.name}]"]
         if f.name == "dynamics":
@@ -1036,8 +1043,9 @@ def params_template(params: RigParams | None = None) -> str:
             ]
         for key, value in dataclasses.asdict(section).items():
             value = list(value) if isinstance(value, tuple) else value
-            if key in notes:
-                out.append(f"# {notes[key]}")
+            if key in notes:  # the notes tell the thesis rig's values: said so where this file's differs
+                same = value == (list(thesis[key]) if isinstance(thesis[key], tuple) else thesis[key])
+                out.append(f"# {notes[key]}" if same else f"# (This digit's differs.) On the thesis rig: {notes[key]}")
             if f.name != "dynamics" and _range_note(f.name, key):  # [dynamics] is read by no twin
                 out.append(_range_note(f.name, key))
             if key in derivable:  # what the sections give: written out, a stale copy outlives an edited section

@@ -76,8 +76,13 @@ def _random_digit(seed: int) -> dict:
 # the loop's Nyquist frequency, matched at DC: the model's gauges led the twin's, control.digit_model); 4
 # (6 sections, 0.38 m, a pair, 3 quarter bridges, tip up), whose map held the true rotation 0.58 deg short of +30 on
 # seed 0 (29.42 deg): its sweep's gauge drift and a 5-reading tare (0.25 deg of noise on its three coarse gauges),
-# until the sweep was referenced to straight and the tare read a window at rest (rig.rotation).
-RANDOM = {f"random-{seed}": random_digit(seed) for seed in (4, 6, 9, 11, 18, 21, 23)}
+# until the sweep was referenced to straight and the tare read a window at rest (rig.rotation); 8 (one 0.38 m
+# section, 3 quarter bridges, a pair: 0.67 deg of noise a reading through the map), whose search found no weights
+# under the noise limits and ran the noisiest: 5 of its 6 steps (+-30, seeds 0-2) left the 2 % band after 1 s, until
+# the search went on to quieter observers where its grid has none (design20ms.QUIET_*); 37 (2 sections, 0.155 m, 3
+# full bridges, geared), whose `run` exited 2 with an internal error: python-control refused its Kalman predictor's
+# process covariance, asymmetric by roundoff (design20ms._predictor_gain).
+RANDOM = {f"random-{seed}": random_digit(seed) for seed in (4, 6, 8, 9, 11, 18, 21, 23, 37)}
 SEEDED = {**{f"seeded-{seed}": _random_digit(seed) for seed in (3, 11)}, **RANDOM}
 ALL = {**DIGITS, **SEEDED}
 #: The twin's seeds each test digit's step is run with (the sweep's twin takes the next one): two, so a design that

@@ -57,6 +57,7 @@ BAD = {
     "gauge_on_support": "gauge_positions_m",
     "gauge_past_strip": "gauge_positions_m",
     "geometry_not_table": "[geometry]",
+    "digit_length_short": "digit_length_m",
     "inverted_adc_range": "adc_range_v",
     "lengths_list_count": "section_length_m",
     "list_sum_mismatch": "section_length_m",
@@ -87,8 +88,7 @@ BAD = {
 
 def test_every_file_is_listed():
     assert {p.stem for p in HERE.glob("*.toml")} == set(GOOD)
-    # digit_length_short.toml is refused but names strip_length_m, not the key it got wrong: in the report
-    assert {p.stem for p in (HERE / "bad").glob("*.toml")} - {"digit_length_short"} == set(BAD)
+    assert {p.stem for p in (HERE / "bad").glob("*.toml")} == set(BAD)
 
 
 @pytest.mark.parametrize("name", sorted(GOOD))
@@ -107,9 +107,25 @@ def test_a_hostile_description_is_refused_in_one_line_naming_its_key(name, capsy
     path = HERE / "bad" / f"{name}.toml"
     assert main(["params", str(path)]) == 2
     captured = capsys.readouterr()
-    # a value's type or range goes to stderr; a description's inconsistency is params' own output (stdout)
-    lines = (captured.err + captured.out).strip().splitlines()
+    # a value's type or range and a description's inconsistency alike: one line on stderr, nothing on stdout
+    assert captured.out == ""
+    lines = captured.err.strip().splitlines()
     assert len(lines) == 1, captured.err + captured.out
+    assert lines[0].startswith("flexdigit params: error: ")
     assert str(path) in lines[0]
     assert BAD[name] in lines[0]
     assert "Traceback" not in captured.err + captured.out
+
+
+def test_a_bad_element_of_a_list_is_named_with_its_value(capsys):
+    assert main(["params", str(HERE / "bad" / "negative_support.toml")]) == 2
+    # support_lengths_m = [0.01, -0.01, 0.01]: the second element (index 1) is outside [0, 2] m
+    assert "(element 1: -0.01)" in capsys.readouterr().err
+
+
+def test_a_digit_shorter_than_its_strip_names_both_lengths(capsys):
+    assert main(["params", str(HERE / "bad" / "digit_length_short.toml")]) == 2
+    # digit_length_m = 0.2 m against the thesis template's 3 x 80 mm strip (0.24 m)
+    assert "'digit_length_m' parameter of Geometry (0.2 m) must be at least 'strip_length_m' (0.24 m)" in (
+        capsys.readouterr().err
+    )

@@ -58,3 +58,59 @@ def test_a_one_gauge_digit_refuses_the_place_and_says_how_uncertain_its_force_is
     assert "uncertain" in held["estimate_note"]
     assert held["estimate_sd_n"] > HOLD * held["setpoint_n"]
     assert abs(held["steady_force_n"] - held["setpoint_n"]) < 3 * held["estimate_sd_n"]
+
+
+def test_a_hold_says_what_its_estimates_decided(tmp_path, capsys):
+    """The force held follows the contact decision (palpation.ForceController.estimate): the JSON counts the last 3
+    s's decisions and gives each sample's; pressing 0.1 N, every estimate of the window decides a contact, and one
+    reading at a time on the short digit (3 gauges' worth of noise: 6.6 mN a reading against a 30 mN threshold)."""
+    held = _hold("short", tmp_path, capsys)
+    window = [t >= held["time_s"][-1] - 3.0 for t in held["time_s"]]
+    assert held["kind"] == "force"  # what the command did, not overwritten by the samples' decisions
+    assert len(held["decision"]) == len(held["time_s"])
+    assert held["decisions"] == {"none": 0, "point": sum(window), "distributed": 0}
+    assert held["decision"][0] == "none"  # the first reading, at the straight command: nothing touches
+    assert held["average_readings"] == 1
+    assert held["tare_readings"] == 10
+
+
+def test_a_one_gauge_hold_decides_on_the_mean_of_its_readings(tmp_path, capsys):
+    """36 mN a reading: each estimate is made on the mean of 14 readings (their noise 3 sd below the 30 mN
+    threshold), and the tare on (36 mN / 3.3 mN)^2 = 118 (its force error a third of 10 % of the setpoint)."""
+    held = _hold("one-section", tmp_path, capsys)
+    assert held["average_readings"] == 14
+    assert 100 <= held["tare_readings"] <= 140
+    assert held["decisions"]["point"] > 0.9 * sum(held["decisions"].values())
+
+
+@pytest.mark.parametrize(
+    ("setpoint_n", "code", "said"),
+    [(0.1, 0, None), (1.0, 2, "hold: never reached 1 N: pressing at its last command 254")],
+)
+def test_a_fine_step_digit_presses_over_its_range_or_says_why_not(setpoint_n, code, said, tmp_path, capsys):
+    """A design-front digit (6 gauges, a pretensioned pair: straight at 127; 0.31 deg of tip a command) beside a
+    body 27 mm away. Within 52 commands past straight its statics pressed at most 0.07 N: after 10 s it was still
+    approaching ("no contact seen", -99.6 %). Its range is now the thesis rig's in tip rotation (127..254,
+    palpation._press_commands): 0.1 N holds; 1 N, more than its 254 presses (0.6 N), ends in one line, exit 2."""
+    from pathlib import Path
+
+    digit = Path(__file__).parents[1] / "data" / "handmade_digits" / "design_front_30_six_gauges_pair.toml"
+    tissue = tmp_path / "tissue.toml"
+    tissue.write_text(
+        '[tissue]\nname = "block"\nside = "cable"\nstart_mm = 148.5\nend_mm = 350.0\ngap_mm = 27.0\n'
+        "modulus_n_m2 = 1000.0\n"
+    )
+    protocol = tmp_path / "hold.toml"
+    protocol.write_text(f"[force]\nsetpoint_n = {setpoint_n}\nduration_s = 10.0\n")
+    argv = ["palpate", "--params", str(digit), "--tissue", str(tissue), "--protocol", str(protocol), "--json"]
+    assert main(argv) == code
+    out = json.loads(capsys.readouterr().out)
+    if said is None:
+        assert abs(out["steady_error"]) < HOLD
+        assert "limit_note" not in out
+    else:
+        assert out["error"].startswith(said), out
+
+
+def test_a_hold_that_holds_says_nothing_of_limits(tmp_path, capsys):
+    assert "limit_note" not in _hold("short", tmp_path, capsys)

@@ -19,13 +19,16 @@ HOLD = "[force]\nsetpoint_n = 0.2\nduration_s = 0.1\n"
 
 
 def test_palpate_log_is_refused_then_replaced_with_force_and_the_urls_seed_is_used(tmp_path, capsys):
+    # 0.1 s never reaches 0.2 N: the hold ends in one line, exit 2 (never a success that touched nothing), its
+    # loop's log written all the same
     protocol = tmp_path / "hold.toml"
     protocol.write_text(HOLD)
     log = tmp_path / "p.jsonl"
     argv = ["palpate", "--tissue", "soft-block", "--protocol", str(protocol), "--log", str(log), "--json"]
-    assert main(argv) == 0
-    first = json.loads(capsys.readouterr().out)
-    assert first["rig"]["seed"] == 0  # the default, reported
+    assert main(argv) == 2
+    assert "never reached 0.2 N" in json.loads(capsys.readouterr().out)["error"]
+    ((_, header, _, _),) = read_log_runs(log)
+    assert "seed=0," in header["rig"]  # the default
     before = log.read_bytes()
 
     assert main(argv) == 2  # refused before the rig moves: the log is as it was
@@ -34,9 +37,10 @@ def test_palpate_log_is_refused_then_replaced_with_force_and_the_urls_seed_is_us
 
     # --force replaces it (it failed inside the loop before: the loop refused the file the command had cleared);
     # sim?seed=5 with no --seed is the twin of seed 5 (the default --seed 0 made it a conflict)
-    assert main([*argv, "--force", "--backend", "sim?seed=5"]) == 0
-    assert json.loads(capsys.readouterr().out)["rig"]["seed"] == 5
-    ((_, _, samples, footer),) = read_log_runs(log)  # one run: replaced, not appended
+    assert main([*argv, "--force", "--backend", "sim?seed=5"]) == 2
+    assert "never reached" in json.loads(capsys.readouterr().out)["error"]
+    ((_, header, samples, footer),) = read_log_runs(log)  # one run: replaced, not appended
+    assert "seed=5," in header["rig"]
     assert footer["stop"] == "completed"
     assert len(samples) == 5  # 0.1 s of 20 ms frames
 
@@ -53,10 +57,13 @@ def test_a_series_that_would_fill_the_memory_is_refused(tmp_path):
 
 
 def test_a_sweep_that_barely_presses_the_tissue_reports_no_modulus(tmp_path, capsys):
-    # the geared digit's built-in sweep does not reach soft-block (surface 30 mm away): its fit found a near-zero
-    # modulus at a made-up gap (1.7 +- 2.4 N/m^2 for a true 1000) and printed it; now no stiffness is reported
+    # the thesis rig's commands 8..30 on the 4:1 geared digit do not reach soft-block (surface 30 mm away): its fit
+    # found a near-zero modulus at a made-up gap (1.7 +- 2.4 N/m^2 for a true 1000) and printed it; now no stiffness
+    # is reported (the built-in sweep is laid out on the digit, 8..96, and reaches it: tests/cli/test_palpate_pairs)
     params = write_digit("six-gauges-geared", tmp_path)
-    code = main(["palpate", "--tissue", "soft-block", "--params", str(params)])
+    protocol = tmp_path / "thesis_commands.toml"
+    protocol.write_text("[sweep]\ncommands = { from = 8, to = 30, step = 1 }\n")
+    code = main(["palpate", "--tissue", "soft-block", "--params", str(params), "--protocol", str(protocol)])
     err = capsys.readouterr().err
     assert code == 2
     assert "the modulus is not determined" in err

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 
 from flexdigit.errors import ParameterError
-from flexdigit.params import RigParams
+from flexdigit.params import RigParams, description_notes
 from flexdigit.studies.design_study import (
     Candidate,
     DesignSettings,
     _information,
+    _with_supports,
     candidates,
     d_criterion,
     d_optimal_positions,
@@ -244,9 +245,20 @@ chunk_size = 2
         expected = expected.replace(
             actuator=dataclasses.replace(a, equilibrium_command=127, operating_commands=(127 - span, 127 + span))
         )
+    # a resized design's supports written out (not derived with a note that they are not 10 mm)
+    expected = _with_supports(expected)
     assert load_params(exported) == expected  # the design's own rig: 4 gauges, geared servo, its cables and size
     assert len(load_params(exported).geometry.gauge_positions_m) == 4
+    assert description_notes(load_params(exported)) == []
+    text = exported.read_text().splitlines()
+    # the template's notes tell the thesis rig's values: a key whose value differs says so (trial: "Half bridge"
+    # written above bridge = "full")
+    above_bridge = text[text.index('bridge = "full"') - 1]
+    assert above_bridge.startswith("# (This digit's differs.) On the thesis rig: Half bridge")
+    assert any(line.startswith("# Its servo step, 0.4311 deg a command") for line in text)
+    capsys.readouterr()
     assert main(["params", str(exported)]) == 0
+    assert "note:" not in capsys.readouterr().out
     assert main(["simulate", "release", "--params", str(exported), "--out", str(tmp_path / "r.parquet")]) == 0
     capsys.readouterr()
     assert main([*base, "--export", str(k)]) != 0  # never overwritten without --force

@@ -45,17 +45,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_plot_flag(p, "force against indentation (sweep), the stiffness map (scan) or the force over time (hold)")
 
 
-def _sim_options(backend: str, kind: str, seed: int | None) -> dict:
+def _sim_options(backend: str, kind: str, seed: int | None, params) -> dict:
+    from flexdigit.palpation.palpation import twin_step_s
     from flexdigit.rig.base import parse_rig_url, seed_option
 
     url = parse_rig_url(backend)
     options = seed_option(backend, seed)  # --seed only when given: the URL's seed= is not overridden by a default
-    if not url.scheme.startswith("sim"):
-        return options
-    if "dt_s" not in url.options:
-        # a quasi-static sweep needs no finer step than 10 ms (the fit's chi^2 is the same at 2 ms); force control
-        # acts between frames, 5 ms
-        options["dt_s"] = 0.005 if kind == "force" else 0.01
+    if url.scheme.startswith("sim") and "dt_s" not in url.options:
+        options["dt_s"] = twin_step_s(kind, params)
     return options
 
 
@@ -75,8 +72,9 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
+        plan = _laid_out(plan, rig, calibration, tissue.side, info.source)
         if kind == "force":
-            data, text, fig = _force(rig, tissue, plan, logs[0], log_mode)
+            data, text, fig = _force(rig, tissue, plan, logs[0], log_mode, info.source)
         elif kind == "scan":
             data, text, fig = _scan(rig, tissue, plan, logs, log_mode, calibration)
         else:
@@ -86,6 +84,8 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     finally:
         rig.close()
     data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, "rig": settings, **data}
+    if settings.get("orientation") == "hanging":
+        text += "\nmounted tip down (hanging): this digit buckles tip up (as `flexdigit run --params` mounts it)"
     if sim:
         data["truth"] = {
             "gap_mm": 1000 * tissue.gap_m,
@@ -93,6 +93,38 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             "exponent": tissue.exponent,
         }
     return CommandResult(data=data, text=text + _save_outputs(args, data, fig, out))
+
+
+def _laid_out(plan, rig, calibration, side: str, tissue_source: str):
+    """The protocol on the rig's digit: the built-in sweep's thesis commands (and those a file leaves out) from its
+    straight command towards the tissue, as far in tip rotation, each plateau settling as much longer as the digit
+    rings (palpation.digit_protocol); a file's own commands checked to press towards the tissue
+    (palpation.check_sweep_commands). One line naming the file if not."""
+    from dataclasses import replace
+
+    from flexdigit.errors import DataFileError, ParameterError
+    from flexdigit.palpation.contact_estimation import ContactGaugeModel
+    from flexdigit.palpation.palpation import check_sweep_commands, digit_protocol, towards
+
+    params = rig.params
+    try:
+        sign = towards(params, side)
+    except ParameterError as exc:
+        raise DataFileError(f"{tissue_source}: key 'tissue.side': {exc}") from None
+    if plan.force:
+        if sign < 0:
+            raise DataFileError(
+                f"{tissue_source}: key 'tissue.side' = 'opposite': force control presses the digit towards its cable "
+                "side (commands above straight); an antagonistic pair's other side is not held yet"
+            )
+        return plan
+    try:
+        model = ContactGaugeModel(params, calibration, orientation=_orientation(rig))
+        sweep = digit_protocol(plan.sweep, params, side, laid_out=plan.laid_out, model=model)
+        check_sweep_commands(sweep, params, side)
+    except ParameterError as exc:
+        raise DataFileError(f"{plan.source}: [sweep] {exc}") from None
+    return replace(plan, sweep=sweep)
 
 
 def _palpation_rig(args: argparse.Namespace, info, kind: str):
@@ -111,11 +143,24 @@ def _palpation_rig(args: argparse.Namespace, info, kind: str):
         )
     params = load_params(args.params) if args.params else RigParams()
     calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
-    options = _sim_options(args.backend, kind, args.seed)
+    options = _sim_options(args.backend, kind, args.seed, params)
     if sim and (args.params or args.calibration):
         options["calibration"] = calibration
+    if sim and args.params and "orientation" not in _url_options(args.backend):
+        from flexdigit.control.design20ms import digit_mount
+
+        # a digit that buckles tip up hangs, as `run --params` mounts it (said in the output): tip up its twin
+        # sagged off its straight command and the gauge model's statics did not converge (69 warnings, > 6 min)
+        if digit_mount(params, calibration) == "hanging":
+            options["orientation"] = "hanging"
     rig = open_rig(args.backend, params, **options)
     return sim, rig, calibration
+
+
+def _url_options(backend: str) -> dict:
+    from flexdigit.rig.base import rig_url_options
+
+    return rig_url_options(backend)[1]
 
 
 def _save_outputs(args: argparse.Namespace, data: dict, fig, out) -> str:
@@ -196,23 +241,30 @@ def _refuse_poor_fit(fit, what: str, max_rel_sd: float | None = None) -> None:
         )
 
 
-def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
+def _refuse_untouched(curve) -> None:
+    """One line if the digit reached the tissue on fewer than 3 plateaus (a stiffness needs 3)."""
     import numpy as np
 
     from flexdigit.errors import DataFileError
+
+    touching = int(np.count_nonzero(curve["indentation_m"] > 0))
+    if touching < 3:
+        raise DataFileError(
+            f"palpation: the digit reached the tissue on {touching} of {len(curve['command'])} plateaus (3 "
+            "needed for a stiffness): sweep to higher commands ('commands') or place the tissue nearer"
+        )
+
+
+def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import palpate, stiffness_bound
 
     model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
-    result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode)
+    result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode, drift=True)
     _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
-    touching = int(np.count_nonzero(result.curve["indentation_m"] > 0))
-    if touching < 3:
-        raise DataFileError(
-            f"palpation: the digit reached the tissue on {touching} of {len(result.curve['command'])} plateaus (3 "
-            "needed for a stiffness): sweep to higher commands ('commands') or place the tissue nearer"
-        )
-    bound = stiffness_bound(model, result.fit.tissue, plan.sweep, fit_exponent=plan.sweep.model == "hunt-crossley")
+    _refuse_untouched(result.curve)
+    hunt = plan.sweep.model == "hunt-crossley"
+    bound = stiffness_bound(model, result.fit.tissue, plan.sweep, fit_exponent=hunt, drift=True)  # the walk weighed
     data = _sweep_data(result, plan, bound, tissue)
     summary = data["result"]
     f = result.fit
@@ -260,6 +312,8 @@ def _sweep_data(result, plan, bound, tissue) -> dict:
         "protocol": {
             "commands": list(plan.sweep.commands),
             "settle_s": plan.sweep.settle_s,
+            "return_settle_s": plan.sweep.return_settle_s,
+            "tare_command": plan.sweep.tare_command,
             "readings": plan.sweep.readings,
         },
         "result": summary,
@@ -386,12 +440,20 @@ def _place_data(held) -> dict:
     return data
 
 
-def _force(rig, tissue, plan, log, log_mode):
+def _force(rig, tissue, plan, log, log_mode, source="tissue"):
     from flexdigit.palpation.palpation import hold_force
 
     f = plan.force
+    length = rig.params.geometry.digit_length_m
+    if tissue.start_m > length - 2e-3:  # the contact estimator's least region: two of its 1 mm grid steps
+        from flexdigit.errors import DataFileError
+
+        raise DataFileError(
+            f"{source}: key 'tissue.start_mm' = {1000 * tissue.start_m:g}: the tissue starts at or past the digit's "
+            f"{1000 * length:g} mm tip, where force control cannot press it; place it along the digit"
+        )
     rig.place_tissue(tissue)
-    end = min(tissue.end_m, rig.params.geometry.digit_length_m)
+    end = min(tissue.end_m, length)
     held = hold_force(
         rig,
         f["setpoint_n"],
@@ -403,6 +465,12 @@ def _force(rig, tissue, plan, log, log_mode):
         log_path=log,
         log_mode=log_mode,
     )
+    unreached = held.unreached()
+    if unreached:  # never a success that touched nothing: the digit relaxed, one line, exit 2
+        from flexdigit.errors import RigError
+
+        straight = rig.relax()
+        raise RigError(f"hold: {unreached}; digit relaxed to command {straight}")
     data, text = _hold_data(held)
 
     def figure():
@@ -411,6 +479,33 @@ def _force(rig, tissue, plan, log, log_mode):
         return hold_figure(held, title=f"force control at {held.setpoint_n:g} N")
 
     return data, text, figure
+
+
+def _limit_data(held) -> dict:
+    """``palpate --json``'s ``limit_note``: why a hold ended short, in one line: no contact seen (the approach did
+    not reach the body), or the loop at its highest command
+    (:meth:`~flexdigit.palpation.palpation.ForceHold.limit_reached`)."""
+    if not held.touched and held.command.size:
+        return {
+            "limit_note": f"no contact seen in the hold: the approach reached command {int(held.command[-1])} at "
+            f"{held.approach_rate:g} commands/s; hold longer ('duration_s') or place the body nearer"
+        }
+    if not held.limit_reached():
+        return {}
+    top = held.region["command_range"][1]
+    return {
+        "limit_note": f"the loop reached its highest command ({top}: the thesis rig's 60 in tip rotation) short of "
+        f"{held.setpoint_n:g} N: the digit does not press that hard there; place the body nearer"
+    }
+
+
+def _decisions_line(data: dict) -> str:
+    """The text's line on what the estimates of the figures' window decided (the force held follows it)."""
+    counts = data["decisions"]
+    said = ", ".join(f"{kind} {n}" for kind, n in counts.items() if n)
+    average = data["average_readings"]
+    each = "each reading" if average == 1 else f"the mean of each {average} readings"
+    return f"contact decided on {each} over the last window: {said or 'no estimate'}"
 
 
 def _hold_data(held) -> tuple[dict, str]:
@@ -425,10 +520,16 @@ def _hold_data(held) -> tuple[dict, str]:
         "status": held.status,
         "scored_on": "true contact force (twin)" if held.true_force_n is not None else "estimated force",
         "contact_place": _place_data(held),
+        # how many of the last window's estimates decided each kind of contact (the force follows the decision)
+        "decisions": held.decisions(),
+        "average_readings": held.region.get("average_readings", 1),
+        **_limit_data(held),
+        "tare_readings": held.region.get("tare_readings"),
         **_uncertainty_data(held),
         "time_s": held.time_s.tolist(),
         "command": held.command.tolist(),
         "force_n": held.force_n.tolist(),
+        "decision": [] if held.kind is None else held.kind.tolist(),
         **({"true_force_n": held.true_force_n.tolist()} if held.true_force_n is not None else {}),
     }
     place = data["contact_place"]
@@ -437,7 +538,9 @@ def _hold_data(held) -> tuple[dict, str]:
         f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, within 10 % after "
         f"{held.settling_s:.2f} s ({data['scored_on']})\n"
         + (f"contact at {place['steady_mm']:.1f} mm" if place["steady_mm"] is not None else "contact place: not told")
-        + f" ({place['reason']})"
+        + f" ({place['reason']})\n"
+        + _decisions_line(data)
+        + (f"\n{data['limit_note']}" if "limit_note" in data else "")
         + (f"\n{data['estimate_note']}" if "estimate_note" in data else "")
     )
     return data, text

@@ -19,6 +19,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _params(args: argparse.Namespace) -> CommandResult:
+    from flexdigit.errors import ParameterError
     from flexdigit.params import (
         RigParams,
         derived_figures,
@@ -43,11 +44,9 @@ def _params(args: argparse.Namespace) -> CommandResult:
     lines.extend(f"  {k} = {_figure(v)}" for k, v in derived.items())
     lines.extend(f"note: {n}" for n in notes)
     if problems:
-        # one line each, naming the key; nothing is written from a description that contradicts itself (a note
-        # may say why: the template's digit_length_m kept for shorter sections puts the gauges on long supports)
-        text = "\n".join([*(f"{args.file}: {p}" for p in problems), *(f"{args.file}: note: {n}" for n in notes)])
-        data = {"params": data, "derived": derived, "problems": problems, "notes": notes}
-        return CommandResult(data=data, text=text, exit_code=2)
+        # refused through the one error path (stderr, "flexdigit params: error:", exit 2), every problem on its one
+        # line, naming its key; a note may say why (the template's digit_length_m kept for shorter sections)
+        raise ParameterError(f"{args.file}: " + "; ".join([*problems, *(f"note: {n}" for n in notes)]))
     if args.write:
         path = save_params(params, args.write, force=args.force)
         lines.append(f"written to {path}")

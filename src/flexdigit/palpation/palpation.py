@@ -37,6 +37,7 @@ import numpy as np
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_choice, check_int, check_real, check_values
 from flexdigit.errors import ParameterError, RigError
+from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
 from flexdigit.params import RigParams
 from flexdigit.rig.loop import run_loop
@@ -47,6 +48,13 @@ from flexdigit.twin.digit_calibration import twin_calibration
 __all__ = [
     "MODELS",
     "PalpationProtocol",
+    "THESIS_STRAIGHT",
+    "command_scale",
+    "towards",
+    "digit_command",
+    "digit_protocol",
+    "check_sweep_commands",
+    "ring_time_s",
     "SweepRecord",
     "run_sweep",
     "TissueFit",
@@ -67,6 +75,7 @@ __all__ = [
     "force_per_command",
     "force_gains",
     "force_region",
+    "twin_step_s",
     "servo_lag_force",
     "SERVO_LAG_FORCE",
     "CONTACT_FRACTION",
@@ -98,6 +107,10 @@ class PalpationProtocol:
         Loop period (s): 0.020, the servo board's frame (5.2).
     model : {"linear", "hunt-crossley"}
         The tissue model fitted: Winkler (``q = k delta``) or Hunt-Crossley (``q = k delta^n``, ``n`` fitted).
+    return_settle_s : float
+        Extra settling of the closing tare (s): the step back from the last command is the whole sweep, not one
+        command (:func:`digit_protocol` sets it on a digit whose gauges see that step ring longer than the thesis
+        rig's; 0 on it).
     """
 
     commands: tuple[int, ...] = tuple(range(8, 31))
@@ -106,6 +119,7 @@ class PalpationProtocol:
     tare_command: int = 8
     period_s: float = 0.020
     model: str = "linear"
+    return_settle_s: float = 0.0
 
     def __post_init__(self) -> None:
         owner = "PalpationProtocol"
@@ -117,6 +131,9 @@ class PalpationProtocol:
         object.__setattr__(self, "commands", tuple(int(c) for c in cmds))
         object.__setattr__(self, "period_s", check_real(self.period_s, "period_s", owner, low=1e-3, high=1.0))
         object.__setattr__(self, "settle_s", check_real(self.settle_s, "settle_s", owner, low=0.0, high=600.0))
+        object.__setattr__(
+            self, "return_settle_s", check_real(self.return_settle_s, "return_settle_s", owner, low=0.0, high=600.0)
+        )
         object.__setattr__(self, "readings", check_int(self.readings, "readings", owner, low=1, high=100_000))
         object.__setattr__(self, "tare_command", check_int(self.tare_command, "tare_command", owner, low=0, high=254))
         check_choice(self.model, "model", MODELS, owner)
@@ -129,7 +146,143 @@ class PalpationProtocol:
     @property
     def duration_s(self) -> float:
         """The whole sweep, tares included (s)."""
-        return (len(self.commands) + 2) * self.plateau_s
+        return (len(self.commands) + 2) * self.plateau_s + self.return_settle_s
+
+    def reading_times_s(self) -> np.ndarray:
+        """Mid-time (s from the start) of each plateau's readings, the tares included."""
+        times = self.plateau_s * (np.arange(len(self.commands) + 2) + 1.0) - 0.5 * self.readings * self.period_s
+        times[-1] += self.return_settle_s
+        return times
+
+
+#: The thesis rig's straight command: the built-in protocols count their commands from it.
+THESIS_STRAIGHT = 8
+
+
+def command_scale(params) -> float:
+    """Commands of ``params``'s digit per command of the thesis rig for the same tip rotation: the thesis's cable-model
+    1.735 deg a command over the digit's (:func:`flexdigit.models.cable.tip_rotation_per_command_deg`: its servo
+    step, gearing, pulley radius and cable eccentricity). 1 on the thesis rig, the gear ratio on a geared copy of it
+    (3 on a 3:1), 5.6 on a servo of 0.216 deg a command (the design study's front design 30: 0.31 deg of tip)."""
+    # to 12 figures: a 3:1 copy of the thesis rig scales by 3, not 2.9999999999999996
+    return float(f"{tip_rotation_per_command_deg(RigParams()) / tip_rotation_per_command_deg(params):.12g}")
+
+
+def towards(params, side: str = "cable") -> int:
+    """+1 if the digit's commands above its straight one bend it towards a body on ``side``, -1 if those below do
+    (an antagonistic pair, ``side`` "opposite"). A single cable bends the digit towards its cable side only: a body
+    on the other side is refused in one line (:class:`~flexdigit.errors.ParameterError`)."""
+    check_choice(side, "side", ("cable", "opposite"), "towards")
+    if side == "cable":
+        return 1
+    if params.cables.count == 2:
+        return -1
+    raise ParameterError(
+        "tissue side 'opposite': this digit's single cable bends it towards its cable side only, never into a body on "
+        "the other side; place the tissue on side 'cable' (or describe an antagonistic pair, [cables] count = 2)"
+    )
+
+
+def digit_command(params, thesis_command: float, side: str = "cable") -> int:
+    """The command of ``params``'s digit as far past its straight command, towards ``side``, in tip rotation as
+    ``thesis_command`` is past the thesis rig's straight 8 (:func:`command_scale`), within the servo's range."""
+    a = params.actuator
+    past = (float(thesis_command) - THESIS_STRAIGHT) * command_scale(params)
+    command = int(a.equilibrium_command) + towards(params, side) * int(round(past))
+    return int(min(int(a.command_max), max(int(a.command_min), command)))
+
+
+def ring_time_s(model) -> float:
+    """The slowest time constant ``1 / (zeta wn)`` (s) of ``model``'s digit (its chain's linear modes, housed, as
+    mounted): the thesis rig's 1.12 s (13.1 rad/s, zeta 0.068); a 0.5 m one-section digit's 4.9 s."""
+    wn, zeta = model.chain.linear_modes()
+    return float(np.max(1.0 / (np.asarray(zeta) * np.asarray(wn))))
+
+
+@lru_cache(maxsize=1)
+def _thesis_ring_time_s() -> float:
+    return ring_time_s(ContactGaugeModel(RigParams(), packaged_calibration()))
+
+
+def _return_swing(model, tare: int, last: int, readings: int) -> float:
+    """The closing tare's step, ``last`` back to ``tare``, on the gauges, in plateau-mean noise sds (the largest)."""
+    v = model.free_v([tare, last])
+    return float(np.max(np.abs(v[1] - v[0]) / (np.asarray(model.noise_v, dtype=float) / math.sqrt(readings))))
+
+
+@lru_cache(maxsize=1)
+def _thesis_return_swing() -> float:
+    p = PalpationProtocol()
+    return _return_swing(ContactGaugeModel(RigParams(), packaged_calibration()), p.tare_command, p.commands[-1], 20)
+
+
+def digit_protocol(
+    protocol: PalpationProtocol,
+    params,
+    side: str = "cable",
+    *,
+    laid_out=("commands", "tare_command"),
+    model=None,
+):
+    """A protocol written for the thesis rig (commands counted from its straight 8) laid out on ``params``'s digit:
+    each command the same tip rotation past the digit's straight command (:func:`digit_command`), towards the tissue
+    (above it on the cable side; below it for an antagonistic pair's other side), the tare at its straight command.
+
+    ``laid_out`` names which of ``commands``, ``tare_command`` and ``settle_s`` are the thesis's (a protocol file's
+    own values are the user's, kept, and checked by :func:`check_sweep_commands`). Commands that fall on one after
+    rounding (a coarser step than the thesis's) are taken once; fewer than 3 left is refused. Before, the built-in
+    sweep ran 8..30 and tared at 8 on every digit: 119 commands below an antagonistic pair's straight 127 (a runaway
+    at -124 deg), or 22 fine steps of a 0.31 deg servo that never reached the tissue.
+
+    ``settle_s`` (with ``model``, the digit's gauge model as mounted): the thesis's settling times the digit's
+    slowest ring (:func:`ring_time_s`) over the thesis rig's, never shorter: the thesis's 2.5 s is 2.2 of its 1.12 s
+    time constants; the 0.5 m one-section digit (4.9 s) rang through its 2.5 s plateaus, chi2/dof 948. The closing
+    tare steps back the whole sweep: where the gauges see that step ``S`` times larger (in their noise) than the
+    thesis rig's (587 sd), it settles ``ring ln S`` longer (``return_settle_s``; the one-section digit's 3x: 5.4 s;
+    its closing tare was 28 sd off at 10.8 s)."""
+    commands = protocol.commands
+    if "commands" in laid_out:
+        commands = tuple(dict.fromkeys(digit_command(params, c, side) for c in protocol.commands))
+    tare = digit_command(params, protocol.tare_command, side) if "tare_command" in laid_out else protocol.tare_command
+    if len(commands) < 3:
+        raise ParameterError(
+            f"the sweep's commands laid out on this digit ({tare} straight, {command_scale(params):.3g} of its "
+            f"commands a thesis command) are {list(commands)}: fewer than 3 distinct commands; give 'commands' for it"
+        )
+    settle, back = protocol.settle_s, protocol.return_settle_s
+    if "settle_s" in laid_out and model is not None:
+        ring = ring_time_s(model)
+        settle = max(settle, round(settle * ring / _thesis_ring_time_s(), 1))
+        swing = _return_swing(model, tare, commands[-1], protocol.readings)
+        back = max(back, round(ring * math.log(max(1.0, swing / _thesis_return_swing())), 1))
+    return PalpationProtocol(
+        commands=commands,
+        settle_s=settle,
+        return_settle_s=back,
+        readings=protocol.readings,
+        tare_command=tare,
+        period_s=protocol.period_s,
+        model=protocol.model,
+    )
+
+
+def check_sweep_commands(protocol: PalpationProtocol, params, side: str = "cable") -> None:
+    """Refuse, in one line, a sweep (or tare) command that bends ``params``'s digit away from a body on ``side`` past
+    its straight command: an antagonistic pair bends both ways, and the thesis's 8..30 are 119 commands the wrong way
+    of a pair's straight 127. (Below a single cable's straight command its cable is slack: harmless, allowed.)"""
+    if params.cables.count != 2:
+        towards(params, side)
+        return
+    straight = int(params.actuator.equilibrium_command)
+    sign = towards(params, side)
+    away = [c for c in (protocol.tare_command, *protocol.commands) if sign * (c - straight) < 0]
+    if away:
+        direction = "above" if sign > 0 else "below"
+        raise ParameterError(
+            f"the sweep's command {away[0]} bends this digit away from the {side}-side tissue: its straight command "
+            f"is {straight} and it presses the tissue {direction} it; give 'commands' and 'tare_command' from "
+            f"{straight} {direction} (or leave them out: the built-in sweep laid out on the digit)"
+        )
 
 
 @dataclass
@@ -259,9 +412,15 @@ class TissueFit:
 
 class _TissueLikelihood:
     """Weighted residuals of the plateaus' gauges under a tissue hypothesis, nuisance offsets and drifts profiled
-    out (variable projection: for a given tissue they are a linear least-squares fit per gauge)."""
+    out (variable projection: for a given tissue they are a linear least-squares fit per gauge).
 
-    def __init__(self, model, commands, times, gauges, sigma, tissue_of, nuisance: bool = True):
+    ``walk_v_per_sqrt_s`` (per gauge): the gauges' random-walk drift, whose wander about the fitted line is
+    correlated from plateau to plateau: the residuals are then whitened by each gauge's covariance (white noise plus
+    ``walk^2 min(t_i, t_j)`` from the first plateau) and the nuisance fitted by generalised least squares. Without it
+    (white noise only) a 75 s sweep's walk read as stiffness: the 2 x 65 mm pair's twin sweeps fitted 1155, 970 and
+    1111 N/m^2 for 1000 (seeds 0-2), each "+- 29" (5 sd); with the walk's drift off the twin, 1015 +- 19."""
+
+    def __init__(self, model, commands, times, gauges, sigma, tissue_of, nuisance: bool = True, walk_v_per_sqrt_s=None):
         self.model = model
         self.commands = np.asarray(commands, dtype=int)
         self.gauges = np.asarray(gauges, dtype=float)
@@ -273,6 +432,26 @@ class _TissueLikelihood:
         self.tissue_of = tissue_of
         self.evaluations = 0
         self._shapes: dict[int, np.ndarray] = {}
+        self.whiten = None  # per gauge: W with W C W^T = I
+        if walk_v_per_sqrt_s is not None and self.design is not None:
+            walk = np.broadcast_to(np.asarray(walk_v_per_sqrt_s, dtype=float), (self.gauges.shape[1],))
+            sigma = np.broadcast_to(self.sigma, (self.gauges.shape[1],))
+            since = t - t.min()
+            shared = np.minimum.outer(since, since)
+            self.whiten = [
+                np.linalg.inv(np.linalg.cholesky(np.diag(np.full(t.size, sd**2)) + rate**2 * shared))
+                for sd, rate in zip(sigma, walk, strict=True)
+            ]
+
+    def _gls(self, r):
+        """Per gauge: the whitened residual after the GLS nuisance fit, and the nuisance's coefficients."""
+        out, coefs = np.empty_like(r), []
+        for g, w in enumerate(self.whiten):
+            design, rw = w @ self.design, w @ r[:, g]
+            coef, *_ = np.linalg.lstsq(design, rw, rcond=None)
+            out[:, g] = rw - design @ coef
+            coefs.append(coef)
+        return out, np.array(coefs).T
 
     def predict(self, theta):
         self.evaluations += 1
@@ -288,6 +467,8 @@ class _TissueLikelihood:
 
     def residuals(self, theta):
         r = self.gauges - self.predict(theta)
+        if self.whiten is not None:
+            return self._gls(r)[0].ravel()
         if self.design is not None:
             coef, *_ = np.linalg.lstsq(self.design, r, rcond=None)
             r = r - self.design @ coef
@@ -297,7 +478,10 @@ class _TissueLikelihood:
         r = self.gauges - self.predict(theta)
         if self.design is None:
             return np.zeros(3), np.zeros(3)
-        coef, *_ = np.linalg.lstsq(self.design, r, rcond=None)
+        if self.whiten is not None:
+            coef = self._gls(r)[1]
+        else:
+            coef, *_ = np.linalg.lstsq(self.design, r, rcond=None)
         return coef[0] - coef[1] * self._t0 / self._span, coef[1] / self._span
 
 
@@ -325,6 +509,7 @@ def fit_tissue(
     fit_exponent: bool = False,
     sigma_v=None,
     start=None,
+    drift: bool = False,
 ) -> TissueFit:
     """Fit a tissue's gap and modulus (and Hunt-Crossley exponent) to a sweep's plateaus (module docstring).
 
@@ -345,6 +530,10 @@ def fit_tissue(
         Noise of one plateau mean per gauge (V); default the model's white noise over ``record.readings``.
     start : TissueFit, optional
         Start from this fit's gap and modulus (a neighbouring sweep's) instead of a coarse grid search.
+    drift : bool
+        Weigh the gauges' random-walk drift (the calibration's ``noise_drift_v_per_sqrt_s``) in the likelihood
+        (:class:`_TissueLikelihood`): the modulus and its sd honest over a long sweep (``flexdigit palpate``). Off,
+        white noise only, as the report's studies have always fitted.
     """
     sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(record.readings) if sigma_v is None else sigma_v
     like = _TissueLikelihood(
@@ -354,6 +543,7 @@ def fit_tissue(
         record.gauges_v,
         sigma,
         lambda th: placed.replace(gap_m=th[0], modulus_n_m2=math.exp(th[1]), exponent=th[2] if fit_exponent else 1.0),
+        walk_v_per_sqrt_s=_walk(model) if drift else None,
     )
     if start is None:
         x0 = _start(like, model, placed, record.command, fit_exponent)
@@ -365,8 +555,14 @@ def fit_tissue(
     gap, logk = float(sol.x[0]), float(sol.x[1])
     k = math.exp(logk)
     n = float(sol.x[2]) if fit_exponent else 1.0
+    # the offsets and drifts reported (and taken off the force-indentation curve): the straight line through the
+    # plateaus' residuals that the two tares pin, as without the walk (its GLS line left the thesis rig's first
+    # contact plateaus 4-5 mN off the twin's force)
+    like.whiten = None
     offset, drift = like.nuisance(sol.x)
-    dof = like.gauges.size - sol.x.size - (like.design.shape[1] * 3 if like.design is not None else 0)
+    # an offset and a drift per gauge (G of them: it counted 3 on every digit)
+    nuisances = like.design.shape[1] * like.gauges.shape[1] if like.design is not None else 0
+    dof = like.gauges.size - sol.x.size - nuisances
     # readings the model explains worse than their noise (ringing, drift, a model error) widen the uncertainty
     sd = sd * math.sqrt(max(1.0, 2 * sol.cost / max(dof, 1)))
     return TissueFit(
@@ -384,6 +580,11 @@ def fit_tissue(
         drift_v_per_s=drift,
         extra={"evaluations": like.evaluations},
     )
+
+
+def _walk(model) -> np.ndarray:
+    """The gauges' random-walk drift (V / sqrt(s)) of ``model``'s calibration."""
+    return np.asarray(model.calibration.noise_drift_v_per_sqrt_s, dtype=float)
 
 
 def _start(like, model, placed, commands, fit_exponent):
@@ -412,12 +613,15 @@ def _start(like, model, placed, commands, fit_exponent):
     return x0
 
 
-def stiffness_bound(model, tissue, protocol: PalpationProtocol, *, fit_exponent: bool = False) -> dict:
+def stiffness_bound(
+    model, tissue, protocol: PalpationProtocol, *, fit_exponent: bool = False, drift: bool = False
+) -> dict:
     """Cramer-Rao standard deviations of the gap (m), modulus (N/m^2) and exponent from one sweep of
     ``protocol`` on ``tissue``, with the gauges' white noise over ``readings`` and the nuisance offsets and drifts
     estimated as the fit does."""
     commands = [protocol.tare_command, *protocol.commands, protocol.tare_command]
     times = protocol.plateau_s * (np.arange(len(commands)) + 0.5)
+    times[-1] += protocol.return_settle_s
     sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(protocol.readings)
     clean = model.tissue_solution(tissue, commands)[1]
     like = _TissueLikelihood(
@@ -427,6 +631,7 @@ def stiffness_bound(model, tissue, protocol: PalpationProtocol, *, fit_exponent:
         clean,
         sigma,
         lambda th: tissue.replace(gap_m=th[0], modulus_n_m2=math.exp(th[1]), exponent=th[2] if fit_exponent else 1.0),
+        walk_v_per_sqrt_s=_walk(model) if drift else None,
     )
     theta = np.array([tissue.gap_m, math.log(tissue.modulus_n_m2)] + ([tissue.exponent] if fit_exponent else []))
     steps = np.array([1e-5, 1e-3] + ([1e-3] if fit_exponent else []))
@@ -483,13 +688,15 @@ class PalpationResult:
     __repr__ = fields_summary
 
 
-def analyse(record: SweepRecord, placed, protocol: PalpationProtocol, model, estimator=None) -> PalpationResult:
+def analyse(
+    record: SweepRecord, placed, protocol: PalpationProtocol, model, estimator=None, *, drift: bool = False
+) -> PalpationResult:
     """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope.
 
     The curve's ``force_n`` is NaN ("no force read", ``force_read`` False) where the gauges read no force: the
     estimator saw no contact, or its standard deviation is infinite or over the value (:func:`_force_read`).
     """
-    fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley")
+    fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley", drift=drift)
     sweep = ~record.tare
     cmds = record.command[sweep]
     if estimator is None:
@@ -570,19 +777,39 @@ def _plateau_truth(record: SweepRecord, protocol: PalpationProtocol) -> np.ndarr
 
 
 def palpate(
-    rig, placed, protocol: PalpationProtocol | None = None, *, model=None, log_path=None, log_mode: str = "new"
+    rig,
+    placed,
+    protocol: PalpationProtocol | None = None,
+    *,
+    model=None,
+    log_path=None,
+    log_mode: str = "new",
+    drift: bool = False,
 ) -> PalpationResult:
     """Run a palpation on ``rig`` with the tissue ``placed`` beside the digit (:func:`run_sweep`, :func:`analyse`).
 
     On the twin the tissue is put there (``rig.place_tissue``) and the true contact force is logged beside each
-    sample; on hardware the operator is asked to place it.
+    sample; on hardware the operator is asked to place it. ``drift``: weigh the gauges' random-walk drift in the fit
+    (:func:`fit_tissue`).
     """
     protocol = protocol or PalpationProtocol()
     model = model or rig_contact_model(rig)
     rig.place_tissue(placed)
     truth = _truth_of(rig)
     record = run_sweep(rig, protocol, log_path=log_path, truth=truth, log_mode=log_mode)
-    return analyse(record, placed, protocol, model)
+    return analyse(record, placed, protocol, model, drift=drift)
+
+
+def twin_step_s(kind: str, params=None) -> float:
+    """The twin's integration step (s) for a palpation on the sim backend: ``kind`` "force" (a hold: the loop acts
+    between frames) 5 ms; "sweep" or "scan" (quasi-static plateaus) 10 ms on the thesis rig (the fit's chi^2 the same
+    at 2 ms), 5 ms on any other digit. At 10 ms the 2 x 0.10 m four-gauge example digit's barely taut cable chatters
+    at the first command past straight (a 33 Hz limit cycle, a third of the step rate: the cable slack at every
+    reading, 1.6-4 mV on the gauges read as a 3 mN contact where nothing touches); at 5 ms it rests, taut (0.22 N),
+    as its statics say. None of the other 39 test and drawn digits chatters there at 10 ms."""
+    if kind == "force":
+        return 0.005
+    return 0.01 if params is None or params == RigParams() else 0.005
 
 
 #: The thesis rig's force loop (:func:`hold_force`): integral gain (commands / s / N) and approach rate
@@ -595,16 +822,22 @@ _THESIS_FORCE_TISSUE = (0.15, 0.35, 0.03, 1000.0)
 def force_per_command(model, tissue: Tissue, setpoint_n: float) -> float:
     """The contact force a command adds where the statics of ``model`` first press ``setpoint_n`` (N) into
     ``tissue`` (N per command, the loop's plant gain at its setpoint), from the digit's straight command up its
-    thesis range (52 commands x its gearing); NaN if it never presses that hard there."""
-    act = model.params.actuator
-    eq = int(act.equilibrium_command)
-    commands = np.arange(eq, min(int(act.command_max), eq + int(round(52 * act.gear_ratio))) + 1)
+    thesis range (:func:`_press_commands`); NaN if it never presses that hard there."""
+    commands = _press_commands(model.params)
     force = np.abs(model.tissue_solution(tissue, commands)[0].contact_force_n)
     reached = np.flatnonzero(force >= setpoint_n)
     if not reached.size or reached[0] == 0:
         return math.nan
     k = int(reached[0])
     return float(force[k] - force[k - 1])
+
+
+def _press_commands(params) -> np.ndarray:
+    """The commands force control may press with: the thesis rig's 8..60 laid out on the digit, from its straight
+    command up as far in tip rotation (:func:`digit_command`: 52 commands x its gearing on a copy of the thesis
+    rig; before, 52 x the gearing on any digit, 11 deg of tip on a 0.31 deg servo that never reached the tissue)."""
+    eq = int(params.actuator.equilibrium_command)
+    return np.arange(eq, digit_command(params, THESIS_STRAIGHT + 52) + 1)
 
 
 @lru_cache(maxsize=1)
@@ -626,7 +859,8 @@ def force_gains(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "c
     command where the statics first press ``setpoint_n`` into the thesis's soft block laid out beside the digit's
     ``region_m`` as beside the thesis rig's (from its start to 80 mm past its end, 30 mm x L / 0.27 m away; the
     digit's outer 45 % without a region; a real tissue's stiffness is as unknown to the loop on the thesis rig).
-    The approach rate turns the pulley as fast as the thesis's 4 commands per second (x the gearing).
+    The approach rate turns the tip as fast as the thesis's 4 commands per second (x :func:`command_scale`: the
+    gearing on a geared copy of the thesis rig).
     """
     length = float(model.params.geometry.digit_length_m)
     start, end = (0.55 * length, length) if region_m is None else (float(region_m[0]), float(region_m[1]))
@@ -634,11 +868,11 @@ def force_gains(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "c
     tissue = Tissue(start, end + 0.08, 0.03 * length / 0.27, modulus, side=side)
     k = force_per_command(model, tissue, setpoint_n)
     if not k > 0:  # never presses the setpoint there: the thesis rig's rates per turn of the pulley
-        k = _thesis_force_per_command() / model.params.actuator.gear_ratio
+        k = _thesis_force_per_command() / command_scale(model.params)
     gain = float(f"{THESIS_FORCE_GAIN * _thesis_force_per_command() / k:.3g}")
     return {
         "gain": gain,
-        "approach_rate": THESIS_APPROACH_RATE * float(model.params.actuator.gear_ratio),
+        "approach_rate": THESIS_APPROACH_RATE * command_scale(model.params),
         "force_per_command_n": k,
     }
 
@@ -652,8 +886,15 @@ PLACE_WANDER_CHI2 = 4.0
 #: Where the search is narrowed to: the places whose profiled force reads the reference press within this (a fifth
 #: of the issue's 10 %).
 FORCE_TOLD = 0.02
-#: Readings the force loop tares on at the straight command (nothing touching) before it presses.
+#: Readings the force loop tares on at the straight command (nothing touching) before it presses (at least).
 TARE_READINGS = 10
+#: The tare's force error (1 sd) a hold allows, relative to its setpoint: a third of the issue's 10 % (more readings
+#: where one reading's force is noisier, :func:`_tare_readings`).
+TARE_SHARE = 0.10 / 3
+#: At most this many readings in a tare (10 s of the loop's 20 ms readings) ...
+MAX_TARE_READINGS = 500
+#: ... and in an estimate's mean (0.5 s: at the loop's ~0.8 rad/s crossover a 0.25 s delay, 0.2 rad of phase).
+MAX_AVERAGE_READINGS = 25
 
 
 def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "cable", window_s: float = 3.0) -> dict:
@@ -678,14 +919,12 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
     length = float(model.params.geometry.digit_length_m)
     start, end = (0.55 * length, length) if region_m is None else (float(region_m[0]), float(region_m[1]))
     tissue = Tissue(start, end + 0.08, 0.03 * length / 0.27, _THESIS_FORCE_TISSUE[3], side=side)
-    act = model.params.actuator
-    eq = int(act.equilibrium_command)
-    commands = np.arange(eq, min(int(act.command_max), eq + int(round(52 * act.gear_ratio))) + 1)
+    commands = _press_commands(model.params)
     sol, volts = model.tissue_solution(tissue, commands)
     force = np.abs(sol.contact_force_n)
     reached = np.flatnonzero(force >= setpoint_n)
     out = {"region_m": region_m, "narrowed": False, "spread": math.nan, "place_told": False, "place_sd_m": math.inf,
-           "force_sd_n": math.nan}  # fmt: skip
+           "force_sd_n": math.nan, "point_error": math.nan, "classify": False}  # fmt: skip
     if not reached.size:
         return {**out, "reason": "the digit never presses the reference body that hard: place not checked"}
     k = int(reached[0])
@@ -707,9 +946,16 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
         while hi < s.size - 1 and told[hi + 1]:
             hi += 1
         lo, hi = max(0, min(lo, i - 1)), min(s.size - 1, max(hi, i + 1))  # at least two grid steps
+        if hi - lo < 3:  # the centroid the region's end (the 0.49 m section, soft-block: 349-350 mm, refused by
+            lo, hi = max(0, hi - 3), min(s.size - 1, max(0, hi - 3) + 3)  # ContactEstimator; 348-350 a float short)
         searched = (float(s[lo]), float(s[hi]))
     place_sd, force_sd = _contact_sd(model, centroid, truth, command, side)
     place_sd /= math.sqrt(max(1.0, window_s / 0.020))  # over the window's 20 ms readings
+    # the reference press is a stretch of contact: where the point hypothesis misreads its total by more than
+    # FORCE_TOLD (a gauge inside the stretch), the loop weighs the line-load hypothesis too (ContactEstimator's
+    # classify); on every test digit and random_digit(0..30) it reads it within 2 % (the thesis rig 0.006 %)
+    best = ContactEstimator(model, classify=False, side=side, region_m=searched).fit().predict(volts[k], command)
+    point_error = float(abs(abs(best.point_force_n[0]) - truth) / truth)
     width = (searched[1] - searched[0]) if searched is not None else length
     gauges = len(model.params.geometry.gauge_positions_m)
     place_told = gauges > 1 and place_sd <= width
@@ -730,7 +976,7 @@ def force_region(model, setpoint_n: float = 0.1, *, region_m=None, side: str = "
         )
     return {**out, "region_m": searched, "narrowed": searched != region_m, "spread": spread,
             "place_told": bool(place_told), "place_sd_m": float(place_sd), "force_sd_n": force_sd,
-            "reason": reason}  # fmt: skip
+            "point_error": point_error, "classify": point_error > FORCE_TOLD, "reason": reason}  # fmt: skip
 
 
 def _contact_sd(model, place_m: float, force_n: float, command: int, side: str) -> tuple[float, float]:
@@ -783,7 +1029,7 @@ def simulate_sweep(model, tissue, protocol: PalpationProtocol, *, seed=0, drift_
     (:func:`palpate`) agrees with it once the plateaus settle (tests)."""
     rng = np.random.default_rng(seed)
     sequence = np.array([protocol.tare_command, *protocol.commands, protocol.tare_command])
-    times = protocol.plateau_s * (np.arange(sequence.size) + 1.0) - 0.5 * protocol.readings * protocol.period_s
+    times = protocol.reading_times_s()
     sol, clean = model.tissue_solution(tissue, sequence)
     rate = (
         np.asarray(model.calibration.noise_drift_v_per_sqrt_s, dtype=float)
@@ -942,21 +1188,24 @@ class _ScanLikelihood(_TissueLikelihood):
 class ForceController:
     """Hold a set contact force with the 20 ms loop, from the gauges' force estimate (integral control).
 
-    Each sample the contact force is estimated from the reading
-    (:class:`flexdigit.palpation.contact_estimation.ContactEstimator`,
-    point hypothesis) at the servo's position, which is taken as the controller's own continuous command (the
-    servo low-passes what it is sent): the estimate at the two integer commands around it, interpolated. The
-    command integrates the force error (``gain`` commands per second per N, clamped to ``low..high``: no wind-up),
-    and is rounded with error feedback (a first-order sigma-delta): the integer commands sent average to the
-    continuous one, a resolution the servo (20 rad/s) and the digit (13 rad/s) filter the 25 Hz toggling out of,
-    finer than the ~0.03 N a whole command step presses. Integral action alone has no overshoot while the
-    crossover (``gain`` x ~0.03 N per command) stays well below the digit's lightly damped mode.
+    Each sample the contact is estimated from the reading
+    (:class:`flexdigit.palpation.contact_estimation.ContactEstimator`) at the servo's position, which is taken as the
+    controller's own continuous command (the servo low-passes what it is sent): the estimate at the two integer
+    commands around it, interpolated. **The force follows the contact
+    decision** (:meth:`estimate`): nothing touching reads 0 N, a point contact its point force, a line load (a
+    classifying estimator) its total; before, every reading was converted as a point force at the guessed place, so
+    noise with nothing touching read as a force (clipped at zero: +11 mN on the one-gauge digit). The command
+    integrates the force error (``gain`` commands per second per N, clamped to ``low..high``: no wind-up), and is
+    rounded with error feedback (a first-order sigma-delta): the integer commands sent average to the continuous
+    one, a resolution the servo (20 rad/s) and the digit (13 rad/s) filter the 25 Hz toggling out of, finer than the
+    ~0.03 N a whole command step presses. Integral action alone has no overshoot while the crossover (``gain`` x
+    ~0.03 N per command) stays well below the digit's lightly damped mode.
 
     Parameters
     ----------
     estimator : ContactEstimator
-        Fitted (point hypothesis; ``classify=False`` is enough).
-    offset_v : array_like (3,)
+        Fitted; its ``n_readings`` should be ``average_readings`` (the noise its decision weighs).
+    offset_v : array_like (G,)
         Subtracted from every reading first (the tare: readings at rest minus the model's).
     gain : float
         Integral gain (commands / s / N).
@@ -972,12 +1221,21 @@ class ForceController:
         ``sign * estimate``, positive.
     detect_readings : int
         The contact shows when the mean of the last this many estimates passes ``contact_fraction`` of the
-        setpoint (1: each estimate; more where one reading's noise alone would pass it, :data:`DETECT_SIGMAS`).
+        setpoint (1: each estimate).
+    average_readings : int
+        Each estimate is made on the mean of the last this many tared readings, at their mean servo position (1: each
+        reading alone, the thesis rig). A noisy gauge's single reading cannot decide a contact at the setpoint (the
+        one-gauge digit: 36 mN a reading against a 30 mN threshold); their mean can, and its estimate is not
+        clipped at zero force as a mean of one-reading estimates is.
     servo : (float, float), optional
         The servo's natural frequency (rad/s) and damping ratio: the force is then estimated at the position the
         servo's second-order model reaches from the commands sent (zero-order hold over ``period_s``), not at the
         continuous command. The servo lags a ramp by ``2 zeta / wn`` (55 ms on the thesis rig's): where a digit's
         gauges read that lag as force (:func:`servo_lag_force`), the estimate led the true force by it.
+
+    Per sample it keeps the force held (``forces``, N, > 0 pressing), its standard deviation (``force_sds``, N, the
+    estimator's at its decision), the decision (``kinds``: "none", "point", "distributed") and the point estimate's
+    place (``places``, m from the base).
     """
 
     def __init__(
@@ -994,8 +1252,10 @@ class ForceController:
         contact_fraction=0.3,
         servo=None,
         detect_readings=1,
+        average_readings=1,
     ) -> None:
         self.detect_readings = check_int(detect_readings, "detect_readings", "ForceController", low=1)
+        self.average_readings = check_int(average_readings, "average_readings", "ForceController", low=1)
         self.approach_rate = check_real(approach_rate, "approach_rate", "ForceController", low=0, low_open=True)
         self.contact_fraction = check_real(contact_fraction, "contact_fraction", "ForceController", low=0, high=1)
         self.estimator = estimator
@@ -1005,6 +1265,8 @@ class ForceController:
         self.low, self.high = int(low), int(high)
         self.sign = sign
         self.forces: list[float] = []
+        self.force_sds: list[float] = []
+        self.kinds: list[str] = []
         self.places: list[float] = []  # the point estimate's place (m from the base) per sample
         self.place_m = math.nan
         self.servo = servo
@@ -1013,25 +1275,50 @@ class ForceController:
     def reset(self, command: int) -> None:
         self.u = float(command)
         self.residue = 0.0
-        self.forces = []
-        self.places = []
+        self.forces, self.force_sds, self.kinds, self.places = [], [], [], []
+        self._readings: list[np.ndarray] = []
+        self._positions: list[float] = []
         self.touching = False
         self._servo_state = np.array([float(command), 0.0])
 
-    def force(self, gauges_v, position: float) -> float:
-        """Contact force (N, > 0 pressing) from one reading with the servo at the (continuous) ``position``."""
-        lo = int(math.floor(position))
+    def estimate(self, gauges_v, position: float) -> tuple[float, float, str]:
+        """``(force (N, > 0 pressing), its sd (N), decision)`` from one (mean) reading with the servo at the
+        (continuous) ``position``: the estimator's decided force (0 for no contact, the point force, or a line
+        load's total) at the two commands around it, interpolated; the decision and sd of the nearer command.
+        Also sets :attr:`place_m` (the point estimate's place)."""
+        # the two commands around it within the servo's range (a digit pressing up to its last command, 254)
+        top = int(self.estimator.model.params.actuator.command_max)
+        lo = min(int(math.floor(position)), top - 1)
         frac = position - lo
         v = np.asarray(gauges_v, dtype=float) - self.offset_v
         est = self.estimator.predict(np.vstack([v, v]), np.array([lo, lo + 1]))
-        f = self.sign * est.point_force_n
+        near = int(frac >= 0.5)
         self.place_m = float((1 - frac) * est.point_position_m[0] + frac * est.point_position_m[1])
-        return float((1 - frac) * f[0] + frac * f[1])
+        # one decision for the reading: its likelihood ratio against nothing, interpolated as the force is
+        if (1 - frac) * est.chi2_contact[0] + frac * est.chi2_contact[1] <= self.estimator.detect_chi2:
+            return 0.0, float(est.force_sd_n[near]), "none"
+        kind = "distributed" if est.kind[near] == "distributed" else "point"
+        f = self.sign * (est.line_total_n if kind == "distributed" else est.point_force_n)
+        return float((1 - frac) * f[0] + frac * f[1]), float(est.force_sd_n[near]), kind
+
+    def force(self, gauges_v, position: float) -> float:
+        """Contact force (N, > 0 pressing) from one reading with the servo at the (continuous) ``position``, as
+        the contact decision says (:meth:`estimate`)."""
+        return self.estimate(gauges_v, position)[0]
 
     def step(self, setpoint: float, reading) -> float:
         # where the servo is: the continuous command, or the servo's model driven by the commands sent
-        f = self.force(reading.gauges_v, self.u if self._servo is None else self._servo_state[0])
+        n = self.average_readings
+        self._readings = [*self._readings, np.asarray(reading.gauges_v, dtype=float)][-n:]
+        self._positions = [*self._positions, self.u if self._servo is None else self._servo_state[0]][-n:]
+        if self.average_readings == 1:  # (the thesis rig: its estimates to the last bit as before)
+            mean_v, position = self._readings[-1], self._positions[-1]
+        else:
+            mean_v, position = np.mean(self._readings, axis=0), float(np.mean(self._positions))
+        f, sd, kind = self.estimate(mean_v, position)
         self.forces.append(f)
+        self.force_sds.append(sd)
+        self.kinds.append(kind)
         self.places.append(self.place_m)
         if not self.touching and np.mean(self.forces[-self.detect_readings :]) > self.contact_fraction * setpoint:
             self.touching = True
@@ -1068,13 +1355,13 @@ DETECT_SIGMAS = 3.0
 SERVO_LAG_FORCE = CONTACT_FRACTION / DETECT_SIGMAS
 
 
-def _held_force_sd(model, force_sd_n: float, duration_s: float) -> float:
-    """How uncertain (1 sd, N) the force a hold reads is, its noise averaged out: the tare's :data:`TARE_READINGS`
+def _held_force_sd(model, force_sd_n: float, duration_s: float, tare_readings: int = TARE_READINGS) -> float:
+    """How uncertain (1 sd, N) the force a hold reads is, its noise averaged out: the tare's ``tare_readings``
     readings and the gauges' random-walk drift over the hold (its wait and duration), in force through one reading's
     force sd with the place known (the drift's share of a reading's noise, root-mean-square over the gauges)."""
     cal = model.calibration
     ratio = float(np.sqrt(np.mean((np.asarray(cal.noise_drift_v_per_sqrt_s) / np.asarray(model.noise_v)) ** 2)))
-    return float(force_sd_n * math.sqrt(1.0 / TARE_READINGS + ratio**2 * (1.0 + duration_s)))
+    return float(force_sd_n * math.sqrt(1.0 / tare_readings + ratio**2 * (1.0 + duration_s)))
 
 
 def _detect_readings(force_sd_n: float, threshold_n: float) -> int:
@@ -1098,9 +1385,9 @@ def servo_lag_force(model, estimator, approach_rate: float, command: int) -> flo
 
 @dataclass
 class ForceHold:
-    """A force-control run: per sample ``time_s``, ``command``, ``force_n`` (estimated) and, on the twin,
-    ``true_force_n``; the figures over the last ``window_s``: mean true (or estimated) force and its error,
-    and the overshoot (largest force over the setpoint, relative)."""
+    """A force-control run: per sample ``time_s``, ``command``, ``force_n`` (estimated, as the contact decision
+    says: ``kind``, ``force_sd_n``) and, on the twin, ``true_force_n``; the figures over the last ``window_s``: mean
+    true (or estimated) force and its error, and the overshoot (largest force over the setpoint, relative)."""
 
     setpoint_n: float
     time_s: np.ndarray
@@ -1123,6 +1410,55 @@ class ForceHold:
 
     #: the place estimated from the window's mean reading (NaN where the gauges cannot tell it: ``region``)
     steady_place_m: float = math.nan
+    #: per sample: the estimate's standard deviation (N) and the contact decision it follows ("none", "point",
+    #: "distributed"; :meth:`ForceController.estimate`)
+    force_sd_n: np.ndarray | None = None
+    kind: np.ndarray | None = None
+    #: whether the loop read a contact (its estimate passed CONTACT_FRACTION of the setpoint), and the last command
+    #: it may press with (:func:`_press_commands`)
+    touched: bool = True
+    high_command: int = 254
+
+    def unreached(self) -> str:
+        """Why the hold never held its setpoint, in one line ("" when it did): no contact read up to its last
+        command; or pressing at its last command over the figures' window and reading under 90 % of the setpoint;
+        or, on the twin, a true force under half the setpoint over the window (the gauges misread a contact).
+        Before, a hold that never touched reported "completed" with a steady force of 0 N (error -100 %)."""
+        window = self._window()
+        if not self.touched:
+            return (
+                f"never reached {self.setpoint_n:g} N: no contact read in {self.time_s[-1]:.1f} s, pressing up to "
+                f"command {int(np.max(self.command))} of its last {self.high_command} (the tissue out of reach?)"
+            )
+        estimated = float(np.mean(self.force_n[window])) if np.any(window) else 0.0
+        if np.all(self.command[window] >= self.high_command) and estimated < 0.9 * self.setpoint_n:
+            return (
+                f"never reached {self.setpoint_n:g} N: pressing at its last command {self.high_command}, the gauges "
+                f"read {estimated:.3g} N over the last {self.window_s:g} s"
+            )
+        if self.true_force_n is not None and self.steady_force_n < 0.5 * self.setpoint_n:
+            return (
+                f"never reached {self.setpoint_n:g} N: the twin's true contact force was {self.steady_force_n:.3g} N "
+                f"over the last {self.window_s:g} s while the gauges read {estimated:.3g} N"
+            )
+        return ""
+
+    def limit_reached(self) -> bool:
+        """Whether the hold ended short of its setpoint (more than 10 %, on the scored force) with the loop at the
+        highest command it may send (``region["command_range"]``: the thesis rig's 8..60 in tip rotation): the
+        digit cannot press that hard there, which no gain would change."""
+        top = self.region.get("command_range", (None, None))[1]
+        window = self._window()
+        if top is None or not np.any(window) or not self.steady_error < -0.1:
+            return False
+        return bool(np.max(self.command[window]) >= top)
+
+    def decisions(self) -> dict:
+        """How many samples of the figures' window each contact decision took (``{"none": n, "point": n, ...}``)."""
+        if self.kind is None:
+            return {}
+        kinds = self.kind[self._window()]
+        return {k: int(np.count_nonzero(kinds == k)) for k in ("none", "point", "distributed")}
 
     @property
     def true_steady_place_m(self) -> float:
@@ -1155,10 +1491,13 @@ def hold_force(
 ) -> ForceHold:
     """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
 
-    Tares on :data:`TARE_READINGS` readings at the equilibrium command first (nothing must touch the digit there),
-    then runs :class:`ForceController`. ``region_m`` (m from the base): where the contact can be (where the tissue
-    lies), which steadies the estimate when nothing touches yet; :func:`force_region` narrows it where the force
-    read hangs on the place, and ``ForceHold.region`` says what was decided. On the twin the true contact force is
+    Tares at the equilibrium command first (nothing must touch the digit there; :data:`TARE_READINGS` readings, more
+    where one reading's force is noisy: ``region["tare_readings"]``), then runs :class:`ForceController`, whose force
+    follows the contact decision, each estimate on the mean of ``region["average_readings"]`` readings (1 unless one
+    reading's noise would pass the contact threshold, :data:`DETECT_SIGMAS`). ``region_m`` (m from the base): where
+    the contact can be (where the tissue lies), which steadies the estimate when nothing touches yet;
+    :func:`force_region` narrows it where the force read hangs on the place, and ``ForceHold.region`` says what was
+    decided. On the twin the true contact force is
     logged beside the estimate; the figures (steady force and error over the last ``window_s``, overshoot, 10 %
     settling time) use it there, and the estimate on hardware.
 
@@ -1167,6 +1506,7 @@ def hold_force(
     presses) and the pulley's approach speed are the thesis rig's on any digit.
     """
     setpoint = check_real(setpoint_n, "setpoint_n", "hold_force", low=0, low_open=True)
+    _check_presses(rig.params, side)
     model = model or rig_contact_model(rig)
     if gain is None or approach_rate is None:
         derived = force_gains(model, setpoint, region_m=region_m, side=side)
@@ -1176,9 +1516,17 @@ def hold_force(
     # by more than 10 % along it (force_region; the thesis rig's searches its whole region as before)
     region = force_region(model, setpoint, region_m=region_m, side=side, window_s=window_s)
     if estimator is None:
-        estimator = ContactEstimator(model, classify=False, side=side, region_m=region["region_m"]).fit()
+        # each estimate on the mean of enough readings for its noise to stay DETECT_SIGMAS below the contact
+        # threshold (1 on the thesis rig: 3.3 mN a reading against 30 mN; 14 on the one-gauge digit, 36 mN a reading)
+        needed = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
+        average = min(MAX_AVERAGE_READINGS, needed)
+        estimator = ContactEstimator(
+            model, classify=region.get("classify", False), side=side, region_m=region["region_m"], n_readings=average
+        ).fit()
     controller, region = _force_controller(rig, model, estimator, region, setpoint, gain, approach_rate, side)
-    region["held_force_sd_n"] = _held_force_sd(model, region.get("force_sd_n", math.nan), duration_s)
+    region["held_force_sd_n"] = _held_force_sd(
+        model, region.get("force_sd_n", math.nan), duration_s, region["tare_readings"]
+    )
     truth = _truth_of(rig)
     place = _place_of(rig)
     true_force, true_place = [], []
@@ -1188,15 +1536,9 @@ def hold_force(
         true_place.append(place())
 
     result = run_loop(
-        rig,
-        controller,
-        setpoint,
-        duration_s,
-        log_path=log_path,
-        log_mode=log_mode,
-        on_sample=on_sample if truth else None,
-        close_rig=False,
-    )
+        rig, controller, setpoint, duration_s, log_path=log_path, log_mode=log_mode,
+        on_sample=on_sample if truth else None, close_rig=False,
+    )  # fmt: skip
     result.raise_if_interrupted()
     t = result.time_s
     est = np.array(controller.forces[: t.size])
@@ -1207,7 +1549,19 @@ def hold_force(
         setpoint, t, result.command, est, true, *figures, result.status, float(gain), float(approach_rate),
         region=region, place_m=np.array(controller.places[: t.size]),
         true_place_m=np.array(true_place) if truth else None, window_s=float(window_s), steady_place_m=steady_place,
+        force_sd_n=np.array(controller.force_sds[: t.size]), kind=np.array(controller.kinds[: t.size], dtype=str),
+        touched=bool(getattr(controller, "touching", True)), high_command=int(controller.high),
     )  # fmt: skip
+
+
+def _check_presses(params, side: str) -> None:
+    """Refuse (one line) a body force control cannot press: on a single cable's other side (:func:`towards`), or on
+    an antagonistic pair's other side (the loop presses with commands above straight only)."""
+    if towards(params, side) < 0:
+        raise ParameterError(
+            "force control presses the digit towards its cable side (commands above straight): an antagonistic "
+            "pair's 'opposite'-side tissue is not held yet; place it on side 'cable'"
+        )
 
 
 def _force_controller(rig, model, estimator, region, setpoint, gain, approach_rate, side):
@@ -1216,26 +1570,48 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
     eq = int(rig.params.actuator.equilibrium_command)
     rig.write_command(eq)
     rig.wait(1.0)
-    rest = np.array([rig.read().gauges_v for _ in range(TARE_READINGS)])
-    offset = rest.mean(axis=0) - model.free_v([eq])[0]
+    tare = _tare_readings(region.get("force_sd_n", math.nan), setpoint)
+    offset = _tare(rig, tare) - model.free_v([eq])[0]
     sign = -1.0 if side == "cable" else 1.0
-    # the thesis rig's 8..60: 52 commands of pulley past straight (times a gearing), within the servo's range
+    # the thesis rig's 8..60, laid out on the digit (_press_commands)
     act = rig.params.actuator
-    high = min(int(act.command_max), eq + int(round(52 * act.gear_ratio)))
+    high = int(_press_commands(rig.params)[-1])
     # the servo's lag behind the approach read as force: modelled where it would read as more than 10 % of the
     # setpoint (not on the thesis rig: 1.7 mN at 0.1 N)
     lag_force = servo_lag_force(model, estimator, approach_rate, min(eq + 2, high))
     servo = (act.servo_wn_rad_s, act.servo_zeta) if lag_force > SERVO_LAG_FORCE * setpoint else None
-    region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None}
-    # the contact shows on enough readings that their noise stays DETECT_SIGMAS below the threshold (1 on the
-    # thesis rig: 3.3 mN a reading against 30 mN; 14 on the one-gauge digit, 36 mN a reading)
-    detect = _detect_readings(region.get("force_sd_n", math.nan), CONTACT_FRACTION * setpoint)
-    region["detect_readings"] = detect
+    # each estimate (and the contact's decision) on the mean of the estimator's readings (hold_force: enough for
+    # their noise to stay DETECT_SIGMAS below the threshold)
+    average = int(getattr(estimator, "n_readings", 1))
+    region = {**region, "servo_lag_force_n": lag_force, "servo_modelled": servo is not None,
+              "average_readings": average, "tare_readings": tare, "classify": bool(estimator.classify),
+              "command_range": (eq, high)}  # fmt: skip
     controller = ForceController(
         estimator, offset, gain=gain, low=eq, high=high, sign=sign, approach_rate=approach_rate, servo=servo,
-        contact_fraction=CONTACT_FRACTION, detect_readings=detect,
+        contact_fraction=CONTACT_FRACTION, average_readings=average,
     )  # fmt: skip
     return controller, region
+
+
+def _tare_readings(force_sd_n: float, setpoint_n: float) -> int:
+    """Readings the hold tares on: :data:`TARE_READINGS`, or enough for the tare's force error (one reading's force
+    sd over their root) to stay within :data:`TARE_SHARE` of the setpoint (the one-gauge digit: 36 mN a reading,
+    118 readings, 2.4 s; the thesis rig 3.3 mN, its 10)."""
+    if not math.isfinite(force_sd_n):
+        return TARE_READINGS
+    return min(MAX_TARE_READINGS, max(TARE_READINGS, math.ceil((force_sd_n / (TARE_SHARE * setpoint_n)) ** 2)))
+
+
+def _tare(rig, readings: int) -> np.ndarray:
+    """The mean of ``readings`` gauge readings at rest: :data:`TARE_READINGS` read at once (the thesis rig's tare, as
+    it was), more read one loop period (20 ms) apart, as the loop reads them."""
+    if readings <= TARE_READINGS:
+        return np.array([rig.read().gauges_v for _ in range(readings)]).mean(axis=0)
+    rest = []
+    for _ in range(readings):
+        rest.append(rig.read().gauges_v)
+        rig.wait(0.020)
+    return np.array(rest).mean(axis=0)
 
 
 def _steady_place(controller, result, window_s: float) -> float:

@@ -6,7 +6,10 @@ with ``centre_mm``, ``width_mm``, ``ratio``). A protocol file has any of ``[swee
 ``{from, to, step}``, ``settle_s``, ``readings``, ``tare_command``, ``period_s``, ``model``), ``[scan]``
 (``offsets_mm``, ``inclusion_width_mm``) and ``[force]`` (``setpoint_n``, ``duration_s``, ``gain``,
 ``approach_rate``). Built-in files (``palpation/palpation_data``) are named without ``.toml``: tissues
-``soft-block``, ``nodule-phantom``, ``hertzian-block``; protocols ``sweep``, ``scan``, ``hold``.
+``soft-block``, ``nodule-phantom``, ``hertzian-block``; protocols ``sweep``, ``scan``, ``hold``. The built-in
+protocols' commands (and those a file leaves out) are the thesis rig's, counted from its straight command 8: on
+another digit they are laid out from its straight command, as far in tip rotation
+(:func:`~flexdigit.palpation.palpation.digit_protocol`).
 
 Every problem is one :class:`~flexdigit.errors.DataFileError` naming the file, the key and what was expected,
 e.g. ``tissue.toml: key 'tissue.gap_mm' must be a real number (mm); got 'far'``.
@@ -316,6 +319,10 @@ class PalpationFile:
     force: dict | None = None
     source: str = ""
     extra: dict = field(default_factory=dict)
+    #: which of the sweep's ``commands``, ``tare_command`` and ``settle_s`` are the thesis rig's (its commands counted
+    #: from its straight 8), to be laid out on a digit (:func:`~flexdigit.palpation.palpation.digit_protocol`): all
+    #: in a built-in protocol, those a file leaves out; a file's own values are the user's for their digit
+    laid_out: tuple = ("commands", "tare_command", "settle_s")
 
 
 def load_palpation_protocol(name_or_path=None) -> PalpationFile:
@@ -365,4 +372,6 @@ def load_palpation_protocol(name_or_path=None) -> PalpationFile:
             "gain": f.plausible("gain", FORCE_GAIN) if "gain" in f.data else None,
             "approach_rate": f.plausible("approach_rate", APPROACH_RATE) if "approach_rate" in f.data else None,
         }
-    return PalpationFile(sweep, scan, force, source)
+    builtin = str(name_or_path) in PROTOCOLS
+    laid_out = tuple(key for key in ("commands", "tare_command", "settle_s") if builtin or key not in s.data)
+    return PalpationFile(sweep, scan, force, source, laid_out=laid_out)

@@ -51,7 +51,7 @@ from flexdigit._io import atomic_path, atomic_write, check_output
 from flexdigit._json import to_jsonable
 from flexdigit._repr import fields_summary
 from flexdigit.errors import ParameterError
-from flexdigit.params import BRIDGE_TYPES, RigParams, params_template
+from flexdigit.params import BRIDGE_TYPES, LENGTH_TOLERANCE_M, THESIS_SUPPORT_M, RigParams, params_template
 from flexdigit.studies.execution import run_study
 from flexdigit.studies.figures import _save, pareto_figure
 from flexdigit.studies.metrics import METRICS, MetricContext
@@ -759,14 +759,26 @@ def export_design(result: DesignResult, row: int, path: str | Path, *, force: bo
         calibration=result.settings.calibration,
     )
     objectives = ", ".join(f"{m} {result.outputs[m][row]:.6g}" for m in result.settings.objectives)
-    text = params_template(_bends_both_ways(ps.description())).replace(
+    text = params_template(_with_supports(_bends_both_ways(ps.description()))).replace(
         "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE\n",
         f"# Design {row} on the Pareto front of study {result.spec.name!r}: {c.label()}\n# ({objectives}); check "
-        "with: flexdigit params FILE\n",
+        f"with: flexdigit params FILE\n# Its servo step, {c.servo_deg_per_command:.4g} deg a command, is the servo's "
+        "travel over the commands (angle_min_deg..angle_max_deg), as the study scored it; a geared servo of the "
+        "thesis's travel (gear_ratio) gives the pulley the same step\n",
     )
     with atomic_write(path, "w", force=force) as fh:
         fh.write(text)
     return Path(path)
+
+
+def _with_supports(params: RigParams) -> RigParams:
+    """A resized design's supports written out (``support_lengths_m``), so that its file says the supports the
+    study gave it rather than deriving them from ``digit_length_m`` with a note that they are not 10 mm."""
+    g = params.geometry
+    if g.support_lengths_m is not None or all(abs(s - THESIS_SUPPORT_M) <= LENGTH_TOLERANCE_M for s in g.supports_m):
+        return params
+    supports = tuple(round(s, 12) for s in g.supports_m)
+    return params.replace(geometry=dataclasses.replace(g, support_lengths_m=supports))
 
 
 def _bends_both_ways(params: RigParams) -> RigParams:
