@@ -43,6 +43,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_digittac",
     "benchmarks.bench_bayes",
     "benchmarks.bench_calibrate",
+    "benchmarks.bench_calfix",
     "benchmarks.bench_live",
     "benchmarks.bench_livegauges",
     "benchmarks.bench_studies",

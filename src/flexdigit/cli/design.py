@@ -119,8 +119,9 @@ def _add_digit_flags(p) -> None:
     p.add_argument(
         "--orientation",
         choices=("vertical", "hanging", "horizontal"),
-        default="vertical",
-        help="how the digit is mounted (its mode and stability depend on it; default tip up)",
+        default=None,
+        help="how the digit is mounted (its mode and stability depend on it; default tip up, or hanging for a "
+        "--params digit that buckles tip up, as flexdigit run mounts it)",
     )
 
 
@@ -135,7 +136,24 @@ def _digit(args):
         from flexdigit.params import RigParams
 
         params = RigParams()
+    args.mount_note = ""
+    if args.orientation is None:  # as run and collect mount the digit (control.digit_mount), said in the output
+        from flexdigit.control.design20ms import digit_mount
+
+        args.orientation = "vertical" if params is None else digit_mount(params, calibration)
+        if args.orientation == "hanging":
+            args.mount_note = (
+                "mount: hanging (tip down): tip up this digit buckles under its own weight (as run and collect hang it)"
+            )
     return params, calibration
+
+
+def _with_mount(args, result: CommandResult) -> CommandResult:
+    """The result, with the line that says the digit was hung (when :func:`_digit` chose so)."""
+    if getattr(args, "mount_note", ""):
+        result.text += "\n" + args.mount_note
+        result.data["orientation"] = args.orientation
+    return result
 
 
 def _plot_flags(p) -> None:
@@ -196,7 +214,7 @@ def _hinf(args: argparse.Namespace) -> CommandResult:
     check_plot(args.plot, "design", force=args.force)
     params, calibration = _digit(args)
     if params is not None:
-        return _hinf_digit(args, params, calibration)
+        return _with_mount(args, _hinf_digit(args, params, calibration))
     parts: dict = {}
     s = _design_summary(args.filter_hz, args.plant, args.eps, args.margin, parts)
     if args.plot:
@@ -292,7 +310,7 @@ def _twenty_ms(args: argparse.Namespace) -> CommandResult:
     kept = f" --controller {data['out']}" if data["out"] else ""
     text += f"  {'kept in ' + data['out'] + '; ' if kept else ''}the loop on the twin: flexdigit run{where}{kept}"
     text += " --setpoint-deg 30" + (f"\n  plot -> {data['plot']}" if data["plot"] else "")
-    return CommandResult(data=data, text=text)
+    return _with_mount(args, CommandResult(data=data, text=text))
 
 
 def _twenty_ms_plot(args, params, calibration, summary: dict) -> str | None:
