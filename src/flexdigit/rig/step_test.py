@@ -402,7 +402,7 @@ def board_step_test(
         "final_command": float(run.command[-1]) if run.command.size else None,
         "board": stats,
         "log": None if log_path is None else str(log_path),
-        "series": {"time_s": t, "true_rotation_deg": y, "command": run.command},
+        "series": {"time_s": t, "true_rotation_deg": y, "command": run.command, "estimate_deg": run.estimate_deg},
     }
 
 
@@ -419,8 +419,8 @@ def _watch_board(rig, backend: str, settings: dict, setpoint_deg: float, duratio
     with contextlib.ExitStack() as stack:
         stack.callback(log.abandon)  # an error before the footer: the lines written are kept
 
-        def logged(t, reading, true_deg, command) -> None:
-            log.write(board_log_sample(t, setpoint_deg, reading, true_deg, command))
+        def logged(t, reading, true_deg, command, estimate_deg) -> None:
+            log.write(board_log_sample(t, setpoint_deg, reading, true_deg, command, estimate_deg))
 
         run = run_on_board(rig, setpoint_deg, duration_s, on_period=logged)
         stack.pop_all()
