@@ -49,6 +49,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_palpation",
     "benchmarks.bench_board",
     "benchmarks.bench_digitboard",
+    "benchmarks.bench_board8",
     "benchmarks.bench_resources",
     "benchmarks.bench_plots",
 )
