@@ -53,6 +53,7 @@ def test_run_on_board_logs_and_plots_what_the_host_watched(firmware, tmp_path, c
     y = np.array([s["y"] for s in samples], dtype=float)
     assert np.all(np.isfinite(y))
     assert abs(y[t >= t[-1] - FINAL_WINDOW_S].mean() - final) < MAP_AGREEMENT_DEG
+    assert doc["estimated_final_rotation_deg"] == pytest.approx(y[t >= t[-1] - FINAL_WINDOW_S].mean(), rel=SAME_RTOL)
     # the servo pulse the board generated, in commands, and its nearest serial command
     pulses = np.array([s["board_command"] for s in samples])
     assert doc["final_command"] == pytest.approx(pulses[-1], rel=SAME_RTOL)
