@@ -41,6 +41,8 @@ STEP_SEEDS = range(4)
 #: The firmware's sources (firmware/) and the stream protocol's header (examples/flexdigit_stream/).
 FIRMWARE = Path(__file__).resolve().parents[2] / "firmware"
 STREAM_H = FIRMWARE.parent / "examples" / "flexdigit_stream"
+#: A Nano's flash less its old 2 kB bootloader (the new Optiboot takes 512 bytes) and the ATmega328P's RAM, bytes.
+NANO_FLASH_BYTES, RAM_BYTES = 30_720, 2_048
 #: The image's servo pulse after the control tick, ms (a digit's image: firmware/Makefile's PULSE_DELAY_MS).
 DIGIT_PULSE_DELAY_MS = 5
 
@@ -53,6 +55,10 @@ def _banner(doc: dict) -> str:
 @pytest.mark.parametrize("gauges", [7, 8])
 def test_a_digit_of_seven_or_eight_gauges_holds_its_step_on_a_nano(mapped_digit_firmware, capsys, gauges):
     elf, params, _ = mapped_digit_firmware(gauges)  # -Werror: a warning fails the build
+    out = subprocess.run(["avr-size", "-A", str(elf)], capture_output=True, text=True, check=True).stdout
+    sizes = {line.split()[0]: int(line.split()[1]) for line in out.splitlines() if line.startswith(".")}
+    assert sizes[".text"] + sizes.get(".data", 0) < NANO_FLASH_BYTES
+    assert sizes.get(".data", 0) + sizes.get(".bss", 0) < RAM_BYTES - 512  # room for the stack
     args = ["run", "--on-board", "--params", str(params), "--backend", f"hil://{elf}", "--duration", "2"]
     assert main([*args, "--setpoint-deg", "30", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
