@@ -200,8 +200,13 @@ def markdown(rows: list[dict]) -> str:
         lines.append(f"| {row['period_ms']:g} ms ({row['format']}) | {row['figure']} | {row['value']:.3f} | "
                      f"{row['reference']:.3f} | {shown} | {limit} | {'yes' if met else 'NO'} |")  # fmt: skip
     lines += ["", "| figure | value | unit | note |", "|---|---|---|---|"]
-    lines += [f"| {r['name']} | {r['value']:.4g} | {r['unit']} | {r['note']} |" for r in rows if "figure" not in r]
+    lines += [f"| {r['name']} | {_shown(r)} | {r['unit']} | {r['note']} |" for r in rows if "figure" not in r]
     return "\n".join(lines)
+
+
+def _shown(row: dict) -> str:
+    """A figure as the table shows it: cycles whole (51008, not 5.101e+04), the rest to 4 significant digits."""
+    return f"{row['value']:.0f}" if row["unit"] == "cycles" else f"{row['value']:.4g}"
 
 
 if __name__ == "__main__":  # python benchmarks/bench_board.py [--markdown] [ROWS.json]
