@@ -36,8 +36,8 @@ F_CPU_HZ = 16e6
 PERIODS_S = (0.001, 0.002, 0.004, 0.005, 0.010, 0.020)
 STEP_SEEDS = range(8)
 #: The shortest period the board sustains, (s, format): the shortest dividing the 20 ms frame at which each
-#: period's update runs in its period with idle to spare (the idle rows: ~38 % at 2 ms; at 1 ms 8-9 %, while
-#: formatting one stream line takes ~1 ms of CPU, longer than the period). The step comparison's third period.
+#: period's update runs in its period with idle to spare (the idle rows: ~31 % at 2 ms; at 1 ms 1-2.5 %, while
+#: formatting one stream line takes ~1.3 ms of CPU, longer than the period). The step comparison's third period.
 SHORTEST_SUSTAINED = (0.002, "fixed")
 #: The idle share the issue asks the shortest period to leave.
 IDLE_GOAL = 0.5
