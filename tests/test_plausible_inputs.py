@@ -67,7 +67,7 @@ def test_refusal_is_json_under_json(capsys):
         ("[actuator]\npwm_frequency_hz = 1e308\n", ["pwm_frequency_hz", "1e+308 Hz"]),
         ("[geometry]\nstrip_thickness_m = 0.381\n", ["strip_thickness_m", "did you mean mm (0.000381 m)?"]),
         ("[material]\nyoungs_modulus_pa = 205\n", ["youngs_modulus_pa", "did you mean GPa"]),
-        ("[sensors]\ngauge_factor = 1e6\n", ["gauge_factor", "inside [0.1, 500]"]),
+        ("[sensors]\ngauge_factor = 1e6\n", ["gauge_factor", "inside [0.5, 250]"]),
         # each field in range, together a strip the servo cannot bend (model printed K2 = 8.9e7 N m/rad)
         ("[geometry]\nstrip_thickness_m = 0.004\nstrip_width_m = 0.05\n", ["cannot bend", "K2 = "]),
     ],

@@ -489,23 +489,37 @@ class Plausible(Interval):
         Why these bounds, as the message shows it in parentheses.
     integer : bool
         Whole numbers only (a count of samples, a servo command); then ``8.0`` is converted to ``8``.
+    zero : str
+        If given, exactly 0 is accepted too, as the idealisation this names (a weightless strip, the beam oracles'):
+        a model's limit case, never a measured value.
 
     Examples
     --------
     >>> Plausible("m", 1e-5, 0.01, "a strip 0.01 mm to 10 mm thick").check(0.381e-3, "t", "Geometry", ValueError)
     0.000381
+    >>> Plausible("kg/m^3", 800.0, 22_600.0, "PE to osmium", zero="weightless").describe()
+    'a real number inside [800, 22600] kg/m^3 (PE to osmium) or 0 (weightless)'
     """
 
     def __init__(
-        self, unit: str, low: float, high: float, why: str, *, closed: str = "both", integer: bool = False
+        self,
+        unit: str,
+        low: float,
+        high: float,
+        why: str,
+        *,
+        closed: str = "both",
+        integer: bool = False,
+        zero: str = "",
     ) -> None:
         super().__init__(Integral if integer else Real, low, high, closed=closed)
         if not why:
             raise ValueError("Plausible needs the reason for its bounds")
-        self.unit, self.why = unit, why
+        self.unit, self.why, self.zero = unit, why, zero
 
     def __repr__(self) -> str:
-        return f"Plausible({self.unit!r}, {self.low}, {self.high}, {self.why!r}, closed={self.closed!r})"
+        zero = f", zero={self.zero!r}" if self.zero else ""
+        return f"Plausible({self.unit!r}, {self.low}, {self.high}, {self.why!r}, closed={self.closed!r}{zero})"
 
     def to(self, unit: str, factor: float) -> Plausible:
         """The same range in another unit (``LOAD_KG.to("g", 1e3)`` for a flag in grams): declared once.
@@ -517,14 +531,17 @@ class Plausible(Interval):
         """
         low = None if self.low is None else self.low * factor
         high = None if self.high is None else self.high * factor
-        return Plausible(unit, low, high, self.why, closed=self.closed, integer=self.type is Integral)
+        return Plausible(unit, low, high, self.why, closed=self.closed, integer=self.type is Integral, zero=self.zero)
 
     def describe(self) -> str:
         kind = "an integer" if self.type is Integral else "a real number"
         unit = f" {self.unit}" if self.unit else ""
-        return f"{kind}{_interval_text(self.low, self.high, self.low_open, self.high_open)}{unit} ({self.why})"
+        zero = f" or 0 ({self.zero})" if self.zero else ""
+        return f"{kind}{_interval_text(self.low, self.high, self.low_open, self.high_open)}{unit} ({self.why}){zero}"
 
     def convert(self, value):
+        if self.zero and isinstance(value, Real) and not isinstance(value, bool) and value == 0:
+            return 0 if self.type is Integral else 0.0
         out = super().convert(value)
         if out != 0 and abs(out) < sys.float_info.min:  # subnormal: underflow, never a measured magnitude
             raise _Unsatisfied
@@ -563,7 +580,7 @@ class Plausible(Interval):
         out = super().invalid_values() + [math.inf, -math.inf, 1e308]
         if self.type is Real:
             out.append(5e-324 if (self.low is None or self.low > 0 or self.low_open) else -1e308)
-        return out
+        return [v for v in out if not (self.zero and isinstance(v, Real) and not isinstance(v, bool) and v == 0)]
 
 
 def check_plausible(values, declared: Plausible, name: str, owner: str | None = None, *, error=ParameterError):
@@ -580,6 +597,8 @@ def check_plausible(values, declared: Plausible, name: str, owner: str | None = 
         inside &= (flat == 0) | (np.abs(flat) >= sys.float_info.min)
         if declared.type is Integral:
             inside &= flat == np.round(flat)
+        if declared.zero:  # the idealisation it names
+            inside |= flat == 0
     if not inside.all():
         declared.check(float(flat[np.argmin(inside)]), name, owner, error)
     return out

@@ -57,6 +57,7 @@ __all__ = [
     "MAX_GAUGES",
     "digit_inconsistencies",
     "derived_figures",
+    "plausible_ranges",
     "params_template",
     "description_notes",
     "builtin_digits",
@@ -85,6 +86,21 @@ GAUGE_V = Plausible("V", -100.0, 100.0, "a gauge channel as a DAQ card reads it 
 LOAD_KG = Plausible("kg", 1e-4, 2.0, "a hung weight of 0.1 g to 2 kg; the thesis hung 7.5 to 25 g")
 #: Where a load hangs, measured from the tip: on a digit at most 2 m long (a protocol also checks its own digit).
 POSITION_FROM_TIP_M = Plausible("m", 0.0, 2.0, "on a digit at most 2 m long, from its tip")
+#: The strip's modulus: a spring backbone carrying bonded gauges, from soft polymers (LDPE, PTFE ~0.2-0.5 GPa;
+#: PEEK 3.6 GPa) through nitinol (28-83 GPa), bronzes (~110 GPa) and steels (~200 GPa) to tungsten (411 GPa) and
+#: high-modulus carbon fibre (~600 GPa). An elastomer (MPa) carries no foil gauge.
+YOUNGS_MODULUS_PA = Plausible("Pa", 1e8, 6e11, "a spring strip: polymers from 0.1 GPa to carbon fibre, 600 GPa")
+#: The strip's density: polymers (polyethylene 920, PEEK 1300) through nitinol (6450), steels (7850) and bronzes
+#: (8800) to tungsten (19,300) and osmium (22,600); exactly 0 is the weightless strip the beam oracles take.
+STRIP_DENSITY_KG_M3 = Plausible(
+    "kg/m^3", 800.0, 22_600.0, "polymers (PE 920) to metals (osmium 22,600)", zero="a weightless strip, an idealisation"
+)
+#: A strain gauge's gauge factor: metal foil ~2 (the thesis's effective 0.8, 6.4) to p-type silicon ~100-200.
+GAUGE_FACTOR = Plausible("", 0.5, 250.0, "metal foil ~2 (the thesis's 0.8) to semiconductor gauges ~100-200")
+#: An instrumentation amplifier's gain (the thesis's Fylde FE-366-TA: 10,000).
+AMPLIFIER_GAIN = Plausible("V/V", 1.0, 1e5, "an instrumentation amplifier: 1 to 100,000 (the thesis's 10,000)")
+#: A servo's position pulse (hobby servos: 0.5-2.5 ms; the thesis's 1-2 ms, 3.4.1).
+SERVO_PULSE_S = Plausible("s", 1e-4, 5e-3, "a servo pulse of 0.1 to 5 ms (usually 0.5-2.5 ms)")
 #: The least part of the digit's rotation (max_rotation_per_section_deg x section_count) the servo's stall torque
 #: must bend the strip through: below it the servo cannot bend the strip (RigParams checks it).
 STRIP_BEND_FRACTION = 0.1
@@ -140,8 +156,8 @@ class Geometry:
             Plausible("m", 1e-3, 2.0, "a section 1 mm to the longest digit, 2 m"),
             Array(ndim=1, min_length=1, low=1e-3, high=2.0),  # one per section: each 1 mm to 2 m
         ],
-        "strip_thickness_m": [Plausible("m", 1e-5, 5e-3, "a strip 0.01 to 5 mm thick: foil to a stiff plate")],
-        "strip_width_m": [Plausible("m", 1e-4, 0.2, "a strip 0.1 mm to 20 cm wide")],
+        "strip_thickness_m": [Plausible("m", 2.5e-5, 5e-3, "a strip 0.025 mm (shim stock) to 5 mm (a plate) thick")],
+        "strip_width_m": [Plausible("m", 1e-3, 0.2, "a strip 1 mm (a gauge's grid) to 20 cm wide")],
         "digit_length_m": [DIGIT_LENGTH_M],
         "strip_length_m": [DIGIT_LENGTH_M],
         "cable_eccentricity_m": [Plausible("m", 1e-4, 0.1, "a cable 0.1 mm to 10 cm off the neutral axis")],
@@ -304,9 +320,8 @@ class Material:
     strip_density_kg_m3: float = 7850.0
 
     _parameter_constraints = {
-        "youngs_modulus_pa": [Plausible("Pa", 1e5, 1.2e12, "0.1 MPa (a soft elastomer) to 1.2 TPa (diamond)")],
-        # up to osmium; no lower bound but 0: a weightless strip is the oracle of the beam tests (Euler-Bernoulli)
-        "strip_density_kg_m3": [Plausible("kg/m^3", 0.0, 25_000.0, "at most osmium's 22,600 kg/m^3", closed="right")],
+        "youngs_modulus_pa": [YOUNGS_MODULUS_PA],
+        "strip_density_kg_m3": [STRIP_DENSITY_KG_M3],
     }
 
     def __post_init__(self) -> None:
@@ -364,18 +379,23 @@ class Sensors:
     amplifier_gains_v_per_v: tuple[float, ...] | None = None
 
     _parameter_constraints = {
-        "gauge_factors": [None, Array(ndim=1, min_length=1, low=0.1, high=500.0)],
-        "amplifier_gains_v_per_v": [None, Array(ndim=1, min_length=1, low=1e-3, high=1e7)],
-        "gauge_resistance_ohm": [Plausible("ohm", 1.0, 1e6, "strain gauges are 120 ohm to 5 kohm; up to 1 Mohm")],
-        "gauge_factor": [Plausible("", 0.1, 500.0, "metal foil gauges ~2, semiconductor gauges up to ~200")],
+        "gauge_factors": [None, Array(ndim=1, min_length=1, low=GAUGE_FACTOR.low, high=GAUGE_FACTOR.high)],
+        "amplifier_gains_v_per_v": [
+            None,
+            Array(ndim=1, min_length=1, low=AMPLIFIER_GAIN.low, high=AMPLIFIER_GAIN.high),
+        ],
+        "gauge_resistance_ohm": [
+            Plausible("ohm", 50.0, 20_000.0, "foil gauges 120-1000 ohm; semiconductor, thin-film up to ~10 kohm")
+        ],
+        "gauge_factor": [GAUGE_FACTOR],
         "bridge": [Options(BRIDGE_TYPES)],
-        "excitation_v": [Plausible("V", 1e-3, 100.0, "a bridge supply of 1 mV to 100 V")],
-        "amplifier_gain_v_per_v": [Plausible("V/V", 1e-3, 1e7, "an instrumentation amplifier: 1e-3 to 1e7")],
-        "amplifier_lowpass_hz": [Plausible("Hz", 0.01, 1e7, "a low-pass of 0.01 Hz to 10 MHz")],
-        "amplifier_lowpass_order": [Interval(Integral, 1, 8)],
-        "adc_bits": [Interval(Integral, 1, 32)],
-        # a DAQ card's input range: +-1 kV is beyond any card (the thesis's is +-5 V)
-        "adc_range_v": [Array(shape=(2,), increasing=True, low=-1000.0, high=1000.0)],
+        "excitation_v": [Plausible("V", 0.1, 30.0, "a bridge supply of 0.1 to 30 V; usually 1-10 V")],
+        "amplifier_gain_v_per_v": [AMPLIFIER_GAIN],
+        "amplifier_lowpass_hz": [Plausible("Hz", 1.0, 1e5, "an anti-aliasing low-pass of 1 Hz to 100 kHz")],
+        "amplifier_lowpass_order": [Plausible("", 1, 8, "a filter of 1 to 8 poles", integer=True)],
+        "adc_bits": [Plausible("bits", 8, 24, "a microcontroller's 8-12 bit ADC to a 24-bit DAQ card", integer=True)],
+        # a DAQ card's input range: +-100 V is beyond any card (the thesis's is +-5 V)
+        "adc_range_v": [Array(shape=(2,), increasing=True, low=-100.0, high=100.0)],
         "adc_channels": [Array(ndim=1, min_length=1, low=0, high=63)],
     }
 
@@ -489,23 +509,23 @@ class Actuator:
     gear_ratio: float = 1.0
 
     _parameter_constraints = {
-        "gear_ratio": [Plausible("", 0.01, 100.0, "a gear train between servo and pulley: 1:100 to 100:1")],
+        "gear_ratio": [Plausible("", 1.0, 20.0, "servo turns per pulley turn: 1 (on the shaft) to a 20:1 reduction")],
         "command_min": [SERVO_COMMAND],
         "command_max": [SERVO_COMMAND],
         "angle_min_deg": [Interval(Real, -360, 360)],
         "angle_max_deg": [Interval(Real, -360, 360)],
-        "pulley_radius_m": [Plausible("m", 5e-4, 0.2, "a servo pulley 0.5 mm to 20 cm in radius")],
-        "pwm_frequency_hz": [Plausible("Hz", 1.0, 1e5, "servo pulses: 50-333 Hz on hobby servos, up to 100 kHz")],
-        "pulse_width_min_s": [Plausible("s", 1e-6, 0.1, "a servo pulse of 1 us to 100 ms")],
-        "pulse_width_max_s": [Plausible("s", 1e-6, 0.1, "a servo pulse of 1 us to 100 ms")],
-        "serial_period_s": [Plausible("s", 1e-4, 10.0, "a command every 0.1 ms to 10 s")],
+        "pulley_radius_m": [Plausible("m", 1e-3, 0.1, "a servo pulley 1 mm to 10 cm in radius")],
+        "pwm_frequency_hz": [Plausible("Hz", 20.0, 1000.0, "servo pulses: 50 Hz analogue to ~560 Hz digital servos")],
+        "pulse_width_min_s": [SERVO_PULSE_S],
+        "pulse_width_max_s": [SERVO_PULSE_S],
+        "serial_period_s": [Plausible("s", 1e-4, 1.0, "a command every 0.1 ms to 1 s")],
         "equilibrium_command": [SERVO_COMMAND],
         "operating_commands": [Array(shape=(2,), low=0, high=254)],
-        "servo_wn_rad_s": [_NATURAL_FREQUENCY],
-        "servo_zeta": [Interval(Real, 0, 10, closed="right")],
+        "servo_wn_rad_s": [Plausible("rad/s", 1.0, 1000.0, "a position servo's loop: 1 to 1000 rad/s")],
+        "servo_zeta": [Plausible("", 0.05, 5.0, "a position servo: 0.05 (ringing) to 5 (sluggish)")],
         "pot_v_at_min_angle_v": [Plausible("V", -100.0, 100.0, "a potentiometer read by a DAQ card")],
         "pot_v_at_max_angle_v": [Plausible("V", -100.0, 100.0, "a potentiometer read by a DAQ card")],
-        "stall_torque_nm": [Plausible("N m", 1e-4, 1e3, "a micro servo (0.01 N m) to an industrial drive")],
+        "stall_torque_nm": [Plausible("N m", 5e-3, 100.0, "a micro servo (0.01 N m) to a large servo (~50 N m)")],
     }
 
     def __post_init__(self) -> None:
@@ -581,8 +601,8 @@ class Cables:
 
     _parameter_constraints = {
         "count": [Interval(Integral, 1, 2)],
-        "pretension_n": [Interval(Real, 0, 100, closed="both")],
-        "guide_friction_ratio": [Interval(Real, 0, 1, closed="both")],
+        "pretension_n": [Plausible("N", 0.0, 100.0, "a tendon's rest tension, at most 100 N")],
+        "guide_friction_ratio": [Plausible("", 0.0, 0.5, "the tension's share the guides take: ~0.05, at most 0.5")],
     }
 
     def __post_init__(self) -> None:
@@ -922,6 +942,42 @@ def derived_figures(params: RigParams) -> dict[str, float | list[float]]:
     }
 
 
+def plausible_ranges() -> dict[tuple[str, str], Plausible]:
+    """Every key of a description with a plausible range: ``(table, key)`` -> its :class:`Plausible` (unit, bounds
+    and the reason), as declared once in the dataclasses' ``_parameter_constraints``; a per-gauge list
+    (``gauge_factors``, ``amplifier_gains_v_per_v``) holds each value to its scalar key's range. What ``flexdigit
+    params --template`` prints beside each key and docs/digits.md tabulates.
+
+    Examples
+    --------
+    >>> r = plausible_ranges()[("sensors", "adc_bits")]
+    >>> r.low, r.high, r.unit
+    (8, 24, 'bits')
+    """
+    out: dict[tuple[str, str], Plausible] = {}
+    for f in dataclasses.fields(RigParams):
+        constraints = f.default_factory._parameter_constraints
+        for key, declared in constraints.items():
+            found = [c for c in declared if isinstance(c, Plausible)]
+            if found:
+                out[(f.name, key)] = found[0]
+    out[("sensors", "gauge_factors")] = GAUGE_FACTOR
+    out[("sensors", "amplifier_gains_v_per_v")] = AMPLIFIER_GAIN
+    return out
+
+
+def _range_note(table: str, key: str) -> str:
+    """The template's line on a key's plausible range, or ``""``."""
+    r = plausible_ranges().get((table, key))
+    if r is None:
+        return ""
+    if (table, key) == ("geometry", "section_count"):  # a file is held to the description's limit
+        return f"# Range 1 to {MAX_SECTIONS} in a description (the twin takes up to {r.high:g})."
+    unit = f" {r.unit}" if r.unit else ""
+    zero = f"; or 0, {r.zero}" if r.zero else ""
+    return f"# Range {r.low:g} to {r.high:g}{unit}: {r.why}{zero}."
+
+
 def _attribute_notes(cls: type) -> dict[str, str]:
     """Each attribute's description from a numpydoc ``Attributes`` section, one line."""
     notes: dict[str, str] = {}
@@ -963,6 +1019,7 @@ def params_template(params: RigParams | None = None) -> str:
         "# section_count supports of (digit_length_m - strip_length_m) / section_count each end a section (half",
         "# a support at the clamp); `flexdigit params FILE` prints where each section starts and ends;",
         f"# 1-{MAX_GAUGES} gauges on the strip, one adc_channels entry each; a cable pair needs a pretension.",
+        "# Each physical key has a plausible range ('# Range ...' above it): a value outside is refused naming it.",
         "# Keys commented out are derived (strip_length_m, digit_length_m: from the sections and 10 mm supports)",
         "# or optional; a key left out keeps the value shown. [dynamics] is the thesis rig's, read by no twin.",
     ]
@@ -981,6 +1038,8 @@ def params_template(params: RigParams | None = None) -> str:
             value = list(value) if isinstance(value, tuple) else value
             if key in notes:
                 out.append(f"# {notes[key]}")
+            if f.name != "dynamics" and _range_note(f.name, key):  # [dynamics] is read by no twin
+                out.append(_range_note(f.name, key))
             if key in derivable:  # what the sections give: written out, a stale copy outlives an edited section
                 out.append(f"# Derived when left out ({derivable[key]}); give it only to have it checked.")
                 out.append("# " + tomli_w.dumps({key: value}).strip())

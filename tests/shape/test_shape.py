@@ -44,7 +44,7 @@ def test_integrating_a_constant_curvature_gives_the_circular_arc():
 def test_press_on_a_straight_weightless_digit_matches_euler_bernoulli(s_load):
     # weightless strip and supports (upright, the weight of the real ones would amplify the bending like a
     # column's); a small press towards the cable side at command 8 slackens the cable
-    params = RigParams().replace(material=RigParams().material.__class__(strip_density_kg_m3=1e-9))
+    params = RigParams().replace(material=RigParams().material.__class__(strip_density_kg_m3=0.0))
     calibration = default_calibration().replace(support_mass_kg=(0.0, 0.0, 0.0))
     est = ShapeEstimator(params, calibration, orientation="vertical", load="press")
     force = 1e-3  # N: small deflection
@@ -193,7 +193,7 @@ def test_shape_from_euler_bernoulli_gauges_is_the_closed_form_deflection(s_load,
     # press at gauge 3 (both moments are linear in x over the gauges): that case is the cable-less digit's
     from scipy.integrate import quad
 
-    params = RigParams().replace(material=RigParams().material.__class__(strip_density_kg_m3=1e-9))
+    params = RigParams().replace(material=RigParams().material.__class__(strip_density_kg_m3=0.0))
     calibration = default_calibration().replace(support_mass_kg=(0.0, 0.0, 0.0))
     geo, length, force = params.geometry, params.geometry.digit_length_m, 2e-3  # N: small deflection
     flexible = geo.strip_length_m / geo.section_count

@@ -556,7 +556,9 @@ def open_rig(url: str = "sim", params: RigParams | None = None, **options: Any) 
 
     Keyword ``options`` are the URL's options given from Python (``seed=3``) or Python-only ones (``clock``,
     ``sleep``, ``operator``, ``serial`` ...); every one is checked by :func:`rig_url_options`, and one given both
-    ways must agree.
+    ways must agree. The ``sim`` twin of ``params`` runs on the ``calibration`` option if given, else on the one
+    default the CLI uses too (:func:`~flexdigit.twin.digit_calibration.twin_calibration`: the packaged thesis fit
+    for the thesis rig, the thesis's scaled to any other digit).
 
     Examples
     --------

@@ -23,6 +23,8 @@ size has on ... stiffness and stability"; 2.3.1 names the quarter, half and full
   length kept (:func:`tapered`); 1 keeps the baseline's own sections (equal on the thesis rig). The ``thesis``
   layout's gauges keep their place within their section (midway, on the thesis rig); ``equal`` and
   ``d-optimal`` are laid on the tapered strip;
+- ``calibration`` ["baseline"]: each design's twin calibration (:func:`design_calibration`): the baseline's as it
+  is, or ``"scaled"``, the baseline's scaled to the design by the physics (as the commands run its exported file);
 - ``samples`` [0]: 0 evaluates every combination; a positive number evaluates that many, drawn without
   replacement with the study's seed, always including the thesis design and its equal-spacing twins (the thesis
   design with 4, 5, 6 equally spaced gauges), the designs the front is read against.
@@ -55,6 +57,7 @@ from flexdigit.studies.figures import _save, pareto_figure
 from flexdigit.studies.metrics import METRICS, MetricContext
 from flexdigit.studies.spec import ParameterSet, StudySpec, spec_from_toml
 from flexdigit.tactile.protocols import load_protocol
+from flexdigit.twin.digit_calibration import calibration_for
 from flexdigit.twin.twin import static_gauges_v
 
 __all__ = [
@@ -63,6 +66,7 @@ __all__ = [
     "DesignResult",
     "candidates",
     "design_parameter_set",
+    "design_calibration",
     "equal_positions",
     "d_optimal_positions",
     "d_criterion",
@@ -97,6 +101,10 @@ _THESIS_DESIGN = {
     "size": 1.0,
     "section_taper": 1.0,
 }
+#: How a design's twin calibration is made (:func:`design_calibration`): ``"baseline"`` the baseline's as it is
+#: (channels averaged for another gauge count; the default, the report's showcase), ``"scaled"`` the baseline's
+#: scaled to each design by the physics, as the commands run its exported file.
+CALIBRATIONS = ("baseline", "scaled")
 #: The tapers a study may ask for (tip section over base section): past 5:1 either way a section of a 3-section
 #: thesis-sized digit is shorter than the 20 mm its gauge and guide need.
 TAPER_RANGE = (0.2, 5.0)
@@ -120,6 +128,7 @@ class DesignSettings:
     chunk_size: int = 4
     bayes_samples: int = 300
     grid_step_m: float = 0.0025
+    calibration: str = "baseline"
 
     @classmethod
     def from_spec(cls, spec: StudySpec, **overrides) -> DesignSettings:
@@ -163,8 +172,8 @@ class DesignSettings:
             bad("layouts", "a list of " + ", ".join(LAYOUTS), list(self.layouts))
         if any(x not in BRIDGE_TYPES for x in self.bridges):
             bad("bridges", "a list of " + ", ".join(BRIDGE_TYPES), list(self.bridges))
-        if any(not 4 <= b <= 24 for b in self.adc_bits):
-            bad("adc_bits", "bit counts in 4..24", list(self.adc_bits))
+        if any(not 8 <= b <= 24 for b in self.adc_bits):  # a digit's own range (flexdigit.params.Sensors)
+            bad("adc_bits", "bit counts in 8..24", list(self.adc_bits))
         if any(not 0 < d <= 360.0 / 254 for d in self.servo_deg_per_command):
             bad("servo_deg_per_command", f"steps in (0, {360 / 254:.4g}] degrees", list(self.servo_deg_per_command))
         if any(not 0 < e <= 0.02 for e in self.eccentricity_m):
@@ -180,6 +189,8 @@ class DesignSettings:
             bad("samples", "an integer >= 0 (0: every combination)", self.samples)
         if len(self.objectives) < 2 or any(o not in DESIGN_METRICS for o in self.objectives):
             bad("objectives", "two or more of " + ", ".join(DESIGN_METRICS), list(self.objectives))
+        if self.calibration not in CALIBRATIONS:
+            bad("calibration", " or ".join(repr(c) for c in CALIBRATIONS), self.calibration)
         if self.chunk_size < 1 or self.bayes_samples < 10 or not 0.0005 <= self.grid_step_m <= 0.02:
             bad(
                 "chunk_size/bayes_samples/grid_step_m",
@@ -418,11 +429,14 @@ def _d_optimal_cached(count: int, base: ParameterSet, step: float, seed: int) ->
     return d_optimal_positions(count, base, step_m=step, seed=seed)[0]
 
 
-def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: float = 0.0025, seed: int = 0):
-    """The rig of a candidate design, built from the baseline (see the module docstring)."""
+def design_parameter_set(
+    baseline: ParameterSet, c: Candidate, *, grid_step_m: float = 0.0025, seed: int = 0, calibration: str = "baseline"
+):
+    """The rig of a candidate design, built from the baseline (see the module docstring), with the calibration
+    ``calibration`` says (:data:`CALIBRATIONS`, :func:`design_calibration`)."""
     params = tapered(_scaled(baseline.params, c.size), c.section_taper)
     geo = params.geometry
-    cal = baseline.calibration
+    cal = design_calibration(baseline, params, calibration)  # for the D-optimal placement
     if c.layout == "thesis":
         if c.gauge_count != 3:
             raise ParameterError(f"the 'thesis' layout has 3 gauges. Got {c.gauge_count}.")
@@ -433,8 +447,10 @@ def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: f
         base = ParameterSet(params, cal)
         positions = _d_optimal_cached(c.gauge_count, base, grid_step_m, seed)
     n = c.gauge_count
-    mean = {k: float(np.mean(getattr(cal, k))) for k in ("channel_gain", "noise_white_v", "noise_drift_v_per_sqrt_s")}
-    if n != len(cal.channel_gain):  # new channels: the thesis channels' mean gain and noise, no offset
+    if calibration == "baseline" and n != len(cal.channel_gain):  # new channels: the mean gain and noise, no offset
+        mean = {
+            k: float(np.mean(getattr(cal, k))) for k in ("channel_gain", "noise_white_v", "noise_drift_v_per_sqrt_s")
+        }
         cal = cal.replace(
             channel_gain=(mean["channel_gain"],) * n,
             channel_offset_v=(0.0,) * n,
@@ -455,7 +471,50 @@ def design_parameter_set(baseline: ParameterSet, c: Candidate, *, grid_step_m: f
     )
     if c.pretension_n == 0 and params.cables.count == 2:  # "1 cable": a baseline's described pair is dropped, so
         params = params.replace(cables=dataclasses.replace(params.cables, count=1))  # it is not scored as a pair
+    if calibration == "scaled":
+        cal = design_calibration(baseline, params, calibration)
     return ParameterSet(params, cal, c.pretension_n if c.pretension_n > 0 else None)
+
+
+def design_calibration(baseline: ParameterSet, params: RigParams, calibration: str = "scaled"):
+    """The twin calibration a design ``params`` is scored on.
+
+    ``"baseline"``: the baseline's as it is (the default of a study and the report's showcase; a new gauge count's
+    channels are then averaged, :func:`design_parameter_set`). ``"scaled"``: the baseline's own where the design
+    keeps its structure (geometry, material and amplifiers: only the bridge, ADC, servo step or cables differ, so
+    the fitted values hold), else the baseline's scaled to the design by the laws of
+    :func:`flexdigit.twin.digit_calibration.calibration_for` (a resized digit's supports, cable run and first mode,
+    an eccentricity's housing, the channels of new gauges at their relative places): the calibration the commands
+    give its exported file (:func:`flexdigit.twin.digit_calibration.twin_calibration`). The physics asks for
+    ``"scaled"`` (a design is a digit nobody has measured); it is not the default because it moves the report's
+    showcase front (docs/digits.md, "One default").
+
+    Examples
+    --------
+    >>> from flexdigit.twin.calibration import packaged_calibration
+    >>> thesis = ParameterSet()
+    >>> design_calibration(thesis, RigParams()) == packaged_calibration()
+    True
+    >>> c = Candidate(3, "thesis", "half", 16, 219 / 254, 5.715e-3, 0.0, 1.25)
+    >>> big = design_parameter_set(thesis, c, calibration="scaled")
+    >>> round(big.calibration.cable_stiffness_n_m / packaged_calibration().cable_stiffness_n_m, 4)   # k = EA / l
+    0.8
+    """
+    if calibration not in CALIBRATIONS:
+        raise ParameterError(
+            f"The 'calibration' parameter of design_calibration must be one of {CALIBRATIONS}. Got "
+            f"{calibration!r} instead."
+        )
+    if calibration == "baseline":
+        return baseline.calibration
+    base = baseline.params
+    gauges = len(params.geometry.gauge_positions_m)
+    same = (
+        params.geometry == base.geometry
+        and params.material == base.material
+        and params.sensors.chain(gauges)[2] == base.sensors.chain(gauges)[2]
+    )
+    return baseline.calibration if same else calibration_for(params, baseline.calibration, base)
 
 
 # ----------------------------------------------------------------------------------------------------- pareto
@@ -545,11 +604,17 @@ class DesignResult:
 class _Builder:
     """Picklable row -> ParameterSet for the executor: a row holds a candidate's index."""
 
-    def __init__(self, baseline: ParameterSet, cands: list[Candidate], step: float, seed: int) -> None:
+    def __init__(
+        self, baseline: ParameterSet, cands: list[Candidate], step: float, seed: int, calibration: str = "baseline"
+    ) -> None:
         self.baseline, self.cands, self.step, self.seed = baseline, cands, step, seed
+        self.calibration = calibration
 
     def __call__(self, row, label):
-        return design_parameter_set(self.baseline, self.cands[int(row[0])], grid_step_m=self.step, seed=self.seed)
+        c = self.cands[int(row[0])]
+        return design_parameter_set(
+            self.baseline, c, grid_step_m=self.step, seed=self.seed, calibration=self.calibration
+        )
 
 
 def placement_report(ps: ParameterSet, counts, *, step_m: float, seed: int) -> list[dict]:
@@ -574,13 +639,15 @@ def placement_report(ps: ParameterSet, counts, *, step_m: float, seed: int) -> l
 def study_fingerprint(spec: StudySpec, settings: DesignSettings) -> str:
     """The journal's fingerprint of a design study (:mod:`flexdigit.studies.execution` resumes only its own). A
     study without tapers (``section_taper`` [1.0]) keeps the fingerprint it had before tapers existed, so its
-    journals resume."""
+    journals resume; so does one on the baseline's calibration (``calibration`` "baseline")."""
     import hashlib
     import json
 
     options = dataclasses.asdict(settings)
     if settings.section_taper == (1.0,):
         del options["section_taper"]
+    if settings.calibration == "baseline":
+        del options["calibration"]
     text = json.dumps([spec.fingerprint(), options], sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -608,7 +675,7 @@ def run_design(
     )
     fingerprint = study_fingerprint(spec, settings)
     header = {"kind": "design", "study": spec.name, "fingerprint": fingerprint, "rows": len(cands)}
-    build = _Builder(spec.baseline, cands, settings.grid_step_m, spec.seed)
+    build = _Builder(spec.baseline, cands, settings.grid_step_m, spec.seed, settings.calibration)
     values = np.arange(len(cands), dtype=float)[:, None]
     outputs, errors = run_study(
         build,
@@ -671,8 +738,9 @@ def export_design(result: DesignResult, row: int, path: str | Path, *, force: bo
     design's row in ``designs.parquet`` and ``summary.json``, so that ``flexdigit params`` checks it and every
     command takes it as ``--params``. The twin calibration is not
     in it: the commands scale the thesis's to the digit (:func:`flexdigit.twin.digit_calibration.calibration_for`),
-    while the study evaluated the design on the baseline calibration (its channels averaged for another gauge
-    count, :func:`design_parameter_set`), so a command's twin of a resized design is not exactly the study's.
+    as a study with ``[design] calibration = "scaled"`` scored it (on a thesis-rig baseline the same calibration);
+    the default ``"baseline"`` scored it on the baseline's unscaled, so a command's twin of a resized design is not
+    exactly the study's.
     Never overwrites ``path`` without ``force``."""
     front = sorted(int(i) for i in result.front)
     if isinstance(row, bool) or not isinstance(row, int | np.integer) or int(row) not in front:
@@ -683,7 +751,13 @@ def export_design(result: DesignResult, row: int, path: str | Path, *, force: bo
         )
     row = int(row)
     c = result.candidates[row]
-    ps = design_parameter_set(result.spec.baseline, c, grid_step_m=result.settings.grid_step_m, seed=result.spec.seed)
+    ps = design_parameter_set(
+        result.spec.baseline,
+        c,
+        grid_step_m=result.settings.grid_step_m,
+        seed=result.spec.seed,
+        calibration=result.settings.calibration,
+    )
     objectives = ", ".join(f"{m} {result.outputs[m][row]:.6g}" for m in result.settings.objectives)
     text = params_template(_bends_both_ways(ps.description())).replace(
         "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE\n",

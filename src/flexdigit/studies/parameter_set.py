@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 
 from flexdigit._repr import differences, summary
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.calibration import Calibration
+from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = ["ParameterSet"]
 
@@ -19,11 +20,29 @@ __all__ = ["ParameterSet"]
 @dataclass(frozen=True)
 class ParameterSet:
     """One rig to evaluate: its parameters, its twin calibration and, for designs beyond the thesis, a second
-    antagonistic cable (its pretension in N, both cables; None: the thesis's single cable, 2.1)."""
+    antagonistic cable (its pretension in N, both cables; None: the thesis's single cable, 2.1).
+
+    The calibration left out is the twin's one default for ``params``
+    (:func:`~flexdigit.twin.digit_calibration.twin_calibration`: the packaged thesis fit for the thesis rig, the
+    thesis's scaled to another digit), as ``Twin(params)`` and the commands take it.
+
+    Examples
+    --------
+    >>> from flexdigit.params import Geometry
+    >>> from flexdigit.twin.calibration import default_calibration
+    >>> ParameterSet().calibration == default_calibration()
+    True
+    >>> len(ParameterSet(RigParams(geometry=Geometry(gauge_positions_m=(0.045, 0.135)))).calibration.channel_gain)
+    2
+    """
 
     params: RigParams = field(default_factory=RigParams)
-    calibration: Calibration = field(default_factory=default_calibration)
+    calibration: Calibration = None  # type: ignore[assignment]  # None: twin_calibration(params)
     antagonist_pretension_n: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.calibration is None:
+            object.__setattr__(self, "calibration", twin_calibration(self.params))
 
     def description(self) -> RigParams:
         """The rig as a parameter file describes it (issue 24: one description for the study and the commands):
@@ -62,5 +81,5 @@ class ParameterSet:
             self,
             antagonist_pretension_n=self.antagonist_pretension_n,
             **differences(self.params, RigParams()),
-            **{"calibration." + k: v for k, v in differences(self.calibration, default_calibration()).items()},
+            **{"calibration." + k: v for k, v in differences(self.calibration, twin_calibration(self.params)).items()},
         )

@@ -74,7 +74,7 @@ from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams, load_params
 from flexdigit.studies.metrics import METRICS, UserMetric, checked_value
 from flexdigit.studies.parameter_set import ParameterSet
-from flexdigit.twin.calibration import default_calibration, load_calibration
+from flexdigit.twin.calibration import load_calibration
 
 __all__ = [
     "shipped_specs",
@@ -479,7 +479,9 @@ def _table(value, where: str, source: str) -> dict:
 
 
 def _baseline(study: dict, source: str, base_dir: Path | None) -> ParameterSet:
-    params, calibration = RigParams(), default_calibration()
+    """The spec's baseline rig: ``[study] params`` (the thesis rig) and ``calibration`` (default: the twin's one
+    default for that digit, :func:`~flexdigit.twin.digit_calibration.twin_calibration`)."""
+    params, calibration = RigParams(), None
     for key, loader in (("params", load_params), ("calibration", load_calibration)):
         if key not in study:
             continue

@@ -45,7 +45,7 @@ from flexdigit._validation import check_array, check_choice, check_int, check_re
 from flexdigit.errors import ParameterError
 from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.digit import (
     ORIENTATIONS,
     Chain,
@@ -55,6 +55,7 @@ from flexdigit.twin.digit import (
     digit_arrays,
     section_cells,
 )
+from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, DEFAULT_DT_S, cached_digit
 
 __all__ = ["BatchedChains", "BatchedTwin", "batch_cells"]
@@ -296,6 +297,8 @@ class BatchedTwin:
     params : RigParams or sequence of RigParams
         One per rig (or one for all); the serial period and PWM frequency must agree (one clock).
     calibrations : Calibration or sequence of Calibration, optional
+        One per rig, or one for all; left out, each rig's own default
+        (:func:`~flexdigit.twin.digit_calibration.twin_calibration`), as :class:`~flexdigit.twin.twin.Twin` takes it.
     orientation : {"vertical", "hanging", "horizontal"}
     housing, cable : bool
     dt_s : float
@@ -328,8 +331,10 @@ class BatchedTwin:
         command=None,
     ) -> None:
         params_list = [params] if isinstance(params, RigParams) else list(params)
-        if calibrations is None or isinstance(calibrations, Calibration):
-            cal_list = [calibrations or default_calibration()] * len(params_list)
+        if calibrations is None:  # each rig's own default (twin_calibration), as Twin(params) takes it
+            cal_list = [twin_calibration(p) for p in params_list]
+        elif isinstance(calibrations, Calibration):
+            cal_list = [calibrations] * len(params_list)
         else:
             cal_list = list(calibrations)
         if len(params_list) == 1 and len(cal_list) > 1:

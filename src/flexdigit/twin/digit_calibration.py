@@ -4,7 +4,8 @@ The packaged calibration (:func:`flexdigit.twin.calibration.packaged_calibration
 records (tables 3.1, 3.2, 3.6, E 3.20-3.22, 7.5). A digit described by another parameter file (other sections,
 gauges, strip, cable) has no records yet; :func:`calibration_for` gives its twin the values the thesis rig's would
 become under that digit's description, each by the law below. ``0`` subscripts are the thesis rig's
-(:class:`~flexdigit.params.RigParams` defaults) and its packaged calibration.
+(:class:`~flexdigit.params.RigParams` defaults) and its packaged calibration, or another reference rig and its
+calibration (``calibration_for(params, reference, reference_params)``: the design study scales its baseline's).
 
 - ``support_mass_kg``: a nylon support is a block as long as the support (``l_s``, 10 mm), as wide as the strip
   (``w``) and about as tall as the cable guides either side of the strip (``2 e``): its mass scales with that
@@ -53,7 +54,8 @@ between strip and housing). ``wn1`` is the first mode of the chain's linear moda
 gravity (a property of the structure, not of how it is mounted: a long digit that would buckle tip up still has
 one), at the twin's 3 cells per section; ``wn1_0`` the same of the thesis rig with the reference calibration.
 On the thesis rig the factor is exactly 1 (the same chain both times). A user's calibration file, fitted to the
-digit's own records (``flexdigit calibrate``), replaces all of this (:func:`twin_calibration`).
+digit's own records (``flexdigit calibrate``), replaces all of this (:func:`twin_calibration`, the one default
+of every twin built without a calibration).
 
 On the thesis rig every ratio is 1 and every relative position a thesis gauge's, so the packaged calibration comes
 back (``tests/twin/test_digit_calibration.py`` holds the table, within 5 % per value as issue 24 asks; in fact to
@@ -75,8 +77,15 @@ from functools import lru_cache
 
 import numpy as np
 
+from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, default_calibration, load_calibration, packaged_calibration
+from flexdigit.twin.calibration import (
+    Calibration,
+    default_calibration,
+    default_calibration_source,
+    load_calibration,
+    packaged_calibration,
+)
 
 __all__ = [
     "calibration_for",
@@ -95,7 +104,9 @@ MODAL_CELLS_PER_SECTION = 3
 _SAME_PLACE = 1e-9
 
 
-def calibration_for(params: RigParams, reference: Calibration | None = None) -> Calibration:
+def calibration_for(
+    params: RigParams, reference: Calibration | None = None, reference_params: RigParams | None = None
+) -> Calibration:
     """The default calibration of the digit ``params`` describes, scaled from ``reference`` (the packaged thesis
     calibration by default) by the laws of the module docstring.
 
@@ -104,17 +115,31 @@ def calibration_for(params: RigParams, reference: Calibration | None = None) -> 
     params : RigParams
         The digit (any section and gauge count).
     reference : Calibration, optional
-        The thesis rig's calibration to scale from; it must have the thesis rig's 3 sections and 3 gauges.
+        The calibration to scale from: the packaged thesis fit by default.
+    reference_params : RigParams, optional
+        The rig ``reference`` belongs to (its ``0`` subscripts in the laws): the thesis rig by default. A design
+        study scales its baseline's calibration (any digit's, fitted or derived) to each design this way.
 
     Returns
     -------
     Calibration
         One value per section/support of ``params`` and per gauge.
+
+    Raises
+    ------
+    ParameterError
+        If ``reference`` does not have one value per section and gauge of ``reference_params``.
     """
     ref = reference if reference is not None else packaged_calibration()
-    thesis = RigParams()
-    scaled = _scaled_statics(params, ref, thesis)
-    damping = first_mode_rad_s(thesis, ref) / first_mode_rad_s(params, scaled)  # wn1_0 / wn1: the damping law
+    base = reference_params if reference_params is not None else RigParams()
+    if not _describes(ref, base):
+        raise ParameterError(
+            f"The 'reference' parameter of calibration_for must have one value per section and gauge of its rig "
+            f"({base.geometry.section_count} sections, {len(base.geometry.gauge_positions_m)} gauges). Got "
+            f"{len(ref.support_mass_kg)} support masses and {len(ref.channel_gain)} channel gains instead."
+        )
+    scaled = _scaled_statics(params, ref, base)
+    damping = first_mode_rad_s(base, ref) / first_mode_rad_s(params, scaled)  # wn1_0 / wn1: the damping law
     return scaled.replace(strip_beta_s=ref.strip_beta_s * damping, housing_beta_s=ref.housing_beta_s * damping)
 
 
@@ -158,13 +183,14 @@ def _weightless_chain(params: RigParams, calibration: Calibration):
 
 
 def _scaled_statics(params: RigParams, ref: Calibration, thesis: RigParams) -> Calibration:
+    # ``thesis``: the reference rig (the thesis rig unless calibration_for was given another)
     """Every law of the module docstring but the damping's (``ref``'s ``beta`` kept)."""
     g, g0 = params.geometry, thesis.geometry
     n = g.section_count
     width = g.strip_width_m / g0.strip_width_m
     ecc = g.cable_eccentricity_m / g0.cable_eccentricity_m
     length = g.digit_length_m / g0.digit_length_m
-    support0 = g0.support_length_m
+    support0 = g0.support_length_m if g0.support_lengths_m is None else float(np.mean(g0.supports_m))
     support_mass = tuple(float(np.mean(ref.support_mass_kg)) * (s / support0) * width * ecc for s in g.supports_m)
     housing = np.asarray(ref.housing_ei_n_m2, dtype=float) * width * ecc**3
     uniform = float(np.mean(housing[1:])) if housing.size > 1 else float(housing[0])
@@ -178,7 +204,8 @@ def _scaled_statics(params: RigParams, ref: Calibration, thesis: RigParams) -> C
         same = np.flatnonzero(np.abs(rel0 - x) < _SAME_PLACE)
         offsets.append(float(ref.channel_offset_v[same[0]]) if same.size else 0.0)
     count = rel.size
-    amplify = np.asarray(params.sensors.chain(count)[2]) / thesis.sensors.amplifier_gain_v_per_v  # per gauge
+    gain0 = float(np.mean(thesis.sensors.chain(rel0.size)[2]))  # the reference's amplifier (the thesis's 10,000)
+    amplify = np.asarray(params.sensors.chain(count)[2]) / gain0  # per gauge
     white = tuple(float(v) for v in float(np.mean(ref.noise_white_v)) * amplify)
     drift = tuple(float(v) for v in float(np.mean(ref.noise_drift_v_per_sqrt_s)) * amplify)
     return ref.replace(
@@ -195,18 +222,44 @@ def _scaled_statics(params: RigParams, ref: Calibration, thesis: RigParams) -> C
 
 
 def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
-    """The calibration a twin of ``params`` runs with: the file ``path`` if given, else the packaged default
-    calibration for the thesis rig, else :func:`calibration_for` (the thesis's scaled to that digit).
+    """The calibration a twin of ``params`` runs with when none is passed: the one default of the library and the
+    CLI alike (:class:`~flexdigit.twin.twin.Twin`, ``open_rig("sim", params)``, every command's ``--params``).
+
+    In order: the file ``path`` if given; the calibration a :func:`~flexdigit.twin.calibration.use_calibration`
+    block made the default, if it has one value per section and per gauge of ``params`` (``reproduce
+    --calibration``); the packaged thesis fit for the thesis rig (``params`` None or equal to ``RigParams()``);
+    else :func:`calibration_for` (the thesis's scaled to that digit). Any other digit, even one of 3 sections and
+    3 gauges like the thesis rig's, is not the rig the packaged fit was measured on: its twin gets the scaled one.
 
     Examples
     --------
-    >>> from flexdigit.params import RigParams
+    >>> from flexdigit.params import Geometry, RigParams
     >>> from flexdigit.twin.calibration import default_calibration
     >>> twin_calibration(RigParams()) == default_calibration()
+    True
+    >>> thick = RigParams(geometry=Geometry(strip_thickness_m=0.5e-3))   # 3 sections and 3 gauges, another strip
+    >>> twin_calibration(thick) == calibration_for(thick) != default_calibration()
     True
     """
     if path is not None:
         return load_calibration(path)
-    if params is None or params == RigParams():
+    params = RigParams() if params is None else params
+    if default_calibration_source() != "packaged" and _describes(default_calibration(), params):
         return default_calibration()
+    if params == RigParams():
+        return packaged_calibration()
+    return _calibration_for_cached(params)
+
+
+def _describes(calibration: Calibration, params: RigParams) -> bool:
+    """Whether ``calibration`` has one value per section (support masses) and per gauge (channel gains) of
+    ``params``."""
+    return len(calibration.support_mass_kg) == params.geometry.section_count and len(calibration.channel_gain) == len(
+        params.geometry.gauge_positions_m
+    )
+
+
+@lru_cache(maxsize=64)
+def _calibration_for_cached(params: RigParams) -> Calibration:
+    """:func:`calibration_for` from the packaged calibration, cached (twins of one digit are built many times)."""
     return calibration_for(params)

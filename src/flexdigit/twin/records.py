@@ -35,9 +35,10 @@ from flexdigit._repr import summary
 from flexdigit._validation import check_choice, check_int, check_positive, check_real, check_values
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.digit import ORIENTATIONS
-from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, Twin, _default_calibration, cached_digit, static_gauges_v
+from flexdigit.twin.digit_calibration import twin_calibration
+from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, Twin, cached_digit, static_gauges_v
 
 __all__ = [
     "METADATA_KEY",
@@ -230,7 +231,7 @@ def release_orientation(params: RigParams | None = None, calibration: Calibratio
     ``run --params`` hangs such a digit too. The calibration is the twin's default when not given (the default
     calibration, or for a digit it cannot describe, that fit scaled to the digit)."""
     params = params or RigParams()
-    calibration = calibration or _default_calibration(params)
+    calibration = calibration or twin_calibration(params)
     for housed in (True, False):
         chain = cached_digit(params, calibration, housed, "vertical", DEFAULT_CELLS_PER_SECTION)
         stiffness = chain.tangent_stiffness(np.zeros(chain.n), chain.g_gravity, False)
@@ -286,7 +287,7 @@ def release_test(
         Columns ``time_s, gauge1_v, gauge2_v, gauge3_v, tip_deflection_m``.
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or twin_calibration(params)
     deflection = check_real(tip_deflection_m, "tip_deflection_m", "release_test", low=-0.1, high=0.1)
     _, _, times = _check_rate(duration_s, sample_rate_hz, "release_test")
     check_choice(orientation, "orientation", tuple(ORIENTATIONS), "release_test")
@@ -339,7 +340,7 @@ def servo_step_test(
         Columns ``time_s, command, pot_v, servo_angle_rad, gauge1_v, gauge2_v, gauge3_v``.
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or twin_calibration(params)
     a = params.actuator
     c0 = check_int(command_from, "command_from", "servo_step_test", low=a.command_min, high=a.command_max)
     c1 = check_int(command_to, "command_to", "servo_step_test", low=a.command_min, high=a.command_max)
@@ -384,7 +385,7 @@ def actuation_sweep(
         Columns ``command, sample, time_s, gauge1_v, gauge2_v, gauge3_v, pot_v``.
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or twin_calibration(params)
     a = params.actuator
     if commands is None:
         commands = range(a.operating_commands[0], a.operating_commands[1] + 1)
@@ -449,7 +450,7 @@ def static_load_test(
         gauge3_v`` (``command`` is -1 when the cable is detached).
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or twin_calibration(params)
     length = params.geometry.digit_length_m
     masses, from_tip, reps, commands = _checked_static_plan(
         loads_kg, positions_from_tip_m, repetitions, commands, params

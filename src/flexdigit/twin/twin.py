@@ -33,10 +33,10 @@ from flexdigit.errors import DesignError, ParameterError
 from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import DigitDynamics, RigParams
 from flexdigit.twin.actuator import Servo
-from flexdigit.twin.calibration import Calibration, default_calibration
+from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.contact import Tissue, TissueContact, check_point_force, check_pressure, quadrature
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
-from flexdigit.twin.digit_calibration import calibration_for, twin_calibration
+from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.sensors import SensorChain
 from flexdigit.twin.sensors import adc as quantise
 
@@ -83,18 +83,6 @@ def cable_shortening_m(command_or_angle, params: RigParams, *, is_angle: bool = 
     return a.cable_m_per_servo_rad * (angle - command_to_angle_rad(a.equilibrium_command, params))
 
 
-def _default_calibration(params: RigParams) -> Calibration:
-    """The calibration a twin gets when none is given: the default (the thesis fit), or, for a digit of other
-    section or gauge counts, which it cannot describe, that fit scaled to the digit
-    (:func:`flexdigit.twin.digit_calibration.calibration_for`)."""
-    cal = default_calibration()
-    if len(cal.support_mass_kg) == params.geometry.section_count and len(cal.channel_gain) == len(
-        params.geometry.gauge_positions_m
-    ):
-        return cal
-    return calibration_for(params)
-
-
 class ReadSeries(NamedTuple):
     """What :meth:`Twin.read_at` returns: one row per read."""
 
@@ -124,7 +112,8 @@ class Twin:
     params : RigParams, optional
         The rig; the thesis rig by default.
     calibration : Calibration, optional
-        Fitted parameters; :func:`~flexdigit.twin.calibration.default_calibration` by default.
+        Fitted parameters; by default :func:`~flexdigit.twin.digit_calibration.twin_calibration` of ``params``
+        (the CLI's: the packaged thesis fit for the thesis rig, else the thesis's scaled to the digit).
     seed : int
         Seed of the noise generator: same seed and same calls, same numbers.
     orientation : {"vertical", "hanging", "horizontal"}
@@ -164,7 +153,7 @@ class Twin:
         servo_drive: str = "serial",
     ):
         self.params = params or RigParams()
-        self.calibration = calibration or _default_calibration(self.params)
+        self.calibration = calibration or twin_calibration(self.params)
         self.seed = check_int(seed, "seed", "Twin", low=0)
         self.orientation = check_choice(orientation, "orientation", tuple(ORIENTATIONS), "Twin")
         self.housing = bool(housing)
@@ -650,7 +639,7 @@ def static_gauges_v(
     ((2, 3), True)
     """
     params = params or RigParams()
-    calibration = calibration or _default_calibration(params)
+    calibration = calibration or twin_calibration(params)
     masses, pos = _static_load_cases(loads_mass_kg, positions_from_base_m, params)
     b = masses.shape[0]
     chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
@@ -749,6 +738,7 @@ def friction_sd_v(
 
     Examples
     --------
+    >>> from flexdigit.twin.calibration import default_calibration
     >>> cal = default_calibration().replace(cable_friction_ratio=0.1)
     >>> _, sol = static_gauges_v([0.0, 0.0], [0.0, 0.0], [0, 40], calibration=cal, adc=False, return_solution=True)
     >>> sd = friction_sd_v(sol, calibration=cal)
@@ -756,7 +746,7 @@ def friction_sd_v(
     ((2, 3), True)
     """
     params = params or RigParams()
-    calibration = calibration or _default_calibration(params)
+    calibration = calibration or twin_calibration(params)
     chain = cached_digit(params, calibration, bool(housing), orientation, cells_per_section)
     sensors = SensorChain(params, calibration, np.random.default_rng(0))
     return sensors.friction_sd_v(
