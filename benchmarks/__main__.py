@@ -53,6 +53,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_force",
     "benchmarks.bench_board",
     "benchmarks.bench_digitboard",
+    "benchmarks.bench_board8",
     "benchmarks.bench_resources",
     "benchmarks.bench_plots",
     "benchmarks.bench_plots2",
