@@ -11,6 +11,7 @@ from digits import write_digit
 from flexdigit.params import RigParams, load_params
 from flexdigit.report import ch8_shape
 from flexdigit.report.chapter import ReportContext
+from flexdigit.shape.shape import accuracy_commands
 from flexdigit.twin.calibration import use_calibration
 from flexdigit.twin.digit_calibration import calibration_for
 
@@ -33,3 +34,17 @@ def test_a_digit_that_buckles_upright_is_said_in_words(tmp_path):
 def test_the_thesis_rig_chapter_has_no_such_sentence(tmp_path):
     chapter = _chapter(tmp_path, RigParams())
     assert UNSETTLED not in " ".join(chapter.paragraphs)
+
+
+def test_a_pairs_chapter_scores_its_own_commands_both_ways(tmp_path):
+    # a pair is straight at 127 (four-sections-two-cables): the chapter scored the thesis's 8..43, far off straight
+    params = load_params(write_digit("four-sections-two-cables", tmp_path))
+    chapter = _chapter(tmp_path, params)
+    commands = accuracy_commands(params)[::2]  # fast: every other one of the digit's own
+    assert commands[0] < params.actuator.equilibrium_command < commands[-1]
+    assert f"at commands {commands[0]}..{commands[-1]}" in " ".join(chapter.paragraphs)
+
+
+def test_a_digit_that_buckles_tip_up_is_said_hung(tmp_path):
+    chapter = _chapter(tmp_path, load_params(write_digit("five-sections-eight-gauges", tmp_path)))
+    assert "the bare digit hanging tip down (it buckles tip up)" in " ".join(chapter.paragraphs)

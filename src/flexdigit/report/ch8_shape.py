@@ -13,9 +13,10 @@ import warnings
 import numpy as np
 
 from flexdigit.errors import ConvergenceWarning
+from flexdigit.params import RigParams
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
-from flexdigit.shape.shape import ShapeEstimator, shape_accuracy, true_centre_line_m
+from flexdigit.shape.shape import ShapeEstimator, accuracy_commands, shape_accuracy, true_centre_line_m
 from flexdigit.twin.batched import BatchedChains
 from flexdigit.twin.calibration import default_calibration
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
@@ -26,7 +27,7 @@ SECTION = "8 (beyond)"
 def build(ctx: ReportContext) -> Chapter:
     """Build the shape chapter: tip and along-the-digit errors, one figure."""
     chapter = Chapter(slug="ch8-shape", title=f"Beyond the thesis: the digit's shape from its {ctx.gauges_text}")
-    commands = tuple(range(8, 44, 10 if ctx.fast else 5))
+    commands = _commands(ctx)
     length_m = ctx.params.geometry.digit_length_m  # 27 places along the digit (every 10 mm on the thesis rig)
     positions = tuple(round(length_m * k / 27, 3) for k in range(1, 28, 3 if ctx.fast else 1))
     with warnings.catch_warnings(record=True) as unsettled:  # said in words below, not a warning with a path
@@ -42,7 +43,8 @@ def build(ctx: ReportContext) -> Chapter:
         "command fixes the tip angle (E 3.11, 3.14). The fit (tension, load and where) is integrated to a shape "
         "with large rotations kept. Each case is one noisy reading of the twin (white noise and, with the cable "
         f"taut, one draw of its cable-guide friction; seed {ctx.seed}) at commands {commands[0]}..{commands[-1]}: "
-        "the bare digit upright and horizontal, and a 25 g weight every "
+        f"the bare digit {'hanging tip down (it buckles tip up)' if acc.mount == 'hanging' else 'upright'} and "
+        "horizontal, and a 25 g weight every "
         f"{10 * (3 if ctx.fast else 1)} mm along the horizontal digit (chapters 6-7's mounting)."
     )
     _accuracy_table(chapter, summary, commands)
@@ -58,6 +60,16 @@ def build(ctx: ReportContext) -> Chapter:
         chapter.paragraphs.append(_unsettled_text(ctx, len(unsettled)))
     chapter.figures.append(figure)
     return chapter
+
+
+def _commands(ctx: ReportContext) -> tuple[int, ...]:
+    """The commands scored: the digit's own (:func:`flexdigit.shape.shape.accuracy_commands`: from its straight
+    command to each end of its range, both ways for a cable pair), every other one when fast; the thesis rig's
+    8, 13, ..., 43 (fast: 8, 18, 28, 38) as before."""
+    if ctx.params == RigParams():
+        return tuple(range(8, 44, 10 if ctx.fast else 5))
+    commands = accuracy_commands(ctx.params)
+    return commands[:: 2 if ctx.fast else 1]
 
 
 def _unsettled_text(ctx: ReportContext, count: int) -> str:
