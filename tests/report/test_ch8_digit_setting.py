@@ -69,3 +69,18 @@ def test_the_force_figure_says_how_many_readings_the_estimate_averages():
     assert estimate_label(SimpleNamespace(region={})) == "estimate (one reading)"
     assert estimate_label(SimpleNamespace(region={"average_readings": 1})) == "estimate (one reading)"
     assert estimate_label(SimpleNamespace(region={"average_readings": 8})) == "estimate (mean of 8 readings)"
+
+
+@pytest.mark.slow
+def test_the_chapter_of_a_seven_section_pair_built_alone(tmp_path):
+    # built outside `reproduce` (no use_calibration block): every model reads the digit's own calibration (before,
+    # active sensing's gauge model read the thesis's 3-section fit and raised); ~20 s on one core
+    from flexdigit.report.chapter import ReportContext
+
+    params = load_params(DIGITS / "seven_sections_pair_mixed.toml")
+    chapter = ch8_palpation.build(ReportContext(out_dir=tmp_path, params=params, fast=True))
+    entries = {e.key: e.ours for e in chapter.entries}
+    assert str(entries["palpation.active.bayes_magnitude"]).startswith("not determined")  # was 1.6e-16
+    assert 0.0 < entries["palpation.active.bayes_position_mm"] < entries["palpation.active.single_bayes_position_mm"]
+    assert abs(entries["palpation.stiffness.max_rel_error"]) < 4 * entries["palpation.stiffness.rel_bound"]
+    assert "127..149 laid out from its straight command 127" in chapter.paragraphs[0]

@@ -504,7 +504,7 @@ def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
     if digit is not None:  # the hangs of chapter 7 (tip down or level, as TwinGaugeModel's default)
         on = {
             "commands": (digit.command(-8), digit.command(12), digit.command(32)),
-            "model": TwinGaugeModel(digit.params),
+            "model": TwinGaugeModel(digit.params, twin_calibration(digit.params)),
         }
     a = studies.active_study(samples=500 if ctx.fast else 1000, repetitions=10, seed=ctx.seed, **on)
     e = ch.entries
