@@ -41,6 +41,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_rig",
     "benchmarks.bench_tactile",
     "benchmarks.bench_digittac",
+    "benchmarks.bench_bayes",
     "benchmarks.bench_calibrate",
     "benchmarks.bench_live",
     "benchmarks.bench_livegauges",

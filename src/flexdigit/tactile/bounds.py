@@ -53,6 +53,7 @@ __all__ = [
     "TwinGaugeModel",
     "ProtocolLimits",
     "protocol_limits",
+    "span_position_mse_m2",
     "CONTACT_ZONES",
     "FORCE_ONLY_FRACTION",
     "point_jacobian",
@@ -385,6 +386,88 @@ def protocol_limits(
                 m_hat = (pl @ (1.0 / mg)) / (pl @ (1.0 / mg**2))
                 mag_mse[j] = np.mean(((m_hat - m[j]) / m[j]) ** 2)
     return ProtocolLimits(a, m, c, contact_error, pos_mse, mag_mse)
+
+
+def _position_grid(positions_m, step_m: float, half_width_m) -> np.ndarray:
+    """A lattice of ``step_m`` over ``[min, max]`` of ``positions_m`` (``half_width_m`` None) or over the union of
+    ``[a - half_width_m, a + half_width_m]`` around each, with the positions themselves on it."""
+    a = np.unique(positions_m)
+    if half_width_m is None:
+        lo, hi = a.min(), a.max()
+    else:
+        lo, hi = a - half_width_m, a + half_width_m
+    k = np.arange(np.floor(np.min(lo) / step_m), np.ceil(np.max(hi) / step_m) + 1)
+    lattice = k * step_m
+    if half_width_m is not None:
+        near = np.min(np.abs(lattice[:, None] - a[None, :]), axis=1) <= half_width_m + 1e-12
+        lattice = lattice[near]
+    else:
+        lattice = lattice[(lattice >= lo - 1e-12) & (lattice <= hi + 1e-12)]
+    if not lattice.size:
+        return a
+    off = np.min(np.abs(a[:, None] - lattice[None, :]), axis=1) > 1e-3 * step_m  # a position between lattice points
+    return np.sort(np.concatenate([lattice, a[off]]))
+
+
+def span_position_mse_m2(
+    model,
+    position_from_base_m,
+    mass_kg,
+    command,
+    *,
+    step_m: float,
+    half_width_m=None,
+    samples: int = 1000,
+    seed=0,
+    chunk: int = 200,
+) -> np.ndarray:
+    """Bayes position MSE (m^2) of each loaded setting when the position is continuous over the settings' span.
+
+    :func:`protocol_limits` knows the load hangs at one of the protocol's positions: where those are many noise
+    sigmas apart its posterior never mixes them and the limit falls to zero (10^-14 m on a stiff polymer digit),
+    a floor no regression of a continuous position reaches. Here the prior is uniform in position over
+    ``[min, max]`` of each command's loaded positions (a grid of ``step_m``, the settings' own positions on it)
+    and the masses are the settings' (their frequencies at that command); readings are drawn at each setting
+    from the model's Gaussian noise (``noise_of``) and given the posterior mean over that grid. For a linear
+    gauge ``g = k a`` with noise ``sigma`` the result is ``(sigma / k)^2`` away from the span's ends (the
+    Gaussian posterior; tested). ``step_m`` must resolve the posterior (a quarter of the smallest Cramer-Rao
+    bound adds under 1 % to the RMS).
+
+    Returns an array like ``mass_kg``: the MSE of each loaded setting, NaN for no-load ones.
+    """
+    a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
+    m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
+    c = np.broadcast_to(np.asarray(command), a.shape).astype(int)
+    if not step_m > 0:
+        raise ValueError(f"span_position_mse_m2 needs a positive grid step; got step_m = {step_m}")
+    rng = np.random.default_rng(seed)
+    out = np.full(a.size, np.nan)
+    for value in np.unique(c[m > 0]):
+        group = np.flatnonzero((c == value) & (m > 0))
+        grid = _position_grid(a[group], step_m, half_width_m)
+        masses, counts = np.unique(m[group], return_counts=True)
+        ga = np.repeat(grid, masses.size)
+        gm = np.tile(masses, grid.size)
+        gc = np.full(ga.size, value)
+        # a uniform density in position: the lattice's points weigh alike
+        log_prior = np.log(np.tile(counts / counts.sum(), grid.size))
+        mean = model.gauges_v(ga, gm, gc)
+        sigma = noise_of(model, ga, gm, gc)
+        log_norm = log_prior - np.sum(np.log(sigma), axis=1)
+        mu = model.gauges_v(a[group], m[group], c[group])
+        sd = noise_of(model, a[group], m[group], c[group])
+        per = max(1, min(chunk, int(4e6 // mean.size)))  # (draws, grid, gauges) floats held at once
+        for i, j in enumerate(group):
+            err2 = 0.0
+            for start in range(0, samples, per):
+                n = min(per, samples - start)
+                v = mu[i] + sd[i] * rng.standard_normal((n, mu.shape[1]))
+                z = (v[:, None, :] - mean[None]) / sigma[None]
+                log_post = log_norm - 0.5 * np.sum(z * z, axis=2)
+                post = np.exp(log_post - log_post.max(axis=1, keepdims=True))
+                err2 += float(np.sum(((post @ ga) / post.sum(axis=1) - a[j]) ** 2))
+            out[j] = err2 / samples
+    return out
 
 
 # ---------------------------------------------------------------------------------------------------- contact
