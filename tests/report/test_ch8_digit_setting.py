@@ -60,7 +60,8 @@ def test_a_bayes_limit_below_the_prior_grid_is_not_reported_as_a_number():
     # the trial's seven-section pair: palpation.active.bayes_magnitude = 1.6e-16 (rounding of a posterior that sits
     # on the true setting), now a text; a limit the grid resolves stays the number it is
     text = ch8_palpation._resolved(1.6e-16, ch8_palpation.MASS_SPACING_REL)
-    assert isinstance(text, str) and text.startswith("not determined")
+    assert isinstance(text, str)
+    assert text.startswith("not determined")
     assert ch8_palpation._resolved(0.08, ch8_palpation.MASS_SPACING_REL) == 0.08
     assert ch8_palpation._resolved(0.0123, ch8_palpation.HANG_STEP_M, 1000.0) == pytest.approx(12.3, rel=1e-12)
 

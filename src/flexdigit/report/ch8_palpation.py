@@ -20,6 +20,7 @@ from flexdigit.params import RigParams
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import new
 from flexdigit.tactile.bounds import TwinGaugeModel
+from flexdigit.tactile.localisation import SETTINGS_RESOLVED
 from flexdigit.twin.contact import Tissue
 from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.records import release_orientation
@@ -478,8 +479,8 @@ def _force(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
 HANG_STEP_M, MASS_SPACING_REL = 0.02, (0.0375 - 0.025) / 0.0375
 #: A Bayes limit over that discrete grid below this fraction of its spacing says only that the readings tell every
 #: setting apart: the posterior sits on the true setting to rounding (1.6e-16 on a seven-section pair) and the limit
-#: is the grid's, not the digit's: no figure to stand behind.
-UNRESOLVED_FRACTION = 1e-3
+#: is the grid's, not the digit's: no figure to stand behind (tactile's own threshold for its settings limit).
+UNRESOLVED_FRACTION = SETTINGS_RESOLVED
 
 
 def _resolved(value: float, spacing: float, unit_scale: float = 1.0):
