@@ -107,7 +107,7 @@ def build(ctx: ReportContext) -> Chapter:
 
 def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
     """The chapter on a digit other than the thesis rig: the same studies laid out on it (:class:`DigitSetting`),
-    force control left out (its loop's gains are the thesis rig's; docs/digits.md)."""
+    force control with the digit's own gains (:func:`~flexdigit.palpation.palpation.force_gains`)."""
     digit = DigitSetting(ctx.params, release_orientation(ctx.params), ctx.fast)
     g = ctx.params.geometry
     sweep = digit.protocol(2)
@@ -121,8 +121,9 @@ def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
         f" away), the sweep's commands {sweep.commands[0]}..{sweep.commands[-1]} laid out from its straight command "
         f"{sweep.tare_command} towards the body, as far in tip rotation as the thesis's 8..30 (as `palpate "
         "--params` sweeps it). Noise: the twin's white noise and drift; active sensing at "
-        "its actuated level. Force control runs the thesis rig's loop, its rates per turn of the pulley (x the "
-        "gearing): its figures are the twin's true force, so a digit whose gauges misjudge the force (one gauge, a "
+        "its actuated level. Force control runs the library's loop with the digit's own gains (the thesis's "
+        "crossover and tip-turning rate, palpation.force_gains): its figures are the twin's true force, so a digit "
+        "whose gauges misjudge the force (one gauge, a "
         "short digit) or that presses slowly (a long one) shows it here."
     )
     _contact(ctx, ch, plt, digit)
