@@ -85,3 +85,17 @@ def test_the_chapter_of_a_seven_section_pair_built_alone(tmp_path):
     assert 0.0 < entries["palpation.active.bayes_position_mm"] < entries["palpation.active.single_bayes_position_mm"]
     assert abs(entries["palpation.stiffness.max_rel_error"]) < 4 * entries["palpation.stiffness.rel_bound"]
     assert "127..149 laid out from its straight command 127" in chapter.paragraphs[0]
+
+
+@pytest.mark.slow
+def test_a_fine_step_digit_fits_its_stiffness(tmp_path):
+    # design front 30 (0.31 deg of tip a command): swept 127..149 the digit never reached the body and the
+    # stiffness bound's information matrix was singular (LinAlgError: the chapter failed in reproduce); ~7 s
+    from flexdigit.report.chapter import ReportContext
+
+    params = load_params(DIGITS / "design_front_30_six_gauges_pair.toml")
+    chapter = ch8_palpation.build(ReportContext(out_dir=tmp_path, params=params, fast=True))
+    entries = {e.key: e.ours for e in chapter.entries}
+    assert abs(entries["palpation.stiffness.max_rel_error"]) < 4 * entries["palpation.stiffness.rel_bound"]
+    assert abs(entries["palpation.scan.inclusion_error_mm"]) < 10.0  # issue 13: within 10 mm
+    assert "127..250 laid out from its straight command 127" in chapter.paragraphs[0]
