@@ -43,6 +43,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_digittac",
     "benchmarks.bench_bayes",
     "benchmarks.bench_calibrate",
+    "benchmarks.bench_calfix",
     "benchmarks.bench_live",
     "benchmarks.bench_livegauges",
     "benchmarks.bench_studies",
@@ -52,8 +53,10 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_force",
     "benchmarks.bench_board",
     "benchmarks.bench_digitboard",
+    "benchmarks.bench_board8",
     "benchmarks.bench_resources",
     "benchmarks.bench_plots",
+    "benchmarks.bench_plots2",
 )
 #: Run only when named (``python -m benchmarks bench_converged``): half an hour of CPU.
 ON_REQUEST: tuple[str, ...] = ("benchmarks.bench_converged",)

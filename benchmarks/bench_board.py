@@ -36,8 +36,8 @@ F_CPU_HZ = 16e6
 PERIODS_S = (0.001, 0.002, 0.004, 0.005, 0.010, 0.020)
 STEP_SEEDS = range(8)
 #: The shortest period the board sustains, (s, format): the shortest dividing the 20 ms frame at which each
-#: period's update runs in its period with idle to spare (the idle rows: ~38 % at 2 ms; at 1 ms 8-9 %, while
-#: formatting one stream line takes ~1 ms of CPU, longer than the period). The step comparison's third period.
+#: period's update runs in its period with idle to spare (the idle rows: ~31 % at 2 ms; at 1 ms 1-2.5 %, while
+#: formatting one stream line takes ~1.3 ms of CPU, longer than the period). The step comparison's third period.
 SHORTEST_SUSTAINED = (0.002, "fixed")
 #: The idle share the issue asks the shortest period to leave.
 IDLE_GOAL = 0.5
@@ -200,8 +200,13 @@ def markdown(rows: list[dict]) -> str:
         lines.append(f"| {row['period_ms']:g} ms ({row['format']}) | {row['figure']} | {row['value']:.3f} | "
                      f"{row['reference']:.3f} | {shown} | {limit} | {'yes' if met else 'NO'} |")  # fmt: skip
     lines += ["", "| figure | value | unit | note |", "|---|---|---|---|"]
-    lines += [f"| {r['name']} | {r['value']:.4g} | {r['unit']} | {r['note']} |" for r in rows if "figure" not in r]
+    lines += [f"| {r['name']} | {_shown(r)} | {r['unit']} | {r['note']} |" for r in rows if "figure" not in r]
     return "\n".join(lines)
+
+
+def _shown(row: dict) -> str:
+    """A figure as the table shows it: cycles whole (51008, not 5.101e+04), the rest to 4 significant digits."""
+    return f"{row['value']:.0f}" if row["unit"] == "cycles" else f"{row['value']:.4g}"
 
 
 if __name__ == "__main__":  # python benchmarks/bench_board.py [--markdown] [ROWS.json]

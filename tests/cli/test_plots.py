@@ -31,6 +31,15 @@ def _written(path) -> bool:
     return path.read_bytes().startswith(MAGIC[path.suffix])
 
 
+def _plotted(argv, plot, capsys) -> dict:
+    """Run a command with ``--plot PLOT --json``: what it printed, the plot written where it says."""
+    assert main([*argv, "--plot", str(plot), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["plot"] == str(plot)
+    assert _written(plot)
+    return result
+
+
 def test_simulate_plots_its_record_and_identify_its_fit(tmp_path, drawn, capsys):
     record, plot = tmp_path / "step.csv", tmp_path / "step.png"
     assert main(["simulate", "step", "--duration", "0.6", "--out", str(record), "--plot", str(plot)]) == 0
@@ -414,3 +423,253 @@ def test_design_mixsyn_plots_a_step_that_ends_on_the_setpoint(tmp_path, drawn, c
     y = _lines(step_y)["output y (T_yw)"].get_ydata()
     assert abs(y[-1] - 1.0) < 0.01
     assert _lines(bode_mag)["S (T_zw)"].get_ydata()[0] < -20.0
+
+
+def test_tdcr_contact_that_finds_nothing_exits_non_zero_and_writes_nothing(tmp_path, capsys):
+    """A contact nearer the base than the second gauge station (out of sight) has no place or force the command can
+    stand behind: exit 1, the reason in one line (also under --json), no --out and no --plot written."""
+    out, plot = tmp_path / "contact.json", tmp_path / "contact.png"
+    argv = ["tdcr", "contact", "rao2021", "--tension-n", "2,0,0,0,1,0", "--contact-s-m", "0.05"]
+    argv += ["--contact-force-n", "0,0.05,0", "--out", str(out), "--plot", str(plot)]
+    assert main(argv) == 1
+    text = capsys.readouterr().out
+    refused = [line for line in text.splitlines() if line.startswith("out of sight:")]
+    assert len(refused) == 1
+    assert "place and force not determined" in refused[0]
+    assert not out.exists()
+    assert not plot.exists()
+    assert main([*argv, "--json"]) == 1
+    data = json.loads(capsys.readouterr().out)
+    assert data["refused"] == refused[0]
+    assert data["out_of_sight"] is True
+    assert data["s_m"] is None
+
+
+def test_tdcr_statics_plots_the_backbone_it_solved(tmp_path, drawn, capsys):
+    result = _plotted(["tdcr", "statics", "rao2021", "--tension-n", "2,0,0,1,0,0"], tmp_path / "statics.png", capsys)
+    side, front, top = drawn[0].axes
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in drawn[0].axes] == [
+        ("x (mm)", "z (mm)"),
+        ("y (mm)", "z (mm)"),
+        ("x (mm)", "y (mm)"),
+    ]
+    assert "rao2021" in drawn[0].get_suptitle()
+    backbone_mm = 1e3 * np.asarray(result["backbone_m"])
+    for ax, (i, j) in zip((side, front, top), ((0, 2), (1, 2), (0, 1)), strict=True):
+        line = _lines(ax)["backbone"]
+        np.testing.assert_allclose(line.get_xdata(), backbone_mm[:, i], rtol=SAME_RTOL, atol=1e-12)
+        np.testing.assert_allclose(line.get_ydata(), backbone_mm[:, j], rtol=SAME_RTOL, atol=1e-12)
+        tip = _lines(ax)["tip"]
+        np.testing.assert_allclose(
+            [tip.get_xdata()[0], tip.get_ydata()[0]], 1e3 * np.asarray(result["tip_position_m"])[[i, j]]
+        )
+    # 2 N on the tendon at 90 deg bends the rod towards +y (the tip well off the base's axis), 1 N opposite less so
+    assert result["tip_position_m"][1] > 0.05
+    assert len(_lines(front)["disks"].get_xdata()) == 20  # rao2021's 20 disks (10 a segment)
+
+
+def test_tdcr_dynamics_plots_the_tip_path_it_printed(tmp_path, drawn, capsys):
+    plot = tmp_path / "dynamics.svg"
+    argv = ["tdcr", "dynamics", "rao2021", "--tension-n", "2,0,0,0,0,0", "--duration-s", "0.02"]
+    result = _plotted(argv, plot, capsys)
+    axes = drawn[0].axes
+    assert [ax.get_ylabel() for ax in axes] == ["tip x (mm)", "tip y (mm)", "tip z (mm)"]
+    assert axes[-1].get_xlabel() == "time (s)"
+    assert "rao2021" in axes[0].get_title()
+    tip_mm = 1e3 * np.asarray(result["tip_position_m"])
+    for k, ax in enumerate(axes):
+        line = ax.get_lines()[0]
+        np.testing.assert_allclose(line.get_xdata(), result["t_s"], rtol=SAME_RTOL)
+        np.testing.assert_allclose(line.get_ydata(), tip_mm[:, k], rtol=SAME_RTOL, atol=1e-12)
+    assert tip_mm[-1, 1] > tip_mm[0, 1]  # the pull at 90 deg moves the tip towards +y
+    capsys.readouterr()
+    plot.write_bytes(b"precious")  # an existing plot is kept without --force, refused before the simulation
+    assert main([*argv, "--plot", str(plot)]) == 2
+    assert "pass --force" in capsys.readouterr().err
+    assert plot.read_bytes() == b"precious"
+
+
+#: The 20 ms figure's step is the loop the command scored, redrawn from its weights: the same settling time but
+#: for the rebuilt design's round-off (BLAS orderings in the LQR and Kalman solves), far below a 20 ms sample.
+REDRAWN_RTOL = 1e-6
+
+
+def _step_drawn(ax, label):
+    from flexdigit.control.analysis import step_figures
+
+    line = _lines(ax)[label]
+    return step_figures(line.get_xdata(), line.get_ydata(), target=30.0)
+
+
+def test_design_20ms_plots_the_step_it_scored_and_the_loops_frequency_response(tmp_path, drawn, capsys):
+    data = _plotted(["design", "20ms"], tmp_path / "d20.png", capsys)
+    step_ax, bode_mag, command_ax, bode_phase = drawn[0].axes
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in drawn[0].axes] == [
+        ("", "tip rotation (deg)"),
+        ("", "magnitude (dB)"),
+        ("time (s)", "command change (servo commands)"),
+        ("frequency (rad/s)", "phase of L (deg)"),
+    ]
+    assert "thesis rig" in drawn[0].get_suptitle()
+    shown = _step_drawn(step_ax, "tip rotation")
+    scored = data["linear_step_30deg"]
+    assert shown.settling_time_s == pytest.approx(scored["settling_time_s"], rel=REDRAWN_RTOL)
+    assert shown.overshoot_percent == pytest.approx(scored["overshoot_percent"], rel=REDRAWN_RTOL, abs=1e-9)
+    # the command the loop ends on turns the digit 30 deg at the rotation per command the command printed
+    command = command_ax.get_lines()[0].get_ydata()
+    assert command[-1] * data["deg_per_command"] == pytest.approx(30.0, rel=1e-3)
+    # integral action: the tip follows a slow setpoint (|T| ~ 0 dB) and |S| is small where |L| is large
+    mag = _lines(bode_mag)
+    w = mag["L (loop gain)"].get_xdata()
+    assert w[-1] <= np.pi / data["period_s"]  # up to Nyquist, not beyond
+    assert abs(mag["T (setpoint to tip)"].get_ydata()[0]) < 0.1
+    np.testing.assert_allclose(
+        mag["S = 1/(1 + L)"].get_ydata()[0], -mag["L (loop gain)"].get_ydata()[0], atol=0.1
+    )  # |S| = 1/|1 + L| ~ 1/|L| where |L| >> 1 (30 dB at 0.1 rad/s: within 0.1 dB)
+
+
+@pytest.mark.slow  # a described digit's weights search, 2-8 s
+def test_design_20ms_plots_a_described_digits_design_without_searching_again(tmp_path, drawn, capsys):
+    from digits import write_digit
+
+    digit, plot = write_digit("short", tmp_path), tmp_path / "d20.svg"
+    assert main(["design", "20ms", "--params", str(digit), "--plot", str(plot), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    assert "short" in drawn[0].get_suptitle()
+    shown = _step_drawn(drawn[0].axes[0], "tip rotation")
+    assert shown.settling_time_s == pytest.approx(data["linear_step_30deg"]["settling_time_s"], rel=REDRAWN_RTOL)
+
+
+def test_design_sweep_plots_the_swept_tolerance_beside_the_thesis(tmp_path, drawn, capsys):
+    plot = tmp_path / "sweep.pdf"
+    assert main(["design", "sweep", "--filters", "5,39", "--plot", str(plot), "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    top, bottom = drawn[0].axes
+    assert "thesis rig's printed plant" in top.get_title()
+    assert (top.get_ylabel(), bottom.get_xlabel(), bottom.get_ylabel()) == (
+        "||T_pq|| (dB)",
+        "error filter cut-off (Hz)",
+        "additive tolerance (%)",
+    )
+    np.testing.assert_allclose(top.get_lines()[0].get_xdata(), [5.0, 39.0])
+    np.testing.assert_allclose(top.get_lines()[0].get_ydata(), [r["tpq_peak_db"] for r in rows], rtol=SAME_RTOL)
+    lines = _lines(bottom)
+    ours = lines["1/||T_pq||, % of |G(0)| (flexdigit)"].get_ydata()
+    np.testing.assert_allclose(ours, [r["additive_tolerance_relative_percent"] for r in rows], rtol=SAME_RTOL)
+    # the thesis's printed percentages (reference/thesis.toml hinf.additive_tolerance_percent) drawn as printed
+    np.testing.assert_allclose(lines["thesis (as printed)"].get_ydata(), [0.85, 22.48])
+
+
+SMALL_PROTOCOL = """name = "small"
+orientation = "horizontal"
+loads_g = [20.0]
+positions_from_tip_cm = [0, 5, 10]
+repetitions = 2
+no_load_repetitions = 2
+settle_s = 0.5
+"""
+
+
+def test_collect_plots_the_datasets_gauges_against_place_and_time(tmp_path, drawn, capsys):
+    from flexdigit.tactile.dataset import load_dataset
+
+    protocol, out, plot = tmp_path / "small.toml", tmp_path / "d.parquet", tmp_path / "d.png"
+    protocol.write_text(SMALL_PROTOCOL)
+    assert main(["collect", str(protocol), "--out", str(out), "--plot", str(plot), "--no-progress", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["plot"] == str(plot)
+    assert _written(plot)
+    by_place, by_time = drawn[0].axes
+    assert (by_place.get_xlabel(), by_place.get_ylabel()) == ("load position from the tip (mm)", "gauge voltage (V)")
+    assert (by_time.get_xlabel(), by_time.get_ylabel()) == ("time (s)", "gauge voltage (V)")
+    assert "small" in drawn[0].get_suptitle()
+    dataset = load_dataset(out)
+    loaded = dataset["load_kg"] > 0
+    assert loaded.sum() == 6  # 3 positions x 2 repetitions of 20 g
+    assert len(dataset) == 12  # and as many readings with no load hung
+    for k, name in enumerate(dataset.gauge_columns):
+        shown = _lines(by_place)[f"gauge {k + 1}"]
+        np.testing.assert_allclose(shown.get_xdata(), 1e3 * dataset["position_from_tip_m"][loaded], rtol=SAME_RTOL)
+        np.testing.assert_allclose(shown.get_ydata(), dataset[name][loaded], rtol=SAME_RTOL)
+        over_time = _lines(by_time)[f"gauge {k + 1}"]
+        np.testing.assert_allclose(over_time.get_xdata(), dataset["time_s"], rtol=SAME_RTOL)
+    assert set(np.unique(_lines(by_place)["gauge 1"].get_xdata())) == {0.0, 50.0, 100.0}  # the protocol's places
+
+
+ROBOT_STUDY = """[study]
+robot = "rao2021"
+tensions_n = [1, 0, 0, 0, 0, 0]
+metrics = {metrics}
+[parameters.loads.tensions_n.0]
+distribution = "uniform"
+relative = 0.1
+[parameters.backbone.youngs_modulus_pa]
+distribution = "uniform"
+relative = 0.1
+[sensitivity]
+morris_trajectories = 2
+"""
+
+
+def _robot_study(tmp_path, capsys, drawn, metrics: str) -> tuple[dict, object]:
+    spec = tmp_path / "spec.toml"
+    spec.write_text(ROBOT_STUDY.format(metrics=metrics))
+    argv = ["study", "sensitivity", str(spec), "--out", str(tmp_path / "out"), "--workers", "0", "--n", "8"]
+    summary = _plotted([*argv, "--no-progress"], tmp_path / "study.png", capsys)
+    assert drawn[0].get_suptitle() == "study spec on robot rao2021"
+    return summary, drawn[0]
+
+
+def test_study_sensitivity_plots_the_total_indices_of_every_metric(tmp_path, capsys, drawn):
+    summary, fig = _robot_study(tmp_path, capsys, drawn, '["tip_angle_deg", "tip_z_m"]')
+    ax = fig.axes[0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["loads.tensions_n[0]", "backbone.youngs_modulus_pa"]
+    # each metric a row, "(NOT converged)" after it at this small N
+    assert [t.get_text().split(" (")[0] for t in ax.get_yticklabels()] == ["tip_angle_deg", "tip_z_m"]
+    assert fig.axes[1].get_ylabel() == "total Sobol index ST"  # the colour bar
+    shown = np.asarray(ax.get_images()[0].get_array())
+    for i, metric in enumerate(("tip_angle_deg", "tip_z_m")):
+        sobol = summary["metrics"][metric]["sobol"]
+        st = [sobol[name]["ST"] for name in ("loads.tensions_n[0]", "backbone.youngs_modulus_pa")]
+        np.testing.assert_allclose(shown[i], np.clip(st, 0, 1), rtol=SAME_RTOL)
+    # the tip angle T d L / EI: the tension and the modulus both matter, each near half (uniform +-10 % spreads)
+    assert np.all(shown[0] > 0.3)
+    # a finished study is read for --plot, not run again (nor refused): the same indices drawn
+    argv = ["study", "sensitivity", str(tmp_path / "spec.toml"), "--out", str(tmp_path / "out"), "--n", "8"]
+    journal = (tmp_path / "out" / "journal.jsonl").read_bytes()
+    again = _plotted([*argv, "--workers", "0", "--no-progress"], tmp_path / "again.png", capsys)
+    assert (tmp_path / "out" / "journal.jsonl").read_bytes() == journal
+    np.testing.assert_allclose(np.asarray(drawn[1].axes[0].get_images()[0].get_array()), shown, rtol=SAME_RTOL)
+    assert again["metrics"] == summary["metrics"]
+
+
+def test_study_sensitivity_of_one_metric_plots_its_indices_with_intervals(tmp_path, capsys, drawn):
+    summary, fig = _robot_study(tmp_path, capsys, drawn, '["tip_angle_deg"]')
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "Sobol index"
+    sobol = summary["metrics"]["tip_angle_deg"]["sobol"]
+    from matplotlib.container import BarContainer
+
+    s1_bars, st_bars = (c for c in ax.containers if isinstance(c, BarContainer))
+    names = ("loads.tensions_n[0]", "backbone.youngs_modulus_pa")
+    np.testing.assert_allclose([b.get_height() for b in s1_bars], [sobol[n]["S1"] for n in names], rtol=SAME_RTOL)
+    np.testing.assert_allclose([b.get_height() for b in st_bars], [sobol[n]["ST"] for n in names], rtol=SAME_RTOL)
+    assert "N = 16" in ax.get_title()  # the 2N the indices are from
+
+
+def test_study_design_plots_its_pareto_front(tmp_path, capsys, drawn):
+    plot = tmp_path / "front.svg"
+    argv = ["study", "design", "thesis-design", "--samples", "3", "--out", str(tmp_path / "out"), "--workers", "0"]
+    assert main([*argv, "--no-progress", "--plot", str(plot), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert _written(plot)
+    assert drawn[0].get_suptitle() == "study thesis-design on the thesis rig"
+    ax = drawn[0].axes[0]
+    x_name, y_name = summary["objectives"]
+    assert ax.get_xlabel().startswith(x_name)
+    assert ax.get_ylabel().startswith(y_name)
+    front = _lines(ax)["Pareto front"]
+    printed = sorted((row[x_name], row[y_name]) for row in summary["pareto_front"])
+    np.testing.assert_allclose(sorted(zip(front.get_xdata(), front.get_ydata(), strict=True)), printed, rtol=SAME_RTOL)
+    assert len(ax.collections[0].get_offsets()) == summary["candidates"]  # every candidate drawn

@@ -143,7 +143,7 @@ def test_contact_the_reviewers_case_and_its_honest_lines(capsys):
     assert data["refined"] is True
     assert data["force_error_n"] < REFINED_RTOL * 0.05
     argv[-1] = "0.05"
-    assert main([*argv, "--contact-force-n", "0,0.05,0"]) == 0
+    assert main([*argv, "--contact-force-n", "0,0.05,0"]) == 1  # a result it cannot stand behind: refused
     text = capsys.readouterr().out
     assert "out of sight" in text
     assert "place and force not determined" in text
@@ -151,15 +151,17 @@ def test_contact_the_reviewers_case_and_its_honest_lines(capsys):
 
 
 @pytest.mark.parametrize(
-    ("reading", "needle"),
+    ("reading", "needle", "code"),
     [
-        ("1", "no fit: the twin holds no equilibrium"),  # 100 % strain everywhere: no contact the rod can bear
-        ("1e-4", "poor fit: "),  # a uniform stretch, which no point contact makes (113 microstrain left)
+        # 100 % strain everywhere: no contact the rod can bear, no number to stand behind (exit 1)
+        ("1", "no fit: the twin holds no equilibrium", 1),
+        # a uniform stretch, which no point contact makes (113 microstrain left): the best fit, said to be poor
+        ("1e-4", "poor fit: ", 0),
     ],
 )
-def test_contact_readings_no_contact_explains_are_said_so(capsys, reading, needle):
+def test_contact_readings_no_contact_explains_are_said_so(capsys, reading, needle, code):
     argv = ["tdcr", "contact", "rao2021", "--tension-n", "2,0,0,0,1,0", "--strains", ",".join([reading] * 48)]
-    assert main(argv) == 0
+    assert main(argv) == code
     assert needle in capsys.readouterr().out
 
 

@@ -111,3 +111,47 @@ def make_image(rotation_map):
         return build(out.parent, period_s, fmt, rotation_map, out=out)
 
     return get
+
+
+#: The eight-gauge test digit less its tip gauge: the seven-gauge digit a Nano serves (A0..A6).
+SEVEN_GAUGES = {
+    "geometry": {"gauge_positions_m": [0.03, 0.07, 0.13, 0.17, 0.23, 0.27, 0.33]},
+    "sensors": {"adc_channels": list(range(7))},
+}
+
+
+@pytest.fixture(scope="session")
+def mapped_digit_firmware(tmp_path_factory):
+    """``mapped_digit_firmware(gauges, period_s, fmt)`` -> ``(image, params file, map file)`` of the eight-gauge test
+    digit (``five-sections-eight-gauges``; with 7, its tip gauge left off), built with a rotation map saved first
+    (calibrated on its twin, mounted as the export and ``run --params`` mount it: the map the export would calibrate
+    itself), so the Python loop can run on the same map (``run --rotation-map``). Cached."""
+    from digits import write_digit
+    from flexdigit.control.design20ms import digit_mount
+    from flexdigit.params import load_params
+    from flexdigit.rig.base import open_rig
+    from flexdigit.rig.rotation import calibrate_rotation, save_rotation_map
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    root = tmp_path_factory.mktemp("eight-gauges")
+    cache: dict[tuple[int, float, str], tuple[Path, Path, Path]] = {}
+    maps: dict[int, tuple[Path, Path]] = {}
+
+    def get(gauges: int = 8, period_s: float = 0.020, fmt: str = "float") -> tuple[Path, Path, Path]:
+        if gauges not in maps:
+            folder = root / f"g{gauges}"
+            folder.mkdir()
+            params = write_digit("five-sections-eight-gauges", folder, **(SEVEN_GAUGES if gauges == 7 else {}))
+            p = load_params(params)
+            calibration = twin_calibration(p)
+            with open_rig("sim", p, calibration=calibration, orientation=digit_mount(p, calibration)) as rig:
+                save_rotation_map(calibrate_rotation(rig), folder / "rotation-map.json")
+            maps[gauges] = (params, folder / "rotation-map.json")
+        key = (gauges, period_s, fmt)
+        if key not in cache:
+            params, rotation_map = maps[gauges]
+            out = root / f"g{gauges}-{fmt}-{int(round(period_s * 1e6))}us"
+            cache[key] = (build(root, period_s, fmt, rotation_map, params, out=out), params, rotation_map)
+        return cache[key]
+
+    return get

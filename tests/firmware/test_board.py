@@ -19,14 +19,13 @@ import subprocess
 import pytest
 
 from flexdigit.cli import main
-from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s, run_on_board
+from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s
 from flexdigit.rig.base import open_rig
+
+from .board_helpers import compare_steps, python_command_mismatches, watch_board
 
 #: The ATmega328P's flash (less the Uno's 512-byte bootloader) and RAM, bytes.
 FLASH_BYTES, RAM_BYTES = 32_256, 2_048
-#: The steady-state error of the loop on the board against the Python loop's, deg: the ADC's 4.9 mV step is
-#: 0.25-0.33 deg of rotation on each gauge.
-STEADY_TOLERANCE_DEG = 0.2
 
 
 @pytest.mark.parametrize("fmt", ["float", "fixed"])
@@ -136,71 +135,21 @@ def test_each_fault_ends_in_the_safe_state_within_one_period(firmware, case):
     assert set(FAULTS.values()) >= {"host_timeout", "adc_rail", "rotation_bound", "command_range"}
 
 
-#: The issue's criteria for the 30 deg step, board against the Python loop: settling within 5 %, overshoot within
-#: 1 point, steady-state error within 0.2 deg (STEADY_TOLERANCE_DEG).
-SETTLING_FRACTION, OVERSHOOT_POINTS = 0.05, 1.0
 #: The noise seeds each loop runs with. One seed decides nothing: a servo command is 1.7 deg of rotation, so one
 #: command more or less at the peak moves the overshoot by ~3 points at 2 ms (the Python loop's 16-bit readings:
 #: 15.0-16.3 % by seed; the board's 10-bit ones: 15.15 % or 16.28 % since its loop's start is dated by the line's
 #: arrival, 15.1 % or 17.7-19.1 % before: a startup race, docs/board.md), and a peak near the 2 % band moves the
 #: settling by a whole oscillation (the Python loop alone at 20 ms: 0.59-0.75 s over seeds 0-5). So the figures
-#: compared are typical ones over STEP_SEEDS: the median settling time (a discontinuous figure, bimodal by seed)
-#: and the mean overshoot and steady-state error. Measured (board / Python, 8 seeds; benchmarks/bench_board.py):
-#: see docs/board.md.
+#: compared are typical ones over STEP_SEEDS (board_helpers.typical). Measured (board / Python, 8 seeds;
+#: benchmarks/bench_board.py): see docs/board.md.
 STEP_SEEDS = range(8)
-
-
-def _board_step(elf, seed: int) -> dict:
-    """The loop on the board (hil://, noise seed ``seed``): the twin's true step figures."""
-    from flexdigit.rig.step_test import step_metrics
-
-    rig = open_rig(f"hil://{elf}?seed={seed}", mode="board", setpoint_deg=30.0)
-    try:
-        run = run_on_board(rig, 30.0, 3.0)
-    finally:
-        rig.close()
-    assert run.status == "completed", run.message
-    assert run.time_s[0] == pytest.approx(run.period_s, abs=0.002)  # from the setpoint, as the host loop counts
-    return step_metrics(run.time_s, run.true_rotation_deg, 30.0, 0.0, 1.735).to_dict()
-
-
-def _python_step(period_s: float, seed: int, rotation_map) -> dict:
-    """flexdigit's loop on the twin (``flexdigit run``), its servo driven as the board drives it (the command in
-    force at each 20 ms frame, from the pulse 1 ms later: ``servo_drive=timer``), on the board's rotation map."""
-    import io
-    from contextlib import redirect_stdout
-
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        code = main(["run", "--backend", f"sim?seed={seed}&servo_drive=timer", "--setpoint-deg", "30",
-                     "--duration", "3", "--period", str(period_s), "--rotation-map", str(rotation_map),
-                     "--json"])  # fmt: skip
-    assert code == 0
-    return json.loads(buf.getvalue())["step_metrics"]["true"]
-
-
-def _typical(figures: list[dict]) -> dict:
-    """The typical step figures over seeds (see STEP_SEEDS)."""
-    import numpy as np
-
-    return {
-        "settling_time_s": float(np.median([f["settling_time_s"] for f in figures])),
-        "overshoot_percent": float(np.mean([f["overshoot_percent"] for f in figures])),
-        "final_error_deg": float(np.mean([f["final_error_deg"] for f in figures])),
-    }
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.005, "float"), (0.002, "fixed")])
 def test_loop_on_the_board_holds_a_30_deg_step(firmware, rotation_map, period_s, fmt):
     """At 20 ms, 5 ms and the shortest period the board sustains (2 ms: benchmarks/bench_board.py)."""
-    elf = firmware(period_s, fmt)
-    board = _typical([_board_step(elf, seed) for seed in STEP_SEEDS])
-    python = _typical([_python_step(period_s, seed, rotation_map) for seed in STEP_SEEDS])
-    assert abs(board["final_error_deg"] - python["final_error_deg"]) <= STEADY_TOLERANCE_DEG
-    assert abs(board["final_error_deg"]) < 0.6  # inside the 2 % band of the setpoint
-    assert abs(board["overshoot_percent"] - python["overshoot_percent"]) <= OVERSHOOT_POINTS
-    assert abs(board["settling_time_s"] - python["settling_time_s"]) <= SETTLING_FRACTION * python["settling_time_s"]
+    compare_steps(firmware(period_s, fmt), period_s, rotation_map, STEP_SEEDS)
 
 
 @pytest.mark.slow
@@ -231,28 +180,14 @@ def test_board_commands_are_the_python_controllers_in_closed_loop(firmware, rota
     from types import SimpleNamespace
 
     from flexdigit.cli.export import _export_design
-    from flexdigit.rig.backends.hil_backend import VOLTS_PER_COUNT
 
-    elf = firmware(period_s, fmt)
-    rig = open_rig(f"hil://{elf}", mode="board", setpoint_deg=30.0)
-    try:
-        run_on_board(rig, 30.0, 3.0)
-        samples, marks, tare = list(rig.samples), list(rig.mode_marks), rig.board_tare_deg
-    finally:
-        rig.close()
-    start = [i for i, mode in marks if mode == 2][0]
-    board = samples[start:]
+    _, board, tare = watch_board(firmware(period_s, fmt))
     assert len(board) >= 0.95 * 3.0 / period_s
     assert tare == tare  # every period streamed; the board said its tare
     options = SimpleNamespace(no_rotation_map=False, rotation_map=rotation_map)  # the image's map
     runtime, _, rotation, _, _ = _export_design("digital20", period_s, options)
     runtime.reset(8)
-    mismatches = 0
-    for sample in board:
-        gauges_v = [(c + 0.5) * VOLTS_PER_COUNT for c in sample.gauges]
-        u = runtime.update(30.0, rotation(gauges_v) - tare)
-        assert abs(u - sample.pot) <= 1, f"seq {sample.seq}: board {sample.pot}, python {u}"
-        mismatches += u != sample.pot
+    mismatches = python_command_mismatches(runtime, rotation, board, tare, 30.0)
     assert mismatches <= COMMAND_MISMATCH_FRACTION * len(board), f"{mismatches} of {len(board)} differ"
     assert max(s.pot for s in board) > 20  # the step really moved the servo
 
@@ -323,7 +258,7 @@ def test_a_build_with_other_options_is_rebuilt(tmp_path, make_image, rotation_ma
     assert (out / "flexdigit_board.elf").read_bytes() != first
     assert (out / "options").read_text().split() == [
         "design=digital20", "period_s=0.005", "format=fixed", f"map={rotation_map}", "params=", "calibration=",
-        "pulse_delay_ms=1",
+        "pulse_delay_ms=1", "board=",
     ]  # fmt: skip
 
 

@@ -20,6 +20,8 @@ import pytest
 
 from flexdigit.cli import main
 
+from .board_helpers import python_command_mismatches, watch_board
+
 #: Issue 24's step figures: settling (2 %) under 1 s, overshoot under 10 %, the true final rotation within 2 %.
 SETTLING_LIMIT_S, OVERSHOOT_LIMIT_PERCENT, FINAL_FRACTION = 1.0, 10.0, 0.02
 #: Share of board periods whose command may differ (by one) from the Python controller's: a float32 rounding can
@@ -80,32 +82,18 @@ def test_a_digits_board_commands_are_the_python_controllers(digit_firmware):
 
     from flexdigit.cli.export import _digit_export_design
     from flexdigit.params import load_params
-    from flexdigit.rig.backends.hil_backend import VOLTS_PER_COUNT, run_on_board
-    from flexdigit.rig.base import open_rig
     from flexdigit.twin.digit_calibration import twin_calibration
 
     elf, path = digit_firmware("six-gauges-geared")
     params = load_params(path)
-    rig = open_rig(f"hil://{elf}", params, mode="board", setpoint_deg=30.0, calibration=twin_calibration(params))
-    try:
-        run = run_on_board(rig, 30.0, 2.0)
-        samples, marks, tare = list(rig.samples), list(rig.mode_marks), rig.board_tare_deg
-    finally:
-        rig.close()
-    assert run.status == "completed", run.message
-    board = samples[[i for i, mode in marks if mode == 2][0] :]
+    _, board, tare = watch_board(elf, params, 30.0, 2.0, calibration=twin_calibration(params))
     assert len(board) >= 95
     assert all(len(s.gauges) == 6 for s in board)
     options = SimpleNamespace(calibration=None, rotation_map=None, no_rotation_map=False, params=path)
     runtime, _, rotation, _, _ = _digit_export_design(params, 0.020, options)  # what the image was exported from
     assert runtime.dither
     runtime.reset(8)
-    mismatches = 0
-    for sample in board:
-        gauges_v = [(c + 0.5) * VOLTS_PER_COUNT for c in sample.gauges]
-        u = runtime.update(30.0, rotation(gauges_v) - tare)
-        assert abs(u - sample.pot) <= 1, f"seq {sample.seq}: board {sample.pot}, python {u}"
-        mismatches += u != sample.pot
+    mismatches = python_command_mismatches(runtime, rotation, board, tare, 30.0)
     assert mismatches <= COMMAND_MISMATCH_FRACTION * len(board), f"{mismatches} of {len(board)} differ"
     assert max(s.pot for s in board) > 60  # the step really moved the geared servo (0.42 deg a command)
 

@@ -239,6 +239,28 @@ def test_every_version_2_sample_comes_back_however_cut_beside_version_1(samples,
     assert [(e.sample.seq, e.sample.t_us, e.sample.gauges, e.sample.pot) for e in events] == [s[:4] for s in lines]
 
 
+@given(
+    samples=st.lists(
+        st.tuples(
+            st.integers(0, SEQ_MODULUS - 1),
+            st.lists(counts, min_size=1, max_size=8).map(tuple),
+            counts,
+            st.none() | st.integers(-(2**31), 2**31 - 1),
+        ),
+        min_size=1,
+        max_size=10,
+    ),
+)
+def test_the_boards_rotation_estimate_comes_back_and_lines_without_it_still_read(samples):
+    """The board's lines (issue 24 item 5): the gauges, its command in the pot's field and, when it sends one, its
+    rotation estimate in micro-degrees; lines without the estimate (the images before it) read as before."""
+    stream = b"".join(encode_line(seq, 0, g, pot, version=2, rotation_udeg=r) for seq, g, pot, r in samples)
+    events = LineDecoder().feed(stream)
+    got = [(e.sample.seq, e.sample.gauges, e.sample.pot, e.sample.rotation_udeg) for e in events]
+    assert got == samples
+    assert [e.sample.rotation_deg for e in events] == [None if r is None else r / 1e6 for *_, r in samples]
+
+
 @given(fields=st.lists(st.binary(max_size=12), max_size=14))
 def test_any_version_2_payload_with_a_good_checksum_decodes_or_is_garbled(fields):
     """A board's line with the right checksum but any fields after ``V2``: a sample of 1-8 gauges, or garbled."""
@@ -248,7 +270,9 @@ def test_any_version_2_payload_with_a_good_checksum_decodes_or_is_garbled(fields
         assert event.kind in ("sample", "garbled")
         if event.kind == "sample":
             assert 1 <= len(event.sample.gauges) <= MAX_GAUGES
-            assert len(payload.split(b",")) in (4 + len(event.sample.gauges), 5 + len(event.sample.gauges))
+            # the gauges, then nothing, the pot, or the pot and the board's rotation estimate
+            assert len(payload.split(b",")) - 4 - len(event.sample.gauges) in (0, 1, 2)
+            assert (event.sample.rotation_udeg is None) == (len(payload.split(b",")) < 6 + len(event.sample.gauges))
         else:
             assert event.reason
             assert "\n" not in event.reason
@@ -256,7 +280,7 @@ def test_any_version_2_payload_with_a_good_checksum_decodes_or_is_garbled(fields
 
 @given(count=st.integers(-2, 12), values=st.lists(counts, min_size=0, max_size=10))
 def test_a_version_2_line_whose_count_disagrees_with_its_fields_is_garbled(count, values):
-    assume(not (1 <= count <= MAX_GAUGES and len(values) in (count, count + 1)))
+    assume(not (1 <= count <= MAX_GAUGES and len(values) in (count, count + 1, count + 2)))
     payload = ",".join(["V2", "1", "2", str(count), *map(str, values)]).encode()
     line = b"$" + payload + b"*" + f"{crc16_xmodem(payload):04X}".encode() + b"\r\n"
     (event,) = LineDecoder().feed(line)

@@ -1,8 +1,9 @@
-"""A digit's ``--params`` on the reference firmware's backends (issue 24): ``board://`` (an Uno) and ``hil://`` (its
-image on simavr) serve a digit of up to 6 gauges (the Uno's A0..A5) on an image built for it (``make firmware
-PARAMS=D.toml``), refuse a digit of more gauges in one line naming the key before a port or harness is opened, and
-refuse an image built for another digit (its banner's gauges, straight command, range) in one line. The runs on
-such images are in tests/firmware/test_digit_images.py."""
+"""A digit's ``--params`` on the reference firmware's backends (issue 24): ``board://`` (an Uno, or a Nano or Pro
+Mini for 7-8 gauges) and ``hil://`` (its image on simavr) serve a digit of up to 8 gauges on an image built for it
+(``make firmware PARAMS=D.toml``), refuse a digit of more gauges than the board declares analogue inputs (its
+banner's ``adc_channels``: 6 on an Uno) in one line, and refuse an image built for another digit (its banner's
+gauges, straight command, range) in one line. The runs on such images are in tests/firmware/test_digit_images.py
+and tests/firmware/test_eight_gauges.py."""
 
 from __future__ import annotations
 
@@ -12,28 +13,31 @@ from digits import write_digit
 from flexdigit.errors import ParameterError
 from flexdigit.params import load_params
 from flexdigit.rig.backends.board_link import BoardState, check_board_digit, check_board_image
-from flexdigit.rig.base import open_rig
-
-
-def test_the_boards_refuse_a_digit_of_more_gauges_than_the_uno_reads(tmp_path):
-    params = load_params(write_digit("five-sections-eight-gauges", tmp_path))
-    elf = tmp_path / "board.elf"
-    elf.write_bytes(b"\x7fELF")  # refused before the image is read or the harness looked for
-    for url in (f"hil://{elf}", "board://loop://"):
-        with pytest.raises(ParameterError, match=r"gauge_positions_m has 8 gauges.*at most 6") as err:
-            open_rig(url, params)
-        message = str(err.value)
-        assert message.startswith(url.split("?")[0])
-        assert "\n" not in message
-
-
-@pytest.mark.parametrize("name", ["thesis", "six-gauges-geared", "four-sections-two-cables", "one-section"])
-def test_a_digit_of_up_to_six_gauges_is_served(name, tmp_path):
-    check_board_digit(load_params(write_digit(name, tmp_path)), "board://x")
-    check_board_digit(None, "board://x")
-
 
 BANNER = "# flexdigit-stream 2 adc=atmega328p period_us=20000 fixed=0 gauges={g} straight={s} range=0..254\r\n"
+
+
+def test_an_eight_gauge_digit_is_refused_on_a_board_declaring_six_inputs(tmp_path):
+    eight = load_params(write_digit("five-sections-eight-gauges", tmp_path))
+    check_board_digit(eight, "hil://board.elf")  # the ATmega328P has ADC0..ADC7: no refusal before the banner
+    for banner in (BANNER.format(g=8, s=8), BANNER.format(g=8, s=8).replace("\r", " target=uno adc_channels=6\r")):
+        uno = BoardState()  # an image from before the board's fields counts as an Uno's
+        uno.feed(banner.encode(), time_s=0.0)
+        with pytest.raises(ParameterError, match=r"declares 6 analogue inputs \(uno: A0..A5\); the digit has 8") as err:
+            check_board_image(uno, eight, "board://x")
+        assert "\n" not in str(err.value)
+        assert "BOARD=nano" in str(err.value)
+    nano = BoardState()
+    nano.feed(BANNER.format(g=8, s=8).replace("\r", " target=nano adc_channels=8\r").encode(), time_s=0.0)
+    check_board_image(nano, eight, "board://x")  # its own image, on its board
+
+
+@pytest.mark.parametrize(
+    "name", ["thesis", "six-gauges-geared", "four-sections-two-cables", "one-section", "five-sections-eight-gauges"]
+)
+def test_a_digit_of_up_to_eight_gauges_is_served(name, tmp_path):
+    check_board_digit(load_params(write_digit(name, tmp_path)), "board://x")
+    check_board_digit(None, "board://x")
 
 
 def test_an_image_for_another_digit_is_refused_by_its_banner(tmp_path):

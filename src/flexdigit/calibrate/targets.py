@@ -46,6 +46,9 @@ class CalibrationTargets:
         Commands of the static actuation sweep (E 3.20-3.22: 8..43).
     sweep_slopes_v_per_command, sweep_offsets_v : tuple of float
         Per-channel straight-line fit ``V = slope * command + offset`` of the gauge voltages over the sweep.
+    sweep_slope_se_v_per_command : tuple of float, optional
+        Each slope's standard error, from the scatter of the per-command means about the line (the readings'
+        drift and noise): what a channel's fitted gain is known to (:func:`sweep_lines`).
     deflection_commands : tuple of int
         Commands at which deflections were read (table 3.6: 8..24).
     deflection_mm : tuple of tuple of float
@@ -78,6 +81,7 @@ class CalibrationTargets:
     sweep_commands: tuple[int, ...] | None = None
     sweep_slopes_v_per_command: tuple[float, ...] | None = None
     sweep_offsets_v: tuple[float, ...] | None = None
+    sweep_slope_se_v_per_command: tuple[float, ...] | None = None
     deflection_commands: tuple[int, ...] | None = None
     deflection_mm: tuple[tuple[float, ...], ...] | None = None
     deflection_weight: tuple[tuple[float, ...], ...] | None = None
@@ -254,7 +258,8 @@ def release_figures(records) -> dict[str, Any]:
 def sweep_lines(commands, volts) -> dict[str, tuple]:
     """Per-channel straight line ``V = slope * command + offset`` through a sweep (E 3.20-3.22).
 
-    Returns the ``sweep_*`` fields of :class:`CalibrationTargets`: the distinct commands, slopes and offsets.
+    Returns the ``sweep_*`` fields of :class:`CalibrationTargets`: the distinct commands, slopes, offsets and the
+    slopes' standard errors.
     """
     cmds = check_array(commands, "sweep commands", "CalibrationTargets", ndim=1, min_length=2)
     v = check_array(volts, "sweep volts", "CalibrationTargets", shape=(cmds.size, None))
@@ -264,10 +269,19 @@ def sweep_lines(commands, volts) -> dict[str, tuple]:
             f"The 'sweep commands' of CalibrationTargets must hold at least two different commands. Got {distinct}."
         )
     coef = np.polyfit(cmds, v, 1)
+    # the slope's standard error from the per-command means' scatter about the line: readings at one command share
+    # its drift, so the means, not the readings, are the independent samples (an underestimate when the drift
+    # wanders over several commands; 0 dof with two commands: no estimate, NaN)
+    means = np.array([v[cmds == c].mean(axis=0) for c in distinct])
+    scatter = means - (np.outer(distinct, coef[0]) + coef[1])
+    dof = distinct.size - 2
+    sd = np.sqrt(np.sum(scatter**2, axis=0) / dof) if dof > 0 else np.full(v.shape[1], np.nan)
+    se = sd / np.sqrt(np.sum((distinct - distinct.mean()) ** 2))
     return {
         "sweep_commands": tuple(int(c) for c in distinct),
         "sweep_slopes_v_per_command": tuple(float(x) for x in coef[0]),
         "sweep_offsets_v": tuple(float(x) for x in coef[1]),
+        "sweep_slope_se_v_per_command": tuple(float(x) for x in se),
     }
 
 

@@ -75,6 +75,8 @@ class CalibrationResult:
         The calibration's fields the fit set (the others kept their initial values).
     targets : CalibrationTargets or None
         What was fitted.
+    notes : list of str
+        What the records could not tell apart or determine, one line each (those values kept as started).
     """
 
     calibration: Calibration
@@ -84,6 +86,7 @@ class CalibrationResult:
     message: str = ""
     fitted: list[str] = field(default_factory=list)
     targets: CalibrationTargets | None = None
+    notes: list[str] = field(default_factory=list)
 
     def residual_rows(self) -> list[dict[str, Any]]:
         """The residuals with ``residual`` (twin - measured) and ``relative`` (residual / abs(measured); None at 0)."""
@@ -116,6 +119,8 @@ class CalibrationResult:
         if self.targets is not None:
             record["targets"] = self.targets.to_dict()
         record["residuals"] = [dict(r) for r in self.residuals]
+        if self.notes:
+            record["notes"] = list(self.notes)
         return record
 
     def __repr__(self) -> str:
@@ -209,9 +214,12 @@ def calibrate(
     params = params or RigParams()
     if initial is None:  # the nominal calibration is the thesis rig's; another digit starts from it scaled to it
         initial = Calibration() if params == RigParams() else calibration_for(params)
-    cal, fitted, (cost, success, message) = _fit_mechanics(params, initial, targets, cells_per_section, orientation)
+    cal, fitted, (cost, success, message), notes = _fit_mechanics(
+        params, initial, targets, cells_per_section, orientation
+    )
     r = model_response(params, cal, targets, cells_per_section=cells_per_section, orientation=orientation)
-    cal, sweep_rows, copied = _fit_channels(cal, targets, r)
+    cal, sweep_rows, copied, gain_notes = _fit_channels(cal, targets, r)
+    notes += gain_notes
     cal, friction_rows = _fit_friction(params, cal, targets, cells_per_section, friction_score)
     if targets.sweep_commands is not None:
         fitted += ["channel_gain", "channel_offset_v"]
@@ -219,7 +227,7 @@ def calibrate(
     if friction_rows:
         fitted.append("cable_friction_ratio")
     rows = _mechanics_rows(targets, r) + sweep_rows + friction_rows
-    result = CalibrationResult(cal, rows, cost, success, message, fitted, targets)
+    result = CalibrationResult(cal, rows, cost, success, message, fitted, targets, notes)
     _log.log(logging.INFO if verbose else logging.DEBUG, "calibration residuals:\n%s", result.table())
     return result
 
@@ -229,55 +237,151 @@ def _deflection_weight(t: CalibrationTargets) -> np.ndarray | None:
     return np.asarray(t.deflection_weight, dtype=float) if t.deflection_mm is not None else None
 
 
-def _mechanics_start(cal0: Calibration, t: CalibrationTargets) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
-    """Start point and bounds (log scale) of the mechanics, and which of them the given targets identify.
+#: The order in which the mechanics are tried for the fit when the records cannot tell some apart: the first of
+#: two parameters one record moves alike is fitted, the other kept (a housed release test alone has one wn for the
+#: supports' mass and the housing's stiffness: the housing, the part no scale weighs, is fitted; one zeta for the
+#: strip's and the housing's damping: the housing's, which dominates it).
+PRIORITY = (
+    "housing_ei_n_m2",
+    "housing_beta_s",
+    "support_mass_kg",
+    "strip_beta_s",
+    "cable_stiffness_n_m",
+    "housing_base_factor",
+)
+#: A parameter is fitted only if changing it by a factor e moves the scaled residuals (units: 1 % of a wn or zeta,
+#: a deflection's resolution) by at least this much in a direction the parameters already fitted cannot follow...
+IDENTIFIED_MIN = 1.0
+#: ... and that direction is at least this share of its whole effect (else the two are nearly one parameter: their
+#: fitted values would trade against each other by 1 / share times the records' noise).
+IDENTIFIED_SHARE = 0.05
+#: Scaled residuals (units as above) under which a fit that ran out of evaluations has still met every target.
+MET = 0.01
+#: What record gives each target (what an ill-posed fit is missing).
+_RECORD = {
+    "bare_wn_rad_s": "a bare release test (--release-bare)",
+    "housing_wn_rad_s": "a housed release test (--release-housed)",
+    "bare_zeta": "a bare release test (--release-bare)",
+    "housing_zeta": "a housed release test (--release-housed)",
+    "deflection_mm": "a deflection table (--deflections)",
+}
 
-    A parameter not identified is pinned to its start value by bounds 1e-9 apart.
+
+def _mechanics_start(cal0: Calibration, t: CalibrationTargets) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+    """Start point and bounds (log scale) of the mechanics, and which of them the given targets bear on.
+
+    The supports' masses and the housing's stiffnesses are scales on ``cal0``'s values (their ratios kept: one
+    wn cannot tell one support's mass from another's), the base factor a scale on ``cal0``'s base-to-section
+    ratio; the dampings and the cable stiffness are absolute. A parameter no given target bears on is pinned
+    (:data:`MECHANICS`).
     """
-    m0 = cal0.support_mass_kg[0]
-    ei0 = cal0.housing_ei_n_m2[-1]  # a section past the base (the base's own on a one-section digit)
-    base0 = cal0.housing_ei_n_m2[0] / ei0 if ei0 > 0 else 1.0
-    x0 = np.log(
+    masses = np.maximum(np.asarray(cal0.support_mass_kg, dtype=float), 1e-12)
+    eis = np.maximum(np.asarray(cal0.housing_ei_n_m2, dtype=float), 1e-8)
+    base0 = eis[0] / eis[-1]
+    x0 = np.array(
         [
-            m0,
-            max(ei0, 1e-8),
-            base0,
-            max(cal0.strip_beta_s, 1e-8),
-            max(cal0.housing_beta_s, 1e-8),
-            cal0.cable_stiffness_n_m,
+            0.0,
+            0.0,
+            0.0,
+            np.log(max(cal0.strip_beta_s, 1e-8)),
+            np.log(max(cal0.housing_beta_s, 1e-8)),
+            np.log(cal0.cable_stiffness_n_m),
         ]
     )
-    lower = np.log([1e-4, 1e-5, 0.2, 1e-7, 1e-6, 2e3])
-    upper = np.log([0.5, 1.0, 200.0, 1.0, 1.0, 2e6])
+    lower = np.array(
+        [
+            np.log(1e-4 / masses.min()),
+            np.log(1e-5 / eis[1:].min()) if eis.size > 1 else np.log(1e-5 / eis[0]),
+            np.log(0.2 / base0),
+            np.log(1e-7),
+            np.log(1e-6),
+            np.log(2e3),
+        ]
+    )
+    upper = np.array(
+        [
+            np.log(0.5 / masses.max()),
+            np.log(1.0 / eis[1:].max()) if eis.size > 1 else np.log(1.0 / eis[0]),
+            np.log(200.0 / base0),
+            0.0,
+            0.0,
+            np.log(2e6),
+        ]
+    )
+    lower, upper = np.minimum(lower, x0), np.maximum(upper, x0)  # a start outside the plausible box stays possible
     given = {name for name, value in vars(t).items() if value is not None}
     weight = _deflection_weight(t)
     if weight is None or not np.any(weight > 0):
         given.discard("deflection_mm")
     free = [any(target in given for target in MECHANICS[name]) for name in MECHANICS]
-    for k, is_free in enumerate(free):
-        if not is_free:  # not identifiable from the targets given: keep it
-            lower[k], upper[k] = x0[k] - 1e-9, x0[k] + 1e-9
     return x0, lower, upper, free
 
 
-def _fit_mechanics(
-    params, cal0: Calibration, t: CalibrationTargets, cells_per_section: int, orientation: str = "vertical"
-) -> tuple[Calibration, list[str], tuple[float, bool, str]]:
-    """The mechanics fitted to the wn, zeta and deflection targets: calibration, names fitted, solver outcome."""
-    from scipy.optimize import least_squares
-
-    sections = params.geometry.section_count
+def _unpacker(cal0: Calibration, sections: int):
+    """``x`` (log scales and values, :func:`_mechanics_start`) -> the calibration it stands for."""
+    masses = np.asarray(cal0.support_mass_kg, dtype=float)
+    eis = np.maximum(np.asarray(cal0.housing_ei_n_m2, dtype=float), 1e-8)
 
     def unpack(x):
         m, ei, base, bs, bh, kc = np.exp(x)
-        return cal0.replace(  # one value per section: the base section's housing stiffened by the clamp factor
-            support_mass_kg=(m,) * sections,
-            housing_ei_n_m2=(ei * base,) + (ei,) * (sections - 1),
+        housing = eis * ei
+        housing[0] *= base  # the base section's clamp factor, on its own
+        return cal0.replace(
+            support_mass_kg=tuple(float(v) for v in masses * m),
+            housing_ei_n_m2=tuple(float(v) for v in housing[:sections]),
             strip_beta_s=bs,
             housing_beta_s=bh,
             cable_stiffness_n_m=kc,
         )
 
+    return unpack
+
+
+def _identified(resid, x0: np.ndarray, candidates: list[int]) -> tuple[list[int], dict[int, int | None]]:
+    """Which of the candidate mechanics the targets tell apart (:data:`PRIORITY`, :data:`IDENTIFIED_MIN`,
+    :data:`IDENTIFIED_SHARE`), from the scaled residuals' finite-difference Jacobian at the start: the chosen
+    indices, and for each one left out the chosen one it cannot be told from (None: it moves nothing)."""
+    f0 = resid(x0)
+    if not np.all(np.isfinite(f0)):
+        raise ParameterError(
+            "The starting calibration's twin has no finite modes or deflections as mounted (does the digit buckle "
+            "in that orientation? give --orientation hanging, or --initial FILE)"
+        )
+    step = 1e-3
+    columns = {}
+    for k in candidates:
+        x = x0.copy()
+        x[k] += step
+        columns[k] = (resid(x) - f0) / step
+    names = list(MECHANICS)
+    order = sorted(candidates, key=lambda k: PRIORITY.index(names[k]))
+    chosen: list[int] = []
+    left: dict[int, int | None] = {}
+    for k in order:
+        col = columns[k]
+        if chosen:
+            basis = np.column_stack([columns[j] for j in chosen])
+            coef, *_ = np.linalg.lstsq(basis, col, rcond=None)
+            ortho = col - basis @ coef
+        else:
+            coef, ortho = np.zeros(0), col
+        norm, rest = float(np.linalg.norm(col)), float(np.linalg.norm(ortho))
+        if rest >= IDENTIFIED_MIN and rest >= IDENTIFIED_SHARE * norm:
+            chosen.append(k)
+        else:
+            left[k] = chosen[int(np.argmax(np.abs(coef)))] if norm >= IDENTIFIED_MIN and chosen else None
+    return sorted(chosen), left
+
+
+def _fit_mechanics(
+    params, cal0: Calibration, t: CalibrationTargets, cells_per_section: int, orientation: str = "vertical"
+) -> tuple[Calibration, list[str], tuple[float, bool, str], list[str]]:
+    """The mechanics fitted to the wn, zeta and deflection targets: calibration, names fitted, solver outcome, and
+    the notes on what the records could not tell apart (kept at ``cal0``'s values)."""
+    from scipy.optimize import least_squares
+
+    sections = params.geometry.section_count
+    unpack = _unpacker(cal0, sections)
     weight = _deflection_weight(t)
 
     def resid(x):
@@ -293,41 +397,88 @@ def _fit_mechanics(
         return np.array(out)
 
     x0, lower, upper, free = _mechanics_start(cal0, t)
+    names = list(MECHANICS)
     if sections == 1:  # one section: its housing is the base's, the base factor is no separate parameter
-        base = list(MECHANICS).index("housing_base_factor")
-        lower[base], upper[base], free[base] = x0[base] - 1e-9, x0[base] + 1e-9, False
-    fitted = [name for name, is_free in zip(MECHANICS, free, strict=True) if is_free]
-    if not any(free):
-        return cal0, [], (0.0, True, "no mechanical target: mechanics kept")
+        free[names.index("housing_base_factor")] = False
+    candidates = [k for k, is_free in enumerate(free) if is_free]
+    if not candidates:
+        return cal0, [], (0.0, True, "no mechanical target: mechanics kept"), []
+    chosen, left = _identified(resid, x0, candidates)
+    notes = [_kept_note(names[k], None if j is None else names[j], t) for k, j in left.items()]
+    if not chosen:
+        return cal0, [], (0.0, True, "the records move no mechanical parameter: mechanics kept"), notes
+
+    def sub(z):
+        x = x0.copy()
+        x[chosen] = z
+        return x
+
     fit = least_squares(
-        resid,
-        np.clip(x0, lower + 1e-9, upper - 1e-9),
-        bounds=(lower, upper),
+        lambda z: resid(sub(z)),
+        np.clip(x0[chosen], lower[chosen], upper[chosen]),
+        bounds=(lower[chosen], upper[chosen]),
         x_scale=1.0,
-        xtol=1e-12,
-        ftol=1e-12,
-        gtol=1e-12,
-        max_nfev=400,
+        xtol=1e-10,
+        ftol=1e-10,
+        gtol=1e-10,
+        max_nfev=100 * (len(chosen) + 1),
     )
-    fitted = [name for name in fitted if name != "housing_base_factor"]
-    return unpack(fit.x), fitted, (float(fit.cost), bool(fit.success), str(fit.message))
+    success, message = bool(fit.success), str(fit.message)
+    if not success and fit.fun.size and float(np.max(np.abs(fit.fun))) < MET:
+        success, message = True, f"every target met within {MET:g} of its scale ({fit.nfev} evaluations)"
+    fitted = [names[k] for k in chosen if names[k] != "housing_base_factor"]
+    return unpack(sub(fit.x)), fitted, (float(fit.cost), success, message), notes
+
+
+def _kept_note(name: str, like: str | None, t: CalibrationTargets) -> str:
+    """One line: a mechanical parameter kept at its starting value, why, and the record that would fit it."""
+    given = {key for key, value in vars(t).items() if value is not None}
+    missing = sorted({_RECORD[target] for target in MECHANICS[name] if target not in given and target in _RECORD})
+    why = f"these records cannot tell it from {like}" if like is not None else "these records hardly move it"
+    give = f"; {' or '.join(missing)} would fit it" if missing else ""
+    return f"kept {name} at its starting value: {why}{give}"
+
+
+#: A channel's gain is refused (kept at its starting value, said in a note) when the sweep tells it to no better
+#: than this relative standard error: a gauge that hardly reads in the sweep, or whose drift swamps its line.
+GAIN_UNDETERMINED = 0.25
+#: Relative standard errors of the gains above this are reported in a note (the sweep's noise and drift on them).
+GAIN_REPORTED = 0.02
+#: How long a sweep holds each command, s (the thesis's settled readings, ``simulate sweep``'s default 3 s settle
+#: and 20 readings at 100 Hz): the time over which the gauges' random-walk drift bends its line.
+SWEEP_S_PER_COMMAND = 3.2
 
 
 def _fit_channels(
     cal: Calibration, t: CalibrationTargets, r: dict
-) -> tuple[Calibration, list[dict[str, Any]], list[str]]:
+) -> tuple[Calibration, list[dict[str, Any]], list[str], list[str]]:
     """Each channel's gain and offset fitted to its sweep line (linear least squares), the noise levels copied.
 
-    Returns the calibration, the sweep's residual rows and the names of the noise levels copied.
+    A gain's relative standard error is its line's slope's (``t.sweep_slope_se_v_per_command``): one the sweep
+    cannot tell to :data:`GAIN_UNDETERMINED` is kept at its starting value. Returns the calibration, the sweep's
+    residual rows, the names of the noise levels copied and the notes (gains uncertain or kept).
     """
     gains, offsets = list(cal.channel_gain), list(cal.channel_offset_v)
     rows: list[dict[str, Any]] = []
+    notes: list[str] = []
     if t.sweep_commands is not None:
         cmds = np.asarray(t.sweep_commands, dtype=float)
+        uncertain = []
         for ch in range(r["sweep_unit_v"].shape[1]):
             line = t.sweep_slopes_v_per_command[ch] * cmds + t.sweep_offsets_v[ch]
             design = np.column_stack([r["sweep_unit_v"][:, ch], np.ones_like(cmds)])
             (g, o), *_ = np.linalg.lstsq(design, line, rcond=None)
+            se = _gain_relative_se(t, ch, _drift(cal, t, ch))
+            if se > GAIN_UNDETERMINED:
+                notes.append(
+                    f"kept channel_gain of gauge {ch + 1} at its starting value {gains[ch]:.4g}: the sweep "
+                    f"determines it only to +-{100 * se:.0f} % (its line's slope "
+                    f"{t.sweep_slopes_v_per_command[ch]:.3g} V/command against the scatter of its readings)"
+                )
+                g = gains[ch]
+                o = float(np.mean(line - g * r["sweep_unit_v"][:, ch]))
+            elif se > GAIN_REPORTED:
+                uncertain.append(f"gauge {ch + 1} +-{100 * se:.0f} %")
             gains[ch], offsets[ch] = float(g), float(o)
             model = g * r["sweep_unit_v"][:, ch] + o
             slope, intercept = np.polyfit(cmds, model, 1)
@@ -347,13 +498,38 @@ def _fit_channels(
                     unit="V",
                 )
             )
+        if uncertain:
+            notes.append("channel_gain standard errors from the sweep's scatter and drift: " + ", ".join(uncertain))
     changes: dict[str, Any] = {"channel_gain": tuple(gains), "channel_offset_v": tuple(offsets)}
     if t.noise_white_v is not None:
         changes["noise_white_v"] = tuple(float(v) for v in t.noise_white_v)
     if t.noise_drift_v_per_sqrt_s is not None:
         changes["noise_drift_v_per_sqrt_s"] = tuple(float(v) for v in t.noise_drift_v_per_sqrt_s)
     copied = [name for name in ("noise_white_v", "noise_drift_v_per_sqrt_s") if name in changes]
-    return cal.replace(**changes), rows, copied
+    return cal.replace(**changes), rows, copied, notes
+
+
+def _drift(cal: Calibration, t: CalibrationTargets, channel: int) -> float:
+    """A channel's random-walk drift rate, V/sqrt(s): measured at rest when given, else the calibration's."""
+    rates = t.noise_drift_v_per_sqrt_s if t.noise_drift_v_per_sqrt_s is not None else cal.noise_drift_v_per_sqrt_s
+    return float(rates[channel]) if channel < len(rates) else 0.0
+
+
+def _gain_relative_se(t: CalibrationTargets, channel: int, drift_v_per_sqrt_s: float = 0.0) -> float:
+    """A channel's gain's relative standard error: its sweep slope's, from the readings' scatter about the line
+    and the drift over the sweep (a random walk of rate ``s`` over ``T`` tilts a least-squares line by
+    ``s sqrt(6 / (5 T))`` V/s, :data:`SWEEP_S_PER_COMMAND` s a command), added in quadrature."""
+    slope = float(t.sweep_slopes_v_per_command[channel])
+    scatter = 0.0
+    if t.sweep_slope_se_v_per_command is not None:
+        scatter = float(t.sweep_slope_se_v_per_command[channel])
+        scatter = scatter if np.isfinite(scatter) else 0.0
+    commands = np.asarray(t.sweep_commands, dtype=float)
+    span = float(commands.max() - commands.min())
+    duration_s = SWEEP_S_PER_COMMAND * commands.size
+    tilt = drift_v_per_sqrt_s * np.sqrt(1.2 / duration_s) * duration_s / span if span > 0 else 0.0
+    se = float(np.hypot(scatter, tilt))
+    return se / abs(slope) if slope != 0 else float("inf")
 
 
 def _as_thesis(channel: int) -> str:

@@ -22,6 +22,10 @@ POOR_FIT = 3.0
 RECORDS = ("release_bare", "release_housed", "sweep", "deflections", "rest", "actuated_rest")
 #: How a digit is mounted for its records: tip up as the thesis's; a long digit buckles so and hangs (tip down).
 MOUNTS = ("vertical", "hanging", "horizontal")
+MOUNT_HELP = (
+    "how the records' digit was mounted (default tip up, or hanging for a digit that buckles tip up, as flexdigit "
+    "simulate and run mount it)"
+)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -55,7 +59,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--actuated-rest", metavar="FILE", help="repeated readings of the unloaded actuated digit (friction level)"
     )
     p.add_argument("--time-unit", choices=("s", "ms", "us"), help="unit of a time column named without one")
-    p.add_argument("--orientation", choices=MOUNTS, default="vertical", help="how the records' digit was mounted")
+    p.add_argument("--orientation", choices=MOUNTS, default=None, help=MOUNT_HELP)
     p.add_argument(
         "--decimal", choices=(".", ","), default=None, help="decimal mark of the tables (default: detected per file)"
     )
@@ -72,29 +76,42 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _calibrate(args: argparse.Namespace) -> CommandResult:
     from flexdigit._io import check_output
+    from flexdigit._plot import check_plot
     from flexdigit.calibrate.twin_fit import THESIS_SOURCE, calibrate_to_thesis
     from flexdigit.params import RigParams, load_params
     from flexdigit.twin.calibration import load_calibration, save_calibration
     from flexdigit.twin.digit_calibration import twin_calibration
 
     given = _given_records(args)
-    from flexdigit._plot import check_plot
-
     out = check_output(args.out, force=args.force)  # refuse a bad destination before minutes of fitting
     check_plot(args.plot, "calibrate", force=args.force)
     params = load_params(args.params) if args.params else RigParams()
     # a digit nobody has measured starts from the thesis's calibration scaled to it (one value per section, gauge)
     initial = load_calibration(args.initial) if args.initial else twin_calibration(params)
+    mount = _mount(args, params, initial)
     if args.thesis:
         result, source, releases = calibrate_to_thesis(params), THESIS_SOURCE, {}
     else:
         result, source, releases = _fit_records(args, given, params, initial, out)
     fit = result.fit_record(source)
-    if releases:
-        fit["release_tests"] = {key: _release_summary(fig) for key, fig in releases.items()}
+    fit.update({"release_tests": {key: _release_summary(fig) for key, fig in releases.items()}} if releases else {})
     save_calibration(result.calibration, out, fit, force=args.force)
+    data = _result_data(result, fit, out, args.orientation)
+    text = _calibrate_text(result, data, out) + f"\n{mount}" * bool(mount)
+    if args.plot:
+        from flexdigit._plot import save_plot
+        from flexdigit.calibrate.residual_plot import residual_figure
+
+        fig = residual_figure(result, limit=None if args.thesis else POOR_FIT, title=_plot_title(args, out))
+        data["plot"] = str(save_plot(fig, args.plot, "calibrate", force=args.force))
+        text += f"\nplot -> {args.plot}"
+    return CommandResult(data=data, text=text)
+
+
+def _result_data(result, fit: dict, out, orientation: str) -> dict:
+    """What ``--json`` prints: the fit's outcome, residuals, calibration, release tests and notes."""
     row, miss = result.worst()
-    data = {
+    return {
         "out": str(out),
         "success": result.success,
         "worst": None if row is None else {"target": row["target"], "times_scale": miss},
@@ -105,16 +122,25 @@ def _calibrate(args: argparse.Namespace) -> CommandResult:
         "residuals": result.residual_rows(),
         "calibration": result.calibration.to_dict(),
         "release_tests": fit.get("release_tests", {}),
+        "notes": list(result.notes),
+        "orientation": orientation,
     }
-    text = _calibrate_text(result, data, out)
-    if args.plot:
-        from flexdigit._plot import save_plot
-        from flexdigit.calibrate.residual_plot import residual_figure
 
-        fig = residual_figure(result, limit=None if args.thesis else POOR_FIT, title=_plot_title(args, out))
-        data["plot"] = str(save_plot(fig, args.plot, "calibrate", force=args.force))
-        text += f"\nplot -> {args.plot}"
-    return CommandResult(data=data, text=text)
+
+def _mount(args: argparse.Namespace, params, initial) -> str:
+    """Set ``args.orientation`` when not given, as simulate, run and collect mount the digit
+    (:func:`~flexdigit.control.design20ms.digit_mount`); the line that says it was hung (else empty)."""
+    if args.orientation is not None:
+        return ""
+    from flexdigit.control.design20ms import digit_mount
+
+    args.orientation = digit_mount(params, initial)
+    if args.orientation == "vertical":
+        return ""
+    return (
+        "mount: hanging (tip down): tip up this digit buckles under its own weight (as flexdigit simulate and run "
+        "mount it; --orientation to say otherwise)"
+    )
 
 
 def _plot_title(args: argparse.Namespace, out) -> str:
@@ -208,6 +234,7 @@ def _calibrate_text(result, data: dict, out) -> str:
             lines.append(f"release {key} {s['record']}: not identified ({s['reason']})")
     lines.append("fitted: " + ", ".join(result.fitted))
     lines.append("kept from the starting calibration: " + (", ".join(data["kept"]) or "none"))
+    lines.extend(data["notes"])
     lines.append(f"calibration written to {out}")
     return "\n".join(lines)
 

@@ -62,7 +62,8 @@ def _add_collect(subparsers, settle) -> None:
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
-    p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset, and --record")
+    p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset, and --record, --plot")
+    add_plot_flag(p, "the dataset's gauge voltages against the load's position and against time")
 
 
 def _add_dataset(subparsers) -> None:
@@ -178,8 +179,10 @@ def _digit_protocol(args: argparse.Namespace):
 
 
 def _collect(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._plot import check_plot
     from flexdigit.tactile.runner import collect_on, journal_path
 
+    check_plot(args.plot, "collect", force=args.force)
     params, protocol = _digit_protocol(args)
     resumed = journal_path(args.out).exists()
     dataset = collect_on(
@@ -202,7 +205,21 @@ def _collect(args: argparse.Namespace) -> CommandResult:
         "settings": dataset.meta.get("settings"),
     }
     text = f"{protocol.name}: {len(dataset)} readings written to {args.out}" + (" (resumed)" if resumed else "")
+    if args.plot:
+        data["plot"] = _save_dataset_plot(args, dataset, protocol.name)
+        text += f"\nplot -> {data['plot']}"
     return CommandResult(data=data, text=text)
+
+
+def _save_dataset_plot(args, dataset, protocol: str) -> str:
+    """``collect --plot``: :func:`flexdigit.tactile.dataset_plot.dataset_figure` of the dataset written."""
+    from flexdigit._command import digit_name
+    from flexdigit._plot import save_plot
+    from flexdigit.tactile.dataset_plot import dataset_figure
+
+    digit = digit_name(args.params)
+    title = f"{protocol} on {args.backend}" + (f", digit {digit}" if digit else ", the thesis rig")
+    return str(save_plot(dataset_figure(dataset, title), args.plot, "collect", force=args.force))
 
 
 def _dataset(args: argparse.Namespace) -> CommandResult:

@@ -61,6 +61,8 @@ def register(subparsers) -> None:
     p.add_argument(
         "--filters", type=Flag(FILTER_HZ, many=True), default="0.5,5,39,50", help="comma-separated cut-offs in Hz"
     )
+    add_plot_flag(p, "||T_pq|| and the additive tolerance against the cut-off, the thesis's printed values beside")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --plot file")
     p = add_command(sub, "mixsyn", _mixsyn, help="integral mixed-sensitivity design on the consistent plant")
     p.add_argument(
         "--bandwidth",
@@ -102,7 +104,8 @@ def register(subparsers) -> None:
         metavar="FILE",
         help="keep the design (JSON, the digit's fingerprint in it) for: flexdigit run --params FILE --controller OUT",
     )
-    p.add_argument("--force", action="store_true", help="overwrite an existing --out file")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --out (and --plot) file")
+    add_plot_flag(p, "the linear 30 deg step (tip rotation and command) and the loop's frequency response")
     from flexdigit.cli._formats import epilog
 
     p.epilog = epilog("kept_design")
@@ -116,8 +119,9 @@ def _add_digit_flags(p) -> None:
     p.add_argument(
         "--orientation",
         choices=("vertical", "hanging", "horizontal"),
-        default="vertical",
-        help="how the digit is mounted (its mode and stability depend on it; default tip up)",
+        default=None,
+        help="how the digit is mounted (its mode and stability depend on it; default tip up, or hanging for a "
+        "--params digit that buckles tip up, as flexdigit run mounts it)",
     )
 
 
@@ -132,7 +136,24 @@ def _digit(args):
         from flexdigit.params import RigParams
 
         params = RigParams()
+    args.mount_note = ""
+    if args.orientation is None:  # as run and collect mount the digit (control.digit_mount), said in the output
+        from flexdigit.control.design20ms import digit_mount
+
+        args.orientation = "vertical" if params is None else digit_mount(params, calibration)
+        if args.orientation == "hanging":
+            args.mount_note = (
+                "mount: hanging (tip down): tip up this digit buckles under its own weight (as run and collect hang it)"
+            )
     return params, calibration
+
+
+def _with_mount(args, result: CommandResult) -> CommandResult:
+    """The result, with the line that says the digit was hung (when :func:`_digit` chose so)."""
+    if getattr(args, "mount_note", ""):
+        result.text += "\n" + args.mount_note
+        result.data["orientation"] = args.orientation
+    return result
 
 
 def _plot_flags(p) -> None:
@@ -193,7 +214,7 @@ def _hinf(args: argparse.Namespace) -> CommandResult:
     check_plot(args.plot, "design", force=args.force)
     params, calibration = _digit(args)
     if params is not None:
-        return _hinf_digit(args, params, calibration)
+        return _with_mount(args, _hinf_digit(args, params, calibration))
     parts: dict = {}
     s = _design_summary(args.filter_hz, args.plant, args.eps, args.margin, parts)
     if args.plot:
@@ -249,15 +270,18 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
 def _twenty_ms(args: argparse.Namespace) -> CommandResult:
     """``design 20ms``: the discrete design the loop runs (``flexdigit run --controller digital20``)."""
     from flexdigit._io import check_output
+    from flexdigit._plot import check_plot
     from flexdigit.control.design20ms import digit_design_20ms_summary
 
     if args.out is not None:
         check_output(args.out, force=args.force)  # before the search, not after it
+    check_plot(args.plot, "design", force=args.force)
     params, calibration = _digit(args)
     summary = digit_design_20ms_summary(
         params, period_s=args.period, calibration=calibration, orientation=args.orientation
     )
     data = {"params": args.params, **summary, "out": _keep(args, params, calibration, summary)}
+    data["plot"] = _twenty_ms_plot(args, params, calibration, summary)
     step, digit, search = data["linear_step_30deg"], data["model"], data["search"]
     model = (
         "servo x rotation per command (5.3)"
@@ -285,7 +309,26 @@ def _twenty_ms(args: argparse.Namespace) -> CommandResult:
     where = f" --params {args.params}" if args.params else ""
     kept = f" --controller {data['out']}" if data["out"] else ""
     text += f"  {'kept in ' + data['out'] + '; ' if kept else ''}the loop on the twin: flexdigit run{where}{kept}"
-    return CommandResult(data=data, text=text + " --setpoint-deg 30")
+    text += " --setpoint-deg 30" + (f"\n  plot -> {data['plot']}" if data["plot"] else "")
+    return _with_mount(args, CommandResult(data=data, text=text))
+
+
+def _twenty_ms_plot(args, params, calibration, summary: dict) -> str | None:
+    """``design 20ms --plot``: the design of ``summary`` (its weights, no search again) drawn by
+    :func:`flexdigit.control.design_plot.twenty_ms_figure`; None without ``--plot``."""
+    if args.plot is None:
+        return None
+    from flexdigit._plot import save_plot
+    from flexdigit.control.design20ms import Weights, digit_design_20ms
+    from flexdigit.control.design_plot import twenty_ms_figure
+
+    design = digit_design_20ms(
+        params, period_s=summary["period_s"], calibration=calibration, orientation=args.orientation,
+        weights=Weights(**summary["weights"]),
+    )  # fmt: skip
+    digit = Path(args.params).stem if args.params else "the thesis rig"
+    title = f"20 ms design on {digit} ({args.orientation}; thesis 5.2-5.3)"
+    return str(save_plot(twenty_ms_figure(design, title=title), args.plot, "design", force=args.force))
 
 
 def _keep(args, params, calibration, summary: dict) -> str | None:
@@ -300,8 +343,10 @@ def _keep(args, params, calibration, summary: dict) -> str | None:
 
 
 def _sweep(args: argparse.Namespace) -> CommandResult:
+    from flexdigit._plot import check_plot
     from flexdigit.reference import thesis_value
 
+    check_plot(args.plot, "design", force=args.force)
     printed = thesis_value("hinf.additive_tolerance_percent")
     rows = []
     lines = [
@@ -321,7 +366,20 @@ def _sweep(args: argparse.Namespace) -> CommandResult:
             f"{shifted if shifted is not None else float('nan'):18.3g} | "
             f"{s['additive_tolerance_relative_percent']:22.4g} | {s['tuw_step_peak']:.4g}"
         )
+    if args.plot:
+        lines.append(f"  plot -> {_sweep_plot(args, rows)}")
     return CommandResult(data=rows, text="\n".join(lines))
+
+
+def _sweep_plot(args, rows: list[dict]) -> str:
+    """``design sweep --plot``: :func:`flexdigit.control.design_plot.sweep_figure` of the rows printed."""
+    from flexdigit._plot import save_plot
+    from flexdigit.control.design_plot import sweep_figure
+
+    columns = ("filter_hz", "tpq_peak_db", "additive_tolerance_relative_percent", "thesis_percent")
+    columns += ("thesis_arithmetic_printed_gain_percent",)
+    fig = sweep_figure(*([r[c] for r in rows] for c in columns))
+    return str(save_plot(fig, args.plot, "design", force=args.force))
 
 
 def _mixsyn(args: argparse.Namespace) -> CommandResult:

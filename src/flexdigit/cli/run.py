@@ -484,8 +484,13 @@ def _run_on_board(args: argparse.Namespace) -> CommandResult:
     text = (
         f"loop on the board ({args.backend}): {run['status']} ({run['message']})\n"
         f"  true (twin) rotation: final {run['true_final_rotation_deg']:.2f} deg (setpoint {setpoint:g}), peak "
-        f"{run['true_peak_rotation_deg']:.2f} deg\n"
-        f"  step: {_figures_line({'true': metrics}) if metrics else 'too few samples'}\n"
+        f"{run['true_peak_rotation_deg']:.2f} deg"
+        + (
+            f"; the board's estimate: final {run['estimated_final_rotation_deg']:.2f} deg\n"
+            if run["estimated_final_rotation_deg"] is not None
+            else "\n"
+        )
+        + f"  step: {_figures_line({'true': metrics}) if metrics else 'too few samples'}\n"
         f"  board: {run['samples']} periods of {run['period_s'] * 1000:g} ms, update <= {stats['exec_max_cycles']} "
         f"cycles ({stats['exec_max_cycles'] / 16:.0f} us at 16 MHz), faults {stats['faults'] or 'none'}"
         + (f"\n  log -> {data['log']}" if data["log"] else "")

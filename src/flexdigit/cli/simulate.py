@@ -18,7 +18,7 @@ import argparse
 from flexdigit._command import CommandResult, add_command, digit_name
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible, check_values
-from flexdigit.errors import ParameterError
+from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M, SERVO_COMMAND, RigParams
 
 # The experiments' flags, declared once (flexdigit._validation.Flag): argparse refuses a value outside its range
@@ -29,6 +29,12 @@ DURATION = Plausible("s", 0.01, 600.0, "a simulated record of 10 ms to 10 min")
 RATE = Plausible("Hz", 1.0, 1e4, "sampling at 1 Hz to 10 kHz")
 #: Commands as a list ("0,20,40") or a range ("8..43"), each a servo position byte (both ends checked first).
 COMMANDS = Flag(SERVO_COMMAND, many=True, ranges=True)
+#: A release record's default length: this many periods of the digit's first mode (as mounted, housed or bare),
+#: enough swings for ``identify`` to see the decay (it needs 4 x the time to swing half-way after the release); the
+#: thesis rig's 8 s hold 13 periods of its housed 13.1 rad/s, a 2.4 rad/s bare 0.6 m digit needs 31 s.
+RELEASE_CYCLES = 12.0
+#: ... and never shorter than the thesis's records.
+RELEASE_MIN_S = 8.0
 #: Chapter 6's load positions from the tip (cm) on the thesis digit (6.4: 0 to 14 cm, and 24 cm near the clamp).
 CHAPTER6_POSITIONS_CM = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 24)
 
@@ -99,14 +105,21 @@ def _add_release(sub) -> None:
         default=20.0,
         help="initial tip deflection (mm)",
     )
-    p.add_argument("--duration", type=Flag(DURATION), default=8.0, help="seconds")
+    p.add_argument(
+        "--duration",
+        type=Flag(DURATION),
+        default=None,
+        help=f"seconds (default: {RELEASE_CYCLES:g} periods of the digit's first mode as mounted, at least "
+        f"{RELEASE_MIN_S:g} s, the thesis's records)",
+    )
     p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
     p.add_argument(
         "--orientation",
-        default="vertical",
+        default=None,
         choices=("vertical", "hanging", "horizontal"),
-        help="vertical: tip up, as the thesis mounted it (2.2.4); a long digit buckles so, hang it (with --robot: "
-        "gravity along -z, +z or -x of the robot's base frame)",
+        help="vertical: tip up, as the thesis mounted it (2.2.4); default tip up, or hanging for a digit that "
+        "buckles tip up, as flexdigit run mounts it (with --robot: gravity along -z, +z or -x of the robot's base "
+        "frame; default -z)",
     )
     _robot_flags(p, step=False)
 
@@ -122,6 +135,13 @@ def _add_step(sub) -> None:
     p.add_argument("--duration", type=Flag(DURATION), default=1.5, help="seconds")
     p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
     p.add_argument("--cable", action="store_true", help="keep the cable attached")
+    p.add_argument(
+        "--orientation",
+        default=None,
+        choices=("vertical", "hanging", "horizontal"),
+        help="vertical: tip up, as the thesis mounted it; default tip up, or hanging for a digit that buckles tip "
+        "up, as flexdigit run mounts it",
+    )
     _robot_flags(p, step=True)
 
 
@@ -150,9 +170,10 @@ def _add_sweep(sub) -> None:
     )
     p.add_argument(
         "--orientation",
-        default="vertical",
+        default=None,
         choices=("vertical", "hanging", "horizontal"),
-        help="vertical: tip up, as the thesis swept it (3.4.3); a long digit buckles so, hang it",
+        help="vertical: tip up, as the thesis swept it (3.4.3); default tip up, or hanging for a digit that buckles "
+        "tip up, as flexdigit run mounts it",
     )
 
 
@@ -214,8 +235,10 @@ def _run(args: argparse.Namespace) -> CommandResult:
         cal = calibration_for(params)
     common = dict(seed=args.seed, params=params, calibration=cal)
     gauges = range(1, len(params.geometry.gauge_positions_m) + 1)  # the digit's gauges, 1..G
+    mount = _mount(args, params, cal)
     experiment = {"release": _release, "step": _step, "sweep": _sweep}.get(args.experiment, _load)
     res, findings, text = experiment(args, params, gauges, common)
+    text += f"\n{mount}" * bool(mount)
     path = res.save(args.out, force=args.force)
     if args.plot:
         save_plot(record_figure(res, digit=digit_name(args.params)), args.plot, "simulate", force=args.force)
@@ -228,16 +251,48 @@ def _run(args: argparse.Namespace) -> CommandResult:
         "findings": findings,
         "plot": args.plot,
     }
-    if args.plot:
-        text += f"\nplot -> {args.plot}"
+    text += f"\nplot -> {args.plot}" * bool(args.plot)
     digit = f" of digit {digit_name(args.params)} ({args.params})" if args.params else ""
     head = f"{res.metadata['experiment']}{digit}: {res.table.num_rows} rows -> {path}"
     return CommandResult(data=data, text=f"{head}\n{text}")
 
 
+def _mount(args, params, calibration) -> str:
+    """Set the twin's mount when ``--orientation`` is not given (``load`` keeps its horizontal), as ``flexdigit
+    run`` and ``collect`` choose it (:func:`~flexdigit.control.design20ms.digit_mount`): tip up, or hanging for a
+    digit that buckles tip up; the line that says it was hung (else empty)."""
+    if args.experiment == "load" or args.orientation is not None:
+        return ""
+    from flexdigit.control.design20ms import digit_mount
+
+    args.orientation = digit_mount(params, calibration)
+    if args.orientation == "vertical":
+        return ""
+    return "mount: hanging (tip down): tip up this digit buckles under its own weight (as run and collect hang it)"
+
+
+def release_duration_s(params, calibration, *, housing: bool, orientation: str) -> float:
+    """The default length of a release record (s): :data:`RELEASE_CYCLES` periods of the digit's first mode as
+    mounted (housed or bare, cable removed), at least :data:`RELEASE_MIN_S`.
+
+    Examples
+    --------
+    >>> from flexdigit.twin.calibration import default_calibration
+    >>> release_duration_s(RigParams(), default_calibration(), housing=True, orientation="vertical")
+    8.0
+    """
+    import math
+
+    from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit
+
+    wn = float(cached_digit(params, calibration, housing, orientation, DEFAULT_CELLS_PER_SECTION).linear_modes()[0][0])
+    if not (math.isfinite(wn) and wn > 0):  # buckled as mounted: release_test refuses it in one line
+        return RELEASE_MIN_S
+    return max(RELEASE_MIN_S, math.ceil(RELEASE_CYCLES * 2 * math.pi / wn))
+
+
 def _release(args, params, gauges, common: dict):
     """``simulate release``: the record, each gauge's wn and zeta, and their lines."""
-    from flexdigit.twin import records as ex
 
     if args.deflection_mm == 0:
         # a release from no deflection is noise, and the fit below would report a wn and zeta fitted to it
@@ -245,15 +300,7 @@ def _release(args, params, gauges, common: dict):
             "The '--deflection-mm' parameter of flexdigit simulate release must not be 0: a release test releases "
             "the digit from a deflection (e.g. 20 mm, either sign). Got 0.0 instead."
         )
-    res = ex.release_test(
-        housing=not args.no_housing,
-        tip_deflection_m=args.deflection_mm * 1e-3,
-        duration_s=args.duration,
-        sample_rate_hz=args.rate,
-        orientation=args.orientation,
-        **common,
-    )
-    findings = _release_findings(res, gauges)
+    res, findings = _release_record(args, params, gauges, common)
     lines = []
     for g in gauges:
         f = findings[f"gauge{g}"]
@@ -267,6 +314,33 @@ def _release(args, params, gauges, common: dict):
     return res, findings, "\n".join(lines)
 
 
+def _release_record(args, params, gauges, common: dict):
+    """The release record (``--duration`` or :func:`release_duration_s`) and its findings; a record too short to
+    identify is refused naming ``--duration``."""
+    from flexdigit.twin import records as ex
+
+    need = release_duration_s(params, common["calibration"], housing=not args.no_housing, orientation=args.orientation)
+    duration = need if args.duration is None else args.duration
+    res = ex.release_test(
+        housing=not args.no_housing,
+        tip_deflection_m=args.deflection_mm * 1e-3,
+        duration_s=duration,
+        sample_rate_hz=args.rate,
+        orientation=args.orientation,
+        **common,
+    )
+    try:
+        return res, _release_findings(res, gauges)
+    except DataFileError as exc:
+        if "too short" not in str(exc):
+            raise
+        said = str(exc).partition("; pass --force")[0]
+        raise ParameterError(
+            f"a {duration:g} s release record is too short to identify this digit's first mode: give --duration "
+            f"{max(need, 2 * duration):g} or more (no record written; identify: {said})"
+        ) from None
+
+
 def _step(args, params, gauges, common: dict):
     """``simulate step``: the record and the pot's start, peak and end."""
     from flexdigit.twin import records as ex
@@ -277,6 +351,7 @@ def _step(args, params, gauges, common: dict):
         duration_s=args.duration,
         sample_rate_hz=args.rate,
         cable=args.cable,
+        orientation=args.orientation,
         **common,
     )
     pot = res.column("pot_v")
@@ -405,7 +480,8 @@ def _robot_test(args: argparse.Namespace, robot):
     tensions = _robot_tensions(args.tension_n, "--tension-n", robot)
     if args.experiment == "release":
         g = G_STANDARD_M_S2
-        gravity = {"vertical": (0, 0, -g), "hanging": (0, 0, g), "horizontal": (-g, 0, 0)}[args.orientation]
+        mount = args.orientation or "vertical"
+        gravity = {"vertical": (0, 0, -g), "hanging": (0, 0, g), "horizontal": (-g, 0, 0)}[mount]
         sign = 1.0 if args.deflection_mm >= 0 else -1.0
         test = release_test(
             robot,

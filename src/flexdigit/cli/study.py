@@ -6,6 +6,7 @@ import argparse
 from numbers import Integral
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import Flag, Interval, Plausible
 
 
@@ -34,6 +35,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="sensitivity: Sobol base samples N (a power of 2)",
     )
     p.add_argument("--second-order", action="store_true", help="sensitivity: also second-order indices S2")
+    _add_design_flags(p)
+    p.add_argument(
+        "--force", action="store_true", help="start over: replace the journal and outputs in --out (and --plot)"
+    )
+    add_plot_flag(
+        p,
+        "the study's main result: a sensitivity study's Sobol indices (one metric's S1 and ST, or the total-index "
+        "map of several), a design study's Pareto front",
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+def _add_design_flags(p) -> None:
+    """The flags of ``study design`` alone."""
     p.add_argument(
         "--samples",
         type=Flag(Plausible("", 0, 1_000_000, "candidate designs: a million twin evaluations is days", integer=True)),
@@ -51,8 +66,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--export-to", metavar="FILE", default=None, help="where --export writes (default OUT/design-K.toml)"
     )
-    p.add_argument("--force", action="store_true", help="start over: replace the journal and outputs in --out")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 
 
 def _study(args: argparse.Namespace) -> CommandResult:
@@ -77,6 +90,9 @@ def _study(args: argparse.Namespace) -> CommandResult:
         raise FileNotFoundError(f"{out}: the directory {out.parent} does not exist")
     if args.kind == "sensitivity" and (args.export is not None or args.export_to is not None):
         raise ParameterError("--export K is for design studies (flexdigit study design SPEC --out DIR --export K)")
+    from flexdigit._plot import check_plot
+
+    check_plot(args.plot, "study", force=args.force)
     spec = _load(args)
     if args.kind == "sensitivity":
         return _sensitivity(args, spec, out)
@@ -101,13 +117,15 @@ def _run(args, out, run, settings, write):
     """Run a study in ``out`` (created), write its files, return ``(result, summary)``.
 
     A finished study is refused (before any work) unless some of its tasks failed (a worker died): a rerun then
-    computes those rows again and rewrites the outputs."""
+    computes those rows again and rewrites the outputs; or unless it is asked for ``--export`` or ``--plot``: its
+    journal is then read, nothing computed again, its files left as they are."""
     from flexdigit.errors import OutputExistsError
     from flexdigit.studies.execution import retry_rows
 
     done = out / "summary.json"
     retry = done.exists() and not args.force and retry_rows(out) > 0
-    reading = done.exists() and not args.force and not retry and getattr(args, "export", None) is not None
+    asks = getattr(args, "export", None) is not None or args.plot is not None  # of the finished study: read it
+    reading = done.exists() and not args.force and not retry and asks
     if done.exists() and not args.force and not retry and not reading:
         raise OutputExistsError(f"{done}: this study has finished in {out}; pass --force to run it again")
     from flexdigit._io import output_lock
@@ -124,7 +142,7 @@ def _run(args, out, run, settings, write):
             force=args.force,
             progress=not args.no_progress,
         )
-        # a finished study read for --export: its journal gave every row, its files stay as they are
+        # a finished study read for --export or --plot: its journal gave every row, its files stay as they are
         paths = {} if reading else write(result, out, force=args.force or retry)
     summary = result.summary()
     summary["files"] = {k: str(v) for k, v in paths.items()}
@@ -150,7 +168,20 @@ def _sensitivity(args, spec, out) -> CommandResult:
         lines.append(f"  {metric}: {ranked} [{flag}]")
     if result.failed_rows:
         lines.append(f"  {len(result.failed_rows)} rows failed (listed in summary.json)")
+    if args.plot and result.sobol:
+        from flexdigit.studies.figures import sensitivity_figure
+
+        summary["plot"] = _save_plot(args, sensitivity_figure(result))
+        lines.append(f"  plot -> {summary['plot']}")
+    elif args.plot:
+        lines.append("  no plot: no metric has indices")
     return CommandResult(data=summary, text="\n".join(lines))
+
+
+def _save_plot(args, fig) -> str:
+    from flexdigit._plot import save_plot
+
+    return str(save_plot(fig, args.plot, "study", force=args.force))
 
 
 def _design(args, spec, out) -> CommandResult:
@@ -166,6 +197,12 @@ def _design(args, spec, out) -> CommandResult:
         check_output(target, force=args.force, hint="(which also runs the study again) or give --export-to FILE")
     result, summary = _run(args, out, run_design, settings, write_design_outputs)
     text = result.text()
+    if args.plot:
+        from flexdigit.studies.design_study import design_pareto_figure
+        from flexdigit.studies.figures import with_subject
+
+        summary["plot"] = _save_plot(args, with_subject(design_pareto_figure(result), spec))
+        text += f"\nplot -> {summary['plot']}"
     if args.export is not None:
         from flexdigit.studies.design_study import export_design
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 
 from flexdigit._command import CommandResult, add_command
+from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.errors import ParameterError
 
@@ -63,8 +64,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--tip-moment-nm", help="tip moment mx,my,mz in N m " + vector.format("tip-moment-nm"))
     p.add_argument("--gravity-m-s2", help="gravity gx,gy,gz in m/s^2, base frame (default: none)")
     p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
-    p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
+    p.add_argument("--force", action="store_true", help="replace the --record (and --plot) file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+    add_plot_flag(
+        p, "the robot's backbone from the side (x-z), the front (y-z) and above (x-y) in mm, disks and tip marked"
+    )
     p = sub.add_parser(
         "dynamics", help="time response from a static shape to loads applied at t = 0", epilog=epilog("robot")
     )
@@ -94,8 +98,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="the discretised rod (default; fast, robust) or the continuous rod shot at each step",
     )
     p.add_argument("--record", metavar="OUT.mcap", help="also write an MCAP recording with a 3D view (Foxglove)")
-    p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
+    p.add_argument("--force", action="store_true", help="replace the --record (and --plot) file if it exists")
     p.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the result as JSON")
+    add_plot_flag(p, "the tip's x, y and z (mm) against time (s)")
     _add_shape(sub, vector)
     _add_contact(sub)
 
@@ -151,8 +156,6 @@ def _add_shape(sub, vector: str) -> None:
     p.add_argument(
         "--record", metavar="OUT.mcap", help="also write the estimated shape as an MCAP recording (Foxglove 3D)"
     )
-    from flexdigit._plot import add_plot_flag
-
     add_plot_flag(
         p,
         "the estimated backbone beside the twin's, seen from the side (x-z) and the front (y-z) in mm, and the "
@@ -179,8 +182,6 @@ def _add_contact(sub) -> None:
         help="where to press the twin: arc length from the base, m",
     )
     p.add_argument("--contact-force-n", help="the force to press the twin with, fx,fy,fz in N, world frame")
-    from flexdigit._plot import add_plot_flag
-
     add_plot_flag(
         p,
         "the backbone without the contact from the side (x-z) and the front (y-z) in mm, the estimated contact "
@@ -193,6 +194,10 @@ def _run(args: argparse.Namespace) -> CommandResult:
         from flexdigit._io import check_output
 
         check_output(args.record, force=args.force)
+    if args.plot is not None:
+        from flexdigit._plot import check_plot
+
+        check_plot(args.plot, f"tdcr {args.tdcr_command}", force=args.force)
     if args.tdcr_command in ("shape", "contact"):
         return _sensing(args)
     if args.tdcr_command == "dynamics":
@@ -236,6 +241,16 @@ def _record(args: argparse.Namespace, robot, solution, tensions, loads) -> dict:
     return {"recording": str(path)}
 
 
+def _plot(args: argparse.Namespace, draw) -> dict:
+    """``--plot``: the figure ``draw()`` returns (a :mod:`flexdigit.tdcr.robot_plot` one), saved; its path for the
+    result (empty without ``--plot``)."""
+    if args.plot is None:
+        return {}
+    from flexdigit._plot import save_plot
+
+    return {"plot": str(save_plot(draw(), args.plot, f"tdcr {args.tdcr_command}", force=args.force))}
+
+
 def _start(args: argparse.Namespace, robot) -> dict:
     """Where ``tdcr dynamics`` starts from: the statics of ``--from-tension-n`` (zero) and ``--from-tip-force-n``."""
     start = {"tensions_n": [0.0] * len(robot.tendons)}
@@ -250,7 +265,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
     import warnings
 
     from flexdigit.errors import ConvergenceWarning
-    from flexdigit.tdcr import get_robot, simulate, solve_statics
+    from flexdigit.tdcr import get_robot, simulate, solve_statics, trajectory_figure
 
     robot = get_robot(args.robot)
     tensions = _tensions(args.tension_n, "tension-n", robot)
@@ -265,7 +280,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
             robot, initial, args.duration_s, dt_s=args.dt_s, tensions_n=tensions, method=args.method, **loads
         )
     converged = initial.converged and motion.converged
-    record = _record(args, robot, motion, tensions, loads)
+    record = {**_record(args, robot, motion, tensions, loads), **_plot(args, lambda: trajectory_figure(motion, robot))}
     data = {
         "robot": robot.name,
         "tensions_n": tensions,
@@ -285,7 +300,7 @@ def _dynamics(args: argparse.Namespace) -> CommandResult:
         f"tip from ({tip0[0]:.3f}, {tip0[1]:.3f}, {tip0[2]:.3f}) mm",
         f"      to ({tip1[0]:.3f}, {tip1[1]:.3f}, {tip1[2]:.3f}) mm",
         f"converged: {converged}",
-        *([f"recording: {record['recording']}"] if record else []),
+        *(f"{'recording' if key == 'recording' else 'plot ->'} {path}" for key, path in record.items()),
     ]
     return CommandResult(data=data, text="\n".join(lines), exit_code=0 if converged else 1)
 
@@ -305,7 +320,7 @@ def _statics(args: argparse.Namespace) -> CommandResult:
     import warnings
 
     from flexdigit.errors import ConvergenceWarning
-    from flexdigit.tdcr import get_robot, solve_statics
+    from flexdigit.tdcr import get_robot, solve_statics, statics_figure
 
     robot = get_robot(args.robot)
     tensions = _tensions(args.tension_n, "tension-n", robot)
@@ -313,7 +328,7 @@ def _statics(args: argparse.Namespace) -> CommandResult:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)  # reported below, in the result and the exit code
         sol = solve_statics(robot, tensions, **loads)
-    record = _record(args, robot, sol, tensions, loads)
+    record = {**_record(args, robot, sol, tensions, loads), **_plot(args, lambda: statics_figure(sol, robot))}
     data = {"robot": robot.name, "tensions_n": tensions, **loads, **sol.to_dict(), **record}
     tip = sol.tip_position_m * 1e3
     lines = [
@@ -322,7 +337,7 @@ def _statics(args: argparse.Namespace) -> CommandResult:
         "tip frame (columns: x, y, z axes; last: position in m):",
         *("  " + "  ".join(f"{v:+.6f}" for v in row) for row in sol.tip_frame[:3]),
         f"converged: {sol.converged} ({_newton_said(sol)})",
-        *([f"recording: {record['recording']}"] if record else []),
+        *(f"{'recording' if key == 'recording' else 'plot ->'} {path}" for key, path in record.items()),
     ]
     return CommandResult(data=data, text="\n".join(lines), exit_code=0 if sol.converged else 1)
 
@@ -374,10 +389,6 @@ def _sensing(args: argparse.Namespace) -> CommandResult:
     for path in (args.out, getattr(args, "record", None)):  # refused before the work, not after it
         if path is not None:
             check_output(path, force=args.force)
-    if getattr(args, "plot", None) is not None:
-        from flexdigit._plot import check_plot
-
-        check_plot(args.plot, f"tdcr {args.tdcr_command}", force=args.force)
     robot = get_robot(args.robot)
     given = _readings(args, robot)
     common = {"noise_std": args.noise_std, "seed": args.seed, "stations_per_segment": args.stations_per_segment}
@@ -390,6 +401,8 @@ def _sensing(args: argparse.Namespace) -> CommandResult:
     else:
         data, lines = _contact(args, robot, given, common)
     data = {**head, **data}
+    if data.get("refused"):  # no place or force to stand behind: nothing written, and the exit code says so
+        return CommandResult(data=data, text="\n".join(lines), exit_code=1)
     _write_out(args, data)
     if "out" in data:
         lines.append(f"written: {data['out']}")
@@ -495,9 +508,11 @@ def _contact(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
     est = found.estimate
     data = {"tensions_n": tensions, **found.to_dict()}
     unseen = data["unseen_direction"]
+    said = _estimate_lines(est)
+    data["refused"] = said[0] if est.out_of_sight or not est.refined else None  # exit 1, its reason one line
     lines = [
         f"{robot.name}: contact from {found.layout.s_m.size} gauges (visible beyond {1e3 * est.visible_from_m:.1f} mm)",
-        *_estimate_lines(est),
+        *said,
     ]
     if unseen is not None:
         lines.append("unseen: the force along ({:+.3f}, {:+.3f}, {:+.3f}) makes no moment at any gauge".format(*unseen))
@@ -507,7 +522,7 @@ def _contact(args, robot, given: dict, common: dict) -> tuple[dict, list[str]]:
             f"force error {1e3 * found.force_error_n:.3f} mN"
             + (" (nearer the base than the gauges can see)" if found.true_s_m < est.visible_from_m else "")
         )
-    if args.plot is not None:
+    if args.plot is not None and data["refused"] is None:
         from flexdigit._plot import save_plot
         from flexdigit.tdcr import contact_figure
 

@@ -44,6 +44,8 @@ __getattr__, __all__ = lazy_exports(
         "HinfDesign": "flexdigit.control.synthesis",
         "hinf_riccati": "flexdigit.control.synthesis",
         "design_figure": "flexdigit.control.design_plot",
+        "twenty_ms_figure": "flexdigit.control.design_plot",
+        "sweep_figure": "flexdigit.control.design_plot",
         "hinf_lmi": "flexdigit.control.synthesis",
         "regularisation_path": "flexdigit.control.synthesis",
         "reduce_controller": "flexdigit.control.synthesis",

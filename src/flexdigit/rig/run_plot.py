@@ -34,11 +34,13 @@ def run_figure(run: StepRun, title: str = ""):
 
 def board_run_figure(run: dict, title: str = ""):
     """The same figure for a run whose loop closed on the board (:func:`~flexdigit.rig.step_test.board_step_test`'s
-    result): the setpoint, the twin's true rotation and the board's command (its servo pulse, in commands); no
-    estimate line, the board does not stream its estimate."""
+    result): the setpoint, the board's streamed rotation estimate (none from an image that streams none), the twin's
+    true rotation and the board's command (its servo pulse, in commands)."""
     s = run["series"]
     t = np.asarray(s["time_s"], float)
-    return _figure(t, np.full(t.size, run["setpoint_deg"]), None, s["true_rotation_deg"], s["command"], title)
+    estimate = np.asarray(s.get("estimate_deg", np.full(t.size, np.nan)), float)
+    estimate = None if not np.isfinite(estimate).any() else estimate
+    return _figure(t, np.full(t.size, run["setpoint_deg"]), estimate, s["true_rotation_deg"], s["command"], title)
 
 
 def _figure(time_s, setpoint, estimate, truth, command, title: str):

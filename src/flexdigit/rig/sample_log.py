@@ -413,14 +413,17 @@ def board_log_header(backend: str, settings: dict, period_s: float, board, setpo
         "setpoint_deg": setpoint_deg,
         "image_format": None if fixed is None else ("fixed" if fixed == "1" else "float"),
         "rig_settings": settings,
-        "estimate": "not streamed: the board streams the gauges it used and its command, not its rotation estimate",
+        "estimate": "the board's own: its map's rotation of the streamed gauges minus its tare, as its line carries "
+        "it (null from an image that streams none)",
     }
 
 
-def board_log_sample(t: float, setpoint_deg: float, reading, true_deg: float, command: float) -> dict[str, Any]:
-    """One watched board period as a loop log's sample: ``y`` null (the board does not stream its estimate);
-    ``command`` the board's servo pulse as the nearest serial command (0..254, what the log's readers take) and
-    ``board_command`` the pulse itself in commands (Timer1 resolves finer than one)."""
+def board_log_sample(
+    t: float, setpoint_deg: float, reading, true_deg: float, command: float, estimate_deg: float = math.nan
+) -> dict[str, Any]:
+    """One watched board period as a loop log's sample: ``y`` the board's streamed rotation estimate (deg; null
+    from an image that streams none); ``command`` the board's servo pulse as the nearest serial command (0..254,
+    what the log's readers take) and ``board_command`` the pulse itself in commands (Timer1 resolves finer)."""
 
     def finite(x: float) -> float | None:
         return float(x) if math.isfinite(x) else None
@@ -431,7 +434,7 @@ def board_log_sample(t: float, setpoint_deg: float, reading, true_deg: float, co
         "setpoint": float(setpoint_deg),
         "gauges_v": [finite(float(g)) for g in reading.gauges_v],
         "pot_v": finite(float(reading.pot_v)),
-        "y": None,
+        "y": finite(float(estimate_deg)),
         "command": None if pulse is None else min(max(int(round(pulse)), 0), 254),
         "board_command": pulse,
         "true_rotation_deg": finite(float(true_deg)),

@@ -388,6 +388,8 @@ def board_step_test(
     t, y = run.time_s, run.true_rotation_deg
     metrics = step_metrics(t, y, setpoint_deg, 0.0, dpc) if t.size >= 2 else None
     final = float(y[t >= t[-1] - FINAL_WINDOW_S].mean()) if y.size else math.nan
+    est = run.estimate_deg  # the board's own estimate, streamed (NaN from an image that streams none)
+    streamed = bool(est.size) and bool(np.all(np.isfinite(est)))
     return {
         "status": run.status,
         "message": run.message,
@@ -398,11 +400,13 @@ def board_step_test(
         "true_final_rotation_deg": final,
         # the extreme towards the setpoint (a cable pair's negative step peaks below it)
         "true_peak_rotation_deg": (float(y.min()) if setpoint_deg < 0 else float(y.max())) if y.size else math.nan,
+        # as the host loop's estimated_final_rotation_deg: the board's streamed estimate over the final window
+        "estimated_final_rotation_deg": float(est[t >= t[-1] - FINAL_WINDOW_S].mean()) if streamed else None,
         "step_metrics": {"true": metrics.to_dict() if metrics else None, "deg_per_command": dpc},
         "final_command": float(run.command[-1]) if run.command.size else None,
         "board": stats,
         "log": None if log_path is None else str(log_path),
-        "series": {"time_s": t, "true_rotation_deg": y, "command": run.command},
+        "series": {"time_s": t, "true_rotation_deg": y, "command": run.command, "estimate_deg": run.estimate_deg},
     }
 
 
@@ -419,8 +423,8 @@ def _watch_board(rig, backend: str, settings: dict, setpoint_deg: float, duratio
     with contextlib.ExitStack() as stack:
         stack.callback(log.abandon)  # an error before the footer: the lines written are kept
 
-        def logged(t, reading, true_deg, command) -> None:
-            log.write(board_log_sample(t, setpoint_deg, reading, true_deg, command))
+        def logged(t, reading, true_deg, command, estimate_deg) -> None:
+            log.write(board_log_sample(t, setpoint_deg, reading, true_deg, command, estimate_deg))
 
         run = run_on_board(rig, setpoint_deg, duration_s, on_period=logged)
         stack.pop_all()

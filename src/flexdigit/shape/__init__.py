@@ -17,5 +17,7 @@ __getattr__, __all__ = lazy_exports(
         "shape_figure": "flexdigit.shape.shape_plot",
         "ShapeAccuracy": "flexdigit.shape.shape",
         "shape_accuracy": "flexdigit.shape.shape",
+        "accuracy_commands": "flexdigit.shape.shape",
+        "accuracy_positions_m": "flexdigit.shape.shape",
     },
 )

@@ -59,11 +59,12 @@ import numpy as np
 from flexdigit._constants import G_STANDARD_M_S2
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
+from flexdigit.control.design20ms import digit_mount
 from flexdigit.errors import ConvergenceWarning, ParameterError
 from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import RigParams
-from flexdigit.twin.calibration import default_calibration
 from flexdigit.twin.digit import ORIENTATIONS
+from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.sensors import SensorChain
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
 
@@ -73,6 +74,8 @@ __all__ = [
     "ShapeEstimator",
     "ShapeAccuracy",
     "shape_accuracy",
+    "accuracy_commands",
+    "accuracy_positions_m",
     "LOAD_KINDS",
     "true_centre_line_m",
 ]
@@ -135,7 +138,7 @@ class DigitBeam:
     ) -> DigitBeam:
         """The thesis digit (2.2, tables 3.5, 3.7) with the calibration's housing stiffness and support masses."""
         params = params or RigParams()
-        calibration = calibration or default_calibration()
+        calibration = calibration or twin_calibration(params)
         check_choice(orientation, "orientation", tuple(ORIENTATIONS), "DigitBeam")
         geo, mat = params.geometry, params.material
         length = geo.digit_length_m
@@ -468,7 +471,7 @@ class ShapeEstimator:
             return
         owner = "ShapeEstimator"
         self.params_ = self.params or RigParams()
-        self.calibration_ = self.calibration or default_calibration()
+        self.calibration_ = self.calibration or twin_calibration(self.params_)
         check_choice(self.load, "load", LOAD_KINDS, owner)
         check_int(self.n_average, "n_average", owner, low=1)
         check_real(self.tip_angle_sd_rad, "tip_angle_sd_rad", owner, low=0, low_open=True)
@@ -498,6 +501,11 @@ class ShapeEstimator:
         # per unit tension, the cumulative compliance along the cells and a weight's direction
         e, w_cells = beam.eccentricity_m, beam.inv_ei * beam.ds_m
         self.cable_row_ = np.r_[e * beam.gauge_inv_ei, e * np.sum(w_cells) + 1.0 / (beam.cable_stiffness_n_m * e)]
+        # an antagonistic pair ([cables] count = 2): the tension fitted is the net one, T1 - T2 (either sign; the
+        # moment e (T1 - T2)), and the tip equation's stretch term follows the twin's cable law (:meth:`_cable_model`)
+        cables = self.params_.cables
+        self.pair_ = bool(self.cable) and cables.count == 2
+        self.pretension_n_ = float(cables.pretension_n) if self.pair_ else 0.0
         self.cum_compliance_ = np.r_[0.0, np.cumsum(w_cells)]
         self.down_ = beam.gravity / np.linalg.norm(beam.gravity)
         self.ready_ = self._key()
@@ -591,7 +599,7 @@ class ShapeEstimator:
             )
         unsettled = int(np.sum(change >= self.tol_rad)) if rounds else 0
         sd_k = self._sd_curvature(sd_white, tension)
-        fit = self._fit(kappa_g, tip_eq, sd_k, r, psi, fit if rounds > self.HOLD_AFTER else None)
+        fit = self._fit(kappa_g, tip_eq, sd_k, r, psi, fit if rounds > self.HOLD_AFTER else None, tension)
         curvature = self._curvature_field(fit, r, psi)
         psi, r, _ = beam.integrate(curvature)
         unc = self._uncertainty(fit, tip_eq, sd_k, r, psi)
@@ -629,7 +637,7 @@ class ShapeEstimator:
         settle, fit = _Settle(self.beam_, psi, self.tol_rad), None
         for k in range(rounds):
             held = (fit or hold) if hold is not None else (fit if k >= self.HOLD_AFTER else None)
-            fit = self._fit(kappa_g, tip_eq, self._sd_curvature(sd_white, tension), r, psi, held)
+            fit = self._fit(kappa_g, tip_eq, self._sd_curvature(sd_white, tension), r, psi, held, tension)
             psi, r = settle.step(self._curvature_field(fit, r, psi))
             tension = fit["T"]
             if settle.done:
@@ -712,19 +720,19 @@ class ShapeEstimator:
         rows = np.arange(b * c)  # the shapes still moving: settled ones drop out (the slowest set the count)
         for _ in range(int(self.max_iterations)):
             fit = self._fit_at(kappa[rows], tip[rows], self._sd_curvature(sd_white, tension[rows]), r[rows],
-                               psi[rows], s_l[rows])  # fmt: skip
+                               psi[rows], s_l[rows], tension[rows])  # fmt: skip
             psi[rows], r[rows] = settle.step_rows(self._curvature_field(fit, r[rows], psi[rows]), rows)
             tension[rows] = fit["T"]
             rows = rows[~settle.settled[rows]]
             if rows.size == 0:
                 break
-        fit = self._fit_at(kappa, tip, self._sd_curvature(sd_white, tension), r, psi, s_l)
+        fit = self._fit_at(kappa, tip, self._sd_curvature(sd_white, tension), r, psi, s_l, tension)
         chi = np.where(fit["loaded"], fit["chi2_1"], np.inf).reshape(b, c)
         best = np.argmin(chi, axis=1)
         pick = np.arange(b) * c + best
         return grid[best], chi[np.arange(b), best], psi[pick], r[pick], fit["T"][pick]
 
-    def _fit_at(self, kappa_g, tip_eq, sd_k, r, psi, s_load) -> dict:
+    def _fit_at(self, kappa_g, tip_eq, sd_k, r, psi, s_load, tension) -> dict:
         """Weighted least squares for (T, P) with the load held at ``s_load`` (B,): what :meth:`_fit` does at one
         candidate (the force's prior row included)."""
         b, g = kappa_g.shape[0], self.gauges_
@@ -733,22 +741,49 @@ class ShapeEstimator:
         y = np.concatenate([kappa_g, np.where(has_tip, tip_eq, 0.0)[:, None]], axis=1)
         w = 1.0 / sd**2
         w[:, g] = np.where(has_tip, w[:, g], 0.0)
-        a_t, b_w, a_p = self._rows(r, psi, s_load[:, None])
-        res = np.concatenate([y - b_w, np.zeros((b, 1))], axis=1)
+        _, b_w, a_p = self._rows(r, psi, s_load[:, None])
+        a_t, offset = self._cable_model(tension)
+        res = np.concatenate([y - b_w - offset, np.zeros((b, 1))], axis=1)
         w = np.concatenate([w, np.full((b, 1), self.PRIOR_FORCE_N**-2.0)], axis=1)
         a_p = np.concatenate([a_p, np.ones(a_p.shape[:2] + (1,))], axis=-1)
         t, p, chi = _fit_load(
-            res[:, None, :], np.append(a_t, 0.0), a_p, w[:, None, :], bool(self.cable), self.load == "weight",
-            self.max_force_n, g,
+            res[:, None, :], np.concatenate([a_t, np.zeros((b, 1))], axis=1)[:, None, :], a_p, w[:, None, :],
+            bool(self.cable), self.load == "weight", self.max_force_n, g, self.pair_,
         )  # fmt: skip
         loaded = p[:, 0] != 0
         s_l = np.where(loaded, s_load, np.nan)
         return {"T": t[:, 0], "P": p[:, 0], "sL": s_l, "loaded": loaded, "chi2_1": chi[:, 0]}
 
     def _sd_curvature(self, sd_white: np.ndarray, tension: np.ndarray) -> np.ndarray:
-        """Per reading and gauge, the curvature noise (1/m): white (averaged) and the cable-guide friction."""
-        friction = self.friction_ratio_ * self.beam_.eccentricity_m * tension[:, None] * self.beam_.gauge_inv_ei
+        """Per reading and gauge, the curvature noise (1/m): white (averaged) and the cable-guide friction (of the
+        tension the guides hold: a pair's ``T1 + T2``, :meth:`_cable_model`)."""
+        pull = np.maximum(np.abs(tension), 2.0 * self.pretension_n_) if self.pair_ else tension
+        friction = self.friction_ratio_ * self.beam_.eccentricity_m * pull[:, None] * self.beam_.gauge_inv_ei
         return np.sqrt(sd_white[None, :] ** 2 + friction**2)
+
+    def _cable_model(self, tension: np.ndarray):
+        """The cable's rows per reading: ``(a_T (B, G + 1), offset (B, G + 1))``, the model being
+        ``a_T T + offset + ...`` (the offset only on the tip row).
+
+        One cable: :attr:`cable_row_` (``T = k_c (s - e psi_tip)``, E 3.11 with the stretch), no offset. An
+        antagonistic pair (:mod:`flexdigit.twin.digit`'s law, ``T1 = k_c max(0, p + s - e psi)``, ``T2 = k_c
+        max(0, p - s + e psi)``, ``p`` the pretension's stretch): the net tension ``T = T1 - T2`` gives
+        ``psi + T / (2 k_c e) = s / e`` while both are taut (``|T| < 2 k_c p``) and ``psi + T / (k_c e) -+ p / e
+        = s / e`` once one goes slack; the branch is the one of ``tension`` (the last iteration's net tension),
+        the law being continuous where they meet.
+        """
+        b = tension.shape[0]
+        a_t = np.broadcast_to(self.cable_row_, (b, self.cable_row_.size))
+        offset = np.zeros((b, self.cable_row_.size))
+        if not self.pair_:
+            return a_t, offset
+        beam, g = self.beam_, self.gauges_
+        kc, e = beam.cable_stiffness_n_m, beam.eccentricity_m
+        both = np.abs(tension) < 2.0 * self.pretension_n_
+        a_t = a_t.copy()
+        a_t[:, g] += np.where(both, -0.5, 0.0) / (kc * e)  # the stretch term is 1 / (k_c e) in cable_row_
+        offset[:, g] = np.where(both, 0.0, -np.sign(tension) * self.pretension_n_ / (kc * e))
+        return a_t, offset
 
     def _rows(self, r, psi, s_load=None):
         """The measurement model: curvature at the G gauges and the tip-angle equation (G + 1 rows; 4 on the thesis
@@ -804,10 +839,11 @@ class ShapeEstimator:
     #: A load counts as located when its position's standard deviation is below this share of the prior's.
     LOCATED_FRACTION = 0.5
 
-    def _fit(self, kappa_g, tip_eq, sd_k, r, psi, hold: dict | None = None) -> dict:
+    def _fit(self, kappa_g, tip_eq, sd_k, r, psi, hold: dict | None = None, tension=None) -> dict:
         """Weighted least squares for (T, P) at every candidate position; contact by likelihood ratio.
 
         ``hold``: a previous fit whose model choice is kept and near whose load position the position is sought.
+        ``tension`` (B,): the last net tension, the branch of a pair's cable law (:meth:`_cable_model`).
         """
         b, g = kappa_g.shape[0], self.gauges_
         cable = bool(self.cable)
@@ -816,9 +852,14 @@ class ShapeEstimator:
         y = np.concatenate([kappa_g, np.where(has_tip, tip_eq, 0.0)[:, None]], axis=1)
         w = 1.0 / sd**2
         w[:, g] = np.where(has_tip, w[:, g], 0.0)
-        a_t, b_w, _ = self._rows(r, psi)
-        res = y - b_w  # what the tension (and the load) must explain
-        t0, chi0 = _fit_tension(res, a_t, w, cable, g)
+        _, b_w, _ = self._rows(r, psi)
+        a_t, offset = self._cable_model(np.zeros(b) if tension is None else tension)
+        res = y - b_w - offset  # what the tension (and the load) must explain
+        # the cable's state (taut or slack) is held with the model: at the command where the cable just comes
+        # taut (the straight one) the better of the two flips with the shape, and the lever arms cycled between
+        # them for ever (a 0.44 m geared digit tip up: T 0 <-> 0.005 N, 7e-4 rad, chi-square within 0.2)
+        taut_held = None if hold is None or "T" not in hold else hold["T"] > 0
+        t0, chi0 = _fit_tension(res, a_t, w, cable, g, self.pair_, taut_held)
         out = {"T": t0, "P": np.zeros(b), "sL": np.full(b, np.nan), "chi2_0": chi0, "chi2_1": chi0.copy()}
         out["contact"] = out["loaded"] = np.zeros(b, dtype=bool)
         out["interval_1sd"] = out["interval_2sd"] = np.full((b, 2), np.nan)
@@ -829,11 +870,13 @@ class ShapeEstimator:
         _, _, a_p = self._rows(r, psi, "nodes")
         # the force's weak prior as a fifth row (P = 0 +- PRIOR_FORCE_N): a ridge that keeps a huge force just past
         # a gauge from explaining the friction's scatter better than a modest one where the load really is
-        a_t = np.append(a_t, 0.0)
+        a_t = np.concatenate([a_t, np.zeros((b, 1))], axis=1)[:, None, :]
         res = np.concatenate([res, np.zeros((b, 1))], axis=1)
         w = np.concatenate([w, np.full((b, 1), self.PRIOR_FORCE_N**-2.0)], axis=1)
         a_p = np.concatenate([a_p, np.ones(a_p.shape[:2] + (1,))], axis=-1)
-        t1, p1, chi1 = _fit_load(res[:, None, :], a_t, a_p, w[:, None, :], cable, positive, self.max_force_n, g)
+        t1, p1, chi1 = _fit_load(
+            res[:, None, :], a_t, a_p, w[:, None, :], cable, positive, self.max_force_n, g, self.pair_
+        )
         rows = np.arange(b)
         if hold is not None:
             near = np.abs(self.nodes_m_[None, :] - np.nan_to_num(hold["sL"])[:, None]) <= self.HOLD_WINDOW_M
@@ -843,7 +886,9 @@ class ShapeEstimator:
         refined = _parabola(self.nodes_m_, chi1, best)[:, None]
         _, _, a_ref = self._rows(r, psi, refined)
         a_ref = np.concatenate([a_ref, np.ones(a_ref.shape[:2] + (1,))], axis=-1)
-        t_r, p_r, chi_r = _fit_load(res[:, None, :], a_t, a_ref, w[:, None, :], cable, positive, self.max_force_n, g)
+        t_r, p_r, chi_r = _fit_load(
+            res[:, None, :], a_t, a_ref, w[:, None, :], cable, positive, self.max_force_n, g, self.pair_
+        )
         better = chi_r[:, 0] <= chi1[rows, best]
         s_hat = np.where(better, refined[:, 0], cand[rows, best])
         t_hat = np.where(better, t_r[:, 0], t1[rows, best])
@@ -899,19 +944,20 @@ class ShapeEstimator:
         """Parameter covariance (inverse Fisher information) and its image on the centre line."""
         beam = self.beam_
         b, g = sd_k.shape[0], self.gauges_
-        taut = fit["T"] > 0
+        taut = (fit["T"] > 0) | self.pair_  # a pair's net tension has either sign, and a pair is never slack
         contact = fit["loaded"]
         w = np.concatenate([1.0 / sd_k**2, np.full((b, 1), self.tip_angle_sd_rad**-2.0)], axis=1)
         w[:, g] = np.where(np.isfinite(tip_eq) & taut, w[:, g], 0.0)
         step = 1e-3
         s_l = np.where(contact, fit["sL"], 0.0)
         s_lo, s_hi = np.clip(s_l - step, 0, beam.length_m), np.clip(s_l + step, 0, beam.length_m)
-        a_t, _, a_p = self._rows(r, psi, np.stack([s_l, s_lo, s_hi], axis=1))
+        _, _, a_p = self._rows(r, psi, np.stack([s_l, s_lo, s_hi], axis=1))
+        a_t, _ = self._cable_model(fit["T"])
         d_sl = np.where(s_hi > s_lo, s_hi - s_lo, 1.0)
         p = np.where(contact, fit["P"], 0.0)
         a_s = p[:, None] * (a_p[:, 2] - a_p[:, 1]) / d_sl[:, None]
         # Jacobian columns: T (while the cable is taut), P and s_L (with contact); inactive ones held exactly
-        cols = np.stack([np.broadcast_to(a_t, (b, g + 1)), a_p[:, 0], a_s], axis=2)  # (B, G + 1, 3)
+        cols = np.stack([a_t, a_p[:, 0], a_s], axis=2)  # (B, G + 1, 3)
         active = np.stack([taut, contact, contact], axis=1)
         fisher = np.einsum("bmi,bm,bmj->bij", cols, w, cols)
         both = active[:, :, None] & active[:, None, :]
@@ -974,15 +1020,27 @@ class ShapeEstimator:
         settle = _Settle(beam, psi, 1e-3 * self.tol_rad)
         for _ in range(10 * int(self.max_iterations)):
             if np.all(np.isfinite(tip_eq)):
-                a_t, b_w, a_p = self._rows(r, psi, s_l[:, None])
+                _, b_w, a_p = self._rows(r, psi, s_l[:, None])
                 psi_free = b_w[:, g] + p * a_p[:, 0, g]  # tip equation without the cable
-                fit["T"] = np.maximum((tip_eq - psi_free) / a_t[g], 0.0)
+                fit["T"] = self._tension_from_tip(tip_eq - psi_free)
             psi, r = settle.step(self._curvature_field(fit, r, psi))
             if settle.done:
                 break
         a_t, b_w, a_p = self._rows(r, psi, s_l[:, None])
         kappa = fit["T"][:, None] * a_t[:g] + b_w[:, :g] + p[:, None] * a_p[:, 0, :g]
         return kappa, fit, r, psi
+
+    def _tension_from_tip(self, lead_rad: np.ndarray) -> np.ndarray:
+        """The (net) tension the tip equation asks for, ``lead_rad`` being its right side less the loads' share:
+        a single cable's ``max(0, lead / a)``; a pair's on the branch of its law that holds (:meth:`_cable_model`)."""
+        g = self.gauges_
+        if not self.pair_:
+            return np.maximum(lead_rad / self.cable_row_[g], 0.0)
+        both_a, _ = self._cable_model(np.zeros(lead_rad.shape))
+        t_both = lead_rad / both_a[:, g]
+        one_a, offset = self._cable_model(np.where(lead_rad >= 0, np.inf, -np.inf))
+        t_one = (lead_rad - offset[:, g]) / one_a[:, g]
+        return np.where(np.abs(t_both) < 2.0 * self.pretension_n_, t_both, t_one)
 
     def locatability(self, positions_from_base_m, force_n: float = 0.25, command=None) -> np.ndarray:
         """Standard deviation (m) of the estimated position of a load at each position (inf: not found or not
@@ -1095,29 +1153,36 @@ class _Settle:
         return bool(np.all(self.settled))
 
 
-def _fit_tension(res, a_t, w, cable: bool, gauges: int = 3):
+def _fit_tension(res, a_t, w, cable: bool, gauges: int = 3, signed: bool = False, taut_held=None):
     """T >= 0 alone: ``(T (B,), chi2 (B,))``. With T = 0 the tip row (row ``gauges``, after the gauges') drops
-    out (a slack cable fixes nothing)."""
+    out (a slack cable fixes nothing). ``signed``: an antagonistic pair's net tension, of either sign and never
+    slack. ``taut_held`` (B,) bool: the cable's state kept from an earlier fit (taut while its tension stays
+    positive) instead of the better chi-square's."""
     chi_slack = np.sum(w[:, :gauges] * res[:, :gauges] ** 2, axis=1)
     if not cable:
         return np.zeros(res.shape[0]), chi_slack
     t = np.sum(w * a_t * res, axis=1) / np.sum(w * a_t * a_t, axis=1)
     chi_taut = np.sum(w * (res - t[:, None] * a_t) ** 2, axis=1)
-    taut = (t > 0) & (chi_taut < chi_slack)
+    if signed:
+        return t, chi_taut
+    taut = (t > 0) & ((chi_taut < chi_slack) if taut_held is None else taut_held)
     return np.where(taut, t, 0.0), np.where(taut, chi_taut, chi_slack)
 
 
-def _fit_load(res, a_t, a_p, w, cable: bool, positive: bool, max_force_n: float = np.inf, gauges: int = 3):
+def _fit_load(
+    res, a_t, a_p, w, cable: bool, positive: bool, max_force_n: float = np.inf, gauges: int = 3, signed: bool = False
+):
     """(T, P) per candidate with T >= 0 (a cable only pulls), |P| <= ``max_force_n`` and, for weights, P >= 0: the
     active sets are enumerated (both free; P alone with the cable slack). Shapes (B, C); chi-square is infinite
-    where no feasible load explains the readings."""
+    where no feasible load explains the readings. ``signed``: an antagonistic pair's net tension, either sign,
+    never slack (no "P alone")."""
     slack_w = w.copy()
     slack_w[..., gauges] = 0.0  # the tip row
     sp = np.sum(slack_w * a_p * a_p, axis=-1)
     p_only = np.sum(slack_w * a_p * res, axis=-1) / np.where(sp > 0, sp, 1.0)
     p_only = np.maximum(p_only, 0.0) if positive else p_only
     chi = np.sum(slack_w * (res - p_only[..., None] * a_p) ** 2, axis=-1)
-    chi = np.where(np.abs(p_only) <= max_force_n, chi, np.inf)
+    chi = np.where((np.abs(p_only) <= max_force_n) & (not (cable and signed)), chi, np.inf)
     t_best, p_best = np.zeros(chi.shape), p_only
     if not cable:
         return t_best, p_best, chi
@@ -1133,7 +1198,7 @@ def _fit_load(res, a_t, a_p, w, cable: bool, positive: bool, max_force_n: float 
     t = np.where(ok, (h22 * g1 - h12 * g2) / safe, 0.0)
     p = np.where(ok, (h11 * g2 - h12 * g1) / safe, 0.0)
     chi_tp = np.sum(w * (res - t[..., None] * a_tb - p[..., None] * a_p) ** 2, axis=-1)
-    take = ok & (t > 0) & ((p >= 0) if positive else True) & (np.abs(p) <= max_force_n) & (chi_tp < chi)
+    take = ok & ((t > 0) | signed) & ((p >= 0) if positive else True) & (np.abs(p) <= max_force_n) & (chi_tp < chi)
     return np.where(take, t, t_best), np.where(take, p, p_best), np.where(take, chi_tp, chi)
 
 
@@ -1181,6 +1246,9 @@ class ShapeAccuracy:
         Whether the estimator declared a load.
     load_position_error_m, load_position_sd_m : ndarray, shape (B,)
         Its load position's error and standard deviation (m; NaN without contact).
+    settled : ndarray of bool, shape (B,)
+        Whether the estimate's lever arms settled (``tol_rad``): where not, the row is an estimate it cannot
+        stand behind (flagged here and by ``shape --accuracy``, rather than warned about).
     """
 
     case: np.ndarray
@@ -1193,11 +1261,14 @@ class ShapeAccuracy:
     contact: np.ndarray
     load_position_error_m: np.ndarray
     load_position_sd_m: np.ndarray
+    settled: np.ndarray
     seed: int = 0
+    #: The bare group's mount: "vertical" (tip up), or "hanging" for a digit that buckles tip up.
+    mount: str = "vertical"
 
     def summary(self) -> list[dict]:
         """Per case group: cases, tip error median / 95th percentile / max (mm), mean RMS along the digit (mm),
-        share of tips within two of their standard deviations, contact rate."""
+        share of tips within two of their standard deviations, contact rate, estimates unsettled."""
         out = []
         for group in dict.fromkeys(self.case.tolist()):
             rows = self.case == group
@@ -1212,6 +1283,7 @@ class ShapeAccuracy:
                     "rms_error_mean_mm": float(np.mean(self.rms_error_m[rows]) * 1e3),
                     "tip_within_2sd": float(np.mean(self.tip_error_m[rows] <= 2 * self.tip_sd_m[rows])),
                     "contact_rate": float(np.mean(self.contact[rows])),
+                    "unsettled": int(np.sum(~self.settled[rows])),
                 }
             )
         return out
@@ -1219,13 +1291,39 @@ class ShapeAccuracy:
     __repr__ = fields_summary
 
 
-#: Where :func:`shape_accuracy` hangs its weight by default: every centimetre from the clamp to the tip (m).
+#: Where :func:`shape_accuracy` hangs its weight on the thesis rig: every centimetre from the clamp to the tip (m).
 ACCURACY_POSITIONS_M = tuple(round(0.01 * k, 2) for k in range(1, 28))
+#: Commands :func:`accuracy_commands` takes from the straight command to each end of the operating range (the
+#: thesis rig's 8, 13, ..., 43).
+ACCURACY_STEPS = 7
+
+
+def accuracy_commands(params: RigParams | None = None) -> tuple[int, ...]:
+    """The commands :func:`shape_accuracy` (and ``flexdigit shape --accuracy``) scores a digit at: from its
+    straight command (``equilibrium_command``) to each end of its ``operating_commands`` in
+    :data:`ACCURACY_STEPS` equal steps, rounded; one side for the single cable (8, 13, ..., 43 on the thesis
+    rig), both for an antagonistic pair (127 -+ 35 on a pair described without a range).
+
+    >>> accuracy_commands()
+    (8, 13, 18, 23, 28, 33, 38, 43)
+    """
+    a = (params or RigParams()).actuator
+    ends = [c for c in a.operating_commands if c != a.equilibrium_command]
+    sweeps = [np.linspace(a.equilibrium_command, end, ACCURACY_STEPS + 1) for end in ends]
+    commands = np.unique(np.round(np.concatenate([[a.equilibrium_command], *sweeps])).astype(int))
+    return tuple(int(c) for c in commands)
+
+
+def accuracy_positions_m(params: RigParams | None = None) -> tuple[float, ...]:
+    """Where :func:`shape_accuracy` hangs its weight: the thesis rig's :data:`ACCURACY_POSITIONS_M` as fractions
+    of its 0.27 m digit, on this digit (27 places, the tip included), rounded to 0.1 mm."""
+    length = (params or RigParams()).geometry.digit_length_m
+    return tuple(round(length * k / len(ACCURACY_POSITIONS_M), 4) for k in range(1, len(ACCURACY_POSITIONS_M) + 1))
 
 
 def shape_accuracy(
-    commands=tuple(range(8, 44)),
-    positions_from_base_m=ACCURACY_POSITIONS_M,
+    commands=None,
+    positions_from_base_m=None,
     mass_kg: float = 0.025,
     *,
     seed: int = 0,
@@ -1237,9 +1335,12 @@ def shape_accuracy(
     Three groups of static cases, one noisy reading each (the twin's white noise and, with the cable taut, one
     draw of its cable-guide friction per case, seeded): the bare digit upright (the designed mounting) and
     horizontal at every command of ``commands``, and the horizontal digit with ``mass_kg`` hung at every position
-    of ``positions_from_base_m`` at every command. The twin (:func:`flexdigit.twin.static_gauges_v`, a
-    discrete elastica solved by Newton) gives the readings and the true shape; the estimator sees only the
-    readings and the command.
+    of ``positions_from_base_m`` at every command. A digit that buckles tip up
+    (:func:`flexdigit.control.design20ms.digit_mount`, the mount ``run`` takes) has no upright case: its bare group
+    hangs tip down ("bare, hanging"; :attr:`ShapeAccuracy.mount` says which). ``commands`` default to the
+    digit's :func:`accuracy_commands`, ``positions_from_base_m`` to its :func:`accuracy_positions_m`. The twin
+    (:func:`flexdigit.twin.static_gauges_v`, a discrete elastica solved by Newton) gives the readings and the true
+    shape; the estimator sees only the readings and the command.
 
     Examples
     --------
@@ -1250,25 +1351,30 @@ def shape_accuracy(
     True
     """
     params = params or RigParams()
-    calibration = calibration or default_calibration()
+    calibration = calibration or twin_calibration(params)
     a = params.actuator
+    commands = accuracy_commands(params) if commands is None else commands
+    positions_from_base_m = accuracy_positions_m(params) if positions_from_base_m is None else positions_from_base_m
     cmds = check_array(commands, "commands", "shape_accuracy", ndim=1, min_length=1, low=a.command_min)
     cmds = cmds.astype(int)
     pos = check_array(positions_from_base_m, "positions_from_base_m", "shape_accuracy", ndim=1, low=0)
     mass = check_real(mass_kg, "mass_kg", "shape_accuracy", low=0, low_open=True)
+    mount = digit_mount(params, calibration)  # tip up, or hanging where the digit buckles tip up
+    bare = "bare, upright" if mount == "vertical" else f"bare, {mount}"
     groups = [
-        ("bare, upright", "vertical", cmds, np.zeros(cmds.size), np.zeros(cmds.size)),
+        (bare, mount, cmds, np.zeros(cmds.size), np.zeros(cmds.size)),
         ("bare, horizontal", "horizontal", cmds, np.zeros(cmds.size), np.zeros(cmds.size)),
     ]
     cc, pp = np.meshgrid(cmds, pos, indexing="ij")
     groups.append(("weight, horizontal", "horizontal", cc.ravel(), np.full(cc.size, mass), pp.ravel()))
-    columns: dict[str, list] = {k: [] for k in ShapeAccuracy.__dataclass_fields__ if k != "seed"}
+    columns: dict[str, list] = {k: [] for k in ShapeAccuracy.__dataclass_fields__ if k not in ("seed", "mount")}
     for k, (name, orientation, c, m, s) in enumerate(groups):
         volts, sol = static_gauges_v(
             m, s, c, params=params, calibration=calibration, orientation=orientation, seed=seed + k,
             return_solution=True,
         )  # fmt: skip
-        est = ShapeEstimator(params, calibration, orientation=orientation).estimate(volts, command=c)
+        estimator = ShapeEstimator(params, calibration, orientation=orientation)
+        est, _, change, rounds = estimator._estimate(volts, c, None)  # unsettled rows: a column, not a warning
         chain = cached_digit(params, calibration, True, orientation, DEFAULT_CELLS_PER_SECTION)
         truth = true_centre_line_m(sol.psi_rad, chain, est.s_m)
         dist = np.linalg.norm(est.centre_line_m - truth, axis=-1)
@@ -1282,4 +1388,5 @@ def shape_accuracy(
         columns["contact"].append(est.contact)
         columns["load_position_error_m"].append(np.where(m > 0, est.load_position_from_base_m - s, np.nan))
         columns["load_position_sd_m"].append(est.load_position_sd_m)
-    return ShapeAccuracy(**{k: np.concatenate(v) for k, v in columns.items()}, seed=seed)
+        columns["settled"].append(change < estimator.tol_rad if rounds else np.ones(c.size, dtype=bool))
+    return ShapeAccuracy(**{k: np.concatenate(v) for k, v in columns.items()}, seed=seed, mount=mount)

@@ -1,7 +1,10 @@
 """Figures of the studies: Sobol indices with their intervals, the total-index map, S2 heat maps, Pareto fronts.
 
 Each function draws from a result object and saves through :mod:`flexdigit._io` (atomic, no clobber without
-``force``); the report calls the ``*_figure`` builders and saves them itself.
+``force``); the report calls the ``*_figure`` builders and saves them itself, and ``flexdigit study ... --plot``
+saves the study's main one (:func:`sensitivity_figure`; a design study's Pareto front, titled by
+:func:`with_subject`). Figures are made without pyplot (:func:`flexdigit._plot.new_figure`: no global state,
+nothing to close).
 """
 
 from __future__ import annotations
@@ -11,6 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit._io import atomic_path
+from flexdigit._plot import new_figure
+from flexdigit.params import RigParams
 
 __all__ = [
     "sobol_bars_figure",
@@ -22,33 +27,24 @@ __all__ = [
     "sensitivity_bars",
     "sensitivity_total_map",
     "sensitivity_figures",
+    "sensitivity_figure",
+    "study_subject",
+    "with_subject",
 ]
 
 
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def _save(fig, path: Path, force: bool) -> Path:
-    plt = _plt()
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path, force=force) as tmp:
         fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
-    plt.close(fig)
     return path
 
 
 def sobol_bars_figure(names, res: dict, title: str):
     """S1 and ST per parameter as bars with their bootstrap confidence intervals."""
-    plt = _plt()
     d = len(names)
     x = np.arange(d)
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.45 * d + 2), 3.6))
+    fig, ax = new_figure(figsize=(max(6.0, 0.45 * d + 2), 3.6))
     ax.bar(x - 0.2, res["S1"], 0.4, yerr=res["S1_conf"], capsize=2, label="S1 (first order)")
     ax.bar(x + 0.2, res["ST"], 0.4, yerr=res["ST_conf"], capsize=2, label="ST (total)")
     ax.set_xticks(x, [n.replace("calibration.", "cal.") for n in names], rotation=60, ha="right", fontsize=7)
@@ -61,8 +57,7 @@ def sobol_bars_figure(names, res: dict, title: str):
 
 def total_index_map_figure(names, metrics, st: np.ndarray, title: str):
     """Total indices, metrics (rows) x parameters (columns)."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.45 * len(names) + 3), 0.45 * len(metrics) + 2))
+    fig, ax = new_figure(figsize=(max(6.0, 0.45 * len(names) + 3), 0.45 * len(metrics) + 2))
     im = ax.imshow(np.clip(st, 0, 1), vmin=0, vmax=1, cmap="viridis", aspect="auto")
     ax.set_xticks(
         range(len(names)), [n.replace("calibration.", "cal.") for n in names], rotation=60, ha="right", fontsize=7
@@ -81,12 +76,11 @@ def total_index_map_figure(names, metrics, st: np.ndarray, title: str):
 
 def s2_figure(names, s2: np.ndarray, title: str):
     """Second-order indices as a heat map (upper triangle)."""
-    plt = _plt()
     d = len(names)
     grid = np.full((d, d), np.nan)
     iu = np.triu_indices(d, 1)
     grid[iu] = s2[iu]
-    fig, ax = plt.subplots(figsize=(0.4 * d + 3, 0.4 * d + 2.5))
+    fig, ax = new_figure(figsize=(0.4 * d + 3, 0.4 * d + 2.5))
     im = ax.imshow(grid, cmap="magma", aspect="equal")
     labels = [n.replace("calibration.", "cal.") for n in names]
     ax.set_xticks(range(d), labels, rotation=60, ha="right", fontsize=6)
@@ -98,8 +92,7 @@ def s2_figure(names, s2: np.ndarray, title: str):
 
 def pareto_figure(x, y, front, marks: dict, xlabel: str, ylabel: str, title: str):
     """Candidates (grey), their Pareto front (line) and marked designs (``marks``: label -> (x, y))."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(6.2, 4.2))
+    fig, ax = new_figure(figsize=(6.2, 4.2))
     ax.scatter(x, y, s=8, c="0.75", label="candidates")
     order = np.argsort(x[front])
     ax.plot(x[front][order], y[front][order], "-o", ms=4, color="C0", label="Pareto front")
@@ -172,3 +165,33 @@ def sensitivity_figures(result, fig_dir: Path, *, force: bool = False) -> list[P
         fig = sensitivity_total_map(result, f"{result.spec.name}: total Sobol indices, {size}")
         paths.append(_save(fig, fig_dir / "sobol_total_map.png", force))
     return paths
+
+
+def study_subject(spec) -> str:
+    """What a study's baseline is, for a title: ``robot rao2021``, ``the thesis rig`` or ``the digit of SPEC``."""
+    robot = getattr(spec.baseline, "robot", None)
+    if robot is not None:
+        return f"robot {robot.name}"
+    if spec.baseline.params == RigParams():
+        return "the thesis rig"
+    return f"the digit of {Path(spec.source).name}"
+
+
+def with_subject(fig, spec):
+    """``fig`` with a suptitle naming the study and its baseline (:func:`study_subject`)."""
+    fig.suptitle(f"study {spec.name} on {study_subject(spec)}", fontsize=9)
+    return fig
+
+
+def sensitivity_figure(result):
+    """The main figure of a sensitivity study (``flexdigit study sensitivity ... --plot``): one metric's S1 and ST
+    with their intervals (:func:`sensitivity_bars`), or for several metrics the map of their total indices
+    (:func:`sensitivity_total_map`), at 2N, titled with the study and its baseline."""
+    size = sample_size_text(result.settings)
+    metrics = list(result.sobol)
+    if len(metrics) == 1:
+        conf = f"{result.settings.confidence:.0%} CI"
+        fig = sensitivity_bars(result, metrics[0], f"{metrics[0]}: Sobol indices, {size}, {conf}")
+    else:
+        fig = sensitivity_total_map(result, f"total Sobol indices, {size}")
+    return with_subject(fig, result.spec)

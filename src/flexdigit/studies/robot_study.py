@@ -70,7 +70,7 @@ from flexdigit._repr import summary
 from flexdigit.errors import ParameterError
 from flexdigit.studies.metrics import UserMetric
 from flexdigit.studies.sensitivity import SensitivitySettings, run_sensitivity
-from flexdigit.studies.spec import CHECK_SIGMAS, UncertainParameter, _parameter, _table
+from flexdigit.studies.spec import UncertainParameter, _table, _where, read_parameters
 from flexdigit.tdcr.description import Robot, get_robot
 from flexdigit.tdcr.experiments import release_test
 from flexdigit.tdcr.statics import StaticSolution, solve_statics
@@ -363,53 +363,21 @@ def robot_spec_from_toml(text: str, source: str = "spec", base_dir: Path | None 
 
 
 def _parameters(table, baseline: RobotCase, source: str) -> list[UncertainParameter]:
-    table = _table(table, "[parameters]", source)
+    """A robot spec's uncertain parameters (:func:`~flexdigit.studies.spec.read_parameters` on the robot's
+    sections), each range checked by building the robot at its ends."""
     nominal = _nominal(baseline)
-    out: list[UncertainParameter] = []
-    for section, fields in table.items():
-        if section not in ROBOT_FIELDS:
-            raise ParameterError(
-                f"{source}: unknown section {section!r} in [parameters]; expected one of "
-                + ", ".join(f"[parameters.{s}]" for s in ROBOT_FIELDS)
-            )
-        fields = _table(fields, f"[parameters.{section}]", source)
-        for name, entry in fields.items():
-            where = f"[parameters.{section}.{name}]"
-            if name not in ROBOT_FIELDS[section]:
-                raise ParameterError(
-                    f"{source}: unknown field {name!r} in [parameters.{section}]; expected one of "
-                    + ", ".join(ROBOT_FIELDS[section])
-                )
-            entry = _table(entry, where, source)
-            value = nominal[section][name]
-            if not isinstance(value, list):
-                out.append(_parameter(section, name, None, value, entry, where, source))
-            elif "distribution" in entry:
-                out.append(_parameter(section, name, None, 1.0, entry, where, source, factor=True))
-            else:
-                for key, sub in entry.items():
-                    if not (key.isascii() and key.isdigit() and int(key) < len(value)):
-                        raise ParameterError(
-                            f"{source}: {where}: expected 'distribution' (one factor on every element) or element "
-                            f"tables 0..{len(value) - 1}. Got key {key!r} instead."
-                        )
-                    k = int(key)
-                    sub_where = f"[parameters.{section}.{name}.{k}]"
-                    out.append(
-                        _parameter(section, name, k, value[k], _table(sub, sub_where, source), sub_where, source)
-                    )
-    if not out:
+    parameters = read_parameters(
+        table,
+        tuple(ROBOT_FIELDS),
+        lambda section: {name: nominal[section][name] for name in ROBOT_FIELDS[section]},
+        lambda p, end: _apply(
+            baseline, [p], {p.name: end}, f"{source}: {_where(p)} at {end:.6g} (the end of its range)"
+        ),
+        source,
+    )
+    if not parameters:
         raise ParameterError(f"{source}: no [parameters.SECTION.FIELD] tables: nothing is uncertain")
-    for p in out:
-        for end in p.check_range():
-            where = f"[parameters.{p.section}.{p.field}" + (f".{p.element}]" if p.element is not None else "]")
-            if not math.isfinite(end):
-                raise ParameterError(
-                    f"{source}: {where}: the {p.distribution} range reaches {end:g} at {CHECK_SIGMAS:g} sigmas; "
-                    "give a spread whose range is finite"
-                )
-            _apply(baseline, [p], {p.name: end}, f"{source}: {where} at {end:.6g} (the end of its range)")
-    return out
+    return parameters
 
 
 def run_robot_sensitivity(

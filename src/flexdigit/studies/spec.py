@@ -510,48 +510,55 @@ def _fields(section: str, baseline: ParameterSet) -> dict[str, Any]:
 
 
 def _parameters(table, baseline: ParameterSet, source: str) -> list[UncertainParameter]:
+    """A rig spec's uncertain parameters (:func:`read_parameters` on the baseline rig's sections)."""
+
+    def check(p: UncertainParameter, end: float) -> None:
+        try:
+            apply_values(baseline, [p], {p.name: end}, f"{source}: {_where(p)}")
+        except ParameterError as exc:
+            raise ParameterError(
+                f"{exc} (the {p.distribution} range of {_where(p)} reaches {end:.6g}, which the field refuses)"
+            ) from None
+
+    return read_parameters(table, SECTIONS, lambda section: _fields(section, baseline), check, source)
+
+
+def read_parameters(table, sections, fields, check, source: str) -> list[UncertainParameter]:
+    """The uncertain parameters of a spec's ``[parameters.SECTION.FIELD]`` tables, a rig's or a robot's
+    (:mod:`flexdigit.studies.robot_study`): a real field, an element of a list field (``.K``) or a factor on the
+    whole list (a ``distribution`` at the field's level), each range checked at both ends.
+
+    Parameters
+    ----------
+    table : dict
+        The ``[parameters]`` table as read.
+    sections : sequence of str
+        The sections a spec may name.
+    fields : callable
+        ``fields(section)``: the section's fields and their nominal values.
+    check : callable
+        ``check(parameter, value)``: builds the baseline with the parameter at ``value`` (an end of its range),
+        raising :class:`~flexdigit.errors.ParameterError` naming the key where the field refuses it.
+    source : str
+        The file named in error messages.
+    """
     table = _table(table, "[parameters]", source)
     out: list[UncertainParameter] = []
-    for section, fields in table.items():
-        if section not in SECTIONS:
+    for section, entries in table.items():
+        if section not in sections:
             raise ParameterError(
                 f"{source}: unknown section {section!r} in [parameters]; expected one of "
-                + ", ".join(f"[parameters.{s}]" for s in SECTIONS)
+                + ", ".join(f"[parameters.{s}]" for s in sections)
             )
-        fields = _table(fields, f"[parameters.{section}]", source)
-        allowed = _fields(section, baseline)
-        for name, entry in fields.items():
+        entries = _table(entries, f"[parameters.{section}]", source)
+        allowed = fields(section)
+        for name, entry in entries.items():
             where = f"[parameters.{section}.{name}]"
             if name not in allowed:
                 raise ParameterError(
                     f"{source}: unknown field {name!r} in [parameters.{section}]; expected one of " + ", ".join(allowed)
                 )
-            entry = _table(entry, where, source)
-            nominal = allowed[name]
-            if isinstance(nominal, bool) or isinstance(nominal, (str, int)):
-                raise ParameterError(
-                    f"{source}: {where}: the field is {type(nominal).__name__}-valued ({nominal!r}); only real-valued "
-                    "fields can be uncertain (a design study varies the others)"
-                )
-            if isinstance(nominal, list):
-                if not all(isinstance(v, float) for v in nominal):
-                    raise ParameterError(f"{source}: {where}: only real-valued fields can be uncertain")
-                if "distribution" in entry:  # a factor on the whole tuple
-                    out.append(_parameter(section, name, None, 1.0, entry, where, source, factor=True))
-                    continue
-                for key, sub in entry.items():
-                    if not (key.isascii() and key.isdigit() and int(key) < len(nominal)):  # int("²") fails
-                        raise ParameterError(
-                            f"{source}: {where}: expected 'distribution' (one factor on every element) or element "
-                            f"tables 0..{len(nominal) - 1}. Got key {key!r} instead."
-                        )
-                    k = int(key)
-                    sub = _table(sub, f"[parameters.{section}.{name}.{k}]", source)
-                    out.append(
-                        _parameter(section, name, k, nominal[k], sub, f"[parameters.{section}.{name}.{k}]", source)
-                    )
-                continue
-            out.append(_parameter(section, name, None, float(nominal), entry, where, source))
+            out += _field_parameters(section, name, allowed[name], _table(entry, where, source), source)
     for p in out:
         for end in p.check_range():
             if not math.isfinite(end):  # a spread too wide for floats: every sample would be 0 or inf
@@ -559,12 +566,34 @@ def _parameters(table, baseline: ParameterSet, source: str) -> list[UncertainPar
                     f"{source}: {_where(p)}: the {p.distribution} range reaches {end:g} at {CHECK_SIGMAS:g} sigmas; "
                     "give a spread whose range is finite"
                 )
-            try:
-                apply_values(baseline, [p], {p.name: end}, f"{source}: {_where(p)}")
-            except ParameterError as exc:
-                raise ParameterError(
-                    f"{exc} (the {p.distribution} range of {_where(p)} reaches {end:.6g}, which the field refuses)"
-                ) from None
+            check(p, end)
+    return out
+
+
+def _field_parameters(section: str, name: str, nominal, entry: dict, source: str) -> list[UncertainParameter]:
+    """One ``[parameters.SECTION.NAME]`` table's parameters: the field's, a factor on a list, or its elements'."""
+    where = f"[parameters.{section}.{name}]"
+    if isinstance(nominal, bool) or isinstance(nominal, (str, int)):
+        raise ParameterError(
+            f"{source}: {where}: the field is {type(nominal).__name__}-valued ({nominal!r}); only real-valued "
+            "fields can be uncertain (a design study varies the others)"
+        )
+    if not isinstance(nominal, list):
+        return [_parameter(section, name, None, float(nominal), entry, where, source)]
+    if not all(isinstance(v, float) for v in nominal):
+        raise ParameterError(f"{source}: {where}: only real-valued fields can be uncertain")
+    if "distribution" in entry:  # a factor on the whole list
+        return [_parameter(section, name, None, 1.0, entry, where, source, factor=True)]
+    out = []
+    for key, sub in entry.items():
+        if not (key.isascii() and key.isdigit() and int(key) < len(nominal)):  # int("²") fails
+            raise ParameterError(
+                f"{source}: {where}: expected 'distribution' (one factor on every element) or element "
+                f"tables 0..{len(nominal) - 1}. Got key {key!r} instead."
+            )
+        k = int(key)
+        sub_where = f"[parameters.{section}.{name}.{k}]"
+        out.append(_parameter(section, name, k, nominal[k], _table(sub, sub_where, source), sub_where, source))
     return out
 
 

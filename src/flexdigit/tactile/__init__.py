@@ -45,6 +45,7 @@ __getattr__, __all__ = lazy_exports(
         "percentage_error": "flexdigit.tactile.accuracy",
         "rmse": "flexdigit.tactile.accuracy",
         "prediction_figure": "flexdigit.tactile.prediction_plot",
+        "dataset_figure": "flexdigit.tactile.dataset_plot",
         "target_unit": "flexdigit.tactile.prediction_plot",
         "TwinGaugeModel": "flexdigit.tactile.bounds",
         "cramer_rao": "flexdigit.tactile.bounds",

@@ -538,18 +538,23 @@ def position_bayes_rmse_m(
     if prior not in ("span", "settings"):
         raise ValueError(f"position_bayes_rmse_m: prior must be 'span' or 'settings', not {prior!r}")
     if prior == "settings":
-        limits = bayes_limits(model, dataset, rows, samples=samples, seed=seed)
-        k = limits.index(dataset["position_from_base_m"][rows], dataset["load_kg"][rows], dataset["command"][rows])
-        limit = float(np.sqrt(np.mean(limits.position_mse_m2[k])))
-        distinct = np.unique(limits.position_from_base_m[limits.mass_kg > 0])
-        step = float(np.median(np.diff(distinct))) if distinct.size > 1 else 0.0
-        if limit < SETTINGS_RESOLVED * step:  # no draw mixed two positions: the Monte Carlo saw only rounding
-            raise ValueError(
-                f"the settings Bayes limit ({1e3 * limit:.3g} mm) is under {SETTINGS_RESOLVED:g} of the protocol's "
-                f"step ({1e3 * step:.3g} mm): its draws never mixed two positions; not reported (use prior='span')"
-            )
-        return limit
+        return _settings_limit_m(model, dataset, rows, samples=samples, seed=seed)
     return _span_limit_m(model, dataset, rows, samples=samples, seed=seed)
+
+
+def _settings_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int) -> float:
+    """:func:`position_bayes_rmse_m`'s settings prior (:func:`bayes_limits`), refused where unresolved."""
+    limits = bayes_limits(model, dataset, rows, samples=samples, seed=seed)
+    k = limits.index(dataset["position_from_base_m"][rows], dataset["load_kg"][rows], dataset["command"][rows])
+    limit = float(np.sqrt(np.mean(limits.position_mse_m2[k])))
+    distinct = np.unique(limits.position_from_base_m[limits.mass_kg > 0])
+    step = float(np.median(np.diff(distinct))) if distinct.size > 1 else 0.0
+    if limit < SETTINGS_RESOLVED * step:  # no draw mixed two positions: the Monte Carlo saw only rounding
+        raise ValueError(
+            f"the settings Bayes limit ({1e3 * limit:.3g} mm) is under {SETTINGS_RESOLVED:g} of the protocol's "
+            f"step ({1e3 * step:.3g} mm): its draws never mixed two positions; not reported (use prior='span')"
+        )
+    return limit
 
 
 def _span_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int) -> float:

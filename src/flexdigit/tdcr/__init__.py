@@ -50,6 +50,8 @@ __getattr__, __all__ = lazy_exports(
         "scene_update": "flexdigit.tdcr.scene",
         "write_recording": "flexdigit.tdcr.scene",
         "experiment_figure": "flexdigit.tdcr.robot_plot",
+        "trajectory_figure": "flexdigit.tdcr.robot_plot",
+        "statics_figure": "flexdigit.tdcr.robot_plot",
         "backbone_figure": "flexdigit.tdcr.robot_plot",
         "contact_figure": "flexdigit.tdcr.robot_plot",
     },

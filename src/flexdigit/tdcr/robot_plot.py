@@ -1,6 +1,7 @@
-"""The figures of a tendon robot's commands (``--plot``): ``flexdigit simulate release|step --robot`` draws the
-tip's path over time, ``flexdigit tdcr shape`` the backbone the gauges imply beside the twin's, ``flexdigit tdcr
-contact`` the contact the gauges locate (and the twin's, when it was pressed).
+"""The figures of a tendon robot's commands (``--plot``): ``flexdigit simulate release|step --robot`` and ``flexdigit
+tdcr dynamics`` draw the tip's path over time, ``flexdigit tdcr statics`` the robot's backbone, ``flexdigit tdcr
+shape`` the backbone the gauges imply beside the twin's, ``flexdigit tdcr contact`` the contact the gauges locate
+(and the twin's, when it was pressed).
 
 In the style of the digit's figures (:mod:`flexdigit._plot`): matplotlib ``Figure`` objects without pyplot,
 lengths in mm, times in s, units in every axis label.
@@ -14,12 +15,28 @@ import numpy as np
 
 from flexdigit._plot import new_figure
 
-__all__ = ["experiment_figure", "backbone_figure", "contact_figure"]
+__all__ = ["experiment_figure", "trajectory_figure", "statics_figure", "backbone_figure", "contact_figure"]
 
 #: The tip's coordinates, in the order of ``tip_positions_m``'s columns (world frame: z along the unloaded backbone).
 AXES = ("x", "y", "z")
 #: A coordinate that moves less than this is drawn on this span, centred: a still one shows flat, not its round-off.
 MIN_SPAN_MM = 1.0
+
+
+def _tip_panels(t_s: np.ndarray, tip_positions_m: np.ndarray, title: str):
+    """The tip's x, y and z (mm) against time (s), one panel each, a still coordinate on :data:`MIN_SPAN_MM`."""
+    tip_mm = np.asarray(tip_positions_m) * 1e3
+    fig, axes = new_figure(3, 1, figsize=(8.0, 5.5), sharex=True)
+    for k, ax in enumerate(axes):
+        ax.plot(t_s, tip_mm[:, k], label=f"tip {AXES[k]}")
+        ax.set_ylabel(f"tip {AXES[k]} (mm)")
+        low, high = float(tip_mm[:, k].min()), float(tip_mm[:, k].max())
+        if high - low < MIN_SPAN_MM:
+            middle = 0.5 * (low + high)
+            ax.set_ylim(middle - 0.5 * MIN_SPAN_MM, middle + 0.5 * MIN_SPAN_MM)
+    axes[-1].set_xlabel("time (s)")
+    axes[0].set_title(title, fontsize=9)
+    return fig
 
 
 def experiment_figure(test):
@@ -32,16 +49,6 @@ def experiment_figure(test):
         What :func:`~flexdigit.tdcr.release_test` or :func:`~flexdigit.tdcr.step_test` returned.
     """
     t = test.motion.t_s
-    tip_mm = test.motion.tip_positions_m * 1e3
-    fig, axes = new_figure(3, 1, figsize=(8.0, 5.5), sharex=True)
-    for k, ax in enumerate(axes):
-        ax.plot(t, tip_mm[:, k], label=f"tip {AXES[k]}")
-        ax.set_ylabel(f"tip {AXES[k]} (mm)")
-        low, high = float(tip_mm[:, k].min()), float(tip_mm[:, k].max())
-        if high - low < MIN_SPAN_MM:
-            middle = 0.5 * (low + high)
-            ax.set_ylim(middle - 0.5 * MIN_SPAN_MM, middle + 0.5 * MIN_SPAN_MM)
-    axes[-1].set_xlabel("time (s)")
     title = f"{test.experiment} test of {test.robot.name} on its twin"
     if not math.isnan(test.first_frequency_hz):
         title += (
@@ -50,7 +57,76 @@ def experiment_figure(test):
         )
     if not test.motion.converged:
         title += f" (stopped unconverged at {t[-1]:.3g} s)"
-    axes[0].set_title(title, fontsize=9)
+    return _tip_panels(t, test.motion.tip_positions_m, title)
+
+
+def trajectory_figure(motion, robot=None):
+    """A time response (:func:`~flexdigit.tdcr.simulate`, ``flexdigit tdcr dynamics``) as a matplotlib
+    ``Figure``: the tip's x, y and z (mm) against time (s), one panel each.
+
+    Parameters
+    ----------
+    motion : DynamicSolution
+    robot : Robot, optional
+        Its name goes in the title.
+
+    Examples
+    --------
+    >>> from flexdigit.tdcr import ROBOTS, simulate, solve_statics
+    >>> robot = ROBOTS["rao2021"]
+    >>> straight = solve_statics(robot, [0.0] * 6)
+    >>> fig = trajectory_figure(simulate(robot, straight, 0.002, dt_s=1e-3, tensions_n=[1, 0, 0, 0, 0, 0]), robot)
+    >>> [ax.get_ylabel() for ax in fig.axes]
+    ['tip x (mm)', 'tip y (mm)', 'tip z (mm)']
+    """
+    t = motion.t_s
+    name = robot.name if robot is not None else "the robot"
+    title = f"tip of {name} from t = 0 ({len(t) - 1} steps of {t[1] - t[0]:.3g} s)" if len(t) > 1 else name
+    if not motion.converged:
+        title += f" (stopped unconverged at {t[-1]:.3g} s)"
+    return _tip_panels(t, motion.tip_positions_m, title)
+
+
+def statics_figure(solution, robot=None):
+    """A static equilibrium (:func:`~flexdigit.tdcr.solve_statics`, ``flexdigit tdcr statics``) as a matplotlib
+    ``Figure``: the backbone seen from the side (x-z), the front (y-z) and above (x-y), in mm, its disks and tip
+    marked.
+
+    Parameters
+    ----------
+    solution : StaticSolution
+    robot : Robot, optional
+        Its name goes in the title, its disks on the backbone.
+
+    Examples
+    --------
+    >>> from flexdigit.tdcr import ROBOTS, solve_statics
+    >>> fig = statics_figure(solve_statics(ROBOTS["rao2021"], [2, 0, 0, 0, 0, 0]), ROBOTS["rao2021"])
+    >>> [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
+    [('x (mm)', 'z (mm)'), ('y (mm)', 'z (mm)'), ('x (mm)', 'y (mm)')]
+    """
+    backbone_mm = solution.positions_m * 1e3
+    tip_mm = backbone_mm[-1]
+    fig, axes = new_figure(1, 3, figsize=(10.0, 4.4))
+    disks_mm = None
+    if robot is not None:
+        disks = np.asarray(robot.disk_positions_m, float)
+        disks_mm = np.array([np.interp(disks, solution.s_m, solution.positions_m[:, k]) for k in range(3)]).T * 1e3
+    for ax, (i, j) in zip(axes, ((0, 2), (1, 2), (0, 1)), strict=True):
+        ax.plot(backbone_mm[:, i], backbone_mm[:, j], label="backbone")
+        if disks_mm is not None:
+            ax.plot(disks_mm[:, i], disks_mm[:, j], "o", ms=3, label="disks")
+        ax.plot([tip_mm[i]], [tip_mm[j]], "*", ms=9, label="tip")
+        ax.set_xlabel(f"{AXES[i]} (mm)")
+        ax.set_ylabel(f"{AXES[j]} (mm)")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(f"{AXES[i]}-{AXES[j]} view", fontsize=9)
+    axes[0].legend(fontsize=7)
+    name = robot.name if robot is not None else "the robot"
+    title = f"{name} in static equilibrium: tip at ({tip_mm[0]:.1f}, {tip_mm[1]:.1f}, {tip_mm[2]:.1f}) mm"
+    if not solution.converged:
+        title += f" (NOT converged: residual {solution.residual:.2g})"
+    fig.suptitle(title, fontsize=9)
     return fig
 
 

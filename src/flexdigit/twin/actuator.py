@@ -75,6 +75,9 @@ class Servo:
         self.angle = float(command_to_angle_rad(self.command, params))
         self.rate = 0.0
         self.pending: list[tuple[float, int]] = []
+        #: the timer drive's pulse start after the control tick, s (the firmware's PULSE_DELAY_MS: 1 ms, 5 ms for
+        #: a described digit's image; ``sim?servo_drive=timer&pulse_delay_ms=5``)
+        self.pulse_after_tick_s = TIMER_PULSE_AFTER_TICK_S
         self._targets: dict[int, float] = {}
         self._transitions: dict[float, np.ndarray] = {}
 
@@ -97,7 +100,7 @@ class Servo:
         value = self.check_command(value)
         if self.drive == "timer":
             frame = math.ceil(issued_s / TIMER_FRAME_S - 1e-9) * TIMER_FRAME_S
-            pulse = frame + TIMER_PULSE_AFTER_TICK_S
+            pulse = frame + self.pulse_after_tick_s
         else:
             a = self.params.actuator
             frame = math.ceil(issued_s / a.serial_period_s - 1e-9) * a.serial_period_s

@@ -328,3 +328,35 @@ def test_the_firmware_version_2_lines_decode_for_one_to_eight_gauges(tmp_path):
         assert event.sample.pot == (-5 if count % 2 else None)
         assert event.sample.seq == (65530 + count) % 65536
     assert out.splitlines()[0] + b"\n" == encode_line(65531, 4294967295, g[:1], -5).replace(b"\r", b"")
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler to build the firmware's protocol code")
+def test_the_boards_lines_with_its_rotation_estimate_decode(tmp_path):
+    """The board firmware's lines (flexdigit_format_line_v2_rotation): 8 gauges of any 32-bit count, its command
+    in the pot's field and its rotation estimate, micro-degrees, at the longest a line can be."""
+    main = tmp_path / "main.c"
+    main.write_text(
+        '#include "flexdigit_stream.h"\n'
+        "int main(void) {\n"
+        "  char line[FLEXDIGIT_STREAM_LINE_MAX];\n"
+        "  int32_t g[8] = {-2147483647L - 1, -2147483647L - 1, -2147483647L - 1, -2147483647L - 1,\n"
+        "                  -2147483647L - 1, -2147483647L - 1, -2147483647L - 1, -2147483647L - 1};\n"
+        "  int n = flexdigit_format_line_v2_rotation(line, 65535, 4294967295UL, g, 8, -2147483647L - 1,\n"
+        "                                            -2147483647L - 1);\n"
+        "  fwrite(line, 1, (size_t)n, stdout);\n"
+        "  n = flexdigit_format_line_v2_rotation(line, 7, 20000, g + 7, 1, 130, 29981250L);\n"
+        "  fwrite(line, 1, (size_t)n, stdout);\n"
+        "  return flexdigit_format_line_v2_rotation(line, 7, 20000, g, 9, 130, 0) != 0;\n"
+        "}\n"
+    )
+    exe = tmp_path / "fw3"
+    subprocess.run(["gcc", "-std=c99", "-Wall", "-Werror", "-I", EXAMPLES, str(main), "-o", str(exe)], check=True)
+    out = subprocess.run([str(exe)], check=True, capture_output=True).stdout
+    longest, short = LineDecoder().feed(out)
+    assert longest.sample.gauges == (-(2**31),) * 8
+    assert (longest.sample.pot, longest.sample.rotation_udeg) == (-(2**31), -(2**31))
+    assert len(out.splitlines()[0]) + 2 < 152  # FLEXDIGIT_STREAM_LINE_MAX: the NUL fits too
+    assert (short.sample.gauges, short.sample.pot, short.sample.rotation_deg) == ((-(2**31),), 130, 29.98125)
+    assert out.splitlines()[1] + b"\n" == encode_line(7, 20000, [-(2**31)], 130, rotation_udeg=29981250).replace(
+        b"\r", b""
+    )

@@ -3,9 +3,11 @@ travel: the board on simavr (:mod:`flexdigit.rig.backends.hil_backend`) and a re
 (:mod:`flexdigit.rig.backends.board_backend`) share it.
 
 The board streams each control period's ADC counts (signed about its 2.5 V midpoint) and the command it applied
-in the stream protocol (:mod:`flexdigit.rig.backends.stream_framing`, version 2: its G gauges), and information
+in the stream protocol (:mod:`flexdigit.rig.backends.stream_framing`, version 2: its G gauges, its command in the
+pot's field and its rotation estimate, the map's reading minus its tare, in micro-degrees), and information
 lines: its banner (``# flexdigit-stream 2 ... period_us=20000 fixed=0 gauges=3 straight=8 range=0..254
-pulse_delay_ms=1``: the digit its image was built for), ``# mode <0|1|2>``, ``# tare <micro-deg>`` (the rotation its map
+pulse_delay_ms=1 target=uno adc_channels=6``: the digit its image was built for, and the board it needs: an Uno's six
+analogue inputs, or a Nano's or Pro Mini's eight), ``# mode <0|1|2>``, ``# tare <micro-deg>`` (the rotation its map
 read at rest when its loop started) and ``# fault <code> <name>``. The host sends one command a line: ``S<millideg>``
 setpoint, ``M<0|1|2>`` mode (safe, host commands, loop on the board), ``C<command>``, ``F<0|1>`` safe action
 (relax, hold), ``W`` heartbeat (the board's safe state follows 0.5 s of silence).
@@ -36,16 +38,21 @@ __all__ = [
     "MAX_KEPT_SAMPLES",
     "FIRMWARE_GAUGES",
     "MAX_BOARD_GAUGES",
+    "UNO_ADC_CHANNELS",
     "check_board_digit",
     "check_board_image",
+    "check_board_channels",
 ]
 
 #: Gauges the reference firmware reads when its banner does not say (an image built before issue 24's G gauges):
 #: the thesis rig's three.
 FIRMWARE_GAUGES = 3
-#: Most gauges the reference firmware reads: the Uno's analogue pins A0..A5 (ADC0..ADC5; ADC6 and ADC7 exist only
-#: on the surface-mount ATmega328P).
-MAX_BOARD_GAUGES = 6
+#: Most gauges the reference firmware reads: the ATmega328P's ADC0..ADC7. An Uno (the DIP chip) brings out six,
+#: A0..A5; a Nano or Pro Mini (the TQFP/MLF chip) eight, A6 and A7 analogue-only inputs.
+MAX_BOARD_GAUGES = 8
+#: The analogue inputs a board declares when its banner does not say (an image built before the 8-gauge boards:
+#: for an Uno).
+UNO_ADC_CHANNELS = 6
 
 #: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
 VOLTS_PER_COUNT = 5.0 / 1024.0
@@ -138,10 +145,11 @@ class BoardState:
 def check_board_digit(params, where: str) -> None:
     """Refuse, in one line naming the backend and the key, a digit no image of the reference firmware can serve.
 
-    The firmware reads gauge k on the Uno's ADCk, so a digit of more than :data:`MAX_BOARD_GAUGES` gauges (the
-    Uno's six analogue pins) cannot be read. Any other digit is served by an image built for it (``make firmware
-    PARAMS=D.toml``: its own controller, map, straight command); :func:`check_board_image` then checks, once the
-    board has said what it was built for, that the image is that digit's.
+    The firmware reads gauge k on the ATmega328P's ADCk, so a digit of more than :data:`MAX_BOARD_GAUGES` gauges
+    cannot be read (the description refuses 9 already: this says so for the board). Any other digit is served by
+    an image built for it (``make firmware PARAMS=D.toml``: its own controller, map, straight command, and a
+    Nano/Pro Mini-class board for 7 or 8 gauges); :func:`check_board_image` then checks, once the board has said
+    what it was built for and which board it is, that the image is that digit's and the board has its inputs.
 
     Examples
     --------
@@ -150,9 +158,6 @@ def check_board_digit(params, where: str) -> None:
     >>> eight = RigParams.from_dict({"sensors": {"adc_channels": list(range(8))},
     ...     "geometry": {"gauge_positions_m": [0.02, 0.05, 0.08, 0.11, 0.14, 0.17, 0.2, 0.23]}})
     >>> check_board_digit(eight, "hil://board.elf")
-    Traceback (most recent call last):
-    ...
-    flexdigit.errors.ParameterError: hil://board.elf: the digit's [geometry] gauge_positions_m has 8 gauges; ...
     """
     if params is None:  # the thesis rig
         return
@@ -160,7 +165,7 @@ def check_board_digit(params, where: str) -> None:
     if gauges > MAX_BOARD_GAUGES:
         raise ParameterError(
             f"{where}: the digit's [geometry] gauge_positions_m has {gauges} gauges; the reference firmware reads "
-            f"at most {MAX_BOARD_GAUGES} (the Uno's analogue pins A0..A5, gauge k on ADCk): not supported on the "
+            f"at most {MAX_BOARD_GAUGES} (the ATmega328P's ADC0..ADC7, gauge k on ADCk): not supported on the "
             "board (docs/board.md); close the loop on the host through a gauge stream instead "
             "(flexdigit stream-emulator --params)"
         )
@@ -172,6 +177,7 @@ def check_board_image(board: BoardState, params, where: str) -> None:
     p = params or RigParams()
     a = p.actuator
     want = (len(p.geometry.gauge_positions_m), int(a.equilibrium_command), (int(a.command_min), int(a.command_max)))
+    check_board_channels(board, want[0], where)
     try:
         got = board.image_digit()
     except ValueError:
@@ -185,4 +191,32 @@ def check_board_image(board: BoardState, params, where: str) -> None:
             f"{where}: the firmware image was built for {got[0]} gauges, straight command {got[1]}, commands "
             f"{got[2][0]}..{got[2][1]}; the digit has {want[0]} gauges, straight command {want[1]}, commands "
             f"{want[2][0]}..{want[2][1]}: build the image for it (make firmware PARAMS=your-digit.toml)"
+        )
+
+
+def check_board_channels(board: BoardState, gauges: int, where: str) -> None:
+    """Refuse, in one line, a digit of more gauges than the board declares analogue inputs (its banner's
+    ``adc_channels``: 6 on an Uno, 8 on a Nano or Pro Mini; an image that does not say was built for an Uno).
+
+    Examples
+    --------
+    >>> uno = BoardState()
+    >>> _ = uno.feed(b"# flexdigit-stream 2 gauges=6 target=uno adc_channels=6\\r\\n", time_s=0.0)
+    >>> check_board_channels(uno, 6, "board:///dev/ttyACM0")
+    >>> check_board_channels(uno, 8, "board:///dev/ttyACM0")
+    Traceback (most recent call last):
+    ...
+    flexdigit.errors.ParameterError: board:///dev/ttyACM0: the board declares 6 analogue inputs (uno: A0..A5); ...
+    """
+    declared = board.banner_value("adc_channels")
+    try:
+        channels = UNO_ADC_CHANNELS if declared is None else int(declared)
+    except ValueError:
+        raise RigError(f"{where}: the firmware's banner gives adc_channels={declared}: expected 6 or 8") from None
+    if gauges > channels:
+        target = board.banner_value("target") or "uno"
+        raise ParameterError(
+            f"{where}: the board declares {channels} analogue inputs ({target}: A0..A{channels - 1}); the digit has "
+            f"{gauges} gauges (one an input): use a Nano or Pro Mini (A6, A7) and an image built for it "
+            "(make firmware PARAMS=your-digit.toml BOARD=nano)"
         )

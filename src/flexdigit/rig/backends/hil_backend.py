@@ -514,12 +514,18 @@ def from_url(location: str, params: RigParams | None, options: dict[str, Any]) -
 
 
 class BoardRun:
-    """What :func:`run_on_board` watched: per board period, the time, the twin's true rotation, the command."""
+    """What :func:`run_on_board` watched: per board period, the time, the twin's true rotation, the command, and the
+    board's own rotation estimate (NaN where its line carried none: an image before the estimate was streamed)."""
 
-    def __init__(self, time_s, true_rotation_deg, command, status: str, message: str, period_s: float) -> None:
+    def __init__(
+        self, time_s, true_rotation_deg, command, status: str, message: str, period_s: float, estimate_deg=None
+    ) -> None:
         self.time_s = np.asarray(time_s, dtype=float)
         self.true_rotation_deg = np.asarray(true_rotation_deg, dtype=float)
         self.command = np.asarray(command, dtype=float)
+        self.estimate_deg = (
+            np.full(self.time_s.size, math.nan) if estimate_deg is None else np.asarray(estimate_deg, dtype=float)
+        )
         self.status, self.message, self.period_s = status, message, period_s
 
     def __repr__(self) -> str:
@@ -540,13 +546,14 @@ def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float, on_period=
 
     Times are from the setpoint's sending, as the host's loop counts them from its first sample (the step's
     time 0 in both): the rig's clock already counts the opening's 0.2 s of rest readings. ``on_period(t, reading,
-    true_deg, command)``, when given, sees every period as it is watched (the run's log)."""
+    true_deg, command, estimate_deg)``, when given, sees every period as it is watched (the run's log);
+    ``estimate_deg`` is the board's streamed rotation estimate of the period's newest line (NaN if it sends none)."""
     period = board_period_s(rig)
     t0 = rig.clock()
     rig.set_setpoint(setpoint_deg)
     if rig.mode != "board":
         rig.set_mode("board")
-    t, truth, command = [], [], []
+    t, truth, command, estimate = [], [], [], []
     status, message = "completed", f"{duration_s:g} s on the board"
     n = int(round(duration_s / period))
     try:
@@ -556,8 +563,10 @@ def run_on_board(rig: HilRig, setpoint_deg: float, duration_s: float, on_period=
             t.append(rig.clock() - t0)
             truth.append(rig.tip_rotation_deg())
             command.append(rig.board_command)
+            streamed = rig.latest.rotation_deg  # the line read() took its gauges from
+            estimate.append(math.nan if streamed is None else streamed)
             if on_period is not None:
-                on_period(t[-1], reading, truth[-1], command[-1])
+                on_period(t[-1], reading, truth[-1], command[-1], estimate[-1])
     except RigError as exc:
         status, message = "fault", str(exc)
-    return BoardRun(t, truth, command, status, message, period)
+    return BoardRun(t, truth, command, status, message, period, estimate)

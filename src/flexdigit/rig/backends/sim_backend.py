@@ -22,11 +22,11 @@ from typing import Any
 import numpy as np
 
 from flexdigit._json import fingerprint
-from flexdigit._validation import check_real
+from flexdigit._validation import check_int, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig, UrlOption
-from flexdigit.twin.actuator import SERVO_DRIVES
+from flexdigit.twin.actuator import SERVO_DRIVES, TIMER_PULSE_AFTER_TICK_S
 from flexdigit.twin.twin import Twin
 
 __all__ = ["SimRig", "from_url", "from_url_paced", "DEFAULT_TWIN_DT_S"]
@@ -71,6 +71,7 @@ class SimRig(Rig):
         sleep=None,
         operator=None,
         compiled: bool | None = None,
+        pulse_delay_ms: int | None = None,
         **twin_options: Any,
     ) -> None:
         ready = twin is not None
@@ -82,6 +83,14 @@ class SimRig(Rig):
             twin = Twin(params, seed=int(seed), compiled=bool(compiled), **twin_options)
             if compiled is None and paced:
                 twin.dynamics.use_compiled(background=True)
+        if pulse_delay_ms is not None:
+            if twin.servo.drive != "timer":
+                raise ParameterError(
+                    f"sim: pulse_delay_ms={pulse_delay_ms} applies to servo_drive=timer only (got servo_drive="
+                    f"{twin.servo.drive})"
+                )
+            # the firmware image's PULSE_DELAY_MS (its banner's pulse_delay_ms): like for like with a board run
+            twin.servo.pulse_after_tick_s = check_int(pulse_delay_ms, "pulse_delay_ms", "SimRig", low=1, high=19) / 1e3
         #: Whether the twin's digit steps compiled (or will, once the kernel has loaded in the background)
         self.compiled = twin.dynamics.compiled if ready else bool(compiled or (compiled is None and paced))
         self.twin = twin
@@ -157,6 +166,11 @@ class SimRig(Rig):
             | (  # only when on: older journals stay comparable
                 {"servo_drive": twin.servo.drive} if twin.servo.drive != "serial" else {}
             )
+            | (
+                {"pulse_delay_ms": round(twin.servo.pulse_after_tick_s * 1e3)}
+                if twin.servo.pulse_after_tick_s != TIMER_PULSE_AFTER_TICK_S
+                else {}
+            )
         )
 
     def tip_rotation_deg(self) -> float:
@@ -183,6 +197,13 @@ URL_OPTIONS = (
         "choice",
         choices=SERVO_DRIVES,
         help="how commands reach the servo: the serial board (the thesis rig) or a microcontroller's timer pulse",
+    ),
+    UrlOption(
+        "pulse_delay_ms",
+        "int",
+        low=1,
+        high=19,
+        help="servo_drive=timer: the pulse's start after the control tick, ms (a firmware image's pulse_delay_ms)",
     ),
 )
 #: Keyword arguments only Python passes to :class:`SimRig` (objects, not text).

@@ -11,12 +11,12 @@ One line per sample, ASCII, sent ended by ``\\r\\n``; the host ends a line at ``
 comes, and skips empty lines, so ``\\r\\n``, ``\\n``, ``\\r`` and ``\\n\\r`` all read. Version 2 carries any
 digit's 1 to 8 gauges, version 1 the thesis rig's three; the host reads both, line by line::
 
-    $V2,<seq>,<t_us>,<G>,<g1>,...,<gG>[,<pot>]*<crc>     version 2: G gauges, 1 <= G <= 8
-    $<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<crc>           version 1: three gauges
+    $V2,<seq>,<t_us>,<G>,<g1>,...,<gG>[,<pot>[,<rot>]]*<crc>     version 2: G gauges, 1 <= G <= 8
+    $<seq>,<t_us>,<g1>,<g2>,<g3>[,<pot>]*<crc>                   version 1: three gauges
 
 - ``V2``: the literal tag of a version-2 line (upper case; it is no integer, so no version-1 line starts so);
-- ``G``: how many gauge fields follow, 1..:data:`MAX_GAUGES`; the line then has ``4 + G`` fields, or ``5 + G``
-  with the pot (a count that disagrees with the fields is garbled);
+- ``G``: how many gauge fields follow, 1..:data:`MAX_GAUGES`; the line then has ``4 + G`` fields, ``5 + G``
+  with the pot, or ``6 + G`` with the pot and the rotation (a count that disagrees with the fields is garbled);
 
 - every field is a decimal integer, an optional ``-`` then digits (no ``+``, no blanks, no decimal point, no
   exponent): ADC counts, not volts (the host multiplies by its ``scale``, volts per count);
@@ -29,7 +29,12 @@ digit's 1 to 8 gauges, version 1 the thesis rig's three; the host reads both, li
   wraps after 71.6 minutes; ``millis()`` x 1000 will do). Kept with each sample, never used for timing: the host
   keeps its own clock, so a wrap or a jump is harmless;
 - ``g1 .. gG`` (``g1, g2, g3`` in version 1): the gauges, base to tip, as signed ADC counts;
-- ``pot``: optional (a line may have it or not), the servo potentiometer in signed ADC counts;
+- ``pot``: optional (a line may have it or not), the servo potentiometer in signed ADC counts (the reference
+  board firmware, ``firmware/flexdigit_board.c``, sends the servo command it applied here: it has no pot);
+- ``rot``: version 2 only, optional, only after ``pot``: the board's own rotation estimate of these gauges, in
+  micro-degrees (the board that closes the loop itself streams what it fed its controller: its map's reading minus
+  its tare). Added to version 2 in issue 24 (item 5): a version-2 line without it reads as before, and a host that
+  predates it refuses a line with it as garbled (one field too many), so a board that streams it needs this host;
 - ``crc``: four hexadecimal digits (the firmware sends upper case; either case reads), CRC-16/XMODEM (polynomial
   0x1021, initial value 0, no reflection, no final XOR: Python's ``binascii.crc_hqx(payload, 0)``, avr-libc's
   ``_crc_xmodem_update``; check value 0x31C3 for ``123456789``) of the bytes strictly between ``$`` and ``*``
@@ -57,6 +62,11 @@ b'$7,1000000,120,-45,3000,812*4297\\r\\n'
 b'$V2,8,1020000,5,5,6,7,8,9*2358\\r\\n'
 >>> decoder.feed(v2)[0].sample.gauges
 (5, 6, 7, 8, 9)
+>>> board = encode_line(9, 1_040_000, (5, 6, 7, 8, 9), pot=130, rotation_udeg=-29_981_250)
+>>> board
+b'$V2,9,1040000,5,5,6,7,8,9,130,-29981250*BAE5\\r\\n'
+>>> decoder.feed(board)[0].sample.rotation_deg
+-29.98125
 """
 
 from __future__ import annotations
@@ -104,13 +114,19 @@ def crc16_xmodem(payload: bytes) -> int:
 
 @dataclass(frozen=True)
 class Sample:
-    """One decoded line: sequence number, board time (us), gauge counts (1 to 8, base first) and pot counts (None
-    if not sent)."""
+    """One decoded line: sequence number, board time (us), gauge counts (1 to 8, base first), pot counts (None
+    if not sent) and the board's rotation estimate in micro-degrees (None if not sent)."""
 
     seq: int
     t_us: int
     gauges: tuple[int, ...]
     pot: int | None = None
+    rotation_udeg: int | None = None
+
+    @property
+    def rotation_deg(self) -> float | None:
+        """The board's rotation estimate, deg (None if the line did not carry one)."""
+        return None if self.rotation_udeg is None else self.rotation_udeg / 1e6
 
 
 @dataclass(frozen=True)
@@ -123,20 +139,32 @@ class Event:
     reason: str = ""
 
 
-def encode_line(seq: int, t_us: int, gauges, pot: int | None = None, version: int | None = None) -> bytes:
+def encode_line(
+    seq: int,
+    t_us: int,
+    gauges,
+    pot: int | None = None,
+    version: int | None = None,
+    rotation_udeg: int | None = None,
+) -> bytes:
     """The bytes the firmware sends for one sample (see the module docstring): version 1 for three gauges and
-    version 2 otherwise, unless ``version`` says (version 2 carries three as well)."""
+    version 2 otherwise, unless ``version`` says (version 2 carries three as well); ``rotation_udeg`` (the board's
+    estimate, micro-degrees) only in version 2 and after a ``pot``."""
     values = [int(g) for g in gauges]
-    version = (1 if len(values) == 3 else 2) if version is None else version
+    version = (1 if len(values) == 3 and rotation_udeg is None else 2) if version is None else version
     if version not in PROTOCOL_VERSIONS:
         raise ValueError(f"encode_line writes protocol version 1 or 2. Got {version!r}")
     if version == 1 and len(values) != 3:
         raise ValueError(f"a version-1 line carries 3 gauge values. Got {len(values)}")
     if not 1 <= len(values) <= MAX_GAUGES:
         raise ValueError(f"a version-2 line carries 1 to {MAX_GAUGES} gauge values. Got {len(values)}")
+    if rotation_udeg is not None and (version == 1 or pot is None):
+        raise ValueError("a rotation estimate goes in a version-2 line, after the pot field. Got no pot or version 1")
     fields = [int(seq) % SEQ_MODULUS, int(t_us) % TIME_MODULUS_US, *([len(values)] if version == 2 else []), *values]
     if pot is not None:
         fields.append(int(pot))
+    if rotation_udeg is not None:
+        fields.append(int(rotation_udeg))
     payload = (b"V2," if version == 2 else b"") + ",".join(str(v) for v in fields).encode("ascii")
     return b"$" + payload + b"*" + f"{crc16_xmodem(payload):04X}".encode("ascii") + b"\r\n"
 
@@ -182,13 +210,15 @@ def decode_line(line: bytes) -> Event:
         if len(values) < 4 or not 1 <= values[2] <= MAX_GAUGES:
             return Event("garbled", reason=f"version 2: no gauge count 1..{MAX_GAUGES} and its gauges")
         count, values = values[2], values[:2] + values[3:]
-        if len(values) not in (2 + count, 3 + count):
+        if len(values) not in (2 + count, 3 + count, 4 + count):
             return Event("garbled", reason=f"version 2: {len(values) - 2} values after a gauge count of {count}")
     seq, t_us = values[0], values[1]
     if not (0 <= seq < SEQ_MODULUS and 0 <= t_us < TIME_MODULUS_US):
         return Event("garbled", reason="sequence number or time out of range")
-    pot = values[2 + count] if len(values) == 3 + count else None
-    return Event("sample", Sample(seq, t_us, tuple(values[2 : 2 + count]), pot))
+    extra = values[2 + count :]  # [pot[, rotation]]
+    pot = extra[0] if extra else None
+    rotation = extra[1] if len(extra) == 2 else None
+    return Event("sample", Sample(seq, t_us, tuple(values[2 : 2 + count]), pot, rotation))
 
 
 class LineDecoder:

@@ -1,0 +1,122 @@
+"""``flexdigit calibrate --params D`` on a digit's own simulated records gives its calibration back (issue 24).
+
+Known answers: the records are simulated (seeded) from a twin whose calibration is the digit's derived default
+(:func:`flexdigit.twin.digit_calibration.calibration_for`) perturbed by :data:`PERTURB`, so the fit must move away
+from its starting point to find it. Tolerances, from the records' noise:
+
+- a release test's wn is identified within ~0.1 % (the gauges of one record agree to 0.05 %, ``simulate release``);
+  a mass from the bare wn (``wn^2 ~ 1/m``) to ~0.2 %, the housing's stiffness from the housed wn given the mass to
+  ~0.5 %: :data:`STIFFNESS_RTOL` 2 % leaves the 20 mm release's amplitude (its nonlinearity against the linear
+  modes the fit uses) its share;
+- zeta scatters by ~2 % between gauges (a median over a digit's gauges): the dampings within :data:`DAMPING_RTOL`;
+- a channel's gain to its slope's standard error from the sweep's scatter and drift (the fit reports it): within
+  three of them, :data:`GAIN_SIGMAS`.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+from flexdigit.cli import main
+from flexdigit.params import load_params
+from flexdigit.twin.calibration import load_calibration, save_calibration
+from flexdigit.twin.digit_calibration import calibration_for
+
+HANDMADE = Path(__file__).resolve().parent.parent / "data" / "handmade_digits"
+STIFFNESS_RTOL = 0.02
+DAMPING_RTOL = 0.10
+GAIN_SIGMAS = 3.0
+#: The "rig"'s calibration against the digit's derived default: masses x1.15 (their ratios kept), housing x1.1,
+#: dampings x1.3.
+PERTURB = {"mass": 1.15, "housing": 1.1, "beta": 1.3}
+
+
+def _truth(params, mass=PERTURB["mass"], strip=PERTURB["beta"], gains=None):
+    cal = calibration_for(params)
+    gains = (1.0,) * len(cal.channel_gain) if gains is None else gains
+    return cal.replace(
+        support_mass_kg=tuple(m * mass for m in cal.support_mass_kg),
+        housing_ei_n_m2=tuple(ei * PERTURB["housing"] for ei in cal.housing_ei_n_m2),
+        strip_beta_s=cal.strip_beta_s * strip,
+        housing_beta_s=cal.housing_beta_s * PERTURB["beta"],
+        channel_gain=tuple(g * f for g, f in zip(cal.channel_gain, gains, strict=True)),
+    )
+
+
+def _records(name, tmp_path, capsys, kinds=("bare", "housed"), **truth):
+    """The digit's records simulated from its perturbed calibration (seed 1): ``(params file, truth, files)``."""
+    path = HANDMADE / f"{name}.toml"
+    truth = _truth(load_params(path), **truth)
+    cal_file = save_calibration(truth, tmp_path / "truth.toml")
+    files = {}
+    for kind in kinds:
+        out = tmp_path / f"{kind}.csv"
+        extra = {"bare": ["release", "--no-housing"], "housed": ["release"], "sweep": ["sweep"]}[kind]
+        argv = ["simulate", *extra, "--params", str(path), "--calibration", str(cal_file), "--seed", "1"]
+        assert main([*argv, "--out", str(out)]) == 0
+        files[kind] = out
+    capsys.readouterr()
+    return path, truth, files
+
+
+def _calibrate(path, files, out, capsys):
+    flags = {"bare": "--release-bare", "housed": "--release-housed", "sweep": "--sweep"}
+    argv = ["calibrate", "--params", str(path), "--out", str(out), "--json"]
+    for kind, f in files.items():
+        argv += [flags[kind], str(f)]
+    code = main(argv)
+    captured = capsys.readouterr()
+    return code, (json.loads(captured.out) if code == 0 else captured.err)
+
+
+def test_bare_and_housed_together_converge_on_the_thesis_template(tmp_path, capsys):
+    """Issue 24 trial 1: 4 mechanical values (mass, housing, two dampings) against the 4 figures of the two release
+    tests; was 'did not converge (maximum number of function evaluations)'."""
+    path, truth, files = _records("thesis_template", tmp_path, capsys)
+    code, data = _calibrate(path, files, tmp_path / "c.toml", capsys)
+    assert code == 0, data
+    assert set(data["fitted"]) >= {"support_mass_kg", "housing_ei_n_m2", "strip_beta_s", "housing_beta_s"}
+    got = load_calibration(tmp_path / "c.toml")
+    np.testing.assert_allclose(got.support_mass_kg, truth.support_mass_kg, rtol=STIFFNESS_RTOL)
+    np.testing.assert_allclose(got.housing_ei_n_m2, truth.housing_ei_n_m2, rtol=STIFFNESS_RTOL)
+    np.testing.assert_allclose(got.strip_beta_s, truth.strip_beta_s, rtol=DAMPING_RTOL)
+    np.testing.assert_allclose(got.housing_beta_s, truth.housing_beta_s, rtol=DAMPING_RTOL)
+
+
+def test_unequal_supports_keep_their_ratios(tmp_path, capsys):
+    """Issue 24 trial 2: supports of 12/10/8 mm weigh 7.9/6.6/5.3 g in the records, not 5.55 g each: one wn gives
+    one scale on the description's per-support masses."""
+    path, truth, files = _records("nitinol_unequal_supports", tmp_path, capsys)
+    code, data = _calibrate(path, files, tmp_path / "c.toml", capsys)
+    assert code == 0, data
+    got = np.asarray(load_calibration(tmp_path / "c.toml").support_mass_kg)
+    want = np.asarray(truth.support_mass_kg)
+    assert np.ptp(want) / want.max() > 0.3  # the supports do differ
+    np.testing.assert_allclose(got, want, rtol=STIFFNESS_RTOL)
+    np.testing.assert_allclose(got / got[0], want / want[0], rtol=1e-9)  # ratios kept exactly
+
+
+def test_housed_and_sweep_give_every_gain_within_its_reported_error(tmp_path, capsys):
+    """Issue 24 trial 3: four_sections_geared_eight's gauges 7 and 8 came out -19 / +17 %, its records made tip up
+    where it buckles. Now hung, as simulate and run mount it, and each gain within 3 of its standard error. The
+    supports' mass and the strip's damping are the description's (a housed test alone cannot tell them from the
+    housing's: they are kept, and the notes say so); the gains +-10 % on alternate gauges."""
+    gains = (1.1, 0.9) * 4
+    path, truth, files = _records(
+        "four_sections_geared_eight", tmp_path, capsys, ("housed", "sweep"), mass=1.0, strip=1.0, gains=gains
+    )
+    code, data = _calibrate(path, files, tmp_path / "c.toml", capsys)
+    assert code == 0, data
+    assert data["orientation"] == "hanging"
+    notes = " ".join(data["notes"])
+    assert "kept support_mass_kg" in notes  # housed alone: mass or housing?
+    assert "--release-bare" in notes
+    errors = dict(re.findall(r"gauge (\d+) \+-(\d+) %", notes))
+    got = load_calibration(tmp_path / "c.toml").channel_gain
+    for k, (g, t) in enumerate(zip(got, truth.channel_gain, strict=True)):
+        se = max(float(errors.get(str(k + 1), 2)), 1.0) / 100  # under 2 % it is not reported
+        assert abs(g / t - 1) < GAIN_SIGMAS * se, (k + 1, g, t, se)
