@@ -85,6 +85,10 @@ def test_the_chapter_of_a_seven_section_pair_built_alone(tmp_path):
     assert 0.0 < entries["palpation.active.bayes_position_mm"] < entries["palpation.active.single_bayes_position_mm"]
     assert abs(entries["palpation.stiffness.max_rel_error"]) < 4 * entries["palpation.stiffness.rel_bound"]
     assert "127..149 laid out from its straight command 127" in chapter.paragraphs[0]
+    active = next(t for t in chapter.tables if t.key == "palpation.active")
+    hang = next(r for r in active.rows if r[0].startswith("Bayes limit, one hang"))
+    assert np.isnan(hang[2])  # its magnitude cell blank, as the entry
+    assert hang[1] == pytest.approx(entries["palpation.active.bayes_position_mm"], rel=1e-12)
 
 
 @pytest.mark.slow

@@ -9,7 +9,8 @@ measures each); every table is also in results.json.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -494,6 +495,21 @@ def _resolved(value: float, spacing: float, unit_scale: float = 1.0):
     return unit_scale * value
 
 
+def _unresolved_blank(table):
+    """The active table with every Bayes-limit cell under its grid's resolution (:func:`_resolved`) left blank (NaN:
+    null in results.json), as its entries say "not determined"; estimators' errors stay (a 0 is a count of hits)."""
+    spacing = {"position_rmse_mm": 1000 * HANG_STEP_M, "magnitude_rel_rmse": MASS_SPACING_REL}
+    rows = []
+    for row in table.rows:
+        cells = list(row)
+        if str(row[0]).startswith("Bayes limit"):
+            for j, column in enumerate(table.columns):
+                if column in spacing and cells[j] < UNRESOLVED_FRACTION * spacing[column]:
+                    cells[j] = math.nan
+        rows.append(tuple(cells))
+    return replace(table, rows=tuple(rows))
+
+
 def estimate_label(run) -> str:
     """The force figure's label of the loop's estimate: one reading, or the mean of the hold's ``average_readings``
     (:func:`~flexdigit.palpation.palpation.hold_force` averages on a digit whose one reading is too noisy)."""
@@ -555,4 +571,4 @@ def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
             "maximum likelihood without the protocol's prior",
         )
     )
-    ch.tables.append(a["table"])
+    ch.tables.append(_unresolved_blank(a["table"]))
