@@ -9,31 +9,41 @@ measures each); every table is also in results.json.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from flexdigit.palpation import palpation_studies as studies
 from flexdigit.palpation.contact_estimation import ContactGaugeModel
-from flexdigit.palpation.palpation import PalpationProtocol
+from flexdigit.palpation.palpation import THESIS_STRAIGHT, PalpationProtocol, digit_command, digit_protocol
 from flexdigit.params import RigParams
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import new
 from flexdigit.tactile.bounds import TwinGaugeModel
+from flexdigit.tactile.localisation import SETTINGS_RESOLVED
 from flexdigit.twin.contact import Tissue
+from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.records import release_orientation
 
 SECTION = "beyond: palpation"
 #: The thesis rig's length (m): a digit's regions, extents and scan offsets are the thesis's scaled by L / this.
 THESIS_LENGTH_M = 0.27
+#: What of the thesis's sweep is laid out on a digit: all of it, as for ``palpate``'s built-in sweep.
+_LAID_OUT = ("commands", "tare_command", "settle_s")
 
 
 @dataclass(frozen=True)
 class DigitSetting:
-    """The chapter's studies on a digit other than the thesis rig, laid out as on the thesis rig relative to the
-    digit: the tissue beside its outer 45 % (from 0.55 L to 80 mm past the tip, 0.1 L away, as the digit tests'
-    ``palpate --params`` runs), commands from its straight command up by the thesis's 22 (x its gearing), contact
-    estimates at straight + 12 (the thesis's command 20), its mount (hung tip down if it buckles tip up)."""
+    """The chapter's studies on a digit other than the thesis rig, laid out by the palpation library as ``palpate
+    --params`` lays them out (one implementation; the chapter turns its results into entries): the tissue beside
+    the digit's outer 45 % (from 0.55 L to 80 mm past the tip, 0.1 L away), the thesis's commands laid out from its
+    straight command towards the tissue, as far in tip rotation (:func:`~flexdigit.palpation.palpation.digit_command`,
+    :func:`~flexdigit.palpation.palpation.digit_protocol`: the servo's step and gearing both), contact estimates at
+    the thesis's command 20, the digit's own calibration
+    (:func:`~flexdigit.twin.digit_calibration.twin_calibration`) and its mount (hung tip down if it buckles tip up).
+    Before, commands were scaled by the gear ratio alone (a fine-step servo swept a fifth of the way) and the gauge
+    model read the thesis rig's calibration."""
 
     params: RigParams
     orientation: str
@@ -48,22 +58,25 @@ class DigitSetting:
         return self.length_m / THESIS_LENGTH_M
 
     def command(self, thesis_offset: int) -> int:
-        """The command ``thesis_offset`` thesis commands past straight (the thesis's 8), times the gearing."""
-        a = self.params.actuator
-        return int(min(a.command_max, max(a.command_min, a.equilibrium_command + round(thesis_offset * a.gear_ratio))))
+        """The command as far past the digit's straight one, in tip rotation, as ``thesis_offset`` is past the
+        thesis's straight 8 (towards the cable side; negative: the other way), within the servo's range."""
+        return digit_command(self.params, THESIS_STRAIGHT + thesis_offset)
 
     def protocol(self, every: int) -> PalpationProtocol:
-        straight, step = (
-            self.params.actuator.equilibrium_command,
-            max(1, round(every * self.params.actuator.gear_ratio)),
-        )
-        return PalpationProtocol(commands=tuple(range(straight, self.command(22) + 1, step)), tare_command=straight)
+        """The thesis's sweep 8..30 every ``every`` commands laid out on the digit (its settling as it rings)."""
+        thesis = PalpationProtocol(commands=tuple(range(THESIS_STRAIGHT, 31, every)))
+        return digit_protocol(thesis, self.params, laid_out=_LAID_OUT, model=self.contact_model())
 
     def tissue(self) -> Tissue:
         return Tissue(0.55 * self.length_m, self.length_m + 0.08, 0.1 * self.length_m, 1000.0)
 
     def contact_model(self, cells_per_section: int | None = None) -> ContactGaugeModel:
-        return ContactGaugeModel(self.params, orientation=self.orientation, cells_per_section=cells_per_section)
+        return ContactGaugeModel(
+            self.params,
+            twin_calibration(self.params),
+            orientation=self.orientation,
+            cells_per_section=cells_per_section,
+        )
 
 
 def build(ctx: ReportContext) -> Chapter:
@@ -95,9 +108,10 @@ def build(ctx: ReportContext) -> Chapter:
 
 def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
     """The chapter on a digit other than the thesis rig: the same studies laid out on it (:class:`DigitSetting`),
-    force control left out (its loop's gains are the thesis rig's; docs/digits.md)."""
+    force control with the digit's own gains (:func:`~flexdigit.palpation.palpation.force_gains`)."""
     digit = DigitSetting(ctx.params, release_orientation(ctx.params), ctx.fast)
     g = ctx.params.geometry
+    sweep = digit.protocol(2)
     ch.paragraphs.append(
         f"This digit ({g.section_count} sections, {len(g.gauge_positions_m)} gauges, {1000 * digit.length_m:.0f} "
         "mm) presses into a compliant body beside it, the cable pulling it in, on its own twin (the calibration of "
@@ -105,10 +119,12 @@ def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
         f"{'tip up' if digit.orientation == 'vertical' else 'tip down (it buckles tip up)'}. The thesis rig's "
         "settings are laid out on the digit: positions, regions and extents scaled by its length over 270 mm, the "
         f"body beside its outer 45 % ({1000 * digit.tissue().start_m:.0f} mm on, {1000 * digit.tissue().gap_m:.0f} mm"
-        f" away), commands counted from its straight command {ctx.params.actuator.equilibrium_command} (x its "
-        f"gearing {ctx.params.actuator.gear_ratio:g}). Noise: the twin's white noise and drift; active sensing at "
-        "its actuated level. Force control runs the thesis rig's loop, its rates per turn of the pulley (x the "
-        "gearing): its figures are the twin's true force, so a digit whose gauges misjudge the force (one gauge, a "
+        f" away), the sweep's commands {sweep.commands[0]}..{sweep.commands[-1]} laid out from its straight command "
+        f"{sweep.tare_command} towards the body, as far in tip rotation as the thesis's 8..30 (as `palpate "
+        "--params` sweeps it). Noise: the twin's white noise and drift; active sensing at "
+        "its actuated level. Force control runs the library's loop with the digit's own gains (the thesis's "
+        "crossover and tip-turning rate, palpation.force_gains): its figures are the twin's true force, so a digit "
+        "whose gauges misjudge the force (one gauge, a "
         "short digit) or that presses slowly (a long one) shows it here."
     )
     _contact(ctx, ch, plt, digit)
@@ -451,7 +467,7 @@ def _force(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
     )
     fig, ax = plt.subplots(figsize=(5.5, 3.2))
     ax.plot(run.time_s, run.true_force_n, label="true contact force")
-    ax.plot(run.time_s, run.force_n, lw=0.6, alpha=0.7, label="estimate (one reading)")
+    ax.plot(run.time_s, run.force_n, lw=0.6, alpha=0.7, label=estimate_label(run))
     ax.axhspan(0.09, 0.11, color="0.9", label="0.1 N +- 10 %")
     ax.set(xlabel="time (s)", ylabel="force (N)")
     ax.legend(fontsize=8)
@@ -460,12 +476,53 @@ def _force(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
     )
 
 
+#: The active study's prior grid (table 7.1's settings, palpation_studies.active_study): hangs every 20 mm, masses
+#: 25 and 37.5 g (a third of the larger apart).
+HANG_STEP_M, MASS_SPACING_REL = 0.02, (0.0375 - 0.025) / 0.0375
+#: A Bayes limit over that discrete grid below this fraction of its spacing says only that the readings tell every
+#: setting apart: the posterior sits on the true setting to rounding (1.6e-16 on a seven-section pair) and the limit
+#: is the grid's, not the digit's: no figure to stand behind (tactile's own threshold for its settings limit).
+UNRESOLVED_FRACTION = SETTINGS_RESOLVED
+
+
+def _resolved(value: float, spacing: float, unit_scale: float = 1.0):
+    """``value`` (times ``unit_scale``), or a "not determined" text where it is below the prior grid's resolution."""
+    if value < UNRESOLVED_FRACTION * spacing:
+        return (
+            f"not determined: below {unit_scale * UNRESOLVED_FRACTION * spacing:.2g} (every setting of the discrete "
+            f"prior told apart; its spacing {unit_scale * spacing:.3g})"
+        )
+    return unit_scale * value
+
+
+def _unresolved_blank(table):
+    """The active table with every Bayes-limit cell under its grid's resolution (:func:`_resolved`) left blank (NaN:
+    null in results.json), as its entries say "not determined"; estimators' errors stay (a 0 is a count of hits)."""
+    spacing = {"position_rmse_mm": 1000 * HANG_STEP_M, "magnitude_rel_rmse": MASS_SPACING_REL}
+    rows = []
+    for row in table.rows:
+        cells = list(row)
+        if str(row[0]).startswith("Bayes limit"):
+            for j, column in enumerate(table.columns):
+                if column in spacing and cells[j] < UNRESOLVED_FRACTION * spacing[column]:
+                    cells[j] = math.nan
+        rows.append(tuple(cells))
+    return replace(table, rows=tuple(rows))
+
+
+def estimate_label(run) -> str:
+    """The force figure's label of the loop's estimate: one reading, or the mean of the hold's ``average_readings``
+    (:func:`~flexdigit.palpation.palpation.hold_force` averages on a digit whose one reading is too noisy)."""
+    averaged = int(run.region.get("average_readings", 1))
+    return "estimate (one reading)" if averaged == 1 else f"estimate (mean of {averaged} readings)"
+
+
 def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
     on = {}
     if digit is not None:  # the hangs of chapter 7 (tip down or level, as TwinGaugeModel's default)
         on = {
             "commands": (digit.command(-8), digit.command(12), digit.command(32)),
-            "model": TwinGaugeModel(digit.params),
+            "model": TwinGaugeModel(digit.params, twin_calibration(digit.params)),
         }
     a = studies.active_study(samples=500 if ctx.fast else 1000, repetitions=10, seed=ctx.seed, **on)
     e = ch.entries
@@ -473,7 +530,7 @@ def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
         new(
             "palpation.active.bayes_position_mm",
             SECTION,
-            1000 * a["position_rmse_m"],
+            _resolved(a["position_rmse_m"], HANG_STEP_M, 1000.0),
             "mm",
             "table 7.1's settings read at commands 0, 20 and 40 under one hang (chapter 7's actuated noise)",
         )
@@ -491,7 +548,7 @@ def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
         new(
             "palpation.active.bayes_magnitude",
             SECTION,
-            a["magnitude_rel_rmse"],
+            _resolved(a["magnitude_rel_rmse"], MASS_SPACING_REL),
             "",
             f"single reading: {a['single_magnitude_rel_rmse']:.3f}",
         )
@@ -514,4 +571,4 @@ def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
             "maximum likelihood without the protocol's prior",
         )
     )
-    ch.tables.append(a["table"])
+    ch.tables.append(_unresolved_blank(a["table"]))
