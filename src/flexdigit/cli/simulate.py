@@ -135,14 +135,19 @@ def _add_step(sub) -> None:
     p.add_argument("--duration", type=Flag(DURATION), default=1.5, help="seconds")
     p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
     p.add_argument("--cable", action="store_true", help="keep the cable attached")
+    _orientation_flag(p, "as the thesis mounted it")
+    _robot_flags(p, step=True)
+
+
+def _orientation_flag(p, thesis: str) -> None:
+    """``--orientation``: the mount of step and sweep (default: run's choice, hanging for a digit that buckles)."""
     p.add_argument(
         "--orientation",
         default=None,
         choices=("vertical", "hanging", "horizontal"),
-        help="vertical: tip up, as the thesis mounted it; default tip up, or hanging for a digit that buckles tip "
-        "up, as flexdigit run mounts it",
+        help=f"vertical: tip up, {thesis}; default tip up, or hanging for a digit that buckles tip up, as flexdigit "
+        "run mounts it",
     )
-    _robot_flags(p, step=True)
 
 
 def _add_sweep(sub) -> None:
@@ -168,13 +173,7 @@ def _add_sweep(sub) -> None:
         default=20,
         help="samples per command",
     )
-    p.add_argument(
-        "--orientation",
-        default=None,
-        choices=("vertical", "hanging", "horizontal"),
-        help="vertical: tip up, as the thesis swept it (3.4.3); default tip up, or hanging for a digit that buckles "
-        "tip up, as flexdigit run mounts it",
-    )
+    _orientation_flag(p, "as the thesis swept it (3.4.3)")
 
 
 def _add_load(sub) -> None:
