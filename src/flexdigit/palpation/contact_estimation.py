@@ -62,8 +62,8 @@ from flexdigit._validation import (
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.tactile.bounds import line_steps
-from flexdigit.twin.calibration import default_calibration
 from flexdigit.twin.contact import Pressure, quadrature, solve_contact
+from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.sensors import SensorChain
 from flexdigit.twin.twin import cable_shortening_m, cached_digit
 
@@ -106,7 +106,8 @@ class ContactGaugeModel:
     ----------
     params : RigParams, optional
     calibration : Calibration, optional
-        The twin's calibration (its default); a real rig's is fitted by :func:`flexdigit.twin.calibration.calibrate`.
+        The twin's calibration (default: the digit's own, :func:`~flexdigit.twin.digit_calibration.twin_calibration`);
+        a real rig's is fitted by :func:`flexdigit.twin.calibration.calibrate`.
     orientation : str
         How the digit is mounted ("vertical", tip up: the designed mounting and the palpation set-up).
     housing : bool
@@ -122,7 +123,7 @@ class ContactGaugeModel:
 
     def __init__(self, params=None, calibration=None, *, orientation="vertical", housing=True, cells_per_section=None):
         self.params = params or RigParams()
-        self.calibration = calibration or default_calibration()
+        self.calibration = calibration or twin_calibration(self.params)
         self.orientation = orientation
         self.housing = housing
         self.chain = cached_digit(self.params, self.calibration, bool(housing), orientation, cells_per_section)

@@ -40,7 +40,7 @@ import numpy as np
 from flexdigit._repr import fields_summary
 from flexdigit.params import RigParams
 from flexdigit.tactile.protocols import RELAXED
-from flexdigit.twin.calibration import default_calibration
+from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, friction_sd_v, static_gauges_v
 
 __all__ = [
@@ -186,7 +186,7 @@ class TwinGaugeModel:
     ----------
     params : RigParams, optional
     calibration : Calibration, optional
-        The twin's calibration (default: the twin's default calibration).
+        The twin's calibration (default: the digit's own, :func:`~flexdigit.twin.digit_calibration.twin_calibration`).
     orientation : str
         How the digit lies (the protocols' "horizontal").
     cells_per_section : int
@@ -204,7 +204,7 @@ class TwinGaugeModel:
 
     def __init__(self, params=None, calibration=None, orientation: str = "horizontal", cells_per_section=None) -> None:
         self.params = params or RigParams()
-        self.calibration = calibration or default_calibration()
+        self.calibration = calibration or twin_calibration(self.params)
         self.orientation = orientation
         self.cells_per_section = DEFAULT_CELLS_PER_SECTION if cells_per_section is None else cells_per_section
         self.noise_v = np.asarray(self.calibration.noise_white_v, dtype=float)
