@@ -51,7 +51,7 @@ def test_two_gauge_positions_are_checked_whole_then_simulate(tmp_path, capsys):
     rig = tmp_path / "rig.toml"
     rig.write_text("[geometry]\ngauge_positions_m = [0.045, 0.135]\n")
     assert main(["params", str(rig)]) == 2
-    assert "adc_channels has 3 channels for 2 gauges" in capsys.readouterr().out
+    assert "adc_channels has 3 channels for 2 gauges" in capsys.readouterr().err
     rig.write_text("[geometry]\ngauge_positions_m = [0.045, 0.135]\n[sensors]\nadc_channels = [0, 1]\n")
     assert main(["params", str(rig)]) == 0
     capsys.readouterr()

@@ -187,8 +187,8 @@ def test_params_design_and_run_on_the_digit(name, tmp_path, capsys):
 
 
 def test_a_setpoint_beyond_the_servos_reach_is_refused_in_one_line(tmp_path, capsys, work_must_not_start):
-    """A pair geared 100:1 turns 0.017 deg a command: 127 commands either side of straight reach +-2.2 deg, so
-    -30 deg is refused before the twin moves, naming the reach."""
+    """A pair geared 20:1 (the largest plausible reduction) turns 0.087 deg a command: 127 commands either side of
+    straight reach +-11.0 deg, so -30 deg is refused before the twin moves, naming the reach."""
     import tomli_w
 
     from flexdigit.twin.twin import Twin
@@ -196,9 +196,9 @@ def test_a_setpoint_beyond_the_servos_reach_is_refused_in_one_line(tmp_path, cap
     work_must_not_start(Twin, "advance")
     geared_pair = tmp_path / "g.toml"
     geared_pair.write_text(
-        tomli_w.dumps({"cables": {"count": 2, "pretension_n": 3.0}, "actuator": {"gear_ratio": 100.0}})
+        tomli_w.dumps({"cables": {"count": 2, "pretension_n": 3.0}, "actuator": {"gear_ratio": 20.0}})
     )
     code, out = _cli(["run", "--params", str(geared_pair), "--setpoint-deg=-30"], capsys)
     assert code == 2
     assert "--setpoint-deg -30" in out["error"]
-    assert "reaches -2.2 to 2.2 deg" in out["error"]
+    assert "reaches -11.0 to 11.0 deg" in out["error"]

@@ -110,10 +110,13 @@ def test_a_leftover_digit_length_is_noted_with_the_supports_it_makes(tmp_path, c
     path = _template_edited(tmp_path, keep={"digit_length_m": "0.27"})
     capsys.readouterr()
     assert main(["params", str(path)]) == 2
-    err = capsys.readouterr().out.splitlines()  # the command's result: its problems, one line each
-    assert err[0].startswith(f"{path}: [geometry] gauge_positions_m[2] = 0.13 m is on the support at 0.135 m")
-    assert "digit_length_m = 0.27 (the thesis rig's) makes 2 supports of 35 mm" in err[1]
-    assert "leave digit_length_m out (0.22 m, 10 mm supports)" in err[1]
+    err = capsys.readouterr().err.splitlines()  # one refusal line: its problems, then the note saying why
+    assert len(err) == 1
+    assert err[0].startswith(
+        f"flexdigit params: error: {path}: [geometry] gauge_positions_m[2] = 0.13 m is on the support at 0.135 m"
+    )
+    assert "note: [geometry] digit_length_m = 0.27 (the thesis rig's) makes 2 supports of 35 mm" in err[0]
+    assert "leave digit_length_m out (0.22 m, 10 mm supports)" in err[0]
     # gauges clear of the long supports: consistent, and noted
     moved = _template_edited(
         tmp_path, "moved", keep={"digit_length_m": "0.27", "gauge_positions_m": "[0.03, 0.07, 0.17, 0.2]"}

@@ -151,7 +151,8 @@ def test_train_and_predict_plot_predicted_against_actual(tmp_path, drawn, capsys
     np.testing.assert_allclose(printed[:, 1], readings.get_xdata()[: len(printed)], rtol=1e-4, atol=1e-3)
 
 
-HOLD = "[force]\nsetpoint_n = 0.2\nduration_s = 0.1\n"
+# long enough to touch the block and hold (a hold that never reaches its force now exits 2: palpate)
+HOLD = "[force]\nsetpoint_n = 0.1\nduration_s = 8\n"
 
 
 def test_palpate_hold_plots_force_with_the_truth(tmp_path, drawn):

@@ -149,7 +149,8 @@ def test_hanging_weight_bends_the_horizontal_digit_more_the_heavier_it_is():
 def test_spring_moments_balance_the_weights_in_the_deformed_shape():
     # statics check independent of the solver: at every spring, k * phi = moment of the weights beyond it,
     # with lever arms taken from the deformed positions (large deflection, no small-angle approximation)
-    from flexdigit.twin.twin import cached_digit, default_calibration
+    from flexdigit.twin.calibration import default_calibration
+    from flexdigit.twin.twin import cached_digit
 
     p = RigParams()
     chain = cached_digit(p, default_calibration(), True, "horizontal", 3)
