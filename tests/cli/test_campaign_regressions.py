@@ -89,18 +89,22 @@ def test_calibrate_fits_a_digits_own_records(tmp_path, capsys):
 def test_a_digit_that_buckles_tip_up_is_swept_hanging(tmp_path, capsys):
     """Regression: campaign digit 2 (one 0.39 m section of 0.25 mm strip) buckles tip up; ``simulate sweep`` swept
     it so anyway (it had no --orientation), the digit fell over, and ``calibrate`` fitted negative channel gains to
-    that record. The sweep now refuses the vertical mount in one line and takes ``--orientation hanging``
-    (``calibrate --orientation hanging`` fits such records: the campaign's digit 2)."""
+    that record. The sweep now hangs it by default, as run does, and refuses the vertical mount asked for in one
+    line (``calibrate`` fits such records hanging: the campaign's digit 2)."""
     digit = _digit(2, tmp_path)
     sweep = tmp_path / "sweep.parquet"
     argv = ["simulate", "sweep", "--params", str(digit), "--out", str(sweep), "--settle", "0.2", "--samples", "1"]
-    assert main([*argv, "--commands", "8,20"]) == 2
+    assert main([*argv, "--commands", "8,20", "--orientation", "vertical"]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err
     assert "buckles" in err
     assert "hanging" in err
     _json([*argv, "--commands", "8,20", "--orientation", "hanging"], capsys)
     assert pd.read_parquet(sweep)["command"].tolist() == [8, 20]
+    # by default: hung, as run mounts it (a new file; the first is never overwritten without --force)
+    default = ["simulate", "sweep", "--params", str(digit), "--settle", "0.2", "--samples", "1", "--commands", "8,20"]
+    assert main([*default, "--out", str(tmp_path / "default.parquet")]) == 0
+    assert "mount: hanging" in capsys.readouterr().out
 
 
 def test_shape_says_a_reading_is_at_the_adcs_rail(tmp_path, capsys):

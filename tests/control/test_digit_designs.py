@@ -135,7 +135,11 @@ def test_design_commands_take_params(tmp_path, capsys):
     assert main(["design", "20ms", "--params", str(path), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["stable"]
     long = write_digit("five-sections-eight-gauges", tmp_path)
-    assert main(["design", "20ms", "--params", str(long)]) == 2
+    # a digit that buckles tip up is designed hanging by default, as run mounts it, and says so
+    assert main(["design", "20ms", "--params", str(long)]) == 0
+    assert "mount: hanging (tip down): tip up this digit buckles" in capsys.readouterr().out
+    # asked for tip up, it is refused in one line
+    assert main(["design", "20ms", "--params", str(long), "--orientation", "vertical"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
     assert "buckles" in err[0]
