@@ -26,8 +26,10 @@ pytestmark = pytest.mark.blas  # run again under other OpenBLAS kernels by `make
 RELEASE_RTOL = 0.03
 SLOPE_RTOL = 0.05
 DEFLECTION_ABS_MM = 0.5
-#: The re-fit must land on the packaged values (the fit is deterministic: fixed tolerances, seeded scores)
-REFIT_RTOL = 1e-5
+#: The re-fit must land on the packaged values (the fit is deterministic on one machine: fixed tolerances, seeded
+#: scores); across BLAS kernels its flattest direction, the cable stiffness, lands 1.5e-5 apart (SkylakeX against
+#: Haswell, measured at 9f1cdf6): 1e-4, six times that spread
+REFIT_RTOL = 1e-4
 
 #: The re-fit's friction ratio must cross the thesis's corr2 within this many LEVEL_XTOL (1e-4) of the packaged
 #: one. The score is 8 trained networks' corr2, and training amplifies rounding: under the Haswell, SkylakeX,
