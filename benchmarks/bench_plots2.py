@@ -10,7 +10,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from benchmarks.bench_plots import GOAL_S, REPEATS
+from benchmarks.bench_plots import time_figures
 
 
 def _dataset(readings: int = 1275):
@@ -70,19 +70,5 @@ def _inputs(tmp: Path) -> dict:
 
 
 def run() -> list[dict]:
-    import time
-
-    from flexdigit._plot import save_plot
-
-    rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for name, draw in _inputs(Path(tmp)).items():
-            best = float("inf")
-            for _ in range(REPEATS):
-                start = time.perf_counter()
-                save_plot(draw(), Path(tmp) / "figure.png", force=True)
-                best = min(best, time.perf_counter() - start)
-            rows.append(
-                {"name": name, "value": best, "unit": "s", "goal": f"<= {GOAL_S:g} s", "note": f"best of {REPEATS}"}
-            )
-    return rows
+        return time_figures(_inputs(Path(tmp)), Path(tmp))
