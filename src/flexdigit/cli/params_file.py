@@ -33,7 +33,7 @@ def _params(args: argparse.Namespace) -> CommandResult:
         return _template(args)
     params = load_params(args.file, check=False) if args.file else RigParams()
     problems = digit_inconsistencies(params)
-    notes = description_notes(params)
+    notes = description_notes(params) + ([] if digit_inconsistencies(params) else _reach_notes(params))
     data = params.to_dict()
     derived = derived_figures(params)
     lines = [f"rig parameters ({args.file or 'thesis defaults'}):"]
@@ -54,6 +54,19 @@ def _params(args: argparse.Namespace) -> CommandResult:
         data={"params": data, "derived": derived, "problems": [], "notes": notes, "written": args.write},
         text="\n".join(lines),
     )
+
+
+def _reach_notes(params) -> list[str]:
+    """The gauges that reach an ADC rail inside the operating range, or read too coarsely for the loop (the
+    digit's statics: :func:`flexdigit.rig.gauge_rails.gauge_rails`)."""
+    from flexdigit.errors import FlexdigitError
+    from flexdigit.rig.gauge_rails import gauge_rails, rail_lines, resolution_lines
+
+    try:
+        reaches = gauge_rails(params)
+    except FlexdigitError as exc:  # a digit the statics cannot solve: the other commands say why
+        return [f"the gauges' reach over the operating range was not computed ({exc})"]
+    return rail_lines(reaches, params) + resolution_lines(reaches, params)
 
 
 def _value(value) -> str:

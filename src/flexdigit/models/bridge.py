@@ -45,6 +45,8 @@ __all__ = [
     "adc_clipped",
     "gauge_voltage_v",
     "strain_from_voltage",
+    "unequal_noise_v",
+    "UNEQUAL_NOISE_RATIO",
 ]
 
 if TYPE_CHECKING:
@@ -218,3 +220,37 @@ def strain_from_voltage(voltage_v, sensors: Sensors | None = None):
     """Invert the small-strain chain: surface strain for an amplifier output voltage."""
     out = np.asarray(voltage_v, dtype=float) / bridge_gain_v_per_strain(sensors)
     return out if out.ndim else float(out)
+
+
+#: Ratio of the noisiest gauge's white noise to the quietest's (both in volts, as the sweep measured them at rest)
+#: above which the map weighs each gauge by its own noise (Gauss-Markov, ``RotationEstimator(noise_v=...)``) rather
+#: than equally. Gauges on one shared chain measure within ~10 % of each other (the robust estimate's own scatter
+#: over a calibration sweep's 9-17 windows of 50 readings), so their maps stay as they were; a digit with an
+#: amplifier gain per gauge (noise amplified with the signal) differs by the gains' ratio (12 on the trial's
+#: stainless digit).
+UNEQUAL_NOISE_RATIO = 1.5
+
+
+def unequal_noise_v(noise) -> np.ndarray | None:
+    """Each gauge's white noise (V, the median over the sweep's settled windows) when the gauges differ materially
+    (more than :data:`UNEQUAL_NOISE_RATIO` between the extremes), else None (equal weights).
+
+    Why: the map's equal-weight inverse ``theta = s' (g - a) / (s' s)`` weighs each gauge by its sensitivity in
+    volts squared. Amplify one gauge 12 times more than another and it takes 144 times the weight, though its noise
+    in degrees is the same (its noise is amplified with it): the estimate becomes the most amplified gauge's alone.
+    On the trial's stainless digit (gains 500..6000) that is the tip gauge, whose section bends most in the step's
+    transient: the estimate overshot 46 % where the tip overshot 12 %, and the loop settled in 2.4 s or never.
+    Weighted by their noise (in rotation units, ``noise_v / s``), the gauges count as they would on equal chains.
+
+    Examples
+    --------
+    >>> unequal_noise_v([[1e-3, 1.1e-3], [1e-3, 1.0e-3]]) is None
+    True
+    >>> unequal_noise_v([[1e-3, 6e-3], [1.2e-3, 6.2e-3], [1e-3, 6e-3]]).tolist()
+    [0.001, 0.006]
+    """
+    rows = np.asarray(noise, dtype=float)
+    if rows.ndim != 2 or rows.shape[0] == 0 or not np.all(np.isfinite(rows)) or not np.all(rows > 0):
+        return None
+    pooled = np.median(rows, axis=0)
+    return pooled if float(pooled.max() / pooled.min()) > UNEQUAL_NOISE_RATIO else None

@@ -1,0 +1,88 @@
+"""Unequal gauge chains (issue 24, trial 2 items 1, 3, 4): where a gauge rails, how finely it reads, and the map's
+noise weights.
+
+References: a gauge's rail angle is its rail over its own volts per degree at rest (the statics are near linear
+in the cable's range: 0.5 deg allows their curvature over 20 deg); the Gauss-Markov weights ``W s / (s' W s)``
+with ``W = 1 / noise^2`` (Kariya & Kurata, Generalized Least Squares, 2004, ch. 2) worked by hand.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexdigit.models.bridge import unequal_noise_v
+from flexdigit.params import RigParams, adc_range_notes, load_params
+from flexdigit.rig.gauge_rails import gauge_rails, rail_lines, resolution_lines
+from flexdigit.rig.rotation import RotationEstimator
+
+DIGITS2 = Path(__file__).resolve().parents[1] / "data" / "handmade_digits2"
+#: How far (deg) the rail found on the statics may sit from the linear reference: the chain's curvature over 20 deg.
+RAIL_TOLERANCE_DEG = 0.5
+
+
+def _with_gains(params: RigParams, gains) -> RigParams:
+    return dataclasses.replace(params, sensors=dataclasses.replace(params.sensors, amplifier_gains_v_per_v=gains))
+
+
+def test_a_gauge_amplified_to_rail_at_20_deg_is_found_there_and_said_once():
+    stainless = load_params(DIGITS2 / "stainless_eight_full_gains.toml")
+    reach = gauge_rails(stainless)
+    assert [r.rail_deg for r in reach] == [None] * 8  # gauge 8 (gain 6000) rails at ~65 deg, past the 59 deg range
+    gains = list(stainless.sensors.amplifier_gains_v_per_v)
+    rail_v = stainless.sensors.adc_range_v[1]
+    gains[1] *= rail_v / (20.0 * reach[1].v_per_deg)  # gauge 2 reaches +5 V at 20 deg, on the linear reference
+    hot = _with_gains(stainless, tuple(gains))
+    reach = gauge_rails(hot)
+    assert reach[1].rail_deg == pytest.approx(20.0, abs=RAIL_TOLERANCE_DEG)
+    assert [r.rail_deg for k, r in enumerate(reach) if k != 1] == [None] * 7
+    lines = rail_lines(reach, hot)
+    assert len(lines) == 1
+    assert lines[0].startswith("[sensors] gauge 2 reaches the ADC's 5 V rail")
+
+
+def test_the_thesis_rig_reads_inside_its_range_and_finely():
+    reach = gauge_rails(RigParams())
+    assert rail_lines(reach, RigParams()) == []
+    assert resolution_lines(reach, RigParams()) == []
+    assert adc_range_notes(RigParams()) == []
+
+
+def test_a_unipolar_adc_and_a_coarse_one_are_flagged_naming_the_key():
+    unipolar = load_params(DIGITS2 / "heavy_supports_10bit.toml")
+    (line,) = adc_range_notes(unipolar)
+    assert line.startswith("[sensors] adc_range_v = [0, 3.3] cannot read")
+    bipolar = load_params(DIGITS2 / "heavy_supports_10bit_bipolar.toml")
+    assert adc_range_notes(bipolar) == []
+    reach = gauge_rails(bipolar)
+    # 10 bits over 5 V is 4.9 mV a step; the finest gauge's volts per degree over it
+    finest = max(abs(r.v_per_deg) for r in reach) / (5.0 / 2**10)
+    assert max(r.steps_per_deg for r in reach) == pytest.approx(finest, rel=1e-12)
+    assert finest < 1.0 / 0.6  # under one step over 2 % of 30 deg
+    (line,) = resolution_lines(reach, bipolar)
+    assert "adc_bits = 10" in line
+    assert "raise the amplifier gain or the ADC's bits" in line
+
+
+def test_noise_weights_only_when_the_gauges_noise_differs():
+    assert unequal_noise_v([[2e-3, 2.2e-3, 1.9e-3]] * 3) is None
+    assert unequal_noise_v([]) is None
+    noise = unequal_noise_v([[1e-3, 4e-3], [1.2e-3, 4e-3], [1e-3, 3.8e-3]])
+    np.testing.assert_allclose(noise, [1e-3, 4e-3])
+
+
+def test_noise_weighted_map_counts_gauges_by_their_noise_in_degrees():
+    # two gauges on one rotation, the second amplified 4 times (and its noise with it)
+    theta = np.array([0.0, 10.0, 20.0, 30.0])
+    gauges = np.c_[0.01 * theta, 0.04 * theta]
+    equal = RotationEstimator().fit(gauges, theta)
+    weighted = RotationEstimator(noise_v=[1e-3, 4e-3]).fit(gauges, theta)
+    # equal: s / (s's) = [0.01, 0.04] / 0.0017; weighted: W s / (s'Ws), W = [1e6, 62500]
+    np.testing.assert_allclose(equal.coef_, [0.01 / 0.0017, 0.04 / 0.0017], rtol=1e-9)
+    np.testing.assert_allclose(weighted.coef_, [1e4 / 200.0, 2500.0 / 200.0], rtol=1e-9)
+    # each gauge then carries half the estimate: coef x sensitivity equal
+    np.testing.assert_allclose(weighted.coef_ * [0.01, 0.04], [0.5, 0.5], rtol=1e-9)
+    np.testing.assert_allclose(weighted.predict(gauges), theta, atol=1e-9)
