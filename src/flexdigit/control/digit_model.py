@@ -41,7 +41,7 @@ import control as ct
 import numpy as np
 
 from flexdigit.errors import DesignError
-from flexdigit.models.bridge import unequal_noise_v
+from flexdigit.models.bridge import gauge_noise_scale
 from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.models.servo import servo_unit_tf
 from flexdigit.params import RigParams
@@ -185,18 +185,17 @@ def _measured_rotation(chain, params: RigParams, calibration, solution, static: 
     information = float(sens_v_per_rad @ sens_v_per_rad)
     if not information > 0:
         raise DesignError("design: the digit's gauges do not see the cable's bending (no gauge on a bent strip)")
-    weights = _map_weights(sens_v_per_rad, np.asarray(sensors.white, dtype=float))
+    weights = _map_weights(sens_v_per_rad, gauge_noise_scale(params.sensors, sens_v_per_rad.size))
     sd_deg = math.degrees(float(np.sqrt(np.sum((weights * np.asarray(sensors.white)) ** 2))))
     return (weights * vpc) @ d, sd_deg
 
 
-def _map_weights(sens_v_per_rad: np.ndarray, white_v: np.ndarray) -> np.ndarray:
+def _map_weights(sens_v_per_rad: np.ndarray, noise) -> np.ndarray:
     """The weights (rad per volt) the sweep's map gives the gauges (:class:`~flexdigit.rig.rotation.RotationEstimator`
     as :func:`~flexdigit.rig.rotation.calibrate_rotation` fits it): each gauge's sensitivity over their sum of
-    squares, or, where the gauges' white noise differs materially (:func:`~flexdigit.models.bridge.unequal_noise_v`,
-    an amplifier gain per gauge), the Gauss-Markov weights ``W s / (s' W s)``, ``W = 1 / noise^2``."""
-    noise = unequal_noise_v(white_v[None, :])
-    w = np.ones_like(sens_v_per_rad) if noise is None else 1.0 / noise**2
+    squares, or, with an amplifier gain per gauge (``noise``, :func:`~flexdigit.models.bridge.gauge_noise_scale`),
+    the Gauss-Markov weights ``W s / (s' W s)``, ``W = 1 / noise^2``."""
+    w = np.ones_like(sens_v_per_rad) if noise is None else 1.0 / np.asarray(noise, dtype=float) ** 2
     information = float(sens_v_per_rad @ (w * sens_v_per_rad))
     return w * sens_v_per_rad / information
 

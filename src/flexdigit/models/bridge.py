@@ -45,8 +45,7 @@ __all__ = [
     "adc_clipped",
     "gauge_voltage_v",
     "strain_from_voltage",
-    "unequal_noise_v",
-    "UNEQUAL_NOISE_RATIO",
+    "gauge_noise_scale",
 ]
 
 if TYPE_CHECKING:
@@ -222,35 +221,30 @@ def strain_from_voltage(voltage_v, sensors: Sensors | None = None):
     return out if out.ndim else float(out)
 
 
-#: Ratio of the noisiest gauge's white noise to the quietest's (both in volts, as the sweep measured them at rest)
-#: above which the map weighs each gauge by its own noise (Gauss-Markov, ``RotationEstimator(noise_v=...)``) rather
-#: than equally. Gauges on one shared chain measure within ~10 % of each other (the robust estimate's own scatter
-#: over a calibration sweep's 9-17 windows of 50 readings), so their maps stay as they were; a digit with an
-#: amplifier gain per gauge (noise amplified with the signal) differs by the gains' ratio (12 on the trial's
-#: stainless digit).
-UNEQUAL_NOISE_RATIO = 1.5
+def gauge_noise_scale(sensors: Sensors, count: int) -> np.ndarray | None:
+    """Each gauge's white noise relative to the others' (the amplifier gains, ``amplifier_gains_v_per_v``) when the
+    gauges have amplifiers of unequal gain, else None (equal noise): the weights of the rotation map's Gauss-Markov
+    inverse (:class:`~flexdigit.rig.rotation.RotationEstimator`'s ``noise_v``; only ratios matter) and of the 20 ms
+    design's model of it (:mod:`flexdigit.control.digit_model`).
 
-
-def unequal_noise_v(noise) -> np.ndarray | None:
-    """Each gauge's white noise (V, the median over the sweep's settled windows) when the gauges differ materially
-    (more than :data:`UNEQUAL_NOISE_RATIO` between the extremes), else None (equal weights).
-
-    Why: the map's equal-weight inverse ``theta = s' (g - a) / (s' s)`` weighs each gauge by its sensitivity in
-    volts squared. Amplify one gauge 12 times more than another and it takes 144 times the weight, though its noise
-    in degrees is the same (its noise is amplified with it): the estimate becomes the most amplified gauge's alone.
-    On the trial's stainless digit (gains 500..6000) that is the tip gauge, whose section bends most in the step's
-    transient: the estimate overshot 46 % where the tip overshot 12 %, and the loop settled in 2.4 s or never.
-    Weighted by their noise (in rotation units, ``noise_v / s``), the gauges count as they would on equal chains.
+    Why: a gauge's noise is its amplifier's input-referred noise amplified with its signal (the twin's default
+    calibration scales ``noise_white_v`` by the gain, :mod:`flexdigit.twin.digit_calibration`). The map's
+    equal-weight inverse ``theta = s' (g - a) / (s' s)`` weighs each gauge by its sensitivity in volts squared:
+    amplify one gauge 12 times more than another and it takes 144 times the weight though its noise in degrees is
+    the same, and the estimate becomes the most amplified gauge's alone. On the trial's stainless digit (gains
+    500..6000) that was the tip gauge, which bends most in the step's transient: the estimate overshot 46 % where
+    the tip overshot 12-21 %, and the loop settled in 2.4 s or never. Weighted by the gains, each gauge counts as on
+    equal chains: the map does not depend on how each gauge was amplified. The gains, not the sweep's measured
+    noise: a low-gain gauge's noise near one ADC step is measured in jumps of a factor 2 (the robust estimate of
+    quantised readings), and its weight with it (a factor 4 between twin seeds on a mixed-gain pair).
 
     Examples
     --------
-    >>> unequal_noise_v([[1e-3, 1.1e-3], [1e-3, 1.0e-3]]) is None
+    >>> from flexdigit.params import Sensors
+    >>> gauge_noise_scale(Sensors(), 3) is None
     True
-    >>> unequal_noise_v([[1e-3, 6e-3], [1.2e-3, 6.2e-3], [1e-3, 6e-3]]).tolist()
-    [0.001, 0.006]
+    >>> gauge_noise_scale(Sensors(amplifier_gains_v_per_v=(500.0, 6000.0)), 2).tolist()
+    [500.0, 6000.0]
     """
-    rows = np.asarray(noise, dtype=float)
-    if rows.ndim != 2 or rows.shape[0] == 0 or not np.all(np.isfinite(rows)) or not np.all(rows > 0):
-        return None
-    pooled = np.median(rows, axis=0)
-    return pooled if float(pooled.max() / pooled.min()) > UNEQUAL_NOISE_RATIO else None
+    gains = np.asarray(sensors.chain(count)[2], dtype=float)
+    return gains if gains.size and float(gains.max()) > float(gains.min()) else None

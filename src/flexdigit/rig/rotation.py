@@ -36,7 +36,7 @@ from flexdigit._json import to_jsonable
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
-from flexdigit.models.bridge import unequal_noise_v
+from flexdigit.models.bridge import gauge_noise_scale
 from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.params import MAX_GAUGES, RigParams
 from flexdigit.rig.base import Reading, Rig, open_rig
@@ -345,7 +345,7 @@ class RotationEstimator:
 #: Where a map came from, kept with it (set by :func:`calibrate_rotation`): the source, the sweep's commands, the
 #: time each reading waited for the digit to settle (each visit's, straight ones included, for a referenced sweep),
 #: the rotation per command the sweep measured and, where it was not the plain one, the sweep's protocol.
-_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command", "sweep", "noise_v")
+_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command", "sweep", "noise_scale")
 
 
 @dataclass(frozen=True)
@@ -599,11 +599,12 @@ def calibrate_rotation(
     commands = [int(c) for c in (sweep_commands(rig.params) if commands is None else commands)]
     default = sweep_protocol(rig.params, reference) if settle_s is None else "plain"  # a fixed wait: as it was
     sweep = check_choice(default if sweep is None else sweep, "sweep", SWEEPS, owner)
-    X, sd_v, y, waited, noise = _run_sweep(
+    X, sd_v, y, waited = _run_sweep(
         rig, commands, angle, truth, sweep, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
     )
     if cov is None and callable(reference) and not isinstance(reference, str):
         cov = np.eye(len(commands)) * sd**2
+    noise = gauge_noise_scale(rig.params.sensors, len(X[0]))
     est = _fitted_map(X, y, cov, np.asarray(sd_v), noise, curved=sweep == "referenced")
     est = _provenance(est, source, commands, waited, np.asarray(y))
     if sweep != "plain":  # a plain sweep's map reads as before (the thesis rig's saved maps and logs unchanged)
@@ -612,15 +613,14 @@ def calibrate_rotation(
 
 
 def _fitted_map(X, y, cov, sd_v, noise, *, curved: bool) -> RotationEstimator:
-    """The sweep's map: each gauge weighted by its noise where the gauges' noise differs (an amplifier gain per
-    gauge, :func:`~flexdigit.models.bridge.unequal_noise_v`), with its quadratic terms if ``curved`` and material
+    """The sweep's map: each gauge weighted by its relative noise ``noise`` (None: equally; an amplifier gain per
+    gauge, :func:`~flexdigit.models.bridge.gauge_noise_scale`), with its quadratic terms if ``curved`` and material
     (:func:`_curved_if_material`)."""
-    noise_v = unequal_noise_v(noise)
-    est = RotationEstimator(noise_v=noise_v).fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=sd_v)
+    est = RotationEstimator(noise_v=noise).fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=sd_v)
     if curved:
         est = _curved_if_material(est, cov, sd_v)
-    if noise_v is not None:
-        est.noise_v_ = [float(v) for v in noise_v]
+    if noise is not None:
+        est.noise_scale_ = [float(v) for v in noise]
     return est
 
 
@@ -710,10 +710,9 @@ def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, tim
     """Hold each command and read the settled gauges and the reference rotation (``angle(command)``, or the
     twin's ``truth()`` when ``angle`` is None), then relax the digit and let it settle again.
 
-    Returns the gauges (V), their standard errors (V), the rotations (deg), the waits (s), one per command, and
-    each settled reading's white noise (V per gauge; empty after a fixed wait, which does not estimate it).
+    Returns the gauges (V), their standard errors (V), the rotations (deg) and the waits (s), one per command.
     """
-    X, sd_v, y, waited, noise = [], [], [], [], []
+    X, sd_v, y, waited = [], [], [], []
     for command in commands:
         rig.write_command(command)
         if settle_s is None:
@@ -722,7 +721,6 @@ def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, tim
             )
             X.append(settled.gauges_v)
             sd_v.append(settled.sd_v)
-            noise.append(settled.noise_v)
             waited.append(settled.waited_s)
             y.append(settled.truth_deg if angle is None else float(angle(command)))
         else:
@@ -741,7 +739,7 @@ def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, tim
         wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
     else:
         rig.wait(settle_s)
-    return X, sd_v, y, waited, noise
+    return X, sd_v, y, waited
 
 
 def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s):
@@ -758,7 +756,7 @@ def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s):
     for command in commands:
         if command != straight:
             visits += [command, straight]
-    gauges, sds, rotations, times, waited, noise = [], [], [], [], [], []
+    gauges, sds, rotations, times, waited = [], [], [], [], []
     for command in visits:
         rig.write_command(command)
         settled = wait_until_settled(
@@ -766,7 +764,6 @@ def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s):
         )
         gauges.append(settled.gauges_v)
         sds.append(settled.sd_v)
-        noise.append(settled.noise_v)
         waited.append(settled.waited_s)
         rotations.append(settled.truth_deg if angle is None else float(angle(command)))
         times.append(rig.clock() - window_s / 2)  # the window's middle: only differences between visits matter
@@ -789,7 +786,7 @@ def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s):
             X.append(G[k] - drift_v[k])
             sd_v.append(np.hypot(S[k], straight_sd))
             y.append(float(Y[k] - drift_deg[k]))
-    return X, sd_v, y, waited, noise
+    return X, sd_v, y, waited
 
 
 def _provenance(est: RotationEstimator, source: str, commands, waited, rotation_deg) -> RotationEstimator:
@@ -888,6 +885,6 @@ def _from_dict(cls, data, source: str) -> RotationEstimator:
     for key in _PROVENANCE:
         if key in data:
             setattr(est, f"{key}_", data[key])
-    if "noise_v" in data:  # the weights it was fitted with: its uncertainty refits the same way
-        est.noise_v = array("noise_v", (gauges,))
+    if "noise_scale" in data:  # the weights it was fitted with: its uncertainty refits the same way
+        est.noise_v = array("noise_scale", (gauges,))
     return est
