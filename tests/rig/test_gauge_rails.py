@@ -17,7 +17,7 @@ import pytest
 
 from flexdigit.models.bridge import gauge_noise_scale
 from flexdigit.params import RigParams, adc_range_notes, load_params
-from flexdigit.rig.gauge_rails import gauge_rails, rail_lines, resolution_lines
+from flexdigit.rig.gauge_rails import gauge_rails, rail_lines, railed_readings, resolution_lines
 from flexdigit.rig.rotation import RotationEstimator
 
 DIGITS2 = Path(__file__).resolve().parents[1] / "data" / "handmade_digits2"
@@ -107,3 +107,31 @@ def test_noise_weighted_map_counts_gauges_by_their_noise_in_degrees():
     # each gauge then carries half the estimate: coef x sensitivity equal
     np.testing.assert_allclose(weighted.coef_ * [0.01, 0.04], [0.5, 0.5], rtol=1e-9)
     np.testing.assert_allclose(weighted.predict(gauges), theta, atol=1e-9)
+
+
+def test_railed_readings_are_counted_per_gauge():
+    sensors = RigParams().sensors  # +-5 V, 16 bits
+    top = 5.0 - 10.0 / 2**16  # the highest code
+    readings = [[0.1, 5.0, -4.99], [0.2, top, -5.0], [0.3, 1.0, -5.0]]
+    said = railed_readings(readings, sensors)
+    assert said == (
+        "gauge 2 stuck at the rail (sensors.adc_range_v = [-5, 5] V) in 2 of 3 readings; "
+        "gauge 3 stuck at the rail (sensors.adc_range_v = [-5, 5] V) in 2 of 3 readings"
+    )
+    assert railed_readings([[0.1, top - 10.0 / 2**16, -5.0 + 10.0 / 2**16]], sensors) is None
+
+
+def test_collect_refuses_a_dataset_read_at_the_rail_unless_allowed(tmp_path):
+    from flexdigit.errors import DataFileError
+    from flexdigit.tactile.protocols import Protocol
+    from flexdigit.tactile.runner import collect
+
+    unipolar = load_params(DIGITS2 / "heavy_supports_10bit.toml")
+    small = Protocol("small", (0.0125,), (0.0, 0.05), repetitions=1, no_load_repetitions=1)
+    out = tmp_path / "railed.parquet"
+    with pytest.raises(DataFileError, match=r"gauge 1 stuck at the rail .* in 3 of 3 readings; gauge 2"):
+        collect(small, out=out, params=unipolar, seed=0)
+    assert not out.exists()
+    dataset = collect(small, out=out, params=unipolar, seed=0, allow_rail=True)  # resumes the journal
+    assert out.exists()
+    assert np.all(dataset.gauges_v == 0.0)

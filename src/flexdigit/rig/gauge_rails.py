@@ -20,7 +20,7 @@ from flexdigit.params import RigParams
 from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.twin import static_gauges_v
 
-__all__ = ["GaugeReach", "gauge_rails", "rail_lines", "resolution_lines", "RESOLVE_DEG"]
+__all__ = ["GaugeReach", "gauge_rails", "rail_lines", "resolution_lines", "railed_readings", "RESOLVE_DEG"]
 
 
 @dataclass(frozen=True)
@@ -151,3 +151,24 @@ def resolution_lines(reaches, params: RigParams) -> list[str]:
         f"gauges read at most {finest:.2g} ADC steps a degree of tip rotation, {finest * RESOLVE_DEG:.2g} over 2 % "
         f"of a 30 deg step ({RESOLVE_DEG:g} deg); raise the amplifier gain or the ADC's bits"
     ]
+
+
+def railed_readings(gauges_v, sensors) -> str | None:
+    """``"gauge k stuck at the rail (...) in N of M readings"`` for each gauge some of whose readings sit at an end
+    of ``sensors.adc_range_v`` (its lowest or highest code, the one a clipped input gives), joined by
+    "; ", or None. Such a reading says only that the gauge's voltage is beyond the range, not what it is."""
+    g = np.asarray(gauges_v, dtype=float)
+    if g.ndim != 2 or g.shape[0] == 0:
+        return None
+    low, high = sensors.adc_range_v
+    half = sensors.adc_lsb_v / 2
+    top = low + (2**sensors.adc_bits - 1) * sensors.adc_lsb_v  # the ADC's highest code (models.bridge.adc_clipped)
+    at_rail = (g <= low + half) | (g >= top - half) | ~np.isfinite(g)
+    counts = at_rail.sum(axis=0)
+    parts = [
+        f"gauge {k + 1} stuck at the rail (sensors.adc_range_v = [{low:g}, {high:g}] V) in {int(n)} of {g.shape[0]} "
+        "readings"
+        for k, n in enumerate(counts)
+        if n
+    ]
+    return "; ".join(parts) or None
