@@ -135,3 +135,19 @@ def test_collect_refuses_a_dataset_read_at_the_rail_unless_allowed(tmp_path):
     dataset = collect(small, out=out, params=unipolar, seed=0, allow_rail=True)  # resumes the journal
     assert out.exists()
     assert np.all(dataset.gauges_v == 0.0)
+
+
+def test_a_record_of_a_few_adc_steps_is_called_quantised_not_saturated():
+    from flexdigit.identify.quality import QUANTISED_STEPS, _quantised
+
+    lsb = 10.0 / 2**10  # a 10-bit ADC over +-5 V
+    t = np.linspace(0.0, 8.0, 4001)
+    release = 0.044 * np.exp(-0.6 * t) * np.cos(12.4 * t)  # ~9 steps peak to peak
+    coarse = np.round(release / lsb) * lsb
+    problem = _quantised(coarse, "V")
+    assert problem.code == "quantised"
+    assert problem.message.startswith("quantised: the record spans 9 ADC steps of 0.00977 V")
+    assert "raise the amplifier gain or the ADC's bits" in problem.message
+    fine = np.round(release / (lsb / 64)) * (lsb / 64)
+    assert _quantised(fine, "V") is None
+    assert QUANTISED_STEPS == 16
