@@ -1729,6 +1729,8 @@ def _least_held(model, force_sd_n: float, duration_s: float) -> float:
         return _held_force_sd(model, force_sd_n, duration_s, _tare_readings(force_sd_n, f))
 
     f = held(1.0) / HELD_SD_SHARE  # the drift's share alone, the tare's least
+    if not f > 0:  # a noiseless twin's gauges: any force
+        return 0.0
     while held(f) > HELD_SD_SHARE * f:
         f *= 1.02
     scale = 10 ** (math.floor(math.log10(f)) - 1)
