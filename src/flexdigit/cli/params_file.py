@@ -47,13 +47,47 @@ def _params(args: argparse.Namespace) -> CommandResult:
         # refused through the one error path (stderr, "flexdigit params: error:", exit 2), every problem on its one
         # line, naming its key; a note may say why (the template's digit_length_m kept for shorter sections)
         raise ParameterError(f"{args.file}: " + "; ".join([*problems, *(f"note: {n}" for n in notes)]))
+    twin, text = _resolution(params)
+    lines.extend(text)
     if args.write:
         path = save_params(params, args.write, force=args.force)
         lines.append(f"written to {path}")
     return CommandResult(
-        data={"params": data, "derived": derived, "problems": [], "notes": notes, "written": args.write},
+        data={
+            "params": data,
+            "derived": derived,
+            "twin": twin,
+            "problems": [],
+            "notes": notes,
+            "written": args.write,
+        },
         text="\n".join(lines),
     )
+
+
+def _resolution(params) -> tuple[dict, list[str]]:
+    """The twin's springs and its estimated static error (``twin.resolution.static_error``), and the ``[twin]`` setting
+    that meets 0.1 % when this one does not."""
+    from flexdigit.twin.resolution import CABLE_TIP_DEG, STATIC_RTOL, TIP_LOAD_ALPHA2, resolution_for, static_error
+
+    error = static_error(params)
+    data = {"cells_per_section": list(error.cells), "static_error_tip_load": error.tip_load}
+    data["static_error_cable"] = error.cable
+    source = "its [twin] table" if not params.twin.is_default else "the default: cells <= 27 mm"
+    lines = [
+        f"twin: {sum(error.cells)} springs, {list(error.cells)} a section ({source}); static error against the "
+        f"elastica (estimated, h^2 Richardson): {100 * error.tip_load:.3g} % under a tip load of "
+        f"alpha^2 = {TIP_LOAD_ALPHA2:g}, {100 * error.cable:.3g} % under the cable turning the tip "
+        f"{CABLE_TIP_DEG:g} deg"
+    ]
+    if error.worst > STATIC_RTOL:
+        h, finer = resolution_for(params)
+        data["max_cell_length_m_for_0.1_percent"] = h
+        lines.append(
+            f"  for {100 * STATIC_RTOL:g} %: [twin] max_cell_length_m = {h:g} ({list(finer.cells)} a section: "
+            f"{100 * finer.tip_load:.3g} % | {100 * finer.cable:.3g} %; each step costs more)"
+        )
+    return data, lines
 
 
 def _value(value) -> str:
