@@ -245,6 +245,7 @@ def test_simulate_load_and_params_run_a_finer_twin_end_to_end(tmp_path, capsys):
         outs.append(TwinRecord.load(out))
     assert outs[0].metadata["params"]["twin"] == {"max_cell_length_m": 0.014}
     assert "twin" not in outs[1].metadata["params"]
+    assert outs[0].metadata["calibration"] == outs[1].metadata["calibration"]  # the thesis rig's packaged fit
     gauges = [r.column("gauge1_v") for r in outs]
     assert gauges[0].shape == gauges[1].shape
     assert not np.array_equal(*gauges)  # the finer chain's readings
@@ -266,3 +267,15 @@ def test_the_template_documents_the_table_commented_out(tmp_path):
     assert load_params(path) == RigParams()
     path.write_text(text.replace("# cells_per_section = 7", "cells_per_section = 7"))
     assert twin_cells(load_params(path)) == (7, 7, 7)
+
+
+def test_the_thesis_rig_with_a_finer_twin_is_still_the_thesis_rig_to_its_commands():
+    """What asks "is this the thesis rig?" reads the digit, not its twin's resolution: the rotation map's
+    protocol, the thesis's printed tables, the palpation tolerance (the control, tactile and report layers'
+    own checks are their owners', noted in docs/digits.md)."""
+    from flexdigit.models.chapter3_tables import table_3_4_printed
+    from flexdigit.rig.rotation import sweep_protocol
+
+    fine = RigParams(twin=TwinResolution(cells_per_section=9))
+    assert sweep_protocol(fine, reference="twin") == sweep_protocol(RigParams(), reference="twin") == "plain"
+    assert table_3_4_printed("y_max_mm", fine, 17)[1] == 3.26  # table 3.4, printed
