@@ -280,3 +280,13 @@ def test_the_thesis_rig_with_a_finer_twin_is_still_the_thesis_rig_to_its_command
     fine = RigParams(twin=TwinResolution(cells_per_section=9))
     assert sweep_protocol(fine, reference="twin") == sweep_protocol(RigParams(), reference="twin") == "plain"
     assert table_3_4_printed("y_max_mm", fine, 17)[1] == 3.26  # table 3.4, printed
+
+
+def test_the_sim_rig_runs_the_table_and_records_it_only_when_given():
+    from flexdigit.rig import open_rig
+    from flexdigit.rig.recording import rig_metadata
+
+    fine = open_rig("sim", RigParams(twin=TwinResolution(cells_per_section=5)))
+    assert fine.twin.chain.n == 15
+    assert rig_metadata(fine)["flexdigit.rig"]["params"]["twin"]["cells_per_section"] == 5
+    assert "twin" not in rig_metadata(open_rig("sim", RigParams()))["flexdigit.rig"]["params"]  # as before
