@@ -12,6 +12,7 @@ twin. The settings are docs/digits.md's table (``resolution_for``'s, to 0.5 mm).
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,6 +26,7 @@ from flexdigit.twin.resolution import CABLE_TIP_DEG, STATIC_RTOL, TIP_LOAD_ALPHA
 from flexdigit.twin.twin import Twin
 from oracles import digit_contact_bvp, thesis_digit_segments
 
+DATA = Path(__file__).resolve().parents[1] / "data"
 #: The BVP's tolerance (as tests/twin/test_campaign_digits.py): its error is 1e-5 of the twin's at worst.
 BVP_TOL = 1e-8
 #: How closely the Richardson estimate (twin.resolution) tells the twin's error against the elastica, relative
@@ -290,3 +292,24 @@ def test_the_sim_rig_runs_the_table_and_records_it_only_when_given():
     assert fine.twin.chain.n == 15
     assert rig_metadata(fine)["flexdigit.rig"]["params"]["twin"]["cells_per_section"] == 5
     assert "twin" not in rig_metadata(open_rig("sim", RigParams()))["flexdigit.rig"]["params"]  # as before
+
+
+HANDMADE = sorted(p for folder in ("handmade_digits", "handmade_digits2") for p in (DATA / folder).glob("*.toml"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", HANDMADE, ids=[p.stem for p in HANDMADE])
+def test_the_setting_params_suggests_meets_0_1_percent_on_the_hand_made_digits(path, tmp_path):
+    """Digits written by hand from the template (the stand-ins for the hidden ones): the ``max_cell_length_m``
+    that ``params FILE`` suggests (``resolution_for``), written into the file, puts the twin within 0.1 % of the
+    elastica under both loads."""
+    from flexdigit.twin.resolution import resolution_for
+
+    params = load_params(path)
+    cell_m, _ = resolution_for(params)
+    text = path.read_text() + f"\n[twin]\nmax_cell_length_m = {cell_m!r}\n"
+    fine = tmp_path / path.name
+    fine.write_text(text)
+    params = load_params(fine)
+    twin = Twin(params, orientation="hanging")
+    assert max(_elastica_error(params, twin.chain, twin.calibration)) < STATIC_RTOL
