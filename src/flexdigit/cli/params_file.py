@@ -47,7 +47,8 @@ def _params(args: argparse.Namespace) -> CommandResult:
         # refused through the one error path (stderr, "flexdigit params: error:", exit 2), every problem on its one
         # line, naming its key; a note may say why (the template's digit_length_m kept for shorter sections)
         raise ParameterError(f"{args.file}: " + "; ".join([*problems, *(f"note: {n}" for n in notes)]))
-    twin, text = _resolution(params)
+    # a file's twin is estimated (a static solve: scipy); the thesis defaults keep `params` light (docs/digits.md)
+    twin, text = _resolution(params) if args.file else (None, [])
     lines.extend(text)
     if args.write:
         path = save_params(params, args.write, force=args.force)
