@@ -15,7 +15,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("file", nargs="?", help="a rig TOML to load and check (default: the thesis rig)")
     parser.add_argument("--write", metavar="FILE", help="write the parameters (defaults, or FILE's) as TOML")
     parser.add_argument("--template", metavar="FILE", help="write an annotated description of the thesis rig")
-    parser.add_argument("--force", action="store_true", help="overwrite the --write/--template file if it exists")
+    parser.add_argument(
+        "--write-calibration",
+        metavar="FILE",
+        help="write the twin calibration every command uses for this digit when given no --calibration (the "
+        "thesis's fit, scaled to the digit by the physics: docs/digits.md) as TOML, to read, edit and pass back",
+    )
+    parser.add_argument(
+        "--force", action="store_true", help="overwrite the --write/--template/--write-calibration file if it exists"
+    )
 
 
 def _params(args: argparse.Namespace) -> CommandResult:
@@ -53,6 +61,8 @@ def _params(args: argparse.Namespace) -> CommandResult:
     if args.write:
         path = save_params(params, args.write, force=args.force)
         lines.append(f"written to {path}")
+    if args.write_calibration:
+        lines.append(f"twin calibration written to {_write_calibration(params, args)}")
     return CommandResult(
         data={
             "params": data,
@@ -64,6 +74,22 @@ def _params(args: argparse.Namespace) -> CommandResult:
         },
         text="\n".join(lines),
     )
+
+
+def _write_calibration(params, args: argparse.Namespace):
+    """Save the default calibration of ``params``'s twin (``twin_calibration``), saying where it comes from."""
+    from flexdigit.twin.calibration import save_calibration
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    if params.digit_only() == type(params)():  # the thesis rig, whatever its [twin]
+        how = "the packaged fit to the thesis's records (the thesis rig)"
+    else:
+        how = "the thesis's fit scaled to this digit by the physics (flexdigit.twin.digit_calibration)"
+    header = (
+        f"# flexdigit twin calibration (SI units) of {args.file or 'the thesis rig'}: {how}.\n"
+        "# Pass it back with --calibration FILE; `flexdigit calibrate` fits one to your records.\n"
+    )
+    return save_calibration(twin_calibration(params), args.write_calibration, force=args.force, header=header)
 
 
 def _resolution(params) -> tuple[dict, list[str]]:
