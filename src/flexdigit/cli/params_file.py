@@ -63,17 +63,8 @@ def _params(args: argparse.Namespace) -> CommandResult:
         lines.append(f"written to {path}")
     if args.write_calibration:
         lines.append(f"twin calibration written to {_write_calibration(params, args)}")
-    return CommandResult(
-        data={
-            "params": data,
-            "derived": derived,
-            "twin": twin,
-            "problems": [],
-            "notes": notes,
-            "written": args.write,
-        },
-        text="\n".join(lines),
-    )
+    data = {"params": data, "derived": derived, "twin": twin, "problems": [], "notes": notes, "written": args.write}
+    return CommandResult(data=data, text="\n".join(lines))
 
 
 def _write_calibration(params, args: argparse.Namespace):
