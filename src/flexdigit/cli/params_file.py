@@ -41,7 +41,8 @@ def _params(args: argparse.Namespace) -> CommandResult:
         return _template(args)
     params = load_params(args.file, check=False) if args.file else RigParams()
     problems = digit_inconsistencies(params)
-    notes = description_notes(params) + ([] if digit_inconsistencies(params) else _reach_notes(params))
+    # a file's gauges are checked against its ADC (statics: scipy); the thesis defaults keep `params` light
+    notes = description_notes(params) + (_reach_notes(params) if args.file and not problems else [])
     data = params.to_dict()
     derived = derived_figures(params)
     lines = [f"rig parameters ({args.file or 'thesis defaults'}):"]
