@@ -695,7 +695,8 @@ def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext,
                 [_entry_row(e) for e in chapter.entries],
                 row_class=lambda row: row[6],
             )
-            parts.append(_collapsible("Entries: the thesis beside ours", inner, len(chapter.entries)))
+            heading = "Entries: the thesis beside ours" if ctx.thesis_rig else "Entries: this digit's figures"
+            parts.append(_collapsible(heading, inner, len(chapter.entries)))
         for table in chapter.tables:
             title = f"{html.escape(table.title)} <code>{html.escape(table.key)}</code>"
             parts.append(_collapsible(title, _table_html(table.columns, table.rows), len(table.rows)))

@@ -284,7 +284,8 @@ def _thesis_controller_entries(ctx, study, runs, e: list) -> None:
             "deg",
             "The thesis's state-space (forward Euler) controller at 20 ms on the twin: "
             + (
-                "the command bangs between 0 and 254 - the instability figure 5.7 shows."
+                f"the command bangs between {ctx.params.actuator.command_min} and {ctx.params.actuator.command_max}"
+                " - the instability figure 5.7 shows."
                 if _bangs(runs[("thesis39-euler", 1.0)], ctx.params)
                 else "on this digit its command does not bang between its limits."
             ),
