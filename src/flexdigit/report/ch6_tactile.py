@@ -371,6 +371,9 @@ def _criteria_paragraph(exp, thesis_rig: bool = True) -> str:
         ),
         (f"magnitude {100 * value['magnitude_rel_rmse']:.1f} % RMS (<= 10 %)", "magnitude_rel_rmse"),
     ]
+    if not np.isfinite(rm[best]):  # no identifiable reading (one gauge): no position or magnitude figure to quote
+        labels = [item for item in labels if item[1] in ("corr2_distance_from_thesis", "contact_accuracy_visible")]
+        labels.append(("position and magnitude: no identifiable test reading to score", "best_over_thesis_network"))
     text = "Issue 7's criteria on this experiment: " + "; ".join(
         f"{label}: {'met' if met[name] else 'NOT met'}" for label, name in labels
     )
@@ -417,6 +420,11 @@ def _bayes_sentence(exp, thesis_mlp_m: float, thesis_rig: bool = True) -> str:
         f"network at {thesis_mlp_m / floor_pos:.2f} x), magnitude {100 * floor_mag:.1f} %, contact "
         f"{100 * floor_contact:.2f} %."
     )
+    if not np.isfinite(floor_pos):  # nothing identifiable: the position and magnitude limits are not defined
+        text = (
+            " The Bayes limit of contact (the best any estimator that knows the protocol can do on these readings, "
+            f"twin noise model): {100 * floor_contact:.2f} %; position and magnitude have none (nothing identifiable)."
+        )
     unreachable = []
     if 0.5 * thesis_mlp_m < floor_pos:
         unreachable.append(
