@@ -81,6 +81,7 @@ def test_the_report_of_a_digit(name, tmp_path, capsys):
     thesis_only = ("plant.G.", "plant.closed_loop", "conversion.", "table_3_", "digital.", "hinf.k_5hz_num_lead")
     assert not [e["key"] for e in entries if e["key"].startswith(thesis_only)]
     assert "The cable-actuated flexible digit, reproduced" not in html
+    assert "nan mm" not in html  # a figure the digit does not have is said in words (one gauge: nothing identifiable)
     wn = next(e["ours"] for e in entries if e["key"] == "twin.release_with_housing.wn_rad_s")
     out = tmp_path / "release.csv"
     hung = ["--orientation", "hanging"] if name == BUCKLES else []
