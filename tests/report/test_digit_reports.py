@@ -75,6 +75,13 @@ def test_the_report_of_a_digit(name, tmp_path, capsys):
         and _positive(tactile.get((chapter, key.split(".")[0] + ".thesis_mlp_position_rmse_mm")))
     ]
     assert both, f"no tactile experiment of {name} has a Bayes limit and a network RMSE"
+    # nothing shown as the digit's that is the thesis rig's (tests/report/test_digit_report_truth.py chapter by
+    # chapter): no figure "beside" a thesis figure, none of the thesis rig's printed tables, fits, plant or controllers
+    assert "(beside thesis" not in html
+    thesis_only = ("plant.G.", "plant.closed_loop", "conversion.", "table_3_", "digital.", "hinf.k_5hz_num_lead")
+    assert not [e["key"] for e in entries if e["key"].startswith(thesis_only)]
+    assert "The cable-actuated flexible digit, reproduced" not in html
+    assert "nan mm" not in html  # a figure the digit does not have is said in words (one gauge: nothing identifiable)
     wn = next(e["ours"] for e in entries if e["key"] == "twin.release_with_housing.wn_rad_s")
     out = tmp_path / "release.csv"
     hung = ["--orientation", "hanging"] if name == BUCKLES else []

@@ -36,8 +36,8 @@ from flexdigit.errors import OutputExistsError
 from flexdigit.interrupts import raise_if_stopping, signals_deferred
 from flexdigit.params import RigParams
 from flexdigit.report import CHAPTERS
-from flexdigit.report.chapter import Chapter, ReportContext
-from flexdigit.report.results import not_applicable, thesis_comparisons
+from flexdigit.report.chapter import DERIVED_CALIBRATION_SOURCE, Chapter, ReportContext
+from flexdigit.report.results import NOT_APPLICABLE, not_applicable, thesis_comparisons
 from flexdigit.twin.calibration import (
     default_calibration,
     default_calibration_source,
@@ -50,6 +50,7 @@ __all__ = [
     "ReportSummary",
     "reproduce",
     "HEADLINE",
+    "DIGIT_HEADLINE",
     "STATUSES",
     "results_document",
     "EXPECTED_SECONDS",
@@ -118,7 +119,7 @@ def _digit_calibration(params: RigParams | None) -> Iterator[None]:
     if params is None or params == RigParams() or default_calibration_source() != "packaged":
         yield
         return
-    with use_calibration(calibration_for(params), source="derived from the digit's description"):
+    with use_calibration(calibration_for(params), source=DERIVED_CALIBRATION_SOURCE):
         yield
 
 
@@ -248,6 +249,24 @@ HEADLINE = {
     "actuated.best_estimator_position_rmse_mm": "actuated: best estimator's position error",
     "actuated.bayes_position_rmse_identifiable_mm": "actuated: the Bayes limit of that error",
 }
+#: The first screen of a digit other than the thesis rig's report: its own figures (the thesis rig's headline keys
+#: are its printed figures, most of them not computed for another digit).
+DIGIT_HEADLINE = {
+    "plant.consistent.tip_rotation_deg_per_command": "tip rotation per servo command (cable model)",
+    "cable.commands_for_30deg_tip_rotation": "commands for 30 deg of tip rotation",
+    "twin.release_with_housing.wn_rad_s": "twin release test: wn",
+    "twin.release_with_housing.zeta": "twin release test: zeta",
+    "identify.digit.lsq.wn_rad_s": "digit wn identified by least squares",
+    "hinf.digit.plant_dc_gain_mm_per_command": "plant G(0) from the digit's components (gauge 1)",
+    "hinf.k_5hz.tzw_peak_db": "||T_zw|| of the 5 Hz H-infinity design on the digit's plant",
+    "digital20.settling_time_s": "30 deg step at 20 ms on the twin: 2 % settling",
+    "digital20.overshoot_percent": "30 deg step at 20 ms on the twin: overshoot",
+    "non_actuated.best_estimator_position_rmse_mm": "non-actuated: best estimator's position error",
+    "non_actuated.bayes_position_rmse_identifiable_mm": "non-actuated: the Bayes limit of that error",
+    "actuated.best_estimator_position_rmse_mm": "actuated: best estimator's position error",
+    "actuated.bayes_position_rmse_identifiable_mm": "actuated: the Bayes limit of that error",
+    "palpation.stiffness.max_rel_error": "palpation: largest relative error of the fitted stiffness",
+}
 STATUSES = ("match", "discrepancy", "new")
 
 
@@ -274,7 +293,11 @@ def results_document(
         "fast": ctx.fast,
         "calibration": _calibration_source(),
         "counts": _counts(entries),
-        "headline": [{"key": k, "figure": label} for k, label in HEADLINE.items() if k in present],
+        "headline": [
+            {"key": k, "figure": label}
+            for k, label in (HEADLINE if ctx.thesis_rig else DIGIT_HEADLINE).items()
+            if k in present
+        ],
         "chapters": [
             {
                 "slug": c.slug,
@@ -325,6 +348,8 @@ def _build_chapter(module_name: str, ctx: ReportContext) -> tuple[Chapter | None
             chapter, error = importlib.import_module(module_name).build(ctx), None
         if not thesis_rig:  # another digit: no entry stands against the thesis rig's figure, however it was made
             chapter.entries = [not_applicable(e) for e in chapter.entries]
+            # nor a figure "beside" a thesis figure of the thesis rig's (its caption says what it shows)
+            chapter.figures = [replace(f, thesis_ref="") for f in chapter.figures]
     except Exception as exc:  # a broken chapter must not hide the others; one line says why in the report
         raise_if_stopping(exc)  # a stop signal a compiled kernel handed back as another exception is a stop
         chapter, error = None, _one_line(exc)
@@ -577,18 +602,39 @@ def _gallery(chapters: list[Chapter]) -> str:
     return "<div class='gallery'>" + "".join(_figure_html(f) for f in shown) + "</div>"
 
 
+def _digit_words(ctx: ReportContext) -> str:
+    """A digit in a few words: "2 sections, 2 gauges, 150 mm, a cable pair"."""
+    g = ctx.params.geometry
+    cables = "one cable" if ctx.params.cables.count == 1 else "a cable pair"
+    sections = f"{g.section_count} section{'s' if g.section_count > 1 else ''}"
+    return f"{sections}, {ctx.gauges_text}, {1000 * g.digit_length_m:g} mm, {cables}"
+
+
 def _front_page(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext, document: dict) -> list[str]:
     by_key = {e.key: e for c in chapters for e in c.entries}
     counts = document["counts"]
+    if ctx.thesis_rig:
+        title = "The cable-actuated flexible digit, reproduced on its digital twin"
+        legend = (
+            ". Each entry puts the figure as printed in the thesis beside ours: <span class='match'>match</span>, "
+            "<span class='discrepancy'>discrepancy</span> (the note explains it and gives the corrected figure) or "
+            "<span class='new'>new</span> (not in the thesis)."
+        )
+    else:
+        title = f"Your digit ({_digit_words(ctx)}) on its digital twin, chapter by chapter as the thesis"
+        legend = (
+            ". Every entry is this digit's figure (<span class='new'>new</span>); where the thesis printed a figure "
+            f"of its own rig for the same quantity, its column reads '{NOT_APPLICABLE}': no figure of this digit is "
+            "compared with the thesis rig's."
+        )
     parts = [
-        "<h1>The cable-actuated flexible digit, reproduced on its digital twin</h1>",
+        f"<h1>{html.escape(title)}</h1>",
         f"<p>flexdigit {html.escape(__version__)}, seed {ctx.seed}{', fast mode' if ctx.fast else ''}, "
         f"twin calibration: {html.escape(_calibration_source())}: "
         f"{sum(counts.values())} entries, "
         + ", ".join(f"<span class='{s}'>{counts[s]} {s}</span>" for s in STATUSES)
-        + ". Each entry puts the figure as printed in the thesis beside ours: <span class='match'>match</span>, "
-        "<span class='discrepancy'>discrepancy</span> (the note explains it and gives the corrected figure) or "
-        "<span class='new'>new</span> (not in the thesis). The same entries, and every table as numbers, are in "
+        + legend
+        + " The same entries, and every table as numbers, are in "
         "<code>results.json</code> (hover over an entry for its key there). Click a figure for its full size.</p>",
         _gallery(chapters),
         "<h2 id='headline'>Headline figures</h2>",
@@ -634,7 +680,9 @@ def _first_sentence(note: str) -> str:
 
 def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext, document: dict) -> str:
     parts = [
-        "<!doctype html><html><head><meta charset='utf-8'><title>flexdigit: the thesis reproduced</title>",
+        "<!doctype html><html><head><meta charset='utf-8'><title>flexdigit: "
+        + ("the thesis reproduced" if ctx.thesis_rig else "your digit")
+        + "</title>",
         f"<style>{_CSS}</style></head><body>",
         *_front_page(chapters, failed, ctx, document),
     ]
@@ -647,7 +695,8 @@ def _render(chapters: list[Chapter], failed: dict[str, str], ctx: ReportContext,
                 [_entry_row(e) for e in chapter.entries],
                 row_class=lambda row: row[6],
             )
-            parts.append(_collapsible("Entries: the thesis beside ours", inner, len(chapter.entries)))
+            heading = "Entries: the thesis beside ours" if ctx.thesis_rig else "Entries: this digit's figures"
+            parts.append(_collapsible(heading, inner, len(chapter.entries)))
         for table in chapter.tables:
             title = f"{html.escape(table.title)} <code>{html.escape(table.key)}</code>"
             parts.append(_collapsible(title, _table_html(table.columns, table.rows), len(table.rows)))

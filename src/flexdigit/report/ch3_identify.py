@@ -11,14 +11,16 @@ which E(s) and MT(s) are identified as the thesis identified them from the rig.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from flexdigit.identify.chapter3_identification import STEP_COMMANDS, chapter3_identify_study
 from flexdigit.identify.filters import fft_filter, svd_filter
+from flexdigit.params import RigParams
 from flexdigit.reference import thesis_value
-from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.report.chapter import Chapter, ReportContext, without_columns
 from flexdigit.report.results import Entry, compare, new
 
 SECTION_DIGIT = "3.1.2"
@@ -40,19 +42,46 @@ def build(ctx: ReportContext) -> Chapter:
         "as in table 3.1."
     )
     e = chapter.entries
+    thesis_rig = ctx.thesis_rig
     _wn_formula_bias(ctx, study, chapter, e)
-    _records_tables(study, chapter, e)
-    _noisy_records(study, e)
+    _records_tables(study, chapter, e, thesis_rig)
+    _noisy_records(study, e, thesis_rig)
     _models_from_experiments(ctx, study.twin, chapter, e)
     _filters(ctx, study.filters, chapter, e)
-    _linear_fits(study.deflection[0], e)
-    _voltage_fits(study.voltage[0], e)
-    chapter.tables.extend(study.tables)
-    chapter.paragraphs.append(_summary(e))
+    if thesis_rig:  # table 3.6: the thesis rig's measured deflections
+        _linear_fits(study.deflection[0], e)
+    _voltage_fits(study.voltage[0], e, thesis_rig)
+    if thesis_rig:
+        chapter.tables.extend(study.tables)
+    else:
+        chapter.tables.extend(_digit_tables(study.tables))
+    chapter.paragraphs.append(_summary(e, thesis_rig))
     return chapter
 
 
-def _summary(entries: list[Entry]) -> str:
+#: The thesis rig's printed figures in the study's tables: blank in another digit's report.
+_THESIS_COLUMNS = {
+    "identify.models_from_twin": ("wn_thesis_rad_s", "zeta_thesis"),
+    "identify.voltage_fits": ("slope_printed_v_per_command", "offset_printed_v"),
+}
+#: A method check on the thesis's printed tables (synthetic records), the same in every digit's report.
+_METHOD_CHECK = " A check of the method on the thesis's printed figures, the same for every digit."
+
+
+def _digit_tables(tables) -> list:
+    """The study's tables on a digit other than the thesis rig: table 3.6's fits (the thesis rig's measured
+    deflections) left out, the printed columns of the others blank."""
+    out = []
+    for table in tables:
+        if table.key == "identify.deflection_fits":
+            continue
+        table = without_columns(table, _THESIS_COLUMNS.get(table.key, ()))
+        title = table.title.replace(", beside the thesis's", "").replace(" (E 3.20-3.22)", "")
+        out.append(dataclasses.replace(table, title=title))
+    return out
+
+
+def _summary(entries: list[Entry], thesis_rig: bool = True) -> str:
     """One paragraph of the chapter's findings, from its own entries."""
     v = {x.key: x.ours for x in entries}
 
@@ -63,10 +92,13 @@ def _summary(entries: list[Entry]) -> str:
     return (
         "Findings. From the twin's release test (gauge 1) the least-squares fit gives wn = "
         f"{v['identify.digit.lsq.wn_rad_s']:.3f} rad/s, zeta = {v['identify.digit.lsq.zeta']:.4f}, and from its "
-        f"servo steps wn = {v['identify.servo.lsq.wn_rad_s']:.3f} rad/s, zeta = {v['identify.servo.lsq.zeta']:.4f} "
-        "(thesis: 13.0995, 0.06791; 20.53, 0.5629). The thesis method on the same records gives "
+        f"servo steps wn = {v['identify.servo.lsq.wn_rad_s']:.3f} rad/s, zeta = {v['identify.servo.lsq.zeta']:.4f}"
+        + (" (thesis: 13.0995, 0.06791; 20.53, 0.5629). " if thesis_rig else ". ")
+        + "The thesis method on the same records gives "
         f"{v['identify.digit.thesis.wn_rad_s']:.2f} and {v['identify.servo.thesis.wn_rad_s']:.2f} rad/s: its "
-        f"wn = 4/(zeta Ts) is {pct('wn_settling_formula.bias_digit')} high at the digit's damping and "
+        f"wn = 4/(zeta Ts) is {pct('wn_settling_formula.bias_digit')} high at the "
+        + ("digit's" if thesis_rig else "thesis rig's digit")
+        + " damping and "
         f"{pct('wn_settling_formula.bias_servo')} high at the servo's even without noise. On noisy synthetic "
         "records with known parameters, the largest lsq errors are "
         f"{pct('noisy_release.lsq.zeta_max_abs_rel_error')} (release zeta) and "
@@ -82,6 +114,7 @@ def _summary(entries: list[Entry]) -> str:
 def _wn_formula_bias(ctx: ReportContext, study, chapter: Chapter, e: list[Entry]) -> None:
     p = ctx.params
     zd, zs = p.dynamics.zeta_housing, p.actuator.servo_zeta
+    whose = "the digit's" if ctx.thesis_rig or p.dynamics != RigParams().dynamics else "table 3.2's (thesis rig)"
     bias_digit, bias_servo = study.settling_bias
     e.append(
         new(
@@ -89,7 +122,7 @@ def _wn_formula_bias(ctx: ReportContext, study, chapter: Chapter, e: list[Entry]
             SECTION_DIGIT,
             bias_digit,
             "",
-            f"Relative error of wn = 4/(zeta Ts) on an exact second-order response with the digit's zeta = {zd} "
+            f"Relative error of wn = 4/(zeta Ts) on an exact second-order response with {whose} zeta = {zd} "
             "(Ts the true 2 % settling time): the envelope reaches 2 % at ln(50)/(zeta wn) = 3.91/(zeta wn), and the "
             "last exit from the band comes up to half a period earlier.",
         )
@@ -104,6 +137,12 @@ def _wn_formula_bias(ctx: ReportContext, study, chapter: Chapter, e: list[Entry]
             "overshoot, well before the envelope does, so 4/(zeta Ts) overestimates wn by this much.",
         )
     )
+    if ctx.thesis_rig:  # the printed servo wn is the thesis rig's
+        _servo_wn_from_ts(p, bias_servo, e)
+    _bias_figure(ctx, study, chapter, zd, zs, bias_digit, bias_servo)
+
+
+def _servo_wn_from_ts(p, bias_servo: float, e: list[Entry]) -> None:
     e.append(
         new(
             "identify.wn_settling_formula.servo_wn_if_read_from_ts",
@@ -115,6 +154,9 @@ def _wn_formula_bias(ctx: ReportContext, study, chapter: Chapter, e: list[Entry]
             "settling time'). Table 3.2's wn column, by contrast, is wd/sqrt(1 - zeta^2) to 5e-6 rad/s.",
         )
     )
+
+
+def _bias_figure(ctx: ReportContext, study, chapter: Chapter, zd, zs, bias_digit, bias_servo) -> None:
     zetas, bias = study.bias_curve
     import matplotlib.pyplot as plt
 
@@ -138,7 +180,7 @@ def _wn_formula_bias(ctx: ReportContext, study, chapter: Chapter, e: list[Entry]
     )
 
 
-def _records_tables(study, chapter: Chapter, e: list[Entry]) -> None:
+def _records_tables(study, chapter: Chapter, e: list[Entry], thesis_rig: bool = True) -> None:
     """Tables 3.1 and 3.2 identified back from synthetic records: each method's mean error."""
     for rec in study.records.values():
         key = f"identify.table_{rec.number.replace('.', '_')}"
@@ -151,7 +193,8 @@ def _records_tables(study, chapter: Chapter, e: list[Entry]) -> None:
                     zeta_err,
                     "",
                     f"Mean zeta identified by the {method} method from {rec.rows} synthetic release records built "
-                    f"with table {rec.number}'s printed zeta and wn (0.2 % noise), relative to the mean printed zeta.",
+                    f"with table {rec.number}'s printed zeta and wn (0.2 % noise), relative to the mean printed zeta."
+                    + ("" if thesis_rig else _METHOD_CHECK),
                 )
             )
             e.append(
@@ -160,9 +203,12 @@ def _records_tables(study, chapter: Chapter, e: list[Entry]) -> None:
                     SECTION_DIGIT,
                     wn_err,
                     "",
-                    f"The same for wn ({'wd/sqrt(1-zeta^2), as the table did' if method == 'thesis' else 'fitted'}).",
+                    f"The same for wn ({'wd/sqrt(1-zeta^2), as the table did' if method == 'thesis' else 'fitted'})."
+                    + ("" if thesis_rig else _METHOD_CHECK),
                 )
             )
+    if not thesis_rig:  # table 3.1's damping is the thesis rig's
+        return
     chapter.paragraphs.append(
         "Table 3.1's damping (zeta = 0.0008-0.005) cannot give wn = 4/(zeta Ts): the 2 % settling time would be "
         "4/(zeta wn) = 80-490 s, so the table's wn can only come from the damped frequency. Its wn column is "
@@ -172,7 +218,7 @@ def _records_tables(study, chapter: Chapter, e: list[Entry]) -> None:
     )
 
 
-def _noisy_records(study, e: list[Entry]) -> None:
+def _noisy_records(study, e: list[Entry], thesis_rig: bool = True) -> None:
     """Each method's largest error over the noisy synthetic records."""
     n = study.noisy.records
     for (kind, method), a in study.noisy.errors.items():
@@ -186,7 +232,8 @@ def _noisy_records(study, e: list[Entry]) -> None:
                     f"Largest |relative error| of {par} over {n} synthetic {kind} records with known "
                     f"parameters (the thesis's {'digit' if kind == 'release' else 'servo'}) and white noise of "
                     "2 % of the response; issue 4 asks lsq for < 2 %."
-                    + (" The thesis method's error is mostly the bias of 4/(zeta Ts)." if method == "thesis" else ""),
+                    + (" The thesis method's error is mostly the bias of 4/(zeta Ts)." if method == "thesis" else "")
+                    + ("" if thesis_rig else _METHOD_CHECK),
                 )
             )
 
@@ -195,7 +242,7 @@ def _noisy_records(study, e: list[Entry]) -> None:
 def _models_from_experiments(ctx: ReportContext, twin, chapter: Chapter, e: list[Entry]) -> None:
     """E(s) and MT(s) identified from the twin's experiments, beside the thesis's (figures 3.6, 3.11, 3.12)."""
     _model_entries(twin, e)
-    _tip_entries(twin, e)
+    _tip_entries(twin, e, ctx.thesis_rig)
     _model_figures(ctx, twin, chapter)
 
 
@@ -290,7 +337,7 @@ def _corr2_entry(model: str, method: str, section: str, r, corr_p: float, e: lis
         )
 
 
-def _tip_entries(twin, e: list[Entry]) -> None:
+def _tip_entries(twin, e: list[Entry], thesis_rig: bool = True) -> None:
     """The same release read at the tip, a measurement the rig did not have."""
     wn_p = thesis_value("digit.release_tests_with_housing.wn_avg_rad_s")
     zeta_p = thesis_value("digit.release_tests_with_housing.zeta_avg")
@@ -303,7 +350,7 @@ def _tip_entries(twin, e: list[Entry]) -> None:
                     value,
                     "rad/s" if par == "wn_rad_s" else "",
                     f"The same twin release test read at the tip (a measurement the rig did not have) by the {method} "
-                    f"method; thesis: {wn_p if par == 'wn_rad_s' else zeta_p}.",
+                    "method" + (f"; thesis: {wn_p if par == 'wn_rad_s' else zeta_p}." if thesis_rig else "."),
                 )
             )
 
@@ -433,7 +480,7 @@ def _linear_fits(fits: list, e: list[Entry]) -> None:
         )
 
 
-def _voltage_fits(fits: list, e: list[Entry]) -> None:
+def _voltage_fits(fits: list, e: list[Entry], thesis_rig: bool = True) -> None:
     """E 3.20-3.22 from the twin's actuation sweep, beside the printed lines."""
     printed = thesis_value("conversion.v_sg_fit")
     for k, r in enumerate(fits):
@@ -445,7 +492,8 @@ def _voltage_fits(fits: list, e: list[Entry]) -> None:
                 r.slope.value,
                 "V/command",
                 rtol=0.03,
-                note=f"Least-squares line through the twin's actuation sweep (E 3.2{k}); 95 % CI "
+                note=f"Least-squares line through the twin's actuation sweep "
+                f"({f'E 3.2{k}' if thesis_rig else f'gauge {k + 1}'}); 95 % CI "
                 f"{r.slope.ci_low:.5f}..{r.slope.ci_high:.5f}, residual RMS {1e3 * r.rms:.2f} mV.",
                 discrepancy_note="The twin's calibration does not reproduce this fit of figure 3.17.",
             )

@@ -11,6 +11,8 @@ import math
 import control
 import numpy as np
 
+from flexdigit.control.design20ms import digit_mount
+from flexdigit.control.thesis_designs import digit_plant
 from flexdigit.models import cable, conversion, second_order, servo
 from flexdigit.models.chapter3_tables import chapter3_study, table_3_4_gauge_columns, table_3_4_printed
 from flexdigit.models.plant import (
@@ -21,7 +23,7 @@ from flexdigit.models.plant import (
     printed_digit_zeta,
 )
 from flexdigit.reference import thesis_complex, thesis_value
-from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
 from flexdigit.report.results import Entry, compare, new
 
 
@@ -35,6 +37,8 @@ def build(ctx: ReportContext) -> Chapter:
     p = ctx.params
     study = chapter3_study(p)
     chapter = Chapter(slug="ch3-models", title="Chapter 3: component models and the plant G(s)")
+    if not ctx.thesis_rig:
+        return _digit_chapter(ctx, study, chapter)
     chapter.paragraphs.append(
         "Each component of chapter 3 is rebuilt from the rig parameters (flexdigit.models) and the plant G(s) of "
         "3.5 is assembled from them, twice: 'printed' reproduces the thesis's G(s) with its unit slips, "
@@ -70,6 +74,116 @@ def build(ctx: ReportContext) -> Chapter:
     chapter.paragraphs.append("Printed versus consistent plant, numbered:")
     chapter.paragraphs.extend(explain_discrepancies(p))
     return chapter
+
+
+# --- a digit other than the thesis rig ------------------------------------------------------------------------
+SECTION_DIGIT = "3 (this digit)"
+
+
+def _digit_chapter(ctx: ReportContext, study, chapter: Chapter) -> Chapter:
+    """The models chapter on a digit other than the thesis rig: its own components from its description (the
+    servo's step with its gearing, K2 of E 3.19, E 3.15 at its gauges, the unit-correct plant's gains). The thesis's
+    printed tables, fits and plant are its rig's prints and measurements: audited in the thesis rig's report only."""
+    p = ctx.params
+    a, g = p.actuator, p.geometry
+    e = chapter.entries
+    chapter.paragraphs.append(
+        "The thesis's chapter 3 prints its rig's release tests (tables 3.1, 3.2), deflections (tables 3.4, 3.6), "
+        "fits (E 3.16-3.25) and plant G(s) (3.5, table 4.1): those are audited, with their slips, in the thesis "
+        "rig's report (`flexdigit reproduce`), not here. This chapter rebuilds this digit's components from its "
+        "description (flexdigit.models): the servo's command step at the pulley, the cable's K2 (E 3.19), the "
+        "deflections E 3.15 predicts at its gauges, and the unit-correct plant chain command -> servo angle -> "
+        "cable shortening -> moment -> curvature -> deflection, rotation or gauge volts."
+    )
+    gear = f" through its {a.gear_ratio:g}:1 gearing" if a.gear_ratio != 1 else ""
+    e += [
+        new(
+            "servo.rad_per_command",
+            SECTION_DIGIT,
+            a.rad_per_command,
+            "rad/command",
+            f"The servo's step: {a.angle_max_deg - a.angle_min_deg:g} deg over commands {a.command_min}.."
+            f"{a.command_max} ({a.deg_per_command:.4g} deg a command; {a.pulley_deg_per_command:.4g} deg at the "
+            f"pulley{gear}).",
+        ),
+        new(
+            "cable.K2",
+            SECTION_DIGIT,
+            study.k2,
+            "N m/rad",
+            "E I r_M/(l e) (E 3.19) from this digit's strip, pulley, gearing and eccentricity.",
+        ),
+        new(
+            "plant.consistent.tip_rotation_deg_per_command",
+            SECTION_DIGIT,
+            cable.tip_rotation_per_command_deg(p),
+            "deg/command",
+            "r_M x rad per command / e (with the gearing): what one command does to the tip.",
+        ),
+        new(
+            "cable.commands_for_30deg_tip_rotation",
+            SECTION_DIGIT,
+            commands_for_tip_rotation(30.0, p),
+            "commands",
+            "Commands for 30 deg of tip rotation by the cable model.",
+        ),
+    ]
+    for out, c in study.plant.consistent.items():
+        e.append(
+            new(
+                f"plant.consistent.{out}.dc_gain",
+                SECTION_DIGIT,
+                c.dc_gain,
+                f"{c.output_unit}/command",
+                "Unit-correct chain from this digit's components, cable-model gains (gauge 1: its first gauge at "
+                f"{1000 * g.gauge_positions_m[0]:g} mm).",
+            )
+        )
+    _digit_tables_and_figures(ctx, study, chapter)
+    return chapter
+
+
+def _digit_tables_and_figures(ctx: ReportContext, study, chapter: Chapter) -> None:
+    """E 3.15 at the digit's gauges, its plant's DC gains; its servo's and its plant's pole-zero and Bode plots."""
+
+    p, g = ctx.params, ctx.params.geometry
+    t34 = study.table_3_4.ours
+    columns = table_3_4_gauge_columns(t34)
+    chapter.tables.append(
+        ResultTable(
+            "models.table_3_4",
+            f"E 3.15 on this digit (table 3.4's computation): deflection (mm) at its {ctx.gauges_text} "
+            f"({', '.join(f'{1000 * x:g}' for x in g.gauge_positions_m)} mm) and at its tip "
+            f"({1000 * g.digit_length_m:g} mm), commands {int(t34['commands'][0])}..{int(t34['commands'][-1])} "
+            "from its straight command",
+            ("command", *(f"sg{col[4:-3]}_mm" for col in columns), "y_tip_mm"),
+            tuple(
+                (int(c), *(float(t34[col][j]) for col in columns), float(t34["y_max_mm"][j]))
+                for j, c in enumerate(t34["commands"])
+            ),
+        )
+    )
+    chapter.tables.append(
+        ResultTable(
+            "models.plant_dc_gains",
+            "This digit's unit-correct plant: DC gain per command (in the output's unit)",
+            ("output", "unit", "dc_gain_per_command"),
+            tuple((out, c.output_unit, c.dc_gain) for out, c in study.plant.consistent.items()),
+        )
+    )
+    mount = digit_mount(p)
+    plant = digit_plant(p, orientation=mount)
+    fig = _bode_pz([("MT(s) x rad/command (this digit's servo)", study.servo_tf["consistent"])], "Servo")
+    chapter.figures.append(ctx.save_figure(fig, "ch3_servo_bode_pz", "This digit's servo MT(s): pole-zero and Bode"))
+    fig = _bode_pz([("gauge-1 deflection per command", plant.tf)], "Plant", normalise=True)
+    chapter.figures.append(
+        ctx.save_figure(
+            fig,
+            "ch3_plant_bode_pz",
+            "This digit's plant from its components (gauge-1 deflection, magnitude normalised to its DC gain; E(s) "
+            f"its twin's release mode, mounted {'tip up' if mount == 'vertical' else mount}): pole-zero and Bode",
+        )
+    )
 
 
 # --- 3.1.2: release tests and E(s) ------------------------------------------------------------------------

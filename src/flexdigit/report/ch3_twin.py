@@ -14,10 +14,13 @@ import numpy as np
 
 from flexdigit.calibrate.chapter3_twin import chapter3_twin_study
 from flexdigit.identify.fit import second_order_response
+from flexdigit.models.servo import servo_tf
 from flexdigit.reference import thesis_value
-from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.report.chapter import DERIVED_CALIBRATION_SOURCE, Chapter, ReportContext
 from flexdigit.report.results import compare, new
 from flexdigit.twin import records as ex
+from flexdigit.twin.calibration import default_calibration_source
+from flexdigit.twin.digit import default_cells
 from flexdigit.twin.twin import Twin
 
 
@@ -28,28 +31,22 @@ def build(ctx: ReportContext) -> Chapter:
     seed = int(ctx.rng(3).integers(0, 2**31))
     study = chapter3_twin_study(p, seed=seed, fast=ctx.fast)
     ch = Chapter(slug="ch3-twin", title="Chapter 3 (twin): the calibrated large-deflection digital twin")
-    ch.paragraphs.append(
-        "The twin models the digit as a planar chain of rigid links and rotational springs (a discrete elastica, "
-        "3 springs per 80 mm section, rigid 10 mm nylon supports at 90/180/270 mm), moved by a cable at constant "
-        "eccentricity whose shortening is r_M times the servo angle (E 3.11); the servo is the identified second-"
-        "order model (3.2.4) driven by integer commands latched on 20 ms serial frames; the gauges go through the "
-        "half bridge (E 2.2), a per-channel gain and offset, the 470 Hz low-pass and a 16-bit +-5 V ADC, with seeded "
-        "white noise and drift. Support masses, housing stiffness (with a stiffer base section), damping, cable "
-        "compliance and channel gains are fitted with scipy.optimize.least_squares (flexdigit.calibrate)."
-    )
-    _release_entries(study, ch.entries)
+    if not ctx.thesis_rig:
+        ch.paragraphs.append(_digit_twin_text(p))
+    else:
+        ch.paragraphs.append(_THESIS_TWIN_TEXT)
+    _release_entries(study, ch.entries, ctx.thesis_rig)
     ch.figures.append(_release_figure(ctx, study.releases))
     fits = thesis_value("conversion.v_sg_fit") if ctx.thesis_rig else [None] * len(study.sweep_fits)
-    _sweep_entries(study, fits, ch.entries)
+    _sweep_entries(study, fits, ch.entries, _sweep_note(study.sweep))
     ch.figures.append(_sweep_figure(ctx, study.sweep, fits))
     ch.figures.append(_shapes_and_step_figure(ctx, p, study.calibration, seed, study.orientation))
     if not ctx.thesis_rig:
-        ch.entries.extend(_check_entries(study.checks))
-        ch.tables.extend(study.tables)
+        ch.entries.extend(_check_entries(study.checks, _DIGIT_CHECK_NOTE))
+        ch.tables.extend(_digit_tables(study.tables))
         ch.paragraphs.append(
-            "This digit is not the thesis rig: its twin runs on the thesis's calibration scaled to its description "
-            "(flexdigit params prints what it derives), the thesis's columns are not applicable, and table 3.6 "
-            "(the thesis rig's measured deflections) is skipped."
+            "This digit is not the thesis rig: the thesis's columns are not applicable, and table 3.6 (the thesis "
+            "rig's measured deflections) is skipped (flexdigit params prints what its description derives)."
         )
         if study.orientation != "vertical":
             ch.paragraphs.append(
@@ -86,7 +83,61 @@ def build(ctx: ReportContext) -> Chapter:
     return ch
 
 
-def _release_entries(study, e: list) -> None:
+_THESIS_TWIN_TEXT = (
+    "The twin models the digit as a planar chain of rigid links and rotational springs (a discrete elastica, "
+    "3 springs per 80 mm section, rigid 10 mm nylon supports at 90/180/270 mm), moved by a cable at constant "
+    "eccentricity whose shortening is r_M times the servo angle (E 3.11); the servo is the identified second-"
+    "order model (3.2.4) driven by integer commands latched on 20 ms serial frames; the gauges go through the "
+    "half bridge (E 2.2), a per-channel gain and offset, the 470 Hz low-pass and a 16-bit +-5 V ADC, with seeded "
+    "white noise and drift. Support masses, housing stiffness (with a stiffer base section), damping, cable "
+    "compliance and channel gains are fitted with scipy.optimize.least_squares (flexdigit.calibrate)."
+)
+
+
+def _digit_twin_text(p) -> str:
+    """The twin's model of a digit other than the thesis rig, in its own words (sections, supports, cells, cables,
+    gauge chain and ADC from its description)."""
+    g, s, a = p.geometry, p.sensors, p.actuator
+    count = len(g.gauge_positions_m)
+    bridges = sorted(set(s.chain(count)[0]))
+    cells = sorted(set(default_cells(g)))
+    supports = ", ".join(f"{1000 * c:g}" for c in g.support_centres_m)
+    cable = (
+        "one cable"
+        if p.cables.count == 1
+        else f"an antagonistic pair of cables ({p.cables.pretension_n:g} N pretension)"
+    )
+    gear = f" over its {a.gear_ratio:g}:1 gearing" if a.gear_ratio != 1 else ""
+    return (
+        f"The twin models this digit as a planar chain of rigid links and rotational springs (a discrete elastica, "
+        f"{'/'.join(str(c) for c in cells)} springs per section over its {g.section_count} section"
+        f"{'s' if g.section_count > 1 else ''} of "
+        + ", ".join(f"{1000 * x:g}" for x in g.section_lengths_m)
+        + f" mm of strip, rigid supports centred at {supports} mm), moved by {cable} at "
+        f"{1000 * g.cable_eccentricity_m:g} mm eccentricity whose shortening is r_M times the servo angle{gear} "
+        f"(E 3.11); the servo is the second-order model of 3.2.4 (wn {a.servo_wn_rad_s:g} rad/s, zeta "
+        f"{a.servo_zeta:g}) driven by integer commands latched on {1000 * a.serial_period_s:g} ms serial frames; "
+        + (f"its {count} gauges go through their " if count > 1 else "its gauge goes through its ")
+        + f"{'/'.join(bridges)} bridge{'s' if len(bridges) > 1 else ''}, a "
+        f"per-channel gain and offset, the {s.amplifier_lowpass_hz:g} Hz low-pass and a {s.adc_bits}-bit "
+        f"{s.adc_range_v[0]:g}..{s.adc_range_v[1]:g} V ADC, with seeded white noise and drift. Support masses, "
+        "housing stiffness and damping, cable compliance and channel gains: "
+        + (
+            "the thesis's fitted calibration scaled to this digit's description (`flexdigit params FILE` prints it; "
+            "`flexdigit calibrate --params` fits them to a digit's own records)."
+            if default_calibration_source() in ("packaged", DERIVED_CALIBRATION_SOURCE)
+            else f"the calibration given ({default_calibration_source()})."
+        )
+    )
+
+
+def _sweep_note(sweep) -> str:
+    """What the actuation sweep's lines are fitted through: its own commands (8..43 on the thesis rig)."""
+    cmds = sweep.column("command")
+    return f"Straight line through this digit's simulated sweep, commands {int(cmds.min())}..{int(cmds.max())}."
+
+
+def _release_entries(study, e: list, thesis_rig: bool = True) -> None:
     """Tables 3.1 and 3.2 from simulated release tests fitted like measurements."""
     why = (
         "The twin is calibrated to this figure; a miss means the calibration and the time integration disagree "
@@ -94,9 +145,10 @@ def _release_entries(study, e: list) -> None:
     )
     for housing, table, key in ((False, "3.1", "without_housing"), (True, "3.2", "with_housing")):
         fit = study.releases[housing]
+        beside = f", table {table} average" if thesis_rig else f"; table {table} is the thesis rig's"
         note = (
             f"Median over the gauges of identify's lsq fit (as flexdigit identify release and flexdigit calibrate) "
-            f"to a simulated release test (20 mm tip deflection), table {table} average."
+            f"to a simulated release test (20 mm tip deflection){beside}."
             + (
                 f" Gauges not identified: {', '.join(s['record'] for s in fit.figures['skipped'])}."
                 if fit.figures["skipped"]
@@ -117,6 +169,10 @@ def _release_entries(study, e: list) -> None:
                 discrepancy_note=why,
             ),
             compare(f"twin.release_{key}.zeta", "3.1.2", z_t, fit.zeta, "", rtol=0.03, note=note, discrepancy_note=why),
+        ]
+        if not thesis_rig:  # the correlation with the thesis rig's model says nothing about this digit
+            continue
+        e += [
             new(
                 f"twin.release_{key}.corr2_vs_thesis_model",
                 "3.1.2",
@@ -128,16 +184,13 @@ def _release_entries(study, e: list) -> None:
         ]
 
 
-_SWEEP_NOTE = "Straight line through this digit's simulated sweep, commands 8..43."
-
-
-def _sweep_entries(study, fits, e: list) -> None:
-    """E 3.20-3.22 from the simulated actuation sweep."""
+def _sweep_entries(study, fits, e: list, digit_note: str) -> None:
+    """E 3.20-3.22 from the simulated actuation sweep (``digit_note``: the lines' note on another digit)."""
     for g, (fit, (slope, offset)) in enumerate(zip(fits, study.sweep_fits, strict=True), start=1):
         if fit is None:  # a digit other than the thesis rig: E 3.20-3.22 are the thesis rig's gauges
             e += [
-                new(f"twin.sweep.gauge{g}.slope_v_per_command", "3.4.3", slope, "V/command", _SWEEP_NOTE),
-                new(f"twin.sweep.gauge{g}.offset_v", "3.4.3", offset, "V", _SWEEP_NOTE + " Intercept."),
+                new(f"twin.sweep.gauge{g}.slope_v_per_command", "3.4.3", slope, "V/command", digit_note),
+                new(f"twin.sweep.gauge{g}.offset_v", "3.4.3", offset, "V", digit_note + " Intercept."),
             ]
             continue
         e += [
@@ -227,8 +280,34 @@ _CHECKS = (
 )
 
 
-def _check_entries(checks: dict) -> list:
-    return [new(f"twin.check.{name}_rel_error", section, checks[name], "", note) for name, section, note in _CHECKS]
+#: On a digit other than the thesis rig: what the closed-form checks are of.
+_DIGIT_CHECK_NOTE = " A check of the twin's chain on a uniform 240 mm strip, the same for every digit."
+
+
+def _check_entries(checks: dict, more: str = "") -> list:
+    return [
+        new(f"twin.check.{name}_rel_error", section, checks[name], "", note + more) for name, section, note in _CHECKS
+    ]
+
+
+def _digit_tables(tables) -> list:
+    """The study's tables on a digit other than the thesis rig: a calibration nothing was fitted for has no
+    residuals (left out) and its parameters were scaled, not fitted (the title says so)."""
+    import dataclasses
+
+    out = []
+    for table in tables:
+        if table.key == "twin.calibration_residuals" and not table.rows:
+            continue
+        if table.key == "twin.calibration_parameters" and default_calibration_source() == DERIVED_CALIBRATION_SOURCE:
+            table = dataclasses.replace(
+                table,
+                title="Calibration (the thesis's fit scaled to this digit's description, "
+                "as `flexdigit params FILE` prints it): its parameters (one row per element of a per-section or "
+                "per-gauge parameter)",
+            )
+        out.append(table)
+    return out
 
 
 def _release_figure(ctx: ReportContext, release):
@@ -250,17 +329,18 @@ def _release_figure(ctx: ReportContext, release):
             z = thesis_value(f"digit.release_tests_{key}.zeta_avg")
             model = second_order_response(t, "release", wn, z, gauge2.offset, gauge2.amplitude, gauge2.t0_s)
             ax.plot(t, model, "--", lw=0.8, label=f"thesis model: wn {wn:.2f} rad/s, zeta {z:.4f}")
-        ax.set_title("with housing (table 3.2)" if housing else "without housing (table 3.1)")
+        title = "with housing (table 3.2)" if housing else "without housing (table 3.1)"
+        ax.set_title(title if ctx.thesis_rig else title.split(" (")[0])
         ax.set_ylabel(f"{name} (V)")
         ax.legend(loc="upper right", fontsize=8)
     axes[1].set_xlabel("time (s)")
     fig.tight_layout()
-    return ctx.save_figure(
-        fig,
-        "twin_release_tests",
-        "Simulated release tests beside the thesis's second-order models.",
-        thesis_ref="figure 3.6",
+    caption = (
+        "Simulated release tests beside the thesis's second-order models."
+        if ctx.thesis_rig
+        else "This digit's simulated release tests, with and without its housing (one gauge through the sensor chain)."
     )
+    return ctx.save_figure(fig, "twin_release_tests", caption, thesis_ref="figure 3.6")
 
 
 def _sweep_figure(ctx: ReportContext, sweep, fits):
@@ -278,9 +358,20 @@ def _sweep_figure(ctx: ReportContext, sweep, fits):
     ax.set_ylabel("gauge voltage (V)")
     ax.legend(fontsize=8, ncol=2)
     fig.tight_layout()
-    return ctx.save_figure(
-        fig, "twin_actuation_sweep", "Simulated actuation sweep beside E 3.20-3.22.", thesis_ref="figure 3.17"
+    caption = (
+        "Simulated actuation sweep beside E 3.20-3.22."
+        if ctx.thesis_rig
+        else f"This digit's simulated actuation sweep, commands {int(cmds.min())}..{int(cmds.max())}, every gauge."
     )
+    return ctx.save_figure(fig, "twin_actuation_sweep", caption, thesis_ref="figure 3.17")
+
+
+def _shape_commands(ctx: ReportContext) -> tuple[int, ...]:
+    """Six commands over the digit's operating range (the thesis rig's 8, 15, ..., 43)."""
+    if ctx.thesis_rig:
+        return (8, 15, 22, 29, 36, 43)
+    low, high = ctx.params.actuator.operating_commands
+    return tuple(dict.fromkeys(int(round(c)) for c in np.linspace(low, high, 6)))
 
 
 def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int, orientation: str = "vertical"):
@@ -290,7 +381,7 @@ def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int, orientat
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
     s = np.linspace(0.0, params.geometry.digit_length_m, 60)
-    for command in (8, 15, 22, 29, 36, 43):
+    for command in _shape_commands(ctx):
         twin = Twin(params, cal, command=command, orientation=orientation)
         xy = twin.chain.positions(twin.state()[0], s) * 1e3
         left.plot(xy[:, 1], xy[:, 0], label=f"command {command}")
@@ -301,9 +392,11 @@ def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int, orientat
     left.set_aspect("equal")
     left.legend(fontsize=7)
     left.set_title("twin: digit shape (dots: gauges)")
+    a = params.actuator
+    step_from, step_to = a.command_min, min(a.command_max, a.command_min + 51)  # the thesis rig's 0 -> 51
     res = ex.servo_step_test(
-        command_from=0,
-        command_to=51,
+        command_from=step_from,
+        command_to=step_to,
         duration_s=1.0,
         seed=seed,
         params=params,
@@ -312,21 +405,34 @@ def _shapes_and_step_figure(ctx: ReportContext, params, cal, seed: int, orientat
     )
     t = res.column("time_s")
     pot = res.column("pot_v")
-    step_at = float(t[np.argmax(res.column("command") == 51)])
-    num, den = thesis_value("actuator.model.mt_num"), thesis_value("actuator.model.mt_den")
+    step_at = float(t[np.argmax(res.column("command") == step_to)])
+    if ctx.thesis_rig:
+        num, den = thesis_value("actuator.model.mt_num"), thesis_value("actuator.model.mt_den")
+        model_label = "MT(s) of 3.2.4 from the command's arrival"
+    else:  # this digit's servo (its wn and zeta), not the thesis rig's printed MT(s)
+        mt = servo_tf(params, form="unit")
+        num, den = mt.num[0][0], mt.den[0][0]
+        model_label = (
+            f"its servo's MT(s) (wn {a.servo_wn_rad_s:g} rad/s, zeta {a.servo_zeta:g}) from the command's arrival"
+        )
     tt = np.linspace(0, t[-1] - step_at, 400)
     _, y = scipy.signal.step((num, den), T=tt)
     p0, p1 = pot[: max(1, int(np.argmax(t >= step_at)))].mean(), pot[-50:].mean()
     right.plot(t, pot, lw=0.6, label="twin potentiometer (with noise)")
-    right.plot(tt + step_at, p0 + (p1 - p0) * y, "--", label="MT(s) of 3.2.4 from the command's arrival")
+    right.plot(tt + step_at, p0 + (p1 - p0) * y, "--", label=model_label)
     right.set_xlabel("time (s)")
     right.set_ylabel("potentiometer (V)")
-    right.set_title("servo step 0 -> 51")
+    right.set_title(f"servo step {step_from} -> {step_to}")
     right.legend(fontsize=7)
     fig.tight_layout()
     return ctx.save_figure(
         fig,
         "twin_shapes_and_servo_step",
-        "Digit shapes over the operating commands; a servo step beside MT(s).",
+        "Digit shapes over the operating commands; a servo step beside MT(s)."
+        + (
+            ""
+            if ctx.thesis_rig
+            else f" Commands {', '.join(str(c) for c in _shape_commands(ctx))}; mounted {orientation}."
+        ),
         thesis_ref="figure 3.12",
     )

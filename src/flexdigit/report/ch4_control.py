@@ -10,12 +10,15 @@ import numpy as np
 from flexdigit.control._lsim import step_output
 from flexdigit.control.analysis import loop_maps, root_locus
 from flexdigit.control.chapter4_studies import chapter4_study
+from flexdigit.control.design20ms import digit_mount
+from flexdigit.control.design_plot import design_figure
 from flexdigit.control.generalized import filter_weight
-from flexdigit.control.thesis_designs import printed_controller
+from flexdigit.control.thesis_designs import digit_hinf_summary, printed_controller
+from flexdigit.errors import DesignError
 from flexdigit.models.plant import build_plant
 from flexdigit.reference import thesis_value
 from flexdigit.report import results
-from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
 
 _BLOCK_P = (
     "a block diagram, no data: the generalized plant P of 4.4 is built here from its state-space formula, and its "
@@ -70,7 +73,10 @@ def _half_last_digit(printed: float) -> float:
 
 
 def build(ctx: ReportContext) -> Chapter:
-    """Chapter 4 from :func:`flexdigit.control.chapter4_studies.chapter4_study`: entries, tables and figures."""
+    """Chapter 4 from :func:`flexdigit.control.chapter4_studies.chapter4_study`: entries, tables and figures; on a
+    digit other than the thesis rig, 4.4's design on that digit's plant (:func:`_digit_chapter`)."""
+    if not ctx.thesis_rig:
+        return _digit_chapter(ctx)
     study = chapter4_study(fast=ctx.fast, seed=ctx.seed)
     ch = Chapter("ch4", "Controller design (H-infinity, thesis chapter 4)")
     ch.paragraphs.append(
@@ -88,6 +94,156 @@ def build(ctx: ReportContext) -> Chapter:
     _figures(ctx, study, ch)
     ch.paragraphs.insert(0, _where_the_figures_are(ch))
     return ch
+
+
+#: The error-filter cut-offs of the thesis's sweep (4.7), each designed on a digit's own plant.
+DIGIT_FILTERS_HZ = (0.5, 5.0, 39.0, 50.0)
+SECTION_DIGIT = "4.4 (this digit)"
+
+
+def _digit_chapter(ctx: ReportContext) -> Chapter:
+    """Chapter 4 on a digit other than the thesis rig: the design of 4.4 on its own plant, built the thesis's way
+    from its components, at each cut-off of 4.7's sweep
+    (:func:`flexdigit.control.thesis_designs.digit_hinf_summary`, as ``flexdigit design hinf --params`` reports it).
+    The thesis's printed plant, tables 4.1-4.3 and printed controllers are its rig's: none of them is shown here."""
+    ch = Chapter("ch4", "Controller design (H-infinity on this digit's plant, thesis chapter 4's way)")
+    mount = digit_mount(ctx.params)
+    designs: dict[float, dict] = {}
+    refused: dict[float, str] = {}
+    for hz in DIGIT_FILTERS_HZ:
+        try:
+            designs[hz] = digit_hinf_summary(hz, ctx.params, orientation=mount)
+        except DesignError as exc:  # the central controller does not stabilise this plant: said, not drawn
+            refused[hz] = str(exc)
+    first = next(iter(designs.values()), None)
+    plant_text = ""
+    if first is not None:
+        plant_text = (
+            f" Its plant: gauge-1 deflection per command, DC gain {1000 * first['plant_dc_gain_m_per_command']:.4g} "
+            f"mm per command, E(s) of wn {first['digit_wn_rad_s']:.4g} rad/s (the digit's release mode from its "
+            f"twin, mounted {'tip up' if mount == 'vertical' else mount}), poles "
+            + ", ".join(f"{re:.3g}{im:+.3g}j" for re, im in first["plant_poles"])
+            + " rad/s."
+        )
+    ch.paragraphs.append(
+        "The thesis's chapter 4 analyses its own rig: its printed plant G(s), the K1 loop of table 4.1 and the "
+        "controllers of tables 4.2-4.3 (with their 10x gain). None of those is this digit's, so none is shown "
+        "here. Instead the design of 4.4 (error filter F(s) = 1/(s + 2 pi f_c), regularised as the thesis's printed "
+        "controllers: 39 Hz at the 39 Hz one's eps_u and gamma margin, every other cut-off at the 5 Hz one's) "
+        "is repeated on this digit's own plant, "
+        "built the thesis's way from its components (servo, cable with its gearing, the digit's mode, gauge "
+        f"chain), at each cut-off of 4.7's sweep ({', '.join(f'{hz:g}' for hz in DIGIT_FILTERS_HZ)} Hz); "
+        "`flexdigit design hinf --params FILE --filter-hz F` gives each design." + plant_text
+    )
+    if first is not None:
+        ch.entries += [
+            results.new(
+                "hinf.digit.plant_dc_gain_mm_per_command",
+                SECTION_DIGIT,
+                1000 * first["plant_dc_gain_m_per_command"],
+                "mm/command",
+                "The digit's plant G(0): gauge-1 deflection per servo command, from its components.",
+            ),
+            results.new(
+                "hinf.digit.wn_rad_s",
+                SECTION_DIGIT,
+                first["digit_wn_rad_s"],
+                "rad/s",
+                "wn of the digit's E(s) in its plant: its twin's release mode (or its file's [dynamics]).",
+            ),
+        ]
+    for hz, d in designs.items():
+        _digit_design_entries(hz, d, ch.entries)
+    for hz, why in refused.items():
+        ch.entries.append(
+            results.new(f"hinf.k_{hz:g}hz.design", SECTION_DIGIT, "not stabilising", "", why.split(": ", 1)[-1])
+        )
+    ch.paragraphs.append(
+        "The mixed-sensitivity design of 4.8 and the servo-ready comparison are the thesis rig's and are not "
+        "repeated; this digit's own controller is chapter 5's 20 ms design (`flexdigit design 20ms --params FILE`)."
+    )
+    if designs:
+        ch.tables.append(_digit_design_table(designs))
+        _digit_figure(ctx, ch, designs)
+    return ch
+
+
+def _digit_design_entries(hz: float, d: dict, E: list) -> None:
+    """One filter's design on the digit: gamma, its controller's poles, the loop's norms and settling."""
+    key = f"{hz:g}hz"
+    where = f"the {hz:g} Hz design on this digit's plant"
+    E += [
+        results.new(f"hinf.k_{key}.gamma_opt", SECTION_DIGIT, d["gamma_opt"], "m/m", f"Optimal gamma of {where}."),
+        results.new(
+            f"hinf.k_{key}.gamma",
+            SECTION_DIGIT,
+            d["gamma"],
+            "m/m",
+            f"Its central controller's level (margin {d['margin']:.3g}).",
+        ),
+    ]
+    for i, (re, im) in enumerate(d["controller_poles"]):
+        E.append(
+            results.new(
+                f"hinf.k_{key}_pole_{i}_abs",
+                SECTION_DIGIT,
+                math.hypot(re, im),
+                "rad/s",
+                f"|pole| of the controller of {where}: {re:.4g} {im:+.4g}j.",
+            )
+        )
+    E += [
+        results.new(f"hinf.k_{key}.tzw_peak_db", SECTION_DIGIT, d["tzw_peak_db"], "dB", f"||T_zw|| of {where}."),
+        results.new(
+            f"hinf.k_{key}.tzw_peak_rad_s", SECTION_DIGIT, d["tzw_peak_rad_s"], "rad/s", "Where ||T_zw|| peaks."
+        ),
+        results.new(f"hinf.k_{key}.tpq_peak_db", SECTION_DIGIT, d["tpq_peak_db"], "dB", f"||T_pq|| of {where}."),
+        results.new(
+            f"hinf.k_{key}.additive_tolerance_percent",
+            "4.7 (this digit)",
+            d["additive_tolerance_relative_percent"],
+            "%",
+            f"Additive uncertainty {where} tolerates, 1/||T_pq|| (small gain) as a share of |G(0)|: "
+            f"{d['additive_tolerance_m_per_command']:.3g} m/command.",
+        ),
+        results.new(
+            f"hinf.k_{key}.tyw_settling_s",
+            SECTION_DIGIT,
+            d["tyw_settling_s"] if math.isfinite(d["tyw_settling_s"]) else "not settled within 3 s",
+            "s",
+            "2 % settling time of T_yw's step, over 3 s.",
+        ),
+    ]
+
+
+def _digit_design_table(designs: dict[float, dict]):
+    columns = ("filter_hz", "gamma_opt", "gamma", "tzw_peak_db", "tzw_peak_rad_s", "tpq_peak_db")
+    columns += ("additive_tolerance_m_per_command", "additive_tolerance_percent", "tyw_settling_s")
+    rows = tuple(
+        (hz, d["gamma_opt"], d["gamma"], d["tzw_peak_db"], d["tzw_peak_rad_s"], d["tpq_peak_db"])
+        + (d["additive_tolerance_m_per_command"], d["additive_tolerance_relative_percent"], d["tyw_settling_s"])
+        for hz, d in designs.items()
+    )
+    return ResultTable(
+        "hinf.digit_designs", "4.4's design on this digit's plant, per error-filter cut-off", columns, rows
+    )
+
+
+def _digit_figure(ctx: ReportContext, ch: Chapter, designs: dict[float, dict]) -> None:
+    """The 5 Hz design (or the first that stabilises) on the digit: its step and loop, as ``design hinf --plot``."""
+    hz = 5.0 if 5.0 in designs else next(iter(designs))
+    d = designs[hz]
+    plant = ct.tf(d["plant_num"], d["plant_den"])
+    controller = ct.tf(d["controller_num"], d["controller_den"])
+    fig = design_figure(plant, controller, output_unit="m", title=f"H-inf design on this digit, filter {hz:g} Hz")
+    ch.figures.append(
+        ctx.save_figure(
+            fig,
+            "ch4_digit_design",
+            f"The {hz:g} Hz design of 4.4 on this digit's plant: closed-loop step (gauge-1 deflection, command) and "
+            "the loop's Bode plot",
+        )
+    )
 
 
 def _where_the_figures_are(ch: Chapter) -> str:

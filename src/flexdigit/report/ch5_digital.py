@@ -24,6 +24,16 @@ def build(ctx: ReportContext) -> Chapter:
 
     study = chapter5_study(ctx.params, seed=int(ctx.rng(5).integers(1, 1000)), fast=ctx.fast)
     chapter = Chapter(slug="ch5-digital", title="Chapter 5: the digital controller and control at 20 ms")
+    if not ctx.thesis_rig:  # 5.1's study digitises the thesis's printed controller on its printed plant
+        chapter.paragraphs.append(
+            "The sample-period study of 5.1 (the printed 39 Hz controller digitised by Tustin and forward Euler "
+            "around the printed plant G(s)) is the thesis rig's: it is in the thesis rig's report, not here. This "
+            "chapter closes this digit's own loop at the servo board's 20 ms on its twin."
+        )
+        _twenty_ms(ctx, study, chapter)
+        chapter.tables.extend(t for t in study.tables if t.key != "rig.sample_period_study")
+        chapter.figures.append(_fig_twenty_ms(ctx, plt, study.twenty_ms))
+        return chapter
     chapter.paragraphs.append(
         "The printed 39 Hz H-infinity controller K(s) (4.7) is digitised by Tustin (5.1.1, E 5.1) and by forward "
         "Euler (5.1.2, the state-space method 5.2 implemented) and closed around the printed plant G(s) held by a "
@@ -220,9 +230,15 @@ def _twenty_ms(ctx, study, chapter: Chapter) -> None:
         f"the command grid{where}; the controller must end on the nearest command, so the quantiser has no "
         "hysteresis."
     )
+    model = (
+        "the servo model held by a ZOH"
+        if ctx.thesis_rig
+        else "the servo and this digit's chain linearised about its operating point (its modes below the Nyquist "
+        "frequency kept, as `flexdigit design 20ms --params FILE` designs it), held by a ZOH"
+    )
     chapter.paragraphs.append(
         "Control at the servo board's 20 ms: designed directly in discrete time on "
-        "the servo model held by a ZOH with one sample of transport delay; LQR state feedback with a rate penalty; "
+        f"{model} with one sample of transport delay; LQR state feedback with a rate penalty; "
         "a Kalman predictor with a constant input disturbance for offset-free tracking (no integrator to overshoot "
         "or wind up); the observer is fed the command actually sent (saturated and rounded), so the integer "
         "command causes no limit cycle. Measured on the "
@@ -255,6 +271,11 @@ def _twenty_ms(ctx, study, chapter: Chapter) -> None:
                 "Plant gain x0.7 / x1.3 emulated at the actuator (the controller is not told).",
             )
         )
+    _thesis_controller_entries(ctx, study, runs, e)
+
+
+def _thesis_controller_entries(ctx, study, runs, e: list) -> None:
+    """The thesis's 39 Hz controller at 20 ms on the twin, by forward Euler and by Tustin."""
     e.append(
         new(
             "thesis39_euler_20ms.peak_deg",
@@ -263,20 +284,26 @@ def _twenty_ms(ctx, study, chapter: Chapter) -> None:
             "deg",
             "The thesis's state-space (forward Euler) controller at 20 ms on the twin: "
             + (
-                "the command bangs between 0 and 254 - the instability figure 5.7 shows."
+                f"the command bangs between {ctx.params.actuator.command_min} and {ctx.params.actuator.command_max}"
+                " - the instability figure 5.7 shows."
                 if _bangs(runs[("thesis39-euler", 1.0)], ctx.params)
                 else "on this digit its command does not bang between its limits."
             ),
         )
     )
+    tustin = runs[("thesis39-tustin", 1.0)].metrics
+    moved = abs(tustin.final_error_deg + 30.0) > study.twenty_ms.deg_per_command  # more than a command from 0
     e.append(
         new(
             "thesis39_tustin_20ms.final_error_deg",
             "5.2",
-            runs[("thesis39-tustin", 1.0)].metrics.final_error_deg,
+            tustin.final_error_deg,
             "deg",
             "Tustin at 20 ms is stable, but the printed design's DC loop gain (~3e-4) asks for far less "
-            "than one command: the digit does not move.",
+            "than one command: the digit does not move."
+            if ctx.thesis_rig or not moved
+            else "The thesis's 39 Hz controller, Tustin at 20 ms, on this digit's twin: it moves the digit, and "
+            "ends this far from 30 deg.",
         )
     )
 

@@ -161,6 +161,7 @@ def _contact_study(ctx, digit: DigitSetting | None) -> tuple[dict, float]:
 
 def _contact(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
     c, step = _contact_study(ctx, digit)
+    command = 20 if digit is None else digit.command(12)  # the thesis's command 20, laid out on the digit
     e = ch.entries
     forces = " and ".join(f"{f:g}" for f in np.unique(-c["force_n"]))
     pub = studies.PUBLISHED
@@ -175,7 +176,7 @@ def _contact(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
             )
         )
         _zones(c, e, forces, step)
-        _contact_figure(ctx, ch, plt, c)
+        _contact_figure(ctx, ch, plt, c, command)
         return
     e.append(
         new(
@@ -215,7 +216,8 @@ def _contact(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
                 1000 * c["band_rms_position_m"],
                 "mm",
                 f"between gauge 2 and the tip support ({1000 * c['band_m'][0]:.0f}-{1000 * c['band_m'][1]:.0f} "
-                f"mm); best published {1000 * pub['location_m']:.1f} mm (1 % of the length)",
+                f"mm); best published {1000 * pub['location_m']:.1f} mm (1 % of "
+                + ("the length)" if digit is None else f"the thesis rig's {1000 * THESIS_LENGTH_M:.0f} mm)"),
             )
         )
     _zones(c, e, forces, step)
@@ -225,7 +227,7 @@ def _contact(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
             "the first two gauges, or past the only one, only the product of force and lever is seen; on the tip "
             "support only the force. Where the gauges see the contact, the estimate against its Cramer-Rao bound."
         )
-        _contact_figure(ctx, ch, plt, c)
+        _contact_figure(ctx, ch, plt, c, command)
         return
     ch.paragraphs.append(
         "Which contacts the gauges cannot see: before gauge 1 (45 mm) "
@@ -235,7 +237,7 @@ def _contact(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
         "and in the last section a distant rival explains the reading nearly as well (ambiguous). Where the gauges "
         "see the contact the estimate is at its Cramer-Rao bound."
     )
-    _contact_figure(ctx, ch, plt, c)
+    _contact_figure(ctx, ch, plt, c, command)
 
 
 def _zones(c: dict, e: list, forces: str, step: float) -> None:
@@ -251,8 +253,8 @@ def _zones(c: dict, e: list, forces: str, step: float) -> None:
         )
 
 
-def _contact_figure(ctx, ch, plt, c: dict) -> None:
-    """The contact study's position error beside its Cramer-Rao bound along the digit."""
+def _contact_figure(ctx, ch, plt, c: dict, command: int = 20) -> None:
+    """The contact study's position error beside its Cramer-Rao bound along the digit, read at ``command``."""
     fig, ax = plt.subplots(figsize=(7, 3.6))
     for f, marker in zip(np.unique(c["force_n"])[::-1], "os", strict=False):
         rows = c["force_n"] == f
@@ -262,16 +264,24 @@ def _contact_figure(ctx, ch, plt, c: dict) -> None:
         ax.semilogy(1000 * c["position_m"][rows], 1000 * c["crlb_position_m"][rows], "-", label=f"Cramer-Rao, {-f:g} N")
     for x in ctx.params.geometry.gauge_positions_m:
         ax.axvline(1000 * x, color="0.7", lw=0.8)
-    ax.axhline(1000 * studies.PUBLISHED["location_m"], color="k", ls=":", label="best published (1 % of length)")
+    published = 1000 * studies.PUBLISHED["location_m"]
+    ax.axhline(published, color="k", ls=":", label=_published_label(ctx, published))
     ax.set(xlabel="contact position from the base (mm)", ylabel="position error (mm)", ylim=(0.1, 300))
     ax.legend(fontsize=7, ncol=2)
     ch.figures.append(
         ctx.save_figure(
             fig,
             "palpation_contact_map",
-            "Contact position: error and bound along the digit (25 readings, command 20; gauges grey)",
+            f"Contact position: error and bound along the digit (25 readings, command {command}; gauges grey)",
         )
     )
+
+
+def _published_label(ctx, published_mm: float) -> str:
+    """The published figure's legend: 1 % of the thesis rig's length, which is not 1 % of another digit's."""
+    if ctx.thesis_rig:
+        return "best published (1 % of length)"
+    return f"best published {published_mm:.1f} mm (1 % of the thesis rig's {1000 * THESIS_LENGTH_M:.0f} mm)"
 
 
 def _classification(ctx, ch, digit: DigitSetting | None = None) -> None:
@@ -517,6 +527,14 @@ def estimate_label(run) -> str:
     return "estimate (one reading)" if averaged == 1 else f"estimate (mean of {averaged} readings)"
 
 
+def _commands_text(commands) -> str:
+    """``"commands 0, 20 and 40"``: the commands a study read, in words."""
+    words = [str(int(c)) for c in commands]
+    if len(words) == 1:
+        return f"command {words[0]}"
+    return f"commands {', '.join(words[:-1])} and {words[-1]}"
+
+
 def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
     on = {}
     if digit is not None:  # the hangs of chapter 7 (tip down or level, as TwinGaugeModel's default)
@@ -526,13 +544,24 @@ def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
         }
     a = studies.active_study(samples=500 if ctx.fast else 1000, repetitions=10, seed=ctx.seed, **on)
     e = ch.entries
+    commands = _commands_text(a["commands"])
+    if digit is None:
+        settings = "table 7.1's settings"
+        single = "one reading at one command (chapter 7's 22.5 mm is this over its test split)"
+    else:  # the hangs active_study lays out on the digit (palpation_studies.active_study)
+        reach_mm = 1000 * min(0.18, 2.0 * digit.length_m / 3.0)
+        settings = (
+            f"25 and 37.5 g hung every {1000 * HANG_STEP_M:.0f} mm from the tip to {reach_mm:.0f} mm from it "
+            "(table 7.1's settings on this digit)"
+        )
+        single = "one reading at one command"
     e.append(
         new(
             "palpation.active.bayes_position_mm",
             SECTION,
             _resolved(a["position_rmse_m"], HANG_STEP_M, 1000.0),
             "mm",
-            "table 7.1's settings read at commands 0, 20 and 40 under one hang (chapter 7's actuated noise)",
+            f"{settings} read at {commands} under one hang (chapter 7's actuated noise)",
         )
     )
     e.append(
@@ -541,7 +570,7 @@ def _active(ctx, ch, digit: DigitSetting | None = None) -> None:
             SECTION,
             1000 * a["single_position_rmse_m"],
             "mm",
-            "the same settings, one reading at one command (chapter 7's 22.5 mm is this over its test split)",
+            f"the same settings, {single}",
         )
     )
     e.append(

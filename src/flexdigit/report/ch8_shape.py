@@ -13,6 +13,7 @@ import warnings
 import numpy as np
 
 from flexdigit.errors import ConvergenceWarning
+from flexdigit.palpation.palpation import digit_command
 from flexdigit.params import RigParams
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext, ResultTable
@@ -33,7 +34,7 @@ def build(ctx: ReportContext) -> Chapter:
     with warnings.catch_warnings(record=True) as unsettled:  # said in words below, not a warning with a path
         warnings.simplefilter("always", ConvergenceWarning)
         acc = shape_accuracy(commands, positions, 0.025, seed=ctx.seed, params=ctx.params)
-        figure = _figure(ctx)
+        figure = _figure(ctx, acc.mount)
     summary = acc.summary()
     chapter.paragraphs.append(
         f"The centre line is estimated from the {ctx.gauges_text.replace('gauge', 'gauge voltage')} and the servo "
@@ -45,21 +46,36 @@ def build(ctx: ReportContext) -> Chapter:
         f"taut, one draw of its cable-guide friction; seed {ctx.seed}) at commands {commands[0]}..{commands[-1]}: "
         f"the bare digit {'hanging tip down (it buckles tip up)' if acc.mount == 'hanging' else 'upright'} and "
         "horizontal, and a 25 g weight every "
-        f"{10 * (3 if ctx.fast else 1)} mm along the horizontal digit (chapters 6-7's mounting)."
+        f"{1000 * (positions[1] - positions[0]):.3g} mm along the horizontal digit (chapters 6-7's mounting)."
     )
     _accuracy_table(chapter, summary, commands)
-    _weight_entries(chapter, acc)
+    _weight_entries(chapter, acc, ctx.thesis_rig)
     chapter.paragraphs.append(
         "The shape is good to a millimetre or two wherever the weight's moment is seen, and the load's position "
         "is not: with the cable taut its guide friction (fitted to chapter 7's corr2) moves each gauge by as much "
         "as a 25 g weight a centimetre away does, and between gauges 1 and 2 position and mass trade off. The "
         "shape survives because a misplaced load of the wrong mass bends the digit almost as the true one does."
+        if ctx.thesis_rig
+        else _digit_findings(chapter)
     )
     unsettled = [w for w in unsettled if issubclass(w.category, ConvergenceWarning)]
     if unsettled:
         chapter.paragraphs.append(_unsettled_text(ctx, len(unsettled)))
     chapter.figures.append(figure)
     return chapter
+
+
+def _digit_findings(chapter: Chapter) -> str:
+    """What this digit's entries say, in words (the thesis rig's paragraph quotes its own friction and gauges)."""
+    v = {e.key: e.ours for e in chapter.entries}
+    text = (
+        f"On this digit the median tip error is {v['shape.bare_horizontal.tip_error_median_mm']:.2g} mm bare and "
+        f"{v['shape.weight_horizontal.tip_error_median_mm']:.2g} mm with the weight (horizontal); the weight is "
+        f"declared a contact in {100 * v['shape.weight.contact_rate']:.0f} % of its cases"
+    )
+    if "shape.weight.position_error_median_mm" in v:
+        text += f", then placed to a median {v['shape.weight.position_error_median_mm']:.2g} mm"
+    return text + " (its cable-guide friction is the level fitted on the thesis rig)."
 
 
 def _commands(ctx: ReportContext) -> tuple[int, ...]:
@@ -140,7 +156,7 @@ def _accuracy_table(chapter: Chapter, summary, commands: tuple[int, ...]) -> Non
     )
 
 
-def _weight_entries(chapter: Chapter, acc) -> None:
+def _weight_entries(chapter: Chapter, acc, thesis_rig: bool = True) -> None:
     """How often a hung weight is declared a contact, and how well it is then placed."""
     located = acc.contact & (acc.mass_kg > 0)
     err_mm = np.abs(acc.load_position_error_m[located]) * 1e3
@@ -163,14 +179,15 @@ def _weight_entries(chapter: Chapter, acc) -> None:
                 SECTION,
                 float(np.median(err_mm)),
                 "mm",
-                "median error of the load's position where a contact was declared (one reading, mass unknown); "
-                "chapter 7's estimators reach 22-23 mm at the same friction.",
+                "median error of the load's position where a contact was declared (one reading, mass unknown)"
+                + ("; chapter 7's estimators reach 22-23 mm at the same friction." if thesis_rig else "."),
             )
         )
 
 
-def _figure(ctx: ReportContext):
-    """Three cases: the estimated centre line with its band against the twin's."""
+def _figure(ctx: ReportContext, mount: str = "upright"):
+    """Three cases: the estimated centre line with its band against the twin's; the first one bare as the digit is
+    scored (``mount``: upright, or hanging tip down for a digit that buckles upright)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -178,7 +195,10 @@ def _figure(ctx: ReportContext):
 
     # the load at 200 mm of the thesis rig's 270: the same fraction of another digit
     at_m = 0.20 if ctx.thesis_rig else round(0.20 / 0.27 * ctx.params.geometry.digit_length_m, 3)
-    cases = [("vertical", 0.0, 0.0, 30), ("horizontal", 0.0, 0.0, 20), ("horizontal", 0.025, at_m, 20)]
+    # the thesis rig's commands 30 and 20, as far past this digit's straight command in tip rotation
+    high, low = (30, 20) if ctx.thesis_rig else (digit_command(ctx.params, 30), digit_command(ctx.params, 20))
+    first = "hanging" if mount == "hanging" else "vertical"
+    cases = [(first, 0.0, 0.0, high), ("horizontal", 0.0, 0.0, low), ("horizontal", 0.025, at_m, low)]
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
     for ax, (orientation, mass, position, command) in zip(axes, cases, strict=True):
         volts, sol = static_gauges_v(

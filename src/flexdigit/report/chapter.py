@@ -17,7 +17,19 @@ from flexdigit._result_table import ResultTable
 from flexdigit.params import RigParams
 from flexdigit.report.results import Entry
 
-__all__ = ["Chapter", "Figure", "ReportContext", "ResultTable", "skipped"]
+__all__ = [
+    "Chapter",
+    "Figure",
+    "ReportContext",
+    "ResultTable",
+    "skipped",
+    "DERIVED_CALIBRATION_SOURCE",
+    "without_columns",
+]
+
+#: The twin calibration's source in a report of a digit other than the thesis rig with no calibration given: the
+#: thesis's fit scaled to the digit's description (report.build's use_calibration block).
+DERIVED_CALIBRATION_SOURCE = "derived from the digit's description"
 
 
 @dataclass
@@ -47,6 +59,17 @@ class Chapter:
 def skipped(slug: str, title: str, reason: str) -> Chapter:
     """A chapter that does not apply to the report's digit: no entries, one paragraph saying why."""
     return Chapter(slug=slug, title=title, paragraphs=[f"Skipped for this digit: {reason}"])
+
+
+def without_columns(table: ResultTable, columns: tuple[str, ...]) -> ResultTable:
+    """``table`` with the cells of ``columns`` blank (NaN: "n/a" in index.html, null in results.json): the thesis
+    rig's printed figures in a table of another digit, never beside its own by accident."""
+    import dataclasses
+    import math
+
+    blank = {j for j, name in enumerate(table.columns) if name in columns}
+    rows = tuple(tuple(math.nan if j in blank else cell for j, cell in enumerate(row)) for row in table.rows)
+    return dataclasses.replace(table, rows=rows)
 
 
 @dataclass
