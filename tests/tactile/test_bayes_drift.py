@@ -1,5 +1,7 @@
-"""The localisation Bayes limit counts the gauges' drift the readings carry (issue 24: the thesis rig's network at
-2.9 x a white-noise limit on thesis-6.1, a 774 s run with one no-load block a test).
+"""The gauges' drift in the localisation Bayes limit and the network (issue 24: the thesis rig's network at 2.9 x
+the white-noise limit on thesis-6.1, a 774 s run with one no-load block a test): the drift each reading carries
+against its reference (the limit of a reading whose drift was not learnt, ``drift=True``; the white-noise floor
+stays the default), and ``train`` taring on each test's start block.
 
 References, each independent of the code under test:
 
@@ -149,11 +151,13 @@ def test_limit_counts_the_drift_in_closed_form():
     inner = loaded[(ds["position_from_base_m"][loaded] > 0.06) & (ds["position_from_base_m"][loaded] < 0.14)]
     v = drift_variance_v2(model, ds)[inner, 0]
     expected = np.sqrt(np.mean(1e-6 + v))
-    got = position_bayes_rmse_m(model, ds, inner, samples=4000)
+    got = position_bayes_rmse_m(model, ds, inner, samples=4000, drift=True)
     assert got == pytest.approx(expected, rel=MC_RTOL)
-    white = position_bayes_rmse_m(Linear(1.0, 1e-3), ds, inner, samples=4000)
-    assert white == pytest.approx(1e-3, rel=MC_RTOL)
-    assert got > 1.3 * white
+    floor = position_bayes_rmse_m(model, ds, inner, samples=4000)  # the default: white noise, the floor
+    assert floor == pytest.approx(1e-3, rel=MC_RTOL)
+    assert got > 1.3 * floor
+    with pytest.raises(ValueError, match="span prior only"):
+        position_bayes_rmse_m(model, ds, inner, prior="settings", drift=True)
 
 
 def test_train_tares_on_each_tests_start_block_where_that_validates_better():
