@@ -123,12 +123,9 @@ def _add_train(subparsers, sizes) -> None:
         help="position: m from the tip (loaded readings); position-index: the thesis's position number; "
         "magnitude: kg; contact: load / no load",
     )
-    p.add_argument(
-        "--hidden", type=Flag(sizes.HIDDEN), default=None, help="hidden nodes (default: sweep as the thesis)"
-    )
-    p.add_argument(
-        "--tol", type=Flag(sizes.TOL), default=None, help="'learning gradient' (SCG tolerance; default: sweep)"
-    )
+    hidden, tol = Flag(sizes.HIDDEN), Flag(sizes.TOL)
+    p.add_argument("--hidden", type=hidden, default=None, help="hidden nodes (default: sweep as the thesis)")
+    p.add_argument("--tol", type=tol, default=None, help="'learning gradient' (SCG tolerance; default: sweep)")
     p.add_argument("--seed", type=Flag(SEED), default=0, help="seed of the split and the network's start")
     p.add_argument(
         "--epochs",

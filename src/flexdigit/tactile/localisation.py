@@ -480,7 +480,12 @@ def drift_variance_v2(model, dataset: Dataset, *, tared: bool | None = None) -> 
 
     A protocol that tares before each position leaves under a second of drift (``r^2`` x 1 s is 1 % of the
     thesis chain's white variance); thesis-6.1, one no-load block a test over a 774 s run, leaves ``T/6`` = 129 s
-    of it: 2.3 mV on the thesis chain's 2 mV of white noise.
+    of it: 2.3 mV on the thesis chain's 2 mV of white noise. It is no noise to a network trained on the same run,
+    which learns much of it (a setting's offset, shared by its training and test readings, slow along the
+    protocol's order): on thesis-6.1 (twin seed 0) the thesis rig's network, tared on each test's block, read
+    3.20 mm against a 2.79 mm white-noise limit and 4.58 mm counting this drift (3.54 mm with the twin's drift
+    off). ``position_bayes_rmse_m(drift=True)`` counts it: the limit of one reading of a run whose drift the
+    estimator has not learnt (a new run's).
     """
     n, gauges = len(dataset), dataset.gauge_count
     rate = np.asarray(getattr(model, "drift_v_per_sqrt_s", np.zeros(gauges)), dtype=float)
@@ -522,17 +527,7 @@ SPAN_GRID_MAX = 4000
 SETTINGS_RESOLVED = 1e-3
 
 
-def position_bayes_rmse_m(
-    model,
-    dataset: Dataset,
-    rows,
-    *,
-    samples: int = 4000,
-    seed: int = 0,
-    prior: str = "span",
-    drift: bool = False,
-    tared=None,
-) -> float:
+def position_bayes_rmse_m(model, dataset, rows, *, samples=4000, seed=0, prior="span", drift=False, tared=None):
     """The localisation Bayes limit on the loaded readings ``rows`` of ``dataset``: the RMS position error (m) of the
     best estimator of the position from one reading, averaged over those readings as a trained network's RMSE on
     them is.
@@ -546,19 +541,12 @@ def position_bayes_rmse_m(
     are many noise sigmas apart (a stiff or high-gain digit on the thesis's 1 cm positions scaled) it is near
     zero (the hand-made PEEK digit's 1.4e-11 mm: no draw ever mixed two positions) and no regression of a
     continuous position reaches it; where the positions are closer than the digit resolves (the thesis rig) the
-    two agree. A network scoring under the span limit has learnt the protocol's positions themselves (it snaps
-    to them), which a load between them would not find.
+    two agree. A network under the span limit has learnt the protocol's positions (it snaps to them).
 
-    The readings' noise is the model's (white noise and quantisation for :func:`readings_gauge_model`): the floor
-    of an estimator that knows each setting's offset. The gauges' drift over a run is such an offset, shared by
-    a setting's training and test readings, and a network trained on the run learns much of it: on thesis-6.1
-    (one no-load block a test, a 774 s run) the thesis rig's network tared on each test's block read 3.20 mm
-    against this 2.79 mm floor (3.54 mm on the same protocol with the twin's drift off), and 0.70 x the limit
-    with the drift counted as noise (``drift=True``), which is then no floor. ``drift=True`` (span prior) adds the
-    drift each setting's readings carry against their reference (:func:`drift_variance_v2`, ``tared`` as there):
-    the limit of one reading of a run whose drift the estimator has not learnt (a new run's), which ``train
-    --bayes-limit`` prints beside the floor. The digit must have settled (``settle_s``, ``wait_until_steady``):
-    a swing is noise the limit does not count.
+    The readings' noise is the model's (white noise and quantisation, :func:`readings_gauge_model`): the floor of
+    an estimator that knows each setting's offset. The run's drift is such an offset, which a network trained on
+    the run learns much of (:func:`drift_variance_v2` has the figures); ``drift=True`` counts it as noise, the
+    limit of a reading whose drift was not learnt, no floor. The digit must have settled: a swing is not counted.
 
     Parameters
     ----------
@@ -572,11 +560,8 @@ def position_bayes_rmse_m(
         Monte Carlo readings per setting (the span prior draws a quarter of them: its grid is larger), and their
         seed.
     prior : {"span", "settings"}
-    drift : bool
-        Count the gauges' drift the readings carry (span prior only).
-    tared : bool or None
-        With ``drift``, the drift's reference (:func:`drift_variance_v2`): as read (False), tared (True), or the
-        smaller (None).
+    drift, tared : bool; bool or None
+        Count the drift (span prior only), against ``tared``'s reference (:func:`drift_variance_v2`).
 
     Raises
     ------
