@@ -42,6 +42,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_tactile",
     "benchmarks.bench_digittac",
     "benchmarks.bench_bayes",
+    "benchmarks.bench_netfix",
     "benchmarks.bench_calibrate",
     "benchmarks.bench_calfix",
     "benchmarks.bench_live",

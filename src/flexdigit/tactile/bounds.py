@@ -420,6 +420,7 @@ def span_position_mse_m2(
     samples: int = 1000,
     seed=0,
     chunk: int = 200,
+    extra_variance_v2=None,
 ) -> np.ndarray:
     """Bayes position MSE (m^2) of each loaded setting when the position is continuous over the settings' span.
 
@@ -433,6 +434,12 @@ def span_position_mse_m2(
     Gaussian posterior; tested). ``step_m`` must resolve the posterior (a quarter of the smallest Cramer-Rao
     bound adds under 1 % to the RMS).
 
+    ``extra_variance_v2`` (G,) or (k, G), per setting: a variance its readings carry beyond the model's, independent
+    of the load (the gauges' drift since the readings' reference, :func:`flexdigit.tactile.localisation.
+    drift_variance_v2`), added to the draws and to the posterior's likelihood of that setting's readings alike
+    (the estimator knows how much drift a reading may carry, not which). For the linear gauge the limit becomes
+    ``sqrt(sigma^2 + s^2) / k`` (tested).
+
     Returns an array like ``mass_kg``: the MSE of each loaded setting, NaN for no-load ones.
     """
     a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
@@ -440,6 +447,8 @@ def span_position_mse_m2(
     c = np.broadcast_to(np.asarray(command), a.shape).astype(int)
     if not step_m > 0:
         raise ValueError(f"span_position_mse_m2 needs a positive grid step; got step_m = {step_m}")
+    extra = np.zeros((a.size, 1)) if extra_variance_v2 is None else np.asarray(extra_variance_v2, dtype=float)
+    extra = np.broadcast_to(extra if extra.ndim == 2 else extra[None, :], (a.size, extra.shape[-1]))
     rng = np.random.default_rng(seed)
     out = np.full(a.size, np.nan)
     for value in np.unique(c[m > 0]):
@@ -452,12 +461,13 @@ def span_position_mse_m2(
         # a uniform density in position: the lattice's points weigh alike
         log_prior = np.log(np.tile(counts / counts.sum(), grid.size))
         mean = model.gauges_v(ga, gm, gc)
-        sigma = noise_of(model, ga, gm, gc)
-        log_norm = log_prior - np.sum(np.log(sigma), axis=1)
+        noise2 = noise_of(model, ga, gm, gc) ** 2
         mu = model.gauges_v(a[group], m[group], c[group])
-        sd = noise_of(model, a[group], m[group], c[group])
+        sd = np.sqrt(noise_of(model, a[group], m[group], c[group]) ** 2 + extra[group])
         per = max(1, min(chunk, int(4e6 // mean.size)))  # (draws, grid, gauges) floats held at once
         for i, j in enumerate(group):
+            sigma = np.sqrt(noise2 + extra[j])  # the grid's likelihood of this setting's readings
+            log_norm = log_prior - np.sum(np.log(sigma), axis=1)
             err2 = 0.0
             for start in range(0, samples, per):
                 n = min(per, samples - start)

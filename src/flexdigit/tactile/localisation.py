@@ -25,6 +25,7 @@ from flexdigit.tactile.accuracy import accuracy, corr2, rmse
 from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao, protocol_limits, span_position_mse_m2
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
+from flexdigit.tactile.network_sizes import EPOCHS_MAX, LONGER_GAIN
 from flexdigit.tactile.pipeline import ThesisNetwork, features, run_pipeline, targets, thesis_split
 from flexdigit.tactile.prediction_plot import target_unit
 
@@ -38,6 +39,7 @@ __all__ = [
     "bayes_limits",
     "readings_gauge_model",
     "position_bayes_rmse_m",
+    "drift_variance_v2",
     "SPAN_GRID_MAX",
     "SETTINGS_RESOLVED",
     "train_network",
@@ -102,22 +104,17 @@ def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
     return Dataset(columns, dict(dataset.meta)), since
 
 
-#: ``train``'s chosen network size is trained again with doubled epochs up to this many (:func:`train_network`)
-EPOCHS_MAX = 800
-#: ... and a longer training kept where it lowers the validation MSE by more than this fraction
-LONGER_GAIN = 0.02
-
-
 def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, tol=None, epochs: int = 50):
     """``flexdigit train``'s network: the thesis's pipeline (:func:`~flexdigit.tactile.pipeline.run_pipeline`, no
     error curves) on the dataset's G gauges and, on an actuated protocol, the command.
 
-    On a dataset tared before each position (``tare_each_position``) the network is trained on the readings as
-    read and on the tared ones (:func:`tare`), with the same split and seeds, and the one with the lower
-    validation error is kept, as the thesis chose its hidden nodes: a tare removes the drift between positions
-    but adds its own block's noise to every reading of a position, and which weighs more depends on the digit
-    (a one-gauge digit's network: 1.44 x its Bayes limit as read, 1.14 tared; a 12-bit six-gauge one's 1.03 as
-    read, 1.36 tared). The test readings are not looked at.
+    On a dataset with no-load readings (a block at the start of every test, as the thesis's "no load condition
+    ... measured at the start of every test", 6.5; or one before each position, ``tare_each_position``) the
+    network is trained on the readings as read and on the tared ones (:func:`tare`), with the same split and
+    seeds, and the one with the lower validation error is kept, as the thesis chose its hidden nodes: a tare
+    removes the drift before it but adds its own block's noise to every reading it tares, and which weighs more
+    depends on the digit and the run (a one-gauge digit's network: 1.44 x its Bayes limit as read, 1.14 tared; a
+    12-bit six-gauge one's 1.03 as read, 1.36 tared). The test readings are not looked at.
 
     The size and tolerance are swept at ``epochs`` (the thesis's 50); the chosen size is then trained again
     (its tolerance swept again, unless given) with twice, four times ... the epochs up to :data:`EPOCHS_MAX`,
@@ -134,7 +131,7 @@ def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, 
     inputs = [*dataset.gauge_columns] + (["command"] if actuated else [])
     options = {"seed": seed, "target": target, "curve_hidden": None}
     best = None
-    for tared in (False, True) if dataset.protocol.tare_each_position else (False,):
+    for tared in (False, True) if _has_tares(dataset) else (False,):
         readings = tare(dataset)[0] if tared else dataset
         x = features(readings, with_command=actuated)[rows]
         result = run_pipeline(x, y, epochs=epochs, fixed_hidden=hidden, fixed_tol=tol, **options)
@@ -150,6 +147,14 @@ def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, 
         if trial_mse < (1.0 - LONGER_GAIN) * val_mse:
             val_mse, result = trial_mse, trial
     return result, rows, inputs, tared
+
+
+def _has_tares(dataset: Dataset) -> bool:
+    """Whether every test of ``dataset`` has no-load readings to tare on (:func:`tare` leaves a test without any
+    as read)."""
+    unloaded = dataset["load_kg"] == 0
+    tests = dataset["test"]
+    return bool(len(dataset)) and all(np.any(unloaded[tests == t]) for t in np.unique(tests))
 
 
 def _val_mse(result, x, y) -> float:
@@ -459,6 +464,61 @@ def readings_gauge_model(params=None, calibration=None):
     return model
 
 
+def drift_variance_v2(model, dataset: Dataset, *, tared: bool | None = None) -> np.ndarray:
+    """Variance (V^2) of the gauges' random-walk drift each reading of ``dataset`` carries, (n, G), for a gauge
+    model with ``drift_v_per_sqrt_s`` (the rate ``r`` of :class:`~flexdigit.tactile.bounds.TwinGaugeModel`; zeros
+    without one, or for readings without times).
+
+    Against the readings' reference (what an estimator of one reading can hold its drift to):
+
+    - as read (``tared`` False): the run's mean offset over its loaded readings, which a network trained on them
+      learns as a constant: ``Var(W(t_k) - mean_i W(t_i)) = r^2 (t_k - 2 mean_i min(t_k, t_i) + mean_ij min(t_i,
+      t_j))`` for a Wiener process (about ``r^2 T/6`` on average over a run ``T`` long read evenly);
+    - tared (``tared`` True, :func:`tare`): the drift since the reading's tare, ``r^2 dt``, plus the tare block's
+      own white noise, ``sigma^2 / n`` (``n`` the readings of a tare block; as read in a test without one);
+    - ``tared`` None: the smaller of the two, reading by reading (the best an estimator that may tare can do).
+
+    A protocol that tares before each position leaves under a second of drift (``r^2`` x 1 s is 1 % of the
+    thesis chain's white variance); thesis-6.1, one no-load block a test over a 774 s run, leaves ``T/6`` = 129 s
+    of it: 2.3 mV on the thesis chain's 2 mV of white noise. It is no noise to a network trained on the same run,
+    which learns much of it (a setting's offset, shared by its training and test readings, slow along the
+    protocol's order): on thesis-6.1 (twin seed 0) the thesis rig's network, tared on each test's block, read
+    3.20 mm against a 2.79 mm white-noise limit and 4.58 mm counting this drift (3.54 mm with the twin's drift
+    off). ``position_bayes_rmse_m(drift=True)`` counts it: the limit of one reading of a run whose drift the
+    estimator has not learnt (a new run's).
+    """
+    n, gauges = len(dataset), dataset.gauge_count
+    rate = np.asarray(getattr(model, "drift_v_per_sqrt_s", np.zeros(gauges)), dtype=float)
+    time = np.asarray(dataset["time_s"], dtype=float)
+    if not np.any(rate > 0) or not np.all(np.isfinite(time)) or n == 0:
+        return np.zeros((n, gauges))
+    t = time - time.min()
+    loaded_t = np.sort(t[dataset["load_kg"] > 0]) if np.any(dataset["load_kg"] > 0) else np.sort(t)
+    below = np.r_[0.0, np.cumsum(loaded_t)]
+
+    def mean_min(q):  # mean_i min(q, t_i) over the loaded readings' times, by sorting
+        k = np.searchsorted(loaded_t, q, side="right")
+        return (below[k] + q * (loaded_t.size - k)) / loaded_t.size
+
+    raw = np.maximum(t - 2.0 * mean_min(t) + np.mean(mean_min(loaded_t)), 0.0)
+    white2 = np.asarray(model.noise_v, dtype=float) ** 2
+    since = tare(dataset)[1]
+    block = np.zeros(n)  # readings in the test's tare blocks, on average (0: the test has none)
+    order = np.argsort(dataset["sample"], kind="stable")
+    unloaded = dataset["load_kg"] == 0
+    for test in np.unique(dataset["test"]):
+        rows = order[dataset["test"][order] == test]
+        zero = np.flatnonzero(unloaded[rows])
+        if zero.size:
+            block[rows] = zero.size / np.count_nonzero(np.r_[True, np.diff(zero) != 1])
+    as_read = rate**2 * raw[:, None]
+    with np.errstate(divide="ignore"):
+        tared_v2 = np.where(block[:, None] > 0, rate**2 * since[:, None] + white2 / block[:, None], as_read)
+    if tared is None:
+        return np.minimum(as_read, tared_v2)
+    return tared_v2 if tared else as_read
+
+
 #: The span prior's grid: a quarter of the smallest Cramer-Rao bound (adds under 1 % to the limit), at most this
 #: many points per command's span (beyond, the step is coarser and a limit under two steps is refused).
 SPAN_GRID_MAX = 4000
@@ -467,9 +527,7 @@ SPAN_GRID_MAX = 4000
 SETTINGS_RESOLVED = 1e-3
 
 
-def position_bayes_rmse_m(
-    model, dataset: Dataset, rows, *, samples: int = 4000, seed: int = 0, prior: str = "span"
-) -> float:
+def position_bayes_rmse_m(model, dataset, rows, *, samples=4000, seed=0, prior="span", drift=False, tared=None):
     """The localisation Bayes limit on the loaded readings ``rows`` of ``dataset``: the RMS position error (m) of the
     best estimator of the position from one reading, averaged over those readings as a trained network's RMSE on
     them is.
@@ -483,14 +541,12 @@ def position_bayes_rmse_m(
     are many noise sigmas apart (a stiff or high-gain digit on the thesis's 1 cm positions scaled) it is near
     zero (the hand-made PEEK digit's 1.4e-11 mm: no draw ever mixed two positions) and no regression of a
     continuous position reaches it; where the positions are closer than the digit resolves (the thesis rig) the
-    two agree. A network scoring under the span limit has learnt the protocol's positions themselves (it snaps
-    to them), which a load between them would not find.
+    two agree. A network under the span limit has learnt the protocol's positions (it snaps to them).
 
-    The readings' noise is the model's (white noise and quantisation for :func:`readings_gauge_model`), not the
-    sensors' drift nor a tare's error: each setting's readings are taken within a second (and tared on one block),
-    so a network trained on the same run can learn a setting's offset, and counting it as noise would make the
-    limit no floor (a drawn 7-gauge digit's network at a third of it). The digit must have settled (``settle_s``,
-    ``wait_until_steady``): a swing is noise the limit does not count either.
+    The readings' noise is the model's (white noise and quantisation, :func:`readings_gauge_model`): the floor of
+    an estimator that knows each setting's offset. The run's drift is such an offset, which a network trained on
+    the run learns much of (:func:`drift_variance_v2` has the figures); ``drift=True`` counts it as noise, the
+    limit of a reading whose drift was not learnt, no floor. The digit must have settled: a swing is not counted.
 
     Parameters
     ----------
@@ -504,6 +560,8 @@ def position_bayes_rmse_m(
         Monte Carlo readings per setting (the span prior draws a quarter of them: its grid is larger), and their
         seed.
     prior : {"span", "settings"}
+    drift, tared : bool; bool or None
+        Count the drift (span prior only), against ``tared``'s reference (:func:`drift_variance_v2`).
 
     Raises
     ------
@@ -537,9 +595,11 @@ def position_bayes_rmse_m(
         raise ValueError("position_bayes_rmse_m needs loaded readings (a no-load reading has no position)")
     if prior not in ("span", "settings"):
         raise ValueError(f"position_bayes_rmse_m: prior must be 'span' or 'settings', not {prior!r}")
+    if drift and prior != "span":
+        raise ValueError("position_bayes_rmse_m: the drift is counted with the span prior only")
     if prior == "settings":
         return _settings_limit_m(model, dataset, rows, samples=samples, seed=seed)
-    return _span_limit_m(model, dataset, rows, samples=samples, seed=seed)
+    return _span_limit_m(model, dataset, rows, samples=samples, seed=seed, drift=drift, tared=tared)
 
 
 def _settings_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int) -> float:
@@ -557,9 +617,10 @@ def _settings_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int)
     return limit
 
 
-def _span_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int) -> float:
+def _span_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int, drift: bool, tared=None) -> float:
     """:func:`position_bayes_rmse_m`'s span prior: the grid a quarter of the smallest Cramer-Rao bound (mass
-    known), at most :data:`SPAN_GRID_MAX` points; a limit under two steps refused."""
+    known), at most :data:`SPAN_GRID_MAX` points; with ``drift`` each setting's drift its readings' mean
+    :func:`drift_variance_v2`; a limit under two steps refused."""
     mass = dataset["load_kg"]
     loaded = np.flatnonzero(mass > 0)
     a = np.round(dataset["position_from_base_m"][loaded], 6)
@@ -573,8 +634,20 @@ def _span_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int) -> 
     covered = np.ptp(distinct) if half is None else distinct.size * 2 * half
     step = 0.25 * float(finite.min()) if finite.size else max(covered, 1e-6) / 200
     step = max(step, covered / SPAN_GRID_MAX)
+    extra = None
+    if drift:
+        each = drift_variance_v2(model, dataset, tared=tared)[loaded]
+        extra = np.stack([each[inverse.ravel() == k].mean(axis=0) for k in range(settings.shape[0])])
     mse = span_position_mse_m2(
-        model, a, m, c, step_m=step, half_width_m=half, samples=max(samples // 4, 100), seed=[seed, 13]
+        model,
+        a,
+        m,
+        c,
+        step_m=step,
+        half_width_m=half,
+        samples=max(samples // 4, 100),
+        seed=[seed, 13],
+        extra_variance_v2=extra,
     )
     where = {int(r): int(i) for r, i in zip(loaded, inverse.ravel(), strict=True)}
     limit = float(np.sqrt(np.mean(mse[[where[int(r)] for r in rows]])))
