@@ -19,14 +19,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexdigit._repr import fields_summary
-from flexdigit.errors import DataFileError
+from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
 from flexdigit.tactile.accuracy import accuracy, corr2, rmse
 from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao, protocol_limits, span_position_mse_m2
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.network_sizes import EPOCHS_MAX, LONGER_GAIN
-from flexdigit.tactile.pipeline import ThesisNetwork, features, run_pipeline, targets, thesis_split
+from flexdigit.tactile.pipeline import (
+    ThesisNetwork,
+    features,
+    held_out_positions_split,
+    run_pipeline,
+    targets,
+    thesis_split,
+)
 from flexdigit.tactile.prediction_plot import target_unit
 
 __all__ = [
@@ -104,7 +111,9 @@ def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
     return Dataset(columns, dict(dataset.meta)), since
 
 
-def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, tol=None, epochs: int = 50):
+def train_network(
+    dataset: Dataset, target: str, *, seed: int = 0, hidden=None, tol=None, epochs: int = 50, split: str = "readings"
+):
     """``flexdigit train``'s network: the thesis's pipeline (:func:`~flexdigit.tactile.pipeline.run_pipeline`, no
     error curves) on the dataset's G gauges and, on an actuated protocol, the command.
 
@@ -123,6 +132,11 @@ def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, 
     finer is not: the hand-made PEEK digit's network went from 1.09 mm at 50 epochs to 0.48 at 800
     (docs/digits.md, tactile section).
 
+    ``split``: ``"readings"`` the thesis's (:func:`~flexdigit.tactile.pipeline.thesis_split`: the test positions
+    are training positions too), ``"positions"`` the validation and test readings at positions the network never
+    saw (:func:`~flexdigit.tactile.pipeline.held_out_positions_split`; a position target only): the scoring the
+    span Bayes limit is a floor for (:mod:`flexdigit.tactile.position_floor`).
+
     Returns ``(result, rows, inputs, tared)``: the pipeline's result, the dataset rows with the target, the inputs'
     column names (what ``predict`` reads) and whether the kept network reads tared readings.
     """
@@ -130,6 +144,12 @@ def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, 
     actuated = dataset.protocol.actuated
     inputs = [*dataset.gauge_columns] + (["command"] if actuated else [])
     options = {"seed": seed, "target": target, "curve_hidden": None}
+    if split == "positions":
+        if target != "position":
+            raise ParameterError(f"a held-out positions split scores a position network, not {target!r}")
+        options["split"] = held_out_positions_split(dataset["position_from_base_m"][rows], seed)
+    elif split != "readings":
+        raise ParameterError(f"train_network's split must be 'readings' or 'positions', not {split!r}")
     best = None
     for tared in (False, True) if _has_tares(dataset) else (False,):
         readings = tare(dataset)[0] if tared else dataset
