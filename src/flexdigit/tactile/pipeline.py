@@ -120,7 +120,7 @@ def held_out_positions_split(position_m, seed: int) -> Split:
     if distinct.size < HELD_OUT_MIN_POSITIONS:
         raise ParameterError(
             f"a held-out positions split needs at least {HELD_OUT_MIN_POSITIONS} distinct load positions; the "
-            f"readings have {distinct.size}"
+            f"readings have {distinct.size} (train --split readings trains on them all)"
         )
     gaps = np.diff(distinct)
     near = gaps <= 1.5 * float(np.median(gaps))
@@ -133,7 +133,7 @@ def held_out_positions_split(position_m, seed: int) -> Split:
     if len(held) < 2:
         raise ParameterError(
             f"a held-out positions split needs two interior positions between evenly spaced ones; the readings' "
-            f"{distinct.size} positions have {len(held)}"
+            f"{distinct.size} positions have {len(held)} (train --split readings trains on them all)"
         )
     held = np.random.default_rng(seed).permutation(held)
     n_test = max(1, int(round(len(held) / 3)))
