@@ -22,7 +22,7 @@ from flexdigit.errors import ParameterError
 from flexdigit.tactile.dataset import Dataset, dataset_columns, make_meta
 from flexdigit.tactile.localisation import position_bayes_rmse_m, train_network
 from flexdigit.tactile.pipeline import held_out_positions_split
-from flexdigit.tactile.position_floor import network_floor
+from flexdigit.tactile.position_floor import network_floor, split_for_limit
 from flexdigit.tactile.protocols import load_protocol
 
 LIMIT_RTOL = 0.03
@@ -110,3 +110,8 @@ def test_no_ratio_where_the_floor_is_unresolved():
     scores = network_floor(LinearGauge(), _dataset(far, 4), np.arange(24), 2e-3, split="readings")
     assert (scores["bayes_limit_settings_mm"], scores["rmse_over_bayes_limit"]) == (None, None)
     assert "no ratio: the settings limit" in scores["bayes_limit_note"]
+
+
+def test_a_protocol_too_short_to_hold_positions_out_is_scored_on_readings():
+    assert split_for_limit(_dataset(POSITIONS_M, 2)) == "positions"
+    assert split_for_limit(_dataset(POSITIONS_M[:4], 2)) == "readings"

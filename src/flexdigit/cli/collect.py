@@ -166,7 +166,7 @@ def _add_bayes_flags(p) -> None:
         default=None,
         help="readings: the thesis's shuffle of readings (test positions are training positions too); positions: "
         "validation and test loads at positions the network never saw, the scoring the span Bayes limit is a floor "
-        "for (default: positions with --bayes-limit, else readings)",
+        "for (default: positions with --bayes-limit where the protocol has 5 positions or more, else readings)",
     )
     p.add_argument("--params", metavar="FILE", help="the digit's parameters TOML, for --bayes-limit (default thesis)")
     p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML, for --bayes-limit (default derived)")
@@ -302,8 +302,6 @@ def _train_output(args: argparse.Namespace):
         raise ParameterError(
             f"--split positions holds out load positions: it needs --target position, not {args.target}"
         )
-    if args.split is None:
-        args.split = "positions" if args.bayes_limit else "readings"
     model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
     check_output(model_path, force=args.force)
     check_plot(args.plot, "train", force=args.force)
@@ -315,10 +313,13 @@ def _train(args: argparse.Namespace) -> CommandResult:
     from flexdigit.tactile.localisation import train_network
     from flexdigit.tactile.model_io import save_model
     from flexdigit.tactile.pipeline import target_scores
+    from flexdigit.tactile.position_floor import split_for_limit
 
     model_path = _train_output(args)
     dataset = load_dataset(args.file)
     target = args.target.replace("-", "_")
+    if args.split is None:  # a held-out positions split where the limit is asked for and the positions allow it
+        args.split = split_for_limit(dataset) if args.bayes_limit else "readings"
     result, rows, inputs, tared = train_network(
         dataset, target, seed=args.seed, hidden=args.hidden, tol=args.tol, epochs=args.epochs, split=args.split
     )

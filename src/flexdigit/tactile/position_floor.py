@@ -22,10 +22,12 @@ Both limits are returned whichever is compared, with names that say their prior.
 
 from __future__ import annotations
 
+from flexdigit.errors import ParameterError
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.localisation import position_bayes_rmse_m
+from flexdigit.tactile.pipeline import held_out_positions_split
 
-__all__ = ["SPLIT_PRIOR", "network_floor"]
+__all__ = ["SPLIT_PRIOR", "network_floor", "split_for_limit"]
 
 #: The prior whose Bayes limit is a floor for a network scored on each split's test readings
 SPLIT_PRIOR = {"positions": "span", "readings": "settings"}
@@ -68,3 +70,16 @@ def network_floor(model, dataset: Dataset, test_rows, rmse_m: float, *, split: s
     if notes:
         out["bayes_limit_note"] = "; ".join(notes)
     return out
+
+
+def split_for_limit(dataset: Dataset) -> str:
+    """The split ``train --bayes-limit`` scores a position network on by default: ``"positions"`` where the
+    dataset's loaded positions can be held out (:func:`~flexdigit.tactile.pipeline.held_out_positions_split`: 5 or
+    more, two of them interior), so the network is compared with the span limit; else ``"readings"`` (compared with
+    the settings limit, :func:`network_floor`)."""
+    loaded = dataset["load_kg"] > 0
+    try:
+        held_out_positions_split(dataset["position_from_base_m"][loaded], seed=0)
+    except ParameterError:
+        return "readings"
+    return "positions"
