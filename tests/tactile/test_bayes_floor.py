@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from flexdigit.errors import ParameterError
+from flexdigit.tactile.bounds import span_position_mse_m2
 from flexdigit.tactile.dataset import Dataset, dataset_columns, make_meta
 from flexdigit.tactile.localisation import position_bayes_rmse_m, train_network
 from flexdigit.tactile.pipeline import held_out_positions_split
@@ -115,3 +116,17 @@ def test_no_ratio_where_the_floor_is_unresolved():
 def test_a_protocol_too_short_to_hold_positions_out_is_scored_on_readings():
     assert split_for_limit(_dataset(POSITIONS_M, 2)) == "positions"
     assert split_for_limit(_dataset(POSITIONS_M[:4], 2)) == "readings"
+
+
+def test_a_coarse_grid_still_gives_the_closed_form():
+    # the span grid's step up to the posterior's sd gives the continuous posterior mean (common draws): what lets a
+    # limit of one grid step be reported (SPAN_RESOLVED_STEPS)
+    a = POSITIONS_M + 3e-4  # off every lattice
+    sd = SIGMA_V / SLOPE_V_PER_M
+    rms = []
+    for step in (0.25 * sd, sd, 2 * sd):
+        mse = span_position_mse_m2(LinearGauge(), a, MASS_KG, 0, step_m=step, half_width_m=5e-3, samples=2000)
+        rms.append(float(np.sqrt(np.mean(mse[5:26]))))
+    assert rms[1] == pytest.approx(rms[0], rel=1e-6)
+    assert rms[2] == pytest.approx(rms[0], rel=2e-3)
+    assert rms[0] == pytest.approx(sd, rel=LIMIT_RTOL)
