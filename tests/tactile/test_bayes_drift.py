@@ -176,3 +176,24 @@ def test_train_tares_on_each_tests_start_block_where_that_validates_better():
     assert tared
     rmse_mm = 1e3 * np.sqrt(np.mean((result.y_pred - result.y_test) ** 2))
     assert rmse_mm < 10.0  # 1 mV at 0.2 V/m is 5 mm one sd (within the span's ends)
+
+
+@pytest.mark.slow
+def test_thesis_rig_network_on_thesis_61_is_within_the_issue_bound(tmp_path, capsys):
+    """Issue 24's figure on the thesis rig itself: ``collect thesis-6.1`` then ``train --bayes-limit`` (twin seed
+    0). As read, the run's drift (gauge 2 wanders 15 mV over 774 s) left the network at 8.06 mm, 2.89 x the 2.79 mm
+    floor; tared on each test's start block it reads 3.20 mm (1.15 x). ``BAYES_RATIO`` as tests/tactile/
+    test_digit_data_path's: the issue's 1.3 above, 0.6 below (a test set of ~200 readings scores to ~5 %)."""
+    import json
+
+    from flexdigit.cli import main
+
+    data, model = tmp_path / "d.parquet", tmp_path / "m.json"
+    assert main(["collect", "thesis-6.1", "--out", str(data), "--no-progress"]) == 0
+    capsys.readouterr()
+    assert main(["train", str(data), "--bayes-limit", "--model", str(model), "--json"]) == 0
+    scores = json.loads(capsys.readouterr().out)
+    assert scores["tared"] is True
+    assert 0.6 < scores["rmse_over_bayes_limit"] < 1.3, scores
+    # the drift counted as noise is no floor for a network trained on the run: it reads under that figure
+    assert scores["rmse_mm"] < scores["bayes_limit_with_drift_mm"]
