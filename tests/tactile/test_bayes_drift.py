@@ -197,3 +197,26 @@ def test_thesis_rig_network_on_thesis_61_is_within_the_issue_bound(tmp_path, cap
     assert 0.6 < scores["rmse_over_bayes_limit"] < 1.3, scores
     # the drift counted as noise is no floor for a network trained on the run: it reads under that figure
     assert scores["rmse_mm"] < scores["bayes_limit_with_drift_mm"]
+
+
+def test_a_gauge_past_the_cards_rail_tells_nothing():
+    """A 0-3.3 V card under half bridges that swing negative (tests/data/handmade_digits2/heavy_supports_10bit):
+    every reading is the rail, 0 V, whatever the load. The limit models the card's clipping, so the posterior is
+    the prior and the Bayes estimate the span's middle: the limit is the positions' RMS distance from it (worked
+    by hand below), not the 4 mm the unclipped gauges would allow (the network read 61 mm)."""
+    from pathlib import Path
+
+    from flexdigit.params import load_params
+    from flexdigit.tactile.localisation import readings_gauge_model
+
+    params = load_params(Path(__file__).parents[1] / "data" / "handmade_digits2" / "heavy_supports_10bit.toml")
+    model = readings_gauge_model(params)
+    a = np.array([0.10, 0.11, 0.12, 0.13, 0.14])  # from the base; stretches of +-5 mm: the prior is 0.095..0.145
+    m = np.full(a.size, 0.025)
+    assert np.all(model.gauges_v(a, m, np.full(a.size, -1)) == params.sensors.adc_range_v[0])
+    cols = {c: np.zeros(a.size, dtype=d) for c, d in dataset_columns(3).items()}
+    cols.update(load_kg=m, position_from_base_m=a, command=np.full(a.size, -1), sample=np.arange(a.size))
+    ds = Dataset(cols, {"gauge_count": 3})
+    expected = np.sqrt(np.mean((a - 0.12) ** 2))  # 14.1 mm: the prior's mean is 0.12 m
+    # 2 %: the prior is a lattice of 0.25 mm (a 200th of the stretches), not a continuum
+    assert position_bayes_rmse_m(model, ds, np.arange(a.size), samples=400) == pytest.approx(expected, rel=0.02)

@@ -209,13 +209,15 @@ class TwinGaugeModel:
         self.cells_per_section = DEFAULT_CELLS_PER_SECTION if cells_per_section is None else cells_per_section
         self.noise_v = np.asarray(self.calibration.noise_white_v, dtype=float)
         self.drift_v_per_sqrt_s = np.asarray(self.calibration.noise_drift_v_per_sqrt_s, dtype=float)
+        self.adc_range_v = None  # (low, high): the card's rails, where the readings are clipped (readings_gauge_model)
         self._kept: dict[tuple, dict] = {}  # the last static solves (_static)
 
     def __repr__(self) -> str:
         return f"TwinGaugeModel(orientation={self.orientation!r}, noise_v={self.noise_v.tolist()})"
 
     def gauges_v(self, position_from_base_m, mass_kg, command) -> np.ndarray:
-        return self._solve(position_from_base_m, mass_kg, command, False)
+        volts = self._solve(position_from_base_m, mass_kg, command, False)
+        return volts if self.adc_range_v is None else np.clip(volts, *self.adc_range_v)
 
     def noise_at(self, position_from_base_m, mass_kg, command) -> np.ndarray:
         """Standard deviation (V) of one reading, (n, 3): white noise and, with a taut cable, the cable-guide

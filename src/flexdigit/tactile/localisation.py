@@ -477,11 +477,16 @@ def readings_gauge_model(params=None, calibration=None):
 
     The quantisation matters on a digit whose amplified noise is below one LSB (a quarter bridge's small signal):
     the readings then carry the rounding, and a Bayes limit without it would be a floor no estimator could reach.
-    The studies' ``bayes_position_limit_mm`` models the readings the same way.
+    The studies' ``bayes_position_limit_mm`` models the readings the same way. The static voltages are clipped
+    to the card's range (``adc_range_v``), as the readings are: a gauge past a rail reads the rail whatever the
+    load (a 0-3.3 V card under a half bridge swinging negative reads 0 on every gauge; its limit was 4 mm for a
+    network that could only read 61 mm). Near a rail the clipped mean with Gaussian noise is an approximation
+    (a censored reading's exact likelihood is not modelled).
     """
     model = TwinGaugeModel(params, calibration)
-    lsb = (params or RigParams()).sensors.adc_lsb_v
-    model.noise_v = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + lsb**2 / 12.0)
+    sensors = (params or RigParams()).sensors
+    model.noise_v = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + sensors.adc_lsb_v**2 / 12.0)
+    model.adc_range_v = tuple(sensors.adc_range_v)
     return model
 
 
