@@ -44,6 +44,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_digittac",
     "benchmarks.bench_bayes",
     "benchmarks.bench_netfix",
+    "benchmarks.bench_bayes2",
     "benchmarks.bench_calibrate",
     "benchmarks.bench_calfix",
     "benchmarks.bench_live",

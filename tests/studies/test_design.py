@@ -22,8 +22,9 @@ from flexdigit.studies.design_study import (
     pareto_front,
     run_design,
 )
-from flexdigit.studies.metrics import METRICS, MetricContext
+from flexdigit.studies.metrics import METRICS, MetricContext, bayes_limits_by_prior
 from flexdigit.studies.spec import ParameterSet, load_spec, spec_from_toml
+from flexdigit.twin.digit_calibration import twin_calibration
 
 THESIS = Candidate(3, "thesis", "half", 16, 219 / 254, 5.715e-3, 0.0, 1.0)
 
@@ -256,6 +257,14 @@ chunk_size = 2
     above_bridge = text[text.index('bridge = "full"') - 1]
     assert above_bridge.startswith("# (This digit's differs.) On the thesis rig: Half bridge")
     assert any(line.startswith("# Its servo step, 0.4311 deg a command") for line in text)
+    # the limits of the file's own twin, by prior, as train computes them (trial 2: 0.131 mm scored, 1.47 trained)
+    limits = bayes_limits_by_prior(
+        ParameterSet(expected, twin_calibration(expected)), MetricContext(seed=3, bayes_samples=50)
+    )
+    said = [line for line in text if line.startswith("# Bayes limits of this file's twin")]
+    assert len(said) == 1, said
+    assert f"on its 'baseline' one): {limits['settings']:.3g} mm with" in said[0]
+    assert f"{limits['span']:.3g} mm anywhere on their stretch" in said[0]
     capsys.readouterr()
     assert main(["params", str(exported)]) == 0
     assert "note:" not in capsys.readouterr().out

@@ -89,10 +89,10 @@ def test_positions_many_sigmas_apart_keep_a_span_limit():
 
 
 def test_unresolved_limit_is_refused():
-    """A limit under two grid steps (here 1e-9 m against a 0.25 mm grid over a 1 m span) is refused, not printed."""
+    """A limit under one grid step (here 1e-9 m against a 0.25 mm grid over a 1 m span) is refused, not printed."""
     model = Linear(1.0, 1e-12)
     ds = _dataset([0.0, 0.5, 1.0])
-    with pytest.raises(ValueError, match=r"under two steps of its position grid"):
+    with pytest.raises(ValueError, match=r"under one step of its position grid"):
         position_bayes_rmse_m(model, ds, [1], samples=400)
 
 

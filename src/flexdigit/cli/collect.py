@@ -139,16 +139,7 @@ def _add_train(subparsers, sizes) -> None:
         f"{sizes.EPOCHS_MAX}, and a longer training kept where it lowers the validation error by over "
         f"{100 * sizes.LONGER_GAIN:g} %%",
     )
-    p.add_argument(
-        "--bayes-limit",
-        action="store_true",
-        help="position target: also the localisation Bayes limit on the same test readings (their white noise: "
-        "the floor), from the twin of the --params digit (with --calibration), the network's RMSE over it, and "
-        "the limit with the gauges' drift over the run counted as noise (one reading of a run whose drift the "
-        "estimator has not learnt)",
-    )
-    p.add_argument("--params", metavar="FILE", help="the digit's parameters TOML, for --bayes-limit (default thesis)")
-    p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML, for --bayes-limit (default derived)")
+    _add_bayes_flags(p)
     p.add_argument(
         "--model",
         "--out",
@@ -158,6 +149,30 @@ def _add_train(subparsers, sizes) -> None:
     )
     p.add_argument("--force", action="store_true", help="overwrite the model file (and --plot) if it exists")
     add_plot_flag(p, "the held-out test readings' predicted against actual values")
+
+
+def _add_bayes_flags(p) -> None:
+    """``flexdigit train``'s Bayes limit flags and the split its ratio needs."""
+    p.add_argument(
+        "--bayes-limit",
+        action="store_true",
+        help="position target: also the localisation Bayes limits on the same test readings (their white noise), "
+        "from the twin of the --params digit (with --calibration): the span prior's (a load anywhere on the "
+        "protocol's stretch) and the settings prior's (at one of its positions), the network's RMSE over the one "
+        "that is a floor for its --split (positions: span; readings: settings; no ratio where it is unresolved), "
+        "and the span limit with the gauges' drift over the run counted as noise (one reading of a run whose "
+        "drift the estimator has not learnt)",
+    )
+    p.add_argument(
+        "--split",
+        choices=("readings", "positions"),
+        default=None,
+        help="readings: the thesis's shuffle of readings (test positions are training positions too); positions: "
+        "validation and test loads at positions the network never saw, the scoring the span Bayes limit is a floor "
+        "for (default: positions with --bayes-limit where the protocol has 5 positions or more, else readings)",
+    )
+    p.add_argument("--params", metavar="FILE", help="the digit's parameters TOML, for --bayes-limit (default thesis)")
+    p.add_argument("--calibration", metavar="FILE", help="twin calibration TOML, for --bayes-limit (default derived)")
 
 
 def _add_predict(subparsers) -> None:
@@ -287,6 +302,10 @@ def _train_output(args: argparse.Namespace):
         raise ParameterError("--params and --calibration describe the twin of --bayes-limit: give it too")
     if args.bayes_limit and args.target != "position":
         raise ParameterError(f"--bayes-limit is the position's limit: it needs --target position, not {args.target}")
+    if args.split == "positions" and args.target != "position":
+        raise ParameterError(
+            f"--split positions holds out load positions: it needs --target position, not {args.target}"
+        )
     model_path = Path(args.model) if args.model else Path(args.file).with_suffix(f".{args.target}.model.json")
     check_output(model_path, force=args.force)
     check_plot(args.plot, "train", force=args.force)
@@ -298,21 +317,25 @@ def _train(args: argparse.Namespace) -> CommandResult:
     from flexdigit.tactile.localisation import train_network
     from flexdigit.tactile.model_io import save_model
     from flexdigit.tactile.pipeline import target_scores
+    from flexdigit.tactile.position_floor import split_for_limit
 
     model_path = _train_output(args)
     dataset = load_dataset(args.file)
     target = args.target.replace("-", "_")
+    if args.split is None:  # a held-out positions split where the limit is asked for and the positions allow it
+        args.split = split_for_limit(dataset) if args.bayes_limit else "readings"
     result, rows, inputs, tared = train_network(
-        dataset, target, seed=args.seed, hidden=args.hidden, tol=args.tol, epochs=args.epochs
+        dataset, target, seed=args.seed, hidden=args.hidden, tol=args.tol, epochs=args.epochs, split=args.split
     )
     scores = target_scores(result)
     if args.bayes_limit:
         scores.update(_bayes_scores(args, dataset, rows[result.split.test], scores["rmse_mm"]))
     meta = {"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores}
+    meta["split"] = args.split
     meta["tared"] = tared  # the kept network reads tared readings: predict tares its readings alike
     save_model(model_path, result.model, target=target, inputs=inputs, meta=meta, force=args.force)
     swept = args.hidden is None or args.tol is None
-    data = {"target": target, "model": str(model_path), "swept": swept, "tared": tared, **scores}
+    data = {"target": target, "model": str(model_path), "swept": swept, "tared": tared, "split": args.split, **scores}
     lines = [f"trained {target} network on {len(rows)} readings of {dataset.protocol.name} -> {model_path}"]
     lines += [f"  {k} = {v:.6g}" if isinstance(v, float) else f"  {k} = {v}" for k, v in scores.items()]
     if args.plot:
@@ -323,10 +346,12 @@ def _train(args: argparse.Namespace) -> CommandResult:
 
 
 def _bayes_scores(args: argparse.Namespace, dataset, test_rows, rmse_mm: float) -> dict:
-    """The localisation Bayes limit on the network's test readings (the twin of ``--params``), and the ratio."""
+    """The localisation Bayes limits on the network's test readings (the twin of ``--params``), and the ratio over
+    the floor of its split (:func:`flexdigit.tactile.position_floor.network_floor`)."""
     from flexdigit.errors import ParameterError
     from flexdigit.params import RigParams, load_params
     from flexdigit.tactile.localisation import position_bayes_rmse_m, readings_gauge_model
+    from flexdigit.tactile.position_floor import network_floor
     from flexdigit.twin.digit_calibration import twin_calibration
 
     params = load_params(args.params) if args.params else RigParams()
@@ -336,13 +361,12 @@ def _bayes_scores(args: argparse.Namespace, dataset, test_rows, rmse_mm: float) 
             f"{args.file} holds {dataset.gauge_count}: give the parameters of the digit it was collected on"
         )
     model = readings_gauge_model(params, twin_calibration(params, args.calibration))
-    limit_mm = 1e3 * position_bayes_rmse_m(model, dataset, test_rows, seed=args.seed)
-    drift_mm = 1e3 * position_bayes_rmse_m(model, dataset, test_rows, seed=args.seed, drift=True)
-    return {
-        "bayes_limit_mm": limit_mm,
-        "rmse_over_bayes_limit": rmse_mm / limit_mm if limit_mm > 0 else float("inf"),
-        "bayes_limit_with_drift_mm": drift_mm,
-    }
+    scores = network_floor(model, dataset, test_rows, 1e-3 * rmse_mm, split=args.split, seed=args.seed)
+    try:
+        drift_mm = 1e3 * position_bayes_rmse_m(model, dataset, test_rows, seed=args.seed, drift=True)
+    except ValueError:  # unresolved, as the span limit's note says
+        drift_mm = None
+    return {**scores, "bayes_limit_with_drift_mm": drift_mm}
 
 
 def _predict(args: argparse.Namespace) -> CommandResult:

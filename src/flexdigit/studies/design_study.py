@@ -54,10 +54,10 @@ from flexdigit.errors import ParameterError
 from flexdigit.params import BRIDGE_TYPES, LENGTH_TOLERANCE_M, THESIS_SUPPORT_M, RigParams, params_template
 from flexdigit.studies.execution import run_study
 from flexdigit.studies.figures import _save, pareto_figure
-from flexdigit.studies.metrics import METRICS, MetricContext
+from flexdigit.studies.metrics import METRICS, MetricContext, bayes_limits_by_prior
 from flexdigit.studies.spec import ParameterSet, StudySpec, spec_from_toml
 from flexdigit.tactile.protocols import load_protocol
-from flexdigit.twin.digit_calibration import calibration_for
+from flexdigit.twin.digit_calibration import calibration_for, twin_calibration
 from flexdigit.twin.twin import static_gauges_v
 
 __all__ = [
@@ -759,16 +759,35 @@ def export_design(result: DesignResult, row: int, path: str | Path, *, force: bo
         calibration=result.settings.calibration,
     )
     objectives = ", ".join(f"{m} {result.outputs[m][row]:.6g}" for m in result.settings.objectives)
-    text = params_template(_with_supports(_bends_both_ways(ps.description()))).replace(
+    exported = _with_supports(_bends_both_ways(ps.description()))
+    text = params_template(exported).replace(
         "# The values are the thesis rig's. Edit them for your digit, then check with: flexdigit params FILE\n",
         f"# Design {row} on the Pareto front of study {result.spec.name!r}: {c.label()}\n# ({objectives}); check "
         f"with: flexdigit params FILE\n# Its servo step, {c.servo_deg_per_command:.4g} deg a command, is the servo's "
         "travel over the commands (angle_min_deg..angle_max_deg), as the study scored it; a geared servo of the "
-        "thesis's travel (gear_ratio) gives the pulley the same step\n",
+        "thesis's travel (gear_ratio) gives the pulley the same step\n" + _limits_comment(result, exported),
     )
     with atomic_write(path, "w", force=force) as fh:
         fh.write(text)
     return Path(path)
+
+
+def _limits_comment(result: DesignResult, exported: RigParams) -> str:
+    """The export's comment lines giving the Bayes limits of the file's own twin (the calibration the commands
+    derive for it, :func:`~flexdigit.twin.digit_calibration.twin_calibration`) by prior, as ``flexdigit train
+    --bayes-limit`` computes them (:func:`~flexdigit.studies.metrics.bayes_limits_by_prior`): the study's
+    ``bayes_position_limit_mm`` is the settings prior's on the design's study calibration (``calibration =
+    "baseline"`` by default: the baseline's unscaled), so it is not what ``train`` gives on the file's readings
+    (trial 2: a front design's 0.131 mm here against 1.47 mm from ``train``, 0.79 mm its settings limit)."""
+    ctx = MetricContext(seed=result.spec.seed, bayes_samples=result.settings.bayes_samples)
+    limits = bayes_limits_by_prior(ParameterSet(exported, twin_calibration(exported)), ctx)
+    shown = {k: "not resolved" if v is None else f"{v:.3g} mm" for k, v in limits.items()}
+    return (
+        f"# Bayes limits of this file's twin (calibration derived by the commands; the study scored it on its "
+        f"'{result.settings.calibration}' one): {shown['settings']} with the load at one of table 6.1's positions "
+        f"(bayes_position_limit_mm's prior; train --bayes-limit --split readings), {shown['span']} anywhere on "
+        "their stretch (train --bayes-limit on held-out positions)\n"
+    )
 
 
 def _with_supports(params: RigParams) -> RigParams:

@@ -31,7 +31,10 @@ What each one means (thesis section in brackets):
 - ``hinf_gamma``: gamma of the thesis's H-infinity design (4.4, 5 Hz error weight, the thesis's regularisation)
   on this rig's plant as the thesis assembled it (3.5, :func:`flexdigit.models.plant.build_plant` "printed");
 - ``bayes_position_limit_mm``: chapter 6's localisation Bayes limit (:func:`flexdigit.tactile.bounds.protocol_limits`)
-  on table 6.1's settings: the RMS position error no estimator beats on one reading;
+  on table 6.1's settings: the RMS position error no estimator beats on one reading, the estimator knowing the
+  load hangs at one of the protocol's positions (the "settings" prior: ``flexdigit train --bayes-limit --split
+  readings``'s ``bayes_limit_settings_mm``, not ``train``'s default span limit of a load anywhere on the
+  stretch; both by :func:`bayes_limits_by_prior`), on the design's study calibration;
 - ``blind_zone_mm``: length from the clamp where a 25 g load bends no gauge by a tenth of its noise
   (:func:`flexdigit.tactile.localisation.identifiability_map`), the zone 6.5's position 16 falls in.
 
@@ -64,7 +67,8 @@ from flexdigit.studies._bayes_kernel import position_mse_m2
 from flexdigit.studies.batched_loop import StepSchedule, step_figures, step_figures_batch, step_responses
 from flexdigit.studies.parameter_set import ParameterSet
 from flexdigit.tactile.bounds import TwinGaugeModel, noise_of, protocol_limits
-from flexdigit.tactile.localisation import identifiability_map
+from flexdigit.tactile.dataset import Dataset, dataset_columns
+from flexdigit.tactile.localisation import identifiability_map, position_bayes_rmse_m
 from flexdigit.tactile.protocols import RELAXED, load_protocol
 from flexdigit.twin.batched import BatchedChains
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, cached_digit
@@ -78,6 +82,7 @@ __all__ = [
     "metric_of",
     "register_metric",
     "SENSITIVITY_METRICS",
+    "bayes_limits_by_prior",
 ]
 
 
@@ -843,10 +848,46 @@ def relaxed_statics(ps: ParameterSet, baseline: ParameterSet) -> ParameterSet:
 BAYES_BATCH_RTOL = 1e-9
 
 
+def bayes_limits_by_prior(ps: ParameterSet, ctx: MetricContext) -> dict:
+    """The localisation Bayes limits (mm) of ``ps`` on table 6.1's readings as ``flexdigit train --bayes-limit``
+    computes them (:func:`flexdigit.tactile.localisation.position_bayes_rmse_m` on a dataset of those readings,
+    every setting read its repetitions' times, the study's gauge model), by prior:
+
+    - ``"settings"``: the load at one of the protocol's positions, what ``bayes_position_limit_mm`` is (the same
+      :func:`~flexdigit.tactile.bounds.protocol_limits`; other draws) and what ``train --split readings`` compares
+      its network with (``bayes_limit_settings_mm``);
+    - ``"span"``: the load anywhere on the positions' stretch, what ``train --bayes-limit`` compares a network
+      scored on held-out positions with (its default).
+
+    A limit the draws do not resolve is None. The design study scores a design's twin on its own calibration
+    (``[design] calibration``, by default the baseline's unscaled); the commands run an exported design's file on
+    :func:`flexdigit.twin.digit_calibration.twin_calibration` (the thesis's scaled to it): pass that
+    :class:`ParameterSet` to get the figures ``train`` gives on its collected readings.
+    """
+    a, m, c, w = _bayes_settings(ps, ctx)
+    rows = np.repeat(np.arange(a.size), np.asarray(w, dtype=int))
+    gauges = len(ps.params.geometry.gauge_positions_m)
+    columns = {k: np.zeros(rows.size, dtype=d) for k, d in dataset_columns(gauges).items()}
+    columns.update(load_kg=m[rows], position_from_base_m=a[rows], command=c[rows])
+    readings = Dataset(columns, {"gauge_count": gauges})
+    loaded = np.flatnonzero(readings["load_kg"] > 0)
+    model = gauge_model(ps, ctx.tactile_cells)
+    out = {}
+    for prior in ("settings", "span"):
+        try:
+            limit = position_bayes_rmse_m(
+                model, readings, loaded, samples=ctx.bayes_samples, seed=ctx.seed, prior=prior
+            )
+            out[prior] = 1e3 * limit
+        except ValueError:
+            out[prior] = None
+    return out
+
+
 @register_metric(
     "bayes_position_limit_mm",
     "mm",
-    "chapter 6's localisation Bayes limit (RMS, one reading)",
+    "chapter 6's localisation Bayes limit (RMS, one reading, the load at one of table 6.1's positions)",
     "6.5",
     batched=bayes_limits,
 )

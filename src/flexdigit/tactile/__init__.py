@@ -6,6 +6,7 @@
 - :mod:`~flexdigit.tactile.pipeline`: the thesis's split and network (``thesis_split``, ``ThesisNetwork``);
 - :mod:`~flexdigit.tactile.netlab`: the MLP as netlab trains it; :mod:`~flexdigit.tactile.estimators`: others;
 - :mod:`~flexdigit.tactile.accuracy`, :mod:`~flexdigit.tactile.bounds`: scores and Cramer-Rao / Bayes bounds;
+  :mod:`~flexdigit.tactile.position_floor`: which Bayes limit a trained network is compared with;
 - :mod:`~flexdigit.tactile.localisation`, :mod:`~flexdigit.tactile.thesis_experiments`: the studies the report
   shows.
 
@@ -33,6 +34,7 @@ __getattr__, __all__ = lazy_exports(
         "ColumnMap": "flexdigit.tactile.importer",
         "import_readings": "flexdigit.tactile.importer",
         "thesis_split": "flexdigit.tactile.pipeline",
+        "held_out_positions_split": "flexdigit.tactile.pipeline",
         "ThesisNetwork": "flexdigit.tactile.pipeline",
         "run_pipeline": "flexdigit.tactile.pipeline",
         "target_scores": "flexdigit.tactile.pipeline",
@@ -54,6 +56,7 @@ __getattr__, __all__ = lazy_exports(
         "localisation_study": "flexdigit.tactile.localisation",
         "Prediction": "flexdigit.tactile.localisation",
         "predict_dataset": "flexdigit.tactile.localisation",
+        "network_floor": "flexdigit.tactile.position_floor",
         "run_experiment": "flexdigit.tactile.thesis_experiments",
         "experiment_tables": "flexdigit.tactile.thesis_experiments",
         "white_noise_scan": "flexdigit.tactile.thesis_experiments",

@@ -19,14 +19,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexdigit._repr import fields_summary
-from flexdigit.errors import DataFileError
+from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
 from flexdigit.tactile.accuracy import accuracy, corr2, rmse
 from flexdigit.tactile.bounds import ZONES, TwinGaugeModel, cramer_rao, protocol_limits, span_position_mse_m2
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.network_sizes import EPOCHS_MAX, LONGER_GAIN
-from flexdigit.tactile.pipeline import ThesisNetwork, features, run_pipeline, targets, thesis_split
+from flexdigit.tactile.pipeline import (
+    ThesisNetwork,
+    features,
+    held_out_positions_split,
+    run_pipeline,
+    targets,
+    thesis_split,
+)
 from flexdigit.tactile.prediction_plot import target_unit
 
 __all__ = [
@@ -41,6 +48,7 @@ __all__ = [
     "position_bayes_rmse_m",
     "drift_variance_v2",
     "SPAN_GRID_MAX",
+    "SPAN_RESOLVED_STEPS",
     "SETTINGS_RESOLVED",
     "train_network",
     "EPOCHS_MAX",
@@ -104,7 +112,9 @@ def tare(dataset: Dataset) -> tuple[Dataset, np.ndarray]:
     return Dataset(columns, dict(dataset.meta)), since
 
 
-def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, tol=None, epochs: int = 50):
+def train_network(
+    dataset: Dataset, target: str, *, seed: int = 0, hidden=None, tol=None, epochs: int = 50, split: str = "readings"
+):
     """``flexdigit train``'s network: the thesis's pipeline (:func:`~flexdigit.tactile.pipeline.run_pipeline`, no
     error curves) on the dataset's G gauges and, on an actuated protocol, the command.
 
@@ -123,6 +133,11 @@ def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, 
     finer is not: the hand-made PEEK digit's network went from 1.09 mm at 50 epochs to 0.48 at 800
     (docs/digits.md, tactile section).
 
+    ``split``: ``"readings"`` the thesis's (:func:`~flexdigit.tactile.pipeline.thesis_split`: the test positions
+    are training positions too), ``"positions"`` the validation and test readings at positions the network never
+    saw (:func:`~flexdigit.tactile.pipeline.held_out_positions_split`; a position target only): the scoring the
+    span Bayes limit is a floor for (:mod:`flexdigit.tactile.position_floor`).
+
     Returns ``(result, rows, inputs, tared)``: the pipeline's result, the dataset rows with the target, the inputs'
     column names (what ``predict`` reads) and whether the kept network reads tared readings.
     """
@@ -130,6 +145,12 @@ def train_network(dataset: Dataset, target: str, *, seed: int = 0, hidden=None, 
     actuated = dataset.protocol.actuated
     inputs = [*dataset.gauge_columns] + (["command"] if actuated else [])
     options = {"seed": seed, "target": target, "curve_hidden": None}
+    if split == "positions":
+        if target != "position":
+            raise ParameterError(f"a held-out positions split scores a position network, not {target!r}")
+        options["split"] = held_out_positions_split(dataset["position_from_base_m"][rows], seed)
+    elif split != "readings":
+        raise ParameterError(f"train_network's split must be 'readings' or 'positions', not {split!r}")
     best = None
     for tared in (False, True) if _has_tares(dataset) else (False,):
         readings = tare(dataset)[0] if tared else dataset
@@ -525,8 +546,15 @@ def drift_variance_v2(model, dataset: Dataset, *, tared: bool | None = None) -> 
 
 
 #: The span prior's grid: a quarter of the smallest Cramer-Rao bound (adds under 1 % to the limit), at most this
-#: many points per command's span (beyond, the step is coarser and a limit under two steps is refused).
+#: many points per command's span (beyond, the step is coarser and a limit under :data:`SPAN_RESOLVED_STEPS` steps is
+#: refused).
 SPAN_GRID_MAX = 4000
+#: A span limit under this many steps of its grid is refused. The posterior mean on a lattice of step ``h`` is the
+#: continuous one to ``exp(-2 pi^2 s^2 / h^2)`` for a posterior sd ``s`` (Poisson summation): a linear gauge's limit
+#: read 2.00257 mm at h = 0.25 s, 2.00258 at h = s, 2.00370 at h = 2 s (common draws; tests/tactile/
+#: test_bayes_floor.py). One step (h = s) keeps the error under 1e-6: two refused the 8-gauge stainless digit's
+#: resolved 0.079 mm on a 0.042 mm grid.
+SPAN_RESOLVED_STEPS = 1.0
 #: A settings-prior limit under this fraction of the protocol's step is refused: the Monte Carlo never mixed two
 #: positions (the hand-made PEEK digit's 1.4e-11 mm; the pairwise mix-up probability put it near 1e-4 mm)
 SETTINGS_RESOLVED = 1e-3
@@ -571,7 +599,7 @@ def position_bayes_rmse_m(model, dataset, rows, *, samples=4000, seed=0, prior="
     Raises
     ------
     ValueError
-        A no-load row, an unknown prior, or a span limit under two grid steps (a figure the grid cannot resolve,
+        A no-load row, an unknown prior, or a span limit under one grid step (a figure the grid cannot resolve,
         never printed).
 
     Examples
@@ -625,7 +653,7 @@ def _settings_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int)
 def _span_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int, drift: bool, tared=None) -> float:
     """:func:`position_bayes_rmse_m`'s span prior: the grid a quarter of the smallest Cramer-Rao bound (mass
     known), at most :data:`SPAN_GRID_MAX` points; with ``drift`` each setting's drift its readings' mean
-    :func:`drift_variance_v2`; a limit under two steps refused."""
+    :func:`drift_variance_v2`; a limit under :data:`SPAN_RESOLVED_STEPS` steps refused."""
     mass = dataset["load_kg"]
     loaded = np.flatnonzero(mass > 0)
     a = np.round(dataset["position_from_base_m"][loaded], 6)
@@ -656,9 +684,9 @@ def _span_limit_m(model, dataset: Dataset, rows, *, samples: int, seed: int, dri
     )
     where = {int(r): int(i) for r, i in zip(loaded, inverse.ravel(), strict=True)}
     limit = float(np.sqrt(np.mean(mse[[where[int(r)] for r in rows]])))
-    if limit < 2 * step:
+    if limit < SPAN_RESOLVED_STEPS * step:
         raise ValueError(
-            f"the localisation Bayes limit ({1e3 * limit:.3g} mm) is under two steps of its position grid "
+            f"the localisation Bayes limit ({1e3 * limit:.3g} mm) is under one step of its position grid "
             f"({1e3 * step:.3g} mm): not resolved, not reported"
         )
     return limit
