@@ -232,6 +232,9 @@ class TissueFile:
     description: str
     source: str
     placed_on_twin: bool
+    #: a built-in tissue (:data:`TISSUES`), written beside the thesis rig: laid out beside another digit by
+    #: :func:`~flexdigit.palpation.palpation.digit_tissue`; a file's tissue lies where the file says
+    builtin: bool = False
 
 
 def builtin_palpation_files() -> dict[str, dict[str, str]]:
@@ -306,7 +309,8 @@ def load_tissue(name_or_path):
     except ParameterError as exc:
         raise DataFileError(f"{source}: {exc}") from None
     name = t.text("name", default=Path(str(name_or_path)).stem)
-    info = TissueFile(name, t.text("description"), source, gap is not None and modulus is not None)
+    placed = gap is not None and modulus is not None
+    info = TissueFile(name, t.text("description"), source, placed, builtin=str(name_or_path) in TISSUES)
     return tissue, info
 
 
