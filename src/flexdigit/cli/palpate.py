@@ -73,6 +73,9 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
         tissue, laid = _digit_tissue(tissue, info, rig.params)
+        if laid and plan.scan and plan.builtin:
+            plan = _scan_laid_out(plan, rig.params)
+            logs = _log_paths(args.log, plan, args.force)  # one per offset, named by the offsets laid out
         plan = _laid_out(plan, rig, calibration, tissue.side, info.source)
         if kind == "force":
             data, text, fig = _force(rig, tissue, plan, logs[0], log_mode, info.source)
@@ -121,6 +124,22 @@ def _digit_tissue(tissue, info, params):
     except ParameterError as exc:
         raise DataFileError(f"{info.source}: key 'tissue.start_mm': {exc}") from None
     return tissue, ""
+
+
+def _scan_laid_out(plan, params):
+    """The built-in scan beside a built-in tissue laid out for the digit: its offsets and the inclusion width looked
+    for scaled as the tissue is (palpation.tissue_scale; to 0.1 mm), so the nodule passes along the digit as it
+    passes along the thesis rig's (+-40 mm beside its 0.27 m; +-22.2 mm beside a 0.15 m digit)."""
+    from dataclasses import replace
+
+    from flexdigit.palpation.palpation import tissue_scale
+
+    scale = tissue_scale(params)
+    scan = {
+        "offsets_m": tuple(round(scale * d, 4) for d in plan.scan["offsets_m"]),
+        "inclusion_width_m": round(scale * plan.scan["inclusion_width_m"], 4),
+    }
+    return replace(plan, scan=scan)
 
 
 def _laid_out(plan, rig, calibration, side: str, tissue_source: str):

@@ -266,6 +266,12 @@ def digit_protocol(
     )
 
 
+def tissue_scale(params) -> float:
+    """How much a built-in tissue (and the built-in scan's offsets) are scaled beside ``params``'s digit: its length
+    over the thesis rig's 0.27 m (1 on the thesis rig; :func:`digit_tissue`)."""
+    return params.geometry.digit_length_m / RigParams().geometry.digit_length_m
+
+
 def digit_tissue(tissue: Tissue, params) -> Tissue:
     """A built-in tissue (written beside the thesis rig's 0.27 m digit) laid out beside ``params``'s digit: where it
     lies along the digit (start, end, its inclusions' centres and widths) and its surface's gap, all scaled by the
@@ -274,7 +280,7 @@ def digit_tissue(tissue: Tissue, params) -> Tissue:
     the same fraction of its length; the thesis rig's tissue is unchanged. The modulus, exponent and damping (the
     tissue's material) are kept: the answer palpation must give back. Before, the built-in soft-block started at
     150 mm on every digit: at the tip of a 0.15 m digit, whose sweep then touched nothing (modulus 30 +- inf)."""
-    scale = params.geometry.digit_length_m / RigParams().geometry.digit_length_m
+    scale = tissue_scale(params)
     if scale == 1.0:
         return tissue
 
