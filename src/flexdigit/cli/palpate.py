@@ -303,13 +303,19 @@ def _refuse_untouched(curve) -> None:
 
 
 def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
+    from flexdigit.errors import DataFileError
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import palpate, stiffness_bound
 
     model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode, drift=True)
-    _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
-    _refuse_untouched(result.curve)
+    try:
+        _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
+        _refuse_untouched(result.curve)
+    except DataFileError as exc:  # a climb stopped short of a rail is the likelier reason: said on the same line
+        if not result.record.capped:
+            raise
+        raise DataFileError(f"{exc}; the sweep {result.record.capped}") from None
     hunt = plan.sweep.model == "hunt-crossley"
     held = plan.sweep
     if result.record.capped:  # the bound of the commands the plateaus held (the climb stopped short of a rail)
