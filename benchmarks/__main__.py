@@ -27,6 +27,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_twin",
     "benchmarks.bench_digits",
     "benchmarks.bench_cells",
+    "benchmarks.bench_resolution",
     "benchmarks.bench_unequal",
     "benchmarks.bench_digitshape",
     "benchmarks.bench_digitctl2",

@@ -52,9 +52,15 @@ __all__ = [
     "Actuator",
     "DigitDynamics",
     "Cables",
+    "TwinResolution",
     "RigParams",
     "MAX_SECTIONS",
     "MAX_GAUGES",
+    "MAX_CELL_LENGTH_M",
+    "MIN_CELLS_PER_SECTION",
+    "MAX_TWIN_CELLS",
+    "cells_no_longer_than",
+    "twin_cells",
     "digit_inconsistencies",
     "derived_figures",
     "plausible_ranges",
@@ -643,9 +649,116 @@ class DigitDynamics:
         validate_fields(self)
 
 
+#: The longest spring cell (m) of the twin's default resolution: each section's free strip is cut into cells no
+#: longer than this. Chosen by the convergence study of ``tests/twin/test_cell_resolution.py`` (docs/digits.md, "The
+#: twin's resolution"): on drawn digits 0.15-0.5 m long the gauges' strain and the tip deflection stay within
+#: 1 % of the converged twin; the thesis rig's 80 mm sections keep their 3 cells (80 / 27 = 2.96).
+MAX_CELL_LENGTH_M = 0.027
+#: The fewest cells of a section cut by length (odd, so a gauge midway on a section falls on a spring, as on the
+#: thesis rig).
+MIN_CELLS_PER_SECTION = 3
+#: The most springs a description's ``[twin]`` table may give the whole digit: a 20 ms step of the thesis rig's
+#: twin at 243 springs took 12 ms (1.6x real time, 0.22 ms at its 9; 2026-11-27, the shared 2-core machine), so
+#: more would fall behind a real-time loop.
+MAX_TWIN_CELLS = 243
+#: One section's spring count in a ``[twin]`` table: 81 cells cut the thesis rig's 80 mm into 1 mm.
+_CELLS = Plausible("", 1, 81, "1 to 81 springs a section (81: 1 mm cells on the thesis rig's 80 mm)", integer=True)
+
+
+def cells_no_longer_than(geometry: Geometry, max_cell_length_m: float) -> tuple[int, ...]:
+    """Cells per section so that none is longer than ``max_cell_length_m``: ``ceil(l_k / h)``, at least
+    :data:`MIN_CELLS_PER_SECTION` and odd, for each section's free strip ``l_k`` (``Geometry.section_bounds_m``).
+
+    >>> cells_no_longer_than(Geometry(), MAX_CELL_LENGTH_M), cells_no_longer_than(Geometry(), 0.01)
+    ((3, 3, 3), (9, 9, 9))
+    """
+    out = []
+    for start, end in geometry.section_bounds_m:
+        n = max(MIN_CELLS_PER_SECTION, math.ceil((end - start) / max_cell_length_m - 1e-9))
+        out.append(n + 1 - n % 2)  # odd: the next odd count when even
+    return tuple(out)
+
+
+@declare
+@dataclass(frozen=True)
+class TwinResolution:
+    """The twin's resolution: how finely its chain cuts each section's strip (optional, docs/digits.md).
+
+    Attributes
+    ----------
+    max_cell_length_m : float, optional
+        Cut each section's free strip into cells no longer than this (an odd count, at least 3 a section). Left
+        out, with cells_per_section: 27 mm (3 cells a thesis section); the static error falls as the cell's square.
+    cells_per_section : int or tuple of int, optional
+        Springs per section instead: one count for every section, or one per section from the base. Give this or
+        max_cell_length_m, not both; neither: the default resolution.
+    """
+
+    max_cell_length_m: float | None = None
+    cells_per_section: int | tuple[int, ...] | None = None
+
+    _parameter_constraints = {
+        "max_cell_length_m": [
+            Plausible("m", 1e-3, 0.5, "cells of 1 mm (243 springs on the thesis rig) to a half-metre section"),
+            None,
+        ],
+        "cells_per_section": [_CELLS, Array(ndim=1, min_length=1, low=_CELLS.low, high=_CELLS.high), None],
+    }
+    #: Keys that take one value or a list (``RigParams.from_dict`` passes either through).
+    _scalar_or_list = ("max_cell_length_m", "cells_per_section")
+
+    def __post_init__(self) -> None:
+        validate_fields(self)
+        owner = type(self).__name__
+        cells = self.cells_per_section
+        if cells is not None:
+            counts = [cells] if isinstance(cells, Integral | Real) else list(cells)
+            for i, n in enumerate(counts):
+                if isinstance(n, bool) or not isinstance(n, Integral | Real) or n != int(n):
+                    at = "" if isinstance(cells, Integral | Real) else f"[{i}]"
+                    raise ParameterError(
+                        f"The 'cells_per_section{at}' parameter of {owner} must be a whole number of springs "
+                        f"(1 to {_CELLS.high:g}). Got {n!r} instead."
+                    )
+            whole = tuple(check_int(int(n), "cells_per_section", owner, low=1, high=int(_CELLS.high)) for n in counts)
+            object.__setattr__(self, "cells_per_section", whole[0] if isinstance(cells, Integral | Real) else whole)
+        if self.max_cell_length_m is not None:
+            object.__setattr__(self, "max_cell_length_m", float(self.max_cell_length_m))
+            if cells is not None:
+                raise ParameterError(
+                    f"The 'cells_per_section' parameter of {owner} must be left out when max_cell_length_m is "
+                    f"given (one or the other). Got {cells!r} with max_cell_length_m = {self.max_cell_length_m!r}."
+                )
+
+    @property
+    def is_default(self) -> bool:
+        """Whether neither key is given (the twin's default resolution)."""
+        return self.max_cell_length_m is None and self.cells_per_section is None
+
+    def cells(self, geometry: Geometry) -> tuple[int, ...]:
+        """Springs per section of ``geometry`` at this resolution (the default's: :data:`MAX_CELL_LENGTH_M`).
+
+        Raises
+        ------
+        ParameterError
+            If ``cells_per_section`` is a list of another length than ``geometry.section_count``.
+        """
+        if self.cells_per_section is None:
+            return cells_no_longer_than(geometry, self.max_cell_length_m or MAX_CELL_LENGTH_M)
+        if isinstance(self.cells_per_section, int):
+            return (self.cells_per_section,) * geometry.section_count
+        if len(self.cells_per_section) != geometry.section_count:
+            raise ParameterError(
+                f"[twin] cells_per_section has {len(self.cells_per_section)} counts for {geometry.section_count} "
+                f"sections: one count for all, or one per section. Got {list(self.cells_per_section)!r} instead."
+            )
+        return self.cells_per_section
+
+
 @dataclass(frozen=True)
 class RigParams:
-    """The whole rig: geometry, material, sensors, actuator and identified digit dynamics."""
+    """The whole rig: geometry, material, sensors, actuator and identified digit dynamics, and (optional) the
+    resolution of its twin (``[twin]``, :class:`TwinResolution`)."""
 
     geometry: Geometry = field(default_factory=Geometry)
     material: Material = field(default_factory=Material)
@@ -653,6 +766,7 @@ class RigParams:
     actuator: Actuator = field(default_factory=Actuator)
     dynamics: DigitDynamics = field(default_factory=DigitDynamics)
     cables: Cables = field(default_factory=Cables)
+    twin: TwinResolution = field(default_factory=TwinResolution)
 
     def __post_init__(self) -> None:
         g = self.geometry
@@ -689,12 +803,23 @@ class RigParams:
         """EI of the strip alone (N m^2)."""
         return self.material.youngs_modulus_pa * self.geometry.second_moment_m4
 
+    def digit_only(self) -> RigParams:
+        """The same description at the twin's default resolution: what names the physical digit. The thesis rig
+        with a finer ``[twin]`` is still the rig the packaged calibration was measured on:
+        ``params.digit_only() == RigParams()``.
+
+        >>> RigParams(twin=TwinResolution(cells_per_section=9)).digit_only() == RigParams()
+        True
+        """
+        return self if self.twin.is_default else dataclasses.replace(self, twin=TwinResolution())
+
     def replace(self, **sections: Any) -> RigParams:
         """Return a copy with whole sections replaced, e.g. ``p.replace(sensors=Sensors(bridge="full"))``."""
         return dataclasses.replace(self, **sections)
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
-        """Plain nested dict (lists for tuples), as written to TOML."""
+        """Plain nested dict (lists for tuples), as written to TOML; without ``[twin]`` when it is the default (a
+        file, a record's metadata and a fingerprint of a description without it stay as they were)."""
         return {
             f.name: {
                 k: list(v) if isinstance(v, tuple) else v
@@ -702,6 +827,7 @@ class RigParams:
                 if v is not None  # an optional key left out (TOML has no null)
             }
             for f in dataclasses.fields(self)
+            if f.name != "twin" or not self.twin.is_default
         }
 
     @classmethod
@@ -730,7 +856,9 @@ class RigParams:
             converted = {}
             for key, value in values.items():
                 default = getattr(factory(), key)
-                if isinstance(default, tuple) or default is None:  # None: an optional list, one per gauge
+                if key in getattr(factory, "_scalar_or_list", ()):  # one value or a list: the dataclass checks it
+                    value = tuple(value) if isinstance(value, list) else value
+                elif isinstance(default, tuple) or default is None:  # None: an optional list, one per gauge
                     if not isinstance(value, list):
                         per = "section" if key == "support_lengths_m" else "gauge"
                         like = f"like {list(default)!r}" if default is not None else f"with one value per {per}"
@@ -814,6 +942,37 @@ def _layout_inconsistencies(g: Geometry) -> list[str]:
     return lines
 
 
+def twin_cells(params: RigParams) -> tuple[int, ...]:
+    """Springs per section of the twin of ``params``: its ``[twin]`` table's (:class:`TwinResolution`), else the
+    default resolution (cells no longer than :data:`MAX_CELL_LENGTH_M`, odd, at least 3). Every builder of the
+    digit's chain that is not given explicit cells takes this (:func:`flexdigit.twin.digit.digit_arrays`).
+
+    >>> twin_cells(RigParams()), twin_cells(RigParams(twin=TwinResolution(max_cell_length_m=0.01)))
+    ((3, 3, 3), (9, 9, 9))
+    """
+    return params.twin.cells(params.geometry)
+
+
+def _twin_inconsistencies(params: RigParams) -> list[str]:
+    """A ``[twin]`` table that does not fit the digit: a list of another length, too many springs."""
+    t = params.twin
+    if t.is_default:
+        return []
+    try:
+        cells = twin_cells(params)
+    except ParameterError as exc:
+        return [str(exc)]
+    if sum(cells) > MAX_TWIN_CELLS:
+        key = "cells_per_section" if t.cells_per_section is not None else "max_cell_length_m"
+        value = t.cells_per_section if t.cells_per_section is not None else t.max_cell_length_m
+        value = list(value) if isinstance(value, tuple) else value
+        return [
+            f"[twin] {key} = {value!r} makes {sum(cells)} springs ({list(cells)} a section): a twin takes at most "
+            f"{MAX_TWIN_CELLS} (a 20 ms step of 243 takes ~12 ms, near real time)"
+        ]
+    return []
+
+
 def digit_inconsistencies(params: RigParams) -> list[str]:
     """Every way the description contradicts itself, one line each naming the key; empty if it holds together.
 
@@ -861,6 +1020,8 @@ def digit_inconsistencies(params: RigParams) -> list[str]:
         lines.append("[cables] pretension_n = 0 with count = 2: an antagonistic pair needs a pretension > 0 N")
     if c.count == 1 and c.pretension_n > 0:
         lines.append(f"[cables] pretension_n = {c.pretension_n:g} with count = 1: a single cable has no pretension")
+    if not lines:  # the cells are laid out on sections that add up
+        lines += _twin_inconsistencies(params)
     return lines
 
 
@@ -944,7 +1105,16 @@ def derived_figures(params: RigParams) -> dict[str, float | list[float]]:
         "tip_deg_per_command": a.pulley_deg_per_command * a.pulley_radius_m / g.cable_eccentricity_m,
         "pot_v_per_command": a.pot_v_per_command,
         "adc_lsb_v": params.sensors.adc_lsb_v,
-    }
+    } | _cells_figure(params)
+
+
+def _cells_figure(params: RigParams) -> dict[str, list[int]]:
+    """The twin's springs per section (``[twin]``, else the default resolution); none for a ``[twin]`` list that
+    does not fit the sections (:func:`digit_inconsistencies` says so)."""
+    try:
+        return {"twin_cells_per_section": list(twin_cells(params))}
+    except ParameterError:
+        return {}
 
 
 def plausible_ranges() -> dict[tuple[str, str], Plausible]:
@@ -1036,6 +1206,9 @@ def params_template(params: RigParams | None = None) -> str:
         thesis = dataclasses.asdict(getattr(thesis_rig, f.name))
         first = (type(section).__doc__ or "").strip().split("\n")[0]
         out += ["", f"# {first}", f"[{f.name}]"]
+        if f.name == "twin":
+            out += _twin_template(section, notes)
+            continue
         if f.name == "dynamics":
             out += [
                 "# No twin reads these (a digit's dynamics come from its geometry, material and calibration): the",
@@ -1062,6 +1235,42 @@ def params_template(params: RigParams | None = None) -> str:
                 continue
             out.append(tomli_w.dumps({key: value}).strip())
     return "\n".join(out) + "\n"
+
+
+#: The template's table of the twin's static error (docs/digits.md, "The twin's resolution"): per test digit, the
+#: default's error under a tip load (alpha^2 = 1) | the cable (tip 30 deg), and the setting that meets 0.1 %.
+#: Measured by ``flexdigit params FILE`` (``flexdigit.twin.resolution``: Richardson on the twin, which matches a
+#: solve_bvp elastica; tests/twin/test_twin_resolution.py), 2026-11-27.
+_TWIN_ERROR_TABLE = (
+    "digit (sections x m)          default cells   error %       max_cell_length_m for 0.1 %",
+    "thesis rig (3 x 0.27)         3 a section     0.367 | 0.103   0.014 (7 a section: 0.068 | 0.019)",
+    "one section (1 x 0.16)        7               0.521 | 0.164   0.009 (17: 0.088 | 0.028)",
+    "two sections (2 x 0.22)       5 a section     0.270 | 0.083   0.0135 (9: 0.083 | 0.025)",
+    "short pair (2 x 0.15)         3 a section     0.634 | 0.213   0.009 (9: 0.070 | 0.024)",
+    "one long section (1 x 0.404)  15              0.223 | 0.181   0.018 (23: 0.095 | 0.077)",
+    "five sections (5 x 0.5)       5 a section     0.081 | 0.021   the default meets it",
+)
+
+
+def _twin_template(section: TwinResolution, notes: dict[str, str]) -> list[str]:
+    """The template's ``[twin]`` keys: commented out (the default resolution) unless ``section`` sets one, with
+    the static error table."""
+    out = [
+        "# Left out: cells no longer than 27 mm (3 a thesis section). The chain's static error against the elastica",
+        "# falls as the cell's square and each 20 ms step costs more (9 springs a section: 1.6x, 15: 2.8x);",
+        "# `flexdigit params FILE` prints this digit's error and the max_cell_length_m that meets 0.1 %:",
+        *(f"#   {row}" for row in _TWIN_ERROR_TABLE),
+    ]
+    examples = {"max_cell_length_m": 0.014, "cells_per_section": 7}
+    for key, example in examples.items():
+        out.append(f"# {notes[key]}")
+        out.append(_range_note("twin", key))
+        value = getattr(section, key)
+        if value is None:
+            out.append(f"# {key} = {example}")
+        else:
+            out.append(f"{key} = " + json.dumps(list(value) if isinstance(value, tuple) else value))
+    return out
 
 
 def _derivable_lengths(g: Geometry) -> dict[str, str]:

@@ -3,6 +3,8 @@ mark skipped, a huge echoed value cut to a readable line."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from flexdigit.cli import MESSAGE_LIMIT, main
@@ -46,3 +48,23 @@ def test_a_huge_value_echoed_in_an_error_is_cut_to_one_readable_line(tmp_path, c
     assert len(err) < MESSAGE_LIMIT + 200
     assert "gauge_positions_m" in err
     assert "characters left out" in err
+
+
+def test_params_writes_the_calibration_every_command_uses_for_the_digit(tmp_path, capsys):
+    """What the twin of a digit nobody measured runs on, printable and editable (trial 2: it was not)."""
+    from flexdigit.twin.calibration import load_calibration
+    from flexdigit.twin.digit_calibration import calibration_for, twin_calibration
+
+    path = Path(__file__).parents[1] / "data" / "handmade_digits2" / "quarter_single_150mm.toml"  # 1 section
+    digit = load_params(path)
+    out = tmp_path / "cal.toml"
+    assert main(["params", str(path), "--write-calibration", str(out)]) == 0
+    written = load_calibration(out)
+    assert written == twin_calibration(digit) == calibration_for(digit)
+    assert len(written.housing_ei_n_m2) == 1
+    assert "scaled to this digit" in out.read_text().splitlines()[0]
+    assert main(["params", str(path), "--write-calibration", str(out)]) == 2  # never over a file without --force
+    assert "exists" in capsys.readouterr().err
+    thesis = tmp_path / "thesis.toml"
+    assert main(["params", "--write-calibration", str(thesis)]) == 0
+    assert load_calibration(thesis) == twin_calibration(RigParams())

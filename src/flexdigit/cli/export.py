@@ -168,7 +168,7 @@ def _digit(args, design: str):
     from flexdigit.params import RigParams, load_params
 
     params = load_params(args.params)
-    if params == RigParams() and args.calibration is None:
+    if params.digit_only() == RigParams() and args.calibration is None:
         return None  # the thesis rig: chapter 5's design, as without --params
     if design != "digital20":
         raise ParameterError(
@@ -216,6 +216,6 @@ def _digit_export_design(params, period: float, args):
     measured = measured if isinstance(measured, float) and math.isfinite(measured) and measured > 0 else None
     own = None if args.calibration is None else calibration
     d = digit_design_20ms(params, period_s=period, calibration=own, orientation=orientation, deg_per_command=measured)
-    runtime = d.runtime(params, name="digital20", dither=params != RigParams())  # as run --params runs it
+    runtime = d.runtime(params, name="digital20", dither=params.digit_only() != RigParams())  # as run --params runs it
     rotation = None if args.no_rotation_map else RotationMap.from_estimator(estimator)
     return runtime, d.plant_d, rotation, 1.0, 180.0

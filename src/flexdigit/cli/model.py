@@ -75,7 +75,7 @@ def _digit_dynamics(params):
 
     from flexdigit.params import DigitDynamics, RigParams
 
-    if params == RigParams() or params.dynamics != DigitDynamics():
+    if params.digit_only() == RigParams() or params.dynamics != DigitDynamics():
         return params, False
     from flexdigit.errors import DesignError
     from flexdigit.twin.twin import release_dynamics

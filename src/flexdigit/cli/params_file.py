@@ -15,7 +15,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("file", nargs="?", help="a rig TOML to load and check (default: the thesis rig)")
     parser.add_argument("--write", metavar="FILE", help="write the parameters (defaults, or FILE's) as TOML")
     parser.add_argument("--template", metavar="FILE", help="write an annotated description of the thesis rig")
-    parser.add_argument("--force", action="store_true", help="overwrite the --write/--template file if it exists")
+    parser.add_argument(
+        "--write-calibration",
+        metavar="FILE",
+        help="write the twin calibration every command uses for this digit when given no --calibration (the "
+        "thesis's fit, scaled to the digit by the physics: docs/digits.md) as TOML, to read, edit and pass back",
+    )
+    parser.add_argument(
+        "--force", action="store_true", help="overwrite the --write/--template/--write-calibration file if it exists"
+    )
 
 
 def _params(args: argparse.Namespace) -> CommandResult:
@@ -47,13 +55,78 @@ def _params(args: argparse.Namespace) -> CommandResult:
         # refused through the one error path (stderr, "flexdigit params: error:", exit 2), every problem on its one
         # line, naming its key; a note may say why (the template's digit_length_m kept for shorter sections)
         raise ParameterError(f"{args.file}: " + "; ".join([*problems, *(f"note: {n}" for n in notes)]))
+    # a file's twin is estimated (a static solve: scipy); the thesis defaults keep `params` light (docs/digits.md)
+    twin, text = _resolution(params) if args.file else (None, [])
+    lines.extend(text)
     if args.write:
         path = save_params(params, args.write, force=args.force)
         lines.append(f"written to {path}")
+    if args.write_calibration:
+        lines.append(f"twin calibration written to {_write_calibration(params, args)}")
     return CommandResult(
-        data={"params": data, "derived": derived, "problems": [], "notes": notes, "written": args.write},
+        data={
+            "params": data,
+            "derived": derived,
+            "twin": twin,
+            "problems": [],
+            "notes": notes,
+            "written": args.write,
+        },
         text="\n".join(lines),
     )
+
+
+def _write_calibration(params, args: argparse.Namespace):
+    """Save the default calibration of ``params``'s twin (``twin_calibration``), saying where it comes from."""
+    from flexdigit.twin.calibration import save_calibration
+    from flexdigit.twin.digit_calibration import twin_calibration
+
+    if params.digit_only() == type(params)():  # the thesis rig, whatever its [twin]
+        how = "the packaged fit to the thesis's records (the thesis rig)"
+    else:
+        how = "the thesis's fit scaled to this digit by the physics (flexdigit.twin.digit_calibration)"
+    header = (
+        f"# flexdigit twin calibration (SI units) of {args.file or 'the thesis rig'}: {how}.\n"
+        "# Pass it back with --calibration FILE; `flexdigit calibrate` fits one to your records.\n"
+    )
+    return save_calibration(twin_calibration(params), args.write_calibration, force=args.force, header=header)
+
+
+def _resolution(params) -> tuple[dict, list[str]]:
+    """The twin's springs and its estimated static error (``twin.resolution.static_error``), and the ``[twin]`` setting
+    that meets 0.1 % when this one does not."""
+    import math
+
+    from flexdigit.params import MAX_TWIN_CELLS
+    from flexdigit.twin.resolution import CABLE_TIP_DEG, STATIC_RTOL, TIP_LOAD_ALPHA2, resolution_for, static_error
+
+    error = static_error(params)
+    data = {"cells_per_section": list(error.cells), "static_error_tip_load": error.tip_load}
+    data["static_error_cable"] = error.cable
+    source = "its [twin] table" if not params.twin.is_default else "the default: cells <= 27 mm"
+    if math.isnan(error.worst):  # a static solve that did not converge: no figure rather than a wrong one
+        return data, [
+            f"twin: {sum(error.cells)} springs, {list(error.cells)} a section ({source}); static error not "
+            "determined (the twin's static solve under the tip load or the cable did not converge)"
+        ]
+    lines = [
+        f"twin: {sum(error.cells)} springs, {list(error.cells)} a section ({source}); static error against the "
+        f"elastica (estimated, h^2 Richardson): {100 * error.tip_load:.3g} % under a tip load of "
+        f"alpha^2 = {TIP_LOAD_ALPHA2:g}, {100 * error.cable:.3g} % under the cable turning the tip "
+        f"{CABLE_TIP_DEG:g} deg"
+    ]
+    if error.worst > STATIC_RTOL:
+        h, finer = resolution_for(params)
+        met = finer.worst <= STATIC_RTOL and sum(finer.cells) <= MAX_TWIN_CELLS
+        data["max_cell_length_m_for_0.1_percent"] = h if met else None
+        if not met:
+            lines.append(f"  no [twin] max_cell_length_m a twin takes meets {100 * STATIC_RTOL:g} % on this digit")
+            return data, lines
+        lines.append(
+            f"  for {100 * STATIC_RTOL:g} %: [twin] max_cell_length_m = {h:g} ({list(finer.cells)} a section: "
+            f"{100 * finer.tip_load:.3g} % | {100 * finer.cable:.3g} %; each step costs more)"
+        )
+    return data, lines
 
 
 def _value(value) -> str:

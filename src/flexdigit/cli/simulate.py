@@ -229,7 +229,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
     params = load_params(args.params) if args.params else RigParams()
     if args.calibration:
         cal = load_calibration(args.calibration)
-    elif params == RigParams():
+    elif params.digit_only() == RigParams():  # the thesis rig, at any [twin] resolution
         cal = default_calibration()
     else:  # a digit nobody has measured: the thesis's calibration scaled to it by the physics
         cal = calibration_for(params)
@@ -372,7 +372,7 @@ def _sweep(args, params, gauges, common: dict):
     )
     cmd = res.column("command")
     lines, findings = [], {}
-    thesis = params == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
+    thesis = params.digit_only() == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
     for g in gauges:
         slope, offset = np.polyfit(cmd, res.column(f"gauge{g}_v"), 1)
         findings[f"gauge{g}"] = {"slope_v_per_command": float(slope), "offset_v": float(offset)}

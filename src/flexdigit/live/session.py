@@ -510,8 +510,10 @@ class LiveSession:
             _, options = rig_url_options(self.rig_url)
             options = {k: v for k, v in options.items() if k != "spin_s"}
             options["seed"] = rig.settings()["seed"] + 1
-            if params == RigParams():  # the thesis rig's map is the same at the twin's coarsest step, sooner; another
-                options["dt_s"] = 0.02  # digit's may not settle at it (a 4 x 80 mm pair, horizontal, rings at 20 ms)
+            # the thesis rig's map is the same at the twin's coarsest step, sooner; another digit's may not settle
+            # at it (a 4 x 80 mm pair, horizontal, rings at 20 ms)
+            if params.digit_only() == RigParams():
+                options["dt_s"] = 0.02
             # the map run --params makes (make_rotation_map's twin source), on a twin of this digit
             estimator = make_rotation_map(rig, "twin", twin_options={"calibration": self.calibration, **options})
             self.controller = make_controller("digital20", rig, period_s=self.period_s, estimator=estimator)

@@ -112,7 +112,7 @@ class ContactGaugeModel:
         How the digit is mounted ("vertical", tip up: the designed mounting and the palpation set-up).
     housing : bool
     cells_per_section : int, sequence of int or None
-        Springs per section (None: :func:`flexdigit.twin.digit.default_cells`).
+        Springs per section (None: the description's, :func:`flexdigit.params.twin_cells`).
 
     Attributes
     ----------

@@ -271,9 +271,11 @@ def rig_metadata(rig) -> dict[str, dict[str, Any]]:
     """``flexdigit.rig`` metadata of an open rig: its repr and parameters (and, on the twin, its calibration)."""
     import dataclasses
 
-    out: dict[str, dict[str, Any]] = {
-        "flexdigit.rig": {"rig": repr(rig), "name": rig.name, "params": dataclasses.asdict(rig.params)}
-    }
+    params = dataclasses.asdict(rig.params)
+    twin_table = getattr(rig.params, "twin", None)
+    if twin_table is not None and twin_table.is_default:  # [twin] left out: the metadata as before the table
+        del params["twin"]
+    out: dict[str, dict[str, Any]] = {"flexdigit.rig": {"rig": repr(rig), "name": rig.name, "params": params}}
     twin = getattr(rig, "twin", None)
     if twin is not None:
         out["flexdigit.rig"]["twin_calibration"] = twin.calibration.to_dict()

@@ -172,7 +172,7 @@ def study_subject(spec) -> str:
     robot = getattr(spec.baseline, "robot", None)
     if robot is not None:
         return f"robot {robot.name}"
-    if spec.baseline.params == RigParams():
+    if spec.baseline.params.digit_only() == RigParams():
         return "the thesis rig"
     return f"the digit of {Path(spec.source).name}"
 

@@ -39,5 +39,8 @@ __getattr__, __all__ = lazy_exports(
         "Chain": "flexdigit.twin.digit",
         "build_digit": "flexdigit.twin.digit",
         "default_cells": "flexdigit.twin.digit",
+        "StaticError": "flexdigit.twin.resolution",
+        "static_error": "flexdigit.twin.resolution",
+        "resolution_for": "flexdigit.twin.resolution",
     },
 )

@@ -44,14 +44,13 @@ import scipy.linalg
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.models.servo import command_to_angle_rad
-from flexdigit.params import RigParams
+from flexdigit.params import RigParams, twin_cells
 from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.digit import (
     ORIENTATIONS,
     Chain,
     DynamicState,
     chain_matrices,
-    default_cells,
     digit_arrays,
     section_cells,
 )
@@ -563,7 +562,8 @@ def _shared_layouts(rows: list[dict]) -> list[list[int]]:
 
 def batch_cells(params, cells_per_section=None, owner: str = "BatchedTwin"):
     """The cells per section of a batch: an explicit count as given; None: section by section the most any rig's
-    :func:`~flexdigit.twin.digit.default_cells` asks for (a batch stacks chains of one size; a rig of the batch is
+    resolution asks for (:func:`~flexdigit.params.twin_cells`: its ``[twin]`` table, else
+    :func:`~flexdigit.twin.digit.default_cells`; a batch stacks chains of one size; a rig of the batch is
     then cut at least as finely as its own default, e.g. the design study's scaled digits). Rigs of different
     section counts keep their own defaults (and the stacking refuses them, naming both sizes)."""
     params = list(params)
@@ -571,7 +571,7 @@ def batch_cells(params, cells_per_section=None, owner: str = "BatchedTwin"):
         if np.ndim(cells_per_section) == 0:  # one count for every section of every rig
             return check_int(cells_per_section, "cells_per_section", owner, low=1, high=1000)
         return section_cells(params[0].geometry, cells_per_section, owner) if params else cells_per_section
-    counts = {default_cells(p.geometry) for p in params}
+    counts = {twin_cells(p) for p in params}
     if len(counts) <= 1 or len({len(c) for c in counts}) > 1:
         return None
     return tuple(int(n) for n in np.max(np.array(sorted(counts)), axis=0))

@@ -56,6 +56,7 @@ from flexdigit._constants import G_STANDARD_M_S2
 from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_array, check_choice, check_int, check_positive, check_real, check_values
 from flexdigit.errors import ConvergenceWarning, ParameterError
+from flexdigit.params import MAX_CELL_LENGTH_M, MIN_CELLS_PER_SECTION, cells_no_longer_than, twin_cells
 
 __all__ = [
     "G_STANDARD_M_S2",
@@ -869,33 +870,22 @@ def _chain_uniform(
 Chain.uniform = staticmethod(_chain_uniform)
 
 
-#: The longest spring cell (m) of the default resolution: each section's free strip is cut into cells no longer
-#: than this. Chosen by the convergence study of ``tests/twin/test_cell_resolution.py`` (docs/digits.md, "The
-#: twin's resolution"): on drawn digits 0.15-0.5 m long the gauges' strain and the tip deflection stay within
-#: 1 % of the converged twin; the thesis rig's 80 mm sections keep their 3 cells (80 / 27 = 2.96).
-MAX_CELL_LENGTH_M = 0.027
-#: The fewest cells of a section (odd, so a gauge midway on a section falls on a spring, as on the thesis rig).
-MIN_CELLS_PER_SECTION = 3
-
-
 def default_cells(geometry) -> tuple[int, ...]:
     """Cells per section of the default resolution: ``ceil(l_k / MAX_CELL_LENGTH_M)``, at least
     ``MIN_CELLS_PER_SECTION`` and odd, for each section's free strip ``l_k`` (``Geometry.section_bounds_m``,
-    unequal sections too). The thesis rig's 80 mm sections: ``(3, 3, 3)``.
+    unequal sections too). The thesis rig's 80 mm sections: ``(3, 3, 3)``. A description's ``[twin]`` table
+    may ask for another (:func:`flexdigit.params.twin_cells`, what the builders take).
 
     >>> from flexdigit.params import RigParams
     >>> default_cells(RigParams().geometry)
     (3, 3, 3)
     """
-    out = []
-    for start, end in geometry.section_bounds_m:
-        n = max(MIN_CELLS_PER_SECTION, math.ceil((end - start) / MAX_CELL_LENGTH_M - 1e-9))
-        out.append(n + 1 - n % 2)  # odd: the next odd count when even
-    return tuple(out)
+    return cells_no_longer_than(geometry, MAX_CELL_LENGTH_M)
 
 
 def section_cells(geometry, cells_per_section=None, owner: str = "build_digit") -> tuple[int, ...]:
-    """Cells of each section: :func:`default_cells` for None, one int for every section, or one per section."""
+    """Cells of each section: :func:`default_cells` for None, one int for every section, or one per section
+    (:func:`digit_arrays` passes a description's own, :func:`flexdigit.params.twin_cells`, for None)."""
     nsec = geometry.section_count
     if cells_per_section is None:
         return default_cells(geometry)
@@ -939,8 +929,9 @@ def build_digit(
         With the elastomer housing (table 3.2) or the bare strip (table 3.1).
     orientation : {"vertical", "hanging", "horizontal"}
     cells_per_section : int, sequence of int or None
-        Springs per section (one count for all, or one per section); None: :func:`default_cells`, cells no longer
-        than ``MAX_CELL_LENGTH_M``.
+        Springs per section (one count for all, or one per section); None: the description's own
+        (:func:`flexdigit.params.twin_cells`: its ``[twin]`` table, else :func:`default_cells`, cells no longer
+        than ``MAX_CELL_LENGTH_M``).
     """
     return Chain(
         **digit_arrays(
@@ -956,7 +947,8 @@ def digit_arrays(
     (for chains stacked without building each one, :meth:`flexdigit.twin.batched.BatchedChains.from_rigs`)."""
     check_choice(orientation, "orientation", tuple(ORIENTATIONS), "build_digit")
     geo, mat = params.geometry, params.material
-    cells = section_cells(geo, cells_per_section)
+    # None: the description's own resolution ([twin], else the default), so every builder honours a user's setting
+    cells = twin_cells(params) if cells_per_section is None else section_cells(geo, cells_per_section)
     nsec = geo.section_count
     bounds = geo.section_bounds_m  # each section's free strip (unequal sections too)
     ei_strip = mat.youngs_modulus_pa * geo.second_moment_m4

@@ -227,7 +227,8 @@ def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
 
     In order: the file ``path`` if given; the calibration a :func:`~flexdigit.twin.calibration.use_calibration`
     block made the default, if it has one value per section and per gauge of ``params`` (``reproduce
-    --calibration``); the packaged thesis fit for the thesis rig (``params`` None or equal to ``RigParams()``);
+    --calibration``); the packaged thesis fit for the thesis rig (``params`` None or equal to ``RigParams()`` but for
+    its ``[twin]`` resolution);
     else :func:`calibration_for` (the thesis's scaled to that digit). Any other digit, even one of 3 sections and
     3 gauges like the thesis rig's, is not the rig the packaged fit was measured on: its twin gets the scaled one.
 
@@ -246,9 +247,9 @@ def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
     params = RigParams() if params is None else params
     if default_calibration_source() != "packaged" and _describes(default_calibration(), params):
         return default_calibration()
-    if params == RigParams():
+    if params.digit_only() == RigParams():  # the thesis rig, whatever its twin's resolution ([twin])
         return packaged_calibration()
-    return _calibration_for_cached(params)
+    return _calibration_for_cached(params.digit_only())  # the laws read the digit, not its twin's resolution
 
 
 def _describes(calibration: Calibration, params: RigParams) -> bool:

@@ -55,8 +55,9 @@ __all__ = [
 ]
 
 DEFAULT_DT_S = 0.020
-#: None: each section cut by :func:`flexdigit.twin.digit.default_cells` (cells no longer than
-#: ``MAX_CELL_LENGTH_M``; the thesis rig's 3 per section); an int or a per-section tuple passed instead is honoured.
+#: None: the description's own resolution, :func:`flexdigit.params.twin_cells` (its ``[twin]`` table, else
+#: :func:`flexdigit.twin.digit.default_cells`: cells no longer than ``MAX_CELL_LENGTH_M``, the thesis rig's 3 per
+#: section); an int or a per-section tuple passed instead is honoured.
 DEFAULT_CELLS_PER_SECTION = None
 #: Second word of the seed of the cable-guide friction's generator, ``default_rng([seed, FRICTION_STREAM])``.
 FRICTION_STREAM = 1
@@ -125,7 +126,7 @@ class Twin:
     dt_s : float
         Integration step (s), rounded to a divisor of the serial period.
     cells_per_section : int, sequence of int or None
-        Springs per section of the digit model (None: :func:`~flexdigit.twin.digit.default_cells`).
+        Springs per section of the digit model (None: the description's, :func:`~flexdigit.params.twin_cells`).
     command : int, optional
         Initial command (default the equilibrium command, 8); the twin starts at rest in equilibrium there.
     compiled : bool
@@ -611,7 +612,7 @@ def static_gauges_v(
         Horizontal by default: the weights hang off a horizontal digit, cable side up (chapters 6-7).
     housing : bool
     cells_per_section : int, sequence of int or None
-        Springs per section (None: :func:`~flexdigit.twin.digit.default_cells`).
+        Springs per section (None: the description's, :func:`~flexdigit.params.twin_cells`).
     seed : int, optional
         With a seed, add the calibration's white noise and, where the cable is taut, one draw of the cable-guide
         friction per case (drift is a slow process, not per case). The same seed gives the same white noise as
