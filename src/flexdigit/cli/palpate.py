@@ -302,27 +302,39 @@ def _refuse_untouched(curve) -> None:
         )
 
 
-def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
+def _refuse_sweep(result) -> None:
+    """One line if the sweep's fit is poor, its modulus undetermined or the tissue barely reached; where the climb
+    stopped short of an ADC rail (palpation._Staircase), the likelier reason, said on the same line."""
     from flexdigit.errors import DataFileError
+
+    try:
+        _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
+        _refuse_untouched(result.curve)
+    except DataFileError as exc:
+        if not result.record.capped:
+            raise
+        raise DataFileError(f"{exc}; the sweep {result.record.capped}") from None
+
+
+def _held(sweep, result):
+    """The sweep as its plateaus held it: the protocol, or, where the climb stopped short of a rail, its commands as
+    sent (the Cramer-Rao bound of what was measured)."""
+    if not result.record.capped:
+        return sweep
+    from dataclasses import replace
+
+    return replace(sweep, commands=tuple(int(c) for c in result.record.command[1:-1]))
+
+
+def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import palpate, stiffness_bound
 
     model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode, drift=True)
-    try:
-        _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
-        _refuse_untouched(result.curve)
-    except DataFileError as exc:  # a climb stopped short of a rail is the likelier reason: said on the same line
-        if not result.record.capped:
-            raise
-        raise DataFileError(f"{exc}; the sweep {result.record.capped}") from None
+    _refuse_sweep(result)
     hunt = plan.sweep.model == "hunt-crossley"
-    held = plan.sweep
-    if result.record.capped:  # the bound of the commands the plateaus held (the climb stopped short of a rail)
-        from dataclasses import replace
-
-        held = replace(held, commands=tuple(int(c) for c in result.record.command[1:-1]))
-    bound = stiffness_bound(model, result.fit.tissue, held, fit_exponent=hunt, drift=True)  # the walk weighed
+    bound = stiffness_bound(model, result.fit.tissue, _held(plan.sweep, result), fit_exponent=hunt, drift=True)
     data = _sweep_data(result, plan, bound, tissue)
     summary = data["result"]
     f = result.fit
