@@ -116,7 +116,9 @@ def test_palpate_refuses_a_tissue_file_past_the_tip_in_one_line(tmp_path, capsys
     assert main(["palpate", "--tissue", str(tissue), "--params", str(params)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0
-    assert str(tissue) in err and "'tissue.start_mm'" in err and "150 mm tip" in err
+    assert str(tissue) in err
+    assert "'tissue.start_mm'" in err
+    assert "150 mm tip" in err
 
 
 # --------------------------------------------------------------------------------------------- the ADC's range
@@ -132,7 +134,8 @@ def test_the_staircase_stops_climbing_near_a_rail_and_still_tares():
     sent += [stairs.step(t + 0.5, _reading([0.1, 1.0])) for t in range(4, 7)]
     assert sent == [8, 8, 9, 10, 10, 10, 8]
     assert stairs.sent == [8, 8, 9, 10, 10, 10, 8]
-    assert "command 10" in stairs.capped and "gauge 2" in stairs.capped
+    assert "command 10" in stairs.capped
+    assert "gauge 2" in stairs.capped
 
 
 def test_the_staircase_without_a_range_is_the_schedule():
@@ -192,8 +195,10 @@ def test_a_hold_whose_gauges_fault_at_once_says_so_in_one_line(tmp_path, capsys)
     params = write_digit("short", tmp_path, sensors={"adc_bits": 10, "adc_range_v": [0.0, 3.3]})
     assert main(["palpate", "--tissue", "soft-block", "--protocol", "hold", "--params", str(params)]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "internal error" not in err
-    assert "force hold stopped: sensor fault" in err and "digit relaxed to command" in err
+    assert err.count("\n") == 0
+    assert "internal error" not in err
+    assert "force hold stopped: sensor fault" in err
+    assert "digit relaxed to command" in err
 
 
 def test_the_builtin_scan_is_laid_out_with_the_builtin_tissue():
@@ -201,7 +206,8 @@ def test_the_builtin_scan_is_laid_out_with_the_builtin_tissue():
     from flexdigit.palpation.palpation_files import load_palpation_protocol
 
     plan = load_palpation_protocol("scan")
-    assert plan.builtin and plan.scan["offsets_m"] == (-0.04, -0.03, -0.02, -0.01, 0.0, 0.01, 0.02, 0.03, 0.04)
+    assert plan.builtin
+    assert plan.scan["offsets_m"] == (-0.04, -0.03, -0.02, -0.01, 0.0, 0.01, 0.02, 0.03, 0.04)
     laid = _scan_laid_out(plan, RigParams.from_dict(DIGITS["short"]))  # 0.15 / 0.27 of the thesis rig's
     assert laid.scan["offsets_m"] == tuple(round(d * 0.15 / 0.27, 4) for d in plan.scan["offsets_m"])
     assert laid.scan["inclusion_width_m"] == pytest.approx(0.0056)
