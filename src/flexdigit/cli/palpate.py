@@ -107,13 +107,13 @@ def _digit_tissue(tissue, info, params):
     "" on the thesis rig), or a file's tissue as it is, refused in one line naming the file if it lies past the
     digit's tip (palpation.check_tissue_reach)."""
     from flexdigit.errors import DataFileError, ParameterError
-    from flexdigit.palpation.palpation import check_tissue_reach, digit_tissue
+    from flexdigit.palpation.palpation import check_tissue_reach, digit_tissue, tissue_scale
 
     if info.builtin:
         laid = digit_tissue(tissue, params)
         if laid is tissue:
             return tissue, ""
-        scale = laid.start_m / tissue.start_m
+        scale = tissue_scale(params)
         return laid, (
             f"built-in {info.name} laid out beside this {1000 * params.geometry.digit_length_m:g} mm digit: its "
             f"place and gap scaled by {scale:.3g} from the thesis rig's 270 mm (start {1000 * laid.start_m:.1f} mm, "
