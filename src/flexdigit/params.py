@@ -66,6 +66,7 @@ __all__ = [
     "plausible_ranges",
     "params_template",
     "description_notes",
+    "adc_range_notes",
     "builtin_digits",
     "load_params",
     "save_params",
@@ -1067,7 +1068,33 @@ def description_notes(params: RigParams) -> list[str]:
             "dynamics come from its geometry, material and calibration; [dynamics] only sets chapter 3's synthetic "
             "identification records"
         )
+    notes.extend(adc_range_notes(params))
     return notes
+
+
+def adc_range_notes(params: RigParams) -> list[str]:
+    """A line naming ``[sensors] adc_range_v`` when the range cannot read the gauges' chain at rest: a bridge is
+    balanced straight (its amplifier reads 0 V, the twin's ``channel_offset_v`` 0), so a range that starts (or
+    ends) at 0 V or excludes it reads every gauge at its rail (a microcontroller's 0..3.3 V ADC needs the chain
+    offset to mid-range, or a range around 0 V).
+
+    Examples
+    --------
+    >>> adc_range_notes(RigParams())
+    []
+    >>> adc_range_notes(RigParams.from_dict({"sensors": {"adc_range_v": [0.0, 3.3]}}))[0][:52]
+    '[sensors] adc_range_v = [0, 3.3] cannot read the gau'
+    """
+    s = params.sensors
+    low, high = s.adc_range_v
+    if low + s.adc_lsb_v < 0.0 < high - s.adc_lsb_v:
+        return []
+    return [
+        f"[sensors] adc_range_v = [{low:g}, {high:g}] cannot read the gauges' chain: a balanced bridge reads 0 V "
+        f"straight, {'at the range' if low <= 0.0 <= high else 'outside the range'}'s end, so every gauge reads a "
+        "rail; give a range around 0 V (e.g. "
+        f"[{-(high - low) / 2:g}, {(high - low) / 2:g}]) or offset the amplifier's output to mid-range"
+    ]
 
 
 def _lengths_text(g: Geometry) -> str:

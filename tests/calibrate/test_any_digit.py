@@ -47,15 +47,16 @@ def _truth(params, mass=PERTURB["mass"], strip=PERTURB["beta"], gains=None):
     )
 
 
-def _records(name, tmp_path, capsys, kinds=("bare", "housed"), **truth):
-    """The digit's records simulated from its perturbed calibration (seed 1): ``(params file, truth, files)``."""
+def _records(name, tmp_path, capsys, kinds=("bare", "housed"), sweep=(), **truth):
+    """The digit's records simulated from its perturbed calibration (seed 1): ``(params file, truth, files)``;
+    ``sweep`` more flags of ``simulate sweep``."""
     path = HANDMADE / f"{name}.toml"
     truth = _truth(load_params(path), **truth)
     cal_file = save_calibration(truth, tmp_path / "truth.toml")
     files = {}
     for kind in kinds:
         out = tmp_path / f"{kind}.csv"
-        extra = {"bare": ["release", "--no-housing"], "housed": ["release"], "sweep": ["sweep"]}[kind]
+        extra = {"bare": ["release", "--no-housing"], "housed": ["release"], "sweep": ["sweep", *sweep]}[kind]
         argv = ["simulate", *extra, "--params", str(path), "--calibration", str(cal_file), "--seed", "1"]
         assert main([*argv, "--out", str(out)]) == 0
         files[kind] = out
@@ -100,9 +101,12 @@ def test_unequal_supports_keep_their_ratios(tmp_path, capsys):
     np.testing.assert_allclose(got / got[0], want / want[0], rtol=1e-9)  # ratios kept exactly
 
 
-def test_housed_and_sweep_give_every_gain_within_its_reported_error(tmp_path, capsys):
+def test_housed_and_sweep_give_every_gain_within_its_reported_error_or_keep_it(tmp_path, capsys):
     """Issue 24 trial 3: four_sections_geared_eight's gauges 7 and 8 came out -19 / +17 %, its records made tip up
-    where it buckles. Now hung, as simulate and run mount it, and each gain within 3 of its standard error. The
+    where it buckles. Now hung, as simulate and run mount it. Its 3:1 servo's sweep over 8..43 turns the tip a third
+    as far as the thesis rig's: gauges 1 and 2 read lines too shallow for the gauges' drift to leave their gains
+    within 5 % (7 %, 1 sd; seeds 0-2 fitted them -0.3, -10.0; -8.5, +2.1; -15.3, -1.2 %): kept at their starting
+    values and said, with the sweep that would tell them. The others within 3 of their standard errors. The
     supports' mass and the strip's damping are the description's (a housed test alone cannot tell them from the
     housing's: they are kept, and the notes say so); the gains +-10 % on alternate gauges."""
     gains = (1.1, 0.9) * 4
@@ -115,8 +119,43 @@ def test_housed_and_sweep_give_every_gain_within_its_reported_error(tmp_path, ca
     notes = " ".join(data["notes"])
     assert "kept support_mass_kg" in notes  # housed alone: mass or housing?
     assert "--release-bare" in notes
-    errors = dict(re.findall(r"gauge (\d+) \+-(\d+) %", notes))
+    kept = {int(k) for k in re.findall(r"kept channel_gain of gauge (\d+)", notes)}
+    assert kept == {1, 2}, notes
+    assert "a sweep over 8..113 (as far in tip rotation as the thesis rig's 8..43)" in notes
+    errors = dict(re.findall(r"gauge (\d+) \+-(\d+) %", notes.split("standard errors from the sweep")[-1]))
+    got = load_calibration(tmp_path / "c.toml").channel_gain
+    start = calibration_for(load_params(path)).channel_gain
+    for k, (g, t) in enumerate(zip(got, truth.channel_gain, strict=True)):
+        if k + 1 in kept:
+            assert g == start[k]  # the prior, never a confident wrong value
+            continue
+        se = max(float(errors.get(str(k + 1), 2)), 1.0) / 100  # under 2 % it is not reported
+        assert se <= 0.05
+        assert abs(g / t - 1) < GAIN_SIGMAS * se, (k + 1, g, t, se)
+
+
+def test_a_geared_digits_sweep_over_the_thesis_tip_range_tells_every_gain(tmp_path, capsys):
+    """The same digit swept over 8..113 (the note's advice: 3 of its commands a thesis command): every gain fitted,
+    each told to within 5 % (1 sd; the drift's tilt falls as the root of the commands swept), within 3 of its
+    standard errors of the records' own."""
+    gains = (1.1, 0.9) * 4
+    path, truth, files = _records(
+        "four_sections_geared_eight",
+        tmp_path,
+        capsys,
+        ("housed", "sweep"),
+        mass=1.0,
+        strip=1.0,
+        gains=gains,
+        sweep=["--commands", "8..113"],
+    )
+    code, data = _calibrate(path, files, tmp_path / "c.toml", capsys)
+    assert code == 0, data
+    notes = " ".join(data["notes"])
+    assert "kept channel_gain" not in notes
+    errors = dict(re.findall(r"gauge (\d+) \+-(\d+) %", notes.split("standard errors from the sweep")[-1]))
     got = load_calibration(tmp_path / "c.toml").channel_gain
     for k, (g, t) in enumerate(zip(got, truth.channel_gain, strict=True)):
-        se = max(float(errors.get(str(k + 1), 2)), 1.0) / 100  # under 2 % it is not reported
+        se = max(float(errors.get(str(k + 1), 2)), 1.0) / 100
+        assert se <= 0.05
         assert abs(g / t - 1) < GAIN_SIGMAS * se, (k + 1, g, t, se)

@@ -46,41 +46,52 @@ def test_the_short_digit_holds_its_force_and_tells_the_place(tmp_path, capsys):
     assert held["estimate_sd_n"] < HOLD * held["setpoint_n"]
 
 
-@pytest.mark.parametrize("name", ["one-section"])
-def test_a_one_gauge_digit_refuses_the_place_and_says_how_uncertain_its_force_is(name, tmp_path, capsys):
-    held = _hold(name, tmp_path, capsys)
+def _hold_at(name: str, setpoint_n: float, tmp_path, capsys) -> tuple[int, dict, str]:
+    """``palpate --protocol FILE`` holding ``setpoint_n`` for 10 s beside the block of :func:`_hold`: exit code,
+    JSON and stderr."""
+    digit = write_digit(name, tmp_path)
+    length_mm = 1000 * DIGITS[name]["geometry"]["digit_length_m"]
+    tissue = tmp_path / "tissue.toml"
+    tissue.write_text(
+        f'[tissue]\nname = "block"\nside = "cable"\nstart_mm = {0.55 * length_mm:.1f}\nend_mm = {length_mm + 80:.1f}'
+        f"\ngap_mm = {0.1 * length_mm:.1f}\nmodulus_n_m2 = 1000.0\n"
+    )
+    protocol = tmp_path / "hold.toml"
+    protocol.write_text(f"[force]\nsetpoint_n = {setpoint_n}\nduration_s = 10.0\n")
+    argv = ["palpate", "--params", str(digit), "--tissue", str(tissue), "--protocol", str(protocol), "--json"]
+    code = main(argv)
+    captured = capsys.readouterr()
+    return code, json.loads(captured.out), captured.err
+
+
+def test_a_one_gauge_digit_refuses_a_force_it_cannot_read_within_10_percent(tmp_path, capsys):
+    """Its one gauge reads 36 mN a reading and drifts 3.6 mN/sqrt(s), which it cannot tell from force: over a 10 s
+    hold its force read is uncertain by 12 mN (1 sd), 12 % of 0.1 N. Its twin held -25, -27 and -22 % on seeds 1, 2
+    and 4 and said "completed"; now refused before the digit moves, in one line naming the least force it holds
+    (0.34 N: a larger force tares on fewer readings, palpation._least_held)."""
+    code, out, err = _hold_at("one-section", 0.1, tmp_path, capsys)
+    assert code == 2
+    assert err.count("\n") == 1
+    assert "cannot hold 0.1 N within 10 %" in err
+    assert "uncertain by 12 mN" in err
+    assert "it holds 0.34 N or more within 10 %" in err
+    assert "not moved" in out["error"]
+
+
+def test_a_one_gauge_digit_holds_the_least_force_it_names(tmp_path, capsys):
+    """At the 0.34 N the refusal names, the one-gauge digit holds within 10 % of the twin's true force; its place is
+    refused (one gauge reads one number, the force times its lever)."""
+    code, held, _ = _hold_at("one-section", 0.34, tmp_path, capsys)
+    assert code == 0, held
+    assert abs(held["steady_error"]) < HOLD, held["steady_error"]
     place = held["contact_place"]
     assert place["steady_mm"] is None
-    assert place["error_mm"] is None
     assert not place["told"]
     assert "one gauge" in place["reason"]
     assert place["true_steady_mm"] is not None  # the twin's contact was there: the place is refused, not missed
-    assert "uncertain" in held["estimate_note"]
-    assert held["estimate_sd_n"] > HOLD * held["setpoint_n"]
-    assert abs(held["steady_force_n"] - held["setpoint_n"]) < 3 * held["estimate_sd_n"]
-
-
-def test_a_hold_says_what_its_estimates_decided(tmp_path, capsys):
-    """The force held follows the contact decision (palpation.ForceController.estimate): the JSON counts the last 3
-    s's decisions and gives each sample's; pressing 0.1 N, every estimate of the window decides a contact, and one
-    reading at a time on the short digit (3 gauges' worth of noise: 6.6 mN a reading against a 30 mN threshold)."""
-    held = _hold("short", tmp_path, capsys)
-    window = [t >= held["time_s"][-1] - 3.0 for t in held["time_s"]]
-    assert held["kind"] == "force"  # what the command did, not overwritten by the samples' decisions
-    assert len(held["decision"]) == len(held["time_s"])
-    assert held["decisions"] == {"none": 0, "point": sum(window), "distributed": 0}
-    assert held["decision"][0] == "none"  # the first reading, at the straight command: nothing touches
-    assert held["average_readings"] == 1
-    assert held["tare_readings"] == 10
-
-
-def test_a_one_gauge_hold_decides_on_the_mean_of_its_readings(tmp_path, capsys):
-    """36 mN a reading: each estimate is made on the mean of 14 readings (their noise 3 sd below the 30 mN
-    threshold), and the tare on (36 mN / 3.3 mN)^2 = 118 (its force error a third of 10 % of the setpoint)."""
-    held = _hold("one-section", tmp_path, capsys)
-    assert held["average_readings"] == 14
-    assert 100 <= held["tare_readings"] <= 140
-    assert held["decisions"]["point"] > 0.9 * sum(held["decisions"].values())
+    assert held["estimate_sd_n"] <= 0.05 * held["setpoint_n"]
+    # a contact read (a point, or at this force the line load its reference press reads better) over the window
+    assert held["decisions"]["none"] < 0.1 * sum(held["decisions"].values())
 
 
 @pytest.mark.parametrize(

@@ -61,6 +61,9 @@ def _add_collect(subparsers, settle) -> None:
         "--settle", type=Flag(settle), default=None, help="settle time per setting, s, 0..3600 (default: protocol's)"
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--allow-rail", action="store_true", help="write the dataset even if some gauge readings sit at the ADC's rail"
+    )
     p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
     p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset, and --record, --plot")
     add_plot_flag(p, "the dataset's gauge voltages against the load's position and against time")
@@ -196,6 +199,7 @@ def _collect(args: argparse.Namespace) -> CommandResult:
         settle_s=args.settle,
         progress=not args.no_progress,
         force=args.force,
+        allow_rail=args.allow_rail,
     )
     data = {
         "protocol": protocol.name,

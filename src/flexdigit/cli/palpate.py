@@ -537,6 +537,7 @@ def _force(rig, tissue, plan, log, log_mode, source="tissue"):
         region_m=(max(tissue.start_m, 0.0), end),
         log_path=log,
         log_mode=log_mode,
+        refuse_uncertain=True,  # a force read uncertain by more than 5 % of the setpoint: refused before moving
     )
     unreached = held.unreached()
     if unreached:  # never a success that touched nothing: the digit relaxed, one line, exit 2

@@ -41,7 +41,8 @@ def _params(args: argparse.Namespace) -> CommandResult:
         return _template(args)
     params = load_params(args.file, check=False) if args.file else RigParams()
     problems = digit_inconsistencies(params)
-    notes = description_notes(params)
+    # a file's gauges are checked against its ADC (statics: scipy); the thesis defaults keep `params` light
+    notes = description_notes(params) + (_reach_notes(params) if args.file and not problems else [])
     data = params.to_dict()
     derived = derived_figures(params)
     lines = [f"rig parameters ({args.file or 'thesis defaults'}):"]
@@ -63,17 +64,8 @@ def _params(args: argparse.Namespace) -> CommandResult:
         lines.append(f"written to {path}")
     if args.write_calibration:
         lines.append(f"twin calibration written to {_write_calibration(params, args)}")
-    return CommandResult(
-        data={
-            "params": data,
-            "derived": derived,
-            "twin": twin,
-            "problems": [],
-            "notes": notes,
-            "written": args.write,
-        },
-        text="\n".join(lines),
-    )
+    data = {"params": data, "derived": derived, "twin": twin, "problems": [], "notes": notes, "written": args.write}
+    return CommandResult(data=data, text="\n".join(lines))
 
 
 def _write_calibration(params, args: argparse.Namespace):
@@ -127,6 +119,19 @@ def _resolution(params) -> tuple[dict, list[str]]:
             f"{100 * finer.tip_load:.3g} % | {100 * finer.cable:.3g} %; each step costs more)"
         )
     return data, lines
+
+
+def _reach_notes(params) -> list[str]:
+    """The gauges that reach an ADC rail inside the operating range, or read too coarsely for the loop (the
+    digit's statics: :func:`flexdigit.rig.gauge_rails.gauge_rails`)."""
+    from flexdigit.errors import FlexdigitError
+    from flexdigit.rig.gauge_rails import gauge_rails, rail_lines, resolution_lines
+
+    try:
+        reaches = gauge_rails(params)
+    except FlexdigitError as exc:  # a digit the statics cannot solve: the other commands say why
+        return [f"the gauges' reach over the operating range was not computed ({exc})"]
+    return rail_lines(reaches, params) + resolution_lines(reaches, params)
 
 
 def _value(value) -> str:

@@ -335,6 +335,9 @@ def _release_record(args, params, gauges, common: dict):
         if "too short" not in str(exc):
             raise
         said = str(exc).partition("; pass --force")[0]
+        if "quantised: " in said:  # the resolution, not the duration, is what is wrong
+            why = "quantised: " + said.partition("quantised: ")[2].partition(";")[0]
+            raise ParameterError(f"the release record cannot be identified, {why} (no record written)") from None
         raise ParameterError(
             f"a {duration:g} s release record is too short to identify this digit's first mode: give --duration "
             f"{max(need, 2 * duration):g} or more (no record written; identify: {said})"

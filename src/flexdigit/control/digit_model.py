@@ -41,6 +41,7 @@ import control as ct
 import numpy as np
 
 from flexdigit.errors import DesignError
+from flexdigit.models.bridge import gauge_noise_scale
 from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.models.servo import servo_unit_tf
 from flexdigit.params import RigParams
@@ -184,9 +185,19 @@ def _measured_rotation(chain, params: RigParams, calibration, solution, static: 
     information = float(sens_v_per_rad @ sens_v_per_rad)
     if not information > 0:
         raise DesignError("design: the digit's gauges do not see the cable's bending (no gauge on a bent strip)")
-    weights = sens_v_per_rad / information  # rad per volt, as the sweep's map fits them
+    weights = _map_weights(sens_v_per_rad, gauge_noise_scale(params.sensors, sens_v_per_rad.size))
     sd_deg = math.degrees(float(np.sqrt(np.sum((weights * np.asarray(sensors.white)) ** 2))))
     return (weights * vpc) @ d, sd_deg
+
+
+def _map_weights(sens_v_per_rad: np.ndarray, noise) -> np.ndarray:
+    """The weights (rad per volt) the sweep's map gives the gauges (:class:`~flexdigit.rig.rotation.RotationEstimator`
+    as :func:`~flexdigit.rig.rotation.calibrate_rotation` fits it): each gauge's sensitivity over their sum of
+    squares, or, with an amplifier gain per gauge (``noise``, :func:`~flexdigit.models.bridge.gauge_noise_scale`),
+    the Gauss-Markov weights ``W s / (s' W s)``, ``W = 1 / noise^2``."""
+    w = np.ones_like(sens_v_per_rad) if noise is None else 1.0 / np.asarray(noise, dtype=float) ** 2
+    information = float(sens_v_per_rad @ (w * sens_v_per_rad))
+    return w * sens_v_per_rad / information
 
 
 def _truncated(a: np.ndarray, b: np.ndarray, c: np.ndarray):

@@ -217,7 +217,7 @@ def _saturation_and_misfit(
 ) -> list[Problem]:
     """A clipped record, and (for the fit of the whole record, ``lsq``) a misfit over the limit."""
     problems: list[Problem] = []
-    sat = _saturation(t, raw, m, noise_std, abs(amplitude), unit)
+    sat = _quantised(raw, unit) or _saturation(t, raw, m, noise_std, abs(amplitude), unit)
     if sat:
         problems.append(sat)
     if misfit > limit and method == "lsq":
@@ -258,6 +258,28 @@ def _warnings(method: str, misfit: float, limit: float, lb, block_s: float) -> l
             "confidence intervals are optimistic"
         )
     return warnings
+
+
+#: A record spanning at most this many quantisation steps is too coarse to identify: its "plateaus" are its levels,
+#: not a rail (trial 2: a 10-bit ADC's release record spanned ~5 steps and was called saturated).
+QUANTISED_STEPS = 16
+
+
+def _quantised(raw, unit) -> Problem | None:
+    """A record that spans at most :data:`QUANTISED_STEPS` of its own quantisation step (the smallest difference
+    between its values): what is wrong is the resolution, not a rail."""
+    values = np.unique(np.asarray(raw, dtype=float))
+    if values.size < 2:
+        return None
+    step = float(np.min(np.diff(values)))
+    spans = int(round(float(values[-1] - values[0]) / step))
+    if spans > QUANTISED_STEPS:
+        return None
+    return Problem(
+        "quantised",
+        f"quantised: the record spans {spans} ADC steps of {step:.3g} {unit}".rstrip()
+        + ", too few to identify a response from: raise the amplifier gain or the ADC's bits",
+    )
 
 
 def _saturation(t, raw, model, noise, amplitude, unit) -> Problem | None:

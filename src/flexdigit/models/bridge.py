@@ -45,6 +45,7 @@ __all__ = [
     "adc_clipped",
     "gauge_voltage_v",
     "strain_from_voltage",
+    "gauge_noise_scale",
 ]
 
 if TYPE_CHECKING:
@@ -218,3 +219,32 @@ def strain_from_voltage(voltage_v, sensors: Sensors | None = None):
     """Invert the small-strain chain: surface strain for an amplifier output voltage."""
     out = np.asarray(voltage_v, dtype=float) / bridge_gain_v_per_strain(sensors)
     return out if out.ndim else float(out)
+
+
+def gauge_noise_scale(sensors: Sensors, count: int) -> np.ndarray | None:
+    """Each gauge's white noise relative to the others' (the amplifier gains, ``amplifier_gains_v_per_v``) when the
+    gauges have amplifiers of unequal gain, else None (equal noise): the weights of the rotation map's Gauss-Markov
+    inverse (:class:`~flexdigit.rig.rotation.RotationEstimator`'s ``noise_v``; only ratios matter) and of the 20 ms
+    design's model of it (:mod:`flexdigit.control.digit_model`).
+
+    Why: a gauge's noise is its amplifier's input-referred noise amplified with its signal (the twin's default
+    calibration scales ``noise_white_v`` by the gain, :mod:`flexdigit.twin.digit_calibration`). The map's
+    equal-weight inverse ``theta = s' (g - a) / (s' s)`` weighs each gauge by its sensitivity in volts squared:
+    amplify one gauge 12 times more than another and it takes 144 times the weight though its noise in degrees is
+    the same, and the estimate becomes the most amplified gauge's alone. On the trial's stainless digit (gains
+    500..6000) that was the tip gauge, which bends most in the step's transient: the estimate overshot 46 % where
+    the tip overshot 12-21 %, and the loop settled in 2.4 s or never. Weighted by the gains, each gauge counts as on
+    equal chains: the map does not depend on how each gauge was amplified. The gains, not the sweep's measured
+    noise: a low-gain gauge's noise near one ADC step is measured in jumps of a factor 2 (the robust estimate of
+    quantised readings), and its weight with it (a factor 4 between twin seeds on a mixed-gain pair).
+
+    Examples
+    --------
+    >>> from flexdigit.params import Sensors
+    >>> gauge_noise_scale(Sensors(), 3) is None
+    True
+    >>> gauge_noise_scale(Sensors(amplifier_gains_v_per_v=(500.0, 6000.0)), 2).tolist()
+    [500.0, 6000.0]
+    """
+    gains = np.asarray(sensors.chain(count)[2], dtype=float)
+    return gains if gains.size and float(gains.max()) > float(gains.min()) else None

@@ -36,6 +36,7 @@ from flexdigit._json import to_jsonable
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
+from flexdigit.models.bridge import gauge_noise_scale
 from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.params import MAX_GAUGES, RigParams
 from flexdigit.rig.base import Reading, Rig, open_rig
@@ -344,7 +345,7 @@ class RotationEstimator:
 #: Where a map came from, kept with it (set by :func:`calibrate_rotation`): the source, the sweep's commands, the
 #: time each reading waited for the digit to settle (each visit's, straight ones included, for a referenced sweep),
 #: the rotation per command the sweep measured and, where it was not the plain one, the sweep's protocol.
-_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command", "sweep")
+_PROVENANCE = ("source", "commands", "settle_time_s", "deg_per_command", "sweep", "noise_scale")
 
 
 @dataclass(frozen=True)
@@ -603,12 +604,23 @@ def calibrate_rotation(
     )
     if cov is None and callable(reference) and not isinstance(reference, str):
         cov = np.eye(len(commands)) * sd**2
-    est = RotationEstimator().fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=np.asarray(sd_v))
-    if sweep == "referenced":
-        est = _curved_if_material(est, cov, np.asarray(sd_v))
+    noise = gauge_noise_scale(rig.params.sensors, len(X[0]))
+    est = _fitted_map(X, y, cov, np.asarray(sd_v), noise, curved=sweep == "referenced")
     est = _provenance(est, source, commands, waited, np.asarray(y))
     if sweep != "plain":  # a plain sweep's map reads as before (the thesis rig's saved maps and logs unchanged)
         est.sweep_ = sweep
+    return est
+
+
+def _fitted_map(X, y, cov, sd_v, noise, *, curved: bool) -> RotationEstimator:
+    """The sweep's map: each gauge weighted by its relative noise ``noise`` (None: equally; an amplifier gain per
+    gauge, :func:`~flexdigit.models.bridge.gauge_noise_scale`), with its quadratic terms if ``curved`` and material
+    (:func:`_curved_if_material`)."""
+    est = RotationEstimator(noise_v=noise).fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=sd_v)
+    if curved:
+        est = _curved_if_material(est, cov, sd_v)
+    if noise is not None:
+        est.noise_scale_ = [float(v) for v in noise]
     return est
 
 
@@ -641,7 +653,7 @@ def _curved_if_material(affine: RotationEstimator, cov, sd_v) -> RotationEstimat
     variance = float(residual @ residual) / dof * np.linalg.pinv(A.T @ A)[2, 2]
     if not abs(fit[2]) > student_t.ppf(1 - CURVATURE_LEVEL / 2, dof) * math.sqrt(variance):
         return affine
-    curved = RotationEstimator(degree=2).fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=sd_v)
+    curved = RotationEstimator(degree=2, noise_v=affine.noise_v).fit(X, y, rotation_cov_deg2=cov, gauges_sd_v=sd_v)
     straight = X[int(np.argmin(np.abs(y)))]
     gap = curved.tare(straight).predict(X) - affine.tare(straight).predict(X)
     curved.tare_deg_ = affine.tare_deg_ = 0.0
@@ -873,4 +885,6 @@ def _from_dict(cls, data, source: str) -> RotationEstimator:
     for key in _PROVENANCE:
         if key in data:
             setattr(est, f"{key}_", data[key])
+    if "noise_scale" in data:  # the weights it was fitted with: its uncertainty refits the same way
+        est.noise_v = array("noise_scale", (gauges,))
     return est

@@ -29,6 +29,7 @@ from flexdigit._validation import check_real
 from flexdigit.errors import DataFileError, OutputError, ParameterError, RigError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import open_rig, parse_rig_url, seed_option
+from flexdigit.rig.gauge_rails import railed_readings
 from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
@@ -205,6 +206,7 @@ def collect(
     stop_after: int | None = None,
     force: bool = False,
     settings: dict | None = None,
+    allow_rail: bool = False,
 ) -> Dataset:
     """Take every sample of ``protocol`` on ``rig`` and write the dataset to ``out`` (Parquet).
 
@@ -239,6 +241,8 @@ def collect(
         Overwrite an existing dataset at ``out`` (a journal is still resumed only with the same settings).
     settings : dict, optional
         Further effective settings to record and check on resume (e.g. ``{"calibration": fingerprint}``).
+    allow_rail : bool
+        Write the dataset even with readings at the ADC's rail (refused by default; the journal is kept).
 
     Returns
     -------
@@ -251,14 +255,13 @@ def collect(
         If ``out`` already holds a dataset (unless ``force``).
     DataFileError
         If the journal was written with other settings (named), is corrupt, or (on a deterministic rig) its
-        readings are not what these settings give.
+        readings are not what these settings give; or a gauge reads at the ADC's rail (unless ``allow_rail``).
     ParameterError
         If an option is invalid; raised before anything is read or written.
     RigError
         If the rig fails; the journal keeps every reading taken before.
     """
-    # -- every check before the first reading ------------------------------------------------------------------
-    if out is None:
+    if out is None:  # -- every check before the first reading --
         raise ParameterError("collect needs out, the dataset to write (a .parquet path)")
     if rig is None:
         rig, rig_url = _protocol_twin(protocol, seed, params), rig_url or "sim"
@@ -266,11 +269,9 @@ def collect(
     journal_file, settle = journal_path(out), _checked_options(protocol, rig, settle_s, stop_after)
     plan = protocol.plan(params.geometry.digit_length_m)  # every position on the digit
     meta, steady = _meta_and_check(protocol, rig, rig_url, params, settle, settings)
-    # one collection writes ``out`` and its journal at a time: a second is refused (OutputBusyError), never mixed
-    with output_lock(out):
-        return _collect_locked(
-            protocol, rig, out, journal_file, meta, plan, settle, progress, fsync, stop_after, force, steady
-        )
+    with output_lock(out):  # one collection writes ``out`` and its journal at a time (a second: OutputBusyError)
+        args = (protocol, rig, out, journal_file, meta, plan, settle, progress, fsync, stop_after, force, steady)
+        return _collect_locked(*args, allow_rail=allow_rail)
 
 
 def _meta_and_check(protocol: Protocol, rig, rig_url, params: RigParams, settle: float, settings):
@@ -321,6 +322,8 @@ def _collect_locked(
     stop_after: int | None,
     force: bool,
     steady=None,
+    *,
+    allow_rail: bool = False,
 ) -> Dataset:
     """:func:`collect` once its checks passed, holding ``out``'s lock; ``steady`` the steadiness check (or None)."""
     gauge_count = meta["gauge_count"]
@@ -376,11 +379,29 @@ def _collect_locked(
             raise unwritten  # noqa: B012 - replaces the unnamed OSError the close raised
     dataset = load_dataset(journal_file, protocol)
     if len(dataset) == total:
+        _refuse_railed(dataset, _params_of(rig), journal_file, allow_rail)
         save_dataset(dataset, out, force=force)
         journal_file.unlink()
     if steady is not None:
         steady.warn(out)
     return dataset
+
+
+def _params_of(rig) -> RigParams:
+    """The rig's digit (the thesis rig's if the backend does not say)."""
+    return getattr(rig, "params", None) or RigParams()
+
+
+def _refuse_railed(dataset: Dataset, params: RigParams, journal_file: Path, allow: bool) -> None:
+    """Refuse to write a dataset with readings at the ADC's rail (:func:`~flexdigit.rig.gauge_rails.railed_readings`)
+    unless ``allow``: a network trained on them learns the rail (trial 2: a 0..3.3 V ADC read every gauge of a
+    balanced bridge at 0 V, and ``collect`` wrote 1275 rows of 0.0)."""
+    said = None if allow else railed_readings(dataset.gauges_v, params.sensors)
+    if said is not None:
+        raise DataFileError(
+            f"{said}; not written (the readings are kept in {journal_file}: rerun with --allow-rail to write them "
+            "anyway, or fix the chain: `flexdigit params FILE` says which gauge rails where)"
+        )
 
 
 def _take(rig, protocol: Protocol, plan: dict, i: int, setting, settle: float, gauge_count: int, steady=None):
@@ -496,6 +517,7 @@ def collect_on(
     settle_s: float | None = None,
     progress: bool = False,
     force: bool = False,
+    allow_rail: bool = False,
 ) -> Dataset:
     """``flexdigit collect``: open the rig at ``backend``, take ``protocol`` on it into ``out`` and close it.
 
@@ -532,7 +554,15 @@ def collect_on(
             )
             rig = stack.enter_context(recording_rig(rig, recording))  # closes the rig, then the recording
         return collect(
-            protocol, rig, out, params=params, rig_url=backend, settle_s=settle_s, progress=progress, force=force
+            protocol,
+            rig,
+            out,
+            params=params,
+            rig_url=backend,
+            settle_s=settle_s,
+            progress=progress,
+            force=force,
+            allow_rail=allow_rail,
         )
 
 
