@@ -1742,9 +1742,7 @@ def hold_force(
         rig, controller, setpoint, duration_s, log_path=log_path, log_mode=log_mode,
         on_sample=on_sample if truth else None, close_rig=False,
     )  # fmt: skip
-    result.raise_if_interrupted()
-    if result.status == "fault":  # a rig or sensor fault: run_loop sent the safe command and says so; as the sweep
-        raise RigError(f"force hold stopped: {result.message}")
+    _raise_if_stopped(result)
     t = result.time_s
     est = np.array(controller.forces[: t.size])
     figures = _hold_figures(t, np.array(true_force) if truth else est, setpoint, window_s)
@@ -1768,6 +1766,15 @@ def _hold_estimator(model, region: dict, setpoint: float, side: str) -> ContactE
     return ContactEstimator(
         model, classify=region.get("classify", False), side=side, region_m=region["region_m"], n_readings=average
     ).fit()
+
+
+def _raise_if_stopped(result) -> None:
+    """A hold's loop stopped: a stop (Ctrl-C, SIGTERM) raised again, a rig or sensor fault raised as
+    :class:`~flexdigit.errors.RigError` in one line (run_loop sent the safe command and its message says so), as the
+    sweep does. Before, a fault at the first reading left an empty hold and an IndexError ("internal error")."""
+    result.raise_if_interrupted()
+    if result.status == "fault":
+        raise RigError(f"force hold stopped: {result.message}")
 
 
 def _check_presses(params, side: str) -> None:
