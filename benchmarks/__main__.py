@@ -54,6 +54,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_report",
     "benchmarks.bench_palpation",
     "benchmarks.bench_force",
+    "benchmarks.bench_palp2",
     "benchmarks.bench_forcecal",
     "benchmarks.bench_board",
     "benchmarks.bench_digitboard",

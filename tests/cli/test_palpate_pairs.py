@@ -90,14 +90,19 @@ def test_a_hold_that_never_touches_fails_in_one_line(tmp_path, capsys):
     assert not out.exists()
 
 
-def test_a_hold_refuses_tissue_past_the_tip_in_one_line(capsys):
-    # soft-block starts at 150 mm, the 0.15 m pair's tip: the contact estimator's region was empty (a ParameterError
-    # about 'region_m' of ContactEstimator)
-    argv = ["palpate", "--params", str(HANDMADE / "short_pair_quarter.toml"), "--tissue", "soft-block"]
-    assert main([*argv, "--protocol", "hold"]) == 2
+@pytest.mark.parametrize("protocol", ["hold", "sweep"])
+def test_palpate_refuses_tissue_past_the_tip_in_one_line(protocol, tmp_path, capsys):
+    # a tissue file from 150 mm, the 0.15 m pair's tip: the contact estimator's region was empty (a ParameterError
+    # about 'region_m' of ContactEstimator); the sweep fitted "30 +- inf". (The built-in soft-block, also from
+    # 150 mm, is now laid out beside the digit: tests/palpation/test_sweep_any_digit.py.)
+    tissue = tmp_path / "far.toml"
+    tissue.write_text("[tissue]\nstart_mm = 150.0\nend_mm = 350.0\ngap_mm = 30.0\nmodulus_n_m2 = 1000.0\n")
+    argv = ["palpate", "--params", str(HANDMADE / "short_pair_quarter.toml"), "--tissue", str(tissue)]
+    assert main([*argv, "--protocol", protocol]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
-    assert "tissue soft-block: key 'tissue.start_mm' = 150" in err
+    assert f"{tissue}: key 'tissue.start_mm'" in err
+    assert "starts at 150 mm" in err
 
 
 @pytest.mark.slow

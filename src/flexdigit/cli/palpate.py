@@ -72,6 +72,10 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     settings = rig.settings()  # what was used (the URL's seed, or --seed, or the default): reported
     log_mode = "replace" if args.force else "new"  # the logs were checked above, before the rig moved
     try:
+        tissue, laid = _digit_tissue(tissue, info, rig.params)
+        if laid and plan.scan and plan.builtin:
+            plan = _scan_laid_out(plan, rig.params)
+            logs = _log_paths(args.log, plan, args.force)  # one per offset, named by the offsets laid out
         plan = _laid_out(plan, rig, calibration, tissue.side, info.source)
         if kind == "force":
             data, text, fig = _force(rig, tissue, plan, logs[0], log_mode, info.source)
@@ -84,6 +88,9 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
     finally:
         rig.close()
     data = {"kind": kind, "tissue": _tissue_dict(tissue, info), "backend": args.backend, "rig": settings, **data}
+    if laid:
+        data["tissue"]["laid_out"] = laid
+        text += f"\n{laid}"
     if settings.get("orientation") == "hanging":
         text += "\nmounted tip down (hanging): this digit buckles tip up (as `flexdigit run --params` mounts it)"
     if sim:
@@ -93,6 +100,46 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             "exponent": tissue.exponent,
         }
     return CommandResult(data=data, text=text + _save_outputs(args, data, fig, out))
+
+
+def _digit_tissue(tissue, info, params):
+    """``(tissue, note)``: a built-in tissue laid out beside the digit (palpation.digit_tissue; the note says how,
+    "" on the thesis rig), or a file's tissue as it is, refused in one line naming the file if it lies past the
+    digit's tip (palpation.check_tissue_reach)."""
+    from flexdigit.errors import DataFileError, ParameterError
+    from flexdigit.palpation.palpation import check_tissue_reach, digit_tissue, tissue_scale
+
+    if info.builtin:
+        laid = digit_tissue(tissue, params)
+        if laid is tissue:
+            return tissue, ""
+        scale = tissue_scale(params)
+        return laid, (
+            f"built-in {info.name} laid out beside this {1000 * params.geometry.digit_length_m:g} mm digit: its "
+            f"place and gap scaled by {scale:.3g} from the thesis rig's 270 mm (start {1000 * laid.start_m:.1f} mm, "
+            f"gap {1000 * laid.gap_m:.1f} mm); modulus as written"
+        )
+    try:
+        check_tissue_reach(tissue, params)
+    except ParameterError as exc:
+        raise DataFileError(f"{info.source}: key 'tissue.start_mm': {exc}") from None
+    return tissue, ""
+
+
+def _scan_laid_out(plan, params):
+    """The built-in scan beside a built-in tissue laid out for the digit: its offsets and the inclusion width looked
+    for scaled as the tissue is (palpation.tissue_scale; to 0.1 mm), so the nodule passes along the digit as it
+    passes along the thesis rig's (+-40 mm beside its 0.27 m; +-22.2 mm beside a 0.15 m digit)."""
+    from dataclasses import replace
+
+    from flexdigit.palpation.palpation import tissue_scale
+
+    scale = tissue_scale(params)
+    scan = {
+        "offsets_m": tuple(round(scale * d, 4) for d in plan.scan["offsets_m"]),
+        "inclusion_width_m": round(scale * plan.scan["inclusion_width_m"], 4),
+    }
+    return replace(plan, scan=scan)
 
 
 def _laid_out(plan, rig, calibration, side: str, tissue_source: str):
@@ -255,16 +302,39 @@ def _refuse_untouched(curve) -> None:
         )
 
 
+def _refuse_sweep(result) -> None:
+    """One line if the sweep's fit is poor, its modulus undetermined or the tissue barely reached; where the climb
+    stopped short of an ADC rail (palpation._Staircase), the likelier reason, said on the same line."""
+    from flexdigit.errors import DataFileError
+
+    try:
+        _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
+        _refuse_untouched(result.curve)
+    except DataFileError as exc:
+        if not result.record.capped:
+            raise
+        raise DataFileError(f"{exc}; the sweep {result.record.capped}") from None
+
+
+def _held(sweep, result):
+    """The sweep as its plateaus held it: the protocol, or, where the climb stopped short of a rail, its commands as
+    sent (the Cramer-Rao bound of what was measured)."""
+    if not result.record.capped:
+        return sweep
+    from dataclasses import replace
+
+    return replace(sweep, commands=tuple(int(c) for c in result.record.command[1:-1]))
+
+
 def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None):
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.palpation.palpation import palpate, stiffness_bound
 
     model = ContactGaugeModel(rig.params, calibration, orientation=_orientation(rig))
     result = palpate(rig, tissue, plan.sweep, model=model, log_path=log, log_mode=log_mode, drift=True)
-    _refuse_poor_fit(result.fit, "palpation", MAX_MODULUS_REL_SD)
-    _refuse_untouched(result.curve)
+    _refuse_sweep(result)
     hunt = plan.sweep.model == "hunt-crossley"
-    bound = stiffness_bound(model, result.fit.tissue, plan.sweep, fit_exponent=hunt, drift=True)  # the walk weighed
+    bound = stiffness_bound(model, result.fit.tissue, _held(plan.sweep, result), fit_exponent=hunt, drift=True)
     data = _sweep_data(result, plan, bound, tissue)
     summary = data["result"]
     f = result.fit
@@ -285,6 +355,8 @@ def _sweep(rig, tissue, plan, log, log_mode, true_modulus=None, calibration=None
     ]
     if plan.sweep.model == "hunt-crossley":
         lines.insert(3, f"  exponent  {f.exponent:9.3f} +- {f.exponent_sd:.3f}")
+    if result.record.capped:  # a gauge neared an ADC rail: the climb stopped there, said (palpation._Staircase)
+        lines.append(f"  sweep     {result.record.capped}")
 
     def figure():
         from flexdigit.palpation.palpation_plot import indentation_figure
@@ -315,6 +387,7 @@ def _sweep_data(result, plan, bound, tissue) -> dict:
             "return_settle_s": plan.sweep.return_settle_s,
             "tare_command": plan.sweep.tare_command,
             "readings": plan.sweep.readings,
+            **({"capped": result.record.capped} if result.record.capped else {}),
         },
         "result": summary,
         "cramer_rao": {"gap_mm": 1000 * bound["gap_m"], "modulus_n_m2": bound["modulus_n_m2"]},

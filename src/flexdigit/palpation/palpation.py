@@ -269,6 +269,50 @@ def digit_protocol(
     )
 
 
+def tissue_scale(params) -> float:
+    """How much a built-in tissue (and the built-in scan's offsets) are scaled beside ``params``'s digit: its length
+    over the thesis rig's 0.27 m (1 on the thesis rig; :func:`digit_tissue`)."""
+    return params.geometry.digit_length_m / RigParams().geometry.digit_length_m
+
+
+def digit_tissue(tissue: Tissue, params) -> Tissue:
+    """A built-in tissue (written beside the thesis rig's 0.27 m digit) laid out beside ``params``'s digit: where it
+    lies along the digit (start, end, its inclusions' centres and widths) and its surface's gap, all scaled by the
+    digit's length over the thesis rig's. A digit of the thesis rig's shape, only longer or shorter, bent to the same
+    tip rotation (as :func:`digit_protocol` lays out the sweep) then meets the tissue where the thesis rig does, at
+    the same fraction of its length; the thesis rig's tissue is unchanged. The modulus, exponent and damping (the
+    tissue's material) are kept: the answer palpation must give back. Before, the built-in soft-block started at
+    150 mm on every digit: at the tip of a 0.15 m digit, whose sweep then touched nothing (modulus 30 +- inf)."""
+    scale = tissue_scale(params)
+    if scale == 1.0:
+        return tissue
+
+    def at(x: float) -> float:  # to 0.1 mm: a place a user can read back and write in a file
+        return round(scale * x, 4)
+
+    inclusions = tuple(Inclusion(at(i.centre_m), at(i.width_m), i.ratio) for i in tissue.inclusions)
+    return tissue.replace(
+        start_m=at(tissue.start_m), end_m=at(tissue.end_m), gap_m=at(tissue.gap_m), inclusions=inclusions
+    )
+
+
+#: The least stretch of the digit a tissue must lie beside to be pressed: two of the contact estimator's 1 mm grid
+#: steps (the force hold's bound before the sweep shared it).
+TISSUE_REACH_M = 2e-3
+
+
+def check_tissue_reach(tissue: Tissue, params) -> None:
+    """Refuse (one line, :class:`~flexdigit.errors.ParameterError`) a tissue that starts at or past ``params``'s
+    digit's tip (less than :data:`TISSUE_REACH_M` of it left beside the tissue): no command presses it, and a sweep
+    would fit a modulus to nothing (30 +- inf on a 0.15 m digit beside the thesis's 150 mm soft-block)."""
+    length = params.geometry.digit_length_m
+    if tissue.start_m > length - TISSUE_REACH_M:
+        raise ParameterError(
+            f"the tissue starts at {1000 * tissue.start_m:g} mm, at or past the digit's {1000 * length:g} mm tip, "
+            "where no command presses it; place it along the digit"
+        )
+
+
 def check_sweep_commands(protocol: PalpationProtocol, params, side: str = "cable") -> None:
     """Refuse, in one line, a sweep (or tare) command that bends ``params``'s digit away from a body on ``side`` past
     its straight command: an antagonistic pair bends both ways, and the thesis's 8..30 are 119 commands the wrong way
@@ -318,25 +362,59 @@ class SweepRecord:
     samples: dict = field(default_factory=dict)
     status: str = "completed"
     message: str = ""
+    #: why the staircase stopped climbing short of the protocol's top command, in one line ("" when it did not):
+    #: a gauge read within :data:`RAIL_MARGIN` of an ADC rail (:class:`_Staircase`)
+    capped: str = ""
 
     __repr__ = fields_summary
 
 
-class _Staircase:
-    """A loop controller that sends a scheduled command (it reads nothing): the sweep's open-loop staircase."""
+#: How near an ADC rail (a fraction of the ADC's span) a gauge may read before a sweep stops climbing: a tenth
+#: (1 V of +-5 V) leaves room for the next plateau's ringing; the loop faults a gauge within 1 mV of a rail.
+RAIL_MARGIN = 0.10
 
-    def __init__(self, commands, plateau_s: float) -> None:
+
+class _Staircase:
+    """A loop controller that sends a scheduled command: the sweep's open-loop staircase. Given ``adc_range_v``
+    it reads the gauges too, and stops climbing once one reads within :data:`RAIL_MARGIN` of a rail: the remaining
+    climbing plateaus hold that plateau's command (each a repeated reading of it), the closing tare as planned.
+    ``sent`` is the command each plateau held, ``capped`` says why it stopped. Before, a digit with one gauge at
+    gain 6000 clipped it at +5 V at t = 68 s of its sweep, and the loop's fault ended the palpation."""
+
+    def __init__(self, commands, plateau_s: float, adc_range_v=None) -> None:
         self.commands = list(commands)
+        self.sent = list(commands)
         self.plateau_s = plateau_s
         self._t = 0.0
         self._k = 0
+        self._range = None if adc_range_v is None else (float(adc_range_v[0]), float(adc_range_v[1]))
+        self.cap: int | None = None  # the plateau whose command the climb stopped at
+        self.capped = ""
 
     def reset(self, command: int) -> None:
         self._k = 0
 
     def step(self, setpoint: float, reading) -> float:
         index = min(int(setpoint // self.plateau_s), len(self.commands) - 1)
-        return self.commands[index]
+        last = len(self.commands) - 1  # the closing tare: always sent
+        if self.cap is None and self._range is not None and 0 < index < last:
+            self._watch(index, reading)
+        if self.cap is not None and self.cap < index < last:
+            self.sent[index] = self.sent[self.cap]
+        return self.sent[index]
+
+    def _watch(self, index: int, reading) -> None:
+        low, high = self._range
+        margin = RAIL_MARGIN * (high - low)
+        volts = np.asarray(getattr(reading, "gauges_v", ()), dtype=float)
+        near = np.flatnonzero((volts >= high - margin) | (volts <= low + margin))
+        if near.size:
+            g = int(near[0])
+            self.cap = index
+            self.capped = (
+                f"stopped climbing at command {self.sent[index]}: gauge {g + 1} read {volts[g]:+.3f} V, within "
+                f"{RAIL_MARGIN:.0%} of the ADC's {low:+g}..{high:+g} V range; the remaining plateaus held it"
+            )
 
 
 def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, log_mode: str = "new") -> SweepRecord:
@@ -348,7 +426,7 @@ def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, lo
     ``"replace"`` it, ``"append"`` to it).
     """
     sequence = [protocol.tare_command, *protocol.commands, protocol.tare_command]
-    stairs = _Staircase(sequence, protocol.plateau_s)
+    stairs = _Staircase(sequence, protocol.plateau_s, adc_range_v=rig.params.sensors.adc_range_v)
     true_force = []
     on_sample = (lambda k, t, y, c: true_force.append(truth())) if truth is not None else None
     result = run_loop(
@@ -367,6 +445,7 @@ def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, lo
     if not result.ok:
         raise_from = result.message
         raise RigError(f"palpation sweep stopped: {raise_from}")
+    sequence = stairs.sent  # the commands the plateaus held (repeated where the climb stopped short of a rail)
     t = result.time_s
     plateau = np.minimum((t // protocol.plateau_s).astype(int), len(sequence) - 1)
     means, times = [], []
@@ -379,7 +458,9 @@ def run_sweep(rig, protocol: PalpationProtocol, *, log_path=None, truth=None, lo
         samples["true_force_n"] = np.array(true_force)
     tare = np.zeros(len(sequence), dtype=bool)
     tare[[0, -1]] = True
-    return SweepRecord(np.array(sequence), np.array(times), np.array(means), tare, protocol.readings, samples)
+    return SweepRecord(
+        np.array(sequence), np.array(times), np.array(means), tare, protocol.readings, samples, capped=stairs.capped
+    )
 
 
 # --------------------------------------------------------------------------------------------- the tissue fit
@@ -504,6 +585,35 @@ def _least_squares(likelihood, x0, lower, upper, scale):
     return sol, sd
 
 
+#: Terms of the quantisation bias's Fourier series summed (:func:`quantisation_bias_v`): those left out weigh under
+#: 1e-3 of the sum at no noise (sum over k > 1000 of 1/k^2 against pi^2/6), less with noise.
+QUANTISATION_TERMS = 1000
+
+
+def quantisation_bias_v(noise_v, step_v: float) -> np.ndarray:
+    """The rms (V) of the part of an ADC's quantisation error that averaging readings does not remove: the mean of
+    many readings of a level ``x`` with Gaussian noise ``noise_v`` before a quantiser of step ``step_v`` is off by
+    ``b(x) = sum_k (step / (pi k)) (-1)^k exp(-2 pi^2 k^2 sigma^2 / step^2) sin(2 pi k x / step)`` (Widrow and
+    Kollar, *Quantization Noise*, Cambridge 2008, ch. 19: the Fourier series of the rounding error smoothed by the
+    noise); its rms over levels is ``sqrt(sum_k step^2 / (2 pi^2 k^2) exp(-4 pi^2 k^2 sigma^2 / step^2))``.
+    ``step / sqrt(12)`` with no noise (every reading rounds alike), nothing once the noise spans a step: 0 to
+    machine precision on the thesis rig (2 mV of noise, 0.15 mV steps), 1.4 mV on a 10-bit +-2.5 V ADC whose 0.1 mV
+    of noise never dithers its 4.9 mV steps."""
+    sigma = np.asarray(noise_v, dtype=float)
+    k = np.arange(1, QUANTISATION_TERMS + 1)[:, None]
+    terms = step_v**2 / (2 * math.pi**2 * k**2) * np.exp(-4 * math.pi**2 * k**2 * sigma[None, :] ** 2 / step_v**2)
+    return np.sqrt(terms.sum(axis=0))
+
+
+def plateau_sigma_v(model, readings: int) -> np.ndarray:
+    """The standard deviation (V, per gauge) of one plateau's mean of ``readings`` readings: the gauges' white noise
+    averaged down, and the ADC's quantisation bias that no averaging removes (:func:`quantisation_bias_v`; without
+    it a 10-bit digit's sweep, 0.1 mV of noise on 4.9 mV steps, fitted chi2/dof 1500). The thesis rig's: its noise
+    over sqrt(readings), unchanged to the last bit (np.hypot with 0)."""
+    averaged = np.asarray(model.noise_v, dtype=float) / math.sqrt(readings)
+    return np.hypot(averaged, quantisation_bias_v(model.noise_v, model.params.sensors.adc_lsb_v))
+
+
 def fit_tissue(
     record: SweepRecord,
     model,
@@ -538,7 +648,7 @@ def fit_tissue(
         (:class:`_TissueLikelihood`): the modulus and its sd honest over a long sweep (``flexdigit palpate``). Off,
         white noise only, as the report's studies have always fitted.
     """
-    sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(record.readings) if sigma_v is None else sigma_v
+    sigma = plateau_sigma_v(model, record.readings) if sigma_v is None else sigma_v
     like = _TissueLikelihood(
         model,
         record.command,
@@ -625,7 +735,7 @@ def stiffness_bound(
     commands = [protocol.tare_command, *protocol.commands, protocol.tare_command]
     times = protocol.plateau_s * (np.arange(len(commands)) + 0.5)
     times[-1] += protocol.return_settle_s
-    sigma = np.asarray(model.noise_v, dtype=float) / math.sqrt(protocol.readings)
+    sigma = plateau_sigma_v(model, protocol.readings)
     clean = model.tissue_solution(tissue, commands)[1]
     like = _TissueLikelihood(
         model,
@@ -1510,9 +1620,11 @@ class ForceHold:
         Before, a hold that never touched reported "completed" with a steady force of 0 N (error -100 %)."""
         window = self._window()
         if not self.touched:
+            ran = float(self.time_s[-1]) if self.time_s.size else 0.0  # no sample: a fault before the first
+            top = int(np.max(self.command, initial=0))
             return (
-                f"never reached {self.setpoint_n:g} N: no contact read in {self.time_s[-1]:.1f} s, pressing up to "
-                f"command {int(np.max(self.command))} of its last {self.high_command} (the tissue out of reach?)"
+                f"never reached {self.setpoint_n:g} N: no contact read in {ran:.1f} s, pressing up to "
+                f"command {top} of its last {self.high_command} (the tissue out of reach?)"
             )
         estimated = float(np.mean(self.force_n[window])) if np.any(window) else 0.0
         if np.all(self.command[window] >= self.high_command) and estimated < 0.9 * self.setpoint_n:
@@ -1630,7 +1742,7 @@ def hold_force(
         rig, controller, setpoint, duration_s, log_path=log_path, log_mode=log_mode,
         on_sample=on_sample if truth else None, close_rig=False,
     )  # fmt: skip
-    result.raise_if_interrupted()
+    _raise_if_stopped(result)
     t = result.time_s
     est = np.array(controller.forces[: t.size])
     figures = _hold_figures(t, np.array(true_force) if truth else est, setpoint, window_s)
@@ -1654,6 +1766,15 @@ def _hold_estimator(model, region: dict, setpoint: float, side: str) -> ContactE
     return ContactEstimator(
         model, classify=region.get("classify", False), side=side, region_m=region["region_m"], n_readings=average
     ).fit()
+
+
+def _raise_if_stopped(result) -> None:
+    """A hold's loop stopped: a stop (Ctrl-C, SIGTERM) raised again, a rig or sensor fault raised as
+    :class:`~flexdigit.errors.RigError` in one line (run_loop sent the safe command and its message says so), as the
+    sweep does. Before, a fault at the first reading left an empty hold and an IndexError ("internal error")."""
+    result.raise_if_interrupted()
+    if result.status == "fault":
+        raise RigError(f"force hold stopped: {result.message}")
 
 
 def _check_presses(params, side: str) -> None:

@@ -232,6 +232,9 @@ class TissueFile:
     description: str
     source: str
     placed_on_twin: bool
+    #: a built-in tissue (:data:`TISSUES`), written beside the thesis rig: laid out beside another digit by
+    #: :func:`~flexdigit.palpation.palpation.digit_tissue`; a file's tissue lies where the file says
+    builtin: bool = False
 
 
 def builtin_palpation_files() -> dict[str, dict[str, str]]:
@@ -306,7 +309,8 @@ def load_tissue(name_or_path):
     except ParameterError as exc:
         raise DataFileError(f"{source}: {exc}") from None
     name = t.text("name", default=Path(str(name_or_path)).stem)
-    info = TissueFile(name, t.text("description"), source, gap is not None and modulus is not None)
+    placed = gap is not None and modulus is not None
+    info = TissueFile(name, t.text("description"), source, placed, builtin=str(name_or_path) in TISSUES)
     return tissue, info
 
 
@@ -323,6 +327,9 @@ class PalpationFile:
     #: from its straight 8), to be laid out on a digit (:func:`~flexdigit.palpation.palpation.digit_protocol`): all
     #: in a built-in protocol, those a file leaves out; a file's own values are the user's for their digit
     laid_out: tuple = ("commands", "tare_command", "settle_s")
+    #: a built-in protocol (:data:`PROTOCOLS`): the scan's offsets and inclusion width are the thesis rig's, laid out
+    #: beside another digit with a built-in tissue (:func:`~flexdigit.palpation.palpation.tissue_scale`)
+    builtin: bool = False
 
 
 def load_palpation_protocol(name_or_path=None) -> PalpationFile:
@@ -374,4 +381,4 @@ def load_palpation_protocol(name_or_path=None) -> PalpationFile:
         }
     builtin = str(name_or_path) in PROTOCOLS
     laid_out = tuple(key for key in ("commands", "tare_command", "settle_s") if builtin or key not in s.data)
-    return PalpationFile(sweep, scan, force, source, laid_out=laid_out)
+    return PalpationFile(sweep, scan, force, source, laid_out=laid_out, builtin=builtin)
