@@ -202,3 +202,19 @@ def test_a_setpoint_beyond_the_servos_reach_is_refused_in_one_line(tmp_path, cap
     assert code == 2
     assert "--setpoint-deg -30" in out["error"]
     assert "reaches -11.0 to 11.0 deg" in out["error"]
+
+
+def test_run_says_what_its_design_misses_in_one_line(capsys):
+    """``run``'s design warnings (a command too coarse for the 2 % band: tests/control/test_coarse_step.py) go to
+    stderr as one line each and into ``--json``'s ``design_warnings``; any other warning goes on as it came."""
+    import warnings
+
+    from flexdigit.cli.run import _design_warnings
+    from flexdigit.errors import DesignWarning
+
+    with pytest.warns(UserWarning, match="something else"):
+        with _design_warnings() as said:
+            warnings.warn("design: one frame of one command moves the tip 0.62 deg", DesignWarning, stacklevel=1)
+            warnings.warn("something else", UserWarning, stacklevel=1)
+    assert said == ["design: one frame of one command moves the tip 0.62 deg"]
+    assert capsys.readouterr().err == "run: warning: design: one frame of one command moves the tip 0.62 deg\n"
