@@ -10,7 +10,7 @@ import argparse
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-__all__ = ["CommandResult", "add_command", "digit_name"]
+__all__ = ["CommandResult", "add_command", "digit_name", "name_sub_commands"]
 
 
 @dataclass
@@ -43,5 +43,12 @@ def add_command(
     """Add a sub-command with the common ``--json`` flag; ``func(args)`` returns a :class:`CommandResult`."""
     parser = subparsers.add_parser(name, help=help, description=description or help)
     parser.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
-    parser.set_defaults(func=func, command_name=name)
+    # the command as typed ("design 20ms", not "20ms"): errors are prefixed "flexdigit design 20ms: error:"
+    parser.set_defaults(func=func, command_name=parser.prog.removeprefix("flexdigit").strip())
     return parser
+
+
+def name_sub_commands(sub: argparse._SubParsersAction) -> None:
+    """Let each of ``sub``'s commands report its errors under its whole name ("simulate release", not "simulate")."""
+    for parser in sub.choices.values():
+        parser.set_defaults(command_name=parser.prog.removeprefix("flexdigit").strip())

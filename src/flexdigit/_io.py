@@ -659,9 +659,9 @@ def count_lines(
 
 
 def read_text(
-    path: str | os.PathLike, what: str = "a text file", limit: int = SETTINGS_LIMIT, *, encoding: str = "utf-8"
+    path: str | os.PathLike, what: str = "a text file", limit: int = SETTINGS_LIMIT, *, encoding: str = "utf-8-sig"
 ) -> str:
-    """The text of ``path`` (UTF-8; ``"utf-8-sig"`` skips a byte-order mark), or a
+    """The text of ``path`` (UTF-8; a byte-order mark, as some Windows editors save one, is skipped), or a
     :class:`~flexdigit.errors.DataFileError` naming the file when it is not a regular file, larger than ``limit``
     bytes, binary or not UTF-8 (Python's own message names neither the file nor what was expected).
 

@@ -228,9 +228,16 @@ def _interrupted(exc: KeyboardInterrupt, command: str, wants_json: bool) -> int:
     return _fail(f"interrupted by {name}", "Interrupted", command, wants_json, code, signal=name)
 
 
+#: The longest error line printed (characters): a message that echoes a huge value is cut in its middle.
+MESSAGE_LIMIT = 2000
+
+
 def _fail(message: str, error_type: str, command: str, wants_json: bool, code: int, signal: str | None = None) -> int:
     """Report an error: one line on stderr and, under ``--json``, an ``{"error": ...}`` object on stdout."""
     message = one_line(message)  # a library's message may carry newlines; ours are one line
+    if len(message) > MESSAGE_LIMIT:  # a value echoed whole (2e6 gauge positions): the line's start and end say it
+        half, cut = MESSAGE_LIMIT // 2, len(message) - MESSAGE_LIMIT
+        message = f"{message[:half]} ... ({cut} characters left out) ... {message[-half:]}"
     prefix = f"flexdigit {command}" if command else "flexdigit"
     doc = {"error": message, "error_type": error_type, "command": command or None, "exit_code": code}
     if signal is not None:

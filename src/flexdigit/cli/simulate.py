@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit._command import CommandResult, add_command, digit_name
+from flexdigit._command import CommandResult, add_command, digit_name, name_sub_commands
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible, check_values
 from flexdigit.errors import DataFileError, ParameterError
@@ -60,6 +60,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     for add in (_add_release, _add_step, _add_sweep, _add_load):
         add(sub)
+    name_sub_commands(sub)
 
 
 def _common(p: argparse.ArgumentParser) -> None:

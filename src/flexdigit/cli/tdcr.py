@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import argparse
 
-from flexdigit._command import CommandResult, add_command
+from flexdigit._command import CommandResult, add_command, name_sub_commands
 from flexdigit._plot import add_plot_flag
 from flexdigit._validation import SEED, Flag, Plausible
 from flexdigit.errors import ParameterError
@@ -103,6 +103,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_plot_flag(p, "the tip's x, y and z (mm) against time (s)")
     _add_shape(sub, vector)
     _add_contact(sub)
+    name_sub_commands(sub)
 
 
 #: The gauges' default layout, described once for the help of shape and contact.
