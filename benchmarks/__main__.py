@@ -34,6 +34,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_damping",
     "benchmarks.bench_designunequal",
     "benchmarks.bench_noisy",
+    "benchmarks.bench_stepfix",
     "benchmarks.bench_map",
     "benchmarks.bench_tdcr",
     "benchmarks.bench_tdcrcli",

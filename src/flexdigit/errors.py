@@ -16,6 +16,7 @@ __all__ = [
     "RigError",
     "OutputExistsError",
     "ConvergenceWarning",
+    "DesignWarning",
     "Interrupted",
     "one_line",
 ]
@@ -64,6 +65,11 @@ class ConvergenceWarning(UserWarning):
     The same role as scikit-learn's ``ConvergenceWarning`` (flexdigit's own, so the twin does not import
     scikit-learn): the answer is returned with its flag, never silently as if it had converged.
     """
+
+
+class DesignWarning(UserWarning):
+    """A design is returned that its own checks say misses a figure it was asked for; the warning names the figure
+    (the result carries it too, e.g. :attr:`~flexdigit.control.design20ms.WeightsChoice.failing`)."""
 
 
 def one_line(message: object) -> str:

@@ -95,7 +95,9 @@ RUN_SEEDS = ("0", "2")
 #: jitter on that one noisy gauge (the true rotation's sd 0.18 deg after 1 s: the dithered command, one quantum
 #: 1.67 deg, toggling 25-27) still leaves the 2 % band (0.6 deg) late in some runs: seed 2 at 2.05 s (30.65 deg),
 #: seed 5 at 1.94 s, of seeds 0-7 (before: seeds 2, 3, 4 at 1.08-1.13 s). The loop's noise, not the map's error
-#: (docs/digits.md, "Not yet").
+#: (docs/digits.md, "Not yet"). Its design's check of the dithered step through the board's latch (noise-free, on its
+#: model) flags digits that settle here (two-sections 0.52 deg off after 1 s, short 0.47) more than it (0.42), so
+#: it chooses nothing; a Pade of the latch in its model settles seeds 0-15 but moves with any change of the design.
 KNOWN_MISSES = {("one-section", 30.0, "2"): "the loop's jitter on one noisy gauge: 30.65 deg at 2.05 s"}
 
 
@@ -202,3 +204,19 @@ def test_a_setpoint_beyond_the_servos_reach_is_refused_in_one_line(tmp_path, cap
     assert code == 2
     assert "--setpoint-deg -30" in out["error"]
     assert "reaches -11.0 to 11.0 deg" in out["error"]
+
+
+def test_run_says_what_its_design_misses_in_one_line(capsys):
+    """``run``'s design warnings (a command too coarse for the 2 % band: tests/control/test_coarse_step.py) go to
+    stderr as one line each and into ``--json``'s ``design_warnings``; any other warning goes on as it came."""
+    import warnings
+
+    from flexdigit.cli.run import _design_warnings
+    from flexdigit.errors import DesignWarning
+
+    with pytest.warns(UserWarning, match="something else"):
+        with _design_warnings() as said:
+            warnings.warn("design: one frame of one command moves the tip 0.62 deg", DesignWarning, stacklevel=1)
+            warnings.warn("something else", UserWarning, stacklevel=1)
+    assert said == ["design: one frame of one command moves the tip 0.62 deg"]
+    assert capsys.readouterr().err == "run: warning: design: one frame of one command moves the tip 0.62 deg\n"

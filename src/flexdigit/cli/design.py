@@ -318,14 +318,19 @@ def _twenty_ms_plot(args, params, calibration, summary: dict) -> str | None:
     :func:`flexdigit.control.design_plot.twenty_ms_figure`; None without ``--plot``."""
     if args.plot is None:
         return None
+    import warnings
+
     from flexdigit._plot import save_plot
     from flexdigit.control.design20ms import Weights, digit_design_20ms
     from flexdigit.control.design_plot import twenty_ms_figure
+    from flexdigit.errors import DesignWarning
 
-    design = digit_design_20ms(
-        params, period_s=summary["period_s"], calibration=calibration, orientation=args.orientation,
-        weights=Weights(**summary["weights"]),
-    )  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DesignWarning)  # said in the command's text
+        design = digit_design_20ms(
+            params, period_s=summary["period_s"], calibration=calibration, orientation=args.orientation,
+            weights=Weights(**summary["weights"]),
+        )  # fmt: skip
     digit = Path(args.params).stem if args.params else "the thesis rig"
     title = f"20 ms design on {digit} ({args.orientation}; thesis 5.2-5.3)"
     return str(save_plot(twenty_ms_figure(design, title=title), args.plot, "design", force=args.force))

@@ -222,14 +222,16 @@ def _run(args: argparse.Namespace) -> CommandResult:
         }  # fmt: skip
         if args.kept is not None:
             header["controller_file"] = args.kept.source
-        run = run_step(
-            rig, args.controller, setpoint, duration, period, estimator=estimator, gain=args.gain,
-            on_sample=progress.update if progress else None, log_path=args.log, log_mode=_log_mode(args),
-            header={**header, "rig_settings": settings}, recording=recording, kept=args.kept,
-        )  # fmt: skip
+        with _design_warnings() as design_warnings:
+            run = run_step(
+                rig, args.controller, setpoint, duration, period, estimator=estimator, gain=args.gain,
+                on_sample=progress.update if progress else None, log_path=args.log, log_mode=_log_mode(args),
+                header={**header, "rig_settings": settings}, recording=recording, kept=args.kept,
+            )  # fmt: skip
     if progress:
         progress.stop(_figures_line(run.figures))
     data = _run_data(args, run, rig, settings, setpoint, period, estimator, recording)
+    data["design_warnings"] = design_warnings
     if args.plot:
         from flexdigit._plot import save_plot
         from flexdigit.rig.run_plot import run_figure
@@ -238,6 +240,26 @@ def _run(args: argparse.Namespace) -> CommandResult:
     # a stop by a signal exits as the shell expects of it: 128 + its number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
     exit_code = {"completed": 0, "fault": 1, "interrupted": _signal_exit_code(data["signal"])}[run.result.status]
     return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
+
+
+@contextlib.contextmanager
+def _design_warnings():
+    """What the controller's design says it misses (:class:`~flexdigit.errors.DesignWarning`), collected into the
+    list it yields and said on stderr, one line each, before the run's report; any other warning goes on as it came."""
+    import warnings
+
+    from flexdigit.errors import DesignWarning
+
+    said: list[str] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DesignWarning)
+        yield said
+    for w in caught:
+        if issubclass(w.category, DesignWarning):
+            said.append(str(w.message))
+            print(f"run: warning: {w.message}", file=sys.stderr, flush=True)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def _plot_title(args, setpoint: float) -> str:

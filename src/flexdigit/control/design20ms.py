@@ -33,6 +33,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+import warnings
 from dataclasses import dataclass
 from numbers import Integral, Real
 
@@ -53,7 +54,7 @@ from flexdigit.control.digit_model import digit_model
 from flexdigit.control.discretise import METHODS, discretise
 from flexdigit.control.runtime import RuntimeController
 from flexdigit.control.thesis_designs import printed_controller
-from flexdigit.errors import DesignError
+from flexdigit.errors import DesignError, DesignWarning
 from flexdigit.models.plant import build_plant
 from flexdigit.models.servo import servo_unit_tf
 from flexdigit.params import RigParams
@@ -75,6 +76,8 @@ __all__ = [
     "design_20ms",
     "thesis_controller",
     "closed_loop",
+    "frame_pulse_deg",
+    "STEP_BAND_DEG",
 ]
 
 
@@ -837,13 +840,75 @@ def _digit_design(params, period_s, calibration, orientation, deg_per_command, w
     thesis_dc = float(np.real(ct.dcgain(design_plant(RigParams()))))
     light = bool(model.modes_zeta.size and np.min(model.modes_zeta) < LIGHT_DAMPING)
     mode = _shaped_mode(model)
+    coarse = _coarse_step(G, T)  # a command too coarse for the 2 % band, said whatever the weights
+    if coarse is not None:
+        warnings.warn(f"design: {coarse}", DesignWarning, stacklevel=3)
     if weights is not None:  # kept (chosen on the model's own gain): rescaled as the search scales its candidates
         return _digit_candidate(G, T, weights.for_digit(dc, model.deg_per_command), mode), model
     choice = digit_weights(
         G, T, model.measurement_sd_deg, dc / thesis_dc, lightly_damped=light, params=params, shaped_mode=mode
     )
+    if coarse is not None and choice.meets:  # the same weights: the design is the search's, its figure said
+        choice = dataclasses.replace(choice, meets=False, failing=coarse)
     design = _digit_candidate(G, T, choice.weights, mode)
     return dataclasses.replace(design, choice=choice), model
+
+
+#: Issue 24's settling band of its 30 deg step, deg (2 %): what one frame of one command may move the tip at most
+#: (:func:`frame_pulse_deg`) for a digit's step to be designed without a warning (:func:`_coarse_step`).
+STEP_BAND_DEG = 0.02 * 30.0
+
+
+def frame_pulse_deg(G: ct.StateSpace, period_s: float, horizon_s: float = 3.0, step_s: float = 1e-3) -> float:
+    """The tip's largest rotation (deg) after one frame of one command: the continuous model ``G`` (command deviation
+    -> ``[tip, ...]`` deg, :func:`design_plant` or :mod:`~flexdigit.control.digit_model`) driven by 1 for
+    ``period_s`` then 0, over ``horizon_s`` on a ``step_s`` grid (exact between its points: matrix exponentials).
+
+    What the integer command can do at best between two neighbours: the loop's dither toggles the command by one for
+    a frame, which reaches the tip before the loop can take it back (its sample of delay), and the servo board's
+    latch holds one command in 25 for an extra PWM pulse (``twin.actuator``). The servo (3.2.4, wn 20.53 rad/s,
+    zeta 0.5629) passes ``period_s x 0.52 wn`` of a command's rotation in its impulse response's peak
+    (``wn exp(-zeta / sqrt(1 - zeta^2) atan(sqrt(1 - zeta^2) / zeta))``): 0.21 at 20 ms, whatever the digit
+    behind it (0.195-0.214 on tests/digits.py's and the campaign's digits: 0.36 deg at 1.7 deg a command).
+
+    Examples
+    --------
+    >>> round(frame_pulse_deg(design_plant(), 0.02), 2)  # the thesis rig's 5.3 model: 1.73 deg a command
+    0.36
+    """
+    import scipy.linalg
+
+    P = ct.ss(G)
+    A, B = np.asarray(P.A, dtype=float), np.asarray(P.B, dtype=float)
+    c_tip = np.asarray(P.C, dtype=float)[0]
+    n = A.shape[0]
+    augmented = np.zeros((n + 1, n + 1))
+    augmented[:n, :n], augmented[:n, n:] = A, B
+    held = scipy.linalg.expm(augmented * period_s)
+    x = held[:n, n]  # after the frame, from rest
+    phi = scipy.linalg.expm(A * step_s)
+    peak = abs(float(c_tip @ x))
+    for _ in range(int(round(horizon_s / step_s))):
+        x = phi @ x
+        peak = max(peak, abs(float(c_tip @ x)))
+    # within the frame the response only rises (the servo's from rest): its end is the frame's largest
+    return peak
+
+
+def _coarse_step(G: ct.StateSpace, period_s: float) -> str | None:
+    """One line saying why a digit's command is too coarse for issue 24's 2 % band (:data:`STEP_BAND_DEG`), or
+    None: one frame of one command moves its tip at least the band (:func:`frame_pulse_deg`)."""
+    pulse = frame_pulse_deg(G, period_s)
+    if pulse < STEP_BAND_DEG:
+        return None
+    per_command = float(np.real(np.asarray(ct.dcgain(G))).reshape(-1)[0])
+    return (
+        f"one frame of one command moves the tip {pulse:.2f} deg at its peak (a command turns it {per_command:.2f} "
+        f"deg): at least issue 24's 2 % band of a 30 deg step ({STEP_BAND_DEG:g} deg), so each toggle of the "
+        f"dithered command can kick the tip out of it and an integer command held rests up to {per_command / 2:.2f} "
+        "deg off; its step will not reliably settle within 2 % in 1 s: a finer command step (a gear, a smaller "
+        "pulley, a larger cable eccentricity) would"
+    )
 
 
 def digit_design_20ms_summary(
@@ -895,7 +960,9 @@ def digit_design_20ms_summary(
     if thesis:
         d = digit_design_20ms(params, period_s=period_s, calibration=calibration, orientation=orientation)
     else:
-        d, model = _digit_design(params, period_s, calibration, orientation, None)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DesignWarning)  # said in the summary: its search's ``failing``
+            d, model = _digit_design(params, period_s, calibration, orientation, None)
     mode = None if thesis else digit_first_mode(params, calibration, orientation=orientation)
     loop = closed_loop(d.plant_d, d.controller, output=d.tip_plant_d)
     t = np.arange(0.0, step_duration_s + d.period_s / 2, d.period_s)
