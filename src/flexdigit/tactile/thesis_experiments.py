@@ -82,12 +82,16 @@ def collect_on_twin(
     calibration=None,
     settle_s: float | None = None,
 ) -> Dataset:
-    """Collect ``protocol`` on a fresh twin into ``out`` (replacing an older file and journal)."""
+    """Collect ``protocol`` on a fresh twin into ``out`` (replacing an older file and journal).
+
+    Readings at an ADC rail are kept (``allow_rail``): the thesis's experiments run as written on any digit, and a
+    digit whose gauges rail at the thesis's actuation commands (a cable pair, straight at its middle command, bent
+    far the other way at 0..40) is reported with what it reads, where ``flexdigit collect`` refuses such a run."""
     out = Path(out)
     out.unlink(missing_ok=True)
     journal_path(out).unlink(missing_ok=True)
     with twin_rig(protocol, seed=seed, params=params, calibration=calibration) as rig:
-        return collect(protocol, rig, out, params=params, rig_url="sim", settle_s=settle_s)
+        return collect(protocol, rig, out, params=params, rig_url="sim", settle_s=settle_s, allow_rail=True)
 
 
 #: How often a random disturbance is drawn in :func:`static_dataset`: every reading, or once per hang (setting)
