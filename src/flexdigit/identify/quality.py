@@ -217,7 +217,9 @@ def _saturation_and_misfit(
 ) -> list[Problem]:
     """A clipped record, and (for the fit of the whole record, ``lsq``) a misfit over the limit."""
     problems: list[Problem] = []
-    sat = _quantised(raw, unit) or _saturation(t, raw, m, noise_std, abs(amplitude), unit)
+    sat = _saturation(t, raw, m, noise_std, abs(amplitude), unit)
+    if sat:  # plateaus that are a coarse ADC's levels, not a rail: said as what they are
+        sat = _quantised(raw, unit) or sat
     if sat:
         problems.append(sat)
     if misfit > limit and method == "lsq":
