@@ -124,3 +124,52 @@ def test_a_sweep_trained_together_is_the_networks_trained_one_by_one():
     together = _sweep(x, y, split, configs, epochs=3)
     one_by_one = [_train(x, y, split, h, tol, seed, 3)[1] for h, tol, seed in configs]
     assert together == one_by_one  # dataclass equality: every float to the bit, in order
+
+
+def _fit(x, t, xv, tv, epochs, tol=1e-7):
+    net = MLP(hidden=6, tol=tol, epochs=epochs, iterations_per_epoch=13, random_state=4).fit(x, t, xv, tv)
+    return net.weights_, net.best_epoch_, net.n_iter_, net.train_error_, net.val_error_, net.converged_
+
+
+def _same(a, b):
+    # the same compiled epochs on the same numbers, one after another: every float to the bit
+    for u, v in zip(a, b, strict=True):
+        np.testing.assert_array_equal(u, v)
+
+
+def test_a_longer_training_goes_on_from_the_shorter_one_number_for_number(monkeypatch):
+    """train's 50, 100 ... 800 epochs of one network (tactile.localisation.train_network): each longer training
+    resumes the last one; its result is that of training from the start."""
+    x, t = _data(150, 21)
+    xv, tv = _data(60, 22)
+    monkeypatch.setattr(_scg_kernel, "_runs", type(_scg_kernel._runs)())
+    from_start = _fit(x, t, xv, tv, 12)
+    assert from_start[2] == 12 * 13 and not from_start[5]  # ran every epoch: a resumed one has epochs to add
+    _scg_kernel._runs.clear()
+    epochs_run = []
+    real = _scg_kernel._train
+
+    def counted(w, best_w, train, val, start, *args):
+        epochs_run.append(train.size - 1 - start)
+        return real(w, best_w, train, val, start, *args)
+
+    monkeypatch.setattr(_scg_kernel, "_train", counted)
+    steps = [_fit(x, t, xv, tv, e) for e in (3, 6, 12)]
+    _same(steps[-1], from_start)
+    assert epochs_run == [3, 3, 6]  # each went on from the last
+    _same(_fit(x, t, xv, tv, 12), from_start)  # asked again: kept, none run
+    assert epochs_run == [3, 3, 6]
+    _same(_fit(x, t, xv, tv, 3), steps[0])  # a shorter one starts over
+    assert epochs_run == [3, 3, 6, 3]
+    steps[-1][0][:] = 0.0  # what was returned is the caller's: the kept run is untouched
+    _same(_fit(x, t, xv, tv, 6), steps[1])
+
+
+def test_a_converged_training_asked_for_more_epochs_is_the_same(monkeypatch):
+    x, t = _data(200, 5)
+    monkeypatch.setattr(_scg_kernel, "_runs", type(_scg_kernel._runs)())
+    from_start = _fit(x, t, x, t, 40, tol=1e-1)
+    assert from_start[5] and len(from_start[3]) < 5  # tol 1e-1 is met in the first epoch
+    _scg_kernel._runs.clear()
+    _fit(x, t, x, t, 4, tol=1e-1)
+    _same(_fit(x, t, x, t, 40, tol=1e-1), from_start)  # kept: it would stop where it stopped

@@ -16,7 +16,11 @@ scores, not to the bit.
 
 from __future__ import annotations
 
+import hashlib
 import math
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
 
 import llvmlite.ir
 import numba
@@ -280,23 +284,22 @@ def _mse(w, x, t, nin, nh, nout, z, d):
 
 
 @_jit
-def _train(w0, x, t, xv, tv, nh, epochs, per_epoch, tol):
+def _train(w, best_w, train, val, start, best_epoch, x, t, xv, tv, nh, per_epoch, tol):
+    """Epochs ``start + 1 .. train.size - 1`` from ``w``, the weights after epoch ``start`` (updated in place), with
+    ``train`` and ``val`` filled up to ``start`` (epoch 0: computed here) and ``best_w`` the weights of
+    ``best_epoch`` (updated in place). Returns ``(best_epoch, epochs_run, converged)``."""
     nin = x.shape[0]
     nout = t.shape[0]
     n, nv = x.shape[1], xv.shape[1]
     z, d = np.empty((nh, n)), np.empty((nout, n))
     zs, ds = np.empty((nh, n)), np.empty((nout, n))
     zv, dv = np.empty((nh, nv)), np.empty((nout, nv))
-    w = w0.copy()
-    train = np.full(epochs + 1, np.nan)
-    val = np.full(epochs + 1, np.nan)
-    train[0] = _mse(w, x, t, nin, nh, nout, zs, ds)
-    val[0] = _mse(w, xv, tv, nin, nh, nout, zv, dv)
-    best_w = w.copy()
-    best_epoch = 0
-    last = 0
+    if start == 0:
+        train[0] = _mse(w, x, t, nin, nh, nout, zs, ds)
+        val[0] = _mse(w, xv, tv, nin, nh, nout, zv, dv)
+    last = start
     converged = False
-    for epoch in range(1, epochs + 1):
+    for epoch in range(start + 1, train.size):
         converged = _scg(w, x, t, nin, nh, nout, per_epoch, tol, tol, z, d, zs, ds)
         train[epoch] = _mse(w, x, t, nin, nh, nout, zs, ds)
         val[epoch] = _mse(w, xv, tv, nin, nh, nout, zv, dv)
@@ -306,7 +309,35 @@ def _train(w0, x, t, xv, tv, nh, epochs, per_epoch, tol):
             best_epoch = epoch
         if converged:
             break
-    return best_w, best_epoch, last, train[: last + 1].copy(), val[: last + 1].copy(), converged
+    return best_epoch, last, converged
+
+
+@dataclass
+class _Run:
+    """Where one network's training stopped: the weights after its last epoch, the best ones and the errors."""
+
+    w: np.ndarray
+    best_w: np.ndarray
+    best_epoch: int
+    last: int
+    train: np.ndarray
+    val: np.ndarray
+    converged: bool
+
+
+#: Trainings kept to be resumed (:func:`train`), the most recent last; each holds two weight vectors and two error
+#: curves (a few kB).
+RESUMABLE = 64
+_runs: OrderedDict[bytes, _Run] = OrderedDict()
+_runs_lock = threading.Lock()
+
+
+def _run_key(arrays, hidden: int, per_epoch: int, tol: float) -> bytes:
+    """A digest of everything a training's epochs depend on except their number."""
+    h = hashlib.blake2b(repr((hidden, per_epoch, tol, [a.shape for a in arrays])).encode(), digest_size=32)
+    for a in arrays:
+        h.update(a.tobytes())
+    return h.digest()
 
 
 def train(w0, x, t, xv, tv, hidden: int, epochs: int, iterations_per_epoch: int, tol: float):
@@ -315,16 +346,33 @@ def train(w0, x, t, xv, tv, hidden: int, epochs: int, iterations_per_epoch: int,
     Returns ``(best_weights, best_epoch, epochs_run, train_mse, val_mse, converged)``: the weights of the epoch
     with the lowest validation MSE, that epoch, how many epochs ran, the MSE after each (index 0: ``w0``) and
     whether SCG met the tolerance ``tol`` (both of ``scg.m``'s) before the last epoch.
+
+    A training asked again with more epochs (the same initial weights, data, size and tolerance: ``flexdigit
+    train``'s 50, 100, ... 800 epochs of one network, :func:`flexdigit.tactile.localisation.train_network`) goes
+    on from where the last one stopped instead of starting over: each epoch starts SCG afresh from the weights
+    alone, so epochs ``1..E`` of a longer training are those of the shorter one, and the result is the one
+    training from the start gives, number for number (tests/tactile/test_scg_kernel.py). The last
+    :data:`RESUMABLE` trainings are kept.
     """
     c = np.ascontiguousarray
-    return _train(
-        c(w0, dtype=float),
-        c(np.transpose(x), dtype=float),
-        c(np.transpose(t), dtype=float),
-        c(np.transpose(xv), dtype=float),
-        c(np.transpose(tv), dtype=float),
-        int(hidden),
-        int(epochs),
-        int(iterations_per_epoch),
-        float(tol),
-    )
+    w0 = c(w0, dtype=float)
+    arrays = (w0, *(c(np.transpose(a), dtype=float) for a in (x, t, xv, tv)))
+    hidden, epochs, per_epoch, tol = int(hidden), int(epochs), int(iterations_per_epoch), float(tol)
+    key = _run_key(arrays, hidden, per_epoch, tol)
+    with _runs_lock:
+        run = _runs.get(key)
+    if run is None or epochs < run.last:  # nothing to go on from (a shorter training starts over)
+        run = _Run(w0.copy(), w0.copy(), 0, 0, np.empty(0), np.empty(0), False)
+    if not run.converged and epochs > run.last:
+        train_mse, val_mse = np.full(epochs + 1, np.nan), np.full(epochs + 1, np.nan)
+        train_mse[: run.train.size], val_mse[: run.val.size] = run.train, run.val
+        w, best_w = run.w.copy(), run.best_w.copy()
+        best, last, converged = _train(w, best_w, train_mse, val_mse, run.last, run.best_epoch, *arrays[1:], hidden,
+                                       per_epoch, tol)  # fmt: skip
+        run = _Run(w, best_w, int(best), int(last), train_mse[: last + 1], val_mse[: last + 1], bool(converged))
+    with _runs_lock:
+        _runs[key] = run
+        _runs.move_to_end(key)
+        while len(_runs) > RESUMABLE:
+            _runs.popitem(last=False)
+    return run.best_w.copy(), run.best_epoch, run.last, run.train.copy(), run.val.copy(), run.converged
