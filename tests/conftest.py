@@ -39,6 +39,15 @@ def pytest_report_header(config):
 FIRST = "test_docs.py"
 
 
+def pytest_configure(config):
+    """Keep the files in the order :func:`pytest_collection_modifyitems` gives them. pytest-xdist (3.8) hands
+    ``--dist loadfile``'s files out by their number of tests, most first, unless told not to: the site's build (one
+    test) and the files of one or two slow tests went last, one worker finishing them alone while the other idled.
+    """
+    if hasattr(config.option, "loadscopereorder"):  # xdist installed; harmless without -n
+        config.option.loadscopereorder = False
+
+
 def pytest_collection_modifyitems(session, config, items):
     """Run the longest files first: the site's build, then every file with a ``slow`` test, then the rest (each group
     in its collected order). ``make test`` runs two pytest-xdist workers that take whole files (``--dist
