@@ -154,20 +154,26 @@ def test_params_design_and_run_on_the_digit(name, tmp_path, capsys):
     code, checked = _cli(["params", str(path)], capsys)
     assert code == 0, checked
     params = load_params(path)
-    code, design = _cli(["design", "20ms", "--params", str(path)], capsys)
+    kept = tmp_path / "ctrl.json"
+    design_argv = ["design", "20ms", "--params", str(path), "--out", str(kept)]
+    code, design = _cli(design_argv, capsys)
     if code == 2:  # a digit that buckles tip up is refused, naming the fix: then it is designed hanging
         assert "buckles" in design["error"]
-        code, design = _cli(["design", "20ms", "--params", str(path), "--orientation", "hanging"], capsys)
+        code, design = _cli([*design_argv, "--orientation", "hanging"], capsys)
     assert code == 0, design
     assert design["stable"]
     assert design["closed_loop_pole_radius"] < 1.0
     seeds = RUN_SEEDS if name in DIGITS else RUN_SEEDS[:1]  # the drawn digits on one seed: the suite stays short
-    for setpoint, seed in ((s, seed) for s in _setpoints(params) for seed in seeds):
+    for k, (setpoint, seed) in enumerate((s, seed) for s in _setpoints(params) for seed in seeds):
         log = tmp_path / f"run{setpoint:+g}-{seed}.jsonl"
         argv = ["run", "--params", str(path), f"--setpoint-deg={setpoint:g}", "--duration", RUN_S, "--seed", seed]
-        code, run = _cli([*argv, "--log", str(log)], capsys)
+        # the first run searches the digit's weights itself, as a user's who never ran design; the others run the
+        # design kept above (the same weights: tests/cli/test_kept_design_cli.py), not searching again (2-8 s each)
+        controller = ["--controller", str(kept)] if k else []
+        code, run = _cli([*argv, *controller, "--log", str(log)], capsys)
         assert code == 0, run
         assert run["status"] == "completed"
+        assert run["controller_file"] == (str(kept) if k else None)
         true = run["step_metrics"]["true"]
         assert true["overshoot_percent"] < OVERSHOOT_PERCENT
         assert abs(run["true_final_rotation_deg"] - setpoint) < FINAL_FRACTION * abs(setpoint)
