@@ -6,6 +6,7 @@ derandomized (the same examples every run: a seeded test suite); ``fuzz`` (``mak
 """
 
 import os
+from pathlib import Path
 
 import matplotlib
 import pytest
@@ -37,6 +38,29 @@ def pytest_report_header(config):
 
 #: The documentation site's build (tests/test_docs.py: Sphinx and the gallery's examples, a minute or more); first.
 FIRST = "test_docs.py"
+#: The longest files (path under tests/), by their wall seconds in a full run on two workers (at 365c011, from the
+#: start times of their tests' temporary folders; a loaded machine, load 11-15, so only their order matters):
+#: started first, longest first, so that neither worker is left running one of them alone at the end.
+LONGEST_S = {
+    "cli/test_digit_control.py": 1334,
+    "tactile/test_digit_data_path.py": 733,
+    "live/test_server.py": 449,
+    "studies/test_execution.py": 429,
+    "tactile/test_steady_readings.py": 226,
+    "cli/test_palpate_no_force.py": 183,
+    "cli/test_palpate_pairs.py": 173,
+    "cli/test_stop_signals.py": 166,
+    "studies/test_resources.py": 146,
+    "live/test_page.py": 145,
+    "report/test_ch8_digit_setting.py": 133,
+    "report/test_reproduce_stopped.py": 132,
+    "palpation/test_sweep_any_digit.py": 128,
+    "tactile/test_twin_integration.py": 126,
+    "cli/test_plots.py": 123,
+    "control/test_digit_model.py": 116,
+    "rig/test_rotation_perturbed.py": 115,
+}
+_TESTS = Path(__file__).resolve().parent
 
 
 def pytest_configure(config):
@@ -49,12 +73,20 @@ def pytest_configure(config):
 
 
 def pytest_collection_modifyitems(session, config, items):
-    """Run the longest files first: the site's build, then every file with a ``slow`` test, then the rest (each group
-    in its collected order). ``make test`` runs two pytest-xdist workers that take whole files (``--dist
-    loadfile``): started first, the long files overlap the short ones instead of one left running alone at the end
-    (longest-processing-time-first scheduling). The order is the same in every worker, as xdist requires."""
+    """Run the longest files first: the site's build, then the files of :data:`LONGEST_S` longest first, then every
+    other file with a ``slow`` test, then the rest (each group in its collected order). ``make test`` runs two
+    pytest-xdist workers that take whole files (``--dist loadfile``): started first, the long files overlap the
+    short ones instead of one left running alone at the end (longest-processing-time-first scheduling). The order
+    is the same in every worker, as xdist requires."""
     slow = {item.path for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: (item.path.name != FIRST, item.path not in slow))
+
+    def measured_s(path: Path) -> float:
+        try:
+            return LONGEST_S.get(path.relative_to(_TESTS).as_posix(), 0)
+        except ValueError:  # a doctest of src/flexdigit
+            return 0
+
+    items.sort(key=lambda item: (item.path.name != FIRST, -measured_s(item.path), item.path not in slow))
 
 
 def _work_started(*args, **kwargs):
