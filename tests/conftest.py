@@ -38,27 +38,34 @@ def pytest_report_header(config):
 
 #: The documentation site's build (tests/test_docs.py: Sphinx and the gallery's examples, a minute or more); first.
 FIRST = "test_docs.py"
-#: The longest files (path under tests/), by their wall seconds in a full run on two workers (at 365c011, from the
-#: start times of their tests' temporary folders; a loaded machine, load 11-15, so only their order matters):
+#: The longest files (path under tests/) and their seconds in a full run on two workers (`--durations=150` at 365c011,
+#: the slowest 150 tests summed by file; a loaded machine, load 10-15, the run 84 min: only their order matters):
 #: started first, longest first, so that neither worker is left running one of them alone at the end.
 LONGEST_S = {
-    "cli/test_digit_control.py": 1334,
-    "tactile/test_digit_data_path.py": 733,
-    "live/test_server.py": 449,
-    "studies/test_execution.py": 429,
-    "tactile/test_steady_readings.py": 226,
-    "cli/test_palpate_no_force.py": 183,
-    "cli/test_palpate_pairs.py": 173,
-    "cli/test_stop_signals.py": 166,
-    "studies/test_resources.py": 146,
-    "live/test_page.py": 145,
-    "report/test_ch8_digit_setting.py": 133,
-    "report/test_reproduce_stopped.py": 132,
-    "palpation/test_sweep_any_digit.py": 128,
-    "tactile/test_twin_integration.py": 126,
-    "cli/test_plots.py": 123,
-    "control/test_digit_model.py": 116,
-    "rig/test_rotation_perturbed.py": 115,
+    "cli/test_digit_control.py": 1353,
+    "tactile/test_digit_data_path.py": 763,
+    "cli/test_campaign_digits.py": 696,
+    "studies/test_execution.py": 412,
+    "report/test_digit_reports.py": 398,
+    "live/test_server.py": 365,
+    "firmware/test_board.py": 267,
+    "tactile/test_bayes_drift.py": 223,
+    "cli/test_palpate_pairs.py": 220,
+    "cli/test_stop_signals.py": 199,
+    "firmware/test_eight_gauges.py": 187,
+    "firmware/test_digit_images.py": 179,
+    "firmware/test_hil_commands.py": 174,
+    "live/test_page_digits.py": 145,
+    "studies/test_resources.py": 143,
+    "tdcr/test_chain_kernel.py": 139,
+    "calibrate/test_calibrate_stopped.py": 124,
+    "control/test_digit_model.py": 117,
+    "cli/test_export.py": 102,
+    "live/test_page.py": 92,
+    "palpation/test_sweep_any_digit.py": 90,
+    "report/test_reproduce_stopped.py": 79,
+    "tactile/test_resume.py": 72,
+    "twin/test_campaign_digits.py": 67,
 }
 _TESTS = Path(__file__).resolve().parent
 
