@@ -33,6 +33,8 @@ __getattr__, __all__ = lazy_exports(
         "ForceController": "flexdigit.palpation.palpation",
         "hold_force": "flexdigit.palpation.palpation",
         "rig_contact_model": "flexdigit.palpation.palpation",
+        "digit_tissue": "flexdigit.palpation.palpation",
+        "check_tissue_reach": "flexdigit.palpation.palpation",
         "indentation_figure": "flexdigit.palpation.palpation_plot",
         "scan_figure": "flexdigit.palpation.palpation_plot",
         "hold_figure": "flexdigit.palpation.palpation_plot",
