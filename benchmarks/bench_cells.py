@@ -15,25 +15,8 @@ from __future__ import annotations
 
 import time
 
-from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES, ONE_LONG_SECTION
 
-#: tests/digit_campaign.py's campaign_digit(2), its mechanics (the sensor chain does not change the twin's cost).
-ONE_LONG_SECTION = {
-    "actuator": {"gear_ratio": 1.88},
-    "cables": {"count": 1, "guide_friction_ratio": 0.0163, "pretension_n": 0.0},
-    "geometry": {
-        "cable_eccentricity_m": 0.00318,
-        "digit_length_m": 0.404,
-        "gauge_positions_m": [0.0374, 0.0388, 0.0837, 0.0982, 0.1916, 0.2682, 0.3749],
-        "section_count": 1,
-        "section_length_m": 0.3893,
-        "strip_length_m": 0.3893,
-        "strip_thickness_m": 0.00025,
-        "strip_width_m": 0.0132,
-    },
-    "material": {"strip_density_kg_m3": 8860.0, "youngs_modulus_pa": 110e9},
-    "sensors": {"adc_channels": list(range(7))},
-}
 DIGITS = {
     "thesis rig": ({}, "vertical"),
     "one 0.39 m section": (ONE_LONG_SECTION, "hanging"),

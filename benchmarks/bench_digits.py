@@ -20,18 +20,8 @@ import time
 
 import numpy as np
 
-#: The 8-gauge, 5-section digit of tests/digits.py ("five-sections-eight-gauges"), written out (benchmarks do not
-#: import the tests).
-FIVE_SECTIONS_EIGHT_GAUGES = {
-    "geometry": {
-        "section_count": 5,
-        "section_length_m": 0.09,
-        "strip_length_m": 0.45,
-        "digit_length_m": 0.50,
-        "gauge_positions_m": [0.03, 0.07, 0.13, 0.17, 0.23, 0.27, 0.33, 0.37],
-    },
-    "sensors": {"bridge": "full", "adc_channels": list(range(8))},
-}
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES
+
 DIGITS = {"thesis rig (3 sections, 3 gauges)": ({}, "vertical"), "5 sections, 8 gauges, 0.5 m": (
     FIVE_SECTIONS_EIGHT_GAUGES, "hanging")}  # fmt: skip
 

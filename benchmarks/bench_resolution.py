@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import time
 
-from benchmarks.bench_cells import ONE_LONG_SECTION, realtime_factor
+from benchmarks._common import ONE_LONG_SECTION
+from benchmarks.bench_cells import realtime_factor
 
 #: (name, description, orientation, the max_cell_length_m meeting 0.1 %: docs/digits.md's table)
 DIGITS = (
