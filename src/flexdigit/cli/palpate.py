@@ -127,19 +127,12 @@ def _digit_tissue(tissue, info, params):
 
 
 def _scan_laid_out(plan, params):
-    """The built-in scan beside a built-in tissue laid out for the digit: its offsets and the inclusion width looked
-    for scaled as the tissue is (palpation.tissue_scale; to 0.1 mm), so the nodule passes along the digit as it
-    passes along the thesis rig's (+-40 mm beside its 0.27 m; +-22.2 mm beside a 0.15 m digit)."""
+    """The built-in scan beside a built-in tissue laid out for the digit (palpation.digit_scan)."""
     from dataclasses import replace
 
-    from flexdigit.palpation.palpation import tissue_scale
+    from flexdigit.palpation.palpation import digit_scan
 
-    scale = tissue_scale(params)
-    scan = {
-        "offsets_m": tuple(round(scale * d, 4) for d in plan.scan["offsets_m"]),
-        "inclusion_width_m": round(scale * plan.scan["inclusion_width_m"], 4),
-    }
-    return replace(plan, scan=scan)
+    return replace(plan, scan=digit_scan(plan.scan, params))
 
 
 def _laid_out(plan, rig, calibration, side: str, tissue_source: str):
