@@ -9,9 +9,7 @@ estimate costs (two static solves and, where the default misses 0.1 %, the searc
 
 from __future__ import annotations
 
-import time
-
-from benchmarks._common import ONE_LONG_SECTION
+from benchmarks._common import ONE_LONG_SECTION, best_of
 from benchmarks.bench_cells import realtime_factor
 
 #: (name, description, orientation, the max_cell_length_m meeting 0.1 %: docs/digits.md's table)
@@ -19,15 +17,6 @@ DIGITS = (
     ("thesis rig", {}, "vertical", 0.014),
     ("one 0.39 m section", ONE_LONG_SECTION, "hanging", 0.018),
 )
-
-
-def _best_ms(call, repeats: int = 5) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        call()
-        best = min(best, time.perf_counter() - start)
-    return 1e3 * best
 
 
 def run() -> list[dict]:
@@ -55,7 +44,7 @@ def run() -> list[dict]:
         rows.append(
             {
                 "name": f"static error estimate (params FILE), {name}",
-                "value": _best_ms(lambda p=params: static_error(p)),
+                "value": 1e3 * best_of(lambda p=params: static_error(p), 5),
                 "unit": "ms",
                 "goal": "",
                 "note": "two static solves, at the cells and at 3x (best of 5)",
@@ -64,7 +53,7 @@ def run() -> list[dict]:
         rows.append(
             {
                 "name": f"setting for 0.1 % (resolution_for), {name}",
-                "value": _best_ms(lambda p=params: resolution_for(p)),
+                "value": 1e3 * best_of(lambda p=params: resolution_for(p), 5),
                 "unit": "ms",
                 "goal": "",
                 "note": "the h^2 law's guess, checked by the estimate (best of 5)",
