@@ -35,6 +35,7 @@ __getattr__, __all__ = lazy_exports(
         "rig_contact_model": "flexdigit.palpation.palpation",
         "digit_tissue": "flexdigit.palpation.palpation",
         "check_tissue_reach": "flexdigit.palpation.palpation",
+        "digit_scan": "flexdigit.palpation.palpation",
         "indentation_figure": "flexdigit.palpation.palpation_plot",
         "scan_figure": "flexdigit.palpation.palpation_plot",
         "hold_figure": "flexdigit.palpation.palpation_plot",
