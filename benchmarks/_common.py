@@ -1,5 +1,6 @@
-"""What the benchmarks share: :func:`best_of`, and the test digits they time, written out once here (benchmarks
-do not import the tests: each says which tests/digits.py or tests/digit_campaign.py digit it copies)."""
+"""What the benchmarks share: :func:`best_of`, :func:`realtime_factor`, and the test digits they time, written out
+once here (benchmarks do not import the tests: each says which tests/digits.py or tests/digit_campaign.py digit it
+copies)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import time
 
 __all__ = [
     "best_of",
+    "realtime_factor",
     "ONE_SECTION",
     "FIVE_SECTIONS_EIGHT_GAUGES",
     "RANDOM_DIGIT_8",
@@ -25,6 +27,34 @@ def best_of(function, repeats: int = 3) -> float:
         function()
         best = min(best, time.perf_counter() - start)
     return best
+
+
+def realtime_factor(description: dict, orientation: str, cells=None, sim_seconds: float = 10.0, repeats: int = 3):
+    """Simulated seconds per wall-clock second of the run twin of a digit, ``(factor, springs, elapsed)``: the ``sim``
+    backend's 2 ms step read every 20 ms serial frame, a command every 5th frame of a slow ramp over 30 commands from
+    the straight one, ``sim_seconds`` on fresh twins, best of ``repeats``; ``cells`` per section (None: the
+    description's own resolution)."""
+    from flexdigit.params import RigParams
+    from flexdigit.rig.backends.sim_backend import DEFAULT_TWIN_DT_S
+    from flexdigit.twin.twin import Twin
+
+    params = RigParams.from_dict(description)
+    straight = params.actuator.equilibrium_command
+    ramp = list(range(straight, straight + 31)) + list(range(straight + 29, straight, -1))
+
+    def once() -> tuple[float, int]:
+        twin = Twin(params, seed=0, orientation=orientation, dt_s=DEFAULT_TWIN_DT_S, cells_per_section=cells)
+        frame = params.actuator.serial_period_s
+        start = time.perf_counter()
+        for k in range(int(round(sim_seconds / frame))):
+            if k % 5 == 0:
+                twin.command(ramp[(k // 5) % len(ramp)])
+            twin.advance(frame)
+            twin.read()
+        return time.perf_counter() - start, twin.chain.n
+
+    elapsed, springs = min(once() for _ in range(repeats))
+    return sim_seconds / elapsed, springs, elapsed
 
 
 #: tests/digits.py's one-section digit: one 0.15 m section, one quarter bridge.

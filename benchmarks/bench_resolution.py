@@ -1,6 +1,6 @@
 """The cost of a finer twin (issue 24, a description's ``[twin]`` table, ``flexdigit.twin.resolution``): the run
 twin's real-time factor at the default resolution and at the ``[twin] max_cell_length_m`` that meets 0.1 % of the
-elastica (docs/digits.md, "The twin's resolution"), timed as :func:`benchmarks.bench_cells.realtime_factor`
+elastica (docs/digits.md, "The twin's resolution"), timed as :func:`benchmarks._common.realtime_factor`
 times them, the cells coming from the description (not passed); and what ``flexdigit params FILE``'s error
 estimate costs (two static solves and, where the default misses 0.1 %, the search for the setting).
 
@@ -9,8 +9,7 @@ estimate costs (two static solves and, where the default misses 0.1 %, the searc
 
 from __future__ import annotations
 
-from benchmarks._common import ONE_LONG_SECTION, best_of
-from benchmarks.bench_cells import realtime_factor
+from benchmarks._common import ONE_LONG_SECTION, best_of, realtime_factor
 
 #: (name, description, orientation, the max_cell_length_m meeting 0.1 %: docs/digits.md's table)
 DIGITS = (
