@@ -63,6 +63,7 @@ MODULES: tuple[str, ...] = (
     "benchmarks.bench_resources",
     "benchmarks.bench_plots",
     "benchmarks.bench_plots2",
+    "benchmarks.bench_suitetime",
 )
 #: Run only when named (``python -m benchmarks bench_converged``): half an hour of CPU.
 ON_REQUEST: tuple[str, ...] = ("benchmarks.bench_converged",)
