@@ -144,7 +144,8 @@ def test_a_longer_training_goes_on_from_the_shorter_one_number_for_number(monkey
     xv, tv = _data(60, 22)
     monkeypatch.setattr(_scg_kernel, "_runs", type(_scg_kernel._runs)())
     from_start = _fit(x, t, xv, tv, 12)
-    assert from_start[2] == 12 * 13 and not from_start[5]  # ran every epoch: a resumed one has epochs to add
+    assert from_start[2] == 12 * 13  # ran every epoch: a resumed one has epochs to add
+    assert not from_start[5]
     _scg_kernel._runs.clear()
     epochs_run = []
     real = _scg_kernel._train
@@ -169,7 +170,8 @@ def test_a_converged_training_asked_for_more_epochs_is_the_same(monkeypatch):
     x, t = _data(200, 5)
     monkeypatch.setattr(_scg_kernel, "_runs", type(_scg_kernel._runs)())
     from_start = _fit(x, t, x, t, 40, tol=1e-1)
-    assert from_start[5] and len(from_start[3]) < 5  # tol 1e-1 is met in the first epoch
+    assert from_start[5]  # tol 1e-1 is met in the first epoch
+    assert len(from_start[3]) < 5
     _scg_kernel._runs.clear()
     _fit(x, t, x, t, 4, tol=1e-1)
     _same(_fit(x, t, x, t, 40, tol=1e-1), from_start)  # kept: it would stop where it stopped
