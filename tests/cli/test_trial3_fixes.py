@@ -1,0 +1,55 @@
+"""Issue 24, trial 3 (/work/coord/trial3_report.md): what the third hand-made set found in ``run`` and ``params``.
+
+Each test is a refusal or a message checked on one of tests/data/handmade_digits3's digits (or a one-key change of
+one), before any twin moves: short by construction.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from flexdigit.cli import main
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "handmade_digits3"
+#: The set's single-cable digits (no [cables] table: the thesis rig's one cable).
+ONE_CABLE = ["mixed_bridges_three", "spring_bronze_two", "eight_gauges_two_sections"]
+
+
+def _one_error_line(capsys, command: str) -> str:
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1, captured.err
+    assert lines[0].startswith(f"flexdigit {command}: error: ")
+    return lines[0]
+
+
+@pytest.mark.parametrize("name", ONE_CABLE)
+def test_a_negative_setpoint_on_one_cable_is_refused_before_the_twin_moves(name, capsys, work_must_not_start):
+    """A single cable pulls one way (slack below straight): -30 deg "completed" at 0.00 deg with exit 0 in trial 3."""
+    from flexdigit.twin.twin import Twin
+
+    work_must_not_start(Twin, "advance")
+    path = DATA / f"{name}.toml"
+    assert main(["run", "--params", str(path), "--setpoint-deg=-30", "--no-progress"]) == 2
+    line = _one_error_line(capsys, "run")
+    assert "--setpoint-deg -30" in line and str(path) in line
+    assert "one cable" in line and "reaches 0.0 to " in line
+
+
+def test_the_library_check_is_the_one_run_step_and_live_use():
+    """run_step, board_step_test and the live page's slider all read :func:`reachable_rotation_deg`."""
+    from flexdigit.errors import ParameterError
+    from flexdigit.live.session import setpoint_range
+    from flexdigit.params import load_params
+    from flexdigit.rig.step_test import check_setpoint, reachable_rotation_deg
+
+    params = load_params(DATA / "spring_bronze_two.toml")
+    bottom, top = reachable_rotation_deg(params)
+    assert bottom == 0.0 and top > 30.0
+    assert check_setpoint(30.0, params) == 30.0
+    assert check_setpoint(0.0, params) == 0.0  # straight: the cable's slack end, reachable
+    with pytest.raises(ParameterError, match=r"setpoint_deg -0\.5: .* one cable"):
+        check_setpoint(-0.5, params, name="setpoint_deg")
+    assert setpoint_range(params, "deg")[0] == 0.0
