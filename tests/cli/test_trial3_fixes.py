@@ -53,3 +53,30 @@ def test_the_library_check_is_the_one_run_step_and_live_use():
     with pytest.raises(ParameterError, match=r"setpoint_deg -0\.5: .* one cable"):
         check_setpoint(-0.5, params, name="setpoint_deg")
     assert setpoint_range(params, "deg")[0] == 0.0
+
+
+def test_a_straight_command_outside_the_operating_commands_is_refused_naming_both(tmp_path, capsys):
+    """Trial 3: ``equilibrium_command = 60`` beside the thesis's operating commands 8..43 loaded, and ``run`` then
+    drove command 78."""
+    path = tmp_path / "straight_at_60.toml"
+    path.write_text("[actuator]\nequilibrium_command = 60\n", encoding="utf-8")
+    assert main(["params", str(path)]) == 2
+    line = _one_error_line(capsys, "params")
+    assert str(path) in line and "equilibrium_command" in line and "operating_commands" in line
+    assert "Got 60" in line and "[8, 43]" in line
+
+
+def test_a_digit_that_buckles_tip_up_gets_its_gauge_reach_without_a_library_warning(capsys, recwarn):
+    """Trial 3: ``params seven_sections_450mm.toml`` printed the statics' ConvergenceWarning (its tip-up solve found
+    no straight rest: the digit buckles so). Its reach is now solved hanging, as ``run`` mounts it."""
+    from flexdigit.params import load_params
+    from flexdigit.rig.gauge_rails import gauge_rails
+
+    path = DATA / "seven_sections_450mm.toml"
+    assert main(["params", str(path)]) == 0
+    assert capsys.readouterr().err == ""
+    assert [str(w.message) for w in recwarn] == []
+    reaches = gauge_rails(load_params(path))
+    # 42 commands of a 0.8 mm offset cable bend a 0.45 m digit tens of degrees (49.9 deg hanging when measured)
+    assert 20.0 < reaches[0].range_deg[1] < 90.0
+    assert all(r.v_per_deg != 0.0 for r in reaches)
