@@ -219,6 +219,7 @@ class Geometry:
             low=0,
             high=self.digit_length_m,
             low_open=True,
+            unit="m",
         )
         object.__setattr__(self, "gauge_positions_m", tuple(float(x) for x in positions))
 

@@ -80,3 +80,18 @@ def test_a_digit_that_buckles_tip_up_gets_its_gauge_reach_without_a_library_warn
     # 42 commands of a 0.8 mm offset cable bend a 0.45 m digit tens of degrees (49.9 deg hanging when measured)
     assert 20.0 < reaches[0].range_deg[1] < 90.0
     assert all(r.v_per_deg != 0.0 for r in reaches)
+
+
+@pytest.mark.parametrize(
+    ("bad", "shown"),
+    [
+        ("bits_overflow", "Got 99999999999999999999999 bits instead"),  # was "1e+23 bits"
+        ("date_for_count", "Got 1979-05-27 (a date) instead"),  # was "datetime.date(1979, 5, 27)"
+        ("negative_channel", "Got [-1, 1, 2] instead"),  # was "[-1.0, 1.0, 2.0]"
+        # as strip_thickness_m = 0.381 gets "did you mean mm"
+        ("gauges_in_mm", "Got [45, 135, 225] instead: did you mean mm ([0.045, 0.135, 0.225] m)?"),
+    ],
+)
+def test_a_refused_value_reads_as_it_was_written(bad, shown, capsys):
+    assert main(["params", str(DATA / "bad" / f"{bad}.toml")]) == 2
+    assert shown in _one_error_line(capsys, "params")
