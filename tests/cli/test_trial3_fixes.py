@@ -95,3 +95,31 @@ def test_a_digit_that_buckles_tip_up_gets_its_gauge_reach_without_a_library_warn
 def test_a_refused_value_reads_as_it_was_written(bad, shown, capsys):
     assert main(["params", str(DATA / "bad" / f"{bad}.toml")]) == 2
     assert shown in _one_error_line(capsys, "params")
+
+
+def test_figures_over_no_identifiable_reading_say_not_applicable_not_nan(recwarn):
+    """Trial 3: reproduce --params pair_one_quarter_gauge_geared.toml (one gauge: no reading tells a load's position
+    from its mass) printed numpy's "Mean of empty slice" and wrote 8 chapter-6 figures as null. The means over no
+    identifiable reading are NaN without a warning, and the chapter's entries say why instead."""
+    import math
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from flexdigit.report import results
+    from flexdigit.report.ch6_tactile import _not_applicable_without_identifiable
+    from flexdigit.tactile.localisation import _empty_means_are_nan
+
+    with _empty_means_are_nan(True):
+        rms = float(np.sqrt(np.mean(np.array([])[np.array([], dtype=bool)] ** 2)))
+    assert math.isnan(rms) and [str(w.message) for w in recwarn] == []
+    entries = [
+        results.new("non_actuated.crlb_rms_mass_unknown_mm", "6 (new)", rms, "mm", "bound"),
+        results.new("non_actuated.contact_accuracy", "6 (new)", 0.9, "", "contact"),
+    ]
+    none = SimpleNamespace(key="non_actuated", localisation=SimpleNamespace(extra={"identifiable_fraction": 0.0}))
+    out = _not_applicable_without_identifiable(none, entries)
+    assert out[0].ours.startswith("not applicable: no test reading is identifiable")
+    assert out[1] == entries[1]  # a figure that is defined stays
+    some = SimpleNamespace(key="non_actuated", localisation=SimpleNamespace(extra={"identifiable_fraction": 0.5}))
+    assert _not_applicable_without_identifiable(some, entries) == entries
