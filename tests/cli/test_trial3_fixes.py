@@ -123,3 +123,20 @@ def test_figures_over_no_identifiable_reading_say_not_applicable_not_nan(recwarn
     assert out[1] == entries[1]  # a figure that is defined stays
     some = SimpleNamespace(key="non_actuated", localisation=SimpleNamespace(extra={"identifiable_fraction": 0.5}))
     assert _not_applicable_without_identifiable(some, entries) == entries
+
+
+def test_a_predicted_position_off_the_digit_or_its_trained_span_is_flagged():
+    """Trial 3: predict put loads 0.33 m from the tip of a 0.30 m digit unremarked. Flagged beyond the predictions'
+    RMSE (here 3 mm): 2 mm short of the trained span is the network's scatter, 30 mm past the clamp is not."""
+    from types import SimpleNamespace
+
+    from flexdigit.tactile.localisation import _position_notes
+
+    dataset = SimpleNamespace(meta={"digit_length_m": 0.30})
+    saved = SimpleNamespace(meta={"position_span_m": [0.01, 0.25]})
+    notes = _position_notes([0.33, 0.008, 0.12, 0.27, -0.02], dataset, saved, 0.003)
+    assert notes[0] == "outside the digit (0 to 300 mm from the tip)"
+    assert notes[1] == notes[2] == ""
+    assert notes[3] == "outside the trained positions (10 to 250 mm from the tip)"
+    assert notes[4].startswith("outside the digit")
+    assert _position_notes([0.33], SimpleNamespace(meta={}), SimpleNamespace(meta={}), 0.003) == ("",)

@@ -200,6 +200,11 @@ class Prediction:
     scores : dict
         ``corr2`` and ``rmse`` (the target's SI unit), and ``rmse_<unit>`` where the target has a display unit
         (``rmse_mm``, ``rmse_g``).
+    notes : tuple of str
+        Per prediction, ``""`` or why it is suspect: a position outside the digit (0..its length from the tip,
+        the dataset's ``digit_length_m``) or outside the span of positions the network was trained on (its
+        ``meta["position_span_m"]``), by more than the predictions' RMSE: an extrapolation, not a reading of the
+        gauges (trial 3: 0.33 m on a 0.30 m digit).
     """
 
     target: str
@@ -207,6 +212,7 @@ class Prediction:
     predicted: np.ndarray
     actual: np.ndarray
     scores: dict
+    notes: tuple = ()
 
     __repr__ = fields_summary
 
@@ -232,7 +238,26 @@ def predict_dataset(saved, dataset: Dataset, *, source: str = "the dataset") -> 
     _, unit, scale = target_unit(saved.target)
     if unit:
         scores[f"rmse_{unit}"] = scale * scores["rmse"]
-    return Prediction(saved.target, rows, predicted, actual, scores)
+    position = saved.target == "position"
+    notes = _position_notes(predicted, dataset, saved, scores["rmse"]) if position else ("",) * len(rows)
+    return Prediction(saved.target, rows, predicted, actual, scores, notes)
+
+
+def _position_notes(predicted, dataset: Dataset, saved, margin_m: float) -> tuple[str, ...]:
+    """:attr:`Prediction.notes` of positions from the tip (m): outside the digit or the trained span by more than
+    ``margin_m`` (the predictions' own RMSE: a position a few mm past the tip is the network's scatter)."""
+    length = dataset.meta.get("digit_length_m")
+    span = saved.meta.get("position_span_m")
+    m = float(margin_m) if np.isfinite(margin_m) else 0.0
+    notes = []
+    for p in np.asarray(predicted, dtype=float):
+        if isinstance(length, int | float) and not -m <= p <= length + m:
+            notes.append(f"outside the digit (0 to {1e3 * length:g} mm from the tip)")
+        elif isinstance(span, list | tuple) and len(span) == 2 and not span[0] - m <= p <= span[1] + m:
+            notes.append(f"outside the trained positions ({1e3 * span[0]:g} to {1e3 * span[1]:g} mm from the tip)")
+        else:
+            notes.append("")
+    return tuple(notes)
 
 
 def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
