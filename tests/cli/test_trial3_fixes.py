@@ -34,8 +34,10 @@ def test_a_negative_setpoint_on_one_cable_is_refused_before_the_twin_moves(name,
     path = DATA / f"{name}.toml"
     assert main(["run", "--params", str(path), "--setpoint-deg=-30", "--no-progress"]) == 2
     line = _one_error_line(capsys, "run")
-    assert "--setpoint-deg -30" in line and str(path) in line
-    assert "one cable" in line and "reaches 0.0 to " in line
+    assert "--setpoint-deg -30" in line
+    assert str(path) in line
+    assert "one cable" in line
+    assert "reaches 0.0 to " in line
 
 
 def test_the_library_check_is_the_one_run_step_and_live_use():
@@ -47,7 +49,8 @@ def test_the_library_check_is_the_one_run_step_and_live_use():
 
     params = load_params(DATA / "spring_bronze_two.toml")
     bottom, top = reachable_rotation_deg(params)
-    assert bottom == 0.0 and top > 30.0
+    assert bottom == 0.0
+    assert top > 30.0
     assert check_setpoint(30.0, params) == 30.0
     assert check_setpoint(0.0, params) == 0.0  # straight: the cable's slack end, reachable
     with pytest.raises(ParameterError, match=r"setpoint_deg -0\.5: .* one cable"):
@@ -62,8 +65,11 @@ def test_a_straight_command_outside_the_operating_commands_is_refused_naming_bot
     path.write_text("[actuator]\nequilibrium_command = 60\n", encoding="utf-8")
     assert main(["params", str(path)]) == 2
     line = _one_error_line(capsys, "params")
-    assert str(path) in line and "equilibrium_command" in line and "operating_commands" in line
-    assert "Got 60" in line and "[8, 43]" in line
+    assert str(path) in line
+    assert "equilibrium_command" in line
+    assert "operating_commands" in line
+    assert "Got 60" in line
+    assert "[8, 43]" in line
 
 
 def test_a_digit_that_buckles_tip_up_gets_its_gauge_reach_without_a_library_warning(capsys, recwarn):
@@ -112,7 +118,8 @@ def test_figures_over_no_identifiable_reading_say_not_applicable_not_nan(recwarn
 
     with _empty_means_are_nan(True):
         rms = float(np.sqrt(np.mean(np.array([])[np.array([], dtype=bool)] ** 2)))
-    assert math.isnan(rms) and [str(w.message) for w in recwarn] == []
+    assert math.isnan(rms)
+    assert [str(w.message) for w in recwarn] == []
     entries = [
         results.new("non_actuated.crlb_rms_mass_unknown_mm", "6 (new)", rms, "mm", "bound"),
         results.new("non_actuated.contact_accuracy", "6 (new)", 0.9, "", "contact"),

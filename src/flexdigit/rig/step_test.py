@@ -17,6 +17,8 @@ import numpy as np
 from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_real
 from flexdigit.errors import ParameterError
+from flexdigit.models.cable import tip_rotation_per_command_deg
+from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig, open_rig, parse_rig_url
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import LoopResult, run_loop
@@ -338,9 +340,6 @@ def reachable_rotation_deg(params=None) -> tuple[float, float]:
     >>> [round(deg, 1) for deg in reachable_rotation_deg()]  # the thesis rig: 8..254, straight at 8, 1.735 deg each
     [0.0, 426.8]
     """
-    from flexdigit.models.cable import tip_rotation_per_command_deg
-    from flexdigit.params import RigParams
-
     p = params or RigParams()
     a, per_command = p.actuator, tip_rotation_per_command_deg(p)
     top = (a.command_max - a.equilibrium_command) * per_command
@@ -353,9 +352,6 @@ def check_setpoint(setpoint_deg: float, params=None, *, source=None, name: str =
     :class:`~flexdigit.errors.ParameterError` naming ``name``, the value and the reachable range (from ``source``,
     the digit's file, when given). Checked before anything moves: a single cable asked for a negative rotation
     otherwise "completed" at 0 deg (trial 3), slack at its lowest command."""
-    from flexdigit.models.cable import tip_rotation_per_command_deg
-    from flexdigit.params import RigParams
-
     p = params or RigParams()
     bottom, top = reachable_rotation_deg(p)
     if bottom <= setpoint_deg <= top:
