@@ -50,12 +50,48 @@ import numpy as np
 from flexdigit.errors import ParameterError
 
 
-def _fail(name: str, owner: str | None, expected: str, got: object, error: type[Exception]) -> None:
-    where = f"The '{name}' parameter of {owner}" if owner else f"The '{name}' parameter"
-    shown = repr(got)
-    if len(shown) > 80:  # a 400-digit integer from a client: name it, do not echo it
+def shown_value(got: object) -> str:
+    """A refused value as a message shows it: an integer in its digits (not ``1e+23``), a TOML date or time in its
+    ISO form, a list of numbers as written (``[-1, 1, 2]``, not ``[-1.0, 1.0, 2.0]``), anything else by its repr;
+    cut past 80 characters (a 400-digit integer from a client: named, not echoed).
+
+    Examples
+    --------
+    >>> import datetime
+    >>> shown_value(10**23), shown_value(datetime.date(1979, 5, 27)), shown_value([-1.0, 1.0, 2.5])
+    ('100000000000000000000000', '1979-05-27 (a date)', '[-1, 1, 2.5]')
+    """
+    import datetime
+
+    if isinstance(got, datetime.date | datetime.time):
+        shown = f"{got.isoformat()} (a {'time' if isinstance(got, datetime.time) else 'date'})"
+    elif isinstance(got, Integral) and not isinstance(got, bool):
+        shown = str(int(got))
+    elif isinstance(got, list) and got and all(isinstance(v, float) for v in _flat(got)):
+        shown = _numbers(got)
+    else:
+        shown = repr(got)
+    if len(shown) > 80:
         shown = f"{shown[:60]}... ({len(shown)} characters)"
-    raise error(f"{where} must be {expected}. Got {shown} instead.")
+    return shown
+
+
+def _flat(values: list):
+    for v in values:
+        if isinstance(v, list):
+            yield from _flat(v)
+        else:
+            yield v
+
+
+def _numbers(values: list) -> str:
+    """A nested list of floats as written: ``[-1, 0.5]``."""
+    return "[" + ", ".join(_numbers(v) if isinstance(v, list) else f"{v:.12g}" for v in values) + "]"
+
+
+def _fail(name: str, owner: str | None, expected: str, got: object, error: type[Exception], tail: str = ".") -> None:
+    where = f"The '{name}' parameter of {owner}" if owner else f"The '{name}' parameter"
+    raise error(f"{where} must be {expected}. Got {shown_value(got)} instead{tail}")
 
 
 def check_real(
@@ -171,9 +207,12 @@ def check_array(
     high: float | None = None,
     low_open: bool = False,
     high_open: bool = False,
+    unit: str = "",
     error: type[Exception] = ParameterError,
 ) -> np.ndarray:
-    """Return a float copy of ``value`` after checking its shape and values, or raise naming it.
+    """Return a float copy of ``value`` after checking its shape and values, or raise naming it. With ``unit``, values
+    outside ``low``..``high`` that a unit slip puts inside are refused naming it (``did you mean mm``, as
+    :class:`Plausible` does).
 
     Examples
     --------
@@ -187,8 +226,8 @@ def check_array(
     if _holds_text_or_truth(value):  # numpy reads "0.05" and True as numbers: a file's typo, not a value
         _fail(name, owner, "an array of real numbers", value, error)
 
-    def fail(expected: str):  # the message (and the array as a list in it) only built for a value that fails
-        _fail(name, owner, expected, out.tolist(), error)
+    def fail(expected: str, tail: str = "."):  # the message (and the array as a list in it) only built on failure
+        _fail(name, owner, expected, out.tolist(), error, tail)
 
     if ndim is not None and out.ndim != ndim:
         fail(f"a {ndim}-dimensional array")
@@ -214,9 +253,19 @@ def check_array(
                 bad |= out == high
             first = np.argwhere(bad)[0]
             where = ", ".join(str(int(i)) for i in first)
-            interval = _interval_text(low, high, low_open, high_open)
-            fail(f"an array with values{interval} (element {where}: {out[tuple(first)]:g})")
+            interval = _interval_text(low, high, low_open, high_open) + (f" {unit}" if unit else "")
+            slip = _array_slip(out, unit, low, high)
+            fail(f"an array with values{interval} (element {where}: {out[tuple(first)]:g})", slip or ".")
     return out
+
+
+def _array_slip(values: np.ndarray, unit: str, low, high) -> str:
+    """``": did you mean mm ([0.045, 0.135] m)?"`` when one unit slip puts every value inside, else ``""``."""
+    for factor, name in UNIT_SLIPS.get(unit, ()):
+        meant = values * factor
+        if (low is None or (meant > low).all()) and (high is None or (meant <= high).all()):
+            return f": did you mean {name} ({_numbers(meant.tolist())} {unit})?"
+    return ""
 
 
 # Batches (the twin's load cases, a command repeated over every repetition) would make check_array's message a
@@ -562,9 +611,7 @@ class Plausible(Interval):
         except _Unsatisfied:
             pass
         where = f"The '{name}' parameter of {owner}" if owner else f"The '{name}' parameter"
-        shown = repr(value)
-        if len(shown) > 80:
-            shown = f"{shown[:60]}... ({len(shown)} characters)"
+        shown = shown_value(value)
         slip, finite = "", False
         if isinstance(value, Real) and not isinstance(value, bool):
             try:
@@ -574,7 +621,8 @@ class Plausible(Interval):
             finite = math.isfinite(number)
             if finite:
                 exact = isinstance(value, Integral) or (self.type is Integral and number.is_integer())
-                shown = (str(int(number)) if exact and abs(number) < 1e16 else repr(number)) + (
+                text = shown_value(value) if isinstance(value, Integral) else None
+                shown = (text or (str(int(number)) if exact and abs(number) < 1e16 else repr(number))) + (
                     f" {self.unit}" if self.unit else ""
                 )
                 slip = unit_slip(number, self.unit, self.low, self.high)

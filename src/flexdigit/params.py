@@ -219,6 +219,7 @@ class Geometry:
             low=0,
             high=self.digit_length_m,
             low_open=True,
+            unit="m",
         )
         object.__setattr__(self, "gauge_positions_m", tuple(float(x) for x in positions))
 
@@ -556,6 +557,12 @@ class Actuator:
                 f"inside [{lo}, {hi}]. Got {list(self.operating_commands)!r} instead."
             )
         object.__setattr__(self, "operating_commands", ops)
+        if not ops[0] <= self.equilibrium_command <= ops[1]:  # trial 3: straight at 60 of 8..43 drove command 78
+            raise ParameterError(
+                f"The 'equilibrium_command' parameter of {owner} (where the digit is straight) must lie within its "
+                f"'operating_commands' {list(ops)}. Got {self.equilibrium_command} instead: set operating_commands "
+                "around it (a single cable operates above its straight command, a pair either side)."
+            )
         check_real(
             self.pot_v_at_max_angle_v, "pot_v_at_max_angle_v", owner, low=self.pot_v_at_min_angle_v, low_open=True
         )

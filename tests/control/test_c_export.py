@@ -358,7 +358,9 @@ def test_property_float_export_holds_to_the_runtime(
         kwargs = {"aw_gain": _stable_aw_gain(sys, rng), "aw_quantisation": bool(rng.integers(2))}
     hysteresis, dither = (0.25 if rounding == "hysteresis" else 0.0), rounding == "dither"
     base = RigParams()
-    params = base.replace(actuator=dataclasses.replace(base.actuator, equilibrium_command=straight))
+    operating = (straight, straight + 35) if straight == 8 else (straight - 35, straight + 35)  # 3.4.1's span
+    actuator = dataclasses.replace(base.actuator, equilibrium_command=straight, operating_commands=operating)
+    params = base.replace(actuator=actuator)
     rc = RuntimeController(
         sys,
         params,

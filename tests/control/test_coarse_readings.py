@@ -55,5 +55,6 @@ def test_the_bipolar_10_bit_digits_step_settles_without_overshoot(capsys):
     assert code == 0, run
     true = run["step_metrics"]["true"]
     assert true["overshoot_percent"] < 10.0
-    assert true["settling_time_s"] is not None and true["settling_time_s"] < 1.0
+    assert true["settling_time_s"] is not None
+    assert true["settling_time_s"] < 1.0
     assert abs(run["true_final_rotation_deg"] - 30.0) < 0.02 * 30.0

@@ -147,7 +147,8 @@ def test_a_coarse_digit_whose_search_finds_none_runs_the_quietest_design_in_time
         quiet = dz.digit_design_20ms(params).choice
     monkeypatch.setattr(dz, "STEP_BAND_DEG", math.inf)  # not coarse to the design: the fastest of the stable
     fastest = dz.digit_design_20ms(params).choice
-    assert not fastest.meets and fastest.failing.startswith("noise")
+    assert not fastest.meets
+    assert fastest.failing.startswith("noise")
     assert fastest.noise_sd_deg > dz.NOISE_LIMIT_DEG
     assert quiet.settling_time_s < dz.QUIET_SETTLING_S
     assert quiet.overshoot_percent < dz.OVERSHOOT_LIMIT_PERCENT
@@ -167,6 +168,7 @@ def test_a_coarse_digit_driven_by_the_boards_own_timer_holds_the_band(capsys):
     run = json.loads(capsys.readouterr().out)
     assert code == 0, run
     true = run["step_metrics"]["true"]
-    assert true["settling_time_s"] is not None and true["settling_time_s"] < 1.0
+    assert true["settling_time_s"] is not None
+    assert true["settling_time_s"] < 1.0
     assert true["overshoot_percent"] < 2.0
     assert abs(run["true_final_rotation_deg"] - 30.0) < 0.02 * 30.0

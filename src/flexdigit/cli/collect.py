@@ -313,6 +313,8 @@ def _train_output(args: argparse.Namespace):
 
 
 def _train(args: argparse.Namespace) -> CommandResult:
+    import numpy as np
+
     from flexdigit.tactile.dataset import load_dataset
     from flexdigit.tactile.localisation import train_network
     from flexdigit.tactile.model_io import save_model
@@ -333,6 +335,9 @@ def _train(args: argparse.Namespace) -> CommandResult:
     meta = {"dataset": str(args.file), "protocol": dataset.protocol.name, "seed": args.seed, "scores": scores}
     meta["split"] = args.split
     meta["tared"] = tared  # the kept network reads tared readings: predict tares its readings alike
+    if target == "position":  # predict flags a position outside the span it learnt
+        trained = dataset["position_from_tip_m"][rows[result.split.train]]
+        meta["position_span_m"] = [float(np.min(trained)), float(np.max(trained))]
     save_model(model_path, result.model, target=target, inputs=inputs, meta=meta, force=args.force)
     swept = args.hidden is None or args.tol is None
     data = {"target": target, "model": str(model_path), "swept": swept, "tared": tared, "split": args.split, **scores}
@@ -382,14 +387,18 @@ def _predict(args: argparse.Namespace) -> CommandResult:
     result = predict_dataset(saved, dataset, source=str(args.file))
     rows, pred, y, scores = result.rows, result.predicted, result.actual, result.scores
     data = {"target": saved.target, "samples": rows.tolist(), "predicted": pred, "actual": y, "scores": scores}
+    data["notes"] = list(result.notes)
     _, unit, scale = target_unit(saved.target)
     shown_unit = unit or {"position_index": "positions"}.get(saved.target, "(0..1)")
     rmse_text = f"{scale * scores['rmse']:.4g} {shown_unit}"
     lines = [f"{saved.target}: {len(rows)} readings, corr2 {scores['corr2']:.4f}, RMSE {rmse_text}"]
+    flagged = sum(1 for n in result.notes if n)
+    if flagged:
+        lines.append(f"  warning: {flagged} predictions lie outside the digit or the trained positions (marked)")
     lines += [  # in the unit of the RMSE (mm, g), as the plot shows them
         f"  sample {int(dataset['sample'][r])}: predicted {scale * p:.5g} {shown_unit}, actual {scale * t:.5g} "
-        f"{shown_unit}"
-        for r, p, t in zip(rows[: args.limit], pred[: args.limit], y[: args.limit], strict=True)
+        f"{shown_unit}" + (f"  <- {note}" if note else "")
+        for r, p, t, note in zip(rows[: args.limit], pred[: args.limit], y[: args.limit], result.notes, strict=False)
     ]
     if args.plot:
         title = f"{saved.target} predicted by {args.model} on {args.file}"

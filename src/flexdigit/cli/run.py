@@ -298,6 +298,7 @@ def _checked(args) -> tuple[float, float, bool, dict]:
     from flexdigit.errors import ParameterError
     from flexdigit.rig.base import parse_rig_url, seed_option
     from flexdigit.rig.controllers import CONTROLLERS
+    from flexdigit.rig.step_test import check_setpoint
 
     args.kept = None
     if args.controller not in CONTROLLERS and not _is_design_file(args.controller):
@@ -311,7 +312,7 @@ def _checked(args) -> tuple[float, float, bool, dict]:
     if args.controller not in CONTROLLERS:
         args.kept = _kept_design(args.controller, args.digit)
         args.controller = "digital20"
-    _check_reachable(setpoint, args.digit, args.params)
+    check_setpoint(setpoint, args.digit, source=args.params)
     from flexdigit._plot import check_plot
 
     check_plot(args.plot, "run", force=args.force)  # before the rig moves, not after
@@ -347,27 +348,6 @@ def _digit(args):
     from flexdigit.params import load_params
 
     return load_params(args.params)
-
-
-def _check_reachable(setpoint: float, params, source) -> None:
-    """Refuse a setpoint the digit's servo range cannot reach, by the cable model (E 3.15 with the gearing): above
-    the top command's rotation, or, with a cable pair, below the bottom command's (a single cable goes slack
-    below straight: the runaway guard knows that case)."""
-    from flexdigit.errors import ParameterError
-    from flexdigit.models.cable import tip_rotation_per_command_deg
-    from flexdigit.params import RigParams
-
-    p = params or RigParams()
-    a, per_command = p.actuator, tip_rotation_per_command_deg(p)
-    top = (a.command_max - a.equilibrium_command) * per_command
-    bottom = (a.command_min - a.equilibrium_command) * per_command
-    where = f" of the digit in {source}" if source is not None else ""
-    if setpoint > top or (p.cables.count == 2 and setpoint < bottom):
-        raise ParameterError(
-            f"--setpoint-deg {setpoint:g}: the servo{where} reaches {bottom if p.cables.count == 2 else 0:.1f} to "
-            f"{top:.1f} deg (commands {a.command_min}..{a.command_max}, straight at {a.equilibrium_command}, "
-            f"{per_command:.3f} deg a command); set [actuator] equilibrium_command nearer the middle"
-        )
 
 
 def _period_and_map(args, rig, sim: bool, settings: dict):
@@ -528,6 +508,7 @@ def _on_board_checked(args) -> tuple[float, float]:
     from flexdigit._plot import check_plot
     from flexdigit._validation import check_real
     from flexdigit.errors import ParameterError
+    from flexdigit.rig.step_test import check_setpoint
 
     if _is_design_file(args.controller):
         raise ParameterError(
@@ -543,7 +524,7 @@ def _on_board_checked(args) -> tuple[float, float]:
     # --params: the digit the board's image was built for (make firmware PARAMS=...; the board's banner is checked
     # against it) and the twin it meets, calibrated and mounted as run --params's twin (--calibration for its twin)
     args.digit = _digit(args)
-    _check_reachable(setpoint, args.digit, args.params)
+    check_setpoint(setpoint, args.digit, source=args.params)
     check_plot(args.plot, "run", force=args.force)  # before the board starts, not after
     if args.log is not None and not (args.append and args.log.exists()):
         check_output(args.log, force=args.force, hint="or --append to add this run to it")

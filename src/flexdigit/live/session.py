@@ -36,13 +36,13 @@ import numpy as np
 from flexdigit._validation import check_choice, check_real
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.live.schemas import CONTACT_SCHEMA, SHAPE_SCHEMA
-from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.params import RigParams, load_params
 from flexdigit.rig.base import open_rig, parse_rig_url, rig_url_options
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import check_reading
 from flexdigit.rig.recording import Recording, read_metadata, rig_metadata
 from flexdigit.rig.rotation import load_rotation_map, make_rotation_map
+from flexdigit.rig.step_test import reachable_rotation_deg
 from flexdigit.shape.shape import ShapeEstimator
 from flexdigit.tactile.model_io import load_model
 from flexdigit.twin.calibration import Calibration
@@ -100,10 +100,8 @@ def setpoint_range(params: RigParams, unit: str) -> tuple[float, float]:
             straight = a.equilibrium_command
             return (float(max(a.command_min, straight - high)), float(min(a.command_max, straight + high)))
         return (low, min(high, float(a.command_max)))
-    per_command = tip_rotation_per_command_deg(params)
-    top = min(high, (a.command_max - a.equilibrium_command) * per_command)
-    bottom = max(-high, (a.command_min - a.equilibrium_command) * per_command) if two else low
-    return (round(float(bottom), 3), round(float(top), 3))
+    bottom, top = reachable_rotation_deg(params)  # run --setpoint-deg's reach (0 below for a single cable)
+    return (round(max(-high if two else low, bottom), 3), round(min(high, top), 3))
 
 
 def validate_request(

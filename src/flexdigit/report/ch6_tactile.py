@@ -7,6 +7,8 @@ Cramer-Rao bound, contact and magnitude, and four estimators side by side.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from flexdigit.reference import thesis_value
@@ -41,10 +43,25 @@ def build_tactile(ctx: ReportContext, key: str) -> Chapter:
     _pipeline_entries(exp, chapter.entries, ctx.thesis_rig)
     _beyond_entries(exp, chapter.entries, 1000 * ctx.params.geometry.digit_length_m)
     _bayes_entries(exp, chapter.entries)
+    chapter.entries[:] = _not_applicable_without_identifiable(exp, chapter.entries)
     chapter.paragraphs.append(_criteria_paragraph(exp, ctx.thesis_rig))
     chapter.tables.extend(experiment_tables(exp))
     _figures(ctx, exp, chapter)
     return chapter
+
+
+def _not_applicable_without_identifiable(exp, entries: list) -> list:
+    """With no identifiable test reading (one gauge reads a load's position and mass as one number), the figures
+    over identifiable readings are not defined: each says so and why, never a NaN (trial 3)."""
+    if exp.localisation.extra["identifiable_fraction"] > 0:
+        return entries
+    why = "not applicable: no test reading is identifiable (its position and mass told apart) with this digit's gauges"
+    return [
+        dataclasses.replace(e, ours=why, unit="")
+        if isinstance(e.ours, float) and not np.isfinite(e.ours) and e.key.startswith(f"{exp.key}.")
+        else e
+        for e in entries
+    ]
 
 
 def _protocol_paragraphs(exp, fast: bool, digit=None) -> list[str]:

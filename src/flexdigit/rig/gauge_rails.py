@@ -12,12 +12,15 @@ an end of ``sensors.adc_range_v`` (linearly interpolated between commands), if i
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
+from flexdigit.errors import ConvergenceWarning, UnstableError
 from flexdigit.params import RigParams
 from flexdigit.twin.digit_calibration import twin_calibration
+from flexdigit.twin.records import release_orientation
 from flexdigit.twin.twin import static_gauges_v
 
 __all__ = ["GaugeReach", "gauge_rails", "rail_lines", "resolution_lines", "railed_readings", "RESOLVE_DEG"]
@@ -39,8 +42,13 @@ class GaugeReach:
     range_deg: tuple[float, float]
 
 
-def gauge_rails(params: RigParams | None = None, calibration=None, *, orientation: str = "vertical"):
+def gauge_rails(params: RigParams | None = None, calibration=None, *, orientation: str | None = None):
     """Each gauge's reach (:class:`GaugeReach`) over the digit's operating commands (module docstring).
+
+    ``orientation`` is the mount (default: as ``run`` mounts the digit, tip up, or hanging for one that buckles tip
+    up, :func:`~flexdigit.twin.records.release_orientation`: tip up such a digit has no straight rest, and the
+    statics did not converge, trial 3's seven sections). A solve that does not converge is refused
+    (:class:`~flexdigit.errors.UnstableError`), not warned about.
 
     Examples
     --------
@@ -54,16 +62,23 @@ def gauge_rails(params: RigParams | None = None, calibration=None, *, orientatio
     straight = int(a.equilibrium_command)
     commands = np.unique(np.r_[np.arange(low, high + 1), straight]).astype(int)
     zeros = np.zeros(commands.size)
-    volts, sol = static_gauges_v(
-        zeros,
-        zeros,
-        commands,
-        params=params,
-        calibration=calibration,
-        orientation=orientation,
-        adc=False,
-        return_solution=True,
-    )
+    orientation = orientation or release_orientation(params, calibration)
+    with warnings.catch_warnings():  # said below, in one line, if it did not converge
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        volts, sol = static_gauges_v(
+            zeros,
+            zeros,
+            commands,
+            params=params,
+            calibration=calibration,
+            orientation=orientation,
+            adc=False,
+            return_solution=True,
+        )
+    if not np.all(sol.converged):
+        raise UnstableError(
+            f"the digit's statics ({orientation}, commands {low}..{high}) did not converge: no steady rest to read"
+        )
     tip = np.degrees(np.asarray(sol.psi_rad, dtype=float)[:, -1])
     rest = int(np.flatnonzero(commands == straight)[0])
     tip = tip - tip[rest]

@@ -17,6 +17,8 @@ import numpy as np
 from flexdigit._repr import fields_summary, summary
 from flexdigit._validation import check_real
 from flexdigit.errors import ParameterError
+from flexdigit.models.cable import tip_rotation_per_command_deg
+from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig, open_rig, parse_rig_url
 from flexdigit.rig.controllers import make_controller
 from flexdigit.rig.loop import LoopResult, run_loop
@@ -32,6 +34,8 @@ __all__ = [
     "StepRun",
     "run_step",
     "board_step_test",
+    "reachable_rotation_deg",
+    "check_setpoint",
     "FINAL_WINDOW_S",
     "ESTIMATE_SMOOTH_S",
 ]
@@ -290,6 +294,7 @@ def run_step(
     :class:`~flexdigit.rig.loop.LoopSettings` fields (``log_path``, ``recording``, ``header``, ...); the rig is
     closed at the end, relaxed. ``kept``: a kept ``digital20`` design for the rig's digit (:func:`make_controller`).
     """
+    check_setpoint(setpoint_deg, rig.params)
     ctl = make_controller(controller, rig, period_s=period_s, estimator=estimator, gain=gain, kept=kept)
     truth = getattr(rig, "tip_rotation_deg", None)  # the twin knows the true rotation; hardware only estimates it
     true_rotation: list[float] = []
@@ -321,6 +326,48 @@ def run_step(
     )  # fmt: skip
     figures = summary(result.time_s, result.measurement) if result.time_s.size >= 2 else {}
     return StepRun(result, figures, np.array(true_rotation, dtype=float), truth is not None, deg_per_command)
+
+
+def reachable_rotation_deg(params=None) -> tuple[float, float]:
+    """The beam rotations the digit's servo reaches, deg, ``(lowest, highest)``, by the cable model (E 3.15 with the
+    gearing: ``(command - straight) x deg per command``).
+
+    A single cable pulls one way only (slack below straight): its lowest is 0. An antagonistic pair
+    (``[cables] count = 2``) bends both ways, down to the bottom command's rotation.
+
+    Examples
+    --------
+    >>> [round(deg, 1) for deg in reachable_rotation_deg()]  # the thesis rig: 8..254, straight at 8, 1.735 deg each
+    [0.0, 426.8]
+    """
+    p = params or RigParams()
+    a, per_command = p.actuator, tip_rotation_per_command_deg(p)
+    top = (a.command_max - a.equilibrium_command) * per_command
+    bottom = (a.command_min - a.equilibrium_command) * per_command if p.cables.count == 2 else 0.0
+    return float(bottom), float(top)
+
+
+def check_setpoint(setpoint_deg: float, params=None, *, source=None, name: str = "--setpoint-deg") -> float:
+    """``setpoint_deg`` if the digit ``params`` describes (None: the thesis rig) reaches it, else a one-line
+    :class:`~flexdigit.errors.ParameterError` naming ``name``, the value and the reachable range (from ``source``,
+    the digit's file, when given). Checked before anything moves: a single cable asked for a negative rotation
+    otherwise "completed" at 0 deg (trial 3), slack at its lowest command."""
+    p = params or RigParams()
+    bottom, top = reachable_rotation_deg(p)
+    if bottom <= setpoint_deg <= top:
+        return setpoint_deg
+    a = p.actuator
+    where = f" of the digit in {source}" if source is not None else ""
+    if p.cables.count == 1 and setpoint_deg < 0:
+        raise ParameterError(
+            f"{name} {setpoint_deg:g}: the digit{where} has one cable, which bends it one way only: it reaches "
+            f"{bottom:.1f} to {top:.1f} deg (a cable pair, [cables] count = 2, bends both ways)"
+        )
+    raise ParameterError(
+        f"{name} {setpoint_deg:g}: the servo{where} reaches {bottom:.1f} to {top:.1f} deg (commands "
+        f"{a.command_min}..{a.command_max}, straight at {a.equilibrium_command}, "
+        f"{tip_rotation_per_command_deg(p):.3f} deg a command); set [actuator] equilibrium_command nearer the middle"
+    )
 
 
 def _deg_per_command(params) -> float:
@@ -379,6 +426,7 @@ def board_step_test(
         raise ParameterError(
             f"--on-board needs a board that closes the loop: --backend hil://IMAGE.elf. Got {backend!r}."
         )
+    check_setpoint(setpoint_deg, params)
     options = {"mode": "board", "setpoint_deg": setpoint_deg} | ({} if seed is None else {"seed": seed})
     with open_rig(backend, params, **options, **(twin_options or {})) as rig:
         settings = rig.settings()

@@ -14,6 +14,8 @@ that protocol's data; the free-mass beam inversion assumes nothing of the sort a
 
 from __future__ import annotations
 
+import contextlib
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -198,6 +200,11 @@ class Prediction:
     scores : dict
         ``corr2`` and ``rmse`` (the target's SI unit), and ``rmse_<unit>`` where the target has a display unit
         (``rmse_mm``, ``rmse_g``).
+    notes : tuple of str
+        Per prediction, ``""`` or why it is suspect: a position outside the digit (0..its length from the tip,
+        the dataset's ``digit_length_m``) or outside the span of positions the network was trained on (its
+        ``meta["position_span_m"]``), by more than the predictions' RMSE: an extrapolation, not a reading of the
+        gauges (trial 3: 0.33 m on a 0.30 m digit).
     """
 
     target: str
@@ -205,6 +212,7 @@ class Prediction:
     predicted: np.ndarray
     actual: np.ndarray
     scores: dict
+    notes: tuple = ()
 
     __repr__ = fields_summary
 
@@ -230,7 +238,26 @@ def predict_dataset(saved, dataset: Dataset, *, source: str = "the dataset") -> 
     _, unit, scale = target_unit(saved.target)
     if unit:
         scores[f"rmse_{unit}"] = scale * scores["rmse"]
-    return Prediction(saved.target, rows, predicted, actual, scores)
+    position = saved.target == "position"
+    notes = _position_notes(predicted, dataset, saved, scores["rmse"]) if position else ("",) * len(rows)
+    return Prediction(saved.target, rows, predicted, actual, scores, notes)
+
+
+def _position_notes(predicted, dataset: Dataset, saved, margin_m: float) -> tuple[str, ...]:
+    """:attr:`Prediction.notes` of positions from the tip (m): outside the digit or the trained span by more than
+    ``margin_m`` (the predictions' own RMSE: a position a few mm past the tip is the network's scatter)."""
+    length = dataset.meta.get("digit_length_m")
+    span = saved.meta.get("position_span_m")
+    m = float(margin_m) if np.isfinite(margin_m) else 0.0
+    notes = []
+    for p in np.asarray(predicted, dtype=float):
+        if isinstance(length, int | float) and not -m <= p <= length + m:
+            notes.append(f"outside the digit (0 to {1e3 * length:g} mm from the tip)")
+        elif isinstance(span, list | tuple) and len(span) == 2 and not span[0] - m <= p <= span[1] + m:
+            notes.append(f"outside the trained positions ({1e3 * span[0]:g} to {1e3 * span[1]:g} mm from the tip)")
+        else:
+            notes.append("")
+    return tuple(notes)
 
 
 def reading_zones(model, dataset: Dataset, since_tare_s=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -333,6 +360,30 @@ def localisation_study(
     pos_true, mass_true = pos[te], mass[te]
     visible = zone[split.test] != ZONES[0]
     contact_true = loaded.astype(float)[split.test]
+    with _empty_means_are_nan(not ident.any()):
+        return _result(
+            model, raw, split, te, zone, crlb, crlb_known, pos_pred, pos_true, mass_pred, mass_true, gp_std, ident,
+            visible, contact_pred, contact_true, seed,
+        )  # fmt: skip
+
+
+@contextlib.contextmanager
+def _empty_means_are_nan(empty: bool):
+    """With no identifiable test reading (a single gauge cannot tell a load's position from its mass: trial 3's
+    one-quarter-gauge pair), the identifiable figures are means over nothing: NaN by definition (the report says
+    "not applicable"), without numpy's "Mean of empty slice" reaching the user."""
+    if not empty:
+        yield
+        return
+    with warnings.catch_warnings(), np.errstate(invalid="ignore", divide="ignore"):
+        warnings.filterwarnings("ignore", "Mean of empty slice", RuntimeWarning)
+        warnings.filterwarnings("ignore", "invalid value encountered", RuntimeWarning)
+        yield
+
+
+def _result(model, raw, split, te, zone, crlb, crlb_known, pos_pred, pos_true, mass_pred, mass_true, gp_std, ident,
+            visible, contact_pred, contact_true, seed):  # fmt: skip
+    """:func:`localisation_study`'s result from its predictions and bounds."""
     return LocalisationResult(
         test_rows=te,
         zone=zone[te],
