@@ -851,7 +851,25 @@ def analyse(
     touching = (depth > 0) & read
     slope, slope_sd = _lumped_slope(depth, force, curve["force_sd_n"], touching)
     slope_sd = math.hypot(slope_sd, _lumped_fit_sd(model, fit, cmds, curve["force_sd_n"], touching))
+    if drift:  # each force also carries the gauges' walk about the fitted line (the slope weighs by white noise)
+        white = np.asarray(model.noise_v, dtype=float) / math.sqrt(record.readings)
+        curve["force_sd_n"] = curve["force_sd_n"] * _walk_widening(record.time_s, _walk(model), white)[sweep]
     return PalpationResult(protocol, placed, fit, curve, slope, slope_sd, record)
+
+
+def _walk_widening(times, walk, white) -> np.ndarray:
+    """Per plateau, how much the gauges' random walk (``walk``, V / sqrt(s) per gauge) widens one plateau's white
+    noise (``white``, V per gauge) once the fitted straight line (an offset and a drift per gauge, least squares
+    through every plateau) is taken off: ``sqrt(1 + mean_g (walk_g / white_g)^2 [P M P]_ii)``, ``M_ij = min(t_i, t_j)``
+    from the first plateau, ``P`` the line's residual projector. Exact for a force read from gauges whose walk and
+    white noise are in one ratio (a digit's default calibration); their mean ratio otherwise."""
+    t = np.asarray(times, dtype=float)
+    since = t - t.min()
+    design = np.column_stack([np.ones_like(t), t - t.mean()])
+    residual = np.eye(t.size) - design @ np.linalg.pinv(design)
+    shared = np.diag(residual @ np.minimum.outer(since, since) @ residual)
+    ratio = float(np.mean((np.asarray(walk, dtype=float) / np.asarray(white, dtype=float)) ** 2))
+    return np.sqrt(1.0 + ratio * shared)
 
 
 def _tissue_region(model, placed) -> tuple[float, float]:
