@@ -813,7 +813,9 @@ def analyse(
     """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope.
 
     The curve's ``force_n`` is NaN ("no force read", ``force_read`` False) where the gauges read no force: the
-    estimator saw no contact, or its standard deviation is infinite or over the value (:func:`_force_read`).
+    estimator saw no contact, or its standard deviation is infinite or over the value (:func:`_force_read`). The
+    lumped slope's sd carries the fit's (:func:`_lumped_fit_sd`); with ``drift``, each force's sd the gauges' walk
+    about the fitted line (:func:`_walk_widening`).
     """
     fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley", drift=drift)
     sweep = ~record.tare
