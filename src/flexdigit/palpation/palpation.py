@@ -493,7 +493,8 @@ class TissueFit:
     """Maximum-likelihood tissue parameters of one sweep (or scan), with standard deviations (inf: not seen).
 
     ``offset_v`` / ``drift_v_per_s`` are the nuisance gauge offsets and drifts; ``chi2`` the weighted residual sum
-    of squares over ``dof`` degrees of freedom (about ``dof`` when the model explains the readings to their noise).
+    of squares over ``dof`` degrees of freedom (about ``dof`` when the model explains the readings to their noise);
+    ``covariance`` that of the fitted ``(gap_m, ln modulus[, exponent])``, widened as the sds are (None: not fitted).
     """
 
     tissue: object
@@ -509,6 +510,7 @@ class TissueFit:
     offset_v: np.ndarray
     drift_v_per_s: np.ndarray
     extra: dict = field(default_factory=dict)
+    covariance: np.ndarray | None = None
 
     @property
     def stiffness_n_m_per_cm(self) -> float:
@@ -599,14 +601,17 @@ def _least_squares(likelihood, x0, lower, upper, scale):
     sol = least_squares(
         likelihood.residuals, x0, bounds=(lower, upper), x_scale=scale, diff_step=1e-4, xtol=1e-10, ftol=1e-12
     )
-    jac = sol.jac
+    cov = _covariance(sol.jac)
+    return sol, np.sqrt(np.where(np.diag(cov) > 0, np.diag(cov), np.inf))
+
+
+def _covariance(jac) -> np.ndarray:
+    """The Gauss-Newton covariance ``(J^T J)^-1`` of whitened residuals' Jacobian ``jac``; inf where singular."""
     with np.errstate(divide="ignore", invalid="ignore"):
         try:
-            cov = np.linalg.inv(jac.T @ jac)
-            sd = np.sqrt(np.where(np.diag(cov) > 0, np.diag(cov), np.inf))
+            return np.linalg.inv(jac.T @ jac)
         except np.linalg.LinAlgError:
-            sd = np.full(x0.size, np.inf)
-    return sol, sd
+            return np.full((jac.shape[1], jac.shape[1]), np.inf)
 
 
 #: Terms of the quantisation bias's Fourier series summed (:func:`quantisation_bias_v`): those left out weigh under
@@ -689,8 +694,7 @@ def fit_tissue(
     lower = [-0.05, math.log(1.0)] + ([1.0] if fit_exponent else [])
     upper = [0.3, math.log(1e7)] + ([3.0] if fit_exponent else [])
     sol, sd = _least_squares(like, x0, lower, upper, [1e-3, 0.1] + ([0.1] if fit_exponent else []))
-    gap, logk = float(sol.x[0]), float(sol.x[1])
-    k = math.exp(logk)
+    gap, k = float(sol.x[0]), math.exp(float(sol.x[1]))
     n = float(sol.x[2]) if fit_exponent else 1.0
     # the offsets and drifts reported (and taken off the force-indentation curve): the straight line through the
     # plateaus' residuals that the two tares pin, as without the walk (its GLS line left the thesis rig's first
@@ -701,7 +705,8 @@ def fit_tissue(
     nuisances = like.design.shape[1] * like.gauges.shape[1] if like.design is not None else 0
     dof = like.gauges.size - sol.x.size - nuisances
     # readings the model explains worse than their noise (ringing, drift, a model error) widen the uncertainty
-    sd = sd * math.sqrt(max(1.0, 2 * sol.cost / max(dof, 1)))
+    widen = max(1.0, 2 * sol.cost / max(dof, 1))
+    sd = sd * math.sqrt(widen)
     return TissueFit(
         tissue=placed.replace(gap_m=gap, modulus_n_m2=k, exponent=n),
         gap_m=gap,
@@ -716,6 +721,7 @@ def fit_tissue(
         offset_v=offset,
         drift_v_per_s=drift,
         extra={"evaluations": like.evaluations},
+        covariance=_covariance(sol.jac) * widen,
     )
 
 
@@ -831,7 +837,9 @@ def analyse(
     """Turn a sweep into a palpation result: the tissue fit, the force-indentation curve and its slope.
 
     The curve's ``force_n`` is NaN ("no force read", ``force_read`` False) where the gauges read no force: the
-    estimator saw no contact, or its standard deviation is infinite or over the value (:func:`_force_read`).
+    estimator saw no contact, or its standard deviation is infinite or over the value (:func:`_force_read`). The
+    lumped slope's sd carries the fit's (:func:`_lumped_fit_sd`); with ``drift``, each force's sd the gauges' walk
+    about the fitted line (:func:`_walk_widening`).
     """
     fit = fit_tissue(record, model, placed, fit_exponent=protocol.model == "hunt-crossley", drift=drift)
     sweep = ~record.tare
@@ -866,8 +874,28 @@ def analyse(
             "one gauge reads one number, the contact's force times its lever (infinite Cramer-Rao sd): no force "
             "from the gauges alone (model_force_n is the fitted tissue's, its place known)"
         )
-    slope, slope_sd = _lumped_slope(depth, force, curve["force_sd_n"], (depth > 0) & read)
+    touching = (depth > 0) & read
+    slope, slope_sd = _lumped_slope(depth, force, curve["force_sd_n"], touching)
+    slope_sd = math.hypot(slope_sd, _lumped_fit_sd(model, fit, cmds, curve["force_sd_n"], touching))
+    if drift:  # each force also carries the gauges' walk about the fitted line (the slope weighs by white noise)
+        white = np.asarray(model.noise_v, dtype=float) / math.sqrt(record.readings)
+        curve["force_sd_n"] = curve["force_sd_n"] * _walk_widening(record.time_s, _walk(model), white)[sweep]
     return PalpationResult(protocol, placed, fit, curve, slope, slope_sd, record)
+
+
+def _walk_widening(times, walk, white) -> np.ndarray:
+    """Per plateau, how much the gauges' random walk (``walk``, V / sqrt(s) per gauge) widens one plateau's white
+    noise (``white``, V per gauge) once the fitted straight line (an offset and a drift per gauge, least squares
+    through every plateau) is taken off: ``sqrt(1 + mean_g (walk_g / white_g)^2 [P M P]_ii)``, ``M_ij = min(t_i, t_j)``
+    from the first plateau, ``P`` the line's residual projector. Exact for a force read from gauges whose walk and
+    white noise are in one ratio (a digit's default calibration); their mean ratio otherwise."""
+    t = np.asarray(times, dtype=float)
+    since = t - t.min()
+    design = np.column_stack([np.ones_like(t), t - t.mean()])
+    residual = np.eye(t.size) - design @ np.linalg.pinv(design)
+    shared = np.diag(residual @ np.minimum.outer(since, since) @ residual)
+    ratio = float(np.mean((np.asarray(walk, dtype=float) / np.asarray(white, dtype=float)) ** 2))
+    return np.sqrt(1.0 + ratio * shared)
 
 
 def _tissue_region(model, placed) -> tuple[float, float]:
@@ -896,6 +924,39 @@ def _lumped_slope(depth, force, force_sd, touching) -> tuple[float, float]:
     if np.count_nonzero(touching) >= 2 and information > 0:
         return float(np.sum(w * x * y) / information), float(1.0 / math.sqrt(information))
     return math.nan, math.inf
+
+
+#: Central-difference steps of the fitted (gap (m), ln modulus, exponent) for the lumped slope's sensitivity: the
+#: stiffness bound's steps (:func:`stiffness_bound`).
+LUMPED_STEPS = (1e-5, 1e-3, 1e-3)
+
+
+def _lumped_fit_sd(model, fit: TissueFit, commands, force_sd, touching) -> float:
+    """The lumped slope's sd (N/m) from the fit's uncertain gap and modulus (delta method: the fitted tissue's own
+    force-against-depth slope, with the measured slope's plateaus and weights, differentiated in the fitted
+    parameters, through their covariance). Every plateau's depth comes from the fitted gap and its force from the
+    gauges less the fitted drift: one error shared by all, which the forces' scatter alone leaves out (it claimed
+    0.02 N/m where two_sections_half's seeds 0-9 scattered 0.35; the modulus sd honest there)."""
+    if np.count_nonzero(touching) < 2:
+        return math.inf
+    cov = fit.covariance
+    if cov is None or not np.all(np.isfinite(cov)):
+        return math.inf
+    weights = 1.0 / np.maximum(force_sd[touching], 1e-12) ** 2
+    theta = np.array([fit.gap_m, math.log(fit.modulus_n_m2), fit.exponent][: cov.shape[0]])
+
+    def slope(th) -> float:
+        tissue = fit.tissue.replace(gap_m=th[0], modulus_n_m2=math.exp(th[1]), exponent=th[2] if th.size > 2 else 1.0)
+        sol, _ = model.tissue_solution(tissue, commands)
+        depth = _deepest(model, tissue, sol.static.psi_rad)[touching]
+        force = -tissue.sign * sol.contact_force_n[touching]
+        return float(np.sum(weights * depth * force) / max(float(np.sum(weights * depth**2)), 1e-300))
+
+    steps = np.array(LUMPED_STEPS[: theta.size])
+    pairs = zip(np.diag(steps), steps, strict=True)
+    grad = np.array([(slope(theta + d) - slope(theta - d)) / (2 * h) for d, h in pairs])
+    variance = float(grad @ cov @ grad)
+    return math.sqrt(variance) if variance >= 0 else math.inf
 
 
 def _deepest(model, tissue, psi) -> np.ndarray:
