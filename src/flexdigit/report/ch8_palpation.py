@@ -14,9 +14,19 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from flexdigit.errors import ParameterError, RigError
 from flexdigit.palpation import palpation_studies as studies
 from flexdigit.palpation.contact_estimation import ContactGaugeModel
-from flexdigit.palpation.palpation import THESIS_STRAIGHT, PalpationProtocol, digit_command, digit_protocol
+from flexdigit.palpation.palpation import (
+    THESIS_STRAIGHT,
+    PalpationProtocol,
+    check_tissue_reach,
+    digit_command,
+    digit_protocol,
+    digit_tissue,
+    twin_step_s,
+)
+from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
 from flexdigit.params import RigParams
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import new
@@ -457,10 +467,6 @@ def _digit_hold(ctx, digit: DigitSetting):
     S`` runs on the digit (the built-in soft block laid out beside it, :func:`~flexdigit.palpation.palpation.
     digit_tissue`; the built-in hold's setpoint, duration and gains; palpate's checks, the force read's uncertainty
     refused before the digit moves), or ``(None, tissue, reason)``: palpate's one line why it refuses it."""
-    from flexdigit.errors import ParameterError, RigError
-    from flexdigit.palpation.palpation import check_tissue_reach, digit_tissue, twin_step_s
-    from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
-
     params = digit.params
     tissue = digit_tissue(load_tissue("soft-block")[0], params)
     hold = load_palpation_protocol("hold").force

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexdigit.params import RigParams
+from flexdigit.rig.backends.board_link import BOARD_WINDOW_V
 from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.twin import static_gauges_v
 
@@ -158,8 +159,6 @@ def board_rail_lines(params: RigParams, calibration=None, *, orientation: str = 
     >>> board_rail_lines(RigParams())  # the thesis rig's gauges fit the board
     []
     """
-    from flexdigit.rig.backends.board_link import BOARD_WINDOW_V
-
     low, high = BOARD_WINDOW_V
     s = params.sensors
     reaches = gauge_rails(params, calibration, orientation=orientation, adc_range_v=BOARD_WINDOW_V)
