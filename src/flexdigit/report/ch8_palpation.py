@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from flexdigit.control.design20ms import digit_mount
 from flexdigit.errors import ParameterError, RigError
 from flexdigit.palpation import palpation_studies as studies
 from flexdigit.palpation.contact_estimation import ContactGaugeModel
@@ -34,7 +35,6 @@ from flexdigit.tactile.bounds import TwinGaugeModel
 from flexdigit.tactile.localisation import SETTINGS_RESOLVED
 from flexdigit.twin.contact import Tissue
 from flexdigit.twin.digit_calibration import twin_calibration
-from flexdigit.twin.records import release_orientation
 
 SECTION = "beyond: palpation"
 #: The thesis rig's length (m): a digit's regions, extents and scan offsets are the thesis's scaled by L / this.
@@ -116,10 +116,18 @@ def build(ctx: ReportContext) -> Chapter:
     return ch
 
 
+def digit_setting(ctx: ReportContext) -> DigitSetting:
+    """The chapter's setting of the report's digit, mounted as ``palpate --params`` (and ``run``, ``export``,
+    chapter 5) mounts it (:func:`~flexdigit.control.design20ms.digit_mount`: hung where it does not stand tip up).
+    Before, the release tests' mount (``release_orientation``): three hand-made digits stood tip up here and hung
+    in palpate."""
+    return DigitSetting(ctx.params, digit_mount(ctx.params, twin_calibration(ctx.params)), ctx.fast)
+
+
 def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
     """The chapter on a digit other than the thesis rig: the same studies laid out on it (:class:`DigitSetting`),
     force control with the digit's own gains (:func:`~flexdigit.palpation.palpation.force_gains`)."""
-    digit = DigitSetting(ctx.params, release_orientation(ctx.params), ctx.fast)
+    digit = digit_setting(ctx)
     g = ctx.params.geometry
     sweep = digit.protocol(2)
     ch.paragraphs.append(
