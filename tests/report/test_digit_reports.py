@@ -12,11 +12,14 @@ from __future__ import annotations
 import json
 import math
 
+import pyarrow.parquet as pq
 import pytest
 
 from digits import write_digit
 from flexdigit.cli import main
+from flexdigit.params import load_params
 from flexdigit.report.results import NOT_APPLICABLE
+from flexdigit.tactile.protocols import load_protocol
 
 #: The digit whose straight, tip-up release test buckles under its supports' weight (tests/cli/test_simulate_digits):
 #: its report hangs it, as ``run --params`` does
@@ -82,6 +85,17 @@ def test_the_report_of_a_digit(name, tmp_path, capsys):
     assert not [e["key"] for e in entries if e["key"].startswith(thesis_only)]
     assert "The cable-actuated flexible digit, reproduced" not in html
     assert "nan mm" not in html  # a figure the digit does not have is said in words (one gauge: nothing identifiable)
+    # chapter 7 read the digit at its own commands (collect's layout): a pair inside its range, bent both ways
+    params = load_params(path)
+    read = (
+        pq.read_table(report / "data" / "thesis-7.1-no-load.parquet", columns=["command"]).column("command").to_pylist()
+    )
+    assert sorted(set(read)) == sorted(load_protocol("thesis-7.1-no-load", params).actuation_commands)
+    if params.cables.count == 2:
+        low, high = params.actuator.operating_commands
+        straight = params.actuator.equilibrium_command
+        assert low <= min(read) < straight < max(read) <= high
+        assert "both ways on its cable pair" in html
     wn = next(e["ours"] for e in entries if e["key"] == "twin.release_with_housing.wn_rad_s")
     out = tmp_path / "release.csv"
     hung = ["--orientation", "hanging"] if name == BUCKLES else []

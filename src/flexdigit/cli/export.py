@@ -178,6 +178,18 @@ def _digit(args, design: str):
     return params
 
 
+def _check_board_window(params, calibration, orientation: str, source) -> None:
+    """Refuse, in one line naming the file, each gauge and its volts, a digit whose amplified bridges leave the
+    board's ADC window over its operating range (:func:`flexdigit.rig.gauge_rails.board_rail_lines`: the image
+    would build and then fault "adc_rail" at run time), saying the gain that fits each."""
+    from flexdigit.errors import ParameterError
+    from flexdigit.rig.gauge_rails import board_rail_lines
+
+    railing = board_rail_lines(params, calibration, orientation=orientation)
+    if railing:
+        raise ParameterError(f"{source}: " + "; ".join(railing))
+
+
 def _digit_export_design(params, period: float, args):
     """A described digit's export: the controller ``flexdigit run --params`` runs on the host (its own 20 ms design
     on the rotation per command its map's sweep measured, dithered), its discrete design plant, the rotation map
@@ -197,6 +209,7 @@ def _digit_export_design(params, period: float, args):
     calibration = twin_calibration(params, args.calibration)  # the file, else the digit's default
     # tip up, a digit that buckles under its supports' weight is mounted hanging (as run --params mounts its twin)
     orientation = digit_mount(params, calibration)
+    _check_board_window(params, calibration, orientation, args.params)
     with open_rig("sim", params, calibration=calibration, orientation=orientation) as rig:
         estimator = load_rotation_map(args.rotation_map) if args.rotation_map else calibrate_rotation(rig)
         rest = np.array([rig.read().gauges_v for _ in range(5)])

@@ -314,12 +314,22 @@ def scan_study(*, offsets_m=None, protocol=None, seed=0, inclusion=(0.25, 0.01, 
 
 
 def force_study(
-    moduli_n_m2=(300.0, 1500.0), *, setpoint_n=0.1, duration_s=10.0, seed=2, dt_s=0.005, model=None, placed=None
+    moduli_n_m2=(300.0, 1500.0),
+    *,
+    setpoint_n=0.1,
+    duration_s=10.0,
+    seed=2,
+    dt_s=0.005,
+    model=None,
+    placed=None,
+    **hold_kw,
 ) -> dict:
     """Force control on the dynamic twin through the 20 ms loop, one run per tissue modulus: steady error,
     ripple, overshoot and settling time of the true contact force. ``model``: another digit's
     :class:`ContactGaugeModel` (its params, calibration and mount make the twin), ``placed`` the tissue beside it
-    (its modulus replaced; default the thesis rig and the soft block 0.15-0.35 m, 30 mm away)."""
+    (its modulus replaced; default the thesis rig and the soft block 0.15-0.35 m, 30 mm away). ``hold_kw`` go to
+    :func:`~flexdigit.palpation.palpation.hold_force` (``refuse_uncertain``, ``gain``, ``approach_rate``: what
+    ``flexdigit palpate --protocol hold`` passes)."""
     placed = placed or Tissue(0.15, 0.35, 0.03, 1000.0)
     options = {}
     if model is not None:
@@ -333,7 +343,7 @@ def force_study(
             rig.place_tissue(placed.replace(modulus_n_m2=float(k)))
             region = (placed.start_m, min(placed.end_m, length))
             # the loop's gains are the digit's own (palpation.force_gains: the thesis rig's on the thesis rig)
-            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model))
+            runs.append(hold_force(rig, setpoint_n, duration_s=duration_s, region_m=region, model=model, **hold_kw))
         finally:
             rig.close()
     return {

@@ -77,6 +77,7 @@ def _digit_tables(tables) -> list:
             continue
         table = without_columns(table, _THESIS_COLUMNS.get(table.key, ()))
         title = table.title.replace(", beside the thesis's", "").replace(" (E 3.20-3.22)", "")
+        title = title.replace("NaN for the thesis method", "blank for the thesis method")  # as its cells show
         out.append(dataclasses.replace(table, title=title))
     return out
 

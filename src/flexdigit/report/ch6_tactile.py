@@ -14,6 +14,8 @@ import numpy as np
 from flexdigit.reference import thesis_value
 from flexdigit.report import results
 from flexdigit.report.chapter import Chapter, ReportContext
+from flexdigit.rig.gauge_rails import railed_readings
+from flexdigit.tactile.localisation import SETTINGS_RESOLVED
 from flexdigit.tactile.pipeline import Normaliser
 from flexdigit.tactile.protocols import load_protocol
 from flexdigit.tactile.thesis_experiments import criteria, experiment_tables, position_ratios, run_experiment
@@ -71,9 +73,7 @@ def _protocol_paragraphs(exp, fast: bool, digit=None) -> list[str]:
     protocol = ds.protocol
     straight = ""
     if digit is not None and protocol.actuated:
-        straight = (
-            f" (the thesis's commands as printed; this digit is straight at {digit.actuator.equilibrium_command})"
-        )
+        straight = _digit_commands_text(digit)
     setup = (
         f"cable attached, commands {list(protocol.actuation_commands)}{straight}"
         if protocol.actuated
@@ -112,9 +112,26 @@ def _protocol_paragraphs(exp, fast: bool, digit=None) -> list[str]:
             "best estimator 6.6 mm = 0.80 x the thesis network, a worst error / bound of 2.39, contact and "
             "magnitude met."
         )
+    if digit is not None:
+        railed = railed_readings(ds.gauges_v, digit.sensors)
+        if railed:
+            out.append(f"Readings at an ADC rail are kept (they say only that the gauge is past the range): {railed}.")
     if fast:
         out.append("Fast mode: reduced sweeps (3 coarse sizes, +-1 fine, 3 gradients, 10 epochs).")
     return out
+
+
+def _digit_commands_text(digit) -> str:
+    """How the thesis's commands 0, 20, 40 were laid out on the digit (:func:`flexdigit.tactile.protocols.
+    digit_commands`, as ``flexdigit collect --params`` lays them out)."""
+    a = digit.actuator
+    low, high = a.operating_commands
+    ways = "both ways on its cable pair" if digit.cables.count == 2 else "below straight its cable slack"
+    return (
+        f" (the thesis's 0, 20, 40 laid out on this digit: the same fractions of its operating range {low}..{high} "
+        f"from its straight command {a.equilibrium_command} as of the thesis rig's 8..43 from 8, {ways}; as "
+        "`flexdigit collect --params` lays them out)"
+    )
 
 
 #: Why a corr2 away from the thesis's would be: the noise, revisited in its own chapter (``report.ch6_7_noise``).
@@ -322,17 +339,23 @@ def _bayes_entries(exp, e: list) -> None:
     bayes = loc.bayes
     floor_pos = bayes["position_rmse_identifiable_m"]
     visible = int(np.sum(loc.extra["contact_visible"]))
+    unresolved = _unresolved_floor(exp)
+    ratios = (
+        f"Best estimator / limit = {rm[loc.best] / floor_pos:.2f}; the thesis network / limit = "
+        f"{thesis_mlp / floor_pos:.2f}."
+        if not unresolved
+        else "No ratio to it: it is not determined."
+    )
     e += [
         results.new(
             f"{key}.bayes_position_rmse_identifiable_mm",
             f"{chap} (new)",
-            1000 * floor_pos,
+            unresolved or 1000 * floor_pos,
             "mm",
             "Bayes limit: the RMS position error of the best possible estimator that knows the protocol's settings "
             "(positions, loads, commands, their frequencies) and the twin's noise, on the identifiable test "
             "readings (Monte Carlo, tactile.bounds.protocol_limits). Unlike the Cramer-Rao bound, learned "
-            f"estimators cannot beat it. Best estimator / limit = {rm[loc.best] / floor_pos:.2f}; the thesis network "
-            f"/ limit = {thesis_mlp / floor_pos:.2f}.",
+            f"estimators cannot beat it. {ratios}",
         ),
         results.new(
             f"{key}.bayes_magnitude_rel_rmse_identifiable",
@@ -350,6 +373,21 @@ def _bayes_entries(exp, e: list) -> None:
             f"expected errors on these {visible} readings: {visible * (1 - bayes['contact_accuracy_visible']):.1f}).",
         ),
     ]
+
+
+def _unresolved_floor(exp) -> str:
+    """ "not determined: ..." where the position's Bayes limit is under tactile's :data:`~flexdigit.tactile.
+    localisation.SETTINGS_RESOLVED` of the protocol's position step (its Monte Carlo never mixed two positions: the
+    limit is rounding, 0 on a quiet full-bridge pair), else "" (a figure, or NaN: nothing identifiable)."""
+    floor = exp.localisation.bayes["position_rmse_identifiable_m"]
+    positions = np.sort(np.asarray(exp.dataset.protocol.positions_from_tip_m, dtype=float))
+    step = float(np.median(np.diff(positions))) if positions.size > 1 else 0.0
+    if not np.isfinite(floor) or floor >= SETTINGS_RESOLVED * step:
+        return ""
+    return (
+        f"not determined: below {1000 * SETTINGS_RESOLVED * step:.2g} mm (the readings tell every position of the "
+        "protocol apart: the limit is the settings grid's rounding, not the digit's)"
+    )
 
 
 def load_protocolsamples(key: str) -> int:
@@ -431,11 +469,16 @@ def _bayes_sentence(exp, thesis_mlp_m: float, thesis_rig: bool = True) -> str:
     floor_pos = bayes["position_rmse_identifiable_m"]
     floor_mag = bayes["magnitude_rel_rmse_identifiable"]
     floor_contact = bayes["contact_accuracy_visible"]
+    unresolved = _unresolved_floor(exp)
+    position = (
+        f"position {unresolved}"
+        if unresolved
+        else f"position {1000 * floor_pos:.1f} mm (best estimator at {rm[loc.best] / floor_pos:.2f} x, thesis "
+        f"network at {thesis_mlp_m / floor_pos:.2f} x)"
+    )
     text = (
         " The Bayes limits (the best any estimator that knows the protocol can do on these readings, twin noise "
-        f"model): position {1000 * floor_pos:.1f} mm (best estimator at {rm[loc.best] / floor_pos:.2f} x, thesis "
-        f"network at {thesis_mlp_m / floor_pos:.2f} x), magnitude {100 * floor_mag:.1f} %, contact "
-        f"{100 * floor_contact:.2f} %."
+        f"model): {position}, magnitude {100 * floor_mag:.1f} %, contact {100 * floor_contact:.2f} %."
     )
     if not np.isfinite(floor_pos):  # nothing identifiable: the position and magnitude limits are not defined
         text = (
@@ -443,7 +486,7 @@ def _bayes_sentence(exp, thesis_mlp_m: float, thesis_rig: bool = True) -> str:
             f"twin noise model): {100 * floor_contact:.2f} %; position and magnitude have none (nothing identifiable)."
         )
     unreachable = []
-    if 0.5 * thesis_mlp_m < floor_pos:
+    if not unresolved and 0.5 * thesis_mlp_m < floor_pos:
         unreachable.append(
             f"half the thesis network's error ({1000 * 0.5 * thesis_mlp_m:.1f} mm) is below the position limit"
         )

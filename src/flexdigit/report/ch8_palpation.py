@@ -14,9 +14,20 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from flexdigit.control.design20ms import digit_mount
+from flexdigit.errors import ParameterError, RigError
 from flexdigit.palpation import palpation_studies as studies
 from flexdigit.palpation.contact_estimation import ContactGaugeModel
-from flexdigit.palpation.palpation import THESIS_STRAIGHT, PalpationProtocol, digit_command, digit_protocol
+from flexdigit.palpation.palpation import (
+    THESIS_STRAIGHT,
+    PalpationProtocol,
+    check_tissue_reach,
+    digit_command,
+    digit_protocol,
+    digit_tissue,
+    twin_step_s,
+)
+from flexdigit.palpation.palpation_files import load_palpation_protocol, load_tissue
 from flexdigit.params import RigParams
 from flexdigit.report.chapter import Chapter, ReportContext
 from flexdigit.report.results import new
@@ -24,7 +35,6 @@ from flexdigit.tactile.bounds import TwinGaugeModel
 from flexdigit.tactile.localisation import SETTINGS_RESOLVED
 from flexdigit.twin.contact import Tissue
 from flexdigit.twin.digit_calibration import twin_calibration
-from flexdigit.twin.records import release_orientation
 
 SECTION = "beyond: palpation"
 #: The thesis rig's length (m): a digit's regions, extents and scan offsets are the thesis's scaled by L / this.
@@ -106,10 +116,18 @@ def build(ctx: ReportContext) -> Chapter:
     return ch
 
 
+def digit_setting(ctx: ReportContext) -> DigitSetting:
+    """The chapter's setting of the report's digit, mounted as ``palpate --params`` (and ``run``, ``export``,
+    chapter 5) mounts it (:func:`~flexdigit.control.design20ms.digit_mount`: hung where it does not stand tip up).
+    Before, the release tests' mount (``release_orientation``): three hand-made digits stood tip up here and hung
+    in palpate."""
+    return DigitSetting(ctx.params, digit_mount(ctx.params, twin_calibration(ctx.params)), ctx.fast)
+
+
 def _digit_chapter(ctx: ReportContext, ch: Chapter, plt) -> Chapter:
     """The chapter on a digit other than the thesis rig: the same studies laid out on it (:class:`DigitSetting`),
     force control with the digit's own gains (:func:`~flexdigit.palpation.palpation.force_gains`)."""
-    digit = DigitSetting(ctx.params, release_orientation(ctx.params), ctx.fast)
+    digit = digit_setting(ctx)
     g = ctx.params.geometry
     sweep = digit.protocol(2)
     ch.paragraphs.append(
@@ -448,9 +466,49 @@ def _scan(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
     ch.figures.append(ctx.save_figure(fig, "palpation_scan", "Stiffness map of a scan and the inclusion fitted to it"))
 
 
+#: The force entries, the figure each is of (a hold ``palpate`` would refuse has none of them: each says why).
+FORCE_KEYS = ("palpation.force.steady_error", "palpation.force.overshoot", "palpation.force.settling_s")
+
+
+def _digit_hold(ctx, digit: DigitSetting):
+    """``(study, tissue, "")`` of the hold ``flexdigit palpate --tissue soft-block --protocol hold --params D --seed
+    S`` runs on the digit (the built-in soft block laid out beside it, :func:`~flexdigit.palpation.palpation.
+    digit_tissue`; the built-in hold's setpoint, duration and gains; palpate's checks, the force read's uncertainty
+    refused before the digit moves), or ``(None, tissue, reason)``: palpate's one line why it refuses it."""
+    params = digit.params
+    tissue = digit_tissue(load_tissue("soft-block")[0], params)
+    hold = load_palpation_protocol("hold").force
+    try:
+        check_tissue_reach(tissue, params)
+        f = studies.force_study(
+            (tissue.modulus_n_m2,),
+            setpoint_n=hold["setpoint_n"],
+            duration_s=hold["duration_s"],
+            seed=ctx.seed + 2,
+            dt_s=twin_step_s("force", params),
+            model=digit.contact_model(),
+            placed=tissue,
+            side=tissue.side,
+            gain=hold["gain"],
+            approach_rate=hold["approach_rate"],
+            refuse_uncertain=True,
+        )
+    except (ParameterError, RigError) as exc:  # palpate's exit 2, in its one line
+        return None, tissue, str(exc)
+    reason = f["runs"][0].unreached()
+    return (None, tissue, f"hold: {reason}") if reason else (f, tissue, "")
+
+
 def _force(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
-    on = {} if digit is None else {"model": digit.contact_model(), "placed": digit.tissue()}
-    f = studies.force_study((1000.0,), duration_s=8.0, seed=ctx.seed + 2, **on)
+    if digit is None:
+        f = studies.force_study((1000.0,), duration_s=8.0, seed=ctx.seed + 2)
+        setpoint = 0.1
+    else:
+        f, tissue, reason = _digit_hold(ctx, digit)
+        if f is None:
+            _force_refused(ch, tissue, reason)
+            return
+        setpoint = float(f["runs"][0].setpoint_n)
     run = f["runs"][0]
     e = ch.entries
     e.append(
@@ -482,7 +540,24 @@ def _force(ctx, ch, plt, digit: DigitSetting | None = None) -> None:
     ax.set(xlabel="time (s)", ylabel="force (N)")
     ax.legend(fontsize=8)
     ch.figures.append(
-        ctx.save_figure(fig, "palpation_force_control", "Holding 0.1 N against the soft block (twin, 20 ms loop)")
+        ctx.save_figure(
+            fig, "palpation_force_control", f"Holding {setpoint:g} N against the soft block (twin, 20 ms loop)"
+        )
+    )
+
+
+def _force_refused(ch, tissue, reason: str) -> None:
+    """The force entries of a hold ``palpate`` refuses on this digit: "not applicable" and palpate's reason, no
+    figure (never one ``palpate --protocol hold`` would not give)."""
+    said = f"not applicable: {reason}"
+    for key in FORCE_KEYS:
+        ch.entries.append(
+            new(key, SECTION, said, "", "`flexdigit palpate --tissue soft-block --protocol hold --params D` refuses it")
+        )
+    ch.paragraphs.append(
+        "Force control: the built-in hold against the soft block laid out beside this digit "
+        f"({1000 * tissue.start_m:.0f} mm on, {1000 * tissue.gap_m:.0f} mm away) is one `flexdigit palpate "
+        f"--protocol hold` refuses on it, so no figure is shown: {reason}."
     )
 
 

@@ -19,11 +19,20 @@ import numpy as np
 
 from flexdigit.errors import ConvergenceWarning, UnstableError
 from flexdigit.params import RigParams
+from flexdigit.rig.backends.board_link import BOARD_WINDOW_V
 from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.records import release_orientation
 from flexdigit.twin.twin import static_gauges_v
 
-__all__ = ["GaugeReach", "gauge_rails", "rail_lines", "resolution_lines", "railed_readings", "RESOLVE_DEG"]
+__all__ = [
+    "GaugeReach",
+    "gauge_rails",
+    "board_rail_lines",
+    "rail_lines",
+    "resolution_lines",
+    "railed_readings",
+    "RESOLVE_DEG",
+]
 
 
 @dataclass(frozen=True)
@@ -40,10 +49,12 @@ class GaugeReach:
     rail_deg: float | None
     rail_v: float | None
     range_deg: tuple[float, float]
+    span_v: tuple[float, float] = (math.nan, math.nan)
 
 
-def gauge_rails(params: RigParams | None = None, calibration=None, *, orientation: str | None = None):
-    """Each gauge's reach (:class:`GaugeReach`) over the digit's operating commands (module docstring).
+def gauge_rails(params: RigParams | None = None, calibration=None, *, orientation: str | None = None, adc_range_v=None):
+    """Each gauge's reach (:class:`GaugeReach`) over the digit's operating commands (module docstring); its rails
+    those of ``adc_range_v`` (V, low and high) when given (another ADC than the digit's, e.g. the board's).
 
     ``orientation`` is the mount (default: as ``run`` mounts the digit, tip up, or hanging for one that buckles tip
     up, :func:`~flexdigit.twin.records.release_orientation`: tip up such a digit has no straight rest, and the
@@ -82,7 +93,7 @@ def gauge_rails(params: RigParams | None = None, calibration=None, *, orientatio
     tip = np.degrees(np.asarray(sol.psi_rad, dtype=float)[:, -1])
     rest = int(np.flatnonzero(commands == straight)[0])
     tip = tip - tip[rest]
-    lo_v, hi_v = params.sensors.adc_range_v
+    lo_v, hi_v = params.sensors.adc_range_v if adc_range_v is None else adc_range_v
     lsb = params.sensors.adc_lsb_v
     out = []
     for g in range(volts.shape[1]):
@@ -103,6 +114,7 @@ def gauge_rails(params: RigParams | None = None, calibration=None, *, orientatio
                 rail_deg=rail_deg,
                 rail_v=rail_v,
                 range_deg=(float(tip.min()), float(tip.max())),
+                span_v=(float(v.min()), float(v.max())),
             )
         )
     return out
@@ -148,6 +160,53 @@ def rail_lines(reaches, params: RigParams) -> list[str]:
             f"([actuator] operating_commands): its readings past it are clipped ({key}: {gains[r.gauge - 1]:g})"
         )
     return lines
+
+
+def board_rail_lines(params: RigParams, calibration=None, *, orientation: str | None = None) -> list[str]:
+    """One line per gauge whose reading leaves the reference firmware's ADC window over the digit's operating range
+    (:data:`~flexdigit.rig.backends.board_link.BOARD_WINDOW_V`: the board reads each gauge on 2.5 V into its 0..5 V
+    10-bit ADC and faults "adc_rail" at count 0 or 1023), naming the gauge, its volts and the amplifier gain that
+    would fit it (the chain's output scales with its gain; the window's 95 %, a margin for noise and drift).
+    ``params``'s own ``adc_range_v`` is its DAQ's, not the board's: ``flexdigit params FILE`` checks that one.
+
+    Examples
+    --------
+    >>> board_rail_lines(RigParams())  # the thesis rig's gauges fit the board
+    []
+    """
+    low, high = BOARD_WINDOW_V
+    s = params.sensors
+    reaches = gauge_rails(params, calibration, orientation=orientation, adc_range_v=BOARD_WINDOW_V)
+    gains = s.chain(len(reaches))[2]
+    key = "amplifier_gains_v_per_v" if s.amplifier_gains_v_per_v is not None else "amplifier_gain_v_per_v"
+    lines = []
+    for r in reaches:
+        v_min, v_max = r.span_v
+        if low <= v_min and v_max <= high:
+            continue
+        fit = min(BOARD_FIT_SHARE * high / v_max if v_max > 0 else math.inf,
+                  BOARD_FIT_SHARE * low / v_min if v_min < 0 else math.inf)  # fmt: skip
+        gain = gains[r.gauge - 1]
+        target = f"gauge {r.gauge}'s entry of {key}" if s.amplifier_gains_v_per_v is not None else key
+        lines.append(
+            f"[sensors] gauge {r.gauge} reads {v_min:+.2f}..{v_max:+.2f} V over the operating range "
+            f"{r.range_deg[0]:+.1f}..{r.range_deg[1]:+.1f} deg ([actuator] operating_commands), outside the board's "
+            f"ADC window {low:+.3f}..{high:+.3f} V (0..5 V about its 2.5 V midpoint): the board would fault "
+            f"'adc_rail'; {target} <= {_round_down(gain * fit):g} fits it (now {gain:g})"
+        )
+    return lines
+
+
+#: The share of the board's window a gauge's swing is fitted to by the gain :func:`board_rail_lines` suggests.
+BOARD_FIT_SHARE = 0.95
+
+
+def _round_down(x: float) -> float:
+    """``x`` rounded down to 3 significant figures (a gain that fits, said as a user writes it)."""
+    if not x > 0:
+        return 0.0
+    scale = 10 ** (math.floor(math.log10(x)) - 2)
+    return math.floor(x / scale) * scale
 
 
 #: The loop's figure the gauges must resolve: 2 % of a 30 deg step (issue 24's "true rotation within 2 %"), deg.

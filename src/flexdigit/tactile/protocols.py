@@ -280,6 +280,25 @@ class Protocol:
         positions = tuple(round(p * length / ref, 9) for p in self.positions_from_tip_m)
         return replace(self, name=f"{self.name} on {length:g} m", positions_from_tip_m=positions)
 
+    def commands_on(self, params: RigParams) -> Protocol:
+        """This protocol at the digit ``params``'s own commands: each of the thesis's actuation commands
+        (:func:`digit_commands`), the same fraction of the digit's operating range from its straight command as of
+        the thesis rig's 8..43 (so a cable pair bends both ways); itself when they are the thesis's.
+
+        Examples
+        --------
+        >>> from flexdigit.params import RigParams
+        >>> load_protocol("thesis-7.1").commands_on(RigParams()).actuation_commands  # the thesis rig: as printed
+        (0, 20, 40)
+        """
+        commands = digit_commands(self.actuation_commands, params)
+        if commands == self.actuation_commands:
+            return self
+        from dataclasses import replace
+
+        listed = "/".join(str(c) for c in commands)
+        return replace(self, name=f"{self.name} at commands {listed}", actuation_commands=commands)
+
     def to_dict(self) -> dict:
         """Plain dict (lists for tuples), as stored in datasets and journals."""
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
@@ -365,6 +384,41 @@ def protocol_from_toml(text: str, source: str = "protocol") -> Protocol:
     return protocol
 
 
+#: The thesis rig's straight command and operating range, the frame the built-in protocols' commands are written
+#: in (8 and 8..43: 0 to 30 deg of beam rotation, 3.4.1).
+THESIS_STRAIGHT_COMMAND, THESIS_OPERATING_COMMANDS = 8, (8, 43)
+
+
+def digit_commands(commands, params: RigParams) -> tuple[int, ...]:
+    """The thesis rig's actuation ``commands`` (table 7.1's 0, 20, 40) laid out on the digit ``params``: each the
+    same fraction of the operating range from the straight command as on the thesis rig (``f = (c - 8) / 35``),
+    to its top for ``f >= 0`` and, below straight, to its bottom on a cable pair (bending the other way) or, on a
+    single cable, as far again as the thesis's command 0 (the cable slack), rounded and kept within the servo's
+    range. The thesis rig's, and any digit with its straight command and operating range, get them back.
+
+    Examples
+    --------
+    >>> from dataclasses import replace
+    >>> from flexdigit.params import RigParams
+    >>> pair = RigParams().replace(actuator=replace(RigParams().actuator, equilibrium_command=127,
+    ...                                              operating_commands=(92, 162)))
+    >>> digit_commands((0, 20, 40), pair)   # 127 - 8, 127 + 12, 127 + 32: both ways
+    (119, 139, 159)
+    """
+    a = params.actuator
+    straight = int(a.equilibrium_command)
+    low, high = (int(c) for c in a.operating_commands)
+    t_low, t_high = THESIS_OPERATING_COMMANDS
+    up = high - straight
+    down = straight - low if low < straight else up  # a single cable: slack below straight, as far as above
+    out = []
+    for c in commands:
+        frac = (int(c) - THESIS_STRAIGHT_COMMAND) / (t_high - THESIS_STRAIGHT_COMMAND)
+        moved = straight + frac * (up if frac >= 0 else down)
+        out.append(int(min(max(np.floor(moved + 0.5), a.command_min), a.command_max)))
+    return tuple(out)
+
+
 def load_protocol(name_or_path: str | Path, params: RigParams | None = None) -> Protocol:
     """A built-in protocol by name (see :data:`BUILTIN`) or a user protocol from a TOML file.
 
@@ -373,7 +427,8 @@ def load_protocol(name_or_path: str | Path, params: RigParams | None = None) -> 
     name_or_path : str or path
     params : RigParams, optional
         The digit it will run on. A built-in protocol's positions are then scaled to the digit's length (the same
-        fractions of it, :meth:`Protocol.scaled_to`), and any protocol is checked against the digit (its positions
+        fractions of it, :meth:`Protocol.scaled_to`) and its commands laid out on the digit's operating range
+        (:meth:`Protocol.commands_on`), and any protocol is checked against the digit (its positions
         on it, :meth:`Protocol.plan`) before a rig opens: the protocol ``flexdigit collect PROTOCOL --params FILE``
         runs. None: the protocol as written.
 
@@ -393,7 +448,7 @@ def load_protocol(name_or_path: str | Path, params: RigParams | None = None) -> 
         return protocol
     length_m = params.geometry.digit_length_m
     if str(name_or_path) in BUILTIN:
-        protocol = protocol.scaled_to(length_m)
+        protocol = protocol.scaled_to(length_m).commands_on(params)
     protocol.plan(length_m)
     return protocol
 

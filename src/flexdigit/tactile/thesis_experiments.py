@@ -84,9 +84,10 @@ def collect_on_twin(
 ) -> Dataset:
     """Collect ``protocol`` on a fresh twin into ``out`` (replacing an older file and journal).
 
-    Readings at an ADC rail are kept (``allow_rail``): the thesis's experiments run as written on any digit, and a
-    digit whose gauges rail at the thesis's actuation commands (a cable pair, straight at its middle command, bent
-    far the other way at 0..40) is reported with what it reads, where ``flexdigit collect`` refuses such a run."""
+    Readings at an ADC rail are kept (``allow_rail``): the thesis's experiments run on any digit (at its own
+    commands, :func:`~flexdigit.tactile.protocols.digit_commands`), and a digit whose gauges rail inside its
+    operating range (``flexdigit params FILE`` names them) is reported with what it reads (the report says how many
+    readings railed), where ``flexdigit collect`` refuses such a run."""
     out = Path(out)
     out.unlink(missing_ok=True)
     journal_path(out).unlink(missing_ok=True)

@@ -33,6 +33,7 @@ __all__ = [
     "BoardState",
     "FAULTS",
     "VOLTS_PER_COUNT",
+    "BOARD_WINDOW_V",
     "HEARTBEAT_S",
     "BAUD",
     "MAX_KEPT_SAMPLES",
@@ -56,6 +57,9 @@ UNO_ADC_CHANNELS = 6
 
 #: The front end: gauge volts ride on 2.5 V into the 0..5 V ADC; 10 bits over 5 V.
 VOLTS_PER_COUNT = 5.0 / 1024.0
+#: The gauge volts the board reads without faulting "adc_rail" (firmware/flexdigit_board.c: a count of 0 or 1023
+#: faults; count = floor((v + 2.5) / VOLTS_PER_COUNT)), V.
+BOARD_WINDOW_V = (-2.5 + VOLTS_PER_COUNT, 2.5 - VOLTS_PER_COUNT)
 #: The board's fault codes (firmware/flexdigit_board.c).
 FAULTS = {1: "host_timeout", 2: "adc_rail", 3: "rotation_bound", 4: "command_range", 5: "controller"}
 #: The host sends a heartbeat line if it has said nothing for this long (the board's timeout is 0.5 s).
