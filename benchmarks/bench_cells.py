@@ -1,6 +1,6 @@
 """The cost of the twin's default resolution (issue 24, ``flexdigit.twin.digit.default_cells``): the run twin's
 real-time factor of long digits at the old 3 cells per section and at the default (cells no longer than
-``MAX_CELL_LENGTH_M``), timed in the same run as :func:`benchmarks.bench_digits.bench_realtime` times them (2 ms
+``MAX_CELL_LENGTH_M``), timed in the same run as :func:`benchmarks._common.realtime_factor` times them (2 ms
 step, read every 20 ms frame, a slow ramp, 10 simulated s, best of 3; the long digits hang tip down).
 
 - One 0.39 m section (the campaign's digit 2, ``tests/digit_campaign.py``, written out: benchmarks do not import
@@ -13,57 +13,13 @@ step, read every 20 ms frame, a slow ramp, 10 simulated s, best of 3; the long d
 
 from __future__ import annotations
 
-import time
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES, ONE_LONG_SECTION, realtime_factor
 
-from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
-
-#: tests/digit_campaign.py's campaign_digit(2), its mechanics (the sensor chain does not change the twin's cost).
-ONE_LONG_SECTION = {
-    "actuator": {"gear_ratio": 1.88},
-    "cables": {"count": 1, "guide_friction_ratio": 0.0163, "pretension_n": 0.0},
-    "geometry": {
-        "cable_eccentricity_m": 0.00318,
-        "digit_length_m": 0.404,
-        "gauge_positions_m": [0.0374, 0.0388, 0.0837, 0.0982, 0.1916, 0.2682, 0.3749],
-        "section_count": 1,
-        "section_length_m": 0.3893,
-        "strip_length_m": 0.3893,
-        "strip_thickness_m": 0.00025,
-        "strip_width_m": 0.0132,
-    },
-    "material": {"strip_density_kg_m3": 8860.0, "youngs_modulus_pa": 110e9},
-    "sensors": {"adc_channels": list(range(7))},
-}
 DIGITS = {
     "thesis rig": ({}, "vertical"),
     "one 0.39 m section": (ONE_LONG_SECTION, "hanging"),
     "5 sections, 8 gauges, 0.5 m": (FIVE_SECTIONS_EIGHT_GAUGES, "hanging"),
 }
-
-
-def realtime_factor(description: dict, orientation: str, cells, sim_seconds: float = 10.0, repeats: int = 3):
-    """``(factor, springs, elapsed)`` of the run twin at ``cells`` per section (None: the default)."""
-    from flexdigit.params import RigParams
-    from flexdigit.rig.backends.sim_backend import DEFAULT_TWIN_DT_S
-    from flexdigit.twin.twin import Twin
-
-    params = RigParams.from_dict(description)
-    straight = params.actuator.equilibrium_command
-    ramp = list(range(straight, straight + 31)) + list(range(straight + 29, straight, -1))
-
-    def once() -> tuple[float, int]:
-        twin = Twin(params, seed=0, orientation=orientation, dt_s=DEFAULT_TWIN_DT_S, cells_per_section=cells)
-        frame = params.actuator.serial_period_s
-        start = time.perf_counter()
-        for k in range(int(round(sim_seconds / frame))):
-            if k % 5 == 0:
-                twin.command(ramp[(k // 5) % len(ramp)])
-            twin.advance(frame)
-            twin.read()
-        return time.perf_counter() - start, twin.chain.n
-
-    elapsed, springs = min(once() for _ in range(repeats))
-    return sim_seconds / elapsed, springs, elapsed
 
 
 def run() -> list[dict]:

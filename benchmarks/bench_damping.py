@@ -8,8 +8,7 @@ thesis rig's (the same call, its modal factor exactly 1), caches cleared each ti
 
 from __future__ import annotations
 
-from benchmarks.bench_digitctl2 import best_of
-from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES, best_of
 
 
 def run() -> list[dict]:

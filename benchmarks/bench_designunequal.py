@@ -11,8 +11,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from benchmarks.bench_digitctl2 import best_of
-from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES, best_of
 
 
 def run() -> list[dict]:

@@ -10,19 +10,7 @@ and two Lyapunov solves); the thesis rig's is one design. Best of 3, the 0.5 m 8
 
 from __future__ import annotations
 
-import time
-
-from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
-
-
-def best_of(function, repeats: int = 3) -> float:
-    """The shortest of ``repeats`` wall times of ``function()``, s (also bench_damping's and bench_designunequal's)."""
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        best = min(best, time.perf_counter() - start)
-    return best
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES, best_of
 
 
 def run() -> list[dict]:

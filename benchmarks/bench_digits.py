@@ -20,18 +20,8 @@ import time
 
 import numpy as np
 
-#: The 8-gauge, 5-section digit of tests/digits.py ("five-sections-eight-gauges"), written out (benchmarks do not
-#: import the tests).
-FIVE_SECTIONS_EIGHT_GAUGES = {
-    "geometry": {
-        "section_count": 5,
-        "section_length_m": 0.09,
-        "strip_length_m": 0.45,
-        "digit_length_m": 0.50,
-        "gauge_positions_m": [0.03, 0.07, 0.13, 0.17, 0.23, 0.27, 0.33, 0.37],
-    },
-    "sensors": {"bridge": "full", "adc_channels": list(range(8))},
-}
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES, realtime_factor
+
 DIGITS = {"thesis rig (3 sections, 3 gauges)": ({}, "vertical"), "5 sections, 8 gauges, 0.5 m": (
     FIVE_SECTIONS_EIGHT_GAUGES, "hanging")}  # fmt: skip
 
@@ -40,31 +30,6 @@ def _params(description: dict):
     from flexdigit.params import RigParams
 
     return RigParams.from_dict(description)
-
-
-def bench_realtime(description: dict, orientation: str, sim_seconds: float = 10.0, repeats: int = 3) -> tuple:
-    """Simulated seconds per wall-clock second of the run twin of a digit; ``(factor, springs, elapsed)``."""
-    from flexdigit.rig.backends.sim_backend import DEFAULT_TWIN_DT_S
-    from flexdigit.twin.twin import Twin
-
-    params = _params(description)
-    straight = params.actuator.equilibrium_command
-    ramp = list(range(straight, straight + 31)) + list(range(straight + 29, straight, -1))
-
-    def run() -> tuple[float, int]:
-        twin = Twin(params, seed=0, orientation=orientation, dt_s=DEFAULT_TWIN_DT_S)
-        frame = params.actuator.serial_period_s
-        frames = int(round(sim_seconds / frame))
-        start = time.perf_counter()
-        for k in range(frames):
-            if k % 5 == 0:
-                twin.command(ramp[(k // 5) % len(ramp)])
-            twin.advance(frame)
-            twin.read()
-        return time.perf_counter() - start, twin.chain.n
-
-    elapsed, springs = min(run() for _ in range(repeats))
-    return sim_seconds / elapsed, springs, elapsed
 
 
 def bench_static(description: dict, cases: int = 5_000) -> tuple:
@@ -89,7 +54,7 @@ def speed_rows(digits: dict) -> list[dict]:
     orientation)`` in ``digits``, timed in this run (shared with :mod:`benchmarks.bench_unequal`)."""
     rows = []
     for name, (description, orientation) in digits.items():
-        factor, springs, elapsed = bench_realtime(description, orientation)
+        factor, springs, elapsed = realtime_factor(description, orientation)
         rows.append(
             {
                 "name": f"run twin real-time factor, {name}",

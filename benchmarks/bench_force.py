@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmarks.bench_digitctl2 import best_of
-from benchmarks.bench_map import ONE_SECTION
+from benchmarks._common import ONE_SECTION, best_of
 
 
 def _hold(params) -> None:

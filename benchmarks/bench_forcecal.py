@@ -11,21 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmarks.bench_digitctl2 import best_of
-
-#: ``random_digit(10)`` of tests/digits.py (benchmarks do not import the tests)
-RANDOM_DIGIT_10 = {
-    "geometry": {
-        "section_count": 3,
-        "section_length_m": 0.086,
-        "strip_length_m": 0.258,
-        "digit_length_m": 0.288,
-        "gauge_positions_m": [0.0577, 0.082, 0.2507, 0.2749],
-    },
-    "sensors": {"bridge": "quarter", "adc_channels": [0, 1, 2, 3]},
-    "cables": {"count": 2, "pretension_n": 4.24},
-    "actuator": {"gear_ratio": 1.1},
-}
+from benchmarks._common import RANDOM_DIGIT_10, best_of
 
 
 def _hold(params) -> None:

@@ -12,30 +12,7 @@ import time
 
 import numpy as np
 
-from benchmarks.bench_digitctl2 import best_of
-
-ONE_SECTION = {
-    "geometry": {
-        "section_count": 1,
-        "section_length_m": 0.15,
-        "strip_length_m": 0.15,
-        "digit_length_m": 0.16,
-        "gauge_positions_m": [0.06],
-    },
-    "sensors": {"bridge": "quarter", "adc_channels": [0]},
-}
-#: tests/digits.py's random_digit(20), written out (benchmarks do not import the tests)
-RANDOM_20 = {
-    "geometry": {
-        "section_count": 6,
-        "section_length_m": 0.018833,
-        "strip_length_m": 0.112998,
-        "digit_length_m": 0.173,
-        "gauge_positions_m": [0.0458, 0.1301, 0.1563, 0.1659],
-    },
-    "sensors": {"bridge": "quarter", "adc_channels": [0, 1, 2, 3]},
-    "cables": {"count": 2, "pretension_n": 1.48},
-}
+from benchmarks._common import ONE_SECTION, RANDOM_DIGIT_20, best_of
 
 
 def _sweep(params, sweep: str) -> tuple[float, float]:
@@ -69,7 +46,7 @@ def run() -> list[dict]:
                 "note": f"CPU of calibrate_rotation on its twin; rig time {_sweep(digit, sweep)[1]:.1f} s",
             }
         )
-    curved = calibrate_rotation(open_rig("sim", RigParams.from_dict(RANDOM_20), seed=1))
+    curved = calibrate_rotation(open_rig("sim", RigParams.from_dict(RANDOM_DIGIT_20), seed=1))
     readings = np.asarray(curved.gauges_v_)
     for label, est in (("affine", calibrate_rotation(open_rig("sim", digit, seed=1))), ("curved", curved)):
         g = readings[:, : est.coef_.size]

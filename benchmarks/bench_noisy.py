@@ -10,31 +10,7 @@ one-section test digit, whose grid qualifies (48), in the same run; best of 3.
 
 from __future__ import annotations
 
-from benchmarks.bench_digitctl2 import best_of
-
-#: ``tests/digits.py``'s ``random_digit(8)``, as its TOML reads (the benchmarks do not import the tests).
-RANDOM_DIGIT_8 = {
-    "geometry": {
-        "section_count": 1,
-        "section_length_m": 0.384,
-        "strip_length_m": 0.384,
-        "digit_length_m": 0.394,
-        "gauge_positions_m": [0.0421, 0.2229, 0.3831],
-    },
-    "sensors": {"bridge": "quarter", "adc_channels": [0, 1, 2]},
-    "cables": {"count": 2, "pretension_n": 6.85},
-}
-#: ``tests/digits.py``'s one-section digit.
-ONE_SECTION = {
-    "geometry": {
-        "section_count": 1,
-        "section_length_m": 0.15,
-        "strip_length_m": 0.15,
-        "digit_length_m": 0.16,
-        "gauge_positions_m": [0.06],
-    },
-    "sensors": {"bridge": "quarter", "adc_channels": [0]},
-}
+from benchmarks._common import ONE_SECTION, RANDOM_DIGIT_8, best_of
 
 
 def run() -> list[dict]:

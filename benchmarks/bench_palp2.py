@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from benchmarks.bench_digitctl2 import best_of
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES, best_of
 
 #: samples of the staircase timed per repeat: the built-in sweep's 25 plateaus of 2.5 s at 20 ms
 SAMPLES = 3125
@@ -43,7 +43,6 @@ def _sigma_ms(params) -> float:
 
 
 def run() -> list[dict]:
-    from benchmarks.bench_digits import FIVE_SECTIONS_EIGHT_GAUGES
     from flexdigit.params import RigParams
 
     rows = []

@@ -1,6 +1,6 @@
 """The cost of a finer twin (issue 24, a description's ``[twin]`` table, ``flexdigit.twin.resolution``): the run
 twin's real-time factor at the default resolution and at the ``[twin] max_cell_length_m`` that meets 0.1 % of the
-elastica (docs/digits.md, "The twin's resolution"), timed as :func:`benchmarks.bench_cells.realtime_factor`
+elastica (docs/digits.md, "The twin's resolution"), timed as :func:`benchmarks._common.realtime_factor`
 times them, the cells coming from the description (not passed); and what ``flexdigit params FILE``'s error
 estimate costs (two static solves and, where the default misses 0.1 %, the search for the setting).
 
@@ -9,24 +9,13 @@ estimate costs (two static solves and, where the default misses 0.1 %, the searc
 
 from __future__ import annotations
 
-import time
-
-from benchmarks.bench_cells import ONE_LONG_SECTION, realtime_factor
+from benchmarks._common import ONE_LONG_SECTION, best_of, realtime_factor
 
 #: (name, description, orientation, the max_cell_length_m meeting 0.1 %: docs/digits.md's table)
 DIGITS = (
     ("thesis rig", {}, "vertical", 0.014),
     ("one 0.39 m section", ONE_LONG_SECTION, "hanging", 0.018),
 )
-
-
-def _best_ms(call, repeats: int = 5) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        call()
-        best = min(best, time.perf_counter() - start)
-    return 1e3 * best
 
 
 def run() -> list[dict]:
@@ -54,7 +43,7 @@ def run() -> list[dict]:
         rows.append(
             {
                 "name": f"static error estimate (params FILE), {name}",
-                "value": _best_ms(lambda p=params: static_error(p)),
+                "value": 1e3 * best_of(lambda p=params: static_error(p), 5),
                 "unit": "ms",
                 "goal": "",
                 "note": "two static solves, at the cells and at 3x (best of 5)",
@@ -63,7 +52,7 @@ def run() -> list[dict]:
         rows.append(
             {
                 "name": f"setting for 0.1 % (resolution_for), {name}",
-                "value": _best_ms(lambda p=params: resolution_for(p)),
+                "value": 1e3 * best_of(lambda p=params: resolution_for(p), 5),
                 "unit": "ms",
                 "goal": "",
                 "note": "the h^2 law's guess, checked by the estimate (best of 5)",

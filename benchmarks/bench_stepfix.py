@@ -10,33 +10,7 @@ kept), beside the one-section digit's whole design; best of 3.
 
 from __future__ import annotations
 
-from benchmarks.bench_digitctl2 import best_of
-from benchmarks.bench_noisy import ONE_SECTION
-
-#: tests/digit_campaign.py's campaign_digit(3) (3.1 deg a command; the benchmarks do not import the tests).
-CAMPAIGN_3 = {
-    "geometry": {
-        "section_count": 3,
-        "section_length_m": 0.1401,
-        "strip_length_m": 0.4203,
-        "digit_length_m": 0.444,
-        "strip_thickness_m": 0.0005,
-        "strip_width_m": 0.0199,
-        "cable_eccentricity_m": 0.00305,
-        "gauge_positions_m": [0.0555, 0.1598, 0.1676],
-    },
-    "material": {"youngs_modulus_pa": 110e9, "strip_density_kg_m3": 8860.0},
-    "sensors": {
-        "bridge": "half",
-        "gauge_bridges": ["half", "half", "full"],
-        "gauge_factors": [0.99, 1.28, 1.4],
-        "amplifier_gains_v_per_v": [20000.0, 20000.0, 14674.0],
-        "adc_bits": 16,
-        "adc_range_v": [-2.5, 2.5],
-        "adc_channels": [3, 4, 2],
-    },
-    "cables": {"count": 2, "pretension_n": 3.2, "guide_friction_ratio": 0.0805},
-}
+from benchmarks._common import CAMPAIGN_3, ONE_SECTION, best_of
 
 
 def run() -> list[dict]:

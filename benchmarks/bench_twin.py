@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from benchmarks._common import FIVE_SECTIONS_EIGHT_GAUGES
 from flexdigit.models.beam import elastica_tip_deflection
 
 EI = 205e9 * 12.7e-3 * 0.381e-3**3 / 12  # N m^2, table 3.7
@@ -231,19 +232,6 @@ def bench_read_at(sim_seconds: float = 5.0, read_hz: float = 1000.0, repeats: in
     }
 
 
-#: Issue 24's long digit: 5 sections of 90 mm (0.5 m), 8 full-bridge gauges (tests/digits.py), beside the thesis rig.
-FIVE_BY_EIGHT = {
-    "geometry": {
-        "section_count": 5,
-        "section_length_m": 0.09,
-        "strip_length_m": 0.45,
-        "digit_length_m": 0.50,
-        "gauge_positions_m": [0.03, 0.07, 0.13, 0.17, 0.23, 0.27, 0.33, 0.37],
-    },
-    "sensors": {"bridge": "full", "adc_channels": list(range(8))},
-}
-
-
 def bench_digits(sim_seconds: float = 10.0, cases: int = 5000, repeats: int = 3) -> list[dict]:
     """Real-time factor (hanging, a command each 100 ms, read every 20 ms frame) and static load cases per second
     of the thesis rig and of the 5-section, 8-gauge digit, its calibration derived by
@@ -253,7 +241,10 @@ def bench_digits(sim_seconds: float = 10.0, cases: int = 5000, repeats: int = 3)
     from flexdigit.twin.digit_calibration import calibration_for
 
     rows = []
-    for label, params in (("thesis rig", RigParams()), ("5 sections, 8 gauges", RigParams.from_dict(FIVE_BY_EIGHT))):
+    for label, params in (
+        ("thesis rig", RigParams()),
+        ("5 sections, 8 gauges", RigParams.from_dict(FIVE_SECTIONS_EIGHT_GAUGES)),
+    ):
         cal = calibration_for(params)
 
         def run(params=params, cal=cal) -> float:

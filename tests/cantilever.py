@@ -10,9 +10,19 @@ from __future__ import annotations
 import numpy as np
 
 from flexdigit.rig.base import Rig
+from flexdigit.tactile.protocols import Protocol
 from oracles import cantilever_gauges_v
 
 NOISE_V = 0.002
+#: The tactile command-line tests' dataset on this rig: 2 loads at 6 positions (a tip's 10 cm), 10 repetitions and
+#: 10 no-load readings (240 readings; every position bends gauges 1 and 2).
+SMALL_PROTOCOL = Protocol(
+    "small",
+    loads_kg=(0.0125, 0.025),
+    positions_from_tip_m=(0.0, 0.02, 0.04, 0.06, 0.08, 0.10),
+    repetitions=10,
+    no_load_repetitions=10,
+)
 
 
 class CantileverRig(Rig):

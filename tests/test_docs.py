@@ -166,7 +166,23 @@ def test_the_benchmark_page_shows_the_json_rows_and_their_run():
 def test_without_benchmark_results_the_page_says_how_to_measure_them():
     page = _generator().benchmark_page(None)
     assert "make bench" in page
-    assert "|" not in page  # no table, so no number that was not measured
+    assert "|---" not in page  # no table, so no number that was not measured
+
+
+def test_the_benchmark_page_lists_every_benchmark_and_what_it_measures():
+    """Every ``benchmarks/bench_*.py`` is run by ``python -m benchmarks`` (``MODULES`` or ``ON_REQUEST``) and listed
+    on the page, measured or not, with its docstring's first sentence (a benchmark added without registering it,
+    or without saying what it measures, fails here)."""
+    generator = _generator()
+    files = sorted(p.stem for p in (ROOT / "benchmarks").glob("bench_*.py"))
+    listed = generator.registered_benchmarks()
+    assert sorted(listed) == files
+    page = generator.benchmark_page(None)
+    for name, what in listed.items():
+        assert len(what) > 20, name
+        assert f"- `{name}` (`python -m benchmarks {name.removeprefix('bench_')}`): {what}" in page
+    assert "`bench_stepfix` (`python -m benchmarks stepfix`): The coarse-step check of a digit's 20 ms design" in page
+    assert generator.benchmark_index()[0] in generator.benchmark_page({"rows": []})
 
 
 def test_the_findings_page_shows_every_entry_of_the_report():

@@ -10,8 +10,10 @@ an autosummary of its public names; autosummary then writes one page per name in
 
 from __future__ import annotations
 
+import ast
 import importlib
 import json
+import re
 import types
 from pathlib import Path
 
@@ -19,6 +21,7 @@ DOCS = Path(__file__).resolve().parents[1]
 ROOT = DOCS.parent
 PACKAGE = ROOT / "src" / "flexdigit"
 BENCH_JSON = ROOT / "benchmarks" / "results.json"
+BENCH_MAIN = ROOT / "benchmarks" / "__main__.py"
 REPORT_JSON = ROOT / "report" / "results.json"  # what `make run` writes
 
 #: Public modules that are not packages but hold public names of their own (the top level's ``__all__`` names
@@ -138,8 +141,44 @@ def _cell(text: object) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
+def registered_benchmarks() -> dict[str, str]:
+    """Every benchmark module ``python -m benchmarks`` runs (``MODULES``, then ``ON_REQUEST``, said so), in its order,
+    each with what it measures: its docstring's first sentence. Read from the files, not imported (a benchmark
+    imports what it times)."""
+    tree = ast.parse(BENCH_MAIN.read_text())
+    out: dict[str, str] = {}
+    for node in tree.body:
+        target = node.target if isinstance(node, ast.AnnAssign) else getattr(node, "targets", [None])[0]
+        if isinstance(target, ast.Name) and target.id in ("MODULES", "ON_REQUEST"):
+            for module in ast.literal_eval(node.value):
+                name = module.rsplit(".", 1)[-1]
+                what = _first_sentence(BENCH_MAIN.parent / f"{name}.py")
+                out[name] = f"{what} (run only when named)" if target.id == "ON_REQUEST" else what
+    return out
+
+
+def _first_sentence(path: Path) -> str:
+    """The first sentence of ``path``'s module docstring, on one line (its first paragraph if it has no full stop),
+    its reST roles and literals as Markdown code."""
+    doc = ast.get_docstring(ast.parse(path.read_text())) or ""
+    paragraph = " ".join(doc.split("\n\n")[0].split())
+    found = re.match(r"(.+?\.)(?:\s+[A-Z(`]|$)", paragraph)
+    text = found.group(1) if found else paragraph.removesuffix(":") + "."  # a paragraph that opens a list
+    text = re.sub(r":\w+:`~?([^`]+)`", r"`\1`", text)  # :func:`x` -> `x`
+    return text.replace("``", "`")
+
+
+def benchmark_index() -> list[str]:
+    """The page's list of every benchmark and what it measures (whether or not ``make bench`` has run)."""
+    lines = ["## What each benchmark measures", ""]
+    for name, what in registered_benchmarks().items():
+        lines.append(f"- `{name}` (`python -m benchmarks {name.removeprefix('bench_')}`): {what}")
+    return [*lines, ""]
+
+
 def benchmark_page(results: dict | None) -> str:
-    """The benchmark tables as Markdown, one per benchmark module, from ``make bench``'s JSON (or how to get it)."""
+    """The benchmark tables as Markdown, one per benchmark module, from ``make bench``'s JSON (or how to get it),
+    after the list of every benchmark and what it measures (:func:`benchmark_index`)."""
     head = ["# Benchmarks", ""]
     if results is None:
         return "\n".join(
@@ -149,6 +188,7 @@ def benchmark_page(results: dict | None) -> str:
                 "`benchmarks/results.json`; the next `make docs` turns that file into the tables of this page.",
                 "(`python -m benchmarks bench_twin --out FILE` runs one module.)",
                 "",
+                *benchmark_index(),
             ]
         )
     ctx = results.get("context", {})
@@ -158,6 +198,7 @@ def benchmark_page(results: dict | None) -> str:
         f"Python {ctx.get('python', '?')}). The figures are indicative: compare rows of one run with each other. "
         "This page is generated from `benchmarks/results.json` at every build.",
         "",
+        *benchmark_index(),
     ]
     modules: dict[str, list[dict]] = {}
     for row in results.get("rows", []):

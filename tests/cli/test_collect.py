@@ -3,20 +3,13 @@ import json
 import numpy as np
 import pytest
 
+from cantilever import SMALL_PROTOCOL
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError
 from flexdigit.tactile import load_dataset, predict_dataset
 from flexdigit.tactile.model_io import SavedModel, load_model
-from flexdigit.tactile.protocols import Protocol
 from flexdigit.tactile.runner import collect
 
-SMALL = Protocol(
-    "small",
-    loads_kg=(0.0125, 0.025),
-    positions_from_tip_m=(0.0, 0.02, 0.04, 0.06, 0.08, 0.10),
-    repetitions=10,
-    no_load_repetitions=10,
-)
 #: The command and the library run the same code in one process: the same numbers but for summation order.
 SAME_RTOL = 1e-12
 
@@ -24,7 +17,7 @@ SAME_RTOL = 1e-12
 @pytest.fixture
 def dataset_file(tmp_path, make_rig):
     path = tmp_path / "d.parquet"
-    collect(SMALL, make_rig(seed=0), path)
+    collect(SMALL_PROTOCOL, make_rig(seed=0), path)
     return path
 
 
@@ -61,7 +54,7 @@ def test_train_and_predict_round_trip(dataset_file, tmp_path, capsys):
 def test_contact_target_and_bad_files_give_one_line_errors(dataset_file, tmp_path, capsys):
     assert main(["train", str(dataset_file), "--target", "contact", "--hidden", "4", "--tol", "1e-5", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["accuracy"] >= 0.95  # every position of SMALL bends gauges 1 and 2: contact is plain to see
+    assert out["accuracy"] >= 0.95  # every position of SMALL_PROTOCOL bends gauges 1 and 2: contact is plain to see
     bad = tmp_path / "bad.parquet"
     bad.write_text("nope")
     assert main(["train", str(bad)]) == 2

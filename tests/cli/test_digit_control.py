@@ -219,4 +219,5 @@ def test_run_says_what_its_design_misses_in_one_line(capsys):
             warnings.warn("design: one frame of one command moves the tip 0.62 deg", DesignWarning, stacklevel=1)
             warnings.warn("something else", UserWarning, stacklevel=1)
     assert said == ["design: one frame of one command moves the tip 0.62 deg"]
-    assert capsys.readouterr().err == "run: warning: design: one frame of one command moves the tip 0.62 deg\n"
+    said_on_stderr = "flexdigit run: warning: design: one frame of one command moves the tip 0.62 deg\n"
+    assert capsys.readouterr().err == said_on_stderr  # prefixed as the command's errors are

@@ -20,7 +20,9 @@ HOLD = 0.10
 PLACE_MM = 15.0
 
 
-def _hold(name: str, tmp_path, capsys) -> dict:
+def _digit_and_block(name: str, tmp_path):
+    """The digit's description and a 1000 N/m^2 block beside its outer 45 % (from 0.55 L to 80 mm past the tip,
+    0.1 L away), as files."""
     digit = write_digit(name, tmp_path)
     length_mm = 1000 * DIGITS[name]["geometry"]["digit_length_m"]
     tissue = tmp_path / "tissue.toml"
@@ -28,6 +30,11 @@ def _hold(name: str, tmp_path, capsys) -> dict:
         f'[tissue]\nname = "block"\nside = "cable"\nstart_mm = {0.55 * length_mm:.1f}\nend_mm = {length_mm + 80:.1f}'
         f"\ngap_mm = {0.1 * length_mm:.1f}\nmodulus_n_m2 = 1000.0\n"
     )
+    return digit, tissue
+
+
+def _hold(name: str, tmp_path, capsys) -> dict:
+    digit, tissue = _digit_and_block(name, tmp_path)
     argv = ["palpate", "--params", str(digit), "--tissue", str(tissue), "--protocol", "hold", "--json"]
     assert main(argv) == 0
     return json.loads(capsys.readouterr().out)
@@ -47,15 +54,9 @@ def test_the_short_digit_holds_its_force_and_tells_the_place(tmp_path, capsys):
 
 
 def _hold_at(name: str, setpoint_n: float, tmp_path, capsys) -> tuple[int, dict, str]:
-    """``palpate --protocol FILE`` holding ``setpoint_n`` for 10 s beside the block of :func:`_hold`: exit code,
-    JSON and stderr."""
-    digit = write_digit(name, tmp_path)
-    length_mm = 1000 * DIGITS[name]["geometry"]["digit_length_m"]
-    tissue = tmp_path / "tissue.toml"
-    tissue.write_text(
-        f'[tissue]\nname = "block"\nside = "cable"\nstart_mm = {0.55 * length_mm:.1f}\nend_mm = {length_mm + 80:.1f}'
-        f"\ngap_mm = {0.1 * length_mm:.1f}\nmodulus_n_m2 = 1000.0\n"
-    )
+    """``palpate --protocol FILE`` holding ``setpoint_n`` for 10 s beside the block of :func:`_digit_and_block`: exit
+    code, JSON and stderr."""
+    digit, tissue = _digit_and_block(name, tmp_path)
     protocol = tmp_path / "hold.toml"
     protocol.write_text(f"[force]\nsetpoint_n = {setpoint_n}\nduration_s = 10.0\n")
     argv = ["palpate", "--params", str(digit), "--tissue", str(tissue), "--protocol", str(protocol), "--json"]

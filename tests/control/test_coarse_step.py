@@ -14,6 +14,7 @@ import warnings
 import numpy as np
 import pytest
 
+from digit_campaign import campaign_digit
 from digits import DIGITS
 from flexdigit.cli import main
 from flexdigit.control import design20ms as dz
@@ -26,32 +27,9 @@ SERVO_WN, SERVO_ZETA, FRAME_S = 20.53, 0.5629, 0.020
 #: response between two grid points differs by at most ~(1 ms x wn)^2 / 8 of it.
 PEAK_RTOL = 1e-3
 
-#: tests/digit_campaign.py's campaign_digit(3) as its to_toml writes it: 3 x 140.1 mm of phosphor bronze, 0.444 m,
-#: a pair at 3.05 mm eccentricity: a command turns the tip 3.1 deg (its sweep on the twin: 3.0995).
-COARSE = {
-    "geometry": {
-        "section_count": 3,
-        "section_length_m": 0.1401,
-        "strip_length_m": 0.4203,
-        "digit_length_m": 0.444,
-        "strip_thickness_m": 0.0005,
-        "strip_width_m": 0.0199,
-        "cable_eccentricity_m": 0.00305,
-        "gauge_positions_m": [0.0555, 0.1598, 0.1676],
-    },
-    "material": {"youngs_modulus_pa": 110e9, "strip_density_kg_m3": 8860.0},
-    "sensors": {
-        "bridge": "half",
-        "gauge_bridges": ["half", "half", "full"],
-        "gauge_factors": [0.99, 1.28, 1.4],
-        "amplifier_gains_v_per_v": [20000.0, 20000.0, 14674.0],
-        "adc_bits": 16,
-        "adc_range_v": [-2.5, 2.5],
-        "adc_channels": [3, 4, 2],
-    },
-    "actuator": {"gear_ratio": 1.0},
-    "cables": {"count": 2, "pretension_n": 3.2, "guide_friction_ratio": 0.0805},
-}
+#: tests/digit_campaign.py's campaign_digit(3): 3 x 140.1 mm of phosphor bronze, 0.444 m, a pair at 3.05 mm
+#: eccentricity: a command turns the tip 3.1 deg (its sweep on the twin: 3.0995).
+COARSE = campaign_digit(3)
 
 
 def _servo_pulse_peak(per_command: float, frame_s: float) -> float:

@@ -202,15 +202,16 @@ def test_a_hold_whose_gauges_fault_at_once_says_so_in_one_line(tmp_path, capsys)
 
 
 def test_the_builtin_scan_is_laid_out_with_the_builtin_tissue():
-    from flexdigit.cli.palpate import _scan_laid_out
+    from flexdigit.palpation.palpation import digit_scan
     from flexdigit.palpation.palpation_files import load_palpation_protocol
 
     plan = load_palpation_protocol("scan")
     assert plan.builtin
     assert plan.scan["offsets_m"] == (-0.04, -0.03, -0.02, -0.01, 0.0, 0.01, 0.02, 0.03, 0.04)
-    laid = _scan_laid_out(plan, RigParams.from_dict(DIGITS["short"]))  # 0.15 / 0.27 of the thesis rig's
-    assert laid.scan["offsets_m"] == tuple(round(d * 0.15 / 0.27, 4) for d in plan.scan["offsets_m"])
-    assert laid.scan["inclusion_width_m"] == pytest.approx(0.0056)
+    assert digit_scan(plan.scan, RigParams()) is plan.scan  # the thesis rig's as written
+    laid = digit_scan(plan.scan, RigParams.from_dict(DIGITS["short"]))  # 0.15 / 0.27 of the thesis rig's
+    assert laid["offsets_m"] == tuple(round(d * 0.15 / 0.27, 4) for d in plan.scan["offsets_m"])
+    assert laid["inclusion_width_m"] == pytest.approx(0.0056)
     nodule = digit_tissue(load_tissue("nodule-phantom")[0], RigParams.from_dict(DIGITS["short"])).inclusions[0]
     # the nodule's farthest place, as a fraction of the digit: the thesis rig's (250 + 40) / 270 mm
-    assert (nodule.centre_m + max(laid.scan["offsets_m"])) / 0.15 == pytest.approx(0.29 / 0.27, abs=1e-3)
+    assert (nodule.centre_m + max(laid["offsets_m"])) / 0.15 == pytest.approx(0.29 / 0.27, abs=1e-3)

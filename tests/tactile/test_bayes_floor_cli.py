@@ -9,23 +9,15 @@ import json
 
 import pytest
 
+from cantilever import SMALL_PROTOCOL
 from flexdigit.cli import main
-from flexdigit.tactile.protocols import Protocol
 from flexdigit.tactile.runner import collect
-
-SMALL = Protocol(
-    "small",
-    loads_kg=(0.0125, 0.025),
-    positions_from_tip_m=(0.0, 0.02, 0.04, 0.06, 0.08, 0.10),
-    repetitions=10,
-    no_load_repetitions=10,
-)
 
 
 @pytest.fixture
 def dataset_file(tmp_path, make_rig):
     path = tmp_path / "d.parquet"
-    collect(SMALL, make_rig(seed=0), path)
+    collect(SMALL_PROTOCOL, make_rig(seed=0), path)
     return path
 
 

@@ -194,12 +194,7 @@ def _digit_export_design(params, period: float, args):
     from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
     from flexdigit.twin.digit_calibration import twin_calibration
 
-    if args.calibration is not None:
-        from flexdigit.twin.calibration import load_calibration
-
-        calibration = load_calibration(args.calibration)
-    else:
-        calibration = twin_calibration(params)
+    calibration = twin_calibration(params, args.calibration)  # the file, else the digit's default
     # tip up, a digit that buckles under its supports' weight is mounted hanging (as run --params mounts its twin)
     orientation = digit_mount(params, calibration)
     with open_rig("sim", params, calibration=calibration, orientation=orientation) as rig:

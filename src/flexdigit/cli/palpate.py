@@ -78,7 +78,7 @@ def _palpate(args: argparse.Namespace) -> CommandResult:
             logs = _log_paths(args.log, plan, args.force)  # one per offset, named by the offsets laid out
         plan = _laid_out(plan, rig, calibration, tissue.side, info.source)
         if kind == "force":
-            data, text, fig = _force(rig, tissue, plan, logs[0], log_mode, info.source)
+            data, text, fig = _force(rig, tissue, plan, logs[0], log_mode)
         elif kind == "scan":
             data, text, fig = _scan(rig, tissue, plan, logs, log_mode, calibration)
         else:
@@ -127,19 +127,12 @@ def _digit_tissue(tissue, info, params):
 
 
 def _scan_laid_out(plan, params):
-    """The built-in scan beside a built-in tissue laid out for the digit: its offsets and the inclusion width looked
-    for scaled as the tissue is (palpation.tissue_scale; to 0.1 mm), so the nodule passes along the digit as it
-    passes along the thesis rig's (+-40 mm beside its 0.27 m; +-22.2 mm beside a 0.15 m digit)."""
+    """The built-in scan beside a built-in tissue laid out for the digit (palpation.digit_scan)."""
     from dataclasses import replace
 
-    from flexdigit.palpation.palpation import tissue_scale
+    from flexdigit.palpation.palpation import digit_scan
 
-    scale = tissue_scale(params)
-    scan = {
-        "offsets_m": tuple(round(scale * d, 4) for d in plan.scan["offsets_m"]),
-        "inclusion_width_m": round(scale * plan.scan["inclusion_width_m"], 4),
-    }
-    return replace(plan, scan=scan)
+    return replace(plan, scan=digit_scan(plan.scan, params))
 
 
 def _laid_out(plan, rig, calibration, side: str, tissue_source: str):
@@ -513,20 +506,13 @@ def _place_data(held) -> dict:
     return data
 
 
-def _force(rig, tissue, plan, log, log_mode, source="tissue"):
+def _force(rig, tissue, plan, log, log_mode):
     from flexdigit.palpation.palpation import hold_force
 
     f = plan.force
-    length = rig.params.geometry.digit_length_m
-    if tissue.start_m > length - 2e-3:  # the contact estimator's least region: two of its 1 mm grid steps
-        from flexdigit.errors import DataFileError
-
-        raise DataFileError(
-            f"{source}: key 'tissue.start_mm' = {1000 * tissue.start_m:g}: the tissue starts at or past the digit's "
-            f"{1000 * length:g} mm tip, where force control cannot press it; place it along the digit"
-        )
+    # a tissue past the tip was refused before the rig moved (_digit_tissue: palpation.check_tissue_reach)
     rig.place_tissue(tissue)
-    end = min(tissue.end_m, length)
+    end = min(tissue.end_m, rig.params.geometry.digit_length_m)
     held = hold_force(
         rig,
         f["setpoint_n"],

@@ -257,7 +257,7 @@ def _design_warnings():
     for w in caught:
         if issubclass(w.category, DesignWarning):
             said.append(str(w.message))
-            print(f"run: warning: {w.message}", file=sys.stderr, flush=True)
+            print(f"flexdigit run: warning: {w.message}", file=sys.stderr, flush=True)  # as errors are prefixed
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 

@@ -215,8 +215,7 @@ def _run(args: argparse.Namespace) -> CommandResult:
     from flexdigit._io import check_output
     from flexdigit._plot import check_plot, save_plot
     from flexdigit.params import RigParams, load_params
-    from flexdigit.twin.calibration import default_calibration, load_calibration
-    from flexdigit.twin.digit_calibration import calibration_for
+    from flexdigit.twin.digit_calibration import twin_calibration
     from flexdigit.twin.record_plot import record_figure
 
     check_output(args.out, force=args.force)  # before the simulation, not after it
@@ -227,12 +226,8 @@ def _run(args: argparse.Namespace) -> CommandResult:
         if getattr(args, flag, None) is not None:
             raise ParameterError(f"--{flag.replace('_', '-')} is a tendon robot's: give --robot NAME|FILE with it")
     params = load_params(args.params) if args.params else RigParams()
-    if args.calibration:
-        cal = load_calibration(args.calibration)
-    elif params.digit_only() == RigParams():  # the thesis rig, at any [twin] resolution
-        cal = default_calibration()
-    else:  # a digit nobody has measured: the thesis's calibration scaled to it by the physics
-        cal = calibration_for(params)
+    # the file, else the one default: the thesis rig's packaged fit, another digit's scaled to it by the physics
+    cal = twin_calibration(params, args.calibration)
     common = dict(seed=args.seed, params=params, calibration=cal)
     gauges = range(1, len(params.geometry.gauge_positions_m) + 1)  # the digit's gauges, 1..G
     mount = _mount(args, params, cal)

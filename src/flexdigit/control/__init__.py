@@ -74,6 +74,7 @@ __getattr__, __all__ = lazy_exports(
         "digit_mount": "flexdigit.control.design20ms",
         "stiffness_share": "flexdigit.control.design20ms",
         "digit_weights": "flexdigit.control.design20ms",
+        "frame_pulse_deg": "flexdigit.control.design20ms",
         "WeightsChoice": "flexdigit.control.design20ms",
         "KeptDesign": "flexdigit.control.kept_design",
         "keep_design": "flexdigit.control.kept_design",

@@ -33,7 +33,15 @@ from flexdigit.identify.events import Problem, find_spikes
 from flexdigit.identify.filters import butter_filter
 from flexdigit.identify.scores import LjungBox, corr2, ljung_box, nrmse_fit
 
-__all__ = ["MAX_MISFIT_PERCENT", "MAX_CI_HALFWIDTH", "WHITENESS_P", "SECOND_STEP_FRACTION", "FitQuality", "assess"]
+__all__ = [
+    "MAX_MISFIT_PERCENT",
+    "MAX_CI_HALFWIDTH",
+    "WHITENESS_P",
+    "SECOND_STEP_FRACTION",
+    "QUANTISED_STEPS",
+    "FitQuality",
+    "assess",
+]
 
 #: A fit whose record deviates from it by more than this (% of the response's amplitude) is poor.
 MAX_MISFIT_PERCENT = 10.0

@@ -23,6 +23,7 @@ __getattr__, __all__ = lazy_exports(
         "adc_counts": "flexdigit.models.bridge",
         "counts_to_volts": "flexdigit.models.bridge",
         "adc_quantise": "flexdigit.models.bridge",
+        "gauge_noise_scale": "flexdigit.models.bridge",
         "cable_shortening_m": "flexdigit.models.cable",
         "tip_rotation_rad": "flexdigit.models.cable",
         "tip_rotation_per_command_deg": "flexdigit.models.cable",

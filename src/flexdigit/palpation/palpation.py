@@ -53,10 +53,19 @@ __all__ = [
     "towards",
     "digit_command",
     "digit_protocol",
+    "tissue_scale",
+    "digit_tissue",
+    "digit_scan",
+    "TISSUE_REACH_M",
+    "check_tissue_reach",
     "check_sweep_commands",
     "ring_time_s",
     "SweepRecord",
+    "RAIL_MARGIN",
     "run_sweep",
+    "QUANTISATION_TERMS",
+    "quantisation_bias_v",
+    "plateau_sigma_v",
     "TissueFit",
     "fit_tissue",
     "stiffness_bound",
@@ -294,6 +303,21 @@ def digit_tissue(tissue: Tissue, params) -> Tissue:
     return tissue.replace(
         start_m=at(tissue.start_m), end_m=at(tissue.end_m), gap_m=at(tissue.gap_m), inclusions=inclusions
     )
+
+
+def digit_scan(scan: dict, params) -> dict:
+    """A built-in scan (``offsets_m``, ``inclusion_width_m``, m; written beside the thesis rig) laid out beside
+    ``params``'s digit as :func:`digit_tissue` lays out its tissue: both scaled by :func:`tissue_scale`, to 0.1 mm,
+    so the nodule passes along the digit as along the thesis rig's (+-40 mm beside its 0.27 m; +-22.2 mm beside a
+    0.15 m digit). The thesis rig's scan is returned unchanged."""
+    scale = tissue_scale(params)
+    if scale == 1.0:
+        return scan
+    return {
+        **scan,
+        "offsets_m": tuple(round(scale * d, 4) for d in scan["offsets_m"]),
+        "inclusion_width_m": round(scale * scan["inclusion_width_m"], 4),
+    }
 
 
 #: The least stretch of the digit a tissue must lie beside to be pressed: two of the contact estimator's 1 mm grid

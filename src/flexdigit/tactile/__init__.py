@@ -57,6 +57,7 @@ __getattr__, __all__ = lazy_exports(
         "Prediction": "flexdigit.tactile.localisation",
         "predict_dataset": "flexdigit.tactile.localisation",
         "network_floor": "flexdigit.tactile.position_floor",
+        "split_for_limit": "flexdigit.tactile.position_floor",
         "run_experiment": "flexdigit.tactile.thesis_experiments",
         "experiment_tables": "flexdigit.tactile.thesis_experiments",
         "white_noise_scan": "flexdigit.tactile.thesis_experiments",
