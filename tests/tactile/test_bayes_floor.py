@@ -9,6 +9,9 @@ Tolerances:
 
 - ``LIMIT_RTOL = 0.03``: the span limit's Monte Carlo (1000 draws a setting over the rows' settings: ~1 % of the
   RMS) and its grid (a quarter of ``sigma / k``, under 1 %).
+- The limit's own estimator (the posterior mean, :func:`span_estimator_rmse_m`) on ``n`` readings: its RMSE
+  scatters by ``1 / sqrt(2 n)`` too; on readings offset by ``c`` (a drift since the tare) it reads
+  ``sqrt((sigma / k)^2 + (c / k)^2)`` in closed form (a shifted Gaussian posterior away from the stretch's ends).
 - The network's RMSE on ``n`` test readings scatters by ``1 / sqrt(2 n)`` of itself (the RMS of ``n`` Gaussian
   errors); "not beating the limit" is an RMSE over the limit above ``1 - 3 / sqrt(2 n) - LIMIT_RTOL``.
 """
@@ -21,7 +24,7 @@ import pytest
 from flexdigit.errors import ParameterError
 from flexdigit.tactile.bounds import span_position_mse_m2
 from flexdigit.tactile.dataset import Dataset, dataset_columns, make_meta
-from flexdigit.tactile.localisation import position_bayes_rmse_m, train_network
+from flexdigit.tactile.localisation import position_bayes_rmse_m, span_estimator_rmse_m, train_network
 from flexdigit.tactile.pipeline import held_out_positions_split
 from flexdigit.tactile.position_floor import network_floor, split_for_limit
 from flexdigit.tactile.protocols import load_protocol
@@ -130,3 +133,27 @@ def test_a_coarse_grid_still_gives_the_closed_form():
     assert rms[1] == pytest.approx(rms[0], rel=1e-6)
     assert rms[2] == pytest.approx(rms[0], rel=2e-3)
     assert rms[0] == pytest.approx(sd, rel=LIMIT_RTOL)
+
+
+def test_the_limits_own_estimator_reads_the_limit_on_the_models_noise():
+    ds = _dataset(POSITIONS_M, 100)
+    rows = np.arange(5 * 100, 26 * 100)  # interior positions: the posterior is Gaussian there
+    scatter = 3.0 / np.sqrt(2 * rows.size) + LIMIT_RTOL
+    assert span_estimator_rmse_m(LinearGauge(), ds, rows) == pytest.approx(SIGMA_V / SLOPE_V_PER_M, rel=scatter)
+    scores = network_floor(LinearGauge(), ds, rows, 2.2e-3, split="positions")
+    assert scores["bayes_limit_reached"] is True
+    assert "bayes_limit_note" not in scores
+
+
+def test_readings_with_a_drift_the_limit_does_not_count_are_said():
+    # every reading 2 sigma off (a drift since the tare): the limit's own estimator reads sqrt(2^2 + 4^2) mm
+    ds = _dataset(POSITIONS_M, 100)
+    ds.columns["gauge1_v"] += 2 * SIGMA_V
+    rows = np.arange(5 * 100, 26 * 100)
+    shifted = np.hypot(SIGMA_V, 2 * SIGMA_V) / SLOPE_V_PER_M
+    scatter = 3.0 / np.sqrt(2 * rows.size) + LIMIT_RTOL
+    assert span_estimator_rmse_m(LinearGauge(), ds, rows) == pytest.approx(shifted, rel=scatter)
+    scores = network_floor(LinearGauge(), ds, rows, 5e-3, split="positions")
+    assert scores["bayes_limit_reached"] is False
+    assert scores["rmse_over_bayes_estimator"] == pytest.approx(5e-3 / shifted, rel=scatter)
+    assert "the limit's own estimator (the twin's response known) reads 4.4" in scores["bayes_limit_note"]

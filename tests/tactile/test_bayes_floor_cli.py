@@ -36,6 +36,9 @@ def test_default_is_held_out_positions_against_the_span_limit(dataset_file, tmp_
     assert out["bayes_limit_mm"] == out["bayes_limit_span_mm"]
     assert out["bayes_limit_settings_mm"] is None  # on held-out positions it would be told the test positions
     assert out["rmse_over_bayes_limit"] == pytest.approx(out["rmse_mm"] / out["bayes_limit_mm"], rel=1e-12)
+    # the limit's own estimator on the same test readings, and the note when it does not reach the limit
+    assert out["rmse_over_bayes_estimator"] == pytest.approx(out["rmse_mm"] / out["bayes_estimator_rmse_mm"], rel=1e-12)
+    assert out["bayes_limit_reached"] == ("the limit's own estimator" not in out.get("bayes_limit_note", ""))
 
 
 def test_thesis_split_is_compared_with_the_settings_limit(dataset_file, tmp_path, capsys):
@@ -43,6 +46,7 @@ def test_thesis_split_is_compared_with_the_settings_limit(dataset_file, tmp_path
     assert (out["split"], out["bayes_limit_prior"]) == ("readings", "settings")
     assert out["bayes_limit_settings_mm"] <= out["bayes_limit_span_mm"]  # it knows the positions themselves
     assert out["rmse_over_bayes_limit"] == pytest.approx(out["rmse_mm"] / out["bayes_limit_settings_mm"], rel=1e-12)
+    assert "bayes_estimator_rmse_mm" not in out  # the span estimator is no floor's estimator on this split
 
 
 def test_split_positions_needs_a_position_target(dataset_file, capsys):

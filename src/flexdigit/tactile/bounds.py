@@ -54,6 +54,7 @@ __all__ = [
     "ProtocolLimits",
     "protocol_limits",
     "span_position_mse_m2",
+    "span_posterior_mean_m",
     "CONTACT_ZONES",
     "FORCE_ONLY_FRACTION",
     "point_jacobian",
@@ -413,6 +414,57 @@ def _position_grid(positions_m, step_m: float, half_width_m) -> np.ndarray:
     return lattice if lattice.size else a
 
 
+def _span_prior(model, positions_m, masses_kg, command, step_m: float, half_width_m):
+    """The span prior of one command's loaded settings: the grid's positions (one per grid point and mass), their
+    log prior (uniform in position, the masses as often as the settings have them), the model's gauges there and
+    their noise variance (V^2)."""
+    grid = _position_grid(positions_m, step_m, half_width_m)
+    masses, counts = np.unique(masses_kg, return_counts=True)
+    ga = np.repeat(grid, masses.size)
+    gm = np.tile(masses, grid.size)
+    gc = np.full(ga.size, command)
+    # a uniform density in position: the lattice's points weigh alike
+    log_prior = np.log(np.tile(counts / counts.sum(), grid.size))
+    return ga, log_prior, model.gauges_v(ga, gm, gc), noise_of(model, ga, gm, gc) ** 2
+
+
+def span_posterior_mean_m(
+    model, position_from_base_m, mass_kg, command, readings_v, reading_command, *, step_m: float, half_width_m=None
+) -> np.ndarray:
+    """The span prior's Bayes estimate (posterior mean, m from the base) of each of ``readings_v`` (n, G), the
+    estimator whose error :func:`span_position_mse_m2` averages, applied to readings given rather than drawn.
+
+    The prior is built, as there, from the loaded settings ``(position_from_base_m, mass_kg, command)``; a reading
+    is weighed against the grid of its command (``reading_command``, (n,)). On readings that carry only the model's
+    noise its RMS error is the limit (within its scatter); on a run's real readings it says what the limit does not
+    count (a gauge's drift, a twin unlike the digit): the estimator that knows the twin's response exactly cannot
+    do better than it does there.
+    """
+    a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
+    m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
+    c = np.broadcast_to(np.asarray(command), a.shape).astype(int)
+    v = np.atleast_2d(np.asarray(readings_v, dtype=float))
+    rc = np.broadcast_to(np.asarray(reading_command), v.shape[:1]).astype(int)
+    if not step_m > 0:
+        raise ValueError(f"span_posterior_mean_m needs a positive grid step; got step_m = {step_m}")
+    out = np.full(v.shape[0], np.nan)
+    for value in np.unique(rc):
+        group = (c == value) & (m > 0)
+        if not np.any(group):
+            continue
+        ga, log_prior, mean, noise2 = _span_prior(model, a[group], m[group], value, step_m, half_width_m)
+        log_norm = log_prior - 0.5 * np.sum(np.log(noise2), axis=1)
+        which = np.flatnonzero(rc == value)
+        per = max(1, int(4e6 // mean.size))
+        for start in range(0, which.size, per):
+            idx = which[start : start + per]
+            z2 = (v[idx, None, :] - mean[None]) ** 2 / noise2[None]
+            log_post = log_norm - 0.5 * np.sum(z2, axis=2)
+            post = np.exp(log_post - log_post.max(axis=1, keepdims=True))
+            out[idx] = (post @ ga) / post.sum(axis=1)
+    return out
+
+
 def span_position_mse_m2(
     model,
     position_from_base_m,
@@ -457,15 +509,7 @@ def span_position_mse_m2(
     out = np.full(a.size, np.nan)
     for value in np.unique(c[m > 0]):
         group = np.flatnonzero((c == value) & (m > 0))
-        grid = _position_grid(a[group], step_m, half_width_m)
-        masses, counts = np.unique(m[group], return_counts=True)
-        ga = np.repeat(grid, masses.size)
-        gm = np.tile(masses, grid.size)
-        gc = np.full(ga.size, value)
-        # a uniform density in position: the lattice's points weigh alike
-        log_prior = np.log(np.tile(counts / counts.sum(), grid.size))
-        mean = model.gauges_v(ga, gm, gc)
-        noise2 = noise_of(model, ga, gm, gc) ** 2
+        ga, log_prior, mean, noise2 = _span_prior(model, a[group], m[group], value, step_m, half_width_m)
         mu = model.gauges_v(a[group], m[group], c[group])
         sd = np.sqrt(noise_of(model, a[group], m[group], c[group]) ** 2 + extra[group])
         per = max(1, min(chunk, int(4e6 // mean.size)))  # (draws, grid, gauges) floats held at once
