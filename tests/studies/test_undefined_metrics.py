@@ -139,5 +139,7 @@ def test_two_cables_servo_equivalent_is_a_magnitude(tmp_path):
     params = load_params(write_digit("four-sections-two-cables", tmp_path))
     with use_calibration(calibration_for(params), source="test"):
         eq = equivalent_servo_angle(params)
-    assert eq["taut"] == eq["settings"]
+    # the actuated protocol reads a pair at its own commands both ways (tactile.protocols.digit_commands): bent
+    # against it, one cable can go slack, so not every setting is counted; those counted are magnitudes
+    assert 0 < eq["taut"] <= eq["settings"]
     assert eq["min_deg"] > 0  # was -5.7..-2.5 deg: the pair's tension falls as the servo turns
