@@ -45,14 +45,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_plot_flag(p, "force against indentation (sweep), the stiffness map (scan) or the force over time (hold)")
 
 
-def _sim_options(backend: str, kind: str, seed: int | None, params) -> dict:
+def _sim_options(backend: str, kind: str, seed: int | None, params, calibration, orientation: str) -> dict:
     from flexdigit.palpation.palpation import twin_step_s
     from flexdigit.rig.base import parse_rig_url, seed_option
 
     url = parse_rig_url(backend)
     options = seed_option(backend, seed)  # --seed only when given: the URL's seed= is not overridden by a default
     if url.scheme.startswith("sim") and "dt_s" not in url.options:
-        options["dt_s"] = twin_step_s(kind, params)
+        orientation = url.options.get("orientation", orientation)
+        options["dt_s"] = twin_step_s(kind, params, calibration, orientation)
     return options
 
 
@@ -183,16 +184,19 @@ def _palpation_rig(args: argparse.Namespace, info, kind: str):
         )
     params = load_params(args.params) if args.params else RigParams()
     calibration = twin_calibration(params, args.calibration)  # the twin's (sim) and the gauge model's
-    options = _sim_options(args.backend, kind, args.seed, params)
-    if sim and (args.params or args.calibration):
-        options["calibration"] = calibration
+    mount = {}
     if sim and args.params and "orientation" not in _url_options(args.backend):
         from flexdigit.control.design20ms import digit_mount
 
         # a digit that buckles tip up hangs, as `run --params` mounts it (said in the output): tip up its twin
         # sagged off its straight command and the gauge model's statics did not converge (69 warnings, > 6 min)
         if digit_mount(params, calibration) == "hanging":
-            options["orientation"] = "hanging"
+            mount["orientation"] = "hanging"
+    options = (
+        _sim_options(args.backend, kind, args.seed, params, calibration, mount.get("orientation", "vertical")) | mount
+    )
+    if sim and (args.params or args.calibration):
+        options["calibration"] = calibration
     rig = open_rig(args.backend, params, **options)
     return sim, rig, calibration
 

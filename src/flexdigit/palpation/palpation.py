@@ -44,6 +44,7 @@ from flexdigit.rig.loop import run_loop
 from flexdigit.twin.calibration import packaged_calibration
 from flexdigit.twin.contact import Inclusion, Tissue, TissueContact
 from flexdigit.twin.digit_calibration import twin_calibration
+from flexdigit.twin.twin import Twin
 
 __all__ = [
     "MODELS",
@@ -85,6 +86,8 @@ __all__ = [
     "force_gains",
     "force_region",
     "twin_step_s",
+    "SWEEP_STEPS_S",
+    "STEP_AGREEMENT",
     "servo_lag_force",
     "SERVO_LAG_FORCE",
     "CONTACT_FRACTION",
@@ -998,16 +1001,59 @@ def palpate(
     return analyse(record, placed, protocol, model, drift=drift)
 
 
-def twin_step_s(kind: str, params=None) -> float:
+#: The twin's steps a sweep or scan on a digit tries, coarsest first (divisors of the loop's 20 ms period).
+SWEEP_STEPS_S = (0.005, 0.0025, 0.00125)
+#: How far (a share of one plateau mean's white noise, 20 readings) the resting gauges may read apart at a step and
+#: at half of it before :func:`twin_step_s` takes the finer one.
+STEP_AGREEMENT = 0.1
+
+
+def twin_step_s(kind: str, params=None, calibration=None, orientation: str = "vertical") -> float:
     """The twin's integration step (s) for a palpation on the sim backend: ``kind`` "force" (a hold: the loop acts
     between frames) 5 ms; "sweep" or "scan" (quasi-static plateaus) 10 ms on the thesis rig (the fit's chi^2 the same
-    at 2 ms), 5 ms on any other digit. At 10 ms the 2 x 0.10 m four-gauge example digit's barely taut cable chatters
-    at the first command past straight (a 33 Hz limit cycle, a third of the step rate: the cable slack at every
-    reading, 1.6-4 mV on the gauges read as a 3 mN contact where nothing touches); at 5 ms it rests, taut (0.22 N),
-    as its statics say. None of the other 39 test and drawn digits chatters there at 10 ms."""
+    at 2 ms); on any other digit the coarsest of :data:`SWEEP_STEPS_S` at which its twin rests as at half that step
+    (:func:`_resting_step`). At 10 ms the 2 x 0.10 m four-gauge example digit's barely taut cable chatters at the
+    first command past straight (a 33 Hz limit cycle: 1.6-4 mV on the gauges read as a 3 mN contact where nothing
+    touches); at 5 ms the 0.11 m one-section nitinol digit's chatters back at straight (12 mV, the sweep's tares
+    180 sd apart: chi2/dof 1975), at 2.5 ms it rests. ``calibration`` (default the digit's) and ``orientation``: the
+    twin's, as the sim backend builds it."""
     if kind == "force":
         return 0.005
-    return 0.01 if params is None or params.digit_only() == RigParams() else 0.005
+    if params is None or params.digit_only() == RigParams():
+        return 0.01
+    return _resting_step(params, calibration or twin_calibration(params), orientation)
+
+
+@lru_cache(maxsize=8)
+def _resting_step(params, calibration, orientation: str) -> float:
+    """The coarsest of :data:`SWEEP_STEPS_S` whose noise-free twin, stepped one command past straight and back, reads
+    the means of a plateau's last 20 readings (each end) within :data:`STEP_AGREEMENT` of a plateau's noise of those
+    at half the step: the twin's own step-size error, the one a palpation's plateaus would read as contact."""
+    quiet = (0.0,) * len(calibration.noise_white_v)
+    calibration_quiet = calibration.replace(noise_white_v=quiet, noise_drift_v_per_sqrt_s=quiet)
+    tolerance = STEP_AGREEMENT * np.asarray(calibration.noise_white_v, dtype=float) / math.sqrt(20)
+    for step in SWEEP_STEPS_S:
+        coarse, fine = (_rest_means(params, calibration_quiet, orientation, h) for h in (step, step / 2))
+        if np.all(np.abs(coarse - fine) <= tolerance):
+            return step
+    return SWEEP_STEPS_S[-1] / 2
+
+
+def _rest_means(params, calibration, orientation: str, step_s: float) -> np.ndarray:
+    """Means (V, (2, G)) of the last 20 of 20 ms clean readings of the twin at step ``step_s``, 2.5 s (the thesis's
+    settling) at one command past straight, then 2.5 s back at straight."""
+    twin = Twin(params, calibration, orientation=orientation, dt_s=step_s)
+    straight = int(params.actuator.equilibrium_command)
+    means = []
+    for command in (min(straight + 1, int(params.actuator.command_max)), straight):
+        twin.command(command)
+        twin.advance(2.1)
+        readings = []
+        for _ in range(20):
+            twin.advance(0.02)
+            readings.append(twin.clean_read()[0])
+        means.append(np.mean(readings, axis=0))
+    return np.array(means)
 
 
 #: The thesis rig's force loop (:func:`hold_force`): integral gain (commands / s / N) and approach rate
