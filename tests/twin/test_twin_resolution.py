@@ -141,6 +141,13 @@ def test_the_thesis_rig_with_a_finer_twin_keeps_its_packaged_calibration():
     assert twin_calibration(other) == twin_calibration(other.digit_only())
 
 
+def test_the_thesis_rig_is_named_whatever_its_twin():
+    """``RigParams.is_thesis_rig``: the thesis rig at any ``[twin]`` resolution is it, another digit is not."""
+    assert RigParams(twin=TwinResolution(cells_per_section=9)).is_thesis_rig()
+    assert RigParams(twin=TwinResolution(max_cell_length_m=0.01)).is_thesis_rig()
+    assert not RigParams.from_dict(DIGITS["two-sections"]).is_thesis_rig()
+
+
 def test_every_builder_of_the_chain_takes_the_table():
     """Scalar and batched twins, static readings, records, shape, the contact and gauge models, the design model
     and calibrate's fit: the table's 27 springs, not the default's 9, without being told."""

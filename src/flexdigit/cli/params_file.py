@@ -73,7 +73,7 @@ def _write_calibration(params, args: argparse.Namespace):
     from flexdigit.twin.calibration import save_calibration
     from flexdigit.twin.digit_calibration import twin_calibration
 
-    if params.digit_only() == type(params)():  # the thesis rig, whatever its [twin]
+    if params.is_thesis_rig():  # the thesis rig, whatever its [twin]
         how = "the packaged fit to the thesis's records (the thesis rig)"
     else:
         how = "the thesis's fit scaled to this digit by the physics (flexdigit.twin.digit_calibration)"

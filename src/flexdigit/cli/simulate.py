@@ -361,7 +361,6 @@ def _sweep(args, params, gauges, common: dict):
     """``simulate sweep``: the record and each gauge's line against the command (E 3.20-3.22 on the thesis rig)."""
     import numpy as np
 
-    from flexdigit.params import RigParams
     from flexdigit.twin import records as ex
 
     commands = None if args.commands is None else _commands(args.commands, params, "sweep")
@@ -370,7 +369,7 @@ def _sweep(args, params, gauges, common: dict):
     )
     cmd = res.column("command")
     lines, findings = [], {}
-    thesis = params.digit_only() == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
+    thesis = params.is_thesis_rig()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
     for g in gauges:
         slope, offset = np.polyfit(cmd, res.column(f"gauge{g}_v"), 1)
         findings[f"gauge{g}"] = {"slope_v_per_command": float(slope), "offset_v": float(offset)}

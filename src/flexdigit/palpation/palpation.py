@@ -1007,7 +1007,7 @@ def twin_step_s(kind: str, params=None) -> float:
     as its statics say. None of the other 39 test and drawn digits chatters there at 10 ms."""
     if kind == "force":
         return 0.005
-    return 0.01 if params is None or params.digit_only() == RigParams() else 0.005
+    return 0.01 if params is None or params.is_thesis_rig() else 0.005
 
 
 #: The thesis rig's force loop (:func:`hold_force`): integral gain (commands / s / N) and approach rate
