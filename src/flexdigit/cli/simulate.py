@@ -118,7 +118,7 @@ def _add_release(sub) -> None:
         default=None,
         help=f"seconds (default: {RELEASE_CYCLES:g} periods of the digit's first mode as mounted, at least "
         f"{RELEASE_MIN_S:g} s, the thesis's records, and long enough for its swing to lose "
-        f"{100 * RELEASE_DECAY:g} %, up to {RELEASE_MAX_S:g} s)",
+        f"{100 * RELEASE_DECAY:g} %%, up to {RELEASE_MAX_S:g} s)",
     )
     p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
     p.add_argument(
