@@ -821,6 +821,15 @@ class RigParams:
         """
         return self if self.twin.is_default else dataclasses.replace(self, twin=TwinResolution())
 
+    def is_thesis_rig(self) -> bool:
+        """Whether this describes the thesis rig, whatever its twin's resolution (``[twin]``): the one test for
+        "the thesis's own digit" (its packaged calibration, its printed tables), ``digit_only() == RigParams()``.
+
+        >>> RigParams().is_thesis_rig(), RigParams(twin=TwinResolution(cells_per_section=9)).is_thesis_rig()
+        (True, True)
+        """
+        return self.digit_only() == RigParams()
+
     def replace(self, **sections: Any) -> RigParams:
         """Return a copy with whole sections replaced, e.g. ``p.replace(sensors=Sensors(bridge="full"))``."""
         return dataclasses.replace(self, **sections)

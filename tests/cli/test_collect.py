@@ -112,6 +112,10 @@ def test_predict_is_the_library_call(dataset_file, tmp_path, capsys):
     error_mm = 1e3 * np.sqrt(np.mean((library.predicted - library.actual) ** 2))
     assert library.scores["rmse_mm"] == pytest.approx(error_mm, rel=SAME_RTOL)
     assert command["scores"]["rmse_mm"] == pytest.approx(error_mm, rel=SAME_RTOL)
+    # one note a prediction: the text zips them with the rows strictly, cut at --limit alike
+    assert len(library.notes) == len(library.rows)
+    assert main(["predict", str(model), str(dataset_file), "--limit", "3"]) == 0
+    assert capsys.readouterr().out.count("  sample ") == 3
 
 
 def test_predict_dataset_names_a_missing_input_column(dataset_file):

@@ -22,7 +22,7 @@ from digits import DIGITS
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams, TwinResolution, load_params, twin_cells
 from flexdigit.twin.digit import build_digit, default_cells
-from flexdigit.twin.resolution import CABLE_TIP_DEG, STATIC_RTOL, TIP_LOAD_ALPHA2, static_error
+from flexdigit.twin.resolution import CABLE_TIP_DEG, STATIC_RTOL, TIP_LOAD_ALPHA2, resolution_advice, static_error
 from flexdigit.twin.twin import Twin
 from oracles import digit_contact_bvp, thesis_digit_segments
 
@@ -139,6 +139,26 @@ def test_the_thesis_rig_with_a_finer_twin_keeps_its_packaged_calibration():
     assert twin_calibration(fine) == packaged_calibration()
     other = RigParams.from_dict(_with_twin(DIGITS["two-sections"], cells_per_section=[9, 9]))
     assert twin_calibration(other) == twin_calibration(other.digit_only())
+
+
+def test_the_thesis_rig_is_named_whatever_its_twin():
+    """``RigParams.is_thesis_rig``: the thesis rig at any ``[twin]`` resolution is it, another digit is not."""
+    assert RigParams(twin=TwinResolution(cells_per_section=9)).is_thesis_rig()
+    assert RigParams(twin=TwinResolution(max_cell_length_m=0.01)).is_thesis_rig()
+    assert not RigParams.from_dict(DIGITS["two-sections"]).is_thesis_rig()
+
+
+def test_the_advice_suggests_a_setting_only_where_the_twin_misses():
+    """``resolution_advice`` (what ``params FILE`` prints): the default thesis twin misses 0.1 % and docs/digits.md's
+    0.014 m meets it; a twin at that setting is acceptable and gets no suggestion."""
+    default = resolution_advice(RigParams())
+    assert not default.acceptable
+    assert default.max_cell_length_m == 0.014
+    assert default.suggested_error.worst <= STATIC_RTOL
+    fine = resolution_advice(RigParams(twin=TwinResolution(max_cell_length_m=0.014)))
+    assert fine.acceptable
+    assert fine.max_cell_length_m is None
+    assert fine.suggested_error is None
 
 
 def test_every_builder_of_the_chain_takes_the_table():

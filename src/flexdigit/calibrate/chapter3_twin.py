@@ -271,7 +271,7 @@ def chapter3_twin_study(params: RigParams | None = None, *, seed: int = 0, fast:
         releases=releases,
         sweep=sweep,
         sweep_fits=fits,
-        table_3_6=table_3_6(p, cal) if p.digit_only() == RigParams() else None,  # the thesis rig's measured deflections
+        table_3_6=table_3_6(p, cal) if p.is_thesis_rig() else None,  # the thesis rig's measured deflections
         tip_angle_43_rad=float(Twin(p, cal, command=43, orientation=mount).state()[0][-1]),
         checks=physics_checks(),
         calibration_residuals=residuals,

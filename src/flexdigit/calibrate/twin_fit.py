@@ -215,7 +215,7 @@ def calibrate(
     """
     params = params or RigParams()
     if initial is None:  # the nominal calibration is the thesis rig's; another digit starts from it scaled to it
-        initial = Calibration() if params.digit_only() == RigParams() else calibration_for(params.digit_only())
+        initial = Calibration() if params.is_thesis_rig() else calibration_for(params.digit_only())
     cal, fitted, (cost, success, message), notes = _fit_mechanics(
         params, initial, targets, cells_per_section, orientation
     )

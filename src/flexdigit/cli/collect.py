@@ -398,7 +398,9 @@ def _predict(args: argparse.Namespace) -> CommandResult:
     lines += [  # in the unit of the RMSE (mm, g), as the plot shows them
         f"  sample {int(dataset['sample'][r])}: predicted {scale * p:.5g} {shown_unit}, actual {scale * t:.5g} "
         f"{shown_unit}" + (f"  <- {note}" if note else "")
-        for r, p, t, note in zip(rows[: args.limit], pred[: args.limit], y[: args.limit], result.notes, strict=False)
+        for r, p, t, note in zip(
+            rows[: args.limit], pred[: args.limit], y[: args.limit], result.notes[: args.limit], strict=True
+        )
     ]
     if args.plot:
         title = f"{saved.target} predicted by {args.model} on {args.file}"

@@ -165,10 +165,10 @@ def _digit(args, design: str):
                 f"--calibration {args.calibration} is a digit's twin calibration: give its --params FILE too"
             )
         return None
-    from flexdigit.params import RigParams, load_params
+    from flexdigit.params import load_params
 
     params = load_params(args.params)
-    if params.digit_only() == RigParams() and args.calibration is None:
+    if params.is_thesis_rig() and args.calibration is None:
         return None  # the thesis rig: chapter 5's design, as without --params
     if design != "digital20":
         raise ParameterError(
@@ -201,7 +201,6 @@ def _digit_export_design(params, period: float, args):
     from flexdigit.control.c_export import RotationMap
     from flexdigit.control.design20ms import digit_design_20ms, digit_mount
     from flexdigit.errors import ParameterError
-    from flexdigit.params import RigParams
     from flexdigit.rig.base import open_rig
     from flexdigit.rig.rotation import calibrate_rotation, load_rotation_map
     from flexdigit.twin.digit_calibration import twin_calibration
@@ -224,6 +223,6 @@ def _digit_export_design(params, period: float, args):
     measured = measured if isinstance(measured, float) and math.isfinite(measured) and measured > 0 else None
     own = None if args.calibration is None else calibration
     d = digit_design_20ms(params, period_s=period, calibration=own, orientation=orientation, deg_per_command=measured)
-    runtime = d.runtime(params, name="digital20", dither=params.digit_only() != RigParams())  # as run --params runs it
+    runtime = d.runtime(params, name="digital20", dither=not params.is_thesis_rig())  # as run --params runs it
     rotation = None if args.no_rotation_map else RotationMap.from_estimator(estimator)
     return runtime, d.plant_d, rotation, 1.0, 180.0

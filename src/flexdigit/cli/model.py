@@ -73,9 +73,9 @@ def _digit_dynamics(params):
     release mode (:func:`flexdigit.twin.twin.release_dynamics`) for its E(s); else the params as they are."""
     import dataclasses
 
-    from flexdigit.params import DigitDynamics, RigParams
+    from flexdigit.params import DigitDynamics
 
-    if params.digit_only() == RigParams() or params.dynamics != DigitDynamics():
+    if params.is_thesis_rig() or params.dynamics != DigitDynamics():
         return params, False
     from flexdigit.errors import DesignError
     from flexdigit.twin.twin import release_dynamics

@@ -73,7 +73,7 @@ def _write_calibration(params, args: argparse.Namespace):
     from flexdigit.twin.calibration import save_calibration
     from flexdigit.twin.digit_calibration import twin_calibration
 
-    if params.digit_only() == type(params)():  # the thesis rig, whatever its [twin]
+    if params.is_thesis_rig():  # the thesis rig, whatever its [twin]
         how = "the packaged fit to the thesis's records (the thesis rig)"
     else:
         how = "the thesis's fit scaled to this digit by the physics (flexdigit.twin.digit_calibration)"
@@ -85,18 +85,16 @@ def _write_calibration(params, args: argparse.Namespace):
 
 
 def _resolution(params) -> tuple[dict, list[str]]:
-    """The twin's springs and its estimated static error (``twin.resolution.static_error``), and the ``[twin]`` setting
-    that meets 0.1 % when this one does not."""
-    import math
+    """The twin's springs and its estimated static error, and the ``[twin]`` setting that meets 0.1 % when this one
+    does not (``twin.resolution.resolution_advice``)."""
+    from flexdigit.twin.resolution import CABLE_TIP_DEG, TIP_LOAD_ALPHA2, resolution_advice
 
-    from flexdigit.params import MAX_TWIN_CELLS
-    from flexdigit.twin.resolution import CABLE_TIP_DEG, STATIC_RTOL, TIP_LOAD_ALPHA2, resolution_for, static_error
-
-    error = static_error(params)
+    advice = resolution_advice(params)
+    error, rtol = advice.error, advice.rtol
     data = {"cells_per_section": list(error.cells), "static_error_tip_load": error.tip_load}
     data["static_error_cable"] = error.cable
     source = "its [twin] table" if not params.twin.is_default else "the default: cells <= 27 mm"
-    if math.isnan(error.worst):  # a static solve that did not converge: no figure rather than a wrong one
+    if not advice.determined:  # a static solve that did not converge: no figure rather than a wrong one
         return data, [
             f"twin: {sum(error.cells)} springs, {list(error.cells)} a section ({source}); static error not "
             "determined (the twin's static solve under the tip load or the cable did not converge)"
@@ -107,15 +105,14 @@ def _resolution(params) -> tuple[dict, list[str]]:
         f"alpha^2 = {TIP_LOAD_ALPHA2:g}, {100 * error.cable:.3g} % under the cable turning the tip "
         f"{CABLE_TIP_DEG:g} deg"
     ]
-    if error.worst > STATIC_RTOL:
-        h, finer = resolution_for(params)
-        met = finer.worst <= STATIC_RTOL and sum(finer.cells) <= MAX_TWIN_CELLS
-        data["max_cell_length_m_for_0.1_percent"] = h if met else None
-        if not met:
-            lines.append(f"  no [twin] max_cell_length_m a twin takes meets {100 * STATIC_RTOL:g} % on this digit")
+    if not advice.acceptable:
+        h, finer = advice.max_cell_length_m, advice.suggested_error
+        data["max_cell_length_m_for_0.1_percent"] = h
+        if h is None:
+            lines.append(f"  no [twin] max_cell_length_m a twin takes meets {100 * rtol:g} % on this digit")
             return data, lines
         lines.append(
-            f"  for {100 * STATIC_RTOL:g} %: [twin] max_cell_length_m = {h:g} ({list(finer.cells)} a section: "
+            f"  for {100 * rtol:g} %: [twin] max_cell_length_m = {h:g} ({list(finer.cells)} a section: "
             f"{100 * finer.tip_load:.3g} % | {100 * finer.cable:.3g} %; each step costs more)"
         )
     return data, lines

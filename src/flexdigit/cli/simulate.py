@@ -35,6 +35,12 @@ COMMANDS = Flag(SERVO_COMMAND, many=True, ranges=True)
 RELEASE_CYCLES = 12.0
 #: ... and never shorter than the thesis's records.
 RELEASE_MIN_S = 8.0
+#: ... and long enough for the swing to lose this fraction of its amplitude, as the thesis rig's bare 8 s does:
+#: zeta is read from the decay, and a lightly damped bare strip (seven_sections_450mm: zeta 0.001 at 6.9 rad/s)
+#: loses 7 % over 12 periods, which left its zeta +-17 % (seeds 0-3; 25 s: within 6 %, 40 s: 2.3 %).
+RELEASE_DECAY = 0.18
+#: ... up to this long (a digit without damping never decays: identify reads what the record holds).
+RELEASE_MAX_S = 120.0
 #: Chapter 6's load positions from the tip (cm) on the thesis digit (6.4: 0 to 14 cm, and 24 cm near the clamp).
 CHAPTER6_POSITIONS_CM = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 24)
 
@@ -111,7 +117,8 @@ def _add_release(sub) -> None:
         type=Flag(DURATION),
         default=None,
         help=f"seconds (default: {RELEASE_CYCLES:g} periods of the digit's first mode as mounted, at least "
-        f"{RELEASE_MIN_S:g} s, the thesis's records)",
+        f"{RELEASE_MIN_S:g} s, the thesis's records, and long enough for its swing to lose "
+        f"{100 * RELEASE_DECAY:g} %%, up to {RELEASE_MAX_S:g} s)",
     )
     p.add_argument("--rate", type=Flag(RATE), default=1000.0, help="sample rate (Hz)")
     p.add_argument(
@@ -268,7 +275,8 @@ def _mount(args, params, calibration) -> str:
 
 def release_duration_s(params, calibration, *, housing: bool, orientation: str) -> float:
     """The default length of a release record (s): :data:`RELEASE_CYCLES` periods of the digit's first mode as
-    mounted (housed or bare, cable removed), at least :data:`RELEASE_MIN_S`.
+    mounted (housed or bare, cable removed), at least :data:`RELEASE_MIN_S`, and long enough for the mode to decay
+    by :data:`RELEASE_DECAY` (at most :data:`RELEASE_MAX_S` for that).
 
     Examples
     --------
@@ -280,10 +288,12 @@ def release_duration_s(params, calibration, *, housing: bool, orientation: str) 
 
     from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit
 
-    wn = float(cached_digit(params, calibration, housing, orientation, DEFAULT_CELLS_PER_SECTION).linear_modes()[0][0])
+    wns, zetas = cached_digit(params, calibration, housing, orientation, DEFAULT_CELLS_PER_SECTION).linear_modes()[:2]
+    wn, zeta = float(wns[0]), float(zetas[0])
     if not (math.isfinite(wn) and wn > 0):  # buckled as mounted: release_test refuses it in one line
         return RELEASE_MIN_S
-    return max(RELEASE_MIN_S, math.ceil(RELEASE_CYCLES * 2 * math.pi / wn))
+    decay = -math.log(1 - RELEASE_DECAY) / (zeta * wn) if zeta > 0 else math.inf  # E^-(zeta wn t) = 1 - decay
+    return max(RELEASE_MIN_S, math.ceil(RELEASE_CYCLES * 2 * math.pi / wn), math.ceil(min(RELEASE_MAX_S, decay)))
 
 
 def _release(args, params, gauges, common: dict):
@@ -361,7 +371,6 @@ def _sweep(args, params, gauges, common: dict):
     """``simulate sweep``: the record and each gauge's line against the command (E 3.20-3.22 on the thesis rig)."""
     import numpy as np
 
-    from flexdigit.params import RigParams
     from flexdigit.twin import records as ex
 
     commands = None if args.commands is None else _commands(args.commands, params, "sweep")
@@ -370,7 +379,7 @@ def _sweep(args, params, gauges, common: dict):
     )
     cmd = res.column("command")
     lines, findings = [], {}
-    thesis = params.digit_only() == RigParams()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
+    thesis = params.is_thesis_rig()  # the thesis's lines E 3.20-3.22 are its rig's, no other digit's
     for g in gauges:
         slope, offset = np.polyfit(cmd, res.column(f"gauge{g}_v"), 1)
         findings[f"gauge{g}"] = {"slope_v_per_command": float(slope), "offset_v": float(offset)}

@@ -387,7 +387,7 @@ def voltage_fits(params: RigParams | None = None, *, seed: int = 0, fast: bool =
     commands = sweep.column("command").astype(float)
     # the printed lines are the thesis rig's gauges: NaN beside another digit's
     nan = {"slope": math.nan, "offset": math.nan}
-    printed = thesis_value("conversion.v_sg_fit") if (params or RigParams()).digit_only() == RigParams() else []
+    printed = thesis_value("conversion.v_sg_fit") if (params or RigParams()).is_thesis_rig() else []
     fits, rows = [], []
     for k, name in enumerate(n for n in sweep.table.column_names if n.startswith("gauge")):
         r = fit_linear(commands, sweep.column(name))

@@ -510,7 +510,7 @@ class LiveSession:
             options["seed"] = rig.settings()["seed"] + 1
             # the thesis rig's map is the same at the twin's coarsest step, sooner; another digit's may not settle
             # at it (a 4 x 80 mm pair, horizontal, rings at 20 ms)
-            if params.digit_only() == RigParams():
+            if params.is_thesis_rig():
                 options["dt_s"] = 0.02
             # the map run --params makes (make_rotation_map's twin source), on a twin of this digit
             estimator = make_rotation_map(rig, "twin", twin_options={"calibration": self.calibration, **options})

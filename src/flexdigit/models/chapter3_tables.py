@@ -100,7 +100,7 @@ def table_3_4_gauge_columns(ours: dict) -> list[str]:
 
 def table_3_4_printed(column: str, params: RigParams, rows: int) -> list[float]:
     """Table 3.4's printed ``column`` on the thesis rig; NaN on another digit (its gauges and tip are elsewhere)."""
-    if params.digit_only() == RigParams():
+    if params.is_thesis_rig():
         return list(thesis_value(f"conversion.table_3_4_{column}"))
     return [math.nan] * rows
 

@@ -1019,7 +1019,7 @@ def twin_step_s(kind: str, params=None, calibration=None, orientation: str = "ve
     twin's, as the sim backend builds it."""
     if kind == "force":
         return 0.005
-    if params is None or params.digit_only() == RigParams():
+    if params is None or params.is_thesis_rig():
         return 0.01
     return _resting_step(params, calibration or twin_calibration(params), orientation)
 

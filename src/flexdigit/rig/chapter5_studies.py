@@ -119,7 +119,7 @@ def twenty_ms_study(params: RigParams | None = None, *, seed: int = 0, fast: boo
     """
     params = params or RigParams()
     mount = digit_mount(params)
-    if params.digit_only() == RigParams():
+    if params.is_thesis_rig():
         commands = (8, 14, 20, 26, 32) if fast else (8, 11, 14, 17, 20, 23, 26, 29, 32)
     else:  # the digit's own sweep, as `run --params` maps it (a pair straight at 127 swept both ways)
         commands = sweep_commands(params)[:: 2 if fast else 1]

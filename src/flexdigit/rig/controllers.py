@@ -101,7 +101,7 @@ def make_controller(
             weights=weights,
         )
         # another digit than the thesis rig's is held between quanta (dithered: RuntimeController's ``dither``)
-        runtime = design.runtime(params, name=name, dither=params.digit_only() != RigParams())
+        runtime = design.runtime(params, name=name, dither=not params.is_thesis_rig())
         return _Wrapped(runtime, estimator, 1.0, gain, eq)
     method = "forward_euler" if name.endswith("euler") else "tustin"
     measure = _gauge1_deflection_m(params, float(rest_v[0]))

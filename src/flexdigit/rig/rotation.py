@@ -107,7 +107,7 @@ def sweep_protocol(params=None, reference="twin") -> str:
     """
     params = params or RigParams()
     twin = isinstance(reference, str) and reference == "twin"
-    return "referenced" if twin and params.digit_only() != RigParams() else "plain"
+    return "referenced" if twin and not params.is_thesis_rig() else "plain"
 
 
 #: Draws of the Monte Carlo that propagates the reference's and the readings' uncertainty into the map.
@@ -438,7 +438,7 @@ def tare_at_rest(estimator: RotationEstimator, rig: Rig, *, window_s: float = 1.
 
     Returns the gauges (V) the map was tared on, the mean of the readings (:meth:`RotationEstimator.tare`).
     """
-    if rig.params.digit_only() == RigParams():
+    if rig.params.is_thesis_rig():
         rest = np.asarray([rig.read().gauges_v for _ in range(THESIS_TARE_READINGS)])
     else:
         rest = wait_until_settled(rig, window_s=window_s, timeout_s=settle_timeout_s(rig)).gauges_v[None, :]

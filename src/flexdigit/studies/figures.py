@@ -15,7 +15,6 @@ import numpy as np
 
 from flexdigit._io import atomic_path
 from flexdigit._plot import new_figure
-from flexdigit.params import RigParams
 
 __all__ = [
     "sobol_bars_figure",
@@ -172,7 +171,7 @@ def study_subject(spec) -> str:
     robot = getattr(spec.baseline, "robot", None)
     if robot is not None:
         return f"robot {robot.name}"
-    if spec.baseline.params.digit_only() == RigParams():
+    if spec.baseline.params.is_thesis_rig():
         return "the thesis rig"
     return f"the digit of {Path(spec.source).name}"
 

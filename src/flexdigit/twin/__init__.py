@@ -42,5 +42,7 @@ __getattr__, __all__ = lazy_exports(
         "StaticError": "flexdigit.twin.resolution",
         "static_error": "flexdigit.twin.resolution",
         "resolution_for": "flexdigit.twin.resolution",
+        "ResolutionAdvice": "flexdigit.twin.resolution",
+        "resolution_advice": "flexdigit.twin.resolution",
     },
 )

@@ -247,7 +247,7 @@ def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
     params = RigParams() if params is None else params
     if default_calibration_source() != "packaged" and _describes(default_calibration(), params):
         return default_calibration()
-    if params.digit_only() == RigParams():  # the thesis rig, whatever its twin's resolution ([twin])
+    if params.is_thesis_rig():  # the thesis rig, whatever its twin's resolution ([twin])
         return packaged_calibration()
     return _calibration_for_cached(params.digit_only())  # the laws read the digit, not its twin's resolution
 

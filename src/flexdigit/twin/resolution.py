@@ -36,7 +36,7 @@ import numpy as np
 
 from flexdigit._repr import fields_summary
 from flexdigit.errors import ConvergenceWarning
-from flexdigit.params import MAX_CELL_LENGTH_M, RigParams, TwinResolution, twin_cells
+from flexdigit.params import MAX_CELL_LENGTH_M, MAX_TWIN_CELLS, RigParams, TwinResolution, twin_cells
 from flexdigit.twin.digit import build_digit, section_cells
 from flexdigit.twin.digit_calibration import twin_calibration
 
@@ -48,6 +48,8 @@ __all__ = [
     "StaticError",
     "static_error",
     "resolution_for",
+    "ResolutionAdvice",
+    "resolution_advice",
 ]
 
 #: The tip load as ``alpha^2 = P L^2 / EI``: 1 bends a cantilever's tip through ~28 deg (large deflection).
@@ -148,3 +150,56 @@ def resolution_for(params: RigParams, rtol: float = STATIC_RTOL, calibration=Non
         if h <= 1e-3:
             break
     return h, error
+
+
+@dataclass(frozen=True)
+class ResolutionAdvice:
+    """Whether a description's twin meets the static tolerance, and the ``[twin]`` setting that would
+    (:func:`resolution_advice`).
+
+    Attributes
+    ----------
+    error : StaticError
+        The description's own twin's (its ``[twin]`` or the default).
+    rtol : float
+        The tolerance (relative to the tip's deflection).
+    max_cell_length_m : float or None
+        The ``[twin] max_cell_length_m`` whose twin meets ``rtol`` within :data:`~flexdigit.params.MAX_TWIN_CELLS`
+        springs; None when the own twin meets it, its error is not determined, or no setting a twin takes meets it.
+    suggested_error : StaticError or None
+        The twin of that setting's (the finest tried when none meets); None when none was looked for.
+    """
+
+    error: StaticError
+    rtol: float
+    max_cell_length_m: float | None
+    suggested_error: StaticError | None
+
+    __repr__ = fields_summary
+
+    @property
+    def determined(self) -> bool:
+        """Whether both static solves converged (else no figure rather than a wrong one)."""
+        return not math.isnan(self.error.worst)
+
+    @property
+    def acceptable(self) -> bool:
+        """Whether the description's own twin is within ``rtol`` under both load cases."""
+        return self.error.worst <= self.rtol
+
+
+def resolution_advice(params: RigParams, rtol: float = STATIC_RTOL, calibration=None) -> ResolutionAdvice:
+    """The static error of ``params``'s own twin (:func:`static_error`) and, when it misses ``rtol``, the
+    ``[twin] max_cell_length_m`` that meets it (:func:`resolution_for`) if a twin of at most
+    :data:`~flexdigit.params.MAX_TWIN_CELLS` springs does: what ``flexdigit params FILE`` reports.
+
+    >>> a = resolution_advice(RigParams())
+    >>> a.acceptable, a.max_cell_length_m, a.suggested_error.cells
+    (False, 0.014, (7, 7, 7))
+    """
+    error = static_error(params, calibration)
+    if not error.worst > rtol:  # met, or not determined (NaN): nothing to suggest
+        return ResolutionAdvice(error, rtol, None, None)
+    h, finer = resolution_for(params, rtol, calibration)
+    met = finer.worst <= rtol and sum(finer.cells) <= MAX_TWIN_CELLS
+    return ResolutionAdvice(error, rtol, h if met else None, finer)
