@@ -20,7 +20,7 @@ from flexdigit.identify.chapter3_identification import RELEASE_SETTLING_TIMES, t
 from flexdigit.identify.response import settling_formula_bias
 from flexdigit.models.second_order import settling_time_from_wn
 from flexdigit.params import RigParams, load_params
-from flexdigit.report import ch3_identify
+from flexdigit.report import ch3_identify, ch3_twin
 from flexdigit.report.ch8_studies import REPORT_PARAMETERS
 from flexdigit.report.chapter import ReportContext
 from flexdigit.report.results import thesis_comparisons
@@ -103,6 +103,19 @@ def test_the_identification_chapter_of_a_coarse_digit_says_not_applicable(tmp_pa
     assert isinstance(ours["identify.digit_tip.lsq.wn_rad_s"], float)
     assert isinstance(ours["identify.servo.lsq.wn_rad_s"], float)
     assert "(not identified)" in chapter.paragraphs[-1]
+
+
+@pytest.mark.slow
+def test_the_twin_chapter_of_a_coarse_digit_says_not_applicable(tmp_path):
+    params = load_params(write_digit("thesis", tmp_path, **COARSE_ADC))
+    with use_calibration(calibration_for(params)), thesis_comparisons(False):
+        chapter = ch3_twin.build(ReportContext(out_dir=tmp_path, params=params, fast=True))
+    ours = {e.key: e.ours for e in chapter.entries}
+    for housing in ("with_housing", "without_housing"):
+        for figure in ("wn_rad_s", "zeta"):
+            key = f"twin.release_{housing}.{figure}"
+            assert str(ours[key]).startswith("not applicable: no release record could be identified"), key
+    assert "twin_release_tests" in [f.name for f in chapter.figures]  # the records are still drawn
 
 
 def test_the_studies_ranges_are_scaled_to_a_peek_strip(tmp_path):
