@@ -221,7 +221,7 @@ class TwinIdentification:
     average; ``fits[(model, method)]`` for model ``"digit"``/``"servo"`` and method ``"thesis"``/``"lsq"`` (the
     servo records filtered by the SVD filter, as 3.2.4 did); ``tip_fits[method]`` the same release read at the tip.
     A record ``identify`` refuses (a 10-bit ADC's release spanning a few of its steps) has, in place of its fit,
-    identify's one-line reason (a ``str``) and NaN in ``table``.
+    identify's one-line reason (a ``str``) and NaN in ``table``; one its least-squares fit refuses, for both methods.
     """
 
     origin: str
@@ -243,6 +243,20 @@ def _identified(series: TimeSeries, kind: str, method: str, **options):
         return identify(series, kind, method=method, **options)
     except DataFileError as exc:
         return str(exc)
+
+
+def _unidentifiable_for_both(fits: dict) -> dict:
+    """``fits`` with the thesis method's of a record the least-squares fit refuses replaced by its reason.
+
+    identify refuses a record for what the record is (a release spanning a few ADC steps, one that is not a
+    second-order response); the thesis method reads one extremum and one band crossing of it whatever it is (17
+    rad/s off a 10-bit gauge whose mode is at 7.3): no figure to stand behind either.
+    """
+    out = dict(fits)
+    for model in {model for model, _ in fits}:
+        if isinstance(fits[(model, "lsq")], str):
+            out[(model, "thesis")] = fits[(model, "lsq")]
+    return out
 
 
 def _intervals(r) -> tuple[float, float, float, float]:
@@ -295,6 +309,7 @@ def twin_identification(params: RigParams | None = None, *, seed: int = 0, fast:
         ("servo", m): _identified(step, "step", m, smoothing="svd") for m in ("thesis", "lsq")
     }
     tip_fits = {m: _identified(tip, "release", m) for m in ("thesis", "lsq")}
+    fits = _unidentifiable_for_both(fits)
     printed = {
         "digit": (
             thesis_value("digit.release_tests_with_housing.wn_avg_rad_s"),
