@@ -270,7 +270,13 @@ def _model_entries(twin, e: list[Entry]) -> None:
         wn_p, zeta_p, corr_p = printed[model]
         section = SECTION_DIGIT if model == "digit" else SECTION_SERVO
         if isinstance(r, str):  # identify refused the record: its reason, no figure
-            e.extend(_refused(f"identify.{model}.{method}", section, r, origin, method))
+            corr2 = (
+                f"identify.{model}.thesis.validation_corr2"
+                if method == "thesis"
+                else f"identify.{model}.validation_corr2"
+            )
+            keys = [f"identify.{model}.{method}.wn_rad_s", f"identify.{model}.{method}.zeta", corr2]
+            e.extend(_refused(keys, section, r, origin, method))
             continue
         why = (
             "The thesis method's wn = 4/(zeta Ts) carries the bias of identify.wn_settling_formula.* plus the noise "
@@ -321,15 +327,10 @@ def _model_entries(twin, e: list[Entry]) -> None:
         _corr2_entry(model, method, section, r, corr_p, e)
 
 
-def _refused(prefix: str, section: str, reason: str, origin: str, method: str) -> list[Entry]:
-    """The entries of a record ``identify`` refuses: "not applicable" and its reason, for wn, zeta and corr2."""
-    said, note = f"not applicable: {reason}", f"Identified from {origin} by the {method} method."
-    keys = ["wn_rad_s", "zeta"]
-    if prefix.startswith("identify.digit_tip."):
-        return [new(f"{prefix}.{k}", section, said, "", note) for k in keys]
-    model = prefix.split(".")[1]
-    corr2 = f"identify.{model}.thesis.validation_corr2" if method == "thesis" else f"identify.{model}.validation_corr2"
-    return [new(f"{prefix}.{k}", section, said, "", note) for k in keys] + [new(corr2, section, said, "", note)]
+def _refused(keys: list[str], section: str, reason: str, origin: str, method: str) -> list[Entry]:
+    """The entries ``keys`` of a record ``identify`` refuses: "not applicable" and its reason, no figure."""
+    note = f"Identified from {origin} by the {method} method."
+    return [new(key, section, f"not applicable: {reason}", "", note) for key in keys]
 
 
 def _corr2_entry(model: str, method: str, section: str, r, corr_p: float, e: list[Entry]) -> None:
@@ -367,7 +368,8 @@ def _tip_entries(twin, e: list[Entry], thesis_rig: bool = True) -> None:
     zeta_p = thesis_value("digit.release_tests_with_housing.zeta_avg")
     for method, r in twin.tip_fits.items():
         if isinstance(r, str):
-            e.extend(_refused(f"identify.digit_tip.{method}", SECTION_DIGIT, r, twin.origin, method))
+            keys = [f"identify.digit_tip.{method}.wn_rad_s", f"identify.digit_tip.{method}.zeta"]
+            e.extend(_refused(keys, SECTION_DIGIT, r, twin.origin, method))
             continue
         for par, value in (("wn_rad_s", r.wn_rad_s), ("zeta", r.zeta)):
             e.append(
