@@ -24,6 +24,7 @@ import numpy as np
 from flexdigit._repr import fields_summary
 from flexdigit._result_table import ResultTable
 from flexdigit.calibrate.targets import CalibrationTargets, release_figures
+from flexdigit.errors import DataFileError
 from flexdigit.identify.fit import second_order_response
 from flexdigit.identify.timeseries import series_from_table
 from flexdigit.models.beam import elastica_tip_deflection
@@ -56,11 +57,14 @@ class ReleaseFit:
     """A simulated release test fitted like a measurement: ``figures`` is
     :func:`~flexdigit.calibrate.targets.release_figures` of its three gauges (``wn_rad_s`` and ``zeta``, the medians
     over the gauges identified; ``fits``; ``skipped``), and ``corr2_vs_thesis_model`` the corr2 of gauge 2 with the
-    thesis's second-order model (its wn and zeta) on gauge 2's fitted offset, amplitude and release instant."""
+    thesis's second-order model (its wn and zeta) on gauge 2's fitted offset, amplitude and release instant.
+    ``refused``: where no gauge's record can be identified (a 10-bit ADC's release spanning a few of its steps), the
+    reason, and wn, zeta and corr2 NaN; else None."""
 
     record: object
     figures: dict
     corr2_vs_thesis_model: float
+    refused: str | None = None
 
     @property
     def wn_rad_s(self) -> float:
@@ -71,8 +75,9 @@ class ReleaseFit:
         return float(self.figures["zeta"])
 
     def gauge_fit(self, channel: str = "gauge2"):
-        """The identification of ``channel``, or the first gauge identified."""
-        return next((f for f in self.figures["fits"] if f.channel == channel), self.figures["fits"][0])
+        """The identification of ``channel``, or the first gauge identified (None where none is)."""
+        fits = self.figures["fits"]
+        return next((f for f in fits if f.channel == channel), fits[0] if fits else None)
 
     __repr__ = fields_summary
 
@@ -88,7 +93,10 @@ def release_fit(
     )
     t = res.column("time_s")
     gauges = [name.removesuffix("_v") for name in res.table.column_names if name.startswith("gauge")]  # G of them
-    figures = release_figures([series_from_table(res, gauge) for gauge in gauges])
+    try:
+        figures = release_figures([series_from_table(res, gauge) for gauge in gauges])
+    except DataFileError as exc:  # no gauge identifiable: the reason, never a figure fitted to the ADC's steps
+        return ReleaseFit(res, {"wn_rad_s": math.nan, "zeta": math.nan, "fits": [], "skipped": []}, math.nan, str(exc))
     wn_t = thesis_value(f"digit.release_tests_{key}.wn_avg_rad_s")
     z_t = thesis_value(f"digit.release_tests_{key}.zeta_avg")
     gauge2 = next((f for f in figures["fits"] if f.channel == "gauge2"), figures["fits"][0])

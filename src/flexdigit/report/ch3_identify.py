@@ -89,14 +89,19 @@ def _summary(entries: list[Entry], thesis_rig: bool = True) -> str:
     def pct(key: str) -> str:
         return f"{100 * v['identify.' + key]:.1f} %"
 
-    servo_off = v["identify.servo.thesis.wn_rad_s"] / v["identify.servo.lsq.wn_rad_s"] - 1
+    def num(key: str, digits: int) -> str:  # a refused record's entry is its "not applicable" text
+        value = v[f"identify.{key}"]
+        return "(not identified)" if isinstance(value, str) else f"{value:.{digits}f}"
+
+    servo = (v["identify.servo.thesis.wn_rad_s"], v["identify.servo.lsq.wn_rad_s"])
+    servo_off = math.nan if any(isinstance(x, str) for x in servo) else servo[0] / servo[1] - 1
     return (
         "Findings. From the twin's release test (gauge 1) the least-squares fit gives wn = "
-        f"{v['identify.digit.lsq.wn_rad_s']:.3f} rad/s, zeta = {v['identify.digit.lsq.zeta']:.4f}, and from its "
-        f"servo steps wn = {v['identify.servo.lsq.wn_rad_s']:.3f} rad/s, zeta = {v['identify.servo.lsq.zeta']:.4f}"
+        f"{num('digit.lsq.wn_rad_s', 3)} rad/s, zeta = {num('digit.lsq.zeta', 4)}, and from its "
+        f"servo steps wn = {num('servo.lsq.wn_rad_s', 3)} rad/s, zeta = {num('servo.lsq.zeta', 4)}"
         + (" (thesis: 13.0995, 0.06791; 20.53, 0.5629). " if thesis_rig else ". ")
         + "The thesis method on the same records gives "
-        f"{v['identify.digit.thesis.wn_rad_s']:.2f} and {v['identify.servo.thesis.wn_rad_s']:.2f} rad/s: its "
+        f"{num('digit.thesis.wn_rad_s', 2)} and {num('servo.thesis.wn_rad_s', 2)} rad/s: its "
         f"wn = 4/(zeta Ts) is {pct('wn_settling_formula.bias_digit')} high at the "
         + ("digit's" if thesis_rig else "thesis rig's digit")
         + " damping and "
@@ -106,7 +111,7 @@ def _summary(entries: list[Entry], thesis_rig: bool = True) -> str:
         f"{pct('noisy_step.lsq.wn_max_abs_rel_error')} (step wn), against "
         f"{pct('noisy_release.thesis.wn_max_abs_rel_error')} and {pct('noisy_step.thesis.wn_max_abs_rel_error')} "
         "for the thesis method's wn. corr2, the thesis's validation figure, is "
-        f"{v['identify.servo.thesis.validation_corr2']:.4f} for the thesis method's servo model although its wn is "
+        f"{num('servo.thesis.validation_corr2', 4)} for the thesis method's servo model although its wn is "
         f"{100 * servo_off:.0f} % off (figure 3.12 analogue): it hardly sees a wrong wn; the NRMSE fit does."
     )
 
@@ -264,12 +269,25 @@ def _model_entries(twin, e: list[Entry]) -> None:
     for (model, method), r in fits.items():
         wn_p, zeta_p, corr_p = printed[model]
         section = SECTION_DIGIT if model == "digit" else SECTION_SERVO
+        if isinstance(r, str):  # identify refused the record: its reason, no figure
+            corr2 = (
+                f"identify.{model}.thesis.validation_corr2"
+                if method == "thesis"
+                else f"identify.{model}.validation_corr2"
+            )
+            keys = [f"identify.{model}.{method}.wn_rad_s", f"identify.{model}.{method}.zeta", corr2]
+            e.extend(_refused(keys, section, r, origin, method))
+            continue
         why = (
             "The thesis method's wn = 4/(zeta Ts) carries the bias of identify.wn_settling_formula.* plus the noise "
             "in the settling time read off a filtered record."
         )
         why_zeta = "%OS is read off one extremum of a filtered noisy record, so it moves with the noise and the filter."
-        if model == "digit":
+        if (
+            model == "digit"
+            and not isinstance(tip_fits["thesis"], str)
+            and not isinstance(fits[(model, "thesis")], str)
+        ):
             tz = tip_fits["thesis"].zeta
             why += " On gauge 1 the settling time is also short because the zeta it starts from is low (next entry)."
             why_zeta = (
@@ -309,6 +327,12 @@ def _model_entries(twin, e: list[Entry]) -> None:
         _corr2_entry(model, method, section, r, corr_p, e)
 
 
+def _refused(keys: list[str], section: str, reason: str, origin: str, method: str) -> list[Entry]:
+    """The entries ``keys`` of a record ``identify`` refuses: "not applicable" and its reason, no figure."""
+    note = f"Identified from {origin} by the {method} method."
+    return [new(key, section, f"not applicable: {reason}", "", note) for key in keys]
+
+
 def _corr2_entry(model: str, method: str, section: str, r, corr_p: float, e: list[Entry]) -> None:
     """corr2 of the identified model against its record: new for the thesis method, against print for lsq."""
     if method == "thesis":
@@ -343,6 +367,10 @@ def _tip_entries(twin, e: list[Entry], thesis_rig: bool = True) -> None:
     wn_p = thesis_value("digit.release_tests_with_housing.wn_avg_rad_s")
     zeta_p = thesis_value("digit.release_tests_with_housing.zeta_avg")
     for method, r in twin.tip_fits.items():
+        if isinstance(r, str):
+            keys = [f"identify.digit_tip.{method}.wn_rad_s", f"identify.digit_tip.{method}.zeta"]
+            e.extend(_refused(keys, SECTION_DIGIT, r, twin.origin, method))
+            continue
         for par, value in (("wn_rad_s", r.wn_rad_s), ("zeta", r.zeta)):
             e.append(
                 new(
@@ -369,6 +397,8 @@ def _model_figures(ctx: ReportContext, twin, chapter: Chapter) -> None:
         ax.plot(rec.t_s, rec.y, color="0.6", lw=0.6, label="twin record")
         for method, style in (("thesis", "--"), ("lsq", "-")):
             r = fits[(model, method)]
+            if isinstance(r, str):  # refused: the record alone
+                continue
             ax.plot(
                 rec.t_s,
                 r.predict(rec.t_s),

@@ -145,6 +145,11 @@ def _release_entries(study, e: list, thesis_rig: bool = True) -> None:
     )
     for housing, table, key in ((False, "3.1", "without_housing"), (True, "3.2", "with_housing")):
         fit = study.releases[housing]
+        if fit.refused is not None:  # no gauge identifiable: the reason, never a figure fitted to the ADC's steps
+            said = f"not applicable: {fit.refused}"
+            note = f"identify's lsq fit to a simulated release test (20 mm tip deflection), table {table}'s figure."
+            e += [new(f"twin.release_{key}.{k}", "3.1.2", said, "", note) for k in ("wn_rad_s", "zeta")]
+            continue
         beside = f", table {table} average" if thesis_rig else f"; table {table} is the thesis rig's"
         note = (
             f"Median over the gauges of identify's lsq fit (as flexdigit identify release and flexdigit calibrate) "
@@ -321,10 +326,11 @@ def _release_figure(ctx: ReportContext, release):
         res = release[housing].record
         t = res.column("time_s")
         gauge2 = release[housing].gauge_fit("gauge2")  # gauge 2, or the digit's first gauge identified
-        y = res.column(f"{gauge2.channel}_v")
-        name = gauge2.channel.replace("gauge", "gauge ")
+        channel = gauge2.channel if gauge2 is not None else "gauge1"  # none identified: the record alone
+        y = res.column(f"{channel}_v")
+        name = channel.replace("gauge", "gauge ")
         ax.plot(t, y, lw=0.8, label=f"twin ({name}, through the sensor chain)")
-        if ctx.thesis_rig:
+        if ctx.thesis_rig and gauge2 is not None:
             wn = thesis_value(f"digit.release_tests_{key}.wn_avg_rad_s")
             z = thesis_value(f"digit.release_tests_{key}.zeta_avg")
             model = second_order_response(t, "release", wn, z, gauge2.offset, gauge2.amplitude, gauge2.t0_s)

@@ -67,11 +67,13 @@ def rerun_hint(fast: bool, n: int) -> str:
 
 def _sensitivity(ctx: ReportContext, chapter: Chapter) -> None:
     # on a digit other than the thesis rig: the shipped tolerances about its description and its calibration (the
-    # report's, default_calibration() inside reproduce); relative and delta ranges are then about its values
+    # report's, default_calibration() inside reproduce); relative and delta ranges are then about its values, and
+    # absolute ones scaled to them
     spec = load_spec(
         "thesis-tolerances",
         baseline=None if ctx.thesis_rig else ParameterSet(ctx.params, default_calibration()),
         fields=tuple({name.split("[")[0] for name in REPORT_PARAMETERS}),
+        scaled=not ctx.thesis_rig,  # the steel's datasheet range as a spread about this digit's own modulus
     )
     spec = dataclasses.replace(spec, parameters=tuple(p for p in spec.parameters if p.name in REPORT_PARAMETERS))
     n = 16 if ctx.fast else 128

@@ -317,7 +317,11 @@ def _replaced(section, changes: tuple):
 
 # --------------------------------------------------------------------------------------------------- reading
 def load_spec(
-    name_or_path: str | Path, *, baseline: ParameterSet | None = None, fields: tuple[str, ...] | None = None
+    name_or_path: str | Path,
+    *,
+    baseline: ParameterSet | None = None,
+    fields: tuple[str, ...] | None = None,
+    scaled: bool = False,
 ) -> StudySpec:
     """Read a study spec: a file, or the name of a shipped one (:data:`SHIPPED_SPECS`).
 
@@ -325,7 +329,10 @@ def load_spec(
     the spec's ``[study] params`` / ``calibration`` (refused if it names them too) or the thesis rig; its
     relative and ``delta`` ranges are then about that rig's values. ``fields``: keep only these
     ``[parameters.SECTION.FIELD]`` tables (``"section.field"``), e.g. the ones that apply to such a rig (the thesis
-    rig's three gauge positions do not to a digit of one gauge).
+    rig's three gauge positions do not to a digit of one gauge). ``scaled`` (with ``baseline``): the spec's absolute
+    values of a real field (``low``, ``high``, ``mode``, ``mean``, ``sd``, ``median``), set about the spec's own rig,
+    are multiplied by the baseline's value over that rig's: the same relative spread about the baseline (the thesis
+    steel's 195-215 GPa becomes +-4.9 % about a PEEK strip's modulus, not a steel range it cannot take).
 
     Raises
     ------
@@ -340,11 +347,12 @@ def load_spec(
         from importlib import resources
 
         ref = resources.files("flexdigit.studies").joinpath("specs").joinpath(f"{text_name}.toml")
-        return spec_from_toml(ref.read_text(), source=f"{text_name}.toml", baseline=baseline, fields=fields)
+        text, source = ref.read_text(), f"{text_name}.toml"
+        return spec_from_toml(text, source=source, baseline=baseline, fields=fields, scaled=scaled)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory, not a study spec")
     text = read_text(path, "a study spec TOML")  # binary garbage: named, not a codec error
-    return spec_from_toml(text, source=str(path), base_dir=path.parent, baseline=baseline, fields=fields)
+    return spec_from_toml(text, source=str(path), base_dir=path.parent, baseline=baseline, fields=fields, scaled=scaled)
 
 
 def shipped_specs() -> dict[str, str]:
@@ -367,9 +375,11 @@ def spec_from_toml(
     base_dir: Path | None = None,
     baseline: ParameterSet | None = None,
     fields: tuple[str, ...] | None = None,
+    scaled: bool = False,
 ) -> StudySpec:
     """Parse a study spec from TOML text (see the module docstring); errors name ``source`` and the key.
-    ``baseline``: the rig to take the tolerances about; ``fields``: the parameter tables kept (:func:`load_spec`)."""
+    ``baseline``: the rig to take the tolerances about; ``fields``: the parameter tables kept; ``scaled``: its
+    absolute values scaled to the baseline (:func:`load_spec`)."""
     try:
         doc = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, RecursionError) as exc:  # RecursionError: nested past the parser
@@ -410,6 +420,8 @@ def spec_from_toml(
         raise ParameterError(
             f"{source}: [study] {named} names the baseline rig, and another was given: give the baseline one way"
         )
+    elif scaled and isinstance(doc.get("parameters"), dict):
+        doc["parameters"] = _scaled_to(doc["parameters"], _baseline(study, source, base_dir), baseline)
     user_metrics = _user_metrics(doc.get("metrics", {}), baseline, source)
     if metrics:
         known_metrics = [*METRICS, *(u.name for u in user_metrics)]
@@ -476,6 +488,34 @@ def _table(value, where: str, source: str) -> dict:
     if not isinstance(value, dict):
         raise ParameterError(f"{source}: {where} must be a table of keys. Got {value!r} instead.")
     return value
+
+
+#: The absolute values of a distribution that :func:`_scaled_to` carries to another rig (``delta`` stays: a
+#: manufacturing tolerance is a length, whatever the part's size).
+SCALED_KEYS = ("low", "high", "mode", "mean", "sd", "median")
+
+
+def _scaled_to(table: dict, own: ParameterSet, other: ParameterSet) -> dict:
+    """``[parameters]`` with each real field's absolute values times ``other``'s value over ``own``'s (the rig the
+    spec was written about); the rest as read, for :func:`read_parameters` to check."""
+    out = {}
+    for section, entries in table.items():
+        if section not in SECTIONS or not isinstance(entries, dict):
+            out[section] = entries
+            continue
+        mine, theirs = _fields(section, own), _fields(section, other)
+        out[section] = dict(entries)
+        for name, entry in entries.items():
+            a, b = mine.get(name), theirs.get(name)
+            if not (isinstance(entry, dict) and isinstance(a, float) and isinstance(b, float) and a != 0.0):
+                continue
+            ratio = b / a
+            scaled = {k: v * ratio if k in SCALED_KEYS and isinstance(v, float) else v for k, v in entry.items()}
+            if ratio != 1.0 and any(k in SCALED_KEYS for k in entry):
+                note = f"scaled x{ratio:.4g} to this rig's {b:.6g}"
+                scaled["source"] = f"{entry['source']} ({note})" if isinstance(entry.get("source"), str) else note
+            out[section][name] = scaled
+    return out
 
 
 def _baseline(study: dict, source: str, base_dir: Path | None) -> ParameterSet:
