@@ -89,16 +89,10 @@ ALL = {**DIGITS, **SEEDED}
 #: settles on one seed's noise by luck does not pass (seed 2 found one-section at 2.1 s and the 0.5 m digit at 1.6 s).
 RUN_SEEDS = ("0", "2")
 #: Runs known to miss the settling, with why; each must still miss it (so that a fix removes it from here). The
-#: one-section digit reads its rotation through one quarter-bridge gauge (0.41 deg of noise a reading, drifting).
-#: Its map was off by up to 0.3 deg at 30 deg (the gauge's drift during the sweep, and a 5-reading tare); referenced
-#: to straight and tared on a window at rest it holds 30 deg within 0.01 deg statically (seeds 0-2), but the loop's
-#: jitter on that one noisy gauge (the true rotation's sd 0.18 deg after 1 s: the dithered command, one quantum
-#: 1.67 deg, toggling 25-27) still leaves the 2 % band (0.6 deg) late in some runs: seed 2 at 2.05 s (30.65 deg),
-#: seed 5 at 1.94 s, of seeds 0-7 (before: seeds 2, 3, 4 at 1.08-1.13 s). The loop's noise, not the map's error
-#: (docs/digits.md, "Not yet"). Its design's check of the dithered step through the board's latch (noise-free, on its
-#: model) flags digits that settle here (two-sections 0.52 deg off after 1 s, short 0.47) more than it (0.42), so
-#: it chooses nothing; a Pade of the latch in its model settles seeds 0-15 but moves with any change of the design.
-KNOWN_MISSES = {("one-section", 30.0, "2"): "the loop's jitter on one noisy gauge: 30.65 deg at 2.05 s"}
+#: one-section digit's seed 2 was one (30.65 deg at 2.05 s): its dithered command (one quantum, 1.67 deg) toggling
+#: through the serial board, which reads one frame in 25 twice, kicked its tip out of the band; the dither now counts
+#: the board's pulses (``Rig.command_pulses``, tests/rig/test_board_pulses.py) and it settles in 0.22 s.
+KNOWN_MISSES: dict[tuple[str, float, str], str] = {}
 
 
 def _write(name: str, directory) -> object:

@@ -159,8 +159,8 @@ def test_a_coarse_digit_whose_search_finds_none_runs_the_quietest_design_in_time
 def test_a_coarse_digit_driven_by_the_boards_own_timer_holds_the_band(capsys):
     """The same digit's step with the servo pulsed by the board's own timer (the reference firmware's drive): the
     dithered command's toggles reach the servo one per frame, and the tip settles within 2 % in 1 s (0.58 s, seed
-    0). On the serial board, which reads one frame in 25 twice, a doubled upper command kicks the tip 0.79 deg, past
-    the band (docs/digits.md)."""
+    0). On the serial board, which reads one frame in 25 twice, the dither counts the board's pulses
+    (tests/rig/test_board_pulses.py)."""
     code = main(
         ["run", "--backend", "sim?servo_drive=timer", "--params", str(BIG_PULLEY), "--setpoint-deg", "30", "--seed",
          "0", "--json"]

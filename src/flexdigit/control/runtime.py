@@ -193,8 +193,14 @@ class RuntimeController:
         self._carry = 0.0
 
     # -- the update --------------------------------------------------------------------------------------------
-    def update(self, r: float, y: float) -> int | float:
-        """One sample: setpoint ``r`` and measurement ``y`` in, the command (0..254) out."""
+    def update(self, r: float, y: float, pulses: int = 1) -> int | float:
+        """One sample: setpoint ``r`` and measurement ``y`` in, the command (0..254) out.
+
+        ``pulses``: how many of the servo's pulses will carry this command (:meth:`flexdigit.rig.base.Rig
+        .command_pulses`; 2 for the serial board's frame read twice). The dither then counts the rounding error
+        once per pulse, so the pulses, not the frames, average the unrounded command: the command is rounded from
+        ``u + carry / pulses`` and carries ``pulses x`` its rounding error on.
+        """
         v, z, n = self._v, self._z, self.nstates
         if self.ninputs == 1:
             v[n] = r - y
@@ -214,9 +220,10 @@ class RuntimeController:
             if self.hysteresis and abs(u - last) < 0.5 + self.hysteresis and lo <= last <= hi:
                 u = float(last)
             elif self.dither:
-                wanted = u + self._carry
+                wanted = u + self._carry / pulses
                 u = min(max(float(round(wanted)), lo), hi)
-                self._carry = min(max(wanted - u, -0.5), 0.5)  # a saturated command carries no more than a half
+                # a saturated command carries no more than half a command a pulse
+                self._carry = pulses * min(max(wanted - u, -0.5), 0.5)
             else:
                 u = float(round(u))
         self.saturated = u_clip != u_raw

@@ -231,6 +231,16 @@ class Rig(abc.ABC):
         """Rig time in seconds since opening: virtual on the twin, monotonic on hardware."""
         return self._clock() - self._t0
 
+    def command_pulses(self) -> int | None:
+        """How many of the servo's pulses will carry a command sent now, or None where the rig cannot tell.
+
+        The thesis's serial board pulses the servo at 52 Hz with the last of the frames sent every 20 ms (3.4.1,
+        5.2), so it reads one frame in 25 twice; the twin knows which
+        (:meth:`flexdigit.twin.actuator.Servo.pulses_carrying`). The loop's dither counts them
+        (:meth:`flexdigit.control.runtime.RuntimeController.update`'s ``pulses``); None counts one.
+        """
+        return None
+
     def read(self) -> Reading:
         """Read the three gauges and the potentiometer now."""
         self._check_open()

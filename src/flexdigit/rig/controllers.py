@@ -29,8 +29,12 @@ def _gauge1_deflection_m(params: RigParams, tare_v: float) -> Callable[[Reading]
 class _Wrapped:
     """Adapts a :class:`RuntimeController` to the loop: measurement, setpoint units, optional actuator gain error."""
 
-    def __init__(self, runtime, measure, setpoint_scale: float = 1.0, gain: float = 1.0, equilibrium: int = 8):
+    def __init__(
+        self, runtime, measure, setpoint_scale: float = 1.0, gain: float = 1.0, equilibrium: int = 8, pulses=None
+    ):
         self.runtime, self.measure = runtime, measure
+        # the rig's count of the servo pulses a command gets (Rig.command_pulses), for the dither
+        self.pulses = pulses
         self.setpoint_scale, self.gain, self.equilibrium = setpoint_scale, gain, equilibrium
         self.name = runtime.name
 
@@ -38,7 +42,8 @@ class _Wrapped:
         self.runtime.reset(command)
 
     def step(self, setpoint: float, reading: Reading) -> float:
-        u = self.runtime.update(setpoint * self.setpoint_scale, self.measure(reading))
+        pulses = self.pulses() if self.pulses is not None else None
+        u = self.runtime.update(setpoint * self.setpoint_scale, self.measure(reading), pulses or 1)
         # a plant gain error, emulated at the actuator: the servo gets gain x the asked deviation
         return self.equilibrium + self.gain * (u - self.equilibrium) if self.gain != 1.0 else u
 
@@ -102,7 +107,7 @@ def make_controller(
         )
         # another digit than the thesis rig's is held between quanta (dithered: RuntimeController's ``dither``)
         runtime = design.runtime(params, name=name, dither=not params.is_thesis_rig())
-        return _Wrapped(runtime, estimator, 1.0, gain, eq)
+        return _Wrapped(runtime, estimator, 1.0, gain, eq, pulses=rig.command_pulses if runtime.dither else None)
     method = "forward_euler" if name.endswith("euler") else "tustin"
     measure = _gauge1_deflection_m(params, float(rest_v[0]))
     # metres of gauge-1 deflection per degree: K3 (m/V) x the sweep's gauge-1 volts per degree

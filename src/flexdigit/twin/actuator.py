@@ -111,6 +111,28 @@ class Servo:
         self.pending.sort(key=lambda item: item[0])
         return apply
 
+    def pulses_carrying(self, issued_s: float) -> int:
+        """How many of the servo's pulses carry a command issued at ``issued_s``: 1 on the timer drive; on the serial
+        board, its 52 Hz pulses between the command's 20 ms frame and the next (5.2, 3.4.1), 2 for one frame in 25.
+
+        The loop's dither counts them (:meth:`flexdigit.rig.base.Rig.command_pulses`): a command the board reads
+        twice turns the servo for twice as long.
+
+        Examples
+        --------
+        >>> from flexdigit.params import RigParams
+        >>> servo = Servo(RigParams(), 8)
+        >>> [servo.pulses_carrying(k * 0.02) for k in range(24, 27)]  # frame 25 (0.5 s) starts on pulse 26
+        [1, 2, 1]
+        """
+        if self.drive == "timer":
+            return 1
+        a = self.params.actuator
+        frame = math.ceil(issued_s / a.serial_period_s - 1e-9) * a.serial_period_s
+        pwm = 1.0 / a.pwm_frequency_hz
+        first, after = (math.ceil(t / pwm - 1e-9) for t in (frame, frame + a.serial_period_s))
+        return after - first
+
     def update_command(self, time_s: float) -> None:
         """Apply every scheduled command whose time has come (the last one wins)."""
         while self.pending and self.pending[0][0] <= time_s + 1e-12:

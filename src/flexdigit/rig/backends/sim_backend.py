@@ -130,6 +130,11 @@ class SimRig(Rig):
         self._catch_up()
         self.twin.command(command)
 
+    def command_pulses(self) -> int:
+        """The twin's servo pulses that will carry a command sent now (2 for one serial frame in 25, else 1)."""
+        self._catch_up()
+        return self.twin.servo.pulses_carrying(self.twin.time_s)
+
     def _apply_load(self, mass_kg: float, position_from_base_m: float) -> None:
         self.twin.place_load(mass_kg, position_from_base_m)
 
