@@ -79,6 +79,8 @@ __all__ = [
     "ForceController",
     "ForceHold",
     "hold_force",
+    "check_tare_rails",
+    "TARE_RAIL_SIGMAS",
     "rig_contact_model",
     "THESIS_FORCE_GAIN",
     "THESIS_APPROACH_RATE",
@@ -1786,6 +1788,30 @@ class ForceHold:
             return False
         return bool(np.max(self.command[window]) >= top)
 
+    def settled(self) -> bool:
+        """Whether the scored force stayed within 10 % of the setpoint over the whole figures' window (its last
+        ``window_s``): only then are the steady figures a steady state. ``settling_s`` is the last time outside 10 %;
+        one inside the window means the steady mean still carries the approach (thick_stiff_strong_servo: within
+        10 % from 8.98 s of 10, its last 3 s's mean -14.9 %: said "within 10 % after 8.98 s" before)."""
+        if not self.time_s.size:
+            return False
+        return bool(self.settling_s <= self.time_s[-1] - self.window_s)
+
+    def settle_note(self) -> str:
+        """Why the steady figures are not a steady state, in one line ("" when :meth:`settled`)."""
+        if self.settled():
+            return ""
+        end = float(self.time_s[-1]) if self.time_s.size else 0.0
+        within = (
+            "never within 10 % of the setpoint at the end"
+            if not math.isfinite(self.settling_s)
+            else f"within 10 % only from {self.settling_s:.2f} s"
+        )
+        return (
+            f"not settled: {within}, after the figures' window began ({end - self.window_s:.2f} s of {end:.2f} s), "
+            f"so the steady {100 * self.steady_error:+.1f} % still carries the approach; hold longer ('duration_s')"
+        )
+
     def decisions(self) -> dict:
         """How many samples of the figures' window each contact decision took (``{"none": n, "point": n, ...}``)."""
         if self.kind is None:
@@ -1846,6 +1872,7 @@ def hold_force(
     setpoint = check_real(setpoint_n, "setpoint_n", "hold_force", low=0, low_open=True)
     _check_presses(rig.params, side)
     model = model or rig_contact_model(rig)
+    check_tare_rails(model)
     if gain is None or approach_rate is None:
         derived = force_gains(model, setpoint, region_m=region_m, side=side)
         gain = derived["gain"] if gain is None else gain
@@ -1897,6 +1924,36 @@ def _hold_estimator(model, region: dict, setpoint: float, side: str) -> ContactE
     return ContactEstimator(
         model, classify=region.get("classify", False), side=side, region_m=region["region_m"], n_readings=average
     ).fit()
+
+
+#: How near (in a reading's noise sds, plus one ADC step) an ADC rail a gauge may read at the hold's tare before the
+#: hold is refused (:func:`check_tare_rails`): at 3 sd one reading in 700 clips, and the loop faults on it.
+TARE_RAIL_SIGMAS = 3.0
+
+
+def check_tare_rails(model) -> None:
+    """Refuse (one line, :class:`~flexdigit.errors.ParameterError`, before the rig moves) a hold whose tare would
+    read a gauge at an ADC rail: straight, with nothing touching, each gauge's model reading must lie more than
+    :data:`TARE_RAIL_SIGMAS` noise sds and one ADC step inside ``[sensors] adc_range_v``. A microcontroller's
+    0..3.3 V ADC without an offset reads a balanced bridge's 0 V straight on its rail (heavy_supports_10bit: all
+    three gauges; before, the loop faulted at its first tare reading, "gauge 1 clipped at +0.000 V"). Taring
+    bent instead would leave the gauges a fraction of an ADC step a degree above the rail where the contact
+    unbends the digit, and ``flexdigit params`` already says such a range cannot read the chain: refused, naming
+    the gauges, not worked round."""
+    s = model.params.sensors
+    low, high = (float(v) for v in s.adc_range_v)
+    eq = int(model.params.actuator.equilibrium_command)
+    rest = model.free_v([eq])[0]
+    margin = TARE_RAIL_SIGMAS * np.asarray(model.noise_v, dtype=float) + s.adc_lsb_v
+    near = [g for g in range(rest.size) if not low + margin[g] < rest[g] < high - margin[g]]
+    if not near:
+        return
+    named = ", ".join(f"gauge {g + 1} {rest[g]:+.3f} V" for g in near)
+    raise ParameterError(
+        f"hold: the tare at the straight command {eq} (nothing touching) would read {named}, on or within "
+        f"{TARE_RAIL_SIGMAS:g} noise sds of an ADC rail ([sensors] adc_range_v = [{low:g}, {high:g}]): the tare "
+        "cannot read it; give a range around the gauges' rest or offset their amplifier; the digit was not moved"
+    )
 
 
 def _raise_if_stopped(result) -> None:
