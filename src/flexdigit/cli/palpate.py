@@ -592,6 +592,10 @@ def _hold_data(held) -> tuple[dict, str]:
         "average_readings": held.region.get("average_readings", 1),
         **_limit_data(held),
         "tare_readings": held.region.get("tare_readings"),
+        # how the command is rounded: the sigma-delta, or the integer within integer_band of it where a lone
+        # one-frame step rings the force more than 10 % (palpation.quantiser_band; ring NaN: not measured)
+        "integer_band": held.region.get("integer_band", 0.0),
+        "lone_step_ring_n": held.region.get("lone_step_ring_n"),
         **_uncertainty_data(held),
         "time_s": held.time_s.tolist(),
         "command": held.command.tolist(),
