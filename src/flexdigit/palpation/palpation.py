@@ -1894,8 +1894,9 @@ class ForceHold:
     def settled(self) -> bool:
         """Whether the scored force stayed within 10 % of the setpoint over the whole figures' window (its last
         ``window_s``): only then are the steady figures a steady state. ``settling_s`` is the last time outside 10 %;
-        one inside the window means the steady mean still carries the approach (thick_stiff_strong_servo: within
-        10 % from 8.98 s of 10, its last 3 s's mean -14.9 %: said "within 10 % after 8.98 s" before)."""
+        one inside the window means the steady mean is over a force still rising (thick_stiff_strong_servo: within
+        10 % from 8.98 s of 10, its last 3 s's mean -14.9 %: said "within 10 % after 8.98 s" before) or ringing
+        past the band late in the hold."""
         if not self.time_s.size:
             return False
         return bool(self.settling_s <= self.time_s[-1] - self.window_s)
@@ -1911,8 +1912,8 @@ class ForceHold:
             else f"within 10 % only from {self.settling_s:.2f} s"
         )
         return (
-            f"not settled: {within}, after the figures' window began ({end - self.window_s:.2f} s of {end:.2f} s), "
-            f"so the steady {100 * self.steady_error:+.1f} % still carries the approach; hold longer ('duration_s')"
+            f"not settled: {within}, after the figures' window began ({end - self.window_s:.2f} s of {end:.2f} s): "
+            f"the steady {100 * self.steady_error:+.1f} % is a mean over a force still rising or ringing past 10 %"
         )
 
     def decisions(self) -> dict:
