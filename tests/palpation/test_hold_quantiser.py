@@ -110,7 +110,7 @@ def test_a_light_digit_holds_its_force_within_the_band():
     within 10 % overshoot (seed 0: 9.3 %; the sigma-delta alone held it within too, 6.9 %: on this digit the
     integer band neither needed nor helped, measured with `palpate --params light.toml --protocol hold`)."""
     params = RigParams.from_dict(LIGHT)
-    tissue = digit_tissue(load_tissue("soft-block"), params)
+    tissue = digit_tissue(load_tissue("soft-block")[0], params)
     with open_rig("sim", params=params, seed=0, dt_s=0.005) as rig:
         rig.place_tissue(tissue)
         held = hold_force(rig, 0.1, region_m=(tissue.start_m, min(tissue.end_m, params.geometry.digit_length_m)))
