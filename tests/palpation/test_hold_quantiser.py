@@ -1,6 +1,7 @@
-"""Force control's command rounding (issue 24: the hold's late overshoot on cfrp_strip_four and the like): where a
-lone one-frame command step rings the contact force more than the 10 % band, the loop sends the integer near the
-command it needs instead of the sigma-delta's lone steps; the thesis rig keeps its sigma-delta.
+"""Force control's command rounding (issue 24: the hold's late overshoot on cfrp_strip_four and the like): with
+``hold_force(..., integer_band=True)``, where a lone one-frame command step rings the contact force more than the
+10 % band, the loop sends the integer near the command it needs instead of the sigma-delta's lone steps; the thesis
+rig keeps its sigma-delta. Off by default (docs/guide/palpation.md: it traded two holds over 10 % for two others).
 
 References: a first-order sigma-delta fed a constant ``u = n + e`` sends ``n + 1`` exactly ``round(N e)`` times in
 ``N`` samples (its residue is ``e`` times the count, closed form); the contact force's response to a small command
@@ -113,6 +114,7 @@ def test_a_light_digit_holds_its_force_within_the_band():
     tissue = digit_tissue(load_tissue("soft-block")[0], params)
     with open_rig("sim", params=params, seed=0, dt_s=0.005) as rig:
         rig.place_tissue(tissue)
-        held = hold_force(rig, 0.1, region_m=(tissue.start_m, min(tissue.end_m, params.geometry.digit_length_m)))
+        region = (tissue.start_m, min(tissue.end_m, params.geometry.digit_length_m))
+        held = hold_force(rig, 0.1, region_m=region, integer_band=True)
     assert held.region["integer_band"] > 0.0
     assert held.overshoot < HOLD

@@ -1952,6 +1952,7 @@ def hold_force(
     log_path=None,
     log_mode: str = "new",
     refuse_uncertain: bool = False,
+    integer_band: bool = False,
 ) -> ForceHold:
     """Press the digit against whatever is beside it and hold ``setpoint_n`` (N) of contact force on the 20 ms loop.
 
@@ -1961,17 +1962,16 @@ def hold_force(
     reading's noise would pass the contact threshold, :data:`DETECT_SIGMAS`). ``region_m`` (m from the base): where
     the contact can be (where the tissue lies), which steadies the estimate when nothing touches yet;
     :func:`force_region` narrows it where the force read hangs on the place, and ``ForceHold.region`` says what was
-    decided. On the twin the true contact force is
-    logged beside the estimate; the figures (steady force and error over the last ``window_s``, overshoot, 10 %
-    settling time) use it there, and the estimate on hardware.
+    decided. On the twin the true contact force is logged beside the estimate; the figures (steady force and error
+    over the last ``window_s``, overshoot, 10 % settling time) use it there, and the estimate on hardware.
 
-    ``gain`` and ``approach_rate`` default to the digit's own (:func:`force_gains`): the thesis rig's 30 commands
-    per second per N and 4 commands per second, scaled so that the loop's crossover (gain x the force a command
-    presses) and the pulley's approach speed are the thesis rig's on any digit.
+    ``gain`` and ``approach_rate`` default to the digit's own (:func:`force_gains`): the thesis rig's 30 commands per
+    second per N and 4 commands per second, scaled so that the loop's crossover and approach speed are the thesis's.
 
     ``refuse_uncertain``: refuse in one line, before the rig moves, a hold whose force read would be uncertain by
     more than :data:`HELD_SD_SHARE` of the setpoint (``flexdigit palpate``; a study keeps its figures, and
-    :meth:`ForceHold.unreached` says the same).
+    :meth:`ForceHold.unreached` says the same). ``integer_band``: round the command by :func:`quantiser_band`
+    (off by default: over the 44 test digits it traded two holds over 10 % for two others, docs/guide/palpation.md).
     """
     setpoint = check_real(setpoint_n, "setpoint_n", "hold_force", low=0, low_open=True)
     model = model or rig_contact_model(rig)
@@ -1982,7 +1982,7 @@ def hold_force(
         approach_rate = derived["approach_rate"] if approach_rate is None else approach_rate
     # where the contact is looked for (force_region: narrowed where noise moves the force read > 10 %); quantiser_band
     region = {**force_region(model, setpoint, region_m=region_m, side=side, window_s=window_s),
-              **quantiser_band(model, setpoint, region_m=region_m, side=side)}  # fmt: skip
+              **(quantiser_band(model, setpoint, region_m=region_m, side=side) if integer_band else {})}  # fmt: skip
     estimator = estimator or _hold_estimator(model, region, setpoint, side)
     least = _least_held(model, region.get("force_sd_n", math.nan), duration_s)
     if refuse_uncertain:  # before the rig moves: the tare's readings and the drift over the hold are known now
