@@ -1603,8 +1603,8 @@ class ForceController:
     integer_band : float
         Within this many commands of an integer, send that integer (the residue cleared) instead of the sigma-delta's
         integer with a lone one-frame step every ``1 / (u - n)`` frames: 0 (the thesis rig) always the sigma-delta.
-        :func:`hold_force` sets it where one such step rings the contact force more than the 10 % band
-        (:func:`quantiser_band`).
+        ``hold_force(integer_band=True)`` sets it where one such step rings the contact force more than the 10 %
+        band (:func:`quantiser_band`).
     servo : (float, float), optional
         The servo's natural frequency (rad/s) and damping ratio: the force is then estimated at the position the
         servo's second-order model reaches from the commands sent (zero-order hold over ``period_s``), not at the
