@@ -581,6 +581,9 @@ def _hold_data(held) -> tuple[dict, str]:
         "steady_ripple_n": held.steady_ripple_n,
         "overshoot": held.overshoot,
         "settling_s": held.settling_s,
+        # within 10 % over the whole figures' window: only then is "steady" a steady state
+        "settled": held.settled(),
+        **({"settle_note": held.settle_note()} if not held.settled() else {}),
         "status": held.status,
         "scored_on": "true contact force (twin)" if held.true_force_n is not None else "estimated force",
         "contact_place": _place_data(held),
@@ -589,6 +592,10 @@ def _hold_data(held) -> tuple[dict, str]:
         "average_readings": held.region.get("average_readings", 1),
         **_limit_data(held),
         "tare_readings": held.region.get("tare_readings"),
+        # how the command is rounded: the sigma-delta, or the integer within integer_band of it where a lone
+        # one-frame step rings the force more than 10 % (palpation.quantiser_band; ring NaN: not measured)
+        "integer_band": held.region.get("integer_band", 0.0),
+        "lone_step_ring_n": held.region.get("lone_step_ring_n"),
         **_uncertainty_data(held),
         "time_s": held.time_s.tolist(),
         "command": held.command.tolist(),
@@ -599,8 +606,10 @@ def _hold_data(held) -> tuple[dict, str]:
     place = data["contact_place"]
     text = (
         f"held {held.setpoint_n:g} N: steady {held.steady_force_n:.4f} N ({100 * held.steady_error:+.1f} %), ripple "
-        f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, within 10 % after "
-        f"{held.settling_s:.2f} s ({data['scored_on']})\n"
+        f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, "
+        + (f"within 10 % after {held.settling_s:.2f} s" if data["settled"] else "NOT settled")
+        + f" ({data['scored_on']})\n"
+        + (f"{data['settle_note']}\n" if "settle_note" in data else "")
         + (f"contact at {place['steady_mm']:.1f} mm" if place["steady_mm"] is not None else "contact place: not told")
         + f" ({place['reason']})\n"
         + _decisions_line(data)
