@@ -57,6 +57,7 @@ __all__ = [
     "position_bayes_rmse_m",
     "span_estimator_rmse_m",
     "drift_variance_v2",
+    "drift_referenced_readings",
     "SPAN_GRID_MAX",
     "SPAN_RESOLVED_STEPS",
     "SETTINGS_RESOLVED",
@@ -604,6 +605,28 @@ def drift_variance_v2(model, dataset: Dataset, *, tared: bool | None = None) -> 
     return tared_v2 if tared else as_read
 
 
+def drift_referenced_readings(model, dataset: Dataset) -> tuple[np.ndarray, np.ndarray]:
+    """Every reading (n, G) against the reference :func:`drift_variance_v2` (``tared=None``) holds it to, gauge by
+    gauge, and that drift variance (V^2, (n, G)): the readings the drift-counted limit's estimator weighs.
+
+    Tared (the smaller variance): the reading minus its tare (:func:`tare`) plus the model's no-load gauges at its
+    command, so it compares with the model's absolute voltages. As read: the reading minus the run's mean offset
+    from the model over its loaded readings (the constant a network trained on the run learns; here computed
+    from the model that knows each setting's response, as the limit's estimator does).
+    """
+    as_read_v2 = drift_variance_v2(model, dataset, tared=False)
+    tared_v2 = drift_variance_v2(model, dataset, tared=True)
+    loaded = np.flatnonzero(dataset["load_kg"] > 0)
+    position = np.nan_to_num(dataset["position_from_base_m"], nan=0.0)
+    command = dataset["command"]
+    raw = dataset.gauges_v
+    offset = np.mean(raw[loaded] - model.gauges_v(position[loaded], dataset["load_kg"][loaded], command[loaded]), 0)
+    free = model.gauges_v(position, np.zeros(len(dataset)), command)
+    tared = tare(dataset)[0].gauges_v + free
+    use_tare = tared_v2 < as_read_v2
+    return np.where(use_tare, tared, raw - offset), np.where(use_tare, tared_v2, as_read_v2)
+
+
 #: The span prior's grid: a quarter of the smallest Cramer-Rao bound (adds under 1 % to the limit), at most this
 #: many points per command's span (beyond, the step is coarser and a limit under :data:`SPAN_RESOLVED_STEPS` steps is
 #: refused).
@@ -729,7 +752,7 @@ def _span_grid(model, dataset: Dataset):
     return loaded, settings, inverse, max(step, covered / SPAN_GRID_MAX), half
 
 
-def span_estimator_rmse_m(model, dataset: Dataset, rows) -> float:
+def span_estimator_rmse_m(model, dataset: Dataset, rows, *, drift: bool = False) -> float:
     """The RMS position error (m) of the span limit's own estimator on ``dataset``'s readings ``rows`` as read:
     the posterior mean of :func:`position_bayes_rmse_m`'s span prior, which knows the twin's response exactly
     (:func:`~flexdigit.tactile.bounds.span_posterior_mean_m`).
@@ -739,20 +762,27 @@ def span_estimator_rmse_m(model, dataset: Dataset, rows) -> float:
     them is measured against a floor no estimator reached. On thesis-6.1 of the hand-made thin shim digit (twin
     seed 0) it read 2.03 mm against a 0.47 mm limit: the amplifiers' drift, 7 mV over the run on 1 mV of white
     noise; 0.44 mm on the same digit with the drift off.
+
+    ``drift=True``: the estimator of the drift-counted limit (``position_bayes_rmse_m(drift=True)``) on the same
+    readings, each held to the reference that limit gives it (:func:`drift_referenced_readings`) and its likelihood
+    widened by that reading's drift variance: where it reads that limit within its scatter, the limit counts what
+    these readings carry.
     """
     rows = np.asarray(rows, dtype=int)
     if rows.size == 0 or np.any(dataset["load_kg"][rows] <= 0):
         raise ValueError("span_estimator_rmse_m needs loaded readings (a no-load reading has no position)")
     loaded, settings, _, step, half = _span_grid(model, dataset)
+    readings, extra = drift_referenced_readings(model, dataset) if drift else (dataset.gauges_v, None)
     estimate = span_posterior_mean_m(
         model,
         settings[:, 0],
         settings[:, 1],
         settings[:, 2].astype(int),
-        dataset.gauges_v[rows],
+        readings[rows],
         dataset["command"][rows],
         step_m=step,
         half_width_m=half,
+        extra_variance_v2=None if extra is None else extra[rows],
     )
     return float(np.sqrt(np.mean((estimate - dataset["position_from_base_m"][rows]) ** 2)))
 
