@@ -39,6 +39,10 @@ def test_default_is_held_out_positions_against_the_span_limit(dataset_file, tmp_
     # the limit's own estimator on the same test readings, and the note when it does not reach the limit
     assert out["rmse_over_bayes_estimator"] == pytest.approx(out["rmse_mm"] / out["bayes_estimator_rmse_mm"], rel=1e-12)
     assert out["bayes_limit_reached"] == ("the limit's own estimator" not in out.get("bayes_limit_note", ""))
+    # issue 24's ratio: over the span limit with the run's drift counted, named in the output
+    assert out["compared_limit"] == "bayes_limit_with_drift_mm"
+    drift_mm = out["bayes_limit_with_drift_mm"]
+    assert out["rmse_over_compared_limit"] == pytest.approx(out["rmse_mm"] / drift_mm, rel=1e-12)
 
 
 def test_thesis_split_is_compared_with_the_settings_limit(dataset_file, tmp_path, capsys):
@@ -47,6 +51,8 @@ def test_thesis_split_is_compared_with_the_settings_limit(dataset_file, tmp_path
     assert out["bayes_limit_settings_mm"] <= out["bayes_limit_span_mm"]  # it knows the positions themselves
     assert out["rmse_over_bayes_limit"] == pytest.approx(out["rmse_mm"] / out["bayes_limit_settings_mm"], rel=1e-12)
     assert "bayes_estimator_rmse_mm" not in out  # the span estimator is no floor's estimator on this split
+    assert out["compared_limit"] == "bayes_limit_settings_mm"  # a readings split's test settings are trained on
+    assert "bayes_estimator_with_drift_rmse_mm" not in out
 
 
 def test_split_positions_needs_a_position_target(dataset_file, capsys):

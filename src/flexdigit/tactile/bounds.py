@@ -429,7 +429,16 @@ def _span_prior(model, positions_m, masses_kg, command, step_m: float, half_widt
 
 
 def span_posterior_mean_m(
-    model, position_from_base_m, mass_kg, command, readings_v, reading_command, *, step_m: float, half_width_m=None
+    model,
+    position_from_base_m,
+    mass_kg,
+    command,
+    readings_v,
+    reading_command,
+    *,
+    step_m: float,
+    half_width_m=None,
+    extra_variance_v2=None,
 ) -> np.ndarray:
     """The span prior's Bayes estimate (posterior mean, m from the base) of each of ``readings_v`` (n, G), the
     estimator whose error :func:`span_position_mse_m2` averages, applied to readings given rather than drawn.
@@ -439,12 +448,18 @@ def span_posterior_mean_m(
     noise its RMS error is the limit (within its scatter); on a run's real readings it says what the limit does not
     count (a gauge's drift, a twin unlike the digit): the estimator that knows the twin's response exactly cannot
     do better than it does there.
+
+    ``extra_variance_v2`` (n, G) or (G,), per reading: a variance it carries beyond the model's (its drift since its
+    reference, :func:`flexdigit.tactile.localisation.drift_variance_v2`), added to the likelihood as
+    :func:`span_position_mse_m2` adds it: the estimator of the drift-counted limit.
     """
     a = np.atleast_1d(np.asarray(position_from_base_m, dtype=float))
     m = np.broadcast_to(np.asarray(mass_kg, dtype=float), a.shape)
     c = np.broadcast_to(np.asarray(command), a.shape).astype(int)
     v = np.atleast_2d(np.asarray(readings_v, dtype=float))
     rc = np.broadcast_to(np.asarray(reading_command), v.shape[:1]).astype(int)
+    extra = np.zeros((1, 1)) if extra_variance_v2 is None else np.asarray(extra_variance_v2, dtype=float)
+    extra = np.broadcast_to(extra if extra.ndim == 2 else extra[None, :], (v.shape[0], extra.shape[-1]))
     if not step_m > 0:
         raise ValueError(f"span_posterior_mean_m needs a positive grid step; got step_m = {step_m}")
     out = np.full(v.shape[0], np.nan)
@@ -453,13 +468,13 @@ def span_posterior_mean_m(
         if not np.any(group):
             continue
         ga, log_prior, mean, noise2 = _span_prior(model, a[group], m[group], value, step_m, half_width_m)
-        log_norm = log_prior - 0.5 * np.sum(np.log(noise2), axis=1)
         which = np.flatnonzero(rc == value)
         per = max(1, int(4e6 // mean.size))
         for start in range(0, which.size, per):
             idx = which[start : start + per]
-            z2 = (v[idx, None, :] - mean[None]) ** 2 / noise2[None]
-            log_post = log_norm - 0.5 * np.sum(z2, axis=2)
+            var = noise2[None] + extra[idx, None, :]  # (readings, grid, gauges)
+            z2 = (v[idx, None, :] - mean[None]) ** 2 / var
+            log_post = log_prior - 0.5 * np.sum(z2 + np.log(var), axis=2)
             post = np.exp(log_post - log_post.max(axis=1, keepdims=True))
             out[idx] = (post @ ga) / post.sum(axis=1)
     return out
