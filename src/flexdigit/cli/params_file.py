@@ -89,13 +89,22 @@ def _resolution(params) -> tuple[dict, list[str]]:
     that meets 0.1 % when this one does not."""
     import math
 
-    from flexdigit.params import MAX_TWIN_CELLS
-    from flexdigit.twin.resolution import CABLE_TIP_DEG, STATIC_RTOL, TIP_LOAD_ALPHA2, resolution_for, static_error
+    from flexdigit.params import MAX_TWIN_CELLS, twin_cells
+    from flexdigit.twin.resolution import (
+        CABLE_TIP_DEG,
+        DERIVED_RTOL,
+        STATIC_RTOL,
+        TIP_LOAD_ALPHA2,
+        resolution_for,
+        static_error,
+    )
 
     error = static_error(params)
     data = {"cells_per_section": list(error.cells), "static_error_tip_load": error.tip_load}
     data["static_error_cable"] = error.cable
     source = "its [twin] table" if not params.twin.is_default else "the default: cells <= 27 mm"
+    if params.twin.is_default and error.cells != twin_cells(params):  # a derived calibration's finer default
+        source = f"the default on its derived calibration: the fewest within {100 * DERIVED_RTOL:g} %"
     if math.isnan(error.worst):  # a static solve that did not converge: no figure rather than a wrong one
         return data, [
             f"twin: {sum(error.cells)} springs, {list(error.cells)} a section ({source}); static error not "
