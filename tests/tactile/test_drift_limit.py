@@ -88,31 +88,3 @@ def test_under_the_drift_counted_limit_is_said():
     scores = network_floor(Linear(1.0, WHITE_V, drift=RATE_V_PER_SQRT_S), ds, _interior(ds), 1e-4, split="positions")
     assert scores["rmse_over_compared_limit"] < 1.0
     assert "new run's readings" in scores["bayes_limit_note"]
-
-
-#: Hand-made digits whose limit is coarse (a quarter bridge's few millimetres and more: a fast Monte Carlo), each
-#: collected on thesis-6.1 with twin seed 1, independent of the seed-0 runs docs/guide/tactile.md's table measures
-FAST_DIGITS = ("handmade_digits2/quarter_single_150mm", "handmade_digits/one_section_quarter")
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("digit", FAST_DIGITS)
-def test_a_network_is_within_the_bound_of_the_drift_counted_limit(digit, tmp_path, capsys):
-    """Issue 24's figure from the command line: ``collect thesis-6.1 --params D --seed 1`` then ``train --bayes-limit
-    --params D`` (held-out positions, one size and tolerance to keep it short): the network's RMSE within
-    ``NETWORK_RATIO_MAX`` (1.3, the issue's) of the drift-counted limit it names."""
-    import json
-    from pathlib import Path
-
-    from flexdigit.cli import main
-
-    params = Path(__file__).parents[1] / "data" / f"{digit}.toml"
-    data, model = tmp_path / "d.parquet", tmp_path / "m.json"
-    collect = ["collect", "thesis-6.1", "--params", str(params), "--seed", "1", "--out", str(data), "--no-progress"]
-    assert main(collect) == 0
-    capsys.readouterr()
-    train = ["train", str(data), "--bayes-limit", "--params", str(params), "--hidden", "10", "--tol", "1e-7"]
-    assert main([*train, "--model", str(model), "--json"]) == 0
-    scores = json.loads(capsys.readouterr().out)
-    assert scores["compared_limit"] == "bayes_limit_with_drift_mm"
-    assert scores["rmse_over_compared_limit"] < NETWORK_RATIO_MAX, scores

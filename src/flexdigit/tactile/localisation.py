@@ -16,14 +16,14 @@ from __future__ import annotations
 
 import contextlib
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from flexdigit._repr import fields_summary
 from flexdigit.errors import DataFileError, ParameterError
 from flexdigit.params import RigParams
-from flexdigit.tactile.accuracy import accuracy, corr2, percentage_error, rmse
+from flexdigit.tactile.accuracy import accuracy, corr2, rmse
 from flexdigit.tactile.bounds import (
     ZONES,
     TwinGaugeModel,
@@ -37,7 +37,6 @@ from flexdigit.tactile.estimators import BeamInversion, GPLocaliser
 from flexdigit.tactile.network_sizes import EPOCHS_MAX, LONGER_GAIN
 from flexdigit.tactile.pipeline import (
     ThesisNetwork,
-    ensemble_network,
     features,
     held_out_positions_split,
     run_pipeline,
@@ -63,7 +62,6 @@ __all__ = [
     "SPAN_RESOLVED_STEPS",
     "SETTINGS_RESOLVED",
     "train_network",
-    "ENSEMBLE_SIZE",
     "EPOCHS_MAX",
     "LONGER_GAIN",
     "Prediction",
@@ -72,10 +70,6 @@ __all__ = [
 ]
 
 ESTIMATORS = ("MLP (thesis architecture)", "beam inversion", "beam inversion, known load set", "Gaussian process")
-#: Networks averaged by :func:`train_network` (its chosen one and this many less one from other starting weights),
-#: kept where the mean validates better: on thesis-6.1 of the hand-made thin shim digit (held-out positions, twin
-#: seed 0) five networks of its 25 nodes read 0.74-1.34 mm alone and 0.99 mm averaged (docs/guide/tactile.md)
-ENSEMBLE_SIZE = 5
 #: chi-square(2 dof) 99.9 % quantile: a load is declared when it explains the reading this much better than none
 CONTACT_CHI2 = 13.8155
 
@@ -148,9 +142,7 @@ def train_network(
     and a longer training is kept where it lowers the validation error by more than :data:`LONGER_GAIN`. The
     thesis rig's 3 gauges at 2.7 mm are learnt in 50 epochs; a digit that resolves its positions many times
     finer is not: the hand-made PEEK digit's network went from 1.09 mm at 50 epochs to 0.48 at 800
-    (docs/digits.md, tactile section). Last, the kept network is averaged with :data:`ENSEMBLE_SIZE` less one
-    networks of its size, tolerance and epochs from other starting weights, kept where the mean validates better
-    (:func:`~flexdigit.tactile.pipeline.ensemble_network`: one network of their nodes side by side).
+    (docs/digits.md, tactile section).
 
     ``split``: ``"readings"`` the thesis's (:func:`~flexdigit.tactile.pipeline.thesis_split`: the test positions
     are training positions too), ``"positions"`` the validation and test readings at positions the network never
@@ -179,39 +171,14 @@ def train_network(
         if best is None or val_mse < best[0]:
             best = (val_mse, result, tared, x)
     val_mse, result, tared, x = best
-    longer, kept = epochs, epochs
+    longer = epochs
     while 2 * longer <= EPOCHS_MAX:
         longer *= 2  # the chosen size trained longer, its tolerance swept again (unless given)
         trial = run_pipeline(x, y, epochs=longer, fixed_hidden=result.best_hidden, fixed_tol=tol, **options)
         trial_mse = _val_mse(trial, x, y)
         if trial_mse < (1.0 - LONGER_GAIN) * val_mse:
-            val_mse, result, kept = trial_mse, trial, longer
-    return _ensembled(result, x, y, val_mse, kept, seed), rows, inputs, tared
-
-
-def _ensembled(result, x, y, val_mse: float, epochs: int, seed: int):
-    """``result`` with its network replaced by the mean of :data:`ENSEMBLE_SIZE` networks of its size, tolerance and
-    epochs from different starting weights (seeded from ``seed``; :func:`~flexdigit.tactile.pipeline.
-    ensemble_network`) where that lowers the validation error; else ``result``. The test readings are not looked
-    at."""
-    split = result.split
-    starts = np.random.default_rng([seed, 24]).integers(0, 2**31, size=ENSEMBLE_SIZE - 1)
-    nets = [result.model]
-    for start in starts:
-        net = ThesisNetwork(hidden=result.best_hidden, tol=result.best_tol, epochs=epochs, random_state=int(start))
-        nets.append(net.fit(x[split.train], y[split.train], x[split.val], y[split.val]))
-    merged = ensemble_network(nets)
-    if float(np.mean((merged.predict(x[split.val]) - y[split.val]) ** 2)) >= val_mse:
-        return result
-    y_pred = merged.predict(x[split.test])
-    return replace(
-        result,
-        model=merged,
-        y_pred=y_pred,
-        corr2=corr2(y_pred, result.y_test),
-        percent_error=percentage_error(y_pred, result.y_test),
-        extra={**result.extra, "ensemble": len(nets)},
-    )
+            val_mse, result = trial_mse, trial
+    return result, rows, inputs, tared
 
 
 def _has_tares(dataset: Dataset) -> bool:

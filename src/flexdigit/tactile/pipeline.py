@@ -44,7 +44,7 @@ from flexdigit._validation import (
 from flexdigit.errors import ParameterError
 from flexdigit.tactile.accuracy import accuracy, corr2, percentage_error, relative_rmse, rmse
 from flexdigit.tactile.dataset import Dataset
-from flexdigit.tactile.netlab import MLP, mlp_unpack
+from flexdigit.tactile.netlab import MLP
 from flexdigit.tactile.network_sizes import HIDDEN, TOL
 
 __all__ = [
@@ -59,7 +59,6 @@ __all__ = [
     "features",
     "targets",
     "ThesisNetwork",
-    "ensemble_network",
     "SweepPoint",
     "PipelineResult",
     "run_pipeline",
@@ -243,42 +242,6 @@ class ThesisNetwork(Estimator):
         x = check_array(X, "X", "ThesisNetwork.predict", ndim=2)
         y = self.y_norm_.inverse_transform(self.net_.predict(self.x_norm_.transform(x)).reshape(x.shape[0], -1))
         return y[:, 0] if self.y_ndim_ == 1 else y
-
-
-def ensemble_network(networks) -> ThesisNetwork:
-    """One :class:`ThesisNetwork` that predicts the mean of ``networks``' predictions: their hidden layers side by
-    side (``K h`` tanh nodes for ``K`` networks of ``h``), the output weights and biases averaged. Exact, since the
-    output layer is linear; the networks must share their normalisers (fitted on the same training readings), so the
-    ensemble saves and loads as any network (:mod:`flexdigit.tactile.model_io`).
-
-    Examples
-    --------
-    >>> x = np.linspace(0, 1, 20)[:, None]
-    >>> nets = [ThesisNetwork(hidden=3, epochs=2, random_state=s).fit(x, x[:, 0] ** 2) for s in (0, 1)]
-    >>> both = ensemble_network(nets)
-    >>> bool(np.allclose(both.predict(x), (nets[0].predict(x) + nets[1].predict(x)) / 2)), both.hidden
-    (True, 6)
-    """
-    nets = list(networks)
-    first = nets[0]
-    for net in nets[1:]:
-        same = [np.array_equal(getattr(net, n).mean_, getattr(first, n).mean_) for n in ("x_norm_", "y_norm_")]
-        if not all(same) or net.y_ndim_ != first.y_ndim_:
-            raise ParameterError("ensemble_network needs networks fitted on the same training readings")
-    nin, nout = first.net_.n_inputs_, first.net_.n_outputs_
-    parts = [mlp_unpack(n.net_.weights_, nin, n.net_.hidden, nout) for n in nets]
-    k = len(nets)
-    w1 = np.concatenate([p[0] for p in parts], axis=1)
-    b1 = np.concatenate([p[1] for p in parts])
-    w2 = np.concatenate([p[2] for p in parts], axis=0) / k
-    b2 = np.mean([p[3] for p in parts], axis=0)
-    hidden = int(b1.size)
-    mlp = MLP(hidden=hidden, tol=first.tol)
-    mlp.weights_ = np.concatenate([w1.ravel(), b1, w2.ravel(), b2])
-    mlp.n_inputs_, mlp.n_outputs_, mlp.y_ndim_ = nin, nout, first.net_.y_ndim_
-    out = ThesisNetwork(hidden=hidden, tol=first.tol, epochs=first.epochs, random_state=first.random_state)
-    out.net_, out.x_norm_, out.y_norm_, out.y_ndim_ = mlp, first.x_norm_, first.y_norm_, first.y_ndim_
-    return out
 
 
 @dataclass
@@ -551,8 +514,6 @@ def target_scores(result: PipelineResult) -> dict:
         (position index).
     """
     scores = {"corr2": result.corr2, "hidden": result.best_hidden, "learning_gradient": result.best_tol}
-    if "ensemble" in result.extra:  # networks of ``hidden`` nodes averaged (flexdigit.tactile.localisation)
-        scores["ensemble"] = result.extra["ensemble"]
     if result.target == "position":
         scores["rmse_mm"] = 1000 * rmse(result.y_pred, result.y_test)
     elif result.target == "magnitude":
