@@ -191,14 +191,15 @@ def test_a_high_gain_gauge_stops_the_climb_short_of_its_rail(tmp_path):
 
 @pytest.mark.slow
 def test_a_hold_whose_gauges_fault_at_once_says_so_in_one_line(tmp_path, capsys):
-    # a 0..3.3 V ADC under gauges centred on 0 V: every gauge sits on its lower rail from the first reading
+    # a 0..3.3 V ADC under gauges centred on 0 V: every gauge sits on its lower rail from the first reading, so the
+    # hold is refused at its tare, before anything moves (palpation's check_tare_rails)
     params = write_digit("short", tmp_path, sensors={"adc_bits": 10, "adc_range_v": [0.0, 3.3]})
     assert main(["palpate", "--tissue", "soft-block", "--protocol", "hold", "--params", str(params)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0
     assert "internal error" not in err
-    assert "force hold stopped: sensor fault" in err
-    assert "digit relaxed to command" in err
+    assert "the tare at the straight command 8 (nothing touching) would read gauge 1 -0.121 V" in err
+    assert "the digit was not moved" in err
 
 
 def test_the_builtin_scan_is_laid_out_with_the_builtin_tissue():
