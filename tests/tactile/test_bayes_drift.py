@@ -30,8 +30,8 @@ MC_RTOL = 0.12
 WALK_RTOL = 0.1
 WALKS = 4000
 #: Issue 24's bound on a network's RMSE over the Bayes limit, and how far one trained network's ratio moves with the
-#: CPU: numpy's SIMD tanh/exp round differently on AVX2 and AVX-512, and SCG's training amplifies it. The thesis
-#: rig's thesis-6.1 network below read 1.29 x on stop 36's (AVX2) machine and 1.337 x on an AVX-512 one (the same
+#: CPU: numpy's SIMD tanh/exp round differently from one CPU to another, and SCG's training amplifies it. The thesis
+#: rig's thesis-6.1 network below read 1.29 x on stop 36's machine and 1.337 x on an AVX-512 one (the same
 #: under OPENBLAS_CORETYPE=Haswell, so not the BLAS kernel): it sits at the bound, met on one CPU and not the other.
 ISSUE_RATIO = 1.3
 CPU_SPREAD = 0.05
