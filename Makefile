@@ -51,8 +51,8 @@ lint: $(STAMP)
 # 0.7-0.9 of one core (live servers, browsers, ptys and simavr wait on the wall clock), so a second worker all
 # but halves the run. The site's build is not a step of its own: tests/test_docs.py runs the same command, offline,
 # first, on one worker while the other runs the tests (before, `make docs` ran alone for a minute, one core idle).
-# PYTEST_WORKERS=0: one process, as `pytest` alone runs. `make test` prints its 40 slowest tests (set-up included):
-# where the suite's 15 minutes go, for tests/conftest.py's LONGEST_S.
+# PYTEST_WORKERS=0: one process, as `pytest` alone runs. Every run ends with its 30 longest files
+# (tests/conftest.py): where the suite's 15 minutes go, for LONGEST_S.
 PYTEST_WORKERS ?= 2
 PYTEST := $(BIN)/pytest -n $(PYTEST_WORKERS) --dist loadfile
 
@@ -72,7 +72,7 @@ docs: $(STAMP)
 	@echo "the site: docs/_build/html/index.html"
 
 test: lint browser three avr $(STAMP)
-	$(PYTEST) --durations=40
+	$(PYTEST)
 	@if [ -n "$$OPENBLAS_CORETYPE" ]; then echo "blas tests, OpenBLAS's own kernel (OPENBLAS_CORETYPE unset)"; \
 	    env -u OPENBLAS_CORETYPE $(BLAS_RUN); fi
 	@if [ "$$OPENBLAS_CORETYPE" != Nehalem ]; then echo "blas tests, OPENBLAS_CORETYPE=Nehalem"; \

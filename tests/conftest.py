@@ -96,6 +96,28 @@ def pytest_collection_modifyitems(session, config, items):
     items.sort(key=lambda item: (item.path.name != FIRST, -measured_s(item.path), item.path not in slow))
 
 
+#: Seconds each test file took (set-up, call and tear-down of its tests, as the workers report them to the
+#: controller); printed at the end of the run, the longest first, for :data:`LONGEST_S`.
+_FILE_SECONDS: dict[str, float] = {}
+#: How many files the summary lists.
+FILES_SHOWN = 30
+
+
+def pytest_runtest_logreport(report):
+    path = report.nodeid.split("::", 1)[0]
+    _FILE_SECONDS[path] = _FILE_SECONDS.get(path, 0.0) + report.duration
+
+
+def pytest_terminal_summary(terminalreporter):
+    """The longest test files of this run (seconds, summed over their tests): where the suite's time goes."""
+    if not _FILE_SECONDS:
+        return
+    terminalreporter.section(f"the {FILES_SHOWN} longest files (s, their tests summed)")
+    longest = sorted(_FILE_SECONDS.items(), key=lambda item: -item[1])[:FILES_SHOWN]
+    for path, seconds in longest:
+        terminalreporter.write_line(f"{seconds:8.1f}  {path}")
+
+
 def _work_started(*args, **kwargs):
     raise RuntimeError("the work started")
 
