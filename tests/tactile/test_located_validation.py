@@ -92,8 +92,8 @@ def test_the_validation_keeps_the_located_positions_and_the_test_all():
 
 @pytest.mark.parametrize("gauges_m", [(0.055,), (0.055, 0.215)])
 def test_a_digit_whose_validation_cannot_be_located_keeps_its_split(gauges_m):
-    """One gauge locates nothing; a second gauge at 215 mm leaves under two validation positions past it: the
-    split is left as it was (early stopping needs validation readings)."""
+    """One gauge locates nothing; a second gauge at 215 mm leaves under two validation positions past it (early
+    stopping needs validation readings): the split is the same object, the network trained as before."""
     ds = _cantilever(gauges_m)
     rows, _ = targets(ds, "position")
     split = held_out_positions_split(ds["position_from_base_m"][rows], 0)

@@ -233,7 +233,10 @@ def located_validation(split: Split, dataset: Dataset, rows) -> Split:
     bend two gauges (a one-gauge digit)."""
     rows = np.asarray(rows, dtype=int)
     located = split.val[bending_gauges(dataset)[rows[split.val]] >= 2]
-    if np.unique(np.round(dataset["position_from_base_m"][rows[located]], 6)).size < 2:
+    if (
+        located.size == split.val.size
+        or np.unique(np.round(dataset["position_from_base_m"][rows[located]], 6)).size < 2
+    ):
         return split
     return Split(split.train, located, split.test)
 
