@@ -98,3 +98,16 @@ def test_a_digit_whose_validation_cannot_be_located_keeps_its_split(gauges_m):
     rows, _ = targets(ds, "position")
     split = held_out_positions_split(ds["position_from_base_m"][rows], 0)
     assert located_validation(split, ds, rows) is split
+
+
+def test_a_single_mass_is_located_by_one_gauge():
+    """With one mass in the protocol the moment at gauge 1 tells the lever: the loads between the gauges are
+    located, and only those bending no gauge (short of gauge 1) would leave the validation."""
+    ds = _cantilever()
+    keep = (ds["load_kg"] == 0) | (ds["load_kg"] == MASSES_KG[1])
+    one = ds.subset(keep)
+    rows, _ = targets(one, "position")
+    a = one["position_from_base_m"][rows]
+    split = held_out_positions_split(a, 0)
+    kept = located_validation(split, one, rows)
+    assert np.array_equal(np.unique(a[kept.val]), np.unique(a[split.val][a[split.val] > GAUGES_M[0]]))
