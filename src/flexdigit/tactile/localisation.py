@@ -223,14 +223,15 @@ def bending_gauges(dataset: Dataset) -> np.ndarray:
 
 def located_validation(split: Split, dataset: Dataset, rows) -> Split:
     """A held-out positions ``split`` of ``dataset``'s ``rows`` (:func:`~flexdigit.tactile.pipeline.
-    held_out_positions_split`) with its validation readings those whose load bends two gauges or more (one, where
-    the protocol hangs a single mass: the moment then tells the lever) (:func:`bending_gauges`): what chooses a network's size and tolerance and stops its training early. A reading
-    bending one gauge cannot be located by any estimator (a 7.5 g load 147 mm from thick_stiff_strong_servo's base
+    held_out_positions_split`) with its validation readings those whose load bends two gauges or more
+    (:func:`bending_gauges`; one where the protocol hangs a single mass: the moment then tells the lever): what
+    chooses a network's size and tolerance and stops its training early. A reading bending one gauge of a protocol
+    of several masses cannot be located by any estimator (a 7.5 g load 147 mm from thick_stiff_strong_servo's base
     reads as 12.5 g at 110 mm: gauge 2 is at 165 mm), its error is the mix-up's whatever the network, and where such
     readings are most of the validation set they choose networks by chance: its three confounded validation
     positions held every size's validation RMSE at 11.5-13.4 mm while the test RMSE went 6.7-33 mm. The test
-    readings are kept whole (the limit counts the mix-up). Unchanged where fewer than two validation positions
-    bend two gauges (a one-gauge digit)."""
+    readings are kept whole (the limit counts the mix-up). The split itself where no validation reading drops or
+    fewer than two validation positions would stay (a one-gauge digit)."""
     rows = np.asarray(rows, dtype=int)
     masses = np.unique(dataset["load_kg"][dataset["load_kg"] > 0])
     need = 2 if masses.size > 1 else 1  # one load of the protocol's mass: one gauge's moment locates it
