@@ -572,6 +572,16 @@ def _decisions_line(data: dict) -> str:
     return f"contact decided on {each} over the last window: {said or 'no estimate'}"
 
 
+def _decisions_data(held) -> dict:
+    """``palpate --json`` of a hold's contact decisions: how many of the window's estimates decided each kind, and
+    the decision's chi^2 threshold, raised past what the digit's free motion reads (``palpation.free_motion_chi2``)."""
+    return {
+        "decisions": held.decisions(),
+        "free_motion_chi2": held.region.get("free_motion_chi2"),
+        "detect_chi2": held.region.get("detect_chi2"),
+    }
+
+
 def _hold_data(held) -> tuple[dict, str]:
     """``palpate --json`` of a hold and its text: the figures, the contact place, the estimate's uncertainty."""
     data = {
@@ -588,7 +598,7 @@ def _hold_data(held) -> tuple[dict, str]:
         "scored_on": "true contact force (twin)" if held.true_force_n is not None else "estimated force",
         "contact_place": _place_data(held),
         # how many of the last window's estimates decided each kind of contact (the force follows the decision)
-        "decisions": held.decisions(),
+        **_decisions_data(held),
         "average_readings": held.region.get("average_readings", 1),
         **_limit_data(held),
         "tare_readings": held.region.get("tare_readings"),

@@ -28,6 +28,7 @@ the N/m of one centimetre).
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -99,6 +100,9 @@ __all__ = [
     "STEP_AGREEMENT",
     "servo_lag_force",
     "SERVO_LAG_FORCE",
+    "free_motion_chi2",
+    "motion_detect_chi2",
+    "FREE_MOTION_S",
     "CONTACT_FRACTION",
     "DETECT_SIGMAS",
     "FORCE_PLACE_SPREAD",
@@ -1600,6 +1604,9 @@ class ForceController:
         (the thesis rig). A point force's place from one reading wanders with its noise and drift, and the force
         read with it (``random_digit(12)``: 150 mm for its contact's 160, where a reading means more force: the
         hold 10 % short); at one place the force is linear in the reading, its noise averaging out.
+    detect_chi2 : float, optional
+        The contact decision's threshold on the likelihood ratio against nothing (None: the estimator's): raised
+        where the digit's own free motion reads as contact (:func:`motion_detect_chi2`).
     integer_band : float
         Within this many commands of an integer, send that integer (the residue cleared) instead of the sigma-delta's
         integer with a lone one-frame step every ``1 / (u - n)`` frames: 0 (the thesis rig) always the sigma-delta.
@@ -1634,7 +1641,12 @@ class ForceController:
         free_step=False,
         place_readings=0,
         integer_band=0.0,
+        detect_chi2=None,
     ) -> None:
+        self.detect_chi2 = (
+            None if detect_chi2 is None else check_real(detect_chi2, "detect_chi2", "ForceController", low=0)
+        )
+        self.chi2 = math.nan
         self.free_step = bool(free_step)
         self.place_readings = check_int(place_readings, "place_readings", "ForceController", low=0)
         self._free_steps: dict[int, np.ndarray] = {}
@@ -1687,7 +1699,8 @@ class ForceController:
         near = int(frac >= 0.5)
         self.place_m = float((1 - frac) * est.point_position_m[0] + frac * est.point_position_m[1])
         # one decision for the reading: its likelihood ratio against nothing, interpolated as the force is
-        if (1 - frac) * est.chi2_contact[0] + frac * est.chi2_contact[1] <= self.estimator.detect_chi2:
+        self.chi2 = float((1 - frac) * est.chi2_contact[0] + frac * est.chi2_contact[1])
+        if self.chi2 <= (self.estimator.detect_chi2 if self.detect_chi2 is None else self.detect_chi2):
             return 0.0, float(est.force_sd_n[near]), "none"
         kind = "distributed" if est.kind[near] == "distributed" else "point"
         f = self.sign * (est.line_total_n if kind == "distributed" else est.point_force_n)
@@ -1808,6 +1821,55 @@ def servo_lag_force(model, estimator, approach_rate: float, command: int) -> flo
     slope = (free[2] - free[0]) / 2.0
     readings = np.vstack([free[1] - lag * slope, free[1] + lag * slope])
     return float(np.max(np.abs(estimator.predict(readings, command).point_force_n)))
+
+
+#: Seconds of the free approach :func:`free_motion_chi2` simulates: the ramp's start and a dozen rings of the
+#: stiffest test digit's 35 rad/s mode, at the loop's approach rate.
+FREE_MOTION_S = 3.0
+
+
+class _CleanReading:
+    """A noise-free twin reading as the force loop reads one (``gauges_v``)."""
+
+    def __init__(self, gauges_v) -> None:
+        self.gauges_v = gauges_v
+
+
+def free_motion_chi2(controller, model, command: int, duration_s: float = FREE_MOTION_S) -> float:
+    """The largest contact chi^2 (the likelihood ratio against nothing touching) ``controller`` reads on its digit
+    moving with nothing touching: ``model``'s digit on its twin (noise-free, the serial drive, the hold's 5 ms step)
+    driven from rest at ``command`` by the controller's own approach for ``duration_s``, each reading estimated as
+    the loop estimates it (its servo model, its free steps). The statics read the moving digit's shape (its modes
+    ringing at every command step the sigma-delta sends, the servo's pulse phase) as a contact where they differ from
+    a shape at rest: thick_stiff_strong_servo's approach read chi^2 up to 350 (8-36 mN of "point" contact), the
+    thesis rig's 4.3 (under :data:`~flexdigit.palpation.contact_estimation.DETECT_CHI2`, 13.8)."""
+    free = copy.copy(controller)  # its settings and estimator; its own state and tare
+    twin = Twin(model.params, model.calibration, orientation=model.orientation, housing=model.housing,
+                dt_s=twin_step_s("force"), command=command)  # fmt: skip
+    free.offset_v = np.asarray(twin.clean_read()[0]) - model.free_v([command])[0]
+    free.reset(command)
+    period = float(model.params.actuator.serial_period_s)
+    chi2 = [0.0]
+    for _ in range(round(duration_s / period)):
+        sent = free.step(math.inf, _CleanReading(twin.clean_read()[0]))  # an unreachable setpoint: approach only
+        chi2.append(free.chi2)
+        twin.command(sent)
+        twin.advance(period)
+    return float(np.nanmax(chi2))
+
+
+def motion_detect_chi2(detect_chi2: float, motion_chi2: float) -> float:
+    """The force loop's contact threshold on a digit whose free motion reads ``motion_chi2``
+    (:func:`free_motion_chi2`): ``detect_chi2`` where that motion stays under it (nothing changes: the thesis rig),
+    else ``(sqrt(motion_chi2) + sqrt(detect_chi2))^2``. The decision's chi^2 is the squared weighted norm of the
+    reading's part the contact explains, a projection, so its root is sub-additive: a reading of motion no worse
+    than the free approach's worst plus noise passes this threshold no more often than the noise alone passes
+    ``detect_chi2`` (0.1 %). A contact pressing ``f`` reads about ``(f / sd)^2`` (``sd`` one reading's force sd):
+    on thick_stiff_strong_servo 350 -> 503, declared from ~43 mN of contact instead of 7 mN (the 30 mN threshold
+    of the setpoint's share is then met a few frames later)."""
+    if not motion_chi2 > detect_chi2:
+        return float(detect_chi2)
+    return float((math.sqrt(motion_chi2) + math.sqrt(detect_chi2)) ** 2)
 
 
 @dataclass
@@ -2109,6 +2171,10 @@ def _force_controller(rig, model, estimator, region, setpoint, gain, approach_ra
         place_readings=PLACE_READINGS if region.get("free_step", False) and region.get("place_told", False) else 0,
         integer_band=float(region.get("integer_band", 0.0)),
     )  # fmt: skip
+    # the digit's own motion read as contact (the moving shape through the statics), on its twin at the tare
+    motion = free_motion_chi2(controller, model, eq)
+    controller.detect_chi2 = motion_detect_chi2(estimator.detect_chi2, motion)
+    region.update(free_motion_chi2=motion, detect_chi2=controller.detect_chi2)
     return controller, region
 
 
