@@ -53,6 +53,10 @@ relative = 0.5
 """
 
 
+def _cli(*args, **kwargs):
+    return subprocess.run([sys.executable, "-m", "flexdigit.cli", *args], capture_output=True, text=True, **kwargs)
+
+
 def _evaluations(out):
     return pq.read_table(out / "evaluations.parquet").to_pandas()
 
@@ -126,8 +130,8 @@ def test_a_killed_study_resumes_without_recomputing(tmp_path, resumed_ref):
     rows_total = len(resumed_ref)
     assert 6 <= len(before) < rows_total + 1, "the kill must land mid-study"
     assert not (out / "evaluations.parquet").exists()
-    # the rerun in this process: a child's ~3 s of imports buys nothing here (the stopped run was the child)
-    assert main(["study", "sensitivity", str(spec), "--out", str(out), "--workers", "0", "--no-progress"]) == 0
+    done = _cli("study", "sensitivity", str(spec), "--out", str(out), "--workers", "0", "--no-progress")
+    assert done.returncode == 0, done.stderr
     after = journal.read_text().splitlines()
     # the rows done before the kill were kept, not recomputed; each row appears once
     assert after[: len(before) - 1] == before[:-1]
@@ -319,8 +323,8 @@ def test_a_study_stopped_by_sigterm_resumes_without_recomputing(tmp_path, resume
     rows_total = len(resumed_ref)
     assert 6 <= len(before) < rows_total + 1, "the stop must land mid-study"
     assert not (out / "evaluations.parquet").exists()
-    # the rerun in this process: a child's ~3 s of imports buys nothing here (the stopped run was the child)
-    assert main(["study", "sensitivity", str(spec), "--out", str(out), "--workers", "0", "--no-progress"]) == 0
+    done = _cli("study", "sensitivity", str(spec), "--out", str(out), "--workers", "0", "--no-progress")
+    assert done.returncode == 0, done.stderr
     after = journal.read_text().splitlines()
     assert after[: len(before)] == before  # every row finished before the stop was kept whole, not recomputed
     assert _evaluations(out).equals(resumed_ref)
