@@ -15,7 +15,9 @@ import pytest
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
+from flexdigit.cli import main
 from flexdigit.errors import ParameterError
+from flexdigit.live import server as server_module
 from flexdigit.live.server import TokenBucket, check_host
 from flexdigit.live.session import validate_request
 
@@ -146,7 +148,12 @@ def test_a_remote_host_needs_allow_remote():
     assert "Traceback" not in run.stderr
 
 
-def test_bad_files_are_named_before_anything_is_served(tmp_path):
+def test_bad_files_are_named_before_anything_is_served(tmp_path, capsys, monkeypatch):
+    """In-process (``main``): each case used to start its own ``python -m flexdigit.cli`` (imports ~3 s CPU each, 118
+    s for the six on a loaded machine); test_a_remote_host_needs_allow_remote keeps one such child for the exit code
+    a shell sees. Nothing may be served: ``serve`` is replaced by one that records the call."""
+    served = []
+    monkeypatch.setattr(server_module, "serve", lambda *args, **kwargs: served.append(args))
     bad = tmp_path / "rig.toml"
     bad.write_text("[calibration]\nsupport_mass_kg = 'heavy'\n")
     two_gauges_at_one_place = tmp_path / "digit.toml"
@@ -159,12 +166,12 @@ def test_bad_files_are_named_before_anything_is_served(tmp_path):
         (["--params", str(two_gauges_at_one_place)], "gauge_positions_m"),  # issue 24: a digit's file
         (["--params", str(tmp_path / "mine.toml")], "mine.toml"),
     ):
-        run = subprocess.run(
-            [sys.executable, "-m", "flexdigit.cli", "live", *args], capture_output=True, text=True, timeout=120
-        )
-        assert run.returncode == 2, run.stderr
-        assert culprit in run.stderr, run.stderr
-        assert "Traceback" not in run.stderr, run.stderr
+        code = main(["live", *args])
+        err = capsys.readouterr().err
+        assert code == 2, err
+        assert culprit in err, err
+        assert "Traceback" not in err, err
+        assert served == [], args
 
 
 def test_request_validation_names_the_culprit():
@@ -194,8 +201,6 @@ def test_token_bucket_limits_the_rate():
 
 @pytest.mark.slow
 def test_a_recording_replays_at_1x_and_10x(tmp_path):
-    from flexdigit.cli import main
-
     path = tmp_path / "run.mcap"
     assert main(["run", "--backend", "sim", "--duration", "8", "--record", str(path), "--no-progress"]) == 0
     srv = LiveServer(tmp_path, "--backend", f"replay://{path}")

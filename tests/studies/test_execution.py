@@ -61,6 +61,23 @@ def _evaluations(out):
     return pq.read_table(out / "evaluations.parquet").to_pandas()
 
 
+#: The study a kill or a signal stops mid-way: one row a chunk, 106 rows, so a stop lands between rows.
+RESUMED_SPEC = SPEC.replace("chunk_size = 3", "chunk_size = 1").replace("sobol_n = 4", "sobol_n = 8")
+
+
+@pytest.fixture(scope="module")
+def resumed_ref(tmp_path_factory):
+    """:data:`RESUMED_SPEC`'s serial run, its evaluations: what every stopped-then-resumed study must give. Run once
+    for the module (the killed study and the SIGTERM-stopped ones, 0 and 2 workers, each compared with it): it was
+    run three times, the same command on the same spec."""
+    root = tmp_path_factory.mktemp("resumed-ref")
+    spec = root / "spec.toml"
+    spec.write_text(RESUMED_SPEC)
+    ref = root / "ref"
+    assert main(["study", "sensitivity", str(spec), "--out", str(ref), "--workers", "0", "--no-progress"]) == 0
+    return _evaluations(ref)
+
+
 @pytest.mark.slow
 def test_dask_workers_give_the_serial_numbers(tmp_path):
     spec = tmp_path / "spec.toml"
@@ -79,11 +96,9 @@ def test_dask_workers_give_the_serial_numbers(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_killed_study_resumes_without_recomputing(tmp_path):
+def test_a_killed_study_resumes_without_recomputing(tmp_path, resumed_ref):
     spec = tmp_path / "spec.toml"
-    spec.write_text(SPEC.replace("chunk_size = 3", "chunk_size = 1").replace("sobol_n = 4", "sobol_n = 8"))
-    ref = tmp_path / "ref"
-    assert main(["study", "sensitivity", str(spec), "--out", str(ref), "--workers", "0", "--no-progress"]) == 0
+    spec.write_text(RESUMED_SPEC)
     out = tmp_path / "killed"
     proc = subprocess.Popen(
         [
@@ -112,7 +127,7 @@ def test_a_killed_study_resumes_without_recomputing(tmp_path):
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     before = journal.read_text().splitlines()
-    rows_total = len(_evaluations(ref))
+    rows_total = len(resumed_ref)
     assert 6 <= len(before) < rows_total + 1, "the kill must land mid-study"
     assert not (out / "evaluations.parquet").exists()
     done = _cli("study", "sensitivity", str(spec), "--out", str(out), "--workers", "0", "--no-progress")
@@ -122,7 +137,7 @@ def test_a_killed_study_resumes_without_recomputing(tmp_path):
     assert after[: len(before) - 1] == before[:-1]
     rows = [json.loads(line)["row"] for line in after[1:]]
     assert sorted(rows) == list(range(rows_total))
-    assert _evaluations(out).equals(_evaluations(ref))
+    assert _evaluations(out).equals(resumed_ref)
 
 
 _DYING = """
@@ -287,15 +302,13 @@ def test_a_finished_study_is_not_overwritten(tmp_path, capsys):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("workers", ["0", "2"])
-def test_a_study_stopped_by_sigterm_resumes_without_recomputing(tmp_path, workers):
+def test_a_study_stopped_by_sigterm_resumes_without_recomputing(tmp_path, resumed_ref, workers):
     """Issue 22: SIGTERM (kill, a batch scheduler) stops a study as Ctrl-C does: exit 143 with the JSON error
     naming it, the journal's finished rows kept, no outputs yet; the plain rerun computes only the rest."""
     from children import lines, stop, wait_until
 
     spec = tmp_path / "spec.toml"
-    spec.write_text(SPEC.replace("chunk_size = 3", "chunk_size = 1").replace("sobol_n = 4", "sobol_n = 8"))
-    ref = tmp_path / "ref"
-    assert main(["study", "sensitivity", str(spec), "--out", str(ref), "--workers", "0", "--no-progress"]) == 0
+    spec.write_text(RESUMED_SPEC)
     out = tmp_path / "stopped"
     argv = ["study", "sensitivity", str(spec), "--out", str(out), "--workers", workers, "--no-progress", "--json"]
     proc = subprocess.Popen([sys.executable, "-m", "flexdigit.cli", *argv], stdout=subprocess.PIPE,
@@ -307,14 +320,14 @@ def test_a_study_stopped_by_sigterm_resumes_without_recomputing(tmp_path, worker
     assert result["signal"] == "SIGTERM"
     assert result["error"] == "interrupted by SIGTERM"
     before = journal.read_text().splitlines()
-    rows_total = len(_evaluations(ref))
+    rows_total = len(resumed_ref)
     assert 6 <= len(before) < rows_total + 1, "the stop must land mid-study"
     assert not (out / "evaluations.parquet").exists()
     done = _cli("study", "sensitivity", str(spec), "--out", str(out), "--workers", "0", "--no-progress")
     assert done.returncode == 0, done.stderr
     after = journal.read_text().splitlines()
     assert after[: len(before)] == before  # every row finished before the stop was kept whole, not recomputed
-    assert _evaluations(out).equals(_evaluations(ref))
+    assert _evaluations(out).equals(resumed_ref)
 
 
 def test_dask_tasks_take_consecutive_blocks_shrinking_to_one_at_the_end():
