@@ -21,12 +21,15 @@ Run the campaign (each command a subprocess, as a user would type it; ``--comman
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import math
 import os
 import subprocess
 import sys
 import time
+import traceback
 from pathlib import Path
 
 import numpy as np
@@ -274,12 +277,21 @@ def _argv(command: str, digit: Path, work: Path, data: dict, hanging: bool) -> l
             "calibrate", *p, "--release-housed", str(work / "simulate-release.parquet"),
             "--sweep", str(work / "simulate-sweep.parquet"), "--out", f"{out}.toml", "--allow-poor-fit", *orient,
         ]  # fmt: skip
+    kept = work / f"design-20ms-{'hanging' if hanging else 'upright'}.json"
     if command == "design-20ms":
-        return ["design", "20ms", *p, *orient]
+        return ["design", "20ms", *p, "--out", str(kept), "--force", *orient]
     if command == "design-hinf":
         return ["design", "hinf", "--filter-hz", "39", *p, *orient]
     if command in ("run+30", "run-30"):
-        return ["run", *p, f"--setpoint-deg={command[3:]}", "--duration", "2.5", "--seed", "0", *orient]
+        # the design design-20ms kept, where it ran (the same weights run would search again, 2-8 s:
+        # tests/cli/test_kept_design_cli.py; run's own search on drawn digits: tests/cli/test_digit_control.py),
+        # and the rotation map run+30 sweeps (the twin's default, of the next seed: the same for -30) loaded by run-30
+        controller = ["--controller", str(kept)] if kept.exists() else []
+        rotation_map = ["--rotation-map", str(work / f"rotation-map-{'hanging' if hanging else 'upright'}.json")]
+        if command == "run+30":
+            rotation_map += ["--map-from", "twin", "--force"]
+        return ["run", *p, f"--setpoint-deg={command[3:]}", "--duration", "2.5", "--seed", "0", *orient,
+                *controller, *rotation_map]  # fmt: skip
     if command == "collect":
         _protocol(work / "protocol.toml", digit)
         return ["collect", str(work / "protocol.toml"), *p, "--out", str(work / "data.parquet"), "--no-progress"]
@@ -296,7 +308,9 @@ def _argv(command: str, digit: Path, work: Path, data: dict, hanging: bool) -> l
         return ["palpate", *p, "--tissue", str(tissue), "--protocol", str(sweep), "--backend",
                 "sim?orientation=hanging"]  # fmt: skip
     if command == "reproduce":
-        return ["reproduce", "--fast", *p, "--out", str(work / "report")]
+        # one process, the chapters one by one (as tests/report/test_digit_reports.py): the same report, without a
+        # pool of workers each importing the library on a machine whose cores the campaign's commands already fill
+        return ["reproduce", "--fast", *p, "--out", str(work / "report"), "--workers", "1"]
     raise ValueError(command)
 
 
@@ -324,19 +338,43 @@ def run_command(argv: list[str], timeout_s: float = 900.0) -> dict:
         )  # fmt: skip
     except subprocess.TimeoutExpired:
         return {"code": None, "traceback": False, "error": f"timed out after {timeout_s:g} s", "json": None}
+    return _outcome(done.returncode, done.stdout, done.stderr, start)
+
+
+def run_in_process(argv: list[str]) -> dict:
+    """:func:`run_command` in this process (``flexdigit.cli.main``, the same parser and commands, its output and
+    any traceback captured): no Python start and no imports of flexdigit and its libraries per command, a few
+    seconds each of the campaign's 15 (the test suite's way; the campaign's own runs are subprocesses)."""
+    from flexdigit.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    start = time.perf_counter()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main([*argv, "--json"])
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 1
+        except Exception:  # noqa: BLE001  (what a subprocess would print as its traceback)
+            traceback.print_exc()
+            code = 1
+    return _outcome(code, out.getvalue(), err.getvalue(), start)
+
+
+def _outcome(code: int | None, stdout: str, stderr: str, start: float) -> dict:
+    """A command's exit code, a traceback seen, its JSON, its last error line and its seconds since ``start``."""
     try:
-        result = json.loads(done.stdout)
+        result = json.loads(stdout)
     except json.JSONDecodeError:
         result = None
-    err_lines = [line for line in done.stderr.splitlines() if line.strip()]
+    err_lines = [line for line in stderr.splitlines() if line.strip()]
     error = ""
     if isinstance(result, dict) and "error" in result:
         error = str(result["error"])
     elif err_lines:
         error = err_lines[-1]
     return {
-        "code": done.returncode,
-        "traceback": "Traceback (most recent call last)" in done.stderr + done.stdout,
+        "code": code,
+        "traceback": "Traceback (most recent call last)" in stderr + stdout,
         "error": error[:400],
         "json": result,
         "seconds": round(time.perf_counter() - start, 1),
@@ -347,9 +385,12 @@ def _buckles(outcome: dict) -> bool:
     return outcome["code"] == 2 and "buckl" in outcome["error"]
 
 
-def run_digit(data: dict, work: Path, commands=COMMANDS, digit: Path | None = None) -> dict[str, dict]:
-    """Every command on the digit ``data`` in ``work`` (written there, unless ``digit`` is its file already); a
-    digit that buckles tip up is run hanging from then on (the CLI's own advice, as a user would follow it)."""
+def run_digit(
+    data: dict, work: Path, commands=COMMANDS, digit: Path | None = None, runner=run_command
+) -> dict[str, dict]:
+    """Every command on the digit ``data`` in ``work`` (written there, unless ``digit`` is its file already), each
+    by ``runner`` (:func:`run_command`, or :func:`run_in_process`); a digit that buckles tip up is run hanging from
+    then on (the CLI's own advice, as a user would follow it)."""
     work.mkdir(parents=True, exist_ok=True)
     if digit is None:
         digit = work / "digit.toml"
@@ -360,10 +401,10 @@ def run_digit(data: dict, work: Path, commands=COMMANDS, digit: Path | None = No
     for command in commands:
         if command in PAIR_ONLY and not pair:
             continue
-        outcome = run_command(_argv(command, digit, work, data, hanging))
+        outcome = runner(_argv(command, digit, work, data, hanging))
         if _buckles(outcome) and not hanging:
             hanging = True
-            outcome = run_command(_argv(command, digit, work, data, hanging))
+            outcome = runner(_argv(command, digit, work, data, hanging))
             outcome["hanging"] = True
         outcomes[command] = outcome
     return outcomes

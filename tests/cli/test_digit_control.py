@@ -164,7 +164,11 @@ def test_params_design_and_run_on_the_digit(name, tmp_path, capsys):
         # the first run searches the digit's weights itself, as a user's who never ran design; the others run the
         # design kept above (the same weights: tests/cli/test_kept_design_cli.py), not searching again (2-8 s each)
         controller = ["--controller", str(kept)] if k else []
-        code, run = _cli([*argv, *controller, "--log", str(log)], capsys)
+        # the rotation map is swept on a twin of the next seed (cli/run.py), the same map for +30 and -30 on one
+        # seed: the first run of a seed saves it, a pair's -30 loads it (--rotation-map) instead of sweeping the
+        # same twin again (~60 simulated s, most of a run's time), the map and the run as they would be
+        rotation_map = ["--rotation-map", str(tmp_path / f"map-{seed}.json")]
+        code, run = _cli([*argv, *controller, *rotation_map, "--log", str(log)], capsys)
         assert code == 0, run
         assert run["status"] == "completed"
         assert run["controller_file"] == (str(kept) if k else None)
