@@ -245,6 +245,7 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
         args.filter_hz, params, calibration, orientation=args.orientation, eps_u=args.eps, margin=args.margin
     )
     data = {"params": args.params, **summary}
+    eps_from = "given" if args.eps is not None else "the thesis's, scaled to this |G(0)|"
     if args.plot:  # the plant and the controller the design reported, as transfer functions
         import control as ct
 
@@ -259,12 +260,22 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
         f"  gamma_opt {data['gamma_opt']:.6g}, central controller at {data['gamma']:.6g} (margin "
         f"{data['margin']:.3g}); closed loop stable\n"
         f"  ||T_zw|| {data['tzw_peak_db']:.4f} dB at {data['tzw_peak_rad_s']:.3f} rad/s; ||T_pq|| "
-        f"{data['tpq_peak_db']:.2f} dB; additive tolerance {data['additive_tolerance_m_per_command']:.4g} m/command "
-        f"({data['additive_tolerance_relative_percent']:.3g} % of |G(0)|)\n"
+        f"{data['tpq_peak_db']:.2f} dB; eps_u {data['eps_u']:.4g} ({eps_from})\n"
+        f"  additive tolerance {_tolerance_text(data)}\n"
         f"  T_yw settling {data['tyw_settling_s']:.3f} s; thesis columns not applicable"
         + (f"\n  plot -> {data['plot']}" if args.plot else "")
     )
     return CommandResult(data=data, text=text)
+
+
+def _tolerance_text(data: dict) -> str:
+    """The digit design's additive tolerance, or why it is not given (the open-loop design)."""
+    if data["additive_tolerance_m_per_command"] is None:
+        return data["additive_tolerance_note"]
+    return (
+        f"{data['additive_tolerance_m_per_command']:.4g} m/command ({data['additive_tolerance_relative_percent']:.3g} "
+        f"% of |G(0)|; loop gain at DC {data['loop_gain_dc']:.3g})"
+    )
 
 
 def _twenty_ms(args: argparse.Namespace) -> CommandResult:
