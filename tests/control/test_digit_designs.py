@@ -213,6 +213,15 @@ def test_the_39_hz_design_is_the_open_loop_one_and_its_tolerance_is_refused():
     assert five["additive_tolerance_relative_percent"] < 100.0  # a loop that controls tolerates less than G itself
 
 
+def test_the_thesis_rigs_39_hz_design_says_it_is_open_loop(capsys):
+    """The thesis rig's printed plant at 39 Hz is the same open-loop design (gamma_opt = 1/(2 pi 39)): its
+    tolerance is printed as the thesis path always has, and explained; the 5 Hz design is not open loop."""
+    assert main(["design", "hinf", "--filter-hz", "39", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["open_loop"] is True
+    assert main(["design", "hinf", "--filter-hz", "5"]) == 0
+    assert "open loop" not in capsys.readouterr().out
+
+
 @pytest.mark.slow
 def test_a_coarse_maps_digit_gets_a_quiet_observer_and_others_keep_theirs(monkeypatch):
     """``random_digit(8)`` reads its rotation through 3 coarse quarter bridges (0.67 deg a reading): no candidate of

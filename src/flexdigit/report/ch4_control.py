@@ -227,7 +227,11 @@ def _digit_design_table(designs: dict[float, dict]):
     columns += ("additive_tolerance_m_per_command", "additive_tolerance_percent", "tyw_settling_s")
     rows = tuple(
         (hz, d["gamma_opt"], d["gamma"], d["tzw_peak_db"], d["tzw_peak_rad_s"], d["tpq_peak_db"])
-        + (d["additive_tolerance_m_per_command"], d["additive_tolerance_relative_percent"], d["tyw_settling_s"])
+        + tuple(
+            "open loop: not applicable" if d[k] is None else d[k]
+            for k in ("additive_tolerance_m_per_command", "additive_tolerance_relative_percent")
+        )
+        + (d["tyw_settling_s"],)
         for hz, d in designs.items()
     )
     return ResultTable(
