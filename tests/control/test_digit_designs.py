@@ -128,6 +128,9 @@ def test_design_commands_take_params(tmp_path, capsys):
     hinf = json.loads(capsys.readouterr().out)
     assert hinf["closed_loop_stable"]
     assert "not applicable" in hinf["thesis_columns"]
+    # at 39 Hz the design is the open-loop one on every digit: its additive tolerance is refused, with the reason
+    assert hinf["additive_tolerance_relative_percent"] is None
+    assert "cost of no controller" in hinf["additive_tolerance_note"]
     # E(s) is this digit's release mode (its twin), not the thesis's table 3.2
     assert hinf["digit_wn_rad_s"] == pytest.approx(
         release_dynamics(RigParams.from_dict(DIGITS["two-sections"])).wn_housing_rad_s
@@ -150,8 +153,8 @@ def test_digit_hinf_summary_is_the_design_on_the_digits_own_plant():
     from flexdigit.control.thesis_designs import digit_hinf_design, digit_hinf_summary
 
     params = RigParams.from_dict(DIGITS["two-sections"])
-    s = digit_hinf_summary(39.0, params)
-    design, plant = digit_hinf_design(39.0, params)
+    s = digit_hinf_summary(5.0, params)
+    design, plant = digit_hinf_design(5.0, params)
     # E(s) is this digit's release mode (its twin), not table 3.2's
     assert s["digit_wn_rad_s"] == pytest.approx(release_dynamics(params).wn_housing_rad_s)
     assert s["digit_wn_rad_s"] != pytest.approx(TABLE_3_2[0], rel=1e-2)
@@ -162,6 +165,61 @@ def test_digit_hinf_summary_is_the_design_on_the_digits_own_plant():
     assert s["additive_tolerance_relative_percent"] == pytest.approx(
         100 * s["additive_tolerance_m_per_command"] / abs(s["plant_dc_gain_m_per_command"]), rel=1e-9
     )
+
+
+#: Relative agreement of two designs whose problems are the same up to a scale: the gamma bisection's own accuracy
+#: (``hinf_riccati``'s ``gtol`` 1e-4) carried through the central controller, with a 10x allowance.
+SCALED_DESIGN_RTOL = 1e-3
+
+
+def test_a_digit_with_its_gain_doubled_keeps_gamma_and_doubles_its_tolerance():
+    """The regularised problem of 4.4 is covariant: G -> 2 G with eps_u -> 2 eps_u (digit_regularisation's scaling)
+    has the same gamma_opt, K -> K/2, so the tolerance 1/||K S|| doubles in m/command and keeps its share of |G(0)|."""
+    from flexdigit.control.analysis import additive_tolerance
+    from flexdigit.control.thesis_designs import digit_plant, digit_regularisation, thesis_design
+
+    plant = digit_plant(RigParams.from_dict(DIGITS["two-sections"]))
+    eps, margin = digit_regularisation(5.0, plant.dc_gain)
+    eps2, margin2 = digit_regularisation(5.0, 2 * plant.dc_gain)
+    assert eps2 == pytest.approx(2 * eps, rel=1e-12)  # a ratio of two products: exact but for rounding
+    assert margin2 == margin
+    one = thesis_design(5.0, plant.tf, eps_u=eps, margin=margin)
+    two = thesis_design(5.0, 2 * plant.tf, eps_u=eps2, margin=margin)
+    assert two.gamma_opt == pytest.approx(one.gamma_opt, rel=SCALED_DESIGN_RTOL)
+    tol1 = additive_tolerance(plant.tf, one.controller)
+    tol2 = additive_tolerance(2 * plant.tf, two.controller)
+    assert tol2["tolerance"] == pytest.approx(2 * tol1["tolerance"], rel=SCALED_DESIGN_RTOL)
+    assert tol2["tolerance_relative_percent"] == pytest.approx(
+        tol1["tolerance_relative_percent"], rel=SCALED_DESIGN_RTOL
+    )
+
+
+def test_the_39_hz_design_is_the_open_loop_one_and_its_tolerance_is_refused():
+    """At 39 Hz the thesis's regularisation leaves nothing to gain by feeding back on any digit: gamma_opt is
+    ||F||_inf = 1/(2 pi 39), the cost of K = 0 (closed form), and 1/||T_pq|| (millions of % of |G(0)|) is refused."""
+    import math
+
+    from flexdigit.control.thesis_designs import OPEN_LOOP_GAMMA_RTOL, digit_hinf_summary
+
+    params = RigParams.from_dict(DIGITS["two-sections"])
+    s = digit_hinf_summary(39.0, params)
+    assert s["open_loop_gamma"] == pytest.approx(1 / (2 * math.pi * 39.0), rel=1e-12)
+    assert s["gamma_opt"] == pytest.approx(s["open_loop_gamma"], rel=OPEN_LOOP_GAMMA_RTOL)
+    assert s["additive_tolerance_relative_percent"] is None
+    assert s["additive_tolerance_note"].startswith("not applicable: gamma_opt")
+    # at 5 Hz the loop controls: gamma_opt well below the cost of no controller, and the figure is given
+    five = digit_hinf_summary(5.0, params)
+    assert five["gamma_opt"] < (1 - OPEN_LOOP_GAMMA_RTOL) * five["open_loop_gamma"]
+    assert five["additive_tolerance_relative_percent"] < 100.0  # a loop that controls tolerates less than G itself
+
+
+def test_the_thesis_rigs_39_hz_design_says_it_is_open_loop(capsys):
+    """The thesis rig's printed plant at 39 Hz is the same open-loop design (gamma_opt = 1/(2 pi 39)): its
+    tolerance is printed as the thesis path always has, and explained; the 5 Hz design is not open loop."""
+    assert main(["design", "hinf", "--filter-hz", "39", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["open_loop"] is True
+    assert main(["design", "hinf", "--filter-hz", "5"]) == 0
+    assert "open loop" not in capsys.readouterr().out
 
 
 @pytest.mark.slow

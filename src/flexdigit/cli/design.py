@@ -175,7 +175,7 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
     import numpy as np
 
     from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps, step_metrics
-    from flexdigit.control.thesis_designs import sorted_poles, thesis_design
+    from flexdigit.control.thesis_designs import OPEN_LOOP_GAMMA_RTOL, sorted_poles, thesis_design
     from flexdigit.models.plant import build_plant
 
     plant = build_plant(plant_variant).tf
@@ -203,6 +203,7 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
         "additive_tolerance_m_per_command": tol["tolerance"],
         "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
         "thesis_arithmetic_percent": tol["thesis_arithmetic_percent"],
+        "open_loop": d.gamma_opt >= (1 - OPEN_LOOP_GAMMA_RTOL) / (2 * np.pi * filter_hz),
         "tuw_step_peak": step_metrics(maps.T_uw, t_final=3.0)["peak"],
         "tyw_settling_s": step_metrics(maps.T_yw, t_final=3.0)["settling_time_s"],
     }
@@ -229,7 +230,8 @@ def _hinf(args: argparse.Namespace) -> CommandResult:
         f"  additive tolerance {s['additive_tolerance_m_per_command']:.4g} m/command "
         f"({s['additive_tolerance_relative_percent']:.3g} % of |G(0)|; thesis arithmetic 100/dB = "
         f"{s['thesis_arithmetic_percent']:.3g} %)\n"
-        f"  T_uw step peak {s['tuw_step_peak']:.4g} commands/m; T_yw settling {s['tyw_settling_s']:.3f} s"
+        + (_OPEN_LOOP_TEXT if s["open_loop"] else "")
+        + f"  T_uw step peak {s['tuw_step_peak']:.4g} commands/m; T_yw settling {s['tyw_settling_s']:.3f} s"
         + (f"\n  plot -> {s['plot']}" if args.plot else "")
     )
     return CommandResult(data=s, text=text)
@@ -245,6 +247,7 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
         args.filter_hz, params, calibration, orientation=args.orientation, eps_u=args.eps, margin=args.margin
     )
     data = {"params": args.params, **summary}
+    eps_from = "given" if args.eps is not None else "the thesis's, scaled to this |G(0)|"
     if args.plot:  # the plant and the controller the design reported, as transfer functions
         import control as ct
 
@@ -259,12 +262,29 @@ def _hinf_digit(args, params, calibration) -> CommandResult:
         f"  gamma_opt {data['gamma_opt']:.6g}, central controller at {data['gamma']:.6g} (margin "
         f"{data['margin']:.3g}); closed loop stable\n"
         f"  ||T_zw|| {data['tzw_peak_db']:.4f} dB at {data['tzw_peak_rad_s']:.3f} rad/s; ||T_pq|| "
-        f"{data['tpq_peak_db']:.2f} dB; additive tolerance {data['additive_tolerance_m_per_command']:.4g} m/command "
-        f"({data['additive_tolerance_relative_percent']:.3g} % of |G(0)|)\n"
+        f"{data['tpq_peak_db']:.2f} dB; eps_u {data['eps_u']:.4g} ({eps_from})\n"
+        f"  additive tolerance {_tolerance_text(data)}\n"
         f"  T_yw settling {data['tyw_settling_s']:.3f} s; thesis columns not applicable"
         + (f"\n  plot -> {data['plot']}" if args.plot else "")
     )
     return CommandResult(data=data, text=text)
+
+
+#: What ``design hinf`` says of a design whose gamma_opt is ||F||_inf (docs/guide/control.md, "Design on your digit").
+_OPEN_LOOP_TEXT = (
+    "  (open loop: gamma_opt is ||F||_inf = 1/(2 pi f_c), the cost of K = 0: this design barely feeds back, and its "
+    "tolerance says only that; not a robustness figure)\n"
+)
+
+
+def _tolerance_text(data: dict) -> str:
+    """The digit design's additive tolerance, or why it is not given (the open-loop design)."""
+    if data["additive_tolerance_m_per_command"] is None:
+        return data["additive_tolerance_note"]
+    return (
+        f"{data['additive_tolerance_m_per_command']:.4g} m/command ({data['additive_tolerance_relative_percent']:.3g} "
+        f"% of |G(0)|; loop gain at DC {data['loop_gain_dc']:.3g})"
+    )
 
 
 def _twenty_ms(args: argparse.Namespace) -> CommandResult:

@@ -82,6 +82,8 @@ __getattr__, __all__ = lazy_exports(
         "read_kept_design": "flexdigit.control.kept_design",
         "DigitModel": "flexdigit.control.digit_model",
         "digit_plant": "flexdigit.control.thesis_designs",
+        "digit_regularisation": "flexdigit.control.thesis_designs",
+        "OPEN_LOOP_GAMMA_RTOL": "flexdigit.control.thesis_designs",
         "digit_hinf_design": "flexdigit.control.thesis_designs",
         "digit_hinf_summary": "flexdigit.control.thesis_designs",
         "RuntimeController": "flexdigit.control.runtime",

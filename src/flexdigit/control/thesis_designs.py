@@ -10,6 +10,8 @@ numerators are 10x ours (see :func:`printed_controller`).
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 import warnings
 
@@ -35,7 +37,9 @@ __all__ = [
     "fit_thesis_regularisation",
     "sorted_poles",
     "singular_infimum_witness",
+    "OPEN_LOOP_GAMMA_RTOL",
     "digit_plant",
+    "digit_regularisation",
     "digit_hinf_design",
     "digit_hinf_summary",
 ]
@@ -43,6 +47,14 @@ __all__ = [
 #: ``(eps_u, margin)`` per cut-off (Hz) that reproduce the printed controller poles (tables 4.2, 4.3), as found
 #: by :func:`fit_thesis_regularisation` (tests re-run the fit); other cut-offs use the 5 Hz pair.
 THESIS_REGULARISATION: dict[float, tuple[float, float]] = {5.0: (1.0538e-7, 0.20912), 39.0: (8.4175e-7, 1.8405)}
+
+#: A design whose ``gamma_opt`` is within this fraction of ``||F||_inf = 1/(2 pi f_c)`` (the cost of no controller
+#: at all, ``K = 0``) is the open-loop one: the weights leave nothing to gain by feeding back, its central controller
+#: is an arbitrary small stabilising one and its additive tolerance ``1/||K S||`` measures a loop that does not
+#: control. 1 %: the bisection's optimum sits 8e-4 above it where K = 0 is optimal (0.00408408 against
+#: 1/(2 pi 39) = 0.00408090 on every digit at 39 Hz), and a controlling design is 10-40 % below (0.020-0.025 at 5 Hz
+#: against 0.0318).
+OPEN_LOOP_GAMMA_RTOL = 1e-2
 
 #: Relative pole error a fit to printed poles must reach: half a unit in table 4.3's 4th significant digit.
 POLE_FIT_RTOL = 5e-4
@@ -188,7 +200,6 @@ def digit_plant(params, calibration=None, *, orientation: str = "vertical", outp
     values to 0.01 %), not the thesis's tables, which are its rig's alone; a file that gives ``[dynamics]``
     (identified on that digit) is taken at its word.
     """
-    import dataclasses
 
     # the file's [dynamics] when it gives them (identified on that digit), else its twin's release mode
     given = params.dynamics != DigitDynamics()
@@ -196,6 +207,26 @@ def digit_plant(params, calibration=None, *, orientation: str = "vertical", outp
     if not (dynamics.wn_housing_rad_s > 0 and dynamics.zeta_housing > 0):
         raise DesignError(f"the digit's release mode is not a damped vibration ({dynamics!r}): no plant to design on")
     return build_plant("consistent", dataclasses.replace(params, dynamics=dynamics), output=output)
+
+
+@functools.cache
+def _thesis_rig_dc_gain() -> float:
+    """``|G(0)|`` of the thesis rig's unit-correct plant (``build_plant("consistent")``), m per command."""
+    return abs(build_plant("consistent").dc_gain)
+
+
+def digit_regularisation(filter_hz: float, plant_dc_gain: float) -> tuple[float, float]:
+    """``(eps_u, margin)`` of 4.4's design on a digit whose plant has DC gain ``plant_dc_gain`` (m per command).
+
+    The thesis's pair (:data:`THESIS_REGULARISATION`) with ``eps_u`` scaled by ``|G(0)|`` over the thesis rig's
+    (its unit-correct plant, ``design hinf --plant consistent``). The regularised problem is covariant: ``G -> c G``
+    with ``eps_u -> c eps_u`` gives the same ``gamma_opt`` and ``K -> K/c``, so a digit is weighted as the thesis
+    weighted its rig (control effort against its plant's gain); an absolute ``eps_u`` would weigh a digit 10x less
+    stiff in gain 10x harder against control and leave it nearly open loop. The thesis rig gets its pair back.
+    """
+    fc = check_positive(filter_hz, "filter_hz", "digit_regularisation", error=DesignError)
+    eps_u, margin = THESIS_REGULARISATION.get(round(fc, 6), THESIS_REGULARISATION[5.0])
+    return eps_u * abs(plant_dc_gain) / _thesis_rig_dc_gain(), margin
 
 
 def digit_hinf_design(
@@ -208,11 +239,20 @@ def digit_hinf_design(
     margin: float | None = None,
 ):
     """The H-infinity design of 4.4 (:func:`thesis_design`) on a described digit's plant (:func:`digit_plant`,
-    gauge-1 deflection in m per command), checked: returns ``(design, plant)``; a controller that does not
-    stabilise the plant is refused (:class:`~flexdigit.errors.DesignError`, one line)."""
+    gauge-1 deflection in m per command), regularised as :func:`digit_regularisation` says unless ``eps_u`` is
+    given (solved as the thesis's problem on ``c G``, ``c`` = the thesis rig's ``|G(0)|`` over the digit's, and
+    ``K = c K'``: the same design, without the Riccati solver's failure at ``eps_u`` ~ 1e-8), checked: returns
+    ``(design, plant)``; a controller that does not stabilise the plant is refused
+    (:class:`~flexdigit.errors.DesignError`, one line)."""
 
     plant = digit_plant(params, calibration, orientation=orientation)
-    design = thesis_design(filter_hz, plant.tf, eps_u=eps_u, margin=margin)
+    margin = digit_regularisation(filter_hz, plant.dc_gain)[1] if margin is None else margin
+    if eps_u is None:  # solved on the plant scaled to the thesis rig's |G(0)| (as well conditioned as the rig's)
+        scale = _thesis_rig_dc_gain() / abs(plant.dc_gain)
+        design = thesis_design(filter_hz, scale * plant.tf, margin=margin)
+        design = dataclasses.replace(design, controller=scale * design.controller)
+    else:
+        design = thesis_design(filter_hz, plant.tf, eps_u=eps_u, margin=margin)
     maps = loop_maps(plant.tf, design.controller)
     if not is_stable(maps.T_yw):
         raise DesignError(
@@ -245,16 +285,17 @@ def digit_hinf_summary(
     orientation : str
         How the digit is mounted, for its mode.
     eps_u, margin : float, optional
-        Regularisation and distance from ``gamma_opt`` (default: :data:`THESIS_REGULARISATION`'s 5 Hz pair).
+        Regularisation and distance from ``gamma_opt`` (default: :func:`digit_regularisation`).
 
     Returns
     -------
     dict
         The plant (``plant_num``, ``plant_den``, ``plant_poles`` as ``[re, im]``, ``plant_dc_gain_m_per_command``,
-        ``digit_wn_rad_s``), the design (``gamma_opt``, ``gamma``, ``margin``, ``controller_num``,
+        ``digit_wn_rad_s``), the design (``eps_u``, ``gamma_opt``, ``gamma``, ``margin``, ``controller_num``,
         ``controller_den``, ``controller_poles``) and its figures (``tzw_peak_db`` at ``tzw_peak_rad_s``,
-        ``tpq_peak_db``, ``additive_tolerance_m_per_command``, ``additive_tolerance_relative_percent``,
-        ``tyw_settling_s`` over 3 s).
+        ``tpq_peak_db``, ``open_loop_gamma``, ``loop_gain_dc``, ``additive_tolerance_m_per_command``,
+        ``additive_tolerance_relative_percent`` (None, ``additive_tolerance_note`` says why, for the open-loop
+        design: :func:`_digit_tolerance`), ``tyw_settling_s`` over 3 s).
 
     Raises
     ------
@@ -265,7 +306,6 @@ def digit_hinf_summary(
     K = d.controller
     maps = loop_maps(plant.tf, K)
     tzw, wzw = hinf_norm(maps.T_zw, "T_zw")
-    tol = additive_tolerance(plant.tf, K)
     tf = ct.tf(K)
     return {
         "filter_hz": filter_hz,
@@ -275,6 +315,7 @@ def digit_hinf_summary(
         "plant_poles": [[float(p.real), float(p.imag)] for p in plant.poles],
         "plant_dc_gain_m_per_command": plant.dc_gain,
         "digit_wn_rad_s": plant.factors["E_digit_housing"].den[-1] ** 0.5,
+        "eps_u": digit_regularisation(filter_hz, plant.dc_gain)[0] if eps_u is None else eps_u,
         "gamma_opt": d.gamma_opt,
         "gamma": d.gamma,
         "margin": d.margin,
@@ -284,9 +325,38 @@ def digit_hinf_summary(
         "closed_loop_stable": True,
         "tzw_peak_db": 20 * np.log10(tzw),
         "tzw_peak_rad_s": wzw,
-        "tpq_peak_db": tol["tpq_db"],
-        "additive_tolerance_m_per_command": tol["tolerance"],
-        "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
+        **_digit_tolerance(filter_hz, plant, d),
         "tyw_settling_s": step_metrics(maps.T_yw, t_final=3.0)["settling_time_s"],
         "thesis_columns": "not applicable (the thesis printed its own rig's designs only)",
     }
+
+
+def _digit_tolerance(filter_hz: float, plant, design: HinfDesign) -> dict:
+    """The additive tolerance of a digit's design (thesis 4.6) when it measures a loop that controls.
+
+    ``open_loop_gamma`` is ``||F||_inf = 1/(2 pi f_c)``, the cost of ``K = 0``; ``loop_gain_dc`` is ``|G(0) K(0)|``.
+    A design whose ``gamma_opt`` is within :data:`OPEN_LOOP_GAMMA_RTOL` of it is the open-loop one: its tolerance
+    (``1/||K S||``, millions of % of ``|G(0)|``: any plant is tolerated by a loop that barely feeds back) is refused,
+    ``None`` with ``additive_tolerance_note`` saying why.
+    """
+    open_loop = 1 / (2 * math.pi * filter_hz)
+    loop_dc = abs(plant.dc_gain * float(np.real(ct.dcgain(design.controller))))
+    tol = additive_tolerance(plant.tf, design.controller)
+    out = {
+        "open_loop_gamma": open_loop,
+        "loop_gain_dc": loop_dc,
+        "tpq_peak_db": tol["tpq_db"],
+        "additive_tolerance_m_per_command": tol["tolerance"],
+        "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
+        "additive_tolerance_note": "",
+    }
+    if design.gamma_opt >= (1 - OPEN_LOOP_GAMMA_RTOL) * open_loop:
+        out["additive_tolerance_note"] = (
+            f"not applicable: gamma_opt {design.gamma_opt:.6g} is ||F||_inf = 1/(2 pi {filter_hz:g} Hz) = "
+            f"{open_loop:.6g}, the cost of no controller: at this cut-off the weights leave nothing to gain by "
+            f"feeding back (loop gain at DC {loop_dc:.3g}), so 1/||T_pq|| ({tol['tolerance']:.3g} m/command, "
+            f"{tol['tolerance_relative_percent']:.3g} % of |G(0)|) is that of a loop that does not control"
+        )
+        out["additive_tolerance_m_per_command"] = None
+        out["additive_tolerance_relative_percent"] = None
+    return out

@@ -129,7 +129,9 @@ def _digit_chapter(ctx: ReportContext) -> Chapter:
         "The thesis's chapter 4 analyses its own rig: its printed plant G(s), the K1 loop of table 4.1 and the "
         "controllers of tables 4.2-4.3 (with their 10x gain). None of those is this digit's, so none is shown "
         "here. Instead the design of 4.4 (error filter F(s) = 1/(s + 2 pi f_c), regularised as the thesis's printed "
-        "controllers: 39 Hz at the 39 Hz one's eps_u and gamma margin, every other cut-off at the 5 Hz one's) "
+        "controllers: 39 Hz at the 39 Hz one's eps_u and gamma margin, every other cut-off at the 5 Hz one's, eps_u "
+        "scaled by this plant's DC gain over the thesis rig's; where gamma_opt is the cost of no controller, "
+        "1/(2 pi f_c), the design does not feed back and its additive tolerance is not given) "
         "is repeated on this digit's own plant, "
         "built the thesis's way from its components (servo, cable with its gearing, the digit's mode, gauge "
         f"chain), at each cut-off of 4.7's sweep ({', '.join(f'{hz:g}' for hz in DIGIT_FILTERS_HZ)} Hz); "
@@ -201,10 +203,14 @@ def _digit_design_entries(hz: float, d: dict, E: list) -> None:
         results.new(
             f"hinf.k_{key}.additive_tolerance_percent",
             "4.7 (this digit)",
-            d["additive_tolerance_relative_percent"],
+            d["additive_tolerance_note"] or d["additive_tolerance_relative_percent"],
             "%",
-            f"Additive uncertainty {where} tolerates, 1/||T_pq|| (small gain) as a share of |G(0)|: "
-            f"{d['additive_tolerance_m_per_command']:.3g} m/command.",
+            f"Additive uncertainty {where} tolerates, 1/||T_pq|| (small gain) as a share of |G(0)|"
+            + (
+                f": {d['additive_tolerance_m_per_command']:.3g} m/command."
+                if d["additive_tolerance_m_per_command"]
+                else "."
+            ),
         ),
         results.new(
             f"hinf.k_{key}.tyw_settling_s",
@@ -221,7 +227,11 @@ def _digit_design_table(designs: dict[float, dict]):
     columns += ("additive_tolerance_m_per_command", "additive_tolerance_percent", "tyw_settling_s")
     rows = tuple(
         (hz, d["gamma_opt"], d["gamma"], d["tzw_peak_db"], d["tzw_peak_rad_s"], d["tpq_peak_db"])
-        + (d["additive_tolerance_m_per_command"], d["additive_tolerance_relative_percent"], d["tyw_settling_s"])
+        + tuple(
+            "open loop: not applicable" if d[k] is None else d[k]
+            for k in ("additive_tolerance_m_per_command", "additive_tolerance_relative_percent")
+        )
+        + (d["tyw_settling_s"],)
         for hz, d in designs.items()
     )
     return ResultTable(
