@@ -48,6 +48,7 @@ LONGEST_S = {
     "studies/test_execution.py": 412,
     "report/test_digit_reports.py": 398,
     "live/test_server.py": 365,
+    "tactile/test_refined_network.py": 280,  # at load 15-19 on 2 shared cores, alone
     "firmware/test_board.py": 267,
     "tactile/test_bayes_drift.py": 223,
     "cli/test_palpate_pairs.py": 220,

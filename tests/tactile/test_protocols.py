@@ -89,3 +89,21 @@ def test_a_protocol_for_a_digit_is_one_library_call(tmp_path):
     assert load_protocol(user).positions_from_tip_m == (0.2,)  # no digit given: as written, unchecked
     with pytest.raises(ParameterError, match="must lie on the digit"):
         load_protocol(user, short)  # a user's protocol is checked, not scaled: 20 cm is off a 15 cm digit
+
+
+def test_a_refined_protocol_cuts_each_step_and_keeps_its_readings():
+    """``Protocol.refined`` (``collect --refine``): thesis-6.1's 1 cm run cut into K steps, the 24 cm position (10
+    steps past the run: no step of the run) kept alone, the repetitions divided by K rounded up."""
+    p = load_protocol("thesis-6.1")
+    fine = p.refined(4)
+    run_cm = [round(100 * x, 6) for x in fine.positions_from_tip_m[:-1]]
+    assert run_cm == [round(0.25 * k, 6) for k in range(57)]  # 0 to 14 cm in 0.25 cm steps
+    assert fine.positions_from_tip_m[-1] == pytest.approx(0.24)
+    assert fine.repetitions == 7  # ceil(25 / 4)
+    assert fine.sample_count == 3 * 25 + 3 * 58 * 7  # 1293, against thesis-6.1's 1275
+    assert p.refined(1) is p
+
+
+def test_a_refined_protocol_refuses_a_factor_by_name():
+    with pytest.raises(ParameterError, match="'factor'"):
+        load_protocol("thesis-6.1").refined(0)

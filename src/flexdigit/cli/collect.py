@@ -14,21 +14,21 @@ from flexdigit.params import DIGIT_LENGTH_M
 def _collect_flags():
     """The declarations the flags share with the library (imported when the parser is built)."""
     from flexdigit.tactile import network_sizes
-    from flexdigit.tactile.protocols import MAX_SETTLE_S
+    from flexdigit.tactile.protocols import MAX_SETTLE_S, REFINE
 
     settle = Plausible("s", 0.0, MAX_SETTLE_S, "settle time per setting: an hour at most")
-    return network_sizes, settle
+    return network_sizes, settle, REFINE
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    sizes, settle = _collect_flags()
-    _add_collect(subparsers, settle)
+    sizes, settle, refine = _collect_flags()
+    _add_collect(subparsers, settle, refine)
     _add_dataset(subparsers)
     _add_train(subparsers, sizes)
     _add_predict(subparsers)
 
 
-def _add_collect(subparsers, settle) -> None:
+def _add_collect(subparsers, settle, refine) -> None:
     """``flexdigit collect``'s flags."""
     p = add_command(
         subparsers,
@@ -60,6 +60,7 @@ def _add_collect(subparsers, settle) -> None:
     p.add_argument(
         "--settle", type=Flag(settle), default=None, help="settle time per setting, s, 0..3600 (default: protocol's)"
     )
+    _add_refine(p, refine)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument(
         "--allow-rail", action="store_true", help="write the dataset even if some gauge readings sit at the ADC's rail"
@@ -67,6 +68,19 @@ def _add_collect(subparsers, settle) -> None:
     p.add_argument("--record", default=None, help="also record every reading (and every load) to this MCAP file")
     p.add_argument("--force", action="store_true", help="overwrite --out if it holds a dataset, and --record, --plot")
     add_plot_flag(p, "the dataset's gauge voltages against the load's position and against time")
+
+
+def _add_refine(p, refine) -> None:
+    """``collect --refine K`` (:meth:`flexdigit.tactile.protocols.Protocol.refined`)."""
+    p.add_argument(
+        "--refine",
+        type=Flag(refine),
+        default=1,
+        metavar="K",
+        help="K positions where the protocol has one step (its evenly spaced positions), its repetitions divided by "
+        "K (about as many readings): for a digit that resolves positions far finer than the protocol's step, so a "
+        "network has training positions near the ones it is tested on (default 1, the protocol's)",
+    )
 
 
 def _add_dataset(subparsers) -> None:
@@ -194,12 +208,12 @@ def _add_predict(subparsers) -> None:
 
 def _digit_protocol(args: argparse.Namespace):
     """The ``--params`` digit and the protocol on it: a built-in's positions scaled to the digit's length (the same
-    fractions of it), a user protocol's checked against it, before the rig opens."""
+    fractions of it), a user protocol's checked against it, before the rig opens; ``--refine``'s positions."""
     from flexdigit.params import RigParams, load_params
     from flexdigit.tactile.protocols import load_protocol
 
     params = load_params(args.params) if args.params else RigParams()
-    return params, load_protocol(args.protocol, params)
+    return params, load_protocol(args.protocol, params).refined(args.refine)
 
 
 def _collect(args: argparse.Namespace) -> CommandResult:

@@ -44,10 +44,26 @@ from flexdigit._validation import (
 from flexdigit.errors import ParameterError
 from flexdigit.params import LOAD_KG, POSITION_FROM_TIP_M, RigParams
 
-__all__ = ["builtin_protocols", "RELAXED", "MAX_SETTLE_S", "BUILTIN", "Protocol", "protocol_from_toml", "load_protocol"]
+__all__ = [
+    "builtin_protocols",
+    "RELAXED",
+    "MAX_SETTLE_S",
+    "REFINE",
+    "REFINE_MAX",
+    "BUILTIN",
+    "Protocol",
+    "protocol_from_toml",
+    "load_protocol",
+]
 
 #: The ``command`` recorded when actuation is disabled (the servo relaxed, chapter 6).
 RELAXED = -1
+
+#: Most steps :meth:`Protocol.refined` cuts one protocol step into (``collect --refine``): at 25, one of
+#: thesis-6.1's 25 readings a position is left
+REFINE_MAX = 25
+REFINE = Plausible("", 1, REFINE_MAX, "steps per protocol step: 25 leaves one of thesis-6.1's 25 readings a position",
+                   integer=True)  # fmt: skip
 
 #: Longest settle time (and reading interval) a protocol or ``collect --settle`` takes, s: an hour.
 MAX_SETTLE_S = 3600.0
@@ -279,6 +295,42 @@ class Protocol:
 
         positions = tuple(round(p * length / ref, 9) for p in self.positions_from_tip_m)
         return replace(self, name=f"{self.name} on {length:g} m", positions_from_tip_m=positions)
+
+    def refined(self, factor: int) -> Protocol:
+        """This protocol with ``factor`` positions where it has one step: every gap between two neighbouring
+        positions of its evenly spaced run (a gap within 1.5 median gaps, as
+        :func:`~flexdigit.tactile.pipeline.held_out_positions_split` reads them) cut into ``factor`` equal steps,
+        an isolated position (thesis-6.1's 24 cm) kept as it is, and the repetitions divided by ``factor``
+        (rounded up) so the run takes about as many readings; itself for ``factor`` 1.
+
+        A network is scored on held-out positions between its training ones (``train --split positions``): two
+        protocol steps apart on thesis-6.1, 7-13 mm on the hand-made digits, where a digit that resolves a tenth of
+        a millimetre (its Bayes limit) cannot be interpolated to its limit (a gauge's kink where the load passes it
+        falls between two training positions). ``flexdigit collect --refine K``.
+
+        Examples
+        --------
+        >>> p = load_protocol("thesis-6.1").refined(4)
+        >>> len(p.positions_from_tip_m), p.repetitions, round(p.positions_from_tip_m[1], 6), p.sample_count
+        (58, 7, 0.0025, 1293)
+        """
+        factor = check_int(factor, "factor", f"Protocol {self.name!r}.refined", low=1, high=REFINE_MAX)
+        if factor == 1:
+            return self
+        tips = np.sort(np.asarray(self.positions_from_tip_m))
+        gaps = np.diff(tips)
+        near = gaps <= 1.5 * float(np.median(gaps)) if gaps.size else gaps.astype(bool)
+        inserted = [a + (b - a) * k / factor for a, b, n in zip(tips[:-1], tips[1:], near, strict=True) if n
+                    for k in range(1, factor)]  # fmt: skip
+        from dataclasses import replace
+
+        positions = tuple(round(float(p), 9) for p in sorted({*self.positions_from_tip_m, *inserted}))
+        return replace(
+            self,
+            name=f"{self.name} refined x{factor}",
+            positions_from_tip_m=positions,
+            repetitions=-(-self.repetitions // factor),
+        )
 
     def commands_on(self, params: RigParams) -> Protocol:
         """This protocol at the digit ``params``'s own commands: each of the thesis's actuation commands
