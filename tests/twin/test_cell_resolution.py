@@ -162,21 +162,29 @@ def test_an_explicit_resolution_is_honoured():
 
 
 def test_every_builder_of_the_chain_takes_the_one_default():
-    """Scalar twin, static readings, batched twin, contact model and the design model: one chain."""
+    """Scalar twin, static readings, contact model and the design model: one chain, the twin's default on the
+    derived calibration (finer than 27 mm: twin.resolution.twin_default_cells); the studies' batched twin keeps
+    the description's 27 mm, one resolution for every design it stacks."""
     from flexdigit.control.digit_model import digit_model
     from flexdigit.palpation.contact_estimation import ContactGaugeModel
     from flexdigit.twin.batched import BatchedChains, BatchedTwin
+    from flexdigit.twin.resolution import twin_default_cells
     from flexdigit.twin.twin import Twin
 
     params = RigParams.from_dict(campaign_digit(2))
     cal = calibration_for(params)
-    n = sum(default_cells(params.geometry))
+    cells = twin_default_cells(params, cal)
+    n = sum(cells)
+    assert n > sum(default_cells(params.geometry))
     assert Twin(params, cal).chain.n == n
-    assert BatchedTwin(params, cal).chains.n == n
-    assert BatchedChains.from_rigs([params], [cal]).n == n
     assert ContactGaugeModel(params, cal).chain.n == n
+    # the studies' batched twin: every design at its description's resolution, one for all
+    assert BatchedTwin(params, cal).chains.n == sum(default_cells(params.geometry))
+    assert BatchedChains.from_rigs([params], [cal]).n == sum(default_cells(params.geometry))
     # the design model (hanging: this long digit buckles upright under its own weight, whatever the cells)
-    wn = [digit_model(params, cal, orientation="hanging", cells_per_section=c).modes_wn_rad_s[0] for c in (None, 15, 3)]
+    wn = [
+        digit_model(params, cal, orientation="hanging", cells_per_section=c).modes_wn_rad_s[0] for c in (None, cells, 3)
+    ]
     assert wn[0] == wn[1]  # the same chain: the same numbers
     assert abs(wn[2] / wn[1] - 1) > 0.05  # 3 cells: 7 % stiffer
 
