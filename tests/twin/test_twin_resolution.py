@@ -29,6 +29,10 @@ from oracles import digit_contact_bvp, thesis_digit_segments
 DATA = Path(__file__).resolve().parents[1] / "data"
 #: The BVP's tolerance (as tests/twin/test_campaign_digits.py): its error is 1e-5 of the twin's at worst.
 BVP_TOL = 1e-8
+#: The BVP's tolerance where only the 0.1 % bound is asked (every described digit's default twin): at 1e-6 the
+#: measured errors (0.03-0.07 %) moved by at most 2e-6 of the deflection against 1e-8 (five_unequal_bronze_full's
+#: tip load 0.0405 -> 0.0403 %; five-sections-eight-gauges and one-section < 3e-7), for 25-45 % less time.
+BOUND_BVP_TOL = 1e-6
 #: How closely the Richardson estimate (twin.resolution) tells the twin's error against the elastica, relative
 #: to that error: measured < 0.05 % on these digits (the h^4 term and the BVP's own 1e-8), 2026-11-27.
 ESTIMATE_RTOL = 0.01
@@ -54,8 +58,9 @@ def _load(tmp_path, data: dict, name="digit.toml") -> RigParams:
     return load_params(path)
 
 
-def _elastica_error(params, chain, cal) -> tuple[float, float]:
-    """The chain's tip error over the tip deflection against the solve_bvp elastica: (tip load, cable)."""
+def _elastica_error(params, chain, cal, tol: float = BVP_TOL) -> tuple[float, float]:
+    """The chain's tip error over the tip deflection against the solve_bvp elastica (at ``tol``): (tip load,
+    cable)."""
     length = params.geometry.digit_length_m
     pair = params.cables.count == 2
     segments, supports = thesis_digit_segments(params, cal)
@@ -74,7 +79,7 @@ def _elastica_error(params, chain, cal) -> tuple[float, float]:
             eccentricity_m=params.geometry.cable_eccentricity_m,
             cable_stiffness_n_m=cal.cable_stiffness_n_m,
             cable_pretension_m=params.cables.pretension_n / cal.cable_stiffness_n_m if pair else None,
-            tol=BVP_TOL,
+            tol=tol,
             max_nodes=100_000,
             **loads,
         )
@@ -355,7 +360,7 @@ def test_every_described_digit_s_default_twin_is_within_0_1_percent_of_the_elast
     (``Twin(params)``), within the issue's 0.1 % of the solve_bvp elastica under the tip load and the cable. The
     thesis rig keeps the 3 cells a section its packaged calibration was fitted at (0.37 %, docs/digits.md)."""
     twin = Twin(params, orientation="hanging")
-    tip_load, cable = _elastica_error(params, twin.chain, twin.calibration)
+    tip_load, cable = _elastica_error(params, twin.chain, twin.calibration, BOUND_BVP_TOL)
     assert tip_load < STATIC_RTOL, f"{name}: {100 * tip_load:.3f} % under the tip load at {twin.chain.n} springs"
     assert cable < STATIC_RTOL, f"{name}: {100 * cable:.3f} % under the cable at {twin.chain.n} springs"
 
