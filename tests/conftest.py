@@ -61,6 +61,7 @@ LONGEST_S = {
     "tdcr/test_chain_kernel.py": 139,
     "calibrate/test_calibrate_stopped.py": 124,
     "control/test_digit_model.py": 117,
+    "twin/test_twin_resolution.py": 110,  # its 49 default-twin elastica cases alone: 107 s on two loaded workers
     "cli/test_export.py": 102,
     "live/test_page.py": 92,
     "palpation/test_sweep_any_digit.py": 90,

@@ -10,7 +10,7 @@ import pytest
 from flexdigit.control.analysis import step_figures
 from flexdigit.control.design20ms import closed_loop, design_20ms
 from flexdigit.control.runtime import RuntimeController
-from flexdigit.params import RigParams
+from flexdigit.params import RigParams, twin_cells
 from flexdigit.studies.batched_loop import BatchedRuntime, StepSchedule, step_figures_batch, step_responses
 from flexdigit.studies.metrics import METRICS, MetricContext, loop_design, loop_plant, twin_figures
 from flexdigit.studies.spec import ParameterSet
@@ -61,7 +61,8 @@ def test_batched_loop_is_run_loop_on_the_scalar_twin():
         schedule,
     )
     for i, ps in enumerate(sets):
-        rig = SimRig(ps.params, calibration=ps.calibration)
+        # at the batch's resolution, the description's: a scalar twin on a derived calibration runs finer
+        rig = SimRig(ps.params, calibration=ps.calibration, cells_per_section=twin_cells(ps.params))
         rest = rig.tip_rotation_deg()
         ctl = loop_design(ps, CTX).runtime(
             ps.params, measure=lambda reading, rig=rig, rest=rest: rig.tip_rotation_deg() - rest

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from digits import write_digit
-from flexdigit.params import RigParams, load_params
+from flexdigit.params import RigParams, load_params, twin_cells
 from flexdigit.report.ch8_studies import REPORT_PARAMETERS
 from flexdigit.studies import metrics
 from flexdigit.studies.metrics import METRICS, UNDEFINED, twin_figures
@@ -25,7 +25,7 @@ from flexdigit.twin.batched import BatchedChains
 from flexdigit.twin.calibration import default_calibration, use_calibration
 from flexdigit.twin.digit_calibration import calibration_for
 from flexdigit.twin.records import release_orientation
-from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit, static_gauges_v
+from flexdigit.twin.twin import cached_digit, static_gauges_v
 
 STIFFNESS = "tip_stiffness_nm_per_rad"
 STUCK_ROW = 3  # the design row whose probe solve is made to return its starting angles
@@ -96,7 +96,8 @@ def test_the_eight_gauge_digit_is_hung_not_scored_about_a_shape_it_cannot_hold(t
         chains = BatchedChains.from_rigs([params], [baseline.calibration], housing=True, orientation="vertical")
         metrics._new_block()
         wn = METRICS["release_wn_rad_s"](baseline)
-        hung = cached_digit(params, baseline.calibration, True, "hanging", DEFAULT_CELLS_PER_SECTION)
+        # at the study's resolution, the description's (a scalar twin on the derived calibration runs finer)
+        hung = cached_digit(params, baseline.calibration, True, "hanging", twin_cells(params))
     at_rest = chains.linearised(np.zeros((1, chains.n)), np.array([-np.inf]))[2][0]
     assert np.linalg.eigvalsh(at_rest)[0] < 0  # the cause, on the batched twin's own matrices
     assert not result.refused

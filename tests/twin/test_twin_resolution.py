@@ -29,6 +29,10 @@ from oracles import digit_contact_bvp, thesis_digit_segments
 DATA = Path(__file__).resolve().parents[1] / "data"
 #: The BVP's tolerance (as tests/twin/test_campaign_digits.py): its error is 1e-5 of the twin's at worst.
 BVP_TOL = 1e-8
+#: The BVP's tolerance where only the 0.1 % bound is asked (every described digit's default twin): at 1e-6 the
+#: measured errors (0.03-0.07 %) moved by at most 2e-6 of the deflection against 1e-8 (five_unequal_bronze_full's
+#: tip load 0.0405 -> 0.0403 %; five-sections-eight-gauges and one-section < 3e-7), for 25-45 % less time.
+BOUND_BVP_TOL = 1e-6
 #: How closely the Richardson estimate (twin.resolution) tells the twin's error against the elastica, relative
 #: to that error: measured < 0.05 % on these digits (the h^4 term and the BVP's own 1e-8), 2026-11-27.
 ESTIMATE_RTOL = 0.01
@@ -54,8 +58,9 @@ def _load(tmp_path, data: dict, name="digit.toml") -> RigParams:
     return load_params(path)
 
 
-def _elastica_error(params, chain, cal) -> tuple[float, float]:
-    """The chain's tip error over the tip deflection against the solve_bvp elastica: (tip load, cable)."""
+def _elastica_error(params, chain, cal, tol: float = BVP_TOL) -> tuple[float, float]:
+    """The chain's tip error over the tip deflection against the solve_bvp elastica (at ``tol``): (tip load,
+    cable)."""
     length = params.geometry.digit_length_m
     pair = params.cables.count == 2
     segments, supports = thesis_digit_segments(params, cal)
@@ -74,7 +79,7 @@ def _elastica_error(params, chain, cal) -> tuple[float, float]:
             eccentricity_m=params.geometry.cable_eccentricity_m,
             cable_stiffness_n_m=cal.cable_stiffness_n_m,
             cable_pretension_m=params.cables.pretension_n / cal.cable_stiffness_n_m if pair else None,
-            tol=BVP_TOL,
+            tol=tol,
             max_nodes=100_000,
             **loads,
         )
@@ -90,17 +95,18 @@ def test_a_twin_table_brings_the_statics_within_0_1_percent_of_the_elastica(name
     """Through the public path: a file with ``[twin] max_cell_length_m``, ``load_params``, ``Twin(params)``."""
     default = _load(tmp_path, data, "default.toml")
     fine = _load(tmp_path, _with_twin(data, max_cell_length_m=max_cell_m), "fine.toml")
-    twin_default = Twin(default, orientation="hanging")
+    # the 27 mm cells a [twin] table replaces (a derived digit's own default is finer already: below)
+    twin_default = Twin(default, orientation="hanging", cells_per_section=twin_cells(default))
     twin_fine = Twin(fine, orientation="hanging")
     assert twin_fine.calibration == twin_default.calibration  # the same digit: its resolution is not its physics
     assert twin_fine.chain.n > twin_default.chain.n
     coarse = _elastica_error(default, twin_default.chain, twin_default.calibration)
     refined = _elastica_error(fine, twin_fine.chain, twin_fine.calibration)
-    assert coarse[0] > STATIC_RTOL  # the default misses the issue's 0.1 % under the tip load ...
+    assert coarse[0] > STATIC_RTOL  # 27 mm cells miss the issue's 0.1 % under the tip load ...
     assert max(refined) < STATIC_RTOL  # ... the setting meets it under both
     # the estimate `params FILE` prints tells the measured error (h^2 Richardson, no BVP)
     for params, measured in ((default, coarse), (fine, refined)):
-        estimate = static_error(params)
+        estimate = static_error(params, cells=twin_cells(params))
         assert estimate.tip_load == pytest.approx(measured[0], rel=ESTIMATE_RTOL)
         assert estimate.cable == pytest.approx(measured[1], rel=ESTIMATE_RTOL)
 
@@ -336,3 +342,43 @@ def test_the_setting_params_suggests_meets_0_1_percent_on_the_hand_made_digits(p
     params = load_params(fine)
     twin = Twin(params, orientation="hanging")
     assert max(_elastica_error(params, twin.chain, twin.calibration)) < STATIC_RTOL
+
+
+#: Every described digit but the thesis rig's: the test digits of tests/digits.py and the three hand-made sets.
+DESCRIBED = [(f"digits-{name}", RigParams.from_dict(data)) for name, data in DIGITS.items() if data] + [
+    (f"{p.parent.name}-{p.stem}", load_params(p))
+    for folder in ("handmade_digits", "handmade_digits2", "handmade_digits3")
+    for p in sorted((DATA / folder).glob("*.toml"))
+]
+DESCRIBED = [(name, params) for name, params in DESCRIBED if params.digit_only() != RigParams()]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("name", "params"), DESCRIBED, ids=[d[0] for d in DESCRIBED])
+def test_every_described_digit_s_default_twin_is_within_0_1_percent_of_the_elastica(name, params):
+    """No ``[twin]`` table: the twin of a digit on its derived calibration, as every command builds it
+    (``Twin(params)``), within the issue's 0.1 % of the solve_bvp elastica under the tip load and the cable. The
+    thesis rig keeps the 3 cells a section its packaged calibration was fitted at (0.37 %, docs/digits.md)."""
+    twin = Twin(params, orientation="hanging")
+    tip_load, cable = _elastica_error(params, twin.chain, twin.calibration, BOUND_BVP_TOL)
+    assert tip_load < STATIC_RTOL, f"{name}: {100 * tip_load:.3f} % under the tip load at {twin.chain.n} springs"
+    assert cable < STATIC_RTOL, f"{name}: {100 * cable:.3f} % under the cable at {twin.chain.n} springs"
+
+
+def test_the_thesis_rig_keeps_the_cells_its_calibration_was_fitted_at():
+    """The packaged fit is the thesis rig's at 3 cells a section (its report's 509 entries rest on them); a
+    fitted or user calibration keeps the 27 mm default too; only a derived one is refined."""
+    from flexdigit.twin.calibration import packaged_calibration
+    from flexdigit.twin.resolution import DERIVED_RTOL, twin_default_cells
+
+    assert Twin(RigParams()).chain.n == 9
+    one = RigParams.from_dict(DIGITS["one-section"])
+    derived = Twin(one).calibration
+    fitted = derived.replace(strip_beta_s=derived.strip_beta_s * 1.01)  # e.g. calibrate's result
+    assert twin_default_cells(one, fitted) == twin_cells(one) == (7,)
+    assert Twin(one, calibration=fitted).chain.n == 7
+    cells = twin_default_cells(one, derived)
+    assert static_error(one, derived, cells).worst <= DERIVED_RTOL
+    fewer = tuple(n - 2 for n in cells)  # the fewest odd cells that meet it
+    assert static_error(one, derived, fewer).worst > DERIVED_RTOL
+    assert twin_default_cells(RigParams(), packaged_calibration()) == (3, 3, 3)

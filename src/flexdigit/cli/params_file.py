@@ -87,13 +87,16 @@ def _write_calibration(params, args: argparse.Namespace):
 def _resolution(params) -> tuple[dict, list[str]]:
     """The twin's springs and its estimated static error, and the ``[twin]`` setting that meets 0.1 % when this one
     does not (``twin.resolution.resolution_advice``)."""
-    from flexdigit.twin.resolution import CABLE_TIP_DEG, TIP_LOAD_ALPHA2, resolution_advice
+    from flexdigit.params import twin_cells
+    from flexdigit.twin.resolution import CABLE_TIP_DEG, DERIVED_RTOL, TIP_LOAD_ALPHA2, resolution_advice
 
     advice = resolution_advice(params)
     error, rtol = advice.error, advice.rtol
     data = {"cells_per_section": list(error.cells), "static_error_tip_load": error.tip_load}
     data["static_error_cable"] = error.cable
     source = "its [twin] table" if not params.twin.is_default else "the default: cells <= 27 mm"
+    if params.twin.is_default and error.cells != twin_cells(params):  # a derived calibration's finer default
+        source = f"the default on its derived calibration: the fewest within {100 * DERIVED_RTOL:g} %"
     if not advice.determined:  # a static solve that did not converge: no figure rather than a wrong one
         return data, [
             f"twin: {sum(error.cells)} springs, {list(error.cells)} a section ({source}); static error not "

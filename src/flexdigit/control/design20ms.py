@@ -57,9 +57,9 @@ from flexdigit.control.thesis_designs import printed_controller
 from flexdigit.errors import DesignError, DesignWarning
 from flexdigit.models.plant import build_plant
 from flexdigit.models.servo import servo_unit_tf
-from flexdigit.params import RigParams
+from flexdigit.params import RigParams, twin_cells
 from flexdigit.twin.digit_calibration import twin_calibration
-from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cached_digit
+from flexdigit.twin.twin import cached_digit
 
 __all__ = [
     "digit_first_mode",
@@ -407,7 +407,7 @@ def digit_first_mode(params: RigParams, calibration=None, *, orientation: str = 
 def _straight_chain(params: RigParams, calibration, orientation: str):
 
     cal = calibration if calibration is not None else twin_calibration(params)
-    return cached_digit(params, cal, True, orientation, DEFAULT_CELLS_PER_SECTION)
+    return cached_digit(params, cal, True, orientation, twin_cells(params))
 
 
 #: The least share of its own stiffness the straight digit must keep under its weight as mounted, ``1 - P/P_cr``

@@ -44,10 +44,10 @@ from flexdigit.errors import DesignError
 from flexdigit.models.bridge import gauge_noise_scale
 from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.models.servo import servo_unit_tf
-from flexdigit.params import RigParams
+from flexdigit.params import RigParams, twin_cells
 from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.sensors import SensorChain
-from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, cached_digit
+from flexdigit.twin.twin import cable_shortening_m, cached_digit
 
 __all__ = ["DigitModel", "digit_model", "MAX_MODES"]
 
@@ -134,7 +134,7 @@ def digit_model(
     """
 
     cal = calibration if calibration is not None else twin_calibration(params)
-    cells = cells_per_section or DEFAULT_CELLS_PER_SECTION
+    cells = cells_per_section or twin_cells(params)  # the description's resolution, not a derived twin's finer one
     chain = cached_digit(params, cal, True, orientation, cells)
     solution, shortening = _operating_shape(chain, params, at_deg)
     psi = np.asarray(solution.psi_rad[0], dtype=float)

@@ -62,7 +62,7 @@ from flexdigit.errors import ParameterError
 from flexdigit.interrupts import raise_if_stopping
 from flexdigit.models.plant import build_plant
 from flexdigit.models.servo import servo_unit_tf
-from flexdigit.params import RigParams
+from flexdigit.params import RigParams, twin_cells
 from flexdigit.studies._bayes_kernel import position_mse_m2
 from flexdigit.studies.batched_loop import StepSchedule, step_figures, step_figures_batch, step_responses
 from flexdigit.studies.parameter_set import ParameterSet
@@ -288,7 +288,8 @@ def evaluate_many(parameter_sets, names, context: MetricContext | None = None) -
 
 # ------------------------------------------------------------------------------------------------ the digit
 def _chain(ps: ParameterSet, cells: int | None = None):
-    return cached_digit(ps.params, ps.calibration, True, "vertical", cells or DEFAULT_CELLS_PER_SECTION)
+    # every design at one resolution, its description's (a batch of designs stacks at it too: batch_cells)
+    return cached_digit(ps.params, ps.calibration, True, "vertical", cells or twin_cells(ps.params))
 
 
 def _chains(parameter_sets, orientation: str = "vertical"):

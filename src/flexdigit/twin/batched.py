@@ -358,8 +358,11 @@ class BatchedTwin:
         self._period = period
         dt = check_real(dt_s, "dt_s", "BatchedTwin", low=1e-5, high=period)
         self.dt_s = period / max(1, round(period / dt))
+        # each rig at its description's resolution (twin_cells), never the finer twin of a derived calibration
+        # (twin.resolution): a study scores every design at one resolution, as BatchedChains.from_rigs stacks them
         chains = [
-            cached_digit(p, c, bool(housing), orientation, cells) for p, c in zip(params_list, cal_list, strict=True)
+            cached_digit(p, c, bool(housing), orientation, twin_cells(p) if cells is None else cells)
+            for p, c in zip(params_list, cal_list, strict=True)
         ]
         if not self.cable:  # detached: no cable pulls, neither the pair's second one
             pretension_n, antagonist = np.zeros(self.size), np.zeros(self.size, dtype=bool)

@@ -89,6 +89,7 @@ from flexdigit.twin.calibration import (
 
 __all__ = [
     "calibration_for",
+    "is_derived",
     "decay_time_constant_s",
     "first_mode_rad_s",
     "twin_calibration",
@@ -250,6 +251,18 @@ def twin_calibration(params: RigParams | None = None, path=None) -> Calibration:
     if params.is_thesis_rig():  # the thesis rig, whatever its twin's resolution ([twin])
         return packaged_calibration()
     return _calibration_for_cached(params.digit_only())  # the laws read the digit, not its twin's resolution
+
+
+def is_derived(params: RigParams, calibration: Calibration) -> bool:
+    """Whether ``calibration`` is the default :func:`calibration_for` derives for the digit of ``params`` (a digit
+    nobody measured, not the thesis rig): a twin on it gets a resolution fine enough for its statics
+    (:func:`flexdigit.twin.resolution.twin_default_cells`); a fitted calibration keeps the cells it was fitted at.
+
+    >>> is_derived(RigParams(), packaged_calibration())
+    False
+    """
+    digit = params.digit_only()
+    return digit != RigParams() and calibration == _calibration_for_cached(digit)
 
 
 def _describes(calibration: Calibration, params: RigParams) -> bool:

@@ -31,14 +31,22 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from flexdigit._repr import fields_summary
 from flexdigit.errors import ConvergenceWarning
-from flexdigit.params import MAX_CELL_LENGTH_M, MAX_TWIN_CELLS, RigParams, TwinResolution, twin_cells
+from flexdigit.params import (
+    MAX_CELL_LENGTH_M,
+    MAX_TWIN_CELLS,
+    RigParams,
+    TwinResolution,
+    cells_no_longer_than,
+    twin_cells,
+)
 from flexdigit.twin.digit import build_digit, section_cells
-from flexdigit.twin.digit_calibration import twin_calibration
+from flexdigit.twin.digit_calibration import is_derived, twin_calibration
 
 __all__ = [
     "TIP_LOAD_ALPHA2",
@@ -50,6 +58,8 @@ __all__ = [
     "resolution_for",
     "ResolutionAdvice",
     "resolution_advice",
+    "DERIVED_RTOL",
+    "twin_default_cells",
 ]
 
 #: The tip load as ``alpha^2 = P L^2 / EI``: 1 bends a cantilever's tip through ~28 deg (large deflection).
@@ -61,6 +71,9 @@ CABLE_TIP_DEG = 30.0
 REFINEMENT = 3
 #: The issue's tolerance on the static deflection against the elastica: 0.1 % of the deflection.
 STATIC_RTOL = 1e-3
+#: What the estimate must meet for a digit on its derived calibration (:func:`twin_default_cells`): 0.07 %, a
+#: margin under :data:`STATIC_RTOL` for the estimate's own error (its h^4 term) and the solve_bvp reference's.
+DERIVED_RTOL = 7e-4
 
 
 @dataclass(frozen=True)
@@ -115,10 +128,10 @@ def static_error(params: RigParams, calibration=None, cells=None) -> StaticError
     calibration : Calibration, optional
         Default :func:`~flexdigit.twin.digit_calibration.twin_calibration` (the twin's own).
     cells : int, sequence of int or None
-        Springs per section (one count or one per section).
+        Springs per section (one count or one per section); None: the twin's own, :func:`twin_default_cells`.
     """
     cal = twin_calibration(params) if calibration is None else calibration
-    cells = twin_cells(params) if cells is None else section_cells(params.geometry, cells, "static_error")
+    cells = twin_default_cells(params, cal) if cells is None else section_cells(params.geometry, cells, "static_error")
     coarse = _tips(params, cal, cells)
     fine = _tips(params, cal, tuple(REFINEMENT * n for n in cells))
     if coarse is None or fine is None:
@@ -140,13 +153,14 @@ def resolution_for(params: RigParams, rtol: float = STATIC_RTOL, calibration=Non
     """
     cal = twin_calibration(params) if calibration is None else calibration
     base = params.digit_only()
-    error = static_error(base, cal)
+    error = static_error(base, cal, twin_cells(base))  # the 27 mm default a [twin] table replaces
     h = MAX_CELL_LENGTH_M
     for _ in range(20):
         if not error.worst > rtol:  # met (a NaN: no estimate; the default kept)
             return h, error
         h = max(1e-3, math.floor(2000 * h * min(0.9, math.sqrt(rtol / error.worst))) / 2000)
-        error = static_error(base.replace(twin=TwinResolution(max_cell_length_m=h)), cal)
+        finer = base.replace(twin=TwinResolution(max_cell_length_m=h))
+        error = static_error(finer, cal, twin_cells(finer))
         if h <= 1e-3:
             break
     return h, error
@@ -203,3 +217,42 @@ def resolution_advice(params: RigParams, rtol: float = STATIC_RTOL, calibration=
     h, finer = resolution_for(params, rtol, calibration)
     met = finer.worst <= rtol and sum(finer.cells) <= MAX_TWIN_CELLS
     return ResolutionAdvice(error, rtol, h if met else None, finer)
+
+
+def twin_default_cells(params: RigParams, calibration) -> tuple[int, ...]:
+    """Springs per section of the twin of ``params`` on ``calibration`` when no cells are asked for (what
+    :func:`flexdigit.twin.twin.cached_digit`, so :class:`~flexdigit.twin.twin.Twin`, builds).
+
+    - a ``[twin]`` table: its cells (:func:`flexdigit.params.twin_cells`);
+    - the digit's derived default calibration (:func:`~flexdigit.twin.digit_calibration.is_derived`, a digit
+      nobody measured): the fewest odd cells, the longest section's count setting every section's cell length,
+      whose estimated static error (:func:`static_error`, both load cases) is within :data:`DERIVED_RTOL`,
+      found once per digit (cached);
+    - any other calibration (the packaged thesis fit, a ``calibrate`` result, a design study's): the default
+      27 mm cells it was fitted or derived at, so the thesis rig keeps 3 cells a section and its report.
+
+    >>> from flexdigit.twin.calibration import packaged_calibration
+    >>> twin_default_cells(RigParams(), packaged_calibration())
+    (3, 3, 3)
+    """
+    if not params.twin.is_default or not is_derived(params, calibration):
+        return twin_cells(params)
+    return _derived_cells(params.digit_only(), calibration)
+
+
+@lru_cache(maxsize=64)
+def _derived_cells(params: RigParams, calibration) -> tuple[int, ...]:
+    """:func:`twin_default_cells` on a derived calibration: from the default, the ``h^2`` law's count for the
+    longest section (Richardson's estimate says how far), then two more cells until the estimate meets
+    :data:`DERIVED_RTOL`; the default kept where a static solve fails, the finest tried at :data:`MAX_TWIN_CELLS`."""
+    geo = params.geometry
+    longest = max(end - start for start, end in geo.section_bounds_m)
+    cells = twin_cells(params)
+    error = static_error(params, calibration, cells)
+    while error.worst > DERIVED_RTOL:  # False for a NaN: no estimate, the cells kept
+        count = max(max(cells) + 2, math.ceil(max(cells) * math.sqrt(error.worst / DERIVED_RTOL)))
+        finer = cells_no_longer_than(geo, longest / count)
+        if sum(finer) > MAX_TWIN_CELLS:
+            break
+        cells, error = finer, static_error(params, calibration, finer)
+    return cells

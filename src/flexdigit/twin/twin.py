@@ -37,6 +37,7 @@ from flexdigit.twin.calibration import Calibration
 from flexdigit.twin.contact import Tissue, TissueContact, check_point_force, check_pressure, quadrature
 from flexdigit.twin.digit import ORIENTATIONS, Chain, DynamicState, build_digit
 from flexdigit.twin.digit_calibration import twin_calibration
+from flexdigit.twin.resolution import twin_default_cells
 from flexdigit.twin.sensors import SensorChain
 from flexdigit.twin.sensors import adc as quantise
 
@@ -64,8 +65,11 @@ FRICTION_STREAM = 1
 
 
 def cached_digit(params: RigParams, calibration: Calibration, housing: bool, orientation: str, cells=None) -> Chain:
-    """:func:`build_digit`, cached (parameters are frozen and hashable; ``cells`` None, a count or one per section)."""
-    if cells is not None and np.ndim(cells) > 0:
+    """:func:`build_digit`, cached (parameters are frozen and hashable; ``cells`` a count or one per section, None
+    the twin's own: :func:`~flexdigit.twin.resolution.twin_default_cells`, finer on a derived calibration)."""
+    if cells is None:
+        cells = twin_default_cells(params, calibration)
+    if np.ndim(cells) > 0:
         cells = tuple(cells)
     return _cached_digit(params, calibration, housing, orientation, cells)
 
