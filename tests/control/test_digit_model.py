@@ -26,7 +26,7 @@ from flexdigit.control.design20ms import (
 from flexdigit.control.digit_model import digit_model
 from flexdigit.errors import DesignError
 from flexdigit.models.cable import tip_rotation_per_command_deg
-from flexdigit.params import RigParams
+from flexdigit.params import RigParams, twin_cells
 from flexdigit.twin.digit_calibration import twin_calibration
 from flexdigit.twin.twin import DEFAULT_CELLS_PER_SECTION, cable_shortening_m, cached_digit
 
@@ -90,10 +90,11 @@ def test_the_truncated_model_responds_as_the_whole_chain(digit, monkeypatch):
 def test_the_long_digits_slow_mode_is_in_its_model():
     """The 0.5 m digit hung: its first mode, 1.5 Hz, is the chain's own about the operating shape (its linear modal
     analysis, :meth:`Chain.linear_modes`), damped as the damping law gives it (the thesis rig's first-mode zeta
-    carried over, ``twin.digit_calibration``: 0.07 with the cable taut; 0.02 when relaxation times were kept)."""
+    carried over, ``twin.digit_calibration``: 0.07 with the cable taut; 0.02 when relaxation times were kept). The
+    chain at the description's cells, as the model builds it (the twin on a derived calibration runs finer)."""
     params = RigParams.from_dict(DIGITS["five-sections-eight-gauges"])
     model = digit_model(params, orientation="hanging")
-    chain = cached_digit(params, twin_calibration(params), True, "hanging", DEFAULT_CELLS_PER_SECTION)
+    chain = cached_digit(params, twin_calibration(params), True, "hanging", twin_cells(params))
     command = params.actuator.equilibrium_command + round(15.0 / tip_rotation_per_command_deg(params))
     psi = chain.solve_static(cable_shortening_m=np.array([float(cable_shortening_m(command, params))])).psi_rad[0]
     wn, zeta = chain.linear_modes(psi, cable_taut=1)

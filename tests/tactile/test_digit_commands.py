@@ -58,5 +58,5 @@ def test_collect_and_the_reports_chapter_7_lay_it_out_alike():
     from flexdigit.cli.collect import _digit_protocol as collect_protocol
 
     pair = load_params(PAIR)
-    _, collected = collect_protocol(argparse.Namespace(params=str(PAIR), protocol="thesis-7.1"))
+    _, collected = collect_protocol(argparse.Namespace(params=str(PAIR), protocol="thesis-7.1", refine=1))
     assert _digit_protocol("thesis-7.1", pair) == collected
