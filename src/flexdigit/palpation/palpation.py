@@ -41,6 +41,7 @@ from flexdigit.errors import ParameterError, RigError
 from flexdigit.models.cable import tip_rotation_per_command_deg
 from flexdigit.palpation.contact_estimation import ContactEstimator, ContactGaugeModel
 from flexdigit.params import RigParams
+from flexdigit.rig.base import Reading
 from flexdigit.rig.loop import run_loop
 from flexdigit.twin.calibration import packaged_calibration
 from flexdigit.twin.contact import Inclusion, Tissue, TissueContact
@@ -1828,13 +1829,6 @@ def servo_lag_force(model, estimator, approach_rate: float, command: int) -> flo
 FREE_MOTION_S = 3.0
 
 
-class _CleanReading:
-    """A noise-free twin reading as the force loop reads one (``gauges_v``)."""
-
-    def __init__(self, gauges_v) -> None:
-        self.gauges_v = gauges_v
-
-
 def free_motion_chi2(controller, model, command: int, duration_s: float = FREE_MOTION_S) -> float:
     """The largest contact chi^2 (the likelihood ratio against nothing touching) ``controller`` reads on its digit
     moving with nothing touching: ``model``'s digit on its twin (noise-free, the serial drive, the hold's 5 ms step)
@@ -1851,9 +1845,11 @@ def free_motion_chi2(controller, model, command: int, duration_s: float = FREE_M
     period = float(model.params.actuator.serial_period_s)
     chi2 = [0.0]
     for _ in range(round(duration_s / period)):
-        sent = free.step(math.inf, _CleanReading(twin.clean_read()[0]))  # an unreachable setpoint: approach only
+        gauges_v, pot_v = twin.clean_read()
+        reading = Reading(twin.time_s, gauges_v, pot_v, command)
+        command = free.step(math.inf, reading)  # an unreachable setpoint: approach only
         chi2.append(free.chi2)
-        twin.command(sent)
+        twin.command(command)
         twin.advance(period)
     return float(np.nanmax(chi2))
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 import hashlib
 import json
 import tomllib
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from pathlib import Path
 
@@ -291,8 +291,6 @@ class Protocol:
         ref = check_real(reference_length_m, "reference_length_m", "Protocol.scaled_to", low=0, low_open=True)
         if length == ref:
             return self
-        from dataclasses import replace
-
         positions = tuple(round(p * length / ref, 9) for p in self.positions_from_tip_m)
         return replace(self, name=f"{self.name} on {length:g} m", positions_from_tip_m=positions)
 
@@ -322,8 +320,6 @@ class Protocol:
         near = gaps <= 1.5 * float(np.median(gaps)) if gaps.size else gaps.astype(bool)
         inserted = [a + (b - a) * k / factor for a, b, n in zip(tips[:-1], tips[1:], near, strict=True) if n
                     for k in range(1, factor)]  # fmt: skip
-        from dataclasses import replace
-
         positions = tuple(round(float(p), 9) for p in sorted({*self.positions_from_tip_m, *inserted}))
         return replace(
             self,
@@ -346,8 +342,6 @@ class Protocol:
         commands = digit_commands(self.actuation_commands, params)
         if commands == self.actuation_commands:
             return self
-        from dataclasses import replace
-
         listed = "/".join(str(c) for c in commands)
         return replace(self, name=f"{self.name} at commands {listed}", actuation_commands=commands)
 
