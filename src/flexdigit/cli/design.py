@@ -175,7 +175,7 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
     import numpy as np
 
     from flexdigit.control.analysis import additive_tolerance, hinf_norm, loop_maps, step_metrics
-    from flexdigit.control.thesis_designs import OPEN_LOOP_GAMMA_RTOL, sorted_poles, thesis_design
+    from flexdigit.control.thesis_designs import is_open_loop, sorted_poles, thesis_design
     from flexdigit.models.plant import build_plant
 
     plant = build_plant(plant_variant).tf
@@ -203,7 +203,7 @@ def _design_summary(filter_hz: float, plant_variant: str = "printed", eps=None, 
         "additive_tolerance_m_per_command": tol["tolerance"],
         "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
         "thesis_arithmetic_percent": tol["thesis_arithmetic_percent"],
-        "open_loop": d.gamma_opt >= (1 - OPEN_LOOP_GAMMA_RTOL) / (2 * np.pi * filter_hz),
+        "open_loop": is_open_loop(d.gamma_opt, filter_hz),
         "tuw_step_peak": step_metrics(maps.T_uw, t_final=3.0)["peak"],
         "tyw_settling_s": step_metrics(maps.T_yw, t_final=3.0)["settling_time_s"],
     }

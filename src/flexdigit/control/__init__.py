@@ -84,6 +84,7 @@ __getattr__, __all__ = lazy_exports(
         "digit_plant": "flexdigit.control.thesis_designs",
         "digit_regularisation": "flexdigit.control.thesis_designs",
         "OPEN_LOOP_GAMMA_RTOL": "flexdigit.control.thesis_designs",
+        "is_open_loop": "flexdigit.control.thesis_designs",
         "digit_hinf_design": "flexdigit.control.thesis_designs",
         "digit_hinf_summary": "flexdigit.control.thesis_designs",
         "RuntimeController": "flexdigit.control.runtime",

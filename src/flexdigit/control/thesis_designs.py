@@ -38,6 +38,7 @@ __all__ = [
     "sorted_poles",
     "singular_infimum_witness",
     "OPEN_LOOP_GAMMA_RTOL",
+    "is_open_loop",
     "digit_plant",
     "digit_regularisation",
     "digit_hinf_design",
@@ -55,6 +56,17 @@ THESIS_REGULARISATION: dict[float, tuple[float, float]] = {5.0: (1.0538e-7, 0.20
 #: 1/(2 pi 39) = 0.00408090 on every digit at 39 Hz), and a controlling design is 10-40 % below (0.020-0.025 at 5 Hz
 #: against 0.0318).
 OPEN_LOOP_GAMMA_RTOL = 1e-2
+
+
+def is_open_loop(gamma_opt: float, filter_hz: float) -> bool:
+    """Whether a design of 4.4 at cut-off ``filter_hz`` whose optimum is ``gamma_opt`` is the open-loop one:
+    ``gamma_opt`` within :data:`OPEN_LOOP_GAMMA_RTOL` of ``||F||_inf = 1/(2 pi f_c)``, the cost of ``K = 0``.
+
+    >>> is_open_loop(0.00408408, 39.0), is_open_loop(0.0240224, 5.0)
+    (True, False)
+    """
+    return gamma_opt >= (1 - OPEN_LOOP_GAMMA_RTOL) / (2 * math.pi * filter_hz)
+
 
 #: Relative pole error a fit to printed poles must reach: half a unit in table 4.3's 4th significant digit.
 POLE_FIT_RTOL = 5e-4
@@ -350,7 +362,7 @@ def _digit_tolerance(filter_hz: float, plant, design: HinfDesign) -> dict:
         "additive_tolerance_relative_percent": tol["tolerance_relative_percent"],
         "additive_tolerance_note": "",
     }
-    if design.gamma_opt >= (1 - OPEN_LOOP_GAMMA_RTOL) * open_loop:
+    if is_open_loop(design.gamma_opt, filter_hz):
         out["additive_tolerance_note"] = (
             f"not applicable: gamma_opt {design.gamma_opt:.6g} is ||F||_inf = 1/(2 pi {filter_hz:g} Hz) = "
             f"{open_loop:.6g}, the cost of no controller: at this cut-off the weights leave nothing to gain by "
