@@ -167,24 +167,35 @@ def test_digit_hinf_summary_is_the_design_on_the_digits_own_plant():
     )
 
 
-#: Relative agreement of two designs whose problems are the same up to a scale: the gamma bisection's own accuracy
-#: (``hinf_riccati``'s ``gtol`` 1e-4) carried through the central controller, with a 10x allowance.
+#: Relative agreement of two designs whose problems are the same up to a scale, each solved with the bisection at
+#: :data:`COVARIANCE_GTOL`: on two-sections at 5 Hz the optima of G, 2G and G/2 agree within 1.2e-4 under the
+#: SkylakeX, Haswell and Nehalem kernels; 1e-3 allows 8x that.
 SCALED_DESIGN_RTOL = 1e-3
+#: The bisection's tolerance for the covariance test. At ``hinf_riccati``'s default 1e-4 SLICOT's bisection (sb10ad)
+#: stops at one of two optima 0.29 % apart (0.0222599 or 0.0223252 on two-sections at 5 Hz), which of them set by
+#: the BLAS kernel's rounding: wider than the claim it would test.
+COVARIANCE_GTOL = 1e-6
 
 
 def test_a_digit_with_its_gain_doubled_keeps_gamma_and_doubles_its_tolerance():
     """The regularised problem of 4.4 is covariant: G -> 2 G with eps_u -> 2 eps_u (digit_regularisation's scaling)
     has the same gamma_opt, K -> K/2, so the tolerance 1/||K S|| doubles in m/command and keeps its share of |G(0)|."""
     from flexdigit.control.analysis import additive_tolerance
-    from flexdigit.control.thesis_designs import digit_plant, digit_regularisation, thesis_design
+    from flexdigit.control.generalized import filter_weight, regularise, thesis_generalized_plant
+    from flexdigit.control.synthesis import hinf_riccati
+    from flexdigit.control.thesis_designs import digit_plant, digit_regularisation
+
+    def design(gain_tf, eps_u, margin):  # thesis_design's problem, its bisection at COVARIANCE_GTOL
+        problem = regularise(thesis_generalized_plant(gain_tf, filter_weight(5.0)), eps_u)
+        return hinf_riccati(problem, margin=margin, gtol=COVARIANCE_GTOL)
 
     plant = digit_plant(RigParams.from_dict(DIGITS["two-sections"]))
     eps, margin = digit_regularisation(5.0, plant.dc_gain)
     eps2, margin2 = digit_regularisation(5.0, 2 * plant.dc_gain)
     assert eps2 == pytest.approx(2 * eps, rel=1e-12)  # a ratio of two products: exact but for rounding
     assert margin2 == margin
-    one = thesis_design(5.0, plant.tf, eps_u=eps, margin=margin)
-    two = thesis_design(5.0, 2 * plant.tf, eps_u=eps2, margin=margin)
+    one = design(plant.tf, eps, margin)
+    two = design(2 * plant.tf, eps2, margin)
     assert two.gamma_opt == pytest.approx(one.gamma_opt, rel=SCALED_DESIGN_RTOL)
     tol1 = additive_tolerance(plant.tf, one.controller)
     tol2 = additive_tolerance(2 * plant.tf, two.controller)
