@@ -5,6 +5,8 @@ side by side on the same seeded, randomly generated commands, loads, presses and
 import numpy as np
 import pytest
 
+from digits import DIGITS
+from flexdigit.params import RigParams
 from flexdigit.rig.base import open_rig
 from flexdigit.twin import Twin
 from flexdigit.twin.contact import Tissue
@@ -131,6 +133,38 @@ def test_paced_backend_steps_compiled_by_default_and_virtual_time_does_not():
             assert rig.twin.dynamics.compiled is expected, url
         finally:
             rig.close()
+
+
+def test_a_described_digit_steps_compiled_by_default_and_the_thesis_rig_does_not():
+    # issue 24's suite time: a described digit's twin steps compiled unless told not to; the thesis rig's numbers
+    # are the report's (numpy, bit for bit)
+    described = RigParams.from_dict(DIGITS["two-sections"])
+    for url, params, expected in (
+        ("sim", described, True),
+        ("sim?compiled=false", described, False),
+        ("sim", RigParams(), False),
+        ("sim+paced?compiled=false", described, False),
+    ):
+        rig = open_rig(url, params, seed=0)
+        try:
+            assert rig.twin.dynamics.compiled is expected, url
+            assert rig.compiled is expected, url
+        finally:
+            rig.close()
+    assert Twin(described).dynamics.compiled
+    assert not Twin(described, compiled=False).dynamics.compiled
+
+
+def test_a_described_digits_virtual_time_run_repeats_and_follows_numpy():
+    # the compiled default is deterministic on one machine (same seed, same numbers), and within PSI_ATOL of numpy
+    described = RigParams.from_dict(DIGITS["four-sections-two-cables"])
+    twins = [Twin(described, seed=5, dt_s=0.002, compiled=c) for c in (None, None, False)]
+    for twin in twins:
+        twin.command(described.actuator.equilibrium_command + 15)
+        twin.advance(0.7)
+    first, again, numpy_twin = (twin.state()[0] for twin in twins)
+    assert np.array_equal(first, again)
+    assert np.max(np.abs(first - numpy_twin)) <= PSI_ATOL
 
 
 def test_the_background_load_switches_a_running_twin_over():

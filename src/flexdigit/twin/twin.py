@@ -133,10 +133,12 @@ class Twin:
         Springs per section of the digit model (None: the description's, :func:`~flexdigit.params.twin_cells`).
     command : int, optional
         Initial command (default the equilibrium command, 8); the twin starts at rest in equilibrium there.
-    compiled : bool
+    compiled : bool, optional
         Step the digit with the compiled kernel (:meth:`~flexdigit.twin.digit.DynamicState.use_compiled`): ~5 x
-        less CPU per simulated second, within 1e-9 rad of the default numpy path but not bit for bit, so off
-        by default (the report's numbers come from the numpy path).
+        less CPU per simulated second, within 1e-9 rad of the numpy path but not bit for bit. Default (None):
+        compiled for a digit other than the thesis rig, numpy for the thesis rig (the report's numbers come from
+        its numpy path); False keeps numpy for any digit. Either path is deterministic on one machine (same seed
+        and calls, same numbers: numba's machine code runs the same operations in the same order every time).
     servo_drive : {"serial", "timer"}
         How commands reach the servo (:mod:`flexdigit.twin.actuator`): the thesis's serial board, or a pulse the
         controller's own timer generates (the reference firmware's: the loop on the board's timing).
@@ -154,7 +156,7 @@ class Twin:
         dt_s: float = DEFAULT_DT_S,
         cells_per_section: int = DEFAULT_CELLS_PER_SECTION,
         command: int | None = None,
-        compiled: bool = False,
+        compiled: bool | None = None,
         servo_drive: str = "serial",
     ):
         self.params = params or RigParams()
@@ -183,7 +185,7 @@ class Twin:
         self._presses: list = []  # PointForce / Pressure (flexdigit.twin.contact)
         self.tissue = None
         self.dynamics = DynamicState(self.chain)
-        if compiled:
+        if compiled or (compiled is None and not self.params.is_thesis_rig()):
             self.dynamics.use_compiled()
         self._settle()
         self.time_s = 0.0
