@@ -1,6 +1,7 @@
-"""The twin stepped by the compiled kernel (``Twin(compiled=True)``, ``sim+paced``'s default) against the numpy
-path it replaces: the same ROS2 step in another arithmetic order, so the oracle is the numpy twin itself, run
-side by side on the same seeded, randomly generated commands, loads, presses and advance lengths."""
+"""The twin stepped by the compiled kernel (``Twin(compiled=True)``; ``sim+paced``'s and a described digit's
+default) against the numpy path it replaces: the same ROS2 step in another arithmetic order, so the oracle is the
+numpy twin itself, run side by side on the same seeded, randomly generated commands, loads, presses and advance
+lengths."""
 
 import numpy as np
 import pytest
