@@ -133,11 +133,15 @@ def still_scatter_v(rig, params: RigParams) -> np.ndarray:
     :func:`~flexdigit.twin.digit_calibration.twin_calibration`) and half an ADC step either side,
     ``sqrt(sigma^2 + lsb^2 / 4)``. Not the readings' average rounding noise ``lsb / sqrt(12)``: a gauge whose white
     noise is under an LSB toggles between two codes, a deviation of up to ``lsb / 2`` when its value sits on a code
-    boundary (a 12-bit gauge with 0.6 mV of noise and 2.4 mV steps read 1.36 x the average one, still)."""
+    boundary (a 12-bit gauge with 0.6 mV of noise and 2.4 mV steps read 1.36 x the average one, still). The ADC
+    step is the rig's own where it reads through one of its own (``rig.adc_lsb_v``: a board's 10-bit count, 4.9 mV,
+    not the described DAQ's; with the DAQ's, a board's gauge toggling by a count was never steady and ``collect``
+    over ``hil://`` waited the 180 s cap for a setting)."""
     twin = getattr(rig, "twin", None)
     calibration = getattr(twin, "calibration", None) or twin_calibration(params)
     white = np.asarray(calibration.noise_white_v, dtype=float)
-    return np.sqrt(white**2 + params.sensors.adc_lsb_v**2 / 4.0)
+    lsb = getattr(rig, "adc_lsb_v", params.sensors.adc_lsb_v)
+    return np.sqrt(white**2 + lsb**2 / 4.0)
 
 
 def wait_until_steady(rig, noise_v, interval_s: float, cap_s: float) -> tuple[float, bool]:

@@ -62,6 +62,9 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: differences and the statics' Newton keep IEEE's. 1.3x on the 40-node rod's step (benchmarks/bench_tdcr.py).
 FAST_MATH = {"contract", "reassoc", "arcp", "nsz"}
 _fast = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath=FAST_MATH)
+# A callee is compiled once per argument types, and numba types a constant argument (True, 2) as its literal: a
+# call with a constant beside one with a variable compiles the callee twice (_newton, _backward_euler, _corotate were,
+# ~25 % of the first compile). So the constants passed are typed values: np.bool_(True), np.int64(2).
 
 #: Returned by :func:`equilibrate` when Newton did not converge.
 NO_PROGRESS = -1
@@ -585,11 +588,11 @@ def _newton(
             since = 0
         its += 1
         _residual(z, a, 1.0, xh, qh, psih, vh, wh, mass, inertia, model, dmp, xx, qq, f, t, sig, kap, res)
-        _corotate(qq, q_jac, turn, res, True)
+        _corotate(qq, q_jac, turn, res, np.bool_(True))
         for i in range(size):
             res[i] = -res[i]
         _band_solve(jac, hb, res, padded)
-        _corotate(qq, q_jac, turn, dz, False)
+        _corotate(qq, q_jac, turn, dz, np.bool_(False))
         big = 0.0
         for i in range(size):
             d = abs(dz[i]) * (a_per_length if i % 6 >= 3 else a)
@@ -686,7 +689,7 @@ def _backward_euler(state, dt, pieces, model, mass, inertia, beta, hb, tol, max_
             work,
             keep,
             rate,
-            False,
+            np.bool_(False),
         )
         its += more
         if not ok:
@@ -834,7 +837,7 @@ def run(x0, q0, model, mass, inertia, beta, hb, dt, n_steps, tol, max_iter, xs, 
         else:
             rate[0] = RATE  # measured afresh on the next step
             turn_known = False
-            pieces = 2
+            pieces = np.int64(2)
             while not ok and pieces <= 64:
                 ok, more = _backward_euler(
                     now, dt, pieces, model, mass, inertia, beta, hb, tol, max_iter, length, fallback, new

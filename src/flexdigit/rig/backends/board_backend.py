@@ -81,6 +81,8 @@ class BoardRig(Rig):
     """
 
     name = "board"
+    #: A reading's step (V): the board's 10-bit count, whatever ADC the parameters describe
+    adc_lsb_v = VOLTS_PER_COUNT
 
     def __init__(
         self,

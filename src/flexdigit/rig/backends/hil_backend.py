@@ -161,6 +161,9 @@ class HilRig(Rig):
 
     name = "hil"
     accepts_loads = True
+    #: A reading's step (V): the board's 10-bit count, whatever ADC the parameters describe (what a still gauge's
+    #: reading toggles by: :func:`flexdigit.tactile.runner.still_scatter_v`)
+    adc_lsb_v = VOLTS_PER_COUNT
 
     @property
     def deterministic(self) -> bool:  # simulated time: the same actions, the same readings
