@@ -400,7 +400,6 @@ LAZY_IMPORTS = {
     ("flexdigit.twin.batched", "flexdigit.twin._batched_kernel"): "numba: imported and compiled when a batch runs",
     ("flexdigit.twin.digit", "flexdigit.twin._batched_kernel"): "numba: imported and compiled when a batch runs",
     ("flexdigit.twin.contact", "flexdigit.twin._contact_points"): "numba: imported and compiled on the first press",
-    ("flexdigit.twin.digit", "flexdigit.twin._tridiagonal"): "numba: imported and compiled at the first static solve",
     ("flexdigit.palpation.contact_estimation", "flexdigit.palpation._contact_kernel"): "numba, once in _kernel()",
     ("flexdigit.tactile.netlab", "flexdigit.tactile._scg_kernel"): "numba: imported and compiled when a net trains",
     (

@@ -241,9 +241,6 @@ class Chain:
             self.mass_inertia,
             self.gravity,
         )
-        #: Whether K_psi is tridiagonal (springs between neighbouring links: always, as built here): the static
-        #: Newton then solves its Jacobian in O(n) (:meth:`_tridiagonal_step`).
-        self._k_tridiagonal = not np.any(np.triu(self.k_psi, 2)) and not np.any(np.tril(self.k_psi, -2))
         # weight beyond each gauge (for the axial force)
         self._mass_beyond_gauge = (ms[None, :] > self.gauge_s_m[:, None]) @ self.mass_kg
         self._gauge_interp = self._interpolation(self.gauge_s_m)
@@ -571,21 +568,18 @@ class Chain:
             s, c = np.sin(psi), np.cos(psi)
             res = psi @ self.k_psi + s * ga - c * gb
             res[:, -1] -= moment
-            diagonal = np.diagonal(self.k_psi) + (c * ga + s * gb)  # the Jacobian's diagonal
+            jac = np.broadcast_to(self.k_psi, (b, self.n, self.n)).copy()
+            idx = np.arange(self.n)
+            jac[:, idx, idx] += c * ga + s * gb
             if short is not None:
                 t1, t2, taut1, taut2 = self.cable_tensions(psi[:, -1], short)
                 res[:, -1] -= e * (t1 - t2) if self.antagonist else e * t1
-                diagonal[:, -1] += kc * e * e * (taut1 + taut2.astype(float) if self.antagonist else taut1)
-            if contact is None and self._k_tridiagonal:  # J = K_psi + a diagonal: O(n) a case
-                step = self._tridiagonal_step(diagonal, res)
-            else:
-                jac = np.broadcast_to(self.k_psi, (b, self.n, self.n)).copy()
-                jac[:, np.arange(self.n), np.arange(self.n)] = diagonal
-                if contact is not None:
-                    q_contact, dq_contact, _ = contact.generalized(psi)
-                    res -= q_contact
-                    jac -= dq_contact
-                step = np.linalg.solve(jac, res[..., None])[..., 0]
+                jac[:, -1, -1] += kc * e * e * (taut1 + taut2.astype(float) if self.antagonist else taut1)
+            if contact is not None:
+                q_contact, dq_contact, _ = contact.generalized(psi)
+                res -= q_contact
+                jac -= dq_contact
+            step = np.linalg.solve(jac, res[..., None])[..., 0]
             biggest = np.max(np.abs(step), axis=1, keepdims=True)
             step *= np.minimum(1.0, max_step_rad / np.maximum(biggest, 1e-300))
             psi -= step
@@ -593,20 +587,6 @@ class Chain:
                 converged = True
                 break
         return psi, iterations, converged, res, biggest
-
-    def _tridiagonal_step(self, diagonal, res):
-        """``J^-1 res`` (B, n) for the Jacobians ``K_psi + diag(diagonal)`` (compiled, with dgtsv's partial
-        pivoting); a singular one goes to ``np.linalg.solve``, which says so."""
-        from flexdigit.twin._tridiagonal import solve_tridiagonal
-
-        k = self.k_psi
-        lower, upper = np.ascontiguousarray(np.diagonal(k, -1)), np.ascontiguousarray(np.diagonal(k, 1))
-        step, regular = solve_tridiagonal(lower, np.ascontiguousarray(diagonal), upper, np.ascontiguousarray(res))
-        if regular:
-            return step
-        jac = np.broadcast_to(k, (res.shape[0], self.n, self.n)).copy()
-        jac[:, np.arange(self.n), np.arange(self.n)] = diagonal
-        return np.linalg.solve(jac, res[..., None])[..., 0]
 
     # ----------------------------------------------------------------------------------------------- dynamics
     def linear_modes(self, psi_eq=None, g_extra=None, cable_taut=False):
