@@ -49,9 +49,10 @@ QUADRATURE_TOL = 1e-12
 #: carried through at most 24 links' sums: 64 eps.
 CONTACT_KERNEL_TOL = 64 * np.finfo(float).eps
 #: The compiled generalised forces, Jacobians and resultant against their numpy references, on each array's scale:
-#: the same products, summed over the quadrature points in order where numpy's einsum sums in its own order, so each
-#: sum may differ by an ulp per point of its up to ~200 (the links in contact x the body's pieces x Gauss points): 1e-13
-#: (450 eps); a lever, a sign or a cosine wrong would be off by its whole term, ~1e-2 of the scale.
+#: the same products in the same order for the forces and Jacobians (equal to the bit here), but the resultant's
+#: sums run in order where np.sum sums pairwise, and another CPU's sin/cos may differ by an ulp: an ulp per point of
+#: up to ~200 (the links in contact x the body's pieces x Gauss points), 1e-13 (450 eps); a lever, a sign or a
+#: cosine wrong would be off by its whole term, ~1e-2 of the scale.
 GENERALIZED_KERNEL_TOL = 1e-13
 
 PARAMS = RigParams()

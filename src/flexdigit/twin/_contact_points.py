@@ -5,6 +5,10 @@ Newton solve (1-20 shapes) numpy spends ~200 us a call in dispatch and temporari
 palpation study calls it ~9,000 times. The same elementwise IEEE operations in the same order as the numpy
 reference (``TissueContact._points_numpy``; the cumulative sums run in order, as ``np.cumsum`` does; no fast-math,
 so no fused multiply-adds), so the same bits: ``tests/twin/test_contact.py`` checks them equal.
+The generalised forces and their Jacobian (``contact_generalized``) sum over the points in order, as numpy's einsum
+does, and add the diagonal's moment term after those sums, as ``TissueContact._generalized_numpy`` does: equal to
+the bit here too (the thesis report's palpation tables are unchanged); the resultant (``contact_resultant``) sums
+sequentially where ``np.sum`` sums pairwise, so it may differ by an ulp per point.
 """
 
 from __future__ import annotations
@@ -118,10 +122,11 @@ def contact_generalized(psi, omega, link_start, link_len, chain_link_len, joint_
     gen = np.zeros((b, n))
     d_psi = np.zeros((b, n, n))
     d_omega = np.zeros((b, n, n))
-    lever, c = np.empty(n), np.empty(n)
+    lever, c, moment = np.empty(n), np.empty(n), np.empty(n)
     rated = omega.shape[0] == b and damping > 0
     for i in range(b):
         cos_psi, sin_psi = np.cos(psi[i]), np.sin(psi[i])
+        moment[:] = 0.0  # sum_p w q lever_pj, added to the diagonal after the sums over the points (numpy's order)
         for p in range(s.shape[1]):
             if w[i, p] == 0.0:
                 continue  # a point outside the contact: weight 0, no load
@@ -134,11 +139,17 @@ def contact_generalized(psi, omega, link_start, link_len, chain_link_len, joint_
             q, dq_dd, dq_dv = _point_load(delta[i, p], kk[i, p], rate, exponent, damping)
             wq, wd, wv = w[i, p] * q, w[i, p] * dq_dd, w[i, p] * dq_dv
             for j in range(count):
-                gen[i, j] -= sign * wq * c[j]
-                d_psi[i, j, j] += sign * wq * lever[j] * sin_psi[j]
+                gen[i, j] += wq * c[j]
+                moment[j] += wq * lever[j]
                 for m in range(count):
-                    d_psi[i, j, m] -= wd * c[j] * c[m]
-                    d_omega[i, j, m] -= wv * c[j] * c[m]
+                    d_psi[i, j, m] += wd * c[j] * c[m]
+                    d_omega[i, j, m] += wv * c[j] * c[m]
+        for j in range(n):
+            gen[i, j] *= -sign
+            for m in range(n):
+                d_psi[i, j, m] = -d_psi[i, j, m]
+                d_omega[i, j, m] = -d_omega[i, j, m]
+            d_psi[i, j, j] += sign * moment[j] * sin_psi[j]
     return gen, d_psi, d_omega
 
 
