@@ -48,6 +48,12 @@ QUADRATURE_TOL = 1e-12
 #: and numpy's sin/cos and sums have SIMD paths of their own, so another CPU may differ by an ulp per operation,
 #: carried through at most 24 links' sums: 64 eps.
 CONTACT_KERNEL_TOL = 64 * np.finfo(float).eps
+#: The compiled generalised forces, Jacobians and resultant against their numpy references, on each array's scale:
+#: the same products in the same order for the forces and Jacobians (equal to the bit here), but the resultant's
+#: sums run in order where np.sum sums pairwise, and another CPU's sin/cos may differ by an ulp: an ulp per point of
+#: up to ~200 (the links in contact x the body's pieces x Gauss points), 1e-13 (450 eps); a lever, a sign or a
+#: cosine wrong would be off by its whole term, ~1e-2 of the scale.
+GENERALIZED_KERNEL_TOL = 1e-13
 
 PARAMS = RigParams()
 CAL = default_calibration()
@@ -314,3 +320,44 @@ def test_compiled_contact_quadrature_is_the_numpy_quadrature_to_rounding():
         for got, want in zip(contact.points(psi, omega), contact._points_numpy(psi, omega), strict=True):
             scale = np.abs(want).max(initial=0.0)
             np.testing.assert_allclose(got, want, rtol=CONTACT_KERNEL_TOL, atol=CONTACT_KERNEL_TOL * scale)
+
+
+def test_compiled_contact_forces_are_the_numpy_forces_to_rounding():
+    # TissueContact.generalized and .resultant run compiled kernels (the dynamics ask them every step, each reading
+    # asks the resultant); the numpy code they replaced is the reference: seeded random bodies (either side, gaps,
+    # inclusions, Hunt-Crossley exponents 1 and 1.5, with and without damping), mountings, resolutions, batches of
+    # shapes with and without rates: every array within GENERALIZED_KERNEL_TOL of its scale, the NaNs where they are
+    from flexdigit.twin.contact import TissueContact
+
+    rng = np.random.default_rng(29)
+    for trial in range(90):
+        chain = cached_digit(PARAMS, CAL, True, ("vertical", "horizontal")[trial % 2], (3, 2, 4)[trial % 3])
+        start = float(rng.uniform(0.0, 0.2))
+        end = start + float(rng.uniform(0.01, 0.3))
+        inclusions = (
+            (Inclusion(float(rng.uniform(start, end)), 0.02, float(rng.uniform(0.3, 5.0))),) if trial % 4 else ()
+        )
+        tissue = Tissue(
+            start,
+            end,
+            float(rng.uniform(-0.002, 0.02)),
+            float(rng.uniform(1e3, 1e5)),
+            inclusions=inclusions,
+            exponent=(1.0, 1.5)[trial % 5 == 0],
+            damping_s_m=0.5 * (trial % 2),
+            side=("cable", "opposite")[trial % 3 == 0],
+        )
+        contact = TissueContact(chain, tissue)
+        psi = rng.normal(0.0, 0.15, (int(rng.integers(1, 25)), chain.n)) * rng.uniform(0.0, 2.0)
+        omega = (None, rng.normal(0.0, 1.0, psi.shape))[trial % 3 != 1]
+        gen, res = contact.generalized(psi, omega), contact.resultant(psi, omega)
+        gen_ref, res_ref = contact._generalized_numpy(psi, omega), contact._resultant_numpy(psi, omega)
+        assert (gen[2] is None) == (gen_ref[2] is None), f"trial {trial}: dQ/domega given without damping"
+        names = ("Q", "dQ/dpsi", "dQ/domega", "force", "centroid", "first", "last", "beyond")
+        got = [*gen, res[0], res[1], *res[2], res[3]]
+        want = [*gen_ref, res_ref[0], res_ref[1], *res_ref[2], res_ref[3]]
+        for name, a, b in zip(names, got, want, strict=True):
+            if b is None:
+                continue
+            scale = np.nanmax(np.abs(b), initial=0.0)
+            np.testing.assert_allclose(a, b, rtol=0, atol=GENERALIZED_KERNEL_TOL * scale, err_msg=f"{trial}: {name}")

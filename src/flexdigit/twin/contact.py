@@ -298,9 +298,12 @@ class TissueContact:
         self._link_start = np.concatenate([[0.0], chain.joint_s_m])
         self._link_len = np.concatenate([[chain.joint_s_m[0]], chain.link_length_m])
         self._chain_link_len = np.ascontiguousarray(chain.link_length_m, dtype=float)
-        from flexdigit.twin._contact_points import contact_points
+        from flexdigit.twin._contact_points import contact_generalized, contact_points, contact_resultant
 
         self._contact_points = contact_points
+        self._contact_generalized, self._contact_resultant = contact_generalized, contact_resultant
+        self._joint_s = np.ascontiguousarray(chain.joint_s_m, dtype=float)
+        self._gauge_s = np.ascontiguousarray(chain.gauge_s_m, dtype=float)
 
     def __repr__(self) -> str:
         return f"TissueContact(tissue={self.tissue!r})"
@@ -400,11 +403,31 @@ class TissueContact:
             np.where(pushing, 1.5 * alpha * elastic, 0.0),
         )
 
+    def _kernel_args(self, psi, omega):
+        """``psi`` and ``omega`` (B, n; (0, n) for none) as the compiled kernels take them."""
+        psi = np.ascontiguousarray(np.atleast_2d(np.asarray(psi, dtype=float)))
+        if omega is None:
+            omega = np.zeros((0, psi.shape[1]))
+        return psi, np.ascontiguousarray(np.atleast_2d(np.asarray(omega, dtype=float)))
+
     def generalized(self, psi, omega=None):
-        """Generalised forces ``Q`` (B, n) of the body on the chain, ``dQ/dpsi`` and ``dQ/domega`` (B, n, n).
+        """Generalised forces ``Q`` (B, n) of the body on the chain, ``dQ/dpsi`` and ``dQ/domega`` (B, n, n; None
+        without damping).
 
         ``Q_j = -sign sum_p w_p q_p lever_pj cos psi_j`` (the load is normal to the surface, world-fixed).
+        Compiled (:func:`flexdigit.twin._contact_points.contact_generalized`): the dynamics call it twice a step,
+        where numpy spent ~0.2 ms a call on a few dozen points; :meth:`_generalized_numpy` is its reference.
         """
+        psi, omega = self._kernel_args(psi, omega)
+        t = self.tissue
+        gen, d_psi, d_omega = self._contact_generalized(
+            psi, omega, self._link_start, self._link_len, self._chain_link_len, self._joint_s, float(self.sign),
+            float(t.gap_m), self._lo, self._hi, self._k, _GAUSS_T, _GAUSS_W, float(t.exponent), float(t.damping_s_m),
+        )  # fmt: skip
+        return gen, d_psi, (d_omega if t.damping_s_m > 0 else None)
+
+    def _generalized_numpy(self, psi, omega=None):
+        """:meth:`generalized` in numpy: the reference the compiled one is tested against."""
         ch = self.chain
         psi = np.atleast_2d(np.asarray(psi, dtype=float))
         s, w, delta, k, rate = self.points(psi, omega)
@@ -427,7 +450,21 @@ class TissueContact:
     def resultant(self, psi, omega=None):
         """Total force (N, + towards the cable side; the body pushes with ``-sign``), its centroid along the arc
         (m from the clamp, NaN without contact), the contact's arc extent ``(first, last)`` (m) and the force
-        carried past each gauge in the (a, b) axes (B, G, 2)."""
+        carried past each gauge in the (a, b) axes (B, G, 2).
+
+        Compiled (:func:`flexdigit.twin._contact_points.contact_resultant`): every reading of a twin beside a body
+        asks it; :meth:`_resultant_numpy` is its reference."""
+        psi, omega = self._kernel_args(psi, omega)
+        t = self.tissue
+        total, centroid, first, last, beyond = self._contact_resultant(
+            psi, omega, self._link_start, self._link_len, self._chain_link_len, self._joint_s, self._gauge_s,
+            float(self.sign), float(t.gap_m), self._lo, self._hi, self._k, _GAUSS_T, _GAUSS_W, float(t.exponent),
+            float(t.damping_s_m),
+        )  # fmt: skip
+        return total, centroid, (first, last), beyond
+
+    def _resultant_numpy(self, psi, omega=None):
+        """:meth:`resultant` in numpy: the reference the compiled one is tested against."""
         psi = np.atleast_2d(np.asarray(psi, dtype=float))
         s, w, delta, k, rate = self.points(psi, omega)
         q = self.load(delta, k, rate)[0]
