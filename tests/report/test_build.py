@@ -167,3 +167,25 @@ def test_a_worker_runs_every_blas_and_openmp_library_on_one_thread():
     pools = ast.literal_eval(out)  # a printed list of (api, threads) tuples
     assert {api for api, _ in pools} >= {"openblas", "openmp"}  # the libraries are there to be checked
     assert {threads for _, threads in pools} == {1}
+
+
+def test_a_report_built_in_this_process_runs_its_chapters_on_one_blas_thread(tmp_path):
+    # as its workers do (above): the same factorisations, and no BLAS threads fighting for the cores; restored after
+    from threadpoolctl import threadpool_info
+
+    seen = []
+
+    def counting(ctx):
+        seen.extend(i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas")
+        return Chapter(slug="threads", title="Threads", entries=[new("threads.n", "1", 1.0, "", "one")])
+
+    before = {i["filepath"]: i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas"}
+    name = _install("fd_test_threads_chapter", counting)
+    try:
+        reproduce(tmp_path, chapters=(name,), workers=1)
+    finally:
+        sys.modules.pop(name, None)
+    assert len(seen) >= 3  # numpy's, SciPy's and slycot's OpenBLAS, each held
+    assert set(seen) == {1}
+    after = {i["filepath"]: i["num_threads"] for i in threadpool_info() if i["filepath"] in before}
+    assert after == before

@@ -3,8 +3,8 @@ from the command line, its thesis columns "not applicable", its twin, control an
 (the twin's release wn the one ``flexdigit simulate release --params`` measures; a Bayes limit and the thesis
 network's RMSE for its G gauges), palpation and the sensitivity study on the digit, no chapter skipped.
 
-The whole report in fast mode, one process: 20-25 s a digit on one core (``flexdigit reproduce --fast --params D.toml``,
-docs/digits.md).
+The whole report in fast mode, one process on one BLAS thread: 30-80 s a digit on two cores (``flexdigit reproduce
+--fast --params D.toml``, docs/digits.md).
 """
 
 from __future__ import annotations

@@ -35,6 +35,7 @@ import itertools
 import math
 import warnings
 from dataclasses import dataclass
+from functools import lru_cache
 from numbers import Integral, Real
 
 import control as ct
@@ -862,6 +863,31 @@ def digit_design_20ms(
 
 
 def _digit_design(params, period_s, calibration, orientation, deg_per_command, weights=None):
+    """``(design, model)`` of :func:`digit_design_20ms` on a described digit; its coarse command said each time."""
+    settings = tuple(globals()[name] for name in _SETTINGS)  # a setting changed (a test's) designs again
+    design, model, coarse = _searched_design(
+        params, period_s, calibration, orientation, deg_per_command, weights, settings
+    )
+    if coarse is not None:
+        warnings.warn(f"design: {coarse}", DesignWarning, stacklevel=3)
+    return design, model
+
+
+#: This module's settings a digit's design depends on, part of the key :func:`_searched_design` keeps it by
+_SETTINGS = (
+    "STIFFNESS_MARGIN", "GAIN_ERRORS", "OVERSHOOT_LIMIT_PERCENT", "NOISE_LIMIT_DEG", "COMMAND_NOISE_LIMIT_DEG",
+    "SEARCH_R_U", "SEARCH_Q_RATE", "SEARCH_Q_DISTURBANCE", "SEARCH_Q_SHAPE", "LIGHT_DAMPING", "SEARCH_R_FACTORS",
+    "QUIET_Q_DISTURBANCE", "QUIET_R_FACTORS", "SEARCH_STEP_S", "QUANTISED_BAND", "SHAPED_DAMPING",
+    "SHAPED_TIME_CONSTANT_S", "QUIET_SETTLING_S", "STEP_BAND_DEG",
+)  # fmt: skip
+
+
+@lru_cache(maxsize=16)
+def _searched_design(params, period_s, calibration, orientation, deg_per_command, weights, settings):
+    """The design, its model and its coarse command's note (or None), kept per exact inputs (the digit's frozen
+    params and calibration, its mount, the period, the measured rotation per command, kept weights, this module's
+    ``settings``): a report's chapter 5 steps one design three times and the weight search is most of a design's
+    seconds (0.5-4 s). A refused digit raises again each time (exceptions are not kept)."""
     digit_first_mode(params, calibration, orientation=orientation)  # refused if it buckles as mounted
     T = params.actuator.serial_period_s if period_s is None else period_s
     model = digit_model(params, calibration, orientation=orientation)
@@ -873,10 +899,8 @@ def _digit_design(params, period_s, calibration, orientation, deg_per_command, w
     light = bool(model.modes_zeta.size and np.min(model.modes_zeta) < LIGHT_DAMPING)
     mode = _shaped_mode(model)
     coarse = _coarse_step(G, T)  # a command too coarse for the 2 % band, said whatever the weights
-    if coarse is not None:
-        warnings.warn(f"design: {coarse}", DesignWarning, stacklevel=3)
     if weights is not None:  # kept (chosen on the model's own gain): rescaled as the search scales its candidates
-        return _digit_candidate(G, T, weights.for_digit(dc, model.deg_per_command), mode), model
+        return _digit_candidate(G, T, weights.for_digit(dc, model.deg_per_command), mode), model, coarse
     choice = digit_weights(
         G, T, model.measurement_sd_deg, dc / thesis_dc, lightly_damped=light, params=params, shaped_mode=mode,
         coarse=coarse is not None,
@@ -884,7 +908,7 @@ def _digit_design(params, period_s, calibration, orientation, deg_per_command, w
     if coarse is not None and choice.meets:  # the same weights: the design is the search's, its figure said
         choice = dataclasses.replace(choice, meets=False, failing=coarse)
     design = _digit_candidate(G, T, choice.weights, mode)
-    return dataclasses.replace(design, choice=choice), model
+    return dataclasses.replace(design, choice=choice), model, coarse
 
 
 #: Issue 24's settling band of its 30 deg step, deg (2 %): what one frame of one command may move the tip at most
