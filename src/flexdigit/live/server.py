@@ -75,6 +75,8 @@ SLOW_DROP_S = 3.0
 PING_INTERVAL_S, PING_TIMEOUT_S = 1.0, 2.0
 #: Pages served at once; one more is refused (WebSocket close 1013, "try again later").
 MAX_PAGES = 8
+#: How long a flooding page has to reply to its close (1008) before it is dropped, s.
+CLOSE_GRACE_S = 1.0
 #: The largest WebSocket frame read at all (bytes): a bigger one closes the connection (1009) before it is buffered.
 MAX_FRAME_BYTES = 4096
 
@@ -252,7 +254,11 @@ class _Page:
         from starlette.websockets import WebSocketDisconnect
 
         try:
-            await asyncio.wait_for(self.websocket.send_text(text), SLOW_DROP_S)
+            # in this task (asyncio.timeout, not wait_for's task per message): a page's burst of requests is
+            # answered in one pass of the event loop, so its reading, paused by uvicorn until the app has taken
+            # its requests, resumes at once and the keepalive's pong behind them is read in time on a busy server
+            async with asyncio.timeout(SLOW_DROP_S):
+                await self.websocket.send_text(text)
         except TimeoutError:
             self.drop("not reading")
             raise WebSocketDisconnect(1008) from None
@@ -262,7 +268,14 @@ class _Page:
 
     async def push(self) -> None:
         """Send the page a frame every 1/:data:`UPDATE_HZ` s, one in flight at most, skipping frames while its
-        buffer is full; drop the page when it has taken none for :data:`SLOW_DROP_S`."""
+        buffer is full; drop the page when it has taken none for :data:`SLOW_DROP_S`. Ends quietly when the page
+        has gone (closed, dropped or flooding) rather than leaving asyncio a task error to print."""
+        from starlette.websockets import WebSocketDisconnect
+
+        with contextlib.suppress(WebSocketDisconnect, RuntimeError, OSError):
+            await self._push_frames()
+
+    async def _push_frames(self) -> None:
         transport = self.transport
         since = -1
         period = 1.0 / UPDATE_HZ
@@ -310,10 +323,17 @@ class _Page:
             await self.answer(message.get("text"))
 
     async def close_flooding(self) -> None:
+        """Tell a flooding page why (close 1008) and drop it once it has replied, or after :data:`CLOSE_GRACE_S`:
+        uvicorn would read and parse its flood for 10 s more waiting for that reply, event-loop time the other
+        pages' requests and keepalive answers wait behind."""
         reason = f"flooding: more than {RATE_PER_PAGE:g} requests a second"
-        try:
-            await asyncio.wait_for(self.websocket.close(code=1008, reason=reason), 1.0)
-        except TimeoutError:
+        transport = self.transport
+        with contextlib.suppress(TimeoutError, RuntimeError, OSError):
+            async with asyncio.timeout(CLOSE_GRACE_S):
+                await self.websocket.close(code=1008, reason=reason)
+                while transport is not None and not transport.is_closing():
+                    await asyncio.sleep(0.02)  # uvicorn closes the connection on the page's close reply
+        if transport is not None:
             self.drop(reason)
 
     async def tell_to_slow_down(self) -> None:
