@@ -38,36 +38,35 @@ def pytest_report_header(config):
 
 #: The documentation site's build (tests/test_docs.py: Sphinx and the gallery's examples, a minute or more); first.
 FIRST = "test_docs.py"
-#: The longest files (path under tests/) and their seconds in a full run on two workers (`--durations=150` at 365c011,
-#: the slowest 150 tests summed by file; a loaded machine, load 10-15, the run 84 min: only their order matters):
-#: started first, longest first, so that neither worker is left running one of them alone at the end.
+#: The longest files (path under tests/) and their seconds in a full run on two workers (the run's own list of its
+#: 30 longest files, a fresh clone of 427f071 on an idle machine, `make test`'s pytest 16 min 42 s): started first,
+#: longest first, so that neither worker is left running one of them alone at the end.
 LONGEST_S = {
-    "cli/test_digit_control.py": 1353,
-    "tactile/test_digit_data_path.py": 763,
-    "cli/test_campaign_digits.py": 696,
-    "studies/test_execution.py": 412,
-    "report/test_digit_reports.py": 398,
-    "live/test_server.py": 365,
-    "tactile/test_refined_network.py": 280,  # at load 15-19 on 2 shared cores, alone
-    "firmware/test_board.py": 267,
-    "tactile/test_bayes_drift.py": 223,
-    "cli/test_palpate_pairs.py": 220,
-    "cli/test_stop_signals.py": 199,
-    "firmware/test_eight_gauges.py": 187,
-    "firmware/test_digit_images.py": 179,
-    "firmware/test_hil_commands.py": 174,
-    "live/test_page_digits.py": 145,
-    "studies/test_resources.py": 143,
-    "tdcr/test_chain_kernel.py": 139,
-    "calibrate/test_calibrate_stopped.py": 124,
-    "control/test_digit_model.py": 117,
-    "twin/test_twin_resolution.py": 110,  # its 49 default-twin elastica cases alone: 107 s on two loaded workers
-    "cli/test_export.py": 102,
-    "live/test_page.py": 92,
-    "palpation/test_sweep_any_digit.py": 90,
-    "report/test_reproduce_stopped.py": 79,
-    "tactile/test_resume.py": 72,
-    "twin/test_campaign_digits.py": 67,
+    "cli/test_digit_control.py": 140,
+    "tactile/test_digit_data_path.py": 108,
+    "report/test_digit_reports.py": 106,
+    "cli/test_campaign_digits.py": 86,
+    "firmware/test_board.py": 67,
+    "tdcr/test_chain_kernel.py": 66,
+    "test_io_commands.py": 61,
+    "live/test_page.py": 55,
+    "studies/test_execution.py": 52,
+    "cli/test_stop_signals.py": 45,
+    "tactile/test_bayes_drift.py": 41,
+    "twin/test_twin_resolution.py": 33,
+    "cli/test_palpate_pairs.py": 32,
+    "firmware/test_eight_gauges.py": 32,
+    "live/test_page_digits.py": 30,
+    "live/test_server.py": 29,
+    "tactile/test_refined_network.py": 26,
+    "studies/test_resources.py": 24,
+    "firmware/test_digit_images.py": 23,
+    "rig/test_rotation_perturbed.py": 23,
+    "live/test_resources.py": 23,
+    "cli/test_plots.py": 23,
+    "studies/test_cluster.py": 23,
+    "rig/backends/test_stream_third_party.py": 22,
+    "calibrate/test_calibrate_stopped.py": 21,
 }
 _TESTS = Path(__file__).resolve().parent
 
