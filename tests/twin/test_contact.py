@@ -295,26 +295,9 @@ def test_compiled_contact_quadrature_is_the_numpy_quadrature_to_rounding():
     # TissueContact.points runs a compiled kernel; the numpy quadrature it replaced is the reference: seeded random
     # bodies (either side, gaps from pressing-in to clear, inclusions), mountings, resolutions and batches of
     # shapes, rates with damping: every array within CONTACT_KERNEL_TOL of its scale (equal to the bit here)
-    from flexdigit.twin.contact import TissueContact
-
     rng = np.random.default_rng(13)
     for trial in range(120):
-        chain = cached_digit(PARAMS, CAL, True, ("vertical", "horizontal")[trial % 2], (3, 2, 4)[trial % 3])
-        start = float(rng.uniform(0.0, 0.2))
-        end = start + float(rng.uniform(0.01, 0.3))
-        inclusions = (
-            (Inclusion(float(rng.uniform(start, end)), 0.02, float(rng.uniform(0.3, 5.0))),) if trial % 4 else ()
-        )
-        tissue = Tissue(
-            start,
-            end,
-            float(rng.uniform(-0.002, 0.02)),
-            float(rng.uniform(1e3, 1e5)),
-            inclusions=inclusions,
-            damping_s_m=0.5 * (trial % 2),
-            side=("cable", "opposite")[trial % 3 == 0],
-        )
-        contact = TissueContact(chain, tissue)
+        chain, contact = _random_contact(rng, trial)
         psi = rng.normal(0.0, 0.15, (int(rng.integers(1, 25)), chain.n)) * rng.uniform(0.0, 2.0)
         omega = rng.normal(0.0, 1.0, psi.shape)
         for got, want in zip(contact.points(psi, omega), contact._points_numpy(psi, omega), strict=True):
@@ -327,27 +310,9 @@ def test_compiled_contact_forces_are_the_numpy_forces_to_rounding():
     # asks the resultant); the numpy code they replaced is the reference: seeded random bodies (either side, gaps,
     # inclusions, Hunt-Crossley exponents 1 and 1.5, with and without damping), mountings, resolutions, batches of
     # shapes with and without rates: every array within GENERALIZED_KERNEL_TOL of its scale, the NaNs where they are
-    from flexdigit.twin.contact import TissueContact
-
     rng = np.random.default_rng(29)
     for trial in range(90):
-        chain = cached_digit(PARAMS, CAL, True, ("vertical", "horizontal")[trial % 2], (3, 2, 4)[trial % 3])
-        start = float(rng.uniform(0.0, 0.2))
-        end = start + float(rng.uniform(0.01, 0.3))
-        inclusions = (
-            (Inclusion(float(rng.uniform(start, end)), 0.02, float(rng.uniform(0.3, 5.0))),) if trial % 4 else ()
-        )
-        tissue = Tissue(
-            start,
-            end,
-            float(rng.uniform(-0.002, 0.02)),
-            float(rng.uniform(1e3, 1e5)),
-            inclusions=inclusions,
-            exponent=(1.0, 1.5)[trial % 5 == 0],
-            damping_s_m=0.5 * (trial % 2),
-            side=("cable", "opposite")[trial % 3 == 0],
-        )
-        contact = TissueContact(chain, tissue)
+        chain, contact = _random_contact(rng, trial, exponent=(1.0, 1.5)[trial % 5 == 0])
         psi = rng.normal(0.0, 0.15, (int(rng.integers(1, 25)), chain.n)) * rng.uniform(0.0, 2.0)
         omega = (None, rng.normal(0.0, 1.0, psi.shape))[trial % 3 != 1]
         gen, res = contact.generalized(psi, omega), contact.resultant(psi, omega)
@@ -361,3 +326,25 @@ def test_compiled_contact_forces_are_the_numpy_forces_to_rounding():
                 continue
             scale = np.nanmax(np.abs(b), initial=0.0)
             np.testing.assert_allclose(a, b, rtol=0, atol=GENERALIZED_KERNEL_TOL * scale, err_msg=f"{trial}: {name}")
+
+
+def _random_contact(rng, trial: int, **tissue_options):
+    """A seeded random body beside the digit (either side, a gap from pressing-in to clear, an inclusion on three
+    trials of four, damping on odd trials), on a mounting and resolution set by ``trial``: ``(chain, contact)``."""
+    from flexdigit.twin.contact import TissueContact
+
+    chain = cached_digit(PARAMS, CAL, True, ("vertical", "horizontal")[trial % 2], (3, 2, 4)[trial % 3])
+    start = float(rng.uniform(0.0, 0.2))
+    end = start + float(rng.uniform(0.01, 0.3))
+    inclusions = (Inclusion(float(rng.uniform(start, end)), 0.02, float(rng.uniform(0.3, 5.0))),) if trial % 4 else ()
+    tissue = Tissue(
+        start,
+        end,
+        float(rng.uniform(-0.002, 0.02)),
+        float(rng.uniform(1e3, 1e5)),
+        inclusions=inclusions,
+        damping_s_m=0.5 * (trial % 2),
+        side=("cable", "opposite")[trial % 3 == 0],
+        **tissue_options,
+    )
+    return chain, TissueContact(chain, tissue)
