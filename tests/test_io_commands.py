@@ -17,6 +17,8 @@ import pytest
 
 from flexdigit._io import RECORDS_ROW_LIMIT, output_lock
 from flexdigit.cli import main
+from flexdigit.rig.base import open_rig
+from flexdigit.rig.rotation import calibrate_rotation, save_rotation_map
 
 #: A command that could hang on a FIFO gets this long before the test fails (s); each takes ~2 s when it works.
 HANG_TIMEOUT_S = 90
@@ -25,6 +27,15 @@ HANG_TIMEOUT_S = 90
 MAX_RSS_KB = 600_000
 
 EXE = [sys.executable, "-m", "flexdigit.cli"]
+
+
+@pytest.fixture(scope="module")
+def rotation_map(tmp_path_factory):
+    """The twin's rotation map, made once: a ``run`` subprocess given it skips ~1.5 s of calibrating the twin (the
+    claims below are about the log, the lock and the disk, not the map)."""
+    path = tmp_path_factory.mktemp("map") / "map.json"
+    save_rotation_map(calibrate_rotation(open_rig("sim", seed=1)), path)
+    return str(path)
 
 
 def _run(argv, cwd, timeout=HANG_TIMEOUT_S):
@@ -260,7 +271,7 @@ def _fill(directory, leave_bytes: int) -> None:
 
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="mounting a tmpfs needs root; test_io.py injects ENOSPC instead")
-def test_a_forced_log_on_a_disk_that_fills_keeps_the_old_log_and_names_it(tmp_path, monkeypatch):
+def test_a_forced_log_on_a_disk_that_fills_keeps_the_old_log_and_names_it(tmp_path, monkeypatch, rotation_map):
     """`--log old.jsonl --force` on a disk that filled stopped at t = 1.6 s and the previous log was gone."""
     with _small_tmpfs(tmp_path / "disk") as disk:
         monkeypatch.chdir(disk)
@@ -268,7 +279,7 @@ def test_a_forced_log_on_a_disk_that_fills_keeps_the_old_log_and_names_it(tmp_pa
         monkeypatch.undo()
         old = (disk / "old.jsonl").read_bytes()
         _fill(disk, 48 * 1024)
-        done = _run(["run", "--log", "old.jsonl", "--force", "--duration", "60"], disk)
+        done = _run(["run", "--log", "old.jsonl", "--force", "--duration", "60", "--rotation-map", rotation_map], disk)
         assert "old.jsonl: cannot write it: No space left on device" in done.stdout + done.stderr
         assert "log: old.jsonl is kept as it was" in done.stdout + done.stderr
         assert (disk / "old.jsonl").read_bytes() == old
@@ -335,7 +346,7 @@ def test_two_collects_into_one_output_one_completes_one_is_refused(tmp_path):
 
 
 @pytest.mark.slow
-def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path):
+def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path, rotation_map):
     """Two real `run --log --append` at once: the first (the paced twin, for up to 10 minutes) holds the log until
     the second has been refused, then SIGTERM stops it (as systemd would; SIGINT may be inherited ignored from a
     non-interactive shell); however slowly a loaded machine starts the second."""
@@ -345,7 +356,7 @@ def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path):
     from flexdigit.rig.loop import read_log_runs
 
     log = tmp_path / "r.jsonl"
-    argv = ["run", "--backend", "sim+paced", "--log", str(log), "--append"]
+    argv = ["run", "--backend", "sim+paced", "--log", str(log), "--append", "--rotation-map", rotation_map]
     first = subprocess.Popen([*EXE, *argv, "--duration", "600"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         for _ in range(600):  # until the first holds the log's lock (it is released only when the run ends)

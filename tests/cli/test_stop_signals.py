@@ -46,10 +46,12 @@ def _read_with_mcap(path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("signum, code", STOPS, ids=[s.name for s, _ in STOPS])
-def test_run_with_log_and_record_stops_cleanly(tmp_path, signum, code):
+def test_run_with_log_and_record_stops_cleanly(tmp_path, rotation_map_file, signum, code):
     name = signal.Signals(signum).name
     log, record = tmp_path / "run.jsonl", tmp_path / "run.mcap"
-    proc = start("run", "--backend", "sim+paced", "--duration", "120", "--log", log, "--record", record, "--json")
+    # (--rotation-map: the twin's map made once, not calibrated again in each child; the stop is the claim)
+    proc = start("run", "--backend", "sim+paced", "--rotation-map", rotation_map_file, "--duration", "120",
+                 "--log", log, "--record", record, "--json")  # fmt: skip
     wait_until(lambda: lines(log) > SAMPLES_BEFORE_STOP, proc)
     exit_code, result, err = stop(proc, signum)
     assert exit_code == code, err
