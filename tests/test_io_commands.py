@@ -17,6 +17,8 @@ import pytest
 
 from flexdigit._io import RECORDS_ROW_LIMIT, output_lock
 from flexdigit.cli import main
+from flexdigit.rig.base import open_rig
+from flexdigit.rig.rotation import calibrate_rotation, save_rotation_map
 
 #: A command that could hang on a FIFO gets this long before the test fails (s); each takes ~2 s when it works.
 HANG_TIMEOUT_S = 90
@@ -25,6 +27,15 @@ HANG_TIMEOUT_S = 90
 MAX_RSS_KB = 600_000
 
 EXE = [sys.executable, "-m", "flexdigit.cli"]
+
+
+@pytest.fixture(scope="module")
+def rotation_map(tmp_path_factory):
+    """The twin's rotation map, made once: a ``run`` subprocess given it skips ~1.5 s of calibrating the twin (the
+    claims below are about the log, the lock and the disk, not the map)."""
+    path = tmp_path_factory.mktemp("map") / "map.json"
+    save_rotation_map(calibrate_rotation(open_rig("sim", seed=1)), path)
+    return str(path)
 
 
 def _run(argv, cwd, timeout=HANG_TIMEOUT_S):
@@ -67,19 +78,61 @@ def _links(tmp_path, target) -> None:
         (tmp_path / f"in{suffix}").symlink_to(target)
 
 
+#: One child runs every command of INPUTS through ``flexdigit.cli.main`` (the interpreter and flexdigit imported
+#: once, not 13 times), each under ``SIGALRM`` so a hang is a failure naming it: ``{name: [exit code or "hung",
+#: stderr]}`` as JSON on stdout.
+_FIFO_CHILD = """
+import contextlib, io, json, signal, sys
+from flexdigit.cli import main
+
+def _hung(*_):
+    raise TimeoutError
+
+signal.signal(signal.SIGALRM, _hung)
+results = {}
+for name, argv in json.loads(sys.argv[1]).items():
+    err = io.StringIO()
+    signal.alarm(int(sys.argv[2]))
+    try:
+        with contextlib.redirect_stderr(err):
+            code = main(argv)
+    except TimeoutError:
+        code = "hung"
+    finally:
+        signal.alarm(0)
+    results[name] = [code, err.getvalue()]
+print(json.dumps(results))
+"""
+
+
+@pytest.fixture(scope="module")
+def fifo_inputs(tmp_path_factory):
+    """Every command of INPUTS given the same FIFO (``in.*``: symlinks to it), in one child process."""
+    where = tmp_path_factory.mktemp("fifo")
+    os.mkfifo(where / "fifo")
+    _links(where, where / "fifo")
+    argvs = {name: [a.replace("{f}", "in") for a in argv] for name, (argv, _) in INPUTS.items()}
+    child = [sys.executable, "-c", _FIFO_CHILD, json.dumps(argvs), str(HANG_TIMEOUT_S)]
+    timeout = HANG_TIMEOUT_S * (len(INPUTS) + 1)
+    try:
+        done = subprocess.run(child, cwd=where, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"the commands given a FIFO hung for {timeout} s")
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(INPUTS))
-def test_a_fifo_input_is_refused_in_one_line_never_hangs(tmp_path, name):
+def test_a_fifo_input_is_refused_in_one_line_never_hangs(fifo_inputs, name):
     """A FIFO as params, model, rotation map, replay log or study spec hung forever (12 commands)."""
-    os.mkfifo(tmp_path / "fifo")
-    _links(tmp_path, tmp_path / "fifo")
-    argv, what = INPUTS[name]
-    done = _run([a.replace("{f}", "in") for a in argv], tmp_path)
-    line = _one_line(done.stderr)
-    assert done.returncode == 2, line
+    code, stderr = fifo_inputs[name]
+    assert code != "hung", f"flexdigit {name} hung for {HANG_TIMEOUT_S} s on a FIFO"
+    line = _one_line(stderr)
+    assert code == 2, line
     assert "in." in line, line
     assert "is a FIFO (named pipe)" in line, line
-    assert what in line, line
+    assert INPUTS[name][1] in line, line
 
 
 @pytest.mark.parametrize("name", ["params", "identify", "model", "calibrate records", "replay log"])
@@ -189,15 +242,12 @@ def test_a_non_utf8_output_name_works(tmp_path):
 
 
 def test_written_files_are_0644_under_umask_022(tmp_path):
-    """Issue 28: every file flexdigit wrote was 0600 whatever the umask."""
-    done = subprocess.run(
-        ["sh", "-c", 'umask 022 && exec "$@"', "sh", *EXE, *STEP, "--out", "o.parquet"],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        timeout=HANG_TIMEOUT_S,
-    )
-    assert done.returncode == 0, done.stderr
+    """Issue 28: every file flexdigit wrote was 0600 whatever the umask (in-process: the mode is the library's)."""
+    before = os.umask(0o022)
+    try:
+        assert main([*STEP, "--out", str(tmp_path / "o.parquet")]) == 0
+    finally:
+        os.umask(before)
     assert oct((tmp_path / "o.parquet").stat().st_mode & 0o777) == oct(0o644)
 
 
@@ -221,13 +271,15 @@ def _fill(directory, leave_bytes: int) -> None:
 
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="mounting a tmpfs needs root; test_io.py injects ENOSPC instead")
-def test_a_forced_log_on_a_disk_that_fills_keeps_the_old_log_and_names_it(tmp_path):
+def test_a_forced_log_on_a_disk_that_fills_keeps_the_old_log_and_names_it(tmp_path, monkeypatch, rotation_map):
     """`--log old.jsonl --force` on a disk that filled stopped at t = 1.6 s and the previous log was gone."""
     with _small_tmpfs(tmp_path / "disk") as disk:
-        assert _run(["run", "--log", "old.jsonl", "--duration", "1"], disk).returncode == 0
+        monkeypatch.chdir(disk)
+        assert main(["run", "--log", "old.jsonl", "--duration", "1"]) == 0  # the old log (in-process: no claim)
+        monkeypatch.undo()
         old = (disk / "old.jsonl").read_bytes()
         _fill(disk, 48 * 1024)
-        done = _run(["run", "--log", "old.jsonl", "--force", "--duration", "60"], disk)
+        done = _run(["run", "--log", "old.jsonl", "--force", "--duration", "60", "--rotation-map", rotation_map], disk)
         assert "old.jsonl: cannot write it: No space left on device" in done.stdout + done.stderr
         assert "log: old.jsonl is kept as it was" in done.stdout + done.stderr
         assert (disk / "old.jsonl").read_bytes() == old
@@ -252,7 +304,7 @@ def test_a_forced_table_on_a_full_disk_keeps_the_old_file_and_names_it(tmp_path)
 def test_a_second_run_appending_to_a_log_in_use_is_refused(tmp_path):
     """Two `run --log --append` at once left a log that no longer read back: the second is refused."""
     log = tmp_path / "r.jsonl"
-    assert _run(["run", "--log", str(log), "--duration", "0.2"], tmp_path).returncode == 0
+    assert main(["run", "--log", str(log), "--duration", "0.2"]) == 0  # the first log: in-process (no claim)
     before = log.read_bytes()
     with output_lock(log):  # as a first run holds it for its whole length
         done = _run(["run", "--log", str(log), "--append", "--duration", "0.2"], tmp_path)
@@ -294,7 +346,7 @@ def test_two_collects_into_one_output_one_completes_one_is_refused(tmp_path):
 
 
 @pytest.mark.slow
-def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path):
+def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path, rotation_map):
     """Two real `run --log --append` at once: the first (the paced twin, for up to 10 minutes) holds the log until
     the second has been refused, then SIGTERM stops it (as systemd would; SIGINT may be inherited ignored from a
     non-interactive shell); however slowly a loaded machine starts the second."""
@@ -304,7 +356,7 @@ def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path):
     from flexdigit.rig.loop import read_log_runs
 
     log = tmp_path / "r.jsonl"
-    argv = ["run", "--backend", "sim+paced", "--log", str(log), "--append"]
+    argv = ["run", "--backend", "sim+paced", "--log", str(log), "--append", "--rotation-map", rotation_map]
     first = subprocess.Popen([*EXE, *argv, "--duration", "600"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         for _ in range(600):  # until the first holds the log's lock (it is released only when the run ends)
@@ -329,7 +381,7 @@ def test_two_runs_appending_to_one_log_at_once_the_second_is_refused(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.skipif(os.geteuid() != 0, reason="mounting a tmpfs needs root; test_io.py injects ENOSPC instead")
-def test_a_collect_on_a_disk_that_fills_names_its_journal_and_a_rerun_resumes(tmp_path):
+def test_a_collect_on_a_disk_that_fills_names_its_journal_and_a_rerun_resumes(tmp_path, monkeypatch):
     from flexdigit.tactile.dataset import load_dataset
 
     with _small_tmpfs(tmp_path / "disk") as disk:
@@ -341,6 +393,8 @@ def test_a_collect_on_a_disk_that_fills_names_its_journal_and_a_rerun_resumes(tm
         assert "cannot write it: No space left on device" in line, line
         assert "readings before are kept: free some space and rerun to resume" in line
         (disk / "filler").unlink()
-        assert _run(argv, disk, timeout=600).returncode == 0
+        monkeypatch.chdir(disk)
+        assert main(argv) == 0  # the rerun resumes (in-process: the journal is the library's, not a process's)
+        monkeypatch.undo()
         assert len(load_dataset(disk / "d.parquet")) == 1275
         assert sorted(p.name for p in disk.iterdir()) == ["d.parquet"]

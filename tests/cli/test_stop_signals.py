@@ -46,10 +46,12 @@ def _read_with_mcap(path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("signum, code", STOPS, ids=[s.name for s, _ in STOPS])
-def test_run_with_log_and_record_stops_cleanly(tmp_path, signum, code):
+def test_run_with_log_and_record_stops_cleanly(tmp_path, rotation_map_file, signum, code):
     name = signal.Signals(signum).name
     log, record = tmp_path / "run.jsonl", tmp_path / "run.mcap"
-    proc = start("run", "--backend", "sim+paced", "--duration", "120", "--log", log, "--record", record, "--json")
+    # (--rotation-map: the twin's map made once, not calibrated again in each child; the stop is the claim)
+    proc = start("run", "--backend", "sim+paced", "--rotation-map", rotation_map_file, "--duration", "120",
+                 "--log", log, "--record", record, "--json")  # fmt: skip
     wait_until(lambda: lines(log) > SAMPLES_BEFORE_STOP, proc)
     exit_code, result, err = stop(proc, signum)
     assert exit_code == code, err
@@ -105,6 +107,15 @@ def test_a_serial_rig_is_left_at_the_safe_command(tmp_path, rotation_map_file, s
     _check_footer(footer, name)
 
 
+def _pressing_sweep(tmp_path):
+    """The default sweep's staircase from command 12 (pressing into soft-block, as in the issue) with 0.9 s plateaus:
+    the default's first two plateaus (the tare and command 8, 2.9 s each) kept the board at 8 for ~6 s before the
+    stop could test anything; 17 plateaus (~15 s) still leave the signal far from the closing tare."""
+    path = tmp_path / "pressing.toml"
+    path.write_text("[sweep]\ncommands = { from = 12, to = 26, step = 1 }\nsettle_s = 0.5\nreadings = 20\n")
+    return path
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("signum, code", STOPS, ids=[s.name for s, _ in STOPS])
 def test_a_palpation_sweep_on_a_serial_rig_stops_at_the_safe_command(tmp_path, signum, code):
@@ -116,7 +127,8 @@ def test_a_palpation_sweep_on_a_serial_rig_stops_at_the_safe_command(tmp_path, s
     with StreamEmulator(twin=True, seed=0) as emulator:
         # (daq.timeout: the stop is the signal; a pause of the emulator on a loaded machine is no silent stream here)
         url = f"serial://{emulator.servo_port}?daq=stream://{emulator.port}&daq.timeout=5"
-        argv = ["palpate", "--tissue", "soft-block", "--backend", url, "--log", log, "--json"]
+        argv = ["palpate", "--tissue", "soft-block", "--protocol", _pressing_sweep(tmp_path), "--backend", url,
+                "--log", log, "--json"]  # fmt: skip
         proc = start(*argv, operator="\n")  # Enter: the tissue is placed
         # the sweep is pressing: the board's last frame is a step of the staircase, not the resting command 8
         wait_until(lambda: lines(log) > SAMPLES_BEFORE_STOP and emulator.commands[-1] != 8, proc)
