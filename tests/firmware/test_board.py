@@ -22,7 +22,7 @@ from flexdigit.cli import main
 from flexdigit.rig.backends.hil_backend import FAULTS, board_period_s
 from flexdigit.rig.base import open_rig
 
-from .board_helpers import compare_steps, python_command_mismatches, watch_board
+from .board_helpers import STEP_DURATION_S, compare_steps, python_command_mismatches, watch_board
 
 #: The ATmega328P's flash (less the Uno's 512-byte bootloader) and RAM, bytes.
 FLASH_BYTES, RAM_BYTES = 32_256, 2_048
@@ -149,7 +149,7 @@ STEP_SEEDS = range(8)
 @pytest.mark.parametrize("period_s, fmt", [(0.020, "float"), (0.005, "float"), (0.002, "fixed")])
 def test_loop_on_the_board_holds_a_30_deg_step(firmware, rotation_map, period_s, fmt):
     """At 20 ms, 5 ms and the shortest period the board sustains (2 ms: benchmarks/bench_board.py)."""
-    compare_steps(firmware(period_s, fmt), period_s, rotation_map, STEP_SEEDS)
+    compare_steps(firmware(period_s, fmt), period_s, rotation_map, STEP_SEEDS, duration_s=STEP_DURATION_S)
 
 
 @pytest.mark.slow
