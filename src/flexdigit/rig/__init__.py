@@ -6,6 +6,7 @@
 - :mod:`~flexdigit.rig.sample_log`: the loop's JSON-lines log, written and read back (``read_log``);
 - :mod:`~flexdigit.rig.safety`: the runaway guard; :mod:`~flexdigit.rig.controllers`: ``make_controller(name, rig)``;
 - :mod:`~flexdigit.rig.rotation`, :mod:`~flexdigit.rig.rotation_reference`: the gauges -> beam rotation map;
+- :mod:`~flexdigit.rig.pacing`: ``WallPacer``, a paced backend's simulation kept at the wall clock's time;
 - :mod:`~flexdigit.rig.recording`: MCAP recordings; :mod:`~flexdigit.rig.step_test`: the closed-loop step test;
 - :mod:`~flexdigit.rig.chapter5_studies`: what report chapter 5 shows;
 - :mod:`flexdigit.rig.backends`: the backends and their transports.
@@ -36,6 +37,7 @@ __getattr__, __all__ = lazy_exports(
         "RotationEstimator": "flexdigit.rig.rotation",
         "calibrate_rotation": "flexdigit.rig.rotation",
         "make_rotation_map": "flexdigit.rig.rotation",
+        "WallPacer": "flexdigit.rig.pacing",
         "Recording": "flexdigit.rig.recording",
         "read_recording": "flexdigit.rig.recording",
         "StepTest": "flexdigit.rig.step_test",

@@ -12,7 +12,10 @@ Two clocks:
   the 1 kHz jitter benchmark runs, and how a controller is rehearsed in real time before meeting the hardware.
   Its twin steps with the compiled kernel (``compiled``, loaded in the background at opening: numpy steps until
   it is ready): a wall-clock run does not repeat bit for bit anyway, and the live page's twin then costs ~3 %
-  of a core instead of ~15 % (``benchmarks/bench_live.py``).
+  of a core instead of ~15 % (``benchmarks/bench_live.py``). Opened with ``start_paced=False`` (the live page),
+  it runs in virtual time until :meth:`SimRig.start_pacing`: what its start does on the twin at rest (the
+  controller's tare) takes no wall time, and the seconds the start spends computing are not simulated afterwards
+  at full speed to catch the twin up to the wall clock; its time carries on from where the twin is.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from flexdigit._validation import check_int, check_real
 from flexdigit.errors import ParameterError
 from flexdigit.params import RigParams
 from flexdigit.rig.base import Rig, UrlOption
+from flexdigit.rig.pacing import WallPacer
 from flexdigit.twin.actuator import SERVO_DRIVES, TIMER_PULSE_AFTER_TICK_S
 from flexdigit.twin.twin import Twin
 
@@ -51,6 +55,9 @@ class SimRig(Rig):
         A ready twin (tests and studies that perturb it); built from ``params`` and ``twin_options`` otherwise.
     spin_s : float
         Paced mode: busy-wait the last ``spin_s`` of every wait.
+    start_paced : bool
+        Paced mode: follow the wall clock from opening (default); False runs the twin in virtual time until
+        :meth:`start_pacing` (a start's waits cost no wall time, and its computing is not simulated afterwards).
     compiled : bool, optional
         Step the twin's digit with the compiled kernel (:meth:`flexdigit.twin.digit.DynamicState.use_compiled`).
         Default: in paced mode, loaded in the background (the twin steps in numpy until it is ready); in virtual
@@ -76,6 +83,7 @@ class SimRig(Rig):
         sleep=None,
         operator=None,
         compiled: bool | None = None,
+        start_paced: bool = True,
         pulse_delay_ms: int | None = None,
         **twin_options: Any,
     ) -> None:
@@ -102,28 +110,52 @@ class SimRig(Rig):
         self.twin = twin
         self.paced = bool(paced)
         self.spin_s = check_real(spin_s, "spin_s", "SimRig", low=0.0)
+        # paced: the clock and sleep given are the wall clock's; before pacing starts, waits step the twin
+        self._pacer = WallPacer(clock or time.monotonic) if self.paced else None
         if self.paced:
-            clock = clock or time.monotonic
-            sleep = sleep or self._precise_sleep
-        else:
-            clock = clock or (lambda: self.twin.time_s)
-            sleep = sleep or self.twin.advance
-        super().__init__(twin.params, clock=clock, sleep=sleep, operator=operator or (lambda message: None))
+            self._wall_sleep = sleep or self._precise_sleep
+            sleep = self._wait
+        self._virtual_clock = clock if clock is not None and not self.paced else (lambda: self.twin.time_s)
+        super().__init__(
+            twin.params, clock=self._now, sleep=sleep or self.twin.advance, operator=operator or (lambda m: None)
+        )
+        if start_paced:
+            self.start_pacing()
         self.name = "sim+paced" if self.paced else "sim"
         self._command = int(twin.servo.command)
 
+    @property
+    def _pacing(self) -> bool:
+        return self._pacer is not None and self._pacer.started
+
+    def _now(self) -> float:
+        """The twin's time (virtual), or once pacing the wall clock's on the twin's time axis."""
+        return self._pacer.now() if self._pacing else self._virtual_clock()
+
+    def _wait(self, seconds: float) -> None:
+        if self._pacing:
+            self._wall_sleep(seconds)
+        else:
+            self.twin.advance(seconds)
+
+    def start_pacing(self) -> None:
+        """Paced mode: follow the wall clock from now on, carrying on from the twin's time (what ran before, in
+        virtual time, took no wall time; idempotent); nothing in virtual time (``sim``)."""
+        if self._pacer is not None:
+            self._pacer.start(self.twin.time_s)
+
     def _precise_sleep(self, seconds: float) -> None:
-        end = self._clock() + seconds
+        end = self._pacer.clock() + seconds
         coarse = seconds - self.spin_s
         if coarse > 0:
             time.sleep(coarse)
-        while self._clock() < end:
+        while self._pacer.clock() < end:
             pass
 
     def _catch_up(self) -> None:
         """Paced mode: advance the twin to the wall-clock time."""
-        if self.paced:
-            behind = self.clock() - self.twin.time_s
+        if self._pacing:
+            behind = self._pacer.due(self.twin.time_s)
             if behind > 0:
                 self.twin.advance(behind)
 
@@ -218,7 +250,7 @@ URL_OPTIONS = (
     ),
 )
 #: Keyword arguments only Python passes to :class:`SimRig` (objects, not text).
-PYTHON_OPTIONS = ("twin", "calibration", "cells_per_section", "command", "clock", "sleep", "operator")
+PYTHON_OPTIONS = ("twin", "calibration", "cells_per_section", "command", "clock", "sleep", "operator", "start_paced")
 
 
 def _no_location(location: str, scheme: str) -> None:
