@@ -146,6 +146,41 @@ def test_live_keeps_the_board_at_the_wall_clocks_time(firmware):
     assert len(set(frames)) >= 10
 
 
+@pytest.mark.slow
+def test_a_paced_board_on_a_slow_machine_runs_a_bounded_step_a_call_and_reports_its_lag(firmware):
+    """A machine slower than real time (a fake wall clock: each simulated second costs two, each frame 20 ms more):
+    each read runs at most ``MAX_CATCH_UP_S`` of the board, which falls behind by what it reports (unbounded, each
+    catch-up would run what the one before cost twice over: 15 frames, 11 minutes of board time)."""
+    elf = firmware(0.020, "float")
+    frames = [0]
+    rig = open_rig(f"hil://{elf}", paced=True, start_paced=False, wall_clock=lambda: wall())
+
+    def wall():  # the fake machine's wall clock
+        return frames[0] * 0.020 + 2.0 * (rig.clock() - opened_s)
+
+    runs, lags, behind = [], [], []
+    try:
+        opened_s = rig.clock()
+        rig.start_pacing()
+        for _ in range(15):
+            frames[0] += 1
+            at_call, before = wall(), rig.clock()
+            rig.read()
+            runs.append(rig.clock() - before)
+            lags.append(rig.lag_s)
+            behind.append(at_call - (rig.clock() - opened_s))  # the wall clock's time on the board's axis, less its
+    finally:
+        rig.close()
+    for k, run in enumerate(runs):
+        assert run <= rig.MAX_CATCH_UP_S + rig.step_s, f"read {k} ran {run} s of the board"
+    # 0.02 s and 0.06 s (under the bound), then the bound every read: linear, not geometric
+    assert sum(runs) == pytest.approx(0.08 + 13 * rig.MAX_CATCH_UP_S, abs=15 * rig.step_s)
+    assert lags == pytest.approx(behind, abs=rig.step_s)  # the lag reported is the fake clock's
+    # 15 frames and twice the board time run before the last read, less all it ran: 0.3 + 2.56 - 1.38 s behind
+    last = 15 * 0.020 + 2.0 * (0.08 + 12 * rig.MAX_CATCH_UP_S) - (0.08 + 13 * rig.MAX_CATCH_UP_S)
+    assert lags[-1] == pytest.approx(last, abs=30 * rig.step_s)
+
+
 def test_a_harness_without_a_pty_is_refused_naming_the_pipe(tmp_path):
     """A machine without ptys (no /dev/pts): one line saying so and how to run without one, no hang."""
     elf = tmp_path / "board.elf"

@@ -63,6 +63,7 @@ from flexdigit.rig.backends.board_link import (
     check_board_image,
 )
 from flexdigit.rig.base import Rig, RigURL, UrlOption, rig_url_options
+from flexdigit.rig.pacing import WallPacer
 from flexdigit.twin.digit import ORIENTATIONS
 from flexdigit.twin.twin import Twin
 
@@ -103,7 +104,7 @@ URL_OPTIONS = (
     UrlOption("paced", "bool", help="keep the emulated board at the wall clock's time (the live page)"),
     UrlOption("uart", "choice", choices=("pty", "pipe"), help="the firmware's UART: a pty the host opens, or a pipe"),
 )
-PYTHON_OPTIONS = ("twin", "operator", "calibration")
+PYTHON_OPTIONS = ("twin", "operator", "calibration", "wall_clock", "start_paced")
 
 
 def pulse_to_command(pulse_cycles: int, params: RigParams | None = None) -> float:
@@ -149,7 +150,14 @@ class HilRig(Rig):
         The twin's mounting and cable (as the ``sim`` backend's; ``flexdigit collect`` sets them from its protocol).
     paced : bool
         Keep the board at the wall clock's time: before each read and command (and in :meth:`wait`, after
-        sleeping) it runs up to it, as ``sim+paced`` keeps the twin (``flexdigit live`` opens it so).
+        sleeping) it runs up to it, as ``sim+paced`` keeps the twin (``flexdigit live`` opens it so), at most
+        :attr:`MAX_CATCH_UP_S` a call (:class:`~flexdigit.rig.pacing.WallPacer`): on a machine slower than real
+        time the board falls behind by :attr:`lag_s`, rather than each catch-up growing on the last. The rig's
+        clock is the board's time.
+    start_paced : bool
+        Paced: from opening (default), or in simulated time until :meth:`start_pacing` (the live page's start).
+    wall_clock : callable, optional
+        Paced: the wall clock (:func:`time.monotonic`; tests pass a slow fake one).
     uart : {"pty", "pipe"}
         The firmware's UART: a pty the host opens as a serial port (pyserial), or carried in the exchange.
     step_s : float
@@ -161,6 +169,10 @@ class HilRig(Rig):
 
     name = "hil"
     accepts_loads = True
+    #: Paced: the most board time one read, command or wait runs to catch up with the wall clock, s (five of the live
+    #: page's 20 ms frames: a stall is made up over a few frames, and a machine slower than real time leaves the
+    #: board behind, :attr:`lag_s`, with every call bounded).
+    MAX_CATCH_UP_S = 0.1
     #: A reading's step (V): the board's 10-bit count, whatever ADC the parameters describe (what a still gauge's
     #: reading toggles by: :func:`flexdigit.tactile.runner.still_scatter_v`)
     adc_lsb_v = VOLTS_PER_COUNT
@@ -182,6 +194,8 @@ class HilRig(Rig):
         step_s: float = 0.0005,
         uart: str = "pty",
         paced: bool = False,
+        start_paced: bool = True,
+        wall_clock=None,
         orientation: str = "vertical",
         cable: bool = True,
         twin: Any = None,
@@ -208,7 +222,7 @@ class HilRig(Rig):
         self.setpoint_deg = float(setpoint_deg)
         self._time_s = 0.0
         self.paced = bool(paced)
-        self._wall0: float | None = None  # paced: the wall clock's reading at simulated time 0, once started
+        self._pacer = WallPacer(wall_clock or time.monotonic, self.MAX_CATCH_UP_S) if self.paced else None
         super().__init__(twin.params, clock=self._now, sleep=self._wait_alive, operator=operator or (lambda m: None))
         self._outbox = bytearray()
         self._last_said_s = 0.0
@@ -225,8 +239,8 @@ class HilRig(Rig):
         #: ``{channel: gauge volts}`` forced onto ADC pins instead of the twin's (a gauge wire off: ``{1: -2.5}``)
         self.gauge_override: dict[int, float] = {}
         self._start_board()
-        if self.paced:  # from here on the board's time is the wall clock's (its opening ran as fast as it could)
-            self._wall0 = time.monotonic() - self._time_s
+        if start_paced:  # from here on the board keeps the wall clock's time (its opening ran as fast as it could)
+            self.start_pacing()
 
     def _start_board(self) -> None:
         """Start the harness running the firmware, take the board's banner and rest readings, and put it in its
@@ -363,21 +377,36 @@ class HilRig(Rig):
             self._time_s += self.step_s
 
     def _now(self) -> float:
-        """The rig's clock: simulated time, or (paced) the wall clock's since simulated time 0."""
-        return self._time_s if self._wall0 is None else time.monotonic() - self._wall0
+        """The rig's clock: the board's (simulated) time; paced, it follows the wall clock's, :attr:`lag_s` behind."""
+        return self._time_s
+
+    @property
+    def _pacing(self) -> bool:
+        return self._pacer is not None and self._pacer.started
+
+    def start_pacing(self) -> None:
+        """Paced: keep the board at the wall clock's time from now on, from its time now (idempotent)."""
+        if self._pacer is not None:
+            self._pacer.start(self._time_s)
+
+    @property
+    def lag_s(self) -> float:
+        """How far the board was behind the wall clock after its last catch-up, s (0 unless paced and the machine
+        is slower than real time)."""
+        return self._pacer.lag_s if self._pacer is not None else 0.0
 
     def _catch_up(self) -> None:
-        """Paced: run the board (host alive) up to the wall clock's time."""
-        if self._wall0 is not None:
-            self._run_alive(self._now() - self._time_s)
+        """Paced: run the board (host alive) up to the wall clock's time, at most :attr:`MAX_CATCH_UP_S`."""
+        if self._pacing:
+            self._run_alive(self._pacer.due(self._time_s))
 
     def _wait_alive(self, seconds: float) -> None:
         """:meth:`wait`: time passes with the host alive; paced, the wall clock's."""
-        if self._wall0 is None:
-            self._run_alive(seconds)
-        else:
+        if self._pacing:
             time.sleep(seconds)
             self._catch_up()
+        else:
+            self._run_alive(seconds)
 
     def _run_alive(self, seconds: float) -> None:
         """Run the board ``seconds`` of simulated time, the host alive (a heartbeat line every HEARTBEAT_S)."""
