@@ -53,3 +53,29 @@ def test_the_locatability_map_waits_for_a_held_command_on_the_injected_clock():
         assert worker.keys == [20]  # held 0.6 s on the virtual clock
     finally:
         session.rig.close()
+
+
+def test_the_twin_is_paced_from_the_loops_start_its_start_taking_no_twin_time():
+    # the session's start (the rotation map, the tare) computes for seconds of wall time; the twin is paced from
+    # the loop's start, so those seconds are not simulated afterwards and the stream's time carries on from the
+    # twin's (the tare's readings were of the twin at rest, in virtual time)
+    now = [100.0]
+    sleeps = []
+
+    def sleep(seconds):
+        sleeps.append(seconds)
+        now[0] += seconds
+        if len(sleeps) == 5:
+            session._stop.set()
+
+    session = LiveSession("sim", period_s=PERIOD_S, seed=0, clock=lambda: now[0], sleep=sleep)
+    try:
+        started_s = session.rig.twin.time_s
+        now[0] += 30.0  # what the start cost on a loaded machine
+        session._run()
+        samples = session.snapshot(-1)["samples"]
+        ended_s = session.rig.twin.time_s
+    finally:
+        session.rig.close()
+    assert samples[0]["t"] == pytest.approx(started_s, abs=1e-9)  # the first frame: the twin where its start left it
+    assert ended_s == pytest.approx(started_s + 5 * PERIOD_S, abs=1e-9)  # five periods simulated, not 30 s more

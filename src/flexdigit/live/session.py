@@ -361,7 +361,9 @@ class LiveSession:
     ----------
     backend : str
         A rig URL (:func:`flexdigit.rig.base.open_rig`); ``sim`` runs the twin on the wall clock (``sim+paced``),
-        horizontal by default (the mounting of chapters 6-7, where a hung weight bends the digit).
+        horizontal by default (the mounting of chapters 6-7, where a hung weight bends the digit). A twin (or
+        ``hil://``'s board) is paced from the loop's start: before it, the controller's tare reads it at rest in
+        virtual time, and the stream's time carries on from there rather than from the session's opening.
     model : path, optional
         A trained position network for the contact panel.
     record : path, optional
@@ -442,12 +444,17 @@ class LiveSession:
             # the twin keeps the loop's clock (a test's virtual one steps it in virtual time), and an injected sleep
             # with it: the rig's own waits (the tare at rest) must move that clock, not spin on it
             pacing = {"clock": clock} if sleep is time.sleep else {"clock": clock, "sleep": sleep}
-            self.rig = open_rig(self.rig_url, given_params, calibration=self.calibration, **pacing, **given)
+            # in virtual time until the loop starts (start_pacing): the tare's readings are of the twin at rest
+            # where the start left it, and the seconds the start computes (the map) are not simulated afterwards
+            self.rig = open_rig(
+                self.rig_url, given_params, calibration=self.calibration, start_paced=False, **pacing, **given
+            )
         else:
             self.rig_url = backend
-            # the emulated board keeps pace with the page, as the twin does (sim -> sim+paced)
+            # the emulated board keeps pace with the page, as the twin does (sim -> sim+paced), from the loop's start
             paced = {"paced": True} if parsed.scheme == "hil" and "paced" not in parsed.options else {}
-            self.rig = open_rig(backend, given_params, **paced)
+            held = {"start_paced": False} if parsed.scheme == "hil" else {}
+            self.rig = open_rig(backend, given_params, **paced, **held)
         try:
             self._setup(model, record, force, rotation_map, orientation, seed)
         except BaseException:
@@ -639,6 +646,8 @@ class LiveSession:
                     "estimate_error": self.estimate_error,
                     "clients": self.clients,
                     "rig_cpu_s": round(self.rig_cpu_s, 4),
+                    # a paced simulation this far behind the wall clock (a machine slower than real time)
+                    "lag_s": round(float(getattr(self.rig, "lag_s", 0.0)), 4),
                     "server_ms": time.time() * 1e3,
                 },
                 "locatability": self.state.locatability,
@@ -681,6 +690,8 @@ class LiveSession:
         equilibrium = int(rig.params.actuator.equilibrium_command)
         if self.controller is not None:
             self.controller.reset(rig.command)
+        if hasattr(rig, "start_pacing"):  # a paced twin or board: the wall clock's from here, carrying on from
+            rig.start_pacing()  # the time its start (map, tare) left it at
         t0 = self._clock()
         virtual = 0.0  # replay time
         k = 0
