@@ -36,7 +36,7 @@ class VirtualClock:
 
     def sleep(self, dt: float) -> None:
         self.now += dt
-        if self.session is None:  # the session setting up (its tare at rest waits on this clock)
+        if self.session is None:  # the session setting up (its tare steps the twin in virtual time, not this)
             return
         k = int(round((self.now - self.origin) / PERIOD_S))
         if k > self.frames - self.keep:

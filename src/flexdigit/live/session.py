@@ -442,10 +442,10 @@ class LiveSession:
             # the URL's seed= or the seed given, never one silently over the other (issue 16)
             given = {} if seed is None else {"seed": seed}
             # the twin keeps the loop's clock (a test's virtual one steps it in virtual time), and an injected sleep
-            # with it: the rig's own waits (the tare at rest) must move that clock, not spin on it
+            # with it: once paced, the rig's own waits must move that clock, not spin on it
             pacing = {"clock": clock} if sleep is time.sleep else {"clock": clock, "sleep": sleep}
-            # in virtual time until the loop starts (start_pacing): the tare's readings are of the twin at rest
-            # where the start left it, and the seconds the start computes (the map) are not simulated afterwards
+            # in virtual time until the loop starts (start_pacing): the tare's waits step the twin, its readings are
+            # of the twin at rest, and the seconds the start computes (map, design) are not simulated afterwards
             self.rig = open_rig(
                 self.rig_url, given_params, calibration=self.calibration, start_paced=False, **pacing, **given
             )
