@@ -334,6 +334,7 @@
   function drawPanels() {
     const st = last.state, sh = last.shape;
     $("status").textContent = st.status + (st.overruns ? " (" + st.overruns + " overruns)" : "") +
+      (st.lag_s > 0 ? "; " + st.lag_s.toFixed(2) + " s behind the wall clock (a machine slower than real time)" : "") +
       (st.estimate_error ? "; estimate failed: " + st.estimate_error : "");
     const how = st.controller ? "controller " + st.controller : "open loop";
     $("ctrl-state").textContent = (hello && hello.kind === "replay" ? "recorded " + (st.controller ? "under " : "") + how : how) +
