@@ -63,10 +63,15 @@ def test_a_two_cable_digit_is_held_below_straight(tmp_path):
         assert len(hello["gauges_m"]) == 4
         assert hello["setpoint_range"][0] < -20 < 0 < hello["setpoint_range"][1]
         assert session.request({"type": "setpoint", "value": -20})["value"] == -20.0
+        tared_s = session.rig.twin.time_s  # the twin's time when its start (the tare at rest) left it
         session._run()  # 6 s of the loop, in this thread, on the virtual clock
         samples = session.snapshot(-1)["samples"]
     finally:
         session.stop()
+    # the tare waited out its 1 s window at rest on the twin in virtual time (tare_at_rest), and the stream's time
+    # carries on from there (the twin is paced from the loop's start)
+    assert tared_s >= 1.0
+    assert samples[0]["t"] == pytest.approx(tared_s, abs=1e-4)  # as_dict rounds t to 0.1 ms
     assert len(samples[-1]["gauges_v"]) == 4
     assert samples[-1]["setpoint"] == -20.0
     last_2s = samples[-int(2.0 / PERIOD_S) :]
