@@ -529,7 +529,7 @@ def _twin_map(params: RigParams, options: dict) -> RotationEstimator:
             _TWIN_MAPS[key] = kept  # the latest used last
     if kept is None:
         with open_rig("sim", params, **options) as twin:
-            kept = calibrate_rotation(twin, start_at_rest=True)
+            kept = calibrate_rotation(twin, start_at_rest=twin.deterministic)  # a paced twin swings to rest
         if key is not None:
             with _TWIN_MAPS_LOCK:
                 _TWIN_MAPS[key] = kept
