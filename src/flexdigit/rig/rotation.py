@@ -627,8 +627,8 @@ def calibrate_rotation(
         are taken at rest (``settle_s`` None), plain after a fixed wait (the report's chapter-5 studies); a
         referenced sweep with a fixed wait is refused.
     start_at_rest : bool
-        A twin only (virtual time): each hold starts at rest, :func:`_twin_at_rest` (a map's own twin, whose
-        settling is no reading's business); read once :func:`wait_until_settled` finds it so.
+        A twin in virtual time only (a map's own, :func:`make_rotation_map`): each hold starts with the servo at the
+        command's angle and the digit in its static equilibrium, 5 time constants on; read once at rest.
 
     Returns
     -------
