@@ -23,8 +23,10 @@ and drift between calibration and run do not become a steady-state error. Maps a
 
 from __future__ import annotations
 
+import copy
 import json
 import math
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,12 +34,13 @@ from pathlib import Path
 import numpy as np
 
 from flexdigit._io import atomic_write, read_text
-from flexdigit._json import to_jsonable
+from flexdigit._json import fingerprint, to_jsonable
 from flexdigit._repr import fields_summary
 from flexdigit._validation import check_array, check_choice, check_int, check_real
 from flexdigit.errors import DataFileError, ParameterError, RigError
 from flexdigit.models.bridge import gauge_noise_scale
 from flexdigit.models.cable import tip_rotation_per_command_deg
+from flexdigit.models.servo import command_to_angle_rad
 from flexdigit.params import MAX_GAUGES, RigParams
 from flexdigit.rig.base import Reading, Rig, open_rig
 from flexdigit.rig.rotation_reference import ROTATION_RESOLUTION_DEG, MeasuredReference, read_reference
@@ -469,7 +472,10 @@ def make_rotation_map(
         (or deflections) measured on the rig (:func:`~flexdigit.rig.rotation_reference.read_reference`, read to
         ``resolution_mm`` / ``resolution_deg``).
     twin_options : dict, optional
-        Keyword options of the ``"sim"`` rig the twin map is made on (``seed``, ``calibration``, ...).
+        Keyword options of the ``"sim"`` rig the twin map is made on (``seed``, ``calibration``, ...). Its sweep
+        starts each hold at rest (``calibrate_rotation(..., start_at_rest=True)``), and the map is made once per
+        process for one digit, twin calibration, set of options and seed (:data:`TWIN_MAPS_KEPT` kept; each call
+        gets its own copy, so a tare does not reach another caller's).
     ask : callable, optional
         The operator's reading, required with ``source="operator"``.
     resolution_mm, resolution_deg : float
@@ -489,7 +495,7 @@ def make_rotation_map(
         A replay asked to be swept, or ``"operator"`` without ``ask``.
     """
     if source == "twin":
-        return calibrate_rotation(open_rig("sim", rig.params, **(twin_options or {})))
+        return _twin_map(rig.params, dict(twin_options or {}))
     if source == "operator":
         if replay:
             raise ParameterError("a replay cannot be swept (it ignores commands); pass --rotation-map FILE")
@@ -502,6 +508,52 @@ def make_rotation_map(
             f"a replay cannot be swept; {source} needs gauge1_v, gauge2_v, gauge3_v columns to fit the map alone"
         )
     return calibrate_rotation(rig, reference=reference)
+
+
+#: Twin maps :func:`make_rotation_map` keeps per process (the latest used), each under :func:`_twin_map_key`.
+TWIN_MAPS_KEPT = 8
+_TWIN_MAPS: dict[str, RotationEstimator] = {}
+_TWIN_MAPS_LOCK = threading.Lock()
+
+
+def _twin_map(params: RigParams, options: dict) -> RotationEstimator:
+    """The map of a separate twin of ``params`` opened with ``options`` (the ``"sim"`` rig's, in virtual time),
+    swept with each hold started at rest; made once per key (:func:`_twin_map_key`), a copy handed out."""
+    # the calibration the twin would take by default, named: it may be another one in a use_calibration block
+    if options.get("calibration") is None:
+        options = {**options, "calibration": twin_calibration(params)}
+    key = _twin_map_key(params, options)
+    with _TWIN_MAPS_LOCK:
+        kept = _TWIN_MAPS.pop(key, None) if key is not None else None
+        if kept is not None:
+            _TWIN_MAPS[key] = kept  # the latest used last
+    if kept is None:
+        with open_rig("sim", params, **options) as twin:
+            kept = calibrate_rotation(twin, start_at_rest=twin.deterministic)  # a paced twin swings to rest
+        if key is not None:
+            with _TWIN_MAPS_LOCK:
+                _TWIN_MAPS[key] = kept
+                while len(_TWIN_MAPS) > TWIN_MAPS_KEPT:
+                    _TWIN_MAPS.pop(next(iter(_TWIN_MAPS)))
+    return copy.deepcopy(kept)  # a tare (tare_at_rest) changes the map it is given
+
+
+def _twin_map_key(params: RigParams, options: dict) -> str | None:
+    """What a twin map depends on, all of it: the digit's parameters, every option of its twin (the calibration by
+    its numbers, the seed among them) and how it is swept (:data:`REST_TIME_CONSTANTS`); None (not kept) when an
+    option is not plain data (a ready ``twin``, a clock) or the twin is paced."""
+    plain = (bool, int, float, str, type(None))
+    named = {}
+    for name, value in options.items():
+        if name == "calibration" and hasattr(value, "to_dict"):
+            named[name] = {"calibration": value.to_dict()}
+        elif isinstance(value, plain) or (isinstance(value, tuple | list) and all(isinstance(v, plain) for v in value)):
+            named[name] = value if not isinstance(value, float) else float.hex(value)
+        else:
+            return None
+    if named.get("paced"):
+        return None
+    return fingerprint({"params": params.to_dict(), "options": named, "rest": float.hex(REST_TIME_CONSTANTS)})
 
 
 #: The least time a sweep reading waits for the digit to come to rest before giving up, s (the thesis rig rests
@@ -543,6 +595,7 @@ def calibrate_rotation(
     reference_sd_deg: float | None = None,
     angle_source: Callable[[int], float] | None = None,
     sweep: str | None = None,
+    start_at_rest: bool = False,
 ) -> RotationEstimator:
     """Static calibration sweep: hold each command, wait for the digit to settle, read, fit gauges -> rotation.
 
@@ -573,6 +626,9 @@ def calibrate_rotation(
         :func:`sweep_protocol` (referenced on a digit other than the thesis rig mapped on its twin) when readings
         are taken at rest (``settle_s`` None), plain after a fixed wait (the report's chapter-5 studies); a
         referenced sweep with a fixed wait is refused.
+    start_at_rest : bool
+        A twin in virtual time only (a map's own, :func:`make_rotation_map`): each hold starts with the servo at the
+        command's angle and the digit in its static equilibrium, 5 time constants on; read once at rest.
 
     Returns
     -------
@@ -583,8 +639,6 @@ def calibrate_rotation(
     owner = "calibrate_rotation"
     if angle_source is not None:
         reference = angle_source
-    if timeout_s is None:
-        timeout_s = settle_timeout_s(rig)
     cov, truth = None, None
     if isinstance(reference, MeasuredReference):
         commands = _measured_commands(reference, commands)
@@ -599,9 +653,8 @@ def calibrate_rotation(
     commands = [int(c) for c in (sweep_commands(rig.params) if commands is None else commands)]
     default = sweep_protocol(rig.params, reference) if settle_s is None else "plain"  # a fixed wait: as it was
     sweep = check_choice(default if sweep is None else sweep, "sweep", SWEEPS, owner)
-    X, sd_v, y, waited = _run_sweep(
-        rig, commands, angle, truth, sweep, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
-    )
+    how = {"settle_s": settle_s, "samples": samples, "window_s": window_s, "timeout_s": timeout_s}
+    X, sd_v, y, waited = _run_sweep(rig, commands, angle, truth, sweep, at_rest=start_at_rest, **how)
     if cov is None and callable(reference) and not isinstance(reference, str):
         cov = np.eye(len(commands)) * sd**2
     noise = gauge_noise_scale(rig.params.sensors, len(X[0]))
@@ -695,33 +748,79 @@ def _twin_truth(rig: Rig) -> Callable[[], float]:
     return truth
 
 
-def _run_sweep(rig: Rig, commands, angle, truth, sweep: str, *, settle_s, samples, window_s, timeout_s):
-    """:func:`_sweep` or :func:`_sweep_referenced`, as ``sweep`` says (the referenced one only at rest)."""
+def _run_sweep(rig: Rig, commands, angle, truth, sweep: str, *, at_rest, settle_s, samples, window_s, timeout_s):
+    """:func:`_sweep` or :func:`_sweep_referenced`, as ``sweep`` says (the referenced one only at rest), each hold
+    started at rest (:func:`_twin_at_rest`) if ``at_rest``."""
+    timeout_s = settle_timeout_s(rig) if timeout_s is None else timeout_s
+    rest_s = _rest_time_s(rig, settle_s) if at_rest else None
     if sweep == "plain":
-        return _sweep(
-            rig, commands, angle, truth, settle_s=settle_s, samples=samples, window_s=window_s, timeout_s=timeout_s
-        )
+        how = {"settle_s": settle_s, "samples": samples, "window_s": window_s, "timeout_s": timeout_s}
+        return _sweep(rig, commands, angle, truth, rest_s=rest_s, **how)
     if settle_s is not None:
         raise ParameterError("calibrate_rotation: sweep='referenced' reads the digit at rest; give settle_s=None")
-    return _sweep_referenced(rig, commands, angle, truth, window_s=window_s, timeout_s=timeout_s)
+    return _sweep_referenced(rig, commands, angle, truth, window_s=window_s, timeout_s=timeout_s, rest_s=rest_s)
 
 
-def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, timeout_s):
+#: Time constants of the digit's slowest vibration (:func:`~flexdigit.twin.digit_calibration.decay_time_constant_s`)
+#: a hold started at rest (:func:`_twin_at_rest`) lets pass, for the gauges' drift, before its window: the time the
+#: sweep waits for a swing to die beyond its window, 4.9 of them (median over the visits) on the five- and the
+#: seven-section test digits (``five_unequal_bronze_full``, ``seven_sections_pair_mixed``, seed 1), 1.8-2 on the
+#: better damped thesis rig and one-section digit: as much drift as the slowest digits see, or more.
+REST_TIME_CONSTANTS = 5.0
+
+
+def _rest_time_s(rig: Rig, settle_s) -> float:
+    """:data:`REST_TIME_CONSTANTS` time constants of ``rig``'s twin; refused off a twin in virtual time or with a
+    fixed wait (the chapter-5 studies', kept as it was)."""
+    twin = getattr(rig, "twin", None)
+    if twin is None or not getattr(rig, "deterministic", False) or settle_s is not None:
+        raise ParameterError(
+            f"calibrate_rotation: start_at_rest puts a twin at rest in virtual time, with settle_s=None; not {rig.name}"
+            + ("" if settle_s is None else f" with settle_s={settle_s}")
+        )
+    return REST_TIME_CONSTANTS * decay_time_constant_s(rig.params, twin.calibration)
+
+
+def _twin_at_rest(rig: Rig, rest_s: float = 0.0) -> None:
+    """Bring a twin (``sim`` rig, virtual time) to rest at the command in force: its servo at the command's angle
+    and its digit in the static equilibrium there, ``rest_s`` seconds on.
+
+    What the twin would reach by integrating the swing down to rest at its 2 ms step (seconds of simulated time on
+    a lightly damped digit, most of a map's sweep), at the cost of one static solve. The command takes effect at
+    its frame's servo pulse, as it would (up to 40 ms simulated); the gauges' drift walks over the ``rest_s``
+    skipped at the next reading, so readings after it have the statistics they would have after a wait. The cable
+    guides' friction is left as it is (a servo's pull does not jolt it).
+    """
+    twin = rig.twin
+    servo = twin.servo
+    if servo.pending:  # the command is latched at its frame's pulse
+        twin.advance(max(servo.pending[-1][0] - twin.time_s, 0.0))
+        servo.update_command(twin.time_s)
+    angle = float(command_to_angle_rad(servo.command, rig.params))
+    servo.angle, servo.rate = min(max(angle, servo.angle_min), servo.angle_max), 0.0
+    twin.time_s += check_real(rest_s, "rest_s", "_twin_at_rest", low=0.0)
+    twin.deflect(0.0)  # at rest in the static equilibrium, no force at the tip; the integration restarts here
+
+
+def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, timeout_s, rest_s=None):
     """Hold each command and read the settled gauges and the reference rotation (``angle(command)``, or the
     twin's ``truth()`` when ``angle`` is None), then relax the digit and let it settle again.
 
     Returns the gauges (V), their standard errors (V), the rotations (deg) and the waits (s), one per command.
+    With ``rest_s`` (s), each hold starts at rest :func:`_twin_at_rest` ``rest_s`` on (counted in its wait).
     """
     X, sd_v, y, waited = [], [], [], []
     for command in commands:
         rig.write_command(command)
         if settle_s is None:
+            if rest_s is not None:
+                _twin_at_rest(rig, rest_s)
             settled = wait_until_settled(
                 rig, window_s=window_s, timeout_s=timeout_s, truth=truth if angle is None else None
             )
             X.append(settled.gauges_v)
             sd_v.append(settled.sd_v)
-            waited.append(settled.waited_s)
+            waited.append(settled.waited_s + (rest_s or 0.0))
             y.append(settled.truth_deg if angle is None else float(angle(command)))
         else:
             rig.wait(check_real(settle_s, "settle_s", "calibrate_rotation", low=0.0))
@@ -734,15 +833,22 @@ def _sweep(rig: Rig, commands, angle, truth, *, settle_s, samples, window_s, tim
             sd_v.append(np.zeros(len(rows[0])))
             waited.append(float(settle_s))
             y.append(float(np.mean(truths)) if angle is None else float(angle(command)))
-    rig.relax()
-    if settle_s is None:
-        wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
-    else:
-        rig.wait(settle_s)
+    _relax(rig, settle_s, rest_s, window_s=window_s, timeout_s=timeout_s)
     return X, sd_v, y, waited
 
 
-def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s):
+def _relax(rig: Rig, settle_s, rest_s, *, window_s, timeout_s) -> None:
+    """The sweep's end: the digit relaxed and left at rest (:func:`_twin_at_rest` with ``rest_s``)."""
+    rig.relax()
+    if rest_s is not None:
+        _twin_at_rest(rig, rest_s)
+    elif settle_s is None:
+        wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
+    else:
+        rig.wait(settle_s)
+
+
+def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s, rest_s=None):
     """:func:`_sweep` with the straight command read before, between and after the others (``sweep="referenced"``).
 
     Each reading (gauges, and the reference rotation) is taken against the straight readings just before and after
@@ -759,16 +865,17 @@ def _sweep_referenced(rig: Rig, commands, angle, truth, *, window_s, timeout_s):
     gauges, sds, rotations, times, waited = [], [], [], [], []
     for command in visits:
         rig.write_command(command)
+        if rest_s is not None:
+            _twin_at_rest(rig, rest_s)
         settled = wait_until_settled(
             rig, window_s=window_s, timeout_s=timeout_s, truth=truth if angle is None else None
         )
         gauges.append(settled.gauges_v)
         sds.append(settled.sd_v)
-        waited.append(settled.waited_s)
+        waited.append(settled.waited_s + (rest_s or 0.0))
         rotations.append(settled.truth_deg if angle is None else float(angle(command)))
         times.append(rig.clock() - window_s / 2)  # the window's middle: only differences between visits matter
-    rig.relax()
-    wait_until_settled(rig, window_s=window_s, timeout_s=timeout_s)
+    _relax(rig, None, rest_s, window_s=window_s, timeout_s=timeout_s)
     G, S, Y, T = np.asarray(gauges), np.asarray(sds), np.asarray(rotations), np.asarray(times)
     at = np.array([c == straight for c in visits])
     # the straight readings' drift from their mean, interpolated to every visit
