@@ -38,7 +38,12 @@ def _contact(s) -> dict:
 def test_page_streams_the_twin_and_the_slider_moves_the_digit(live_server, page, tmp_path):
     server = live_server("--record", str(tmp_path / "session.mcap"))
     page.goto(server.url)
-    first = wait_for(page, lambda s: s["samples"] > 20 and s["last"]["shape"] is not None, what="the first samples")
+    # a frame may carry the shape and no samples: wait for one that has both, so the traces' time can be compared
+    first = wait_for(
+        page,
+        lambda s: s["samples"] > 20 and s["last"]["shape"] is not None and s["last"]["samples"],
+        what="the first samples",
+    )
     # 50 Hz: about 50 more a second; the traces advance (waited for, not timed: a loaded machine is slower)
     later = wait_for(page, lambda s: s["samples"] >= first["samples"] + 30, timeout_s=10, what="more samples")
     assert later["last"]["samples"] == [] or later["last"]["samples"][-1]["t"] > first["last"]["samples"][-1]["t"]
