@@ -14,7 +14,7 @@ three; docs/guide/tactile.md) were within it at K = 4. So, before collecting, fo
 the position with the mass unknown (:func:`~flexdigit.tactile.bounds.cramer_rao` on the twin's static gauges, their
 white noise and the ADC's quantisation, :func:`~flexdigit.tactile.bounds.readings_gauge_model`: a few static solves,
 no Monte Carlo). The mass unknown, because a network is not told which load hangs: the bound then separates the
-digits measured (step over bound 15.9-81 on the four that needed K = 4; 13.4 at most on those within 1.3x at
+digits measured (step over bound 14.8-81 on the four that needed K = 4; 13.0 at most on those within 1.3x at
 K = 1); where the position and the mass are confounded (one bending gauge: the bound infinite) refining cannot
 help and K is 1. A protocol of fewer than :data:`~flexdigit.tactile.protocols.HELD_OUT_MIN_POSITIONS` positions
 keeps K = 1: ``train --bayes-limit`` scores its network on the readings split (test positions are training
@@ -39,15 +39,12 @@ from flexdigit.twin.digit_calibration import twin_calibration
 __all__ = ["AUTO_REFINE_MAX", "RESOLVED_STEP_BOUNDS", "Refinement", "position_step_m", "refinement_for"]
 
 #: The refined step the automatic ``K`` aims at, in Cramer-Rao bounds of the position (mass unknown): the four
-#: digits over 1.3x at K = 1 had steps 15.9-81 bounds (K = 4 each at 4), the digits within 1.3x 13.4 at most and
-#: all but two (mixed_bridges_three 13.4: K = 4; five_unequal_bronze_full 11.3: K = 3) under 4 (K = 1)
+#: digits over 1.3x at K = 1 had steps 14.8-81 bounds (K = 4 each at 4), the digits within 1.3x 13.0 at most and
+#: all but two (mixed_bridges_three 13.0: K = 4; five_unequal_bronze_full 11.3: K = 3) under 4 (K = 1)
 RESOLVED_STEP_BOUNDS = 4.0
 #: Most steps the automatic choice cuts one protocol step into: K = 4 was enough on the four digits measured
 #: (stainless, 81 bounds a step: 0.78x); more divides thesis-6.1's 25 readings a position under 7, unmeasured
 AUTO_REFINE_MAX = 4
-
-#: Why a factor was chosen (``Refinement.chosen``)
-CHOICES = ("given", "thesis rig", "auto")
 
 
 @dataclass(frozen=True)
