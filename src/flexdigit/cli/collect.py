@@ -75,11 +75,12 @@ def _add_refine(p, refine) -> None:
     p.add_argument(
         "--refine",
         type=Flag(refine),
-        default=1,
+        default=None,
         metavar="K",
         help="K positions where the protocol has one step (its evenly spaced positions), its repetitions divided by "
         "K (about as many readings): for a digit that resolves positions far finer than the protocol's step, so a "
-        "network has training positions near the ones it is tested on (default 1, the protocol's)",
+        "network has training positions near the ones it is tested on (default: 1 on the thesis rig; for another "
+        "--params digit, the step over 4 Cramer-Rao bounds of its positions, 1 to 4; --json says which and why)",
     )
 
 
@@ -208,12 +209,12 @@ def _add_predict(subparsers) -> None:
 
 def _digit_protocol(args: argparse.Namespace):
     """The ``--params`` digit and the protocol on it: a built-in's positions scaled to the digit's length (the same
-    fractions of it), a user protocol's checked against it, before the rig opens; ``--refine``'s positions."""
+    fractions of it), a user protocol's checked against it, before the rig opens (``collect_on`` refines it)."""
     from flexdigit.params import RigParams, load_params
     from flexdigit.tactile.protocols import load_protocol
 
     params = load_params(args.params) if args.params else RigParams()
-    return params, load_protocol(args.protocol, params).refined(args.refine)
+    return params, load_protocol(args.protocol, params)
 
 
 def _collect(args: argparse.Namespace) -> CommandResult:
@@ -235,17 +236,16 @@ def _collect(args: argparse.Namespace) -> CommandResult:
         progress=not args.no_progress,
         force=args.force,
         allow_rail=args.allow_rail,
+        refine=args.refine,
     )
-    data = {
-        "protocol": protocol.name,
-        "samples": len(dataset),
-        "out": str(args.out),
-        "resumed": resumed,
-        "settings": dataset.meta.get("settings"),
-    }
-    text = f"{protocol.name}: {len(dataset)} readings written to {args.out}" + (" (resumed)" if resumed else "")
+    settings = dataset.meta.get("settings") or {}
+    refine = settings.get("refine") or {"factor": 1, "chosen": "thesis rig"}  # the thesis rig's: not recorded
+    data = {"protocol": dataset.protocol.name, "samples": len(dataset), "out": str(args.out), "resumed": resumed}
+    data |= {"settings": dataset.meta.get("settings"), "refine": refine}
+    text = f"{dataset.protocol.name}: {len(dataset)} readings written to {args.out}" + (" (resumed)" if resumed else "")
+    text += f"\npositions refined x{refine['factor']} ({refine['chosen']})" if refine["factor"] > 1 else ""
     if args.plot:
-        data["plot"] = _save_dataset_plot(args, dataset, protocol.name)
+        data["plot"] = _save_dataset_plot(args, dataset, dataset.protocol.name)
         text += f"\nplot -> {data['plot']}"
     return CommandResult(data=data, text=text)
 

@@ -2,6 +2,7 @@
 
 - :mod:`~flexdigit.tactile.protocols`: load experiments (``load_protocol("thesis-6.1")``);
 - :mod:`~flexdigit.tactile.runner`: ``collect(protocol, rig, path)``, a dataset from any rig;
+  :mod:`~flexdigit.tactile.refinement`: how finely ``collect`` lays the protocol's positions on a digit;
 - :mod:`~flexdigit.tactile.dataset`, :mod:`~flexdigit.tactile.importer`: datasets saved, loaded, imported;
 - :mod:`~flexdigit.tactile.pipeline`: the thesis's split and network (``thesis_split``, ``ThesisNetwork``);
 - :mod:`~flexdigit.tactile.netlab`: the MLP as netlab trains it; :mod:`~flexdigit.tactile.estimators`: others;
@@ -28,6 +29,8 @@ __getattr__, __all__ = lazy_exports(
         "collect": "flexdigit.tactile.runner",
         "collect_on": "flexdigit.tactile.runner",
         "load_or_collect": "flexdigit.tactile.runner",
+        "Refinement": "flexdigit.tactile.refinement",
+        "refinement_for": "flexdigit.tactile.refinement",
         "Dataset": "flexdigit.tactile.dataset",
         "load_dataset": "flexdigit.tactile.dataset",
         "save_dataset": "flexdigit.tactile.dataset",

@@ -51,6 +51,7 @@ __all__ = [
     "cramer_rao",
     "zone_of",
     "TwinGaugeModel",
+    "readings_gauge_model",
     "ProtocolLimits",
     "protocol_limits",
     "span_position_mse_m2",
@@ -284,6 +285,25 @@ class TwinGaugeModel:
             )
         values = hit["friction"] if friction else hit["volts"]
         return values if hit["inverse"] is None else values[hit["inverse"].ravel()]
+
+
+def readings_gauge_model(params=None, calibration=None):
+    """The twin's gauge model (:class:`~flexdigit.tactile.bounds.TwinGaugeModel`) of a digit as its card reads it:
+    white noise and the ADC's quantisation, ``lsb / sqrt(12)`` (a uniform rounding error), per gauge, V.
+
+    The quantisation matters on a digit whose amplified noise is below one LSB (a quarter bridge's small signal):
+    the readings then carry the rounding, and a Bayes limit without it would be a floor no estimator could reach.
+    The studies' ``bayes_position_limit_mm`` models the readings the same way. The static voltages are clipped
+    to the card's range (``adc_range_v``), as the readings are: a gauge past a rail reads the rail whatever the
+    load (a 0-3.3 V card under a half bridge swinging negative reads 0 on every gauge; its limit was 4 mm for a
+    network that could only read 61 mm). Near a rail the clipped mean with Gaussian noise is an approximation
+    (a censored reading's exact likelihood is not modelled).
+    """
+    model = TwinGaugeModel(params, calibration)
+    sensors = (params or RigParams()).sensors
+    model.noise_v = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + sensors.adc_lsb_v**2 / 12.0)
+    model.adc_range_v = tuple(sensors.adc_range_v)
+    return model
 
 
 @dataclass

@@ -22,13 +22,12 @@ import numpy as np
 
 from flexdigit._repr import fields_summary
 from flexdigit.errors import DataFileError, ParameterError
-from flexdigit.params import RigParams
 from flexdigit.tactile.accuracy import accuracy, corr2, rmse
 from flexdigit.tactile.bounds import (
     ZONES,
-    TwinGaugeModel,
     cramer_rao,
     protocol_limits,
+    readings_gauge_model,
     span_position_mse_m2,
     span_posterior_mean_m,
 )
@@ -592,25 +591,6 @@ def bayes_limits(model, dataset: Dataset, rows=None, *, samples: int = 4000, see
     return protocol_limits(
         model, k[:, 0], k[:, 1], k[:, 2], counts[keep], samples=samples, seed=[seed, 11], no_load_noise_v=white
     )
-
-
-def readings_gauge_model(params=None, calibration=None):
-    """The twin's gauge model (:class:`~flexdigit.tactile.bounds.TwinGaugeModel`) of a digit as its card reads it:
-    white noise and the ADC's quantisation, ``lsb / sqrt(12)`` (a uniform rounding error), per gauge, V.
-
-    The quantisation matters on a digit whose amplified noise is below one LSB (a quarter bridge's small signal):
-    the readings then carry the rounding, and a Bayes limit without it would be a floor no estimator could reach.
-    The studies' ``bayes_position_limit_mm`` models the readings the same way. The static voltages are clipped
-    to the card's range (``adc_range_v``), as the readings are: a gauge past a rail reads the rail whatever the
-    load (a 0-3.3 V card under a half bridge swinging negative reads 0 on every gauge; its limit was 4 mm for a
-    network that could only read 61 mm). Near a rail the clipped mean with Gaussian noise is an approximation
-    (a censored reading's exact likelihood is not modelled).
-    """
-    model = TwinGaugeModel(params, calibration)
-    sensors = (params or RigParams()).sensors
-    model.noise_v = np.sqrt(np.asarray(model.noise_v, dtype=float) ** 2 + sensors.adc_lsb_v**2 / 12.0)
-    model.adc_range_v = tuple(sensors.adc_range_v)
-    return model
 
 
 def drift_variance_v2(model, dataset: Dataset, *, tared: bool | None = None) -> np.ndarray:

@@ -46,6 +46,7 @@ from flexdigit.tactile.accuracy import accuracy, corr2, percentage_error, relati
 from flexdigit.tactile.dataset import Dataset
 from flexdigit.tactile.netlab import MLP
 from flexdigit.tactile.network_sizes import HIDDEN, TOL
+from flexdigit.tactile.protocols import HELD_OUT_MIN_POSITIONS
 
 __all__ = [
     "TARGETS",
@@ -89,10 +90,6 @@ def thesis_split(n: int, seed: int) -> Split:
     perm = np.random.default_rng(seed).permutation(n)
     n_train, n_val = int(round(n / 2)), int(round(n / 3))
     return Split(perm[:n_train], perm[n_train : n_train + n_val], perm[n_train + n_val :])
-
-
-#: ``held_out_positions_split``: the fewest distinct positions it splits (two ends kept, two held out between)
-HELD_OUT_MIN_POSITIONS = 5
 
 
 def held_out_positions_split(position_m, seed: int) -> Split:

@@ -50,6 +50,7 @@ __all__ = [
     "MAX_SETTLE_S",
     "REFINE",
     "REFINE_MAX",
+    "HELD_OUT_MIN_POSITIONS",
     "BUILTIN",
     "Protocol",
     "protocol_from_toml",
@@ -64,6 +65,11 @@ RELAXED = -1
 REFINE_MAX = 25
 REFINE = Plausible("", 1, REFINE_MAX, "steps per protocol step: 25 leaves one of thesis-6.1's 25 readings a position",
                    integer=True)  # fmt: skip
+
+#: :func:`~flexdigit.tactile.pipeline.held_out_positions_split`: the fewest distinct positions it splits (two ends
+#: kept, two held out between); here, beside the protocols, as :func:`~flexdigit.tactile.refinement.refinement_for`
+#: refines only a protocol a network is scored on held-out positions of (its import stays light)
+HELD_OUT_MIN_POSITIONS = 5
 
 #: Longest settle time (and reading interval) a protocol or ``collect --settle`` takes, s: an hour.
 MAX_SETTLE_S = 3600.0

@@ -33,6 +33,7 @@ from flexdigit.rig.gauge_rails import railed_readings
 from flexdigit.rig.recording import Recording, recording_rig, rig_metadata
 from flexdigit.tactile.dataset import Dataset, Journal, load_dataset, make_meta, save_dataset
 from flexdigit.tactile.protocols import MAX_SETTLE_S, RELAXED, Protocol
+from flexdigit.tactile.refinement import refinement_for
 from flexdigit.twin.digit_calibration import twin_calibration
 
 __all__ = [
@@ -522,8 +523,14 @@ def collect_on(
     progress: bool = False,
     force: bool = False,
     allow_rail: bool = False,
+    refine: int | None = None,
 ) -> Dataset:
     """``flexdigit collect``: open the rig at ``backend``, take ``protocol`` on it into ``out`` and close it.
+
+    The protocol's positions are refined first (:meth:`~flexdigit.tactile.protocols.Protocol.refined`) by
+    ``refine``, or by the ``K`` the digit's resolution asks for (:func:`~flexdigit.tactile.refinement.refinement_for`:
+    1 on the thesis rig): the dataset's ``meta["settings"]["refine"]`` says which and why (absent for the thesis
+    rig's protocol as written, whose datasets are as they were).
 
     On a twin URL (``sim...``) the twin is set up for the protocol (:func:`sim_options`) with ``seed`` (unless the
     URL sets one) and, when ``calibration`` (a TOML) or ``params`` (another digit) is given, the calibration of
@@ -544,6 +551,9 @@ def collect_on(
         raise ParameterError(
             f"--calibration calibrates the twin: it needs a sim backend, not {backend!r} (a real rig is itself)"
         )
+    refinement = refinement_for(protocol, params, refine, calibration=calibration)
+    protocol = protocol.refined(refinement.factor)
+    settings = None if refinement.chosen == "thesis rig" else {"refine": refinement.to_dict()}
     options = sim_options(protocol, backend) if on_twin else {}
     if scheme == "hil":
         options = {k: v for k, v in sim_options(protocol, backend).items() if k in ("orientation", "cable")}
@@ -567,6 +577,7 @@ def collect_on(
             progress=progress,
             force=force,
             allow_rail=allow_rail,
+            settings=settings,
         )
 
 
