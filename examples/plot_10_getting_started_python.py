@@ -19,7 +19,7 @@ import numpy as np
 from flexdigit.control import thesis_design
 from flexdigit.identify import TimeSeries, identify
 from flexdigit.rig import make_controller, open_rig, run_loop
-from flexdigit.tactile import ThesisNetwork, collect, load_protocol, thesis_split
+from flexdigit.tactile import ThesisNetwork, collect_on, load_protocol, thesis_split
 from flexdigit.twin import Twin, servo_step_test
 
 record = servo_step_test(seed=0)
@@ -43,8 +43,9 @@ print(loop.status, f"final rotation {loop.measurement[-1]:.1f} deg")
 # %%
 # A tactile dataset and the thesis's network (chapter 6)
 # ------------------------------------------------------
+# On the twin stepped by its compiled kernel (``sim?compiled=1``): the numpy twin's readings for less CPU.
 with tempfile.TemporaryDirectory() as folder:
-    dataset = collect(load_protocol("thesis-6.1"), out=Path(folder) / "d6.parquet", seed=0)
+    dataset = collect_on("sim?compiled=1", load_protocol("thesis-6.1"), Path(folder) / "d6.parquet", seed=0)
 c = dataset.columns
 loaded = c["load_kg"] > 0
 x = np.column_stack([c["gauge1_v"], c["gauge2_v"], c["gauge3_v"]])[loaded]

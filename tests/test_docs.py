@@ -21,8 +21,11 @@ import types
 from pathlib import Path
 
 import pytest
+from numpydoc import docscrape_sphinx, numpydoc
 
 import flexdigit
+from flexdigit.control import thesis_design
+from flexdigit.twin import Twin, release_test
 
 #: The first build of the site (a fresh clone without `make docs` before) imports every domain and runs the gallery:
 #: a few minutes on a loaded 2-core machine, more than pytest-timeout's 600 s default allows.
@@ -120,6 +123,20 @@ def test_every_gallery_example_ran_in_the_build_and_shows_a_figure(build):
         figure = f"sphx_glr_{example.stem}_001.png"
         assert figure in page.read_text(), f"{example.name} drew no figure"
         assert (HTML / "_images" / figure).is_file(), figure
+
+
+def test_numpydoc_renders_a_docstring_the_same_with_its_template_compiled_once(monkeypatch):
+    """The site's extension hands numpydoc a ``get_doc_object`` that compiles the docstring template once per build
+    (numpydoc's own compiles it per docstring): the same text for a class, a function and a design entry point (a
+    numpydoc release that changed its own would show here, not as a quietly different reference)."""
+    monkeypatch.setattr(numpydoc, "get_doc_object", numpydoc.get_doc_object)  # put back after the test
+    _generator().numpydoc_template_once()
+    assert numpydoc.get_doc_object is not docscrape_sphinx.get_doc_object
+    for obj in (Twin, release_test, thesis_design):
+        ours = str(numpydoc.get_doc_object(obj, config={"show_class_members": False}))
+        theirs = str(docscrape_sphinx.get_doc_object(obj, config={"show_class_members": False}))
+        assert obj.__doc__.strip().splitlines()[0] in ours, obj.__name__  # a rendered docstring, not an empty one
+        assert ours == theirs, obj.__name__
 
 
 def test_the_firmware_sketch_is_not_in_the_gallery(build):

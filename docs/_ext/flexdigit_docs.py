@@ -441,6 +441,38 @@ def remove_unpublished_pages(app, exception) -> None:
             path.unlink(missing_ok=True)
 
 
+def numpydoc_template_once() -> None:
+    """Have numpydoc compile its docstring template once per builder, not once per docstring.
+
+    ``numpydoc.docscrape_sphinx.get_doc_object`` builds a Jinja environment and compiles
+    ``numpydoc_docstring.rst`` on every call: ~2300 calls, ~1.5 ms each, 3-4 s of a cold build's CPU for the same
+    template. numpydoc's ``setup`` takes a replacement (``get_doc_object_``), read from its module's global at each
+    docstring: this one renders with the same template and classes, compiled on first use.
+    """
+    from jinja2 import FileSystemLoader
+    from jinja2.sandbox import SandboxedEnvironment
+    from numpydoc import docscrape, docscrape_sphinx, numpydoc
+    from sphinx.jinja2glue import BuiltinTemplateLoader
+
+    folders = [str(Path(docscrape_sphinx.__file__).parent / "templates")]
+    compiled: dict[int, object] = {}
+
+    def get_doc_object(obj, what=None, doc=None, config=None, builder=None):
+        config = {} if config is None else config
+        if id(builder) not in compiled:
+            loader = FileSystemLoader(folders)
+            if builder is not None:
+                loader = BuiltinTemplateLoader()
+                loader.init(builder, dirs=folders)
+            compiled[id(builder)] = SandboxedEnvironment(loader=loader).get_template("numpydoc_docstring.rst")
+        config["template"] = compiled[id(builder)]
+        classes = {"class_doc": docscrape_sphinx.SphinxClassDoc, "func_doc": docscrape_sphinx.SphinxFunctionDoc}
+        classes["obj_doc"] = docscrape_sphinx.SphinxObjDoc
+        return docscrape.get_doc_object(obj, what=what, doc=doc, config=config, **classes)
+
+    numpydoc.get_doc_object = get_doc_object
+
+
 def setup(app):
     # on config-inited: before Sphinx looks for source files and autosummary reads the pages written here
     app.connect("config-inited", write_api_pages)
@@ -450,4 +482,5 @@ def setup(app):
     app.connect("config-inited", write_file_formats_page)
     app.connect("build-finished", remove_unpublished_pages)
     app.add_directive("benchmark-table", benchmark_table_directive())
+    numpydoc_template_once()
     return {"parallel_read_safe": True, "parallel_write_safe": True}
