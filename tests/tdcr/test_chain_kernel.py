@@ -11,7 +11,7 @@ The kernel before's answer on this case is stored (``tests/data/chain_kernel_bef
 ``tests/data/update_chain_kernel_before.py`` from ``benchmarks/tdcr_kernel_before.py``; the file holds the kernel
 file's SHA-256, the commit, numba's version and the case): compiling that kernel was ~60 s of this file's 66 on every
 fresh clone. The test refuses a file made from another kernel file or for another case; the stored answer, made again
-on another load of the same machine, was the same to the bit.
+from a fresh compile of that kernel (``update_chain_kernel_before.py --check``), was the same to the bit.
 """
 
 import hashlib
