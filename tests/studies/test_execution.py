@@ -15,6 +15,7 @@ import pytest
 
 from flexdigit.cli import main
 from flexdigit.errors import DataFileError, ParameterError
+from flexdigit.studies import execution
 from flexdigit.studies.execution import (
     JOURNAL_NAME,
     TASK_FAILED,
@@ -208,6 +209,67 @@ def test_a_worker_dying_mid_task_fails_that_task_only_and_a_rerun_computes_it(tm
     assert not again.refused
     for metric in spec.metrics:
         np.testing.assert_array_equal(again.outputs[metric], ref.outputs[metric])
+
+
+@dataclasses.dataclass(frozen=True)
+class _ClosingSpec(StudySpec):
+    """A spec whose row ``close_on`` closes the worker evaluating it while the file ``sentinel`` exists: a worker
+    of an in-process cluster (no nanny), so no worker is left and none comes back."""
+
+    close_on: str = ""
+    sentinel: str = ""
+
+    def parameter_set(self, values, label="sample"):
+        if label == self.close_on and os.path.exists(self.sentinel):
+            from distributed import get_worker
+
+            worker = get_worker()
+            worker.loop.add_callback(worker.close)
+        return super().parameter_set(values, label)
+
+
+def test_a_study_whose_workers_are_all_gone_ends_in_one_line_and_a_rerun_resumes(tmp_path, monkeypatch):
+    from distributed import LocalCluster
+
+    # the study looks at its cluster every 0.2 s and gives up after 1 s without a worker (the shipped values
+    # are for a nanny's restart on a loaded machine; the path is the same)
+    monkeypatch.setattr(execution, "WORKER_CHECK_S", 0.2)
+    monkeypatch.setattr(execution, "NO_WORKER_GRACE_S", 1.0)
+    spec = spec_from_toml(SPEC.replace(', "bayes_position_limit_mm"', ""))
+    settings = SensitivitySettings.from_spec(spec)
+    sentinel = tmp_path / "close"
+    sentinel.touch()
+    fields = {f.name: getattr(spec, f.name) for f in dataclasses.fields(StudySpec)}
+    closing = _ClosingSpec(**fields, close_on="row 7", sentinel=str(sentinel))
+    ref = run_sensitivity(spec, tmp_path / "ref", settings=settings, workers=0, progress=False)
+    out = tmp_path / "out"
+    cluster_args = {"n_workers": 1, "threads_per_worker": 1, "processes": False, "protocol": "tcp://"}
+    cluster_args |= {"host": "127.0.0.1", "dashboard_address": None}
+    with LocalCluster(**cluster_args) as cluster, pytest.raises(OSError) as info:
+        run_sensitivity(closing, out, settings=settings, scheduler=cluster.scheduler_address, progress=False)
+    message = str(info.value)
+    assert len(message.splitlines()) == 1
+    assert "has had no worker for 1 s" in message
+    assert "rerun the same command to resume" in message
+    # every row finished before the worker went is journalled, with the serial run's numbers
+    journal = Journal(out / JOURNAL_NAME, json.loads((out / JOURNAL_NAME).open().readline()))
+    kept = sorted(journal.records)
+    assert f"({len(kept)} rows journalled" in message
+    assert len(kept) < len(ref.values)  # the study did stop short
+    for metric in spec.metrics:
+        got = [journal.records[r].values[metric] for r in kept]
+        np.testing.assert_array_equal(got, ref.outputs[metric][kept], err_msg=metric)
+    # a rerun on a cluster with a worker computes the other rows only and gives the serial study, exactly
+    before = (out / JOURNAL_NAME).read_text().splitlines()
+    sentinel.unlink()
+    with LocalCluster(**cluster_args) as cluster:
+        again = run_sensitivity(closing, out, settings=settings, scheduler=cluster.scheduler_address, progress=False)
+    after = (out / JOURNAL_NAME).read_text().splitlines()
+    assert after[: len(before)] == before
+    assert len(after) == 1 + len(ref.values)
+    assert not again.failed_rows
+    for metric in spec.metrics:
+        np.testing.assert_array_equal(again.outputs[metric], ref.outputs[metric], err_msg=metric)
 
 
 @pytest.mark.slow

@@ -528,8 +528,6 @@ def _run_on_dask(
     task journalled as it ends. A task of several blocks that fails is run again block by block, so that only a
     block that fails alone (a worker died running it, or it could not run) journals its rows' failure; the run
     goes on."""
-    from distributed import as_completed
-
     with dask_client(scheduler, workers) as client:
         # every worker, and any that joins later (one restarted after a kill), warmed before its first task
         from flexdigit.studies._warm_worker import WarmWorker
@@ -554,22 +552,63 @@ def _run_on_dask(
         # tasks last, where they even out the workers' ends
         for i, end in enumerate(np.cumsum(sizes)):
             submit(todo[end - sizes[i] : end], priority=len(sizes) - i)
-        pending = as_completed(list(futures))
-        for fut in pending:
-            blocks = futures.pop(fut)
-            try:
-                records = fut.result()
-            except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
-                if client.status != "running":  # not the task: the scheduler is gone, every task with it
-                    _scheduler_lost(client, scheduler, journal)
-                if len(blocks) > 1:  # which block? each alone, again
-                    for block in blocks:
-                        pending.add(submit([block], priority=len(sizes) + 1))
-                    continue
-                message = f"{TASK_FAILED}{type(exc).__name__}: {exc}".splitlines()[0]
-                records = [RowRecord(int(r), {}, message) for r in blocks[0][1]]
-            journal.append(_new(journal, records))
-            bar.update(task, advance=sum(len(rows) for _, rows in blocks))
+        while futures:
+            for fut in _ended(client, futures, scheduler, journal):
+                try:
+                    records = fut.result(timeout=WORKER_CHECK_S)
+                except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
+                    if client.status != "running":  # not the task: the scheduler is gone, every task with it
+                        _scheduler_lost(client, scheduler, journal)
+                    if fut.status == "pending" or (isinstance(exc, TimeoutError) and fut.status == "finished"):
+                        continue  # its result died with the worker holding it (Dask computes it again), or is slow
+                    blocks = futures.pop(fut)
+                    if len(blocks) > 1:  # which block? each alone, again
+                        for block in blocks:
+                            submit([block], priority=len(sizes) + 1)
+                        continue
+                    message = f"{TASK_FAILED}{type(exc).__name__}: {exc}".splitlines()[0]
+                    records = [RowRecord(int(r), {}, message) for r in blocks[0][1]]
+                else:
+                    blocks = futures.pop(fut)
+                journal.append(_new(journal, records))
+                bar.update(task, advance=sum(len(rows) for _, rows in blocks))
+
+
+#: How long a study waits on its tasks between two looks at its cluster, s: it then checks that the scheduler
+#: still has a worker (:func:`_ended`). A task may run for any time; only a cluster with no worker ends a study.
+WORKER_CHECK_S = 2.0
+#: How long a study's cluster may have no worker at all before the study gives up, s (:func:`_workers_lost`): a
+#: nanny restarts a dead worker within seconds, and within tens of seconds on a loaded machine (imports, the warm
+#: row); past this none is coming (the nanny could not restart it, or an existing cluster lost every worker), and
+#: waiting on would hang the study for ever.
+NO_WORKER_GRACE_S = 120.0
+
+
+def _ended(client, futures, scheduler, journal: Journal) -> list:
+    """The futures among ``futures`` that have ended (finished, failed or cancelled), waiting for at least one in
+    slices of :data:`WORKER_CHECK_S`; between slices, the study ends with :func:`_scheduler_lost` when the
+    scheduler is gone and with :func:`_workers_lost` when it has had no worker for :data:`NO_WORKER_GRACE_S`."""
+    from distributed import wait
+
+    alone_since = None
+    while True:
+        with contextlib.suppress(Exception):  # a slice without an end (TimeoutError), or futures cancelled
+            wait(list(futures), timeout=WORKER_CHECK_S, return_when="FIRST_COMPLETED")
+        ended = [fut for fut in futures if fut.done()]
+        if ended:
+            return ended
+        if client.status != "running":
+            _scheduler_lost(client, scheduler, journal)
+        try:
+            workers = client.nthreads()
+        except OSError:
+            _scheduler_lost(client, scheduler, journal)
+        if workers:
+            alone_since = None
+            continue
+        alone_since = time.monotonic() if alone_since is None else alone_since
+        if time.monotonic() - alone_since >= NO_WORKER_GRACE_S:
+            _workers_lost(client, scheduler, journal)
 
 
 def _scheduler_lost(client, scheduler, journal: Journal):
@@ -580,6 +619,18 @@ def _scheduler_lost(client, scheduler, journal: Journal):
     raise OSError(
         f"the Dask scheduler at {address} vanished mid-study ({done} rows journalled in {journal.path}); start it "
         "again and rerun the same command to resume"
+    ) from None
+
+
+def _workers_lost(client, scheduler, journal: Journal):
+    """Raise the one line that says the study's cluster has had no worker for :data:`NO_WORKER_GRACE_S` (every
+    finished row is in the journal, the tasks still out are not the rows' failures) and that a rerun resumes."""
+    address = scheduler or getattr(client.scheduler, "address", "the local cluster")
+    done = sum(1 for r in journal.records.values() if r.done)
+    raise OSError(
+        f"the Dask cluster at {address} has had no worker for {NO_WORKER_GRACE_S:g} s: its workers died and none "
+        f"came back ({done} rows journalled in {journal.path}); start workers (or check the machine's memory) and "
+        "rerun the same command to resume"
     ) from None
 
 
