@@ -27,7 +27,9 @@ is refused, never mixed (``--force`` starts over). A row whose evaluation raises
 its parameters and the study goes on; a task whose worker dies (Dask gives up on it once the workers it ran on
 died, ``KilledWorker``) or that could not run is recorded the same way for each of its rows, its error starting
 with :data:`TASK_FAILED`: such rows are not results (the rig did not refuse them), so a rerun computes them again,
-keeping every other row. A progress bar goes to stderr.
+keeping every other row. A study never waits for ever: a cluster left with no worker for
+:data:`NO_WORKER_GRACE_S` (none restarted, or a lost result with no worker to compute it again) ends it in one
+line, every finished row journalled, and a rerun resumes. A progress bar goes to stderr.
 """
 
 from __future__ import annotations
