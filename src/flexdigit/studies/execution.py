@@ -561,7 +561,7 @@ def _run_on_dask(
                 except Exception as exc:  # noqa: BLE001 - a worker died or the task could not run: keep going
                     if client.status != "running":  # not the task: the scheduler is gone, every task with it
                         _scheduler_lost(client, scheduler, journal)
-                    if fut.status == "pending" or (isinstance(exc, TimeoutError) and fut.status == "finished"):
+                    if not fut.done() or (isinstance(exc, TimeoutError) and fut.status == "finished"):
                         continue  # its result died with the worker holding it (Dask computes it again), or is slow
                     blocks = futures.pop(fut)
                     if len(blocks) > 1:  # which block? each alone, again
