@@ -214,10 +214,12 @@ def test_a_worker_dying_mid_task_fails_that_task_only_and_a_rerun_computes_it(tm
 @dataclasses.dataclass(frozen=True)
 class _ClosingSpec(StudySpec):
     """A spec whose row ``close_on`` closes the worker evaluating it while the file ``sentinel`` exists: a worker
-    of an in-process cluster (no nanny), so no worker is left and none comes back."""
+    of an in-process cluster (no nanny), so no worker is left and none comes back. Without the file, the row
+    takes ``slow_s`` longer: a long task on a live cluster."""
 
     close_on: str = ""
     sentinel: str = ""
+    slow_s: float = 0.0
 
     def parameter_set(self, values, label="sample"):
         if label == self.close_on and os.path.exists(self.sentinel):
@@ -225,6 +227,8 @@ class _ClosingSpec(StudySpec):
 
             worker = get_worker()
             worker.loop.add_callback(worker.close)
+        elif label == self.close_on:
+            time.sleep(self.slow_s)
         return super().parameter_set(values, label)
 
 
@@ -240,8 +244,11 @@ def test_a_study_whose_workers_are_all_gone_ends_in_one_line_and_a_rerun_resumes
     sentinel = tmp_path / "close"
     sentinel.touch()
     fields = {f.name: getattr(spec, f.name) for f in dataclasses.fields(StudySpec)}
-    closing = _ClosingSpec(**fields, close_on="row 7", sentinel=str(sentinel))
     ref = run_sensitivity(spec, tmp_path / "ref", settings=settings, workers=0, progress=False)
+    # the last row (in the last task: the earlier ones are done by then) closes the worker; on the rerun it takes
+    # twice the grace: a long task is waited for, never cut
+    last = len(ref.values) - 1
+    closing = _ClosingSpec(**fields, close_on=f"row {last}", sentinel=str(sentinel), slow_s=2.0)
     out = tmp_path / "out"
     cluster_args = {"n_workers": 1, "threads_per_worker": 1, "processes": False, "protocol": "tcp://"}
     cluster_args |= {"host": "127.0.0.1", "dashboard_address": None}
@@ -255,11 +262,13 @@ def test_a_study_whose_workers_are_all_gone_ends_in_one_line_and_a_rerun_resumes
     journal = Journal(out / JOURNAL_NAME, json.loads((out / JOURNAL_NAME).open().readline()))
     kept = sorted(journal.records)
     assert f"({len(kept)} rows journalled" in message
-    assert len(kept) < len(ref.values)  # the study did stop short
+    assert 0 < len(kept) < len(ref.values)  # the study did stop short, some rows done
+    assert last not in kept
     for metric in spec.metrics:
         got = [journal.records[r].values[metric] for r in kept]
         np.testing.assert_array_equal(got, ref.outputs[metric][kept], err_msg=metric)
-    # a rerun on a cluster with a worker computes the other rows only and gives the serial study, exactly
+    # a rerun on a cluster with a worker computes the other rows only, the last for 2 s, and gives the serial
+    # study, exactly
     before = (out / JOURNAL_NAME).read_text().splitlines()
     sentinel.unlink()
     with LocalCluster(**cluster_args) as cluster:
