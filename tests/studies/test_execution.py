@@ -235,10 +235,10 @@ class _ClosingSpec(StudySpec):
 def test_a_study_whose_workers_are_all_gone_ends_in_one_line_and_a_rerun_resumes(tmp_path, monkeypatch):
     from distributed import LocalCluster
 
-    # the study looks at its cluster every 0.2 s and gives up after 1 s without a worker (the shipped values
+    # the study looks at its cluster every 0.1 s and gives up after 0.5 s without a worker (the shipped values
     # are for a nanny's restart on a loaded machine; the path is the same)
-    monkeypatch.setattr(execution, "WORKER_CHECK_S", 0.2)
-    monkeypatch.setattr(execution, "NO_WORKER_GRACE_S", 1.0)
+    monkeypatch.setattr(execution, "WORKER_CHECK_S", 0.1)
+    monkeypatch.setattr(execution, "NO_WORKER_GRACE_S", 0.5)
     spec = spec_from_toml(SPEC.replace(', "bayes_position_limit_mm"', ""))
     settings = SensitivitySettings.from_spec(spec)
     sentinel = tmp_path / "close"
@@ -248,7 +248,7 @@ def test_a_study_whose_workers_are_all_gone_ends_in_one_line_and_a_rerun_resumes
     # the last row (in the last task: the earlier ones are done by then) closes the worker; on the rerun it takes
     # twice the grace: a long task is waited for, never cut
     last = len(ref.values) - 1
-    closing = _ClosingSpec(**fields, close_on=f"row {last}", sentinel=str(sentinel), slow_s=2.0)
+    closing = _ClosingSpec(**fields, close_on=f"row {last}", sentinel=str(sentinel), slow_s=1.0)
     out = tmp_path / "out"
     cluster_args = {"n_workers": 1, "threads_per_worker": 1, "processes": False, "protocol": "tcp://"}
     cluster_args |= {"host": "127.0.0.1", "dashboard_address": None}
@@ -256,7 +256,7 @@ def test_a_study_whose_workers_are_all_gone_ends_in_one_line_and_a_rerun_resumes
         run_sensitivity(closing, out, settings=settings, scheduler=cluster.scheduler_address, progress=False)
     message = str(info.value)
     assert len(message.splitlines()) == 1
-    assert "has had no worker for 1 s" in message
+    assert "has had no worker for 0.5 s" in message
     assert "rerun the same command to resume" in message
     # every row finished before the worker went is journalled, with the serial run's numbers
     journal = Journal(out / JOURNAL_NAME, json.loads((out / JOURNAL_NAME).open().readline()))
@@ -267,7 +267,7 @@ def test_a_study_whose_workers_are_all_gone_ends_in_one_line_and_a_rerun_resumes
     for metric in spec.metrics:
         got = [journal.records[r].values[metric] for r in kept]
         np.testing.assert_array_equal(got, ref.outputs[metric][kept], err_msg=metric)
-    # a rerun on a cluster with a worker computes the other rows only, the last for 2 s, and gives the serial
+    # a rerun on a cluster with a worker computes the other rows only, the last for 1 s, and gives the serial
     # study, exactly
     before = (out / JOURNAL_NAME).read_text().splitlines()
     sentinel.unlink()
