@@ -535,6 +535,9 @@ def _run_on_dask(
         from flexdigit.studies._warm_worker import WarmWorker
 
         client.register_plugin(WarmWorker(build, values[:1], metrics, context), name=WarmWorker.name)
+        # an existing cluster may get its workers after the study starts: wait for one, as before; from then on a
+        # cluster left with none for NO_WORKER_GRACE_S ends the study (_ended)
+        client.wait_for_workers(1)
         # the builder goes with every task (6.6 kB pickled for the shipped spec), neither scattered (scattered data
         # dies with the workers holding it: every task after a worker death would fail) nor a task of its own (the
         # first tasks, submitted while the scheduler saw too few to queue them, all went to the worker holding it)
