@@ -82,3 +82,22 @@ def test_replay_needs_a_saved_calibration(tmp_path, capsys):
     log.write_text('{"format": "flexdigit-loop-log/1"}\n{"k": 0, "t": 0.0, "gauges_v": [0, 0, 0], "command": 8}\n')
     assert main(["run", "--backend", f"replay://{log}"]) == 2
     assert "--rotation-map" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("backend", ["sim+paced", "hil:///firmware.elf"])
+def test_a_paced_backend_is_opened_held_until_the_loop(backend, monkeypatch, capsys):
+    """``run`` on a backend that follows the wall clock opens it held (``start_paced=False``): its start (map,
+    design, tare) runs in virtual time and ``run_loop`` paces it from the first sample (tests/rig/backends/
+    test_pacing.py), not catching up the start's seconds then. The rig is not opened here: its options are read."""
+    import flexdigit.rig.base
+
+    opened: dict = {}
+
+    def open_rig(url, params=None, **options):
+        opened.update(options)
+        raise RuntimeError("not opened in this test")
+
+    monkeypatch.setattr(flexdigit.rig.base, "open_rig", open_rig)
+    assert main(["run", "--backend", backend, "--duration", "1"]) != 0
+    capsys.readouterr()
+    assert opened["start_paced"] is False

@@ -36,6 +36,8 @@ from flexdigit.rig.step_test import ESTIMATE_SMOOTH_S
 
 #: Longest run ``flexdigit run`` takes, s (a day; a longer one is a typo, and would not end on the twin).
 MAX_DURATION_S = 86_400.0
+#: Backends that follow the wall clock (a paced twin, the emulated board): opened held, paced from the loop's start.
+PACED_SCHEMES = ("sim+paced", "hil")
 #: The run's flags, declared once (flexdigit._validation.Flag: refused by argparse, one line naming the flag).
 DURATION = Plausible("s", 0.0, MAX_DURATION_S, "a run of at most a day", closed="right")
 SETPOINT = Plausible("deg", -60.0, 120.0, "a beam rotation the digit reaches: 30 deg per section, 3 sections")
@@ -318,12 +320,15 @@ def _checked(args) -> tuple[float, float, bool, dict]:
     check_plot(args.plot, "run", force=args.force)  # before the rig moves, not after
     if args.log is not None and not (args.append and args.log.exists()):  # before the rig moves, not after
         check_output(args.log, force=args.force, hint="or --append to add this run to it")
-    sim = parse_rig_url(args.backend).scheme in ("sim", "sim+paced")
+    scheme = parse_rig_url(args.backend).scheme
+    sim = scheme in ("sim", "sim+paced")
     twin_options = _twin_options(args, sim)
     if args.rotation_map is not None and (args.map_from is not None or not args.rotation_map.exists()):
         check_output(args.rotation_map, force=args.force)  # before the sweep, not after it
     # --seed reaches a hardware rig only to be refused (it has no noise); with --map-from twin it seeds the map's twin
     rig_options = twin_options if sim else ({} if args.map_from == "twin" else seed_option(args.backend, args.seed))
+    if scheme in PACED_SCHEMES:  # held in virtual time until the loop starts (run_loop): the map, the design and
+        rig_options["start_paced"] = False  # the tare cost no simulated seconds caught up at the first sample
     return duration, setpoint, sim, rig_options
 
 

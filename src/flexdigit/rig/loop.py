@@ -430,6 +430,9 @@ class _Samples:
 
 def _sample_loop(rig: Rig, controller: LoopController, run: _LoopRun, s: LoopSettings, samples: _Samples) -> None:
     """The samples on their deadlines ``t0 + k T``, until the last one or a fault (raised)."""
+    start_pacing = getattr(rig, "start_pacing", None)  # a paced backend opened held (start_paced=False): the wall
+    if start_pacing is not None:  # clock's from the first sample, what ran before (tare, map) in virtual time
+        start_pacing()
     controller.reset(rig.command)
     if run.guard is not None:
         run.guard.reset(rig.command)

@@ -10,9 +10,10 @@ from __future__ import annotations
 import pytest
 
 from flexdigit.rig.backends.sim_backend import SimRig
+from flexdigit.rig.loop import run_loop
 from flexdigit.rig.pacing import WallPacer
 
-from ..helpers import FakeClock
+from ..helpers import PI, FakeClock
 
 #: Wall seconds the fake machine needs per simulated second: slower than real time.
 SLOWNESS = 2.0
@@ -86,6 +87,7 @@ def test_a_held_twin_runs_its_start_in_virtual_time_and_is_paced_from_there():
         clock.sleep(30.0)  # the start computing (a map, a design) for 30 s of wall time
         assert rig.read().time_s == pytest.approx(1.0)  # not simulated afterwards to catch up
         rig.start_pacing()
+        assert rig.twin.dynamics.compiled  # the kernel loading since opening was waited for, in virtual time
         clock.sleep(0.25)
         reading = rig.read()
         assert reading.time_s == pytest.approx(1.25)  # the wall clock's from the start, carrying on from the twin's
@@ -94,3 +96,18 @@ def test_a_held_twin_runs_its_start_in_virtual_time_and_is_paced_from_there():
         assert clock.now == pytest.approx(30.35)
     finally:
         rig.close()
+
+
+def test_a_held_twins_loop_is_paced_from_its_first_sample():
+    """``run_loop`` starts a held twin's pacing (``flexdigit run --backend sim+paced`` opens it held): the 30 s the
+    start computed are not simulated at the first sample, and the samples follow the wall clock from there."""
+    clock = FakeClock()
+    rig = SimRig(paced=True, start_paced=False, seed=0, clock=clock, sleep=clock.sleep)
+    rig.wait(1.0)  # the start's waits at rest (a tare), in virtual time
+    clock.sleep(30.0)  # the start computing (a map, a design) for 30 s of wall time
+    result = run_loop(rig, PI(), 10.0, 0.2, 0.02, guard=False)
+    assert result.status == "completed"
+    assert result.time_s[0] == pytest.approx(0.0, abs=SUM_TOL_S)  # loop time from the first sample, at once
+    # ten samples 20 ms apart on the wall clock, the twin carried on from its 1 s: not from 31 s
+    assert rig.twin.time_s == pytest.approx(1.0 + 0.2, abs=0.02 + SUM_TOL_S)
+    assert clock.now == pytest.approx(30.0 + 0.2, abs=0.02 + SUM_TOL_S)

@@ -88,6 +88,7 @@ class SimRig(Rig):
         **twin_options: Any,
     ) -> None:
         ready = twin is not None
+        self._kernel_loading = None  # the thread loading the compiled kernel (paced, until start_pacing joins it)
         if twin is None:
             # 2 ms, not the twin's 20 ms default: a loop closed every 20 ms acts on the digit's motion between
             # frames. The 30 deg step of the 20 ms design (seed 0) overshoots 2.69 % at 1 ms, 2.68 % at 2 ms,
@@ -96,7 +97,7 @@ class SimRig(Rig):
             background = compiled is None and paced  # paced: numpy steps while the kernel loads
             twin = Twin(params, seed=int(seed), compiled=False if background else compiled, **twin_options)
             if background:
-                twin.dynamics.use_compiled(background=True)
+                self._kernel_loading = twin.dynamics.use_compiled(background=True)
         if pulse_delay_ms is not None:
             if twin.servo.drive != "timer":
                 raise ParameterError(
@@ -119,8 +120,8 @@ class SimRig(Rig):
         super().__init__(
             twin.params, clock=self._now, sleep=sleep or self.twin.advance, operator=operator or (lambda m: None)
         )
-        if start_paced:
-            self.start_pacing()
+        if start_paced and self._pacer is not None:  # numpy steps paced while the kernel loads
+            self._pacer.start(self.twin.time_s)
         self.name = "sim+paced" if self.paced else "sim"
         self._command = int(twin.servo.command)
 
@@ -140,8 +141,14 @@ class SimRig(Rig):
 
     def start_pacing(self) -> None:
         """Paced mode: follow the wall clock from now on, carrying on from the twin's time (what ran before, in
-        virtual time, took no wall time; idempotent); nothing in virtual time (``sim``)."""
-        if self._pacer is not None:
+        virtual time, took no wall time; idempotent); nothing in virtual time (``sim``).
+
+        A held twin's compiled kernel, loading in the background since opening, is waited for first (virtual time:
+        it costs no simulated seconds): numba compiling in a thread holds the interpreter, and a loop paced from
+        here would find its first samples seconds late (``run``'s stall guard stopped it at a load of ~10)."""
+        if self._pacer is not None and not self._pacer.started:
+            if self._kernel_loading is not None:
+                self._kernel_loading.join()
             self._pacer.start(self.twin.time_s)
 
     def _precise_sleep(self, seconds: float) -> None:
