@@ -162,7 +162,7 @@ def test_params_design_and_run_on_the_digit(name, tmp_path, capsys):
         log = tmp_path / f"run{setpoint:+g}-{seed}.jsonl"
         argv = ["run", "--params", str(path), f"--setpoint-deg={setpoint:g}", "--duration", RUN_S, "--seed", seed]
         # the first run searches the digit's weights itself, as a user's who never ran design; the others run the
-        # design kept above (the same weights: tests/cli/test_kept_design_cli.py), not searching again (2-8 s each)
+        # design kept above (the same weights: tests/cli/test_kept_design_cli.py), not searching again
         controller = ["--controller", str(kept)] if k else []
         # the rotation map is swept on a twin of the next seed (cli/run.py), the same map for +30 and -30 on one
         # seed: the first run of a seed saves it, a pair's -30 loads it (--rotation-map) instead of sweeping the

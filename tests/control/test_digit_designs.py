@@ -299,3 +299,32 @@ def test_the_predictor_gain_given_its_covariance_is_dlqes():
     alone, _, _ = ct.dlqe(A, np.eye(n + 1), C, (covariance + covariance.T) / 2, [[10.0]])
     np.testing.assert_allclose(np.asarray(alone).ravel(), np.asarray(expected).ravel(), rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(_predictor_gain(A, G, C, q, 10.0).ravel(), np.asarray(expected).ravel(), rtol=0)
+
+
+#: The search's own step recursion against python-control's simulation of the same discrete loop: roundoff only.
+SEARCH_FIGURE_ATOL = 1e-9
+
+
+def test_the_searchs_figures_are_its_chosen_designs_own_loop():
+    """The search scores its candidates on their matrices (no system objects built, each LQR and predictor gain
+    solved once for the weights it depends on, a candidate's step simulated only when a figure needs it): the worst
+    settling and overshoot it reports for its choice are those of the chosen design's own loop (``closed_loop`` at
+    each plant gain, the shaped setpoint and the tip's output) stepped by python-control. The five-section digit:
+    two outputs and a shaped setpoint."""
+    import control as ct
+
+    from flexdigit.control import design20ms as dz
+    from flexdigit.control.analysis import step_figures
+
+    params = RigParams.from_dict(DIGITS["five-sections-eight-gauges"])
+    d = digit_design_20ms(params, orientation=digit_mount(params))
+    assert d.setpoint_shaper is not None
+    t = np.arange(int(round(dz.SEARCH_STEP_S / d.period_s)) + 1) * d.period_s
+    settling, overshoot = 0.0, 0.0
+    for gain in dz.GAIN_ERRORS:
+        loop = dz.closed_loop(d.plant_d, d.controller, gain, output=d.tip_plant_d)
+        y = np.asarray(ct.forced_response(loop, t, np.full(t.size, 30.0)).outputs).reshape(-1)
+        f = step_figures(t, y, target=30.0)
+        settling, overshoot = max(settling, f.settling_time_s), max(overshoot, f.overshoot_percent)
+    assert d.choice.settling_time_s == pytest.approx(settling, abs=SEARCH_FIGURE_ATOL)
+    assert d.choice.overshoot_percent == pytest.approx(overshoot, abs=SEARCH_FIGURE_ATOL)

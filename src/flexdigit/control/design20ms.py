@@ -37,6 +37,7 @@ import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 from numbers import Integral, Real
+from typing import NamedTuple
 
 import control as ct
 import numpy as np
@@ -318,10 +319,57 @@ def _design(G: ct.StateSpace, T: float, nd: int, w: Weights) -> Digital20msDesig
     """The design of the module docstring on the continuous model ``G`` (command -> deg): one output, held and
     measured alike (5.3's model), or two, ``[tip rotation, measured rotation]`` (:mod:`~flexdigit.control.digit_model`):
     the LQR weighs the tip, the observer reads the measured one."""
-    dc = float(np.real(np.asarray(ct.dcgain(G))).reshape(-1)[0])
+    held = _held(G, T)
+    p = _design_arrays(held, nd, w)
+    controller = ct.ss(p.Ac, p.Bc, p.Fx, p.Dc, T)
+    plant_d = ct.ss(p.Aa, p.Ba, p.Cm, np.zeros((1, 1)), T)
+    loop = closed_loop(plant_d, controller)
+    poles = loop.poles()
+    if np.max(np.abs(poles)) >= 1:
+        raise DesignError("design_20ms: the nominal loop is unstable; check the weights")
+    tip = None if held.C.shape[0] == 1 else ct.ss(p.Aa, p.Ba, p.Ca, np.zeros((1, 1)), T)
+    return Digital20msDesign(controller, p.Bo.ravel(), plant_d, p.K, p.L, poles, T, nd, held.dc, w, tip)
+
+
+class _Held(NamedTuple):
+    """A continuous design model's DC gain (command -> its first output) and its zero-order hold ``(A, B, C)``."""
+
+    dc: float
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+
+
+def _held(G: ct.StateSpace, T: float) -> _Held:
+    """``G`` (command -> deg) held at ``T``: one discretisation serves every candidate of a search."""
     Gd = ct.sample_system(G, T, method="zoh")
-    A, B = np.asarray(Gd.A), np.asarray(Gd.B)
-    C_all = np.asarray(Gd.C)
+    dc = float(np.real(np.asarray(ct.dcgain(G))).reshape(-1)[0])
+    return _Held(dc, np.asarray(Gd.A), np.asarray(Gd.B), np.asarray(Gd.C))
+
+
+class _Arrays(NamedTuple):
+    """A design's matrices (:func:`_design_arrays`): the delayed plant ``(Aa, Ba)`` with its tip and measured outputs
+    ``Ca``, ``Cm``; the LQR and predictor gains ``K``, ``L``; the controller ``(Ac, Bc, Fx, Dc)`` and the observer's
+    input matrix ``Bo`` (the anti-windup gain)."""
+
+    Aa: np.ndarray
+    Ba: np.ndarray
+    Ca: np.ndarray
+    Cm: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
+    Ac: np.ndarray
+    Bc: np.ndarray
+    Fx: np.ndarray
+    Dc: np.ndarray
+    Bo: np.ndarray
+
+
+def _design_arrays(held: _Held, nd: int, w: Weights, solved: dict | None = None) -> _Arrays:
+    """The matrices of :func:`_design` with weights ``w`` on the held model. ``solved``: the LQR and predictor gains
+    already solved in a search, by the weights each depends on (the LQR's on ``q_rate``, ``r_u``, ``q_shape``, the
+    predictor's on the noises): the same equations, solved once (a 48-candidate grid has 8 and 6 of them)."""
+    dc, A, B, C_all = held
     C, C_meas = C_all[0:1], C_all[-1:]
     n = A.shape[0]
     na = n + nd
@@ -333,7 +381,7 @@ def _design(G: ct.StateSpace, T: float, nd: int, w: Weights) -> Digital20msDesig
     if C_all.shape[0] > 1 and w.q_shape > 0:  # the dynamic bending's change per sample (Weights.q_shape)
         shape = (Cm - Ca) @ (Aa - np.eye(na))
         Q = Q + w.q_shape * w.q_rate * (shape.T @ shape)
-    K, _, _ = ct.dlqr(Aa, Ba, (Q + Q.T) / 2, w.r_u)
+    K = _kept(solved, ("lqr", w.q_rate, w.r_u, w.q_shape), lambda: ct.dlqr(Aa, Ba, (Q + Q.T) / 2, w.r_u)[0])
     # Kalman predictor on [x, delay, d]: d enters where the command reaches the servo
     no = na + 1
     Ao = np.zeros((no, no))
@@ -345,7 +393,9 @@ def _design(G: ct.StateSpace, T: float, nd: int, w: Weights) -> Digital20msDesig
     Gn = np.zeros((no, 2))
     Gn[:n, 0:1] = B
     Gn[na, 1] = 1.0
-    L = _predictor_gain(Ao, Gn, Co, np.diag([w.q_input, w.q_disturbance]), w.r_measurement)
+    noises = np.diag([w.q_input, w.q_disturbance])
+    key = ("kalman", w.q_input, w.q_disturbance, w.r_measurement)
+    L = _kept(solved, key, lambda: _predictor_gain(Ao, Gn, Co, noises, w.r_measurement))
     # steady state per degree of setpoint: u_ss = 1/dc - d, x_servo_ss = (I - A)^-1 B / dc, delays = u_ss
     u_ss = 1.0 / dc
     x_ss = np.linalg.solve(np.eye(n) - A, B * u_ss)
@@ -356,14 +406,16 @@ def _design(G: ct.StateSpace, T: float, nd: int, w: Weights) -> Digital20msDesig
     Ac = Ao - L @ Co + Bo @ Fx
     Bc = np.hstack([Bo * Fr, L])
     Dc = np.array([[Fr, 0.0]])
-    controller = ct.ss(Ac, Bc, Fx, Dc, T)
-    plant_d = ct.ss(Aa, Ba, Cm, np.zeros((1, 1)), T)
-    loop = closed_loop(plant_d, controller)
-    poles = loop.poles()
-    if np.max(np.abs(poles)) >= 1:
-        raise DesignError("design_20ms: the nominal loop is unstable; check the weights")
-    held = None if C_all.shape[0] == 1 else ct.ss(Aa, Ba, Ca, np.zeros((1, 1)), T)
-    return Digital20msDesign(controller, Bo.ravel(), plant_d, K, L, poles, T, nd, dc, w, held)
+    return _Arrays(Aa, Ba, Ca, Cm, K, L, Ac, Bc, Fx, Dc, Bo)
+
+
+def _kept(solved: dict | None, key: tuple, solve):
+    """``solve()``, kept in ``solved`` under ``key`` (None: not kept)."""
+    if solved is None:
+        return solve()
+    if key not in solved:
+        solved[key] = solve()
+    return solved[key]
 
 
 def _predictor_gain(A: np.ndarray, G: np.ndarray, C: np.ndarray, q: np.ndarray, r: float) -> np.ndarray:
@@ -534,31 +586,60 @@ class WeightsChoice:
     quantised_settling_time_s: float = math.nan
 
 
-def _loop_arrays(plant_d, controller, tip_plant_d, gain: float):
+def _loop_arrays(plant: tuple, controller: tuple, shown: np.ndarray, gain: float):
     """``(A, B_r, B_noise, C_tip, C_u, D_u)`` of the closed loop (measurement noise enters where the controller
-    reads y; ``u = C_u x + D_u noise`` is the command)."""
-    loop = closed_loop(plant_d, controller, gain, output=tip_plant_d)
-    A, B, C = np.asarray(loop.A), np.asarray(loop.B), np.asarray(loop.C)
-    P, Kc = ct.ss(plant_d), ct.ss(controller)
-    Dk = np.asarray(Kc.D)
-    noise = np.vstack([np.asarray(P.B) * gain @ Dk[:, 1:2], np.asarray(Kc.B)[:, 1:2]])
-    c_u = np.hstack([Dk[:, 1:2] @ np.asarray(P.C), np.asarray(Kc.C)])
+    reads y; ``u = C_u x + D_u noise`` is the command), from the matrices of :func:`_loop_matrices`."""
+    A, B, C = _loop_matrices(plant, controller, gain, shown)
+    Dk = controller[3]
+    noise = np.vstack([plant[1] * gain @ Dk[:, 1:2], controller[1][:, 1:2]])
+    c_u = np.hstack([Dk[:, 1:2] @ plant[2], controller[2]])
     return A, B, noise, C, c_u, Dk[:, 1:2]
 
 
-def _score(design: Digital20msDesign, measurement_sd_deg: float, step_deg: float = 30.0):
-    """Worst settling time (s), worst overshoot (%) over :data:`GAIN_ERRORS`, the tip's noise (deg) and the
-    command's (in deg of rotation) of a design, on its linear model; inf where a loop is unstable."""
+def _loops(plant: tuple, controller: tuple, shown: np.ndarray) -> list | None:
+    """The closed loops (:func:`_loop_arrays`) at each of :data:`GAIN_ERRORS`, or None when one is unstable."""
+    loops = []
+    for gain in GAIN_ERRORS:
+        arrays = _loop_arrays(plant, controller, shown, gain)
+        if np.max(np.abs(np.linalg.eigvals(arrays[0]))) >= 1.0:
+            return None
+        loops.append(arrays)
+    return loops
+
+
+def _noise_figures(loops: list, plant_b: np.ndarray, deg_per_command: float, measurement_sd_deg: float):
+    """The tip's noise (deg) and the command's (in deg of rotation) on the nominal loop of ``loops``
+    (:func:`_loops`, the one at gain 1 of :data:`GAIN_ERRORS`; inf without one): the gauges' white noise and the
+    dithered command's rounding."""
     import scipy.linalg
 
-    T = design.period_s
-    steps = int(round(SEARCH_STEP_S / T)) + 1
-    t = np.arange(steps) * T
-    settling, overshoot, noise, command_noise = 0.0, 0.0, math.inf, math.inf
-    for gain in GAIN_ERRORS:
-        A, B, Bn, C, Cu, Du = _loop_arrays(design.plant_d, design.controller, design.tip_plant_d, gain)
-        if np.max(np.abs(np.linalg.eigvals(A))) >= 1.0:
-            return math.inf, math.inf, math.inf, math.inf
+    noise, command_noise = math.inf, math.inf
+    for gain, (A, _, Bn, C, Cu, Du) in zip(GAIN_ERRORS, loops, strict=True):
+        if gain != 1.0:
+            continue
+        cov = scipy.linalg.solve_discrete_lyapunov(A, Bn @ Bn.T * measurement_sd_deg**2)
+        noise = float(np.sqrt(max(float((C @ cov @ C.T).item()), 0.0)))
+        # the dithered command's rounding error enters at the plant's input: first-order noise shaping,
+        # e_k - e_(k-1) with e white of variance 1/12 command^2 (RuntimeController's dither), which rings a
+        # lightly damped mode the tip shows
+        m = A.shape[0]
+        Bq = np.zeros((m, 1))
+        Bq[: plant_b.shape[0]] = plant_b * gain
+        A_q = np.block([[A, -Bq], [np.zeros((1, m)), np.zeros((1, 1))]])
+        B_q = np.vstack([Bq, [[1.0]]])
+        rounding = scipy.linalg.solve_discrete_lyapunov(A_q, B_q @ B_q.T / 12.0)[:m, :m]
+        noise = math.hypot(noise, math.sqrt(max(float((C @ rounding @ C.T).item()), 0.0)))
+        u_var = float((Cu @ cov @ Cu.T + Du @ Du.T * measurement_sd_deg**2).item())
+        command_noise = math.sqrt(max(u_var, 0.0)) * deg_per_command
+    return noise, command_noise
+
+
+def _worst_step(loops: list, period_s: float, step_deg: float = 30.0) -> tuple[float, float]:
+    """Worst settling time (s) and overshoot (%) of the tip's linear step over the loops of :func:`_loops`."""
+    steps = int(round(SEARCH_STEP_S / period_s)) + 1
+    t = np.arange(steps) * period_s
+    settling, overshoot = 0.0, 0.0
+    for A, B, _, C, _, _ in loops:
         x = np.zeros(A.shape[0])
         y = np.empty(steps)
         Br = B[:, 0] * step_deg
@@ -568,22 +649,36 @@ def _score(design: Digital20msDesign, measurement_sd_deg: float, step_deg: float
         f = step_figures(t, y, target=step_deg)
         settling = max(settling, f.settling_time_s if math.isfinite(f.settling_time_s) else math.inf)
         overshoot = max(overshoot, f.overshoot_percent)
-        if gain == 1.0:
-            cov = scipy.linalg.solve_discrete_lyapunov(A, Bn @ Bn.T * measurement_sd_deg**2)
-            noise = float(np.sqrt(max(float((C @ cov @ C.T).item()), 0.0)))
-            # the dithered command's rounding error enters at the plant's input: first-order noise shaping,
-            # e_k - e_(k-1) with e white of variance 1/12 command^2 (RuntimeController's dither), which rings a
-            # lightly damped mode the tip shows
-            m = A.shape[0]
-            Bq = np.zeros((m, 1))
-            Bq[: np.asarray(design.plant_d.B).shape[0]] = np.asarray(design.plant_d.B) * gain
-            A_q = np.block([[A, -Bq], [np.zeros((1, m)), np.zeros((1, 1))]])
-            B_q = np.vstack([Bq, [[1.0]]])
-            rounding = scipy.linalg.solve_discrete_lyapunov(A_q, B_q @ B_q.T / 12.0)[:m, :m]
-            noise = math.hypot(noise, math.sqrt(max(float((C @ rounding @ C.T).item()), 0.0)))
-            u_var = float((Cu @ cov @ Cu.T + Du @ Du.T * measurement_sd_deg**2).item())
-            command_noise = math.sqrt(max(u_var, 0.0)) * design.deg_per_command
-    return settling, overshoot, noise, command_noise
+    return settling, overshoot
+
+
+@dataclass(eq=False)
+class _Candidate:
+    """A candidate of the search (:func:`_scored_candidates`): its weights, its loops at :data:`GAIN_ERRORS` (None:
+    one is unstable, every figure inf), the tip's and the command's noise; its worst step (:func:`_worst_step`) is
+    simulated when first asked for (most candidates of a grid fail a noise limit, and their steps are then never
+    looked at, :func:`digit_weights`)."""
+
+    weights: Weights
+    loops: list | None
+    noise: float
+    command_noise: float
+    period_s: float
+    step: tuple[float, float] | None = None
+
+    def _worst(self) -> tuple[float, float]:
+        if self.step is None:
+            self.step = (math.inf, math.inf) if self.loops is None else _worst_step(self.loops, self.period_s)
+            self.loops = None  # the figures kept, the matrices let go
+        return self.step
+
+    @property
+    def settling(self) -> float:
+        return self._worst()[0]
+
+    @property
+    def overshoot(self) -> float:
+        return self._worst()[1]
 
 
 def _digit_candidate(
@@ -615,10 +710,14 @@ def _loop_mode_near(design: Digital20msDesign, wn_rad_s: float) -> tuple[float, 
     """``(wn_rad_s, zeta)`` of the nominal loop's vibrating pole below the Nyquist frequency nearest ``wn_rad_s``
     (the z-plane poles mapped by ``s = ln z / T``); ``(nan, nan)`` when it has none."""
     loop = closed_loop(design.plant_d, design.controller, output=design.tip_plant_d)
-    z = np.linalg.eigvals(np.asarray(loop.A))
+    return _mode_near(np.linalg.eigvals(np.asarray(loop.A)), design.period_s, wn_rad_s)
+
+
+def _mode_near(z: np.ndarray, period_s: float, wn_rad_s: float) -> tuple[float, float]:
+    """:func:`_loop_mode_near` from the loop's z-plane poles ``z``."""
     z = z[np.abs(z) > 1e-12]
-    s = np.log(z.astype(complex)) / design.period_s
-    s = s[(s.imag > 1e-9) & (np.abs(s) < math.pi / design.period_s)]
+    s = np.log(z.astype(complex)) / period_s
+    s = s[(s.imag > 1e-9) & (np.abs(s) < math.pi / period_s)]
     if not s.size:
         return math.nan, math.nan
     k = int(np.argmin(np.abs(np.abs(s) - wn_rad_s)))
@@ -644,7 +743,18 @@ def _with_setpoint_shaper(design: Digital20msDesign, wn_rad_s: float) -> Digital
     wn, zeta = _loop_mode_near(design, wn_rad_s)
     if not (math.isfinite(zeta) and _rings(wn, zeta)):
         return design
-    T = design.period_s
+    K = ct.ss(design.controller)
+    arrays = tuple(np.asarray(x, dtype=float) for x in (K.A, K.B, K.C, K.D))
+    (a, b, c, d), aw_gain = _shaped(arrays, design.aw_gain, design.period_s, wn, zeta)
+    return dataclasses.replace(
+        design, controller=ct.ss(a, b, c, d, design.period_s), aw_gain=aw_gain, setpoint_shaper=(wn, zeta)
+    )
+
+
+def _shaped(controller: tuple, aw_gain: np.ndarray, period_s: float, wn: float, zeta: float) -> tuple:
+    """``((A, B, C, D), aw_gain)`` of a controller with the zero-vibration shaper of :func:`_with_setpoint_shaper`
+    for the loop's mode ``(wn, zeta)`` on its setpoint input."""
+    T = period_s
     k_ratio = math.exp(-zeta * math.pi / math.sqrt(1 - zeta**2))
     half = math.pi / (wn * math.sqrt(1 - zeta**2)) / T  # half the damped period, in samples
     n = int(math.floor(half))
@@ -657,22 +767,15 @@ def _with_setpoint_shaper(design: Digital20msDesign, wn_rad_s: float) -> Digital
     b_s = np.zeros((m, 1))
     b_s[0, 0] = 1.0
     c_s, d_s = taps[1:].reshape(1, m), float(taps[0])
-    K = ct.ss(design.controller)
-    a, b, c, d = (np.asarray(x, dtype=float) for x in (K.A, K.B, K.C, K.D))
+    a, b, c, d = controller
     nk = a.shape[0]
-    controller = ct.ss(
+    shaped = (
         np.block([[a, b[:, :1] @ c_s], [np.zeros((m, nk)), a_s]]),
         np.block([[b[:, :1] * d_s, b[:, 1:]], [b_s, np.zeros((m, 1))]]),
         np.hstack([c, d[:, :1] @ c_s]),
         np.hstack([d[:, :1] * d_s, d[:, 1:]]),
-        T,
     )
-    return dataclasses.replace(
-        design,
-        controller=controller,
-        aw_gain=np.concatenate([np.asarray(design.aw_gain, dtype=float), np.zeros(m)]),
-        setpoint_shaper=(wn, zeta),
-    )
+    return shaped, np.concatenate([np.asarray(aw_gain, dtype=float), np.zeros(m)])
 
 
 def _quantised_settling(design: Digital20msDesign, params: RigParams, step_deg: float = 30.0) -> float:
@@ -701,27 +804,49 @@ def _quantised_settling(design: Digital20msDesign, params: RigParams, step_deg: 
 
 
 def _scored_candidates(model, grid) -> list:
-    """``(settling, overshoot, noise, command noise, weights, design)`` of each ``(r_u, q_rate, q_disturbance,
-    measurement factor, q_shape)`` of ``grid`` (:func:`digit_weights`) that can be designed; ``model`` is
-    ``(G, period_s, measurement_sd_deg, noise_var, ratio, shaped_mode)``."""
-    G, period_s, measurement_sd_deg, noise_var, ratio, shaped_mode = model
+    """The :class:`_Candidate` of each ``(r_u, q_rate, q_disturbance, measurement factor, q_shape)`` of ``grid``
+    (:func:`digit_weights`) that can be designed; ``model`` is ``(held, period_s, measurement_sd_deg, noise_var,
+    ratio, shaped_mode, solved)`` (:func:`_held`; ``solved``: the gains :func:`_design_arrays` keeps)."""
+    held, period_s, measurement_sd_deg, noise_var, ratio, shaped_mode, solved = model
     scored = []
     for r_u, q_rate, q_d, factor, q_shape in grid:
         w = Weights(q_rate, r_u, q_d, 1.0, noise_var * factor, q_shape).for_digit(ratio, 1.0)
         try:
-            d = _digit_candidate(G, period_s, w, shaped_mode)
+            plant, controller, shown = _candidate_loop(held, period_s, w, shaped_mode, solved)
         except (DesignError, ValueError, ArithmeticError, np.linalg.LinAlgError):
             continue
-        scored.append((*_score(d, measurement_sd_deg), w, d))
+        loops = _loops(plant, controller, shown)
+        noise = (math.inf, math.inf) if loops is None else _noise_figures(loops, plant[1], held.dc, measurement_sd_deg)
+        scored.append(_Candidate(w, loops, *noise, period_s))
     return scored
 
 
+def _candidate_loop(held: _Held, period_s: float, w: Weights, shaped_mode, solved: dict) -> tuple:
+    """``(plant (A, B, C), controller (A, B, C, D), tip row)`` of :func:`_digit_candidate`'s design as matrices:
+    the same arithmetic (:func:`_design_arrays`, :func:`_loop_matrices`, :func:`_shaped`), refused alike when its
+    nominal loop is unstable, without building its system objects."""
+    p = _design_arrays(held, 1, w, solved)
+    plant, controller = (p.Aa, p.Ba, p.Cm), (p.Ac, p.Bc, p.Fx, p.Dc)
+    poles = np.linalg.eigvals(_loop_matrices(plant, controller, 1.0, p.Cm)[0])
+    if np.max(np.abs(poles.astype(complex))) >= 1:
+        raise DesignError("design_20ms: the nominal loop is unstable; check the weights")
+    shown = p.Cm if held.C.shape[0] == 1 else p.Ca
+    if shaped_mode is not None:
+        wn, zeta = _mode_near(poles, period_s, shaped_mode[0])
+        if math.isfinite(zeta) and _rings(wn, zeta):
+            controller, _ = _shaped(controller, p.Bo.ravel(), period_s, wn, zeta)
+    return plant, controller, shown
+
+
 def _qualifying(scored) -> list:
-    """The candidates of :func:`_scored_candidates` under the overshoot and both noise limits."""
+    """The candidates of :func:`_scored_candidates` under both noise limits and the overshoot limit (the noises
+    first: a candidate failing them needs no step)."""
     return [
         c
         for c in scored
-        if c[1] < OVERSHOOT_LIMIT_PERCENT and c[2] < NOISE_LIMIT_DEG and c[3] < COMMAND_NOISE_LIMIT_DEG
+        if c.noise < NOISE_LIMIT_DEG
+        and c.command_noise < COMMAND_NOISE_LIMIT_DEG
+        and c.overshoot < OVERSHOOT_LIMIT_PERCENT
     ]
 
 
@@ -730,7 +855,7 @@ def _qualifying(scored) -> list:
 QUIET_SETTLING_S = 0.8
 
 
-def _quietest_in_time(scored) -> tuple | None:
+def _quietest_in_time(scored) -> _Candidate | None:
     """Of scored candidates (:func:`_scored_candidates`), the quietest at the tip (the gauges' noise and the
     dithered command's rounding, :func:`_score`) among those under :data:`OVERSHOOT_LIMIT_PERCENT` and
     :data:`COMMAND_NOISE_LIMIT_DEG` that settle within :data:`QUIET_SETTLING_S`; None when none does.
@@ -746,9 +871,11 @@ def _quietest_in_time(scored) -> tuple | None:
     fit = [
         c
         for c in scored
-        if c[0] < QUIET_SETTLING_S and c[1] < OVERSHOOT_LIMIT_PERCENT and c[3] < COMMAND_NOISE_LIMIT_DEG
+        if c.settling < QUIET_SETTLING_S
+        and c.overshoot < OVERSHOOT_LIMIT_PERCENT
+        and c.command_noise < COMMAND_NOISE_LIMIT_DEG
     ]
-    return min(fit, key=lambda c: (c[2], c[0])) if fit else None
+    return min(fit, key=lambda c: (c.noise, c.settling)) if fit else None
 
 
 def digit_weights(
@@ -767,7 +894,8 @@ def digit_weights(
     Every combination of :data:`SEARCH_R_U`, :data:`SEARCH_Q_RATE`, :data:`SEARCH_Q_DISTURBANCE`,
     :data:`SEARCH_Q_SHAPE` (in the thesis
     rig's units, rescaled by the command's ``ratio`` of rotation, :meth:`Weights.for_digit`) and measurement
-    variances ``measurement_sd_deg^2`` x :data:`SEARCH_R_FACTORS` is designed and scored (:func:`_score`); of
+    variances ``measurement_sd_deg^2`` x :data:`SEARCH_R_FACTORS` is designed and scored
+    (:func:`_scored_candidates`); of
     those whose worst overshoot is under :data:`OVERSHOOT_LIMIT_PERCENT` and whose noises are under
     :data:`NOISE_LIMIT_DEG` (the gauges' and the dithered command's rounding, at the tip) and
     :data:`COMMAND_NOISE_LIMIT_DEG`, one damping the dynamic bending is preferred, then the one settling fastest in
@@ -787,7 +915,7 @@ def digit_weights(
     """
     noise_var = max(measurement_sd_deg**2, MIN_R_MEASUREMENT_DEG2)
     shapes = SEARCH_Q_SHAPE if lightly_damped else (0.0,)
-    model = (G, period_s, measurement_sd_deg, noise_var, ratio, shaped_mode)
+    model = (_held(G, period_s), period_s, measurement_sd_deg, noise_var, ratio, shaped_mode, {})
     first = list(itertools.product(SEARCH_R_U, SEARCH_Q_RATE, SEARCH_Q_DISTURBANCE, SEARCH_R_FACTORS, shapes))
     scored = _scored_candidates(model, first)
     good = _qualifying(scored)
@@ -801,22 +929,23 @@ def digit_weights(
         )
         scored += _scored_candidates(model, [c for c in quiet if c not in set(first)])
         good = _qualifying(scored)
-    stable = [c for c in scored if math.isfinite(c[1])]
-    if not stable:
+    stable = [] if good else [c for c in scored if math.isfinite(c.overshoot)]
+    if not (good or stable):
         raise DesignError("design: no weights of the search give a stable loop on the digit's model")
-    pool = good or stable
     # the dynamic bending damped wherever the limits allow: the linear step cannot show the dithered command
     # ringing a slow S-shaped mode (the 0.5 m digit, seed 2: 1.64 s undamped, 0.53 s damped, both 0.3-0.65 s on
     # the model); then the fastest worst case, the quietest command of equals
-    settling, overshoot, noise, command_noise, w, chosen = min(pool, key=lambda c: (c[4].q_shape == 0, c[0], c[3]))
-    quiet = _quietest_in_time(stable) if coarse and not good else None
-    if quiet is not None:
-        settling, overshoot, noise, command_noise, w, chosen = quiet
+    chosen = min(good or stable, key=lambda c: (c.weights.q_shape == 0, c.settling, c.command_noise))
+    chosen = (_quietest_in_time(stable) if coarse and not good else None) or chosen
+    w, settling, overshoot = chosen.weights, chosen.settling, chosen.overshoot
+    noise, command_noise = chosen.noise, chosen.command_noise
     # the choice's step as the loop runs it (integer, dithered command), reported: ranking the candidates by it
     # took, on random_digit(18), a slower design whose tip rang as much on other twin seeds (0.39 s on the seed
     # that missed, 1.15 and 1.60 s on two that had settled in 0.70-0.75 s); the setpoint's shaper is what stops
     # the ringing (:func:`_with_setpoint_shaper`)
-    quantised = _quantised_settling(chosen, params) if params is not None else math.nan
+    quantised = (
+        _quantised_settling(_digit_candidate(G, period_s, w, shaped_mode), params) if params is not None else math.nan
+    )
     failing = None
     if not good:
         failing = (
@@ -887,7 +1016,7 @@ def _searched_design(params, period_s, calibration, orientation, deg_per_command
     """The design, its model and its coarse command's note (or None), kept per exact inputs (the digit's frozen
     params and calibration, its mount, the period, the measured rotation per command, kept weights, this module's
     ``settings``): a report's chapter 5 steps one design three times and the weight search is most of a design's
-    seconds (0.5-4 s). A refused digit raises again each time (exceptions are not kept)."""
+    time (0.1-0.25 s of CPU). A refused digit raises again each time (exceptions are not kept)."""
     digit_first_mode(params, calibration, orientation=orientation)  # refused if it buckles as mounted
     T = params.actuator.serial_period_s if period_s is None else period_s
     model = digit_model(params, calibration, orientation=orientation)
@@ -1086,15 +1215,22 @@ def closed_loop(plant_d, controller, gain: float = 1.0, output=None) -> ct.State
     P, Kc = ct.ss(plant_d), ct.ss(controller)
     if P.dt != Kc.dt:
         raise DesignError(f"closed_loop: plant dt {P.dt} differs from controller dt {Kc.dt}")
-    A, B, C = P.A, P.B * gain, P.C
-    Ak, Bk, Ck, Dk = Kc.A, Kc.B, Kc.C, Kc.D
     if np.any(P.D):
         raise DesignError("closed_loop: the plant must be strictly proper (it has a hold and a delay)")
+    shown = P.C if output is None else np.asarray(ct.ss(output).C)
+    Acl, Bcl, Ccl = _loop_matrices((P.A, P.B, P.C), (Kc.A, Kc.B, Kc.C, Kc.D), gain, shown)
+    return ct.ss(Acl, Bcl, Ccl, np.zeros((1, 1)), P.dt)
+
+
+def _loop_matrices(plant: tuple, controller: tuple, gain: float, shown: np.ndarray) -> tuple:
+    """``(A, B, C)`` of :func:`closed_loop` from the plant's ``(A, B, C)``, the controller's ``(A, B, C, D)`` and the
+    output row ``shown`` (the search scores its candidates on these, no system objects built)."""
+    A, B, C = plant[0], plant[1] * gain, plant[2]
+    Ak, Bk, Ck, Dk = controller
     Acl = np.block([[A + B @ Dk[:, 1:2] @ C, B @ Ck], [Bk[:, 1:2] @ C, Ak]])
     Bcl = np.vstack([B @ Dk[:, 0:1], Bk[:, 0:1]])
-    shown = C if output is None else np.asarray(ct.ss(output).C)
     Ccl = np.hstack([shown, np.zeros((1, Ak.shape[0]))])
-    return ct.ss(Acl, Bcl, Ccl, np.zeros((1, 1)), P.dt)
+    return Acl, Bcl, Ccl
 
 
 def thesis_controller(

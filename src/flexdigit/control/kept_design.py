@@ -2,9 +2,9 @@
 
 ``flexdigit run --params D.toml`` designs the digit's controller before every run
 (:func:`~flexdigit.control.design20ms.digit_design_20ms`): on a digit other than the thesis rig that is a search of
-48-96 weight candidates on its linearised chain, 2-8 s (0.02 s on the thesis rig, whose weights are chapter 5's).
-The search's outcome is its weights; the rest of the design (the model, one LQR and one Kalman predictor) is
-cheap. So a kept design is the weights the search chose, with what they were chosen for:
+48-240 weight candidates on its linearised chain, 0.1-0.25 s of CPU (0.02 s on the thesis rig, whose weights are
+chapter 5's). The search's outcome is its weights; the rest of the design (the model, one LQR and one Kalman
+predictor) is cheap. So a kept design is the weights the search chose, with what they were chosen for:
 
 - the digit: the fingerprint of its description (:func:`flexdigit._json.fingerprint` of ``RigParams.to_dict()``:
   the values, not the file's bytes, so a comment or a reordered key does not matter; any changed value does);
