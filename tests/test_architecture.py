@@ -51,6 +51,7 @@ SHARED = {
     "_result_table",
     "_estimator",
     "_repr",
+    "_numba_cache",
     "errors",
     "interrupts",
     "reference",

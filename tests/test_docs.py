@@ -139,6 +139,40 @@ def test_numpydoc_renders_a_docstring_the_same_with_its_template_compiled_once(m
         assert ours == theirs, obj.__name__
 
 
+def test_the_search_index_stems_a_word_as_sphinx_does_once_per_build():
+    """The site's search language keeps each word's stem for the build (Sphinx keeps it for one page)."""
+    from sphinx.search.en import SearchEnglish
+
+    ours, sphinx = _generator().search_stems_memoised()({}), SearchEnglish({})
+    assert ours.lang == "en"
+    for word in ("Controllers", "controlling", "gauges", "Identified", "palpation", "Riccati", "the"):
+        assert ours.stem(word) == sphinx.stem(word), word
+        assert ours.stem(word) == sphinx.stem(word), word  # from the memo the second time
+
+
+def test_the_sidebar_kept_by_entry_is_the_theme_s_own_text(build, monkeypatch):
+    """The site's extension renders a cached sidebar from the text of its unchanged top-level entries: after the
+    theme moves the "current" markers to page after page (from the first entries' level to the last), the text is
+    ``str(soup)``, BeautifulSoup's whole rendering that the theme returns."""
+    from bs4 import BeautifulSoup
+    from pydata_sphinx_theme import toctree
+
+    monkeypatch.setattr(toctree, "_patch_cached_sidebar", toctree._patch_cached_sidebar)  # put back after the test
+    generator = _generator()
+    assert generator.sidebar_serialised_by_entry()  # the theme as the patch was written for (0.24)
+    page = (HTML / "api" / "generated" / "flexdigit.twin.Twin.html").read_text()
+    start = page.index('<ul class="current nav bd-sidenav">')
+    soup = BeautifulSoup(page[start : page.index("</div>", start)], "html.parser")
+    hrefs = sorted(set(re.findall(r'href="([^"#]+)"', str(soup))))
+    assert len(hrefs) > 300  # the whole reference, each domain's page and each name's
+    kept: dict[int, str] = {}
+    current = "flexdigit.twin.Twin.html"
+    for href in [*hrefs[:25], *hrefs[::9], current]:
+        assert toctree._move_current_markers(soup, old_href=current, new_href=href, show_nav_level=1), href
+        current = href
+        assert generator.render_sidebar(soup, href, kept) == str(soup), href
+
+
 def test_the_firmware_sketch_is_not_in_the_gallery(build):
     assert build.returncode == 0, build.stderr[-2000:]
     assert not list((HTML / "auto_examples").rglob("*flexdigit_stream*"))

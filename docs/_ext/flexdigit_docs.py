@@ -11,6 +11,8 @@ an autosummary of its public names; autosummary then writes one page per name in
 from __future__ import annotations
 
 import ast
+import functools
+import html
 import importlib
 import json
 import re
@@ -473,6 +475,89 @@ def numpydoc_template_once() -> None:
     numpydoc.get_doc_object = get_doc_object
 
 
+def search_stems_memoised():
+    """Sphinx's English search language with its stems kept for the whole build, as a class for
+    ``app.add_search_language``.
+
+    Sphinx memoises a word's stem within one page only (``IndexBuilder.feed``): the ~490 pages stem ~55,000 words,
+    in pure Python (snowballstemmer; PyStemmer is not installed), mostly the same few thousand again. The stem of a
+    word does not depend on its page, so the search index is the same.
+    """
+    from sphinx.search.en import SearchEnglish
+
+    class SearchEnglishMemo(SearchEnglish):
+        def __init__(self, options):
+            super().__init__(options)
+            self.stem = functools.cache(self.stem)
+
+    return SearchEnglishMemo
+
+
+def sidebar_serialised_by_entry() -> bool:
+    """Have pydata-sphinx-theme reuse the text of the sidebar's top-level entries a page does not change.
+
+    The theme renders the sidebar of a section once and, for each further page of it, moves the "current" markers
+    on the kept BeautifulSoup (``_move_current_markers``) and serialises the whole soup again: every API page's
+    sidebar holds the ~440 entries of the reference, ~8 s of a build. Only the top-level entries (``<li>``) that
+    held the previous page or hold this one change, so the others' text is kept from the page before; each piece
+    is still BeautifulSoup's own rendering, so the page is the same text (``tests/test_docs.py`` checks it against
+    ``str(soup)``). The theme's private functions are replaced only where they are as this was written for (0.24),
+    else the theme is left as it is (returns False).
+    """
+    try:
+        from pydata_sphinx_theme import toctree
+    except ImportError:
+        return False
+    needed = ("_patch_cached_sidebar", "_move_current_markers", "_sidebar_cache")
+    if not all(callable(getattr(toctree, name, None)) for name in needed):
+        return False
+    pieces: dict[int, dict[int, str]] = {}  # id(soup) -> id(top-level <li>) -> its text
+
+    def patch_cached_sidebar(app, cache_key, pagename, show_nav_level):
+        # pydata-sphinx-theme 0.24's _patch_cached_sidebar, but for its last line (str(soup))
+        cached = toctree._sidebar_cache(app).get(cache_key)
+        if cached is None:
+            return None
+        cached_pagename, soup = cached
+        new_href = app.builder.get_relative_uri(cached_pagename, pagename)
+        moved = toctree._move_current_markers(
+            soup,
+            old_href=app.builder.get_relative_uri(pagename, cached_pagename),
+            new_href=new_href,
+            show_nav_level=show_nav_level,
+        )
+        if not moved:
+            return None
+        cached[0] = pagename
+        return render_sidebar(soup, new_href, pieces.setdefault(id(soup), {}))
+
+    toctree._patch_cached_sidebar = patch_cached_sidebar
+    return True
+
+
+def render_sidebar(soup, new_href: str, kept: dict[int, str]) -> str:
+    """``str(soup)`` for a sidebar whose "current" markers just moved to the entry linking ``new_href``: each
+    top-level ``<li>`` from ``kept`` (its text at the previous page, updated here) unless it held the previous
+    page's entry (``href="#"``) or holds this one's; every other piece rendered by BeautifulSoup as ``str`` does."""
+    from bs4 import NavigableString
+
+    changed = ('href="#"', f'href="{html.escape(new_href, quote=False)}"')
+
+    def render(node) -> str:
+        if isinstance(node, NavigableString):
+            return node.output_ready()
+        if node.name == "li":
+            text = kept.get(id(node))
+            if text is None or any(mark in text for mark in changed):
+                text = kept[id(node)] = node.decode()
+            return text
+        shell = node.decode(iterator=iter([node]))  # its start and end tags, as decode writes them
+        end = f"</{node.name}>" if shell.endswith(f"</{node.name}>") else ""
+        return shell[: len(shell) - len(end)] + "".join(render(child) for child in node.contents) + end
+
+    return render(soup)
+
+
 def setup(app):
     # on config-inited: before Sphinx looks for source files and autosummary reads the pages written here
     app.connect("config-inited", write_api_pages)
@@ -483,4 +568,6 @@ def setup(app):
     app.connect("build-finished", remove_unpublished_pages)
     app.add_directive("benchmark-table", benchmark_table_directive())
     numpydoc_template_once()
+    app.add_search_language(search_stems_memoised())
+    sidebar_serialised_by_entry()
     return {"parallel_read_safe": True, "parallel_write_safe": True}

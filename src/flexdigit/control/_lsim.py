@@ -17,7 +17,10 @@ import numba
 import numpy as np
 import scipy.linalg
 
+from flexdigit import _numba_cache
 from flexdigit.errors import DesignError
+
+_numba_cache.install()  # the machine code kept per user by source text (flexdigit/_numba_cache.py)
 
 __all__ = ["step_output"]
 

@@ -14,6 +14,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from flexdigit import _numba_cache
+
+_numba_cache.install()  # the machine code kept per user by source text (flexdigit/_numba_cache.py)
+
 __all__ = ["position_mse_m2"]
 
 #: A posterior term below exp(-NEGLIGIBLE) = 4e-18 of the largest (>= 1 after scaling) is under half an ulp of the

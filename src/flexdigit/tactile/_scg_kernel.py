@@ -28,6 +28,10 @@ import numpy as np
 from numba.core import types
 from numba.extending import intrinsic
 
+from flexdigit import _numba_cache
+
+_numba_cache.install()  # the machine code kept per user by source text (flexdigit/_numba_cache.py)
+
 __all__ = ["tanh", "train"]
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")

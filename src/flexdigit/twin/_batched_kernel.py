@@ -23,6 +23,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from flexdigit import _numba_cache
+
+_numba_cache.install()  # the machine code kept per user by source text (flexdigit/_numba_cache.py)
+
 __all__ = ["LANES", "advance_rigs"]
 
 #: Rigs stepped abreast (two AVX2 vectors of doubles: enough independent work to hide the latencies).
