@@ -394,11 +394,16 @@ def protocol_limits(
         group = np.flatnonzero(c == value)
         loaded = m[group] > 0
         log_prior = np.log(w[group] / w[group].sum())
+        inv_var = 1.0 / sigma[group] ** 2
+        log_norm = np.sum(np.log(sigma[group]), axis=1)
         for j in group:
-            v = mean[j] + sigma[j] * rng.standard_normal((samples, mean.shape[1]))
-            # log posterior over the group's settings (up to a constant), (samples, len(group))
-            z = (v[:, None, :] - mean[group][None]) / sigma[group][None]
-            log_post = log_prior - 0.5 * np.sum(z**2, axis=2) - np.sum(np.log(sigma[group]), axis=1)
+            noise = sigma[j] * rng.standard_normal((samples, mean.shape[1]))  # a reading of setting j less its mean
+            # log posterior over the group's settings (up to a constant), (samples, len(group)): the squared
+            # distances sum_g (v_g - mean_kg)^2 / sigma_kg^2 as three products, about setting j's mean so that no
+            # term is large where a posterior is not negligible (a (samples, group, gauges) array was 3/4 of the time)
+            near = mean[group] - mean[j]
+            z2 = (noise**2) @ inv_var.T - 2.0 * (noise @ (near * inv_var).T) + np.sum(near**2 * inv_var, axis=1)
+            log_post = log_prior - 0.5 * z2 - log_norm
             post = np.exp(log_post - log_post.max(axis=1, keepdims=True))
             post /= post.sum(axis=1, keepdims=True)
             p_load = post[:, loaded].sum(axis=1)

@@ -559,27 +559,31 @@ class Chain:
         ``short`` is the cable shortening (None: no cable); ``res_tol`` the residual tolerance in N m. Returns
         ``(psi, iterations, converged, last residual, last largest step per case)``.
         """
-        b = psi.shape[0]
         ga, gb = g[..., 0], g[..., 1]
         e = self.eccentricity
         kc = self.cable_stiffness
+        # without a contact the Jacobian is K_psi (tridiagonal: D^T diag(k) D) plus a diagonal: over a batch, a
+        # tridiagonal elimination costs ~40 x less than LAPACK's dense solve per case (a tactile grid of 10^4 cases)
+        banded = contact is None and psi.shape[0] >= _BANDED_MIN_BATCH and self.n >= _BANDED_MIN_LINKS
         iterations, converged = 0, False
         for iterations in range(1, max_iter + 1):  # noqa: B007 (returned)
             s, c = np.sin(psi), np.cos(psi)
             res = psi @ self.k_psi + s * ga - c * gb
             res[:, -1] -= moment
-            jac = np.broadcast_to(self.k_psi, (b, self.n, self.n)).copy()
-            idx = np.arange(self.n)
-            jac[:, idx, idx] += c * ga + s * gb
+            diag = np.diagonal(self.k_psi) + (c * ga + s * gb)  # as the dense Jacobian summed it
             if short is not None:
                 t1, t2, taut1, taut2 = self.cable_tensions(psi[:, -1], short)
                 res[:, -1] -= e * (t1 - t2) if self.antagonist else e * t1
-                jac[:, -1, -1] += kc * e * e * (taut1 + taut2.astype(float) if self.antagonist else taut1)
-            if contact is not None:
-                q_contact, dq_contact, _ = contact.generalized(psi)
-                res -= q_contact
-                jac -= dq_contact
-            step = np.linalg.solve(jac, res[..., None])[..., 0]
+                diag[:, -1] += kc * e * e * (taut1 + taut2.astype(float) if self.antagonist else taut1)
+            if banded:
+                step = _tridiagonal_solve(self.k_psi, diag, res)
+            else:
+                jac = self._dense_jacobian(diag)
+                if contact is not None:
+                    q_contact, dq_contact, _ = contact.generalized(psi)
+                    res -= q_contact
+                    jac -= dq_contact
+                step = np.linalg.solve(jac, res[..., None])[..., 0]
             biggest = np.max(np.abs(step), axis=1, keepdims=True)
             step *= np.minimum(1.0, max_step_rad / np.maximum(biggest, 1e-300))
             psi -= step
@@ -587,6 +591,13 @@ class Chain:
                 converged = True
                 break
         return psi, iterations, converged, res, biggest
+
+    def _dense_jacobian(self, diag):
+        """The static Newton's Jacobian (B, n, n): ``K_psi`` off the diagonal, ``diag`` (B, n) on it."""
+        jac = np.broadcast_to(self.k_psi, (diag.shape[0], self.n, self.n)).copy()
+        idx = np.arange(self.n)
+        jac[:, idx, idx] = diag
+        return jac
 
     # ----------------------------------------------------------------------------------------------- dynamics
     def linear_modes(self, psi_eq=None, g_extra=None, cable_taut=False):
@@ -616,6 +627,44 @@ class Chain:
         if cable_taut:
             k[-1, -1] += self.cable_stiffness * self.eccentricity**2 * float(cable_taut)
         return k
+
+
+#: From this many load cases on, the static Newton solves its tridiagonal Jacobians by elimination over the batch
+#: (:func:`_tridiagonal_solve`); below it LAPACK's dense solve per case is cheaper than the elimination's n steps.
+_BANDED_MIN_BATCH = 16
+#: ... and on chains of this many links or more. A shorter chain's dense solves cost little (the thesis rig's 9
+#: links: ~0.2 s of its report's tactile chapters), and keep their bits: the elimination rounds differently, and
+#: 1-ulp changes in the thesis rig's static volts moved its report's per-position estimator tables by up to 5e-8
+#: relative (the inversion's finite differences amplify them; compare.py holds a report to 1e-9).
+_BANDED_MIN_LINKS = 12
+#: A pivot of the tridiagonal elimination below this fraction of its row's largest diagonal entry: that case is
+#: solved again densely (LAPACK, partial pivoting), as an indefinite Jacobian near a fold may need.
+_SMALL_PIVOT = 1e-10
+
+
+def _tridiagonal_solve(k_psi, diag, rhs):
+    """Solve ``J x = rhs`` for a batch of symmetric tridiagonal ``J``: ``diag`` (B, n) on the diagonal and
+    ``K_psi``'s off the diagonal (the same for every case). Elimination without pivoting, vectorised over the
+    batch (Thomas' algorithm); a case with a small or non-finite pivot is solved densely instead."""
+    off = np.diagonal(k_psi, 1)
+    d, r = diag.T.copy(), rhs.T.copy()  # (n, B): each step of the elimination is one contiguous row
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for i in range(1, d.shape[0]):
+            f = off[i - 1] / d[i - 1]
+            d[i] -= f * off[i - 1]
+            r[i] -= f * r[i - 1]
+        r[-1] /= d[-1]
+        for i in range(d.shape[0] - 2, -1, -1):
+            r[i] -= off[i] * r[i + 1]
+            r[i] /= d[i]
+    x = r.T
+    bad = ~(np.min(np.abs(d), axis=0) > _SMALL_PIVOT * np.max(np.abs(diag), axis=1)) | ~np.all(np.isfinite(x), axis=1)
+    if np.any(bad):
+        jac = np.broadcast_to(k_psi, (int(bad.sum()), *k_psi.shape)).copy()
+        idx = np.arange(k_psi.shape[0])
+        jac[:, idx, idx] = diag[bad]
+        x[bad] = np.linalg.solve(jac, rhs[bad][..., None])[..., 0]
+    return x
 
 
 class DynamicState:

@@ -124,6 +124,15 @@ def check_channels(params, calibration) -> None:
             )
 
 
+@lru_cache(maxsize=16)
+def _gauge_chains(sensors: Sensors, count: int) -> tuple[Sensors, ...]:
+    """Each gauge's own :class:`~flexdigit.params.Sensors` (its bridge and gauge factor), kept per description:
+    a :class:`SensorChain` is built per static solve (``static_gauges_v``), and validating ``count`` replaced
+    ``Sensors`` there cost a per-gauge digit's tactile chapters seconds."""
+    bridges, factors, _ = sensors.chain(count)
+    return tuple(dataclasses.replace(sensors, bridge=b, gauge_factor=f) for b, f in zip(bridges, factors, strict=True))
+
+
 class SensorChain:
     """Strain at the gauges to ADC volts, with per-channel gain/offset and seeded noise (module docstring).
 
@@ -140,13 +149,9 @@ class SensorChain:
         s = params.sensors
         self.params = params
         count = len(params.geometry.gauge_positions_m)
-        bridges, factors, amplifier = s.chain(count)
+        amplifier = s.chain(count)[2]
         # a chain per gauge (issue 24): each gauge's bridge and gauge factor; the shared chain keeps its fast path
-        self._chains = (
-            [dataclasses.replace(s, bridge=b, gauge_factor=f) for b, f in zip(bridges, factors, strict=True)]
-            if s.per_gauge
-            else None
-        )
+        self._chains = _gauge_chains(s, count) if s.per_gauge else None
         amp = np.asarray(amplifier, dtype=float) if s.amplifier_gains_v_per_v is not None else s.amplifier_gain_v_per_v
         self.gain = amp * s.excitation_v * np.asarray(calibration.channel_gain, dtype=float)
         self.offset = np.asarray(calibration.channel_offset_v, dtype=float)
