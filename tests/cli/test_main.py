@@ -128,3 +128,28 @@ def test_collect_json_keeps_progress_off_stdout(tmp_path, capsys):
     assert doc["samples"] == 2 * (1 + 2)  # a protocol file tares before each position (docs/tactile): no-load + 2 each
     assert doc["protocol"] == "tiny"
     assert "tiny" in captured.err  # the bar was drawn, on stderr
+
+
+def test_only_the_program_leaves_its_heap_to_the_exit(tmp_path, capsys):
+    """``flexdigit`` as a program freezes its heap as it returns (the exit then frees nothing one by one) and its
+    file is written whole; :func:`main` called in a caller's process leaves that process's collector alone."""
+    import gc
+    import subprocess
+    import sys
+
+    frozen = gc.get_freeze_count()
+    assert main(["params", "--json"]) == 0
+    capsys.readouterr()
+    assert gc.get_freeze_count() == frozen
+    out = tmp_path / "rig.toml"
+    code = (
+        "import atexit, gc, sys\n"
+        "atexit.register(lambda: print('frozen', gc.get_freeze_count(), file=sys.stderr))\n"
+        "from flexdigit.cli import main\n"
+        f"sys.argv = ['flexdigit', 'params', '--write', {str(out)!r}]\n"
+        "raise SystemExit(main())\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert int(done.stderr.split("frozen")[-1]) > 10_000  # the heap: numpy and the domains' objects
+    assert "[geometry]" in out.read_text()
