@@ -283,7 +283,7 @@ def _argv(command: str, digit: Path, work: Path, data: dict, hanging: bool) -> l
     if command == "design-hinf":
         return ["design", "hinf", "--filter-hz", "39", *p, *orient]
     if command in ("run+30", "run-30"):
-        # the design design-20ms kept, where it ran (the same weights run would search again, 2-8 s:
+        # the design design-20ms kept, where it ran (the same weights run would search again:
         # tests/cli/test_kept_design_cli.py; run's own search on drawn digits: tests/cli/test_digit_control.py),
         # and the rotation map run+30 sweeps (the twin's default, of the next seed: the same for -30) loaded by run-30
         controller = ["--controller", str(kept)] if kept.exists() else []

@@ -1,5 +1,5 @@
 """``flexdigit design 20ms --params D.toml --out ctrl.json`` then ``flexdigit run --params D.toml --controller
-ctrl.json``: the run does not search the digit's weights again (issue 24: 2-8 s a run), holds the step as the
+ctrl.json``: the run does not search the digit's weights again (issue 24), holds the step as the
 searched design does, and refuses in one line a design of another digit or period."""
 
 from __future__ import annotations

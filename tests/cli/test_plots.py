@@ -529,7 +529,7 @@ def test_design_20ms_plots_the_step_it_scored_and_the_loops_frequency_response(t
     )  # |S| = 1/|1 + L| ~ 1/|L| where |L| >> 1 (30 dB at 0.1 rad/s: within 0.1 dB)
 
 
-@pytest.mark.slow  # a described digit's weights search, 2-8 s
+@pytest.mark.slow  # a described digit's design and run
 def test_design_20ms_plots_a_described_digits_design_without_searching_again(tmp_path, drawn, capsys):
     from digits import write_digit
 
