@@ -7,10 +7,13 @@ imports the entry point (:mod:`flexdigit.cli`), which only assembles the sub-com
 from __future__ import annotations
 
 import argparse
+import contextlib
+import sys
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-__all__ = ["CommandResult", "add_command", "digit_name", "name_sub_commands"]
+__all__ = ["CommandResult", "add_command", "digit_name", "name_sub_commands", "said_warnings"]
 
 
 @dataclass
@@ -52,3 +55,20 @@ def name_sub_commands(sub: argparse._SubParsersAction) -> None:
     """Let each of ``sub``'s commands report its errors under its whole name ("simulate release", not "simulate")."""
     for parser in sub.choices.values():
         parser.set_defaults(command_name=parser.prog.removeprefix("flexdigit").strip())
+
+
+@contextlib.contextmanager
+def said_warnings(command: str, category: type[Warning]):
+    """The warnings of ``category`` raised inside (a design's: ``flexdigit.errors.DesignWarning``), collected into
+    the list it yields and said on stderr, one line each prefixed as the command's errors are
+    ("flexdigit run: warning: ..."), before the command's report; any other warning goes on as it came."""
+    said: list[str] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", category)
+        yield said
+    for w in caught:
+        if issubclass(w.category, category):
+            said.append(str(w.message))
+            print(f"flexdigit {command}: warning: {w.message}", file=sys.stderr, flush=True)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)

@@ -511,24 +511,27 @@ def _place_data(held) -> dict:
 
 
 def _force(rig, tissue, plan, log, log_mode):
+    from flexdigit._command import said_warnings
+    from flexdigit.errors import DesignWarning
     from flexdigit.palpation.palpation import hold_force
 
     f = plan.force
     # a tissue past the tip was refused before the rig moved (_digit_tissue: palpation.check_tissue_reach)
     rig.place_tissue(tissue)
     end = min(tissue.end_m, rig.params.geometry.digit_length_m)
-    held = hold_force(
-        rig,
-        f["setpoint_n"],
-        duration_s=f["duration_s"],
-        gain=f["gain"],
-        approach_rate=f["approach_rate"],
-        side=tissue.side,
-        region_m=(max(tissue.start_m, 0.0), end),
-        log_path=log,
-        log_mode=log_mode,
-        refuse_uncertain=True,  # a force read uncertain by more than 5 % of the setpoint: refused before moving
-    )
+    with said_warnings("palpate", DesignWarning) as design_warnings:  # a command too coarse for the setpoint
+        held = hold_force(
+            rig,
+            f["setpoint_n"],
+            duration_s=f["duration_s"],
+            gain=f["gain"],
+            approach_rate=f["approach_rate"],
+            side=tissue.side,
+            region_m=(max(tissue.start_m, 0.0), end),
+            log_path=log,
+            log_mode=log_mode,
+            refuse_uncertain=True,  # a force read uncertain by more than 5 % of the setpoint: refused before moving
+        )
     unreached = held.unreached()
     if unreached:  # never a success that touched nothing: the digit relaxed, one line, exit 2
         from flexdigit.errors import RigError
@@ -536,6 +539,7 @@ def _force(rig, tissue, plan, log, log_mode):
         straight = rig.relax()
         raise RigError(f"hold: {unreached}; digit relaxed to command {straight}")
     data, text = _hold_data(held)
+    data["design_warnings"] = design_warnings
 
     def figure():
         from flexdigit.palpation.palpation_plot import hold_figure
@@ -560,6 +564,24 @@ def _limit_data(held) -> dict:
     return {
         "limit_note": f"the loop reached its highest command ({top}: the thesis rig's 60 in tip rotation) short of "
         f"{held.setpoint_n:g} N: the digit does not press that hard there; place the body nearer"
+    }
+
+
+def _band_data(held) -> dict:
+    """``palpate --json`` of the 10 % band: whether the overshoot stayed within it (over it: flagged, never a
+    success, and why, :meth:`~flexdigit.palpation.palpation.ForceHold.over_band`), and what the hold measured before
+    it pressed (``coarse_command``, :func:`~flexdigit.palpation.palpation.hold_coarseness`: the lone step's ring,
+    the force a command presses, the least setpoint it can hold within the band)."""
+    over, coarse = held.over_band(), held.region.get("coarse_command", {})
+    return {
+        "within_band": not over,
+        **({"over_band_note": over} if over else {}),
+        "over_band_tag": " (OVER the 10 % band)" if over else "",
+        "coarse_command": coarse,
+        # how the command is rounded: the sigma-delta, or the integer within integer_band of it where a lone
+        # one-frame step rings the force more than 10 % (palpation.quantiser_band; ring NaN: not measured)
+        "integer_band": held.region.get("integer_band", 0.0),
+        "lone_step_ring_n": held.region.get("lone_step_ring_n", coarse.get("lone_step_ring_n")),
     }
 
 
@@ -590,6 +612,7 @@ def _hold_data(held) -> tuple[dict, str]:
         "steady_error": held.steady_error,
         "steady_ripple_n": held.steady_ripple_n,
         "overshoot": held.overshoot,
+        **_band_data(held),
         "settling_s": held.settling_s,
         # within 10 % over the whole figures' window: only then is "steady" a steady state
         "settled": held.settled(),
@@ -602,10 +625,6 @@ def _hold_data(held) -> tuple[dict, str]:
         "average_readings": held.region.get("average_readings", 1),
         **_limit_data(held),
         "tare_readings": held.region.get("tare_readings"),
-        # how the command is rounded: the sigma-delta, or the integer within integer_band of it where a lone
-        # one-frame step rings the force more than 10 % (palpation.quantiser_band; ring NaN: not measured)
-        "integer_band": held.region.get("integer_band", 0.0),
-        "lone_step_ring_n": held.region.get("lone_step_ring_n"),
         **_uncertainty_data(held),
         "time_s": held.time_s.tolist(),
         "command": held.command.tolist(),
@@ -616,10 +635,10 @@ def _hold_data(held) -> tuple[dict, str]:
     place = data["contact_place"]
     text = (
         f"held {held.setpoint_n:g} N: steady {held.steady_force_n:.4f} N ({100 * held.steady_error:+.1f} %), ripple "
-        f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %, "
+        f"{held.steady_ripple_n * 1000:.1f} mN, overshoot {100 * held.overshoot:.1f} %{data['over_band_tag']}, "
         + (f"within 10 % after {held.settling_s:.2f} s" if data["settled"] else "NOT settled")
         + f" ({data['scored_on']})\n"
-        + (f"{data['settle_note']}\n" if "settle_note" in data else "")
+        + "".join(f"{data[note]}\n" for note in ("over_band_note", "settle_note") if note in data)
         + (f"contact at {place['steady_mm']:.1f} mm" if place["steady_mm"] is not None else "contact place: not told")
         + f" ({place['reason']})\n"
         + _decisions_line(data)

@@ -244,24 +244,13 @@ def _run(args: argparse.Namespace) -> CommandResult:
     return CommandResult(data=data, text=_run_text(args, run, data, setpoint, period), exit_code=exit_code)
 
 
-@contextlib.contextmanager
 def _design_warnings():
     """What the controller's design says it misses (:class:`~flexdigit.errors.DesignWarning`), collected into the
     list it yields and said on stderr, one line each, before the run's report; any other warning goes on as it came."""
-    import warnings
-
+    from flexdigit._command import said_warnings
     from flexdigit.errors import DesignWarning
 
-    said: list[str] = []
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", DesignWarning)
-        yield said
-    for w in caught:
-        if issubclass(w.category, DesignWarning):
-            said.append(str(w.message))
-            print(f"flexdigit run: warning: {w.message}", file=sys.stderr, flush=True)  # as errors are prefixed
-        else:
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return said_warnings("run", DesignWarning)
 
 
 def _plot_title(args, setpoint: float) -> str:
