@@ -14,7 +14,7 @@ import pytest
 
 from flexdigit.rig.recording import read_recording
 
-from .live_helpers import LiveServer, stats, wait_for
+from .live_helpers import stats, wait_for
 
 LOCATE_TOL_M = 0.010  # the issue's 1 cm
 ROTATION_TOL_DEG = 2.0  # the controller's 2 % band is 0.6 deg; the page shows a 0.1 s average of a noisy estimate
@@ -33,28 +33,6 @@ def _click(page, s_m: float, mass_g: float = 25.0) -> None:
 
 def _contact(s) -> dict:
     return s["last"]["contact"][0]
-
-
-@pytest.fixture(scope="module")
-def detached_digit(tmp_path_factory):
-    """One ``flexdigit live --backend sim?cable=false`` (chapter 6's digit: horizontal, the cable detached) for the
-    clicks located within a centimetre: a server's start (imports, the twin) and stop cost ~4 s of CPU each, and
-    the claim is the estimate settling on each weight, not a fresh server (each test opens its own page and starts
-    from the twin without a load, :func:`_unloaded`; its streak of ten polls outlasts the ringing of the weight
-    taken off). Its tests are the file's last: the server runs its twin until the module ends."""
-    server = LiveServer(tmp_path_factory.mktemp("live"), "--backend", "sim?cable=false")
-    yield server
-    if server.proc.poll() is None:
-        server.stop()
-
-
-def _unloaded(page, server) -> None:
-    """Open ``server``'s page and take off any weight an earlier test left on its twin."""
-    page.goto(server.url)
-    first = wait_for(page, lambda s: s["last"]["shape"] is not None, what="the shape")
-    if first["last"]["state"]["loads"]:
-        page.click("#clear")
-        wait_for(page, lambda s: not s["last"]["state"]["loads"], what="the earlier weight removed")
 
 
 def test_page_streams_the_twin_and_the_slider_moves_the_digit(live_server, page, tmp_path):
@@ -106,6 +84,52 @@ def test_page_streams_the_twin_and_the_slider_moves_the_digit(live_server, page,
     assert len(samples) > 100
 
 
+@pytest.mark.parametrize("position_m", [0.17, 0.22, 0.26])
+def test_a_click_is_located_within_a_centimetre_where_the_gauges_see_it(live_server, page, position_m):
+    # chapter 6's digit: horizontal, the cable detached, so no cable friction: two or three gauges bend beyond
+    # gauge 2 and place a 25 g weight to a millimetre or two
+    server = live_server("--backend", "sim?cable=false")
+    page.goto(server.url)
+    wait_for(page, lambda s: s["last"]["shape"] is not None, what="the shape")
+    _click(page, position_m)
+    hung = wait_for(page, lambda s: s["last"]["state"]["loads"], what="the weight hung")["last"]["state"]["loads"]
+    # settled: the located estimate stays within 1 cm of the weight for a second (ten polls in a row)
+    streak, deadline = 0, time.monotonic() + 20
+    while streak < 10 and time.monotonic() < deadline:
+        c = _contact(stats(page))
+        near = c["located"] and abs(c["position_from_base_m"] - hung[0][1]) < LOCATE_TOL_M
+        streak = streak + 1 if near else 0
+        page.wait_for_timeout(100)
+    assert streak >= 10, f"the estimate did not settle within 1 cm of {hung[0][1]} m: last {c}"
+    assert abs(hung[0][1] - position_m) < 0.006  # the weight went where the click was (5 mm grid)
+    assert page.console_errors == []
+    server.stop()
+
+
+def test_the_page_says_where_the_gauges_cannot_see_a_load(live_server, page):
+    server = live_server("--backend", "sim?cable=false")
+    page.goto(server.url)
+    wait_for(page, lambda s: s["locMap"] is not None, timeout_s=40, what="the locatability map")
+    loc = stats(page)["locMap"]
+    blind = [s for s, sd in zip(loc["s_m"], loc["sd_m"], strict=True) if sd is None or sd > 0.005]
+    assert min(blind) < 0.045
+    assert max(blind) >= 0.13  # clamp to gauge 2: no gauge, or gauge 1 alone, bends
+    _click(page, 0.03)  # between the clamp and gauge 1
+    page.wait_for_timeout(3000)
+    c = _contact(stats(page))
+    assert not c["located"]
+    assert c["note"] in ("no load found",) or "cannot" in c["note"]
+    # the panel shows the estimate's note: read together until they agree (the note updates live, drawn a frame
+    # after it arrives), bounded
+    deadline = time.monotonic() + 20
+    shown = page.evaluate(SHOWN_NOTE)
+    while shown[0] != shown[1] and time.monotonic() < deadline:
+        page.wait_for_timeout(100)
+        shown = page.evaluate(SHOWN_NOTE)
+    assert shown[0] == shown[1], shown
+    server.stop()
+
+
 def test_the_page_reconnects_after_a_server_restart(live_server, page):
     server = live_server("--backend", "sim?cable=false")
     page.goto(server.url)
@@ -149,48 +173,3 @@ def test_a_second_page_shows_the_servers_setpoint_and_pause(live_server, browser
     assert contact["y"] > shape["y"] + shape["height"]
     other.context.close()
     server.stop()
-
-
-def test_the_page_says_where_the_gauges_cannot_see_a_load(live_server, page):
-    # a server of its own: on one that had carried a weight, the estimate near the clamp read "placed only to
-    # +- 13 mm" or "do not fit the model" 3 s after this click (the twin not yet at rest again)
-    server = live_server("--backend", "sim?cable=false")
-    page.goto(server.url)
-    wait_for(page, lambda s: s["locMap"] is not None, timeout_s=40, what="the locatability map")
-    loc = stats(page)["locMap"]
-    blind = [s for s, sd in zip(loc["s_m"], loc["sd_m"], strict=True) if sd is None or sd > 0.005]
-    assert min(blind) < 0.045
-    assert max(blind) >= 0.13  # clamp to gauge 2: no gauge, or gauge 1 alone, bends
-    _click(page, 0.03)  # between the clamp and gauge 1
-    page.wait_for_timeout(3000)
-    c = _contact(stats(page))
-    assert not c["located"]
-    assert c["note"] in ("no load found",) or "cannot" in c["note"]
-    # the panel shows the estimate's note: read together until they agree (the note updates live, drawn a frame
-    # after it arrives), bounded
-    deadline = time.monotonic() + 20
-    shown = page.evaluate(SHOWN_NOTE)
-    while shown[0] != shown[1] and time.monotonic() < deadline:
-        page.wait_for_timeout(100)
-        shown = page.evaluate(SHOWN_NOTE)
-    assert shown[0] == shown[1], shown
-    server.stop()
-
-
-@pytest.mark.parametrize("position_m", [0.17, 0.22, 0.26])
-def test_a_click_is_located_within_a_centimetre_where_the_gauges_see_it(detached_digit, page, position_m):
-    # chapter 6's digit: horizontal, the cable detached, so no cable friction: two or three gauges bend beyond
-    # gauge 2 and place a 25 g weight to a millimetre or two
-    _unloaded(page, detached_digit)
-    _click(page, position_m)
-    hung = wait_for(page, lambda s: s["last"]["state"]["loads"], what="the weight hung")["last"]["state"]["loads"]
-    # settled: the located estimate stays within 1 cm of the weight for a second (ten polls in a row)
-    streak, deadline = 0, time.monotonic() + 20
-    while streak < 10 and time.monotonic() < deadline:
-        c = _contact(stats(page))
-        near = c["located"] and abs(c["position_from_base_m"] - hung[0][1]) < LOCATE_TOL_M
-        streak = streak + 1 if near else 0
-        page.wait_for_timeout(100)
-    assert streak >= 10, f"the estimate did not settle within 1 cm of {hung[0][1]} m: last {c}"
-    assert abs(hung[0][1] - position_m) < 0.006  # the weight went where the click was (5 mm grid)
-    assert page.console_errors == []
