@@ -39,35 +39,32 @@ def pytest_report_header(config):
 #: The documentation site's build (tests/test_docs.py: Sphinx and the gallery's examples, a minute or more); first.
 FIRST = "test_docs.py"
 #: The longest files (path under tests/) and their seconds in a full run on two workers (the run's own list of its
-#: 30 longest files, a fresh clone of c954037 on a lightly loaded machine, `make test`'s pytest 17 min 58 s): first,
-#: longest first, so that neither worker is left running one of them alone at the end.
+#: 30 longest files, a fresh clone of 0d15c45 on an idle machine, `make test`'s pytest 11 min 56 s, flexdigit's
+#: numba kernels already in the user's cache; tdcr/test_chain_kernel at its figure with a cold cache, c0c3f27):
+#: first, longest first, so that neither worker is left running one of them alone at the end.
 LONGEST_S = {
-    "cli/test_digit_control.py": 165,
-    "report/test_digit_reports.py": 162,
-    "tactile/test_digit_data_path.py": 151,
-    "cli/test_campaign_digits.py": 79,
-    "studies/test_execution.py": 68,
-    "live/test_page.py": 58,
-    "tactile/test_bayes_drift.py": 54,
-    "firmware/test_board.py": 48,
-    "cli/test_stop_signals.py": 48,
-    "tdcr/test_chain_kernel.py": 42,
-    "twin/test_twin_resolution.py": 38,
-    "test_io_commands.py": 37,
-    "cli/test_palpate_pairs.py": 33,
-    "firmware/test_eight_gauges.py": 28,
-    "live/test_server.py": 28,
-    "tactile/test_refined_network.py": 26,
-    "studies/test_resources.py": 25,
-    "tactile/test_collect_stopped.py": 24,
-    "firmware/test_digit_images.py": 24,
-    "live/test_resources.py": 23,
-    "control/test_coarse_step.py": 23,
-    "rig/test_rotation_perturbed.py": 23,
-    "studies/test_cluster.py": 22,
-    "control/test_digit_designs.py": 22,
-    "live/test_page_digits.py": 21,
+    "tactile/test_digit_data_path.py": 76,
+    "cli/test_campaign_digits.py": 69,
+    "report/test_digit_reports.py": 67,
+    "cli/test_digit_control.py": 51,
+    "studies/test_execution.py": 48,
+    "live/test_page.py": 47,
+    "firmware/test_board.py": 45,
+    "tactile/test_bayes_drift.py": 42,
+    "test_io_commands.py": 34,
+    "tdcr/test_chain_kernel.py": 31,
+    "cli/test_palpate_pairs.py": 30,
+    "twin/test_twin_resolution.py": 29,
+    "tactile/test_refined_network.py": 27,
+    "firmware/test_eight_gauges.py": 26,
+    "cli/test_stop_signals.py": 25,
+    "live/test_server.py": 24,
+    "firmware/test_digit_images.py": 23,
+    "live/test_resources.py": 22,
+    "studies/test_resources.py": 21,
+    "rig/test_rotation_perturbed.py": 21,
     "rig/backends/test_stream_third_party.py": 21,
+    "studies/test_cluster.py": 21,
 }
 _TESTS = Path(__file__).resolve().parent
 
