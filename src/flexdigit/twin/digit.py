@@ -578,7 +578,7 @@ class Chain:
             if banded:
                 step = _tridiagonal_solve(self.k_psi, diag, res)
             else:
-                jac = self._dense_jacobian(diag)
+                jac = _dense_jacobian(self.k_psi, diag)
                 if contact is not None:
                     q_contact, dq_contact, _ = contact.generalized(psi)
                     res -= q_contact
@@ -591,13 +591,6 @@ class Chain:
                 converged = True
                 break
         return psi, iterations, converged, res, biggest
-
-    def _dense_jacobian(self, diag):
-        """The static Newton's Jacobian (B, n, n): ``K_psi`` off the diagonal, ``diag`` (B, n) on it."""
-        jac = np.broadcast_to(self.k_psi, (diag.shape[0], self.n, self.n)).copy()
-        idx = np.arange(self.n)
-        jac[:, idx, idx] = diag
-        return jac
 
     # ----------------------------------------------------------------------------------------------- dynamics
     def linear_modes(self, psi_eq=None, g_extra=None, cable_taut=False):
@@ -642,6 +635,14 @@ _BANDED_MIN_LINKS = 12
 _SMALL_PIVOT = 1e-10
 
 
+def _dense_jacobian(k_psi, diag):
+    """The static Newton's Jacobian (B, n, n): ``K_psi`` off the diagonal, ``diag`` (B, n) on it."""
+    jac = np.broadcast_to(k_psi, (diag.shape[0], *k_psi.shape)).copy()
+    idx = np.arange(k_psi.shape[0])
+    jac[:, idx, idx] = diag
+    return jac
+
+
 def _tridiagonal_solve(k_psi, diag, rhs):
     """Solve ``J x = rhs`` for a batch of symmetric tridiagonal ``J``: ``diag`` (B, n) on the diagonal and
     ``K_psi``'s off the diagonal (the same for every case). Elimination without pivoting, vectorised over the
@@ -660,10 +661,7 @@ def _tridiagonal_solve(k_psi, diag, rhs):
     x = r.T
     bad = ~(np.min(np.abs(d), axis=0) > _SMALL_PIVOT * np.max(np.abs(diag), axis=1)) | ~np.all(np.isfinite(x), axis=1)
     if np.any(bad):
-        jac = np.broadcast_to(k_psi, (int(bad.sum()), *k_psi.shape)).copy()
-        idx = np.arange(k_psi.shape[0])
-        jac[:, idx, idx] = diag[bad]
-        x[bad] = np.linalg.solve(jac, rhs[bad][..., None])[..., 0]
+        x[bad] = np.linalg.solve(_dense_jacobian(k_psi, diag[bad]), rhs[bad][..., None])[..., 0]
     return x
 
 
